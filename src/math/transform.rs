@@ -1,0 +1,366 @@
+//! [`Transform`]: a rigid motion, stored as a nalgebra isometry, read and written in
+//! the SolidWorks pose-matrix layout.
+
+use super::{AngleConvention, Point3, Vec3};
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, Unit, UnitQuaternion};
+use std::fmt;
+
+/// A rigid motion (rotation followed by translation), lengths in millimetres.
+///
+/// # Layout
+/// The document and the scripting API use the SolidWorks pose matrix (seed 000,
+/// formula (1)), which acts on **row vectors**: `[x' y' z' 1] = [x y z 1] · M` with
+///
+/// ```text
+///     | a b c n |      rotation  a..i   (row 1 = image of the X axis, …)
+/// M = | d e f o |      translation j k l (mm)
+///     | g h i p |      scale m = 1, n = o = p = 0
+///     | j k l m |
+/// ```
+///
+/// Internally the motion is a column-vector isometry `p' = R p + t`; `R` is the
+/// transpose of the `a..i` block.
+///
+/// # Composition
+/// `a * b` is the matrix product in the row-vector layout above: apply `a` first,
+/// then `b` (like `IMathTransform.Multiply`).
+#[derive(Clone, Copy, PartialEq, Default)]
+pub struct Transform {
+    iso: Isometry3<f64>,
+}
+
+/// Why a 4×4 matrix is not a rigid pose matrix.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TransformError {
+    /// A value is NaN or infinite.
+    #[error("the pose matrix has a non-finite value (NaN or infinity)")]
+    NonFinite,
+    /// The rotation block is not orthonormal with determinant +1.
+    #[error("the rotation block a..i is not orthonormal (error {0:.2e} > 1e-6): scaling, shear or mirroring is not a rigid pose")]
+    NotOrthonormal(f64),
+    /// `m` is not 1.
+    #[error("the scale m = {0} must be 1")]
+    Scale(f64),
+    /// `n o p` are not zero.
+    #[error("the last column n o p = {0:?} must be 0 0 0")]
+    Projective([f64; 3]),
+    /// The axis of a rotation has zero length.
+    #[error("the rotation axis has zero length")]
+    ZeroAxis,
+}
+
+/// Orthonormality tolerance of the `a..i` block.
+pub const ORTHONORMAL_TOLERANCE: f64 = 1e-6;
+
+impl Transform {
+    /// The identity.
+    pub const IDENTITY: Self = Self {
+        iso: Isometry3::from_parts(
+            Translation3::new(0.0, 0.0, 0.0),
+            UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(1.0, 0.0, 0.0, 0.0)),
+        ),
+    };
+
+    /// Wraps a nalgebra isometry (column-vector convention, mm).
+    pub fn from_isometry(iso: Isometry3<f64>) -> Self {
+        Self { iso }
+    }
+
+    /// The nalgebra isometry (column-vector convention, mm).
+    pub fn isometry(&self) -> &Isometry3<f64> {
+        &self.iso
+    }
+
+    /// A pure translation by `(x, y, z)` mm.
+    pub fn from_translation(v: Vec3) -> Self {
+        Self::from_isometry(Isometry3::from_parts(v.into(), UnitQuaternion::identity()))
+    }
+
+    /// A rotation of `angle` radians (right hand) about the line through `point` along
+    /// `axis`.
+    pub fn from_rotation_about(
+        point: Point3,
+        axis: Vec3,
+        angle: f64,
+    ) -> Result<Self, TransformError> {
+        if !(point
+            .coords
+            .iter()
+            .chain(axis.iter())
+            .all(|v| v.is_finite())
+            && angle.is_finite())
+        {
+            return Err(TransformError::NonFinite);
+        }
+        let axis = Unit::try_new(axis, 1e-12).ok_or(TransformError::ZeroAxis)?;
+        let q = UnitQuaternion::from_axis_angle(&axis, angle);
+        // p' = q (p - c) + c
+        let t = point.coords - q * point.coords;
+        Ok(Self::from_isometry(Isometry3::from_parts(t.into(), q)))
+    }
+
+    /// A rotation and translation from a unit quaternion and a translation (mm).
+    pub fn from_parts(translation: Vec3, rotation: UnitQuaternion<f64>) -> Self {
+        Self::from_isometry(Isometry3::from_parts(translation.into(), rotation))
+    }
+
+    /// The pose `X Y Z A B C`: position in mm, angles in **radians** in `conv`.
+    pub fn from_xyzabc(xyz: Vec3, abc: [f64; 3], conv: AngleConvention) -> Self {
+        Self::from_parts(xyz, conv.rotation(abc[0], abc[1], abc[2]))
+    }
+
+    /// The pose as `[x, y, z, a, b, c]`: mm and **radians** in `conv`.
+    pub fn to_xyzabc(&self, conv: AngleConvention) -> [f64; 6] {
+        let t = self.translation();
+        let (a, b, c) = conv.angles(&self.iso.rotation);
+        [t.x, t.y, t.z, a, b, c]
+    }
+
+    /// Builds a transform from the 4×4 SolidWorks layout (rows as written in the
+    /// document), checking that it is a rigid motion.
+    pub fn from_matrix(m: &[[f64; 4]; 4]) -> Result<Self, TransformError> {
+        if m.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(TransformError::NonFinite);
+        }
+        if (m[3][3] - 1.0).abs() > ORTHONORMAL_TOLERANCE {
+            return Err(TransformError::Scale(m[3][3]));
+        }
+        let npo = [m[0][3], m[1][3], m[2][3]];
+        if npo.iter().any(|v| v.abs() > ORTHONORMAL_TOLERANCE) {
+            return Err(TransformError::Projective(npo));
+        }
+        // The block rows are the images of the axes, i.e. the columns of R.
+        let r = Matrix3::new(
+            m[0][0], m[1][0], m[2][0], //
+            m[0][1], m[1][1], m[2][1], //
+            m[0][2], m[1][2], m[2][2],
+        );
+        let err = (r.transpose() * r - Matrix3::identity()).abs().max();
+        if err > ORTHONORMAL_TOLERANCE || r.determinant() < 0.0 {
+            return Err(TransformError::NotOrthonormal(
+                err.max(if r.determinant() < 0.0 { 2.0 } else { 0.0 }),
+            ));
+        }
+        let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+        Ok(Self::from_parts(Vec3::new(m[3][0], m[3][1], m[3][2]), rot))
+    }
+
+    /// The 4×4 matrix in the SolidWorks layout (see the type docs).
+    pub fn to_matrix(&self) -> [[f64; 4]; 4] {
+        let r = self.iso.rotation.to_rotation_matrix();
+        let r = r.matrix();
+        let t = self.iso.translation.vector;
+        [
+            [r[(0, 0)], r[(1, 0)], r[(2, 0)], 0.0],
+            [r[(0, 1)], r[(1, 1)], r[(2, 1)], 0.0],
+            [r[(0, 2)], r[(1, 2)], r[(2, 2)], 0.0],
+            [t.x, t.y, t.z, 1.0],
+        ]
+    }
+
+    /// The 16 numbers of `IMathTransform.ArrayData`: `a b c d e f g h i` (rotation),
+    /// `j k l` (translation, **mm** — SolidWorks uses metres here), `m` (scale, 1),
+    /// `n o p` (0).
+    pub fn to_array_data(&self) -> [f64; 16] {
+        let m = self.to_matrix();
+        [
+            m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1],
+            m[2][2], //
+            m[3][0], m[3][1], m[3][2], 1.0, 0.0, 0.0, 0.0,
+        ]
+    }
+
+    /// Inverse of [`to_array_data`](Self::to_array_data).
+    pub fn from_array_data(d: &[f64; 16]) -> Result<Self, TransformError> {
+        Self::from_matrix(&[
+            [d[0], d[1], d[2], d[13]],
+            [d[3], d[4], d[5], d[14]],
+            [d[6], d[7], d[8], d[15]],
+            [d[9], d[10], d[11], d[12]],
+        ])
+    }
+
+    /// The translation part (mm).
+    pub fn translation(&self) -> Vec3 {
+        self.iso.translation.vector
+    }
+
+    /// The rotation part.
+    pub fn rotation(&self) -> UnitQuaternion<f64> {
+        self.iso.rotation
+    }
+
+    /// The inverse motion.
+    #[must_use]
+    pub fn inverse(&self) -> Self {
+        Self::from_isometry(self.iso.inverse())
+    }
+
+    /// `self` followed by `next` (row-vector product `self · next`).
+    #[must_use]
+    pub fn then(&self, next: &Self) -> Self {
+        Self::from_isometry(next.iso * self.iso)
+    }
+
+    /// Maps a point (mm).
+    pub fn apply(&self, p: &Point3) -> Point3 {
+        self.iso * p
+    }
+
+    /// Maps a free vector (rotation only).
+    pub fn apply_vector(&self, v: &Vec3) -> Vec3 {
+        self.iso.rotation * v
+    }
+
+    /// Rotation angle (radians) and translation distance (mm) between two poses.
+    pub fn distance_to(&self, other: &Self) -> (f64, f64) {
+        (
+            self.iso.rotation.angle_to(&other.iso.rotation),
+            (self.translation() - other.translation()).norm(),
+        )
+    }
+
+    /// Interpolates translation linearly and rotation by slerp, `s` in `[0, 1]`.
+    pub fn interpolate(&self, other: &Self, s: f64) -> Self {
+        let t = self.translation().lerp(&other.translation(), s);
+        let q = self
+            .iso
+            .rotation
+            .try_slerp(&other.iso.rotation, s, 1e-12)
+            .unwrap_or(if s < 0.5 {
+                self.iso.rotation
+            } else {
+                other.iso.rotation
+            });
+        Self::from_parts(t, q)
+    }
+
+    /// Whether every entry is finite.
+    pub fn is_finite(&self) -> bool {
+        self.to_array_data().iter().all(|v| v.is_finite())
+    }
+
+    /// Approximate equality: rotation within `angle_tol` rad and translation within
+    /// `dist_tol` mm.
+    pub fn approx_eq(&self, other: &Self, dist_tol: f64, angle_tol: f64) -> bool {
+        let (a, d) = self.distance_to(other);
+        a <= angle_tol && d <= dist_tol
+    }
+}
+
+impl std::ops::Mul for Transform {
+    type Output = Transform;
+    /// Row-vector product: apply `self`, then `rhs`.
+    fn mul(self, rhs: Transform) -> Transform {
+        self.then(&rhs)
+    }
+}
+
+impl fmt::Debug for Transform {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
+
+impl fmt::Display for Transform {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = self.to_matrix();
+        write!(f, "Transform[")?;
+        for (i, row) in m.iter().enumerate() {
+            if i > 0 {
+                write!(f, "; ")?;
+            }
+            write!(f, "{:.6} {:.6} {:.6} {:.6}", row[0], row[1], row[2], row[3])?;
+        }
+        write!(f, "]")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    #[test]
+    fn row_vector_layout_matches_seed_formula() {
+        // Rotate 90° about Z then translate by (10, 0, 0): X axis maps to Y.
+        let t = Transform::from_rotation_about(Point3::origin(), Vec3::z(), FRAC_PI_2).unwrap()
+            * Transform::from_translation(Vec3::new(10.0, 0.0, 0.0));
+        let m = t.to_matrix();
+        // Row 1 (a b c) is the image of the X axis.
+        assert!((m[0][1] - 1.0).abs() < 1e-12);
+        // [1 0 0 1] · M = (10, 1, 0)
+        let p = [1.0, 0.0, 0.0, 1.0];
+        let out: Vec<f64> = (0..4)
+            .map(|c| (0..4).map(|r| p[r] * m[r][c]).sum())
+            .collect();
+        let q = t.apply(&Point3::new(1.0, 0.0, 0.0));
+        assert!((out[0] - q.x).abs() < 1e-12 && (out[1] - q.y).abs() < 1e-12);
+        assert!((q - Point3::new(10.0, 1.0, 0.0)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn matrix_and_array_data_round_trip() {
+        let t = Transform::from_xyzabc(
+            Vec3::new(1.0, -2.0, 3.5),
+            [0.3, -0.2, 1.1],
+            AngleConvention::XyzFixed,
+        );
+        let back = Transform::from_matrix(&t.to_matrix()).unwrap();
+        assert!(t.approx_eq(&back, 1e-12, 1e-12));
+        let back = Transform::from_array_data(&t.to_array_data()).unwrap();
+        assert!(t.approx_eq(&back, 1e-12, 1e-12));
+    }
+
+    #[test]
+    fn inverse_law() {
+        let t = Transform::from_xyzabc(
+            Vec3::new(5.0, 6.0, 7.0),
+            [1.0, 0.5, -2.0],
+            AngleConvention::ZyxMoving,
+        );
+        assert!((t * t.inverse()).approx_eq(&Transform::IDENTITY, 1e-12, 1e-12));
+    }
+
+    #[test]
+    fn rejects_non_rigid() {
+        let mut m = Transform::IDENTITY.to_matrix();
+        m[0][0] = 2.0;
+        assert!(matches!(
+            Transform::from_matrix(&m),
+            Err(TransformError::NotOrthonormal(_))
+        ));
+        let mut m = Transform::IDENTITY.to_matrix();
+        m[0][0] = -1.0;
+        assert!(Transform::from_matrix(&m).is_err(), "mirror");
+        let mut m = Transform::IDENTITY.to_matrix();
+        m[3][3] = 2.0;
+        assert!(matches!(
+            Transform::from_matrix(&m),
+            Err(TransformError::Scale(_))
+        ));
+        let mut m = Transform::IDENTITY.to_matrix();
+        m[1][1] = f64::NAN;
+        assert!(matches!(
+            Transform::from_matrix(&m),
+            Err(TransformError::NonFinite)
+        ));
+    }
+
+    #[test]
+    fn rotation_about_point_keeps_point_fixed() {
+        let c = Point3::new(10.0, 20.0, 30.0);
+        let t = Transform::from_rotation_about(c, Vec3::new(1.0, 1.0, 0.0), 0.7).unwrap();
+        assert!((t.apply(&c) - c).norm() < 1e-12);
+        assert!(Transform::from_rotation_about(c, Vec3::zeros(), 1.0).is_err());
+    }
+
+    #[test]
+    fn composition_order_is_row_vector() {
+        let a = Transform::from_translation(Vec3::new(1.0, 0.0, 0.0));
+        let b = Transform::from_rotation_about(Point3::origin(), Vec3::z(), FRAC_PI_2).unwrap();
+        // a then b: (0,0,0) -> (1,0,0) -> (0,1,0)
+        let p = (a * b).apply(&Point3::origin());
+        assert!((p - Point3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+    }
+}
