@@ -5,9 +5,11 @@
 //! user-facing `X Y Z A B C` pose triples, see [`AngleConvention`]).
 
 mod euler;
+mod rng;
 pub mod transform;
 
 pub use euler::AngleConvention;
+pub use rng::Rng;
 pub use transform::Transform;
 
 /// A point or free vector in millimetres.
