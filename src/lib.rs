@@ -10,4 +10,8 @@
 //! | module | what lives there |
 //! |---|---|
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions |
+//! | [`mesh`] | triangle meshes, STL I/O, the mesh cache |
+//! | [`fsutil`] | atomic writes, content hashes |
+pub mod fsutil;
 pub mod math;
+pub mod mesh;

@@ -1,0 +1,308 @@
+//! Triangle meshes of parts: STL reading and writing, validation, and the cache that
+//! keeps meshes between watch reruns.
+//!
+//! Coordinates are millimetres in the part frame.
+
+mod cache;
+mod stl;
+
+pub use cache::MeshCache;
+pub use stl::{parse_stl, read_stl, write_stl, MeshError};
+
+use crate::math::{Point3, Vec3};
+use std::collections::HashMap;
+
+/// An indexed triangle mesh in the part frame (mm). Triangles are counter-clockwise
+/// seen from outside when the mesh is oriented (STL convention).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions, mm.
+    pub vertices: Vec<Point3>,
+    /// Vertex indices of each triangle.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// What [`Mesh::inspect`] found about a mesh's soundness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MeshReport {
+    /// Triangles with (near) zero area.
+    pub degenerate_triangles: usize,
+    /// Edges used by exactly one triangle (holes in the surface).
+    pub boundary_edges: usize,
+    /// Edges used by more than two triangles.
+    pub non_manifold_edges: usize,
+    /// Edges traversed twice in the same direction (inconsistent winding).
+    pub misoriented_edges: usize,
+}
+
+impl MeshReport {
+    /// A closed, consistently oriented 2-manifold: inside and outside are defined,
+    /// so containment ("one part swallowed by another") can be tested.
+    pub fn is_watertight(&self) -> bool {
+        self.boundary_edges == 0 && self.non_manifold_edges == 0 && self.misoriented_edges == 0
+    }
+}
+
+impl Mesh {
+    /// Builds a mesh, checking indices and coordinates.
+    pub fn new(vertices: Vec<Point3>, triangles: Vec<[u32; 3]>) -> Result<Self, MeshError> {
+        if let Some(i) = vertices
+            .iter()
+            .position(|p| !p.coords.iter().all(|v| v.is_finite()))
+        {
+            return Err(MeshError::invalid(format!(
+                "vertex {i} has a non-finite coordinate"
+            )));
+        }
+        let n = vertices.len() as u32;
+        if let Some(t) = triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
+            return Err(MeshError::invalid(format!(
+                "triangle {t} refers to a vertex past the {n} vertices"
+            )));
+        }
+        Ok(Self {
+            vertices,
+            triangles,
+        })
+    }
+
+    /// Builds an indexed mesh from triangle soup, merging bit-identical vertices (as
+    /// STL stores every corner separately).
+    pub fn from_triangle_soup(
+        corners: impl IntoIterator<Item = [Point3; 3]>,
+    ) -> Result<Self, MeshError> {
+        let mut index: HashMap<[u64; 3], u32> = HashMap::new();
+        let mut vertices = Vec::new();
+        let mut triangles = Vec::new();
+        for tri in corners {
+            let mut ids = [0u32; 3];
+            for (k, p) in tri.iter().enumerate() {
+                // +0.0 and -0.0 are the same point.
+                let key = [
+                    (p.x + 0.0).to_bits(),
+                    (p.y + 0.0).to_bits(),
+                    (p.z + 0.0).to_bits(),
+                ];
+                ids[k] = *index.entry(key).or_insert_with(|| {
+                    vertices.push(*p);
+                    (vertices.len() - 1) as u32
+                });
+            }
+            triangles.push(ids);
+        }
+        Self::new(vertices, triangles)
+    }
+
+    /// The three corners of triangle `i`.
+    pub fn triangle(&self, i: usize) -> [Point3; 3] {
+        let t = self.triangles[i];
+        [
+            self.vertices[t[0] as usize],
+            self.vertices[t[1] as usize],
+            self.vertices[t[2] as usize],
+        ]
+    }
+
+    /// Axis-aligned bounds `(min, max)` in the part frame; `None` for an empty mesh.
+    pub fn bounds(&self) -> Option<(Point3, Point3)> {
+        let first = *self.vertices.first()?;
+        Some(
+            self.vertices
+                .iter()
+                .fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p))),
+        )
+    }
+
+    /// Signed volume (mm³): positive for a closed outward-oriented mesh.
+    pub fn signed_volume(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|i| {
+                let [a, b, c] = self.triangle(i);
+                a.coords.dot(&b.coords.cross(&c.coords)) / 6.0
+            })
+            .sum()
+    }
+
+    /// Checks for degenerate triangles, holes, non-manifold edges and inconsistent
+    /// winding.
+    pub fn inspect(&self) -> MeshReport {
+        let mut report = MeshReport::default();
+        let scale = self
+            .bounds()
+            .map(|(lo, hi)| (hi - lo).norm())
+            .unwrap_or(1.0)
+            .max(1e-9);
+        let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new(); // (forward, backward) counts
+        for (i, t) in self.triangles.iter().enumerate() {
+            let [a, b, c] = self.triangle(i);
+            if (b - a).cross(&(c - a)).norm() <= 1e-12 * scale * scale {
+                report.degenerate_triangles += 1;
+            }
+            for k in 0..3 {
+                let (u, v) = (t[k], t[(k + 1) % 3]);
+                if u == v {
+                    continue;
+                }
+                let e = edges.entry((u.min(v), u.max(v))).or_default();
+                if u < v {
+                    e.0 += 1
+                } else {
+                    e.1 += 1
+                }
+            }
+        }
+        for &(f, b) in edges.values() {
+            match f + b {
+                1 => report.boundary_edges += 1,
+                2 if f != 1 => report.misoriented_edges += 1,
+                2 => {}
+                _ => report.non_manifold_edges += 1,
+            }
+        }
+        report
+    }
+
+    /// The mesh moved by `t` (used to bake a pose into exported geometry).
+    pub fn transformed(&self, t: &crate::math::Transform) -> Mesh {
+        Mesh {
+            vertices: self.vertices.iter().map(|p| t.apply(p)).collect(),
+            triangles: self.triangles.clone(),
+        }
+    }
+
+    /// Appends another mesh (no vertex merging).
+    pub fn append(&mut self, other: &Mesh) {
+        let base = self.vertices.len() as u32;
+        self.vertices.extend_from_slice(&other.vertices);
+        self.triangles.extend(
+            other
+                .triangles
+                .iter()
+                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+        );
+    }
+
+    /// An axis-aligned box from `min` to `max` (mm), outward oriented, 12 triangles.
+    pub fn cuboid(min: Point3, max: Point3) -> Mesh {
+        let v = |x: bool, y: bool, z: bool| {
+            Point3::new(
+                if x { max.x } else { min.x },
+                if y { max.y } else { min.y },
+                if z { max.z } else { min.z },
+            )
+        };
+        let vertices = vec![
+            v(false, false, false),
+            v(true, false, false),
+            v(true, true, false),
+            v(false, true, false),
+            v(false, false, true),
+            v(true, false, true),
+            v(true, true, true),
+            v(false, true, true),
+        ];
+        let triangles = vec![
+            [0, 2, 1],
+            [0, 3, 2],
+            [4, 5, 6],
+            [4, 6, 7],
+            [0, 1, 5],
+            [0, 5, 4],
+            [1, 2, 6],
+            [1, 6, 5],
+            [2, 3, 7],
+            [2, 7, 6],
+            [3, 0, 4],
+            [3, 4, 7],
+        ];
+        Mesh {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// A closed cylinder of `radius` and `height` (mm) along +Z from the origin, with
+    /// `segments` facets around (at least 3).
+    pub fn cylinder(radius: f64, height: f64, segments: usize) -> Mesh {
+        Self::frustum(radius, radius, height, segments)
+    }
+
+    /// A closed truncated cone along +Z from the origin: radius `r0` at z = 0 and `r1`
+    /// at z = `height` (mm).
+    pub fn frustum(r0: f64, r1: f64, height: f64, segments: usize) -> Mesh {
+        let n = segments.max(3);
+        let mut vertices = Vec::with_capacity(2 * n + 2);
+        for (r, z) in [(r0, 0.0), (r1, height)] {
+            for i in 0..n {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                vertices.push(Point3::new(r * a.cos(), r * a.sin(), z));
+            }
+        }
+        vertices.push(Point3::new(0.0, 0.0, 0.0));
+        vertices.push(Point3::new(0.0, 0.0, height));
+        let (bc, tc) = (2 * n as u32, 2 * n as u32 + 1);
+        let mut triangles = Vec::with_capacity(4 * n);
+        for i in 0..n as u32 {
+            let j = (i + 1) % n as u32;
+            let (n32, b0, b1) = (n as u32, i, j);
+            triangles.push([b0, b1, b1 + n32]);
+            triangles.push([b0, b1 + n32, b0 + n32]);
+            triangles.push([bc, b1, b0]);
+            triangles.push([tc, b0 + n32, b1 + n32]);
+        }
+        Mesh {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// Unit normal of triangle `i` from its winding (zero for a degenerate one).
+    pub fn triangle_normal(&self, i: usize) -> Vec3 {
+        let [a, b, c] = self.triangle(i);
+        (b - a)
+            .cross(&(c - a))
+            .try_normalize(0.0)
+            .unwrap_or_else(Vec3::zeros)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn primitives_are_watertight_with_positive_volume() {
+        let b = Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 3.0, 4.0));
+        assert!(b.inspect().is_watertight(), "{:?}", b.inspect());
+        assert!((b.signed_volume() - 24.0).abs() < 1e-9);
+        let c = Mesh::cylinder(5.0, 10.0, 64);
+        assert!(c.inspect().is_watertight(), "{:?}", c.inspect());
+        let exact = std::f64::consts::PI * 25.0 * 10.0;
+        assert!(c.signed_volume() > 0.98 * exact && c.signed_volume() < exact);
+    }
+
+    #[test]
+    fn inspect_finds_holes_and_flipped_faces() {
+        let mut b = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+        b.triangles.pop();
+        assert_eq!(b.inspect().boundary_edges, 3);
+        let mut b = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+        b.triangles[0].swap(1, 2);
+        assert!(b.inspect().misoriented_edges > 0);
+    }
+
+    #[test]
+    fn soup_welding_merges_shared_corners() {
+        let b = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+        let soup: Vec<_> = (0..b.triangles.len()).map(|i| b.triangle(i)).collect();
+        let m = Mesh::from_triangle_soup(soup).unwrap();
+        assert_eq!(m.vertices.len(), 8);
+        assert!(m.inspect().is_watertight());
+    }
+
+    #[test]
+    fn rejects_bad_indices_and_nan() {
+        assert!(Mesh::new(vec![Point3::origin()], vec![[0, 0, 1]]).is_err());
+        assert!(Mesh::new(vec![Point3::new(f64::NAN, 0.0, 0.0)], vec![]).is_err());
+    }
+}

@@ -1,0 +1,308 @@
+//! STL input and output (ASCII and binary, read; binary, written atomically).
+//!
+//! Binary files are recognised by their size (`84 + 50·n` bytes for `n` facets), not by
+//! their header: SolidWorks writes binary STL whose 80-byte header starts with
+//! `solid`, which fools parsers that look at the first word.
+
+use super::Mesh;
+use crate::math::Point3;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A mesh that could not be read or written: which file, where in it, and why.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct MeshError {
+    /// The file, when there is one.
+    pub path: Option<PathBuf>,
+    /// 1-based line of an ASCII STL, when known.
+    pub line: Option<usize>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl MeshError {
+    pub(crate) fn invalid(message: impl Into<String>) -> Self {
+        Self {
+            path: None,
+            line: None,
+            message: message.into(),
+        }
+    }
+
+    fn at(line: usize, message: impl Into<String>) -> Self {
+        Self {
+            path: None,
+            line: Some(line),
+            message: message.into(),
+        }
+    }
+
+    /// The same error, naming `path`.
+    pub fn in_file(mut self, path: &Path) -> Self {
+        self.path = Some(path.to_path_buf());
+        self
+    }
+}
+
+impl fmt::Display for MeshError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (&self.path, self.line) {
+            (Some(p), Some(l)) => write!(f, "{}:{}: {}", p.display(), l, self.message),
+            (Some(p), None) => write!(f, "{}: {}", p.display(), self.message),
+            (None, Some(l)) => write!(f, "line {}: {}", l, self.message),
+            (None, None) => write!(f, "{}", self.message),
+        }
+    }
+}
+
+/// Reads an STL file (ASCII or binary) into an indexed mesh (mm).
+pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| MeshError::invalid(format!("cannot read: {e}")).in_file(path))?;
+    parse_stl(&bytes).map_err(|e| e.in_file(path))
+}
+
+/// Parses STL bytes (ASCII or binary).
+pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
+    if bytes.len() >= 84 {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+        if 84 + 50 * n == bytes.len() as u64 {
+            return parse_binary(bytes);
+        }
+    }
+    let head = bytes
+        .iter()
+        .skip_while(|b| b.is_ascii_whitespace())
+        .take(5)
+        .copied()
+        .collect::<Vec<u8>>();
+    if head.eq_ignore_ascii_case(b"solid") {
+        return parse_ascii(bytes);
+    }
+    if bytes.len() >= 84 {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+        return Err(MeshError::invalid(format!(
+            "not an STL file: a binary STL with {n} facets would be {} bytes, this one is {}, and it does not start with `solid`",
+            84 + 50 * n,
+            bytes.len()
+        )));
+    }
+    Err(MeshError::invalid(format!(
+        "not an STL file: {} bytes is too short",
+        bytes.len()
+    )))
+}
+
+fn parse_binary(bytes: &[u8]) -> Result<Mesh, MeshError> {
+    // 80-byte header, u32 count, then per facet: normal (3 f32), 3 vertices (9 f32),
+    // u16 attribute. The size was checked by the caller.
+    let mut soup = Vec::with_capacity((bytes.len() - 84) / 50);
+    for (i, facet) in bytes[84..].chunks_exact(50).enumerate() {
+        let f = |k: usize| {
+            let o = 12 + 4 * k;
+            f32::from_le_bytes([facet[o], facet[o + 1], facet[o + 2], facet[o + 3]]) as f64
+        };
+        let corners = [
+            Point3::new(f(0), f(1), f(2)),
+            Point3::new(f(3), f(4), f(5)),
+            Point3::new(f(6), f(7), f(8)),
+        ];
+        if corners
+            .iter()
+            .any(|c| !c.coords.iter().all(|v| v.is_finite()))
+        {
+            return Err(MeshError::invalid(format!(
+                "binary STL facet {i} has a non-finite coordinate"
+            )));
+        }
+        soup.push(corners);
+    }
+    Mesh::from_triangle_soup(soup)
+}
+
+/// ASCII STL: `solid name / facet normal … / outer loop / vertex x y z ×3 / endloop /
+/// endfacet / endsolid`. Written by hand rather than through stl_io so that every
+/// error carries its line number.
+fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
+        MeshError::at(line, "ASCII STL contains bytes that are not UTF-8 text")
+    })?;
+    let mut soup = Vec::new();
+    let mut corners: Vec<Point3> = Vec::with_capacity(3);
+    let mut in_facet = false;
+    let mut ended = false;
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let mut words = raw.split_whitespace();
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        match keyword.to_ascii_lowercase().as_str() {
+            "solid" if i == 0 || soup.is_empty() => {}
+            "facet" => {
+                if in_facet {
+                    return Err(MeshError::at(
+                        line,
+                        "`facet` before the previous facet's `endfacet`",
+                    ));
+                }
+                in_facet = true;
+                corners.clear();
+            }
+            "outer" | "endloop" => {}
+            "vertex" => {
+                if !in_facet {
+                    return Err(MeshError::at(line, "`vertex` outside a facet"));
+                }
+                let mut xyz = [0.0; 3];
+                for (k, c) in xyz.iter_mut().enumerate() {
+                    let w = words.next().ok_or_else(|| {
+                        MeshError::at(line, format!("`vertex` needs 3 numbers, found {k}"))
+                    })?;
+                    *c = w
+                        .parse::<f64>()
+                        .map_err(|_| MeshError::at(line, format!("`{w}` is not a number")))?;
+                    if !c.is_finite() {
+                        return Err(MeshError::at(
+                            line,
+                            format!("`{w}` is not a finite coordinate"),
+                        ));
+                    }
+                }
+                if corners.len() == 3 {
+                    return Err(MeshError::at(line, "a facet has more than 3 vertices"));
+                }
+                corners.push(Point3::new(xyz[0], xyz[1], xyz[2]));
+            }
+            "endfacet" => {
+                if corners.len() != 3 {
+                    return Err(MeshError::at(
+                        line,
+                        format!("a facet has {} vertices, expected 3", corners.len()),
+                    ));
+                }
+                soup.push([corners[0], corners[1], corners[2]]);
+                in_facet = false;
+            }
+            "endsolid" => {
+                ended = true;
+                break;
+            }
+            other => {
+                return Err(MeshError::at(
+                    line,
+                    format!("unexpected `{other}` in ASCII STL"),
+                ))
+            }
+        }
+    }
+    if in_facet {
+        return Err(MeshError::at(
+            text.lines().count(),
+            "the file ends inside a facet (truncated?)",
+        ));
+    }
+    if !ended && soup.is_empty() {
+        return Err(MeshError::at(
+            text.lines().count().max(1),
+            "no facets and no `endsolid` (truncated?)",
+        ));
+    }
+    Mesh::from_triangle_soup(soup)
+}
+
+/// Writes a binary STL atomically (temporary file in the same folder, then rename), so
+/// a reader never sees a half-written file.
+pub fn write_stl(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {
+    let triangles: Vec<stl_io::Triangle> = (0..mesh.triangles.len())
+        .map(|i| {
+            let [a, b, c] = mesh.triangle(i);
+            let n = mesh.triangle_normal(i);
+            let v = |p: Point3| stl_io::Vertex::new([p.x as f32, p.y as f32, p.z as f32]);
+            stl_io::Triangle {
+                normal: stl_io::Normal::new([n.x as f32, n.y as f32, n.z as f32]),
+                vertices: [v(a), v(b), v(c)],
+            }
+        })
+        .collect();
+    let mut bytes = Vec::with_capacity(84 + 50 * triangles.len());
+    stl_io::write_stl(&mut bytes, triangles.iter())
+        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
+    crate::fsutil::write_atomic(path, &bytes)
+        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube_ascii() -> String {
+        let m = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 2.0, 3.0));
+        let mut s = String::from("solid cube\n");
+        for i in 0..m.triangles.len() {
+            s += "  facet normal 0 0 0\n    outer loop\n";
+            for p in m.triangle(i) {
+                s += &format!("      vertex {} {} {}\n", p.x, p.y, p.z);
+            }
+            s += "    endloop\n  endfacet\n";
+        }
+        s + "endsolid cube\n"
+    }
+
+    #[test]
+    fn ascii_and_binary_agree() {
+        let ascii = parse_stl(cube_ascii().as_bytes()).unwrap();
+        assert_eq!(ascii.triangles.len(), 12);
+        assert!(ascii.inspect().is_watertight());
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("cube.stl");
+        write_stl(&p, &ascii).unwrap();
+        let binary = read_stl(&p).unwrap();
+        assert_eq!(binary, ascii);
+    }
+
+    #[test]
+    fn binary_with_solid_header_is_binary() {
+        let m = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("sw.stl");
+        write_stl(&p, &m).unwrap();
+        let mut bytes = std::fs::read(&p).unwrap();
+        bytes[..12].copy_from_slice(b"solid SW2024");
+        assert_eq!(parse_stl(&bytes).unwrap().triangles.len(), 12);
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let bad = cube_ascii().replacen("vertex 0 0 0", "vertex 0 zero 0", 1);
+        let e = parse_stl(bad.as_bytes()).unwrap_err();
+        assert!(e.line.is_some() && e.message.contains("zero"), "{e}");
+        let truncated: String = cube_ascii().lines().take(5).collect::<Vec<_>>().join("\n");
+        let e = parse_stl(truncated.as_bytes()).unwrap_err();
+        assert!(e.message.contains("truncated"), "{e}");
+        assert!(parse_stl(b"hello").is_err());
+        let mut junk = vec![0u8; 200];
+        junk[80] = 7;
+        assert!(parse_stl(&junk).unwrap_err().message.contains("434 bytes"));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn never_panics_on_arbitrary_bytes(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..400)) {
+            let _ = parse_stl(&bytes);
+        }
+
+        #[test]
+        fn never_panics_on_mangled_ascii(cut in 0usize..600, junk in "[ -~\\n]{0,40}") {
+            let mut s = cube_ascii();
+            let at = cut.min(s.len());
+            s.insert_str(at, &junk);
+            let _ = parse_stl(s.as_bytes());
+        }
+    }
+}
