@@ -15,3 +15,5 @@
 pub mod fsutil;
 pub mod math;
 pub mod mesh;
+pub mod diagnostics;
+pub mod document;

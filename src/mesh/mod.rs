@@ -4,6 +4,7 @@
 //! Coordinates are millimetres in the part frame.
 
 mod cache;
+mod shapes;
 mod stl;
 
 pub use cache::MeshCache;

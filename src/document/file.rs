@@ -1,0 +1,122 @@
+//! The YAML schema of an assembly document, exactly as written on disk.
+//!
+//! These structs mirror the file; [`super::Document`] is the validated model built
+//! from them. Keeping the two apart lets the model hold derived data (meshes, solved
+//! poses) while save writes back only what the user wrote.
+
+use indexmap::IndexMap;
+use serde::{Deserialize, Serialize};
+
+/// The whole document file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct DocumentFile {
+    /// Length unit of the file; only `mm` is accepted (fitup works in millimetres).
+    #[serde(default = "default_units", skip_serializing_if = "is_default_units")]
+    pub units: String,
+    /// Free text.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Part definitions by name.
+    #[serde(default)]
+    pub parts: IndexMap<String, PartFile>,
+    /// Part instances.
+    #[serde(default)]
+    pub components: Vec<ComponentFile>,
+    /// Mates between reference entities of components.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub mates: Vec<MateFile>,
+}
+
+fn default_units() -> String {
+    "mm".into()
+}
+
+fn is_default_units(u: &String) -> bool {
+    u == "mm"
+}
+
+/// A part: a mesh and named reference geometry in the part frame (mm).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartFile {
+    /// STL file, relative to the document's folder.
+    pub stl: String,
+    /// Reference planes: point + normal.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub planes: IndexMap<String, PlaneFile>,
+    /// Reference axes: point + direction.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub axes: IndexMap<String, AxisFile>,
+    /// Reference points.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub points: IndexMap<String, [f64; 3]>,
+    /// The feature tree (cut cells, …), in order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub features: Vec<serde_yaml::Value>,
+}
+
+/// A reference plane through `point` with unit `normal` (normalised on load).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneFile {
+    /// A point on the plane, mm.
+    pub point: [f64; 3],
+    /// The plane normal.
+    pub normal: [f64; 3],
+}
+
+/// A reference axis through `point` along `direction` (normalised on load).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisFile {
+    /// A point on the axis, mm.
+    pub point: [f64; 3],
+    /// The axis direction.
+    pub direction: [f64; 3],
+}
+
+/// A component: an instance of a part at a pose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComponentFile {
+    /// Unique component name (SolidWorks style `part-1` or anything).
+    pub name: String,
+    /// The part it instantiates.
+    pub part: String,
+    /// Fixed components are never moved by the mate solver.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixed: bool,
+    /// Display colour: `[r, g, b]` in 0..1 or `"#rrggbb"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<serde_yaml::Value>,
+    /// The pose matrix, 4 rows `[a b c n] [d e f o] [g h i p] [j k l m]` (seed 000
+    /// formula (1)), translation `j k l` in mm; identity when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transform: Option<[[f64; 4]; 4]>,
+}
+
+/// A mate between two reference entities `component/reference`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MateFile {
+    /// Mate name; a distance or angle mate's driving dimension is `D1@<name>`.
+    pub name: String,
+    /// `coincident`, `concentric`, `parallel`, `perpendicular`, `distance` or `angle`.
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// The two entities, `component/reference` (`reference` is a plane, axis or point of
+    /// the component's part; `origin` is the part origin).
+    pub entities: [String; 2],
+    /// Driving value of distance (mm) and angle (degrees) mates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
+    /// Align the normals/directions instead of opposing them (SolidWorks "aligned"
+    /// vs "anti-aligned"); coincident planes default to anti-aligned.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aligned: Option<bool>,
+    /// For angle mates: the axis (`component/axis`) about which the angle is measured,
+    /// making it a signed angle over the full turn.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub about: Option<String>,
+}

@@ -1,0 +1,612 @@
+//! The assembly document: parts (STL meshes + reference geometry), components (part
+//! instances at a pose), mates and their driving dimensions.
+//!
+//! A document is a YAML file (schema in [`file`]); meshes are STL files next to it.
+//! Lengths are millimetres, angles radians inside; the file writes angle mate values in
+//! degrees. Poses use the SolidWorks pose-matrix layout, see [`Transform`].
+
+pub mod dimension;
+pub mod file;
+pub mod mates;
+pub mod reference;
+
+pub use dimension::{Dimension, DimensionKind};
+pub use mates::{Mate, MateEntity, MateKind};
+pub use reference::Reference;
+
+use crate::diagnostics::{locate, suggestion, SourceError};
+use crate::math::{Point3, Transform, Vec3};
+use crate::mesh::{Mesh, MeshCache};
+use file::{AxisFile, ComponentFile, DocumentFile, MateFile, PartFile, PlaneFile};
+use indexmap::IndexMap;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A part definition: mesh and named references in the part frame (mm).
+#[derive(Debug, Clone)]
+pub struct Part {
+    /// Part name.
+    pub name: String,
+    /// The STL path as written in the document (relative to the document's folder).
+    pub stl: String,
+    /// The STL path resolved on disk.
+    pub mesh_path: PathBuf,
+    /// The triangle mesh (mm, part frame).
+    pub mesh: Arc<Mesh>,
+    /// Named references (planes, axes, points) in the part frame, in file order.
+    pub references: IndexMap<String, Reference>,
+    /// The feature tree as written (cut-cells features and later kinds).
+    pub features: Vec<serde_yaml::Value>,
+}
+
+impl Part {
+    /// A reference by name, including the built-ins (`origin`, `front`, `top`, `right`,
+    /// `x_axis`, `y_axis`, `z_axis`).
+    pub fn reference(&self, name: &str) -> Option<Reference> {
+        self.references.get(name).copied().or_else(|| Reference::builtin(name))
+    }
+}
+
+/// An RGB colour, components in 0..1.
+pub type Color = [f64; 3];
+
+/// A part instance at a pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Component {
+    /// Unique name.
+    pub name: String,
+    /// The part it instantiates.
+    pub part: String,
+    /// Never moved by mates or planners.
+    pub fixed: bool,
+    /// Display colour.
+    pub color: Option<Color>,
+    /// Pose: part frame → world (mm).
+    pub transform: Transform,
+}
+
+/// Why a document operation failed. Load errors carry file, line and column.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DocumentError {
+    /// An error in a file the user wrote (YAML, STL, …), located.
+    #[error("{0}")]
+    Source(#[from] SourceError),
+    /// A name that does not exist; the message lists close matches.
+    #[error("no {what} named `{name}`: {hint}")]
+    NotFound {
+        /// "component", "dimension", …
+        what: &'static str,
+        /// The name asked for.
+        name: String,
+        /// Close matches or what exists.
+        hint: String,
+    },
+    /// An operation that is not allowed (moving a fixed component, a bad value…).
+    #[error("{0}")]
+    Invalid(String),
+    /// Writing the document failed.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// Target path.
+        path: PathBuf,
+        /// OS message.
+        message: String,
+    },
+}
+
+/// An assembly document.
+#[derive(Debug, Clone)]
+pub struct Document {
+    path: PathBuf,
+    description: Option<String>,
+    parts: IndexMap<String, Part>,
+    components: Vec<Component>,
+    by_name: HashMap<String, usize>,
+    mates: Vec<Mate>,
+    revision: u64,
+}
+
+fn vec3(v: [f64; 3]) -> Vec3 {
+    Vec3::new(v[0], v[1], v[2])
+}
+
+fn parse_color(v: &serde_yaml::Value) -> Option<Color> {
+    match v {
+        serde_yaml::Value::String(s) => {
+            let h = s.strip_prefix('#')?;
+            if h.len() != 6 {
+                return None;
+            }
+            let c = |i: usize| u8::from_str_radix(&h[i..i + 2], 16).ok().map(|x| x as f64 / 255.0);
+            Some([c(0)?, c(2)?, c(4)?])
+        }
+        serde_yaml::Value::Sequence(s) if s.len() == 3 => {
+            let mut out = [0.0; 3];
+            for (o, x) in out.iter_mut().zip(s) {
+                *o = x.as_f64()?;
+                if !(0.0..=1.0).contains(o) {
+                    return None;
+                }
+            }
+            Some(out)
+        }
+        _ => None,
+    }
+}
+
+fn color_value(c: &Color) -> serde_yaml::Value {
+    let h = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    serde_yaml::Value::String(format!("#{:02x}{:02x}{:02x}", h(c[0]), h(c[1]), h(c[2])))
+}
+
+/// Snaps round-off (|x| < 1e-14 → 0) so saved matrices read cleanly; idempotent.
+fn tidy(x: f64) -> f64 {
+    if x.abs() < 1e-14 {
+        0.0
+    } else {
+        x
+    }
+}
+
+impl Document {
+    /// Loads a document and its meshes (through `cache`, so unchanged meshes are not
+    /// re-read), validates it and solves its mates.
+    pub fn load(path: &Path, cache: &mut MeshCache) -> Result<Self, DocumentError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SourceError::new(path, 0, 0, format!("cannot read the document: {e}")))?;
+        Self::from_yaml(&text, path, cache)
+    }
+
+    /// Loads a document with a private mesh cache.
+    pub fn open(path: &Path) -> Result<Self, DocumentError> {
+        Self::load(path, &mut MeshCache::new())
+    }
+
+    /// Builds a document from YAML text; `path` names the file in messages and anchors
+    /// relative mesh paths.
+    pub fn from_yaml(text: &str, path: &Path, cache: &mut MeshCache) -> Result<Self, DocumentError> {
+        let file: DocumentFile = serde_yaml::from_str(text).map_err(|e| {
+            let (line, col) = e.location().map(|l| (l.line(), l.column())).unwrap_or((0, 0));
+            SourceError::new(path, line, col, format!("invalid document: {e}"))
+        })?;
+        Self::from_file(file, text, path, cache)
+    }
+
+    fn from_file(file: DocumentFile, text: &str, path: &Path, cache: &mut MeshCache) -> Result<Self, DocumentError> {
+        let at = |needle: &str, section: &str, message: String| -> DocumentError {
+            let from = locate(text, &format!("{section}:"), 1).map(|l| l.0).unwrap_or(1);
+            let (line, col) = locate(text, needle, from).unwrap_or((0, 0));
+            SourceError::new(path, line, col, message).into()
+        };
+        if file.units != "mm" {
+            return Err(at("units", "units", format!("units `{}` are not supported: fitup documents are in mm", file.units)));
+        }
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let mut parts = IndexMap::new();
+        for (name, pf) in &file.parts {
+            let mesh_path = dir.join(&pf.stl);
+            let mesh = cache.get(&mesh_path).map_err(|e| at(&pf.stl, "parts", format!("part `{name}`: {e}")))?;
+            let mut references = IndexMap::new();
+            for (rname, p) in &pf.planes {
+                let normal = vec3(p.normal)
+                    .try_normalize(1e-12)
+                    .ok_or_else(|| at(rname, "parts", format!("plane `{rname}` of part `{name}` has a zero normal")))?;
+                references.insert(rname.clone(), Reference::Plane { point: vec3(p.point).into(), normal });
+            }
+            for (rname, a) in &pf.axes {
+                let direction = vec3(a.direction)
+                    .try_normalize(1e-12)
+                    .ok_or_else(|| at(rname, "parts", format!("axis `{rname}` of part `{name}` has a zero direction")))?;
+                references.insert(rname.clone(), Reference::Axis { point: vec3(a.point).into(), direction });
+            }
+            for (rname, p) in &pf.points {
+                references.insert(rname.clone(), Reference::Point(vec3(*p).into()));
+            }
+            for (rname, r) in &references {
+                let finite = r.anchor().coords.iter().chain(r.direction().unwrap_or_default().iter()).all(|v| v.is_finite());
+                if !finite {
+                    return Err(at(rname, "parts", format!("reference `{rname}` of part `{name}` is not finite")));
+                }
+            }
+            parts.insert(
+                name.clone(),
+                Part { name: name.clone(), stl: pf.stl.clone(), mesh_path, mesh, references, features: pf.features.clone() },
+            );
+        }
+        let mut components = Vec::with_capacity(file.components.len());
+        let mut by_name = HashMap::new();
+        for c in &file.components {
+            let needle = format!("name: {}", c.name);
+            if c.name.is_empty() || c.name.contains('/') {
+                return Err(at(&needle, "components", format!("component name `{}` must be non-empty without `/`", c.name)));
+            }
+            if by_name.insert(c.name.clone(), components.len()).is_some() {
+                return Err(at(&needle, "components", format!("duplicate component name `{}`", c.name)));
+            }
+            if !parts.contains_key(&c.part) {
+                return Err(DocumentError::from(at(
+                    &format!("part: {}", c.part),
+                    &needle,
+                    format!("component `{}` uses unknown part `{}`", c.name, c.part),
+                ))
+                .with_help(suggestion(&c.part, parts.keys().map(String::as_str))));
+            }
+            let transform = match &c.transform {
+                None => Transform::IDENTITY,
+                Some(m) => Transform::from_matrix(m).map_err(|e| {
+                    let from = locate(text, &needle, 1).map(|l| l.0).unwrap_or(1);
+                    let (line, col) = locate(text, "transform", from).unwrap_or((0, 0));
+                    DocumentError::from(SourceError::new(path, line, col, format!("component `{}`: {e}", c.name)))
+                })?,
+            };
+            let color = match &c.color {
+                None => None,
+                Some(v) => Some(parse_color(v).ok_or_else(|| {
+                    at(&needle, "components", format!("component `{}`: colour must be [r, g, b] in 0..1 or \"#rrggbb\"", c.name))
+                })?),
+            };
+            components.push(Component { name: c.name.clone(), part: c.part.clone(), fixed: c.fixed, color, transform });
+        }
+        let mut doc = Document {
+            path: path.to_path_buf(),
+            description: file.description.clone(),
+            parts,
+            components,
+            by_name,
+            mates: Vec::new(),
+            revision: 0,
+        };
+        let mut mate_names = HashMap::new();
+        for m in &file.mates {
+            let needle = format!("name: {}", m.name);
+            let err = |msg: String| at(&needle, "mates", msg);
+            if mate_names.insert(m.name.clone(), ()).is_some() {
+                return Err(err(format!("duplicate mate name `{}`", m.name)));
+            }
+            let kind = MateKind::parse(&m.kind).ok_or_else(|| {
+                err(format!(
+                    "mate `{}`: unknown type `{}` (coincident, concentric, parallel, perpendicular, distance, angle)",
+                    m.name, m.kind
+                ))
+            })?;
+            let ea = doc.mate_entity(&m.entities[0]).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+            let eb = doc.mate_entity(&m.entities[1]).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+            mates::check_entities(kind, &ea.geometry, &eb.geometry).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+            let about = match &m.about {
+                None => None,
+                Some(s) => {
+                    let e = doc.mate_entity(s).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+                    if !matches!(e.geometry, Reference::Axis { .. }) {
+                        return Err(err(format!("mate `{}`: `about` must name an axis", m.name)));
+                    }
+                    Some(e)
+                }
+            };
+            let value = match (kind, m.value) {
+                (MateKind::Angle, Some(v)) => Some(v.to_radians()),
+                (MateKind::Distance, Some(v)) => Some(v),
+                (k, None) if k.has_dimension() => return Err(err(format!("{} mate `{}` needs a `value`", k.name(), m.name))),
+                (_, None) => None,
+                (k, Some(_)) => return Err(err(format!("a {} mate takes no `value`", k.name()))),
+            };
+            if value.is_some_and(|v| !v.is_finite()) {
+                return Err(err(format!("mate `{}`: value is not finite", m.name)));
+            }
+            doc.mates.push(Mate { name: m.name.clone(), kind, entities: [ea, eb], value, aligned: m.aligned, about });
+        }
+        doc.rebuild().map_err(|e| at(&format!("name: {}", e_mate(&e)), "mates", e.to_string()))?;
+        Ok(doc)
+    }
+
+    fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
+        let (comp, reference) =
+            spec.split_once('/').ok_or_else(|| format!("entity `{spec}` must be written `component/reference`"))?;
+        let &component = self
+            .by_name
+            .get(comp)
+            .ok_or_else(|| format!("no component `{comp}` ({})", suggestion(comp, self.by_name.keys().map(String::as_str))))?;
+        let part = &self.parts[&self.components[component].part];
+        let geometry = part.reference(reference).ok_or_else(|| {
+            let names = part.references.keys().map(String::as_str).chain(Reference::BUILTIN_NAMES);
+            format!("part `{}` has no reference `{reference}` ({})", part.name, suggestion(reference, names))
+        })?;
+        Ok(MateEntity { component, reference: reference.to_string(), geometry })
+    }
+
+    /// Re-solves the mates (SolidWorks' rebuild). On failure the poses are unchanged.
+    pub fn rebuild(&mut self) -> Result<(), DocumentError> {
+        let mut poses: Vec<Transform> = self.components.iter().map(|c| c.transform).collect();
+        let fixed: Vec<bool> = self.components.iter().map(|c| c.fixed).collect();
+        mates::solve(&self.mates, &mut poses, &fixed).map_err(|e| DocumentError::Invalid(e.to_string()))?;
+        for (c, p) in self.components.iter_mut().zip(poses) {
+            c.transform = p;
+        }
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// The file this document was loaded from (and `save` writes).
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Incremented on every change of a pose or dimension (for derived caches).
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Free-text description.
+    pub fn description(&self) -> Option<&str> {
+        self.description.as_deref()
+    }
+
+    /// Parts in file order.
+    pub fn parts(&self) -> impl Iterator<Item = &Part> {
+        self.parts.values()
+    }
+
+    /// A part by name.
+    pub fn part(&self, name: &str) -> Result<&Part, DocumentError> {
+        self.parts.get(name).ok_or_else(|| DocumentError::NotFound {
+            what: "part",
+            name: name.into(),
+            hint: suggestion(name, self.parts.keys().map(String::as_str)),
+        })
+    }
+
+    /// Components in file order.
+    pub fn components(&self) -> &[Component] {
+        &self.components
+    }
+
+    /// The index of a component, or an error listing close matches.
+    pub fn component_index(&self, name: &str) -> Result<usize, DocumentError> {
+        self.by_name.get(name).copied().ok_or_else(|| DocumentError::NotFound {
+            what: "component",
+            name: name.into(),
+            hint: suggestion(name, self.components.iter().map(|c| c.name.as_str())),
+        })
+    }
+
+    /// A component by name.
+    pub fn component(&self, name: &str) -> Result<&Component, DocumentError> {
+        Ok(&self.components[self.component_index(name)?])
+    }
+
+    /// The mesh of a component's part (part frame, mm).
+    pub fn mesh_of(&self, component: usize) -> &Arc<Mesh> {
+        &self.parts[&self.components[component].part].mesh
+    }
+
+    /// Sets a component's pose (part → world, mm). Fixed components refuse to move.
+    /// Mates are not re-solved until [`rebuild`](Self::rebuild) or a dimension change,
+    /// as in SolidWorks.
+    pub fn set_transform(&mut self, name: &str, t: Transform) -> Result<(), DocumentError> {
+        let i = self.component_index(name)?;
+        if !t.is_finite() {
+            return Err(DocumentError::Invalid(format!("the pose for `{name}` is not finite")));
+        }
+        if self.components[i].fixed {
+            return Err(DocumentError::Invalid(format!("component `{name}` is fixed; set `fixed: false` to move it")));
+        }
+        self.components[i].transform = t;
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// Marks a component fixed or free.
+    pub fn set_fixed(&mut self, name: &str, fixed: bool) -> Result<(), DocumentError> {
+        let i = self.component_index(name)?;
+        self.components[i].fixed = fixed;
+        Ok(())
+    }
+
+    /// World-frame axis-aligned box of a component (mm).
+    pub fn world_aabb(&self, component: usize) -> Option<(Point3, Point3)> {
+        let c = &self.components[component];
+        let mesh = self.mesh_of(component);
+        let first = c.transform.apply(mesh.vertices.first()?);
+        Some(mesh.vertices.iter().fold((first, first), |(lo, hi), p| {
+            let q = c.transform.apply(p);
+            (lo.inf(&q), hi.sup(&q))
+        }))
+    }
+
+    /// The box around every component (mm), `None` for an empty document.
+    pub fn assembly_aabb(&self) -> Option<(Point3, Point3)> {
+        (0..self.components.len()).filter_map(|i| self.world_aabb(i)).reduce(|(a, b), (c, d)| (a.inf(&c), b.sup(&d)))
+    }
+
+    /// Mates in file order.
+    pub fn mates(&self) -> &[Mate] {
+        &self.mates
+    }
+
+    /// Full names of the driving dimensions (`D1@<mate>`), in file order.
+    pub fn dimensions(&self) -> Vec<String> {
+        self.mates.iter().filter(|m| m.kind.has_dimension()).map(|m| dimension::full_name(&m.name)).collect()
+    }
+
+    /// A dimension by full name (`D1@角度1`).
+    pub fn dimension(&self, full_name: &str) -> Result<Dimension, DocumentError> {
+        let i = self.dimension_mate(full_name)?;
+        let m = &self.mates[i];
+        let kind = if m.kind == MateKind::Angle { DimensionKind::Angle } else { DimensionKind::Length };
+        Ok(Dimension { name: full_name.to_string(), kind, value: m.value.unwrap_or(0.0) })
+    }
+
+    fn dimension_mate(&self, full_name: &str) -> Result<usize, DocumentError> {
+        let not_found = || DocumentError::NotFound {
+            what: "dimension",
+            name: full_name.into(),
+            hint: suggestion(full_name, self.dimensions().iter().map(String::as_str).collect::<Vec<_>>().clone()),
+        };
+        let mate = dimension::mate_of(full_name).ok_or_else(not_found)?;
+        self.mates.iter().position(|m| m.name == mate && m.kind.has_dimension()).ok_or_else(not_found)
+    }
+
+    /// Sets a dimension in internal units (mm or radians) and re-solves the mates, so
+    /// every later query sees the driven poses. On failure nothing changes.
+    pub fn set_dimension(&mut self, full_name: &str, value: f64) -> Result<(), DocumentError> {
+        if !value.is_finite() {
+            return Err(DocumentError::Invalid(format!("{full_name}: value {value} is not finite")));
+        }
+        let i = self.dimension_mate(full_name)?;
+        if self.mates[i].kind == MateKind::Distance && value < 0.0 {
+            return Err(DocumentError::Invalid(format!("{full_name}: a distance cannot be negative ({value} mm)")));
+        }
+        let before = (self.mates[i].value, self.components.iter().map(|c| c.transform).collect::<Vec<_>>());
+        self.mates[i].value = Some(value);
+        if let Err(e) = self.rebuild() {
+            self.mates[i].value = before.0;
+            for (c, t) in self.components.iter_mut().zip(before.1) {
+                c.transform = t;
+            }
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// The document as its YAML schema (what `save` writes).
+    pub fn to_file(&self) -> DocumentFile {
+        let parts = self
+            .parts
+            .values()
+            .map(|p| {
+                let mut pf = PartFile {
+                    stl: p.stl.clone(),
+                    planes: IndexMap::new(),
+                    axes: IndexMap::new(),
+                    points: IndexMap::new(),
+                    features: p.features.clone(),
+                };
+                for (n, r) in &p.references {
+                    let a = |v: Vec3| [v.x, v.y, v.z];
+                    match *r {
+                        Reference::Plane { point, normal } => {
+                            pf.planes.insert(n.clone(), PlaneFile { point: a(point.coords), normal: a(normal) });
+                        }
+                        Reference::Axis { point, direction } => {
+                            pf.axes.insert(n.clone(), AxisFile { point: a(point.coords), direction: a(direction) });
+                        }
+                        Reference::Point(point) => {
+                            pf.points.insert(n.clone(), a(point.coords));
+                        }
+                    }
+                }
+                (p.name.clone(), pf)
+            })
+            .collect();
+        let components = self
+            .components
+            .iter()
+            .map(|c| ComponentFile {
+                name: c.name.clone(),
+                part: c.part.clone(),
+                fixed: c.fixed,
+                color: c.color.as_ref().map(color_value),
+                transform: Some(c.transform.to_matrix().map(|row| row.map(tidy))),
+            })
+            .collect();
+        let mates = self
+            .mates
+            .iter()
+            .map(|m| MateFile {
+                name: m.name.clone(),
+                kind: m.kind.name().into(),
+                entities: m.entities.clone().map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+                value: m.value.map(|v| if m.kind == MateKind::Angle { tidy(v.to_degrees()) } else { tidy(v) }),
+                aligned: m.aligned,
+                about: m.about.as_ref().map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+            })
+            .collect();
+        DocumentFile { units: "mm".into(), description: self.description.clone(), parts, components, mates }
+    }
+
+    /// The document as YAML text.
+    pub fn to_yaml(&self) -> String {
+        serde_yaml::to_string(&self.to_file()).unwrap_or_default()
+    }
+
+    /// Writes the document back to its file atomically.
+    pub fn save(&self) -> Result<(), DocumentError> {
+        self.write_to(&self.path.clone())
+    }
+
+    /// Writes the document to `path` atomically and makes it the document's file.
+    /// Relative mesh paths are rewritten so they still point at the same meshes.
+    pub fn save_as(&mut self, path: &Path) -> Result<(), DocumentError> {
+        let new_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let old = self.parts.clone();
+        for p in self.parts.values_mut() {
+            if let Some(rel) = relative_path(&p.mesh_path, &new_dir) {
+                p.stl = rel;
+            }
+        }
+        if let Err(e) = self.write_to(path) {
+            self.parts = old;
+            return Err(e);
+        }
+        self.path = path.to_path_buf();
+        Ok(())
+    }
+
+    fn write_to(&self, path: &Path) -> Result<(), DocumentError> {
+        let text = serde_yaml::to_string(&self.to_file())
+            .map_err(|e| DocumentError::Write { path: path.into(), message: e.to_string() })?;
+        crate::fsutil::write_atomic(path, text.as_bytes())
+            .map_err(|e| DocumentError::Write { path: path.into(), message: e.to_string() })
+    }
+
+    /// Every file this document was built from (the document and its meshes), for
+    /// watch mode.
+    pub fn source_files(&self) -> Vec<PathBuf> {
+        std::iter::once(self.path.clone()).chain(self.parts.values().map(|p| p.mesh_path.clone())).collect()
+    }
+}
+
+impl DocumentError {
+    /// Adds a hint to a located error.
+    pub fn with_help(self, help: String) -> Self {
+        match self {
+            DocumentError::Source(s) => DocumentError::Source(s.with_help(help)),
+            other => other,
+        }
+    }
+
+    /// The message with source snippet for located errors.
+    pub fn render(&self) -> String {
+        match self {
+            DocumentError::Source(s) => s.render(),
+            other => other.to_string(),
+        }
+    }
+}
+
+fn e_mate(e: &DocumentError) -> String {
+    let s = e.to_string();
+    s.split('`').nth(1).unwrap_or_default().to_string()
+}
+
+/// `target` written relative to `base` when possible (both made absolute first).
+fn relative_path(target: &Path, base: &Path) -> Option<String> {
+    let abs = |p: &Path| std::path::absolute(p).ok();
+    let (t, b) = (abs(target)?, abs(base)?);
+    let (tc, bc): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
+    let common = tc.iter().zip(&bc).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        return Some(t.to_string_lossy().into_owned());
+    }
+    let mut out = PathBuf::new();
+    for _ in common..bc.len() {
+        out.push("..");
+    }
+    for c in &tc[common..] {
+        out.push(c);
+    }
+    Some(out.to_string_lossy().replace('\\', "/"))
+}
+
+#[cfg(test)]
+mod tests;
