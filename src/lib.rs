@@ -10,4 +10,6 @@
 //! | module | what lives there |
 //! |---|---|
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions |
+//! | [`planning`] | path planners for one moving component (greedy ant, RRT family, disassembly) |
 pub mod math;
+pub mod planning;
