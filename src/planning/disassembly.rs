@@ -151,7 +151,16 @@ pub fn disassemble(
     let mut path = match planner {
         DisassemblyPlanner::Rrt(o) => {
             o.validate()?;
-            plan_tree("disassemble_rrt", validator, space, assembled, &target, o, None, progress)?
+            plan_tree(
+                "disassemble_rrt",
+                validator,
+                space,
+                assembled,
+                &target,
+                o,
+                None,
+                progress,
+            )?
         }
         DisassemblyPlanner::LocalRrt(o) => {
             o.validate()?;

@@ -58,7 +58,11 @@ impl GreedyAntOptions {
         PlanError::positive("dis", self.dis)?;
         if let Some(r) = self.radius {
             if !(r.is_finite() && r >= 0.0) {
-                return Err(PlanError::invalid("radius", r.to_string(), "a finite number ≥ 0"));
+                return Err(PlanError::invalid(
+                    "radius",
+                    r.to_string(),
+                    "a finite number ≥ 0",
+                ));
             }
         }
         self.smoothing.validate()
@@ -134,7 +138,14 @@ pub fn greedy_ant(
     for layer in 1..step {
         let prev = poses[poses.len() - 1];
         if let Err(f) = run.next(layer, space.distance(&prev, goal)) {
-            return Ok(Path::failed(NAME, f, run.iterations, layer, &checker, run.elapsed_ms()));
+            return Ok(Path::failed(
+                NAME,
+                f,
+                run.iterations,
+                layer,
+                &checker,
+                run.elapsed_ms(),
+            ));
         }
         let frac = layer as f64 / step as f64;
         let centre = s + delta * frac;

@@ -72,6 +72,11 @@ pub struct Lattice {
     /// (up to `step`) while it is free and brings the node closer to the goal: one
     /// iteration then crosses a whole narrow channel. Not in seed 002. Default true.
     pub follow_through: bool,
+    /// Rank the lattice candidates by distance to the random sample when the sample
+    /// was not the goal (seed 002 always ranks by distance to the goal, which pulls
+    /// every failed extension into the same local minimum in front of a wall).
+    /// Goal-biased iterations always rank by distance to the goal. Default true.
+    pub rank_toward_sample: bool,
 }
 
 impl Default for Lattice {
@@ -83,6 +88,7 @@ impl Default for Lattice {
             alpha: [5f64.to_radians(); 3],
             frame: DiscretizationFrame::Part,
             follow_through: true,
+            rank_toward_sample: true,
         }
     }
 }
@@ -108,7 +114,9 @@ impl Lattice {
     /// The lattice edge lengths to try around `pose`, longest first.
     fn edge_lengths(&self, checker: &mut Checker<'_>, pose: &Transform) -> Vec<f64> {
         if let Some(c) = checker.clearance(pose) {
-            return vec![(c * self.clearance_gain).clamp(self.edge_length_min, self.edge_length_max)];
+            return vec![
+                (c * self.clearance_gain).clamp(self.edge_length_min, self.edge_length_max)
+            ];
         }
         let mut out = Vec::new();
         let mut l = self.edge_length_max;
@@ -146,7 +154,11 @@ impl Lattice {
     ) {
         let base = tree.poses[near];
         let here = target.distance(&base, space);
-        let axes = [self.axis(&base, 0), self.axis(&base, 1), self.axis(&base, 2)];
+        let axes = [
+            self.axis(&base, 0),
+            self.axis(&base, 1),
+            self.axis(&base, 2),
+        ];
         let mut candidates: Vec<(f64, Vec3, Transform)> = Vec::with_capacity(26);
         for l in self.edge_lengths(checker, &base) {
             candidates.clear();
@@ -160,8 +172,7 @@ impl Lattice {
                             + axes[1] * f64::from(dy)
                             + axes[2] * f64::from(dz))
                             * l;
-                        let pose =
-                            Transform::from_parts(base.translation() + dir, base.rotation());
+                        let pose = Transform::from_parts(base.translation() + dir, base.rotation());
                         if space.contains(&pose, reference) && !tree.holds(&pose) {
                             candidates.push((target.distance(&pose, space), dir, pose));
                         }
@@ -174,7 +185,9 @@ impl Lattice {
                     let i = tree.add(pose, near);
                     added.push(i);
                     if self.follow_through && d < here {
-                        self.follow(checker, space, tree, i, dir, d, target, reference, step, added);
+                        self.follow(
+                            checker, space, tree, i, dir, d, target, reference, step, added,
+                        );
                     }
                     return;
                 }

@@ -156,7 +156,8 @@ pub(crate) fn plan_tree(
         if let Err(f) = run.next(tree.len(), best) {
             break Err(f);
         }
-        let sample = if rng.uniform() < options.goal_bias {
+        let goal_biased = rng.uniform() < options.goal_bias;
+        let sample = if goal_biased {
             target.sample(&mut rng, space, start)
         } else {
             space.sample(&mut rng, &reference)
@@ -171,12 +172,18 @@ pub(crate) fn plan_tree(
         {
             added.push(tree.add(candidate, near));
         } else if let Some(local) = local {
+            let toward_sample = PoseTarget(sample);
+            let rank: &dyn Target = if goal_biased || !local.rank_toward_sample {
+                target
+            } else {
+                &toward_sample
+            };
             local.expand(
                 &mut checker,
                 space,
                 &mut tree,
                 near,
-                target,
+                rank,
                 &reference,
                 options.step,
                 &mut added,
@@ -228,6 +235,7 @@ pub(crate) fn plan_tree(
 }
 
 /// Smooths a found path and builds the result.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn finish(
     planner: &'static str,
     mut poses: Vec<Transform>,

@@ -126,7 +126,11 @@ pub fn rrt_connect(
                 options,
                 &mut best,
             ) {
-                break Ok(if a == 0 { (last, reached) } else { (reached, last) });
+                break Ok(if a == 0 {
+                    (last, reached)
+                } else {
+                    (reached, last)
+                });
             }
         }
         a = b;

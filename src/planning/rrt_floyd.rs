@@ -126,7 +126,14 @@ pub fn rrt_floyd(
         }
     }
     if matches!(stop, Failure::Cancelled | Failure::TimeLimit) {
-        return Ok(Path::failed(NAME, stop, run.iterations, tree.len(), &checker, run.elapsed_ms()));
+        return Ok(Path::failed(
+            NAME,
+            stop,
+            run.iterations,
+            tree.len(),
+            &checker,
+            run.elapsed_ms(),
+        ));
     }
     // Phase 2: the graph (goal last when the walk did not reach it).
     let mut nodes = tree.poses.clone();
@@ -150,7 +157,14 @@ pub fn rrt_floyd(
     }
     for i in 0..n {
         if let Err(f) = run.check(n, best) {
-            return Ok(Path::failed(NAME, f, run.iterations, n, &checker, run.elapsed_ms()));
+            return Ok(Path::failed(
+                NAME,
+                f,
+                run.iterations,
+                n,
+                &checker,
+                run.elapsed_ms(),
+            ));
         }
         for j in i + 1..n {
             let w = space.distance(&nodes[i], &nodes[j]);
@@ -181,7 +195,14 @@ pub fn rrt_floyd(
         }
     }
     if dist[g].is_infinite() {
-        return Ok(Path::failed(NAME, stop, run.iterations, n, &checker, run.elapsed_ms()));
+        return Ok(Path::failed(
+            NAME,
+            stop,
+            run.iterations,
+            n,
+            &checker,
+            run.elapsed_ms(),
+        ));
     }
     let mut poses = vec![nodes[0]];
     let mut i = 0;

@@ -111,7 +111,11 @@ impl PlanError {
         if (0.0..=1.0).contains(&v) {
             Ok(())
         } else {
-            Err(Self::invalid(option, v.to_string(), "a probability in [0, 1]"))
+            Err(Self::invalid(
+                option,
+                v.to_string(),
+                "a probability in [0, 1]",
+            ))
         }
     }
 

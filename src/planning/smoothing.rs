@@ -104,9 +104,12 @@ pub(crate) fn shortcut(
         if space.distance(&a, &b) >= old - 1e-9 {
             continue;
         }
-        if checker.edge_free(&a, &b) {
-            // Sub-edges a→p[i+1]… are not kept: the new key poses are a and b, both on
-            // already accepted edges (p[i]→a ⊂ p[i]→p[i+1], b→p[j+1] ⊂ p[j]→p[j+1]).
+        // p[i]→a and b→p[j+1] lie on accepted edges, but a stepwise validator checks
+        // other poses on them: re-check so that every kept edge was itself accepted.
+        if checker.edge_free(&a, &b)
+            && checker.edge_free(&poses[i], &a)
+            && checker.edge_free(&b, &poses[j + 1])
+        {
             let mut next = Vec::with_capacity(poses.len());
             next.extend_from_slice(&poses[..=i]);
             next.push(a);

@@ -141,12 +141,7 @@ impl PlanningSpace {
         match self.rotation {
             RotationFreedom::Free => true,
             RotationFreedom::Fixed => q.angle_to(reference) <= 1e-7,
-            RotationFreedom::Axes {
-                x,
-                y,
-                z,
-                max_angle,
-            } => {
+            RotationFreedom::Axes { x, y, z, max_angle } => {
                 let rel = q * reference.inverse();
                 let (a, b, c) = AngleConvention::XyzFixed.angles(&rel);
                 [(x, a), (y, b), (z, c)].iter().all(|&(on, ang)| {
@@ -180,12 +175,7 @@ impl PlanningSpace {
         let q = match self.rotation {
             RotationFreedom::Fixed => *reference,
             RotationFreedom::Free => rng.rotation(),
-            RotationFreedom::Axes {
-                x,
-                y,
-                z,
-                max_angle,
-            } => {
+            RotationFreedom::Axes { x, y, z, max_angle } => {
                 let mut angle = |on: bool| {
                     if on {
                         rng.range(-max_angle, max_angle)
@@ -236,6 +226,10 @@ mod tests {
         let s = PlanningSpace::new(Vec3::new(0.0, f64::NAN, 0.0), Vec3::new(1.0, 1.0, 1.0));
         assert!(s.validate().is_err());
         let s = PlanningSpace::new(Vec3::zeros(), Vec3::repeat(1.0)).with_rotation_weight(0.0);
-        assert!(s.validate().unwrap_err().to_string().contains("rotation_weight"));
+        assert!(s
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("rotation_weight"));
     }
 }

@@ -104,8 +104,16 @@ pub fn stepwise_edge_free(
             step_mm: dm,
             step_rad: dr,
         } => (
-            if step_mm.is_finite() && step_mm > 0.0 { step_mm } else { dm },
-            if step_rad.is_finite() && step_rad > 0.0 { step_rad } else { dr },
+            if step_mm.is_finite() && step_mm > 0.0 {
+                step_mm
+            } else {
+                dm
+            },
+            if step_rad.is_finite() && step_rad > 0.0 {
+                step_rad
+            } else {
+                dr
+            },
         ),
         EdgeResolution::Continuous => unreachable!("DEFAULT is stepwise"),
     };
@@ -116,7 +124,10 @@ pub fn stepwise_edge_free(
     if !is_free(to) {
         return false;
     }
-    let steps = (dist / step_mm).ceil().max((angle / step_rad).ceil()).max(1.0);
+    let steps = (dist / step_mm)
+        .ceil()
+        .max((angle / step_rad).ceil())
+        .max(1.0);
     // Above ~10^9 poses the caller asked for something unreasonable; cap the count
     // rather than loop for hours.
     let n = steps.min(1e9) as usize;
@@ -215,8 +226,8 @@ mod tests {
     #[test]
     fn rotation_sets_the_step_count() {
         let a = Transform::IDENTITY;
-        let b = Transform::from_rotation_about(crate::math::Point3::origin(), Vec3::z(), 1.0)
-            .unwrap();
+        let b =
+            Transform::from_rotation_about(crate::math::Point3::origin(), Vec3::z(), 1.0).unwrap();
         let mut n = 0;
         stepwise_edge_free(
             |_| {
