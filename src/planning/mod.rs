@@ -41,7 +41,7 @@ pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
 pub use path::{Failure, Path};
 pub use rrt::{biased_rrt, rrt, RrtOptions};
 pub use rrt_connect::{rrt_connect, RrtConnectOptions};
-pub use rrt_floyd::{rrt_floyd, RrtFloydOptions};
+pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
 pub use run::{Control, Limits, PlanError, Progress, ProgressFn};
 pub use smoothing::{smooth, Smoothing};
 pub use space::{PlanningSpace, RotationFreedom};
