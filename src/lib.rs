@@ -9,11 +9,15 @@
 //!
 //! | module | what lives there |
 //! |---|---|
-//! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions |
-//! | [`mesh`] | triangle meshes, STL I/O, the mesh cache |
-//! | [`fsutil`] | atomic writes, content hashes |
+//! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions, the seeded RNG |
+//! | [`mesh`] | triangle meshes, STL I/O, generated shapes, the mesh cache |
+//! | [`document`] | the assembly document: parts, components, mates, dimensions |
+//! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly |
+//! | [`diagnostics`] | errors located in user files, "did you mean" hints |
+//! | [`fsutil`] | atomic writes, content hashes, file stamps |
+pub mod diagnostics;
+pub mod document;
 pub mod fsutil;
 pub mod math;
 pub mod mesh;
-pub mod diagnostics;
-pub mod document;
+pub mod planning;

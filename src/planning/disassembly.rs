@@ -1,0 +1,181 @@
+//! Seed 002's disassembly-first planning: "what can be taken apart can be assembled".
+
+use super::local_rrt::LocalRrtOptions;
+use super::path::Path;
+use super::rrt::{plan_tree, RrtOptions};
+use super::run::{PlanError, ProgressFn};
+use super::space::PlanningSpace;
+use super::tree::Target;
+use super::validator::MotionValidator;
+use crate::math::{Point3, Rng, Transform, Vec3};
+
+/// An axis-aligned box (mm), in the frame the caller states.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Lower corner (mm).
+    pub min: Vec3,
+    /// Upper corner (mm).
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The box `min..max` (mm).
+    pub fn new(min: Vec3, max: Vec3) -> Self {
+        Self { min, max }
+    }
+
+    fn validate(&self, option: &'static str) -> Result<(), PlanError> {
+        let ok = (0..3).all(|i| {
+            self.min[i].is_finite() && self.max[i].is_finite() && self.min[i] <= self.max[i]
+        });
+        if ok {
+            Ok(())
+        } else {
+            Err(PlanError::invalid(
+                option,
+                format!("{:?}..{:?}", self.min.as_slice(), self.max.as_slice()),
+                "a finite box with min ≤ max on every axis",
+            ))
+        }
+    }
+
+    /// The assembly-frame box around this local box placed at `pose`.
+    pub fn transformed(&self, pose: &Transform) -> Aabb {
+        let mut lo = Vec3::repeat(f64::INFINITY);
+        let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+        for k in 0..8 {
+            let c = Point3::new(
+                if k & 1 == 0 { self.min.x } else { self.max.x },
+                if k & 2 == 0 { self.min.y } else { self.max.y },
+                if k & 4 == 0 { self.min.z } else { self.max.z },
+            );
+            let p = pose.apply(&c).coords;
+            lo = lo.inf(&p);
+            hi = hi.sup(&p);
+        }
+        Aabb { min: lo, max: hi }
+    }
+}
+
+/// Which tree planner searches the disassembly path.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DisassemblyPlanner {
+    /// [`rrt`](super::rrt) / [`biased_rrt`](super::biased_rrt) with these options.
+    Rrt(RrtOptions),
+    /// [`local_rrt`](super::local_rrt) with these options (seed 002's choice).
+    LocalRrt(LocalRrtOptions),
+}
+
+/// The goal region: the component's box is outside the product's box.
+struct OutsideBox {
+    part: Aabb,
+    product: Aabb,
+    assembled: Transform,
+}
+
+impl OutsideBox {
+    /// Translations (mm) along ±X, ±Y, ±Z that would take the box out.
+    fn exits(&self, pose: &Transform) -> [f64; 6] {
+        let b = self.part.transformed(pose);
+        let p = &self.product;
+        [
+            p.max.x - b.min.x,
+            b.max.x - p.min.x,
+            p.max.y - b.min.y,
+            b.max.y - p.min.y,
+            p.max.z - b.min.z,
+            b.max.z - p.min.z,
+        ]
+    }
+}
+
+impl Target for OutsideBox {
+    fn reached(&self, pose: &Transform) -> bool {
+        // Touching the product box from outside counts as out.
+        self.exits(pose).iter().any(|&e| e <= 0.0)
+    }
+    fn pose(&self) -> Option<&Transform> {
+        None
+    }
+    fn distance(&self, pose: &Transform, _: &PlanningSpace) -> f64 {
+        self.exits(pose)
+            .iter()
+            .fold(f64::INFINITY, |m, &e| m.min(e))
+            .max(0.0)
+    }
+    fn sample(&self, rng: &mut Rng, space: &PlanningSpace, _: &Transform) -> Transform {
+        // A pose just outside the box along a random axis direction from the
+        // assembled pose, clamped into the space.
+        let dir = rng.below(6);
+        let travel = self.exits(&self.assembled)[dir] + 1.0;
+        let mut t = self.assembled.translation();
+        t[dir / 2] += if dir % 2 == 0 { travel } else { -travel };
+        for k in 0..3 {
+            t[k] = t[k].clamp(space.min[k], space.max[k]);
+        }
+        Transform::from_parts(t, self.assembled.rotation())
+    }
+}
+
+/// Plans an assembly path by planning the disassembly (seed 002).
+///
+/// The search starts at the `assembled` pose and stops as soon as the component's
+/// box (`part_box`, in the component's local frame) placed at a tree node no longer
+/// overlaps `product_box` (assembly frame); there is no goal orientation. The path
+/// is then reversed: the returned path starts outside the product and ends at
+/// `assembled`. Goal-biased samples are poses just outside the product box along
+/// ±X/±Y/±Z from the assembled pose; the local lattice ranks candidates by the
+/// smallest translation still needed to leave the box.
+///
+/// A [`Failure::StartInCollision`](super::Failure::StartInCollision) here means the
+/// assembled pose collides.
+///
+/// # Errors
+/// Invalid options, bounds, boxes or a non-finite pose.
+pub fn disassemble(
+    validator: &mut dyn MotionValidator,
+    space: &PlanningSpace,
+    assembled: &Transform,
+    part_box: &Aabb,
+    product_box: &Aabb,
+    planner: &DisassemblyPlanner,
+    progress: Option<ProgressFn<'_>>,
+) -> Result<Path, PlanError> {
+    part_box.validate("part_box")?;
+    product_box.validate("product_box")?;
+    let target = OutsideBox {
+        part: *part_box,
+        product: *product_box,
+        assembled: *assembled,
+    };
+    let mut path = match planner {
+        DisassemblyPlanner::Rrt(o) => {
+            o.validate()?;
+            plan_tree(
+                "disassemble_rrt",
+                validator,
+                space,
+                assembled,
+                &target,
+                o,
+                None,
+                progress,
+            )?
+        }
+        DisassemblyPlanner::LocalRrt(o) => {
+            o.validate()?;
+            plan_tree(
+                "disassemble_local_rrt",
+                validator,
+                space,
+                assembled,
+                &target,
+                &o.rrt,
+                Some(&o.lattice),
+                progress,
+            )?
+        }
+    };
+    path.poses.reverse();
+    Ok(path)
+}

@@ -1,0 +1,48 @@
+//! Path planning for one rigid component moving among fixed ones.
+//!
+//! A pose is a [`Transform`](crate::math::Transform) (translation in mm + rotation), so
+//! the configuration space is SE(3), clipped by a [`PlanningSpace`]. Planners never look
+//! at geometry: they ask a [`MotionValidator`] whether a pose or a straight SE(3) edge is
+//! free, so any interference checker (meshes, boxes, an analytic test scene) can drive
+//! them.
+//!
+//! | planner | origin | strength |
+//! |---|---|---|
+//! | [`greedy_ant`] | seed 000, single-ant dynamic greedy algorithm (table 4) | deterministic, open scenes |
+//! | [`rrt_floyd`] | seed 000, random-walk RRT + Floyd shortest path | short paths in small graphs |
+//! | [`rrt`], [`biased_rrt`] | seed 002 baselines | reference only |
+//! | [`local_rrt`] | seed 002, local-discretization RRT | narrow passages, insertions |
+//! | [`rrt_connect`] | bidirectional RRT (+ the local discretization on failure) | general, fast |
+//! | [`disassemble`] | seed 002, "what can be taken apart can be assembled" | insertions with unknown approach |
+//!
+//! Every planner takes a seed ([`Limits::seed`]); for a given seed the result is
+//! identical whenever the iteration limit (not the time limit) ends the search.
+//! Details, options and defaults: `docs/planning.md`.
+
+mod disassembly;
+mod greedy_ant;
+mod local_rrt;
+mod path;
+mod rrt;
+mod rrt_connect;
+mod rrt_floyd;
+mod run;
+mod smoothing;
+mod space;
+mod tree;
+mod validator;
+
+#[cfg(test)]
+mod test_scenes;
+
+pub use disassembly::{disassemble, Aabb, DisassemblyPlanner};
+pub use greedy_ant::{greedy_ant, GreedyAntOptions};
+pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
+pub use path::{Failure, Path};
+pub use rrt::{biased_rrt, rrt, RrtOptions};
+pub use rrt_connect::{rrt_connect, RrtConnectOptions};
+pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
+pub use run::{Control, Limits, PlanError, Progress, ProgressFn};
+pub use smoothing::{smooth, Smoothing};
+pub use space::{PlanningSpace, RotationFreedom};
+pub use validator::{stepwise_edge_free, EdgeResolution, MotionValidator};

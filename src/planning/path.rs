@@ -1,0 +1,283 @@
+//! [`Path`]: what a planner returns, found or not.
+
+use super::validator::{Checker, EdgeResolution, MotionValidator};
+use crate::math::{AngleConvention, Transform};
+use std::io::{self, Write};
+
+/// Why a planner returned no path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum Failure {
+    /// The iteration limit was reached.
+    #[error("iteration limit reached")]
+    IterationLimit,
+    /// The time limit was reached.
+    #[error("time limit reached")]
+    TimeLimit,
+    /// The start pose collides.
+    #[error("the start pose is in collision")]
+    StartInCollision,
+    /// The goal pose collides.
+    #[error("the goal pose is in collision")]
+    GoalInCollision,
+    /// The start pose is outside the planning space (box or allowed rotations).
+    #[error("the start pose is outside the planning space")]
+    StartOutOfBounds,
+    /// The goal pose is outside the planning space (box or allowed rotations).
+    #[error("the goal pose is outside the planning space")]
+    GoalOutOfBounds,
+    /// The progress callback asked to stop.
+    #[error("cancelled")]
+    Cancelled,
+    /// A deterministic search ran out of candidates (greedy ant: no free grid point
+    /// on layer `layer`; rrt_floyd: the graph does not join start and goal).
+    #[error("no free candidate left (layer or stage {0})")]
+    Exhausted(usize),
+}
+
+/// The result of a planning run.
+///
+/// `poses` are the key poses of the path, start first and goal last; consecutive
+/// poses are joined by straight SE(3) edges (translation lerp + slerp) that the
+/// validator accepted at `resolution`. Empty when `failure` is set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Path {
+    /// `None` when a path was found, otherwise why not.
+    pub failure: Option<Failure>,
+    /// Key poses, start first (empty when not found).
+    pub poses: Vec<Transform>,
+    /// Sum of the translation lengths of the edges (mm).
+    pub length_mm: f64,
+    /// Sum of the rotation angles of the edges (rad).
+    pub rotation_rad: f64,
+    /// `length_mm` before smoothing (equal to it when smoothing is off).
+    pub raw_length_mm: f64,
+    /// `rotation_rad` before smoothing.
+    pub raw_rotation_rad: f64,
+    /// Iterations the planner ran.
+    pub iterations: usize,
+    /// Poses the search held at the end (tree or graph nodes).
+    pub nodes: usize,
+    /// Calls to [`MotionValidator::is_free`] made by the planner.
+    pub pose_checks: u64,
+    /// Calls to [`MotionValidator::edge_free`] made by the planner (smoothing included).
+    pub edge_checks: u64,
+    /// Wall-clock time of the run (ms).
+    pub time_ms: f64,
+    /// How the validator checked the edges.
+    pub resolution: EdgeResolution,
+    /// Which planner produced the path.
+    pub planner: &'static str,
+}
+
+impl Path {
+    /// Whether a path was found.
+    pub fn found(&self) -> bool {
+        self.failure.is_none()
+    }
+
+    /// Collision checks of both kinds.
+    pub fn collision_checks(&self) -> u64 {
+        self.pose_checks + self.edge_checks
+    }
+
+    pub(crate) fn failed(
+        planner: &'static str,
+        failure: Failure,
+        iterations: usize,
+        nodes: usize,
+        checker: &Checker<'_>,
+        time_ms: f64,
+    ) -> Self {
+        Self {
+            failure: Some(failure),
+            poses: Vec::new(),
+            length_mm: 0.0,
+            rotation_rad: 0.0,
+            raw_length_mm: 0.0,
+            raw_rotation_rad: 0.0,
+            iterations,
+            nodes,
+            pose_checks: checker.pose_checks,
+            edge_checks: checker.edge_checks,
+            time_ms,
+            resolution: checker.resolution(),
+            planner,
+        }
+    }
+
+    pub(crate) fn found_with(
+        planner: &'static str,
+        poses: Vec<Transform>,
+        raw: (f64, f64),
+        iterations: usize,
+        nodes: usize,
+        checker: &Checker<'_>,
+        time_ms: f64,
+    ) -> Self {
+        let (length_mm, rotation_rad) = measure(&poses);
+        Self {
+            failure: None,
+            poses,
+            length_mm,
+            rotation_rad,
+            raw_length_mm: raw.0,
+            raw_rotation_rad: raw.1,
+            iterations,
+            nodes,
+            pose_checks: checker.pose_checks,
+            edge_checks: checker.edge_checks,
+            time_ms,
+            resolution: checker.resolution(),
+            planner,
+        }
+    }
+
+    /// The path with poses at most `step_mm` and `step_rad` apart along every edge
+    /// (for animation and fine re-checks); key poses are kept. Non-positive or
+    /// non-finite steps return the key poses unchanged.
+    pub fn densify(&self, step_mm: f64, step_rad: f64) -> Vec<Transform> {
+        let valid = |s: f64| s.is_finite() && s > 0.0;
+        if !(valid(step_mm) && valid(step_rad)) {
+            return self.poses.clone();
+        }
+        let mut out = Vec::with_capacity(self.poses.len());
+        if let Some(first) = self.poses.first() {
+            out.push(*first);
+        }
+        for w in self.poses.windows(2) {
+            let (angle, dist) = w[0].distance_to(&w[1]);
+            let n = (dist / step_mm)
+                .ceil()
+                .max((angle / step_rad).ceil())
+                .clamp(1.0, 1e7) as usize;
+            for k in 1..=n {
+                out.push(w[0].interpolate(&w[1], k as f64 / n as f64));
+            }
+        }
+        out
+    }
+
+    /// Re-checks the path with `validator`: the first pose with `is_free`, every edge
+    /// with `edge_free`. On failure returns the index of the first bad edge (0 for the
+    /// start pose itself) and its end pose.
+    pub fn revalidate(
+        &self,
+        validator: &mut dyn MotionValidator,
+    ) -> Result<(), (usize, Transform)> {
+        if let Some(first) = self.poses.first() {
+            if !validator.is_free(first) {
+                return Err((0, *first));
+            }
+        }
+        for (i, w) in self.poses.windows(2).enumerate() {
+            if !validator.edge_free(&w[0], &w[1]) {
+                return Err((i, w[1]));
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the key poses as CSV: `index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`, angles in
+    /// `conv` (degrees, as in the user-facing `X Y Z A B C` triples).
+    pub fn write_csv(&self, out: &mut dyn Write, conv: AngleConvention) -> io::Result<()> {
+        writeln!(out, "index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg")?;
+        for (i, p) in self.poses.iter().enumerate() {
+            let v = p.to_xyzabc(conv);
+            writeln!(
+                out,
+                "{i},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+                v[0],
+                v[1],
+                v[2],
+                v[3].to_degrees(),
+                v[4].to_degrees(),
+                v[5].to_degrees()
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Translation length (mm) and rotation (rad) of a polyline of poses.
+pub(crate) fn measure(poses: &[Transform]) -> (f64, f64) {
+    poses.windows(2).fold((0.0, 0.0), |(l, r), w| {
+        let (a, d) = w[0].distance_to(&w[1]);
+        (l + d, r + a)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    fn sample_path() -> Path {
+        let poses = vec![
+            Transform::IDENTITY,
+            Transform::from_translation(Vec3::new(10.0, 0.0, 0.0)),
+            Transform::from_xyzabc(
+                Vec3::new(10.0, 5.0, 0.0),
+                [0.0, 0.0, 0.5],
+                AngleConvention::XyzFixed,
+            ),
+        ];
+        let (l, r) = measure(&poses);
+        Path {
+            failure: None,
+            poses,
+            length_mm: l,
+            rotation_rad: r,
+            raw_length_mm: l,
+            raw_rotation_rad: r,
+            iterations: 0,
+            nodes: 0,
+            pose_checks: 0,
+            edge_checks: 0,
+            time_ms: 0.0,
+            resolution: EdgeResolution::DEFAULT,
+            planner: "test",
+        }
+    }
+
+    #[test]
+    fn densify_keeps_ends_and_respects_steps() {
+        let p = sample_path();
+        assert!((p.length_mm - 15.0).abs() < 1e-9 && (p.rotation_rad - 0.5).abs() < 1e-9);
+        let d = p.densify(1.0, 0.05);
+        assert!(d[0].approx_eq(&p.poses[0], 1e-12, 1e-12));
+        assert!(d.last().unwrap().approx_eq(&p.poses[2], 1e-9, 1e-9));
+        for w in d.windows(2) {
+            let (a, l) = w[0].distance_to(&w[1]);
+            assert!(l <= 1.0 + 1e-9 && a <= 0.05 + 1e-9);
+        }
+    }
+
+    #[test]
+    fn csv_has_header_and_one_row_per_pose() {
+        let p = sample_path();
+        let mut buf = Vec::new();
+        p.write_csv(&mut buf, AngleConvention::XyzFixed).unwrap();
+        let text = String::from_utf8(buf).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg");
+        assert_eq!(lines.len(), 4);
+        let last: Vec<f64> = lines[3].split(',').map(|s| s.parse().unwrap()).collect();
+        assert!((last[2] - 5.0).abs() < 1e-6 && (last[6] - 0.5f64.to_degrees()).abs() < 1e-6);
+    }
+
+    struct Wall;
+    impl MotionValidator for Wall {
+        fn is_free(&mut self, pose: &Transform) -> bool {
+            (pose.translation().x - 5.0).abs() > 0.5
+        }
+    }
+
+    #[test]
+    fn revalidate_names_the_bad_segment() {
+        let p = sample_path();
+        assert_eq!(p.revalidate(&mut Wall).unwrap_err().0, 0);
+        let mut q = sample_path();
+        q.poses.remove(0);
+        assert!(q.revalidate(&mut Wall).is_ok());
+    }
+}

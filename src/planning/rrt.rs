@@ -1,0 +1,263 @@
+//! Seed 002's baselines: [`rrt`] (uniform sampling) and [`biased_rrt`] (goal bias p),
+//! and the tree engine that [`local_rrt`](super::local_rrt) extends.
+
+use super::local_rrt::Lattice;
+use super::path::Path;
+use super::run::{Limits, PlanError, ProgressFn, Run};
+use super::smoothing::{shortcut, Smoothing};
+use super::space::PlanningSpace;
+use super::tree::{check_ends, steer, PoseTarget, Target, Tree};
+use super::validator::{Checker, MotionValidator};
+use crate::math::{Rng, Transform};
+
+/// Options of [`rrt`] and [`biased_rrt`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RrtOptions {
+    /// Seed and limits.
+    pub limits: Limits,
+    /// Largest extension toward a sample, in metric mm (see
+    /// [`PlanningSpace`]). Default 10.
+    pub step: f64,
+    /// Probability `p` of sampling the goal instead of a uniform pose. Plain RRT: 0;
+    /// Biased-RRT: default 0.1.
+    pub goal_bias: f64,
+    /// The distance `dth` (metric mm) under which a new node tries a straight edge to
+    /// the goal. Default 10 (one step).
+    pub goal_tolerance: f64,
+    /// Shortcut smoothing of the found path.
+    pub smoothing: Smoothing,
+}
+
+impl Default for RrtOptions {
+    /// Plain RRT: step 10, no goal bias, tolerance 10, default smoothing.
+    fn default() -> Self {
+        Self {
+            limits: Limits::default(),
+            step: 10.0,
+            goal_bias: 0.0,
+            goal_tolerance: 10.0,
+            smoothing: Smoothing::default(),
+        }
+    }
+}
+
+impl RrtOptions {
+    /// Biased-RRT defaults: as [`Default`] with `goal_bias` 0.1.
+    pub fn biased() -> Self {
+        Self {
+            goal_bias: 0.1,
+            ..Self::default()
+        }
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), PlanError> {
+        self.limits.validate()?;
+        PlanError::positive("step", self.step)?;
+        PlanError::probability("goal_bias", self.goal_bias)?;
+        PlanError::positive("goal_tolerance", self.goal_tolerance)?;
+        self.smoothing.validate()
+    }
+}
+
+/// Plans with seed 002's baseline RRT from `start` to `goal`.
+///
+/// Each iteration samples a pose (the goal with probability `goal_bias`, else
+/// uniformly in `space`), finds the nearest node, and adds the pose `step` toward the
+/// sample if that edge is free. A node within `goal_tolerance` of the goal that can
+/// see the goal ends the search.
+///
+/// # Errors
+/// Invalid options, bounds or non-finite poses.
+pub fn rrt(
+    validator: &mut dyn MotionValidator,
+    space: &PlanningSpace,
+    start: &Transform,
+    goal: &Transform,
+    options: &RrtOptions,
+    progress: Option<ProgressFn<'_>>,
+) -> Result<Path, PlanError> {
+    options.validate()?;
+    plan_tree(
+        "rrt",
+        validator,
+        space,
+        start,
+        &PoseTarget(*goal),
+        options,
+        None,
+        progress,
+    )
+}
+
+/// Seed 002's Biased-RRT: [`rrt`] requiring a goal bias `p > 0`
+/// (see [`RrtOptions::biased`]).
+///
+/// # Errors
+/// As [`rrt`], and `goal_bias == 0`.
+pub fn biased_rrt(
+    validator: &mut dyn MotionValidator,
+    space: &PlanningSpace,
+    start: &Transform,
+    goal: &Transform,
+    options: &RrtOptions,
+    progress: Option<ProgressFn<'_>>,
+) -> Result<Path, PlanError> {
+    options.validate()?;
+    if options.goal_bias <= 0.0 {
+        return Err(PlanError::invalid(
+            "goal_bias",
+            options.goal_bias.to_string(),
+            "a probability in (0, 1] for biased_rrt",
+        ));
+    }
+    plan_tree(
+        "biased_rrt",
+        validator,
+        space,
+        start,
+        &PoseTarget(*goal),
+        options,
+        None,
+        progress,
+    )
+}
+
+/// The single-tree engine of rrt, biased_rrt and local_rrt (options validated).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plan_tree(
+    planner: &'static str,
+    validator: &mut dyn MotionValidator,
+    space: &PlanningSpace,
+    start: &Transform,
+    target: &dyn Target,
+    options: &RrtOptions,
+    local: Option<&Lattice>,
+    progress: Option<ProgressFn<'_>>,
+) -> Result<Path, PlanError> {
+    space.validate()?;
+    PlanError::pose("start", start)?;
+    if let Some(g) = target.pose() {
+        PlanError::pose("goal", g)?;
+    }
+    let mut run = Run::new(options.limits, progress);
+    let mut checker = Checker::new(validator);
+    if let Some(f) = check_ends(&mut checker, space, start, target.pose()) {
+        return Ok(Path::failed(planner, f, 0, 0, &checker, run.elapsed_ms()));
+    }
+    let mut rng = Rng::new(options.limits.seed);
+    let key_mm = local.map_or(options.step * 1e-3, |l| l.edge_length_min * 0.25);
+    let mut tree = Tree::new(*start, key_mm);
+    let reference = start.rotation();
+    let mut best = target.distance(start, space);
+    let outcome = loop {
+        if target.reached(start) {
+            break Ok(0);
+        }
+        if let Err(f) = run.next(tree.len(), best) {
+            break Err(f);
+        }
+        let goal_biased = rng.uniform() < options.goal_bias;
+        let sample = if goal_biased {
+            target.sample(&mut rng, space, start)
+        } else {
+            space.sample(&mut rng, &reference)
+        };
+        let (near, _) = tree.nearest(&sample, space);
+        let near_pose = tree.poses[near];
+        let candidate = steer(&near_pose, &sample, options.step, space);
+        let mut added = Vec::new();
+        if space.contains(&candidate, &reference)
+            && !tree.holds(&candidate)
+            && checker.edge_free(&near_pose, &candidate)
+        {
+            added.push(tree.add(candidate, near));
+        } else if let Some(local) = local {
+            let toward_sample = PoseTarget(sample);
+            let rank: &dyn Target = if goal_biased || !local.rank_toward_sample {
+                target
+            } else {
+                &toward_sample
+            };
+            local.expand(
+                &mut checker,
+                space,
+                &mut tree,
+                near,
+                rank,
+                &reference,
+                options.step,
+                &mut added,
+            );
+        }
+        let mut done = None;
+        for &i in &added {
+            let pose = tree.poses[i];
+            let d = target.distance(&pose, space);
+            best = best.min(d);
+            if target.reached(&pose) {
+                done = Some(i);
+                break;
+            }
+            if let Some(goal) = target.pose() {
+                if d <= options.goal_tolerance && checker.edge_free(&pose, goal) {
+                    done = Some(if d == 0.0 { i } else { tree.add(*goal, i) });
+                    break;
+                }
+            }
+        }
+        if let Some(i) = done {
+            break Ok(i);
+        }
+    };
+    match outcome {
+        Err(f) => Ok(Path::failed(
+            planner,
+            f,
+            run.iterations,
+            tree.len(),
+            &checker,
+            run.elapsed_ms(),
+        )),
+        Ok(i) => {
+            let poses = tree.branch(i);
+            Ok(finish(
+                planner,
+                poses,
+                &mut checker,
+                space,
+                &options.smoothing,
+                options.limits.seed,
+                &run,
+                tree.len(),
+            ))
+        }
+    }
+}
+
+/// Smooths a found path and builds the result.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn finish(
+    planner: &'static str,
+    mut poses: Vec<Transform>,
+    checker: &mut Checker<'_>,
+    space: &PlanningSpace,
+    smoothing: &Smoothing,
+    seed: u64,
+    run: &Run<'_>,
+    nodes: usize,
+) -> Path {
+    let raw = super::path::measure(&poses);
+    // A different stream than the planner's, so smoothing does not depend on how many
+    // numbers the search drew.
+    let mut rng = Rng::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
+    shortcut(checker, space, &mut poses, smoothing, &mut rng);
+    Path::found_with(
+        planner,
+        poses,
+        raw,
+        run.iterations,
+        nodes,
+        checker,
+        run.elapsed_ms(),
+    )
+}

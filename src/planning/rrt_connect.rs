@@ -1,0 +1,215 @@
+//! [`rrt_connect`]: the bidirectional RRT (Kuffner & LaValle), with seed 002's local
+//! discretization as a fallback when an extension fails.
+
+use super::local_rrt::Lattice;
+use super::path::Path;
+use super::rrt::finish;
+use super::run::{Limits, PlanError, ProgressFn, Run};
+use super::smoothing::Smoothing;
+use super::space::PlanningSpace;
+use super::tree::{check_ends, steer, PoseTarget, Tree};
+use super::validator::{Checker, MotionValidator};
+use crate::math::{Rng, Transform};
+
+/// Options of [`rrt_connect`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RrtConnectOptions {
+    /// Seed and limits.
+    pub limits: Limits,
+    /// Largest extension, in metric mm (see [`PlanningSpace`]). Default 10.
+    pub step: f64,
+    /// The local discretization tried when an extension or a connection is blocked
+    /// (`None`: plain RRT-Connect). Default `Some(Lattice::default())`.
+    pub lattice: Option<Lattice>,
+    /// Shortcut smoothing of the found path.
+    pub smoothing: Smoothing,
+}
+
+impl Default for RrtConnectOptions {
+    fn default() -> Self {
+        Self {
+            limits: Limits::default(),
+            step: 10.0,
+            lattice: Some(Lattice::default()),
+            smoothing: Smoothing::default(),
+        }
+    }
+}
+
+impl RrtConnectOptions {
+    fn validate(&self) -> Result<(), PlanError> {
+        self.limits.validate()?;
+        PlanError::positive("step", self.step)?;
+        if let Some(l) = &self.lattice {
+            l.validate()?;
+        }
+        self.smoothing.validate()
+    }
+}
+
+/// Plans from `start` to `goal` with two trees, one rooted at each end.
+///
+/// Each iteration extends one tree by `step` toward a uniform sample, then grows the
+/// other tree straight toward the new node until it is reached (a path) or blocked;
+/// the trees then swap roles. With a [`Lattice`], a blocked extension or connection
+/// falls back to the local discretization around the blocked node, ranked by the
+/// distance to the other tree's root (or to the node being connected to), which
+/// lets the trees creep through narrow passages.
+///
+/// # Errors
+/// Invalid options, bounds or non-finite poses.
+pub fn rrt_connect(
+    validator: &mut dyn MotionValidator,
+    space: &PlanningSpace,
+    start: &Transform,
+    goal: &Transform,
+    options: &RrtConnectOptions,
+    progress: Option<ProgressFn<'_>>,
+) -> Result<Path, PlanError> {
+    const NAME: &str = "rrt_connect";
+    options.validate()?;
+    space.validate()?;
+    PlanError::pose("start", start)?;
+    PlanError::pose("goal", goal)?;
+    let mut run = Run::new(options.limits, progress);
+    let mut checker = Checker::new(validator);
+    if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
+        return Ok(Path::failed(NAME, f, 0, 0, &checker, run.elapsed_ms()));
+    }
+    let mut rng = Rng::new(options.limits.seed);
+    let reference = start.rotation();
+    let key_mm = options
+        .lattice
+        .as_ref()
+        .map_or(options.step * 1e-3, |l| l.edge_length_min * 0.25);
+    // trees[0] grows from the start, trees[1] from the goal; `a` is the one extending.
+    let mut trees = [Tree::new(*start, key_mm), Tree::new(*goal, key_mm)];
+    let mut a = 0;
+    let mut best = space.distance(start, goal);
+    let mut added = Vec::new();
+    let joined = loop {
+        if let Err(f) = run.next(trees[0].len() + trees[1].len(), best) {
+            break Err(f);
+        }
+        let b = 1 - a;
+        let sample = space.sample(&mut rng, &reference);
+        let (near, _) = trees[a].nearest(&sample, space);
+        let near_pose = trees[a].poses[near];
+        let candidate = steer(&near_pose, &sample, options.step, space);
+        added.clear();
+        if space.contains(&candidate, &reference)
+            && !trees[a].holds(&candidate)
+            && checker.edge_free(&near_pose, &candidate)
+        {
+            added.push(trees[a].add(candidate, near));
+        } else if let Some(lattice) = &options.lattice {
+            let other_root = PoseTarget(trees[b].poses[0]);
+            lattice.expand(
+                &mut checker,
+                space,
+                &mut trees[a],
+                near,
+                &other_root,
+                &reference,
+                options.step,
+                &mut added,
+            );
+        }
+        if let Some(&last) = added.last() {
+            let q = trees[a].poses[last];
+            if let Some(reached) = connect(
+                &mut checker,
+                space,
+                &mut trees[b],
+                &q,
+                &reference,
+                options,
+                &mut best,
+            ) {
+                break Ok(if a == 0 {
+                    (last, reached)
+                } else {
+                    (reached, last)
+                });
+            }
+        }
+        a = b;
+    };
+    let nodes = trees[0].len() + trees[1].len();
+    match joined {
+        Err(f) => Ok(Path::failed(
+            NAME,
+            f,
+            run.iterations,
+            nodes,
+            &checker,
+            run.elapsed_ms(),
+        )),
+        Ok((from_start, from_goal)) => {
+            let mut poses = trees[0].branch(from_start);
+            let mut back = trees[1].branch(from_goal);
+            back.reverse();
+            // The meeting pose is in both branches.
+            poses.extend(back.into_iter().skip(1));
+            Ok(finish(
+                NAME,
+                poses,
+                &mut checker,
+                space,
+                &options.smoothing,
+                options.limits.seed,
+                &run,
+                nodes,
+            ))
+        }
+    }
+}
+
+/// Grows `tree` straight toward `q` in `step`s; returns the node equal to `q` when
+/// reached. A blocked step tries the lattice once around the blocked node.
+fn connect(
+    checker: &mut Checker<'_>,
+    space: &PlanningSpace,
+    tree: &mut Tree,
+    q: &Transform,
+    reference: &nalgebra::UnitQuaternion<f64>,
+    options: &RrtConnectOptions,
+    best: &mut f64,
+) -> Option<usize> {
+    let (mut node, _) = tree.nearest(q, space);
+    // Bounded: the distance shrinks by `step` each round, but poses far apart with a
+    // tiny step must not stall one iteration for long.
+    for _ in 0..10_000 {
+        let from = tree.poses[node];
+        let d = space.distance(&from, q);
+        *best = best.min(d);
+        let next = steer(&from, q, options.step, space);
+        if space.contains(&next, reference) && checker.edge_free(&from, &next) {
+            node = tree.add(next, node);
+            if d <= options.step {
+                return Some(node);
+            }
+            continue;
+        }
+        if let Some(lattice) = &options.lattice {
+            let mut added = Vec::new();
+            lattice.expand(
+                checker,
+                space,
+                tree,
+                node,
+                &PoseTarget(*q),
+                reference,
+                options.step,
+                &mut added,
+            );
+            if let Some(&last) = added.last() {
+                if space.distance(&tree.poses[last], q) < 1e-9 {
+                    return Some(last);
+                }
+            }
+        }
+        return None;
+    }
+    None
+}

@@ -1,0 +1,121 @@
+//! Shortcut smoothing of a found path.
+
+use super::path::{measure, Path};
+use super::run::PlanError;
+use super::space::PlanningSpace;
+use super::validator::{Checker, MotionValidator};
+use crate::math::{Rng, Transform};
+
+/// How a found path is shortened.
+///
+/// First a linear pass drops every key pose whose neighbours see each other; then
+/// `shortcut_attempts` random shortcuts join two random points of the path (anywhere
+/// on its edges) by a straight edge when that edge is free. Every kept edge has been
+/// accepted by the validator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Smoothing {
+    /// Whether to smooth at all. Default true.
+    pub enabled: bool,
+    /// Random shortcut attempts after the linear pass. Default 100.
+    pub shortcut_attempts: usize,
+}
+
+impl Default for Smoothing {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            shortcut_attempts: 100,
+        }
+    }
+}
+
+impl Smoothing {
+    /// No smoothing.
+    pub const OFF: Self = Self {
+        enabled: false,
+        shortcut_attempts: 0,
+    };
+
+    pub(crate) fn validate(&self) -> Result<(), PlanError> {
+        Ok(())
+    }
+}
+
+/// Smooths a found `path` in place with `validator`, costs in `space`'s metric,
+/// seeded by `seed`; updates its
+/// lengths and check counts (`raw_*` keep the lengths before).
+pub fn smooth(
+    validator: &mut dyn MotionValidator,
+    space: &PlanningSpace,
+    path: &mut Path,
+    smoothing: &Smoothing,
+    seed: u64,
+) {
+    if !path.found() {
+        return;
+    }
+    let mut checker = Checker::new(validator);
+    let mut rng = Rng::new(seed);
+    shortcut(&mut checker, space, &mut path.poses, smoothing, &mut rng);
+    let (l, r) = measure(&path.poses);
+    path.length_mm = l;
+    path.rotation_rad = r;
+    path.pose_checks += checker.pose_checks;
+    path.edge_checks += checker.edge_checks;
+}
+
+pub(crate) fn shortcut(
+    checker: &mut Checker<'_>,
+    space: &PlanningSpace,
+    poses: &mut Vec<Transform>,
+    smoothing: &Smoothing,
+    rng: &mut Rng,
+) {
+    if !smoothing.enabled || poses.len() < 3 {
+        return;
+    }
+    // Linear pass: drop p[i] when its kept predecessor sees p[i + 1].
+    let mut kept = vec![poses[0]];
+    for i in 1..poses.len() - 1 {
+        let last = kept[kept.len() - 1];
+        if !checker.edge_free(&last, &poses[i + 1]) {
+            kept.push(poses[i]);
+        }
+    }
+    kept.push(poses[poses.len() - 1]);
+    *poses = kept;
+    for _ in 0..smoothing.shortcut_attempts {
+        let edges = poses.len() - 1;
+        if edges < 2 {
+            break;
+        }
+        let (mut i, mut j) = (rng.below(edges), rng.below(edges));
+        if i == j {
+            continue;
+        }
+        if i > j {
+            std::mem::swap(&mut i, &mut j);
+        }
+        let a = poses[i].interpolate(&poses[i + 1], rng.uniform());
+        let b = poses[j].interpolate(&poses[j + 1], rng.uniform());
+        // Cost in the space's metric: mm + weight · rad.
+        let cost = |seg: &[Transform]| space.distance_along(seg);
+        let old = cost(&[a, poses[i + 1]]) + cost(&poses[i + 1..=j]) + cost(&[poses[j], b]);
+        if space.distance(&a, &b) >= old - 1e-9 {
+            continue;
+        }
+        // p[i]→a and b→p[j+1] lie on accepted edges, but a stepwise validator checks
+        // other poses on them: re-check so that every kept edge was itself accepted.
+        if checker.edge_free(&a, &b)
+            && checker.edge_free(&poses[i], &a)
+            && checker.edge_free(&b, &poses[j + 1])
+        {
+            let mut next = Vec::with_capacity(poses.len());
+            next.extend_from_slice(&poses[..=i]);
+            next.push(a);
+            next.push(b);
+            next.extend_from_slice(&poses[j + 1..]);
+            *poses = next;
+        }
+    }
+}

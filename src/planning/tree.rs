@@ -1,0 +1,176 @@
+//! The search tree shared by the RRT family, and helpers every tree planner needs.
+
+use super::path::Failure;
+use super::space::PlanningSpace;
+use super::validator::Checker;
+use crate::math::{Rng, Transform, Vec3};
+use nalgebra::UnitQuaternion;
+use std::collections::HashSet;
+
+/// A tree of poses rooted at index 0.
+///
+/// Nearest-neighbour queries scan all nodes but reject most of them on translation
+/// alone, so a query costs a few nanoseconds per node: cheaper than one mesh
+/// collision check up to several thousand nodes.
+pub(crate) struct Tree {
+    pub poses: Vec<Transform>,
+    pub parent: Vec<usize>,
+    translations: Vec<Vec3>,
+    rotations: Vec<UnitQuaternion<f64>>,
+    /// Quantized poses, so the local discretization does not re-add a lattice vertex.
+    keys: HashSet<[i64; 7]>,
+    key_mm: f64,
+}
+
+impl Tree {
+    /// A tree holding `root`; `key_mm` is the translation quantum of duplicate detection.
+    pub fn new(root: Transform, key_mm: f64) -> Self {
+        let mut t = Self {
+            poses: Vec::new(),
+            parent: Vec::new(),
+            translations: Vec::new(),
+            rotations: Vec::new(),
+            keys: HashSet::new(),
+            key_mm,
+        };
+        t.add(root, 0);
+        t
+    }
+
+    pub fn len(&self) -> usize {
+        self.poses.len()
+    }
+
+    pub fn add(&mut self, pose: Transform, parent: usize) -> usize {
+        let i = self.poses.len();
+        self.keys.insert(self.key(&pose));
+        self.poses.push(pose);
+        self.parent.push(parent);
+        self.translations.push(pose.translation());
+        self.rotations.push(pose.rotation());
+        i
+    }
+
+    /// Whether a pose equal to `pose` (up to the quantum) is already a node.
+    pub fn holds(&self, pose: &Transform) -> bool {
+        self.keys.contains(&self.key(pose))
+    }
+
+    fn key(&self, pose: &Transform) -> [i64; 7] {
+        let t = pose.translation() / self.key_mm;
+        let q = pose.rotation();
+        // q and -q are the same rotation.
+        let s = if q.w < 0.0 { -1e3 } else { 1e3 };
+        [
+            t.x.round() as i64,
+            t.y.round() as i64,
+            t.z.round() as i64,
+            (q.w * s).round() as i64,
+            (q.i * s).round() as i64,
+            (q.j * s).round() as i64,
+            (q.k * s).round() as i64,
+        ]
+    }
+
+    /// The node nearest to `target` in the metric of `space`, and its distance.
+    pub fn nearest(&self, target: &Transform, space: &PlanningSpace) -> (usize, f64) {
+        let tt = target.translation();
+        let tq = target.rotation();
+        let w = space.rotation_weight;
+        let mut best = (0, f64::INFINITY);
+        for (i, t) in self.translations.iter().enumerate() {
+            let d = (t - tt).norm();
+            if d >= best.1 {
+                continue;
+            }
+            let d = d + w * self.rotations[i].angle_to(&tq);
+            if d < best.1 {
+                best = (i, d);
+            }
+        }
+        best
+    }
+
+    /// The poses from the root to node `i`.
+    pub fn branch(&self, mut i: usize) -> Vec<Transform> {
+        let mut out = vec![self.poses[i]];
+        while i != 0 {
+            i = self.parent[i];
+            out.push(self.poses[i]);
+        }
+        out.reverse();
+        out
+    }
+}
+
+/// The pose at most `max_step` (metric mm) from `from` toward `to`.
+pub(crate) fn steer(
+    from: &Transform,
+    to: &Transform,
+    max_step: f64,
+    space: &PlanningSpace,
+) -> Transform {
+    let d = space.distance(from, to);
+    if d <= max_step {
+        *to
+    } else {
+        from.interpolate(to, max_step / d)
+    }
+}
+
+/// Bounds then collision checks of the start (and goal, when there is one).
+pub(crate) fn check_ends(
+    checker: &mut Checker<'_>,
+    space: &PlanningSpace,
+    start: &Transform,
+    goal: Option<&Transform>,
+) -> Option<Failure> {
+    let reference = start.rotation();
+    if !space.contains(start, &reference) {
+        return Some(Failure::StartOutOfBounds);
+    }
+    if let Some(g) = goal {
+        if !space.contains(g, &reference) {
+            return Some(Failure::GoalOutOfBounds);
+        }
+    }
+    if !checker.is_free(start) {
+        return Some(Failure::StartInCollision);
+    }
+    if let Some(g) = goal {
+        if !checker.is_free(g) {
+            return Some(Failure::GoalInCollision);
+        }
+    }
+    None
+}
+
+/// What a tree grows toward: one pose, or a region recognised by a predicate.
+pub(crate) trait Target {
+    /// Whether `pose` solves the query by itself (regions).
+    fn reached(&self, pose: &Transform) -> bool;
+    /// A pose to join with a final edge once within the goal tolerance.
+    fn pose(&self) -> Option<&Transform>;
+    /// Heuristic distance (metric mm) to the goal, used to rank candidates.
+    fn distance(&self, pose: &Transform, space: &PlanningSpace) -> f64;
+    /// A goal pose to bias sampling toward.
+    fn sample(&self, rng: &mut Rng, space: &PlanningSpace, near: &Transform) -> Transform;
+}
+
+/// A single goal pose.
+pub(crate) struct PoseTarget(pub Transform);
+
+impl Target for PoseTarget {
+    fn reached(&self, _: &Transform) -> bool {
+        false
+    }
+    fn pose(&self) -> Option<&Transform> {
+        Some(&self.0)
+    }
+    fn distance(&self, pose: &Transform, space: &PlanningSpace) -> f64 {
+        space.distance(pose, &self.0)
+    }
+    fn sample(&self, _: &mut Rng, _: &PlanningSpace, _: &Transform) -> Transform {
+        self.0
+    }
+}
