@@ -13,8 +13,10 @@
 //! | [`mesh`] | triangle meshes, STL I/O, generated shapes, the mesh cache |
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
 //! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly |
+//! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`fsutil`] | atomic writes, content hashes, file stamps |
+pub mod demo;
 pub mod diagnostics;
 pub mod document;
 pub mod fsutil;

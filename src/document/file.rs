@@ -120,3 +120,74 @@ pub struct MateFile {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub about: Option<String>,
 }
+
+impl DocumentFile {
+    /// The YAML text of the document, with number lists (points, vectors, matrix rows)
+    /// written inline as `[x, y, z]` so that a pose reads as the 4×4 matrix it is.
+    pub fn to_yaml(&self) -> Result<String, serde_yaml::Error> {
+        let block = serde_yaml::to_string(self)?;
+        let flow = inline_number_lists(&block);
+        // The rewrite is purely presentational; never let it change the content.
+        match serde_yaml::from_str::<DocumentFile>(&flow) {
+            Ok(back) if back == *self => Ok(flow),
+            _ => Ok(block),
+        }
+    }
+}
+
+fn number_item<'a>(line: &'a str, prefix: &str) -> Option<&'a str> {
+    let rest = line.strip_prefix(prefix)?;
+    (rest.parse::<f64>().is_ok() || matches!(rest, ".nan" | ".inf" | "-.inf")).then_some(rest)
+}
+
+/// Rewrites `key:` followed by `- <number>` lines as `key: [a, b, c]`, and `key:`
+/// followed by rows of numbers (`- - a` / `  - b`) as `- [a, b]` rows.
+fn inline_number_lists(yaml: &str) -> String {
+    let lines: Vec<&str> = yaml.lines().collect();
+    let mut out = String::with_capacity(yaml.len());
+    let mut i = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        let indent = &line[..line.len() - line.trim_start().len()];
+        if line.ends_with(':') {
+            let item = format!("{indent}- ");
+            let mut j = i + 1;
+            let mut nums = Vec::new();
+            while let Some(n) = lines.get(j).and_then(|l| number_item(l, &item)) {
+                nums.push(n);
+                j += 1;
+            }
+            if !nums.is_empty() {
+                out += &format!("{line} [{}]\n", nums.join(", "));
+                i = j;
+                continue;
+            }
+            // A matrix: rows `- - a` then `  - b`.
+            let row_start = format!("{indent}- - ");
+            let row_more = format!("{indent}  - ");
+            let mut rows = Vec::new();
+            while let Some(first) = lines.get(j).and_then(|l| number_item(l, &row_start)) {
+                let mut row = vec![first];
+                j += 1;
+                while let Some(n) = lines.get(j).and_then(|l| number_item(l, &row_more)) {
+                    row.push(n);
+                    j += 1;
+                }
+                rows.push(row);
+            }
+            if !rows.is_empty() {
+                out += line;
+                out.push('\n');
+                for r in rows {
+                    out += &format!("{indent}- [{}]\n", r.join(", "));
+                }
+                i = j;
+                continue;
+            }
+        }
+        out += line;
+        out.push('\n');
+        i += 1;
+    }
+    out
+}

@@ -225,11 +225,11 @@ impl Document {
                 return Err(at(&needle, "components", format!("duplicate component name `{}`", c.name)));
             }
             if !parts.contains_key(&c.part) {
-                return Err(DocumentError::from(at(
+                return Err(at(
                     &format!("part: {}", c.part),
                     &needle,
                     format!("component `{}` uses unknown part `{}`", c.name, c.part),
-                ))
+                )
                 .with_help(suggestion(&c.part, parts.keys().map(String::as_str))));
             }
             let transform = match &c.transform {
@@ -295,7 +295,12 @@ impl Document {
             }
             doc.mates.push(Mate { name: m.name.clone(), kind, entities: [ea, eb], value, aligned: m.aligned, about });
         }
-        doc.rebuild().map_err(|e| at(&format!("name: {}", e_mate(&e)), "mates", e.to_string()))?;
+        let mut poses: Vec<Transform> = doc.components.iter().map(|c| c.transform).collect();
+        let fixed: Vec<bool> = doc.components.iter().map(|c| c.fixed).collect();
+        mates::solve(&doc.mates, &mut poses, &fixed).map_err(|e| at(&format!("name: {}", e.mate), "mates", e.to_string()))?;
+        for (c, p) in doc.components.iter_mut().zip(poses) {
+            c.transform = p;
+        }
         Ok(doc)
     }
 
@@ -526,7 +531,7 @@ impl Document {
 
     /// The document as YAML text.
     pub fn to_yaml(&self) -> String {
-        serde_yaml::to_string(&self.to_file()).unwrap_or_default()
+        self.to_file().to_yaml().unwrap_or_default()
     }
 
     /// Writes the document back to its file atomically.
@@ -553,7 +558,9 @@ impl Document {
     }
 
     fn write_to(&self, path: &Path) -> Result<(), DocumentError> {
-        let text = serde_yaml::to_string(&self.to_file())
+        let text = self
+            .to_file()
+            .to_yaml()
             .map_err(|e| DocumentError::Write { path: path.into(), message: e.to_string() })?;
         crate::fsutil::write_atomic(path, text.as_bytes())
             .map_err(|e| DocumentError::Write { path: path.into(), message: e.to_string() })
@@ -582,11 +589,6 @@ impl DocumentError {
             other => other.to_string(),
         }
     }
-}
-
-fn e_mate(e: &DocumentError) -> String {
-    let s = e.to_string();
-    s.split('`').nth(1).unwrap_or_default().to_string()
 }
 
 /// `target` written relative to `base` when possible (both made absolute first).

@@ -1,0 +1,147 @@
+use super::*;
+use crate::math::AngleConvention;
+
+fn write_demo() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    crate::demo::write_cell(dir.path()).unwrap();
+    dir
+}
+
+#[test]
+fn demo_loads_and_mates_seat_the_screws() {
+    let dir = write_demo();
+    let doc = Document::open(&dir.path().join("cell.yaml")).unwrap();
+    assert_eq!(doc.components().len(), 8);
+    // screw1 axis is collinear with plate_a's hole1 and its head rests on the plate.
+    let s = doc.component("screw1").unwrap();
+    let plate = doc.component("plate_a").unwrap();
+    let hole = plate.transform.apply(&Point3::new(50.0, 50.0, 0.0));
+    let tip = s.transform.apply(&Point3::origin());
+    assert!((tip - hole).norm() < 1e-6, "tip {tip} hole {hole}");
+    // plate_b got onto the table top and centred on b_axis.
+    let pb = doc.component("plate_b").unwrap();
+    let centre = pb.transform.apply(&Point3::new(100.0, 100.0, 0.0));
+    assert!((centre - Point3::new(800.0, 400.0, 750.0)).norm() < 1e-6, "{centre}");
+}
+
+#[test]
+fn round_trip_is_exact() {
+    let dir = write_demo();
+    let p = dir.path().join("cell.yaml");
+    let doc = Document::open(&p).unwrap();
+    let out = dir.path().join("copy.yaml");
+    let mut d2 = doc.clone();
+    d2.save_as(&out).unwrap();
+    let again = Document::open(&out).unwrap();
+    assert_eq!(doc.to_file(), again.to_file());
+    assert_eq!(doc.to_yaml(), again.to_yaml());
+    for (a, b) in doc.components().iter().zip(again.components()) {
+        assert!(a.transform.approx_eq(&b.transform, 1e-12, 1e-12));
+    }
+}
+
+#[test]
+fn angle_dimension_drives_plate_and_units_are_si() {
+    let dir = write_demo();
+    let mut doc = Document::open(&dir.path().join("cell.yaml")).unwrap();
+    assert_eq!(doc.dimensions(), vec!["D1@角度1".to_string()]);
+    doc.set_dimension("D1@角度1", 30f64.to_radians()).unwrap();
+    let d = doc.dimension("D1@角度1").unwrap();
+    assert!((d.document_value() - 30.0).abs() < 1e-9);
+    assert!((d.system_value() - 30f64.to_radians()).abs() < 1e-12);
+    let pb = doc.component("plate_b").unwrap();
+    let [.., c] = pb.transform.to_xyzabc(AngleConvention::XyzFixed);
+    assert!((c.to_degrees() - 30.0).abs() < 1e-6, "{}", c.to_degrees());
+    // Still centred and on the table after the re-solve.
+    let centre = pb.transform.apply(&Point3::new(100.0, 100.0, 0.0));
+    assert!((centre - Point3::new(800.0, 400.0, 750.0)).norm() < 1e-6);
+    assert!(matches!(doc.dimension("D1@角度2"), Err(DocumentError::NotFound { .. })));
+}
+
+fn load_text(dir: &Path, text: &str) -> Result<Document, DocumentError> {
+    let p = dir.join("t.yaml");
+    std::fs::write(&p, text).unwrap();
+    Document::open(&p)
+}
+
+#[test]
+fn bad_documents_name_the_line_and_cause() {
+    let dir = write_demo();
+    let base = std::fs::read_to_string(dir.path().join("cell.yaml")).unwrap();
+    let cases = [
+        (base.replacen("part: plate_a", "part: plate_x", 1), "unknown part `plate_x`"),
+        (base.replacen("name: screw2", "name: screw1", 1), "duplicate component name"),
+        (base.replacen("type: concentric", "type: concentrik", 1), "unknown type `concentrik`"),
+        (base.replacen("units: mm", "units: inch", 1) + if base.contains("units") { "" } else { "units: inch\n" }, "units"),
+        (base.replacen("meshes/screw.stl", "meshes/nope.stl", 1), "nope.stl"),
+        (base.replacen("parts:", "parts: [", 1), "invalid document"),
+    ];
+    for (text, needle) in cases {
+        let e = load_text(dir.path(), &text).unwrap_err();
+        let msg = e.render();
+        assert!(msg.contains(needle), "expected `{needle}` in:\n{msg}");
+        assert!(msg.contains("t.yaml:"), "no file:line in {msg}");
+    }
+}
+
+#[test]
+fn non_rigid_pose_is_rejected_with_its_line() {
+    let dir = write_demo();
+    let base = std::fs::read_to_string(dir.path().join("cell.yaml")).unwrap();
+    // Scale the table's rotation block: first `- - 1.0` row.
+    let bad = base.replacen("- [1.0, 0.0, 0.0, 0.0]", "- [2.0, 0.0, 0.0, 0.0]", 1);
+    assert_ne!(bad, base);
+    let e = load_text(dir.path(), &bad).unwrap_err().render();
+    assert!(e.contains("not orthonormal") && e.contains("t.yaml:"), "{e}");
+}
+
+#[test]
+fn fixed_components_do_not_move_and_nan_is_refused() {
+    let dir = write_demo();
+    let mut doc = Document::open(&dir.path().join("cell.yaml")).unwrap();
+    assert!(doc.set_transform("table", Transform::IDENTITY).is_err());
+    let e = doc.component("scerw1").unwrap_err().to_string();
+    assert!(e.contains("screw1"), "{e}");
+    let mut m = Transform::IDENTITY.to_matrix();
+    m[3][0] = f64::NAN;
+    assert!(Transform::from_matrix(&m).is_err());
+    assert!(doc.set_dimension("D1@角度1", f64::NAN).is_err());
+}
+
+#[test]
+fn distance_and_angle_mates_solve() {
+    let dir = tempfile::tempdir().unwrap();
+    crate::mesh::write_stl(&dir.path().join("b.stl"), &Mesh::cuboid(Point3::origin(), Point3::new(10.0, 10.0, 10.0))).unwrap();
+    let text = r#"
+parts:
+  block:
+    stl: b.stl
+    planes:
+      bottom: {point: [0, 0, 0], normal: [0, 0, -1]}
+      topf: {point: [0, 0, 10], normal: [0, 0, 1]}
+      side: {point: [0, 0, 0], normal: [0, -1, 0]}
+    axes:
+      vert: {point: [5, 5, 0], direction: [0, 0, 1]}
+components:
+  - {name: base, part: block, fixed: true}
+  - name: top
+    part: block
+    transform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [3, 2, 30, 1]]
+mates:
+  - {name: 距离1, type: distance, entities: [base/topf, top/bottom], value: 5}
+  - {name: axis, type: concentric, entities: [base/vert, top/vert]}
+  - {name: 角度1, type: angle, entities: [base/side, top/side], value: 45, about: base/vert}
+"#;
+    let mut doc = load_text(dir.path(), text).unwrap();
+    let top = doc.component("top").unwrap().transform;
+    assert!((top.apply(&Point3::new(5.0, 5.0, 0.0)) - Point3::new(5.0, 5.0, 15.0)).norm() < 1e-6);
+    let [.., c] = top.to_xyzabc(AngleConvention::XyzFixed);
+    assert!((c.to_degrees() - 45.0).abs() < 1e-6);
+    doc.set_dimension("D1@距离1", 20.0).unwrap();
+    let z = doc.component("top").unwrap().transform.translation().z;
+    assert!((z - 30.0).abs() < 1e-6, "{z}");
+    doc.set_dimension("D1@角度1", (-120f64).to_radians()).unwrap();
+    let [.., c] = doc.component("top").unwrap().transform.to_xyzabc(AngleConvention::XyzFixed);
+    assert!((c.to_degrees() + 120.0).abs() < 1e-6, "{}", c.to_degrees());
+    assert!(doc.set_dimension("D1@距离1", -1.0).is_err());
+}
