@@ -46,7 +46,11 @@ impl SourceError {
                 let gutter = line.to_string();
                 out += &format!("\n {} |\n {} | {}\n", " ".repeat(gutter.len()), gutter, src);
                 if let Some(col) = self.column {
-                    let pad: String = src.chars().take(col.saturating_sub(1)).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
+                    let pad: String = src
+                        .chars()
+                        .take(col.saturating_sub(1))
+                        .map(|c| if c == '\t' { '\t' } else { ' ' })
+                        .collect();
                     out += &format!(" {} | {}^", " ".repeat(gutter.len()), pad);
                 } else {
                     out.pop();
@@ -77,20 +81,33 @@ impl fmt::Display for SourceError {
 /// after line `from_line`, for errors found after parsing (an unknown part name, a
 /// duplicate component) that serde could not locate.
 pub fn locate(text: &str, needle: &str, from_line: usize) -> Option<(usize, usize)> {
-    text.lines().enumerate().skip(from_line.saturating_sub(1)).find_map(|(i, l)| {
-        l.find(needle).map(|byte| (i + 1, l[..byte].chars().count() + 1))
-    })
+    text.lines()
+        .enumerate()
+        .skip(from_line.saturating_sub(1))
+        .find_map(|(i, l)| {
+            l.find(needle)
+                .map(|byte| (i + 1, l[..byte].chars().count() + 1))
+        })
 }
 
 /// Close matches for `name` among `candidates`, best first (for "did you mean").
 pub fn close_matches<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Vec<String> {
     let mut scored: Vec<(f64, &str)> = candidates
         .into_iter()
-        .map(|c| (strsim::jaro_winkler(&name.to_lowercase(), &c.to_lowercase()), c))
+        .map(|c| {
+            (
+                strsim::jaro_winkler(&name.to_lowercase(), &c.to_lowercase()),
+                c,
+            )
+        })
         .filter(|(s, _)| *s > 0.7)
         .collect();
     scored.sort_by(|a, b| b.0.total_cmp(&a.0));
-    scored.into_iter().take(3).map(|(_, c)| c.to_string()).collect()
+    scored
+        .into_iter()
+        .take(3)
+        .map(|(_, c)| c.to_string())
+        .collect()
 }
 
 /// "did you mean `a`, `b`?" or a list of what exists, for a missing name.
@@ -104,7 +121,13 @@ pub fn suggestion<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str> 
     if all.is_empty() {
         "there are none".into()
     } else if all.len() <= 12 {
-        format!("known: {}", all.iter().map(|c| format!("`{c}`")).collect::<Vec<_>>().join(", "))
+        format!(
+            "known: {}",
+            all.iter()
+                .map(|c| format!("`{c}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
     } else {
         format!("{} known, e.g. `{}`", all.len(), all[0])
     }
@@ -129,6 +152,12 @@ mod tests {
         let p = dir.path().join("x.yaml");
         std::fs::write(&p, "one\ntwo three\n").unwrap();
         let r = SourceError::new(&p, 2, 5, "bad").with_help("fix").render();
-        assert!(r.contains(":2:5: bad") && r.contains("two three") && r.contains("    ^") && r.contains("help: fix"), "{r}");
+        assert!(
+            r.contains(":2:5: bad")
+                && r.contains("two three")
+                && r.contains("    ^")
+                && r.contains("help: fix"),
+            "{r}"
+        );
     }
 }

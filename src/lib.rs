@@ -14,8 +14,12 @@
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
 //! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
+//! | [`script`] | the Rhai sandbox and API bindings |
+//! | [`watch`] | watch mode: rerun on every save, exactly once |
+//! | [`cli`] | the `fitup` command line |
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`fsutil`] | atomic writes, content hashes, file stamps |
+pub mod cli;
 pub mod demo;
 pub mod diagnostics;
 pub mod document;
@@ -23,3 +27,5 @@ pub mod fsutil;
 pub mod math;
 pub mod mesh;
 pub mod planning;
+pub mod script;
+pub mod watch;

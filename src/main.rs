@@ -1,1 +1,5 @@
-fn main() {}
+//! The `fitup` binary: see [`fitup::cli`].
+
+fn main() {
+    std::process::exit(fitup::cli::main());
+}

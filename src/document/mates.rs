@@ -91,13 +91,19 @@ pub struct Mate {
 /// parts (the larger one).
 pub(crate) fn residual(mate: &Mate, poses: &[Transform]) -> f64 {
     let (a, b) = world(mate, poses);
-    let about = mate.about.as_ref().map(|e| e.geometry.posed(&poses[e.component]));
+    let about = mate
+        .about
+        .as_ref()
+        .map(|e| e.geometry.posed(&poses[e.component]));
     error(mate, &a, &b, about.as_ref())
 }
 
 fn world(mate: &Mate, poses: &[Transform]) -> (Reference, Reference) {
     let [ea, eb] = &mate.entities;
-    (ea.geometry.posed(&poses[ea.component]), eb.geometry.posed(&poses[eb.component]))
+    (
+        ea.geometry.posed(&poses[ea.component]),
+        eb.geometry.posed(&poses[eb.component]),
+    )
 }
 
 fn signed_angle(u: &Vec3, v: &Vec3, axis: &Vec3) -> f64 {
@@ -135,41 +141,111 @@ fn default_aligned(kind: MateKind, a: &Reference) -> Option<bool> {
 
 fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -> f64 {
     use Reference::*;
-    let dir_err = |u: &Vec3, v: &Vec3| target_direction(mate, u, v, default_aligned(mate.kind, a)).angle(v);
+    let dir_err =
+        |u: &Vec3, v: &Vec3| target_direction(mate, u, v, default_aligned(mate.kind, a)).angle(v);
     let value = mate.value.unwrap_or(0.0);
     match (mate.kind, a, b) {
-        (MateKind::Coincident | MateKind::Distance, Plane { point: pa, normal: na }, Plane { point: pb, normal: nb }) => {
-            let d = if mate.kind == MateKind::Distance { value } else { 0.0 };
+        (
+            MateKind::Coincident | MateKind::Distance,
+            Plane {
+                point: pa,
+                normal: na,
+            },
+            Plane {
+                point: pb,
+                normal: nb,
+            },
+        ) => {
+            let d = if mate.kind == MateKind::Distance {
+                value
+            } else {
+                0.0
+            };
             dir_err(na, nb).max((na.dot(&(pb - pa)) - d).abs())
         }
-        (MateKind::Coincident | MateKind::Distance, Plane { point: pa, normal: na }, Point(pb))
-        | (MateKind::Coincident | MateKind::Distance, Point(pb), Plane { point: pa, normal: na }) => {
-            let d = if mate.kind == MateKind::Distance { value } else { 0.0 };
+        (
+            MateKind::Coincident | MateKind::Distance,
+            Plane {
+                point: pa,
+                normal: na,
+            },
+            Point(pb),
+        )
+        | (
+            MateKind::Coincident | MateKind::Distance,
+            Point(pb),
+            Plane {
+                point: pa,
+                normal: na,
+            },
+        ) => {
+            let d = if mate.kind == MateKind::Distance {
+                value
+            } else {
+                0.0
+            };
             (na.dot(&(pb - pa)).abs() - d).abs()
         }
         (MateKind::Coincident | MateKind::Distance, Point(pa), Point(pb)) => {
-            let d = if mate.kind == MateKind::Distance { value } else { 0.0 };
+            let d = if mate.kind == MateKind::Distance {
+                value
+            } else {
+                0.0
+            };
             ((pb - pa).norm() - d).abs()
         }
-        (MateKind::Coincident, Axis { point: pa, direction: da }, Point(pb))
-        | (MateKind::Coincident, Point(pb), Axis { point: pa, direction: da }) => {
+        (
+            MateKind::Coincident,
+            Axis {
+                point: pa,
+                direction: da,
+            },
+            Point(pb),
+        )
+        | (
+            MateKind::Coincident,
+            Point(pb),
+            Axis {
+                point: pa,
+                direction: da,
+            },
+        ) => {
             let r = pb - pa;
             (r - da * da.dot(&r)).norm()
         }
-        (MateKind::Coincident | MateKind::Concentric, Axis { point: pa, direction: da }, Axis { point: pb, direction: db }) => {
+        (
+            MateKind::Coincident | MateKind::Concentric,
+            Axis {
+                point: pa,
+                direction: da,
+            },
+            Axis {
+                point: pb,
+                direction: db,
+            },
+        ) => {
             let r = pb - pa;
             dir_err(da, db).max((r - da * da.dot(&r)).norm())
         }
         (MateKind::Parallel, _, _) => {
-            let (u, v) = (a.direction().unwrap_or_default(), b.direction().unwrap_or_default());
+            let (u, v) = (
+                a.direction().unwrap_or_default(),
+                b.direction().unwrap_or_default(),
+            );
             u.cross(&v).norm().asin()
         }
         (MateKind::Perpendicular, _, _) => {
-            let (u, v) = (a.direction().unwrap_or_default(), b.direction().unwrap_or_default());
+            let (u, v) = (
+                a.direction().unwrap_or_default(),
+                b.direction().unwrap_or_default(),
+            );
             u.dot(&v).abs().asin()
         }
         (MateKind::Angle, _, _) => {
-            let (u, v) = (a.direction().unwrap_or_default(), b.direction().unwrap_or_default());
+            let (u, v) = (
+                a.direction().unwrap_or_default(),
+                b.direction().unwrap_or_default(),
+            );
             match about.and_then(|r| r.direction()) {
                 Some(axis) => wrap(signed_angle(&u, &v, &axis) - value).abs(),
                 None => (u.angle(&v) - value).abs(),
@@ -183,23 +259,46 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
 pub(crate) fn check_entities(kind: MateKind, a: &Reference, b: &Reference) -> Result<(), String> {
     use Reference::*;
     let ok = match kind {
-        MateKind::Coincident => !matches!((a, b), (Plane { .. }, Axis { .. }) | (Axis { .. }, Plane { .. })),
+        MateKind::Coincident => !matches!(
+            (a, b),
+            (Plane { .. }, Axis { .. }) | (Axis { .. }, Plane { .. })
+        ),
         MateKind::Concentric => matches!((a, b), (Axis { .. }, Axis { .. })),
-        MateKind::Distance => matches!((a, b), (Plane { .. }, Plane { .. }) | (Point(_), Point(_)) | (Plane { .. }, Point(_)) | (Point(_), Plane { .. })),
-        MateKind::Parallel | MateKind::Perpendicular | MateKind::Angle => a.direction().is_some() && b.direction().is_some(),
+        MateKind::Distance => matches!(
+            (a, b),
+            (Plane { .. }, Plane { .. })
+                | (Point(_), Point(_))
+                | (Plane { .. }, Point(_))
+                | (Point(_), Plane { .. })
+        ),
+        MateKind::Parallel | MateKind::Perpendicular | MateKind::Angle => {
+            a.direction().is_some() && b.direction().is_some()
+        }
     };
     if ok {
         Ok(())
     } else {
-        Err(format!("a {} mate cannot join a {} and a {}", kind.name(), a.kind_name(), b.kind_name()))
+        Err(format!(
+            "a {} mate cannot join a {} and a {}",
+            kind.name(),
+            a.kind_name(),
+            b.kind_name()
+        ))
     }
 }
 
 /// The smallest rotation taking unit `from` onto unit `to` (any axis for opposite).
 fn rotation_between(from: &Vec3, to: &Vec3) -> UnitQuaternion<f64> {
     UnitQuaternion::rotation_between(from, to).unwrap_or_else(|| {
-        let perp = if from.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
-        UnitQuaternion::from_axis_angle(&Unit::new_normalize(from.cross(&perp)), std::f64::consts::PI)
+        let perp = if from.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
+        UnitQuaternion::from_axis_angle(
+            &Unit::new_normalize(from.cross(&perp)),
+            std::f64::consts::PI,
+        )
     })
 }
 
@@ -217,50 +316,123 @@ fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Referenc
         rotate_about(at, rotation_between(v, &t))
     };
     match (mate.kind, a, b) {
-        (MateKind::Coincident | MateKind::Distance, Plane { point: pa, normal: na }, Plane { point: pb, normal: nb }) => {
-            let d = if mate.kind == MateKind::Distance { value } else { 0.0 };
+        (
+            MateKind::Coincident | MateKind::Distance,
+            Plane {
+                point: pa,
+                normal: na,
+            },
+            Plane {
+                point: pb,
+                normal: nb,
+            },
+        ) => {
+            let d = if mate.kind == MateKind::Distance {
+                value
+            } else {
+                0.0
+            };
             let r = align(na, nb, pb);
             r * translate(na * (d - na.dot(&(pb - pa))))
         }
-        (MateKind::Coincident | MateKind::Distance, Plane { point: pa, normal: na }, Point(pb)) => {
-            let d = if mate.kind == MateKind::Distance { value } else { 0.0 };
+        (
+            MateKind::Coincident | MateKind::Distance,
+            Plane {
+                point: pa,
+                normal: na,
+            },
+            Point(pb),
+        ) => {
+            let d = if mate.kind == MateKind::Distance {
+                value
+            } else {
+                0.0
+            };
             let s = na.dot(&(pb - pa));
             let target = if s < 0.0 { -d } else { d };
             translate(na * (target - s))
         }
-        (MateKind::Coincident | MateKind::Distance, Point(pb), Plane { point: pa, normal: na }) => {
+        (
+            MateKind::Coincident | MateKind::Distance,
+            Point(pb),
+            Plane {
+                point: pa,
+                normal: na,
+            },
+        ) => {
             // The mover carries the plane: move it so that the point lies at the distance.
-            let d = if mate.kind == MateKind::Distance { value } else { 0.0 };
+            let d = if mate.kind == MateKind::Distance {
+                value
+            } else {
+                0.0
+            };
             let s = na.dot(&(pb - pa));
             let target = if s < 0.0 { -d } else { d };
             translate(-na * (target - s))
         }
         (MateKind::Coincident | MateKind::Distance, Point(pa), Point(pb)) => {
-            let d = if mate.kind == MateKind::Distance { value } else { 0.0 };
+            let d = if mate.kind == MateKind::Distance {
+                value
+            } else {
+                0.0
+            };
             let r = pb - pa;
             let dir = r.try_normalize(1e-12).unwrap_or_else(Vec3::x);
             translate(pa + dir * d - pb)
         }
-        (MateKind::Coincident, Axis { point: pa, direction: da }, Point(pb)) => {
+        (
+            MateKind::Coincident,
+            Axis {
+                point: pa,
+                direction: da,
+            },
+            Point(pb),
+        ) => {
             let r = pb - pa;
             translate(-(r - da * da.dot(&r)))
         }
-        (MateKind::Coincident, Point(pb), Axis { point: pa, direction: da }) => {
+        (
+            MateKind::Coincident,
+            Point(pb),
+            Axis {
+                point: pa,
+                direction: da,
+            },
+        ) => {
             let r = pb - pa;
             translate(r - da * da.dot(&r))
         }
-        (MateKind::Coincident | MateKind::Concentric, Axis { point: pa, direction: da }, Axis { point: pb, direction: db }) => {
+        (
+            MateKind::Coincident | MateKind::Concentric,
+            Axis {
+                point: pa,
+                direction: da,
+            },
+            Axis {
+                point: pb,
+                direction: db,
+            },
+        ) => {
             let rot = align(da, db, pb);
             let r = pb - pa;
             rot * translate(-(r - da * da.dot(&r)))
         }
         (MateKind::Parallel | MateKind::Perpendicular | MateKind::Angle, _, _) => {
-            let (u, v) = (a.direction().unwrap_or_default(), b.direction().unwrap_or_default());
+            let (u, v) = (
+                a.direction().unwrap_or_default(),
+                b.direction().unwrap_or_default(),
+            );
             let at = b.anchor();
-            match (mate.kind, about.and_then(|r| Some((r.anchor(), r.direction()?)))) {
+            match (
+                mate.kind,
+                about.and_then(|r| Some((r.anchor(), r.direction()?))),
+            ) {
                 (MateKind::Angle, Some((ap, axis))) => {
                     let delta = wrap(value - signed_angle(&u, &v, &axis));
-                    rotate_about(&ap, UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), delta))
+                    rotate_about(
+                        &ap,
+                        UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), delta),
+                    )
                 }
                 (kind, _) => {
                     let target_angle = match kind {
@@ -275,11 +447,18 @@ fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Referenc
                         _ => value,
                     };
                     let axis = u.cross(&v).try_normalize(1e-12).unwrap_or_else(|| {
-                        let perp = if u.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+                        let perp = if u.x.abs() < 0.9 {
+                            Vec3::x()
+                        } else {
+                            Vec3::y()
+                        };
                         u.cross(&perp).normalize()
                     });
                     let delta = target_angle - u.angle(&v);
-                    rotate_about(&at, UnitQuaternion::from_axis_angle(&Unit::new_unchecked(axis), delta))
+                    rotate_about(
+                        &at,
+                        UnitQuaternion::from_axis_angle(&Unit::new_unchecked(axis), delta),
+                    )
                 }
             }
         }
@@ -312,7 +491,10 @@ pub fn solve(mates: &[Mate], poses: &mut [Transform], fixed: &[bool]) -> Result<
         for mate in mates {
             let [ea, eb] = &mate.entities;
             let (a, b) = world(mate, poses);
-            let about = mate.about.as_ref().map(|e| e.geometry.posed(&poses[e.component]));
+            let about = mate
+                .about
+                .as_ref()
+                .map(|e| e.geometry.posed(&poses[e.component]));
             let err = error(mate, &a, &b, about.as_ref());
             worst = worst.max(err);
             if err <= SOLVE_TOLERANCE * 0.1 {

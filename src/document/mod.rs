@@ -44,7 +44,10 @@ impl Part {
     /// A reference by name, including the built-ins (`origin`, `front`, `top`, `right`,
     /// `x_axis`, `y_axis`, `z_axis`).
     pub fn reference(&self, name: &str) -> Option<Reference> {
-        self.references.get(name).copied().or_else(|| Reference::builtin(name))
+        self.references
+            .get(name)
+            .copied()
+            .or_else(|| Reference::builtin(name))
     }
 }
 
@@ -118,7 +121,11 @@ fn parse_color(v: &serde_yaml::Value) -> Option<Color> {
             if h.len() != 6 {
                 return None;
             }
-            let c = |i: usize| u8::from_str_radix(&h[i..i + 2], 16).ok().map(|x| x as f64 / 255.0);
+            let c = |i: usize| {
+                u8::from_str_radix(&h[i..i + 2], 16)
+                    .ok()
+                    .map(|x| x as f64 / 255.0)
+            };
             Some([c(0)?, c(2)?, c(4)?])
         }
         serde_yaml::Value::Sequence(s) if s.len() == 3 => {
@@ -165,53 +172,112 @@ impl Document {
 
     /// Builds a document from YAML text; `path` names the file in messages and anchors
     /// relative mesh paths.
-    pub fn from_yaml(text: &str, path: &Path, cache: &mut MeshCache) -> Result<Self, DocumentError> {
+    pub fn from_yaml(
+        text: &str,
+        path: &Path,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
         let file: DocumentFile = serde_yaml::from_str(text).map_err(|e| {
-            let (line, col) = e.location().map(|l| (l.line(), l.column())).unwrap_or((0, 0));
+            let (line, col) = e
+                .location()
+                .map(|l| (l.line(), l.column()))
+                .unwrap_or((0, 0));
             SourceError::new(path, line, col, format!("invalid document: {e}"))
         })?;
         Self::from_file(file, text, path, cache)
     }
 
-    fn from_file(file: DocumentFile, text: &str, path: &Path, cache: &mut MeshCache) -> Result<Self, DocumentError> {
+    fn from_file(
+        file: DocumentFile,
+        text: &str,
+        path: &Path,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
         let at = |needle: &str, section: &str, message: String| -> DocumentError {
-            let from = locate(text, &format!("{section}:"), 1).map(|l| l.0).unwrap_or(1);
+            let from = locate(text, &format!("{section}:"), 1)
+                .map(|l| l.0)
+                .unwrap_or(1);
             let (line, col) = locate(text, needle, from).unwrap_or((0, 0));
             SourceError::new(path, line, col, message).into()
         };
         if file.units != "mm" {
-            return Err(at("units", "units", format!("units `{}` are not supported: fitup documents are in mm", file.units)));
+            return Err(at(
+                "units",
+                "units",
+                format!(
+                    "units `{}` are not supported: fitup documents are in mm",
+                    file.units
+                ),
+            ));
         }
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let mut parts = IndexMap::new();
         for (name, pf) in &file.parts {
             let mesh_path = dir.join(&pf.stl);
-            let mesh = cache.get(&mesh_path).map_err(|e| at(&pf.stl, "parts", format!("part `{name}`: {e}")))?;
+            let mesh = cache
+                .get(&mesh_path)
+                .map_err(|e| at(&pf.stl, "parts", format!("part `{name}`: {e}")))?;
             let mut references = IndexMap::new();
             for (rname, p) in &pf.planes {
-                let normal = vec3(p.normal)
-                    .try_normalize(1e-12)
-                    .ok_or_else(|| at(rname, "parts", format!("plane `{rname}` of part `{name}` has a zero normal")))?;
-                references.insert(rname.clone(), Reference::Plane { point: vec3(p.point).into(), normal });
+                let normal = vec3(p.normal).try_normalize(1e-12).ok_or_else(|| {
+                    at(
+                        rname,
+                        "parts",
+                        format!("plane `{rname}` of part `{name}` has a zero normal"),
+                    )
+                })?;
+                references.insert(
+                    rname.clone(),
+                    Reference::Plane {
+                        point: vec3(p.point).into(),
+                        normal,
+                    },
+                );
             }
             for (rname, a) in &pf.axes {
-                let direction = vec3(a.direction)
-                    .try_normalize(1e-12)
-                    .ok_or_else(|| at(rname, "parts", format!("axis `{rname}` of part `{name}` has a zero direction")))?;
-                references.insert(rname.clone(), Reference::Axis { point: vec3(a.point).into(), direction });
+                let direction = vec3(a.direction).try_normalize(1e-12).ok_or_else(|| {
+                    at(
+                        rname,
+                        "parts",
+                        format!("axis `{rname}` of part `{name}` has a zero direction"),
+                    )
+                })?;
+                references.insert(
+                    rname.clone(),
+                    Reference::Axis {
+                        point: vec3(a.point).into(),
+                        direction,
+                    },
+                );
             }
             for (rname, p) in &pf.points {
                 references.insert(rname.clone(), Reference::Point(vec3(*p).into()));
             }
             for (rname, r) in &references {
-                let finite = r.anchor().coords.iter().chain(r.direction().unwrap_or_default().iter()).all(|v| v.is_finite());
+                let finite = r
+                    .anchor()
+                    .coords
+                    .iter()
+                    .chain(r.direction().unwrap_or_default().iter())
+                    .all(|v| v.is_finite());
                 if !finite {
-                    return Err(at(rname, "parts", format!("reference `{rname}` of part `{name}` is not finite")));
+                    return Err(at(
+                        rname,
+                        "parts",
+                        format!("reference `{rname}` of part `{name}` is not finite"),
+                    ));
                 }
             }
             parts.insert(
                 name.clone(),
-                Part { name: name.clone(), stl: pf.stl.clone(), mesh_path, mesh, references, features: pf.features.clone() },
+                Part {
+                    name: name.clone(),
+                    stl: pf.stl.clone(),
+                    mesh_path,
+                    mesh,
+                    references,
+                    features: pf.features.clone(),
+                },
             );
         }
         let mut components = Vec::with_capacity(file.components.len());
@@ -219,10 +285,18 @@ impl Document {
         for c in &file.components {
             let needle = format!("name: {}", c.name);
             if c.name.is_empty() || c.name.contains('/') {
-                return Err(at(&needle, "components", format!("component name `{}` must be non-empty without `/`", c.name)));
+                return Err(at(
+                    &needle,
+                    "components",
+                    format!("component name `{}` must be non-empty without `/`", c.name),
+                ));
             }
             if by_name.insert(c.name.clone(), components.len()).is_some() {
-                return Err(at(&needle, "components", format!("duplicate component name `{}`", c.name)));
+                return Err(at(
+                    &needle,
+                    "components",
+                    format!("duplicate component name `{}`", c.name),
+                ));
             }
             if !parts.contains_key(&c.part) {
                 return Err(at(
@@ -237,16 +311,34 @@ impl Document {
                 Some(m) => Transform::from_matrix(m).map_err(|e| {
                     let from = locate(text, &needle, 1).map(|l| l.0).unwrap_or(1);
                     let (line, col) = locate(text, "transform", from).unwrap_or((0, 0));
-                    DocumentError::from(SourceError::new(path, line, col, format!("component `{}`: {e}", c.name)))
+                    DocumentError::from(SourceError::new(
+                        path,
+                        line,
+                        col,
+                        format!("component `{}`: {e}", c.name),
+                    ))
                 })?,
             };
             let color = match &c.color {
                 None => None,
                 Some(v) => Some(parse_color(v).ok_or_else(|| {
-                    at(&needle, "components", format!("component `{}`: colour must be [r, g, b] in 0..1 or \"#rrggbb\"", c.name))
+                    at(
+                        &needle,
+                        "components",
+                        format!(
+                            "component `{}`: colour must be [r, g, b] in 0..1 or \"#rrggbb\"",
+                            c.name
+                        ),
+                    )
                 })?),
             };
-            components.push(Component { name: c.name.clone(), part: c.part.clone(), fixed: c.fixed, color, transform });
+            components.push(Component {
+                name: c.name.clone(),
+                part: c.part.clone(),
+                fixed: c.fixed,
+                color,
+                transform,
+            });
         }
         let mut doc = Document {
             path: path.to_path_buf(),
@@ -270,13 +362,20 @@ impl Document {
                     m.name, m.kind
                 ))
             })?;
-            let ea = doc.mate_entity(&m.entities[0]).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
-            let eb = doc.mate_entity(&m.entities[1]).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
-            mates::check_entities(kind, &ea.geometry, &eb.geometry).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+            let ea = doc
+                .mate_entity(&m.entities[0])
+                .map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+            let eb = doc
+                .mate_entity(&m.entities[1])
+                .map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+            mates::check_entities(kind, &ea.geometry, &eb.geometry)
+                .map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
             let about = match &m.about {
                 None => None,
                 Some(s) => {
-                    let e = doc.mate_entity(s).map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+                    let e = doc
+                        .mate_entity(s)
+                        .map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
                     if !matches!(e.geometry, Reference::Axis { .. }) {
                         return Err(err(format!("mate `{}`: `about` must name an axis", m.name)));
                     }
@@ -286,18 +385,32 @@ impl Document {
             let value = match (kind, m.value) {
                 (MateKind::Angle, Some(v)) => Some(v.to_radians()),
                 (MateKind::Distance, Some(v)) => Some(v),
-                (k, None) if k.has_dimension() => return Err(err(format!("{} mate `{}` needs a `value`", k.name(), m.name))),
+                (k, None) if k.has_dimension() => {
+                    return Err(err(format!(
+                        "{} mate `{}` needs a `value`",
+                        k.name(),
+                        m.name
+                    )))
+                }
                 (_, None) => None,
                 (k, Some(_)) => return Err(err(format!("a {} mate takes no `value`", k.name()))),
             };
             if value.is_some_and(|v| !v.is_finite()) {
                 return Err(err(format!("mate `{}`: value is not finite", m.name)));
             }
-            doc.mates.push(Mate { name: m.name.clone(), kind, entities: [ea, eb], value, aligned: m.aligned, about });
+            doc.mates.push(Mate {
+                name: m.name.clone(),
+                kind,
+                entities: [ea, eb],
+                value,
+                aligned: m.aligned,
+                about,
+            });
         }
         let mut poses: Vec<Transform> = doc.components.iter().map(|c| c.transform).collect();
         let fixed: Vec<bool> = doc.components.iter().map(|c| c.fixed).collect();
-        mates::solve(&doc.mates, &mut poses, &fixed).map_err(|e| at(&format!("name: {}", e.mate), "mates", e.to_string()))?;
+        mates::solve(&doc.mates, &mut poses, &fixed)
+            .map_err(|e| at(&format!("name: {}", e.mate), "mates", e.to_string()))?;
         for (c, p) in doc.components.iter_mut().zip(poses) {
             c.transform = p;
         }
@@ -305,25 +418,41 @@ impl Document {
     }
 
     fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
-        let (comp, reference) =
-            spec.split_once('/').ok_or_else(|| format!("entity `{spec}` must be written `component/reference`"))?;
-        let &component = self
-            .by_name
-            .get(comp)
-            .ok_or_else(|| format!("no component `{comp}` ({})", suggestion(comp, self.by_name.keys().map(String::as_str))))?;
+        let (comp, reference) = spec
+            .split_once('/')
+            .ok_or_else(|| format!("entity `{spec}` must be written `component/reference`"))?;
+        let &component = self.by_name.get(comp).ok_or_else(|| {
+            format!(
+                "no component `{comp}` ({})",
+                suggestion(comp, self.by_name.keys().map(String::as_str))
+            )
+        })?;
         let part = &self.parts[&self.components[component].part];
         let geometry = part.reference(reference).ok_or_else(|| {
-            let names = part.references.keys().map(String::as_str).chain(Reference::BUILTIN_NAMES);
-            format!("part `{}` has no reference `{reference}` ({})", part.name, suggestion(reference, names))
+            let names = part
+                .references
+                .keys()
+                .map(String::as_str)
+                .chain(Reference::BUILTIN_NAMES);
+            format!(
+                "part `{}` has no reference `{reference}` ({})",
+                part.name,
+                suggestion(reference, names)
+            )
         })?;
-        Ok(MateEntity { component, reference: reference.to_string(), geometry })
+        Ok(MateEntity {
+            component,
+            reference: reference.to_string(),
+            geometry,
+        })
     }
 
     /// Re-solves the mates (SolidWorks' rebuild). On failure the poses are unchanged.
     pub fn rebuild(&mut self) -> Result<(), DocumentError> {
         let mut poses: Vec<Transform> = self.components.iter().map(|c| c.transform).collect();
         let fixed: Vec<bool> = self.components.iter().map(|c| c.fixed).collect();
-        mates::solve(&self.mates, &mut poses, &fixed).map_err(|e| DocumentError::Invalid(e.to_string()))?;
+        mates::solve(&self.mates, &mut poses, &fixed)
+            .map_err(|e| DocumentError::Invalid(e.to_string()))?;
         for (c, p) in self.components.iter_mut().zip(poses) {
             c.transform = p;
         }
@@ -367,11 +496,14 @@ impl Document {
 
     /// The index of a component, or an error listing close matches.
     pub fn component_index(&self, name: &str) -> Result<usize, DocumentError> {
-        self.by_name.get(name).copied().ok_or_else(|| DocumentError::NotFound {
-            what: "component",
-            name: name.into(),
-            hint: suggestion(name, self.components.iter().map(|c| c.name.as_str())),
-        })
+        self.by_name
+            .get(name)
+            .copied()
+            .ok_or_else(|| DocumentError::NotFound {
+                what: "component",
+                name: name.into(),
+                hint: suggestion(name, self.components.iter().map(|c| c.name.as_str())),
+            })
     }
 
     /// A component by name.
@@ -390,10 +522,14 @@ impl Document {
     pub fn set_transform(&mut self, name: &str, t: Transform) -> Result<(), DocumentError> {
         let i = self.component_index(name)?;
         if !t.is_finite() {
-            return Err(DocumentError::Invalid(format!("the pose for `{name}` is not finite")));
+            return Err(DocumentError::Invalid(format!(
+                "the pose for `{name}` is not finite"
+            )));
         }
         if self.components[i].fixed {
-            return Err(DocumentError::Invalid(format!("component `{name}` is fixed; set `fixed: false` to move it")));
+            return Err(DocumentError::Invalid(format!(
+                "component `{name}` is fixed; set `fixed: false` to move it"
+            )));
         }
         self.components[i].transform = t;
         self.revision += 1;
@@ -420,7 +556,9 @@ impl Document {
 
     /// The box around every component (mm), `None` for an empty document.
     pub fn assembly_aabb(&self) -> Option<(Point3, Point3)> {
-        (0..self.components.len()).filter_map(|i| self.world_aabb(i)).reduce(|(a, b), (c, d)| (a.inf(&c), b.sup(&d)))
+        (0..self.components.len())
+            .filter_map(|i| self.world_aabb(i))
+            .reduce(|(a, b), (c, d)| (a.inf(&c), b.sup(&d)))
     }
 
     /// Mates in file order.
@@ -430,38 +568,70 @@ impl Document {
 
     /// Full names of the driving dimensions (`D1@<mate>`), in file order.
     pub fn dimensions(&self) -> Vec<String> {
-        self.mates.iter().filter(|m| m.kind.has_dimension()).map(|m| dimension::full_name(&m.name)).collect()
+        self.mates
+            .iter()
+            .filter(|m| m.kind.has_dimension())
+            .map(|m| dimension::full_name(&m.name))
+            .collect()
     }
 
     /// A dimension by full name (`D1@角度1`).
     pub fn dimension(&self, full_name: &str) -> Result<Dimension, DocumentError> {
         let i = self.dimension_mate(full_name)?;
         let m = &self.mates[i];
-        let kind = if m.kind == MateKind::Angle { DimensionKind::Angle } else { DimensionKind::Length };
-        Ok(Dimension { name: full_name.to_string(), kind, value: m.value.unwrap_or(0.0) })
+        let kind = if m.kind == MateKind::Angle {
+            DimensionKind::Angle
+        } else {
+            DimensionKind::Length
+        };
+        Ok(Dimension {
+            name: full_name.to_string(),
+            kind,
+            value: m.value.unwrap_or(0.0),
+        })
     }
 
     fn dimension_mate(&self, full_name: &str) -> Result<usize, DocumentError> {
         let not_found = || DocumentError::NotFound {
             what: "dimension",
             name: full_name.into(),
-            hint: suggestion(full_name, self.dimensions().iter().map(String::as_str).collect::<Vec<_>>().clone()),
+            hint: suggestion(
+                full_name,
+                self.dimensions()
+                    .iter()
+                    .map(String::as_str)
+                    .collect::<Vec<_>>()
+                    .clone(),
+            ),
         };
         let mate = dimension::mate_of(full_name).ok_or_else(not_found)?;
-        self.mates.iter().position(|m| m.name == mate && m.kind.has_dimension()).ok_or_else(not_found)
+        self.mates
+            .iter()
+            .position(|m| m.name == mate && m.kind.has_dimension())
+            .ok_or_else(not_found)
     }
 
     /// Sets a dimension in internal units (mm or radians) and re-solves the mates, so
     /// every later query sees the driven poses. On failure nothing changes.
     pub fn set_dimension(&mut self, full_name: &str, value: f64) -> Result<(), DocumentError> {
         if !value.is_finite() {
-            return Err(DocumentError::Invalid(format!("{full_name}: value {value} is not finite")));
+            return Err(DocumentError::Invalid(format!(
+                "{full_name}: value {value} is not finite"
+            )));
         }
         let i = self.dimension_mate(full_name)?;
         if self.mates[i].kind == MateKind::Distance && value < 0.0 {
-            return Err(DocumentError::Invalid(format!("{full_name}: a distance cannot be negative ({value} mm)")));
+            return Err(DocumentError::Invalid(format!(
+                "{full_name}: a distance cannot be negative ({value} mm)"
+            )));
         }
-        let before = (self.mates[i].value, self.components.iter().map(|c| c.transform).collect::<Vec<_>>());
+        let before = (
+            self.mates[i].value,
+            self.components
+                .iter()
+                .map(|c| c.transform)
+                .collect::<Vec<_>>(),
+        );
         self.mates[i].value = Some(value);
         if let Err(e) = self.rebuild() {
             self.mates[i].value = before.0;
@@ -490,10 +660,22 @@ impl Document {
                     let a = |v: Vec3| [v.x, v.y, v.z];
                     match *r {
                         Reference::Plane { point, normal } => {
-                            pf.planes.insert(n.clone(), PlaneFile { point: a(point.coords), normal: a(normal) });
+                            pf.planes.insert(
+                                n.clone(),
+                                PlaneFile {
+                                    point: a(point.coords),
+                                    normal: a(normal),
+                                },
+                            );
                         }
                         Reference::Axis { point, direction } => {
-                            pf.axes.insert(n.clone(), AxisFile { point: a(point.coords), direction: a(direction) });
+                            pf.axes.insert(
+                                n.clone(),
+                                AxisFile {
+                                    point: a(point.coords),
+                                    direction: a(direction),
+                                },
+                            );
                         }
                         Reference::Point(point) => {
                             pf.points.insert(n.clone(), a(point.coords));
@@ -520,13 +702,31 @@ impl Document {
             .map(|m| MateFile {
                 name: m.name.clone(),
                 kind: m.kind.name().into(),
-                entities: m.entities.clone().map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
-                value: m.value.map(|v| if m.kind == MateKind::Angle { tidy(v.to_degrees()) } else { tidy(v) }),
+                entities: m
+                    .entities
+                    .clone()
+                    .map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+                value: m.value.map(|v| {
+                    if m.kind == MateKind::Angle {
+                        tidy(v.to_degrees())
+                    } else {
+                        tidy(v)
+                    }
+                }),
                 aligned: m.aligned,
-                about: m.about.as_ref().map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+                about: m
+                    .about
+                    .as_ref()
+                    .map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
             })
             .collect();
-        DocumentFile { units: "mm".into(), description: self.description.clone(), parts, components, mates }
+        DocumentFile {
+            units: "mm".into(),
+            description: self.description.clone(),
+            parts,
+            components,
+            mates,
+        }
     }
 
     /// The document as YAML text.
@@ -558,18 +758,22 @@ impl Document {
     }
 
     fn write_to(&self, path: &Path) -> Result<(), DocumentError> {
-        let text = self
-            .to_file()
-            .to_yaml()
-            .map_err(|e| DocumentError::Write { path: path.into(), message: e.to_string() })?;
-        crate::fsutil::write_atomic(path, text.as_bytes())
-            .map_err(|e| DocumentError::Write { path: path.into(), message: e.to_string() })
+        let text = self.to_file().to_yaml().map_err(|e| DocumentError::Write {
+            path: path.into(),
+            message: e.to_string(),
+        })?;
+        crate::fsutil::write_atomic(path, text.as_bytes()).map_err(|e| DocumentError::Write {
+            path: path.into(),
+            message: e.to_string(),
+        })
     }
 
     /// Every file this document was built from (the document and its meshes), for
     /// watch mode.
     pub fn source_files(&self) -> Vec<PathBuf> {
-        std::iter::once(self.path.clone()).chain(self.parts.values().map(|p| p.mesh_path.clone())).collect()
+        std::iter::once(self.path.clone())
+            .chain(self.parts.values().map(|p| p.mesh_path.clone()))
+            .collect()
     }
 }
 

@@ -27,10 +27,14 @@ impl Reference {
     /// The entity moved by the component pose `t` (part frame → world).
     pub fn posed(&self, t: &Transform) -> Reference {
         match *self {
-            Reference::Plane { point, normal } => Reference::Plane { point: t.apply(&point), normal: t.apply_vector(&normal) },
-            Reference::Axis { point, direction } => {
-                Reference::Axis { point: t.apply(&point), direction: t.apply_vector(&direction) }
-            }
+            Reference::Plane { point, normal } => Reference::Plane {
+                point: t.apply(&point),
+                normal: t.apply_vector(&normal),
+            },
+            Reference::Axis { point, direction } => Reference::Axis {
+                point: t.apply(&point),
+                direction: t.apply_vector(&direction),
+            },
             Reference::Point(p) => Reference::Point(t.apply(&p)),
         }
     }
@@ -38,7 +42,9 @@ impl Reference {
     /// A point of the entity (mm).
     pub fn anchor(&self) -> Point3 {
         match *self {
-            Reference::Plane { point, .. } | Reference::Axis { point, .. } | Reference::Point(point) => point,
+            Reference::Plane { point, .. }
+            | Reference::Axis { point, .. }
+            | Reference::Point(point) => point,
         }
     }
 
@@ -67,16 +73,36 @@ impl Reference {
         let o = Point3::origin();
         Some(match name {
             "origin" => Reference::Point(o),
-            "front" => Reference::Plane { point: o, normal: Vec3::z() },
-            "top" => Reference::Plane { point: o, normal: Vec3::y() },
-            "right" => Reference::Plane { point: o, normal: Vec3::x() },
-            "x_axis" => Reference::Axis { point: o, direction: Vec3::x() },
-            "y_axis" => Reference::Axis { point: o, direction: Vec3::y() },
-            "z_axis" => Reference::Axis { point: o, direction: Vec3::z() },
+            "front" => Reference::Plane {
+                point: o,
+                normal: Vec3::z(),
+            },
+            "top" => Reference::Plane {
+                point: o,
+                normal: Vec3::y(),
+            },
+            "right" => Reference::Plane {
+                point: o,
+                normal: Vec3::x(),
+            },
+            "x_axis" => Reference::Axis {
+                point: o,
+                direction: Vec3::x(),
+            },
+            "y_axis" => Reference::Axis {
+                point: o,
+                direction: Vec3::y(),
+            },
+            "z_axis" => Reference::Axis {
+                point: o,
+                direction: Vec3::z(),
+            },
             _ => return None,
         })
     }
 
     /// Names of the built-in references.
-    pub const BUILTIN_NAMES: [&'static str; 7] = ["origin", "front", "top", "right", "x_axis", "y_axis", "z_axis"];
+    pub const BUILTIN_NAMES: [&'static str; 7] = [
+        "origin", "front", "top", "right", "x_axis", "y_axis", "z_axis",
+    ];
 }

@@ -21,7 +21,10 @@ fn demo_loads_and_mates_seat_the_screws() {
     // plate_b got onto the table top and centred on b_axis.
     let pb = doc.component("plate_b").unwrap();
     let centre = pb.transform.apply(&Point3::new(100.0, 100.0, 0.0));
-    assert!((centre - Point3::new(800.0, 400.0, 750.0)).norm() < 1e-6, "{centre}");
+    assert!(
+        (centre - Point3::new(800.0, 400.0, 750.0)).norm() < 1e-6,
+        "{centre}"
+    );
 }
 
 #[test]
@@ -55,7 +58,10 @@ fn angle_dimension_drives_plate_and_units_are_si() {
     // Still centred and on the table after the re-solve.
     let centre = pb.transform.apply(&Point3::new(100.0, 100.0, 0.0));
     assert!((centre - Point3::new(800.0, 400.0, 750.0)).norm() < 1e-6);
-    assert!(matches!(doc.dimension("D1@角度2"), Err(DocumentError::NotFound { .. })));
+    assert!(matches!(
+        doc.dimension("D1@角度2"),
+        Err(DocumentError::NotFound { .. })
+    ));
 }
 
 fn load_text(dir: &Path, text: &str) -> Result<Document, DocumentError> {
@@ -69,11 +75,31 @@ fn bad_documents_name_the_line_and_cause() {
     let dir = write_demo();
     let base = std::fs::read_to_string(dir.path().join("cell.yaml")).unwrap();
     let cases = [
-        (base.replacen("part: plate_a", "part: plate_x", 1), "unknown part `plate_x`"),
-        (base.replacen("name: screw2", "name: screw1", 1), "duplicate component name"),
-        (base.replacen("type: concentric", "type: concentrik", 1), "unknown type `concentrik`"),
-        (base.replacen("units: mm", "units: inch", 1) + if base.contains("units") { "" } else { "units: inch\n" }, "units"),
-        (base.replacen("meshes/screw.stl", "meshes/nope.stl", 1), "nope.stl"),
+        (
+            base.replacen("part: plate_a", "part: plate_x", 1),
+            "unknown part `plate_x`",
+        ),
+        (
+            base.replacen("name: screw2", "name: screw1", 1),
+            "duplicate component name",
+        ),
+        (
+            base.replacen("type: concentric", "type: concentrik", 1),
+            "unknown type `concentrik`",
+        ),
+        (
+            base.replacen("units: mm", "units: inch", 1)
+                + if base.contains("units") {
+                    ""
+                } else {
+                    "units: inch\n"
+                },
+            "units",
+        ),
+        (
+            base.replacen("meshes/screw.stl", "meshes/nope.stl", 1),
+            "nope.stl",
+        ),
         (base.replacen("parts:", "parts: [", 1), "invalid document"),
     ];
     for (text, needle) in cases {
@@ -92,7 +118,10 @@ fn non_rigid_pose_is_rejected_with_its_line() {
     let bad = base.replacen("- [1.0, 0.0, 0.0, 0.0]", "- [2.0, 0.0, 0.0, 0.0]", 1);
     assert_ne!(bad, base);
     let e = load_text(dir.path(), &bad).unwrap_err().render();
-    assert!(e.contains("not orthonormal") && e.contains("t.yaml:"), "{e}");
+    assert!(
+        e.contains("not orthonormal") && e.contains("t.yaml:"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -111,7 +140,11 @@ fn fixed_components_do_not_move_and_nan_is_refused() {
 #[test]
 fn distance_and_angle_mates_solve() {
     let dir = tempfile::tempdir().unwrap();
-    crate::mesh::write_stl(&dir.path().join("b.stl"), &Mesh::cuboid(Point3::origin(), Point3::new(10.0, 10.0, 10.0))).unwrap();
+    crate::mesh::write_stl(
+        &dir.path().join("b.stl"),
+        &Mesh::cuboid(Point3::origin(), Point3::new(10.0, 10.0, 10.0)),
+    )
+    .unwrap();
     let text = r#"
 parts:
   block:
@@ -140,8 +173,13 @@ mates:
     doc.set_dimension("D1@距离1", 20.0).unwrap();
     let z = doc.component("top").unwrap().transform.translation().z;
     assert!((z - 30.0).abs() < 1e-6, "{z}");
-    doc.set_dimension("D1@角度1", (-120f64).to_radians()).unwrap();
-    let [.., c] = doc.component("top").unwrap().transform.to_xyzabc(AngleConvention::XyzFixed);
+    doc.set_dimension("D1@角度1", (-120f64).to_radians())
+        .unwrap();
+    let [.., c] = doc
+        .component("top")
+        .unwrap()
+        .transform
+        .to_xyzabc(AngleConvention::XyzFixed);
     assert!((c.to_degrees() + 120.0).abs() < 1e-6, "{}", c.to_degrees());
     assert!(doc.set_dimension("D1@距离1", -1.0).is_err());
 }

@@ -11,10 +11,17 @@ impl Mesh {
     pub fn lathe(profile: &[(f64, f64)], segments: usize) -> Result<Mesh, MeshError> {
         let n = segments.max(3);
         if profile.len() < 3 || profile[0].0 != 0.0 || profile[profile.len() - 1].0 != 0.0 {
-            return Err(MeshError::invalid("a lathe profile needs ≥ 3 points starting and ending on the axis"));
+            return Err(MeshError::invalid(
+                "a lathe profile needs ≥ 3 points starting and ending on the axis",
+            ));
         }
-        if profile.iter().any(|&(r, z)| !(r.is_finite() && z.is_finite()) || r < 0.0) {
-            return Err(MeshError::invalid("a lathe profile needs finite points with radius ≥ 0"));
+        if profile
+            .iter()
+            .any(|&(r, z)| !(r.is_finite() && z.is_finite()) || r < 0.0)
+        {
+            return Err(MeshError::invalid(
+                "a lathe profile needs finite points with radius ≥ 0",
+            ));
         }
         let at = |(r, z): (f64, f64), k: usize| {
             let a = std::f64::consts::TAU * (k % n) as f64 / n as f64;
@@ -57,8 +64,13 @@ impl Mesh {
         hole: impl Fn(usize, usize) -> bool,
     ) -> Result<Mesh, MeshError> {
         let k = k.max(1);
-        if nx == 0 || ny == 0 || !(pitch > 0.0 && thickness > 0.0 && radius >= 0.0 && 2.0 * radius < pitch) {
-            return Err(MeshError::invalid("a perforated plate needs tiles, pitch > 0, thickness > 0 and 0 ≤ 2·radius < pitch"));
+        if nx == 0
+            || ny == 0
+            || !(pitch > 0.0 && thickness > 0.0 && radius >= 0.0 && 2.0 * radius < pitch)
+        {
+            return Err(MeshError::invalid(
+                "a perforated plate needs tiles, pitch > 0, thickness > 0 and 0 ≤ 2·radius < pitch",
+            ));
         }
         let g = |i: usize| i as f64 * pitch / k as f64; // global subdivided grid coordinate
         let mut soup: Vec<[Point3; 3]> = Vec::new();
@@ -118,12 +130,36 @@ impl Mesh {
         let p = |x: usize, y: usize, z: f64| Point3::new(g(x), g(y), z);
         let t = thickness;
         for s in 0..w {
-            quad(&mut soup, p(s, 0, 0.0), p(s + 1, 0, 0.0), p(s + 1, 0, t), p(s, 0, t));
-            quad(&mut soup, p(s + 1, h, 0.0), p(s, h, 0.0), p(s, h, t), p(s + 1, h, t));
+            quad(
+                &mut soup,
+                p(s, 0, 0.0),
+                p(s + 1, 0, 0.0),
+                p(s + 1, 0, t),
+                p(s, 0, t),
+            );
+            quad(
+                &mut soup,
+                p(s + 1, h, 0.0),
+                p(s, h, 0.0),
+                p(s, h, t),
+                p(s + 1, h, t),
+            );
         }
         for s in 0..h {
-            quad(&mut soup, p(w, s, 0.0), p(w, s + 1, 0.0), p(w, s + 1, t), p(w, s, t));
-            quad(&mut soup, p(0, s + 1, 0.0), p(0, s, 0.0), p(0, s, t), p(0, s + 1, t));
+            quad(
+                &mut soup,
+                p(w, s, 0.0),
+                p(w, s + 1, 0.0),
+                p(w, s + 1, t),
+                p(w, s, t),
+            );
+            quad(
+                &mut soup,
+                p(0, s + 1, 0.0),
+                p(0, s, 0.0),
+                p(0, s, t),
+                p(0, s + 1, t),
+            );
         }
         Mesh::from_triangle_soup(soup)
     }
@@ -135,7 +171,18 @@ mod tests {
 
     #[test]
     fn screw_is_watertight_with_expected_volume() {
-        let m = Mesh::lathe(&[(0.0, 0.0), (4.0, 0.0), (4.0, 10.0), (7.0, 10.0), (7.0, 15.0), (0.0, 15.0)], 64).unwrap();
+        let m = Mesh::lathe(
+            &[
+                (0.0, 0.0),
+                (4.0, 0.0),
+                (4.0, 10.0),
+                (7.0, 10.0),
+                (7.0, 15.0),
+                (0.0, 15.0),
+            ],
+            64,
+        )
+        .unwrap();
         assert!(m.inspect().is_watertight(), "{:?}", m.inspect());
         let exact = std::f64::consts::PI * (16.0 * 10.0 + 49.0 * 5.0);
         let v = m.signed_volume();

@@ -1,0 +1,73 @@
+//! `fitup check DOC`.
+
+use super::Exit;
+use crate::document::Document;
+use std::path::Path;
+
+pub(super) fn check(path: &Path) -> Exit {
+    let doc = match Document::open(path) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("error: {}", e.render());
+            return Exit::Failure;
+        }
+    };
+    println!("{}: ok", path.display());
+    if let Some(d) = doc.description() {
+        println!("  {d}");
+    }
+    let mut warnings = 0;
+    println!("  parts ({}):", doc.parts().count());
+    for p in doc.parts() {
+        let r = p.mesh.inspect();
+        let mut notes = Vec::new();
+        if !r.is_watertight() {
+            notes.push(format!(
+                "not watertight ({} open, {} non-manifold, {} misoriented edges): containment cannot be tested",
+                r.boundary_edges, r.non_manifold_edges, r.misoriented_edges
+            ));
+        }
+        if r.degenerate_triangles > 0 {
+            notes.push(format!("{} degenerate triangles", r.degenerate_triangles));
+        }
+        warnings += notes.len();
+        println!(
+            "    {:<12} {:>7} triangles  {}{}",
+            p.name,
+            p.mesh.triangles.len(),
+            p.stl,
+            if notes.is_empty() {
+                String::new()
+            } else {
+                format!("  warning: {}", notes.join("; "))
+            }
+        );
+    }
+    println!("  components ({}):", doc.components().len());
+    for c in doc.components() {
+        // `+ 0.0` turns -0.0 into 0.0 for display.
+        let [x, y, z, a, b, cc] = c.transform.to_xyzabc(Default::default()).map(|v| v + 0.0);
+        println!(
+            "    {:<12} {:<10} {}  at X {:.3} Y {:.3} Z {:.3} A {:.3} B {:.3} C {:.3}",
+            c.name,
+            c.part,
+            if c.fixed { "fixed" } else { "free " },
+            x,
+            y,
+            z,
+            a.to_degrees(),
+            b.to_degrees(),
+            cc.to_degrees()
+        );
+    }
+    println!("  mates ({}), all satisfied", doc.mates().len());
+    for name in doc.dimensions() {
+        if let Ok(d) = doc.dimension(&name) {
+            println!("    {} = {}", d.name, d.document_value());
+        }
+    }
+    if warnings > 0 {
+        println!("  {warnings} warning(s)");
+    }
+    Exit::Ok
+}

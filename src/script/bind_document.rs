@@ -1,0 +1,432 @@
+//! Bindings for the assembly document: `open_doc`, components, dimensions, save.
+
+use super::api::Api;
+use super::bind_math::to_transform;
+use super::convert::{aabb_map, array3, err, fail, floats, num, point3, vec3};
+use super::{Context, ScriptResult};
+use crate::document::{DimensionKind, Document, Reference};
+use crate::math::{Transform, Vec3};
+use rhai::{Array, Dynamic, Map};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+/// A script's handle on an open document (cheap to clone; clones share the document).
+#[derive(Clone)]
+pub struct DocHandle {
+    inner: Arc<Mutex<Document>>,
+    ctx: Arc<Context>,
+}
+
+/// A component of a document, by index.
+#[derive(Clone)]
+pub struct ComponentHandle {
+    doc: DocHandle,
+    index: usize,
+}
+
+/// A driving dimension of a document, by full name (`D1@角度1`).
+#[derive(Clone)]
+pub struct DimensionHandle {
+    doc: DocHandle,
+    name: String,
+}
+
+impl DocHandle {
+    /// Opens a document (path relative to the project root) through the shared mesh
+    /// cache and records its files as dependencies of the run.
+    pub fn open(ctx: &Arc<Context>, path: &str) -> Result<Self, String> {
+        let full = ctx.project.resolve(path)?;
+        ctx.record_read(&full);
+        let doc = {
+            let mut cache = ctx
+                .caches
+                .meshes
+                .lock()
+                .map_err(|_| "mesh cache poisoned".to_string())?;
+            Document::load(&full, &mut cache).map_err(|e| e.render())?
+        };
+        for f in doc.source_files() {
+            ctx.record_read(&f);
+        }
+        Ok(Self {
+            inner: Arc::new(Mutex::new(doc)),
+            ctx: ctx.clone(),
+        })
+    }
+
+    /// Locks the document.
+    pub fn lock(&self) -> ScriptResult<MutexGuard<'_, Document>> {
+        self.inner
+            .lock()
+            .map_err(|_| fail("the document is unusable after an earlier panic"))
+    }
+
+    /// The run context.
+    pub fn context(&self) -> &Arc<Context> {
+        &self.ctx
+    }
+
+    fn component(&self, name: &str) -> ScriptResult<ComponentHandle> {
+        let index = self.lock()?.component_index(name).map_err(fail)?;
+        Ok(ComponentHandle {
+            doc: self.clone(),
+            index,
+        })
+    }
+}
+
+impl ComponentHandle {
+    fn with<R>(
+        &self,
+        f: impl FnOnce(&Document, &crate::document::Component) -> R,
+    ) -> ScriptResult<R> {
+        let doc = self.doc.lock()?;
+        Ok(f(&doc, &doc.components()[self.index]))
+    }
+
+    fn set_transform(&self, t: Transform) -> ScriptResult<()> {
+        let mut doc = self.doc.lock()?;
+        let name = doc.components()[self.index].name.clone();
+        doc.set_transform(&name, t).map_err(fail)
+    }
+
+    fn transform(&self) -> ScriptResult<Transform> {
+        self.with(|_, c| c.transform)
+    }
+}
+
+fn reference_map(r: &Reference) -> Map {
+    let mut m = Map::new();
+    m.insert("type".into(), r.kind_name().into());
+    m.insert("point".into(), array3(&r.anchor().coords));
+    match r {
+        Reference::Plane { normal, .. } => {
+            m.insert("normal".into(), array3(normal));
+        }
+        Reference::Axis { direction, .. } => {
+            m.insert("direction".into(), array3(direction));
+        }
+        Reference::Point(_) => {}
+    }
+    m
+}
+
+pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
+    api.section("Document", "An assembly document (YAML + STL). Lengths in mm, angles in radians unless a name says degrees. Components are part instances with a pose (`transform`, part frame → world).");
+    api.type_::<DocHandle>("Document");
+    api.type_::<ComponentHandle>("Component");
+    api.type_::<DimensionHandle>("Dimension");
+    let c = ctx.clone();
+    api.f("open_doc(path: string) -> Document", "Opens a document (path relative to the project folder); its file and meshes become dependencies of the run, so `fitup watch` reruns when they change.", move |path: &str| -> ScriptResult<DocHandle> {
+        DocHandle::open(&c, path).map_err(fail)
+    });
+    api.get(
+        "Document.path -> string",
+        "The document's file, relative to the project folder.",
+        |d: &mut DocHandle| -> ScriptResult<String> {
+            let p = d.lock()?.path().to_path_buf();
+            Ok(d.ctx.project.display(&p))
+        },
+    );
+    api.f(
+        "Document.component(name: string) -> Component",
+        "A component by name; a missing name is an error that lists close matches.",
+        |d: &mut DocHandle, name: &str| d.component(name),
+    );
+    api.f(
+        "Document.components() -> array",
+        "Every component, in document order.",
+        |d: &mut DocHandle| -> ScriptResult<Array> {
+            let n = d.lock()?.components().len();
+            Ok((0..n)
+                .map(|index| {
+                    Dynamic::from(ComponentHandle {
+                        doc: d.clone(),
+                        index,
+                    })
+                })
+                .collect())
+        },
+    );
+    api.f(
+        "Document.parts() -> array",
+        "Part names, in document order.",
+        |d: &mut DocHandle| -> ScriptResult<Array> {
+            Ok(d.lock()?
+                .parts()
+                .map(|p| Dynamic::from(p.name.clone()))
+                .collect())
+        },
+    );
+    api.f(
+        "Document.dimensions() -> array",
+        "Full names of the driving dimensions (`D1@<mate>`), in document order.",
+        |d: &mut DocHandle| -> ScriptResult<Array> {
+            Ok(d.lock()?
+                .dimensions()
+                .into_iter()
+                .map(Dynamic::from)
+                .collect())
+        },
+    );
+    api.f(
+        "Document.dimension(full_name: string) -> Dimension",
+        "A driving dimension by full name, e.g. `D1@角度1`.",
+        |d: &mut DocHandle, name: &str| -> ScriptResult<DimensionHandle> {
+            d.lock()?.dimension(name).map_err(fail)?;
+            Ok(DimensionHandle {
+                doc: d.clone(),
+                name: name.to_string(),
+            })
+        },
+    );
+    api.f(
+        "Document.rebuild()",
+        "Re-solves the mates (SolidWorks' rebuild): components follow what they are mated to.",
+        |d: &mut DocHandle| -> ScriptResult<()> { d.lock()?.rebuild().map_err(fail) },
+    );
+    api.f(
+        "Document.aabb() -> map",
+        "The world box around every component: `#{min: [x,y,z], max: [x,y,z]}` (mm).",
+        |d: &mut DocHandle| -> ScriptResult<Dynamic> {
+            match d.lock()?.assembly_aabb() {
+                Some((lo, hi)) => Ok(aabb_map(&lo, &hi)),
+                None => err("the document has no components"),
+            }
+        },
+    );
+    api.f(
+        "Document.save()",
+        "Writes the document back to its file atomically (temporary file, then rename).",
+        |d: &mut DocHandle| -> ScriptResult<()> {
+            let doc = d.lock()?;
+            doc.save().map_err(fail)?;
+            d.ctx.record_write(doc.path());
+            Ok(())
+        },
+    );
+    let c = ctx.clone();
+    api.f("Document.save_as(path: string)", "Writes the document to a new file (inside the project) atomically and makes it the document's file; mesh paths are rewritten relative to it.", move |d: &mut DocHandle, path: &str| -> ScriptResult<()> {
+        let full = c.project.resolve(path).map_err(fail)?;
+        d.lock()?.save_as(&full).map_err(fail)?;
+        c.record_write(&full);
+        Ok(())
+    });
+    api.f(
+        "Document.to_string() -> string",
+        "A one-line summary.",
+        |d: &mut DocHandle| -> ScriptResult<String> {
+            let doc = d.lock()?;
+            Ok(format!(
+                "Document({}: {} parts, {} components, {} mates)",
+                doc.path().display(),
+                doc.parts().count(),
+                doc.components().len(),
+                doc.mates().len()
+            ))
+        },
+    );
+
+    api.section("Component", "A part instance. `transform` maps the part frame to the world (mm). Fixed components refuse to move.");
+    api.get(
+        "Component.name -> string",
+        "The component name.",
+        |c: &mut ComponentHandle| c.with(|_, c| c.name.clone()),
+    );
+    api.get(
+        "Component.part -> string",
+        "The part it instantiates.",
+        |c: &mut ComponentHandle| c.with(|_, c| c.part.clone()),
+    );
+    api.get(
+        "Component.fixed -> bool",
+        "Whether the component is fixed (never moved by mates, moves or planners).",
+        |c: &mut ComponentHandle| c.with(|_, c| c.fixed),
+    );
+    api.set(
+        "Component.fixed",
+        |c: &mut ComponentHandle, v: bool| -> ScriptResult<()> {
+            let mut doc = c.doc.lock()?;
+            let name = doc.components()[c.index].name.clone();
+            doc.set_fixed(&name, v).map_err(fail)
+        },
+    );
+    api.get(
+        "Component.transform -> Transform",
+        "The pose, part frame → world (mm).",
+        |c: &mut ComponentHandle| c.transform(),
+    );
+    api.set(
+        "Component.transform",
+        |c: &mut ComponentHandle, v: Dynamic| -> ScriptResult<()> {
+            let t = to_transform(&v, "transform")?;
+            c.set_transform(t)
+        },
+    );
+    api.get(
+        "Component.color -> array",
+        "`[r, g, b]` in 0..1, or an empty array when unset.",
+        |c: &mut ComponentHandle| {
+            c.with(|_, c| {
+                c.color
+                    .map(|v| floats(v))
+                    .unwrap_or_else(|| Dynamic::from_array(Array::new()))
+            })
+        },
+    );
+    api.f(
+        "Component.translate(dx, dy, dz)",
+        "Moves the component by (dx, dy, dz) mm in the world frame.",
+        |c: &mut ComponentHandle, x: Dynamic, y: Dynamic, z: Dynamic| -> ScriptResult<()> {
+            let d = Vec3::new(num(&x, "dx")?, num(&y, "dy")?, num(&z, "dz")?);
+            c.set_transform(c.transform()? * Transform::from_translation(d))
+        },
+    );
+    api.f(
+        "Component.translate(v: array)",
+        "Moves the component by `[dx, dy, dz]` mm in the world frame.",
+        |c: &mut ComponentHandle, v: Dynamic| -> ScriptResult<()> {
+            let d = vec3(&v, "translation")?;
+            c.set_transform(c.transform()? * Transform::from_translation(d))
+        },
+    );
+    api.f("Component.rotate(point: array, axis: array, angle_rad)", "Rotates the component by `angle_rad` **radians** about the world line through `point` (mm) along `axis`.", |c: &mut ComponentHandle, p: Dynamic, a: Dynamic, ang: Dynamic| -> ScriptResult<()> {
+        let r = Transform::from_rotation_about(point3(&p, "point")?, vec3(&a, "axis")?, num(&ang, "angle")?).map_err(fail)?;
+        c.set_transform(c.transform()? * r)
+    });
+    api.f(
+        "Component.aabb() -> map",
+        "World axis-aligned box `#{min: [x,y,z], max: [x,y,z]}` (mm) of the posed mesh.",
+        |c: &mut ComponentHandle| -> ScriptResult<Dynamic> {
+            let doc = c.doc.lock()?;
+            match doc.world_aabb(c.index) {
+                Some((lo, hi)) => Ok(aabb_map(&lo, &hi)),
+                None => err("the component's mesh is empty"),
+            }
+        },
+    );
+    api.f("Component.reference(name: string) -> map", "A reference of the part in world coordinates: `#{type, point, normal}` for planes, `#{type, point, direction}` for axes, `#{type, point}` for points (mm).", |c: &mut ComponentHandle, name: &str| -> ScriptResult<Map> {
+        let doc = c.doc.lock()?;
+        let comp = &doc.components()[c.index];
+        let part = doc.part(&comp.part).map_err(fail)?;
+        let r = part.reference(name).ok_or_else(|| {
+            let names = part.references.keys().map(String::as_str).chain(Reference::BUILTIN_NAMES);
+            fail(format!("part `{}` has no reference `{name}`: {}", part.name, crate::diagnostics::suggestion(name, names)))
+        })?;
+        Ok(reference_map(&r.posed(&comp.transform)))
+    });
+    api.f(
+        "Component.to_string() -> string",
+        "`Component(name)`.",
+        |c: &mut ComponentHandle| c.with(|_, c| format!("Component({})", c.name)),
+    );
+
+    api.section("Dimension", "A driving dimension `D1@<mate>` of a distance or angle mate. `value` is in document units (mm, degrees); `system_value` mirrors SolidWorks' `SystemValue` (metres, radians): `system_value = ang * PI / 180`. Setting either re-solves the mates before anything else reads the document.");
+    api.get(
+        "Dimension.name -> string",
+        "The full name, e.g. `D1@角度1`.",
+        |d: &mut DimensionHandle| d.name.clone(),
+    );
+    api.get(
+        "Dimension.kind -> string",
+        "`\"angle\"` or `\"length\"`.",
+        |d: &mut DimensionHandle| -> ScriptResult<String> {
+            let dim = d.doc.lock()?.dimension(&d.name).map_err(fail)?;
+            Ok(if dim.kind == DimensionKind::Angle {
+                "angle"
+            } else {
+                "length"
+            }
+            .into())
+        },
+    );
+    api.get(
+        "Dimension.value -> float",
+        "The value in document units: mm or degrees.",
+        |d: &mut DimensionHandle| -> ScriptResult<f64> {
+            Ok(d.doc
+                .lock()?
+                .dimension(&d.name)
+                .map_err(fail)?
+                .document_value())
+        },
+    );
+    api.set(
+        "Dimension.value",
+        |d: &mut DimensionHandle, v: Dynamic| -> ScriptResult<()> {
+            let v = num(&v, "value")?;
+            let mut doc = d.doc.lock()?;
+            let kind = doc.dimension(&d.name).map_err(fail)?.kind;
+            doc.set_dimension(&d.name, crate::document::Dimension::from_document(kind, v))
+                .map_err(fail)
+        },
+    );
+    api.get(
+        "Dimension.system_value -> float",
+        "The value in SI units (metres or radians), as SolidWorks' `SystemValue`.",
+        |d: &mut DimensionHandle| -> ScriptResult<f64> {
+            Ok(d.doc
+                .lock()?
+                .dimension(&d.name)
+                .map_err(fail)?
+                .system_value())
+        },
+    );
+    api.set(
+        "Dimension.system_value",
+        |d: &mut DimensionHandle, v: Dynamic| -> ScriptResult<()> {
+            let v = num(&v, "system_value")?;
+            let mut doc = d.doc.lock()?;
+            let kind = doc.dimension(&d.name).map_err(fail)?.kind;
+            doc.set_dimension(&d.name, crate::document::Dimension::from_system(kind, v))
+                .map_err(fail)
+        },
+    );
+    api.f(
+        "Dimension.to_string() -> string",
+        "`D1@name = value unit`.",
+        |d: &mut DimensionHandle| -> ScriptResult<String> {
+            let dim = d.doc.lock()?.dimension(&d.name).map_err(fail)?;
+            Ok(format!(
+                "{} = {} {}",
+                dim.name,
+                dim.document_value(),
+                if dim.kind == DimensionKind::Angle {
+                    "deg"
+                } else {
+                    "mm"
+                }
+            ))
+        },
+    );
+
+    api.section("Checks", "Assertions and output.");
+    api.f("assert(condition: bool, message: string)", "Stops the script with `assertion failed: message` (and its line) when `condition` is false.", |c: bool, m: &str| -> ScriptResult<()> {
+        if c { Ok(()) } else { err(format!("assertion failed: {m}")) }
+    });
+    api.f(
+        "assert(condition: bool)",
+        "Stops the script with `assertion failed` when `condition` is false.",
+        |c: bool| -> ScriptResult<()> {
+            if c {
+                Ok(())
+            } else {
+                err("assertion failed")
+            }
+        },
+    );
+    api.f(
+        "assert_near(a, b, tolerance)",
+        "Stops the script unless |a − b| ≤ tolerance; the message shows both values.",
+        |a: Dynamic, b: Dynamic, t: Dynamic| -> ScriptResult<()> {
+            let (a, b, t) = (num(&a, "a")?, num(&b, "b")?, num(&t, "tolerance")?);
+            if (a - b).abs() <= t {
+                Ok(())
+            } else {
+                err(format!(
+                    "assertion failed: {a} and {b} differ by {} > {t}",
+                    (a - b).abs()
+                ))
+            }
+        },
+    );
+}

@@ -1,0 +1,235 @@
+//! Bindings for `Transform` (the MathTransform of the SolidWorks API).
+
+use super::api::Api;
+use super::convert::{array3, err, fail, floats, num, numbers, point3, vec3};
+use super::ScriptResult;
+use crate::math::{AngleConvention, Transform, Vec3};
+use rhai::{Array, Dynamic};
+
+fn matrix_array(t: &Transform) -> Dynamic {
+    Dynamic::from_array(
+        t.to_matrix()
+            .iter()
+            .map(|r| floats(r.iter().copied()))
+            .collect(),
+    )
+}
+
+/// A pose from `x y z` (mm) and `a b c` (degrees, XyzFixed).
+pub fn pose_deg(v: &[f64; 6], conv: AngleConvention) -> Transform {
+    Transform::from_xyzabc(
+        Vec3::new(v[0], v[1], v[2]),
+        [v[3].to_radians(), v[4].to_radians(), v[5].to_radians()],
+        conv,
+    )
+}
+
+/// `[x, y, z, a, b, c]`: mm and degrees.
+pub fn xyzabc_deg(t: &Transform, conv: AngleConvention) -> Dynamic {
+    let v = t.to_xyzabc(conv);
+    floats([
+        v[0],
+        v[1],
+        v[2],
+        v[3].to_degrees(),
+        v[4].to_degrees(),
+        v[5].to_degrees(),
+    ])
+}
+
+/// A Transform from a script value: a Transform, a 4×4 matrix, 16 array-data numbers
+/// or a pose `[x, y, z, a, b, c]` (mm, degrees).
+pub fn to_transform(v: &Dynamic, what: &str) -> ScriptResult<Transform> {
+    if let Some(t) = v.read_lock::<Transform>() {
+        return Ok(*t);
+    }
+    let arr = v.read_lock::<Array>().ok_or_else(|| {
+        fail(format!(
+            "{what} must be a Transform or an array, not {}",
+            v.type_name()
+        ))
+    })?;
+    match arr.len() {
+        4 => {
+            let mut m = [[0.0; 4]; 4];
+            for (i, row) in arr.iter().enumerate() {
+                let r = numbers(row, 4, &format!("{what} row {}", i + 1))?;
+                m[i].copy_from_slice(&r);
+            }
+            Transform::from_matrix(&m).map_err(fail)
+        }
+        6 => {
+            let n = numbers(v, 6, what)?;
+            Ok(pose_deg(&[n[0], n[1], n[2], n[3], n[4], n[5]], AngleConvention::default()))
+        }
+        16 => {
+            let n = numbers(v, 16, what)?;
+            let mut d = [0.0; 16];
+            d.copy_from_slice(&n);
+            Transform::from_array_data(&d).map_err(fail)
+        }
+        n => err(format!("{what}: an array of {n} elements is not a 4×4 matrix, a pose [x,y,z,a,b,c] or 16 array-data numbers")),
+    }
+}
+
+fn convention(name: &str) -> ScriptResult<AngleConvention> {
+    AngleConvention::parse(name).ok_or_else(|| {
+        fail(format!(
+            "unknown angle convention `{name}`: use \"xyz\" (seed 000) or \"zyx\" (seed 001)"
+        ))
+    })
+}
+
+pub(super) fn register(api: &mut Api) {
+    api.section("Transform", "Rigid poses in the SolidWorks pose-matrix layout: 4 rows `[a b c 0] [d e f 0] [g h i 0] [j k l 1]`, rotation in a..i, translation j k l in mm, acting on row vectors (`[x y z 1] · M`). `a * b` applies `a` first, then `b` (like IMathTransform.Multiply). Pose triples `X Y Z A B C` are mm and degrees; default convention `xyz`: A about the fixed X axis, then B about fixed Y, then C about fixed Z (R = Rz(C)·Ry(B)·Rx(A)); `zyx` is seed 001's: rotate Z by A, then the new Y by B, then the new X by C.");
+    api.type_::<Transform>("Transform");
+    api.f("identity() -> Transform", "The identity pose.", || {
+        Transform::IDENTITY
+    });
+    api.f(
+        "translation(x, y, z) -> Transform",
+        "A pure translation by (x, y, z) mm.",
+        |x: Dynamic, y: Dynamic, z: Dynamic| -> ScriptResult<Transform> {
+            Ok(Transform::from_translation(Vec3::new(
+                num(&x, "x")?,
+                num(&y, "y")?,
+                num(&z, "z")?,
+            )))
+        },
+    );
+    api.f(
+        "translation(v: array) -> Transform",
+        "A pure translation by [x, y, z] mm.",
+        |v: Dynamic| -> ScriptResult<Transform> {
+            Ok(Transform::from_translation(vec3(&v, "translation")?))
+        },
+    );
+    api.f("rotation(point: array, axis: array, angle_rad) -> Transform", "A rotation of `angle_rad` **radians** (right hand) about the line through `point` (mm) along `axis`.", |p: Dynamic, a: Dynamic, ang: Dynamic| -> ScriptResult<Transform> {
+        Transform::from_rotation_about(point3(&p, "point")?, vec3(&a, "axis")?, num(&ang, "angle")?).map_err(fail)
+    });
+    api.f("pose(x, y, z, a, b, c) -> Transform", "A pose from position (mm) and angles A B C in **degrees** (convention `xyz`, see the section).", |x: Dynamic, y: Dynamic, z: Dynamic, a: Dynamic, b: Dynamic, c: Dynamic| -> ScriptResult<Transform> {
+        Ok(pose_deg(&[num(&x, "x")?, num(&y, "y")?, num(&z, "z")?, num(&a, "a")?, num(&b, "b")?, num(&c, "c")?], AngleConvention::default()))
+    });
+    api.f(
+        "pose(xyzabc: array) -> Transform",
+        "A pose from `[x, y, z, a, b, c]` (mm, degrees, convention `xyz`).",
+        |v: Dynamic| -> ScriptResult<Transform> {
+            let n = numbers(&v, 6, "pose")?;
+            Ok(pose_deg(
+                &[n[0], n[1], n[2], n[3], n[4], n[5]],
+                AngleConvention::default(),
+            ))
+        },
+    );
+    api.f(
+        "pose(xyzabc: array, convention: string) -> Transform",
+        "A pose from `[x, y, z, a, b, c]` (mm, degrees) in convention `\"xyz\"` or `\"zyx\"`.",
+        |v: Dynamic, conv: &str| -> ScriptResult<Transform> {
+            let n = numbers(&v, 6, "pose")?;
+            Ok(pose_deg(
+                &[n[0], n[1], n[2], n[3], n[4], n[5]],
+                convention(conv)?,
+            ))
+        },
+    );
+    api.f("transform(m: array) -> Transform", "A Transform from a 4×4 matrix (layout above), 16 array-data numbers or a pose `[x,y,z,a,b,c]`; checks that it is rigid.", |m: Dynamic| to_transform(&m, "transform"));
+    api.get(
+        "Transform.matrix -> array",
+        "The 4×4 matrix, rows `[a b c 0] [d e f 0] [g h i 0] [j k l 1]` (mm).",
+        |t: &mut Transform| matrix_array(t),
+    );
+    api.get(
+        "Transform.array_data -> array",
+        "The 16 numbers of IMathTransform.ArrayData: a..i, j k l (mm, not metres), scale 1, 0 0 0.",
+        |t: &mut Transform| floats(t.to_array_data()),
+    );
+    api.get(
+        "Transform.xyzabc -> array",
+        "`[x, y, z, a, b, c]`: mm and degrees, convention `xyz`.",
+        |t: &mut Transform| xyzabc_deg(t, AngleConvention::default()),
+    );
+    api.f(
+        "Transform.xyzabc_in(convention: string) -> array",
+        "`[x, y, z, a, b, c]` (mm, degrees) in convention `\"xyz\"` or `\"zyx\"`.",
+        |t: &mut Transform, conv: &str| -> ScriptResult<Dynamic> {
+            Ok(xyzabc_deg(t, convention(conv)?))
+        },
+    );
+    api.get(
+        "Transform.translation -> array",
+        "The translation `[j, k, l]` (mm).",
+        |t: &mut Transform| array3(&t.translation()),
+    );
+    api.f(
+        "Transform.inverse() -> Transform",
+        "The inverse pose.",
+        |t: &mut Transform| t.inverse(),
+    );
+    api.f(
+        "Transform.apply(point: array) -> array",
+        "Maps a point `[x, y, z]` (mm) through the pose.",
+        |t: &mut Transform, p: Dynamic| -> ScriptResult<Dynamic> {
+            Ok(array3(&t.apply(&point3(&p, "point")?).coords))
+        },
+    );
+    api.f(
+        "Transform.apply_vector(v: array) -> array",
+        "Rotates a direction `[x, y, z]` (no translation).",
+        |t: &mut Transform, v: Dynamic| -> ScriptResult<Dynamic> {
+            Ok(array3(&t.apply_vector(&vec3(&v, "vector")?)))
+        },
+    );
+    api.f(
+        "Transform.interpolate(other: Transform, s) -> Transform",
+        "Straight-line translation and slerp rotation, `s` from 0 (self) to 1 (other).",
+        |t: &mut Transform, o: Transform, s: Dynamic| -> ScriptResult<Transform> {
+            Ok(t.interpolate(&o, num(&s, "s")?))
+        },
+    );
+    api.f(
+        "Transform.distance_to(other: Transform) -> map",
+        "`#{mm, deg}`: translation distance (mm) and rotation angle (degrees) between two poses.",
+        |t: &mut Transform, o: Transform| {
+            let (a, d) = t.distance_to(&o);
+            let mut m = rhai::Map::new();
+            m.insert("mm".into(), Dynamic::from_float(d));
+            m.insert("deg".into(), Dynamic::from_float(a.to_degrees()));
+            m
+        },
+    );
+    api.f(
+        "Transform * Transform -> Transform",
+        "Composition: apply the left pose, then the right one (row-vector product).",
+        |a: Transform, b: Transform| a * b,
+    );
+    api.f(
+        "Transform == Transform -> bool",
+        "Equal within 1e-9 mm and 1e-9 rad.",
+        |a: Transform, b: Transform| a.approx_eq(&b, 1e-9, 1e-9),
+    );
+    api.f(
+        "Transform != Transform -> bool",
+        "Not equal within 1e-9 mm and 1e-9 rad.",
+        |a: Transform, b: Transform| !a.approx_eq(&b, 1e-9, 1e-9),
+    );
+    api.f(
+        "Transform.to_string() -> string",
+        "The matrix as text.",
+        |t: &mut Transform| t.to_string(),
+    );
+    api.f(
+        "Transform.to_debug() -> string",
+        "The matrix as text.",
+        |t: &mut Transform| t.to_string(),
+    );
+    api.f(
+        "deg(rad) -> float",
+        "Radians to degrees.",
+        |r: Dynamic| -> ScriptResult<f64> { Ok(num(&r, "rad")?.to_degrees()) },
+    );
+    api.f(
+        "rad(deg) -> float",
+        "Degrees to radians.",
+        |d: Dynamic| -> ScriptResult<f64> { Ok(num(&d, "deg")?.to_radians()) },
+    );
+}

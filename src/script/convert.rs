@@ -1,0 +1,116 @@
+//! Conversions between Rhai values and fitup types, with messages that name the
+//! argument. Numbers may be integers or floats everywhere (Rhai does not convert `1`
+//! to `1.0` for native functions, so every binding takes numbers through [`num`]).
+
+use super::ScriptResult;
+use crate::math::{Point3, Vec3};
+use rhai::{Array, Dynamic, EvalAltResult, Map};
+
+/// A runtime error with a message; Rhai fills in the call's position.
+pub fn err<T>(message: impl Into<String>) -> ScriptResult<T> {
+    Err(Box::new(EvalAltResult::ErrorRuntime(
+        Dynamic::from(message.into()),
+        rhai::Position::NONE,
+    )))
+}
+
+/// Any displayable error as a script error.
+pub fn fail<E: std::fmt::Display>(e: E) -> Box<EvalAltResult> {
+    Box::new(EvalAltResult::ErrorRuntime(
+        Dynamic::from(e.to_string()),
+        rhai::Position::NONE,
+    ))
+}
+
+/// A finite number from an integer or a float.
+pub fn num(v: &Dynamic, what: &str) -> ScriptResult<f64> {
+    let x = if let Ok(f) = v.as_float() {
+        f
+    } else if let Ok(i) = v.as_int() {
+        i as f64
+    } else {
+        return err(format!("{what} must be a number, not {}", v.type_name()));
+    };
+    if !x.is_finite() {
+        return err(format!("{what} must be finite, not {x}"));
+    }
+    Ok(x)
+}
+
+/// A list of `n` numbers.
+pub fn numbers(v: &Dynamic, n: usize, what: &str) -> ScriptResult<Vec<f64>> {
+    let arr = v.read_lock::<Array>().ok_or_else(|| {
+        fail(format!(
+            "{what} must be an array of {n} numbers, not {}",
+            v.type_name()
+        ))
+    })?;
+    if arr.len() != n {
+        return err(format!(
+            "{what} must have {n} numbers, it has {}",
+            arr.len()
+        ));
+    }
+    arr.iter()
+        .enumerate()
+        .map(|(i, x)| num(x, &format!("{what}[{i}]")))
+        .collect()
+}
+
+/// A vector from `[x, y, z]`.
+pub fn vec3(v: &Dynamic, what: &str) -> ScriptResult<Vec3> {
+    let n = numbers(v, 3, what)?;
+    Ok(Vec3::new(n[0], n[1], n[2]))
+}
+
+/// A point from `[x, y, z]` (mm).
+pub fn point3(v: &Dynamic, what: &str) -> ScriptResult<Point3> {
+    Ok(vec3(v, what)?.into())
+}
+
+/// `[x, y, z]` as a Rhai array.
+pub fn array3(v: &Vec3) -> Dynamic {
+    floats(v.iter().copied())
+}
+
+/// Numbers as a Rhai array of floats.
+pub fn floats(v: impl IntoIterator<Item = f64>) -> Dynamic {
+    Dynamic::from_array(v.into_iter().map(Dynamic::from_float).collect())
+}
+
+/// `#{min: [..], max: [..]}`.
+pub fn aabb_map(min: &Point3, max: &Point3) -> Dynamic {
+    let mut m = Map::new();
+    m.insert("min".into(), array3(&min.coords));
+    m.insert("max".into(), array3(&max.coords));
+    Dynamic::from_map(m)
+}
+
+/// An optional numeric field of an options map.
+pub fn opt_num(map: &Map, key: &str) -> ScriptResult<Option<f64>> {
+    map.get(key).map(|v| num(v, key)).transpose()
+}
+
+/// An optional string field of an options map.
+pub fn opt_str(map: &Map, key: &str) -> ScriptResult<Option<String>> {
+    match map.get(key) {
+        None => Ok(None),
+        Some(v) => v
+            .clone()
+            .into_string()
+            .map(Some)
+            .map_err(|t| fail(format!("option `{key}` must be a string, not {t}"))),
+    }
+}
+
+/// Refuses keys that are not in `known` (a typo in an option name is an error, not a
+/// silent default).
+pub fn check_keys(map: &Map, known: &[&str], what: &str) -> ScriptResult<()> {
+    for k in map.keys() {
+        if !known.contains(&k.as_str()) {
+            let hint = crate::diagnostics::suggestion(k, known.iter().copied());
+            return err(format!("unknown {what} option `{k}`: {hint}"));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,315 @@
+//! Rhai scripting: the sandboxed engine, the API bindings, and running a script.
+//!
+//! Bindings are thin: each one converts arguments (numbers, `[x, y, z]` arrays,
+//! degrees for user-facing angles), calls the Rust API, and converts the result back.
+//! Units: millimetres and radians, except pose triples (`X Y Z A B C`) and joint arrays,
+//! which are degrees; a dimension's `system_value` is SI (metres, radians).
+
+mod api;
+mod bind_document;
+mod bind_math;
+mod convert;
+pub mod sandbox;
+
+pub use api::{api_reference, ApiEntry};
+pub use bind_document::DocHandle;
+pub use sandbox::{Limits, Project};
+
+use crate::diagnostics::SourceError;
+use crate::mesh::MeshCache;
+use rhai::{Engine, EvalAltResult, Position, Scope};
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+pub(crate) type ScriptResult<T> = Result<T, Box<EvalAltResult>>;
+
+/// Caches that outlive one run (watch mode keeps them between reruns).
+#[derive(Default)]
+pub struct Caches {
+    /// Meshes by file, re-read only when the file changed.
+    pub meshes: Mutex<MeshCache>,
+}
+
+/// Where a script's `print` and progress lines go.
+pub type OutputSink = Arc<dyn Fn(&str) + Send + Sync>;
+
+/// Shared state of one run, reachable from every binding.
+pub struct Context {
+    /// The folder that bounds file access.
+    pub project: Project,
+    /// Caches shared across runs.
+    pub caches: Arc<Caches>,
+    /// Set to stop the run (a newer save in watch mode).
+    pub cancel: Arc<AtomicBool>,
+    /// Output lines.
+    pub output: OutputSink,
+    reads: Mutex<BTreeSet<PathBuf>>,
+    writes: Mutex<BTreeSet<PathBuf>>,
+}
+
+impl Context {
+    /// A fresh context for one run.
+    pub fn new(
+        project: Project,
+        caches: Arc<Caches>,
+        cancel: Arc<AtomicBool>,
+        output: OutputSink,
+    ) -> Self {
+        Self {
+            project,
+            caches,
+            cancel,
+            output,
+            reads: Mutex::default(),
+            writes: Mutex::default(),
+        }
+    }
+
+    /// Records a file the run depends on (watch mode reruns when it changes).
+    pub fn record_read(&self, path: &Path) {
+        if let Ok(mut r) = self.reads.lock() {
+            r.insert(path.to_path_buf());
+        }
+    }
+
+    /// Records a file the run wrote, so watch mode does not mistake the run's own
+    /// output for a user's save.
+    pub fn record_write(&self, path: &Path) {
+        if let Ok(mut w) = self.writes.lock() {
+            w.insert(path.to_path_buf());
+        }
+    }
+
+    /// Sends a line to the output.
+    pub fn print(&self, line: &str) {
+        (self.output)(line)
+    }
+
+    /// Whether the run was cancelled.
+    pub fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+}
+
+/// What to run.
+#[derive(Clone)]
+pub struct RunOptions {
+    /// The script file.
+    pub script: PathBuf,
+    /// A document to provide as the variable `doc`.
+    pub doc: Option<PathBuf>,
+    /// The project root.
+    pub project: Project,
+    /// Resource limits.
+    pub limits: Limits,
+    /// Cancellation flag.
+    pub cancel: Arc<AtomicBool>,
+    /// Output sink.
+    pub output: OutputSink,
+}
+
+/// Why a run failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ScriptError {
+    /// A syntax error, a runtime error or a failed `assert`, located in a file.
+    #[error("{0}")]
+    Located(SourceError),
+    /// A newer save cancelled the run.
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl ScriptError {
+    /// The message with the source line.
+    pub fn render(&self) -> String {
+        match self {
+            ScriptError::Located(s) => s.render(),
+            ScriptError::Cancelled => "cancelled".into(),
+        }
+    }
+}
+
+/// The result of a run.
+pub struct RunOutcome {
+    /// Success, or the located error.
+    pub result: Result<(), ScriptError>,
+    /// Every file the run read (script, imports, documents, meshes, CSVs…), for watch.
+    pub files_read: Vec<PathBuf>,
+    /// Every file the run wrote.
+    pub files_written: Vec<PathBuf>,
+    /// Wall time of the run.
+    pub elapsed: Duration,
+}
+
+/// Builds a sandboxed engine with the whole fitup API for the given context.
+pub fn engine(ctx: &Arc<Context>, limits: &Limits) -> Engine {
+    let mut engine = Engine::new();
+    limits.apply(&mut engine);
+    engine.set_strict_variables(true);
+    engine.set_fail_on_invalid_map_property(true);
+    let c = ctx.clone();
+    engine.on_print(move |s| c.print(s));
+    let c = ctx.clone();
+    engine.on_debug(move |s, _, pos| c.print(&format!("[debug {pos}] {s}")));
+    let c = ctx.clone();
+    engine.on_progress(move |_| {
+        if c.cancelled() {
+            Some("cancelled".into())
+        } else {
+            None
+        }
+    });
+    engine.set_module_resolver(sandbox::ProjectResolver { ctx: ctx.clone() });
+    api::register_all(&mut engine, ctx);
+    engine
+}
+
+/// Runs a script to completion (or cancellation) and reports what it read.
+pub fn run_script(opts: &RunOptions, caches: &Arc<Caches>) -> RunOutcome {
+    let start = Instant::now();
+    let ctx = Arc::new(Context::new(
+        opts.project.clone(),
+        caches.clone(),
+        opts.cancel.clone(),
+        opts.output.clone(),
+    ));
+    let result = run_inner(opts, &ctx);
+    let files_read = ctx
+        .reads
+        .lock()
+        .map(|r| r.iter().cloned().collect())
+        .unwrap_or_default();
+    let files_written = ctx
+        .writes
+        .lock()
+        .map(|r| r.iter().cloned().collect())
+        .unwrap_or_default();
+    RunOutcome {
+        result,
+        files_read,
+        files_written,
+        elapsed: start.elapsed(),
+    }
+}
+
+fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
+    let script = opts.script.canonicalize().map_err(|e| {
+        ScriptError::Located(SourceError::new(
+            &opts.script,
+            0,
+            0,
+            format!("cannot read the script: {e}"),
+        ))
+    })?;
+    ctx.record_read(&script);
+    let text = std::fs::read_to_string(&script).map_err(|e| {
+        ScriptError::Located(SourceError::new(
+            &script,
+            0,
+            0,
+            format!("cannot read the script: {e}"),
+        ))
+    })?;
+    let engine = engine(ctx, &opts.limits);
+    let mut scope = Scope::new();
+    if let Some(doc_path) = &opts.doc {
+        let doc = bind_document::DocHandle::open(ctx, &doc_path.to_string_lossy())
+            .map_err(|e| ScriptError::Located(SourceError::new(doc_path, 0, 0, e.to_string())))?;
+        scope.push("doc", doc);
+    }
+    let mut ast = engine.compile(&text).map_err(|e| {
+        let (line, col) = (e.1.line().unwrap_or(0), e.1.position().unwrap_or(0));
+        ScriptError::Located(SourceError::new(
+            &script,
+            line,
+            col,
+            format!("syntax error: {}", e.0),
+        ))
+    })?;
+    ast.set_source(script.to_string_lossy().as_ref());
+    match engine.run_ast_with_scope(&mut scope, &ast) {
+        Ok(()) => Ok(()),
+        Err(e) => {
+            if ctx.cancelled() && matches!(*e, EvalAltResult::ErrorTerminated(..)) {
+                return Err(ScriptError::Cancelled);
+            }
+            Err(ScriptError::Located(locate_error(&e, &script)))
+        }
+    }
+}
+
+/// Finds the innermost located cause of a Rhai error, in whichever file it happened.
+fn locate_error(err: &EvalAltResult, file: &Path) -> SourceError {
+    let mut calls = Vec::new();
+    let mut current = err;
+    let mut path = file.to_path_buf();
+    let mut pos = err.position();
+    loop {
+        match current {
+            EvalAltResult::ErrorInFunctionCall(name, src, inner, p) => {
+                calls.push(name.clone());
+                if !src.is_empty() {
+                    path = PathBuf::from(src);
+                }
+                pos = if inner.position().is_none() {
+                    *p
+                } else {
+                    inner.position()
+                };
+                current = inner;
+            }
+            EvalAltResult::ErrorInModule(name, inner, p) => {
+                if !name.is_empty() && Path::new(name).is_file() {
+                    path = PathBuf::from(name);
+                }
+                pos = if inner.position().is_none() {
+                    *p
+                } else {
+                    inner.position()
+                };
+                current = inner;
+            }
+            _ => break,
+        }
+    }
+    let message = describe(current);
+    let (line, col) = position(pos);
+    let mut e = SourceError::new(&path, line, col, message);
+    if !calls.is_empty() {
+        e = e.with_help(format!(
+            "inside {}",
+            calls
+                .iter()
+                .map(|c| format!("`{c}`"))
+                .collect::<Vec<_>>()
+                .join(" → ")
+        ));
+    }
+    e
+}
+
+fn position(pos: Position) -> (usize, usize) {
+    (pos.line().unwrap_or(0), pos.position().unwrap_or(0))
+}
+
+fn describe(err: &EvalAltResult) -> String {
+    match err {
+        EvalAltResult::ErrorRuntime(v, _) => v.to_string(),
+        EvalAltResult::ErrorTooManyOperations(_) => {
+            "the script ran past its operation limit (an endless loop?); raise it with --max-operations".into()
+        }
+        EvalAltResult::ErrorStackOverflow(_) => "too many nested function calls (runaway recursion?)".into(),
+        EvalAltResult::ErrorDataTooLarge(what, _) => format!("{what} is larger than the sandbox allows"),
+        other => {
+            let s = other.to_string();
+            // Rhai appends " (line x, position y)"; the location is shown separately.
+            match s.rfind(" (line ") {
+                Some(i) => s[..i].to_string(),
+                None => s,
+            }
+        }
+    }
+}
