@@ -220,7 +220,7 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
             .map_err(|e| ScriptError::Located(SourceError::new(doc_path, 0, 0, e.to_string())))?;
         scope.push("doc", doc);
     }
-    let mut ast = engine.compile(&text).map_err(|e| {
+    let mut ast = engine.compile_with_scope(&scope, &text).map_err(|e| {
         let (line, col) = (e.1.line().unwrap_or(0), e.1.position().unwrap_or(0));
         ScriptError::Located(SourceError::new(
             &script,

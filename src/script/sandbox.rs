@@ -156,12 +156,23 @@ impl rhai::ModuleResolver for ProjectResolver {
             Some(b) if rel.is_relative() => b.join(&rel),
             _ => rel,
         };
+        // Refusals are runtime errors: Rhai turns a ModuleNotFound into one that shows
+        // the bare path only.
+        let refuse = |m: String| {
+            Box::new(EvalAltResult::ErrorRuntime(
+                format!("import \"{path}\": {m}").into(),
+                pos,
+            ))
+        };
         let full = self
             .ctx
             .project
             .resolve(&candidate.to_string_lossy())
-            .map_err(|m| err(format!("{path}: {m}")))?;
-        let text = std::fs::read_to_string(&full).map_err(|e| err(format!("{path}: {e}")))?;
+            .map_err(refuse)?;
+        if !full.is_file() {
+            return Err(err(path.to_string()));
+        }
+        let text = std::fs::read_to_string(&full).map_err(|e| refuse(e.to_string()))?;
         self.ctx.record_read(&full);
         let mut ast = engine.compile(&text).map_err(|e| {
             Box::new(EvalAltResult::ErrorInModule(

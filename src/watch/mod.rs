@@ -80,6 +80,12 @@ pub fn watch(
         .collect();
     for p in &always {
         baseline.insert(p.clone(), hash_file(p));
+        // Watched before the first run ends, so a save can cancel a first run that spins.
+        if let Some(dir) = p.parent() {
+            if watched_dirs.insert(dir.to_path_buf()) {
+                watcher.watch(dir, RecursiveMode::NonRecursive)?;
+            }
+        }
     }
 
     loop {
