@@ -218,7 +218,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             let doc = d.lock()?;
             Ok(format!(
                 "Document({}: {} parts, {} components, {} mates)",
-                doc.path().display(),
+                d.ctx.project.display(doc.path()),
                 doc.parts().count(),
                 doc.components().len(),
                 doc.mates().len()
