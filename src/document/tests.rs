@@ -183,3 +183,29 @@ mates:
     assert!((c.to_degrees() + 120.0).abs() < 1e-6, "{}", c.to_degrees());
     assert!(doc.set_dimension("D1@距离1", -1.0).is_err());
 }
+
+#[test]
+fn cached_world_boxes_match_brute_force_after_moves() {
+    let dir = write_demo();
+    let mut doc = Document::open(&dir.path().join("cell.yaml")).unwrap();
+    let i = doc.component_index("screw4").unwrap();
+    let brute = |doc: &Document| {
+        let c = &doc.components()[i];
+        let m = doc.mesh_of(i);
+        let pts: Vec<Point3> = m.vertices.iter().map(|p| c.transform.apply(p)).collect();
+        pts.iter().fold((pts[0], pts[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)))
+    };
+    let mut rng = crate::math::Rng::new(3);
+    for k in 0..50 {
+        let t = doc.component("screw4").unwrap().transform;
+        let step = if k % 3 == 0 {
+            Transform::from_parts(Vec3::new(rng.range(-5.0, 5.0), 0.0, 1.0), rng.rotation())
+        } else {
+            Transform::from_translation(Vec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.5))
+        };
+        doc.set_transform("screw4", t * step).unwrap();
+        let (lo, hi) = doc.world_aabb(i).unwrap();
+        let (blo, bhi) = brute(&doc);
+        assert!((lo - blo).norm() < 1e-9 && (hi - bhi).norm() < 1e-9, "step {k}");
+    }
+}
