@@ -10,4 +10,6 @@
 //! | module | what lives there |
 //! |---|---|
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions |
+//! | [`kinematics`] | kinematic trees, D-H, robot catalog, FK, analytic and numeric IK, motions, programs, drilling |
+pub mod kinematics;
 pub mod math;
