@@ -252,3 +252,137 @@ pub fn robot_by_name(name: &str) -> Option<Robot> {
         .find(|c| c.name() == name)
         .map(|c| c.robot())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::{IkError, IkOptions};
+    use crate::math::Rng;
+    use std::f64::consts::PI;
+
+    fn pos(r: &Robot, q: [f64; 6]) -> Vec3 {
+        r.tcp_pose(&q).unwrap().translation()
+    }
+
+    /// MZ07 (table 2) by hand, standard D-H: at zero frame 5 is parallel to the base
+    /// with its origin (the wrist centre) at (50 + 340, 0, 340 + 330 + 45) =
+    /// (390, 0, 715); z₅ points up, so the flange (d = −80) is at z = 635 and the tool
+    /// point (d₆ = −516.9) at (390, 0, 198.1), pointing down.
+    #[test]
+    fn mz07_fk_by_hand() {
+        let r = Catalog::NachiMz07.robot();
+        let flange = r.flange_pose(&[0.0; 6]).unwrap();
+        assert!(flange.approx_eq(
+            &Transform::from_translation(Vec3::new(390.0, 0.0, 635.0)),
+            1e-9,
+            1e-12
+        ));
+        assert!((pos(&r, [0.0; 6]) - Vec3::new(390.0, 0.0, 198.1)).norm() < 1e-9);
+        let down = r.tcp_pose(&[0.0; 6]).unwrap().apply_vector(&Vec3::z());
+        assert!(
+            (down - Vec3::z()).norm() < 1e-12,
+            "tool frame keeps z up; the tool length points along -z"
+        );
+        // Joint 1 by 90°: a quarter turn about the base z axis.
+        assert!(
+            (pos(&r, [FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0]) - Vec3::new(0.0, 390.0, 198.1)).norm()
+                < 1e-9
+        );
+        // Joint 2 by 90° about z₁ = −y through (50, 0, 340): (340, 0, −141.9) relative
+        // turns into (141.9, 0, 340).
+        assert!(
+            (pos(&r, [0.0, FRAC_PI_2, 0.0, 0.0, 0.0, 0.0]) - Vec3::new(191.9, 0.0, 680.0)).norm()
+                < 1e-9
+        );
+        // Joint 5 by 90° about z₄ = +y through the wrist centre: the tool swings from −z
+        // to −x.
+        assert!(
+            (pos(&r, [0.0, 0.0, 0.0, 0.0, FRAC_PI_2, 0.0]) - Vec3::new(390.0 - 516.9, 0.0, 715.0))
+                .norm()
+                < 1e-9
+        );
+        // Joint 6 spins the tool about its own axis: the point stays.
+        assert!(
+            (pos(&r, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]) - Vec3::new(390.0, 0.0, 198.1)).norm() < 1e-9
+        );
+    }
+
+    #[test]
+    fn catalog_names_resolve() {
+        for name in catalog_names() {
+            let r = robot_by_name(name).unwrap();
+            assert_eq!(r.dof(), 6);
+            assert_eq!(r.name(), name);
+        }
+        assert!(robot_by_name("nope").is_none());
+    }
+
+    /// UR5: numeric IK round trip; every solution reproduces the pose to 1e-6 mm and
+    /// 1e-9 rad and lies within the limits.
+    #[test]
+    fn ur5_numeric_round_trip() {
+        let r = Catalog::Ur5.robot();
+        assert!(r.analytic().is_none());
+        let mut rng = Rng::new(3);
+        let opts = IkOptions::default();
+        let mut found_original = 0;
+        let n = 60;
+        for _ in 0..n {
+            let q: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
+            let t = r.tcp_pose(&q).unwrap();
+            // A reference near the original: the nearest solution is the original.
+            let reference: Vec<f64> = q.iter().map(|v| v + rng.range(-0.05, 0.05)).collect();
+            let sols = r.inverse(&t, &reference, &opts).unwrap();
+            for s in &sols {
+                let (ang, dist) = r.tcp_pose(&s.joints).unwrap().distance_to(&t);
+                assert!(dist < 1e-6 && ang < 1e-9, "{dist} mm {ang} rad");
+                assert!(r.limit_violation(&s.joints).is_none());
+            }
+            if sols[0]
+                .joints
+                .iter()
+                .zip(&q)
+                .all(|(a, b)| (a - b).abs() < 1e-6)
+            {
+                found_original += 1;
+            }
+            // From a far reference the restarts still find a solution.
+            let sols = r.inverse(&t, &[0.0; 6], &opts).unwrap();
+            assert!(r
+                .tcp_pose(&sols[0].joints)
+                .unwrap()
+                .approx_eq(&t, 1e-6, 1e-9));
+        }
+        assert_eq!(found_original, n);
+    }
+
+    #[test]
+    fn ur5_numeric_errors_name_the_cause() {
+        let r = Catalog::Ur5.robot();
+        let opts = IkOptions {
+            restarts: 6,
+            ..IkOptions::default()
+        };
+        let far = Transform::from_translation(Vec3::new(3000.0, 0.0, 0.0));
+        assert!(matches!(
+            r.inverse(&far, &[0.0; 6], &opts),
+            Err(IkError::Unreachable(_))
+        ));
+        // Joint 1 restricted to a narrow range: a target needing joint 1 ≈ ±2.5 rad
+        // (or its other shoulder solution) is only reachable outside the limits.
+        let mut tree_links = r.tree().links().to_vec();
+        tree_links[1].joint.limits = Some(JointLimits::new(-0.1, 0.1));
+        let narrow = Robot::new(
+            "ur5-narrow",
+            KinematicTree::new(tree_links).unwrap(),
+            6,
+            Transform::IDENTITY,
+        )
+        .unwrap();
+        let t = r.tcp_pose(&[2.5, -1.0, 1.0, -0.5, 1.2, 0.3]).unwrap();
+        assert!(matches!(
+            narrow.inverse(&t, &[0.0; 6], &opts),
+            Err(IkError::JointLimits { joint: 1, .. })
+        ));
+    }
+}
