@@ -19,7 +19,7 @@ mod ik_numeric;
 mod joint;
 mod motion;
 mod opw;
-//mod program;
+mod program;
 mod robot;
 mod trajectory;
 mod tree;
@@ -33,7 +33,9 @@ pub use ik_numeric::NumericIk;
 pub use joint::{Joint, JointKind, JointLimits};
 pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
 pub use opw::{Branch, Branches, NotOpw, OpwSolver};
-//pub use program::{parse_program, read_program, run_program, Command, Program, ProgramError, ProgramLine, RunError};
+pub use program::{
+    parse_program, read_program, run_program, Command, Program, ProgramError, ProgramLine, RunError,
+};
 pub use robot::Robot;
 pub use trajectory::{Trajectory, TrajectorySample};
 pub use tree::{KinematicTree, Link};
