@@ -12,7 +12,7 @@
 
 mod catalog;
 mod dh;
-//mod drilling;
+mod drilling;
 mod error;
 mod ik;
 mod ik_numeric;
@@ -26,7 +26,10 @@ mod tree;
 
 pub use catalog::{catalog_names, robot_by_name, Catalog};
 pub use dh::{DhConvention, DhRow};
-//pub use drilling::{     drill_program, hole_tool_pose, parse_holes, read_holes, DrillError, DrillOptions, DrillReport,     Hole, HoleOutcome, HoleReport, ToolAxis, };
+pub use drilling::{
+    drill_program, hole_tool_pose, parse_holes, read_holes, DrillError, DrillOptions, DrillReport,
+    Hole, HoleOutcome, HoleReport, ToolAxis,
+};
 pub use error::KinematicsError;
 pub use ik::{Configuration, Elbow, IkError, IkOptions, IkSolution, Shoulder, Wrist};
 pub use ik_numeric::NumericIk;
