@@ -42,7 +42,9 @@ use super::{
     Wrist,
 };
 use crate::math::Transform;
-use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{
+    Isometry3, Matrix3, Point3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3,
+};
 use std::f64::consts::{PI, TAU};
 
 /// Why a robot does not qualify for the closed-form solver.
@@ -160,13 +162,20 @@ pub struct OpwSolver {
     a4: Vector3<f64>,
     a5: Vector3<f64>,
     a6: Vector3<f64>,
-    /// Wrist-equation coefficients A = a4·a6, B = a4·(a5×a6).
-    wa: f64,
-    wb: f64,
+    /// a5 × a6.
+    a5x6: Vector3<f64>,
+    /// φ5 = atan2(a4·(a5×a6), a4·a6), its sine and cosine.
+    phi5: f64,
+    s_phi5: f64,
+    c_phi5: f64,
+    /// Sine and cosine of γ.
+    sg: f64,
+    cg: f64,
     /// Wrist centre in the TCP frame.
     w_tcp: Vector3<f64>,
-    /// TCP rotation at zero in C.
-    r0: Matrix3<f64>,
+    /// TCP rotation at zero in C (transposed) and as a quaternion.
+    r0t: Matrix3<f64>,
+    q0: Quaternion<f64>,
     limits: [Option<JointLimits>; 6],
 }
 
@@ -188,32 +197,17 @@ fn rot_vec(k: &Vector3<f64>, s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
     v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
 }
 
-/// Rotation matrix about unit `k` (sine `s`, cosine `c`).
-#[inline]
-fn rot_mat(k: &Vector3<f64>, s: f64, c: f64) -> Matrix3<f64> {
-    let t = 1.0 - c;
-    let (x, y, z) = (k.x, k.y, k.z);
-    Matrix3::new(
-        t * x * x + c,
-        t * x * y - s * z,
-        t * x * z + s * y,
-        t * x * y + s * z,
-        t * y * y + c,
-        t * y * z - s * x,
-        t * x * z - s * y,
-        t * y * z + s * x,
-        t * z * z + c,
-    )
-}
-
 /// Wraps an angle into (−π, π].
 #[inline]
 pub(crate) fn wrap(a: f64) -> f64 {
-    let mut r = a % TAU;
-    if r <= -PI {
-        r += TAU;
-    } else if r > PI {
+    // Inputs here are sums of a few angles in (−π, π]: subtracting turns is cheaper
+    // than a floating-point remainder; the remainder covers anything larger.
+    let mut r = if a.abs() > 4.0 * TAU { a % TAU } else { a };
+    while r > PI {
         r -= TAU;
+    }
+    while r <= -PI {
+        r += TAU;
     }
     r
 }
@@ -318,6 +312,8 @@ impl OpwSolver {
         let mut limits = [None; 6];
         limits.copy_from_slice(&limits_v[..6]);
         let tcp0_c = c_from_root * tcp0;
+        let gamma = ang(u3) - ang(u2);
+        let phi5 = a4c.dot(&a5c.cross(&a6c)).atan2(a4c.dot(&a6c));
         Ok(Self {
             root_from_c,
             c_from_root,
@@ -327,24 +323,28 @@ impl OpwSolver {
             b: qw.y,
             len_sq: l2 * l2 + l3 * l3,
             len_prod2: 2.0 * l2 * l3,
-            gamma: ang(u3) - ang(u2),
+            gamma,
             reach: [(l2 - l3).abs(), l2 + l3],
             s2: ey.dot(&a2).signum(),
             s3: ey.dot(&a3).signum(),
-            wa: a4c.dot(&a6c),
-            wb: a4c.dot(&a5c.cross(&a6c)),
+            a5x6: a5c.cross(&a6c),
+            phi5,
+            s_phi5: phi5.sin(),
+            c_phi5: phi5.cos(),
+            sg: gamma.sin(),
+            cg: gamma.cos(),
             a4: a4c,
             a5: a5c,
             a6: a6c,
             w_tcp: (tcp0.inverse() * w0).coords,
-            r0: *tcp0_c.rotation.to_rotation_matrix().matrix(),
+            r0t: tcp0_c.rotation.to_rotation_matrix().matrix().transpose(),
+            q0: *tcp0_c.rotation.quaternion(),
             limits,
         })
     }
 
     /// TCP pose in the root frame for joint values `q` (rad), in closed form.
     pub fn forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
-        let (s1, c1) = q[0].sin_cos();
         let th = self.s3 * q[2];
         let th2 = self.s2 * q[1];
         let (st, ct) = th.sin_cos();
@@ -352,22 +352,24 @@ impl OpwSolver {
         let f = rot2(self.u3, st, ct);
         let arm = rot2([self.u2[0] + f[0], self.u2[1] + f[1]], s2, c2);
         let (x, z) = (self.p2[0] + arm[0], self.p2[1] + arm[1]);
+        // Half angles build the rotation as a quaternion product (cheaper than matrices).
+        let (sh1, ch1) = (0.5 * q[0]).sin_cos();
+        let (s1, c1) = (2.0 * sh1 * ch1, ch1 * ch1 - sh1 * sh1);
         let w = Vector3::new(c1 * x - s1 * self.b, s1 * x + c1 * self.b, z);
-        let (s23, c23) = (th + th2).sin_cos();
-        let rz = Matrix3::new(c1, -s1, 0.0, s1, c1, 0.0, 0.0, 0.0, 1.0);
-        let ry = Matrix3::new(c23, 0.0, s23, 0.0, 1.0, 0.0, -s23, 0.0, c23);
-        let (s4, c4) = q[3].sin_cos();
-        let (s5, c5) = q[4].sin_cos();
-        let (s6, c6) = q[5].sin_cos();
-        let r = rz
-            * ry
-            * rot_mat(&self.a4, s4, c4)
-            * rot_mat(&self.a5, s5, c5)
-            * rot_mat(&self.a6, s6, c6)
-            * self.r0;
+        let (sh23, ch23) = (0.5 * (th + th2)).sin_cos();
+        let quat = |axis: &Vector3<f64>, angle: f64| {
+            let (s, c) = (0.5 * angle).sin_cos();
+            Quaternion::new(c, axis.x * s, axis.y * s, axis.z * s)
+        };
+        let r = Quaternion::new(ch1, 0.0, 0.0, sh1)
+            * Quaternion::new(ch23, 0.0, sh23, 0.0)
+            * quat(&self.a4, q[3])
+            * quat(&self.a5, q[4])
+            * quat(&self.a6, q[5])
+            * self.q0;
+        let r = UnitQuaternion::new_unchecked(r);
         let p = w - r * self.w_tcp;
-        let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
-        self.root_from_c * Isometry3::from_parts(Translation3::from(p), rot)
+        self.root_from_c * Isometry3::from_parts(Translation3::from(p), r)
     }
 
     /// Every principal branch (up to 8) reaching the TCP pose `target` given in the
@@ -379,7 +381,7 @@ impl OpwSolver {
         let rx = x.rotation.to_rotation_matrix();
         let rx = rx.matrix();
         let w = rx * self.w_tcp + x.translation.vector;
-        let re = rx * self.r0.transpose();
+        let re = rx * self.r0t;
         let rho_sq = w.x * w.x + w.y * w.y;
         let disc = rho_sq - self.b * self.b;
         let scale = 1.0 + self.reach[1];
@@ -392,47 +394,63 @@ impl OpwSolver {
             return out;
         }
         let root = disc.max(0.0).sqrt();
-        let phi = w.y.atan2(w.x);
         for sh in [1.0_f64, -1.0] {
-            if sh < 0.0 && root < 1e-12 * scale && self.b.abs() >= DISTANCE_TOL {
+            if sh < 0.0 && root < 1e-12 * scale {
                 // Both shoulder roots coincide: the second is a duplicate.
                 break;
             }
             let xp = sh * root;
-            let q1 = phi - self.b.atan2(xp);
+            // Rz(q1)·(x', b) = (Wx, Wy).
+            let (s1, c1) = (
+                (xp * w.y - self.b * w.x) / rho_sq,
+                (xp * w.x + self.b * w.y) / rho_sq,
+            );
+            let q1 = s1.atan2(c1);
             let d = [xp - self.p2[0], w.z - self.p2[1]];
             let kappa = (d[0] * d[0] + d[1] * d[1] - self.len_sq) / self.len_prod2;
             if kappa.abs() > 1.0 + 1e-12 {
                 out.out_of_reach = true;
                 continue;
             }
-            let acos_k = kappa.clamp(-1.0, 1.0).acos();
-            let ang_d = ang(d);
-            let (s1, c1) = q1.sin_cos();
+            let kappa = kappa.clamp(-1.0, 1.0);
+            let acos_k = kappa.acos();
+            let sk = (1.0 - kappa * kappa).sqrt();
             // Rz(−q1)·R_E.
             let rz_t = Matrix3::new(c1, s1, 0.0, -s1, c1, 0.0, 0.0, 0.0, 1.0);
             let r1 = rz_t * re;
             for el in [1.0_f64, -1.0] {
-                if el < 0.0 && acos_k < 1e-12 {
+                if el < 0.0 && sk < 1e-12 {
+                    // Arm stretched or folded: both elbow roots coincide.
                     break;
                 }
+                // θ = el·acos κ − γ, its sine and cosine by the angle difference.
+                let (sa, ca) = (el * sk, kappa);
+                let (st, ct) = (sa * self.cg - ca * self.sg, ca * self.cg + sa * self.sg);
                 let th = el * acos_k - self.gamma;
-                let (st, ct) = th.sin_cos();
                 let f = rot2(self.u3, st, ct);
                 let v = [self.u2[0] + f[0], self.u2[1] + f[1]];
-                let th2 = ang_d - ang(v);
-                let th23 = th2 + th;
-                let (s23, c23) = th23.sin_cos();
+                // Angle from v to d about +y.
+                let crs = d[0] * v[1] - d[1] * v[0];
+                let dot = d[0] * v[0] + d[1] * v[1];
+                let nrm = crs.hypot(dot);
+                if nrm < 1e-12 * scale * scale {
+                    // Wrist centre on axis 2: joint 2 undetermined.
+                    out.singular = true;
+                    continue;
+                }
+                let th2 = crs.atan2(dot);
+                let (s2a, c2a) = (crs / nrm, dot / nrm);
+                let (s23, c23) = (s2a * ct + c2a * st, c2a * ct - s2a * st);
                 let ry_t = Matrix3::new(c23, 0.0, -s23, 0.0, 1.0, 0.0, s23, 0.0, c23);
                 let rw = ry_t * r1;
                 let t = rw * self.a6;
                 let cw = self.a4.dot(&t).clamp(-1.0, 1.0);
-                let delta = cw.acos();
-                if delta.sin() < singularity_threshold {
+                let sd = (1.0 - cw * cw).sqrt();
+                if sd < singularity_threshold {
                     out.singular = true;
                     continue;
                 }
-                let phi5 = self.wb.atan2(self.wa);
+                let delta = cw.acos();
                 let elbow = if (el > 0.0) == (sh > 0.0) {
                     Elbow::Up
                 } else {
@@ -444,26 +462,30 @@ impl OpwSolver {
                     Shoulder::Back
                 };
                 let rw_a5 = rw * self.a5;
+                let tp = t - self.a4 * self.a4.dot(&t);
                 for wr in [1.0_f64, -1.0] {
-                    let q5 = phi5 + wr * delta;
-                    let (s5, c5) = q5.sin_cos();
-                    let v5 = rot_vec(&self.a5, s5, c5, &self.a6);
+                    // q5 = φ5 ± δ with φ5 = atan2(B, A).
+                    let sdw = wr * sd;
+                    let s5 = self.s_phi5 * cw + self.c_phi5 * sdw;
+                    let c5 = self.c_phi5 * cw - self.s_phi5 * sdw;
+                    let v5 = self.a6 * c5 + self.a5x6 * s5;
                     // q4 turns v5 onto t about a4.
                     let vp = v5 - self.a4 * self.a4.dot(&v5);
-                    let tp = t - self.a4 * self.a4.dot(&t);
-                    let q4 = self.a4.dot(&vp.cross(&tp)).atan2(vp.dot(&tp));
-                    let (s4, c4) = q4.sin_cos();
+                    let crs4 = self.a4.dot(&vp.cross(&tp));
+                    let dot4 = vp.dot(&tp);
+                    let n4 = crs4.hypot(dot4);
+                    let (s4, c4) = (crs4 / n4, dot4 / n4);
                     // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
                     let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
                     let q6 = self.a6.dot(&self.a5.cross(&m)).atan2(self.a5.dot(&m));
                     out.push(Branch {
                         joints: [
-                            wrap(q1),
+                            q1,
                             wrap(self.s2 * th2),
                             wrap(self.s3 * th),
-                            wrap(q4),
-                            wrap(q5),
-                            wrap(q6),
+                            crs4.atan2(dot4),
+                            wrap(self.phi5 + wr * delta),
+                            q6,
                         ],
                         configuration: Configuration {
                             shoulder,
