@@ -463,37 +463,48 @@ impl OpwSolver {
                 };
                 let rw_a5 = rw * self.a5;
                 let tp = t - self.a4 * self.a4.dot(&t);
-                for wr in [1.0_f64, -1.0] {
-                    // q5 = φ5 ± δ with φ5 = atan2(B, A).
-                    let sdw = wr * sd;
-                    let s5 = self.s_phi5 * cw + self.c_phi5 * sdw;
-                    let c5 = self.c_phi5 * cw - self.s_phi5 * sdw;
-                    let v5 = self.a6 * c5 + self.a5x6 * s5;
-                    // q4 turns v5 onto t about a4.
-                    let vp = v5 - self.a4 * self.a4.dot(&v5);
-                    let crs4 = self.a4.dot(&vp.cross(&tp));
-                    let dot4 = vp.dot(&tp);
-                    let n4 = crs4.hypot(dot4);
-                    let (s4, c4) = (crs4 / n4, dot4 / n4);
-                    // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
-                    let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
-                    let q6 = self.a6.dot(&self.a5.cross(&m)).atan2(self.a5.dot(&m));
-                    out.push(Branch {
-                        joints: [
-                            q1,
-                            wrap(self.s2 * th2),
-                            wrap(self.s3 * th),
-                            crs4.atan2(dot4),
-                            wrap(self.phi5 + wr * delta),
-                            q6,
-                        ],
-                        configuration: Configuration {
-                            shoulder,
-                            elbow,
-                            wrist: if wr > 0.0 { Wrist::NoFlip } else { Wrist::Flip },
-                        },
-                    });
-                }
+                // No-flip root q5 = φ5 + δ.
+                let s5 = self.s_phi5 * cw + self.c_phi5 * sd;
+                let c5 = self.c_phi5 * cw - self.s_phi5 * sd;
+                let v5 = self.a6 * c5 + self.a5x6 * s5;
+                // q4 turns v5 onto t about a4.
+                let vp = v5 - self.a4 * self.a4.dot(&v5);
+                let crs4 = self.a4.dot(&vp.cross(&tp));
+                let dot4 = vp.dot(&tp);
+                let n4 = crs4.hypot(dot4);
+                let (s4, c4) = (crs4 / n4, dot4 / n4);
+                // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
+                let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
+                let q4 = crs4.atan2(dot4);
+                let q6 = self.a6.dot(&self.a5.cross(&m)).atan2(self.a5.dot(&m));
+                let q2 = wrap(self.s2 * th2);
+                let q3 = wrap(self.s3 * th);
+                out.push(Branch {
+                    joints: [q1, q2, q3, q4, wrap(self.phi5 + delta), q6],
+                    configuration: Configuration {
+                        shoulder,
+                        elbow,
+                        wrist: Wrist::NoFlip,
+                    },
+                });
+                // The flip root follows without trigonometry: since a5 ⟂ a4 and
+                // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
+                // Rot(a4,q4+π)·Rot(a5,2φ5−q5)·Rot(a6,q6+π) = Rot(a4,q4)·Rot(a5,q5)·Rot(a6,q6).
+                out.push(Branch {
+                    joints: [
+                        q1,
+                        q2,
+                        q3,
+                        wrap(q4 + PI),
+                        wrap(self.phi5 - delta),
+                        wrap(q6 + PI),
+                    ],
+                    configuration: Configuration {
+                        shoulder,
+                        elbow,
+                        wrist: Wrist::Flip,
+                    },
+                });
             }
         }
         out
