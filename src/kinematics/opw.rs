@@ -34,7 +34,10 @@
 //! cos q₅·a₆ + sin q₅·(a₅×a₆)`, so `A cos q₅ + B sin q₅ = a₄·t` with
 //! `A = a₄·a₆`, `B = a₄·(a₅×a₆)`, `A² + B² = 1`: `q₅ = atan2(B, A) ± acos(a₄·t)`
 //! (wrist flip). `q₄` turns `Rot(a₅,q₅)a₆` onto `t` about `a₄`, and `q₆` turns `a₅`
-//! onto `Rot(a₅,−q₅)Rot(a₄,−q₄)Rw·a₅` about `a₆`. When the two `q₅` roots coincide
+//! onto `Rot(a₅,−q₅)Rot(a₄,−q₄)Rw·a₅` about `a₆`. The flip root needs no more
+//! trigonometry: `Rot(a₄,π)·Rot(a₆,π) = Rot(a₅, 2φ₅)` (`φ₅ = atan2(B, A)`) and
+//! `Rot(a₄,π)` reverses `a₅`, so `(q₄+π, 2φ₅−q₅, q₆+π)` gives the same rotation.
+//! When the two `q₅` roots coincide
 //! (`sin(acos(a₄·t)) = 0`) axes 4 and 6 line up: the wrist singularity.
 
 use super::{
@@ -173,8 +176,9 @@ pub struct OpwSolver {
     cg: f64,
     /// Wrist centre in the TCP frame.
     w_tcp: Vector3<f64>,
-    /// TCP rotation at zero in C (transposed) and as a quaternion.
-    r0t: Matrix3<f64>,
+    /// R0ᵀ·a6 and R0ᵀ·a5 (R0: TCP rotation at zero in C), and R0 as a quaternion.
+    r0t_a6: Vector3<f64>,
+    r0t_a5: Vector3<f64>,
     q0: Quaternion<f64>,
     limits: [Option<JointLimits>; 6],
 }
@@ -337,7 +341,8 @@ impl OpwSolver {
             a5: a5c,
             a6: a6c,
             w_tcp: (tcp0.inverse() * w0).coords,
-            r0t: tcp0_c.rotation.to_rotation_matrix().matrix().transpose(),
+            r0t_a6: tcp0_c.rotation.inverse() * a6c,
+            r0t_a5: tcp0_c.rotation.inverse() * a5c,
             q0: *tcp0_c.rotation.quaternion(),
             limits,
         })
@@ -381,7 +386,9 @@ impl OpwSolver {
         let rx = x.rotation.to_rotation_matrix();
         let rx = rx.matrix();
         let w = rx * self.w_tcp + x.translation.vector;
-        let re = rx * self.r0t;
+        // Only Rw·a6 and Rw·a5 are needed: R_E·a = R_X·(R0ᵀ·a), the bracket precomputed.
+        let re_a6 = rx * self.r0t_a6;
+        let re_a5 = rx * self.r0t_a5;
         let rho_sq = w.x * w.x + w.y * w.y;
         let disc = rho_sq - self.b * self.b;
         let scale = 1.0 + self.reach[1];
@@ -415,9 +422,10 @@ impl OpwSolver {
             let kappa = kappa.clamp(-1.0, 1.0);
             let acos_k = kappa.acos();
             let sk = (1.0 - kappa * kappa).sqrt();
-            // Rz(−q1)·R_E.
-            let rz_t = Matrix3::new(c1, s1, 0.0, -s1, c1, 0.0, 0.0, 0.0, 1.0);
-            let r1 = rz_t * re;
+            // Rz(−q1)·R_E·a6 and ·a5.
+            let rz =
+                |v: &Vector3<f64>| Vector3::new(c1 * v.x + s1 * v.y, -s1 * v.x + c1 * v.y, v.z);
+            let (r1_a6, r1_a5) = (rz(&re_a6), rz(&re_a5));
             for el in [1.0_f64, -1.0] {
                 if el < 0.0 && sk < 1e-12 {
                     // Arm stretched or folded: both elbow roots coincide.
@@ -432,7 +440,7 @@ impl OpwSolver {
                 // Angle from v to d about +y.
                 let crs = d[0] * v[1] - d[1] * v[0];
                 let dot = d[0] * v[0] + d[1] * v[1];
-                let nrm = crs.hypot(dot);
+                let nrm = (crs * crs + dot * dot).sqrt();
                 if nrm < 1e-12 * scale * scale {
                     // Wrist centre on axis 2: joint 2 undetermined.
                     out.singular = true;
@@ -441,9 +449,11 @@ impl OpwSolver {
                 let th2 = crs.atan2(dot);
                 let (s2a, c2a) = (crs / nrm, dot / nrm);
                 let (s23, c23) = (s2a * ct + c2a * st, c2a * ct - s2a * st);
-                let ry_t = Matrix3::new(c23, 0.0, -s23, 0.0, 1.0, 0.0, s23, 0.0, c23);
-                let rw = ry_t * r1;
-                let t = rw * self.a6;
+                // Ry(−θ23)·….
+                let ry = |v: &Vector3<f64>| {
+                    Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
+                };
+                let t = ry(&r1_a6);
                 let cw = self.a4.dot(&t).clamp(-1.0, 1.0);
                 let sd = (1.0 - cw * cw).sqrt();
                 if sd < singularity_threshold {
@@ -461,7 +471,7 @@ impl OpwSolver {
                 } else {
                     Shoulder::Back
                 };
-                let rw_a5 = rw * self.a5;
+                let rw_a5 = ry(&r1_a5);
                 let tp = t - self.a4 * self.a4.dot(&t);
                 // No-flip root q5 = φ5 + δ.
                 let s5 = self.s_phi5 * cw + self.c_phi5 * sd;
@@ -471,7 +481,7 @@ impl OpwSolver {
                 let vp = v5 - self.a4 * self.a4.dot(&v5);
                 let crs4 = self.a4.dot(&vp.cross(&tp));
                 let dot4 = vp.dot(&tp);
-                let n4 = crs4.hypot(dot4);
+                let n4 = (crs4 * crs4 + dot4 * dot4).sqrt();
                 let (s4, c4) = (crs4 / n4, dot4 / n4);
                 // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
                 let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
@@ -626,6 +636,21 @@ mod tests {
     use super::*;
     use crate::kinematics::{Catalog, Joint, KinematicTree, Link, NumericIk};
     use crate::math::{Rng, Vec3};
+
+    /// The parameters extracted from the MZ07 tree are table 2's: upper arm 330 mm,
+    /// forearm √(340² + 45²) mm, no lateral offset, axis 2 at 50 mm out and 340 mm up.
+    #[test]
+    fn mz07_parameters_are_extracted_from_the_tree() {
+        let r = Catalog::NachiMz07.robot();
+        let (p2, u2, u3, b, _) = r.analytic().unwrap().parameters();
+        assert!(
+            (p2[0] - 50.0).abs() < 1e-9 && (p2[1] - 340.0).abs() < 1e-9,
+            "{p2:?}"
+        );
+        assert!((u2[0].hypot(u2[1]) - 330.0).abs() < 1e-9);
+        assert!((u3[0].hypot(u3[1]) - 340f64.hypot(45.0)).abs() < 1e-9);
+        assert!(b.abs() < 1e-9);
+    }
 
     const OPW_ARMS: [Catalog; 5] = [
         Catalog::NachiMz07,
@@ -786,14 +811,15 @@ mod tests {
             let got = r.tcp_pose(&b.joints).unwrap();
             assert!(got.approx_eq(&home, 1e-6, 1e-9));
         }
-        // Wrist centre on axis 1 (Stäubli has b ≠ 0, so use the IRB 2400 upright).
-        let mut q = [0.0, 0.0, 0.0, 0.0, 0.5, 0.0];
-        // Choose joint 2 so the wrist centre is straight above axis 1.
-        let (_, u2, u3, _, _) = s.parameters();
-        let _ = (u2, u3);
-        q[1] = -0.3;
-        let t = r.tcp_pose(&q).unwrap();
-        assert!(r.inverse(&t, &q, &IkOptions::default()).is_ok());
+        // Wrist centre on axis 1 (b = 0 for the IRB 2400): joint 1 is undetermined.
+        // For this arm C is the root frame, so W = (0, 0, 1400) is on axis 1.
+        let rot = crate::math::AngleConvention::XyzFixed.rotation(0.3, 1.0, -0.4);
+        let p = Vec3::new(0.0, 0.0, 1400.0) - rot * s.w_tcp;
+        let on_axis = Transform::from_parts(p, rot);
+        assert!(matches!(
+            r.inverse(&on_axis, &zero, &IkOptions::default()),
+            Err(IkError::Singular(_))
+        ));
         let nan = Transform::from_translation(Vec3::new(f64::NAN, 0.0, 0.0));
         assert!(r.inverse(&nan, &zero, &IkOptions::default()).is_err());
     }
