@@ -103,15 +103,14 @@ fn main() {
         n_theirs as f64 / 1000.0
     );
 
-    let series = || Vec::with_capacity(ROUNDS);
-    let (mut ik_a, mut ik_b, mut fk_a, mut fk_b, mut fk_tree, mut ik_full): (
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-    ) = (series(), series(), series(), series(), series(), series());
+    let mut ik_a: Vec<f64> = Vec::with_capacity(ROUNDS);
+    let (mut ik_b, mut fk_a, mut fk_b, mut fk_tree, mut ik_full) = (
+        ik_a.clone(),
+        ik_a.clone(),
+        ik_a.clone(),
+        ik_a.clone(),
+        ik_a.clone(),
+    );
     let opts = IkOptions::default();
     let robot: &Robot = &mz07;
     for round in 0..ROUNDS {
