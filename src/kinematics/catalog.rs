@@ -326,7 +326,7 @@ mod tests {
         let mut rng = Rng::new(3);
         let opts = IkOptions::default();
         let mut found_original = 0;
-        let n = 60;
+        let n = 1000;
         for _ in 0..n {
             let q: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
             let t = r.tcp_pose(&q).unwrap();
@@ -353,7 +353,10 @@ mod tests {
                 .unwrap()
                 .approx_eq(&t, 1e-6, 1e-9));
         }
-        assert_eq!(found_original, n);
+        // Started 0.05 rad away, the descent lands on the original configuration except
+        // near singular configurations, where another branch lies that close (6 of
+        // 1000 with this seed).
+        assert!(found_original >= n * 99 / 100, "{found_original} of {n}");
     }
 
     #[test]

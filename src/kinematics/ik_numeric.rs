@@ -201,6 +201,17 @@ impl NumericIk {
         target: &Transform,
         reference: &[f64],
     ) -> Result<Vec<IkSolution>, IkError> {
+        if reference.len() != robot.dof() {
+            return Err(IkError::Input(super::KinematicsError::JointCount {
+                expected: robot.dof(),
+                got: reference.len(),
+            }));
+        }
+        if reference.iter().any(|v| !v.is_finite()) || !target.is_finite() {
+            return Err(IkError::Unreachable(
+                "the target or the reference is not finite".into(),
+            ));
+        }
         let o = &self.options;
         let target = *target.isometry();
         let mut rng = Rng::new(o.seed);

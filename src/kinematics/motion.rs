@@ -165,13 +165,22 @@ fn sample(robot: &Robot, t: f64, q: Vec<f64>) -> Result<TrajectorySample, Motion
 }
 
 /// Output times `0, dt, 2dt, …, duration` (the last interval may be shorter).
-fn output_times(duration: f64, dt: f64) -> Vec<f64> {
+fn output_times(duration: f64, dt: f64) -> Result<Vec<f64>, MotionError> {
     if duration <= 0.0 {
-        return vec![0.0];
+        return Ok(vec![0.0]);
     }
-    let n = (duration / dt - 1e-9).ceil().max(1.0) as usize;
-    (0..=n).map(|j| (j as f64 * dt).min(duration)).collect()
+    let n = (duration / dt - 1e-9).ceil().max(1.0);
+    if !(n <= MAX_SAMPLES as f64) {
+        return Err(MotionError::InvalidOptions(format!(
+            "{duration:.3} s at {dt} s per sample would need more than {MAX_SAMPLES} samples"
+        )));
+    }
+    let n = n as usize;
+    Ok((0..=n).map(|j| (j as f64 * dt).min(duration)).collect())
 }
+
+/// Most samples one motion may produce (guards against absurd intervals).
+pub const MAX_SAMPLES: usize = 10_000_000;
 
 /// A joint move from `start` to `target` (joint order, rad/mm): every joint moves
 /// linearly and all arrive together; the duration is set by the joint that moves most
@@ -200,7 +209,7 @@ pub fn move_joint(
         })
         .fold(0.0, f64::max);
     let mut traj = Trajectory::new(kinds);
-    for t in output_times(duration, options.sample_interval) {
+    for t in output_times(duration, options.sample_interval)? {
         let s = if duration > 0.0 { t / duration } else { 1.0 };
         let q: Vec<f64> = start
             .iter()
@@ -240,7 +249,7 @@ fn track(
     let mut q = start.to_vec();
     let mut s_prev = 0.0;
     let mut step = 0usize;
-    for t in output_times(duration, options.sample_interval)
+    for t in output_times(duration, options.sample_interval)?
         .into_iter()
         .skip(1)
     {

@@ -386,6 +386,11 @@ impl OpwSolver {
         let rx = x.rotation.to_rotation_matrix();
         let rx = rx.matrix();
         let w = rx * self.w_tcp + x.translation.vector;
+        if !(w.iter().all(|v| v.is_finite()) && rx.iter().all(|v| v.is_finite())) {
+            // A non-finite target has no solution (and must not yield NaN joints).
+            out.out_of_reach = true;
+            return out;
+        }
         // Only Rw·a6 and Rw·a5 are needed: R_E·a = R_X·(R0ᵀ·a), the bracket precomputed.
         let re_a6 = rx * self.r0t_a6;
         let re_a5 = rx * self.r0t_a5;
