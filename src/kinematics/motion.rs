@@ -170,7 +170,7 @@ fn output_times(duration: f64, dt: f64) -> Result<Vec<f64>, MotionError> {
         return Ok(vec![0.0]);
     }
     let n = (duration / dt - 1e-9).ceil().max(1.0);
-    if !(n <= MAX_SAMPLES as f64) {
+    if n.is_nan() || n > MAX_SAMPLES as f64 {
         return Err(MotionError::InvalidOptions(format!(
             "{duration:.3} s at {dt} s per sample would need more than {MAX_SAMPLES} samples"
         )));
