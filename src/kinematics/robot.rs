@@ -6,7 +6,7 @@ use super::{
     NumericIk, OpwSolver,
 };
 use crate::math::{AngleConvention, Transform};
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
 
 /// A robot arm: a [`KinematicTree`], the world pose of its root (`base`), the link that
 /// carries the tool (`flange`), the tool centre point in the flange frame (`tool`),
@@ -187,11 +187,28 @@ impl Robot {
         let links = self.tree.links();
         for &i in &self.chain {
             let link = &links[i];
-            if link.joint.kind == JointKind::Fixed {
-                pose *= link.home.isometry();
-            } else {
-                pose = pose * link.joint.motion(q[k]) * link.home.isometry();
-                k += 1;
+            let home = link.home.isometry();
+            match link.joint.kind {
+                JointKind::Fixed => pose *= home,
+                JointKind::Revolute => {
+                    // pose · M(q) · home with M the rotation r about the axis line through
+                    // p, folded: t += R_pose·(p + r·(t_home − p)), R = R_pose·r·R_home.
+                    let p = link.joint.point.coords;
+                    let r = UnitQuaternion::from_axis_angle(
+                        &Unit::new_unchecked(link.joint.axis),
+                        q[k],
+                    );
+                    let local = p + r * (home.translation.vector - p);
+                    pose = Isometry3::from_parts(
+                        Translation3::from(pose.translation.vector + pose.rotation * local),
+                        pose.rotation * r * home.rotation,
+                    );
+                    k += 1;
+                }
+                JointKind::Prismatic => {
+                    pose = pose * link.joint.motion(q[k]) * home;
+                    k += 1;
+                }
             }
         }
         pose
