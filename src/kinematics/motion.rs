@@ -239,10 +239,13 @@ fn track(
         max_solutions: 1,
         ..options.ik.clone()
     };
-    let start_config = robot
+    // The branch the move must keep: the start's own, or, when the start is singular
+    // (its branch is undetermined), the one of the first step.
+    let mut start_config = robot
         .inverse(&robot.tcp_pose(start)?, start, &ik)
         .ok()
         .and_then(|s| s.into_iter().next())
+        .filter(|s| s.distance < 1e-6)
         .and_then(|s| s.configuration);
     let mut traj = Trajectory::new(robot.joint_kinds());
     traj.samples.push(sample(robot, 0.0, start.to_vec())?);
@@ -300,10 +303,12 @@ fn track(
                     }
                 });
             }
-            if let (Some(from), Some(to)) = (start_config, sol.configuration) {
-                if from != to {
+            match (start_config, sol.configuration) {
+                (Some(from), Some(to)) if from != to => {
                     return Err(MotionError::ConfigurationChange { step, s, from, to });
                 }
+                (None, Some(to)) => start_config = Some(to),
+                _ => {}
             }
             q = sol.joints;
         }
@@ -498,6 +503,28 @@ mod tests {
             ),
             "{err}"
         );
+    }
+
+    /// Leaving a wrist singularity along a Cartesian line needs an instantaneous turn of
+    /// joints 4 and 6: the move reports the singularity at its first step instead of
+    /// jumping; a joint move out of it first makes the line possible.
+    #[test]
+    fn line_from_a_singular_start_reports_it() {
+        let r = Catalog::AbbIrb2400.robot();
+        let q0 = vec![0.0; 6]; // joint 5 = 0: axes 4 and 6 aligned
+        let p0 = r.tcp_pose(&q0).unwrap();
+        let end = Transform::from_translation(Vec3::new(-50.0, 20.0, -80.0)) * p0;
+        let o = MotionOptions::default();
+        assert!(matches!(
+            move_line(&r, &q0, &end, &o),
+            Err(MotionError::Singular { step: 1, .. })
+        ));
+        let q1 = vec![0.0, 0.0, 0.0, 0.0, 0.3, 0.0];
+        let j = move_joint(&r, &q0, &q1, &o).unwrap();
+        let end =
+            Transform::from_translation(Vec3::new(-50.0, 20.0, -80.0)) * r.tcp_pose(&q1).unwrap();
+        let t = move_line(&r, j.last_joints().unwrap(), &end, &o).unwrap();
+        assert!(t.samples.last().unwrap().tcp.approx_eq(&end, 1e-6, 1e-9));
     }
 
     #[test]
