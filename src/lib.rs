@@ -11,6 +11,7 @@
 //! |---|---|
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions, the seeded RNG |
 //! | [`mesh`] | triangle meshes, STL I/O, generated shapes, the mesh cache |
+//! | [`kinematics`] | kinematic trees, D-H, robot catalog, FK, analytic and numeric IK, motions, programs, drilling |
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
 //! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
@@ -24,6 +25,7 @@ pub mod demo;
 pub mod diagnostics;
 pub mod document;
 pub mod fsutil;
+pub mod kinematics;
 pub mod math;
 pub mod mesh;
 pub mod planning;

@@ -1,0 +1,44 @@
+//! Robot kinematics: kinematic trees of links and joints (seed 001), robots built
+//! from D-H tables (seed 000, table 2), a catalog of industrial arms, forward
+//! kinematics, closed-form inverse kinematics for ortho-parallel arms with a
+//! spherical wrist (all branches), numeric inverse kinematics for any chain,
+//! joint and Cartesian motions sampled into trajectories, motion programs and
+//! drilling of hole tables.
+//!
+//! Units: millimetres and radians everywhere (joint values of prismatic joints in mm).
+//! Degrees appear only in program files, CSV output and the scripting layer.
+//! Transforms are [`Transform`](crate::math::Transform)s; see `docs/kinematics.md` for
+//! the frame conventions and the derivation of the analytic solver.
+
+mod catalog;
+mod dh;
+mod drilling;
+mod error;
+mod ik;
+mod ik_numeric;
+mod joint;
+mod motion;
+mod opw;
+mod program;
+mod robot;
+mod trajectory;
+mod tree;
+
+pub use catalog::{catalog_names, robot_by_name, Catalog};
+pub use dh::{DhConvention, DhRow};
+pub use drilling::{
+    drill_program, hole_tool_pose, parse_holes, read_holes, DrillError, DrillOptions, DrillReport,
+    Hole, HoleOutcome, HoleReport, ToolAxis,
+};
+pub use error::KinematicsError;
+pub use ik::{Configuration, Elbow, IkError, IkOptions, IkSolution, Shoulder, Wrist};
+pub use ik_numeric::NumericIk;
+pub use joint::{Joint, JointKind, JointLimits};
+pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
+pub use opw::{Branch, Branches, NotOpw, OpwSolver};
+pub use program::{
+    parse_program, read_program, run_program, Command, Program, ProgramError, ProgramLine, RunError,
+};
+pub use robot::Robot;
+pub use trajectory::{Trajectory, TrajectorySample};
+pub use tree::{KinematicTree, Link};

@@ -1,0 +1,923 @@
+//! [`OpwSolver`]: closed-form inverse kinematics of 6R arms with an ortho-parallel base
+//! and a spherical wrist, derived from the tree geometry (no per-robot code).
+//!
+//! # Derivation (product of exponentials)
+//! At the zero configuration every joint `i` has an axis line (unit direction `aᵢ`,
+//! point `pᵢ`) in the robot root frame. For any joint values the TCP pose is
+//! `T(q) = E₁(q₁)·…·E₆(q₆)·T₀`, where `Eᵢ(θ)` is the rotation by `θ` about the
+//! zero-configuration axis line `i` and `T₀` the TCP pose at zero. The arm qualifies
+//! when `a₁ ⟂ a₂`, `a₂ ∥ a₃`, axes 4, 5, 6 meet in one point `W₀` (the wrist centre)
+//! and `a₄ ⟂ a₅ ⟂ a₆`. Offsets of any sign, axis directions of either sign and any
+//! zero position are covered because nothing else is assumed.
+//!
+//! A canonical frame C is put on axis 1: `z = a₁`, `y ⟂ z` along axis 2 and `x`
+//! chosen so that the wrist centre at zero has `x ≥ 0`. In C, axes 2 and 3 are
+//! parallel to `y` (signs `s₂, s₃ = ±1`) and cross the `xz` plane at `P₂`, `P₃`;
+//! `W₀ = (·, b, ·)`.
+//!
+//! **Position.** The wrist joints do not move `W₀`, so
+//! `W(q) = Rz(q₁)·[P₂ + R(s₂q₂)(u₂ + R(s₃q₃)u₃), b]` with the planar vectors
+//! `u₂ = P₃ − P₂`, `u₃ = W₀ − P₃` (in `x,z`) and `R` the rotation about `y`.
+//! The wrist centre of a target TCP pose `X` is `W = X·(T₀⁻¹W₀)`.
+//! - Axis 1: the `y` component of `Rz(−q₁)W` must be `b`, so with `ρ² = Wx² + Wy²`
+//!   the arm-plane abscissa is `x' = ±√(ρ² − b²)` (shoulder front/back) and
+//!   `q₁ = atan2(Wy, Wx) − atan2(b, x')`. `ρ < |b|` is out of reach; `ρ = b = 0` is
+//!   the shoulder singularity.
+//! - Axis 3: with `d = (x', Wz) − P₂`,
+//!   `|u₂ + R(θ)u₃|² = |u₂|² + |u₃|² + 2|u₂||u₃|cos(θ + γ) = |d|²`, `γ` the angle
+//!   from `u₂` to `u₃`: `θ = ±acos(κ) − γ` (elbow), `q₃ = s₃θ`; `|κ| > 1` is out
+//!   of reach.
+//! - Axis 2: `q₂ = s₂(∠d − ∠(u₂ + R(θ)u₃))`.
+//!
+//! **Orientation.** `Rw = Ry(−θ₂₃)·Rz(−q₁)·R_X·R₀ᵀ = Rot(a₄,q₄)Rot(a₅,q₅)Rot(a₆,q₆)`.
+//! With `t = Rw·a₆`, rotations about `a₄` keep `a₄·t`, and `Rot(a₅,q₅)a₆ =
+//! cos q₅·a₆ + sin q₅·(a₅×a₆)`, so `A cos q₅ + B sin q₅ = a₄·t` with
+//! `A = a₄·a₆`, `B = a₄·(a₅×a₆)`, `A² + B² = 1`: `q₅ = atan2(B, A) ± acos(a₄·t)`
+//! (wrist flip). `q₄` turns `Rot(a₅,q₅)a₆` onto `t` about `a₄`, and `q₆` turns `a₅`
+//! onto `Rot(a₅,−q₅)Rot(a₄,−q₄)Rw·a₅` about `a₆`. The flip root needs no more
+//! trigonometry: `Rot(a₄,π)·Rot(a₆,π) = Rot(a₅, 2φ₅)` (`φ₅ = atan2(B, A)`) and
+//! `Rot(a₄,π)` reverses `a₅`, so `(q₄+π, 2φ₅−q₅, q₆+π)` gives the same rotation.
+//! When the two `q₅` roots coincide
+//! (`sin(acos(a₄·t)) = 0`) axes 4 and 6 line up: the wrist singularity.
+
+use super::{
+    Configuration, Elbow, IkError, IkOptions, IkSolution, JointKind, JointLimits, Robot, Shoulder,
+    Wrist,
+};
+use crate::math::Transform;
+use nalgebra::{
+    Isometry3, Matrix3, Point3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3,
+};
+use std::f64::consts::{PI, TAU};
+
+/// Why a robot does not qualify for the closed-form solver.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum NotOpw {
+    /// The chain does not have exactly six revolute joints.
+    #[error("the chain does not have exactly six revolute joints")]
+    NotSixRevolute,
+    /// Axes 1 and 2 are not perpendicular.
+    #[error("axes 1 and 2 are not perpendicular")]
+    Axes12NotPerpendicular,
+    /// Axes 2 and 3 are not parallel.
+    #[error("axes 2 and 3 are not parallel")]
+    Axes23NotParallel,
+    /// Axes 4, 5 and 6 do not meet in one point (no spherical wrist).
+    #[error("axes 4, 5 and 6 do not meet in one point (no spherical wrist)")]
+    WristNotSpherical,
+    /// Axis 5 is not perpendicular to axes 4 and 6.
+    #[error("axis 5 is not perpendicular to axes 4 and 6")]
+    WristNotOrthogonal,
+    /// Axis 3 or the wrist centre lies on the previous axis (zero link length).
+    #[error("zero upper-arm or forearm length")]
+    Degenerate,
+}
+
+/// The configuration tag of one principal branch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Branch {
+    /// Joint values in (−π, π] (rad).
+    pub joints: [f64; 6],
+    /// Shoulder, elbow and wrist choice.
+    pub configuration: Configuration,
+}
+
+/// Up to eight principal branches (joint values in (−π, π], no limits applied), in a
+/// fixed-capacity array so that solving allocates nothing.
+#[derive(Debug, Clone, Copy)]
+pub struct Branches {
+    items: [Branch; 8],
+    len: usize,
+    /// Some branches were dropped at a wrist or shoulder singularity.
+    pub singular: bool,
+    /// Some branch was dropped because the wrist centre is out of reach.
+    pub out_of_reach: bool,
+}
+
+impl Branches {
+    const EMPTY_BRANCH: Branch = Branch {
+        joints: [0.0; 6],
+        configuration: Configuration {
+            shoulder: Shoulder::Front,
+            elbow: Elbow::Up,
+            wrist: Wrist::NoFlip,
+        },
+    };
+
+    fn new() -> Self {
+        Self {
+            items: [Self::EMPTY_BRANCH; 8],
+            len: 0,
+            singular: false,
+            out_of_reach: false,
+        }
+    }
+
+    /// The branches found.
+    pub fn as_slice(&self) -> &[Branch] {
+        &self.items[..self.len]
+    }
+
+    /// Number of branches found (0..=8).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether no branch was found.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline]
+    fn push(&mut self, b: Branch) {
+        if self.len < 8 {
+            self.items[self.len] = b;
+            self.len += 1;
+        }
+    }
+}
+
+/// Closed-form solver for one robot (tool included), with every parameter
+/// precomputed from the tree geometry at the zero configuration. Works in the robot's
+/// root frame (the [`Robot`] applies its base pose).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OpwSolver {
+    /// Root frame ← canonical frame C.
+    root_from_c: Isometry3<f64>,
+    /// C ← root frame.
+    c_from_root: Isometry3<f64>,
+    /// Axis 2 in the arm plane (x, z), mm.
+    p2: [f64; 2],
+    /// Upper arm (axis 2 → axis 3) and forearm (axis 3 → wrist centre) at zero, (x, z).
+    u2: [f64; 2],
+    u3: [f64; 2],
+    /// Lateral offset of the wrist centre along y (mm).
+    b: f64,
+    /// |u2|² + |u3|², 2|u2||u3|, angle from u2 to u3.
+    len_sq: f64,
+    len_prod2: f64,
+    gamma: f64,
+    /// Reach limits of the wrist centre from axis 2 (mm).
+    reach: [f64; 2],
+    s2: f64,
+    s3: f64,
+    /// Wrist axes at zero in C.
+    a4: Vector3<f64>,
+    a5: Vector3<f64>,
+    a6: Vector3<f64>,
+    /// a5 × a6.
+    a5x6: Vector3<f64>,
+    /// φ5 = atan2(a4·(a5×a6), a4·a6), its sine and cosine.
+    phi5: f64,
+    s_phi5: f64,
+    c_phi5: f64,
+    /// Sine and cosine of γ.
+    sg: f64,
+    cg: f64,
+    /// Wrist centre in the TCP frame.
+    w_tcp: Vector3<f64>,
+    /// R0ᵀ·a6 and R0ᵀ·a5 (R0: TCP rotation at zero in C), and R0 as a quaternion.
+    r0t_a6: Vector3<f64>,
+    r0t_a5: Vector3<f64>,
+    q0: Quaternion<f64>,
+    limits: [Option<JointLimits>; 6],
+}
+
+/// Angle of the planar vector (x, z), increasing with right-hand rotation about +y.
+#[inline]
+fn ang(v: [f64; 2]) -> f64 {
+    v[0].atan2(v[1])
+}
+
+/// Rotation of the planar vector (x, z) about +y by the angle with sine `s`, cosine `c`.
+#[inline]
+fn rot2(v: [f64; 2], s: f64, c: f64) -> [f64; 2] {
+    [v[0] * c + v[1] * s, -v[0] * s + v[1] * c]
+}
+
+/// Rodrigues rotation of `v` about unit `k` by the angle with sine `s`, cosine `c`.
+#[inline]
+fn rot_vec(k: &Vector3<f64>, s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
+    v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
+}
+
+/// Wraps an angle into (−π, π].
+#[inline]
+pub(crate) fn wrap(a: f64) -> f64 {
+    // Inputs here are sums of a few angles in (−π, π]: subtracting turns is cheaper
+    // than a floating-point remainder; the remainder covers anything larger.
+    let mut r = if a.abs() > 4.0 * TAU { a % TAU } else { a };
+    while r > PI {
+        r -= TAU;
+    }
+    while r <= -PI {
+        r += TAU;
+    }
+    r
+}
+
+const PARALLEL_TOL: f64 = 1e-9;
+const DISTANCE_TOL: f64 = 1e-6;
+
+impl OpwSolver {
+    /// Derives the solver from a robot's geometry at the zero configuration, or says
+    /// why the robot does not qualify.
+    pub fn detect(robot: &Robot) -> Result<Self, NotOpw> {
+        if robot.dof() != 6
+            || robot
+                .joint_kinds()
+                .iter()
+                .any(|k| *k != JointKind::Revolute)
+        {
+            return Err(NotOpw::NotSixRevolute);
+        }
+        // Axis lines at zero in the root frame.
+        let links = robot.tree().links();
+        let chain = robot
+            .tree()
+            .path_from_root(robot.flange())
+            .ok_or(NotOpw::NotSixRevolute)?;
+        let mut pose = Isometry3::identity();
+        let mut axes = Vec::with_capacity(6);
+        for &i in &chain {
+            let l = &links[i];
+            if l.joint.kind != JointKind::Fixed {
+                axes.push((pose.rotation * l.joint.axis, pose * l.joint.point));
+            }
+            pose *= l.home.isometry();
+        }
+        let tcp0 = pose * robot.tool().isometry();
+        let (a1, p1) = axes[0];
+        let (a2, p2) = axes[1];
+        let (a3, p3) = axes[2];
+        let (a4, p4) = axes[3];
+        let (a5, p5) = axes[4];
+        let (a6, p6) = axes[5];
+        if a1.dot(&a2).abs() > PARALLEL_TOL {
+            return Err(NotOpw::Axes12NotPerpendicular);
+        }
+        if a2.cross(&a3).norm() > PARALLEL_TOL {
+            return Err(NotOpw::Axes23NotParallel);
+        }
+        // Wrist centre: closest points of lines 4 and 5, then line 6 through it.
+        let cb = a4.dot(&a5);
+        let denom = 1.0 - cb * cb;
+        if denom < 1e-12 {
+            return Err(NotOpw::WristNotSpherical);
+        }
+        let w = p4 - p5;
+        let (d, e) = (a4.dot(&w), a5.dot(&w));
+        let s = (cb * e - d) / denom;
+        let t = (e - cb * d) / denom;
+        let c4 = p4 + a4 * s;
+        let c5 = p5 + a5 * t;
+        if (c4 - c5).norm() > DISTANCE_TOL {
+            return Err(NotOpw::WristNotSpherical);
+        }
+        let w0 = Point3::from((c4.coords + c5.coords) * 0.5);
+        if (w0 - p6).cross(&a6).norm() > DISTANCE_TOL {
+            return Err(NotOpw::WristNotSpherical);
+        }
+        if a4.dot(&a5).abs() > PARALLEL_TOL || a5.dot(&a6).abs() > PARALLEL_TOL {
+            return Err(NotOpw::WristNotOrthogonal);
+        }
+        // Canonical frame C on axis 1.
+        let ez = a1;
+        let ey0 = a2;
+        let mut ex = ey0.cross(&ez).normalize();
+        let side = (w0 - p1).dot(&ex);
+        let side = if side.abs() > DISTANCE_TOL {
+            side
+        } else {
+            (p3 - p1).dot(&ex)
+        };
+        if side < -DISTANCE_TOL {
+            ex = -ex;
+        }
+        let ey = ez.cross(&ex);
+        let rc = Matrix3::from_columns(&[ex, ey, ez]);
+        let root_from_c = Isometry3::from_parts(
+            Translation3::from(p1.coords),
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rc)),
+        );
+        let c_from_root = root_from_c.inverse();
+        let inc = |p: &Point3<f64>| c_from_root * p;
+        let (q2, q3, qw) = (inc(&p2), inc(&p3), inc(&w0));
+        let p2c = [q2.x, q2.z];
+        let u2 = [q3.x - q2.x, q3.z - q2.z];
+        let u3 = [qw.x - q3.x, qw.z - q3.z];
+        let (l2, l3) = (u2[0].hypot(u2[1]), u3[0].hypot(u3[1]));
+        if l2 < DISTANCE_TOL || l3 < DISTANCE_TOL {
+            return Err(NotOpw::Degenerate);
+        }
+        let to_c = |v: &Vector3<f64>| c_from_root.rotation * v;
+        let (a4c, a5c, a6c) = (to_c(&a4), to_c(&a5), to_c(&a6));
+        let limits_v = robot.joint_limits();
+        let mut limits = [None; 6];
+        limits.copy_from_slice(&limits_v[..6]);
+        let tcp0_c = c_from_root * tcp0;
+        let gamma = ang(u3) - ang(u2);
+        let phi5 = a4c.dot(&a5c.cross(&a6c)).atan2(a4c.dot(&a6c));
+        Ok(Self {
+            root_from_c,
+            c_from_root,
+            p2: p2c,
+            u2,
+            u3,
+            b: qw.y,
+            len_sq: l2 * l2 + l3 * l3,
+            len_prod2: 2.0 * l2 * l3,
+            gamma,
+            reach: [(l2 - l3).abs(), l2 + l3],
+            s2: ey.dot(&a2).signum(),
+            s3: ey.dot(&a3).signum(),
+            a5x6: a5c.cross(&a6c),
+            phi5,
+            s_phi5: phi5.sin(),
+            c_phi5: phi5.cos(),
+            sg: gamma.sin(),
+            cg: gamma.cos(),
+            a4: a4c,
+            a5: a5c,
+            a6: a6c,
+            w_tcp: (tcp0.inverse() * w0).coords,
+            r0t_a6: tcp0_c.rotation.inverse() * a6c,
+            r0t_a5: tcp0_c.rotation.inverse() * a5c,
+            q0: *tcp0_c.rotation.quaternion(),
+            limits,
+        })
+    }
+
+    /// TCP pose in the root frame for joint values `q` (rad), in closed form.
+    pub fn forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
+        let th = self.s3 * q[2];
+        let th2 = self.s2 * q[1];
+        let (st, ct) = th.sin_cos();
+        let (s2, c2) = th2.sin_cos();
+        let f = rot2(self.u3, st, ct);
+        let arm = rot2([self.u2[0] + f[0], self.u2[1] + f[1]], s2, c2);
+        let (x, z) = (self.p2[0] + arm[0], self.p2[1] + arm[1]);
+        // Half angles build the rotation as a quaternion product (cheaper than matrices).
+        let (sh1, ch1) = (0.5 * q[0]).sin_cos();
+        let (s1, c1) = (2.0 * sh1 * ch1, ch1 * ch1 - sh1 * sh1);
+        let w = Vector3::new(c1 * x - s1 * self.b, s1 * x + c1 * self.b, z);
+        let (sh23, ch23) = (0.5 * (th + th2)).sin_cos();
+        let quat = |axis: &Vector3<f64>, angle: f64| {
+            let (s, c) = (0.5 * angle).sin_cos();
+            Quaternion::new(c, axis.x * s, axis.y * s, axis.z * s)
+        };
+        let r = Quaternion::new(ch1, 0.0, 0.0, sh1)
+            * Quaternion::new(ch23, 0.0, sh23, 0.0)
+            * quat(&self.a4, q[3])
+            * quat(&self.a5, q[4])
+            * quat(&self.a6, q[5])
+            * self.q0;
+        let r = UnitQuaternion::new_unchecked(r);
+        let p = w - r * self.w_tcp;
+        self.root_from_c * Isometry3::from_parts(Translation3::from(p), r)
+    }
+
+    /// Every principal branch (up to 8) reaching the TCP pose `target` given in the
+    /// root frame; joint values in (−π, π], no limits applied. Singular branches are
+    /// dropped (and flagged), never returned with an arbitrary free angle.
+    pub fn branches(&self, target: &Isometry3<f64>, singularity_threshold: f64) -> Branches {
+        let mut out = Branches::new();
+        let x = self.c_from_root * target;
+        let rx = x.rotation.to_rotation_matrix();
+        let rx = rx.matrix();
+        let w = rx * self.w_tcp + x.translation.vector;
+        if !(w.iter().all(|v| v.is_finite()) && rx.iter().all(|v| v.is_finite())) {
+            // A non-finite target has no solution (and must not yield NaN joints).
+            out.out_of_reach = true;
+            return out;
+        }
+        // Only Rw·a6 and Rw·a5 are needed: R_E·a = R_X·(R0ᵀ·a), the bracket precomputed.
+        let re_a6 = rx * self.r0t_a6;
+        let re_a5 = rx * self.r0t_a5;
+        let rho_sq = w.x * w.x + w.y * w.y;
+        let disc = rho_sq - self.b * self.b;
+        let scale = 1.0 + self.reach[1];
+        if disc < -1e-12 * scale * scale {
+            out.out_of_reach = true;
+            return out;
+        }
+        if rho_sq.sqrt() < singularity_threshold * scale && self.b.abs() < DISTANCE_TOL {
+            out.singular = true;
+            return out;
+        }
+        let root = disc.max(0.0).sqrt();
+        for sh in [1.0_f64, -1.0] {
+            if sh < 0.0 && root < 1e-12 * scale {
+                // Both shoulder roots coincide: the second is a duplicate.
+                break;
+            }
+            let xp = sh * root;
+            // Rz(q1)·(x', b) = (Wx, Wy).
+            let (s1, c1) = (
+                (xp * w.y - self.b * w.x) / rho_sq,
+                (xp * w.x + self.b * w.y) / rho_sq,
+            );
+            let q1 = s1.atan2(c1);
+            let d = [xp - self.p2[0], w.z - self.p2[1]];
+            let kappa = (d[0] * d[0] + d[1] * d[1] - self.len_sq) / self.len_prod2;
+            if kappa.abs() > 1.0 + 1e-12 {
+                out.out_of_reach = true;
+                continue;
+            }
+            let kappa = kappa.clamp(-1.0, 1.0);
+            let acos_k = kappa.acos();
+            let sk = (1.0 - kappa * kappa).sqrt();
+            // Rz(−q1)·R_E·a6 and ·a5.
+            let rz =
+                |v: &Vector3<f64>| Vector3::new(c1 * v.x + s1 * v.y, -s1 * v.x + c1 * v.y, v.z);
+            let (r1_a6, r1_a5) = (rz(&re_a6), rz(&re_a5));
+            for el in [1.0_f64, -1.0] {
+                if el < 0.0 && sk < 1e-12 {
+                    // Arm stretched or folded: both elbow roots coincide.
+                    break;
+                }
+                // θ = el·acos κ − γ, its sine and cosine by the angle difference.
+                let (sa, ca) = (el * sk, kappa);
+                let (st, ct) = (sa * self.cg - ca * self.sg, ca * self.cg + sa * self.sg);
+                let th = el * acos_k - self.gamma;
+                let f = rot2(self.u3, st, ct);
+                let v = [self.u2[0] + f[0], self.u2[1] + f[1]];
+                // Angle from v to d about +y.
+                let crs = d[0] * v[1] - d[1] * v[0];
+                let dot = d[0] * v[0] + d[1] * v[1];
+                let nrm = (crs * crs + dot * dot).sqrt();
+                if nrm < 1e-12 * scale * scale {
+                    // Wrist centre on axis 2: joint 2 undetermined.
+                    out.singular = true;
+                    continue;
+                }
+                let th2 = crs.atan2(dot);
+                let (s2a, c2a) = (crs / nrm, dot / nrm);
+                let (s23, c23) = (s2a * ct + c2a * st, c2a * ct - s2a * st);
+                // Ry(−θ23)·….
+                let ry = |v: &Vector3<f64>| {
+                    Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
+                };
+                let t = ry(&r1_a6);
+                let cw = self.a4.dot(&t).clamp(-1.0, 1.0);
+                let sd = (1.0 - cw * cw).sqrt();
+                if sd < singularity_threshold {
+                    out.singular = true;
+                    continue;
+                }
+                let delta = cw.acos();
+                let elbow = if (el > 0.0) == (sh > 0.0) {
+                    Elbow::Up
+                } else {
+                    Elbow::Down
+                };
+                let shoulder = if sh > 0.0 {
+                    Shoulder::Front
+                } else {
+                    Shoulder::Back
+                };
+                let rw_a5 = ry(&r1_a5);
+                let tp = t - self.a4 * self.a4.dot(&t);
+                // No-flip root q5 = φ5 + δ.
+                let s5 = self.s_phi5 * cw + self.c_phi5 * sd;
+                let c5 = self.c_phi5 * cw - self.s_phi5 * sd;
+                let v5 = self.a6 * c5 + self.a5x6 * s5;
+                // q4 turns v5 onto t about a4.
+                let vp = v5 - self.a4 * self.a4.dot(&v5);
+                let crs4 = self.a4.dot(&vp.cross(&tp));
+                let dot4 = vp.dot(&tp);
+                let n4 = (crs4 * crs4 + dot4 * dot4).sqrt();
+                let (s4, c4) = (crs4 / n4, dot4 / n4);
+                // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
+                let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
+                let q4 = crs4.atan2(dot4);
+                let q6 = self.a6.dot(&self.a5.cross(&m)).atan2(self.a5.dot(&m));
+                let q2 = wrap(self.s2 * th2);
+                let q3 = wrap(self.s3 * th);
+                out.push(Branch {
+                    joints: [q1, q2, q3, q4, wrap(self.phi5 + delta), q6],
+                    configuration: Configuration {
+                        shoulder,
+                        elbow,
+                        wrist: Wrist::NoFlip,
+                    },
+                });
+                // The flip root follows without trigonometry: since a5 ⟂ a4 and
+                // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
+                // Rot(a4,q4+π)·Rot(a5,2φ5−q5)·Rot(a6,q6+π) = Rot(a4,q4)·Rot(a5,q5)·Rot(a6,q6).
+                out.push(Branch {
+                    joints: [
+                        q1,
+                        q2,
+                        q3,
+                        wrap(q4 + PI),
+                        wrap(self.phi5 - delta),
+                        wrap(q6 + PI),
+                    ],
+                    configuration: Configuration {
+                        shoulder,
+                        elbow,
+                        wrist: Wrist::Flip,
+                    },
+                });
+            }
+        }
+        out
+    }
+
+    /// All solutions for the TCP pose `target` (root frame) within the joint limits,
+    /// with every ±360° variant the limits allow, sorted by Euclidean joint distance to
+    /// `reference`.
+    pub fn solve(
+        &self,
+        _robot: &Robot,
+        target: &Transform,
+        reference: &[f64],
+        options: &IkOptions,
+    ) -> Result<Vec<IkSolution>, IkError> {
+        let branches = self.branches(target.isometry(), options.singularity_threshold);
+        if branches.is_empty() {
+            return Err(if branches.singular {
+                IkError::Singular(
+                    "the wrist centre is on axis 1 or axes 4 and 6 are aligned (joint 1 or joints 4+6 undetermined)"
+                        .into(),
+                )
+            } else {
+                IkError::Unreachable(format!(
+                    "the wrist centre is outside the arm's reach ({:.3}..{:.3} mm from axis 2, at least {:.3} mm from axis 1)",
+                    self.reach[0],
+                    self.reach[1],
+                    self.b.abs()
+                ))
+            });
+        }
+        let mut out = Vec::new();
+        let mut first_violation: Option<(f64, usize, f64)> = None;
+        for br in branches.as_slice() {
+            let mut choices: [[f64; 4]; 6] = [[0.0; 4]; 6];
+            let mut counts = [0usize; 6];
+            for j in 0..6 {
+                let v = br.joints[j];
+                match self.limits[j] {
+                    None => {
+                        // Unlimited: the representative nearest the reference.
+                        let r = reference.get(j).copied().unwrap_or(0.0);
+                        choices[j][0] = v + TAU * ((r - v) / TAU).round();
+                        counts[j] = 1;
+                    }
+                    Some(l) => {
+                        let kmin = ((l.min - 1e-9 - v) / TAU).ceil() as i64;
+                        let kmax = ((l.max + 1e-9 - v) / TAU).floor() as i64;
+                        let mut k = kmin;
+                        while k <= kmax && counts[j] < 4 {
+                            choices[j][counts[j]] = (v + TAU * k as f64).clamp(l.min, l.max);
+                            counts[j] += 1;
+                            k += 1;
+                        }
+                    }
+                }
+            }
+            if let Some(j) = counts.iter().position(|&c| c == 0) {
+                let dist: f64 = br
+                    .joints
+                    .iter()
+                    .zip(reference)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum();
+                if first_violation.is_none_or(|(d, _, _)| dist < d) {
+                    first_violation = Some((dist, j + 1, br.joints[j]));
+                }
+                continue;
+            }
+            let mut idx = [0usize; 6];
+            loop {
+                let joints: Vec<f64> = (0..6).map(|j| choices[j][idx[j]]).collect();
+                let distance = joints
+                    .iter()
+                    .zip(reference)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt();
+                out.push(IkSolution {
+                    joints,
+                    configuration: Some(br.configuration),
+                    distance,
+                });
+                let mut j = 0;
+                loop {
+                    idx[j] += 1;
+                    if idx[j] < counts[j] {
+                        break;
+                    }
+                    idx[j] = 0;
+                    j += 1;
+                    if j == 6 {
+                        break;
+                    }
+                }
+                if j == 6 {
+                    break;
+                }
+            }
+        }
+        if out.is_empty() {
+            let (_, joint, value) = first_violation.unwrap_or((0.0, 1, 0.0));
+            return Err(IkError::JointLimits { joint, value });
+        }
+        out.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+        Ok(out)
+    }
+
+    /// Lateral offset `b` of the wrist centre from axis 1 (mm), upper-arm and
+    /// forearm vectors in the arm plane `(x, z)` (mm), and the signs of axes 2, 3
+    /// relative to the canonical `y`: the detected ortho-parallel parameters.
+    pub fn parameters(&self) -> ([f64; 2], [f64; 2], [f64; 2], f64, [f64; 2]) {
+        (self.p2, self.u2, self.u3, self.b, [self.s2, self.s3])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::{Catalog, Joint, KinematicTree, Link, NumericIk};
+    use crate::math::{Rng, Vec3};
+
+    /// The parameters extracted from the MZ07 tree are table 2's: upper arm 330 mm,
+    /// forearm √(340² + 45²) mm, no lateral offset, axis 2 at 50 mm out and 340 mm up.
+    #[test]
+    fn mz07_parameters_are_extracted_from_the_tree() {
+        let r = Catalog::NachiMz07.robot();
+        let (p2, u2, u3, b, _) = r.analytic().unwrap().parameters();
+        assert!(
+            (p2[0] - 50.0).abs() < 1e-9 && (p2[1] - 340.0).abs() < 1e-9,
+            "{p2:?}"
+        );
+        assert!((u2[0].hypot(u2[1]) - 330.0).abs() < 1e-9);
+        assert!((u3[0].hypot(u3[1]) - 340f64.hypot(45.0)).abs() < 1e-9);
+        assert!(b.abs() < 1e-9);
+    }
+
+    const OPW_ARMS: [Catalog; 5] = [
+        Catalog::NachiMz07,
+        Catalog::AbbIrb2400,
+        Catalog::KukaKr6R700,
+        Catalog::FanucLrMate200iD,
+        Catalog::StaubliTx2_60L,
+    ];
+
+    fn random_q(rng: &mut Rng, robot: &Robot) -> [f64; 6] {
+        let mut q = [0.0; 6];
+        for (v, l) in q.iter_mut().zip(robot.joint_limits()) {
+            let l = l.unwrap_or(JointLimits::symmetric(PI));
+            *v = rng.range(l.min.max(-PI), l.max.min(PI));
+        }
+        q
+    }
+
+    fn same_angles(a: &[f64], b: &[f64], tol: f64) -> bool {
+        a.iter().zip(b).all(|(x, y)| wrap(x - y).abs() < tol)
+    }
+
+    #[test]
+    fn every_catalog_arm_but_ur5_is_detected() {
+        for arm in OPW_ARMS {
+            let r = arm.robot();
+            assert!(
+                r.analytic().is_some(),
+                "{}: {:?}",
+                arm.name(),
+                r.analytic_rejection()
+            );
+        }
+        let ur5 = Catalog::Ur5.robot();
+        assert_eq!(ur5.analytic_rejection(), Some(NotOpw::WristNotSpherical));
+    }
+
+    #[test]
+    fn closed_form_forward_matches_tree() {
+        let mut rng = Rng::new(11);
+        for arm in OPW_ARMS {
+            let r = arm.robot();
+            let s = r.analytic().unwrap();
+            for _ in 0..200 {
+                let q = random_q(&mut rng, &r);
+                let a = Transform::from_isometry(s.forward(&q));
+                let b = r.tcp_pose(&q).unwrap();
+                assert!(a.approx_eq(&b, 1e-9, 1e-12), "{}", arm.name());
+            }
+        }
+    }
+
+    /// Every returned branch reproduces the pose, and the generating configuration is
+    /// among the branches, for thousands of seeded configurations per arm.
+    #[test]
+    fn round_trip_all_branches() {
+        let mut rng = Rng::new(2024);
+        for arm in OPW_ARMS {
+            let r = arm.robot();
+            let s = r.analytic().unwrap();
+            let mut total = 0;
+            for _ in 0..3000 {
+                let q = random_q(&mut rng, &r);
+                let target = r.tcp_pose(&q).unwrap();
+                let br = s.branches(target.isometry(), 1e-9);
+                assert!(!br.is_empty(), "{}: no branch for {q:?}", arm.name());
+                for b in br.as_slice() {
+                    let got = r.tcp_pose(&b.joints).unwrap();
+                    let (ang, dist) = got.distance_to(&target);
+                    assert!(
+                        dist < 1e-6 && ang < 1e-9,
+                        "{} {q:?} -> {b:?}: {dist} mm {ang} rad",
+                        arm.name()
+                    );
+                    total += 1;
+                }
+                assert!(
+                    br.as_slice()
+                        .iter()
+                        .any(|b| same_angles(&b.joints, &q, 1e-7)),
+                    "{}: original {q:?} missing from {:?}",
+                    arm.name(),
+                    br.as_slice()
+                );
+                // Branches are distinct.
+                for (i, a) in br.as_slice().iter().enumerate() {
+                    for b in &br.as_slice()[i + 1..] {
+                        assert!(!same_angles(&a.joints, &b.joints, 1e-9));
+                        assert_ne!(a.configuration, b.configuration);
+                    }
+                }
+            }
+            assert!(total >= 3000);
+        }
+    }
+
+    /// A brute-force numeric search from many seeded starts finds no solution that the
+    /// closed form misses.
+    #[test]
+    fn no_branch_missing_against_brute_force() {
+        let mut rng = Rng::new(77);
+        let opts = IkOptions {
+            restarts: 1,
+            max_iterations: 60,
+            ..IkOptions::default()
+        };
+        let numeric = NumericIk::from_options(&opts);
+        for arm in OPW_ARMS {
+            let r = arm.robot();
+            let s = r.analytic().unwrap();
+            for _ in 0..3 {
+                let q = random_q(&mut rng, &r);
+                let target = r.tcp_pose(&q).unwrap();
+                let local = Transform::from_isometry(*target.isometry());
+                let br = s.branches(target.isometry(), 1e-9);
+                let mut numeric_found = 0;
+                for _ in 0..60 {
+                    let start: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
+                    // Unlimited descent (the branch set ignores limits).
+                    let d = numeric.descend(&r, local.isometry(), &start, false);
+                    if d.pos_err < 1e-6 && d.ang_err < 1e-9 {
+                        numeric_found += 1;
+                        assert!(
+                            br.as_slice()
+                                .iter()
+                                .any(|b| same_angles(&b.joints, &d.q, 1e-5)),
+                            "{}: numeric solution {:?} not among {:?}",
+                            arm.name(),
+                            d.q,
+                            br.as_slice()
+                        );
+                    }
+                }
+                assert!(
+                    numeric_found > 0,
+                    "{}: brute force found nothing",
+                    arm.name()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn out_of_reach_and_singular_targets_are_errors() {
+        let r = Catalog::AbbIrb2400.robot();
+        let far = Transform::from_translation(Vec3::new(5000.0, 0.0, 500.0));
+        let zero = [0.0; 6];
+        assert!(matches!(
+            r.inverse(&far, &zero, &IkOptions::default()),
+            Err(IkError::Unreachable(_))
+        ));
+        // The IRB 2400 zero pose has joint 5 = 0: axes 4 and 6 aligned.
+        let home = r.tcp_pose(&zero).unwrap();
+        let s = r.analytic().unwrap();
+        let br = s.branches(home.isometry(), 1e-9);
+        assert!(br.singular);
+        for b in br.as_slice() {
+            let got = r.tcp_pose(&b.joints).unwrap();
+            assert!(got.approx_eq(&home, 1e-6, 1e-9));
+        }
+        // Wrist centre on axis 1 (b = 0 for the IRB 2400): joint 1 is undetermined.
+        // For this arm C is the root frame, so W = (0, 0, 1400) is on axis 1.
+        let rot = crate::math::AngleConvention::XyzFixed.rotation(0.3, 1.0, -0.4);
+        let p = Vec3::new(0.0, 0.0, 1400.0) - rot * s.w_tcp;
+        let on_axis = Transform::from_parts(p, rot);
+        assert!(matches!(
+            r.inverse(&on_axis, &zero, &IkOptions::default()),
+            Err(IkError::Singular(_))
+        ));
+        let nan = Transform::from_translation(Vec3::new(f64::NAN, 0.0, 0.0));
+        assert!(r.inverse(&nan, &zero, &IkOptions::default()).is_err());
+    }
+
+    #[test]
+    fn limits_and_variants_sorted_by_distance() {
+        let r = Catalog::AbbIrb2400.robot(); // joint 6 ±400°: two variants often
+        let mut rng = Rng::new(5);
+        for _ in 0..200 {
+            let q = random_q(&mut rng, &r);
+            let t = r.tcp_pose(&q).unwrap();
+            let sols = r.inverse(&t, &q, &IkOptions::default()).unwrap();
+            assert!(
+                sols[0].distance < 1e-6,
+                "nearest must be the reference itself"
+            );
+            for w in sols.windows(2) {
+                assert!(w[0].distance <= w[1].distance);
+            }
+            for s in &sols {
+                assert!(r.limit_violation(&s.joints).is_none());
+                assert!(r.tcp_pose(&s.joints).unwrap().approx_eq(&t, 1e-6, 1e-9));
+            }
+            assert!(
+                sols.iter().any(|s| (s.joints[5] - q[5]).abs() > 6.0),
+                "±360° variant of joint 6"
+            );
+        }
+    }
+
+    /// Re-framing every link (arbitrary link frames, tool pointing back, base moved)
+    /// keeps the robot detected and solved: nothing depends on D-H frames.
+    #[test]
+    fn detection_is_independent_of_link_frames() {
+        let mut rng = Rng::new(9);
+        for arm in OPW_ARMS {
+            let r = arm.robot();
+            let links = r.tree().links();
+            let frames: Vec<Isometry3<f64>> = (0..links.len())
+                .map(|_| {
+                    Isometry3::from_parts(
+                        Translation3::new(
+                            rng.range(-50.0, 50.0),
+                            rng.range(-50.0, 50.0),
+                            rng.range(-50.0, 50.0),
+                        ),
+                        rng.rotation(),
+                    )
+                })
+                .collect();
+            // New link frame i = old frame · F_i; children see parent quantities through F_parent⁻¹.
+            let new_links: Vec<Link> = links
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    let finv = l
+                        .parent
+                        .map(|p| frames[p].inverse())
+                        .unwrap_or_else(Isometry3::identity);
+                    let mut j: Joint = l.joint;
+                    j.axis = finv.rotation * j.axis;
+                    j.point = finv * j.point;
+                    Link {
+                        name: l.name.clone(),
+                        parent: l.parent,
+                        home: Transform::from_isometry(finv * l.home.isometry() * frames[i]),
+                        joint: j,
+                    }
+                })
+                .collect();
+            let tool = Transform::from_isometry(frames[r.flange()].inverse() * r.tool().isometry());
+            let tree = KinematicTree::new(new_links).unwrap();
+            let base = Transform::from_xyzabc(
+                Vec3::new(100.0, -20.0, 30.0),
+                [0.3, -0.2, 1.0],
+                Default::default(),
+            );
+            let r2 = Robot::new("reframed", tree, r.flange(), tool)
+                .unwrap()
+                .with_base(base);
+            assert!(
+                r2.analytic().is_some(),
+                "{}: {:?}",
+                arm.name(),
+                r2.analytic_rejection()
+            );
+            for _ in 0..200 {
+                let q = random_q(&mut rng, &r);
+                let t = r2.tcp_pose(&q).unwrap();
+                assert!(t.approx_eq(&(r.tcp_pose(&q).unwrap() * base), 1e-9, 1e-12));
+                let sols = r2.inverse(&t, &q, &IkOptions::default()).unwrap();
+                assert!(same_angles(&sols[0].joints, &q, 1e-7));
+            }
+        }
+    }
+}

@@ -1,0 +1,297 @@
+//! [`Robot`]: a kinematic tree with a base pose, a flange link, a tool (TCP) frame and
+//! the ordered list of its movable joints.
+
+use super::{
+    IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree, KinematicsError,
+    NumericIk, OpwSolver,
+};
+use crate::math::{AngleConvention, Transform};
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
+
+/// A robot arm: a [`KinematicTree`], the world pose of its root (`base`), the link that
+/// carries the tool (`flange`), the tool centre point in the flange frame (`tool`),
+/// and its joints: the movable links on the path from the root to the flange, in order.
+///
+/// Joint vectors passed to a robot have one value per joint, in that order (radians
+/// for revolute joints, mm for prismatic ones). Movable links that are not on the
+/// flange chain (e.g. gripper fingers) are held at 0 by [`Robot::link_poses`].
+///
+/// When the chain is a 6R ortho-parallel arm with a spherical wrist (detected from
+/// the geometry, see [`OpwSolver::detect`]) the closed-form solver is used for inverse
+/// kinematics, otherwise the numeric one.
+#[derive(Debug, Clone)]
+pub struct Robot {
+    name: String,
+    tree: KinematicTree,
+    base: Transform,
+    flange: usize,
+    tool: Transform,
+    joints: Vec<usize>,
+    chain: Vec<usize>,
+    analytic: Option<OpwSolver>,
+}
+
+impl Robot {
+    /// A robot from a tree, its flange link and the tool frame in the flange frame;
+    /// the base pose is the identity.
+    pub fn new(
+        name: impl Into<String>,
+        tree: KinematicTree,
+        flange: usize,
+        tool: Transform,
+    ) -> Result<Self, KinematicsError> {
+        let chain = tree
+            .path_from_root(flange)
+            .ok_or(KinematicsError::NoSuchLink(flange))?;
+        let joints: Vec<usize> = chain
+            .iter()
+            .copied()
+            .filter(|&i| tree.links()[i].joint.kind != JointKind::Fixed)
+            .collect();
+        if joints.is_empty() {
+            return Err(KinematicsError::NoJoints);
+        }
+        if !tool.is_finite() {
+            return Err(KinematicsError::InvalidDescription(
+                "tool frame is not finite".into(),
+            ));
+        }
+        let mut robot = Self {
+            name: name.into(),
+            tree,
+            base: Transform::IDENTITY,
+            flange,
+            tool,
+            joints,
+            chain,
+            analytic: None,
+        };
+        robot.analytic = OpwSolver::detect(&robot).ok();
+        Ok(robot)
+    }
+
+    /// The robot's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The kinematic tree.
+    pub fn tree(&self) -> &KinematicTree {
+        &self.tree
+    }
+
+    /// World pose of the tree root (mm).
+    pub fn base(&self) -> Transform {
+        self.base
+    }
+
+    /// Sets the world pose of the tree root.
+    pub fn set_base(&mut self, base: Transform) {
+        self.base = base;
+    }
+
+    /// The same robot placed at `base`.
+    #[must_use]
+    pub fn with_base(mut self, base: Transform) -> Self {
+        self.base = base;
+        self
+    }
+
+    /// The flange link index.
+    pub fn flange(&self) -> usize {
+        self.flange
+    }
+
+    /// The tool centre point frame in the flange frame (mm).
+    pub fn tool(&self) -> Transform {
+        self.tool
+    }
+
+    /// Sets the tool frame (in the flange frame) and re-derives the analytic solver.
+    pub fn set_tool(&mut self, tool: Transform) {
+        self.tool = tool;
+        self.analytic = OpwSolver::detect(self).ok();
+    }
+
+    /// The same robot with another tool frame.
+    #[must_use]
+    pub fn with_tool(mut self, tool: Transform) -> Self {
+        self.set_tool(tool);
+        self
+    }
+
+    /// Number of joints (degrees of freedom).
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Link indices of the joints, in joint order.
+    pub fn joint_links(&self) -> &[usize] {
+        &self.joints
+    }
+
+    /// Kind of each joint, in joint order.
+    pub fn joint_kinds(&self) -> Vec<JointKind> {
+        self.joints
+            .iter()
+            .map(|&i| self.tree.links()[i].joint.kind)
+            .collect()
+    }
+
+    /// Limits of each joint (rad or mm), in joint order.
+    pub fn joint_limits(&self) -> Vec<Option<JointLimits>> {
+        self.joints
+            .iter()
+            .map(|&i| self.tree.links()[i].joint.limits)
+            .collect()
+    }
+
+    /// Index of the first joint whose value lies outside its limits (tolerance 1e-9).
+    pub fn limit_violation(&self, q: &[f64]) -> Option<usize> {
+        self.joints.iter().zip(q).position(|(&i, &v)| {
+            self.tree.links()[i]
+                .joint
+                .limits
+                .is_some_and(|l| !l.contains(v, 1e-9))
+        })
+    }
+
+    /// The closed-form solver, when the robot qualifies.
+    pub fn analytic(&self) -> Option<&OpwSolver> {
+        self.analytic.as_ref()
+    }
+
+    /// Why the robot does not qualify for the closed-form solver (`None` if it does).
+    pub fn analytic_rejection(&self) -> Option<super::NotOpw> {
+        OpwSolver::detect(self).err()
+    }
+
+    fn check(&self, q: &[f64]) -> Result<(), KinematicsError> {
+        if q.len() != self.joints.len() {
+            return Err(KinematicsError::JointCount {
+                expected: self.joints.len(),
+                got: q.len(),
+            });
+        }
+        if let Some(i) = q.iter().position(|v| !v.is_finite()) {
+            return Err(KinematicsError::NonFiniteJoint(i));
+        }
+        Ok(())
+    }
+
+    /// Flange pose in the root frame without checks (q has `dof` finite values).
+    #[inline]
+    pub(crate) fn flange_in_root(&self, q: &[f64]) -> Isometry3<f64> {
+        let mut pose = Isometry3::identity();
+        let mut k = 0;
+        let links = self.tree.links();
+        for &i in &self.chain {
+            let link = &links[i];
+            let home = link.home.isometry();
+            match link.joint.kind {
+                JointKind::Fixed => pose *= home,
+                JointKind::Revolute => {
+                    // pose · M(q) · home with M the rotation r about the axis line through
+                    // p, folded: t += R_pose·(p + r·(t_home − p)), R = R_pose·r·R_home.
+                    let p = link.joint.point.coords;
+                    let r = UnitQuaternion::from_axis_angle(
+                        &Unit::new_unchecked(link.joint.axis),
+                        q[k],
+                    );
+                    let local = p + r * (home.translation.vector - p);
+                    pose = Isometry3::from_parts(
+                        Translation3::from(pose.translation.vector + pose.rotation * local),
+                        pose.rotation * r * home.rotation,
+                    );
+                    k += 1;
+                }
+                JointKind::Prismatic => {
+                    pose = pose * link.joint.motion(q[k]) * home;
+                    k += 1;
+                }
+            }
+        }
+        pose
+    }
+
+    /// World poses of every link of the tree for joint values `q` (joint order).
+    pub fn link_poses(&self, q: &[f64]) -> Result<Vec<Transform>, KinematicsError> {
+        self.check(q)?;
+        let mut values = vec![0.0; self.tree.len()];
+        for (&i, &v) in self.joints.iter().zip(q) {
+            values[i] = v;
+        }
+        self.tree.link_poses(&self.base, &values)
+    }
+
+    /// World pose of the flange for joint values `q`.
+    pub fn flange_pose(&self, q: &[f64]) -> Result<Transform, KinematicsError> {
+        self.check(q)?;
+        Ok(Transform::from_isometry(
+            self.base.isometry() * self.flange_in_root(q),
+        ))
+    }
+
+    /// World pose of the tool centre point for joint values `q`.
+    pub fn tcp_pose(&self, q: &[f64]) -> Result<Transform, KinematicsError> {
+        self.check(q)?;
+        Ok(Transform::from_isometry(
+            self.base.isometry() * self.flange_in_root(q) * self.tool.isometry(),
+        ))
+    }
+
+    /// The TCP pose as `[x, y, z, a, b, c]` (mm, radians in `conv`).
+    pub fn tcp_xyzabc(
+        &self,
+        q: &[f64],
+        conv: AngleConvention,
+    ) -> Result<[f64; 6], KinematicsError> {
+        Ok(self.tcp_pose(q)?.to_xyzabc(conv))
+    }
+
+    /// TCP pose in the root frame without checks.
+    #[inline]
+    pub(crate) fn tcp_in_root(&self, q: &[f64]) -> Isometry3<f64> {
+        self.flange_in_root(q) * self.tool.isometry()
+    }
+
+    /// All joint solutions placing the TCP at the world pose `target`, within the
+    /// joint limits, sorted by distance to `reference` (the current configuration).
+    ///
+    /// Uses the closed-form solver when the robot qualifies (every branch, with ±360°
+    /// variants allowed by the limits), else the numeric solver with
+    /// `options.numeric` settings. Errors name the cause: unreachable, singular,
+    /// outside the joint limits.
+    pub fn inverse(
+        &self,
+        target: &Transform,
+        reference: &[f64],
+        options: &IkOptions,
+    ) -> Result<Vec<IkSolution>, IkError> {
+        self.check(reference).map_err(IkError::Input)?;
+        if !target.is_finite() {
+            return Err(IkError::Input(KinematicsError::InvalidDescription(
+                "target pose is not finite".into(),
+            )));
+        }
+        let local = Transform::from_isometry(self.base.isometry().inverse() * target.isometry());
+        match &self.analytic {
+            Some(solver) => solver.solve(self, &local, reference, options),
+            None => NumericIk::from_options(options).solve(self, &local, reference),
+        }
+    }
+
+    /// The solution nearest to `reference` (see [`Robot::inverse`]).
+    pub fn inverse_nearest(
+        &self,
+        target: &Transform,
+        reference: &[f64],
+        options: &IkOptions,
+    ) -> Result<IkSolution, IkError> {
+        let mut all = self.inverse(target, reference, options)?;
+        if all.is_empty() {
+            return Err(IkError::Unreachable("no solution".into()));
+        }
+        Ok(all.swap_remove(0))
+    }
+}
