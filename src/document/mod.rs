@@ -533,12 +533,20 @@ impl Document {
     /// as in SolidWorks.
     pub fn set_transform(&mut self, name: &str, t: Transform) -> Result<(), DocumentError> {
         let i = self.component_index(name)?;
+        self.set_transform_at(i, t)
+    }
+
+    /// [`set_transform`](Self::set_transform) by component index (no name lookup: the
+    /// hot path of stepwise animations).
+    pub fn set_transform_at(&mut self, i: usize, t: Transform) -> Result<(), DocumentError> {
         if !t.is_finite() {
+            let name = &self.components[i].name;
             return Err(DocumentError::Invalid(format!(
                 "the pose for `{name}` is not finite"
             )));
         }
         if self.components[i].fixed {
+            let name = &self.components[i].name;
             return Err(DocumentError::Invalid(format!(
                 "component `{name}` is fixed; set `fixed: false` to move it"
             )));

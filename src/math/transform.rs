@@ -237,7 +237,13 @@ impl Transform {
 
     /// Whether every entry is finite.
     pub fn is_finite(&self) -> bool {
-        self.to_array_data().iter().all(|v| v.is_finite())
+        let q = self.iso.rotation.coords;
+        self.iso
+            .translation
+            .vector
+            .iter()
+            .chain(q.iter())
+            .all(|v| v.is_finite())
     }
 
     /// Approximate equality: rotation within `angle_tol` rad and translation within

@@ -84,9 +84,17 @@ impl ComponentHandle {
     }
 
     fn set_transform(&self, t: Transform) -> ScriptResult<()> {
+        self.doc
+            .lock()?
+            .set_transform_at(self.index, t)
+            .map_err(fail)
+    }
+
+    /// Moves the component by `motion` applied after its pose (world frame), under one lock.
+    fn move_by(&self, motion: Transform) -> ScriptResult<()> {
         let mut doc = self.doc.lock()?;
-        let name = doc.components()[self.index].name.clone();
-        doc.set_transform(&name, t).map_err(fail)
+        let t = doc.components()[self.index].transform * motion;
+        doc.set_transform_at(self.index, t).map_err(fail)
     }
 
     fn transform(&self) -> ScriptResult<Transform> {
@@ -278,7 +286,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Moves the component by (dx, dy, dz) mm in the world frame.",
         |c: &mut ComponentHandle, x: Dynamic, y: Dynamic, z: Dynamic| -> ScriptResult<()> {
             let d = Vec3::new(num(&x, "dx")?, num(&y, "dy")?, num(&z, "dz")?);
-            c.set_transform(c.transform()? * Transform::from_translation(d))
+            c.move_by(Transform::from_translation(d))
         },
     );
     api.f(
@@ -286,12 +294,12 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Moves the component by `[dx, dy, dz]` mm in the world frame.",
         |c: &mut ComponentHandle, v: Dynamic| -> ScriptResult<()> {
             let d = vec3(&v, "translation")?;
-            c.set_transform(c.transform()? * Transform::from_translation(d))
+            c.move_by(Transform::from_translation(d))
         },
     );
     api.f("Component.rotate(point: array, axis: array, angle_rad)", "Rotates the component by `angle_rad` **radians** about the world line through `point` (mm) along `axis`.", |c: &mut ComponentHandle, p: Dynamic, a: Dynamic, ang: Dynamic| -> ScriptResult<()> {
         let r = Transform::from_rotation_about(point3(&p, "point")?, vec3(&a, "axis")?, num(&ang, "angle")?).map_err(fail)?;
-        c.set_transform(c.transform()? * r)
+        c.move_by(r)
     });
     api.f(
         "Component.aabb() -> map",
