@@ -12,6 +12,8 @@
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions |
 //! | [`mesh`] | triangle meshes, STL I/O, the mesh cache |
 //! | [`fsutil`] | atomic writes, content hashes |
+//! | [`collision`] | interference: exact, whole-part boxes, cut cells, sweeps |
+pub mod collision;
 pub mod fsutil;
 pub mod math;
 pub mod mesh;
