@@ -66,6 +66,13 @@ fn leaf(n: &Node) -> std::ops::Range<usize> {
     n.first as usize..(n.first + n.count) as usize
 }
 
+fn tri_box(t: &Tri) -> Aabb {
+    Aabb {
+        lo: t[0].inf(&t[1]).inf(&t[2]),
+        hi: t[0].sup(&t[1]).sup(&t[2]),
+    }
+}
+
 fn size(n: &Node) -> f64 {
     n.bounds.half_extents().norm_squared()
 }
@@ -92,8 +99,12 @@ fn for_each_triangle_pair<B>(
                 moved.clear();
                 moved.extend(b.tris[leaf(nb)].iter().map(|t| rel.tri(t)));
                 for ta in &a.tris[leaf(na)] {
+                    let ba = tri_box(ta);
                     for tb in &moved {
-                        f(ta, tb)?;
+                        // cheap reject before the exact test
+                        if ba.overlap(&tri_box(tb)).min() >= -margin {
+                            f(ta, tb)?;
+                        }
                     }
                 }
             }

@@ -80,7 +80,8 @@ def run_coal(a, b, cats):
     def model(m):
         bvh = coal.BVHModelOBBRSS()
         bvh.beginModel(len(m[1]), len(m[0]))
-        bvh.addSubModel(m[0], m[1].astype(np.int64))
+        bvh.addSubModel([np.array(v) for v in m[0]],
+                        [coal.Triangle(int(t[0]), int(t[1]), int(t[2])) for t in m[1]])
         bvh.endModel()
         return bvh
 
