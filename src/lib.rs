@@ -11,6 +11,7 @@
 //! |---|---|
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions, the seeded RNG |
 //! | [`mesh`] | triangle meshes, STL I/O, generated shapes, the mesh cache |
+//! | [`collision`] | interference: exact (solid), whole-part boxes, cut cells, sweeps |
 //! | [`kinematics`] | kinematic trees, D-H, robot catalog, FK, analytic and numeric IK, motions, programs, drilling |
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
 //! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly |
@@ -21,6 +22,7 @@
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`fsutil`] | atomic writes, content hashes, file stamps |
 pub mod cli;
+pub mod collision;
 pub mod demo;
 pub mod diagnostics;
 pub mod document;

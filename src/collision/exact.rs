@@ -1,0 +1,341 @@
+//! Exact interference of two posed parts: simultaneous traversal of the two trees in
+//! the first part's frame, triangle pairs tested with [`tri_tri`], containment by
+//! ray parity, and the minimum distance used by continuous sweeps.
+
+use super::shape::{Aabb, Collider, Node};
+use super::triangle::{tri_distance, tri_tri, Tri};
+use super::{CollisionError, Contact, InterferenceKind, Part};
+use crate::math::{Transform, Vec3};
+use nalgebra::{Isometry3, Matrix3};
+use std::ops::ControlFlow;
+
+/// The pose of `b`'s part frame in `a`'s part frame, with what the node test needs.
+pub(crate) struct Relative {
+    iso: Isometry3<f64>,
+    rot: Matrix3<f64>,
+    abs_rot: Matrix3<f64>,
+}
+
+impl Relative {
+    pub(crate) fn new(pa: &Transform, pb: &Transform) -> Self {
+        let iso = pa.isometry().inverse() * pb.isometry();
+        let rot = *iso.rotation.to_rotation_matrix().matrix();
+        // the small bias keeps near-parallel axes conservative
+        let abs_rot = rot.abs().add_scalar(1e-12);
+        Relative { iso, rot, abs_rot }
+    }
+
+    /// Whether box `a` (frame A) and box `b` (frame B) come within `margin`: the
+    /// separating-axis test on the six face axes of both boxes.
+    #[inline]
+    fn boxes_meet(&self, a: &Aabb, b: &Aabb, margin: f64) -> bool {
+        let (ca, ha) = (a.centre().coords, a.half_extents());
+        let (cb, hb) = (b.centre().coords, b.half_extents());
+        let cb_in_a = self.rot * cb + self.iso.translation.vector;
+        let d = cb_in_a - ca;
+        let hb_in_a = self.abs_rot * hb;
+        for k in 0..3 {
+            if d[k].abs() > ha[k] + hb_in_a[k] + margin {
+                return false;
+            }
+        }
+        let d_in_b = self.rot.tr_mul(&d);
+        let ha_in_b = self.abs_rot.tr_mul(&ha);
+        for k in 0..3 {
+            if d_in_b[k].abs() > hb[k] + ha_in_b[k] + margin {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Lower bound of the distance between box `a` (frame A) and box `b` (frame B).
+    #[inline]
+    fn box_distance(&self, a: &Aabb, b: &Aabb) -> f64 {
+        let bb = b.transformed(&self.iso);
+        let gap = (a.lo - bb.hi).sup(&(bb.lo - a.hi)).sup(&Vec3::zeros());
+        gap.norm()
+    }
+
+    fn tri(&self, t: &Tri) -> Tri {
+        [self.iso * t[0], self.iso * t[1], self.iso * t[2]]
+    }
+}
+
+fn leaf(n: &Node) -> std::ops::Range<usize> {
+    n.first as usize..(n.first + n.count) as usize
+}
+
+fn tri_box(t: &Tri) -> Aabb {
+    Aabb {
+        lo: t[0].inf(&t[1]).inf(&t[2]),
+        hi: t[0].sup(&t[1]).sup(&t[2]),
+    }
+}
+
+fn size(n: &Node) -> f64 {
+    n.bounds.half_extents().norm_squared()
+}
+
+/// Calls `f` on every pair of triangles (b's already in a's frame) whose leaf boxes
+/// come within `margin`, until it breaks.
+fn for_each_triangle_pair<B>(
+    a: &Collider,
+    b: &Collider,
+    rel: &Relative,
+    margin: f64,
+    mut f: impl FnMut(&Tri, &Tri) -> ControlFlow<B>,
+) -> ControlFlow<B> {
+    let mut stack: Vec<(u32, u32)> = Vec::with_capacity(64);
+    stack.push((0, 0));
+    let mut moved: Vec<Tri> = Vec::with_capacity(8);
+    while let Some((i, j)) = stack.pop() {
+        let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
+        if !rel.boxes_meet(&na.bounds, &nb.bounds, margin) {
+            continue;
+        }
+        match (na.count > 0, nb.count > 0) {
+            (true, true) => {
+                moved.clear();
+                moved.extend(b.tris[leaf(nb)].iter().map(|t| rel.tri(t)));
+                for ta in &a.tris[leaf(na)] {
+                    let ba = tri_box(ta);
+                    for tb in &moved {
+                        // cheap reject before the exact test
+                        if ba.overlap(&tri_box(tb)).min() >= -margin {
+                            f(ta, tb)?;
+                        }
+                    }
+                }
+            }
+            (false, true) => stack.extend([(na.first, j), (na.first + 1, j)]),
+            (true, false) => stack.extend([(i, nb.first), (i, nb.first + 1)]),
+            (false, false) => {
+                if size(na) >= size(nb) {
+                    stack.extend([(na.first, j), (na.first + 1, j)]);
+                } else {
+                    stack.extend([(i, nb.first), (i, nb.first + 1)]);
+                }
+            }
+        }
+    }
+    ControlFlow::Continue(())
+}
+
+fn check_pose(p: &Transform) -> Result<(), CollisionError> {
+    if p.is_finite() {
+        Ok(())
+    } else {
+        Err(CollisionError::BadPose(
+            "the pose has a NaN or infinite entry".into(),
+        ))
+    }
+}
+
+fn check_tolerance(tolerance: f64) -> Result<(), CollisionError> {
+    if tolerance.is_finite() && tolerance >= 0.0 {
+        Ok(())
+    } else {
+        Err(CollisionError::BadTolerance(tolerance))
+    }
+}
+
+fn eps(a: &Collider, b: &Collider, pa: &Transform, pb: &Transform) -> f64 {
+    let far = pa.translation().amax().max(pb.translation().amax());
+    a.eps.max(b.eps).max(1e-12 * far)
+}
+
+/// Whether parts `a` at `pa` and `b` at `pb` interfere: their surfaces cross deeper
+/// than `tolerance` (mm), or one solid lies inside the other. Stops at the first
+/// witness; the cheap query for planners. Same verdict as [`contact`]
+/// (`Contact::Interfering`).
+pub fn interferes(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    tolerance: f64,
+) -> Result<bool, CollisionError> {
+    check_pose(pa)?;
+    check_pose(pb)?;
+    check_tolerance(tolerance)?;
+    let rel = Relative::new(pa, pb);
+    let eps = eps(a, b, pa, pb);
+    let oriented = a.is_solid() && b.is_solid();
+    let mut crossed = false;
+    let crossing = for_each_triangle_pair(a, b, &rel, eps, |ta, tb| {
+        match tri_tri(ta, tb, eps, oriented) {
+            Some(d) if d > tolerance => ControlFlow::Break(()),
+            Some(d) => {
+                crossed |= d > 0.0;
+                ControlFlow::Continue(())
+            }
+            None => ControlFlow::Continue(()),
+        }
+    });
+    if crossing.is_break() {
+        return Ok(true);
+    }
+    // surfaces that cross (even shallowly) cannot have one solid inside the other
+    Ok(!crossed && containment(a, pa, b, pb, eps).is_some())
+}
+
+/// The full verdict for parts `a` at `pa` and `b` at `pb` (part frames → world):
+/// separate, touching (surfaces meet, crossing depth ≤ `tolerance` mm), or
+/// interfering with the largest crossing depth, or by containment.
+/// Symmetric: swapping the parts gives the same verdict and depth (with
+/// [`InterferenceKind::Contained`]'s `inner` swapped).
+pub fn contact(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    tolerance: f64,
+) -> Result<Contact, CollisionError> {
+    check_pose(pa)?;
+    check_pose(pb)?;
+    check_tolerance(tolerance)?;
+    let rel = Relative::new(pa, pb);
+    let eps = eps(a, b, pa, pb);
+    let oriented = a.is_solid() && b.is_solid();
+    let mut touching = false;
+    let mut depth = 0.0f64;
+    let _ = for_each_triangle_pair::<()>(a, b, &rel, eps, |ta, tb| {
+        if let Some(d) = tri_tri(ta, tb, eps, oriented) {
+            touching = true;
+            depth = depth.max(d);
+        }
+        ControlFlow::Continue(())
+    });
+    if depth > tolerance {
+        return Ok(Contact::Interfering {
+            depth,
+            kind: InterferenceKind::SurfacesCross,
+        });
+    }
+    // surfaces that cross (even shallowly) cannot have one solid inside the other
+    if depth > 0.0 {
+        return Ok(Contact::Touching);
+    }
+    if let Some((inner, depth)) = containment(a, pa, b, pb, eps) {
+        return Ok(Contact::Interfering {
+            depth,
+            kind: InterferenceKind::Contained { inner },
+        });
+    }
+    Ok(if touching {
+        Contact::Touching
+    } else {
+        Contact::Separate
+    })
+}
+
+/// When the surfaces do not cross: is one solid inside the other? Returns which
+/// part is inside ([`Part::First`] = `a`) and the containment depth.
+fn containment(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    eps: f64,
+) -> Option<(Part, f64)> {
+    let a_in_b = Relative::new(pb, pa).iso; // a's frame → b's frame
+    if b.is_solid() && inside(a, b, &a_in_b, eps) {
+        return Some((Part::First, containment_depth(a, b, &a_in_b)));
+    }
+    let b_in_a = Relative::new(pa, pb).iso;
+    if a.is_solid() && inside(b, a, &b_in_a, eps) {
+        return Some((Part::Second, containment_depth(b, a, &b_in_a)));
+    }
+    None
+}
+
+/// Whether the solid `inner` (mapped into `outer`'s frame by `iso`) has its
+/// material inside `outer`, judged at the first test point that is clearly off
+/// `outer`'s surface: vertices first, then points just inside `inner` under its
+/// triangles' centroids (so coincident solids count as overlapping).
+fn inside(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>, eps: f64) -> bool {
+    let bounds = outer.bounds();
+    let off = 1e3 * eps;
+    let vertices = inner.tris.iter().flat_map(|t| t.iter().copied());
+    let under_faces = inner.tris.iter().filter_map(|t| {
+        let n = (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(0.0)?;
+        let c = nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]);
+        Some(c - n * off)
+    });
+    for p in vertices.take(64).chain(under_faces.take(256)) {
+        let q = iso * p;
+        if bounds.distance_to_point(&q) > eps {
+            return false;
+        }
+        if outer.distance_to_point(&q, eps) <= eps {
+            continue;
+        }
+        return outer.contains_point(&q);
+    }
+    false
+}
+
+/// Largest distance from a vertex of `inner` to the surface of `outer`, mm.
+fn containment_depth(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>) -> f64 {
+    let mut best = 0.0f64;
+    for t in &inner.tris {
+        for p in t {
+            best = best.max(outer.distance_to_point(&(iso * p), 0.0));
+        }
+    }
+    best
+}
+
+/// Minimum distance between the surfaces of `a` at `pa` and `b` at `pb`, mm (0 when
+/// they touch or cross; for one part inside another it is the gap between the
+/// surfaces). Pruned by box distances; stops early once below `stop`.
+pub fn surface_distance(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    stop: f64,
+) -> Result<f64, CollisionError> {
+    check_pose(pa)?;
+    check_pose(pb)?;
+    let rel = Relative::new(pa, pb);
+    let mut best = f64::INFINITY;
+    let mut stack: Vec<(u32, u32, f64)> = vec![(0, 0, 0.0)];
+    let mut moved: Vec<Tri> = Vec::with_capacity(8);
+    while let Some((i, j, lb)) = stack.pop() {
+        if lb >= best {
+            continue;
+        }
+        let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
+        if na.count > 0 && nb.count > 0 {
+            moved.clear();
+            moved.extend(b.tris[leaf(nb)].iter().map(|t| rel.tri(t)));
+            for ta in &a.tris[leaf(na)] {
+                for tb in &moved {
+                    best = best.min(tri_distance(ta, tb));
+                }
+            }
+            if best < stop {
+                return Ok(best);
+            }
+            continue;
+        }
+        let split_a = nb.count > 0 || (na.count == 0 && size(na) >= size(nb));
+        let children = if split_a {
+            [(na.first, j), (na.first + 1, j)]
+        } else {
+            [(i, nb.first), (i, nb.first + 1)]
+        };
+        let mut next = children.map(|(ci, cj)| {
+            let d = rel.box_distance(&a.nodes[ci as usize].bounds, &b.nodes[cj as usize].bounds);
+            (ci, cj, d)
+        });
+        // nearer pair last so it is explored first
+        if next[0].2 < next[1].2 {
+            next.swap(0, 1);
+        }
+        stack.extend(next.into_iter().filter(|c| c.2 < best));
+    }
+    Ok(best)
+}

@@ -1,0 +1,295 @@
+//! Interference detection between posed parts (see `docs/interference.md`).
+//!
+//! Three static methods, all on meshes in the part frame (mm) posed by a
+//! [`Transform`] (part frame → world):
+//!
+//! - [`Method::Exact`]: solid semantics. Parts interfere when their surfaces cross
+//!   deeper than a penetration tolerance (default [`DEFAULT_TOLERANCE`]) or one solid
+//!   lies inside the other; surfaces that only meet (a plate on a table, a screw in a
+//!   hole of its diameter, coplanar faces) are [`Contact::Touching`].
+//! - [`Method::Aabb`]: the whole-part world boxes (seed 000, first stage).
+//! - [`Method::Cells`]: seed 000's "finite subdivision": the whole-part boxes, then
+//!   the boxes of the cut cells ([`CutCells`]).
+//!
+//! Dynamic interference along a [`Motion`] is in [`sweep`].
+//!
+//! Every query validates its input and returns [`CollisionError`]; none panics.
+
+mod cells;
+mod exact;
+pub mod fixtures;
+mod shape;
+mod sweep;
+mod triangle;
+
+pub use cells::{
+    cells_contact, method_disagreement, Cell, CutCells, CutSpec, Disagreement, MAX_CELLS,
+};
+pub use exact::{contact, interferes, surface_distance};
+pub use shape::{Aabb, Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
+pub use sweep::{sweep, Motion, Obstacle, SweepHit, SweepMethod, SweepOptions};
+
+use crate::math::Transform;
+use rayon::prelude::*;
+
+/// Default penetration tolerance, mm: crossings up to this depth count as touching.
+pub const DEFAULT_TOLERANCE: f64 = 0.01;
+
+/// Why a collision query could not be answered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CollisionError {
+    /// The mesh cannot be used (no triangle of non-zero area, NaN or huge
+    /// coordinates, bad indices).
+    #[error("unusable mesh: {0}")]
+    BadMesh(String),
+    /// A pose has NaN or infinite entries.
+    #[error("bad pose: {0}")]
+    BadPose(String),
+    /// The penetration tolerance is negative or not finite.
+    #[error("the penetration tolerance must be a finite number >= 0 mm, got {0}")]
+    BadTolerance(f64),
+    /// The cell size or cut planes are unusable.
+    #[error("bad cut cells: {0}")]
+    BadCells(String),
+    /// The cut would make more cells than [`MAX_CELLS`].
+    #[error("the cut would make {count} cells ({nx} x {ny} x {nz}), more than the limit of {limit}; use a larger cell size")]
+    TooManyCells {
+        /// Cells the grid would have.
+        count: u128,
+        /// Cells along X.
+        nx: u64,
+        /// Cells along Y.
+        ny: u64,
+        /// Cells along Z.
+        nz: u64,
+        /// The limit, [`MAX_CELLS`].
+        limit: usize,
+    },
+    /// The cells method was asked for a part without cut cells where they are needed.
+    #[error("method \"cells\" needs the cut cells of both parts")]
+    MissingCells,
+    /// The motion or sweep options are unusable (NaN, zero axis, empty, step <= 0).
+    #[error("bad motion: {0}")]
+    BadMotion(String),
+    /// An unknown method name.
+    #[error("unknown interference method \"{0}\": expected \"exact\", \"aabb\" or \"cells\"")]
+    UnknownMethod(String),
+}
+
+/// One of the two parts of a pair query.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Part {
+    /// The first part given (`a`).
+    First,
+    /// The second part given (`b`).
+    Second,
+}
+
+/// How two parts interfere.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InterferenceKind {
+    /// The surfaces cross deeper than the tolerance.
+    SurfacesCross,
+    /// No surfaces cross, but `inner`'s solid lies inside the other's.
+    Contained {
+        /// The part inside.
+        inner: Part,
+    },
+    /// Approximate methods ([`Method::Aabb`], [`Method::Cells`]): boxes overlap
+    /// deeper than the tolerance on all three axes.
+    BoxesOverlap,
+}
+
+/// The verdict for a pair of posed parts.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Contact {
+    /// Apart (farther than the contact resolution, about 1e-9 × part size).
+    Separate,
+    /// The surfaces meet but cross no deeper than the tolerance.
+    Touching,
+    /// They interfere.
+    Interfering {
+        /// Penetration depth estimate, mm (defined in `docs/interference.md`).
+        depth: f64,
+        /// Surfaces crossing or containment.
+        kind: InterferenceKind,
+    },
+}
+
+impl Contact {
+    /// Whether the verdict is [`Contact::Interfering`].
+    pub fn is_interfering(&self) -> bool {
+        matches!(self, Contact::Interfering { .. })
+    }
+
+    /// Whether the verdict is [`Contact::Touching`].
+    pub fn is_touching(&self) -> bool {
+        matches!(self, Contact::Touching)
+    }
+
+    /// The penetration depth (mm), 0 unless interfering.
+    pub fn depth(&self) -> f64 {
+        match self {
+            Contact::Interfering { depth, .. } => *depth,
+            _ => 0.0,
+        }
+    }
+
+    /// The same verdict seen from the other part (swaps `Contained::inner`).
+    pub fn swapped(self) -> Contact {
+        match self {
+            Contact::Interfering {
+                depth,
+                kind: InterferenceKind::Contained { inner },
+            } => Contact::Interfering {
+                depth,
+                kind: InterferenceKind::Contained {
+                    inner: match inner {
+                        Part::First => Part::Second,
+                        Part::Second => Part::First,
+                    },
+                },
+            },
+            c => c,
+        }
+    }
+}
+
+/// A static interference method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Mesh-exact, solid semantics.
+    #[default]
+    Exact,
+    /// Whole-part world boxes only.
+    Aabb,
+    /// Whole-part boxes, then cut-cell boxes (seed 000).
+    Cells,
+}
+
+impl std::str::FromStr for Method {
+    type Err = CollisionError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "exact" => Ok(Method::Exact),
+            "aabb" => Ok(Method::Aabb),
+            "cells" => Ok(Method::Cells),
+            other => Err(CollisionError::UnknownMethod(other.to_string())),
+        }
+    }
+}
+
+/// A part placed in the world: its collider, its cut cells if it has the feature,
+/// and its pose (part frame → world).
+#[derive(Debug, Clone, Copy)]
+pub struct PosedPart<'a> {
+    /// The collision shape of the part's mesh.
+    pub collider: &'a Collider,
+    /// The cut-cells feature, when the part has one ([`Method::Cells`] uses the
+    /// whole-part box for parts without).
+    pub cells: Option<&'a CutCells>,
+    /// Part frame → world.
+    pub pose: Transform,
+}
+
+/// Interference of two posed parts by `method`, tolerance in mm.
+pub fn check(
+    method: Method,
+    a: &PosedPart,
+    b: &PosedPart,
+    tolerance: f64,
+) -> Result<Contact, CollisionError> {
+    match method {
+        Method::Exact => contact(a.collider, &a.pose, b.collider, &b.pose, tolerance),
+        Method::Aabb => cells::boxes_contact(
+            &[a.collider.bounds()],
+            &a.pose,
+            &[b.collider.bounds()],
+            &b.pose,
+            tolerance,
+        ),
+        Method::Cells => {
+            let ca = a
+                .cells
+                .map(|c| c.boxes())
+                .unwrap_or_else(|| vec![a.collider.bounds()]);
+            let cb = b
+                .cells
+                .map(|c| c.boxes())
+                .unwrap_or_else(|| vec![b.collider.bounds()]);
+            let whole = cells::boxes_contact(
+                &[a.collider.bounds()],
+                &a.pose,
+                &[b.collider.bounds()],
+                &b.pose,
+                tolerance,
+            )?;
+            if whole == Contact::Separate {
+                return Ok(whole);
+            }
+            cells::boxes_contact(&ca, &a.pose, &cb, &b.pose, tolerance)
+        }
+    }
+}
+
+/// A pair of parts (indices into the slice given) that touch or interfere.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairContact {
+    /// Index of the first part (the smaller index).
+    pub a: usize,
+    /// Index of the second part.
+    pub b: usize,
+    /// The verdict (never [`Contact::Separate`]).
+    pub contact: Contact,
+}
+
+/// Every pair of `parts` that touches or interferes by `method`, sorted by
+/// `(a, b)`. Pairs whose world boxes are apart are skipped before any mesh work;
+/// the rest run in parallel.
+pub fn check_all(
+    parts: &[PosedPart],
+    method: Method,
+    tolerance: f64,
+) -> Result<Vec<PairContact>, CollisionError> {
+    let boxes: Vec<Aabb> = parts
+        .iter()
+        .map(|p| {
+            if p.pose.is_finite() {
+                Ok(p.collider.world_bounds(&p.pose))
+            } else {
+                Err(CollisionError::BadPose(
+                    "the pose has a NaN or infinite entry".into(),
+                ))
+            }
+        })
+        .collect::<Result<_, _>>()?;
+    let mut candidates = Vec::new();
+    for i in 0..parts.len() {
+        for j in i + 1..parts.len() {
+            let o = boxes[i].overlap(&boxes[j]);
+            let slack = 1e-9 * (1.0 + boxes[i].hi.coords.amax().max(boxes[j].hi.coords.amax()));
+            if o.min() >= -slack {
+                candidates.push((i, j));
+            }
+        }
+    }
+    let found: Vec<Option<PairContact>> = candidates
+        .par_iter()
+        .map(|&(i, j)| {
+            let c = check(method, &parts[i], &parts[j], tolerance)?;
+            Ok((c != Contact::Separate).then_some(PairContact {
+                a: i,
+                b: j,
+                contact: c,
+            }))
+        })
+        .collect::<Result<_, CollisionError>>()?;
+    Ok(found.into_iter().flatten().collect())
+}
+
+#[cfg(test)]
+mod tests;

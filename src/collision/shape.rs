@@ -1,0 +1,398 @@
+//! [`Collider`]: the per-mesh collision shape (an AABB tree over the triangles in the
+//! part frame), built once and shared, and [`ColliderCache`] which keeps colliders
+//! across watch reruns while the mesh is unchanged.
+
+use super::triangle::{closest_on_triangle, x_line_crossing, Tri};
+use super::CollisionError;
+use crate::math::{Point3, Vec3};
+use crate::mesh::{Mesh, MeshReport};
+use std::collections::HashMap;
+use std::sync::{Arc, Weak};
+
+/// Largest coordinate magnitude (mm) a collider accepts: beyond it the f64 spacing
+/// exceeds the contact tolerances used here.
+pub const MAX_COORDINATE: f64 = 1e9;
+
+/// Triangles per BVH leaf.
+const LEAF_SIZE: usize = 4;
+
+/// An axis-aligned box (mm), `lo <= hi` component-wise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Minimum corner, mm.
+    pub lo: Point3,
+    /// Maximum corner, mm.
+    pub hi: Point3,
+}
+
+impl Aabb {
+    /// The empty box (inverted), neutral for [`Aabb::grow`].
+    pub const EMPTY: Aabb = Aabb {
+        lo: Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
+        hi: Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY),
+    };
+
+    /// Extends the box over `p`.
+    pub fn grow(&mut self, p: &Point3) {
+        self.lo = self.lo.inf(p);
+        self.hi = self.hi.sup(p);
+    }
+
+    /// Whether nothing was added.
+    pub fn is_empty(&self) -> bool {
+        self.lo.x > self.hi.x
+    }
+
+    /// The centre, mm.
+    pub fn centre(&self) -> Point3 {
+        nalgebra::center(&self.lo, &self.hi)
+    }
+
+    /// Half the edge lengths, mm.
+    pub fn half_extents(&self) -> Vec3 {
+        (self.hi - self.lo) * 0.5
+    }
+
+    /// The axis-aligned box (in the target frame) around this box moved by `iso`:
+    /// conservative, it contains the rotated box.
+    pub fn transformed(&self, iso: &nalgebra::Isometry3<f64>) -> Aabb {
+        let c = iso * self.centre();
+        let r = iso.rotation.to_rotation_matrix();
+        let h = r.matrix().abs() * self.half_extents();
+        Aabb {
+            lo: c - h,
+            hi: c + h,
+        }
+    }
+
+    /// Per-axis overlap `min(hi) - max(lo)` (negative: a gap), mm.
+    pub fn overlap(&self, other: &Aabb) -> Vec3 {
+        self.hi.coords.inf(&other.hi.coords) - self.lo.coords.sup(&other.lo.coords)
+    }
+
+    /// Distance from `p` to the box (0 inside), mm.
+    pub fn distance_to_point(&self, p: &Point3) -> f64 {
+        let d = (self.lo - p).sup(&(p - self.hi)).sup(&Vec3::zeros());
+        d.norm()
+    }
+}
+
+/// A node of the tree: `count > 0`: a leaf over `tris[first..first + count]`;
+/// otherwise children `first` and `first + 1`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Node {
+    pub(crate) bounds: Aabb,
+    pub(crate) first: u32,
+    pub(crate) count: u32,
+}
+
+/// The precomputed collision shape of a part's mesh: a bounding-volume hierarchy of
+/// axis-aligned boxes over its triangles, in the part frame (mm).
+///
+/// Built once per mesh ([`Collider::new`]) and shared through `Arc`; queries take it
+/// with a pose (`Transform`, part frame → world). Degenerate (zero-area) triangles
+/// are dropped: they bound no material.
+#[derive(Debug)]
+pub struct Collider {
+    mesh: Arc<Mesh>,
+    pub(crate) nodes: Vec<Node>,
+    /// Triangles in tree order.
+    pub(crate) tris: Vec<Tri>,
+    report: MeshReport,
+    radius: f64,
+    pub(crate) eps: f64,
+}
+
+/// Something about a mesh that weakens the answers given for it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ColliderWarning {
+    /// The mesh is not closed and consistently oriented, so "inside" is undefined:
+    /// only surface crossings are reported for it, never containment.
+    NotWatertight(MeshReport),
+    /// Zero-area triangles were ignored.
+    DegenerateTriangles(usize),
+}
+
+impl std::fmt::Display for ColliderWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ColliderWarning::NotWatertight(r) => write!(
+                f,
+                "mesh is not watertight ({} open edges, {} non-manifold, {} misoriented): \
+                 only surface crossings are detected, not containment",
+                r.boundary_edges, r.non_manifold_edges, r.misoriented_edges
+            ),
+            ColliderWarning::DegenerateTriangles(n) => {
+                write!(f, "{n} zero-area triangles ignored")
+            }
+        }
+    }
+}
+
+impl Collider {
+    /// Builds the tree for `mesh` (part frame, mm).
+    ///
+    /// Errors: a mesh without any non-degenerate triangle, or with a coordinate that
+    /// is not finite or beyond [`MAX_COORDINATE`].
+    pub fn new(mesh: Arc<Mesh>) -> Result<Collider, CollisionError> {
+        if let Some(p) = mesh.vertices.iter().find(|p| {
+            !p.coords
+                .iter()
+                .all(|v| v.is_finite() && v.abs() <= MAX_COORDINATE)
+        }) {
+            return Err(CollisionError::BadMesh(format!(
+                "vertex ({}, {}, {}) is not finite or beyond {MAX_COORDINATE:e} mm",
+                p.x, p.y, p.z
+            )));
+        }
+        let n = mesh.vertices.len();
+        if let Some(i) = mesh
+            .triangles
+            .iter()
+            .position(|t| t.iter().any(|&v| v as usize >= n))
+        {
+            return Err(CollisionError::BadMesh(format!(
+                "triangle {i} refers to a vertex past the {n} vertices"
+            )));
+        }
+        let report = mesh.inspect();
+        let scale = mesh
+            .bounds()
+            .map(|(lo, hi)| (hi - lo).norm().max(lo.coords.amax()).max(hi.coords.amax()))
+            .unwrap_or(1.0)
+            .max(1.0);
+        let mut tris: Vec<Tri> = (0..mesh.triangles.len())
+            .map(|i| mesh.triangle(i))
+            .filter(|t| (t[1] - t[0]).cross(&(t[2] - t[0])).norm() > 1e-24 * scale * scale)
+            .collect();
+        if tris.is_empty() {
+            return Err(CollisionError::BadMesh(
+                "the mesh has no triangle of non-zero area".into(),
+            ));
+        }
+        let radius = mesh
+            .vertices
+            .iter()
+            .map(|p| p.coords.norm())
+            .fold(0.0, f64::max);
+        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF_SIZE + 2);
+        nodes.push(Node {
+            bounds: Aabb::EMPTY,
+            first: 0,
+            count: 0,
+        });
+        let mut centroids: Vec<(Point3, Tri)> = tris
+            .drain(..)
+            .map(|t| (nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]), t))
+            .collect();
+        build(&mut nodes, 0, &mut centroids, 0);
+        Ok(Collider {
+            mesh,
+            nodes,
+            tris: centroids.into_iter().map(|(_, t)| t).collect(),
+            report,
+            radius,
+            eps: 1e-9 * scale,
+        })
+    }
+
+    /// The mesh this collider was built from.
+    pub fn mesh(&self) -> &Arc<Mesh> {
+        &self.mesh
+    }
+
+    /// Whether the mesh bounds a solid (closed, consistently oriented), so that
+    /// containment can be decided.
+    pub fn is_solid(&self) -> bool {
+        self.report.is_watertight()
+    }
+
+    /// What weakens the answers for this mesh (not watertight, degenerate triangles).
+    pub fn warnings(&self) -> Vec<ColliderWarning> {
+        let mut w = Vec::new();
+        if !self.report.is_watertight() {
+            w.push(ColliderWarning::NotWatertight(self.report));
+        }
+        if self.report.degenerate_triangles > 0 {
+            w.push(ColliderWarning::DegenerateTriangles(
+                self.report.degenerate_triangles,
+            ));
+        }
+        w
+    }
+
+    /// Bounds of the mesh in the part frame, mm.
+    pub fn bounds(&self) -> Aabb {
+        self.nodes[0].bounds
+    }
+
+    /// World axis-aligned box of the part at `pose` (the box around the rotated
+    /// part-frame bounds: conservative), mm.
+    pub fn world_bounds(&self, pose: &crate::math::Transform) -> Aabb {
+        self.bounds().transformed(pose.isometry())
+    }
+
+    /// Largest distance of a vertex from the part-frame origin, mm: bounds how far
+    /// any point of the part moves under a rotation about the origin.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// Number of (non-degenerate) triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Distance from `p` (part frame) to the surface, stopping early once it is
+    /// known to be below `stop` (then the value returned is some distance `< stop`).
+    pub fn distance_to_point(&self, p: &Point3, stop: f64) -> f64 {
+        let mut best = f64::INFINITY;
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i as usize];
+            if node.bounds.distance_to_point(p) >= best {
+                continue;
+            }
+            if node.count > 0 {
+                for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
+                    best = best.min((p - closest_on_triangle(p, t)).norm());
+                }
+                if best < stop {
+                    return best;
+                }
+            } else {
+                let (l, r) = (node.first, node.first + 1);
+                let dl = self.nodes[l as usize].bounds.distance_to_point(p);
+                let dr = self.nodes[r as usize].bounds.distance_to_point(p);
+                // nearer child last so it is popped first
+                if dl < dr {
+                    stack.extend([r, l]);
+                } else {
+                    stack.extend([l, r]);
+                }
+            }
+        }
+        best
+    }
+
+    /// The `x` of every crossing of the line `y = y0, z = z0` (part frame) with the
+    /// surface, by the watertight rule, unsorted.
+    pub(crate) fn x_line_crossings(&self, y0: f64, z0: f64, out: &mut Vec<f64>) {
+        out.clear();
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i as usize];
+            let b = &node.bounds;
+            if y0 < b.lo.y || y0 > b.hi.y || z0 < b.lo.z || z0 > b.hi.z {
+                continue;
+            }
+            if node.count > 0 {
+                for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
+                    if let Some(x) = x_line_crossing(t, y0, z0) {
+                        out.push(x);
+                    }
+                }
+            } else {
+                stack.extend([node.first, node.first + 1]);
+            }
+        }
+    }
+
+    /// Whether `p` (part frame) lies inside the solid, by the parity of surface
+    /// crossings of the ray from `p` along +X. Meaningful for solid meshes and points
+    /// farther than about 1e-9 × the part size from the surface; a point on the
+    /// surface may go either way.
+    pub fn contains_point(&self, p: &Point3) -> bool {
+        let b = self.bounds();
+        if p.x < b.lo.x
+            || p.x > b.hi.x
+            || p.y < b.lo.y
+            || p.y > b.hi.y
+            || p.z < b.lo.z
+            || p.z > b.hi.z
+        {
+            return false;
+        }
+        // a line lying in a face plane has no defined parity: shift it off by far
+        // less than the contact resolution (callers keep points `eps` off the surface)
+        let mut xs = Vec::new();
+        self.x_line_crossings(p.y + 0.0707 * self.eps, p.z + 0.0577 * self.eps, &mut xs);
+        xs.iter().filter(|&&x| x > p.x).count() % 2 == 1
+    }
+}
+
+fn build(nodes: &mut Vec<Node>, at: usize, items: &mut [(Point3, Tri)], offset: usize) {
+    let mut bounds = Aabb::EMPTY;
+    let mut cb = Aabb::EMPTY;
+    for (c, t) in items.iter() {
+        t.iter().for_each(|p| bounds.grow(p));
+        cb.grow(c);
+    }
+    nodes[at].bounds = bounds;
+    if items.len() <= LEAF_SIZE {
+        nodes[at].first = offset as u32;
+        nodes[at].count = items.len() as u32;
+        return;
+    }
+    let ext = cb.hi - cb.lo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mid = items.len() / 2;
+    items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
+    let left = nodes.len();
+    nodes[at].first = left as u32;
+    nodes[at].count = 0;
+    let blank = Node {
+        bounds: Aabb::EMPTY,
+        first: 0,
+        count: 0,
+    };
+    nodes.push(blank);
+    nodes.push(blank);
+    let (l, r) = items.split_at_mut(mid);
+    build(nodes, left, l, offset);
+    build(nodes, left + 1, r, offset + mid);
+}
+
+/// Colliders by mesh, so trees survive watch reruns while the mesh is unchanged.
+///
+/// Keyed by the `Arc<Mesh>` allocation: [`crate::mesh::MeshCache`] hands out the same
+/// `Arc` for an unchanged file, so a lookup is one hash probe. Entries whose mesh
+/// was dropped are pruned on insertion.
+#[derive(Default)]
+pub struct ColliderCache {
+    entries: HashMap<usize, (Weak<Mesh>, Arc<Collider>)>,
+    builds: usize,
+}
+
+impl ColliderCache {
+    /// An empty cache.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The collider for `mesh`, built on first use.
+    pub fn get(&mut self, mesh: &Arc<Mesh>) -> Result<Arc<Collider>, CollisionError> {
+        let key = Arc::as_ptr(mesh) as usize;
+        if let Some((weak, c)) = self.entries.get(&key) {
+            if weak.upgrade().is_some_and(|m| Arc::ptr_eq(&m, mesh)) {
+                return Ok(c.clone());
+            }
+        }
+        let c = Arc::new(Collider::new(mesh.clone())?);
+        self.builds += 1;
+        self.entries.retain(|_, (w, _)| w.strong_count() > 0);
+        self.entries.insert(key, (Arc::downgrade(mesh), c.clone()));
+        Ok(c)
+    }
+
+    /// How many colliders were built (for tests and the watch header).
+    pub fn build_count(&self) -> usize {
+        self.builds
+    }
+}

@@ -1,0 +1,337 @@
+//! Dynamic interference: the first pose along a motion at which a moving part
+//! interferes with one of the obstacles, by seed 000's stepwise method (a static check
+//! after every step) or by a continuous method (conservative advancement) that cannot
+//! jump over thin features.
+
+use super::exact::{interferes, surface_distance};
+use super::shape::Collider;
+use super::CollisionError;
+use crate::math::{Point3, Transform, Vec3};
+
+/// A motion of the moving part, parametrised by `t ∈ [0, 1]` (world frame, mm, rad).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Motion {
+    /// From `start`, translate by `offset` (mm) in the world.
+    Translation {
+        /// Pose at `t = 0`.
+        start: Transform,
+        /// World translation over the whole motion, mm.
+        offset: Vec3,
+    },
+    /// From `start`, rotate by `angle` (rad, right hand) about the world line through
+    /// `centre` along `axis`.
+    Rotation {
+        /// Pose at `t = 0`.
+        start: Transform,
+        /// A point of the axis, world, mm.
+        centre: Point3,
+        /// Axis direction (any length > 0).
+        axis: Vec3,
+        /// Total angle, rad.
+        angle: f64,
+    },
+    /// Through a sequence of poses, each segment by [`Transform::interpolate`]
+    /// (linear translation, slerp rotation about the part origin); each segment takes
+    /// an equal share of `t`.
+    Poses(Vec<Transform>),
+}
+
+impl Motion {
+    fn validate(&self) -> Result<(), CollisionError> {
+        let bad = |m: &str| Err(CollisionError::BadMotion(m.to_string()));
+        match self {
+            Motion::Translation { start, offset } => {
+                if !start.is_finite() || !offset.iter().all(|v| v.is_finite()) {
+                    return bad("the start pose or the offset has NaN or infinite values");
+                }
+            }
+            Motion::Rotation {
+                start,
+                centre,
+                axis,
+                angle,
+            } => {
+                if !start.is_finite()
+                    || !centre
+                        .coords
+                        .iter()
+                        .chain(axis.iter())
+                        .all(|v| v.is_finite())
+                    || !angle.is_finite()
+                {
+                    return bad("the rotation has NaN or infinite values");
+                }
+                if axis.norm() < 1e-12 {
+                    return bad("the rotation axis has zero length");
+                }
+            }
+            Motion::Poses(p) => {
+                if p.is_empty() {
+                    return bad("the pose sequence is empty");
+                }
+                if p.iter().any(|t| !t.is_finite()) {
+                    return bad("a pose of the sequence has NaN or infinite values");
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The pose at `t` (clamped to `[0, 1]`).
+    pub fn pose_at(&self, t: f64) -> Transform {
+        let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+        match self {
+            Motion::Translation { start, offset } => {
+                start.then(&Transform::from_translation(offset * t))
+            }
+            Motion::Rotation {
+                start,
+                centre,
+                axis,
+                angle,
+            } => match Transform::from_rotation_about(*centre, *axis, angle * t) {
+                Ok(r) => start.then(&r),
+                Err(_) => *start,
+            },
+            Motion::Poses(p) => {
+                if p.len() < 2 {
+                    return p.first().copied().unwrap_or_default();
+                }
+                let m = (p.len() - 1) as f64;
+                let k = ((t * m).floor() as usize).min(p.len() - 2);
+                p[k].interpolate(&p[k + 1], t * m - k as f64)
+            }
+        }
+    }
+
+    /// Pieces of `t` on which the motion is smooth, with the largest distance any
+    /// point within `radius` of the part origin moves over each piece (mm).
+    fn pieces(&self, radius: f64) -> Vec<(f64, f64, f64)> {
+        match self {
+            Motion::Translation { offset, .. } => vec![(0.0, 1.0, offset.norm())],
+            Motion::Rotation {
+                start,
+                centre,
+                angle,
+                ..
+            } => {
+                let arm = (start.translation() - centre.coords).norm() + radius;
+                vec![(0.0, 1.0, angle.abs() * arm)]
+            }
+            Motion::Poses(p) => {
+                let m = p.len().saturating_sub(1).max(1) as f64;
+                p.windows(2)
+                    .enumerate()
+                    .map(|(k, w)| {
+                        let (angle, dist) = w[0].distance_to(&w[1]);
+                        (k as f64 / m, (k + 1) as f64 / m, dist + angle * radius)
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// A fixed part the moving part may hit.
+#[derive(Debug, Clone, Copy)]
+pub struct Obstacle<'a> {
+    /// Its collision shape.
+    pub collider: &'a Collider,
+    /// Part frame → world.
+    pub pose: Transform,
+}
+
+/// How to sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SweepMethod {
+    /// Seed 000: a static check at the start and after every step; a step moves no
+    /// point of the part more than `step` mm (so rotations are stepped too). Can
+    /// jump over features thinner than a step.
+    Step {
+        /// Largest displacement of any point of the part per step, mm.
+        step: f64,
+    },
+    /// Conservative advancement: advance by the surface distance divided by the
+    /// largest point speed; near contact, static checks every `tolerance / 2` mm of
+    /// displacement. Does not miss contacts.
+    Continuous,
+}
+
+/// Options of [`sweep`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepOptions {
+    /// Stepwise or continuous.
+    pub method: SweepMethod,
+    /// Penetration tolerance of the static checks, mm.
+    pub tolerance: f64,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        SweepOptions {
+            method: SweepMethod::Continuous,
+            tolerance: super::DEFAULT_TOLERANCE,
+        }
+    }
+}
+
+/// The outcome of a sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepHit {
+    /// Whether the part interferes somewhere along the motion.
+    pub hit: bool,
+    /// First interfering parameter (1 when there is no hit).
+    pub t: f64,
+    /// The pose at `t`.
+    pub pose: Transform,
+    /// Index of the obstacle hit.
+    pub with: Option<usize>,
+    /// Static checks and distance queries made (for benchmarks).
+    pub queries: usize,
+}
+
+/// Most queries a sweep may make before it gives up with an error.
+const MAX_QUERIES: usize = 2_000_000;
+
+/// The first `t` at which `moving` (moved by `motion`) interferes with one of
+/// `obstacles`, by `options.method`.
+pub fn sweep(
+    moving: &Collider,
+    motion: &Motion,
+    obstacles: &[Obstacle],
+    options: &SweepOptions,
+) -> Result<SweepHit, CollisionError> {
+    motion.validate()?;
+    let tol = options.tolerance;
+    if !(tol.is_finite() && tol >= 0.0) {
+        return Err(CollisionError::BadTolerance(tol));
+    }
+    if let Some(o) = obstacles.iter().find(|o| !o.pose.is_finite()) {
+        let _ = o;
+        return Err(CollisionError::BadPose(
+            "an obstacle pose has NaN or infinite values".into(),
+        ));
+    }
+    let pieces = motion.pieces(moving.radius());
+    let mut queries = 0usize;
+    let hit_at = |t: f64, with: usize, queries: usize| SweepHit {
+        hit: true,
+        t,
+        pose: motion.pose_at(t),
+        with: Some(with),
+        queries,
+    };
+    // the obstacles each piece can reach at all
+    let reachable = |t0: f64, reach: f64| -> Vec<usize> {
+        let wb = moving.world_bounds(&motion.pose_at(t0));
+        (0..obstacles.len())
+            .filter(|&i| {
+                let ob = obstacles[i].collider.world_bounds(&obstacles[i].pose);
+                wb.overlap(&ob).min() >= -reach - 1e-9
+            })
+            .collect()
+    };
+    let check =
+        |t: f64, near: &[usize], queries: &mut usize| -> Result<Option<usize>, CollisionError> {
+            let pose = motion.pose_at(t);
+            for &i in near {
+                *queries += 1;
+                if interferes(
+                    moving,
+                    &pose,
+                    obstacles[i].collider,
+                    &obstacles[i].pose,
+                    tol,
+                )? {
+                    return Ok(Some(i));
+                }
+            }
+            Ok(None)
+        };
+    match options.method {
+        SweepMethod::Step { step } => {
+            if !(step.is_finite() && step > 0.0) {
+                return Err(CollisionError::BadMotion(format!(
+                    "the step must be a finite number > 0 mm, got {step}"
+                )));
+            }
+            let all: Vec<usize> = (0..obstacles.len()).collect();
+            if let Some(i) = check(0.0, &all, &mut queries)? {
+                return Ok(hit_at(0.0, i, queries));
+            }
+            for &(t0, t1, reach) in &pieces {
+                let n = (reach / step).ceil().max(1.0);
+                if n * obstacles.len().max(1) as f64 > MAX_QUERIES as f64 {
+                    return Err(CollisionError::BadMotion(format!(
+                        "{n} steps of {step} mm would take more than {MAX_QUERIES} checks"
+                    )));
+                }
+                let near = reachable(t0, reach);
+                let n = n as usize;
+                for k in 1..=n {
+                    let t = t0 + (t1 - t0) * k as f64 / n as f64;
+                    if let Some(i) = check(t, &near, &mut queries)? {
+                        return Ok(hit_at(t, i, queries));
+                    }
+                }
+            }
+        }
+        SweepMethod::Continuous => {
+            let all: Vec<usize> = (0..obstacles.len()).collect();
+            if let Some(i) = check(0.0, &all, &mut queries)? {
+                return Ok(hit_at(0.0, i, queries));
+            }
+            // gap below which static checks take over, and their spacing
+            let g = tol.max(1e-3) / 2.0;
+            for &(t0, t1, reach) in &pieces {
+                if reach <= 0.0 {
+                    continue;
+                }
+                let near = reachable(t0, reach);
+                let speed = reach / (t1 - t0); // mm per unit t
+                let mut t = t0;
+                while t < t1 {
+                    if queries > MAX_QUERIES {
+                        return Err(CollisionError::BadMotion(format!(
+                            "the continuous sweep took more than {MAX_QUERIES} queries"
+                        )));
+                    }
+                    let pose = motion.pose_at(t);
+                    let mut d = f64::INFINITY;
+                    for &i in &near {
+                        queries += 1;
+                        let o = &obstacles[i];
+                        d = d.min(surface_distance(moving, &pose, o.collider, &o.pose, g)?);
+                    }
+                    let advance = if d > g { d - g / 2.0 } else { g };
+                    let next = (t + advance / speed).min(t1);
+                    if d <= g || next >= t1 {
+                        if let Some(i) = check(next, &near, &mut queries)? {
+                            // bisect between the free t and the interfering `next`
+                            let (mut lo, mut hi, mut with) = (t, next, i);
+                            while (hi - lo) * speed > g / 8.0 {
+                                let mid = 0.5 * (lo + hi);
+                                match check(mid, &near, &mut queries)? {
+                                    Some(j) => {
+                                        hi = mid;
+                                        with = j;
+                                    }
+                                    None => lo = mid,
+                                }
+                            }
+                            return Ok(hit_at(hi, with, queries));
+                        }
+                    }
+                    t = next;
+                }
+            }
+        }
+    }
+    Ok(SweepHit {
+        hit: false,
+        t: 1.0,
+        pose: motion.pose_at(1.0),
+        with: None,
+        queries,
+    })
+}

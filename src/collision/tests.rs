@@ -1,0 +1,744 @@
+//! Properties of the interference methods (unit tests of `collision`).
+
+use super::triangle::{tri_distance, tri_tri};
+use super::*;
+use crate::math::{Point3, Rng, Transform, Vec3};
+use crate::mesh::Mesh;
+use std::sync::Arc;
+
+fn collider(m: Mesh) -> Collider {
+    Collider::new(Arc::new(m)).expect("valid mesh")
+}
+
+fn cuboid(lo: [f64; 3], hi: [f64; 3]) -> Collider {
+    collider(Mesh::cuboid(lo.into(), hi.into()))
+}
+
+fn at(x: f64, y: f64, z: f64) -> Transform {
+    Transform::from_translation(Vec3::new(x, y, z))
+}
+
+fn random_pose(rng: &mut Rng, spread: f64) -> Transform {
+    Transform::from_parts(
+        Vec3::new(
+            rng.range(-spread, spread),
+            rng.range(-spread, spread),
+            rng.range(-spread, spread),
+        ),
+        rng.rotation(),
+    )
+}
+
+const TOL: f64 = DEFAULT_TOLERANCE;
+
+#[test]
+fn plate_on_table_touches_in_any_world_pose() {
+    let table = cuboid([-50.0, -50.0, -20.0], [50.0, 50.0, 0.0]);
+    let plate = cuboid([0.0, 0.0, 0.0], [30.0, 20.0, 5.0]);
+    let mut rng = Rng::new(1);
+    for k in 0..20 {
+        let world = if k == 0 {
+            Transform::IDENTITY
+        } else {
+            random_pose(&mut rng, 100.0)
+        };
+        let on = at(rng.range(-40.0, 10.0), rng.range(-40.0, 25.0), 0.0).then(&world);
+        let c = contact(&plate, &on, &table, &world, TOL).unwrap();
+        assert_eq!(c, Contact::Touching, "pose {k}");
+        assert!(!interferes(&plate, &on, &table, &world, TOL).unwrap());
+        // 0.5 mm into the table interferes with depth 0.5
+        let sunk = at(0.0, 0.0, -0.5).then(&on);
+        let c = contact(&plate, &sunk, &table, &world, TOL).unwrap();
+        assert!(c.is_interfering(), "pose {k}: {c:?}");
+        assert!((c.depth() - 0.5).abs() < 1e-6, "pose {k}: {c:?}");
+        // 1 mm above is separate
+        let above = at(0.0, 0.0, 1.0).then(&on);
+        assert_eq!(
+            contact(&plate, &above, &table, &world, TOL).unwrap(),
+            Contact::Separate
+        );
+    }
+}
+
+#[test]
+fn plate_flush_with_the_table_edge_touches() {
+    let table = cuboid([0.0, 0.0, -20.0], [100.0, 100.0, 0.0]);
+    let plate = cuboid([0.0, 0.0, 0.0], [100.0, 40.0, 5.0]);
+    assert_eq!(
+        contact(
+            &plate,
+            &at(0.0, 0.0, 0.0),
+            &table,
+            &Transform::IDENTITY,
+            TOL
+        )
+        .unwrap(),
+        Contact::Touching
+    );
+    // side by side, flush faces
+    let other = cuboid([0.0, 0.0, 0.0], [100.0, 40.0, 5.0]);
+    let c = contact(
+        &plate,
+        &Transform::IDENTITY,
+        &other,
+        &at(0.0, 40.0, 0.0),
+        TOL,
+    )
+    .unwrap();
+    assert_eq!(c, Contact::Touching);
+}
+
+#[test]
+fn screw_in_a_hole_of_its_diameter_touches() {
+    let plate = collider(fixtures::plate_with_hole(20.0, 4.0, 3.0, 32));
+    let pin = collider(Mesh::cylinder(3.0, 10.0, 32));
+    let screw = collider(fixtures::screw(3.0, 4.0, 5.0, 2.0, 32));
+    let mut rng = Rng::new(2);
+    for k in 0..10 {
+        let world = if k == 0 {
+            Transform::IDENTITY
+        } else {
+            random_pose(&mut rng, 50.0)
+        };
+        let through = at(0.0, 0.0, -3.0).then(&world);
+        assert_eq!(
+            contact(&pin, &through, &plate, &world, TOL).unwrap(),
+            Contact::Touching,
+            "pose {k}"
+        );
+        // the screw's head rests on the plate's top face
+        assert_eq!(
+            contact(&screw, &world, &plate, &world, TOL).unwrap(),
+            Contact::Touching,
+            "pose {k}"
+        );
+        // 0.2 mm off the axis, the pin cuts into the wall
+        let off = at(0.2, 0.0, -3.0).then(&world);
+        assert!(
+            interferes(&pin, &off, &plate, &world, TOL).unwrap(),
+            "pose {k}"
+        );
+    }
+}
+
+#[test]
+fn one_mm_overlap_has_depth_one() {
+    let a = cuboid([0.0, 0.0, 0.0], [10.0, 10.0, 10.0]);
+    let b = cuboid([0.0, 0.0, 0.0], [10.0, 6.0, 6.0]);
+    let c = contact(&a, &Transform::IDENTITY, &b, &at(9.0, 2.0, 2.0), TOL).unwrap();
+    assert!(
+        matches!(
+            c,
+            Contact::Interfering {
+                kind: InterferenceKind::SurfacesCross,
+                ..
+            }
+        ),
+        "{c:?}"
+    );
+    assert!((c.depth() - 1.0).abs() < 1e-9, "{c:?}");
+    // flush sides but overlapping by 5 mm in Z: interference, not touching
+    let c = contact(&a, &Transform::IDENTITY, &a, &at(0.0, 0.0, 5.0), TOL).unwrap();
+    assert!((c.depth() - 5.0).abs() < 1e-9, "{c:?}");
+    // within the tolerance: touching
+    let c = contact(&a, &Transform::IDENTITY, &b, &at(9.995, 2.0, 2.0), TOL).unwrap();
+    assert_eq!(c, Contact::Touching);
+    let c = contact(&a, &Transform::IDENTITY, &b, &at(9.995, 2.0, 2.0), 0.001).unwrap();
+    assert!(c.is_interfering());
+}
+
+#[test]
+fn swallowed_part_is_contained() {
+    let big = cuboid([0.0, 0.0, 0.0], [100.0, 100.0, 100.0]);
+    let ball = collider(fixtures::sphere(10.0, 24, 12));
+    let c = contact(
+        &ball,
+        &at(50.0, 40.0, 30.0),
+        &big,
+        &Transform::IDENTITY,
+        TOL,
+    )
+    .unwrap();
+    match c {
+        Contact::Interfering {
+            depth,
+            kind: InterferenceKind::Contained { inner: Part::First },
+        } => assert!((depth - 40.0).abs() < 1e-6, "{depth}"),
+        other => panic!("{other:?}"),
+    }
+    let c2 = contact(
+        &big,
+        &Transform::IDENTITY,
+        &ball,
+        &at(50.0, 40.0, 30.0),
+        TOL,
+    )
+    .unwrap();
+    assert_eq!(c2, c.swapped());
+    assert!(interferes(
+        &big,
+        &Transform::IDENTITY,
+        &ball,
+        &at(50.0, 40.0, 30.0),
+        TOL
+    )
+    .unwrap());
+    // identical coincident parts overlap completely
+    assert!(
+        contact(&big, &Transform::IDENTITY, &big, &Transform::IDENTITY, TOL)
+            .unwrap()
+            .is_interfering()
+    );
+    // outside: separate
+    assert_eq!(
+        contact(&ball, &at(150.0, 0.0, 0.0), &big, &Transform::IDENTITY, TOL).unwrap(),
+        Contact::Separate
+    );
+}
+
+#[test]
+fn open_meshes_get_surface_checks_and_a_warning() {
+    let mut open = Mesh::cuboid(Point3::origin(), Point3::new(10.0, 10.0, 10.0));
+    open.triangles.pop();
+    let open = collider(open);
+    assert!(matches!(
+        open.warnings()[0],
+        ColliderWarning::NotWatertight(_)
+    ));
+    let big = cuboid([-100.0; 3], [100.0; 3]);
+    // inside but no containment can be decided for the open part... the big one is
+    // solid, so the open part inside it is still reported as contained
+    let c = contact(&open, &Transform::IDENTITY, &big, &Transform::IDENTITY, TOL).unwrap();
+    assert!(c.is_interfering());
+    // the big solid inside an open shell: no containment without an inside
+    let small = cuboid([2.0; 3], [3.0; 3]);
+    assert_eq!(
+        contact(
+            &small,
+            &Transform::IDENTITY,
+            &open,
+            &Transform::IDENTITY,
+            TOL
+        )
+        .unwrap(),
+        Contact::Separate
+    );
+    // surfaces crossing still found
+    assert!(interferes(&open, &Transform::IDENTITY, &big, &at(105.0, 0.0, 0.0), TOL).unwrap());
+}
+
+#[test]
+fn verdicts_are_symmetric_and_fast_path_agrees() {
+    let a = collider(fixtures::torus(20.0, 5.0, 32, 16));
+    let b = collider(fixtures::sphere(12.0, 20, 10));
+    let mut rng = Rng::new(3);
+    let mut kinds = [0usize; 3];
+    for _ in 0..300 {
+        let (pa, pb) = (random_pose(&mut rng, 25.0), random_pose(&mut rng, 25.0));
+        let ab = contact(&a, &pa, &b, &pb, TOL).unwrap();
+        let ba = contact(&b, &pb, &a, &pa, TOL).unwrap();
+        assert_eq!(ab.is_interfering(), ba.is_interfering());
+        assert!((ab.depth() - ba.depth()).abs() < 1e-9, "{ab:?} {ba:?}");
+        if let Contact::Interfering {
+            kind: InterferenceKind::Contained { .. },
+            ..
+        } = ab
+        {
+            assert_eq!(ab, ba.swapped());
+        }
+        assert_eq!(
+            ab.is_interfering(),
+            interferes(&a, &pa, &b, &pb, TOL).unwrap()
+        );
+        kinds[match ab {
+            Contact::Separate => 0,
+            Contact::Touching => 1,
+            Contact::Interfering { .. } => 2,
+        }] += 1;
+    }
+    assert!(kinds[0] > 20 && kinds[2] > 20, "{kinds:?}");
+}
+
+#[test]
+fn tree_traversal_matches_brute_force() {
+    let a = collider(fixtures::torus(10.0, 3.0, 16, 8));
+    let b = collider(fixtures::sphere(6.0, 12, 6));
+    let mut rng = Rng::new(4);
+    for _ in 0..100 {
+        let (pa, pb) = (random_pose(&mut rng, 12.0), random_pose(&mut rng, 12.0));
+        let ta: Vec<_> = a.tris.iter().map(|t| t.map(|p| pa.apply(&p))).collect();
+        let tb: Vec<_> = b.tris.iter().map(|t| t.map(|p| pb.apply(&p))).collect();
+        let mut depth = None::<f64>;
+        let mut dist = f64::INFINITY;
+        for x in &ta {
+            for y in &tb {
+                if let Some(d) = tri_tri(x, y, 1e-8, true) {
+                    depth = Some(depth.unwrap_or(0.0).max(d));
+                }
+                dist = dist.min(tri_distance(x, y));
+            }
+        }
+        let c = contact(&a, &pa, &b, &pb, TOL).unwrap();
+        match depth {
+            Some(d) if d > TOL => assert!((c.depth() - d).abs() < 1e-6, "{c:?} vs {d}"),
+            Some(_) => assert!(c != Contact::Separate),
+            None => assert!(!matches!(
+                c,
+                Contact::Touching
+                    | Contact::Interfering {
+                        kind: InterferenceKind::SurfacesCross,
+                        ..
+                    }
+            )),
+        }
+        let d = surface_distance(&a, &pa, &b, &pb, 0.0).unwrap();
+        assert!((d - dist).abs() < 1e-6, "{d} vs {dist}");
+    }
+}
+
+#[test]
+fn bad_input_is_refused() {
+    let a = cuboid([0.0; 3], [1.0; 3]);
+    let nan = Transform::from_translation(Vec3::new(f64::NAN, 0.0, 0.0));
+    assert!(matches!(
+        contact(&a, &nan, &a, &Transform::IDENTITY, TOL),
+        Err(CollisionError::BadPose(_))
+    ));
+    assert!(matches!(
+        interferes(&a, &Transform::IDENTITY, &a, &nan, TOL),
+        Err(CollisionError::BadPose(_))
+    ));
+    assert!(matches!(
+        contact(&a, &Transform::IDENTITY, &a, &Transform::IDENTITY, -1.0),
+        Err(CollisionError::BadTolerance(_))
+    ));
+    assert!(contact(&a, &Transform::IDENTITY, &a, &Transform::IDENTITY, f64::NAN).is_err());
+    let flat = Mesh {
+        vertices: vec![
+            Point3::origin(),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(2.0, 0.0, 0.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 0, 1]],
+    };
+    assert!(matches!(
+        Collider::new(Arc::new(flat)),
+        Err(CollisionError::BadMesh(_))
+    ));
+    let huge = Mesh::cuboid(Point3::origin(), Point3::new(1e12, 1.0, 1.0));
+    assert!(matches!(
+        Collider::new(Arc::new(huge)),
+        Err(CollisionError::BadMesh(_))
+    ));
+    let bad_index = Mesh {
+        vertices: vec![Point3::origin()],
+        triangles: vec![[0, 1, 2]],
+    };
+    assert!(Collider::new(Arc::new(bad_index)).is_err());
+    // large but accepted coordinates still give sane answers
+    let far = 1e6;
+    let c = contact(&a, &at(far, far, far), &a, &at(far + 0.5, far, far), TOL).unwrap();
+    assert!(c.is_interfering(), "{c:?}");
+    assert_eq!(
+        contact(&a, &at(far, far, far), &a, &at(far + 1.0, far, far), TOL).unwrap(),
+        Contact::Touching
+    );
+}
+
+#[test]
+fn degenerate_triangles_are_ignored_with_a_warning() {
+    let mut m = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+    m.triangles.push([0, 0, 1]);
+    let c = collider(m);
+    assert!(c
+        .warnings()
+        .iter()
+        .any(|w| matches!(w, ColliderWarning::DegenerateTriangles(1))));
+    assert_eq!(c.triangle_count(), 12);
+}
+
+#[test]
+fn cells_of_a_solid_block_are_full_boxes() {
+    let block = cuboid([0.0; 3], [10.0, 10.0, 10.0]);
+    let cells = CutCells::derive(&block, CutSpec::Size(5.0)).unwrap();
+    assert_eq!(cells.grid, [2, 2, 2]);
+    assert_eq!(cells.cells.len(), 8);
+    for c in &cells.cells {
+        for k in 0..3 {
+            assert!((c.max[k] - c.min[k] - 5.0).abs() < 1e-12, "{c:?}");
+        }
+    }
+    // a 3x3x3 cut of a 9 mm cube: the centre cell has no surface but is full
+    let cube = cuboid([0.0; 3], [9.0; 3]);
+    let cells = CutCells::derive(&cube, CutSpec::Size(3.0)).unwrap();
+    let centre = cells
+        .cells
+        .iter()
+        .find(|c| c.index == [1, 1, 1])
+        .expect("centre cell");
+    assert_eq!((centre.min, centre.max), ([3.0; 3], [6.0; 3]));
+}
+
+#[test]
+fn cells_skip_holes_and_cover_the_material() {
+    let plate_mesh = fixtures::perforated_plate((4, 4), 4.0, 8.0, 4.0, 2.0);
+    let plate = collider(plate_mesh);
+    let cells = CutCells::derive(&plate, CutSpec::Size(2.0)).unwrap();
+    let boxes = cells.boxes();
+    // no cell box inside a hole: the first hole spans x, y in [4, 8]
+    let covering: Vec<_> = cells
+        .cells
+        .iter()
+        .filter(|c| c.min[0] <= 6.0 && c.max[0] >= 6.0 && c.min[1] <= 6.0 && c.max[1] >= 6.0)
+        .collect();
+    assert!(covering.is_empty(), "{covering:?}");
+    let mut rng = Rng::new(5);
+    let bb = plate.bounds();
+    let mut inside = 0;
+    for _ in 0..2000 {
+        let p = Point3::new(
+            rng.range(bb.lo.x, bb.hi.x),
+            rng.range(bb.lo.y, bb.hi.y),
+            rng.range(bb.lo.z, bb.hi.z),
+        );
+        if plate.contains_point(&p) {
+            inside += 1;
+            assert!(
+                boxes.iter().any(|b| b.distance_to_point(&p) <= 1e-12),
+                "{p:?} not covered"
+            );
+        }
+    }
+    assert!(inside > 500);
+    // explicit planes
+    let by_planes = CutCells::derive(
+        &plate,
+        CutSpec::Planes {
+            x: vec![10.0, 20.0],
+            y: vec![],
+            z: vec![1.0, 99.0],
+        },
+    )
+    .unwrap();
+    assert_eq!(by_planes.grid, [3, 1, 2]);
+}
+
+#[test]
+fn bad_cell_requests_are_refused() {
+    let block = cuboid([0.0; 3], [100.0; 3]);
+    for s in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(
+            matches!(
+                CutCells::derive(&block, CutSpec::Size(s)),
+                Err(CollisionError::BadCells(_))
+            ),
+            "{s}"
+        );
+    }
+    let e = CutCells::derive(&block, CutSpec::Size(0.5)).unwrap_err();
+    assert!(e.to_string().contains("8000000 cells"), "{e}");
+    let e = CutCells::derive(&block, CutSpec::Size(1e-300)).unwrap_err();
+    assert!(matches!(e, CollisionError::TooManyCells { .. }), "{e}");
+    let planes = CutSpec::Planes {
+        x: vec![f64::NAN],
+        y: vec![],
+        z: vec![],
+    };
+    assert!(CutCells::derive(&block, planes).is_err());
+}
+
+#[test]
+fn cells_never_miss_an_exact_interference() {
+    let plate = collider(fixtures::perforated_plate((5, 5), 4.0, 8.0, 4.0, 3.0));
+    let pin = collider(Mesh::cylinder(1.8, 12.0, 16));
+    let mut rng = Rng::new(6);
+    for size in [1.0, 2.5, 6.0] {
+        let pc = CutCells::derive(&plate, CutSpec::Size(size)).unwrap();
+        let nc = CutCells::derive(&pin, CutSpec::Size(size)).unwrap();
+        let fixed = PosedPart {
+            collider: &plate,
+            cells: Some(&pc),
+            pose: Transform::IDENTITY,
+        };
+        for _ in 0..300 {
+            let tilt = crate::math::AngleConvention::XyzFixed.rotation(
+                rng.range(-0.3, 0.3),
+                rng.range(-0.3, 0.3),
+                rng.uniform() * 6.3,
+            );
+            let pose = Transform::from_parts(
+                Vec3::new(
+                    rng.range(0.0, 44.0),
+                    rng.range(0.0, 44.0),
+                    rng.range(-8.0, 2.0),
+                ),
+                tilt,
+            );
+            let m = PosedPart {
+                collider: &pin,
+                cells: Some(&nc),
+                pose,
+            };
+            let exact = check(Method::Exact, &fixed, &m, TOL).unwrap();
+            let cells = check(Method::Cells, &fixed, &m, TOL).unwrap();
+            let aabb = check(Method::Aabb, &fixed, &m, TOL).unwrap();
+            if exact != Contact::Separate {
+                assert!(
+                    cells != Contact::Separate,
+                    "size {size}: {exact:?} vs {cells:?}"
+                );
+            }
+            if cells != Contact::Separate {
+                assert!(aabb != Contact::Separate);
+            }
+        }
+    }
+}
+
+#[test]
+fn disagreement_is_measured_and_reproducible() {
+    let plate = collider(fixtures::perforated_plate((5, 5), 4.0, 8.0, 4.0, 3.0));
+    let pin = collider(Mesh::cylinder(1.5, 12.0, 16));
+    let pc = CutCells::derive(&plate, CutSpec::Size(2.0)).unwrap();
+    let nc = CutCells::derive(&pin, CutSpec::Size(2.0)).unwrap();
+    let fixed = [PosedPart {
+        collider: &plate,
+        cells: Some(&pc),
+        pose: Transform::IDENTITY,
+    }];
+    // near a hole centre (6 + 8 k): sometimes in the clear, sometimes in the wall
+    let sampler = |r: &mut Rng| {
+        let c = |r: &mut Rng| 6.0 + 8.0 * r.below(5) as f64 + r.range(-0.8, 0.8);
+        at(c(r), c(r), r.range(-8.0, 2.0))
+    };
+    let d1 = method_disagreement(&fixed, (&pin, Some(&nc)), sampler, 200, 9, TOL).unwrap();
+    let d2 = method_disagreement(&fixed, (&pin, Some(&nc)), sampler, 200, 9, TOL).unwrap();
+    assert_eq!(d1, d2);
+    assert_eq!(d1.cells_false_negatives, 0);
+    assert!(
+        d1.exact_interfering > 0 && d1.exact_interfering < 200,
+        "{d1:?}"
+    );
+    // boxes of the whole plate cover the holes: always interfering in this region
+    assert!(
+        d1.aabb_false_positives >= d1.cells_false_positives,
+        "{d1:?}"
+    );
+}
+
+#[test]
+fn check_all_reports_touching_and_interfering_pairs() {
+    let table = cuboid([-50.0, -50.0, -20.0], [50.0, 50.0, 0.0]);
+    let plate = cuboid([0.0; 3], [20.0, 20.0, 5.0]);
+    let parts = [
+        PosedPart {
+            collider: &table,
+            cells: None,
+            pose: Transform::IDENTITY,
+        },
+        PosedPart {
+            collider: &plate,
+            cells: None,
+            pose: Transform::IDENTITY,
+        },
+        PosedPart {
+            collider: &plate,
+            cells: None,
+            pose: at(10.0, 10.0, 0.0),
+        },
+        PosedPart {
+            collider: &plate,
+            cells: None,
+            pose: at(200.0, 0.0, 0.0),
+        },
+    ];
+    let found = check_all(&parts, Method::Exact, TOL).unwrap();
+    let pairs: Vec<_> = found
+        .iter()
+        .map(|p| (p.a, p.b, p.contact.is_interfering()))
+        .collect();
+    assert_eq!(pairs, vec![(0, 1, false), (0, 2, false), (1, 2, true)]);
+}
+
+#[test]
+fn collider_cache_reuses_trees_for_the_same_mesh() {
+    let mut cache = ColliderCache::new();
+    let m = Arc::new(Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0)));
+    let a = cache.get(&m).unwrap();
+    let b = cache.get(&m).unwrap();
+    assert!(Arc::ptr_eq(&a, &b));
+    let m2 = Arc::new((*m).clone());
+    let c = cache.get(&m2).unwrap();
+    assert!(!Arc::ptr_eq(&a, &c));
+    assert_eq!(cache.build_count(), 2);
+}
+
+fn thin_wall_scene() -> (Collider, Collider, Transform) {
+    // a 0.2 mm wall at x = 12.3; a 1 mm thick plate moving 20 mm along +X
+    let wall = cuboid([12.3, -20.0, -20.0], [12.5, 20.0, 20.0]);
+    let mover = cuboid([0.0, -5.0, -5.0], [1.0, 5.0, 5.0]);
+    (wall, mover, Transform::IDENTITY)
+}
+
+#[test]
+fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
+    let (wall, mover, _) = thin_wall_scene();
+    let obstacles = [Obstacle {
+        collider: &wall,
+        pose: Transform::IDENTITY,
+    }];
+    let motion = Motion::Translation {
+        start: Transform::IDENTITY,
+        offset: Vec3::new(20.0, 0.0, 0.0),
+    };
+    let stepped = sweep(
+        &mover,
+        &motion,
+        &obstacles,
+        &SweepOptions {
+            method: SweepMethod::Step { step: 5.0 },
+            tolerance: TOL,
+        },
+    )
+    .unwrap();
+    assert!(!stepped.hit, "{stepped:?}");
+    let cont = sweep(&mover, &motion, &obstacles, &SweepOptions::default()).unwrap();
+    assert!(cont.hit && cont.with == Some(0));
+    // first contact: the front face x = 1 reaches x = 12.3 (+ the tolerance)
+    let x = cont.t * 20.0;
+    assert!(x > 11.3 && x < 11.3 + 2.0 * TOL, "{x}");
+    assert!(interferes(&mover, &cont.pose, &wall, &Transform::IDENTITY, TOL).unwrap());
+    // fine stepwise scan: nothing earlier
+    let fine = sweep(
+        &mover,
+        &motion,
+        &obstacles,
+        &SweepOptions {
+            method: SweepMethod::Step { step: TOL / 4.0 },
+            tolerance: TOL,
+        },
+    )
+    .unwrap();
+    assert!(
+        fine.hit && fine.t >= cont.t - TOL / 20.0,
+        "{} vs {}",
+        fine.t,
+        cont.t
+    );
+}
+
+#[test]
+fn continuous_rotation_and_pose_sequences_find_first_contact() {
+    let post = cuboid([30.0, -1.0, -5.0], [30.4, 1.0, 5.0]);
+    let arm = cuboid([0.0, -1.0, -1.0], [40.0, 1.0, 1.0]);
+    let obstacles = [Obstacle {
+        collider: &post,
+        pose: at(0.0, 20.0, 0.0),
+    }];
+    let rot = Motion::Rotation {
+        start: Transform::IDENTITY,
+        centre: Point3::origin(),
+        axis: Vec3::z(),
+        angle: 1.5,
+    };
+    let cont = sweep(&arm, &rot, &obstacles, &SweepOptions::default()).unwrap();
+    assert!(cont.hit);
+    let fine = sweep(
+        &arm,
+        &rot,
+        &obstacles,
+        &SweepOptions {
+            method: SweepMethod::Step { step: TOL / 2.0 },
+            tolerance: TOL,
+        },
+    )
+    .unwrap();
+    assert!(
+        fine.hit && (fine.t - cont.t).abs() * 1.5 * 40.0 < 2.0 * TOL,
+        "{} vs {}",
+        fine.t,
+        cont.t
+    );
+    let poses = Motion::Poses(vec![
+        Transform::IDENTITY,
+        rot.pose_at(0.5),
+        rot.pose_at(1.0),
+    ]);
+    let seq = sweep(&arm, &poses, &obstacles, &SweepOptions::default()).unwrap();
+    assert!(seq.hit && interferes(&arm, &seq.pose, &post, &at(0.0, 20.0, 0.0), TOL).unwrap());
+}
+
+#[test]
+fn sweeps_refuse_bad_motions() {
+    let (wall, mover, _) = thin_wall_scene();
+    let obstacles = [Obstacle {
+        collider: &wall,
+        pose: Transform::IDENTITY,
+    }];
+    let nan = Motion::Translation {
+        start: Transform::IDENTITY,
+        offset: Vec3::new(f64::NAN, 0.0, 0.0),
+    };
+    assert!(matches!(
+        sweep(&mover, &nan, &obstacles, &SweepOptions::default()),
+        Err(CollisionError::BadMotion(_))
+    ));
+    let zero_axis = Motion::Rotation {
+        start: Transform::IDENTITY,
+        centre: Point3::origin(),
+        axis: Vec3::zeros(),
+        angle: 1.0,
+    };
+    assert!(sweep(&mover, &zero_axis, &obstacles, &SweepOptions::default()).is_err());
+    assert!(sweep(
+        &mover,
+        &Motion::Poses(vec![]),
+        &obstacles,
+        &SweepOptions::default()
+    )
+    .is_err());
+    let ok = Motion::Translation {
+        start: Transform::IDENTITY,
+        offset: Vec3::new(1e9, 0.0, 0.0),
+    };
+    let tiny = SweepOptions {
+        method: SweepMethod::Step { step: 1e-6 },
+        tolerance: TOL,
+    };
+    assert!(sweep(&mover, &ok, &obstacles, &tiny).is_err());
+    let zero = SweepOptions {
+        method: SweepMethod::Step { step: 0.0 },
+        tolerance: TOL,
+    };
+    assert!(sweep(&mover, &ok, &obstacles, &zero).is_err());
+}
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn random_soups_and_poses_never_panic(
+            coords in proptest::collection::vec(-1e3f64..1e3, 9..90),
+            pose in proptest::array::uniform6(-50.0f64..50.0),
+            tol in 0.0f64..1.0,
+        ) {
+            let n = coords.len() / 9;
+            let soup = (0..n).map(|i| {
+                let c = &coords[9 * i..9 * i + 9];
+                [Point3::new(c[0], c[1], c[2]), Point3::new(c[3], c[4], c[5]), Point3::new(c[6], c[7], c[8])]
+            });
+            let Ok(mesh) = Mesh::from_triangle_soup(soup) else { return Ok(()); };
+            let Ok(a) = Collider::new(Arc::new(mesh)) else { return Ok(()); };
+            let b = cuboid([-10.0; 3], [10.0; 3]);
+            let p = Transform::from_xyzabc(Vec3::new(pose[0], pose[1], pose[2]), [pose[3], pose[4], pose[5]], Default::default());
+            let ab = contact(&a, &p, &b, &Transform::IDENTITY, tol).unwrap();
+            let ba = contact(&b, &Transform::IDENTITY, &a, &p, tol).unwrap();
+            prop_assert_eq!(ab.is_interfering(), ba.is_interfering());
+            prop_assert_eq!(ab.is_interfering(), interferes(&a, &p, &b, &Transform::IDENTITY, tol).unwrap());
+            let _ = CutCells::derive(&a, CutSpec::Size(50.0));
+        }
+    }
+}

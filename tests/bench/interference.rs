@@ -1,0 +1,380 @@
+//! `cargo bench --bench interference`: exact pair queries per second on ~10k-triangle
+//! parts (colliding, 1 mm near miss, far apart) against python-fcl and coal measured
+//! in the same run (interleaved), cells vs exact (time and disagreement per cell
+//! size), and continuous vs stepwise sweeps. Figures go to docs/interference.md.
+//!
+//! The peers run from `.venv/bin/python` when it exists (`pip install python-fcl coal
+//! numpy` in `.venv`); without it only fitup is timed.
+
+use fitup::collision::{
+    check, fixtures, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells,
+    CutSpec, Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
+};
+use fitup::math::{Rng, Transform, Vec3};
+use fitup::mesh::{write_stl, Mesh};
+use std::io::Write;
+use std::sync::Arc;
+use std::time::Instant;
+
+const PAIRS: usize = 1000;
+const ROUNDS: usize = 5;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn line(p: &Transform) -> String {
+    let t = p.translation();
+    let q = p.rotation();
+    format!("{} {} {} {} {} {} {}", t.x, t.y, t.z, q.w, q.i, q.j, q.k)
+}
+
+fn random_pose(rng: &mut Rng, spread: f64) -> Transform {
+    let t = Vec3::new(
+        rng.range(-spread, spread),
+        rng.range(-spread, spread),
+        rng.range(-spread, spread),
+    );
+    Transform::from_parts(t, rng.rotation())
+}
+
+fn main() {
+    let a_mesh = fixtures::torus(30.0, 10.0, 100, 50); // 10,000 triangles
+    let b_mesh = fixtures::sphere(20.0, 100, 51); // 10,000 triangles
+    let a = Collider::new(Arc::new(a_mesh.clone())).unwrap();
+    let b = Collider::new(Arc::new(b_mesh.clone())).unwrap();
+    println!(
+        "# parts: torus {} triangles, sphere {} triangles",
+        a.triangle_count(),
+        b.triangle_count()
+    );
+
+    // pose pairs by category
+    let mut rng = Rng::new(2024);
+    let mut cats: Vec<(&str, Vec<(Transform, Transform)>)> = Vec::new();
+    let mut colliding = Vec::new();
+    while colliding.len() < PAIRS {
+        let (pa, pb) = (random_pose(&mut rng, 5.0), random_pose(&mut rng, 30.0));
+        if interferes(&a, &pa, &b, &pb, DEFAULT_TOLERANCE).unwrap() {
+            colliding.push((pa, pb));
+        }
+    }
+    cats.push(("colliding", colliding));
+    let mut near = Vec::new();
+    while near.len() < PAIRS {
+        let pa = random_pose(&mut rng, 5.0);
+        let rb = rng.rotation();
+        let dir = Vec3::new(rng.normal(), rng.normal(), rng.normal()).normalize();
+        // place b along dir so that the surfaces are 1 mm apart (bisection)
+        let (mut lo, mut hi) = (0.0, 200.0);
+        let pose = |s: f64| Transform::from_parts(pa.translation() + dir * s, rb);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            let p = pose(mid);
+            let d = surface_distance(&a, &pa, &b, &p, 1.0).unwrap();
+            if d < 1.0 || interferes(&a, &pa, &b, &p, 0.0).unwrap() {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        let p = pose(hi);
+        if !interferes(&a, &pa, &b, &p, 0.0).unwrap() {
+            near.push((pa, p));
+        }
+    }
+    cats.push(("near_miss_1mm", near));
+    let far: Vec<_> = (0..PAIRS)
+        .map(|_| {
+            let pa = random_pose(&mut rng, 5.0);
+            let pb = Transform::from_parts(
+                Vec3::new(300.0, rng.range(-50.0, 50.0), 0.0),
+                rng.rotation(),
+            );
+            (pa, pb)
+        })
+        .collect();
+    cats.push(("far", far));
+
+    let dir = tempfile::tempdir().unwrap();
+    write_stl(&dir.path().join("a.stl"), &a_mesh).unwrap();
+    write_stl(&dir.path().join("b.stl"), &b_mesh).unwrap();
+    let mut f = std::fs::File::create(dir.path().join("poses.txt")).unwrap();
+    for (cat, pairs) in &cats {
+        for (pa, pb) in pairs {
+            writeln!(f, "{cat} {} {}", line(pa), line(pb)).unwrap();
+        }
+    }
+    drop(f);
+    let python = std::path::Path::new(".venv/bin/python");
+    let script = "tests/bench/interference_peers.py";
+
+    let mut ours: Vec<Vec<f64>> = vec![Vec::new(); cats.len()];
+    let mut hits = vec![0usize; cats.len()];
+    let mut peers: std::collections::BTreeMap<(String, String), (Vec<f64>, String)> =
+        Default::default();
+    for round in 0..ROUNDS {
+        for (k, (_, pairs)) in cats.iter().enumerate() {
+            let t0 = Instant::now();
+            let mut n = 0;
+            for (pa, pb) in pairs {
+                n += interferes(&a, pa, &b, pb, DEFAULT_TOLERANCE).unwrap() as usize;
+            }
+            ours[k].push(t0.elapsed().as_secs_f64() / pairs.len() as f64 * 1e6);
+            hits[k] = n;
+        }
+        if python.exists() {
+            let out = std::process::Command::new(python)
+                .arg(script)
+                .arg(dir.path())
+                .output()
+                .unwrap();
+            for l in String::from_utf8_lossy(&out.stdout).lines() {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                if w.len() == 4 && !l.starts_with('#') {
+                    let e = peers
+                        .entry((w[0].to_string(), w[1].to_string()))
+                        .or_default();
+                    e.0.push(w[2].parse().unwrap_or(f64::NAN));
+                    e.1 = w[3].to_string();
+                } else if round == 0 {
+                    println!("{l}");
+                }
+            }
+        }
+        let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+        println!("# round {round} loadavg {}", load.trim());
+    }
+    println!(
+        "\n## exact pair query (interferes), median of {ROUNDS} rounds x {PAIRS} pairs, µs/query"
+    );
+    println!("| poses | fitup µs | fitup hits | fcl µs | fcl hits | coal µs | coal hits | fcl/fitup | coal/fitup |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for (k, (cat, _)) in cats.iter().enumerate() {
+        let o = median(ours[k].clone());
+        let get = |p: &str| {
+            peers
+                .get(&(p.to_string(), cat.to_string()))
+                .map(|(v, h)| (median(v.clone()), h.clone()))
+        };
+        let (f, fh) = get("fcl").unwrap_or((f64::NAN, "-".into()));
+        let (c, ch) = get("coal").unwrap_or((f64::NAN, "-".into()));
+        println!(
+            "| {cat} | {o:.2} | {} | {f:.2} | {fh} | {c:.2} | {ch} | {:.2} | {:.2} |",
+            hits[k],
+            f / o,
+            c / o
+        );
+    }
+
+    cells_vs_exact();
+    sweeps();
+}
+
+fn cells_vs_exact() {
+    println!("\n## cells vs exact: disagreement and time per check");
+    // perforated plate with pins near the holes
+    let plate = Collider::new(Arc::new(fixtures::perforated_plate(
+        (10, 10),
+        4.0,
+        8.0,
+        4.0,
+        3.0,
+    )))
+    .unwrap();
+    let pin = Collider::new(Arc::new(Mesh::cylinder(1.5, 12.0, 32))).unwrap();
+    let pin_sampler = |r: &mut Rng| {
+        let c = |r: &mut Rng| 6.0 + 8.0 * r.below(10) as f64 + r.range(-0.8, 0.8);
+        let tilt = fitup::math::AngleConvention::XyzFixed.rotation(
+            r.range(-0.05, 0.05),
+            r.range(-0.05, 0.05),
+            r.range(0.0, 6.3),
+        );
+        Transform::from_parts(Vec3::new(c(r), c(r), r.range(-8.0, 2.0)), tilt)
+    };
+    // table + two plates + a screw dropped near a hole
+    let table = Collider::new(Arc::new(Mesh::cuboid(
+        [-100.0, -100.0, -30.0].into(),
+        [100.0, 100.0, 0.0].into(),
+    )))
+    .unwrap();
+    let plate2 = Collider::new(Arc::new(fixtures::plate_with_hole(30.0, 5.0, 3.0, 32))).unwrap();
+    let screw = Collider::new(Arc::new(fixtures::screw(2.9, 12.0, 5.0, 3.0, 32))).unwrap();
+    let screw_sampler = |r: &mut Rng| {
+        let tilt = fitup::math::AngleConvention::XyzFixed.rotation(
+            r.range(-0.1, 0.1),
+            r.range(-0.1, 0.1),
+            r.range(0.0, 6.3),
+        );
+        Transform::from_parts(
+            Vec3::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-6.0, 2.0)),
+            tilt,
+        )
+    };
+    println!("| scene | cell mm | cells (fixed, moving) | exact hits | cells hits | cells false +/- | aabb false +/- | exact µs | cells µs |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for size in [0.5, 1.0, 2.0, 4.0, 8.0] {
+        let pc = match CutCells::derive(&plate, CutSpec::Size(size)) {
+            Ok(c) => c,
+            Err(e) => {
+                println!("| perforated plate + pin | {size} | refused: {e} | | | | | | |");
+                continue;
+            }
+        };
+        let nc = CutCells::derive(&pin, CutSpec::Size(size)).unwrap();
+        let fixed = [PosedPart {
+            collider: &plate,
+            cells: Some(&pc),
+            pose: Transform::IDENTITY,
+        }];
+        report(
+            "perforated plate + pin",
+            size,
+            &fixed,
+            (&pin, &nc),
+            pin_sampler,
+            (pc.cells.len(), nc.cells.len()),
+        );
+        let tc = CutCells::derive(&table, CutSpec::Size(size.max(2.0))).unwrap();
+        let p2c = CutCells::derive(&plate2, CutSpec::Size(size)).unwrap();
+        let sc = CutCells::derive(&screw, CutSpec::Size(size)).unwrap();
+        let fixed = [
+            PosedPart {
+                collider: &table,
+                cells: Some(&tc),
+                pose: Transform::from_translation(Vec3::new(0.0, 0.0, -5.0)),
+            },
+            PosedPart {
+                collider: &plate2,
+                cells: Some(&p2c),
+                pose: Transform::from_translation(Vec3::new(0.0, 0.0, -5.0)),
+            },
+            PosedPart {
+                collider: &plate2,
+                cells: Some(&p2c),
+                pose: Transform::IDENTITY,
+            },
+        ];
+        report(
+            "table + 2 plates + screw",
+            size,
+            &fixed,
+            (&screw, &sc),
+            screw_sampler,
+            (p2c.cells.len(), sc.cells.len()),
+        );
+    }
+}
+
+fn report(
+    name: &str,
+    size: f64,
+    fixed: &[PosedPart],
+    moving: (&Collider, &CutCells),
+    sampler: impl Fn(&mut Rng) -> Transform + Copy,
+    counts: (usize, usize),
+) {
+    const N: usize = 2000;
+    let d = method_disagreement(
+        fixed,
+        (moving.0, Some(moving.1)),
+        sampler,
+        N,
+        7,
+        DEFAULT_TOLERANCE,
+    )
+    .unwrap();
+    let time = |method: Method| {
+        let mut rng = Rng::new(7);
+        let t0 = Instant::now();
+        for _ in 0..N {
+            let m = PosedPart {
+                collider: moving.0,
+                cells: Some(moving.1),
+                pose: sampler(&mut rng),
+            };
+            for f in fixed {
+                std::hint::black_box(check(method, f, &m, DEFAULT_TOLERANCE).unwrap());
+            }
+        }
+        t0.elapsed().as_secs_f64() / N as f64 * 1e6
+    };
+    let (te, tc) = (time(Method::Exact), time(Method::Cells));
+    println!(
+        "| {name} | {size} | {} , {} | {} | {} | {} / {} | {} / {} | {te:.1} | {tc:.1} |",
+        counts.0,
+        counts.1,
+        d.exact_interfering,
+        d.cells_interfering,
+        d.cells_false_positives,
+        d.cells_false_negatives,
+        d.aabb_false_positives,
+        d.aabb_false_negatives
+    );
+}
+
+fn sweeps() {
+    println!("\n## sweeps: thin wall (0.2 mm) crossed by a 1 mm plate moving 20 mm, 200 random wall positions");
+    let mover = Collider::new(Arc::new(Mesh::cuboid(
+        [0.0, -5.0, -5.0].into(),
+        [1.0, 5.0, 5.0].into(),
+    )))
+    .unwrap();
+    let wall = Collider::new(Arc::new(Mesh::cuboid(
+        [0.0, -20.0, -20.0].into(),
+        [0.2, 20.0, 20.0].into(),
+    )))
+    .unwrap();
+    let ball = Collider::new(Arc::new(fixtures::sphere(5.0, 100, 51))).unwrap();
+    let motion = Motion::Translation {
+        start: Transform::IDENTITY,
+        offset: Vec3::new(20.0, 0.0, 0.0),
+    };
+    println!("| mover | method | missed | mean t error | µs/sweep |");
+    println!("|---|---|---|---|---|");
+    for (mname, m) in [("box 12 tris", &mover), ("sphere 10k tris", &ball)] {
+        for (name, method) in [
+            ("step 5 mm", SweepMethod::Step { step: 5.0 }),
+            ("step 1 mm", SweepMethod::Step { step: 1.0 }),
+            ("step 0.1 mm", SweepMethod::Step { step: 0.1 }),
+            ("continuous", SweepMethod::Continuous),
+        ] {
+            let mut rng = Rng::new(11);
+            let (mut missed, mut err, mut n) = (0, 0.0, 0);
+            let t0 = Instant::now();
+            const RUNS: usize = 200;
+            for _ in 0..RUNS {
+                let x = rng.range(8.0, 15.0);
+                let obstacles = [Obstacle {
+                    collider: &wall,
+                    pose: Transform::from_translation(Vec3::new(x, 0.0, 0.0)),
+                }];
+                let h = sweep(
+                    m,
+                    &motion,
+                    &obstacles,
+                    &SweepOptions {
+                        method,
+                        tolerance: DEFAULT_TOLERANCE,
+                    },
+                )
+                .unwrap();
+                // exact first contact: the part's +X extent reaches the wall
+                let reach = m.bounds().hi.x;
+                let t_true = (x - reach) / 20.0;
+                if !h.hit {
+                    missed += 1;
+                } else {
+                    err += (h.t - t_true).abs() * 20.0;
+                    n += 1;
+                }
+            }
+            let us = t0.elapsed().as_secs_f64() / RUNS as f64 * 1e6;
+            println!(
+                "| {mname} | {name} | {missed}/{RUNS} | {:.3} mm | {us:.0} |",
+                err / n.max(1) as f64
+            );
+        }
+    }
+}
