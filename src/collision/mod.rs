@@ -18,6 +18,7 @@
 mod cells;
 mod exact;
 pub mod fixtures;
+pub mod scene;
 mod shape;
 mod sweep;
 mod triangle;

@@ -53,7 +53,41 @@ pub struct PartFile {
     pub points: IndexMap<String, [f64; 3]>,
     /// The feature tree (cut cells, …), in order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub features: Vec<serde_yaml::Value>,
+    pub features: Vec<FeatureFile>,
+}
+
+/// A feature of a part's feature tree.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FeatureFile {
+    /// Seed 000's "finite subdivision": the part cut into cells by arrays of planes,
+    /// one box per cell. Give either `cell_size` (mm, cubic cells from the part's
+    /// minimum corner) or `planes` (positions in the part frame, mm).
+    CutCells {
+        /// Feature name (unique in the part).
+        name: String,
+        /// Edge of the cubic cells, mm.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        cell_size: Option<f64>,
+        /// Explicit cut planes.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        planes: Option<PlanesFile>,
+    },
+}
+
+/// Cut plane positions along each axis of the part frame (mm).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PlanesFile {
+    /// Planes `x = const`.
+    #[serde(default)]
+    pub x: Vec<f64>,
+    /// Planes `y = const`.
+    #[serde(default)]
+    pub y: Vec<f64>,
+    /// Planes `z = const`.
+    #[serde(default)]
+    pub z: Vec<f64>,
 }
 
 /// A reference plane through `point` with unit `normal` (normalised on load).

@@ -14,10 +14,13 @@ pub use dimension::{Dimension, DimensionKind};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
 
+use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{Mesh, MeshCache};
-use file::{AxisFile, ComponentFile, DocumentFile, MateFile, PartFile, PlaneFile};
+use file::{
+    AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile, PlaneFile, PlanesFile,
+};
 use indexmap::IndexMap;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -36,8 +39,96 @@ pub struct Part {
     pub mesh: Arc<Mesh>,
     /// Named references (planes, axes, points) in the part frame, in file order.
     pub references: IndexMap<String, Reference>,
-    /// The feature tree as written (cut-cells features and later kinds).
-    pub features: Vec<serde_yaml::Value>,
+    /// The feature tree, in order.
+    pub features: Vec<Feature>,
+}
+
+/// A feature of a part's feature tree.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Feature {
+    /// Seed 000's cut cells: the part cut by plane arrays into cells, one box each.
+    /// The cells themselves are derived from the mesh when needed (and again when the
+    /// mesh changes), see [`crate::collision::scene`].
+    CutCells {
+        /// Feature name.
+        name: String,
+        /// How the part is cut.
+        spec: CutSpec,
+    },
+}
+
+impl Feature {
+    /// The feature's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Feature::CutCells { name, .. } => name,
+        }
+    }
+
+    fn from_file(f: &FeatureFile) -> Result<Feature, String> {
+        match f {
+            FeatureFile::CutCells {
+                name,
+                cell_size,
+                planes,
+            } => {
+                let spec = match (cell_size, planes) {
+                    (Some(s), None) if s.is_finite() && *s > 0.0 => CutSpec::Size(*s),
+                    (Some(s), None) => {
+                        return Err(format!(
+                            "cut cells `{name}`: cell_size must be a number > 0 mm, not {s}"
+                        ))
+                    }
+                    (None, Some(p)) => {
+                        if p.x.iter().chain(&p.y).chain(&p.z).any(|v| !v.is_finite()) {
+                            return Err(format!(
+                                "cut cells `{name}`: plane positions must be finite"
+                            ));
+                        }
+                        CutSpec::Planes {
+                            x: p.x.clone(),
+                            y: p.y.clone(),
+                            z: p.z.clone(),
+                        }
+                    }
+                    _ => {
+                        return Err(format!(
+                            "cut cells `{name}`: give exactly one of `cell_size` and `planes`"
+                        ))
+                    }
+                };
+                Ok(Feature::CutCells {
+                    name: name.clone(),
+                    spec,
+                })
+            }
+        }
+    }
+
+    fn to_file(&self) -> FeatureFile {
+        match self {
+            Feature::CutCells {
+                name,
+                spec: CutSpec::Size(s),
+            } => FeatureFile::CutCells {
+                name: name.clone(),
+                cell_size: Some(*s),
+                planes: None,
+            },
+            Feature::CutCells {
+                name,
+                spec: CutSpec::Planes { x, y, z },
+            } => FeatureFile::CutCells {
+                name: name.clone(),
+                cell_size: None,
+                planes: Some(PlanesFile {
+                    x: x.clone(),
+                    y: y.clone(),
+                    z: z.clone(),
+                }),
+            },
+        }
+    }
 }
 
 impl Part {
@@ -264,6 +355,27 @@ impl Document {
             for (rname, p) in &pf.points {
                 references.insert(rname.clone(), Reference::Point(vec3(*p).into()));
             }
+            let mut features = Vec::new();
+            for f in &pf.features {
+                let feature = Feature::from_file(f).map_err(|m| {
+                    at(
+                        &format!("name: {}", feature_name(f)),
+                        "parts",
+                        format!("part `{name}`: {m}"),
+                    )
+                })?;
+                if features
+                    .iter()
+                    .any(|g: &Feature| g.name() == feature.name())
+                {
+                    return Err(at(
+                        &format!("name: {}", feature.name()),
+                        "parts",
+                        format!("part `{name}`: duplicate feature name `{}`", feature.name()),
+                    ));
+                }
+                features.push(feature);
+            }
             for (rname, r) in &references {
                 let finite = r
                     .anchor()
@@ -287,7 +399,7 @@ impl Document {
                     mesh_path,
                     mesh,
                     references,
-                    features: pf.features.clone(),
+                    features,
                 },
             );
         }
@@ -563,6 +675,36 @@ impl Document {
         Ok(())
     }
 
+    /// Adds a feature to a part's tree, replacing the feature of the same name. Saved
+    /// with the document.
+    pub fn set_feature(&mut self, part: &str, feature: Feature) -> Result<(), DocumentError> {
+        if let Feature::CutCells {
+            spec: CutSpec::Size(s),
+            name,
+        } = &feature
+        {
+            if !(s.is_finite() && *s > 0.0) {
+                return Err(DocumentError::Invalid(format!(
+                    "cut cells `{name}`: cell size must be a number > 0 mm, not {s}"
+                )));
+            }
+        }
+        let p = self
+            .parts
+            .get_mut(part)
+            .ok_or_else(|| DocumentError::NotFound {
+                what: "part",
+                name: part.into(),
+                hint: String::new(),
+            })?;
+        match p.features.iter_mut().find(|f| f.name() == feature.name()) {
+            Some(f) => *f = feature,
+            None => p.features.push(feature),
+        }
+        self.revision += 1;
+        Ok(())
+    }
+
     /// World-frame axis-aligned box of a component (mm).
     pub fn world_aabb(&self, component: usize) -> Option<(Point3, Point3)> {
         let c = &self.components[component];
@@ -689,7 +831,7 @@ impl Document {
                     planes: IndexMap::new(),
                     axes: IndexMap::new(),
                     points: IndexMap::new(),
-                    features: p.features.clone(),
+                    features: p.features.iter().map(Feature::to_file).collect(),
                 };
                 for (n, r) in &p.references {
                     let a = |v: Vec3| [v.x, v.y, v.z];
@@ -809,6 +951,12 @@ impl Document {
         std::iter::once(self.path.clone())
             .chain(self.parts.values().map(|p| p.mesh_path.clone()))
             .collect()
+    }
+}
+
+fn feature_name(f: &FeatureFile) -> &str {
+    match f {
+        FeatureFile::CutCells { name, .. } => name,
     }
 }
 

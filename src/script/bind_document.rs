@@ -19,8 +19,8 @@ pub struct DocHandle {
 /// A component of a document, by index.
 #[derive(Clone)]
 pub struct ComponentHandle {
-    doc: DocHandle,
-    index: usize,
+    pub(crate) doc: DocHandle,
+    pub(crate) index: usize,
 }
 
 /// A driving dimension of a document, by full name (`D1@角度1`).
@@ -65,7 +65,7 @@ impl DocHandle {
         &self.ctx
     }
 
-    fn component(&self, name: &str) -> ScriptResult<ComponentHandle> {
+    pub(crate) fn component(&self, name: &str) -> ScriptResult<ComponentHandle> {
         let index = self.lock()?.component_index(name).map_err(fail)?;
         Ok(ComponentHandle {
             doc: self.clone(),

@@ -7,6 +7,7 @@
 
 mod api;
 mod bind_document;
+mod bind_interference;
 mod bind_math;
 mod convert;
 pub mod sandbox;
@@ -31,6 +32,8 @@ pub(crate) type ScriptResult<T> = Result<T, Box<EvalAltResult>>;
 pub struct Caches {
     /// Meshes by file, re-read only when the file changed.
     pub meshes: Mutex<MeshCache>,
+    /// Collision trees and cut cells by mesh.
+    pub scene: Mutex<crate::collision::scene::SceneCache>,
 }
 
 /// Where a script's `print` and progress lines go.

@@ -109,7 +109,7 @@ impl Default for Limits {
             max_expr_depth: (128, 64),
             max_string_size: 16 << 20,
             max_array_size: 4_000_000,
-            max_map_size: 100_000,
+            max_map_size: 2_000_000,
             max_modules: 64,
         }
     }

@@ -1,0 +1,380 @@
+//! Bindings for interference detection: static checks (exact, AABB, cut cells), the
+//! cut-cells feature, and sweeps along motions.
+
+use super::api::Api;
+use super::bind_document::{ComponentHandle, DocHandle};
+use super::bind_math::to_transform;
+use super::convert::{aabb_map, check_keys, err, fail, floats, num, opt_num, opt_str};
+use super::ScriptResult;
+use crate::collision::scene::Scene;
+use crate::collision::{
+    Contact, CutSpec, InterferenceKind, Method, Motion, Part, SweepMethod, SweepOptions,
+    DEFAULT_TOLERANCE,
+};
+use crate::document::{Document, Feature};
+use crate::math::Point3;
+use rhai::{Array, Dynamic, Map};
+
+/// A part's cut-cells feature, by part and feature name.
+#[derive(Clone)]
+pub struct FeatureHandle {
+    doc: DocHandle,
+    part: String,
+    name: String,
+}
+
+fn with_scene<R>(
+    d: &DocHandle,
+    f: impl FnOnce(&Document, &Scene) -> ScriptResult<R>,
+) -> ScriptResult<R> {
+    let doc = d.lock()?;
+    let scene = {
+        let mut cache = d
+            .context()
+            .caches
+            .scene
+            .lock()
+            .map_err(|_| fail("collision cache poisoned"))?;
+        Scene::new(&doc, &mut cache).map_err(fail)?
+    };
+    f(&doc, &scene)
+}
+
+fn options(map: Option<&Map>) -> ScriptResult<(Method, f64)> {
+    let Some(m) = map else {
+        return Ok((Method::Exact, DEFAULT_TOLERANCE));
+    };
+    check_keys(m, &["method", "tolerance"], "interference")?;
+    let method = match opt_str(m, "method")? {
+        Some(s) => s.parse::<Method>().map_err(fail)?,
+        None => Method::Exact,
+    };
+    let tolerance = opt_num(m, "tolerance")?.unwrap_or(DEFAULT_TOLERANCE);
+    if tolerance < 0.0 {
+        return err(format!("tolerance must be ≥ 0 mm, not {tolerance}"));
+    }
+    Ok((method, tolerance))
+}
+
+fn kind_name(k: &InterferenceKind, a: &str, b: &str) -> String {
+    match k {
+        InterferenceKind::SurfacesCross => "surfaces cross".into(),
+        InterferenceKind::Contained { inner: Part::First } => format!("{a} inside {b}"),
+        InterferenceKind::Contained {
+            inner: Part::Second,
+        } => format!("{b} inside {a}"),
+        InterferenceKind::BoxesOverlap => "boxes overlap".into(),
+    }
+}
+
+fn contact_map(c: &Contact, a: &str, b: &str) -> Map {
+    let mut m = Map::new();
+    m.insert("a".into(), a.into());
+    m.insert("b".into(), b.into());
+    let state = match c {
+        Contact::Separate => "separate",
+        Contact::Touching => "touching",
+        Contact::Interfering { .. } => "interfering",
+    };
+    m.insert("state".into(), state.into());
+    m.insert("depth".into(), Dynamic::from_float(c.depth()));
+    if let Contact::Interfering { kind, .. } = c {
+        m.insert("kind".into(), kind_name(kind, a, b).into());
+    }
+    m
+}
+
+fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult<Array> {
+    let (method, tol) = options(opts)?;
+    with_scene(d, |doc, scene| {
+        let names = |i: usize| doc.components()[i].name.clone();
+        Ok(scene
+            .contacts(method, tol)
+            .map_err(fail)?
+            .into_iter()
+            .filter(|p| p.contact.is_touching() == want_touching)
+            .map(|p| Dynamic::from_map(contact_map(&p.contact, &names(p.a), &names(p.b))))
+            .collect())
+    })
+}
+
+fn pair(d: &DocHandle, a: &str, b: &str, opts: Option<&Map>) -> ScriptResult<Map> {
+    let (method, tol) = options(opts)?;
+    with_scene(d, |doc, scene| {
+        let (ia, ib) = (
+            doc.component_index(a).map_err(fail)?,
+            doc.component_index(b).map_err(fail)?,
+        );
+        if ia == ib {
+            return err(format!("`{a}` is checked against itself"));
+        }
+        Ok(contact_map(
+            &scene.contact(ia, ib, method, tol).map_err(fail)?,
+            a,
+            b,
+        ))
+    })
+}
+
+fn motion_of(start: crate::math::Transform, motion: &Dynamic) -> ScriptResult<Motion> {
+    if let Some(arr) = motion.read_lock::<Array>() {
+        // An array of Transforms (not a 4×4 matrix or a pose): a pose sequence.
+        if arr.iter().all(|v| v.is::<crate::math::Transform>()) && !arr.is_empty() {
+            let mut poses = vec![start];
+            for (i, v) in arr.iter().enumerate() {
+                poses.push(to_transform(v, &format!("motion[{i}]"))?);
+            }
+            return Ok(Motion::Poses(poses));
+        }
+    }
+    Ok(Motion::Poses(vec![start, to_transform(motion, "motion")?]))
+}
+
+fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> ScriptResult<Map> {
+    let mut tolerance = DEFAULT_TOLERANCE;
+    let mut method = SweepMethod::Continuous;
+    if let Some(m) = opts {
+        check_keys(m, &["method", "step", "tolerance"], "sweep")?;
+        tolerance = opt_num(m, "tolerance")?.unwrap_or(tolerance);
+        let step = opt_num(m, "step")?;
+        method = match opt_str(m, "method")?.as_deref() {
+            None | Some("continuous") => SweepMethod::Continuous,
+            Some("step") => {
+                let step = step.unwrap_or(1.0);
+                if step <= 0.0 {
+                    return err(format!("step must be > 0 mm, not {step}"));
+                }
+                SweepMethod::Step { step }
+            }
+            Some(other) => {
+                return err(format!(
+                    "unknown sweep method `{other}`: \"step\" or \"continuous\""
+                ))
+            }
+        };
+    }
+    with_scene(d, |doc, scene| {
+        let i = doc.component_index(name).map_err(fail)?;
+        let motion = motion_of(scene.poses[i], motion)?;
+        let hit = scene
+            .sweep(i, &motion, &SweepOptions { method, tolerance })
+            .map_err(fail)?;
+        let mut m = Map::new();
+        m.insert("hit".into(), hit.hit.into());
+        m.insert("t".into(), Dynamic::from_float(hit.t));
+        m.insert("transform".into(), Dynamic::from(hit.pose));
+        m.insert(
+            "with".into(),
+            hit.with
+                .map(|k| Dynamic::from(doc.components()[k].name.clone()))
+                .unwrap_or(Dynamic::UNIT),
+        );
+        m.insert("checks".into(), Dynamic::from_int(hit.queries as i64));
+        Ok(m)
+    })
+}
+
+fn feature_map(part: &str, f: &Feature) -> Map {
+    let mut m = Map::new();
+    m.insert("part".into(), part.into());
+    m.insert("name".into(), f.name().into());
+    match f {
+        Feature::CutCells { spec, .. } => {
+            m.insert("type".into(), "cut_cells".into());
+            match spec {
+                CutSpec::Size(s) => {
+                    m.insert("cell_size".into(), Dynamic::from_float(*s));
+                }
+                CutSpec::Planes { x, y, z } => {
+                    let mut p = Map::new();
+                    p.insert("x".into(), floats(x.iter().copied()));
+                    p.insert("y".into(), floats(y.iter().copied()));
+                    p.insert("z".into(), floats(z.iter().copied()));
+                    m.insert("planes".into(), p.into());
+                }
+            }
+        }
+    }
+    m
+}
+
+fn split(c: &ComponentHandle, spec: CutSpec) -> ScriptResult<FeatureHandle> {
+    let mut doc = c.doc.lock()?;
+    let part = doc.components()[c.index].part.clone();
+    let name = "CutCells".to_string();
+    // Derive now so a bad size (too many cells) fails here, before it is stored.
+    let mesh = doc.mesh_of(c.index).clone();
+    c.doc
+        .context()
+        .caches
+        .scene
+        .lock()
+        .map_err(|_| fail("collision cache poisoned"))?
+        .cells(&mesh, &spec)
+        .map_err(fail)?;
+    doc.set_feature(
+        &part,
+        Feature::CutCells {
+            name: name.clone(),
+            spec,
+        },
+    )
+    .map_err(fail)?;
+    Ok(FeatureHandle {
+        doc: c.doc.clone(),
+        part,
+        name,
+    })
+}
+
+fn feature_cells(f: &FeatureHandle) -> ScriptResult<std::sync::Arc<crate::collision::CutCells>> {
+    let doc = f.doc.lock()?;
+    let part = doc.part(&f.part).map_err(fail)?;
+    let Some(Feature::CutCells { spec, .. }) = part.features.iter().find(|x| x.name() == f.name)
+    else {
+        return err(format!(
+            "part `{}` has no feature `{}` any more",
+            f.part, f.name
+        ));
+    };
+    let mut cache = f
+        .doc
+        .context()
+        .caches
+        .scene
+        .lock()
+        .map_err(|_| fail("collision cache poisoned"))?;
+    cache.cells(&part.mesh, spec).map_err(fail)
+}
+
+pub(super) fn register(api: &mut Api) {
+    api.section("Interference", "Static interference between components, seed 000 style. Methods: `\"exact\"` (default: solid semantics — surfaces crossing deeper than the tolerance, or one part inside the other), `\"aabb\"` (whole-part world boxes) and `\"cells\"` (whole-part boxes, then the boxes of the parts' cut cells). Parts whose surfaces only meet (a plate on the table, a screw resting in a hole of its diameter) are *touching*, not interfering. `tolerance` is the penetration tolerance in mm (default 0.01). Results are maps `#{a, b, state, depth, kind}`: `state` is `\"separate\"`, `\"touching\"` or `\"interfering\"`, `depth` the penetration estimate in mm, `kind` `\"surfaces cross\"`, `\"X inside Y\"` or `\"boxes overlap\"`.");
+    api.type_::<FeatureHandle>("Feature");
+    api.f(
+        "Document.interferences() -> array",
+        "Every interfering pair (exact method): `#{a, b, state, depth, kind}`.",
+        |d: &mut DocHandle| pairs(d, None, false),
+    );
+    api.f(
+        "Document.interferences(options: map) -> array",
+        "Every interfering pair by `#{method, tolerance}`.",
+        |d: &mut DocHandle, o: Map| pairs(d, Some(&o), false),
+    );
+    api.f(
+        "Document.touching() -> array",
+        "Every pair whose surfaces meet without interfering (exact method).",
+        |d: &mut DocHandle| pairs(d, None, true),
+    );
+    api.f(
+        "Document.touching(options: map) -> array",
+        "Touching pairs by `#{method, tolerance}`.",
+        |d: &mut DocHandle, o: Map| pairs(d, Some(&o), true),
+    );
+    api.f(
+        "Document.interferes(a: string, b: string) -> bool",
+        "Whether two components interfere (exact method, 0.01 mm tolerance).",
+        |d: &mut DocHandle, a: &str, b: &str| -> ScriptResult<bool> {
+            Ok(pair(d, a, b, None)?
+                .get("state")
+                .is_some_and(|s| s.to_string() == "interfering"))
+        },
+    );
+    api.f(
+        "Document.interferes(a: string, b: string, options: map) -> bool",
+        "Whether two components interfere by `#{method: \"exact\"|\"aabb\"|\"cells\", tolerance}`.",
+        |d: &mut DocHandle, a: &str, b: &str, o: Map| -> ScriptResult<bool> {
+            Ok(pair(d, a, b, Some(&o))?
+                .get("state")
+                .is_some_and(|s| s.to_string() == "interfering"))
+        },
+    );
+    api.f(
+        "Document.contact(a: string, b: string) -> map",
+        "The verdict for two components: `#{a, b, state, depth, kind}` (exact method).",
+        |d: &mut DocHandle, a: &str, b: &str| pair(d, a, b, None),
+    );
+    api.f(
+        "Document.contact(a: string, b: string, options: map) -> map",
+        "The verdict for two components by `#{method, tolerance}`.",
+        |d: &mut DocHandle, a: &str, b: &str, o: Map| pair(d, a, b, Some(&o)),
+    );
+    api.f("Document.clearance(a: string, b: string) -> float", "Distance between the surfaces of two components (mm), 0 when they touch or cross; searched up to 1000 mm.", |d: &mut DocHandle, a: &str, b: &str| -> ScriptResult<f64> {
+        with_scene(d, |doc, scene| {
+            let (ia, ib) = (doc.component_index(a).map_err(fail)?, doc.component_index(b).map_err(fail)?);
+            scene.clearance(ia, ib, 1000.0).map_err(fail)
+        })
+    });
+    api.f("Document.sweep(name: string, motion) -> map", "Dynamic interference: moves the component from its pose to `motion` (a Transform, or an array of Transforms visited in order; translation lerp + rotation slerp) and returns the first contact: `#{hit, t, transform, with, checks}` (`t` in 0..1 along the motion, `with` the other component — `with` is a Rhai keyword, read it as `hit[\"with\"]`). Continuous method: never misses a contact.", |d: &mut DocHandle, name: &str, motion: Dynamic| sweep(d, name, &motion, None));
+    api.f("Document.sweep(name: string, motion, options: map) -> map", "As above with `#{method: \"step\"|\"continuous\", step: mm, tolerance: mm}`; `\"step\"` is seed 000's static check after every step (no point of the part moves more than `step` mm between checks) and can jump over thin features.", |d: &mut DocHandle, name: &str, motion: Dynamic, o: Map| sweep(d, name, &motion, Some(&o)));
+
+    api.section("Cut cells", "Seed 000's finite subdivision: a part cut by arrays of planes into cells, one box per cell, stored as a feature in the part's feature tree (saved with the document, re-derived when the mesh changes). Cells are in the part frame (mm).");
+    api.f("Component.split(cell_size) -> Feature", "Cuts the component's part into cubic cells of `cell_size` mm (plane arrays from the part's minimum corner) and stores the feature `CutCells` in the part's tree (replacing an earlier one). Refuses sizes that would make more than 100,000 cells.", |c: &mut ComponentHandle, size: Dynamic| -> ScriptResult<FeatureHandle> {
+        let s = num(&size, "cell_size")?;
+        if s <= 0.0 {
+            return err(format!("cell_size must be > 0 mm, not {s}"));
+        }
+        split(c, CutSpec::Size(s))
+    });
+    api.f("Component.split(planes: map) -> Feature", "Cuts the part by explicit planes `#{x: [..], y: [..], z: [..]}` (positions in the part frame, mm).", |c: &mut ComponentHandle, p: Map| -> ScriptResult<FeatureHandle> {
+        check_keys(&p, &["x", "y", "z"], "planes")?;
+        let axis = |k: &str| -> ScriptResult<Vec<f64>> {
+            match p.get(k) {
+                None => Ok(vec![]),
+                Some(v) => v.read_lock::<Array>().ok_or_else(|| fail(format!("planes.{k} must be an array")))?.iter().map(|x| num(x, k)).collect(),
+            }
+        };
+        split(c, CutSpec::Planes { x: axis("x")?, y: axis("y")?, z: axis("z")? })
+    });
+    api.f(
+        "Document.features(part: string) -> array",
+        "The part's feature tree: maps `#{part, name, type, cell_size | planes}`.",
+        |d: &mut DocHandle, part: &str| -> ScriptResult<Array> {
+            let doc = d.lock()?;
+            let p = doc.part(part).map_err(fail)?;
+            Ok(p.features
+                .iter()
+                .map(|f| Dynamic::from_map(feature_map(part, f)))
+                .collect())
+        },
+    );
+    api.f(
+        "Document.feature(part: string, name: string) -> Feature",
+        "A feature of a part by name.",
+        |d: &mut DocHandle, part: &str, name: &str| -> ScriptResult<FeatureHandle> {
+            let doc = d.lock()?;
+            let p = doc.part(part).map_err(fail)?;
+            if !p.features.iter().any(|f| f.name() == name) {
+                return err(format!("part `{part}` has no feature `{name}`"));
+            }
+            Ok(FeatureHandle {
+                doc: d.clone(),
+                part: part.into(),
+                name: name.into(),
+            })
+        },
+    );
+    api.get(
+        "Feature.name -> string",
+        "The feature name.",
+        |f: &mut FeatureHandle| f.name.clone(),
+    );
+    api.get(
+        "Feature.part -> string",
+        "The part whose tree holds it.",
+        |f: &mut FeatureHandle| f.part.clone(),
+    );
+    api.f("Feature.cells() -> array", "The cells: `#{min: [x,y,z], max: [x,y,z]}` boxes of the part's material in each grid cell, part frame (mm).", |f: &mut FeatureHandle| -> ScriptResult<Array> {
+        let cells = feature_cells(f)?;
+        Ok(cells.cells.iter().map(|c| aabb_map(&Point3::from(c.min), &Point3::from(c.max))).collect())
+    });
+    api.get(
+        "Feature.count -> int",
+        "How many cells have material.",
+        |f: &mut FeatureHandle| -> ScriptResult<i64> { Ok(feature_cells(f)?.cells.len() as i64) },
+    );
+    api.f(
+        "Feature.to_string() -> string",
+        "`Feature(part/name)`.",
+        |f: &mut FeatureHandle| format!("Feature({}/{})", f.part, f.name),
+    );
+}
