@@ -236,7 +236,7 @@ fn cells_vs_exact() {
             pin_sampler,
             (pc.cells.len(), nc.cells.len()),
         );
-        let tc = CutCells::derive(&table, CutSpec::Size(size.max(2.0))).unwrap();
+        let tc = CutCells::derive(&table, CutSpec::Size(size.max(4.0))).unwrap();
         let p2c = CutCells::derive(&plate2, CutSpec::Size(size)).unwrap();
         let sc = CutCells::derive(&screw, CutSpec::Size(size)).unwrap();
         let fixed = [

@@ -80,8 +80,9 @@ def run_coal(a, b, cats):
     def model(m):
         bvh = coal.BVHModelOBBRSS()
         bvh.beginModel(len(m[1]), len(m[0]))
-        bvh.addSubModel([np.array(v) for v in m[0]],
-                        [coal.Triangle(int(t[0]), int(t[1]), int(t[2])) for t in m[1]])
+        v = m[0]
+        for t in m[1]:
+            bvh.addTriangle(v[t[0]], v[t[1]], v[t[2]])
         bvh.endModel()
         return bvh
 
