@@ -31,6 +31,7 @@ mod smoothing;
 mod space;
 mod tree;
 mod validator;
+mod mesh_validator;
 
 #[cfg(test)]
 mod test_scenes;
@@ -45,4 +46,5 @@ pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
 pub use run::{Control, Limits, PlanError, Progress, ProgressFn};
 pub use smoothing::{smooth, Smoothing};
 pub use space::{PlanningSpace, RotationFreedom};
+pub use mesh_validator::{EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats};
 pub use validator::{stepwise_edge_free, EdgeResolution, MotionValidator};
