@@ -32,6 +32,7 @@ mod space;
 mod tree;
 mod validator;
 mod mesh_validator;
+mod request;
 
 #[cfg(test)]
 mod test_scenes;
@@ -47,4 +48,5 @@ pub use run::{Control, Limits, PlanError, Progress, ProgressFn};
 pub use smoothing::{smooth, Smoothing};
 pub use space::{PlanningSpace, RotationFreedom};
 pub use mesh_validator::{EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats};
+pub use request::{Planner, PLANNER_NAMES};
 pub use validator::{stepwise_edge_free, EdgeResolution, MotionValidator};

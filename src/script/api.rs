@@ -161,6 +161,7 @@ pub(crate) fn register_all(
     super::bind_math::register(&mut api);
     super::bind_document::register(&mut api, ctx);
     super::bind_interference::register(&mut api);
+    super::bind_planning::register(&mut api);
     (api.sections, api.entries)
 }
 

@@ -8,6 +8,7 @@
 mod api;
 mod bind_document;
 mod bind_interference;
+mod bind_planning;
 mod bind_math;
 mod convert;
 pub mod sandbox;
