@@ -354,7 +354,7 @@ fn mz07_parts(parts: &mut IndexMap<String, PartFile>) {
 /// and its robot entry, placed at `base`, with dimensions `D1@<feature>n`.
 fn mz07_robot(
     name: &str,
-    base: Transform,
+    base: [[f64; 4]; 4],
     feature: &str,
     color: &str,
 ) -> (Vec<ComponentFile>, RobotFile) {
@@ -363,7 +363,10 @@ fn mz07_robot(
     let mut links = Vec::new();
     for (i, (part, _)) in mz07_link_meshes().into_iter().enumerate() {
         let comp = format!("{name}_{}", part.trim_start_matches("mz07_"));
-        components.push(component(&comp, &part, i == 0, color, base));
+        components.push(ComponentFile {
+            transform: Some(base),
+            ..component(&comp, &part, i == 0, color, Transform::IDENTITY)
+        });
         links.push(LinkFile {
             component: Some(comp),
             dimension: (i > 0).then(|| format!("{feature}{i}")),
@@ -374,7 +377,7 @@ fn mz07_robot(
         name: name.into(),
         catalog: Some("nachi_mz07".into()),
         dh: None,
-        base: Some(base.to_matrix()),
+        base: Some(base),
         tool: Some(robot.tool().to_matrix()),
         flange: None,
         drawn_at_zero: true,
@@ -390,7 +393,12 @@ fn mz07_robot(
 pub fn mz07_document() -> DocumentFile {
     let mut parts = IndexMap::new();
     mz07_parts(&mut parts);
-    let (components, robot) = mz07_robot("mz07", Transform::IDENTITY, "角度", "#e8b020");
+    let (components, robot) = mz07_robot(
+        "mz07",
+        Transform::IDENTITY.to_matrix(),
+        "角度",
+        "#e8b020",
+    );
     DocumentFile {
         units: "mm".into(),
         description: Some(
@@ -435,13 +443,12 @@ pub fn cell_robots_document() -> DocumentFile {
             Transform::from_translation(at),
         ));
         // Turned ±90° about Z (written exactly, so the file holds clean 0s and 1s).
-        let base = Transform::from_matrix(&[
+        let base = [
             [0.0, s, 0.0, 0.0],
             [-s, 0.0, 0.0, 0.0],
             [0.0, 0.0, 1.0, 0.0],
             [at.x, at.y, PEDESTAL_HEIGHT, 1.0],
-        ])
-        .unwrap_or(Transform::IDENTITY);
+        ];
         let (components, robot) = mz07_robot(name, base, feature, color);
         doc.components.extend(components);
         doc.robots.push(robot);
