@@ -160,6 +160,7 @@ pub(crate) fn register_all(
     let mut api = Api::new(engine);
     super::bind_math::register(&mut api);
     super::bind_document::register(&mut api, ctx);
+    super::bind_robot::register(&mut api, ctx);
     (api.sections, api.entries)
 }
 

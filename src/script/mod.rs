@@ -8,6 +8,7 @@
 mod api;
 mod bind_document;
 mod bind_math;
+mod bind_robot;
 mod convert;
 pub mod sandbox;
 
