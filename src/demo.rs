@@ -306,9 +306,8 @@ pub fn mz07_link_meshes() -> Vec<(String, Mesh)> {
             .transformed(&(turn * Transform::from_translation(Vec3::new(x0, 0.0, z))))
     };
     let z_cyl = |r: f64, z0: f64, z1: f64, x: f64| {
-        Mesh::cylinder(r, z1 - z0, 32).transformed(&Transform::from_translation(Vec3::new(
-            x, 0.0, z0,
-        )))
+        Mesh::cylinder(r, z1 - z0, 32)
+            .transformed(&Transform::from_translation(Vec3::new(x, 0.0, z0)))
     };
     let base = z_cyl(110.0, 0.0, 180.0, 0.0);
     let mut link1 = z_cyl(90.0, 180.0, 290.0, 0.0);
@@ -324,9 +323,10 @@ pub fn mz07_link_meshes() -> Vec<(String, Mesh)> {
     link5.append(&z_cyl(32.0, 675.0, 680.0, 390.0));
     let mut link6 = z_cyl(30.0, 635.0, 672.0, 390.0);
     link6.append(&z_cyl(12.0, 260.0, 635.0, 390.0));
-    link6.append(&Mesh::frustum(1.0, 8.0, 61.9, 16).transformed(
-        &Transform::from_translation(Vec3::new(390.0, 0.0, 198.1)),
-    ));
+    link6.append(
+        &Mesh::frustum(1.0, 8.0, 61.9, 16)
+            .transformed(&Transform::from_translation(Vec3::new(390.0, 0.0, 198.1))),
+    );
     let names = ["base", "link1", "link2", "link3", "link4", "link5", "link6"];
     names
         .iter()
@@ -393,12 +393,8 @@ fn mz07_robot(
 pub fn mz07_document() -> DocumentFile {
     let mut parts = IndexMap::new();
     mz07_parts(&mut parts);
-    let (components, robot) = mz07_robot(
-        "mz07",
-        Transform::IDENTITY.to_matrix(),
-        "角度",
-        "#e8b020",
-    );
+    let (components, robot) =
+        mz07_robot("mz07", Transform::IDENTITY.to_matrix(), "角度", "#e8b020");
     DocumentFile {
         units: "mm".into(),
         description: Some(
@@ -417,8 +413,7 @@ pub fn mz07_document() -> DocumentFile {
 /// `D1@b角度n`.
 pub fn cell_robots_document() -> DocumentFile {
     let mut doc = cell_document();
-    doc.description =
-        Some("Seed 000 demo cell with two NACHI MZ07 arms beside the table".into());
+    doc.description = Some("Seed 000 demo cell with two NACHI MZ07 arms beside the table".into());
     mz07_parts(&mut doc.parts);
     doc.parts.insert(
         "pedestal".into(),

@@ -632,11 +632,12 @@ impl Document {
             }
             DimensionTarget::Joint { robot, joint } => {
                 let r = &self.robots[robot];
-                let kind = if r.robot().joint_kinds()[joint] == crate::kinematics::JointKind::Prismatic {
-                    DimensionKind::Length
-                } else {
-                    DimensionKind::Angle
-                };
+                let kind =
+                    if r.robot().joint_kinds()[joint] == crate::kinematics::JointKind::Prismatic {
+                        DimensionKind::Length
+                    } else {
+                        DimensionKind::Angle
+                    };
                 (kind, r.joints()[joint])
             }
         };

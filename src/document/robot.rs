@@ -12,7 +12,8 @@ use super::file::{DhFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
-    robot_by_name, DhConvention, DhRow, Joint, JointKind, JointLimits, KinematicTree, Link, Robot,
+    robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind, JointLimits, KinematicTree,
+    Link, MotionOptions, Program, Robot, Trajectory,
 };
 use crate::math::{Point3, Transform, Vec3};
 use std::collections::{HashMap, HashSet};
@@ -151,7 +152,12 @@ impl RobotInstance {
 pub fn joints_from_document(robot: &Robot, values: &[f64]) -> Vec<f64> {
     values
         .iter()
-        .zip(robot.joint_kinds().into_iter().chain(std::iter::repeat(JointKind::Revolute)))
+        .zip(
+            robot
+                .joint_kinds()
+                .into_iter()
+                .chain(std::iter::repeat(JointKind::Revolute)),
+        )
         .map(|(v, k)| {
             if k == JointKind::Prismatic {
                 *v
@@ -165,7 +171,12 @@ pub fn joints_from_document(robot: &Robot, values: &[f64]) -> Vec<f64> {
 /// Joint values from radians / mm to document units (degrees / mm).
 pub fn joints_to_document(robot: &Robot, q: &[f64]) -> Vec<f64> {
     q.iter()
-        .zip(robot.joint_kinds().into_iter().chain(std::iter::repeat(JointKind::Revolute)))
+        .zip(
+            robot
+                .joint_kinds()
+                .into_iter()
+                .chain(std::iter::repeat(JointKind::Revolute)),
+        )
         .map(|(v, k)| {
             if k == JointKind::Prismatic {
                 *v
@@ -224,7 +235,10 @@ fn dh_robot(name: &str, dh: &DhFile) -> Result<Robot, String> {
             JointKind::Revolute => DhRow::revolute(theta, r.d, r.a, alpha),
             JointKind::Prismatic => DhRow::prismatic(theta, r.d, r.a, alpha),
             JointKind::Fixed => {
-                return Err(format!("D-H row {}: a row must be revolute or prismatic", i + 1))
+                return Err(format!(
+                    "D-H row {}: a row must be revolute or prismatic",
+                    i + 1
+                ))
             }
         };
         if let Some(l) = limits(r.limits, kind).map_err(|e| format!("D-H row {}: {e}", i + 1))? {
@@ -238,17 +252,19 @@ fn dh_robot(name: &str, dh: &DhFile) -> Result<Robot, String> {
     Robot::from_dh(name, &rows, convention, Transform::IDENTITY).map_err(|e| e.to_string())
 }
 
-fn explicit_robot(f: &RobotFile) -> Result<Robot, String> {
+/// An explicit tree; errors carry a needle (the failing link's name) and a message.
+fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
+    let whole = |m: String| (format!("name: {}", f.name), m);
     let mut index: HashMap<&str, usize> = HashMap::new();
     let mut links = Vec::with_capacity(f.links.len());
     for (i, l) in f.links.iter().enumerate() {
         let name = l
             .name
             .as_deref()
-            .ok_or_else(|| format!("link {} needs a `name`", i + 1))?;
-        let err = |m: String| format!("link `{name}`: {m}");
+            .ok_or_else(|| whole(format!("link {} needs a `name`", i + 1)))?;
+        let err = |m: String| (format!("name: {name}"), format!("link `{name}`: {m}"));
         if index.insert(name, i).is_some() {
-            return Err(format!("duplicate link name `{name}`"));
+            return Err(err("duplicate link name".into()));
         }
         let parent = match l.parent.as_deref() {
             None => None,
@@ -264,7 +280,8 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, String> {
         let mut joint = match kind {
             JointKind::Fixed => Joint::fixed(),
             JointKind::Revolute => Joint::revolute(
-                v(l.axis.ok_or_else(|| err("a revolute joint needs an `axis`".into()))?),
+                v(l.axis
+                    .ok_or_else(|| err("a revolute joint needs an `axis`".into()))?),
                 Point3::from(v(l.point.unwrap_or([0.0; 3]))),
             ),
             JointKind::Prismatic => Joint::prismatic(v(l
@@ -282,17 +299,20 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, String> {
             .unwrap_or(Transform::IDENTITY);
         links.push(Link::new(name, parent, home, joint));
     }
-    let tree = KinematicTree::new(links).map_err(|e| e.to_string())?;
+    let tree = KinematicTree::new(links).map_err(|e| whole(e.to_string()))?;
     let flange = match f.flange.as_deref() {
-        Some(n) => tree
-            .find(n)
-            .ok_or_else(|| format!("flange `{n}` is not a link"))?,
+        Some(n) => tree.find(n).ok_or_else(|| {
+            (
+                format!("flange: {n}"),
+                format!("flange `{n}` is not a link"),
+            )
+        })?,
         None => tree
             .len()
             .checked_sub(1)
-            .ok_or("a robot needs `catalog`, `dh` or `links`")?,
+            .ok_or_else(|| whole("a robot needs `catalog`, `dh` or `links`".into()))?,
     };
-    Robot::new(&f.name, tree, flange, Transform::IDENTITY).map_err(|e| e.to_string())
+    Robot::new(&f.name, tree, flange, Transform::IDENTITY).map_err(|e| whole(e.to_string()))
 }
 
 /// Builds one robot of a file; `components` maps component names to indices.
@@ -314,7 +334,7 @@ fn build(
             )
         })?,
         (None, Some(dh)) => dh_robot(&f.name, dh).map_err(|m| ("dh:".to_string(), m))?,
-        (None, None) => explicit_robot(f).map_err(whole)?,
+        (None, None) => explicit_robot(f)?,
     };
     let robot_name = f.name.clone();
     // Catalog robots keep their catalog name in the kinematics; use the document's.
@@ -361,7 +381,11 @@ fn build(
             if lf.name.as_ref().is_some_and(|n| n != &link_name) {
                 return Err(err(format!(
                     "is named `{link_name}` by the {} (link {i})",
-                    if f.catalog.is_some() { "catalog" } else { "D-H table" }
+                    if f.catalog.is_some() {
+                        "catalog"
+                    } else {
+                        "D-H table"
+                    }
                 )));
             }
             if lf.parent.is_some()
@@ -422,7 +446,11 @@ fn build(
             if v.len() != robot.dof() {
                 return Err((
                     "joints:".into(),
-                    format!("{} joint values given, the robot has {}", v.len(), robot.dof()),
+                    format!(
+                        "{} joint values given, the robot has {}",
+                        v.len(),
+                        robot.dof()
+                    ),
                 ));
             }
             joints_from_document(&robot, v)
@@ -478,7 +506,9 @@ pub(super) fn load(
             if !dims.insert(d.clone()) {
                 return Err(at(
                     d,
-                    format!("duplicate dimension name `D1@{d}` (mates and joints share one namespace)"),
+                    format!(
+                        "duplicate dimension name `D1@{d}` (mates and joints share one namespace)"
+                    ),
                 ));
             }
         }
@@ -560,7 +590,9 @@ impl Document {
     /// Sets a robot's tool frame (TCP in the flange frame, mm).
     pub fn set_robot_tool(&mut self, robot: usize, tool: Transform) -> Result<(), DocumentError> {
         if !tool.is_finite() {
-            return Err(DocumentError::Invalid("the tool frame is not finite".into()));
+            return Err(DocumentError::Invalid(
+                "the tool frame is not finite".into(),
+            ));
         }
         let r = self
             .robots
@@ -569,6 +601,28 @@ impl Document {
         r.robot.set_tool(tool);
         self.revision += 1;
         Ok(())
+    }
+
+    /// Runs a motion program on a robot from its current joints; on success the robot
+    /// (and its link components) ends where the program ends. Errors name the program
+    /// file and line (`file:line: cause`).
+    pub fn run_robot_program(
+        &mut self,
+        robot: usize,
+        program: &Program,
+        options: &MotionOptions,
+    ) -> Result<Trajectory, DocumentError> {
+        let r = self
+            .robots
+            .get(robot)
+            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
+        let t = run_program(program, &r.robot, &r.joints, options)
+            .map_err(|e| DocumentError::Invalid(e.to_string()))?;
+        if let Some(q) = t.last_joints() {
+            let q = q.to_vec();
+            self.set_robot_joints(robot, &q)?;
+        }
+        Ok(t)
     }
 
     /// Whether a component is moved by a robot link (the mate solver then treats it as
@@ -601,10 +655,12 @@ impl Document {
     /// The dimension target of a robot joint feature name (without `D1@`).
     pub(super) fn robot_dimension(&self, feature: &str) -> Option<dimension::DimensionTarget> {
         self.robots.iter().enumerate().find_map(|(ri, r)| {
-            r.dimensions
-                .iter()
-                .position(|d| d == feature)
-                .map(|j| dimension::DimensionTarget::Joint { robot: ri, joint: j })
+            r.dimensions.iter().position(|d| d == feature).map(|j| {
+                dimension::DimensionTarget::Joint {
+                    robot: ri,
+                    joint: j,
+                }
+            })
         })
     }
 }

@@ -47,12 +47,7 @@ impl RobotHandle {
     }
 
     /// Moves the robot to the end of `t`, streams it when asked, and wraps it.
-    fn finish(
-        &self,
-        robot: &Robot,
-        t: Trajectory,
-        stream: bool,
-    ) -> ScriptResult<TrajectoryHandle> {
+    fn finish(&self, robot: &Robot, t: Trajectory, stream: bool) -> ScriptResult<TrajectoryHandle> {
         if stream {
             stream_samples(self.doc.context(), robot, &t);
         }
@@ -98,7 +93,13 @@ fn joints_out(robot: &Robot, q: &[f64]) -> Dynamic {
     floats(joints_to_document(robot, q))
 }
 
-const MOTION_KEYS: [&str; 5] = ["speed", "joint_speed", "angular_speed", "interval", "stream"];
+const MOTION_KEYS: [&str; 5] = [
+    "speed",
+    "joint_speed",
+    "angular_speed",
+    "interval",
+    "stream",
+];
 
 fn stream_flag(m: &Map) -> ScriptResult<bool> {
     match m.get("stream") {
@@ -166,7 +167,9 @@ fn hole_map(h: &Hole) -> Map {
     let mut m = Map::new();
     m.insert(
         "id".into(),
-        h.id.clone().map(Dynamic::from).unwrap_or(Dynamic::from(String::new())),
+        h.id.clone()
+            .map(Dynamic::from)
+            .unwrap_or(Dynamic::from(String::new())),
     );
     m.insert("position".into(), array3(&h.position.coords));
     m.insert("normal".into(), array3(&h.normal));
@@ -223,21 +226,22 @@ fn drill_options(m: &Map) -> ScriptResult<(DrillOptions, bool)> {
     }
     if let Some(v) = m.get("travel") {
         let abc = numbers(v, 3, "travel")?;
-        o.travel_orientation = Some(
-            AngleConvention::default().rotation(
-                abc[0].to_radians(),
-                abc[1].to_radians(),
-                abc[2].to_radians(),
-            ),
-        );
+        o.travel_orientation = Some(AngleConvention::default().rotation(
+            abc[0].to_radians(),
+            abc[1].to_radians(),
+            abc[2].to_radians(),
+        ));
     }
     Ok((o, stream))
 }
 
 fn options_map(v: &Dynamic, what: &str) -> ScriptResult<Map> {
-    v.read_lock::<Map>()
-        .map(|m| m.clone())
-        .ok_or_else(|| fail(format!("{what} options must be a map, not {}", v.type_name())))
+    v.read_lock::<Map>().map(|m| m.clone()).ok_or_else(|| {
+        fail(format!(
+            "{what} options must be a map, not {}",
+            v.type_name()
+        ))
+    })
 }
 
 pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
@@ -269,9 +273,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.get(
         "Robot.name -> string",
         "The robot's name.",
-        |r: &mut RobotHandle| -> ScriptResult<String> {
-            Ok(r.snapshot()?.0.name().to_string())
-        },
+        |r: &mut RobotHandle| -> ScriptResult<String> { Ok(r.snapshot()?.0.name().to_string()) },
     );
     api.get(
         "Robot.dof -> int",
@@ -421,7 +423,12 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         }).collect())
     });
 
-    fn motion<F>(r: &RobotHandle, opts: Option<&Dynamic>, what: &str, f: F) -> ScriptResult<TrajectoryHandle>
+    fn motion<F>(
+        r: &RobotHandle,
+        opts: Option<&Dynamic>,
+        what: &str,
+        f: F,
+    ) -> ScriptResult<TrajectoryHandle>
     where
         F: FnOnce(&Robot, &[f64], &MotionOptions) -> Result<Trajectory, String>,
     {
@@ -432,37 +439,76 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         check_keys(&m, &MOTION_KEYS, what)?;
         let (o, stream) = motion_options(&m)?;
         let (robot, q) = r.snapshot()?;
-        let t = f(&robot, &q, &o).map_err(|e| fail(format!("robot `{}`: {what}: {e}", robot.name())))?;
+        let t = f(&robot, &q, &o)
+            .map_err(|e| fail(format!("robot `{}`: {what}: {e}", robot.name())))?;
         r.finish(&robot, t, stream)
     }
-    let mj = |r: &mut RobotHandle, j: Dynamic, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
-        let (robot, _) = r.snapshot()?;
-        let target = joints_arg(&robot, &j, "joints")?;
-        motion(r, o, "move_joint", |robot, q, o| move_joint(robot, q, &target, o).map_err(|e| e.to_string()))
-    };
-    api.f("Robot.move_joint(joints: array) -> Trajectory", "Joint move to the joint values (degrees / mm): all joints arrive together.", move |r: &mut RobotHandle, j: Dynamic| mj(r, j, None));
-    api.f("Robot.move_joint(joints: array, options: map) -> Trajectory", "Joint move with motion options (see the section).", move |r: &mut RobotHandle, j: Dynamic, o: Dynamic| mj(r, j, Some(&o)));
-    let ml = |r: &mut RobotHandle, t: Dynamic, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
-        let end = to_transform(&t, "target")?;
-        motion(r, o, "move_line", |robot, q, o| move_line(robot, q, &end, o).map_err(|e| e.to_string()))
-    };
+    let mj =
+        |r: &mut RobotHandle, j: Dynamic, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
+            let (robot, _) = r.snapshot()?;
+            let target = joints_arg(&robot, &j, "joints")?;
+            motion(r, o, "move_joint", |robot, q, o| {
+                move_joint(robot, q, &target, o).map_err(|e| e.to_string())
+            })
+        };
+    api.f(
+        "Robot.move_joint(joints: array) -> Trajectory",
+        "Joint move to the joint values (degrees / mm): all joints arrive together.",
+        move |r: &mut RobotHandle, j: Dynamic| mj(r, j, None),
+    );
+    api.f(
+        "Robot.move_joint(joints: array, options: map) -> Trajectory",
+        "Joint move with motion options (see the section).",
+        move |r: &mut RobotHandle, j: Dynamic, o: Dynamic| mj(r, j, Some(&o)),
+    );
+    let ml =
+        |r: &mut RobotHandle, t: Dynamic, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
+            let end = to_transform(&t, "target")?;
+            motion(r, o, "move_line", |robot, q, o| {
+                move_line(robot, q, &end, o).map_err(|e| e.to_string())
+            })
+        };
     api.f("Robot.move_line(target) -> Trajectory", "Straight TCP line to the world pose (orientation slerped), keeping the configuration; fails at the first unreachable, singular or out-of-limits step.", move |r: &mut RobotHandle, t: Dynamic| ml(r, t, None));
-    api.f("Robot.move_line(target, options: map) -> Trajectory", "Straight TCP line with motion options.", move |r: &mut RobotHandle, t: Dynamic, o: Dynamic| ml(r, t, Some(&o)));
-    let mc = |r: &mut RobotHandle, v: Dynamic, t: Dynamic, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
+    api.f(
+        "Robot.move_line(target, options: map) -> Trajectory",
+        "Straight TCP line with motion options.",
+        move |r: &mut RobotHandle, t: Dynamic, o: Dynamic| ml(r, t, Some(&o)),
+    );
+    let mc = |r: &mut RobotHandle,
+              v: Dynamic,
+              t: Dynamic,
+              o: Option<&Dynamic>|
+     -> ScriptResult<TrajectoryHandle> {
         let via = to_transform(&v, "via")?;
         let end = to_transform(&t, "target")?;
-        motion(r, o, "move_circle", |robot, q, o| move_circle(robot, q, &via, &end, o).map_err(|e| e.to_string()))
+        motion(r, o, "move_circle", |robot, q, o| {
+            move_circle(robot, q, &via, &end, o).map_err(|e| e.to_string())
+        })
     };
-    api.f("Robot.move_circle(via, target) -> Trajectory", "Circular TCP arc through the via pose to the target pose (world, mm/degrees).", move |r: &mut RobotHandle, v: Dynamic, t: Dynamic| mc(r, v, t, None));
-    api.f("Robot.move_circle(via, target, options: map) -> Trajectory", "Circular arc with motion options.", move |r: &mut RobotHandle, v: Dynamic, t: Dynamic, o: Dynamic| mc(r, v, t, Some(&o)));
+    api.f(
+        "Robot.move_circle(via, target) -> Trajectory",
+        "Circular TCP arc through the via pose to the target pose (world, mm/degrees).",
+        move |r: &mut RobotHandle, v: Dynamic, t: Dynamic| mc(r, v, t, None),
+    );
+    api.f(
+        "Robot.move_circle(via, target, options: map) -> Trajectory",
+        "Circular arc with motion options.",
+        move |r: &mut RobotHandle, v: Dynamic, t: Dynamic, o: Dynamic| mc(r, v, t, Some(&o)),
+    );
 
     let c = ctx.clone();
-    let rp = move |r: &mut RobotHandle, path: &str, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
+    let rp = move |r: &mut RobotHandle,
+                   path: &str,
+                   o: Option<&Dynamic>|
+          -> ScriptResult<TrajectoryHandle> {
         let full = c.project.resolve(path).map_err(fail)?;
         c.record_read(&full);
-        let text = std::fs::read_to_string(&full).map_err(|e| fail(format!("cannot read {path}: {e}")))?;
+        let text =
+            std::fs::read_to_string(&full).map_err(|e| fail(format!("cannot read {path}: {e}")))?;
         let program = parse_program(&c.project.display(&full), &text).map_err(fail)?;
-        motion(r, o, "run_program", |robot, q, o| run_program(&program, robot, q, o).map_err(|e| e.to_string()))
+        motion(r, o, "run_program", |robot, q, o| {
+            run_program(&program, robot, q, o).map_err(|e| e.to_string())
+        })
     };
     let rp2 = rp.clone();
     api.f("Robot.run_program(path: string) -> Trajectory", "Runs a motion program file (Line/Circle/Joint/Speed/Tool…, see docs/kinematics.md) from the current joints; a syntax or motion error names the file and line. The file is a dependency of the run (watch reruns on its saves).", move |r: &mut RobotHandle, p: &str| rp(r, p, None));
@@ -474,9 +520,14 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             None => Map::new(),
         };
         let (opts, stream) = drill_options(&m)?;
-        let holes: Vec<Hole> = holes.iter().enumerate().map(|(i, h)| hole_arg(h, i)).collect::<ScriptResult<_>>()?;
+        let holes: Vec<Hole> = holes
+            .iter()
+            .enumerate()
+            .map(|(i, h)| hole_arg(h, i))
+            .collect::<ScriptResult<_>>()?;
         let (robot, q) = r.snapshot()?;
-        let report = drill_program(&robot, &q, &holes, &opts).map_err(|e| fail(format!("robot `{}`: drill_program: {e}", robot.name())))?;
+        let report = drill_program(&robot, &q, &holes, &opts)
+            .map_err(|e| fail(format!("robot `{}`: drill_program: {e}", robot.name())))?;
         let mut rows = Array::new();
         let mut drilled = 0;
         for (h, rep) in holes.iter().zip(&report.holes) {
@@ -536,21 +587,65 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         let n = t.trajectory.samples.len() as i64;
         let k = if i < 0 { n + i } else { i };
         if k < 0 || k >= n {
-            return err(format!("sample {i} is out of range: the trajectory has {n} samples"));
+            return err(format!(
+                "sample {i} is out of range: the trajectory has {n} samples"
+            ));
         }
         Ok(&t.trajectory.samples[k as usize])
     }
     let deg = |t: &TrajectoryHandle, q: &[f64]| -> Dynamic {
-        floats(q.iter().zip(t.trajectory.joint_kinds.iter().map(Some).chain(std::iter::repeat(None))).map(|(v, k)| {
-            if k == Some(&crate::kinematics::JointKind::Prismatic) { *v } else { v.to_degrees() }
-        }))
+        floats(
+            q.iter()
+                .zip(
+                    t.trajectory
+                        .joint_kinds
+                        .iter()
+                        .map(Some)
+                        .chain(std::iter::repeat(None)),
+                )
+                .map(|(v, k)| {
+                    if k == Some(&crate::kinematics::JointKind::Prismatic) {
+                        *v
+                    } else {
+                        v.to_degrees()
+                    }
+                }),
+        )
     };
-    api.get("Trajectory.len -> int", "Number of samples.", |t: &mut TrajectoryHandle| t.trajectory.samples.len() as i64);
-    api.get("Trajectory.duration -> float", "Duration (s).", |t: &mut TrajectoryHandle| t.trajectory.duration());
-    api.f("Trajectory.time(i: int) -> float", "Time of sample `i` (s).", |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<f64> { Ok(sample(t, i)?.t) });
-    api.f("Trajectory.joints(i: int) -> array", "Joint values of sample `i` (degrees / mm).", move |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> { Ok(deg(t, &sample(t, i)?.joints)) });
-    api.f("Trajectory.tcp(i: int) -> Transform", "TCP world pose of sample `i` (mm).", |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Transform> { Ok(sample(t, i)?.tcp) });
-    api.f("Trajectory.tcp_xyzabc(i: int) -> array", "TCP of sample `i` as `[x, y, z, a, b, c]` (mm, degrees, convention `xyz`).", |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> { Ok(xyzabc_deg(&sample(t, i)?.tcp, AngleConvention::default())) });
+    api.get(
+        "Trajectory.len -> int",
+        "Number of samples.",
+        |t: &mut TrajectoryHandle| t.trajectory.samples.len() as i64,
+    );
+    api.get(
+        "Trajectory.duration -> float",
+        "Duration (s).",
+        |t: &mut TrajectoryHandle| t.trajectory.duration(),
+    );
+    api.f(
+        "Trajectory.time(i: int) -> float",
+        "Time of sample `i` (s).",
+        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<f64> { Ok(sample(t, i)?.t) },
+    );
+    api.f(
+        "Trajectory.joints(i: int) -> array",
+        "Joint values of sample `i` (degrees / mm).",
+        move |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> {
+            Ok(deg(t, &sample(t, i)?.joints))
+        },
+    );
+    api.f(
+        "Trajectory.tcp(i: int) -> Transform",
+        "TCP world pose of sample `i` (mm).",
+        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Transform> { Ok(sample(t, i)?.tcp) },
+    );
+    api.f(
+        "Trajectory.tcp_xyzabc(i: int) -> array",
+        "TCP of sample `i` as `[x, y, z, a, b, c]` (mm, degrees, convention `xyz`).",
+        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> {
+            Ok(xyzabc_deg(&sample(t, i)?.tcp, AngleConvention::default()))
+        },
+    );
     api.f("Trajectory.save_csv(path: string)", "Writes the joint/TCP log as CSV inside the project, atomically: `t_s,j1_deg,…,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`.", |t: &mut TrajectoryHandle, path: &str| -> ScriptResult<()> {
         let full = t.ctx.project.resolve(path).map_err(fail)?;
         let csv = t.trajectory.to_csv(AngleConvention::default());
@@ -558,5 +653,15 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         t.ctx.record_write(&full);
         Ok(())
     });
-    api.f("Trajectory.to_string() -> string", "`Trajectory(n samples, d s)`.", |t: &mut TrajectoryHandle| format!("Trajectory({} samples, {:.3} s)", t.trajectory.samples.len(), t.trajectory.duration()));
+    api.f(
+        "Trajectory.to_string() -> string",
+        "`Trajectory(n samples, d s)`.",
+        |t: &mut TrajectoryHandle| {
+            format!(
+                "Trajectory({} samples, {:.3} s)",
+                t.trajectory.samples.len(),
+                t.trajectory.duration()
+            )
+        },
+    );
 }
