@@ -193,8 +193,7 @@ fn cached_world_boxes_match_brute_force_after_moves() {
         let c = &doc.components()[i];
         let m = doc.mesh_of(i);
         let pts: Vec<Point3> = m.vertices.iter().map(|p| c.transform.apply(p)).collect();
-        pts.iter()
-            .fold((pts[0], pts[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)))
+        pts.iter().fold((pts[0], pts[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)))
     };
     let mut rng = crate::math::Rng::new(3);
     for k in 0..50 {
@@ -207,9 +206,6 @@ fn cached_world_boxes_match_brute_force_after_moves() {
         doc.set_transform("screw4", t * step).unwrap();
         let (lo, hi) = doc.world_aabb(i).unwrap();
         let (blo, bhi) = brute(&doc);
-        assert!(
-            (lo - blo).norm() < 1e-9 && (hi - bhi).norm() < 1e-9,
-            "step {k}"
-        );
+        assert!((lo - blo).norm() < 1e-9 && (hi - bhi).norm() < 1e-9, "step {k}");
     }
 }

@@ -15,21 +15,12 @@ const N: usize = 200_000;
 
 fn rhai_seconds(dir: &Path, body: &str) -> f64 {
     let script = dir.join("scripts/bench.rhai");
-    std::fs::write(
-        &script,
-        format!(
-            "let d = open_doc(\"models/cell.yaml\");\nlet s = d.component(\"screw4\");\n{body}\n"
-        ),
-    )
-    .unwrap();
+    std::fs::write(&script, format!("let d = open_doc(\"models/cell.yaml\");\nlet s = d.component(\"screw4\");\n{body}\n")).unwrap();
     let opts = RunOptions {
         script,
         doc: None,
         project: Project::new(dir).unwrap(),
-        limits: Limits {
-            max_operations: u64::MAX / 2,
-            ..Limits::default()
-        },
+        limits: Limits { max_operations: u64::MAX / 2, ..Limits::default() },
         cancel: Arc::new(AtomicBool::new(false)),
         output: Arc::new(|l: &str| println!("{l}")),
     };
@@ -85,9 +76,7 @@ fn build_extension(dir: &Path) -> bool {
         let o = Command::new("python3").args(["-c", &format!("import sysconfig; print(sysconfig.get_config_var('{k}') or sysconfig.get_paths().get('{k}', ''))")]).output().ok()?;
         Some(String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
-    let (Some(inc), Some(suffix)) = (cfg("include"), cfg("EXT_SUFFIX")) else {
-        return false;
-    };
+    let (Some(inc), Some(suffix)) = (cfg("include"), cfg("EXT_SUFFIX")) else { return false };
     std::fs::write(dir.join("fitupbench.c"), C_SOURCE).unwrap();
     Command::new("cc")
         .args(["-O2", "-shared", "-fPIC", "-I", &inc, "-o"])
@@ -129,15 +118,7 @@ fn main() {
     } else {
         let (pa, pe) = (median(&mut pa), median(&mut pe));
         println!("Python: loop {:.0} ns/iter, empty loop {:.0} ns/iter → {:.0} ns per native call ({:.2} M calls/s)", pa / N as f64 * 1e9, pe / N as f64 * 1e9, per_call(pa, pe), 1e3 / per_call(pa, pe));
-        println!(
-            "ratio Rhai / Python per call: {:.2}",
-            per_call(ra, re) / per_call(pa, pe)
-        );
+        println!("ratio Rhai / Python per call: {:.2}", per_call(ra, re) / per_call(pa, pe));
     }
-    println!(
-        "loadavg: {}",
-        std::fs::read_to_string("/proc/loadavg")
-            .unwrap_or_default()
-            .trim()
-    );
+    println!("loadavg: {}", std::fs::read_to_string("/proc/loadavg").unwrap_or_default().trim());
 }

@@ -20,23 +20,14 @@ fn main() {
     let triangles: usize = sieve.triangles.len() + 60 + 928 + 640 + 5 * 256;
     file.parts.insert(
         "sieve".into(),
-        PartFile {
-            stl: "meshes/sieve.stl".into(),
-            planes: Default::default(),
-            axes: Default::default(),
-            points: Default::default(),
-            features: vec![],
-        },
+        PartFile { stl: "meshes/sieve.stl".into(), planes: Default::default(), axes: Default::default(), points: Default::default(), features: vec![] },
     );
     file.components.push(ComponentFile {
         name: "sieve".into(),
         part: "sieve".into(),
         fixed: true,
         color: None,
-        transform: Some(
-            fitup::math::Transform::from_translation(fitup::math::Vec3::new(0.0, 0.0, 800.0))
-                .to_matrix(),
-        ),
+        transform: Some(fitup::math::Transform::from_translation(fitup::math::Vec3::new(0.0, 0.0, 800.0)).to_matrix()),
     });
     std::fs::write(models.join("big.yaml"), file.to_yaml().unwrap()).unwrap();
     std::fs::create_dir(dir.path().join("scripts")).unwrap();
@@ -64,9 +55,7 @@ fn main() {
     });
     let wait_done = |n: usize| -> Instant {
         loop {
-            let (t, l) = rx
-                .recv_timeout(Duration::from_secs(60))
-                .expect("watch output");
+            let (t, l) = rx.recv_timeout(Duration::from_secs(60)).expect("watch output");
             if l.starts_with(&format!("== done {n} ")) {
                 assert!(l.contains(" ok "), "{l}");
                 return t;
@@ -75,10 +64,7 @@ fn main() {
     };
     let t_first = Instant::now();
     wait_done(1);
-    println!(
-        "first run (reads {triangles} triangles): {:.1} ms",
-        t_first.elapsed().as_secs_f64() * 1e3
-    );
+    println!("first run (reads {triangles} triangles): {:.1} ms", t_first.elapsed().as_secs_f64() * 1e3);
 
     let saves = 60;
     let mut latencies = Vec::new();
@@ -102,12 +88,6 @@ fn main() {
     let q = |p: f64| sorted[((sorted.len() - 1) as f64 * p).round() as usize];
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("watch latency, save → end of rerun, {saves} saves (in-place and rename alternating), {triangles} cached triangles:");
-    println!(
-        "  median {:.1} ms   p95 {:.1} ms   min {:.1} ms   max {:.1} ms",
-        q(0.5),
-        q(0.95),
-        sorted[0],
-        sorted[sorted.len() - 1]
-    );
+    println!("  median {:.1} ms   p95 {:.1} ms   min {:.1} ms   max {:.1} ms", q(0.5), q(0.95), sorted[0], sorted[sorted.len() - 1]);
     println!("  loadavg: {}", load.trim());
 }
