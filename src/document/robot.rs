@@ -664,3 +664,105 @@ impl Document {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::document::file::{DhRowFile, LinkFile};
+    use crate::kinematics::Catalog;
+
+    fn row(theta: f64, d: f64, a: f64, alpha: f64) -> DhRowFile {
+        DhRowFile {
+            theta,
+            d,
+            a,
+            alpha,
+            joint: None,
+            limits: None,
+        }
+    }
+
+    /// Seed 000's table 2 written as a D-H table in the file (flange at 80 mm, as the
+    /// catalog models it) gives the catalog's flange poses.
+    #[test]
+    fn dh_rows_in_degrees_match_the_catalog() {
+        let dh = DhFile {
+            convention: None,
+            rows: vec![
+                row(0.0, 340.0, 50.0, 90.0),
+                row(90.0, 0.0, 330.0, 0.0),
+                row(0.0, 0.0, 45.0, 90.0),
+                row(0.0, 340.0, 0.0, 90.0),
+                row(90.0, 0.0, 0.0, 90.0),
+                row(0.0, -80.0, 0.0, 0.0),
+            ],
+        };
+        let r = dh_robot("t", &dh).unwrap();
+        let c = Catalog::NachiMz07.robot();
+        let q = [0.1, -0.2, 0.3, -0.4, 0.5, -0.6];
+        assert!(r
+            .flange_pose(&q)
+            .unwrap()
+            .approx_eq(&c.flange_pose(&q).unwrap(), 1e-9, 1e-12));
+        let bad = DhFile {
+            convention: Some("craig".into()),
+            rows: vec![],
+        };
+        assert!(dh_robot("t", &bad).unwrap_err().contains("convention"));
+    }
+
+    #[test]
+    fn limits_are_checked_and_converted() {
+        assert!(limits(Some([10.0, -10.0]), JointKind::Revolute)
+            .unwrap_err()
+            .contains("inverted"));
+        assert!(limits(Some([f64::NAN, 1.0]), JointKind::Revolute).is_err());
+        let l = limits(Some([-90.0, 45.0]), JointKind::Revolute)
+            .unwrap()
+            .unwrap();
+        assert!((l.min + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        let p = limits(Some([0.0, 500.0]), JointKind::Prismatic)
+            .unwrap()
+            .unwrap();
+        assert_eq!((p.min, p.max), (0.0, 500.0));
+    }
+
+    /// `drawn_at_zero` offsets put every link component at the base pose when the
+    /// joints are 0, and a component follows `offset · link pose` otherwise.
+    #[test]
+    fn drawn_at_zero_offsets() {
+        let f = RobotFile {
+            name: "r".into(),
+            catalog: Some("nachi_mz07".into()),
+            dh: None,
+            base: Some(Transform::from_translation(Vec3::new(100.0, 0.0, 50.0)).to_matrix()),
+            tool: None,
+            flange: None,
+            drawn_at_zero: true,
+            links: (0..7)
+                .map(|i| LinkFile {
+                    component: Some(format!("c{i}")),
+                    ..LinkFile::default()
+                })
+                .collect(),
+            joints: None,
+        };
+        let components: HashMap<String, usize> = (0..7).map(|i| (format!("c{i}"), i)).collect();
+        let inst = build(&f, &components).unwrap();
+        let base = inst.robot().base();
+        for (_, p) in inst.component_poses(&[0.0; 6]).unwrap() {
+            assert!(p.approx_eq(&base, 1e-9, 1e-12));
+        }
+        let q = [0.3, -0.2, 0.1, 0.4, -0.5, 0.6];
+        let links = inst.robot().link_poses(&q).unwrap();
+        for (c, p) in inst.component_poses(&q).unwrap() {
+            assert!(p.approx_eq(&(inst.links()[c].offset * links[c]), 1e-9, 1e-12));
+        }
+        assert_eq!(inst.dimension_features()[0], "角度1@r");
+        // Joint values outside the limits are refused with the joint named in degrees.
+        let msg = inst
+            .check_joints(&[0.0, 0.0, 0.0, 0.0, 2.5, 0.0])
+            .unwrap_err();
+        assert!(msg.contains("joint 5") && msg.contains("143.2394"), "{msg}");
+    }
+}
