@@ -375,3 +375,32 @@ fn invalid_robots_are_located_errors() {
         );
     }
 }
+
+/// `stream: true` prints one monitor line per sample through the run's output (the
+/// sink `fitup watch` streams), with the joints and the TCP of each sample.
+#[test]
+fn streamed_motions_print_every_sample() {
+    let dir = project();
+    let script = r#"
+        let arm = open_doc("models/mz07.yaml").robot("mz07");
+        let t = arm.move_line(pose(390, 0, 250, 0, 0, 0), #{speed: 100, interval: 0.1, stream: true});
+        print(`samples ${t.len}`);
+    "#;
+    std::fs::write(dir.path().join("scripts/s.rhai"), script).unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/s.rhai"]);
+    let text = common::text(&out);
+    assert!(out.status.success(), "{text}");
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("[mz07] t="))
+        .collect();
+    // 51.9 mm at 100 mm/s = 0.519 s: samples at 0, 0.1, …, 0.5 and 0.519.
+    assert_eq!(lines.len(), 7, "{text}");
+    assert!(text.contains("samples 7"));
+    assert!(
+        lines[6].contains("tcp=[390.000 0.000 250.000")
+            || lines[6].contains("tcp=[390.000 -0.000 250.000"),
+        "{}",
+        lines[6]
+    );
+}
