@@ -60,6 +60,11 @@ fn dimensions_drive_link_components() {
         .unwrap()
         .transform
         .approx_eq(&base_before, 1e-12, 1e-12));
+    // A link component is moved through its robot, not directly.
+    let err = doc
+        .set_transform("mz07_link3", Transform::IDENTITY)
+        .unwrap_err();
+    assert!(err.to_string().contains("link of robot `mz07`"), "{err}");
     // Out of the limits: refused, nothing moves.
     let err = doc
         .set_dimension("D1@角度5", 150f64.to_radians())

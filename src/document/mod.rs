@@ -556,6 +556,16 @@ impl Document {
                 "component `{name}` is fixed; set `fixed: false` to move it"
             )));
         }
+        if let Some(robot) = self.driving_robot(i) {
+            // Rhai writes a property back after a method call on it
+            // (`link.transform.apply(p)`): an unchanged pose is not a move.
+            if t.approx_eq(&self.components[i].transform, 1e-12, 1e-12) {
+                return Ok(());
+            }
+            return Err(DocumentError::Invalid(format!(
+                "component `{name}` is a link of robot `{robot}`: set the robot's joints (or base) to move it"
+            )));
+        }
         self.components[i].transform = t;
         self.revision += 1;
         Ok(())

@@ -628,9 +628,15 @@ impl Document {
     /// Whether a component is moved by a robot link (the mate solver then treats it as
     /// fixed).
     pub fn is_robot_driven(&self, component: usize) -> bool {
+        self.driving_robot(component).is_some()
+    }
+
+    /// The name of the robot whose link a component displays.
+    pub fn driving_robot(&self, component: usize) -> Option<&str> {
         self.robots
             .iter()
-            .any(|r| r.links.iter().any(|l| l.component == Some(component)))
+            .find(|r| r.links.iter().any(|l| l.component == Some(component)))
+            .map(|r| r.name())
     }
 
     /// Places every robot link component at its robot's current joints.
