@@ -4,10 +4,13 @@
 //! World frame: floor at z = 0, table top surface at z = 750 mm, table spanning
 //! x ∈ [0, 1200], y ∈ [0, 800] mm.
 
-use crate::document::file::{AxisFile, ComponentFile, DocumentFile, MateFile, PartFile, PlaneFile};
+use crate::document::file::{
+    AxisFile, ComponentFile, DocumentFile, LinkFile, MateFile, PartFile, PlaneFile, RobotFile,
+};
 use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{write_stl, Mesh, MeshError};
 use indexmap::IndexMap;
+use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
 /// Table top surface height (mm).
@@ -252,6 +255,7 @@ pub fn cell_document() -> DocumentFile {
         parts,
         components,
         mates,
+        robots: Vec::new(),
     }
 }
 
@@ -274,5 +278,201 @@ pub fn write_cell(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     write_stl(&dir.join("meshes/screw.stl"), &screw_mesh()?)?;
     let text = cell_document().to_yaml()?;
     crate::fsutil::write_atomic(&dir.join("cell.yaml"), text.as_bytes())?;
+    Ok(())
+}
+
+/// Height of the pedestals the two arms of the robot cell stand on (mm): the MZ07's
+/// tool point at the zero configuration is then 48 mm above the table top.
+pub const PEDESTAL_HEIGHT: f64 = 600.0;
+
+/// Link meshes of the NACHI MZ07 (seed 000 table 2), drawn in the robot base frame at
+/// the zero configuration (`drawn_at_zero`): `(part name, mesh)` for the base and links
+/// 1–6. Simple solids around the D-H geometry: shoulder axis at (50, y, 340), elbow axis
+/// at (50, y, 670), forearm along X at z = 715, wrist centre (390, 0, 715), flange at
+/// (390, 0, 635), tool point at (390, 0, 198.1) (link 6 carries the tool spindle).
+pub fn mz07_link_meshes() -> Vec<(String, Mesh)> {
+    let p = Point3::new;
+    let along_y = |r: f64, y0: f64, y1: f64, x: f64, z: f64| {
+        // A Z cylinder turned onto +Y (rotation about X by −90°), then placed.
+        let turn = Transform::from_rotation_about(Point3::origin(), Vec3::x(), -FRAC_PI_2)
+            .unwrap_or(Transform::IDENTITY);
+        Mesh::cylinder(r, y1 - y0, 32)
+            .transformed(&(turn * Transform::from_translation(Vec3::new(x, y0, z))))
+    };
+    let along_x = |r: f64, x0: f64, x1: f64, z: f64| {
+        let turn = Transform::from_rotation_about(Point3::origin(), Vec3::y(), FRAC_PI_2)
+            .unwrap_or(Transform::IDENTITY);
+        Mesh::cylinder(r, x1 - x0, 32)
+            .transformed(&(turn * Transform::from_translation(Vec3::new(x0, 0.0, z))))
+    };
+    let z_cyl = |r: f64, z0: f64, z1: f64, x: f64| {
+        Mesh::cylinder(r, z1 - z0, 32)
+            .transformed(&Transform::from_translation(Vec3::new(x, 0.0, z0)))
+    };
+    let base = z_cyl(110.0, 0.0, 180.0, 0.0);
+    let mut link1 = z_cyl(90.0, 180.0, 290.0, 0.0);
+    link1.append(&Mesh::cuboid(p(-70.0, -75.0, 290.0), p(110.0, 75.0, 390.0)));
+    let mut link2 = along_y(60.0, -130.0, -75.0, 50.0, 340.0);
+    link2.append(&Mesh::cuboid(p(15.0, -125.0, 340.0), p(85.0, -80.0, 670.0)));
+    link2.append(&along_y(50.0, -130.0, -75.0, 50.0, 670.0));
+    let mut link3 = Mesh::cuboid(p(0.0, -70.0, 640.0), p(130.0, 70.0, 770.0));
+    link3.append(&along_y(45.0, -75.0, 75.0, 50.0, 670.0));
+    let mut link4 = along_x(42.0, 130.0, 340.0, 715.0);
+    link4.append(&Mesh::cuboid(p(340.0, -45.0, 690.0), p(350.0, 45.0, 740.0)));
+    let mut link5 = along_y(35.0, -40.0, 40.0, 390.0, 715.0);
+    link5.append(&z_cyl(32.0, 675.0, 680.0, 390.0));
+    let mut link6 = z_cyl(30.0, 635.0, 672.0, 390.0);
+    link6.append(&z_cyl(12.0, 260.0, 635.0, 390.0));
+    link6.append(
+        &Mesh::frustum(1.0, 8.0, 61.9, 16)
+            .transformed(&Transform::from_translation(Vec3::new(390.0, 0.0, 198.1))),
+    );
+    let names = ["base", "link1", "link2", "link3", "link4", "link5", "link6"];
+    names
+        .iter()
+        .map(|n| format!("mz07_{n}"))
+        .zip([base, link1, link2, link3, link4, link5, link6])
+        .collect()
+}
+
+fn mz07_parts(parts: &mut IndexMap<String, PartFile>) {
+    for (name, _) in mz07_link_meshes() {
+        parts.insert(
+            name.clone(),
+            PartFile {
+                stl: format!("meshes/{name}.stl"),
+                planes: IndexMap::new(),
+                axes: IndexMap::new(),
+                points: IndexMap::new(),
+                features: vec![],
+            },
+        );
+    }
+}
+
+/// One MZ07 of a document: its link components (named `<name>_base`, `<name>_link1`…)
+/// and its robot entry, placed at `base`, with dimensions `D1@<feature>n`.
+fn mz07_robot(
+    name: &str,
+    base: [[f64; 4]; 4],
+    feature: &str,
+    color: &str,
+) -> (Vec<ComponentFile>, RobotFile) {
+    let robot = crate::kinematics::Catalog::NachiMz07.robot();
+    let mut components = Vec::new();
+    let mut links = Vec::new();
+    for (i, (part, _)) in mz07_link_meshes().into_iter().enumerate() {
+        let comp = format!("{name}_{}", part.trim_start_matches("mz07_"));
+        components.push(ComponentFile {
+            transform: Some(base),
+            ..component(&comp, &part, i == 0, color, Transform::IDENTITY)
+        });
+        links.push(LinkFile {
+            component: Some(comp),
+            dimension: (i > 0).then(|| format!("{feature}{i}")),
+            ..LinkFile::default()
+        });
+    }
+    let robot_file = RobotFile {
+        name: name.into(),
+        catalog: Some("nachi_mz07".into()),
+        dh: None,
+        base: Some(base),
+        tool: Some(robot.tool().to_matrix()),
+        flange: None,
+        drawn_at_zero: true,
+        links,
+        joints: Some(vec![0.0; 6]),
+    };
+    (components, robot_file)
+}
+
+/// `models/mz07.yaml`: one NACHI MZ07 at the origin, its links driven by the
+/// dimensions `D1@角度1` … `D1@角度6` (seed 000 §3.3), tool point 436.9 mm below the
+/// flange.
+pub fn mz07_document() -> DocumentFile {
+    let mut parts = IndexMap::new();
+    mz07_parts(&mut parts);
+    let (components, robot) =
+        mz07_robot("mz07", Transform::IDENTITY.to_matrix(), "角度", "#e8b020");
+    DocumentFile {
+        units: "mm".into(),
+        description: Some(
+            "NACHI MZ07 (seed 000 table 2): joints driven by D1@角度1..6, degrees".into(),
+        ),
+        parts,
+        components,
+        mates: vec![],
+        robots: vec![robot],
+    }
+}
+
+/// `models/cell_robots.yaml`: the demo cell of [`cell_document`] with two MZ07 arms on
+/// pedestals on either side of the table (seed 000's demo has two arms): `mz07_a` at
+/// (600, −350) facing +Y, `mz07_b` at (600, 1150) facing −Y; dimensions `D1@a角度n`,
+/// `D1@b角度n`.
+pub fn cell_robots_document() -> DocumentFile {
+    let mut doc = cell_document();
+    doc.description = Some("Seed 000 demo cell with two NACHI MZ07 arms beside the table".into());
+    mz07_parts(&mut doc.parts);
+    doc.parts.insert(
+        "pedestal".into(),
+        PartFile {
+            stl: "meshes/pedestal.stl".into(),
+            planes: IndexMap::new(),
+            axes: IndexMap::new(),
+            points: IndexMap::new(),
+            features: vec![],
+        },
+    );
+    for (name, y, s, feature, color) in [
+        ("mz07_a", -350.0, 1.0, "a角度", "#e8b020"),
+        ("mz07_b", 1150.0, -1.0, "b角度", "#d06020"),
+    ] {
+        let at = Vec3::new(600.0, y, 0.0);
+        doc.components.push(component(
+            &format!("{name}_pedestal"),
+            "pedestal",
+            true,
+            "#606060",
+            Transform::from_translation(at),
+        ));
+        // Turned ±90° about Z (written exactly, so the file holds clean 0s and 1s).
+        let base = [
+            [0.0, s, 0.0, 0.0],
+            [-s, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [at.x, at.y, PEDESTAL_HEIGHT, 1.0],
+        ];
+        let (components, robot) = mz07_robot(name, base, feature, color);
+        doc.components.extend(components);
+        doc.robots.push(robot);
+    }
+    doc
+}
+
+/// The pedestal under each arm of the robot cell: 300 × 300 mm, [`PEDESTAL_HEIGHT`]
+/// high, centred on its origin.
+pub fn pedestal_mesh() -> Mesh {
+    Mesh::cuboid(
+        Point3::new(-150.0, -150.0, 0.0),
+        Point3::new(150.0, 150.0, PEDESTAL_HEIGHT),
+    )
+}
+
+/// Writes `dir/mz07.yaml`, `dir/cell_robots.yaml` and their meshes (the cell's meshes
+/// too, through [`write_cell`]).
+pub fn write_robots(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    write_cell(dir)?;
+    for (name, mesh) in mz07_link_meshes() {
+        write_stl(&dir.join(format!("meshes/{name}.stl")), &mesh)?;
+    }
+    write_stl(&dir.join("meshes/pedestal.stl"), &pedestal_mesh())?;
+    for (file, doc) in [
+        ("mz07.yaml", mz07_document()),
+        ("cell_robots.yaml", cell_robots_document()),
+    ] {
+        crate::fsutil::write_atomic(&dir.join(file), doc.to_yaml()?.as_bytes())?;
+    }
     Ok(())
 }

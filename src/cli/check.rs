@@ -66,6 +66,24 @@ pub(super) fn check(path: &Path) -> Exit {
             println!("    {} = {}", d.name, d.document_value());
         }
     }
+    if !doc.robots().is_empty() {
+        println!("  robots ({}):", doc.robots().len());
+        for r in doc.robots() {
+            let p = r.tcp().to_xyzabc(crate::math::AngleConvention::default());
+            println!(
+                "    {:<12} {} joints, {} solver, TCP at X {:.3} Y {:.3} Z {:.3} A {:.3} B {:.3} C {:.3}",
+                r.name(),
+                r.robot().dof(),
+                if r.robot().analytic().is_some() { "closed-form" } else { "numeric" },
+                p[0],
+                p[1],
+                p[2],
+                p[3].to_degrees(),
+                p[4].to_degrees(),
+                p[5].to_degrees()
+            );
+        }
+    }
     if warnings > 0 {
         println!("  {warnings} warning(s)");
     }

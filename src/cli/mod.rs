@@ -20,7 +20,8 @@ pub struct Cli {
 /// Options shared by `run` and `watch`.
 #[derive(Debug, clap::Args, Clone)]
 pub struct ScriptArgs {
-    /// The Rhai script (`.rhai`).
+    /// The Rhai script (`.rhai`), or a robot motion program (any other extension,
+    /// `run` only: needs `--doc`, and `--robot` when the document has several robots).
     pub script: PathBuf,
     /// A document to open and provide to the script as `doc`.
     #[arg(long)]
@@ -28,6 +29,12 @@ pub struct ScriptArgs {
     /// The project folder that bounds file access [default: the current folder].
     #[arg(long)]
     pub root: Option<PathBuf>,
+    /// The robot of `--doc` that runs a motion program.
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Where to write a motion program's joint/TCP log (CSV) [default: standard output].
+    #[arg(long)]
+    pub log: Option<PathBuf>,
     /// Operation limit of the sandbox (roughly: expressions evaluated).
     #[arg(long, default_value_t = crate::script::Limits::default().max_operations)]
     pub max_operations: u64,

@@ -47,7 +47,21 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
     })
 }
 
+/// Whether the file is a robot motion program rather than a Rhai script.
+fn is_program(path: &std::path::Path) -> bool {
+    path.extension().is_none_or(|e| e != "rhai")
+}
+
 pub(super) fn run(a: &ScriptArgs) -> Exit {
+    if is_program(&a.script) {
+        return match run_program(a) {
+            Ok(()) => Exit::Ok,
+            Err((exit, message)) => {
+                eprintln!("error: {message}");
+                exit
+            }
+        };
+    }
     let opts = match options(a) {
         Ok(o) => o,
         Err(e) => {
@@ -140,4 +154,76 @@ fn clock() -> String {
         ((day % 3600.0) / 60.0) as u32,
         day % 60.0
     )
+}
+
+/// `fitup run PROGRAM --doc DOC [--robot NAME] [--log CSV]`: runs a motion program on a
+/// robot of the document from its saved joints and prints (or writes) the joint/TCP log.
+fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
+    let usage = |m: String| (Exit::Usage, m);
+    let root = match &a.root {
+        Some(r) => r.clone(),
+        None => std::env::current_dir()
+            .map_err(|e| usage(format!("cannot read the current folder: {e}")))?,
+    };
+    let project = Project::new(&root)
+        .map_err(|e| usage(format!("project folder {}: {e}", root.display())))?;
+    let program_path = project
+        .resolve(&a.script.to_string_lossy())
+        .map_err(|e| usage(format!("program: {e} (pass --root)")))?;
+    let doc_arg = a.doc.as_ref().ok_or_else(|| {
+        usage(format!(
+            "{} is a robot program (not .rhai): pass --doc with the document holding the robot",
+            a.script.display()
+        ))
+    })?;
+    let doc_path = project
+        .resolve(&doc_arg.to_string_lossy())
+        .map_err(|e| usage(format!("document: {e}")))?;
+    let fail = |m: String| (Exit::Failure, m);
+    let mut doc = crate::document::Document::open(&doc_path).map_err(|e| fail(e.render()))?;
+    let index = match &a.robot {
+        Some(name) => doc.robot_index(name).map_err(|e| usage(e.to_string()))?,
+        None => match doc.robots().len() {
+            1 => 0,
+            0 => return Err(fail(format!("{} has no robots", doc_arg.display()))),
+            _ => {
+                let names: Vec<&str> = doc.robots().iter().map(|r| r.name()).collect();
+                return Err(usage(format!(
+                    "{} has several robots ({}): pass --robot",
+                    doc_arg.display(),
+                    names.join(", ")
+                )));
+            }
+        },
+    };
+    let text = std::fs::read_to_string(&program_path)
+        .map_err(|e| fail(format!("cannot read {}: {e}", a.script.display())))?;
+    let program = crate::kinematics::parse_program(&project.display(&program_path), &text)
+        .map_err(|e| fail(e.to_string()))?;
+    let trajectory = doc
+        .run_robot_program(
+            index,
+            &program,
+            &crate::kinematics::MotionOptions::default(),
+        )
+        .map_err(|e| fail(e.to_string()))?;
+    let csv = trajectory.to_csv(crate::math::AngleConvention::default());
+    match &a.log {
+        Some(log) => {
+            let path = project
+                .resolve(&log.to_string_lossy())
+                .map_err(|e| usage(format!("log: {e}")))?;
+            crate::fsutil::write_atomic(&path, csv.as_bytes())
+                .map_err(|e| fail(format!("cannot write {}: {e}", log.display())))?;
+            println!(
+                "{}: {} samples, {:.3} s; log written to {}",
+                doc.robots()[index].name(),
+                trajectory.samples.len(),
+                trajectory.duration(),
+                log.display()
+            );
+        }
+        None => print!("{csv}"),
+    }
+    Ok(())
 }

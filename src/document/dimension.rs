@@ -64,3 +64,17 @@ pub fn full_name(mate: &str) -> String {
 pub fn mate_of(full_name: &str) -> Option<&str> {
     full_name.strip_prefix("D1@").filter(|m| !m.is_empty())
 }
+
+/// What a driving dimension drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DimensionTarget {
+    /// The value of a distance or angle mate (index into the document's mates).
+    Mate(usize),
+    /// A joint of a robot (indices of the robot and of the joint, in joint order).
+    Joint {
+        /// Robot index in the document.
+        robot: usize,
+        /// 0-based joint index.
+        joint: usize,
+    },
+}

@@ -26,6 +26,9 @@ pub struct DocumentFile {
     /// Mates between reference entities of components.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub mates: Vec<MateFile>,
+    /// Robots whose links are displayed by components (see [`RobotFile`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub robots: Vec<RobotFile>,
 }
 
 fn default_units() -> String {
@@ -153,6 +156,120 @@ pub struct MateFile {
     /// making it a signed angle over the full turn.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub about: Option<String>,
+}
+
+/// A robot: a kinematic tree (from the catalog, a D-H table or explicit links) placed
+/// at `base`, with a tool frame and current joint values; its links move components.
+///
+/// Exactly one of `catalog`, `dh` or a `links` list with joints describes the tree.
+/// With `catalog` or `dh`, `links` only attaches components (link 0 is the base, link
+/// `i` carries D-H frame `i`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotFile {
+    /// Unique robot name.
+    pub name: String,
+    /// A catalog arm (`nachi_mz07`, `abb_irb2400`, …).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub catalog: Option<String>,
+    /// A D-H table.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dh: Option<DhFile>,
+    /// World pose of the robot's root link (pose matrix like components; identity when
+    /// absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<[[f64; 4]; 4]>,
+    /// The tool centre point in the flange frame (pose matrix); the catalog tool, or
+    /// the flange itself, when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<[[f64; 4]; 4]>,
+    /// Explicit trees: the name of the link carrying the tool (default: the last link).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flange: Option<String>,
+    /// Components' part frames coincide with the robot base frame when every joint is
+    /// at 0 (meshes drawn in the zero configuration, as CAD models of robots usually
+    /// are): the default `offset` of each link is then the inverse of its zero pose.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub drawn_at_zero: bool,
+    /// The links (parents first).
+    #[serde(default)]
+    pub links: Vec<LinkFile>,
+    /// Current joint values in joint order: degrees (revolute), mm (prismatic); all 0
+    /// when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joints: Option<Vec<f64>>,
+}
+
+/// A D-H table (angles in degrees, lengths in mm).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DhFile {
+    /// `standard` (seed 000 table 2, default) or `modified` (Craig).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convention: Option<String>,
+    /// One row per joint.
+    pub rows: Vec<DhRowFile>,
+}
+
+/// One D-H row: θ (joint offset) and α in degrees, d and a in mm.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DhRowFile {
+    /// Joint offset θ (degrees).
+    pub theta: f64,
+    /// Offset along z (mm).
+    pub d: f64,
+    /// Length along x (mm).
+    pub a: f64,
+    /// Twist about x (degrees).
+    pub alpha: f64,
+    /// `revolute` (default) or `prismatic`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<String>,
+    /// `[min, max]`: degrees (revolute) or mm (prismatic).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits: Option<[f64; 2]>,
+}
+
+/// A link of a robot: which component displays it, and (explicit trees only) its
+/// parent and joint. Axis and point are in the parent link's frame (seed 001).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct LinkFile {
+    /// Link name (required for explicit trees; catalog and D-H links are `base`,
+    /// `link1`, …).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The component whose pose follows this link.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub component: Option<String>,
+    /// Pose of the component's part frame in the link frame (pose matrix); identity,
+    /// or the inverse zero pose with `drawn_at_zero`, when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<[[f64; 4]; 4]>,
+    /// Explicit trees: the parent link's name (none for the root).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent: Option<String>,
+    /// Explicit trees: `fixed` (default), `revolute` or `prismatic`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<String>,
+    /// Explicit trees: the joint axis direction in the parent frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// Explicit trees: a point on a revolute axis in the parent frame (mm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point: Option<[f64; 3]>,
+    /// Explicit trees: the link frame in the parent frame at joint value 0 (pose
+    /// matrix; identity when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub home: Option<[[f64; 4]; 4]>,
+    /// Explicit trees: `[min, max]` in degrees (revolute) or mm (prismatic).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits: Option<[f64; 2]>,
+    /// The driving dimension's feature name (full name `D1@<dimension>`); default
+    /// `角度<n>@<robot>` (revolute) or `距离<n>@<robot>` (prismatic), n = joint number.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dimension: Option<String>,
 }
 
 impl DocumentFile {

@@ -9,10 +9,12 @@ pub mod dimension;
 pub mod file;
 pub mod mates;
 pub mod reference;
+pub mod robot;
 
-pub use dimension::{Dimension, DimensionKind};
+pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
+pub use robot::{LinkDisplay, RobotInstance};
 
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
@@ -198,6 +200,7 @@ pub struct Document {
     components: Vec<Component>,
     by_name: HashMap<String, usize>,
     mates: Vec<Mate>,
+    robots: Vec<RobotInstance>,
     revision: u64,
     aabb_cache: AabbCache,
 }
@@ -470,6 +473,7 @@ impl Document {
             components,
             by_name,
             mates: Vec::new(),
+            robots: Vec::new(),
             revision: 0,
             aabb_cache: AabbCache::default(),
         };
@@ -531,8 +535,16 @@ impl Document {
                 about,
             });
         }
+        let mate_dimensions = doc
+            .mates
+            .iter()
+            .filter(|m| m.kind.has_dimension())
+            .map(|m| m.name.clone())
+            .collect();
+        doc.robots = robot::load(&file.robots, &doc.by_name, &mate_dimensions, text, path)?;
+        doc.apply_robots();
         let mut poses: Vec<Transform> = doc.components.iter().map(|c| c.transform).collect();
-        let fixed: Vec<bool> = doc.components.iter().map(|c| c.fixed).collect();
+        let fixed = doc.solver_fixed();
         mates::solve(&doc.mates, &mut poses, &fixed)
             .map_err(|e| at(&format!("name: {}", e.mate), "mates", e.to_string()))?;
         for (c, p) in doc.components.iter_mut().zip(poses) {
@@ -573,8 +585,9 @@ impl Document {
 
     /// Re-solves the mates (SolidWorks' rebuild). On failure the poses are unchanged.
     pub fn rebuild(&mut self) -> Result<(), DocumentError> {
+        self.apply_robots();
         let mut poses: Vec<Transform> = self.components.iter().map(|c| c.transform).collect();
-        let fixed: Vec<bool> = self.components.iter().map(|c| c.fixed).collect();
+        let fixed = self.solver_fixed();
         mates::solve(&self.mates, &mut poses, &fixed)
             .map_err(|e| DocumentError::Invalid(e.to_string()))?;
         for (c, p) in self.components.iter_mut().zip(poses) {
@@ -651,16 +664,21 @@ impl Document {
     /// [`set_transform`](Self::set_transform) by component index (no name lookup: the
     /// hot path of stepwise animations).
     pub fn set_transform_at(&mut self, i: usize, t: Transform) -> Result<(), DocumentError> {
+        let name = &self.components[i].name;
         if !t.is_finite() {
-            let name = &self.components[i].name;
-            return Err(DocumentError::Invalid(format!(
-                "the pose for `{name}` is not finite"
-            )));
+            return Err(DocumentError::Invalid(format!("the pose for `{name}` is not finite")));
+        }
+        // Setting the pose a component already has is not a move (Rhai writes a property
+        // back after a method call on it, as in `table.transform.apply(p)`).
+        if t == self.components[i].transform {
+            return Ok(());
         }
         if self.components[i].fixed {
-            let name = &self.components[i].name;
+            return Err(DocumentError::Invalid(format!("component `{name}` is fixed; set `fixed: false` to move it")));
+        }
+        if let Some(robot) = self.driving_robot(i) {
             return Err(DocumentError::Invalid(format!(
-                "component `{name}` is fixed; set `fixed: false` to move it"
+                "component `{name}` is a link of robot `{robot}`: set the robot's joints (or base) to move it"
             )));
         }
         self.components[i].transform = t;
@@ -743,29 +761,67 @@ impl Document {
         &self.mates
     }
 
-    /// Full names of the driving dimensions (`D1@<mate>`), in file order.
+    /// Full names of the driving dimensions, in file order: mates' (`D1@<mate>`),
+    /// then every robot joint's (`D1@角度1`, …).
     pub fn dimensions(&self) -> Vec<String> {
         self.mates
             .iter()
             .filter(|m| m.kind.has_dimension())
             .map(|m| dimension::full_name(&m.name))
+            .chain(self.robots.iter().flat_map(|r| r.dimension_names()))
             .collect()
     }
 
-    /// A dimension by full name (`D1@角度1`).
+    /// A dimension by full name (`D1@角度1`): a mate value or a robot joint
+    /// (revolute joints are angles, prismatic joints lengths).
     pub fn dimension(&self, full_name: &str) -> Result<Dimension, DocumentError> {
-        let i = self.dimension_mate(full_name)?;
-        let m = &self.mates[i];
-        let kind = if m.kind == MateKind::Angle {
-            DimensionKind::Angle
-        } else {
-            DimensionKind::Length
+        let (kind, value) = match self.dimension_target(full_name)? {
+            DimensionTarget::Mate(i) => {
+                let m = &self.mates[i];
+                let kind = if m.kind == MateKind::Angle {
+                    DimensionKind::Angle
+                } else {
+                    DimensionKind::Length
+                };
+                (kind, m.value.unwrap_or(0.0))
+            }
+            DimensionTarget::Joint { robot, joint } => {
+                let r = &self.robots[robot];
+                let kind =
+                    if r.robot().joint_kinds()[joint] == crate::kinematics::JointKind::Prismatic {
+                        DimensionKind::Length
+                    } else {
+                        DimensionKind::Angle
+                    };
+                (kind, r.joints()[joint])
+            }
         };
         Ok(Dimension {
             name: full_name.to_string(),
             kind,
-            value: m.value.unwrap_or(0.0),
+            value,
         })
+    }
+
+    /// What a dimension drives: a mate or a robot joint.
+    pub fn dimension_target(&self, full_name: &str) -> Result<DimensionTarget, DocumentError> {
+        let not_found = || DocumentError::NotFound {
+            what: "dimension",
+            name: full_name.into(),
+            hint: suggestion(
+                full_name,
+                self.dimensions()
+                    .iter()
+                    .map(String::as_str)
+                    .collect::<Vec<_>>()
+                    .clone(),
+            ),
+        };
+        let feature = dimension::mate_of(full_name).ok_or_else(not_found)?;
+        match self.robot_dimension(feature) {
+            Some(t) => Ok(t),
+            None => self.dimension_mate(full_name).map(DimensionTarget::Mate),
+        }
     }
 
     fn dimension_mate(&self, full_name: &str) -> Result<usize, DocumentError> {
@@ -796,7 +852,16 @@ impl Document {
                 "{full_name}: value {value} is not finite"
             )));
         }
-        let i = self.dimension_mate(full_name)?;
+        let i = match self.dimension_target(full_name)? {
+            DimensionTarget::Mate(i) => i,
+            DimensionTarget::Joint { robot, joint } => {
+                let mut q = self.robots[robot].joints().to_vec();
+                q[joint] = value;
+                return self
+                    .set_robot_joints(robot, &q)
+                    .map_err(|e| DocumentError::Invalid(format!("{full_name}: {e}")));
+            }
+        };
         if self.mates[i].kind == MateKind::Distance && value < 0.0 {
             return Err(DocumentError::Invalid(format!(
                 "{full_name}: a distance cannot be negative ({value} mm)"
@@ -903,6 +968,7 @@ impl Document {
             parts,
             components,
             mates,
+            robots: self.robots.iter().map(RobotInstance::to_file).collect(),
         }
     }
 

@@ -128,7 +128,11 @@ fn non_rigid_pose_is_rejected_with_its_line() {
 fn fixed_components_do_not_move_and_nan_is_refused() {
     let dir = write_demo();
     let mut doc = Document::open(&dir.path().join("cell.yaml")).unwrap();
-    assert!(doc.set_transform("table", Transform::IDENTITY).is_err());
+    // Setting a fixed component's own pose is not a move (scripts do it implicitly);
+    // any other pose is refused.
+    assert!(doc.set_transform("table", Transform::IDENTITY).is_ok());
+    let moved = Transform::from_translation(Vec3::new(1.0, 0.0, 0.0));
+    assert!(doc.set_transform("table", moved).is_err());
     let e = doc.component("scerw1").unwrap_err().to_string();
     assert!(e.contains("screw1"), "{e}");
     let mut m = Transform::IDENTITY.to_matrix();

@@ -10,6 +10,7 @@ mod bind_document;
 mod bind_interference;
 mod bind_planning;
 mod bind_math;
+mod bind_robot;
 mod convert;
 pub mod sandbox;
 

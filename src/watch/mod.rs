@@ -6,7 +6,7 @@
 //!   by writing a temporary file and renaming it over the original are seen;
 //! - a rerun starts as soon as the writer closes the file (inotify's close-write) or a
 //!   rename lands on it; a bare "modified" event (which on Linux arrives before the
-//!   writer is done) only arms a short fallback timer;
+//!   writer is done) only arms a fallback timer (300 ms, re-armed by every further modification);
 //! - a file counts as changed only when its content hash differs from the one the last
 //!   run saw, so duplicate events, `touch`, and the run's own writes trigger nothing.
 //!
@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 
 /// How long a bare "modified" event waits for the writer's close before the file is
 /// checked anyway (writers that keep the file open, network file systems).
-pub const MODIFY_FALLBACK: Duration = Duration::from_millis(40);
+pub const MODIFY_FALLBACK: Duration = Duration::from_millis(300);
 
 /// What the watcher reports to its user interface.
 pub enum WatchEvent<'a> {
@@ -138,9 +138,9 @@ pub fn watch(
                         | EventKind::Create(_)
                         | EventKind::Remove(_)
                         | EventKind::Modify(ModifyKind::Name(_)) => check_now = true,
-                        _ => {
-                            deadline.get_or_insert(Instant::now() + MODIFY_FALLBACK);
-                        }
+                        // Re-armed by every further "modified": a writer that is
+                        // still writing (or slow under load) is not read half-done.
+                        _ => deadline = Some(Instant::now() + MODIFY_FALLBACK),
                     }
                 }
             }

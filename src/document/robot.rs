@@ -1,0 +1,774 @@
+//! Robots in a document: a [`Robot`] (kinematic tree, base, tool) whose links move
+//! components, with current joint values and one driving dimension per joint.
+//!
+//! A link's component pose is `offset · link_world` (row-vector order: the part frame
+//! is placed in the link frame by `offset`, then the link frame in the world), so
+//! setting the joints (or a joint's dimension) moves every link component, as a
+//! SolidWorks rebuild does. Joint values are radians / mm inside; the file writes
+//! degrees / mm.
+
+use super::dimension;
+use super::file::{DhFile, RobotFile};
+use super::{Document, DocumentError};
+use crate::diagnostics::{locate, suggestion, SourceError};
+use crate::kinematics::{
+    robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind, JointLimits, KinematicTree,
+    Link, MotionOptions, Program, Robot, Trajectory,
+};
+use crate::math::{Point3, Transform, Vec3};
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+/// How one link is displayed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkDisplay {
+    /// The component that follows the link, if any.
+    pub component: Option<usize>,
+    /// Pose of the component's part frame in the link frame (mm).
+    pub offset: Transform,
+}
+
+/// A robot of a document: kinematics, current joints, displayed links, dimensions.
+#[derive(Debug, Clone)]
+pub struct RobotInstance {
+    robot: Robot,
+    links: Vec<LinkDisplay>,
+    joints: Vec<f64>,
+    dimensions: Vec<String>,
+    file: RobotFile,
+}
+
+impl RobotInstance {
+    /// The robot's name.
+    pub fn name(&self) -> &str {
+        self.robot.name()
+    }
+
+    /// The kinematic robot (base and tool as currently set).
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// Current joint values in joint order (rad, or mm for prismatic joints).
+    pub fn joints(&self) -> &[f64] {
+        &self.joints
+    }
+
+    /// Per link of the tree: its component and offset.
+    pub fn links(&self) -> &[LinkDisplay] {
+        &self.links
+    }
+
+    /// Feature names of the joints' driving dimensions, in joint order (the full name
+    /// is `D1@<feature>`).
+    pub fn dimension_features(&self) -> &[String] {
+        &self.dimensions
+    }
+
+    /// Full names of the joints' driving dimensions (`D1@角度1`), in joint order.
+    pub fn dimension_names(&self) -> Vec<String> {
+        self.dimensions
+            .iter()
+            .map(|d| dimension::full_name(d))
+            .collect()
+    }
+
+    /// The world pose of the TCP at the current joints (mm).
+    pub fn tcp(&self) -> Transform {
+        // The joints are checked whenever they are set, so FK cannot fail here.
+        self.robot
+            .tcp_pose(&self.joints)
+            .unwrap_or(Transform::IDENTITY)
+    }
+
+    /// World poses of the displayed components for joint values `q`:
+    /// `(component index, pose)`.
+    pub fn component_poses(&self, q: &[f64]) -> Result<Vec<(usize, Transform)>, String> {
+        let poses = self.robot.link_poses(q).map_err(|e| e.to_string())?;
+        Ok(self
+            .links
+            .iter()
+            .zip(poses)
+            .filter_map(|(l, p)| l.component.map(|c| (c, l.offset * p)))
+            .collect())
+    }
+
+    /// Why `q` is not a valid joint vector for this robot (count, finite, limits), as
+    /// a message naming the joint in document units.
+    pub fn check_joints(&self, q: &[f64]) -> Result<(), String> {
+        self.robot.tcp_pose(q).map_err(|e| e.to_string())?;
+        if let Some(j) = self.robot.limit_violation(q) {
+            let kinds = self.robot.joint_kinds();
+            let limits = self.robot.joint_limits();
+            let (v, lo, hi, unit) = match (kinds[j], limits[j]) {
+                (JointKind::Prismatic, Some(l)) => (q[j], l.min, l.max, "mm"),
+                (_, Some(l)) => (
+                    q[j].to_degrees(),
+                    l.min.to_degrees(),
+                    l.max.to_degrees(),
+                    "°",
+                ),
+                (_, None) => (q[j], f64::NAN, f64::NAN, ""),
+            };
+            return Err(format!(
+                "robot `{}`: joint {} = {v:.4}{unit} is outside its limits [{lo:.4}, {hi:.4}]{unit}",
+                self.name(),
+                j + 1
+            ));
+        }
+        Ok(())
+    }
+
+    /// The robot as written in the file, with the current base, tool and joints.
+    pub fn to_file(&self) -> RobotFile {
+        let tidy = |m: [[f64; 4]; 4]| m.map(|r| r.map(|x| if x.abs() < 1e-14 { 0.0 } else { x }));
+        let kinds = self.robot.joint_kinds();
+        let mut f = self.file.clone();
+        f.base = Some(tidy(self.robot.base().to_matrix()));
+        f.tool = Some(tidy(self.robot.tool().to_matrix()));
+        f.joints = Some(
+            self.joints
+                .iter()
+                .zip(kinds)
+                .map(|(v, k)| {
+                    let v = if k == JointKind::Prismatic {
+                        *v
+                    } else {
+                        v.to_degrees()
+                    };
+                    if v.abs() < 1e-12 {
+                        0.0
+                    } else {
+                        v
+                    }
+                })
+                .collect(),
+        );
+        f
+    }
+}
+
+/// Joint values from document units (degrees / mm) to radians / mm.
+pub fn joints_from_document(robot: &Robot, values: &[f64]) -> Vec<f64> {
+    values
+        .iter()
+        .zip(
+            robot
+                .joint_kinds()
+                .into_iter()
+                .chain(std::iter::repeat(JointKind::Revolute)),
+        )
+        .map(|(v, k)| {
+            if k == JointKind::Prismatic {
+                *v
+            } else {
+                v.to_radians()
+            }
+        })
+        .collect()
+}
+
+/// Joint values from radians / mm to document units (degrees / mm).
+pub fn joints_to_document(robot: &Robot, q: &[f64]) -> Vec<f64> {
+    q.iter()
+        .zip(
+            robot
+                .joint_kinds()
+                .into_iter()
+                .chain(std::iter::repeat(JointKind::Revolute)),
+        )
+        .map(|(v, k)| {
+            if k == JointKind::Prismatic {
+                *v
+            } else {
+                v.to_degrees()
+            }
+        })
+        .collect()
+}
+
+fn matrix(m: &Option<[[f64; 4]; 4]>, what: &str) -> Result<Option<Transform>, String> {
+    m.as_ref()
+        .map(|m| Transform::from_matrix(m).map_err(|e| format!("{what}: {e}")))
+        .transpose()
+}
+
+fn joint_kind(s: Option<&str>, default: JointKind) -> Result<JointKind, String> {
+    match s {
+        None => Ok(default),
+        Some("fixed") => Ok(JointKind::Fixed),
+        Some("revolute") => Ok(JointKind::Revolute),
+        Some("prismatic") => Ok(JointKind::Prismatic),
+        Some(other) => Err(format!(
+            "unknown joint type `{other}` (fixed, revolute, prismatic)"
+        )),
+    }
+}
+
+fn limits(l: Option<[f64; 2]>, kind: JointKind) -> Result<Option<JointLimits>, String> {
+    let Some([lo, hi]) = l else { return Ok(None) };
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Err(format!("limits [{lo}, {hi}] are not finite"));
+    }
+    if lo > hi {
+        return Err(format!("limits [{lo}, {hi}] are inverted (min > max)"));
+    }
+    Ok(Some(if kind == JointKind::Prismatic {
+        JointLimits::new(lo, hi)
+    } else {
+        JointLimits::degrees(lo, hi)
+    }))
+}
+
+fn dh_robot(name: &str, dh: &DhFile) -> Result<Robot, String> {
+    let convention = match dh.convention.as_deref() {
+        None | Some("standard") => DhConvention::Standard,
+        Some("modified") => DhConvention::Modified,
+        Some(o) => return Err(format!("unknown D-H convention `{o}` (standard, modified)")),
+    };
+    let mut rows = Vec::with_capacity(dh.rows.len());
+    for (i, r) in dh.rows.iter().enumerate() {
+        let kind = joint_kind(r.joint.as_deref(), JointKind::Revolute)
+            .map_err(|e| format!("D-H row {}: {e}", i + 1))?;
+        let (theta, alpha) = (r.theta.to_radians(), r.alpha.to_radians());
+        let mut row = match kind {
+            JointKind::Revolute => DhRow::revolute(theta, r.d, r.a, alpha),
+            JointKind::Prismatic => DhRow::prismatic(theta, r.d, r.a, alpha),
+            JointKind::Fixed => {
+                return Err(format!(
+                    "D-H row {}: a row must be revolute or prismatic",
+                    i + 1
+                ))
+            }
+        };
+        if let Some(l) = limits(r.limits, kind).map_err(|e| format!("D-H row {}: {e}", i + 1))? {
+            row = row.with_limits(l);
+        }
+        rows.push(row);
+    }
+    if rows.is_empty() {
+        return Err("the D-H table has no rows".into());
+    }
+    Robot::from_dh(name, &rows, convention, Transform::IDENTITY).map_err(|e| e.to_string())
+}
+
+/// An explicit tree; errors carry a needle (the failing link's name) and a message.
+fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
+    let whole = |m: String| (format!("name: {}", f.name), m);
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    let mut links = Vec::with_capacity(f.links.len());
+    for (i, l) in f.links.iter().enumerate() {
+        let name = l
+            .name
+            .as_deref()
+            .ok_or_else(|| whole(format!("link {} needs a `name`", i + 1)))?;
+        let err = |m: String| (format!("name: {name}"), format!("link `{name}`: {m}"));
+        if index.insert(name, i).is_some() {
+            return Err(err("duplicate link name".into()));
+        }
+        let parent = match l.parent.as_deref() {
+            None => None,
+            Some(p) => Some(*index.get(p).ok_or_else(|| {
+                err(format!(
+                    "parent `{p}` is not a link listed before it ({})",
+                    suggestion(p, index.keys().copied())
+                ))
+            })?),
+        };
+        let kind = joint_kind(l.joint.as_deref(), JointKind::Fixed).map_err(err)?;
+        let v = |a: [f64; 3]| Vec3::new(a[0], a[1], a[2]);
+        let mut joint = match kind {
+            JointKind::Fixed => Joint::fixed(),
+            JointKind::Revolute => Joint::revolute(
+                v(l.axis
+                    .ok_or_else(|| err("a revolute joint needs an `axis`".into()))?),
+                Point3::from(v(l.point.unwrap_or([0.0; 3]))),
+            ),
+            JointKind::Prismatic => Joint::prismatic(v(l
+                .axis
+                .ok_or_else(|| err("a prismatic joint needs an `axis`".into()))?)),
+        };
+        if kind == JointKind::Fixed && (l.axis.is_some() || l.limits.is_some()) {
+            return Err(err("a fixed link takes no `axis` or `limits`".into()));
+        }
+        if let Some(lim) = limits(l.limits, kind).map_err(err)? {
+            joint = joint.with_limits(lim);
+        }
+        let home = matrix(&l.home, "home")
+            .map_err(err)?
+            .unwrap_or(Transform::IDENTITY);
+        links.push(Link::new(name, parent, home, joint));
+    }
+    let tree = KinematicTree::new(links).map_err(|e| whole(e.to_string()))?;
+    let flange = match f.flange.as_deref() {
+        Some(n) => tree.find(n).ok_or_else(|| {
+            (
+                format!("flange: {n}"),
+                format!("flange `{n}` is not a link"),
+            )
+        })?,
+        None => tree
+            .len()
+            .checked_sub(1)
+            .ok_or_else(|| whole("a robot needs `catalog`, `dh` or `links`".into()))?,
+    };
+    Robot::new(&f.name, tree, flange, Transform::IDENTITY).map_err(|e| whole(e.to_string()))
+}
+
+/// Builds one robot of a file; `components` maps component names to indices.
+fn build(
+    f: &RobotFile,
+    components: &HashMap<String, usize>,
+) -> Result<RobotInstance, (String, String)> {
+    // Errors carry a needle to locate (a line of this robot) and the message.
+    let whole = |m: String| (format!("name: {}", f.name), m);
+    let mut robot = match (&f.catalog, &f.dh) {
+        (Some(_), Some(_)) => return Err(whole("give either `catalog` or `dh`, not both".into())),
+        (Some(c), None) => robot_by_name(c).ok_or_else(|| {
+            (
+                format!("catalog: {c}"),
+                format!(
+                    "unknown catalog robot `{c}` ({})",
+                    suggestion(c, crate::kinematics::catalog_names())
+                ),
+            )
+        })?,
+        (None, Some(dh)) => dh_robot(&f.name, dh).map_err(|m| ("dh:".to_string(), m))?,
+        (None, None) => explicit_robot(f)?,
+    };
+    let robot_name = f.name.clone();
+    // Catalog robots keep their catalog name in the kinematics; use the document's.
+    if robot.name() != robot_name {
+        robot = Robot::new(
+            robot_name.clone(),
+            robot.tree().clone(),
+            robot.flange(),
+            robot.tool(),
+        )
+        .map_err(|e| whole(e.to_string()))?;
+    }
+    if let Some(t) = matrix(&f.base, "base").map_err(|m| ("base:".to_string(), m))? {
+        robot.set_base(t);
+    }
+    if let Some(t) = matrix(&f.tool, "tool").map_err(|m| ("tool:".to_string(), m))? {
+        robot.set_tool(t);
+    }
+    let explicit = f.catalog.is_none() && f.dh.is_none();
+    let tree = robot.tree().clone();
+    if f.links.len() > tree.len() {
+        return Err(whole(format!(
+            "{} links listed, the robot has {}",
+            f.links.len(),
+            tree.len()
+        )));
+    }
+    let zero = tree
+        .link_poses(&Transform::IDENTITY, &vec![0.0; tree.len()])
+        .map_err(|e| whole(e.to_string()))?;
+    let mut links = Vec::with_capacity(tree.len());
+    for (i, link) in tree.links().iter().enumerate() {
+        let lf = f.links.get(i).cloned().unwrap_or_default();
+        let link_name = link.name.clone().unwrap_or_else(|| format!("link{i}"));
+        let err = |m: String| {
+            let needle = lf
+                .component
+                .as_ref()
+                .map(|c| format!("component: {c}"))
+                .unwrap_or_else(|| format!("name: {}", f.name));
+            (needle, format!("link `{link_name}`: {m}"))
+        };
+        if !explicit {
+            if lf.name.as_ref().is_some_and(|n| n != &link_name) {
+                return Err(err(format!(
+                    "is named `{link_name}` by the {} (link {i})",
+                    if f.catalog.is_some() {
+                        "catalog"
+                    } else {
+                        "D-H table"
+                    }
+                )));
+            }
+            if lf.parent.is_some()
+                || lf.joint.is_some()
+                || lf.axis.is_some()
+                || lf.point.is_some()
+                || lf.home.is_some()
+                || lf.limits.is_some()
+            {
+                return Err(err(
+                    "parent, joint, axis, point, home and limits come from the catalog or D-H table"
+                        .into(),
+                ));
+            }
+        }
+        let component = match &lf.component {
+            None => None,
+            Some(c) => Some(*components.get(c).ok_or_else(|| {
+                err(format!(
+                    "unknown component `{c}` ({})",
+                    suggestion(c, components.keys().map(String::as_str))
+                ))
+            })?),
+        };
+        let offset = match matrix(&lf.offset, "offset").map_err(err)? {
+            Some(t) => t,
+            None if f.drawn_at_zero => zero[i].inverse(),
+            None => Transform::IDENTITY,
+        };
+        links.push(LinkDisplay { component, offset });
+    }
+    let mut dimensions = Vec::with_capacity(robot.dof());
+    let kinds = robot.joint_kinds();
+    for (j, &li) in robot.joint_links().iter().enumerate() {
+        let name = match f.links.get(li).and_then(|l| l.dimension.clone()) {
+            Some(d) => d,
+            None if kinds[j] == JointKind::Prismatic => format!("距离{}@{}", j + 1, f.name),
+            None => format!("角度{}@{}", j + 1, f.name),
+        };
+        if name.is_empty() {
+            return Err(whole(format!("joint {}: empty dimension name", j + 1)));
+        }
+        dimensions.push(name);
+    }
+    for (i, lf) in f.links.iter().enumerate() {
+        if lf.dimension.is_some() && !robot.joint_links().contains(&i) {
+            return Err((
+                format!("dimension: {}", lf.dimension.clone().unwrap_or_default()),
+                format!(
+                    "link {i} is not a joint of the arm (fixed, or off the flange chain): it has no dimension"
+                ),
+            ));
+        }
+    }
+    let joints = match &f.joints {
+        None => vec![0.0; robot.dof()],
+        Some(v) => {
+            if v.len() != robot.dof() {
+                return Err((
+                    "joints:".into(),
+                    format!(
+                        "{} joint values given, the robot has {}",
+                        v.len(),
+                        robot.dof()
+                    ),
+                ));
+            }
+            joints_from_document(&robot, v)
+        }
+    };
+    let inst = RobotInstance {
+        robot,
+        links,
+        joints,
+        dimensions,
+        file: RobotFile {
+            base: None,
+            tool: None,
+            joints: None,
+            ..f.clone()
+        },
+    };
+    inst.check_joints(&inst.joints)
+        .map_err(|m| ("joints:".to_string(), m))?;
+    Ok(inst)
+}
+
+/// Builds the robots of a document file. `taken` holds the mate dimension names
+/// (feature part, without `D1@`); errors are located in `text`.
+pub(super) fn load(
+    files: &[RobotFile],
+    components: &HashMap<String, usize>,
+    taken: &HashSet<String>,
+    text: &str,
+    path: &Path,
+) -> Result<Vec<RobotInstance>, DocumentError> {
+    let section = locate(text, "robots:", 1).map(|l| l.0).unwrap_or(1);
+    let mut names = HashSet::new();
+    let mut dims: HashSet<String> = taken.clone();
+    let mut shown: HashMap<usize, String> = HashMap::new();
+    let mut out = Vec::with_capacity(files.len());
+    for f in files {
+        let from = locate(text, &format!("name: {}", f.name), section)
+            .map(|l| l.0)
+            .unwrap_or(section);
+        let at = |needle: &str, message: String| -> DocumentError {
+            let (line, col) = locate(text, needle, from).unwrap_or((from, 1));
+            SourceError::new(path, line, col, format!("robot `{}`: {message}", f.name)).into()
+        };
+        if f.name.is_empty() || !names.insert(f.name.clone()) {
+            return Err(at(
+                "name:",
+                "robot names must be unique and non-empty".into(),
+            ));
+        }
+        let inst = build(f, components).map_err(|(n, m)| at(&n, m))?;
+        for d in &inst.dimensions {
+            if !dims.insert(d.clone()) {
+                return Err(at(
+                    d,
+                    format!(
+                        "duplicate dimension name `D1@{d}` (mates and joints share one namespace)"
+                    ),
+                ));
+            }
+        }
+        for l in &inst.links {
+            if let Some(c) = l.component {
+                if let Some(other) = shown.insert(c, f.name.clone()) {
+                    let cname = components
+                        .iter()
+                        .find(|(_, &i)| i == c)
+                        .map(|(n, _)| n.clone())
+                        .unwrap_or_default();
+                    return Err(at(
+                        &format!("component: {cname}"),
+                        format!("component `{cname}` already displays a link of robot `{other}`"),
+                    ));
+                }
+            }
+        }
+        out.push(inst);
+    }
+    Ok(out)
+}
+
+impl Document {
+    /// The robots, in file order.
+    pub fn robots(&self) -> &[RobotInstance] {
+        &self.robots
+    }
+
+    /// The index of a robot, or an error listing close matches.
+    pub fn robot_index(&self, name: &str) -> Result<usize, DocumentError> {
+        self.robots
+            .iter()
+            .position(|r| r.name() == name)
+            .ok_or_else(|| DocumentError::NotFound {
+                what: "robot",
+                name: name.into(),
+                hint: suggestion(name, self.robots.iter().map(|r| r.name())),
+            })
+    }
+
+    /// A robot by name.
+    pub fn robot(&self, name: &str) -> Result<&RobotInstance, DocumentError> {
+        Ok(&self.robots[self.robot_index(name)?])
+    }
+
+    /// Sets a robot's joints (rad / mm, joint order) and moves its link components.
+    /// Values outside the limits, of the wrong count or not finite are refused and
+    /// nothing changes.
+    pub fn set_robot_joints(&mut self, robot: usize, q: &[f64]) -> Result<(), DocumentError> {
+        let r = self
+            .robots
+            .get(robot)
+            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
+        r.check_joints(q).map_err(DocumentError::Invalid)?;
+        let poses = r.component_poses(q).map_err(DocumentError::Invalid)?;
+        self.robots[robot].joints = q.to_vec();
+        for (c, p) in poses {
+            self.components[c].transform = p;
+        }
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// Moves a robot's base (world pose of its root, mm) and its link components.
+    pub fn set_robot_base(&mut self, robot: usize, base: Transform) -> Result<(), DocumentError> {
+        if !base.is_finite() {
+            return Err(DocumentError::Invalid("the base pose is not finite".into()));
+        }
+        let r = self
+            .robots
+            .get_mut(robot)
+            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
+        r.robot.set_base(base);
+        let q = r.joints.clone();
+        self.set_robot_joints(robot, &q)
+    }
+
+    /// Sets a robot's tool frame (TCP in the flange frame, mm).
+    pub fn set_robot_tool(&mut self, robot: usize, tool: Transform) -> Result<(), DocumentError> {
+        if !tool.is_finite() {
+            return Err(DocumentError::Invalid(
+                "the tool frame is not finite".into(),
+            ));
+        }
+        let r = self
+            .robots
+            .get_mut(robot)
+            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
+        r.robot.set_tool(tool);
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// Runs a motion program on a robot from its current joints; on success the robot
+    /// (and its link components) ends where the program ends. Errors name the program
+    /// file and line (`file:line: cause`).
+    pub fn run_robot_program(
+        &mut self,
+        robot: usize,
+        program: &Program,
+        options: &MotionOptions,
+    ) -> Result<Trajectory, DocumentError> {
+        let r = self
+            .robots
+            .get(robot)
+            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
+        let t = run_program(program, &r.robot, &r.joints, options)
+            .map_err(|e| DocumentError::Invalid(e.to_string()))?;
+        if let Some(q) = t.last_joints() {
+            let q = q.to_vec();
+            self.set_robot_joints(robot, &q)?;
+        }
+        Ok(t)
+    }
+
+    /// Whether a component is moved by a robot link (the mate solver then treats it as
+    /// fixed).
+    pub fn is_robot_driven(&self, component: usize) -> bool {
+        self.driving_robot(component).is_some()
+    }
+
+    /// The name of the robot whose link a component displays.
+    pub fn driving_robot(&self, component: usize) -> Option<&str> {
+        self.robots
+            .iter()
+            .find(|r| r.links.iter().any(|l| l.component == Some(component)))
+            .map(|r| r.name())
+    }
+
+    /// Places every robot link component at its robot's current joints.
+    pub(super) fn apply_robots(&mut self) {
+        for r in &self.robots {
+            if let Ok(poses) = r.component_poses(&r.joints) {
+                for (c, p) in poses {
+                    self.components[c].transform = p;
+                }
+            }
+        }
+    }
+
+    /// Per component: whether the mate solver must keep it in place (fixed by the user
+    /// or driven by a robot).
+    pub(super) fn solver_fixed(&self) -> Vec<bool> {
+        (0..self.components.len())
+            .map(|i| self.components[i].fixed || self.is_robot_driven(i))
+            .collect()
+    }
+
+    /// The dimension target of a robot joint feature name (without `D1@`).
+    pub(super) fn robot_dimension(&self, feature: &str) -> Option<dimension::DimensionTarget> {
+        self.robots.iter().enumerate().find_map(|(ri, r)| {
+            r.dimensions.iter().position(|d| d == feature).map(|j| {
+                dimension::DimensionTarget::Joint {
+                    robot: ri,
+                    joint: j,
+                }
+            })
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::document::file::{DhRowFile, LinkFile};
+    use crate::kinematics::Catalog;
+
+    fn row(theta: f64, d: f64, a: f64, alpha: f64) -> DhRowFile {
+        DhRowFile {
+            theta,
+            d,
+            a,
+            alpha,
+            joint: None,
+            limits: None,
+        }
+    }
+
+    /// Seed 000's table 2 written as a D-H table in the file (flange at 80 mm, as the
+    /// catalog models it) gives the catalog's flange poses.
+    #[test]
+    fn dh_rows_in_degrees_match_the_catalog() {
+        let dh = DhFile {
+            convention: None,
+            rows: vec![
+                row(0.0, 340.0, 50.0, 90.0),
+                row(90.0, 0.0, 330.0, 0.0),
+                row(0.0, 0.0, 45.0, 90.0),
+                row(0.0, 340.0, 0.0, 90.0),
+                row(90.0, 0.0, 0.0, 90.0),
+                row(0.0, -80.0, 0.0, 0.0),
+            ],
+        };
+        let r = dh_robot("t", &dh).unwrap();
+        let c = Catalog::NachiMz07.robot();
+        let q = [0.1, -0.2, 0.3, -0.4, 0.5, -0.6];
+        assert!(r
+            .flange_pose(&q)
+            .unwrap()
+            .approx_eq(&c.flange_pose(&q).unwrap(), 1e-9, 1e-12));
+        let bad = DhFile {
+            convention: Some("craig".into()),
+            rows: vec![],
+        };
+        assert!(dh_robot("t", &bad).unwrap_err().contains("convention"));
+    }
+
+    #[test]
+    fn limits_are_checked_and_converted() {
+        assert!(limits(Some([10.0, -10.0]), JointKind::Revolute)
+            .unwrap_err()
+            .contains("inverted"));
+        assert!(limits(Some([f64::NAN, 1.0]), JointKind::Revolute).is_err());
+        let l = limits(Some([-90.0, 45.0]), JointKind::Revolute)
+            .unwrap()
+            .unwrap();
+        assert!((l.min + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        let p = limits(Some([0.0, 500.0]), JointKind::Prismatic)
+            .unwrap()
+            .unwrap();
+        assert_eq!((p.min, p.max), (0.0, 500.0));
+    }
+
+    /// `drawn_at_zero` offsets put every link component at the base pose when the
+    /// joints are 0, and a component follows `offset · link pose` otherwise.
+    #[test]
+    fn drawn_at_zero_offsets() {
+        let f = RobotFile {
+            name: "r".into(),
+            catalog: Some("nachi_mz07".into()),
+            dh: None,
+            base: Some(Transform::from_translation(Vec3::new(100.0, 0.0, 50.0)).to_matrix()),
+            tool: None,
+            flange: None,
+            drawn_at_zero: true,
+            links: (0..7)
+                .map(|i| LinkFile {
+                    component: Some(format!("c{i}")),
+                    ..LinkFile::default()
+                })
+                .collect(),
+            joints: None,
+        };
+        let components: HashMap<String, usize> = (0..7).map(|i| (format!("c{i}"), i)).collect();
+        let inst = build(&f, &components).unwrap();
+        let base = inst.robot().base();
+        for (_, p) in inst.component_poses(&[0.0; 6]).unwrap() {
+            assert!(p.approx_eq(&base, 1e-9, 1e-12));
+        }
+        let q = [0.3, -0.2, 0.1, 0.4, -0.5, 0.6];
+        let links = inst.robot().link_poses(&q).unwrap();
+        for (c, p) in inst.component_poses(&q).unwrap() {
+            assert!(p.approx_eq(&(inst.links()[c].offset * links[c]), 1e-9, 1e-12));
+        }
+        assert_eq!(inst.dimension_features()[0], "角度1@r");
+        // Joint values outside the limits are refused with the joint named in degrees.
+        let msg = inst
+            .check_joints(&[0.0, 0.0, 0.0, 0.0, 2.5, 0.0])
+            .unwrap_err();
+        assert!(msg.contains("joint 5") && msg.contains("143.2394"), "{msg}");
+    }
+}

@@ -1,0 +1,667 @@
+//! Bindings for the robots of a document: joints, FK/IK, motions, programs, drilling,
+//! trajectories. Joint arrays are degrees (mm for prismatic joints); poses are
+//! Transforms or `[x, y, z, a, b, c]` (mm, degrees). Every motion moves the robot (and
+//! its link components) to the end of the motion.
+
+use super::api::Api;
+use super::bind_document::DocHandle;
+use super::bind_math::{to_transform, xyzabc_deg};
+use super::convert::{array3, check_keys, err, fail, floats, numbers, opt_num, opt_str, vec3};
+use super::{Context, ScriptResult};
+use crate::document::robot::{joints_from_document, joints_to_document};
+use crate::kinematics::{
+    drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
+    DrillOptions, Hole, HoleOutcome, IkOptions, MotionOptions, Robot, ToolAxis, Trajectory,
+};
+use crate::math::{AngleConvention, Transform};
+use rhai::{Array, Dynamic, Map};
+use std::sync::Arc;
+
+/// A robot of a document, by index (shares the document with its handle).
+#[derive(Clone)]
+pub struct RobotHandle {
+    doc: DocHandle,
+    index: usize,
+}
+
+/// A sampled motion returned by a robot move.
+#[derive(Clone)]
+pub struct TrajectoryHandle {
+    trajectory: Arc<Trajectory>,
+    ctx: Arc<Context>,
+}
+
+impl RobotHandle {
+    /// The robot (kinematics, base, tool), its current joints (rad/mm) and its name.
+    fn snapshot(&self) -> ScriptResult<(Robot, Vec<f64>)> {
+        let doc = self.doc.lock()?;
+        let r = &doc.robots()[self.index];
+        Ok((r.robot().clone(), r.joints().to_vec()))
+    }
+
+    fn set_joints(&self, q: &[f64]) -> ScriptResult<()> {
+        self.doc
+            .lock()?
+            .set_robot_joints(self.index, q)
+            .map_err(fail)
+    }
+
+    /// Moves the robot to the end of `t`, streams it when asked, and wraps it.
+    fn finish(&self, robot: &Robot, t: Trajectory, stream: bool) -> ScriptResult<TrajectoryHandle> {
+        if stream {
+            stream_samples(self.doc.context(), robot, &t);
+        }
+        if let Some(q) = t.last_joints() {
+            self.set_joints(q)?;
+        }
+        Ok(TrajectoryHandle {
+            trajectory: Arc::new(t),
+            ctx: self.doc.context().clone(),
+        })
+    }
+}
+
+/// Prints every sample as seed 001's live monitor did: time, joints, TCP.
+fn stream_samples(ctx: &Context, robot: &Robot, t: &Trajectory) {
+    for s in &t.samples {
+        let j = joints_to_document(robot, &s.joints)
+            .iter()
+            .map(|v| format!("{v:.3}"))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let p = s.tcp.to_xyzabc(AngleConvention::default());
+        ctx.print(&format!(
+            "[{}] t={:.3}s joints=[{j}] tcp=[{:.3} {:.3} {:.3} {:.3} {:.3} {:.3}]",
+            robot.name(),
+            s.t,
+            p[0],
+            p[1],
+            p[2],
+            p[3].to_degrees(),
+            p[4].to_degrees(),
+            p[5].to_degrees()
+        ));
+    }
+}
+
+fn joints_arg(robot: &Robot, v: &Dynamic, what: &str) -> ScriptResult<Vec<f64>> {
+    let n = numbers(v, robot.dof(), what)?;
+    Ok(joints_from_document(robot, &n))
+}
+
+fn joints_out(robot: &Robot, q: &[f64]) -> Dynamic {
+    floats(joints_to_document(robot, q))
+}
+
+const MOTION_KEYS: [&str; 5] = [
+    "speed",
+    "joint_speed",
+    "angular_speed",
+    "interval",
+    "stream",
+];
+
+fn stream_flag(m: &Map) -> ScriptResult<bool> {
+    match m.get("stream") {
+        None => Ok(false),
+        Some(v) => v
+            .as_bool()
+            .map_err(|t| fail(format!("option `stream` must be true or false, not {t}"))),
+    }
+}
+
+/// Motion options from a map: `speed` (mm/s), `joint_speed` and `angular_speed`
+/// (deg/s), `interval` (s); returns them with the `stream` flag.
+fn motion_options(m: &Map) -> ScriptResult<(MotionOptions, bool)> {
+    let mut o = MotionOptions::default();
+    if let Some(v) = opt_num(m, "speed")? {
+        o.linear_speed = v;
+    }
+    if let Some(v) = opt_num(m, "joint_speed")? {
+        o.joint_speed = v.to_radians();
+    }
+    if let Some(v) = opt_num(m, "angular_speed")? {
+        o.angular_speed = v.to_radians();
+    }
+    if let Some(v) = opt_num(m, "interval")? {
+        o.sample_interval = v;
+    }
+    Ok((o, stream_flag(m)?))
+}
+
+fn ik_all() -> IkOptions {
+    IkOptions {
+        max_solutions: 16,
+        ..IkOptions::default()
+    }
+}
+
+/// A hole from a `load_holes` map (`position`, `normal`, optional `id`).
+fn hole_arg(v: &Dynamic, i: usize) -> ScriptResult<Hole> {
+    let m = v
+        .read_lock::<Map>()
+        .ok_or_else(|| fail(format!("hole {i} must be a map #{{position, normal}}")))?;
+    let get = |k: &str| {
+        m.get(k)
+            .ok_or_else(|| fail(format!("hole {i} has no `{k}`")))
+    };
+    let position = vec3(get("position")?, &format!("hole {i} position"))?;
+    let normal = vec3(get("normal")?, &format!("hole {i} normal"))?
+        .try_normalize(1e-12)
+        .ok_or_else(|| fail(format!("hole {i}: the normal is zero")))?;
+    let id = m.get("id").map(|v| v.to_string()).filter(|s| !s.is_empty());
+    let line = m
+        .get("line")
+        .and_then(|v| v.as_int().ok())
+        .unwrap_or(0)
+        .max(0) as usize;
+    Ok(Hole {
+        id,
+        position: position.into(),
+        normal,
+        line,
+    })
+}
+
+fn hole_map(h: &Hole) -> Map {
+    let mut m = Map::new();
+    m.insert(
+        "id".into(),
+        h.id.clone()
+            .map(Dynamic::from)
+            .unwrap_or(Dynamic::from(String::new())),
+    );
+    m.insert("position".into(), array3(&h.position.coords));
+    m.insert("normal".into(), array3(&h.normal));
+    m.insert("line".into(), Dynamic::from_int(h.line as i64));
+    m
+}
+
+/// Drilling options from a map (see the API doc of `Robot.drill_program`).
+fn drill_options(m: &Map) -> ScriptResult<(DrillOptions, bool)> {
+    check_keys(
+        m,
+        &[
+            "tool_axis",
+            "compensation",
+            "approach",
+            "retract",
+            "spin_samples",
+            "travel",
+            "speed",
+            "joint_speed",
+            "angular_speed",
+            "interval",
+            "stream",
+        ],
+        "drilling",
+    )?;
+    let (motion, stream) = motion_options(m)?;
+    let mut o = DrillOptions {
+        motion,
+        ..DrillOptions::default()
+    };
+    if let Some(a) = opt_str(m, "tool_axis")? {
+        o.tool_axis = match a.as_str() {
+            "x" => ToolAxis::X,
+            "z" => ToolAxis::Z,
+            "-z" => ToolAxis::NegZ,
+            other => return err(format!("tool_axis `{other}`: use \"x\", \"z\" or \"-z\"")),
+        };
+    }
+    if let Some(v) = m.get("compensation") {
+        o.compensation = vec3(v, "compensation")?;
+    }
+    if let Some(v) = opt_num(m, "approach")? {
+        o.approach = v;
+    }
+    if let Some(v) = opt_num(m, "retract")? {
+        o.retract = v;
+    }
+    if let Some(v) = opt_num(m, "spin_samples")? {
+        if !(1.0..=3600.0).contains(&v) {
+            return err(format!("spin_samples = {v} must be between 1 and 3600"));
+        }
+        o.spin_samples = v as usize;
+    }
+    if let Some(v) = m.get("travel") {
+        let abc = numbers(v, 3, "travel")?;
+        o.travel_orientation = Some(AngleConvention::default().rotation(
+            abc[0].to_radians(),
+            abc[1].to_radians(),
+            abc[2].to_radians(),
+        ));
+    }
+    Ok((o, stream))
+}
+
+fn options_map(v: &Dynamic, what: &str) -> ScriptResult<Map> {
+    v.read_lock::<Map>().map(|m| m.clone()).ok_or_else(|| {
+        fail(format!(
+            "{what} options must be a map, not {}",
+            v.type_name()
+        ))
+    })
+}
+
+pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
+    api.section("Robot", "A robot of a document (`robots:` in the YAML): a kinematic tree whose links move components. Joint arrays are **degrees** (mm for prismatic joints), in joint order; poses are Transforms or `[x, y, z, a, b, c]` (mm, degrees). Setting `joints`, a joint dimension (`D1@角度1`) or running a motion moves the link components. Motion options (a map, all optional): `speed` (TCP, mm/s), `joint_speed` (deg/s), `angular_speed` (deg/s), `interval` (sample interval, s), `stream: true` (print every sample `t joints tcp`, seed 001's live monitor; in `fitup watch` the lines stream to the output). Failures (unreachable, singular, joint limits) are script errors that say why and at which step.");
+    api.type_::<RobotHandle>("Robot");
+    api.type_::<TrajectoryHandle>("Trajectory");
+    api.f(
+        "Document.robots() -> array",
+        "Names of the robots, in document order.",
+        |d: &mut DocHandle| -> ScriptResult<Array> {
+            Ok(d.lock()?
+                .robots()
+                .iter()
+                .map(|r| Dynamic::from(r.name().to_string()))
+                .collect())
+        },
+    );
+    api.f(
+        "Document.robot(name: string) -> Robot",
+        "A robot by name; a missing name is an error that lists close matches.",
+        |d: &mut DocHandle, name: &str| -> ScriptResult<RobotHandle> {
+            let index = d.lock()?.robot_index(name).map_err(fail)?;
+            Ok(RobotHandle {
+                doc: d.clone(),
+                index,
+            })
+        },
+    );
+    api.get(
+        "Robot.name -> string",
+        "The robot's name.",
+        |r: &mut RobotHandle| -> ScriptResult<String> { Ok(r.snapshot()?.0.name().to_string()) },
+    );
+    api.get(
+        "Robot.dof -> int",
+        "Number of joints.",
+        |r: &mut RobotHandle| -> ScriptResult<i64> { Ok(r.snapshot()?.0.dof() as i64) },
+    );
+    api.get(
+        "Robot.joints -> array",
+        "Current joint values (degrees; mm for prismatic joints).",
+        |r: &mut RobotHandle| -> ScriptResult<Dynamic> {
+            let (robot, q) = r.snapshot()?;
+            Ok(joints_out(&robot, &q))
+        },
+    );
+    api.set(
+        "Robot.joints",
+        |r: &mut RobotHandle, v: Dynamic| -> ScriptResult<()> {
+            let (robot, _) = r.snapshot()?;
+            let q = joints_arg(&robot, &v, "joints")?;
+            r.set_joints(&q)
+        },
+    );
+    api.get(
+        "Robot.limits -> array",
+        "Per joint `[min, max]` (degrees or mm), or `[]` for an unlimited joint.",
+        |r: &mut RobotHandle| -> ScriptResult<Array> {
+            let (robot, _) = r.snapshot()?;
+            Ok(robot
+                .joint_limits()
+                .iter()
+                .zip(robot.joint_kinds())
+                .map(|(l, k)| match l {
+                    None => Dynamic::from_array(Array::new()),
+                    Some(l) if k == crate::kinematics::JointKind::Prismatic => {
+                        floats([l.min, l.max])
+                    }
+                    Some(l) => floats([l.min.to_degrees(), l.max.to_degrees()]),
+                })
+                .collect())
+        },
+    );
+    api.get(
+        "Robot.dimensions -> array",
+        "Full names of the joints' driving dimensions (`D1@角度1`, …), in joint order.",
+        |r: &mut RobotHandle| -> ScriptResult<Array> {
+            let doc = r.doc.lock()?;
+            Ok(doc.robots()[r.index]
+                .dimension_names()
+                .into_iter()
+                .map(Dynamic::from)
+                .collect())
+        },
+    );
+    api.get(
+        "Robot.components -> array",
+        "Names of the components displaying the links (root first).",
+        |r: &mut RobotHandle| -> ScriptResult<Array> {
+            let doc = r.doc.lock()?;
+            Ok(doc.robots()[r.index]
+                .links()
+                .iter()
+                .filter_map(|l| l.component)
+                .map(|c| Dynamic::from(doc.components()[c].name.clone()))
+                .collect())
+        },
+    );
+    api.get(
+        "Robot.base -> Transform",
+        "World pose of the robot's root link (mm).",
+        |r: &mut RobotHandle| -> ScriptResult<Transform> { Ok(r.snapshot()?.0.base()) },
+    );
+    api.set(
+        "Robot.base",
+        |r: &mut RobotHandle, v: Dynamic| -> ScriptResult<()> {
+            let t = to_transform(&v, "base")?;
+            r.doc.lock()?.set_robot_base(r.index, t).map_err(fail)
+        },
+    );
+    api.get(
+        "Robot.tool -> Transform",
+        "The tool centre point in the flange frame (mm).",
+        |r: &mut RobotHandle| -> ScriptResult<Transform> { Ok(r.snapshot()?.0.tool()) },
+    );
+    api.set(
+        "Robot.tool",
+        |r: &mut RobotHandle, v: Dynamic| -> ScriptResult<()> {
+            let t = to_transform(&v, "tool")?;
+            r.doc.lock()?.set_robot_tool(r.index, t).map_err(fail)
+        },
+    );
+    api.get(
+        "Robot.tcp -> Transform",
+        "World pose of the tool centre point at the current joints (mm).",
+        |r: &mut RobotHandle| -> ScriptResult<Transform> {
+            let (robot, q) = r.snapshot()?;
+            robot.tcp_pose(&q).map_err(fail)
+        },
+    );
+    api.f(
+        "Robot.fk(joints: array) -> Transform",
+        "World pose of the TCP for the joint values (degrees / mm); the robot does not move.",
+        |r: &mut RobotHandle, j: Dynamic| -> ScriptResult<Transform> {
+            let (robot, _) = r.snapshot()?;
+            let q = joints_arg(&robot, &j, "joints")?;
+            robot.tcp_pose(&q).map_err(fail)
+        },
+    );
+    api.f(
+        "Robot.link_poses(joints: array) -> array",
+        "World pose of every link of the tree (root first) for the joint values (degrees / mm).",
+        |r: &mut RobotHandle, j: Dynamic| -> ScriptResult<Array> {
+            let (robot, _) = r.snapshot()?;
+            let q = joints_arg(&robot, &j, "joints")?;
+            Ok(robot
+                .link_poses(&q)
+                .map_err(fail)?
+                .into_iter()
+                .map(Dynamic::from)
+                .collect())
+        },
+    );
+    api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. An unreachable or singular target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
+        let (robot, q) = r.snapshot()?;
+        let target = to_transform(&t, "target")?;
+        let sols = robot.inverse(&target, &q, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
+        if sols.is_empty() {
+            return err(format!("robot `{}`: ik: no solution within the joint limits", robot.name()));
+        }
+        Ok(sols.iter().map(|s| joints_out(&robot, &s.joints)).collect())
+    });
+    api.f("Robot.ik_near(target, joints: array) -> array", "The joint solution (degrees) for the world pose `target` nearest to `joints` (degrees); the robot does not move.", |r: &mut RobotHandle, t: Dynamic, j: Dynamic| -> ScriptResult<Dynamic> {
+        let (robot, _) = r.snapshot()?;
+        let target = to_transform(&t, "target")?;
+        let reference = joints_arg(&robot, &j, "joints")?;
+        let sol = robot.inverse_nearest(&target, &reference, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik_near: {e}", robot.name())))?;
+        Ok(joints_out(&robot, &sol.joints))
+    });
+    api.f("Robot.ik_branches(target) -> array", "Every solution with its configuration: `#{joints, configuration}` (configuration like `front/up/noflip`, or `\"\"` for numeric solutions).", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
+        let (robot, q) = r.snapshot()?;
+        let target = to_transform(&t, "target")?;
+        let sols = robot.inverse(&target, &q, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
+        Ok(sols.iter().map(|s| {
+            let mut m = Map::new();
+            m.insert("joints".into(), joints_out(&robot, &s.joints));
+            m.insert("configuration".into(), Dynamic::from(s.configuration.map(|c| c.to_string()).unwrap_or_default()));
+            Dynamic::from_map(m)
+        }).collect())
+    });
+
+    fn motion<F>(
+        r: &RobotHandle,
+        opts: Option<&Dynamic>,
+        what: &str,
+        f: F,
+    ) -> ScriptResult<TrajectoryHandle>
+    where
+        F: FnOnce(&Robot, &[f64], &MotionOptions) -> Result<Trajectory, String>,
+    {
+        let m = match opts {
+            Some(v) => options_map(v, what)?,
+            None => Map::new(),
+        };
+        check_keys(&m, &MOTION_KEYS, what)?;
+        let (o, stream) = motion_options(&m)?;
+        let (robot, q) = r.snapshot()?;
+        let t = f(&robot, &q, &o)
+            .map_err(|e| fail(format!("robot `{}`: {what}: {e}", robot.name())))?;
+        r.finish(&robot, t, stream)
+    }
+    let mj =
+        |r: &mut RobotHandle, j: Dynamic, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
+            let (robot, _) = r.snapshot()?;
+            let target = joints_arg(&robot, &j, "joints")?;
+            motion(r, o, "move_joint", |robot, q, o| {
+                move_joint(robot, q, &target, o).map_err(|e| e.to_string())
+            })
+        };
+    api.f(
+        "Robot.move_joint(joints: array) -> Trajectory",
+        "Joint move to the joint values (degrees / mm): all joints arrive together.",
+        move |r: &mut RobotHandle, j: Dynamic| mj(r, j, None),
+    );
+    api.f(
+        "Robot.move_joint(joints: array, options: map) -> Trajectory",
+        "Joint move with motion options (see the section).",
+        move |r: &mut RobotHandle, j: Dynamic, o: Dynamic| mj(r, j, Some(&o)),
+    );
+    let ml =
+        |r: &mut RobotHandle, t: Dynamic, o: Option<&Dynamic>| -> ScriptResult<TrajectoryHandle> {
+            let end = to_transform(&t, "target")?;
+            motion(r, o, "move_line", |robot, q, o| {
+                move_line(robot, q, &end, o).map_err(|e| e.to_string())
+            })
+        };
+    api.f("Robot.move_line(target) -> Trajectory", "Straight TCP line to the world pose (orientation slerped), keeping the configuration; fails at the first unreachable, singular or out-of-limits step.", move |r: &mut RobotHandle, t: Dynamic| ml(r, t, None));
+    api.f(
+        "Robot.move_line(target, options: map) -> Trajectory",
+        "Straight TCP line with motion options.",
+        move |r: &mut RobotHandle, t: Dynamic, o: Dynamic| ml(r, t, Some(&o)),
+    );
+    let mc = |r: &mut RobotHandle,
+              v: Dynamic,
+              t: Dynamic,
+              o: Option<&Dynamic>|
+     -> ScriptResult<TrajectoryHandle> {
+        let via = to_transform(&v, "via")?;
+        let end = to_transform(&t, "target")?;
+        motion(r, o, "move_circle", |robot, q, o| {
+            move_circle(robot, q, &via, &end, o).map_err(|e| e.to_string())
+        })
+    };
+    api.f(
+        "Robot.move_circle(via, target) -> Trajectory",
+        "Circular TCP arc through the via pose to the target pose (world, mm/degrees).",
+        move |r: &mut RobotHandle, v: Dynamic, t: Dynamic| mc(r, v, t, None),
+    );
+    api.f(
+        "Robot.move_circle(via, target, options: map) -> Trajectory",
+        "Circular arc with motion options.",
+        move |r: &mut RobotHandle, v: Dynamic, t: Dynamic, o: Dynamic| mc(r, v, t, Some(&o)),
+    );
+
+    let c = ctx.clone();
+    let rp = move |r: &mut RobotHandle,
+                   path: &str,
+                   o: Option<&Dynamic>|
+          -> ScriptResult<TrajectoryHandle> {
+        let full = c.project.resolve(path).map_err(fail)?;
+        c.record_read(&full);
+        let text =
+            std::fs::read_to_string(&full).map_err(|e| fail(format!("cannot read {path}: {e}")))?;
+        let program = parse_program(&c.project.display(&full), &text).map_err(fail)?;
+        motion(r, o, "run_program", |robot, q, o| {
+            run_program(&program, robot, q, o).map_err(|e| e.to_string())
+        })
+    };
+    let rp2 = rp.clone();
+    api.f("Robot.run_program(path: string) -> Trajectory", "Runs a motion program file (Line/Circle/Joint/Speed/Tool…, see docs/kinematics.md) from the current joints; a syntax or motion error names the file and line. The file is a dependency of the run (watch reruns on its saves).", move |r: &mut RobotHandle, p: &str| rp(r, p, None));
+    api.f("Robot.run_program(path: string, options: map) -> Trajectory", "Runs a program file with motion options (the program's own Speed/Interval lines override them).", move |r: &mut RobotHandle, p: &str, o: Dynamic| rp2(r, p, Some(&o)));
+
+    let dp = |r: &mut RobotHandle, holes: Array, o: Option<&Dynamic>| -> ScriptResult<Map> {
+        let m = match o {
+            Some(v) => options_map(v, "drilling")?,
+            None => Map::new(),
+        };
+        let (opts, stream) = drill_options(&m)?;
+        let holes: Vec<Hole> = holes
+            .iter()
+            .enumerate()
+            .map(|(i, h)| hole_arg(h, i))
+            .collect::<ScriptResult<_>>()?;
+        let (robot, q) = r.snapshot()?;
+        let report = drill_program(&robot, &q, &holes, &opts)
+            .map_err(|e| fail(format!("robot `{}`: drill_program: {e}", robot.name())))?;
+        let mut rows = Array::new();
+        let mut drilled = 0;
+        for (h, rep) in holes.iter().zip(&report.holes) {
+            let mut row = hole_map(h);
+            row.insert("index".into(), Dynamic::from_int(rep.index as i64));
+            match &rep.outcome {
+                HoleOutcome::Drilled { spin, joints } => {
+                    drilled += 1;
+                    row.insert("reachable".into(), Dynamic::TRUE);
+                    row.insert("reason".into(), Dynamic::from(String::new()));
+                    row.insert("spin".into(), Dynamic::from_float(spin.to_degrees()));
+                    row.insert("joints".into(), joints_out(&robot, joints));
+                }
+                HoleOutcome::Unreachable(why) => {
+                    row.insert("reachable".into(), Dynamic::FALSE);
+                    row.insert("reason".into(), Dynamic::from(why.clone()));
+                }
+            }
+            rows.push(Dynamic::from_map(row));
+        }
+        let n = rows.len();
+        let t = r.finish(&robot, report.trajectory, stream)?;
+        let mut out = Map::new();
+        out.insert("trajectory".into(), Dynamic::from(t));
+        out.insert("holes".into(), Dynamic::from_array(rows));
+        out.insert("drilled".into(), Dynamic::from_int(drilled));
+        out.insert("unreachable".into(), Dynamic::from_int(n as i64 - drilled));
+        Ok(out)
+    };
+    api.f("Robot.drill_program(holes: array) -> map", "Drills the holes (from `load_holes`) in order (seed 001 §2.2: travel posture, line to the approach point, align, drill, retract). Returns `#{trajectory, holes, drilled, unreachable}`; each hole row is the hole map plus `index`, `reachable`, `reason` (which step failed and why), and for drilled holes `spin` (degrees) and `joints` at the hole. Unreachable holes are reported, not errors.", move |r: &mut RobotHandle, h: Array| dp(r, h, None));
+    api.f("Robot.drill_program(holes: array, options: map) -> map", "Drilling with options: `tool_axis` (`\"x\"` seed 001, `\"z\"`, `\"-z\"` e.g. the MZ07 tool point), `compensation` `[x,y,z]` (drill tip in the TCP frame, mm), `approach` / `retract` (mm), `spin_samples`, `travel` `[a,b,c]` (degrees, travel orientation), and the motion options.", move |r: &mut RobotHandle, h: Array, o: Dynamic| dp(r, h, Some(&o)));
+    api.f(
+        "Robot.to_string() -> string",
+        "`Robot(name: joints …)`.",
+        |r: &mut RobotHandle| -> ScriptResult<String> {
+            let (robot, q) = r.snapshot()?;
+            let j = joints_to_document(&robot, &q)
+                .iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            Ok(format!("Robot({}: [{j}])", robot.name()))
+        },
+    );
+
+    let c = ctx.clone();
+    api.f("load_holes(path: string) -> array", "Reads a hole table (CSV `id,x,y,z,nx,ny,nz` or `x y z nx ny nz`, mm, `#` comments) inside the project: an array of `#{id, position, normal, line}` (normals unit). The file is a dependency of the run; a bad line is an error naming it.", move |path: &str| -> ScriptResult<Array> {
+        let full = c.project.resolve(path).map_err(fail)?;
+        c.record_read(&full);
+        let text = std::fs::read_to_string(&full).map_err(|e| fail(format!("cannot read {path}: {e}")))?;
+        let holes = parse_holes(&c.project.display(&full), &text).map_err(fail)?;
+        Ok(holes.iter().map(|h| Dynamic::from_map(hole_map(h))).collect())
+    });
+
+    api.section("Trajectory", "A sampled motion: `len` samples at times `0 … duration` (s), each with joint values (degrees / mm) and the TCP pose. Sample indices may be negative (−1 = last).");
+    fn sample(t: &TrajectoryHandle, i: i64) -> ScriptResult<&crate::kinematics::TrajectorySample> {
+        let n = t.trajectory.samples.len() as i64;
+        let k = if i < 0 { n + i } else { i };
+        if k < 0 || k >= n {
+            return err(format!(
+                "sample {i} is out of range: the trajectory has {n} samples"
+            ));
+        }
+        Ok(&t.trajectory.samples[k as usize])
+    }
+    let deg = |t: &TrajectoryHandle, q: &[f64]| -> Dynamic {
+        floats(
+            q.iter()
+                .zip(
+                    t.trajectory
+                        .joint_kinds
+                        .iter()
+                        .map(Some)
+                        .chain(std::iter::repeat(None)),
+                )
+                .map(|(v, k)| {
+                    if k == Some(&crate::kinematics::JointKind::Prismatic) {
+                        *v
+                    } else {
+                        v.to_degrees()
+                    }
+                }),
+        )
+    };
+    api.get(
+        "Trajectory.len -> int",
+        "Number of samples.",
+        |t: &mut TrajectoryHandle| t.trajectory.samples.len() as i64,
+    );
+    api.get(
+        "Trajectory.duration -> float",
+        "Duration (s).",
+        |t: &mut TrajectoryHandle| t.trajectory.duration(),
+    );
+    api.f(
+        "Trajectory.time(i: int) -> float",
+        "Time of sample `i` (s).",
+        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<f64> { Ok(sample(t, i)?.t) },
+    );
+    api.f(
+        "Trajectory.joints(i: int) -> array",
+        "Joint values of sample `i` (degrees / mm).",
+        move |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> {
+            Ok(deg(t, &sample(t, i)?.joints))
+        },
+    );
+    api.f(
+        "Trajectory.tcp(i: int) -> Transform",
+        "TCP world pose of sample `i` (mm).",
+        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Transform> { Ok(sample(t, i)?.tcp) },
+    );
+    api.f(
+        "Trajectory.tcp_xyzabc(i: int) -> array",
+        "TCP of sample `i` as `[x, y, z, a, b, c]` (mm, degrees, convention `xyz`).",
+        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> {
+            Ok(xyzabc_deg(&sample(t, i)?.tcp, AngleConvention::default()))
+        },
+    );
+    api.f("Trajectory.save_csv(path: string)", "Writes the joint/TCP log as CSV inside the project, atomically: `t_s,j1_deg,…,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`.", |t: &mut TrajectoryHandle, path: &str| -> ScriptResult<()> {
+        let full = t.ctx.project.resolve(path).map_err(fail)?;
+        let csv = t.trajectory.to_csv(AngleConvention::default());
+        crate::fsutil::write_atomic(&full, csv.as_bytes()).map_err(|e| fail(format!("cannot write {path}: {e}")))?;
+        t.ctx.record_write(&full);
+        Ok(())
+    });
+    api.f(
+        "Trajectory.to_string() -> string",
+        "`Trajectory(n samples, d s)`.",
+        |t: &mut TrajectoryHandle| {
+            format!(
+                "Trajectory({} samples, {:.3} s)",
+                t.trajectory.samples.len(),
+                t.trajectory.duration()
+            )
+        },
+    );
+}

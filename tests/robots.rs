@@ -1,0 +1,411 @@
+//! Robots in documents, end to end: dimensions drive link components, IK through the
+//! script API, programs through the CLI (and their located errors), save/load round
+//! trips, and the loader's located validation errors.
+
+mod common;
+
+use fitup::document::{DimensionKind, Document};
+use fitup::math::{Point3, Transform, Vec3};
+use std::path::{Path, PathBuf};
+
+/// A scratch project with the demo cell and the robot models under `models/`.
+fn project() -> tempfile::TempDir {
+    let dir = common::project();
+    fitup::demo::write_robots(&dir.path().join("models")).unwrap();
+    dir
+}
+
+fn mz07(dir: &Path) -> PathBuf {
+    dir.join("models/mz07.yaml")
+}
+
+/// Setting a joint dimension moves every link component to `offset · link pose`, so
+/// the mesh drawn at the zero configuration follows the kinematics: the tool point of
+/// link 6's mesh is the robot's TCP, and the base does not move.
+#[test]
+fn dimensions_drive_link_components() {
+    let dir = project();
+    let mut doc = Document::open(&mz07(dir.path())).unwrap();
+    let names = doc.dimensions();
+    for i in 1..=6 {
+        assert!(names.contains(&format!("D1@角度{i}")), "{names:?}");
+    }
+    let tip_drawn = Point3::new(390.0, 0.0, 198.1);
+    let base_before = doc.component("mz07_base").unwrap().transform;
+    let q_deg: [f64; 6] = [25.0, -30.0, 40.0, 60.0, -45.0, 90.0];
+    for (i, v) in q_deg.iter().enumerate() {
+        let name = format!("D1@角度{}", i + 1);
+        assert_eq!(doc.dimension(&name).unwrap().kind, DimensionKind::Angle);
+        doc.set_dimension(&name, v.to_radians()).unwrap();
+        assert!((doc.dimension(&name).unwrap().document_value() - v).abs() < 1e-12);
+    }
+    let robot = doc.robot("mz07").unwrap();
+    let q: Vec<f64> = q_deg.iter().map(|v| v.to_radians()).collect();
+    assert_eq!(robot.joints(), q.as_slice());
+    let tcp = robot.robot().tcp_pose(&q).unwrap();
+    let link6 = doc.component("mz07_link6").unwrap().transform;
+    assert!((link6.apply(&tip_drawn).coords - tcp.translation()).norm() < 1e-9);
+    // Every link component equals offset · link pose.
+    let poses = robot.robot().link_poses(&q).unwrap();
+    for (l, p) in robot.links().iter().zip(&poses) {
+        let c = &doc.components()[l.component.unwrap()];
+        assert!(
+            c.transform.approx_eq(&(l.offset * *p), 1e-9, 1e-12),
+            "{}",
+            c.name
+        );
+    }
+    assert!(doc
+        .component("mz07_base")
+        .unwrap()
+        .transform
+        .approx_eq(&base_before, 1e-12, 1e-12));
+    // A link component is moved through its robot, not directly.
+    let err = doc
+        .set_transform("mz07_link3", Transform::IDENTITY)
+        .unwrap_err();
+    assert!(err.to_string().contains("link of robot `mz07`"), "{err}");
+    // Out of the limits: refused, nothing moves.
+    let err = doc
+        .set_dimension("D1@角度5", 150f64.to_radians())
+        .unwrap_err();
+    assert!(err.to_string().contains("joint 5"), "{err}");
+    assert!(doc
+        .component("mz07_link6")
+        .unwrap()
+        .transform
+        .approx_eq(&link6, 1e-12, 1e-12));
+}
+
+/// The script API's IK returns branches that each reproduce the target, for targets
+/// made by FK of configurations across the workspace; joints set through `joints` and
+/// through dimensions agree.
+#[test]
+fn ik_round_trip_through_the_script_api() {
+    let dir = project();
+    let script = r#"
+        let doc = open_doc("models/mz07.yaml");
+        let arm = doc.robot("mz07");
+        let configs = [[0, 0, 0, 0, 30, 0], [40, -60, 20, 90, -70, 10], [-120, 30, 100, -45, 60, -200],
+                       [150, -100, -80, 170, 100, 300], [5, 60, 250, -150, -20, -90]];
+        for q in configs {
+            let target = arm.fk(q);
+            let sols = arm.ik(target);
+            let found = false;
+            for s in sols {
+                let d = arm.fk(s).distance_to(target);
+                assert(d.mm < 1e-6 && d.deg < 1e-6, `${s} misses ${q}`);
+                let same = true;
+                for i in 0..6 { if (s[i] - q[i]).abs() > 1e-6 { same = false; } }
+                if same { found = true; }
+            }
+            assert(found, `${q} is not among its branches`);
+            arm.joints = q;
+            for i in 0..6 { assert_near(doc.dimension(arm.dimensions[i]).value, q[i], 1e-9); }
+            assert(arm.tcp == target, "tcp");
+        }
+        print("ok");
+    "#;
+    std::fs::write(dir.path().join("scripts/ik.rhai"), script).unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/ik.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+}
+
+/// `fitup run PROGRAM --doc DOC --robot NAME` prints the joint/TCP log (or writes it
+/// with --log); the last row is the last Joint command.
+#[test]
+fn program_runs_through_the_cli() {
+    let dir = project();
+    std::fs::copy(
+        common::repo().join("models/mz07_demo.prg"),
+        dir.path().join("models/mz07_demo.prg"),
+    )
+    .unwrap();
+    let out = common::run_in(
+        dir.path(),
+        &["run", "models/mz07_demo.prg", "--doc", "models/mz07.yaml"],
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let mut lines = text.lines();
+    assert!(lines.next().unwrap().starts_with("t_s,j1_deg"));
+    let last: Vec<f64> = text
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let want = [20.0, -10.0, 10.0, 0.0, 0.0, 0.0];
+    for (v, w) in last[1..7].iter().zip(want) {
+        assert!((v - w).abs() < 1e-5, "{last:?}");
+    }
+    // Two robots: --robot chooses, --log writes the CSV.
+    let out = common::run_in(
+        dir.path(),
+        &[
+            "run",
+            "models/mz07_demo.prg",
+            "--doc",
+            "models/cell_robots.yaml",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", common::text(&out));
+    assert!(common::text(&out).contains("--robot"));
+    let out = common::run_in(
+        dir.path(),
+        &[
+            "run",
+            "models/mz07_demo.prg",
+            "--doc",
+            "models/cell_robots.yaml",
+            "--robot",
+            "mz07_a",
+            "--log",
+            "log.csv",
+        ],
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+    let log = std::fs::read_to_string(dir.path().join("log.csv")).unwrap();
+    assert!(log.lines().count() > 10);
+}
+
+/// Syntax and motion errors of a program name the file and the line.
+#[test]
+fn bad_programs_give_file_and_line() {
+    let dir = project();
+    std::fs::write(
+        dir.path().join("bad.prg"),
+        "# comment\nSpeed 100\nLine 390 0 300 0 0\n",
+    )
+    .unwrap();
+    let out = common::run_in(dir.path(), &["run", "bad.prg", "--doc", "models/mz07.yaml"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        common::text(&out).contains("bad.prg:3:"),
+        "{}",
+        common::text(&out)
+    );
+    std::fs::write(
+        dir.path().join("far.prg"),
+        "Line 390 0 300 0 0 0\n\nLine 390 0 1500 0 0 0\n",
+    )
+    .unwrap();
+    let out = common::run_in(dir.path(), &["run", "far.prg", "--doc", "models/mz07.yaml"]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = common::text(&out);
+    assert!(
+        text.contains("far.prg:3:") && text.contains("unreachable"),
+        "{text}"
+    );
+    // Without --doc: a usage error that says what is missing.
+    let out = common::run_in(dir.path(), &["run", "far.prg"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(common::text(&out).contains("--doc"));
+}
+
+/// Saving keeps robots, joints, base and tool; reloading reproduces every link pose.
+#[test]
+fn save_and_load_keep_robots() {
+    let dir = project();
+    let mut doc = Document::open(&dir.path().join("models/cell_robots.yaml")).unwrap();
+    let a = doc.robot_index("mz07_a").unwrap();
+    let b = doc.robot_index("mz07_b").unwrap();
+    let qa: Vec<f64> = [10.0f64, -20.0, 30.0, 40.0, 50.0, 60.0]
+        .iter()
+        .map(|v| v.to_radians())
+        .collect();
+    doc.set_robot_joints(a, &qa).unwrap();
+    doc.set_dimension("D1@b角度3", 0.5).unwrap();
+    let base =
+        doc.robots()[b].robot().base() * Transform::from_translation(Vec3::new(0.0, 25.0, 0.0));
+    doc.set_robot_base(b, base).unwrap();
+    let tool = Transform::from_translation(Vec3::new(0.0, 0.0, -300.0));
+    doc.set_robot_tool(a, tool).unwrap();
+    let copy = dir.path().join("models/copy.yaml");
+    doc.save_as(&copy).unwrap();
+    let back = Document::open(&copy).unwrap();
+    assert_eq!(back.robots().len(), 2);
+    assert_eq!(back.dimensions(), doc.dimensions());
+    for (r0, r1) in doc.robots().iter().zip(back.robots()) {
+        assert_eq!(r0.name(), r1.name());
+        for (x, y) in r0.joints().iter().zip(r1.joints()) {
+            assert!((x - y).abs() < 1e-12);
+        }
+        assert!(r0.robot().base().approx_eq(&r1.robot().base(), 1e-9, 1e-12));
+        assert!(r0.robot().tool().approx_eq(&r1.robot().tool(), 1e-9, 1e-12));
+        assert!(r0.tcp().approx_eq(&r1.tcp(), 1e-9, 1e-12));
+    }
+    for (c0, c1) in doc.components().iter().zip(back.components()) {
+        assert!(
+            c0.transform.approx_eq(&c1.transform, 1e-9, 1e-12),
+            "{}",
+            c0.name
+        );
+    }
+    assert!((back.dimension("D1@b角度3").unwrap().value - 0.5).abs() < 1e-12);
+    // The plate's angle mate still drives the plate with the robots present.
+    let mut back = back;
+    back.set_dimension("D1@角度1", 0.3).unwrap();
+    let c = back
+        .component("plate_b")
+        .unwrap()
+        .transform
+        .to_xyzabc(Default::default())[5];
+    assert!((c - 0.3).abs() < 1e-6);
+}
+
+/// A robot from a D-H table (seed 000 table 2) and from explicit links build the same
+/// kinematics as the catalog arm; a prismatic joint's dimension is a length.
+#[test]
+fn dh_and_explicit_trees() {
+    let dir = project();
+    let doc_text = r#"
+parts:
+  box: {stl: meshes/pedestal.stl}
+components:
+- {name: slide, part: box}
+- {name: arm, part: box}
+robots:
+- name: table2
+  dh:
+    rows:
+    - {theta: 0, d: 340, a: 50, alpha: 90, limits: [-170, 170]}
+    - {theta: 90, d: 0, a: 330, alpha: 0}
+    - {theta: 0, d: 0, a: 45, alpha: 90}
+    - {theta: 0, d: 340, a: 0, alpha: 90}
+    - {theta: 90, d: 0, a: 0, alpha: 90}
+    - {theta: 0, d: -80, a: 0, alpha: 0}
+  tool:
+  - [1, 0, 0, 0]
+  - [0, 1, 0, 0]
+  - [0, 0, 1, 0]
+  - [0, 0, -436.9, 1]
+  joints: [10, 20, 30, 40, 50, 60]
+- name: gantry
+  links:
+  - {name: floor}
+  - {name: carriage, parent: floor, joint: prismatic, axis: [1, 0, 0], limits: [0, 500], component: slide, dimension: X轴}
+  - name: arm
+    parent: carriage
+    joint: revolute
+    axis: [0, 0, 1]
+    point: [0, 100, 0]
+    component: arm
+  joints: [120, 90]
+"#;
+    let path = dir.path().join("models/trees.yaml");
+    std::fs::write(&path, doc_text).unwrap();
+    let mut doc = Document::open(&path).unwrap();
+    let dh = doc.robot("table2").unwrap();
+    let cat = fitup::kinematics::Catalog::NachiMz07.robot();
+    let q = dh.joints().to_vec();
+    assert!(dh
+        .robot()
+        .tcp_pose(&q)
+        .unwrap()
+        .approx_eq(&cat.tcp_pose(&q).unwrap(), 1e-9, 1e-12));
+    assert!(
+        dh.robot().analytic().is_some(),
+        "a table-2 arm gets the closed form"
+    );
+    // Default dimension names, and the prismatic joint's length dimension.
+    assert!(doc.dimensions().contains(&"D1@角度1@table2".to_string()));
+    let x = doc.dimension("D1@X轴").unwrap();
+    assert_eq!(x.kind, DimensionKind::Length);
+    assert!((x.system_value() - 0.12).abs() < 1e-12);
+    doc.set_dimension("D1@X轴", 300.0).unwrap();
+    assert!(
+        (doc.component("slide").unwrap().transform.translation() - Vec3::new(300.0, 0.0, 0.0))
+            .norm()
+            < 1e-9
+    );
+    // The arm turned 90° about the line x = 300, y = 100: its origin went to (400, 100).
+    let arm = doc.component("arm").unwrap().transform;
+    assert!((arm.translation() - Vec3::new(400.0, 100.0, 0.0)).norm() < 1e-9);
+    assert!(doc.set_dimension("D1@X轴", 600.0).is_err());
+}
+
+/// Loader errors are located (line > 0) and say what is wrong.
+#[test]
+fn invalid_robots_are_located_errors() {
+    let dir = project();
+    let head = "parts:\n  box: {stl: meshes/pedestal.stl}\ncomponents:\n- {name: b, part: box}\n";
+    let cases = [
+        (
+            "robots:\n- name: r\n  catalog: nachi_mz07\n  links:\n  - component: nope\n",
+            "unknown component `nope`",
+            9,
+        ),
+        (
+            "robots:\n- name: r\n  catalog: nachi_mz7\n",
+            "did you mean `nachi_mz07`",
+            7,
+        ),
+        (
+            "robots:\n- name: r\n  links:\n  - {name: a}\n  - {name: c, parent: a, joint: revolute, axis: [0, 0, 1], limits: [90, -90]}\n",
+            "inverted",
+            9,
+        ),
+        (
+            "robots:\n- name: r\n  catalog: nachi_mz07\n  joints: [0, 0, 0]\n",
+            "3 joint values given, the robot has 6",
+            8,
+        ),
+        (
+            "robots:\n- name: r\n  catalog: nachi_mz07\n  joints: [0, 0, 0, 0, 130, 0]\n",
+            "joint 5",
+            8,
+        ),
+        (
+            "robots:\n- name: r\n  catalog: nachi_mz07\n  links:\n  - {}\n  - {dimension: 角度1}\n- name: s\n  catalog: nachi_mz07\n  links:\n  - {}\n  - {dimension: 角度1}\n",
+            "duplicate dimension name `D1@角度1`",
+            15,
+        ),
+        (
+            "robots:\n- name: r\n  catalog: nachi_mz07\n  links:\n  - {component: b}\n- name: s\n  catalog: nachi_mz07\n  links:\n  - {component: b}\n",
+            "already displays a link of robot `r`",
+            13,
+        ),
+    ];
+    for (robots, message, line) in cases {
+        let path = dir.path().join("models/bad.yaml");
+        std::fs::write(&path, format!("{head}{robots}")).unwrap();
+        let err = Document::open(&path).unwrap_err();
+        let text = err.to_string();
+        assert!(text.contains(message), "{robots}\n→ {text}");
+        assert!(
+            text.contains(&format!("bad.yaml:{line}:")),
+            "{robots}\n→ {text} (expected line {line})"
+        );
+    }
+}
+
+/// `stream: true` prints one monitor line per sample through the run's output (the
+/// sink `fitup watch` streams), with the joints and the TCP of each sample.
+#[test]
+fn streamed_motions_print_every_sample() {
+    let dir = project();
+    let script = r#"
+        let arm = open_doc("models/mz07.yaml").robot("mz07");
+        let t = arm.move_line(pose(390, 0, 250, 0, 0, 0), #{speed: 100, interval: 0.1, stream: true});
+        print(`samples ${t.len}`);
+    "#;
+    std::fs::write(dir.path().join("scripts/s.rhai"), script).unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/s.rhai"]);
+    let text = common::text(&out);
+    assert!(out.status.success(), "{text}");
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("[mz07] t="))
+        .collect();
+    // 51.9 mm at 100 mm/s = 0.519 s: samples at 0, 0.1, …, 0.5 and 0.519.
+    assert_eq!(lines.len(), 7, "{text}");
+    assert!(text.contains("samples 7"));
+    assert!(
+        lines[6].contains("tcp=[390.000 0.000 250.000")
+            || lines[6].contains("tcp=[390.000 -0.000 250.000"),
+        "{}",
+        lines[6]
+    );
+}
