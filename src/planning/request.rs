@@ -144,4 +144,71 @@ impl Planner {
         };
         disassemble(validator, space, assembled, part_box, product_box, &planner, progress)
     }
+
+    /// Seed 002's assembly by disassembly, for a full start → goal path: plans the
+    /// disassembly from `goal` (the assembled pose) until the part's box leaves
+    /// `product_box`, then a free-space path from `start` to where the disassembly
+    /// left the product (with this planner, or `rrt_connect` when this planner cannot
+    /// disassemble), and joins them: start → outside → assembled.
+    #[allow(clippy::too_many_arguments)]
+    pub fn plan_via_disassembly(
+        &self,
+        validator: &mut dyn MotionValidator,
+        space: &PlanningSpace,
+        start: &Transform,
+        goal: &Transform,
+        part_box: &Aabb,
+        product_box: &Aabb,
+        mut progress: Option<ProgressFn<'_>>,
+    ) -> Result<Path, PlanError> {
+        let disassembler = match self {
+            Planner::Rrt(_) | Planner::BiasedRrt(_) | Planner::LocalRrt(_) => self.clone(),
+            other => {
+                let mut l = LocalRrtOptions::default();
+                l.rrt.limits = other.clone().limits_mut().clone();
+                Planner::LocalRrt(l)
+            }
+        };
+        let out = disassembler.plan_disassembly(
+            validator,
+            space,
+            goal,
+            part_box,
+            product_box,
+            progress.as_mut().map(|p| &mut **p as ProgressFn<'_>),
+        )?;
+        if !out.found() {
+            return Ok(out);
+        }
+        let exit = out.poses[0];
+        let approach_planner = match self {
+            Planner::GreedyAnt(_) | Planner::RrtFloyd(_) | Planner::RrtConnect(_) => self.clone(),
+            other => {
+                let mut c = RrtConnectOptions::default();
+                c.limits = other.clone().limits_mut().clone();
+                Planner::RrtConnect(c)
+            }
+        };
+        let approach = approach_planner.plan(validator, space, start, &exit, progress)?;
+        if !approach.found() {
+            return Ok(approach);
+        }
+        let mut poses = approach.poses.clone();
+        poses.extend(out.poses.iter().skip(1).copied());
+        Ok(Path {
+            failure: None,
+            poses,
+            length_mm: approach.length_mm + out.length_mm,
+            rotation_rad: approach.rotation_rad + out.rotation_rad,
+            raw_length_mm: approach.raw_length_mm + out.raw_length_mm,
+            raw_rotation_rad: approach.raw_rotation_rad + out.raw_rotation_rad,
+            iterations: approach.iterations + out.iterations,
+            nodes: approach.nodes + out.nodes,
+            pose_checks: approach.pose_checks + out.pose_checks,
+            edge_checks: approach.edge_checks + out.edge_checks,
+            time_ms: approach.time_ms + out.time_ms,
+            resolution: out.resolution,
+            planner: "disassembly_first",
+        })
+    }
 }

@@ -21,7 +21,8 @@ use std::time::Instant;
 #[derive(Clone)]
 pub struct PathHandle(Arc<Path>, Arc<Context>);
 
-const OPTION_KEYS: [&str; 18] = [
+const OPTION_KEYS: [&str; 19] = [
+    "disassemble",
     "planner", "seed", "max_iterations", "time_limit_ms", "step", "goal_bias", "smoothing", "bounds", "margin",
     "rotation", "rotation_weight", "tolerance", "edge", "edge_step", "edge_step_deg", "L", "dis", "radius",
 ];
@@ -34,6 +35,7 @@ struct Request {
     margin: f64,
     rotation: bool,
     rotation_weight: Option<f64>,
+    disassemble: bool,
 }
 
 fn parse(opts: &Map) -> ScriptResult<Request> {
@@ -117,7 +119,11 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
         None => true,
         Some(r) => r.as_bool().map_err(|t| fail(format!("rotation must be true or false, not {t}")))?,
     };
-    Ok(Request { planner, validator, bounds, margin, rotation, rotation_weight: opt_num(opts, "rotation_weight")? })
+    let disassemble = match opts.get("disassemble") {
+        None => false,
+        Some(r) => r.as_bool().map_err(|t| fail(format!("disassemble must be true or false, not {t}")))?,
+    };
+    Ok(Request { planner, validator, bounds, margin, rotation, rotation_weight: opt_num(opts, "rotation_weight")?, disassemble })
 }
 
 /// The validator for component `index` among the others, and the planning space.
@@ -179,10 +185,16 @@ fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<P
     let goal = to_transform(goal, "goal")?;
     let req = parse(opts)?;
     let index = d.lock()?.component_index(name).map_err(fail)?;
-    let (mut validator, space, start, _) = setup(d, index, &req, &[goal])?;
+    let (mut validator, space, start, product) = setup(d, index, &req, &[goal])?;
     let ctx = d.context().clone();
     let mut cb = progress_printer(&ctx, req.planner.name());
-    let path = req.planner.plan(&mut validator, &space, &start, &goal, Some(&mut cb)).map_err(fail)?;
+    let path = if req.disassemble {
+        let part_box = part_box(d, index)?;
+        req.planner.plan_via_disassembly(&mut validator, &space, &start, &goal, &part_box, &product, Some(&mut cb))
+    } else {
+        req.planner.plan(&mut validator, &space, &start, &goal, Some(&mut cb))
+    }
+    .map_err(fail)?;
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");
     }
@@ -195,16 +207,19 @@ fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathH
     let req = parse(&opts)?;
     let index = d.lock()?.component_index(name).map_err(fail)?;
     let (mut validator, space, assembled, product) = setup(d, index, &req, &[])?;
-    let part_box = {
-        let doc = d.lock()?;
-        let (lo, hi) = doc.mesh_of(index).bounds().ok_or_else(|| fail("the component's mesh is empty"))?;
-        Aabb::new(lo.coords, hi.coords)
-    };
+    let part_box = part_box(d, index)?;
     let ctx = d.context().clone();
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path =
         req.planner.plan_disassembly(&mut validator, &space, &assembled, &part_box, &product, Some(&mut cb)).map_err(fail)?;
     Ok(PathHandle(Arc::new(path), ctx.clone()))
+}
+
+/// The component's box in its part frame.
+fn part_box(d: &DocHandle, index: usize) -> ScriptResult<Aabb> {
+    let doc = d.lock()?;
+    let (lo, hi) = doc.mesh_of(index).bounds().ok_or_else(|| fail("the component's mesh is empty"))?;
+    Ok(Aabb::new(lo.coords, hi.coords))
 }
 
 fn densify(p: &Path, step: f64) -> ScriptResult<Vec<Transform>> {
@@ -216,7 +231,7 @@ fn densify(p: &Path, step: f64) -> ScriptResult<Vec<Transform>> {
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice when an extension is blocked). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms`, `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default, exact conservative advancement) or `\"step\"` with `edge_step` (mm) and `edge_step_deg`. A path that is not found says why in `reason`.");
+    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice when an extension is blocked). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms`, `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default, exact conservative advancement) or `\"step\"` with `edge_step` (mm) and `edge_step_deg`, `disassemble: true` (seed 002: plan the disassembly from the goal — the assembled pose — until the part leaves the product's box, reverse it, and join it to a free-space path from the start; the way to get into tight clearances). A path that is not found says why in `reason`.");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
     api.f("Document.plan_path(name: string, goal, options: map) -> Path", "Plans a path with options (see the section).", |d: &mut DocHandle, name: &str, goal: Dynamic, o: Map| plan(d, name, &goal, &o));
