@@ -175,8 +175,9 @@ pub fn watch(
                 if running.as_ref().is_some_and(|(r, _)| *r == n) {
                     running = None;
                 }
-                // Saves that happened while the run was going on.
-                check_now = !pending.is_empty();
+                // Saves completed during the run were checked when their close or
+                // rename arrived; what is still pending is a file being written, left
+                // to its close event or the fallback timer.
             }
             Err(RecvTimeoutError::Timeout) => {
                 check_now = deadline.is_some_and(|d| Instant::now() >= d)
