@@ -205,9 +205,12 @@ pub struct Document {
     aabb_cache: AabbCache,
 }
 
+/// A rotation and the box `(min, max)` of a mesh rotated by it.
+type RotatedBox = (nalgebra::UnitQuaternion<f64>, Point3, Point3);
+
 /// Per component: the rotation last seen and the box of the mesh rotated by it.
 #[derive(Debug, Default)]
-struct AabbCache(std::sync::Mutex<Vec<Option<(nalgebra::UnitQuaternion<f64>, Point3, Point3)>>>);
+struct AabbCache(std::sync::Mutex<Vec<Option<RotatedBox>>>);
 
 impl Clone for AabbCache {
     fn clone(&self) -> Self {

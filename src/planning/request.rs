@@ -73,6 +73,11 @@ impl Planner {
         }
     }
 
+    /// Seed, iteration and time limits (a copy).
+    pub fn limits(&self) -> Limits {
+        self.clone().limits_mut().to_owned()
+    }
+
     /// Sets the extension step (metric mm) of the tree planners; for `greedy_ant`,
     /// `step` is the number of segments of the line s → e (seed 000 table 4).
     pub fn set_step(&mut self, step: f64) {
@@ -184,7 +189,7 @@ impl Planner {
             Planner::Rrt(_) | Planner::BiasedRrt(_) | Planner::LocalRrt(_) => self.clone(),
             other => {
                 let mut l = LocalRrtOptions::default();
-                l.rrt.limits = other.clone().limits_mut().clone();
+                l.rrt.limits = other.limits();
                 Planner::LocalRrt(l)
             }
         };
@@ -203,9 +208,7 @@ impl Planner {
         let approach_planner = match self {
             Planner::GreedyAnt(_) | Planner::RrtFloyd(_) | Planner::RrtConnect(_) => self.clone(),
             other => {
-                let mut c = RrtConnectOptions::default();
-                c.limits = other.clone().limits_mut().clone();
-                Planner::RrtConnect(c)
+                Planner::RrtConnect(RrtConnectOptions { limits: other.limits(), ..Default::default() })
             }
         };
         let approach = approach_planner.plan(validator, space, start, &exit, progress)?;

@@ -276,7 +276,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         |c: &mut ComponentHandle| {
             c.with(|_, c| {
                 c.color
-                    .map(|v| floats(v))
+                    .map(floats)
                     .unwrap_or_else(|| Dynamic::from_array(Array::new()))
             })
         },

@@ -97,6 +97,7 @@ fn main() {
         latencies.push((t1 - t0).as_secs_f64() * 1e3);
     }
     let _ = child.kill();
+    let _ = child.wait();
     let mut sorted = latencies.clone();
     sorted.sort_by(f64::total_cmp);
     let q = |p: f64| sorted[((sorted.len() - 1) as f64 * p).round() as usize];
