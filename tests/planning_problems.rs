@@ -37,8 +37,8 @@ fn committed_problems_match_generators_and_load() {
     for p in &all {
         p.write(fresh.path()).unwrap();
         for f in files(p) {
-            let committed = std::fs::read(dir.join(&f))
-                .unwrap_or_else(|e| panic!("models/problems/{f}: {e}"));
+            let committed =
+                std::fs::read(dir.join(&f)).unwrap_or_else(|e| panic!("models/problems/{f}: {e}"));
             let generated = std::fs::read(fresh.path().join(&f)).unwrap();
             assert!(
                 committed == generated,
@@ -127,8 +127,16 @@ fn ring_puzzle_is_well_posed() {
     assert!(v.is_free(&p.start));
     assert!(v.is_free(&p.goal));
     assert!(!v.edge_free(&p.start, &p.goal));
-    let away = |d: [f64; 3]| p.start.then(&fitup::math::Transform::from_translation(d.into()));
-    for d in [[0.0, 0.0, 80.0], [0.0, 80.0, 0.0], [-80.0, 0.0, 0.0], [80.0, 0.0, 0.0]] {
+    let away = |d: [f64; 3]| {
+        p.start
+            .then(&fitup::math::Transform::from_translation(d.into()))
+    };
+    for d in [
+        [0.0, 0.0, 80.0],
+        [0.0, 80.0, 0.0],
+        [-80.0, 0.0, 0.0],
+        [80.0, 0.0, 0.0],
+    ] {
         assert!(!v.edge_free(&p.start, &away(d)), "{d:?}");
     }
     // A witness that it can be solved: the slit faces the fixed wire, so straight

@@ -23,6 +23,9 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::path::Path as FsPath;
 use std::sync::Arc;
 
+/// Obstacle colliders with their poses (part frame → assembly frame).
+pub type PosedColliders = Vec<(Arc<Collider>, Transform)>;
+
 /// A fixed part of a problem.
 #[derive(Debug, Clone)]
 pub struct ProblemObstacle {
@@ -88,9 +91,7 @@ impl Problem {
     }
 
     /// Colliders of the moving part and the obstacles (one per distinct part).
-    pub fn colliders(
-        &self,
-    ) -> Result<(Arc<Collider>, Vec<(Arc<Collider>, Transform)>), CollisionError> {
+    pub fn colliders(&self) -> Result<(Arc<Collider>, PosedColliders), CollisionError> {
         let mut cache = crate::collision::ColliderCache::new();
         let moving = cache.get(&self.moving)?;
         let obstacles = self
@@ -102,7 +103,10 @@ impl Problem {
     }
 
     /// A [`MeshValidator`] for the problem.
-    pub fn validator(&self, options: MeshValidatorOptions) -> Result<MeshValidator, CollisionError> {
+    pub fn validator(
+        &self,
+        options: MeshValidatorOptions,
+    ) -> Result<MeshValidator, CollisionError> {
         let (moving, obstacles) = self.colliders()?;
         MeshValidator::new(moving, obstacles, options)
     }
@@ -295,7 +299,7 @@ pub fn peg_in_hole(clearance: f64) -> Result<Problem, MeshError> {
     )?;
     let peg = Mesh::cylinder(10.0, 100.0, 64);
     let lying = Transform::from_rotation_about(Point3::origin(), Vec3::y(), FRAC_PI_2)
-        .map_err(|e| MeshError::invalid(&e.to_string()))?;
+        .map_err(|e| MeshError::invalid(e.to_string()))?;
     let name = format!("peg_in_hole_{}", (clearance * 1000.0).round() as i64);
     Ok(Problem {
         description: format!(
@@ -493,10 +497,10 @@ pub fn ring_puzzle() -> Result<Problem, MeshError> {
     let fixed = ring(big, wire, 0.0, 96, 16)?;
     let slit_ring = ring(big, wire, gap, 96, 16)?;
     let upright = Transform::from_rotation_about(Point3::origin(), Vec3::x(), FRAC_PI_2)
-        .map_err(|e| MeshError::invalid(&e.to_string()))?;
+        .map_err(|e| MeshError::invalid(e.to_string()))?;
     // The slit faces away from the fixed ring's wire (local +X → world -X side turned).
     let turn = Transform::from_rotation_about(Point3::origin(), Vec3::z(), PI / 2.0)
-        .map_err(|e| MeshError::invalid(&e.to_string()))?;
+        .map_err(|e| MeshError::invalid(e.to_string()))?;
     let start = turn.then(&upright).then(&at(big, 0.0, 0.0));
     Ok(Problem {
         name: "ring_puzzle".into(),
