@@ -13,17 +13,20 @@
 //! | [`rrt`], [`biased_rrt`] | seed 002 baselines | reference only |
 //! | [`local_rrt`] | seed 002, local-discretization RRT | narrow passages, insertions |
 //! | [`rrt_connect`] | bidirectional RRT (+ the local discretization on failure) | general, fast |
+//! | [`plan_assembly`] | disassembly first, then RRT-Connect to the free end | the benchmark problems ([`problems`]) |
 //! | [`disassemble`] | seed 002, "what can be taken apart can be assembled" | insertions with unknown approach |
 //!
 //! Every planner takes a seed ([`Limits::seed`]); for a given seed the result is
 //! identical whenever the iteration limit (not the time limit) ends the search.
 //! Details, options and defaults: `docs/planning.md`.
 
+mod assembly;
 mod disassembly;
 mod greedy_ant;
 mod local_rrt;
 mod mesh_validator;
 mod path;
+pub mod problems;
 mod request;
 mod rrt;
 mod rrt_connect;
@@ -37,6 +40,7 @@ mod validator;
 #[cfg(test)]
 mod test_scenes;
 
+pub use assembly::{plan_assembly, AssemblyOptions};
 pub use disassembly::{disassemble, Aabb, DisassemblyPlanner};
 pub use greedy_ant::{greedy_ant, GreedyAntOptions};
 pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};

@@ -2,10 +2,10 @@
 //! that scripts, the CLI and benchmarks use, so the dispatch lives in one place.
 
 use super::{
-    biased_rrt, disassemble, greedy_ant, local_rrt, rrt, rrt_connect, rrt_floyd, Aabb,
-    DisassemblyPlanner, GreedyAntOptions, Limits, LocalRrtOptions, MotionValidator, Path,
-    PlanError, PlanningSpace, ProgressFn, RrtConnectOptions, RrtFloydOptions, RrtOptions,
-    Smoothing,
+    biased_rrt, disassemble, greedy_ant, local_rrt, plan_assembly, rrt, rrt_connect, rrt_floyd,
+    Aabb, AssemblyOptions, DisassemblyPlanner, GreedyAntOptions, Limits, LocalRrtOptions,
+    MotionValidator, Path, PlanError, PlanningSpace, ProgressFn, RrtConnectOptions,
+    RrtFloydOptions, RrtOptions, Smoothing,
 };
 use crate::math::Transform;
 
@@ -169,11 +169,10 @@ impl Planner {
         )
     }
 
-    /// Seed 002's assembly by disassembly, for a full start → goal path: plans the
-    /// disassembly from `goal` (the assembled pose) until the part's box leaves
-    /// `product_box`, then a free-space path from `start` to where the disassembly
-    /// left the product (with this planner, or `rrt_connect` when this planner cannot
-    /// disassemble), and joins them: start → outside → assembled.
+    /// Seed 002's assembly by disassembly, for a full start → goal path: see
+    /// [`plan_assembly`]. This planner's options drive the part of the search they fit:
+    /// `local_rrt` options the disassembly, `rrt_connect` options the free-space join;
+    /// the seed and limits of any planner apply to both.
     #[allow(clippy::too_many_arguments)]
     pub fn plan_via_disassembly(
         &self,
@@ -183,54 +182,27 @@ impl Planner {
         goal: &Transform,
         part_box: &Aabb,
         product_box: &Aabb,
-        mut progress: Option<ProgressFn<'_>>,
+        progress: Option<ProgressFn<'_>>,
     ) -> Result<Path, PlanError> {
-        let disassembler = match self {
-            Planner::Rrt(_) | Planner::BiasedRrt(_) | Planner::LocalRrt(_) => self.clone(),
-            other => {
-                let mut l = LocalRrtOptions::default();
-                l.rrt.limits = other.limits();
-                Planner::LocalRrt(l)
-            }
-        };
-        let out = disassembler.plan_disassembly(
+        let limits = self.limits();
+        let mut options =
+            AssemblyOptions::default().with_limits(limits.seed, limits.max_iterations);
+        options.disassembly.rrt.limits.time_limit_ms = limits.time_limit_ms;
+        options.approach.limits.time_limit_ms = limits.time_limit_ms;
+        match self {
+            Planner::LocalRrt(o) => options.disassembly = o.clone(),
+            Planner::RrtConnect(o) => options.approach = o.clone(),
+            _ => {}
+        }
+        plan_assembly(
             validator,
             space,
+            start,
             goal,
             part_box,
             product_box,
-            progress.as_mut().map(|p| &mut **p as ProgressFn<'_>),
-        )?;
-        if !out.found() {
-            return Ok(out);
-        }
-        let exit = out.poses[0];
-        let approach_planner = match self {
-            Planner::GreedyAnt(_) | Planner::RrtFloyd(_) | Planner::RrtConnect(_) => self.clone(),
-            other => {
-                Planner::RrtConnect(RrtConnectOptions { limits: other.limits(), ..Default::default() })
-            }
-        };
-        let approach = approach_planner.plan(validator, space, start, &exit, progress)?;
-        if !approach.found() {
-            return Ok(approach);
-        }
-        let mut poses = approach.poses.clone();
-        poses.extend(out.poses.iter().skip(1).copied());
-        Ok(Path {
-            failure: None,
-            poses,
-            length_mm: approach.length_mm + out.length_mm,
-            rotation_rad: approach.rotation_rad + out.rotation_rad,
-            raw_length_mm: approach.raw_length_mm + out.raw_length_mm,
-            raw_rotation_rad: approach.raw_rotation_rad + out.raw_rotation_rad,
-            iterations: approach.iterations + out.iterations,
-            nodes: approach.nodes + out.nodes,
-            pose_checks: approach.pose_checks + out.pose_checks,
-            edge_checks: approach.edge_checks + out.edge_checks,
-            time_ms: approach.time_ms + out.time_ms,
-            resolution: out.resolution,
-            planner: "disassembly_first",
-        })
+            &options,
+            progress,
+        )
     }
 }

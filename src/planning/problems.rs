@@ -1,0 +1,539 @@
+//! Benchmark planning problems generated in code (meshes, obstacle poses, start,
+//! goal, bounds), also committed as documents under `models/problems/`.
+//!
+//! | problem | what makes it hard |
+//! |---|---|
+//! | [`peg_in_hole`] | Ø20 peg into a 60 mm deep blind hole, radial clearance 0.5 or 0.1 mm |
+//! | [`piston_rod_cap`] | seed 002's experiment: a cap leaves its seat through a 0.5 mm channel and slot, 500 mm cube |
+//! | [`screw_cell`] | seed 000 fig. 11: a screw from the table into a plate hole (0.5 mm) |
+//! | [`ring_puzzle`] | two interlocked rings; the slit ring's gap is 10 % wider than the other's wire |
+
+use super::assembly::{plan_assembly, AssemblyOptions};
+use super::disassembly::Aabb;
+use super::path::Path;
+use super::run::PlanError;
+use super::space::PlanningSpace;
+use super::{EdgeCheck, MeshValidator, MeshValidatorOptions};
+use crate::collision::{Collider, CollisionError};
+use crate::document::file::{ComponentFile, DocumentFile, PartFile};
+use crate::math::{Point3, Transform, Vec3};
+use crate::mesh::{write_stl, Mesh, MeshError};
+use indexmap::IndexMap;
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::path::Path as FsPath;
+use std::sync::Arc;
+
+/// Obstacle colliders with their poses (part frame → assembly frame).
+pub type PosedColliders = Vec<(Arc<Collider>, Transform)>;
+
+/// A fixed part of a problem.
+#[derive(Debug, Clone)]
+pub struct ProblemObstacle {
+    /// Component name.
+    pub name: String,
+    /// Part (mesh) name; obstacles sharing a part share the mesh.
+    pub part: String,
+    /// The mesh in the part frame (mm).
+    pub mesh: Arc<Mesh>,
+    /// Part frame → assembly frame.
+    pub pose: Transform,
+}
+
+/// A planning problem: one moving component among fixed ones.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// Short name, also the file stem under `models/problems/`.
+    pub name: String,
+    /// One line: what it is and its clearances.
+    pub description: String,
+    /// Part name of the moving component.
+    pub moving_part: String,
+    /// Mesh of the moving component (component frame, mm).
+    pub moving: Arc<Mesh>,
+    /// The fixed components.
+    pub obstacles: Vec<ProblemObstacle>,
+    /// Start pose of the moving component (assembly frame).
+    pub start: Transform,
+    /// Goal pose of the moving component (assembly frame).
+    pub goal: Transform,
+    /// Translation bounds, rotation freedom and metric.
+    pub space: PlanningSpace,
+    /// The product's box (assembly frame): disassembly ends when the component's
+    /// box leaves it.
+    pub product_box: Aabb,
+}
+
+/// Why a problem could not be built, written or solved.
+#[derive(Debug, thiserror::Error)]
+pub enum ProblemError {
+    /// A generated mesh is invalid.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A collider could not be built.
+    #[error(transparent)]
+    Collision(#[from] CollisionError),
+    /// The planner refused its input.
+    #[error(transparent)]
+    Plan(#[from] PlanError),
+    /// Writing the files failed.
+    #[error("{0}")]
+    Io(String),
+}
+
+impl Problem {
+    /// The moving component's box in its own frame (mm).
+    pub fn part_box(&self) -> Aabb {
+        let (lo, hi) = self
+            .moving
+            .bounds()
+            .unwrap_or((Point3::origin(), Point3::origin()));
+        Aabb::new(lo.coords, hi.coords)
+    }
+
+    /// Colliders of the moving part and the obstacles (one per distinct part).
+    pub fn colliders(&self) -> Result<(Arc<Collider>, PosedColliders), CollisionError> {
+        let mut cache = crate::collision::ColliderCache::new();
+        let moving = cache.get(&self.moving)?;
+        let obstacles = self
+            .obstacles
+            .iter()
+            .map(|o| Ok((cache.get(&o.mesh)?, o.pose)))
+            .collect::<Result<Vec<_>, CollisionError>>()?;
+        Ok((moving, obstacles))
+    }
+
+    /// A [`MeshValidator`] for the problem.
+    pub fn validator(
+        &self,
+        options: MeshValidatorOptions,
+    ) -> Result<MeshValidator, CollisionError> {
+        let (moving, obstacles) = self.colliders()?;
+        MeshValidator::new(moving, obstacles, options)
+    }
+
+    /// The validator options the benchmarks and tests use: exact interference with
+    /// the default tolerance, stepwise edges at 0.05 mm / (0.05 mm ÷ the part's
+    /// radius) so no point of the part moves more than about 0.1 mm between checks.
+    pub fn default_validator_options(&self) -> MeshValidatorOptions {
+        let radius = self
+            .moving
+            .vertices
+            .iter()
+            .map(|v| v.coords.norm())
+            .fold(1.0, f64::max);
+        MeshValidatorOptions {
+            edge: EdgeCheck::Stepwise {
+                mm: 0.05,
+                rad: 0.05 / radius,
+            },
+            ..Default::default()
+        }
+    }
+
+    /// Solves the problem with fitup's best planner ([`plan_assembly`], disassembly
+    /// first) for `seed`, at most `max_iterations` per search.
+    ///
+    /// # Errors
+    /// Only for invalid input (the problems are valid).
+    pub fn solve(
+        &self,
+        validator: &mut MeshValidator,
+        seed: u64,
+        max_iterations: usize,
+    ) -> Result<Path, PlanError> {
+        plan_assembly(
+            validator,
+            &self.space,
+            &self.start,
+            &self.goal,
+            &self.part_box(),
+            &self.product_box,
+            &AssemblyOptions::default().with_limits(seed, max_iterations),
+            None,
+        )
+    }
+
+    /// The problem as a document (moving component at its start pose, named
+    /// `moving`; meshes `meshes/<name>_<part>.stl`).
+    pub fn document(&self) -> DocumentFile {
+        let part = |p: &str| PartFile {
+            stl: format!("meshes/{}_{p}.stl", self.name),
+            planes: IndexMap::new(),
+            axes: IndexMap::new(),
+            points: IndexMap::new(),
+            features: vec![],
+        };
+        let mut parts = IndexMap::new();
+        parts.insert(self.moving_part.clone(), part(&self.moving_part));
+        for o in &self.obstacles {
+            parts.entry(o.part.clone()).or_insert_with(|| part(&o.part));
+        }
+        let mut components: Vec<ComponentFile> = self
+            .obstacles
+            .iter()
+            .map(|o| ComponentFile {
+                name: o.name.clone(),
+                part: o.part.clone(),
+                fixed: true,
+                color: Some(serde_yaml::Value::String("#8c8c8c".into())),
+                transform: Some(o.pose.to_matrix()),
+            })
+            .collect();
+        components.push(ComponentFile {
+            name: "moving".into(),
+            part: self.moving_part.clone(),
+            fixed: false,
+            color: Some(serde_yaml::Value::String("#d4a72c".into())),
+            transform: Some(self.start.to_matrix()),
+        });
+        DocumentFile {
+            units: "mm".into(),
+            description: Some(self.description.clone()),
+            parts,
+            components,
+            mates: vec![],
+            robots: vec![],
+        }
+    }
+
+    /// The planning data (start, goal, bounds, product box, rotation weight) as
+    /// JSON; poses as translation (mm) + unit quaternion `[w, x, y, z]` acting on
+    /// column vectors (`p' = R p + t`).
+    pub fn plan_json(&self) -> serde_json::Value {
+        let pose = |t: &Transform| {
+            let iso = t.isometry();
+            let q = iso.rotation;
+            serde_json::json!({
+                "t": [iso.translation.x, iso.translation.y, iso.translation.z],
+                "q": [q.w, q.i, q.j, q.k],
+            })
+        };
+        serde_json::json!({
+            "name": self.name,
+            "description": self.description,
+            "document": format!("{}.yaml", self.name),
+            "moving_component": "moving",
+            "start": pose(&self.start),
+            "goal": pose(&self.goal),
+            "bounds_min": self.space.min.as_slice(),
+            "bounds_max": self.space.max.as_slice(),
+            "rotation_weight_mm_per_rad": self.space.rotation_weight,
+            "product_box_min": self.product_box.min.as_slice(),
+            "product_box_max": self.product_box.max.as_slice(),
+        })
+    }
+
+    /// Writes `dir/<name>.yaml`, `dir/<name>.plan.json` and
+    /// `dir/meshes/<name>_<part>.stl` (atomically).
+    ///
+    /// # Errors
+    /// File system errors, unwritable meshes.
+    pub fn write(&self, dir: &FsPath) -> Result<(), ProblemError> {
+        let io = |e: std::io::Error| ProblemError::Io(e.to_string());
+        std::fs::create_dir_all(dir.join("meshes")).map_err(io)?;
+        let stl = |p: &str| dir.join(format!("meshes/{}_{p}.stl", self.name));
+        write_stl(&stl(&self.moving_part), &self.moving)?;
+        let mut written = std::collections::HashSet::new();
+        for o in &self.obstacles {
+            if written.insert(o.part.clone()) {
+                write_stl(&stl(&o.part), &o.mesh)?;
+            }
+        }
+        let yaml = self
+            .document()
+            .to_yaml()
+            .map_err(|e| ProblemError::Io(e.to_string()))?;
+        crate::fsutil::write_atomic(&dir.join(format!("{}.yaml", self.name)), yaml.as_bytes())
+            .map_err(io)?;
+        let json = serde_json::to_string_pretty(&self.plan_json())
+            .map_err(|e| ProblemError::Io(e.to_string()))?;
+        crate::fsutil::write_atomic(
+            &dir.join(format!("{}.plan.json", self.name)),
+            format!("{json}\n").as_bytes(),
+        )
+        .map_err(io)?;
+        Ok(())
+    }
+}
+
+fn obstacle(name: &str, part: &str, mesh: Mesh, pose: Transform) -> ProblemObstacle {
+    ProblemObstacle {
+        name: name.into(),
+        part: part.into(),
+        mesh: Arc::new(mesh),
+        pose,
+    }
+}
+
+fn at(x: f64, y: f64, z: f64) -> Transform {
+    Transform::from_translation(Vec3::new(x, y, z))
+}
+
+fn boxed(lo: [f64; 3], hi: [f64; 3]) -> Mesh {
+    Mesh::cuboid(Point3::from(lo), Point3::from(hi))
+}
+
+/// A Ø20 × 100 mm peg (origin at the centre of its bottom face, axis +Z) into a
+/// blind hole of radius `10 + clearance` and 60 mm depth in a Ø80 × 70 mm block
+/// (64 facets around: the smallest gap between the polygons is
+/// `(10 + clearance)·cos(π/64) − 10`, 0.49 mm for 0.5, 0.09 mm for 0.1). Start: the
+/// peg lying on its side 120 mm away; goal: resting on the floor of the hole.
+///
+/// # Errors
+/// A clearance that is not finite and in `(0, 20)` mm.
+pub fn peg_in_hole(clearance: f64) -> Result<Problem, MeshError> {
+    if !(clearance.is_finite() && clearance > 0.0 && clearance < 20.0) {
+        return Err(MeshError::invalid(
+            "the peg-in-hole clearance must be in (0, 20) mm",
+        ));
+    }
+    let r = 10.0 + clearance;
+    let block = Mesh::lathe(
+        &[
+            (0.0, 0.0),
+            (40.0, 0.0),
+            (40.0, 70.0),
+            (r, 70.0),
+            (r, 10.0),
+            (0.0, 10.0),
+        ],
+        64,
+    )?;
+    let peg = Mesh::cylinder(10.0, 100.0, 64);
+    let lying = Transform::from_rotation_about(Point3::origin(), Vec3::y(), FRAC_PI_2)
+        .map_err(|e| MeshError::invalid(e.to_string()))?;
+    let name = format!("peg_in_hole_{}", (clearance * 1000.0).round() as i64);
+    Ok(Problem {
+        description: format!(
+            "Peg in hole: Ø20 × 100 mm peg into a 60 mm deep blind hole, {clearance} mm radial clearance"
+        ),
+        name,
+        moving_part: "peg".into(),
+        moving: Arc::new(peg),
+        obstacles: vec![obstacle("block", "block", block, Transform::IDENTITY)],
+        start: lying.then(&at(120.0, 30.0, 60.0)),
+        goal: at(0.0, 0.0, 10.0),
+        space: PlanningSpace::new(Vec3::new(-200.0, -200.0, 0.0), Vec3::new(200.0, 200.0, 250.0))
+            .with_rotation_weight(50.0),
+        product_box: Aabb::new(Vec3::new(-40.0, -40.0, 0.0), Vec3::new(40.0, 40.0, 70.0)),
+    })
+}
+
+/// Seed 002's experiment, simplified: a piston-rod cap (Ø60 × 20 mm disc with a
+/// Ø30 × 15 mm boss) seated in a housing in the 0..500 mm cube. The seat is a
+/// channel 61 mm wide and 20.5 mm high (0.5 mm clearance around the disc) under a
+/// cover plate whose slot is 31 mm wide (0.5 mm around the boss): the cap can only
+/// leave by sliding 130 mm along +X before it can lift. Start: above the housing,
+/// turned; goal: seated.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn piston_rod_cap() -> Result<Problem, MeshError> {
+    let cap = Mesh::lathe(
+        &[
+            (0.0, 0.0),
+            (30.0, 0.0),
+            (30.0, 20.0),
+            (15.0, 20.0),
+            (15.0, 35.0),
+            (0.0, 35.0),
+        ],
+        48,
+    )?;
+    let (x0, x1, y0, y1) = (150.0, 350.0, 190.0, 310.0);
+    let (floor, top, cover) = (200.0, 220.5, 235.0);
+    let pieces = [
+        ("floor", [x0, y0, 180.0], [x1, y1, floor]),
+        ("wall_left", [x0, y0, floor], [x1, 219.5, top]),
+        ("wall_right", [x0, 280.5, floor], [x1, y1, top]),
+        ("back", [x0, 219.5, floor], [219.5, 280.5, top]),
+        ("cover_left", [x0, y0, top], [x1, 234.5, cover]),
+        ("cover_right", [x0, 265.5, top], [x1, y1, cover]),
+        ("cover_back", [x0, 234.5, top], [234.5, 265.5, cover]),
+    ];
+    let obstacles = pieces
+        .iter()
+        .map(|(n, lo, hi)| obstacle(n, n, boxed(*lo, *hi), Transform::IDENTITY))
+        .collect();
+    let turned = Transform::from_xyzabc(
+        Vec3::new(250.0, 250.0, 380.0),
+        [0.4, -0.3, 0.8],
+        Default::default(),
+    );
+    Ok(Problem {
+        name: "piston_rod_cap".into(),
+        description: "Seed 002 experiment (simplified): piston-rod cap into a seat with 0.5 mm clearances, 500 mm cube".into(),
+        moving_part: "cap".into(),
+        moving: Arc::new(cap),
+        obstacles,
+        start: turned,
+        goal: at(250.0, 250.0, floor),
+        space: PlanningSpace::new(Vec3::zeros(), Vec3::repeat(500.0)).with_rotation_weight(35.0),
+        product_box: Aabb::new(Vec3::new(x0, y0, 180.0), Vec3::new(x1, y1, cover)),
+    })
+}
+
+/// Seed 000's fig. 11 cell: screw 4 goes from the table into plate B's first hole
+/// (radius 4.5 mm around the r = 4 mm shank: 0.5 mm clearance); the table, both
+/// plates, the three seated screws of plate A and screw 5 are obstacles. Start and
+/// goal rest on the table (touching).
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn screw_cell() -> Result<Problem, MeshError> {
+    use crate::demo::{screw_mesh, table_mesh, HOLE_RADIUS, PLATE_THICKNESS, TABLE_TOP};
+    let screw = Arc::new(screw_mesh()?);
+    let plate_a = Mesh::perforated_plate(3, 2, 100.0, PLATE_THICKNESS, HOLE_RADIUS, 8, |i, j| {
+        [(0, 0), (1, 1), (2, 0)].contains(&(i, j))
+    })?;
+    let plate_b = Mesh::perforated_plate(2, 2, 100.0, PLATE_THICKNESS, HOLE_RADIUS, 8, |i, j| {
+        [(0, 0), (1, 1)].contains(&(i, j))
+    })?;
+    let mut obstacles = vec![
+        obstacle("table", "table", table_mesh(), Transform::IDENTITY),
+        obstacle("plate_a", "plate_a", plate_a, at(100.0, 150.0, TABLE_TOP)),
+        obstacle("plate_b", "plate_b", plate_b, at(700.0, 300.0, TABLE_TOP)),
+    ];
+    for (k, (x, y)) in [(150.0, 200.0), (250.0, 300.0), (350.0, 200.0)]
+        .into_iter()
+        .enumerate()
+    {
+        obstacles.push(ProblemObstacle {
+            name: format!("screw{}", k + 1),
+            part: "screw".into(),
+            mesh: screw.clone(),
+            pose: at(x, y, TABLE_TOP),
+        });
+    }
+    obstacles.push(ProblemObstacle {
+        name: "screw5".into(),
+        part: "screw".into(),
+        mesh: screw.clone(),
+        pose: at(650.0, 650.0, TABLE_TOP),
+    });
+    Ok(Problem {
+        name: "screw_cell".into(),
+        description: "Seed 000 fig. 11 cell: screw 4 from the table into plate B's hole (0.5 mm radial clearance)".into(),
+        moving_part: "screw".into(),
+        moving: screw,
+        obstacles,
+        start: at(600.0, 650.0, TABLE_TOP),
+        goal: at(750.0, 350.0, TABLE_TOP),
+        space: PlanningSpace::new(
+            Vec3::new(0.0, 0.0, TABLE_TOP),
+            Vec3::new(1200.0, 800.0, TABLE_TOP + 250.0),
+        )
+        .with_rotation_weight(15.0),
+        product_box: Aabb::new(
+            Vec3::new(700.0, 300.0, TABLE_TOP),
+            Vec3::new(900.0, 500.0, TABLE_TOP + PLATE_THICKNESS),
+        ),
+    })
+}
+
+/// A ring of centre radius `big` and wire radius `wire` in its XY plane around the
+/// origin, leaving out the angles within `gap / 2` of +X (0: a closed torus; > 0:
+/// a slit ring closed by flat end caps). `nu` facets along, `nv` around the wire.
+fn ring(big: f64, wire: f64, gap: f64, nu: usize, nv: usize) -> Result<Mesh, MeshError> {
+    let closed = gap <= 0.0;
+    let (a0, span) = if closed {
+        (0.0, TAU)
+    } else {
+        (gap / 2.0, TAU - gap)
+    };
+    let rows = if closed { nu } else { nu + 1 };
+    let mut vertices = Vec::with_capacity(rows * nv + 2);
+    for i in 0..rows {
+        let u = a0 + span * i as f64 / nu as f64;
+        for j in 0..nv {
+            let v = TAU * j as f64 / nv as f64;
+            let rr = big + wire * v.cos();
+            vertices.push(Point3::new(rr * u.cos(), rr * u.sin(), wire * v.sin()));
+        }
+    }
+    let idx = |i: usize, j: usize| ((i % rows) * nv + j % nv) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    if !closed {
+        // each cap runs its boundary edges opposite to the tube's
+        for (i, u, first) in [(0usize, a0, true), (nu, a0 + span, false)] {
+            let c = vertices.len() as u32;
+            vertices.push(Point3::new(big * u.cos(), big * u.sin(), 0.0));
+            for j in 0..nv {
+                triangles.push(if first {
+                    [c, idx(i, j), idx(i, j + 1)]
+                } else {
+                    [c, idx(i, j + 1), idx(i, j)]
+                });
+            }
+        }
+    }
+    let mut mesh = Mesh::new(vertices, triangles)?;
+    // Make it outward-oriented whatever the parametrisation's handedness.
+    if mesh.signed_volume() < 0.0 {
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+    }
+    Ok(mesh)
+}
+
+/// Two interlocked rings (centre radius 30 mm, wire radius 3 mm): the fixed one in
+/// the XY plane, the moving one in the XZ plane through its centre, with a slit
+/// whose narrowest width (at the inner edge) is 6.6 mm, 10 % wider than the 6 mm
+/// wire. Out only by threading the fixed wire through the slit: coordinated
+/// rotation and translation. Start: interlocked; goal: apart, 150 mm away.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn ring_puzzle() -> Result<Problem, MeshError> {
+    let (big, wire): (f64, f64) = (30.0, 3.0);
+    let slit = 1.10 * 2.0 * wire;
+    let gap = 2.0 * (slit / (2.0 * (big - wire))).asin();
+    let fixed = ring(big, wire, 0.0, 96, 16)?;
+    let slit_ring = ring(big, wire, gap, 96, 16)?;
+    let upright = Transform::from_rotation_about(Point3::origin(), Vec3::x(), FRAC_PI_2)
+        .map_err(|e| MeshError::invalid(e.to_string()))?;
+    // The slit faces away from the fixed ring's wire (local +X → world -X side turned).
+    let turn = Transform::from_rotation_about(Point3::origin(), Vec3::z(), PI / 2.0)
+        .map_err(|e| MeshError::invalid(e.to_string()))?;
+    let start = turn.then(&upright).then(&at(big, 0.0, 0.0));
+    Ok(Problem {
+        name: "ring_puzzle".into(),
+        description: format!(
+            "Ring puzzle: two interlocked rings (R 30, wire r 3 mm); the moving ring's slit is {slit:.1} mm wide"
+        ),
+        moving_part: "slit_ring".into(),
+        moving: Arc::new(slit_ring),
+        obstacles: vec![obstacle("ring", "ring", fixed, Transform::IDENTITY)],
+        start,
+        goal: upright.then(&at(150.0, 0.0, 0.0)),
+        space: PlanningSpace::new(Vec3::repeat(-120.0), Vec3::repeat(200.0))
+            .with_rotation_weight(33.0),
+        product_box: Aabb::new(
+            Vec3::new(-big - wire, -big - wire, -wire),
+            Vec3::new(big + wire, big + wire, wire),
+        ),
+    })
+}
+
+/// Every benchmark problem: peg in hole at 0.5 and 0.1 mm, piston-rod cap, screw
+/// cell, ring puzzle.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn all() -> Result<Vec<Problem>, MeshError> {
+    Ok(vec![
+        peg_in_hole(0.5)?,
+        peg_in_hole(0.1)?,
+        piston_rod_cap()?,
+        screw_cell()?,
+        ring_puzzle()?,
+    ])
+}

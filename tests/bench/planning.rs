@@ -1,0 +1,253 @@
+//! Planning benchmark: fitup's best planner (`plan_assembly`) on the benchmark
+//! problems (`fitup::planning::problems`) against OMPL's RRTConnect (FCL collision,
+//! `tests/bench/ompl_peer.py`) in the same run, and seed 002's protocol (100 runs ×
+//! 100 iterations: rrt, biased_rrt, local_rrt on the piston-rod cap).
+//!
+//! `cargo bench --bench planning`. The peer runs when `FITUP_PY` (default
+//! `.venv/bin/python`) exists. Environment: `FITUP_RUNS` (fitup runs per problem,
+//! 10), `FITUP_OMPL_RUNS` (5), `FITUP_OMPL_LIMIT_S` (10), `FITUP_OMPL_RRT=1` (also
+//! OMPL's plain RRT).
+
+use fitup::math::Transform;
+use fitup::planning::problems::{self, Problem};
+use fitup::planning::{
+    disassemble, DisassemblyPlanner, EdgeCheck, LocalRrtOptions, MeshValidatorOptions, RrtOptions,
+};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+fn env_or<T: std::str::FromStr>(key: &str, default: T) -> T {
+    std::env::var(key)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// Stepwise resolution shared by fitup and the peer (mm of the SE(3) metric).
+const RESOLUTION_MM: f64 = 0.05;
+
+fn median(xs: &mut [f64]) -> Option<f64> {
+    if xs.is_empty() {
+        return None;
+    }
+    xs.sort_by(f64::total_cmp);
+    let n = xs.len();
+    Some(if n % 2 == 1 {
+        xs[n / 2]
+    } else {
+        0.5 * (xs[n / 2 - 1] + xs[n / 2])
+    })
+}
+
+/// Writes the peer's input: the moving mesh (part frame), the obstacles in world
+/// coordinates and problem.json.
+fn export(p: &Problem, dir: &Path) -> PathBuf {
+    let mut spec = p.plan_json();
+    fitup::mesh::write_stl(&dir.join("moving.stl"), &p.moving).unwrap();
+    let mut stls = Vec::new();
+    for (k, o) in p.obstacles.iter().enumerate() {
+        let name = format!("obstacle{k}.stl");
+        fitup::mesh::write_stl(&dir.join(&name), &o.mesh.transformed(&o.pose)).unwrap();
+        stls.push(name);
+    }
+    spec["moving_stl"] = "moving.stl".into();
+    spec["obstacle_stls"] = stls.into();
+    spec["resolution_mm"] = RESOLUTION_MM.into();
+    // FCL reports touching as collision: lift the resting ends off their supports.
+    spec["peer_lift_mm"] = 0.05.into();
+    let path = dir.join("problem.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&spec).unwrap()).unwrap();
+    path
+}
+
+struct Row {
+    solved: usize,
+    runs: usize,
+    median_s: Option<f64>,
+}
+
+fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize) -> Row {
+    let mut times = Vec::new();
+    for seed in 0..runs as u64 {
+        let mut v = p.validator(options).unwrap();
+        let t0 = Instant::now();
+        let path = p.solve(&mut v, seed, 5000).unwrap();
+        let dt = t0.elapsed().as_secs_f64();
+        if path.found() {
+            times.push(dt);
+        }
+    }
+    Row {
+        solved: times.len(),
+        runs,
+        median_s: median(&mut times),
+    }
+}
+
+fn peer_runs(py: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> Option<Row> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/ompl_peer.py");
+    let out = std::process::Command::new(py)
+        .arg(script)
+        .arg(spec)
+        .arg(planner)
+        .arg(runs.to_string())
+        .arg(limit.to_string())
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        eprintln!("peer failed: {}", String::from_utf8_lossy(&out.stderr));
+        return None;
+    }
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).ok()?;
+    let mut times: Vec<f64> = v["times_s"]
+        .as_array()?
+        .iter()
+        .filter_map(|t| t.as_f64())
+        .collect();
+    Some(Row {
+        solved: v["solved"].as_u64()? as usize,
+        runs: v["runs"].as_u64()? as usize,
+        median_s: median(&mut times),
+    })
+}
+
+fn fmt(r: &Row) -> String {
+    format!(
+        "{:>3}/{:<3} {:>10}",
+        r.solved,
+        r.runs,
+        r.median_s
+            .map_or("-".to_string(), |t| format!("{:.4} s", t))
+    )
+}
+
+/// Seed 002's protocol: 100 runs, at most 100 iterations each, disassembly of the
+/// cap from its seat (all three planners through `disassemble`).
+fn protocol() {
+    let p = problems::piston_rod_cap().unwrap();
+    let options = p.default_validator_options();
+    println!("\nseed 002 protocol: piston_rod_cap disassembly, 100 runs x 100 iterations");
+    println!(
+        "{:<12} {:>8} {:>14} {:>14}",
+        "planner", "success", "mean time", "mean checks"
+    );
+    let mk = |bias: f64| {
+        DisassemblyPlanner::Rrt(RrtOptions {
+            goal_bias: bias,
+            ..RrtOptions::default()
+        })
+    };
+    for (name, planner) in [
+        ("rrt", mk(0.0)),
+        ("biased_rrt", mk(0.1)),
+        (
+            "local_rrt",
+            DisassemblyPlanner::LocalRrt(LocalRrtOptions::default()),
+        ),
+    ] {
+        let (mut ok, mut total, mut checks) = (0, 0.0, 0u64);
+        for seed in 0..100u64 {
+            let mut planner = planner.clone();
+            match &mut planner {
+                DisassemblyPlanner::Rrt(o) => {
+                    o.limits.seed = seed;
+                    o.limits.max_iterations = 100;
+                }
+                DisassemblyPlanner::LocalRrt(o) => {
+                    o.rrt.limits.seed = seed;
+                    o.rrt.limits.max_iterations = 100;
+                }
+            }
+            let mut v = p.validator(options).unwrap();
+            let t0 = Instant::now();
+            let path = disassemble(
+                &mut v,
+                &p.space,
+                &p.goal,
+                &p.part_box(),
+                &p.product_box,
+                &planner,
+                None,
+            )
+            .unwrap();
+            total += t0.elapsed().as_secs_f64();
+            checks += path.collision_checks();
+            ok += path.found() as usize;
+        }
+        println!(
+            "{:<12} {:>7}% {:>11.2} ms {:>14.0}",
+            name,
+            ok,
+            total / 100.0 * 1e3,
+            checks as f64 / 100.0
+        );
+    }
+}
+
+fn main() {
+    let runs = env_or("FITUP_RUNS", 10usize);
+    let peer_n = env_or("FITUP_OMPL_RUNS", 5usize);
+    let limit = env_or("FITUP_OMPL_LIMIT_S", 10.0f64);
+    let py =
+        PathBuf::from(std::env::var("FITUP_PY").unwrap_or_else(|_| {
+            concat!(env!("CARGO_MANIFEST_DIR"), "/.venv/bin/python").to_string()
+        }));
+    let peer = py.exists();
+    if !peer {
+        eprintln!("no OMPL peer ({} missing): fitup only", py.display());
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    println!(
+        "planning: success and median time of successful runs; fitup = plan_assembly, {runs} seeds x <= 5000 iterations; OMPL {peer_n} runs x {limit} s; stepwise edges at {RESOLUTION_MM} mm"
+    );
+    println!(
+        "{:<18} {:>20} {:>20} {:>20} {:>10}",
+        "problem", "fitup stepwise", "fitup continuous", "OMPL RRTConnect", "ratio"
+    );
+    for p in problems::all().unwrap() {
+        let dir = tmp.path().join(&p.name);
+        std::fs::create_dir_all(&dir).unwrap();
+        let spec = export(&p, &dir);
+        let step = fitup_runs(&p, p.default_validator_options(), runs);
+        let cont = fitup_runs(
+            &p,
+            MeshValidatorOptions {
+                edge: EdgeCheck::Continuous,
+                ..Default::default()
+            },
+            runs,
+        );
+        let ompl = if peer {
+            peer_runs(&py, &spec, "RRTConnect", peer_n, limit)
+        } else {
+            None
+        };
+        let ratio = match (&ompl, step.median_s) {
+            (
+                Some(Row {
+                    median_s: Some(o), ..
+                }),
+                Some(f),
+            ) => format!("{:.0}x", o / f),
+            (Some(o), Some(_)) if o.solved == 0 => {
+                format!(">{:.0}x", limit / step.median_s.unwrap())
+            }
+            _ => "-".into(),
+        };
+        println!(
+            "{:<18} {:>20} {:>20} {:>20} {:>10}",
+            p.name,
+            fmt(&step),
+            fmt(&cont),
+            ompl.as_ref().map_or("-".into(), fmt),
+            ratio
+        );
+        if peer && std::env::var_os("FITUP_OMPL_RRT").is_some() {
+            if let Some(r) = peer_runs(&py, &spec, "RRT", peer_n, limit) {
+                println!("{:<18} {:>20} {:>20} {:>20}", "", "", "OMPL RRT", fmt(&r));
+            }
+        }
+    }
+    let _ = Transform::IDENTITY;
+    protocol();
+}

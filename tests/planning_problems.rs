@@ -1,0 +1,149 @@
+//! The benchmark planning problems (`fitup::planning::problems`): the committed
+//! documents under `models/problems/` are exactly the generators' output
+//! (regenerate with `FITUP_BLESS=1 cargo test --test planning_problems`), and
+//! fitup's best planner solves them with paths that are collision-free at a fine
+//! resolution, start and end where asked, and repeat for a seed.
+
+use fitup::collision::{interferes, DEFAULT_TOLERANCE};
+use fitup::planning::problems::{self, Problem};
+use fitup::planning::Path;
+use std::path::Path as FsPath;
+
+fn files(p: &Problem) -> Vec<String> {
+    let mut f = vec![
+        format!("{}.yaml", p.name),
+        format!("{}.plan.json", p.name),
+        format!("meshes/{}_{}.stl", p.name, p.moving_part),
+    ];
+    for o in &p.obstacles {
+        let s = format!("meshes/{}_{}.stl", p.name, o.part);
+        if !f.contains(&s) {
+            f.push(s);
+        }
+    }
+    f
+}
+
+#[test]
+fn committed_problems_match_generators_and_load() {
+    let dir = FsPath::new(env!("CARGO_MANIFEST_DIR")).join("models/problems");
+    let all = problems::all().unwrap();
+    if std::env::var_os("FITUP_BLESS").is_some() {
+        for p in &all {
+            p.write(&dir).unwrap();
+        }
+    }
+    let fresh = tempfile::tempdir().unwrap();
+    for p in &all {
+        p.write(fresh.path()).unwrap();
+        for f in files(p) {
+            let committed =
+                std::fs::read(dir.join(&f)).unwrap_or_else(|e| panic!("models/problems/{f}: {e}"));
+            let generated = std::fs::read(fresh.path().join(&f)).unwrap();
+            assert!(
+                committed == generated,
+                "models/problems/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test planning_problems"
+            );
+        }
+        let doc = fitup::document::Document::open(&dir.join(format!("{}.yaml", p.name))).unwrap();
+        assert_eq!(doc.components().len(), p.obstacles.len() + 1);
+        for i in 0..doc.components().len() {
+            assert!(
+                doc.mesh_of(i).inspect().is_watertight(),
+                "{}: {}",
+                p.name,
+                doc.components()[i].name
+            );
+        }
+    }
+}
+
+/// Every pose of the densified path (0.02 mm, and the rotation moving no point more
+/// than 0.02 mm) is free by the exact interference test.
+fn assert_collision_free(p: &Problem, path: &Path) {
+    let (moving, obstacles) = p.colliders().unwrap();
+    let step = 0.02;
+    for (k, pose) in path
+        .densify(step, step / moving.radius())
+        .iter()
+        .enumerate()
+    {
+        for (o, (c, op)) in obstacles.iter().enumerate() {
+            assert!(
+                !interferes(&moving, pose, c, op, DEFAULT_TOLERANCE).unwrap(),
+                "{}: pose {k} of the densified path hits obstacle {}",
+                p.name,
+                p.obstacles[o].name
+            );
+        }
+        assert!(
+            (0..3).all(|i| {
+                let t = pose.translation()[i];
+                t >= p.space.min[i] - 1e-9 && t <= p.space.max[i] + 1e-9
+            }),
+            "{}: pose {k} leaves the bounds",
+            p.name
+        );
+    }
+}
+
+fn check_solves(p: &Problem, seed: u64, iterations: usize) {
+    let mut v = p.validator(p.default_validator_options()).unwrap();
+    let path = p.solve(&mut v, seed, iterations).unwrap();
+    assert!(path.found(), "{}: {:?}", p.name, path.failure);
+    let (first, last) = (path.poses[0], *path.poses.last().unwrap());
+    assert!(first.approx_eq(&p.start, 1e-9, 1e-9), "{}: start", p.name);
+    assert!(last.approx_eq(&p.goal, 1e-9, 1e-9), "{}: goal", p.name);
+    assert_collision_free(p, &path);
+    let mut again = p.validator(p.default_validator_options()).unwrap();
+    let repeat = p.solve(&mut again, seed, iterations).unwrap();
+    assert_eq!(path.poses, repeat.poses, "{}: same seed, same path", p.name);
+    assert_eq!(path.collision_checks(), repeat.collision_checks());
+}
+
+#[test]
+fn peg_in_hole_is_solved_collision_free_and_deterministic() {
+    check_solves(&problems::peg_in_hole(0.5).unwrap(), 1, 2000);
+}
+
+#[test]
+fn piston_rod_cap_is_solved_collision_free_and_deterministic() {
+    check_solves(&problems::piston_rod_cap().unwrap(), 1, 2000);
+}
+
+#[test]
+fn screw_cell_is_solved_collision_free_and_deterministic() {
+    check_solves(&problems::screw_cell().unwrap(), 1, 2000);
+}
+
+/// The ring puzzle is not solved yet within a test's budget (see docs/planning.md);
+/// check that it is well posed: both ends free, the rings linked (blocked along
+/// the other axes), and one way out exists.
+#[test]
+fn ring_puzzle_is_well_posed() {
+    use fitup::planning::MotionValidator;
+    let p = problems::ring_puzzle().unwrap();
+    let mut v = p.validator(p.default_validator_options()).unwrap();
+    assert!(v.is_free(&p.start));
+    assert!(v.is_free(&p.goal));
+    assert!(!v.edge_free(&p.start, &p.goal));
+    let away = |d: [f64; 3]| {
+        p.start
+            .then(&fitup::math::Transform::from_translation(d.into()))
+    };
+    for d in [
+        [0.0, 0.0, 80.0],
+        [0.0, 80.0, 0.0],
+        [-80.0, 0.0, 0.0],
+        [80.0, 0.0, 0.0],
+    ] {
+        assert!(!v.edge_free(&p.start, &away(d)), "{d:?}");
+    }
+    // A witness that it can be solved: the slit faces the fixed wire, so straight
+    // down threads the wire through the slit (0.3 mm each side), then across.
+    let below = away([0.0, 0.0, -80.0]);
+    let beside = away([120.0, 0.0, -80.0]);
+    assert!(v.edge_free(&p.start, &below));
+    assert!(v.edge_free(&below, &beside));
+    assert!(v.edge_free(&beside, &p.goal));
+}
