@@ -101,6 +101,17 @@ impl Planner {
         true
     }
 
+    /// The path shortcutting settings.
+    pub fn smoothing(&self) -> Smoothing {
+        match self {
+            Planner::GreedyAnt(o) => o.smoothing,
+            Planner::RrtFloyd(o) => o.smoothing,
+            Planner::Rrt(o) | Planner::BiasedRrt(o) => o.smoothing,
+            Planner::LocalRrt(o) => o.rrt.smoothing,
+            Planner::RrtConnect(o) => o.smoothing,
+        }
+    }
+
     /// Path shortcutting on or off.
     pub fn set_smoothing(&mut self, on: bool) {
         let s = Smoothing {
@@ -189,6 +200,7 @@ impl Planner {
             AssemblyOptions::default().with_limits(limits.seed, limits.max_iterations);
         options.disassembly.rrt.limits.time_limit_ms = limits.time_limit_ms;
         options.approach.limits.time_limit_ms = limits.time_limit_ms;
+        options.smoothing = self.smoothing();
         match self {
             Planner::LocalRrt(o) => options.disassembly = o.clone(),
             Planner::RrtConnect(o) => options.approach = o.clone(),
