@@ -77,10 +77,10 @@ impl Scene {
             let part = doc
                 .part(&c.part)
                 .map_err(|e| CollisionError::BadMesh(e.to_string()))?;
-            let spec = part.features.iter().map(|f| match f {
+            let mut spec = part.features.iter().map(|f| match f {
                 Feature::CutCells { spec, .. } => spec,
             });
-            cells.push(match spec.last() {
+            cells.push(match spec.next_back() {
                 Some(s) => Some(cache.cells(mesh, s)?),
                 None => None,
             });

@@ -666,9 +666,7 @@ impl Document {
     pub fn set_transform_at(&mut self, i: usize, t: Transform) -> Result<(), DocumentError> {
         let name = &self.components[i].name;
         if !t.is_finite() {
-            return Err(DocumentError::Invalid(format!(
-                "the pose for `{name}` is not finite"
-            )));
+            return Err(DocumentError::Invalid(format!("the pose for `{name}` is not finite")));
         }
         // Setting the pose a component already has is not a move (Rhai writes a property
         // back after a method call on it, as in `table.transform.apply(p)`).
@@ -676,9 +674,7 @@ impl Document {
             return Ok(());
         }
         if self.components[i].fixed {
-            return Err(DocumentError::Invalid(format!(
-                "component `{name}` is fixed; set `fixed: false` to move it"
-            )));
+            return Err(DocumentError::Invalid(format!("component `{name}` is fixed; set `fixed: false` to move it")));
         }
         if let Some(robot) = self.driving_robot(i) {
             return Err(DocumentError::Invalid(format!(

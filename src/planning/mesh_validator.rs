@@ -355,15 +355,12 @@ mod tests {
         assert!(!v.edge_free(&at(0.0), &at(70.0)));
         assert!(v.edge_free(&at(0.0), &at(45.0)));
         // a turn that swings a corner through the wall
-        let turn =
-            Transform::from_rotation_about(Point3::new(44.0, 0.0, 0.0), Vec3::z(), 0.8).unwrap();
+        let turn = Transform::from_rotation_about(Point3::new(44.0, 0.0, 0.0), Vec3::z(), 0.8)
+            .unwrap();
         let start = at(44.0);
         assert!(!v.edge_free(&start, &start.then(&turn)));
         // a coarse stepwise check jumps the wall, as documented
-        let mut s = wall_scene(EdgeCheck::Stepwise {
-            mm: 100.0,
-            rad: 1.0,
-        });
+        let mut s = wall_scene(EdgeCheck::Stepwise { mm: 100.0, rad: 1.0 });
         assert!(s.edge_free(&at(0.0), &at(70.0)));
         let mut s = wall_scene(EdgeCheck::Stepwise { mm: 0.5, rad: 0.01 });
         assert!(!s.edge_free(&at(0.0), &at(70.0)));
@@ -378,7 +375,10 @@ mod tests {
             ..Default::default()
         }));
         assert!(bad(MeshValidatorOptions {
-            edge: EdgeCheck::Stepwise { mm: 0.0, rad: 0.1 },
+            edge: EdgeCheck::Stepwise {
+                mm: 0.0,
+                rad: 0.1
+            },
             ..Default::default()
         }));
         assert!(bad(MeshValidatorOptions {
@@ -386,10 +386,8 @@ mod tests {
             ..Default::default()
         }));
         let nan = Transform::from_translation(Vec3::new(f64::NAN, 0.0, 0.0));
-        assert!(
-            MeshValidator::new(cube.clone(), vec![(cube.clone(), nan)], Default::default())
-                .is_err()
-        );
+        assert!(MeshValidator::new(cube.clone(), vec![(cube.clone(), nan)], Default::default())
+            .is_err());
         let mut v = wall_scene(EdgeCheck::Continuous);
         assert!(!v.is_free(&nan));
         assert!(!v.edge_free(&at(0.0), &nan));

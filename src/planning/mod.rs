@@ -22,9 +22,7 @@
 mod disassembly;
 mod greedy_ant;
 mod local_rrt;
-mod mesh_validator;
 mod path;
-mod request;
 mod rrt;
 mod rrt_connect;
 mod rrt_floyd;
@@ -33,6 +31,8 @@ mod smoothing;
 mod space;
 mod tree;
 mod validator;
+mod mesh_validator;
+mod request;
 
 #[cfg(test)]
 mod test_scenes;
@@ -40,13 +40,13 @@ mod test_scenes;
 pub use disassembly::{disassemble, Aabb, DisassemblyPlanner};
 pub use greedy_ant::{greedy_ant, GreedyAntOptions};
 pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
-pub use mesh_validator::{EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats};
 pub use path::{Failure, Path};
-pub use request::{Planner, PLANNER_NAMES};
 pub use rrt::{biased_rrt, rrt, RrtOptions};
 pub use rrt_connect::{rrt_connect, RrtConnectOptions};
 pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
 pub use run::{Control, Limits, PlanError, Progress, ProgressFn};
 pub use smoothing::{smooth, Smoothing};
 pub use space::{PlanningSpace, RotationFreedom};
+pub use mesh_validator::{EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats};
+pub use request::{Planner, PLANNER_NAMES};
 pub use validator::{stepwise_edge_free, EdgeResolution, MotionValidator};

@@ -2,10 +2,9 @@
 //! that scripts, the CLI and benchmarks use, so the dispatch lives in one place.
 
 use super::{
-    biased_rrt, disassemble, greedy_ant, local_rrt, rrt, rrt_connect, rrt_floyd, Aabb,
-    DisassemblyPlanner, GreedyAntOptions, Limits, LocalRrtOptions, MotionValidator, Path,
-    PlanError, PlanningSpace, ProgressFn, RrtConnectOptions, RrtFloydOptions, RrtOptions,
-    Smoothing,
+    biased_rrt, disassemble, greedy_ant, local_rrt, rrt, rrt_connect, rrt_floyd, Aabb, DisassemblyPlanner,
+    GreedyAntOptions, Limits, LocalRrtOptions, MotionValidator, Path, PlanError, PlanningSpace, ProgressFn,
+    RrtConnectOptions, RrtFloydOptions, RrtOptions, Smoothing,
 };
 use crate::math::Transform;
 
@@ -27,14 +26,7 @@ pub enum Planner {
 }
 
 /// The planner names accepted by [`Planner::by_name`].
-pub const PLANNER_NAMES: [&str; 6] = [
-    "greedy_ant",
-    "rrt_floyd",
-    "rrt",
-    "biased_rrt",
-    "local_rrt",
-    "rrt_connect",
-];
+pub const PLANNER_NAMES: [&str; 6] = ["greedy_ant", "rrt_floyd", "rrt", "biased_rrt", "local_rrt", "rrt_connect"];
 
 impl Planner {
     /// The planner called `name` with its default options.
@@ -98,10 +90,7 @@ impl Planner {
 
     /// Path shortcutting on or off.
     pub fn set_smoothing(&mut self, on: bool) {
-        let s = Smoothing {
-            enabled: on,
-            ..Smoothing::default()
-        };
+        let s = Smoothing { enabled: on, ..Smoothing::default() };
         match self {
             Planner::GreedyAnt(o) => o.smoothing = s,
             Planner::RrtFloyd(o) => o.smoothing = s,
@@ -153,15 +142,7 @@ impl Planner {
                 })
             }
         };
-        disassemble(
-            validator,
-            space,
-            assembled,
-            part_box,
-            product_box,
-            &planner,
-            progress,
-        )
+        disassemble(validator, space, assembled, part_box, product_box, &planner, progress)
     }
 
     /// Seed 002's assembly by disassembly, for a full start → goal path: plans the

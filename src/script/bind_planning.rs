@@ -9,8 +9,8 @@ use super::{Context, ScriptResult};
 use crate::collision::scene::Scene;
 use crate::math::{AngleConvention, Transform, Vec3};
 use crate::planning::{
-    Aabb, Control, EdgeCheck, MeshValidator, MeshValidatorOptions, Path, Planner, PlanningSpace,
-    Progress, RotationFreedom, PLANNER_NAMES,
+    Aabb, Control, EdgeCheck, MeshValidator, MeshValidatorOptions, Path, Planner, PlanningSpace, Progress, RotationFreedom,
+    PLANNER_NAMES,
 };
 use rhai::{Array, Dynamic, Map};
 use std::sync::Arc;
@@ -23,24 +23,8 @@ pub struct PathHandle(Arc<Path>, Arc<Context>);
 
 const OPTION_KEYS: [&str; 19] = [
     "disassemble",
-    "planner",
-    "seed",
-    "max_iterations",
-    "time_limit_ms",
-    "step",
-    "goal_bias",
-    "smoothing",
-    "bounds",
-    "margin",
-    "rotation",
-    "rotation_weight",
-    "tolerance",
-    "edge",
-    "edge_step",
-    "edge_step_deg",
-    "L",
-    "dis",
-    "radius",
+    "planner", "seed", "max_iterations", "time_limit_ms", "step", "goal_bias", "smoothing", "bounds", "margin",
+    "rotation", "rotation_weight", "tolerance", "edge", "edge_step", "edge_step_deg", "L", "dis", "radius",
 ];
 
 /// Everything a planning call needs, parsed from the script's options.
@@ -58,16 +42,11 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
     check_keys(opts, &OPTION_KEYS, "planning")?;
     let name = opt_str(opts, "planner")?.unwrap_or_else(|| "rrt_connect".into());
     let mut planner = Planner::by_name(&name).ok_or_else(|| {
-        fail(format!(
-            "unknown planner `{name}`: {}",
-            crate::diagnostics::suggestion(&name, PLANNER_NAMES)
-        ))
+        fail(format!("unknown planner `{name}`: {}", crate::diagnostics::suggestion(&name, PLANNER_NAMES)))
     })?;
     let limits = planner.limits_mut();
     if let Some(s) = opts.get("seed") {
-        limits.seed =
-            s.as_int()
-                .map_err(|t| fail(format!("seed must be an integer, not {t}")))? as u64;
+        limits.seed = s.as_int().map_err(|t| fail(format!("seed must be an integer, not {t}")))? as u64;
     }
     if let Some(n) = opt_num(opts, "max_iterations")? {
         if n < 1.0 {
@@ -96,10 +75,7 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
         }
     }
     if let Some(s) = opts.get("smoothing") {
-        planner.set_smoothing(
-            s.as_bool()
-                .map_err(|t| fail(format!("smoothing must be true or false, not {t}")))?,
-        );
+        planner.set_smoothing(s.as_bool().map_err(|t| fail(format!("smoothing must be true or false, not {t}")))?);
     }
     if let Planner::GreedyAnt(g) = &mut planner {
         if let Some(l) = opt_num(opts, "L")? {
@@ -122,32 +98,18 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
             mm: opt_num(opts, "edge_step")?.unwrap_or(0.1),
             rad: opt_num(opts, "edge_step_deg")?.unwrap_or(0.1).to_radians(),
         },
-        Some(o) => {
-            return err(format!(
-                "edge must be \"continuous\" or \"step\", not `{o}`"
-            ))
-        }
+        Some(o) => return err(format!("edge must be \"continuous\" or \"step\", not `{o}`")),
     };
     let bounds = match opts.get("bounds") {
         None => None,
         Some(b) => {
-            let m = b
-                .read_lock::<Map>()
-                .ok_or_else(|| fail("bounds must be #{min: [x,y,z], max: [x,y,z]}"))?;
+            let m = b.read_lock::<Map>().ok_or_else(|| fail("bounds must be #{min: [x,y,z], max: [x,y,z]}"))?;
             let (lo, hi) = (
-                vec3(
-                    m.get("min").ok_or_else(|| fail("bounds needs `min`"))?,
-                    "bounds.min",
-                )?,
-                vec3(
-                    m.get("max").ok_or_else(|| fail("bounds needs `max`"))?,
-                    "bounds.max",
-                )?,
+                vec3(m.get("min").ok_or_else(|| fail("bounds needs `min`"))?, "bounds.min")?,
+                vec3(m.get("max").ok_or_else(|| fail("bounds needs `max`"))?, "bounds.max")?,
             );
             if (0..3).any(|i| lo[i] >= hi[i]) {
-                return err(format!(
-                    "bounds are empty: min {lo:?} is not below max {hi:?} on every axis"
-                ));
+                return err(format!("bounds are empty: min {lo:?} is not below max {hi:?} on every axis"));
             }
             Some((lo, hi))
         }
@@ -155,55 +117,27 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
     let margin = opt_num(opts, "margin")?.unwrap_or(50.0);
     let rotation = match opts.get("rotation") {
         None => true,
-        Some(r) => r
-            .as_bool()
-            .map_err(|t| fail(format!("rotation must be true or false, not {t}")))?,
+        Some(r) => r.as_bool().map_err(|t| fail(format!("rotation must be true or false, not {t}")))?,
     };
     let disassemble = match opts.get("disassemble") {
         None => false,
-        Some(r) => r
-            .as_bool()
-            .map_err(|t| fail(format!("disassemble must be true or false, not {t}")))?,
+        Some(r) => r.as_bool().map_err(|t| fail(format!("disassemble must be true or false, not {t}")))?,
     };
-    Ok(Request {
-        planner,
-        validator,
-        bounds,
-        margin,
-        rotation,
-        rotation_weight: opt_num(opts, "rotation_weight")?,
-        disassemble,
-    })
+    Ok(Request { planner, validator, bounds, margin, rotation, rotation_weight: opt_num(opts, "rotation_weight")?, disassemble })
 }
 
 /// The validator for component `index` among the others, and the planning space.
-fn setup(
-    d: &DocHandle,
-    index: usize,
-    req: &Request,
-    extra: &[Transform],
-) -> ScriptResult<(MeshValidator, PlanningSpace, Transform, Aabb)> {
+fn setup(d: &DocHandle, index: usize, req: &Request, extra: &[Transform]) -> ScriptResult<(MeshValidator, PlanningSpace, Transform, Aabb)> {
     let doc = d.lock()?;
     let scene = {
-        let mut cache = d
-            .context()
-            .caches
-            .scene
-            .lock()
-            .map_err(|_| fail("collision cache poisoned"))?;
+        let mut cache = d.context().caches.scene.lock().map_err(|_| fail("collision cache poisoned"))?;
         Scene::new(&doc, &mut cache).map_err(fail)?
     };
-    let obstacles = (0..scene.poses.len())
-        .filter(|&i| i != index)
-        .map(|i| (scene.colliders[i].clone(), scene.poses[i]))
-        .collect();
-    let validator = MeshValidator::new(scene.colliders[index].clone(), obstacles, req.validator)
-        .map_err(fail)?;
+    let obstacles = (0..scene.poses.len()).filter(|&i| i != index).map(|i| (scene.colliders[i].clone(), scene.poses[i])).collect();
+    let validator = MeshValidator::new(scene.colliders[index].clone(), obstacles, req.validator).map_err(fail)?;
     let start = scene.poses[index];
     // The product box: every other component, in the world.
-    let others = (0..scene.poses.len())
-        .filter(|&i| i != index)
-        .filter_map(|i| doc.world_aabb(i));
+    let others = (0..scene.poses.len()).filter(|&i| i != index).filter_map(|i| doc.world_aabb(i));
     let product = others.reduce(|(a, b), (c, e)| (a.inf(&c), b.sup(&e)));
     let (lo, hi) = match req.bounds {
         Some(b) => b,
@@ -222,24 +156,15 @@ fn setup(
             (lo - m, hi + m)
         }
     };
-    let mut space = PlanningSpace::new(lo, hi).with_rotation(if req.rotation {
-        RotationFreedom::Free
-    } else {
-        RotationFreedom::Fixed
-    });
+    let mut space = PlanningSpace::new(lo, hi).with_rotation(if req.rotation { RotationFreedom::Free } else { RotationFreedom::Fixed });
     if let Some(w) = req.rotation_weight {
         space = space.with_rotation_weight(w);
     }
-    let product_box = product
-        .map(|(a, b)| Aabb::new(a.coords, b.coords))
-        .unwrap_or_else(|| Aabb::new(lo, hi));
+    let product_box = product.map(|(a, b)| Aabb::new(a.coords, b.coords)).unwrap_or_else(|| Aabb::new(lo, hi));
     Ok((validator, space, start, product_box))
 }
 
-fn progress_printer<'a>(
-    ctx: &'a Arc<Context>,
-    planner: &'static str,
-) -> impl FnMut(&Progress) -> Control + 'a {
+fn progress_printer<'a>(ctx: &'a Arc<Context>, planner: &'static str) -> impl FnMut(&Progress) -> Control + 'a {
     let mut last = Instant::now();
     move |p: &Progress| {
         if ctx.cancelled() {
@@ -265,18 +190,9 @@ fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<P
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path = if req.disassemble {
         let part_box = part_box(d, index)?;
-        req.planner.plan_via_disassembly(
-            &mut validator,
-            &space,
-            &start,
-            &goal,
-            &part_box,
-            &product,
-            Some(&mut cb),
-        )
+        req.planner.plan_via_disassembly(&mut validator, &space, &start, &goal, &part_box, &product, Some(&mut cb))
     } else {
-        req.planner
-            .plan(&mut validator, &space, &start, &goal, Some(&mut cb))
+        req.planner.plan(&mut validator, &space, &start, &goal, Some(&mut cb))
     }
     .map_err(fail)?;
     if path.failure.is_some() && ctx.cancelled() {
@@ -287,35 +203,22 @@ fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<P
 
 fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathHandle> {
     let mut opts = opts.clone();
-    opts.entry("planner".into())
-        .or_insert_with(|| "local_rrt".into());
+    opts.entry("planner".into()).or_insert_with(|| "local_rrt".into());
     let req = parse(&opts)?;
     let index = d.lock()?.component_index(name).map_err(fail)?;
     let (mut validator, space, assembled, product) = setup(d, index, &req, &[])?;
     let part_box = part_box(d, index)?;
     let ctx = d.context().clone();
     let mut cb = progress_printer(&ctx, req.planner.name());
-    let path = req
-        .planner
-        .plan_disassembly(
-            &mut validator,
-            &space,
-            &assembled,
-            &part_box,
-            &product,
-            Some(&mut cb),
-        )
-        .map_err(fail)?;
+    let path =
+        req.planner.plan_disassembly(&mut validator, &space, &assembled, &part_box, &product, Some(&mut cb)).map_err(fail)?;
     Ok(PathHandle(Arc::new(path), ctx.clone()))
 }
 
 /// The component's box in its part frame.
 fn part_box(d: &DocHandle, index: usize) -> ScriptResult<Aabb> {
     let doc = d.lock()?;
-    let (lo, hi) = doc
-        .mesh_of(index)
-        .bounds()
-        .ok_or_else(|| fail("the component's mesh is empty"))?;
+    let (lo, hi) = doc.mesh_of(index).bounds().ok_or_else(|| fail("the component's mesh is empty"))?;
     Ok(Aabb::new(lo.coords, hi.coords))
 }
 
@@ -331,116 +234,31 @@ pub(super) fn register(api: &mut Api) {
     api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice when an extension is blocked). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms`, `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default, exact conservative advancement) or `\"step\"` with `edge_step` (mm) and `edge_step_deg`, `disassemble: true` (seed 002: plan the disassembly from the goal — the assembled pose — until the part leaves the product's box, reverse it, and join it to a free-space path from the start; the way to get into tight clearances). A path that is not found says why in `reason`.");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
-    api.f(
-        "Document.plan_path(name: string, goal, options: map) -> Path",
-        "Plans a path with options (see the section).",
-        |d: &mut DocHandle, name: &str, goal: Dynamic, o: Map| plan(d, name, &goal, &o),
-    );
+    api.f("Document.plan_path(name: string, goal, options: map) -> Path", "Plans a path with options (see the section).", |d: &mut DocHandle, name: &str, goal: Dynamic, o: Map| plan(d, name, &goal, &o));
     api.f("Document.plan_disassembly(name: string) -> Path", "Seed 002's \"can be disassembled, can be assembled\": plans from the component's (assembled) pose until its box is outside the box of the other components, then reverses the path, so it ends assembled. Default planner `local_rrt`.", |d: &mut DocHandle, name: &str| plan_disassembly(d, name, &Map::new()));
-    api.f(
-        "Document.plan_disassembly(name: string, options: map) -> Path",
-        "As above with options (planner `rrt`, `biased_rrt` or `local_rrt`).",
-        |d: &mut DocHandle, name: &str, o: Map| plan_disassembly(d, name, &o),
-    );
-    api.get(
-        "Path.found -> bool",
-        "Whether a path was found.",
-        |p: &mut PathHandle| p.0.found(),
-    );
+    api.f("Document.plan_disassembly(name: string, options: map) -> Path", "As above with options (planner `rrt`, `biased_rrt` or `local_rrt`).", |d: &mut DocHandle, name: &str, o: Map| plan_disassembly(d, name, &o));
+    api.get("Path.found -> bool", "Whether a path was found.", |p: &mut PathHandle| p.0.found());
     api.get("Path.reason -> string", "Why not (iteration limit, time limit, start/goal in collision or out of bounds, cancelled); empty when found.", |p: &mut PathHandle| p.0.failure.as_ref().map(|f| f.to_string()).unwrap_or_default());
-    api.get(
-        "Path.poses -> array",
-        "The key poses (Transforms), start to end.",
-        |p: &mut PathHandle| {
-            p.0.poses
-                .iter()
-                .map(|t| Dynamic::from(*t))
-                .collect::<Array>()
-        },
-    );
-    api.get(
-        "Path.xyzabc -> array",
-        "The key poses as `[x, y, z, a, b, c]` (mm, degrees).",
-        |p: &mut PathHandle| {
-            p.0.poses
-                .iter()
-                .map(|t| xyzabc_deg(t, AngleConvention::default()))
-                .collect::<Array>()
-        },
-    );
-    api.get(
-        "Path.length -> float",
-        "Translation length (mm) after smoothing.",
-        |p: &mut PathHandle| p.0.length_mm,
-    );
-    api.get(
-        "Path.length_before_smoothing -> float",
-        "Translation length (mm) as the planner found it.",
-        |p: &mut PathHandle| p.0.raw_length_mm,
-    );
-    api.get(
-        "Path.rotation -> float",
-        "Total rotation along the path (degrees).",
-        |p: &mut PathHandle| p.0.rotation_rad.to_degrees(),
-    );
-    api.get(
-        "Path.iterations -> int",
-        "Planner iterations.",
-        |p: &mut PathHandle| p.0.iterations as i64,
-    );
-    api.get(
-        "Path.checks -> int",
-        "Collision checks (poses + edges).",
-        |p: &mut PathHandle| p.0.collision_checks() as i64,
-    );
-    api.get(
-        "Path.time_ms -> float",
-        "Planning time (ms).",
-        |p: &mut PathHandle| p.0.time_ms,
-    );
-    api.get(
-        "Path.planner -> string",
-        "The planner that made it.",
-        |p: &mut PathHandle| p.0.planner.to_string(),
-    );
-    api.get(
-        "Path.resolution -> string",
-        "How edges were validated (continuous, or the stepwise resolution).",
-        |p: &mut PathHandle| format!("{:?}", p.0.resolution),
-    );
-    api.f(
-        "Path.densify(step) -> array",
-        "Poses along the path no more than `step` mm (and `step` degrees) apart, for animation.",
-        |p: &mut PathHandle, s: Dynamic| -> ScriptResult<Array> {
-            Ok(densify(&p.0, num(&s, "step")?)?
-                .into_iter()
-                .map(Dynamic::from)
-                .collect())
-        },
-    );
-    api.f(
-        "Path.to_string() -> string",
-        "A one-line summary.",
-        |p: &mut PathHandle| {
-            let p = &p.0;
-            match &p.failure {
-                None => format!(
-                    "Path({}: {} key poses, {:.1} mm, {:.1}°, {} iterations, {} checks, {:.1} ms)",
-                    p.planner,
-                    p.poses.len(),
-                    p.length_mm,
-                    p.rotation_rad.to_degrees(),
-                    p.iterations,
-                    p.collision_checks(),
-                    p.time_ms
-                ),
-                Some(f) => format!(
-                    "Path({}: not found — {f}; {} iterations, {:.1} ms)",
-                    p.planner, p.iterations, p.time_ms
-                ),
-            }
-        },
-    );
+    api.get("Path.poses -> array", "The key poses (Transforms), start to end.", |p: &mut PathHandle| p.0.poses.iter().map(|t| Dynamic::from(*t)).collect::<Array>());
+    api.get("Path.xyzabc -> array", "The key poses as `[x, y, z, a, b, c]` (mm, degrees).", |p: &mut PathHandle| p.0.poses.iter().map(|t| xyzabc_deg(t, AngleConvention::default())).collect::<Array>());
+    api.get("Path.length -> float", "Translation length (mm) after smoothing.", |p: &mut PathHandle| p.0.length_mm);
+    api.get("Path.length_before_smoothing -> float", "Translation length (mm) as the planner found it.", |p: &mut PathHandle| p.0.raw_length_mm);
+    api.get("Path.rotation -> float", "Total rotation along the path (degrees).", |p: &mut PathHandle| p.0.rotation_rad.to_degrees());
+    api.get("Path.iterations -> int", "Planner iterations.", |p: &mut PathHandle| p.0.iterations as i64);
+    api.get("Path.checks -> int", "Collision checks (poses + edges).", |p: &mut PathHandle| p.0.collision_checks() as i64);
+    api.get("Path.time_ms -> float", "Planning time (ms).", |p: &mut PathHandle| p.0.time_ms);
+    api.get("Path.planner -> string", "The planner that made it.", |p: &mut PathHandle| p.0.planner.to_string());
+    api.get("Path.resolution -> string", "How edges were validated (continuous, or the stepwise resolution).", |p: &mut PathHandle| format!("{:?}", p.0.resolution));
+    api.f("Path.densify(step) -> array", "Poses along the path no more than `step` mm (and `step` degrees) apart, for animation.", |p: &mut PathHandle, s: Dynamic| -> ScriptResult<Array> {
+        Ok(densify(&p.0, num(&s, "step")?)?.into_iter().map(Dynamic::from).collect())
+    });
+    api.f("Path.to_string() -> string", "A one-line summary.", |p: &mut PathHandle| {
+        let p = &p.0;
+        match &p.failure {
+            None => format!("Path({}: {} key poses, {:.1} mm, {:.1}°, {} iterations, {} checks, {:.1} ms)", p.planner, p.poses.len(), p.length_mm, p.rotation_rad.to_degrees(), p.iterations, p.collision_checks(), p.time_ms),
+            Some(f) => format!("Path({}: not found — {f}; {} iterations, {:.1} ms)", p.planner, p.iterations, p.time_ms),
+        }
+    });
     api.f("Path.save_csv(file: string)", "Writes the key poses as CSV (`index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`) inside the project, atomically.", |p: &mut PathHandle, file: &str| -> ScriptResult<()> {
         let full = p.1.project.resolve(file).map_err(fail)?;
         let mut bytes = Vec::new();
@@ -467,11 +285,7 @@ pub(super) fn register(api: &mut Api) {
         Ok(m)
     });
     api.f("Component.follow(path: Path, step) -> int", "Animates the component along the path in steps of at most `step` mm (and degrees), printing each step's pose (mm, degrees) — in watch mode each step shows. Returns the number of steps.", |c: &mut ComponentHandle, p: PathHandle, s: Dynamic| follow(c, &p, &s, true));
-    api.f(
-        "Component.follow(path: Path, step, print: bool) -> int",
-        "As above; `print: false` moves silently.",
-        |c: &mut ComponentHandle, p: PathHandle, s: Dynamic, print: bool| follow(c, &p, &s, print),
-    );
+    api.f("Component.follow(path: Path, step, print: bool) -> int", "As above; `print: false` moves silently.", |c: &mut ComponentHandle, p: PathHandle, s: Dynamic, print: bool| follow(c, &p, &s, print));
 }
 
 fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> ScriptResult<i64> {

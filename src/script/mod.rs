@@ -8,8 +8,8 @@
 mod api;
 mod bind_document;
 mod bind_interference;
-mod bind_math;
 mod bind_planning;
+mod bind_math;
 mod bind_robot;
 mod convert;
 pub mod sandbox;
