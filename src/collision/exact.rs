@@ -2,7 +2,7 @@
 //! the first part's frame, triangle pairs tested with [`tri_tri`], containment by
 //! ray parity, and the minimum distance used by continuous sweeps.
 
-use super::shape::{Aabb, Collider, Node};
+use super::shape::{Aabb, Collider, Node, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
 use super::{CollisionError, Contact, InterferenceKind, Part};
 use crate::math::{Transform, Vec3};
@@ -13,37 +13,56 @@ use std::ops::ControlFlow;
 pub(crate) struct Relative {
     iso: Isometry3<f64>,
     rot: Matrix3<f64>,
-    abs_rot: Matrix3<f64>,
 }
 
 impl Relative {
     pub(crate) fn new(pa: &Transform, pb: &Transform) -> Self {
         let iso = pa.isometry().inverse() * pb.isometry();
         let rot = *iso.rotation.to_rotation_matrix().matrix();
-        // the small bias keeps near-parallel axes conservative
-        let abs_rot = rot.abs().add_scalar(1e-12);
-        Relative { iso, rot, abs_rot }
+        Relative { iso, rot }
     }
 
-    /// Whether box `a` (frame A) and box `b` (frame B) come within `margin`: the
-    /// separating-axis test on the six face axes of both boxes.
+    /// Whether oriented boxes `a` (frame A) and `b` (frame B) come within `margin`:
+    /// a bounding-sphere reject, then the separating-axis test on the 15 axes (faces
+    /// of both boxes and edge cross products). Conservative: cross axes are not
+    /// normalised (length ≤ 1), so the margin they apply is at least `margin`.
     #[inline]
-    fn boxes_meet(&self, a: &Aabb, b: &Aabb, margin: f64) -> bool {
-        let (ca, ha) = (a.centre().coords, a.half_extents());
-        let (cb, hb) = (b.centre().coords, b.half_extents());
-        let cb_in_a = self.rot * cb + self.iso.translation.vector;
-        let d = cb_in_a - ca;
-        let hb_in_a = self.abs_rot * hb;
-        for k in 0..3 {
-            if d[k].abs() > ha[k] + hb_in_a[k] + margin {
+    fn boxes_meet(&self, a: &Obb, b: &Obb, margin: f64) -> bool {
+        let d = self.rot * b.centre + self.iso.translation.vector - a.centre;
+        let reach = a.half.norm() + b.half.norm() + margin;
+        if d.norm_squared() > reach * reach {
+            return false;
+        }
+        // b's axes and the centre offset in a's box frame
+        let r = a.axes.tr_mul(&(self.rot * b.axes));
+        let t = a.axes.tr_mul(&d);
+        // the small bias keeps near-parallel axes conservative
+        let ar = r.abs().add_scalar(1e-12);
+        let (ha, hb) = (&a.half, &b.half);
+        for i in 0..3 {
+            let rb = hb[0] * ar[(i, 0)] + hb[1] * ar[(i, 1)] + hb[2] * ar[(i, 2)];
+            if t[i].abs() > ha[i] + rb + margin {
                 return false;
             }
         }
-        let d_in_b = self.rot.tr_mul(&d);
-        let ha_in_b = self.abs_rot.tr_mul(&ha);
-        for k in 0..3 {
-            if d_in_b[k].abs() > hb[k] + ha_in_b[k] + margin {
+        for j in 0..3 {
+            let ra = ha[0] * ar[(0, j)] + ha[1] * ar[(1, j)] + ha[2] * ar[(2, j)];
+            let tj = t[0] * r[(0, j)] + t[1] * r[(1, j)] + t[2] * r[(2, j)];
+            if tj.abs() > ra + hb[j] + margin {
                 return false;
+            }
+        }
+        // axis a_i × b_j
+        for i in 0..3 {
+            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+            for j in 0..3 {
+                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+                let ra = ha[i1] * ar[(i2, j)] + ha[i2] * ar[(i1, j)];
+                let rb = hb[j1] * ar[(i, j2)] + hb[j2] * ar[(i, j1)];
+                let tl = t[i2] * r[(i1, j)] - t[i1] * r[(i2, j)];
+                if tl.abs() > ra + rb + margin {
+                    return false;
+                }
             }
         }
         true
@@ -77,6 +96,10 @@ fn size(n: &Node) -> f64 {
     n.bounds.half_extents().norm_squared()
 }
 
+fn obb_size(o: &Obb) -> f64 {
+    o.half.norm_squared()
+}
+
 /// Calls `f` on every pair of triangles (b's already in a's frame) whose leaf boxes
 /// come within `margin`, until it breaks.
 fn for_each_triangle_pair<B>(
@@ -91,7 +114,7 @@ fn for_each_triangle_pair<B>(
     let mut moved: Vec<Tri> = Vec::with_capacity(8);
     while let Some((i, j)) = stack.pop() {
         let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
-        if !rel.boxes_meet(&na.bounds, &nb.bounds, margin) {
+        if !rel.boxes_meet(&a.obbs[i as usize], &b.obbs[j as usize], margin) {
             continue;
         }
         match (na.count > 0, nb.count > 0) {
@@ -111,7 +134,7 @@ fn for_each_triangle_pair<B>(
             (false, true) => stack.extend([(na.first, j), (na.first + 1, j)]),
             (true, false) => stack.extend([(i, nb.first), (i, nb.first + 1)]),
             (false, false) => {
-                if size(na) >= size(nb) {
+                if obb_size(&a.obbs[i as usize]) >= obb_size(&b.obbs[j as usize]) {
                     stack.extend([(na.first, j), (na.first + 1, j)]);
                 } else {
                     stack.extend([(i, nb.first), (i, nb.first + 1)]);

@@ -6,6 +6,7 @@ use super::triangle::{closest_on_triangle, x_line_crossing, Tri};
 use super::CollisionError;
 use crate::math::{Point3, Vec3};
 use crate::mesh::{Mesh, MeshReport};
+use nalgebra::Matrix3;
 use std::collections::HashMap;
 use std::sync::{Arc, Weak};
 
@@ -77,6 +78,63 @@ impl Aabb {
     }
 }
 
+/// An oriented box (part frame, mm) fitted to a node's triangles: `axes` columns are
+/// orthonormal directions, `half` the half extents along them. Far tighter than the
+/// node's axis-aligned box for a surface patch that is tilted in the part frame, which
+/// is what prunes near misses in the exact traversal.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Obb {
+    pub(crate) centre: Vec3,
+    pub(crate) axes: Matrix3<f64>,
+    pub(crate) half: Vec3,
+}
+
+impl Obb {
+    const BLANK: Obb = Obb {
+        centre: Vec3::new(0.0, 0.0, 0.0),
+        axes: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+        half: Vec3::new(0.0, 0.0, 0.0),
+    };
+
+    /// The box along the principal axes of the triangles' vertices, or the
+    /// axis-aligned `aabb` when that is smaller; padded so rounding never leaves a
+    /// vertex outside.
+    fn fit(items: &[(Point3, Tri)], aabb: &Aabb) -> Obb {
+        let n = (3 * items.len()) as f64;
+        let mean = items
+            .iter()
+            .flat_map(|(_, t)| t.iter())
+            .fold(Vec3::zeros(), |m, p| m + p.coords)
+            / n;
+        let mut cov = Matrix3::zeros();
+        for p in items.iter().flat_map(|(_, t)| t.iter()) {
+            let d = p.coords - mean;
+            cov += d * d.transpose();
+        }
+        let axes = nalgebra::SymmetricEigen::new(cov).eigenvectors;
+        let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
+        for p in items.iter().flat_map(|(_, t)| t.iter()) {
+            let q = axes.tr_mul(&p.coords);
+            lo = lo.inf(&q);
+            hi = hi.sup(&q);
+        }
+        let ha = aabb.half_extents();
+        let half = (hi - lo) * 0.5;
+        let usable = axes.iter().all(|v| v.is_finite()) && half.iter().all(|v| v.is_finite());
+        let (centre, axes, half) = if usable && half.product() < ha.product() {
+            (axes * ((lo + hi) * 0.5), axes, half)
+        } else {
+            (aabb.centre().coords, Matrix3::identity(), ha)
+        };
+        let pad = 1e-12 * (centre.amax() + half.amax());
+        Obb {
+            centre,
+            axes,
+            half: half.add_scalar(pad),
+        }
+    }
+}
+
 /// A node of the tree: `count > 0`: a leaf over `tris[first..first + count]`;
 /// otherwise children `first` and `first + 1`.
 #[derive(Debug, Clone, Copy)]
@@ -96,6 +154,8 @@ pub(crate) struct Node {
 pub struct Collider {
     mesh: Arc<Mesh>,
     pub(crate) nodes: Vec<Node>,
+    /// The oriented box of each node (same index as `nodes`).
+    pub(crate) obbs: Vec<Obb>,
     /// Triangles in tree order.
     pub(crate) tris: Vec<Tri>,
     report: MeshReport,
@@ -185,10 +245,12 @@ impl Collider {
             .drain(..)
             .map(|t| (nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]), t))
             .collect();
-        build(&mut nodes, 0, &mut centroids, 0);
+        let mut obbs = vec![Obb::BLANK];
+        build(&mut nodes, &mut obbs, 0, &mut centroids, 0);
         Ok(Collider {
             mesh,
             nodes,
+            obbs,
             tris: centroids.into_iter().map(|(_, t)| t).collect(),
             report,
             radius,
@@ -321,7 +383,13 @@ impl Collider {
     }
 }
 
-fn build(nodes: &mut Vec<Node>, at: usize, items: &mut [(Point3, Tri)], offset: usize) {
+fn build(
+    nodes: &mut Vec<Node>,
+    obbs: &mut Vec<Obb>,
+    at: usize,
+    items: &mut [(Point3, Tri)],
+    offset: usize,
+) {
     let mut bounds = Aabb::EMPTY;
     let mut cb = Aabb::EMPTY;
     for (c, t) in items.iter() {
@@ -329,6 +397,7 @@ fn build(nodes: &mut Vec<Node>, at: usize, items: &mut [(Point3, Tri)], offset: 
         cb.grow(c);
     }
     nodes[at].bounds = bounds;
+    obbs[at] = Obb::fit(items, &bounds);
     if items.len() <= LEAF_SIZE {
         nodes[at].first = offset as u32;
         nodes[at].count = items.len() as u32;
@@ -354,9 +423,11 @@ fn build(nodes: &mut Vec<Node>, at: usize, items: &mut [(Point3, Tri)], offset: 
     };
     nodes.push(blank);
     nodes.push(blank);
+    obbs.push(Obb::BLANK);
+    obbs.push(Obb::BLANK);
     let (l, r) = items.split_at_mut(mid);
-    build(nodes, left, l, offset);
-    build(nodes, left + 1, r, offset + mid);
+    build(nodes, obbs, left, l, offset);
+    build(nodes, obbs, left + 1, r, offset + mid);
 }
 
 /// Colliders by mesh, so trees survive watch reruns while the mesh is unchanged.

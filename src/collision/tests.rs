@@ -742,3 +742,74 @@ mod props {
         }
     }
 }
+
+/// Every node's oriented box holds all the vertices under it (the traversal's
+/// node test is only exact if the boxes are conservative).
+#[test]
+fn oriented_node_boxes_hold_their_triangles() {
+    fn range(c: &Collider, i: usize) -> (usize, usize) {
+        let n = &c.nodes[i];
+        if n.count > 0 {
+            (n.first as usize, (n.first + n.count) as usize)
+        } else {
+            let (l, r) = (range(c, n.first as usize), range(c, n.first as usize + 1));
+            (l.0.min(r.0), l.1.max(r.1))
+        }
+    }
+    for c in [
+        collider(fixtures::torus(10.0, 3.0, 16, 8)),
+        collider(fixtures::sphere(6.0, 12, 6)),
+    ] {
+        for (i, o) in c.obbs.iter().enumerate() {
+            let (lo, hi) = range(&c, i);
+            for p in c.tris[lo..hi].iter().flatten() {
+                let q = o.axes.tr_mul(&(p.coords - o.centre));
+                assert!(q.iter().zip(o.half.iter()).all(|(q, h)| q.abs() <= *h));
+            }
+            // the fitted box is never larger than the axis-aligned one
+            let h = c.nodes[i].bounds.half_extents();
+            assert!(o.half.product() <= h.product() * (1.0 + 1e-9) + 1e-30);
+        }
+    }
+}
+
+/// Near misses and grazing contacts (where the node test decides) agree with the
+/// brute-force verdict over all triangle pairs.
+#[test]
+fn near_misses_match_brute_force() {
+    let a = collider(fixtures::torus(10.0, 3.0, 16, 8));
+    let b = collider(fixtures::sphere(6.0, 12, 6));
+    let mut rng = Rng::new(11);
+    let mut seen = [0usize; 2];
+    for k in 0..60 {
+        let pa = random_pose(&mut rng, 3.0);
+        let rb = rng.rotation();
+        let dir = Vec3::new(rng.normal(), rng.normal(), rng.normal()).normalize();
+        let pose = |s: f64| Transform::from_parts(pa.translation() + dir * s, rb);
+        let (mut lo, mut hi) = (0.0, 60.0);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if surface_distance(&a, &pa, &b, &pose(mid), 0.0).unwrap() > 0.0 {
+                hi = mid
+            } else {
+                lo = mid
+            }
+        }
+        // just outside, and just inside, first contact
+        let pb = pose(if k % 2 == 0 { hi + 0.01 } else { lo - 0.01 });
+        let ta: Vec<_> = a.tris.iter().map(|t| t.map(|p| pa.apply(&p))).collect();
+        let tb: Vec<_> = b.tris.iter().map(|t| t.map(|p| pb.apply(&p))).collect();
+        let mut depth = 0.0f64;
+        for x in &ta {
+            for y in &tb {
+                if let Some(d) = tri_tri(x, y, 1e-8, true) {
+                    depth = depth.max(d);
+                }
+            }
+        }
+        let hit = interferes(&a, &pa, &b, &pb, 0.0).unwrap();
+        assert_eq!(hit, depth > 0.0, "pose {k}: depth {depth}");
+        seen[hit as usize] += 1;
+    }
+    assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
+}

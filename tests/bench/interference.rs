@@ -168,8 +168,11 @@ fn main() {
         );
     }
 
-    cells_vs_exact();
-    sweeps();
+    // `FITUP_BENCH_EXACT_ONLY=1`: the exact pair rows only (the other tables take minutes)
+    if std::env::var_os("FITUP_BENCH_EXACT_ONLY").is_none() {
+        cells_vs_exact();
+        sweeps();
+    }
 }
 
 fn cells_vs_exact() {
