@@ -810,20 +810,19 @@ impl Document {
         })
     }
 
-    /// What a dimension drives: a mate or a robot joint.
-    pub fn dimension_target(&self, full_name: &str) -> Result<DimensionTarget, DocumentError> {
-        let not_found = || DocumentError::NotFound {
+    /// "No dimension named …", with close matches among the existing ones.
+    fn dimension_not_found(&self, full_name: &str) -> DocumentError {
+        let names = self.dimensions();
+        DocumentError::NotFound {
             what: "dimension",
             name: full_name.into(),
-            hint: suggestion(
-                full_name,
-                self.dimensions()
-                    .iter()
-                    .map(String::as_str)
-                    .collect::<Vec<_>>()
-                    .clone(),
-            ),
-        };
+            hint: suggestion(full_name, names.iter().map(String::as_str)),
+        }
+    }
+
+    /// What a dimension drives: a mate or a robot joint.
+    pub fn dimension_target(&self, full_name: &str) -> Result<DimensionTarget, DocumentError> {
+        let not_found = || self.dimension_not_found(full_name);
         let feature = dimension::mate_of(full_name).ok_or_else(not_found)?;
         match self.robot_dimension(feature) {
             Some(t) => Ok(t),
@@ -832,18 +831,7 @@ impl Document {
     }
 
     fn dimension_mate(&self, full_name: &str) -> Result<usize, DocumentError> {
-        let not_found = || DocumentError::NotFound {
-            what: "dimension",
-            name: full_name.into(),
-            hint: suggestion(
-                full_name,
-                self.dimensions()
-                    .iter()
-                    .map(String::as_str)
-                    .collect::<Vec<_>>()
-                    .clone(),
-            ),
-        };
+        let not_found = || self.dimension_not_found(full_name);
         let mate = dimension::mate_of(full_name).ok_or_else(not_found)?;
         self.mates
             .iter()

@@ -23,20 +23,23 @@ pub struct FeatureHandle {
     name: String,
 }
 
+/// The collision scene of a document (colliders and cells from the run's caches).
+pub(super) fn scene_of(d: &DocHandle, doc: &Document) -> ScriptResult<Scene> {
+    let mut cache = d
+        .context()
+        .caches
+        .scene
+        .lock()
+        .map_err(|_| fail("collision cache poisoned"))?;
+    Scene::new(doc, &mut cache).map_err(fail)
+}
+
 fn with_scene<R>(
     d: &DocHandle,
     f: impl FnOnce(&Document, &Scene) -> ScriptResult<R>,
 ) -> ScriptResult<R> {
     let doc = d.lock()?;
-    let scene = {
-        let mut cache = d
-            .context()
-            .caches
-            .scene
-            .lock()
-            .map_err(|_| fail("collision cache poisoned"))?;
-        Scene::new(&doc, &mut cache).map_err(fail)?
-    };
+    let scene = scene_of(d, &doc)?;
     f(&doc, &scene)
 }
 

@@ -6,7 +6,6 @@ use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
 use super::convert::{check_keys, err, fail, num, opt_num, opt_str, vec3};
 use super::{Context, ScriptResult};
-use crate::collision::scene::Scene;
 use crate::math::{AngleConvention, Transform, Vec3};
 use crate::planning::{
     Aabb, Control, EdgeCheck, MeshValidator, MeshValidatorOptions, Path, Planner, PlanningSpace,
@@ -184,15 +183,7 @@ fn setup(
     extra: &[Transform],
 ) -> ScriptResult<(MeshValidator, PlanningSpace, Transform, Aabb)> {
     let doc = d.lock()?;
-    let scene = {
-        let mut cache = d
-            .context()
-            .caches
-            .scene
-            .lock()
-            .map_err(|_| fail("collision cache poisoned"))?;
-        Scene::new(&doc, &mut cache).map_err(fail)?
-    };
+    let scene = super::bind_interference::scene_of(d, &doc)?;
     let obstacles = (0..scene.poses.len())
         .filter(|&i| i != index)
         .map(|i| (scene.colliders[i].clone(), scene.poses[i]))
