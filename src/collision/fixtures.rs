@@ -191,12 +191,20 @@ pub fn screw(
     head_height: f64,
     segments: usize,
 ) -> Mesh {
-    let mut m = Mesh::cylinder(radius, length, segments);
-    let head = Mesh::cylinder(head_radius, head_height, segments).transformed(
-        &crate::math::Transform::from_translation(Vec3::new(0.0, 0.0, length)),
-    );
-    m.append(&head);
-    m
+    // One closed solid (not a shank and a head touching): the lathe of the profile.
+    let (h, r, rh) = (length, radius, head_radius);
+    Mesh::lathe(
+        &[
+            (0.0, 0.0),
+            (r, 0.0),
+            (r, h),
+            (rh, h),
+            (rh, h + head_height),
+            (0.0, h + head_height),
+        ],
+        segments,
+    )
+    .unwrap_or_else(|_| Mesh::cylinder(r, h, segments))
 }
 
 /// A UV sphere of `radius` about the origin with `slices` around and `stacks` from
