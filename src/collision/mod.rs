@@ -11,11 +11,13 @@
 //! - [`Method::Cells`]: seed 000's "finite subdivision": the whole-part boxes, then
 //!   the boxes of the cut cells ([`CutCells`]).
 //!
-//! Dynamic interference along a [`Motion`] is in [`sweep`].
+//! Dynamic interference along a [`Motion`] is in [`sweep`]; along one planner edge
+//! (lerp + slerp) in [`edge_interferes`].
 //!
 //! Every query validates its input and returns [`CollisionError`]; none panics.
 
 mod cells;
+mod edge;
 mod exact;
 pub mod fixtures;
 pub mod scene;
@@ -26,7 +28,8 @@ mod triangle;
 pub use cells::{
     cells_contact, method_disagreement, Cell, CutCells, CutSpec, Disagreement, MAX_CELLS,
 };
-pub use exact::{contact, interferes, surface_distance};
+pub use edge::{edge_interferes, EdgeOptions};
+pub use exact::{contact, distance_lower_bound, interferes, surface_distance};
 pub use shape::{Aabb, Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
 pub use sweep::{sweep, Motion, Obstacle, SweepHit, SweepMethod, SweepOptions};
 

@@ -3,7 +3,7 @@
 //! after every step) or by a continuous method (conservative advancement) that cannot
 //! jump over thin features.
 
-use super::exact::{interferes, surface_distance};
+use super::exact::{distance_lower_bound, interferes};
 use super::shape::Collider;
 use super::CollisionError;
 use crate::math::{Point3, Transform, Vec3};
@@ -301,7 +301,11 @@ pub fn sweep(
                     for &i in &near {
                         queries += 1;
                         let o = &obstacles[i];
-                        d = d.min(surface_distance(moving, &pose, o.collider, &o.pose, g)?);
+                        // a bound good to 25 %, capped at what is left of the piece
+                        let cap = (t1 - t) * speed + g;
+                        d = d.min(distance_lower_bound(
+                            moving, &pose, o.collider, &o.pose, g, cap, 0.25,
+                        )?);
                     }
                     let advance = if d > g { d - g / 2.0 } else { g };
                     let next = (t + advance / speed).min(t1);

@@ -813,3 +813,123 @@ fn near_misses_match_brute_force() {
     }
     assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
 }
+
+/// Whether some pose among `n` evenly spaced ones after `from` on the edge interferes.
+fn sampled_edge_hits(
+    m: &Collider,
+    from: &Transform,
+    to: &Transform,
+    o: &Collider,
+    po: &Transform,
+    n: usize,
+) -> bool {
+    (1..=n).any(|k| {
+        let p = from.interpolate(to, k as f64 / n as f64);
+        interferes(m, &p, o, po, DEFAULT_TOLERANCE).unwrap()
+    })
+}
+
+/// The continuous edge check never misses a crossing that dense sampling finds, on
+/// random short edges (translation and rotation) around a torus: the sweep bounds
+/// and the plane tests are conservative.
+#[test]
+fn edge_check_never_misses_what_sampling_sees() {
+    let a = collider(fixtures::sphere(4.0, 12, 6));
+    let b = collider(fixtures::torus(10.0, 3.0, 16, 8));
+    let pb = Transform::IDENTITY;
+    let mut rng = Rng::new(5);
+    let mut seen = [0usize; 2];
+    let opts = EdgeOptions::default();
+    for k in 0..150 {
+        let from = random_pose(&mut rng, 16.0);
+        if interferes(&a, &from, &b, &pb, DEFAULT_TOLERANCE).unwrap() {
+            continue;
+        }
+        let to = Transform::from_parts(
+            from.translation() + Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 4.0,
+            from.isometry().rotation
+                * nalgebra::UnitQuaternion::from_scaled_axis(
+                    Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3,
+                ),
+        );
+        let sampled = sampled_edge_hits(&a, &from, &to, &b, &pb, 400);
+        let swept = edge_interferes(&a, &from, &to, &b, &pb, &opts).unwrap();
+        assert!(
+            !sampled || swept,
+            "edge {k}: sampling hits, the edge check does not"
+        );
+        seen[swept as usize] += 1;
+    }
+    assert!(seen[0] > 10 && seen[1] > 10, "{seen:?}");
+}
+
+/// A face gliding on a face and a peg sliding along a tight bore are free; pushing
+/// into the face, or a thin wall anywhere on the edge, is not.
+#[test]
+fn edge_check_on_sliding_contacts_and_thin_walls() {
+    let opts = EdgeOptions::default();
+    let cube = cuboid([-5.0, -5.0, 0.0], [5.0, 5.0, 10.0]);
+    let table = cuboid([-100.0, -100.0, -10.0], [100.0, 100.0, 0.0]);
+    let id = Transform::IDENTITY;
+    // resting on the table (touching), sliding 50 mm and turning about the normal
+    let slide = at(50.0, 20.0, 0.0);
+    assert!(!edge_interferes(&cube, &id, &slide, &table, &id, &opts).unwrap());
+    let turn = Transform::from_rotation_about(Point3::origin(), Vec3::z(), 0.7).unwrap();
+    assert!(!edge_interferes(&cube, &id, &turn, &table, &id, &opts).unwrap());
+    // pressing 1 mm into it
+    assert!(edge_interferes(&cube, &id, &at(10.0, 0.0, -1.0), &table, &id, &opts).unwrap());
+    // tipping over an edge of the cube's base digs a corner in
+    let tip = Transform::from_rotation_about(Point3::origin(), Vec3::x(), 0.2).unwrap();
+    assert!(edge_interferes(&cube, &id, &tip, &table, &id, &opts).unwrap());
+    // a 0.5 mm wall between two free poses
+    let wall = cuboid([20.0, -50.0, -50.0], [20.5, 50.0, 50.0]);
+    assert!(edge_interferes(&cube, &id, &at(40.0, 0.0, 0.0), &wall, &id, &opts).unwrap());
+    assert!(!edge_interferes(&cube, &id, &at(14.9, 0.0, 0.0), &wall, &id, &opts).unwrap());
+    // a Ø20 peg along a bore of radius 10.1 (64 facets each: the gap is 0.09 mm)
+    let peg = collider(Mesh::cylinder(10.0, 100.0, 64));
+    let block = collider(
+        Mesh::lathe(
+            &[
+                (0.0, 0.0),
+                (40.0, 0.0),
+                (40.0, 70.0),
+                (10.1, 70.0),
+                (10.1, 10.0),
+                (0.0, 10.0),
+            ],
+            64,
+        )
+        .unwrap(),
+    );
+    let seated = at(0.0, 0.0, 10.0);
+    let out = at(0.0, 0.0, 75.0);
+    assert!(!interferes(&peg, &out, &block, &id, DEFAULT_TOLERANCE).unwrap());
+    assert!(!edge_interferes(&peg, &seated, &out, &block, &id, &opts).unwrap());
+    assert!(!edge_interferes(&peg, &out, &seated, &block, &id, &opts).unwrap());
+    // tilting in the bore jams
+    let tilt = seated.then(
+        &Transform::from_rotation_about(Point3::new(0.0, 0.0, 40.0), Vec3::x(), 0.05).unwrap(),
+    );
+    assert!(edge_interferes(&peg, &seated, &tilt, &block, &id, &opts).unwrap());
+}
+
+#[test]
+fn edge_check_refuses_bad_input() {
+    let c = cuboid([0.0; 3], [1.0; 3]);
+    let id = Transform::IDENTITY;
+    let nan = at(f64::NAN, 0.0, 0.0);
+    assert!(edge_interferes(
+        &c,
+        &id,
+        &nan,
+        &c,
+        &at(5.0, 0.0, 0.0),
+        &EdgeOptions::default()
+    )
+    .is_err());
+    let bad = EdgeOptions {
+        contact_step: 0.0,
+        ..Default::default()
+    };
+    assert!(edge_interferes(&c, &id, &at(1.0, 0.0, 0.0), &c, &at(5.0, 0.0, 0.0), &bad).is_err());
+}

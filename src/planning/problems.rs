@@ -112,9 +112,15 @@ impl Problem {
     }
 
     /// The validator options the benchmarks and tests use: exact interference with
-    /// the default tolerance, stepwise edges at 0.05 mm / (0.05 mm ÷ the part's
-    /// radius) so no point of the part moves more than about 0.1 mm between checks.
+    /// the default tolerance, continuous edges ([`EdgeCheck::Continuous`]).
     pub fn default_validator_options(&self) -> MeshValidatorOptions {
+        MeshValidatorOptions::default()
+    }
+
+    /// Stepwise edges at 0.05 mm / (0.05 mm ÷ the part's radius), so no point of the
+    /// part moves more than about 0.1 mm between checks: the resolution the OMPL
+    /// peer's validity checker is given in the benchmark.
+    pub fn stepwise_validator_options(&self) -> MeshValidatorOptions {
         let radius = self
             .moving
             .vertices

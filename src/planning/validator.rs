@@ -5,9 +5,16 @@ use crate::math::Transform;
 /// How a validator checks a straight SE(3) edge (translation lerp + rotation slerp).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum EdgeResolution {
-    /// Every pose of the edge is covered (e.g. conservative advancement): no
-    /// collision can hide between two checked poses.
-    Continuous,
+    /// Conservative advancement: while the part is clear of every obstacle, each
+    /// advance is shorter than the distance to the nearest one, so nothing is jumped
+    /// over; while it touches one (within half the penetration tolerance), poses are
+    /// checked every `contact_step_mm` of point displacement, so a contact that
+    /// deepens and recedes within one such step can go unseen.
+    Continuous {
+        /// Largest displacement of any point of the part between two checked poses
+        /// while it touches an obstacle (mm).
+        contact_step_mm: f64,
+    },
     /// Poses are checked at most `step_mm` of translation and `step_rad` of rotation
     /// apart; an obstacle thinner than one step can be missed between two poses.
     Stepwise {
@@ -16,6 +23,20 @@ pub enum EdgeResolution {
         /// Largest rotation between two checked poses (rad).
         step_rad: f64,
     },
+}
+
+impl std::fmt::Display for EdgeResolution {
+    /// `continuous (0.05 mm steps in contact)` or `stepwise 0.1 mm / 0.115°`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            EdgeResolution::Continuous { contact_step_mm } => {
+                write!(f, "continuous ({contact_step_mm} mm steps in contact)")
+            }
+            EdgeResolution::Stepwise { step_mm, step_rad } => {
+                write!(f, "stepwise {step_mm} mm / {:.4}°", step_rad.to_degrees())
+            }
+        }
+    }
 }
 
 impl EdgeResolution {
@@ -57,7 +78,7 @@ pub trait MotionValidator {
     fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
         let (step_mm, step_rad) = match self.resolution() {
             EdgeResolution::Stepwise { step_mm, step_rad } => (step_mm, step_rad),
-            EdgeResolution::Continuous => (0.1, 0.002),
+            EdgeResolution::Continuous { .. } => (0.1, 0.002),
         };
         stepwise_edge_free(|p| self.is_free(p), from, to, step_mm, step_rad)
     }
@@ -115,7 +136,7 @@ pub fn stepwise_edge_free(
                 dr
             },
         ),
-        EdgeResolution::Continuous => unreachable!("DEFAULT is stepwise"),
+        EdgeResolution::Continuous { .. } => unreachable!("DEFAULT is stepwise"),
     };
     let (angle, dist) = from.distance_to(to);
     if !(angle.is_finite() && dist.is_finite()) {

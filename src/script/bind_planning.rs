@@ -20,7 +20,7 @@ use std::time::Instant;
 #[derive(Clone)]
 pub struct PathHandle(Arc<Path>, Arc<Context>);
 
-const OPTION_KEYS: [&str; 19] = [
+const OPTION_KEYS: [&str; 20] = [
     "disassemble",
     "planner",
     "seed",
@@ -37,6 +37,7 @@ const OPTION_KEYS: [&str; 19] = [
     "edge",
     "edge_step",
     "edge_step_deg",
+    "contact_step",
     "L",
     "dis",
     "radius",
@@ -114,6 +115,9 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
     let mut validator = MeshValidatorOptions::default();
     if let Some(t) = opt_num(opts, "tolerance")? {
         validator.tolerance = t;
+    }
+    if let Some(c) = opt_num(opts, "contact_step")? {
+        validator.contact_step = c;
     }
     validator.edge = match opt_str(opts, "edge")?.as_deref() {
         None | Some("continuous") => EdgeCheck::Continuous,
@@ -319,7 +323,7 @@ fn densify(p: &Path, step: f64) -> ScriptResult<Vec<Transform>> {
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice when an extension is blocked). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms`, `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default, exact conservative advancement) or `\"step\"` with `edge_step` (mm) and `edge_step_deg`, `disassemble: true` (seed 002: plan the disassembly from the goal — the assembled pose — until the part leaves the product's box, reverse it, and join it to a free-space path from the start; the way to get into tight clearances). A path that is not found says why in `reason`.");
+    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice when an extension is blocked). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms`, `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm) and `edge_step_deg`, `disassemble: true` (seed 002: plan the disassembly from the goal — the assembled pose — until the part leaves the product's box, reverse it, and join it to a free-space path from the start; the way to get into tight clearances). A path that is not found says why in `reason`.");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
     api.f(
@@ -397,7 +401,7 @@ pub(super) fn register(api: &mut Api) {
     api.get(
         "Path.resolution -> string",
         "How edges were validated (continuous, or the stepwise resolution).",
-        |p: &mut PathHandle| format!("{:?}", p.0.resolution),
+        |p: &mut PathHandle| p.0.resolution.to_string(),
     );
     api.f(
         "Path.densify(step) -> array",

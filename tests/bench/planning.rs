@@ -208,7 +208,7 @@ fn main() {
         let dir = tmp.path().join(&p.name);
         std::fs::create_dir_all(&dir).unwrap();
         let spec = export(&p, &dir);
-        let step = fitup_runs(&p, p.default_validator_options(), runs);
+        let step = fitup_runs(&p, p.stepwise_validator_options(), runs);
         let cont = fitup_runs(
             &p,
             MeshValidatorOptions {

@@ -1,0 +1,329 @@
+//! Continuous interference along one straight SE(3) edge — translation by lerp,
+//! rotation by slerp, as every planner's edge — in a single traversal of the two
+//! trees.
+//!
+//! The moving part's node boxes are swept over the whole edge (grown along the
+//! translation and by the arc its points can travel), so node pairs that cannot meet
+//! anywhere on the edge are dropped at once: a peg sliding along the axis of a tight
+//! hole keeps its thin facet boxes thin and is cleared in microseconds. Triangle pairs
+//! that can meet get their own conservative advancement, so the work goes where the
+//! parts are close, not into the whole part.
+
+use super::exact::{check_pose, check_tolerance, eps, leaf, obb_size, tri_box, Relative};
+use super::shape::{Aabb, Collider, Obb};
+use super::triangle::{tri_distance, tri_tri, Tri};
+use super::CollisionError;
+use crate::math::{Transform, Vec3};
+use nalgebra::Isometry3;
+
+/// Options of [`edge_interferes`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgeOptions {
+    /// Penetration tolerance (mm, ≥ 0): surfaces crossing no deeper count as touching.
+    pub tolerance: f64,
+    /// While two triangles touch (closer than half the tolerance), the largest
+    /// displacement of the moving one between two crossing checks (mm, > 0; raised
+    /// to half the tolerance). A contact that deepens and recedes within one such
+    /// step goes unseen.
+    pub contact_step: f64,
+}
+
+impl Default for EdgeOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: super::DEFAULT_TOLERANCE,
+            contact_step: 0.05,
+        }
+    }
+}
+
+/// Largest rotation of one edge, rad: beyond it slerp's path is ill-defined.
+const MAX_EDGE_ANGLE: f64 = 3.0;
+
+/// Most advancement steps of one triangle pair (beyond: reported interfering).
+const MAX_PAIR_STEPS: usize = 1_000_000;
+
+/// Where the moving part is along the edge, in the obstacle's frame.
+struct EdgeFrames {
+    /// World → obstacle frame.
+    obstacle_inv: Isometry3<f64>,
+    from: Transform,
+    to: Transform,
+    /// Translation of the part origin over the edge, world, mm.
+    shift: f64,
+    /// Rotation over the edge, rad.
+    angle: f64,
+}
+
+impl EdgeFrames {
+    /// Moving part frame → obstacle frame at edge parameter `t`.
+    fn at(&self, t: f64) -> Isometry3<f64> {
+        self.obstacle_inv * self.from.interpolate(&self.to, t).isometry()
+    }
+
+    /// Largest displacement over the whole edge of a point `rho` mm from the part
+    /// origin, mm.
+    fn reach(&self, rho: f64) -> f64 {
+        self.shift + self.angle * rho
+    }
+}
+
+/// Whether `moving`, carried from `from` to `to` (part frame → world; translation
+/// lerp, rotation slerp about the part origin), interferes with `obstacle` at
+/// `pose` anywhere after `from`: some pair of triangles crosses deeper than the
+/// tolerance. `from` is taken as free; containment is not tested here — a solid
+/// can only get inside another through a crossing, and the caller checks `to`
+/// with [`interferes`](super::interferes).
+///
+/// Edges turning by more than 3 rad are refused as interfering (split them).
+///
+/// # Errors
+/// Non-finite poses, a bad tolerance or contact step.
+pub fn edge_interferes(
+    moving: &Collider,
+    from: &Transform,
+    to: &Transform,
+    obstacle: &Collider,
+    pose: &Transform,
+    options: &EdgeOptions,
+) -> Result<bool, CollisionError> {
+    check_pose(from)?;
+    check_pose(to)?;
+    check_pose(pose)?;
+    check_tolerance(options.tolerance)?;
+    if !(options.contact_step.is_finite() && options.contact_step > 0.0) {
+        return Err(CollisionError::BadMotion(format!(
+            "the contact step must be a finite number > 0 mm, got {}",
+            options.contact_step
+        )));
+    }
+    let (angle, shift) = from.distance_to(to);
+    if angle > MAX_EDGE_ANGLE {
+        return Ok(true);
+    }
+    if angle == 0.0 && shift == 0.0 {
+        return Ok(false);
+    }
+    let frames = EdgeFrames {
+        obstacle_inv: pose.isometry().inverse(),
+        from: *from,
+        to: *to,
+        shift,
+        angle,
+    };
+    // the translation in the start frame of the moving part: its boxes sweep along it
+    let sweep = from.isometry().rotation.inverse() * (to.translation() - from.translation());
+    // the obstacle's frame is "a", the moving part at `from` is "b"
+    let rel = Relative::new(pose, from);
+    let at_start = frames.at(0.0);
+    let motion = Motion {
+        shift: frames.obstacle_inv.rotation * (to.translation() - from.translation()),
+        angle,
+    };
+    let at_end = frames.at(1.0);
+    let pairs = PairCheck {
+        eps: eps(moving, obstacle, from, pose).max(eps(moving, obstacle, to, pose)),
+        oriented: moving.is_solid() && obstacle.is_solid(),
+        tolerance: options.tolerance,
+        gap: options.tolerance.max(1e-3) / 2.0,
+        contact_step: options.contact_step.max(options.tolerance / 2.0),
+    };
+    let mut stack: Vec<(u32, u32)> = vec![(0, 0)];
+    while let Some((i, j)) = stack.pop() {
+        let (no, nm) = (&obstacle.nodes[i as usize], &moving.nodes[j as usize]);
+        let swept = swept_obb(&moving.obbs[j as usize], &sweep, angle);
+        if !rel.boxes_meet(&obstacle.obbs[i as usize], &swept, pairs.eps) {
+            continue;
+        }
+        match (no.count > 0, nm.count > 0) {
+            (true, true) => {
+                for ta in &moving.tris[leaf(nm)] {
+                    let rho = ta.iter().map(|p| p.coords.norm()).fold(0.0, f64::max);
+                    // the triangle's box over the edge: both ends, and the arc's bulge
+                    // over the chord (at most rho·angle²/8)
+                    let a0 = ta.map(|p| at_start * p);
+                    let mut b = tri_box(&a0);
+                    let e = tri_box(&ta.map(|p| at_end * p));
+                    b.grow(&e.lo);
+                    b.grow(&e.hi);
+                    let bulge = rho * angle * angle / 8.0 + pairs.eps;
+                    for tb in &obstacle.tris[leaf(no)] {
+                        if box_gap(&b, &tri_box(tb)) > bulge
+                            || pairs.plane_advance(&a0, rho, tb, &motion) >= 1.0
+                        {
+                            continue;
+                        }
+                        if pairs
+                            .first_crossing(ta, rho, tb, &frames, &motion)
+                            .is_some()
+                        {
+                            return Ok(true);
+                        }
+                    }
+                }
+            }
+            (false, true) => stack.extend([(no.first, j), (no.first + 1, j)]),
+            (true, false) => stack.extend([(i, nm.first), (i, nm.first + 1)]),
+            (false, false) => {
+                if obb_size(&obstacle.obbs[i as usize]) >= obb_size(&swept) {
+                    stack.extend([(no.first, j), (no.first + 1, j)]);
+                } else {
+                    stack.extend([(i, nm.first), (i, nm.first + 1)]);
+                }
+            }
+        }
+    }
+    Ok(false)
+}
+
+/// A box (moving part frame at the edge start) holding every position of `b` over
+/// the edge: swept along `sweep` (mm) and grown by the arc `angle · ρ` its points
+/// travel at most (ρ: the box's farthest point from the origin).
+fn swept_obb(b: &Obb, sweep: &Vec3, angle: f64) -> Obb {
+    let rho = b.centre.norm() + b.half.norm();
+    let along = b.axes.tr_mul(sweep).abs() / 2.0;
+    Obb {
+        centre: b.centre + sweep / 2.0,
+        axes: b.axes,
+        half: b.half + along + Vec3::repeat(angle * rho),
+    }
+}
+
+/// Distance between two axis-aligned boxes (0 when they overlap), mm.
+fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
+    (a.lo - b.hi).sup(&(b.lo - a.hi)).sup(&Vec3::zeros()).norm()
+}
+
+/// The edge's motion in the obstacle frame, for the plane tests.
+struct Motion {
+    /// Translation of the part origin, obstacle frame, mm.
+    shift: Vec3,
+    /// Rotation, rad.
+    angle: f64,
+}
+
+/// Unit normal of a triangle (right-hand order), if it has an area.
+fn normal(t: &Tri) -> Option<Vec3> {
+    (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(1e-300)
+}
+
+/// The per-triangle-pair conservative advancement.
+struct PairCheck {
+    eps: f64,
+    oriented: bool,
+    tolerance: f64,
+    /// Below this distance the pair is in contact, mm.
+    gap: f64,
+    contact_step: f64,
+}
+
+impl PairCheck {
+    /// How much further along the edge (in `t`) moving triangle `a` (obstacle frame
+    /// at the current pose, `rho` its farthest vertex from the part origin) is sure
+    /// not to cross obstacle triangle `tb` deeper than the tolerance, by the planes
+    /// of the two triangles: a pair's crossing depth is at most how far one triangle
+    /// reaches through the other's plane, and along a plane's normal every vertex
+    /// moves by at most its share of the translation plus `angle · rho` over the
+    /// whole edge. This clears sliding contacts — a face gliding on a face, a peg
+    /// along a bore — without stepping. `f64::INFINITY` when nothing limits it.
+    fn plane_advance(&self, a: &Tri, rho: f64, tb: &Tri, motion: &Motion) -> f64 {
+        let wobble = motion.angle * rho;
+        // depth of the triangle with shadow `lo..hi` behind (and, unoriented, in
+        // front of) the plane at height `h`, and how fast that depth can grow
+        // (per unit `t`) when the triangle's shadow moves by `along` over the edge
+        // and wobbles by `wobble`
+        let limit = |lo: f64, hi: f64, h: f64, along: f64, wobble: f64| -> f64 {
+            let (depth, rate) = if self.oriented {
+                (h - lo, (-along).max(0.0) + wobble)
+            } else {
+                ((h - lo).min(hi - h), along.abs() + wobble)
+            };
+            let room = self.tolerance - depth;
+            if room < 0.0 {
+                0.0
+            } else if rate > 0.0 {
+                room / rate
+            } else {
+                f64::INFINITY
+            }
+        };
+        let shadow = |x: &Tri, n: &Vec3| {
+            let s = x.map(|p| n.dot(&p.coords));
+            (s[0].min(s[1]).min(s[2]), s[0].max(s[1]).max(s[2]))
+        };
+        let mut dt = 0.0f64;
+        if let Some(n) = normal(tb) {
+            let (lo, hi) = shadow(a, &n);
+            dt = dt.max(limit(
+                lo,
+                hi,
+                n.dot(&tb[0].coords),
+                n.dot(&motion.shift),
+                wobble,
+            ));
+        }
+        // a translating triangle keeps its normal: its plane only shifts, which moves
+        // b's shadow relative to it the other way
+        if motion.angle == 0.0 {
+            if let Some(n) = normal(a) {
+                let (lo, hi) = shadow(tb, &n);
+                dt = dt.max(limit(
+                    lo,
+                    hi,
+                    n.dot(&a[0].coords),
+                    -n.dot(&motion.shift),
+                    0.0,
+                ));
+            }
+        }
+        dt
+    }
+
+    /// The first edge parameter after 0 at which moving triangle `ta` (part frame,
+    /// `rho` its farthest vertex from the origin) crosses obstacle triangle `tb`
+    /// (obstacle frame) deeper than the tolerance, if any. Each advance is the
+    /// larger of the planes' ([`plane_advance`](Self::plane_advance)) and the pair's
+    /// distance over its fastest vertex speed; when neither clears a contact step
+    /// and the pair is in contact, it moves by `contact_step` and checks the
+    /// crossing depth there.
+    fn first_crossing(
+        &self,
+        ta: &Tri,
+        rho: f64,
+        tb: &Tri,
+        frames: &EdgeFrames,
+        motion: &Motion,
+    ) -> Option<f64> {
+        let reach = frames.reach(rho);
+        if reach <= 0.0 {
+            return None;
+        }
+        let contact_dt = self.contact_step / reach;
+        let mut t = 0.0;
+        for _ in 0..MAX_PAIR_STEPS {
+            let iso = frames.at(t);
+            let a = ta.map(|p| iso * p);
+            let mut dt = self.plane_advance(&a, rho, tb, motion);
+            if dt < contact_dt {
+                let d = tri_distance(&a, tb);
+                if d > self.gap {
+                    dt = dt.max((d - self.gap / 2.0) / reach);
+                } else {
+                    if t > 0.0 {
+                        if let Some(depth) = tri_tri(&a, tb, self.eps, self.oriented) {
+                            if depth > self.tolerance {
+                                return Some(t);
+                            }
+                        }
+                    }
+                    dt = contact_dt;
+                }
+            }
+            t += dt;
+            if t >= 1.0 {
+                return None;
+            }
+        }
+        Some(t)
+    }
+}
