@@ -15,8 +15,8 @@ use crate::math::Transform;
 #[derive(Debug, Clone, PartialEq)]
 pub struct AssemblyOptions {
     /// The disassembly search from the assembled end (its `limits.seed` seeds the
-    /// whole run; its smoothing is not used).
-    pub disassembly: LocalRrtOptions,
+    /// whole run; its smoothing is not used). Default: `local_rrt`.
+    pub disassembly: DisassemblyPlanner,
     /// The search joining the free end to where the disassembly left the product
     /// (its seed is derived from the disassembly's; its smoothing is not used).
     pub approach: RrtConnectOptions,
@@ -26,8 +26,8 @@ pub struct AssemblyOptions {
 
 impl Default for AssemblyOptions {
     fn default() -> Self {
-        let mut disassembly = LocalRrtOptions::default();
-        disassembly.rrt.smoothing.enabled = false;
+        let mut disassembly = DisassemblyPlanner::LocalRrt(LocalRrtOptions::default());
+        disassembly.rrt_mut().smoothing.enabled = false;
         let mut approach = RrtConnectOptions::default();
         approach.smoothing.enabled = false;
         Self {
@@ -42,8 +42,8 @@ impl AssemblyOptions {
     /// The same options with `seed` and `max_iterations` for both searches.
     #[must_use]
     pub fn with_limits(mut self, seed: u64, max_iterations: usize) -> Self {
-        self.disassembly.rrt.limits.seed = seed;
-        self.disassembly.rrt.limits.max_iterations = max_iterations;
+        self.disassembly.rrt_mut().limits.seed = seed;
+        self.disassembly.rrt_mut().limits.max_iterations = max_iterations;
         self.approach.limits.seed = seed;
         self.approach.limits.max_iterations = max_iterations;
         self
@@ -85,7 +85,7 @@ pub fn plan_assembly(
     PlanError::pose("start", start)?;
     PlanError::pose("goal", goal)?;
     options.smoothing.validate()?;
-    let seed = options.disassembly.rrt.limits.seed;
+    let seed = options.disassembly.rrt().limits.seed;
     let (start_in, goal_in) = (
         inside(part_box, start, product_box),
         inside(part_box, goal, product_box),
@@ -101,7 +101,7 @@ pub fn plan_assembly(
     }
     let assembled = if goal_in { goal } else { start };
     let mut out = options.disassembly.clone();
-    out.rrt.smoothing.enabled = false;
+    out.rrt_mut().smoothing.enabled = false;
     // `disassemble` returns the path outside → assembled.
     let mut apart = disassemble(
         validator,
@@ -109,7 +109,7 @@ pub fn plan_assembly(
         assembled,
         part_box,
         product_box,
-        &DisassemblyPlanner::LocalRrt(out),
+        &out,
         progress.as_mut().map(|p| &mut **p as ProgressFn<'_>),
     )?;
     apart.planner = NAME;

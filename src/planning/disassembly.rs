@@ -66,6 +66,24 @@ pub enum DisassemblyPlanner {
     LocalRrt(LocalRrtOptions),
 }
 
+impl DisassemblyPlanner {
+    /// The tree search options (for `local_rrt`, those of its underlying RRT).
+    pub fn rrt_mut(&mut self) -> &mut RrtOptions {
+        match self {
+            DisassemblyPlanner::Rrt(o) => o,
+            DisassemblyPlanner::LocalRrt(o) => &mut o.rrt,
+        }
+    }
+
+    /// The tree search options (for `local_rrt`, those of its underlying RRT).
+    pub fn rrt(&self) -> &RrtOptions {
+        match self {
+            DisassemblyPlanner::Rrt(o) => o,
+            DisassemblyPlanner::LocalRrt(o) => &o.rrt,
+        }
+    }
+}
+
 /// The goal region: the component's box is outside the product's box.
 struct OutsideBox {
     part: Aabb,

@@ -182,8 +182,10 @@ impl Planner {
 
     /// Seed 002's assembly by disassembly, for a full start → goal path: see
     /// [`plan_assembly`]. This planner's options drive the part of the search they fit:
-    /// `local_rrt` options the disassembly, `rrt_connect` options the free-space join;
-    /// the seed and limits of any planner apply to both.
+    /// `rrt`, `biased_rrt` and `local_rrt` search the disassembly (seed 002's
+    /// comparison), `rrt_connect` options the free-space join (the disassembly is then
+    /// `local_rrt`); the seed and limits apply to both. `greedy_ant` and `rrt_floyd`
+    /// are refused: they search toward a goal pose, not out of the product box.
     #[allow(clippy::too_many_arguments)]
     pub fn plan_via_disassembly(
         &self,
@@ -198,13 +200,24 @@ impl Planner {
         let limits = self.limits();
         let mut options =
             AssemblyOptions::default().with_limits(limits.seed, limits.max_iterations);
-        options.disassembly.rrt.limits.time_limit_ms = limits.time_limit_ms;
+        options.disassembly.rrt_mut().limits.time_limit_ms = limits.time_limit_ms;
         options.approach.limits.time_limit_ms = limits.time_limit_ms;
         options.smoothing = self.smoothing();
         match self {
-            Planner::LocalRrt(o) => options.disassembly = o.clone(),
+            Planner::Rrt(o) | Planner::BiasedRrt(o) => {
+                options.disassembly = DisassemblyPlanner::Rrt(o.clone())
+            }
+            Planner::LocalRrt(o) => options.disassembly = DisassemblyPlanner::LocalRrt(o.clone()),
             Planner::RrtConnect(o) => options.approach = o.clone(),
-            _ => {}
+            Planner::GreedyAnt(_) | Planner::RrtFloyd(_) => {
+                return Err(PlanError::InvalidOption {
+                    option: "planner",
+                    value: self.name().to_string(),
+                    expected: "rrt, biased_rrt, local_rrt or rrt_connect with disassemble: true \
+                               (greedy_ant and rrt_floyd search toward a goal pose, not out of \
+                               the product box)",
+                })
+            }
         }
         plan_assembly(
             validator,

@@ -74,16 +74,7 @@ pub(crate) fn shortcut(
     if !smoothing.enabled || poses.len() < 3 {
         return;
     }
-    // Linear pass: drop p[i] when its kept predecessor sees p[i + 1].
-    let mut kept = vec![poses[0]];
-    for i in 1..poses.len() - 1 {
-        let last = kept[kept.len() - 1];
-        if !checker.edge_free(&last, &poses[i + 1]) {
-            kept.push(poses[i]);
-        }
-    }
-    kept.push(poses[poses.len() - 1]);
-    *poses = kept;
+    linear_pass(checker, poses);
     for _ in 0..smoothing.shortcut_attempts {
         let edges = poses.len() - 1;
         if edges < 2 {
@@ -118,4 +109,22 @@ pub(crate) fn shortcut(
             *poses = next;
         }
     }
+    // Shortcuts that land next to an existing key pose leave near-duplicates behind.
+    linear_pass(checker, poses);
+}
+
+/// Drops `p[i]` whenever its kept predecessor sees `p[i + 1]`.
+fn linear_pass(checker: &mut Checker<'_>, poses: &mut Vec<Transform>) {
+    if poses.len() < 3 {
+        return;
+    }
+    let mut kept = vec![poses[0]];
+    for i in 1..poses.len() - 1 {
+        let last = kept[kept.len() - 1];
+        if !checker.edge_free(&last, &poses[i + 1]) {
+            kept.push(poses[i]);
+        }
+    }
+    kept.push(poses[poses.len() - 1]);
+    *poses = kept;
 }

@@ -6,9 +6,10 @@
 //! `cargo bench --bench planning`. The peer runs when `FITUP_PY` (default
 //! `.venv/bin/python`) exists. Environment: `FITUP_RUNS` (fitup runs per problem,
 //! 10), `FITUP_OMPL_RUNS` (5), `FITUP_OMPL_LIMIT_S` (10), `FITUP_OMPL_RRT=1` (also
-//! OMPL's plain RRT).
+//! OMPL's plain RRT), `FITUP_STEPWISE=1` (also fitup with stepwise edges),
+//! `FITUP_PROBLEM=name` (only problems whose name contains it),
+//! `FITUP_PROTOCOL=0` (skip seed 002's protocol).
 
-use fitup::math::Transform;
 use fitup::planning::problems::{self, Problem};
 use fitup::planning::{
     disassemble, DisassemblyPlanner, EdgeCheck, LocalRrtOptions, MeshValidatorOptions, RrtOptions,
@@ -128,8 +129,8 @@ fn protocol() {
     let options = p.default_validator_options();
     println!("\nseed 002 protocol: piston_rod_cap disassembly, 100 runs x 100 iterations");
     println!(
-        "{:<12} {:>8} {:>14} {:>14}",
-        "planner", "success", "mean time", "mean checks"
+        "{:<12} {:>8} {:>14} {:>14} {:>14}",
+        "planner", "success", "mean time", "median time", "mean checks"
     );
     let mk = |bias: f64| {
         DisassemblyPlanner::Rrt(RrtOptions {
@@ -146,6 +147,7 @@ fn protocol() {
         ),
     ] {
         let (mut ok, mut total, mut checks) = (0, 0.0, 0u64);
+        let mut times = Vec::new();
         for seed in 0..100u64 {
             let mut planner = planner.clone();
             match &mut planner {
@@ -170,15 +172,18 @@ fn protocol() {
                 None,
             )
             .unwrap();
-            total += t0.elapsed().as_secs_f64();
+            let dt = t0.elapsed().as_secs_f64();
+            total += dt;
+            times.push(dt);
             checks += path.collision_checks();
             ok += path.found() as usize;
         }
         println!(
-            "{:<12} {:>7}% {:>11.2} ms {:>14.0}",
+            "{:<12} {:>7}% {:>11.2} ms {:>11.2} ms {:>14.0}",
             name,
             ok,
             total / 100.0 * 1e3,
+            median(&mut times).unwrap_or(0.0) * 1e3,
             checks as f64 / 100.0
         );
     }
@@ -197,57 +202,54 @@ fn main() {
         eprintln!("no OMPL peer ({} missing): fitup only", py.display());
     }
     let tmp = tempfile::tempdir().unwrap();
+    let stepwise = std::env::var_os("FITUP_STEPWISE").is_some();
+    let only: Option<String> = std::env::var("FITUP_PROBLEM").ok();
     println!(
-        "planning: success and median time of successful runs; fitup = plan_assembly, {runs} seeds x <= 5000 iterations; OMPL {peer_n} runs x {limit} s; stepwise edges at {RESOLUTION_MM} mm"
+        "planning: success and median time of successful runs; fitup = plan_assembly with continuous edges, {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
     );
     println!(
-        "{:<18} {:>20} {:>20} {:>20} {:>10}",
-        "problem", "fitup stepwise", "fitup continuous", "OMPL RRTConnect", "ratio"
+        "{:<18} {:>20} {:>20} {:>10} {:>20}",
+        "problem", "fitup", "OMPL RRTConnect", "ratio", "fitup stepwise"
     );
     for p in problems::all().unwrap() {
+        if only.as_ref().is_some_and(|o| !p.name.contains(o.as_str())) {
+            continue;
+        }
         let dir = tmp.path().join(&p.name);
         std::fs::create_dir_all(&dir).unwrap();
         let spec = export(&p, &dir);
-        let step = fitup_runs(&p, p.stepwise_validator_options(), runs);
-        let cont = fitup_runs(
-            &p,
-            MeshValidatorOptions {
-                edge: EdgeCheck::Continuous,
-                ..Default::default()
-            },
-            runs,
-        );
+        let cont = fitup_runs(&p, p.default_validator_options(), runs);
         let ompl = if peer {
             peer_runs(&py, &spec, "RRTConnect", peer_n, limit)
         } else {
             None
         };
-        let ratio = match (&ompl, step.median_s) {
+        let step = stepwise.then(|| fitup_runs(&p, p.stepwise_validator_options(), runs));
+        let ratio = match (&ompl, cont.median_s) {
             (
                 Some(Row {
                     median_s: Some(o), ..
                 }),
                 Some(f),
             ) => format!("{:.0}x", o / f),
-            (Some(o), Some(_)) if o.solved == 0 => {
-                format!(">{:.0}x", limit / step.median_s.unwrap())
-            }
+            (Some(o), Some(f)) if o.solved == 0 => format!(">{:.0}x", limit / f),
             _ => "-".into(),
         };
         println!(
-            "{:<18} {:>20} {:>20} {:>20} {:>10}",
+            "{:<18} {:>20} {:>20} {:>10} {:>20}",
             p.name,
-            fmt(&step),
             fmt(&cont),
             ompl.as_ref().map_or("-".into(), fmt),
-            ratio
+            ratio,
+            step.as_ref().map_or("-".into(), fmt),
         );
         if peer && std::env::var_os("FITUP_OMPL_RRT").is_some() {
             if let Some(r) = peer_runs(&py, &spec, "RRT", peer_n, limit) {
-                println!("{:<18} {:>20} {:>20} {:>20}", "", "", "OMPL RRT", fmt(&r));
+                println!("{:<18} {:>20} {:>20}", "", "OMPL RRT", fmt(&r));
             }
         }
     }
-    let _ = Transform::IDENTITY;
-    protocol();
+    if std::env::var("FITUP_PROTOCOL").map_or(true, |v| v != "0") {
+        protocol();
+    }
 }
