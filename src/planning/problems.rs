@@ -147,6 +147,21 @@ impl Problem {
         seed: u64,
         max_iterations: usize,
     ) -> Result<Path, PlanError> {
+        self.solve_with(
+            validator,
+            &AssemblyOptions::default().with_limits(seed, max_iterations),
+        )
+    }
+
+    /// Solves the problem with [`plan_assembly`] and `options`.
+    ///
+    /// # Errors
+    /// Only for invalid options.
+    pub fn solve_with(
+        &self,
+        validator: &mut MeshValidator,
+        options: &AssemblyOptions,
+    ) -> Result<Path, PlanError> {
         plan_assembly(
             validator,
             &self.space,
@@ -154,7 +169,7 @@ impl Problem {
             &self.goal,
             &self.part_box(),
             &self.product_box,
-            &AssemblyOptions::default().with_limits(seed, max_iterations),
+            options,
             None,
         )
     }

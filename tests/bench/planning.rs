@@ -12,7 +12,8 @@
 
 use fitup::planning::problems::{self, Problem};
 use fitup::planning::{
-    disassemble, DisassemblyPlanner, EdgeCheck, LocalRrtOptions, MeshValidatorOptions, RrtOptions,
+    disassemble, AssemblyOptions, DisassemblyPlanner, LocalRrtOptions, MeshValidatorOptions,
+    RrtOptions, Smoothing,
 };
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -67,12 +68,18 @@ struct Row {
     median_s: Option<f64>,
 }
 
-fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize) -> Row {
+/// fitup's best planner on `p` for `runs` seeds; `smoothing` adds the shortcut
+/// pass (OMPL's `solve` does not simplify either).
+fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize, smoothing: bool) -> Row {
     let mut times = Vec::new();
     for seed in 0..runs as u64 {
         let mut v = p.validator(options).unwrap();
+        let mut plan = AssemblyOptions::default().with_limits(seed, 5000);
+        if !smoothing {
+            plan.smoothing = Smoothing::OFF;
+        }
         let t0 = Instant::now();
-        let path = p.solve(&mut v, seed, 5000).unwrap();
+        let path = p.solve_with(&mut v, &plan).unwrap();
         let dt = t0.elapsed().as_secs_f64();
         if path.found() {
             times.push(dt);
@@ -205,11 +212,11 @@ fn main() {
     let stepwise = std::env::var_os("FITUP_STEPWISE").is_some();
     let only: Option<String> = std::env::var("FITUP_PROBLEM").ok();
     println!(
-        "planning: success and median time of successful runs; fitup = plan_assembly with continuous edges, {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
+        "planning: success and median time of successful runs; fitup = plan_assembly with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
     );
     println!(
-        "{:<18} {:>20} {:>20} {:>10} {:>20}",
-        "problem", "fitup", "OMPL RRTConnect", "ratio", "fitup stepwise"
+        "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20}",
+        "problem", "fitup", "OMPL RRTConnect", "ratio", "fitup + smoothing", "fitup stepwise"
     );
     for p in problems::all().unwrap() {
         if only.as_ref().is_some_and(|o| !p.name.contains(o.as_str())) {
@@ -218,13 +225,14 @@ fn main() {
         let dir = tmp.path().join(&p.name);
         std::fs::create_dir_all(&dir).unwrap();
         let spec = export(&p, &dir);
-        let cont = fitup_runs(&p, p.default_validator_options(), runs);
+        let cont = fitup_runs(&p, p.default_validator_options(), runs, false);
+        let smoothed = fitup_runs(&p, p.default_validator_options(), runs, true);
         let ompl = if peer {
             peer_runs(&py, &spec, "RRTConnect", peer_n, limit)
         } else {
             None
         };
-        let step = stepwise.then(|| fitup_runs(&p, p.stepwise_validator_options(), runs));
+        let step = stepwise.then(|| fitup_runs(&p, p.stepwise_validator_options(), runs, false));
         let ratio = match (&ompl, cont.median_s) {
             (
                 Some(Row {
@@ -236,11 +244,12 @@ fn main() {
             _ => "-".into(),
         };
         println!(
-            "{:<18} {:>20} {:>20} {:>10} {:>20}",
+            "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20}",
             p.name,
             fmt(&cont),
             ompl.as_ref().map_or("-".into(), fmt),
             ratio,
+            fmt(&smoothed),
             step.as_ref().map_or("-".into(), fmt),
         );
         if peer && std::env::var_os("FITUP_OMPL_RRT").is_some() {
