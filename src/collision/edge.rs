@@ -10,7 +10,7 @@
 //! parts are close, not into the whole part.
 
 use super::exact::{check_pose, check_tolerance, eps, leaf, obb_size, tri_box, Relative};
-use super::shape::{Aabb, Collider, Obb};
+use super::shape::{Collider, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
 use super::CollisionError;
 use crate::math::{Transform, Vec3};
@@ -37,6 +37,13 @@ impl Default for EdgeOptions {
     }
 }
 
+impl EdgeOptions {
+    /// The contact step actually used: `contact_step`, at least half the tolerance, mm.
+    pub fn effective_contact_step(&self) -> f64 {
+        self.contact_step.max(self.tolerance / 2.0)
+    }
+}
+
 /// Largest rotation of one edge, rad: beyond it slerp's path is ill-defined.
 const MAX_EDGE_ANGLE: f64 = 3.0;
 
@@ -49,8 +56,10 @@ struct EdgeFrames {
     obstacle_inv: Isometry3<f64>,
     from: Transform,
     to: Transform,
-    /// Translation of the part origin over the edge, world, mm.
+    /// Length of the part origin's translation over the edge, mm.
     shift: f64,
+    /// That translation in the obstacle frame, mm.
+    shift_local: Vec3,
     /// Rotation over the edge, rad.
     angle: f64,
 }
@@ -109,6 +118,7 @@ pub fn edge_interferes(
         from: *from,
         to: *to,
         shift,
+        shift_local: pose.isometry().inverse().rotation * (to.translation() - from.translation()),
         angle,
     };
     // the translation in the start frame of the moving part: its boxes sweep along it
@@ -116,17 +126,13 @@ pub fn edge_interferes(
     // the obstacle's frame is "a", the moving part at `from` is "b"
     let rel = Relative::new(pose, from);
     let at_start = frames.at(0.0);
-    let motion = Motion {
-        shift: frames.obstacle_inv.rotation * (to.translation() - from.translation()),
-        angle,
-    };
     let at_end = frames.at(1.0);
     let pairs = PairCheck {
         eps: eps(moving, obstacle, from, pose).max(eps(moving, obstacle, to, pose)),
         oriented: moving.is_solid() && obstacle.is_solid(),
         tolerance: options.tolerance,
         gap: options.tolerance.max(1e-3) / 2.0,
-        contact_step: options.contact_step.max(options.tolerance / 2.0),
+        contact_step: options.effective_contact_step(),
     };
     let mut stack: Vec<(u32, u32)> = vec![(0, 0)];
     while let Some((i, j)) = stack.pop() {
@@ -148,15 +154,12 @@ pub fn edge_interferes(
                     b.grow(&e.hi);
                     let bulge = rho * angle * angle / 8.0 + pairs.eps;
                     for tb in &obstacle.tris[leaf(no)] {
-                        if box_gap(&b, &tri_box(tb)) > bulge
-                            || pairs.plane_advance(&a0, rho, tb, &motion) >= 1.0
+                        if b.distance_to_box(&tri_box(tb)) > bulge
+                            || pairs.plane_advance(&a0, rho, tb, &frames) >= 1.0
                         {
                             continue;
                         }
-                        if pairs
-                            .first_crossing(ta, rho, tb, &frames, &motion)
-                            .is_some()
-                        {
+                        if pairs.first_crossing(ta, rho, tb, &frames).is_some() {
                             return Ok(true);
                         }
                     }
@@ -189,19 +192,6 @@ fn swept_obb(b: &Obb, sweep: &Vec3, angle: f64) -> Obb {
     }
 }
 
-/// Distance between two axis-aligned boxes (0 when they overlap), mm.
-fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
-    (a.lo - b.hi).sup(&(b.lo - a.hi)).sup(&Vec3::zeros()).norm()
-}
-
-/// The edge's motion in the obstacle frame, for the plane tests.
-struct Motion {
-    /// Translation of the part origin, obstacle frame, mm.
-    shift: Vec3,
-    /// Rotation, rad.
-    angle: f64,
-}
-
 /// Unit normal of a triangle (right-hand order), if it has an area.
 fn normal(t: &Tri) -> Option<Vec3> {
     (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(1e-300)
@@ -226,8 +216,8 @@ impl PairCheck {
     /// moves by at most its share of the translation plus `angle · rho` over the
     /// whole edge. This clears sliding contacts — a face gliding on a face, a peg
     /// along a bore — without stepping. `f64::INFINITY` when nothing limits it.
-    fn plane_advance(&self, a: &Tri, rho: f64, tb: &Tri, motion: &Motion) -> f64 {
-        let wobble = motion.angle * rho;
+    fn plane_advance(&self, a: &Tri, rho: f64, tb: &Tri, frames: &EdgeFrames) -> f64 {
+        let wobble = frames.angle * rho;
         // depth of the triangle with shadow `lo..hi` behind (and, unoriented, in
         // front of) the plane at height `h`, and how fast that depth can grow
         // (per unit `t`) when the triangle's shadow moves by `along` over the edge
@@ -258,20 +248,20 @@ impl PairCheck {
                 lo,
                 hi,
                 n.dot(&tb[0].coords),
-                n.dot(&motion.shift),
+                n.dot(&frames.shift_local),
                 wobble,
             ));
         }
         // a translating triangle keeps its normal: its plane only shifts, which moves
         // b's shadow relative to it the other way
-        if motion.angle == 0.0 {
+        if frames.angle == 0.0 {
             if let Some(n) = normal(a) {
                 let (lo, hi) = shadow(tb, &n);
                 dt = dt.max(limit(
                     lo,
                     hi,
                     n.dot(&a[0].coords),
-                    -n.dot(&motion.shift),
+                    -n.dot(&frames.shift_local),
                     0.0,
                 ));
             }
@@ -286,14 +276,7 @@ impl PairCheck {
     /// distance over its fastest vertex speed; when neither clears a contact step
     /// and the pair is in contact, it moves by `contact_step` and checks the
     /// crossing depth there.
-    fn first_crossing(
-        &self,
-        ta: &Tri,
-        rho: f64,
-        tb: &Tri,
-        frames: &EdgeFrames,
-        motion: &Motion,
-    ) -> Option<f64> {
+    fn first_crossing(&self, ta: &Tri, rho: f64, tb: &Tri, frames: &EdgeFrames) -> Option<f64> {
         let reach = frames.reach(rho);
         if reach <= 0.0 {
             return None;
@@ -303,7 +286,7 @@ impl PairCheck {
         for _ in 0..MAX_PAIR_STEPS {
             let iso = frames.at(t);
             let a = ta.map(|p| iso * p);
-            let mut dt = self.plane_advance(&a, rho, tb, motion);
+            let mut dt = self.plane_advance(&a, rho, tb, frames);
             if dt < contact_dt {
                 let d = tri_distance(&a, tb);
                 if d > self.gap {

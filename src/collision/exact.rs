@@ -5,7 +5,7 @@
 use super::shape::{Aabb, Collider, Node, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
 use super::{CollisionError, Contact, InterferenceKind, Part};
-use crate::math::{Transform, Vec3};
+use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3};
 use std::ops::ControlFlow;
 
@@ -394,8 +394,7 @@ fn distance_search(
                 let ba = tri_box(ta);
                 for (tb, bb) in &moved_boxes {
                     // the triangles' boxes bound their distance from below
-                    let gap = (ba.lo - bb.hi).sup(&(bb.lo - ba.hi)).sup(&Vec3::zeros());
-                    if gap.norm_squared() * grow * grow < best * best {
+                    if ba.distance_to_box(bb) * grow < best {
                         best = best.min(tri_distance(ta, tb));
                     }
                 }

@@ -71,6 +71,14 @@ impl Aabb {
         self.hi.coords.inf(&other.hi.coords) - self.lo.coords.sup(&other.lo.coords)
     }
 
+    /// Distance between the two boxes (0 when they overlap), mm.
+    pub fn distance_to_box(&self, other: &Aabb) -> f64 {
+        (self.lo - other.hi)
+            .sup(&(other.lo - self.hi))
+            .sup(&Vec3::zeros())
+            .norm()
+    }
+
     /// Distance from `p` to the box (0 inside), mm.
     pub fn distance_to_point(&self, p: &Point3) -> f64 {
         let d = (self.lo - p).sup(&(p - self.hi)).sup(&Vec3::zeros());

@@ -208,6 +208,14 @@ impl MeshValidator {
         self.free_among_near(pose)
     }
 
+    /// The options of the continuous edge check.
+    fn edge_options(&self) -> EdgeOptions {
+        EdgeOptions {
+            tolerance: self.options.tolerance,
+            contact_step: self.options.contact_step,
+        }
+    }
+
     /// Continuous check of `from → to` (`to` already known free) against every
     /// obstacle the swept part can reach ([`edge_interferes`]).
     fn continuous_edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
@@ -230,10 +238,7 @@ impl MeshValidator {
                 }
             }
         }
-        let options = EdgeOptions {
-            tolerance: self.options.tolerance,
-            contact_step: self.options.contact_step,
-        };
+        let options = self.edge_options();
         for k in 0..self.near.len() {
             let (c, p, _) = &self.obstacles[self.near[k]];
             self.stats.pair_queries += 1;
@@ -259,7 +264,7 @@ impl MotionValidator for MeshValidator {
     fn resolution(&self) -> EdgeResolution {
         match self.options.edge {
             EdgeCheck::Continuous => EdgeResolution::Continuous {
-                contact_step_mm: self.options.contact_step.max(self.options.tolerance / 2.0),
+                contact_step_mm: self.edge_options().effective_contact_step(),
             },
             EdgeCheck::Stepwise { mm, rad } => EdgeResolution::Stepwise {
                 step_mm: mm,
