@@ -259,6 +259,17 @@ pub fn cell_document() -> DocumentFile {
     }
 }
 
+/// What `fitup demo DIR` writes as `DIR/fitup.toml`: the mark of a project root.
+pub const PROJECT_TOML: &str = "# Marks the root of a fitup project: scripts below this folder resolve their\n# paths against it and may use files inside it only (docs/scripting.md).\n";
+
+/// Writes a demo project: `dir/fitup.toml` and the demo cell in `dir/models/`, the
+/// layout of the fitup repository, so its example scripts run there unchanged.
+pub fn write_project(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    write_cell(&dir.join("models"))?;
+    crate::fsutil::write_atomic(&dir.join(crate::project::PROJECT_FILE), PROJECT_TOML.as_bytes())?;
+    Ok(())
+}
+
 /// Writes the demo cell to `dir/cell.yaml` and `dir/meshes/*.stl` (atomically).
 pub fn write_cell(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir.join("meshes"))?;

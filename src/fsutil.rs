@@ -72,3 +72,178 @@ pub fn stamp(path: &Path) -> std::io::Result<Stamp> {
         inode,
     })
 }
+
+/// Takes an exclusive advisory lock on a folder (released when the returned handle is
+/// dropped, or when the process dies), so that writers of files in it take turns.
+/// `None` when the platform or file system cannot lock: writing goes on unlocked.
+pub fn lock_folder(dir: &Path) -> Option<std::fs::File> {
+    let f = std::fs::File::open(dir).ok()?;
+    // `File::lock` is std since Rust 1.89; the toolchain in use is newer.
+    #[allow(clippy::incompatible_msrv)]
+    f.lock().ok()?;
+    Some(f)
+}
+
+/// What kind of file a reader expects: each kind has its own size cap, stated in the
+/// error when a file exceeds it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileKind {
+    /// An assembly document (YAML).
+    Document,
+    /// An STL mesh.
+    Mesh,
+    /// A Rhai script or imported module.
+    Script,
+    /// A robot motion program.
+    Program,
+    /// A CSV table (hole tables, …).
+    Table,
+}
+
+impl FileKind {
+    /// The largest file of this kind fitup reads, in bytes: far above any real file of
+    /// the kind, low enough that a mistaken path cannot exhaust memory.
+    pub const fn max_bytes(self) -> u64 {
+        match self {
+            FileKind::Document => 16 << 20,
+            FileKind::Mesh => 512 << 20,
+            FileKind::Script => 4 << 20,
+            FileKind::Program | FileKind::Table => 64 << 20,
+        }
+    }
+
+    /// How messages call this kind of file.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FileKind::Document => "a document",
+            FileKind::Mesh => "an STL mesh",
+            FileKind::Script => "a script",
+            FileKind::Program => "a robot program",
+            FileKind::Table => "a CSV table",
+        }
+    }
+}
+
+/// Why a file could not be read.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ReadError {
+    /// The operating system refused (missing file, permissions, …).
+    #[error("cannot read: {0}")]
+    Io(String),
+    /// A folder, device, FIFO or socket: only regular files are read, because reading
+    /// `/dev/zero` never ends and opening a FIFO waits for a writer forever.
+    #[error("not a regular file (it is {0}): fitup reads only regular files")]
+    NotRegular(&'static str),
+    /// Larger than the cap of its kind.
+    #[error("{size} bytes is larger than the {cap} MiB limit for {what}")]
+    TooLarge {
+        /// The file size in bytes.
+        size: u64,
+        /// The cap in MiB.
+        cap: u64,
+        /// The kind of file.
+        what: &'static str,
+    },
+    /// Not UTF-8 text where text was expected.
+    #[error("not UTF-8 text (byte {0})")]
+    NotText(usize),
+}
+
+fn file_type_name(md: &std::fs::Metadata) -> &'static str {
+    let t = md.file_type();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() {
+        "a folder"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Reads a regular file of `kind`, refusing folders, devices and FIFOs (checked before
+/// the file is opened, so a FIFO cannot block) and files over [`FileKind::max_bytes`].
+/// The read itself is bounded too, in case the file grows while it is read.
+pub fn read_file(path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
+    use std::io::Read;
+    let cap = kind.max_bytes();
+    let too_large = |size| ReadError::TooLarge {
+        size,
+        cap: cap >> 20,
+        what: kind.name(),
+    };
+    let md = std::fs::metadata(path).map_err(|e| ReadError::Io(e.to_string()))?;
+    if !md.is_file() {
+        return Err(ReadError::NotRegular(file_type_name(&md)));
+    }
+    if md.len() > cap {
+        return Err(too_large(md.len()));
+    }
+    let file = std::fs::File::open(path).map_err(|e| ReadError::Io(e.to_string()))?;
+    // The path may have been replaced between the check and the open.
+    let md = file.metadata().map_err(|e| ReadError::Io(e.to_string()))?;
+    if !md.is_file() {
+        return Err(ReadError::NotRegular(file_type_name(&md)));
+    }
+    let mut bytes = Vec::with_capacity(md.len().min(cap) as usize);
+    file.take(cap + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| ReadError::Io(e.to_string()))?;
+    if bytes.len() as u64 > cap {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// [`read_file`] for text files: the bytes must be UTF-8.
+pub fn read_text(path: &Path, kind: FileKind) -> Result<String, ReadError> {
+    String::from_utf8(read_file(path, kind)?)
+        .map_err(|e| ReadError::NotText(e.utf8_error().valid_up_to()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn special_files_and_oversized_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(matches!(
+            read_file(dir.path(), FileKind::Mesh),
+            Err(ReadError::NotRegular("a folder"))
+        ));
+        #[cfg(unix)]
+        {
+            let e = read_file(Path::new("/dev/zero"), FileKind::Mesh).unwrap_err();
+            assert_eq!(e, ReadError::NotRegular("a device"));
+            let fifo = dir.path().join("fifo");
+            let ok = std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .is_ok_and(|s| s.success());
+            if ok {
+                let e = read_file(&fifo, FileKind::Document).unwrap_err();
+                assert_eq!(e, ReadError::NotRegular("a FIFO"));
+            }
+        }
+        let big = dir.path().join("big.rhai");
+        let f = std::fs::File::create(&big).unwrap();
+        f.set_len(FileKind::Script.max_bytes() + 1).unwrap();
+        let e = read_file(&big, FileKind::Script).unwrap_err();
+        assert!(e.to_string().contains("4 MiB limit for a script"), "{e}");
+        std::fs::write(&big, b"ok").unwrap();
+        assert_eq!(read_text(&big, FileKind::Script).unwrap(), "ok");
+        std::fs::write(&big, b"o\xffk").unwrap();
+        assert_eq!(read_text(&big, FileKind::Script), Err(ReadError::NotText(1)));
+    }
+}

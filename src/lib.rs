@@ -20,7 +20,8 @@
 //! | [`watch`] | watch mode: rerun on every save, exactly once |
 //! | [`cli`] | the `fitup` command line |
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
-//! | [`fsutil`] | atomic writes, content hashes, file stamps |
+//! | [`project`] | the project folder that bounds every file a run touches, and the path rule |
+//! | [`fsutil`] | atomic writes, capped reads of regular files only, content hashes, file stamps |
 pub mod cli;
 pub mod collision;
 pub mod demo;
@@ -31,5 +32,6 @@ pub mod kinematics;
 pub mod math;
 pub mod mesh;
 pub mod planning;
+pub mod project;
 pub mod script;
 pub mod watch;

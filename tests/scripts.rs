@@ -1,11 +1,12 @@
-//! Every example script in `scripts/` runs to completion (each asserts its own results).
+//! Every example script in `scripts/` runs to completion (each asserts its own results),
+//! run exactly as the README shows: `fitup run scripts/NAME.rhai` from the repository
+//! root, with no set-up (scripts create the output folder `out/` they write to).
 
 mod common;
 
 #[test]
 fn every_example_script_runs() {
     let root = common::repo();
-    std::fs::create_dir_all(root.join("target/fitup-examples")).unwrap();
     let mut scripts: Vec<_> = std::fs::read_dir(root.join("scripts"))
         .unwrap()
         .map(|e| e.unwrap().path())

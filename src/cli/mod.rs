@@ -58,7 +58,8 @@ pub enum Command {
         #[arg(long, default_value = "docs/api.md")]
         out: PathBuf,
     },
-    /// Write the demo cell (seed 000 fig. 11) into a folder: `cell.yaml` and `meshes/`.
+    /// Write the demo project (seed 000 fig. 11) into a folder: `fitup.toml`,
+    /// `models/cell.yaml` and `models/meshes/`.
     Demo {
         /// Target folder.
         dir: PathBuf,
@@ -105,9 +106,12 @@ pub fn main() -> i32 {
                 }
             }
         }
-        Command::Demo { dir } => match crate::demo::write_cell(&dir) {
+        Command::Demo { dir } => match crate::demo::write_project(&dir) {
             Ok(()) => {
-                println!("wrote {}/cell.yaml and its meshes", dir.display());
+                println!(
+                    "wrote {0}/fitup.toml, {0}/models/cell.yaml and its meshes",
+                    dir.display()
+                );
                 Exit::Ok
             }
             Err(e) => {

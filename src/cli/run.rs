@@ -8,26 +8,9 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
-    let root = match &a.root {
-        Some(r) => r.clone(),
-        None => {
-            std::env::current_dir().map_err(|e| format!("cannot read the current folder: {e}"))?
-        }
-    };
-    let project =
-        Project::new(&root).map_err(|e| format!("project folder {}: {e}", root.display()))?;
-    let script = project
-        .resolve(&a.script.to_string_lossy())
-        .map_err(|e| format!("script: {e} (pass --root)"))?;
-    if !script.is_file() {
-        return Err(format!("script {} does not exist", a.script.display()));
-    }
+    let (project, script) = project_of(a, "script")?;
     let doc = match &a.doc {
-        Some(d) => Some(
-            project
-                .resolve(&d.to_string_lossy())
-                .map_err(|e| format!("document: {e}"))?,
-        ),
+        Some(d) => Some(inside(&project, d).map_err(|e| format!("document: {e}"))?),
         None => None,
     };
     Ok(RunOptions {
@@ -45,6 +28,35 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
             let _ = out.flush();
         }),
     })
+}
+
+/// The project of a run (the path rule of [`Project`]: `--root`, else the nearest
+/// folder of the script holding `fitup.toml`, else the script's folder) and the
+/// script's absolute path. Command-line paths are relative to the current folder.
+fn project_of(a: &ScriptArgs, what: &str) -> Result<(Project, std::path::PathBuf), String> {
+    let script = std::path::absolute(&a.script)
+        .map_err(|e| format!("{what} {}: {e}", a.script.display()))?;
+    if !script.is_file() {
+        return Err(format!("{what} {} does not exist", a.script.display()));
+    }
+    let project = match &a.root {
+        Some(r) => Project::new(r).map_err(|e| format!("project folder {}: {e}", r.display()))?,
+        None => Project::for_file(&script)
+            .map_err(|e| format!("{what} {}: {e}", a.script.display()))?,
+    };
+    let script = project
+        .resolve(&script.to_string_lossy())
+        .map_err(|e| format!("{what}: {e} (pass --root)"))?;
+    Ok((project, script))
+}
+
+/// A command-line path (relative to the current folder), checked to lie inside the
+/// project.
+fn inside(project: &Project, path: &std::path::Path) -> Result<std::path::PathBuf, String> {
+    let abs = std::path::absolute(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    project
+        .resolve(&abs.to_string_lossy())
+        .map_err(|e| e.to_string())
 }
 
 /// Whether the file is a robot motion program rather than a Rhai script.
@@ -160,27 +172,21 @@ fn clock() -> String {
 /// robot of the document from its saved joints and prints (or writes) the joint/TCP log.
 fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     let usage = |m: String| (Exit::Usage, m);
-    let root = match &a.root {
-        Some(r) => r.clone(),
-        None => std::env::current_dir()
-            .map_err(|e| usage(format!("cannot read the current folder: {e}")))?,
-    };
-    let project = Project::new(&root)
-        .map_err(|e| usage(format!("project folder {}: {e}", root.display())))?;
-    let program_path = project
-        .resolve(&a.script.to_string_lossy())
-        .map_err(|e| usage(format!("program: {e} (pass --root)")))?;
+    let (project, program_path) = project_of(a, "program").map_err(usage)?;
     let doc_arg = a.doc.as_ref().ok_or_else(|| {
         usage(format!(
             "{} is a robot program (not .rhai): pass --doc with the document holding the robot",
             a.script.display()
         ))
     })?;
-    let doc_path = project
-        .resolve(&doc_arg.to_string_lossy())
-        .map_err(|e| usage(format!("document: {e}")))?;
+    let doc_path = inside(&project, doc_arg).map_err(|e| usage(format!("document: {e}")))?;
     let fail = |m: String| (Exit::Failure, m);
-    let mut doc = crate::document::Document::open(&doc_path).map_err(|e| fail(e.render()))?;
+    let mut doc = crate::document::Document::load_in(
+        &doc_path,
+        &project,
+        &mut crate::mesh::MeshCache::new(),
+    )
+    .map_err(|e| fail(e.render()))?;
     let index = match &a.robot {
         Some(name) => doc.robot_index(name).map_err(|e| usage(e.to_string()))?,
         None => match doc.robots().len() {
@@ -196,8 +202,8 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
             }
         },
     };
-    let text = std::fs::read_to_string(&program_path)
-        .map_err(|e| fail(format!("cannot read {}: {e}", a.script.display())))?;
+    let text = crate::fsutil::read_text(&program_path, crate::fsutil::FileKind::Program)
+        .map_err(|e| fail(format!("{}: {e}", a.script.display())))?;
     let program = crate::kinematics::parse_program(&project.display(&program_path), &text)
         .map_err(|e| fail(e.to_string()))?;
     let trajectory = doc
@@ -210,8 +216,9 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     let csv = trajectory.to_csv(crate::math::AngleConvention::default());
     match &a.log {
         Some(log) => {
+            let abs = std::path::absolute(log).map_err(|e| usage(format!("log: {e}")))?;
             let path = project
-                .resolve(&log.to_string_lossy())
+                .resolve_for_write(&abs.to_string_lossy())
                 .map_err(|e| usage(format!("log: {e}")))?;
             crate::fsutil::write_atomic(&path, csv.as_bytes())
                 .map_err(|e| fail(format!("cannot write {}: {e}", log.display())))?;

@@ -10,16 +10,20 @@ pub mod file;
 pub mod mates;
 pub mod reference;
 pub mod robot;
+pub mod scan;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
 pub use robot::{LinkDisplay, RobotInstance};
+pub use scan::MAX_ABS_VALUE;
 
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::math::{Point3, Transform, Vec3};
+use crate::fsutil::{content_hash, FileKind};
 use crate::mesh::{Mesh, MeshCache};
+use crate::project::Project;
 use file::{
     AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile, PlaneFile, PlanesFile,
 };
@@ -203,6 +207,9 @@ pub struct Document {
     robots: Vec<RobotInstance>,
     revision: u64,
     aabb_cache: AabbCache,
+    /// Hash of the file's bytes when it was loaded or last saved: a save refuses to
+    /// overwrite a file that changed on disk since (another writer's edits).
+    disk_hash: Option<u64>,
 }
 
 /// A rotation and the box `(min, max)` of a mesh rotated by it.
@@ -267,10 +274,28 @@ fn tidy(x: f64) -> f64 {
 impl Document {
     /// Loads a document and its meshes (through `cache`, so unchanged meshes are not
     /// re-read), validates it and solves its mates.
+    ///
+    /// The project (which bounds its mesh paths) is found by the path rule of
+    /// [`Project::for_file`]: the nearest folder holding `fitup.toml`, else the
+    /// document's folder.
     pub fn load(path: &Path, cache: &mut MeshCache) -> Result<Self, DocumentError> {
-        let text = std::fs::read_to_string(path)
+        let project = Project::for_file(path)
             .map_err(|e| SourceError::new(path, 0, 0, format!("cannot read the document: {e}")))?;
-        Self::from_yaml(&text, path, cache)
+        Self::load_in(path, &project, cache)
+    }
+
+    /// Loads a document whose meshes must lie inside `project` (a mesh path leading
+    /// outside it is refused at its `stl:` line, and the outside file is never opened).
+    pub fn load_in(
+        path: &Path,
+        project: &Project,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
+        let text = crate::fsutil::read_text(path, FileKind::Document)
+            .map_err(|e| SourceError::new(path, 0, 0, format!("cannot read the document: {e}")))?;
+        let mut doc = Self::from_yaml_in(&text, path, project, cache)?;
+        doc.disk_hash = Some(content_hash(text.as_bytes()));
+        Ok(doc)
     }
 
     /// Loads a document with a private mesh cache.
@@ -279,12 +304,28 @@ impl Document {
     }
 
     /// Builds a document from YAML text; `path` names the file in messages and anchors
-    /// relative mesh paths.
+    /// relative mesh paths (which must stay inside the folder [`Project::for_file`]
+    /// finds for `path`, or `path`'s folder when `path` does not exist).
     pub fn from_yaml(
         text: &str,
         path: &Path,
         cache: &mut MeshCache,
     ) -> Result<Self, DocumentError> {
+        let project = Project::for_file(path)
+            .or_else(|_| Project::new(path.parent().unwrap_or(Path::new("."))))
+            .map_err(|e| SourceError::new(path, 0, 0, format!("cannot resolve its folder: {e}")))?;
+        Self::from_yaml_in(text, path, &project, cache)
+    }
+
+    /// Parses and checks document text without loading meshes: the checks of
+    /// [`scan`] (aliases, duplicate keys, number ranges, empty files), then the schema.
+    /// Errors are located in `path`.
+    pub fn parse_text(
+        text: &str,
+        path: &Path,
+    ) -> Result<(DocumentFile, scan::Positions), DocumentError> {
+        let positions = scan::scan(text)
+            .map_err(|i| SourceError::new(path, i.line, i.column, i.message))?;
         let file: DocumentFile = serde_yaml::from_str(text).map_err(|e| {
             let (line, col) = e
                 .location()
@@ -292,13 +333,26 @@ impl Document {
                 .unwrap_or((0, 0));
             SourceError::new(path, line, col, format!("invalid document: {e}"))
         })?;
-        Self::from_file(file, text, path, cache)
+        Ok((file, positions))
+    }
+
+    /// [`from_yaml`](Self::from_yaml) with meshes bounded by `project`.
+    pub fn from_yaml_in(
+        text: &str,
+        path: &Path,
+        project: &Project,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
+        let (file, positions) = Self::parse_text(text, path)?;
+        Self::from_file(file, text, path, project, &positions, cache)
     }
 
     fn from_file(
         file: DocumentFile,
         text: &str,
         path: &Path,
+        project: &Project,
+        positions: &scan::Positions,
         cache: &mut MeshCache,
     ) -> Result<Self, DocumentError> {
         let at = |needle: &str, section: &str, message: String| -> DocumentError {
@@ -318,13 +372,30 @@ impl Document {
                 ),
             ));
         }
-        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let dir = std::path::absolute(path)
+            .ok()
+            .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
+            .unwrap_or_else(|| project.root().to_path_buf());
         let mut parts = IndexMap::new();
         for (name, pf) in &file.parts {
-            let mesh_path = dir.join(&pf.stl);
-            let mesh = cache
-                .get(&mesh_path)
-                .map_err(|e| at(&pf.stl, "parts", format!("part `{name}`: {e}")))?;
+            // The `stl:` value's own line, from the scan.
+            let stl_at = |message: String| -> DocumentError {
+                let (line, col) = positions
+                    .get(&format!("parts/{name}/stl"))
+                    .unwrap_or((0, 0));
+                SourceError::new(path, line, col, message).into()
+            };
+            let mesh_path = project
+                .resolve_from(&dir, &pf.stl)
+                .map_err(|e| stl_at(format!("part `{name}`: mesh {e}")))?;
+            let mesh = cache.get(&mesh_path).map_err(|e| {
+                // Name the mesh as written; the message is about that file.
+                let within = e
+                    .line
+                    .map(|l| format!(" (line {l} of the mesh)"))
+                    .unwrap_or_default();
+                stl_at(format!("part `{name}`: mesh `{}`: {}{within}", pf.stl, e.message))
+            })?;
             let mut references = IndexMap::new();
             for (rname, p) in &pf.planes {
                 let normal = vec3(p.normal).try_normalize(1e-12).ok_or_else(|| {
@@ -437,6 +508,13 @@ impl Document {
             }
             let transform = match &c.transform {
                 None => Transform::IDENTITY,
+                Some(m) if m.iter().flatten().any(|v| !v.is_finite() || v.abs() > MAX_ABS_VALUE) => {
+                    return Err(at(
+                        "transform",
+                        &needle,
+                        format!("component `{}`: pose entries must be finite and at most {MAX_ABS_VALUE:e} in magnitude", c.name),
+                    ))
+                }
                 Some(m) => Transform::from_matrix(m).map_err(|e| {
                     let from = locate(text, &needle, 1).map(|l| l.0).unwrap_or(1);
                     let (line, col) = locate(text, "transform", from).unwrap_or((0, 0));
@@ -479,6 +557,7 @@ impl Document {
             robots: Vec::new(),
             revision: 0,
             aabb_cache: AabbCache::default(),
+            disk_hash: None,
         };
         let mut mate_names = HashMap::new();
         for m in &file.mates {
@@ -668,11 +747,7 @@ impl Document {
     /// hot path of stepwise animations).
     pub fn set_transform_at(&mut self, i: usize, t: Transform) -> Result<(), DocumentError> {
         let name = &self.components[i].name;
-        if !t.is_finite() {
-            return Err(DocumentError::Invalid(format!(
-                "the pose for `{name}` is not finite"
-            )));
-        }
+        check_pose(&t, &format!("the pose for `{name}`"))?;
         // Setting the pose a component already has is not a move (Rhai writes a property
         // back after a method call on it, as in `table.transform.apply(p)`).
         if t == self.components[i].transform {
@@ -847,6 +922,18 @@ impl Document {
                 "{full_name}: value {value} is not finite"
             )));
         }
+        // The range is checked in document units (mm, degrees), as the file holds them.
+        let doc_value = Dimension {
+            name: full_name.into(),
+            kind: self.dimension(full_name)?.kind,
+            value,
+        }
+        .document_value();
+        if !(doc_value.abs() <= MAX_ABS_VALUE) {
+            return Err(DocumentError::Invalid(format!(
+                "{full_name}: value {doc_value:e} is out of range (at most {MAX_ABS_VALUE:e} mm or degrees)"
+            )));
+        }
         let i = match self.dimension_target(full_name)? {
             DimensionTarget::Mate(i) => i,
             DimensionTarget::Joint { robot, joint } => {
@@ -973,13 +1060,38 @@ impl Document {
     }
 
     /// Writes the document back to its file atomically.
-    pub fn save(&self) -> Result<(), DocumentError> {
-        self.write_to(&self.path.clone())
+    ///
+    /// Refused, with nothing written, when the text would not load again (a value out
+    /// of range, …) or when the file changed on disk since the document was loaded or
+    /// last saved (another writer's edits are never overwritten silently: reopen the
+    /// document and apply the change again).
+    pub fn save(&mut self) -> Result<(), DocumentError> {
+        let path = self.path.clone();
+        let expected = self.disk_hash;
+        self.write_checked(&path, expected)
     }
 
     /// Writes the document to `path` atomically and makes it the document's file.
     /// Relative mesh paths are rewritten so they still point at the same meshes.
+    ///
+    /// Refuses to overwrite a mesh of this document and any existing file that is not
+    /// a fitup document; over its own file it behaves as [`save`](Self::save).
     pub fn save_as(&mut self, path: &Path) -> Result<(), DocumentError> {
+        let target = canonical_target(path);
+        if let Some(p) = self
+            .parts
+            .values()
+            .find(|p| canonical_target(&p.mesh_path) == target)
+        {
+            return Err(DocumentError::Invalid(format!(
+                "refusing to save over {}: it is the mesh of part `{}`",
+                path.display(),
+                p.name
+            )));
+        }
+        let expected = (target == canonical_target(&self.path))
+            .then_some(self.disk_hash)
+            .flatten();
         let new_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let old = self.parts.clone();
         for p in self.parts.values_mut() {
@@ -987,7 +1099,7 @@ impl Document {
                 p.stl = rel;
             }
         }
-        if let Err(e) = self.write_to(path) {
+        if let Err(e) = self.write_checked(path, expected) {
             self.parts = old;
             return Err(e);
         }
@@ -995,15 +1107,57 @@ impl Document {
         Ok(())
     }
 
-    fn write_to(&self, path: &Path) -> Result<(), DocumentError> {
-        let text = self.to_file().to_yaml().map_err(|e| DocumentError::Write {
+    /// Validates the text, then, holding a lock on the folder (so concurrent fitup
+    /// writers take turns), checks what is on disk — the bytes hashed to `expected`, or
+    /// else no file or a fitup document — and replaces it atomically.
+    fn write_checked(&mut self, path: &Path, expected: Option<u64>) -> Result<(), DocumentError> {
+        let write_err = |message: String| DocumentError::Write {
             path: path.into(),
-            message: e.to_string(),
-        })?;
-        crate::fsutil::write_atomic(path, text.as_bytes()).map_err(|e| DocumentError::Write {
-            path: path.into(),
-            message: e.to_string(),
-        })
+            message,
+        };
+        let text = self
+            .to_file()
+            .to_yaml()
+            .map_err(|e| write_err(e.to_string()))?;
+        if let Err(e) = Self::parse_text(&text, path) {
+            let why = match &e {
+                DocumentError::Source(s) => s.message.clone(),
+                other => other.to_string(),
+            };
+            return Err(write_err(format!(
+                "not saved: the document would not open again ({why})"
+            )));
+        }
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let _lock = crate::fsutil::lock_folder(dir);
+        match crate::fsutil::read_file(path, FileKind::Document) {
+            Err(crate::fsutil::ReadError::Io(_)) if !path.exists() => {}
+            Ok(bytes) => match expected {
+                Some(h) if content_hash(&bytes) != h => {
+                    return Err(write_err(
+                        "not saved: the file changed on disk since it was loaded (another program or script saved it); open it again and redo the change".into(),
+                    ))
+                }
+                Some(_) => {}
+                None => {
+                    let is_document = std::str::from_utf8(&bytes)
+                        .ok()
+                        .is_some_and(|t| Self::parse_text(t, path).is_ok());
+                    if !is_document {
+                        return Err(write_err(
+                            "refusing to overwrite a file that is not a fitup document".into(),
+                        ));
+                    }
+                }
+            },
+            Err(e) => return Err(write_err(format!("refusing to overwrite it: {e}"))),
+        }
+        crate::fsutil::write_atomic(path, text.as_bytes()).map_err(|e| write_err(e.to_string()))?;
+        self.disk_hash = Some(content_hash(text.as_bytes()));
+        Ok(())
     }
 
     /// Every file this document was built from (the document and its meshes), for
@@ -1037,6 +1191,32 @@ impl DocumentError {
             other => other.to_string(),
         }
     }
+}
+
+/// The canonical form of a path that may not exist yet (its folder canonicalized), to
+/// tell whether two paths name the same file.
+fn canonical_target(p: &Path) -> PathBuf {
+    if let Ok(c) = p.canonicalize() {
+        return c;
+    }
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    match (abs.parent().and_then(|d| d.canonicalize().ok()), abs.file_name()) {
+        (Some(d), Some(n)) => d.join(n),
+        _ => abs,
+    }
+}
+
+/// Checks a pose set through the API: finite, translation within [`MAX_ABS_VALUE`] mm.
+pub(crate) fn check_pose(t: &Transform, what: &str) -> Result<(), DocumentError> {
+    if !t.is_finite() {
+        return Err(DocumentError::Invalid(format!("{what} is not finite")));
+    }
+    if t.translation().iter().any(|v| v.abs() > MAX_ABS_VALUE) {
+        return Err(DocumentError::Invalid(format!(
+            "{what} is out of range: translations are at most {MAX_ABS_VALUE:e} mm"
+        )));
+    }
+    Ok(())
 }
 
 /// `target` written relative to `base` when possible (both made absolute first).

@@ -575,9 +575,7 @@ impl Document {
 
     /// Moves a robot's base (world pose of its root, mm) and its link components.
     pub fn set_robot_base(&mut self, robot: usize, base: Transform) -> Result<(), DocumentError> {
-        if !base.is_finite() {
-            return Err(DocumentError::Invalid("the base pose is not finite".into()));
-        }
+        super::check_pose(&base, "the base pose")?;
         let r = self
             .robots
             .get_mut(robot)
@@ -589,11 +587,7 @@ impl Document {
 
     /// Sets a robot's tool frame (TCP in the flange frame, mm).
     pub fn set_robot_tool(&mut self, robot: usize, tool: Transform) -> Result<(), DocumentError> {
-        if !tool.is_finite() {
-            return Err(DocumentError::Invalid(
-                "the tool frame is not finite".into(),
-            ));
-        }
+        super::check_pose(&tool, "the tool frame")?;
         let r = self
             .robots
             .get_mut(robot)

@@ -184,7 +184,7 @@ pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
 /// Reads and parses a hole table file.
 pub fn read_holes(path: &Path) -> Result<Vec<Hole>, DrillError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| DrillError {
+    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Table).map_err(|e| DrillError {
         file: name.clone(),
         line: 0,
         cause: format!("cannot read the file: {e}"),

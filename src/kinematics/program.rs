@@ -200,7 +200,7 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
 /// Reads and parses a program file.
 pub fn read_program(path: &Path) -> Result<Program, ProgramError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| ProgramError {
+    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Program).map_err(|e| ProgramError {
         file: name.clone(),
         line: 0,
         column: 0,

@@ -38,8 +38,8 @@ impl MeshCache {
                 return Ok(e.mesh.clone());
             }
         }
-        let bytes = std::fs::read(&key)
-            .map_err(|e| MeshError::invalid(format!("cannot read: {e}")).in_file(path))?;
+        let bytes = crate::fsutil::read_file(&key, crate::fsutil::FileKind::Mesh)
+            .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
         let hash = content_hash(&bytes);
         if let Some(e) = self.entries.get_mut(&key) {
             if e.hash == hash {

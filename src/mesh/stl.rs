@@ -57,13 +57,37 @@ impl fmt::Display for MeshError {
 
 /// Reads an STL file (ASCII or binary) into an indexed mesh (mm).
 pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| MeshError::invalid(format!("cannot read: {e}")).in_file(path))?;
+    let bytes = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh)
+        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
     parse_stl(&bytes).map_err(|e| e.in_file(path))
 }
 
-/// Parses STL bytes (ASCII or binary).
+/// Parses STL bytes (ASCII or binary). A mesh without facets, or with a coordinate
+/// beyond [`MAX_ABS_VALUE`](crate::document::MAX_ABS_VALUE) mm, is refused (ASCII
+/// errors name the line).
 pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
+    let mesh = parse_any(bytes)?;
+    if mesh.triangles.is_empty() {
+        return Err(MeshError::invalid("the STL has no facets"));
+    }
+    Ok(mesh)
+}
+
+/// A coordinate that is not finite or beyond the accepted range.
+fn check_coordinate(v: f64) -> Result<(), String> {
+    let max = crate::document::MAX_ABS_VALUE;
+    if !v.is_finite() {
+        Err(format!("coordinate {v} is not finite"))
+    } else if v.abs() > max {
+        Err(format!(
+            "coordinate {v:e} is out of range (at most {max:e} mm)"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+fn parse_any(bytes: &[u8]) -> Result<Mesh, MeshError> {
     if bytes.len() >= 84 {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
         if 84 + 50 * n == bytes.len() as u64 {
@@ -107,13 +131,9 @@ fn parse_binary(bytes: &[u8]) -> Result<Mesh, MeshError> {
             Point3::new(f(3), f(4), f(5)),
             Point3::new(f(6), f(7), f(8)),
         ];
-        if corners
-            .iter()
-            .any(|c| !c.coords.iter().all(|v| v.is_finite()))
-        {
-            return Err(MeshError::invalid(format!(
-                "binary STL facet {i} has a non-finite coordinate"
-            )));
+        for v in corners.iter().flat_map(|c| c.coords.iter()) {
+            check_coordinate(*v)
+                .map_err(|m| MeshError::invalid(format!("binary STL facet {i}: {m}")))?;
         }
         soup.push(corners);
     }
@@ -167,12 +187,7 @@ fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
                     *c = w
                         .parse::<f64>()
                         .map_err(|_| MeshError::at(line, format!("`{w}` is not a number")))?;
-                    if !c.is_finite() {
-                        return Err(MeshError::at(
-                            line,
-                            format!("`{w}` is not a finite coordinate"),
-                        ));
-                    }
+                    check_coordinate(*c).map_err(|m| MeshError::at(line, m))?;
                 }
                 if corners.len() == 3 {
                     return Err(MeshError::at(line, "a facet has more than 3 vertices"));

@@ -34,7 +34,7 @@ impl DocHandle {
     /// Opens a document (path relative to the project root) through the shared mesh
     /// cache and records its files as dependencies of the run.
     pub fn open(ctx: &Arc<Context>, path: &str) -> Result<Self, String> {
-        let full = ctx.project.resolve(path)?;
+        let full = ctx.project.resolve(path).map_err(|e| e.to_string())?;
         ctx.record_read(&full);
         let doc = {
             let mut cache = ctx
@@ -42,7 +42,7 @@ impl DocHandle {
                 .meshes
                 .lock()
                 .map_err(|_| "mesh cache poisoned".to_string())?;
-            Document::load(&full, &mut cache).map_err(|e| e.render())?
+            Document::load_in(&full, &ctx.project, &mut cache).map_err(|e| e.render())?
         };
         for f in doc.source_files() {
             ctx.record_read(&f);
@@ -206,7 +206,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Document.save()",
         "Writes the document back to its file atomically (temporary file, then rename).",
         |d: &mut DocHandle| -> ScriptResult<()> {
-            let doc = d.lock()?;
+            let mut doc = d.lock()?;
             doc.save().map_err(fail)?;
             d.ctx.record_write(doc.path());
             Ok(())
@@ -214,7 +214,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     let c = ctx.clone();
     api.f("Document.save_as(path: string)", "Writes the document to a new file (inside the project) atomically and makes it the document's file; mesh paths are rewritten relative to it.", move |d: &mut DocHandle, path: &str| -> ScriptResult<()> {
-        let full = c.project.resolve(path).map_err(fail)?;
+        let full = c.project.resolve_for_write(path).map_err(fail)?;
         d.lock()?.save_as(&full).map_err(fail)?;
         c.record_write(&full);
         Ok(())

@@ -503,8 +503,8 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
           -> ScriptResult<TrajectoryHandle> {
         let full = c.project.resolve(path).map_err(fail)?;
         c.record_read(&full);
-        let text =
-            std::fs::read_to_string(&full).map_err(|e| fail(format!("cannot read {path}: {e}")))?;
+        let text = crate::fsutil::read_text(&full, crate::fsutil::FileKind::Program)
+            .map_err(|e| fail(format!("{path}: {e}")))?;
         let program = parse_program(&c.project.display(&full), &text).map_err(fail)?;
         motion(r, o, "run_program", |robot, q, o| {
             run_program(&program, robot, q, o).map_err(|e| e.to_string())
@@ -577,7 +577,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.f("load_holes(path: string) -> array", "Reads a hole table (CSV `id,x,y,z,nx,ny,nz` or `x y z nx ny nz`, mm, `#` comments) inside the project: an array of `#{id, position, normal, line}` (normals unit). The file is a dependency of the run; a bad line is an error naming it.", move |path: &str| -> ScriptResult<Array> {
         let full = c.project.resolve(path).map_err(fail)?;
         c.record_read(&full);
-        let text = std::fs::read_to_string(&full).map_err(|e| fail(format!("cannot read {path}: {e}")))?;
+        let text = crate::fsutil::read_text(&full, crate::fsutil::FileKind::Table).map_err(|e| fail(format!("{path}: {e}")))?;
         let holes = parse_holes(&c.project.display(&full), &text).map_err(fail)?;
         Ok(holes.iter().map(|h| Dynamic::from_map(hole_map(h))).collect())
     });
@@ -647,7 +647,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         },
     );
     api.f("Trajectory.save_csv(path: string)", "Writes the joint/TCP log as CSV inside the project, atomically: `t_s,j1_deg,…,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`.", |t: &mut TrajectoryHandle, path: &str| -> ScriptResult<()> {
-        let full = t.ctx.project.resolve(path).map_err(fail)?;
+        let full = t.ctx.project.resolve_for_write(path).map_err(fail)?;
         let csv = t.trajectory.to_csv(AngleConvention::default());
         crate::fsutil::write_atomic(&full, csv.as_bytes()).map_err(|e| fail(format!("cannot write {path}: {e}")))?;
         t.ctx.record_write(&full);

@@ -210,7 +210,7 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
         ))
     })?;
     ctx.record_read(&script);
-    let text = std::fs::read_to_string(&script).map_err(|e| {
+    let text = crate::fsutil::read_text(&script, crate::fsutil::FileKind::Script).map_err(|e| {
         ScriptError::Located(SourceError::new(
             &script,
             0,

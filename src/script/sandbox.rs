@@ -3,83 +3,10 @@
 
 use super::{Context, ScriptResult};
 use rhai::{Engine, EvalAltResult, Module, Position, Scope, Shared};
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// The folder a script may read and write in. Relative paths in scripts are
-/// resolved against it; anything that resolves outside it is refused.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Project {
-    root: PathBuf,
-}
-
-impl Project {
-    /// A project rooted at `root` (made absolute and canonical).
-    pub fn new(root: &Path) -> std::io::Result<Self> {
-        Ok(Self {
-            root: root.canonicalize()?,
-        })
-    }
-
-    /// The canonical root folder.
-    pub fn root(&self) -> &Path {
-        &self.root
-    }
-
-    /// The absolute path of `path` (relative to the root), checked to lie inside the
-    /// project. `..` components and symbolic links are resolved before the check, so
-    /// neither can escape. The file need not exist (for writes); its folder must.
-    pub fn resolve(&self, path: &str) -> Result<PathBuf, String> {
-        if path.is_empty() {
-            return Err("empty path".into());
-        }
-        let p = Path::new(path);
-        let joined = if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            self.root.join(p)
-        };
-        // Canonicalize the deepest existing ancestor, then append the rest lexically.
-        let mut existing = joined.clone();
-        let mut rest = Vec::new();
-        while !existing.exists() {
-            match (existing.file_name(), existing.parent()) {
-                (Some(name), Some(parent)) => {
-                    rest.push(name.to_os_string());
-                    existing = parent.to_path_buf();
-                }
-                _ => return Err(format!("`{path}` cannot be resolved")),
-            }
-        }
-        let mut full = existing
-            .canonicalize()
-            .map_err(|e| format!("`{path}`: {e}"))?;
-        for name in rest.iter().rev() {
-            if Path::new(name)
-                .components()
-                .any(|c| matches!(c, Component::ParentDir))
-            {
-                return Err(format!("`{path}` leaves the project folder"));
-            }
-            full.push(name);
-        }
-        if !full.starts_with(&self.root) {
-            return Err(format!(
-                "`{path}` is outside the project folder {}: scripts may only use files inside it",
-                self.root.display()
-            ));
-        }
-        Ok(full)
-    }
-
-    /// `path` shown relative to the root when inside it.
-    pub fn display(&self, path: &Path) -> String {
-        path.strip_prefix(&self.root)
-            .unwrap_or(path)
-            .display()
-            .to_string()
-    }
-}
+pub use crate::project::Project;
 
 /// Resource limits of a script run. Every limit is set explicitly on the engine (debug
 /// builds of Rhai otherwise default to a call depth of 8).
@@ -168,11 +95,12 @@ impl rhai::ModuleResolver for ProjectResolver {
             .ctx
             .project
             .resolve(&candidate.to_string_lossy())
-            .map_err(refuse)?;
-        if !full.is_file() {
+            .map_err(|e| refuse(e.to_string()))?;
+        if !full.exists() {
             return Err(err(path.to_string()));
         }
-        let text = std::fs::read_to_string(&full).map_err(|e| refuse(e.to_string()))?;
+        let text = crate::fsutil::read_text(&full, crate::fsutil::FileKind::Script)
+            .map_err(|e| refuse(e.to_string()))?;
         self.ctx.record_read(&full);
         let mut ast = engine.compile(&text).map_err(|e| {
             Box::new(EvalAltResult::ErrorInModule(
@@ -184,28 +112,5 @@ impl rhai::ModuleResolver for ProjectResolver {
         ast.set_source(full.to_string_lossy().as_ref());
         let module = Module::eval_ast_as_new(Scope::new(), &ast, engine)?;
         Ok(module.into())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn paths_outside_the_project_are_refused() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::create_dir(dir.path().join("models")).unwrap();
-        let p = Project::new(dir.path()).unwrap();
-        assert!(p.resolve("models/x.yaml").is_ok());
-        assert!(p.resolve("new/deeper/file.csv").is_ok());
-        assert!(p.resolve("../x").is_err());
-        assert!(p.resolve("models/../../x").is_err());
-        assert!(p.resolve("/etc/passwd").is_err());
-        assert!(p.resolve("").is_err());
-        #[cfg(unix)]
-        {
-            std::os::unix::fs::symlink("/tmp", dir.path().join("escape")).unwrap();
-            assert!(p.resolve("escape/x").is_err());
-        }
     }
 }

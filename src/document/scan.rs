@@ -1,0 +1,286 @@
+//! The pre-flight check of a document's YAML text, before it is deserialized: one
+//! pass over the parser's events, in time and memory linear in the text.
+//!
+//! It refuses what the deserializer would accept silently or expand without bound —
+//! anchors and aliases (an "alias bomb" of a few hundred KB expands to gigabytes),
+//! duplicate keys anywhere (the last one would win), numbers that are not finite or
+//! beyond [`MAX_ABS_VALUE`], nesting deeper than [`MAX_DEPTH`], an empty file — each
+//! with its line and column. It also records where every key's value starts, so later
+//! errors (a bad mesh path, a bad pose) can point at their own line.
+
+use std::collections::HashMap;
+use yaml_rust2::parser::{Event, Parser};
+use yaml_rust2::scanner::TScalarStyle;
+
+/// The largest magnitude of any number in a document (mm, degrees, …): far beyond any
+/// real cell (1000 km), small enough that products and squares stay finite.
+pub const MAX_ABS_VALUE: f64 = 1e9;
+
+/// The deepest nesting of mappings and sequences a document may have.
+pub const MAX_DEPTH: usize = 64;
+
+/// A problem found by [`scan`], at a 1-based line and column.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScanIssue {
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Where each value of the document starts: by key path such as `parts/screw/stl` or
+/// `components/2/transform` (sequence items by 0-based index).
+#[derive(Debug, Clone, Default)]
+pub struct Positions(HashMap<String, (usize, usize)>);
+
+impl Positions {
+    /// The 1-based line and column of the value at `path`.
+    pub fn get(&self, path: &str) -> Option<(usize, usize)> {
+        self.0.get(path).copied()
+    }
+}
+
+/// Keys whose values are text even when they look like numbers.
+const TEXT_KEYS: &[&str] = &[
+    "name",
+    "part",
+    "stl",
+    "description",
+    "units",
+    "type",
+    "about",
+    "flange",
+    "parent",
+    "joint",
+    "dimension",
+    "catalog",
+    "convention",
+    "component",
+    "entities",
+    "color",
+];
+
+enum Frame {
+    Map {
+        path: String,
+        keys: HashMap<String, usize>,
+        key: Option<String>,
+    },
+    Seq {
+        path: String,
+        next: usize,
+    },
+}
+
+/// A plain scalar that YAML reads as a number: its value, or why it is refused.
+fn plain_number(s: &str) -> Option<Result<f64, String>> {
+    let lower = s.to_ascii_lowercase();
+    if matches!(
+        lower.as_str(),
+        ".inf" | "+.inf" | "-.inf" | ".nan"
+    ) {
+        return Some(Err(format!("`{s}` is not a finite number")));
+    }
+    let numeric = !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_digit() || matches!(c, '+' | '-' | '.' | 'e' | 'E' | '_'))
+        && s.chars().any(|c| c.is_ascii_digit());
+    if !numeric {
+        return None;
+    }
+    let v: f64 = s.replace('_', "").parse().ok()?;
+    if !v.is_finite() || v.abs() > MAX_ABS_VALUE {
+        return Some(Err(format!(
+            "number out of range: `{s}` (fitup accepts magnitudes up to {MAX_ABS_VALUE:e}: mm, degrees)"
+        )));
+    }
+    Some(Ok(v))
+}
+
+/// Checks the YAML text of a document; see the module documentation.
+pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
+    let mut parser = Parser::new_from_str(text);
+    let mut stack: Vec<Frame> = Vec::new();
+    let mut positions = Positions::default();
+    let mut content = false;
+    let mut documents = 0;
+    loop {
+        let (event, mark) = parser.next_token().map_err(|e| ScanIssue {
+            line: e.marker().line(),
+            column: e.marker().col() + 1,
+            message: format!("invalid document: YAML syntax: {}", e.info()),
+        })?;
+        let (line, column) = (mark.line(), mark.col() + 1);
+        let issue = |message: String| ScanIssue {
+            line,
+            column,
+            message,
+        };
+        let anchor = match &event {
+            Event::Alias(_) => {
+                return Err(issue(
+                    "YAML aliases (`*name`) are not allowed in fitup documents: write the value out".into(),
+                ))
+            }
+            Event::Scalar(_, _, a, _) | Event::MappingStart(a, _) | Event::SequenceStart(a, _) => *a,
+            _ => 0,
+        };
+        if anchor > 0 {
+            return Err(issue(
+                "YAML anchors (`&name`) are not allowed in fitup documents: write the value out".into(),
+            ));
+        }
+        match event {
+            Event::StreamEnd => break,
+            Event::DocumentStart => {
+                documents += 1;
+                if documents > 1 {
+                    return Err(issue(
+                        "a second YAML document (`---`): a fitup document file holds one".into(),
+                    ));
+                }
+            }
+            Event::Scalar(value, style, _, _) => {
+                if stack.is_empty() {
+                    // A bare scalar at the top: empty (`~`, nothing) or not a mapping.
+                    if !(value.is_empty() || value == "~" || value == "null") {
+                        content = true;
+                    }
+                    continue;
+                }
+                let top = stack.len() - 1;
+                match &mut stack[top] {
+                    Frame::Map { path, keys, key } if key.is_none() => {
+                        if let Some(first) = keys.insert(value.clone(), line) {
+                            return Err(issue(format!(
+                                "duplicate key `{value}` (first at line {first}): each key may appear once"
+                            )));
+                        }
+                        let full = format!("{path}/{value}");
+                        positions.0.insert(full, (line, column));
+                        *key = Some(value);
+                    }
+                    Frame::Map { path, key, .. } => {
+                        let k = key.take().unwrap_or_default();
+                        if style == TScalarStyle::Plain && !TEXT_KEYS.contains(&k.as_str()) {
+                            if let Some(Err(m)) = plain_number(&value) {
+                                return Err(issue(format!("`{}`: {m}", &path_key(path, &k))));
+                            }
+                        }
+                        positions
+                            .0
+                            .insert(format!("{path}/{k}"), (line, column));
+                    }
+                    Frame::Seq { path, next } => {
+                        let p = format!("{path}/{next}");
+                        *next += 1;
+                        let text_list = path.rsplit('/').next().is_some_and(|k| TEXT_KEYS.contains(&k));
+                        if style == TScalarStyle::Plain && !text_list {
+                            if let Some(Err(m)) = plain_number(&value) {
+                                return Err(issue(format!("`{}`: {m}", p.trim_start_matches('/'))));
+                            }
+                        }
+                        positions.0.insert(p, (line, column));
+                    }
+                }
+            }
+            Event::MappingStart(..) | Event::SequenceStart(..) => {
+                content = true;
+                if stack.len() >= MAX_DEPTH {
+                    return Err(issue(format!(
+                        "nesting deeper than {MAX_DEPTH} levels"
+                    )));
+                }
+                let path = match stack.last_mut() {
+                    None => String::new(),
+                    Some(Frame::Map { key: None, .. }) => {
+                        return Err(issue(
+                            "a mapping or list used as a key: keys must be plain text".into(),
+                        ))
+                    }
+                    Some(Frame::Map { path, key, .. }) => {
+                        format!("{path}/{}", key.as_deref().unwrap_or_default())
+                    }
+                    Some(Frame::Seq { path, next }) => {
+                        *next += 1;
+                        format!("{path}/{}", *next - 1)
+                    }
+                };
+                positions.0.insert(path.trim_start_matches('/').to_string(), (line, column));
+                stack.push(if matches!(event, Event::MappingStart(..)) {
+                    Frame::Map {
+                        path,
+                        keys: HashMap::new(),
+                        key: None,
+                    }
+                } else {
+                    Frame::Seq { path, next: 0 }
+                });
+            }
+            Event::MappingEnd | Event::SequenceEnd => {
+                stack.pop();
+                if let Some(Frame::Map { key, .. }) = stack.last_mut() {
+                    *key = None;
+                }
+            }
+            _ => {}
+        }
+    }
+    if !content {
+        return Err(ScanIssue {
+            line: 1,
+            column: 1,
+            message: "the document is empty: a fitup document is a YAML mapping with `parts:` and `components:`".into(),
+        });
+    }
+    // Keys are stored without the leading `/`.
+    positions.0 = positions
+        .0
+        .into_iter()
+        .map(|(k, v)| (k.trim_start_matches('/').to_string(), v))
+        .collect();
+    Ok(positions)
+}
+
+fn path_key(path: &str, key: &str) -> String {
+    format!("{path}/{key}").trim_start_matches('/').to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn issue(text: &str) -> ScanIssue {
+        scan(text).unwrap_err()
+    }
+
+    #[test]
+    fn refuses_aliases_duplicates_and_out_of_range_numbers_with_lines() {
+        let e = issue("parts:\n  a:\n    stl: a.stl\n    points:\n      p: &p [1, 2, 3]\n      q: *p\n");
+        assert_eq!(e.line, 5, "{e:?}");
+        assert!(e.message.contains("anchors"), "{e:?}");
+        let e = issue("parts:\n  a:\n    stl: a.stl\n  a:\n    stl: b.stl\ncomponents: []\n");
+        assert_eq!(e.line, 4);
+        assert!(e.message.contains("duplicate key `a` (first at line 2)"), "{e:?}");
+        let e = issue("components:\n  - name: x\n    transform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [1e400, 0, 0, 1]]\n");
+        assert_eq!(e.line, 3);
+        assert!(e.message.contains("number out of range"), "{e:?}");
+        let e = issue("mates:\n  - name: m\n    value: .nan\n");
+        assert!(e.message.contains("not a finite number"), "{e:?}");
+        assert!(issue("").message.contains("empty"));
+        assert!(issue("# only a comment\n").message.contains("empty"));
+        assert!(issue("a: [").message.contains("YAML syntax"));
+        // Text fields may look like numbers.
+        let p = scan("parts:\n  '1':\n    stl: 1e400\ncomponents:\n  - name: 12345678901234\n").unwrap();
+        assert_eq!(p.get("parts/1/stl"), Some((3, 10)));
+        assert_eq!(p.get("components/0/name"), Some((5, 11)));
+    }
+
+    #[test]
+    fn deep_nesting_is_refused() {
+        let text = format!("{}{}", "[".repeat(200), "]".repeat(200));
+        assert!(issue(&text).message.contains("nesting"));
+    }
+}
