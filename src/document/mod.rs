@@ -388,14 +388,9 @@ impl Document {
             let mesh_path = project
                 .resolve_from(&dir, &pf.stl)
                 .map_err(|e| stl_at(format!("part `{name}`: mesh {e}")))?;
-            let mesh = cache.get(&mesh_path).map_err(|e| {
-                // Name the mesh as written; the message is about that file.
-                let within = e
-                    .line
-                    .map(|l| format!(" (line {l} of the mesh)"))
-                    .unwrap_or_default();
-                stl_at(format!("part `{name}`: mesh `{}`: {}{within}", pf.stl, e.message))
-            })?;
+            let mesh = cache
+                .get(&mesh_path)
+                .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
             let mut references = IndexMap::new();
             for (rname, p) in &pf.planes {
                 let normal = vec3(p.normal).try_normalize(1e-12).ok_or_else(|| {

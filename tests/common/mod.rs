@@ -11,10 +11,11 @@ pub fn fitup() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fitup"))
 }
 
-/// A temporary project folder holding `models/cell.yaml` and its meshes.
+/// A temporary project folder (`fitup demo`): `fitup.toml`, `models/cell.yaml` and its
+/// meshes.
 pub fn project() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    fitup::demo::write_cell(&dir.path().join("models")).unwrap();
+    fitup::demo::write_project(dir.path()).unwrap();
     std::fs::create_dir(dir.path().join("scripts")).unwrap();
     dir
 }
