@@ -41,7 +41,12 @@ impl SourceError {
     /// Reads the file again to show the line; falls back to the one-line form.
     pub fn render(&self) -> String {
         let mut out = self.to_string();
-        if let (Some(line), Ok(text)) = (self.line, std::fs::read_to_string(&self.path)) {
+        // Only a located error shows its line, and only a regular file is read again
+        // (the error may be about a device or FIFO).
+        let text = self.line.and_then(|_| {
+            crate::fsutil::read_text(&self.path, crate::fsutil::FileKind::Table).ok()
+        });
+        if let (Some(line), Some(text)) = (self.line, text) {
             if let Some(src) = text.lines().nth(line - 1) {
                 let gutter = line.to_string();
                 out += &format!("\n {} |\n {} | {}\n", " ".repeat(gutter.len()), gutter, src);

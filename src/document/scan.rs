@@ -128,9 +128,15 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
             _ => 0,
         };
         if anchor > 0 {
-            return Err(issue(
+            // The parser marks the node, which may start on a later line than its
+            // `&name`: point at the `&`.
+            let (line, column) = anchor_position(text, mark.index()).unwrap_or((line, column));
+            return Err(ScanIssue {
+                line,
+                column,
+                message:
                 "YAML anchors (`&name`) are not allowed in fitup documents: write the value out".into(),
-            ));
+            });
         }
         match event {
             Event::StreamEnd => break,
@@ -242,6 +248,15 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
         .map(|(k, v)| (k.trim_start_matches('/').to_string(), v))
         .collect();
     Ok(positions)
+}
+
+/// The line and column of the last `&` before character `index` of `text`.
+fn anchor_position(text: &str, index: usize) -> Option<(usize, usize)> {
+    let before: Vec<char> = text.chars().take(index + 1).collect();
+    let at = before.iter().rposition(|&c| c == '&')?;
+    let line = before[..at].iter().filter(|&&c| c == '\n').count() + 1;
+    let column = at - before[..at].iter().rposition(|&c| c == '\n').map_or(0, |i| i + 1) + 1;
+    Some((line, column))
 }
 
 fn path_key(path: &str, key: &str) -> String {
