@@ -266,7 +266,10 @@ pub const PROJECT_TOML: &str = "# Marks the root of a fitup project: scripts bel
 /// layout of the fitup repository, so its example scripts run there unchanged.
 pub fn write_project(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     write_cell(&dir.join("models"))?;
-    crate::fsutil::write_atomic(&dir.join(crate::project::PROJECT_FILE), PROJECT_TOML.as_bytes())?;
+    crate::fsutil::write_atomic(
+        &dir.join(crate::project::PROJECT_FILE),
+        PROJECT_TOML.as_bytes(),
+    )?;
     Ok(())
 }
 

@@ -244,6 +244,9 @@ mod tests {
         std::fs::write(&big, b"ok").unwrap();
         assert_eq!(read_text(&big, FileKind::Script).unwrap(), "ok");
         std::fs::write(&big, b"o\xffk").unwrap();
-        assert_eq!(read_text(&big, FileKind::Script), Err(ReadError::NotText(1)));
+        assert_eq!(
+            read_text(&big, FileKind::Script),
+            Err(ReadError::NotText(1))
+        );
     }
 }

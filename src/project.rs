@@ -75,10 +75,7 @@ impl Project {
     pub fn for_file(file: &Path) -> std::io::Result<Self> {
         let file = file.canonicalize()?;
         let folder = file.parent().unwrap_or(Path::new("/"));
-        if let Some(root) = folder
-            .ancestors()
-            .find(|d| d.join(PROJECT_FILE).is_file())
-        {
+        if let Some(root) = folder.ancestors().find(|d| d.join(PROJECT_FILE).is_file()) {
             return Self::new(root);
         }
         Self::new(folder)
@@ -135,15 +132,16 @@ impl Project {
             }
         }
         // A dangling symbolic link: canonicalize fails; refuse rather than guess.
-        let mut full = existing
-            .canonicalize()
-            .map_err(|e| match std::fs::read_link(&existing) {
-                Ok(_) => outside(),
-                Err(_) => PathError::Unresolvable {
-                    path: path.to_string(),
-                    message: e.to_string(),
-                },
-            })?;
+        let mut full =
+            existing
+                .canonicalize()
+                .map_err(|e| match std::fs::read_link(&existing) {
+                    Ok(_) => outside(),
+                    Err(_) => PathError::Unresolvable {
+                        path: path.to_string(),
+                        message: e.to_string(),
+                    },
+                })?;
         for name in rest.iter().rev() {
             if Path::new(name)
                 .components()

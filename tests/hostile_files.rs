@@ -66,7 +66,10 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, u64> {
             if md.is_dir() {
                 stack.push(p);
             } else if md.is_file() {
-                out.insert(p.clone(), fitup::fsutil::content_hash(&std::fs::read(&p).unwrap()));
+                out.insert(
+                    p.clone(),
+                    fitup::fsutil::content_hash(&std::fs::read(&p).unwrap()),
+                );
             }
         }
     }
@@ -78,7 +81,12 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, u64> {
 fn unchanged(before: &BTreeMap<PathBuf, u64>, dir: &Path) {
     let now = snapshot(dir);
     for (path, hash) in before {
-        assert_eq!(now.get(path), Some(hash), "{} changed or vanished", path.display());
+        assert_eq!(
+            now.get(path),
+            Some(hash),
+            "{} changed or vanished",
+            path.display()
+        );
     }
 }
 
@@ -89,9 +97,8 @@ fn line_of(text: &str, needle: &str) -> usize {
 
 /// A one-part document `models/NAME` whose mesh is `stl`; returns the text.
 fn one_part_doc(dir: &Path, name: &str, stl: &str) -> String {
-    let text = format!(
-        "parts:\n  evil:\n    stl: {stl}\ncomponents:\n  - name: e1\n    part: evil\n"
-    );
+    let text =
+        format!("parts:\n  evil:\n    stl: {stl}\ncomponents:\n  - name: e1\n    part: evil\n");
     std::fs::write(dir.join("models").join(name), &text).unwrap();
     text
 }
@@ -104,7 +111,11 @@ fn write(dir: &Path, rel: &str, text: &str) {
 fn documents_cannot_reach_outside_their_project() {
     let outside = tempfile::tempdir().unwrap();
     let secret = outside.path().join("secret.stl");
-    std::fs::write(&secret, "solid SECRET_MARKER\n  SECRET_LINE_TWO 1 2 3\nendsolid\n").unwrap();
+    std::fs::write(
+        &secret,
+        "solid SECRET_MARKER\n  SECRET_LINE_TWO 1 2 3\nendsolid\n",
+    )
+    .unwrap();
     let dir = project();
     let p = dir.path();
     #[cfg(unix)]
@@ -128,7 +139,10 @@ fn documents_cannot_reach_outside_their_project() {
         // `fitup check` and a script opening the document say the same.
         write(p, "scripts/open.rhai", &format!("open_doc(\"{doc}\");\n"));
         let before = snapshot(p);
-        for args in [vec!["check", doc.as_str()], vec!["run", "scripts/open.rhai"]] {
+        for args in [
+            vec!["check", doc.as_str()],
+            vec!["run", "scripts/open.rhai"],
+        ] {
             let (code, out) = run(p, &args);
             assert_eq!(code, 1, "{args:?}: {out}");
             assert!(
@@ -152,7 +166,11 @@ fn special_files_are_refused_without_hanging() {
         .status()
         .unwrap()
         .success());
-    std::fs::copy(p.join("models/meshes/table.stl"), p.join("models/meshes/ok.stl")).unwrap();
+    std::fs::copy(
+        p.join("models/meshes/table.stl"),
+        p.join("models/meshes/ok.stl"),
+    )
+    .unwrap();
     std::os::unix::fs::symlink("fifo.stl", p.join("models/meshes/to_fifo.stl")).unwrap();
     let before = snapshot(p);
     for (name, stl, expect) in [
@@ -172,13 +190,23 @@ fn special_files_are_refused_without_hanging() {
         std::fs::remove_file(p.join(&doc)).unwrap();
     }
     // A CSV that is a FIFO, and devices given as documents or tables.
-    write(p, "scripts/holes.rhai", "load_holes(\"models/meshes/fifo.stl\");\n");
+    write(
+        p,
+        "scripts/holes.rhai",
+        "load_holes(\"models/meshes/fifo.stl\");\n",
+    );
     let (code, out) = run(p, &["run", "scripts/holes.rhai"]);
     assert_eq!(code, 1, "{out}");
-    assert!(out.contains("holes.rhai:1") && out.contains("FIFO"), "{out}");
+    assert!(
+        out.contains("holes.rhai:1") && out.contains("FIFO"),
+        "{out}"
+    );
     let (code, out) = run(p, &["check", "/dev/zero"]);
     assert_eq!(code, 1, "{out}");
-    assert!(out.contains("/dev/zero") && out.contains("not a regular file"), "{out}");
+    assert!(
+        out.contains("/dev/zero") && out.contains("not a regular file"),
+        "{out}"
+    );
     let (code, out) = run(p, &["run", "models/mz07_demo.prg", "--doc", "/dev/urandom"]);
     assert_ne!(code, 0, "{out}");
     unchanged(&before, p);
@@ -202,7 +230,10 @@ fn alias_bombs_are_refused_at_their_line() {
     let before = snapshot(p);
     let (code, out) = run(p, &["check", "models/bomb.yaml"]);
     assert_eq!(code, 1, "{out}");
-    assert!(out.contains("bomb.yaml:4:") && out.contains("anchors"), "{out}");
+    assert!(
+        out.contains("bomb.yaml:4:") && out.contains("anchors"),
+        "{out}"
+    );
     // An alias without an anchor-bearing line before it is refused too.
     write(p, "models/alias.yaml", "parts: *nothing\ncomponents: []\n");
     let (code, out) = run(p, &["check", "models/alias.yaml"]);
@@ -237,11 +268,7 @@ fn bad_yaml_is_located_and_never_silently_accepted() {
     let cases: Vec<(&str, String, String)> = vec![
         ("empty.yaml", String::new(), "empty.yaml:1:".into()),
         ("comment.yaml", "# nothing\n".into(), "empty".into()),
-        (
-            "dup.yaml",
-            dup,
-            format!("dup.yaml:{second_table}:"),
-        ),
+        ("dup.yaml", dup, format!("dup.yaml:{second_table}:")),
         ("huge.yaml", huge, format!("huge.yaml:{matrix_line}:")),
         ("inf.yaml", inf, "number out of range".into()),
         ("nan.yaml", nan, format!("nan.yaml:{matrix_line}:")),
@@ -251,7 +278,10 @@ fn bad_yaml_is_located_and_never_silently_accepted() {
         write(p, &format!("models/{name}"), &text);
         let (code, out) = run(p, &["check", &format!("models/{name}")]);
         assert_eq!(code, 1, "{name}: {out}");
-        assert!(out.contains(&expect), "{name}: expected `{expect}` in\n{out}");
+        assert!(
+            out.contains(&expect),
+            "{name}: expected `{expect}` in\n{out}"
+        );
         if name == "dup.yaml" {
             assert!(
                 out.contains(&format!("first at line {first_table}")),
@@ -272,7 +302,11 @@ fn check_refuses_meshes_that_scripts_refuse() {
         format!("solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 {z}\nendloop\nendfacet\nendsolid s\n")
     };
     for (mesh, text, expect) in [
-        ("empty.stl", "solid s\nendsolid s\n".to_string(), "no facets".to_string()),
+        (
+            "empty.stl",
+            "solid s\nendsolid s\n".to_string(),
+            "no facets".to_string(),
+        ),
         ("far.stl", facet("1e39"), "far.stl:6".to_string()),
         ("inf.stl", facet("inf"), "inf.stl:6".to_string()),
     ] {
@@ -281,7 +315,10 @@ fn check_refuses_meshes_that_scripts_refuse() {
         let line = line_of(&doc_text, "stl:");
         write(p, "scripts/m.rhai", "open_doc(\"models/m.yaml\");\n");
         let before = snapshot(p);
-        for args in [vec!["check", "models/m.yaml"], vec!["run", "scripts/m.rhai"]] {
+        for args in [
+            vec!["check", "models/m.yaml"],
+            vec!["run", "scripts/m.rhai"],
+        ] {
             let (code, out) = run(p, &args);
             assert_eq!(code, 1, "{mesh} {args:?}: {out}");
             assert!(
@@ -306,7 +343,11 @@ fn setters_refuse_non_finite_and_huge_values_and_saves_stay_loadable() {
     let before = snapshot(p);
     for (i, line) in cases.iter().enumerate() {
         let script = format!("scripts/set{i}.rhai");
-        write(p, &script, &format!("let doc = open_doc(\"models/cell.yaml\");\n{line}\ndoc.save();\n"));
+        write(
+            p,
+            &script,
+            &format!("let doc = open_doc(\"models/cell.yaml\");\n{line}\ndoc.save();\n"),
+        );
         let (code, out) = run(p, &["run", &script]);
         assert_eq!(code, 1, "{line}: {out}");
         assert!(
@@ -326,7 +367,12 @@ fn saves_never_overwrite_meshes_or_other_files() {
     write(p, "notes.txt", "my notes, not a document\n");
     write(p, "other.yaml", "key: value\n");
     let before = snapshot(p);
-    for target in ["models/meshes/screw.stl", "notes.txt", "other.yaml", "models/meshes"] {
+    for target in [
+        "models/meshes/screw.stl",
+        "notes.txt",
+        "other.yaml",
+        "models/meshes",
+    ] {
         write(
             p,
             "scripts/save.rhai",
@@ -397,7 +443,10 @@ fn concurrent_writers_never_lose_an_edit_silently() {
         for (i, (code, msg)) in results.iter().enumerate() {
             let expected = 10.0 * (i + 1) as f64;
             if *code == 0 {
-                assert_eq!(xs[i], expected, "writer {i} succeeded but its edit vanished");
+                assert_eq!(
+                    xs[i], expected,
+                    "writer {i} succeeded but its edit vanished"
+                );
                 landed += 1;
             } else {
                 assert!(
@@ -439,7 +488,11 @@ fn cli_paths_follow_the_path_rule() {
     let p = dir.path();
     // A script below the project root finds the root by its fitup.toml, from any
     // current folder; the SCRIPT argument is relative to the current folder.
-    write(p, "scripts/n.rhai", "print(open_doc(\"models/cell.yaml\").components().len());\n");
+    write(
+        p,
+        "scripts/n.rhai",
+        "print(open_doc(\"models/cell.yaml\").components().len());\n",
+    );
     let (code, out) = run(&p.join("models"), &["run", "../scripts/n.rhai"]);
     assert_eq!((code, out.trim()), (0, "8"), "{out}");
     // --root does not change where SCRIPT is looked up.

@@ -41,8 +41,9 @@ fn project_of(a: &ScriptArgs, what: &str) -> Result<(Project, std::path::PathBuf
     }
     let project = match &a.root {
         Some(r) => Project::new(r).map_err(|e| format!("project folder {}: {e}", r.display()))?,
-        None => Project::for_file(&script)
-            .map_err(|e| format!("{what} {}: {e}", a.script.display()))?,
+        None => {
+            Project::for_file(&script).map_err(|e| format!("{what} {}: {e}", a.script.display()))?
+        }
     };
     let script = project
         .resolve(&script.to_string_lossy())
@@ -181,12 +182,9 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     })?;
     let doc_path = inside(&project, doc_arg).map_err(|e| usage(format!("document: {e}")))?;
     let fail = |m: String| (Exit::Failure, m);
-    let mut doc = crate::document::Document::load_in(
-        &doc_path,
-        &project,
-        &mut crate::mesh::MeshCache::new(),
-    )
-    .map_err(|e| fail(e.render()))?;
+    let mut doc =
+        crate::document::Document::load_in(&doc_path, &project, &mut crate::mesh::MeshCache::new())
+            .map_err(|e| fail(e.render()))?;
     let index = match &a.robot {
         Some(name) => doc.robot_index(name).map_err(|e| usage(e.to_string()))?,
         None => match doc.robots().len() {

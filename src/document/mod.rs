@@ -20,8 +20,8 @@ pub use scan::MAX_ABS_VALUE;
 
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
-use crate::math::{Point3, Transform, Vec3};
 use crate::fsutil::{content_hash, FileKind};
+use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{Mesh, MeshCache};
 use crate::project::Project;
 use file::{
@@ -324,8 +324,8 @@ impl Document {
         text: &str,
         path: &Path,
     ) -> Result<(DocumentFile, scan::Positions), DocumentError> {
-        let positions = scan::scan(text)
-            .map_err(|i| SourceError::new(path, i.line, i.column, i.message))?;
+        let positions =
+            scan::scan(text).map_err(|i| SourceError::new(path, i.line, i.column, i.message))?;
         let file: DocumentFile = serde_yaml::from_str(text).map_err(|e| {
             let (line, col) = e
                 .location()
@@ -924,7 +924,7 @@ impl Document {
             value,
         }
         .document_value();
-        if !(doc_value.abs() <= MAX_ABS_VALUE) {
+        if !doc_value.is_finite() || doc_value.abs() > MAX_ABS_VALUE {
             return Err(DocumentError::Invalid(format!(
                 "{full_name}: value {doc_value:e} is out of range (at most {MAX_ABS_VALUE:e} mm or degrees)"
             )));
@@ -1195,7 +1195,10 @@ fn canonical_target(p: &Path) -> PathBuf {
         return c;
     }
     let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    match (abs.parent().and_then(|d| d.canonicalize().ok()), abs.file_name()) {
+    match (
+        abs.parent().and_then(|d| d.canonicalize().ok()),
+        abs.file_name(),
+    ) {
         (Some(d), Some(n)) => d.join(n),
         _ => abs,
     }

@@ -77,10 +77,7 @@ enum Frame {
 /// A plain scalar that YAML reads as a number: its value, or why it is refused.
 fn plain_number(s: &str) -> Option<Result<f64, String>> {
     let lower = s.to_ascii_lowercase();
-    if matches!(
-        lower.as_str(),
-        ".inf" | "+.inf" | "-.inf" | ".nan"
-    ) {
+    if matches!(lower.as_str(), ".inf" | "+.inf" | "-.inf" | ".nan") {
         return Some(Err(format!("`{s}` is not a finite number")));
     }
     let numeric = !s.is_empty()
@@ -119,12 +116,13 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
             message,
         };
         let anchor = match &event {
-            Event::Alias(_) => {
-                return Err(issue(
-                    "YAML aliases (`*name`) are not allowed in fitup documents: write the value out".into(),
-                ))
+            Event::Alias(_) => return Err(issue(
+                "YAML aliases (`*name`) are not allowed in fitup documents: write the value out"
+                    .into(),
+            )),
+            Event::Scalar(_, _, a, _) | Event::MappingStart(a, _) | Event::SequenceStart(a, _) => {
+                *a
             }
-            Event::Scalar(_, _, a, _) | Event::MappingStart(a, _) | Event::SequenceStart(a, _) => *a,
             _ => 0,
         };
         if anchor > 0 {
@@ -135,7 +133,8 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
                 line,
                 column,
                 message:
-                "YAML anchors (`&name`) are not allowed in fitup documents: write the value out".into(),
+                    "YAML anchors (`&name`) are not allowed in fitup documents: write the value out"
+                        .into(),
             });
         }
         match event {
@@ -175,14 +174,15 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
                                 return Err(issue(format!("`{}`: {m}", &path_key(path, &k))));
                             }
                         }
-                        positions
-                            .0
-                            .insert(format!("{path}/{k}"), (line, column));
+                        positions.0.insert(format!("{path}/{k}"), (line, column));
                     }
                     Frame::Seq { path, next } => {
                         let p = format!("{path}/{next}");
                         *next += 1;
-                        let text_list = path.rsplit('/').next().is_some_and(|k| TEXT_KEYS.contains(&k));
+                        let text_list = path
+                            .rsplit('/')
+                            .next()
+                            .is_some_and(|k| TEXT_KEYS.contains(&k));
                         if style == TScalarStyle::Plain && !text_list {
                             if let Some(Err(m)) = plain_number(&value) {
                                 return Err(issue(format!("`{}`: {m}", p.trim_start_matches('/'))));
@@ -195,9 +195,7 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
             Event::MappingStart(..) | Event::SequenceStart(..) => {
                 content = true;
                 if stack.len() >= MAX_DEPTH {
-                    return Err(issue(format!(
-                        "nesting deeper than {MAX_DEPTH} levels"
-                    )));
+                    return Err(issue(format!("nesting deeper than {MAX_DEPTH} levels")));
                 }
                 let path = match stack.last_mut() {
                     None => String::new(),
@@ -214,7 +212,9 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
                         format!("{path}/{}", *next - 1)
                     }
                 };
-                positions.0.insert(path.trim_start_matches('/').to_string(), (line, column));
+                positions
+                    .0
+                    .insert(path.trim_start_matches('/').to_string(), (line, column));
                 stack.push(if matches!(event, Event::MappingStart(..)) {
                     Frame::Map {
                         path,
@@ -255,7 +255,12 @@ fn anchor_position(text: &str, index: usize) -> Option<(usize, usize)> {
     let before: Vec<char> = text.chars().take(index + 1).collect();
     let at = before.iter().rposition(|&c| c == '&')?;
     let line = before[..at].iter().filter(|&&c| c == '\n').count() + 1;
-    let column = at - before[..at].iter().rposition(|&c| c == '\n').map_or(0, |i| i + 1) + 1;
+    let column = at
+        - before[..at]
+            .iter()
+            .rposition(|&c| c == '\n')
+            .map_or(0, |i| i + 1)
+        + 1;
     Some((line, column))
 }
 
@@ -273,12 +278,17 @@ mod tests {
 
     #[test]
     fn refuses_aliases_duplicates_and_out_of_range_numbers_with_lines() {
-        let e = issue("parts:\n  a:\n    stl: a.stl\n    points:\n      p: &p [1, 2, 3]\n      q: *p\n");
+        let e = issue(
+            "parts:\n  a:\n    stl: a.stl\n    points:\n      p: &p [1, 2, 3]\n      q: *p\n",
+        );
         assert_eq!(e.line, 5, "{e:?}");
         assert!(e.message.contains("anchors"), "{e:?}");
         let e = issue("parts:\n  a:\n    stl: a.stl\n  a:\n    stl: b.stl\ncomponents: []\n");
         assert_eq!(e.line, 4);
-        assert!(e.message.contains("duplicate key `a` (first at line 2)"), "{e:?}");
+        assert!(
+            e.message.contains("duplicate key `a` (first at line 2)"),
+            "{e:?}"
+        );
         let e = issue("components:\n  - name: x\n    transform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [1e400, 0, 0, 1]]\n");
         assert_eq!(e.line, 3);
         assert!(e.message.contains("number out of range"), "{e:?}");
@@ -288,7 +298,8 @@ mod tests {
         assert!(issue("# only a comment\n").message.contains("empty"));
         assert!(issue("a: [").message.contains("YAML syntax"));
         // Text fields may look like numbers.
-        let p = scan("parts:\n  '1':\n    stl: 1e400\ncomponents:\n  - name: 12345678901234\n").unwrap();
+        let p = scan("parts:\n  '1':\n    stl: 1e400\ncomponents:\n  - name: 12345678901234\n")
+            .unwrap();
         assert_eq!(p.get("parts/1/stl"), Some((3, 10)));
         assert_eq!(p.get("components/0/name"), Some((5, 11)));
     }

@@ -184,11 +184,12 @@ pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
 /// Reads and parses a hole table file.
 pub fn read_holes(path: &Path) -> Result<Vec<Hole>, DrillError> {
     let name = path.display().to_string();
-    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Table).map_err(|e| DrillError {
-        file: name.clone(),
-        line: 0,
-        cause: format!("cannot read the file: {e}"),
-    })?;
+    let text =
+        crate::fsutil::read_text(path, crate::fsutil::FileKind::Table).map_err(|e| DrillError {
+            file: name.clone(),
+            line: 0,
+            cause: format!("cannot read the file: {e}"),
+        })?;
     parse_holes(&name, &text)
 }
 

@@ -200,11 +200,13 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
 /// Reads and parses a program file.
 pub fn read_program(path: &Path) -> Result<Program, ProgramError> {
     let name = path.display().to_string();
-    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Program).map_err(|e| ProgramError {
-        file: name.clone(),
-        line: 0,
-        column: 0,
-        cause: format!("cannot read the file: {e}"),
+    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Program).map_err(|e| {
+        ProgramError {
+            file: name.clone(),
+            line: 0,
+            column: 0,
+            cause: format!("cannot read the file: {e}"),
+        }
     })?;
     parse_program(&name, &text)
 }
