@@ -1,5 +1,6 @@
 use super::*;
 use crate::math::AngleConvention;
+use proptest::strategy::Strategy;
 
 fn write_demo() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
@@ -230,6 +231,60 @@ proptest::proptest! {
         let end = (at + drop).min(s.len());
         s.splice(at..end, junk.chars());
         let text: String = s.into_iter().collect();
-        let _ = load_text(dir.path(), &text);
+        match load_text(dir.path(), &text) {
+            Ok(doc) => {
+                // Whatever loads saves to text that loads again.
+                proptest::prop_assert!(Document::parse_text(&doc.to_yaml(), &dir.path().join("t.yaml")).is_ok());
+            }
+            Err(DocumentError::Source(e)) => {
+                proptest::prop_assert!(e.path.ends_with("t.yaml") || e.path.extension().is_some_and(|x| x == "stl"), "{e}");
+            }
+            Err(e) => proptest::prop_assert!(false, "unlocated error: {e}"),
+        }
+    }
+
+    /// Any number in a pose: accepted only when finite and in range; otherwise the
+    /// error names the line of the matrix.
+    #[test]
+    fn pose_numbers_are_range_checked_with_their_line(v in proptest::prop_oneof![
+        proptest::num::f64::ANY.prop_map(|v| format!("{v:e}")),
+        proptest::strategy::Just(".inf".to_string()),
+        proptest::strategy::Just("-.inf".to_string()),
+        proptest::strategy::Just(".nan".to_string()),
+        proptest::strategy::Just("1e400".to_string()),
+        (-1e10f64..1e10).prop_map(|v| format!("{v}")),
+    ]) {
+        let dir = write_demo();
+        let base = std::fs::read_to_string(dir.path().join("cell.yaml")).unwrap();
+        // plate_a's translation row.
+        let row = "- [100.0, 150.0, 750.0, 1.0]";
+        let line = base.lines().position(|l| l.trim() == row).map(|l| l + 1);
+        proptest::prop_assert!(line.is_some());
+        let text = base.replacen(row, &format!("- [{v}, 150.0, 750.0, 1.0]"), 1);
+        let parsed: Option<f64> = v.parse().ok().filter(|x: &f64| x.is_finite() && x.abs() <= MAX_ABS_VALUE);
+        match (load_text(dir.path(), &text), parsed) {
+            (Ok(_), p) => proptest::prop_assert!(p.is_some(), "{v} accepted"),
+            (Err(DocumentError::Source(e)), None) => {
+                proptest::prop_assert_eq!(e.line, line, "{}", e);
+            }
+            // In range, but the mates may not solve that far away: still located.
+            (Err(DocumentError::Source(e)), Some(_)) => {
+                proptest::prop_assert!(e.line.is_some(), "{}", e);
+            }
+            (Err(e), _) => proptest::prop_assert!(false, "unlocated error: {e}"),
+        }
+    }
+
+    /// Alias bombs of any shape are refused at once (aliases never expand).
+    #[test]
+    fn aliases_are_refused_whatever_their_shape(width in 1usize..200, depth in 1usize..6) {
+        let mut text = String::from("a0: &a0 [");
+        text += &vec!["1"; width].join(", ");
+        text += "]\n";
+        for d in 1..depth {
+            text += &format!("a{d}: &a{d} [{}]\n", vec![format!("*a{}", d - 1); width].join(", "));
+        }
+        let e = scan::scan(&text).unwrap_err();
+        proptest::prop_assert_eq!(e.line, 1);
     }
 }

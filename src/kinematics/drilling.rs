@@ -157,10 +157,10 @@ pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
         let mut v = [0.0; 6];
         for (k, (p, s)) in parsed.iter().zip(nums).enumerate() {
             match p {
-                Some(x) if x.is_finite() => v[k] = *x,
+                Some(x) if x.is_finite() && x.abs() <= crate::document::MAX_ABS_VALUE => v[k] = *x,
                 _ => {
                     return Err(err(format!(
-                        "column {}: '{s}' is not a finite number",
+                        "column {}: '{s}' is not a finite number of magnitude at most 1e9",
                         k + 1 + usize::from(id.is_some())
                     )))
                 }
@@ -460,5 +460,48 @@ mod tests {
         }
         assert!(drilled >= 3, "{:?}", rep.holes);
         assert!(rep.trajectory.duration() > 0.0);
+    }
+}
+
+#[cfg(test)]
+mod fuzz {
+    use super::*;
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// Arbitrary tables never panic; an error names the file and a line of it, and
+        /// every accepted hole is finite with a unit normal.
+        #[test]
+        fn hole_tables_parse_or_fail_with_a_line(
+            rows in proptest::collection::vec(
+                proptest::collection::vec(
+                    proptest::prop_oneof![
+                        "-?[0-9]{1,4}(\\.[0-9]{1,3})?",
+                        proptest::strategy::Just("1e400".to_string()),
+                        proptest::strategy::Just("nan".to_string()),
+                        proptest::strategy::Just("-1e12".to_string()),
+                        "[a-z#,]{1,5}",
+                    ],
+                    0..9,
+                ),
+                0..12,
+            ),
+            sep in proptest::prop_oneof![proptest::strategy::Just(","), proptest::strategy::Just(" ")],
+        ) {
+            let text: String = rows.iter().map(|r| r.join(sep) + "\n").collect();
+            match parse_holes("t.csv", &text) {
+                Ok(holes) => {
+                    for h in holes {
+                        proptest::prop_assert!(h.position.coords.iter().all(|v| v.is_finite()));
+                        proptest::prop_assert!((h.normal.norm() - 1.0).abs() < 1e-9);
+                        proptest::prop_assert!(h.line >= 1 && h.line <= rows.len());
+                    }
+                }
+                Err(e) => {
+                    proptest::prop_assert_eq!(e.file.as_str(), "t.csv");
+                    proptest::prop_assert!(e.line >= 1 && e.line <= rows.len().max(1), "{e}");
+                }
+            }
+        }
     }
 }

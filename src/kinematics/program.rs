@@ -135,7 +135,11 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
             }
             args.iter()
                 .map(|&(col, tok)| match tok.parse::<f64>() {
-                    Ok(v) if v.is_finite() => Ok(v),
+                    Ok(v) if v.is_finite() && v.abs() <= crate::document::MAX_ABS_VALUE => Ok(v),
+                    Ok(v) if v.is_finite() => Err(err(
+                        col,
+                        format!("'{tok}' is out of range (magnitude at most 1e9)"),
+                    )),
                     _ => Err(err(col, format!("'{tok}' is not a finite number"))),
                 })
                 .collect()
@@ -383,5 +387,66 @@ mod tests {
                 .line,
             2
         );
+    }
+}
+
+#[cfg(test)]
+mod fuzz {
+    use super::*;
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// Arbitrary programs never panic; an error names the file, a line and column
+        /// inside the text; accepted numbers are finite and in range.
+        #[test]
+        fn programs_parse_or_fail_with_a_place(
+            lines in proptest::collection::vec(
+                (
+                    proptest::prop_oneof![
+                        proptest::strategy::Just("Line"), proptest::strategy::Just("Circle"),
+                        proptest::strategy::Just("Joint"), proptest::strategy::Just("Speed"),
+                        proptest::strategy::Just("Interval"), proptest::strategy::Just("Tool"),
+                        proptest::strategy::Just("Angles"), proptest::strategy::Just("#"),
+                        proptest::strategy::Just("Bogus"), proptest::strategy::Just(""),
+                    ],
+                    proptest::collection::vec(
+                        proptest::prop_oneof![
+                            "-?[0-9]{1,4}(\\.[0-9]{1,3})?",
+                            proptest::strategy::Just("1e400".to_string()),
+                            proptest::strategy::Just("2e9".to_string()),
+                            proptest::strategy::Just("nan".to_string()),
+                            proptest::strategy::Just("zyx".to_string()),
+                            "[ -~]{0,6}",
+                        ],
+                        0..14,
+                    ),
+                ),
+                0..10,
+            ),
+        ) {
+            let text: String = lines
+                .iter()
+                .map(|(k, args)| format!("{k} {}\n", args.join(" ")))
+                .collect();
+            match parse_program("p.prg", &text) {
+                Ok(p) => {
+                    for l in &p.lines {
+                        let nums: Vec<f64> = match &l.command {
+                            Command::Line(v) | Command::Tool(v) => v.to_vec(),
+                            Command::Circle { via, end } => via.iter().chain(end).copied().collect(),
+                            Command::Joint(v) => v.clone(),
+                            Command::Speed(v) | Command::JointSpeed(v) | Command::Interval(v) => vec![*v],
+                            Command::Angles(_) => vec![],
+                        };
+                        proptest::prop_assert!(nums.iter().all(|v| v.is_finite() && v.abs() <= 1e9));
+                    }
+                }
+                Err(e) => {
+                    proptest::prop_assert_eq!(e.file.as_str(), "p.prg");
+                    proptest::prop_assert!(e.line >= 1 && e.line <= lines.len(), "{}", e);
+                    proptest::prop_assert!(e.column >= 1, "{}", e);
+                }
+            }
+        }
     }
 }
