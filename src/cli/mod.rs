@@ -26,7 +26,8 @@ pub struct ScriptArgs {
     /// A document to open and provide to the script as `doc`.
     #[arg(long)]
     pub doc: Option<PathBuf>,
-    /// The project folder that bounds file access [default: the current folder].
+    /// The project folder that bounds file access [default: the nearest folder of the
+    /// script holding `fitup.toml`, else the script's folder].
     #[arg(long)]
     pub root: Option<PathBuf>,
     /// The robot of `--doc` that runs a motion program.

@@ -185,7 +185,7 @@ pub fn api_reference() -> String {
          Units: **millimetres and radians** inside. Pose triples `X Y Z A B C` and joint arrays are \
          **degrees**; a dimension's `system_value` is SI (metres, radians) like the SolidWorks API. \
          Numbers may be written as integers or floats everywhere. Points and vectors are arrays `[x, y, z]`.\n\n\
-         Files: paths are relative to the project folder (where `fitup` runs, or `--root`); a script \
+         Files: paths are relative to the project folder (`--root`, else the nearest folder of the script holding `fitup.toml`, else the script's folder; see docs/scripting.md); a script \
          can only read and write inside it.\n",
     );
     for (title, intro) in &sections {

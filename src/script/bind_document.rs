@@ -204,7 +204,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     api.f(
         "Document.save()",
-        "Writes the document back to its file atomically (temporary file, then rename).",
+        "Writes the document back to its file atomically (temporary file, then rename). Refused, with nothing written, when the file changed on disk since it was opened or last saved (another writer's edits are kept), or when a value would make the document unloadable.",
         |d: &mut DocHandle| -> ScriptResult<()> {
             let mut doc = d.lock()?;
             doc.save().map_err(fail)?;
@@ -213,7 +213,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         },
     );
     let c = ctx.clone();
-    api.f("Document.save_as(path: string)", "Writes the document to a new file (inside the project) atomically and makes it the document's file; mesh paths are rewritten relative to it.", move |d: &mut DocHandle, path: &str| -> ScriptResult<()> {
+    api.f("Document.save_as(path: string)", "Writes the document to a new file (inside the project; missing folders are created) atomically and makes it the document's file; mesh paths are rewritten relative to it. Refuses to overwrite a mesh of the document or any file that is not a fitup document.", move |d: &mut DocHandle, path: &str| -> ScriptResult<()> {
         let full = c.project.resolve_for_write(path).map_err(fail)?;
         d.lock()?.save_as(&full).map_err(fail)?;
         c.record_write(&full);
