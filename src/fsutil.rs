@@ -106,7 +106,7 @@ impl FileKind {
     pub const fn max_bytes(self) -> u64 {
         match self {
             FileKind::Document => 16 << 20,
-            FileKind::Mesh => 512 << 20,
+            FileKind::Mesh => 256 << 20,
             FileKind::Script => 4 << 20,
             FileKind::Program | FileKind::Table => 64 << 20,
         }

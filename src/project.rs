@@ -27,7 +27,7 @@ pub enum PathError {
     Empty,
     /// The path leads outside the project folder (by `..`, an absolute path or a
     /// symbolic link).
-    #[error("`{path}` is outside the project folder {root}: only files inside it may be used")]
+    #[error("`{path}` is outside the project folder {root}: only files inside it may be used (the project folder is `--root`, else the nearest folder holding fitup.toml, else the script's or document's own folder)")]
     Outside {
         /// The path as written.
         path: String,

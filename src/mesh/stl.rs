@@ -312,6 +312,36 @@ mod tests {
             let _ = parse_stl(&bytes);
         }
 
+        /// A vertex is accepted exactly when it is finite and within 1e9 mm, in ASCII
+        /// (error at its line) and binary files alike.
+        #[test]
+        fn vertex_range_is_enforced(v in proptest::prop_oneof![
+            proptest::num::f64::ANY,
+            -2e9f64..2e9,
+            proptest::strategy::Just(1e39),
+        ]) {
+            let ok = v.is_finite() && v.abs() <= crate::document::MAX_ABS_VALUE;
+            let ascii = cube_ascii().replacen("vertex 0 0 0", &format!("vertex 0 {v:e} 0"), 1);
+            let line = ascii.lines().position(|l| l.contains(&format!("{v:e}"))).map(|l| l + 1);
+            match parse_stl(ascii.as_bytes()) {
+                Ok(_) => proptest::prop_assert!(ok, "{v:e} accepted"),
+                Err(e) => {
+                    proptest::prop_assert!(!ok, "{v:e} refused: {e}");
+                    proptest::prop_assert_eq!(e.line, line);
+                }
+            }
+            let mut m = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+            m.vertices[0].y = v;
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("b.stl");
+            if write_stl(&p, &m).is_ok() {
+                // Binary STL stores f32: what counts is the value read back.
+                let stored = v as f32 as f64;
+                let ok = stored.is_finite() && stored.abs() <= crate::document::MAX_ABS_VALUE;
+                proptest::prop_assert_eq!(read_stl(&p).is_ok(), ok, "{:e}", v);
+            }
+        }
+
         #[test]
         fn never_panics_on_mangled_ascii(cut in 0usize..600, junk in "[ -~\\n]{0,40}") {
             let mut s = cube_ascii();
