@@ -182,6 +182,29 @@ impl Project {
         Ok(full)
     }
 
+    /// [`resolve_for_write`](Self::resolve_for_write) for an output file (CSV logs,
+    /// key poses): refuses to replace a file that holds the user's work — a document,
+    /// mesh, script, program or project file (by extension: `yaml`, `yml`, `stl`,
+    /// `rhai`, `prg`, `toml`) — or anything that is not a regular file.
+    pub fn resolve_output(&self, path: &str) -> Result<PathBuf, PathError> {
+        let full = self.resolve_for_write(path)?;
+        let protected = full.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+            ["yaml", "yml", "stl", "rhai", "prg", "toml"].contains(&e.to_ascii_lowercase().as_str())
+        });
+        match std::fs::metadata(&full) {
+            Ok(md) if !md.is_file() => Err(PathError::Unresolvable {
+                path: path.to_string(),
+                message: "refusing to write over something that is not a regular file".into(),
+            }),
+            Ok(_) if protected => Err(PathError::Unresolvable {
+                path: path.to_string(),
+                message: "refusing to overwrite a document, mesh, script or program with output"
+                    .into(),
+            }),
+            _ => Ok(full),
+        }
+    }
+
     /// `path` shown relative to the root when inside it.
     pub fn display(&self, path: &Path) -> String {
         path.strip_prefix(&self.root)
@@ -231,6 +254,12 @@ mod tests {
         }
         let w = p.resolve_for_write("out/sub/x.csv").unwrap();
         assert!(w.parent().unwrap().is_dir());
+        std::fs::write(dir.path().join("models/cell.yaml"), "parts: {}\n").unwrap();
+        assert!(p.resolve_output("models/cell.yaml").is_err());
+        assert!(p.resolve_output("models").is_err());
+        assert!(p.resolve_output("models/new.yaml").is_ok());
+        std::fs::write(&w, "a,b\n").unwrap();
+        assert!(p.resolve_output("out/sub/x.csv").is_ok());
     }
 
     #[test]

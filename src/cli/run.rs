@@ -216,7 +216,7 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
         Some(log) => {
             let abs = std::path::absolute(log).map_err(|e| usage(format!("log: {e}")))?;
             let path = project
-                .resolve_for_write(&abs.to_string_lossy())
+                .resolve_output(&abs.to_string_lossy())
                 .map_err(|e| usage(format!("log: {e}")))?;
             crate::fsutil::write_atomic(&path, csv.as_bytes())
                 .map_err(|e| fail(format!("cannot write {}: {e}", log.display())))?;

@@ -437,7 +437,7 @@ pub(super) fn register(api: &mut Api) {
         },
     );
     api.f("Path.save_csv(file: string)", "Writes the key poses as CSV (`index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`) inside the project, atomically.", |p: &mut PathHandle, file: &str| -> ScriptResult<()> {
-        let full = p.1.project.resolve_for_write(file).map_err(fail)?;
+        let full = p.1.project.resolve_output(file).map_err(fail)?;
         let mut bytes = Vec::new();
         p.0.write_csv(&mut bytes, AngleConvention::default()).map_err(fail)?;
         crate::fsutil::write_atomic(&full, &bytes).map_err(fail)?;

@@ -647,7 +647,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         },
     );
     api.f("Trajectory.save_csv(path: string)", "Writes the joint/TCP log as CSV inside the project, atomically: `t_s,j1_deg,…,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`.", |t: &mut TrajectoryHandle, path: &str| -> ScriptResult<()> {
-        let full = t.ctx.project.resolve_for_write(path).map_err(fail)?;
+        let full = t.ctx.project.resolve_output(path).map_err(fail)?;
         let csv = t.trajectory.to_csv(AngleConvention::default());
         crate::fsutil::write_atomic(&full, csv.as_bytes()).map_err(|e| fail(format!("cannot write {path}: {e}")))?;
         t.ctx.record_write(&full);
