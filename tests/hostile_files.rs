@@ -201,6 +201,23 @@ fn special_files_are_refused_without_hanging() {
         out.contains("holes.rhai:1") && out.contains("FIFO"),
         "{out}"
     );
+    // An import that is a FIFO, and a script past its size cap.
+    write(
+        p,
+        "scripts/imp.rhai",
+        "import \"../models/meshes/fifo.stl\" as f;\n",
+    );
+    let (code, out) = run(p, &["run", "scripts/imp.rhai"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(out.contains("imp.rhai:1") && out.contains("FIFO"), "{out}");
+    let big = std::fs::File::create(p.join("scripts/big.rhai")).unwrap();
+    big.set_len(5 << 20).unwrap();
+    let (code, out) = run(p, &["run", "scripts/big.rhai"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("big.rhai") && out.contains("4 MiB limit"),
+        "{out}"
+    );
     let (code, out) = run(p, &["check", "/dev/zero"]);
     assert_eq!(code, 1, "{out}");
     assert!(

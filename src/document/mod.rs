@@ -773,15 +773,31 @@ impl Document {
     /// Adds a feature to a part's tree, replacing the feature of the same name. Saved
     /// with the document.
     pub fn set_feature(&mut self, part: &str, feature: Feature) -> Result<(), DocumentError> {
-        if let Feature::CutCells {
-            spec: CutSpec::Size(s),
-            name,
-        } = &feature
-        {
-            if !(s.is_finite() && *s > 0.0) {
-                return Err(DocumentError::Invalid(format!(
-                    "cut cells `{name}`: cell size must be a number > 0 mm, not {s}"
-                )));
+        match &feature {
+            Feature::CutCells {
+                spec: CutSpec::Size(s),
+                name,
+            } => {
+                if !(s.is_finite() && *s > 0.0 && *s <= MAX_ABS_VALUE) {
+                    return Err(DocumentError::Invalid(format!(
+                        "cut cells `{name}`: cell size must be a number > 0 mm and at most {MAX_ABS_VALUE:e} mm, not {s}"
+                    )));
+                }
+            }
+            Feature::CutCells {
+                spec: CutSpec::Planes { x, y, z },
+                name,
+            } => {
+                if let Some(v) = x
+                    .iter()
+                    .chain(y)
+                    .chain(z)
+                    .find(|v| !v.is_finite() || v.abs() > MAX_ABS_VALUE)
+                {
+                    return Err(DocumentError::Invalid(format!(
+                        "cut cells `{name}`: plane position {v} is not finite or beyond {MAX_ABS_VALUE:e} mm"
+                    )));
+                }
             }
         }
         let p = self
