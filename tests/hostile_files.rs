@@ -527,5 +527,8 @@ fn cli_paths_follow_the_path_rule() {
     std::fs::remove_file(p.join("fitup.toml")).unwrap();
     let (code, out) = run(p, &["run", "scripts/n.rhai"]);
     assert_eq!(code, 1, "{out}");
-    assert!(out.contains("n.rhai:1"), "{out}");
+    assert!(
+        out.contains("n.rhai:1") && out.contains("does not exist in the project folder"),
+        "{out}"
+    );
 }

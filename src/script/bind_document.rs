@@ -36,6 +36,13 @@ impl DocHandle {
     pub fn open(ctx: &Arc<Context>, path: &str) -> Result<Self, String> {
         let full = ctx.project.resolve(path).map_err(|e| e.to_string())?;
         ctx.record_read(&full);
+        if !full.exists() {
+            // The usual cause is a project root other than the user expects.
+            return Err(format!(
+                "`{path}` does not exist in the project folder {} (the project folder is `--root`, else the nearest folder of the script holding fitup.toml, else the script's folder)",
+                ctx.project.root().display()
+            ));
+        }
         let doc = {
             let mut cache = ctx
                 .caches
