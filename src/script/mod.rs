@@ -288,12 +288,15 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
     }
     let mut ast = engine.compile_with_scope(&scope, &text).map_err(|e| {
         let (line, col) = (e.1.line().unwrap_or(0), e.1.position().unwrap_or(0));
-        ScriptError::Located(SourceError::new(
-            &script,
-            line,
-            col,
-            format!("syntax error: {}", e.0),
-        ))
+        let located = SourceError::new(&script, line, col, format!("syntax error: {}", e.0));
+        ScriptError::Located(match *e.0 {
+            rhai::ParseErrorType::AssignmentToInvalidLHS(..) => located.with_help(
+                "Rhai cannot set a property of a function call's result \
+                 (`doc.component(\"x\").transform = m`); write `doc.set_transform(\"x\", m)`, \
+                 `doc.component(\"x\").set_transform(m)`, or `let c = doc.component(\"x\"); c.transform = m;`",
+            ),
+            _ => located,
+        })
     })?;
     ast.set_source(script.to_string_lossy().as_ref());
     match engine.run_ast_with_scope(&mut scope, &ast) {
