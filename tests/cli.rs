@@ -65,7 +65,7 @@ fn sandbox_limits_and_file_access() {
     let dir = project();
     let p = dir.path();
     let cases = [
-        ("loop { }", "operation limit of 50,000,000 operations"),
+        ("loop { }", "operation limit of 2,000,000 operations"),
         ("fn f(n) { f(n + 1) } f(0);", "nested function calls"),
         (
             "let s = \"x\"; loop { s += s; }",
