@@ -90,7 +90,9 @@ fn excerpt(line: &str, column: Option<usize>) -> (String, Option<usize>) {
         return (line.to_string(), column);
     }
     let col = column.unwrap_or(1).clamp(1, n);
-    let start = col.saturating_sub(MAX_SHOWN_LINE / 2).min(n - MAX_SHOWN_LINE);
+    let start = col
+        .saturating_sub(MAX_SHOWN_LINE / 2)
+        .min(n - MAX_SHOWN_LINE);
     let end = start + MAX_SHOWN_LINE;
     let mut shown: String = line.chars().skip(start).take(MAX_SHOWN_LINE).collect();
     let mut col_in = column.map(|c| c.saturating_sub(start));

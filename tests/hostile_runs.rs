@@ -41,7 +41,10 @@ fn finish(mut child: Child, what: &str) -> Output {
                 stdout: out.join().unwrap(),
                 stderr: err.join().unwrap(),
             };
-            panic!("{what}: still running after {TIMEOUT:?}; output:\n{}", text(&o));
+            panic!(
+                "{what}: still running after {TIMEOUT:?}; output:\n{}",
+                text(&o)
+            );
         }
         std::thread::sleep(Duration::from_millis(20));
     };
@@ -158,7 +161,10 @@ fn module_count_and_import_depth_limits_fire() {
         p,
         "deep.rhai",
         "import \"d0\" as d;\n",
-        &["imports are nested more than 16 deep", "scripts/d15.rhai:1 →"],
+        &[
+            "imports are nested more than 16 deep",
+            "scripts/d15.rhai:1 →",
+        ],
     );
     // One module imported again and again: the 65th import is refused.
     std::fs::write(p.join("scripts/lib.rhai"), "fn one() { 1 }\n").unwrap();
@@ -245,7 +251,11 @@ fn deep_recursion_and_nesting_end_with_the_sandbox_message() {
         &["recurse.rhai:3:", "more than 64 nested function calls"],
     );
     // Recursion through a module's function.
-    std::fs::write(p.join("scripts/rec_lib.rhai"), "fn down(n) { down(n + 1) }\n").unwrap();
+    std::fs::write(
+        p.join("scripts/rec_lib.rhai"),
+        "fn down(n) { down(n + 1) }\n",
+    )
+    .unwrap();
     expect_error(
         p,
         "recurse_lib.rhai",
@@ -260,7 +270,7 @@ fn deep_recursion_and_nesting_end_with_the_sandbox_message() {
         ("arrays.rhai", deep("[", "]", 20000)),
         ("maps.rhai", deep("#{a: ", "}", 20000)),
         ("blocks.rhai", deep("{ ", " }", 20000)),
-        ("unary.rhai", deep("-", "", 20000)),
+        ("unary.rhai", deep("- ", "", 20000)),
         (
             "ifs.rhai",
             format!(

@@ -26,7 +26,7 @@
 
 use crate::fsutil::content_hash;
 use crate::script::{run_script, Caches, RunOptions, RunOutcome};
-use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind};
+use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind, RenameMode};
 use notify::{RecursiveMode, Watcher as _};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -105,12 +105,13 @@ pub fn watch(
     let mut watched_dirs: BTreeMap<PathBuf, Option<FolderId>> = BTreeMap::new();
     // Content hash of every dependency as the current run saw it.
     let mut baseline: HashMap<PathBuf, Option<u64>> = HashMap::new();
-    let mut pending: BTreeSet<PathBuf> = BTreeSet::new();
+    // Files with news, and when each may be read: at once after its writer closed it
+    // or a rename landed on it, MODIFY_FALLBACK after any other event (re-armed).
+    let mut pending: BTreeMap<PathBuf, Instant> = BTreeMap::new();
     // Files found missing or empty, and since when: given MODIFY_FALLBACK to settle.
     let mut settling: HashMap<PathBuf, Instant> = HashMap::new();
     // Files reported missing (reported once; the run waits for them).
     let mut missing: BTreeSet<PathBuf> = BTreeSet::new();
-    let mut deadline: Option<Instant> = None;
     let mut last_poll = Instant::now();
     let mut number = 0u64;
     let mut running: Option<(u64, Arc<AtomicBool>)> = None;
@@ -160,7 +161,6 @@ pub fn watch(
                 running = Some((number, cancel));
             }
         }
-        let mut check_now = false;
         // Folders moved away, deleted or replaced: watch them again when they are back.
         if last_poll.elapsed() >= FOLDER_POLL {
             last_poll = Instant::now();
@@ -187,13 +187,13 @@ pub fn watch(
                             )));
                             *id = now;
                             // Compare its files with what the last run saw.
+                            let now = Instant::now();
                             pending.extend(
                                 baseline
                                     .keys()
                                     .filter(|f| f.parent() == Some(dir.as_path()))
-                                    .cloned(),
+                                    .map(|f| (f.clone(), now)),
                             );
-                            check_now = true;
                         }
                         Err(e) => report(WatchEvent::Warning(format!(
                             "cannot watch {} again: {e}; retrying",
@@ -203,42 +203,51 @@ pub fn watch(
                 }
             }
         }
-        let wait = deadline
+        let next_due = pending.values().min().copied();
+        let wait = next_due
             .map(|d| d.saturating_duration_since(Instant::now()))
             .unwrap_or(FOLDER_POLL)
             .min(FOLDER_POLL);
-        let msg = if check_now {
+        let msg = if wait.is_zero() {
             Err(RecvTimeoutError::Timeout)
         } else {
             rx.recv_timeout(wait)
         };
         match msg {
             Ok(Msg::Fs(Ok(event))) => {
-                let relevant: Vec<PathBuf> = event
-                    .paths
-                    .iter()
-                    .map(|p| absolute(p))
-                    .filter(|p| baseline.contains_key(p))
-                    // Events of a folder that was moved away arrive under its old name.
-                    .filter(|p| {
-                        p.parent().is_some_and(|d| {
-                            watched_dirs
-                                .get(d)
-                                .is_some_and(|id| id.is_some() && *id == folder_id(d))
-                        })
-                    })
-                    .collect();
-                if !relevant.is_empty() {
-                    pending.extend(relevant);
-                    match event.kind {
-                        EventKind::Access(AccessKind::Close(AccessMode::Write))
-                        | EventKind::Remove(_)
-                        | EventKind::Modify(ModifyKind::Name(_)) => check_now = true,
-                        // Re-armed by every further "modified": a writer that is
-                        // still writing (or slow under load) is not read half-done. A
-                        // created file is still empty: its close comes later.
-                        _ => deadline = Some(Instant::now() + MODIFY_FALLBACK),
+                // A save is complete when its writer closes the file or a rename lands
+                // on it; the rename's target is the last path of a "both" event.
+                let landed = match event.kind {
+                    EventKind::Access(AccessKind::Close(AccessMode::Write)) => event.paths.first(),
+                    EventKind::Modify(ModifyKind::Name(RenameMode::To | RenameMode::Both)) => {
+                        event.paths.last()
                     }
+                    _ => None,
+                }
+                .map(|p| absolute(p));
+                for p in &event.paths {
+                    let p = absolute(p);
+                    if !baseline.contains_key(&p) {
+                        continue;
+                    }
+                    // Events of a folder that was moved away arrive under its old name.
+                    let current = p.parent().is_some_and(|d| {
+                        watched_dirs
+                            .get(d)
+                            .is_some_and(|id| id.is_some() && *id == folder_id(d))
+                    });
+                    if !current {
+                        continue;
+                    }
+                    // Anything else (created, modified, renamed away, deleted) is a
+                    // save in progress: wait for its end, re-armed by every event, so
+                    // a file is not read half-written or in the gap of a backup save.
+                    let due = if landed.as_ref() == Some(&p) {
+                        Instant::now()
+                    } else {
+                        Instant::now() + MODIFY_FALLBACK
+                    };
+                    pending.insert(p, due);
                 }
             }
             Ok(Msg::Fs(Err(e))) => report(WatchEvent::Warning(format!("file watching: {e}"))),
@@ -279,17 +288,21 @@ pub fn watch(
                 // rename arrived; what is still pending is a file being written, left
                 // to its close event or the fallback timer.
             }
-            Err(RecvTimeoutError::Timeout) => {
-                check_now |= deadline.is_some_and(|d| Instant::now() >= d)
-            }
+            Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => return Ok(()),
         }
-        if check_now {
-            deadline = None;
+        let now = Instant::now();
+        let due: Vec<PathBuf> = pending
+            .iter()
+            .filter(|(_, t)| **t <= now)
+            .map(|(p, _)| p.clone())
+            .collect();
+        if !due.is_empty() {
             let mut changed = Vec::new();
-            for p in std::mem::take(&mut pending) {
-                let now = hash_file(&p);
-                if baseline.get(&p).is_none_or(|h| *h == now) {
+            for p in due {
+                pending.remove(&p);
+                let hash = hash_file(&p);
+                if baseline.get(&p).is_none_or(|h| *h == hash) {
                     settling.remove(&p);
                     missing.remove(&p);
                     continue;
@@ -298,11 +311,9 @@ pub fn watch(
                 if matches!(size, None | Some(0)) {
                     // Missing or empty: mid-save (renamed to a backup, or created and
                     // not yet written). Give it time before believing it.
-                    let since = *settling.entry(p.clone()).or_insert_with(Instant::now);
-                    let settled = since.elapsed() >= MODIFY_FALLBACK;
-                    if !settled {
-                        pending.insert(p);
-                        deadline = Some(since + MODIFY_FALLBACK);
+                    let since = *settling.entry(p.clone()).or_insert(now);
+                    if now < since + MODIFY_FALLBACK {
+                        pending.insert(p, since + MODIFY_FALLBACK);
                         continue;
                     }
                     if size.is_none() {
