@@ -295,6 +295,110 @@ impl rhai::ModuleResolver for ProjectResolver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::script::{run_script, Caches, RunOptions, ScriptError};
+
+    /// Runs `main.rhai` of a folder holding `files`; the error message, if any.
+    fn run_files(files: &[(&str, &str)], limits: Limits) -> Option<String> {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, text) in files {
+            std::fs::write(dir.path().join(name), text).unwrap();
+        }
+        let opts = RunOptions {
+            script: dir.path().join("main.rhai"),
+            doc: None,
+            project: Project::new(dir.path()).unwrap(),
+            limits,
+            cancel: Default::default(),
+            output: Arc::new(|_| {}),
+            args: Default::default(),
+        };
+        match run_script(&opts, &Arc::new(Caches::default())).result {
+            Ok(()) => None,
+            Err(ScriptError::Located(e)) => Some(e.to_string()),
+            Err(e) => Some(e.to_string()),
+        }
+    }
+
+    #[test]
+    fn import_cycles_are_errors_with_the_chain() {
+        let e = run_files(&[("main.rhai", "import \"main\" as m;")], Limits::default()).unwrap();
+        assert!(
+            e.contains("main.rhai:1:") && e.contains("import cycle: main.rhai:1 → main.rhai"),
+            "{e}"
+        );
+        let e = run_files(
+            &[
+                ("main.rhai", "import \"a\" as a;"),
+                ("a.rhai", "\nimport \"b\" as b;"),
+                ("b.rhai", "import \"a\" as a;"),
+            ],
+            Limits::default(),
+        )
+        .unwrap();
+        assert!(
+            e.contains("b.rhai:1:") && e.contains("import cycle: a.rhai:2 → b.rhai:1 → a.rhai"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn module_limits_fire() {
+        let chain: Vec<(String, String)> = (0..5)
+            .map(|i| (format!("m{i}.rhai"), format!("import \"m{}\" as n;", i + 1)))
+            .chain(std::iter::once(("m5.rhai".into(), "fn x() { 1 }".into())))
+            .collect();
+        let mut files: Vec<(&str, &str)> = chain
+            .iter()
+            .map(|(a, b)| (a.as_str(), b.as_str()))
+            .collect();
+        files.push(("main.rhai", "import \"m0\" as m;"));
+        let tight = Limits {
+            max_import_depth: 3,
+            ..Limits::default()
+        };
+        let e = run_files(&files, tight).unwrap();
+        assert!(e.contains("nested more than 3 deep"), "{e}");
+        assert_eq!(run_files(&files, Limits::default()), None);
+        let few = Limits {
+            max_modules: 4,
+            ..Limits::default()
+        };
+        let e = run_files(&files, few).unwrap();
+        assert!(e.contains("more than 4 modules"), "{e}");
+    }
+
+    #[test]
+    fn scripts_do_not_use_the_callers_stack() {
+        // A caller with a small stack (watch mode's threads, an embedding application)
+        // still gets the limit messages, not a stack overflow.
+        let deep = format!("let x = {}1{};", "[".repeat(30), "]".repeat(30));
+        let recursion = "fn f(n) { if n == 0 { 0 } else { 1 + f(n - 1) } } f(60);";
+        let errors = std::thread::Builder::new()
+            .stack_size(256 << 10)
+            .spawn(move || {
+                (
+                    run_files(&[("main.rhai", &deep)], Limits::default()),
+                    run_files(&[("main.rhai", recursion)], Limits::default()),
+                    run_files(
+                        &[("main.rhai", "fn f(n) { f(n + 1) } f(0);")],
+                        Limits::default(),
+                    ),
+                )
+            })
+            .unwrap()
+            .join()
+            .unwrap();
+        assert_eq!(errors.0, None);
+        assert_eq!(errors.1, None);
+        assert!(
+            errors
+                .2
+                .as_deref()
+                .unwrap_or("")
+                .contains("nested function calls"),
+            "{errors:?}"
+        );
+    }
 
     #[test]
     fn paths_outside_the_project_are_refused() {
