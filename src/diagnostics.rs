@@ -41,7 +41,7 @@ impl SourceError {
     /// Reads the file again to show the line; falls back to the one-line form.
     pub fn render(&self) -> String {
         let mut out = self.to_string();
-        if let (Some(line), Ok(text)) = (self.line, std::fs::read_to_string(&self.path)) {
+        if let Some((line, text)) = self.line.and_then(|l| Some((l, source_text(&self.path)?))) {
             if let Some(full) = text.lines().nth(line - 1) {
                 let (src, column) = excerpt(full, self.column);
                 let src = src.as_str();
@@ -77,6 +77,17 @@ impl fmt::Display for SourceError {
         }
         write!(f, ": {}", self.message)
     }
+}
+
+/// The text of a file to quote from: a regular file of at most 16 MiB only (the error
+/// may be about a FIFO, a device or a huge file, which must not be read again).
+fn source_text(path: &Path) -> Option<String> {
+    const MAX: u64 = 16 << 20;
+    let meta = std::fs::metadata(path).ok()?;
+    if !meta.is_file() || meta.len() > MAX {
+        return None;
+    }
+    std::fs::read_to_string(path).ok()
 }
 
 /// Characters of a source line shown around the error column; a longer line (a

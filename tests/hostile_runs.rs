@@ -433,3 +433,42 @@ fn script_arguments_reach_the_script_typed() {
     let o = run(p, &["run", "scripts/args.rhai", "n=3"]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }
+
+#[cfg(unix)]
+#[test]
+fn special_and_huge_script_files_are_refused_without_reading_them() {
+    let dir = project();
+    let p = dir.path();
+    let fifo = p.join("scripts/pipe.rhai");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    // Nobody writes to the FIFO: reading it would block forever.
+    let o = run(p, &["run", "scripts/pipe.rhai"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("pipe.rhai") && t.contains("not a regular file"),
+        "{t}"
+    );
+    expect_error(
+        p,
+        "imports_pipe.rhai",
+        "import \"pipe\" as p;\n",
+        &["imports_pipe.rhai:1:", "not a regular file"],
+    );
+    // A folder named like a script.
+    std::fs::create_dir(p.join("scripts/folder.rhai")).unwrap();
+    let o = run(p, &["run", "scripts/folder.rhai"]);
+    assert!(text(&o).contains("not a regular file"), "{}", text(&o));
+    // A script over the 16 MiB string limit.
+    let big = p.join("scripts/big.rhai");
+    let f = std::fs::File::create(&big).unwrap();
+    f.set_len(17 << 20).unwrap();
+    let o = run(p, &["run", "scripts/big.rhai"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("big.rhai") && t.contains("larger than"), "{t}");
+}

@@ -20,7 +20,8 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
     let script = project
         .resolve(&a.script.to_string_lossy())
         .map_err(|e| format!("script: {e} (pass --root)"))?;
-    if !script.is_file() {
+    // Anything else that exists (a folder, a FIFO) is refused by the run, by name.
+    if !script.exists() {
         return Err(format!("script {} does not exist", a.script.display()));
     }
     let doc = match &a.doc {

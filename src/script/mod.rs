@@ -270,7 +270,7 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
         ))
     })?;
     ctx.record_read(&script);
-    let text = std::fs::read_to_string(&script).map_err(|e| {
+    let text = sandbox::read_script(&script, opts.limits.max_string_size).map_err(|e| {
         ScriptError::Located(SourceError::new(
             &script,
             0,

@@ -142,6 +142,29 @@ impl Limits {
     }
 }
 
+/// Reads a script or module: a regular file only (a FIFO or device would block or never
+/// end) of at most `max_bytes` (the sandbox's string limit), in UTF-8.
+pub(crate) fn read_script(path: &Path, max_bytes: usize) -> Result<String, String> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    let too_big = || format!("larger than the {max_bytes} bytes a script may have");
+    if meta.len() > max_bytes as u64 {
+        return Err(too_big());
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(max_bytes as u64 + 1).read_to_end(&mut bytes))
+        .map_err(|e| e.to_string())?;
+    // The file may have grown since its size was read.
+    if bytes.len() > max_bytes {
+        return Err(too_big());
+    }
+    String::from_utf8(bytes).map_err(|e| format!("not UTF-8 text ({e})"))
+}
+
 /// One import being evaluated: `importer` line `line` imports `module`.
 struct ImportFrame {
     importer: PathBuf,
@@ -222,7 +245,7 @@ impl rhai::ModuleResolver for ProjectResolver {
             .project
             .resolve(&candidate.to_string_lossy())
             .map_err(refuse)?;
-        if !full.is_file() {
+        if !full.exists() {
             return Err(err(path.to_string()));
         }
         let importer = source.map(PathBuf::from).unwrap_or_default();
@@ -274,7 +297,7 @@ impl rhai::ModuleResolver for ProjectResolver {
             chain.push(frame);
         }
         let _pop = PopOnDrop(self);
-        let text = std::fs::read_to_string(&full).map_err(|e| refuse(e.to_string()))?;
+        let text = read_script(&full, self.limits.max_string_size).map_err(refuse)?;
         self.ctx.record_read(&full);
         let in_module = |e: Box<EvalAltResult>| {
             Box::new(EvalAltResult::ErrorInModule(
