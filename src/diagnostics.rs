@@ -41,16 +41,13 @@ impl SourceError {
     /// Reads the file again to show the line; falls back to the one-line form.
     pub fn render(&self) -> String {
         let mut out = self.to_string();
-        // Only a located error shows its line, and only a regular file is read again
-        // (the error may be about a device or FIFO).
-        let text = self.line.and_then(|_| {
-            crate::fsutil::read_text(&self.path, crate::fsutil::FileKind::Table).ok()
-        });
-        if let (Some(line), Some(text)) = (self.line, text) {
-            if let Some(src) = text.lines().nth(line - 1) {
+        if let Some((line, text)) = self.line.and_then(|l| Some((l, source_text(&self.path)?))) {
+            if let Some(full) = text.lines().nth(line - 1) {
+                let (src, column) = excerpt(full, self.column);
+                let src = src.as_str();
                 let gutter = line.to_string();
                 out += &format!("\n {} |\n {} | {}\n", " ".repeat(gutter.len()), gutter, src);
-                if let Some(col) = self.column {
+                if let Some(col) = column {
                     let pad: String = src
                         .chars()
                         .take(col.saturating_sub(1))
@@ -80,6 +77,39 @@ impl fmt::Display for SourceError {
         }
         write!(f, ": {}", self.message)
     }
+}
+
+/// The text of a file to quote from: a regular file of at most 16 MiB only (the error
+/// may be about a FIFO, a device or a huge file, which must not be read again).
+fn source_text(path: &Path) -> Option<String> {
+    crate::fsutil::read_text(path, crate::fsutil::FileKind::Document).ok()
+}
+
+/// Characters of a source line shown around the error column; a longer line (a
+/// generated or minified file) is cut to a window with `…` on the cut sides.
+const MAX_SHOWN_LINE: usize = 120;
+
+/// The part of `line` to show and the column within it.
+fn excerpt(line: &str, column: Option<usize>) -> (String, Option<usize>) {
+    let n = line.chars().count();
+    if n <= MAX_SHOWN_LINE {
+        return (line.to_string(), column);
+    }
+    let col = column.unwrap_or(1).clamp(1, n);
+    let start = col
+        .saturating_sub(MAX_SHOWN_LINE / 2)
+        .min(n - MAX_SHOWN_LINE);
+    let end = start + MAX_SHOWN_LINE;
+    let mut shown: String = line.chars().skip(start).take(MAX_SHOWN_LINE).collect();
+    let mut col_in = column.map(|c| c.saturating_sub(start));
+    if start > 0 {
+        shown.insert(0, '…');
+        col_in = col_in.map(|c| c + 1);
+    }
+    if end < n {
+        shown.push('…');
+    }
+    (shown, col_in)
 }
 
 /// The 1-based line and column of the first occurrence of `needle` in `text` at or
@@ -149,6 +179,22 @@ mod tests {
         assert_eq!(locate(text, "角度1", 4), None);
         assert!(suggestion("plate_a", ["plate_a1", "table"]).contains("plate_a1"));
         assert!(suggestion("zzz", ["table"]).contains("known"));
+    }
+
+    #[test]
+    fn long_lines_are_cut_around_the_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("long.rhai");
+        let line = format!("{}X{}", "(".repeat(5000), ")".repeat(5000));
+        std::fs::write(&p, &line).unwrap();
+        let r = SourceError::new(&p, 1, 5001, "deep").render();
+        assert!(r.len() < 600, "{r}");
+        let shown = r.lines().nth(2).unwrap();
+        let caret = r.lines().nth(3).unwrap();
+        assert!(shown.contains('…') && shown.contains('X'), "{r}");
+        // The caret still points at the X.
+        let x = shown.chars().position(|c| c == 'X').unwrap();
+        assert_eq!(caret.chars().position(|c| c == '^'), Some(x), "{r}");
     }
 
     #[test]

@@ -65,7 +65,7 @@ fn sandbox_limits_and_file_access() {
     let dir = project();
     let p = dir.path();
     let cases = [
-        ("loop { }", "operation limit"),
+        ("loop { }", "operation limit of 2,000,000 operations"),
         ("fn f(n) { f(n + 1) } f(0);", "nested function calls"),
         (
             "let s = \"x\"; loop { s += s; }",
@@ -143,4 +143,129 @@ fn docs_command_writes_the_reference() {
     assert_eq!(o.status.code(), Some(0));
     let md = std::fs::read_to_string(dir.path().join("api.md")).unwrap();
     assert!(md.contains("open_doc(path: string) -> Document") && md.contains("system_value"));
+}
+
+#[test]
+fn docs_without_a_docs_folder_and_to_standard_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    // The default target's folder is created.
+    let o = run_in(p, &["docs"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(text(&o).contains("wrote docs/api.md"), "{}", text(&o));
+    let md = std::fs::read_to_string(p.join("docs/api.md")).unwrap();
+    assert!(md.contains("fmt(value)"));
+    // `--out -` prints the reference and writes nothing.
+    let o = run_in(p, &["docs", "--out", "-"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(String::from_utf8_lossy(&o.stdout), md);
+    // A target that cannot be written: a message naming it and the alternative.
+    std::fs::write(p.join("file"), "x").unwrap();
+    let o = run_in(p, &["docs", "--out", "file/api.md"]);
+    assert_eq!(o.status.code(), Some(1));
+    let t = text(&o);
+    assert!(t.contains("file/api.md") && t.contains("--out -"), "{t}");
+}
+
+#[test]
+fn demo_refuses_a_folder_that_is_not_empty() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let o = run_in(p, &["demo", "cell"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    // The user edits the cell; a second `demo` must not replace it.
+    let cell = p.join("cell/models/cell.yaml");
+    let edited = std::fs::read_to_string(&cell).unwrap() + "# my edit\n";
+    std::fs::write(&cell, &edited).unwrap();
+    let o = run_in(p, &["demo", "cell"]);
+    assert_eq!(o.status.code(), Some(1));
+    let t = text(&o);
+    assert!(t.contains("is not empty") && t.contains("--force"), "{t}");
+    assert_eq!(std::fs::read_to_string(&cell).unwrap(), edited);
+    // An empty folder is fine; --force overwrites.
+    std::fs::create_dir(p.join("empty")).unwrap();
+    assert_eq!(run_in(p, &["demo", "empty"]).status.code(), Some(0));
+    let o = run_in(p, &["demo", "cell", "--force"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(!std::fs::read_to_string(&cell)
+        .unwrap()
+        .contains("# my edit"));
+}
+
+#[test]
+fn watch_help_lists_only_what_watch_takes() {
+    let o = run_in(&common::repo(), &["watch", "--help"]);
+    assert_eq!(o.status.code(), Some(0));
+    let t = text(&o);
+    assert!(
+        !t.contains("--robot") && !t.contains("--log") && !t.contains("run only"),
+        "{t}"
+    );
+    assert!(
+        t.contains("--max-operations") && t.contains("KEY=VALUE"),
+        "{t}"
+    );
+    let t = text(&run_in(&common::repo(), &["run", "--help"]));
+    assert!(t.contains("--robot") && t.contains("KEY=VALUE"), "{t}");
+}
+
+#[test]
+fn setting_a_pose_in_one_call_and_the_hint_for_the_natural_spelling() {
+    let dir = project();
+    let p = dir.path();
+    std::fs::write(
+        p.join("scripts/natural.rhai"),
+        "let doc = open_doc(\"models/cell.yaml\");\ndoc.component(\"screw4\").transform = pose(0, 0, 50, 0, 0, 0);\n",
+    )
+    .unwrap();
+    let o = run_in(p, &["run", "scripts/natural.rhai"]);
+    assert_eq!(o.status.code(), Some(1));
+    let t = text(&o);
+    assert!(
+        t.contains("natural.rhai:2:")
+            && t.contains("doc.set_transform(\"x\", m)")
+            && t.contains("set_transform(m)"),
+        "{t}"
+    );
+    std::fs::write(
+        p.join("scripts/one_call.rhai"),
+        "let doc = open_doc(\"models/cell.yaml\");\n\
+         doc.component(\"screw4\").set_transform(pose(1, 2, 50, 0, 0, 30));\n\
+         print(doc.component(\"screw4\").transform);\n\
+         doc.set_transform(\"screw5\", [0.1 + 0.2, -0.0, 7, 0, 0, 29.999999999999996]);\n\
+         print(fmt(doc.component(\"screw5\").transform));\n\
+         print(fmt(doc.component(\"screw5\").transform.xyzabc));\n\
+         print(fmt(1.0 / 3.0, 5) + \" \" + fmt_mm(12.5) + \" \" + fmt_deg(-0.0001));\n\
+         let failed = false;\n\
+         try { doc.set_transform(\"table\", translation(1, 2, 3)); } catch (e) { failed = true; }\n\
+         assert(failed, \"the table is fixed\");\n",
+    )
+    .unwrap();
+    let o = run_in(p, &["run", "scripts/one_call.rhai"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let lines: Vec<&str> = t.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            "X 1 Y 2 Z 50 A 0° B 0° C 30°",
+            "X 0.3 Y 0 Z 7 A 0° B 0° C 30°",
+            "[0.3, 0, 7, 0, 0, 30]",
+            "0.33333 12.5 mm 0°",
+        ],
+        "{t}"
+    );
+}
+
+#[test]
+fn check_prints_numbers_for_people() {
+    let dir = project();
+    let o = run_in(dir.path(), &["check", "models/cell.yaml"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        !t.contains("-0 ") && !t.contains("-0°") && !t.contains("99999"),
+        "{t}"
+    );
+    assert!(t.contains("fixed  at X "), "{t}");
 }

@@ -211,3 +211,187 @@ fn a_save_cancels_the_running_script() {
     w.wait_for("== done 2 ok");
     assert!(w.seen.iter().any(|l| l == "fixed"));
 }
+
+/// Copies a folder tree (files and folders only).
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_tree(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
+}
+
+/// A script whose first and last lines print the tag, so a run of a half-written file
+/// shows.
+fn tagged(tag: &str) -> String {
+    format!(
+        "print(\"begin {tag}\");\nlet d = open_doc(\"models/cell.yaml\");\nlet n = d.components().len();\nprint(\"end {tag} \" + n);\n"
+    )
+}
+
+/// Writes `text` in two parts with a pause, the way a slow editor or a large file does.
+fn write_slowly(path: &Path, text: &str) {
+    use std::io::Write;
+    let mut f = std::fs::File::create(path).unwrap();
+    let (a, b) = text.split_at(text.len() / 2);
+    f.write_all(a.as_bytes()).unwrap();
+    f.flush().unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    f.write_all(b.as_bytes()).unwrap();
+}
+
+/// Counts runs and checks each one saw the complete script (`end TAG` printed).
+fn assert_one_complete_run(w: &mut Watch, number: u64, tag: &str, how: &str) {
+    w.wait_for(&format!("== done {number}"));
+    let after = w.quiet(Duration::from_millis(1500));
+    assert_eq!(
+        Watch::runs_started(&after),
+        0,
+        "{how}: more than one run for one save: {:?}",
+        w.seen
+    );
+    assert!(
+        w.seen.iter().any(|l| l == &format!("end {tag} 8")),
+        "{how}: the run did not see the complete file: {:?}",
+        w.seen
+    );
+    assert!(
+        w.seen
+            .iter()
+            .any(|l| l.starts_with(&format!("== done {number} ok"))),
+        "{how}: {:?}",
+        w.seen
+    );
+}
+
+#[test]
+fn backup_and_rename_saves_give_one_run_of_the_complete_file() {
+    let dir = common::project();
+    let p = dir.path();
+    let script = p.join("scripts/e.rhai");
+    std::fs::write(&script, tagged("first")).unwrap();
+    let mut w = Watch::start(p, "scripts/e.rhai", &[]);
+    w.wait_for("== done 1 ok");
+
+    // Emacs: rename the original to a backup, create the file, write it, close.
+    let backup = p.join("scripts/e.rhai~");
+    std::fs::rename(&script, &backup).unwrap();
+    std::thread::sleep(Duration::from_millis(30));
+    write_slowly(&script, &tagged("emacs"));
+    assert_one_complete_run(&mut w, 2, "emacs", "emacs-style save");
+
+    // Vim: probe file `4913`, original renamed to a backup, new file written, backup
+    // deleted.
+    std::fs::write(p.join("scripts/4913"), "").unwrap();
+    std::fs::remove_file(p.join("scripts/4913")).unwrap();
+    std::fs::rename(&script, &backup).unwrap();
+    write_slowly(&script, &tagged("vim"));
+    std::fs::remove_file(&backup).unwrap();
+    assert_one_complete_run(&mut w, 3, "vim", "vim-style save");
+
+    // In place, slowly (truncate, write, pause, write).
+    write_slowly(&script, &tagged("inplace"));
+    assert_one_complete_run(&mut w, 4, "inplace", "in-place save");
+
+    // A temporary file renamed over the original.
+    save_by_rename(&script, &tagged("renamed"));
+    assert_one_complete_run(&mut w, 5, "renamed", "rename save");
+
+    // Deleted: reported, no run; back with new content: one run.
+    std::fs::remove_file(&script).unwrap();
+    w.wait_for("is gone");
+    assert_eq!(Watch::runs_started(&w.quiet(Duration::from_millis(800))), 0);
+    std::fs::write(&script, tagged("back")).unwrap();
+    assert_one_complete_run(&mut w, 6, "back", "file recreated");
+}
+
+#[test]
+fn a_project_folder_moved_away_and_recreated_is_watched_again() {
+    let parent = tempfile::tempdir().unwrap();
+    let proj = parent.path().join("proj");
+    let moved = parent.path().join("proj.old");
+    let template = common::project();
+    copy_tree(template.path(), &proj);
+    std::fs::write(proj.join("scripts/r.rhai"), tagged("one")).unwrap();
+    let mut w = Watch::start(&proj, "scripts/r.rhai", &[]);
+    w.wait_for("== done 1 ok");
+
+    // Move the whole project away and put an identical copy in its place.
+    std::fs::rename(&proj, &moved).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    copy_tree(&moved, &proj);
+    w.wait_for("is back");
+    let after = w.quiet(Duration::from_millis(1500));
+    assert_eq!(
+        Watch::runs_started(&after),
+        0,
+        "the same content came back: no run expected: {:?}",
+        w.seen
+    );
+
+    // Saves in the moved-away copy are not the project's any more.
+    std::fs::write(moved.join("scripts/r.rhai"), tagged("stale")).unwrap();
+    assert_eq!(
+        Watch::runs_started(&w.quiet(Duration::from_millis(1000))),
+        0,
+        "{:?}",
+        w.seen
+    );
+
+    // A save in the new folder: exactly one run, of the new content.
+    std::fs::write(proj.join("scripts/r.rhai"), tagged("two")).unwrap();
+    assert_one_complete_run(&mut w, 2, "two", "save after the folder came back");
+    // And the document, in its recreated folder, is watched too.
+    let yaml_path = proj.join("models/cell.yaml");
+    let yaml = std::fs::read_to_string(&yaml_path).unwrap();
+    std::fs::write(
+        &yaml_path,
+        yaml.replacen("description: '", "description: 'edited ", 1),
+    )
+    .unwrap();
+    let header = w.wait_for("== run 3");
+    assert!(header.contains("cell.yaml"), "{header}");
+}
+
+#[test]
+fn an_import_cycle_under_watch_is_an_error_run_not_a_crash() {
+    let dir = common::project();
+    let p = dir.path();
+    let script = p.join("scripts/c.rhai");
+    std::fs::write(p.join("scripts/lib.rhai"), "fn one() { 1 }\n").unwrap();
+    std::fs::write(
+        &script,
+        "import \"lib\" as l;\nprint(\"sum \" + l::one());\n",
+    )
+    .unwrap();
+    let mut w = Watch::start(p, "scripts/c.rhai", &[]);
+    w.wait_for("== done 1 ok");
+    // The library imports the script: a cycle.
+    std::fs::write(
+        p.join("scripts/lib.rhai"),
+        "import \"c\" as c;\nfn one() { 1 }\n",
+    )
+    .unwrap();
+    w.wait_for("import cycle");
+    w.wait_for("== done 2 error");
+    std::fs::write(p.join("scripts/lib.rhai"), "fn one() { 2 }\n").unwrap();
+    w.wait_for("== done 3 ok");
+    assert!(w.seen.iter().any(|l| l == "sum 2"), "{:?}", w.seen);
+}
+
+#[test]
+fn script_arguments_reach_every_run() {
+    let dir = common::project();
+    let p = dir.path();
+    let script = p.join("scripts/a.rhai");
+    std::fs::write(&script, "print(`n is ${args.n}`);\n").unwrap();
+    let mut w = Watch::start(p, "scripts/a.rhai", &["--", "n=7"]);
+    w.wait_for("n is 7");
+    std::fs::write(&script, "print(`n+1 is ${args.n + 1}`);\n").unwrap();
+    w.wait_for("n+1 is 8");
+}

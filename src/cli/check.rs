@@ -1,6 +1,9 @@
 //! `fitup check DOC`.
 
 use super::Exit;
+// Every line goes through the CLI writer, which stops quietly on a closed pipe
+// (`fitup check doc.yaml | head`); `println!` would panic there.
+use super::out::{errln as eprintln, outln as println};
 use crate::document::Document;
 use std::path::Path;
 
@@ -45,19 +48,13 @@ pub(super) fn check(path: &Path) -> Exit {
     }
     println!("  components ({}):", doc.components().len());
     for c in doc.components() {
-        // `+ 0.0` turns -0.0 into 0.0 for display.
-        let [x, y, z, a, b, cc] = c.transform.to_xyzabc(Default::default()).map(|v| v + 0.0);
+        // The Transform's Display is the pose for people (mm, degrees, no `-0`).
         println!(
-            "    {:<12} {:<10} {}  at X {:.3} Y {:.3} Z {:.3} A {:.3} B {:.3} C {:.3}",
+            "    {:<12} {:<10} {}  at {}",
             c.name,
             c.part,
             if c.fixed { "fixed" } else { "free " },
-            x,
-            y,
-            z,
-            a.to_degrees(),
-            b.to_degrees(),
-            cc.to_degrees()
+            c.transform
         );
     }
     println!("  mates ({}), all satisfied", doc.mates().len());
@@ -69,18 +66,16 @@ pub(super) fn check(path: &Path) -> Exit {
     if !doc.robots().is_empty() {
         println!("  robots ({}):", doc.robots().len());
         for r in doc.robots() {
-            let p = r.tcp().to_xyzabc(crate::math::AngleConvention::default());
             println!(
-                "    {:<12} {} joints, {} solver, TCP at X {:.3} Y {:.3} Z {:.3} A {:.3} B {:.3} C {:.3}",
+                "    {:<12} {} joints, {} solver, TCP at {}",
                 r.name(),
                 r.robot().dof(),
-                if r.robot().analytic().is_some() { "closed-form" } else { "numeric" },
-                p[0],
-                p[1],
-                p[2],
-                p[3].to_degrees(),
-                p[4].to_degrees(),
-                p[5].to_degrees()
+                if r.robot().analytic().is_some() {
+                    "closed-form"
+                } else {
+                    "numeric"
+                },
+                r.tcp()
             );
         }
     }

@@ -3,10 +3,12 @@
 //! 2 usage).
 
 mod check;
+pub(crate) mod out;
 mod run;
 
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
+use out::{errln, outln};
+use std::path::{Path, PathBuf};
 
 /// fitup: scripting engine for robotic assembly (SolidWorks-API macros without SolidWorks).
 #[derive(Debug, Parser)]
@@ -17,11 +19,11 @@ pub struct Cli {
     pub command: Command,
 }
 
-/// Options shared by `run` and `watch`.
+/// Options of `run`.
 #[derive(Debug, clap::Args, Clone)]
 pub struct ScriptArgs {
-    /// The Rhai script (`.rhai`), or a robot motion program (any other extension,
-    /// `run` only: needs `--doc`, and `--robot` when the document has several robots).
+    /// The Rhai script (`.rhai`), or a robot motion program (any other extension:
+    /// needs `--doc`, and `--robot` when the document has several robots).
     pub script: PathBuf,
     /// A document to open and provide to the script as `doc`.
     #[arg(long)]
@@ -36,18 +38,57 @@ pub struct ScriptArgs {
     /// Where to write a motion program's joint/TCP log (CSV) [default: standard output].
     #[arg(long)]
     pub log: Option<PathBuf>,
-    /// Operation limit of the sandbox (roughly: expressions evaluated).
+    /// Operation limit of the sandbox (roughly: expressions evaluated, over the script
+    /// and its imports); the default stops an endless loop within about two seconds.
     #[arg(long, default_value_t = crate::script::Limits::default().max_operations)]
     pub max_operations: u64,
+    /// Script arguments after `--`: `key=value …`, the map `args` in the script
+    /// (numbers become numbers, `true`/`false` booleans, anything else text).
+    #[arg(last = true, value_name = "KEY=VALUE")]
+    pub args: Vec<String>,
+}
+
+/// Options of `watch` (a Rhai script only: motion programs are run with `run`).
+#[derive(Debug, clap::Args, Clone)]
+pub struct WatchArgs {
+    /// The Rhai script (`.rhai`).
+    pub script: PathBuf,
+    /// A document to open and provide to the script as `doc`.
+    #[arg(long)]
+    pub doc: Option<PathBuf>,
+    /// The project folder that bounds file access [default: the current folder].
+    #[arg(long)]
+    pub root: Option<PathBuf>,
+    /// Operation limit of the sandbox per run (roughly: expressions evaluated, over the
+    /// script and its imports); a new save cancels a running script anyway.
+    #[arg(long, default_value_t = crate::script::Limits::default().max_operations)]
+    pub max_operations: u64,
+    /// Script arguments after `--`: `key=value …`, the map `args` in the script.
+    #[arg(last = true, value_name = "KEY=VALUE")]
+    pub args: Vec<String>,
+}
+
+impl From<WatchArgs> for ScriptArgs {
+    fn from(w: WatchArgs) -> Self {
+        ScriptArgs {
+            script: w.script,
+            doc: w.doc,
+            root: w.root,
+            robot: None,
+            log: None,
+            max_operations: w.max_operations,
+            args: w.args,
+        }
+    }
 }
 
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Run a script once.
+    /// Run a script once (or a robot motion program with `--doc`).
     Run(ScriptArgs),
     /// Run a script, then again on every save of the script, the document or any file it read.
-    Watch(ScriptArgs),
+    Watch(WatchArgs),
     /// Validate a document and print a summary.
     Check {
         /// The document (`.yaml`).
@@ -55,15 +96,18 @@ pub enum Command {
     },
     /// Write the scripting API reference (generated from the registered functions).
     Docs {
-        /// Output file.
+        /// Output file (its folder is created when missing), or `-` for standard output.
         #[arg(long, default_value = "docs/api.md")]
         out: PathBuf,
     },
     /// Write the demo project (seed 000 fig. 11) into a folder: `fitup.toml`,
     /// `models/cell.yaml` and `models/meshes/`.
     Demo {
-        /// Target folder.
+        /// Target folder: new or empty, unless `--force`.
         dir: PathBuf,
+        /// Write into a folder that is not empty, replacing `cell.yaml` and the demo meshes.
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -83,43 +127,92 @@ pub fn main() -> i32 {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
-            let _ = e.print();
-            return if e.use_stderr() {
-                Exit::Usage as i32
+            // Help and errors go through the writer too (`fitup --help | head`).
+            let text = e.render().to_string();
+            let (stream, code) = if e.use_stderr() {
+                (out::Stream::Stderr, Exit::Usage)
             } else {
-                Exit::Ok as i32
+                (out::Stream::Stdout, Exit::Ok)
             };
+            out::write(stream, &text);
+            return code as i32;
         }
     };
     let exit = match cli.command {
         Command::Run(a) => run::run(&a),
-        Command::Watch(a) => run::watch(&a),
+        Command::Watch(a) => run::watch(&a.into()),
         Command::Check { doc } => check::check(&doc),
-        Command::Docs { out } => {
-            match crate::fsutil::write_atomic(&out, crate::script::api_reference().as_bytes()) {
-                Ok(()) => {
-                    println!("wrote {}", out.display());
-                    Exit::Ok
-                }
-                Err(e) => {
-                    eprintln!("error: cannot write {}: {e}", out.display());
-                    Exit::Failure
-                }
-            }
-        }
-        Command::Demo { dir } => match crate::demo::write_project(&dir) {
-            Ok(()) => {
-                println!(
-                    "wrote {0}/fitup.toml, {0}/models/cell.yaml and its meshes",
-                    dir.display()
-                );
-                Exit::Ok
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                Exit::Failure
-            }
-        },
+        Command::Docs { out } => docs(&out),
+        Command::Demo { dir, force } => demo(&dir, force),
     };
     exit as i32
+}
+
+/// `fitup docs [--out FILE|-]`.
+fn docs(out: &Path) -> Exit {
+    let text = crate::script::api_reference();
+    if out == Path::new("-") {
+        out::write(out::Stream::Stdout, &text);
+        return Exit::Ok;
+    }
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        if let Err(e) = std::fs::create_dir_all(parent) {
+            errln!(
+                "error: cannot create the folder {} for {}: {e} (pass --out FILE, or --out - for standard output)",
+                parent.display(),
+                out.display()
+            );
+            return Exit::Failure;
+        }
+    }
+    match crate::fsutil::write_atomic(out, text.as_bytes()) {
+        Ok(()) => {
+            outln!("wrote {}", out.display());
+            Exit::Ok
+        }
+        Err(e) => {
+            errln!(
+                "error: cannot write {}: {e} (pass --out FILE, or --out - for standard output)",
+                out.display()
+            );
+            Exit::Failure
+        }
+    }
+}
+
+/// `fitup demo DIR [--force]`: refuses a folder that already holds something, so an
+/// edited `cell.yaml` is never replaced by accident.
+fn demo(dir: &Path, force: bool) -> Exit {
+    if !force {
+        match std::fs::read_dir(dir) {
+            Ok(mut entries) => {
+                if entries.next().is_some() {
+                    errln!(
+                        "error: {} is not empty: the demo would replace fitup.toml and models/ in it; \
+                         choose a new folder, or pass --force to overwrite",
+                        dir.display()
+                    );
+                    return Exit::Failure;
+                }
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => {
+                errln!("error: {}: {e}", dir.display());
+                return Exit::Failure;
+            }
+        }
+    }
+    match crate::demo::write_project(dir) {
+        Ok(()) => {
+            outln!(
+                "wrote {0}/fitup.toml, {0}/models/cell.yaml and its meshes",
+                dir.display()
+            );
+            Exit::Ok
+        }
+        Err(e) => {
+            errln!("error: {e}");
+            Exit::Failure
+        }
+    }
 }

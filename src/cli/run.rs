@@ -1,9 +1,10 @@
 //! `fitup run` and `fitup watch`.
 
+use super::out::{errln, outln};
 use super::{Exit, ScriptArgs};
-use crate::script::{run_script, Caches, Limits, Project, RunOptions, ScriptError};
+use crate::math::format;
+use crate::script::{run_script, Arguments, Caches, Limits, Project, RunOptions, ScriptError};
 use crate::watch::{watch as watch_loop, WatchEvent};
-use std::io::Write;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -13,6 +14,7 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
         Some(d) => Some(inside(&project, d).map_err(|e| format!("document: {e}"))?),
         None => None,
     };
+    let args = Arguments::parse(&a.args).map_err(|e| e.to_string())?;
     Ok(RunOptions {
         script,
         doc,
@@ -22,11 +24,8 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
             ..Limits::default()
         },
         cancel: Arc::new(AtomicBool::new(false)),
-        output: Arc::new(|line: &str| {
-            let mut out = std::io::stdout().lock();
-            let _ = writeln!(out, "{line}");
-            let _ = out.flush();
-        }),
+        output: Arc::new(|line: &str| super::out::line(line)),
+        args,
     })
 }
 
@@ -36,7 +35,8 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
 fn project_of(a: &ScriptArgs, what: &str) -> Result<(Project, std::path::PathBuf), String> {
     let script = std::path::absolute(&a.script)
         .map_err(|e| format!("{what} {}: {e}", a.script.display()))?;
-    if !script.is_file() {
+    // Anything else that exists (a folder, a FIFO) is refused by name when it is read.
+    if !script.exists() {
         return Err(format!("{what} {} does not exist", a.script.display()));
     }
     let project = match &a.root {
@@ -67,10 +67,17 @@ fn is_program(path: &std::path::Path) -> bool {
 
 pub(super) fn run(a: &ScriptArgs) -> Exit {
     if is_program(&a.script) {
+        if !a.args.is_empty() {
+            errln!(
+                "error: script arguments (after `--`) are for .rhai scripts; {} is a motion program",
+                a.script.display()
+            );
+            return Exit::Usage;
+        }
         return match run_program(a) {
             Ok(()) => Exit::Ok,
             Err((exit, message)) => {
-                eprintln!("error: {message}");
+                errln!("error: {message}");
                 exit
             }
         };
@@ -78,7 +85,7 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
     let opts = match options(a) {
         Ok(o) => o,
         Err(e) => {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
             return Exit::Usage;
         }
     };
@@ -86,7 +93,7 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
     match outcome.result {
         Ok(()) => Exit::Ok,
         Err(e) => {
-            eprintln!("error: {}", e.render());
+            errln!("error: {}", e.render());
             Exit::Failure
         }
     }
@@ -96,59 +103,50 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
     let opts = match options(a) {
         Ok(o) => o,
         Err(e) => {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
             return Exit::Usage;
         }
     };
     let project = opts.project.clone();
     let stop = Arc::new(AtomicBool::new(false));
-    println!(
+    outln!(
         "watching {} (Ctrl-C to stop)",
         project.display(&opts.script)
     );
-    let result = watch_loop(opts, stop, |event| {
-        let mut out = std::io::stdout().lock();
-        match event {
-            WatchEvent::RunStarted { number, changed } => {
-                let what = if changed.is_empty() {
-                    "first run".to_string()
-                } else {
-                    changed
-                        .iter()
-                        .map(|p| project.display(p))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                };
-                let _ = writeln!(out, "== run {number} at {} ({what})", clock());
-            }
-            WatchEvent::RunFinished { number, outcome } => {
-                let ms = outcome.elapsed.as_secs_f64() * 1000.0;
-                match &outcome.result {
-                    Ok(()) => {
-                        let _ = writeln!(out, "== done {number} ok in {ms:.1} ms");
-                    }
-                    Err(ScriptError::Cancelled) => {
-                        let _ = writeln!(
-                            out,
-                            "== done {number} cancelled after {ms:.1} ms (a newer save)"
-                        );
-                    }
-                    Err(e) => {
-                        let _ = writeln!(out, "{}", e.render());
-                        let _ = writeln!(out, "== done {number} error in {ms:.1} ms");
-                    }
+    let result = watch_loop(opts, stop, |event| match event {
+        WatchEvent::RunStarted { number, changed } => {
+            let what = if changed.is_empty() {
+                "first run".to_string()
+            } else {
+                changed
+                    .iter()
+                    .map(|p| project.display(p))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            outln!("== run {number} at {} ({what})", clock());
+        }
+        WatchEvent::RunFinished { number, outcome } => {
+            let ms = format::number(outcome.elapsed.as_secs_f64() * 1000.0, 1);
+            let ops = format::count(outcome.operations);
+            match &outcome.result {
+                Ok(()) => outln!("== done {number} ok in {ms} ms ({ops} operations)"),
+                Err(ScriptError::Cancelled) => {
+                    outln!("== done {number} cancelled after {ms} ms (a newer save)")
+                }
+                Err(e) => {
+                    outln!("{}", e.render());
+                    outln!("== done {number} error in {ms} ms");
                 }
             }
-            WatchEvent::Warning(w) => {
-                let _ = writeln!(out, "warning: {w}");
-            }
         }
-        let _ = out.flush();
+        WatchEvent::Warning(w) => outln!("warning: {w}"),
+        WatchEvent::Notice(n) => outln!("== {n}"),
     });
     match result {
         Ok(()) => Exit::Ok,
         Err(e) => {
-            eprintln!("error: file watching failed: {e}");
+            errln!("error: file watching failed: {e}");
             Exit::Failure
         }
     }
@@ -220,15 +218,15 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
                 .map_err(|e| usage(format!("log: {e}")))?;
             crate::fsutil::write_atomic(&path, csv.as_bytes())
                 .map_err(|e| fail(format!("cannot write {}: {e}", log.display())))?;
-            println!(
-                "{}: {} samples, {:.3} s; log written to {}",
+            outln!(
+                "{}: {} samples, {} s; log written to {}",
                 doc.robots()[index].name(),
                 trajectory.samples.len(),
-                trajectory.duration(),
+                format::number(trajectory.duration(), 3),
                 log.display()
             );
         }
-        None => print!("{csv}"),
+        None => super::out::write(super::out::Stream::Stdout, &csv),
     }
     Ok(())
 }

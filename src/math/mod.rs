@@ -5,6 +5,7 @@
 //! user-facing `X Y Z A B C` pose triples, see [`AngleConvention`]).
 
 mod euler;
+pub mod format;
 mod rng;
 pub mod transform;
 

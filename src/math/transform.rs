@@ -262,13 +262,8 @@ impl std::ops::Mul for Transform {
     }
 }
 
+/// The full-precision matrix, rows `[a b c 0] [d e f 0] [g h i 0] [j k l 1]` (mm).
 impl fmt::Debug for Transform {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        fmt::Display::fmt(self, f)
-    }
-}
-
-impl fmt::Display for Transform {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let m = self.to_matrix();
         write!(f, "Transform[")?;
@@ -276,9 +271,26 @@ impl fmt::Display for Transform {
             if i > 0 {
                 write!(f, "; ")?;
             }
-            write!(f, "{:.6} {:.6} {:.6} {:.6}", row[0], row[1], row[2], row[3])?;
+            write!(f, "{:?} {:?} {:?} {:?}", row[0], row[1], row[2], row[3])?;
         }
         write!(f, "]")
+    }
+}
+
+/// The pose for people: `X 10 Y 0 Z 5 A 0° B 0° C 90°` (mm and degrees, default
+/// convention `xyz`, 0.001 resolution, see [`super::format`]).
+impl fmt::Display for Transform {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.to_xyzabc(AngleConvention::default());
+        let deg = [
+            v[0],
+            v[1],
+            v[2],
+            v[3].to_degrees(),
+            v[4].to_degrees(),
+            v[5].to_degrees(),
+        ];
+        f.write_str(&super::format::xyzabc_deg(&deg))
     }
 }
 

@@ -148,6 +148,14 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         |d: &mut DocHandle, name: &str| d.component(name),
     );
     api.f(
+        "Document.set_transform(name: string, pose)",
+        "Sets the pose of component `name` (part frame → world, mm): a Transform, a 4×4 matrix or `[x, y, z, a, b, c]` (mm, degrees). Same as `doc.component(name).set_transform(pose)`; fixed components refuse.",
+        |d: &mut DocHandle, name: &str, v: Dynamic| -> ScriptResult<()> {
+            let t = to_transform(&v, "pose")?;
+            d.component(name)?.set_transform(t)
+        },
+    );
+    api.f(
         "Document.components() -> array",
         "Every component, in document order.",
         |d: &mut DocHandle| -> ScriptResult<Array> {
@@ -275,6 +283,15 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         |c: &mut ComponentHandle, v: Dynamic| -> ScriptResult<()> {
             let t = to_transform(&v, "transform")?;
             c.set_transform(t)
+        },
+    );
+    // Rhai refuses `doc.component("x").transform = m` (a property set on a call's
+    // result is a syntax error), so setting a pose has a one-call spelling too.
+    api.f(
+        "Component.set_transform(pose)",
+        "Sets the pose (part frame → world, mm): a Transform, a 4×4 matrix or `[x, y, z, a, b, c]` (mm, degrees). The one-call spelling of `c.transform = pose` that also works on a call's result: `doc.component(\"x\").set_transform(pose)`.",
+        |c: &mut ComponentHandle, v: Dynamic| -> ScriptResult<()> {
+            c.set_transform(to_transform(&v, "pose")?)
         },
     );
     api.get(

@@ -3,7 +3,7 @@
 use super::api::Api;
 use super::convert::{array3, err, fail, floats, num, numbers, point3, vec3};
 use super::ScriptResult;
-use crate::math::{AngleConvention, Transform, Vec3};
+use crate::math::{format, AngleConvention, Transform, Vec3};
 use rhai::{Array, Dynamic};
 
 fn matrix_array(t: &Transform) -> Dynamic {
@@ -69,6 +69,43 @@ pub fn to_transform(v: &Dynamic, what: &str) -> ScriptResult<Transform> {
             Transform::from_array_data(&d).map_err(fail)
         }
         n => err(format!("{what}: an array of {n} elements is not a 4×4 matrix, a pose [x,y,z,a,b,c] or 16 array-data numbers")),
+    }
+}
+
+/// `v` for people: numbers to `decimals` places without noise or `-0`, arrays element
+/// by element, Transforms as `X … C …°` poses (see [`crate::math::format`]).
+fn fmt_value(v: &Dynamic, decimals: usize) -> String {
+    if let Ok(x) = v.as_float() {
+        return format::number(x, decimals);
+    }
+    if let Ok(i) = v.as_int() {
+        return i.to_string();
+    }
+    if let Some(t) = v.read_lock::<Transform>() {
+        return t.to_string();
+    }
+    if let Some(a) = v.read_lock::<Array>() {
+        let items: Vec<String> = a.iter().map(|x| fmt_value(x, decimals)).collect();
+        return format!("[{}]", items.join(", "));
+    }
+    if let Some(m) = v.read_lock::<rhai::Map>() {
+        let items: Vec<String> = m
+            .iter()
+            .map(|(k, x)| format!("{k}: {}", fmt_value(x, decimals)))
+            .collect();
+        return format!("#{{{}}}", items.join(", "));
+    }
+    v.to_string()
+}
+
+fn decimals(d: i64) -> ScriptResult<usize> {
+    if (0..=format::MAX_DECIMALS as i64).contains(&d) {
+        Ok(d as usize)
+    } else {
+        err(format!(
+            "decimals must be 0 to {}, not {d}",
+            format::MAX_DECIMALS
+        ))
     }
 }
 
@@ -214,13 +251,13 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f(
         "Transform.to_string() -> string",
-        "The matrix as text.",
+        "The pose for people, `X 10 Y 0 Z 5 A 0° B 0° C 90°` (mm, degrees, convention `xyz`, 0.001 resolution); what `print` and `${t}` show.",
         |t: &mut Transform| t.to_string(),
     );
     api.f(
         "Transform.to_debug() -> string",
-        "The matrix as text.",
-        |t: &mut Transform| t.to_string(),
+        "The 4×4 matrix at full precision, rows `[a b c 0] [d e f 0] [g h i 0] [j k l 1]` (mm).",
+        |t: &mut Transform| format!("{t:?}"),
     );
     api.f(
         "deg(rad) -> float",
@@ -231,5 +268,26 @@ pub(super) fn register(api: &mut Api) {
         "rad(deg) -> float",
         "Degrees to radians.",
         |d: Dynamic| -> ScriptResult<f64> { Ok(num(&d, "deg")?.to_radians()) },
+    );
+    api.section("Formatting", "Numbers for people: `fmt` rounds to a number of decimals (3 by default: 0.001 mm, 0.001°), drops trailing zeros and rounding noise (`29.999999999999996` → `30`, `6.4e-15` → `0`), never prints `-0`, and writes magnitudes of 10¹⁵ and more as `1e308`. Plain `print(x)` and `${x}` keep every digit (use them for data you will read back).");
+    api.f(
+        "fmt(value) -> string",
+        "A number with up to 3 decimals; an array or map element by element; a Transform as its pose (`X 10 Y 0 Z 5 A 0° B 0° C 90°`); anything else as `to_string`.",
+        |v: Dynamic| fmt_value(&v, format::DEFAULT_DECIMALS),
+    );
+    api.f(
+        "fmt(value, decimals: int) -> string",
+        "Like `fmt(value)` with `decimals` places (0 to 15) for numbers, also inside arrays and maps.",
+        |v: Dynamic, d: i64| -> ScriptResult<String> { Ok(fmt_value(&v, decimals(d)?)) },
+    );
+    api.f(
+        "fmt_mm(length) -> string",
+        "A length in mm for people: `12.5 mm` (0.001 mm resolution).",
+        |v: Dynamic| -> ScriptResult<String> { Ok(format::length(num(&v, "length")?)) },
+    );
+    api.f(
+        "fmt_deg(angle_deg) -> string",
+        "An angle **already in degrees** for people: `30°` (0.001° resolution); for radians write `fmt_deg(deg(r))`.",
+        |v: Dynamic| -> ScriptResult<String> { Ok(format::degrees(num(&v, "angle")?)) },
     );
 }

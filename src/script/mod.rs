@@ -6,6 +6,7 @@
 //! which are degrees; a dimension's `system_value` is SI (metres, radians).
 
 mod api;
+mod args;
 mod bind_document;
 mod bind_interference;
 mod bind_math;
@@ -15,6 +16,7 @@ mod convert;
 pub mod sandbox;
 
 pub use api::{api_reference, ApiEntry};
+pub use args::{ArgError, ArgValue, Arguments};
 pub use bind_document::DocHandle;
 pub use sandbox::{Limits, Project};
 
@@ -23,7 +25,7 @@ use crate::mesh::MeshCache;
 use rhai::{Engine, EvalAltResult, Position, Scope};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -51,8 +53,11 @@ pub struct Context {
     pub cancel: Arc<AtomicBool>,
     /// Output lines.
     pub output: OutputSink,
+    /// The script's arguments (`fitup run SCRIPT -- key=value …`), the map `args`.
+    pub args: Arguments,
     reads: Mutex<BTreeSet<PathBuf>>,
     writes: Mutex<BTreeSet<PathBuf>>,
+    operations: AtomicU64,
 }
 
 impl Context {
@@ -68,9 +73,22 @@ impl Context {
             caches,
             cancel,
             output,
+            args: Arguments::default(),
             reads: Mutex::default(),
             writes: Mutex::default(),
+            operations: AtomicU64::new(0),
         }
+    }
+
+    /// The same context with script arguments.
+    pub fn with_args(mut self, args: Arguments) -> Self {
+        self.args = args;
+        self
+    }
+
+    /// Operations evaluated so far in this run, over the script and all its modules.
+    pub fn operations(&self) -> u64 {
+        self.operations.load(Ordering::Relaxed)
     }
 
     /// Records a file the run depends on (watch mode reruns when it changes).
@@ -114,6 +132,8 @@ pub struct RunOptions {
     pub cancel: Arc<AtomicBool>,
     /// Output sink.
     pub output: OutputSink,
+    /// The script's arguments, the map `args` in the script.
+    pub args: Arguments,
 }
 
 /// Why a run failed.
@@ -147,7 +167,18 @@ pub struct RunOutcome {
     pub files_written: Vec<PathBuf>,
     /// Wall time of the run.
     pub elapsed: Duration,
+    /// Operations the run evaluated (script and modules), to compare with the limit.
+    pub operations: u64,
 }
+
+/// Stack of the thread a script runs on. Rhai evaluates recursively; the sandbox's
+/// depth limits (64 nested calls, expressions 128 deep, 16 nested imports) fit in a
+/// fraction of this, which is only reserved address space until used.
+pub const SCRIPT_STACK_BYTES: usize = 256 << 20;
+
+/// What `on_progress` returns when the run passes its operation limit (Rhai counts
+/// each imported module from zero, so the limit over the whole run is kept here).
+const OPERATION_LIMIT: &str = "operation limit";
 
 /// Builds a sandboxed engine with the whole fitup API for the given context.
 pub fn engine(ctx: &Arc<Context>, limits: &Limits) -> Engine {
@@ -160,28 +191,56 @@ pub fn engine(ctx: &Arc<Context>, limits: &Limits) -> Engine {
     let c = ctx.clone();
     engine.on_debug(move |s, _, pos| c.print(&format!("[debug {pos}] {s}")));
     let c = ctx.clone();
+    let max_operations = limits.max_operations;
     engine.on_progress(move |_| {
+        let n = c.operations.fetch_add(1, Ordering::Relaxed) + 1;
         if c.cancelled() {
             Some("cancelled".into())
+        } else if max_operations > 0 && n > max_operations {
+            Some(OPERATION_LIMIT.into())
         } else {
             None
         }
     });
-    engine.set_module_resolver(sandbox::ProjectResolver { ctx: ctx.clone() });
+    engine.set_module_resolver(sandbox::ProjectResolver::new(ctx.clone(), *limits));
     api::register_all(&mut engine, ctx);
     engine
 }
 
 /// Runs a script to completion (or cancellation) and reports what it read.
+///
+/// The script runs on its own thread with a [`SCRIPT_STACK_BYTES`] stack, so deep
+/// recursion and deeply nested expressions end with the sandbox's limit message, never
+/// with a stack overflow of the caller's thread (watch mode's run threads are small).
 pub fn run_script(opts: &RunOptions, caches: &Arc<Caches>) -> RunOutcome {
     let start = Instant::now();
-    let ctx = Arc::new(Context::new(
-        opts.project.clone(),
-        caches.clone(),
-        opts.cancel.clone(),
-        opts.output.clone(),
-    ));
-    let result = run_inner(opts, &ctx);
+    let ctx = Arc::new(
+        Context::new(
+            opts.project.clone(),
+            caches.clone(),
+            opts.cancel.clone(),
+            opts.output.clone(),
+        )
+        .with_args(opts.args.clone()),
+    );
+    let result = std::thread::scope(|s| {
+        let run = std::thread::Builder::new()
+            .name("fitup-script".into())
+            .stack_size(SCRIPT_STACK_BYTES)
+            .spawn_scoped(s, || run_inner(opts, &ctx));
+        match run {
+            Ok(handle) => handle.join().unwrap_or_else(|_| {
+                Err(ScriptError::Located(SourceError::new(
+                    &opts.script,
+                    0,
+                    0,
+                    "internal error: the script's thread panicked (please report this)",
+                )))
+            }),
+            // No thread to be had (out of memory or threads): run here instead.
+            Err(_) => run_inner(opts, &ctx),
+        }
+    });
     let files_read = ctx
         .reads
         .lock()
@@ -197,6 +256,7 @@ pub fn run_script(opts: &RunOptions, caches: &Arc<Caches>) -> RunOutcome {
         files_read,
         files_written,
         elapsed: start.elapsed(),
+        operations: ctx.operations(),
     }
 }
 
@@ -220,6 +280,7 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
     })?;
     let engine = engine(ctx, &opts.limits);
     let mut scope = Scope::new();
+    scope.push_constant("args", ctx.args.to_map());
     if let Some(doc_path) = &opts.doc {
         let doc = bind_document::DocHandle::open(ctx, &doc_path.to_string_lossy())
             .map_err(|e| ScriptError::Located(SourceError::new(doc_path, 0, 0, e.to_string())))?;
@@ -227,27 +288,36 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
     }
     let mut ast = engine.compile_with_scope(&scope, &text).map_err(|e| {
         let (line, col) = (e.1.line().unwrap_or(0), e.1.position().unwrap_or(0));
-        ScriptError::Located(SourceError::new(
-            &script,
-            line,
-            col,
-            format!("syntax error: {}", e.0),
-        ))
+        let located = SourceError::new(&script, line, col, format!("syntax error: {}", e.0));
+        ScriptError::Located(match *e.0 {
+            rhai::ParseErrorType::AssignmentToInvalidLHS(..) => located.with_help(
+                "Rhai cannot set a property of a function call's result \
+                 (`doc.component(\"x\").transform = m`); write `doc.set_transform(\"x\", m)`, \
+                 `doc.component(\"x\").set_transform(m)`, or `let c = doc.component(\"x\"); c.transform = m;`",
+            ),
+            _ => located,
+        })
     })?;
     ast.set_source(script.to_string_lossy().as_ref());
     match engine.run_ast_with_scope(&mut scope, &ast) {
         Ok(()) => Ok(()),
         Err(e) => {
-            if ctx.cancelled() && matches!(*e, EvalAltResult::ErrorTerminated(..)) {
+            // Whatever error a cancelled run ends with (the termination itself, or a
+            // module's error wrapping it) is the cancellation.
+            if ctx.cancelled() {
                 return Err(ScriptError::Cancelled);
             }
-            Err(ScriptError::Located(locate_error(&e, &script)))
+            Err(ScriptError::Located(locate_error(
+                &e,
+                &script,
+                &opts.limits,
+            )))
         }
     }
 }
 
 /// Finds the innermost located cause of a Rhai error, in whichever file it happened.
-fn locate_error(err: &EvalAltResult, file: &Path) -> SourceError {
+fn locate_error(err: &EvalAltResult, file: &Path, limits: &Limits) -> SourceError {
     let mut calls = Vec::new();
     let mut current = err;
     let mut path = file.to_path_buf();
@@ -280,7 +350,7 @@ fn locate_error(err: &EvalAltResult, file: &Path) -> SourceError {
             _ => break,
         }
     }
-    let message = describe(current);
+    let message = describe(current, limits);
     let (line, col) = position(pos);
     let mut e = SourceError::new(&path, line, col, message);
     if !calls.is_empty() {
@@ -300,14 +370,34 @@ fn position(pos: Position) -> (usize, usize) {
     (pos.line().unwrap_or(0), pos.position().unwrap_or(0))
 }
 
-fn describe(err: &EvalAltResult) -> String {
+fn describe(err: &EvalAltResult, limits: &Limits) -> String {
     match err {
         EvalAltResult::ErrorRuntime(v, _) => v.to_string(),
-        EvalAltResult::ErrorTooManyOperations(_) => {
-            "the script ran past its operation limit (an endless loop?); raise it with --max-operations".into()
+        EvalAltResult::ErrorTerminated(token, _)
+            if token.clone().into_string().ok().as_deref() != Some(OPERATION_LIMIT) =>
+        {
+            "the script was stopped".into()
         }
-        EvalAltResult::ErrorStackOverflow(_) => "too many nested function calls (runaway recursion?)".into(),
-        EvalAltResult::ErrorDataTooLarge(what, _) => format!("{what} is larger than the sandbox allows"),
+        EvalAltResult::ErrorTooManyOperations(_) | EvalAltResult::ErrorTerminated(..) => format!(
+            "the script ran past its operation limit of {} operations (an endless loop?); if it really needs more, \
+             raise it with `--max-operations N` (e.g. `--max-operations {}`)",
+            crate::math::format::count(limits.max_operations),
+            limits.max_operations.saturating_mul(10)
+        ),
+        EvalAltResult::ErrorStackOverflow(_) => format!(
+            "more than {} nested function calls (runaway recursion?)",
+            limits.max_call_levels
+        ),
+        EvalAltResult::ErrorTooManyModules(_) => format!(
+            "more than {} modules imported in one run",
+            limits.max_modules
+        ),
+        EvalAltResult::ErrorDataTooLarge(what, _) => format!(
+            "{what} is larger than the sandbox allows (strings up to {} characters, arrays up to {} elements, maps up to {} properties)",
+            crate::math::format::count(limits.max_string_size as u64),
+            crate::math::format::count(limits.max_array_size as u64),
+            crate::math::format::count(limits.max_map_size as u64)
+        ),
         other => {
             let s = other.to_string();
             // Rhai appends " (line x, position y)"; the location is shown separately.

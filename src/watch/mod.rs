@@ -8,16 +8,27 @@
 //!   rename lands on it; a bare "modified" event (which on Linux arrives before the
 //!   writer is done) only arms a fallback timer (300 ms, re-armed by every further modification);
 //! - a file counts as changed only when its content hash differs from the one the last
-//!   run saw, so duplicate events, `touch`, and the run's own writes trigger nothing.
+//!   run saw, so duplicate events, `touch`, and the run's own writes trigger nothing;
+//! - a file that is missing or empty when checked is given [`MODIFY_FALLBACK`] to come
+//!   back: editors that save by renaming the original to a backup, creating the file
+//!   and writing it (Emacs, Vim) give one run of the complete content, not a run of the
+//!   missing or empty file. A file still missing after that is reported and waited for;
+//! - a newly created file is read at its writer's close, not at its creation (when it
+//!   is still empty);
+//! - every watched folder is checked every [`FOLDER_POLL`]: a folder renamed away,
+//!   deleted or replaced (the project folder moved and recreated) is reported and
+//!   watched again when it is back, and its files are compared with what the last run
+//!   saw. Events from a folder that was moved away are ignored (inotify keeps reporting
+//!   them under the old name).
 //!
 //! A save while a run is in progress cancels that run (the engine checks the flag
 //! between operations) and starts a new one.
 
 use crate::fsutil::content_hash;
 use crate::script::{run_script, Caches, RunOptions, RunOutcome};
-use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind};
+use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind, RenameMode};
 use notify::{RecursiveMode, Watcher as _};
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, RecvTimeoutError};
@@ -27,6 +38,9 @@ use std::time::{Duration, Instant};
 /// How long a bare "modified" event waits for the writer's close before the file is
 /// checked anyway (writers that keep the file open, network file systems).
 pub const MODIFY_FALLBACK: Duration = Duration::from_millis(300);
+
+/// How often watched folders are checked for having been moved, deleted or replaced.
+pub const FOLDER_POLL: Duration = Duration::from_millis(200);
 
 /// What the watcher reports to its user interface.
 pub enum WatchEvent<'a> {
@@ -46,6 +60,27 @@ pub enum WatchEvent<'a> {
     },
     /// The watcher itself hit a problem (a folder could not be watched…); it goes on.
     Warning(String),
+    /// Something the user should know that is not a problem (a folder is back).
+    Notice(String),
+}
+
+/// Identity of a folder (device and inode on Unix), to tell a folder from a new one
+/// created under the same name.
+type FolderId = (u64, u64);
+
+#[cfg(unix)]
+fn folder_id(dir: &Path) -> Option<FolderId> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(dir)
+        .ok()
+        .filter(|m| m.is_dir())
+        .map(|m| (m.dev(), m.ino()))
+}
+
+#[cfg(not(unix))]
+fn folder_id(dir: &Path) -> Option<FolderId> {
+    // Without inodes a replaced folder is only seen when it goes missing.
+    dir.is_dir().then_some((0, 0))
 }
 
 enum Msg {
@@ -66,11 +101,18 @@ pub fn watch(
     let mut watcher = notify::recommended_watcher(move |e| {
         let _ = fs_tx.send(Msg::Fs(e));
     })?;
-    let mut watched_dirs: BTreeSet<PathBuf> = BTreeSet::new();
+    // Every watched folder and its identity when it was watched (None while missing).
+    let mut watched_dirs: BTreeMap<PathBuf, Option<FolderId>> = BTreeMap::new();
     // Content hash of every dependency as the current run saw it.
     let mut baseline: HashMap<PathBuf, Option<u64>> = HashMap::new();
-    let mut pending: BTreeSet<PathBuf> = BTreeSet::new();
-    let mut deadline: Option<Instant> = None;
+    // Files with news, and when each may be read: at once after its writer closed it
+    // or a rename landed on it, MODIFY_FALLBACK after any other event (re-armed).
+    let mut pending: BTreeMap<PathBuf, Instant> = BTreeMap::new();
+    // Files found missing or empty, and since when: given MODIFY_FALLBACK to settle.
+    let mut settling: HashMap<PathBuf, Instant> = HashMap::new();
+    // Files reported missing (reported once; the run waits for them).
+    let mut missing: BTreeSet<PathBuf> = BTreeSet::new();
+    let mut last_poll = Instant::now();
     let mut number = 0u64;
     let mut running: Option<(u64, Arc<AtomicBool>)> = None;
     let mut queued: Option<Vec<PathBuf>> = Some(Vec::new());
@@ -82,8 +124,9 @@ pub fn watch(
         baseline.insert(p.clone(), hash_file(p));
         // Watched before the first run ends, so a save can cancel a first run that spins.
         if let Some(dir) = p.parent() {
-            if watched_dirs.insert(dir.to_path_buf()) {
+            if !watched_dirs.contains_key(dir) {
                 watcher.watch(dir, RecursiveMode::NonRecursive)?;
+                watched_dirs.insert(dir.to_path_buf(), folder_id(dir));
             }
         }
     }
@@ -118,30 +161,93 @@ pub fn watch(
                 running = Some((number, cancel));
             }
         }
-        let wait = deadline
+        // Folders moved away, deleted or replaced: watch them again when they are back.
+        if last_poll.elapsed() >= FOLDER_POLL {
+            last_poll = Instant::now();
+            for (dir, id) in watched_dirs.iter_mut() {
+                let now = folder_id(dir);
+                if now == *id {
+                    continue;
+                }
+                // The old watch follows the moved folder (or is gone with it).
+                let _ = watcher.unwatch(dir);
+                match now {
+                    None => {
+                        report(WatchEvent::Warning(format!(
+                            "the folder {} was moved or deleted; waiting for it to come back",
+                            dir.display()
+                        )));
+                        *id = None;
+                    }
+                    Some(_) => match watcher.watch(dir, RecursiveMode::NonRecursive) {
+                        Ok(()) => {
+                            report(WatchEvent::Notice(format!(
+                                "the folder {} is back (a new folder): watching it again",
+                                dir.display()
+                            )));
+                            *id = now;
+                            // Compare its files with what the last run saw.
+                            let now = Instant::now();
+                            pending.extend(
+                                baseline
+                                    .keys()
+                                    .filter(|f| f.parent() == Some(dir.as_path()))
+                                    .map(|f| (f.clone(), now)),
+                            );
+                        }
+                        Err(e) => report(WatchEvent::Warning(format!(
+                            "cannot watch {} again: {e}; retrying",
+                            dir.display()
+                        ))),
+                    },
+                }
+            }
+        }
+        let next_due = pending.values().min().copied();
+        let wait = next_due
             .map(|d| d.saturating_duration_since(Instant::now()))
-            .unwrap_or(Duration::from_millis(200));
-        let msg = rx.recv_timeout(wait);
-        let mut check_now = false;
+            .unwrap_or(FOLDER_POLL)
+            .min(FOLDER_POLL);
+        let msg = if wait.is_zero() {
+            Err(RecvTimeoutError::Timeout)
+        } else {
+            rx.recv_timeout(wait)
+        };
         match msg {
             Ok(Msg::Fs(Ok(event))) => {
-                let relevant: Vec<PathBuf> = event
-                    .paths
-                    .iter()
-                    .map(|p| absolute(p))
-                    .filter(|p| baseline.contains_key(p))
-                    .collect();
-                if !relevant.is_empty() {
-                    pending.extend(relevant);
-                    match event.kind {
-                        EventKind::Access(AccessKind::Close(AccessMode::Write))
-                        | EventKind::Create(_)
-                        | EventKind::Remove(_)
-                        | EventKind::Modify(ModifyKind::Name(_)) => check_now = true,
-                        // Re-armed by every further "modified": a writer that is
-                        // still writing (or slow under load) is not read half-done.
-                        _ => deadline = Some(Instant::now() + MODIFY_FALLBACK),
+                // A save is complete when its writer closes the file or a rename lands
+                // on it; the rename's target is the last path of a "both" event.
+                let landed = match event.kind {
+                    EventKind::Access(AccessKind::Close(AccessMode::Write)) => event.paths.first(),
+                    EventKind::Modify(ModifyKind::Name(RenameMode::To | RenameMode::Both)) => {
+                        event.paths.last()
                     }
+                    _ => None,
+                }
+                .map(|p| absolute(p));
+                for p in &event.paths {
+                    let p = absolute(p);
+                    if !baseline.contains_key(&p) {
+                        continue;
+                    }
+                    // Events of a folder that was moved away arrive under its old name.
+                    let current = p.parent().is_some_and(|d| {
+                        watched_dirs
+                            .get(d)
+                            .is_some_and(|id| id.is_some() && *id == folder_id(d))
+                    });
+                    if !current {
+                        continue;
+                    }
+                    // Anything else (created, modified, renamed away, deleted) is a
+                    // save in progress: wait for its end, re-armed by every event, so
+                    // a file is not read half-written or in the gap of a backup save.
+                    let due = if landed.as_ref() == Some(&p) {
+                        Instant::now()
+                    } else {
+                        Instant::now() + MODIFY_FALLBACK
+                    };
+                    pending.insert(p, due);
                 }
             }
             Ok(Msg::Fs(Err(e))) => report(WatchEvent::Warning(format!("file watching: {e}"))),
@@ -152,12 +258,15 @@ pub fn watch(
                     let f = absolute(f);
                     baseline.entry(f.clone()).or_insert_with(|| hash_file(&f));
                     if let Some(dir) = f.parent() {
-                        if watched_dirs.insert(dir.to_path_buf()) {
-                            if let Err(e) = watcher.watch(dir, RecursiveMode::NonRecursive) {
-                                report(WatchEvent::Warning(format!(
+                        if !watched_dirs.contains_key(dir) {
+                            match watcher.watch(dir, RecursiveMode::NonRecursive) {
+                                Ok(()) => {
+                                    watched_dirs.insert(dir.to_path_buf(), folder_id(dir));
+                                }
+                                Err(e) => report(WatchEvent::Warning(format!(
                                     "cannot watch {}: {e}",
                                     dir.display()
-                                )));
+                                ))),
                             }
                         }
                     }
@@ -179,19 +288,49 @@ pub fn watch(
                 // rename arrived; what is still pending is a file being written, left
                 // to its close event or the fallback timer.
             }
-            Err(RecvTimeoutError::Timeout) => {
-                check_now = deadline.is_some_and(|d| Instant::now() >= d)
-            }
+            Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => return Ok(()),
         }
-        if check_now {
-            deadline = None;
-            let changed: Vec<PathBuf> = pending
-                .iter()
-                .filter(|p| baseline.get(*p).is_some_and(|h| *h != hash_file(p)))
-                .cloned()
-                .collect();
-            pending.clear();
+        let now = Instant::now();
+        let due: Vec<PathBuf> = pending
+            .iter()
+            .filter(|(_, t)| **t <= now)
+            .map(|(p, _)| p.clone())
+            .collect();
+        if !due.is_empty() {
+            let mut changed = Vec::new();
+            for p in due {
+                pending.remove(&p);
+                let hash = hash_file(&p);
+                if baseline.get(&p).is_none_or(|h| *h == hash) {
+                    settling.remove(&p);
+                    missing.remove(&p);
+                    continue;
+                }
+                let size = std::fs::metadata(&p).ok().map(|m| m.len());
+                if matches!(size, None | Some(0)) {
+                    // Missing or empty: mid-save (renamed to a backup, or created and
+                    // not yet written). Give it time before believing it.
+                    let since = *settling.entry(p.clone()).or_insert(now);
+                    if now < since + MODIFY_FALLBACK {
+                        pending.insert(p, since + MODIFY_FALLBACK);
+                        continue;
+                    }
+                    if size.is_none() {
+                        settling.remove(&p);
+                        if missing.insert(p.clone()) {
+                            report(WatchEvent::Warning(format!(
+                                "{} is gone; the next run starts when it is back",
+                                p.display()
+                            )));
+                        }
+                        continue;
+                    }
+                }
+                settling.remove(&p);
+                missing.remove(&p);
+                changed.push(p);
+            }
             if !changed.is_empty() {
                 for p in &changed {
                     baseline.insert(p.clone(), hash_file(p));

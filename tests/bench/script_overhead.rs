@@ -32,6 +32,7 @@ fn rhai_seconds(dir: &Path, body: &str) -> f64 {
         },
         cancel: Arc::new(AtomicBool::new(false)),
         output: Arc::new(|l: &str| println!("{l}")),
+        args: Default::default(),
     };
     let caches = Arc::new(Caches::default());
     let t = Instant::now();
