@@ -124,7 +124,7 @@ pub fn greedy_ant(
         ));
     }
     let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
         return Ok(Path::failed(NAME, f, 0, 0, &checker, run.elapsed_ms()));
     }
@@ -206,7 +206,7 @@ pub fn greedy_ant(
         space,
         &options.smoothing,
         options.limits.seed,
-        &run,
+        &mut run,
         nodes,
     ))
 }

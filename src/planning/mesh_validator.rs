@@ -7,6 +7,14 @@ use crate::collision::{
 };
 use crate::math::Transform;
 use std::sync::Arc;
+use std::time::Instant;
+
+/// The finest stepwise edge resolution and contact step accepted, mm: finer steps
+/// cannot see anything the 0.01 mm default tolerance does not, and only make one
+/// edge check take hours.
+pub const MIN_STEP_MM: f64 = 1e-4;
+/// The finest stepwise rotation step accepted, rad.
+pub const MIN_STEP_RAD: f64 = 1e-6;
 
 /// How [`MeshValidator`] checks a straight SE(3) edge.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,9 +27,9 @@ pub enum EdgeCheck {
     /// Static checks at most `mm` of translation and `rad` of rotation apart
     /// (bisection order, end pose first). Features thinner than a step can be missed.
     Stepwise {
-        /// Largest translation between two checked poses (mm, > 0).
+        /// Largest translation between two checked poses (mm, ≥ [`MIN_STEP_MM`]).
         mm: f64,
-        /// Largest rotation between two checked poses (rad, > 0).
+        /// Largest rotation between two checked poses (rad, ≥ [`MIN_STEP_RAD`]).
         rad: f64,
     },
 }
@@ -38,7 +46,8 @@ pub struct MeshValidatorOptions {
     /// obstacles report this value. Default 20.
     pub clearance_cap: f64,
     /// Continuous edges: largest displacement of any point of the part between two
-    /// static checks while it touches an obstacle (mm, ≥ half the tolerance).
+    /// static checks while it touches an obstacle (mm, ≥ [`MIN_STEP_MM`]; raised to
+    /// half the tolerance).
     /// Default 0.05: a sliding contact costs one check per 0.05 mm instead of one
     /// per 0.005 mm, and a contact can deepen by at most about half a step between
     /// two checks.
@@ -82,6 +91,7 @@ pub struct MeshValidator {
     options: MeshValidatorOptions,
     stats: ValidatorStats,
     near: Vec<usize>,
+    deadline: Option<Instant>,
 }
 
 impl MeshValidator {
@@ -90,8 +100,9 @@ impl MeshValidator {
     /// # Errors
     /// [`CollisionError::BadTolerance`] for a negative or non-finite tolerance,
     /// [`CollisionError::BadPose`] for a non-finite obstacle pose,
-    /// [`CollisionError::BadMotion`] for a non-positive or non-finite stepwise
-    /// resolution or clearance cap.
+    /// [`CollisionError::BadMotion`] for a stepwise resolution or contact step
+    /// finer than [`MIN_STEP_MM`] / [`MIN_STEP_RAD`] or not finite, or a bad
+    /// clearance cap.
     pub fn new(
         moving: Arc<Collider>,
         obstacles: Vec<(Arc<Collider>, Transform)>,
@@ -101,15 +112,21 @@ impl MeshValidator {
             return Err(CollisionError::BadTolerance(options.tolerance));
         }
         if let EdgeCheck::Stepwise { mm, rad } = options.edge {
-            if !(mm.is_finite() && mm > 0.0 && rad.is_finite() && rad > 0.0) {
+            if !(mm.is_finite() && mm >= MIN_STEP_MM) {
                 return Err(CollisionError::BadMotion(format!(
-                    "the stepwise edge resolution must be finite and > 0, got {mm} mm, {rad} rad"
+                    "the stepwise edge step must be a finite number of at least {MIN_STEP_MM} mm, got {mm} mm"
+                )));
+            }
+            if !(rad.is_finite() && rad >= MIN_STEP_RAD) {
+                return Err(CollisionError::BadMotion(format!(
+                    "the stepwise edge rotation step must be a finite angle of at least {MIN_STEP_RAD} rad ({:.6}°), got {rad} rad",
+                    MIN_STEP_RAD.to_degrees()
                 )));
             }
         }
-        if !(options.contact_step.is_finite() && options.contact_step > 0.0) {
+        if !(options.contact_step.is_finite() && options.contact_step >= MIN_STEP_MM) {
             return Err(CollisionError::BadMotion(format!(
-                "the contact step must be a finite number > 0 mm, got {}",
+                "the contact step must be a finite number of at least {MIN_STEP_MM} mm, got {}",
                 options.contact_step
             )));
         }
@@ -139,6 +156,7 @@ impl MeshValidator {
             options,
             stats: ValidatorStats::default(),
             near: Vec::new(),
+            deadline: None,
         })
     }
 
@@ -186,8 +204,17 @@ impl MeshValidator {
         self.collect_near(&swept, bulge);
     }
 
-    /// Static check of the obstacles in `self.near` (`false` for a bad pose).
+    /// Whether the caller's deadline has passed (then every check answers "not free").
+    fn expired(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+
+    /// Static check of the obstacles in `self.near` (`false` for a bad pose or a
+    /// passed deadline).
     fn free_among_near(&mut self, pose: &Transform) -> bool {
+        if self.expired() {
+            return false;
+        }
         for k in 0..self.near.len() {
             let (c, p, _) = &self.obstacles[self.near[k]];
             self.stats.pair_queries += 1;
@@ -240,6 +267,9 @@ impl MeshValidator {
         }
         let options = self.edge_options();
         for k in 0..self.near.len() {
+            if self.expired() {
+                return false;
+            }
             let (c, p, _) = &self.obstacles[self.near[k]];
             self.stats.pair_queries += 1;
             match edge_interferes(&self.moving, from, to, c, p, &options) {
@@ -293,6 +323,10 @@ impl MotionValidator for MeshValidator {
                 stepwise_edge_free(|p| self.free_among_near(p), from, to, mm, rad)
             }
         }
+    }
+
+    fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.deadline = deadline;
     }
 
     fn clearance(&mut self, pose: &Transform) -> Option<f64> {

@@ -1,5 +1,6 @@
 //! [`Path`]: what a planner returns, found or not.
 
+use super::run::Run;
 use super::validator::{Checker, EdgeResolution, MotionValidator};
 use crate::math::{AngleConvention, Transform};
 use std::io::{self, Write};
@@ -61,8 +62,13 @@ pub struct Path {
     pub pose_checks: u64,
     /// Calls to [`MotionValidator::edge_free`] made by the planner (smoothing included).
     pub edge_checks: u64,
-    /// Wall-clock time of the run (ms).
+    /// Wall-clock time of the whole call (ms): search, smoothing and any nested
+    /// search, bounded by the call's time budget.
     pub time_ms: f64,
+    /// Of `time_ms`, the search (ms).
+    pub search_ms: f64,
+    /// Of `time_ms`, the smoothing (ms); 0 when smoothing is off or no path was found.
+    pub smoothing_ms: f64,
     /// How the validator checked the edges.
     pub resolution: EdgeResolution,
     /// Which planner produced the path.
@@ -100,6 +106,8 @@ impl Path {
             pose_checks: checker.pose_checks,
             edge_checks: checker.edge_checks,
             time_ms,
+            search_ms: time_ms,
+            smoothing_ms: 0.0,
             resolution: checker.resolution(),
             planner,
         }
@@ -112,9 +120,11 @@ impl Path {
         iterations: usize,
         nodes: usize,
         checker: &Checker<'_>,
-        time_ms: f64,
+        run: &Run<'_>,
     ) -> Self {
         let (length_mm, rotation_rad) = measure(&poses);
+        let time_ms = run.elapsed_ms();
+        let search_ms = run.search_ms.unwrap_or(time_ms);
         Self {
             failure: None,
             poses,
@@ -127,6 +137,8 @@ impl Path {
             pose_checks: checker.pose_checks,
             edge_checks: checker.edge_checks,
             time_ms,
+            search_ms,
+            smoothing_ms: time_ms - search_ms,
             resolution: checker.resolution(),
             planner,
         }
@@ -234,6 +246,8 @@ mod tests {
             pose_checks: 0,
             edge_checks: 0,
             time_ms: 0.0,
+            search_ms: 0.0,
+            smoothing_ms: 0.0,
             resolution: EdgeResolution::DEFAULT,
             planner: "test",
         }

@@ -8,7 +8,7 @@
 //! | [`screw_cell`] | seed 000 fig. 11: a screw from the table into a plate hole (0.5 mm) |
 //! | [`ring_puzzle`] | two interlocked rings; the slit ring's gap is 10 % wider than the other's wire |
 
-use super::assembly::{plan_assembly, AssemblyOptions};
+use super::insertion::{plan_insertion, InsertionOptions};
 use super::disassembly::Aabb;
 use super::path::Path;
 use super::run::PlanError;
@@ -136,7 +136,7 @@ impl Problem {
         }
     }
 
-    /// Solves the problem with fitup's best planner ([`plan_assembly`], disassembly
+    /// Solves the problem with fitup's best planner ([`plan_insertion`], disassembly
     /// first) for `seed`, at most `max_iterations` per search.
     ///
     /// # Errors
@@ -149,20 +149,20 @@ impl Problem {
     ) -> Result<Path, PlanError> {
         self.solve_with(
             validator,
-            &AssemblyOptions::default().with_limits(seed, max_iterations),
+            &InsertionOptions::default().with_limits(seed, max_iterations),
         )
     }
 
-    /// Solves the problem with [`plan_assembly`] and `options`.
+    /// Solves the problem with [`plan_insertion`] and `options`.
     ///
     /// # Errors
     /// Only for invalid options.
     pub fn solve_with(
         &self,
         validator: &mut MeshValidator,
-        options: &AssemblyOptions,
+        options: &InsertionOptions,
     ) -> Result<Path, PlanError> {
-        plan_assembly(
+        plan_insertion(
             validator,
             &self.space,
             &self.start,

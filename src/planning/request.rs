@@ -2,8 +2,8 @@
 //! that scripts, the CLI and benchmarks use, so the dispatch lives in one place.
 
 use super::{
-    biased_rrt, disassemble, greedy_ant, local_rrt, plan_assembly, rrt, rrt_connect, rrt_floyd,
-    Aabb, AssemblyOptions, DisassemblyPlanner, GreedyAntOptions, Limits, LocalRrtOptions,
+    biased_rrt, disassemble, greedy_ant, local_rrt, plan_insertion, rrt, rrt_connect, rrt_floyd,
+    Aabb, InsertionOptions, DisassemblyPlanner, GreedyAntOptions, Limits, LocalRrtOptions,
     MotionValidator, Path, PlanError, PlanningSpace, ProgressFn, RrtConnectOptions,
     RrtFloydOptions, RrtOptions, Smoothing,
 };
@@ -181,7 +181,7 @@ impl Planner {
     }
 
     /// Seed 002's assembly by disassembly, for a full start → goal path: see
-    /// [`plan_assembly`]. This planner's options drive the part of the search they fit:
+    /// [`plan_insertion`]. This planner's options drive the part of the search they fit:
     /// `rrt`, `biased_rrt` and `local_rrt` search the disassembly (seed 002's
     /// comparison), `rrt_connect` options the free-space join (the disassembly is then
     /// `local_rrt`); the seed and limits apply to both. `greedy_ant` and `rrt_floyd`
@@ -199,16 +199,18 @@ impl Planner {
     ) -> Result<Path, PlanError> {
         let limits = self.limits();
         let mut options =
-            AssemblyOptions::default().with_limits(limits.seed, limits.max_iterations);
-        options.disassembly.rrt_mut().limits.time_limit_ms = limits.time_limit_ms;
-        options.approach.limits.time_limit_ms = limits.time_limit_ms;
+            InsertionOptions::default().with_limits(limits.seed, limits.max_iterations);
+        options.time_limit_ms = limits.time_limit_ms;
         options.smoothing = self.smoothing();
         match self {
             Planner::Rrt(o) | Planner::BiasedRrt(o) => {
                 options.disassembly = DisassemblyPlanner::Rrt(o.clone())
             }
             Planner::LocalRrt(o) => options.disassembly = DisassemblyPlanner::LocalRrt(o.clone()),
-            Planner::RrtConnect(o) => options.approach = o.clone(),
+            Planner::RrtConnect(o) => {
+                options.approach = o.clone();
+                options.approach.limits.max_iterations = limits.max_iterations;
+            }
             Planner::GreedyAnt(_) | Planner::RrtFloyd(_) => {
                 return Err(PlanError::InvalidOption {
                     option: "planner",
@@ -219,7 +221,7 @@ impl Planner {
                 })
             }
         }
-        plan_assembly(
+        plan_insertion(
             validator,
             space,
             start,

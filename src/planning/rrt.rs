@@ -140,7 +140,7 @@ pub(crate) fn plan_tree(
         PlanError::pose("goal", g)?;
     }
     let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, target.pose()) {
         return Ok(Path::failed(planner, f, 0, 0, &checker, run.elapsed_ms()));
     }
@@ -227,7 +227,7 @@ pub(crate) fn plan_tree(
                 space,
                 &options.smoothing,
                 options.limits.seed,
-                &run,
+                &mut run,
                 tree.len(),
             ))
         }
@@ -243,21 +243,14 @@ pub(crate) fn finish(
     space: &PlanningSpace,
     smoothing: &Smoothing,
     seed: u64,
-    run: &Run<'_>,
+    run: &mut Run<'_>,
     nodes: usize,
 ) -> Path {
     let raw = super::path::measure(&poses);
+    run.end_search();
     // A different stream than the planner's, so smoothing does not depend on how many
     // numbers the search drew.
     let mut rng = Rng::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
-    shortcut(checker, space, &mut poses, smoothing, &mut rng);
-    Path::found_with(
-        planner,
-        poses,
-        raw,
-        run.iterations,
-        nodes,
-        checker,
-        run.elapsed_ms(),
-    )
+    shortcut(checker, space, &mut poses, smoothing, &mut rng, run);
+    Path::found_with(planner, poses, raw, run.iterations, nodes, checker, run)
 }

@@ -72,7 +72,7 @@ pub fn rrt_connect(
     PlanError::pose("start", start)?;
     PlanError::pose("goal", goal)?;
     let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
         return Ok(Path::failed(NAME, f, 0, 0, &checker, run.elapsed_ms()));
     }
@@ -158,7 +158,7 @@ pub fn rrt_connect(
                 space,
                 &options.smoothing,
                 options.limits.seed,
-                &run,
+                &mut run,
                 nodes,
             ))
         }
