@@ -11,10 +11,11 @@
 //! |---|---|
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions, the seeded RNG |
 //! | [`mesh`] | triangle meshes, STL I/O, generated shapes, the mesh cache |
-//! | [`collision`] | interference: exact (solid), whole-part boxes, cut cells, sweeps |
+//! | [`collision`] | interference of posed meshes: exact (solid), whole-part boxes, cut cells, sweeps, planner edges |
 //! | [`kinematics`] | kinematic trees, D-H, robot catalog, FK, analytic and numeric IK, motions, programs, drilling |
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
-//! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly |
+//! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly, insertion |
+//! | [`workspace`] | a document as a collision scene and every document-level request: interference, contact, clearance, sweeps, planning, revalidation, following |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
 //! | [`script`] | the Rhai sandbox and API bindings |
 //! | [`watch`] | watch mode: rerun on every save, exactly once |
@@ -33,3 +34,4 @@ pub mod mesh;
 pub mod planning;
 pub mod script;
 pub mod watch;
+pub mod workspace;

@@ -598,6 +598,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &SweepOptions {
             method: SweepMethod::Step { step: 5.0 },
             tolerance: TOL,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -616,6 +617,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &SweepOptions {
             method: SweepMethod::Step { step: TOL / 4.0 },
             tolerance: TOL,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -650,6 +652,7 @@ fn continuous_rotation_and_pose_sequences_find_first_contact() {
         &SweepOptions {
             method: SweepMethod::Step { step: TOL / 2.0 },
             tolerance: TOL,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -704,11 +707,13 @@ fn sweeps_refuse_bad_motions() {
     let tiny = SweepOptions {
         method: SweepMethod::Step { step: 1e-6 },
         tolerance: TOL,
+        ..Default::default()
     };
     assert!(sweep(&mover, &ok, &obstacles, &tiny).is_err());
     let zero = SweepOptions {
         method: SweepMethod::Step { step: 0.0 },
         tolerance: TOL,
+        ..Default::default()
     };
     assert!(sweep(&mover, &ok, &obstacles, &zero).is_err());
 }

@@ -169,20 +169,26 @@ impl Path {
         out
     }
 
-    /// Re-checks the path with `validator`: the first pose with `is_free`, every edge
+    /// Re-checks the path with `validator`: every key pose with `is_free`, every edge
     /// with `edge_free`. On failure returns the index of the first bad edge (0 for the
     /// start pose itself) and its end pose.
+    ///
+    /// The one tolerance rule: an edge is accepted when the validator accepts it in
+    /// either direction. Planners check an edge in the direction they grew it, and a
+    /// path from a goal tree or a disassembly is reversed afterwards; a continuous
+    /// check's steps along a sliding contact depend on the direction, so checking
+    /// only the other one could reject a pose the planner accepted.
     pub fn revalidate(
         &self,
         validator: &mut dyn MotionValidator,
     ) -> Result<(), (usize, Transform)> {
-        if let Some(first) = self.poses.first() {
-            if !validator.is_free(first) {
-                return Err((0, *first));
+        for (i, p) in self.poses.iter().enumerate() {
+            if !validator.is_free(p) {
+                return Err((i.saturating_sub(1), *p));
             }
         }
         for (i, w) in self.poses.windows(2).enumerate() {
-            if !validator.edge_free(&w[0], &w[1]) {
+            if !validator.edge_free(&w[0], &w[1]) && !validator.edge_free(&w[1], &w[0]) {
                 return Err((i, w[1]));
             }
         }

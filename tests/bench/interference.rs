@@ -360,6 +360,7 @@ fn sweeps() {
                     &SweepOptions {
                         method,
                         tolerance: DEFAULT_TOLERANCE,
+                        ..Default::default()
                     },
                 )
                 .unwrap();
