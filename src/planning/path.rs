@@ -94,6 +94,16 @@ impl Path {
         checker: &Checker<'_>,
         time_ms: f64,
     ) -> Self {
+        // Once the budget is spent every check answers "not free": a collision or
+        // an exhausted search seen after that is the time limit, not the geometry.
+        let failure = match failure {
+            Failure::StartInCollision | Failure::GoalInCollision | Failure::Exhausted(_)
+                if checker.expired() =>
+            {
+                Failure::TimeLimit
+            }
+            f => f,
+        };
         Self {
             failure: Some(failure),
             poses: Vec::new(),

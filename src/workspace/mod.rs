@@ -288,3 +288,6 @@ impl<'d> Workspace<'d> {
         self.sweep(name, &Motion::Poses(poses), options)
     }
 }
+
+#[cfg(test)]
+mod tests;
