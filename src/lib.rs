@@ -22,6 +22,7 @@
 //! | [`cli`] | the `fitup` command line |
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`fsutil`] | atomic writes, content hashes, file stamps |
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod collision;
 pub mod demo;
@@ -32,6 +33,8 @@ pub mod kinematics;
 pub mod math;
 pub mod mesh;
 pub mod planning;
+#[cfg(feature = "script")]
 pub mod script;
+#[cfg(feature = "watch")]
 pub mod watch;
 pub mod workspace;

@@ -4,7 +4,7 @@
 //! path and following it.
 //!
 //! This is the layer between [`document`](crate::document) (what the user wrote)
-//! and [`script`](crate::script) (Rhai bindings, which only convert values): a Rust
+//! and `script` (Rhai bindings, which only convert values): a Rust
 //! program does through it everything a script does. It owns the document's
 //! collision scene ([`Scene`], built through a [`SceneCache`] that keeps colliders
 //! and cut cells while meshes are unchanged) and the rules that turn a component
