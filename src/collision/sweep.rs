@@ -225,8 +225,9 @@ pub fn sweep(
             "the sweep's time limit must be a finite number of ms > 0, got {budget_ms}"
         )));
     }
-    let deadline = std::time::Instant::now()
-        .checked_add(std::time::Duration::from_secs_f64(budget_ms.min(1e12) / 1e3));
+    let deadline = std::time::Instant::now().checked_add(std::time::Duration::from_secs_f64(
+        budget_ms.min(1e12) / 1e3,
+    ));
     let out_of_time = || deadline.is_some_and(|d| std::time::Instant::now() >= d);
     let pieces = motion.pieces(moving.radius());
     let mut queries = 0usize;

@@ -1,7 +1,7 @@
 //! [`plan_insertion`]: disassembly-first planning between any two poses (seed 002's
 //! "what can be taken apart can be assembled", joined to the free end by RRT-Connect).
 
-use super::disassembly::{disassemble, Aabb, DisassemblyPlanner};
+use super::disassembly::{disassemble, DisassemblyPlanner};
 use super::local_rrt::LocalRrtOptions;
 use super::path::{measure, Path};
 use super::rrt_connect::{rrt_connect, RrtConnectOptions};
@@ -9,6 +9,7 @@ use super::run::{Limits, PlanError, ProgressFn};
 use super::smoothing::{smooth, Smoothing};
 use super::space::PlanningSpace;
 use super::validator::MotionValidator;
+use crate::collision::Aabb;
 use crate::math::Transform;
 use std::time::Instant;
 
@@ -59,8 +60,8 @@ impl InsertionOptions {
 /// Whether `part_box` (component frame) placed at `pose` overlaps `product_box`
 /// (assembly frame) with a positive volume.
 pub(crate) fn inside(part_box: &Aabb, pose: &Transform, product_box: &Aabb) -> bool {
-    let b = part_box.transformed(pose);
-    (0..3).all(|k| b.min[k] < product_box.max[k] && b.max[k] > product_box.min[k])
+    let b = part_box.transformed(pose.isometry());
+    (0..3).all(|k| b.lo[k] < product_box.hi[k] && b.hi[k] > product_box.lo[k])
 }
 
 /// The label of a path made by [`plan_insertion`]: what actually ran.
@@ -117,7 +118,11 @@ pub fn plan_insertion(
     // and a spent one then ends the next search at its first clock read).
     let left = || {
         Some(
-            (deadline.saturating_duration_since(Instant::now()).as_secs_f64() * 1e3).max(1e-3),
+            (deadline
+                .saturating_duration_since(Instant::now())
+                .as_secs_f64()
+                * 1e3)
+                .max(1e-3),
         )
     };
     let seed = options.disassembly.rrt().limits.seed;
@@ -137,7 +142,16 @@ pub fn plan_insertion(
             &approach,
             progress.as_mut().map(|p| &mut **p as ProgressFn<'_>),
         )?;
-        finish(validator, space, &mut path, options, seed, clock, left(), progress);
+        finish(
+            validator,
+            space,
+            &mut path,
+            options,
+            seed,
+            clock,
+            left(),
+            progress,
+        );
         return Ok(path);
     }
     approach.limits.seed = options.approach.limits.seed ^ 0x9E37_79B9_7F4A_7C15;
@@ -217,7 +231,16 @@ pub fn plan_insertion(
     path.raw_rotation_rad = r;
     path.length_mm = l;
     path.rotation_rad = r;
-    finish(validator, space, &mut path, options, seed, clock, left(), progress);
+    finish(
+        validator,
+        space,
+        &mut path,
+        options,
+        seed,
+        clock,
+        left(),
+        progress,
+    );
     Ok(path)
 }
 

@@ -22,9 +22,9 @@
 //! [`DEFAULT_TIME_LIMIT_MS`]) over search and smoothing together.
 //! Details, options and defaults: `docs/planning.md`.
 
-mod insertion;
 mod disassembly;
 mod greedy_ant;
+mod insertion;
 mod local_rrt;
 mod mesh_validator;
 mod path;
@@ -42,9 +42,9 @@ mod validator;
 #[cfg(test)]
 mod test_scenes;
 
-pub use insertion::{plan_insertion, InsertionOptions};
-pub use disassembly::{disassemble, Aabb, DisassemblyPlanner};
+pub use disassembly::{disassemble, DisassemblyPlanner};
 pub use greedy_ant::{greedy_ant, GreedyAntOptions};
+pub use insertion::{plan_insertion, InsertionOptions};
 pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
 pub use mesh_validator::{
     EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,

@@ -9,11 +9,11 @@
 //! | [`ring_puzzle`] | two interlocked rings; the slit ring's gap is 10 % wider than the other's wire |
 
 use super::insertion::{plan_insertion, InsertionOptions};
-use super::disassembly::Aabb;
 use super::path::Path;
 use super::run::PlanError;
 use super::space::PlanningSpace;
 use super::{EdgeCheck, MeshValidator, MeshValidatorOptions};
+use crate::collision::Aabb;
 use crate::collision::{Collider, CollisionError};
 use crate::document::file::{ComponentFile, DocumentFile, PartFile};
 use crate::math::{Point3, Transform, Vec3};
@@ -87,7 +87,7 @@ impl Problem {
             .moving
             .bounds()
             .unwrap_or((Point3::origin(), Point3::origin()));
-        Aabb::new(lo.coords, hi.coords)
+        Aabb::new(lo, hi)
     }
 
     /// Colliders of the moving part and the obstacles (one per distinct part).
@@ -239,8 +239,8 @@ impl Problem {
             "bounds_min": self.space.min.as_slice(),
             "bounds_max": self.space.max.as_slice(),
             "rotation_weight_mm_per_rad": self.space.rotation_weight,
-            "product_box_min": self.product_box.min.as_slice(),
-            "product_box_max": self.product_box.max.as_slice(),
+            "product_box_min": self.product_box.lo.coords.as_slice(),
+            "product_box_max": self.product_box.hi.coords.as_slice(),
         })
     }
 

@@ -3,10 +3,11 @@
 
 use super::{
     biased_rrt, disassemble, greedy_ant, local_rrt, plan_insertion, rrt, rrt_connect, rrt_floyd,
-    Aabb, InsertionOptions, DisassemblyPlanner, GreedyAntOptions, Limits, LocalRrtOptions,
+    DisassemblyPlanner, GreedyAntOptions, InsertionOptions, Limits, LocalRrtOptions,
     MotionValidator, Path, PlanError, PlanningSpace, ProgressFn, RrtConnectOptions,
     RrtFloydOptions, RrtOptions, Smoothing,
 };
+use crate::collision::Aabb;
 use crate::math::Transform;
 
 /// A planner and its options.

@@ -68,7 +68,14 @@ pub fn smooth(
     run.end_search();
     let mut checker = Checker::new(validator, Some(run.deadline()));
     let mut rng = Rng::new(seed);
-    shortcut(&mut checker, space, &mut path.poses, smoothing, &mut rng, &mut run);
+    shortcut(
+        &mut checker,
+        space,
+        &mut path.poses,
+        smoothing,
+        &mut rng,
+        &mut run,
+    );
     let (l, r) = measure(&path.poses);
     path.length_mm = l;
     path.rotation_rad = r;

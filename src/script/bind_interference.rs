@@ -4,15 +4,15 @@
 use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
+use super::bind_planning::with_workspace;
 use super::convert::{aabb_map, check_keys, err, fail, floats, num, opt_num, opt_str};
 use super::ScriptResult;
-use super::bind_planning::with_workspace;
 use crate::collision::{
     Contact, CutSpec, InterferenceKind, Method, Part, SweepMethod, SweepOptions,
 };
 use crate::document::Feature;
-use crate::workspace::CheckOptions;
 use crate::math::Point3;
+use crate::workspace::CheckOptions;
 use rhai::{Array, Dynamic, Map};
 
 /// A part's cut-cells feature, by part and feature name.
@@ -34,7 +34,10 @@ fn options(map: Option<&Map>) -> ScriptResult<CheckOptions> {
     }
     o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
     if !(o.tolerance.is_finite() && o.tolerance >= 0.0) {
-        return err(format!("tolerance must be a finite number ≥ 0 mm, not {}", o.tolerance));
+        return err(format!(
+            "tolerance must be a finite number ≥ 0 mm, not {}",
+            o.tolerance
+        ));
     }
     Ok(o)
 }
@@ -108,7 +111,11 @@ fn waypoints(motion: &Dynamic) -> ScriptResult<Vec<crate::math::Transform>> {
 fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> ScriptResult<Map> {
     let mut o = SweepOptions::default();
     if let Some(m) = opts {
-        check_keys(m, &["method", "step", "tolerance", "time_limit_ms"], "sweep")?;
+        check_keys(
+            m,
+            &["method", "step", "tolerance", "time_limit_ms"],
+            "sweep",
+        )?;
         o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
         o.time_limit_ms = opt_num(m, "time_limit_ms")?;
         let step = opt_num(m, "step")?;

@@ -6,10 +6,11 @@ use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
 use super::convert::{check_keys, err, fail, num, opt_num, opt_str, vec3};
 use super::{Context, ScriptResult};
+use crate::collision::Aabb;
 use crate::math::AngleConvention;
 use crate::planning::{
-    Aabb, Control, EdgeCheck, MeshValidatorOptions, Path, Phase, Planner, Progress,
-    RotationFreedom, PLANNER_NAMES,
+    Control, EdgeCheck, MeshValidatorOptions, Path, Phase, Planner, Progress, RotationFreedom,
+    PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -225,8 +226,7 @@ fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<P
     let ctx = d.context().clone();
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path = with_workspace(d, |ws| {
-        ws.plan_path(name, &goal, &req, Some(&mut cb))
-            .map_err(fail)
+        ws.plan_path(name, &goal, &req, Some(&mut cb)).map_err(fail)
     })?;
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");
@@ -242,8 +242,7 @@ fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathH
     let ctx = d.context().clone();
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path = with_workspace(d, |ws| {
-        ws.plan_disassembly(name, &req, Some(&mut cb))
-            .map_err(fail)
+        ws.plan_disassembly(name, &req, Some(&mut cb)).map_err(fail)
     })?;
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");

@@ -37,8 +37,7 @@ pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_MM};
 pub use scene::{Scene, SceneCache};
 
 use crate::collision::{
-    CollisionError, Contact, Method, Motion, PairContact, SweepHit, SweepOptions,
-    DEFAULT_TOLERANCE,
+    CollisionError, Contact, Method, Motion, PairContact, SweepHit, SweepOptions, DEFAULT_TOLERANCE,
 };
 use crate::document::{Document, DocumentError};
 use crate::math::Transform;
@@ -57,7 +56,9 @@ pub enum WorkspaceError {
     #[error(transparent)]
     Plan(#[from] PlanError),
     /// Planners never move a fixed component.
-    #[error("component `{0}` is fixed: planners never move fixed components (set `fixed: false` first)")]
+    #[error(
+        "component `{0}` is fixed: planners never move fixed components (set `fixed: false` first)"
+    )]
     FixedComponent(String),
     /// A pair query names the same component twice.
     #[error("`{0}` is checked against itself")]

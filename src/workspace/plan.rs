@@ -2,11 +2,12 @@
 //! (validator, bounds, boxes), re-validation and following a path.
 
 use super::{Workspace, WorkspaceError};
+use crate::collision::Aabb;
 use crate::document::Document;
 use crate::math::{Transform, Vec3};
 use crate::planning::{
-    Aabb, Control, MeshValidator, MeshValidatorOptions, Path, Planner, PlanningSpace,
-    ProgressFn, RotationFreedom,
+    Control, MeshValidator, MeshValidatorOptions, Path, Planner, PlanningSpace, ProgressFn,
+    RotationFreedom,
 };
 
 /// Default growth (mm) of the planning bounds around the product box, start and
@@ -117,7 +118,7 @@ impl Workspace<'_> {
             .mesh_of(index)
             .bounds()
             .ok_or_else(|| WorkspaceError::EmptyMesh(name.to_string()))?;
-        Ok(Aabb::new(lo.coords, hi.coords))
+        Ok(Aabb::new(lo, hi))
     }
 
     /// The box of every component but `name` (world, mm): the product a
@@ -132,7 +133,7 @@ impl Workspace<'_> {
             .filter(|&i| i != index)
             .filter_map(|i| doc.world_aabb(i))
             .reduce(|(a, b), (c, e)| (a.inf(&c), b.sup(&e)))
-            .map(|(lo, hi)| Aabb::new(lo.coords, hi.coords)))
+            .map(|(lo, hi)| Aabb::new(lo, hi)))
     }
 
     /// The planning space of component `name` for `request`: its bounds, or the
@@ -148,7 +149,7 @@ impl Workspace<'_> {
     ) -> Result<PlanningSpace, WorkspaceError> {
         let start = self.pose(name)?;
         let (lo, hi) = match request.bounds {
-            Some(b) => (b.min, b.max),
+            Some(b) => (b.lo.coords, b.hi.coords),
             None => {
                 let m = request.margin_mm;
                 if !(m.is_finite() && m >= 0.0) {
@@ -165,8 +166,8 @@ impl Workspace<'_> {
                     hi = hi.sup(&t.translation());
                 }
                 if let Some(p) = self.product_box(name)? {
-                    lo = lo.inf(&p.min);
-                    hi = hi.sup(&p.max);
+                    lo = lo.inf(&p.lo.coords);
+                    hi = hi.sup(&p.hi.coords);
                 }
                 (lo - Vec3::repeat(m), hi + Vec3::repeat(m))
             }

@@ -3,8 +3,8 @@
 
 use super::*;
 use crate::collision::SweepMethod;
-use crate::planning::{EdgeCheck, Failure, Planner, RotationFreedom};
 use crate::math::Vec3;
+use crate::planning::{EdgeCheck, Failure, Planner, RotationFreedom};
 use std::path::Path as FsPath;
 use std::time::Instant;
 
@@ -36,7 +36,11 @@ fn plan_path_ends_with_the_time_limit_outcome() {
         let clock = Instant::now();
         let path = ws.plan_path("moving", &goal, &request, None).unwrap();
         let wall = clock.elapsed().as_secs_f64() * 1e3;
-        assert_eq!(path.failure, Some(Failure::TimeLimit), "disassemble {disassemble}");
+        assert_eq!(
+            path.failure,
+            Some(Failure::TimeLimit),
+            "disassemble {disassemble}"
+        );
         // Only a hang guard: 10× the budget.
         assert!(wall < 3000.0, "{wall} ms");
         assert!(path.time_ms >= path.search_ms);
@@ -142,7 +146,10 @@ fn sweeps_honour_their_budget() {
     let clock = Instant::now();
     let err = ws.sweep_through("screw5", &[to], &options).unwrap_err();
     assert!(clock.elapsed().as_secs_f64() < 1.0);
-    assert_eq!(err, WorkspaceError::Collision(CollisionError::TimeLimit(1.0)));
+    assert_eq!(
+        err,
+        WorkspaceError::Collision(CollisionError::TimeLimit(1.0))
+    );
     // With the default budget the same motion is answered.
     let coarse = SweepOptions::default();
     assert!(!ws.sweep_through("screw5", &[to], &coarse).unwrap().hit);

@@ -12,7 +12,7 @@
 
 use fitup::planning::problems::{self, Problem};
 use fitup::planning::{
-    disassemble, InsertionOptions, DisassemblyPlanner, LocalRrtOptions, MeshValidatorOptions,
+    disassemble, DisassemblyPlanner, InsertionOptions, LocalRrtOptions, MeshValidatorOptions,
     RrtOptions, Smoothing,
 };
 use std::path::{Path, PathBuf};
