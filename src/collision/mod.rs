@@ -87,7 +87,7 @@ pub enum CollisionError {
 /// One of the two parts of a pair query.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Part {
+pub enum PairMember {
     /// The first part given (`a`).
     First,
     /// The second part given (`b`).
@@ -103,7 +103,7 @@ pub enum InterferenceKind {
     /// No surfaces cross, but `inner`'s solid lies inside the other's.
     Contained {
         /// The part inside.
-        inner: Part,
+        inner: PairMember,
     },
     /// Approximate methods ([`Method::Aabb`], [`Method::Cells`]): boxes overlap
     /// deeper than the tolerance on all three axes.
@@ -156,8 +156,8 @@ impl Contact {
                 depth,
                 kind: InterferenceKind::Contained {
                     inner: match inner {
-                        Part::First => Part::Second,
-                        Part::Second => Part::First,
+                        PairMember::First => PairMember::Second,
+                        PairMember::Second => PairMember::First,
                     },
                 },
             },

@@ -162,7 +162,10 @@ fn swallowed_part_is_contained() {
     match c {
         Contact::Interfering {
             depth,
-            kind: InterferenceKind::Contained { inner: Part::First },
+            kind:
+                InterferenceKind::Contained {
+                    inner: PairMember::First,
+                },
         } => assert!((depth - 40.0).abs() < 1e-6, "{depth}"),
         other => panic!("{other:?}"),
     }

@@ -1,7 +1,7 @@
 //! Seed 002's disassembly-first planning: "what can be taken apart can be assembled".
 
 use super::local_rrt::LocalRrtOptions;
-use super::path::Path;
+use super::path::PlannedPath;
 use super::rrt::{plan_tree, RrtOptions};
 use super::run::{PlanError, ProgressFn};
 use super::space::PlanningSpace;
@@ -125,7 +125,7 @@ pub fn disassemble(
     product_box: &Aabb,
     planner: &DisassemblyPlanner,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     validate_box(part_box, "part_box")?;
     validate_box(product_box, "product_box")?;
     let target = OutsideBox {

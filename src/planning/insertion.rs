@@ -3,9 +3,9 @@
 
 use super::disassembly::{disassemble, DisassemblyPlanner};
 use super::local_rrt::LocalRrtOptions;
-use super::path::{measure, Path};
+use super::path::{measure, PlannedPath};
 use super::rrt_connect::{rrt_connect, RrtConnectOptions};
-use super::run::{Limits, PlanError, ProgressFn};
+use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::{smooth, Smoothing};
 use super::space::PlanningSpace;
 use super::validator::MotionValidator;
@@ -103,14 +103,14 @@ pub fn plan_insertion(
     product_box: &Aabb,
     options: &InsertionOptions,
     mut progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     let clock = Instant::now();
     PlanError::pose("start", start)?;
     PlanError::pose("goal", goal)?;
     options.smoothing.validate()?;
-    let budget = Limits {
+    let budget = PlanLimits {
         time_limit_ms: options.time_limit_ms,
-        ..Limits::default()
+        ..PlanLimits::default()
     };
     budget.validate()?;
     let deadline = budget.deadline(clock);
@@ -198,7 +198,7 @@ pub fn plan_insertion(
             progress.as_mut().map(|p| &mut **p as ProgressFn<'_>),
         )?
     };
-    let mut path = Path {
+    let mut path = PlannedPath {
         failure: join.failure,
         poses: Vec::new(),
         iterations: apart.iterations + join.iterations,
@@ -253,7 +253,7 @@ fn ms_since(clock: Instant) -> f64 {
 fn finish(
     validator: &mut dyn MotionValidator,
     space: &PlanningSpace,
-    path: &mut Path,
+    path: &mut PlannedPath,
     options: &InsertionOptions,
     seed: u64,
     clock: Instant,

@@ -16,9 +16,9 @@
 //! | [`plan_insertion`] | disassembly first, then RRT-Connect to the free end | the benchmark problems ([`problems`]) |
 //! | [`disassemble`] | seed 002, "what can be taken apart can be assembled" | insertions with unknown approach |
 //!
-//! Every planner takes a seed ([`Limits::seed`]); for a given seed the result is
+//! Every planner takes a seed ([`PlanLimits::seed`]); for a given seed the result is
 //! identical whenever the iteration limit (not the time limit) ends the search.
-//! Every call honours one time budget ([`Limits::time_limit_ms`], default
+//! Every call honours one time budget ([`PlanLimits::time_limit_ms`], default
 //! [`DEFAULT_TIME_LIMIT_MS`]) over search and smoothing together.
 //! Details, options and defaults: `docs/planning.md`.
 
@@ -49,13 +49,13 @@ pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
 pub use mesh_validator::{
     EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
 };
-pub use path::{Failure, Path};
+pub use path::{Failure, PlannedPath};
 pub use request::{Planner, PLANNER_NAMES};
 pub use rrt::{biased_rrt, rrt, RrtOptions};
 pub use rrt_connect::{rrt_connect, RrtConnectOptions};
 pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
 pub use run::{
-    Control, Limits, Phase, PlanError, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
+    Control, Phase, PlanError, PlanLimits, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
     SMOOTHING_PROGRESS_EVERY,
 };
 pub use smoothing::{smooth, Smoothing};

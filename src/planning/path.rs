@@ -1,4 +1,4 @@
-//! [`Path`]: what a planner returns, found or not.
+//! [`PlannedPath`]: what a planner returns, found or not.
 
 use super::run::Run;
 use super::validator::{Checker, EdgeResolution, MotionValidator};
@@ -41,7 +41,7 @@ pub enum Failure {
 /// poses are joined by straight SE(3) edges (translation lerp + slerp) that the
 /// validator accepted at `resolution`. Empty when `failure` is set.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Path {
+pub struct PlannedPath {
     /// `None` when a path was found, otherwise why not.
     pub failure: Option<Failure>,
     /// Key poses, start first (empty when not found).
@@ -75,7 +75,7 @@ pub struct Path {
     pub planner: &'static str,
 }
 
-impl Path {
+impl PlannedPath {
     /// Whether a path was found.
     pub fn found(&self) -> bool {
         self.failure.is_none()
@@ -239,7 +239,7 @@ mod tests {
     use super::*;
     use crate::math::Vec3;
 
-    fn sample_path() -> Path {
+    fn sample_path() -> PlannedPath {
         let poses = vec![
             Transform::IDENTITY,
             Transform::from_translation(Vec3::new(10.0, 0.0, 0.0)),
@@ -250,7 +250,7 @@ mod tests {
             ),
         ];
         let (l, r) = measure(&poses);
-        Path {
+        PlannedPath {
             failure: None,
             poses,
             length_mm: l,

@@ -9,7 +9,7 @@
 //! | [`ring_puzzle`] | two interlocked rings; the slit ring's gap is 10 % wider than the other's wire |
 
 use super::insertion::{plan_insertion, InsertionOptions};
-use super::path::Path;
+use super::path::PlannedPath;
 use super::run::PlanError;
 use super::space::PlanningSpace;
 use super::{EdgeCheck, MeshValidator, MeshValidatorOptions};
@@ -146,7 +146,7 @@ impl Problem {
         validator: &mut MeshValidator,
         seed: u64,
         max_iterations: usize,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         self.solve_with(
             validator,
             &InsertionOptions::default().with_limits(seed, max_iterations),
@@ -161,7 +161,7 @@ impl Problem {
         &self,
         validator: &mut MeshValidator,
         options: &InsertionOptions,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         plan_insertion(
             validator,
             &self.space,

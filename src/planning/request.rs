@@ -3,8 +3,8 @@
 
 use super::{
     biased_rrt, disassemble, greedy_ant, local_rrt, plan_insertion, rrt, rrt_connect, rrt_floyd,
-    DisassemblyPlanner, GreedyAntOptions, InsertionOptions, Limits, LocalRrtOptions,
-    MotionValidator, Path, PlanError, PlanningSpace, ProgressFn, RrtConnectOptions,
+    DisassemblyPlanner, GreedyAntOptions, InsertionOptions, LocalRrtOptions, MotionValidator,
+    PlanError, PlanLimits, PlannedPath, PlanningSpace, ProgressFn, RrtConnectOptions,
     RrtFloydOptions, RrtOptions, Smoothing,
 };
 use crate::collision::Aabb;
@@ -64,7 +64,7 @@ impl Planner {
     }
 
     /// Seed, iteration and time limits.
-    pub fn limits_mut(&mut self) -> &mut Limits {
+    pub fn limits_mut(&mut self) -> &mut PlanLimits {
         match self {
             Planner::GreedyAnt(o) => &mut o.limits,
             Planner::RrtFloyd(o) => &mut o.limits,
@@ -75,7 +75,7 @@ impl Planner {
     }
 
     /// Seed, iteration and time limits (a copy).
-    pub fn limits(&self) -> Limits {
+    pub fn limits(&self) -> PlanLimits {
         self.clone().limits_mut().to_owned()
     }
 
@@ -136,7 +136,7 @@ impl Planner {
         start: &Transform,
         goal: &Transform,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         match self {
             Planner::GreedyAnt(o) => greedy_ant(validator, space, start, goal, o, progress),
             Planner::RrtFloyd(o) => rrt_floyd(validator, space, start, goal, o, progress),
@@ -158,7 +158,7 @@ impl Planner {
         part_box: &Aabb,
         product_box: &Aabb,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         let planner = match self {
             Planner::Rrt(o) | Planner::BiasedRrt(o) => DisassemblyPlanner::Rrt(o.clone()),
             Planner::LocalRrt(o) => DisassemblyPlanner::LocalRrt(o.clone()),
@@ -197,7 +197,7 @@ impl Planner {
         part_box: &Aabb,
         product_box: &Aabb,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         let limits = self.limits();
         let mut options =
             InsertionOptions::default().with_limits(limits.seed, limits.max_iterations);

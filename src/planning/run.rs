@@ -9,7 +9,7 @@ pub const DEFAULT_TIME_LIMIT_MS: f64 = 10_000.0;
 
 /// Seed and limits of one planning run.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Limits {
+pub struct PlanLimits {
     /// Seed of the run's [`Rng`](crate::math::Rng): equal seeds give equal paths
     /// whenever the iteration limit, not the time limit, ends the search.
     pub seed: u64,
@@ -22,7 +22,7 @@ pub struct Limits {
     pub time_limit_ms: Option<f64>,
 }
 
-impl Default for Limits {
+impl Default for PlanLimits {
     /// Seed 0, 10 000 iterations, the default time budget ([`DEFAULT_TIME_LIMIT_MS`]).
     fn default() -> Self {
         Self {
@@ -33,7 +33,7 @@ impl Default for Limits {
     }
 }
 
-impl Limits {
+impl PlanLimits {
     /// The time budget in ms: `time_limit_ms` or [`DEFAULT_TIME_LIMIT_MS`].
     pub fn budget_ms(&self) -> f64 {
         self.time_limit_ms.unwrap_or(DEFAULT_TIME_LIMIT_MS)
@@ -173,7 +173,7 @@ impl PlanError {
 pub(crate) struct Run<'p> {
     started: Instant,
     deadline: Instant,
-    limits: Limits,
+    limits: PlanLimits,
     progress: Option<ProgressFn<'p>>,
     pub iterations: usize,
     /// Time the search took (ms), set by [`Run::end_search`].
@@ -181,7 +181,7 @@ pub(crate) struct Run<'p> {
 }
 
 impl<'p> Run<'p> {
-    pub fn new(limits: Limits, progress: Option<ProgressFn<'p>>) -> Self {
+    pub fn new(limits: PlanLimits, progress: Option<ProgressFn<'p>>) -> Self {
         let started = Instant::now();
         Self {
             started,

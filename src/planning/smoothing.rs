@@ -1,7 +1,7 @@
 //! Shortcut smoothing of a found path.
 
-use super::path::{measure, Path};
-use super::run::{Limits, PlanError, ProgressFn, Run};
+use super::path::{measure, PlannedPath};
+use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::space::PlanningSpace;
 use super::validator::{Checker, MotionValidator};
 use crate::math::{Rng, Transform};
@@ -50,7 +50,7 @@ impl Smoothing {
 pub fn smooth(
     validator: &mut dyn MotionValidator,
     space: &PlanningSpace,
-    path: &mut Path,
+    path: &mut PlannedPath,
     smoothing: &Smoothing,
     seed: u64,
     time_limit_ms: Option<f64>,
@@ -59,7 +59,7 @@ pub fn smooth(
     if !path.found() {
         return;
     }
-    let limits = Limits {
+    let limits = PlanLimits {
         seed,
         max_iterations: usize::MAX,
         time_limit_ms,

@@ -155,8 +155,8 @@ fn at(x: f64, y: f64, z: f64) -> Transform {
     Transform::from_translation(Vec3::new(x, y, z))
 }
 
-fn limits(seed: u64, max_iterations: usize) -> Limits {
-    Limits {
+fn limits(seed: u64, max_iterations: usize) -> PlanLimits {
+    PlanLimits {
         seed,
         max_iterations,
         time_limit_ms: None,
@@ -172,7 +172,7 @@ fn plan(
     goal: &Transform,
     seed: u64,
     iterations: usize,
-) -> Path {
+) -> PlannedPath {
     let lim = limits(seed, iterations);
     let s = s.clone();
     match name {
@@ -266,7 +266,7 @@ const PLANNERS: [&str; 7] = [
 
 /// The property every found path must have: it starts and ends where asked and is
 /// free in the exact scene at a resolution finer than the planner's.
-fn assert_valid(p: &Path, scene: &BoxScene, start: &Transform, goal: Option<&Transform>) {
+fn assert_valid(p: &PlannedPath, scene: &BoxScene, start: &Transform, goal: Option<&Transform>) {
     assert!(p.found(), "{}: {:?}", p.planner, p.failure);
     assert!(
         p.poses[0].approx_eq(start, 1e-9, 1e-9),
@@ -405,7 +405,7 @@ fn bad_options_are_rejected_with_their_name() {
     let s = space();
     let mut v = open_scene();
     let (a, b) = (at(-30.0, 0.0, 0.0), at(30.0, 0.0, 0.0));
-    let err = |r: Result<Path, PlanError>| r.unwrap_err().to_string();
+    let err = |r: Result<PlannedPath, PlanError>| r.unwrap_err().to_string();
     let o = RrtOptions {
         step: -1.0,
         ..Default::default()

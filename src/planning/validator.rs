@@ -57,7 +57,7 @@ impl EdgeResolution {
 /// neighbour is valid.
 ///
 /// Planners count the calls they make (reported as `pose_checks` and `edge_checks`
-/// in [`Path`](super::Path)).
+/// in [`PlannedPath`](super::PlannedPath)).
 pub trait MotionValidator {
     /// Whether the component at `pose` is free of collision.
     fn is_free(&mut self, pose: &Transform) -> bool;

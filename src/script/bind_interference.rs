@@ -8,7 +8,7 @@ use super::bind_planning::with_workspace;
 use super::convert::{aabb_map, check_keys, err, fail, floats, num, opt_num, opt_str};
 use super::ScriptResult;
 use crate::collision::{
-    Contact, CutSpec, InterferenceKind, Method, Part, SweepMethod, SweepOptions,
+    Contact, CutSpec, InterferenceKind, Method, PairMember, SweepMethod, SweepOptions,
 };
 use crate::document::Feature;
 use crate::math::Point3;
@@ -45,9 +45,11 @@ fn options(map: Option<&Map>) -> ScriptResult<CheckOptions> {
 fn kind_name(k: &InterferenceKind, a: &str, b: &str) -> String {
     match k {
         InterferenceKind::SurfacesCross => "surfaces cross".into(),
-        InterferenceKind::Contained { inner: Part::First } => format!("{a} inside {b}"),
         InterferenceKind::Contained {
-            inner: Part::Second,
+            inner: PairMember::First,
+        } => format!("{a} inside {b}"),
+        InterferenceKind::Contained {
+            inner: PairMember::Second,
         } => format!("{b} inside {a}"),
         InterferenceKind::BoxesOverlap => "boxes overlap".into(),
     }

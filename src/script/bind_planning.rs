@@ -9,8 +9,8 @@ use super::{Context, ScriptResult};
 use crate::collision::Aabb;
 use crate::math::AngleConvention;
 use crate::planning::{
-    Control, EdgeCheck, MeshValidatorOptions, Path, Phase, Planner, Progress, RotationFreedom,
-    PLANNER_NAMES,
+    Control, EdgeCheck, MeshValidatorOptions, Phase, PlannedPath, Planner, Progress,
+    RotationFreedom, PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -21,7 +21,7 @@ use std::time::Instant;
 /// and record the file it writes, and the validator options it was planned with so
 /// `revalidate` applies the same tolerance rule.
 #[derive(Clone)]
-pub struct PathHandle(Arc<Path>, Arc<Context>, MeshValidatorOptions);
+pub struct PathHandle(Arc<PlannedPath>, Arc<Context>, MeshValidatorOptions);
 
 const OPTION_KEYS: [&str; 20] = [
     "disassemble",
@@ -250,7 +250,7 @@ fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathH
     Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
 }
 
-fn densify(p: &Path, step: f64) -> ScriptResult<Vec<crate::math::Transform>> {
+fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transform>> {
     if !(step.is_finite() && step > 0.0) {
         return err(format!("step must be a finite number > 0 mm, not {step}"));
     }

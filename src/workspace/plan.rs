@@ -6,7 +6,7 @@ use crate::collision::Aabb;
 use crate::document::Document;
 use crate::math::{Transform, Vec3};
 use crate::planning::{
-    Control, MeshValidator, MeshValidatorOptions, Path, Planner, PlanningSpace, ProgressFn,
+    Control, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace, ProgressFn,
     RotationFreedom,
 };
 
@@ -205,7 +205,7 @@ impl Workspace<'_> {
     /// Plans a path for component `name` from its current pose to `goal` (world,
     /// mm) among all the other components. The whole call — search, smoothing and
     /// any nested search — honours the planner's time budget; a path that is not
-    /// found says why in [`Path::failure`] (e.g. the time limit).
+    /// found says why in [`PlannedPath::failure`] (e.g. the time limit).
     ///
     /// # Examples
     /// ```
@@ -236,7 +236,7 @@ impl Workspace<'_> {
         goal: &Transform,
         request: &PlanRequest,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, WorkspaceError> {
+    ) -> Result<PlannedPath, WorkspaceError> {
         let mut p = self.problem(name, request, &[*goal])?;
         let path = if request.disassemble {
             request.planner.plan_via_disassembly(
@@ -268,7 +268,7 @@ impl Workspace<'_> {
         name: &str,
         request: &PlanRequest,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, WorkspaceError> {
+    ) -> Result<PlannedPath, WorkspaceError> {
         let mut p = self.problem(name, request, &[])?;
         Ok(request.planner.plan_disassembly(
             &mut p.validator,
@@ -282,14 +282,14 @@ impl Workspace<'_> {
 
     /// Checks a path for component `name` again against the document as it is
     /// now, with the validator options the path was planned with (the one tolerance
-    /// rule: see [`Path::revalidate`]).
+    /// rule: see [`PlannedPath::revalidate`]).
     ///
     /// # Errors
     /// An unknown component, bad options, a path that was not found.
     pub fn revalidate(
         &self,
         name: &str,
-        path: &Path,
+        path: &PlannedPath,
         options: &MeshValidatorOptions,
     ) -> Result<Revalidation, WorkspaceError> {
         if !path.found() {
@@ -314,7 +314,7 @@ impl Workspace<'_> {
 pub fn follow(
     doc: &mut Document,
     name: &str,
-    path: &Path,
+    path: &PlannedPath,
     step_mm: f64,
     mut on_step: impl FnMut(usize, usize, &Transform) -> Control,
 ) -> Result<usize, WorkspaceError> {
