@@ -19,7 +19,6 @@
 mod cells;
 mod edge;
 mod exact;
-pub mod fixtures;
 mod shape;
 mod sweep;
 mod triangle;

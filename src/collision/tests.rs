@@ -6,6 +6,9 @@ use crate::math::{Point3, Rng, Transform, Vec3};
 use crate::mesh::Mesh;
 use std::sync::Arc;
 
+#[path = "../../tests/common/fixtures.rs"]
+mod fixtures;
+
 fn collider(m: Mesh) -> Collider {
     Collider::new(Arc::new(m)).expect("valid mesh")
 }
