@@ -35,6 +35,11 @@ impl Aabb {
         }
     }
 
+    /// The box of a mesh's vertices in its own frame (mm); `None` when it has none.
+    pub fn of_mesh(mesh: &Mesh) -> Option<Aabb> {
+        mesh.bounds().map(|(lo, hi)| Aabb { lo, hi })
+    }
+
     /// The empty box (inverted), neutral for [`Aabb::grow`].
     pub const EMPTY: Aabb = Aabb {
         lo: Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),

@@ -83,11 +83,7 @@ pub enum ProblemError {
 impl Problem {
     /// The moving component's box in its own frame (mm).
     pub fn part_box(&self) -> Aabb {
-        let (lo, hi) = self
-            .moving
-            .bounds()
-            .unwrap_or((Point3::origin(), Point3::origin()));
-        Aabb::new(lo, hi)
+        Aabb::of_mesh(&self.moving).unwrap_or(Aabb::new(Point3::origin(), Point3::origin()))
     }
 
     /// Colliders of the moving part and the obstacles (one per distinct part).

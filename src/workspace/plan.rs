@@ -113,12 +113,8 @@ impl Workspace<'_> {
     /// An unknown component or an empty mesh.
     pub fn part_box(&self, name: &str) -> Result<Aabb, WorkspaceError> {
         let index = self.index(name)?;
-        let (lo, hi) = self
-            .document()
-            .mesh_of(index)
-            .bounds()
-            .ok_or_else(|| WorkspaceError::EmptyMesh(name.to_string()))?;
-        Ok(Aabb::new(lo, hi))
+        Aabb::of_mesh(self.document().mesh_of(index))
+            .ok_or_else(|| WorkspaceError::EmptyMesh(name.to_string()))
     }
 
     /// The box of every component but `name` (world, mm): the product a
