@@ -47,7 +47,7 @@ pub use greedy_ant::{greedy_ant, GreedyAntOptions};
 pub use insertion::{plan_insertion, InsertionOptions};
 pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
 pub use mesh_validator::{
-    EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
+    MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
 };
 pub use path::{Failure, PlannedPath};
 pub use request::{Planner, PLANNER_NAMES};

@@ -12,7 +12,7 @@ use super::insertion::{plan_insertion, InsertionOptions};
 use super::path::PlannedPath;
 use super::run::PlanError;
 use super::space::PlanningSpace;
-use super::{EdgeCheck, MeshValidator, MeshValidatorOptions};
+use super::{EdgeResolution, MeshValidator, MeshValidatorOptions};
 use crate::collision::Aabb;
 use crate::collision::{Collider, CollisionError};
 use crate::document::file::{ComponentFile, DocumentFile, PartFile};
@@ -108,7 +108,7 @@ impl Problem {
     }
 
     /// The validator options the benchmarks and tests use: exact interference with
-    /// the default tolerance, continuous edges ([`EdgeCheck::Continuous`]).
+    /// the default tolerance, continuous edges ([`EdgeResolution::CONTINUOUS`]).
     pub fn default_validator_options(&self) -> MeshValidatorOptions {
         MeshValidatorOptions::default()
     }
@@ -124,9 +124,9 @@ impl Problem {
             .map(|v| v.coords.norm())
             .fold(1.0, f64::max);
         MeshValidatorOptions {
-            edge: EdgeCheck::Stepwise {
-                mm: 0.05,
-                rad: 0.05 / radius,
+            edge: EdgeResolution::Stepwise {
+                step_mm: 0.05,
+                step_rad: 0.05 / radius,
             },
             ..Default::default()
         }

@@ -41,6 +41,15 @@ impl std::fmt::Display for EdgeResolution {
 }
 
 impl EdgeResolution {
+    /// The contact step of [`EdgeResolution::CONTINUOUS`], mm.
+    pub const DEFAULT_CONTACT_STEP_MM: f64 = 0.05;
+
+    /// The continuous check with the default contact step (0.05 mm): the mesh
+    /// validator's default.
+    pub const CONTINUOUS: Self = Self::Continuous {
+        contact_step_mm: Self::DEFAULT_CONTACT_STEP_MM,
+    };
+
     /// The resolution used by validators that do not state one: 0.1 mm, 0.002 rad.
     pub const DEFAULT: Self = Self::Stepwise {
         step_mm: 0.1,

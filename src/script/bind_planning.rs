@@ -9,7 +9,7 @@ use super::{Context, ScriptResult};
 use crate::collision::Aabb;
 use crate::math::AngleConvention;
 use crate::planning::{
-    Control, EdgeCheck, MeshValidatorOptions, Phase, PlannedPath, Planner, Progress,
+    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, Progress,
     RotationFreedom, PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
@@ -109,14 +109,14 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
     if let Some(t) = opt_num(opts, "tolerance")? {
         validator.tolerance = t;
     }
-    if let Some(c) = opt_num(opts, "contact_step")? {
-        validator.contact_step = c;
-    }
     validator.edge = match opt_str(opts, "edge")?.as_deref() {
-        None | Some("continuous") => EdgeCheck::Continuous,
-        Some("step") => EdgeCheck::Stepwise {
-            mm: opt_num(opts, "edge_step")?.unwrap_or(0.1),
-            rad: opt_num(opts, "edge_step_deg")?.unwrap_or(0.1).to_radians(),
+        None | Some("continuous") => EdgeResolution::Continuous {
+            contact_step_mm: opt_num(opts, "contact_step")?
+                .unwrap_or(EdgeResolution::DEFAULT_CONTACT_STEP_MM),
+        },
+        Some("step") => EdgeResolution::Stepwise {
+            step_mm: opt_num(opts, "edge_step")?.unwrap_or(0.1),
+            step_rad: opt_num(opts, "edge_step_deg")?.unwrap_or(0.1).to_radians(),
         },
         Some(o) => {
             return err(format!(

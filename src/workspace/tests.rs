@@ -4,7 +4,7 @@
 use super::*;
 use crate::collision::SweepMethod;
 use crate::math::Vec3;
-use crate::planning::{EdgeCheck, Failure, Planner, RotationFreedom};
+use crate::planning::{EdgeResolution, Failure, Planner, RotationFreedom};
 use std::path::Path as FsPath;
 use std::time::Instant;
 
@@ -117,9 +117,9 @@ fn degenerate_resolutions_are_refused() {
     let ws = Workspace::new(&doc, &mut cache).unwrap();
     let goal = shifted(&ws.pose("screw5").unwrap(), 0.0, 0.0, 40.0);
     let mut request = PlanRequest::default();
-    request.validator.edge = EdgeCheck::Stepwise {
-        mm: 1e-9,
-        rad: 0.1f64.to_radians(),
+    request.validator.edge = EdgeResolution::Stepwise {
+        step_mm: 1e-9,
+        step_rad: 0.1f64.to_radians(),
     };
     let err = ws.plan_path("screw5", &goal, &request, None).unwrap_err();
     assert!(
@@ -127,8 +127,9 @@ fn degenerate_resolutions_are_refused() {
         "{err}"
     );
     assert!(err.to_string().contains("at least"), "{err}");
-    request.validator.edge = EdgeCheck::Continuous;
-    request.validator.contact_step = 1e-12;
+    request.validator.edge = EdgeResolution::Continuous {
+        contact_step_mm: 1e-12,
+    };
     assert!(ws.plan_path("screw5", &goal, &request, None).is_err());
 }
 
