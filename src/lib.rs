@@ -11,10 +11,11 @@
 //! |---|---|
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions, the seeded RNG |
 //! | [`mesh`] | triangle meshes, STL I/O, generated shapes, the mesh cache |
-//! | [`collision`] | interference: exact (solid), whole-part boxes, cut cells, sweeps |
+//! | [`collision`] | interference of posed meshes: exact (solid), whole-part boxes, cut cells, sweeps, planner edges |
 //! | [`kinematics`] | kinematic trees, D-H, robot catalog, FK, analytic and numeric IK, motions, programs, drilling |
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
-//! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly |
+//! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly, insertion |
+//! | [`workspace`] | a document as a collision scene and every document-level request: interference, contact, clearance, sweeps, planning, revalidation, following |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
 //! | [`script`] | the Rhai sandbox and API bindings |
 //! | [`watch`] | watch mode: rerun on every save, exactly once |
@@ -22,6 +23,7 @@
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`project`] | the project folder that bounds every file a run touches, and the path rule |
 //! | [`fsutil`] | atomic writes, capped reads of regular files only, content hashes, file stamps |
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod collision;
 pub mod demo;
@@ -33,5 +35,8 @@ pub mod math;
 pub mod mesh;
 pub mod planning;
 pub mod project;
+#[cfg(feature = "script")]
 pub mod script;
+#[cfg(feature = "watch")]
 pub mod watch;
+pub mod workspace;

@@ -6,7 +6,7 @@
 
 use fitup::collision::{interferes, DEFAULT_TOLERANCE};
 use fitup::planning::problems::{self, Problem};
-use fitup::planning::Path;
+use fitup::planning::PlannedPath;
 use std::path::Path as FsPath;
 
 fn files(p: &Problem) -> Vec<String> {
@@ -60,7 +60,7 @@ fn committed_problems_match_generators_and_load() {
 
 /// Every pose of the densified path (0.02 mm, and the rotation moving no point more
 /// than 0.02 mm) is free by the exact interference test.
-fn assert_collision_free(p: &Problem, path: &Path) {
+fn assert_collision_free(p: &Problem, path: &PlannedPath) {
     let (moving, obstacles) = p.colliders().unwrap();
     let step = 0.02;
     for (k, pose) in path

@@ -4,7 +4,7 @@
 
 use super::shape::{Aabb, Collider, Node, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
-use super::{CollisionError, Contact, InterferenceKind, Part};
+use super::{CollisionError, Contact, InterferenceKind, PairMember};
 use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3};
 use std::ops::ControlFlow;
@@ -269,21 +269,21 @@ pub fn contact(
 }
 
 /// When the surfaces do not cross: is one solid inside the other? Returns which
-/// part is inside ([`Part::First`] = `a`) and the containment depth.
+/// part is inside ([`PairMember::First`] = `a`) and the containment depth.
 fn containment(
     a: &Collider,
     pa: &Transform,
     b: &Collider,
     pb: &Transform,
     eps: f64,
-) -> Option<(Part, f64)> {
+) -> Option<(PairMember, f64)> {
     let a_in_b = Relative::new(pb, pa).iso; // a's frame → b's frame
     if b.is_solid() && inside(a, b, &a_in_b, eps) {
-        return Some((Part::First, containment_depth(a, b, &a_in_b)));
+        return Some((PairMember::First, containment_depth(a, b, &a_in_b)));
     }
     let b_in_a = Relative::new(pa, pb).iso;
     if a.is_solid() && inside(b, a, &b_in_a, eps) {
-        return Some((Part::Second, containment_depth(b, a, &b_in_a)));
+        return Some((PairMember::Second, containment_depth(b, a, &b_in_a)));
     }
     None
 }

@@ -19,8 +19,6 @@
 mod cells;
 mod edge;
 mod exact;
-pub mod fixtures;
-pub mod scene;
 mod shape;
 mod sweep;
 mod triangle;
@@ -31,7 +29,9 @@ pub use cells::{
 pub use edge::{edge_interferes, EdgeOptions};
 pub use exact::{contact, distance_lower_bound, interferes, surface_distance};
 pub use shape::{Aabb, Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
-pub use sweep::{sweep, Motion, Obstacle, SweepHit, SweepMethod, SweepOptions};
+pub use sweep::{
+    sweep, Motion, Obstacle, SweepHit, SweepMethod, SweepOptions, DEFAULT_SWEEP_TIME_LIMIT_MS,
+};
 
 use crate::math::Transform;
 use rayon::prelude::*;
@@ -75,6 +75,9 @@ pub enum CollisionError {
     /// The motion or sweep options are unusable (NaN, zero axis, empty, step <= 0).
     #[error("bad motion: {0}")]
     BadMotion(String),
+    /// A sweep ran out of its time budget (ms) before it could answer.
+    #[error("the sweep ran out of its time limit of {0} ms before reaching the end of the motion; give it a larger `time_limit_ms` or a coarser method")]
+    TimeLimit(f64),
     /// An unknown method name.
     #[error("unknown interference method \"{0}\": expected \"exact\", \"aabb\" or \"cells\"")]
     UnknownMethod(String),
@@ -83,7 +86,7 @@ pub enum CollisionError {
 /// One of the two parts of a pair query.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Part {
+pub enum PairMember {
     /// The first part given (`a`).
     First,
     /// The second part given (`b`).
@@ -99,7 +102,7 @@ pub enum InterferenceKind {
     /// No surfaces cross, but `inner`'s solid lies inside the other's.
     Contained {
         /// The part inside.
-        inner: Part,
+        inner: PairMember,
     },
     /// Approximate methods ([`Method::Aabb`], [`Method::Cells`]): boxes overlap
     /// deeper than the tolerance on all three axes.
@@ -152,8 +155,8 @@ impl Contact {
                 depth,
                 kind: InterferenceKind::Contained {
                     inner: match inner {
-                        Part::First => Part::Second,
-                        Part::Second => Part::First,
+                        PairMember::First => PairMember::Second,
+                        PairMember::Second => PairMember::First,
                     },
                 },
             },

@@ -27,6 +27,19 @@ pub struct Aabb {
 }
 
 impl Aabb {
+    /// The box `lo..hi` (mm); points or vectors from the origin.
+    pub fn new(lo: impl Into<Point3>, hi: impl Into<Point3>) -> Aabb {
+        Aabb {
+            lo: lo.into(),
+            hi: hi.into(),
+        }
+    }
+
+    /// The box of a mesh's vertices in its own frame (mm); `None` when it has none.
+    pub fn of_mesh(mesh: &Mesh) -> Option<Aabb> {
+        mesh.bounds().map(|(lo, hi)| Aabb { lo, hi })
+    }
+
     /// The empty box (inverted), neutral for [`Aabb::grow`].
     pub const EMPTY: Aabb = Aabb {
         lo: Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
@@ -54,8 +67,9 @@ impl Aabb {
         (self.hi - self.lo) * 0.5
     }
 
-    /// The axis-aligned box (in the target frame) around this box moved by `iso`:
-    /// conservative, it contains the rotated box.
+    /// The axis-aligned box (in the target frame) around this box moved by `iso`
+    /// (a [`Transform`](crate::math::Transform) gives it with `.isometry()`): the
+    /// tightest box containing the moved box.
     pub fn transformed(&self, iso: &nalgebra::Isometry3<f64>) -> Aabb {
         let c = iso * self.centre();
         let r = iso.rotation.to_rotation_matrix();

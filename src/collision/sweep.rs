@@ -164,13 +164,20 @@ pub struct SweepOptions {
     pub method: SweepMethod,
     /// Penetration tolerance of the static checks, mm.
     pub tolerance: f64,
+    /// Wall-clock budget of the sweep in ms (`None`: [`DEFAULT_SWEEP_TIME_LIMIT_MS`]);
+    /// a sweep that runs out of it fails with [`CollisionError::TimeLimit`].
+    pub time_limit_ms: Option<f64>,
 }
+
+/// The time budget of a sweep when none is given: 10 s.
+pub const DEFAULT_SWEEP_TIME_LIMIT_MS: f64 = 10_000.0;
 
 impl Default for SweepOptions {
     fn default() -> Self {
         SweepOptions {
             method: SweepMethod::Continuous,
             tolerance: super::DEFAULT_TOLERANCE,
+            time_limit_ms: None,
         }
     }
 }
@@ -212,6 +219,16 @@ pub fn sweep(
             "an obstacle pose has NaN or infinite values".into(),
         ));
     }
+    let budget_ms = options.time_limit_ms.unwrap_or(DEFAULT_SWEEP_TIME_LIMIT_MS);
+    if !(budget_ms.is_finite() && budget_ms > 0.0) {
+        return Err(CollisionError::BadMotion(format!(
+            "the sweep's time limit must be a finite number of ms > 0, got {budget_ms}"
+        )));
+    }
+    let deadline = std::time::Instant::now().checked_add(std::time::Duration::from_secs_f64(
+        budget_ms.min(1e12) / 1e3,
+    ));
+    let out_of_time = || deadline.is_some_and(|d| std::time::Instant::now() >= d);
     let pieces = motion.pieces(moving.radius());
     let mut queries = 0usize;
     let hit_at = |t: f64, with: usize, queries: usize| SweepHit {
@@ -233,6 +250,9 @@ pub fn sweep(
     };
     let check =
         |t: f64, near: &[usize], queries: &mut usize| -> Result<Option<usize>, CollisionError> {
+            if out_of_time() {
+                return Err(CollisionError::TimeLimit(budget_ms));
+            }
             let pose = motion.pose_at(t);
             for &i in near {
                 *queries += 1;
@@ -295,6 +315,9 @@ pub fn sweep(
                         return Err(CollisionError::BadMotion(format!(
                             "the continuous sweep took more than {MAX_QUERIES} queries"
                         )));
+                    }
+                    if out_of_time() {
+                        return Err(CollisionError::TimeLimit(budget_ms));
                     }
                     let pose = motion.pose_at(t);
                     let mut d = f64::INFINITY;

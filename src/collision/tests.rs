@@ -6,6 +6,9 @@ use crate::math::{Point3, Rng, Transform, Vec3};
 use crate::mesh::Mesh;
 use std::sync::Arc;
 
+#[path = "../../tests/common/fixtures.rs"]
+mod fixtures;
+
 fn collider(m: Mesh) -> Collider {
     Collider::new(Arc::new(m)).expect("valid mesh")
 }
@@ -162,7 +165,10 @@ fn swallowed_part_is_contained() {
     match c {
         Contact::Interfering {
             depth,
-            kind: InterferenceKind::Contained { inner: Part::First },
+            kind:
+                InterferenceKind::Contained {
+                    inner: PairMember::First,
+                },
         } => assert!((depth - 40.0).abs() < 1e-6, "{depth}"),
         other => panic!("{other:?}"),
     }
@@ -598,6 +604,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &SweepOptions {
             method: SweepMethod::Step { step: 5.0 },
             tolerance: TOL,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -616,6 +623,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &SweepOptions {
             method: SweepMethod::Step { step: TOL / 4.0 },
             tolerance: TOL,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -650,6 +658,7 @@ fn continuous_rotation_and_pose_sequences_find_first_contact() {
         &SweepOptions {
             method: SweepMethod::Step { step: TOL / 2.0 },
             tolerance: TOL,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -704,11 +713,13 @@ fn sweeps_refuse_bad_motions() {
     let tiny = SweepOptions {
         method: SweepMethod::Step { step: 1e-6 },
         tolerance: TOL,
+        ..Default::default()
     };
     assert!(sweep(&mover, &ok, &obstacles, &tiny).is_err());
     let zero = SweepOptions {
         method: SweepMethod::Step { step: 0.0 },
         tolerance: TOL,
+        ..Default::default()
     };
     assert!(sweep(&mover, &ok, &obstacles, &zero).is_err());
 }

@@ -54,7 +54,7 @@ pub struct Part {
 pub enum Feature {
     /// Seed 000's cut cells: the part cut by plane arrays into cells, one box each.
     /// The cells themselves are derived from the mesh when needed (and again when the
-    /// mesh changes), see [`crate::collision::scene`].
+    /// mesh changes), see [`crate::workspace::SceneCache`].
     CutCells {
         /// Feature name.
         name: String,

@@ -1,59 +1,26 @@
 //! Seed 002's disassembly-first planning: "what can be taken apart can be assembled".
 
 use super::local_rrt::LocalRrtOptions;
-use super::path::Path;
+use super::path::PlannedPath;
 use super::rrt::{plan_tree, RrtOptions};
 use super::run::{PlanError, ProgressFn};
 use super::space::PlanningSpace;
 use super::tree::Target;
 use super::validator::MotionValidator;
-use crate::math::{Point3, Rng, Transform, Vec3};
+use crate::collision::Aabb;
+use crate::math::{Rng, Transform};
 
-/// An axis-aligned box (mm), in the frame the caller states.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Aabb {
-    /// Lower corner (mm).
-    pub min: Vec3,
-    /// Upper corner (mm).
-    pub max: Vec3,
-}
-
-impl Aabb {
-    /// The box `min..max` (mm).
-    pub fn new(min: Vec3, max: Vec3) -> Self {
-        Self { min, max }
-    }
-
-    fn validate(&self, option: &'static str) -> Result<(), PlanError> {
-        let ok = (0..3).all(|i| {
-            self.min[i].is_finite() && self.max[i].is_finite() && self.min[i] <= self.max[i]
-        });
-        if ok {
-            Ok(())
-        } else {
-            Err(PlanError::invalid(
-                option,
-                format!("{:?}..{:?}", self.min.as_slice(), self.max.as_slice()),
-                "a finite box with min ≤ max on every axis",
-            ))
-        }
-    }
-
-    /// The assembly-frame box around this local box placed at `pose`.
-    pub fn transformed(&self, pose: &Transform) -> Aabb {
-        let mut lo = Vec3::repeat(f64::INFINITY);
-        let mut hi = Vec3::repeat(f64::NEG_INFINITY);
-        for k in 0..8 {
-            let c = Point3::new(
-                if k & 1 == 0 { self.min.x } else { self.max.x },
-                if k & 2 == 0 { self.min.y } else { self.max.y },
-                if k & 4 == 0 { self.min.z } else { self.max.z },
-            );
-            let p = pose.apply(&c).coords;
-            lo = lo.inf(&p);
-            hi = hi.sup(&p);
-        }
-        Aabb { min: lo, max: hi }
+/// Checks a box is finite with `lo ≤ hi` on every axis.
+pub(crate) fn validate_box(b: &Aabb, option: &'static str) -> Result<(), PlanError> {
+    let ok = (0..3).all(|i| b.lo[i].is_finite() && b.hi[i].is_finite() && b.lo[i] <= b.hi[i]);
+    if ok {
+        Ok(())
+    } else {
+        Err(PlanError::invalid(
+            option,
+            format!("{:?}..{:?}", b.lo.coords.as_slice(), b.hi.coords.as_slice()),
+            "a finite box with min ≤ max on every axis",
+        ))
     }
 }
 
@@ -94,15 +61,15 @@ struct OutsideBox {
 impl OutsideBox {
     /// Translations (mm) along ±X, ±Y, ±Z that would take the box out.
     fn exits(&self, pose: &Transform) -> [f64; 6] {
-        let b = self.part.transformed(pose);
+        let b = self.part.transformed(pose.isometry());
         let p = &self.product;
         [
-            p.max.x - b.min.x,
-            b.max.x - p.min.x,
-            p.max.y - b.min.y,
-            b.max.y - p.min.y,
-            p.max.z - b.min.z,
-            b.max.z - p.min.z,
+            p.hi.x - b.lo.x,
+            b.hi.x - p.lo.x,
+            p.hi.y - b.lo.y,
+            b.hi.y - p.lo.y,
+            p.hi.z - b.lo.z,
+            b.hi.z - p.lo.z,
         ]
     }
 }
@@ -158,9 +125,9 @@ pub fn disassemble(
     product_box: &Aabb,
     planner: &DisassemblyPlanner,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
-    part_box.validate("part_box")?;
-    product_box.validate("product_box")?;
+) -> Result<PlannedPath, PlanError> {
+    validate_box(part_box, "part_box")?;
+    validate_box(product_box, "product_box")?;
     let target = OutsideBox {
         part: *part_box,
         product: *product_box,

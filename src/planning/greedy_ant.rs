@@ -1,8 +1,8 @@
 //! Seed 000's single-ant dynamic greedy algorithm (section 5.2, table 4).
 
-use super::path::{Failure, Path};
+use super::path::{Failure, PlannedPath};
 use super::rrt::finish;
-use super::run::{Limits, PlanError, ProgressFn, Run};
+use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
 use super::tree::check_ends;
@@ -18,7 +18,7 @@ const MAX_LAYER_POINTS: usize = 4_000_000;
 pub struct GreedyAntOptions {
     /// Time limit and cancellation (the algorithm draws no random numbers; the seed
     /// is unused; one layer is one iteration).
-    pub limits: Limits,
+    pub limits: PlanLimits,
     /// `step`: number of segments the straight line `s → e` is cut into (`step - 1`
     /// layers). `None`: `ceil(D / L)`, so consecutive layers are at most `L` apart.
     pub step: Option<usize>,
@@ -38,7 +38,7 @@ pub struct GreedyAntOptions {
 impl Default for GreedyAntOptions {
     fn default() -> Self {
         Self {
-            limits: Limits::default(),
+            limits: PlanLimits::default(),
             step: None,
             shortest_length: 10.0,
             dis: 2.0,
@@ -97,7 +97,7 @@ pub fn greedy_ant(
     goal: &Transform,
     options: &GreedyAntOptions,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     const NAME: &str = "greedy_ant";
     options.validate()?;
     space.validate()?;
@@ -124,9 +124,16 @@ pub fn greedy_ant(
         ));
     }
     let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
-        return Ok(Path::failed(NAME, f, 0, 0, &checker, run.elapsed_ms()));
+        return Ok(PlannedPath::failed(
+            NAME,
+            f,
+            0,
+            0,
+            &checker,
+            run.elapsed_ms(),
+        ));
     }
     let reference = start.rotation();
     let mut poses = vec![*start];
@@ -138,7 +145,7 @@ pub fn greedy_ant(
     for layer in 1..step {
         let prev = poses[poses.len() - 1];
         if let Err(f) = run.next(layer, space.distance(&prev, goal)) {
-            return Ok(Path::failed(
+            return Ok(PlannedPath::failed(
                 NAME,
                 f,
                 run.iterations,
@@ -175,7 +182,7 @@ pub fn greedy_ant(
         match chosen {
             Some(pose) => poses.push(pose),
             None => {
-                return Ok(Path::failed(
+                return Ok(PlannedPath::failed(
                     NAME,
                     Failure::Exhausted(layer),
                     run.iterations,
@@ -188,7 +195,7 @@ pub fn greedy_ant(
     }
     let last = poses[poses.len() - 1];
     if !checker.edge_free(&last, goal) {
-        return Ok(Path::failed(
+        return Ok(PlannedPath::failed(
             NAME,
             Failure::Exhausted(step),
             run.iterations,
@@ -206,7 +213,7 @@ pub fn greedy_ant(
         space,
         &options.smoothing,
         options.limits.seed,
-        &run,
+        &mut run,
         nodes,
     ))
 }

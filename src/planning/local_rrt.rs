@@ -1,7 +1,7 @@
 //! Seed 002's improved RRT: when the extension toward the sample fails, discretize
 //! the space around the nearest node and take the best free neighbour.
 
-use super::path::Path;
+use super::path::PlannedPath;
 use super::rrt::{plan_tree, RrtOptions};
 use super::run::{PlanError, ProgressFn};
 use super::space::PlanningSpace;
@@ -290,7 +290,7 @@ pub fn local_rrt(
     goal: &Transform,
     options: &LocalRrtOptions,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     options.validate()?;
     plan_tree(
         "local_rrt",

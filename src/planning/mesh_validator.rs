@@ -7,24 +7,14 @@ use crate::collision::{
 };
 use crate::math::Transform;
 use std::sync::Arc;
+use std::time::Instant;
 
-/// How [`MeshValidator`] checks a straight SE(3) edge.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum EdgeCheck {
-    /// [`edge_interferes`]: the part's boxes swept over the edge, then conservative
-    /// advancement per triangle pair that can meet, so no obstacle is jumped over;
-    /// a pair in contact (within `tolerance / 2`, touching or sliding) gets a
-    /// crossing check every [`contact_step`](MeshValidatorOptions::contact_step) mm.
-    Continuous,
-    /// Static checks at most `mm` of translation and `rad` of rotation apart
-    /// (bisection order, end pose first). Features thinner than a step can be missed.
-    Stepwise {
-        /// Largest translation between two checked poses (mm, > 0).
-        mm: f64,
-        /// Largest rotation between two checked poses (rad, > 0).
-        rad: f64,
-    },
-}
+/// The finest stepwise edge resolution and contact step accepted, mm: finer steps
+/// cannot see anything the 0.01 mm default tolerance does not, and only make one
+/// edge check take hours.
+pub const MIN_STEP_MM: f64 = 1e-4;
+/// The finest stepwise rotation step accepted, rad.
+pub const MIN_STEP_RAD: f64 = 1e-6;
 
 /// Options of [`MeshValidator`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,26 +22,30 @@ pub struct MeshValidatorOptions {
     /// Penetration tolerance (mm, ≥ 0): surfaces crossing no deeper than this count
     /// as touching, which is free. Default [`crate::collision::DEFAULT_TOLERANCE`].
     pub tolerance: f64,
-    /// How edges are checked. Default [`EdgeCheck::Continuous`].
-    pub edge: EdgeCheck,
+    /// How edges are checked — the same type the validator reports in
+    /// [`PlannedPath::resolution`](super::PlannedPath::resolution). Default
+    /// [`EdgeResolution::CONTINUOUS`]: [`edge_interferes`] (the part's boxes swept
+    /// over the edge, then conservative advancement per triangle pair that can meet,
+    /// so no obstacle is jumped over); a pair in contact (within `tolerance / 2`,
+    /// touching or sliding) gets a crossing check every `contact_step_mm` (≥
+    /// [`MIN_STEP_MM`], raised to half the tolerance; 0.05 by default: a sliding
+    /// contact costs one check per 0.05 mm instead of one per 0.005 mm, and a contact
+    /// can deepen by at most about half a step between two checks). Or
+    /// [`EdgeResolution::Stepwise`]: static checks at most `step_mm` (≥
+    /// [`MIN_STEP_MM`]) and `step_rad` (≥ [`MIN_STEP_RAD`]) apart, bisection order,
+    /// end pose first; features thinner than a step can be missed.
+    pub edge: EdgeResolution,
     /// Largest distance (mm) [`MotionValidator::clearance`] looks for; farther
     /// obstacles report this value. Default 20.
     pub clearance_cap: f64,
-    /// Continuous edges: largest displacement of any point of the part between two
-    /// static checks while it touches an obstacle (mm, ≥ half the tolerance).
-    /// Default 0.05: a sliding contact costs one check per 0.05 mm instead of one
-    /// per 0.005 mm, and a contact can deepen by at most about half a step between
-    /// two checks.
-    pub contact_step: f64,
 }
 
 impl Default for MeshValidatorOptions {
     fn default() -> Self {
         Self {
             tolerance: crate::collision::DEFAULT_TOLERANCE,
-            edge: EdgeCheck::Continuous,
+            edge: EdgeResolution::CONTINUOUS,
             clearance_cap: 20.0,
-            contact_step: 0.05,
         }
     }
 }
@@ -82,6 +76,7 @@ pub struct MeshValidator {
     options: MeshValidatorOptions,
     stats: ValidatorStats,
     near: Vec<usize>,
+    deadline: Option<Instant>,
 }
 
 impl MeshValidator {
@@ -90,8 +85,9 @@ impl MeshValidator {
     /// # Errors
     /// [`CollisionError::BadTolerance`] for a negative or non-finite tolerance,
     /// [`CollisionError::BadPose`] for a non-finite obstacle pose,
-    /// [`CollisionError::BadMotion`] for a non-positive or non-finite stepwise
-    /// resolution or clearance cap.
+    /// [`CollisionError::BadMotion`] for a stepwise resolution or contact step
+    /// finer than [`MIN_STEP_MM`] / [`MIN_STEP_RAD`] or not finite, or a bad
+    /// clearance cap.
     pub fn new(
         moving: Arc<Collider>,
         obstacles: Vec<(Arc<Collider>, Transform)>,
@@ -100,18 +96,29 @@ impl MeshValidator {
         if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
             return Err(CollisionError::BadTolerance(options.tolerance));
         }
-        if let EdgeCheck::Stepwise { mm, rad } = options.edge {
-            if !(mm.is_finite() && mm > 0.0 && rad.is_finite() && rad > 0.0) {
+        if let EdgeResolution::Stepwise {
+            step_mm: mm,
+            step_rad: rad,
+        } = options.edge
+        {
+            if !(mm.is_finite() && mm >= MIN_STEP_MM) {
                 return Err(CollisionError::BadMotion(format!(
-                    "the stepwise edge resolution must be finite and > 0, got {mm} mm, {rad} rad"
+                    "the stepwise edge step must be a finite number of at least {MIN_STEP_MM} mm, got {mm} mm"
+                )));
+            }
+            if !(rad.is_finite() && rad >= MIN_STEP_RAD) {
+                return Err(CollisionError::BadMotion(format!(
+                    "the stepwise edge rotation step must be a finite angle of at least {MIN_STEP_RAD} rad ({:.6}°), got {rad} rad",
+                    MIN_STEP_RAD.to_degrees()
                 )));
             }
         }
-        if !(options.contact_step.is_finite() && options.contact_step > 0.0) {
-            return Err(CollisionError::BadMotion(format!(
-                "the contact step must be a finite number > 0 mm, got {}",
-                options.contact_step
-            )));
+        if let EdgeResolution::Continuous { contact_step_mm: c } = options.edge {
+            if !(c.is_finite() && c >= MIN_STEP_MM) {
+                return Err(CollisionError::BadMotion(format!(
+                    "the contact step must be a finite number of at least {MIN_STEP_MM} mm, got {c}"
+                )));
+            }
         }
         if !(options.clearance_cap.is_finite() && options.clearance_cap > 0.0) {
             return Err(CollisionError::BadMotion(format!(
@@ -139,6 +146,7 @@ impl MeshValidator {
             options,
             stats: ValidatorStats::default(),
             near: Vec::new(),
+            deadline: None,
         })
     }
 
@@ -186,8 +194,17 @@ impl MeshValidator {
         self.collect_near(&swept, bulge);
     }
 
-    /// Static check of the obstacles in `self.near` (`false` for a bad pose).
+    /// Whether the caller's deadline has passed (then every check answers "not free").
+    fn expired(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+
+    /// Static check of the obstacles in `self.near` (`false` for a bad pose or a
+    /// passed deadline).
     fn free_among_near(&mut self, pose: &Transform) -> bool {
+        if self.expired() {
+            return false;
+        }
         for k in 0..self.near.len() {
             let (c, p, _) = &self.obstacles[self.near[k]];
             self.stats.pair_queries += 1;
@@ -212,7 +229,10 @@ impl MeshValidator {
     fn edge_options(&self) -> EdgeOptions {
         EdgeOptions {
             tolerance: self.options.tolerance,
-            contact_step: self.options.contact_step,
+            contact_step: match self.options.edge {
+                EdgeResolution::Continuous { contact_step_mm } => contact_step_mm,
+                EdgeResolution::Stepwise { .. } => EdgeResolution::DEFAULT_CONTACT_STEP_MM,
+            },
         }
     }
 
@@ -240,6 +260,9 @@ impl MeshValidator {
         }
         let options = self.edge_options();
         for k in 0..self.near.len() {
+            if self.expired() {
+                return false;
+            }
             let (c, p, _) = &self.obstacles[self.near[k]];
             self.stats.pair_queries += 1;
             match edge_interferes(&self.moving, from, to, c, p, &options) {
@@ -263,13 +286,10 @@ impl MotionValidator for MeshValidator {
 
     fn resolution(&self) -> EdgeResolution {
         match self.options.edge {
-            EdgeCheck::Continuous => EdgeResolution::Continuous {
+            EdgeResolution::Continuous { .. } => EdgeResolution::Continuous {
                 contact_step_mm: self.edge_options().effective_contact_step(),
             },
-            EdgeCheck::Stepwise { mm, rad } => EdgeResolution::Stepwise {
-                step_mm: mm,
-                step_rad: rad,
-            },
+            stepwise => stepwise,
         }
     }
 
@@ -283,8 +303,11 @@ impl MotionValidator for MeshValidator {
             return false;
         }
         match self.options.edge {
-            EdgeCheck::Continuous => self.continuous_edge_free(from, to),
-            EdgeCheck::Stepwise { mm, rad } => {
+            EdgeResolution::Continuous { .. } => self.continuous_edge_free(from, to),
+            EdgeResolution::Stepwise {
+                step_mm: mm,
+                step_rad: rad,
+            } => {
                 let (angle, _) = from.distance_to(to);
                 self.collect_swept(from, to, angle);
                 if self.near.is_empty() {
@@ -293,6 +316,10 @@ impl MotionValidator for MeshValidator {
                 stepwise_edge_free(|p| self.free_among_near(p), from, to, mm, rad)
             }
         }
+    }
+
+    fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.deadline = deadline;
     }
 
     fn clearance(&mut self, pose: &Transform) -> Option<f64> {
@@ -327,7 +354,7 @@ mod tests {
     }
 
     /// A 10 mm cube moving over a wall 1 mm thick at x = 50.
-    fn wall_scene(edge: EdgeCheck) -> MeshValidator {
+    fn wall_scene(edge: EdgeResolution) -> MeshValidator {
         let cube = collider(Mesh::cuboid(
             Point3::new(-5.0, -5.0, -5.0),
             Point3::new(5.0, 5.0, 5.0),
@@ -353,7 +380,7 @@ mod tests {
 
     #[test]
     fn touching_is_free_and_crossing_is_not() {
-        let mut v = wall_scene(EdgeCheck::Continuous);
+        let mut v = wall_scene(EdgeResolution::CONTINUOUS);
         assert!(v.is_free(&at(0.0)));
         assert!(v.is_free(&at(45.0)), "touching the wall");
         assert!(!v.is_free(&at(45.5)));
@@ -365,7 +392,7 @@ mod tests {
 
     #[test]
     fn continuous_edges_never_jump_a_thin_wall() {
-        let mut v = wall_scene(EdgeCheck::Continuous);
+        let mut v = wall_scene(EdgeResolution::CONTINUOUS);
         // both ends free, the wall in between
         assert!(v.is_free(&at(70.0)));
         assert!(!v.edge_free(&at(0.0), &at(70.0)));
@@ -376,12 +403,15 @@ mod tests {
         let start = at(44.0);
         assert!(!v.edge_free(&start, &start.then(&turn)));
         // a coarse stepwise check jumps the wall, as documented
-        let mut s = wall_scene(EdgeCheck::Stepwise {
-            mm: 100.0,
-            rad: 1.0,
+        let mut s = wall_scene(EdgeResolution::Stepwise {
+            step_mm: 100.0,
+            step_rad: 1.0,
         });
         assert!(s.edge_free(&at(0.0), &at(70.0)));
-        let mut s = wall_scene(EdgeCheck::Stepwise { mm: 0.5, rad: 0.01 });
+        let mut s = wall_scene(EdgeResolution::Stepwise {
+            step_mm: 0.5,
+            step_rad: 0.01,
+        });
         assert!(!s.edge_free(&at(0.0), &at(70.0)));
     }
 
@@ -394,7 +424,10 @@ mod tests {
             ..Default::default()
         }));
         assert!(bad(MeshValidatorOptions {
-            edge: EdgeCheck::Stepwise { mm: 0.0, rad: 0.1 },
+            edge: EdgeResolution::Stepwise {
+                step_mm: 0.0,
+                step_rad: 0.1,
+            },
             ..Default::default()
         }));
         assert!(bad(MeshValidatorOptions {
@@ -406,7 +439,7 @@ mod tests {
             MeshValidator::new(cube.clone(), vec![(cube.clone(), nan)], Default::default())
                 .is_err()
         );
-        let mut v = wall_scene(EdgeCheck::Continuous);
+        let mut v = wall_scene(EdgeResolution::CONTINUOUS);
         assert!(!v.is_free(&nan));
         assert!(!v.edge_free(&at(0.0), &nan));
     }

@@ -13,16 +13,18 @@
 //! | [`rrt`], [`biased_rrt`] | seed 002 baselines | reference only |
 //! | [`local_rrt`] | seed 002, local-discretization RRT | narrow passages, insertions |
 //! | [`rrt_connect`] | bidirectional RRT (+ the local discretization on failure) | general, fast |
-//! | [`plan_assembly`] | disassembly first, then RRT-Connect to the free end | the benchmark problems ([`problems`]) |
+//! | [`plan_insertion`] | disassembly first, then RRT-Connect to the free end | the benchmark problems ([`problems`]) |
 //! | [`disassemble`] | seed 002, "what can be taken apart can be assembled" | insertions with unknown approach |
 //!
-//! Every planner takes a seed ([`Limits::seed`]); for a given seed the result is
+//! Every planner takes a seed ([`PlanLimits::seed`]); for a given seed the result is
 //! identical whenever the iteration limit (not the time limit) ends the search.
+//! Every call honours one time budget ([`PlanLimits::time_limit_ms`], default
+//! [`DEFAULT_TIME_LIMIT_MS`]) over search and smoothing together.
 //! Details, options and defaults: `docs/planning.md`.
 
-mod assembly;
 mod disassembly;
 mod greedy_ant;
+mod insertion;
 mod local_rrt;
 mod mesh_validator;
 mod path;
@@ -40,17 +42,22 @@ mod validator;
 #[cfg(test)]
 mod test_scenes;
 
-pub use assembly::{plan_assembly, AssemblyOptions};
-pub use disassembly::{disassemble, Aabb, DisassemblyPlanner};
+pub use disassembly::{disassemble, DisassemblyPlanner};
 pub use greedy_ant::{greedy_ant, GreedyAntOptions};
+pub use insertion::{plan_insertion, InsertionOptions};
 pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
-pub use mesh_validator::{EdgeCheck, MeshValidator, MeshValidatorOptions, ValidatorStats};
-pub use path::{Failure, Path};
+pub use mesh_validator::{
+    MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
+};
+pub use path::{Failure, PlannedPath};
 pub use request::{Planner, PLANNER_NAMES};
 pub use rrt::{biased_rrt, rrt, RrtOptions};
 pub use rrt_connect::{rrt_connect, RrtConnectOptions};
 pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
-pub use run::{Control, Limits, PlanError, Progress, ProgressFn};
+pub use run::{
+    Control, Phase, PlanError, PlanLimits, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
+    SMOOTHING_PROGRESS_EVERY,
+};
 pub use smoothing::{smooth, Smoothing};
 pub use space::{PlanningSpace, RotationFreedom};
 pub use validator::{stepwise_edge_free, EdgeResolution, MotionValidator};

@@ -1,5 +1,6 @@
-//! [`Path`]: what a planner returns, found or not.
+//! [`PlannedPath`]: what a planner returns, found or not.
 
+use super::run::Run;
 use super::validator::{Checker, EdgeResolution, MotionValidator};
 use crate::math::{AngleConvention, Transform};
 use std::io::{self, Write};
@@ -40,7 +41,7 @@ pub enum Failure {
 /// poses are joined by straight SE(3) edges (translation lerp + slerp) that the
 /// validator accepted at `resolution`. Empty when `failure` is set.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Path {
+pub struct PlannedPath {
     /// `None` when a path was found, otherwise why not.
     pub failure: Option<Failure>,
     /// Key poses, start first (empty when not found).
@@ -61,15 +62,20 @@ pub struct Path {
     pub pose_checks: u64,
     /// Calls to [`MotionValidator::edge_free`] made by the planner (smoothing included).
     pub edge_checks: u64,
-    /// Wall-clock time of the run (ms).
+    /// Wall-clock time of the whole call (ms): search, smoothing and any nested
+    /// search, bounded by the call's time budget.
     pub time_ms: f64,
+    /// Of `time_ms`, the search (ms).
+    pub search_ms: f64,
+    /// Of `time_ms`, the smoothing (ms); 0 when smoothing is off or no path was found.
+    pub smoothing_ms: f64,
     /// How the validator checked the edges.
     pub resolution: EdgeResolution,
     /// Which planner produced the path.
     pub planner: &'static str,
 }
 
-impl Path {
+impl PlannedPath {
     /// Whether a path was found.
     pub fn found(&self) -> bool {
         self.failure.is_none()
@@ -88,6 +94,16 @@ impl Path {
         checker: &Checker<'_>,
         time_ms: f64,
     ) -> Self {
+        // Once the budget is spent every check answers "not free": a collision or
+        // an exhausted search seen after that is the time limit, not the geometry.
+        let failure = match failure {
+            Failure::StartInCollision | Failure::GoalInCollision | Failure::Exhausted(_)
+                if checker.expired() =>
+            {
+                Failure::TimeLimit
+            }
+            f => f,
+        };
         Self {
             failure: Some(failure),
             poses: Vec::new(),
@@ -100,6 +116,8 @@ impl Path {
             pose_checks: checker.pose_checks,
             edge_checks: checker.edge_checks,
             time_ms,
+            search_ms: time_ms,
+            smoothing_ms: 0.0,
             resolution: checker.resolution(),
             planner,
         }
@@ -112,9 +130,11 @@ impl Path {
         iterations: usize,
         nodes: usize,
         checker: &Checker<'_>,
-        time_ms: f64,
+        run: &Run<'_>,
     ) -> Self {
         let (length_mm, rotation_rad) = measure(&poses);
+        let time_ms = run.elapsed_ms();
+        let search_ms = run.search_ms.unwrap_or(time_ms);
         Self {
             failure: None,
             poses,
@@ -127,6 +147,8 @@ impl Path {
             pose_checks: checker.pose_checks,
             edge_checks: checker.edge_checks,
             time_ms,
+            search_ms,
+            smoothing_ms: time_ms - search_ms,
             resolution: checker.resolution(),
             planner,
         }
@@ -157,20 +179,26 @@ impl Path {
         out
     }
 
-    /// Re-checks the path with `validator`: the first pose with `is_free`, every edge
+    /// Re-checks the path with `validator`: every key pose with `is_free`, every edge
     /// with `edge_free`. On failure returns the index of the first bad edge (0 for the
     /// start pose itself) and its end pose.
+    ///
+    /// The one tolerance rule: an edge is accepted when the validator accepts it in
+    /// either direction. Planners check an edge in the direction they grew it, and a
+    /// path from a goal tree or a disassembly is reversed afterwards; a continuous
+    /// check's steps along a sliding contact depend on the direction, so checking
+    /// only the other one could reject a pose the planner accepted.
     pub fn revalidate(
         &self,
         validator: &mut dyn MotionValidator,
     ) -> Result<(), (usize, Transform)> {
-        if let Some(first) = self.poses.first() {
-            if !validator.is_free(first) {
-                return Err((0, *first));
+        for (i, p) in self.poses.iter().enumerate() {
+            if !validator.is_free(p) {
+                return Err((i.saturating_sub(1), *p));
             }
         }
         for (i, w) in self.poses.windows(2).enumerate() {
-            if !validator.edge_free(&w[0], &w[1]) {
+            if !validator.edge_free(&w[0], &w[1]) && !validator.edge_free(&w[1], &w[0]) {
                 return Err((i, w[1]));
             }
         }
@@ -211,7 +239,7 @@ mod tests {
     use super::*;
     use crate::math::Vec3;
 
-    fn sample_path() -> Path {
+    fn sample_path() -> PlannedPath {
         let poses = vec![
             Transform::IDENTITY,
             Transform::from_translation(Vec3::new(10.0, 0.0, 0.0)),
@@ -222,7 +250,7 @@ mod tests {
             ),
         ];
         let (l, r) = measure(&poses);
-        Path {
+        PlannedPath {
             failure: None,
             poses,
             length_mm: l,
@@ -234,6 +262,8 @@ mod tests {
             pose_checks: 0,
             edge_checks: 0,
             time_ms: 0.0,
+            search_ms: 0.0,
+            smoothing_ms: 0.0,
             resolution: EdgeResolution::DEFAULT,
             planner: "test",
         }

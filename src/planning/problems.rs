@@ -8,12 +8,12 @@
 //! | [`screw_cell`] | seed 000 fig. 11: a screw from the table into a plate hole (0.5 mm) |
 //! | [`ring_puzzle`] | two interlocked rings; the slit ring's gap is 10 % wider than the other's wire |
 
-use super::assembly::{plan_assembly, AssemblyOptions};
-use super::disassembly::Aabb;
-use super::path::Path;
+use super::insertion::{plan_insertion, InsertionOptions};
+use super::path::PlannedPath;
 use super::run::PlanError;
 use super::space::PlanningSpace;
-use super::{EdgeCheck, MeshValidator, MeshValidatorOptions};
+use super::{EdgeResolution, MeshValidator, MeshValidatorOptions};
+use crate::collision::Aabb;
 use crate::collision::{Collider, CollisionError};
 use crate::document::file::{ComponentFile, DocumentFile, PartFile};
 use crate::math::{Point3, Transform, Vec3};
@@ -83,11 +83,7 @@ pub enum ProblemError {
 impl Problem {
     /// The moving component's box in its own frame (mm).
     pub fn part_box(&self) -> Aabb {
-        let (lo, hi) = self
-            .moving
-            .bounds()
-            .unwrap_or((Point3::origin(), Point3::origin()));
-        Aabb::new(lo.coords, hi.coords)
+        Aabb::of_mesh(&self.moving).unwrap_or(Aabb::new(Point3::origin(), Point3::origin()))
     }
 
     /// Colliders of the moving part and the obstacles (one per distinct part).
@@ -112,7 +108,7 @@ impl Problem {
     }
 
     /// The validator options the benchmarks and tests use: exact interference with
-    /// the default tolerance, continuous edges ([`EdgeCheck::Continuous`]).
+    /// the default tolerance, continuous edges ([`EdgeResolution::CONTINUOUS`]).
     pub fn default_validator_options(&self) -> MeshValidatorOptions {
         MeshValidatorOptions::default()
     }
@@ -128,15 +124,15 @@ impl Problem {
             .map(|v| v.coords.norm())
             .fold(1.0, f64::max);
         MeshValidatorOptions {
-            edge: EdgeCheck::Stepwise {
-                mm: 0.05,
-                rad: 0.05 / radius,
+            edge: EdgeResolution::Stepwise {
+                step_mm: 0.05,
+                step_rad: 0.05 / radius,
             },
             ..Default::default()
         }
     }
 
-    /// Solves the problem with fitup's best planner ([`plan_assembly`], disassembly
+    /// Solves the problem with fitup's best planner ([`plan_insertion`], disassembly
     /// first) for `seed`, at most `max_iterations` per search.
     ///
     /// # Errors
@@ -146,23 +142,23 @@ impl Problem {
         validator: &mut MeshValidator,
         seed: u64,
         max_iterations: usize,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         self.solve_with(
             validator,
-            &AssemblyOptions::default().with_limits(seed, max_iterations),
+            &InsertionOptions::default().with_limits(seed, max_iterations),
         )
     }
 
-    /// Solves the problem with [`plan_assembly`] and `options`.
+    /// Solves the problem with [`plan_insertion`] and `options`.
     ///
     /// # Errors
     /// Only for invalid options.
     pub fn solve_with(
         &self,
         validator: &mut MeshValidator,
-        options: &AssemblyOptions,
-    ) -> Result<Path, PlanError> {
-        plan_assembly(
+        options: &InsertionOptions,
+    ) -> Result<PlannedPath, PlanError> {
+        plan_insertion(
             validator,
             &self.space,
             &self.start,
@@ -239,8 +235,8 @@ impl Problem {
             "bounds_min": self.space.min.as_slice(),
             "bounds_max": self.space.max.as_slice(),
             "rotation_weight_mm_per_rad": self.space.rotation_weight,
-            "product_box_min": self.product_box.min.as_slice(),
-            "product_box_max": self.product_box.max.as_slice(),
+            "product_box_min": self.product_box.lo.coords.as_slice(),
+            "product_box_max": self.product_box.hi.coords.as_slice(),
         })
     }
 

@@ -2,11 +2,12 @@
 //! that scripts, the CLI and benchmarks use, so the dispatch lives in one place.
 
 use super::{
-    biased_rrt, disassemble, greedy_ant, local_rrt, plan_assembly, rrt, rrt_connect, rrt_floyd,
-    Aabb, AssemblyOptions, DisassemblyPlanner, GreedyAntOptions, Limits, LocalRrtOptions,
-    MotionValidator, Path, PlanError, PlanningSpace, ProgressFn, RrtConnectOptions,
+    biased_rrt, disassemble, greedy_ant, local_rrt, plan_insertion, rrt, rrt_connect, rrt_floyd,
+    DisassemblyPlanner, GreedyAntOptions, InsertionOptions, LocalRrtOptions, MotionValidator,
+    PlanError, PlanLimits, PlannedPath, PlanningSpace, ProgressFn, RrtConnectOptions,
     RrtFloydOptions, RrtOptions, Smoothing,
 };
+use crate::collision::Aabb;
 use crate::math::Transform;
 
 /// A planner and its options.
@@ -63,7 +64,7 @@ impl Planner {
     }
 
     /// Seed, iteration and time limits.
-    pub fn limits_mut(&mut self) -> &mut Limits {
+    pub fn limits_mut(&mut self) -> &mut PlanLimits {
         match self {
             Planner::GreedyAnt(o) => &mut o.limits,
             Planner::RrtFloyd(o) => &mut o.limits,
@@ -74,7 +75,7 @@ impl Planner {
     }
 
     /// Seed, iteration and time limits (a copy).
-    pub fn limits(&self) -> Limits {
+    pub fn limits(&self) -> PlanLimits {
         self.clone().limits_mut().to_owned()
     }
 
@@ -135,7 +136,7 @@ impl Planner {
         start: &Transform,
         goal: &Transform,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         match self {
             Planner::GreedyAnt(o) => greedy_ant(validator, space, start, goal, o, progress),
             Planner::RrtFloyd(o) => rrt_floyd(validator, space, start, goal, o, progress),
@@ -157,7 +158,7 @@ impl Planner {
         part_box: &Aabb,
         product_box: &Aabb,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         let planner = match self {
             Planner::Rrt(o) | Planner::BiasedRrt(o) => DisassemblyPlanner::Rrt(o.clone()),
             Planner::LocalRrt(o) => DisassemblyPlanner::LocalRrt(o.clone()),
@@ -181,7 +182,7 @@ impl Planner {
     }
 
     /// Seed 002's assembly by disassembly, for a full start → goal path: see
-    /// [`plan_assembly`]. This planner's options drive the part of the search they fit:
+    /// [`plan_insertion`]. This planner's options drive the part of the search they fit:
     /// `rrt`, `biased_rrt` and `local_rrt` search the disassembly (seed 002's
     /// comparison), `rrt_connect` options the free-space join (the disassembly is then
     /// `local_rrt`); the seed and limits apply to both. `greedy_ant` and `rrt_floyd`
@@ -196,19 +197,21 @@ impl Planner {
         part_box: &Aabb,
         product_box: &Aabb,
         progress: Option<ProgressFn<'_>>,
-    ) -> Result<Path, PlanError> {
+    ) -> Result<PlannedPath, PlanError> {
         let limits = self.limits();
         let mut options =
-            AssemblyOptions::default().with_limits(limits.seed, limits.max_iterations);
-        options.disassembly.rrt_mut().limits.time_limit_ms = limits.time_limit_ms;
-        options.approach.limits.time_limit_ms = limits.time_limit_ms;
+            InsertionOptions::default().with_limits(limits.seed, limits.max_iterations);
+        options.time_limit_ms = limits.time_limit_ms;
         options.smoothing = self.smoothing();
         match self {
             Planner::Rrt(o) | Planner::BiasedRrt(o) => {
                 options.disassembly = DisassemblyPlanner::Rrt(o.clone())
             }
             Planner::LocalRrt(o) => options.disassembly = DisassemblyPlanner::LocalRrt(o.clone()),
-            Planner::RrtConnect(o) => options.approach = o.clone(),
+            Planner::RrtConnect(o) => {
+                options.approach = o.clone();
+                options.approach.limits.max_iterations = limits.max_iterations;
+            }
             Planner::GreedyAnt(_) | Planner::RrtFloyd(_) => {
                 return Err(PlanError::InvalidOption {
                     option: "planner",
@@ -219,7 +222,7 @@ impl Planner {
                 })
             }
         }
-        plan_assembly(
+        plan_insertion(
             validator,
             space,
             start,

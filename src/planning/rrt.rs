@@ -2,8 +2,8 @@
 //! and the tree engine that [`local_rrt`](super::local_rrt) extends.
 
 use super::local_rrt::Lattice;
-use super::path::Path;
-use super::run::{Limits, PlanError, ProgressFn, Run};
+use super::path::PlannedPath;
+use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::{shortcut, Smoothing};
 use super::space::PlanningSpace;
 use super::tree::{check_ends, steer, PoseTarget, Target, Tree};
@@ -14,7 +14,7 @@ use crate::math::{Rng, Transform};
 #[derive(Debug, Clone, PartialEq)]
 pub struct RrtOptions {
     /// Seed and limits.
-    pub limits: Limits,
+    pub limits: PlanLimits,
     /// Largest extension toward a sample, in metric mm (see
     /// [`PlanningSpace`]). Default 10.
     pub step: f64,
@@ -32,7 +32,7 @@ impl Default for RrtOptions {
     /// Plain RRT: step 10, no goal bias, tolerance 10, default smoothing.
     fn default() -> Self {
         Self {
-            limits: Limits::default(),
+            limits: PlanLimits::default(),
             step: 10.0,
             goal_bias: 0.0,
             goal_tolerance: 10.0,
@@ -75,7 +75,7 @@ pub fn rrt(
     goal: &Transform,
     options: &RrtOptions,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     options.validate()?;
     plan_tree(
         "rrt",
@@ -101,7 +101,7 @@ pub fn biased_rrt(
     goal: &Transform,
     options: &RrtOptions,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     options.validate()?;
     if options.goal_bias <= 0.0 {
         return Err(PlanError::invalid(
@@ -133,16 +133,23 @@ pub(crate) fn plan_tree(
     options: &RrtOptions,
     local: Option<&Lattice>,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     space.validate()?;
     PlanError::pose("start", start)?;
     if let Some(g) = target.pose() {
         PlanError::pose("goal", g)?;
     }
     let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, target.pose()) {
-        return Ok(Path::failed(planner, f, 0, 0, &checker, run.elapsed_ms()));
+        return Ok(PlannedPath::failed(
+            planner,
+            f,
+            0,
+            0,
+            &checker,
+            run.elapsed_ms(),
+        ));
     }
     let mut rng = Rng::new(options.limits.seed);
     let key_mm = local.map_or(options.step * 1e-3, |l| l.edge_length_min * 0.25);
@@ -210,7 +217,7 @@ pub(crate) fn plan_tree(
         }
     };
     match outcome {
-        Err(f) => Ok(Path::failed(
+        Err(f) => Ok(PlannedPath::failed(
             planner,
             f,
             run.iterations,
@@ -227,7 +234,7 @@ pub(crate) fn plan_tree(
                 space,
                 &options.smoothing,
                 options.limits.seed,
-                &run,
+                &mut run,
                 tree.len(),
             ))
         }
@@ -243,21 +250,14 @@ pub(crate) fn finish(
     space: &PlanningSpace,
     smoothing: &Smoothing,
     seed: u64,
-    run: &Run<'_>,
+    run: &mut Run<'_>,
     nodes: usize,
-) -> Path {
+) -> PlannedPath {
     let raw = super::path::measure(&poses);
+    run.end_search();
     // A different stream than the planner's, so smoothing does not depend on how many
     // numbers the search drew.
     let mut rng = Rng::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
-    shortcut(checker, space, &mut poses, smoothing, &mut rng);
-    Path::found_with(
-        planner,
-        poses,
-        raw,
-        run.iterations,
-        nodes,
-        checker,
-        run.elapsed_ms(),
-    )
+    shortcut(checker, space, &mut poses, smoothing, &mut rng, run);
+    PlannedPath::found_with(planner, poses, raw, run.iterations, nodes, checker, run)
 }

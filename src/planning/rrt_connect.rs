@@ -2,9 +2,9 @@
 //! discretization as a fallback when an extension fails.
 
 use super::local_rrt::Lattice;
-use super::path::Path;
+use super::path::PlannedPath;
 use super::rrt::finish;
-use super::run::{Limits, PlanError, ProgressFn, Run};
+use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
 use super::tree::{check_ends, steer, PoseTarget, Tree};
@@ -15,7 +15,7 @@ use crate::math::{Rng, Transform};
 #[derive(Debug, Clone, PartialEq)]
 pub struct RrtConnectOptions {
     /// Seed and limits.
-    pub limits: Limits,
+    pub limits: PlanLimits,
     /// Largest extension, in metric mm (see [`PlanningSpace`]). Default 10.
     pub step: f64,
     /// The local discretization tried when an extension or a connection is blocked
@@ -28,7 +28,7 @@ pub struct RrtConnectOptions {
 impl Default for RrtConnectOptions {
     fn default() -> Self {
         Self {
-            limits: Limits::default(),
+            limits: PlanLimits::default(),
             step: 10.0,
             lattice: Some(Lattice::default()),
             smoothing: Smoothing::default(),
@@ -65,16 +65,23 @@ pub fn rrt_connect(
     goal: &Transform,
     options: &RrtConnectOptions,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     const NAME: &str = "rrt_connect";
     options.validate()?;
     space.validate()?;
     PlanError::pose("start", start)?;
     PlanError::pose("goal", goal)?;
     let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
-        return Ok(Path::failed(NAME, f, 0, 0, &checker, run.elapsed_ms()));
+        return Ok(PlannedPath::failed(
+            NAME,
+            f,
+            0,
+            0,
+            &checker,
+            run.elapsed_ms(),
+        ));
     }
     let mut rng = Rng::new(options.limits.seed);
     let reference = start.rotation();
@@ -137,7 +144,7 @@ pub fn rrt_connect(
     };
     let nodes = trees[0].len() + trees[1].len();
     match joined {
-        Err(f) => Ok(Path::failed(
+        Err(f) => Ok(PlannedPath::failed(
             NAME,
             f,
             run.iterations,
@@ -158,7 +165,7 @@ pub fn rrt_connect(
                 space,
                 &options.smoothing,
                 options.limits.seed,
-                &run,
+                &mut run,
                 nodes,
             ))
         }

@@ -1,8 +1,8 @@
 //! Seed 000's random-walk RRT + Floyd shortest path.
 
-use super::path::{Failure, Path};
+use super::path::{Failure, PlannedPath};
 use super::rrt::finish;
-use super::run::{Limits, PlanError, ProgressFn, Run};
+use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
 use super::tree::{check_ends, steer, Tree};
@@ -17,7 +17,7 @@ pub const MAX_FLOYD_NODES: usize = 1000;
 #[derive(Debug, Clone, PartialEq)]
 pub struct RrtFloydOptions {
     /// Seed and limits (one iteration = one random-walk extension).
-    pub limits: Limits,
+    pub limits: PlanLimits,
     /// Largest extension toward a sample (metric mm). Default 10.
     pub step: f64,
     /// Probability of walking toward the goal instead of a uniform sample. Default 0.05.
@@ -37,7 +37,7 @@ pub struct RrtFloydOptions {
 impl Default for RrtFloydOptions {
     fn default() -> Self {
         Self {
-            limits: Limits::default(),
+            limits: PlanLimits::default(),
             step: 10.0,
             goal_bias: 0.05,
             goal_tolerance: 10.0,
@@ -85,16 +85,23 @@ pub fn rrt_floyd(
     goal: &Transform,
     options: &RrtFloydOptions,
     progress: Option<ProgressFn<'_>>,
-) -> Result<Path, PlanError> {
+) -> Result<PlannedPath, PlanError> {
     const NAME: &str = "rrt_floyd";
     options.validate()?;
     space.validate()?;
     PlanError::pose("start", start)?;
     PlanError::pose("goal", goal)?;
     let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
-        return Ok(Path::failed(NAME, f, 0, 0, &checker, run.elapsed_ms()));
+        return Ok(PlannedPath::failed(
+            NAME,
+            f,
+            0,
+            0,
+            &checker,
+            run.elapsed_ms(),
+        ));
     }
     let mut rng = Rng::new(options.limits.seed);
     let reference = start.rotation();
@@ -126,7 +133,7 @@ pub fn rrt_floyd(
         }
     }
     if matches!(stop, Failure::Cancelled | Failure::TimeLimit) {
-        return Ok(Path::failed(
+        return Ok(PlannedPath::failed(
             NAME,
             stop,
             run.iterations,
@@ -157,7 +164,7 @@ pub fn rrt_floyd(
     }
     for i in 0..n {
         if let Err(f) = run.check(n, best) {
-            return Ok(Path::failed(
+            return Ok(PlannedPath::failed(
                 NAME,
                 f,
                 run.iterations,
@@ -195,7 +202,7 @@ pub fn rrt_floyd(
         }
     }
     if dist[g].is_infinite() {
-        return Ok(Path::failed(
+        return Ok(PlannedPath::failed(
             NAME,
             stop,
             run.iterations,
@@ -217,7 +224,7 @@ pub fn rrt_floyd(
         space,
         &options.smoothing,
         options.limits.seed,
-        &run,
+        &mut run,
         n,
     ))
 }

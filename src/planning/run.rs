@@ -1,22 +1,29 @@
 //! What every planner shares: limits, progress reports, cancellation, option errors.
 
 use super::path::Failure;
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+/// The time budget of a planning call when none is given: 10 s (search, smoothing
+/// and every nested search together).
+pub const DEFAULT_TIME_LIMIT_MS: f64 = 10_000.0;
 
 /// Seed and limits of one planning run.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Limits {
+pub struct PlanLimits {
     /// Seed of the run's [`Rng`](crate::math::Rng): equal seeds give equal paths
     /// whenever the iteration limit, not the time limit, ends the search.
     pub seed: u64,
     /// Largest number of iterations (tree extensions, or layers for the greedy ant).
     pub max_iterations: usize,
-    /// Wall-clock limit in milliseconds (`None`: none). It only cuts a run short.
+    /// Wall-clock budget of the whole call in milliseconds — search, smoothing and
+    /// nested searches together (`None`: [`DEFAULT_TIME_LIMIT_MS`]). When it runs out
+    /// the search stops with [`Failure::TimeLimit`], or smoothing stops and keeps the
+    /// best path found so far.
     pub time_limit_ms: Option<f64>,
 }
 
-impl Default for Limits {
-    /// Seed 0, 10 000 iterations, no time limit.
+impl Default for PlanLimits {
+    /// Seed 0, 10 000 iterations, the default time budget ([`DEFAULT_TIME_LIMIT_MS`]).
     fn default() -> Self {
         Self {
             seed: 0,
@@ -26,7 +33,17 @@ impl Default for Limits {
     }
 }
 
-impl Limits {
+impl PlanLimits {
+    /// The time budget in ms: `time_limit_ms` or [`DEFAULT_TIME_LIMIT_MS`].
+    pub fn budget_ms(&self) -> f64 {
+        self.time_limit_ms.unwrap_or(DEFAULT_TIME_LIMIT_MS)
+    }
+
+    /// The instant the budget runs out for a call started at `started`.
+    pub fn deadline(&self, started: Instant) -> Instant {
+        deadline_after(started, self.budget_ms())
+    }
+
     pub(crate) fn validate(&self) -> Result<(), PlanError> {
         if self.max_iterations == 0 {
             return Err(PlanError::invalid(
@@ -42,17 +59,38 @@ impl Limits {
     }
 }
 
+/// `started + ms`, saturating far in the future for huge budgets.
+pub(crate) fn deadline_after(started: Instant, ms: f64) -> Instant {
+    Duration::try_from_secs_f64(ms.max(0.0) / 1e3)
+        .ok()
+        .and_then(|d| started.checked_add(d))
+        .unwrap_or_else(|| started + Duration::from_secs(100 * 365 * 86_400))
+}
+
+/// What a planning call is doing when it reports progress.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// Searching for a path.
+    Search,
+    /// Shortening a found path (anytime: stopping keeps the best path so far).
+    Smoothing,
+}
+
 /// A progress report, handed to the caller's callback every
-/// [`PROGRESS_EVERY`] iterations.
+/// [`PROGRESS_EVERY`] iterations (searching) or shortcut attempts (smoothing).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
-    /// Iterations done so far.
+    /// Searching or smoothing.
+    pub phase: Phase,
+    /// Iterations done so far (smoothing: shortcut attempts).
     pub iterations: usize,
-    /// Poses held by the search (tree nodes, graph nodes, layers).
+    /// Poses held by the search (tree nodes, graph nodes, layers; smoothing: the
+    /// path's key poses).
     pub nodes: usize,
-    /// Metric distance (mm) from the closest pose found so far to the goal.
+    /// Metric distance (mm) from the closest pose found so far to the goal
+    /// (smoothing: the path's current length in the space's metric).
     pub best_distance: f64,
-    /// Time since the run started (ms).
+    /// Time since the call started (ms).
     pub elapsed_ms: f64,
 }
 
@@ -70,6 +108,8 @@ pub type ProgressFn<'a> = &'a mut dyn FnMut(&Progress) -> Control;
 
 /// Iterations between two progress callbacks.
 pub const PROGRESS_EVERY: usize = 256;
+/// Shortcut attempts between two progress callbacks while smoothing.
+pub const SMOOTHING_PROGRESS_EVERY: usize = 16;
 /// Iterations between two clock reads.
 const CLOCK_EVERY: usize = 16;
 
@@ -132,23 +172,69 @@ impl PlanError {
 /// The clock, counters and callback of one run.
 pub(crate) struct Run<'p> {
     started: Instant,
-    limits: Limits,
+    deadline: Instant,
+    limits: PlanLimits,
     progress: Option<ProgressFn<'p>>,
     pub iterations: usize,
+    /// Time the search took (ms), set by [`Run::end_search`].
+    pub search_ms: Option<f64>,
 }
 
 impl<'p> Run<'p> {
-    pub fn new(limits: Limits, progress: Option<ProgressFn<'p>>) -> Self {
+    pub fn new(limits: PlanLimits, progress: Option<ProgressFn<'p>>) -> Self {
+        let started = Instant::now();
         Self {
-            started: Instant::now(),
+            started,
+            deadline: limits.deadline(started),
             limits,
             progress,
             iterations: 0,
+            search_ms: None,
         }
     }
 
     pub fn elapsed_ms(&self) -> f64 {
         self.started.elapsed().as_secs_f64() * 1e3
+    }
+
+    /// When the call's budget runs out.
+    pub fn deadline(&self) -> Instant {
+        self.deadline
+    }
+
+    /// Whether the budget is spent.
+    pub fn expired(&self) -> bool {
+        Instant::now() >= self.deadline
+    }
+
+    /// Marks the end of the search (smoothing follows).
+    pub fn end_search(&mut self) {
+        self.search_ms = Some(self.elapsed_ms());
+    }
+
+    /// Called once per shortcut attempt while smoothing: reports progress every
+    /// [`SMOOTHING_PROGRESS_EVERY`] attempts; `false` when smoothing must stop
+    /// (budget spent or cancelled).
+    pub fn smoothing_tick(&mut self, attempt: usize, key_poses: usize, length: f64) -> bool {
+        if self.expired() {
+            return false;
+        }
+        if attempt % SMOOTHING_PROGRESS_EVERY == 0 && attempt > 0 {
+            let elapsed_ms = self.elapsed_ms();
+            if let Some(f) = self.progress.as_mut() {
+                let report = Progress {
+                    phase: Phase::Smoothing,
+                    iterations: attempt,
+                    nodes: key_poses,
+                    best_distance: length,
+                    elapsed_ms,
+                };
+                if f(&report) == Control::Cancel {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Starts the next iteration, or says why the run must stop.
@@ -164,17 +250,14 @@ impl<'p> Run<'p> {
     /// Time and callback checks without counting an iteration (long inner loops).
     pub fn check(&mut self, nodes: usize, best_distance: f64) -> Result<(), Failure> {
         let i = self.iterations;
-        if i % CLOCK_EVERY == 0 {
-            if let Some(limit) = self.limits.time_limit_ms {
-                if self.elapsed_ms() >= limit {
-                    return Err(Failure::TimeLimit);
-                }
-            }
+        if i % CLOCK_EVERY == 0 && self.expired() {
+            return Err(Failure::TimeLimit);
         }
         if i % PROGRESS_EVERY == 0 && i > 0 {
             let elapsed_ms = self.elapsed_ms();
             if let Some(f) = self.progress.as_mut() {
                 let report = Progress {
+                    phase: Phase::Search,
                     iterations: i,
                     nodes,
                     best_distance,

@@ -1,7 +1,7 @@
 //! Shortcut smoothing of a found path.
 
-use super::path::{measure, Path};
-use super::run::PlanError;
+use super::path::{measure, PlannedPath};
+use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::space::PlanningSpace;
 use super::validator::{Checker, MotionValidator};
 use crate::math::{Rng, Transform};
@@ -42,26 +42,48 @@ impl Smoothing {
 }
 
 /// Smooths a found `path` in place with `validator`, costs in `space`'s metric,
-/// seeded by `seed`; updates its
-/// lengths and check counts (`raw_*` keep the lengths before).
+/// seeded by `seed`, within `time_limit_ms` (`None`: the default budget,
+/// [`DEFAULT_TIME_LIMIT_MS`](super::DEFAULT_TIME_LIMIT_MS)). Anytime: when the budget
+/// is spent or `progress` cancels, the shortest path so far is kept (every kept edge
+/// was accepted by the validator). Updates the lengths, check counts, `smoothing_ms`
+/// and `time_ms` (`raw_*` keep the lengths before).
 pub fn smooth(
     validator: &mut dyn MotionValidator,
     space: &PlanningSpace,
-    path: &mut Path,
+    path: &mut PlannedPath,
     smoothing: &Smoothing,
     seed: u64,
+    time_limit_ms: Option<f64>,
+    progress: Option<ProgressFn<'_>>,
 ) {
     if !path.found() {
         return;
     }
-    let mut checker = Checker::new(validator);
+    let limits = PlanLimits {
+        seed,
+        max_iterations: usize::MAX,
+        time_limit_ms,
+    };
+    let mut run = Run::new(limits, progress);
+    run.end_search();
+    let mut checker = Checker::new(validator, Some(run.deadline()));
     let mut rng = Rng::new(seed);
-    shortcut(&mut checker, space, &mut path.poses, smoothing, &mut rng);
+    shortcut(
+        &mut checker,
+        space,
+        &mut path.poses,
+        smoothing,
+        &mut rng,
+        &mut run,
+    );
     let (l, r) = measure(&path.poses);
     path.length_mm = l;
     path.rotation_rad = r;
     path.pose_checks += checker.pose_checks;
     path.edge_checks += checker.edge_checks;
+    let ms = run.elapsed_ms();
+    path.smoothing_ms += ms;
+    path.time_ms += ms;
 }
 
 pub(crate) fn shortcut(
@@ -70,12 +92,18 @@ pub(crate) fn shortcut(
     poses: &mut Vec<Transform>,
     smoothing: &Smoothing,
     rng: &mut Rng,
+    run: &mut Run<'_>,
 ) {
     if !smoothing.enabled || poses.len() < 3 {
         return;
     }
     linear_pass(checker, poses);
-    for _ in 0..smoothing.shortcut_attempts {
+    for attempt in 0..smoothing.shortcut_attempts {
+        // Anytime: every accepted shortcut leaves a valid path, so stopping here
+        // keeps the best one so far.
+        if !run.smoothing_tick(attempt, poses.len(), space.distance_along(poses)) {
+            return;
+        }
         let edges = poses.len() - 1;
         if edges < 2 {
             break;
@@ -113,9 +141,10 @@ pub(crate) fn shortcut(
     linear_pass(checker, poses);
 }
 
-/// Drops `p[i]` whenever its kept predecessor sees `p[i + 1]`.
+/// Drops `p[i]` whenever its kept predecessor sees `p[i + 1]` (a spent budget makes
+/// every check answer "not free", which keeps the pose: the path stays valid).
 fn linear_pass(checker: &mut Checker<'_>, poses: &mut Vec<Transform>) {
-    if poses.len() < 3 {
+    if poses.len() < 3 || checker.expired() {
         return;
     }
     let mut kept = vec![poses[0]];

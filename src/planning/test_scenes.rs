@@ -2,6 +2,7 @@
 //! checked exactly with a separating-axis test, and the planner property tests.
 
 use super::*;
+use crate::collision::Aabb;
 use crate::math::{Transform, Vec3};
 use nalgebra::Matrix3;
 
@@ -69,8 +70,8 @@ impl MotionValidator for BoxScene {
         let r = pose.rotation().to_rotation_matrix().into_inner();
         let c = pose.translation();
         !self.obstacles.iter().any(|o| {
-            let b = (o.min + o.max) * 0.5;
-            let e = (o.max - o.min) * 0.5 + Vec3::repeat(self.inflate);
+            let b = (o.lo.coords + o.hi.coords) * 0.5;
+            let e = (o.hi - o.lo) * 0.5 + Vec3::repeat(self.inflate);
             obb_overlaps_aabb(&r, &c, &self.half, &b, &e)
         })
     }
@@ -85,9 +86,9 @@ impl MotionValidator for BoxScene {
             return None;
         }
         // Distance from the component's bounding box: a lower bound of the true one.
-        let b = self.local_box().transformed(pose);
+        let b = self.local_box().transformed(pose.isometry());
         let d = self.obstacles.iter().fold(f64::INFINITY, |m, o| {
-            let gap = (o.min - b.max).sup(&(b.min - o.max)).sup(&Vec3::zeros());
+            let gap = (o.lo - b.hi).sup(&(b.lo - o.hi)).sup(&Vec3::zeros());
             m.min(gap.norm() - self.inflate)
         });
         Some(d.max(0.0))
@@ -154,8 +155,8 @@ fn at(x: f64, y: f64, z: f64) -> Transform {
     Transform::from_translation(Vec3::new(x, y, z))
 }
 
-fn limits(seed: u64, max_iterations: usize) -> Limits {
-    Limits {
+fn limits(seed: u64, max_iterations: usize) -> PlanLimits {
+    PlanLimits {
         seed,
         max_iterations,
         time_limit_ms: None,
@@ -171,7 +172,7 @@ fn plan(
     goal: &Transform,
     seed: u64,
     iterations: usize,
-) -> Path {
+) -> PlannedPath {
     let lim = limits(seed, iterations);
     let s = s.clone();
     match name {
@@ -265,7 +266,7 @@ const PLANNERS: [&str; 7] = [
 
 /// The property every found path must have: it starts and ends where asked and is
 /// free in the exact scene at a resolution finer than the planner's.
-fn assert_valid(p: &Path, scene: &BoxScene, start: &Transform, goal: Option<&Transform>) {
+fn assert_valid(p: &PlannedPath, scene: &BoxScene, start: &Transform, goal: Option<&Transform>) {
     assert!(p.found(), "{}: {:?}", p.planner, p.failure);
     assert!(
         p.poses[0].approx_eq(start, 1e-9, 1e-9),
@@ -404,7 +405,7 @@ fn bad_options_are_rejected_with_their_name() {
     let s = space();
     let mut v = open_scene();
     let (a, b) = (at(-30.0, 0.0, 0.0), at(30.0, 0.0, 0.0));
-    let err = |r: Result<Path, PlanError>| r.unwrap_err().to_string();
+    let err = |r: Result<PlannedPath, PlanError>| r.unwrap_err().to_string();
     let o = RrtOptions {
         step: -1.0,
         ..Default::default()
@@ -534,8 +535,8 @@ fn disassembly_leaves_the_product_box_and_ends_assembled() {
             continue; // the baseline may fail; only what it returns must be right
         }
         assert!(p.found(), "{:?}", p.failure);
-        let first = part.transformed(&p.poses[0]);
-        assert!((0..3).any(|k| first.min[k] >= product.max[k] || first.max[k] <= product.min[k]));
+        let first = part.transformed(p.poses[0].isometry());
+        assert!((0..3).any(|k| first.lo[k] >= product.hi[k] || first.hi[k] <= product.lo[k]));
         assert!(p.poses.last().unwrap().approx_eq(&assembled, 1e-9, 1e-9));
         let mut exact = scene.exact();
         assert!(p.densify(0.05, 0.002).iter().all(|q| exact.is_free(q)));

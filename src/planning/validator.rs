@@ -1,6 +1,7 @@
 //! [`MotionValidator`]: the one question planners ask about geometry.
 
 use crate::math::Transform;
+use std::time::Instant;
 
 /// How a validator checks a straight SE(3) edge (translation lerp + rotation slerp).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,6 +41,15 @@ impl std::fmt::Display for EdgeResolution {
 }
 
 impl EdgeResolution {
+    /// The contact step of [`EdgeResolution::CONTINUOUS`], mm.
+    pub const DEFAULT_CONTACT_STEP_MM: f64 = 0.05;
+
+    /// The continuous check with the default contact step (0.05 mm): the mesh
+    /// validator's default.
+    pub const CONTINUOUS: Self = Self::Continuous {
+        contact_step_mm: Self::DEFAULT_CONTACT_STEP_MM,
+    };
+
     /// The resolution used by validators that do not state one: 0.1 mm, 0.002 rad.
     pub const DEFAULT: Self = Self::Stepwise {
         step_mm: 0.1,
@@ -56,7 +66,7 @@ impl EdgeResolution {
 /// neighbour is valid.
 ///
 /// Planners count the calls they make (reported as `pose_checks` and `edge_checks`
-/// in [`Path`](super::Path)).
+/// in [`PlannedPath`](super::PlannedPath)).
 pub trait MotionValidator {
     /// Whether the component at `pose` is free of collision.
     fn is_free(&mut self, pose: &Transform) -> bool;
@@ -89,6 +99,13 @@ pub trait MotionValidator {
     fn clearance(&mut self, _pose: &Transform) -> Option<f64> {
         None
     }
+
+    /// The instant the caller's time budget runs out (`None`: no deadline). A
+    /// validator whose single queries can take long (fine stepwise edges, long
+    /// continuous edges) should answer "not free" once it has passed, so that one
+    /// check cannot overrun the budget; planners set it for the duration of a call
+    /// and clear it afterwards. The default ignores it.
+    fn set_deadline(&mut self, _deadline: Option<Instant>) {}
 }
 
 impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
@@ -103,6 +120,9 @@ impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
     }
     fn clearance(&mut self, pose: &Transform) -> Option<f64> {
         (**self).clearance(pose)
+    }
+    fn set_deadline(&mut self, deadline: Option<Instant>) {
+        (**self).set_deadline(deadline)
     }
 }
 
@@ -171,30 +191,41 @@ pub fn stepwise_edge_free(
     true
 }
 
-/// Wraps the caller's validator to count the checks a planner makes.
+/// Wraps the caller's validator to count the checks a planner makes and to hold
+/// the call's deadline: once it has passed every check answers "not free" at once
+/// (nothing unchecked is ever accepted), and the planner's next clock read ends the
+/// search with the time limit.
 pub(crate) struct Checker<'v> {
     validator: &'v mut dyn MotionValidator,
+    deadline: Option<Instant>,
     pub pose_checks: u64,
     pub edge_checks: u64,
 }
 
 impl<'v> Checker<'v> {
-    pub fn new(validator: &'v mut dyn MotionValidator) -> Self {
+    pub fn new(validator: &'v mut dyn MotionValidator, deadline: Option<Instant>) -> Self {
+        validator.set_deadline(deadline);
         Self {
             validator,
+            deadline,
             pose_checks: 0,
             edge_checks: 0,
         }
     }
 
+    /// Whether the deadline has passed.
+    pub fn expired(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+
     pub fn is_free(&mut self, pose: &Transform) -> bool {
         self.pose_checks += 1;
-        self.validator.is_free(pose)
+        !self.expired() && self.validator.is_free(pose)
     }
 
     pub fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
         self.edge_checks += 1;
-        self.validator.edge_free(from, to)
+        !self.expired() && self.validator.edge_free(from, to)
     }
 
     pub fn clearance(&mut self, pose: &Transform) -> Option<f64> {
@@ -205,6 +236,13 @@ impl<'v> Checker<'v> {
 
     pub fn resolution(&self) -> EdgeResolution {
         self.validator.resolution()
+    }
+}
+
+impl Drop for Checker<'_> {
+    /// The validator outlives the call: its deadline must not.
+    fn drop(&mut self) {
+        self.validator.set_deadline(None);
     }
 }
 

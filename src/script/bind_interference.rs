@@ -4,15 +4,15 @@
 use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
+use super::bind_planning::with_workspace;
 use super::convert::{aabb_map, check_keys, err, fail, floats, num, opt_num, opt_str};
 use super::ScriptResult;
-use crate::collision::scene::Scene;
 use crate::collision::{
-    Contact, CutSpec, InterferenceKind, Method, Motion, Part, SweepMethod, SweepOptions,
-    DEFAULT_TOLERANCE,
+    Contact, CutSpec, InterferenceKind, Method, PairMember, SweepMethod, SweepOptions,
 };
-use crate::document::{Document, Feature};
+use crate::document::Feature;
 use crate::math::Point3;
+use crate::workspace::CheckOptions;
 use rhai::{Array, Dynamic, Map};
 
 /// A part's cut-cells feature, by part and feature name.
@@ -23,48 +23,33 @@ pub struct FeatureHandle {
     name: String,
 }
 
-/// The collision scene of a document (colliders and cells from the run's caches).
-pub(super) fn scene_of(d: &DocHandle, doc: &Document) -> ScriptResult<Scene> {
-    let mut cache = d
-        .context()
-        .caches
-        .scene
-        .lock()
-        .map_err(|_| fail("collision cache poisoned"))?;
-    Scene::new(doc, &mut cache).map_err(fail)
-}
-
-fn with_scene<R>(
-    d: &DocHandle,
-    f: impl FnOnce(&Document, &Scene) -> ScriptResult<R>,
-) -> ScriptResult<R> {
-    let doc = d.lock()?;
-    let scene = scene_of(d, &doc)?;
-    f(&doc, &scene)
-}
-
-fn options(map: Option<&Map>) -> ScriptResult<(Method, f64)> {
+fn options(map: Option<&Map>) -> ScriptResult<CheckOptions> {
+    let mut o = CheckOptions::default();
     let Some(m) = map else {
-        return Ok((Method::Exact, DEFAULT_TOLERANCE));
+        return Ok(o);
     };
     check_keys(m, &["method", "tolerance"], "interference")?;
-    let method = match opt_str(m, "method")? {
-        Some(s) => s.parse::<Method>().map_err(fail)?,
-        None => Method::Exact,
-    };
-    let tolerance = opt_num(m, "tolerance")?.unwrap_or(DEFAULT_TOLERANCE);
-    if tolerance < 0.0 {
-        return err(format!("tolerance must be ≥ 0 mm, not {tolerance}"));
+    if let Some(s) = opt_str(m, "method")? {
+        o.method = s.parse::<Method>().map_err(fail)?;
     }
-    Ok((method, tolerance))
+    o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
+    if !(o.tolerance.is_finite() && o.tolerance >= 0.0) {
+        return err(format!(
+            "tolerance must be a finite number ≥ 0 mm, not {}",
+            o.tolerance
+        ));
+    }
+    Ok(o)
 }
 
 fn kind_name(k: &InterferenceKind, a: &str, b: &str) -> String {
     match k {
         InterferenceKind::SurfacesCross => "surfaces cross".into(),
-        InterferenceKind::Contained { inner: Part::First } => format!("{a} inside {b}"),
         InterferenceKind::Contained {
-            inner: Part::Second,
+            inner: PairMember::First,
+        } => format!("{a} inside {b}"),
+        InterferenceKind::Contained {
+            inner: PairMember::Second,
         } => format!("{b} inside {a}"),
         InterferenceKind::BoxesOverlap => "boxes overlap".into(),
     }
@@ -88,67 +73,59 @@ fn contact_map(c: &Contact, a: &str, b: &str) -> Map {
 }
 
 fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult<Array> {
-    let (method, tol) = options(opts)?;
-    with_scene(d, |doc, scene| {
-        let names = |i: usize| doc.components()[i].name.clone();
-        Ok(scene
-            .contacts(method, tol)
-            .map_err(fail)?
+    let o = options(opts)?;
+    with_workspace(d, |ws| {
+        let found = if want_touching {
+            ws.touching(&o)
+        } else {
+            ws.interferences(&o)
+        }
+        .map_err(fail)?;
+        Ok(found
             .into_iter()
-            .filter(|p| p.contact.is_touching() == want_touching)
-            .map(|p| Dynamic::from_map(contact_map(&p.contact, &names(p.a), &names(p.b))))
+            .map(|p| Dynamic::from_map(contact_map(&p.contact, ws.name(p.a), ws.name(p.b))))
             .collect())
     })
 }
 
 fn pair(d: &DocHandle, a: &str, b: &str, opts: Option<&Map>) -> ScriptResult<Map> {
-    let (method, tol) = options(opts)?;
-    with_scene(d, |doc, scene| {
-        let (ia, ib) = (
-            doc.component_index(a).map_err(fail)?,
-            doc.component_index(b).map_err(fail)?,
-        );
-        if ia == ib {
-            return err(format!("`{a}` is checked against itself"));
-        }
-        Ok(contact_map(
-            &scene.contact(ia, ib, method, tol).map_err(fail)?,
-            a,
-            b,
-        ))
+    let o = options(opts)?;
+    with_workspace(d, |ws| {
+        Ok(contact_map(&ws.contact(a, b, &o).map_err(fail)?, a, b))
     })
 }
 
-fn motion_of(start: crate::math::Transform, motion: &Dynamic) -> ScriptResult<Motion> {
+/// The waypoints of a motion: a Transform or pose, or an array of Transforms.
+fn waypoints(motion: &Dynamic) -> ScriptResult<Vec<crate::math::Transform>> {
     if let Some(arr) = motion.read_lock::<Array>() {
         // An array of Transforms (not a 4×4 matrix or a pose): a pose sequence.
         if arr.iter().all(|v| v.is::<crate::math::Transform>()) && !arr.is_empty() {
-            let mut poses = vec![start];
-            for (i, v) in arr.iter().enumerate() {
-                poses.push(to_transform(v, &format!("motion[{i}]"))?);
-            }
-            return Ok(Motion::Poses(poses));
+            return arr
+                .iter()
+                .enumerate()
+                .map(|(i, v)| to_transform(v, &format!("motion[{i}]")))
+                .collect();
         }
     }
-    Ok(Motion::Poses(vec![start, to_transform(motion, "motion")?]))
+    Ok(vec![to_transform(motion, "motion")?])
 }
 
 fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> ScriptResult<Map> {
-    let mut tolerance = DEFAULT_TOLERANCE;
-    let mut method = SweepMethod::Continuous;
+    let mut o = SweepOptions::default();
     if let Some(m) = opts {
-        check_keys(m, &["method", "step", "tolerance"], "sweep")?;
-        tolerance = opt_num(m, "tolerance")?.unwrap_or(tolerance);
+        check_keys(
+            m,
+            &["method", "step", "tolerance", "time_limit_ms"],
+            "sweep",
+        )?;
+        o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
+        o.time_limit_ms = opt_num(m, "time_limit_ms")?;
         let step = opt_num(m, "step")?;
-        method = match opt_str(m, "method")?.as_deref() {
+        o.method = match opt_str(m, "method")?.as_deref() {
             None | Some("continuous") => SweepMethod::Continuous,
-            Some("step") => {
-                let step = step.unwrap_or(1.0);
-                if step <= 0.0 {
-                    return err(format!("step must be > 0 mm, not {step}"));
-                }
-                SweepMethod::Step { step }
-            }
+            Some("step") => SweepMethod::Step {
+                step: step.unwrap_or(1.0),
+            },
             Some(other) => {
                 return err(format!(
                     "unknown sweep method `{other}`: \"step\" or \"continuous\""
@@ -156,12 +133,9 @@ fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> Scr
             }
         };
     }
-    with_scene(d, |doc, scene| {
-        let i = doc.component_index(name).map_err(fail)?;
-        let motion = motion_of(scene.poses[i], motion)?;
-        let hit = scene
-            .sweep(i, &motion, &SweepOptions { method, tolerance })
-            .map_err(fail)?;
+    let to = waypoints(motion)?;
+    with_workspace(d, |ws| {
+        let hit = ws.sweep_through(name, &to, &o).map_err(fail)?;
         let mut m = Map::new();
         m.insert("hit".into(), hit.hit.into());
         m.insert("t".into(), Dynamic::from_float(hit.t));
@@ -169,7 +143,7 @@ fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> Scr
         m.insert(
             "with".into(),
             hit.with
-                .map(|k| Dynamic::from(doc.components()[k].name.clone()))
+                .map(|k| Dynamic::from(ws.name(k).to_string()))
                 .unwrap_or(Dynamic::UNIT),
         );
         m.insert("checks".into(), Dynamic::from_int(hit.queries as i64));
@@ -302,13 +276,10 @@ pub(super) fn register(api: &mut Api) {
         |d: &mut DocHandle, a: &str, b: &str, o: Map| pair(d, a, b, Some(&o)),
     );
     api.f("Document.clearance(a: string, b: string) -> float", "Distance between the surfaces of two components (mm), 0 when they touch or cross; searched up to 1000 mm.", |d: &mut DocHandle, a: &str, b: &str| -> ScriptResult<f64> {
-        with_scene(d, |doc, scene| {
-            let (ia, ib) = (doc.component_index(a).map_err(fail)?, doc.component_index(b).map_err(fail)?);
-            scene.clearance(ia, ib, 1000.0).map_err(fail)
-        })
+        with_workspace(d, |ws| ws.clearance(a, b, 1000.0).map_err(fail))
     });
     api.f("Document.sweep(name: string, motion) -> map", "Dynamic interference: moves the component from its pose to `motion` (a Transform, or an array of Transforms visited in order; translation lerp + rotation slerp) and returns the first contact: `#{hit, t, transform, with, checks}` (`t` in 0..1 along the motion, `with` the other component — `with` is a Rhai keyword, read it as `hit[\"with\"]`). Continuous method: never misses a contact.", |d: &mut DocHandle, name: &str, motion: Dynamic| sweep(d, name, &motion, None));
-    api.f("Document.sweep(name: string, motion, options: map) -> map", "As above with `#{method: \"step\"|\"continuous\", step: mm, tolerance: mm}`; `\"step\"` is seed 000's static check after every step (no point of the part moves more than `step` mm between checks) and can jump over thin features.", |d: &mut DocHandle, name: &str, motion: Dynamic, o: Map| sweep(d, name, &motion, Some(&o)));
+    api.f("Document.sweep(name: string, motion, options: map) -> map", "As above with `#{method: \"step\"|\"continuous\", step: mm, tolerance: mm, time_limit_ms}` (default budget 10 s; a sweep that runs out of it fails with an error); `\"step\"` is seed 000's static check after every step (no point of the part moves more than `step` mm between checks) and can jump over thin features.", |d: &mut DocHandle, name: &str, motion: Dynamic, o: Map| sweep(d, name, &motion, Some(&o)));
 
     api.section("Cut cells", "Seed 000's finite subdivision: a part cut by arrays of planes into cells, one box per cell, stored as a feature in the part's feature tree (saved with the document, re-derived when the mesh changes). Cells are in the part frame (mm).");
     api.f("Component.split(cell_size) -> Feature", "Cuts the component's part into cubic cells of `cell_size` mm (plane arrays from the part's minimum corner) and stores the feature `CutCells` in the part's tree (replacing an earlier one). Refuses sizes that would make more than 100,000 cells.", |c: &mut ComponentHandle, size: Dynamic| -> ScriptResult<FeatureHandle> {

@@ -6,19 +6,22 @@ use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
 use super::convert::{check_keys, err, fail, num, opt_num, opt_str, vec3};
 use super::{Context, ScriptResult};
-use crate::math::{AngleConvention, Transform, Vec3};
+use crate::collision::Aabb;
+use crate::math::AngleConvention;
 use crate::planning::{
-    Aabb, Control, EdgeCheck, MeshValidator, MeshValidatorOptions, Path, Planner, PlanningSpace,
-    Progress, RotationFreedom, PLANNER_NAMES,
+    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, Progress,
+    RotationFreedom, PLANNER_NAMES,
 };
+use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
 use std::sync::Arc;
 use std::time::Instant;
 
 /// A planned path (cheap to clone); it keeps the run context so `save_csv` can check
-/// and record the file it writes.
+/// and record the file it writes, and the validator options it was planned with so
+/// `revalidate` applies the same tolerance rule.
 #[derive(Clone)]
-pub struct PathHandle(Arc<Path>, Arc<Context>);
+pub struct PathHandle(Arc<PlannedPath>, Arc<Context>, MeshValidatorOptions);
 
 const OPTION_KEYS: [&str; 20] = [
     "disassemble",
@@ -43,18 +46,8 @@ const OPTION_KEYS: [&str; 20] = [
     "radius",
 ];
 
-/// Everything a planning call needs, parsed from the script's options.
-struct Request {
-    planner: Planner,
-    validator: MeshValidatorOptions,
-    bounds: Option<(Vec3, Vec3)>,
-    margin: f64,
-    rotation: bool,
-    rotation_weight: Option<f64>,
-    disassemble: bool,
-}
-
-fn parse(opts: &Map) -> ScriptResult<Request> {
+/// The planning request of the script's options.
+fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
     check_keys(opts, &OPTION_KEYS, "planning")?;
     let name = opt_str(opts, "planner")?.unwrap_or_else(|| "rrt_connect".into());
     let mut planner = Planner::by_name(&name).ok_or_else(|| {
@@ -116,14 +109,14 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
     if let Some(t) = opt_num(opts, "tolerance")? {
         validator.tolerance = t;
     }
-    if let Some(c) = opt_num(opts, "contact_step")? {
-        validator.contact_step = c;
-    }
     validator.edge = match opt_str(opts, "edge")?.as_deref() {
-        None | Some("continuous") => EdgeCheck::Continuous,
-        Some("step") => EdgeCheck::Stepwise {
-            mm: opt_num(opts, "edge_step")?.unwrap_or(0.1),
-            rad: opt_num(opts, "edge_step_deg")?.unwrap_or(0.1).to_radians(),
+        None | Some("continuous") => EdgeResolution::Continuous {
+            contact_step_mm: opt_num(opts, "contact_step")?
+                .unwrap_or(EdgeResolution::DEFAULT_CONTACT_STEP_MM),
+        },
+        Some("step") => EdgeResolution::Stepwise {
+            step_mm: opt_num(opts, "edge_step")?.unwrap_or(0.1),
+            step_rad: opt_num(opts, "edge_step_deg")?.unwrap_or(0.1).to_radians(),
         },
         Some(o) => {
             return err(format!(
@@ -152,10 +145,10 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
                     "bounds are empty: min {lo:?} is not below max {hi:?} on every axis"
                 ));
             }
-            Some((lo, hi))
+            Some(Aabb::new(lo, hi))
         }
     };
-    let margin = opt_num(opts, "margin")?.unwrap_or(50.0);
+    let margin = opt_num(opts, "margin")?.unwrap_or(crate::workspace::DEFAULT_MARGIN_MM);
     let rotation = match opts.get("rotation") {
         None => true,
         Some(r) => r
@@ -168,67 +161,19 @@ fn parse(opts: &Map) -> ScriptResult<Request> {
             .as_bool()
             .map_err(|t| fail(format!("disassemble must be true or false, not {t}")))?,
     };
-    Ok(Request {
+    Ok(PlanRequest {
         planner,
         validator,
         bounds,
-        margin,
-        rotation,
+        margin_mm: margin,
+        rotation: if rotation {
+            RotationFreedom::Free
+        } else {
+            RotationFreedom::Fixed
+        },
         rotation_weight: opt_num(opts, "rotation_weight")?,
         disassemble,
     })
-}
-
-/// The validator for component `index` among the others, and the planning space.
-fn setup(
-    d: &DocHandle,
-    index: usize,
-    req: &Request,
-    extra: &[Transform],
-) -> ScriptResult<(MeshValidator, PlanningSpace, Transform, Aabb)> {
-    let doc = d.lock()?;
-    let scene = super::bind_interference::scene_of(d, &doc)?;
-    let obstacles = (0..scene.poses.len())
-        .filter(|&i| i != index)
-        .map(|i| (scene.colliders[i].clone(), scene.poses[i]))
-        .collect();
-    let validator = MeshValidator::new(scene.colliders[index].clone(), obstacles, req.validator)
-        .map_err(fail)?;
-    let start = scene.poses[index];
-    // The product box: every other component, in the world.
-    let others = (0..scene.poses.len())
-        .filter(|&i| i != index)
-        .filter_map(|i| doc.world_aabb(i));
-    let product = others.reduce(|(a, b), (c, e)| (a.inf(&c), b.sup(&e)));
-    let (lo, hi) = match req.bounds {
-        Some(b) => b,
-        None => {
-            let mut lo = start.translation();
-            let mut hi = lo;
-            for t in extra {
-                lo = lo.inf(&t.translation());
-                hi = hi.sup(&t.translation());
-            }
-            if let Some((a, b)) = product {
-                lo = lo.inf(&a.coords);
-                hi = hi.sup(&b.coords);
-            }
-            let m = Vec3::repeat(req.margin);
-            (lo - m, hi + m)
-        }
-    };
-    let mut space = PlanningSpace::new(lo, hi).with_rotation(if req.rotation {
-        RotationFreedom::Free
-    } else {
-        RotationFreedom::Fixed
-    });
-    if let Some(w) = req.rotation_weight {
-        space = space.with_rotation_weight(w);
-    }
-    let product_box = product
-        .map(|(a, b)| Aabb::new(a.coords, b.coords))
-        .unwrap_or_else(|| Aabb::new(lo, hi));
-    Ok((validator, space, start, product_box))
 }
 
 fn progress_printer<'a>(
@@ -242,42 +187,51 @@ fn progress_printer<'a>(
         }
         if last.elapsed().as_secs_f64() > 1.0 {
             last = Instant::now();
-            ctx.print(&format!(
-                "  {planner}: {} iterations, {} nodes, {:.2} mm from the goal, {:.0} ms",
-                p.iterations, p.nodes, p.best_distance, p.elapsed_ms
-            ));
+            ctx.print(&match p.phase {
+                Phase::Search => format!(
+                    "  {planner}: {} iterations, {} nodes, {:.2} mm from the goal, {:.0} ms",
+                    p.iterations, p.nodes, p.best_distance, p.elapsed_ms
+                ),
+                Phase::Smoothing => format!(
+                    "  {planner}: smoothing, {} shortcuts tried, {} key poses, {:.1} long, {:.0} ms",
+                    p.iterations, p.nodes, p.best_distance, p.elapsed_ms
+                ),
+            });
         }
         Control::Continue
     }
 }
 
+/// Runs `f` on the workspace of the document (the run's scene cache).
+pub(super) fn with_workspace<R>(
+    d: &DocHandle,
+    f: impl FnOnce(&Workspace) -> ScriptResult<R>,
+) -> ScriptResult<R> {
+    let doc = d.lock()?;
+    let ws = {
+        let mut cache = d
+            .context()
+            .caches
+            .scene
+            .lock()
+            .map_err(|_| fail("collision cache poisoned"))?;
+        Workspace::new(&doc, &mut cache).map_err(fail)?
+    };
+    f(&ws)
+}
+
 fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<PathHandle> {
     let goal = to_transform(goal, "goal")?;
     let req = parse(opts)?;
-    let index = d.lock()?.component_index(name).map_err(fail)?;
-    let (mut validator, space, start, product) = setup(d, index, &req, &[goal])?;
     let ctx = d.context().clone();
     let mut cb = progress_printer(&ctx, req.planner.name());
-    let path = if req.disassemble {
-        let part_box = part_box(d, index)?;
-        req.planner.plan_via_disassembly(
-            &mut validator,
-            &space,
-            &start,
-            &goal,
-            &part_box,
-            &product,
-            Some(&mut cb),
-        )
-    } else {
-        req.planner
-            .plan(&mut validator, &space, &start, &goal, Some(&mut cb))
-    }
-    .map_err(fail)?;
+    let path = with_workspace(d, |ws| {
+        ws.plan_path(name, &goal, &req, Some(&mut cb)).map_err(fail)
+    })?;
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");
     }
-    Ok(PathHandle(Arc::new(path), ctx.clone()))
+    Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
 }
 
 fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathHandle> {
@@ -285,45 +239,27 @@ fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathH
     opts.entry("planner".into())
         .or_insert_with(|| "local_rrt".into());
     let req = parse(&opts)?;
-    let index = d.lock()?.component_index(name).map_err(fail)?;
-    let (mut validator, space, assembled, product) = setup(d, index, &req, &[])?;
-    let part_box = part_box(d, index)?;
     let ctx = d.context().clone();
     let mut cb = progress_printer(&ctx, req.planner.name());
-    let path = req
-        .planner
-        .plan_disassembly(
-            &mut validator,
-            &space,
-            &assembled,
-            &part_box,
-            &product,
-            Some(&mut cb),
-        )
-        .map_err(fail)?;
-    Ok(PathHandle(Arc::new(path), ctx.clone()))
+    let path = with_workspace(d, |ws| {
+        ws.plan_disassembly(name, &req, Some(&mut cb)).map_err(fail)
+    })?;
+    if path.failure.is_some() && ctx.cancelled() {
+        return err("cancelled");
+    }
+    Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
 }
 
-/// The component's box in its part frame.
-fn part_box(d: &DocHandle, index: usize) -> ScriptResult<Aabb> {
-    let doc = d.lock()?;
-    let (lo, hi) = doc
-        .mesh_of(index)
-        .bounds()
-        .ok_or_else(|| fail("the component's mesh is empty"))?;
-    Ok(Aabb::new(lo.coords, hi.coords))
-}
-
-fn densify(p: &Path, step: f64) -> ScriptResult<Vec<Transform>> {
-    if step <= 0.0 {
-        return err(format!("step must be > 0 mm, not {step}"));
+fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transform>> {
+    if !(step.is_finite() && step > 0.0) {
+        return err(format!("step must be a finite number > 0 mm, not {step}"));
     }
     // Rotation steps follow the translation step: 1 mm ~ 1°.
     Ok(p.densify(step, step.to_radians()))
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice when an extension is blocked). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms`, `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm) and `edge_step_deg`, `disassemble: true` (seed 002: plan the disassembly from the goal — the assembled pose — until the part leaves the product's box, reverse it, and join it to a free-space path from the start; the way to get into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, `rrt_connect` (default) the join with `local_rrt` taking the part out; `greedy_ant` and `rrt_floyd` are refused). A path that is not found says why in `reason`.");
+    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice when an extension is blocked). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"disassemble_local_rrt+rrt_connect\"`). Fixed components are refused. A path that is not found says why in `reason`.");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
     api.f(
@@ -390,8 +326,18 @@ pub(super) fn register(api: &mut Api) {
     );
     api.get(
         "Path.time_ms -> float",
-        "Planning time (ms).",
+        "Time of the whole call (ms): search and smoothing.",
         |p: &mut PathHandle| p.0.time_ms,
+    );
+    api.get(
+        "Path.search_ms -> float",
+        "Of `time_ms`, the search (ms).",
+        |p: &mut PathHandle| p.0.search_ms,
+    );
+    api.get(
+        "Path.smoothing_ms -> float",
+        "Of `time_ms`, the smoothing (ms).",
+        |p: &mut PathHandle| p.0.smoothing_ms,
     );
     api.get(
         "Path.planner -> string",
@@ -444,18 +390,16 @@ pub(super) fn register(api: &mut Api) {
         p.1.record_write(&full);
         Ok(())
     });
-    api.f("Document.revalidate(name: string, path: Path) -> map", "Checks a path again against the document as it is now: `#{ok, segment, transform}` (the first blocked segment and pose when not ok).", |d: &mut DocHandle, name: &str, p: PathHandle| -> ScriptResult<Map> {
-        let req = parse(&Map::new())?;
-        let index = d.lock()?.component_index(name).map_err(fail)?;
-        let (mut v, ..) = setup(d, index, &req, &[])?;
+    api.f("Document.revalidate(name: string, path: Path) -> map", "Checks a path again against the document as it is now, with the tolerance and edge check it was planned with (a path the planner accepted passes while nothing moved): `#{ok, segment, transform}` (the first blocked segment and pose when not ok).", |d: &mut DocHandle, name: &str, p: PathHandle| -> ScriptResult<Map> {
+        let r = with_workspace(d, |ws| ws.revalidate(name, &p.0, &p.2).map_err(fail))?;
         let mut m = Map::new();
-        match p.0.revalidate(&mut v) {
-            Ok(()) => {
+        match r {
+            Revalidation::Valid => {
                 m.insert("ok".into(), true.into());
             }
-            Err((seg, pose)) => {
+            Revalidation::Blocked { segment, pose } => {
                 m.insert("ok".into(), false.into());
-                m.insert("segment".into(), Dynamic::from_int(seg as i64));
+                m.insert("segment".into(), Dynamic::from_int(segment as i64));
                 m.insert("transform".into(), Dynamic::from(pose));
             }
         }
@@ -470,27 +414,15 @@ pub(super) fn register(api: &mut Api) {
 }
 
 fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> ScriptResult<i64> {
-    if !p.0.found() {
-        return err("the path was not found; nothing to follow");
-    }
-    let poses = densify(&p.0, num(step, "step")?)?;
+    let step = num(step, "step")?;
     let ctx = c.doc.context().clone();
-    let n = poses.len();
-    for (k, t) in poses.iter().enumerate() {
-        if ctx.cancelled() {
-            return err("cancelled");
-        }
-        let name = {
-            let mut doc = c.doc.lock()?;
-            doc.set_transform_at(c.index, *t).map_err(fail)?;
-            doc.components()[c.index].name.clone()
-        };
+    let mut doc = c.doc.lock()?;
+    let name = doc.components()[c.index].name.clone();
+    let n = crate::workspace::follow(&mut doc, &name, &p.0, step, |k, n, t| {
         if print {
             let v = t.to_xyzabc(AngleConvention::default());
             ctx.print(&format!(
-                "follow {name} {}/{}: X {:.3} Y {:.3} Z {:.3} A {:.2} B {:.2} C {:.2}",
-                k + 1,
-                n,
+                "follow {name} {k}/{n}: X {:.3} Y {:.3} Z {:.3} A {:.2} B {:.2} C {:.2}",
                 v[0],
                 v[1],
                 v[2],
@@ -499,6 +431,12 @@ fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> S
                 v[5].to_degrees()
             ));
         }
-    }
+        if ctx.cancelled() {
+            Control::Cancel
+        } else {
+            Control::Continue
+        }
+    })
+    .map_err(fail)?;
     Ok(n as i64)
 }

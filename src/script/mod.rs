@@ -37,7 +37,7 @@ pub struct Caches {
     /// Meshes by file, re-read only when the file changed.
     pub meshes: Mutex<MeshCache>,
     /// Collision trees and cut cells by mesh.
-    pub scene: Mutex<crate::collision::scene::SceneCache>,
+    pub scene: Mutex<crate::workspace::SceneCache>,
 }
 
 /// Where a script's `print` and progress lines go.

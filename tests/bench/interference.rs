@@ -7,14 +7,17 @@
 //! numpy` in `.venv`); without it only fitup is timed.
 
 use fitup::collision::{
-    check, fixtures, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells,
-    CutSpec, Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
+    check, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells, CutSpec,
+    Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
 };
-use fitup::math::{Rng, Transform, Vec3};
+use fitup::math::{Point3, Rng, Transform, Vec3};
 use fitup::mesh::{write_stl, Mesh};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;
+
+#[path = "../common/fixtures.rs"]
+mod fixtures;
 
 const PAIRS: usize = 1000;
 const ROUNDS: usize = 5;
@@ -360,6 +363,7 @@ fn sweeps() {
                     &SweepOptions {
                         method,
                         tolerance: DEFAULT_TOLERANCE,
+                        ..Default::default()
                     },
                 )
                 .unwrap();

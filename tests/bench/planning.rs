@@ -1,4 +1,4 @@
-//! Planning benchmark: fitup's best planner (`plan_assembly`) on the benchmark
+//! Planning benchmark: fitup's best planner (`plan_insertion`) on the benchmark
 //! problems (`fitup::planning::problems`) against OMPL's RRTConnect (FCL collision,
 //! `tests/bench/ompl_peer.py`) in the same run, and seed 002's protocol (100 runs ×
 //! 100 iterations: rrt, biased_rrt, local_rrt on the piston-rod cap).
@@ -12,7 +12,7 @@
 
 use fitup::planning::problems::{self, Problem};
 use fitup::planning::{
-    disassemble, AssemblyOptions, DisassemblyPlanner, LocalRrtOptions, MeshValidatorOptions,
+    disassemble, DisassemblyPlanner, InsertionOptions, LocalRrtOptions, MeshValidatorOptions,
     RrtOptions, Smoothing,
 };
 use std::path::{Path, PathBuf};
@@ -74,7 +74,7 @@ fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize, smoothing
     let mut times = Vec::new();
     for seed in 0..runs as u64 {
         let mut v = p.validator(options).unwrap();
-        let mut plan = AssemblyOptions::default().with_limits(seed, 5000);
+        let mut plan = InsertionOptions::default().with_limits(seed, 5000);
         if !smoothing {
             plan.smoothing = Smoothing::OFF;
         }
@@ -212,7 +212,7 @@ fn main() {
     let stepwise = std::env::var_os("FITUP_STEPWISE").is_some();
     let only: Option<String> = std::env::var("FITUP_PROBLEM").ok();
     println!(
-        "planning: success and median time of successful runs; fitup = plan_assembly with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
+        "planning: success and median time of successful runs; fitup = plan_insertion with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
     );
     println!(
         "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20}",

@@ -2,7 +2,8 @@
 //! component (shared per part mesh) and the cut cells of parts that have the
 //! feature, all cached across watch reruns while the meshes are unchanged.
 
-use super::{
+use super::WorkspaceError;
+use crate::collision::{
     check, check_all, surface_distance, sweep, Collider, ColliderCache, CollisionError, Contact,
     CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart, SweepHit, SweepOptions,
 };
@@ -67,16 +68,18 @@ pub struct Scene {
 
 impl Scene {
     /// Builds the scene of `doc` through `cache`.
-    pub fn new(doc: &Document, cache: &mut SceneCache) -> Result<Scene, CollisionError> {
+    ///
+    /// # Errors
+    /// A part the document does not hold ([`WorkspaceError::Document`]), a mesh or
+    /// cut that cannot be used ([`WorkspaceError::Collision`]).
+    pub fn new(doc: &Document, cache: &mut SceneCache) -> Result<Scene, WorkspaceError> {
         let n = doc.components().len();
         let mut colliders = Vec::with_capacity(n);
         let mut cells = Vec::with_capacity(n);
         for (i, c) in doc.components().iter().enumerate() {
             let mesh = doc.mesh_of(i);
             colliders.push(cache.collider(mesh)?);
-            let part = doc
-                .part(&c.part)
-                .map_err(|e| CollisionError::BadMesh(e.to_string()))?;
+            let part = doc.part(&c.part)?;
             let mut spec = part.features.iter().map(|f| match f {
                 Feature::CutCells { spec, .. } => spec,
             });
@@ -92,7 +95,8 @@ impl Scene {
         })
     }
 
-    fn posed(&self, i: usize) -> PosedPart<'_> {
+    /// Component `i` as a posed part.
+    pub fn posed(&self, i: usize) -> PosedPart<'_> {
         PosedPart {
             collider: &self.colliders[i],
             cells: self.cells[i].as_deref(),

@@ -1,9 +1,12 @@
 //! Closed, outward-oriented test parts generated in code (mm, part frame), used by
-//! the tests, the method comparison and the benchmarks: perforated plates, a plate
-//! with a round hole, screws, spheres and tori.
+//! the collision unit tests and the interference benchmark (test scaffolding, not
+//! part of the library): perforated plates, a plate with a round hole, screws,
+//! spheres and tori. Included with `#[path]`; the including module provides
+//! `Mesh`, `Point3` and `Vec3`.
 
-use crate::math::{Point3, Vec3};
-use crate::mesh::Mesh;
+#![allow(dead_code)]
+
+use super::{Mesh, Point3, Vec3};
 
 struct Builder {
     mesh: Mesh,
@@ -285,6 +288,8 @@ pub fn torus(major: f64, minor: f64, n: usize, m: usize) -> Mesh {
 
 #[cfg(test)]
 mod tests {
+    // A bench that includes this file without the test harness drops the tests.
+    #[allow(unused_imports)]
     use super::*;
 
     #[test]

@@ -1,0 +1,294 @@
+//! The workspace: a [`Document`] seen as a collision scene, and every
+//! document-level request — interference of all or some components, touching,
+//! clearance, contact, sweeps, planning a path for a component, re-validating a
+//! path and following it.
+//!
+//! This is the layer between [`document`](crate::document) (what the user wrote)
+//! and `script` (Rhai bindings, which only convert values): a Rust
+//! program does through it everything a script does. It owns the document's
+//! collision scene ([`Scene`], built through a [`SceneCache`] that keeps colliders
+//! and cut cells while meshes are unchanged) and the rules that turn a component
+//! name into a planning problem: the obstacles (every other component), the
+//! planning bounds (default: the product box with start and goal, grown by
+//! [`DEFAULT_MARGIN_MM`]), the component's box for disassembly, and one tolerance
+//! rule shared by planners, [`Workspace::revalidate`] and [`Workspace::contact`].
+//!
+//! Units: millimetres and radians; poses are [`Transform`]s (part frame → world).
+//!
+//! # Examples
+//! ```
+//! use fitup::document::Document;
+//! use fitup::workspace::{CheckOptions, SceneCache, Workspace};
+//!
+//! let doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+//! let mut cache = SceneCache::new();
+//! let ws = Workspace::new(&doc, &mut cache).unwrap();
+//! // The demo cell is assembled without interference: screws rest in their holes.
+//! assert!(ws.interferences(&CheckOptions::default()).unwrap().is_empty());
+//! assert!(!ws.interferes("screw1", "plate_a", &CheckOptions::default()).unwrap());
+//! let gap = ws.clearance("screw4", "screw5", 1000.0).unwrap();
+//! assert!(gap > 0.0 && gap < 50.0, "{gap} mm");
+//! ```
+
+mod plan;
+mod scene;
+
+pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_MM};
+pub use scene::{Scene, SceneCache};
+
+use crate::collision::{
+    CollisionError, Contact, Method, Motion, PairContact, SweepHit, SweepOptions, DEFAULT_TOLERANCE,
+};
+use crate::document::{Document, DocumentError};
+use crate::math::Transform;
+use crate::planning::PlanError;
+
+/// Why a workspace request could not be answered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum WorkspaceError {
+    /// The document refused (unknown component or part, a fixed component moved…).
+    #[error(transparent)]
+    Document(#[from] DocumentError),
+    /// A collision query refused its input (bad mesh, pose, tolerance, motion).
+    #[error(transparent)]
+    Collision(#[from] CollisionError),
+    /// A planner refused its options.
+    #[error(transparent)]
+    Plan(#[from] PlanError),
+    /// Planners never move a fixed component.
+    #[error(
+        "component `{0}` is fixed: planners never move fixed components (set `fixed: false` first)"
+    )]
+    FixedComponent(String),
+    /// A pair query names the same component twice.
+    #[error("`{0}` is checked against itself")]
+    SameComponent(String),
+    /// The component's mesh has no vertices.
+    #[error("the mesh of component `{0}` is empty")]
+    EmptyMesh(String),
+    /// An option has a value the request cannot use.
+    #[error("invalid option `{option}` = {value}: expected {expected}")]
+    InvalidOption {
+        /// The option's name.
+        option: &'static str,
+        /// The value given.
+        value: String,
+        /// What is accepted.
+        expected: &'static str,
+    },
+    /// There is no path to follow or revalidate.
+    #[error("the path was not found; nothing to follow")]
+    PathNotFound,
+    /// The caller's callback asked to stop.
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// Method and tolerance of a static interference request.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CheckOptions {
+    /// Exact (default), whole-part boxes or cut cells.
+    pub method: Method,
+    /// Penetration tolerance, mm (≥ 0): crossings up to this depth are touching.
+    /// Default [`DEFAULT_TOLERANCE`], the planners' default too.
+    pub tolerance: f64,
+}
+
+impl Default for CheckOptions {
+    fn default() -> Self {
+        Self {
+            method: Method::Exact,
+            tolerance: DEFAULT_TOLERANCE,
+        }
+    }
+}
+
+/// A document's components as a collision scene at their current poses, with the
+/// document-level requests. Cheap to build from a warm [`SceneCache`]; build a new
+/// one after moving components.
+pub struct Workspace<'d> {
+    doc: &'d Document,
+    scene: Scene,
+}
+
+impl<'d> Workspace<'d> {
+    /// The workspace of `doc`, colliders and cut cells through `cache`.
+    ///
+    /// # Errors
+    /// Unusable meshes or cuts, parts the document does not hold.
+    pub fn new(doc: &'d Document, cache: &mut SceneCache) -> Result<Self, WorkspaceError> {
+        Ok(Self {
+            doc,
+            scene: Scene::new(doc, cache)?,
+        })
+    }
+
+    /// The document.
+    pub fn document(&self) -> &'d Document {
+        self.doc
+    }
+
+    /// The collision scene (per component: collider, cut cells, pose).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The index of component `name`.
+    ///
+    /// # Errors
+    /// [`DocumentError::NotFound`] with close matches.
+    pub fn index(&self, name: &str) -> Result<usize, WorkspaceError> {
+        Ok(self.doc.component_index(name)?)
+    }
+
+    /// The name of component `index`.
+    pub fn name(&self, index: usize) -> &'d str {
+        &self.doc.components()[index].name
+    }
+
+    /// The current pose of component `name` (part frame → world, mm).
+    ///
+    /// # Errors
+    /// An unknown component.
+    pub fn pose(&self, name: &str) -> Result<Transform, WorkspaceError> {
+        Ok(self.scene.poses[self.index(name)?])
+    }
+
+    fn pair(&self, a: &str, b: &str) -> Result<(usize, usize), WorkspaceError> {
+        let (ia, ib) = (self.index(a)?, self.index(b)?);
+        if ia == ib {
+            return Err(WorkspaceError::SameComponent(a.to_string()));
+        }
+        Ok((ia, ib))
+    }
+
+    /// Every pair that touches or interferes (`a < b`, component indices), sorted.
+    ///
+    /// # Errors
+    /// A bad tolerance or an unusable mesh.
+    pub fn contacts(&self, options: &CheckOptions) -> Result<Vec<PairContact>, WorkspaceError> {
+        Ok(self.scene.contacts(options.method, options.tolerance)?)
+    }
+
+    /// Every interfering pair.
+    ///
+    /// # Errors
+    /// As [`contacts`](Self::contacts).
+    pub fn interferences(
+        &self,
+        options: &CheckOptions,
+    ) -> Result<Vec<PairContact>, WorkspaceError> {
+        let mut all = self.contacts(options)?;
+        all.retain(|p| p.contact.is_interfering());
+        Ok(all)
+    }
+
+    /// Every pair whose surfaces meet without interfering.
+    ///
+    /// # Errors
+    /// As [`contacts`](Self::contacts).
+    pub fn touching(&self, options: &CheckOptions) -> Result<Vec<PairContact>, WorkspaceError> {
+        let mut all = self.contacts(options)?;
+        all.retain(|p| p.contact.is_touching());
+        Ok(all)
+    }
+
+    /// The verdict for components `a` and `b` (`Contained::inner` refers to them in
+    /// this order). A pose a planner accepts with the same tolerance is never
+    /// [`Contact::Interfering`] here: both use "deeper than the tolerance".
+    ///
+    /// # Errors
+    /// Unknown or equal components, a bad tolerance.
+    pub fn contact(
+        &self,
+        a: &str,
+        b: &str,
+        options: &CheckOptions,
+    ) -> Result<Contact, WorkspaceError> {
+        let (ia, ib) = self.pair(a, b)?;
+        Ok(self
+            .scene
+            .contact(ia, ib, options.method, options.tolerance)?)
+    }
+
+    /// Whether components `a` and `b` interfere.
+    ///
+    /// # Errors
+    /// As [`contact`](Self::contact).
+    pub fn interferes(
+        &self,
+        a: &str,
+        b: &str,
+        options: &CheckOptions,
+    ) -> Result<bool, WorkspaceError> {
+        Ok(self.contact(a, b, options)?.is_interfering())
+    }
+
+    /// Distance between the surfaces of `a` and `b` (mm), 0 when they touch or
+    /// cross; searched no farther than `stop_mm` (returns `stop_mm` or more beyond).
+    ///
+    /// # Errors
+    /// Unknown or equal components.
+    pub fn clearance(&self, a: &str, b: &str, stop_mm: f64) -> Result<f64, WorkspaceError> {
+        let (ia, ib) = self.pair(a, b)?;
+        Ok(self.scene.clearance(ia, ib, stop_mm)?)
+    }
+
+    /// The first contact of component `name` along `motion` with any other
+    /// component (`with` in the result is a component index; see [`name`](Self::name)).
+    ///
+    /// # Errors
+    /// An unknown component, a bad motion or options, a spent time budget
+    /// ([`CollisionError::TimeLimit`]).
+    pub fn sweep(
+        &self,
+        name: &str,
+        motion: &Motion,
+        options: &SweepOptions,
+    ) -> Result<SweepHit, WorkspaceError> {
+        Ok(self.scene.sweep(self.index(name)?, motion, options)?)
+    }
+
+    /// [`sweep`](Self::sweep) from the component's current pose through
+    /// `waypoints` in order (translation lerp + rotation slerp between them).
+    ///
+    /// # Examples
+    /// ```
+    /// use fitup::document::Document;
+    /// use fitup::collision::SweepOptions;
+    /// use fitup::math::{Transform, Vec3};
+    /// use fitup::workspace::{SceneCache, Workspace};
+    ///
+    /// let doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+    /// let mut cache = SceneCache::new();
+    /// let ws = Workspace::new(&doc, &mut cache).unwrap();
+    /// // Slide screw5 toward screw4 along -X: it hits it.
+    /// let to = ws.pose("screw5").unwrap().then(&Transform::from_translation(Vec3::new(-60.0, 0.0, 0.0)));
+    /// let hit = ws.sweep_through("screw5", &[to], &SweepOptions::default()).unwrap();
+    /// assert!(hit.hit);
+    /// assert_eq!(ws.name(hit.with.unwrap()), "screw4");
+    /// ```
+    ///
+    /// # Errors
+    /// As [`sweep`](Self::sweep); an empty `waypoints`.
+    pub fn sweep_through(
+        &self,
+        name: &str,
+        waypoints: &[Transform],
+        options: &SweepOptions,
+    ) -> Result<SweepHit, WorkspaceError> {
+        if waypoints.is_empty() {
+            return Err(WorkspaceError::InvalidOption {
+                option: "waypoints",
+                value: "[]".into(),
+                expected: "at least one pose",
+            });
+        }
+        let mut poses = vec![self.pose(name)?];
+        poses.extend_from_slice(waypoints);
+        self.sweep(name, &Motion::Poses(poses), options)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,338 @@
+//! Planning for a component of a document: the request, the problem it becomes
+//! (validator, bounds, boxes), re-validation and following a path.
+
+use super::{Workspace, WorkspaceError};
+use crate::collision::Aabb;
+use crate::document::Document;
+use crate::math::{Transform, Vec3};
+use crate::planning::{
+    Control, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace, ProgressFn,
+    RotationFreedom,
+};
+
+/// Default growth (mm) of the planning bounds around the product box, start and
+/// goal.
+pub const DEFAULT_MARGIN_MM: f64 = 50.0;
+
+/// How to plan a path for one component of a document.
+#[derive(Debug, Clone)]
+pub struct PlanRequest {
+    /// The planner and its options: seed, iteration limit, time budget (the whole
+    /// call, default [`DEFAULT_TIME_LIMIT_MS`](crate::planning::DEFAULT_TIME_LIMIT_MS)),
+    /// step, smoothing. Default `rrt_connect`.
+    pub planner: Planner,
+    /// Penetration tolerance and edge check of the validator — the one tolerance
+    /// rule: [`Workspace::revalidate`] with the same options accepts every path the
+    /// planner returns.
+    pub validator: MeshValidatorOptions,
+    /// Bounds of the component's origin (world, mm); `None`: the box of the other
+    /// components with start and goal, grown by `margin_mm`.
+    pub bounds: Option<Aabb>,
+    /// Growth of the default bounds, mm. Default [`DEFAULT_MARGIN_MM`].
+    pub margin_mm: f64,
+    /// Whether the component may turn. Default [`RotationFreedom::Free`].
+    pub rotation: RotationFreedom,
+    /// Weight of rotation in the metric (mm per rad); `None`: the space's default.
+    pub rotation_weight: Option<f64>,
+    /// Seed 002's disassembly first (see [`Planner::plan_via_disassembly`]): the end
+    /// inside the product box is the assembled one. Default false.
+    pub disassemble: bool,
+}
+
+impl Default for PlanRequest {
+    fn default() -> Self {
+        Self {
+            planner: Planner::by_name("rrt_connect").expect("a planner name"),
+            validator: MeshValidatorOptions::default(),
+            bounds: None,
+            margin_mm: DEFAULT_MARGIN_MM,
+            rotation: RotationFreedom::Free,
+            rotation_weight: None,
+            disassemble: false,
+        }
+    }
+}
+
+/// The outcome of [`Workspace::revalidate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Revalidation {
+    /// Every key pose and edge is free.
+    Valid,
+    /// The first blocked part: edge `segment` (0 for the start pose itself) and the
+    /// pose ending it.
+    Blocked {
+        /// Index of the first blocked edge (0 also for a blocked start pose).
+        segment: usize,
+        /// The end pose of that edge (the start pose for a blocked start).
+        pose: Transform,
+    },
+}
+
+impl Revalidation {
+    /// Whether the path is still free.
+    pub fn is_valid(&self) -> bool {
+        matches!(self, Revalidation::Valid)
+    }
+}
+
+/// The planning problem of one component: validator, space, start, product box.
+struct Problem {
+    validator: MeshValidator,
+    space: PlanningSpace,
+    start: Transform,
+    product: Aabb,
+}
+
+impl Workspace<'_> {
+    /// A [`MeshValidator`] for component `name` moving among all the others at
+    /// their current poses.
+    ///
+    /// # Errors
+    /// An unknown component, bad validator options.
+    pub fn validator(
+        &self,
+        name: &str,
+        options: &MeshValidatorOptions,
+    ) -> Result<MeshValidator, WorkspaceError> {
+        let index = self.index(name)?;
+        let s = self.scene();
+        let obstacles = (0..s.poses.len())
+            .filter(|&i| i != index)
+            .map(|i| (s.colliders[i].clone(), s.poses[i]))
+            .collect();
+        Ok(MeshValidator::new(
+            s.colliders[index].clone(),
+            obstacles,
+            *options,
+        )?)
+    }
+
+    /// The box of component `name` in its part frame (mm).
+    ///
+    /// # Errors
+    /// An unknown component or an empty mesh.
+    pub fn part_box(&self, name: &str) -> Result<Aabb, WorkspaceError> {
+        let index = self.index(name)?;
+        Aabb::of_mesh(self.document().mesh_of(index))
+            .ok_or_else(|| WorkspaceError::EmptyMesh(name.to_string()))
+    }
+
+    /// The box of every component but `name` (world, mm): the product a
+    /// disassembly leaves; `None` when there is no other component.
+    ///
+    /// # Errors
+    /// An unknown component.
+    pub fn product_box(&self, name: &str) -> Result<Option<Aabb>, WorkspaceError> {
+        let index = self.index(name)?;
+        let doc = self.document();
+        Ok((0..doc.components().len())
+            .filter(|&i| i != index)
+            .filter_map(|i| doc.world_aabb(i))
+            .reduce(|(a, b), (c, e)| (a.inf(&c), b.sup(&e)))
+            .map(|(lo, hi)| Aabb::new(lo, hi)))
+    }
+
+    /// The planning space of component `name` for `request`: its bounds, or the
+    /// product box with the current pose and `through` grown by the margin.
+    ///
+    /// # Errors
+    /// An unknown component, bad bounds or margin.
+    pub fn planning_space(
+        &self,
+        name: &str,
+        request: &PlanRequest,
+        through: &[Transform],
+    ) -> Result<PlanningSpace, WorkspaceError> {
+        let start = self.pose(name)?;
+        let (lo, hi) = match request.bounds {
+            Some(b) => (b.lo.coords, b.hi.coords),
+            None => {
+                let m = request.margin_mm;
+                if !(m.is_finite() && m >= 0.0) {
+                    return Err(WorkspaceError::InvalidOption {
+                        option: "margin",
+                        value: m.to_string(),
+                        expected: "a finite number of mm ≥ 0",
+                    });
+                }
+                let mut lo = start.translation();
+                let mut hi = lo;
+                for t in through {
+                    lo = lo.inf(&t.translation());
+                    hi = hi.sup(&t.translation());
+                }
+                if let Some(p) = self.product_box(name)? {
+                    lo = lo.inf(&p.lo.coords);
+                    hi = hi.sup(&p.hi.coords);
+                }
+                (lo - Vec3::repeat(m), hi + Vec3::repeat(m))
+            }
+        };
+        let mut space = PlanningSpace::new(lo, hi).with_rotation(request.rotation);
+        if let Some(w) = request.rotation_weight {
+            space = space.with_rotation_weight(w);
+        }
+        Ok(space)
+    }
+
+    fn problem(
+        &self,
+        name: &str,
+        request: &PlanRequest,
+        through: &[Transform],
+    ) -> Result<Problem, WorkspaceError> {
+        let index = self.index(name)?;
+        if self.document().components()[index].fixed {
+            return Err(WorkspaceError::FixedComponent(name.to_string()));
+        }
+        let space = self.planning_space(name, request, through)?;
+        let product = match self.product_box(name)? {
+            Some(p) => p,
+            None => Aabb::new(space.min, space.max),
+        };
+        Ok(Problem {
+            validator: self.validator(name, &request.validator)?,
+            space,
+            start: self.pose(name)?,
+            product,
+        })
+    }
+
+    /// Plans a path for component `name` from its current pose to `goal` (world,
+    /// mm) among all the other components. The whole call — search, smoothing and
+    /// any nested search — honours the planner's time budget; a path that is not
+    /// found says why in [`PlannedPath::failure`] (e.g. the time limit).
+    ///
+    /// # Examples
+    /// ```
+    /// use fitup::document::Document;
+    /// use fitup::math::{Transform, Vec3};
+    /// use fitup::workspace::{PlanRequest, SceneCache, Workspace};
+    ///
+    /// let doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+    /// let mut cache = SceneCache::new();
+    /// let ws = Workspace::new(&doc, &mut cache).unwrap();
+    /// let goal = ws.pose("screw5").unwrap().then(&Transform::from_translation(Vec3::new(0.0, 0.0, 40.0)));
+    /// let mut request = PlanRequest::default();
+    /// request.planner.limits_mut().time_limit_ms = Some(5_000.0);
+    /// let path = ws.plan_path("screw5", &goal, &request, None).unwrap();
+    /// assert!(path.found(), "{:?}", path.failure);
+    /// assert!(path.time_ms >= path.search_ms);
+    /// // The same tolerance rule re-checks it.
+    /// assert!(ws.revalidate("screw5", &path, &request.validator).unwrap().is_valid());
+    /// // Fixed components are never planned for.
+    /// assert!(ws.plan_path("table", &goal, &request, None).is_err());
+    /// ```
+    ///
+    /// # Errors
+    /// An unknown or fixed component, bad options, bounds or goal.
+    pub fn plan_path(
+        &self,
+        name: &str,
+        goal: &Transform,
+        request: &PlanRequest,
+        progress: Option<ProgressFn<'_>>,
+    ) -> Result<PlannedPath, WorkspaceError> {
+        let mut p = self.problem(name, request, &[*goal])?;
+        let path = if request.disassemble {
+            request.planner.plan_via_disassembly(
+                &mut p.validator,
+                &p.space,
+                &p.start,
+                goal,
+                &self.part_box(name)?,
+                &p.product,
+                progress,
+            )
+        } else {
+            request
+                .planner
+                .plan(&mut p.validator, &p.space, &p.start, goal, progress)
+        }?;
+        Ok(path)
+    }
+
+    /// Seed 002's "can be disassembled, can be assembled" for component `name`:
+    /// plans from its current (assembled) pose until its box leaves the box of the
+    /// other components, then reverses the path so it ends assembled. Planners
+    /// `rrt`, `biased_rrt` and `local_rrt`.
+    ///
+    /// # Errors
+    /// An unknown or fixed component, another planner, bad options.
+    pub fn plan_disassembly(
+        &self,
+        name: &str,
+        request: &PlanRequest,
+        progress: Option<ProgressFn<'_>>,
+    ) -> Result<PlannedPath, WorkspaceError> {
+        let mut p = self.problem(name, request, &[])?;
+        Ok(request.planner.plan_disassembly(
+            &mut p.validator,
+            &p.space,
+            &p.start,
+            &self.part_box(name)?,
+            &p.product,
+            progress,
+        )?)
+    }
+
+    /// Checks a path for component `name` again against the document as it is
+    /// now, with the validator options the path was planned with (the one tolerance
+    /// rule: see [`PlannedPath::revalidate`]).
+    ///
+    /// # Errors
+    /// An unknown component, bad options, a path that was not found.
+    pub fn revalidate(
+        &self,
+        name: &str,
+        path: &PlannedPath,
+        options: &MeshValidatorOptions,
+    ) -> Result<Revalidation, WorkspaceError> {
+        if !path.found() {
+            return Err(WorkspaceError::PathNotFound);
+        }
+        let mut v = self.validator(name, options)?;
+        Ok(match path.revalidate(&mut v) {
+            Ok(()) => Revalidation::Valid,
+            Err((segment, pose)) => Revalidation::Blocked { segment, pose },
+        })
+    }
+}
+
+/// Moves component `name` of `doc` along `path` in steps of at most `step_mm` of
+/// translation (and as many degrees of rotation), calling `on_step(k, n, pose)`
+/// after each move (`k` from 1 to `n`); [`Control::Cancel`] stops with
+/// [`WorkspaceError::Cancelled`]. Returns the number of steps.
+///
+/// # Errors
+/// A path that was not found, a step that is not a finite number > 0, an unknown or
+/// fixed component, cancellation.
+pub fn follow(
+    doc: &mut Document,
+    name: &str,
+    path: &PlannedPath,
+    step_mm: f64,
+    mut on_step: impl FnMut(usize, usize, &Transform) -> Control,
+) -> Result<usize, WorkspaceError> {
+    if !path.found() {
+        return Err(WorkspaceError::PathNotFound);
+    }
+    if !(step_mm.is_finite() && step_mm > 0.0) {
+        return Err(WorkspaceError::InvalidOption {
+            option: "step",
+            value: step_mm.to_string(),
+            expected: "a finite number of mm > 0",
+        });
+    }
+    let index = doc.component_index(name)?;
+    // Rotation steps follow the translation step: 1 mm ~ 1°.
+    let poses = path.densify(step_mm, step_mm.to_radians());
+    let n = poses.len();
+    for (k, t) in poses.iter().enumerate() {
+        doc.set_transform_at(index, *t)?;
+        if on_step(k + 1, n, t) == Control::Cancel {
+            return Err(WorkspaceError::Cancelled);
+        }
+    }
+    Ok(n)
+}

@@ -1,0 +1,207 @@
+//! The workspace on the committed demo cell and benchmark problem documents:
+//! budgets honoured, fixed components and degenerate resolutions refused.
+
+use super::*;
+use crate::collision::SweepMethod;
+use crate::math::Vec3;
+use crate::planning::{EdgeResolution, Failure, Planner, RotationFreedom};
+use std::path::Path as FsPath;
+use std::time::Instant;
+
+fn open(path: &str) -> Document {
+    Document::open(FsPath::new(path)).unwrap()
+}
+
+fn shifted(t: &Transform, x: f64, y: f64, z: f64) -> Transform {
+    t.then(&Transform::from_translation(Vec3::new(x, y, z)))
+}
+
+/// The ring puzzle needs seconds to minutes: a short budget must end it with the
+/// time-limit outcome, search and smoothing included.
+#[test]
+fn plan_path_ends_with_the_time_limit_outcome() {
+    let doc = open("models/problems/ring_puzzle.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let goal = crate::planning::problems::ring_puzzle().unwrap().goal;
+    for disassemble in [false, true] {
+        let mut request = PlanRequest {
+            disassemble,
+            ..PlanRequest::default()
+        };
+        let limits = request.planner.limits_mut();
+        limits.max_iterations = usize::MAX;
+        // The disassembly variant solves this puzzle in well under a second.
+        limits.time_limit_ms = Some(if disassemble { 5.0 } else { 300.0 });
+        let clock = Instant::now();
+        let path = ws.plan_path("moving", &goal, &request, None).unwrap();
+        let wall = clock.elapsed().as_secs_f64() * 1e3;
+        assert_eq!(
+            path.failure,
+            Some(Failure::TimeLimit),
+            "disassemble {disassemble}"
+        );
+        // Only a hang guard: 10× the budget.
+        assert!(wall < 3000.0, "{wall} ms");
+        assert!(path.time_ms >= path.search_ms);
+        assert!(path.time_ms <= wall + 1.0);
+    }
+}
+
+/// Smoothing with an unbounded number of shortcut attempts stops when the budget is
+/// spent and keeps a valid path; the times add up.
+#[test]
+fn smoothing_is_anytime_within_the_budget() {
+    let doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    // screw5 to the far side of screw4: no straight line, so the path keeps ≥ 2 edges.
+    let goal = shifted(&ws.pose("screw5").unwrap(), -100.0, 0.0, 0.0);
+    let mut request = PlanRequest::default();
+    if let Planner::RrtConnect(o) = &mut request.planner {
+        o.smoothing.shortcut_attempts = usize::MAX;
+        o.limits.time_limit_ms = Some(1500.0);
+        o.limits.seed = 3;
+    }
+    let clock = Instant::now();
+    let path = ws.plan_path("screw5", &goal, &request, None).unwrap();
+    let wall = clock.elapsed().as_secs_f64() * 1e3;
+    assert!(path.found(), "{:?}", path.failure);
+    assert!(wall < 15_000.0, "{wall} ms");
+    assert!(path.smoothing_ms > 0.0);
+    assert!((path.search_ms + path.smoothing_ms - path.time_ms).abs() < 1.0);
+    assert!(path.poses.len() >= 3);
+    assert!(ws
+        .revalidate("screw5", &path, &request.validator)
+        .unwrap()
+        .is_valid());
+}
+
+#[test]
+fn a_goal_far_away_ends_within_the_budget() {
+    let doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let goal = shifted(&ws.pose("screw5").unwrap(), 1e12, 0.0, 0.0);
+    let mut request = PlanRequest::default();
+    request.planner.limits_mut().time_limit_ms = Some(500.0);
+    request.planner.limits_mut().max_iterations = usize::MAX;
+    let clock = Instant::now();
+    let path = ws.plan_path("screw5", &goal, &request, None).unwrap();
+    let wall = clock.elapsed().as_secs_f64() * 1e3;
+    assert!(wall < 5000.0, "{wall} ms");
+    assert_eq!(path.failure, Some(Failure::TimeLimit));
+}
+
+#[test]
+fn fixed_components_are_never_planned() {
+    let doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let goal = shifted(&ws.pose("table").unwrap(), 0.0, 0.0, 10.0);
+    let err = ws
+        .plan_path("table", &goal, &PlanRequest::default(), None)
+        .unwrap_err();
+    assert_eq!(err, WorkspaceError::FixedComponent("table".into()));
+    assert!(err.to_string().contains("fixed"));
+    assert!(matches!(
+        ws.plan_disassembly("table", &PlanRequest::default(), None),
+        Err(WorkspaceError::FixedComponent(_))
+    ));
+}
+
+#[test]
+fn degenerate_resolutions_are_refused() {
+    let doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let goal = shifted(&ws.pose("screw5").unwrap(), 0.0, 0.0, 40.0);
+    let mut request = PlanRequest::default();
+    request.validator.edge = EdgeResolution::Stepwise {
+        step_mm: 1e-9,
+        step_rad: 0.1f64.to_radians(),
+    };
+    let err = ws.plan_path("screw5", &goal, &request, None).unwrap_err();
+    assert!(
+        matches!(err, WorkspaceError::Collision(CollisionError::BadMotion(_))),
+        "{err}"
+    );
+    assert!(err.to_string().contains("at least"), "{err}");
+    request.validator.edge = EdgeResolution::Continuous {
+        contact_step_mm: 1e-12,
+    };
+    assert!(ws.plan_path("screw5", &goal, &request, None).is_err());
+}
+
+#[test]
+fn sweeps_honour_their_budget() {
+    let doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let to = shifted(&ws.pose("screw5").unwrap(), 0.0, 0.0, 300.0);
+    let options = SweepOptions {
+        method: SweepMethod::Step { step: 0.01 },
+        time_limit_ms: Some(1.0),
+        ..SweepOptions::default()
+    };
+    let clock = Instant::now();
+    let err = ws.sweep_through("screw5", &[to], &options).unwrap_err();
+    assert!(clock.elapsed().as_secs_f64() < 1.0);
+    assert_eq!(
+        err,
+        WorkspaceError::Collision(CollisionError::TimeLimit(1.0))
+    );
+    // With the default budget the same motion is answered.
+    let coarse = SweepOptions::default();
+    assert!(!ws.sweep_through("screw5", &[to], &coarse).unwrap().hit);
+}
+
+#[test]
+fn disassembly_labels_say_what_ran() {
+    let doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let start = ws.pose("screw5").unwrap();
+    // screw5 stands on the table, inside the box of the others; sliding it 30 mm
+    // along the table keeps it inside: nothing to disassemble, plain rrt_connect.
+    let goal = shifted(&start, 0.0, 30.0, 0.0);
+    let request = PlanRequest {
+        disassemble: true,
+        rotation: RotationFreedom::Fixed,
+        ..PlanRequest::default()
+    };
+    let path = ws.plan_path("screw5", &goal, &request, None).unwrap();
+    assert!(path.found(), "{:?}", path.failure);
+    assert_eq!(path.planner, "rrt_connect");
+    // screw1 sits in a plate hole: its removal is a real disassembly.
+    let seated = ws.pose("screw1").unwrap();
+    let away = shifted(&seated, 0.0, 0.0, 400.0);
+    let path = ws.plan_path("screw1", &away, &request, None).unwrap();
+    assert!(path.found(), "{:?}", path.failure);
+    assert_eq!(path.planner, "disassemble_local_rrt+rrt_connect");
+    assert!(ws
+        .revalidate("screw1", &path, &request.validator)
+        .unwrap()
+        .is_valid());
+}
+
+#[test]
+fn pair_requests_name_their_errors() {
+    let doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let o = CheckOptions::default();
+    assert!(matches!(
+        ws.contact("screw1", "screw1", &o),
+        Err(WorkspaceError::SameComponent(_))
+    ));
+    assert!(matches!(
+        ws.contact("screw1", "nope", &o),
+        Err(WorkspaceError::Document(DocumentError::NotFound { .. }))
+    ));
+    // screw1 rests in its hole: touching, not interfering, at the planners' tolerance.
+    assert!(ws.touching(&o).unwrap().iter().any(|p| {
+        let names = [ws.name(p.a), ws.name(p.b)];
+        names.contains(&"screw1")
+    }));
+}
