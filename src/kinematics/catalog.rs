@@ -12,10 +12,9 @@
 //! Joint limits are the manufacturers' data-sheet ranges (see the docs for which
 //! could be confirmed).
 
-use super::{DhConvention, DhRow, Joint, JointLimits, KinematicTree, KinematicsError, Link, Robot};
-use crate::math::{Point3, Transform, Vec3};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion};
-use std::f64::consts::FRAC_PI_2;
+use super::{DhConvention, DhRow, JointLimits, KinematicsError, OpwParameters, Robot};
+use crate::math::{Transform, Vec3};
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// The arms of the catalog.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -67,6 +66,7 @@ impl Catalog {
 
     fn build(self) -> Result<Robot, KinematicsError> {
         let deg = JointLimits::degrees;
+        let rad = JointLimits::new;
         match self {
             Catalog::NachiMz07 => {
                 let limits = [
@@ -97,64 +97,85 @@ impl Catalog {
                     0.0,
                     -(MZ07_TOOL_POINT - MZ07_FLANGE),
                 ));
-                Robot::from_dh(self.name(), &rows, DhConvention::Standard, tool)
+                Ok(
+                    Robot::from_dh(self.name(), &rows, DhConvention::Standard, tool)?
+                        .with_limits_source(
+                            "unverified: NACHI data-sheet ranges from memory, no public source checked",
+                        ),
+                )
             }
-            Catalog::AbbIrb2400 => opw_robot(
-                self.name(),
-                [100.0, -135.0, 0.0, 615.0, 705.0, 755.0, 85.0],
-                [0.0, 0.0, -FRAC_PI_2, 0.0, 0.0, 0.0],
-                [1.0; 6],
-                [
-                    deg(-180.0, 180.0),
-                    deg(-100.0, 110.0),
-                    deg(-60.0, 65.0),
-                    deg(-200.0, 200.0),
-                    deg(-120.0, 120.0),
-                    deg(-400.0, 400.0),
-                ],
-            ),
-            Catalog::KukaKr6R700 => opw_robot(
-                self.name(),
-                [25.0, -35.0, 0.0, 400.0, 315.0, 365.0, 80.0],
-                [0.0, -FRAC_PI_2, 0.0, 0.0, 0.0, 0.0],
-                [-1.0, 1.0, 1.0, -1.0, 1.0, -1.0],
-                [
+            Catalog::AbbIrb2400 => {
+                // Geometry: opw_kinematics `makeIrb2400_10` (Jmeyer1292/opw_kinematics,
+                // include/opw_kinematics/opw_parameters_examples.h). Limits: ROS-Industrial
+                // (ros-industrial/abb, abb_irb2400_support/urdf/irb2400_macro.xacro), rad.
+                let mut p = OpwParameters::new(100.0, -135.0, 0.0, 615.0, 705.0, 755.0, 85.0);
+                p.offsets[2] = -FRAC_PI_2;
+                let limits = [
+                    rad(-3.1416, 3.1416),
+                    rad(-1.7453, 1.9199),
+                    rad(-1.0472, 1.1345),
+                    rad(-3.49, 3.49),
+                    rad(-2.0944, 2.0944),
+                    rad(-6.9813, 6.9813),
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "ros-industrial/abb abb_irb2400_support/urdf/irb2400_macro.xacro",
+                ))
+            }
+            Catalog::KukaKr6R700 => {
+                // Geometry: opw_kinematics `makeKukaKR6_R700_sixx` (same file as above).
+                // Limits: ros-industrial/kuka_experimental,
+                // kuka_kr6_support/urdf/kr6r700sixx_macro.xacro (degrees there).
+                let mut p = OpwParameters::new(25.0, -35.0, 0.0, 400.0, 315.0, 365.0, 80.0);
+                p.offsets[1] = -FRAC_PI_2;
+                p.signs = [-1.0, 1.0, 1.0, -1.0, 1.0, -1.0];
+                let limits = [
                     deg(-170.0, 170.0),
                     deg(-190.0, 45.0),
                     deg(-120.0, 156.0),
                     deg(-185.0, 185.0),
                     deg(-120.0, 120.0),
                     deg(-350.0, 350.0),
-                ],
-            ),
-            Catalog::FanucLrMate200iD => opw_robot(
-                self.name(),
-                [50.0, -35.0, 0.0, 330.0, 330.0, 335.0, 80.0],
-                [0.0, 0.0, -FRAC_PI_2, 0.0, 0.0, 0.0],
-                [1.0, 1.0, -1.0, -1.0, -1.0, -1.0],
-                [
-                    deg(-170.0, 170.0),
-                    deg(-100.0, 145.0),
-                    deg(-70.0, 205.0),
-                    deg(-190.0, 190.0),
-                    deg(-125.0, 125.0),
-                    deg(-360.0, 360.0),
-                ],
-            ),
-            Catalog::StaubliTx2_60L => opw_robot(
-                self.name(),
-                [0.0, 0.0, 20.0, 375.0, 400.0, 450.0, 70.0],
-                [0.0; 6],
-                [1.0; 6],
-                [
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "ros-industrial/kuka_experimental kuka_kr6_support/urdf/kr6r700sixx_macro.xacro",
+                ))
+            }
+            Catalog::FanucLrMate200iD => {
+                // Geometry, offsets (J3 −90°, J6 180°) and signs: ROS-Industrial
+                // opw_parameters_lrmate200id.yaml, checked against the URDF
+                // (ros-industrial/fanuc, fanuc_lrmate200id_support/urdf/lrmate200id_macro.xacro),
+                // which also gives the limits (rad).
+                let mut p = OpwParameters::new(50.0, -35.0, 0.0, 330.0, 330.0, 335.0, 80.0);
+                p.offsets[2] = -FRAC_PI_2;
+                p.offsets[5] = PI;
+                p.signs = [1.0, 1.0, -1.0, -1.0, -1.0, -1.0];
+                let limits = [
+                    rad(-2.965, 2.965),
+                    rad(-1.745329, 2.530727),
+                    rad(-2.450966, 4.886922),
+                    rad(-3.315, 3.315),
+                    rad(-2.18, 2.18),
+                    rad(-6.285, 6.285),
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "ros-industrial/fanuc fanuc_lrmate200id_support/urdf/lrmate200id_macro.xacro",
+                ))
+            }
+            Catalog::StaubliTx2_60L => {
+                let p = OpwParameters::new(0.0, 0.0, 20.0, 375.0, 400.0, 450.0, 70.0);
+                let limits = [
                     deg(-180.0, 180.0),
                     deg(-127.5, 127.5),
                     deg(-142.5, 142.5),
                     deg(-270.0, 270.0),
                     deg(-121.0, 132.5),
                     deg(-270.0, 270.0),
-                ],
-            ),
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "unverified: data-sheet ranges from memory, no public source checked",
+                ))
+            }
             Catalog::Ur5 => {
                 let rows = [
                     DhRow::revolute(0.0, 89.159, 0.0, FRAC_PI_2),
@@ -168,12 +189,13 @@ impl Catalog {
                     .iter()
                     .map(|r| r.with_limits(deg(-360.0, 360.0)))
                     .collect();
-                Robot::from_dh(
+                Ok(Robot::from_dh(
                     self.name(),
                     &rows,
                     DhConvention::Standard,
                     Transform::IDENTITY,
-                )
+                )?
+                .with_limits_source("unverified: ±360° on every joint (UR data sheet, from memory)"))
             }
         }
     }
@@ -183,62 +205,6 @@ impl Catalog {
 pub const MZ07_FLANGE: f64 = 80.0;
 /// Seed 000 table 2's |d6|: the tool point's distance from the wrist centre (mm).
 pub const MZ07_TOOL_POINT: f64 = 516.9;
-
-/// Builds an ortho-parallel arm from the usual parameter set
-/// `[a1, a2, b, c1, c2, c3, c4]` (mm), joint offsets (rad) and axis signs, by placing
-/// every axis line at the robot's zero configuration: joint `i`'s geometric angle is
-/// `sign·q + offset`. Every link frame coincides with the root frame at zero (the
-/// way CAD assemblies of robots are usually drawn); the flange frame has `z` out of
-/// the flange.
-fn opw_robot(
-    name: &str,
-    p: [f64; 7],
-    offsets: [f64; 6],
-    signs: [f64; 6],
-    limits: [JointLimits; 6],
-) -> Result<Robot, KinematicsError> {
-    let [a1, a2, b, c1, c2, c3, c4] = p;
-    // Axis lines in the upright reference pose (every geometric angle 0).
-    let mut axes: Vec<(Vec3, Point3)> = vec![
-        (Vec3::z(), Point3::origin()),
-        (Vec3::y(), Point3::new(a1, b, c1)),
-        (Vec3::y(), Point3::new(a1, b, c1 + c2)),
-        (Vec3::z(), Point3::new(a1 + a2, b, c1 + c2 + c3)),
-        (Vec3::y(), Point3::new(a1 + a2, b, c1 + c2 + c3)),
-        (Vec3::z(), Point3::new(a1 + a2, b, c1 + c2 + c3)),
-    ];
-    let mut flange = Isometry3::translation(a1 + a2, b, c1 + c2 + c3 + c4);
-    // Turn each joint to its offset, moving everything distal to it.
-    for i in 0..6 {
-        if offsets[i] != 0.0 {
-            let (axis, point) = axes[i];
-            let q =
-                UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), offsets[i]);
-            let m = Isometry3::from_parts(Translation3::from(point.coords - q * point.coords), q);
-            for ax in axes.iter_mut().skip(i + 1) {
-                *ax = (m.rotation * ax.0, m * ax.1);
-            }
-            flange = m * flange;
-        }
-    }
-    let mut links = vec![Link::new("base", None, Transform::IDENTITY, Joint::fixed())];
-    for i in 0..6 {
-        let (axis, point) = axes[i];
-        let home = if i == 5 {
-            Transform::from_isometry(flange)
-        } else {
-            Transform::IDENTITY
-        };
-        links.push(Link::new(
-            format!("link{}", i + 1),
-            Some(i),
-            home,
-            Joint::revolute(axis * signs[i], point).with_limits(limits[i]),
-        ));
-    }
-    let tree = KinematicTree::new(links)?;
-    Robot::new(name, tree, 6, Transform::IDENTITY)
-}
 
 /// Names of the catalog arms.
 pub fn catalog_names() -> Vec<&'static str> {
@@ -256,7 +222,7 @@ pub fn robot_by_name(name: &str) -> Option<Robot> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{IkError, IkOptions};
+    use crate::kinematics::{IkError, IkOptions, KinematicTree};
     use crate::math::Rng;
     use std::f64::consts::PI;
 

@@ -19,6 +19,7 @@ mod ik_numeric;
 mod joint;
 mod motion;
 mod opw;
+mod opw_params;
 mod program;
 mod robot;
 mod trajectory;
@@ -36,6 +37,7 @@ pub use ik_numeric::NumericIk;
 pub use joint::{Joint, JointKind, JointLimits};
 pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
 pub use opw::{Branch, Branches, NotOpw, OpwSolver};
+pub use opw_params::OpwParameters;
 pub use program::{
     parse_program, read_program, run_program, Command, Program, ProgramError, ProgramLine, RunError,
 };
