@@ -100,8 +100,8 @@ impl Catalog {
                 Ok(
                     Robot::from_dh(self.name(), &rows, DhConvention::Standard, tool)?
                         .with_limits_source(
-                            "unverified: NACHI data-sheet ranges from memory, no public source checked",
-                        ),
+                        "unverified: NACHI data-sheet ranges from memory, no public source checked",
+                    ),
                 )
             }
             Catalog::AbbIrb2400 => {
@@ -195,7 +195,9 @@ impl Catalog {
                     DhConvention::Standard,
                     Transform::IDENTITY,
                 )?
-                .with_limits_source("unverified: ±360° on every joint (UR data sheet, from memory)"))
+                .with_limits_source(
+                    "unverified: ±360° on every joint (UR data sheet, from memory)",
+                ))
             }
         }
     }
@@ -224,7 +226,7 @@ mod tests {
     use super::*;
     use crate::kinematics::{IkError, IkOptions, KinematicTree};
     use crate::math::Rng;
-    use std::f64::consts::PI;
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
     fn pos(r: &Robot, q: [f64; 6]) -> Vec3 {
         r.tcp_pose(&q).unwrap().translation()
@@ -271,6 +273,162 @@ mod tests {
         assert!(
             (pos(&r, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]) - Vec3::new(390.0, 0.0, 198.1)).norm() < 1e-9
         );
+    }
+
+    /// A serial chain as ROS-Industrial URDFs write it: per joint the origin `xyz`
+    /// (metres, every `rpy` 0 in these files) and the axis; then a fixed tool frame.
+    /// Returns the tool frame pose in mm for joint values `q`.
+    fn urdf_chain(
+        joints: &[([f64; 3], [f64; 3])],
+        tool: UnitQuaternion<f64>,
+        q: &[f64],
+    ) -> Isometry3<f64> {
+        let mut pose = Isometry3::identity();
+        for ((xyz, axis), v) in joints.iter().zip(q) {
+            let t = Isometry3::translation(xyz[0] * 1000.0, xyz[1] * 1000.0, xyz[2] * 1000.0);
+            let r = UnitQuaternion::from_axis_angle(
+                &nalgebra::Unit::new_normalize(Vec3::new(axis[0], axis[1], axis[2])),
+                *v,
+            );
+            pose = pose * t * Isometry3::from_parts(Translation3::identity(), r);
+        }
+        pose * Isometry3::from_parts(Translation3::identity(), tool)
+    }
+
+    /// URDF `rpy` (fixed X, then Y, then Z) as a rotation.
+    fn rpy(r: f64, p: f64, y: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_euler_angles(r, p, y)
+    }
+
+    /// ABB IRB 2400: joint origins and axes typed from ros-industrial/abb,
+    /// abb_irb2400_support/urdf/irb2400_macro.xacro (tool0: rpy 0 0 0 on link_6).
+    const IRB2400_URDF: [([f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.1, 0.0, 0.615], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.705], [0.0, 1.0, 0.0]),
+        ([0.258, 0.0, 0.135], [1.0, 0.0, 0.0]),
+        ([0.497, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.085, 0.0, 0.0], [1.0, 0.0, 0.0]),
+    ];
+    /// KUKA KR 6 R700 sixx: ros-industrial/kuka_experimental,
+    /// kuka_kr6_support/urdf/kr6r700sixx_macro.xacro (tool0: rpy 0 90° 0 on the flange).
+    const KR6_URDF: [([f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.4], [0.0, 0.0, -1.0]),
+        ([0.025, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.315, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.035], [-1.0, 0.0, 0.0]),
+        ([0.365, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.080, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+    ];
+    /// Fanuc LR Mate 200iD: ros-industrial/fanuc,
+    /// fanuc_lrmate200id_support/urdf/lrmate200id_macro.xacro (tool0: rpy π −π/2 0).
+    const LRMATE_URDF: [([f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.330], [0.0, 0.0, 1.0]),
+        ([0.050, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.330], [0.0, -1.0, 0.0]),
+        ([0.0, 0.0, 0.035], [-1.0, 0.0, 0.0]),
+        ([0.335, 0.0, 0.0], [0.0, -1.0, 0.0]),
+        ([0.080, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+    ];
+
+    /// The zero poses stated by the published models (issue 11, and the URDFs above):
+    /// flange at (940, 0, 1455), (785, 0, 435), (465, 0, 695) mm, pointing +x.
+    #[test]
+    fn catalog_zero_poses_match_the_published_models() {
+        for (arm, p) in [
+            (Catalog::AbbIrb2400, Vec3::new(940.0, 0.0, 1455.0)),
+            (Catalog::KukaKr6R700, Vec3::new(785.0, 0.0, 435.0)),
+            (Catalog::FanucLrMate200iD, Vec3::new(465.0, 0.0, 695.0)),
+        ] {
+            let r = arm.robot();
+            let t = r.tcp_pose(&[0.0; 6]).unwrap();
+            assert!((t.translation() - p).norm() < 1e-9, "{}: {t}", arm.name());
+            let z = t.apply_vector(&Vec3::z());
+            assert!((z - Vec3::x()).norm() < 1e-12, "{}: z = {z:?}", arm.name());
+            assert!(r.analytic().is_some(), "{}", arm.name());
+        }
+        // The Stäubli TX2-60L (no offsets) stands upright: flange on top.
+        let t = Catalog::StaubliTx2_60L.robot().tcp_pose(&[0.0; 6]).unwrap();
+        assert!(
+            (t.translation() - Vec3::new(0.0, 20.0, 375.0 + 400.0 + 450.0 + 70.0)).norm() < 1e-9
+        );
+    }
+
+    /// Published poses: the ROS-Industrial URDF chains (typed in above) at a set of
+    /// joint vectors, including large ones on every joint, give the catalog's TCP pose
+    /// (the URDF `tool0` frame; for the IRB 2400 its `tool0` has x forward where the
+    /// OPW flange has z forward, a fixed quarter turn about y).
+    #[test]
+    fn catalog_matches_ros_industrial_urdfs() {
+        let d = |v: [f64; 6]| v.map(f64::to_radians);
+        let poses = [
+            [0.0; 6],
+            d([30.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+            d([0.0, 40.0, 0.0, 0.0, 0.0, 0.0]),
+            d([0.0, 0.0, -35.0, 0.0, 0.0, 0.0]),
+            d([0.0, 0.0, 0.0, 70.0, 45.0, 0.0]),
+            d([0.0, 0.0, 0.0, 0.0, 0.0, 90.0]),
+            d([-45.0, 20.0, 30.0, -60.0, 50.0, 120.0]),
+        ];
+        let cases: [(
+            Catalog,
+            &[([f64; 3], [f64; 3]); 6],
+            UnitQuaternion<f64>,
+            UnitQuaternion<f64>,
+        ); 3] = [
+            (
+                Catalog::AbbIrb2400,
+                &IRB2400_URDF,
+                rpy(0.0, 0.0, 0.0),
+                rpy(0.0, -FRAC_PI_2, 0.0),
+            ),
+            (
+                Catalog::KukaKr6R700,
+                &KR6_URDF,
+                rpy(0.0, FRAC_PI_2, 0.0),
+                UnitQuaternion::identity(),
+            ),
+            (
+                Catalog::FanucLrMate200iD,
+                &LRMATE_URDF,
+                rpy(PI, -FRAC_PI_2, 0.0),
+                UnitQuaternion::identity(),
+            ),
+        ];
+        let mut rng = Rng::new(42);
+        for (arm, chain, tool0, flange_to_tool0) in cases {
+            let r = arm.robot();
+            let random: Vec<[f64; 6]> = (0..50)
+                .map(|_| std::array::from_fn(|_| rng.range(-PI, PI)))
+                .collect();
+            for q in poses.iter().chain(&random) {
+                let urdf = Transform::from_isometry(urdf_chain(chain, tool0, q));
+                let ours = Transform::from_isometry(
+                    r.tcp_pose(q).unwrap().isometry()
+                        * Isometry3::from_parts(Translation3::identity(), flange_to_tool0),
+                );
+                assert!(
+                    ours.approx_eq(&urdf, 1e-9, 1e-12),
+                    "{} at {q:?}: {ours} vs URDF {urdf}",
+                    arm.name()
+                );
+            }
+        }
+    }
+
+    /// Limits are the URDFs' (typed in above) or marked unverified.
+    #[test]
+    fn every_catalog_arm_says_where_its_limits_come_from() {
+        for arm in Catalog::ALL {
+            let r = arm.robot();
+            let src = r.limits_source().unwrap();
+            assert!(
+                src.starts_with("ros-industrial/") || src.starts_with("unverified"),
+                "{src}"
+            );
+        }
+        let l = Catalog::FanucLrMate200iD.robot().joint_limits();
+        assert_eq!(l[2], Some(JointLimits::new(-2.450966, 4.886922)));
     }
 
     #[test]

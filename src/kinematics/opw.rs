@@ -80,6 +80,10 @@ pub struct Branch {
     pub joints: [f64; 6],
     /// Shoulder, elbow and wrist choice.
     pub configuration: Configuration,
+    /// Axes 4 and 6 are (within the singularity threshold) aligned: joints 4 and 6
+    /// are ill-conditioned; at the singularity itself joint 5 is exactly φ₅ (0 for the
+    /// usual wrist) and joint 4 keeps the seed (see [`OpwSolver::branches_seeded`]).
+    pub singular: bool,
 }
 
 /// Up to eight principal branches (joint values in (−π, π], no limits applied), in a
@@ -88,7 +92,9 @@ pub struct Branch {
 pub struct Branches {
     items: [Branch; 8],
     len: usize,
-    /// Some branches were dropped at a wrist or shoulder singularity.
+    /// The target is at or near a singularity: some branch is flagged
+    /// [`Branch::singular`] (wrist), or branches were dropped because joint 1 or
+    /// joint 2 is undetermined (wrist centre on axis 1 or on axis 2).
     pub singular: bool,
     /// Some branch was dropped because the wrist centre is out of reach.
     pub out_of_reach: bool,
@@ -102,6 +108,7 @@ impl Branches {
             elbow: Elbow::Up,
             wrist: Wrist::NoFlip,
         },
+        singular: false,
     };
 
     fn new() -> Self {
@@ -217,6 +224,10 @@ pub(crate) fn wrap(a: f64) -> f64 {
 }
 
 const PARALLEL_TOL: f64 = 1e-9;
+/// Below this sine of the angle between axis 4 and the target's axis 6 the wrist is
+/// treated as exactly singular (rounding level: the regular formulas stay accurate
+/// to ~1e-16 rad above it).
+const WRIST_SNAP: f64 = 1e-13;
 const DISTANCE_TOL: f64 = 1e-6;
 
 impl OpwSolver {
@@ -318,6 +329,15 @@ impl OpwSolver {
         let tcp0_c = c_from_root * tcp0;
         let gamma = ang(u3) - ang(u2);
         let phi5 = a4c.dot(&a5c.cross(&a6c)).atan2(a4c.dot(&a6c));
+        // Axes built by rotations carry rounding: the usual wrist has φ5 = 0 (or π)
+        // exactly, so that singular targets give joint 5 exactly 0.
+        let phi5 = if phi5.abs() < 1e-12 {
+            0.0
+        } else if (phi5.abs() - PI).abs() < 1e-12 {
+            PI
+        } else {
+            phi5
+        };
         Ok(Self {
             root_from_c,
             c_from_root,
@@ -378,9 +398,32 @@ impl OpwSolver {
     }
 
     /// Every principal branch (up to 8) reaching the TCP pose `target` given in the
-    /// root frame; joint values in (−π, π], no limits applied. Singular branches are
-    /// dropped (and flagged), never returned with an arbitrary free angle.
+    /// root frame; joint values in (−π, π], no limits applied; at a wrist singularity
+    /// joint 4 is 0 (see [`Self::branches_seeded`]).
+    #[inline]
     pub fn branches(&self, target: &Isometry3<f64>, singularity_threshold: f64) -> Branches {
+        self.branches_seeded(target, singularity_threshold, 0.0)
+    }
+
+    /// Every principal branch reaching `target` (root frame, mm); joint values in
+    /// (−π, π], no limits applied.
+    ///
+    /// **Wrist singularity** (axes 4 and 6 aligned, `sin ∠(a₄, t) < 1e-13`): every arm
+    /// branch still comes back with both wrist labels and `singular` set; joint 5 is
+    /// exactly φ₅ (0 for the usual wrist; φ₅ + π when the axes are opposed) and only
+    /// `q4 + q6` (`q4 − q6` when opposed) is determined. Rule: joint 4 keeps `q4_seed`
+    /// (the current joint 4 value, wrapped) on the no-flip branch and `q4_seed + π` on
+    /// the flip branch; joint 6 takes the rest. Near the singularity (sine below
+    /// `singularity_threshold`) branches are solved normally and flagged `singular`.
+    /// The shoulder singularity (wrist centre on axis 1) and the wrist centre on axis 2
+    /// leave joint 1 or 2 undetermined: those branches are dropped and
+    /// [`Branches::singular`] set.
+    pub fn branches_seeded(
+        &self,
+        target: &Isometry3<f64>,
+        singularity_threshold: f64,
+        q4_seed: f64,
+    ) -> Branches {
         let mut out = Branches::new();
         let x = self.c_from_root * target;
         let rx = x.rotation.to_rotation_matrix();
@@ -459,13 +502,10 @@ impl OpwSolver {
                     Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
                 };
                 let t = ry(&r1_a6);
-                let cw = self.a4.dot(&t).clamp(-1.0, 1.0);
-                let sd = (1.0 - cw * cw).sqrt();
-                if sd < singularity_threshold {
-                    out.singular = true;
-                    continue;
-                }
-                let delta = cw.acos();
+                // δ = ∠(a4, t) from its sine and cosine: acos(a4·t) loses half the
+                // digits near the singularity (δ = 1e-7 would come back ±1e-9 off).
+                let cw = self.a4.dot(&t);
+                let sd = self.a4.cross(&t).norm();
                 let elbow = if (el > 0.0) == (sh > 0.0) {
                     Elbow::Up
                 } else {
@@ -477,6 +517,41 @@ impl OpwSolver {
                     Shoulder::Back
                 };
                 let rw_a5 = ry(&r1_a5);
+                let q2 = wrap(self.s2 * th2);
+                let q3 = wrap(self.s3 * th);
+                let near_singular = sd < singularity_threshold;
+                if near_singular {
+                    out.singular = true;
+                }
+                if sd < WRIST_SNAP {
+                    // Axes 4 and 6 aligned (cw > 0) or opposed: q5 is exactly φ5 or
+                    // φ5 + π and only q4 + q6 (or q4 − q6) is determined; it equals ψ,
+                    // the angle about a4 from a5 to Rw·a5. Rule: q4 keeps the seed,
+                    // q6 takes the rest; the flip branch is q4 + π.
+                    let psi = self
+                        .a4
+                        .dot(&self.a5.cross(&rw_a5))
+                        .atan2(self.a5.dot(&rw_a5));
+                    let (q5, sgn) = if cw > 0.0 {
+                        (self.phi5, 1.0)
+                    } else {
+                        (wrap(self.phi5 + PI), -1.0)
+                    };
+                    for (k, wrist) in [(0.0, Wrist::NoFlip), (PI, Wrist::Flip)] {
+                        let q4 = wrap(q4_seed + k);
+                        out.push(Branch {
+                            joints: [q1, q2, q3, q4, q5, wrap(sgn * (psi - q4))],
+                            configuration: Configuration {
+                                shoulder,
+                                elbow,
+                                wrist,
+                            },
+                            singular: true,
+                        });
+                    }
+                    continue;
+                }
+                let delta = sd.atan2(cw);
                 let tp = t - self.a4 * self.a4.dot(&t);
                 // No-flip root q5 = φ5 + δ.
                 let s5 = self.s_phi5 * cw + self.c_phi5 * sd;
@@ -492,8 +567,6 @@ impl OpwSolver {
                 let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
                 let q4 = crs4.atan2(dot4);
                 let q6 = self.a6.dot(&self.a5.cross(&m)).atan2(self.a5.dot(&m));
-                let q2 = wrap(self.s2 * th2);
-                let q3 = wrap(self.s3 * th);
                 out.push(Branch {
                     joints: [q1, q2, q3, q4, wrap(self.phi5 + delta), q6],
                     configuration: Configuration {
@@ -501,6 +574,7 @@ impl OpwSolver {
                         elbow,
                         wrist: Wrist::NoFlip,
                     },
+                    singular: near_singular,
                 });
                 // The flip root follows without trigonometry: since a5 ⟂ a4 and
                 // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
@@ -519,6 +593,7 @@ impl OpwSolver {
                         elbow,
                         wrist: Wrist::Flip,
                     },
+                    singular: near_singular,
                 });
             }
         }
@@ -535,7 +610,9 @@ impl OpwSolver {
         reference: &[f64],
         options: &IkOptions,
     ) -> Result<Vec<IkSolution>, IkError> {
-        let branches = self.branches(target.isometry(), options.singularity_threshold);
+        let seed4 = reference.get(3).copied().unwrap_or(0.0);
+        let branches =
+            self.branches_seeded(target.isometry(), options.singularity_threshold, seed4);
         if branches.is_empty() {
             return Err(if branches.singular {
                 IkError::Singular(
@@ -602,6 +679,7 @@ impl OpwSolver {
                     joints,
                     configuration: Some(br.configuration),
                     distance,
+                    singular: br.singular,
                 });
                 let mut j = 0;
                 loop {

@@ -91,7 +91,10 @@ impl OpwParameters {
             }
         }
         if self.c2 <= 0.0 {
-            return bad(format!("OPW c2 = {} mm: the upper arm needs a positive length", self.c2));
+            return bad(format!(
+                "OPW c2 = {} mm: the upper arm needs a positive length",
+                self.c2
+            ));
         }
         if self.a2.hypot(self.c3) <= 0.0 {
             return bad("OPW a2 = c3 = 0: the forearm has no length".into());
@@ -138,7 +141,8 @@ impl OpwParameters {
             if theta != 0.0 {
                 let (axis, point) = axes[i];
                 let r = UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), theta);
-                let m = Isometry3::from_parts(Translation3::from(point.coords - r * point.coords), r);
+                let m =
+                    Isometry3::from_parts(Translation3::from(point.coords - r * point.coords), r);
                 for ax in axes.iter_mut().skip(i + 1) {
                     *ax = (m.rotation * ax.0, m * ax.1);
                 }
