@@ -14,7 +14,7 @@ pub mod robot;
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
-pub use robot::{LinkDisplay, RobotInstance};
+pub use robot::{LinkDisplay, RobotError, RobotInstance};
 
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
@@ -181,6 +181,9 @@ pub enum DocumentError {
     /// An operation that is not allowed (moving a fixed component, a bad value…).
     #[error("{0}")]
     Invalid(String),
+    /// A robot refused an operation (kinematics, joint limits, program).
+    #[error(transparent)]
+    Robot(#[from] robot::RobotError),
     /// Writing the document failed.
     #[error("cannot write {path}: {message}")]
     Write {

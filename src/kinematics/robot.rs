@@ -90,6 +90,13 @@ impl Robot {
         self
     }
 
+    /// The same robot under another name.
+    #[must_use]
+    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+
     /// The kinematic tree.
     pub fn tree(&self) -> &KinematicTree {
         &self.tree

@@ -32,11 +32,18 @@ pub struct TrajectoryHandle {
 }
 
 impl RobotHandle {
-    /// The robot (kinematics, base, tool), its current joints (rad/mm) and its name.
-    fn snapshot(&self) -> ScriptResult<(Robot, Vec<f64>)> {
+    /// The robot (kinematics, base, tool; shared, not copied) and its current joints
+    /// (rad/mm). The document lock is held only to take the handle.
+    fn snapshot(&self) -> ScriptResult<(Arc<Robot>, Vec<f64>)> {
         let doc = self.doc.lock()?;
-        let r = &doc.robots()[self.index];
-        Ok((r.robot().clone(), r.joints().to_vec()))
+        let r = doc.robot_at(self.index).map_err(fail)?;
+        Ok((r.shared_robot(), r.joints().to_vec()))
+    }
+
+    /// The shared robot alone (no joint copy).
+    fn shared(&self) -> ScriptResult<Arc<Robot>> {
+        let doc = self.doc.lock()?;
+        Ok(doc.robot_at(self.index).map_err(fail)?.shared_robot())
     }
 
     fn set_joints(&self, q: &[f64]) -> ScriptResult<()> {
@@ -376,9 +383,53 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Robot.fk(joints: array) -> Transform",
         "World pose of the TCP for the joint values (degrees / mm); the robot does not move.",
         |r: &mut RobotHandle, j: Dynamic| -> ScriptResult<Transform> {
-            let (robot, _) = r.snapshot()?;
+            let robot = r.shared()?;
             let q = joints_arg(&robot, &j, "joints")?;
             robot.tcp_pose(&q).map_err(fail)
+        },
+    );
+    api.f(
+        "Robot.fk_many(joints: array) -> array",
+        "World TCP poses (Transforms, mm) for an array of joint arrays (degrees / mm), computed in one call (one document lock, no per-call overhead); the robot does not move. A bad entry is an error naming its index.",
+        |r: &mut RobotHandle, list: Array| -> ScriptResult<Array> {
+            let robot = r.shared()?;
+            list.iter()
+                .enumerate()
+                .map(|(i, j)| {
+                    let q = joints_arg(&robot, j, &format!("joints[{i}]"))?;
+                    robot
+                        .tcp_pose(&q)
+                        .map(Dynamic::from)
+                        .map_err(|e| fail(format!("fk_many: entry {i}: {e}")))
+                })
+                .collect()
+        },
+    );
+    api.f(
+        "Robot.ik_many(targets: array) -> array",
+        "For each world pose in `targets` (Transforms or `[x,y,z,a,b,c]`), the joint solution (degrees) nearest to the previous entry's (the first nearest the current joints), or `()` when the pose has no solution within the limits; one call for thousands of poses. The robot does not move.",
+        |r: &mut RobotHandle, list: Array| -> ScriptResult<Array> {
+            let (robot, mut q) = r.snapshot()?;
+            let opts = IkOptions::default();
+            let mut out = Array::with_capacity(list.len());
+            for (i, t) in list.iter().enumerate() {
+                let target = to_transform(t, &format!("targets[{i}]"))?;
+                match robot.inverse_nearest(&target, &q, &opts) {
+                    Ok(sol) => {
+                        out.push(joints_out(&robot, &sol.joints));
+                        q = sol.joints;
+                    }
+                    Err(_) => out.push(Dynamic::UNIT),
+                }
+            }
+            Ok(out)
+        },
+    );
+    api.get(
+        "Robot.limits_source -> string",
+        "Where the joint limits come from: a public source (`ros-industrial/…` file), `unverified: …`, or `\"\"` when the document gave them.",
+        |r: &mut RobotHandle| -> ScriptResult<String> {
+            Ok(r.shared()?.limits_source().unwrap_or_default().to_string())
         },
     );
     api.f(
@@ -395,7 +446,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
                 .collect())
         },
     );
-    api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. An unreachable or singular target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
+    api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. At a wrist singularity (joints 4 and 6 aligned) every branch still comes back with joint 5 exactly at its singular value and joint 4 kept at its current value (joint 6 takes the rest). An unreachable target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
         let (robot, q) = r.snapshot()?;
         let target = to_transform(&t, "target")?;
         let sols = robot.inverse(&target, &q, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
@@ -411,7 +462,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         let sol = robot.inverse_nearest(&target, &reference, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik_near: {e}", robot.name())))?;
         Ok(joints_out(&robot, &sol.joints))
     });
-    api.f("Robot.ik_branches(target) -> array", "Every solution with its configuration: `#{joints, configuration}` (configuration like `front/up/noflip`, or `\"\"` for numeric solutions).", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
+    api.f("Robot.ik_branches(target) -> array", "Every solution with its configuration: `#{joints, configuration, singular}` (configuration like `front/up/noflip`, or `\"\"` for numeric solutions; `singular` when joints 4 and 6 are at or near alignment).", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
         let (robot, q) = r.snapshot()?;
         let target = to_transform(&t, "target")?;
         let sols = robot.inverse(&target, &q, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
@@ -419,6 +470,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             let mut m = Map::new();
             m.insert("joints".into(), joints_out(&robot, &s.joints));
             m.insert("configuration".into(), Dynamic::from(s.configuration.map(|c| c.to_string()).unwrap_or_default()));
+            m.insert("singular".into(), Dynamic::from(s.singular));
             Dynamic::from_map(m)
         }).collect())
     });
