@@ -146,6 +146,52 @@ fn batch_fk_ik_and_singular_flags_through_the_script_api() {
     assert!(out.status.success(), "{}", common::text(&out));
 }
 
+/// Script constructors: `robot_opw` with the IRB 2400's published parameters
+/// (opw_kinematics `makeIrb2400_10`, metres there, mm here) puts the flange at
+/// (940, 0, 1455) pointing +x and is solved in closed form; `robot_dh` with seed 000's
+/// table 2 matches the catalog MZ07's flange; `add_robot` places it in a document at a
+/// base, where it moves along a line, and saving then reopening keeps it.
+#[test]
+fn robots_built_in_scripts_join_a_document() {
+    let dir = project();
+    let script = r#"
+        let irb = robot_opw(#{a1: 100, a2: -135, b: 0, c1: 615, c2: 705, c3: 755, c4: 85,
+                              offsets: [0, 0, -90, 0, 0, 0],
+                              limits: [[-180, 180], [-100, 110], [-60, 65], [-200, 200], [-120, 120], [-400, 400]]});
+        assert(irb.closed_form, "closed form");
+        let p = irb.fk([0, 0, 0, 0, 0, 0]);
+        let t = p.translation;
+        assert_near(t[0], 940.0, 1e-9); assert_near(t[1], 0.0, 1e-9); assert_near(t[2], 1455.0, 1e-9);
+        let z = p.apply_vector([0, 0, 1]);
+        assert_near(z[0], 1.0, 1e-12);
+        let sols = irb.ik(irb.fk([10, 20, -30, 40, 50, 60]));
+        assert(sols.len() >= 2, "branches");
+        let mz = robot_dh([[0, 340, 50, 90], [90, 0, 330, 0], [0, 0, 45, 90], [0, 340, 0, 90], [90, 0, 0, 90], [0, -80, 0, 0]]);
+        let doc = open_doc("models/mz07.yaml");
+        let ref = doc.robot("mz07");
+        let q = [10, -20, 30, 40, -50, 60];
+        let flange = mz.fk(q);
+        // Row-vector composition: the flange is 436.9 mm up the tool axis from the TCP.
+        assert_near(flange.distance_to(translation(0, 0, 516.9 - 80) * ref.fk(q)).mm, 0.0, 1e-9);
+        let arm = doc.add_robot("irb", irb, #{base: [1000, 0, 0, 0, 0, 90]});
+        assert(doc.robots().contains("irb"), "listed");
+        assert_near(arm.tcp.translation[0], 1000.0, 1e-9); assert_near(arm.tcp.translation[1], 940.0, 1e-9);
+        arm.joints = [0, 10, -10, 0, 30, 0];
+        let start = arm.tcp;
+        arm.move_line(start * translation(0, 50, -50));
+        assert_near(arm.tcp.distance_to(start * translation(0, 50, -50)).mm, 0.0, 1e-6);
+        doc.save_as("models/with_irb.yaml");
+        let again = open_doc("models/with_irb.yaml");
+        let b = again.robot("irb");
+        assert_near(b.tcp.distance_to(arm.tcp).mm, 0.0, 1e-6);
+        assert_near(b.fk([5, 5, 5, 5, 5, 5]).distance_to(arm.fk([5, 5, 5, 5, 5, 5])).mm, 0.0, 1e-6);
+        print("ok");
+    "#;
+    std::fs::write(dir.path().join("scripts/build.rhai"), script).unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/build.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+}
+
 /// Robot errors reach the document caller typed: limits and kinematics errors are
 /// `DocumentError::Robot`, an unknown robot index is `NotFound`.
 #[test]

@@ -8,7 +8,7 @@
 //! degrees / mm.
 
 use super::dimension;
-use super::file::{DhFile, RobotFile};
+use super::file::{DhFile, LinkFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
@@ -533,6 +533,58 @@ fn build(
     Ok(inst)
 }
 
+/// The explicit-tree file form of `robot` (links, axes, homes, limits, flange, base,
+/// tool), named `name`: how a robot built in code is written to a document.
+fn explicit_file(name: &str, robot: &Robot) -> RobotFile {
+    let tree = robot.tree();
+    let link_name = |i: usize| {
+        tree.links()[i]
+            .name
+            .clone()
+            .filter(|n| !n.is_empty())
+            .unwrap_or_else(|| format!("link{i}"))
+    };
+    let links = tree
+        .links()
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let kind = l.joint.kind;
+            let a = |v: Vec3| [v.x, v.y, v.z];
+            LinkFile {
+                name: Some(link_name(i)),
+                component: None,
+                offset: None,
+                parent: l.parent.map(link_name),
+                joint: match kind {
+                    JointKind::Fixed => None,
+                    JointKind::Revolute => Some("revolute".into()),
+                    JointKind::Prismatic => Some("prismatic".into()),
+                },
+                axis: kind.is_movable().then(|| a(l.joint.axis)),
+                point: (kind == JointKind::Revolute).then(|| a(l.joint.point.coords)),
+                home: (l.home != Transform::IDENTITY).then(|| l.home.to_matrix()),
+                limits: l.joint.limits.map(|lim| match kind {
+                    JointKind::Prismatic => [lim.min, lim.max],
+                    _ => [lim.min.to_degrees(), lim.max.to_degrees()],
+                }),
+                dimension: None,
+            }
+        })
+        .collect();
+    RobotFile {
+        name: name.to_string(),
+        catalog: None,
+        dh: None,
+        base: Some(robot.base().to_matrix()),
+        tool: Some(robot.tool().to_matrix()),
+        flange: Some(link_name(robot.flange())),
+        drawn_at_zero: false,
+        links,
+        joints: None,
+    }
+}
+
 /// Builds the robots of a document file. `taken` holds the mate dimension names
 /// (feature part, without `D1@`); errors are located in `text`.
 pub(super) fn load(
@@ -624,6 +676,57 @@ impl Document {
                 name: format!("#{index}"),
                 hint: format!("the document has {} robots", self.robots.len()),
             })
+    }
+
+    /// Adds a robot built in code (catalog, [`OpwParameters`](crate::kinematics::OpwParameters),
+    /// D-H table, URDF, explicit tree) under `name`, its root placed at `base` (world
+    /// pose, mm; the robot's own base when `None`). It displays no components; its
+    /// joints start at 0 (clamped into the limits) and get driving dimensions
+    /// `角度<n>@<name>` / `距离<n>@<name>`. Saving writes it as an explicit tree.
+    /// Returns its index.
+    pub fn add_robot(
+        &mut self,
+        name: &str,
+        robot: &Robot,
+        base: Option<Transform>,
+    ) -> Result<usize, DocumentError> {
+        if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
+            return Err(DocumentError::Invalid(format!(
+                "robot names must be unique and non-empty: `{name}`"
+            )));
+        }
+        let base = base.unwrap_or(robot.base());
+        if !base.is_finite() {
+            return Err(RobotError::NonFinite {
+                robot: name.to_string(),
+                what: "base",
+            }
+            .into());
+        }
+        let mut file = explicit_file(name, robot);
+        file.base = Some(base.to_matrix());
+        let zero: Vec<f64> = robot
+            .joint_limits()
+            .iter()
+            .map(|l| l.map_or(0.0, |l| 0.0f64.clamp(l.min, l.max)))
+            .collect();
+        file.joints = Some(joints_to_document(robot, &zero));
+        let mut inst = build(&file, &HashMap::new())
+            .map_err(|(_, m)| DocumentError::Invalid(format!("robot `{name}`: {m}")))?;
+        let taken = self.dimensions();
+        if let Some(d) = inst
+            .dimension_names()
+            .into_iter()
+            .find(|d| taken.contains(d))
+        {
+            return Err(DocumentError::Invalid(format!(
+                "robot `{name}`: dimension `{d}` already exists"
+            )));
+        }
+        Arc::make_mut(&mut inst.robot).set_limits_source(robot.limits_source().map(String::from));
+        self.robots.push(inst);
+        self.revision += 1;
+        Ok(self.robots.len() - 1)
     }
 
     /// Sets a robot's joints (rad / mm, joint order) and moves its link components.

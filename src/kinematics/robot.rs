@@ -90,6 +90,11 @@ impl Robot {
         self
     }
 
+    /// Sets (or clears) the note on where the joint limits come from.
+    pub fn set_limits_source(&mut self, source: Option<String>) {
+        self.limits_source = source;
+    }
+
     /// The same robot under another name.
     #[must_use]
     pub fn with_name(mut self, name: impl Into<String>) -> Self {

@@ -11,7 +11,8 @@ use super::{Context, ScriptResult};
 use crate::document::robot::{joints_from_document, joints_to_document};
 use crate::kinematics::{
     drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
-    DrillOptions, Hole, HoleOutcome, IkOptions, MotionOptions, Robot, ToolAxis, Trajectory,
+    DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkOptions, JointLimits, MotionOptions,
+    OpwParameters, Robot, ToolAxis, Trajectory,
 };
 use crate::math::{AngleConvention, Transform};
 use rhai::{Array, Dynamic, Map};
@@ -22,6 +23,38 @@ use std::sync::Arc;
 pub struct RobotHandle {
     doc: DocHandle,
     index: usize,
+}
+
+/// A robot built in a script (`robot_opw`, `robot_dh`), not yet in a document.
+#[derive(Clone)]
+pub struct RobotModel(Arc<Robot>);
+
+/// Per-joint limits from a script array of `[min, max]` (degrees; `[]` = unlimited).
+fn limits_arg(v: &Dynamic, n: usize) -> ScriptResult<Vec<Option<JointLimits>>> {
+    let arr = v.as_array_ref().map_err(|t| {
+        fail(format!(
+            "option `limits` must be an array of [min, max], not {t}"
+        ))
+    })?;
+    if arr.len() != n {
+        return err(format!(
+            "option `limits`: {} entries for {n} joints",
+            arr.len()
+        ));
+    }
+    arr.iter()
+        .enumerate()
+        .map(|(i, l)| {
+            if l.as_array_ref().is_ok_and(|a| a.is_empty()) {
+                return Ok(None);
+            }
+            let v = numbers(l, 2, &format!("limits[{i}]"))?;
+            if v[0] > v[1] {
+                return err(format!("limits[{i}]: min {} > max {}", v[0], v[1]));
+            }
+            Ok(Some(JointLimits::degrees(v[0], v[1])))
+        })
+        .collect()
 }
 
 /// A sampled motion returned by a robot move.
@@ -474,6 +507,138 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             Dynamic::from_map(m)
         }).collect())
     });
+
+    api.type_::<RobotModel>("RobotModel");
+    api.f(
+        "robot_opw(params: map) -> RobotModel",
+        "An ortho-parallel arm from its published OPW parameters (opw_kinematics / ROS-Industrial `opw_parameters_*.yaml` convention, lengths in **mm** — the YAML files give metres): `#{a1, a2, b, c1, c2, c3, c4, offsets, signs, limits, name}`; `offsets` (6 angles, **degrees**) and `signs` (6 × ±1) default to 0 and +1; a joint value q means the geometric angle `sign·q − offset`; `limits` is 6 × `[min, max]` degrees (`[]` unlimited). Upright reference pose: axis 1 = base z, axes 2/3 parallel to y at (a1, b, c1) and (a1, b, c1 + c2), wrist centre at (a1 + a2, b, c1 + c2 + c3), flange c4 above it with z out of the flange. Solved in closed form.",
+        |m: Map| -> ScriptResult<RobotModel> {
+            check_keys(&m, &["a1", "a2", "b", "c1", "c2", "c3", "c4", "offsets", "signs", "limits", "name"], "robot_opw")?;
+            let need = |k: &str| -> ScriptResult<f64> {
+                opt_num(&m, k)?.ok_or_else(|| fail(format!("robot_opw: `{k}` is required (mm)")))
+            };
+            let mut p = OpwParameters::new(need("a1")?, need("a2")?, need("b")?, need("c1")?, need("c2")?, need("c3")?, need("c4")?);
+            if let Some(v) = m.get("offsets") {
+                let o = numbers(v, 6, "offsets")?;
+                p.offsets = std::array::from_fn(|i| o[i].to_radians());
+            }
+            if let Some(v) = m.get("signs") {
+                let o = numbers(v, 6, "signs")?;
+                p.signs = std::array::from_fn(|i| o[i]);
+            }
+            let limits = match m.get("limits") {
+                Some(v) => limits_arg(v, 6)?,
+                None => vec![None; 6],
+            };
+            let name = opt_str(&m, "name")?.unwrap_or_else(|| "opw".into());
+            let robot = p
+                .robot(&name, std::array::from_fn(|i| limits[i]))
+                .map_err(|e| fail(format!("robot_opw: {e}")))?;
+            Ok(RobotModel(Arc::new(robot)))
+        },
+    );
+    fn dh_model(rows: &Array, m: &Map) -> ScriptResult<RobotModel> {
+        check_keys(
+            m,
+            &["convention", "base", "tool", "limits", "name"],
+            "robot_dh",
+        )?;
+        let convention = match opt_str(m, "convention")?.as_deref() {
+            None | Some("standard") => DhConvention::Standard,
+            Some("modified") => DhConvention::Modified,
+            Some(o) => {
+                return err(format!(
+                    "robot_dh: unknown convention `{o}` (standard, modified)"
+                ))
+            }
+        };
+        let limits = match m.get("limits") {
+            Some(v) => limits_arg(v, rows.len())?,
+            None => vec![None; rows.len()],
+        };
+        let mut dh = Vec::with_capacity(rows.len());
+        for (i, r) in rows.iter().enumerate() {
+            let v = numbers(r, 4, &format!("rows[{i}] ([theta, d, a, alpha])"))?;
+            let mut row = DhRow::degrees(v[0], v[1], v[2], v[3]);
+            if let Some(l) = limits[i] {
+                row = row.with_limits(l);
+            }
+            dh.push(row);
+        }
+        let tool = match m.get("tool") {
+            Some(t) => to_transform(t, "tool")?,
+            None => Transform::IDENTITY,
+        };
+        let name = opt_str(m, "name")?.unwrap_or_else(|| "dh".into());
+        let mut robot = Robot::from_dh(&name, &dh, convention, tool)
+            .map_err(|e| fail(format!("robot_dh: {e}")))?;
+        if let Some(b) = m.get("base") {
+            robot.set_base(to_transform(b, "base")?);
+        }
+        Ok(RobotModel(Arc::new(robot)))
+    }
+    api.f(
+        "robot_dh(rows: array, options: map) -> RobotModel",
+        "A revolute arm from a D-H table: `rows` are `[theta, d, a, alpha]` per joint (**degrees**, mm; theta is the joint's zero offset); options `#{convention, base, tool, limits, name}`: `convention` `\"standard\"` (default: frame i from i−1 by Rz(θ)·Tz(d)·Tx(a)·Rx(α), as seed 000 table 2) or `\"modified\"` (Craig: Rx(α)·Tx(a)·Rz(θ)·Tz(d)); `base` and `tool` Transforms or `[x,y,z,a,b,c]`; `limits` per joint `[min, max]` degrees.",
+        |rows: Array, m: Map| -> ScriptResult<RobotModel> { dh_model(&rows, &m) },
+    );
+    api.f(
+        "robot_dh(rows: array) -> RobotModel",
+        "`robot_dh(rows, #{})`: standard D-H, no limits.",
+        |rows: Array| -> ScriptResult<RobotModel> { dh_model(&rows, &Map::new()) },
+    );
+    api.get(
+        "RobotModel.dof -> int",
+        "Number of joints.",
+        |r: &mut RobotModel| -> ScriptResult<i64> { Ok(r.0.dof() as i64) },
+    );
+    api.get("RobotModel.closed_form -> bool", "Whether inverse kinematics is solved in closed form (an OPW arm detected from the geometry) rather than numerically.", |r: &mut RobotModel| -> ScriptResult<bool> { Ok(r.0.analytic().is_some()) });
+    api.f(
+        "RobotModel.fk(joints: array) -> Transform",
+        "World pose of the TCP for the joint values (degrees / mm).",
+        |r: &mut RobotModel, j: Dynamic| -> ScriptResult<Transform> {
+            let q = joints_arg(&r.0, &j, "joints")?;
+            r.0.tcp_pose(&q).map_err(fail)
+        },
+    );
+    api.f(
+        "RobotModel.ik(target) -> array",
+        "Every joint solution (degrees) for the world pose, nearest to all-zero joints first.",
+        |r: &mut RobotModel, t: Dynamic| -> ScriptResult<Array> {
+            let target = to_transform(&t, "target")?;
+            let zero = vec![0.0; r.0.dof()];
+            let sols =
+                r.0.inverse(&target, &zero, &ik_all())
+                    .map_err(|e| fail(format!("ik: {e}")))?;
+            Ok(sols.iter().map(|s| joints_out(&r.0, &s.joints)).collect())
+        },
+    );
+    fn add_robot(
+        d: &DocHandle,
+        name: &str,
+        model: &RobotModel,
+        m: &Map,
+    ) -> ScriptResult<RobotHandle> {
+        check_keys(m, &["base"], "add_robot")?;
+        let base = m.get("base").map(|b| to_transform(b, "base")).transpose()?;
+        let index = d.lock()?.add_robot(name, &model.0, base).map_err(fail)?;
+        Ok(RobotHandle {
+            doc: d.clone(),
+            index,
+        })
+    }
+    api.f(
+        "Document.add_robot(name: string, robot: RobotModel, options: map) -> Robot",
+        "Adds a robot built with `robot_opw` / `robot_dh` to the document under `name`, options `#{base}` (world pose of its root, Transform or `[x,y,z,a,b,c]`). Its joints start at 0 (clamped into the limits) with dimensions `D1@角度<n>@<name>`; saving writes it as an explicit tree.",
+        |d: &mut DocHandle, name: &str, model: RobotModel, m: Map| -> ScriptResult<RobotHandle> { add_robot(d, name, &model, &m) },
+    );
+    api.f(
+        "Document.add_robot(name: string, robot: RobotModel) -> Robot",
+        "`add_robot(name, robot, #{})`.",
+        |d: &mut DocHandle, name: &str, model: RobotModel| -> ScriptResult<RobotHandle> {
+            add_robot(d, name, &model, &Map::new())
+        },
+    );
 
     fn motion<F>(
         r: &RobotHandle,
