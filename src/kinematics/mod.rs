@@ -24,6 +24,7 @@ mod program;
 mod robot;
 mod trajectory;
 mod tree;
+mod urdf;
 
 pub use catalog::{catalog_names, robot_by_name, Catalog};
 pub use dh::{DhConvention, DhRow};
@@ -44,3 +45,4 @@ pub use program::{
 pub use robot::Robot;
 pub use trajectory::{Trajectory, TrajectorySample};
 pub use tree::{KinematicTree, Link};
+pub use urdf::{parse_urdf, read_urdf, resolve_mesh, UrdfMesh, UrdfRobot, MAX_URDF_BYTES};

@@ -16,6 +16,7 @@ use std::time::Instant;
 
 const N: usize = 20_000;
 const ROUNDS: usize = 7;
+const BATCH: usize = 10;
 
 const SETUP: &str = r#"let d = open_doc("models/mz07.yaml");
 let arm = d.robot("mz07");
@@ -90,9 +91,9 @@ fn main() {
         s_fk.push((rhai_seconds(dir.path(), &fk) - e) / N as f64 * 1e9);
         s_ik.push((rhai_seconds(dir.path(), &ik) - e) / N as f64 * 1e9);
         let e = rhai_seconds(dir.path(), &fk_many_empty);
-        s_fkm.push((rhai_seconds(dir.path(), &fk_many) - e) / N as f64 * 1e9);
+        s_fkm.push((rhai_seconds(dir.path(), &fk_many) - e) / (N * BATCH) as f64 * 1e9);
         let e = rhai_seconds(dir.path(), &ik_many_empty);
-        s_ikm.push((rhai_seconds(dir.path(), &ik_many) - e) / N as f64 * 1e9);
+        s_ikm.push((rhai_seconds(dir.path(), &ik_many) - e) / (N * BATCH) as f64 * 1e9);
     }
     let (rf, ri) = (median(&mut r_fk), median(&mut r_ik));
     let (sf, si) = (median(&mut s_fk), median(&mut s_ik));
