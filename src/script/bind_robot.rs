@@ -587,6 +587,47 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "`robot_dh(rows, #{})`: standard D-H, no limits.",
         |rows: Array| -> ScriptResult<RobotModel> { dh_model(&rows, &Map::new()) },
     );
+    let c = ctx.clone();
+    api.f(
+        "load_urdf(path: string) -> RobotModel",
+        "A robot from a URDF file (path relative to the project; xacro already expanded): revolute, continuous, prismatic and fixed joints, origins (`xyz` metres → mm, `rpy`), axes, limits. The flange is the end of the chain with the most joints (a fixed `tool0` after the last joint counts). When the geometry is an ortho-parallel arm with a spherical wrist, IK is solved in closed form (`closed_form`, `opw_parameters`). Errors name the file, line and cause.",
+        move |path: &str| -> ScriptResult<RobotModel> {
+            let full = c.project.resolve(path).map_err(fail)?;
+            c.record_read(&full);
+            let u = crate::kinematics::read_urdf(&full, None).map_err(fail)?;
+            let source = format!("URDF {}", c.project.display(&full));
+            Ok(RobotModel(Arc::new(u.robot.with_limits_source(source))))
+        },
+    );
+    api.get(
+        "RobotModel.opw_parameters -> map",
+        "The ortho-parallel parameters detected from the geometry (mm): `#{axis2, upper_arm, forearm, b, signs}` (`axis2` = axis 2 in the arm plane `[x, z]`, `upper_arm` / `forearm` the arm-plane vectors at zero, `b` the lateral offset), or `()` when the robot is not an OPW arm.",
+        |r: &mut RobotModel| -> ScriptResult<Dynamic> {
+            Ok(match r.0.analytic() {
+                None => Dynamic::UNIT,
+                Some(s) => {
+                    let (p2, u2, u3, b, signs) = s.parameters();
+                    let mut m = Map::new();
+                    m.insert("axis2".into(), floats(p2));
+                    m.insert("upper_arm".into(), floats(u2));
+                    m.insert("forearm".into(), floats(u3));
+                    m.insert("b".into(), Dynamic::from(b));
+                    m.insert("signs".into(), floats(signs));
+                    Dynamic::from_map(m)
+                }
+            })
+        },
+    );
+    api.get(
+        "RobotModel.name -> string",
+        "The robot's name.",
+        |r: &mut RobotModel| -> ScriptResult<String> { Ok(r.0.name().to_string()) },
+    );
+    api.get(
+        "RobotModel.limits_source -> string",
+        "Where the joint limits come from (`URDF <file>`, a public source, `unverified: …`, or `\"\"`).",
+        |r: &mut RobotModel| -> ScriptResult<String> { Ok(r.0.limits_source().unwrap_or_default().to_string()) },
+    );
     api.get(
         "RobotModel.dof -> int",
         "Number of joints.",
