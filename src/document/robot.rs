@@ -62,9 +62,9 @@ pub enum RobotError {
     Program {
         /// The robot's name.
         robot: String,
-        /// The failing command and cause.
+        /// The failing command and cause (boxed: keeps the error small).
         #[source]
-        source: RunError,
+        source: Box<RunError>,
     },
 }
 
@@ -789,7 +789,7 @@ impl Document {
         let t = run_program(program, &r.robot, &r.joints, options).map_err(|source| {
             RobotError::Program {
                 robot: r.name().to_string(),
-                source,
+                source: Box::new(source),
             }
         })?;
         if let Some(q) = t.last_joints() {

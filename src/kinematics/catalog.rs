@@ -64,6 +64,8 @@ impl Catalog {
             .unwrap_or_else(|e| unreachable!("catalog entry {} is invalid: {e}", self.name()))
     }
 
+    // The limits are the URDFs' published numbers (e.g. 3.1416), kept as written.
+    #[allow(clippy::approx_constant)]
     fn build(self) -> Result<Robot, KinematicsError> {
         let deg = JointLimits::degrees;
         let rad = JointLimits::new;
@@ -295,6 +297,14 @@ mod tests {
         pose * Isometry3::from_parts(Translation3::identity(), tool)
     }
 
+    /// Arm, its URDF chain, the URDF `tool0` on the last link, and our flange → `tool0`.
+    type UrdfCase = (
+        Catalog,
+        &'static [([f64; 3], [f64; 3]); 6],
+        UnitQuaternion<f64>,
+        UnitQuaternion<f64>,
+    );
+
     /// URDF `rpy` (fixed X, then Y, then Z) as a rotation.
     fn rpy(r: f64, p: f64, y: f64) -> UnitQuaternion<f64> {
         UnitQuaternion::from_euler_angles(r, p, y)
@@ -370,12 +380,7 @@ mod tests {
             d([0.0, 0.0, 0.0, 0.0, 0.0, 90.0]),
             d([-45.0, 20.0, 30.0, -60.0, 50.0, 120.0]),
         ];
-        let cases: [(
-            Catalog,
-            &[([f64; 3], [f64; 3]); 6],
-            UnitQuaternion<f64>,
-            UnitQuaternion<f64>,
-        ); 3] = [
+        let cases: [UrdfCase; 3] = [
             (
                 Catalog::AbbIrb2400,
                 &IRB2400_URDF,
