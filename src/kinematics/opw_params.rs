@@ -24,6 +24,19 @@ use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
 /// − offsets[i]`). For example the ABB IRB 2400 has `offsets[2] = −π/2`: at `q = 0`
 /// its forearm is horizontal (θ₃ = +π/2) and the flange sits at (940, 0, 1455) mm
 /// pointing along `+x`.
+///
+/// # Examples
+/// ```
+/// use fitup::kinematics::OpwParameters;
+/// use fitup::math::Vec3;
+/// // ABB IRB 2400/10 (opw_kinematics `makeIrb2400_10`, metres there, mm here).
+/// let mut p = OpwParameters::new(100.0, -135.0, 0.0, 615.0, 705.0, 755.0, 85.0);
+/// p.offsets[2] = -std::f64::consts::FRAC_PI_2;
+/// let irb = p.robot("irb2400", [None; 6]).unwrap();
+/// let flange = irb.tcp_pose(&[0.0; 6]).unwrap();
+/// assert!((flange.translation() - Vec3::new(940.0, 0.0, 1455.0)).norm() < 1e-9);
+/// assert!(irb.analytic().is_some()); // closed-form IK
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OpwParameters {
     /// Shoulder offset along x from axis 1 to axis 2 (mm).

@@ -71,7 +71,23 @@ pub fn resolve_mesh(urdf_path: &Path, uri: &str) -> PathBuf {
     folder.join(uri.strip_prefix("file://").unwrap_or(uri))
 }
 
-/// Parses URDF text; `path` names the file in errors (and is not read).
+/// Parses URDF text; `path` names the file in errors (and is not read); `tip` names
+/// the flange link (default: see the module docs).
+///
+/// # Examples
+/// ```
+/// use fitup::kinematics::parse_urdf;
+/// let urdf = r#"<robot name="r">
+///   <link name="base"/><link name="arm"/>
+///   <joint name="j1" type="revolute">
+///     <origin xyz="0 0 0.5"/><parent link="base"/><child link="arm"/>
+///     <axis xyz="0 0 1"/><limit lower="-1" upper="1"/>
+///   </joint>
+/// </robot>"#;
+/// let r = parse_urdf(std::path::Path::new("r.urdf"), urdf, None).unwrap().robot;
+/// assert_eq!(r.dof(), 1);
+/// assert!((r.tcp_pose(&[0.3]).unwrap().translation().z - 500.0).abs() < 1e-9); // mm
+/// ```
 pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobot, SourceError> {
     let whole = |m: String| SourceError::new(path, 1, 1, m);
     if text.len() > MAX_URDF_BYTES {
