@@ -64,12 +64,20 @@ fn main() {
     let empty = format!("for i in 0..{N} {{ let x = q; }}");
     let fk = format!("for i in 0..{N} {{ let x = arm.fk(q); }}");
     let ik = format!("for i in 0..{N} {{ let x = arm.ik_near(t, q); }}");
-    let fk_many =
-        format!("let qs = []; for i in 0..{N} {{ qs.push(q); }}\nlet x = arm.fk_many(qs);");
-    let fk_many_empty = format!("let qs = []; for i in 0..{N} {{ qs.push(q); }}");
-    let ik_many =
-        format!("let ts = []; for i in 0..{N} {{ ts.push(t); }}\nlet x = arm.ik_many(ts);");
-    let ik_many_empty = format!("let ts = []; for i in 0..{N} {{ ts.push(t); }}");
+    // Batch forms: one array of N entries, the batch call repeated BATCH times, minus
+    // the same script without the calls.
+    let fk_many = format!(
+        "let qs = []; for i in 0..{N} {{ qs.push(q); }}\nfor k in 0..{BATCH} {{ let x = arm.fk_many(qs); }}"
+    );
+    let fk_many_empty = format!(
+        "let qs = []; for i in 0..{N} {{ qs.push(q); }}\nfor k in 0..{BATCH} {{ let x = 0; }}"
+    );
+    let ik_many = format!(
+        "let ts = []; for i in 0..{N} {{ ts.push(t); }}\nfor k in 0..{BATCH} {{ let x = arm.ik_many(ts); }}"
+    );
+    let ik_many_empty = format!(
+        "let ts = []; for i in 0..{N} {{ ts.push(t); }}\nfor k in 0..{BATCH} {{ let x = 0; }}"
+    );
     let (mut r_fk, mut r_ik, mut s_fk, mut s_ik, mut s_fkm, mut s_ikm) =
         (vec![], vec![], vec![], vec![], vec![], vec![]);
     for _ in 0..ROUNDS {
