@@ -517,6 +517,58 @@ mod tests {
         assert!(t.samples.iter().any(|s| s.joints[4] < -0.1));
     }
 
+    /// A circle and a program whose TCP path turns only joint 5 from +0.3 through 0
+    /// (the via point is exactly wrist-singular) to −0.3: every sample keeps joints
+    /// 1–4 and 6 (no 180° flip of 4/6), joint 5 goes down monotonically.
+    #[test]
+    fn circle_and_program_through_wrist_singularity_keep_the_branch() {
+        use crate::kinematics::{parse_program, run_program};
+        use crate::math::AngleConvention;
+        let r = Catalog::AbbIrb2400.robot();
+        let q0 = vec![0.4, 0.2, 0.1, 0.5, 0.3, -0.2];
+        let at = |q5: f64| {
+            let mut q = q0.clone();
+            q[4] = q5;
+            r.tcp_pose(&q).unwrap()
+        };
+        let o = MotionOptions::default();
+        let check = |t: &Trajectory| {
+            let mut prev = f64::INFINITY;
+            for s in &t.samples {
+                for j in [0, 1, 2, 3, 5] {
+                    assert!(
+                        (s.joints[j] - q0[j]).abs() < 1e-6,
+                        "joint {}: {:?}",
+                        j + 1,
+                        s.joints
+                    );
+                }
+                assert!(s.joints[4] <= prev + 1e-9);
+                prev = s.joints[4];
+            }
+            assert!((t.last_joints().unwrap()[4] + 0.3).abs() < 1e-6);
+        };
+        let t = move_circle(&r, &q0, &at(0.0), &at(-0.3), &o).unwrap();
+        check(&t);
+        // The same path as a program (poses in mm and degrees, fixed X-Y-Z).
+        let line = |t: &Transform| {
+            let p = t.to_xyzabc(AngleConvention::XyzFixed);
+            format!(
+                "{} {} {} {} {} {}",
+                p[0],
+                p[1],
+                p[2],
+                p[3].to_degrees(),
+                p[4].to_degrees(),
+                p[5].to_degrees()
+            )
+        };
+        let text = format!("Circle {}   {}\n", line(&at(0.0)), line(&at(-0.3)));
+        let program = parse_program("through.prg", &text).unwrap();
+        let t = run_program(&program, &r, &q0, &o).unwrap();
+        check(&t);
+    }
+
     /// Leaving a wrist singularity along a Cartesian line needs an instantaneous turn of
     /// joints 4 and 6: the move reports the singularity at its first step instead of
     /// jumping; a joint move out of it first makes the line possible.
