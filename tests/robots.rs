@@ -111,6 +111,125 @@ fn ik_round_trip_through_the_script_api() {
     assert!(out.status.success(), "{}", common::text(&out));
 }
 
+/// Batch forms: `fk_many` equals `fk` entry by entry, `ik_many` follows a line of poses
+/// keeping each solution next to the previous one (and `()` where a pose is out of
+/// reach); the wrist-singular pose comes back from `ik_branches` flagged with joint 5
+/// exactly 0; `limits_source` says where the catalog limits come from.
+#[test]
+fn batch_fk_ik_and_singular_flags_through_the_script_api() {
+    let dir = project();
+    let script = r#"
+        let doc = open_doc("models/mz07.yaml");
+        let arm = doc.robot("mz07");
+        let qs = [];
+        for i in 0..200 { qs.push([i * 0.3, -20 + i * 0.1, 10, 30, 40 - i * 0.2, i]); }
+        let poses = arm.fk_many(qs);
+        assert(poses.len() == 200, "count");
+        for i in 0..200 { assert(poses[i] == arm.fk(qs[i]), `fk_many ${i}`); }
+        let sols = arm.ik_many(poses);
+        for i in 0..200 {
+            for j in 0..6 { assert_near(sols[i][j], qs[i][j], 1e-6); }
+        }
+        let far = arm.ik_many([[9000, 0, 0, 0, 0, 0]]);
+        assert(far[0] == (), "unreachable entry is ()");
+        // Joint 5 at its singular value (MZ07: -90° in this table's convention is not
+        // special; its wrist aligns axes 4 and 6 at joint 5 = 90°).
+        let branches = arm.ik_branches(arm.fk([10, -20, 30, 25, 90, 40]));
+        let flagged = 0;
+        for b in branches { if b.singular { flagged += 1; assert(b.joints[4] == 90.0 || (b.joints[4] - 90.0).abs() < 1e-9, `${b.joints}`); } }
+        assert(flagged >= 2, `${flagged} singular branches`);
+        assert(arm.limits_source.starts_with("unverified"), arm.limits_source);
+        print("ok");
+    "#;
+    std::fs::write(dir.path().join("scripts/batch.rhai"), script).unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/batch.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+}
+
+/// Script constructors: `robot_opw` with the IRB 2400's published parameters
+/// (opw_kinematics `makeIrb2400_10`, metres there, mm here) puts the flange at
+/// (940, 0, 1455) pointing +x and is solved in closed form; `robot_dh` with seed 000's
+/// table 2 matches the catalog MZ07's flange; `add_robot` places it in a document at a
+/// base, where it moves along a line, and saving then reopening keeps it.
+#[test]
+fn robots_built_in_scripts_join_a_document() {
+    let dir = project();
+    let script = r#"
+        let irb = robot_opw(#{a1: 100, a2: -135, b: 0, c1: 615, c2: 705, c3: 755, c4: 85,
+                              offsets: [0, 0, -90, 0, 0, 0],
+                              limits: [[-180, 180], [-100, 110], [-60, 65], [-200, 200], [-120, 120], [-400, 400]]});
+        assert(irb.closed_form, "closed form");
+        let p = irb.fk([0, 0, 0, 0, 0, 0]);
+        let t = p.translation;
+        assert_near(t[0], 940.0, 1e-9); assert_near(t[1], 0.0, 1e-9); assert_near(t[2], 1455.0, 1e-9);
+        let z = p.apply_vector([0, 0, 1]);
+        assert_near(z[0], 1.0, 1e-12);
+        let sols = irb.ik(irb.fk([10, 20, -30, 40, 50, 60]));
+        assert(sols.len() >= 2, "branches");
+        let mz = robot_dh([[0, 340, 50, 90], [90, 0, 330, 0], [0, 0, 45, 90], [0, 340, 0, 90], [90, 0, 0, 90], [0, -80, 0, 0]]);
+        let doc = open_doc("models/mz07.yaml");
+        let ref = doc.robot("mz07");
+        let q = [10, -20, 30, 40, -50, 60];
+        let flange = mz.fk(q);
+        // Row-vector composition: the flange is 436.9 mm up the tool axis from the TCP.
+        assert_near(flange.distance_to(translation(0, 0, 516.9 - 80) * ref.fk(q)).mm, 0.0, 1e-9);
+        let arm = doc.add_robot("irb", irb, #{base: [1000, 0, 0, 0, 0, 90]});
+        assert(doc.robots().contains("irb"), "listed");
+        assert_near(arm.tcp.translation[0], 1000.0, 1e-9); assert_near(arm.tcp.translation[1], 940.0, 1e-9);
+        arm.joints = [0, 10, -10, 0, 30, 0];
+        let start = arm.tcp;
+        arm.move_line(start * translation(0, 50, -50));
+        assert_near(arm.tcp.distance_to(start * translation(0, 50, -50)).mm, 0.0, 1e-6);
+        doc.save_as("models/with_irb.yaml");
+        let again = open_doc("models/with_irb.yaml");
+        let b = again.robot("irb");
+        assert_near(b.tcp.distance_to(arm.tcp).mm, 0.0, 1e-6);
+        assert_near(b.fk([5, 5, 5, 5, 5, 5]).distance_to(arm.fk([5, 5, 5, 5, 5, 5])).mm, 0.0, 1e-6);
+        print("ok");
+    "#;
+    std::fs::write(dir.path().join("scripts/build.rhai"), script).unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/build.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+}
+
+/// Robot errors reach the document caller typed: limits and kinematics errors are
+/// `DocumentError::Robot`, an unknown robot index is `NotFound`.
+#[test]
+fn robot_errors_are_typed() {
+    use fitup::document::{DocumentError, RobotError};
+    let dir = project();
+    let mut doc = Document::open(&mz07(dir.path())).unwrap();
+    let e = doc
+        .set_robot_joints(0, &[0.0, 0.0, 0.0, 0.0, 3.0, 0.0])
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DocumentError::Robot(RobotError::JointLimit { joint: 5, .. })
+        ),
+        "{e}"
+    );
+    let e = doc.set_robot_joints(0, &[0.0; 3]).unwrap_err();
+    assert!(
+        matches!(e, DocumentError::Robot(RobotError::Kinematics { .. })),
+        "{e}"
+    );
+    let e = doc.set_robot_joints(7, &[0.0; 6]).unwrap_err();
+    assert!(
+        matches!(e, DocumentError::NotFound { what: "robot", .. }),
+        "{e}"
+    );
+    let nan = Transform::from_translation(Vec3::new(f64::NAN, 0.0, 0.0));
+    let e = doc.set_robot_base(0, nan).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DocumentError::Robot(RobotError::NonFinite { what: "base", .. })
+        ),
+        "{e}"
+    );
+}
+
 /// `fitup run PROGRAM --doc DOC --robot NAME` prints the joint/TCP log (or writes it
 /// with --log); the last row is the last Joint command.
 #[test]

@@ -15,7 +15,7 @@ pub mod scan;
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
-pub use robot::{LinkDisplay, RobotInstance};
+pub use robot::{LinkDisplay, RobotError, RobotInstance};
 pub use scan::MAX_ABS_VALUE;
 
 use crate::collision::CutSpec;
@@ -185,6 +185,9 @@ pub enum DocumentError {
     /// An operation that is not allowed (moving a fixed component, a bad value…).
     #[error("{0}")]
     Invalid(String),
+    /// A robot refused an operation (kinematics, joint limits, program).
+    #[error(transparent)]
+    Robot(#[from] robot::RobotError),
     /// Writing the document failed.
     #[error("cannot write {path}: {message}")]
     Write {

@@ -8,16 +8,65 @@
 //! degrees / mm.
 
 use super::dimension;
-use super::file::{DhFile, RobotFile};
+use super::file::{DhFile, LinkFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
     robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind, JointLimits, KinematicTree,
-    Link, MotionOptions, Program, Robot, Trajectory,
+    KinematicsError, Link, MotionOptions, Program, Robot, RunError, Trajectory,
 };
 use crate::math::{Point3, Transform, Vec3};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
+use std::sync::Arc;
+
+/// Why a robot of a document refused an operation (carried by
+/// [`DocumentError::Robot`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RobotError {
+    /// A kinematics error (joint count, non-finite value, …).
+    #[error("robot `{robot}`: {source}")]
+    Kinematics {
+        /// The robot's name.
+        robot: String,
+        /// The cause.
+        #[source]
+        source: KinematicsError,
+    },
+    /// A joint value outside its limits (in document units: degrees or mm).
+    #[error("robot `{robot}`: joint {joint} = {value:.4}{unit} is outside its limits [{min:.4}, {max:.4}]{unit}")]
+    JointLimit {
+        /// The robot's name.
+        robot: String,
+        /// 1-based joint number.
+        joint: usize,
+        /// The value (degrees or mm).
+        value: f64,
+        /// Lower limit (degrees or mm).
+        min: f64,
+        /// Upper limit (degrees or mm).
+        max: f64,
+        /// `°` or `mm`.
+        unit: &'static str,
+    },
+    /// A base or tool pose that is not finite.
+    #[error("robot `{robot}`: the {what} pose is not finite")]
+    NonFinite {
+        /// The robot's name.
+        robot: String,
+        /// `base` or `tool`.
+        what: &'static str,
+    },
+    /// A motion program failed (file, line and motion error).
+    #[error("robot `{robot}`: {source}")]
+    Program {
+        /// The robot's name.
+        robot: String,
+        /// The failing command and cause (boxed: keeps the error small).
+        #[source]
+        source: Box<RunError>,
+    },
+}
 
 /// How one link is displayed.
 #[derive(Debug, Clone, PartialEq)]
@@ -31,7 +80,8 @@ pub struct LinkDisplay {
 /// A robot of a document: kinematics, current joints, displayed links, dimensions.
 #[derive(Debug, Clone)]
 pub struct RobotInstance {
-    robot: Robot,
+    /// Shared so that scripts can hold the robot without copying its tree.
+    robot: Arc<Robot>,
     links: Vec<LinkDisplay>,
     joints: Vec<f64>,
     dimensions: Vec<String>,
@@ -47,6 +97,12 @@ impl RobotInstance {
     /// The kinematic robot (base and tool as currently set).
     pub fn robot(&self) -> &Robot {
         &self.robot
+    }
+
+    /// The kinematic robot, shared: a cheap handle (no copy of the tree) that stays
+    /// valid while the document changes (a later base or tool change makes a new one).
+    pub fn shared_robot(&self) -> Arc<Robot> {
+        Arc::clone(&self.robot)
     }
 
     /// Current joint values in joint order (rad, or mm for prismatic joints).
@@ -83,8 +139,8 @@ impl RobotInstance {
 
     /// World poses of the displayed components for joint values `q`:
     /// `(component index, pose)`.
-    pub fn component_poses(&self, q: &[f64]) -> Result<Vec<(usize, Transform)>, String> {
-        let poses = self.robot.link_poses(q).map_err(|e| e.to_string())?;
+    pub fn component_poses(&self, q: &[f64]) -> Result<Vec<(usize, Transform)>, RobotError> {
+        let poses = self.robot.link_poses(q).map_err(|e| self.kinematics(e))?;
         Ok(self
             .links
             .iter()
@@ -93,10 +149,17 @@ impl RobotInstance {
             .collect())
     }
 
-    /// Why `q` is not a valid joint vector for this robot (count, finite, limits), as
-    /// a message naming the joint in document units.
-    pub fn check_joints(&self, q: &[f64]) -> Result<(), String> {
-        self.robot.tcp_pose(q).map_err(|e| e.to_string())?;
+    fn kinematics(&self, source: KinematicsError) -> RobotError {
+        RobotError::Kinematics {
+            robot: self.name().to_string(),
+            source,
+        }
+    }
+
+    /// Why `q` is not a valid joint vector for this robot (count, finite, limits),
+    /// naming the joint in document units.
+    pub fn check_joints(&self, q: &[f64]) -> Result<(), RobotError> {
+        self.robot.tcp_pose(q).map_err(|e| self.kinematics(e))?;
         if let Some(j) = self.robot.limit_violation(q) {
             let kinds = self.robot.joint_kinds();
             let limits = self.robot.joint_limits();
@@ -110,11 +173,14 @@ impl RobotInstance {
                 ),
                 (_, None) => (q[j], f64::NAN, f64::NAN, ""),
             };
-            return Err(format!(
-                "robot `{}`: joint {} = {v:.4}{unit} is outside its limits [{lo:.4}, {hi:.4}]{unit}",
-                self.name(),
-                j + 1
-            ));
+            return Err(RobotError::JointLimit {
+                robot: self.name().to_string(),
+                joint: j + 1,
+                value: v,
+                min: lo,
+                max: hi,
+                unit,
+            });
         }
         Ok(())
     }
@@ -339,13 +405,7 @@ fn build(
     let robot_name = f.name.clone();
     // Catalog robots keep their catalog name in the kinematics; use the document's.
     if robot.name() != robot_name {
-        robot = Robot::new(
-            robot_name.clone(),
-            robot.tree().clone(),
-            robot.flange(),
-            robot.tool(),
-        )
-        .map_err(|e| whole(e.to_string()))?;
+        robot = robot.with_name(robot_name.clone());
     }
     if let Some(t) = matrix(&f.base, "base").map_err(|m| ("base:".to_string(), m))? {
         robot.set_base(t);
@@ -457,7 +517,7 @@ fn build(
         }
     };
     let inst = RobotInstance {
-        robot,
+        robot: Arc::new(robot),
         links,
         joints,
         dimensions,
@@ -469,8 +529,60 @@ fn build(
         },
     };
     inst.check_joints(&inst.joints)
-        .map_err(|m| ("joints:".to_string(), m))?;
+        .map_err(|m| ("joints:".to_string(), m.to_string()))?;
     Ok(inst)
+}
+
+/// The explicit-tree file form of `robot` (links, axes, homes, limits, flange, base,
+/// tool), named `name`: how a robot built in code is written to a document.
+fn explicit_file(name: &str, robot: &Robot) -> RobotFile {
+    let tree = robot.tree();
+    let link_name = |i: usize| {
+        tree.links()[i]
+            .name
+            .clone()
+            .filter(|n| !n.is_empty())
+            .unwrap_or_else(|| format!("link{i}"))
+    };
+    let links = tree
+        .links()
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let kind = l.joint.kind;
+            let a = |v: Vec3| [v.x, v.y, v.z];
+            LinkFile {
+                name: Some(link_name(i)),
+                component: None,
+                offset: None,
+                parent: l.parent.map(link_name),
+                joint: match kind {
+                    JointKind::Fixed => None,
+                    JointKind::Revolute => Some("revolute".into()),
+                    JointKind::Prismatic => Some("prismatic".into()),
+                },
+                axis: kind.is_movable().then(|| a(l.joint.axis)),
+                point: (kind == JointKind::Revolute).then(|| a(l.joint.point.coords)),
+                home: (l.home != Transform::IDENTITY).then(|| l.home.to_matrix()),
+                limits: l.joint.limits.map(|lim| match kind {
+                    JointKind::Prismatic => [lim.min, lim.max],
+                    _ => [lim.min.to_degrees(), lim.max.to_degrees()],
+                }),
+                dimension: None,
+            }
+        })
+        .collect();
+    RobotFile {
+        name: name.to_string(),
+        catalog: None,
+        dh: None,
+        base: Some(robot.base().to_matrix()),
+        tool: Some(robot.tool().to_matrix()),
+        flange: Some(link_name(robot.flange())),
+        drawn_at_zero: false,
+        links,
+        joints: None,
+    }
 }
 
 /// Builds the robots of a document file. `taken` holds the mate dimension names
@@ -555,16 +667,75 @@ impl Document {
         Ok(&self.robots[self.robot_index(name)?])
     }
 
+    /// A robot by index, or [`DocumentError::NotFound`].
+    pub fn robot_at(&self, index: usize) -> Result<&RobotInstance, DocumentError> {
+        self.robots
+            .get(index)
+            .ok_or_else(|| DocumentError::NotFound {
+                what: "robot",
+                name: format!("#{index}"),
+                hint: format!("the document has {} robots", self.robots.len()),
+            })
+    }
+
+    /// Adds a robot built in code (catalog, [`OpwParameters`](crate::kinematics::OpwParameters),
+    /// D-H table, URDF, explicit tree) under `name`, its root placed at `base` (world
+    /// pose, mm; the robot's own base when `None`). It displays no components; its
+    /// joints start at 0 (clamped into the limits) and get driving dimensions
+    /// `角度<n>@<name>` / `距离<n>@<name>`. Saving writes it as an explicit tree.
+    /// Returns its index.
+    pub fn add_robot(
+        &mut self,
+        name: &str,
+        robot: &Robot,
+        base: Option<Transform>,
+    ) -> Result<usize, DocumentError> {
+        if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
+            return Err(DocumentError::Invalid(format!(
+                "robot names must be unique and non-empty: `{name}`"
+            )));
+        }
+        let base = base.unwrap_or(robot.base());
+        if !base.is_finite() {
+            return Err(RobotError::NonFinite {
+                robot: name.to_string(),
+                what: "base",
+            }
+            .into());
+        }
+        let mut file = explicit_file(name, robot);
+        file.base = Some(base.to_matrix());
+        let zero: Vec<f64> = robot
+            .joint_limits()
+            .iter()
+            .map(|l| l.map_or(0.0, |l| 0.0f64.clamp(l.min, l.max)))
+            .collect();
+        file.joints = Some(joints_to_document(robot, &zero));
+        let mut inst = build(&file, &HashMap::new())
+            .map_err(|(_, m)| DocumentError::Invalid(format!("robot `{name}`: {m}")))?;
+        let taken = self.dimensions();
+        if let Some(d) = inst
+            .dimension_names()
+            .into_iter()
+            .find(|d| taken.contains(d))
+        {
+            return Err(DocumentError::Invalid(format!(
+                "robot `{name}`: dimension `{d}` already exists"
+            )));
+        }
+        Arc::make_mut(&mut inst.robot).set_limits_source(robot.limits_source().map(String::from));
+        self.robots.push(inst);
+        self.revision += 1;
+        Ok(self.robots.len() - 1)
+    }
+
     /// Sets a robot's joints (rad / mm, joint order) and moves its link components.
     /// Values outside the limits, of the wrong count or not finite are refused and
     /// nothing changes.
     pub fn set_robot_joints(&mut self, robot: usize, q: &[f64]) -> Result<(), DocumentError> {
-        let r = self
-            .robots
-            .get(robot)
-            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
-        r.check_joints(q).map_err(DocumentError::Invalid)?;
-        let poses = r.component_poses(q).map_err(DocumentError::Invalid)?;
+        let r = self.robot_at(robot)?;
+        r.check_joints(q)?;
+        let poses = r.component_poses(q)?;
         self.robots[robot].joints = q.to_vec();
         for (c, p) in poses {
             self.components[c].transform = p;
@@ -575,24 +746,20 @@ impl Document {
 
     /// Moves a robot's base (world pose of its root, mm) and its link components.
     pub fn set_robot_base(&mut self, robot: usize, base: Transform) -> Result<(), DocumentError> {
+        self.robot_at(robot)?;
         super::check_pose(&base, "the base pose")?;
-        let r = self
-            .robots
-            .get_mut(robot)
-            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
-        r.robot.set_base(base);
+        let r = &mut self.robots[robot];
+        Arc::make_mut(&mut r.robot).set_base(base);
         let q = r.joints.clone();
         self.set_robot_joints(robot, &q)
     }
 
     /// Sets a robot's tool frame (TCP in the flange frame, mm).
     pub fn set_robot_tool(&mut self, robot: usize, tool: Transform) -> Result<(), DocumentError> {
+        self.robot_at(robot)?;
         super::check_pose(&tool, "the tool frame")?;
-        let r = self
-            .robots
-            .get_mut(robot)
-            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
-        r.robot.set_tool(tool);
+        let r = &mut self.robots[robot];
+        Arc::make_mut(&mut r.robot).set_tool(tool);
         self.revision += 1;
         Ok(())
     }
@@ -606,12 +773,13 @@ impl Document {
         program: &Program,
         options: &MotionOptions,
     ) -> Result<Trajectory, DocumentError> {
-        let r = self
-            .robots
-            .get(robot)
-            .ok_or_else(|| DocumentError::Invalid(format!("no robot {robot}")))?;
-        let t = run_program(program, &r.robot, &r.joints, options)
-            .map_err(|e| DocumentError::Invalid(e.to_string()))?;
+        let r = self.robot_at(robot)?;
+        let t = run_program(program, &r.robot, &r.joints, options).map_err(|source| {
+            RobotError::Program {
+                robot: r.name().to_string(),
+                source: Box::new(source),
+            }
+        })?;
         if let Some(q) = t.last_joints() {
             let q = q.to_vec();
             self.set_robot_joints(robot, &q)?;
@@ -762,7 +930,8 @@ mod tests {
         // Joint values outside the limits are refused with the joint named in degrees.
         let msg = inst
             .check_joints(&[0.0, 0.0, 0.0, 0.0, 2.5, 0.0])
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("joint 5") && msg.contains("143.2394"), "{msg}");
     }
 }

@@ -12,10 +12,9 @@
 //! Joint limits are the manufacturers' data-sheet ranges (see the docs for which
 //! could be confirmed).
 
-use super::{DhConvention, DhRow, Joint, JointLimits, KinematicTree, KinematicsError, Link, Robot};
-use crate::math::{Point3, Transform, Vec3};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion};
-use std::f64::consts::FRAC_PI_2;
+use super::{DhConvention, DhRow, JointLimits, KinematicsError, OpwParameters, Robot};
+use crate::math::{Transform, Vec3};
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// The arms of the catalog.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -65,8 +64,11 @@ impl Catalog {
             .unwrap_or_else(|e| unreachable!("catalog entry {} is invalid: {e}", self.name()))
     }
 
+    // The limits are the URDFs' published numbers (e.g. 3.1416), kept as written.
+    #[allow(clippy::approx_constant)]
     fn build(self) -> Result<Robot, KinematicsError> {
         let deg = JointLimits::degrees;
+        let rad = JointLimits::new;
         match self {
             Catalog::NachiMz07 => {
                 let limits = [
@@ -97,64 +99,85 @@ impl Catalog {
                     0.0,
                     -(MZ07_TOOL_POINT - MZ07_FLANGE),
                 ));
-                Robot::from_dh(self.name(), &rows, DhConvention::Standard, tool)
+                Ok(
+                    Robot::from_dh(self.name(), &rows, DhConvention::Standard, tool)?
+                        .with_limits_source(
+                        "unverified: NACHI data-sheet ranges from memory, no public source checked",
+                    ),
+                )
             }
-            Catalog::AbbIrb2400 => opw_robot(
-                self.name(),
-                [100.0, -135.0, 0.0, 615.0, 705.0, 755.0, 85.0],
-                [0.0, 0.0, -FRAC_PI_2, 0.0, 0.0, 0.0],
-                [1.0; 6],
-                [
-                    deg(-180.0, 180.0),
-                    deg(-100.0, 110.0),
-                    deg(-60.0, 65.0),
-                    deg(-200.0, 200.0),
-                    deg(-120.0, 120.0),
-                    deg(-400.0, 400.0),
-                ],
-            ),
-            Catalog::KukaKr6R700 => opw_robot(
-                self.name(),
-                [25.0, -35.0, 0.0, 400.0, 315.0, 365.0, 80.0],
-                [0.0, -FRAC_PI_2, 0.0, 0.0, 0.0, 0.0],
-                [-1.0, 1.0, 1.0, -1.0, 1.0, -1.0],
-                [
+            Catalog::AbbIrb2400 => {
+                // Geometry: opw_kinematics `makeIrb2400_10` (Jmeyer1292/opw_kinematics,
+                // include/opw_kinematics/opw_parameters_examples.h). Limits: ROS-Industrial
+                // (ros-industrial/abb, abb_irb2400_support/urdf/irb2400_macro.xacro), rad.
+                let mut p = OpwParameters::new(100.0, -135.0, 0.0, 615.0, 705.0, 755.0, 85.0);
+                p.offsets[2] = -FRAC_PI_2;
+                let limits = [
+                    rad(-3.1416, 3.1416),
+                    rad(-1.7453, 1.9199),
+                    rad(-1.0472, 1.1345),
+                    rad(-3.49, 3.49),
+                    rad(-2.0944, 2.0944),
+                    rad(-6.9813, 6.9813),
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "ros-industrial/abb abb_irb2400_support/urdf/irb2400_macro.xacro",
+                ))
+            }
+            Catalog::KukaKr6R700 => {
+                // Geometry: opw_kinematics `makeKukaKR6_R700_sixx` (same file as above).
+                // Limits: ros-industrial/kuka_experimental,
+                // kuka_kr6_support/urdf/kr6r700sixx_macro.xacro (degrees there).
+                let mut p = OpwParameters::new(25.0, -35.0, 0.0, 400.0, 315.0, 365.0, 80.0);
+                p.offsets[1] = -FRAC_PI_2;
+                p.signs = [-1.0, 1.0, 1.0, -1.0, 1.0, -1.0];
+                let limits = [
                     deg(-170.0, 170.0),
                     deg(-190.0, 45.0),
                     deg(-120.0, 156.0),
                     deg(-185.0, 185.0),
                     deg(-120.0, 120.0),
                     deg(-350.0, 350.0),
-                ],
-            ),
-            Catalog::FanucLrMate200iD => opw_robot(
-                self.name(),
-                [50.0, -35.0, 0.0, 330.0, 330.0, 335.0, 80.0],
-                [0.0, 0.0, -FRAC_PI_2, 0.0, 0.0, 0.0],
-                [1.0, 1.0, -1.0, -1.0, -1.0, -1.0],
-                [
-                    deg(-170.0, 170.0),
-                    deg(-100.0, 145.0),
-                    deg(-70.0, 205.0),
-                    deg(-190.0, 190.0),
-                    deg(-125.0, 125.0),
-                    deg(-360.0, 360.0),
-                ],
-            ),
-            Catalog::StaubliTx2_60L => opw_robot(
-                self.name(),
-                [0.0, 0.0, 20.0, 375.0, 400.0, 450.0, 70.0],
-                [0.0; 6],
-                [1.0; 6],
-                [
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "ros-industrial/kuka_experimental kuka_kr6_support/urdf/kr6r700sixx_macro.xacro",
+                ))
+            }
+            Catalog::FanucLrMate200iD => {
+                // Geometry, offsets (J3 −90°, J6 180°) and signs: ROS-Industrial
+                // opw_parameters_lrmate200id.yaml, checked against the URDF
+                // (ros-industrial/fanuc, fanuc_lrmate200id_support/urdf/lrmate200id_macro.xacro),
+                // which also gives the limits (rad).
+                let mut p = OpwParameters::new(50.0, -35.0, 0.0, 330.0, 330.0, 335.0, 80.0);
+                p.offsets[2] = -FRAC_PI_2;
+                p.offsets[5] = PI;
+                p.signs = [1.0, 1.0, -1.0, -1.0, -1.0, -1.0];
+                let limits = [
+                    rad(-2.965, 2.965),
+                    rad(-1.745329, 2.530727),
+                    rad(-2.450966, 4.886922),
+                    rad(-3.315, 3.315),
+                    rad(-2.18, 2.18),
+                    rad(-6.285, 6.285),
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "ros-industrial/fanuc fanuc_lrmate200id_support/urdf/lrmate200id_macro.xacro",
+                ))
+            }
+            Catalog::StaubliTx2_60L => {
+                let p = OpwParameters::new(0.0, 0.0, 20.0, 375.0, 400.0, 450.0, 70.0);
+                let limits = [
                     deg(-180.0, 180.0),
                     deg(-127.5, 127.5),
                     deg(-142.5, 142.5),
                     deg(-270.0, 270.0),
                     deg(-121.0, 132.5),
                     deg(-270.0, 270.0),
-                ],
-            ),
+                ];
+                Ok(p.robot(self.name(), limits.map(Some))?.with_limits_source(
+                    "unverified: data-sheet ranges from memory, no public source checked",
+                ))
+            }
             Catalog::Ur5 => {
                 let rows = [
                     DhRow::revolute(0.0, 89.159, 0.0, FRAC_PI_2),
@@ -168,12 +191,15 @@ impl Catalog {
                     .iter()
                     .map(|r| r.with_limits(deg(-360.0, 360.0)))
                     .collect();
-                Robot::from_dh(
+                Ok(Robot::from_dh(
                     self.name(),
                     &rows,
                     DhConvention::Standard,
                     Transform::IDENTITY,
-                )
+                )?
+                .with_limits_source(
+                    "unverified: ±360° on every joint (UR data sheet, from memory)",
+                ))
             }
         }
     }
@@ -183,62 +209,6 @@ impl Catalog {
 pub const MZ07_FLANGE: f64 = 80.0;
 /// Seed 000 table 2's |d6|: the tool point's distance from the wrist centre (mm).
 pub const MZ07_TOOL_POINT: f64 = 516.9;
-
-/// Builds an ortho-parallel arm from the usual parameter set
-/// `[a1, a2, b, c1, c2, c3, c4]` (mm), joint offsets (rad) and axis signs, by placing
-/// every axis line at the robot's zero configuration: joint `i`'s geometric angle is
-/// `sign·q + offset`. Every link frame coincides with the root frame at zero (the
-/// way CAD assemblies of robots are usually drawn); the flange frame has `z` out of
-/// the flange.
-fn opw_robot(
-    name: &str,
-    p: [f64; 7],
-    offsets: [f64; 6],
-    signs: [f64; 6],
-    limits: [JointLimits; 6],
-) -> Result<Robot, KinematicsError> {
-    let [a1, a2, b, c1, c2, c3, c4] = p;
-    // Axis lines in the upright reference pose (every geometric angle 0).
-    let mut axes: Vec<(Vec3, Point3)> = vec![
-        (Vec3::z(), Point3::origin()),
-        (Vec3::y(), Point3::new(a1, b, c1)),
-        (Vec3::y(), Point3::new(a1, b, c1 + c2)),
-        (Vec3::z(), Point3::new(a1 + a2, b, c1 + c2 + c3)),
-        (Vec3::y(), Point3::new(a1 + a2, b, c1 + c2 + c3)),
-        (Vec3::z(), Point3::new(a1 + a2, b, c1 + c2 + c3)),
-    ];
-    let mut flange = Isometry3::translation(a1 + a2, b, c1 + c2 + c3 + c4);
-    // Turn each joint to its offset, moving everything distal to it.
-    for i in 0..6 {
-        if offsets[i] != 0.0 {
-            let (axis, point) = axes[i];
-            let q =
-                UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), offsets[i]);
-            let m = Isometry3::from_parts(Translation3::from(point.coords - q * point.coords), q);
-            for ax in axes.iter_mut().skip(i + 1) {
-                *ax = (m.rotation * ax.0, m * ax.1);
-            }
-            flange = m * flange;
-        }
-    }
-    let mut links = vec![Link::new("base", None, Transform::IDENTITY, Joint::fixed())];
-    for i in 0..6 {
-        let (axis, point) = axes[i];
-        let home = if i == 5 {
-            Transform::from_isometry(flange)
-        } else {
-            Transform::IDENTITY
-        };
-        links.push(Link::new(
-            format!("link{}", i + 1),
-            Some(i),
-            home,
-            Joint::revolute(axis * signs[i], point).with_limits(limits[i]),
-        ));
-    }
-    let tree = KinematicTree::new(links)?;
-    Robot::new(name, tree, 6, Transform::IDENTITY)
-}
 
 /// Names of the catalog arms.
 pub fn catalog_names() -> Vec<&'static str> {
@@ -256,9 +226,9 @@ pub fn robot_by_name(name: &str) -> Option<Robot> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{IkError, IkOptions};
+    use crate::kinematics::{IkError, IkOptions, KinematicTree};
     use crate::math::Rng;
-    use std::f64::consts::PI;
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
     fn pos(r: &Robot, q: [f64; 6]) -> Vec3 {
         r.tcp_pose(&q).unwrap().translation()
@@ -305,6 +275,165 @@ mod tests {
         assert!(
             (pos(&r, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]) - Vec3::new(390.0, 0.0, 198.1)).norm() < 1e-9
         );
+    }
+
+    /// A serial chain as ROS-Industrial URDFs write it: per joint the origin `xyz`
+    /// (metres, every `rpy` 0 in these files) and the axis; then a fixed tool frame.
+    /// Returns the tool frame pose in mm for joint values `q`.
+    fn urdf_chain(
+        joints: &[([f64; 3], [f64; 3])],
+        tool: UnitQuaternion<f64>,
+        q: &[f64],
+    ) -> Isometry3<f64> {
+        let mut pose = Isometry3::identity();
+        for ((xyz, axis), v) in joints.iter().zip(q) {
+            let t = Isometry3::translation(xyz[0] * 1000.0, xyz[1] * 1000.0, xyz[2] * 1000.0);
+            let r = UnitQuaternion::from_axis_angle(
+                &nalgebra::Unit::new_normalize(Vec3::new(axis[0], axis[1], axis[2])),
+                *v,
+            );
+            pose = pose * t * Isometry3::from_parts(Translation3::identity(), r);
+        }
+        pose * Isometry3::from_parts(Translation3::identity(), tool)
+    }
+
+    /// Arm, its URDF chain, the URDF `tool0` on the last link, and our flange → `tool0`.
+    type UrdfCase = (
+        Catalog,
+        &'static [([f64; 3], [f64; 3]); 6],
+        UnitQuaternion<f64>,
+        UnitQuaternion<f64>,
+    );
+
+    /// URDF `rpy` (fixed X, then Y, then Z) as a rotation.
+    fn rpy(r: f64, p: f64, y: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_euler_angles(r, p, y)
+    }
+
+    /// ABB IRB 2400: joint origins and axes typed from ros-industrial/abb,
+    /// abb_irb2400_support/urdf/irb2400_macro.xacro (tool0: rpy 0 0 0 on link_6).
+    const IRB2400_URDF: [([f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.1, 0.0, 0.615], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.705], [0.0, 1.0, 0.0]),
+        ([0.258, 0.0, 0.135], [1.0, 0.0, 0.0]),
+        ([0.497, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.085, 0.0, 0.0], [1.0, 0.0, 0.0]),
+    ];
+    /// KUKA KR 6 R700 sixx: ros-industrial/kuka_experimental,
+    /// kuka_kr6_support/urdf/kr6r700sixx_macro.xacro (tool0: rpy 0 90° 0 on the flange).
+    const KR6_URDF: [([f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.4], [0.0, 0.0, -1.0]),
+        ([0.025, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.315, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.035], [-1.0, 0.0, 0.0]),
+        ([0.365, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.080, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+    ];
+    /// Fanuc LR Mate 200iD: ros-industrial/fanuc,
+    /// fanuc_lrmate200id_support/urdf/lrmate200id_macro.xacro (tool0: rpy π −π/2 0).
+    const LRMATE_URDF: [([f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.330], [0.0, 0.0, 1.0]),
+        ([0.050, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.330], [0.0, -1.0, 0.0]),
+        ([0.0, 0.0, 0.035], [-1.0, 0.0, 0.0]),
+        ([0.335, 0.0, 0.0], [0.0, -1.0, 0.0]),
+        ([0.080, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+    ];
+
+    /// The zero poses stated by the published models (issue 11, and the URDFs above):
+    /// flange at (940, 0, 1455), (785, 0, 435), (465, 0, 695) mm, pointing +x.
+    #[test]
+    fn catalog_zero_poses_match_the_published_models() {
+        for (arm, p) in [
+            (Catalog::AbbIrb2400, Vec3::new(940.0, 0.0, 1455.0)),
+            (Catalog::KukaKr6R700, Vec3::new(785.0, 0.0, 435.0)),
+            (Catalog::FanucLrMate200iD, Vec3::new(465.0, 0.0, 695.0)),
+        ] {
+            let r = arm.robot();
+            let t = r.tcp_pose(&[0.0; 6]).unwrap();
+            assert!((t.translation() - p).norm() < 1e-9, "{}: {t}", arm.name());
+            let z = t.apply_vector(&Vec3::z());
+            assert!((z - Vec3::x()).norm() < 1e-12, "{}: z = {z:?}", arm.name());
+            assert!(r.analytic().is_some(), "{}", arm.name());
+        }
+        // The Stäubli TX2-60L (no offsets) stands upright: flange on top.
+        let t = Catalog::StaubliTx2_60L.robot().tcp_pose(&[0.0; 6]).unwrap();
+        assert!(
+            (t.translation() - Vec3::new(0.0, 20.0, 375.0 + 400.0 + 450.0 + 70.0)).norm() < 1e-9
+        );
+    }
+
+    /// Published poses: the ROS-Industrial URDF chains (typed in above) at a set of
+    /// joint vectors, including large ones on every joint, give the catalog's TCP pose
+    /// (the URDF `tool0` frame; for the IRB 2400 its `tool0` has x forward where the
+    /// OPW flange has z forward, a fixed quarter turn about y).
+    #[test]
+    fn catalog_matches_ros_industrial_urdfs() {
+        let d = |v: [f64; 6]| v.map(f64::to_radians);
+        let poses = [
+            [0.0; 6],
+            d([30.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+            d([0.0, 40.0, 0.0, 0.0, 0.0, 0.0]),
+            d([0.0, 0.0, -35.0, 0.0, 0.0, 0.0]),
+            d([0.0, 0.0, 0.0, 70.0, 45.0, 0.0]),
+            d([0.0, 0.0, 0.0, 0.0, 0.0, 90.0]),
+            d([-45.0, 20.0, 30.0, -60.0, 50.0, 120.0]),
+        ];
+        let cases: [UrdfCase; 3] = [
+            (
+                Catalog::AbbIrb2400,
+                &IRB2400_URDF,
+                rpy(0.0, 0.0, 0.0),
+                rpy(0.0, -FRAC_PI_2, 0.0),
+            ),
+            (
+                Catalog::KukaKr6R700,
+                &KR6_URDF,
+                rpy(0.0, FRAC_PI_2, 0.0),
+                UnitQuaternion::identity(),
+            ),
+            (
+                Catalog::FanucLrMate200iD,
+                &LRMATE_URDF,
+                rpy(PI, -FRAC_PI_2, 0.0),
+                UnitQuaternion::identity(),
+            ),
+        ];
+        let mut rng = Rng::new(42);
+        for (arm, chain, tool0, flange_to_tool0) in cases {
+            let r = arm.robot();
+            let random: Vec<[f64; 6]> = (0..50)
+                .map(|_| std::array::from_fn(|_| rng.range(-PI, PI)))
+                .collect();
+            for q in poses.iter().chain(&random) {
+                let urdf = Transform::from_isometry(urdf_chain(chain, tool0, q));
+                let ours = Transform::from_isometry(
+                    r.tcp_pose(q).unwrap().isometry()
+                        * Isometry3::from_parts(Translation3::identity(), flange_to_tool0),
+                );
+                assert!(
+                    ours.approx_eq(&urdf, 1e-9, 1e-12),
+                    "{} at {q:?}: {ours} vs URDF {urdf}",
+                    arm.name()
+                );
+            }
+        }
+    }
+
+    /// Limits are the URDFs' (typed in above) or marked unverified.
+    #[test]
+    fn every_catalog_arm_says_where_its_limits_come_from() {
+        for arm in Catalog::ALL {
+            let r = arm.robot();
+            let src = r.limits_source().unwrap();
+            assert!(
+                src.starts_with("ros-industrial/") || src.starts_with("unverified"),
+                "{src}"
+            );
+        }
+        let l = Catalog::FanucLrMate200iD.robot().joint_limits();
+        assert_eq!(l[2], Some(JointLimits::new(-2.450966, 4.886922)));
     }
 
     #[test]

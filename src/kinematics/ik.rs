@@ -70,6 +70,10 @@ pub struct IkSolution {
     pub configuration: Option<Configuration>,
     /// Euclidean distance in joint space to the reference configuration (rad/mm mix).
     pub distance: f64,
+    /// The solution is at or near a singularity (wrist axes 4 and 6 aligned for the
+    /// closed-form solver, Jacobian conditioning below the threshold for the numeric
+    /// one): some joints are ill-conditioned or, exactly at it, chosen by a rule.
+    pub singular: bool,
 }
 
 /// Settings of inverse kinematics.

@@ -247,6 +247,8 @@ impl NumericIk {
                         joints: d.q,
                         configuration: None,
                         distance,
+                        // Converged solutions at a rank-deficient Jacobian are skipped above.
+                        singular: false,
                     });
                     if found.len() >= o.max_solutions.max(1) {
                         break;

@@ -19,10 +19,12 @@ mod ik_numeric;
 mod joint;
 mod motion;
 mod opw;
+mod opw_params;
 mod program;
 mod robot;
 mod trajectory;
 mod tree;
+mod urdf;
 
 pub use catalog::{catalog_names, robot_by_name, Catalog};
 pub use dh::{DhConvention, DhRow};
@@ -36,9 +38,11 @@ pub use ik_numeric::NumericIk;
 pub use joint::{Joint, JointKind, JointLimits};
 pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
 pub use opw::{Branch, Branches, NotOpw, OpwSolver};
+pub use opw_params::OpwParameters;
 pub use program::{
     parse_program, read_program, run_program, Command, Program, ProgramError, ProgramLine, RunError,
 };
 pub use robot::Robot;
 pub use trajectory::{Trajectory, TrajectorySample};
 pub use tree::{KinematicTree, Link};
+pub use urdf::{parse_urdf, read_urdf, resolve_mesh, UrdfMesh, UrdfRobot, MAX_URDF_BYTES};

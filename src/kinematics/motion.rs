@@ -304,10 +304,15 @@ fn track(
                 });
             }
             match (start_config, sol.configuration) {
-                (Some(from), Some(to)) if from != to => {
+                (Some(from), Some(to))
+                    if from.shoulder != to.shoulder || from.elbow != to.elbow =>
+                {
                     return Err(MotionError::ConfigurationChange { step, s, from, to });
                 }
-                (None, Some(to)) => start_config = Some(to),
+                // Joint 5 crossing 0 continuously (the jump check above rules out the
+                // half turn of joints 4 and 6 a real wrist flip needs): the arm keeps its
+                // branch, only the wrist label follows the sign of joint 5.
+                (Some(_), Some(to)) | (None, Some(to)) => start_config = Some(to),
                 _ => {}
             }
             q = sol.joints;
@@ -486,23 +491,82 @@ mod tests {
         }
     }
 
+    /// IRB 2400: joint 5 passes through 0 on this line (wrist singular). The move keeps
+    /// its arm branch, joints 4 and 6 never turn by a large step (no 180° flip), joint 5
+    /// changes sign continuously and every sample is on the line.
     #[test]
-    fn line_through_wrist_singularity_fails() {
-        // IRB 2400: joint 5 passes through 0 on this line (wrist singular).
+    fn line_through_wrist_singularity_keeps_the_branch() {
         let r = Catalog::AbbIrb2400.robot();
         let q0 = vec![0.0, 0.2, 0.1, 0.0, 0.3, 0.0];
         let q1 = vec![0.0, 0.2, 0.1, 0.0, -0.3, 0.0];
         let end = r.tcp_pose(&q1).unwrap();
-        let err = move_line(&r, &q0, &end, &MotionOptions::default()).unwrap_err();
-        assert!(
-            matches!(
-                err,
-                MotionError::Singular { .. }
-                    | MotionError::ConfigurationChange { .. }
-                    | MotionError::JointJump { .. }
-            ),
-            "{err}"
-        );
+        let o = MotionOptions::default();
+        let t = move_line(&r, &q0, &end, &o).unwrap();
+        let last = t.last_joints().unwrap();
+        assert!(r.tcp_pose(last).unwrap().approx_eq(&end, 1e-6, 1e-9));
+        for (a, b) in last.iter().zip(&q1) {
+            assert!((a - b).abs() < 1e-6, "{last:?} vs {q1:?}");
+        }
+        for w in t.samples.windows(2) {
+            for j in [3, 4, 5] {
+                let d = (w[1].joints[j] - w[0].joints[j]).abs();
+                assert!(d < o.max_joint_jump, "joint {} jumps {d}", j + 1);
+            }
+        }
+        assert!(t.samples.iter().any(|s| s.joints[4] > 0.1));
+        assert!(t.samples.iter().any(|s| s.joints[4] < -0.1));
+    }
+
+    /// A circle and a program whose TCP path turns only joint 5 from +0.3 through 0
+    /// (the via point is exactly wrist-singular) to −0.3: every sample keeps joints
+    /// 1–4 and 6 (no 180° flip of 4/6), joint 5 goes down monotonically.
+    #[test]
+    fn circle_and_program_through_wrist_singularity_keep_the_branch() {
+        use crate::kinematics::{parse_program, run_program};
+        use crate::math::AngleConvention;
+        let r = Catalog::AbbIrb2400.robot();
+        let q0 = vec![0.4, 0.2, 0.1, 0.5, 0.3, -0.2];
+        let at = |q5: f64| {
+            let mut q = q0.clone();
+            q[4] = q5;
+            r.tcp_pose(&q).unwrap()
+        };
+        let o = MotionOptions::default();
+        let check = |t: &Trajectory| {
+            let mut prev = f64::INFINITY;
+            for s in &t.samples {
+                for j in [0, 1, 2, 3, 5] {
+                    assert!(
+                        (s.joints[j] - q0[j]).abs() < 1e-6,
+                        "joint {}: {:?}",
+                        j + 1,
+                        s.joints
+                    );
+                }
+                assert!(s.joints[4] <= prev + 1e-9);
+                prev = s.joints[4];
+            }
+            assert!((t.last_joints().unwrap()[4] + 0.3).abs() < 1e-6);
+        };
+        let t = move_circle(&r, &q0, &at(0.0), &at(-0.3), &o).unwrap();
+        check(&t);
+        // The same path as a program (poses in mm and degrees, fixed X-Y-Z).
+        let line = |t: &Transform| {
+            let p = t.to_xyzabc(AngleConvention::XyzFixed);
+            format!(
+                "{} {} {} {} {} {}",
+                p[0],
+                p[1],
+                p[2],
+                p[3].to_degrees(),
+                p[4].to_degrees(),
+                p[5].to_degrees()
+            )
+        };
+        let text = format!("Circle {}   {}\n", line(&at(0.0)), line(&at(-0.3)));
+        let program = parse_program("through.prg", &text).unwrap();
+        let t = run_program(&program, &r, &q0, &o).unwrap();
+        check(&t);
     }
 
     /// Leaving a wrist singularity along a Cartesian line needs an instantaneous turn of

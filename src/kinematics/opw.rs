@@ -80,6 +80,10 @@ pub struct Branch {
     pub joints: [f64; 6],
     /// Shoulder, elbow and wrist choice.
     pub configuration: Configuration,
+    /// Axes 4 and 6 are (within the singularity threshold) aligned: joints 4 and 6
+    /// are ill-conditioned; at the singularity itself joint 5 is exactly φ₅ (0 for the
+    /// usual wrist) and joint 4 keeps the seed (see [`OpwSolver::branches_seeded`]).
+    pub singular: bool,
 }
 
 /// Up to eight principal branches (joint values in (−π, π], no limits applied), in a
@@ -88,7 +92,9 @@ pub struct Branch {
 pub struct Branches {
     items: [Branch; 8],
     len: usize,
-    /// Some branches were dropped at a wrist or shoulder singularity.
+    /// The target is at or near a singularity: some branch is flagged
+    /// [`Branch::singular`] (wrist), or branches were dropped because joint 1 or
+    /// joint 2 is undetermined (wrist centre on axis 1 or on axis 2).
     pub singular: bool,
     /// Some branch was dropped because the wrist centre is out of reach.
     pub out_of_reach: bool,
@@ -102,6 +108,7 @@ impl Branches {
             elbow: Elbow::Up,
             wrist: Wrist::NoFlip,
         },
+        singular: false,
     };
 
     fn new() -> Self {
@@ -217,6 +224,12 @@ pub(crate) fn wrap(a: f64) -> f64 {
 }
 
 const PARALLEL_TOL: f64 = 1e-9;
+/// Below this sine of the angle between axis 4 and the target's axis 6 the wrist is
+/// treated as exactly singular. The arm joints of a target taken near a shoulder or
+/// elbow singularity carry ~1e-13 rad of rounding, which shows up in that sine; 1e-10
+/// absorbs it while the orientation error of snapping (the sine itself) stays below
+/// 1e-10 rad.
+const WRIST_SNAP: f64 = 1e-10;
 const DISTANCE_TOL: f64 = 1e-6;
 
 impl OpwSolver {
@@ -318,6 +331,15 @@ impl OpwSolver {
         let tcp0_c = c_from_root * tcp0;
         let gamma = ang(u3) - ang(u2);
         let phi5 = a4c.dot(&a5c.cross(&a6c)).atan2(a4c.dot(&a6c));
+        // Axes built by rotations carry rounding: the usual wrist has φ5 = 0 (or π)
+        // exactly, so that singular targets give joint 5 exactly 0.
+        let phi5 = if phi5.abs() < 1e-12 {
+            0.0
+        } else if (phi5.abs() - PI).abs() < 1e-12 {
+            PI
+        } else {
+            phi5
+        };
         Ok(Self {
             root_from_c,
             c_from_root,
@@ -378,9 +400,32 @@ impl OpwSolver {
     }
 
     /// Every principal branch (up to 8) reaching the TCP pose `target` given in the
-    /// root frame; joint values in (−π, π], no limits applied. Singular branches are
-    /// dropped (and flagged), never returned with an arbitrary free angle.
+    /// root frame; joint values in (−π, π], no limits applied; at a wrist singularity
+    /// joint 4 is 0 (see [`Self::branches_seeded`]).
+    #[inline]
     pub fn branches(&self, target: &Isometry3<f64>, singularity_threshold: f64) -> Branches {
+        self.branches_seeded(target, singularity_threshold, 0.0)
+    }
+
+    /// Every principal branch reaching `target` (root frame, mm); joint values in
+    /// (−π, π], no limits applied.
+    ///
+    /// **Wrist singularity** (axes 4 and 6 aligned, `sin ∠(a₄, t) < 1e-10`): every arm
+    /// branch still comes back with both wrist labels and `singular` set; joint 5 is
+    /// exactly φ₅ (0 for the usual wrist; φ₅ + π when the axes are opposed) and only
+    /// `q4 + q6` (`q4 − q6` when opposed) is determined. Rule: joint 4 keeps `q4_seed`
+    /// (the current joint 4 value, wrapped) on the no-flip branch and `q4_seed + π` on
+    /// the flip branch; joint 6 takes the rest. Near the singularity (sine below
+    /// `singularity_threshold`) branches are solved normally and flagged `singular`.
+    /// The shoulder singularity (wrist centre on axis 1) and the wrist centre on axis 2
+    /// leave joint 1 or 2 undetermined: those branches are dropped and
+    /// [`Branches::singular`] set.
+    pub fn branches_seeded(
+        &self,
+        target: &Isometry3<f64>,
+        singularity_threshold: f64,
+        q4_seed: f64,
+    ) -> Branches {
         let mut out = Branches::new();
         let x = self.c_from_root * target;
         let rx = x.rotation.to_rotation_matrix();
@@ -459,13 +504,10 @@ impl OpwSolver {
                     Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
                 };
                 let t = ry(&r1_a6);
-                let cw = self.a4.dot(&t).clamp(-1.0, 1.0);
-                let sd = (1.0 - cw * cw).sqrt();
-                if sd < singularity_threshold {
-                    out.singular = true;
-                    continue;
-                }
-                let delta = cw.acos();
+                // δ = ∠(a4, t) from its sine and cosine: acos(a4·t) loses half the
+                // digits near the singularity (δ = 1e-7 would come back ±1e-9 off).
+                let cw = self.a4.dot(&t);
+                let sd = self.a4.cross(&t).norm();
                 let elbow = if (el > 0.0) == (sh > 0.0) {
                     Elbow::Up
                 } else {
@@ -477,6 +519,41 @@ impl OpwSolver {
                     Shoulder::Back
                 };
                 let rw_a5 = ry(&r1_a5);
+                let q2 = wrap(self.s2 * th2);
+                let q3 = wrap(self.s3 * th);
+                let near_singular = sd < singularity_threshold;
+                if near_singular {
+                    out.singular = true;
+                }
+                if sd < WRIST_SNAP {
+                    // Axes 4 and 6 aligned (cw > 0) or opposed: q5 is exactly φ5 or
+                    // φ5 + π and only q4 + q6 (or q4 − q6) is determined; it equals ψ,
+                    // the angle about a4 from a5 to Rw·a5. Rule: q4 keeps the seed,
+                    // q6 takes the rest; the flip branch is q4 + π.
+                    let psi = self
+                        .a4
+                        .dot(&self.a5.cross(&rw_a5))
+                        .atan2(self.a5.dot(&rw_a5));
+                    let (q5, sgn) = if cw > 0.0 {
+                        (self.phi5, 1.0)
+                    } else {
+                        (wrap(self.phi5 + PI), -1.0)
+                    };
+                    for (k, wrist) in [(0.0, Wrist::NoFlip), (PI, Wrist::Flip)] {
+                        let q4 = wrap(q4_seed + k);
+                        out.push(Branch {
+                            joints: [q1, q2, q3, q4, q5, wrap(sgn * (psi - q4))],
+                            configuration: Configuration {
+                                shoulder,
+                                elbow,
+                                wrist,
+                            },
+                            singular: true,
+                        });
+                    }
+                    continue;
+                }
+                let delta = sd.atan2(cw);
                 let tp = t - self.a4 * self.a4.dot(&t);
                 // No-flip root q5 = φ5 + δ.
                 let s5 = self.s_phi5 * cw + self.c_phi5 * sd;
@@ -492,8 +569,6 @@ impl OpwSolver {
                 let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
                 let q4 = crs4.atan2(dot4);
                 let q6 = self.a6.dot(&self.a5.cross(&m)).atan2(self.a5.dot(&m));
-                let q2 = wrap(self.s2 * th2);
-                let q3 = wrap(self.s3 * th);
                 out.push(Branch {
                     joints: [q1, q2, q3, q4, wrap(self.phi5 + delta), q6],
                     configuration: Configuration {
@@ -501,6 +576,7 @@ impl OpwSolver {
                         elbow,
                         wrist: Wrist::NoFlip,
                     },
+                    singular: near_singular,
                 });
                 // The flip root follows without trigonometry: since a5 ⟂ a4 and
                 // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
@@ -519,6 +595,7 @@ impl OpwSolver {
                         elbow,
                         wrist: Wrist::Flip,
                     },
+                    singular: near_singular,
                 });
             }
         }
@@ -535,7 +612,9 @@ impl OpwSolver {
         reference: &[f64],
         options: &IkOptions,
     ) -> Result<Vec<IkSolution>, IkError> {
-        let branches = self.branches(target.isometry(), options.singularity_threshold);
+        let seed4 = reference.get(3).copied().unwrap_or(0.0);
+        let branches =
+            self.branches_seeded(target.isometry(), options.singularity_threshold, seed4);
         if branches.is_empty() {
             return Err(if branches.singular {
                 IkError::Singular(
@@ -602,6 +681,7 @@ impl OpwSolver {
                     joints,
                     configuration: Some(br.configuration),
                     distance,
+                    singular: br.singular,
                 });
                 let mut j = 0;
                 loop {
@@ -639,7 +719,7 @@ impl OpwSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{Catalog, Joint, KinematicTree, Link, NumericIk};
+    use crate::kinematics::{Catalog, Joint, KinematicTree, Link, NumericIk, OpwParameters};
     use crate::math::{Rng, Vec3};
 
     /// The parameters extracted from the MZ07 tree are table 2's: upper arm 330 mm,
@@ -794,6 +874,114 @@ mod tests {
                     "{}: brute force found nothing",
                     arm.name()
                 );
+            }
+        }
+    }
+
+    /// Joint 5 values at and around the wrist singularity (issue 11).
+    const NEAR_SINGULAR: [f64; 7] = [0.0, 1e-12, -1e-12, 1e-9, -1e-9, 1e-7, -1e-7];
+
+    /// Checks the wrist-singularity properties for `robot` at joints `q` whose joint 5
+    /// is `eps` away from the singular value (axes 4 and 6 aligned, or opposed when
+    /// `opposed`): the branch count equals the regular count (same wrist centre,
+    /// joint 5 moved away), every branch reproduces the target to 1e-9 mm (well under
+    /// 1e-9 m) and 1e-9 rad, the generating configuration is among them (up to the
+    /// split of q4 ± q6 where that is ill-conditioned), and at the exact singularity
+    /// joint 5 is exactly the singular value, the branch is flagged and q4 is the seed.
+    fn check_wrist_singular(
+        robot: &Robot,
+        q: [f64; 5],
+        eps: f64,
+        opposed: bool,
+    ) -> Result<(), String> {
+        let s = robot.analytic().ok_or("not OPW")?;
+        let q5s = if opposed { wrap(s.phi5 + PI) } else { s.phi5 };
+        let q = [q[0], q[1], q[2], q[3], q5s + eps, q[4]];
+        let target = robot.tcp_pose(&q).unwrap();
+        let mut regular_q = q;
+        regular_q[4] = q5s + 0.5;
+        let regular = s.branches(robot.tcp_pose(&regular_q).unwrap().isometry(), 1e-9);
+        let br = s.branches_seeded(target.isometry(), 1e-9, q[3]);
+        if br.len() != regular.len() || br.is_empty() {
+            return Err(format!("{} branches, regular {}", br.len(), regular.len()));
+        }
+        let sgn = if opposed { -1.0 } else { 1.0 };
+        let mut found = false;
+        for b in br.as_slice() {
+            let got = robot.tcp_pose(&b.joints).unwrap();
+            let (ang, dist) = got.distance_to(&target);
+            if dist > 1e-9 || ang > 1e-9 {
+                return Err(format!("{b:?}: {dist:e} mm {ang:e} rad"));
+            }
+            if !same_angles(&b.joints[..3], &q[..3], 1e-7) {
+                continue; // another arm branch: its wrist is not singular
+            }
+            if eps == 0.0 {
+                if b.joints[4] != q5s || !b.singular {
+                    return Err(format!("singular target, q5 must be {q5s}: {b:?}"));
+                }
+                if b.configuration.wrist == Wrist::NoFlip && b.joints[3] != wrap(q[3]) {
+                    return Err(format!("q4 must keep the seed {}: {b:?}", q[3]));
+                }
+            } else if eps.abs() < 1e-9 && !b.singular {
+                return Err(format!("near-singular branch not flagged: {b:?}"));
+            }
+            // Near the singularity q4 ± q6 is well conditioned; q4 alone carries the
+            // rounding of the target divided by sin(θ5) (≈ 1e-16 / |eps|).
+            // (an arm near its shoulder singularity adds its own ill-conditioning).
+            let q4_tol = if eps == 0.0 { PI } else { 1e-11 / eps.abs() };
+            found |= wrap(b.joints[4] - q[4]).abs() < 1e-9
+                && wrap(b.joints[3] + sgn * b.joints[5] - q[3] - sgn * q[5]).abs() < 1e-7
+                && wrap(b.joints[3] - q[3]).abs() < q4_tol;
+        }
+        if !found {
+            return Err(format!("original {q:?} missing from {:?}", br.as_slice()));
+        }
+        Ok(())
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(400))]
+
+        /// Every catalog OPW arm with joint 5 at 0, ±1e-12, ±1e-9, ±1e-7 from its
+        /// singular value (θ5 = 0 in the arm's own convention; also the opposed case).
+        #[test]
+        fn catalog_wrist_singularity_keeps_every_branch(
+            arm in 0usize..OPW_ARMS.len(),
+            q in proptest::array::uniform5(-PI..PI),
+            k in 0usize..NEAR_SINGULAR.len(),
+            opposed in proptest::bool::weighted(0.2),
+        ) {
+            let r = OPW_ARMS[arm].robot();
+            if let Err(e) = check_wrist_singular(&r, q, NEAR_SINGULAR[k], opposed) {
+                proptest::prop_assert!(false, "{}: {}", OPW_ARMS[arm].name(), e);
+            }
+        }
+
+        /// Random OPW geometries (offsets on joints 2, 3 and 6, random axis signs).
+        #[test]
+        fn random_opw_wrist_singularity_keeps_every_branch(
+            len in proptest::array::uniform7(0.0..1.0f64),
+            off in proptest::array::uniform3(-PI..PI),
+            signs in proptest::array::uniform6(proptest::bool::ANY),
+            q in proptest::array::uniform5(-PI..PI),
+            k in 0usize..NEAR_SINGULAR.len(),
+            opposed in proptest::bool::weighted(0.2),
+        ) {
+            let mut p = OpwParameters::new(
+                300.0 * len[0],
+                400.0 * len[1] - 200.0,
+                200.0 * len[2] - 100.0,
+                200.0 + 600.0 * len[3],
+                200.0 + 800.0 * len[4],
+                200.0 + 800.0 * len[5],
+                200.0 * len[6],
+            );
+            p.offsets = [0.0, off[0], off[1], 0.0, 0.0, off[2]];
+            p.signs = signs.map(|b| if b { 1.0 } else { -1.0 });
+            let r = p.robot("random", [None; 6]).unwrap();
+            if let Err(e) = check_wrist_singular(&r, q, NEAR_SINGULAR[k], opposed) {
+                proptest::prop_assert!(false, "{p:?}: {}", e);
             }
         }
     }

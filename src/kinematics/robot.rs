@@ -29,6 +29,7 @@ pub struct Robot {
     joints: Vec<usize>,
     chain: Vec<usize>,
     analytic: Option<OpwSolver>,
+    limits_source: Option<String>,
 }
 
 impl Robot {
@@ -65,6 +66,7 @@ impl Robot {
             joints,
             chain,
             analytic: None,
+            limits_source: None,
         };
         robot.analytic = OpwSolver::detect(&robot).ok();
         Ok(robot)
@@ -73,6 +75,31 @@ impl Robot {
     /// The robot's name.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Where the joint limits come from (a public source, `unverified: …`, or `None`
+    /// when the user supplied them).
+    pub fn limits_source(&self) -> Option<&str> {
+        self.limits_source.as_deref()
+    }
+
+    /// The same robot with a note on where its joint limits come from.
+    #[must_use]
+    pub fn with_limits_source(mut self, source: impl Into<String>) -> Self {
+        self.limits_source = Some(source.into());
+        self
+    }
+
+    /// Sets (or clears) the note on where the joint limits come from.
+    pub fn set_limits_source(&mut self, source: Option<String>) {
+        self.limits_source = source;
+    }
+
+    /// The same robot under another name.
+    #[must_use]
+    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
     }
 
     /// The kinematic tree.

@@ -11,7 +11,8 @@ use super::{Context, ScriptResult};
 use crate::document::robot::{joints_from_document, joints_to_document};
 use crate::kinematics::{
     drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
-    DrillOptions, Hole, HoleOutcome, IkOptions, MotionOptions, Robot, ToolAxis, Trajectory,
+    DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkOptions, JointLimits, MotionOptions,
+    OpwParameters, Robot, ToolAxis, Trajectory,
 };
 use crate::math::{AngleConvention, Transform};
 use rhai::{Array, Dynamic, Map};
@@ -24,6 +25,38 @@ pub struct RobotHandle {
     index: usize,
 }
 
+/// A robot built in a script (`robot_opw`, `robot_dh`), not yet in a document.
+#[derive(Clone)]
+pub struct RobotModel(Arc<Robot>);
+
+/// Per-joint limits from a script array of `[min, max]` (degrees; `[]` = unlimited).
+fn limits_arg(v: &Dynamic, n: usize) -> ScriptResult<Vec<Option<JointLimits>>> {
+    let arr = v.as_array_ref().map_err(|t| {
+        fail(format!(
+            "option `limits` must be an array of [min, max], not {t}"
+        ))
+    })?;
+    if arr.len() != n {
+        return err(format!(
+            "option `limits`: {} entries for {n} joints",
+            arr.len()
+        ));
+    }
+    arr.iter()
+        .enumerate()
+        .map(|(i, l)| {
+            if l.as_array_ref().is_ok_and(|a| a.is_empty()) {
+                return Ok(None);
+            }
+            let v = numbers(l, 2, &format!("limits[{i}]"))?;
+            if v[0] > v[1] {
+                return err(format!("limits[{i}]: min {} > max {}", v[0], v[1]));
+            }
+            Ok(Some(JointLimits::degrees(v[0], v[1])))
+        })
+        .collect()
+}
+
 /// A sampled motion returned by a robot move.
 #[derive(Clone)]
 pub struct TrajectoryHandle {
@@ -32,11 +65,18 @@ pub struct TrajectoryHandle {
 }
 
 impl RobotHandle {
-    /// The robot (kinematics, base, tool), its current joints (rad/mm) and its name.
-    fn snapshot(&self) -> ScriptResult<(Robot, Vec<f64>)> {
+    /// The robot (kinematics, base, tool; shared, not copied) and its current joints
+    /// (rad/mm). The document lock is held only to take the handle.
+    fn snapshot(&self) -> ScriptResult<(Arc<Robot>, Vec<f64>)> {
         let doc = self.doc.lock()?;
-        let r = &doc.robots()[self.index];
-        Ok((r.robot().clone(), r.joints().to_vec()))
+        let r = doc.robot_at(self.index).map_err(fail)?;
+        Ok((r.shared_robot(), r.joints().to_vec()))
+    }
+
+    /// The shared robot alone (no joint copy).
+    fn shared(&self) -> ScriptResult<Arc<Robot>> {
+        let doc = self.doc.lock()?;
+        Ok(doc.robot_at(self.index).map_err(fail)?.shared_robot())
     }
 
     fn set_joints(&self, q: &[f64]) -> ScriptResult<()> {
@@ -376,9 +416,53 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Robot.fk(joints: array) -> Transform",
         "World pose of the TCP for the joint values (degrees / mm); the robot does not move.",
         |r: &mut RobotHandle, j: Dynamic| -> ScriptResult<Transform> {
-            let (robot, _) = r.snapshot()?;
+            let robot = r.shared()?;
             let q = joints_arg(&robot, &j, "joints")?;
             robot.tcp_pose(&q).map_err(fail)
+        },
+    );
+    api.f(
+        "Robot.fk_many(joints: array) -> array",
+        "World TCP poses (Transforms, mm) for an array of joint arrays (degrees / mm), computed in one call (one document lock, no per-call overhead); the robot does not move. A bad entry is an error naming its index.",
+        |r: &mut RobotHandle, list: Array| -> ScriptResult<Array> {
+            let robot = r.shared()?;
+            list.iter()
+                .enumerate()
+                .map(|(i, j)| {
+                    let q = joints_arg(&robot, j, &format!("joints[{i}]"))?;
+                    robot
+                        .tcp_pose(&q)
+                        .map(Dynamic::from)
+                        .map_err(|e| fail(format!("fk_many: entry {i}: {e}")))
+                })
+                .collect()
+        },
+    );
+    api.f(
+        "Robot.ik_many(targets: array) -> array",
+        "For each world pose in `targets` (Transforms or `[x,y,z,a,b,c]`), the joint solution (degrees) nearest to the previous entry's (the first nearest the current joints), or `()` when the pose has no solution within the limits; one call for thousands of poses. The robot does not move.",
+        |r: &mut RobotHandle, list: Array| -> ScriptResult<Array> {
+            let (robot, mut q) = r.snapshot()?;
+            let opts = IkOptions::default();
+            let mut out = Array::with_capacity(list.len());
+            for (i, t) in list.iter().enumerate() {
+                let target = to_transform(t, &format!("targets[{i}]"))?;
+                match robot.inverse_nearest(&target, &q, &opts) {
+                    Ok(sol) => {
+                        out.push(joints_out(&robot, &sol.joints));
+                        q = sol.joints;
+                    }
+                    Err(_) => out.push(Dynamic::UNIT),
+                }
+            }
+            Ok(out)
+        },
+    );
+    api.get(
+        "Robot.limits_source -> string",
+        "Where the joint limits come from: a public source (`ros-industrial/…` file), `unverified: …`, or `\"\"` when the document gave them.",
+        |r: &mut RobotHandle| -> ScriptResult<String> {
+            Ok(r.shared()?.limits_source().unwrap_or_default().to_string())
         },
     );
     api.f(
@@ -395,7 +479,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
                 .collect())
         },
     );
-    api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. An unreachable or singular target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
+    api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. At a wrist singularity (joints 4 and 6 aligned) every branch still comes back with joint 5 exactly at its singular value and joint 4 kept at its current value (joint 6 takes the rest). An unreachable target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
         let (robot, q) = r.snapshot()?;
         let target = to_transform(&t, "target")?;
         let sols = robot.inverse(&target, &q, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
@@ -411,7 +495,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         let sol = robot.inverse_nearest(&target, &reference, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik_near: {e}", robot.name())))?;
         Ok(joints_out(&robot, &sol.joints))
     });
-    api.f("Robot.ik_branches(target) -> array", "Every solution with its configuration: `#{joints, configuration}` (configuration like `front/up/noflip`, or `\"\"` for numeric solutions).", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
+    api.f("Robot.ik_branches(target) -> array", "Every solution with its configuration: `#{joints, configuration, singular}` (configuration like `front/up/noflip`, or `\"\"` for numeric solutions; `singular` when joints 4 and 6 are at or near alignment).", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
         let (robot, q) = r.snapshot()?;
         let target = to_transform(&t, "target")?;
         let sols = robot.inverse(&target, &q, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
@@ -419,9 +503,183 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             let mut m = Map::new();
             m.insert("joints".into(), joints_out(&robot, &s.joints));
             m.insert("configuration".into(), Dynamic::from(s.configuration.map(|c| c.to_string()).unwrap_or_default()));
+            m.insert("singular".into(), Dynamic::from(s.singular));
             Dynamic::from_map(m)
         }).collect())
     });
+
+    api.type_::<RobotModel>("RobotModel");
+    api.f(
+        "robot_opw(params: map) -> RobotModel",
+        "An ortho-parallel arm from its published OPW parameters (opw_kinematics / ROS-Industrial `opw_parameters_*.yaml` convention, lengths in **mm** — the YAML files give metres): `#{a1, a2, b, c1, c2, c3, c4, offsets, signs, limits, name}`; `offsets` (6 angles, **degrees**) and `signs` (6 × ±1) default to 0 and +1; a joint value q means the geometric angle `sign·q − offset`; `limits` is 6 × `[min, max]` degrees (`[]` unlimited). Upright reference pose: axis 1 = base z, axes 2/3 parallel to y at (a1, b, c1) and (a1, b, c1 + c2), wrist centre at (a1 + a2, b, c1 + c2 + c3), flange c4 above it with z out of the flange. Solved in closed form.",
+        |m: Map| -> ScriptResult<RobotModel> {
+            check_keys(&m, &["a1", "a2", "b", "c1", "c2", "c3", "c4", "offsets", "signs", "limits", "name"], "robot_opw")?;
+            let need = |k: &str| -> ScriptResult<f64> {
+                opt_num(&m, k)?.ok_or_else(|| fail(format!("robot_opw: `{k}` is required (mm)")))
+            };
+            let mut p = OpwParameters::new(need("a1")?, need("a2")?, need("b")?, need("c1")?, need("c2")?, need("c3")?, need("c4")?);
+            if let Some(v) = m.get("offsets") {
+                let o = numbers(v, 6, "offsets")?;
+                p.offsets = std::array::from_fn(|i| o[i].to_radians());
+            }
+            if let Some(v) = m.get("signs") {
+                let o = numbers(v, 6, "signs")?;
+                p.signs = std::array::from_fn(|i| o[i]);
+            }
+            let limits = match m.get("limits") {
+                Some(v) => limits_arg(v, 6)?,
+                None => vec![None; 6],
+            };
+            let name = opt_str(&m, "name")?.unwrap_or_else(|| "opw".into());
+            let robot = p
+                .robot(&name, std::array::from_fn(|i| limits[i]))
+                .map_err(|e| fail(format!("robot_opw: {e}")))?;
+            Ok(RobotModel(Arc::new(robot)))
+        },
+    );
+    fn dh_model(rows: &Array, m: &Map) -> ScriptResult<RobotModel> {
+        check_keys(
+            m,
+            &["convention", "base", "tool", "limits", "name"],
+            "robot_dh",
+        )?;
+        let convention = match opt_str(m, "convention")?.as_deref() {
+            None | Some("standard") => DhConvention::Standard,
+            Some("modified") => DhConvention::Modified,
+            Some(o) => {
+                return err(format!(
+                    "robot_dh: unknown convention `{o}` (standard, modified)"
+                ))
+            }
+        };
+        let limits = match m.get("limits") {
+            Some(v) => limits_arg(v, rows.len())?,
+            None => vec![None; rows.len()],
+        };
+        let mut dh = Vec::with_capacity(rows.len());
+        for (i, r) in rows.iter().enumerate() {
+            let v = numbers(r, 4, &format!("rows[{i}] ([theta, d, a, alpha])"))?;
+            let mut row = DhRow::degrees(v[0], v[1], v[2], v[3]);
+            if let Some(l) = limits[i] {
+                row = row.with_limits(l);
+            }
+            dh.push(row);
+        }
+        let tool = match m.get("tool") {
+            Some(t) => to_transform(t, "tool")?,
+            None => Transform::IDENTITY,
+        };
+        let name = opt_str(m, "name")?.unwrap_or_else(|| "dh".into());
+        let mut robot = Robot::from_dh(&name, &dh, convention, tool)
+            .map_err(|e| fail(format!("robot_dh: {e}")))?;
+        if let Some(b) = m.get("base") {
+            robot.set_base(to_transform(b, "base")?);
+        }
+        Ok(RobotModel(Arc::new(robot)))
+    }
+    api.f(
+        "robot_dh(rows: array, options: map) -> RobotModel",
+        "A revolute arm from a D-H table: `rows` are `[theta, d, a, alpha]` per joint (**degrees**, mm; theta is the joint's zero offset); options `#{convention, base, tool, limits, name}`: `convention` `\"standard\"` (default: frame i from i−1 by Rz(θ)·Tz(d)·Tx(a)·Rx(α), as seed 000 table 2) or `\"modified\"` (Craig: Rx(α)·Tx(a)·Rz(θ)·Tz(d)); `base` and `tool` Transforms or `[x,y,z,a,b,c]`; `limits` per joint `[min, max]` degrees.",
+        |rows: Array, m: Map| -> ScriptResult<RobotModel> { dh_model(&rows, &m) },
+    );
+    api.f(
+        "robot_dh(rows: array) -> RobotModel",
+        "`robot_dh(rows, #{})`: standard D-H, no limits.",
+        |rows: Array| -> ScriptResult<RobotModel> { dh_model(&rows, &Map::new()) },
+    );
+    let c = ctx.clone();
+    api.f(
+        "load_urdf(path: string) -> RobotModel",
+        "A robot from a URDF file (path relative to the project; xacro already expanded): revolute, continuous, prismatic and fixed joints, origins (`xyz` metres → mm, `rpy`), axes, limits. The flange is the end of the chain with the most joints (a fixed `tool0` after the last joint counts). When the geometry is an ortho-parallel arm with a spherical wrist, IK is solved in closed form (`closed_form`, `opw_parameters`). Errors name the file, line and cause.",
+        move |path: &str| -> ScriptResult<RobotModel> {
+            let full = c.project.resolve(path).map_err(fail)?;
+            c.record_read(&full);
+            let u = crate::kinematics::read_urdf(&full, None).map_err(fail)?;
+            let source = format!("URDF {}", c.project.display(&full));
+            Ok(RobotModel(Arc::new(u.robot.with_limits_source(source))))
+        },
+    );
+    api.get(
+        "RobotModel.opw_parameters -> map",
+        "The ortho-parallel parameters detected from the geometry (mm): `#{axis2, upper_arm, forearm, b, signs}` (`axis2` = axis 2 in the arm plane `[x, z]`, `upper_arm` / `forearm` the arm-plane vectors at zero, `b` the lateral offset), or `()` when the robot is not an OPW arm.",
+        |r: &mut RobotModel| -> ScriptResult<Dynamic> {
+            Ok(match r.0.analytic() {
+                None => Dynamic::UNIT,
+                Some(s) => {
+                    let (p2, u2, u3, b, signs) = s.parameters();
+                    let mut m = Map::new();
+                    m.insert("axis2".into(), floats(p2));
+                    m.insert("upper_arm".into(), floats(u2));
+                    m.insert("forearm".into(), floats(u3));
+                    m.insert("b".into(), Dynamic::from(b));
+                    m.insert("signs".into(), floats(signs));
+                    Dynamic::from_map(m)
+                }
+            })
+        },
+    );
+    api.get(
+        "RobotModel.name -> string",
+        "The robot's name.",
+        |r: &mut RobotModel| -> ScriptResult<String> { Ok(r.0.name().to_string()) },
+    );
+    api.get(
+        "RobotModel.limits_source -> string",
+        "Where the joint limits come from (`URDF <file>`, a public source, `unverified: …`, or `\"\"`).",
+        |r: &mut RobotModel| -> ScriptResult<String> { Ok(r.0.limits_source().unwrap_or_default().to_string()) },
+    );
+    api.get(
+        "RobotModel.dof -> int",
+        "Number of joints.",
+        |r: &mut RobotModel| -> ScriptResult<i64> { Ok(r.0.dof() as i64) },
+    );
+    api.get("RobotModel.closed_form -> bool", "Whether inverse kinematics is solved in closed form (an OPW arm detected from the geometry) rather than numerically.", |r: &mut RobotModel| -> ScriptResult<bool> { Ok(r.0.analytic().is_some()) });
+    api.f(
+        "RobotModel.fk(joints: array) -> Transform",
+        "World pose of the TCP for the joint values (degrees / mm).",
+        |r: &mut RobotModel, j: Dynamic| -> ScriptResult<Transform> {
+            let q = joints_arg(&r.0, &j, "joints")?;
+            r.0.tcp_pose(&q).map_err(fail)
+        },
+    );
+    api.f(
+        "RobotModel.ik(target) -> array",
+        "Every joint solution (degrees) for the world pose, nearest to all-zero joints first.",
+        |r: &mut RobotModel, t: Dynamic| -> ScriptResult<Array> {
+            let target = to_transform(&t, "target")?;
+            let zero = vec![0.0; r.0.dof()];
+            let sols =
+                r.0.inverse(&target, &zero, &ik_all())
+                    .map_err(|e| fail(format!("ik: {e}")))?;
+            Ok(sols.iter().map(|s| joints_out(&r.0, &s.joints)).collect())
+        },
+    );
+    fn add_robot(
+        d: &DocHandle,
+        name: &str,
+        model: &RobotModel,
+        m: &Map,
+    ) -> ScriptResult<RobotHandle> {
+        check_keys(m, &["base"], "add_robot")?;
+        let base = m.get("base").map(|b| to_transform(b, "base")).transpose()?;
+        let index = d.lock()?.add_robot(name, &model.0, base).map_err(fail)?;
+        Ok(RobotHandle {
+            doc: d.clone(),
+            index,
+        })
+    }
+    api.f(
+        "Document.add_robot(name: string, robot: RobotModel, options: map) -> Robot",
+        "Adds a robot built with `robot_opw` / `robot_dh` to the document under `name`, options `#{base}` (world pose of its root, Transform or `[x,y,z,a,b,c]`). Its joints start at 0 (clamped into the limits) with dimensions `D1@角度<n>@<name>`; saving writes it as an explicit tree.",
+        |d: &mut DocHandle, name: &str, model: RobotModel, m: Map| -> ScriptResult<RobotHandle> { add_robot(d, name, &model, &m) },
+    );
+    api.f(
+        "Document.add_robot(name: string, robot: RobotModel) -> Robot",
+        "`add_robot(name, robot, #{})`.",
+        |d: &mut DocHandle, name: &str, model: RobotModel| -> ScriptResult<RobotHandle> {
+            add_robot(d, name, &model, &Map::new())
+        },
+    );
 
     fn motion<F>(
         r: &RobotHandle,

@@ -1,0 +1,426 @@
+//! URDF import: a ROS robot description (xacro already expanded) as a [`Robot`].
+//!
+//! # Conventions
+//! URDF lengths are **metres**; fitup multiplies them by 1000 (mm). A joint's
+//! `<origin xyz rpy>` places the child link frame in the parent link frame at joint
+//! value 0 (`rpy`: roll about X, pitch about Y, yaw about Z, fixed axes, i.e.
+//! `R = Rz(yaw)·Ry(pitch)·Rx(roll)`); `<axis xyz>` (default `1 0 0`) is in the child
+//! frame. fitup stores the same joint as a home transform (the origin) and an axis
+//! line in the parent frame (`R_origin·axis` through the origin's position), which
+//! gives the identical motion. Joint types: `revolute` and `continuous` (rad;
+//! `continuous` has no limits), `prismatic` (limits ×1000, mm), `fixed`; `floating` and
+//! `planar` are refused. The robot's flange is the link at the end of the chain with
+//! the most movable joints (then the deepest, e.g. a fixed `tool0`) unless a tip link
+//! is named;
+//! the tool is the identity. When the chain is an OPW arm the closed-form solver is
+//! chosen from the geometry (see [`Robot::analytic`]).
+//!
+//! Meshes: `<visual><geometry><mesh filename>` per link are listed in
+//! [`UrdfRobot::meshes`] (with the visual origin); `package://PKG/rest` URIs resolve to
+//! `rest` relative to the URDF's folder (ROS-Industrial support packages keep
+//! `urdf/` and `meshes/` side by side: a URDF in `PKG/urdf/` resolves
+//! `package://PKG/meshes/x.stl` to `PKG/urdf/../meshes/x.stl` — see [`resolve_mesh`]).
+//!
+//! Errors are [`SourceError`]s naming the file, line and column.
+
+use super::{Joint, JointLimits, KinematicTree, Link, Robot};
+use crate::diagnostics::SourceError;
+use crate::math::{Point3, Transform, Vec3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Largest URDF accepted (bytes): real descriptions are well under a megabyte.
+pub const MAX_URDF_BYTES: usize = 8 << 20;
+
+/// A visual mesh of a link.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UrdfMesh {
+    /// Index of the link in the robot's tree.
+    pub link: usize,
+    /// The `filename` attribute as written (`package://…`, relative or absolute).
+    pub uri: String,
+    /// Pose of the mesh in the link frame (mm).
+    pub origin: Transform,
+    /// Scale from the `scale` attribute times 1000 (metres → mm) per axis.
+    pub scale: [f64; 3],
+}
+
+/// A robot read from a URDF, with its link meshes.
+#[derive(Debug, Clone)]
+pub struct UrdfRobot {
+    /// The kinematics (mm, rad).
+    pub robot: Robot,
+    /// Visual meshes per link, in file order.
+    pub meshes: Vec<UrdfMesh>,
+}
+
+/// Where a mesh URI points, for a URDF at `urdf_path`: `package://PKG/rest` →
+/// `<urdf folder>/../rest` when the URDF sits in a `urdf/` folder of the package (the
+/// ROS-Industrial layout), else `<urdf folder>/rest`; `file://` and plain paths are
+/// relative to the URDF's folder. The caller still checks the path (project jail).
+pub fn resolve_mesh(urdf_path: &Path, uri: &str) -> PathBuf {
+    let folder = urdf_path.parent().unwrap_or(Path::new(""));
+    if let Some(rest) = uri.strip_prefix("package://") {
+        let rest = rest.split_once('/').map_or("", |(_, r)| r);
+        if folder.file_name().is_some_and(|n| n == "urdf") {
+            return folder.parent().unwrap_or(Path::new("")).join(rest);
+        }
+        return folder.join(rest);
+    }
+    folder.join(uri.strip_prefix("file://").unwrap_or(uri))
+}
+
+/// Parses URDF text; `path` names the file in errors (and is not read); `tip` names
+/// the flange link (default: see the module docs).
+///
+/// # Examples
+/// ```
+/// use fitup::kinematics::parse_urdf;
+/// let urdf = r#"<robot name="r">
+///   <link name="base"/><link name="arm"/>
+///   <joint name="j1" type="revolute">
+///     <origin xyz="0 0 0.5"/><parent link="base"/><child link="arm"/>
+///     <axis xyz="0 0 1"/><limit lower="-1" upper="1"/>
+///   </joint>
+/// </robot>"#;
+/// let r = parse_urdf(std::path::Path::new("r.urdf"), urdf, None).unwrap().robot;
+/// assert_eq!(r.dof(), 1);
+/// assert!((r.tcp_pose(&[0.3]).unwrap().translation().z - 500.0).abs() < 1e-9); // mm
+/// ```
+pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobot, SourceError> {
+    let whole = |m: String| SourceError::new(path, 1, 1, m);
+    if text.len() > MAX_URDF_BYTES {
+        return Err(whole(format!(
+            "{} bytes: larger than the {MAX_URDF_BYTES}-byte limit for a URDF",
+            text.len()
+        )));
+    }
+    let doc = roxmltree::Document::parse(text).map_err(|e| {
+        let p = e.pos();
+        SourceError::new(
+            path,
+            p.row as usize,
+            p.col as usize,
+            format!("not valid XML: {e}"),
+        )
+    })?;
+    let at = |node: roxmltree::Node, m: String| {
+        let p = doc.text_pos_at(node.range().start);
+        SourceError::new(path, p.row as usize, p.col as usize, m)
+    };
+    let root = doc.root_element();
+    if root.tag_name().name() != "robot" {
+        return Err(at(
+            root,
+            format!(
+                "the root element is <{}>, not <robot>",
+                root.tag_name().name()
+            ),
+        ));
+    }
+    let name = root.attribute("name").unwrap_or("urdf").to_string();
+    // Links, in file order.
+    let mut link_nodes = Vec::new();
+    let mut link_index: HashMap<&str, usize> = HashMap::new();
+    for n in root.children().filter(|n| n.has_tag_name("link")) {
+        let ln = n
+            .attribute("name")
+            .ok_or_else(|| at(n, "<link> without a name".into()))?;
+        if link_index.insert(ln, link_nodes.len()).is_some() {
+            return Err(at(n, format!("link `{ln}` is defined twice")));
+        }
+        link_nodes.push(n);
+    }
+    if link_nodes.is_empty() {
+        return Err(at(root, "the robot has no <link>".into()));
+    }
+    // Joints: child link → (joint node, parent link, kind, origin, axis, limits).
+    struct J<'a> {
+        node: roxmltree::Node<'a, 'a>,
+        parent: usize,
+        joint: Joint,
+        home: Transform,
+    }
+    let mut parent_of: HashMap<usize, J> = HashMap::new();
+    for n in root.children().filter(|n| n.has_tag_name("joint")) {
+        let jn = n.attribute("name").unwrap_or("");
+        let err = |node: roxmltree::Node, m: String| at(node, format!("joint `{jn}`: {m}"));
+        let link_ref = |tag: &str| -> Result<usize, SourceError> {
+            let e = n
+                .children()
+                .find(|c| c.has_tag_name(tag))
+                .ok_or_else(|| err(n, format!("no <{tag}>")))?;
+            let l = e
+                .attribute("link")
+                .ok_or_else(|| err(e, format!("<{tag}> without a link")))?;
+            link_index
+                .get(l)
+                .copied()
+                .ok_or_else(|| err(e, format!("{tag} link `{l}` is not defined")))
+        };
+        let (parent, child) = (link_ref("parent")?, link_ref("child")?);
+        let numbers = |node: roxmltree::Node,
+                       attr: &str,
+                       default: [f64; 3]|
+         -> Result<[f64; 3], SourceError> {
+            let Some(s) = node.attribute(attr) else {
+                return Ok(default);
+            };
+            let v: Vec<f64> = s
+                .split_whitespace()
+                .map(|t| t.parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| err(node, format!("{attr}=\"{s}\" is not three numbers")))?;
+            if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+                return Err(err(
+                    node,
+                    format!("{attr}=\"{s}\" is not three finite numbers"),
+                ));
+            }
+            Ok([v[0], v[1], v[2]])
+        };
+        let home = match n.children().find(|c| c.has_tag_name("origin")) {
+            Some(o) => origin(numbers(o, "xyz", [0.0; 3])?, numbers(o, "rpy", [0.0; 3])?),
+            None => Transform::IDENTITY,
+        };
+        let axis_node = n.children().find(|c| c.has_tag_name("axis"));
+        let axis = match axis_node {
+            Some(a) => numbers(a, "xyz", [1.0, 0.0, 0.0])?,
+            None => [1.0, 0.0, 0.0],
+        };
+        let axis = home.isometry().rotation * Vec3::new(axis[0], axis[1], axis[2]);
+        let kind = n.attribute("type").unwrap_or("");
+        let limit = n.children().find(|c| c.has_tag_name("limit"));
+        let bound = |attr: &str, scale: f64| -> Result<Option<f64>, SourceError> {
+            let Some(l) = limit else { return Ok(None) };
+            let Some(s) = l.attribute(attr) else {
+                return Ok(None);
+            };
+            let v: f64 = s
+                .trim()
+                .parse()
+                .map_err(|_| err(l, format!("{attr}=\"{s}\" is not a number")))?;
+            if !v.is_finite() {
+                return Err(err(l, format!("{attr}=\"{s}\" is not finite")));
+            }
+            Ok(Some(v * scale))
+        };
+        let limits = |scale: f64| -> Result<Option<JointLimits>, SourceError> {
+            match (bound("lower", scale)?, bound("upper", scale)?) {
+                (None, None) => Ok(None),
+                (lo, hi) => {
+                    let (lo, hi) = (lo.unwrap_or(0.0), hi.unwrap_or(0.0));
+                    if lo > hi {
+                        return Err(err(limit.unwrap_or(n), format!("lower {lo} > upper {hi}")));
+                    }
+                    // URDF writes lower = upper = 0 for "no limits given".
+                    Ok((lo < hi).then(|| JointLimits::new(lo, hi)))
+                }
+            }
+        };
+        if axis.norm() < 1e-12 && matches!(kind, "revolute" | "continuous" | "prismatic") {
+            return Err(err(
+                axis_node.unwrap_or(n),
+                "the axis has zero length".into(),
+            ));
+        }
+        let origin_point = Point3::from(home.translation());
+        let joint = match kind {
+            "fixed" => Joint::fixed(),
+            "revolute" => {
+                let mut j = Joint::revolute(axis, origin_point);
+                j.limits = limits(1.0)?;
+                j
+            }
+            "continuous" => Joint::revolute(axis, origin_point),
+            "prismatic" => {
+                let mut j = Joint::prismatic(axis);
+                j.limits = limits(1000.0)?;
+                j
+            }
+            other => {
+                return Err(err(n, format!("joint type `{other}` is not supported (revolute, continuous, prismatic, fixed)")))
+            }
+        };
+        if parent == child {
+            return Err(err(n, "a link cannot be its own parent".into()));
+        }
+        if let Some(prev) = parent_of.get(&child) {
+            let p = doc.text_pos_at(prev.node.range().start);
+            return Err(err(
+                n,
+                format!(
+                    "link `{}` already has a parent joint (line {}): a URDF is a tree",
+                    link_nodes[child].attribute("name").unwrap_or(""),
+                    p.row
+                ),
+            ));
+        }
+        parent_of.insert(
+            child,
+            J {
+                node: n,
+                parent,
+                joint,
+                home,
+            },
+        );
+    }
+    let roots: Vec<usize> = (0..link_nodes.len())
+        .filter(|i| !parent_of.contains_key(i))
+        .collect();
+    match roots.len() {
+        0 => {
+            return Err(at(
+                root,
+                "every link has a parent: the joints form a cycle".into(),
+            ))
+        }
+        1 => {}
+        _ => {
+            return Err(at(
+                link_nodes[roots[1]],
+                format!(
+                    "two root links (`{}` and `{}`): every link but one needs a parent joint",
+                    link_nodes[roots[0]].attribute("name").unwrap_or(""),
+                    link_nodes[roots[1]].attribute("name").unwrap_or("")
+                ),
+            ))
+        }
+    }
+    // Order parents first (breadth-first from the root); links not reached sit on a cycle.
+    let mut children: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (&c, j) in &parent_of {
+        children.entry(j.parent).or_default().push(c);
+    }
+    for v in children.values_mut() {
+        v.sort_unstable();
+    }
+    let mut order = vec![roots[0]];
+    let mut k = 0;
+    while k < order.len() {
+        if let Some(cs) = children.get(&order[k]) {
+            order.extend(cs);
+        }
+        k += 1;
+    }
+    if order.len() != link_nodes.len() {
+        let lost = (0..link_nodes.len())
+            .find(|i| !order.contains(i))
+            .unwrap_or(0);
+        return Err(at(
+            link_nodes[lost],
+            format!(
+                "link `{}` is on a cycle of joints, not connected to the root",
+                link_nodes[lost].attribute("name").unwrap_or("")
+            ),
+        ));
+    }
+    let new_index: HashMap<usize, usize> = order.iter().enumerate().map(|(i, &l)| (l, i)).collect();
+    let mut links = Vec::with_capacity(order.len());
+    let mut movable_depth = vec![0usize; order.len()];
+    let mut depth = vec![0usize; order.len()];
+    for (i, &l) in order.iter().enumerate() {
+        let lname = link_nodes[l].attribute("name").unwrap_or("");
+        match parent_of.get(&l) {
+            None => links.push(Link::new(lname, None, Transform::IDENTITY, Joint::fixed())),
+            Some(j) => {
+                let p = new_index[&j.parent];
+                movable_depth[i] = movable_depth[p] + usize::from(j.joint.kind.is_movable());
+                depth[i] = depth[p] + 1;
+                links.push(Link::new(lname, Some(p), j.home, j.joint));
+            }
+        }
+    }
+    let flange = match tip {
+        Some(t) => *link_index
+            .get(t)
+            .map(|l| &new_index[l])
+            .ok_or_else(|| whole(format!("tip link `{t}` is not defined")))?,
+        None => {
+            // Most movable joints, then the deepest link (a fixed `tool0` after the last
+            // joint), then the first in breadth-first order.
+            let key = |i: usize| (movable_depth[i], depth[i]);
+            let best = (0..order.len()).map(key).max().unwrap_or((0, 0));
+            (0..order.len()).position(|i| key(i) == best).unwrap_or(0)
+        }
+    };
+    let tree = KinematicTree::new(links).map_err(|e| whole(e.to_string()))?;
+    let robot = Robot::new(name, tree, flange, Transform::IDENTITY)
+        .map_err(|e| whole(e.to_string()))?
+        .with_limits_source(format!("URDF {}", path.display()));
+    let mut meshes = Vec::new();
+    for (i, &l) in order.iter().enumerate() {
+        for v in link_nodes[l]
+            .children()
+            .filter(|c| c.has_tag_name("visual"))
+        {
+            let Some(m) = v.descendants().find(|c| c.has_tag_name("mesh")) else {
+                continue;
+            };
+            let uri = m
+                .attribute("filename")
+                .ok_or_else(|| at(m, "<mesh> without a filename".into()))?;
+            let num3 =
+                |node: roxmltree::Node, attr: &str, d: [f64; 3]| -> Result<[f64; 3], SourceError> {
+                    let Some(s) = node.attribute(attr) else {
+                        return Ok(d);
+                    };
+                    let v: Vec<f64> = s
+                        .split_whitespace()
+                        .filter_map(|t| t.parse().ok())
+                        .collect();
+                    if v.len() != 3 || v.iter().any(|x: &f64| !x.is_finite()) {
+                        return Err(at(
+                            node,
+                            format!("{attr}=\"{s}\" is not three finite numbers"),
+                        ));
+                    }
+                    Ok([v[0], v[1], v[2]])
+                };
+            let origin_t = match v.children().find(|c| c.has_tag_name("origin")) {
+                Some(o) => origin(num3(o, "xyz", [0.0; 3])?, num3(o, "rpy", [0.0; 3])?),
+                None => Transform::IDENTITY,
+            };
+            let s = num3(m, "scale", [1.0; 3])?;
+            meshes.push(UrdfMesh {
+                link: i,
+                uri: uri.to_string(),
+                origin: origin_t,
+                scale: s.map(|x| x * 1000.0),
+            });
+        }
+    }
+    Ok(UrdfRobot { robot, meshes })
+}
+
+/// Reads and parses a URDF file (see [`parse_urdf`]).
+pub fn read_urdf(path: &Path, tip: Option<&str>) -> Result<UrdfRobot, SourceError> {
+    let meta = std::fs::metadata(path).map_err(|e| SourceError::new(path, 0, 0, e.to_string()))?;
+    if !meta.is_file() {
+        return Err(SourceError::new(path, 0, 0, "not a regular file"));
+    }
+    if meta.len() > MAX_URDF_BYTES as u64 {
+        return Err(SourceError::new(
+            path,
+            0,
+            0,
+            format!(
+                "{} bytes: larger than the {MAX_URDF_BYTES}-byte limit for a URDF",
+                meta.len()
+            ),
+        ));
+    }
+    let text =
+        std::fs::read_to_string(path).map_err(|e| SourceError::new(path, 0, 0, e.to_string()))?;
+    parse_urdf(path, &text, tip)
+}
+
+/// A URDF origin (metres, rpy radians) as a transform in mm.
+fn origin(xyz: [f64; 3], rpy: [f64; 3]) -> Transform {
+    Transform::from_isometry(Isometry3::from_parts(
+        Translation3::new(xyz[0] * 1000.0, xyz[1] * 1000.0, xyz[2] * 1000.0),
+        UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+    ))
+}

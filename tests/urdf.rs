@@ -1,0 +1,214 @@
+//! URDF import end to end: a 6-axis industrial arm (ROS-Industrial layout, written
+//! here) and a 7-DOF arm of our own load with the right kinematics (FK against hand
+//! computations, IK round trips, the closed form chosen for the OPW arm), mesh URIs
+//! resolve by the documented rule, and hostile files give located errors.
+
+use fitup::kinematics::{parse_urdf, resolve_mesh, IkOptions, OpwSolver, MAX_URDF_BYTES};
+use fitup::math::{Rng, Vec3};
+use std::f64::consts::FRAC_PI_2;
+use std::path::Path;
+
+/// A 6-axis industrial arm in the ROS-Industrial style (metres, `base_link`,
+/// `link_1..6`, `tool0` with z out of the flange), our own dimensions.
+const ARM6: &str = r#"<?xml version="1.0"?>
+<robot name="arm6">
+  <link name="base_link">
+    <visual><geometry><mesh filename="package://arm6_support/meshes/base_link.stl"/></geometry></visual>
+  </link>
+  <link name="link_1"><visual><origin xyz="0 0 0.1" rpy="0 0 0"/><geometry><mesh filename="package://arm6_support/meshes/link_1.stl"/></geometry></visual></link>
+  <link name="link_2"/>
+  <link name="link_3"/>
+  <link name="link_4"/>
+  <link name="link_5"/>
+  <link name="link_6"/>
+  <link name="tool0"/>
+  <joint name="joint_1" type="revolute">
+    <origin xyz="0 0 0.45" rpy="0 0 0"/><parent link="base_link"/><child link="link_1"/>
+    <axis xyz="0 0 1"/><limit lower="-3.14" upper="3.14" effort="0" velocity="2"/>
+  </joint>
+  <joint name="joint_2" type="revolute">
+    <origin xyz="0.15 0 0" rpy="0 0 0"/><parent link="link_1"/><child link="link_2"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" effort="0" velocity="2"/>
+  </joint>
+  <joint name="joint_3" type="revolute">
+    <origin xyz="0 0 0.6" rpy="0 0 0"/><parent link="link_2"/><child link="link_3"/>
+    <axis xyz="0 1 0"/><limit lower="-2.5" upper="2.5" effort="0" velocity="2"/>
+  </joint>
+  <joint name="joint_4" type="revolute">
+    <origin xyz="0 0 0.12" rpy="0 0 0"/><parent link="link_3"/><child link="link_4"/>
+    <axis xyz="1 0 0"/><limit lower="-3.5" upper="3.5" effort="0" velocity="2"/>
+  </joint>
+  <joint name="joint_5" type="revolute">
+    <origin xyz="0.55 0 0" rpy="0 0 0"/><parent link="link_4"/><child link="link_5"/>
+    <axis xyz="0 1 0"/><limit lower="-2.1" upper="2.1" effort="0" velocity="2"/>
+  </joint>
+  <joint name="joint_6" type="continuous">
+    <origin xyz="0.1 0 0" rpy="0 0 0"/><parent link="link_5"/><child link="link_6"/>
+    <axis xyz="1 0 0"/>
+  </joint>
+  <joint name="joint_6-tool0" type="fixed">
+    <origin xyz="0 0 0" rpy="0 1.5707963267948966 0"/><parent link="link_6"/><child link="tool0"/>
+  </joint>
+</robot>
+"#;
+
+/// A 7-DOF arm of our own: alternating z / y axes with elbow offsets (not OPW).
+const ARM7: &str = r#"<robot name="arm7">
+  <link name="l0"/><link name="l1"/><link name="l2"/><link name="l3"/><link name="l4"/>
+  <link name="l5"/><link name="l6"/><link name="l7"/><link name="tip"/>
+  <joint name="j1" type="revolute"><origin xyz="0 0 0.3"/><parent link="l0"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><axis xyz="0 1 0"/><limit lower="-1.8" upper="1.8"/></joint>
+  <joint name="j3" type="revolute"><origin xyz="0 0 0.4"/><parent link="l2"/><child link="l3"/><axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9"/></joint>
+  <joint name="j4" type="revolute"><origin xyz="0.05 0 0"/><parent link="l3"/><child link="l4"/><axis xyz="0 1 0"/><limit lower="-3.0" upper="3.0"/></joint>
+  <joint name="j5" type="revolute"><origin xyz="-0.05 0 0.35"/><parent link="l4"/><child link="l5"/><axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9"/></joint>
+  <joint name="j6" type="revolute"><parent link="l5"/><child link="l6"/><axis xyz="0 1 0"/><limit lower="-3.0" upper="3.0"/></joint>
+  <joint name="j7" type="revolute"><origin xyz="0.08 0 0.1"/><parent link="l6"/><child link="l7"/><axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9"/></joint>
+  <joint name="flange" type="fixed"><origin xyz="0 0 0.1"/><parent link="l7"/><child link="tip"/></joint>
+</robot>"#;
+
+fn path() -> &'static Path {
+    Path::new("support/urdf/arm.urdf")
+}
+
+/// The 6-axis arm: FK by hand (mm), z out of the flange, the closed form detected and
+/// every IK solution round-tripping; joint 6 `continuous` has no limits.
+#[test]
+fn industrial_arm_loads_with_closed_form_ik() {
+    let u = parse_urdf(path(), ARM6, None).unwrap();
+    let r = &u.robot;
+    assert_eq!(r.dof(), 6);
+    assert!(r.analytic().is_some(), "{:?}", r.analytic_rejection());
+    assert_eq!(r.tree().links()[r.flange()].name.as_deref(), Some("tool0"));
+    assert!(r.joint_limits()[5].is_none());
+    assert!((r.joint_limits()[1].unwrap().max - 2.0).abs() < 1e-15);
+    // q = 0: tool0 at (150 + 550 + 100, 0, 450 + 600 + 120), z along +x.
+    let t = r.tcp_pose(&[0.0; 6]).unwrap();
+    assert!((t.translation() - Vec3::new(800.0, 0.0, 1170.0)).norm() < 1e-9);
+    assert!((t.apply_vector(&Vec3::z()) - Vec3::x()).norm() < 1e-12);
+    // Joint 2 by 90° about +y through (150, 0, 450): (650, 0, 720) turns to (720, 0, −650).
+    let t = r.tcp_pose(&[0.0, FRAC_PI_2, 0.0, 0.0, 0.0, 0.0]).unwrap();
+    assert!((t.translation() - Vec3::new(870.0, 0.0, -200.0)).norm() < 1e-9);
+    // Joint 1 by 90°: a quarter turn about z.
+    let t = r.tcp_pose(&[FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+    assert!((t.translation() - Vec3::new(0.0, 800.0, 1170.0)).norm() < 1e-9);
+    // The derived OPW parameters: upper arm 600 mm, forearm √(550² + 120²), no lateral offset.
+    let (_p2, u2, u3, b, _) = OpwSolver::detect(r).unwrap().parameters();
+    assert!((u2[0].hypot(u2[1]) - 600.0).abs() < 1e-9);
+    assert!((u3[0].hypot(u3[1]) - 550f64.hypot(120.0)).abs() < 1e-9);
+    assert!(b.abs() < 1e-9);
+    let mut rng = Rng::new(6);
+    for _ in 0..300 {
+        let q: Vec<f64> = (0..6).map(|_| rng.range(-1.5, 1.5)).collect();
+        let target = r.tcp_pose(&q).unwrap();
+        let sols = r.inverse(&target, &q, &IkOptions::default()).unwrap();
+        assert!(sols[0]
+            .joints
+            .iter()
+            .zip(&q)
+            .all(|(a, b)| (a - b).abs() < 1e-7));
+        for s in &sols {
+            assert!(r
+                .tcp_pose(&s.joints)
+                .unwrap()
+                .approx_eq(&target, 1e-6, 1e-9));
+        }
+    }
+    // Meshes: listed per link with their visual origin, scaled to mm.
+    assert_eq!(u.meshes.len(), 2);
+    assert_eq!(u.meshes[1].link, 1);
+    assert!((u.meshes[1].origin.translation() - Vec3::new(0.0, 0.0, 100.0)).norm() < 1e-12);
+    assert_eq!(u.meshes[0].scale, [1000.0; 3]);
+}
+
+/// The 7-DOF arm: FK by hand, numeric IK (no closed form) round-trips.
+#[test]
+fn seven_dof_arm_loads_with_numeric_ik() {
+    let r = parse_urdf(path(), ARM7, None).unwrap().robot;
+    assert_eq!(r.dof(), 7);
+    assert!(r.analytic().is_none());
+    // q = 0: tip at x = 50 − 50 + 80, z = 300 + 400 + 350 + 100 + 100.
+    let t = r.tcp_pose(&[0.0; 7]).unwrap();
+    assert!((t.translation() - Vec3::new(80.0, 0.0, 1250.0)).norm() < 1e-9);
+    // Joint 4 by 90° about +y through (50, 0, 700): (30, 0, 550) turns to (550, 0, −30).
+    let mut q = [0.0; 7];
+    q[3] = FRAC_PI_2;
+    let t = r.tcp_pose(&q).unwrap();
+    assert!((t.translation() - Vec3::new(600.0, 0.0, 670.0)).norm() < 1e-9);
+    let mut rng = Rng::new(7);
+    let opts = IkOptions::default();
+    for _ in 0..40 {
+        let q: Vec<f64> = (0..7).map(|_| rng.range(-1.2, 1.2)).collect();
+        let target = r.tcp_pose(&q).unwrap();
+        let start: Vec<f64> = q.iter().map(|v| v + rng.range(-0.2, 0.2)).collect();
+        let sols = r.inverse(&target, &start, &opts).unwrap();
+        for s in &sols {
+            let (ang, dist) = r.tcp_pose(&s.joints).unwrap().distance_to(&target);
+            assert!(dist < 1e-6 && ang < 1e-9, "{dist} mm {ang} rad");
+            assert!(r.limit_violation(&s.joints).is_none());
+        }
+    }
+}
+
+/// `package://PKG/rest` resolves next to the URDF's package (ROS-Industrial layout).
+#[test]
+fn package_uris_resolve_by_the_documented_rule() {
+    let p = Path::new("models/arm6_support/urdf/arm6.urdf");
+    assert_eq!(
+        resolve_mesh(p, "package://arm6_support/meshes/link_1.stl"),
+        Path::new("models/arm6_support/meshes/link_1.stl")
+    );
+    let flat = Path::new("models/arm6.urdf");
+    assert_eq!(
+        resolve_mesh(flat, "package://arm6_support/meshes/l.stl"),
+        Path::new("models/meshes/l.stl")
+    );
+    assert_eq!(
+        resolve_mesh(flat, "meshes/l.stl"),
+        Path::new("models/meshes/l.stl")
+    );
+}
+
+fn error(text: &str) -> String {
+    parse_urdf(path(), text, None).unwrap_err().to_string()
+}
+
+/// Hostile URDFs: located errors (file and line), no panic, bounded work.
+#[test]
+fn hostile_urdfs_give_located_errors() {
+    let cycle = r#"<robot name="c">
+<link name="a"/><link name="b"/>
+<joint name="ab" type="fixed"><parent link="a"/><child link="b"/></joint>
+<joint name="ba" type="fixed"><parent link="b"/><child link="a"/></joint>
+</robot>"#;
+    let e = error(cycle);
+    assert!(e.contains("cycle") && e.contains("arm.urdf"), "{e}");
+    let two_parents = r#"<robot name="c">
+<link name="a"/><link name="b"/><link name="c"/>
+<joint name="ab" type="fixed"><parent link="a"/><child link="b"/></joint>
+<joint name="cb" type="fixed"><parent link="c"/><child link="b"/></joint>
+</robot>"#;
+    let e = error(two_parents);
+    assert!(
+        e.contains(":4:") && e.contains("already has a parent"),
+        "{e}"
+    );
+    let missing = "<robot name=\"m\">\n<link name=\"a\"/>\n<joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"ghost\"/></joint>\n</robot>";
+    let e = error(missing);
+    assert!(e.contains(":3:") && e.contains("ghost"), "{e}");
+    let roots = "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n</robot>";
+    let e = error(roots);
+    assert!(e.contains(":3:") && e.contains("two root links"), "{e}");
+    for bad in ["nan 0 0", "0 inf 0", "1e999 0 0", "0 0", "x y z"] {
+        let t = format!("<robot name=\"n\">\n<link name=\"a\"/><link name=\"b\"/>\n<joint name=\"j\" type=\"revolute\"><origin xyz=\"{bad}\"/><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"0 0 1\"/></joint>\n</robot>");
+        let e = error(&t);
+        assert!(e.contains(":3:") && e.contains("xyz"), "{bad}: {e}");
+    }
+    let e = error("<robot name=\"u\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"floating\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>");
+    assert!(e.contains("floating"), "{e}");
+    let e = error("<robot><link name=\"a\"></robot>");
+    assert!(e.contains("not valid XML"), "{e}");
+    let e = error("<robot name=\"z\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"0 0 0\"/></joint></robot>");
+    assert!(e.contains("zero length"), "{e}");
+    let huge = format!("<robot name=\"h\">{}</robot>", " ".repeat(MAX_URDF_BYTES));
+    assert!(error(&huge).contains("limit"));
+}
