@@ -3,6 +3,7 @@
 //! 2 usage).
 
 mod check;
+mod db;
 mod run;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +39,11 @@ pub struct ScriptArgs {
     /// Operation limit of the sandbox (roughly: expressions evaluated).
     #[arg(long, default_value_t = crate::script::Limits::default().max_operations)]
     pub max_operations: u64,
+    /// Record every run in the results database: `--db` alone for the project's
+    /// (`FITUP_DB`, else `fitup.db`), or `--db FILE|postgres://…`; the script's
+    /// `open_db()` opens the same one.
+    #[arg(long, num_args = 0..=1, default_missing_value = "")]
+    pub db: Option<String>,
 }
 
 /// The subcommands.
@@ -58,6 +64,9 @@ pub enum Command {
         #[arg(long, default_value = "docs/api.md")]
         out: PathBuf,
     },
+    /// The results database: `runs`, `paths`, `show ID`, `export ID --csv|--json`,
+    /// `diff RUN_A RUN_B`.
+    Db(db::DbArgs),
     /// Write the demo cell (seed 000 fig. 11) into a folder: `cell.yaml` and `meshes/`.
     Demo {
         /// Target folder.
@@ -92,6 +101,7 @@ pub fn main() -> i32 {
     let exit = match cli.command {
         Command::Run(a) => run::run(&a),
         Command::Watch(a) => run::watch(&a),
+        Command::Db(a) => db::main(&a),
         Command::Check { doc } => check::check(&doc),
         Command::Docs { out } => {
             match crate::fsutil::write_atomic(&out, crate::script::api_reference().as_bytes()) {

@@ -62,14 +62,17 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
             }
         };
     }
-    let opts = match options(a) {
+    let mut opts = match options(a) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: {e}");
             return Exit::Usage;
         }
     };
+    let recorder = super::db::Recorder::new(a, &mut opts);
+    recorder.start(a, &opts);
     let outcome = run_script(&opts, &Arc::new(Caches::default()));
+    recorder.finish(&outcome.result);
     match outcome.result {
         Ok(()) => Exit::Ok,
         Err(e) => {
@@ -80,13 +83,15 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
 }
 
 pub(super) fn watch(a: &ScriptArgs) -> Exit {
-    let opts = match options(a) {
+    let mut opts = match options(a) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: {e}");
             return Exit::Usage;
         }
     };
+    let recorder = super::db::Recorder::new(a, &mut opts);
+    let run_opts = opts.clone();
     let project = opts.project.clone();
     let stop = Arc::new(AtomicBool::new(false));
     println!(
@@ -97,6 +102,7 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
         let mut out = std::io::stdout().lock();
         match event {
             WatchEvent::RunStarted { number, changed } => {
+                recorder.start(a, &run_opts);
                 let what = if changed.is_empty() {
                     "first run".to_string()
                 } else {
@@ -109,6 +115,7 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
                 let _ = writeln!(out, "== run {number} at {} ({what})", clock());
             }
             WatchEvent::RunFinished { number, outcome } => {
+                recorder.finish(&outcome.result);
                 let ms = outcome.elapsed.as_secs_f64() * 1000.0;
                 match &outcome.result {
                     Ok(()) => {

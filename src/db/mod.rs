@@ -34,6 +34,7 @@
 
 mod backend;
 mod records;
+pub mod recording;
 mod schema;
 
 pub use backend::{Dialect, SqlValue};

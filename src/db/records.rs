@@ -106,6 +106,8 @@ pub struct StoredPath {
     pub created_at: String,
     /// Component, seed, options.
     pub meta: PathMeta,
+    /// The number of key poses (also when they were not read: [`PathQuery::without_poses`]).
+    pub pose_count: usize,
     /// The path: key poses (mm), lengths (mm), rotation (rad), statistics.
     pub path: Path,
 }
@@ -833,6 +835,7 @@ fn path_from(tx: &mut dyn Tx, r: &[SqlValue], with_poses: bool) -> Result<Stored
         run_id: r[1].as_i64(),
         name: text(&r[2]).unwrap_or_default(),
         created_at: text(&r[3]).unwrap_or_default(),
+        pose_count: int(&r[10]) as usize,
         meta: PathMeta {
             component: text(&r[4]),
             seed: r[5].as_i64().map(|s| s as u64),

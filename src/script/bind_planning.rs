@@ -18,7 +18,7 @@ use std::time::Instant;
 /// A planned path (cheap to clone); it keeps the run context so `save_csv` can check
 /// and record the file it writes.
 #[derive(Clone)]
-pub struct PathHandle(Arc<Path>, Arc<Context>);
+pub struct PathHandle(pub(super) Arc<Path>, pub(super) Arc<Context>);
 
 const OPTION_KEYS: [&str; 20] = [
     "disassemble",

@@ -27,7 +27,7 @@ pub struct RobotHandle {
 /// A sampled motion returned by a robot move.
 #[derive(Clone)]
 pub struct TrajectoryHandle {
-    trajectory: Arc<Trajectory>,
+    pub(super) trajectory: Arc<Trajectory>,
     ctx: Arc<Context>,
 }
 

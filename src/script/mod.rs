@@ -6,6 +6,7 @@
 //! which are degrees; a dimension's `system_value` is SI (metres, radians).
 
 mod api;
+mod bind_db;
 mod bind_document;
 mod bind_interference;
 mod bind_math;
