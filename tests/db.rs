@@ -398,7 +398,7 @@ fn a_file_that_is_not_a_database_is_a_clear_error() {
     let e = Database::open(&Target::Sqlite(p.clone())).unwrap_err();
     assert!(matches!(e, DbError::Open { .. }), "{e}");
     assert!(e.to_string().contains(&p.display().to_string()) && e.to_string().contains("not a database"), "{e}");
-    assert_eq!(std::fs::read_to_string(&p).unwrap().len(), 2600, "the file is left alone");
+    assert_eq!(std::fs::read_to_string(&p).unwrap().len(), 2800, "the file is left alone");
     let e = Database::open(&Target::Sqlite(dir.path().join("missing/x.db"))).unwrap_err();
     assert!(e.to_string().contains("does not exist"), "{e}");
 }

@@ -170,7 +170,7 @@ pub(crate) fn migrate(tx: &mut dyn Tx, target: u32, now: &str) -> Result<Migrate
     if dialect == Dialect::Postgres {
         // Two processes opening a fresh database at once: the second waits here
         // instead of failing on a half-created table.
-        tx.rows("SELECT pg_advisory_xact_lock(7414014)", &[])?;
+        tx.exec("SELECT pg_advisory_xact_lock(7414014)", &[])?;
     }
     tx.exec(
         &fill(
