@@ -13,7 +13,7 @@ use fitup::document::DimensionKind;
 use fitup::kinematics::{JointKind, Trajectory, TrajectorySample};
 use fitup::math::{AngleConvention, Transform, Vec3};
 use fitup::planning::{EdgeResolution, Failure, Path};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -51,7 +51,12 @@ fn postgres_url() -> Option<String> {
             if std::env::var("CI").is_ok_and(|v| v == "true") {
                 panic!("FITUP_TEST_POSTGRES is not set under CI=true: the PostgreSQL tests must run (.ci/run starts a server)");
             }
-            eprintln!("note: PostgreSQL tests skipped: set FITUP_TEST_POSTGRES=postgres://user@host:port/db to run them");
+            // Straight to stderr: the test harness would swallow `eprintln!`.
+            use std::io::Write;
+            let _ = writeln!(
+                std::io::stderr(),
+                "note: PostgreSQL tests skipped: set FITUP_TEST_POSTGRES=postgres://user@host:port/db to run them"
+            );
             None
         }
     }
@@ -104,7 +109,14 @@ fn pose(x: f64, y: f64, z: f64, abc_deg: [f64; 3]) -> Transform {
 
 fn sample_path(n: usize) -> Path {
     let poses: Vec<Transform> = (0..n)
-        .map(|i| pose(i as f64 * 1.5, 200.0 - i as f64, 751.25, [0.0, 90.0 * (i % 3) as f64 / 7.0, -12.5]))
+        .map(|i| {
+            pose(
+                i as f64 * 1.5,
+                200.0 - i as f64,
+                751.25,
+                [0.0, 90.0 * (i % 3) as f64 / 7.0, -12.5],
+            )
+        })
         .collect();
     let length = poses.windows(2).map(|w| w[0].distance_to(&w[1]).1).sum();
     Path {
@@ -158,16 +170,23 @@ fn every_stored_kind_round_trips() {
             seed: Some(u64::MAX - 3),
             options: Some(serde_json::json!({"seed": 7, "disassemble": true})),
         };
-        let id = db.save_path(Some(run), "screw4_into_hole1", &path, &meta).unwrap();
+        let id = db
+            .save_path(Some(run), "screw4_into_hole1", &path, &meta)
+            .unwrap();
         let mut lost = sample_path(0);
         lost.failure = Some(Failure::Exhausted(4));
         lost.resolution = EdgeResolution::Continuous {
             contact_step_mm: 0.05,
         };
         lost.planner = "plan_assembly";
-        let lost_id = db.save_path(None, "nowhere", &lost, &PathMeta::default()).unwrap();
+        let lost_id = db
+            .save_path(None, "nowhere", &lost, &PathMeta::default())
+            .unwrap();
         let back = db.path(id).unwrap();
-        assert_eq!((back.run_id, back.name.as_str(), &back.meta), (Some(run), "screw4_into_hole1", &meta));
+        assert_eq!(
+            (back.run_id, back.name.as_str(), &back.meta),
+            (Some(run), "screw4_into_hole1", &meta)
+        );
         assert_same_path(&path, &back.path);
         assert_eq!(db.path(lost_id).unwrap().path, lost);
         let q = |name: &str| PathQuery {
@@ -202,9 +221,14 @@ fn every_stored_kind_round_trips() {
                 tcp: pose(500.0, i as f64, 300.0, [180.0, 0.0, 5.0 * i as f64]),
             });
         }
-        let tid = db.save_trajectory(Some(run), "weld", Some("mz07"), &t).unwrap();
+        let tid = db
+            .save_trajectory(Some(run), "weld", Some("mz07"), &t)
+            .unwrap();
         let tb = db.trajectory(tid).unwrap();
-        assert_eq!((tb.name.as_str(), tb.robot.as_deref()), ("weld", Some("mz07")));
+        assert_eq!(
+            (tb.name.as_str(), tb.robot.as_deref()),
+            ("weld", Some("mz07"))
+        );
         assert_eq!(tb.trajectory.joint_kinds, t.joint_kinds);
         assert_eq!(tb.trajectory.samples.len(), 5);
         for (a, b) in t.samples.iter().zip(&tb.trajectory.samples) {
@@ -224,7 +248,10 @@ fn every_stored_kind_round_trips() {
         assert_eq!(sb.document, snap.document);
         let mut names: Vec<_> = snap.poses.iter().map(|p| p.0.clone()).collect();
         names.sort();
-        assert_eq!(sb.poses.iter().map(|p| p.0.clone()).collect::<Vec<_>>(), names);
+        assert_eq!(
+            sb.poses.iter().map(|p| p.0.clone()).collect::<Vec<_>>(),
+            names
+        );
         for (n, t) in &sb.poses {
             let orig = &snap.poses.iter().find(|p| &p.0 == n).unwrap().1;
             assert!(orig.approx_eq(t, 1e-9, 1e-12));
@@ -250,13 +277,19 @@ fn every_stored_kind_round_trips() {
                 kind: String::new(),
             },
         ];
-        let iid = db.save_interference(Some(run), "after move", &pairs).unwrap();
+        let iid = db
+            .save_interference(Some(run), "after move", &pairs)
+            .unwrap();
         assert_eq!(db.interference(iid).unwrap().pairs, pairs);
 
         // The run itself.
-        db.finish_run(run, RunStatus::Failed, "line 1\nerror: x").unwrap();
+        db.finish_run(run, RunStatus::Failed, "line 1\nerror: x")
+            .unwrap();
         let r = db.run(run).unwrap();
-        assert_eq!((r.status.as_str(), r.output.as_str()), ("failed", "line 1\nerror: x"));
+        assert_eq!(
+            (r.status.as_str(), r.output.as_str()),
+            ("failed", "line 1\nerror: x")
+        );
         assert!(r.finished_at.unwrap() >= r.started_at);
         assert_eq!(r.document.as_deref(), Some("models/cell.yaml"));
 
@@ -282,11 +315,17 @@ fn non_finite_values_are_refused_and_nothing_is_half_written() {
         let mut db = Database::open(&f.target).unwrap();
         let mut p = sample_path(5);
         p.length_mm = f64::NAN;
-        let e = db.save_path(None, "bad", &p, &PathMeta::default()).unwrap_err();
+        let e = db
+            .save_path(None, "bad", &p, &PathMeta::default())
+            .unwrap_err();
         assert!(matches!(e, DbError::Invalid { .. }), "{e}");
         assert!(e.to_string().contains("path `bad`"), "{e}");
         assert!(db.paths(&PathQuery::default()).unwrap().is_empty());
-        assert!(db.query("SELECT * FROM path_poses", &[]).unwrap().rows.is_empty());
+        assert!(db
+            .query("SELECT * FROM path_poses", &[])
+            .unwrap()
+            .rows
+            .is_empty());
     });
 }
 
@@ -342,21 +381,36 @@ fn migration_from_the_previous_schema_keeps_the_data() {
         let mut db = Database::open(&f.target).unwrap();
         assert_eq!(db.schema_version().unwrap(), fitup::db::SCHEMA_VERSION);
         let old = db.path(1).unwrap();
-        assert_eq!((old.name.as_str(), old.path.planner, old.meta.component.clone()), ("old", "rrt", None));
+        assert_eq!(
+            (
+                old.name.as_str(),
+                old.path.planner,
+                old.meta.component.clone()
+            ),
+            ("old", "rrt", None)
+        );
         assert_eq!(old.path.poses.len(), 2);
         assert!((old.path.poses[1].translation().x - 10.0).abs() < 1e-12);
         assert_eq!(db.runs().unwrap()[0].script, "old.rhai");
         // The new kinds can be stored now.
         let t = Trajectory::new(vec![JointKind::Revolute]);
         db.save_trajectory(None, "empty", None, &t).unwrap();
-        let versions = db.query("SELECT version FROM schema_version ORDER BY version", &[]).unwrap();
-        assert_eq!(versions.rows, vec![vec![SqlValue::Int(1)], vec![SqlValue::Int(2)]]);
+        let versions = db
+            .query("SELECT version FROM schema_version ORDER BY version", &[])
+            .unwrap();
+        assert_eq!(
+            versions.rows,
+            vec![vec![SqlValue::Int(1)], vec![SqlValue::Int(2)]]
+        );
     });
 }
 
 fn raw_exec(target: &Target, sql: &str) {
     match target {
-        Target::Sqlite(p) => rusqlite::Connection::open(p).unwrap().execute_batch(sql).unwrap(),
+        Target::Sqlite(p) => rusqlite::Connection::open(p)
+            .unwrap()
+            .execute_batch(sql)
+            .unwrap(),
         Target::Postgres(u) => postgres::Client::connect(u, postgres::NoTls)
             .unwrap()
             .batch_execute(sql)
@@ -374,7 +428,9 @@ fn a_database_from_a_newer_fitup_is_refused() {
         );
         let e = Database::open(&f.target).unwrap_err();
         match &e {
-            DbError::NewerSchema { found, supported, .. } => {
+            DbError::NewerSchema {
+                found, supported, ..
+            } => {
                 assert_eq!((*found, *supported), (99, fitup::db::SCHEMA_VERSION))
             }
             other => panic!("expected NewerSchema, got {other}"),
@@ -386,7 +442,11 @@ fn a_database_from_a_newer_fitup_is_refused() {
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(1), "{}", common::text(&out));
-        assert!(common::text(&out).contains("written by a newer fitup (schema version 99"), "{}", common::text(&out));
+        assert!(
+            common::text(&out).contains("written by a newer fitup (schema version 99"),
+            "{}",
+            common::text(&out)
+        );
     });
 }
 
@@ -397,8 +457,16 @@ fn a_file_that_is_not_a_database_is_a_clear_error() {
     std::fs::write(&p, "runs:\n  - not sqlite at all\n".repeat(100)).unwrap();
     let e = Database::open(&Target::Sqlite(p.clone())).unwrap_err();
     assert!(matches!(e, DbError::Open { .. }), "{e}");
-    assert!(e.to_string().contains(&p.display().to_string()) && e.to_string().contains("not a database"), "{e}");
-    assert_eq!(std::fs::read_to_string(&p).unwrap().len(), 2800, "the file is left alone");
+    assert!(
+        e.to_string().contains(&p.display().to_string())
+            && e.to_string().contains("not a database"),
+        "{e}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&p).unwrap().len(),
+        2800,
+        "the file is left alone"
+    );
     let e = Database::open(&Target::Sqlite(dir.path().join("missing/x.db"))).unwrap_err();
     assert!(e.to_string().contains("does not exist"), "{e}");
 }
@@ -460,22 +528,39 @@ fn four_concurrent_writer_processes_lose_nothing() {
             assert!(out.status.success(), "{}", common::text(&out));
         }
         let mut d = Database::open(&f.target).unwrap();
-        let paths = d.paths(&PathQuery { without_poses: true, ..Default::default() }).unwrap();
+        let paths = d
+            .paths(&PathQuery {
+                without_poses: true,
+                ..Default::default()
+            })
+            .unwrap();
         assert_eq!(paths.len(), 800);
         let mut names: Vec<_> = paths.iter().map(|p| p.name.clone()).collect();
         names.sort();
         names.dedup();
         assert_eq!(names.len(), 800, "every result stored once");
         for (id, said, rows) in pose_counts(&mut d).unwrap() {
-            assert!(said >= 2 && said == rows, "path {id}: {said} poses said, {rows} stored");
+            assert!(
+                said >= 2 && said == rows,
+                "path {id}: {said} poses said, {rows} stored"
+            );
         }
         // Four recorded runs, each ok, each owning its 200 paths.
         let runs = d.runs().unwrap();
         assert_eq!(runs.len(), 4);
         for r in &runs {
             assert_eq!(r.status, "ok", "{r:?}");
-            assert!(r.output.contains(&format!("saved by run {}", r.id)), "{r:?}");
-            let mine = d.paths(&PathQuery { run_id: Some(r.id), without_poses: true, ..Default::default() }).unwrap();
+            assert!(
+                r.output.contains(&format!("saved by run {}", r.id)),
+                "{r:?}"
+            );
+            let mine = d
+                .paths(&PathQuery {
+                    run_id: Some(r.id),
+                    without_poses: true,
+                    ..Default::default()
+                })
+                .unwrap();
             assert_eq!(mine.len(), 200);
         }
     });
@@ -488,25 +573,40 @@ fn kill_9_during_writes_leaves_a_consistent_database() {
         let db = db_arg(&f.target);
         let mut child = common::fitup()
             .current_dir(dir.path())
-            .args(["run", "scripts/writer0.rhai", "--db", &db, "--max-operations", "1000000000000"])
+            .args([
+                "run",
+                "scripts/writer0.rhai",
+                "--db",
+                &db,
+                "--max-operations",
+                "1000000000000",
+            ])
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
             .unwrap();
         // Wait until it is writing steadily, then kill it without warning.
         let deadline = Instant::now() + Duration::from_secs(60);
-        let mut d = None;
         loop {
-            assert!(Instant::now() < deadline, "the writer never stored 30 paths");
+            assert!(
+                Instant::now() < deadline,
+                "the writer never stored 30 paths"
+            );
             std::thread::sleep(Duration::from_millis(100));
+            // The connection closes before the kill (end of this block).
             if let Ok(mut x) = Database::open(&f.target) {
-                if x.paths(&PathQuery { without_poses: true, ..Default::default() }).map(|p| p.len()).unwrap_or(0) >= 30 {
-                    d = Some(x);
+                if x.paths(&PathQuery {
+                    without_poses: true,
+                    ..Default::default()
+                })
+                .map(|p| p.len())
+                .unwrap_or(0)
+                    >= 30
+                {
                     break;
                 }
             }
         }
-        drop(d);
         child.kill().unwrap(); // SIGKILL on Unix
         child.wait().unwrap();
         let mut d = Database::open(&f.target).unwrap();
@@ -517,12 +617,16 @@ fn kill_9_during_writes_leaves_a_consistent_database() {
         let counts = pose_counts(&mut d).unwrap();
         assert!(counts.len() >= 30);
         for (id, said, rows) in counts {
-            assert!(said >= 2 && said == rows, "path {id}: {said} poses said, {rows} stored");
+            assert!(
+                said >= 2 && said == rows,
+                "path {id}: {said} poses said, {rows} stored"
+            );
         }
         // The killed run stays `running` (it never finished) and the database takes
         // new results.
         assert_eq!(d.runs().unwrap()[0].status, "running");
-        d.save_path(None, "after", &sample_path(3), &PathMeta::default()).unwrap();
+        d.save_path(None, "after", &sample_path(3), &PathMeta::default())
+            .unwrap();
     });
 }
 
@@ -551,10 +655,19 @@ fn the_example_is_recorded_and_the_cli_lists_shows_exports_and_diffs() {
     assert_eq!(paths.matches("screw4_into_hole1").count(), 2, "{paths}");
     assert!(paths.contains("screw5_into_hole2"), "{paths}");
     let show = cli(&["show", "path:1"]);
-    assert!(show.contains("component  screw4") && show.contains("X 600.000 Y 650.000 Z 750.000"), "{show}");
+    assert!(
+        show.contains("component  screw4") && show.contains("X 600.000 Y 650.000 Z 750.000"),
+        "{show}"
+    );
     let csv = cli(&["export", "path:1", "--csv"]);
-    assert!(csv.starts_with("index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg\n0,600.000000,650.000000,750.000000"), "{csv}");
-    let json: serde_json::Value = serde_json::from_str(&cli(&["export", "run:1", "--json"])).unwrap();
+    assert!(
+        csv.starts_with(
+            "index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg\n0,600.000000,650.000000,750.000000"
+        ),
+        "{csv}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&cli(&["export", "run:1", "--json"])).unwrap();
     assert_eq!(json["paths"].as_array().unwrap().len(), 2);
     assert_eq!(json["status"], "ok");
     assert!(json["output"].as_str().unwrap().contains("still holds"));
@@ -571,8 +684,14 @@ fn the_example_is_recorded_and_the_cli_lists_shows_exports_and_diffs() {
     d.save_snapshot(Some(run), &snap).unwrap();
     let diff = cli(&["diff", "1", &run.to_string()]);
     assert!(diff.contains("moved 5.000 mm"), "{diff}");
-    assert!(diff.contains("dimension D1@角度1: 0.000° → 28.648°"), "{diff}");
-    assert!(diff.contains("path screw4_into_hole1: only in run 1"), "{diff}");
+    assert!(
+        diff.contains("dimension D1@角度1: 0.000° → 28.648°"),
+        "{diff}"
+    );
+    assert!(
+        diff.contains("path screw4_into_hole1: only in run 1"),
+        "{diff}"
+    );
     // Usage errors are told apart.
     let out = common::run_in(&root, &["db", "show", "robot:1", "--db", &db]);
     assert_eq!(out.status.code(), Some(2));
@@ -592,8 +711,15 @@ fn a_script_query_cannot_write_and_script_paths_stay_in_the_project() {
     let out = common::run_in(dir.path(), &["run", "scripts/q.rhai"]);
     assert_eq!(out.status.code(), Some(1));
     let t = common::text(&out);
-    assert!(t.contains("q.rhai:4") && t.contains("db.query is read-only"), "{t}");
-    std::fs::write(dir.path().join("scripts/out.rhai"), "open_db(\"../escape.db\");\n").unwrap();
+    assert!(
+        t.contains("q.rhai:4") && t.contains("db.query is read-only"),
+        "{t}"
+    );
+    std::fs::write(
+        dir.path().join("scripts/out.rhai"),
+        "open_db(\"../escape.db\");\n",
+    )
+    .unwrap();
     let out = common::run_in(dir.path(), &["run", "scripts/out.rhai"]);
     assert_eq!(out.status.code(), Some(1), "{}", common::text(&out));
     assert!(!dir.path().parent().unwrap().join("escape.db").exists());

@@ -133,7 +133,10 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
             if runs.is_empty() {
                 println!("no runs recorded in {target}");
             }
-            println!("{:>5}  {:<9}  {:<24}  {:<10}  script", "run", "status", "started (UTC)", "time");
+            println!(
+                "{:>5}  {:<9}  {:<24}  {:<10}  script",
+                "run", "status", "started (UTC)", "time"
+            );
             for r in runs {
                 println!(
                     "{:>5}  {:<9}  {:<24}  {:<10}  {}{}",
@@ -142,7 +145,9 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                     r.started_at,
                     duration(&r.started_at, r.finished_at.as_deref()),
                     r.script,
-                    r.document.map(|d| format!(" --doc {d}")).unwrap_or_default()
+                    r.document
+                        .map(|d| format!(" --doc {d}"))
+                        .unwrap_or_default()
                 );
             }
         }
@@ -173,7 +178,9 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                     if p.path.found() { "yes" } else { "no" },
                     p.path.length_mm,
                     p.path.rotation_rad.to_degrees(),
-                    p.run_id.map(|r| r.to_string()).unwrap_or_else(|| "-".into()),
+                    p.run_id
+                        .map(|r| r.to_string())
+                        .unwrap_or_else(|| "-".into()),
                     p.created_at
                 );
             }
@@ -242,7 +249,9 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
             println!("  started    {}", r.started_at);
             println!(
                 "  finished   {}",
-                r.finished_at.as_deref().unwrap_or("- (running, or the process died)")
+                r.finished_at
+                    .as_deref()
+                    .unwrap_or("- (running, or the process died)")
             );
             println!("  fitup      {}", r.fitup_version);
             let paths = db.paths(&PathQuery {
@@ -251,7 +260,17 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                 ..Default::default()
             })?;
             for p in &paths {
-                println!("  path:{:<4} {} ({}, {})", p.id, p.name, p.path.planner, if p.path.found() { format!("{:.1} mm", p.path.length_mm) } else { "not found".into() });
+                println!(
+                    "  path:{:<4} {} ({}, {})",
+                    p.id,
+                    p.name,
+                    p.path.planner,
+                    if p.path.found() {
+                        format!("{:.1} mm", p.path.length_mm)
+                    } else {
+                        "not found".into()
+                    }
+                );
             }
             for (tid, name, n) in db.trajectory_list(Some(id))? {
                 println!("  trajectory:{tid:<4} {name} ({n} samples)");
@@ -260,7 +279,12 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                 println!("  interference:{iid:<4} {name} ({n} pairs)");
             }
             for (sid, s) in db.snapshots(Some(id))? {
-                println!("  snapshot {sid}: {} ({} components, {} dimensions)", s.document, s.poses.len(), s.dimensions.len());
+                println!(
+                    "  snapshot {sid}: {} ({} components, {} dimensions)",
+                    s.document,
+                    s.poses.len(),
+                    s.dimensions.len()
+                );
             }
             if !r.output.is_empty() {
                 println!("  output:");
@@ -272,8 +296,18 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
         Kind::Path => {
             let p = db.path(id)?;
             println!("path {}: {} ({})", p.id, p.name, p.created_at);
-            println!("  component  {}", p.meta.component.as_deref().unwrap_or("-"));
-            println!("  planner    {}{}", p.path.planner, p.meta.seed.map(|s| format!(", seed {s}")).unwrap_or_default());
+            println!(
+                "  component  {}",
+                p.meta.component.as_deref().unwrap_or("-")
+            );
+            println!(
+                "  planner    {}{}",
+                p.path.planner,
+                p.meta
+                    .seed
+                    .map(|s| format!(", seed {s}"))
+                    .unwrap_or_default()
+            );
             match &p.path.failure {
                 None => println!(
                     "  found      {} key poses, {:.3} mm, {:.2}°, {} iterations, {:.1} ms",
@@ -290,7 +324,12 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                 let v = t.to_xyzabc(AngleConvention::default());
                 println!(
                     "  {i:>4}  X {:.3} Y {:.3} Z {:.3} A {:.2} B {:.2} C {:.2}",
-                    v[0], v[1], v[2], v[3].to_degrees(), v[4].to_degrees(), v[5].to_degrees()
+                    v[0],
+                    v[1],
+                    v[2],
+                    v[3].to_degrees(),
+                    v[4].to_degrees(),
+                    v[5].to_degrees()
                 );
             }
         }
@@ -308,9 +347,17 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
         }
         Kind::Interference => {
             let r = db.interference(id)?;
-            println!("interference {}: {} ({} pairs)", r.id, r.name, r.pairs.len());
+            println!(
+                "interference {}: {} ({} pairs)",
+                r.id,
+                r.name,
+                r.pairs.len()
+            );
             for p in r.pairs {
-                println!("  {} – {}: {} {:.3} mm {}", p.a, p.b, p.state, p.depth_mm, p.kind);
+                println!(
+                    "  {} – {}: {} {:.3} mm {}",
+                    p.a, p.b, p.state, p.depth_mm, p.kind
+                );
             }
         }
     }
@@ -351,9 +398,7 @@ fn export(
     id: i64,
     json: bool,
 ) -> Result<String, Result<crate::db::DbError, String>> {
-    let pretty = |v: serde_json::Value| {
-        serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
-    };
+    let pretty = |v: serde_json::Value| serde_json::to_string_pretty(&v).unwrap_or_default() + "\n";
     Ok(match (kind, json) {
         (Kind::Path, false) => {
             let p = db.path(id).map_err(Ok)?;
@@ -470,7 +515,10 @@ fn csv_field(s: &str) -> String {
 
 fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
     let (ra, rb) = (db.run(a)?, db.run(b)?);
-    println!("run {a} ({}, {}) → run {b} ({}, {})", ra.script, ra.started_at, rb.script, rb.started_at);
+    println!(
+        "run {a} ({}, {}) → run {b} ({}, {})",
+        ra.script, ra.started_at, rb.script, rb.started_at
+    );
     let mut differences = 0;
     let last = |v: Vec<(i64, crate::db::Snapshot)>| v.into_iter().last().map(|(_, s)| s);
     match (last(db.snapshots(Some(a))?), last(db.snapshots(Some(b))?)) {
@@ -485,12 +533,19 @@ fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
                         let (angle, dist) = ta.distance_to(tb);
                         if dist > 1e-6 || angle > 1e-9 {
                             differences += 1;
-                            println!("  component {name}: moved {dist:.3} mm, turned {:.3}°", angle.to_degrees());
+                            println!(
+                                "  component {name}: moved {dist:.3} mm, turned {:.3}°",
+                                angle.to_degrees()
+                            );
                         }
                     }
                 }
             }
-            for (name, _) in sb.poses.iter().filter(|(n, _)| !sa.poses.iter().any(|(m, _)| m == n)) {
+            for (name, _) in sb
+                .poses
+                .iter()
+                .filter(|(n, _)| !sa.poses.iter().any(|(m, _)| m == n))
+            {
                 differences += 1;
                 println!("  component {name}: only in run {b}");
             }
@@ -499,7 +554,9 @@ fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
                     if (va - vb).abs() > 1e-9 {
                         differences += 1;
                         let (x, y, unit) = match kind {
-                            crate::document::DimensionKind::Angle => (va.to_degrees(), vb.to_degrees(), "°"),
+                            crate::document::DimensionKind::Angle => {
+                                (va.to_degrees(), vb.to_degrees(), "°")
+                            }
                             crate::document::DimensionKind::Length => (*va, *vb, " mm"),
                         };
                         println!("  dimension {name}: {x:.3}{unit} → {y:.3}{unit}");
@@ -507,12 +564,26 @@ fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
                 }
             }
         }
-        _ => println!("  (no document snapshot in {}: store one with `db.save(doc)`)", if db.snapshots(Some(a))?.is_empty() { a } else { b }),
+        _ => println!(
+            "  (no document snapshot in {}: store one with `db.save(doc)`)",
+            if db.snapshots(Some(a))?.is_empty() {
+                a
+            } else {
+                b
+            }
+        ),
     }
-    let q = |run| PathQuery { run_id: Some(run), without_poses: true, ..Default::default() };
+    let q = |run| PathQuery {
+        run_id: Some(run),
+        without_poses: true,
+        ..Default::default()
+    };
     let (pa, pb) = (db.paths(&q(a))?, db.paths(&q(b))?);
     let describe = |p: &StoredPath| match &p.path.failure {
-        None => format!("found, {} key poses, {:.1} mm", p.pose_count, p.path.length_mm),
+        None => format!(
+            "found, {} key poses, {:.1} mm",
+            p.pose_count, p.path.length_mm
+        ),
         Some(f) => format!("not found ({f})"),
     };
     for p in &pa {

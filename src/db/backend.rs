@@ -286,7 +286,11 @@ pub(crate) fn numbered(sql: &str) -> String {
 }
 
 /// Converts a value to what PostgreSQL expects for a parameter of type `ty`.
-pub(crate) fn pg_param(v: &SqlValue, ty: &Type, index: usize) -> Result<Box<dyn ToSql + Sync>, Raw> {
+pub(crate) fn pg_param(
+    v: &SqlValue,
+    ty: &Type,
+    index: usize,
+) -> Result<Box<dyn ToSql + Sync>, Raw> {
     let bad = || {
         Raw::other(format!(
             "parameter {} ({v:?}) does not fit type {ty}",

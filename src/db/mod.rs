@@ -33,8 +33,8 @@
 //! ```
 
 mod backend;
-mod records;
 pub mod recording;
+mod records;
 mod schema;
 
 pub use backend::{Dialect, SqlValue};
@@ -85,11 +85,10 @@ impl Target {
     /// The database of a project: `explicit` (the `--db` flag) if given, else the
     /// `FITUP_DB` variable, else `fitup.db` at `root`.
     pub fn resolve(explicit: Option<&str>, root: &Path) -> Target {
-        match explicit.map(str::to_string).or_else(|| {
-            std::env::var(ENV_VAR)
-                .ok()
-                .filter(|s| !s.trim().is_empty())
-        }) {
+        match explicit
+            .map(str::to_string)
+            .or_else(|| std::env::var(ENV_VAR).ok().filter(|s| !s.trim().is_empty()))
+        {
             Some(t) => Target::parse(&t, root),
             None => Target::Sqlite(root.join(DEFAULT_FILE)),
         }
@@ -269,8 +268,9 @@ impl Database {
                 Conn::Sqlite(c)
             }
             Target::Postgres(url) => {
-                let mut config: postgres::Config =
-                    url.parse().map_err(|e: postgres::Error| open_err(e.to_string()))?;
+                let mut config: postgres::Config = url
+                    .parse()
+                    .map_err(|e: postgres::Error| open_err(e.to_string()))?;
                 config.connect_timeout(Duration::from_secs(10));
                 config.application_name("fitup");
                 let client = config
@@ -285,9 +285,7 @@ impl Database {
         };
         let target_version = version.min(schema::LATEST);
         let now = now_utc();
-        match db.transaction("the schema", |tx| {
-            schema::migrate(tx, target_version, &now)
-        })? {
+        match db.transaction("the schema", |tx| schema::migrate(tx, target_version, &now))? {
             schema::Migrated::Ok => Ok(db),
             schema::Migrated::Newer(found) => Err(DbError::NewerSchema {
                 target: db.target.to_string(),
@@ -354,7 +352,8 @@ impl Database {
                 Conn::Sqlite(c) => (|| {
                     // IMMEDIATE: take the write lock up front, so two writers never
                     // deadlock upgrading read locks.
-                    let tx = c.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
+                    let tx =
+                        c.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
                     let mut t = SqliteTx(tx);
                     let r = f(&mut t)?;
                     t.0.commit()?;
@@ -410,8 +409,7 @@ impl Database {
                             params.len()
                         )));
                     }
-                    let columns: Vec<String> =
-                        stmt.column_names().map(|s| s.to_string()).collect();
+                    let columns: Vec<String> = stmt.column_names().map(|s| s.to_string()).collect();
                     let n = columns.len();
                     let mut rows = stmt.query(rusqlite::params_from_iter(params.iter()))?;
                     let mut out = Vec::new();
@@ -436,8 +434,11 @@ impl Database {
                 let run = |c: &mut postgres::Client| -> Result<QueryResult, Raw> {
                     let mut tx = c.build_transaction().read_only(true).start()?;
                     let stmt = tx.prepare(sql)?;
-                    let columns: Vec<String> =
-                        stmt.columns().iter().map(|c| c.name().to_string()).collect();
+                    let columns: Vec<String> = stmt
+                        .columns()
+                        .iter()
+                        .map(|c| c.name().to_string())
+                        .collect();
                     if stmt.params().len() != params.len() {
                         return Err(Raw::other(format!(
                             "the statement has {} parameters, {} given",
@@ -542,9 +543,6 @@ mod tests {
 
     #[test]
     fn placeholders_are_numbered_for_postgres() {
-        assert_eq!(
-            backend::numbered("a = ? AND b = ?"),
-            "a = $1 AND b = $2"
-        );
+        assert_eq!(backend::numbered("a = ? AND b = ?"), "a = $1 AND b = $2");
     }
 }

@@ -322,7 +322,9 @@ const PATH_COLUMNS: &str = "id, run_id, name, created_at, component, seed, optio
 impl Database {
     fn invalid(&self, what: &str, e: DbError) -> DbError {
         match e {
-            DbError::Sql { cause, .. } if cause.contains("non-finite") || cause.contains("not finite") => {
+            DbError::Sql { cause, .. }
+                if cause.contains("non-finite") || cause.contains("not finite") =>
+            {
                 DbError::Invalid {
                     what: what.to_string(),
                     cause,
@@ -632,10 +634,19 @@ impl Database {
     }
 
     /// Ids and names of the stored trajectories (of one run if `run_id` is given).
-    pub fn trajectory_list(&mut self, run_id: Option<i64>) -> Result<Vec<(i64, String, i64)>, DbError> {
+    pub fn trajectory_list(
+        &mut self,
+        run_id: Option<i64>,
+    ) -> Result<Vec<(i64, String, i64)>, DbError> {
         let (sql, p) = match run_id {
-            Some(r) => ("SELECT id, name, sample_count FROM trajectories WHERE run_id = ? ORDER BY id", vec![r.into()]),
-            None => ("SELECT id, name, sample_count FROM trajectories ORDER BY id", vec![]),
+            Some(r) => (
+                "SELECT id, name, sample_count FROM trajectories WHERE run_id = ? ORDER BY id",
+                vec![r.into()],
+            ),
+            None => (
+                "SELECT id, name, sample_count FROM trajectories ORDER BY id",
+                vec![],
+            ),
         };
         let rows = self.transaction("reading trajectories", |tx| tx.rows(sql, &p))?;
         Ok(rows
@@ -650,7 +661,11 @@ impl Database {
         let r = self.transaction("storing the snapshot", |tx| {
             let id = tx.insert_id(
                 "INSERT INTO snapshots (run_id, document, created_at) VALUES (?, ?, ?)",
-                &[run_id.into(), s.document.as_str().into(), now.as_str().into()],
+                &[
+                    run_id.into(),
+                    s.document.as_str().into(),
+                    now.as_str().into(),
+                ],
             )?;
             let mut poses = Vec::with_capacity(s.poses.len());
             for (name, t) in &s.poses {
@@ -678,7 +693,11 @@ impl Database {
                     ])
                 })
                 .collect::<Result<Vec<_>, Raw>>()?;
-            tx.insert_many("dimension_values", &["snapshot_id", "name", "kind", "value"], &dims)?;
+            tx.insert_many(
+                "dimension_values",
+                &["snapshot_id", "name", "kind", "value"],
+                &dims,
+            )?;
             Ok(id)
         });
         r.map_err(|e| self.invalid("the document snapshot", e))
@@ -790,7 +809,10 @@ impl Database {
     }
 
     /// Ids and names of the stored interference results (of one run if given).
-    pub fn interference_list(&mut self, run_id: Option<i64>) -> Result<Vec<(i64, String, i64)>, DbError> {
+    pub fn interference_list(
+        &mut self,
+        run_id: Option<i64>,
+    ) -> Result<Vec<(i64, String, i64)>, DbError> {
         let (sql, p) = match run_id {
             Some(r) => ("SELECT id, name, pair_count FROM interference_results WHERE run_id = ? ORDER BY id", vec![r.into()]),
             None => ("SELECT id, name, pair_count FROM interference_results ORDER BY id", vec![]),
@@ -827,7 +849,9 @@ fn path_from(tx: &mut dyn Tx, r: &[SqlValue], with_poses: bool) -> Result<Stored
         },
     };
     let options = match r[6].as_str() {
-        Some(s) => Some(serde_json::from_str(s).map_err(|e| Raw::other(format!("stored options: {e}")))?),
+        Some(s) => {
+            Some(serde_json::from_str(s).map_err(|e| Raw::other(format!("stored options: {e}")))?)
+        }
         None => None,
     };
     Ok(StoredPath {
@@ -873,5 +897,8 @@ pub fn pose_counts(db: &mut Database) -> Result<Vec<(i64, i64, i64)>, DbError> {
             &[],
         )
     })?;
-    Ok(rows.iter().map(|r| (int(&r[0]), int(&r[1]), int(&r[2]))).collect())
+    Ok(rows
+        .iter()
+        .map(|r| (int(&r[0]), int(&r[1]), int(&r[2])))
+        .collect())
 }

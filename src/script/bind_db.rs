@@ -57,9 +57,7 @@ impl DbHandle {
 fn to_json(v: &Dynamic) -> serde_json::Value {
     if let Some(m) = v.read_lock::<Map>() {
         return serde_json::Value::Object(
-            m.iter()
-                .map(|(k, v)| (k.to_string(), to_json(v)))
-                .collect(),
+            m.iter().map(|(k, v)| (k.to_string(), to_json(v))).collect(),
         );
     }
     if let Some(a) = v.read_lock::<Array>() {

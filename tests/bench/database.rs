@@ -65,7 +65,9 @@ fn bench(make: &mut dyn FnMut() -> Target, path: &Path, t: &Trajectory) -> [f64;
         let target = make();
         let mut db = Database::open(&target).unwrap();
         let s = Instant::now();
-        let pid = db.save_path(None, "bench", path, &PathMeta::default()).unwrap();
+        let pid = db
+            .save_path(None, "bench", path, &PathMeta::default())
+            .unwrap();
         times[0].push(s.elapsed().as_secs_f64() * 1e3);
         let s = Instant::now();
         let back = db
@@ -102,16 +104,24 @@ fn main() {
         k += 1;
         Target::Sqlite(dir.path().join(format!("bench{k}.db")))
     };
-    report("SQLite (WAL, synchronous=NORMAL)", bench(&mut make, &path, &t));
+    report(
+        "SQLite (WAL, synchronous=NORMAL)",
+        bench(&mut make, &path, &t),
+    );
     if let Ok(url) = std::env::var("FITUP_BENCH_POSTGRES") {
         let mut admin = postgres::Client::connect(&url, postgres::NoTls).unwrap();
         let mut n = 0;
         let mut names = Vec::new();
-        let base = url.rsplit_once('/').map(|(b, _)| b.to_string()).unwrap_or(url.clone());
+        let base = url
+            .rsplit_once('/')
+            .map(|(b, _)| b.to_string())
+            .unwrap_or(url.clone());
         let mut make = || {
             n += 1;
             let name = format!("fitup_bench_{}_{n}", std::process::id());
-            admin.batch_execute(&format!("CREATE DATABASE {name}")).unwrap();
+            admin
+                .batch_execute(&format!("CREATE DATABASE {name}"))
+                .unwrap();
             names.push(name.clone());
             Target::Postgres(format!("{base}/{name}"))
         };
