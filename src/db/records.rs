@@ -555,7 +555,9 @@ impl Database {
                     SqlValue::Null,
                     SqlValue::Int(i as i64),
                     s.t.into(),
-                    serde_json::Value::from(s.joints.clone()).to_string().into(),
+                    serde_json::to_string(&s.joints)
+                        .map_err(|e| Raw::other(e.to_string()))?
+                        .into(),
                 ];
                 row.extend(pose_values(&s.tcp, &format!("the TCP of sample {i}"))?);
                 samples.push(row);

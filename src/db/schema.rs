@@ -3,8 +3,8 @@
 //! by a newer fitup and is refused rather than misread.
 //!
 //! Every migration is written once with three placeholders that each back end fills
-//! in: `{id}` (the auto-numbered key), `{int}` (64-bit integers) and `{real}` (64-bit
-//! floats).
+//! in: `{id}` (the auto-numbered key), `{int}` (64-bit integers), `{real}` (64-bit
+//! floats) and `{clustered}` (SQLite's `WITHOUT ROWID` for tables read by key range).
 
 use super::backend::{Dialect, Raw, SqlValue, Tx};
 
@@ -65,7 +65,7 @@ CREATE TABLE path_poses (
     a_deg {real} NOT NULL, b_deg {real} NOT NULL, c_deg {real} NOT NULL,
     qw {real} NOT NULL, qx {real} NOT NULL, qy {real} NOT NULL, qz {real} NOT NULL,
     PRIMARY KEY (path_id, idx)
-)",
+) {clustered}",
     },
     Migration {
         version: 2,
@@ -115,7 +115,7 @@ CREATE TABLE trajectory_samples (
     a_deg {real} NOT NULL, b_deg {real} NOT NULL, c_deg {real} NOT NULL,
     qw {real} NOT NULL, qx {real} NOT NULL, qy {real} NOT NULL, qz {real} NOT NULL,
     PRIMARY KEY (trajectory_id, idx)
-);
+) {clustered};
 CREATE TABLE interference_results (
     id {id},
     run_id {int} REFERENCES runs(id) ON DELETE SET NULL,
@@ -137,11 +137,19 @@ CREATE TABLE interference_pairs (
 ];
 
 fn fill(sql: &str, dialect: Dialect) -> String {
-    let (id, int, real) = match dialect {
-        Dialect::Sqlite => ("INTEGER PRIMARY KEY AUTOINCREMENT", "INTEGER", "REAL"),
-        Dialect::Postgres => ("BIGSERIAL PRIMARY KEY", "BIGINT", "DOUBLE PRECISION"),
+    // `{clustered}`: SQLite keeps pose and sample rows in their key's b-tree (one
+    // insert per row instead of a row plus an index entry).
+    let (id, int, real, clustered) = match dialect {
+        Dialect::Sqlite => (
+            "INTEGER PRIMARY KEY AUTOINCREMENT",
+            "INTEGER",
+            "REAL",
+            "WITHOUT ROWID",
+        ),
+        Dialect::Postgres => ("BIGSERIAL PRIMARY KEY", "BIGINT", "DOUBLE PRECISION", ""),
     };
     sql.replace("{id}", id)
+        .replace("{clustered}", clustered)
         .replace("{int}", int)
         .replace("{real}", real)
 }
