@@ -301,6 +301,29 @@ fn failure_from(reason: &str) -> Failure {
     Failure::Exhausted(stage)
 }
 
+/// A JSON array of numbers (what [`Database::save_trajectory`] writes), read with
+/// the standard float parser: exact round trip and faster than a general JSON parser
+/// for the 10,000s of samples of a trajectory. Anything else goes to `serde_json`.
+fn parse_joints(text: &str) -> Result<Vec<f64>, Raw> {
+    let inner = text
+        .trim()
+        .strip_prefix('[')
+        .and_then(|t| t.strip_suffix(']'));
+    if let Some(inner) = inner {
+        if inner.trim().is_empty() {
+            return Ok(Vec::new());
+        }
+        if let Ok(v) = inner
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<Vec<_>, _>>()
+        {
+            return Ok(v);
+        }
+    }
+    serde_json::from_str(text).map_err(|e| Raw::other(format!("stored joints `{text}`: {e}")))
+}
+
 fn joint_kind_name(k: JointKind) -> &'static str {
     match k {
         JointKind::Fixed => "fixed",
@@ -614,8 +637,7 @@ impl Database {
                 .map(|r| {
                     Ok(TrajectorySample {
                         t: real(&r[0]),
-                        joints: serde_json::from_str(r[1].as_str().unwrap_or("[]"))
-                            .map_err(|e| Raw::other(format!("stored joints: {e}")))?,
+                        joints: parse_joints(r[1].as_str().unwrap_or("[]"))?,
                         tcp: pose_from(&r[2..])?,
                     })
                 })

@@ -4,7 +4,8 @@
 //!
 //! Every migration is written once with three placeholders that each back end fills
 //! in: `{id}` (the auto-numbered key), `{int}` (64-bit integers), `{real}` (64-bit
-//! floats) and `{clustered}` (SQLite's `WITHOUT ROWID` for tables read by key range).
+//! floats) and `{clustered}` (SQLite's `WITHOUT ROWID` for small rows read by key
+//! range).
 
 use super::backend::{Dialect, Raw, SqlValue, Tx};
 
@@ -115,7 +116,7 @@ CREATE TABLE trajectory_samples (
     a_deg {real} NOT NULL, b_deg {real} NOT NULL, c_deg {real} NOT NULL,
     qw {real} NOT NULL, qx {real} NOT NULL, qy {real} NOT NULL, qz {real} NOT NULL,
     PRIMARY KEY (trajectory_id, idx)
-) {clustered};
+);
 CREATE TABLE interference_results (
     id {id},
     run_id {int} REFERENCES runs(id) ON DELETE SET NULL,
