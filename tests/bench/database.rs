@@ -13,28 +13,11 @@ use std::time::Instant;
 const N: usize = 10_000;
 const ROUNDS: usize = 15;
 
-/// Nanoseconds this thread has run on a CPU (Linux `/proc/thread-self/schedstat`):
-/// unlike wall time, it leaves out the time the thread waited for a busy CPU.
-/// (SQLite's I/O syscalls run on this thread, so they count.)
-fn cpu_ns() -> Option<u64> {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()?
-        .split_whitespace()
-        .next()?
-        .parse()
-        .ok()
-}
-
-/// Wall and on-CPU milliseconds of `f`.
-fn timed<R>(f: impl FnOnce() -> R) -> (R, f64, f64) {
-    let (c, s) = (cpu_ns(), Instant::now());
+/// The result of `f` and its wall time (ms).
+fn timed<R>(f: impl FnOnce() -> R) -> (R, f64) {
+    let s = Instant::now();
     let r = f();
-    let wall = s.elapsed().as_secs_f64() * 1e3;
-    let cpu = match (c, cpu_ns()) {
-        (Some(a), Some(b)) => (b - a) as f64 / 1e6,
-        _ => f64::NAN,
-    };
-    (r, wall, cpu)
+    (r, s.elapsed().as_secs_f64() * 1e3)
 }
 
 /// (fastest, median): on a busy machine the fastest round is the best estimate of
@@ -84,59 +67,43 @@ fn data() -> (Path, Trajectory) {
     (path, t)
 }
 
-/// Wall and on-CPU ms (fastest, median) of: store path, read path, store trajectory,
-/// read trajectory.
-fn bench(
-    make: &mut dyn FnMut() -> Target,
-    path: &Path,
-    t: &Trajectory,
-) -> [((f64, f64), (f64, f64)); 4] {
+/// Wall ms (fastest, median) of: store path, read path, store trajectory, read
+/// trajectory.
+fn bench(make: &mut dyn FnMut() -> Target, path: &Path, t: &Trajectory) -> [(f64, f64); 4] {
     let mut wall: [Vec<f64>; 4] = Default::default();
-    let mut cpu: [Vec<f64>; 4] = Default::default();
-    let mut note = |k: usize, w: f64, c: f64| {
-        wall[k].push(w);
-        cpu[k].push(c);
-    };
+    let mut note = |k: usize, w: f64| wall[k].push(w);
     for _ in 0..ROUNDS {
         let target = make();
         let mut db = Database::open(&target).unwrap();
-        let (pid, w, c) = timed(|| {
+        let (pid, w) = timed(|| {
             db.save_path(None, "bench", path, &PathMeta::default())
                 .unwrap()
         });
-        note(0, w, c);
-        let (back, w, c) = timed(|| {
+        note(0, w);
+        let (back, w) = timed(|| {
             db.paths(&PathQuery {
                 name: Some("bench".into()),
                 ..Default::default()
             })
             .unwrap()
         });
-        note(1, w, c);
+        note(1, w);
         assert_eq!(back[0].id, pid);
         assert_eq!(back[0].path.poses.len(), N);
         assert!(back[0].path.poses[N - 1].approx_eq(&path.poses[N - 1], 1e-9, 1e-12));
-        let (tid, w, c) = timed(|| db.save_trajectory(None, "bench", None, t).unwrap());
-        note(2, w, c);
-        let (tb, w, c) = timed(|| db.trajectory(tid).unwrap());
-        note(3, w, c);
+        let (tid, w) = timed(|| db.save_trajectory(None, "bench", None, t).unwrap());
+        note(2, w);
+        let (tb, w) = timed(|| db.trajectory(tid).unwrap());
+        note(3, w);
         assert_eq!(tb.trajectory.samples.len(), N);
         assert_eq!(tb.trajectory.samples[N - 1].joints, t.samples[N - 1].joints);
     }
-    let mut out = [((0.0, 0.0), (0.0, 0.0)); 4];
-    for k in 0..4 {
-        out[k] = (summary(wall[k].clone()), summary(cpu[k].clone()));
-    }
-    out
+    wall.map(summary)
 }
 
-fn report(name: &str, r: [((f64, f64), (f64, f64)); 4]) {
-    println!("{name}, ms over {ROUNDS} rounds:");
-    println!(
-        "  {:<32} {:>9} {:>9} {:>9} {:>9}",
-        "", "wall min", "wall med", "CPU min", "CPU med"
-    );
-    for (what, ((wmin, wmed), (cmin, cmed))) in [
+fn report(name: &str, r: [(f64, f64); 4]) {
+    println!("{name}, wall ms over {ROUNDS} rounds (fastest / median):");
+    for (what, (min, med)) in [
         "store a {N}-pose path",
         "read it back",
         "store a {N}-sample trajectory",
@@ -146,7 +113,7 @@ fn report(name: &str, r: [((f64, f64), (f64, f64)); 4]) {
     .zip(r)
     {
         println!(
-            "  {:<32} {wmin:>9.1} {wmed:>9.1} {cmin:>9.1} {cmed:>9.1}",
+            "  {:<32} {min:>7.1} / {med:>7.1}",
             what.replace("{N}", &N.to_string())
         );
     }
