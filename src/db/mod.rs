@@ -316,7 +316,7 @@ impl Database {
 
     /// The schema version of the open database.
     pub fn schema_version(&mut self) -> Result<u32, DbError> {
-        self.transaction("the schema version", |tx| schema::current_version(tx))
+        self.read("the schema version", |tx| schema::current_version(tx))
     }
 
     fn error(&self, what: &str, e: Raw, tries: u32) -> DbError {
@@ -348,6 +348,25 @@ impl Database {
     pub(crate) fn transaction<R>(
         &mut self,
         what: &str,
+        f: impl FnMut(&mut dyn Tx) -> Result<R, Raw>,
+    ) -> Result<R, DbError> {
+        self.transact(what, rusqlite::TransactionBehavior::Immediate, f)
+    }
+
+    /// As [`Database::transaction`] for reads: SQLite takes no write lock, so readers
+    /// never wait for (or hold up) writers.
+    pub(crate) fn read<R>(
+        &mut self,
+        what: &str,
+        f: impl FnMut(&mut dyn Tx) -> Result<R, Raw>,
+    ) -> Result<R, DbError> {
+        self.transact(what, rusqlite::TransactionBehavior::Deferred, f)
+    }
+
+    fn transact<R>(
+        &mut self,
+        what: &str,
+        behavior: rusqlite::TransactionBehavior,
         mut f: impl FnMut(&mut dyn Tx) -> Result<R, Raw>,
     ) -> Result<R, DbError> {
         let mut attempt = 0;
@@ -355,10 +374,9 @@ impl Database {
             attempt += 1;
             let result: Result<R, Raw> = match &mut self.conn {
                 Conn::Sqlite(c) => (|| {
-                    // IMMEDIATE: take the write lock up front, so two writers never
-                    // deadlock upgrading read locks.
-                    let tx =
-                        c.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
+                    // Writes are IMMEDIATE: they take the write lock up front, so two
+                    // writers never deadlock upgrading read locks.
+                    let tx = c.transaction_with_behavior(behavior)?;
                     let mut t = SqliteTx(tx);
                     let r = f(&mut t)?;
                     t.0.commit()?;

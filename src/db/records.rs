@@ -406,7 +406,7 @@ impl Database {
 
     /// Every run, oldest first.
     pub fn runs(&mut self) -> Result<Vec<RunRecord>, DbError> {
-        let rows = self.transaction("reading runs", |tx| {
+        let rows = self.read("reading runs", |tx| {
             tx.rows("SELECT id, script, document, script_hash, document_hash, started_at, finished_at, status, output, fitup_version FROM runs ORDER BY id", &[])
         })?;
         Ok(rows
@@ -537,7 +537,7 @@ impl Database {
         }
         sql.push_str(" ORDER BY id");
         let with_poses = !q.without_poses;
-        self.transaction("reading paths", |tx| {
+        self.read("reading paths", |tx| {
             let rows = tx.rows(&sql, &params)?;
             rows.iter().map(|r| path_from(tx, r, with_poses)).collect()
         })
@@ -546,7 +546,7 @@ impl Database {
     /// Path `id` with its key poses.
     pub fn path(&mut self, id: i64) -> Result<StoredPath, DbError> {
         let sql = format!("SELECT {PATH_COLUMNS} FROM paths WHERE id = ?");
-        let found = self.transaction("reading the path", |tx| {
+        let found = self.read("reading the path", |tx| {
             let rows = tx.rows(&sql, &[id.into()])?;
             rows.first().map(|r| path_from(tx, r, true)).transpose()
         })?;
@@ -610,7 +610,7 @@ impl Database {
 
     /// Trajectory `id` with its samples.
     pub fn trajectory(&mut self, id: i64) -> Result<StoredTrajectory, DbError> {
-        let found = self.transaction("reading the trajectory", |tx| {
+        let found = self.read("reading the trajectory", |tx| {
             let head = tx.rows(
                 "SELECT id, run_id, name, robot, joint_kinds, created_at FROM trajectories WHERE id = ?",
                 &[id.into()],
@@ -672,7 +672,7 @@ impl Database {
                 vec![],
             ),
         };
-        let rows = self.transaction("reading trajectories", |tx| tx.rows(sql, &p))?;
+        let rows = self.read("reading trajectories", |tx| tx.rows(sql, &p))?;
         Ok(rows
             .iter()
             .map(|r| (int(&r[0]), text(&r[1]).unwrap_or_default(), int(&r[2])))
@@ -729,7 +729,7 @@ impl Database {
 
     /// The snapshots stored by run `run_id` (or every snapshot), oldest first, with ids.
     pub fn snapshots(&mut self, run_id: Option<i64>) -> Result<Vec<(i64, Snapshot)>, DbError> {
-        self.transaction("reading snapshots", |tx| {
+        self.read("reading snapshots", |tx| {
             let heads = match run_id {
                 Some(r) => tx.rows("SELECT id, document FROM snapshots WHERE run_id = ? ORDER BY id", &[r.into()])?,
                 None => tx.rows("SELECT id, document FROM snapshots ORDER BY id", &[])?,
@@ -805,7 +805,7 @@ impl Database {
 
     /// Interference result `id` with its pairs.
     pub fn interference(&mut self, id: i64) -> Result<StoredInterference, DbError> {
-        let found = self.transaction("reading the interference result", |tx| {
+        let found = self.read("reading the interference result", |tx| {
             let head = tx.rows("SELECT run_id, name, created_at FROM interference_results WHERE id = ?", &[id.into()])?;
             let Some(h) = head.first() else {
                 return Ok(None);
@@ -841,7 +841,7 @@ impl Database {
             Some(r) => ("SELECT id, name, pair_count FROM interference_results WHERE run_id = ? ORDER BY id", vec![r.into()]),
             None => ("SELECT id, name, pair_count FROM interference_results ORDER BY id", vec![]),
         };
-        let rows = self.transaction("reading interference results", |tx| tx.rows(sql, &p))?;
+        let rows = self.read("reading interference results", |tx| tx.rows(sql, &p))?;
         Ok(rows
             .iter()
             .map(|r| (int(&r[0]), text(&r[1]).unwrap_or_default(), int(&r[2])))
@@ -915,7 +915,7 @@ fn path_from(tx: &mut dyn Tx, r: &[SqlValue], with_poses: bool) -> Result<Stored
 /// for every path: equal in a consistent database (used by the fault tests and
 /// `fitup db show`).
 pub fn pose_counts(db: &mut Database) -> Result<Vec<(i64, i64, i64)>, DbError> {
-    let rows = db.transaction("counting poses", |tx| {
+    let rows = db.read("counting poses", |tx| {
         tx.rows(
             "SELECT p.id, p.pose_count, (SELECT COUNT(*) FROM path_poses q WHERE q.path_id = p.id) FROM paths p ORDER BY p.id",
             &[],
