@@ -132,6 +132,7 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
             let runs = db.runs().map_err(e)?;
             if runs.is_empty() {
                 println!("no runs recorded in {target}");
+                return Ok(());
             }
             println!(
                 "{:>5}  {:<9}  {:<24}  {:<10}  script",
