@@ -12,6 +12,7 @@
 //! | [`math`] | [`Transform`](math::Transform) (the pose matrix), angle conventions, the seeded RNG |
 //! | [`mesh`] | triangle meshes, STL I/O, generated shapes, the mesh cache |
 //! | [`collision`] | interference of posed meshes: exact (solid), whole-part boxes, cut cells, sweeps, planner edges |
+//! | [`db`] | the results database: SQLite by default, PostgreSQL for teams |
 //! | [`kinematics`] | kinematic trees, D-H, robot catalog, FK, analytic and numeric IK, motions, programs, drilling |
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
 //! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly, insertion |
@@ -26,6 +27,7 @@
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod collision;
+pub mod db;
 pub mod demo;
 pub mod diagnostics;
 pub mod document;

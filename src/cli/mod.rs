@@ -3,6 +3,7 @@
 //! 2 usage).
 
 mod check;
+mod db;
 pub(crate) mod out;
 mod run;
 
@@ -46,6 +47,11 @@ pub struct ScriptArgs {
     /// (numbers become numbers, `true`/`false` booleans, anything else text).
     #[arg(last = true, value_name = "KEY=VALUE")]
     pub args: Vec<String>,
+    /// Record every run in the results database: `--db` alone for the project's
+    /// (`FITUP_DB`, else `fitup.db`), or `--db FILE|postgres://…`; the script's
+    /// `open_db()` opens the same one.
+    #[arg(long, num_args = 0..=1, default_missing_value = "")]
+    pub db: Option<String>,
 }
 
 /// Options of `watch` (a Rhai script only: motion programs are run with `run`).
@@ -66,6 +72,11 @@ pub struct WatchArgs {
     /// Script arguments after `--`: `key=value …`, the map `args` in the script.
     #[arg(last = true, value_name = "KEY=VALUE")]
     pub args: Vec<String>,
+    /// Record every run in the results database: `--db` alone for the project's
+    /// (`FITUP_DB`, else `fitup.db`), or `--db FILE|postgres://…`; the script's
+    /// `open_db()` opens the same one.
+    #[arg(long, num_args = 0..=1, default_missing_value = "")]
+    pub db: Option<String>,
 }
 
 impl From<WatchArgs> for ScriptArgs {
@@ -78,6 +89,7 @@ impl From<WatchArgs> for ScriptArgs {
             log: None,
             max_operations: w.max_operations,
             args: w.args,
+            db: w.db,
         }
     }
 }
@@ -100,6 +112,9 @@ pub enum Command {
         #[arg(long, default_value = "docs/api.md")]
         out: PathBuf,
     },
+    /// The results database: `runs`, `paths`, `show ID`, `export ID --csv|--json`,
+    /// `diff RUN_A RUN_B`.
+    Db(db::DbArgs),
     /// Write the demo project (seed 000 fig. 11) into a folder: `fitup.toml`,
     /// `models/cell.yaml` and `models/meshes/`.
     Demo {
@@ -141,6 +156,7 @@ pub fn main() -> i32 {
     let exit = match cli.command {
         Command::Run(a) => run::run(&a),
         Command::Watch(a) => run::watch(&a.into()),
+        Command::Db(a) => db::main(&a),
         Command::Check { doc } => check::check(&doc),
         Command::Docs { out } => docs(&out),
         Command::Demo { dir, force } => demo(&dir, force),

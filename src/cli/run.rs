@@ -82,14 +82,17 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
             }
         };
     }
-    let opts = match options(a) {
+    let mut opts = match options(a) {
         Ok(o) => o,
         Err(e) => {
             errln!("error: {e}");
             return Exit::Usage;
         }
     };
+    let recorder = super::db::Recorder::new(a, &mut opts);
+    recorder.start(a, &opts);
     let outcome = run_script(&opts, &Arc::new(Caches::default()));
+    recorder.finish(&outcome.result);
     match outcome.result {
         Ok(()) => Exit::Ok,
         Err(e) => {
@@ -100,13 +103,15 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
 }
 
 pub(super) fn watch(a: &ScriptArgs) -> Exit {
-    let opts = match options(a) {
+    let mut opts = match options(a) {
         Ok(o) => o,
         Err(e) => {
             errln!("error: {e}");
             return Exit::Usage;
         }
     };
+    let recorder = super::db::Recorder::new(a, &mut opts);
+    let run_opts = opts.clone();
     let project = opts.project.clone();
     let stop = Arc::new(AtomicBool::new(false));
     outln!(
@@ -115,6 +120,7 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
     );
     let result = watch_loop(opts, stop, |event| match event {
         WatchEvent::RunStarted { number, changed } => {
+            recorder.start(a, &run_opts);
             let what = if changed.is_empty() {
                 "first run".to_string()
             } else {
@@ -127,6 +133,7 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
             outln!("== run {number} at {} ({what})", clock());
         }
         WatchEvent::RunFinished { number, outcome } => {
+            recorder.finish(&outcome.result);
             let ms = format::number(outcome.elapsed.as_secs_f64() * 1000.0, 1);
             let ops = format::count(outcome.operations);
             match &outcome.result {

@@ -163,6 +163,7 @@ pub(crate) fn register_all(
     super::bind_interference::register(&mut api);
     super::bind_planning::register(&mut api);
     super::bind_robot::register(&mut api, ctx);
+    super::bind_db::register(&mut api, ctx);
     (api.sections, api.entries)
 }
 

@@ -21,7 +21,11 @@ use std::time::Instant;
 /// and record the file it writes, and the validator options it was planned with so
 /// `revalidate` applies the same tolerance rule.
 #[derive(Clone)]
-pub struct PathHandle(Arc<PlannedPath>, Arc<Context>, MeshValidatorOptions);
+pub struct PathHandle(
+    pub(super) Arc<PlannedPath>,
+    pub(super) Arc<Context>,
+    pub(super) MeshValidatorOptions,
+);
 
 const OPTION_KEYS: [&str; 20] = [
     "disassemble",

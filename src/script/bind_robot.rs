@@ -60,7 +60,7 @@ fn limits_arg(v: &Dynamic, n: usize) -> ScriptResult<Vec<Option<JointLimits>>> {
 /// A sampled motion returned by a robot move.
 #[derive(Clone)]
 pub struct TrajectoryHandle {
-    trajectory: Arc<Trajectory>,
+    pub(super) trajectory: Arc<Trajectory>,
     ctx: Arc<Context>,
 }
 

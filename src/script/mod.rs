@@ -7,6 +7,7 @@
 
 mod api;
 mod args;
+mod bind_db;
 mod bind_document;
 mod bind_interference;
 mod bind_math;

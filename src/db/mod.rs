@@ -1,0 +1,571 @@
+//! The results database: every run's paths, trajectories, document snapshots and
+//! interference results kept in SQL, so they can be compared, queried and shared.
+//!
+//! Two back ends behind one API ([`Database`]):
+//! - **SQLite** (default): one file per project, `fitup.db` at the project root unless
+//!   `--db` or the `FITUP_DB` variable names another ([`Target::resolve`]). WAL mode,
+//!   foreign keys on, a busy timeout plus retries so several `fitup run` processes can
+//!   write at once.
+//! - **PostgreSQL** (`postgres://…` or `postgresql://…`): the same schema and API for
+//!   teams and batches that outgrow one machine.
+//!
+//! Every stored result is one transaction: a process killed mid-write leaves either
+//! the whole result or none of it. The schema is versioned in code (`schema_version`);
+//! a database written by a newer fitup is refused with [`DbError::NewerSchema`].
+//!
+//! Units: millimetres and radians, as everywhere in fitup. Poses are stored as columns
+//! `x_mm, y_mm, z_mm` (translation), `a_deg, b_deg, c_deg` (the user-facing `X Y Z A B C`
+//! triple, **degrees**, fixed X then Y then Z, for queries) and `qw, qx, qy, qz` (the
+//! rotation quaternion, which is what is read back, so poses round-trip exactly).
+//! Joint values of trajectory samples are a JSON array in radians (mm for prismatic
+//! joints). See `docs/database.md` for the tables.
+//!
+//! # Examples
+//!
+//! ```
+//! use fitup::db::{Database, PathQuery, Target};
+//! let dir = tempfile::tempdir().unwrap();
+//! let mut db = Database::open(&Target::Sqlite(dir.path().join("fitup.db"))).unwrap();
+//! let run = db.start_run(&fitup::db::NewRun::script("scripts/demo.rhai")).unwrap();
+//! db.finish_run(run, fitup::db::RunStatus::Ok, "done").unwrap();
+//! assert_eq!(db.runs().unwrap()[0].status, "ok");
+//! assert!(db.paths(&PathQuery::default()).unwrap().is_empty());
+//! ```
+
+mod backend;
+pub mod recording;
+mod records;
+mod schema;
+
+pub use backend::{Dialect, SqlValue};
+pub use records::*;
+pub use schema::LATEST as SCHEMA_VERSION;
+
+use backend::{Kind, PgTx, Raw, SqliteTx, Tx};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// The database file name at a project's root when nothing else is said.
+pub const DEFAULT_FILE: &str = "fitup.db";
+
+/// The environment variable that names the database (a file or a `postgres://` URL).
+pub const ENV_VAR: &str = "FITUP_DB";
+
+/// How long SQLite waits for another writer before reporting busy (then fitup retries).
+const BUSY_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// How many times a busy transaction is tried before giving up.
+const TRIES: u32 = 12;
+
+/// Where the data lives.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Target {
+    /// A SQLite file.
+    Sqlite(PathBuf),
+    /// A PostgreSQL connection URL (`postgres://user@host:port/db`).
+    Postgres(String),
+}
+
+impl Target {
+    /// A database named by the user: a `postgres://`/`postgresql://` URL, or a file
+    /// (relative paths are taken from `root`, the project folder).
+    pub fn parse(text: &str, root: &Path) -> Target {
+        if text.starts_with("postgres://") || text.starts_with("postgresql://") {
+            Target::Postgres(text.to_string())
+        } else {
+            let p = Path::new(text);
+            Target::Sqlite(if p.is_absolute() {
+                p.to_path_buf()
+            } else {
+                root.join(p)
+            })
+        }
+    }
+
+    /// The database of a project: `explicit` (the `--db` flag) if given, else the
+    /// `FITUP_DB` variable, else `fitup.db` at `root`.
+    pub fn resolve(explicit: Option<&str>, root: &Path) -> Target {
+        match explicit
+            .map(str::to_string)
+            .or_else(|| std::env::var(ENV_VAR).ok().filter(|s| !s.trim().is_empty()))
+        {
+            Some(t) => Target::parse(&t, root),
+            None => Target::Sqlite(root.join(DEFAULT_FILE)),
+        }
+    }
+}
+
+impl std::fmt::Display for Target {
+    /// The file path, or the URL without its password.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Target::Sqlite(p) => write!(f, "{}", p.display()),
+            Target::Postgres(url) => {
+                // postgres://user:secret@host/db → postgres://user@host/db
+                let shown = match (url.find("://"), url.rfind('@')) {
+                    (Some(s), Some(at)) if at > s => {
+                        let userinfo = &url[s + 3..at];
+                        let user = userinfo.split(':').next().unwrap_or("");
+                        format!("{}{user}{}", &url[..s + 3], &url[at..])
+                    }
+                    _ => url.clone(),
+                };
+                write!(f, "{shown}")
+            }
+        }
+    }
+}
+
+/// Why a database operation failed. Every variant names the database.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DbError {
+    /// The database was written by a newer fitup.
+    #[error("{target} was written by a newer fitup (schema version {found}; this fitup {ours} knows versions up to {supported}): upgrade fitup to use it")]
+    NewerSchema {
+        /// The database.
+        target: String,
+        /// Its schema version.
+        found: u32,
+        /// The newest version this build knows.
+        supported: u32,
+        /// This build's version.
+        ours: &'static str,
+    },
+    /// The database cannot be opened or reached.
+    #[error("cannot open the database {target}: {cause}")]
+    Open {
+        /// The database.
+        target: String,
+        /// The driver's message.
+        cause: String,
+    },
+    /// The file, its folder or the server refuses writes.
+    #[error("the database {target} is read-only: {cause}")]
+    ReadOnly {
+        /// The database.
+        target: String,
+        /// The driver's message.
+        cause: String,
+    },
+    /// The disk is full; the result was not stored (earlier results are intact).
+    #[error("the disk holding {target} is full; the result was not stored: {cause}")]
+    DiskFull {
+        /// The database.
+        target: String,
+        /// The driver's message.
+        cause: String,
+    },
+    /// Other writers held the database for too long.
+    #[error("the database {target} stayed busy (other writers) through {tries} tries: {cause}")]
+    Busy {
+        /// The database.
+        target: String,
+        /// Attempts made.
+        tries: u32,
+        /// The driver's last message.
+        cause: String,
+    },
+    /// A read-only query tried to change the database.
+    #[error("db.query is read-only: {cause}")]
+    WriteRefused {
+        /// What was refused.
+        cause: String,
+    },
+    /// No record with that id.
+    #[error("no {what} with id {id} in {target}")]
+    NotFound {
+        /// "run", "path", …
+        what: &'static str,
+        /// The id asked for.
+        id: i64,
+        /// The database.
+        target: String,
+    },
+    /// A value that cannot be stored (a non-finite number, …).
+    #[error("cannot store {what}: {cause}")]
+    Invalid {
+        /// What was being stored.
+        what: String,
+        /// Why not.
+        cause: String,
+    },
+    /// Any other SQL error.
+    #[error("database {target}: {cause}")]
+    Sql {
+        /// The database.
+        target: String,
+        /// The driver's message.
+        cause: String,
+    },
+}
+
+enum Conn {
+    Sqlite(rusqlite::Connection),
+    Postgres(Box<postgres::Client>),
+}
+
+/// An open results database (SQLite file or PostgreSQL server), migrated to
+/// [`SCHEMA_VERSION`].
+pub struct Database {
+    conn: Conn,
+    target: Target,
+}
+
+impl std::fmt::Debug for Database {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Database({})", self.target)
+    }
+}
+
+impl Database {
+    /// Opens (creating if needed) the database and brings its schema up to date.
+    ///
+    /// Fails with [`DbError::NewerSchema`] when a newer fitup wrote it.
+    pub fn open(target: &Target) -> Result<Self, DbError> {
+        Self::open_at_version(target, schema::LATEST)
+    }
+
+    /// Opens the database and migrates it only up to `version` (at most
+    /// [`SCHEMA_VERSION`]): for migration tests and tools that must write an older
+    /// schema. Prefer [`Database::open`].
+    pub fn open_at_version(target: &Target, version: u32) -> Result<Self, DbError> {
+        let name = target.to_string();
+        let open_err = |cause: String| DbError::Open {
+            target: name.clone(),
+            cause,
+        };
+        let conn = match target {
+            Target::Sqlite(path) => {
+                if path.is_dir() {
+                    return Err(open_err("it is a folder, not a database file".into()));
+                }
+                if let Some(parent) = path.parent() {
+                    if !parent.as_os_str().is_empty() && !parent.is_dir() {
+                        return Err(open_err(format!(
+                            "the folder {} does not exist",
+                            parent.display()
+                        )));
+                    }
+                }
+                let c = rusqlite::Connection::open(path).map_err(|e| open_err(e.to_string()))?;
+                c.busy_timeout(BUSY_TIMEOUT)
+                    .map_err(|e| open_err(e.to_string()))?;
+                // A file that is not SQLite fails here with "file is not a database".
+                let mode: String = c
+                    .query_row("PRAGMA journal_mode=WAL", [], |r| r.get(0))
+                    .map_err(|e| open_err(e.to_string()))?;
+                if mode != "wal" {
+                    // Read-only media cannot switch; reads still work.
+                    if path.exists() && is_read_only(path) {
+                        return Err(DbError::ReadOnly {
+                            target: name,
+                            cause: "the file is not writable".into(),
+                        });
+                    }
+                }
+                // In WAL mode NORMAL stays consistent after any crash (a power cut may lose
+                // the last commits, never half of one); a 16 MB page cache holds a large
+                // result.
+                c.execute_batch(
+                    "PRAGMA foreign_keys=ON; PRAGMA synchronous=NORMAL; PRAGMA cache_size=-16000;",
+                )
+                .map_err(|e| open_err(e.to_string()))?;
+                Conn::Sqlite(c)
+            }
+            Target::Postgres(url) => {
+                let mut config: postgres::Config = url
+                    .parse()
+                    .map_err(|e: postgres::Error| open_err(e.to_string()))?;
+                config.connect_timeout(Duration::from_secs(10));
+                config.application_name("fitup");
+                let client = config
+                    .connect(postgres::NoTls)
+                    .map_err(|e| open_err(Raw::from(e).message))?;
+                Conn::Postgres(Box::new(client))
+            }
+        };
+        let mut db = Database {
+            conn,
+            target: target.clone(),
+        };
+        let target_version = version.min(schema::LATEST);
+        let now = now_utc();
+        match db.transaction("the schema", |tx| schema::migrate(tx, target_version, &now))? {
+            schema::Migrated::Ok => Ok(db),
+            schema::Migrated::Newer(found) => Err(DbError::NewerSchema {
+                target: db.target.to_string(),
+                found,
+                supported: schema::LATEST,
+                ours: env!("CARGO_PKG_VERSION"),
+            }),
+        }
+    }
+
+    /// Where the data lives.
+    pub fn target(&self) -> &Target {
+        &self.target
+    }
+
+    /// Which back end.
+    pub fn dialect(&self) -> Dialect {
+        match self.conn {
+            Conn::Sqlite(_) => Dialect::Sqlite,
+            Conn::Postgres(_) => Dialect::Postgres,
+        }
+    }
+
+    /// The schema version of the open database.
+    pub fn schema_version(&mut self) -> Result<u32, DbError> {
+        self.read("the schema version", |tx| schema::current_version(tx))
+    }
+
+    fn error(&self, what: &str, e: Raw, tries: u32) -> DbError {
+        let target = self.target.to_string();
+        match e.kind {
+            Kind::Busy => DbError::Busy {
+                target,
+                tries,
+                cause: e.message,
+            },
+            Kind::ReadOnly => DbError::ReadOnly {
+                target,
+                cause: e.message,
+            },
+            Kind::Full => DbError::DiskFull {
+                target,
+                cause: e.message,
+            },
+            Kind::WriteRefused => DbError::WriteRefused { cause: e.message },
+            Kind::Other => DbError::Sql {
+                target,
+                cause: format!("{what}: {}", e.message),
+            },
+        }
+    }
+
+    /// Runs `f` in one transaction, committed when it returns `Ok`; retried (with the
+    /// whole closure) while other writers hold the database.
+    pub(crate) fn transaction<R>(
+        &mut self,
+        what: &str,
+        f: impl FnMut(&mut dyn Tx) -> Result<R, Raw>,
+    ) -> Result<R, DbError> {
+        self.transact(what, rusqlite::TransactionBehavior::Immediate, f)
+    }
+
+    /// As [`Database::transaction`] for reads: SQLite takes no write lock, so readers
+    /// never wait for (or hold up) writers.
+    pub(crate) fn read<R>(
+        &mut self,
+        what: &str,
+        f: impl FnMut(&mut dyn Tx) -> Result<R, Raw>,
+    ) -> Result<R, DbError> {
+        self.transact(what, rusqlite::TransactionBehavior::Deferred, f)
+    }
+
+    fn transact<R>(
+        &mut self,
+        what: &str,
+        behavior: rusqlite::TransactionBehavior,
+        mut f: impl FnMut(&mut dyn Tx) -> Result<R, Raw>,
+    ) -> Result<R, DbError> {
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
+            let result: Result<R, Raw> = match &mut self.conn {
+                Conn::Sqlite(c) => (|| {
+                    // Writes are IMMEDIATE: they take the write lock up front, so two
+                    // writers never deadlock upgrading read locks.
+                    let tx = c.transaction_with_behavior(behavior)?;
+                    let mut t = SqliteTx(tx);
+                    let r = f(&mut t)?;
+                    t.0.commit()?;
+                    Ok(r)
+                })(),
+                Conn::Postgres(c) => (|| {
+                    let tx = c.transaction()?;
+                    let mut t = PgTx(tx);
+                    let r = f(&mut t)?;
+                    t.0.commit()?;
+                    Ok(r)
+                })(),
+            };
+            match result {
+                Ok(r) => return Ok(r),
+                Err(e) if e.kind == Kind::Busy && attempt < TRIES => {
+                    // Back off a little longer each time, staggered by process.
+                    let jitter = u64::from(std::process::id() % 7);
+                    std::thread::sleep(Duration::from_millis(5 * u64::from(attempt) + jitter));
+                }
+                Err(e) => return Err(self.error(what, e, attempt)),
+            }
+        }
+    }
+
+    /// Runs a read-only SQL query (one `SELECT`, `?`-free: parameters are `?1`… in
+    /// SQLite and `$1`… in PostgreSQL) and returns its columns and rows. Writes are
+    /// refused: SQLite checks the statement is read-only and runs it with
+    /// `query_only`; PostgreSQL runs it in a `READ ONLY` transaction.
+    pub fn query(&mut self, sql: &str, params: &[SqlValue]) -> Result<QueryResult, DbError> {
+        let target = self.target.to_string();
+        let sql_err = |e: Raw| match e.kind {
+            Kind::WriteRefused | Kind::ReadOnly => DbError::WriteRefused { cause: e.message },
+            _ => DbError::Sql {
+                target: target.clone(),
+                cause: e.message,
+            },
+        };
+        match &mut self.conn {
+            Conn::Sqlite(c) => {
+                let run = |c: &rusqlite::Connection| -> Result<QueryResult, Raw> {
+                    let mut stmt = c.prepare(sql)?;
+                    if !stmt.readonly() {
+                        return Err(Raw {
+                            kind: Kind::WriteRefused,
+                            message: "the statement would change the database".into(),
+                        });
+                    }
+                    if stmt.parameter_count() != params.len() {
+                        return Err(Raw::other(format!(
+                            "the statement has {} parameters, {} given",
+                            stmt.parameter_count(),
+                            params.len()
+                        )));
+                    }
+                    let columns: Vec<String> = stmt.column_names().map(|s| s.to_string()).collect();
+                    let n = columns.len();
+                    let mut rows = stmt.query(rusqlite::params_from_iter(params.iter()))?;
+                    let mut out = Vec::new();
+                    while let Some(row) = rows.next()? {
+                        out.push(
+                            (0..n)
+                                .map(|i| row.get_ref(i).map(backend::sqlite_value))
+                                .collect::<Result<_, _>>()?,
+                        );
+                    }
+                    Ok(QueryResult { columns, rows: out })
+                };
+                c.execute_batch("PRAGMA query_only=ON")
+                    .map_err(|e| sql_err(e.into()))?;
+                let r = run(c);
+                let reset = c.execute_batch("PRAGMA query_only=OFF");
+                let r = r.map_err(sql_err)?;
+                reset.map_err(|e| sql_err(e.into()))?;
+                Ok(r)
+            }
+            Conn::Postgres(c) => {
+                let run = |c: &mut postgres::Client| -> Result<QueryResult, Raw> {
+                    let mut tx = c.build_transaction().read_only(true).start()?;
+                    let stmt = tx.prepare(sql)?;
+                    let columns: Vec<String> = stmt
+                        .columns()
+                        .iter()
+                        .map(|c| c.name().to_string())
+                        .collect();
+                    if stmt.params().len() != params.len() {
+                        return Err(Raw::other(format!(
+                            "the statement has {} parameters, {} given",
+                            stmt.params().len(),
+                            params.len()
+                        )));
+                    }
+                    let boxed = params
+                        .iter()
+                        .zip(stmt.params())
+                        .enumerate()
+                        .map(|(i, (v, t))| backend::pg_param(v, t, i))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let refs: Vec<&(dyn postgres::types::ToSql + Sync)> =
+                        boxed.iter().map(|b| b.as_ref()).collect();
+                    let rows = tx.query(&stmt, &refs)?;
+                    let rows = rows
+                        .iter()
+                        .map(|r| (0..r.len()).map(|i| backend::pg_value(r, i)).collect())
+                        .collect::<Result<Vec<_>, Raw>>()?;
+                    tx.rollback()?;
+                    Ok(QueryResult { columns, rows })
+                };
+                run(c).map_err(sql_err)
+            }
+        }
+    }
+}
+
+/// Whether the file cannot be written by this process.
+fn is_read_only(path: &Path) -> bool {
+    std::fs::OpenOptions::new().append(true).open(path).is_err()
+}
+
+/// The columns and rows of a [`Database::query`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct QueryResult {
+    /// Column names, in order.
+    pub columns: Vec<String>,
+    /// Rows, each with one value per column.
+    pub rows: Vec<Vec<SqlValue>>,
+}
+
+/// The current time (UTC) as ISO 8601 with milliseconds, `2026-11-30T17:43:21.123Z`:
+/// how every `*_at` column is written (text that sorts in time order).
+pub fn now_utc() -> String {
+    let d = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap_or_default();
+    format_utc(d.as_secs() as i64, d.subsec_millis())
+}
+
+/// Seconds since 1970 (UTC) and milliseconds as ISO 8601.
+fn format_utc(secs: i64, millis: u32) -> String {
+    let days = secs.div_euclid(86_400);
+    let rem = secs.rem_euclid(86_400);
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}.{millis:03}Z",
+        rem / 3600,
+        (rem % 3600) / 60,
+        rem % 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_format_matches_known_dates() {
+        assert_eq!(format_utc(0, 0), "1970-01-01T00:00:00.000Z");
+        assert_eq!(format_utc(951_782_400, 5), "2000-02-29T00:00:00.005Z");
+        assert_eq!(format_utc(1_796_059_401, 123), "2026-11-30T17:23:21.123Z");
+    }
+
+    #[test]
+    fn targets_parse_urls_and_files() {
+        let root = Path::new("/p");
+        assert_eq!(
+            Target::parse("postgres://u:pw@h:5/d", root).to_string(),
+            "postgres://u@h:5/d"
+        );
+        assert_eq!(
+            Target::parse("x.db", root),
+            Target::Sqlite(PathBuf::from("/p/x.db"))
+        );
+        assert_eq!(
+            Target::resolve(Some("/abs.db"), root),
+            Target::Sqlite(PathBuf::from("/abs.db"))
+        );
+    }
+
+    #[test]
+    fn placeholders_are_numbered_for_postgres() {
+        assert_eq!(backend::numbered("a = ? AND b = ?"), "a = $1 AND b = $2");
+    }
+}
