@@ -78,8 +78,6 @@ pub fn stamp(path: &Path) -> std::io::Result<Stamp> {
 /// `None` when the platform or file system cannot lock: writing goes on unlocked.
 pub fn lock_folder(dir: &Path) -> Option<std::fs::File> {
     let f = std::fs::File::open(dir).ok()?;
-    // `File::lock` is std since Rust 1.89; the toolchain in use is newer.
-    #[allow(clippy::incompatible_msrv)]
     f.lock().ok()?;
     Some(f)
 }

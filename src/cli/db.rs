@@ -1,6 +1,7 @@
 //! `fitup db …` (list, show, export and compare stored results) and the recording
 //! of `fitup run`/`watch` runs in the results database.
 
+use super::out::{errln, outln};
 use super::{Exit, ScriptArgs};
 use crate::db::{recording, Database, NewRun, PathQuery, RunStatus, StoredPath, Target};
 use crate::math::AngleConvention;
@@ -106,7 +107,7 @@ pub(super) fn main(a: &DbArgs) -> Exit {
     match run_action(a) {
         Ok(()) => Exit::Ok,
         Err((exit, m)) => {
-            eprintln!("error: {m}");
+            errln!("error: {m}");
             exit
         }
     }
@@ -131,15 +132,18 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
         DbAction::Runs => {
             let runs = db.runs().map_err(e)?;
             if runs.is_empty() {
-                println!("no runs recorded in {target}");
+                outln!("no runs recorded in {target}");
                 return Ok(());
             }
-            println!(
+            outln!(
                 "{:>5}  {:<9}  {:<24}  {:<10}  script",
-                "run", "status", "started (UTC)", "time"
+                "run",
+                "status",
+                "started (UTC)",
+                "time"
             );
             for r in runs {
-                println!(
+                outln!(
                     "{:>5}  {:<9}  {:<24}  {:<10}  {}{}",
                     r.id,
                     r.status,
@@ -162,15 +166,22 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                 })
                 .map_err(e)?;
             if paths.is_empty() {
-                println!("no paths stored in {target}");
+                outln!("no paths stored in {target}");
                 return Ok(());
             }
-            println!(
+            outln!(
                 "{:>5}  {:<20} {:<10} {:<12} {:>5} {:>10} {:>9}  {:>4}  stored (UTC)",
-                "path", "name", "component", "planner", "found", "length mm", "rot. °", "run"
+                "path",
+                "name",
+                "component",
+                "planner",
+                "found",
+                "length mm",
+                "rot. °",
+                "run"
             );
             for p in paths {
-                println!(
+                outln!(
                     "{:>5}  {:<20} {:<10} {:<12} {:>5} {:>10.1} {:>9.1}  {:>4}  {}",
                     p.id,
                     p.name,
@@ -209,7 +220,7 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                         .map_err(|x| usage(format!("--out: {x}")))?;
                     crate::fsutil::write_atomic(&path, text.as_bytes())
                         .map_err(|x| fail(format!("cannot write {}: {x}", o.display())))?;
-                    println!("wrote {}", o.display());
+                    outln!("wrote {}", o.display());
                 }
             }
         }
@@ -243,25 +254,25 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
     match kind {
         Kind::Run => {
             let r = db.run(id)?;
-            println!("run {}: {} ({})", r.id, r.script, r.status);
+            outln!("run {}: {} ({})", r.id, r.script, r.status);
             if let Some(d) = &r.document {
-                println!("  document   {d}");
+                outln!("  document   {d}");
             }
-            println!("  started    {}", r.started_at);
-            println!(
+            outln!("  started    {}", r.started_at);
+            outln!(
                 "  finished   {}",
                 r.finished_at
                     .as_deref()
                     .unwrap_or("- (running, or the process died)")
             );
-            println!("  fitup      {}", r.fitup_version);
+            outln!("  fitup      {}", r.fitup_version);
             let paths = db.paths(&PathQuery {
                 run_id: Some(id),
                 without_poses: true,
                 ..Default::default()
             })?;
             for p in &paths {
-                println!(
+                outln!(
                     "  path:{:<4} {} ({}, {})",
                     p.id,
                     p.name,
@@ -274,13 +285,13 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                 );
             }
             for (tid, name, n) in db.trajectory_list(Some(id))? {
-                println!("  trajectory:{tid:<4} {name} ({n} samples)");
+                outln!("  trajectory:{tid:<4} {name} ({n} samples)");
             }
             for (iid, name, n) in db.interference_list(Some(id))? {
-                println!("  interference:{iid:<4} {name} ({n} pairs)");
+                outln!("  interference:{iid:<4} {name} ({n} pairs)");
             }
             for (sid, s) in db.snapshots(Some(id))? {
-                println!(
+                outln!(
                     "  snapshot {sid}: {} ({} components, {} dimensions)",
                     s.document,
                     s.poses.len(),
@@ -288,20 +299,20 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                 );
             }
             if !r.output.is_empty() {
-                println!("  output:");
+                outln!("  output:");
                 for line in r.output.lines() {
-                    println!("    {line}");
+                    outln!("    {line}");
                 }
             }
         }
         Kind::Path => {
             let p = db.path(id)?;
-            println!("path {}: {} ({})", p.id, p.name, p.created_at);
-            println!(
+            outln!("path {}: {} ({})", p.id, p.name, p.created_at);
+            outln!(
                 "  component  {}",
                 p.meta.component.as_deref().unwrap_or("-")
             );
-            println!(
+            outln!(
                 "  planner    {}{}",
                 p.path.planner,
                 p.meta
@@ -310,7 +321,7 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                     .unwrap_or_default()
             );
             match &p.path.failure {
-                None => println!(
+                None => outln!(
                     "  found      {} key poses, {:.3} mm, {:.2}°, {} iterations, {:.1} ms",
                     p.path.poses.len(),
                     p.path.length_mm,
@@ -318,12 +329,12 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                     p.path.iterations,
                     p.path.time_ms
                 ),
-                Some(f) => println!("  not found  {f}"),
+                Some(f) => outln!("  not found  {f}"),
             }
-            println!("  edges      {}", p.path.resolution);
+            outln!("  edges      {}", p.path.resolution);
             for (i, t) in p.path.poses.iter().enumerate() {
                 let v = t.to_xyzabc(AngleConvention::default());
-                println!(
+                outln!(
                     "  {i:>4}  X {:.3} Y {:.3} Z {:.3} A {:.2} B {:.2} C {:.2}",
                     v[0],
                     v[1],
@@ -336,7 +347,7 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
         }
         Kind::Trajectory => {
             let t = db.trajectory(id)?;
-            println!(
+            outln!(
                 "trajectory {}: {} ({} samples, {:.3} s{})",
                 t.id,
                 t.name,
@@ -348,16 +359,20 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
         }
         Kind::Interference => {
             let r = db.interference(id)?;
-            println!(
+            outln!(
                 "interference {}: {} ({} pairs)",
                 r.id,
                 r.name,
                 r.pairs.len()
             );
             for p in r.pairs {
-                println!(
+                outln!(
                     "  {} – {}: {} {:.3} mm {}",
-                    p.a, p.b, p.state, p.depth_mm, p.kind
+                    p.a,
+                    p.b,
+                    p.state,
+                    p.depth_mm,
+                    p.kind
                 );
             }
         }
@@ -516,9 +531,12 @@ fn csv_field(s: &str) -> String {
 
 fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
     let (ra, rb) = (db.run(a)?, db.run(b)?);
-    println!(
+    outln!(
         "run {a} ({}, {}) → run {b} ({}, {})",
-        ra.script, ra.started_at, rb.script, rb.started_at
+        ra.script,
+        ra.started_at,
+        rb.script,
+        rb.started_at
     );
     let mut differences = 0;
     let last = |v: Vec<(i64, crate::db::Snapshot)>| v.into_iter().last().map(|(_, s)| s);
@@ -528,13 +546,13 @@ fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
                 match sb.poses.iter().find(|(n, _)| n == name) {
                     None => {
                         differences += 1;
-                        println!("  component {name}: only in run {a}");
+                        outln!("  component {name}: only in run {a}");
                     }
                     Some((_, tb)) => {
                         let (angle, dist) = ta.distance_to(tb);
                         if dist > 1e-6 || angle > 1e-9 {
                             differences += 1;
-                            println!(
+                            outln!(
                                 "  component {name}: moved {dist:.3} mm, turned {:.3}°",
                                 angle.to_degrees()
                             );
@@ -548,7 +566,7 @@ fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
                 .filter(|(n, _)| !sa.poses.iter().any(|(m, _)| m == n))
             {
                 differences += 1;
-                println!("  component {name}: only in run {b}");
+                outln!("  component {name}: only in run {b}");
             }
             for (name, kind, va) in &sa.dimensions {
                 if let Some((_, _, vb)) = sb.dimensions.iter().find(|(n, _, _)| n == name) {
@@ -560,12 +578,12 @@ fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
                             }
                             crate::document::DimensionKind::Length => (*va, *vb, " mm"),
                         };
-                        println!("  dimension {name}: {x:.3}{unit} → {y:.3}{unit}");
+                        outln!("  dimension {name}: {x:.3}{unit} → {y:.3}{unit}");
                     }
                 }
             }
         }
-        _ => println!(
+        _ => outln!(
             "  (no document snapshot in {}: store one with `db.save(doc)`)",
             if db.snapshots(Some(a))?.is_empty() {
                 a
@@ -591,23 +609,23 @@ fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
         match pb.iter().rev().find(|x| x.name == p.name) {
             None => {
                 differences += 1;
-                println!("  path {}: only in run {a}", p.name);
+                outln!("  path {}: only in run {a}", p.name);
             }
             Some(x) => {
                 let (da, dbb) = (describe(p), describe(x));
                 if da != dbb {
                     differences += 1;
-                    println!("  path {}: {da} → {dbb}", p.name);
+                    outln!("  path {}: {da} → {dbb}", p.name);
                 }
             }
         }
     }
     for p in pb.iter().filter(|x| !pa.iter().any(|y| y.name == x.name)) {
         differences += 1;
-        println!("  path {}: only in run {b}", p.name);
+        outln!("  path {}: only in run {b}", p.name);
     }
     if differences == 0 {
-        println!("  no differences");
+        outln!("  no differences");
     }
     Ok(())
 }
@@ -656,20 +674,24 @@ impl Recorder {
         if let Ok(mut b) = self.output.lock() {
             b.clear();
         }
-        let hash = |p: &std::path::Path| {
-            std::fs::read(p)
+        // Capped reads of regular files only: a FIFO or device must not block the run.
+        let hash = |p: &std::path::Path, kind| {
+            crate::fsutil::read_file(p, kind)
                 .ok()
                 .map(|b| format!("{:016x}", crate::fsutil::content_hash(&b)))
         };
         let run = NewRun {
             script: opts.project.display(&opts.script),
             document: opts.doc.as_ref().map(|d| opts.project.display(d)),
-            script_hash: hash(&opts.script),
-            document_hash: opts.doc.as_deref().and_then(hash),
+            script_hash: hash(&opts.script, crate::fsutil::FileKind::Script),
+            document_hash: opts
+                .doc
+                .as_deref()
+                .and_then(|d| hash(d, crate::fsutil::FileKind::Document)),
         };
         let target = Target::resolve(None, opts.project.root());
         if let Err(e) = recording::begin(target, run, a.db.is_some()) {
-            eprintln!("warning: the run is not recorded: {e}");
+            errln!("warning: the run is not recorded: {e}");
         }
     }
 
@@ -692,7 +714,7 @@ impl Recorder {
             output.drain(..cut);
         }
         if let Err(e) = recording::finish(status, &output) {
-            eprintln!("warning: the end of the run is not recorded: {e}");
+            errln!("warning: the end of the run is not recorded: {e}");
         }
     }
 }

@@ -94,7 +94,11 @@ impl Target for OutsideBox {
         let dir = rng.below(6);
         let travel = self.exits(&self.assembled)[dir] + 1.0;
         let mut t = self.assembled.translation();
-        t[dir / 2] += if dir % 2 == 0 { travel } else { -travel };
+        t[dir / 2] += if dir.is_multiple_of(2) {
+            travel
+        } else {
+            -travel
+        };
         for k in 0..3 {
             t[k] = t[k].clamp(space.min[k], space.max[k]);
         }

@@ -219,7 +219,7 @@ impl<'p> Run<'p> {
         if self.expired() {
             return false;
         }
-        if attempt % SMOOTHING_PROGRESS_EVERY == 0 && attempt > 0 {
+        if attempt.is_multiple_of(SMOOTHING_PROGRESS_EVERY) && attempt > 0 {
             let elapsed_ms = self.elapsed_ms();
             if let Some(f) = self.progress.as_mut() {
                 let report = Progress {
@@ -250,10 +250,10 @@ impl<'p> Run<'p> {
     /// Time and callback checks without counting an iteration (long inner loops).
     pub fn check(&mut self, nodes: usize, best_distance: f64) -> Result<(), Failure> {
         let i = self.iterations;
-        if i % CLOCK_EVERY == 0 && self.expired() {
+        if i.is_multiple_of(CLOCK_EVERY) && self.expired() {
             return Err(Failure::TimeLimit);
         }
-        if i % PROGRESS_EVERY == 0 && i > 0 {
+        if i.is_multiple_of(PROGRESS_EVERY) && i > 0 {
             let elapsed_ms = self.elapsed_ms();
             if let Some(f) = self.progress.as_mut() {
                 let report = Progress {

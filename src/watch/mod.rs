@@ -347,7 +347,10 @@ pub fn watch(
 }
 
 fn hash_file(p: &Path) -> Option<u64> {
-    std::fs::read(p).ok().map(|b| content_hash(&b))
+    // Capped, regular files only: a path replaced by a FIFO must not block the watcher.
+    crate::fsutil::read_file(p, crate::fsutil::FileKind::Mesh)
+        .ok()
+        .map(|b| content_hash(&b))
 }
 
 /// The absolute path with the folder canonicalized (the file itself may be missing
