@@ -746,7 +746,15 @@ impl Document {
 
     /// Moves a robot's base (world pose of its root, mm) and its link components.
     pub fn set_robot_base(&mut self, robot: usize, base: Transform) -> Result<(), DocumentError> {
-        self.robot_at(robot)?;
+        let name = self.robot_at(robot)?.name().to_string();
+        if !base.is_finite() {
+            return Err(RobotError::NonFinite {
+                robot: name,
+                what: "base",
+            }
+            .into());
+        }
+        // Finite but beyond the document's range is refused like any pose.
         super::check_pose(&base, "the base pose")?;
         let r = &mut self.robots[robot];
         Arc::make_mut(&mut r.robot).set_base(base);
@@ -756,7 +764,15 @@ impl Document {
 
     /// Sets a robot's tool frame (TCP in the flange frame, mm).
     pub fn set_robot_tool(&mut self, robot: usize, tool: Transform) -> Result<(), DocumentError> {
-        self.robot_at(robot)?;
+        let name = self.robot_at(robot)?.name().to_string();
+        if !tool.is_finite() {
+            return Err(RobotError::NonFinite {
+                robot: name,
+                what: "tool",
+            }
+            .into());
+        }
+        // Finite but beyond the document's range is refused like any pose.
         super::check_pose(&tool, "the tool frame")?;
         let r = &mut self.robots[robot];
         Arc::make_mut(&mut r.robot).set_tool(tool);
