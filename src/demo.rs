@@ -391,6 +391,7 @@ fn mz07_robot(
         name: name.into(),
         catalog: Some("nachi_mz07".into()),
         dh: None,
+        urdf: None,
         base: Some(base),
         tool: Some(robot.tool().to_matrix()),
         flange: None,
