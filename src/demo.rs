@@ -391,6 +391,7 @@ fn mz07_robot(
         name: name.into(),
         catalog: Some("nachi_mz07".into()),
         dh: None,
+        urdf: None,
         base: Some(base),
         tool: Some(robot.tool().to_matrix()),
         flange: None,
@@ -488,5 +489,37 @@ pub fn write_robots(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     ] {
         crate::fsutil::write_atomic(&dir.join(file), doc.to_yaml()?.as_bytes())?;
     }
+    Ok(())
+}
+
+/// The link meshes of `models/urdf/fitup_arm6.urdf` (file stem, mesh), in **metres**
+/// as URDF meshes are (the URDF's default scale 1 makes them mm on import), each in
+/// its link frame except `link_2`, whose visual origin lifts it 0.05 m.
+pub fn arm6_link_meshes() -> Vec<(&'static str, Mesh)> {
+    let m = |x0: f64, y0: f64, z0: f64, x1: f64, y1: f64, z1: f64| {
+        Mesh::cuboid(Point3::new(x0, y0, z0), Point3::new(x1, y1, z1))
+    };
+    vec![
+        ("base_link", m(-0.15, -0.15, 0.0, 0.15, 0.15, 0.40)),
+        ("link_1", m(-0.10, -0.10, 0.0, 0.20, 0.10, 0.04)),
+        ("link_2", Mesh::cylinder(0.06, 0.5, 24)),
+        ("link_3", m(-0.06, -0.06, 0.0, 0.06, 0.06, 0.10)),
+        ("link_4", m(0.08, -0.05, -0.05, 0.50, 0.05, 0.05)),
+        ("link_5", m(0.0, -0.04, -0.04, 0.08, 0.04, 0.04)),
+        ("link_6", m(0.0, -0.04, -0.04, 0.02, 0.04, 0.04)),
+    ]
+}
+
+/// Writes `urdf/meshes/<link>.stl` for [`arm6_link_meshes`] under `dir` (the meshes
+/// `models/urdf/fitup_arm6.urdf` names through `package://`) and `urdf/obstacle.stl`
+/// (a 200 mm cube, mm).
+pub fn write_arm6_meshes(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir.join("urdf/meshes"))?;
+    for (name, mesh) in arm6_link_meshes() {
+        write_stl(&dir.join(format!("urdf/meshes/{name}.stl")), &mesh)?;
+    }
+    // The obstacle of `models/urdf/arm6_cell.yaml`: a document part, so in mm.
+    let obstacle = Mesh::cuboid(Point3::origin(), Point3::new(200.0, 200.0, 200.0));
+    write_stl(&dir.join("urdf/obstacle.stl"), &obstacle)?;
     Ok(())
 }

@@ -82,3 +82,33 @@ fn committed_robot_models_match_generator() {
     assert!((b.y - (1150.0 - 390.0)).abs() < 1e-9);
     assert!((a.z - (fitup::demo::PEDESTAL_HEIGHT + 198.1)).abs() < 1e-9);
 }
+
+/// The URDF example's link meshes (`models/urdf/meshes/*.stl`, metres) are what
+/// `fitup::demo::write_arm6_meshes` produces, and the cell document holding the URDF
+/// robot loads with one component per meshed link.
+#[test]
+fn committed_urdf_meshes_match_generator() {
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    if std::env::var_os("FITUP_BLESS").is_some() {
+        fitup::demo::write_arm6_meshes(&models).unwrap();
+    }
+    let fresh = tempfile::tempdir().unwrap();
+    fitup::demo::write_arm6_meshes(fresh.path()).unwrap();
+    let files = fitup::demo::arm6_link_meshes()
+        .into_iter()
+        .map(|(name, _)| format!("urdf/meshes/{name}.stl"))
+        .chain(["urdf/obstacle.stl".to_string()]);
+    for f in files {
+        let committed =
+            std::fs::read(models.join(&f)).unwrap_or_else(|e| panic!("models/{f}: {e}"));
+        let generated = std::fs::read(fresh.path().join(&f)).unwrap();
+        assert!(
+            committed == generated,
+            "models/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test models"
+        );
+    }
+    let doc = fitup::document::Document::open(&models.join("urdf/arm6_cell.yaml")).unwrap();
+    let arm = doc.robot("arm6").unwrap();
+    let shown = arm.links().iter().filter(|l| l.component.is_some()).count();
+    assert_eq!(shown, fitup::demo::arm6_link_meshes().len());
+}

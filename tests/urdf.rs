@@ -3,8 +3,10 @@
 //! computations, IK round trips, the closed form chosen for the OPW arm), mesh URIs
 //! resolve by the documented rule, and hostile files give located errors.
 
+use fitup::document::Document;
 use fitup::kinematics::{parse_urdf, resolve_mesh, IkOptions, OpwSolver, MAX_URDF_BYTES};
-use fitup::math::{Rng, Vec3};
+use fitup::math::{Point3, Rng, Vec3};
+use fitup::mesh::{write_stl, Mesh};
 use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
@@ -211,4 +213,111 @@ fn hostile_urdfs_give_located_errors() {
     assert!(e.contains("zero length"), "{e}");
     let huge = format!("<robot name=\"h\">{}</robot>", " ".repeat(MAX_URDF_BYTES));
     assert!(error(&huge).contains("limit"));
+}
+
+/// A project in a temporary folder: `proj/fitup.toml`, a URDF `proj/r.urdf` whose
+/// link `arm` has the mesh `mesh` (visual origin 0.1 m along x, scale 2 1 1), the
+/// cuboid STL `proj/m.stl` (metres) and a document `proj/cell.yaml` with the robot.
+fn urdf_project(mesh: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let proj = dir.path().join("proj");
+    std::fs::create_dir_all(&proj).unwrap();
+    std::fs::write(proj.join("fitup.toml"), "").unwrap();
+    let cube = Mesh::cuboid(Point3::origin(), Point3::new(0.01, 0.02, 0.03));
+    write_stl(&proj.join("m.stl"), &cube).unwrap();
+    write_stl(&dir.path().join("elsewhere.stl"), &cube).unwrap();
+    let urdf = format!(
+        r#"<robot name="r">
+  <link name="base"/>
+  <link name="arm">
+    <visual><origin xyz="0.1 0 0"/><geometry><mesh filename="{mesh}" scale="2 1 1"/></geometry></visual>
+  </link>
+  <joint name="j1" type="revolute">
+    <origin xyz="0 0 0.5"/><parent link="base"/><child link="arm"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3"/>
+  </joint>
+</robot>"#
+    );
+    std::fs::write(proj.join("r.urdf"), urdf).unwrap();
+    std::fs::write(
+        proj.join("cell.yaml"),
+        "robots:\n- name: r\n  urdf: r.urdf\n  joints: [90]\n",
+    )
+    .unwrap();
+    let doc = proj.join("cell.yaml");
+    (dir, doc)
+}
+
+/// A `urdf:` robot in a document: the link's STL mesh is a component posed by FK with
+/// the visual origin and scale applied, and saving writes the `urdf:` entry back.
+#[test]
+fn document_urdf_robot_meshes_are_posed_and_saved() {
+    let (_dir, path) = urdf_project("package://r_support/m.stl");
+    let mut doc = Document::open(&path).unwrap();
+    let c = doc.component_index("r:arm").unwrap();
+    let world: Vec<Point3> = {
+        let t = doc.components()[c].transform;
+        doc.mesh_of(c).vertices.iter().map(|v| t.apply(v)).collect()
+    };
+    // By hand: corner (10, 20, 30) mm, scaled (2, 1, 1) → (20, 20, 30), visual origin
+    // +100 x → (120, 20, 30) in the link frame; joint 1 at 90° about z turns it to
+    // (−20, 120, 30), the joint origin lifts it 500 mm.
+    for (x, y, z) in [(0.0, 0.0, 0.0), (20.0, 20.0, 30.0), (20.0, 0.0, 30.0)] {
+        // Link frame (100 + x, y, z) turned 90° about z: (−y, 100 + x, z), lifted 500.
+        let e = Point3::new(-y, 100.0 + x, 500.0 + z);
+        assert!(
+            world.iter().any(|w| (w - e).norm() < 1e-4),
+            "{e:?} not among {world:?}"
+        );
+    }
+    assert!(world
+        .iter()
+        .any(|w| (w - Point3::new(-20.0, 120.0, 530.0)).norm() < 1e-4));
+    // Joints move the component: at 0 the same corner is at (120, 20, 530).
+    doc.set_robot_joints(0, &[0.0]).unwrap();
+    let t = doc.components()[c].transform;
+    assert!(doc
+        .mesh_of(c)
+        .vertices
+        .iter()
+        .any(|v| (t.apply(v) - Point3::new(120.0, 20.0, 530.0)).norm() < 1e-4));
+    // Saved: the `urdf:` entry, not the generated part; it loads again.
+    let yaml = doc.to_yaml();
+    assert!(
+        yaml.contains("urdf: r.urdf") && !yaml.contains("r:arm"),
+        "{yaml}"
+    );
+    let moved = path.parent().unwrap().join("sub/cell2.yaml");
+    std::fs::create_dir_all(moved.parent().unwrap()).unwrap();
+    doc.save_as(&moved).unwrap();
+    let text = std::fs::read_to_string(&moved).unwrap();
+    assert!(text.contains("urdf: ../r.urdf"), "{text}");
+    let again = Document::open(&moved).unwrap();
+    assert!(again.component_index("r:arm").is_ok());
+    // add_urdf_robot: the same robot added in code brings its mesh component.
+    let mut empty = Document::from_yaml("{}", &path, &mut fitup::mesh::MeshCache::new()).unwrap();
+    let i = empty
+        .add_urdf_robot("r2", &path.parent().unwrap().join("r.urdf"), None)
+        .unwrap();
+    assert_eq!(empty.robots()[i].name(), "r2");
+    assert!(empty.component_index("r2:arm").is_ok());
+    assert!(empty.to_yaml().contains("urdf: r.urdf"));
+}
+
+/// A mesh path leading outside the project is refused (the file outside is never
+/// read); a `.dae` mesh is reported with the URDF line.
+#[test]
+fn urdf_mesh_escape_refused_and_dae_reported() {
+    let (_dir, path) = urdf_project("../elsewhere.stl");
+    let e = Document::open(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("outside the project") && e.contains("r.urdf:4"),
+        "{e}"
+    );
+    let (_dir, path) = urdf_project("package://r_support/meshes/arm.dae");
+    let e = Document::open(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("cell.yaml:3") && e.contains("r.urdf:4") && e.contains("not an STL"),
+        "{e}"
+    );
 }

@@ -161,8 +161,8 @@ pub struct MateFile {
 /// A robot: a kinematic tree (from the catalog, a D-H table or explicit links) placed
 /// at `base`, with a tool frame and current joint values; its links move components.
 ///
-/// Exactly one of `catalog`, `dh` or a `links` list with joints describes the tree.
-/// With `catalog` or `dh`, `links` only attaches components (link 0 is the base, link
+/// Exactly one of `catalog`, `dh`, `urdf` or a `links` list with joints describes the
+/// tree. With `catalog`, `dh` or `urdf`, `links` only attaches components (link 0 is the base, link
 /// `i` carries D-H frame `i`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -175,6 +175,11 @@ pub struct RobotFile {
     /// A D-H table.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dh: Option<DhFile>,
+    /// A URDF file (path relative to the document's folder, inside the project): its
+    /// kinematics, and its links' STL meshes as generated parts and components (see
+    /// `docs/robots.md`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub urdf: Option<String>,
     /// World pose of the robot's root link (pose matrix like components; identity when
     /// absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]

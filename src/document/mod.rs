@@ -208,6 +208,9 @@ pub struct Document {
     by_name: HashMap<String, usize>,
     mates: Vec<Mate>,
     robots: Vec<RobotInstance>,
+    /// Parts (and their components, same name) made from `urdf:` robots' link meshes:
+    /// derived data, not written by `save`.
+    generated: std::collections::HashSet<String>,
     revision: u64,
     aabb_cache: AabbCache,
     /// Hash of the file's bytes when it was loaded or last saved: a save refuses to
@@ -545,8 +548,39 @@ impl Document {
                 transform,
             });
         }
+        // URDF robots: their links' meshes become generated parts and components.
+        let mut urdf = HashMap::new();
+        let mut generated = std::collections::HashSet::new();
+        for rf in &file.robots {
+            let Some(u) = &rf.urdf else { continue };
+            let robot_at = |m: String| {
+                let from = locate(text, &format!("name: {}", rf.name), 1)
+                    .map(|l| l.0)
+                    .unwrap_or(1);
+                let (line, col) = locate(text, "urdf:", from).unwrap_or((0, 0));
+                DocumentError::from(SourceError::new(
+                    path,
+                    line,
+                    col,
+                    format!("robot `{}`: {m}", rf.name),
+                ))
+            };
+            let loaded = robot::read_urdf_robot(project, &dir, u, cache).map_err(robot_at)?;
+            add_urdf_parts(
+                &rf.name,
+                u,
+                &loaded,
+                &mut parts,
+                &mut components,
+                &mut by_name,
+                &mut generated,
+            )
+            .map_err(robot_at)?;
+            urdf.insert(rf.name.clone(), loaded);
+        }
         let mut doc = Document {
             path: path.to_path_buf(),
+            generated,
             description: file.description.clone(),
             parts,
             components,
@@ -621,7 +655,14 @@ impl Document {
             .filter(|m| m.kind.has_dimension())
             .map(|m| m.name.clone())
             .collect();
-        doc.robots = robot::load(&file.robots, &doc.by_name, &mate_dimensions, text, path)?;
+        doc.robots = robot::load(
+            &file.robots,
+            &doc.by_name,
+            &urdf,
+            &mate_dimensions,
+            text,
+            path,
+        )?;
         doc.apply_robots();
         let mut poses: Vec<Transform> = doc.components.iter().map(|c| c.transform).collect();
         let fixed = doc.solver_fixed();
@@ -986,6 +1027,7 @@ impl Document {
         let parts = self
             .parts
             .values()
+            .filter(|p| !self.generated.contains(&p.name))
             .map(|p| {
                 let mut pf = PartFile {
                     stl: p.stl.clone(),
@@ -1026,6 +1068,7 @@ impl Document {
         let components = self
             .components
             .iter()
+            .filter(|c| !self.generated.contains(&c.part))
             .map(|c| ComponentFile {
                 name: c.name.clone(),
                 part: c.part.clone(),
@@ -1108,13 +1151,18 @@ impl Document {
             .flatten();
         let new_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let old = self.parts.clone();
+        let old_robots = self.robots.clone();
         for p in self.parts.values_mut() {
             if let Some(rel) = relative_path(&p.mesh_path, &new_dir) {
                 p.stl = rel;
             }
         }
+        for r in &mut self.robots {
+            r.rebase_urdf(|f| relative_path(f, &new_dir));
+        }
         if let Err(e) = self.write_checked(path, expected) {
             self.parts = old;
+            self.robots = old_robots;
             return Err(e);
         }
         self.path = path.to_path_buf();
@@ -1179,8 +1227,56 @@ impl Document {
     pub fn source_files(&self) -> Vec<PathBuf> {
         std::iter::once(self.path.clone())
             .chain(self.parts.values().map(|p| p.mesh_path.clone()))
+            .chain(self.robots.iter().flat_map(|r| r.urdf_files().to_vec()))
             .collect()
     }
+}
+
+/// Adds the parts and components of a URDF robot's link meshes (named by
+/// [`robot::urdf_component_name`]), recording them as generated.
+fn add_urdf_parts(
+    robot_name: &str,
+    uri: &str,
+    loaded: &robot::UrdfLoaded,
+    parts: &mut IndexMap<String, Part>,
+    components: &mut Vec<Component>,
+    by_name: &mut HashMap<String, usize>,
+    generated: &mut std::collections::HashSet<String>,
+) -> Result<(), String> {
+    for (i, mesh) in loaded.meshes.iter().enumerate() {
+        let Some(mesh) = mesh else { continue };
+        let link = loaded.robot.tree().links()[i]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("link{i}"));
+        let name = robot::urdf_component_name(robot_name, &link);
+        if parts.contains_key(&name) || by_name.contains_key(&name) {
+            return Err(format!(
+                "the part or component `{name}` (made for link `{link}` of the URDF) already exists"
+            ));
+        }
+        parts.insert(
+            name.clone(),
+            Part {
+                name: name.clone(),
+                stl: uri.to_string(),
+                mesh_path: loaded.path.clone(),
+                mesh: Arc::new(mesh.clone()),
+                references: IndexMap::new(),
+                features: Vec::new(),
+            },
+        );
+        by_name.insert(name.clone(), components.len());
+        components.push(Component {
+            name: name.clone(),
+            part: name.clone(),
+            fixed: false,
+            color: None,
+            transform: Transform::IDENTITY,
+        });
+        generated.insert(name);
+    }
+    Ok(())
 }
 
 fn feature_name(f: &FeatureFile) -> &str {
@@ -1237,7 +1333,7 @@ pub(crate) fn check_pose(t: &Transform, what: &str) -> Result<(), DocumentError>
 }
 
 /// `target` written relative to `base` when possible (both made absolute first).
-fn relative_path(target: &Path, base: &Path) -> Option<String> {
+pub(super) fn relative_path(target: &Path, base: &Path) -> Option<String> {
     let abs = |p: &Path| std::path::absolute(p).ok();
     let (t, b) = (abs(target)?, abs(base)?);
     let (tc, bc): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());

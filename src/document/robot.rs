@@ -12,12 +12,15 @@ use super::file::{DhFile, LinkFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
-    robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind, JointLimits, KinematicTree,
-    KinematicsError, Link, MotionOptions, Program, Robot, RunError, Trajectory,
+    read_urdf, resolve_mesh, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
+    JointLimits, KinematicTree, KinematicsError, Link, MotionOptions, Program, Robot, RunError,
+    Trajectory,
 };
 use crate::math::{Point3, Transform, Vec3};
+use crate::mesh::{Mesh, MeshCache};
+use crate::project::Project;
 use std::collections::{HashMap, HashSet};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Why a robot of a document refused an operation (carried by
@@ -86,6 +89,8 @@ pub struct RobotInstance {
     joints: Vec<f64>,
     dimensions: Vec<String>,
     file: RobotFile,
+    /// For a `urdf:` robot: the URDF and its mesh files.
+    urdf_files: Vec<PathBuf>,
 }
 
 impl RobotInstance {
@@ -183,6 +188,22 @@ impl RobotInstance {
             });
         }
         Ok(())
+    }
+
+    /// For a robot read from a `urdf:` file: the URDF and the mesh files it names
+    /// (the first is the URDF).
+    pub fn urdf_files(&self) -> &[PathBuf] {
+        &self.urdf_files
+    }
+
+    /// Rewrites the `urdf:` path with `relative` (the URDF file → its path from a new
+    /// document folder), for `save_as`.
+    pub(super) fn rebase_urdf(&mut self, relative: impl Fn(&Path) -> Option<String>) {
+        if let (Some(_), Some(f)) = (&self.file.urdf, self.urdf_files.first()) {
+            if let Some(rel) = relative(f) {
+                self.file.urdf = Some(rel);
+            }
+        }
     }
 
     /// The robot as written in the file, with the current base, tool and joints.
@@ -381,14 +402,107 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
     Robot::new(&f.name, tree, flange, Transform::IDENTITY).map_err(|e| whole(e.to_string()))
 }
 
-/// Builds one robot of a file; `components` maps component names to indices.
+/// A URDF robot of a document with its generated link components.
+#[derive(Debug, Clone)]
+pub(super) struct UrdfLoaded {
+    /// The kinematics.
+    pub robot: Robot,
+    /// The URDF file on disk (for watch mode and `save_as`).
+    pub path: PathBuf,
+    /// Per link of the tree: its merged mesh (link frame, mm), if it has one.
+    pub meshes: Vec<Option<Mesh>>,
+    /// The URDF and every mesh file read (for watch mode).
+    pub files: Vec<PathBuf>,
+}
+
+/// Reads the URDF `uri` of robot `name` (relative to the document folder `dir`,
+/// inside `project`) and its links' STL meshes: each mesh resolved by
+/// [`resolve_mesh`] and checked to lie inside the project, scaled (metres → mm and the
+/// URDF `scale`), moved by its visual origin into the link frame; the meshes of one
+/// link are merged. A mesh that is not STL (`.dae`, `.obj`, …) is an error naming the
+/// URDF line.
+pub(super) fn read_urdf_robot(
+    project: &Project,
+    dir: &Path,
+    uri: &str,
+    cache: &mut MeshCache,
+) -> Result<UrdfLoaded, String> {
+    let path = project
+        .resolve_from(dir, uri)
+        .map_err(|e| format!("URDF {e}"))?;
+    let u = read_urdf(&path, None).map_err(|e| e.to_string())?;
+    let tree = u.robot.tree();
+    let mut meshes: Vec<Option<Mesh>> = vec![None; tree.len()];
+    let mut files = vec![path.clone()];
+    for m in &u.meshes {
+        let link = tree.links()[m.link].name.clone().unwrap_or_default();
+        let at = |msg: String| format!("{}:{}: link `{link}`: {msg}", path.display(), m.line);
+        let is_stl = Path::new(&m.uri)
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+        if !is_stl {
+            return Err(at(format!(
+                "mesh `{}` is not an STL file: fitup reads only STL meshes (convert it, e.g. .dae/.obj to .stl)",
+                m.uri
+            )));
+        }
+        let resolved = resolve_mesh(&path, &m.uri);
+        let file = project
+            .resolve_from(dir, &resolved.to_string_lossy())
+            .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
+        let mesh = cache
+            .get(&file)
+            .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
+        files.push(file);
+        let [sx, sy, sz] = m.scale;
+        let scaled = Mesh {
+            vertices: mesh
+                .vertices
+                .iter()
+                .map(|v| Point3::new(v.x * sx, v.y * sy, v.z * sz))
+                .collect(),
+            triangles: mesh.triangles.clone(),
+        }
+        .transformed(&m.origin);
+        match &mut meshes[m.link] {
+            Some(all) => all.append(&scaled),
+            slot => *slot = Some(scaled),
+        }
+    }
+    Ok(UrdfLoaded {
+        robot: u.robot,
+        path,
+        meshes,
+        files,
+    })
+}
+
+/// The part and component name of a URDF link's mesh: `<robot>:<link>` (`/` in the
+/// names, which component names cannot hold, becomes `_`).
+pub(super) fn urdf_component_name(robot: &str, link: &str) -> String {
+    format!("{robot}:{link}").replace('/', "_")
+}
+
+/// Builds one robot of a file; `components` maps component names to indices; `urdf`
+/// is the robot read from its `urdf:` file (see [`read_urdf_robot`]).
 fn build(
     f: &RobotFile,
     components: &HashMap<String, usize>,
+    urdf: Option<&UrdfLoaded>,
 ) -> Result<RobotInstance, (String, String)> {
     // Errors carry a needle to locate (a line of this robot) and the message.
     let whole = |m: String| (format!("name: {}", f.name), m);
+    let sources = [f.catalog.is_some(), f.dh.is_some(), f.urdf.is_some()];
+    if sources.iter().filter(|&&x| x).count() > 1 {
+        return Err(whole(
+            "give one of `catalog`, `dh` or `urdf`, not several".into(),
+        ));
+    }
     let mut robot = match (&f.catalog, &f.dh) {
+        _ if f.urdf.is_some() => match urdf {
+            Some(u) => u.robot.clone(),
+            None => return Err(whole("the URDF was not read".into())),
+        },
         (Some(_), Some(_)) => return Err(whole("give either `catalog` or `dh`, not both".into())),
         (Some(c), None) => robot_by_name(c).ok_or_else(|| {
             (
@@ -413,7 +527,7 @@ fn build(
     if let Some(t) = matrix(&f.tool, "tool").map_err(|m| ("tool:".to_string(), m))? {
         robot.set_tool(t);
     }
-    let explicit = f.catalog.is_none() && f.dh.is_none();
+    let explicit = f.catalog.is_none() && f.dh.is_none() && f.urdf.is_none();
     let tree = robot.tree().clone();
     if f.links.len() > tree.len() {
         return Err(whole(format!(
@@ -443,6 +557,8 @@ fn build(
                     "is named `{link_name}` by the {} (link {i})",
                     if f.catalog.is_some() {
                         "catalog"
+                    } else if f.urdf.is_some() {
+                        "URDF"
                     } else {
                         "D-H table"
                     }
@@ -456,13 +572,17 @@ fn build(
                 || lf.limits.is_some()
             {
                 return Err(err(
-                    "parent, joint, axis, point, home and limits come from the catalog or D-H table"
+                    "parent, joint, axis, point, home and limits come from the catalog, D-H table or URDF"
                         .into(),
                 ));
             }
         }
         let component = match &lf.component {
-            None => None,
+            // A URDF link with a mesh is displayed by its generated component.
+            None => urdf
+                .and_then(|u| u.meshes[i].as_ref())
+                .and_then(|_| components.get(&urdf_component_name(&f.name, &link_name)))
+                .copied(),
             Some(c) => Some(*components.get(c).ok_or_else(|| {
                 err(format!(
                     "unknown component `{c}` ({})",
@@ -527,6 +647,7 @@ fn build(
             joints: None,
             ..f.clone()
         },
+        urdf_files: urdf.map(|u| u.files.clone()).unwrap_or_default(),
     };
     inst.check_joints(&inst.joints)
         .map_err(|m| ("joints:".to_string(), m.to_string()))?;
@@ -576,6 +697,7 @@ fn explicit_file(name: &str, robot: &Robot) -> RobotFile {
         name: name.to_string(),
         catalog: None,
         dh: None,
+        urdf: None,
         base: Some(robot.base().to_matrix()),
         tool: Some(robot.tool().to_matrix()),
         flange: Some(link_name(robot.flange())),
@@ -590,6 +712,7 @@ fn explicit_file(name: &str, robot: &Robot) -> RobotFile {
 pub(super) fn load(
     files: &[RobotFile],
     components: &HashMap<String, usize>,
+    urdf: &HashMap<String, UrdfLoaded>,
     taken: &HashSet<String>,
     text: &str,
     path: &Path,
@@ -613,7 +736,7 @@ pub(super) fn load(
                 "robot names must be unique and non-empty".into(),
             ));
         }
-        let inst = build(f, components).map_err(|(n, m)| at(&n, m))?;
+        let inst = build(f, components, urdf.get(&f.name)).map_err(|(n, m)| at(&n, m))?;
         for d in &inst.dimensions {
             if !dims.insert(d.clone()) {
                 return Err(at(
@@ -711,7 +834,7 @@ impl Document {
             .map(|l| l.map_or(0.0, |l| 0.0f64.clamp(l.min, l.max)))
             .collect();
         file.joints = Some(joints_to_document(robot, &zero));
-        let mut inst = build(&file, &HashMap::new())
+        let mut inst = build(&file, &HashMap::new(), None)
             .map_err(|(_, m)| DocumentError::Invalid(format!("robot `{name}`: {m}")))?;
         let taken = self.dimensions();
         if let Some(d) = inst
@@ -726,6 +849,89 @@ impl Document {
         Arc::make_mut(&mut inst.robot).set_limits_source(robot.limits_source().map(String::from));
         self.robots.push(inst);
         self.revision += 1;
+        Ok(self.robots.len() - 1)
+    }
+
+    /// Adds the robot of the URDF file `urdf` (a path inside the document's project)
+    /// under `name`, as a `urdf:` entry (saved as the URDF's path relative to the
+    /// document): its links' STL meshes become components `<name>:<link>` that follow
+    /// the links (shown and checked for interference like any component), its root at
+    /// `base` (world pose, mm; identity when `None`). Joints start at 0 (clamped into
+    /// the limits). Mesh rules as for a document's `urdf:` entry
+    /// (see `docs/robots.md`). Nothing changes on error. Returns the robot's index.
+    pub fn add_urdf_robot(
+        &mut self,
+        name: &str,
+        urdf: &Path,
+        base: Option<Transform>,
+    ) -> Result<usize, DocumentError> {
+        let invalid = |m: String| DocumentError::Invalid(format!("robot `{name}`: {m}"));
+        if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
+            return Err(DocumentError::Invalid(format!(
+                "robot names must be unique and non-empty: `{name}`"
+            )));
+        }
+        let base = base.unwrap_or(Transform::IDENTITY);
+        if !base.is_finite() {
+            return Err(RobotError::NonFinite {
+                robot: name.to_string(),
+                what: "base",
+            }
+            .into());
+        }
+        let project = Project::for_file(&self.path)
+            .or_else(|_| Project::new(self.path.parent().unwrap_or(Path::new("."))))
+            .map_err(|e| invalid(format!("cannot find the project: {e}")))?;
+        let dir = std::path::absolute(&self.path)
+            .ok()
+            .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
+            .unwrap_or_else(|| project.root().to_path_buf());
+        let uri =
+            super::relative_path(urdf, &dir).unwrap_or_else(|| urdf.to_string_lossy().into_owned());
+        let loaded =
+            read_urdf_robot(&project, &dir, &uri, &mut MeshCache::new()).map_err(invalid)?;
+        let mut next = self.clone();
+        super::add_urdf_parts(
+            name,
+            &uri,
+            &loaded,
+            &mut next.parts,
+            &mut next.components,
+            &mut next.by_name,
+            &mut next.generated,
+        )
+        .map_err(invalid)?;
+        let zero: Vec<f64> = loaded
+            .robot
+            .joint_limits()
+            .iter()
+            .map(|l| l.map_or(0.0, |l| 0.0f64.clamp(l.min, l.max)))
+            .collect();
+        let file = RobotFile {
+            name: name.to_string(),
+            catalog: None,
+            dh: None,
+            urdf: Some(uri),
+            base: Some(base.to_matrix()),
+            tool: None,
+            flange: None,
+            drawn_at_zero: false,
+            links: Vec::new(),
+            joints: Some(joints_to_document(&loaded.robot, &zero)),
+        };
+        let inst = build(&file, &next.by_name, Some(&loaded)).map_err(|(_, m)| invalid(m))?;
+        let taken = next.dimensions();
+        if let Some(d) = inst
+            .dimension_names()
+            .into_iter()
+            .find(|d| taken.contains(d))
+        {
+            return Err(invalid(format!("dimension `{d}` already exists")));
+        }
+        next.robots.push(inst);
+        next.apply_robots();
+        next.revision += 1;
+        *self = next;
         Ok(self.robots.len() - 1)
     }
 
@@ -919,6 +1125,7 @@ mod tests {
             name: "r".into(),
             catalog: Some("nachi_mz07".into()),
             dh: None,
+            urdf: None,
             base: Some(Transform::from_translation(Vec3::new(100.0, 0.0, 50.0)).to_matrix()),
             tool: None,
             flange: None,
@@ -932,7 +1139,7 @@ mod tests {
             joints: None,
         };
         let components: HashMap<String, usize> = (0..7).map(|i| (format!("c{i}"), i)).collect();
-        let inst = build(&f, &components).unwrap();
+        let inst = build(&f, &components, None).unwrap();
         let base = inst.robot().base();
         for (_, p) in inst.component_poses(&[0.0; 6]).unwrap() {
             assert!(p.approx_eq(&base, 1e-9, 1e-12));

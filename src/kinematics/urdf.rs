@@ -15,8 +15,9 @@
 //! the tool is the identity. When the chain is an OPW arm the closed-form solver is
 //! chosen from the geometry (see [`Robot::analytic`]).
 //!
-//! Meshes: `<visual><geometry><mesh filename>` per link are listed in
-//! [`UrdfRobot::meshes`] (with the visual origin); `package://PKG/rest` URIs resolve to
+//! Meshes: `<visual><geometry><mesh filename>` per link (or the link's `<collision>`
+//! meshes when it has no visual mesh) are listed in [`UrdfRobot::meshes`] (with the
+//! visual origin and scale); `package://PKG/rest` URIs resolve to
 //! `rest` relative to the URDF's folder (ROS-Industrial support packages keep
 //! `urdf/` and `meshes/` side by side: a URDF in `PKG/urdf/` resolves
 //! `package://PKG/meshes/x.stl` to `PKG/urdf/../meshes/x.stl` — see [`resolve_mesh`]).
@@ -44,6 +45,8 @@ pub struct UrdfMesh {
     pub origin: Transform,
     /// Scale from the `scale` attribute times 1000 (metres → mm) per axis.
     pub scale: [f64; 3],
+    /// Line of the `<mesh>` element in the URDF (for messages).
+    pub line: usize,
 }
 
 /// A robot read from a URDF, with its link meshes.
@@ -352,10 +355,20 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
         .with_limits_source(format!("URDF {}", path.display()));
     let mut meshes = Vec::new();
     for (i, &l) in order.iter().enumerate() {
-        for v in link_nodes[l]
-            .children()
-            .filter(|c| c.has_tag_name("visual"))
-        {
+        // A link's `<visual>` meshes, or its `<collision>` meshes when it has no visual
+        // mesh (fitup uses one geometry per link for display and interference).
+        let with_mesh = |tag: &str| {
+            link_nodes[l]
+                .children()
+                .filter(|c| c.has_tag_name(tag))
+                .filter(|c| c.descendants().any(|d| d.has_tag_name("mesh")))
+                .collect::<Vec<_>>()
+        };
+        let mut geometry = with_mesh("visual");
+        if geometry.is_empty() {
+            geometry = with_mesh("collision");
+        }
+        for v in geometry {
             let Some(m) = v.descendants().find(|c| c.has_tag_name("mesh")) else {
                 continue;
             };
@@ -389,6 +402,7 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 uri: uri.to_string(),
                 origin: origin_t,
                 scale: s.map(|x| x * 1000.0),
+                line: doc.text_pos_at(m.range().start).row as usize,
             });
         }
     }

@@ -27,7 +27,7 @@ pub struct RobotHandle {
 
 /// A robot built in a script (`robot_opw`, `robot_dh`), not yet in a document.
 #[derive(Clone)]
-pub struct RobotModel(Arc<Robot>);
+pub struct RobotModel(Arc<Robot>, Option<std::path::PathBuf>);
 
 /// Per-joint limits from a script array of `[min, max]` (degrees; `[]` = unlimited).
 fn limits_arg(v: &Dynamic, n: usize) -> ScriptResult<Vec<Option<JointLimits>>> {
@@ -534,7 +534,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             let robot = p
                 .robot(&name, std::array::from_fn(|i| limits[i]))
                 .map_err(|e| fail(format!("robot_opw: {e}")))?;
-            Ok(RobotModel(Arc::new(robot)))
+            Ok(RobotModel(Arc::new(robot), None))
         },
     );
     fn dh_model(rows: &Array, m: &Map) -> ScriptResult<RobotModel> {
@@ -575,7 +575,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         if let Some(b) = m.get("base") {
             robot.set_base(to_transform(b, "base")?);
         }
-        Ok(RobotModel(Arc::new(robot)))
+        Ok(RobotModel(Arc::new(robot), None))
     }
     api.f(
         "robot_dh(rows: array, options: map) -> RobotModel",
@@ -596,7 +596,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             c.record_read(&full);
             let u = crate::kinematics::read_urdf(&full, None).map_err(fail)?;
             let source = format!("URDF {}", c.project.display(&full));
-            Ok(RobotModel(Arc::new(u.robot.with_limits_source(source))))
+            Ok(RobotModel(
+                Arc::new(u.robot.with_limits_source(source)),
+                Some(full),
+            ))
         },
     );
     api.get(
@@ -662,7 +665,12 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     ) -> ScriptResult<RobotHandle> {
         check_keys(m, &["base"], "add_robot")?;
         let base = m.get("base").map(|b| to_transform(b, "base")).transpose()?;
-        let index = d.lock()?.add_robot(name, &model.0, base).map_err(fail)?;
+        let index = match &model.1 {
+            // A URDF robot brings its link meshes (a `urdf:` entry in the document).
+            Some(urdf) => d.lock()?.add_urdf_robot(name, urdf, base),
+            None => d.lock()?.add_robot(name, &model.0, base),
+        }
+        .map_err(fail)?;
         Ok(RobotHandle {
             doc: d.clone(),
             index,
@@ -670,7 +678,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     }
     api.f(
         "Document.add_robot(name: string, robot: RobotModel, options: map) -> Robot",
-        "Adds a robot built with `robot_opw` / `robot_dh` to the document under `name`, options `#{base}` (world pose of its root, Transform or `[x,y,z,a,b,c]`). Its joints start at 0 (clamped into the limits) with dimensions `D1@角度<n>@<name>`; saving writes it as an explicit tree.",
+        "Adds a robot built with `robot_opw` / `robot_dh` / `load_urdf` to the document under `name`, options `#{base}` (world pose of its root, Transform or `[x,y,z,a,b,c]`). Its joints start at 0 (clamped into the limits) with dimensions `D1@角度<n>@<name>`; saving writes it as an explicit tree, or, for a `load_urdf` robot, as a `urdf:` entry whose links' STL meshes become components `<name>:<link>` (shown and checked for interference).",
         |d: &mut DocHandle, name: &str, model: RobotModel, m: Map| -> ScriptResult<RobotHandle> { add_robot(d, name, &model, &m) },
     );
     api.f(
