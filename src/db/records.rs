@@ -632,20 +632,19 @@ impl Database {
                     _ => JointKind::Fixed,
                 })
                 .collect();
-            let rows = tx.rows(
+            let mut samples = Vec::new();
+            tx.each_row(
                 "SELECT t_s, joints, x_mm, y_mm, z_mm, qw, qx, qy, qz FROM trajectory_samples WHERE trajectory_id = ? ORDER BY idx",
                 &[id.into()],
-            )?;
-            let samples = rows
-                .iter()
-                .map(|r| {
-                    Ok(TrajectorySample {
+                &mut |r| {
+                    samples.push(TrajectorySample {
                         t: real(&r[0]),
                         joints: parse_joints(r[1].as_str().unwrap_or("[]"))?,
                         tcp: pose_from(&r[2..])?,
-                    })
-                })
-                .collect::<Result<_, Raw>>()?;
+                    });
+                    Ok(())
+                },
+            )?;
             Ok(Some(StoredTrajectory {
                 id,
                 run_id: h[1].as_i64(),
