@@ -212,13 +212,24 @@ pub struct StoredInterference {
 /// The pose columns of `t`; `what` names it in the error (called only then: no
 /// string is built per row of a 10,000-row result).
 fn pose_values(t: &Transform, what: impl FnOnce() -> String) -> Result<Vec<SqlValue>, Raw> {
+    let mut out = Vec::with_capacity(POSE_COLUMNS.len());
+    push_pose_values(&mut out, t, what)?;
+    Ok(out)
+}
+
+/// [`pose_values`] appended to a row (one allocation per row, not two).
+fn push_pose_values(
+    out: &mut Vec<SqlValue>,
+    t: &Transform,
+    what: impl FnOnce() -> String,
+) -> Result<(), Raw> {
     if !t.is_finite() {
         return Err(Raw::other(format!("{} is not finite", what())));
     }
     let v = t.to_xyzabc(AngleConvention::default());
     let q = t.rotation();
     let c = q.quaternion().coords; // i, j, k, w
-    Ok(vec![
+    out.extend([
         v[0].into(),
         v[1].into(),
         v[2].into(),
@@ -229,7 +240,8 @@ fn pose_values(t: &Transform, what: impl FnOnce() -> String) -> Result<Vec<SqlVa
         c[0].into(),
         c[1].into(),
         c[2].into(),
-    ])
+    ]);
+    Ok(())
 }
 
 const POSE_COLUMNS: [&str; 10] = [
@@ -470,8 +482,9 @@ impl Database {
                 .iter()
                 .enumerate()
                 .map(|(i, p)| {
-                    let mut row = vec![SqlValue::Null, SqlValue::Int(i as i64)];
-                    row.extend(pose_values(p, || format!("key pose {i}"))?);
+                    let mut row = Vec::with_capacity(2 + POSE_COLUMNS.len());
+                    row.extend([SqlValue::Null, SqlValue::Int(i as i64)]);
+                    push_pose_values(&mut row, p, || format!("key pose {i}"))?;
                     Ok(row)
                 })
                 .collect::<Result<Vec<_>, Raw>>()?;
@@ -581,15 +594,16 @@ impl Database {
                 if !s.t.is_finite() || !s.joints.iter().all(|v| v.is_finite()) {
                     return Err(Raw::other(format!("sample {i} has a non-finite number")));
                 }
-                let mut row = vec![
+                let mut row = Vec::with_capacity(4 + POSE_COLUMNS.len());
+                row.extend([
                     SqlValue::Null,
                     SqlValue::Int(i as i64),
                     s.t.into(),
                     serde_json::to_string(&s.joints)
                         .map_err(|e| Raw::other(e.to_string()))?
                         .into(),
-                ];
-                row.extend(pose_values(&s.tcp, || format!("the TCP of sample {i}"))?);
+                ]);
+                push_pose_values(&mut row, &s.tcp, || format!("the TCP of sample {i}"))?;
                 samples.push(row);
             }
             let id = tx.insert_id(
