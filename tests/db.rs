@@ -732,3 +732,110 @@ fn a_script_query_cannot_write_and_script_paths_stay_in_the_project() {
     // No database is created by a run that does not use one.
     assert!(!dir.path().join("fitup.db").exists());
 }
+
+/// A small tmpfs mounted on a fresh folder (unmounted on drop): a real filesystem that
+/// fills up or turns read-only. `None` where this process may not mount (not root).
+struct SmallDisk(tempfile::TempDir);
+
+impl SmallDisk {
+    fn mount(size: &str) -> Option<SmallDisk> {
+        let dir = tempfile::tempdir().unwrap();
+        let ok = std::process::Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(dir.path())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if !ok {
+            eprintln!(
+                "cannot mount a tmpfs here (needs root): full-disk and read-only media not tested"
+            );
+            return None;
+        }
+        Some(SmallDisk(dir))
+    }
+
+    fn remount_read_only(&self) {
+        let s = std::process::Command::new("mount")
+            .args(["-o", "remount,ro"])
+            .arg(self.0.path())
+            .status()
+            .unwrap();
+        assert!(s.success());
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("umount")
+            .arg(self.0.path())
+            .status();
+    }
+}
+
+fn big_trajectory(n: usize) -> Trajectory {
+    let mut t = Trajectory::new(vec![JointKind::Revolute; 6]);
+    for i in 0..n {
+        let x = i as f64;
+        t.samples.push(TrajectorySample {
+            t: x * 0.004,
+            joints: (0..6).map(|j| (x * 0.37 + j as f64).sin()).collect(),
+            tcp: pose(x, -x, 0.5 * x, [x % 90.0, 0.0, 0.0]),
+        });
+    }
+    t
+}
+
+#[test]
+fn a_full_disk_is_a_typed_error_and_earlier_results_survive() {
+    let Some(disk) = SmallDisk::mount("1m") else {
+        return;
+    };
+    let file = disk.0.path().join("fitup.db");
+    let target = Target::Sqlite(file.clone());
+    let mut db = Database::open(&target).unwrap();
+    let kept = db
+        .save_path(None, "kept", &sample_path(20), &PathMeta::default())
+        .unwrap();
+    // About 2.5 MB of samples on a 1 MB disk.
+    let e = db
+        .save_trajectory(None, "too big", None, &big_trajectory(10_000))
+        .unwrap_err();
+    assert!(matches!(e, DbError::DiskFull { .. }), "{e:?}");
+    assert!(e.to_string().contains(&file.display().to_string()), "{e}");
+    // The same connection and a new one still read the earlier result whole, and
+    // nothing of the refused one.
+    assert_eq!(db.path(kept).unwrap().path.poses.len(), 20);
+    drop(db);
+    let mut again = Database::open(&target).unwrap();
+    assert_eq!(again.path(kept).unwrap().path.poses.len(), 20);
+    assert!(again.trajectory_list(None).unwrap().is_empty());
+}
+
+#[test]
+fn a_read_only_file_is_a_typed_error_and_its_results_stay_readable() {
+    let Some(disk) = SmallDisk::mount("4m") else {
+        return;
+    };
+    let file = disk.0.path().join("fitup.db");
+    let target = Target::Sqlite(file.clone());
+    let kept = {
+        let mut db = Database::open(&target).unwrap();
+        db.save_path(None, "kept", &sample_path(20), &PathMeta::default())
+            .unwrap()
+    };
+    disk.remount_read_only();
+    let e = Database::open(&target).unwrap_err();
+    assert!(matches!(e, DbError::ReadOnly { .. }), "{e:?}");
+    assert!(e.to_string().contains(&file.display().to_string()), "{e}");
+    assert!(e.to_string().contains("read-only"), "{e}");
+    // Nothing was lost: the file reads back once writable again.
+    let s = std::process::Command::new("mount")
+        .args(["-o", "remount,rw"])
+        .arg(disk.0.path())
+        .status()
+        .unwrap();
+    assert!(s.success());
+    let mut db = Database::open(&target).unwrap();
+    assert_eq!(db.path(kept).unwrap().path.poses.len(), 20);
+}

@@ -163,6 +163,19 @@ pub(crate) trait Tx {
     fn exec(&mut self, sql: &str, params: &[SqlValue]) -> Result<u64, Raw>;
     /// Runs a query; returns every row.
     fn rows(&mut self, sql: &str, params: &[SqlValue]) -> Result<Vec<Vec<SqlValue>>, Raw>;
+    /// Runs a query and hands each row to `f` in turn (for long results: no row is
+    /// kept after `f` returns).
+    fn each_row(
+        &mut self,
+        sql: &str,
+        params: &[SqlValue],
+        f: &mut dyn FnMut(&[SqlValue]) -> Result<(), Raw>,
+    ) -> Result<(), Raw> {
+        for r in self.rows(sql, params)? {
+            f(&r)?;
+        }
+        Ok(())
+    }
     /// Runs an `INSERT` into a table with an `id` key; returns the new id.
     fn insert_id(&mut self, sql: &str, params: &[SqlValue]) -> Result<i64, Raw>;
     /// Inserts many rows into `table` (`columns` in order).
@@ -238,6 +251,33 @@ impl Tx for SqliteTx<'_> {
 
     fn rows(&mut self, sql: &str, params: &[SqlValue]) -> Result<Vec<Vec<SqlValue>>, Raw> {
         sqlite_rows(&self.0, sql, params)
+    }
+
+    fn each_row(
+        &mut self,
+        sql: &str,
+        params: &[SqlValue],
+        f: &mut dyn FnMut(&[SqlValue]) -> Result<(), Raw>,
+    ) -> Result<(), Raw> {
+        let mut stmt = self.0.prepare_cached(sql)?;
+        let n = stmt.column_count();
+        let mut rows = stmt.query(rusqlite::params_from_iter(params.iter()))?;
+        // One row buffer for the whole result; text columns reuse their strings.
+        let mut buf = vec![SqlValue::Null; n];
+        while let Some(row) = rows.next()? {
+            for (i, slot) in buf.iter_mut().enumerate() {
+                use rusqlite::types::ValueRef;
+                match (row.get_ref(i)?, slot) {
+                    (ValueRef::Text(t), SqlValue::Text(s)) => {
+                        s.clear();
+                        s.push_str(&String::from_utf8_lossy(t));
+                    }
+                    (v, slot) => *slot = sqlite_value(v),
+                }
+            }
+            f(&buf)?;
+        }
+        Ok(())
     }
 
     fn insert_id(&mut self, sql: &str, params: &[SqlValue]) -> Result<i64, Raw> {

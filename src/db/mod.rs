@@ -247,29 +247,45 @@ impl Database {
                         )));
                     }
                 }
-                let c = rusqlite::Connection::open(path).map_err(|e| open_err(e.to_string()))?;
-                c.busy_timeout(BUSY_TIMEOUT)
-                    .map_err(|e| open_err(e.to_string()))?;
+                // A file on read-only media (or without write permission) opens, or fails
+                // to open its WAL index, with SQLite's generic "unable to open": say
+                // read-only when that is the cause.
+                let fail = |e: rusqlite::Error| {
+                    if path.exists() && is_read_only(path) {
+                        DbError::ReadOnly {
+                            target: name.clone(),
+                            cause: format!("the file is not writable ({e})"),
+                        }
+                    } else {
+                        open_err(e.to_string())
+                    }
+                };
+                let c = rusqlite::Connection::open(path).map_err(fail)?;
+                c.busy_timeout(BUSY_TIMEOUT).map_err(fail)?;
                 // A file that is not SQLite fails here with "file is not a database".
                 let mode: String = c
                     .query_row("PRAGMA journal_mode=WAL", [], |r| r.get(0))
-                    .map_err(|e| open_err(e.to_string()))?;
+                    .map_err(fail)?;
                 if mode != "wal" {
                     // Read-only media cannot switch; reads still work.
                     if path.exists() && is_read_only(path) {
                         return Err(DbError::ReadOnly {
-                            target: name,
+                            target: name.clone(),
                             cause: "the file is not writable".into(),
                         });
                     }
                 }
                 // In WAL mode NORMAL stays consistent after any crash (a power cut may lose
-                // the last commits, never half of one); a 16 MB page cache holds a large
-                // result.
+                // the last commits, never half of one; commits do not wait for fsync); a
+                // 16 MB page cache holds a large result. The WAL is copied back into the
+                // file (a checkpoint, with fsync) once it passes 4,096 pages (16 MB)
+                // instead of SQLite's 1,000, so a run storing a few large results does
+                // not pay for one in the middle of a commit; the last connection to close
+                // checkpoints the rest.
                 c.execute_batch(
-                    "PRAGMA foreign_keys=ON; PRAGMA synchronous=NORMAL; PRAGMA cache_size=-16000;",
+                    "PRAGMA foreign_keys=ON; PRAGMA synchronous=NORMAL; PRAGMA cache_size=-16000; PRAGMA wal_autocheckpoint=4096;",
                 )
-                .map_err(|e| open_err(e.to_string()))?;
+                .map_err(fail)?;
                 Conn::Sqlite(c)
             }
             Target::Postgres(url) => {

@@ -209,14 +209,27 @@ pub struct StoredInterference {
     pub pairs: Vec<InterferencePair>,
 }
 
-fn pose_values(t: &Transform, what: &str) -> Result<Vec<SqlValue>, Raw> {
+/// The pose columns of `t`; `what` names it in the error (called only then: no
+/// string is built per row of a 10,000-row result).
+fn pose_values(t: &Transform, what: impl FnOnce() -> String) -> Result<Vec<SqlValue>, Raw> {
+    let mut out = Vec::with_capacity(POSE_COLUMNS.len());
+    push_pose_values(&mut out, t, what)?;
+    Ok(out)
+}
+
+/// [`pose_values`] appended to a row (one allocation per row, not two).
+fn push_pose_values(
+    out: &mut Vec<SqlValue>,
+    t: &Transform,
+    what: impl FnOnce() -> String,
+) -> Result<(), Raw> {
     if !t.is_finite() {
-        return Err(Raw::other(format!("{what} is not finite")));
+        return Err(Raw::other(format!("{} is not finite", what())));
     }
     let v = t.to_xyzabc(AngleConvention::default());
     let q = t.rotation();
     let c = q.quaternion().coords; // i, j, k, w
-    Ok(vec![
+    out.extend([
         v[0].into(),
         v[1].into(),
         v[2].into(),
@@ -227,7 +240,8 @@ fn pose_values(t: &Transform, what: &str) -> Result<Vec<SqlValue>, Raw> {
         c[0].into(),
         c[1].into(),
         c[2].into(),
-    ])
+    ]);
+    Ok(())
 }
 
 const POSE_COLUMNS: [&str; 10] = [
@@ -468,8 +482,9 @@ impl Database {
                 .iter()
                 .enumerate()
                 .map(|(i, p)| {
-                    let mut row = vec![SqlValue::Null, SqlValue::Int(i as i64)];
-                    row.extend(pose_values(p, &format!("key pose {i}"))?);
+                    let mut row = Vec::with_capacity(2 + POSE_COLUMNS.len());
+                    row.extend([SqlValue::Null, SqlValue::Int(i as i64)]);
+                    push_pose_values(&mut row, p, || format!("key pose {i}"))?;
                     Ok(row)
                 })
                 .collect::<Result<Vec<_>, Raw>>()?;
@@ -576,17 +591,19 @@ impl Database {
         let r = self.transaction("storing the trajectory", |tx| {
             let mut samples = Vec::with_capacity(t.samples.len());
             for (i, s) in t.samples.iter().enumerate() {
-                finite(&format!("sample {i}"), &s.joints)?;
-                finite(&format!("sample {i}"), &[s.t])?;
-                let mut row = vec![
+                if !s.t.is_finite() || !s.joints.iter().all(|v| v.is_finite()) {
+                    return Err(Raw::other(format!("sample {i} has a non-finite number")));
+                }
+                let mut row = Vec::with_capacity(4 + POSE_COLUMNS.len());
+                row.extend([
                     SqlValue::Null,
                     SqlValue::Int(i as i64),
                     s.t.into(),
                     serde_json::to_string(&s.joints)
                         .map_err(|e| Raw::other(e.to_string()))?
                         .into(),
-                ];
-                row.extend(pose_values(&s.tcp, &format!("the TCP of sample {i}"))?);
+                ]);
+                push_pose_values(&mut row, &s.tcp, || format!("the TCP of sample {i}"))?;
                 samples.push(row);
             }
             let id = tx.insert_id(
@@ -632,20 +649,19 @@ impl Database {
                     _ => JointKind::Fixed,
                 })
                 .collect();
-            let rows = tx.rows(
+            let mut samples = Vec::new();
+            tx.each_row(
                 "SELECT t_s, joints, x_mm, y_mm, z_mm, qw, qx, qy, qz FROM trajectory_samples WHERE trajectory_id = ? ORDER BY idx",
                 &[id.into()],
-            )?;
-            let samples = rows
-                .iter()
-                .map(|r| {
-                    Ok(TrajectorySample {
+                &mut |r| {
+                    samples.push(TrajectorySample {
                         t: real(&r[0]),
                         joints: parse_joints(r[1].as_str().unwrap_or("[]"))?,
                         tcp: pose_from(&r[2..])?,
-                    })
-                })
-                .collect::<Result<_, Raw>>()?;
+                    });
+                    Ok(())
+                },
+            )?;
             Ok(Some(StoredTrajectory {
                 id,
                 run_id: h[1].as_i64(),
@@ -698,7 +714,7 @@ impl Database {
             let mut poses = Vec::with_capacity(s.poses.len());
             for (name, t) in &s.poses {
                 let mut row = vec![SqlValue::Int(id), name.as_str().into()];
-                row.extend(pose_values(t, &format!("the pose of {name}"))?);
+                row.extend(pose_values(t, || format!("the pose of {name}"))?);
                 poses.push(row);
             }
             let mut cols = vec!["snapshot_id", "component"];
