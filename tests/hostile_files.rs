@@ -8,46 +8,19 @@
 
 mod common;
 
-use common::{fitup, project};
+use common::{project, spawn};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Child;
+use std::time::Duration;
 
 /// Generous bound on any single command: a hang, not slowness, fails.
 const HANG: Duration = Duration::from_secs(30);
 
 /// Exit code and combined output of a finished child; fails when it hangs.
-fn finish(mut child: Child, what: &str) -> (i32, String) {
-    let start = Instant::now();
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            let out = child.wait_with_output().unwrap();
-            let text = format!(
-                "{}{}",
-                String::from_utf8_lossy(&out.stdout),
-                String::from_utf8_lossy(&out.stderr)
-            );
-            return (status.code().unwrap_or(-1), text);
-        }
-        if start.elapsed() > HANG {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("`fitup {what}` did not finish within {HANG:?}");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-fn spawn(dir: &Path, args: &[&str]) -> Child {
-    fitup()
-        .current_dir(dir)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap()
+fn finish(child: Child, what: &str) -> (i32, String) {
+    let o = common::finish(child, what, HANG);
+    (o.status.code().unwrap_or(-1), common::text(&o))
 }
 
 /// Runs `fitup ARGS` in `dir` with the hang bound.

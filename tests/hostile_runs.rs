@@ -6,81 +6,17 @@
 
 mod common;
 
-use common::{fitup, project};
-use std::io::Read;
+use common::{project, short_text as text, spawn};
 use std::path::Path;
-use std::process::{Child, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Output;
+use std::time::Duration;
 
 /// Generous: far beyond what any case needs on a loaded machine.
 const TIMEOUT: Duration = Duration::from_secs(120);
 
-/// Waits for `child`, killing it (and failing) after [`TIMEOUT`]. Its output is read
-/// meanwhile, so a chatty child never blocks on a full pipe.
-fn finish(mut child: Child, what: &str) -> Output {
-    fn drain(r: Option<impl Read + Send + 'static>) -> std::thread::JoinHandle<Vec<u8>> {
-        std::thread::spawn(move || {
-            let mut buf = Vec::new();
-            if let Some(mut r) = r {
-                let _ = r.read_to_end(&mut buf);
-            }
-            buf
-        })
-    }
-    let out = drain(child.stdout.take());
-    let err = drain(child.stderr.take());
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if start.elapsed() > TIMEOUT {
-            let _ = child.kill();
-            let o = Output {
-                status: child.wait().unwrap(),
-                stdout: out.join().unwrap(),
-                stderr: err.join().unwrap(),
-            };
-            panic!(
-                "{what}: still running after {TIMEOUT:?}; output:\n{}",
-                text(&o)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    Output {
-        status,
-        stdout: out.join().unwrap(),
-        stderr: err.join().unwrap(),
-    }
-}
-
-/// Standard output and error, cut to a readable length for failure messages.
-fn text(o: &Output) -> String {
-    let t = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    if t.chars().count() > 4000 {
-        let head: String = t.chars().take(4000).collect();
-        format!("{head}… ({} characters)", t.chars().count())
-    } else {
-        t
-    }
-}
-
 /// `fitup ARGS` in `dir`, bounded by [`TIMEOUT`].
 fn run(dir: &Path, args: &[&str]) -> Output {
-    let child = fitup()
-        .current_dir(dir)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    finish(child, &args.join(" "))
+    common::run_bounded(dir, args, TIMEOUT)
 }
 
 /// Runs `scripts/NAME` (written with `source`) and expects exit 1 with every needle.
@@ -319,17 +255,10 @@ fn data_growth_stops_at_the_size_limits() {
 /// Starts `fitup ARGS` with its standard output closed before it writes anything,
 /// then checks it ends quietly.
 fn closed_stdout(dir: &Path, args: &[&str]) {
-    let mut child = fitup()
-        .current_dir(dir)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = spawn(dir, args);
     // Close the reading end at once: every write of the child hits a broken pipe.
     drop(child.stdout.take());
-    let o = finish(child, &args.join(" "));
+    let o = common::finish(child, &args.join(" "), TIMEOUT);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !err.contains("panicked") && !err.contains("Broken pipe"),

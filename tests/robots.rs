@@ -522,8 +522,7 @@ fn streamed_motions_print_every_sample() {
     assert_eq!(lines.len(), 7, "{text}");
     assert!(text.contains("samples 7"));
     assert!(
-        lines[6].contains("tcp=[390.000 0.000 250.000")
-            || lines[6].contains("tcp=[390.000 -0.000 250.000"),
+        lines[6].contains("tcp=[390 0 250 0 0 0]") && !lines[6].contains("-0 "),
         "{}",
         lines[6]
     );

@@ -333,16 +333,7 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
             }
             outln!("  edges      {}", p.path.resolution);
             for (i, t) in p.path.poses.iter().enumerate() {
-                let v = t.to_xyzabc(AngleConvention::default());
-                outln!(
-                    "  {i:>4}  X {:.3} Y {:.3} Z {:.3} A {:.2} B {:.2} C {:.2}",
-                    v[0],
-                    v[1],
-                    v[2],
-                    v[3].to_degrees(),
-                    v[4].to_degrees(),
-                    v[5].to_degrees()
-                );
+                outln!("  {i:>4}  {t}");
             }
         }
         Kind::Trajectory => {
@@ -386,11 +377,11 @@ fn path_json(p: &StoredPath) -> serde_json::Value {
         .poses
         .iter()
         .map(|t| {
-            let v = t.to_xyzabc(AngleConvention::default());
+            let v = t.to_xyzabc_deg(AngleConvention::default());
             let q = t.rotation();
             serde_json::json!({
                 "x_mm": v[0], "y_mm": v[1], "z_mm": v[2],
-                "a_deg": v[3].to_degrees(), "b_deg": v[4].to_degrees(), "c_deg": v[5].to_degrees(),
+                "a_deg": v[3], "b_deg": v[4], "c_deg": v[5],
                 "qw": q.w, "qx": q.i, "qy": q.j, "qz": q.k,
             })
         })
@@ -437,11 +428,11 @@ fn export(
                 .samples
                 .iter()
                 .map(|s| {
-                    let v = s.tcp.to_xyzabc(AngleConvention::default());
+                    let v = s.tcp.to_xyzabc_deg(AngleConvention::default());
                     serde_json::json!({
                         "t_s": s.t, "joints": s.joints,
                         "x_mm": v[0], "y_mm": v[1], "z_mm": v[2],
-                        "a_deg": v[3].to_degrees(), "b_deg": v[4].to_degrees(), "c_deg": v[5].to_degrees(),
+                        "a_deg": v[3], "b_deg": v[4], "c_deg": v[5],
                     })
                 })
                 .collect();
@@ -493,8 +484,8 @@ fn export(
                         .poses
                         .iter()
                         .map(|(n, t)| {
-                            let v = t.to_xyzabc(AngleConvention::default());
-                            (n.clone(), serde_json::json!([v[0], v[1], v[2], v[3].to_degrees(), v[4].to_degrees(), v[5].to_degrees()]))
+                            let v = t.to_xyzabc_deg(AngleConvention::default());
+                            (n.clone(), serde_json::json!([v[0], v[1], v[2], v[3], v[4], v[5]]))
                         })
                         .collect();
                     let dims: serde_json::Map<String, serde_json::Value> = s

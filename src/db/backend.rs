@@ -429,12 +429,12 @@ pub(crate) fn pg_value(row: &postgres::Row, i: usize) -> Result<SqlValue, Raw> {
     })
 }
 
-pub(crate) fn pg_rows(
-    client: &mut impl postgres::GenericClient,
-    sql: &str,
+/// The parameters of a prepared statement, converted to the types it declares; a
+/// wrong count is an error (zipping would silently drop or ignore parameters).
+pub(crate) fn pg_bind(
+    stmt: &postgres::Statement,
     params: &[SqlValue],
-) -> Result<Vec<Vec<SqlValue>>, Raw> {
-    let stmt = client.prepare(&numbered(sql))?;
+) -> Result<Vec<Box<dyn ToSql + Sync>>, Raw> {
     if stmt.params().len() != params.len() {
         return Err(Raw::other(format!(
             "the statement has {} parameters, {} given",
@@ -442,17 +442,30 @@ pub(crate) fn pg_rows(
             params.len()
         )));
     }
-    let boxed = params
+    params
         .iter()
         .zip(stmt.params())
         .enumerate()
         .map(|(i, (v, t))| pg_param(v, t, i))
-        .collect::<Result<Vec<_>, _>>()?;
-    let refs: Vec<&(dyn ToSql + Sync)> = boxed.iter().map(|b| b.as_ref()).collect();
-    let rows = client.query(&stmt, &refs)?;
+        .collect()
+}
+
+/// Every row of a query result as values.
+pub(crate) fn pg_table(rows: &[postgres::Row]) -> Result<Vec<Vec<SqlValue>>, Raw> {
     rows.iter()
         .map(|r| (0..r.len()).map(|i| pg_value(r, i)).collect())
         .collect()
+}
+
+pub(crate) fn pg_rows(
+    client: &mut impl postgres::GenericClient,
+    sql: &str,
+    params: &[SqlValue],
+) -> Result<Vec<Vec<SqlValue>>, Raw> {
+    let stmt = client.prepare(&numbered(sql))?;
+    let boxed = pg_bind(&stmt, params)?;
+    let refs: Vec<&(dyn ToSql + Sync)> = boxed.iter().map(|b| b.as_ref()).collect();
+    pg_table(&client.query(&stmt, &refs)?)
 }
 
 /// A PostgreSQL transaction.
@@ -461,12 +474,7 @@ pub(crate) struct PgTx<'a>(pub postgres::Transaction<'a>);
 impl Tx for PgTx<'_> {
     fn exec(&mut self, sql: &str, params: &[SqlValue]) -> Result<u64, Raw> {
         let stmt = self.0.prepare(&numbered(sql))?;
-        let boxed = params
-            .iter()
-            .zip(stmt.params())
-            .enumerate()
-            .map(|(i, (v, t))| pg_param(v, t, i))
-            .collect::<Result<Vec<_>, _>>()?;
+        let boxed = pg_bind(&stmt, params)?;
         let refs: Vec<&(dyn ToSql + Sync)> = boxed.iter().map(|b| b.as_ref()).collect();
         Ok(self.0.execute(&stmt, &refs)?)
     }

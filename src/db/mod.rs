@@ -478,26 +478,10 @@ impl Database {
                         .iter()
                         .map(|c| c.name().to_string())
                         .collect();
-                    if stmt.params().len() != params.len() {
-                        return Err(Raw::other(format!(
-                            "the statement has {} parameters, {} given",
-                            stmt.params().len(),
-                            params.len()
-                        )));
-                    }
-                    let boxed = params
-                        .iter()
-                        .zip(stmt.params())
-                        .enumerate()
-                        .map(|(i, (v, t))| backend::pg_param(v, t, i))
-                        .collect::<Result<Vec<_>, _>>()?;
+                    let boxed = backend::pg_bind(&stmt, params)?;
                     let refs: Vec<&(dyn postgres::types::ToSql + Sync)> =
                         boxed.iter().map(|b| b.as_ref()).collect();
-                    let rows = tx.query(&stmt, &refs)?;
-                    let rows = rows
-                        .iter()
-                        .map(|r| (0..r.len()).map(|i| backend::pg_value(r, i)).collect())
-                        .collect::<Result<Vec<_>, Raw>>()?;
+                    let rows = backend::pg_table(&tx.query(&stmt, &refs)?)?;
                     tx.rollback()?;
                     Ok(QueryResult { columns, rows })
                 };

@@ -226,16 +226,16 @@ fn push_pose_values(
     if !t.is_finite() {
         return Err(Raw::other(format!("{} is not finite", what())));
     }
-    let v = t.to_xyzabc(AngleConvention::default());
+    let v = t.to_xyzabc_deg(AngleConvention::default());
     let q = t.rotation();
     let c = q.quaternion().coords; // i, j, k, w
     out.extend([
         v[0].into(),
         v[1].into(),
         v[2].into(),
-        v[3].to_degrees().into(),
-        v[4].to_degrees().into(),
-        v[5].to_degrees().into(),
+        v[3].into(),
+        v[4].into(),
+        v[5].into(),
         c[3].into(),
         c[0].into(),
         c[1].into(),

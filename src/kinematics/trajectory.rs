@@ -87,15 +87,10 @@ impl Trajectory {
                 };
                 line.push_str(&format!(",{v:.6}"));
             }
-            let p = s.tcp.to_xyzabc(conv);
+            let p = s.tcp.to_xyzabc_deg(conv);
             line.push_str(&format!(
                 ",{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
-                p[0],
-                p[1],
-                p[2],
-                p[3].to_degrees(),
-                p[4].to_degrees(),
-                p[5].to_degrees()
+                p[0], p[1], p[2], p[3], p[4], p[5]
             ));
             writeln!(out, "{line}")?;
         }

@@ -116,6 +116,13 @@ impl Transform {
         [t.x, t.y, t.z, a, b, c]
     }
 
+    /// The pose as `[x, y, z, a, b, c]`: mm and **degrees** in `conv` — the pose
+    /// triple users read and write (scripts, CSV, the database, printed poses).
+    pub fn to_xyzabc_deg(&self, conv: AngleConvention) -> [f64; 6] {
+        let [x, y, z, a, b, c] = self.to_xyzabc(conv);
+        [x, y, z, a.to_degrees(), b.to_degrees(), c.to_degrees()]
+    }
+
     /// Builds a transform from the 4×4 SolidWorks layout (rows as written in the
     /// document), checking that it is a rigid motion.
     pub fn from_matrix(m: &[[f64; 4]; 4]) -> Result<Self, TransformError> {
@@ -281,16 +288,9 @@ impl fmt::Debug for Transform {
 /// convention `xyz`, 0.001 resolution, see [`super::format`]).
 impl fmt::Display for Transform {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let v = self.to_xyzabc(AngleConvention::default());
-        let deg = [
-            v[0],
-            v[1],
-            v[2],
-            v[3].to_degrees(),
-            v[4].to_degrees(),
-            v[5].to_degrees(),
-        ];
-        f.write_str(&super::format::xyzabc_deg(&deg))
+        f.write_str(&super::format::xyzabc_deg(
+            &self.to_xyzabc_deg(AngleConvention::default()),
+        ))
     }
 }
 

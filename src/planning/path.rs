@@ -210,16 +210,11 @@ impl PlannedPath {
     pub fn write_csv(&self, out: &mut dyn Write, conv: AngleConvention) -> io::Result<()> {
         writeln!(out, "index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg")?;
         for (i, p) in self.poses.iter().enumerate() {
-            let v = p.to_xyzabc(conv);
+            let v = p.to_xyzabc_deg(conv);
             writeln!(
                 out,
                 "{i},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
-                v[0],
-                v[1],
-                v[2],
-                v[3].to_degrees(),
-                v[4].to_degrees(),
-                v[5].to_degrees()
+                v[0], v[1], v[2], v[3], v[4], v[5]
             )?;
         }
         Ok(())

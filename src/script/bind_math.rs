@@ -26,15 +26,7 @@ pub fn pose_deg(v: &[f64; 6], conv: AngleConvention) -> Transform {
 
 /// `[x, y, z, a, b, c]`: mm and degrees.
 pub fn xyzabc_deg(t: &Transform, conv: AngleConvention) -> Dynamic {
-    let v = t.to_xyzabc(conv);
-    floats([
-        v[0],
-        v[1],
-        v[2],
-        v[3].to_degrees(),
-        v[4].to_degrees(),
-        v[5].to_degrees(),
-    ])
+    floats(t.to_xyzabc_deg(conv))
 }
 
 /// A Transform from a script value: a Transform, a 4×4 matrix, 16 array-data numbers

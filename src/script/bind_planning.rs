@@ -424,16 +424,7 @@ fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> S
     let name = doc.components()[c.index].name.clone();
     let n = crate::workspace::follow(&mut doc, &name, &p.0, step, |k, n, t| {
         if print {
-            let v = t.to_xyzabc(AngleConvention::default());
-            ctx.print(&format!(
-                "follow {name} {k}/{n}: X {:.3} Y {:.3} Z {:.3} A {:.2} B {:.2} C {:.2}",
-                v[0],
-                v[1],
-                v[2],
-                v[3].to_degrees(),
-                v[4].to_degrees(),
-                v[5].to_degrees()
-            ));
+            ctx.print(&format!("follow {name} {k}/{n}: {t}"));
         }
         if ctx.cancelled() {
             Control::Cancel

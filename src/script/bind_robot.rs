@@ -104,22 +104,19 @@ impl RobotHandle {
 /// Prints every sample as seed 001's live monitor did: time, joints, TCP.
 fn stream_samples(ctx: &Context, robot: &Robot, t: &Trajectory) {
     for s in &t.samples {
-        let j = joints_to_document(robot, &s.joints)
-            .iter()
-            .map(|v| format!("{v:.3}"))
-            .collect::<Vec<_>>()
-            .join(" ");
-        let p = s.tcp.to_xyzabc(AngleConvention::default());
+        // Numbers for people: 0.001 resolution, no `-0`, no rounding noise.
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| crate::math::format::number(*x, 3))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let j = list(&joints_to_document(robot, &s.joints));
+        let p = list(&s.tcp.to_xyzabc_deg(AngleConvention::default()));
         ctx.print(&format!(
-            "[{}] t={:.3}s joints=[{j}] tcp=[{:.3} {:.3} {:.3} {:.3} {:.3} {:.3}]",
+            "[{}] t={}s joints=[{j}] tcp=[{p}]",
             robot.name(),
-            s.t,
-            p[0],
-            p[1],
-            p[2],
-            p[3].to_degrees(),
-            p[4].to_degrees(),
-            p[5].to_degrees()
+            crate::math::format::number(s.t, 3),
         ));
     }
 }

@@ -3,8 +3,10 @@
 
 #![allow(dead_code)]
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// The built `fitup` binary.
 pub fn fitup() -> Command {
@@ -37,4 +39,74 @@ pub fn text(o: &Output) -> String {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     )
+}
+
+/// [`text`] cut to a readable length for failure messages.
+pub fn short_text(o: &Output) -> String {
+    let t = text(o);
+    let n = t.chars().count();
+    if n > 4000 {
+        let head: String = t.chars().take(4000).collect();
+        format!("{head}… ({n} characters)")
+    } else {
+        t
+    }
+}
+
+/// Starts `fitup ARGS` in `dir` with no input and both outputs piped.
+pub fn spawn(dir: &Path, args: &[&str]) -> Child {
+    fitup()
+        .current_dir(dir)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Waits for `child`, killing it and failing the test after `bound` — a bound on
+/// hangs, not a speed assertion. Its output is read meanwhile, so a chatty child
+/// never blocks on a full pipe.
+pub fn finish(mut child: Child, what: &str, bound: Duration) -> Output {
+    fn drain(r: Option<impl Read + Send + 'static>) -> std::thread::JoinHandle<Vec<u8>> {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            if let Some(mut r) = r {
+                let _ = r.read_to_end(&mut buf);
+            }
+            buf
+        })
+    }
+    let out = drain(child.stdout.take());
+    let err = drain(child.stderr.take());
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > bound {
+            let _ = child.kill();
+            let o = Output {
+                status: child.wait().unwrap(),
+                stdout: out.join().unwrap(),
+                stderr: err.join().unwrap(),
+            };
+            panic!(
+                "`fitup {what}`: still running after {bound:?}; output:\n{}",
+                text(&o)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    Output {
+        status,
+        stdout: out.join().unwrap(),
+        stderr: err.join().unwrap(),
+    }
+}
+
+/// `fitup ARGS` in `dir`, killed (failing the test) after `bound`.
+pub fn run_bounded(dir: &Path, args: &[&str], bound: Duration) -> Output {
+    finish(spawn(dir, args), &args.join(" "), bound)
 }
