@@ -662,7 +662,7 @@ fn the_example_is_recorded_and_the_cli_lists_shows_exports_and_diffs() {
     assert!(paths.contains("screw5_into_hole2"), "{paths}");
     let show = cli(&["show", "path:1"]);
     assert!(
-        show.contains("component  screw4") && show.contains("X 600.000 Y 650.000 Z 750.000"),
+        show.contains("component  screw4") && show.contains("X 600 Y 650 Z 750 A "),
         "{show}"
     );
     let csv = cli(&["export", "path:1", "--csv"]);
