@@ -42,3 +42,6 @@ pub mod script;
 #[cfg(feature = "watch")]
 pub mod watch;
 pub mod workspace;
+
+#[cfg(test)]
+pub(crate) mod test_support;

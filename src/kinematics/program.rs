@@ -395,7 +395,7 @@ mod fuzz {
     use super::*;
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        #![proptest_config(crate::test_support::proptest_config(256))]
         /// Arbitrary programs never panic; an error names the file, a line and column
         /// inside the text; accepted numbers are finite and in range.
         #[test]

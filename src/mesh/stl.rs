@@ -307,6 +307,8 @@ mod tests {
     }
 
     proptest::proptest! {
+        #![proptest_config(crate::test_support::proptest_config(256))]
+
         #[test]
         fn never_panics_on_arbitrary_bytes(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..400)) {
             let _ = parse_stl(&bytes);
