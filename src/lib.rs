@@ -16,6 +16,7 @@
 //! | [`kinematics`] | kinematic trees, D-H, robot catalog, FK, analytic and numeric IK, motions, programs, drilling |
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
 //! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly, insertion |
+//! | [`sequence`] | assembly sequences: tasks (base part, assembly part, operation) for a robot |
 //! | [`workspace`] | a document as a collision scene and every document-level request: interference, contact, clearance, sweeps, planning, revalidation, following |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
 //! | [`script`] | the Rhai sandbox and API bindings |
@@ -39,6 +40,7 @@ pub mod planning;
 pub mod project;
 #[cfg(feature = "script")]
 pub mod script;
+pub mod sequence;
 #[cfg(feature = "watch")]
 pub mod watch;
 pub mod workspace;
