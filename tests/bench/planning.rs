@@ -1,6 +1,8 @@
 //! Planning benchmark: fitup's best planner (`plan_insertion`) on the benchmark
 //! problems (`fitup::planning::problems`) against OMPL's RRTConnect (FCL collision,
-//! `tests/bench/ompl_peer.py`) in the same run, and seed 002's protocol (100 runs ×
+//! `tests/bench/ompl_peer.py`) and OMPL 1.5 C++ RRTConnect and KPIECE1
+//! (`tests/bench/ompl/harness.cpp`, compiled here when `libompl-dev` and
+//! `libfcl-dev` are installed, skipped with a message otherwise) in the same run, and seed 002's protocol (100 runs ×
 //! 100 iterations: rrt, biased_rrt, local_rrt on the piston-rod cap).
 //!
 //! `cargo bench --bench planning`. The peer runs when `FITUP_PY` (default
@@ -58,6 +60,22 @@ fn export(p: &Problem, dir: &Path) -> PathBuf {
     spec["resolution_mm"] = RESOLUTION_MM.into();
     // FCL reports touching as collision: lift the resting ends off their supports.
     spec["peer_lift_mm"] = 0.05.into();
+    // the C++ harness's plain-text spec (tests/bench/ompl/harness.cpp)
+    let pose = |t: &fitup::math::Transform| {
+        let q = t.rotation();
+        let v = t.translation();
+        format!("{} {} {} {} {} {} {}", v.x, v.y, v.z, q.w, q.i, q.j, q.k)
+    };
+    let mut txt = String::from("moving moving.stl\n");
+    for (k, _) in p.obstacles.iter().enumerate() {
+        txt += &format!("obstacle obstacle{k}.stl\n");
+    }
+    let (lo, hi) = (p.space.min, p.space.max);
+    txt += &format!(
+        "bounds {} {} {} {} {} {}\nstart {}\ngoal {}\nrotation_weight {}\nresolution_mm {RESOLUTION_MM}\nlift_mm 0.05\n",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, pose(&p.start), pose(&p.goal), p.space.rotation_weight
+    );
+    std::fs::write(dir.join("problem.txt"), txt).unwrap();
     let path = dir.join("problem.json");
     std::fs::write(&path, serde_json::to_string_pretty(&spec).unwrap()).unwrap();
     path
@@ -93,6 +111,53 @@ fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize, smoothing
     }
 }
 
+/// Compiles the OMPL C++ harness (tests/bench/ompl/harness.cpp) when OMPL 1.5 and
+/// FCL headers and g++ are installed; `None` (with a message) otherwise.
+fn build_cpp_peer(out_dir: &Path) -> Option<PathBuf> {
+    let ompl = Path::new("/usr/include/ompl-1.5");
+    if !ompl.exists() || !Path::new("/usr/include/fcl/fcl.h").exists() {
+        eprintln!("no OMPL C++ peer: install libompl-dev libfcl-dev (Debian) for it");
+        return None;
+    }
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/ompl/harness.cpp");
+    let exe = out_dir.join("ompl_harness");
+    let status = std::process::Command::new("g++")
+        .args([
+            "-O2",
+            "-std=c++17",
+            "-I/usr/include/ompl-1.5",
+            "-I/usr/include/eigen3",
+        ])
+        .arg(&src)
+        .arg("-o")
+        .arg(&exe)
+        .args(["-lompl", "-lfcl", "-lccd"])
+        .status();
+    match status {
+        Ok(s) if s.success() => Some(exe),
+        other => {
+            eprintln!(
+                "no OMPL C++ peer: compiling {} failed ({other:?})",
+                src.display()
+            );
+            None
+        }
+    }
+}
+
+/// Runs the C++ harness on the problem's `problem.txt` beside `spec`.
+fn cpp_runs(exe: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> Option<Row> {
+    let txt = spec.with_file_name("problem.txt");
+    let out = std::process::Command::new(exe)
+        .arg(&txt)
+        .arg(planner)
+        .arg(runs.to_string())
+        .arg(limit.to_string())
+        .output()
+        .ok()?;
+    parse_peer(out)
+}
+
 fn peer_runs(py: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> Option<Row> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/ompl_peer.py");
     let out = std::process::Command::new(py)
@@ -103,6 +168,11 @@ fn peer_runs(py: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> 
         .arg(limit.to_string())
         .output()
         .ok()?;
+    parse_peer(out)
+}
+
+/// The peers' JSON line: `{"runs", "solved", "times_s": [t or null]}`.
+fn parse_peer(out: std::process::Output) -> Option<Row> {
     if !out.status.success() {
         eprintln!("peer failed: {}", String::from_utf8_lossy(&out.stderr));
         return None;
@@ -305,14 +375,25 @@ fn main() {
         eprintln!("no OMPL peer ({} missing): fitup only", py.display());
     }
     let tmp = tempfile::tempdir().unwrap();
+    let cpp = build_cpp_peer(tmp.path());
     let stepwise = std::env::var_os("FITUP_STEPWISE").is_some();
     let only: Option<String> = std::env::var("FITUP_PROBLEM").ok();
     println!(
         "planning: success and median time of successful runs; fitup = plan_insertion with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
     );
     println!(
-        "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20}",
-        "problem", "fitup", "OMPL RRTConnect", "ratio", "fitup + smoothing", "fitup stepwise"
+        "OMPL C++ (RRTConnect, KPIECE1; FCL validity at {RESOLUTION_MM} mm): {peer_n} runs x {limit} s; ratio = OMPL's best median / fitup's median"
+    );
+    println!(
+        "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20} {:>20} {:>20}",
+        "problem",
+        "fitup",
+        "OMPL RRTConnect",
+        "ratio",
+        "fitup + smoothing",
+        "fitup stepwise",
+        "C++ RRTConnect",
+        "C++ KPIECE1"
     );
     for p in problems::all().unwrap() {
         if only.as_ref().is_some_and(|o| !p.name.contains(o.as_str())) {
@@ -339,14 +420,31 @@ fn main() {
             (Some(o), Some(f)) if o.solved == 0 => format!(">{:.0}x", limit / f),
             _ => "-".into(),
         };
+        let c_rrt = cpp
+            .as_ref()
+            .and_then(|e| cpp_runs(e, &spec, "RRTConnect", peer_n, limit));
+        let c_kp = cpp
+            .as_ref()
+            .and_then(|e| cpp_runs(e, &spec, "KPIECE1", peer_n, limit));
+        let best = [&ompl, &c_rrt, &c_kp]
+            .iter()
+            .filter_map(|r| r.as_ref().and_then(|r| r.median_s))
+            .fold(None, |b: Option<f64>, t| Some(b.map_or(t, |b| b.min(t))));
+        let ratio = match (best, cont.median_s) {
+            (Some(o), Some(f)) => format!("{:.1}x", o / f),
+            (None, Some(f)) if c_rrt.is_some() || ompl.is_some() => format!(">{:.0}x", limit / f),
+            _ => ratio,
+        };
         println!(
-            "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20}",
+            "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20} {:>20} {:>20}",
             p.name,
             fmt(&cont),
             ompl.as_ref().map_or("-".into(), fmt),
             ratio,
             fmt(&smoothed),
             step.as_ref().map_or("-".into(), fmt),
+            c_rrt.as_ref().map_or("-".into(), fmt),
+            c_kp.as_ref().map_or("-".into(), fmt),
         );
         if peer && std::env::var_os("FITUP_OMPL_RRT").is_some() {
             if let Some(r) = peer_runs(&py, &spec, "RRT", peer_n, limit) {
