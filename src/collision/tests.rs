@@ -302,6 +302,55 @@ fn tree_traversal_matches_brute_force() {
     }
 }
 
+/// A fine part across the faces of a coarse box (where the traversal drops subtrees
+/// on one side of every plane of a leaf's triangles) agrees with all pairs.
+#[test]
+fn coarse_box_against_fine_part_matches_brute_force() {
+    let a = collider(fixtures::torus(10.0, 3.0, 40, 12));
+    let b = cuboid([-8.0, -8.0, -8.0], [8.0, 8.0, 8.0]);
+    let mut rng = Rng::new(21);
+    let mut kinds = [0usize; 3];
+    for _ in 0..150 {
+        let (pa, pb) = (random_pose(&mut rng, 10.0), random_pose(&mut rng, 10.0));
+        let ta: Vec<_> = a.tris.iter().map(|t| t.map(|p| pa.apply(&p))).collect();
+        let tb: Vec<_> = b.tris.iter().map(|t| t.map(|p| pb.apply(&p))).collect();
+        let mut depth = None::<f64>;
+        for x in &ta {
+            for y in &tb {
+                if let Some(d) = tri_tri(x, y, 1e-8, true) {
+                    depth = Some(depth.unwrap_or(0.0).max(d));
+                }
+            }
+        }
+        let c = contact(&a, &pa, &b, &pb, TOL).unwrap();
+        let hit = interferes(&a, &pa, &b, &pb, TOL).unwrap();
+        assert_eq!(hit, matches!(c, Contact::Interfering { .. }), "{c:?}");
+        match depth {
+            Some(d) if d > TOL => {
+                assert!(hit);
+                assert!((c.depth() - d).abs() < 1e-6, "{c:?} vs {d}");
+                kinds[0] += 1;
+            }
+            Some(_) => {
+                assert!(c != Contact::Separate);
+                kinds[1] += 1;
+            }
+            None => {
+                assert!(matches!(
+                    c,
+                    Contact::Separate
+                        | Contact::Interfering {
+                            kind: InterferenceKind::Contained { .. },
+                            ..
+                        }
+                ));
+                kinds[2] += 1;
+            }
+        }
+    }
+    assert!(kinds[0] > 20 && kinds[2] > 20, "{kinds:?}");
+}
+
 #[test]
 fn bad_input_is_refused() {
     let a = cuboid([0.0; 3], [1.0; 3]);

@@ -9,8 +9,8 @@ use super::{Context, ScriptResult};
 use crate::collision::Aabb;
 use crate::math::AngleConvention;
 use crate::planning::{
-    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, Progress,
-    RotationFreedom, PLANNER_NAMES,
+    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, ProblemFile,
+    Progress, RotationFreedom, PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -177,6 +177,7 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
         },
         rotation_weight: opt_num(opts, "rotation_weight")?,
         disassemble,
+        start: None,
     })
 }
 
@@ -238,6 +239,34 @@ fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<P
     Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
 }
 
+/// A planning problem read from a `.plan.json` file (cheap to clone).
+#[derive(Clone)]
+pub struct ProblemHandle(pub(super) Arc<ProblemFile>);
+
+fn load_problem(d: &DocHandle, path: &str) -> ScriptResult<ProblemHandle> {
+    let ctx = d.context();
+    let full = ctx.project.resolve(path).map_err(fail)?;
+    ctx.record_read(&full);
+    let p = ProblemFile::read(&full).map_err(fail)?;
+    d.lock()?
+        .component_index(&p.moving_component)
+        .map_err(|e| fail(format!("{path}: {e}")))?;
+    Ok(ProblemHandle(Arc::new(p)))
+}
+
+fn plan_problem(d: &DocHandle, p: &ProblemHandle, opts: &Map) -> ScriptResult<PathHandle> {
+    let req = parse(opts)?;
+    let ctx = d.context().clone();
+    let mut cb = progress_printer(&ctx, req.planner.name());
+    let path = with_workspace(d, |ws| {
+        ws.plan_problem(&p.0, &req, Some(&mut cb)).map_err(fail)
+    })?;
+    if path.failure.is_some() && ctx.cancelled() {
+        return err("cancelled");
+    }
+    Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
+}
+
 fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathHandle> {
     let mut opts = opts.clone();
     opts.entry("planner".into())
@@ -276,6 +305,38 @@ pub(super) fn register(api: &mut Api) {
         "Document.plan_disassembly(name: string, options: map) -> Path",
         "As above with options (planner `rrt`, `biased_rrt` or `local_rrt`).",
         |d: &mut DocHandle, name: &str, o: Map| plan_disassembly(d, name, &o),
+    );
+    api.type_::<ProblemHandle>("Problem");
+    api.f("Document.load_problem(file: string) -> Problem", "Reads a planning problem (`.plan.json`, path inside the project: which component moves, start and goal poses, bounds, rotation weight — the files under `models/problems/`) and checks that its component is in this document; errors name the file, line and field.", |d: &mut DocHandle, file: &str| load_problem(d, file));
+    api.f(
+        "Document.plan_problem(problem: Problem) -> Path",
+        "Plans the problem: its component from the file's start to its goal within its bounds, default planner and options.",
+        |d: &mut DocHandle, p: ProblemHandle| plan_problem(d, &p, &Map::new()),
+    );
+    api.f(
+        "Document.plan_problem(problem: Problem, options: map) -> Path",
+        "As above with the options of `plan_path` (`bounds` and `start` come from the file).",
+        |d: &mut DocHandle, p: ProblemHandle, o: Map| plan_problem(d, &p, &o),
+    );
+    api.get(
+        "Problem.name -> string",
+        "The problem's name.",
+        |p: &mut ProblemHandle| p.0.name.clone(),
+    );
+    api.get(
+        "Problem.component -> string",
+        "The component that moves.",
+        |p: &mut ProblemHandle| p.0.moving_component.clone(),
+    );
+    api.get(
+        "Problem.start -> Transform",
+        "Start pose (mm).",
+        |p: &mut ProblemHandle| p.0.start,
+    );
+    api.get(
+        "Problem.goal -> Transform",
+        "Goal pose (mm).",
+        |p: &mut ProblemHandle| p.0.goal,
     );
     api.get(
         "Path.found -> bool",
