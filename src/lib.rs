@@ -34,6 +34,7 @@ pub mod diagnostics;
 pub mod document;
 pub mod fsutil;
 pub mod kinematics;
+pub mod manipulator;
 pub mod math;
 pub mod mesh;
 pub mod planning;
