@@ -42,6 +42,7 @@ pub mod project;
 #[cfg(feature = "script")]
 pub mod script;
 pub mod sequence;
+pub mod skills;
 #[cfg(feature = "watch")]
 pub mod watch;
 pub mod workspace;
