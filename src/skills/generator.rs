@@ -184,7 +184,7 @@ pub fn generate(
                             segment: segment.clone(),
                             reason,
                         })?;
-                        let (d, r) = from.distance_to(&to);
+                        let (r, d) = from.distance_to(&to);
                         let a = if action.moves_part() && r > 1e-9 && d < 1e-9 {
                             attr("angle_rad", r, Source::Cad)
                         } else {
@@ -213,7 +213,7 @@ pub fn generate(
                         segment: "P3->assembled".into(),
                         reason,
                     })?;
-                    let mut attributes = vec![attr("length_mm", pose.distance_to(&end).0, Source::Cad)];
+                    let mut attributes = vec![attr("length_mm", pose.distance_to(&end).1, Source::Cad)];
                     if action == Action::Screw {
                         attributes.push(attr("turns", options.screw_turns, Source::User));
                     }
@@ -298,7 +298,7 @@ pub fn move_path(
     let points = [(turned, "P0"), (p1, "P1"), (p2, "P2"), (p3, "P3")];
     let mut from = points[0];
     for to in &points[1..] {
-        let d = from.0.distance_to(&to.0).0;
+        let d = from.0.distance_to(&to.0).1;
         if d < 1e-6 {
             continue;
         }

@@ -217,7 +217,7 @@ impl Skill {
 
     /// A one-line description for people: `#3 Move_Table gear 120.0 mm`.
     pub fn describe(&self) -> String {
-        let (d, r) = self.start.0.distance_to(&self.end.0);
+        let (r, d) = self.start.0.distance_to(&self.end.0);
         let mut s = format!("#{} {} {}", self.id, self.action.name(), self.part);
         if d > 1e-9 {
             s += &format!(" {}", crate::math::format::length(d));
