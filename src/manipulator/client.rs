@@ -414,10 +414,14 @@ impl Client {
         timeout: Duration,
         cancel: &dyn Fn() -> bool,
     ) -> Result<bool, ManipulatorError> {
-        let deadline = Instant::now() + timeout;
+        let since = Instant::now();
+        let deadline = since + timeout;
         loop {
             let st = self.state()?;
-            if let Some(status) = st.status {
+            // Only a STATUS published after the wait began says anything about the
+            // motion just sent (an older one may still carry a cleared error).
+            let fresh = lock(&self.shared).status_at.is_some_and(|t| t > since);
+            if let Some(status) = st.status.filter(|_| fresh) {
                 if status.in_error == TriState::On {
                     return Err(ManipulatorError::InError(status.error_code));
                 }

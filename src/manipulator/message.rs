@@ -457,6 +457,26 @@ impl Packet {
             }
             Ok(j)
         };
+        // A reply may be header only (REP-I0006's *alternative* reply; after FAILURE
+        // the payload is invalid anyway), whatever its type.
+        if comm_type == CommType::ServiceReply && b.is_empty() {
+            if !matches!(
+                msg_type,
+                msg_type::PING
+                    | msg_type::JOINT_POSITION
+                    | msg_type::JOINT_TRAJ_PT
+                    | msg_type::STATUS
+                    | msg_type::FITUP_TOOL
+            ) {
+                return Err(CodecError::UnknownType(msg_type));
+            }
+            return Ok(Self {
+                msg_type,
+                comm_type,
+                reply_code,
+                body: Body::Empty,
+            });
+        }
         let body = match msg_type {
             msg_type::PING => match b.len() {
                 40 => Body::Ping,
