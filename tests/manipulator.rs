@@ -95,11 +95,21 @@ fn free_port() -> u16 {
 
 /// `fitup manipulator` on the MZ07 of `models/mz07.yaml`; returns it and its ports.
 fn simulator(port: u16, state: u16, speed: &str) -> (Proc, SocketAddr, SocketAddr) {
+    simulator_of("models/mz07.yaml", "mz07", port, state, speed)
+}
+
+fn simulator_of(
+    doc: &str,
+    robot: &str,
+    port: u16,
+    state: u16,
+    speed: &str,
+) -> (Proc, SocketAddr, SocketAddr) {
     let (p, s) = (port.to_string(), state.to_string());
     let mut sim = Proc::spawn(
         &[
-            "manipulator", "--doc", "models/mz07.yaml", "--robot", "mz07", "--port", &p,
-            "--state-port", &s, "--speed", speed,
+            "manipulator", "--doc", doc, "--robot", robot, "--port", &p, "--state-port", &s,
+            "--speed", speed,
         ],
         false,
     );
@@ -152,6 +162,32 @@ fn a_joint_limit_trajectory_is_refused_with_the_reason() {
         matches!(e, ManipulatorError::Refused { code: Some(RefusalCode::OutOfOrder), .. }),
         "{e}"
     );
+}
+
+#[test]
+fn a_trajectory_into_the_table_is_refused_as_a_collision() {
+    // The arm `mz07_a` of the two-arm demo cell, folded back and down: its forearm
+    // and flange reach into the table.
+    let (mut sim, m, s) = simulator_of("models/cell_robots.yaml", "mz07_a", 0, 0, "10");
+    let mut c = client(m, s);
+    let home = c.state().unwrap().joints;
+    let folded = vec![
+        0.0,
+        (-134f64).to_radians(),
+        180f64.to_radians(),
+        0.0,
+        0.0,
+        0.0,
+    ];
+    let e = c.stream(&[(home.clone(), 0.0), (folded, 2.0)]).unwrap_err();
+    assert!(
+        matches!(e, ManipulatorError::Refused { code: Some(RefusalCode::Collision), .. }),
+        "{e}"
+    );
+    let why = sim.wait_for("refused point 1", Duration::from_secs(30));
+    assert!(why.contains("`table`"), "{why}");
+    std::thread::sleep(Duration::from_millis(200));
+    assert_eq!(c.state().unwrap().joints, home, "a refused point must not move the arm");
 }
 
 #[test]
