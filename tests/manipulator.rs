@@ -68,7 +68,10 @@ impl Proc {
                 break;
             }
         }
-        panic!("no line with `{pat}` within {bound:?}; seen:\n{}", self.seen.join("\n"));
+        panic!(
+            "no line with `{pat}` within {bound:?}; seen:\n{}",
+            self.seen.join("\n")
+        );
     }
 
     fn send(&mut self, line: &str) {
@@ -108,15 +111,28 @@ fn simulator_of(
     let (p, s) = (port.to_string(), state.to_string());
     let mut sim = Proc::spawn(
         &[
-            "manipulator", "--doc", doc, "--robot", robot, "--port", &p, "--state-port", &s,
-            "--speed", speed,
+            "manipulator",
+            "--doc",
+            doc,
+            "--robot",
+            robot,
+            "--port",
+            &p,
+            "--state-port",
+            &s,
+            "--speed",
+            speed,
         ],
         false,
     );
     let line = sim.wait_for("listening", Duration::from_secs(60));
     let addr = |key: &str| -> SocketAddr {
         let rest = &line[line.find(key).unwrap() + key.len()..];
-        rest.split([',', ' ']).find(|w| !w.is_empty()).unwrap().parse().unwrap()
+        rest.split([',', ' '])
+            .find(|w| !w.is_empty())
+            .unwrap()
+            .parse()
+            .unwrap()
     };
     let (m, st) = (addr("motion "), addr("state "));
     (sim, m, st)
@@ -136,9 +152,7 @@ fn a_joint_limit_trajectory_is_refused_with_the_reason() {
     // Joint 2 of the MZ07 stops at −135°.
     let mut bad = home.clone();
     bad[1] = (-150f64).to_radians();
-    let e = c
-        .stream(&[(home.clone(), 0.0), (bad, 1.0)])
-        .unwrap_err();
+    let e = c.stream(&[(home.clone(), 0.0), (bad, 1.0)]).unwrap_err();
     match &e {
         ManipulatorError::Refused { code, reason, .. } => {
             assert_eq!(*code, Some(RefusalCode::JointLimit(1)), "{e}");
@@ -146,7 +160,10 @@ fn a_joint_limit_trajectory_is_refused_with_the_reason() {
         }
         other => panic!("{other}"),
     }
-    sim.wait_for("refused point 1: joint 2 outside its limits", Duration::from_secs(10));
+    sim.wait_for(
+        "refused point 1: joint 2 outside its limits",
+        Duration::from_secs(10),
+    );
     // The arm did not move, and a new trajectory (sequence 0) clears the error.
     std::thread::sleep(Duration::from_millis(200));
     assert_eq!(c.state().unwrap().joints, home);
@@ -159,7 +176,13 @@ fn a_joint_limit_trajectory_is_refused_with_the_reason() {
     // A point out of order is refused too.
     let e = c.send_point(5, &ok, 0.1).unwrap_err();
     assert!(
-        matches!(e, ManipulatorError::Refused { code: Some(RefusalCode::OutOfOrder), .. }),
+        matches!(
+            e,
+            ManipulatorError::Refused {
+                code: Some(RefusalCode::OutOfOrder),
+                ..
+            }
+        ),
         "{e}"
     );
 }
@@ -181,23 +204,33 @@ fn a_trajectory_into_the_table_is_refused_as_a_collision() {
     ];
     let e = c.stream(&[(home.clone(), 0.0), (folded, 2.0)]).unwrap_err();
     assert!(
-        matches!(e, ManipulatorError::Refused { code: Some(RefusalCode::Collision), .. }),
+        matches!(
+            e,
+            ManipulatorError::Refused {
+                code: Some(RefusalCode::Collision),
+                ..
+            }
+        ),
         "{e}"
     );
     let why = sim.wait_for("refused point 1", Duration::from_secs(30));
     assert!(why.contains("`table`"), "{why}");
     std::thread::sleep(Duration::from_millis(200));
-    assert_eq!(c.state().unwrap().joints, home, "a refused point must not move the arm");
+    assert_eq!(
+        c.state().unwrap().joints,
+        home,
+        "a refused point must not move the arm"
+    );
 }
 
 #[test]
 fn malformed_messages_to_the_simulator_cost_only_that_connection() {
     let (mut sim, m, s) = simulator(0, 0, "10");
     let garbage: [&[u8]; 4] = [
-        b"GET / HTTP/1.1\r\n\r\n",                  // a huge length prefix
+        b"GET / HTTP/1.1\r\n\r\n",                           // a huge length prefix
         &[0, 0, 0, 12, 0, 0, 0, 99, 0, 0, 0, 2, 0, 0, 0, 0], // unknown type
-        &[0, 0, 0, 64, 0, 0, 0, 11],                 // truncated, then silence
-        &[0xff, 0xff, 0xff, 0xff],                   // negative length
+        &[0, 0, 0, 64, 0, 0, 0, 11],                         // truncated, then silence
+        &[0xff, 0xff, 0xff, 0xff],                           // negative length
     ];
     for g in garbage {
         let mut t = TcpStream::connect(m).unwrap();
@@ -228,7 +261,10 @@ fn malformed_messages_to_the_simulator_cost_only_that_connection() {
             .unwrap();
         let r = Packet::read_from(&mut t, ByteOrder::Big).unwrap();
         assert_eq!(r.msg_type, msg_type::JOINT_POSITION);
-        assert_eq!(r.reply_code, fitup::manipulator::message::ReplyCode::Failure);
+        assert_eq!(
+            r.reply_code,
+            fitup::manipulator::message::ReplyCode::Failure
+        );
     }
     c.ping().unwrap();
 }
@@ -292,7 +328,13 @@ fn remote_targets_need_the_explicit_flag() {
     let plan = write_plan(&joint_plan(1, 1.0));
     let o = fitup()
         .current_dir(repo())
-        .args(["skills", "run", plan.path().to_str().unwrap(), "--target", "10.1.2.3:11000"])
+        .args([
+            "skills",
+            "run",
+            plan.path().to_str().unwrap(),
+            "--target",
+            "10.1.2.3:11000",
+        ])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(1));
@@ -322,7 +364,12 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
             part: "gear".into(),
             action: "Move_Table".into(),
             description: format!("#{i} Move_Table gear"),
-            end_state: if i + 1 == skills { "Adjusted" } else { "Grasped" }.into(),
+            end_state: if i + 1 == skills {
+                "Adjusted"
+            } else {
+                "Grasped"
+            }
+            .into(),
             commands: vec![
                 SkillCommand::Trajectory(pts),
                 SkillCommand::Tool {
@@ -354,7 +401,15 @@ fn pause_and_resume_mid_run() {
     let target = m.to_string();
     let state = s.port().to_string();
     let mut run = Proc::spawn(
-        &["skills", "run", plan.path().to_str().unwrap(), "--target", &target, "--state-port", &state],
+        &[
+            "skills",
+            "run",
+            plan.path().to_str().unwrap(),
+            "--target",
+            &target,
+            "--state-port",
+            &state,
+        ],
         true,
     );
     run.wait_for("running #1", Duration::from_secs(30));
@@ -374,10 +429,18 @@ fn pause_and_resume_mid_run() {
     run.send("resume");
     run.wait_for("resumed", Duration::from_secs(10));
     run.wait_for("done", Duration::from_secs(60));
-    let finished: Vec<_> = run.seen.iter().filter(|l| l.starts_with("finished")).collect();
+    let finished: Vec<_> = run
+        .seen
+        .iter()
+        .filter(|l| l.starts_with("finished"))
+        .collect();
     assert_eq!(finished.len(), 3, "{:?}", run.seen);
-    let end = c.state().unwrap().joints;
-    assert!((end[0] - 0.3).abs() < 1e-3, "{end:?}");
+    let mut end_q = vec![0.0; 6];
+    end_q[0] = 0.3;
+    end_q[2] = 0.15;
+    assert!(c
+        .wait_until_at(&end_q, 1e-3, Duration::from_secs(10), &|| false)
+        .unwrap());
 }
 
 #[test]
@@ -385,10 +448,19 @@ fn killing_the_simulator_mid_skill_interrupts_and_resumes_without_repeating() {
     let (port, state_port) = (free_port(), free_port());
     let (sim, m, s) = simulator(port, state_port, "1");
     let plan = write_plan(&joint_plan(3, 2.0));
+    let db_dir = tempfile::tempdir().unwrap();
+    let db_file = db_dir.path().join("log.db");
     let mut run = Proc::spawn(
         &[
-            "skills", "run", plan.path().to_str().unwrap(), "--target", &m.to_string(),
-            "--state-port", &s.port().to_string(),
+            "skills",
+            "run",
+            plan.path().to_str().unwrap(),
+            "--target",
+            &m.to_string(),
+            "--state-port",
+            &s.port().to_string(),
+            "--db",
+            db_file.to_str().unwrap(),
         ],
         false,
     );
@@ -405,8 +477,32 @@ fn killing_the_simulator_mid_skill_interrupts_and_resumes_without_repeating() {
     assert_eq!(count("finished #0"), 1, "{:?}", run.seen);
     assert_eq!(count("finished #1"), 1, "{:?}", run.seen);
     assert_eq!(count("finished #2"), 1, "{:?}", run.seen);
+    // The execution log is in the database, written as it happened.
+    let mut db = fitup::db::Database::open(&fitup::db::Target::Sqlite(db_file.clone())).unwrap();
+    let log = db.skill_log(None).unwrap();
+    let events: Vec<(Option<i64>, &str)> =
+        log.iter().map(|e| (e.skill, e.event.as_str())).collect();
+    let finished: Vec<_> = events.iter().filter(|e| e.1 == "finished").collect();
+    assert_eq!(
+        finished,
+        [
+            &(Some(0), "finished"),
+            &(Some(1), "finished"),
+            &(Some(2), "finished")
+        ],
+        "{events:?}"
+    );
+    assert!(events.contains(&(Some(1), "interrupted")), "{events:?}");
+    assert!(events.contains(&(None, "reconnected")), "{events:?}");
+    assert_eq!(events.last(), Some(&(None, "done")));
+    assert!(log.iter().all(|e| e.plan.ends_with(".json")));
+    assert_eq!(log[1].part.as_deref(), Some("gear"));
     // The restarted controller started at home and ends where the plan ends.
     let c = client(m, s);
-    let end = c.state().unwrap().joints;
-    assert!((end[0] - 0.3).abs() < 1e-3, "{end:?}");
+    let mut end_q = vec![0.0; 6];
+    end_q[0] = 0.3;
+    end_q[2] = 0.15;
+    assert!(c
+        .wait_until_at(&end_q, 1e-3, Duration::from_secs(10), &|| false)
+        .unwrap());
 }

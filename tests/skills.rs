@@ -78,13 +78,9 @@ fn the_move_generator_goes_around_the_obstacle_box() {
     let assembled = Transform::from_translation(Vec3::new(0.0, 0.0, 0.0));
     let task = gear_task(assembled);
     // The gear waits 200 mm to the side, turned 30° about Z.
-    let start = Transform::from_rotation_about(
-        Point3::origin(),
-        Vec3::z(),
-        30f64.to_radians(),
-    )
-    .unwrap()
-    .then(&Transform::from_translation(Vec3::new(200.0, 0.0, -10.0)));
+    let start = Transform::from_rotation_about(Point3::origin(), Vec3::z(), 30f64.to_radians())
+        .unwrap()
+        .then(&Transform::from_translation(Vec3::new(200.0, 0.0, -10.0)));
     let mut checked = Vec::new();
     let mut check = |_: &Task, a: &Transform, b: &Transform| {
         checked.push((*a, *b));
@@ -182,8 +178,14 @@ fn a_fixture_template_skips_locate_and_a_missing_grasp_is_an_error() {
     assert_eq!(skills[0].action, Action::Grasp);
     assert!(skills.iter().all(|s| s.action != Action::Touch));
     task.grasp = None;
-    let e = generate(&[task], &[t], &|_| None, &GeneratorOptions::default(), &mut no_check)
-        .unwrap_err();
+    let e = generate(
+        &[task],
+        &[t],
+        &|_| None,
+        &GeneratorOptions::default(),
+        &mut no_check,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("no grasp"), "{e}");
 }
 
@@ -198,8 +200,11 @@ fn bundled_template_files_parse() {
 
 #[test]
 fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
-    let doc = Document::open(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/models/mz07.yaml")))
-        .unwrap();
+    let doc = Document::open(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/models/mz07.yaml"
+    )))
+    .unwrap();
     let robot = doc.robot("mz07").unwrap().robot().clone();
     let home = vec![0.0, 0.3, -0.2, 0.0, -0.4, 0.0];
     let tcp = robot.tcp_pose(&home).unwrap();
@@ -209,8 +214,13 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
     let task = gear_task(assembled);
     let start = tcp
         .then(&Transform::from_translation(-tcp.translation()))
-        .then(&Transform::from_rotation_about(Point3::origin(), Vec3::z(), 20f64.to_radians()).unwrap())
-        .then(&Transform::from_translation(tcp.translation() + Vec3::new(0.0, 120.0, -100.0)));
+        .then(
+            &Transform::from_rotation_about(Point3::origin(), Vec3::z(), 20f64.to_radians())
+                .unwrap(),
+        )
+        .then(&Transform::from_translation(
+            tcp.translation() + Vec3::new(0.0, 120.0, -100.0),
+        ));
     let skills = generate(
         std::slice::from_ref(&task),
         &[],
@@ -219,8 +229,14 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
         &mut no_check,
     )
     .unwrap();
-    let plan = Plan::bind(&skills, std::slice::from_ref(&task), &robot, &home, &MotionOptions::default())
-        .unwrap();
+    let plan = Plan::bind(
+        &skills,
+        std::slice::from_ref(&task),
+        &robot,
+        &home,
+        &MotionOptions::default(),
+    )
+    .unwrap();
     // The plan survives its file format.
     let plan = Plan::from_json("plan.json", &plan.to_json()).unwrap();
 

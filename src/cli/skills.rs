@@ -59,6 +59,11 @@ pub enum SkillsCommand {
         /// Longest time one trajectory may take (s).
         #[arg(long, default_value_t = 120.0)]
         skill_timeout: f64,
+        /// Write the execution log to the results database as it happens: `--db`
+        /// alone for the project's (`FITUP_DB`, else `fitup.db` in the current
+        /// folder), or `--db FILE|postgres://…`.
+        #[arg(long, num_args = 0..=1, default_missing_value = "")]
+        db: Option<String>,
     },
 }
 
@@ -114,6 +119,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         allow_remote,
         reconnect_timeout,
         skill_timeout,
+        db,
     } = &a.command;
     let (reconnect, skill) = match (
         duration(*reconnect_timeout, "reconnect-timeout"),
@@ -132,11 +138,27 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
             return Exit::Failure;
         }
     };
-    let plan = match crate::skills::Plan::from_json(&plan.display().to_string(), &text) {
+    let plan_label = plan.display().to_string();
+    let plan = match crate::skills::Plan::from_json(&plan_label, &text) {
         Ok(p) => p,
         Err(e) => {
             errln!("error: {e}");
             return Exit::Failure;
+        }
+    };
+    let label = plan_label.clone();
+    let mut db = match db {
+        None => None,
+        Some(d) => {
+            let root = std::env::current_dir().unwrap_or_default();
+            let target = crate::db::Target::resolve((!d.is_empty()).then_some(d.as_str()), &root);
+            match crate::db::Database::open(&target) {
+                Ok(db) => Some(db),
+                Err(e) => {
+                    errln!("error: {e}");
+                    return Exit::Failure;
+                }
+            }
         }
     };
     let mut options = ManagerOptions {
@@ -147,6 +169,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         ..ManagerOptions::default()
     };
     options.client.allow_remote = *allow_remote;
+    let logged_plan = plan.clone();
     let mut manager = SkillManager::new(plan, options);
     let handle = manager.handle();
     // Commands from standard input; the thread ends with the process.
@@ -174,7 +197,29 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
             }
         }
     });
-    let result = manager.run(&mut |e| match e {
+    let mut log_failed = false;
+    let result = manager.run(&mut |e| {
+        if let Some(db) = db.as_mut() {
+            if let Err(err) = crate::skills::log_event(db, None, &label, &logged_plan, e) {
+                if !log_failed {
+                    errln!("warning: the skill log could not be written: {err}");
+                    log_failed = true;
+                }
+            }
+        }
+        print_event(e)
+    });
+    match result {
+        Ok(()) => Exit::Ok,
+        Err(e) => {
+            errln!("error: {e}");
+            Exit::Failure
+        }
+    }
+}
+
+fn print_event(e: &Event) {
+    match e {
         Event::Connected(a) => outln!("connected {a}"),
         Event::Started(_, d) => outln!("running {d}"),
         Event::Finished { skill, part, state } => {
@@ -190,12 +235,5 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         Event::Failed(i, why) => outln!("failed #{i}: {why}"),
         Event::Aborted => outln!("aborted"),
         Event::Done => outln!("done"),
-    });
-    match result {
-        Ok(()) => Exit::Ok,
-        Err(e) => {
-            errln!("error: {e}");
-            Exit::Failure
-        }
     }
 }

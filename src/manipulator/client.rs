@@ -7,8 +7,8 @@
 //! reconnect and resume.
 
 use super::message::{
-    msg_type, special_seq, Body, ByteOrder, CodecError, CommType, JointTrajPt, Packet,
-    ReplyCode, Status, ToolAction, ToolCommand, TriState, TOOL_EXTENSION_VERSION,
+    msg_type, special_seq, Body, ByteOrder, CodecError, CommType, JointTrajPt, Packet, ReplyCode,
+    Status, ToolAction, ToolCommand, TriState, TOOL_EXTENSION_VERSION,
 };
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::kinematics::JointKind;
@@ -164,8 +164,12 @@ impl Client {
         let shared = Arc::new(Mutex::new(Shared::default()));
         let stop = Arc::new(AtomicBool::new(false));
         let reader = {
-            let (shared, stop, kinds, order) =
-                (shared.clone(), stop.clone(), kinds.clone(), options.byte_order);
+            let (shared, stop, kinds, order) = (
+                shared.clone(),
+                stop.clone(),
+                kinds.clone(),
+                options.byte_order,
+            );
             std::thread::spawn(move || loop {
                 if stop.load(Ordering::Relaxed) {
                     return;
@@ -191,8 +195,7 @@ impl Client {
                             CodecError::Io(io)
                                 if matches!(
                                     io.kind(),
-                                    std::io::ErrorKind::WouldBlock
-                                        | std::io::ErrorKind::TimedOut
+                                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
                                 ) =>
                             {
                                 "no state message within the state timeout".to_string()
@@ -253,7 +256,9 @@ impl Client {
         if let Some(b) = &s.broken {
             return Err(ManipulatorError::Disconnected(b.clone()));
         }
-        if s.last_rx.is_none_or(|t| t.elapsed() > self.options.state_timeout) {
+        if s.last_rx
+            .is_none_or(|t| t.elapsed() > self.options.state_timeout)
+        {
             return Err(ManipulatorError::Disconnected(
                 "no state message within the state timeout".into(),
             ));
@@ -426,7 +431,11 @@ impl Client {
                     return Err(ManipulatorError::InError(status.error_code));
                 }
                 let close = st.joints.len() == target.len()
-                    && st.joints.iter().zip(target).all(|(a, b)| (a - b).abs() <= tol);
+                    && st
+                        .joints
+                        .iter()
+                        .zip(target)
+                        .all(|(a, b)| (a - b).abs() <= tol);
                 if close && status.in_motion == TriState::Off {
                     return Ok(true);
                 }

@@ -693,7 +693,7 @@ mod tests {
             panic!("{p:?}")
         };
         assert_eq!(pt.sequence, 1);
-        assert!((pt.joints[1] - 0.327742815).abs() < 1e-7);
+        assert!((pt.joints[1] - 0.327_742_8).abs() < 1e-6);
         assert!((pt.joints[3] - -std::f32::consts::PI).abs() < 1e-6);
         assert_eq!(pt.velocity, 0.1);
         assert_eq!(pt.duration, 5.0);
@@ -744,7 +744,11 @@ mod tests {
             reply.encode(ByteOrder::Big),
             hex("0000000C 0000000B 00000003 00000002")
         );
-        let full = Packet::reply(msg_type::JOINT_TRAJ_PT, ReplyCode::Success, Body::DummyReals);
+        let full = Packet::reply(
+            msg_type::JOINT_TRAJ_PT,
+            ReplyCode::Success,
+            Body::DummyReals,
+        );
         let bytes = full.encode(ByteOrder::Big);
         assert_eq!(bytes.len(), 56);
         assert_eq!(Packet::decode(&bytes, ByteOrder::Big).unwrap(), full);
@@ -858,7 +862,7 @@ mod tests {
         for _ in 0..20_000 {
             let n = (rng.next_u64() % 80) as usize;
             let mut b: Vec<u8> = (0..n).map(|_| rng.next_u64() as u8).collect();
-            if n >= 4 && rng.next_u64() % 2 == 0 {
+            if n >= 4 && rng.next_u64().is_multiple_of(2) {
                 b[..4].copy_from_slice(&((n as i32) - 4).to_be_bytes());
             }
             let _ = Packet::decode(&b, ByteOrder::Big);

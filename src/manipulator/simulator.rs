@@ -16,8 +16,8 @@
 //! simulator logs the cause to standard error and keeps serving.
 
 use super::message::{
-    msg_type, special_seq, Body, ByteOrder, CodecError, JointTrajPt, Packet, ReplyCode,
-    RobotMode, Status, ToolAction, TriState,
+    msg_type, special_seq, Body, ByteOrder, CodecError, JointTrajPt, Packet, ReplyCode, RobotMode,
+    Status, ToolAction, TriState,
 };
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::document::Document;
@@ -501,14 +501,15 @@ fn handle(
     let ok = |t| Some(Packet::reply(t, ReplyCode::Success, Body::Empty));
     let fail = |t| Some(Packet::reply(t, ReplyCode::Failure, Body::Empty));
     match &p.body {
-        Body::Ping => Some(Packet::reply(msg_type::PING, ReplyCode::Success, Body::Ping)),
+        Body::Ping => Some(Packet::reply(
+            msg_type::PING,
+            ReplyCode::Success,
+            Body::Ping,
+        )),
         Body::JointTrajPt(pt) => match enqueue(pt, state, cell, kinds, opts) {
             Ok(()) => ok(msg_type::JOINT_TRAJ_PT),
             Err((code, why)) => {
-                eprintln!(
-                    "manipulator: refused point {}: {code}: {why}",
-                    pt.sequence
-                );
+                eprintln!("manipulator: refused point {}: {code}: {why}", pt.sequence);
                 let mut s = lock(state);
                 s.stop();
                 s.error = Some(code);

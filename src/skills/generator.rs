@@ -213,7 +213,8 @@ pub fn generate(
                         segment: "P3->assembled".into(),
                         reason,
                     })?;
-                    let mut attributes = vec![attr("length_mm", pose.distance_to(&end).1, Source::Cad)];
+                    let mut attributes =
+                        vec![attr("length_mm", pose.distance_to(&end).1, Source::Cad)];
                     if action == Action::Screw {
                         attributes.push(attr("turns", options.screw_turns, Source::User));
                     }
@@ -266,9 +267,7 @@ pub fn move_path(
     let turned = Transform::from_parts(p0.translation(), target_rot);
     let rel = target_rot * p0.rotation().inverse();
     if rel.angle() > 1e-9 {
-        let about_z = rel
-            .axis()
-            .is_some_and(|a| a.z.abs() > 1.0 - 1e-9);
+        let about_z = rel.axis().is_some_and(|a| a.z.abs() > 1.0 - 1e-9);
         let action = if about_z {
             Action::RotateTable
         } else {
@@ -340,4 +339,3 @@ pub fn segment_check_fn(
         Ok(())
     }
 }
-

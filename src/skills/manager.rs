@@ -231,7 +231,9 @@ impl SkillManager {
         let mut client = self
             .connect(Instant::now() + self.options.client.connect_timeout)
             .map_err(RunError::Connection)?;
-        on_event(&Event::Connected(self.addresses().map_err(RunError::Connection)?.0));
+        on_event(&Event::Connected(
+            self.addresses().map_err(RunError::Connection)?.0,
+        ));
         let mut i = 0;
         // Commands of the running skill already done (not repeated on resume).
         let mut done_commands = 0;
@@ -409,7 +411,11 @@ impl SkillManager {
                     .unwrap_or(0);
                 if nearest + 1 < points.len() || dist(&last.0) > self.options.tolerance {
                     let mut stream = vec![(here.clone(), 0.0)];
-                    stream.extend(points[(nearest + 1).min(points.len() - 1)..].iter().cloned());
+                    stream.extend(
+                        points[(nearest + 1).min(points.len() - 1)..]
+                            .iter()
+                            .cloned(),
+                    );
                     client.stream(&stream)?;
                 }
                 let cancel = || self.cancelled();
@@ -431,4 +437,46 @@ impl SkillManager {
             }
         }
     }
+}
+
+impl Event {
+    /// The event as a log row: `(skill, event name, detail)`.
+    pub fn log_fields(&self) -> (Option<usize>, &'static str, String) {
+        match self {
+            Event::Connected(a) => (None, "connected", a.to_string()),
+            Event::Started(i, d) => (Some(*i), "started", d.clone()),
+            Event::Finished { skill, part, state } => {
+                (Some(*skill), "finished", format!("{part} {state}"))
+            }
+            Event::Interrupted(i, why) => (Some(*i), "interrupted", why.clone()),
+            Event::Reconnected => (None, "reconnected", String::new()),
+            Event::Paused => (None, "paused", String::new()),
+            Event::Resumed => (None, "resumed", String::new()),
+            Event::Edited(i) => (Some(*i), "edited", String::new()),
+            Event::EditRefused(i, why) => (Some(*i), "edit_refused", why.clone()),
+            Event::Manual(c) => (None, "manual", c.clone()),
+            Event::Failed(i, why) => (Some(*i), "failed", why.clone()),
+            Event::Aborted => (None, "aborted", String::new()),
+            Event::Done => (None, "done", String::new()),
+        }
+    }
+}
+
+/// Writes one manager event to the skill execution log of `db` (plan label `plan`);
+/// the part is taken from the plan's step.
+///
+/// # Errors
+/// The database's error.
+pub fn log_event(
+    db: &mut crate::db::Database,
+    run_id: Option<i64>,
+    plan_label: &str,
+    plan: &Plan,
+    event: &Event,
+) -> Result<i64, crate::db::DbError> {
+    let (skill, name, detail) = event.log_fields();
+    let part = skill
+        .and_then(|i| plan.steps.get(i))
+        .map(|s| s.part.as_str());
+    db.log_skill_event(run_id, plan_label, skill, part, name, &detail)
 }

@@ -21,7 +21,9 @@ pub mod program;
 mod template;
 
 pub use generator::{generate, segment_check_fn, GeneratorOptions, SegmentCheck, SkillError};
-pub use manager::{Event, ManagerHandle, ManagerOptions, RunError, SkillManager, SkillStatus};
+pub use manager::{
+    log_event, Event, ManagerHandle, ManagerOptions, RunError, SkillManager, SkillStatus,
+};
 pub use program::{bind, BindError, Command, Plan, PlanStep};
 pub use template::{default_template, Template, TemplateError, Workflow};
 

@@ -142,7 +142,11 @@ pub enum BindError {
 }
 
 /// Keeps a sample every `interval` seconds (and the last): `(joints, dt)`.
-fn points(traj: &crate::kinematics::Trajectory, start: &[f64], interval: f64) -> Vec<(Vec<f64>, f64)> {
+fn points(
+    traj: &crate::kinematics::Trajectory,
+    start: &[f64],
+    interval: f64,
+) -> Vec<(Vec<f64>, f64)> {
     let mut out = vec![(start.to_vec(), 0.0)];
     let mut last_t = 0.0;
     let n = traj.samples.len();
@@ -171,7 +175,11 @@ impl Plan {
     ) -> Result<Self, BindError> {
         let grasps: HashMap<usize, (Transform, f64)> = tasks
             .iter()
-            .filter_map(|t| t.grasp.as_ref().map(|g| (t.index, (g.tool_in_part, g.width))))
+            .filter_map(|t| {
+                t.grasp
+                    .as_ref()
+                    .map(|g| (t.index, (g.tool_in_part, g.width)))
+            })
             .collect();
         let mut q = start.to_vec();
         let mut steps = Vec::new();
@@ -183,10 +191,13 @@ impl Plan {
                 reason,
             };
             let grasp = || {
-                grasps.get(&s.task).copied().ok_or_else(|| BindError::NoGrasp {
-                    skill: s.id,
-                    part: s.part.clone(),
-                })
+                grasps
+                    .get(&s.task)
+                    .copied()
+                    .ok_or_else(|| BindError::NoGrasp {
+                        skill: s.id,
+                        part: s.part.clone(),
+                    })
             };
             let tool = |action: &str, value: f64| Command::Tool {
                 action: action.into(),
@@ -220,8 +231,8 @@ impl Plan {
                 _ => {
                     let (tip, _) = grasp()?;
                     let target = tip.then(&s.end.0);
-                    let traj =
-                        move_line(robot, &q, &target, options).map_err(|e| motion_err(e.to_string()))?;
+                    let traj = move_line(robot, &q, &target, options)
+                        .map_err(|e| motion_err(e.to_string()))?;
                     let pts = points(&traj, &q, 0.2);
                     if let Some(last) = traj.last_joints() {
                         q = last.to_vec();
@@ -280,12 +291,14 @@ impl Plan {
     /// trajectory point of the wrong joint count, an unknown tool action, an unknown
     /// part state.
     pub fn from_json(name: &str, text: &str) -> Result<Self, BindError> {
-        let plan: Plan = serde_json::from_str(text).map_err(|e| {
-            BindError::File(format!("{name}:{}:{}: {e}", e.line(), e.column()))
-        })?;
+        let plan: Plan = serde_json::from_str(text)
+            .map_err(|e| BindError::File(format!("{name}:{}:{}: {e}", e.line(), e.column())))?;
         let bad = |m: String| BindError::File(format!("{name}: {m}"));
         if plan.version != 1 {
-            return Err(bad(format!("version {} (this build reads 1)", plan.version)));
+            return Err(bad(format!(
+                "version {} (this build reads 1)",
+                plan.version
+            )));
         }
         let n = plan.joint_kinds.len();
         if n == 0 || n > crate::manipulator::message::MAX_JOINTS {
@@ -293,13 +306,19 @@ impl Plan {
         }
         for s in &plan.steps {
             if PartState::parse(&s.end_state).is_none() {
-                return Err(bad(format!("skill #{}: unknown state `{}`", s.skill, s.end_state)));
+                return Err(bad(format!(
+                    "skill #{}: unknown state `{}`",
+                    s.skill, s.end_state
+                )));
             }
             for c in &s.commands {
                 match c {
                     Command::Trajectory(pts) => {
                         for (q, d) in pts {
-                            if q.len() != n || !q.iter().chain([d]).all(|v| v.is_finite()) || *d < 0.0 {
+                            if q.len() != n
+                                || !q.iter().chain([d]).all(|v| v.is_finite())
+                                || *d < 0.0
+                            {
                                 return Err(bad(format!(
                                     "skill #{}: a trajectory point needs {n} finite joints and a duration ≥ 0",
                                     s.skill
@@ -309,7 +328,10 @@ impl Plan {
                     }
                     Command::Tool { action, value, .. } => {
                         if Command::tool_action(action).is_none() || !value.is_finite() {
-                            return Err(bad(format!("skill #{}: bad tool command `{action}`", s.skill)));
+                            return Err(bad(format!(
+                                "skill #{}: bad tool command `{action}`",
+                                s.skill
+                            )));
                         }
                     }
                 }

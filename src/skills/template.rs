@@ -106,7 +106,11 @@ impl Template {
             .with_help(suggestion(&file.operation, ["insertion", "screw", "align"]))
         })?;
         if file.workflows.is_empty() {
-            return Err(err("workflows", 1, "a template needs at least one workflow".into()));
+            return Err(err(
+                "workflows",
+                1,
+                "a template needs at least one workflow".into(),
+            ));
         }
         let names: Vec<&str> = PartState::ALL.iter().map(|s| s.name()).collect();
         let mut workflows = Vec::new();
@@ -147,7 +151,11 @@ impl Template {
                 return Err(err(
                     &w.to,
                     entry_line,
-                    format!("a workflow must advance the part: {} -> {}", from.name(), to.name()),
+                    format!(
+                        "a workflow must advance the part: {} -> {}",
+                        from.name(),
+                        to.name()
+                    ),
                 ));
             }
             if !generator_fits(&w.generator, from, to) {
@@ -245,12 +253,14 @@ mod tests {
         assert_eq!(e.line, Some(4), "{e}");
         assert!(e.message.contains("broken chain"), "{e}");
 
-        let text = "operation: insertion\nworkflows:\n  - {from: FREE, to: In_Ws, generator: locate}\n";
+        let text =
+            "operation: insertion\nworkflows:\n  - {from: FREE, to: In_Ws, generator: locate}\n";
         let e = Template::parse(p, text).unwrap_err();
         assert_eq!(e.line, Some(3), "{e}");
         assert!(e.help.as_deref().unwrap().contains("In_WS"), "{e:?}");
 
-        let text = "operation: insertion\nworkflows:\n  - {from: FREE, to: In_WS, generator: locate}\n";
+        let text =
+            "operation: insertion\nworkflows:\n  - {from: FREE, to: In_WS, generator: locate}\n";
         let e = Template::parse(p, text).unwrap_err();
         assert!(e.message.contains("not Assembled"), "{e}");
 
