@@ -286,3 +286,159 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
     // Grasp opened to the grasp width, released wider at the end (metres on the wire).
     assert!((sim.gripper() - 0.018).abs() < 1e-6, "{}", sim.gripper());
 }
+
+/// The demo chain's plan and a simulator at the plan's start joints.
+fn chain(speed: f64) -> (Plan, Simulator, usize) {
+    let doc = Document::open(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/models/mz07.yaml"
+    )))
+    .unwrap();
+    let robot = doc.robot("mz07").unwrap().robot().clone();
+    let home = vec![0.0, 0.3, -0.2, 0.0, -0.4, 0.0];
+    let tcp = robot.tcp_pose(&home).unwrap();
+    let assembled = tcp.then(&Transform::from_translation(Vec3::new(80.0, 0.0, -100.0)));
+    let task = gear_task(assembled);
+    let start = tcp.then(&Transform::from_translation(Vec3::new(0.0, 120.0, -100.0)));
+    let skills = generate(
+        std::slice::from_ref(&task),
+        &[],
+        &|_| Some(start),
+        &GeneratorOptions::default(),
+        &mut no_check,
+    )
+    .unwrap();
+    let plan = Plan::bind(&skills, &[task], &robot, &home, &MotionOptions::default()).unwrap();
+    let mut doc = doc;
+    doc.set_robot_joints(0, &home).unwrap();
+    let sim = Simulator::start(
+        &doc,
+        "mz07",
+        &SimulatorOptions {
+            motion_port: 0,
+            state_port: 0,
+            speed,
+            ..SimulatorOptions::default()
+        },
+    )
+    .unwrap();
+    let n = skills.len();
+    (plan, sim, n)
+}
+
+fn options_for(sim: &Simulator) -> ManagerOptions {
+    ManagerOptions {
+        target: sim.motion_addr().to_string(),
+        state_port: Some(sim.state_addr().port()),
+        ..ManagerOptions::default()
+    }
+}
+
+#[test]
+fn a_pending_skill_can_be_edited_and_a_finished_one_cannot() {
+    let (plan, sim, n) = chain(50.0);
+    // Edit the last skill (a Release): open wider.
+    let mut last = plan.steps[n - 1].clone();
+    last.commands = vec![fitup::skills::Command::Tool {
+        action: "release".into(),
+        index: 0,
+        value: 0.05,
+    }];
+    let mut manager = SkillManager::new(plan, options_for(&sim));
+    let handle = manager.handle();
+    handle.edit(n - 1, last);
+    let mut events = Vec::new();
+    let h2 = handle.clone();
+    let mut edited_finished = false;
+    manager
+        .run(&mut |e| {
+            if let Event::Finished { skill: 0, .. } = e {
+                if !edited_finished {
+                    // Skill 0 is done: an edit of it is refused at the next dispatch.
+                    h2.edit(
+                        0,
+                        fitup::skills::PlanStep {
+                            skill: 0,
+                            task: 0,
+                            part: "gear".into(),
+                            action: "Touch".into(),
+                            description: "changed".into(),
+                            end_state: "In_WS".into(),
+                            commands: vec![],
+                        },
+                    );
+                    edited_finished = true;
+                }
+            }
+            events.push(e.clone());
+        })
+        .unwrap();
+    assert!(events.contains(&Event::Edited(n - 1)), "{events:?}");
+    assert!(
+        events.iter().any(|e| matches!(e, Event::EditRefused(0, _))),
+        "{events:?}"
+    );
+    assert!((sim.gripper() - 0.05).abs() < 1e-6, "{}", sim.gripper());
+    assert_eq!(manager.status().len(), n);
+    assert!(manager
+        .status()
+        .iter()
+        .all(|s| *s == fitup::skills::SkillStatus::Finished));
+}
+
+#[test]
+fn a_skill_that_times_out_stops_the_run_with_the_reason() {
+    // Real time: the first arm motion takes seconds; allow 50 ms.
+    let (plan, sim, _) = chain(1.0);
+    let mut options = options_for(&sim);
+    options.skill_timeout = std::time::Duration::from_millis(50);
+    let mut manager = SkillManager::new(plan, options);
+    let mut events = Vec::new();
+    let e = manager.run(&mut |e| events.push(e.clone())).unwrap_err();
+    assert!(e.to_string().contains("timeout"), "{e}");
+    let failed = events
+        .iter()
+        .find_map(|e| match e {
+            Event::Failed(i, why) => Some((*i, why.clone())),
+            _ => None,
+        })
+        .unwrap();
+    assert!(failed.1.contains("did not reach"), "{failed:?}");
+    assert!(matches!(
+        manager.status()[failed.0],
+        fitup::skills::SkillStatus::Failed(_)
+    ));
+    // Nothing after the failed skill ran.
+    assert!(manager.status()[failed.0 + 1..]
+        .iter()
+        .all(|s| *s == fitup::skills::SkillStatus::Pending));
+}
+
+#[test]
+fn fitup_skills_template_reports_located_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("t.yaml");
+    std::fs::write(
+        &f,
+        "operation: insertion\nworkflows:\n  - {from: FREE, to: In_WS, generator: locate}\n  - {from: In_WS, to: Grasped, generator: grab}\n",
+    )
+    .unwrap();
+    let fitup = || std::process::Command::new(env!("CARGO_BIN_EXE_fitup"));
+    let o = fitup()
+        .args(["skills", "template", f.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("t.yaml:4:"), "{err}");
+    assert!(err.contains("did you mean `grasp`"), "{err}");
+    // As the docs show it, from the repository root.
+    let o = fitup()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["skills", "template", "models/templates/insertion.yaml"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("Grasped -> Adjusted: move"), "{out}");
+}

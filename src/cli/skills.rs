@@ -65,6 +65,12 @@ pub enum SkillsCommand {
         #[arg(long, num_args = 0..=1, default_missing_value = "")]
         db: Option<String>,
     },
+    /// Validate a task template (`models/templates/*.yaml` or your own copy): errors
+    /// at `file:line:col`, then the chain of workflows.
+    Template {
+        /// The template file.
+        file: PathBuf,
+    },
 }
 
 /// `fitup manipulator …`: runs until killed.
@@ -110,8 +116,28 @@ fn duration(s: f64, what: &str) -> Result<std::time::Duration, String> {
         .map_err(|_| format!("--{what} must be a number of seconds ≥ 0, got {s}"))
 }
 
+/// `fitup skills template FILE`.
+fn template(file: &std::path::Path) -> Exit {
+    match crate::skills::Template::read(file) {
+        Ok(t) => {
+            outln!("{}: {} template", file.display(), t.operation.name());
+            for w in &t.workflows {
+                outln!("  {} -> {}: {}", w.from.name(), w.to.name(), w.generator);
+            }
+            Exit::Ok
+        }
+        Err(e) => {
+            errln!("error: {}", e.render());
+            Exit::Failure
+        }
+    }
+}
+
 /// `fitup skills …`.
 pub(super) fn skills(a: &SkillsArgs) -> Exit {
+    if let SkillsCommand::Template { file } = &a.command {
+        return template(file);
+    }
     let SkillsCommand::Run {
         plan,
         target,
@@ -120,7 +146,10 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         reconnect_timeout,
         skill_timeout,
         db,
-    } = &a.command;
+    } = &a.command
+    else {
+        unreachable!("handled above")
+    };
     let (reconnect, skill) = match (
         duration(*reconnect_timeout, "reconnect-timeout"),
         duration(*skill_timeout, "skill-timeout"),
