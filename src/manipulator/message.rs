@@ -344,6 +344,17 @@ impl Packet {
     }
 
     /// The packet as bytes, prefix included.
+    ///
+    /// # Examples
+    /// ```
+    /// use fitup::manipulator::message::{msg_type, Body, ByteOrder, Packet};
+    ///
+    /// let ping = Packet::request(msg_type::PING, Body::Ping);
+    /// let bytes = ping.encode(ByteOrder::Big);
+    /// // length 52 (header 12 + ten zero ints), type 1, SERVICE_REQUEST, INVALID.
+    /// assert_eq!(&bytes[..16], &[0, 0, 0, 52, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 0]);
+    /// assert_eq!(Packet::decode(&bytes, ByteOrder::Big).unwrap(), ping);
+    /// ```
     pub fn encode(&self, order: ByteOrder) -> Vec<u8> {
         let mut body = Vec::with_capacity(64);
         match &self.body {
