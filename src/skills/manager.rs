@@ -346,8 +346,7 @@ impl SkillManager {
                 return Ok(());
             };
             let text = format!("{c:?}");
-            let mut done = 0;
-            self.run_command(client, &c, &mut done)?;
+            self.run_command(client, &c)?;
             on_event(&Event::Manual(text));
         }
     }
@@ -365,8 +364,7 @@ impl SkillManager {
     ) -> Result<Outcome, ManipulatorError> {
         let commands = self.plan.steps[i].commands.clone();
         while *done < commands.len() {
-            let mut step_done = 0;
-            match self.run_command(client, &commands[*done], &mut step_done)? {
+            match self.run_command(client, &commands[*done])? {
                 Outcome::Done => *done += 1,
                 other => return Ok(other),
             }
@@ -374,12 +372,7 @@ impl SkillManager {
         Ok(Outcome::Done)
     }
 
-    fn run_command(
-        &self,
-        client: &mut Client,
-        c: &Command,
-        _done: &mut usize,
-    ) -> Result<Outcome, ManipulatorError> {
+    fn run_command(&self, client: &mut Client, c: &Command) -> Result<Outcome, ManipulatorError> {
         match c {
             Command::Tool {
                 action,
