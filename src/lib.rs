@@ -34,6 +34,7 @@ pub mod diagnostics;
 pub mod document;
 pub mod fsutil;
 pub mod kinematics;
+pub mod manipulator;
 pub mod math;
 pub mod mesh;
 pub mod planning;
@@ -41,6 +42,7 @@ pub mod project;
 #[cfg(feature = "script")]
 pub mod script;
 pub mod sequence;
+pub mod skills;
 #[cfg(feature = "watch")]
 pub mod watch;
 pub mod workspace;

@@ -6,6 +6,7 @@ mod check;
 mod db;
 pub(crate) mod out;
 mod run;
+mod skills;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};
@@ -115,6 +116,11 @@ pub enum Command {
     /// The results database: `runs`, `paths`, `show ID`, `export ID --csv|--json`,
     /// `diff RUN_A RUN_B`.
     Db(db::DbArgs),
+    /// A simulated manipulator controller on 127.0.0.1 (simple_message): moves a robot
+    /// of the document, refuses trajectories that break joint limits or collide.
+    Manipulator(skills::ManipulatorArgs),
+    /// Skills: `run PLAN --target HOST:PORT` dispatches a plan to a controller.
+    Skills(skills::SkillsArgs),
     /// Write the demo project (seed 000 fig. 11) into a folder: `fitup.toml`,
     /// `models/cell.yaml` and `models/meshes/`.
     Demo {
@@ -160,6 +166,8 @@ pub fn main() -> i32 {
         Command::Check { doc } => check::check(&doc),
         Command::Docs { out } => docs(&out),
         Command::Demo { dir, force } => demo(&dir, force),
+        Command::Manipulator(a) => skills::manipulator(&a),
+        Command::Skills(a) => skills::skills(&a),
     };
     exit as i32
 }
