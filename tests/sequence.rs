@@ -253,3 +253,50 @@ fn pinned_order_that_cannot_work_says_why() {
     let msg = e.to_string();
     assert!(msg.contains("cup"), "{msg}");
 }
+
+#[test]
+fn cell_screws_go_into_the_plates_holes() {
+    let doc = open("models/cell.yaml");
+    let o = SequenceOptions {
+        threaded: vec!["screw".into()],
+        ..SequenceOptions::default()
+    };
+    let plan = plan_sequence(&doc, &mut SceneCache::new(), &o).unwrap();
+    let best = plan.best();
+    let order = best.order();
+    assert_eq!(order[0], "table", "the largest part is the base: {order:?}");
+    let pos = |n: &str| order.iter().position(|o| o == n).unwrap();
+    for s in ["screw1", "screw2", "screw3"] {
+        // Into plate_a's holes: after the plate, from above, screwed.
+        assert!(pos("plate_a") < pos(s), "{order:?}");
+        let t = best.tasks.iter().find(|t| t.part == s).unwrap();
+        assert_eq!(t.base, "plate_a");
+        assert_eq!(t.operation, Operation::Screw);
+        assert!((t.mating_direction - (-Vec3::z())).norm() < 1e-9);
+    }
+    // Everything goes in from above: no re-mounting.
+    assert_eq!(best.mounts, 0);
+    let plate_b = best.tasks.iter().find(|t| t.part == "plate_b").unwrap();
+    assert_eq!(plate_b.base, "table");
+    assert_eq!(plate_b.operation, Operation::Insertion);
+    recheck(&doc, &plan);
+    assert!(plan.precedence.contains(&("plate_a".into(), "screw1".into())));
+}
+
+#[test]
+fn cell_without_mates() {
+    let doc = open("models/cell.yaml");
+    let o = SequenceOptions {
+        mode: Mode::Geometry,
+        ..SequenceOptions::default()
+    };
+    let plan = plan_sequence(&doc, &mut SceneCache::new(), &o).unwrap();
+    let order = plan.best().order();
+    let pos = |n: &str| order.iter().position(|o| o == n).unwrap();
+    assert_eq!(order[0], "table");
+    for s in ["screw1", "screw2", "screw3"] {
+        assert!(pos("plate_a") < pos(s), "{order:?}");
+    }
+    assert_eq!(plan.best().mounts, 0);
+    recheck(&doc, &plan);
+}

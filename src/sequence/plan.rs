@@ -380,7 +380,9 @@ impl<'d> Ctx<'d> {
         let len = exit_distance(&bp, &bq, d) + self.opts.probe_mm;
         let moved = Aabb::new(bp.lo + d * len, bp.hi + d * len);
         let swept = Aabb::new(bp.lo.inf(&moved.lo), bp.hi.sup(&moved.hi));
-        if !boxes_meet(&swept, &bq, self.opts.tolerance) {
+        // Interference needs the boxes to overlap deeper than the tolerance on every
+        // axis: a part sliding on a face (a plate on the table) is never swept.
+        if swept.overlap(&bq).min() <= self.opts.tolerance {
             return Ok(false);
         }
         let remaining = self.remaining_ms();
