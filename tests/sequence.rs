@@ -280,7 +280,9 @@ fn cell_screws_go_into_the_plates_holes() {
     assert_eq!(plate_b.base, "table");
     assert_eq!(plate_b.operation, Operation::Insertion);
     recheck(&doc, &plan);
-    assert!(plan.precedence.contains(&("plate_a".into(), "screw1".into())));
+    assert!(plan
+        .precedence
+        .contains(&("plate_a".into(), "screw1".into())));
 }
 
 #[test]

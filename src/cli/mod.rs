@@ -6,6 +6,7 @@ mod check;
 mod db;
 pub(crate) mod out;
 mod run;
+mod sequence;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};
@@ -124,6 +125,29 @@ pub enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Plan the assembly sequence of a document (seed 003): tasks, mounts, precedence.
+    PlanSequence {
+        /// The document (`.yaml`).
+        doc: PathBuf,
+        /// `mates` (the relation graph) or `geometry` (meshes only).
+        #[arg(long, default_value = "mates")]
+        mode: String,
+        /// Pin the base component.
+        #[arg(long)]
+        base: Option<String>,
+        /// Components or parts that are screwed (repeatable).
+        #[arg(long)]
+        threaded: Vec<String>,
+        /// Time budget of the whole call (ms); default 30000.
+        #[arg(long)]
+        time_limit_ms: Option<f64>,
+        /// How many sequences to rank.
+        #[arg(long, default_value_t = 5)]
+        max_sequences: usize,
+        /// Print the plan as JSON.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// Exit status of a command.
@@ -160,6 +184,23 @@ pub fn main() -> i32 {
         Command::Check { doc } => check::check(&doc),
         Command::Docs { out } => docs(&out),
         Command::Demo { dir, force } => demo(&dir, force),
+        Command::PlanSequence {
+            doc,
+            mode,
+            base,
+            threaded,
+            time_limit_ms,
+            max_sequences,
+            json,
+        } => sequence::plan(sequence::Args {
+            doc: &doc,
+            mode: &mode,
+            base,
+            threaded,
+            time_limit_ms,
+            max_sequences,
+            json,
+        }),
     };
     exit as i32
 }

@@ -41,6 +41,7 @@ mod graph;
 mod grasp;
 mod options;
 mod plan;
+mod report;
 mod task;
 
 pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};

@@ -665,6 +665,8 @@ struct Search<'c, 'd> {
     complete_count: u32,
     expanded: usize,
     cut: bool,
+    /// Whether dead ends ask the planners (second pass).
+    use_fallback: bool,
 }
 
 const MAX_EXPANDED: usize = 200_000;
@@ -778,7 +780,7 @@ impl Search<'_, '_> {
                 ));
             }
         }
-        if options.is_empty() && ctx.opts.planner_fallback {
+        if options.is_empty() && self.use_fallback {
             // No straight insertion: ask the planners for the eligible parts.
             for p in (0..ctx.n).filter(|&p| mask & bit(p) == 0) {
                 if pinned.is_some_and(|q| q != p) || !ctx.eligible(p, mask) {
@@ -884,7 +886,7 @@ fn step_info(ctx: &Ctx, p: usize, mask: Mask, order: &[usize]) -> (Vec<usize>, V
 }
 
 /// The operation from the geometry (seed 003 section 2 step 9).
-fn operation(ctx: &Ctx, p: usize, receivers: &[usize]) -> Operation {
+fn operation(ctx: &Ctx, p: usize, receivers: &[usize], mate: &Vec3) -> Operation {
     let c = &ctx.doc.components()[p];
     if ctx
         .opts
@@ -922,10 +924,12 @@ fn operation(ctx: &Ctx, p: usize, receivers: &[usize]) -> Operation {
         return Operation::Align;
     }
     // No mates (geometry mode): a part held sideways by what is assembled (at least
-    // two of the four directions across its mating direction blocked) is inserted.
+    // two of the four axis directions across its mating direction blocked) is
+    // inserted.
     let mask: Mask = receivers.iter().fold(0, |a, &q| a | bit(q));
     let blocked_across = axis_dirs()
         .iter()
+        .filter(|d| d.dot(mate).abs() < 0.5)
         .filter(|d| {
             ctx.dirs[p]
                 .iter()
@@ -933,7 +937,7 @@ fn operation(ctx: &Ctx, p: usize, receivers: &[usize]) -> Operation {
                 .is_some_and(|k| ctx.blocked[p][k] & mask != 0)
         })
         .count();
-    if blocked_across >= 3 {
+    if blocked_across >= 2 {
         Operation::Insertion
     } else {
         Operation::Align
@@ -1050,7 +1054,7 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
             index,
             base: ctx.names[receiver].clone(),
             part: ctx.names[p].clone(),
-            operation: operation(ctx, p, &receivers),
+            operation: operation(ctx, p, &receivers, &mate),
             mating_direction: mate,
             safe_length: safe,
             grasp,
@@ -1122,41 +1126,64 @@ pub(crate) fn plan(
         complete_count: 0,
         expanded: 0,
         cut: false,
+        use_fallback: false,
     };
-    for &base in &bases {
-        if ctx.out_of_time() {
-            search.cut = true;
+    // Straight insertions first; the planners only when no sequence exists without
+    // them (they cost seconds where a sweep costs milliseconds).
+    let passes: &[bool] = if opts.planner_fallback {
+        &[false, true]
+    } else {
+        &[false]
+    };
+    for &fallback in passes {
+        if fallback && search.complete_count > 0 {
             break;
         }
-        // A base that does not start its composite node is not a base.
-        if ctx.graph.nodes[ctx.graph.node_of(base)].members[0] != base {
-            continue;
-        }
-        // Seed 003 section 2.2 step 2: a base much smaller than what it joins is
-        // inactive.
-        let biggest_related = members(ctx.related[base])
-            .map(|q| ctx.sizes[q])
-            .fold(0.0, f64::max);
-        if opts.base.is_none() && ctx.sizes[base] < opts.small_base_ratio * biggest_related {
-            search.reject(
-                base,
-                &[],
-                format!(
-                    "inactive base: {} is much smaller ({:.0}) than a part it joins ({:.0})",
-                    ctx.names[base], ctx.sizes[base], biggest_related
-                ),
-            );
-            continue;
-        }
-        search.dead.clear();
-        let mut choices = Vec::new();
-        search.dfs(base, bit(base), &mut choices, None, (0, 0, 0.0), &pins);
+        search.use_fallback = fallback;
+        search.fallback_pass(&bases, &pins);
     }
     let found = std::mem::take(&mut search.found);
     let rejected = std::mem::take(&mut search.rejected);
     let before = std::mem::take(&mut search.before);
     let (count, cut) = (search.complete_count, search.cut);
     finish(&ctx, found, rejected, before, count, cut)
+}
+
+impl Search<'_, '_> {
+    fn fallback_pass(&mut self, bases: &[usize], pins: &[usize]) {
+        let ctx = self.ctx;
+        let opts = &ctx.opts;
+        let search = self;
+        for &base in bases {
+            if ctx.out_of_time() {
+                search.cut = true;
+                break;
+            }
+            // A base that does not start its composite node is not a base.
+            if ctx.graph.nodes[ctx.graph.node_of(base)].members[0] != base {
+                continue;
+            }
+            // Seed 003 section 2.2 step 2: a base much smaller than what it joins is
+            // inactive.
+            let biggest_related = members(ctx.related[base])
+                .map(|q| ctx.sizes[q])
+                .fold(0.0, f64::max);
+            if opts.base.is_none() && ctx.sizes[base] < opts.small_base_ratio * biggest_related {
+                search.reject(
+                    base,
+                    &[],
+                    format!(
+                        "inactive base: {} is much smaller ({:.0}) than a part it joins ({:.0})",
+                        ctx.names[base], ctx.sizes[base], biggest_related
+                    ),
+                );
+                continue;
+            }
+            search.dead.clear();
+            let mut choices = Vec::new();
+            search.dfs(base, bit(base), &mut choices, None, (0, 0, 0.0), pins);
+        }
+    }
 }
 
 fn finish(
