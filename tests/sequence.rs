@@ -2,6 +2,8 @@
 //! micro-robot wheel, the fig. 11 cell, and the same without mates. Every returned
 //! sequence is re-checked step by step against exactly the parts assembled before.
 
+mod common;
+
 use fitup::document::Document;
 use fitup::math::{Point3, Vec3};
 use fitup::mesh::{read_stl, Mesh};
@@ -301,4 +303,38 @@ fn cell_without_mates() {
     }
     assert_eq!(plan.best().mounts, 0);
     recheck(&doc, &plan);
+}
+
+/// The example script, run as a user runs it, writes the paper's answer as CSV.
+#[test]
+fn wheel_example_script_runs_as_documented() {
+    let root = common::repo();
+    let out = common::run_in(&root, &["run", "scripts/sequence_wheel.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    let csv = std::fs::read_to_string(root.join("out/sequence_wheel.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows.len(), 3, "{csv}");
+    assert!(
+        rows[1].starts_with("0,axis,gear,insertion,0,0,-1,"),
+        "{csv}"
+    );
+    assert!(rows[2].starts_with("1,axis,cup,insertion,0,0,-1,"), "{csv}");
+}
+
+#[test]
+fn plan_sequence_command_prints_json() {
+    let root = common::repo();
+    let out = common::run_in(&root, &["plan-sequence", "models/wheel.yaml", "--json"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        v["sequences"][0]["order"],
+        serde_json::json!(["axis", "gear", "cup"])
+    );
+    assert_eq!(v["composites"], serde_json::json!([["axis", "gear"]]));
+    let bad = common::run_in(
+        &root,
+        &["plan-sequence", "models/wheel.yaml", "--mode", "magic"],
+    );
+    assert_eq!(bad.status.code(), Some(2));
 }

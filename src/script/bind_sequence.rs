@@ -112,8 +112,13 @@ fn run<R>(
     Ok(f(&doc, &mut cache))
 }
 
+/// A direction for people: no `-0`.
+fn dir(v: &crate::math::Vec3) -> Dynamic {
+    array3(&v.map(|x| x + 0.0))
+}
+
 fn dir_array(v: &[crate::math::Vec3]) -> Array {
-    v.iter().map(array3).collect()
+    v.iter().map(dir).collect()
 }
 
 fn sequence_map(s: &sequence::Sequence) -> Map {
@@ -147,7 +152,7 @@ fn task_maps(s: &sequence::Sequence) -> Array {
             m.insert("base".into(), t.base.clone().into());
             m.insert("part".into(), t.part.clone().into());
             m.insert("operation".into(), t.operation.name().into());
-            m.insert("mating_direction".into(), array3(&t.mating_direction));
+            m.insert("mating_direction".into(), dir(&t.mating_direction));
             m.insert(
                 "mating_directions".into(),
                 dir_array(&st.mating_directions).into(),
