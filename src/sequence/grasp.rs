@@ -73,7 +73,9 @@ pub fn face_pairs(
     }
     let named = std::mem::take(&mut out);
     // Planar faces of the mesh: triangles grouped by normal and offset.
-    let mut faces: HashMap<(i64, i64, i64, i64), (Vec3, f64, f64)> = HashMap::new();
+    // Key: normal and offset, rounded; value: normal, offset, area.
+    type Face = (Vec3, f64, f64);
+    let mut faces: HashMap<[i64; 4], Face> = HashMap::new();
     for t in 0..mesh.triangles.len() {
         let [a, b, c] = mesh.triangle(t);
         let area = 0.5 * (b - a).cross(&(c - a)).norm();
@@ -82,12 +84,12 @@ pub fn face_pairs(
         }
         let n = mesh.triangle_normal(t);
         let off = n.dot(&a.coords);
-        let key = (
+        let key = [
             (n.x * 1e4).round() as i64,
             (n.y * 1e4).round() as i64,
             (n.z * 1e4).round() as i64,
             (off * 1e3).round() as i64,
-        );
+        ];
         let e = faces.entry(key).or_insert((n, off, 0.0));
         e.2 += area;
     }

@@ -115,8 +115,8 @@ pub fn grasp_planes(
     Ok(grasp::grasp_planes(&ctx, p, &dirs))
 }
 
-/// The safe length (mm) of component `name` moved out along `direction` (any length
-/// > 0, assembly frame) from its assembled pose among its related components: how
+/// The safe length (mm) of component `name` moved out along `direction` (any
+/// non-zero length, assembly frame) from its assembled pose among its related components: how
 /// far it must go before a probe along every other candidate direction is free.
 ///
 /// # Errors

@@ -197,9 +197,9 @@ impl<'d> Ctx<'d> {
         let scene = Scene::new(doc, cache)?;
         let names: Vec<String> = doc.components().iter().map(|c| c.name.clone()).collect();
         let mut boxes = Vec::with_capacity(n);
-        for i in 0..n {
+        for (i, name) in names.iter().enumerate() {
             if doc.mesh_of(i).vertices.is_empty() {
-                return Err(WorkspaceError::EmptyMesh(names[i].clone()).into());
+                return Err(WorkspaceError::EmptyMesh(name.clone()).into());
             }
             boxes.push(scene.colliders[i].world_bounds(&scene.poses[i]));
         }
