@@ -338,3 +338,116 @@ fn plan_sequence_command_prints_json() {
     );
     assert_eq!(bad.status.code(), Some(2));
 }
+
+#[test]
+fn bad_options_and_names_are_typed_errors() {
+    use fitup::sequence::SequenceError;
+    let doc = open("models/wheel.yaml");
+    let mut cache = SceneCache::new();
+    let with = |f: &dyn Fn(&mut SequenceOptions)| {
+        let mut o = SequenceOptions::default();
+        f(&mut o);
+        o
+    };
+    for o in [
+        with(&|o| o.time_limit_ms = Some(0.0)),
+        with(&|o| o.time_limit_ms = Some(f64::NAN)),
+        with(&|o| o.tolerance = -1.0),
+        with(&|o| o.probe_mm = f64::INFINITY),
+        with(&|o| o.max_sequences = 0),
+        with(&|o| {
+            o.masses.insert("gear".into(), -3.0);
+        }),
+    ] {
+        let e = plan_sequence(&doc, &mut cache, &o).unwrap_err();
+        assert!(matches!(e, SequenceError::InvalidOption { .. }), "{e}");
+    }
+    let e = plan_sequence(&doc, &mut cache, &with(&|o| o.base = Some("gearr".into()))).unwrap_err();
+    assert!(e.to_string().contains("gear"), "{e}");
+    assert!(safe_length(
+        &doc,
+        &mut cache,
+        "cup",
+        &Vec3::zeros(),
+        &SequenceOptions::default()
+    )
+    .is_err());
+    // A pinned base inside the composite node starts it: gear first, then the axis.
+    let p = plan_sequence(&doc, &mut cache, &with(&|o| o.base = Some("gear".into()))).unwrap();
+    assert_eq!(p.best().order()[0], "gear");
+    recheck(&doc, &p);
+}
+
+/// A pegboard of 10 parts (a plate, nine pegs with two mates each), generated here.
+fn pegboard(dir: &Path) -> std::path::PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let (pitch, t, r) = (10.0, 5.0, 2.0);
+    let plate = Mesh::perforated_plate(3, 3, pitch, t, r, 4, |_, _| true).unwrap();
+    fitup::mesh::write_stl(&dir.join("plate.stl"), &plate).unwrap();
+    let rs = r * (std::f64::consts::PI / 16.0).cos() * 0.97;
+    let peg = Mesh::lathe(
+        &[
+            (0.0, 0.0),
+            (rs, 0.0),
+            (rs, t),
+            (1.6 * r, t),
+            (1.6 * r, t + 2.0),
+            (0.0, t + 2.0),
+        ],
+        16,
+    )
+    .unwrap();
+    fitup::mesh::write_stl(&dir.join("peg.stl"), &peg).unwrap();
+    let mut y = String::from(
+        "parts:\n  plate:\n    stl: plate.stl\n    planes:\n      top: {point: [0, 0, 5], normal: [0, 0, 1]}\n    axes:\n",
+    );
+    let at = |i: usize| pitch * (i as f64 + 0.5);
+    for i in 0..3 {
+        for j in 0..3 {
+            y += &format!(
+                "      hole{i}{j}: {{point: [{}, {}, 0], direction: [0, 0, 1]}}\n",
+                at(i),
+                at(j)
+            );
+        }
+    }
+    y += "  peg:\n    stl: peg.stl\n    planes:\n      under_head: {point: [0, 0, 5], normal: [0, 0, -1]}\n    axes:\n      axis: {point: [0, 0, 0], direction: [0, 0, 1]}\n";
+    y += "components:\n- {name: plate, part: plate}\n";
+    let mut mates = String::from("mates:\n");
+    for i in 0..3 {
+        for j in 0..3 {
+            y += &format!("- name: peg{i}{j}\n  part: peg\n  transform: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[{},{},0,1]]\n", at(i), at(j));
+            mates += &format!("- {{name: peg{i}{j}_axis, type: concentric, entities: [plate/hole{i}{j}, peg{i}{j}/axis]}}\n");
+            mates += &format!("- {{name: peg{i}{j}_seat, type: coincident, entities: [plate/top, peg{i}{j}/under_head]}}\n");
+        }
+    }
+    let path = dir.join("pegboard.yaml");
+    std::fs::write(&path, y + mates.as_str()).unwrap();
+    path
+}
+
+#[test]
+fn pegboard_of_ten_parts_with_and_without_mates() {
+    let dir = std::env::temp_dir().join(format!("fitup_seq_pegboard_{}", std::process::id()));
+    let doc = Document::open(&pegboard(&dir)).unwrap();
+    for mode in [Mode::Mates, Mode::Geometry] {
+        let o = SequenceOptions {
+            mode,
+            ..SequenceOptions::default()
+        };
+        let plan = plan_sequence(&doc, &mut SceneCache::new(), &o).unwrap();
+        let best = plan.best();
+        assert_eq!(best.order()[0], "plate", "{mode:?}");
+        assert_eq!(best.mounts, 0);
+        assert_eq!(plan.sequences.len(), 5, "several sequences ranked");
+        for t in &best.tasks {
+            assert_eq!(t.base, "plate");
+            assert_eq!(t.operation, Operation::Insertion, "{}", t.part);
+            assert!((t.mating_direction - (-Vec3::z())).norm() < 1e-9);
+            // The peg clears its 5 mm hole before it may move sideways.
+            assert!(t.safe_length > 4.5, "{}", t.safe_length);
+        }
+        recheck(&doc, &plan);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
