@@ -451,3 +451,29 @@ fn pegboard_of_ten_parts_with_and_without_mates() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn interfering_assembly_and_tiny_budgets_are_refused_in_bounded_time() {
+    use fitup::math::Transform;
+    use fitup::sequence::SequenceError;
+    let mut doc = open("models/wheel.yaml");
+    // The gear sunk 1 mm into the axis's flange.
+    let sunk = Transform::from_translation(Vec3::new(0.0, 0.0, 0.5));
+    doc.set_transform("gear", sunk).unwrap();
+    let e = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, SequenceError::AssembledInterference { .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("gear"), "{e}");
+    // A budget too small for the blocking graph: an error, quickly.
+    let doc = open("models/cell.yaml");
+    let o = SequenceOptions {
+        time_limit_ms: Some(1.0),
+        ..SequenceOptions::default()
+    };
+    let t = std::time::Instant::now();
+    let r = plan_sequence(&doc, &mut SceneCache::new(), &o);
+    assert!(r.is_err(), "1 ms cannot sequence the cell");
+    assert!(t.elapsed().as_secs_f64() < 20.0, "{:?}", t.elapsed());
+}
