@@ -239,10 +239,13 @@ pub struct SequencePlan {
     pub sequences: Vec<Sequence>,
     /// Orders that failed, with the reason (at most 50).
     pub rejected: Vec<Rejected>,
-    /// Precedence: `(a, b)` means `a` is assembled before `b` in every sequence found
-    /// (transitively reduced). Exact when `complete`.
+    /// Precedence: `(a, b)` means `a` is assembled before `b` in every complete
+    /// sequence the search met (transitively reduced); branch and bound skips orders
+    /// that cannot rank among the kept ones, so this is the precedence of the best
+    /// sequences, not of every feasible one.
     pub precedence: Vec<(String, String)>,
-    /// Whether the search saw every feasible order class (not cut by time or count).
+    /// Whether the search ended by itself (not cut by the time limit or the 200 000
+    /// expansions): the sequences returned are then the best by the ranking.
     pub complete: bool,
     /// The relation graph used (mates mode), or the contact graph (geometry mode,
     /// relations without mates).

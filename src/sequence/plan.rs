@@ -667,6 +667,8 @@ struct Search<'c, 'd> {
     cut: bool,
     /// Whether dead ends ask the planners (second pass).
     use_fallback: bool,
+    /// Whether branch and bound cut a subtree below the current node.
+    pruned: bool,
 }
 
 const MAX_EXPANDED: usize = 200_000;
@@ -741,7 +743,9 @@ impl Search<'_, '_> {
         }
         if let Some(w) = self.worst_kept() {
             if !cost_lt(&cost, &w) {
-                self.cut = true;
+                // Branch and bound: nothing below can rank among the kept ones. The
+                // mask is not dead, so it is not memoised either.
+                self.pruned = true;
                 return false;
             }
         }
@@ -834,8 +838,9 @@ impl Search<'_, '_> {
                 .then(a.1.total_cmp(&b.1))
                 .then(a.2.part.cmp(&b.2.part))
         });
-        let cut_before = self.cut;
+        let (cut_before, pruned_before) = (self.cut, self.pruned);
         self.cut = false;
+        self.pruned = false;
         let mut any = false;
         for (mount, len, choice) in options {
             let mate = -choice.leave;
@@ -862,10 +867,11 @@ impl Search<'_, '_> {
             );
             choices.pop();
         }
-        if !any && !self.cut {
+        if !any && !self.cut && !self.pruned {
             self.dead.insert(mask);
         }
         self.cut |= cut_before;
+        self.pruned |= pruned_before;
         any
     }
 }
@@ -1127,6 +1133,7 @@ pub(crate) fn plan(
         expanded: 0,
         cut: false,
         use_fallback: false,
+        pruned: false,
     };
     // Straight insertions first; the planners only when no sequence exists without
     // them (they cost seconds where a sweep costs milliseconds).
