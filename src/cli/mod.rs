@@ -7,6 +7,7 @@ mod db;
 pub(crate) mod out;
 mod run;
 mod skills;
+mod sequence;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};
@@ -130,6 +131,29 @@ pub enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Plan the assembly sequence of a document (seed 003): tasks, mounts, precedence.
+    PlanSequence {
+        /// The document (`.yaml`).
+        doc: PathBuf,
+        /// `mates` (the relation graph) or `geometry` (meshes only).
+        #[arg(long, default_value = "mates")]
+        mode: String,
+        /// Pin the base component.
+        #[arg(long)]
+        base: Option<String>,
+        /// Components or parts that are screwed (repeatable).
+        #[arg(long)]
+        threaded: Vec<String>,
+        /// Time budget of the whole call (ms); default 30000.
+        #[arg(long)]
+        time_limit_ms: Option<f64>,
+        /// How many sequences to rank.
+        #[arg(long, default_value_t = 5)]
+        max_sequences: usize,
+        /// Print the plan as JSON.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// Exit status of a command.
@@ -168,6 +192,23 @@ pub fn main() -> i32 {
         Command::Demo { dir, force } => demo(&dir, force),
         Command::Manipulator(a) => skills::manipulator(&a),
         Command::Skills(a) => skills::skills(&a),
+        Command::PlanSequence {
+            doc,
+            mode,
+            base,
+            threaded,
+            time_limit_ms,
+            max_sequences,
+            json,
+        } => sequence::plan(sequence::Args {
+            doc: &doc,
+            mode: &mode,
+            base,
+            threaded,
+            time_limit_ms,
+            max_sequences,
+            json,
+        }),
     };
     exit as i32
 }

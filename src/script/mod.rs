@@ -13,6 +13,7 @@ mod bind_interference;
 mod bind_math;
 mod bind_planning;
 mod bind_robot;
+mod bind_sequence;
 mod convert;
 pub mod sandbox;
 
