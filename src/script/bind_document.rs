@@ -212,7 +212,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "The world box around every component: `#{min: [x,y,z], max: [x,y,z]}` (mm).",
         |d: &mut DocHandle| -> ScriptResult<Dynamic> {
             match d.lock()?.assembly_aabb() {
-                Some((lo, hi)) => Ok(aabb_map(&lo, &hi)),
+                Some(b) => Ok(aabb_map(&b)),
                 None => err("the document has no components"),
             }
         },
@@ -331,7 +331,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         |c: &mut ComponentHandle| -> ScriptResult<Dynamic> {
             let doc = c.doc.lock()?;
             match doc.world_aabb(c.index) {
-                Some((lo, hi)) => Ok(aabb_map(&lo, &hi)),
+                Some(b) => Ok(aabb_map(&b)),
                 None => err("the component's mesh is empty"),
             }
         },

@@ -11,7 +11,6 @@ use crate::collision::{
     Contact, CutSpec, InterferenceKind, Method, PairMember, SweepMethod, SweepOptions,
 };
 use crate::document::Feature;
-use crate::math::Point3;
 use crate::workspace::CheckOptions;
 use rhai::{Array, Dynamic, Map};
 
@@ -123,8 +122,8 @@ fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> Scr
         let step = opt_num(m, "step")?;
         o.method = match opt_str(m, "method")?.as_deref() {
             None | Some("continuous") => SweepMethod::Continuous,
-            Some("step") => SweepMethod::Step {
-                step: step.unwrap_or(1.0),
+            Some("step") => SweepMethod::Stepwise {
+                step_mm: step.unwrap_or(1.0),
             },
             Some(other) => {
                 return err(format!(
@@ -339,7 +338,7 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f("Feature.cells() -> array", "The cells: `#{min: [x,y,z], max: [x,y,z]}` boxes of the part's material in each grid cell, part frame (mm).", |f: &mut FeatureHandle| -> ScriptResult<Array> {
         let cells = feature_cells(f)?;
-        Ok(cells.cells.iter().map(|c| aabb_map(&Point3::from(c.min), &Point3::from(c.max))).collect())
+        Ok(cells.cells.iter().map(|c| aabb_map(&c.bounds)).collect())
     });
     api.get(
         "Feature.count -> int",

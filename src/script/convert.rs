@@ -79,10 +79,10 @@ pub fn floats(v: impl IntoIterator<Item = f64>) -> Dynamic {
 }
 
 /// `#{min: [..], max: [..]}`.
-pub fn aabb_map(min: &Point3, max: &Point3) -> Dynamic {
+pub fn aabb_map(b: &crate::math::Aabb) -> Dynamic {
     let mut m = Map::new();
-    m.insert("min".into(), array3(&min.coords));
-    m.insert("max".into(), array3(&max.coords));
+    m.insert("min".into(), array3(&b.lo.coords));
+    m.insert("max".into(), array3(&b.hi.coords));
     Dynamic::from_map(m)
 }
 

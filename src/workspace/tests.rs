@@ -140,7 +140,7 @@ fn sweeps_honour_their_budget() {
     let ws = Workspace::new(&doc, &mut cache).unwrap();
     let to = shifted(&ws.pose("screw5").unwrap(), 0.0, 0.0, 300.0);
     let options = SweepOptions {
-        method: SweepMethod::Step { step: 0.01 },
+        method: SweepMethod::Stepwise { step_mm: 0.01 },
         time_limit_ms: Some(1.0),
         ..SweepOptions::default()
     };
