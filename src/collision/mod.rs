@@ -185,7 +185,9 @@ impl Contact {
 }
 
 /// A static interference method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Mesh-exact, solid semantics.
@@ -281,6 +283,27 @@ pub fn check_all(
     method: Method,
     tolerance: f64,
 ) -> Result<Vec<PairContact>, CollisionError> {
+    let candidates = candidate_pairs(parts)?;
+    let found: Vec<Option<PairContact>> = candidates
+        .par_iter()
+        .map(|&(i, j)| {
+            let c = check(method, &parts[i], &parts[j], tolerance)?;
+            Ok((c != Contact::Separate).then_some(PairContact {
+                a: i,
+                b: j,
+                contact: c,
+            }))
+        })
+        .collect::<Result<_, CollisionError>>()?;
+    Ok(found.into_iter().flatten().collect())
+}
+
+/// The pairs `(i, j)`, `i < j`, of `parts` whose world boxes touch or overlap: the
+/// only pairs any method can find in contact (the broad phase of [`check_all`]).
+///
+/// # Errors
+/// A pose with a NaN or infinite entry.
+pub fn candidate_pairs(parts: &[PosedPart]) -> Result<Vec<(usize, usize)>, CollisionError> {
     let boxes: Vec<Aabb> = parts
         .iter()
         .map(|p| {
@@ -303,18 +326,7 @@ pub fn check_all(
             }
         }
     }
-    let found: Vec<Option<PairContact>> = candidates
-        .par_iter()
-        .map(|&(i, j)| {
-            let c = check(method, &parts[i], &parts[j], tolerance)?;
-            Ok((c != Contact::Separate).then_some(PairContact {
-                a: i,
-                b: j,
-                contact: c,
-            }))
-        })
-        .collect::<Result<_, CollisionError>>()?;
-    Ok(found.into_iter().flatten().collect())
+    Ok(candidates)
 }
 
 #[cfg(test)]

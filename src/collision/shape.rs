@@ -407,6 +407,50 @@ impl ColliderCache {
         Ok(c)
     }
 
+    /// The colliders of `meshes` (same order), the missing ones built in parallel
+    /// (one rayon task per distinct mesh): what opening a cell of many distinct
+    /// parts costs once.
+    ///
+    /// # Errors
+    /// The first mesh that cannot be used (see [`Collider::new`]).
+    pub fn get_all(&mut self, meshes: &[&Arc<Mesh>]) -> Result<Vec<Arc<Collider>>, CollisionError> {
+        use rayon::prelude::*;
+        let key = |m: &Arc<Mesh>| Arc::as_ptr(m) as usize;
+        // per distinct mesh: its collider when cached and still for this mesh
+        let mut found: HashMap<usize, Option<Arc<Collider>>> = HashMap::new();
+        let mut missing: Vec<&Arc<Mesh>> = Vec::new();
+        for &m in meshes {
+            if found.contains_key(&key(m)) {
+                continue;
+            }
+            let hit = self
+                .entries
+                .get(&key(m))
+                .filter(|(w, _)| w.upgrade().is_some_and(|x| Arc::ptr_eq(&x, m)))
+                .map(|(_, c)| c.clone());
+            if hit.is_none() {
+                missing.push(m);
+            }
+            found.insert(key(m), hit);
+        }
+        let built: Vec<Arc<Collider>> = missing
+            .par_iter()
+            .map(|m| Collider::new(Arc::clone(m)).map(Arc::new))
+            .collect::<Result<_, _>>()?;
+        if !built.is_empty() {
+            self.builds += built.len();
+            self.entries.retain(|_, (w, _)| w.strong_count() > 0);
+        }
+        for (m, c) in missing.into_iter().zip(built) {
+            found.insert(key(m), Some(c.clone()));
+            self.entries.insert(key(m), (Arc::downgrade(m), c));
+        }
+        Ok(meshes
+            .iter()
+            .filter_map(|m| found.get(&key(m)).cloned().flatten())
+            .collect())
+    }
+
     /// How many colliders were built (for tests and the watch header).
     pub fn build_count(&self) -> usize {
         self.builds
