@@ -1,7 +1,9 @@
 //! Scale: a generated cell of N distinct parts of ~10k triangles each (solids of
 //! revolution on a grid, neighbours overlapping), measured as a user opens and checks
 //! it: open the document (YAML + STL), the first full interference pass (every
-//! collider built), a repeat pass (colliders cached), and the resident memory.
+//! collider built), a repeat pass (nothing moved: colliders and pair verdicts
+//! reused), a pass after every component moved (trees reused, every pair
+//! rechecked), and the resident memory.
 //!
 //! `cargo bench --bench scale` prints the table for 10 → 200 parts, each row in a
 //! fresh process (so resident memory is that row's); `-- --parts 100` runs one row.
@@ -67,7 +69,7 @@ fn write_cell(dir: &Path, parts: usize) -> (std::path::PathBuf, usize) {
         file.components.push(ComponentFile {
             name: name.clone(),
             part: name,
-            fixed: true,
+            fixed: false,
             color: None,
             transform: Some(Transform::from_translation(at).to_matrix()),
         });
@@ -112,14 +114,28 @@ fn row(parts: usize) {
         repeat = repeat.min(t.elapsed().as_secs_f64());
         assert_eq!(again, found, "the repeat pass must find the same pairs");
     }
+    // every component moved by the same 1 mm: the same pairs, but no verdict can be
+    // reused, so this is the full recheck with the trees already built
+    let mut doc = doc;
+    let shift = Transform::from_translation(Vec3::new(1.0, 0.0, 0.0));
+    for i in 0..doc.components().len() {
+        let t = doc.components()[i].transform;
+        doc.set_transform_at(i, shift * t).unwrap();
+    }
+    let t = Instant::now();
+    let scene = Scene::new(&doc, &mut cache).unwrap();
+    let moved = scene.contacts(Method::Exact, DEFAULT_TOLERANCE).unwrap();
+    let recheck = t.elapsed().as_secs_f64();
+    assert_eq!(moved.len(), found.len(), "a common shift keeps every pair");
     let (rss, peak) = resident_mb();
     println!(
-        "| {parts:>5} | {:>9} | {:>7.0} | {:>10.0} | {:>9.0} | {:>10.1} | {:>6} | {:>8.0} | {:>8.0} |",
+        "| {parts:>5} | {:>9} | {:>7.0} | {:>10.0} | {:>9.0} | {:>10.1} | {:>10.0} | {:>6} | {:>8.0} | {:>8.0} |",
         triangles,
         open * 1e3,
         first * 1e3,
         (open + first) * 1e3,
         repeat * 1e3,
+        recheck * 1e3,
         found.len(),
         rss - base,
         peak,
@@ -138,9 +154,9 @@ fn main() {
         rayon_threads()
     );
     println!(
-        "| parts | triangles | open ms | 1st pass ms | open+1st ms | repeat ms | pairs | ΔRSS MB | peak MB |"
+        "| parts | triangles | open ms | 1st pass ms | open+1st ms | repeat ms | moved ms | pairs | ΔRSS MB | peak MB |"
     );
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let me = std::env::current_exe().unwrap();
     for n in [10, 25, 50, 100, 200] {
         let status = Command::new(&me)
