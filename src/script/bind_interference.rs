@@ -5,7 +5,7 @@ use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
 use super::bind_planning::with_workspace;
-use super::convert::{aabb_map, check_keys, err, fail, floats, num, opt_num, opt_str};
+use super::convert::{box_value, check_keys, err, fail, floats, num, opt_num, opt_str};
 use super::ScriptResult;
 use crate::collision::{
     Contact, CutSpec, InterferenceKind, Method, PairMember, SweepMethod, SweepOptions,
@@ -336,9 +336,9 @@ pub(super) fn register(api: &mut Api) {
         "The part whose tree holds it.",
         |f: &mut FeatureHandle| f.part.clone(),
     );
-    api.f("Feature.cells() -> array", "The cells: `#{min: [x,y,z], max: [x,y,z]}` boxes of the part's material in each grid cell, part frame (mm).", |f: &mut FeatureHandle| -> ScriptResult<Array> {
+    api.f("Feature.cells() -> array", "The cells: a `Box` (`.min`, `.max`) of the part's material in each grid cell, part frame (mm).", |f: &mut FeatureHandle| -> ScriptResult<Array> {
         let cells = feature_cells(f)?;
-        Ok(cells.cells.iter().map(|c| aabb_map(&c.bounds)).collect())
+        Ok(cells.cells.iter().map(|c| box_value(&c.bounds)).collect())
     });
     api.get(
         "Feature.count -> int",
