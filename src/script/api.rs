@@ -342,3 +342,35 @@ mod box_tests {
         assert!(e.contains("dx"), "{e}");
     }
 }
+
+#[cfg(test)]
+mod document_cache_tests {
+    use crate::document::Document;
+    use crate::script::DocumentCache;
+
+    /// A cached document is handed out only while its YAML and meshes are unchanged.
+    #[test]
+    fn cached_documents_follow_their_files() {
+        let dir = tempfile::tempdir().unwrap();
+        crate::demo::write_cell(&dir.path().join("models")).unwrap();
+        let path = dir.path().join("models/cell.yaml");
+        let doc = Document::open(&path).unwrap();
+        let mut cache = DocumentCache::default();
+        assert!(cache.get(dir.path(), &path).is_none());
+        cache.insert(dir.path(), &path, &doc);
+        let copy = cache.get(dir.path(), &path).expect("unchanged files");
+        assert_eq!(copy.components().len(), doc.components().len());
+        // a mesh replaced by another writer (new inode) invalidates the copy
+        let mesh = dir.path().join("models/meshes/table.stl");
+        let bytes = std::fs::read(&mesh).unwrap();
+        std::fs::remove_file(&mesh).unwrap();
+        std::fs::write(&mesh, &bytes).unwrap();
+        assert!(cache.get(dir.path(), &path).is_none());
+        cache.insert(dir.path(), &path, &doc);
+        assert!(cache.get(dir.path(), &path).is_some());
+        // so does an edited YAML
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, format!("{text}\n# edited\n")).unwrap();
+        assert!(cache.get(dir.path(), &path).is_none());
+    }
+}

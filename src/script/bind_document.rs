@@ -43,13 +43,31 @@ impl DocHandle {
                 ctx.project.root().display()
             ));
         }
-        let doc = {
-            let mut cache = ctx
-                .caches
-                .meshes
-                .lock()
-                .map_err(|_| "mesh cache poisoned".to_string())?;
-            Document::load_in(&full, &ctx.project, &mut cache).map_err(|e| e.render())?
+        let root = ctx.project.root().to_path_buf();
+        let cached = ctx
+            .caches
+            .documents
+            .lock()
+            .map_err(|_| "document cache poisoned".to_string())?
+            .get(&root, &full);
+        let doc = match cached {
+            Some(doc) => doc,
+            None => {
+                let doc = {
+                    let mut cache = ctx
+                        .caches
+                        .meshes
+                        .lock()
+                        .map_err(|_| "mesh cache poisoned".to_string())?;
+                    Document::load_in(&full, &ctx.project, &mut cache).map_err(|e| e.render())?
+                };
+                ctx.caches
+                    .documents
+                    .lock()
+                    .map_err(|_| "document cache poisoned".to_string())?
+                    .insert(&root, &full, &doc);
+                doc
+            }
         };
         for f in doc.source_files() {
             ctx.record_read(&f);
