@@ -43,18 +43,19 @@ pub struct Caches {
     pub documents: Mutex<DocumentCache>,
 }
 
+/// A parsed document and the stamps of its source files when it was loaded.
+type CachedDocument = (
+    Vec<(PathBuf, crate::fsutil::Stamp)>,
+    crate::document::Document,
+);
+
 /// Parsed documents kept between reruns: a document whose YAML, meshes and robot
 /// files all have the [`Stamp`](crate::fsutil::Stamp) they had when it was loaded is
 /// handed out as a copy instead of being parsed and solved again.
 #[derive(Default)]
 pub struct DocumentCache {
-    entries: std::collections::HashMap<
-        (PathBuf, PathBuf),
-        (
-            Vec<(PathBuf, crate::fsutil::Stamp)>,
-            crate::document::Document,
-        ),
-    >,
+    /// By (project root, document path): the source files' stamps and the document.
+    entries: std::collections::HashMap<(PathBuf, PathBuf), CachedDocument>,
 }
 
 impl DocumentCache {
