@@ -2,12 +2,13 @@
 //! command does; `main` maps errors to exit codes (0 ok, 1 script or document error,
 //! 2 usage).
 
+mod batch;
 mod check;
 mod db;
 pub(crate) mod out;
 mod run;
-mod skills;
 mod sequence;
+mod skills;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};
@@ -101,6 +102,9 @@ impl From<WatchArgs> for ScriptArgs {
 pub enum Command {
     /// Run a script once (or a robot motion program with `--doc`).
     Run(ScriptArgs),
+    /// Run a script once per document (`--docs A.yaml B.yaml …`), in parallel on
+    /// all cores; each run independent (recorded with `--db` like `run`).
+    Batch(batch::BatchArgs),
     /// Run a script, then again on every save of the script, the document or any file it read.
     Watch(WatchArgs),
     /// Validate a document and print a summary.
@@ -185,6 +189,7 @@ pub fn main() -> i32 {
     };
     let exit = match cli.command {
         Command::Run(a) => run::run(&a),
+        Command::Batch(a) => batch::batch(&a),
         Command::Watch(a) => run::watch(&a.into()),
         Command::Db(a) => db::main(&a),
         Command::Check { doc } => check::check(&doc),

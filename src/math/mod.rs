@@ -4,11 +4,13 @@
 //! Units: millimetres for lengths, radians for angles (degrees only in the
 //! user-facing `X Y Z A B C` pose triples, see [`AngleConvention`]).
 
+mod aabb;
 mod euler;
 pub mod format;
 mod rng;
 pub mod transform;
 
+pub use aabb::Aabb;
 pub use euler::AngleConvention;
 pub use rng::Rng;
 pub use transform::Transform;

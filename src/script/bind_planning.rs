@@ -4,7 +4,7 @@
 use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
-use super::convert::{check_keys, err, fail, num, opt_num, opt_str, vec3};
+use super::convert::{check_keys, err, fail, num, opt_num, opt_str};
 use super::{Context, ScriptResult};
 use crate::collision::Aabb;
 use crate::math::AngleConvention;
@@ -131,19 +131,7 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
     let bounds = match opts.get("bounds") {
         None => None,
         Some(b) => {
-            let m = b
-                .read_lock::<Map>()
-                .ok_or_else(|| fail("bounds must be #{min: [x,y,z], max: [x,y,z]}"))?;
-            let (lo, hi) = (
-                vec3(
-                    m.get("min").ok_or_else(|| fail("bounds needs `min`"))?,
-                    "bounds.min",
-                )?,
-                vec3(
-                    m.get("max").ok_or_else(|| fail("bounds needs `max`"))?,
-                    "bounds.max",
-                )?,
-            );
+            let Aabb { lo, hi } = super::convert::to_box(b, "bounds")?;
             if (0..3).any(|i| lo[i] >= hi[i]) {
                 return err(format!(
                     "bounds are empty: min {lo:?} is not below max {hi:?} on every axis"

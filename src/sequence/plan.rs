@@ -403,7 +403,7 @@ impl<'d> Ctx<'d> {
             pose: self.scene.poses[q],
         }];
         let options = SweepOptions {
-            method: SweepMethod::Step { step: self.step },
+            method: SweepMethod::Stepwise { step_mm: self.step },
             tolerance: self.opts.tolerance,
             time_limit_ms: Some(remaining),
         };

@@ -131,8 +131,7 @@ impl Workspace<'_> {
         Ok((0..doc.components().len())
             .filter(|&i| i != index)
             .filter_map(|i| doc.world_aabb(i))
-            .reduce(|(a, b), (c, e)| (a.inf(&c), b.sup(&e)))
-            .map(|(lo, hi)| Aabb::new(lo, hi)))
+            .reduce(|a, b| a.union(&b)))
     }
 
     /// The planning space of component `name` for `request`: its bounds, or the
