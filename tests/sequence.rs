@@ -3,6 +3,8 @@
 //! sequence is re-checked step by step against exactly the parts assembled before.
 
 mod common;
+#[path = "common/pegboard.rs"]
+mod pegboard;
 
 use fitup::document::Document;
 use fitup::math::{Point3, Vec3};
@@ -378,58 +380,10 @@ fn bad_options_and_names_are_typed_errors() {
     recheck(&doc, &p);
 }
 
-/// A pegboard of 10 parts (a plate, nine pegs with two mates each), generated here.
-fn pegboard(dir: &Path) -> std::path::PathBuf {
-    std::fs::create_dir_all(dir).unwrap();
-    let (pitch, t, r) = (10.0, 5.0, 2.0);
-    let plate = Mesh::perforated_plate(3, 3, pitch, t, r, 4, |_, _| true).unwrap();
-    fitup::mesh::write_stl(&dir.join("plate.stl"), &plate).unwrap();
-    let rs = r * (std::f64::consts::PI / 16.0).cos() * 0.97;
-    let peg = Mesh::lathe(
-        &[
-            (0.0, 0.0),
-            (rs, 0.0),
-            (rs, t),
-            (1.6 * r, t),
-            (1.6 * r, t + 2.0),
-            (0.0, t + 2.0),
-        ],
-        16,
-    )
-    .unwrap();
-    fitup::mesh::write_stl(&dir.join("peg.stl"), &peg).unwrap();
-    let mut y = String::from(
-        "parts:\n  plate:\n    stl: plate.stl\n    planes:\n      top: {point: [0, 0, 5], normal: [0, 0, 1]}\n    axes:\n",
-    );
-    let at = |i: usize| pitch * (i as f64 + 0.5);
-    for i in 0..3 {
-        for j in 0..3 {
-            y += &format!(
-                "      hole{i}{j}: {{point: [{}, {}, 0], direction: [0, 0, 1]}}\n",
-                at(i),
-                at(j)
-            );
-        }
-    }
-    y += "  peg:\n    stl: peg.stl\n    planes:\n      under_head: {point: [0, 0, 5], normal: [0, 0, -1]}\n    axes:\n      axis: {point: [0, 0, 0], direction: [0, 0, 1]}\n";
-    y += "components:\n- {name: plate, part: plate}\n";
-    let mut mates = String::from("mates:\n");
-    for i in 0..3 {
-        for j in 0..3 {
-            y += &format!("- name: peg{i}{j}\n  part: peg\n  transform: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[{},{},0,1]]\n", at(i), at(j));
-            mates += &format!("- {{name: peg{i}{j}_axis, type: concentric, entities: [plate/hole{i}{j}, peg{i}{j}/axis]}}\n");
-            mates += &format!("- {{name: peg{i}{j}_seat, type: coincident, entities: [plate/top, peg{i}{j}/under_head]}}\n");
-        }
-    }
-    let path = dir.join("pegboard.yaml");
-    std::fs::write(&path, y + mates.as_str()).unwrap();
-    path
-}
-
 #[test]
 fn pegboard_of_ten_parts_with_and_without_mates() {
     let dir = std::env::temp_dir().join(format!("fitup_seq_pegboard_{}", std::process::id()));
-    let doc = Document::open(&pegboard(&dir)).unwrap();
+    let doc = Document::open(&pegboard::pegboard(&dir, false)).unwrap();
     for mode in [Mode::Mates, Mode::Geometry] {
         let o = SequenceOptions {
             mode,

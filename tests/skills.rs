@@ -16,26 +16,11 @@ use fitup::skills::{
 use std::path::Path;
 
 fn path() -> PlannedPath {
-    PlannedPath {
-        failure: None,
-        poses: vec![],
-        length_mm: 0.0,
-        rotation_rad: 0.0,
-        raw_length_mm: 0.0,
-        raw_rotation_rad: 0.0,
-        iterations: 0,
-        nodes: 0,
-        pose_checks: 0,
-        edge_checks: 0,
-        time_ms: 0.0,
-        search_ms: 0.0,
-        smoothing_ms: 0.0,
-        resolution: EdgeResolution::Stepwise {
-            step_mm: 1.0,
-            step_rad: 0.01,
-        },
-        planner: "by hand",
-    }
+    let resolution = EdgeResolution::Stepwise {
+        step_mm: 1.0,
+        step_rad: 0.01,
+    };
+    PlannedPath::given("by hand", vec![], resolution)
 }
 
 /// A gear inserted onto an axis along −Z, 30 mm safe length, at `assembled`; the
@@ -198,9 +183,20 @@ fn bundled_template_files_parse() {
     }
 }
 
-#[test]
-fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
-    let doc = Document::open(Path::new(concat!(
+/// The gear task on the bundled MZ07 cell: the gear seats 80 mm in front of the TCP
+/// at `home` and 100 mm lower; it waits 120 mm to the side, turned `turn_deg` about the
+/// vertical. Its skills, bound to the robot (and through the plan's file format), and a
+/// simulator at the plan's start joints.
+struct GearCell {
+    robot: fitup::kinematics::Robot,
+    assembled: Transform,
+    skills: Vec<fitup::skills::Skill>,
+    plan: Plan,
+    sim: Simulator,
+}
+
+fn gear_cell(turn_deg: f64, speed: f64) -> GearCell {
+    let mut doc = Document::open(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/models/mz07.yaml"
     )))
@@ -208,14 +204,12 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
     let robot = doc.robot("mz07").unwrap().robot().clone();
     let home = vec![0.0, 0.3, -0.2, 0.0, -0.4, 0.0];
     let tcp = robot.tcp_pose(&home).unwrap();
-    // The gear seats 80 mm in front of the TCP at that pose and 100 mm lower; it
-    // waits 120 mm to the side, turned 20° about the vertical.
     let assembled = tcp.then(&Transform::from_translation(Vec3::new(80.0, 0.0, -100.0)));
     let task = gear_task(assembled);
     let start = tcp
         .then(&Transform::from_translation(-tcp.translation()))
         .then(
-            &Transform::from_rotation_about(Point3::origin(), Vec3::z(), 20f64.to_radians())
+            &Transform::from_rotation_about(Point3::origin(), Vec3::z(), turn_deg.to_radians())
                 .unwrap(),
         )
         .then(&Transform::from_translation(
@@ -239,8 +233,6 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
     .unwrap();
     // The plan survives its file format.
     let plan = Plan::from_json("plan.json", &plan.to_json()).unwrap();
-
-    let mut doc = doc;
     doc.set_robot_joints(0, &home).unwrap();
     let sim = Simulator::start(
         &doc,
@@ -248,19 +240,30 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
         &SimulatorOptions {
             motion_port: 0,
             state_port: 0,
-            speed: 50.0,
+            speed,
             ..SimulatorOptions::default()
         },
     )
     .unwrap();
-    let mut manager = SkillManager::new(
+    GearCell {
+        robot,
+        assembled,
+        skills,
         plan,
-        ManagerOptions {
-            target: sim.motion_addr().to_string(),
-            state_port: Some(sim.state_addr().port()),
-            ..ManagerOptions::default()
-        },
-    );
+        sim,
+    }
+}
+
+#[test]
+fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
+    let GearCell {
+        robot,
+        assembled,
+        skills,
+        plan,
+        sim,
+    } = gear_cell(20.0, 50.0);
+    let mut manager = SkillManager::new(plan, options_for(&sim));
     let mut events = Vec::new();
     manager.run(&mut |e| events.push(e.clone())).unwrap();
     let states: Vec<&str> = events
@@ -287,43 +290,10 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
     assert!((sim.gripper() - 0.018).abs() < 1e-6, "{}", sim.gripper());
 }
 
-/// The demo chain's plan and a simulator at the plan's start joints.
+/// The gear cell's plan (no turn) and its simulator, with the number of skills.
 fn chain(speed: f64) -> (Plan, Simulator, usize) {
-    let doc = Document::open(Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/models/mz07.yaml"
-    )))
-    .unwrap();
-    let robot = doc.robot("mz07").unwrap().robot().clone();
-    let home = vec![0.0, 0.3, -0.2, 0.0, -0.4, 0.0];
-    let tcp = robot.tcp_pose(&home).unwrap();
-    let assembled = tcp.then(&Transform::from_translation(Vec3::new(80.0, 0.0, -100.0)));
-    let task = gear_task(assembled);
-    let start = tcp.then(&Transform::from_translation(Vec3::new(0.0, 120.0, -100.0)));
-    let skills = generate(
-        std::slice::from_ref(&task),
-        &[],
-        &|_| Some(start),
-        &GeneratorOptions::default(),
-        &mut no_check,
-    )
-    .unwrap();
-    let plan = Plan::bind(&skills, &[task], &robot, &home, &MotionOptions::default()).unwrap();
-    let mut doc = doc;
-    doc.set_robot_joints(0, &home).unwrap();
-    let sim = Simulator::start(
-        &doc,
-        "mz07",
-        &SimulatorOptions {
-            motion_port: 0,
-            state_port: 0,
-            speed,
-            ..SimulatorOptions::default()
-        },
-    )
-    .unwrap();
-    let n = skills.len();
-    (plan, sim, n)
+    let c = gear_cell(0.0, speed);
+    (c.plan, c.sim, c.skills.len())
 }
 
 fn options_for(sim: &Simulator) -> ManagerOptions {

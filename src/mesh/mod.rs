@@ -112,6 +112,16 @@ impl Mesh {
         Some(crate::math::Aabb::around(&self.vertices))
     }
 
+    /// Flips every triangle when the mesh is inward-oriented (negative signed volume),
+    /// so a closed mesh's normals point out whatever the generator's handedness.
+    pub fn orient_outward(&mut self) {
+        if self.signed_volume() < 0.0 {
+            for t in &mut self.triangles {
+                t.swap(1, 2);
+            }
+        }
+    }
+
     /// Signed volume (mm³): positive for a closed outward-oriented mesh.
     pub fn signed_volume(&self) -> f64 {
         (0..self.triangles.len())

@@ -497,11 +497,7 @@ fn ring(big: f64, wire: f64, gap: f64, nu: usize, nv: usize) -> Result<Mesh, Mes
     }
     let mut mesh = Mesh::new(vertices, triangles)?;
     // Make it outward-oriented whatever the parametrisation's handedness.
-    if mesh.signed_volume() < 0.0 {
-        for t in &mut mesh.triangles {
-            t.swap(1, 2);
-        }
-    }
+    mesh.orient_outward();
     Ok(mesh)
 }
 
@@ -726,11 +722,7 @@ fn helix_tube(
         }
     }
     let mut mesh = Mesh::new(vertices, triangles)?;
-    if mesh.signed_volume() < 0.0 {
-        for t in &mut mesh.triangles {
-            t.swap(1, 2);
-        }
-    }
+    mesh.orient_outward();
     Ok(mesh)
 }
 

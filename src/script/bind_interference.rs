@@ -182,10 +182,7 @@ fn split(c: &ComponentHandle, spec: CutSpec) -> ScriptResult<FeatureHandle> {
     let mesh = doc.mesh_of(c.index).clone();
     c.doc
         .context()
-        .caches
-        .scene
-        .lock()
-        .map_err(|_| fail("collision cache poisoned"))?
+        .scene_cache()?
         .cells(&mesh, &spec)
         .map_err(fail)?;
     doc.set_feature(
@@ -213,13 +210,7 @@ fn feature_cells(f: &FeatureHandle) -> ScriptResult<std::sync::Arc<crate::collis
             f.part, f.name
         ));
     };
-    let mut cache = f
-        .doc
-        .context()
-        .caches
-        .scene
-        .lock()
-        .map_err(|_| fail("collision cache poisoned"))?;
+    let mut cache = f.doc.context().scene_cache()?;
     cache.cells(&part.mesh, spec).map_err(fail)
 }
 

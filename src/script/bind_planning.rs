@@ -201,15 +201,7 @@ pub(super) fn with_workspace<R>(
     f: impl FnOnce(&Workspace) -> ScriptResult<R>,
 ) -> ScriptResult<R> {
     let doc = d.lock()?;
-    let ws = {
-        let mut cache = d
-            .context()
-            .caches
-            .scene
-            .lock()
-            .map_err(|_| fail("collision cache poisoned"))?;
-        Workspace::new(&doc, &mut cache).map_err(fail)?
-    };
+    let ws = Workspace::new(&doc, &mut *d.context().scene_cache()?).map_err(fail)?;
     f(&ws)
 }
 

@@ -103,12 +103,7 @@ fn run<R>(
     f: impl FnOnce(&crate::document::Document, &mut crate::workspace::SceneCache) -> R,
 ) -> ScriptResult<R> {
     let doc = d.lock()?;
-    let mut cache = d
-        .context()
-        .caches
-        .scene
-        .lock()
-        .map_err(|_| fail("collision cache poisoned"))?;
+    let mut cache = d.context().scene_cache()?;
     Ok(f(&doc, &mut cache))
 }
 

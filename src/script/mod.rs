@@ -109,6 +109,17 @@ pub struct Context {
 }
 
 impl Context {
+    /// The run's collision cache (colliders and cut cells by mesh, kept across watch
+    /// reruns), locked for the caller.
+    pub(crate) fn scene_cache(
+        &self,
+    ) -> ScriptResult<std::sync::MutexGuard<'_, crate::workspace::SceneCache>> {
+        self.caches
+            .scene
+            .lock()
+            .map_err(|_| convert::fail("collision cache poisoned"))
+    }
+
     /// A fresh context for one run.
     pub fn new(
         project: Project,

@@ -17,7 +17,6 @@ use crate::planning::{
     EdgeResolution, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace,
 };
 use crate::workspace::{Scene, SceneCache, WorkspaceError};
-use nalgebra::UnitQuaternion;
 use std::collections::{HashMap, HashSet};
 use std::time::{Duration, Instant};
 
@@ -950,43 +949,13 @@ fn operation(ctx: &Ctx, p: usize, receivers: &[usize], mate: &Vec3) -> Operation
     }
 }
 
-fn rotation_taking(from: &Vec3, to: &Vec3) -> UnitQuaternion<f64> {
-    UnitQuaternion::rotation_between(from, to).unwrap_or_else(|| {
-        let perp = if from.x.abs() < 0.9 {
-            Vec3::x()
-        } else {
-            Vec3::y()
-        };
-        UnitQuaternion::from_axis_angle(
-            &nalgebra::Unit::new_normalize(from.cross(&perp)),
-            std::f64::consts::PI,
-        )
-    })
-}
-
 /// A straight path from `from` to `to` checked by `validator`.
 fn straight_path(
     validator: &mut MeshValidator,
     from: Transform,
     to: Transform,
 ) -> Option<PlannedPath> {
-    let path = PlannedPath {
-        failure: None,
-        poses: vec![from, to],
-        length_mm: (to.translation() - from.translation()).norm(),
-        rotation_rad: 0.0,
-        raw_length_mm: (to.translation() - from.translation()).norm(),
-        raw_rotation_rad: 0.0,
-        iterations: 0,
-        nodes: 2,
-        pose_checks: 2,
-        edge_checks: 1,
-        time_ms: 0.0,
-        search_ms: 0.0,
-        smoothing_ms: 0.0,
-        resolution: validator.options().edge,
-        planner: "straight",
-    };
+    let path = PlannedPath::given("straight", vec![from, to], validator.options().edge);
     path.revalidate(validator).is_ok().then_some(path)
 }
 
@@ -1051,8 +1020,10 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
         changes += change as usize;
         total += path.length_mm;
         let down = current.unwrap_or(mate);
-        let sequence_frame =
-            Transform::from_parts(base_pose.translation(), rotation_taking(&-Vec3::z(), &down));
+        let sequence_frame = Transform::from_parts(
+            base_pose.translation(),
+            crate::math::rotation_between(&-Vec3::z(), &down),
+        );
         let receiver = receivers.first().copied().unwrap_or(f.base);
         let obstacle_box = union_box(&ctx.boxes, mask).unwrap_or(ctx.boxes[f.base]);
         let grasp = find_grasp(ctx, p, &mating_directions, &mate, mask);
