@@ -299,6 +299,24 @@ fn batch_runs_the_script_once_per_document() {
         .collect();
     counts.sort();
     assert_eq!(counts, ["count 8", "count 8"], "{}", text(&o));
+    // More runs than cores, each checking interference (rayon work inside the run):
+    // every run ends with its own document's answer.
+    std::fs::write(
+        p.join("scripts/clash.rhai"),
+        "print(`clash ${doc.components().len()} ${doc.interferences().len()}`);\n",
+    )
+    .unwrap();
+    let docs = ["models/cell.yaml", "models/copy.yaml"].repeat(3);
+    let mut args = vec!["batch", "scripts/clash.rhai", "--docs"];
+    args.extend(docs.iter().copied());
+    // Bounded: this used to deadlock (runs on rayon's workers waiting for rayon work).
+    let o = common::run_bounded(p, &args, std::time::Duration::from_secs(120));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let clashes: Vec<String> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect();
+    assert_eq!(clashes, vec!["clash 8 0".to_string(); 6], "{}", text(&o));
     // a missing document fails its run only, and is named
     let o = run_in(
         p,

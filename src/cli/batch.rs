@@ -4,9 +4,9 @@
 
 use super::out::errln;
 use super::{run, Exit, ScriptArgs};
-use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// Options of `batch`.
@@ -32,37 +32,44 @@ pub(super) fn batch(a: &BatchArgs) -> Exit {
     let total = a.docs.len();
     let done = AtomicUsize::new(0);
     let start = Instant::now();
-    let exits: Vec<Exit> = std::thread::scope(|s| {
-        let progress = s.spawn(|| {
-            let mut last = Instant::now();
-            while done.load(Ordering::Relaxed) < total {
-                std::thread::sleep(Duration::from_millis(50));
-                if start.elapsed() >= Duration::from_secs(1)
-                    && last.elapsed() >= Duration::from_secs(1)
-                {
-                    last = Instant::now();
-                    errln!(
-                        "batch: {}/{total} runs done, {:.0} s",
-                        done.load(Ordering::Relaxed),
-                        start.elapsed().as_secs_f64()
-                    );
-                }
-            }
-        });
-        let exits = a
-            .docs
-            .par_iter()
-            .map(|d| {
+    // Plain threads, not rayon's pool: a run blocks on its script thread, and the
+    // script's own parallel work (collider builds) needs rayon's workers free — runs
+    // on the pool's workers deadlock as soon as a script checks interference.
+    let next = AtomicUsize::new(0);
+    let slots: Vec<Mutex<Exit>> = a.docs.iter().map(|_| Mutex::new(Exit::Ok)).collect();
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(total);
+    std::thread::scope(|s| {
+        for _ in 0..workers {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(d) = a.docs.get(i) else { break };
                 let mut one = a.run.clone();
                 one.doc = Some(d.clone());
                 let exit = run::run(&one);
+                *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = exit;
                 done.fetch_add(1, Ordering::Relaxed);
-                exit
-            })
-            .collect();
-        let _ = progress.join();
-        exits
+            });
+        }
+        let mut last = Instant::now();
+        while done.load(Ordering::Relaxed) < total {
+            std::thread::sleep(Duration::from_millis(50));
+            if start.elapsed() >= Duration::from_secs(1) && last.elapsed() >= Duration::from_secs(1)
+            {
+                last = Instant::now();
+                errln!(
+                    "batch: {}/{total} runs done, {:.0} s",
+                    done.load(Ordering::Relaxed),
+                    start.elapsed().as_secs_f64()
+                );
+            }
+        }
     });
+    let exits: Vec<Exit> = slots
+        .into_iter()
+        .map(|e| e.into_inner().unwrap_or_else(|e| e.into_inner()))
+        .collect();
     let failed: Vec<String> = a
         .docs
         .iter()

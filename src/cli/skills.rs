@@ -38,7 +38,7 @@ pub struct SkillsArgs {
 /// `skills` subcommands.
 #[derive(Debug, clap::Subcommand, Clone)]
 pub enum SkillsCommand {
-    /// Dispatch a plan file (JSON, from `Plan::to_json` / the script API) to a
+    /// Dispatch a plan file (JSON, written by `Plan::to_json` in the Rust API) to a
     /// controller, printing one line per event. Standard input takes `pause`,
     /// `resume`, `abort`, `manual grasp|release|touch MM`, `manual output I 0|1`.
     Run {
