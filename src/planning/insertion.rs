@@ -64,11 +64,19 @@ pub(crate) fn inside(part_box: &Aabb, pose: &Transform, product_box: &Aabb) -> b
     (0..3).all(|k| b.lo[k] < product_box.hi[k] && b.hi[k] > product_box.lo[k])
 }
 
-/// The label of a path made by [`plan_insertion`]: what actually ran.
-fn label(disassembly: &DisassemblyPlanner) -> &'static str {
-    match disassembly {
-        DisassemblyPlanner::Rrt(_) => "disassemble_rrt+rrt_connect",
-        DisassemblyPlanner::LocalRrt(_) => "disassemble_local_rrt+rrt_connect",
+/// The label of a path made by [`plan_insertion`]: what actually ran (`lazy_`:
+/// explored with pose checks, the path certified by the validator's edge check).
+fn label(disassembly: &DisassemblyPlanner, approach: &RrtConnectOptions) -> &'static str {
+    let local = matches!(disassembly, DisassemblyPlanner::LocalRrt(_));
+    match (local, disassembly.rrt().lazy.is_some(), approach.lazy.is_some()) {
+        (false, false, false) => "disassemble_rrt+rrt_connect",
+        (false, false, true) => "disassemble_rrt+lazy_rrt_connect",
+        (false, true, false) => "lazy_disassemble_rrt+rrt_connect",
+        (false, true, true) => "lazy_disassemble_rrt+lazy_rrt_connect",
+        (true, false, false) => "disassemble_local_rrt+rrt_connect",
+        (true, false, true) => "disassemble_local_rrt+lazy_rrt_connect",
+        (true, true, false) => "lazy_disassemble_local_rrt+rrt_connect",
+        (true, true, true) => "lazy_disassemble_local_rrt+lazy_rrt_connect",
     }
 }
 
@@ -155,7 +163,7 @@ pub fn plan_insertion(
         return Ok(path);
     }
     approach.limits.seed = options.approach.limits.seed ^ 0x9E37_79B9_7F4A_7C15;
-    let name = label(&options.disassembly);
+    let name = label(&options.disassembly, &options.approach);
     let assembled = if goal_in { goal } else { start };
     let mut out = options.disassembly.clone();
     out.rrt_mut().smoothing.enabled = false;

@@ -7,7 +7,7 @@ use super::run::{PlanError, ProgressFn};
 use super::space::PlanningSpace;
 use super::tree::{PoseTarget, Target, Tree};
 use super::validator::{Checker, MotionValidator};
-use crate::math::{Transform, Vec3};
+use crate::math::{Rng, Transform, Vec3};
 use nalgebra::{Unit, UnitQuaternion};
 
 /// The axes of the local lattice and of the single-axis rotations.
@@ -77,6 +77,13 @@ pub struct Lattice {
     /// every failed extension into the same local minimum in front of a wall).
     /// Goal-biased iterations always rank by distance to the goal. Default true.
     pub rank_toward_sample: bool,
+    /// Random coordinated moves tried with the single-axis rotations when no
+    /// translation of the lattice is free: each translates by up to the lattice
+    /// edge in a random direction while turning by up to the largest `alpha` about
+    /// a random axis (a screw about a random line, which is what threading a part
+    /// through a slit or round a corner needs); all are ranked together with the
+    /// 6 rotations. Not in seed 002 (0 gives its discretization). Default 0.
+    pub random_moves: usize,
 }
 
 impl Default for Lattice {
@@ -89,6 +96,7 @@ impl Default for Lattice {
             frame: DiscretizationFrame::Part,
             follow_through: true,
             rank_toward_sample: true,
+            random_moves: 0,
         }
     }
 }
@@ -150,6 +158,7 @@ impl Lattice {
         target: &dyn Target,
         reference: &UnitQuaternion<f64>,
         step: f64,
+        rng: &mut Rng,
         added: &mut Vec<usize>,
     ) {
         let base = tree.poses[near];
@@ -160,7 +169,8 @@ impl Lattice {
             self.axis(&base, 2),
         ];
         let mut candidates: Vec<(f64, Vec3, Transform)> = Vec::with_capacity(26);
-        for l in self.edge_lengths(checker, &base) {
+        let lengths = self.edge_lengths(checker, &base);
+        for &l in &lengths {
             candidates.clear();
             for dx in -1i32..=1 {
                 for dy in -1i32..=1 {
@@ -206,6 +216,26 @@ impl Lattice {
                 let pose = Transform::from_parts(base.translation(), turn * base.rotation());
                 if space.contains(&pose, reference) && !tree.holds(&pose) {
                     turns.push((target.distance(&pose, space), sign < 0.0, alpha, pose));
+                }
+            }
+        }
+        if self.random_moves > 0 {
+            let l = lengths[0];
+            let alpha = self.alpha.iter().copied().fold(0.0, f64::max);
+            let free_rotation = matches!(space.rotation, super::RotationFreedom::Free);
+            for _ in 0..self.random_moves {
+                let dir = Vec3::new(rng.normal(), rng.normal(), rng.normal());
+                let dir = dir / dir.norm().max(1e-12) * l * rng.uniform();
+                let angle = rng.range(-alpha, alpha);
+                let axis = Vec3::new(rng.normal(), rng.normal(), rng.normal());
+                let turn = match (free_rotation, Unit::try_new(axis, 1e-9)) {
+                    (true, Some(axis)) => UnitQuaternion::from_axis_angle(&axis, angle),
+                    _ => UnitQuaternion::identity(),
+                };
+                let pose =
+                    Transform::from_parts(base.translation() + dir, turn * base.rotation());
+                if space.contains(&pose, reference) && !tree.holds(&pose) {
+                    turns.push((target.distance(&pose, space), false, angle.abs(), pose));
                 }
             }
         }

@@ -62,4 +62,4 @@ pub use run::{
 };
 pub use smoothing::{smooth, Smoothing};
 pub use space::{PlanningSpace, RotationFreedom};
-pub use validator::{stepwise_edge_free, EdgeResolution, MotionValidator};
+pub use validator::{stepwise_edge_free, EdgeResolution, LazyValidation, MotionValidator};

@@ -7,7 +7,7 @@ use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::{shortcut, Smoothing};
 use super::space::PlanningSpace;
 use super::tree::{check_ends, steer, PoseTarget, Target, Tree};
-use super::validator::{Checker, MotionValidator};
+use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Rng, Transform};
 
 /// Options of [`rrt`] and [`biased_rrt`].
@@ -26,6 +26,10 @@ pub struct RrtOptions {
     pub goal_tolerance: f64,
     /// Shortcut smoothing of the found path.
     pub smoothing: Smoothing,
+    /// Explore with pose checks and certify only the branch that reaches the goal
+    /// ([`LazyValidation`]); `None` (default): every edge is checked by the
+    /// validator when it is added.
+    pub lazy: Option<LazyValidation>,
 }
 
 impl Default for RrtOptions {
@@ -37,6 +41,7 @@ impl Default for RrtOptions {
             goal_bias: 0.0,
             goal_tolerance: 10.0,
             smoothing: Smoothing::default(),
+            lazy: None,
         }
     }
 }
@@ -55,6 +60,9 @@ impl RrtOptions {
         PlanError::positive("step", self.step)?;
         PlanError::probability("goal_bias", self.goal_bias)?;
         PlanError::positive("goal_tolerance", self.goal_tolerance)?;
+        if let Some(l) = &self.lazy {
+            l.validate()?;
+        }
         self.smoothing.validate()
     }
 }
@@ -151,6 +159,7 @@ pub(crate) fn plan_tree(
             run.elapsed_ms(),
         ));
     }
+    checker.set_lazy(options.lazy.map(|l| l.steps(space)));
     let mut rng = Rng::new(options.limits.seed);
     let key_mm = local.map_or(options.step * 1e-3, |l| l.edge_length_min * 0.25);
     let mut tree = Tree::new(*start, key_mm);
@@ -193,6 +202,7 @@ pub(crate) fn plan_tree(
                 rank,
                 &reference,
                 options.step,
+                &mut rng,
                 &mut added,
             );
         }
@@ -213,7 +223,11 @@ pub(crate) fn plan_tree(
             }
         }
         if let Some(i) = done {
-            break Ok(i);
+            // Lazy: the goal was reached through explored edges; certify the branch
+            // (a failed edge is cut with its subtree, and the search goes on).
+            if !checker.is_lazy() || tree.certify_branch(i, &mut checker) {
+                break Ok(i);
+            }
         }
     };
     match outcome {
@@ -227,6 +241,8 @@ pub(crate) fn plan_tree(
         )),
         Ok(i) => {
             let poses = tree.branch(i);
+            // Smoothing keeps only edges the validator itself accepts.
+            checker.set_lazy(None);
             Ok(finish(
                 planner,
                 poses,

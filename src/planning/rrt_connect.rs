@@ -8,7 +8,7 @@ use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
 use super::tree::{check_ends, steer, PoseTarget, Tree};
-use super::validator::{Checker, MotionValidator};
+use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Rng, Transform};
 
 /// Options of [`rrt_connect`].
@@ -23,6 +23,11 @@ pub struct RrtConnectOptions {
     pub lattice: Option<Lattice>,
     /// Shortcut smoothing of the found path.
     pub smoothing: Smoothing,
+    /// Explore with pose checks and certify only the candidate path with the
+    /// validator's edge check ([`LazyValidation`]); `None`: every edge is checked
+    /// by the validator when it is added. The path is then labelled
+    /// `lazy_rrt_connect`.
+    pub lazy: Option<LazyValidation>,
 }
 
 impl Default for RrtConnectOptions {
@@ -32,6 +37,7 @@ impl Default for RrtConnectOptions {
             step: 10.0,
             lattice: Some(Lattice::default()),
             smoothing: Smoothing::default(),
+            lazy: Some(LazyValidation::default()),
         }
     }
 }
@@ -41,6 +47,9 @@ impl RrtConnectOptions {
         self.limits.validate()?;
         PlanError::positive("step", self.step)?;
         if let Some(l) = &self.lattice {
+            l.validate()?;
+        }
+        if let Some(l) = &self.lazy {
             l.validate()?;
         }
         self.smoothing.validate()
@@ -66,7 +75,11 @@ pub fn rrt_connect(
     options: &RrtConnectOptions,
     progress: Option<ProgressFn<'_>>,
 ) -> Result<PlannedPath, PlanError> {
-    const NAME: &str = "rrt_connect";
+    let name = if options.lazy.is_some() {
+        "lazy_rrt_connect"
+    } else {
+        "rrt_connect"
+    };
     options.validate()?;
     space.validate()?;
     PlanError::pose("start", start)?;
@@ -75,7 +88,7 @@ pub fn rrt_connect(
     let mut checker = Checker::new(validator, Some(run.deadline()));
     if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
         return Ok(PlannedPath::failed(
-            NAME,
+            name,
             f,
             0,
             0,
@@ -83,6 +96,7 @@ pub fn rrt_connect(
             run.elapsed_ms(),
         ));
     }
+    checker.set_lazy(options.lazy.map(|l| l.steps(space)));
     let mut rng = Rng::new(options.limits.seed);
     let reference = start.rotation();
     let key_mm = options
@@ -119,6 +133,7 @@ pub fn rrt_connect(
                 &other_root,
                 &reference,
                 options.step,
+                &mut rng,
                 &mut added,
             );
         }
@@ -132,12 +147,22 @@ pub fn rrt_connect(
                 &reference,
                 options,
                 &mut best,
+                &mut rng,
             ) {
-                break Ok(if a == 0 {
+                let (s, g) = if a == 0 {
                     (last, reached)
                 } else {
                     (reached, last)
-                });
+                };
+                // Lazy: the trees met through explored edges; the path is found
+                // once both branches pass the validator's own check (a failed edge
+                // is cut with its subtree, and the search goes on).
+                if !checker.is_lazy()
+                    || (trees[0].certify_branch(s, &mut checker)
+                        && trees[1].certify_branch(g, &mut checker))
+                {
+                    break Ok((s, g));
+                }
             }
         }
         a = b;
@@ -145,7 +170,7 @@ pub fn rrt_connect(
     let nodes = trees[0].len() + trees[1].len();
     match joined {
         Err(f) => Ok(PlannedPath::failed(
-            NAME,
+            name,
             f,
             run.iterations,
             nodes,
@@ -158,8 +183,10 @@ pub fn rrt_connect(
             back.reverse();
             // The meeting pose is in both branches.
             poses.extend(back.into_iter().skip(1));
+            // Smoothing keeps only edges the validator itself accepts.
+            checker.set_lazy(None);
             Ok(finish(
-                NAME,
+                name,
                 poses,
                 &mut checker,
                 space,
@@ -182,6 +209,7 @@ fn connect(
     reference: &nalgebra::UnitQuaternion<f64>,
     options: &RrtConnectOptions,
     best: &mut f64,
+    rng: &mut Rng,
 ) -> Option<usize> {
     let (mut node, _) = tree.nearest(q, space);
     // Bounded: the distance shrinks by `step` each round, but poses far apart with a
@@ -208,6 +236,7 @@ fn connect(
                 &PoseTarget(*q),
                 reference,
                 options.step,
+                rng,
                 &mut added,
             );
             if let Some(&last) = added.last() {

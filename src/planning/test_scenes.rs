@@ -237,6 +237,18 @@ fn plan(
             },
             None,
         ),
+        "rrt_connect_eager" => rrt_connect(
+            v,
+            &s,
+            start,
+            goal,
+            &RrtConnectOptions {
+                limits: lim,
+                lazy: None,
+                ..Default::default()
+            },
+            None,
+        ),
         "rrt_connect_plain" => rrt_connect(
             v,
             &s,
@@ -254,13 +266,14 @@ fn plan(
     .expect("valid options")
 }
 
-const PLANNERS: [&str; 7] = [
+const PLANNERS: [&str; 8] = [
     "greedy_ant",
     "rrt_floyd",
     "rrt",
     "biased_rrt",
     "local_rrt",
     "rrt_connect",
+    "rrt_connect_eager",
     "rrt_connect_plain",
 ];
 
@@ -454,6 +467,11 @@ fn bad_options_are_rejected_with_their_name() {
         ..Default::default()
     };
     assert!(err(rrt_connect(&mut v, &s, &a, &b, &o, None)).contains("step"));
+    let o = RrtConnectOptions {
+        lazy: Some(LazyValidation { step_mm: -1.0 }),
+        ..Default::default()
+    };
+    assert!(err(rrt_connect(&mut v, &s, &a, &b, &o, None)).contains("lazy.step_mm"));
     let nan = at(f64::NAN, 0.0, 0.0);
     assert!(err(rrt_connect(
         &mut v,
@@ -464,6 +482,53 @@ fn bad_options_are_rejected_with_their_name() {
         None
     ))
     .contains("start"));
+}
+
+/// Lazy validation explores with pose checks 8 mm apart, which jump a wall 1 mm
+/// thick (the box is 4 mm long); certification with the validator's own edge check
+/// must catch every such edge, cut it and let the search go round through the
+/// window. Every returned path is free in the exact scene, and the paths that were
+/// certified by the search's own counts: each edge of the path cost one check.
+#[test]
+fn lazy_search_certifies_its_path_and_repairs_jumped_walls() {
+    let hole = 6.0;
+    let wall = |ylo, yhi, zlo, zhi| aabb([-0.5, ylo, zlo], [0.5, yhi, zhi]);
+    let scene = scene(
+        [2.0; 3],
+        vec![
+            wall(-50.0, -hole, -50.0, 50.0),
+            wall(hole, 50.0, -50.0, 50.0),
+            wall(-hole, hole, -50.0, -hole),
+            wall(-hole, hole, hole, 50.0),
+        ],
+    );
+    let (start, goal) = (at(-20.0, 30.0, 0.0), at(20.0, 30.0, 0.0));
+    // The pose checks alone accept the straight edge through the wall.
+    let mut probe = scene.clone();
+    assert!(stepwise_edge_free(|p| probe.is_free(p), &start, &goal, 8.0, 0.8));
+    assert!(!scene.clone().edge_free(&start, &goal));
+    let fixed = space().with_rotation(RotationFreedom::Fixed);
+    for seed in 0..5 {
+        let o = RrtConnectOptions {
+            limits: limits(seed, 3000),
+            lazy: Some(LazyValidation { step_mm: 8.0 }),
+            smoothing: Smoothing::OFF,
+            ..Default::default()
+        };
+        let p = rrt_connect(&mut scene.clone(), &fixed, &start, &goal, &o, None).unwrap();
+        assert_eq!(p.planner, "lazy_rrt_connect");
+        assert_valid(&p, &scene, &start, Some(&goal));
+        assert!(
+            p.edge_checks >= (p.poses.len() - 1) as u64,
+            "every edge of the path was certified"
+        );
+        // It went through the window.
+        let crossing = p.densify(0.5, 0.01);
+        assert!(crossing
+            .iter()
+            .filter(|q| q.translation().x.abs() < 2.8)
+            .all(|q| q.translation().y.abs() < hole));
+    }
 }
 
 #[test]

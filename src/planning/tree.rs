@@ -20,6 +20,11 @@ pub(crate) struct Tree {
     /// Quantized poses, so the local discretization does not re-add a lattice vertex.
     keys: HashSet<[i64; 7]>,
     key_mm: f64,
+    /// Nodes cut off by a failed certification (lazy search): never nearest again.
+    dead: Vec<bool>,
+    /// Whether the edge parent → node passed the validator's own edge check (the
+    /// root's entry is true).
+    certified: Vec<bool>,
 }
 
 impl Tree {
@@ -32,8 +37,11 @@ impl Tree {
             rotations: Vec::new(),
             keys: HashSet::new(),
             key_mm,
+            dead: Vec::new(),
+            certified: Vec::new(),
         };
         t.add(root, 0);
+        t.certified[0] = true;
         t
     }
 
@@ -48,7 +56,46 @@ impl Tree {
         self.parent.push(parent);
         self.translations.push(pose.translation());
         self.rotations.push(pose.rotation());
+        self.dead.push(false);
+        self.certified.push(false);
         i
+    }
+
+    /// Cuts node `i` and everything grown from it out of the tree (they stay in the
+    /// arrays but are never nearest again). Parents come before their children, so
+    /// one pass from `i` finds every descendant.
+    fn cut(&mut self, i: usize) {
+        self.dead[i] = true;
+        for k in i + 1..self.len() {
+            if self.dead[self.parent[k]] {
+                self.dead[k] = true;
+            }
+        }
+    }
+
+    /// Certifies the branch root → `i` with the validator's own edge check
+    /// ([`Checker::certify`]), each edge in the direction it was grown (parent →
+    /// child), from the root outward, skipping edges certified before. On the first
+    /// edge that fails, cuts its child's subtree and returns `false`.
+    pub fn certify_branch(&mut self, i: usize, checker: &mut Checker<'_>) -> bool {
+        let mut chain = Vec::new();
+        let mut k = i;
+        while k != 0 {
+            chain.push(k);
+            k = self.parent[k];
+        }
+        for &k in chain.iter().rev() {
+            if self.certified[k] {
+                continue;
+            }
+            if checker.certify(&self.poses[self.parent[k]], &self.poses[k]) {
+                self.certified[k] = true;
+            } else {
+                self.cut(k);
+                return false;
+            }
+        }
+        true
     }
 
     /// Whether a pose equal to `pose` (up to the quantum) is already a node.
@@ -80,7 +127,7 @@ impl Tree {
         let mut best = (0, f64::INFINITY);
         for (i, t) in self.translations.iter().enumerate() {
             let d = (t - tt).norm();
-            if d >= best.1 {
+            if d >= best.1 || self.dead[i] {
                 continue;
             }
             let d = d + w * self.rotations[i].angle_to(&tq);

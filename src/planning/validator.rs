@@ -57,6 +57,39 @@ impl EdgeResolution {
     };
 }
 
+/// Lazy validation of a tree search: edges are explored with pose checks only
+/// (`is_free` at most `step_mm` of translation and `step_mm / rotation_weight` of
+/// rotation apart, the end pose first), which is cheap but can cut a corner or
+/// cross a feature thinner than a step; once the trees join, every edge of the
+/// candidate path is certified with the validator's own
+/// [`edge_free`](MotionValidator::edge_free) (continuous for the mesh validator).
+/// An edge that fails certification is cut from its tree with everything grown
+/// from it and the search goes on. The returned path is the certified one: its
+/// `resolution` is the validator's, as for an eager search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LazyValidation {
+    /// Largest translation (mm) between two explored poses of an edge; the rotation
+    /// step is this over the space's `rotation_weight` (rad). Default 1.
+    pub step_mm: f64,
+}
+
+impl Default for LazyValidation {
+    fn default() -> Self {
+        Self { step_mm: 1.0 }
+    }
+}
+
+impl LazyValidation {
+    /// The explored `(mm, rad)` steps in `space`'s metric.
+    pub(crate) fn steps(&self, space: &super::PlanningSpace) -> (f64, f64) {
+        (self.step_mm, self.step_mm / space.rotation_weight)
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), super::PlanError> {
+        super::PlanError::positive("lazy.step_mm", self.step_mm)
+    }
+}
+
 /// Answers whether the moving component collides with the fixed ones at a pose or
 /// along a straight edge between two poses.
 ///
@@ -198,6 +231,9 @@ pub fn stepwise_edge_free(
 pub(crate) struct Checker<'v> {
     validator: &'v mut dyn MotionValidator,
     deadline: Option<Instant>,
+    /// Lazy exploration: `edge_free` checks poses `(mm, rad)` apart with `is_free`
+    /// only; [`Checker::certify`] asks the validator's own edge check.
+    lazy: Option<(f64, f64)>,
     pub pose_checks: u64,
     pub edge_checks: u64,
 }
@@ -208,9 +244,29 @@ impl<'v> Checker<'v> {
         Self {
             validator,
             deadline,
+            lazy: None,
             pose_checks: 0,
             edge_checks: 0,
         }
+    }
+
+    /// Switches lazy exploration on (`Some((step_mm, step_rad))`: edges are
+    /// explored by pose checks that far apart) or off (`None`: the validator's own
+    /// edge check).
+    pub fn set_lazy(&mut self, steps: Option<(f64, f64)>) {
+        self.lazy = steps;
+    }
+
+    /// Whether edges are explored lazily.
+    pub fn is_lazy(&self) -> bool {
+        self.lazy.is_some()
+    }
+
+    /// The validator's own check of the edge `from → to` (what a lazy search
+    /// certifies its path with), whatever the mode.
+    pub fn certify(&mut self, from: &Transform, to: &Transform) -> bool {
+        self.edge_checks += 1;
+        !self.expired() && self.validator.edge_free(from, to)
     }
 
     /// Whether the deadline has passed.
@@ -223,9 +279,26 @@ impl<'v> Checker<'v> {
         !self.expired() && self.validator.is_free(pose)
     }
 
+    /// The edge check of the current mode: the validator's own, or, when lazy,
+    /// pose checks along the edge (end pose first, then bisection order).
     pub fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
-        self.edge_checks += 1;
-        !self.expired() && self.validator.edge_free(from, to)
+        let Some((mm, rad)) = self.lazy else {
+            return self.certify(from, to);
+        };
+        if self.expired() {
+            return false;
+        }
+        let (validator, checks) = (&mut *self.validator, &mut self.pose_checks);
+        stepwise_edge_free(
+            |p| {
+                *checks += 1;
+                validator.is_free(p)
+            },
+            from,
+            to,
+            mm,
+            rad,
+        )
     }
 
     pub fn clearance(&mut self, pose: &Transform) -> Option<f64> {

@@ -163,7 +163,7 @@ fn disassembly_labels_say_what_ran() {
     let ws = Workspace::new(&doc, &mut cache).unwrap();
     let start = ws.pose("screw5").unwrap();
     // screw5 stands on the table, inside the box of the others; sliding it 30 mm
-    // along the table keeps it inside: nothing to disassemble, plain rrt_connect.
+    // along the table keeps it inside: nothing to disassemble, plain (lazy) rrt_connect.
     let goal = shifted(&start, 0.0, 30.0, 0.0);
     let request = PlanRequest {
         disassemble: true,
@@ -172,13 +172,13 @@ fn disassembly_labels_say_what_ran() {
     };
     let path = ws.plan_path("screw5", &goal, &request, None).unwrap();
     assert!(path.found(), "{:?}", path.failure);
-    assert_eq!(path.planner, "rrt_connect");
+    assert_eq!(path.planner, "lazy_rrt_connect");
     // screw1 sits in a plate hole: its removal is a real disassembly.
     let seated = ws.pose("screw1").unwrap();
     let away = shifted(&seated, 0.0, 0.0, 400.0);
     let path = ws.plan_path("screw1", &away, &request, None).unwrap();
     assert!(path.found(), "{:?}", path.failure);
-    assert_eq!(path.planner, "disassemble_local_rrt+rrt_connect");
+    assert_eq!(path.planner, "disassemble_local_rrt+lazy_rrt_connect");
     assert!(ws
         .revalidate("screw1", &path, &request.validator)
         .unwrap()

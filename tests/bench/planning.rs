@@ -11,7 +11,8 @@
 //! OMPL's plain RRT), `FITUP_STEPWISE=1` (also fitup with stepwise edges),
 //! `FITUP_PROBLEM=name` (only problems whose name contains it),
 //! `FITUP_PROTOCOL=0` (skip seed 002's protocol), `FITUP_VALIDATOR=0` (skip the
-//! validator profile: pose and edge checks per problem).
+//! validator profile: pose and edge checks per problem), `FITUP_VARIANTS=1` (also
+//! fitup's exploration variants side by side: eager, lazy, random moves).
 
 use fitup::planning::problems::{self, Problem};
 use fitup::planning::{
@@ -87,19 +88,36 @@ struct Row {
     median_s: Option<f64>,
 }
 
+/// fitup's time budget per call in the benchmark (ms), the default one.
+const BUDGET_MS: f64 = fitup::planning::DEFAULT_TIME_LIMIT_MS;
+
+/// The largest overrun of the time budget seen in this run (ms of wall time past
+/// `BUDGET_MS`, measured around each call), printed at the end.
+static WORST_OVERRUN_MS: std::sync::Mutex<f64> = std::sync::Mutex::new(f64::NEG_INFINITY);
+
 /// fitup's best planner on `p` for `runs` seeds; `smoothing` adds the shortcut
-/// pass (OMPL's `solve` does not simplify either).
-fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize, smoothing: bool) -> Row {
+/// pass (OMPL's `solve` does not simplify either); `variant` adjusts the options.
+fn fitup_runs(
+    p: &Problem,
+    options: MeshValidatorOptions,
+    runs: usize,
+    smoothing: bool,
+    variant: &dyn Fn(&mut InsertionOptions),
+) -> Row {
     let mut times = Vec::new();
     for seed in 0..runs as u64 {
         let mut v = p.validator(options).unwrap();
         let mut plan = InsertionOptions::default().with_limits(seed, 5000);
+        plan.time_limit_ms = Some(BUDGET_MS);
         if !smoothing {
             plan.smoothing = Smoothing::OFF;
         }
+        variant(&mut plan);
         let t0 = Instant::now();
         let path = p.solve_with(&mut v, &plan).unwrap();
         let dt = t0.elapsed().as_secs_f64();
+        let mut worst = WORST_OVERRUN_MS.lock().unwrap();
+        *worst = worst.max(dt * 1e3 - BUDGET_MS);
         if path.found() {
             times.push(dt);
         }
@@ -109,6 +127,51 @@ fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize, smoothing
         runs,
         median_s: median(&mut times),
     }
+}
+
+/// The exploration variants compared by `FITUP_VARIANTS=1` (issue 12): eager
+/// validation (every edge checked continuously when added), lazy validation of the
+/// join only, lazy everywhere, and lazy with random coordinated moves in the
+/// local discretization.
+fn variants() -> Vec<(&'static str, Box<dyn Fn(&mut InsertionOptions)>)> {
+    use fitup::planning::LazyValidation;
+    let lazy = Some(LazyValidation::default());
+    vec![
+        (
+            "eager",
+            Box::new(|o: &mut InsertionOptions| {
+                o.approach.lazy = None;
+                o.disassembly.rrt_mut().lazy = None;
+            }),
+        ),
+        (
+            "lazy join",
+            Box::new(move |o: &mut InsertionOptions| {
+                o.approach.lazy = lazy;
+                o.disassembly.rrt_mut().lazy = None;
+            }),
+        ),
+        (
+            "lazy both",
+            Box::new(move |o: &mut InsertionOptions| {
+                o.approach.lazy = lazy;
+                o.disassembly.rrt_mut().lazy = lazy;
+            }),
+        ),
+        (
+            "lazy + 8 random moves",
+            Box::new(move |o: &mut InsertionOptions| {
+                o.approach.lazy = lazy;
+                o.disassembly.rrt_mut().lazy = lazy;
+                if let Some(l) = o.approach.lattice.as_mut() {
+                    l.random_moves = 8;
+                }
+                if let DisassemblyPlanner::LocalRrt(d) = &mut o.disassembly {
+                    d.lattice.random_moves = 8;
+                }
+            }),
+        ),
+    ]
 }
 
 /// Compiles the OMPL C++ harness (tests/bench/ompl/harness.cpp) when OMPL 1.5 and
@@ -378,6 +441,7 @@ fn main() {
     let cpp = build_cpp_peer(tmp.path());
     let stepwise = std::env::var_os("FITUP_STEPWISE").is_some();
     let only: Option<String> = std::env::var("FITUP_PROBLEM").ok();
+    let compare = std::env::var_os("FITUP_VARIANTS").is_some();
     println!(
         "planning: success and median time of successful runs; fitup = plan_insertion with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
     );
@@ -402,14 +466,21 @@ fn main() {
         let dir = tmp.path().join(&p.name);
         std::fs::create_dir_all(&dir).unwrap();
         let spec = export(&p, &dir);
-        let cont = fitup_runs(&p, p.default_validator_options(), runs, false);
-        let smoothed = fitup_runs(&p, p.default_validator_options(), runs, true);
+        if compare {
+            for (name, variant) in variants() {
+                let r = fitup_runs(&p, p.default_validator_options(), runs, false, &*variant);
+                println!("{:<18} {:>20} {}", "", fmt(&r), name);
+            }
+        }
+        let cont = fitup_runs(&p, p.default_validator_options(), runs, false, &|_| ());
+        let smoothed = fitup_runs(&p, p.default_validator_options(), runs, true, &|_| ());
         let ompl = if peer {
             peer_runs(&py, &spec, "RRTConnect", peer_n, limit)
         } else {
             None
         };
-        let step = stepwise.then(|| fitup_runs(&p, p.stepwise_validator_options(), runs, false));
+        let step = stepwise
+            .then(|| fitup_runs(&p, p.stepwise_validator_options(), runs, false, &|_| ()));
         let ratio = match (&ompl, cont.median_s) {
             (
                 Some(Row {
@@ -451,6 +522,12 @@ fn main() {
                 println!("{:<18} {:>20} {:>20}", "", "OMPL RRT", fmt(&r));
             }
         }
+    }
+    let worst = *WORST_OVERRUN_MS.lock().unwrap();
+    if worst.is_finite() {
+        println!(
+            "fitup's time budget: {BUDGET_MS} ms per call; largest overrun seen {worst:.1} ms (negative: every call ended within it)"
+        );
     }
     if std::env::var("FITUP_PROTOCOL").map_or(true, |v| v != "0") {
         protocol();
