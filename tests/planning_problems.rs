@@ -195,3 +195,25 @@ fn rotation_puzzles_are_well_posed() {
         }
     }
 }
+
+/// One time budget for the whole call: a search that cannot finish within it (the
+/// key ring, which no planner here solves in seconds) ends with the time limit,
+/// and the result reports the call's time as the sum of its search and smoothing.
+#[test]
+fn a_spent_budget_ends_the_call_with_the_time_limit_reported() {
+    use fitup::planning::{Failure, InsertionOptions};
+    let p = problems::key_ring().unwrap();
+    let mut v = p.validator(p.default_validator_options()).unwrap();
+    let mut options = InsertionOptions::default().with_limits(3, usize::MAX / 2);
+    options.time_limit_ms = Some(300.0);
+    let path = p.solve_with(&mut v, &options).unwrap();
+    assert_eq!(path.failure, Some(Failure::TimeLimit), "{}", path.planner);
+    assert!(path.time_ms > 0.0 && path.search_ms > 0.0);
+    assert!(
+        (path.time_ms - path.search_ms - path.smoothing_ms).abs() < 1.0,
+        "time {} = search {} + smoothing {}",
+        path.time_ms,
+        path.search_ms,
+        path.smoothing_ms
+    );
+}

@@ -2,13 +2,13 @@
 //! "what can be taken apart can be assembled", joined to the free end by RRT-Connect).
 
 use super::disassembly::{disassemble, DisassemblyPlanner};
-use super::local_rrt::LocalRrtOptions;
+use super::local_rrt::{Lattice, LocalRrtOptions};
 use super::path::{measure, PlannedPath};
 use super::rrt_connect::{rrt_connect, RrtConnectOptions};
 use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::{smooth, Smoothing};
 use super::space::PlanningSpace;
-use super::validator::MotionValidator;
+use super::validator::{LazyValidation, MotionValidator};
 use crate::collision::Aabb;
 use crate::math::Transform;
 use std::time::Instant;
@@ -17,11 +17,12 @@ use std::time::Instant;
 #[derive(Debug, Clone, PartialEq)]
 pub struct InsertionOptions {
     /// The disassembly search from the assembled end (its `limits.seed` seeds the
-    /// whole run; its smoothing and time limit are not used). Default: `local_rrt`.
+    /// whole run; its smoothing and time limit are not used). Default: `local_rrt`
+    /// with lazy validation and [`Lattice::RANDOM_MOVES`] random coordinated moves.
     pub disassembly: DisassemblyPlanner,
     /// The search joining the free end to where the disassembly left the product
     /// (its seed is derived from the disassembly's; its smoothing and time limit are
-    /// not used).
+    /// not used). Default: [`RrtConnectOptions::default`] (lazy, random moves).
     pub approach: RrtConnectOptions,
     /// Shortcut smoothing of the joined path.
     pub smoothing: Smoothing,
@@ -32,7 +33,10 @@ pub struct InsertionOptions {
 
 impl Default for InsertionOptions {
     fn default() -> Self {
-        let mut disassembly = DisassemblyPlanner::LocalRrt(LocalRrtOptions::default());
+        let mut local = LocalRrtOptions::default();
+        local.lattice.random_moves = Lattice::RANDOM_MOVES;
+        local.rrt.lazy = Some(LazyValidation::default());
+        let mut disassembly = DisassemblyPlanner::LocalRrt(local);
         disassembly.rrt_mut().smoothing.enabled = false;
         let mut approach = RrtConnectOptions::default();
         approach.smoothing.enabled = false;

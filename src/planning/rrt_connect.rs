@@ -19,7 +19,8 @@ pub struct RrtConnectOptions {
     /// Largest extension, in metric mm (see [`PlanningSpace`]). Default 10.
     pub step: f64,
     /// The local discretization tried when an extension or a connection is blocked
-    /// (`None`: plain RRT-Connect). Default `Some(Lattice::default())`.
+    /// (`None`: plain RRT-Connect). Default: [`Lattice::default`] with
+    /// [`Lattice::RANDOM_MOVES`] random coordinated moves.
     pub lattice: Option<Lattice>,
     /// Shortcut smoothing of the found path.
     pub smoothing: Smoothing,
@@ -35,7 +36,10 @@ impl Default for RrtConnectOptions {
         Self {
             limits: PlanLimits::default(),
             step: 10.0,
-            lattice: Some(Lattice::default()),
+            lattice: Some(Lattice {
+                random_moves: Lattice::RANDOM_MOVES,
+                ..Lattice::default()
+            }),
             smoothing: Smoothing::default(),
             lazy: Some(LazyValidation::default()),
         }

@@ -178,7 +178,7 @@ fn disassembly_labels_say_what_ran() {
     let away = shifted(&seated, 0.0, 0.0, 400.0);
     let path = ws.plan_path("screw1", &away, &request, None).unwrap();
     assert!(path.found(), "{:?}", path.failure);
-    assert_eq!(path.planner, "disassemble_local_rrt+lazy_rrt_connect");
+    assert_eq!(path.planner, "lazy_disassemble_local_rrt+lazy_rrt_connect");
     assert!(ws
         .revalidate("screw1", &path, &request.validator)
         .unwrap()
