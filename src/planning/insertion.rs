@@ -72,7 +72,11 @@ pub(crate) fn inside(part_box: &Aabb, pose: &Transform, product_box: &Aabb) -> b
 /// explored with pose checks, the path certified by the validator's edge check).
 fn label(disassembly: &DisassemblyPlanner, approach: &RrtConnectOptions) -> &'static str {
     let local = matches!(disassembly, DisassemblyPlanner::LocalRrt(_));
-    match (local, disassembly.rrt().lazy.is_some(), approach.lazy.is_some()) {
+    match (
+        local,
+        disassembly.rrt().lazy.is_some(),
+        approach.lazy.is_some(),
+    ) {
         (false, false, false) => "disassemble_rrt+rrt_connect",
         (false, false, true) => "disassemble_rrt+lazy_rrt_connect",
         (false, true, false) => "lazy_disassemble_rrt+rrt_connect",

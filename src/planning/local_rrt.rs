@@ -239,8 +239,7 @@ impl Lattice {
                     (true, Some(axis)) => UnitQuaternion::from_axis_angle(&axis, angle),
                     _ => UnitQuaternion::identity(),
                 };
-                let pose =
-                    Transform::from_parts(base.translation() + dir, turn * base.rotation());
+                let pose = Transform::from_parts(base.translation() + dir, turn * base.rotation());
                 if space.contains(&pose, reference) && !tree.holds(&pose) {
                     turns.push((target.distance(&pose, space), false, angle.abs(), pose));
                 }

@@ -505,7 +505,13 @@ fn lazy_search_certifies_its_path_and_repairs_jumped_walls() {
     let (start, goal) = (at(-20.0, 30.0, 0.0), at(20.0, 30.0, 0.0));
     // The pose checks alone accept the straight edge through the wall.
     let mut probe = scene.clone();
-    assert!(stepwise_edge_free(|p| probe.is_free(p), &start, &goal, 8.0, 0.8));
+    assert!(stepwise_edge_free(
+        |p| probe.is_free(p),
+        &start,
+        &goal,
+        8.0,
+        0.8
+    ));
     assert!(!scene.clone().edge_free(&start, &goal));
     let fixed = space().with_rotation(RotationFreedom::Fixed);
     for seed in 0..5 {

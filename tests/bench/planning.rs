@@ -479,8 +479,8 @@ fn main() {
         } else {
             None
         };
-        let step = stepwise
-            .then(|| fitup_runs(&p, p.stepwise_validator_options(), runs, false, &|_| ()));
+        let step =
+            stepwise.then(|| fitup_runs(&p, p.stepwise_validator_options(), runs, false, &|_| ()));
         let ratio = match (&ompl, cont.median_s) {
             (
                 Some(Row {
