@@ -259,16 +259,31 @@ impl MeshValidator {
             }
         }
         let options = self.edge_options();
-        for k in 0..self.near.len() {
-            if self.expired() {
-                return false;
+        // One continuous check along a long sliding contact can take a second; in
+        // pieces of at most PIECE_REACH_MM (a piece of a straight SE(3) edge is
+        // the straight edge between its ends, so nothing changes but where the
+        // deadline is read) no single call overruns the caller's budget by much.
+        let reach = dist + angle * self.moving.radius();
+        let pieces = (reach / PIECE_REACH_MM).ceil().clamp(1.0, 1e6) as u32;
+        let mut a = *from;
+        for i in 1..=pieces {
+            let b = if i == pieces {
+                *to
+            } else {
+                from.interpolate(to, f64::from(i) / f64::from(pieces))
+            };
+            for k in 0..self.near.len() {
+                if self.expired() {
+                    return false;
+                }
+                let (c, p, _) = &self.obstacles[self.near[k]];
+                self.stats.pair_queries += 1;
+                match edge_interferes(&self.moving, &a, &b, c, p, &options) {
+                    Ok(false) => {}
+                    _ => return false,
+                }
             }
-            let (c, p, _) = &self.obstacles[self.near[k]];
-            self.stats.pair_queries += 1;
-            match edge_interferes(&self.moving, from, to, c, p, &options) {
-                Ok(false) => {}
-                _ => return false,
-            }
+            a = b;
         }
         true
     }
@@ -277,6 +292,9 @@ impl MeshValidator {
 /// Edges longer than this (largest point displacement, mm) get static checks at
 /// 15 inner poses before the continuous pass.
 const PRESAMPLE_REACH_MM: f64 = 10.0;
+/// The continuous check runs in pieces whose points move at most this far (mm),
+/// reading the deadline between them.
+const PIECE_REACH_MM: f64 = 5.0;
 
 impl MotionValidator for MeshValidator {
     fn is_free(&mut self, pose: &Transform) -> bool {

@@ -205,6 +205,7 @@ pub fn rrt_connect(
 
 /// Grows `tree` straight toward `q` in `step`s; returns the node equal to `q` when
 /// reached. A blocked step tries the lattice once around the blocked node.
+#[allow(clippy::too_many_arguments)]
 fn connect(
     checker: &mut Checker<'_>,
     space: &PlanningSpace,
