@@ -129,11 +129,14 @@ fn fitup_runs(
     }
 }
 
+/// A change to fitup's default options.
+type Variant = Box<dyn Fn(&mut InsertionOptions)>;
+
 /// The exploration variants compared by `FITUP_VARIANTS=1` (issue 12): eager
 /// validation (every edge checked continuously when added), lazy validation of the
 /// join only, lazy everywhere, and lazy with random coordinated moves in the
 /// local discretization.
-fn variants() -> Vec<(&'static str, Box<dyn Fn(&mut InsertionOptions)>)> {
+fn variants() -> Vec<(&'static str, Variant)> {
     use fitup::planning::LazyValidation;
     let lazy = Some(LazyValidation::default());
     vec![
