@@ -294,7 +294,7 @@ impl MeshValidator {
 const PRESAMPLE_REACH_MM: f64 = 10.0;
 /// The continuous check runs in pieces whose points move at most this far (mm),
 /// reading the deadline between them.
-const PIECE_REACH_MM: f64 = 5.0;
+const PIECE_REACH_MM: f64 = 10.0;
 
 impl MotionValidator for MeshValidator {
     fn is_free(&mut self, pose: &Transform) -> bool {
