@@ -248,21 +248,5 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
 }
 
 fn print_event(e: &Event) {
-    match e {
-        Event::Connected(a) => outln!("connected {a}"),
-        Event::Started(_, d) => outln!("running {d}"),
-        Event::Finished { skill, part, state } => {
-            outln!("finished #{skill}: {part} {state}")
-        }
-        Event::Interrupted(i, why) => outln!("interrupted #{i}: {why}"),
-        Event::Reconnected => outln!("reconnected"),
-        Event::Paused => outln!("paused"),
-        Event::Resumed => outln!("resumed"),
-        Event::Edited(i) => outln!("edited #{i}"),
-        Event::EditRefused(i, why) => outln!("edit of #{i} refused: {why}"),
-        Event::Manual(c) => outln!("manual {c}"),
-        Event::Failed(i, why) => outln!("failed #{i}: {why}"),
-        Event::Aborted => outln!("aborted"),
-        Event::Done => outln!("done"),
-    }
+    outln!("{}", e.describe());
 }
