@@ -49,8 +49,9 @@ struct ManagerInner {
     parts: Mutex<BTreeMap<String, String>>,
 }
 
-const SKILL_KEYS: [&str; 11] = [
+const SKILL_KEYS: [&str; 12] = [
     "robot",
+    "supply",
     "tool",
     "templates",
     "place",
@@ -91,6 +92,15 @@ fn skills(d: &DocHandle, seq: &SequenceHandle, m: &Map) -> ScriptResult<SkillsHa
     }
     if let Some(t) = m.get("tool") {
         options.tool_in_grasp = to_transform(t, "tool")?;
+    }
+    if let Some(v) = m.get("supply") {
+        let Some(map) = v.clone().try_cast::<Map>() else {
+            return err("skills: `supply` must be a map part: pose");
+        };
+        for (part, pose) in map {
+            let t = to_transform(&pose, "supply")?;
+            options.supply.insert(part.to_string(), t);
+        }
     }
     if let Some(v) = m.get("supply_offset") {
         options.supply_offset = vec3(v, "supply_offset")?;
@@ -409,7 +419,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.type_::<ManagerObj>("SkillManager");
     api.f(
         "Document.skills(sequence: Sequence, options: map) -> Skills",
-        "The whole chain for the sequence's tasks (this document is the assembly): skills from the templates, checked for interference against the assembly as it is at each task (earlier parts assembled, later ones waiting), bound to a robot. Options: `robot` (a Robot, required; its current joints are the start), `templates: [files]` (override the defaults per operation, validated), `tool` (the robot's tool frame in the grasp frame, whose z is the approach and x the closing direction; identity — `[0, 0, 0, 180, 0, 0]` for a tool whose z points back at the flange), `place` (where the assembly sits in the robot's cell, Transform or `[x,y,z,a,b,c]`; identity), `supply_offset: [x,y,z]` (where each part waits before its task, from its assembled pose, assembly frame, mm; `[0, 60, 0]`), `long_range_mm` (50), `clearance_mm` (20), `touch_distance_mm` (10), `screw_turns` (2), `contact_force_n` (2), `check` (true).",
+        "The whole chain for the sequence's tasks (this document is the assembly): skills from the templates, checked for interference against the assembly as it is at each task (earlier parts assembled, later ones waiting), bound to a robot. Options: `robot` (a Robot, required; its current joints are the start), `templates: [files]` (override the defaults per operation, validated), `tool` (the robot's tool frame in the grasp frame, whose z is the approach and x the closing direction; identity — `[0, 0, 0, 180, 0, 0]` for a tool whose z points back at the flange), `place` (where the assembly sits in the robot's cell, Transform or `[x,y,z,a,b,c]`; identity), `supply_offset: [x,y,z]` (the parts wait in a row before their tasks: the k-th task's part, from 0, at its assembled pose moved by (k + 1) × this; assembly frame, mm; `[0, 60, 0]`), `supply: #{part: pose}` (where given parts wait instead, assembly frame), `long_range_mm` (50), `clearance_mm` (20), `touch_distance_mm` (10), `screw_turns` (2), `contact_force_n` (2), `check` (true).",
         |d: &mut DocHandle, seq: SequenceHandle, m: Map| skills(d, &seq, &m),
     );
     api.get(

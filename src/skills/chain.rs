@@ -48,6 +48,8 @@ pub struct ChainOptions {
     /// 0) at its assembled pose moved by (k + 1) × this, in the assembly frame (mm).
     /// Default: 60 mm along +Y.
     pub supply_offset: Vec3,
+    /// Supply poses given per part (part → assembly frame), instead of the row.
+    pub supply: HashMap<String, Transform>,
     /// The robot's tool frame in the grasp frame (the grasp's z is the approach — the
     /// mating direction —, x the closing direction): identity when the robot's tool
     /// z points where it approaches; a half turn about x for a tool whose z points
@@ -69,6 +71,7 @@ impl Default for ChainOptions {
             place: Transform::IDENTITY,
             supply_offset: Vec3::new(0.0, 60.0, 0.0),
             tool_in_grasp: Transform::IDENTITY,
+            supply: HashMap::new(),
             generator: GeneratorOptions::default(),
             motion: MotionOptions::default(),
             check: true,
@@ -137,7 +140,9 @@ pub fn plan_chain(
     if !options.place.is_finite() {
         return Err(ChainError::NotFinite("the placement"));
     }
-    if !options.supply_offset.iter().all(|v| v.is_finite()) {
+    if !options.supply_offset.iter().all(|v| v.is_finite())
+        || !options.supply.values().all(Transform::is_finite)
+    {
         return Err(ChainError::NotFinite("the supply offset"));
     }
     for t in tasks {
@@ -150,7 +155,14 @@ pub fn plan_chain(
     let supply: HashMap<&str, Transform> = tasks
         .iter()
         .enumerate()
-        .map(|(k, t)| (t.part.as_str(), supply_pose(t, k, &options.supply_offset)))
+        .map(|(k, t)| {
+            let pose = options
+                .supply
+                .get(&t.part)
+                .copied()
+                .unwrap_or_else(|| supply_pose(t, k, &options.supply_offset));
+            (t.part.as_str(), pose)
+        })
         .collect();
     // The assembly as it is during each task: earlier parts assembled, later ones
     // (and this one, which the sweep moves) at their supply poses.
