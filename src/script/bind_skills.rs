@@ -355,7 +355,7 @@ fn run(
             events.push(map.clone());
             if let Some((ncc, f)) = call {
                 if callback_error.is_none() {
-                    if let Err(x) = f.call_within_context::<Dynamic>(ncc, (map,)) {
+                    if let Err(x) = f.call_within_context::<Dynamic>(ncc, (map, m.clone())) {
                         inner.handle.abort();
                         callback_error = Some(x);
                     }
@@ -482,32 +482,32 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.f(
         "SkillManager.run(skills: Skills) -> array",
         "Dispatches every skill in order until done, aborted or failed (a failure is an error naming the skill and the reason); returns the events `#{event, skill, part, state, detail, text}` (printed as they happen unless `quiet`).",
-        |m: &mut ManagerObj, s: SkillsHandle| run(None, m, &s),
+        |m: ManagerObj, s: SkillsHandle| run(None, &m, &s),
     );
     api.f(
         "SkillManager.run(skills: Skills, on_event: fn) -> array",
-        "As `run(skills)`, calling `on_event(event)` for each event as it happens; the callback may call `pause()`, `resume()`, `abort()`, `edit(…)`, `manual(…)` (a `resume()` on the `paused` event continues; manual commands queued while paused run at once).",
-        |ncc: NativeCallContext, m: &mut ManagerObj, s: SkillsHandle, f: FnPtr| run(Some((&ncc, &f)), m, &s),
+        "As `run(skills)`, calling `on_event(event, manager)` for each event as it happens: steer the run through the callback's `manager` argument (`pause()`, `resume()`, `abort()`, `edit(…)`, `manual(…)`; a `resume()` on the `paused` event continues) rather than a captured variable.",
+        |ncc: NativeCallContext, m: ManagerObj, s: SkillsHandle, f: FnPtr| run(Some((&ncc, &f)), &m, &s),
     );
     api.f(
         "SkillManager.pause()",
         "Stops the arm now; the running skill continues on `resume()`.",
-        |m: &mut ManagerObj| m.0.handle.pause(),
+        |m: ManagerObj| m.0.handle.pause(),
     );
     api.f(
         "SkillManager.resume()",
         "Continues after `pause()`.",
-        |m: &mut ManagerObj| m.0.handle.resume(),
+        |m: ManagerObj| m.0.handle.resume(),
     );
     api.f(
         "SkillManager.abort()",
         "Stops the arm and the run; pending skills stay pending (`run` returns, its last event `aborted`).",
-        |m: &mut ManagerObj| m.0.handle.abort(),
+        |m: ManagerObj| m.0.handle.abort(),
     );
     api.f(
         "SkillManager.manual(command: string)",
         "Queues a manual tool command, run between skills or while paused: `grasp MM`, `release MM`, `touch MM`, `output I 0|1`.",
-        |m: &mut ManagerObj, cmd: &str| -> ScriptResult<()> {
+        |m: ManagerObj, cmd: &str| -> ScriptResult<()> {
             let c = Command::parse_manual(cmd)
                 .ok_or_else(|| fail(format!("manual: bad command `{cmd}` ({MANUAL_HELP})")))?;
             m.0.handle.manual(c);
@@ -517,12 +517,12 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.f(
         "SkillManager.edit(skills: Skills, id: int, changes: map)",
         "Replaces pending skill `id` of `skills` before it is dispatched: `#{commands: [manual commands], description}`; refused (event `edit_refused`) once it started.",
-        |m: &mut ManagerObj, s: SkillsHandle, id: i64, changes: Map| plan_step(m, &s, id, &changes),
+        |m: ManagerObj, s: SkillsHandle, id: i64, changes: Map| plan_step(&m, &s, id, &changes),
     );
     api.get(
         "SkillManager.parts -> map",
         "Each part's state after the skills run so far: `#{gear: \"Assembled\", …}`.",
-        |m: &mut ManagerObj| -> Map {
+        |m: ManagerObj| -> Map {
             m.0.parts
                 .lock()
                 .map(|p| {

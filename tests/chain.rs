@@ -1,0 +1,259 @@
+//! The whole chain from one script (issue 16): sequence → tasks → workflows →
+//! skills → dispatched to the simulated manipulator → every part Assembled, the
+//! execution log in the database. The commands are those of docs/skills.md and the
+//! README, run from the repository root against the real binaries over loopback.
+
+mod common;
+
+use fitup::db::{Database, SkillLogEntry, Target};
+use fitup::skills::Plan;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Child;
+use std::time::{Duration, Instant};
+
+const BOUND: Duration = Duration::from_secs(300);
+
+/// The skill log of the database's last recorded run.
+fn last_run_log(db: &Path) -> Vec<SkillLogEntry> {
+    let mut db = Database::open(&Target::Sqlite(db.to_path_buf())).unwrap();
+    let log = db.skill_log(None).unwrap();
+    let last = log.iter().filter_map(|e| e.run_id).max();
+    assert!(last.is_some(), "no run recorded the skill log: {log:?}");
+    log.into_iter().filter(|e| e.run_id == last).collect()
+}
+
+/// Every skill of the plan started and finished exactly once, in order, and every
+/// part of the plan ended Assembled.
+fn assert_assembled(plan_file: &Path, db: &Path) {
+    let root = common::repo();
+    let plan = Plan::from_json(
+        "plan",
+        &std::fs::read_to_string(root.join(plan_file)).unwrap(),
+    )
+    .unwrap();
+    assert!(!plan.steps.is_empty());
+    let log = last_run_log(&root.join(db));
+    for event in ["started", "finished"] {
+        let skills: Vec<i64> = log
+            .iter()
+            .filter(|e| e.event == event)
+            .map(|e| e.skill.unwrap())
+            .collect();
+        let expected: Vec<i64> = (0..plan.steps.len() as i64).collect();
+        assert_eq!(skills, expected, "`{event}` events of {}", db.display());
+    }
+    let mut state = BTreeMap::new();
+    for e in log.iter().filter(|e| e.event == "finished") {
+        let (part, s) = e.detail.split_once(' ').unwrap();
+        assert_eq!(Some(part), e.part.as_deref());
+        state.insert(part.to_string(), s.to_string());
+    }
+    for s in &plan.steps {
+        assert_eq!(state[&s.part], "Assembled", "{}: {state:?}", s.part);
+    }
+    assert_eq!(log.last().unwrap().event, "done");
+}
+
+struct Manipulator(Child);
+
+impl Drop for Manipulator {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `fitup manipulator ARGS` (from the repository root), once it listens.
+fn manipulator(args: &[&str]) -> Manipulator {
+    let mut child = common::fitup()
+        .current_dir(common::repo())
+        .arg("manipulator")
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while std::net::TcpStream::connect("127.0.0.1:11002").is_err() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "fitup manipulator exited"
+        );
+        assert!(start.elapsed() < Duration::from_secs(60), "no manipulator");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Manipulator(child)
+}
+
+fn run(args: &[&str]) -> std::process::Output {
+    let o = common::run_bounded(&common::repo(), args, BOUND);
+    assert!(
+        o.status.success(),
+        "fitup {}: {}",
+        args.join(" "),
+        common::text(&o)
+    );
+    o
+}
+
+#[test]
+fn the_wheel_and_the_cell_assemble_as_documented_in_process_and_over_tcp() {
+    // In-process simulator.
+    let o = run(&["run", "scripts/assemble_wheel.rhai", "--db", "out/wheel.db"]);
+    assert!(common::text(&o).contains("finished #13: cup Assembled"));
+    assert_assembled(
+        Path::new("out/assemble_wheel.plan.json"),
+        Path::new("out/wheel.db"),
+    );
+    run(&["run", "scripts/assemble_cell.rhai", "--db", "out/cell.db"]);
+    assert_assembled(
+        Path::new("out/assemble_cell.plan.json"),
+        Path::new("out/cell.db"),
+    );
+    // A separate `fitup manipulator` on the default ports.
+    {
+        let _sim = manipulator(&[
+            "--doc",
+            "models/mz07.yaml",
+            "--robot",
+            "mz07",
+            "--speed",
+            "20",
+        ]);
+        run(&[
+            "run",
+            "scripts/assemble_wheel.rhai",
+            "--dispatch",
+            "--db",
+            "out/wheel.db",
+            "--",
+            "target=127.0.0.1:11000",
+        ]);
+        assert_assembled(
+            Path::new("out/assemble_wheel.plan.json"),
+            Path::new("out/wheel.db"),
+        );
+    }
+    let _sim = manipulator(&[
+        "--doc",
+        "models/cell_arm.yaml",
+        "--robot",
+        "mz07",
+        "--speed",
+        "20",
+    ]);
+    run(&[
+        "run",
+        "scripts/assemble_cell.rhai",
+        "--dispatch",
+        "--db",
+        "out/cell.db",
+        "--",
+        "target=127.0.0.1:11000",
+    ]);
+    assert_assembled(
+        Path::new("out/assemble_cell.plan.json"),
+        Path::new("out/cell.db"),
+    );
+    // The plan file the script saved runs with `fitup skills run` too (the arm is
+    // back where the plan starts only for the first skill's joint move, which
+    // starts wherever the arm is).
+    let o = run(&[
+        "skills",
+        "run",
+        "out/assemble_cell.plan.json",
+        "--target",
+        "127.0.0.1:11000",
+    ]);
+    assert!(common::text(&o).ends_with("done\n"), "{}", common::text(&o));
+}
+
+#[test]
+fn a_script_dispatches_over_tcp_only_when_the_command_line_says_so() {
+    let root = common::repo();
+    // No manipulator listens on this port: the refusal comes before any connection.
+    let o = common::run_bounded(
+        &root,
+        &[
+            "run",
+            "scripts/assemble_wheel.rhai",
+            "--",
+            "target=127.0.0.1:1",
+        ],
+        BOUND,
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--dispatch") && err.contains("assemble_wheel.rhai:"),
+        "{err}"
+    );
+    let o = common::run_bounded(
+        &root,
+        &[
+            "run",
+            "scripts/assemble_wheel.rhai",
+            "--dispatch",
+            "--",
+            "target=192.0.2.7:11000",
+        ],
+        BOUND,
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--allow-remote"), "{err}");
+    // `--allow-remote` alone is a usage error.
+    let o = common::run_in(
+        &root,
+        &["run", "scripts/assemble_wheel.rhai", "--allow-remote"],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
+}
+
+#[test]
+fn a_script_pauses_resumes_commands_by_hand_and_aborts_from_its_event_callback() {
+    let root = common::repo();
+    std::fs::create_dir_all(root.join("out")).unwrap();
+    let script = root.join("out/test_chain_callback.rhai");
+    std::fs::write(
+        &script,
+        r#"
+let wheel = open_doc("models/wheel.yaml");
+let seq = wheel.assembly_sequence(#{seed: 1});
+let cell = open_doc("models/mz07.yaml");
+let robot = cell.robot("mz07");
+robot.joints = robot.ik_near([500, 0, 250, 0, 0, 0], [0, 0, 0, 0, -90, 0]);
+let skills = wheel.skills(seq, #{robot: robot, place: [500, 0, 150, 0, 0, 0], tool: [0, 0, 0, 180, 0, 0]});
+let m = skill_manager(#{target: "sim", robot: robot, speed: 20, quiet: true});
+// Skill 2 (a move of the gear) is paused as soon as it starts; on `paused` a manual
+// command is queued and the run resumed; the last skill is edited before it runs.
+m.edit(skills, skills.len - 1, #{commands: ["release 20"]});
+let events = m.run(skills, |e, manager| {
+    if e.event == "started" && e.skill == 2 { manager.pause(); }
+    if e.event == "paused" { manager.manual("output 3 1"); manager.resume(); }
+});
+let names = events.map(|e| e.event);
+print(names);
+assert(names.contains("paused") && names.contains("resumed") && names.contains("manual"), `${names}`);
+assert(names.contains("edited"), `${names}`);
+assert(names[names.len() - 1] == "done");
+assert(m.parts.cup == "Assembled" && m.parts.gear == "Assembled", `${m.parts}`);
+// Abort from the callback: the run returns, later skills never start.
+let m2 = skill_manager(#{target: "sim", robot: robot, speed: 20, quiet: true});
+let events = m2.run(skills, |e, manager| { if e.event == "finished" && e.skill == 1 { manager.abort(); } });
+let names = events.map(|e| e.event);
+assert(names[names.len() - 1] == "aborted", `${names}`);
+assert(events.filter(|e| e.event == "started").len() <= 3, `${names}`);
+print("callback ok");
+"#,
+    )
+    .unwrap();
+    let o = run(&["run", "out/test_chain_callback.rhai"]);
+    assert!(
+        common::text(&o).contains("callback ok"),
+        "{}",
+        common::text(&o)
+    );
+}
