@@ -29,7 +29,7 @@
 //! println!("{} skills", chain.skills.len());
 //! ```
 
-use super::generator::{generate, segment_check_fn, GeneratorOptions, SkillError};
+use super::generator::{generate, segment_check_fn, GeneratorOptions, SegmentHit, SkillError};
 use super::program::{BindError, Plan};
 use super::{Skill, Template};
 use crate::document::Document;
@@ -186,7 +186,7 @@ pub fn plan_chain(
         .enumerate()
         .map(|(k, t)| (t.index, k))
         .collect();
-    let mut check = |task: &Task, a: &Transform, b: &Transform| -> Result<(), String> {
+    let mut check = |task: &Task, a: &Transform, b: &Transform| -> Result<(), SegmentHit> {
         match position.get(&task.index).and_then(|&k| checks.get_mut(k)) {
             Some(c) => c(task, a, b),
             None => Ok(()),

@@ -22,7 +22,9 @@ pub mod program;
 mod template;
 
 pub use chain::{plan_chain, Chain, ChainError, ChainOptions};
-pub use generator::{generate, segment_check_fn, GeneratorOptions, SegmentCheck, SkillError};
+pub use generator::{
+    generate, segment_check_fn, GeneratorOptions, SegmentCheck, SegmentHit, SkillError,
+};
 pub use manager::{
     log_event, Event, ManagerHandle, ManagerOptions, RunError, SkillManager, SkillStatus,
 };
