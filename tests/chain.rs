@@ -257,3 +257,69 @@ print("callback ok");
         common::text(&o)
     );
 }
+
+#[test]
+fn a_new_save_aborts_a_running_manager_in_watch_mode() {
+    use std::io::BufRead;
+    let root = common::repo();
+    std::fs::create_dir_all(root.join("out")).unwrap();
+    let script = root.join("out/test_chain_watch.rhai");
+    let text = r#"
+let wheel = open_doc("models/wheel.yaml");
+let seq = wheel.assembly_sequence(#{seed: 1});
+let cell = open_doc("models/mz07.yaml");
+let robot = cell.robot("mz07");
+robot.joints = robot.ik_near([500, 0, 250, 0, 0, 0], [0, 0, 0, 0, -90, 0]);
+let skills = wheel.skills(seq, #{robot: robot, place: [500, 0, 150, 0, 0, 0], tool: [0, 0, 0, 180, 0, 0]});
+// Real time and slow: the run lasts far longer than the test waits.
+let m = skill_manager(#{target: "sim", robot: robot, speed: 0.05});
+m.run(skills);
+"#;
+    std::fs::write(&script, text).unwrap();
+    let mut child = common::fitup()
+        .current_dir(&root)
+        .args(["watch", "out/test_chain_watch.rhai"])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let out = child.stdout.take().unwrap();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(out).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut seen = Vec::new();
+    let mut wait_for = |what: &str, seen: &mut Vec<String>| {
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(120) {
+            if let Ok(l) = rx.recv_timeout(Duration::from_millis(100)) {
+                let hit = l.contains(what);
+                seen.push(l);
+                if hit {
+                    return;
+                }
+            }
+        }
+        let _ = child.kill();
+        panic!("no `{what}` in watch output: {seen:#?}");
+    };
+    // The arm is moving (skill #1 is the grasp's joint move), then a save.
+    wait_for("running #1", &mut seen);
+    std::thread::sleep(Duration::from_millis(300));
+    std::fs::write(&script, format!("{text}\n// saved again\n")).unwrap();
+    wait_for("aborted", &mut seen);
+    // The new run starts from the beginning.
+    wait_for("running #0", &mut seen);
+    let _ = child.kill();
+    let _ = child.wait();
+    let aborted = seen.iter().position(|l| l.contains("aborted")).unwrap();
+    assert!(
+        !seen[..aborted].iter().any(|l| l.contains("finished #1")),
+        "the moving skill was not cut off: {seen:#?}"
+    );
+}
