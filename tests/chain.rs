@@ -66,6 +66,11 @@ impl Drop for Manipulator {
 
 /// `fitup manipulator ARGS` (from the repository root), once it listens.
 fn manipulator(args: &[&str]) -> Manipulator {
+    manipulator_on(args, 11002)
+}
+
+/// [`manipulator`] with its state port.
+fn manipulator_on(args: &[&str], state_port: u16) -> Manipulator {
     let mut child = common::fitup()
         .current_dir(common::repo())
         .arg("manipulator")
@@ -76,7 +81,7 @@ fn manipulator(args: &[&str]) -> Manipulator {
         .spawn()
         .unwrap();
     let start = Instant::now();
-    while std::net::TcpStream::connect("127.0.0.1:11002").is_err() {
+    while std::net::TcpStream::connect(("127.0.0.1", state_port)).is_err() {
         assert!(
             child.try_wait().unwrap().is_none(),
             "fitup manipulator exited"
@@ -322,4 +327,103 @@ m.run(skills);
         !seen[..aborted].iter().any(|l| l.contains("finished #1")),
         "the moving skill was not cut off: {seen:#?}"
     );
+}
+
+fn tmux(socket: &str, args: &[&str]) -> String {
+    let o = std::process::Command::new("tmux")
+        .arg("-L")
+        .arg(socket)
+        .args(args)
+        .output()
+        .expect("tmux (Debian package `tmux`) runs the terminal UI test");
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn the_terminal_ui_shows_the_run_and_takes_keys_under_tmux() {
+    let root = common::repo();
+    // The plan the wheel script saves (deterministic: the same file every run).
+    run(&["run", "scripts/assemble_wheel.rhai"]);
+    let _sim = manipulator_on(
+        &[
+            "--doc",
+            "models/mz07.yaml",
+            "--robot",
+            "mz07",
+            "--speed",
+            "3",
+            "--port",
+            "11300",
+            "--state-port",
+            "11302",
+        ],
+        11302,
+    );
+    let socket = format!("fitup-chain-test-{}", std::process::id());
+    let command = format!(
+        "{} skills run out/assemble_wheel.plan.json --target 127.0.0.1:11300; echo EXIT=$?; sleep 60",
+        env!("CARGO_BIN_EXE_fitup")
+    );
+    tmux(
+        &socket,
+        &[
+            "new-session",
+            "-d",
+            "-x",
+            "150",
+            "-y",
+            "45",
+            "-c",
+            root.to_str().unwrap(),
+            &command,
+        ],
+    );
+    struct Server(String);
+    impl Drop for Server {
+        fn drop(&mut self) {
+            tmux(&self.0, &["kill-server"]);
+        }
+    }
+    let _server = Server(socket.clone());
+    let screen = || tmux(&socket, &["capture-pane", "-p"]);
+    let wait_for = |what: &str| -> String {
+        let start = Instant::now();
+        loop {
+            let s = screen();
+            if s.contains(what) {
+                return s;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(120),
+                "no `{what}` on the screen:\n{s}"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    };
+    // The lists and the live joints while the arm moves.
+    let s = wait_for("running:  #1 Grasp gear");
+    assert!(
+        s.contains("pending (") && s.contains("finished (1/14)"),
+        "{s}"
+    );
+    assert!(s.contains("parts:") && s.contains("gear In_WS"), "{s}");
+    assert!(s.contains("joints:") && s.contains('°'), "{s}");
+    tmux(&socket, &["send-keys", "p"]);
+    let s = wait_for("state: paused");
+    assert!(s.contains("running:  #1 Grasp gear"), "{s}");
+    // A manual command while paused, then resume.
+    tmux(&socket, &["send-keys", "m"]);
+    wait_for("manual command (");
+    tmux(&socket, &["send-keys", "output 3 1", "Enter"]);
+    wait_for("manual output 3 1");
+    tmux(&socket, &["send-keys", "r"]);
+    wait_for("resumed");
+    let s = wait_for("state: done");
+    assert!(
+        s.contains("finished (14/14)") && s.contains("cup Assembled"),
+        "{s}"
+    );
+    tmux(&socket, &["send-keys", "q"]);
+    let s = wait_for("EXIT=");
+    assert!(s.contains("EXIT=0"), "{s}");
 }

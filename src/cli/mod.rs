@@ -9,6 +9,7 @@ pub(crate) mod out;
 mod run;
 mod sequence;
 mod skills;
+mod skills_tui;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};

@@ -106,6 +106,8 @@ struct Control {
     abort: AtomicBool,
     manual: Mutex<VecDeque<Command>>,
     edits: Mutex<VecDeque<(usize, PlanStep)>>,
+    /// The controller's joints last seen (rad / mm).
+    joints: Mutex<Vec<f64>>,
 }
 
 /// A handle to steer a running manager from another thread.
@@ -123,6 +125,11 @@ impl ManagerHandle {
     /// steering calls made before the run are applied when it starts.
     pub fn new() -> Self {
         Self(Arc::new(Control::default()))
+    }
+    /// The controller's joints last seen by the manager (rad / mm; empty before the
+    /// first motion), refreshed while a trajectory runs.
+    pub fn joints(&self) -> Vec<f64> {
+        lock(&self.0.joints).clone()
     }
     /// Clears a previous abort and pause, for a new run.
     pub fn reset(&self) {
@@ -439,8 +446,14 @@ impl SkillManager {
                     );
                     client.stream(&stream)?;
                 }
-                let cancel = || self.cancelled();
-                let arrived = client.wait_until_at(
+                let client_ref: &Client = client;
+                let cancel = || {
+                    if let Ok(st) = client_ref.state() {
+                        *lock(&self.control.joints) = st.joints;
+                    }
+                    self.cancelled()
+                };
+                let arrived = client_ref.wait_until_at(
                     &last.0,
                     self.options.tolerance,
                     self.options.skill_timeout,
