@@ -242,7 +242,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         }
         runner
             .join()
-            .unwrap_or_else(|_| Err(crate::skills::RunError::Aborted))
+            .unwrap_or(Err(crate::skills::RunError::Aborted))
     } else {
         // Commands from standard input; the thread ends with the process.
         std::thread::spawn(move || {
