@@ -10,8 +10,8 @@ use fitup::math::{Point3, Transform, Vec3};
 use fitup::planning::{EdgeResolution, PlannedPath};
 use fitup::sequence::{Grasp, Operation, Task};
 use fitup::skills::{
-    generate, Action, Event, GeneratorOptions, ManagerOptions, PartState, Plan, SkillManager,
-    Template,
+    generate, Action, Event, GeneratorOptions, ManagerOptions, PartState, Plan, SegmentHit,
+    SkillManager, Template,
 };
 use std::path::Path;
 
@@ -54,7 +54,7 @@ fn gear_task(assembled: Transform) -> Task {
     }
 }
 
-fn no_check(_: &Task, _: &Transform, _: &Transform) -> Result<(), String> {
+fn no_check(_: &Task, _: &Transform, _: &Transform) -> Result<(), SegmentHit> {
     Ok(())
 }
 
@@ -127,7 +127,10 @@ fn a_segment_that_interferes_stops_generation_with_the_reason() {
         let (xa, xb) = (a.translation().x, b.translation().x);
         let z = a.translation().z.max(b.translation().z);
         if xa.min(xb) < 100.0 && xa.max(xb) > 100.0 && z < 100.0 {
-            Err("the part hits `wall`".into())
+            Err(SegmentHit::Component {
+                with: "wall".into(),
+                fraction: 0.5,
+            })
         } else {
             Ok(())
         }

@@ -9,6 +9,7 @@ pub(crate) mod out;
 mod run;
 mod sequence;
 mod skills;
+mod skills_tui;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};
@@ -55,6 +56,15 @@ pub struct ScriptArgs {
     /// `open_db()` opens the same one.
     #[arg(long, num_args = 0..=1, default_missing_value = "")]
     pub db: Option<String>,
+    /// Let the script's skill manager command a manipulator over TCP on this
+    /// machine (`skill_manager(#{target: "127.0.0.1:11000"})`); without it only the
+    /// in-process simulator (`target: "sim"`) runs.
+    #[arg(long)]
+    pub dispatch: bool,
+    /// With `--dispatch`: also to an address that is not this machine (a real
+    /// controller).
+    #[arg(long, requires = "dispatch")]
+    pub allow_remote: bool,
 }
 
 /// Options of `watch` (a Rhai script only: motion programs are run with `run`).
@@ -80,6 +90,15 @@ pub struct WatchArgs {
     /// `open_db()` opens the same one.
     #[arg(long, num_args = 0..=1, default_missing_value = "")]
     pub db: Option<String>,
+    /// Let the script's skill manager command a manipulator over TCP on this
+    /// machine (`skill_manager(#{target: "127.0.0.1:11000"})`); without it only the
+    /// in-process simulator (`target: "sim"`) runs.
+    #[arg(long)]
+    pub dispatch: bool,
+    /// With `--dispatch`: also to an address that is not this machine (a real
+    /// controller).
+    #[arg(long, requires = "dispatch")]
+    pub allow_remote: bool,
 }
 
 impl From<WatchArgs> for ScriptArgs {
@@ -93,6 +112,8 @@ impl From<WatchArgs> for ScriptArgs {
             max_operations: w.max_operations,
             args: w.args,
             db: w.db,
+            dispatch: w.dispatch,
+            allow_remote: w.allow_remote,
         }
     }
 }

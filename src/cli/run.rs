@@ -3,7 +3,9 @@
 use super::out::{errln, outln};
 use super::{Exit, ScriptArgs};
 use crate::math::format;
-use crate::script::{run_script, Arguments, Caches, Limits, Project, RunOptions, ScriptError};
+use crate::script::{
+    run_script, Arguments, Caches, Dispatch, Limits, Project, RunOptions, ScriptError,
+};
 use crate::watch::{watch as watch_loop, WatchEvent};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -21,6 +23,11 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
         project,
         limits: Limits {
             max_operations: a.max_operations,
+            dispatch: match (a.dispatch, a.allow_remote) {
+                (false, _) => Dispatch::Never,
+                (true, false) => Dispatch::Loopback,
+                (true, true) => Dispatch::Remote,
+            },
             ..Limits::default()
         },
         cancel: Arc::new(AtomicBool::new(false)),

@@ -5,6 +5,7 @@ use super::out::{errln, outln};
 use super::Exit;
 use crate::manipulator::simulator::{Simulator, SimulatorOptions};
 use crate::skills::{Event, ManagerOptions, SkillManager};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// Options of `manipulator`.
@@ -38,9 +39,12 @@ pub struct SkillsArgs {
 /// `skills` subcommands.
 #[derive(Debug, clap::Subcommand, Clone)]
 pub enum SkillsCommand {
-    /// Dispatch a plan file (JSON, written by `Plan::to_json` in the Rust API) to a
-    /// controller, printing one line per event. Standard input takes `pause`,
-    /// `resume`, `abort`, `manual grasp|release|touch MM`, `manual output I 0|1`.
+    /// Dispatch a plan file (JSON: a script's `skills.save(FILE)`, or `Plan::to_json`)
+    /// to a controller. On a terminal: a terminal UI (running / finished / pending
+    /// skills, part states, live joints; keys p pause, r resume, a abort, m manual
+    /// command, q quit). Otherwise (or `--plain`) one line per event, and standard
+    /// input takes `pause`, `resume`, `abort`, `manual grasp|release|touch MM`,
+    /// `manual output I 0|1`.
     Run {
         /// The plan file.
         plan: PathBuf,
@@ -64,6 +68,10 @@ pub enum SkillsCommand {
         /// folder), or `--db FILE|postgres://…`.
         #[arg(long, num_args = 0..=1, default_missing_value = "")]
         db: Option<String>,
+        /// One line per event, commands from standard input, even on a terminal
+        /// (the default when standard output or input is not a terminal).
+        #[arg(long)]
+        plain: bool,
     },
     /// Validate a task template (`models/templates/*.yaml` or your own copy): errors
     /// at `file:line:col`, then the chain of workflows.
@@ -146,6 +154,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         reconnect_timeout,
         skill_timeout,
         db,
+        plain,
     } = &a.command
     else {
         unreachable!("handled above")
@@ -201,33 +210,8 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
     let logged_plan = plan.clone();
     let mut manager = SkillManager::new(plan, options);
     let handle = manager.handle();
-    // Commands from standard input; the thread ends with the process.
-    std::thread::spawn(move || {
-        let mut line = String::new();
-        while {
-            line.clear();
-            std::io::stdin().read_line(&mut line).is_ok_and(|n| n > 0)
-        } {
-            let l = line.trim();
-            match l {
-                "pause" => handle.pause(),
-                "resume" => handle.resume(),
-                "abort" => handle.abort(),
-                "" => {}
-                _ => match l
-                    .strip_prefix("manual ")
-                    .and_then(crate::skills::Command::parse_manual)
-                {
-                    Some(c) => handle.manual(c),
-                    None => errln!(
-                        "unknown command `{l}` (pause, resume, abort, manual grasp|release|touch MM, manual output I 0|1)"
-                    ),
-                },
-            }
-        }
-    });
     let mut log_failed = false;
-    let result = manager.run(&mut |e| {
+    let mut record = move |e: &Event| {
         if let Some(db) = db.as_mut() {
             if let Err(err) = crate::skills::log_event(db, None, &label, &logged_plan, e) {
                 if !log_failed {
@@ -236,10 +220,67 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
                 }
             }
         }
-        print_event(e)
-    });
+    };
+    let tui = !*plain && std::io::stdout().is_terminal() && std::io::stdin().is_terminal();
+    let result = if tui {
+        let shown = manager.plan().clone();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let runner = std::thread::spawn(move || {
+            let r = manager.run(&mut |e| {
+                record(e);
+                let _ = tx.send(super::skills_tui::Msg::Event(e.clone()));
+            });
+            let _ = tx.send(super::skills_tui::Msg::End(
+                r.as_ref().err().map(|e| e.to_string()),
+            ));
+            r
+        });
+        let title = format!("fitup skills run {plan_label} → {target}");
+        if let Err(e) = super::skills_tui::run(&shown, title, &handle, &rx) {
+            handle.abort();
+            errln!("error: the terminal UI failed: {e}");
+        }
+        runner
+            .join()
+            .unwrap_or(Err(crate::skills::RunError::Aborted))
+    } else {
+        // Commands from standard input; the thread ends with the process.
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            while {
+                line.clear();
+                std::io::stdin().read_line(&mut line).is_ok_and(|n| n > 0)
+            } {
+                let l = line.trim();
+                match l {
+                    "pause" => handle.pause(),
+                    "resume" => handle.resume(),
+                    "abort" => handle.abort(),
+                    "" => {}
+                    _ => match l
+                        .strip_prefix("manual ")
+                        .and_then(crate::skills::Command::parse_manual)
+                    {
+                        Some(c) => handle.manual(c),
+                        None => errln!(
+                            "unknown command `{l}` (pause, resume, abort, manual grasp|release|touch MM, manual output I 0|1)"
+                        ),
+                    },
+                }
+            }
+        });
+        manager.run(&mut |e| {
+            record(e);
+            print_event(e)
+        })
+    };
     match result {
-        Ok(()) => Exit::Ok,
+        Ok(()) => {
+            if tui {
+                outln!("done");
+            }
+            Exit::Ok
+        }
         Err(e) => {
             errln!("error: {e}");
             Exit::Failure
@@ -248,21 +289,5 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
 }
 
 fn print_event(e: &Event) {
-    match e {
-        Event::Connected(a) => outln!("connected {a}"),
-        Event::Started(_, d) => outln!("running {d}"),
-        Event::Finished { skill, part, state } => {
-            outln!("finished #{skill}: {part} {state}")
-        }
-        Event::Interrupted(i, why) => outln!("interrupted #{i}: {why}"),
-        Event::Reconnected => outln!("reconnected"),
-        Event::Paused => outln!("paused"),
-        Event::Resumed => outln!("resumed"),
-        Event::Edited(i) => outln!("edited #{i}"),
-        Event::EditRefused(i, why) => outln!("edit of #{i} refused: {why}"),
-        Event::Manual(c) => outln!("manual {c}"),
-        Event::Failed(i, why) => outln!("failed #{i}: {why}"),
-        Event::Aborted => outln!("aborted"),
-        Event::Done => outln!("done"),
-    }
+    outln!("{}", e.describe());
 }

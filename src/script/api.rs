@@ -188,6 +188,7 @@ pub(crate) fn register_all(
     super::bind_robot::register(&mut api, ctx);
     super::bind_db::register(&mut api, ctx);
     super::bind_sequence::register(&mut api);
+    super::bind_skills::register(&mut api, ctx);
     (api.sections, api.entries, api.overloads)
 }
 

@@ -17,8 +17,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 /// An open results database in a script (cheap to clone).
 #[derive(Clone)]
 pub struct DbHandle {
-    db: Arc<Mutex<Database>>,
-    run_id: Option<i64>,
+    pub(super) db: Arc<Mutex<Database>>,
+    pub(super) run_id: Option<i64>,
     ctx: Arc<Context>,
 }
 

@@ -21,8 +21,8 @@ use std::sync::Arc;
 /// A robot of a document, by index (shares the document with its handle).
 #[derive(Clone)]
 pub struct RobotHandle {
-    doc: DocHandle,
-    index: usize,
+    pub(super) doc: DocHandle,
+    pub(super) index: usize,
 }
 
 /// A robot built in a script (`robot_opw`, `robot_dh`), not yet in a document.
@@ -67,7 +67,7 @@ pub struct TrajectoryHandle {
 impl RobotHandle {
     /// The robot (kinematics, base, tool; shared, not copied) and its current joints
     /// (rad/mm). The document lock is held only to take the handle.
-    fn snapshot(&self) -> ScriptResult<(Arc<Robot>, Vec<f64>)> {
+    pub(super) fn snapshot(&self) -> ScriptResult<(Arc<Robot>, Vec<f64>)> {
         let doc = self.doc.lock()?;
         let r = doc.robot_at(self.index).map_err(fail)?;
         Ok((r.shared_robot(), r.joints().to_vec()))

@@ -16,7 +16,7 @@ use std::sync::Arc;
 /// The result of `doc.assembly_sequence` (cheap to clone); it keeps the run context
 /// so `save_csv` can check and record the file it writes.
 #[derive(Clone)]
-pub struct SequenceHandle(Arc<SequencePlan>, Arc<Context>);
+pub struct SequenceHandle(pub(super) Arc<SequencePlan>, Arc<Context>);
 
 const KEYS: [&str; 11] = [
     "base",

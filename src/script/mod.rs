@@ -14,13 +14,14 @@ mod bind_math;
 mod bind_planning;
 mod bind_robot;
 mod bind_sequence;
+mod bind_skills;
 mod convert;
 pub mod sandbox;
 
 pub use api::{api_reference, ApiEntry};
 pub use args::{ArgError, ArgValue, Arguments};
 pub use bind_document::DocHandle;
-pub use sandbox::{Limits, Project};
+pub use sandbox::{Dispatch, Limits, Project};
 
 use crate::diagnostics::SourceError;
 use crate::mesh::MeshCache;
@@ -103,6 +104,8 @@ pub struct Context {
     pub output: OutputSink,
     /// The script's arguments (`fitup run SCRIPT -- key=value …`), the map `args`.
     pub args: Arguments,
+    /// Whether skills may be dispatched over TCP (`fitup run --dispatch`).
+    pub dispatch: Dispatch,
     reads: Mutex<BTreeSet<PathBuf>>,
     writes: Mutex<BTreeSet<PathBuf>>,
     operations: AtomicU64,
@@ -133,6 +136,7 @@ impl Context {
             cancel,
             output,
             args: Arguments::default(),
+            dispatch: Dispatch::Never,
             reads: Mutex::default(),
             writes: Mutex::default(),
             operations: AtomicU64::new(0),
@@ -142,6 +146,12 @@ impl Context {
     /// The same context with script arguments.
     pub fn with_args(mut self, args: Arguments) -> Self {
         self.args = args;
+        self
+    }
+
+    /// The same context with the dispatch permission of the command line.
+    pub fn with_dispatch(mut self, dispatch: Dispatch) -> Self {
+        self.dispatch = dispatch;
         self
     }
 
@@ -280,7 +290,8 @@ pub fn run_script(opts: &RunOptions, caches: &Arc<Caches>) -> RunOutcome {
             opts.cancel.clone(),
             opts.output.clone(),
         )
-        .with_args(opts.args.clone()),
+        .with_args(opts.args.clone())
+        .with_dispatch(opts.limits.dispatch),
     );
     let result = std::thread::scope(|s| {
         let run = std::thread::Builder::new()

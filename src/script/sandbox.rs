@@ -31,6 +31,21 @@ pub struct Limits {
     pub max_modules: usize,
     /// Depth of nested imports (a module importing a module importing …).
     pub max_import_depth: usize,
+    /// Whether the script may dispatch skills to a manipulator over TCP
+    /// (`fitup run --dispatch [--allow-remote]`); the in-process simulator needs none.
+    pub dispatch: Dispatch,
+}
+
+/// Permission to command a manipulator over TCP from a script.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Dispatch {
+    /// Never (the default, and `fitup watch` without `--dispatch`).
+    #[default]
+    Never,
+    /// To a controller on this machine (loopback) only: `--dispatch`.
+    Loopback,
+    /// To any address: `--dispatch --allow-remote`.
+    Remote,
 }
 
 /// The default operation limit: a tight loop (`while true { x += 1 }`) reaches it in
@@ -50,6 +65,7 @@ impl Default for Limits {
             max_map_size: 2_000_000,
             max_modules: 64,
             max_import_depth: 16,
+            dispatch: Dispatch::Never,
         }
     }
 }

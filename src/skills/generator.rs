@@ -44,8 +44,24 @@ impl Default for GeneratorOptions {
 }
 
 /// Checks one straight segment of the part (poses part frame → world) against the
-/// cell; `Err` holds the reason (what it hits).
-pub type SegmentCheck<'a> = dyn FnMut(&Task, &Transform, &Transform) -> Result<(), String> + 'a;
+/// cell; `Err` says what it hits.
+pub type SegmentCheck<'a> = dyn FnMut(&Task, &Transform, &Transform) -> Result<(), SegmentHit> + 'a;
+
+/// Why a segment of a part's motion is refused by a [`SegmentCheck`].
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SegmentHit {
+    /// The part hits a component of the cell.
+    #[error("the part hits `{with}` at {:.0}% of the segment", fraction * 100.0)]
+    Component {
+        /// The component hit.
+        with: String,
+        /// Where along the segment (0 at its start, 1 at its end).
+        fraction: f64,
+    },
+    /// The segment could not be checked (the cell's geometry, the part's name).
+    #[error("the segment cannot be checked: {0}")]
+    Unchecked(String),
+}
 
 /// Why skills cannot be generated.
 #[derive(Debug, Error)]
@@ -70,7 +86,7 @@ pub enum SkillError {
         /// `P0->P1`, …
         segment: String,
         /// What it hits.
-        reason: String,
+        reason: SegmentHit,
     },
     /// A task that cannot be used (non-finite values, zero mating direction…).
     #[error("task {task} ({part}): {reason}")]
@@ -318,23 +334,23 @@ pub fn move_path(
 /// way).
 pub fn segment_check_fn(
     doc: &crate::document::Document,
-) -> impl FnMut(&Task, &Transform, &Transform) -> Result<(), String> + '_ {
+) -> impl FnMut(&Task, &Transform, &Transform) -> Result<(), SegmentHit> + '_ {
     let mut cache = crate::workspace::SceneCache::new();
     move |task, from, to| {
-        let ws = crate::workspace::Workspace::new(doc, &mut cache).map_err(|e| e.to_string())?;
+        let ws = crate::workspace::Workspace::new(doc, &mut cache)
+            .map_err(|e| SegmentHit::Unchecked(e.to_string()))?;
         let hit = ws
             .sweep(
                 &task.part,
                 &crate::collision::Motion::Poses(vec![*from, *to]),
                 &crate::collision::SweepOptions::default(),
             )
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| SegmentHit::Unchecked(e.to_string()))?;
         if hit.hit {
-            let with = hit.with.map_or("?", |i| ws.name(i));
-            return Err(format!(
-                "the part hits `{with}` at {:.0}% of the segment",
-                hit.t * 100.0
-            ));
+            return Err(SegmentHit::Component {
+                with: hit.with.map_or("?", |i| ws.name(i)).to_string(),
+                fraction: hit.t,
+            });
         }
         Ok(())
     }

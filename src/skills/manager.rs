@@ -106,13 +106,40 @@ struct Control {
     abort: AtomicBool,
     manual: Mutex<VecDeque<Command>>,
     edits: Mutex<VecDeque<(usize, PlanStep)>>,
+    /// The controller's joints last seen (rad / mm).
+    joints: Mutex<Vec<f64>>,
 }
 
 /// A handle to steer a running manager from another thread.
 #[derive(Clone)]
 pub struct ManagerHandle(Arc<Control>);
 
+impl Default for ManagerHandle {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl ManagerHandle {
+    /// A handle not yet bound to a manager (see [`SkillManager::with_handle`]):
+    /// steering calls made before the run are applied when it starts.
+    pub fn new() -> Self {
+        Self(Arc::new(Control::default()))
+    }
+    /// The controller's joints last seen by the manager (rad / mm; empty before the
+    /// first motion), refreshed while a trajectory runs.
+    pub fn joints(&self) -> Vec<f64> {
+        lock(&self.0.joints).clone()
+    }
+    /// Clears a previous abort and pause, for a new run.
+    pub fn reset(&self) {
+        self.0.abort.store(false, Ordering::SeqCst);
+        self.0.paused.store(false, Ordering::SeqCst);
+    }
+    /// Whether [`abort`](Self::abort) was called (and not [`reset`](Self::reset)).
+    pub fn aborted(&self) -> bool {
+        self.0.abort.load(Ordering::SeqCst)
+    }
     /// Pauses: the arm stops now; the running skill resumes on [`resume`](Self::resume).
     pub fn pause(&self) {
         self.0.paused.store(true, Ordering::SeqCst);
@@ -178,6 +205,14 @@ impl SkillManager {
             options,
             control: Arc::new(Control::default()),
         }
+    }
+
+    /// A manager for `plan` steered through an existing `handle` (e.g. one a script
+    /// holds before the run starts).
+    pub fn with_handle(plan: Plan, options: ManagerOptions, handle: &ManagerHandle) -> Self {
+        let mut m = Self::new(plan, options);
+        m.control = handle.0.clone();
+        m
     }
 
     /// A handle for pause / resume / abort / edit / manual.
@@ -345,7 +380,7 @@ impl SkillManager {
             let Some(c) = lock(&self.control.manual).pop_front() else {
                 return Ok(());
             };
-            let text = format!("{c:?}");
+            let text = c.describe();
             self.run_command(client, &c)?;
             on_event(&Event::Manual(text));
         }
@@ -411,8 +446,14 @@ impl SkillManager {
                     );
                     client.stream(&stream)?;
                 }
-                let cancel = || self.cancelled();
-                let arrived = client.wait_until_at(
+                let client_ref: &Client = client;
+                let cancel = || {
+                    if let Ok(st) = client_ref.state() {
+                        *lock(&self.control.joints) = st.joints;
+                    }
+                    self.cancelled()
+                };
+                let arrived = client_ref.wait_until_at(
                     &last.0,
                     self.options.tolerance,
                     self.options.skill_timeout,
@@ -433,6 +474,26 @@ impl SkillManager {
 }
 
 impl Event {
+    /// The event as one line for people: `running #3 Move_Table gear 200 mm`,
+    /// `finished #3: gear Grasped`, `paused`, `done`…
+    pub fn describe(&self) -> String {
+        match self {
+            Event::Connected(a) => format!("connected {a}"),
+            Event::Started(_, d) => format!("running {d}"),
+            Event::Finished { skill, part, state } => format!("finished #{skill}: {part} {state}"),
+            Event::Interrupted(i, why) => format!("interrupted #{i}: {why}"),
+            Event::Reconnected => "reconnected".into(),
+            Event::Paused => "paused".into(),
+            Event::Resumed => "resumed".into(),
+            Event::Edited(i) => format!("edited #{i}"),
+            Event::EditRefused(i, why) => format!("edit of #{i} refused: {why}"),
+            Event::Manual(c) => format!("manual {c}"),
+            Event::Failed(i, why) => format!("failed #{i}: {why}"),
+            Event::Aborted => "aborted".into(),
+            Event::Done => "done".into(),
+        }
+    }
+
     /// The event as a log row: `(skill, event name, detail)`.
     pub fn log_fields(&self) -> (Option<usize>, &'static str, String) {
         match self {

@@ -15,12 +15,16 @@
 //!
 //! Units: millimetres and radians; every pose is part frame → assembly (world) frame.
 
+pub mod chain;
 pub mod generator;
 pub mod manager;
 pub mod program;
 mod template;
 
-pub use generator::{generate, segment_check_fn, GeneratorOptions, SegmentCheck, SkillError};
+pub use chain::{plan_chain, Chain, ChainError, ChainOptions};
+pub use generator::{
+    generate, segment_check_fn, GeneratorOptions, SegmentCheck, SegmentHit, SkillError,
+};
 pub use manager::{
     log_event, Event, ManagerHandle, ManagerOptions, RunError, SkillManager, SkillStatus,
 };

@@ -50,6 +50,21 @@ impl Command {
         })
     }
 
+    /// The command for people, as [`parse_manual`](Self::parse_manual) reads it:
+    /// `grasp 12 mm`, `output 3 1`, `trajectory of 5 points`.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Trajectory(p) => format!("trajectory of {} points", p.len()),
+            Self::Tool {
+                action,
+                index,
+                value,
+                ..
+            } if action == "set_output" => format!("output {index} {value}"),
+            Self::Tool { action, value, .. } => format!("{action} {} mm", value * 1000.0),
+        }
+    }
+
     /// Parses a manual command line: `grasp W_MM`, `release W_MM`, `touch D_MM`,
     /// `output I 0|1`.
     pub fn parse_manual(line: &str) -> Option<Self> {

@@ -1,0 +1,429 @@
+//! The whole chain from one script (issue 16): sequence → tasks → workflows →
+//! skills → dispatched to the simulated manipulator → every part Assembled, the
+//! execution log in the database. The commands are those of docs/skills.md and the
+//! README, run from the repository root against the real binaries over loopback.
+
+mod common;
+
+use fitup::db::{Database, SkillLogEntry, Target};
+use fitup::skills::Plan;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Child;
+use std::time::{Duration, Instant};
+
+const BOUND: Duration = Duration::from_secs(300);
+
+/// The skill log of the database's last recorded run.
+fn last_run_log(db: &Path) -> Vec<SkillLogEntry> {
+    let mut db = Database::open(&Target::Sqlite(db.to_path_buf())).unwrap();
+    let log = db.skill_log(None).unwrap();
+    let last = log.iter().filter_map(|e| e.run_id).max();
+    assert!(last.is_some(), "no run recorded the skill log: {log:?}");
+    log.into_iter().filter(|e| e.run_id == last).collect()
+}
+
+/// Every skill of the plan started and finished exactly once, in order, and every
+/// part of the plan ended Assembled.
+fn assert_assembled(plan_file: &Path, db: &Path) {
+    let root = common::repo();
+    let plan = Plan::from_json(
+        "plan",
+        &std::fs::read_to_string(root.join(plan_file)).unwrap(),
+    )
+    .unwrap();
+    assert!(!plan.steps.is_empty());
+    let log = last_run_log(&root.join(db));
+    for event in ["started", "finished"] {
+        let skills: Vec<i64> = log
+            .iter()
+            .filter(|e| e.event == event)
+            .map(|e| e.skill.unwrap())
+            .collect();
+        let expected: Vec<i64> = (0..plan.steps.len() as i64).collect();
+        assert_eq!(skills, expected, "`{event}` events of {}", db.display());
+    }
+    let mut state = BTreeMap::new();
+    for e in log.iter().filter(|e| e.event == "finished") {
+        let (part, s) = e.detail.split_once(' ').unwrap();
+        assert_eq!(Some(part), e.part.as_deref());
+        state.insert(part.to_string(), s.to_string());
+    }
+    for s in &plan.steps {
+        assert_eq!(state[&s.part], "Assembled", "{}: {state:?}", s.part);
+    }
+    assert_eq!(log.last().unwrap().event, "done");
+}
+
+struct Manipulator(Child);
+
+impl Drop for Manipulator {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `fitup manipulator ARGS` (from the repository root), once it listens.
+fn manipulator(args: &[&str]) -> Manipulator {
+    manipulator_on(args, 11002)
+}
+
+/// [`manipulator`] with its state port.
+fn manipulator_on(args: &[&str], state_port: u16) -> Manipulator {
+    let mut child = common::fitup()
+        .current_dir(common::repo())
+        .arg("manipulator")
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while std::net::TcpStream::connect(("127.0.0.1", state_port)).is_err() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "fitup manipulator exited"
+        );
+        assert!(start.elapsed() < Duration::from_secs(60), "no manipulator");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Manipulator(child)
+}
+
+fn run(args: &[&str]) -> std::process::Output {
+    let o = common::run_bounded(&common::repo(), args, BOUND);
+    assert!(
+        o.status.success(),
+        "fitup {}: {}",
+        args.join(" "),
+        common::text(&o)
+    );
+    o
+}
+
+#[test]
+fn the_wheel_and_the_cell_assemble_as_documented_in_process_and_over_tcp() {
+    // In-process simulator.
+    let o = run(&["run", "scripts/assemble_wheel.rhai", "--db", "out/wheel.db"]);
+    assert!(common::text(&o).contains("finished #13: cup Assembled"));
+    assert_assembled(
+        Path::new("out/assemble_wheel.plan.json"),
+        Path::new("out/wheel.db"),
+    );
+    run(&["run", "scripts/assemble_cell.rhai", "--db", "out/cell.db"]);
+    assert_assembled(
+        Path::new("out/assemble_cell.plan.json"),
+        Path::new("out/cell.db"),
+    );
+    // A separate `fitup manipulator` on the default ports.
+    {
+        let _sim = manipulator(&[
+            "--doc",
+            "models/mz07.yaml",
+            "--robot",
+            "mz07",
+            "--speed",
+            "20",
+        ]);
+        run(&[
+            "run",
+            "scripts/assemble_wheel.rhai",
+            "--dispatch",
+            "--db",
+            "out/wheel.db",
+            "--",
+            "target=127.0.0.1:11000",
+        ]);
+        assert_assembled(
+            Path::new("out/assemble_wheel.plan.json"),
+            Path::new("out/wheel.db"),
+        );
+    }
+    let _sim = manipulator(&[
+        "--doc",
+        "models/cell_arm.yaml",
+        "--robot",
+        "mz07",
+        "--speed",
+        "20",
+    ]);
+    run(&[
+        "run",
+        "scripts/assemble_cell.rhai",
+        "--dispatch",
+        "--db",
+        "out/cell.db",
+        "--",
+        "target=127.0.0.1:11000",
+    ]);
+    assert_assembled(
+        Path::new("out/assemble_cell.plan.json"),
+        Path::new("out/cell.db"),
+    );
+    // The plan file the script saved runs with `fitup skills run` too (the arm is
+    // back where the plan starts only for the first skill's joint move, which
+    // starts wherever the arm is).
+    let o = run(&[
+        "skills",
+        "run",
+        "out/assemble_cell.plan.json",
+        "--target",
+        "127.0.0.1:11000",
+    ]);
+    assert!(common::text(&o).ends_with("done\n"), "{}", common::text(&o));
+}
+
+#[test]
+fn a_script_dispatches_over_tcp_only_when_the_command_line_says_so() {
+    let root = common::repo();
+    // No manipulator listens on this port: the refusal comes before any connection.
+    let o = common::run_bounded(
+        &root,
+        &[
+            "run",
+            "scripts/assemble_wheel.rhai",
+            "--",
+            "target=127.0.0.1:1",
+        ],
+        BOUND,
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--dispatch") && err.contains("assemble_wheel.rhai:"),
+        "{err}"
+    );
+    let o = common::run_bounded(
+        &root,
+        &[
+            "run",
+            "scripts/assemble_wheel.rhai",
+            "--dispatch",
+            "--",
+            "target=192.0.2.7:11000",
+        ],
+        BOUND,
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--allow-remote"), "{err}");
+    // `--allow-remote` alone is a usage error.
+    let o = common::run_in(
+        &root,
+        &["run", "scripts/assemble_wheel.rhai", "--allow-remote"],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
+}
+
+#[test]
+fn a_script_pauses_resumes_commands_by_hand_and_aborts_from_its_event_callback() {
+    let root = common::repo();
+    std::fs::create_dir_all(root.join("out")).unwrap();
+    let script = root.join("out/test_chain_callback.rhai");
+    std::fs::write(
+        &script,
+        r#"
+let wheel = open_doc("models/wheel.yaml");
+let seq = wheel.assembly_sequence(#{seed: 1});
+let cell = open_doc("models/mz07.yaml");
+let robot = cell.robot("mz07");
+robot.joints = robot.ik_near([500, 0, 250, 0, 0, 0], [0, 0, 0, 0, -90, 0]);
+let skills = wheel.skills(seq, #{robot: robot, place: [500, 0, 150, 0, 0, 0], tool: [0, 0, 0, 180, 0, 0]});
+let m = skill_manager(#{target: "sim", robot: robot, speed: 20, quiet: true});
+// Skill 2 (a move of the gear) is paused as soon as it starts; on `paused` a manual
+// command is queued and the run resumed; the last skill is edited before it runs.
+m.edit(skills, skills.len - 1, #{commands: ["release 20"]});
+let events = m.run(skills, |e, manager| {
+    if e.event == "started" && e.skill == 2 { manager.pause(); }
+    if e.event == "paused" { manager.manual("output 3 1"); manager.resume(); }
+});
+let names = events.map(|e| e.event);
+print(names);
+assert(names.contains("paused") && names.contains("resumed") && names.contains("manual"), `${names}`);
+assert(names.contains("edited"), `${names}`);
+assert(names[names.len() - 1] == "done");
+assert(m.parts.cup == "Assembled" && m.parts.gear == "Assembled", `${m.parts}`);
+// Abort from the callback: the run returns, later skills never start.
+let m2 = skill_manager(#{target: "sim", robot: robot, speed: 20, quiet: true});
+let events = m2.run(skills, |e, manager| { if e.event == "finished" && e.skill == 1 { manager.abort(); } });
+let names = events.map(|e| e.event);
+assert(names[names.len() - 1] == "aborted", `${names}`);
+assert(events.filter(|e| e.event == "started").len() <= 3, `${names}`);
+print("callback ok");
+"#,
+    )
+    .unwrap();
+    let o = run(&["run", "out/test_chain_callback.rhai"]);
+    assert!(
+        common::text(&o).contains("callback ok"),
+        "{}",
+        common::text(&o)
+    );
+}
+
+#[test]
+fn a_new_save_aborts_a_running_manager_in_watch_mode() {
+    use std::io::BufRead;
+    let root = common::repo();
+    std::fs::create_dir_all(root.join("out")).unwrap();
+    let script = root.join("out/test_chain_watch.rhai");
+    let text = r#"
+let wheel = open_doc("models/wheel.yaml");
+let seq = wheel.assembly_sequence(#{seed: 1});
+let cell = open_doc("models/mz07.yaml");
+let robot = cell.robot("mz07");
+robot.joints = robot.ik_near([500, 0, 250, 0, 0, 0], [0, 0, 0, 0, -90, 0]);
+let skills = wheel.skills(seq, #{robot: robot, place: [500, 0, 150, 0, 0, 0], tool: [0, 0, 0, 180, 0, 0]});
+// Real time and slow: the run lasts far longer than the test waits.
+let m = skill_manager(#{target: "sim", robot: robot, speed: 0.05});
+m.run(skills);
+"#;
+    std::fs::write(&script, text).unwrap();
+    let mut child = common::fitup()
+        .current_dir(&root)
+        .args(["watch", "out/test_chain_watch.rhai"])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let out = child.stdout.take().unwrap();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(out).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut seen = Vec::new();
+    let mut wait_for = |what: &str, seen: &mut Vec<String>| {
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(120) {
+            if let Ok(l) = rx.recv_timeout(Duration::from_millis(100)) {
+                let hit = l.contains(what);
+                seen.push(l);
+                if hit {
+                    return;
+                }
+            }
+        }
+        let _ = child.kill();
+        panic!("no `{what}` in watch output: {seen:#?}");
+    };
+    // The arm is moving (skill #1 is the grasp's joint move), then a save.
+    wait_for("running #1", &mut seen);
+    std::thread::sleep(Duration::from_millis(300));
+    std::fs::write(&script, format!("{text}\n// saved again\n")).unwrap();
+    wait_for("aborted", &mut seen);
+    // The new run starts from the beginning.
+    wait_for("running #0", &mut seen);
+    let _ = child.kill();
+    let _ = child.wait();
+    let aborted = seen.iter().position(|l| l.contains("aborted")).unwrap();
+    assert!(
+        !seen[..aborted].iter().any(|l| l.contains("finished #1")),
+        "the moving skill was not cut off: {seen:#?}"
+    );
+}
+
+fn tmux(socket: &str, args: &[&str]) -> String {
+    let o = std::process::Command::new("tmux")
+        .arg("-L")
+        .arg(socket)
+        .args(args)
+        .output()
+        .expect("tmux (Debian package `tmux`) runs the terminal UI test");
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn the_terminal_ui_shows_the_run_and_takes_keys_under_tmux() {
+    let root = common::repo();
+    // The plan the wheel script saves (deterministic: the same file every run).
+    run(&["run", "scripts/assemble_wheel.rhai"]);
+    let _sim = manipulator_on(
+        &[
+            "--doc",
+            "models/mz07.yaml",
+            "--robot",
+            "mz07",
+            "--speed",
+            "3",
+            "--port",
+            "11300",
+            "--state-port",
+            "11302",
+        ],
+        11302,
+    );
+    let socket = format!("fitup-chain-test-{}", std::process::id());
+    let command = format!(
+        "{} skills run out/assemble_wheel.plan.json --target 127.0.0.1:11300; echo EXIT=$?; sleep 60",
+        env!("CARGO_BIN_EXE_fitup")
+    );
+    tmux(
+        &socket,
+        &[
+            "new-session",
+            "-d",
+            "-x",
+            "150",
+            "-y",
+            "45",
+            "-c",
+            root.to_str().unwrap(),
+            &command,
+        ],
+    );
+    struct Server(String);
+    impl Drop for Server {
+        fn drop(&mut self) {
+            tmux(&self.0, &["kill-server"]);
+        }
+    }
+    let _server = Server(socket.clone());
+    let screen = || tmux(&socket, &["capture-pane", "-p"]);
+    let wait_for = |what: &str| -> String {
+        let start = Instant::now();
+        loop {
+            let s = screen();
+            if s.contains(what) {
+                return s;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(120),
+                "no `{what}` on the screen:\n{s}"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    };
+    // The lists and the live joints while the arm moves.
+    let s = wait_for("running:  #1 Grasp gear");
+    assert!(
+        s.contains("pending (") && s.contains("finished (1/14)"),
+        "{s}"
+    );
+    assert!(s.contains("parts:") && s.contains("gear In_WS"), "{s}");
+    assert!(s.contains("joints:") && s.contains('°'), "{s}");
+    tmux(&socket, &["send-keys", "p"]);
+    let s = wait_for("state: paused");
+    assert!(s.contains("running:  #1 Grasp gear"), "{s}");
+    // A manual command while paused, then resume.
+    tmux(&socket, &["send-keys", "m"]);
+    wait_for("manual command (");
+    tmux(&socket, &["send-keys", "output 3 1", "Enter"]);
+    wait_for("manual output 3 1");
+    tmux(&socket, &["send-keys", "r"]);
+    wait_for("resumed");
+    let s = wait_for("state: done");
+    assert!(
+        s.contains("finished (14/14)") && s.contains("cup Assembled"),
+        "{s}"
+    );
+    tmux(&socket, &["send-keys", "q"]);
+    let s = wait_for("EXIT=");
+    assert!(s.contains("EXIT=0"), "{s}");
+}
