@@ -6,6 +6,7 @@ mod check;
 mod db;
 pub(crate) mod out;
 mod run;
+mod view;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};
@@ -52,6 +53,25 @@ pub struct ScriptArgs {
     /// `open_db()` opens the same one.
     #[arg(long, num_args = 0..=1, default_missing_value = "")]
     pub db: Option<String>,
+    /// The live 3D viewer (`--view`, `--open`, `--record FILE.rrd`).
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// Options of the live 3D viewer (docs/viewer.md).
+#[derive(Debug, clap::Args, Clone, Default)]
+pub struct ViewArgs {
+    /// Show the run in the live 3D viewer: serves it on 127.0.0.1 and prints the address
+    /// (`run` keeps serving after the script until Ctrl-C; `watch` shows every rerun).
+    #[arg(long)]
+    pub view: bool,
+    /// With `--view`: also open the address in the default browser.
+    #[arg(long, requires = "view")]
+    pub open: bool,
+    /// Save the run as a Rerun recording (`.rrd`; `fitup view FILE` shows it again). In
+    /// watch mode the file holds the latest run.
+    #[arg(long, value_name = "FILE.rrd")]
+    pub record: Option<PathBuf>,
 }
 
 /// Options of `watch` (a Rhai script only: motion programs are run with `run`).
@@ -77,6 +97,9 @@ pub struct WatchArgs {
     /// `open_db()` opens the same one.
     #[arg(long, num_args = 0..=1, default_missing_value = "")]
     pub db: Option<String>,
+    /// The live 3D viewer (`--view`, `--open`, `--record FILE.rrd`).
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 impl From<WatchArgs> for ScriptArgs {
@@ -90,6 +113,7 @@ impl From<WatchArgs> for ScriptArgs {
             max_operations: w.max_operations,
             args: w.args,
             db: w.db,
+            view: w.view,
         }
     }
 }
@@ -115,6 +139,15 @@ pub enum Command {
     /// The results database: `runs`, `paths`, `show ID`, `export ID --csv|--json`,
     /// `diff RUN_A RUN_B`.
     Db(db::DbArgs),
+    /// Show a saved recording (`--record FILE.rrd`) in the viewer, served on 127.0.0.1
+    /// until Ctrl-C.
+    View {
+        /// The recording (`.rrd`).
+        file: PathBuf,
+        /// Also open the address in the default browser.
+        #[arg(long)]
+        open: bool,
+    },
     /// Write the demo project (seed 000 fig. 11) into a folder: `fitup.toml`,
     /// `models/cell.yaml` and `models/meshes/`.
     Demo {
@@ -160,6 +193,7 @@ pub fn main() -> i32 {
         Command::Check { doc } => check::check(&doc),
         Command::Docs { out } => docs(&out),
         Command::Demo { dir, force } => demo(&dir, force),
+        Command::View { file, open } => view::view_file(&file, open),
     };
     exit as i32
 }

@@ -164,6 +164,7 @@ pub(crate) fn register_all(
     super::bind_planning::register(&mut api);
     super::bind_robot::register(&mut api, ctx);
     super::bind_db::register(&mut api, ctx);
+    super::bind_view::register(&mut api);
     (api.sections, api.entries)
 }
 

@@ -13,6 +13,7 @@ mod bind_interference;
 mod bind_math;
 mod bind_planning;
 mod bind_robot;
+mod bind_view;
 mod convert;
 pub mod sandbox;
 
@@ -39,6 +40,8 @@ pub struct Caches {
     pub meshes: Mutex<MeshCache>,
     /// Collision trees and cut cells by mesh.
     pub scene: Mutex<crate::workspace::SceneCache>,
+    /// The viewer session the runs log to (off unless `--view`/`--record`).
+    pub view: crate::viewer::Viewer,
 }
 
 /// Where a script's `print` and progress lines go.
@@ -282,6 +285,7 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
     let engine = engine(ctx, &opts.limits);
     let mut scope = Scope::new();
     scope.push_constant("args", ctx.args.to_map());
+    scope.push_constant("view", bind_view::ViewHandle::new(ctx));
     if let Some(doc_path) = &opts.doc {
         let doc = bind_document::DocHandle::open(ctx, &doc_path.to_string_lossy())
             .map_err(|e| ScriptError::Located(SourceError::new(doc_path, 0, 0, e.to_string())))?;
