@@ -49,7 +49,12 @@ fn lines(r: impl Read + Send + 'static) -> Receiver<String> {
 }
 
 /// Waits for a line containing `needle`; returns it.
-fn wait_line(rx: &Receiver<String>, needle: &str, bound: Duration, seen: &mut Vec<String>) -> String {
+fn wait_line(
+    rx: &Receiver<String>,
+    needle: &str,
+    bound: Duration,
+    seen: &mut Vec<String>,
+) -> String {
     let end = Instant::now() + bound;
     while let Some(left) = end.checked_duration_since(Instant::now()) {
         match rx.recv_timeout(left) {
@@ -62,7 +67,10 @@ fn wait_line(rx: &Receiver<String>, needle: &str, bound: Duration, seen: &mut Ve
             Err(_) => break,
         }
     }
-    panic!("no `{needle}` within {bound:?}; output:\n{}", seen.join("\n"));
+    panic!(
+        "no `{needle}` within {bound:?}; output:\n{}",
+        seen.join("\n")
+    );
 }
 
 // ---- a minimal WebSocket client (RFC 6455), enough for the DevTools protocol ----
@@ -72,7 +80,9 @@ const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz012
 fn b64_encode(data: &[u8]) -> String {
     let mut s = String::new();
     for c in data.chunks(3) {
-        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
         for i in 0..4 {
             if i <= c.len() {
                 s.push(B64[(n >> (18 - 6 * i) & 63) as usize] as char);
@@ -88,7 +98,9 @@ fn b64_decode(s: &str) -> Vec<u8> {
     let mut out = Vec::with_capacity(s.len() * 3 / 4);
     let (mut acc, mut bits) = (0u32, 0);
     for c in s.bytes() {
-        let Some(v) = B64.iter().position(|&b| b == c) else { continue };
+        let Some(v) = B64.iter().position(|&b| b == c) else {
+            continue;
+        };
         acc = acc << 6 | v as u32;
         bits += 6;
         if bits >= 8 {
@@ -121,7 +133,11 @@ impl Ws {
             s.read_exact(&mut b).unwrap();
             head.push(b[0]);
         }
-        assert!(head.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&head));
+        assert!(
+            head.starts_with(b"HTTP/1.1 101"),
+            "{}",
+            String::from_utf8_lossy(&head)
+        );
         Ws { s }
     }
 
@@ -154,7 +170,9 @@ impl Ws {
             if self.s.read_exact(&mut h).is_err() {
                 return None;
             }
-            self.s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+            self.s
+                .set_read_timeout(Some(Duration::from_secs(30)))
+                .unwrap();
             let len = match h[1] & 0x7f {
                 126 => {
                     let mut l = [0u8; 2];
@@ -192,10 +210,13 @@ impl Page {
     fn call(&mut self, method: &str, params: serde_json::Value) -> serde_json::Value {
         self.next += 1;
         let id = self.next;
-        self.ws.send(&serde_json::json!({"id": id, "method": method, "params": params}).to_string());
+        self.ws
+            .send(&serde_json::json!({"id": id, "method": method, "params": params}).to_string());
         let end = Instant::now() + Duration::from_secs(120);
         while Instant::now() < end {
-            let Some(m) = self.ws.recv(Duration::from_secs(120)) else { break };
+            let Some(m) = self.ws.recv(Duration::from_secs(120)) else {
+                break;
+            };
             let v: serde_json::Value = serde_json::from_str(&m).unwrap();
             if v["id"].as_u64() == Some(id) {
                 assert!(v.get("error").is_none(), "{method}: {v}");
@@ -219,7 +240,8 @@ impl Page {
             Some("Network.loadingFailed") => {
                 let p = &v["params"];
                 if p.get("blockedReason").is_some_and(|r| !r.is_null()) {
-                    self.blocked.insert(p["requestId"].as_str().unwrap_or("").to_string());
+                    self.blocked
+                        .insert(p["requestId"].as_str().unwrap_or("").to_string());
                 }
             }
             _ => {}
@@ -230,7 +252,9 @@ impl Page {
     fn idle(&mut self, d: Duration) {
         let end = Instant::now() + d;
         while let Some(left) = end.checked_duration_since(Instant::now()) {
-            let Some(m) = self.ws.recv(left.min(Duration::from_millis(500))) else { continue };
+            let Some(m) = self.ws.recv(left.min(Duration::from_millis(500))) else {
+                continue;
+            };
             if let Ok(v) = serde_json::from_str::<serde_json::Value>(&m) {
                 self.event(&v);
             }
@@ -238,7 +262,10 @@ impl Page {
     }
 
     fn screenshot(&mut self, file: &Path) -> Vec<u8> {
-        let r = self.call("Page.captureScreenshot", serde_json::json!({"format": "png"}));
+        let r = self.call(
+            "Page.captureScreenshot",
+            serde_json::json!({"format": "png"}),
+        );
         let png = b64_decode(r["data"].as_str().unwrap());
         std::fs::write(file, &png).unwrap();
         png
@@ -247,19 +274,30 @@ impl Page {
 
 fn http_get(port: u16, path: &str) -> String {
     let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
-    write!(s, "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n").unwrap();
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
     let mut t = String::new();
     s.read_to_string(&mut t).unwrap();
-    t.split_once("\r\n\r\n").map(|x| x.1.to_string()).unwrap_or_default()
+    t.split_once("\r\n\r\n")
+        .map(|x| x.1.to_string())
+        .unwrap_or_default()
 }
 
 fn is_local(url: &str) -> bool {
     ["data:", "blob:", "about:", "chrome:", "chrome-extension:"]
         .iter()
         .any(|p| url.starts_with(p))
-        || ["http://127.0.0.1:", "ws://127.0.0.1:", "http://localhost:", "ws://localhost:"]
-            .iter()
-            .any(|p| url.starts_with(p))
+        || [
+            "http://127.0.0.1:",
+            "ws://127.0.0.1:",
+            "http://localhost:",
+            "ws://localhost:",
+        ]
+        .iter()
+        .any(|p| url.starts_with(p))
 }
 
 const SCRIPT: &str = "let doc = open_doc(\"models/cell.yaml\");\n\
@@ -273,7 +311,9 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
             std::env::var("CI").as_deref() != Ok("true"),
             "CI=true but no chromium: .ci/run installs it"
         );
-        eprintln!("note: no chromium on the PATH; the browser test is skipped (.ci/run installs it)");
+        eprintln!(
+            "note: no chromium on the PATH; the browser test is skipped (.ci/run installs it)"
+        );
         return;
     };
     let dir = common::project();
@@ -323,7 +363,13 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
         assert!(start.elapsed() < bound, "chromium did not start");
         std::thread::sleep(Duration::from_millis(200));
     }
-    let port: u16 = std::fs::read_to_string(&port_file).unwrap().lines().next().unwrap().parse().unwrap();
+    let port: u16 = std::fs::read_to_string(&port_file)
+        .unwrap()
+        .lines()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
     let targets: serde_json::Value = serde_json::from_str(&http_get(port, "/json/list")).unwrap();
     let ws_url = targets
         .as_array()
@@ -341,7 +387,10 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
     };
     page.call("Network.enable", serde_json::json!({}));
     page.call("Page.enable", serde_json::json!({}));
-    page.call("Page.navigate", serde_json::json!({"url": format!("{url}&renderer=webgl")}));
+    page.call(
+        "Page.navigate",
+        serde_json::json!({"url": format!("{url}&renderer=webgl")}),
+    );
     // The first complete frame takes ~20 s under software rendering.
     page.idle(Duration::from_secs(40));
     let shots = repo().join("out/viewer-tests");
@@ -358,11 +407,18 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
     let second = page.screenshot(&shots.join("browser-2.png"));
 
     // Something was drawn (a blank page compresses to a few kB) and it changed.
-    assert!(first.len() > 20_000 && second.len() > 20_000, "{} / {} bytes", first.len(), second.len());
+    assert!(
+        first.len() > 20_000 && second.len() > 20_000,
+        "{} / {} bytes",
+        first.len(),
+        second.len()
+    );
     assert_ne!(first, second, "the newer run shows");
     // The page loaded the viewer from fitup and asked nothing of the internet.
     assert!(
-        page.requests.iter().any(|(_, u)| u.contains("re_viewer_bg.wasm")),
+        page.requests
+            .iter()
+            .any(|(_, u)| u.contains("re_viewer_bg.wasm")),
         "{:?}",
         page.requests
     );
@@ -374,5 +430,8 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
         .filter(|(id, u)| !is_local(u) && !page.blocked.contains(id))
         .map(|(_, u)| u)
         .collect();
-    assert!(outside.is_empty(), "requests outside localhost: {outside:?}");
+    assert!(
+        outside.is_empty(),
+        "requests outside localhost: {outside:?}"
+    );
 }

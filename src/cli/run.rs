@@ -89,7 +89,8 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
             return Exit::Usage;
         }
     };
-    let live = match super::view::start(&a.view, &opts.project, Some(run_name(&opts.script, None))) {
+    let live = match super::view::start(&a.view, &opts.project, Some(run_name(&opts.script, None)))
+    {
         Ok(l) => l,
         Err(e) => {
             errln!("error: {e}");

@@ -15,14 +15,19 @@ pub(super) type Live = Option<std::convert::Infallible>;
 /// Starts the session the flags ask for; `first_run` names a first recording (for
 /// `run`; `watch` starts one per run). The `.rrd` file must lie inside the project.
 #[cfg(feature = "viewer")]
-pub(super) fn start(a: &ViewArgs, project: &Project, first_run: Option<String>) -> Result<Live, String> {
+pub(super) fn start(
+    a: &ViewArgs,
+    project: &Project,
+    first_run: Option<String>,
+) -> Result<Live, String> {
     use crate::viewer::{Session, SessionOptions};
     if !a.view && a.record.is_none() {
         return Ok(None);
     }
     let record = match &a.record {
         Some(r) => {
-            let abs = std::path::absolute(r).map_err(|e| format!("--record {}: {e}", r.display()))?;
+            let abs =
+                std::path::absolute(r).map_err(|e| format!("--record {}: {e}", r.display()))?;
             Some(
                 project
                     .resolve_output(&abs.to_string_lossy())
@@ -45,7 +50,11 @@ pub(super) fn start(a: &ViewArgs, project: &Project, first_run: Option<String>) 
 }
 
 #[cfg(not(feature = "viewer"))]
-pub(super) fn start(a: &ViewArgs, _project: &Project, _first_run: Option<String>) -> Result<Live, String> {
+pub(super) fn start(
+    a: &ViewArgs,
+    _project: &Project,
+    _first_run: Option<String>,
+) -> Result<Live, String> {
     if a.view || a.record.is_some() {
         return Err(crate::viewer::not_built().to_string());
     }

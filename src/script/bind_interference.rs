@@ -83,7 +83,10 @@ fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult
         .map_err(fail)?;
         let view = &d.context().caches.view;
         if view.is_live() && !want_touching {
-            let pairs: Vec<_> = found.iter().map(|p| (p.a, p.b, p.contact.depth())).collect();
+            let pairs: Vec<_> = found
+                .iter()
+                .map(|p| (p.a, p.b, p.contact.depth()))
+                .collect();
             view.log_interference(ws.document(), &pairs);
         }
         Ok(found

@@ -93,7 +93,7 @@ impl RobotHandle {
         }
         let view = &self.doc.context().caches.view;
         if view.is_live() {
-            view.log_trajectory(&self.doc.lock()?, self.index, &t);
+            view.log_trajectory(&*self.doc.lock()?, self.index, &t);
         }
         if let Some(q) = t.last_joints() {
             self.set_joints(q)?;

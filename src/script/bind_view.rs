@@ -37,7 +37,7 @@ pub(super) fn register(api: &mut Api) {
         "View.show(doc: Document)",
         "Shows every component of the document at its current pose (mesh, colour; fixed parts darker) at the current step.",
         |v: &mut ViewHandle, d: DocHandle| -> ScriptResult<()> {
-            v.viewer().log_document(&d.lock()?);
+            v.viewer().log_document(&*d.lock()?);
             Ok(())
         },
     );

@@ -119,7 +119,10 @@ impl Worker {
             .set_sinks(sinks)
         {
             Ok(rec) => {
-                let _ = rec.log_static(EntityPath::root(), &rerun::ViewCoordinates::RIGHT_HAND_Z_UP());
+                let _ = rec.log_static(
+                    EntityPath::root(),
+                    &rerun::ViewCoordinates::RIGHT_HAND_Z_UP(),
+                );
                 rec.set_time_sequence(STEP, 0);
                 self.rec = Some(rec);
             }
@@ -245,7 +248,9 @@ impl Worker {
             .iter()
             .flat_map(|a| points.iter().map(move |b| (a, b)))
             .take(10_000)
-            .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt())
+            .map(|(a, b)| {
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            })
             .fold(0.0f32, f32::max);
         let len = (extent / 10.0).max(5.0) as f64;
         let mut origins = Vec::new();
@@ -273,25 +278,49 @@ impl Worker {
     }
 
     fn trajectory(&mut self, doc: &str, robot: &str, samples: &[RobotSample]) {
-        let mut tcp_path = Vec::with_capacity(samples.len());
-        for s in samples {
+        // The whole TCP curve once, from the trajectory's first frame on; the current
+        // TCP as a point at every sample.
+        let curve: Vec<[f32; 3]> = samples
+            .iter()
+            .map(|s| {
+                let p = s.tcp.translation();
+                f32x3([p.x, p.y, p.z])
+            })
+            .collect();
+        for (k, s) in samples.iter().enumerate() {
             self.set_step(self.step + 1);
+            if k == 0 {
+                self.log(
+                    path(&["robots", robot, "tcp_path"]),
+                    &rerun::LineStrips3D::new([curve.clone()]).with_colors([[0u8, 180, 220, 255]]),
+                );
+            }
             for (name, pose) in &s.links {
                 self.log(path(&[doc, name]), &transform3d(pose));
             }
             for (i, q) in s.joints.iter().enumerate() {
                 let j = format!("j{}", i + 1);
-                self.log(path(&[doc, robot, "joints", &j]), &rerun::Scalars::single(*q));
+                self.log(
+                    path(&["robots", robot, "joints", &j]),
+                    &rerun::Scalars::single(*q),
+                );
             }
             let p = s.tcp.translation();
             for (axis, v) in [("x", p.x), ("y", p.y), ("z", p.z)] {
-                self.log(path(&[doc, robot, "tcp", axis]), &rerun::Scalars::single(v));
+                self.log(
+                    path(&["robots", robot, "tcp", axis]),
+                    &rerun::Scalars::single(v),
+                );
             }
-            self.log(path(&[doc, robot, "time_s"]), &rerun::Scalars::single(s.t));
-            tcp_path.push(f32x3([p.x, p.y, p.z]));
             self.log(
-                path(&[doc, robot, "tcp_path"]),
-                &rerun::LineStrips3D::new([tcp_path.clone()]).with_colors([[0u8, 180, 220, 255]]),
+                path(&["robots", robot, "time_s"]),
+                &rerun::Scalars::single(s.t),
+            );
+            self.log(
+                path(&["robots", robot, "tcp_point"]),
+                &rerun::Points3D::new([curve[k]])
+                    .with_colors([[0u8, 180, 220, 255]])
+                    .with_radii([3.0f32]),
             );
         }
     }
@@ -303,8 +332,16 @@ impl Worker {
             let entity = path(&[doc, "interference", &name]);
             now.insert(entity.clone());
             let (lo, hi) = p.overlap;
-            let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, (lo[2] + hi[2]) / 2.0];
-            let half = [(hi[0] - lo[0]) / 2.0, (hi[1] - lo[1]) / 2.0, (hi[2] - lo[2]) / 2.0];
+            let centre = [
+                (lo[0] + hi[0]) / 2.0,
+                (lo[1] + hi[1]) / 2.0,
+                (lo[2] + hi[2]) / 2.0,
+            ];
+            let half = [
+                (hi[0] - lo[0]) / 2.0,
+                (hi[1] - lo[1]) / 2.0,
+                (hi[2] - lo[2]) / 2.0,
+            ];
             self.log(
                 entity.clone(),
                 &rerun::Boxes3D::from_centers_and_half_sizes([f32x3(centre)], [f32x3(half)])

@@ -13,9 +13,10 @@
 //!   recording and converted once per session: meshes are cached across reruns) and its
 //!   pose on the `step` timeline. Colours come from the document; fixed parts are drawn
 //!   darker (their colour at 55 %) so they stand apart from the moving ones.
-//! - `DOC/ROBOT/joints/jN` (degrees, mm for prismatic joints) and `DOC/ROBOT/tcp/x|y|z`
-//!   (mm): the joint monitor, one point per trajectory sample; `DOC/ROBOT/tcp_path` the
-//!   TCP's curve. Link components move on the same `step` timeline.
+//! - `robots/ROBOT/joints/jN` (degrees, mm for prismatic joints) and
+//!   `robots/ROBOT/tcp/x|y|z` (mm): the joint monitor, one point per trajectory sample;
+//!   `robots/ROBOT/tcp_path` the TCP's curve (outside `DOC`, whose entities carry the
+//!   components' poses). Link components move on the same `step` timeline.
 //! - `paths/NAME/keys`: a path's key points as a 3D curve, `paths/NAME/frames` a small
 //!   frame (red X, green Y, blue Z) at each key pose.
 //! - `DOC/interference/A × B`: an interfering pair: the overlap of their world boxes as a

@@ -44,9 +44,8 @@ pub(crate) fn for_each_message(
         reason,
     };
     let reader = std::fs::File::open(file).map_err(|e| fail(e.to_string()))?;
-    let decoder = rerun::external::re_log_encoding::DecoderApp::decode_lazy(
-        std::io::BufReader::new(reader),
-    );
+    let decoder =
+        rerun::external::re_log_encoding::DecoderApp::decode_lazy(std::io::BufReader::new(reader));
     let mut n = 0;
     for msg in decoder {
         let msg = msg.map_err(|e| fail(format!("not a readable Rerun recording: {e}")))?;

@@ -123,9 +123,10 @@ impl Session {
     /// # Errors
     /// A file that cannot be opened or is not a Rerun recording; a session not serving.
     pub fn replay(&self, file: &Path) -> Result<usize, ViewerError> {
-        let grpc = self.grpc.as_ref().ok_or_else(|| ViewerError::Server(
-            "replay needs a serving session".into(),
-        ))?;
+        let grpc = self
+            .grpc
+            .as_ref()
+            .ok_or_else(|| ViewerError::Server("replay needs a serving session".into()))?;
         let n = super::read::for_each_message(file, |msg| grpc.send(msg))?;
         let _ = grpc.flush_blocking(FINAL_FLUSH);
         Ok(n)
@@ -312,8 +313,14 @@ mod tests {
         let web = WebServer::start(9).unwrap();
         let (head, body) = get(web.port, "/?url=x");
         assert!(head.starts_with("HTTP/1.1 200"), "{head}");
-        assert!(head.contains("Content-Security-Policy: default-src 'self'"), "{head}");
-        assert!(head.contains("connect-src 'self' http://127.0.0.1:9 "), "{head}");
+        assert!(
+            head.contains("Content-Security-Policy: default-src 'self'"),
+            "{head}"
+        );
+        assert!(
+            head.contains("connect-src 'self' http://127.0.0.1:9 "),
+            "{head}"
+        );
         assert!(String::from_utf8_lossy(&body).contains("re_viewer"));
         let (head, body) = get(web.port, "/re_viewer_bg.wasm");
         assert!(head.contains("application/wasm"));

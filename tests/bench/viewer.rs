@@ -61,7 +61,11 @@ fn main() {
             session.viewer().flush(Duration::from_secs(60));
             catch_up.push(t.elapsed().as_secs_f64() * 1e3);
         }
-        let (a, b, c) = (median(&mut without), median(&mut with), median(&mut catch_up));
+        let (a, b, c) = (
+            median(&mut without),
+            median(&mut with),
+            median(&mut catch_up),
+        );
         println!(
             "| {script} | {rounds} | {a:.1} ms | {b:.1} ms | {:+.1} % | {c:.1} ms |",
             (b / a - 1.0) * 100.0
