@@ -35,6 +35,7 @@ pub mod diagnostics;
 pub mod document;
 pub mod fsutil;
 pub mod kinematics;
+pub mod manipulator;
 pub mod math;
 pub mod mesh;
 pub mod planning;
@@ -42,6 +43,7 @@ pub mod project;
 #[cfg(feature = "script")]
 pub mod script;
 pub mod sequence;
+pub mod skills;
 pub mod viewer;
 #[cfg(feature = "watch")]
 pub mod watch;

@@ -269,3 +269,69 @@ fn check_prints_numbers_for_people() {
     );
     assert!(t.contains("fixed  at X "), "{t}");
 }
+
+/// `fitup batch` runs the script once per document, each with its own `doc`, and
+/// names the documents whose run failed.
+#[test]
+fn batch_runs_the_script_once_per_document() {
+    let dir = project();
+    let p = dir.path();
+    std::fs::copy(p.join("models/cell.yaml"), p.join("models/copy.yaml")).unwrap();
+    std::fs::write(
+        p.join("scripts/count.rhai"),
+        "print(`count ${doc.components().len()}`);\n",
+    )
+    .unwrap();
+    let o = run_in(
+        p,
+        &[
+            "batch",
+            "scripts/count.rhai",
+            "--docs",
+            "models/cell.yaml",
+            "models/copy.yaml",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let mut counts: Vec<String> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect();
+    counts.sort();
+    assert_eq!(counts, ["count 8", "count 8"], "{}", text(&o));
+    // More runs than cores, each checking interference (rayon work inside the run):
+    // every run ends with its own document's answer.
+    std::fs::write(
+        p.join("scripts/clash.rhai"),
+        "print(`clash ${doc.components().len()} ${doc.interferences().len()}`);\n",
+    )
+    .unwrap();
+    let docs = ["models/cell.yaml", "models/copy.yaml"].repeat(3);
+    let mut args = vec!["batch", "scripts/clash.rhai", "--docs"];
+    args.extend(docs.iter().copied());
+    // Bounded: this used to deadlock (runs on rayon's workers waiting for rayon work).
+    let o = common::run_bounded(p, &args, std::time::Duration::from_secs(120));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let clashes: Vec<String> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect();
+    assert_eq!(clashes, vec!["clash 8 0".to_string(); 6], "{}", text(&o));
+    // a missing document fails its run only, and is named
+    let o = run_in(
+        p,
+        &[
+            "batch",
+            "scripts/count.rhai",
+            "--docs",
+            "models/cell.yaml",
+            "models/none.yaml",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("count 8") && t.contains("1 of 2 runs failed: models/none.yaml"),
+        "{t}"
+    );
+}

@@ -405,7 +405,8 @@ fn migration_from_the_previous_schema_keeps_the_data() {
             vec![
                 vec![SqlValue::Int(1)],
                 vec![SqlValue::Int(2)],
-                vec![SqlValue::Int(3)]
+                vec![SqlValue::Int(3)],
+                vec![SqlValue::Int(4)]
             ]
         );
     });

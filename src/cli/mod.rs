@@ -2,10 +2,13 @@
 //! command does; `main` maps errors to exit codes (0 ok, 1 script or document error,
 //! 2 usage).
 
+mod batch;
 mod check;
 mod db;
 pub(crate) mod out;
 mod run;
+mod sequence;
+mod skills;
 mod view;
 
 use clap::{Parser, Subcommand};
@@ -123,6 +126,9 @@ impl From<WatchArgs> for ScriptArgs {
 pub enum Command {
     /// Run a script once (or a robot motion program with `--doc`).
     Run(ScriptArgs),
+    /// Run a script once per document (`--docs A.yaml B.yaml …`), in parallel on
+    /// all cores; each run independent (recorded with `--db` like `run`).
+    Batch(batch::BatchArgs),
     /// Run a script, then again on every save of the script, the document or any file it read.
     Watch(WatchArgs),
     /// Validate a document and print a summary.
@@ -139,6 +145,11 @@ pub enum Command {
     /// The results database: `runs`, `paths`, `show ID`, `export ID --csv|--json`,
     /// `diff RUN_A RUN_B`.
     Db(db::DbArgs),
+    /// A simulated manipulator controller on 127.0.0.1 (simple_message): moves a robot
+    /// of the document, refuses trajectories that break joint limits or collide.
+    Manipulator(skills::ManipulatorArgs),
+    /// Skills: `run PLAN --target HOST:PORT` dispatches a plan to a controller.
+    Skills(skills::SkillsArgs),
     /// Show a saved recording (`--record FILE.rrd`) in the viewer, served on 127.0.0.1
     /// until Ctrl-C.
     View {
@@ -156,6 +167,29 @@ pub enum Command {
         /// Write into a folder that is not empty, replacing `cell.yaml` and the demo meshes.
         #[arg(long)]
         force: bool,
+    },
+    /// Plan the assembly sequence of a document (seed 003): tasks, mounts, precedence.
+    PlanSequence {
+        /// The document (`.yaml`).
+        doc: PathBuf,
+        /// `mates` (the relation graph) or `geometry` (meshes only).
+        #[arg(long, default_value = "mates")]
+        mode: String,
+        /// Pin the base component.
+        #[arg(long)]
+        base: Option<String>,
+        /// Components or parts that are screwed (repeatable).
+        #[arg(long)]
+        threaded: Vec<String>,
+        /// Time budget of the whole call (ms); default 30000.
+        #[arg(long)]
+        time_limit_ms: Option<f64>,
+        /// How many sequences to rank.
+        #[arg(long, default_value_t = 5)]
+        max_sequences: usize,
+        /// Print the plan as JSON.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -188,11 +222,31 @@ pub fn main() -> i32 {
     };
     let exit = match cli.command {
         Command::Run(a) => run::run(&a),
+        Command::Batch(a) => batch::batch(&a),
         Command::Watch(a) => run::watch(&a.into()),
         Command::Db(a) => db::main(&a),
         Command::Check { doc } => check::check(&doc),
         Command::Docs { out } => docs(&out),
         Command::Demo { dir, force } => demo(&dir, force),
+        Command::Manipulator(a) => skills::manipulator(&a),
+        Command::Skills(a) => skills::skills(&a),
+        Command::PlanSequence {
+            doc,
+            mode,
+            base,
+            threaded,
+            time_limit_ms,
+            max_sequences,
+            json,
+        } => sequence::plan(sequence::Args {
+            doc: &doc,
+            mode: &mode,
+            base,
+            threaded,
+            time_limit_ms,
+            max_sequences,
+            json,
+        }),
         Command::View { file, open } => view::view_file(&file, open),
     };
     exit as i32

@@ -1,6 +1,8 @@
 //! `--view`, `--open`, `--record` of `run`/`watch`, and `fitup view FILE.rrd`.
 
-use super::out::{errln, outln};
+use super::out::errln;
+#[cfg(feature = "viewer")]
+use super::out::outln;
 use super::{Exit, ViewArgs};
 use crate::script::Project;
 use std::path::Path;

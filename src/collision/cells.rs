@@ -32,10 +32,8 @@ pub enum CutSpec {
 pub struct Cell {
     /// Grid position (along X, Y, Z).
     pub index: [u32; 3],
-    /// Minimum corner of the material's box, part frame, mm.
-    pub min: [f64; 3],
-    /// Maximum corner of the material's box, part frame, mm.
-    pub max: [f64; 3],
+    /// The box of the material in the cell, part frame, mm.
+    pub bounds: Aabb,
 }
 
 /// The cut-cells feature: its definition and the cells derived from the mesh.
@@ -257,8 +255,7 @@ impl CutCells {
                     if !bx.is_empty() {
                         cells.push(Cell {
                             index: [i as u32, j as u32, k as u32],
-                            min: bx.lo.coords.into(),
-                            max: bx.hi.coords.into(),
+                            bounds: *bx,
                         });
                     }
                 }
@@ -273,13 +270,7 @@ impl CutCells {
 
     /// The cells' boxes, part frame, mm.
     pub fn boxes(&self) -> Vec<Aabb> {
-        self.cells
-            .iter()
-            .map(|c| Aabb {
-                lo: c.min.into(),
-                hi: c.max.into(),
-            })
-            .collect()
+        self.cells.iter().map(|c| c.bounds).collect()
     }
 }
 
@@ -335,13 +326,7 @@ pub(crate) fn boxes_contact(
         boxes.iter().map(|x| x.transformed(p.isometry())).collect()
     };
     let (wa, wb) = (world(a, pa), world(b, pb));
-    let union = |v: &[Aabb]| {
-        v.iter().fold(Aabb::EMPTY, |mut u, x| {
-            u.grow(&x.lo);
-            u.grow(&x.hi);
-            u
-        })
-    };
+    let union = |v: &[Aabb]| v.iter().fold(Aabb::EMPTY, |u, x| u.union(x));
     let (ua, ub) = (union(&wa), union(&wb));
     let scale = ua.hi.coords.amax().max(ub.hi.coords.amax()).abs().max(1.0);
     let slack = 1e-9 * scale;

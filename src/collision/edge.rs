@@ -38,7 +38,8 @@ impl Default for EdgeOptions {
 }
 
 impl EdgeOptions {
-    /// The contact step actually used: `contact_step`, at least half the tolerance, mm.
+    /// The contact step actually used: `contact_step`, at least half the tolerance, mm
+    /// (the one place this clamp is written).
     pub fn effective_contact_step(&self) -> f64 {
         self.contact_step.max(self.tolerance / 2.0)
     }
@@ -131,7 +132,7 @@ pub fn edge_interferes(
         eps: eps(moving, obstacle, from, pose).max(eps(moving, obstacle, to, pose)),
         oriented: moving.is_solid() && obstacle.is_solid(),
         tolerance: options.tolerance,
-        gap: options.tolerance.max(1e-3) / 2.0,
+        gap: super::contact_gap(options.tolerance),
         contact_step: options.effective_contact_step(),
     };
     let mut stack: Vec<(u32, u32)> = vec![(0, 0)];

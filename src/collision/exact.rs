@@ -146,8 +146,26 @@ fn for_each_triangle_pair<B>(
                     }
                 }
             }
-            (false, true) => stack.extend([(na.first, j), (na.first + 1, j)]),
-            (true, false) => stack.extend([(i, nb.first), (i, nb.first + 1)]),
+            (false, true) => {
+                // A subtree of `a` on one side of every plane of `b`'s few triangles
+                // cannot cross them (`tri_tri` rejects such pairs first): a small
+                // part deep inside a large box never reaches the leaves.
+                let planes = b.tris[leaf(nb)].iter().map(|t| rel.tri(t));
+                if obb_meets_planes(&a.obbs[i as usize], planes, margin) {
+                    stack.extend([(na.first, j), (na.first + 1, j)]);
+                }
+            }
+            (true, false) => {
+                let o = &b.obbs[j as usize];
+                let moved_obb = Obb {
+                    centre: rel.rot * o.centre + rel.iso.translation.vector,
+                    axes: rel.rot * o.axes,
+                    half: o.half,
+                };
+                if obb_meets_planes(&moved_obb, a.tris[leaf(na)].iter().copied(), margin) {
+                    stack.extend([(i, nb.first), (i, nb.first + 1)]);
+                }
+            }
             (false, false) => {
                 if obb_size(&a.obbs[i as usize]) >= obb_size(&b.obbs[j as usize]) {
                     stack.extend([(na.first, j), (na.first + 1, j)]);
@@ -158,6 +176,26 @@ fn for_each_triangle_pair<B>(
         }
     }
     ControlFlow::Continue(())
+}
+
+/// Whether box `o` reaches within `margin` of the plane of some triangle of
+/// `tris` (same frame); degenerate triangles meet nothing ([`tri_tri`] skips them).
+#[inline]
+fn obb_meets_planes(o: &Obb, tris: impl Iterator<Item = Tri>, margin: f64) -> bool {
+    for t in tris {
+        let Some(n) = (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(0.0) else {
+            continue;
+        };
+        let c = n.dot(&(o.centre - t[0].coords));
+        let r = o.half[0] * n.dot(&o.axes.column(0)).abs()
+            + o.half[1] * n.dot(&o.axes.column(1)).abs()
+            + o.half[2] * n.dot(&o.axes.column(2)).abs();
+        // the small bias keeps the test conservative against rounding
+        if c.abs() <= r + margin + 1e-9 * (1.0 + c.abs()) {
+            return true;
+        }
+    }
+    false
 }
 
 pub(crate) fn check_pose(p: &Transform) -> Result<(), CollisionError> {

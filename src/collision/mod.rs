@@ -14,6 +14,17 @@
 //! Dynamic interference along a [`Motion`] is in [`sweep`]; along one planner edge
 //! (lerp + slerp) in [`edge_interferes`].
 //!
+//! # Motion-check vocabulary
+//! One set of words for every check of a moving part (sweeps here, planner edges in
+//! `planning::EdgeResolution`):
+//! - **stepwise**: static checks at poses at most `step_mm` of point displacement
+//!   apart ([`SweepMethod::Stepwise`]); can jump over features thinner than a step.
+//! - **continuous**: conservative advancement ([`SweepMethod::Continuous`],
+//!   [`edge_interferes`]): every advance is shorter than the distance to the nearest
+//!   obstacle, so nothing is jumped over. Below the **contact gap**
+//!   ([`contact_gap`]) the part counts as in contact and advances by at most the
+//!   **contact step** ([`EdgeOptions::effective_contact_step`]).
+//!
 //! Every query validates its input and returns [`CollisionError`]; none panics.
 
 mod cells;
@@ -28,13 +39,21 @@ pub use cells::{
 };
 pub use edge::{edge_interferes, EdgeOptions};
 pub use exact::{contact, distance_lower_bound, interferes, surface_distance};
-pub use shape::{Aabb, Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
+pub use shape::{Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
 pub use sweep::{
     sweep, Motion, Obstacle, SweepHit, SweepMethod, SweepOptions, DEFAULT_SWEEP_TIME_LIMIT_MS,
 };
 
+pub use crate::math::Aabb;
 use crate::math::Transform;
 use rayon::prelude::*;
+
+/// The contact gap of a continuous check at penetration `tolerance` (mm): surfaces
+/// closer than this count as in contact, and the check switches from distance-sized
+/// advances to contact steps. Half the tolerance, at least 0.5 µm.
+pub fn contact_gap(tolerance: f64) -> f64 {
+    tolerance.max(1e-3) / 2.0
+}
 
 /// Default penetration tolerance, mm: crossings up to this depth count as touching.
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
@@ -166,7 +185,9 @@ impl Contact {
 }
 
 /// A static interference method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Mesh-exact, solid semantics.
@@ -262,6 +283,27 @@ pub fn check_all(
     method: Method,
     tolerance: f64,
 ) -> Result<Vec<PairContact>, CollisionError> {
+    let candidates = candidate_pairs(parts)?;
+    let found: Vec<Option<PairContact>> = candidates
+        .par_iter()
+        .map(|&(i, j)| {
+            let c = check(method, &parts[i], &parts[j], tolerance)?;
+            Ok((c != Contact::Separate).then_some(PairContact {
+                a: i,
+                b: j,
+                contact: c,
+            }))
+        })
+        .collect::<Result<_, CollisionError>>()?;
+    Ok(found.into_iter().flatten().collect())
+}
+
+/// The pairs `(i, j)`, `i < j`, of `parts` whose world boxes touch or overlap: the
+/// only pairs any method can find in contact (the broad phase of [`check_all`]).
+///
+/// # Errors
+/// A pose with a NaN or infinite entry.
+pub fn candidate_pairs(parts: &[PosedPart]) -> Result<Vec<(usize, usize)>, CollisionError> {
     let boxes: Vec<Aabb> = parts
         .iter()
         .map(|p| {
@@ -284,18 +326,7 @@ pub fn check_all(
             }
         }
     }
-    let found: Vec<Option<PairContact>> = candidates
-        .par_iter()
-        .map(|&(i, j)| {
-            let c = check(method, &parts[i], &parts[j], tolerance)?;
-            Ok((c != Contact::Separate).then_some(PairContact {
-                a: i,
-                b: j,
-                contact: c,
-            }))
-        })
-        .collect::<Result<_, CollisionError>>()?;
-    Ok(found.into_iter().flatten().collect())
+    Ok(candidates)
 }
 
 #[cfg(test)]

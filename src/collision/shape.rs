@@ -4,6 +4,7 @@
 
 use super::triangle::{closest_on_triangle, x_line_crossing, Tri};
 use super::CollisionError;
+pub use crate::math::Aabb;
 use crate::math::{Point3, Vec3};
 use crate::mesh::{Mesh, MeshReport};
 use nalgebra::Matrix3;
@@ -16,89 +17,6 @@ pub const MAX_COORDINATE: f64 = 1e9;
 
 /// Triangles per BVH leaf.
 const LEAF_SIZE: usize = 4;
-
-/// An axis-aligned box (mm), `lo <= hi` component-wise.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Aabb {
-    /// Minimum corner, mm.
-    pub lo: Point3,
-    /// Maximum corner, mm.
-    pub hi: Point3,
-}
-
-impl Aabb {
-    /// The box `lo..hi` (mm); points or vectors from the origin.
-    pub fn new(lo: impl Into<Point3>, hi: impl Into<Point3>) -> Aabb {
-        Aabb {
-            lo: lo.into(),
-            hi: hi.into(),
-        }
-    }
-
-    /// The box of a mesh's vertices in its own frame (mm); `None` when it has none.
-    pub fn of_mesh(mesh: &Mesh) -> Option<Aabb> {
-        mesh.bounds().map(|(lo, hi)| Aabb { lo, hi })
-    }
-
-    /// The empty box (inverted), neutral for [`Aabb::grow`].
-    pub const EMPTY: Aabb = Aabb {
-        lo: Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
-        hi: Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY),
-    };
-
-    /// Extends the box over `p`.
-    pub fn grow(&mut self, p: &Point3) {
-        self.lo = self.lo.inf(p);
-        self.hi = self.hi.sup(p);
-    }
-
-    /// Whether nothing was added.
-    pub fn is_empty(&self) -> bool {
-        self.lo.x > self.hi.x
-    }
-
-    /// The centre, mm.
-    pub fn centre(&self) -> Point3 {
-        nalgebra::center(&self.lo, &self.hi)
-    }
-
-    /// Half the edge lengths, mm.
-    pub fn half_extents(&self) -> Vec3 {
-        (self.hi - self.lo) * 0.5
-    }
-
-    /// The axis-aligned box (in the target frame) around this box moved by `iso`
-    /// (a [`Transform`](crate::math::Transform) gives it with `.isometry()`): the
-    /// tightest box containing the moved box.
-    pub fn transformed(&self, iso: &nalgebra::Isometry3<f64>) -> Aabb {
-        let c = iso * self.centre();
-        let r = iso.rotation.to_rotation_matrix();
-        let h = r.matrix().abs() * self.half_extents();
-        Aabb {
-            lo: c - h,
-            hi: c + h,
-        }
-    }
-
-    /// Per-axis overlap `min(hi) - max(lo)` (negative: a gap), mm.
-    pub fn overlap(&self, other: &Aabb) -> Vec3 {
-        self.hi.coords.inf(&other.hi.coords) - self.lo.coords.sup(&other.lo.coords)
-    }
-
-    /// Distance between the two boxes (0 when they overlap), mm.
-    pub fn distance_to_box(&self, other: &Aabb) -> f64 {
-        (self.lo - other.hi)
-            .sup(&(other.lo - self.hi))
-            .sup(&Vec3::zeros())
-            .norm()
-    }
-
-    /// Distance from `p` to the box (0 inside), mm.
-    pub fn distance_to_point(&self, p: &Point3) -> f64 {
-        let d = (self.lo - p).sup(&(p - self.hi)).sup(&Vec3::zeros());
-        d.norm()
-    }
-}
 
 /// An oriented box (part frame, mm) fitted to a node's triangles: `axes` columns are
 /// orthonormal directions, `half` the half extents along them. Far tighter than the
@@ -240,7 +158,12 @@ impl Collider {
         let report = mesh.inspect();
         let scale = mesh
             .bounds()
-            .map(|(lo, hi)| (hi - lo).norm().max(lo.coords.amax()).max(hi.coords.amax()))
+            .map(|b| {
+                (b.hi - b.lo)
+                    .norm()
+                    .max(b.lo.coords.amax())
+                    .max(b.hi.coords.amax())
+            })
             .unwrap_or(1.0)
             .max(1.0);
         let mut tris: Vec<Tri> = (0..mesh.triangles.len())
@@ -482,6 +405,50 @@ impl ColliderCache {
         self.entries.retain(|_, (w, _)| w.strong_count() > 0);
         self.entries.insert(key, (Arc::downgrade(mesh), c.clone()));
         Ok(c)
+    }
+
+    /// The colliders of `meshes` (same order), the missing ones built in parallel
+    /// (one rayon task per distinct mesh): what opening a cell of many distinct
+    /// parts costs once.
+    ///
+    /// # Errors
+    /// The first mesh that cannot be used (see [`Collider::new`]).
+    pub fn get_all(&mut self, meshes: &[&Arc<Mesh>]) -> Result<Vec<Arc<Collider>>, CollisionError> {
+        use rayon::prelude::*;
+        let key = |m: &Arc<Mesh>| Arc::as_ptr(m) as usize;
+        // per distinct mesh: its collider when cached and still for this mesh
+        let mut found: HashMap<usize, Option<Arc<Collider>>> = HashMap::new();
+        let mut missing: Vec<&Arc<Mesh>> = Vec::new();
+        for &m in meshes {
+            if found.contains_key(&key(m)) {
+                continue;
+            }
+            let hit = self
+                .entries
+                .get(&key(m))
+                .filter(|(w, _)| w.upgrade().is_some_and(|x| Arc::ptr_eq(&x, m)))
+                .map(|(_, c)| c.clone());
+            if hit.is_none() {
+                missing.push(m);
+            }
+            found.insert(key(m), hit);
+        }
+        let built: Vec<Arc<Collider>> = missing
+            .par_iter()
+            .map(|m| Collider::new(Arc::clone(m)).map(Arc::new))
+            .collect::<Result<_, _>>()?;
+        if !built.is_empty() {
+            self.builds += built.len();
+            self.entries.retain(|_, (w, _)| w.strong_count() > 0);
+        }
+        for (m, c) in missing.into_iter().zip(built) {
+            found.insert(key(m), Some(c.clone()));
+            self.entries.insert(key(m), (Arc::downgrade(m), c));
+        }
+        Ok(meshes
+            .iter()
+            .filter_map(|m| found.get(&key(m)).cloned().flatten())
+            .collect())
     }
 
     /// How many colliders were built (for tests and the watch header).

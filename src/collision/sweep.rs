@@ -144,15 +144,16 @@ pub struct Obstacle<'a> {
 /// How to sweep.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SweepMethod {
-    /// Seed 000: a static check at the start and after every step; a step moves no
-    /// point of the part more than `step` mm (so rotations are stepped too). Can
-    /// jump over features thinner than a step.
-    Step {
+    /// Stepwise (seed 000): a static check at the start and after every step; a step
+    /// moves no point of the part more than `step_mm` (so rotations are stepped too).
+    /// Can jump over features thinner than a step.
+    Stepwise {
         /// Largest displacement of any point of the part per step, mm.
-        step: f64,
+        step_mm: f64,
     },
-    /// Conservative advancement: advance by the surface distance divided by the
-    /// largest point speed; near contact, static checks every `tolerance / 2` mm of
+    /// Continuous (conservative advancement): advance by the surface distance divided
+    /// by the largest point speed; within the contact gap
+    /// ([`contact_gap`](super::contact_gap)), static checks every contact gap of
     /// displacement. Does not miss contacts.
     Continuous,
 }
@@ -269,7 +270,7 @@ pub fn sweep(
             Ok(None)
         };
     match options.method {
-        SweepMethod::Step { step } => {
+        SweepMethod::Stepwise { step_mm: step } => {
             if !(step.is_finite() && step > 0.0) {
                 return Err(CollisionError::BadMotion(format!(
                     "the step must be a finite number > 0 mm, got {step}"
@@ -302,7 +303,7 @@ pub fn sweep(
                 return Ok(hit_at(0.0, i, queries));
             }
             // gap below which static checks take over, and their spacing
-            let g = tol.max(1e-3) / 2.0;
+            let g = super::contact_gap(tol);
             for &(t0, t1, reach) in &pieces {
                 if reach <= 0.0 {
                     continue;

@@ -302,6 +302,55 @@ fn tree_traversal_matches_brute_force() {
     }
 }
 
+/// A fine part across the faces of a coarse box (where the traversal drops subtrees
+/// on one side of every plane of a leaf's triangles) agrees with all pairs.
+#[test]
+fn coarse_box_against_fine_part_matches_brute_force() {
+    let a = collider(fixtures::torus(10.0, 3.0, 40, 12));
+    let b = cuboid([-8.0, -8.0, -8.0], [8.0, 8.0, 8.0]);
+    let mut rng = Rng::new(21);
+    let mut kinds = [0usize; 3];
+    for _ in 0..150 {
+        let (pa, pb) = (random_pose(&mut rng, 10.0), random_pose(&mut rng, 10.0));
+        let ta: Vec<_> = a.tris.iter().map(|t| t.map(|p| pa.apply(&p))).collect();
+        let tb: Vec<_> = b.tris.iter().map(|t| t.map(|p| pb.apply(&p))).collect();
+        let mut depth = None::<f64>;
+        for x in &ta {
+            for y in &tb {
+                if let Some(d) = tri_tri(x, y, 1e-8, true) {
+                    depth = Some(depth.unwrap_or(0.0).max(d));
+                }
+            }
+        }
+        let c = contact(&a, &pa, &b, &pb, TOL).unwrap();
+        let hit = interferes(&a, &pa, &b, &pb, TOL).unwrap();
+        assert_eq!(hit, matches!(c, Contact::Interfering { .. }), "{c:?}");
+        match depth {
+            Some(d) if d > TOL => {
+                assert!(hit);
+                assert!((c.depth() - d).abs() < 1e-6, "{c:?} vs {d}");
+                kinds[0] += 1;
+            }
+            Some(_) => {
+                assert!(c != Contact::Separate);
+                kinds[1] += 1;
+            }
+            None => {
+                assert!(matches!(
+                    c,
+                    Contact::Separate
+                        | Contact::Interfering {
+                            kind: InterferenceKind::Contained { .. },
+                            ..
+                        }
+                ));
+                kinds[2] += 1;
+            }
+        }
+    }
+    assert!(kinds[0] > 20 && kinds[2] > 20, "{kinds:?}");
+}
+
 #[test]
 fn bad_input_is_refused() {
     let a = cuboid([0.0; 3], [1.0; 3]);
@@ -371,7 +420,10 @@ fn cells_of_a_solid_block_are_full_boxes() {
     assert_eq!(cells.cells.len(), 8);
     for c in &cells.cells {
         for k in 0..3 {
-            assert!((c.max[k] - c.min[k] - 5.0).abs() < 1e-12, "{c:?}");
+            assert!(
+                (c.bounds.hi[k] - c.bounds.lo[k] - 5.0).abs() < 1e-12,
+                "{c:?}"
+            );
         }
     }
     // a 3x3x3 cut of a 9 mm cube: the centre cell has no surface but is full
@@ -382,7 +434,7 @@ fn cells_of_a_solid_block_are_full_boxes() {
         .iter()
         .find(|c| c.index == [1, 1, 1])
         .expect("centre cell");
-    assert_eq!((centre.min, centre.max), ([3.0; 3], [6.0; 3]));
+    assert_eq!(centre.bounds, Aabb::new([3.0; 3], [6.0; 3]));
 }
 
 #[test]
@@ -395,7 +447,12 @@ fn cells_skip_holes_and_cover_the_material() {
     let covering: Vec<_> = cells
         .cells
         .iter()
-        .filter(|c| c.min[0] <= 6.0 && c.max[0] >= 6.0 && c.min[1] <= 6.0 && c.max[1] >= 6.0)
+        .filter(|c| {
+            c.bounds.lo[0] <= 6.0
+                && c.bounds.hi[0] >= 6.0
+                && c.bounds.lo[1] <= 6.0
+                && c.bounds.hi[1] >= 6.0
+        })
         .collect();
     assert!(covering.is_empty(), "{covering:?}");
     let mut rng = Rng::new(5);
@@ -602,7 +659,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &motion,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Step { step: 5.0 },
+            method: SweepMethod::Stepwise { step_mm: 5.0 },
             tolerance: TOL,
             ..Default::default()
         },
@@ -621,7 +678,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &motion,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Step { step: TOL / 4.0 },
+            method: SweepMethod::Stepwise { step_mm: TOL / 4.0 },
             tolerance: TOL,
             ..Default::default()
         },
@@ -656,7 +713,7 @@ fn continuous_rotation_and_pose_sequences_find_first_contact() {
         &rot,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Step { step: TOL / 2.0 },
+            method: SweepMethod::Stepwise { step_mm: TOL / 2.0 },
             tolerance: TOL,
             ..Default::default()
         },
@@ -711,13 +768,13 @@ fn sweeps_refuse_bad_motions() {
         offset: Vec3::new(1e9, 0.0, 0.0),
     };
     let tiny = SweepOptions {
-        method: SweepMethod::Step { step: 1e-6 },
+        method: SweepMethod::Stepwise { step_mm: 1e-6 },
         tolerance: TOL,
         ..Default::default()
     };
     assert!(sweep(&mover, &ok, &obstacles, &tiny).is_err());
     let zero = SweepOptions {
-        method: SweepMethod::Step { step: 0.0 },
+        method: SweepMethod::Stepwise { step_mm: 0.0 },
         tolerance: TOL,
         ..Default::default()
     };

@@ -94,28 +94,37 @@ fn one_strict_side(d: &[f64; 3]) -> bool {
 /// a large triangle is judged where it meets `o`, not at a far corner. `oriented`:
 /// behind means against `n` (into the solid); otherwise the lesser of the two sides.
 fn reach_into(t: &Tri, o: &Tri, n: &Vec3, eps: f64, oriented: bool) -> f64 {
-    let mut poly: Vec<Point3> = t.to_vec();
+    // Clipping a triangle by three half-planes leaves at most 6 corners: fixed
+    // buffers (this runs for every crossing pair; no allocation).
+    let mut poly = [Point3::origin(); 8];
+    let mut len = 3;
+    poly[..3].copy_from_slice(t);
     for k in 0..3 {
         let (u, v) = (o[k], o[(k + 1) % 3]);
         let m = n.cross(&(v - u)); // points into `o` for a counter-clockwise `o`
         let slack = eps * m.norm();
         let side = |p: &Point3| m.dot(&(p - u)) + slack;
-        let mut next = Vec::with_capacity(poly.len() + 1);
-        for (i, p) in poly.iter().enumerate() {
-            let q = &poly[(i + 1) % poly.len()];
+        let mut next = [Point3::origin(); 8];
+        let mut count = 0;
+        for i in 0..len {
+            let (p, q) = (&poly[i], &poly[(i + 1) % len]);
             let (sp, sq) = (side(p), side(q));
-            if sp >= 0.0 {
-                next.push(*p);
+            if sp >= 0.0 && count < next.len() {
+                next[count] = *p;
+                count += 1;
             }
-            if (sp >= 0.0) != (sq >= 0.0) {
-                next.push(p + (q - p) * (sp / (sp - sq)));
+            if (sp >= 0.0) != (sq >= 0.0) && count < next.len() {
+                next[count] = p + (q - p) * (sp / (sp - sq));
+                count += 1;
             }
         }
         poly = next;
-        if poly.is_empty() {
+        len = count;
+        if len == 0 {
             return 0.0;
         }
     }
+    let poly = &poly[..len];
     let d = poly.iter().map(|p| n.dot(&(p - o[0])));
     let above = d.clone().fold(0.0f64, |m, v| m.max(v));
     let below = d.fold(0.0f64, |m, v| m.max(-v));

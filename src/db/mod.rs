@@ -36,6 +36,8 @@ mod backend;
 pub mod recording;
 mod records;
 mod schema;
+mod skill_log;
+pub use skill_log::SkillLogEntry;
 
 pub use backend::{Dialect, SqlValue};
 pub use records::*;

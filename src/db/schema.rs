@@ -10,7 +10,7 @@
 use super::backend::{Dialect, Raw, SqlValue, Tx};
 
 /// The schema version this fitup writes.
-pub const LATEST: u32 = 3;
+pub const LATEST: u32 = 4;
 
 /// One step of the schema.
 struct Migration {
@@ -141,6 +141,23 @@ CREATE TABLE interference_pairs (
         sql: "
 ALTER TABLE paths ADD COLUMN search_ms {real} NOT NULL DEFAULT 0;
 ALTER TABLE paths ADD COLUMN smoothing_ms {real} NOT NULL DEFAULT 0;
+",
+    },
+    Migration {
+        version: 4,
+        what: "skill execution log",
+        sql: "
+CREATE TABLE skill_log (
+    id {id},
+    run_id {int} REFERENCES runs(id) ON DELETE SET NULL,
+    plan TEXT NOT NULL,
+    skill {int},
+    part TEXT,
+    event TEXT NOT NULL,
+    detail TEXT NOT NULL DEFAULT '',
+    created_at TEXT NOT NULL
+);
+CREATE INDEX skill_log_by_plan ON skill_log(plan, id)
 ",
     },
 ];

@@ -6,7 +6,7 @@
 //! until every mate holds (Gauss–Seidel). Distances are mm, angles radians.
 
 use super::reference::Reference;
-use crate::math::{Point3, Transform, Vec3};
+use crate::math::{rotation_between, Point3, Transform, Vec3};
 use nalgebra::{Unit, UnitQuaternion};
 
 /// The kinds of mate.
@@ -285,21 +285,6 @@ pub(crate) fn check_entities(kind: MateKind, a: &Reference, b: &Reference) -> Re
             b.kind_name()
         ))
     }
-}
-
-/// The smallest rotation taking unit `from` onto unit `to` (any axis for opposite).
-fn rotation_between(from: &Vec3, to: &Vec3) -> UnitQuaternion<f64> {
-    UnitQuaternion::rotation_between(from, to).unwrap_or_else(|| {
-        let perp = if from.x.abs() < 0.9 {
-            Vec3::x()
-        } else {
-            Vec3::y()
-        };
-        UnitQuaternion::from_axis_angle(
-            &Unit::new_normalize(from.cross(&perp)),
-            std::f64::consts::PI,
-        )
-    })
 }
 
 fn rotate_about(point: &Point3, q: UnitQuaternion<f64>) -> Transform {

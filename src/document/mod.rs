@@ -21,7 +21,7 @@ pub use scan::MAX_ABS_VALUE;
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::fsutil::{content_hash, FileKind};
-use crate::math::{Point3, Transform, Vec3};
+use crate::math::{Aabb, Transform, Vec3};
 use crate::mesh::{Mesh, MeshCache};
 use crate::project::Project;
 use file::{
@@ -218,8 +218,8 @@ pub struct Document {
     disk_hash: Option<u64>,
 }
 
-/// A rotation and the box `(min, max)` of a mesh rotated by it.
-type RotatedBox = (nalgebra::UnitQuaternion<f64>, Point3, Point3);
+/// A rotation and the box of a mesh rotated by it (mm).
+type RotatedBox = (nalgebra::UnitQuaternion<f64>, Aabb);
 
 /// Per component: the rotation last seen and the box of the mesh rotated by it.
 #[derive(Debug, Default)]
@@ -860,8 +860,9 @@ impl Document {
         Ok(())
     }
 
-    /// World-frame axis-aligned box of a component (mm).
-    pub fn world_aabb(&self, component: usize) -> Option<(Point3, Point3)> {
+    /// World-frame axis-aligned box of a component (mm): the tight box of its mesh's
+    /// vertices at the component's pose; `None` for an empty mesh.
+    pub fn world_aabb(&self, component: usize) -> Option<Aabb> {
         let c = &self.components[component];
         let rotation = c.transform.rotation();
         let t = c.transform.translation();
@@ -871,26 +872,28 @@ impl Document {
         if cache.len() != self.components.len() {
             cache.resize(self.components.len(), None);
         }
-        if let Some((q, lo, hi)) = cache[component] {
+        if let Some((q, b)) = cache[component] {
             if q == rotation {
-                return Some((lo + t, hi + t));
+                return Some(b.translated(&t));
             }
         }
         let mesh = self.mesh_of(component);
-        let first = rotation * mesh.vertices.first()?;
-        let (lo, hi) = mesh.vertices.iter().fold((first, first), |(lo, hi), p| {
-            let q = rotation * p;
-            (lo.inf(&q), hi.sup(&q))
+        if mesh.vertices.is_empty() {
+            return None;
+        }
+        let b = mesh.vertices.iter().fold(Aabb::EMPTY, |mut b, p| {
+            b.grow(&(rotation * p));
+            b
         });
-        cache[component] = Some((rotation, lo, hi));
-        Some((lo + t, hi + t))
+        cache[component] = Some((rotation, b));
+        Some(b.translated(&t))
     }
 
     /// The box around every component (mm), `None` for an empty document.
-    pub fn assembly_aabb(&self) -> Option<(Point3, Point3)> {
+    pub fn assembly_aabb(&self) -> Option<Aabb> {
         (0..self.components.len())
             .filter_map(|i| self.world_aabb(i))
-            .reduce(|(a, b), (c, d)| (a.inf(&c), b.sup(&d)))
+            .reduce(|a, b| a.union(&b))
     }
 
     /// Mates in file order.

@@ -4,11 +4,13 @@
 //! Units: millimetres for lengths, radians for angles (degrees only in the
 //! user-facing `X Y Z A B C` pose triples, see [`AngleConvention`]).
 
+mod aabb;
 mod euler;
 pub mod format;
 mod rng;
 pub mod transform;
 
+pub use aabb::Aabb;
 pub use euler::AngleConvention;
 pub use rng::Rng;
 pub use transform::Transform;
@@ -17,3 +19,20 @@ pub use transform::Transform;
 pub type Vec3 = nalgebra::Vector3<f64>;
 /// A point in millimetres.
 pub type Point3 = nalgebra::Point3<f64>;
+
+/// The smallest rotation taking the direction `from` onto the direction `to` (any
+/// axis perpendicular to `from` when they are opposite). Frame-free: both vectors in
+/// the same frame, the rotation in that frame.
+pub fn rotation_between(from: &Vec3, to: &Vec3) -> nalgebra::UnitQuaternion<f64> {
+    nalgebra::UnitQuaternion::rotation_between(from, to).unwrap_or_else(|| {
+        let perp = if from.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
+        nalgebra::UnitQuaternion::from_axis_angle(
+            &nalgebra::Unit::new_normalize(from.cross(&perp)),
+            std::f64::consts::PI,
+        )
+    })
+}

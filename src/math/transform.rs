@@ -49,6 +49,30 @@ pub enum TransformError {
     ZeroAxis,
 }
 
+/// A nalgebra isometry (column-vector convention, mm) is a pose: part frame → world.
+///
+/// # Examples
+/// ```
+/// use fitup::math::Transform;
+/// use nalgebra::{Isometry3, Vector3};
+/// let iso = Isometry3::translation(10.0, 0.0, 0.0);
+/// let t: Transform = iso.into();
+/// let back: Isometry3<f64> = t.into();
+/// assert_eq!(back.translation.vector, Vector3::new(10.0, 0.0, 0.0));
+/// ```
+impl From<Isometry3<f64>> for Transform {
+    fn from(iso: Isometry3<f64>) -> Self {
+        Self::from_isometry(iso)
+    }
+}
+
+/// The pose as a nalgebra isometry (column-vector convention, mm).
+impl From<Transform> for Isometry3<f64> {
+    fn from(t: Transform) -> Self {
+        t.iso
+    }
+}
+
 /// Orthonormality tolerance of the `a..i` block.
 pub const ORTHONORMAL_TOLERANCE: f64 = 1e-6;
 

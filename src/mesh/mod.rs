@@ -104,14 +104,22 @@ impl Mesh {
         ]
     }
 
-    /// Axis-aligned bounds `(min, max)` in the part frame; `None` for an empty mesh.
-    pub fn bounds(&self) -> Option<(Point3, Point3)> {
-        let first = *self.vertices.first()?;
-        Some(
-            self.vertices
-                .iter()
-                .fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p))),
-        )
+    /// Axis-aligned bounds in the part frame (mm); `None` for an empty mesh.
+    pub fn bounds(&self) -> Option<crate::math::Aabb> {
+        if self.vertices.is_empty() {
+            return None;
+        }
+        Some(crate::math::Aabb::around(&self.vertices))
+    }
+
+    /// Flips every triangle when the mesh is inward-oriented (negative signed volume),
+    /// so a closed mesh's normals point out whatever the generator's handedness.
+    pub fn orient_outward(&mut self) {
+        if self.signed_volume() < 0.0 {
+            for t in &mut self.triangles {
+                t.swap(1, 2);
+            }
+        }
     }
 
     /// Signed volume (mm³): positive for a closed outward-oriented mesh.
@@ -130,7 +138,7 @@ impl Mesh {
         let mut report = MeshReport::default();
         let scale = self
             .bounds()
-            .map(|(lo, hi)| (hi - lo).norm())
+            .map(|b| (b.hi - b.lo).norm())
             .unwrap_or(1.0)
             .max(1e-9);
         let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new(); // (forward, backward) counts

@@ -42,11 +42,7 @@ impl Mesh {
             }
         }
         let mut mesh = Mesh::from_triangle_soup(soup)?;
-        if mesh.signed_volume() < 0.0 {
-            for t in &mut mesh.triangles {
-                t.swap(1, 2);
-            }
-        }
+        mesh.orient_outward();
         Ok(mesh)
     }
 

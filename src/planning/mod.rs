@@ -28,6 +28,7 @@ mod insertion;
 mod local_rrt;
 mod mesh_validator;
 mod path;
+mod problem_file;
 pub mod problems;
 mod request;
 mod rrt;
@@ -50,6 +51,7 @@ pub use mesh_validator::{
     MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
 };
 pub use path::{Failure, PlannedPath};
+pub use problem_file::{ProblemFile, ProblemFileError, MAX_PROBLEM_FILE_BYTES};
 pub use request::{Planner, PLANNER_NAMES};
 pub use rrt::{biased_rrt, rrt, RrtOptions};
 pub use rrt_connect::{rrt_connect, RrtConnectOptions};

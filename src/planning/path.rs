@@ -123,6 +123,31 @@ impl PlannedPath {
         }
     }
 
+    /// A path through `poses` (part poses, mm, world frame) that was given rather
+    /// than searched — a straight line, a path written by hand: lengths measured
+    /// (raw = final), no search counts. `resolution` is how it is meant to be checked
+    /// ([`PlannedPath::revalidate`] uses the validator's own options).
+    pub fn given(planner: &'static str, poses: Vec<Transform>, resolution: EdgeResolution) -> Self {
+        let (length_mm, rotation_rad) = measure(&poses);
+        Self {
+            failure: None,
+            poses,
+            length_mm,
+            rotation_rad,
+            raw_length_mm: length_mm,
+            raw_rotation_rad: rotation_rad,
+            iterations: 0,
+            nodes: 0,
+            pose_checks: 0,
+            edge_checks: 0,
+            time_ms: 0.0,
+            search_ms: 0.0,
+            smoothing_ms: 0.0,
+            resolution,
+            planner,
+        }
+    }
+
     pub(crate) fn found_with(
         planner: &'static str,
         poses: Vec<Transform>,
@@ -244,24 +269,7 @@ mod tests {
                 AngleConvention::XyzFixed,
             ),
         ];
-        let (l, r) = measure(&poses);
-        PlannedPath {
-            failure: None,
-            poses,
-            length_mm: l,
-            rotation_rad: r,
-            raw_length_mm: l,
-            raw_rotation_rad: r,
-            iterations: 0,
-            nodes: 0,
-            pose_checks: 0,
-            edge_checks: 0,
-            time_ms: 0.0,
-            search_ms: 0.0,
-            smoothing_ms: 0.0,
-            resolution: EdgeResolution::DEFAULT,
-            planner: "test",
-        }
+        PlannedPath::given("test", poses, EdgeResolution::DEFAULT)
     }
 
     #[test]

@@ -7,6 +7,10 @@
 //! | [`piston_rod_cap`] | seed 002's experiment: a cap leaves its seat through a 0.5 mm channel and slot, 500 mm cube |
 //! | [`screw_cell`] | seed 000 fig. 11: a screw from the table into a plate hole (0.5 mm) |
 //! | [`ring_puzzle`] | two interlocked rings; the slit ring's gap is 10 % wider than the other's wire |
+//! | [`rod_corner`] | a rod twice as long as the corridor is wide turns a right-angle corner under a ceiling |
+//! | [`bar_slot`] | a flat bar turns 90° to pass a slot 0.3 mm wider than itself, then turns back |
+//! | [`peg_tilt`] | a peg taller than a window enters lying, stands up inside and drops into a 0.2 mm hole |
+//! | [`key_ring`] | a small ring threaded on a two-turn split key ring: out only along the spiral |
 
 use super::insertion::{plan_insertion, InsertionOptions};
 use super::path::PlannedPath;
@@ -493,11 +497,7 @@ fn ring(big: f64, wire: f64, gap: f64, nu: usize, nv: usize) -> Result<Mesh, Mes
     }
     let mut mesh = Mesh::new(vertices, triangles)?;
     // Make it outward-oriented whatever the parametrisation's handedness.
-    if mesh.signed_volume() < 0.0 {
-        for t in &mut mesh.triangles {
-            t.swap(1, 2);
-        }
-    }
+    mesh.orient_outward();
     Ok(mesh)
 }
 
@@ -540,8 +540,234 @@ pub fn ring_puzzle() -> Result<Problem, MeshError> {
     })
 }
 
+/// A rotation by `angle` (rad) about `axis` through the origin.
+fn turn(axis: Vec3, angle: f64) -> Result<Transform, MeshError> {
+    Transform::from_rotation_about(Point3::origin(), axis, angle)
+        .map_err(|e| MeshError::invalid(e.to_string()))
+}
+
+/// A rod round a corner: a Ø6 × 40 mm rod (origin at its centre, axis X) in an
+/// L-shaped corridor 20 mm wide and 12 mm high (floor, ceiling, outer walls and the
+/// inner corner block). The rod is twice as long as the corridor is wide, so it
+/// turns the corner only by rotating about Z while it moves. Start: in the X leg;
+/// goal: in the Y leg.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn rod_corner() -> Result<Problem, MeshError> {
+    let rod = Mesh::cylinder(3.0, 40.0, 24)
+        .transformed(&at(0.0, 0.0, -20.0))
+        .transformed(&turn(Vec3::y(), FRAC_PI_2)?);
+    let (w, h) = (20.0, 12.0);
+    let pieces = [
+        ("floor", [-110.0, -5.0, -5.0], [w + 5.0, 130.0, 0.0]),
+        ("ceiling", [-110.0, -5.0, h], [w + 5.0, 130.0, h + 5.0]),
+        ("outer_south", [-110.0, -5.0, 0.0], [w + 5.0, 0.0, h]),
+        ("outer_east", [w, 0.0, 0.0], [w + 5.0, 130.0, h]),
+        ("inner", [-110.0, w, 0.0], [0.0, 130.0, h]),
+    ];
+    let obstacles = pieces
+        .iter()
+        .map(|(n, lo, hi)| obstacle(n, n, boxed(*lo, *hi), Transform::IDENTITY))
+        .collect();
+    Ok(Problem {
+        name: "rod_corner".into(),
+        description:
+            "Rod round a corner: Ø6 × 40 mm rod, L-shaped corridor 20 mm wide and 12 mm high".into(),
+        moving_part: "rod".into(),
+        moving: Arc::new(rod),
+        obstacles,
+        start: at(-60.0, w / 2.0, h / 2.0),
+        goal: turn(Vec3::z(), FRAC_PI_2)?.then(&at(w / 2.0, 80.0, h / 2.0)),
+        space: PlanningSpace::new(Vec3::new(-90.0, 0.0, 0.0), Vec3::new(w, 110.0, h))
+            .with_rotation_weight(20.0),
+        product_box: Aabb::new(
+            Vec3::new(-110.0, -5.0, -5.0),
+            Vec3::new(w + 5.0, 130.0, h + 5.0),
+        ),
+    })
+}
+
+/// A flat bar through a slot: a 40 × 20 × 4 mm bar (origin at its centre, lying
+/// flat) crosses a 5 mm wall through a vertical slot 4.3 × 20.3 mm, 0.3 mm wider
+/// than the bar each way. It must roll 90° about its length to pass, then roll
+/// back. Start and goal: lying flat on either side of the wall.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn bar_slot() -> Result<Problem, MeshError> {
+    let bar = boxed([-20.0, -10.0, -2.0], [20.0, 10.0, 2.0]);
+    let (sy, sz) = (4.3 / 2.0, 20.3 / 2.0);
+    let (t, e) = (5.0, 90.0);
+    let pieces = [
+        ("wall_low", [0.0, -e, -e], [t, e, -sz]),
+        ("wall_high", [0.0, -e, sz], [t, e, e]),
+        ("wall_left", [0.0, -e, -sz], [t, -sy, sz]),
+        ("wall_right", [0.0, sy, -sz], [t, e, sz]),
+    ];
+    let obstacles = pieces
+        .iter()
+        .map(|(n, lo, hi)| obstacle(n, n, boxed(*lo, *hi), Transform::IDENTITY))
+        .collect();
+    Ok(Problem {
+        name: "bar_slot".into(),
+        description: "Flat bar through a slot: 40 × 20 × 4 mm bar, slot 4.3 × 20.3 mm in a 5 mm wall: roll 90°, pass, roll back".into(),
+        moving_part: "bar".into(),
+        moving: Arc::new(bar),
+        obstacles,
+        start: at(-40.0, 0.0, 0.0),
+        goal: at(45.0, 0.0, 0.0),
+        space: PlanningSpace::new(Vec3::new(-60.0, -40.0, -40.0), Vec3::new(65.0, 40.0, 40.0))
+            .with_rotation_weight(22.0),
+        product_box: Aabb::new(Vec3::new(0.0, -e, -e), Vec3::new(t, e, e)),
+    })
+}
+
+/// A peg that needs a tilt: a Ø20 × 30 mm peg (origin at the centre of its bottom
+/// face, axis Z) enters a closed chamber through a window 30 mm wide and only
+/// 25 mm high, so it must come in lying down, stand up inside (the chamber is 40 mm
+/// high) and drop into a blind hole of radius 10.2 mm (0.2 mm clearance), 10 mm
+/// deep, in the chamber floor. Start: lying outside the window; goal: in the hole.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn peg_tilt() -> Result<Problem, MeshError> {
+    let peg = Mesh::cylinder(10.0, 30.0, 48);
+    let (floor, top) = (20.0, 60.0);
+    let base = Mesh::lathe(
+        &[
+            (0.0, 0.0),
+            (62.0, 0.0),
+            (62.0, floor),
+            (10.2, floor),
+            (10.2, floor - 10.0),
+            (0.0, floor - 10.0),
+        ],
+        48,
+    )?;
+    let (win_y, win_z) = (15.0, floor + 25.0);
+    let pieces = [
+        ("roof", [-45.0, -45.0, top], [45.0, 45.0, top + 5.0]),
+        ("wall_back", [-45.0, -45.0, floor], [-40.0, 45.0, top]),
+        ("wall_south", [-40.0, -45.0, floor], [40.0, -40.0, top]),
+        ("wall_north", [-40.0, 40.0, floor], [40.0, 45.0, top]),
+        ("front_left", [40.0, -45.0, floor], [45.0, -win_y, top]),
+        ("front_right", [40.0, win_y, floor], [45.0, 45.0, top]),
+        ("front_lintel", [40.0, -win_y, win_z], [45.0, win_y, top]),
+    ];
+    let mut obstacles = vec![obstacle("base", "base", base, Transform::IDENTITY)];
+    obstacles.extend(
+        pieces
+            .iter()
+            .map(|(n, lo, hi)| obstacle(n, n, boxed(*lo, *hi), Transform::IDENTITY)),
+    );
+    let lying = turn(Vec3::y(), FRAC_PI_2)?;
+    Ok(Problem {
+        name: "peg_tilt".into(),
+        description: "Peg that needs a tilt: Ø20 × 30 mm peg through a 25 mm high window, stood up inside a 40 mm high chamber, into a hole with 0.2 mm clearance".into(),
+        moving_part: "peg".into(),
+        moving: Arc::new(peg),
+        obstacles,
+        start: lying.then(&at(90.0, 0.0, floor + 11.0)),
+        goal: at(0.0, 0.0, floor - 10.0),
+        space: PlanningSpace::new(Vec3::new(-40.0, -40.0, floor - 10.0), Vec3::new(120.0, 40.0, top))
+            .with_rotation_weight(18.0),
+        product_box: Aabb::new(Vec3::new(-62.0, -62.0, 0.0), Vec3::new(62.0, 62.0, top + 5.0)),
+    })
+}
+
+/// A closed tube of wire radius `wire` along the helix of radius `radius` and
+/// `pitch` (mm per turn) around +Z, `turns` turns from angle 0, capped flat at
+/// both ends; `nu` facets per turn along, `nv` around the wire.
+fn helix_tube(
+    radius: f64,
+    pitch: f64,
+    turns: f64,
+    wire: f64,
+    nu: usize,
+    nv: usize,
+) -> Result<Mesh, MeshError> {
+    let n = ((nu as f64) * turns).ceil().max(2.0) as usize;
+    let lead = pitch / TAU;
+    let mut vertices = Vec::with_capacity((n + 1) * nv + 2);
+    let centre = |t: f64| Point3::new(radius * t.cos(), radius * t.sin(), lead * t);
+    for i in 0..=n {
+        let t = TAU * turns * i as f64 / n as f64;
+        let tangent = Vec3::new(-radius * t.sin(), radius * t.cos(), lead).normalize();
+        let normal = Vec3::new(t.cos(), t.sin(), 0.0);
+        let binormal = tangent.cross(&normal);
+        for j in 0..nv {
+            let v = TAU * j as f64 / nv as f64;
+            vertices.push(centre(t) + (normal * v.cos() + binormal * v.sin()) * wire);
+        }
+    }
+    let idx = |i: usize, j: usize| (i * nv + j % nv) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        for j in 0..nv {
+            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    for (i, first) in [(0usize, true), (n, false)] {
+        let c = vertices.len() as u32;
+        vertices.push(centre(TAU * turns * i as f64 / n as f64));
+        for j in 0..nv {
+            triangles.push(if first {
+                [c, idx(i, j), idx(i, j + 1)]
+            } else {
+                [c, idx(i, j + 1), idx(i, j)]
+            });
+        }
+    }
+    let mut mesh = Mesh::new(vertices, triangles)?;
+    mesh.orient_outward();
+    Ok(mesh)
+}
+
+/// A twisted puzzle in the spirit of the alpha puzzle: a split key ring (helix of
+/// radius 15 mm, pitch 7.6 mm, two turns, wire radius 1.5 mm) holds a small closed
+/// ring (centre radius 4.5 mm, wire radius 1 mm) threaded on it one turn from its
+/// end. The ring comes off only by following the spiral — turning with its tangent
+/// while it climbs — with its wire passing between the key ring's turns (4.6 mm
+/// apart) and the neighbouring turn clearing its rim by about 0.6 mm. Start:
+/// threaded; goal: free, 60 mm away.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn key_ring() -> Result<Problem, MeshError> {
+    let (radius, pitch, turns) = (15.0, 7.6, 2.0);
+    let spiral = helix_tube(radius, pitch, turns, 1.5, 64, 12)?;
+    let small = ring(4.5, 1.0, 0.0, 32, 10)?;
+    // On the spiral one turn from its end: centre on the wire, ring plane normal
+    // to the wire's tangent (the ring's axis Z along the tangent).
+    let t0 = TAU * (turns - 1.0);
+    let lead = pitch / TAU;
+    let tangent = Vec3::new(-radius * t0.sin(), radius * t0.cos(), lead).normalize();
+    let align = Transform::from_parts(
+        Vec3::zeros(),
+        nalgebra::UnitQuaternion::rotation_between(&Vec3::z(), &tangent)
+            .ok_or_else(|| MeshError::invalid("degenerate key ring tangent"))?,
+    );
+    let start = align.then(&at(radius * t0.cos(), radius * t0.sin(), lead * t0));
+    Ok(Problem {
+        name: "key_ring".into(),
+        description: "Key ring: a ring (R 4.5, wire r 1 mm) threaded on a two-turn split key ring (R 15, pitch 7.6, wire r 1.5 mm), off only along the spiral".into(),
+        moving_part: "small_ring".into(),
+        moving: Arc::new(small),
+        obstacles: vec![obstacle("key_ring", "key_ring", spiral, Transform::IDENTITY)],
+        start,
+        goal: at(75.0, 0.0, 8.0),
+        space: PlanningSpace::new(Vec3::new(-30.0, -30.0, -20.0), Vec3::new(90.0, 30.0, 35.0))
+            .with_rotation_weight(6.0),
+        product_box: Aabb::new(Vec3::new(-16.5, -16.5, -1.5), Vec3::new(16.5, 16.5, 16.7)),
+    })
+}
+
 /// Every benchmark problem: peg in hole at 0.5 and 0.1 mm, piston-rod cap, screw
-/// cell, ring puzzle.
+/// cell, ring puzzle, rod round a corner, bar through a slot, peg that needs a
+/// tilt, key ring.
 ///
 /// # Errors
 /// None in practice (the generated meshes are valid).
@@ -552,5 +778,18 @@ pub fn all() -> Result<Vec<Problem>, MeshError> {
         piston_rod_cap()?,
         screw_cell()?,
         ring_puzzle()?,
+        rod_corner()?,
+        bar_slot()?,
+        peg_tilt()?,
+        key_ring()?,
     ])
+}
+
+/// The benchmark problem called `name` (the file stem under `models/problems/`),
+/// `None` for an unknown name.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn by_name(name: &str) -> Result<Option<Problem>, MeshError> {
+    Ok(all()?.into_iter().find(|p| p.name == name))
 }

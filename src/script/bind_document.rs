@@ -2,7 +2,7 @@
 
 use super::api::Api;
 use super::bind_math::to_transform;
-use super::convert::{aabb_map, array3, err, fail, floats, num, point3, vec3};
+use super::convert::{array3, box_value, err, fail, floats, num, point3, vec3};
 use super::{Context, ScriptResult};
 use crate::document::{DimensionKind, Document, Reference};
 use crate::math::{Transform, Vec3};
@@ -43,13 +43,31 @@ impl DocHandle {
                 ctx.project.root().display()
             ));
         }
-        let doc = {
-            let mut cache = ctx
-                .caches
-                .meshes
-                .lock()
-                .map_err(|_| "mesh cache poisoned".to_string())?;
-            Document::load_in(&full, &ctx.project, &mut cache).map_err(|e| e.render())?
+        let root = ctx.project.root().to_path_buf();
+        let cached = ctx
+            .caches
+            .documents
+            .lock()
+            .map_err(|_| "document cache poisoned".to_string())?
+            .get(&root, &full);
+        let doc = match cached {
+            Some(doc) => doc,
+            None => {
+                let doc = {
+                    let mut cache = ctx
+                        .caches
+                        .meshes
+                        .lock()
+                        .map_err(|_| "mesh cache poisoned".to_string())?;
+                    Document::load_in(&full, &ctx.project, &mut cache).map_err(|e| e.render())?
+                };
+                ctx.caches
+                    .documents
+                    .lock()
+                    .map_err(|_| "document cache poisoned".to_string())?
+                    .insert(&root, &full, &doc);
+                doc
+            }
         };
         for f in doc.source_files() {
             ctx.record_read(&f);
@@ -220,11 +238,11 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         |d: &mut DocHandle| -> ScriptResult<()> { d.lock()?.rebuild().map_err(fail) },
     );
     api.f(
-        "Document.aabb() -> map",
-        "The world box around every component: `#{min: [x,y,z], max: [x,y,z]}` (mm).",
+        "Document.aabb() -> Box",
+        "The world box around every component (mm): a `Box` (`.min`, `.max`).",
         |d: &mut DocHandle| -> ScriptResult<Dynamic> {
             match d.lock()?.assembly_aabb() {
-                Some((lo, hi)) => Ok(aabb_map(&lo, &hi)),
+                Some(b) => Ok(box_value(&b)),
                 None => err("the document has no components"),
             }
         },
@@ -325,6 +343,22 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             c.move_by(Transform::from_translation(d))
         },
     );
+    // typed fast paths of the form above (all floats, all integers): no Dynamic
+    // conversions on the hot path of animation loops
+    api.overload(
+        "Component.translate(dx, dy, dz)",
+        |c: &mut ComponentHandle, x: f64, y: f64, z: f64| -> ScriptResult<()> {
+            c.move_by(Transform::from_translation(Vec3::new(x, y, z)))
+        },
+    );
+    api.overload(
+        "Component.translate(dx, dy, dz)",
+        |c: &mut ComponentHandle, x: i64, y: i64, z: i64| -> ScriptResult<()> {
+            c.move_by(Transform::from_translation(Vec3::new(
+                x as f64, y as f64, z as f64,
+            )))
+        },
+    );
     api.f(
         "Component.translate(v: array)",
         "Moves the component by `[dx, dy, dz]` mm in the world frame.",
@@ -338,12 +372,12 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         c.move_by(r)
     });
     api.f(
-        "Component.aabb() -> map",
-        "World axis-aligned box `#{min: [x,y,z], max: [x,y,z]}` (mm) of the posed mesh.",
+        "Component.aabb() -> Box",
+        "World axis-aligned box (mm) of the posed mesh: a `Box` (`.min`, `.max`).",
         |c: &mut ComponentHandle| -> ScriptResult<Dynamic> {
             let doc = c.doc.lock()?;
             match doc.world_aabb(c.index) {
-                Some((lo, hi)) => Ok(aabb_map(&lo, &hi)),
+                Some(b) => Ok(box_value(&b)),
                 None => err("the component's mesh is empty"),
             }
         },

@@ -5,13 +5,12 @@ use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
 use super::bind_planning::with_workspace;
-use super::convert::{aabb_map, check_keys, err, fail, floats, num, opt_num, opt_str};
+use super::convert::{box_value, check_keys, err, fail, floats, num, opt_num, opt_str};
 use super::ScriptResult;
 use crate::collision::{
     Contact, CutSpec, InterferenceKind, Method, PairMember, SweepMethod, SweepOptions,
 };
 use crate::document::Feature;
-use crate::math::Point3;
 use crate::workspace::CheckOptions;
 use rhai::{Array, Dynamic, Map};
 
@@ -131,8 +130,8 @@ fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> Scr
         let step = opt_num(m, "step")?;
         o.method = match opt_str(m, "method")?.as_deref() {
             None | Some("continuous") => SweepMethod::Continuous,
-            Some("step") => SweepMethod::Step {
-                step: step.unwrap_or(1.0),
+            Some("step") => SweepMethod::Stepwise {
+                step_mm: step.unwrap_or(1.0),
             },
             Some(other) => {
                 return err(format!(
@@ -191,10 +190,7 @@ fn split(c: &ComponentHandle, spec: CutSpec) -> ScriptResult<FeatureHandle> {
     let mesh = doc.mesh_of(c.index).clone();
     c.doc
         .context()
-        .caches
-        .scene
-        .lock()
-        .map_err(|_| fail("collision cache poisoned"))?
+        .scene_cache()?
         .cells(&mesh, &spec)
         .map_err(fail)?;
     doc.set_feature(
@@ -222,13 +218,7 @@ fn feature_cells(f: &FeatureHandle) -> ScriptResult<std::sync::Arc<crate::collis
             f.part, f.name
         ));
     };
-    let mut cache = f
-        .doc
-        .context()
-        .caches
-        .scene
-        .lock()
-        .map_err(|_| fail("collision cache poisoned"))?;
+    let mut cache = f.doc.context().scene_cache()?;
     cache.cells(&part.mesh, spec).map_err(fail)
 }
 
@@ -345,9 +335,9 @@ pub(super) fn register(api: &mut Api) {
         "The part whose tree holds it.",
         |f: &mut FeatureHandle| f.part.clone(),
     );
-    api.f("Feature.cells() -> array", "The cells: `#{min: [x,y,z], max: [x,y,z]}` boxes of the part's material in each grid cell, part frame (mm).", |f: &mut FeatureHandle| -> ScriptResult<Array> {
+    api.f("Feature.cells() -> array", "The cells: a `Box` (`.min`, `.max`) of the part's material in each grid cell, part frame (mm).", |f: &mut FeatureHandle| -> ScriptResult<Array> {
         let cells = feature_cells(f)?;
-        Ok(cells.cells.iter().map(|c| aabb_map(&Point3::from(c.min), &Point3::from(c.max))).collect())
+        Ok(cells.cells.iter().map(|c| box_value(&c.bounds)).collect())
     });
     api.get(
         "Feature.count -> int",

@@ -1,9 +1,9 @@
 //! Bindings for `Transform` (the MathTransform of the SolidWorks API).
 
 use super::api::Api;
-use super::convert::{array3, err, fail, floats, num, numbers, point3, vec3};
+use super::convert::{array3, box_text, err, fail, floats, num, numbers, point3, vec3};
 use super::ScriptResult;
-use crate::math::{format, AngleConvention, Transform, Vec3};
+use crate::math::{format, Aabb, AngleConvention, Transform, Vec3};
 use rhai::{Array, Dynamic};
 
 fn matrix_array(t: &Transform) -> Dynamic {
@@ -75,6 +75,13 @@ fn fmt_value(v: &Dynamic, decimals: usize) -> String {
     }
     if let Some(t) = v.read_lock::<Transform>() {
         return t.to_string();
+    }
+    if let Some(b) = v.read_lock::<Aabb>() {
+        let v = |p: &crate::math::Point3| {
+            let items: Vec<String> = p.iter().map(|x| format::number(*x, decimals)).collect();
+            format!("[{}]", items.join(", "))
+        };
+        return format!("#{{min: {}, max: {}}}", v(&b.lo), v(&b.hi));
     }
     if let Some(a) = v.read_lock::<Array>() {
         let items: Vec<String> = a.iter().map(|x| fmt_value(x, decimals)).collect();
@@ -261,10 +268,34 @@ pub(super) fn register(api: &mut Api) {
         "Degrees to radians.",
         |d: Dynamic| -> ScriptResult<f64> { Ok(num(&d, "deg")?.to_radians()) },
     );
+    api.section("Box", "An axis-aligned box (mm), as `aabb()` and `cells()` return it; where an option takes a box (`bounds`), a map `#{min: [x,y,z], max: [x,y,z]}` works too.");
+    api.type_::<Aabb>("Box");
+    api.get(
+        "Box.min -> array",
+        "The minimum corner `[x, y, z]` (mm).",
+        |b: &mut Aabb| array3(&b.lo.coords),
+    );
+    api.get(
+        "Box.max -> array",
+        "The maximum corner `[x, y, z]` (mm).",
+        |b: &mut Aabb| array3(&b.hi.coords),
+    );
+    api.get(
+        "Box.centre -> array",
+        "The centre `[x, y, z]` (mm).",
+        |b: &mut Aabb| array3(&b.centre().coords),
+    );
+    api.get(
+        "Box.size -> array",
+        "The edge lengths `[dx, dy, dz]` (mm).",
+        |b: &mut Aabb| array3(&(b.hi - b.lo)),
+    );
+    api.overload("to_string(b: Box)", |b: &mut Aabb| box_text(b));
+    api.overload("to_debug(b: Box)", |b: &mut Aabb| box_text(b));
     api.section("Formatting", "Numbers for people: `fmt` rounds to a number of decimals (3 by default: 0.001 mm, 0.001°), drops trailing zeros and rounding noise (`29.999999999999996` → `30`, `6.4e-15` → `0`), never prints `-0`, and writes magnitudes of 10¹⁵ and more as `1e308`. Plain `print(x)` and `${x}` keep every digit (use them for data you will read back).");
     api.f(
         "fmt(value) -> string",
-        "A number with up to 3 decimals; an array or map element by element; a Transform as its pose (`X 10 Y 0 Z 5 A 0° B 0° C 90°`); anything else as `to_string`.",
+        "A number with up to 3 decimals; an array, map or Box element by element; a Transform as its pose (`X 10 Y 0 Z 5 A 0° B 0° C 90°`); anything else as `to_string`.",
         |v: Dynamic| fmt_value(&v, format::DEFAULT_DECIMALS),
     );
     api.f(

@@ -4,13 +4,13 @@
 use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
-use super::convert::{check_keys, err, fail, num, opt_num, opt_str, vec3};
+use super::convert::{check_keys, err, fail, num, opt_num, opt_str};
 use super::{Context, ScriptResult};
 use crate::collision::Aabb;
 use crate::math::AngleConvention;
 use crate::planning::{
-    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, Progress,
-    RotationFreedom, PLANNER_NAMES,
+    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, ProblemFile,
+    Progress, RotationFreedom, PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -131,19 +131,7 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
     let bounds = match opts.get("bounds") {
         None => None,
         Some(b) => {
-            let m = b
-                .read_lock::<Map>()
-                .ok_or_else(|| fail("bounds must be #{min: [x,y,z], max: [x,y,z]}"))?;
-            let (lo, hi) = (
-                vec3(
-                    m.get("min").ok_or_else(|| fail("bounds needs `min`"))?,
-                    "bounds.min",
-                )?,
-                vec3(
-                    m.get("max").ok_or_else(|| fail("bounds needs `max`"))?,
-                    "bounds.max",
-                )?,
-            );
+            let Aabb { lo, hi } = super::convert::to_box(b, "bounds")?;
             if (0..3).any(|i| lo[i] >= hi[i]) {
                 return err(format!(
                     "bounds are empty: min {lo:?} is not below max {hi:?} on every axis"
@@ -177,6 +165,7 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
         },
         rotation_weight: opt_num(opts, "rotation_weight")?,
         disassemble,
+        start: None,
     })
 }
 
@@ -212,15 +201,7 @@ pub(super) fn with_workspace<R>(
     f: impl FnOnce(&Workspace) -> ScriptResult<R>,
 ) -> ScriptResult<R> {
     let doc = d.lock()?;
-    let ws = {
-        let mut cache = d
-            .context()
-            .caches
-            .scene
-            .lock()
-            .map_err(|_| fail("collision cache poisoned"))?;
-        Workspace::new(&doc, &mut cache).map_err(fail)?
-    };
+    let ws = Workspace::new(&doc, &mut *d.context().scene_cache()?).map_err(fail)?;
     f(&ws)
 }
 
@@ -231,6 +212,34 @@ fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<P
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path = with_workspace(d, |ws| {
         ws.plan_path(name, &goal, &req, Some(&mut cb)).map_err(fail)
+    })?;
+    if path.failure.is_some() && ctx.cancelled() {
+        return err("cancelled");
+    }
+    Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
+}
+
+/// A planning problem read from a `.plan.json` file (cheap to clone).
+#[derive(Clone)]
+pub struct ProblemHandle(pub(super) Arc<ProblemFile>);
+
+fn load_problem(d: &DocHandle, path: &str) -> ScriptResult<ProblemHandle> {
+    let ctx = d.context();
+    let full = ctx.project.resolve(path).map_err(fail)?;
+    ctx.record_read(&full);
+    let p = ProblemFile::read(&full).map_err(fail)?;
+    d.lock()?
+        .component_index(&p.moving_component)
+        .map_err(|e| fail(format!("{path}: {e}")))?;
+    Ok(ProblemHandle(Arc::new(p)))
+}
+
+fn plan_problem(d: &DocHandle, p: &ProblemHandle, opts: &Map) -> ScriptResult<PathHandle> {
+    let req = parse(opts)?;
+    let ctx = d.context().clone();
+    let mut cb = progress_printer(&ctx, req.planner.name());
+    let path = with_workspace(d, |ws| {
+        ws.plan_problem(&p.0, &req, Some(&mut cb)).map_err(fail)
     })?;
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");
@@ -276,6 +285,38 @@ pub(super) fn register(api: &mut Api) {
         "Document.plan_disassembly(name: string, options: map) -> Path",
         "As above with options (planner `rrt`, `biased_rrt` or `local_rrt`).",
         |d: &mut DocHandle, name: &str, o: Map| plan_disassembly(d, name, &o),
+    );
+    api.type_::<ProblemHandle>("Problem");
+    api.f("Document.load_problem(file: string) -> Problem", "Reads a planning problem (`.plan.json`, path inside the project: which component moves, start and goal poses, bounds, rotation weight — the files under `models/problems/`) and checks that its component is in this document; errors name the file, line and field.", |d: &mut DocHandle, file: &str| load_problem(d, file));
+    api.f(
+        "Document.plan_problem(problem: Problem) -> Path",
+        "Plans the problem: its component from the file's start to its goal within its bounds, default planner and options.",
+        |d: &mut DocHandle, p: ProblemHandle| plan_problem(d, &p, &Map::new()),
+    );
+    api.f(
+        "Document.plan_problem(problem: Problem, options: map) -> Path",
+        "As above with the options of `plan_path` (`bounds` and `start` come from the file).",
+        |d: &mut DocHandle, p: ProblemHandle, o: Map| plan_problem(d, &p, &o),
+    );
+    api.get(
+        "Problem.name -> string",
+        "The problem's name.",
+        |p: &mut ProblemHandle| p.0.name.clone(),
+    );
+    api.get(
+        "Problem.component -> string",
+        "The component that moves.",
+        |p: &mut ProblemHandle| p.0.moving_component.clone(),
+    );
+    api.get(
+        "Problem.start -> Transform",
+        "Start pose (mm).",
+        |p: &mut ProblemHandle| p.0.start,
+    );
+    api.get(
+        "Problem.goal -> Transform",
+        "Goal pose (mm).",
+        |p: &mut ProblemHandle| p.0.goal,
     );
     api.get(
         "Path.found -> bool",

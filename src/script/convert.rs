@@ -78,12 +78,38 @@ pub fn floats(v: impl IntoIterator<Item = f64>) -> Dynamic {
     Dynamic::from_array(v.into_iter().map(Dynamic::from_float).collect())
 }
 
-/// `#{min: [..], max: [..]}`.
-pub fn aabb_map(min: &Point3, max: &Point3) -> Dynamic {
-    let mut m = Map::new();
-    m.insert("min".into(), array3(&min.coords));
-    m.insert("max".into(), array3(&max.coords));
-    Dynamic::from_map(m)
+/// A box as the script type `Box` (properties `min`, `max`, …; no map allocated).
+pub fn box_value(b: &crate::math::Aabb) -> Dynamic {
+    Dynamic::from(*b)
+}
+
+/// A box from a script value: a `Box`, or a map `#{min: [x,y,z], max: [x,y,z]}` (mm).
+pub fn to_box(v: &Dynamic, what: &str) -> ScriptResult<crate::math::Aabb> {
+    if let Some(b) = v.clone().try_cast::<crate::math::Aabb>() {
+        return Ok(b);
+    }
+    let m = v.read_lock::<Map>().ok_or_else(|| {
+        fail(format!(
+            "{what} must be a Box or #{{min: [x,y,z], max: [x,y,z]}}"
+        ))
+    })?;
+    let lo = vec3(
+        m.get("min")
+            .ok_or_else(|| fail(format!("{what} needs `min`")))?,
+        &format!("{what}.min"),
+    )?;
+    let hi = vec3(
+        m.get("max")
+            .ok_or_else(|| fail(format!("{what} needs `max`")))?,
+        &format!("{what}.max"),
+    )?;
+    Ok(crate::math::Aabb::new(lo, hi))
+}
+
+/// How a `Box` prints: `#{min: [x, y, z], max: [x, y, z]}` with every digit (mm).
+pub fn box_text(b: &crate::math::Aabb) -> String {
+    let v = |p: &crate::math::Point3| format!("[{:?}, {:?}, {:?}]", p.x, p.y, p.z);
+    format!("#{{min: {}, max: {}}}", v(&b.lo), v(&b.hi))
 }
 
 /// An optional numeric field of an options map.

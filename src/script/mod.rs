@@ -13,6 +13,7 @@ mod bind_interference;
 mod bind_math;
 mod bind_planning;
 mod bind_robot;
+mod bind_sequence;
 mod bind_view;
 mod convert;
 pub mod sandbox;
@@ -40,8 +41,54 @@ pub struct Caches {
     pub meshes: Mutex<MeshCache>,
     /// Collision trees and cut cells by mesh.
     pub scene: Mutex<crate::workspace::SceneCache>,
+    /// Parsed documents by file, reused while none of their source files changed.
+    pub documents: Mutex<DocumentCache>,
     /// The viewer session the runs log to (off unless `--view`/`--record`).
     pub view: crate::viewer::Viewer,
+}
+
+/// A parsed document and the stamps of its source files when it was loaded.
+type CachedDocument = (
+    Vec<(PathBuf, crate::fsutil::Stamp)>,
+    crate::document::Document,
+);
+
+/// Parsed documents kept between reruns: a document whose YAML, meshes and robot
+/// files all have the [`Stamp`](crate::fsutil::Stamp) they had when it was loaded is
+/// handed out as a copy instead of being parsed and solved again.
+#[derive(Default)]
+pub struct DocumentCache {
+    /// By (project root, document path): the source files' stamps and the document.
+    entries: std::collections::HashMap<(PathBuf, PathBuf), CachedDocument>,
+}
+
+impl DocumentCache {
+    /// The cached copy of the document at `path` opened in `project`, when every
+    /// source file is unchanged.
+    pub fn get(&self, project: &Path, path: &Path) -> Option<crate::document::Document> {
+        let (stamps, doc) = self
+            .entries
+            .get(&(project.to_path_buf(), path.to_path_buf()))?;
+        stamps
+            .iter()
+            .all(|(f, s)| crate::fsutil::stamp(f).is_ok_and(|now| now == *s))
+            .then(|| doc.clone())
+    }
+
+    /// Keeps `doc` (just loaded from `path` in `project`) with its files' stamps.
+    pub fn insert(&mut self, project: &Path, path: &Path, doc: &crate::document::Document) {
+        let stamps: Option<Vec<_>> = doc
+            .source_files()
+            .into_iter()
+            .map(|f| crate::fsutil::stamp(&f).ok().map(|s| (f, s)))
+            .collect();
+        if let Some(stamps) = stamps {
+            self.entries.insert(
+                (project.to_path_buf(), path.to_path_buf()),
+                (stamps, doc.clone()),
+            );
+        }
+    }
 }
 
 /// Where a script's `print` and progress lines go.
@@ -65,6 +112,17 @@ pub struct Context {
 }
 
 impl Context {
+    /// The run's collision cache (colliders and cut cells by mesh, kept across watch
+    /// reruns), locked for the caller.
+    pub(crate) fn scene_cache(
+        &self,
+    ) -> ScriptResult<std::sync::MutexGuard<'_, crate::workspace::SceneCache>> {
+        self.caches
+            .scene
+            .lock()
+            .map_err(|_| convert::fail("collision cache poisoned"))
+    }
+
     /// A fresh context for one run.
     pub fn new(
         project: Project,

@@ -1,6 +1,141 @@
 //! Assembly sequences: which component goes on which, in what order and direction
-//! (seed 003's task layer). Units: millimetres and radians, assembly frame.
+//! (seed 003's task layer). Units: millimetres and radians; every direction, point and
+//! box is in the assembly frame (the document's world frame) unless a doc says
+//! otherwise.
+//!
+//! The seed's method, in the order it runs (see `docs/assembly.md`):
+//! 1. the **relation graph** from the document's mates ([`RelationGraph`]);
+//! 2. the **remaining degrees of freedom** of each mate as a 6-vector and their
+//!    intersections ([`Freedom`]);
+//! 3. **loops** broken into **composite nodes** (the pair with the fewest free degrees
+//!    around the loop is united; the composite implies an order);
+//! 4. **mating directions**: each part separated along its free directions
+//!    (straight sweeps against each other component: a directional blocking graph);
+//! 5. **grasp planes**: parallel face pairs across every mating direction, with the
+//!    end effector's fingers slid along them ([`Grasp`]);
+//! 6. the **safe length** along the mating direction;
+//! 7. the **obstacle box** of the parts already assembled;
+//! 8. the **sequence search**: base by size (or `masses`), inactive bases skipped,
+//!    mounts counted, fewest mounts first, pins honoured, several sequences ranked,
+//!    rejected orders with their reason;
+//! 9. **tasks** `T = (base part, assembly part, operation)` with their checked paths.
+//!
+//! [`Mode::Geometry`] does the same from the meshes alone: contacts instead of mates,
+//! directions ±X/±Y/±Z and the contact normals, and a planner fallback (seed 002's
+//! disassembly) when no straight insertion exists.
+//!
+//! # Examples
+//! ```
+//! use fitup::document::Document;
+//! use fitup::sequence::{plan_sequence, SequenceOptions};
+//! use fitup::workspace::SceneCache;
+//!
+//! let doc = Document::open(std::path::Path::new("models/wheel.yaml")).unwrap();
+//! let plan = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default()).unwrap();
+//! // Seed 003's answer: the gear onto the axis, then the cup onto axis and gear.
+//! assert_eq!(plan.best().order(), ["axis", "gear", "cup"]);
+//! assert_eq!(plan.best().mounts, 0);
+//! ```
 
+mod graph;
+mod grasp;
+mod options;
+mod plan;
+mod report;
 mod task;
 
+pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};
+pub use grasp::{face_pairs, FacePair};
+pub use options::{
+    Gripper, Mode, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
+    DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
+};
 pub use task::{Grasp, Operation, Task};
+
+use crate::document::Document;
+use crate::math::Vec3;
+use crate::workspace::{SceneCache, WorkspaceError};
+
+/// Plans the assembly sequences of `doc` (seed 003 section 2.2): every returned
+/// task's insertion path is collision-free against exactly the components assembled
+/// before it. The whole call honours `options.time_limit_ms`.
+///
+/// # Errors
+/// Bad options, unknown pinned names, unusable meshes, components interfering in the
+/// assembled pose, no sequence (with the reasons), the time limit spent before the
+/// blocking graph was built.
+pub fn plan_sequence(
+    doc: &Document,
+    cache: &mut SceneCache,
+    options: &SequenceOptions,
+) -> Result<SequencePlan, SequenceError> {
+    plan::plan(doc, cache, options)
+}
+
+/// The relation graph of `doc` from its mates, loops broken into composite nodes
+/// (composite bases chosen by mesh volume).
+pub fn relation_graph(doc: &Document) -> RelationGraph {
+    let vols: Vec<f64> = (0..doc.components().len())
+        .map(|i| doc.mesh_of(i).signed_volume().abs())
+        .collect();
+    RelationGraph::build(doc, &|i| vols[i])
+}
+
+/// The mating directions of component `name` (unit, assembly frame: the direction
+/// it moves while it is joined): its candidate separations that are free of every
+/// component related to it (mates, or contacts in geometry mode), negated.
+///
+/// # Errors
+/// As [`plan_sequence`] before the search; an unknown component.
+pub fn mating_directions(
+    doc: &Document,
+    cache: &mut SceneCache,
+    name: &str,
+    options: &SequenceOptions,
+) -> Result<Vec<Vec3>, SequenceError> {
+    let p = doc.component_index(name).map_err(WorkspaceError::from)?;
+    let ctx = plan::Ctx::new(doc, cache, options)?;
+    Ok(plan::mating_directions_of(&ctx, p))
+}
+
+/// The grasp face pairs of component `name` valid for all its mating directions
+/// (the seed's `G1 ∩ G2 ∩ …`), part frame.
+///
+/// # Errors
+/// As [`mating_directions`].
+pub fn grasp_planes(
+    doc: &Document,
+    cache: &mut SceneCache,
+    name: &str,
+    options: &SequenceOptions,
+) -> Result<Vec<FacePair>, SequenceError> {
+    let p = doc.component_index(name).map_err(WorkspaceError::from)?;
+    let ctx = plan::Ctx::new(doc, cache, options)?;
+    let dirs = plan::mating_directions_of(&ctx, p);
+    Ok(grasp::grasp_planes(&ctx, p, &dirs))
+}
+
+/// The safe length (mm) of component `name` moved out along `direction` (any
+/// non-zero length, assembly frame) from its assembled pose among its related components: how
+/// far it must go before a probe along every other candidate direction is free.
+///
+/// # Errors
+/// As [`mating_directions`]; a zero or non-finite direction.
+pub fn safe_length(
+    doc: &Document,
+    cache: &mut SceneCache,
+    name: &str,
+    direction: &Vec3,
+    options: &SequenceOptions,
+) -> Result<f64, SequenceError> {
+    let p = doc.component_index(name).map_err(WorkspaceError::from)?;
+    if !(direction.iter().all(|v| v.is_finite()) && direction.norm() > 1e-12) {
+        return Err(SequenceError::InvalidOption {
+            option: "direction",
+            value: format!("{:?}", direction.as_slice()),
+            expected: "a finite non-zero vector",
+        });
+    }
+    let ctx = plan::Ctx::new(doc, cache, options)?;
+    Ok(ctx.safe_length(p, &direction.normalize(), plan::related_of(&ctx, p)))
+}

@@ -196,6 +196,7 @@ pub fn document_name(doc: &Document) -> String {
 
 impl Viewer {
     /// A handle that sends to `tx` (the worker of a [`Session`] owns the receiver).
+    #[cfg(any(feature = "viewer", test))]
     pub(crate) fn from_sender(tx: Sender<Event>) -> Self {
         Self { tx: Some(tx) }
     }
@@ -351,8 +352,8 @@ impl Viewer {
 const MAX_PAIR_POINTS: usize = 2000;
 
 fn pair_view(doc: &Document, a: usize, b: usize, depth: f64) -> Option<PairView> {
-    let (a_min, a_max) = doc.world_aabb(a)?;
-    let (b_min, b_max) = doc.world_aabb(b)?;
+    let (ab, bb) = (doc.world_aabb(a)?, doc.world_aabb(b)?);
+    let (a_min, a_max, b_min, b_max) = (ab.lo, ab.hi, bb.lo, bb.hi);
     let lo = [
         a_min.x.max(b_min.x),
         a_min.y.max(b_min.y),

@@ -6,8 +6,8 @@ use crate::collision::Aabb;
 use crate::document::Document;
 use crate::math::{Transform, Vec3};
 use crate::planning::{
-    Control, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace, ProgressFn,
-    RotationFreedom,
+    Control, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace, ProblemFile,
+    ProgressFn, RotationFreedom,
 };
 
 /// Default growth (mm) of the planning bounds around the product box, start and
@@ -37,6 +37,8 @@ pub struct PlanRequest {
     /// Seed 002's disassembly first (see [`Planner::plan_via_disassembly`]): the end
     /// inside the product box is the assembled one. Default false.
     pub disassemble: bool,
+    /// Where the path starts (world, mm); `None`: the component's current pose.
+    pub start: Option<Transform>,
 }
 
 impl Default for PlanRequest {
@@ -49,6 +51,7 @@ impl Default for PlanRequest {
             rotation: RotationFreedom::Free,
             rotation_weight: None,
             disassemble: false,
+            start: None,
         }
     }
 }
@@ -128,8 +131,7 @@ impl Workspace<'_> {
         Ok((0..doc.components().len())
             .filter(|&i| i != index)
             .filter_map(|i| doc.world_aabb(i))
-            .reduce(|(a, b), (c, e)| (a.inf(&c), b.sup(&e)))
-            .map(|(lo, hi)| Aabb::new(lo, hi)))
+            .reduce(|a, b| a.union(&b)))
     }
 
     /// The planning space of component `name` for `request`: its bounds, or the
@@ -143,7 +145,10 @@ impl Workspace<'_> {
         request: &PlanRequest,
         through: &[Transform],
     ) -> Result<PlanningSpace, WorkspaceError> {
-        let start = self.pose(name)?;
+        let start = match request.start {
+            Some(s) => s,
+            None => self.pose(name)?,
+        };
         let (lo, hi) = match request.bounds {
             Some(b) => (b.lo.coords, b.hi.coords),
             None => {
@@ -193,7 +198,17 @@ impl Workspace<'_> {
         Ok(Problem {
             validator: self.validator(name, &request.validator)?,
             space,
-            start: self.pose(name)?,
+            start: match request.start {
+                Some(s) if !s.is_finite() => {
+                    return Err(WorkspaceError::InvalidOption {
+                        option: "start",
+                        value: format!("{s:?}"),
+                        expected: "a finite pose",
+                    })
+                }
+                Some(s) => s,
+                None => self.pose(name)?,
+            },
             product,
         })
     }
@@ -250,6 +265,44 @@ impl Workspace<'_> {
                 .plan(&mut p.validator, &p.space, &p.start, goal, progress)
         }?;
         Ok(path)
+    }
+
+    /// Plans the problem of a [`ProblemFile`]: its moving component from the
+    /// file's start to its goal within its bounds (and its rotation weight unless
+    /// `request` sets one); the rest of `request` (planner, budget, validator,
+    /// disassembly) as given.
+    ///
+    /// # Examples
+    /// ```
+    /// use fitup::document::Document;
+    /// use fitup::planning::ProblemFile;
+    /// use fitup::workspace::{PlanRequest, SceneCache, Workspace};
+    ///
+    /// let problem = ProblemFile::read("models/problems/peg_in_hole_500.plan.json".as_ref()).unwrap();
+    /// let doc = Document::open(&std::path::Path::new("models/problems").join(&problem.document)).unwrap();
+    /// let mut cache = SceneCache::new();
+    /// let ws = Workspace::new(&doc, &mut cache).unwrap();
+    /// let mut request = PlanRequest { disassemble: true, ..PlanRequest::default() };
+    /// request.planner.limits_mut().time_limit_ms = Some(20_000.0);
+    /// let path = ws.plan_problem(&problem, &request, None).unwrap();
+    /// assert!(path.found(), "{:?}", path.failure);
+    /// assert!(path.poses[0].approx_eq(&problem.start, 1e-9, 1e-9));
+    /// ```
+    ///
+    /// # Errors
+    /// As [`plan_path`](Self::plan_path) (e.g. the file's component is not in the
+    /// document).
+    pub fn plan_problem(
+        &self,
+        problem: &ProblemFile,
+        request: &PlanRequest,
+        progress: Option<ProgressFn<'_>>,
+    ) -> Result<PlannedPath, WorkspaceError> {
+        let mut request = request.clone();
+        request.start = Some(problem.start);
+        request.bounds = Some(problem.bounds);
+        request.rotation_weight = request.rotation_weight.or(problem.rotation_weight);
+        self.plan_path(&problem.moving_component, &problem.goal, &request, progress)
     }
 
     /// Seed 002's "can be disassembled, can be assembled" for component `name`:

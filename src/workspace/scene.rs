@@ -4,19 +4,48 @@
 
 use super::WorkspaceError;
 use crate::collision::{
-    check, check_all, surface_distance, sweep, Collider, ColliderCache, CollisionError, Contact,
-    CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart, SweepHit, SweepOptions,
+    candidate_pairs, check, surface_distance, sweep, Collider, ColliderCache, CollisionError,
+    Contact, CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart, SweepHit,
+    SweepOptions,
 };
 use crate::document::{Document, Feature};
 use crate::mesh::Mesh;
+use rayon::prelude::*;
 use std::collections::HashMap;
-use std::sync::{Arc, Weak};
+use std::sync::{Arc, Mutex, Weak};
 
-/// Colliders and derived cut cells by mesh, kept between runs.
+/// Colliders and derived cut cells by mesh, and pair verdicts by pose, kept between
+/// runs.
 #[derive(Default)]
 pub struct SceneCache {
     colliders: ColliderCache,
     cells: HashMap<(usize, String), (Weak<Mesh>, Arc<CutCells>)>,
+    verdicts: Arc<Mutex<Verdicts>>,
+}
+
+/// Most pair verdicts remembered; beyond, the memo starts over.
+const MAX_VERDICTS: usize = 100_000;
+
+/// What a pair verdict depends on: both colliders (and cut cells), both poses
+/// (exact bits), the method and the tolerance.
+#[derive(Clone, PartialEq, Eq, Hash)]
+struct VerdictKey {
+    parts: [usize; 4],
+    poses: [[u64; 7]; 2],
+    method: Method,
+    tolerance: u64,
+}
+
+/// Pair verdicts of earlier passes. Each entry keeps weak handles of its colliders
+/// and cells: an address reused by another mesh after a drop never matches.
+#[derive(Default)]
+struct Verdicts(HashMap<VerdictKey, (Weak<Collider>, Weak<Collider>, Contact)>);
+
+fn pose_bits(t: &crate::math::Transform) -> [u64; 7] {
+    let iso = t.isometry();
+    let q = iso.rotation.coords;
+    let v = iso.translation.vector;
+    [q[0], q[1], q[2], q[3], v.x, v.y, v.z].map(f64::to_bits)
 }
 
 impl SceneCache {
@@ -28,6 +57,14 @@ impl SceneCache {
     /// The collider of a mesh.
     pub fn collider(&mut self, mesh: &Arc<Mesh>) -> Result<Arc<Collider>, CollisionError> {
         self.colliders.get(mesh)
+    }
+
+    /// The colliders of `meshes` (same order), the missing ones built in parallel.
+    pub fn colliders(
+        &mut self,
+        meshes: &[&Arc<Mesh>],
+    ) -> Result<Vec<Arc<Collider>>, CollisionError> {
+        self.colliders.get_all(meshes)
     }
 
     /// The cells of `spec` cut from `mesh`, derived once per mesh and spec.
@@ -64,6 +101,9 @@ pub struct Scene {
     pub cells: Vec<Option<Arc<CutCells>>>,
     /// Per component: the pose (part frame → world, mm).
     pub poses: Vec<crate::math::Transform>,
+    /// The cache's pair verdicts: a pass over an unchanged scene (a watch rerun, a
+    /// repeated check) only recomputes the pairs that moved.
+    verdicts: Arc<Mutex<Verdicts>>,
 }
 
 impl Scene {
@@ -74,11 +114,12 @@ impl Scene {
     /// cut that cannot be used ([`WorkspaceError::Collision`]).
     pub fn new(doc: &Document, cache: &mut SceneCache) -> Result<Scene, WorkspaceError> {
         let n = doc.components().len();
-        let mut colliders = Vec::with_capacity(n);
+        // every part's tree at once, in parallel (the cost of opening a large cell)
+        let meshes: Vec<&Arc<Mesh>> = (0..n).map(|i| doc.mesh_of(i)).collect();
+        let colliders = cache.colliders(&meshes)?;
         let mut cells = Vec::with_capacity(n);
         for (i, c) in doc.components().iter().enumerate() {
             let mesh = doc.mesh_of(i);
-            colliders.push(cache.collider(mesh)?);
             let part = doc.part(&c.part)?;
             let mut spec = part.features.iter().map(|f| match f {
                 Feature::CutCells { spec, .. } => spec,
@@ -92,6 +133,7 @@ impl Scene {
             colliders,
             cells,
             poses: doc.components().iter().map(|c| c.transform).collect(),
+            verdicts: cache.verdicts.clone(),
         })
     }
 
@@ -104,14 +146,85 @@ impl Scene {
         }
     }
 
-    /// Every pair that touches or interferes (`a < b`, component indices).
+    /// Every pair that touches or interferes (`a < b`, component indices), by
+    /// `method` at penetration `tolerance` (mm). Pairs whose world boxes are apart are
+    /// skipped; pairs whose colliders and poses are as in an earlier pass through the
+    /// same [`SceneCache`] reuse that verdict; the rest run in parallel.
     pub fn contacts(
         &self,
         method: Method,
         tolerance: f64,
     ) -> Result<Vec<PairContact>, CollisionError> {
+        if !(tolerance.is_finite() && tolerance >= 0.0) {
+            return Err(CollisionError::BadTolerance(tolerance));
+        }
         let parts: Vec<PosedPart> = (0..self.poses.len()).map(|i| self.posed(i)).collect();
-        check_all(&parts, method, tolerance)
+        let candidates = candidate_pairs(&parts)?;
+        let cells_id = |i: usize| {
+            self.cells[i]
+                .as_ref()
+                .map_or(0, |c| Arc::as_ptr(c) as usize)
+        };
+        let key = |i: usize, j: usize| VerdictKey {
+            parts: [
+                Arc::as_ptr(&self.colliders[i]) as usize,
+                Arc::as_ptr(&self.colliders[j]) as usize,
+                cells_id(i),
+                cells_id(j),
+            ],
+            poses: [pose_bits(&self.poses[i]), pose_bits(&self.poses[j])],
+            method,
+            tolerance: tolerance.to_bits(),
+        };
+        let known: Vec<Option<Contact>> = {
+            let memo = self.verdicts.lock().unwrap_or_else(|e| e.into_inner());
+            candidates
+                .iter()
+                .map(|&(i, j)| {
+                    memo.0.get(&key(i, j)).and_then(|(wa, wb, c)| {
+                        let same = |w: &Weak<Collider>, k: usize| {
+                            w.upgrade()
+                                .is_some_and(|x| Arc::ptr_eq(&x, &self.colliders[k]))
+                        };
+                        (same(wa, i) && same(wb, j)).then_some(*c)
+                    })
+                })
+                .collect()
+        };
+        let computed: Vec<Option<Contact>> = candidates
+            .par_iter()
+            .zip(&known)
+            .map(|(&(i, j), k)| match k {
+                Some(_) => Ok(None),
+                None => check(method, &parts[i], &parts[j], tolerance).map(Some),
+            })
+            .collect::<Result<_, CollisionError>>()?;
+        let mut memo = self.verdicts.lock().unwrap_or_else(|e| e.into_inner());
+        if memo.0.len() > MAX_VERDICTS {
+            memo.0.clear();
+        }
+        let mut out = Vec::new();
+        for ((&(i, j), k), c) in candidates.iter().zip(known).zip(computed) {
+            if let Some(c) = c {
+                memo.0.insert(
+                    key(i, j),
+                    (
+                        Arc::downgrade(&self.colliders[i]),
+                        Arc::downgrade(&self.colliders[j]),
+                        c,
+                    ),
+                );
+            }
+            match k.or(c) {
+                Some(Contact::Separate) | None => {}
+                Some(contact) => out.push(PairContact {
+                    a: i,
+                    b: j,
+                    contact,
+                }),
+            }
+        }
+        Ok(out)
     }
 
     /// The verdict for components `a` and `b`.

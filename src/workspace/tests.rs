@@ -140,7 +140,7 @@ fn sweeps_honour_their_budget() {
     let ws = Workspace::new(&doc, &mut cache).unwrap();
     let to = shifted(&ws.pose("screw5").unwrap(), 0.0, 0.0, 300.0);
     let options = SweepOptions {
-        method: SweepMethod::Step { step: 0.01 },
+        method: SweepMethod::Stepwise { step_mm: 0.01 },
         time_limit_ms: Some(1.0),
         ..SweepOptions::default()
     };
@@ -204,4 +204,41 @@ fn pair_requests_name_their_errors() {
         let names = [ws.name(p.a), ws.name(p.b)];
         names.contains(&"screw1")
     }));
+}
+
+/// A pass through the same cache reuses verdicts only for pairs that did not move:
+/// after a component is moved into another, the repeat pass finds the new
+/// interference exactly as a pass through a fresh cache does.
+#[test]
+fn repeated_contacts_reuse_only_unmoved_pairs() {
+    let mut doc = open("models/cell.yaml");
+    let mut cache = SceneCache::new();
+    let fresh = |doc: &Document| {
+        let scene = Scene::new(doc, &mut SceneCache::new()).unwrap();
+        scene.contacts(Method::Exact, 0.01).unwrap()
+    };
+    let first = Scene::new(&doc, &mut cache)
+        .unwrap()
+        .contacts(Method::Exact, 0.01)
+        .unwrap();
+    assert_eq!(first, fresh(&doc));
+    let again = Scene::new(&doc, &mut cache)
+        .unwrap()
+        .contacts(Method::Exact, 0.01)
+        .unwrap();
+    assert_eq!(again, first);
+    // screw4 sunk 5 mm into whatever is below it
+    let i = doc.component_index("screw4").unwrap();
+    let t = doc.components()[i].transform;
+    doc.set_transform("screw4", shifted(&t, 0.0, 0.0, -5.0))
+        .unwrap();
+    let moved = Scene::new(&doc, &mut cache)
+        .unwrap()
+        .contacts(Method::Exact, 0.01)
+        .unwrap();
+    assert_eq!(moved, fresh(&doc));
+    assert_ne!(
+        moved, first,
+        "moving screw4 5 mm down must change a verdict"
+    );
 }

@@ -341,9 +341,9 @@ fn sweeps() {
     println!("|---|---|---|---|---|");
     for (mname, m) in [("box 12 tris", &mover), ("sphere 10k tris", &ball)] {
         for (name, method) in [
-            ("step 5 mm", SweepMethod::Step { step: 5.0 }),
-            ("step 1 mm", SweepMethod::Step { step: 1.0 }),
-            ("step 0.1 mm", SweepMethod::Step { step: 0.1 }),
+            ("step 5 mm", SweepMethod::Stepwise { step_mm: 5.0 }),
+            ("step 1 mm", SweepMethod::Stepwise { step_mm: 1.0 }),
+            ("step 0.1 mm", SweepMethod::Stepwise { step_mm: 0.1 }),
             ("continuous", SweepMethod::Continuous),
         ] {
             let mut rng = Rng::new(11);

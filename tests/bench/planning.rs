@@ -1,6 +1,8 @@
 //! Planning benchmark: fitup's best planner (`plan_insertion`) on the benchmark
 //! problems (`fitup::planning::problems`) against OMPL's RRTConnect (FCL collision,
-//! `tests/bench/ompl_peer.py`) in the same run, and seed 002's protocol (100 runs ×
+//! `tests/bench/ompl_peer.py`) and OMPL 1.5 C++ RRTConnect and KPIECE1
+//! (`tests/bench/ompl/harness.cpp`, compiled here when `libompl-dev` and
+//! `libfcl-dev` are installed, skipped with a message otherwise) in the same run, and seed 002's protocol (100 runs ×
 //! 100 iterations: rrt, biased_rrt, local_rrt on the piston-rod cap).
 //!
 //! `cargo bench --bench planning`. The peer runs when `FITUP_PY` (default
@@ -8,7 +10,8 @@
 //! 10), `FITUP_OMPL_RUNS` (5), `FITUP_OMPL_LIMIT_S` (10), `FITUP_OMPL_RRT=1` (also
 //! OMPL's plain RRT), `FITUP_STEPWISE=1` (also fitup with stepwise edges),
 //! `FITUP_PROBLEM=name` (only problems whose name contains it),
-//! `FITUP_PROTOCOL=0` (skip seed 002's protocol).
+//! `FITUP_PROTOCOL=0` (skip seed 002's protocol), `FITUP_VALIDATOR=0` (skip the
+//! validator profile: pose and edge checks per problem).
 
 use fitup::planning::problems::{self, Problem};
 use fitup::planning::{
@@ -57,6 +60,22 @@ fn export(p: &Problem, dir: &Path) -> PathBuf {
     spec["resolution_mm"] = RESOLUTION_MM.into();
     // FCL reports touching as collision: lift the resting ends off their supports.
     spec["peer_lift_mm"] = 0.05.into();
+    // the C++ harness's plain-text spec (tests/bench/ompl/harness.cpp)
+    let pose = |t: &fitup::math::Transform| {
+        let q = t.rotation();
+        let v = t.translation();
+        format!("{} {} {} {} {} {} {}", v.x, v.y, v.z, q.w, q.i, q.j, q.k)
+    };
+    let mut txt = String::from("moving moving.stl\n");
+    for (k, _) in p.obstacles.iter().enumerate() {
+        txt += &format!("obstacle obstacle{k}.stl\n");
+    }
+    let (lo, hi) = (p.space.min, p.space.max);
+    txt += &format!(
+        "bounds {} {} {} {} {} {}\nstart {}\ngoal {}\nrotation_weight {}\nresolution_mm {RESOLUTION_MM}\nlift_mm 0.05\n",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, pose(&p.start), pose(&p.goal), p.space.rotation_weight
+    );
+    std::fs::write(dir.join("problem.txt"), txt).unwrap();
     let path = dir.join("problem.json");
     std::fs::write(&path, serde_json::to_string_pretty(&spec).unwrap()).unwrap();
     path
@@ -92,6 +111,53 @@ fn fitup_runs(p: &Problem, options: MeshValidatorOptions, runs: usize, smoothing
     }
 }
 
+/// Compiles the OMPL C++ harness (tests/bench/ompl/harness.cpp) when OMPL 1.5 and
+/// FCL headers and g++ are installed; `None` (with a message) otherwise.
+fn build_cpp_peer(out_dir: &Path) -> Option<PathBuf> {
+    let ompl = Path::new("/usr/include/ompl-1.5");
+    if !ompl.exists() || !Path::new("/usr/include/fcl/fcl.h").exists() {
+        eprintln!("no OMPL C++ peer: install libompl-dev libfcl-dev (Debian) for it");
+        return None;
+    }
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/ompl/harness.cpp");
+    let exe = out_dir.join("ompl_harness");
+    let status = std::process::Command::new("g++")
+        .args([
+            "-O2",
+            "-std=c++17",
+            "-I/usr/include/ompl-1.5",
+            "-I/usr/include/eigen3",
+        ])
+        .arg(&src)
+        .arg("-o")
+        .arg(&exe)
+        .args(["-lompl", "-lfcl", "-lccd"])
+        .status();
+    match status {
+        Ok(s) if s.success() => Some(exe),
+        other => {
+            eprintln!(
+                "no OMPL C++ peer: compiling {} failed ({other:?})",
+                src.display()
+            );
+            None
+        }
+    }
+}
+
+/// Runs the C++ harness on the problem's `problem.txt` beside `spec`.
+fn cpp_runs(exe: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> Option<Row> {
+    let txt = spec.with_file_name("problem.txt");
+    let out = std::process::Command::new(exe)
+        .arg(&txt)
+        .arg(planner)
+        .arg(runs.to_string())
+        .arg(limit.to_string())
+        .output()
+        .ok()?;
+    parse_peer(out)
+}
+
 fn peer_runs(py: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> Option<Row> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/ompl_peer.py");
     let out = std::process::Command::new(py)
@@ -102,6 +168,11 @@ fn peer_runs(py: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> 
         .arg(limit.to_string())
         .output()
         .ok()?;
+    parse_peer(out)
+}
+
+/// The peers' JSON line: `{"runs", "solved", "times_s": [t or null]}`.
+fn parse_peer(out: std::process::Output) -> Option<Row> {
     if !out.status.success() {
         eprintln!("peer failed: {}", String::from_utf8_lossy(&out.stderr));
         return None;
@@ -196,7 +267,102 @@ fn protocol() {
     }
 }
 
+/// The validator's two questions on each problem, at 2000 random poses in the
+/// bounds (uniform rotations): the yes/no pose check (`is_free`, stops at the first
+/// crossing deeper than the tolerance) split by verdict, and the continuous check of
+/// 2 mm / 2° edges from the free ones. Means in µs of the fastest of three runs
+/// of each query.
+fn validator_profile() {
+    use fitup::math::{Transform, Vec3};
+    use fitup::planning::MotionValidator;
+    println!("\nvalidator: mean µs per query over 2000 random poses per problem (seed 7)");
+    println!(
+        "{:<18} {:>8} {:>10} {:>8} {:>10} {:>12}",
+        "problem", "free", "µs", "blocked", "µs", "edge µs"
+    );
+    for p in problems::all().unwrap() {
+        let mut v = p.validator(p.default_validator_options()).unwrap();
+        let mut s: u64 = 7;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut poses = Vec::new();
+        for _ in 0..2000 {
+            let t = Vec3::new(
+                p.space.min.x + rnd() * (p.space.max.x - p.space.min.x),
+                p.space.min.y + rnd() * (p.space.max.y - p.space.min.y),
+                p.space.min.z + rnd() * (p.space.max.z - p.space.min.z),
+            );
+            let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                rnd() - 0.5,
+                rnd() - 0.5,
+                rnd() - 0.5,
+                rnd() - 0.5,
+            ));
+            poses.push(Transform::from_parts(t, q));
+        }
+        let (mut free, mut blocked) = (Vec::new(), Vec::new());
+        for pose in &poses {
+            // the fastest of three: a shared machine preempts single queries
+            let (mut ok, mut dt) = (false, f64::INFINITY);
+            for _ in 0..3 {
+                let t0 = Instant::now();
+                ok = v.is_free(pose);
+                dt = dt.min(t0.elapsed().as_secs_f64() * 1e6);
+            }
+            if ok {
+                free.push((dt, *pose));
+            } else {
+                blocked.push(dt);
+            }
+        }
+        let mut edge_us = Vec::new();
+        for (_, pose) in &free {
+            let step = Transform::from_xyzabc(
+                Vec3::new(2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0),
+                [
+                    (2.0 * rnd() - 1.0).to_radians(),
+                    (2.0 * rnd() - 1.0).to_radians(),
+                    (2.0 * rnd() - 1.0).to_radians(),
+                ],
+                Default::default(),
+            );
+            let to = step.then(pose);
+            let mut dt = f64::INFINITY;
+            for _ in 0..3 {
+                let t0 = Instant::now();
+                v.edge_free(pose, &to);
+                dt = dt.min(t0.elapsed().as_secs_f64() * 1e6);
+            }
+            edge_us.push(dt);
+        }
+        let mean = |xs: &[f64]| {
+            if xs.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{:.1}", xs.iter().sum::<f64>() / xs.len() as f64)
+            }
+        };
+        let free_us: Vec<f64> = free.iter().map(|f| f.0).collect();
+        println!(
+            "{:<18} {:>8} {:>10} {:>8} {:>10} {:>12}",
+            p.name,
+            free.len(),
+            mean(&free_us),
+            blocked.len(),
+            mean(&blocked),
+            mean(&edge_us)
+        );
+    }
+}
+
 fn main() {
+    if std::env::var("FITUP_VALIDATOR").map_or(true, |v| v != "0") {
+        validator_profile();
+    }
     let runs = env_or("FITUP_RUNS", 10usize);
     let peer_n = env_or("FITUP_OMPL_RUNS", 5usize);
     let limit = env_or("FITUP_OMPL_LIMIT_S", 10.0f64);
@@ -209,14 +375,25 @@ fn main() {
         eprintln!("no OMPL peer ({} missing): fitup only", py.display());
     }
     let tmp = tempfile::tempdir().unwrap();
+    let cpp = build_cpp_peer(tmp.path());
     let stepwise = std::env::var_os("FITUP_STEPWISE").is_some();
     let only: Option<String> = std::env::var("FITUP_PROBLEM").ok();
     println!(
         "planning: success and median time of successful runs; fitup = plan_insertion with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
     );
     println!(
-        "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20}",
-        "problem", "fitup", "OMPL RRTConnect", "ratio", "fitup + smoothing", "fitup stepwise"
+        "OMPL C++ (RRTConnect, KPIECE1; FCL validity at {RESOLUTION_MM} mm): {peer_n} runs x {limit} s; ratio = OMPL's best median / fitup's median"
+    );
+    println!(
+        "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20} {:>20} {:>20}",
+        "problem",
+        "fitup",
+        "OMPL RRTConnect",
+        "ratio",
+        "fitup + smoothing",
+        "fitup stepwise",
+        "C++ RRTConnect",
+        "C++ KPIECE1"
     );
     for p in problems::all().unwrap() {
         if only.as_ref().is_some_and(|o| !p.name.contains(o.as_str())) {
@@ -243,14 +420,31 @@ fn main() {
             (Some(o), Some(f)) if o.solved == 0 => format!(">{:.0}x", limit / f),
             _ => "-".into(),
         };
+        let c_rrt = cpp
+            .as_ref()
+            .and_then(|e| cpp_runs(e, &spec, "RRTConnect", peer_n, limit));
+        let c_kp = cpp
+            .as_ref()
+            .and_then(|e| cpp_runs(e, &spec, "KPIECE1", peer_n, limit));
+        let best = [&ompl, &c_rrt, &c_kp]
+            .iter()
+            .filter_map(|r| r.as_ref().and_then(|r| r.median_s))
+            .fold(None, |b: Option<f64>, t| Some(b.map_or(t, |b| b.min(t))));
+        let ratio = match (best, cont.median_s) {
+            (Some(o), Some(f)) => format!("{:.1}x", o / f),
+            (None, Some(f)) if c_rrt.is_some() || ompl.is_some() => format!(">{:.0}x", limit / f),
+            _ => ratio,
+        };
         println!(
-            "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20}",
+            "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20} {:>20} {:>20}",
             p.name,
             fmt(&cont),
             ompl.as_ref().map_or("-".into(), fmt),
             ratio,
             fmt(&smoothed),
             step.as_ref().map_or("-".into(), fmt),
+            c_rrt.as_ref().map_or("-".into(), fmt),
+            c_kp.as_ref().map_or("-".into(), fmt),
         );
         if peer && std::env::var_os("FITUP_OMPL_RRT").is_some() {
             if let Some(r) = peer_runs(&py, &spec, "RRT", peer_n, limit) {

@@ -39,6 +39,8 @@ fn main() {
         ),
     });
     std::fs::write(models.join("big.yaml"), file.to_yaml().unwrap()).unwrap();
+    // the project root: scripts/ resolves `models/…` against it
+    std::fs::write(dir.path().join("fitup.toml"), "").unwrap();
     std::fs::create_dir(dir.path().join("scripts")).unwrap();
     let script = dir.path().join("scripts/w.rhai");
     let body = |i: usize| {
@@ -63,12 +65,14 @@ fn main() {
         }
     });
     let wait_done = |n: usize| -> Instant {
+        let mut seen = Vec::new();
         loop {
             let (t, l) = rx
                 .recv_timeout(Duration::from_secs(60))
                 .expect("watch output");
+            seen.push(l.clone());
             if l.starts_with(&format!("== done {n} ")) {
-                assert!(l.contains(" ok "), "{l}");
+                assert!(l.contains(" ok "), "{}", seen.join("\n"));
                 return t;
             }
         }

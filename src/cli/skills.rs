@@ -1,0 +1,268 @@
+//! `fitup manipulator` (the simulated controller) and `fitup skills run` (the skill
+//! manager, line by line).
+
+use super::out::{errln, outln};
+use super::Exit;
+use crate::manipulator::simulator::{Simulator, SimulatorOptions};
+use crate::skills::{Event, ManagerOptions, SkillManager};
+use std::path::PathBuf;
+
+/// Options of `manipulator`.
+#[derive(Debug, clap::Args, Clone)]
+pub struct ManipulatorArgs {
+    /// The cell document (`.yaml`).
+    #[arg(long)]
+    pub doc: PathBuf,
+    /// The robot of the document the controller moves.
+    #[arg(long)]
+    pub robot: String,
+    /// Motion port on 127.0.0.1 (JOINT_TRAJ_PT, tool commands); 0 picks a free one.
+    #[arg(long, default_value_t = crate::manipulator::MOTION_PORT)]
+    pub port: u16,
+    /// State port on 127.0.0.1 (JOINT_POSITION, STATUS); 0 picks a free one.
+    #[arg(long, default_value_t = crate::manipulator::STATE_PORT)]
+    pub state_port: u16,
+    /// Time scale: 1 is real time, 10 ten times faster.
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+}
+
+/// Options of `skills`.
+#[derive(Debug, clap::Args, Clone)]
+pub struct SkillsArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: SkillsCommand,
+}
+
+/// `skills` subcommands.
+#[derive(Debug, clap::Subcommand, Clone)]
+pub enum SkillsCommand {
+    /// Dispatch a plan file (JSON, written by `Plan::to_json` in the Rust API) to a
+    /// controller, printing one line per event. Standard input takes `pause`,
+    /// `resume`, `abort`, `manual grasp|release|touch MM`, `manual output I 0|1`.
+    Run {
+        /// The plan file.
+        plan: PathBuf,
+        /// The controller's motion port `HOST:PORT`.
+        #[arg(long, default_value = "127.0.0.1:11000")]
+        target: String,
+        /// The controller's state port [default: the motion port + 2].
+        #[arg(long)]
+        state_port: Option<u16>,
+        /// Allow a target that is not this machine (a real controller).
+        #[arg(long)]
+        allow_remote: bool,
+        /// Longest time to get the controller back after a disconnection (s).
+        #[arg(long, default_value_t = 30.0)]
+        reconnect_timeout: f64,
+        /// Longest time one trajectory may take (s).
+        #[arg(long, default_value_t = 120.0)]
+        skill_timeout: f64,
+        /// Write the execution log to the results database as it happens: `--db`
+        /// alone for the project's (`FITUP_DB`, else `fitup.db` in the current
+        /// folder), or `--db FILE|postgres://…`.
+        #[arg(long, num_args = 0..=1, default_missing_value = "")]
+        db: Option<String>,
+    },
+    /// Validate a task template (`models/templates/*.yaml` or your own copy): errors
+    /// at `file:line:col`, then the chain of workflows.
+    Template {
+        /// The template file.
+        file: PathBuf,
+    },
+}
+
+/// `fitup manipulator …`: runs until killed.
+pub(super) fn manipulator(a: &ManipulatorArgs) -> Exit {
+    if !(a.speed.is_finite() && a.speed > 0.0 && a.speed <= 1000.0) {
+        errln!("error: --speed must be in (0, 1000], got {}", a.speed);
+        return Exit::Usage;
+    }
+    let doc = match crate::document::Document::open(&a.doc) {
+        Ok(d) => d,
+        Err(e) => {
+            errln!("error: {}", e.render());
+            return Exit::Failure;
+        }
+    };
+    let options = SimulatorOptions {
+        motion_port: a.port,
+        state_port: a.state_port,
+        speed: a.speed,
+        ..SimulatorOptions::default()
+    };
+    let sim = match Simulator::start(&doc, &a.robot, &options) {
+        Ok(s) => s,
+        Err(e) => {
+            errln!("error: {e}");
+            return Exit::Failure;
+        }
+    };
+    outln!(
+        "manipulator `{}` listening: motion {}, state {} (simple_message, big-endian), speed ×{}",
+        a.robot,
+        sim.motion_addr(),
+        sim.state_addr(),
+        a.speed
+    );
+    loop {
+        std::thread::park();
+    }
+}
+
+fn duration(s: f64, what: &str) -> Result<std::time::Duration, String> {
+    std::time::Duration::try_from_secs_f64(s)
+        .map_err(|_| format!("--{what} must be a number of seconds ≥ 0, got {s}"))
+}
+
+/// `fitup skills template FILE`.
+fn template(file: &std::path::Path) -> Exit {
+    match crate::skills::Template::read(file) {
+        Ok(t) => {
+            outln!("{}: {} template", file.display(), t.operation.name());
+            for w in &t.workflows {
+                outln!("  {} -> {}: {}", w.from.name(), w.to.name(), w.generator);
+            }
+            Exit::Ok
+        }
+        Err(e) => {
+            errln!("error: {}", e.render());
+            Exit::Failure
+        }
+    }
+}
+
+/// `fitup skills …`.
+pub(super) fn skills(a: &SkillsArgs) -> Exit {
+    if let SkillsCommand::Template { file } = &a.command {
+        return template(file);
+    }
+    let SkillsCommand::Run {
+        plan,
+        target,
+        state_port,
+        allow_remote,
+        reconnect_timeout,
+        skill_timeout,
+        db,
+    } = &a.command
+    else {
+        unreachable!("handled above")
+    };
+    let (reconnect, skill) = match (
+        duration(*reconnect_timeout, "reconnect-timeout"),
+        duration(*skill_timeout, "skill-timeout"),
+    ) {
+        (Ok(r), Ok(s)) => (r, s),
+        (Err(e), _) | (_, Err(e)) => {
+            errln!("error: {e}");
+            return Exit::Usage;
+        }
+    };
+    let text = match crate::fsutil::read_text(plan, crate::fsutil::FileKind::Document) {
+        Ok(t) => t,
+        Err(e) => {
+            errln!("error: {}: {e}", plan.display());
+            return Exit::Failure;
+        }
+    };
+    let plan_label = plan.display().to_string();
+    let plan = match crate::skills::Plan::from_json(&plan_label, &text) {
+        Ok(p) => p,
+        Err(e) => {
+            errln!("error: {e}");
+            return Exit::Failure;
+        }
+    };
+    let label = plan_label.clone();
+    let mut db = match db {
+        None => None,
+        Some(d) => {
+            let root = std::env::current_dir().unwrap_or_default();
+            let target = crate::db::Target::resolve((!d.is_empty()).then_some(d.as_str()), &root);
+            match crate::db::Database::open(&target) {
+                Ok(db) => Some(db),
+                Err(e) => {
+                    errln!("error: {e}");
+                    return Exit::Failure;
+                }
+            }
+        }
+    };
+    let mut options = ManagerOptions {
+        target: target.clone(),
+        state_port: *state_port,
+        skill_timeout: skill,
+        reconnect_timeout: reconnect,
+        ..ManagerOptions::default()
+    };
+    options.client.allow_remote = *allow_remote;
+    let logged_plan = plan.clone();
+    let mut manager = SkillManager::new(plan, options);
+    let handle = manager.handle();
+    // Commands from standard input; the thread ends with the process.
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        while {
+            line.clear();
+            std::io::stdin().read_line(&mut line).is_ok_and(|n| n > 0)
+        } {
+            let l = line.trim();
+            match l {
+                "pause" => handle.pause(),
+                "resume" => handle.resume(),
+                "abort" => handle.abort(),
+                "" => {}
+                _ => match l
+                    .strip_prefix("manual ")
+                    .and_then(crate::skills::Command::parse_manual)
+                {
+                    Some(c) => handle.manual(c),
+                    None => errln!(
+                        "unknown command `{l}` (pause, resume, abort, manual grasp|release|touch MM, manual output I 0|1)"
+                    ),
+                },
+            }
+        }
+    });
+    let mut log_failed = false;
+    let result = manager.run(&mut |e| {
+        if let Some(db) = db.as_mut() {
+            if let Err(err) = crate::skills::log_event(db, None, &label, &logged_plan, e) {
+                if !log_failed {
+                    errln!("warning: the skill log could not be written: {err}");
+                    log_failed = true;
+                }
+            }
+        }
+        print_event(e)
+    });
+    match result {
+        Ok(()) => Exit::Ok,
+        Err(e) => {
+            errln!("error: {e}");
+            Exit::Failure
+        }
+    }
+}
+
+fn print_event(e: &Event) {
+    match e {
+        Event::Connected(a) => outln!("connected {a}"),
+        Event::Started(_, d) => outln!("running {d}"),
+        Event::Finished { skill, part, state } => {
+            outln!("finished #{skill}: {part} {state}")
+        }
+        Event::Interrupted(i, why) => outln!("interrupted #{i}: {why}"),
+        Event::Reconnected => outln!("reconnected"),
+        Event::Paused => outln!("paused"),
+        Event::Resumed => outln!("resumed"),
+        Event::Edited(i) => outln!("edited #{i}"),
+        Event::EditRefused(i, why) => outln!("edit of #{i} refused: {why}"),
+        Event::Manual(c) => outln!("manual {c}"),
+        Event::Failed(i, why) => outln!("failed #{i}: {why}"),
+        Event::Aborted => outln!("aborted"),
+        Event::Done => outln!("done"),
+    }
+}

@@ -1,0 +1,883 @@
+//! The ROS-Industrial **simple_message** codec (REP-I0006), plus fitup's tool extension.
+//!
+//! A packet on the wire is
+//!
+//! ```text
+//! prefix  length      shared_int   bytes of header + body (the prefix itself excluded)
+//! header  msg_type    shared_int   1 PING, 10 JOINT_POSITION, 11 JOINT_TRAJ_PT, 13 STATUS,
+//!                                  65001 FITUP_TOOL (extension, freely assignable range)
+//!         comm_type   shared_int   1 TOPIC, 2 SERVICE_REQUEST, 3 SERVICE_REPLY
+//!         reply_code  shared_int   0 INVALID (unused), 1 SUCCESS, 2 FAILURE
+//! body    message specific (see [`Body`])
+//! ```
+//!
+//! `shared_int` is a 32-bit two's-complement integer and `shared_real` a 32-bit IEEE
+//! float (the 4/4 variant of REP-I0006). The byte order is a property of the
+//! connection ([`ByteOrder`]): REP-I0006 lets a driver use either ("swap" or
+//! "non-swap" client nodes); fitup defaults to big-endian (network order), the order
+//! in which REP-I0006 prints its byte-stream examples.
+//!
+//! Units on the wire follow REP-103: radians for revolute joints, **metres** for
+//! prismatic joints, seconds for durations. fitup works in millimetres: the
+//! conversion happens in the client and simulator, not here.
+//!
+//! Decoding never panics and never allocates more than [`MAX_LENGTH`] bytes: a bad
+//! length, an unknown type, a body of the wrong size or a non-finite number is a
+//! typed [`CodecError`].
+
+use std::io::{Read, Write};
+use thiserror::Error;
+
+/// Bytes of the length prefix.
+pub const PREFIX_SIZE: usize = 4;
+/// Bytes of the header (msg_type, comm_type, reply_code).
+pub const HEADER_SIZE: usize = 12;
+/// Largest accepted `length` (header + body, bytes). The largest standard message
+/// (JOINT_TRAJ_PT_FULL) is 148 bytes; anything far beyond is garbage or an attack.
+pub const MAX_LENGTH: usize = 1024;
+/// Joint values carried by JOINT_POSITION and JOINT_TRAJ_PT (unused ones are 0).
+pub const MAX_JOINTS: usize = 10;
+
+/// Message type identifiers (REP-I0004).
+pub mod msg_type {
+    /// PING (synchronous service, 10 dummy ints each way).
+    pub const PING: i32 = 1;
+    /// JOINT_POSITION (published joint state).
+    pub const JOINT_POSITION: i32 = 10;
+    /// JOINT_TRAJ_PT (enqueue one trajectory point).
+    pub const JOINT_TRAJ_PT: i32 = 11;
+    /// STATUS (published controller status).
+    pub const STATUS: i32 = 13;
+    /// fitup's tool extension (grasp, release, touch, tool output), in the freely
+    /// assignable range 65001–65535 of REP-I0004.
+    pub const FITUP_TOOL: i32 = 65001;
+}
+
+/// Special sequence numbers of JOINT_TRAJ_PT (REP-I0006).
+pub mod special_seq {
+    /// Downloading drivers only: start of a trajectory.
+    pub const START_TRAJECTORY_DOWNLOAD: i32 = -1;
+    /// Start of a streamed trajectory.
+    pub const START_TRAJECTORY_STREAMING: i32 = -2;
+    /// Downloading drivers only: end of a trajectory.
+    pub const END_TRAJECTORY: i32 = -3;
+    /// Abort any motion now.
+    pub const STOP_TRAJECTORY: i32 = -4;
+}
+
+/// Version of fitup's tool extension carried in every FITUP_TOOL body.
+pub const TOOL_EXTENSION_VERSION: i32 = 1;
+
+/// Byte order of every `shared_int` / `shared_real` on a connection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ByteOrder {
+    /// Network order (most significant byte first): fitup's default.
+    #[default]
+    Big,
+    /// Least significant byte first (the "non-swap" nodes on an x86 host).
+    Little,
+}
+
+/// The header's communication type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CommType {
+    /// Needs no acknowledgement (published state).
+    Topic = 1,
+    /// The sender waits for a reply.
+    ServiceRequest = 2,
+    /// The reply to a request.
+    ServiceReply = 3,
+}
+
+/// The header's reply code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReplyCode {
+    /// Unused (topics and requests).
+    Invalid = 0,
+    /// The receiver accepted the request.
+    Success = 1,
+    /// The receiver refused the request (the reason is in the next STATUS).
+    Failure = 2,
+}
+
+/// A STATUS tri-state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TriState {
+    /// Cannot be determined.
+    Unknown = -1,
+    /// False / off / disabled.
+    Off = 0,
+    /// True / on / enabled.
+    On = 1,
+}
+
+impl TriState {
+    /// `On` for true, `Off` for false.
+    pub fn from_bool(b: bool) -> Self {
+        if b {
+            Self::On
+        } else {
+            Self::Off
+        }
+    }
+}
+
+/// Controller mode of STATUS (ISO 10218-1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RobotMode {
+    /// Cannot be determined.
+    Unknown = -1,
+    /// Manual mode.
+    Manual = 1,
+    /// Automatic mode.
+    Auto = 2,
+}
+
+/// The body of JOINT_TRAJ_PT: one trajectory point (radians / metres, seconds).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointTrajPt {
+    /// Index into the trajectory (0 starts a new one), or a [`special_seq`] value.
+    pub sequence: i32,
+    /// Joint positions (rad, m); unused entries 0.
+    pub joints: [f32; MAX_JOINTS],
+    /// Fraction (0, 1] of the maximum joint speed.
+    pub velocity: f32,
+    /// Time to reach this point from the previous one (s).
+    pub duration: f32,
+}
+
+/// The body of JOINT_POSITION: the joint state (rad, m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointPosition {
+    /// Unused when reporting state (0).
+    pub sequence: i32,
+    /// Joint positions (rad, m); unused entries 0.
+    pub joints: [f32; MAX_JOINTS],
+}
+
+/// The body of STATUS.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Status {
+    /// Servo power.
+    pub drives_powered: TriState,
+    /// Emergency stop engaged.
+    pub e_stopped: TriState,
+    /// Code of the error that put the controller in error (see
+    /// [`crate::manipulator::RefusalCode`] for the simulator's codes).
+    pub error_code: i32,
+    /// In error.
+    pub in_error: TriState,
+    /// Moving.
+    pub in_motion: TriState,
+    /// Controller mode.
+    pub mode: RobotMode,
+    /// A new trajectory would run now.
+    pub motion_possible: TriState,
+}
+
+/// A tool action of fitup's extension (FITUP_TOOL, version 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToolAction {
+    /// Close the gripper to `value` (opening, m).
+    Grasp = 1,
+    /// Open the gripper to `value` (opening, m).
+    Release = 2,
+    /// Move until contact, at most `value` (m) along the tool's Z; the reply's value
+    /// is the distance travelled (m).
+    Touch = 3,
+    /// Set digital output `index` to `value` (0 or 1).
+    SetOutput = 4,
+}
+
+/// The body of FITUP_TOOL (request and reply have the same layout):
+/// `version, action, index: shared_int; value: shared_real` (16 bytes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ToolCommand {
+    /// The extension's version ([`TOOL_EXTENSION_VERSION`]).
+    pub version: i32,
+    /// What to do.
+    pub action: ToolAction,
+    /// Output index ([`ToolAction::SetOutput`]), else 0.
+    pub index: i32,
+    /// The action's value (see [`ToolAction`]); in a reply, the measured value.
+    pub value: f32,
+}
+
+/// The body of a packet.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Body {
+    /// Nothing after the header (an acknowledgement, the *alternative* replies).
+    Empty,
+    /// PING's 10 zero ints (request and reply).
+    Ping,
+    /// JOINT_TRAJ_PT request.
+    JointTrajPt(JointTrajPt),
+    /// 10 zero reals: the full reply of JOINT_TRAJ_PT.
+    DummyReals,
+    /// JOINT_POSITION.
+    JointPosition(JointPosition),
+    /// STATUS.
+    Status(Status),
+    /// FITUP_TOOL.
+    Tool(ToolCommand),
+}
+
+/// One simple_message packet.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Packet {
+    /// Message type ([`msg_type`]).
+    pub msg_type: i32,
+    /// Communication type.
+    pub comm_type: CommType,
+    /// Reply code ([`ReplyCode::Invalid`] unless a reply).
+    pub reply_code: ReplyCode,
+    /// The body, matching `msg_type` and `comm_type`.
+    pub body: Body,
+}
+
+/// A packet that cannot be decoded (or a connection that broke while reading one).
+#[derive(Debug, Error)]
+pub enum CodecError {
+    /// The length prefix is negative, smaller than the header or above [`MAX_LENGTH`].
+    #[error("bad length prefix {0} (must be {HEADER_SIZE}..={MAX_LENGTH} bytes)")]
+    BadLength(i64),
+    /// The stream ended inside a packet.
+    #[error("truncated packet: {got} of {expected} bytes")]
+    Truncated {
+        /// Bytes expected.
+        expected: usize,
+        /// Bytes received.
+        got: usize,
+    },
+    /// The message type is not one fitup speaks.
+    #[error("unknown message type {0}")]
+    UnknownType(i32),
+    /// The communication type is not 1, 2 or 3.
+    #[error("bad comm_type {0}")]
+    BadCommType(i32),
+    /// The reply code is not 0, 1 or 2, or does not fit the comm_type.
+    #[error("bad reply_code {0} for this comm_type")]
+    BadReplyCode(i32),
+    /// The body has the wrong size for its type.
+    #[error("message type {msg_type}: body of {got} bytes, expected {expected}")]
+    BadBodySize {
+        /// Message type.
+        msg_type: i32,
+        /// Expected body size(s), for people.
+        expected: String,
+        /// Body bytes received.
+        got: usize,
+    },
+    /// A field holds a value outside its domain (a non-finite real, a bad tri-state…).
+    #[error("message type {msg_type}: bad field `{field}`: {value}")]
+    BadField {
+        /// Message type.
+        msg_type: i32,
+        /// Field name.
+        field: &'static str,
+        /// The value, for people.
+        value: String,
+    },
+    /// The connection failed or timed out.
+    #[error("connection: {0}")]
+    Io(#[from] std::io::Error),
+}
+
+impl ByteOrder {
+    fn put_i32(self, out: &mut Vec<u8>, v: i32) {
+        out.extend_from_slice(&match self {
+            Self::Big => v.to_be_bytes(),
+            Self::Little => v.to_le_bytes(),
+        });
+    }
+    fn put_f32(self, out: &mut Vec<u8>, v: f32) {
+        out.extend_from_slice(&match self {
+            Self::Big => v.to_be_bytes(),
+            Self::Little => v.to_le_bytes(),
+        });
+    }
+    fn i32_at(self, b: &[u8], at: usize) -> i32 {
+        let w = [b[at], b[at + 1], b[at + 2], b[at + 3]];
+        match self {
+            Self::Big => i32::from_be_bytes(w),
+            Self::Little => i32::from_le_bytes(w),
+        }
+    }
+    fn f32_at(self, b: &[u8], at: usize) -> f32 {
+        let w = [b[at], b[at + 1], b[at + 2], b[at + 3]];
+        match self {
+            Self::Big => f32::from_be_bytes(w),
+            Self::Little => f32::from_le_bytes(w),
+        }
+    }
+}
+
+impl Packet {
+    /// A TOPIC packet.
+    pub fn topic(msg_type: i32, body: Body) -> Self {
+        Self {
+            msg_type,
+            comm_type: CommType::Topic,
+            reply_code: ReplyCode::Invalid,
+            body,
+        }
+    }
+
+    /// A SERVICE_REQUEST packet.
+    pub fn request(msg_type: i32, body: Body) -> Self {
+        Self {
+            msg_type,
+            comm_type: CommType::ServiceRequest,
+            reply_code: ReplyCode::Invalid,
+            body,
+        }
+    }
+
+    /// A SERVICE_REPLY packet.
+    pub fn reply(msg_type: i32, reply_code: ReplyCode, body: Body) -> Self {
+        Self {
+            msg_type,
+            comm_type: CommType::ServiceReply,
+            reply_code,
+            body,
+        }
+    }
+
+    /// The packet as bytes, prefix included.
+    ///
+    /// # Examples
+    /// ```
+    /// use fitup::manipulator::message::{msg_type, Body, ByteOrder, Packet};
+    ///
+    /// let ping = Packet::request(msg_type::PING, Body::Ping);
+    /// let bytes = ping.encode(ByteOrder::Big);
+    /// // length 52 (header 12 + ten zero ints), type 1, SERVICE_REQUEST, INVALID.
+    /// assert_eq!(&bytes[..16], &[0, 0, 0, 52, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 0]);
+    /// assert_eq!(Packet::decode(&bytes, ByteOrder::Big).unwrap(), ping);
+    /// ```
+    pub fn encode(&self, order: ByteOrder) -> Vec<u8> {
+        let mut body = Vec::with_capacity(64);
+        match &self.body {
+            Body::Empty => {}
+            Body::Ping => (0..10).for_each(|_| order.put_i32(&mut body, 0)),
+            Body::DummyReals => (0..10).for_each(|_| order.put_f32(&mut body, 0.0)),
+            Body::JointTrajPt(p) => {
+                order.put_i32(&mut body, p.sequence);
+                p.joints.iter().for_each(|&j| order.put_f32(&mut body, j));
+                order.put_f32(&mut body, p.velocity);
+                order.put_f32(&mut body, p.duration);
+            }
+            Body::JointPosition(p) => {
+                order.put_i32(&mut body, p.sequence);
+                p.joints.iter().for_each(|&j| order.put_f32(&mut body, j));
+            }
+            Body::Status(s) => {
+                for v in [
+                    s.drives_powered as i32,
+                    s.e_stopped as i32,
+                    s.error_code,
+                    s.in_error as i32,
+                    s.in_motion as i32,
+                    s.mode as i32,
+                    s.motion_possible as i32,
+                ] {
+                    order.put_i32(&mut body, v);
+                }
+            }
+            Body::Tool(t) => {
+                order.put_i32(&mut body, t.version);
+                order.put_i32(&mut body, t.action as i32);
+                order.put_i32(&mut body, t.index);
+                order.put_f32(&mut body, t.value);
+            }
+        }
+        let mut out = Vec::with_capacity(PREFIX_SIZE + HEADER_SIZE + body.len());
+        order.put_i32(&mut out, (HEADER_SIZE + body.len()) as i32);
+        order.put_i32(&mut out, self.msg_type);
+        order.put_i32(&mut out, self.comm_type as i32);
+        order.put_i32(&mut out, self.reply_code as i32);
+        out.extend_from_slice(&body);
+        out
+    }
+
+    /// Decodes one whole packet (prefix included) from `bytes`; extra bytes after it
+    /// are an error.
+    ///
+    /// # Errors
+    /// Any [`CodecError`] but `Io`.
+    pub fn decode(bytes: &[u8], order: ByteOrder) -> Result<Self, CodecError> {
+        if bytes.len() < PREFIX_SIZE {
+            return Err(CodecError::Truncated {
+                expected: PREFIX_SIZE,
+                got: bytes.len(),
+            });
+        }
+        let length = check_length(order.i32_at(bytes, 0))?;
+        let rest = &bytes[PREFIX_SIZE..];
+        if rest.len() < length {
+            return Err(CodecError::Truncated {
+                expected: PREFIX_SIZE + length,
+                got: bytes.len(),
+            });
+        }
+        if rest.len() > length {
+            return Err(CodecError::BadLength(length as i64));
+        }
+        Self::decode_message(rest, order)
+    }
+
+    /// Decodes header + body (the bytes the length prefix counts).
+    fn decode_message(m: &[u8], order: ByteOrder) -> Result<Self, CodecError> {
+        let msg_type = order.i32_at(m, 0);
+        let comm = order.i32_at(m, 4);
+        let reply = order.i32_at(m, 8);
+        let comm_type = match comm {
+            1 => CommType::Topic,
+            2 => CommType::ServiceRequest,
+            3 => CommType::ServiceReply,
+            c => return Err(CodecError::BadCommType(c)),
+        };
+        let reply_code = match (reply, comm_type) {
+            (0, CommType::Topic | CommType::ServiceRequest) => ReplyCode::Invalid,
+            (1, CommType::ServiceReply) => ReplyCode::Success,
+            (2, CommType::ServiceReply) => ReplyCode::Failure,
+            (r, _) => return Err(CodecError::BadReplyCode(r)),
+        };
+        let b = &m[HEADER_SIZE..];
+        let size = |expected: &str| CodecError::BadBodySize {
+            msg_type,
+            expected: expected.into(),
+            got: b.len(),
+        };
+        let real = |at: usize, field: &'static str| -> Result<f32, CodecError> {
+            let v = order.f32_at(b, at);
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(CodecError::BadField {
+                    msg_type,
+                    field,
+                    value: v.to_string(),
+                })
+            }
+        };
+        let joints = |from: usize| -> Result<[f32; MAX_JOINTS], CodecError> {
+            let mut j = [0f32; MAX_JOINTS];
+            for (i, v) in j.iter_mut().enumerate() {
+                *v = real(from + 4 * i, "joint_data")?;
+            }
+            Ok(j)
+        };
+        // A reply may be header only (REP-I0006's *alternative* reply; after FAILURE
+        // the payload is invalid anyway), whatever its type.
+        if comm_type == CommType::ServiceReply && b.is_empty() {
+            if !matches!(
+                msg_type,
+                msg_type::PING
+                    | msg_type::JOINT_POSITION
+                    | msg_type::JOINT_TRAJ_PT
+                    | msg_type::STATUS
+                    | msg_type::FITUP_TOOL
+            ) {
+                return Err(CodecError::UnknownType(msg_type));
+            }
+            return Ok(Self {
+                msg_type,
+                comm_type,
+                reply_code,
+                body: Body::Empty,
+            });
+        }
+        let body = match msg_type {
+            msg_type::PING => match b.len() {
+                40 => Body::Ping,
+                0 => Body::Empty,
+                _ => return Err(size("40 (or 0)")),
+            },
+            msg_type::JOINT_TRAJ_PT => match comm_type {
+                CommType::ServiceReply => match b.len() {
+                    40 => Body::DummyReals,
+                    0 => Body::Empty,
+                    _ => return Err(size("40 or 0")),
+                },
+                _ => {
+                    if b.len() != 52 {
+                        return Err(size("52"));
+                    }
+                    Body::JointTrajPt(JointTrajPt {
+                        sequence: order.i32_at(b, 0),
+                        joints: joints(4)?,
+                        velocity: real(44, "velocity")?,
+                        duration: real(48, "duration")?,
+                    })
+                }
+            },
+            msg_type::JOINT_POSITION => {
+                if b.len() != 44 {
+                    return Err(size("44"));
+                }
+                Body::JointPosition(JointPosition {
+                    sequence: order.i32_at(b, 0),
+                    joints: joints(4)?,
+                })
+            }
+            msg_type::STATUS => {
+                if b.len() != 28 {
+                    return Err(size("28"));
+                }
+                let tri = |at: usize, field: &'static str| match order.i32_at(b, at) {
+                    -1 => Ok(TriState::Unknown),
+                    0 => Ok(TriState::Off),
+                    1 => Ok(TriState::On),
+                    v => Err(CodecError::BadField {
+                        msg_type,
+                        field,
+                        value: v.to_string(),
+                    }),
+                };
+                let mode = match order.i32_at(b, 20) {
+                    1 => RobotMode::Manual,
+                    2 => RobotMode::Auto,
+                    // Other values are reserved; REP-I0006 says report them as unknown.
+                    _ => RobotMode::Unknown,
+                };
+                Body::Status(Status {
+                    drives_powered: tri(0, "drives_powered")?,
+                    e_stopped: tri(4, "e_stopped")?,
+                    error_code: order.i32_at(b, 8),
+                    in_error: tri(12, "in_error")?,
+                    in_motion: tri(16, "in_motion")?,
+                    mode,
+                    motion_possible: tri(24, "motion_possible")?,
+                })
+            }
+            msg_type::FITUP_TOOL => {
+                if b.len() != 16 {
+                    return Err(size("16"));
+                }
+                let version = order.i32_at(b, 0);
+                if version != TOOL_EXTENSION_VERSION {
+                    return Err(CodecError::BadField {
+                        msg_type,
+                        field: "version",
+                        value: format!("{version} (this build speaks {TOOL_EXTENSION_VERSION})"),
+                    });
+                }
+                let action = match order.i32_at(b, 4) {
+                    1 => ToolAction::Grasp,
+                    2 => ToolAction::Release,
+                    3 => ToolAction::Touch,
+                    4 => ToolAction::SetOutput,
+                    v => {
+                        return Err(CodecError::BadField {
+                            msg_type,
+                            field: "action",
+                            value: v.to_string(),
+                        })
+                    }
+                };
+                Body::Tool(ToolCommand {
+                    version,
+                    action,
+                    index: order.i32_at(b, 8),
+                    value: real(12, "value")?,
+                })
+            }
+            t => return Err(CodecError::UnknownType(t)),
+        };
+        Ok(Self {
+            msg_type,
+            comm_type,
+            reply_code,
+            body,
+        })
+    }
+
+    /// Reads exactly one packet from a stream. The read is bounded: the length is
+    /// checked before anything is allocated, and the stream's own timeout (set by the
+    /// caller) bounds the wait. A stream that ends between packets gives
+    /// `Io(UnexpectedEof)`; one that ends inside a packet gives `Truncated`.
+    ///
+    /// # Errors
+    /// Any [`CodecError`].
+    pub fn read_from(stream: &mut impl Read, order: ByteOrder) -> Result<Self, CodecError> {
+        let mut prefix = [0u8; PREFIX_SIZE];
+        let got = read_full(stream, &mut prefix)?;
+        if got == 0 {
+            return Err(CodecError::Io(std::io::ErrorKind::UnexpectedEof.into()));
+        }
+        if got < PREFIX_SIZE {
+            return Err(CodecError::Truncated {
+                expected: PREFIX_SIZE,
+                got,
+            });
+        }
+        let length = check_length(order.i32_at(&prefix, 0))?;
+        let mut message = vec![0u8; length];
+        let got = read_full(stream, &mut message)?;
+        if got < length {
+            return Err(CodecError::Truncated {
+                expected: PREFIX_SIZE + length,
+                got: PREFIX_SIZE + got,
+            });
+        }
+        Self::decode_message(&message, order)
+    }
+
+    /// Writes the packet to a stream.
+    ///
+    /// # Errors
+    /// The stream's error.
+    pub fn write_to(&self, stream: &mut impl Write, order: ByteOrder) -> Result<(), CodecError> {
+        stream.write_all(&self.encode(order))?;
+        stream.flush()?;
+        Ok(())
+    }
+}
+
+fn check_length(length: i32) -> Result<usize, CodecError> {
+    if length < HEADER_SIZE as i32 || length as usize > MAX_LENGTH {
+        return Err(CodecError::BadLength(length as i64));
+    }
+    Ok(length as usize)
+}
+
+/// Reads until `buf` is full or the stream ends; returns the bytes read. Errors
+/// (timeouts included) are passed on, except an interrupted read, which is retried.
+fn read_full(stream: &mut impl Read, buf: &mut [u8]) -> Result<usize, CodecError> {
+    let mut got = 0;
+    while got < buf.len() {
+        match stream.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(CodecError::Io(e)),
+        }
+    }
+    Ok(got)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hex(s: &str) -> Vec<u8> {
+        let s: String = s.split_whitespace().collect();
+        (0..s.len())
+            .step_by(2)
+            .map(|i| u8::from_str_radix(&s[i..i + 2], 16).unwrap())
+            .collect()
+    }
+
+    // The three byte streams of REP-I0006 appendix A (printed big-endian).
+    const JOINT_POSITION_EXAMPLE: &str = "00000038 0000000A 00000001 00000000 00000000 B81AD9FA
+        B6836312 B7C043F5 B8B81516 B865D055 B8B6365E 00000000 00000000 00000000 00000000";
+    const JOINT_TRAJ_PT_EXAMPLE: &str = "00000040 0000000B 00000002 00000000 00000001 A7600000
+        3EA7CDE8 BF5D9E57 C0490FDB 3F34815F C0490FDB 00000000 00000000 00000000 00000000
+        3DCCCCCD 40A00000";
+    const STATUS_EXAMPLE: &str = "00000028 0000000D 00000001 00000000 00000001 FFFFFFFF
+        00000000 00000000 00000000 00000002 00000001";
+
+    #[test]
+    fn rep_i0006_joint_position_example() {
+        let bytes = hex(JOINT_POSITION_EXAMPLE);
+        let p = Packet::decode(&bytes, ByteOrder::Big).unwrap();
+        assert_eq!(p.msg_type, msg_type::JOINT_POSITION);
+        assert_eq!(p.comm_type, CommType::Topic);
+        let Body::JointPosition(jp) = &p.body else {
+            panic!("{p:?}")
+        };
+        assert_eq!(jp.sequence, 0);
+        assert!((jp.joints[0] - -0.000036919).abs() < 1e-9);
+        assert!((jp.joints[5] - -0.000086886).abs() < 1e-9);
+        assert_eq!(jp.joints[6..], [0.0; 4]);
+        assert_eq!(p.encode(ByteOrder::Big), bytes);
+    }
+
+    #[test]
+    fn rep_i0006_joint_traj_pt_example() {
+        let bytes = hex(JOINT_TRAJ_PT_EXAMPLE);
+        let p = Packet::decode(&bytes, ByteOrder::Big).unwrap();
+        assert_eq!(p.comm_type, CommType::ServiceRequest);
+        assert_eq!(p.reply_code, ReplyCode::Invalid);
+        let Body::JointTrajPt(pt) = &p.body else {
+            panic!("{p:?}")
+        };
+        assert_eq!(pt.sequence, 1);
+        assert!((pt.joints[1] - 0.327_742_8).abs() < 1e-6);
+        assert!((pt.joints[3] - -std::f32::consts::PI).abs() < 1e-6);
+        assert_eq!(pt.velocity, 0.1);
+        assert_eq!(pt.duration, 5.0);
+        assert_eq!(p.encode(ByteOrder::Big), bytes);
+    }
+
+    #[test]
+    fn rep_i0006_status_example() {
+        let bytes = hex(STATUS_EXAMPLE);
+        let p = Packet::decode(&bytes, ByteOrder::Big).unwrap();
+        assert_eq!(
+            p.body,
+            Body::Status(Status {
+                drives_powered: TriState::On,
+                e_stopped: TriState::Unknown,
+                error_code: 0,
+                in_error: TriState::Off,
+                in_motion: TriState::Off,
+                mode: RobotMode::Auto,
+                motion_possible: TriState::On,
+            })
+        );
+        assert_eq!(p.encode(ByteOrder::Big), bytes);
+    }
+
+    #[test]
+    fn little_endian_is_the_byte_reverse_of_each_field() {
+        let big = hex(STATUS_EXAMPLE);
+        let p = Packet::decode(&big, ByteOrder::Big).unwrap();
+        let little = p.encode(ByteOrder::Little);
+        assert_eq!(little.len(), big.len());
+        for (b, l) in big.chunks(4).zip(little.chunks(4)) {
+            let mut r = b.to_vec();
+            r.reverse();
+            assert_eq!(r, l);
+        }
+        assert_eq!(Packet::decode(&little, ByteOrder::Little).unwrap(), p);
+    }
+
+    #[test]
+    fn ping_and_replies_layouts() {
+        let ping = Packet::request(msg_type::PING, Body::Ping).encode(ByteOrder::Big);
+        assert_eq!(ping.len(), 4 + 12 + 40);
+        assert_eq!(&ping[..16], &hex("00000034 00000001 00000002 00000000")[..]);
+        assert!(ping[16..].iter().all(|&b| b == 0));
+        let reply = Packet::reply(msg_type::JOINT_TRAJ_PT, ReplyCode::Failure, Body::Empty);
+        assert_eq!(
+            reply.encode(ByteOrder::Big),
+            hex("0000000C 0000000B 00000003 00000002")
+        );
+        let full = Packet::reply(
+            msg_type::JOINT_TRAJ_PT,
+            ReplyCode::Success,
+            Body::DummyReals,
+        );
+        let bytes = full.encode(ByteOrder::Big);
+        assert_eq!(bytes.len(), 56);
+        assert_eq!(Packet::decode(&bytes, ByteOrder::Big).unwrap(), full);
+    }
+
+    #[test]
+    fn tool_extension_layout() {
+        let t = Packet::request(
+            msg_type::FITUP_TOOL,
+            Body::Tool(ToolCommand {
+                version: 1,
+                action: ToolAction::Grasp,
+                index: 0,
+                value: 0.5,
+            }),
+        );
+        let bytes = t.encode(ByteOrder::Big);
+        assert_eq!(
+            bytes,
+            hex("0000001C 0000FDE9 00000002 00000000 00000001 00000001 00000000 3F000000")
+        );
+        assert_eq!(Packet::decode(&bytes, ByteOrder::Big).unwrap(), t);
+        let mut v2 = bytes.clone();
+        v2[19] = 2;
+        assert!(matches!(
+            Packet::decode(&v2, ByteOrder::Big),
+            Err(CodecError::BadField {
+                field: "version",
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn malformed_packets_are_typed_errors() {
+        let good = hex(JOINT_TRAJ_PT_EXAMPLE);
+        // Every truncation.
+        for n in 0..good.len() {
+            let e = Packet::decode(&good[..n], ByteOrder::Big).unwrap_err();
+            assert!(matches!(e, CodecError::Truncated { .. }), "{n}: {e}");
+            let e = Packet::read_from(&mut &good[..n], ByteOrder::Big).unwrap_err();
+            if n == 0 {
+                assert!(matches!(e, CodecError::Io(_)), "{e}");
+            } else {
+                assert!(matches!(e, CodecError::Truncated { .. }), "{n}: {e}");
+            }
+        }
+        // Lengths: negative, too small, huge (nothing allocated: read_from fails first).
+        for len in [-1i32, 0, 11, 1025, i32::MAX] {
+            let mut b = good.clone();
+            b[..4].copy_from_slice(&len.to_be_bytes());
+            assert!(matches!(
+                Packet::read_from(&mut &b[..], ByteOrder::Big),
+                Err(CodecError::BadLength(_))
+            ));
+        }
+        // Wrong byte order reads a huge length.
+        assert!(matches!(
+            Packet::decode(&good, ByteOrder::Little),
+            Err(CodecError::BadLength(_))
+        ));
+        // Unknown type, bad comm type, reply code on a request, body size, NaN.
+        let mut b = good.clone();
+        b[7] = 99;
+        assert!(matches!(
+            Packet::decode(&b, ByteOrder::Big),
+            Err(CodecError::UnknownType(99))
+        ));
+        let mut b = good.clone();
+        b[11] = 7;
+        assert!(matches!(
+            Packet::decode(&b, ByteOrder::Big),
+            Err(CodecError::BadCommType(7))
+        ));
+        let mut b = good.clone();
+        b[15] = 1;
+        assert!(matches!(
+            Packet::decode(&b, ByteOrder::Big),
+            Err(CodecError::BadReplyCode(1))
+        ));
+        let mut b = good.clone();
+        b.truncate(b.len() - 4);
+        b[3] = 60;
+        assert!(matches!(
+            Packet::decode(&b, ByteOrder::Big),
+            Err(CodecError::BadBodySize { .. })
+        ));
+        let mut b = good.clone();
+        b[20..24].copy_from_slice(&f32::NAN.to_be_bytes());
+        assert!(matches!(
+            Packet::decode(&b, ByteOrder::Big),
+            Err(CodecError::BadField {
+                field: "joint_data",
+                ..
+            })
+        ));
+        let mut b = hex(STATUS_EXAMPLE);
+        b[19] = 5;
+        assert!(matches!(
+            Packet::decode(&b, ByteOrder::Big),
+            Err(CodecError::BadField {
+                field: "drives_powered",
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn arbitrary_bytes_never_panic() {
+        let mut rng = crate::math::Rng::new(7);
+        for _ in 0..20_000 {
+            let n = (rng.next_u64() % 80) as usize;
+            let mut b: Vec<u8> = (0..n).map(|_| rng.next_u64() as u8).collect();
+            if n >= 4 && rng.next_u64().is_multiple_of(2) {
+                b[..4].copy_from_slice(&((n as i32) - 4).to_be_bytes());
+            }
+            let _ = Packet::decode(&b, ByteOrder::Big);
+            let _ = Packet::read_from(&mut &b[..], ByteOrder::Big);
+        }
+    }
+}

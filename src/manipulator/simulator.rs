@@ -1,0 +1,632 @@
+//! A simulated manipulator controller that speaks simple_message on 127.0.0.1.
+//!
+//! It moves one robot of a document in real time (or `speed` times faster): points
+//! streamed with JOINT_TRAJ_PT on the motion port are checked and queued, the motion
+//! thread interpolates joint-linearly between them, and every state client gets
+//! JOINT_POSITION and STATUS each [`SimulatorOptions::publish_interval`].
+//!
+//! A point is **refused** (FAILURE reply, then STATUS `in_error` with a
+//! [`RefusalCode`] as `error_code`, and any motion stopped) when a joint leaves its
+//! limits, the segment from the previous point makes the robot's link components
+//! interfere with any other component of the cell (pairs that already interfere at
+//! start-up are ignored), the sequence number is out of order, or the point is
+//! malformed. A new trajectory (sequence 0) clears the error.
+//!
+//! Clients that disconnect or send garbage only lose their own connection: the
+//! simulator logs the cause to standard error and keeps serving.
+
+use super::message::{
+    msg_type, special_seq, Body, ByteOrder, CodecError, JointTrajPt, Packet, ReplyCode, RobotMode,
+    Status, ToolAction, TriState,
+};
+use super::{joints_from_wire, joints_to_wire, RefusalCode};
+use crate::document::Document;
+use crate::kinematics::JointKind;
+use crate::workspace::{CheckOptions, SceneCache, Workspace};
+use std::collections::{HashSet, VecDeque};
+use std::io::Write;
+use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use thiserror::Error;
+
+/// Settings of a [`Simulator`].
+#[derive(Debug, Clone)]
+pub struct SimulatorOptions {
+    /// Motion port on 127.0.0.1 (0 picks a free one).
+    pub motion_port: u16,
+    /// State port on 127.0.0.1 (0 picks a free one).
+    pub state_port: u16,
+    /// Time scale: 1 is real time, 10 runs motions ten times faster.
+    pub speed: f64,
+    /// Byte order of every connection.
+    pub byte_order: ByteOrder,
+    /// Time between two JOINT_POSITION + STATUS publications (wall clock).
+    pub publish_interval: Duration,
+    /// Joint speed used when a point gives only a velocity fraction (rad/s at 1.0;
+    /// prismatic joints: this × 1000 mm/s per rad/s).
+    pub max_joint_speed: f64,
+    /// Largest joint step between two interference checks of a segment (rad / mm).
+    pub check_step: f64,
+}
+
+impl Default for SimulatorOptions {
+    fn default() -> Self {
+        Self {
+            motion_port: super::MOTION_PORT,
+            state_port: super::STATE_PORT,
+            speed: 1.0,
+            byte_order: ByteOrder::Big,
+            publish_interval: Duration::from_millis(50),
+            max_joint_speed: 1.0,
+            check_step: 2f64.to_radians(),
+        }
+    }
+}
+
+/// A simulator that cannot start.
+#[derive(Debug, Error)]
+pub enum SimulatorError {
+    /// No such robot, or a robot whose start pose cannot be checked.
+    #[error("{0}")]
+    Setup(String),
+    /// A port cannot be bound.
+    #[error("cannot listen on 127.0.0.1:{port}: {source}")]
+    Bind {
+        /// The port.
+        port: u16,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+/// The cell as the simulator checks it: the document, the robot and the pairs that
+/// already interfere at start-up.
+struct Cell {
+    doc: Document,
+    robot: usize,
+    kinds: Vec<JointKind>,
+    links: HashSet<usize>,
+    baseline: HashSet<(usize, usize)>,
+    cache: SceneCache,
+    check_step: f64,
+}
+
+impl Cell {
+    /// Robot-vs-cell interfering pairs at joints `q` (component indices).
+    fn pairs(&mut self, q: &[f64]) -> Result<Vec<(usize, usize)>, String> {
+        self.doc
+            .set_robot_joints(self.robot, q)
+            .map_err(|e| e.to_string())?;
+        let ws = Workspace::new(&self.doc, &mut self.cache).map_err(|e| e.to_string())?;
+        let all = ws
+            .interferences(&CheckOptions::default())
+            .map_err(|e| e.to_string())?;
+        Ok(all
+            .into_iter()
+            .filter(|p| self.links.contains(&p.a) != self.links.contains(&p.b))
+            .map(|p| (p.a, p.b))
+            .collect())
+    }
+
+    /// Checks limits at `to` and interference along `from → to`.
+    fn check(&mut self, from: &[f64], to: &[f64]) -> Result<(), (RefusalCode, String)> {
+        let robot = self.doc.robots()[self.robot].shared_robot();
+        if let Some(j) = robot.limit_violation(to) {
+            let lim = robot.joint_limits()[j];
+            return Err((
+                RefusalCode::JointLimit(j),
+                format!(
+                    "joint {} = {} is outside its limits {:?}",
+                    j + 1,
+                    to[j],
+                    lim.map(|l| (l.min, l.max))
+                ),
+            ));
+        }
+        let step = from
+            .iter()
+            .zip(to)
+            .zip(&self.kinds)
+            .map(|((a, b), k)| {
+                let d = (b - a).abs();
+                match k {
+                    // Prismatic joints are checked every 2 mm.
+                    JointKind::Prismatic => d / 2.0 * self.check_step,
+                    _ => d,
+                }
+            })
+            .fold(0.0, f64::max);
+        let n = ((step / self.check_step).ceil() as usize).clamp(1, 500);
+        for i in 1..=n {
+            let s = i as f64 / n as f64;
+            let q: Vec<f64> = from.iter().zip(to).map(|(a, b)| a + (b - a) * s).collect();
+            let pairs = self.pairs(&q).map_err(|e| (RefusalCode::BadPoint, e))?;
+            if let Some(&(a, b)) = pairs.iter().find(|p| !self.baseline.contains(p)) {
+                let c = self.doc.components();
+                return Err((
+                    RefusalCode::Collision,
+                    format!(
+                        "`{}` would interfere with `{}` at {:.0}% of the segment",
+                        c[a].name,
+                        c[b].name,
+                        s * 100.0
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One queued segment: target joints (rad/mm) and duration (s, simulated time).
+#[derive(Debug, Clone)]
+struct Segment {
+    to: Vec<f64>,
+    duration: f64,
+}
+
+#[derive(Debug)]
+struct State {
+    joints: Vec<f64>,
+    /// The current segment's start joints and elapsed time.
+    current: Option<(Vec<f64>, Segment, f64)>,
+    queue: VecDeque<Segment>,
+    /// Joints at the end of the last queued point (where the next segment starts).
+    last_target: Vec<f64>,
+    last_seq: Option<i32>,
+    error: Option<RefusalCode>,
+    gripper: f32,
+    outputs: [bool; 32],
+}
+
+impl State {
+    fn in_motion(&self) -> bool {
+        self.current.is_some() || !self.queue.is_empty()
+    }
+
+    fn stop(&mut self) {
+        self.current = None;
+        self.queue.clear();
+        self.last_target = self.joints.clone();
+    }
+
+    fn status(&self) -> Status {
+        Status {
+            drives_powered: TriState::On,
+            e_stopped: TriState::Off,
+            error_code: self.error.map_or(0, RefusalCode::code),
+            in_error: TriState::from_bool(self.error.is_some()),
+            in_motion: TriState::from_bool(self.in_motion()),
+            mode: RobotMode::Auto,
+            motion_possible: TriState::from_bool(self.error.is_none()),
+        }
+    }
+
+    /// Advances the motion by `dt` seconds of simulated time.
+    fn advance(&mut self, mut dt: f64) {
+        while dt > 0.0 {
+            if self.current.is_none() {
+                match self.queue.pop_front() {
+                    Some(seg) => self.current = Some((self.joints.clone(), seg, 0.0)),
+                    None => return,
+                }
+            }
+            let (from, seg, elapsed) = self.current.as_mut().expect("set above");
+            let left = seg.duration - *elapsed;
+            if dt >= left {
+                dt -= left.max(0.0);
+                self.joints = seg.to.clone();
+                self.current = None;
+            } else {
+                *elapsed += dt;
+                let s = *elapsed / seg.duration;
+                self.joints = from
+                    .iter()
+                    .zip(&seg.to)
+                    .map(|(a, b)| a + (b - a) * s)
+                    .collect();
+                dt = 0.0;
+            }
+        }
+    }
+}
+
+/// A running simulator; dropping it (or [`Simulator::shutdown`]) stops its threads.
+pub struct Simulator {
+    motion_addr: SocketAddr,
+    state_addr: SocketAddr,
+    stop: Arc<AtomicBool>,
+    state: Arc<Mutex<State>>,
+    threads: Vec<std::thread::JoinHandle<()>>,
+}
+
+impl Simulator {
+    /// Starts the simulator for robot `robot` of `doc` (at its saved joints) on
+    /// 127.0.0.1.
+    ///
+    /// # Errors
+    /// An unknown robot, a cell that cannot be checked, a port in use.
+    pub fn start(
+        doc: &Document,
+        robot: &str,
+        options: &SimulatorOptions,
+    ) -> Result<Self, SimulatorError> {
+        let index = doc
+            .robot_index(robot)
+            .map_err(|e| SimulatorError::Setup(e.to_string()))?;
+        let inst = &doc.robots()[index];
+        let kinds = inst.robot().joint_kinds();
+        let links: HashSet<usize> = inst.links().iter().filter_map(|l| l.component).collect();
+        let joints = inst.joints().to_vec();
+        let mut cell = Cell {
+            doc: doc.clone(),
+            robot: index,
+            kinds: kinds.clone(),
+            links,
+            baseline: HashSet::new(),
+            cache: SceneCache::new(),
+            check_step: options.check_step.max(1e-3),
+        };
+        cell.baseline = cell
+            .pairs(&joints)
+            .map_err(SimulatorError::Setup)?
+            .into_iter()
+            .collect();
+        let bind = |port: u16| {
+            TcpListener::bind((Ipv4Addr::LOCALHOST, port))
+                .map_err(|source| SimulatorError::Bind { port, source })
+        };
+        let motion = bind(options.motion_port)?;
+        let state_l = bind(options.state_port)?;
+        let motion_addr = motion.local_addr().expect("bound");
+        let state_addr = state_l.local_addr().expect("bound");
+        for l in [&motion, &state_l] {
+            l.set_nonblocking(true).expect("nonblocking listener");
+        }
+        let stop = Arc::new(AtomicBool::new(false));
+        let state = Arc::new(Mutex::new(State {
+            last_target: joints.clone(),
+            joints,
+            current: None,
+            queue: VecDeque::new(),
+            last_seq: None,
+            error: None,
+            gripper: 0.0,
+            outputs: [false; 32],
+        }));
+        let cell = Arc::new(Mutex::new(cell));
+        let mut threads = Vec::new();
+        // Motion clock.
+        {
+            let (stop, state, speed) = (stop.clone(), state.clone(), options.speed.max(1e-3));
+            threads.push(std::thread::spawn(move || {
+                let mut last = Instant::now();
+                while !stop.load(Ordering::Relaxed) {
+                    std::thread::sleep(Duration::from_millis(5));
+                    let now = Instant::now();
+                    let dt = (now - last).as_secs_f64() * speed;
+                    last = now;
+                    lock(&state).advance(dt);
+                }
+            }));
+        }
+        // Motion port.
+        {
+            let (stop, state, opts) = (stop.clone(), state.clone(), options.clone());
+            let kinds = kinds.clone();
+            threads.push(std::thread::spawn(move || {
+                accept_loop(motion, &stop, |stream| {
+                    let (stop, state, cell, kinds, opts) = (
+                        stop.clone(),
+                        state.clone(),
+                        cell.clone(),
+                        kinds.clone(),
+                        opts.clone(),
+                    );
+                    std::thread::spawn(move || {
+                        serve_motion(stream, &stop, &state, &cell, &kinds, &opts)
+                    });
+                })
+            }));
+        }
+        // State port.
+        {
+            let (stop, state, opts) = (stop.clone(), state.clone(), options.clone());
+            threads.push(std::thread::spawn(move || {
+                accept_loop(state_l, &stop, |stream| {
+                    let (stop, state, kinds, opts) =
+                        (stop.clone(), state.clone(), kinds.clone(), opts.clone());
+                    std::thread::spawn(move || serve_state(stream, &stop, &state, &kinds, &opts));
+                })
+            }));
+        }
+        Ok(Self {
+            motion_addr,
+            state_addr,
+            stop,
+            state,
+            threads,
+        })
+    }
+
+    /// The motion port's address.
+    pub fn motion_addr(&self) -> SocketAddr {
+        self.motion_addr
+    }
+
+    /// The state port's address.
+    pub fn state_addr(&self) -> SocketAddr {
+        self.state_addr
+    }
+
+    /// Current joints (rad, mm).
+    pub fn joints(&self) -> Vec<f64> {
+        lock(&self.state).joints.clone()
+    }
+
+    /// Current gripper opening (m, as last commanded).
+    pub fn gripper(&self) -> f32 {
+        lock(&self.state).gripper
+    }
+
+    /// Stops every thread and closes the ports.
+    pub fn shutdown(mut self) {
+        self.stop_threads();
+    }
+
+    fn stop_threads(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for Simulator {
+    fn drop(&mut self) {
+        self.stop_threads();
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A panicked connection thread must not take the controller down.
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn accept_loop(listener: TcpListener, stop: &AtomicBool, mut serve: impl FnMut(TcpStream)) {
+    while !stop.load(Ordering::Relaxed) {
+        match listener.accept() {
+            Ok((stream, _)) => {
+                let _ = stream.set_nonblocking(false);
+                let _ = stream.set_nodelay(true);
+                serve(stream);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            Err(e) => {
+                eprintln!("manipulator: accept failed: {e}");
+                std::thread::sleep(Duration::from_millis(100));
+            }
+        }
+    }
+}
+
+fn serve_state(
+    mut stream: TcpStream,
+    stop: &AtomicBool,
+    state: &Mutex<State>,
+    kinds: &[JointKind],
+    opts: &SimulatorOptions,
+) {
+    let _ = stream.set_write_timeout(Some(Duration::from_secs(2)));
+    while !stop.load(Ordering::Relaxed) {
+        let (joints, status) = {
+            let s = lock(state);
+            (joints_to_wire(kinds, &s.joints), s.status())
+        };
+        let mut bytes = Packet::topic(
+            msg_type::JOINT_POSITION,
+            Body::JointPosition(super::message::JointPosition {
+                sequence: 0,
+                joints,
+            }),
+        )
+        .encode(opts.byte_order);
+        bytes.extend(Packet::topic(msg_type::STATUS, Body::Status(status)).encode(opts.byte_order));
+        if stream.write_all(&bytes).is_err() {
+            return; // the client left
+        }
+        std::thread::sleep(opts.publish_interval);
+    }
+}
+
+fn serve_motion(
+    mut stream: TcpStream,
+    stop: &AtomicBool,
+    state: &Mutex<State>,
+    cell: &Mutex<Cell>,
+    kinds: &[JointKind],
+    opts: &SimulatorOptions,
+) {
+    let peer = stream
+        .peer_addr()
+        .map_or_else(|_| "?".to_string(), |a| a.to_string());
+    // Short read timeouts so that shutdown is noticed; an idle client is fine.
+    let _ = stream.set_read_timeout(Some(Duration::from_millis(200)));
+    let _ = stream.set_write_timeout(Some(Duration::from_secs(2)));
+    while !stop.load(Ordering::Relaxed) {
+        let packet = match Packet::read_from(&mut stream, opts.byte_order) {
+            Ok(p) => p,
+            Err(CodecError::Io(e))
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                continue
+            }
+            Err(CodecError::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => return,
+            Err(e) => {
+                // Byte counting is all simple_message has: after garbage the stream
+                // cannot be re-synchronised, so this connection ends.
+                eprintln!("manipulator: {peer}: {e}; closing the connection");
+                return;
+            }
+        };
+        let reply = handle(&packet, state, cell, kinds, opts);
+        if let Some(r) = reply {
+            if let Err(e) = r.write_to(&mut stream, opts.byte_order) {
+                eprintln!("manipulator: {peer}: {e}");
+                return;
+            }
+        }
+    }
+}
+
+/// The reply to one request (None for topics, which need none).
+fn handle(
+    p: &Packet,
+    state: &Mutex<State>,
+    cell: &Mutex<Cell>,
+    kinds: &[JointKind],
+    opts: &SimulatorOptions,
+) -> Option<Packet> {
+    use super::message::CommType;
+    if p.comm_type != CommType::ServiceRequest {
+        return None;
+    }
+    let ok = |t| Some(Packet::reply(t, ReplyCode::Success, Body::Empty));
+    let fail = |t| Some(Packet::reply(t, ReplyCode::Failure, Body::Empty));
+    match &p.body {
+        Body::Ping => Some(Packet::reply(
+            msg_type::PING,
+            ReplyCode::Success,
+            Body::Ping,
+        )),
+        Body::JointTrajPt(pt) => match enqueue(pt, state, cell, kinds, opts) {
+            Ok(()) => ok(msg_type::JOINT_TRAJ_PT),
+            Err((code, why)) => {
+                eprintln!("manipulator: refused point {}: {code}: {why}", pt.sequence);
+                let mut s = lock(state);
+                s.stop();
+                s.error = Some(code);
+                s.last_seq = None;
+                fail(msg_type::JOINT_TRAJ_PT)
+            }
+        },
+        Body::Tool(t) => {
+            let mut s = lock(state);
+            let mut reply = *t;
+            match t.action {
+                ToolAction::Grasp | ToolAction::Release => {
+                    if !(0.0..=1.0).contains(&t.value) {
+                        return fail(msg_type::FITUP_TOOL);
+                    }
+                    s.gripper = t.value;
+                }
+                // The simulator has no contact sensing: contact is reported at the
+                // full distance asked for.
+                ToolAction::Touch => reply.value = t.value,
+                ToolAction::SetOutput => {
+                    let Some(o) = usize::try_from(t.index)
+                        .ok()
+                        .and_then(|i| s.outputs.get_mut(i))
+                    else {
+                        return fail(msg_type::FITUP_TOOL);
+                    };
+                    *o = t.value != 0.0;
+                }
+            }
+            Some(Packet::reply(
+                msg_type::FITUP_TOOL,
+                ReplyCode::Success,
+                Body::Tool(reply),
+            ))
+        }
+        // REP-I0006: a request for an unsupported service gets FAILURE.
+        _ => fail(p.msg_type),
+    }
+}
+
+fn enqueue(
+    pt: &JointTrajPt,
+    state: &Mutex<State>,
+    cell: &Mutex<Cell>,
+    kinds: &[JointKind],
+    opts: &SimulatorOptions,
+) -> Result<(), (RefusalCode, String)> {
+    match pt.sequence {
+        special_seq::STOP_TRAJECTORY => {
+            let mut s = lock(state);
+            s.stop();
+            s.last_seq = None;
+            return Ok(());
+        }
+        special_seq::START_TRAJECTORY_STREAMING
+        | special_seq::START_TRAJECTORY_DOWNLOAD
+        | special_seq::END_TRAJECTORY => return Ok(()),
+        n if n < 0 => return Err((RefusalCode::BadPoint, format!("sequence {n} is reserved"))),
+        _ => {}
+    }
+    if pt.joints[kinds.len()..].iter().any(|&v| v != 0.0) {
+        return Err((
+            RefusalCode::BadPoint,
+            format!("this robot has {} joints; the rest must be 0", kinds.len()),
+        ));
+    }
+    let target = joints_from_wire(kinds, &pt.joints);
+    let from = {
+        let mut s = lock(state);
+        if pt.sequence == 0 {
+            // A new trajectory: stop whatever runs and start from where the arm is.
+            s.stop();
+            s.error = None;
+        } else if s.last_seq != Some(pt.sequence - 1) {
+            return Err((
+                RefusalCode::OutOfOrder,
+                format!(
+                    "point {} after {}",
+                    pt.sequence,
+                    s.last_seq.map_or("nothing".into(), |v| v.to_string())
+                ),
+            ));
+        }
+        s.last_target.clone()
+    };
+    let travel = from
+        .iter()
+        .zip(&target)
+        .zip(kinds)
+        .map(|((a, b), k)| match k {
+            JointKind::Prismatic => (b - a).abs() / 1000.0,
+            _ => (b - a).abs(),
+        })
+        .fold(0.0, f64::max);
+    let duration = if pt.duration > 0.0 {
+        pt.duration as f64
+    } else if pt.velocity > 0.0 && pt.velocity <= 1.0 {
+        travel / (opts.max_joint_speed * pt.velocity as f64)
+    } else if travel == 0.0 {
+        0.0
+    } else {
+        return Err((
+            RefusalCode::BadPoint,
+            format!(
+                "no duration ({}) and velocity {} outside (0, 1]",
+                pt.duration, pt.velocity
+            ),
+        ));
+    };
+    lock(cell).check(&from, &target)?;
+    let mut s = lock(state);
+    s.last_seq = Some(pt.sequence);
+    s.last_target = target.clone();
+    s.queue.push_back(Segment {
+        to: target,
+        duration,
+    });
+    Ok(())
+}

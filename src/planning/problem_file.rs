@@ -1,0 +1,264 @@
+//! [`ProblemFile`]: a planning problem stored beside its document
+//! (`models/problems/<name>.plan.json`), so scripts and benchmarks run problems by
+//! name instead of repeating start, goal and bounds.
+//!
+//! The format is what [`Problem::plan_json`](super::problems::Problem::plan_json)
+//! writes: poses as `{"t": [x, y, z], "q": [w, x, y, z]}` (mm; unit quaternion acting
+//! on column vectors, `p' = R p + t`), boxes as `*_min` / `*_max` corners (mm), the
+//! rotation weight in mm per rad.
+
+use crate::collision::Aabb;
+use crate::math::{Transform, Vec3};
+use nalgebra::{Quaternion, UnitQuaternion};
+use serde::Deserialize;
+use std::path::Path;
+
+/// Largest problem file read, bytes: a problem is a few hundred bytes.
+pub const MAX_PROBLEM_FILE_BYTES: u64 = 1 << 20;
+
+/// Why a problem file could not be used; the message names the file and the field.
+#[derive(Debug, thiserror::Error)]
+pub enum ProblemFileError {
+    /// Reading the file failed (missing, unreadable, too large, not a regular file).
+    #[error("{file}: {cause}")]
+    Read {
+        /// The file.
+        file: String,
+        /// What went wrong.
+        cause: String,
+    },
+    /// The text is not the problem format (JSON syntax, a missing or unknown field),
+    /// with the line and column serde reports.
+    #[error("{file}:{line}:{column}: {cause}")]
+    Syntax {
+        /// The file.
+        file: String,
+        /// Line (1-based).
+        line: usize,
+        /// Column (1-based).
+        column: usize,
+        /// What the parser expected.
+        cause: String,
+    },
+    /// A value is out of range (non-finite number, quaternion far from unit length,
+    /// inverted box, a pose outside the bounds).
+    #[error("{file}: `{field}` {cause}")]
+    Value {
+        /// The file.
+        file: String,
+        /// The field.
+        field: &'static str,
+        /// What is wrong with it.
+        cause: String,
+    },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PoseJson {
+    t: [f64; 3],
+    q: [f64; 4],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProblemJson {
+    name: String,
+    #[serde(default)]
+    description: String,
+    document: String,
+    moving_component: String,
+    start: PoseJson,
+    goal: PoseJson,
+    bounds_min: [f64; 3],
+    bounds_max: [f64; 3],
+    rotation_weight_mm_per_rad: Option<f64>,
+    product_box_min: Option<[f64; 3]>,
+    product_box_max: Option<[f64; 3]>,
+}
+
+/// A planning problem read from a `.plan.json` file: which component of which
+/// document moves from where to where, within which bounds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProblemFile {
+    /// The problem's name.
+    pub name: String,
+    /// One line for people.
+    pub description: String,
+    /// The document, relative to the problem file's folder.
+    pub document: String,
+    /// The component that moves.
+    pub moving_component: String,
+    /// Start pose of the component (assembly frame, mm).
+    pub start: Transform,
+    /// Goal pose of the component (assembly frame, mm).
+    pub goal: Transform,
+    /// Bounds of the component's origin (assembly frame, mm).
+    pub bounds: Aabb,
+    /// Weight of rotation in the metric, mm per rad (`None`: the space's default).
+    pub rotation_weight: Option<f64>,
+    /// The product's box (assembly frame, mm), when given: disassembly ends when the
+    /// component's box leaves it.
+    pub product_box: Option<Aabb>,
+}
+
+impl ProblemFile {
+    /// Reads and checks `path` (at most [`MAX_PROBLEM_FILE_BYTES`]).
+    ///
+    /// # Examples
+    /// ```
+    /// use fitup::planning::ProblemFile;
+    ///
+    /// let p = ProblemFile::read("models/problems/bar_slot.plan.json".as_ref()).unwrap();
+    /// assert_eq!(p.moving_component, "moving");
+    /// assert_eq!(p.bounds.distance_to_point(&p.start.translation().into()), 0.0);
+    /// ```
+    ///
+    /// # Errors
+    /// [`ProblemFileError`] naming the file: unreadable, not JSON, a missing or
+    /// unknown field, or a value out of range.
+    pub fn read(path: &Path) -> Result<Self, ProblemFileError> {
+        let file = path.display().to_string();
+        let read = |cause: String| ProblemFileError::Read {
+            file: file.clone(),
+            cause,
+        };
+        let meta = std::fs::metadata(path).map_err(|e| read(e.to_string()))?;
+        if !meta.is_file() {
+            return Err(read("not a regular file".into()));
+        }
+        if meta.len() > MAX_PROBLEM_FILE_BYTES {
+            return Err(read(format!(
+                "{} bytes is too large for a problem file (at most {MAX_PROBLEM_FILE_BYTES})",
+                meta.len()
+            )));
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| read(e.to_string()))?;
+        Self::parse(&text, &file)
+    }
+
+    /// Parses and checks the text of a problem file; `file` names it in errors.
+    ///
+    /// # Errors
+    /// As [`read`](Self::read), without the file system ones.
+    pub fn parse(text: &str, file: &str) -> Result<Self, ProblemFileError> {
+        let j: ProblemJson = serde_json::from_str(text).map_err(|e| ProblemFileError::Syntax {
+            file: file.into(),
+            line: e.line(),
+            column: e.column(),
+            cause: e.to_string(),
+        })?;
+        let value = |field: &'static str, cause: String| ProblemFileError::Value {
+            file: file.into(),
+            field,
+            cause,
+        };
+        let finite3 = |field: &'static str, v: [f64; 3]| {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(Vec3::from(v))
+            } else {
+                Err(value(field, "has a non-finite number".into()))
+            }
+        };
+        let pose = |field: &'static str, p: &PoseJson| {
+            let t = finite3(field, p.t)?;
+            let [w, x, y, z] = p.q;
+            let q = Quaternion::new(w, x, y, z);
+            let n = q.norm();
+            if !(n.is_finite() && (n - 1.0).abs() <= 1e-6) {
+                return Err(value(
+                    field,
+                    format!("has a rotation quaternion of length {n}, expected 1"),
+                ));
+            }
+            Ok(Transform::from_parts(t, UnitQuaternion::new_normalize(q)))
+        };
+        let boxed = |field: &'static str, lo: [f64; 3], hi: [f64; 3]| {
+            let (lo, hi) = (finite3(field, lo)?, finite3(field, hi)?);
+            if (0..3).any(|i| lo[i] > hi[i]) {
+                return Err(value(field, "has a minimum above its maximum".into()));
+            }
+            Ok(Aabb::new(lo, hi))
+        };
+        let start = pose("start", &j.start)?;
+        let goal = pose("goal", &j.goal)?;
+        let bounds = boxed("bounds_min", j.bounds_min, j.bounds_max)?;
+        for (field, p) in [("start", &start), ("goal", &goal)] {
+            if bounds.distance_to_point(&p.translation().into()) > 0.0 {
+                return Err(value(field, "lies outside the bounds".into()));
+            }
+        }
+        if let Some(w) = j.rotation_weight_mm_per_rad {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(value(
+                    "rotation_weight_mm_per_rad",
+                    format!("must be a finite number > 0, not {w}"),
+                ));
+            }
+        }
+        let product_box = match (j.product_box_min, j.product_box_max) {
+            (Some(lo), Some(hi)) => Some(boxed("product_box_min", lo, hi)?),
+            (None, None) => None,
+            _ => {
+                return Err(value(
+                    "product_box_min",
+                    "and `product_box_max` come together".into(),
+                ))
+            }
+        };
+        Ok(Self {
+            name: j.name,
+            description: j.description,
+            document: j.document,
+            moving_component: j.moving_component,
+            start,
+            goal,
+            bounds,
+            rotation_weight: j.rotation_weight_mm_per_rad,
+            product_box,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"{"name": "x", "document": "x.yaml", "moving_component": "m",
+        "start": {"t": [0, 0, 0], "q": [1, 0, 0, 0]},
+        "goal": {"t": [10, 0, 0], "q": [0, 1, 0, 0]},
+        "bounds_min": [-5, -5, -5], "bounds_max": [20, 5, 5]}"#;
+
+    #[test]
+    fn a_good_file_parses() {
+        let p = ProblemFile::parse(GOOD, "x.plan.json").unwrap();
+        assert_eq!(p.moving_component, "m");
+        assert!((p.goal.translation().x - 10.0).abs() < 1e-12);
+        assert!((p.goal.distance_to(&p.start).0 - std::f64::consts::PI).abs() < 1e-9);
+        assert_eq!(p.product_box, None);
+    }
+
+    #[test]
+    fn bad_files_name_file_and_field() {
+        let bad = |text: &str| {
+            ProblemFile::parse(text, "bad.plan.json")
+                .unwrap_err()
+                .to_string()
+        };
+        let e = bad("{\n\"name\": 3}");
+        assert!(e.starts_with("bad.plan.json:2:"), "{e}");
+        let e = bad(&GOOD.replace("[20, 5, 5]", "[-20, 5, 5]"));
+        assert!(
+            e.contains("bounds_min") && e.contains("minimum above"),
+            "{e}"
+        );
+        let e = bad(&GOOD.replace("[0, 1, 0, 0]", "[0, 2, 0, 0]"));
+        assert!(e.contains("`goal`") && e.contains("length 2"), "{e}");
+        let e = bad(&GOOD.replace("[10, 0, 0]", "[100, 0, 0]"));
+        assert!(e.contains("`goal` lies outside the bounds"), "{e}");
+        let e = bad(&GOOD.replace("\"name\"", "\"nmae\""));
+        assert!(e.contains("unknown field"), "{e}");
+        let e = bad(&GOOD.replace("[10, 0, 0]", "[1e999, 0, 0]"));
+        assert!(e.starts_with("bad.plan.json:"), "{e}");
+    }
+}

@@ -1,0 +1,403 @@
+//! Bindings for assembly sequence planning (seed 003's task layer): the relation
+//! graph, mating directions, grasp planes, safe length and `doc.assembly_sequence`,
+//! whose Sequence result saves as CSV or JSON inside the project. Values are only
+//! converted here; the work is `crate::sequence`.
+
+use super::api::Api;
+use super::bind_document::DocHandle;
+use super::bind_math::xyzabc_deg;
+use super::convert::{array3, check_keys, err, fail, num, opt_num, opt_str, vec3};
+use super::{Context, ScriptResult};
+use crate::math::AngleConvention;
+use crate::sequence::{self, Mode, SequenceOptions, SequencePlan};
+use rhai::{Array, Dynamic, Map};
+use std::sync::Arc;
+
+/// The result of `doc.assembly_sequence` (cheap to clone); it keeps the run context
+/// so `save_csv` can check and record the file it writes.
+#[derive(Clone)]
+pub struct SequenceHandle(Arc<SequencePlan>, Arc<Context>);
+
+const KEYS: [&str; 11] = [
+    "base",
+    "order",
+    "mode",
+    "max_sequences",
+    "time_limit_ms",
+    "seed",
+    "tolerance",
+    "threaded",
+    "masses",
+    "max_tilt_deg",
+    "planner_fallback",
+];
+
+fn strings(v: &Dynamic, what: &str) -> ScriptResult<Vec<String>> {
+    let Some(a) = v.clone().try_cast::<Array>() else {
+        return err(format!("`{what}` must be an array of names"));
+    };
+    a.into_iter()
+        .map(|x| {
+            x.into_string()
+                .map_err(|t| fail(format!("`{what}` must hold strings, not {t}")))
+        })
+        .collect()
+}
+
+fn options(m: Option<&Map>) -> ScriptResult<SequenceOptions> {
+    let mut o = SequenceOptions::default();
+    let Some(m) = m else {
+        return Ok(o);
+    };
+    check_keys(m, &KEYS, "sequence")?;
+    o.base = opt_str(m, "base")?;
+    if let Some(v) = m.get("order") {
+        o.order = strings(v, "order")?;
+    }
+    if let Some(v) = m.get("threaded") {
+        o.threaded = strings(v, "threaded")?;
+    }
+    if let Some(s) = opt_str(m, "mode")? {
+        o.mode = Mode::parse(&s).ok_or_else(|| {
+            fail(format!(
+                "mode must be \"mates\" or \"geometry\", not \"{s}\""
+            ))
+        })?;
+    }
+    let count = |key: &str, v: f64| -> ScriptResult<u64> {
+        if v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v <= 1e15 {
+            Ok(v as u64)
+        } else {
+            err(format!("{key} must be a whole number ≥ 0, not {v}"))
+        }
+    };
+    if let Some(v) = opt_num(m, "max_sequences")? {
+        o.max_sequences = count("max_sequences", v)? as usize;
+    }
+    if let Some(v) = opt_num(m, "seed")? {
+        o.seed = count("seed", v)?;
+    }
+    o.time_limit_ms = opt_num(m, "time_limit_ms")?;
+    o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
+    if let Some(v) = opt_num(m, "max_tilt_deg")? {
+        o.max_tilt = v.to_radians();
+    }
+    if let Some(v) = m.get("planner_fallback") {
+        o.planner_fallback = v
+            .as_bool()
+            .map_err(|t| fail(format!("planner_fallback must be a bool, not {t}")))?;
+    }
+    if let Some(v) = m.get("masses") {
+        let Some(mm) = v.clone().try_cast::<Map>() else {
+            return err("`masses` must be a map of name: mass");
+        };
+        for (k, x) in mm {
+            o.masses.insert(k.to_string(), num(&x, "mass")?);
+        }
+    }
+    Ok(o)
+}
+
+fn run<R>(
+    d: &DocHandle,
+    f: impl FnOnce(&crate::document::Document, &mut crate::workspace::SceneCache) -> R,
+) -> ScriptResult<R> {
+    let doc = d.lock()?;
+    let mut cache = d.context().scene_cache()?;
+    Ok(f(&doc, &mut cache))
+}
+
+/// A direction for people: no `-0`.
+fn dir(v: &crate::math::Vec3) -> Dynamic {
+    array3(&v.map(|x| x + 0.0))
+}
+
+fn dir_array(v: &[crate::math::Vec3]) -> Array {
+    v.iter().map(dir).collect()
+}
+
+fn sequence_map(s: &sequence::Sequence) -> Map {
+    let mut m = Map::new();
+    m.insert("base".into(), s.base.clone().into());
+    m.insert(
+        "order".into(),
+        s.order()
+            .into_iter()
+            .map(Dynamic::from)
+            .collect::<Array>()
+            .into(),
+    );
+    m.insert("mounts".into(), (s.mounts as i64).into());
+    m.insert(
+        "direction_changes".into(),
+        (s.direction_changes as i64).into(),
+    );
+    m.insert("path_length".into(), Dynamic::from_float(s.path_length_mm));
+    m
+}
+
+fn task_maps(s: &sequence::Sequence) -> Array {
+    let conv = AngleConvention::default();
+    s.tasks
+        .iter()
+        .zip(&s.steps)
+        .map(|(t, st)| {
+            let mut m = Map::new();
+            m.insert("index".into(), (t.index as i64).into());
+            m.insert("base".into(), t.base.clone().into());
+            m.insert("part".into(), t.part.clone().into());
+            m.insert("operation".into(), t.operation.name().into());
+            m.insert("mating_direction".into(), dir(&t.mating_direction));
+            m.insert(
+                "mating_directions".into(),
+                dir_array(&st.mating_directions).into(),
+            );
+            m.insert(
+                "receivers".into(),
+                st.receivers
+                    .iter()
+                    .cloned()
+                    .map(Dynamic::from)
+                    .collect::<Array>()
+                    .into(),
+            );
+            m.insert("safe_length".into(), Dynamic::from_float(t.safe_length));
+            m.insert("mount".into(), t.mount.into());
+            m.insert("planned".into(), st.planned.into());
+            m.insert("path_length".into(), Dynamic::from_float(t.path.length_mm));
+            m.insert(
+                "path".into(),
+                t.path
+                    .poses
+                    .iter()
+                    .map(|p| xyzabc_deg(p, conv))
+                    .collect::<Array>()
+                    .into(),
+            );
+            m.insert("assembled".into(), xyzabc_deg(&t.assembled_pose, conv));
+            m.insert(
+                "grasp".into(),
+                match &t.grasp {
+                    Some(g) => {
+                        let mut gm = Map::new();
+                        gm.insert(
+                            "faces".into(),
+                            g.faces
+                                .iter()
+                                .cloned()
+                                .map(Dynamic::from)
+                                .collect::<Array>()
+                                .into(),
+                        );
+                        gm.insert("normal".into(), array3(&g.normal));
+                        gm.insert("width".into(), Dynamic::from_float(g.width));
+                        gm.insert("depth".into(), Dynamic::from_float(g.depth));
+                        gm.insert("point".into(), array3(&g.point));
+                        gm.into()
+                    }
+                    None => Dynamic::UNIT,
+                },
+            );
+            Dynamic::from_map(m)
+        })
+        .collect()
+}
+
+pub(super) fn register(api: &mut Api) {
+    api.section("Assembly sequences", "Seed 003's task layer (see `docs/assembly.md`): the relation graph from mates, mating directions, grasp planes, safe lengths and the assembly sequence — tasks `(base, part, operation)` with checked insertion paths. Directions are `[x, y, z]` unit vectors in the assembly frame (mm); poses `[X, Y, Z, A, B, C]` in degrees.");
+    api.type_::<SequenceHandle>("Sequence");
+    api.f(
+        "Document.relation_graph() -> map",
+        "The relation graph from the mates: `#{relations: [#{a, b, mates, freedom, ones}], composites: [[names…]], loops}` — `freedom` is the seed's 6-vector `(x, y, z, Rotx, Roty, Rotz)` of the pair's remaining degrees of freedom (intersection of its mates'), `ones` their count; loops are broken into composite nodes (members in their implied order).",
+        |d: &mut DocHandle| -> ScriptResult<Map> {
+            let g = run(d, |doc, _| sequence::relation_graph(doc))?;
+            let mut m = Map::new();
+            let rel: Array = g
+                .relations
+                .iter()
+                .map(|r| {
+                    let mut x = Map::new();
+                    x.insert("a".into(), g.components[r.a].clone().into());
+                    x.insert("b".into(), g.components[r.b].clone().into());
+                    x.insert("mates".into(), (r.mates.len() as i64).into());
+                    x.insert(
+                        "freedom".into(),
+                        r.freedom
+                            .vector()
+                            .iter()
+                            .map(|&v| Dynamic::from(v as i64))
+                            .collect::<Array>()
+                            .into(),
+                    );
+                    x.insert("ones".into(), (r.freedom.count() as i64).into());
+                    Dynamic::from_map(x)
+                })
+                .collect();
+            m.insert("relations".into(), rel.into());
+            let comp: Array = g
+                .nodes
+                .iter()
+                .filter(|n| n.is_composite())
+                .map(|n| {
+                    n.members
+                        .iter()
+                        .map(|&i| Dynamic::from(g.components[i].clone()))
+                        .collect::<Array>()
+                        .into()
+                })
+                .collect();
+            m.insert("composites".into(), comp.into());
+            m.insert("loops".into(), (g.loops.len() as i64).into());
+            Ok(m)
+        },
+    );
+    api.f(
+        "Document.mating_directions(name: string) -> array",
+        "The mating directions of a component (unit `[x, y, z]`, the way it moves while joined): its free separations from the parts it is related to by mates, negated. Empty when it cannot leave them straight.",
+        |d: &mut DocHandle, name: &str| -> ScriptResult<Array> {
+            let o = SequenceOptions::default();
+            let v = run(d, |doc, c| sequence::mating_directions(doc, c, name, &o))?.map_err(fail)?;
+            Ok(dir_array(&v))
+        },
+    );
+    api.f(
+        "Document.grasp_planes(name: string) -> array",
+        "The parallel face pairs a two-finger gripper can hold the component by across all its mating directions (the seed's G1 ∩ G2 ∩ …): `#{faces, normal, width}` in the part frame (mm); named planes first, faces found on the mesh (`mesh_face_k`) otherwise.",
+        |d: &mut DocHandle, name: &str| -> ScriptResult<Array> {
+            let o = SequenceOptions::default();
+            let v = run(d, |doc, c| sequence::grasp_planes(doc, c, name, &o))?.map_err(fail)?;
+            Ok(v.iter()
+                .map(|f| {
+                    let mut m = Map::new();
+                    m.insert(
+                        "faces".into(),
+                        f.faces
+                            .iter()
+                            .cloned()
+                            .map(Dynamic::from)
+                            .collect::<Array>()
+                            .into(),
+                    );
+                    m.insert("normal".into(), array3(&f.normal));
+                    m.insert("width".into(), Dynamic::from_float(f.width));
+                    Dynamic::from_map(m)
+                })
+                .collect())
+        },
+    );
+    api.f(
+        "Document.safe_length(name: string, direction: array) -> float",
+        "How far (mm) the component must move out along `direction` (`[x, y, z]`, assembly frame) before it is free to move in every other direction among the parts it is related to.",
+        |d: &mut DocHandle, name: &str, dir: Dynamic| -> ScriptResult<f64> {
+            let v = vec3(&dir, "direction")?;
+            let o = SequenceOptions::default();
+            run(d, |doc, c| sequence::safe_length(doc, c, name, &v, &o))?.map_err(fail)
+        },
+    );
+    api.f(
+        "Document.assembly_sequence() -> Sequence",
+        "Plans the assembly sequence from the mates with the defaults (see the map form).",
+        |d: &mut DocHandle| plan(d, None),
+    );
+    api.f(
+        "Document.assembly_sequence(options: map) -> Sequence",
+        "Plans the assembly sequence: `#{base, order, mode: \"mates\"|\"geometry\", max_sequences (5), time_limit_ms (30000), seed, tolerance, threaded: [names], masses: #{name: mass}, max_tilt_deg (0), planner_fallback (true)}`. Fewest re-mountings of the base wins, then fewest direction changes, then the shortest insertion paths; every task's path is collision-free against the parts assembled before it.",
+        |d: &mut DocHandle, o: Map| plan(d, Some(&o)),
+    );
+    api.get(
+        "Sequence.tasks -> array",
+        "The best sequence's tasks: `#{index, base, part, operation, mating_direction, mating_directions, receivers, safe_length, mount, planned, path_length, path, assembled, grasp}`.",
+        |s: &mut SequenceHandle| task_maps(s.0.best()),
+    );
+    api.get(
+        "Sequence.order -> array",
+        "The best sequence's component names, base first.",
+        |s: &mut SequenceHandle| -> Array {
+            s.0.best().order().into_iter().map(Dynamic::from).collect()
+        },
+    );
+    api.get(
+        "Sequence.base -> string",
+        "The base component of the best sequence.",
+        |s: &mut SequenceHandle| s.0.best().base.clone(),
+    );
+    api.get(
+        "Sequence.mounts -> int",
+        "Re-mountings of the base in the best sequence.",
+        |s: &mut SequenceHandle| s.0.best().mounts as i64,
+    );
+    api.get(
+        "Sequence.sequences -> array",
+        "Every sequence found, best first: `#{base, order, mounts, direction_changes, path_length}`.",
+        |s: &mut SequenceHandle| -> Array {
+            s.0.sequences
+                .iter()
+                .map(|q| Dynamic::from_map(sequence_map(q)))
+                .collect()
+        },
+    );
+    api.get(
+        "Sequence.precedence -> array",
+        "`[a, b]` pairs: `a` goes before `b` in every sequence found.",
+        |s: &mut SequenceHandle| -> Array {
+            s.0.precedence
+                .iter()
+                .map(|(a, b)| {
+                    Dynamic::from_array(vec![Dynamic::from(a.clone()), Dynamic::from(b.clone())])
+                })
+                .collect()
+        },
+    );
+    api.get(
+        "Sequence.rejected -> array",
+        "Orders that failed and why: `#{order, reason}`.",
+        |s: &mut SequenceHandle| -> Array {
+            s.0.rejected
+                .iter()
+                .map(|r| {
+                    let mut m = Map::new();
+                    m.insert(
+                        "order".into(),
+                        r.order
+                            .iter()
+                            .cloned()
+                            .map(Dynamic::from)
+                            .collect::<Array>()
+                            .into(),
+                    );
+                    m.insert("reason".into(), r.reason.clone().into());
+                    Dynamic::from_map(m)
+                })
+                .collect()
+        },
+    );
+    api.f(
+        "Sequence.to_json() -> string",
+        "The whole plan as JSON (sequences, rejected, precedence, relations).",
+        |s: &mut SequenceHandle| s.0.to_json(),
+    );
+    api.f(
+        "Sequence.to_string() -> string",
+        "A report for people.",
+        |s: &mut SequenceHandle| s.0.summary(),
+    );
+    api.f(
+        "Sequence.save_csv(file: string)",
+        "Writes the best sequence's tasks as CSV inside the project, atomically: `index,base,part,operation,mate_x,mate_y,mate_z,safe_length_mm,mount,planned,path_length_mm,receivers,grasp_faces`.",
+        |s: &mut SequenceHandle, file: &str| -> ScriptResult<()> {
+            let full = s.1.project.resolve_output(file).map_err(fail)?;
+            let mut bytes = Vec::new();
+            s.0.best().write_csv(&mut bytes).map_err(fail)?;
+            crate::fsutil::write_atomic(&full, &bytes).map_err(fail)?;
+            s.1.record_write(&full);
+            Ok(())
+        },
+    );
+}
+
+fn plan(d: &DocHandle, opts: Option<&Map>) -> ScriptResult<SequenceHandle> {
+    let o = options(opts)?;
+    let ctx = d.context().clone();
+    let p = run(d, |doc, c| sequence::plan_sequence(doc, c, &o))?.map_err(fail)?;
+    Ok(SequenceHandle(Arc::new(p), ctx))
+}

@@ -1,0 +1,264 @@
+//! Options, errors and results of assembly sequence planning.
+
+use super::graph::RelationGraph;
+use super::task::Task;
+use crate::math::Vec3;
+use crate::workspace::WorkspaceError;
+use std::collections::BTreeMap;
+
+/// Default time budget of one sequence-planning call (ms): 30 s.
+pub const DEFAULT_SEQUENCE_TIME_LIMIT_MS: f64 = 30_000.0;
+
+/// Most components a document may have for sequence planning.
+pub const MAX_COMPONENTS: usize = 128;
+
+/// Where the relations between components come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mode {
+    /// Seed 003: the document's mates (relation graph, freedoms, composite nodes).
+    #[default]
+    Mates,
+    /// Meshes only: contacts in the assembled pose and a directional blocking graph
+    /// over ±X/±Y/±Z and the contact normals (mates ignored).
+    Geometry,
+}
+
+impl Mode {
+    /// `mates` or `geometry`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Mates => "mates",
+            Mode::Geometry => "geometry",
+        }
+    }
+
+    /// Parses [`Mode::name`].
+    pub fn parse(s: &str) -> Option<Mode> {
+        match s {
+            "mates" => Some(Mode::Mates),
+            "geometry" => Some(Mode::Geometry),
+            _ => None,
+        }
+    }
+}
+
+/// The end effector of seed 003 (a two-finger gripper) as boxes: each finger is a box
+/// `thickness × width × length` (mm) slid along the grasp plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gripper {
+    /// Finger thickness along the closing direction (mm).
+    pub finger_thickness: f64,
+    /// Finger width across the closing and mating directions (mm); 0: half the part's
+    /// extent across.
+    pub finger_width: f64,
+    /// Largest opening between the fingers (mm): wider face pairs are not grasped.
+    pub max_opening: f64,
+}
+
+impl Default for Gripper {
+    fn default() -> Self {
+        Gripper {
+            finger_thickness: 1.0,
+            finger_width: 0.0,
+            max_opening: 200.0,
+        }
+    }
+}
+
+/// How to plan an assembly sequence. Lengths mm, angles radians.
+#[derive(Debug, Clone)]
+pub struct SequenceOptions {
+    /// Mates (default) or geometry only.
+    pub mode: Mode,
+    /// Pin the base component (seed 003: "the user can pin a base"); `None`: chosen by
+    /// size.
+    pub base: Option<String>,
+    /// Pin the first components after the base, in order.
+    pub order: Vec<String>,
+    /// How many sequences to return, best first (default 5).
+    pub max_sequences: usize,
+    /// Wall-clock budget of the whole call (ms); default
+    /// [`DEFAULT_SEQUENCE_TIME_LIMIT_MS`].
+    pub time_limit_ms: Option<f64>,
+    /// Seed of the planner fallback (the only randomized part).
+    pub seed: u64,
+    /// Penetration tolerance of every interference check (mm); default
+    /// [`crate::collision::DEFAULT_TOLERANCE`].
+    pub tolerance: f64,
+    /// How far a part is separated along a free direction to test it (mm, larger than
+    /// the largest fit clearance; seed 003 section 2.1 step 2). Default 0.5.
+    pub probe_mm: f64,
+    /// Step of the blocking sweeps and the safe-length search (mm); 0: 1 % of the
+    /// smallest part's box diagonal, clamped to 0.05..2 mm.
+    pub step_mm: f64,
+    /// Mass (any unit) per component or part name, for the base choice; missing:
+    /// the mesh volume (mm³).
+    pub masses: BTreeMap<String, f64>,
+    /// Components or parts marked threaded: their tasks are `screw`.
+    pub threaded: Vec<String>,
+    /// A base is inactive when its size is below this fraction of its largest
+    /// related part (seed 003 section 2.2 step 2). Default 0.2.
+    pub small_base_ratio: f64,
+    /// Largest angle (rad) between two consecutive mating directions that needs no
+    /// re-mounting of the base. Default 0 (every change of direction re-mounts).
+    pub max_tilt: f64,
+    /// Plan a path with fitup's planners (`local_rrt` disassembly among the parts
+    /// already assembled) when no straight insertion exists. Default true.
+    pub planner_fallback: bool,
+    /// Budget of one planner fallback call (ms), within the call's budget. Default 5000.
+    pub fallback_time_limit_ms: f64,
+    /// The gripper used for grasps.
+    pub gripper: Gripper,
+}
+
+impl Default for SequenceOptions {
+    fn default() -> Self {
+        SequenceOptions {
+            mode: Mode::Mates,
+            base: None,
+            order: Vec::new(),
+            max_sequences: 5,
+            time_limit_ms: None,
+            seed: 0,
+            tolerance: crate::collision::DEFAULT_TOLERANCE,
+            probe_mm: 0.5,
+            step_mm: 0.0,
+            masses: BTreeMap::new(),
+            threaded: Vec::new(),
+            small_base_ratio: 0.2,
+            max_tilt: 0.0,
+            planner_fallback: true,
+            fallback_time_limit_ms: 5_000.0,
+            gripper: Gripper::default(),
+        }
+    }
+}
+
+/// Why sequence planning could not answer.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SequenceError {
+    /// The workspace refused (unknown component, unusable mesh, bad tolerance…).
+    #[error(transparent)]
+    Workspace(#[from] WorkspaceError),
+    /// An option has a value the planner cannot use.
+    #[error("invalid sequence option `{option}` = {value}: expected {expected}")]
+    InvalidOption {
+        /// The option.
+        option: &'static str,
+        /// The value given.
+        value: String,
+        /// What is accepted.
+        expected: &'static str,
+    },
+    /// The document has no components.
+    #[error("the document has no components to sequence")]
+    Empty,
+    /// Too many components for the planner's sets.
+    #[error("the document has {0} components; sequence planning handles at most {MAX_COMPONENTS}")]
+    TooManyComponents(usize),
+    /// Components interfere in the assembled pose: no order can join them.
+    #[error("components `{a}` and `{b}` interfere in the assembled pose (depth {depth:.3} mm); fix the model or raise `tolerance`")]
+    AssembledInterference {
+        /// One component.
+        a: String,
+        /// The other.
+        b: String,
+        /// Penetration depth, mm.
+        depth: f64,
+    },
+    /// No order assembles every component (every try is in `rejected`).
+    #[error("no assembly sequence found{}: {}", if *.timed_out { " within the time limit" } else { "" }, .reasons.join("; "))]
+    NoSequence {
+        /// Whether the time budget ran out first.
+        timed_out: bool,
+        /// Why the orders tried failed (the first few).
+        reasons: Vec<String>,
+    },
+    /// The time budget ran out before the blocking graph was built.
+    #[error("the time limit of {0} ms ran out before the blocking graph was complete")]
+    TimeLimit(f64),
+}
+
+/// Extra facts of one step besides its [`Task`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepInfo {
+    /// The assembled components the part is related to (mates, or contacts in
+    /// geometry mode), in assembly order — the task's base is the first.
+    pub receivers: Vec<String>,
+    /// Every free mating direction at this step (unit, assembly frame).
+    pub mating_directions: Vec<Vec3>,
+    /// Whether the insertion path was planned (no straight insertion exists).
+    pub planned: bool,
+    /// Whether the mating direction differs from the previous task's.
+    pub direction_change: bool,
+}
+
+/// One assembly sequence: the tasks in order, with their costs.
+#[derive(Debug, Clone)]
+pub struct Sequence {
+    /// The base component (placed first, never moved).
+    pub base: String,
+    /// The tasks, in order (the base has none).
+    pub tasks: Vec<Task>,
+    /// Per task: receivers, free directions, planned or straight.
+    pub steps: Vec<StepInfo>,
+    /// Re-mountings of the base (tasks with `mount` set): the seed's criterion.
+    pub mounts: usize,
+    /// Changes of mating direction between consecutive tasks.
+    pub direction_changes: usize,
+    /// Total length of the insertion paths (mm).
+    pub path_length_mm: f64,
+}
+
+impl Sequence {
+    /// The component names in assembly order, base first.
+    pub fn order(&self) -> Vec<String> {
+        std::iter::once(self.base.clone())
+            .chain(self.tasks.iter().map(|t| t.part.clone()))
+            .collect()
+    }
+}
+
+/// An order that was tried and failed, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rejected {
+    /// The components placed before it failed, base first.
+    pub order: Vec<String>,
+    /// Why no component could go next (per remaining component, or a pin or base rule).
+    pub reason: String,
+}
+
+/// The result of [`plan_sequence`](super::plan_sequence): ranked sequences and what
+/// was learnt on the way.
+#[derive(Debug, Clone)]
+pub struct SequencePlan {
+    /// The mode used.
+    pub mode: Mode,
+    /// The sequences found, best first: fewest mounts, then fewest direction changes,
+    /// then shortest total insertion path.
+    pub sequences: Vec<Sequence>,
+    /// Orders that failed, with the reason (at most 50).
+    pub rejected: Vec<Rejected>,
+    /// Precedence: `(a, b)` means `a` is assembled before `b` in every complete
+    /// sequence the search met (transitively reduced); branch and bound skips orders
+    /// that cannot rank among the kept ones, so this is the precedence of the best
+    /// sequences, not of every feasible one.
+    pub precedence: Vec<(String, String)>,
+    /// Whether the search ended by itself (not cut by the time limit or the 200 000
+    /// expansions): the sequences returned are then the best by the ranking.
+    pub complete: bool,
+    /// The relation graph used (mates mode), or the contact graph (geometry mode,
+    /// relations without mates).
+    pub graph: RelationGraph,
+    /// Wall-clock time of the call (ms).
+    pub time_ms: f64,
+    /// Blocking sweeps run.
+    pub sweeps: usize,
+}
+
+impl SequencePlan {
+    /// The best sequence.
+    pub fn best(&self) -> &Sequence {
+        &self.sequences[0]
+    }
+}

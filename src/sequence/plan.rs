@@ -1,0 +1,1244 @@
+//! Seed 003 section 2.1 steps 2–6 and section 2.2: mating directions by separating
+//! each part along its free directions, the directional blocking graph they form,
+//! the safe length, the obstacle box, the sequence search with base choice and
+//! mount counting, and the tasks. Units: millimetres and radians, assembly frame.
+
+use super::graph::{separation_directions, Freedom, RelationGraph};
+use super::grasp::find_grasp;
+use super::options::{
+    Mode, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
+    DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
+};
+use super::task::{Operation, Task};
+use crate::collision::{interferes, sweep, Aabb, Motion, Obstacle, SweepMethod, SweepOptions};
+use crate::document::{Document, MateKind, Reference};
+use crate::math::{Transform, Vec3};
+use crate::planning::{
+    EdgeResolution, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace,
+};
+use crate::workspace::{Scene, SceneCache, WorkspaceError};
+use std::collections::{HashMap, HashSet};
+use std::time::{Duration, Instant};
+
+type Mask = u128;
+
+fn bit(i: usize) -> Mask {
+    1u128 << i
+}
+
+pub(crate) fn members_of(m: Mask) -> impl Iterator<Item = usize> {
+    members(m)
+}
+
+fn members(m: Mask) -> impl Iterator<Item = usize> {
+    (0..128).filter(move |&i| m & bit(i) != 0)
+}
+
+/// Everything the search needs, computed once per call.
+pub(crate) struct Ctx<'d> {
+    pub doc: &'d Document,
+    pub scene: Scene,
+    pub opts: SequenceOptions,
+    pub n: usize,
+    pub names: Vec<String>,
+    /// World boxes in the assembled pose.
+    pub boxes: Vec<Aabb>,
+    /// Size (mass or volume) per component.
+    pub sizes: Vec<f64>,
+    pub graph: RelationGraph,
+    /// Related components (mates, or contacts in geometry mode).
+    pub related: Vec<Mask>,
+    /// Candidate separation directions per component (unit, world).
+    pub dirs: Vec<Vec<Vec3>>,
+    /// `blocked[p][k]`: the components that hit `p` moving along `dirs[p][k]`.
+    pub blocked: Vec<Vec<Mask>>,
+    pub step: f64,
+    pub deadline: Instant,
+    pub started: Instant,
+    pub sweeps: usize,
+}
+
+fn same_dir(a: &Vec3, b: &Vec3) -> bool {
+    (a - b).norm() < 1e-6
+}
+
+fn push_dir(v: &mut Vec<Vec3>, d: Vec3) {
+    if d.norm() < 1e-9 {
+        return;
+    }
+    let d = d.normalize();
+    if !v.iter().any(|e| same_dir(e, &d)) {
+        v.push(d);
+    }
+}
+
+fn axis_dirs() -> [Vec3; 6] {
+    [
+        Vec3::x(),
+        -Vec3::x(),
+        Vec3::y(),
+        -Vec3::y(),
+        Vec3::z(),
+        -Vec3::z(),
+    ]
+}
+
+fn union_box(boxes: &[Aabb], m: Mask) -> Option<Aabb> {
+    members(m)
+        .map(|i| boxes[i])
+        .reduce(|a, b| Aabb::new(a.lo.inf(&b.lo), a.hi.sup(&b.hi)))
+}
+
+fn diag(b: &Aabb) -> f64 {
+    (b.hi - b.lo).norm()
+}
+
+/// How far `b` must move along unit `d` to leave `region` (mm, ≥ 0).
+fn exit_distance(b: &Aabb, region: &Aabb, d: &Vec3) -> f64 {
+    let mut best = f64::INFINITY;
+    for k in 0..3 {
+        if d[k].abs() < 1e-12 {
+            continue;
+        }
+        let s = if d[k] > 0.0 {
+            (region.hi[k] - b.lo[k]) / d[k]
+        } else {
+            (region.lo[k] - b.hi[k]) / d[k]
+        };
+        best = best.min(s.max(0.0));
+    }
+    if best.is_finite() {
+        best
+    } else {
+        0.0
+    }
+}
+
+fn boxes_meet(a: &Aabb, b: &Aabb, slack: f64) -> bool {
+    a.overlap(b).min() > -slack
+}
+
+impl<'d> Ctx<'d> {
+    pub fn new(
+        doc: &'d Document,
+        cache: &mut SceneCache,
+        opts: &SequenceOptions,
+    ) -> Result<Ctx<'d>, SequenceError> {
+        let started = Instant::now();
+        let n = doc.components().len();
+        if n == 0 {
+            return Err(SequenceError::Empty);
+        }
+        if n > MAX_COMPONENTS {
+            return Err(SequenceError::TooManyComponents(n));
+        }
+        let bad = |option: &'static str, v: f64, expected: &'static str| {
+            Err(SequenceError::InvalidOption {
+                option,
+                value: v.to_string(),
+                expected,
+            })
+        };
+        let limit = opts.time_limit_ms.unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS);
+        if !(limit.is_finite() && limit > 0.0) {
+            return bad("time_limit_ms", limit, "a finite number of ms > 0");
+        }
+        if !(opts.tolerance.is_finite() && opts.tolerance >= 0.0) {
+            return bad("tolerance", opts.tolerance, "a finite number of mm ≥ 0");
+        }
+        if !(opts.probe_mm.is_finite() && opts.probe_mm > 0.0 && opts.probe_mm < 1e6) {
+            return bad("probe_mm", opts.probe_mm, "a finite number of mm > 0");
+        }
+        if !(opts.step_mm.is_finite() && opts.step_mm >= 0.0 && opts.step_mm < 1e6) {
+            return bad(
+                "step_mm",
+                opts.step_mm,
+                "a finite number of mm ≥ 0 (0: automatic)",
+            );
+        }
+        if !(opts.max_tilt.is_finite() && opts.max_tilt >= 0.0) {
+            return bad("max_tilt", opts.max_tilt, "a finite angle ≥ 0");
+        }
+        if !(opts.small_base_ratio.is_finite() && opts.small_base_ratio >= 0.0) {
+            return bad(
+                "small_base_ratio",
+                opts.small_base_ratio,
+                "a finite number ≥ 0",
+            );
+        }
+        if !(opts.fallback_time_limit_ms.is_finite() && opts.fallback_time_limit_ms > 0.0) {
+            return bad(
+                "fallback_time_limit_ms",
+                opts.fallback_time_limit_ms,
+                "a finite number of ms > 0",
+            );
+        }
+        if opts.max_sequences == 0 {
+            return Err(SequenceError::InvalidOption {
+                option: "max_sequences",
+                value: "0".into(),
+                expected: "at least 1",
+            });
+        }
+        for (k, v) in &opts.masses {
+            if !(v.is_finite() && *v > 0.0) {
+                return Err(SequenceError::InvalidOption {
+                    option: "masses",
+                    value: format!("{k}: {v}"),
+                    expected: "finite numbers > 0",
+                });
+            }
+        }
+        for name in opts.base.iter().chain(&opts.order) {
+            doc.component_index(name).map_err(WorkspaceError::from)?;
+        }
+        let deadline = started + Duration::from_secs_f64(limit.min(1e9) / 1e3);
+        let scene = Scene::new(doc, cache)?;
+        let names: Vec<String> = doc.components().iter().map(|c| c.name.clone()).collect();
+        let mut boxes = Vec::with_capacity(n);
+        for (i, name) in names.iter().enumerate() {
+            if doc.mesh_of(i).vertices.is_empty() {
+                return Err(WorkspaceError::EmptyMesh(name.clone()).into());
+            }
+            boxes.push(scene.colliders[i].world_bounds(&scene.poses[i]));
+        }
+        let sizes: Vec<f64> = (0..n)
+            .map(|i| {
+                let c = &doc.components()[i];
+                opts.masses
+                    .get(&c.name)
+                    .or_else(|| opts.masses.get(&c.part))
+                    .copied()
+                    .unwrap_or_else(|| doc.mesh_of(i).signed_volume().abs())
+            })
+            .collect();
+        // The assembled state must be free of interference.
+        let contacts = scene
+            .contacts(crate::collision::Method::Exact, opts.tolerance)
+            .map_err(WorkspaceError::from)?;
+        if let Some(p) = contacts.iter().find(|p| p.contact.is_interfering()) {
+            return Err(SequenceError::AssembledInterference {
+                a: names[p.a].clone(),
+                b: names[p.b].clone(),
+                depth: p.contact.depth(),
+            });
+        }
+        let sizes_for = sizes.clone();
+        let mut graph = match opts.mode {
+            Mode::Mates => RelationGraph::build(doc, &|i| sizes_for[i]),
+            Mode::Geometry => RelationGraph {
+                components: names.clone(),
+                relations: Vec::new(),
+                nodes: (0..n)
+                    .map(|i| super::graph::Node { members: vec![i] })
+                    .collect(),
+                loops: Vec::new(),
+            },
+        };
+        let mut related = vec![0 as Mask; n];
+        match opts.mode {
+            Mode::Mates => {
+                for r in &graph.relations {
+                    related[r.a] |= bit(r.b);
+                    related[r.b] |= bit(r.a);
+                }
+            }
+            Mode::Geometry => {
+                for p in &contacts {
+                    related[p.a] |= bit(p.b);
+                    related[p.b] |= bit(p.a);
+                    let f = Freedom {
+                        frame: Transform::IDENTITY,
+                        translations: Vec::new(),
+                        rotations: Vec::new(),
+                    };
+                    graph.relations.push(super::graph::Relation {
+                        a: p.a,
+                        b: p.b,
+                        mates: Vec::new(),
+                        freedoms: Vec::new(),
+                        freedom: f,
+                    });
+                }
+            }
+        }
+        let step = if opts.step_mm > 0.0 {
+            opts.step_mm
+        } else {
+            let smallest = boxes.iter().map(diag).fold(f64::INFINITY, f64::min);
+            (0.01 * smallest).clamp(0.05, 2.0)
+        };
+        let mut ctx = Ctx {
+            doc,
+            scene,
+            opts: opts.clone(),
+            n,
+            names,
+            boxes,
+            sizes,
+            graph,
+            related,
+            dirs: Vec::new(),
+            blocked: Vec::new(),
+            step,
+            deadline,
+            started,
+            sweeps: 0,
+        };
+        ctx.dirs = (0..n).map(|i| ctx.candidate_directions(i)).collect();
+        ctx.build_blocking()?;
+        Ok(ctx)
+    }
+
+    pub fn out_of_time(&self) -> bool {
+        Instant::now() >= self.deadline
+    }
+
+    fn remaining_ms(&self) -> f64 {
+        self.deadline
+            .saturating_duration_since(Instant::now())
+            .as_secs_f64()
+            * 1e3
+    }
+
+    /// Candidate separation directions of component `c`.
+    fn candidate_directions(&self, c: usize) -> Vec<Vec3> {
+        let mut out = Vec::new();
+        match self.opts.mode {
+            Mode::Mates => {
+                for r in self.graph.relations.iter().filter(|r| r.a == c || r.b == c) {
+                    for (k, &m) in r.mates.iter().enumerate() {
+                        let mate = &self.doc.mates()[m];
+                        for d in separation_directions(self.doc, mate, c, &r.freedoms[k]) {
+                            push_dir(&mut out, d);
+                        }
+                    }
+                }
+                if out.is_empty() {
+                    for d in axis_dirs() {
+                        push_dir(&mut out, d);
+                    }
+                }
+            }
+            Mode::Geometry => {
+                for d in axis_dirs() {
+                    push_dir(&mut out, d);
+                }
+                for d in self.contact_normals(c) {
+                    push_dir(&mut out, d);
+                }
+            }
+        }
+        out
+    }
+
+    /// Directions leaving the faces of `c` that touch another component: minus the
+    /// outward normals of `c`'s triangles lying on a neighbour's surface (at most 6
+    /// new ones, largest touching area first).
+    fn contact_normals(&self, c: usize) -> Vec<Vec3> {
+        let mesh = self.doc.mesh_of(c);
+        let pose = self.scene.poses[c];
+        let tol = (2.0 * self.opts.tolerance).max(1e-6);
+        let mut found: Vec<(Vec3, f64)> = Vec::new();
+        for q in members(self.related[c]) {
+            let qb = &self.boxes[q];
+            let inv = self.scene.poses[q].inverse();
+            for t in 0..mesh.triangles.len() {
+                if self.out_of_time() {
+                    return Vec::new();
+                }
+                let [a, b, cc] = mesh.triangle(t);
+                let area = 0.5 * (b - a).cross(&(cc - a)).norm();
+                if area <= 0.0 {
+                    continue;
+                }
+                let centroid = pose.apply(&nalgebra::Point3::from(
+                    (a.coords + b.coords + cc.coords) / 3.0,
+                ));
+                if qb.distance_to_point(&centroid) > tol {
+                    continue;
+                }
+                let local = inv.apply(&centroid);
+                if self.scene.colliders[q].distance_to_point(&local, tol * 2.0) > tol {
+                    continue;
+                }
+                let n = -pose.apply_vector(&mesh.triangle_normal(t));
+                match found.iter_mut().find(|(e, _)| (e - n).norm() < 1e-3) {
+                    Some((_, w)) => *w += area,
+                    None => found.push((n, area)),
+                }
+            }
+        }
+        found.sort_by(|a, b| b.1.total_cmp(&a.1));
+        found.into_iter().take(6).map(|(n, _)| n).collect()
+    }
+
+    /// Whether `p` moved straight along `d` from its assembled pose hits `q`.
+    fn sweep_hits(&mut self, p: usize, d: &Vec3, q: usize) -> Result<bool, SequenceError> {
+        let (bp, bq) = (self.boxes[p], self.boxes[q]);
+        let len = exit_distance(&bp, &bq, d) + self.opts.probe_mm;
+        let moved = Aabb::new(bp.lo + d * len, bp.hi + d * len);
+        let swept = Aabb::new(bp.lo.inf(&moved.lo), bp.hi.sup(&moved.hi));
+        // Interference needs the boxes to overlap deeper than the tolerance on every
+        // axis: a part sliding on a face (a plate on the table) is never swept.
+        if swept.overlap(&bq).min() <= self.opts.tolerance {
+            return Ok(false);
+        }
+        let remaining = self.remaining_ms();
+        if remaining <= 0.0 {
+            return Err(SequenceError::TimeLimit(
+                self.opts
+                    .time_limit_ms
+                    .unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS),
+            ));
+        }
+        self.sweeps += 1;
+        let motion = Motion::Translation {
+            start: self.scene.poses[p],
+            offset: d * len,
+        };
+        let obstacle = [Obstacle {
+            collider: &self.scene.colliders[q],
+            pose: self.scene.poses[q],
+        }];
+        let options = SweepOptions {
+            method: SweepMethod::Stepwise { step_mm: self.step },
+            tolerance: self.opts.tolerance,
+            time_limit_ms: Some(remaining),
+        };
+        match sweep(&self.scene.colliders[p], &motion, &obstacle, &options) {
+            Ok(h) => Ok(h.hit),
+            Err(crate::collision::CollisionError::TimeLimit(_)) => Err(SequenceError::TimeLimit(
+                self.opts
+                    .time_limit_ms
+                    .unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS),
+            )),
+            Err(e) => Err(WorkspaceError::from(e).into()),
+        }
+    }
+
+    /// The directional blocking graph: for every component, direction and other
+    /// component, whether the straight removal hits it.
+    fn build_blocking(&mut self) -> Result<(), SequenceError> {
+        let mut blocked = Vec::with_capacity(self.n);
+        for p in 0..self.n {
+            let mut row = Vec::new();
+            for k in 0..self.dirs[p].len() {
+                let d = self.dirs[p][k];
+                let mut m: Mask = 0;
+                for q in 0..self.n {
+                    if q != p && self.sweep_hits(p, &d, q)? {
+                        m |= bit(q);
+                    }
+                }
+                row.push(m);
+            }
+            blocked.push(row);
+        }
+        self.blocked = blocked;
+        Ok(())
+    }
+
+    /// The free separation directions of `p` among the components of `mask`.
+    pub fn free_dirs(&self, p: usize, mask: Mask) -> Vec<usize> {
+        (0..self.dirs[p].len())
+            .filter(|&k| self.blocked[p][k] & mask == 0)
+            .collect()
+    }
+
+    fn node_index(&self, c: usize) -> usize {
+        self.graph.node_of(c)
+    }
+
+    fn group_of(&self, c: usize) -> Mask {
+        let mut g = bit(c);
+        loop {
+            let mut next = g;
+            for i in members(g) {
+                next |= self.related[i];
+            }
+            if next == g {
+                return g;
+            }
+            g = next;
+        }
+    }
+
+    fn node_size(&self, node: usize) -> f64 {
+        self.graph.nodes[node]
+            .members
+            .iter()
+            .map(|&m| self.sizes[m])
+            .sum()
+    }
+
+    /// Whether `p` may be assembled next onto `mask` (seed 003 section 2.2: nodes in
+    /// the relation graph, composite nodes in their implied order).
+    fn eligible(&self, p: usize, mask: Mask) -> bool {
+        let node = &self.graph.nodes[self.node_index(p)];
+        let pos = node.members.iter().position(|&m| m == p).unwrap_or(0);
+        if pos > 0 {
+            return mask & bit(node.members[pos - 1]) != 0;
+        }
+        // The node's first member: a related node complete in `mask`, or the first
+        // node of a group nothing of which is assembled yet (its largest).
+        let node_mask: Mask = node.members.iter().fold(0, |a, &m| a | bit(m));
+        let mut rel: Mask = 0;
+        for &m in &node.members {
+            rel |= self.related[m];
+        }
+        rel &= !node_mask;
+        for q in members(rel & mask) {
+            let qn = &self.graph.nodes[self.node_index(q)];
+            if qn.members.iter().all(|&m| mask & bit(m) != 0) {
+                return true;
+            }
+        }
+        let group = self.group_of(p);
+        if group & mask != 0 {
+            return false;
+        }
+        let best = members(group)
+            .map(|c| self.node_index(c))
+            .max_by(|&a, &b| {
+                self.node_size(a)
+                    .total_cmp(&self.node_size(b))
+                    .then(b.cmp(&a))
+            })
+            .unwrap_or(usize::MAX);
+        best == self.node_index(p)
+    }
+
+    fn why_not(&self, p: usize, mask: Mask) -> String {
+        if !self.eligible(p, mask) {
+            let node = &self.graph.nodes[self.node_index(p)];
+            let pos = node.members.iter().position(|&m| m == p).unwrap_or(0);
+            if pos > 0 {
+                return format!(
+                    "{} waits for {} (composite node order)",
+                    self.names[p],
+                    self.names[node.members[pos - 1]]
+                );
+            }
+            return format!("{} has nothing assembled to go onto", self.names[p]);
+        }
+        let mut by: Mask = 0;
+        for k in 0..self.dirs[p].len() {
+            by |= self.blocked[p][k] & mask;
+        }
+        let names: Vec<&str> = members(by).map(|i| self.names[i].as_str()).collect();
+        format!(
+            "{} is blocked along all {} directions by {}",
+            self.names[p],
+            self.dirs[p].len(),
+            names.join(", ")
+        )
+    }
+
+    /// A path for `p` out of the components of `mask` found by fitup's planners
+    /// (seed 002's disassembly with `local_rrt`), ending assembled.
+    fn plan_fallback(&self, p: usize, mask: Mask) -> Option<PlannedPath> {
+        let budget = self.opts.fallback_time_limit_ms.min(self.remaining_ms());
+        if budget < 1.0 {
+            return None;
+        }
+        let obstacles: Vec<_> = members(mask)
+            .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
+            .collect();
+        let product = union_box(&self.boxes, mask)?;
+        let mut validator = MeshValidator::new(
+            self.scene.colliders[p].clone(),
+            obstacles,
+            MeshValidatorOptions {
+                tolerance: self.opts.tolerance,
+                ..MeshValidatorOptions::default()
+            },
+        )
+        .ok()?;
+        let margin = diag(&self.boxes[p]).max(10.0);
+        let all = Aabb::new(
+            product.lo.inf(&self.boxes[p].lo),
+            product.hi.sup(&self.boxes[p].hi),
+        );
+        let space = PlanningSpace::new(
+            all.lo.coords - Vec3::repeat(margin),
+            all.hi.coords + Vec3::repeat(margin),
+        );
+        let mut planner = Planner::by_name("local_rrt")?;
+        planner.limits_mut().seed = self.opts.seed;
+        planner.limits_mut().time_limit_ms = Some(budget);
+        planner.limits_mut().max_iterations = 20_000;
+        let part_box = self.scene.colliders[p].bounds();
+        let path = planner
+            .plan_disassembly(
+                &mut validator,
+                &space,
+                &self.scene.poses[p],
+                &part_box,
+                &product,
+                None,
+            )
+            .ok()?;
+        path.found().then_some(path)
+    }
+
+    /// Static interference of `p` at `pose` with any component of `mask`.
+    fn pose_hits(&self, p: usize, pose: &Transform, mask: Mask) -> bool {
+        let b = self.scene.colliders[p].world_bounds(pose);
+        members(mask).any(|q| {
+            boxes_meet(&b, &self.boxes[q], self.opts.tolerance)
+                && interferes(
+                    &self.scene.colliders[p],
+                    pose,
+                    &self.scene.colliders[q],
+                    &self.scene.poses[q],
+                    self.opts.tolerance,
+                )
+                .unwrap_or(true)
+        })
+    }
+
+    /// Seed 003 section 2.1 step 6: step `p` out along `d` (unit) until a probe along
+    /// every other candidate direction is free of `mask` (mm).
+    pub fn safe_length(&self, p: usize, d: &Vec3, mask: Mask) -> f64 {
+        let Some(region) = union_box(&self.boxes, mask) else {
+            return self.opts.probe_mm;
+        };
+        let limit = exit_distance(&self.boxes[p], &region, d) + self.opts.probe_mm;
+        let others: Vec<Vec3> = self.dirs[p]
+            .iter()
+            .filter(|e| e.dot(d).abs() < 0.9)
+            .copied()
+            .collect();
+        let step = self.step.max(limit / 200.0);
+        let start = self.scene.poses[p];
+        let mut s = self.opts.probe_mm;
+        while s < limit {
+            if self.out_of_time() {
+                return limit;
+            }
+            let at = start.then(&Transform::from_translation(d * s));
+            let free = others.iter().all(|e| {
+                let probe = at.then(&Transform::from_translation(e * self.opts.probe_mm));
+                !self.pose_hits(p, &probe, mask)
+            });
+            if free {
+                return s;
+            }
+            s += step;
+        }
+        limit
+    }
+}
+
+/// One choice of the search: a part and how it goes in.
+#[derive(Clone)]
+struct Choice {
+    part: usize,
+    /// Separation direction (the part leaves along it; the mating direction is its
+    /// negation).
+    leave: Vec3,
+    planned: Option<PlannedPath>,
+}
+
+#[derive(Clone)]
+struct Found {
+    base: usize,
+    choices: Vec<Choice>,
+    cost: (usize, usize, f64),
+}
+
+fn cost_lt(a: &(usize, usize, f64), b: &(usize, usize, f64)) -> bool {
+    (a.0, a.1) < (b.0, b.1) || ((a.0, a.1) == (b.0, b.1) && a.2 < b.2 - 1e-9)
+}
+
+struct Search<'c, 'd> {
+    ctx: &'c Ctx<'d>,
+    k: usize,
+    found: Vec<Found>,
+    rejected: Vec<Rejected>,
+    dead: HashSet<Mask>,
+    fallback: HashMap<(usize, Mask), Option<PlannedPath>>,
+    /// Pairs (a, b) with a before b, counted over every complete sequence seen.
+    before: Vec<Vec<u32>>,
+    complete_count: u32,
+    expanded: usize,
+    cut: bool,
+    /// Whether dead ends ask the planners (second pass).
+    use_fallback: bool,
+    /// Whether branch and bound cut a subtree below the current node.
+    pruned: bool,
+}
+
+const MAX_EXPANDED: usize = 200_000;
+const MAX_REJECTED: usize = 50;
+
+impl Search<'_, '_> {
+    fn mounts_for(&self, current: Option<Vec3>, mate: &Vec3) -> bool {
+        match current {
+            None => false,
+            Some(c) => c.angle(mate) > self.ctx.opts.max_tilt + 1e-9,
+        }
+    }
+
+    fn worst_kept(&self) -> Option<(usize, usize, f64)> {
+        (self.found.len() >= self.k).then(|| self.found[self.found.len() - 1].cost)
+    }
+
+    fn record(&mut self, base: usize, choices: &[Choice], cost: (usize, usize, f64)) {
+        let order: Vec<usize> = std::iter::once(base)
+            .chain(choices.iter().map(|c| c.part))
+            .collect();
+        for (i, &a) in order.iter().enumerate() {
+            for &b in &order[i + 1..] {
+                self.before[a][b] += 1;
+            }
+        }
+        self.complete_count += 1;
+        let f = Found {
+            base,
+            choices: choices.to_vec(),
+            cost,
+        };
+        let pos = self
+            .found
+            .iter()
+            .position(|g| cost_lt(&cost, &g.cost))
+            .unwrap_or(self.found.len());
+        self.found.insert(pos, f);
+        self.found.truncate(self.k);
+    }
+
+    fn reject(&mut self, base: usize, choices: &[Choice], reason: String) {
+        if self.rejected.len() < MAX_REJECTED {
+            let order = std::iter::once(base)
+                .chain(choices.iter().map(|c| c.part))
+                .map(|i| self.ctx.names[i].clone())
+                .collect();
+            self.rejected.push(Rejected { order, reason });
+        }
+    }
+
+    /// Depth-first over feasible next parts; returns whether a completion exists
+    /// below (`self.cut` tells whether the answer is partial).
+    fn dfs(
+        &mut self,
+        base: usize,
+        mask: Mask,
+        choices: &mut Vec<Choice>,
+        current: Option<Vec3>,
+        cost: (usize, usize, f64),
+        pins: &[usize],
+    ) -> bool {
+        let ctx = self.ctx;
+        let all: Mask = if ctx.n == 128 { !0 } else { bit(ctx.n) - 1 };
+        if mask == all {
+            self.record(base, choices, cost);
+            return true;
+        }
+        if ctx.out_of_time() || self.expanded >= MAX_EXPANDED {
+            self.cut = true;
+            return false;
+        }
+        if let Some(w) = self.worst_kept() {
+            if !cost_lt(&cost, &w) {
+                // Branch and bound: nothing below can rank among the kept ones. The
+                // mask is not dead, so it is not memoised either.
+                self.pruned = true;
+                return false;
+            }
+        }
+        if self.dead.contains(&mask) {
+            return false;
+        }
+        self.expanded += 1;
+        let depth = choices.len();
+        let pinned = pins.get(depth).copied();
+        let region = union_box(&ctx.boxes, mask).unwrap_or(ctx.boxes[base]);
+        // Options: (needs mount, exit distance, part, leave, planned).
+        let mut options: Vec<(bool, f64, Choice)> = Vec::new();
+        for p in (0..ctx.n).filter(|&p| mask & bit(p) == 0) {
+            if pinned.is_some_and(|q| q != p) || !ctx.eligible(p, mask) {
+                continue;
+            }
+            let free = ctx.free_dirs(p, mask);
+            // Keeping the current mount direction dominates every other choice.
+            let keep = free
+                .iter()
+                .find(|&&k| current.is_some_and(|c| !self.mounts_for(Some(c), &-ctx.dirs[p][k])));
+            let ks: Vec<usize> = match keep {
+                Some(&k) => vec![k],
+                None => free,
+            };
+            for k in ks {
+                let d = ctx.dirs[p][k];
+                options.push((
+                    self.mounts_for(current, &-d),
+                    exit_distance(&ctx.boxes[p], &region, &d),
+                    Choice {
+                        part: p,
+                        leave: d,
+                        planned: None,
+                    },
+                ));
+            }
+        }
+        if options.is_empty() && self.use_fallback {
+            // No straight insertion: ask the planners for the eligible parts.
+            for p in (0..ctx.n).filter(|&p| mask & bit(p) == 0) {
+                if pinned.is_some_and(|q| q != p) || !ctx.eligible(p, mask) {
+                    continue;
+                }
+                let path = match self.fallback.get(&(p, mask)) {
+                    Some(r) => r.clone(),
+                    None => {
+                        let r = ctx.plan_fallback(p, mask);
+                        self.fallback.insert((p, mask), r.clone());
+                        r
+                    }
+                };
+                if let Some(path) = path {
+                    let n = path.poses.len();
+                    let last = path.poses[n - 1].translation() - path.poses[n - 2].translation();
+                    let leave = if last.norm() > 1e-9 {
+                        -last.normalize()
+                    } else {
+                        Vec3::z()
+                    };
+                    options.push((
+                        self.mounts_for(current, &-leave),
+                        path.length_mm,
+                        Choice {
+                            part: p,
+                            leave,
+                            planned: Some(path),
+                        },
+                    ));
+                }
+            }
+        }
+        if options.is_empty() {
+            let reasons: Vec<String> = (0..ctx.n)
+                .filter(|&p| mask & bit(p) == 0)
+                .filter(|&p| pinned.is_none_or(|q| q == p))
+                .take(4)
+                .map(|p| ctx.why_not(p, mask))
+                .collect();
+            let mut reason = reasons.join("; ");
+            if let Some(q) = pinned {
+                reason = format!("pinned order: {} cannot go next: {reason}", ctx.names[q]);
+            }
+            self.reject(base, choices, reason);
+            self.dead.insert(mask);
+            return false;
+        }
+        options.sort_by(|a, b| {
+            a.0.cmp(&b.0)
+                .then(a.1.total_cmp(&b.1))
+                .then(a.2.part.cmp(&b.2.part))
+        });
+        let (cut_before, pruned_before) = (self.cut, self.pruned);
+        self.cut = false;
+        self.pruned = false;
+        let mut any = false;
+        for (mount, len, choice) in options {
+            let mate = -choice.leave;
+            let change = current.is_some_and(|c| c.angle(&mate) > 1e-6);
+            let next_current = if current.is_none() || mount {
+                Some(mate)
+            } else {
+                current
+            };
+            let next_cost = (
+                cost.0 + mount as usize,
+                cost.1 + change as usize,
+                cost.2 + len,
+            );
+            let part = choice.part;
+            choices.push(choice);
+            any |= self.dfs(
+                base,
+                mask | bit(part),
+                choices,
+                next_current,
+                next_cost,
+                pins,
+            );
+            choices.pop();
+        }
+        if !any && !self.cut && !self.pruned {
+            self.dead.insert(mask);
+        }
+        self.cut |= cut_before;
+        self.pruned |= pruned_before;
+        any
+    }
+}
+
+/// The mating directions of `p` against `mask` (negated free separations).
+fn step_info(ctx: &Ctx, p: usize, mask: Mask, order: &[usize]) -> (Vec<usize>, Vec<Vec3>) {
+    let receivers: Vec<usize> = order
+        .iter()
+        .copied()
+        .filter(|&q| mask & bit(q) != 0 && ctx.related[p] & bit(q) != 0)
+        .collect();
+    let dirs = ctx
+        .free_dirs(p, mask)
+        .into_iter()
+        .map(|k| -ctx.dirs[p][k])
+        .collect();
+    (receivers, dirs)
+}
+
+/// The operation from the geometry (seed 003 section 2 step 9).
+fn operation(ctx: &Ctx, p: usize, receivers: &[usize], mate: &Vec3) -> Operation {
+    let c = &ctx.doc.components()[p];
+    if ctx
+        .opts
+        .threaded
+        .iter()
+        .any(|t| t == &c.name || t == &c.part)
+    {
+        return Operation::Screw;
+    }
+    let (mut axis, mut plane) = (false, false);
+    for m in ctx.doc.mates() {
+        let (a, b) = (m.entities[0].component, m.entities[1].component);
+        let other = if a == p {
+            b
+        } else if b == p {
+            a
+        } else {
+            continue;
+        };
+        if !receivers.contains(&other) {
+            continue;
+        }
+        match (m.kind, &m.entities[0].geometry) {
+            (MateKind::Concentric, _) | (MateKind::Coincident, Reference::Axis { .. }) => {
+                axis = true
+            }
+            (MateKind::Coincident | MateKind::Distance, Reference::Plane { .. }) => plane = true,
+            _ => {}
+        }
+    }
+    if axis {
+        return Operation::Insertion;
+    }
+    if plane {
+        return Operation::Align;
+    }
+    // No mates (geometry mode): a part held sideways by what is assembled (at least
+    // two of the four axis directions across its mating direction blocked) is
+    // inserted.
+    let mask: Mask = receivers.iter().fold(0, |a, &q| a | bit(q));
+    let blocked_across = axis_dirs()
+        .iter()
+        .filter(|d| d.dot(mate).abs() < 0.5)
+        .filter(|d| {
+            ctx.dirs[p]
+                .iter()
+                .position(|e| same_dir(e, d))
+                .is_some_and(|k| ctx.blocked[p][k] & mask != 0)
+        })
+        .count();
+    if blocked_across >= 2 {
+        Operation::Insertion
+    } else {
+        Operation::Align
+    }
+}
+
+/// A straight path from `from` to `to` checked by `validator`.
+fn straight_path(
+    validator: &mut MeshValidator,
+    from: Transform,
+    to: Transform,
+) -> Option<PlannedPath> {
+    let path = PlannedPath::given("straight", vec![from, to], validator.options().edge);
+    path.revalidate(validator).is_ok().then_some(path)
+}
+
+/// Turns a found order into tasks: safe lengths, checked paths, grasps, boxes and
+/// frames. `Err(reason)` when a step's path cannot be checked free.
+fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
+    let mut mask = bit(f.base);
+    let mut order = vec![f.base];
+    let mut tasks = Vec::new();
+    let mut steps = Vec::new();
+    let mut current: Option<Vec3> = None;
+    let mut prev: Option<Vec3> = None;
+    let (mut mounts, mut changes, mut total) = (0, 0, 0.0);
+    let base_pose = ctx.scene.poses[f.base];
+    for (index, ch) in f.choices.iter().enumerate() {
+        let p = ch.part;
+        let (receivers, mating_directions) = step_info(ctx, p, mask, &order);
+        let mate = -ch.leave;
+        let assembled = ctx.scene.poses[p];
+        let obstacles: Vec<_> = members(mask)
+            .map(|q| (ctx.scene.colliders[q].clone(), ctx.scene.poses[q]))
+            .collect();
+        let mut validator = MeshValidator::new(
+            ctx.scene.colliders[p].clone(),
+            obstacles,
+            MeshValidatorOptions {
+                tolerance: ctx.opts.tolerance,
+                edge: EdgeResolution::CONTINUOUS,
+                ..MeshValidatorOptions::default()
+            },
+        )
+        .map_err(|e| e.to_string())?;
+        let (safe, path) = match &ch.planned {
+            Some(path) => {
+                if path.revalidate(&mut validator).is_err() {
+                    return Err(format!("the planned path of {} is blocked", ctx.names[p]));
+                }
+                (ctx.opts.probe_mm, path.clone())
+            }
+            None => {
+                let safe = ctx.safe_length(p, &ch.leave, mask);
+                let from = assembled.then(&Transform::from_translation(ch.leave * safe));
+                match straight_path(&mut validator, from, assembled) {
+                    Some(path) => (safe, path),
+                    None => {
+                        return Err(format!(
+                            "the straight insertion of {} along {:?} collides",
+                            ctx.names[p],
+                            mate.as_slice()
+                        ))
+                    }
+                }
+            }
+        };
+        let mount = current.is_some_and(|c| c.angle(&mate) > ctx.opts.max_tilt + 1e-9);
+        if current.is_none() || mount {
+            current = Some(mate);
+        }
+        let change = prev.is_some_and(|c| c.angle(&mate) > 1e-6);
+        prev = Some(mate);
+        mounts += mount as usize;
+        changes += change as usize;
+        total += path.length_mm;
+        let down = current.unwrap_or(mate);
+        let sequence_frame = Transform::from_parts(
+            base_pose.translation(),
+            crate::math::rotation_between(&-Vec3::z(), &down),
+        );
+        let receiver = receivers.first().copied().unwrap_or(f.base);
+        let obstacle_box = union_box(&ctx.boxes, mask).unwrap_or(ctx.boxes[f.base]);
+        let grasp = find_grasp(ctx, p, &mating_directions, &mate, mask);
+        tasks.push(Task {
+            index,
+            base: ctx.names[receiver].clone(),
+            part: ctx.names[p].clone(),
+            operation: operation(ctx, p, &receivers, &mate),
+            mating_direction: mate,
+            safe_length: safe,
+            grasp,
+            obstacle_box,
+            assembled_pose: assembled,
+            base_pose: ctx.scene.poses[receiver],
+            sequence_frame,
+            mount,
+            path,
+        });
+        steps.push(StepInfo {
+            receivers: receivers.iter().map(|&q| ctx.names[q].clone()).collect(),
+            mating_directions,
+            planned: ch.planned.is_some(),
+            direction_change: change,
+        });
+        mask |= bit(p);
+        order.push(p);
+    }
+    Ok(Sequence {
+        base: ctx.names[f.base].clone(),
+        tasks,
+        steps,
+        mounts,
+        direction_changes: changes,
+        path_length_mm: total,
+    })
+}
+
+/// Plans the assembly sequences of `doc` (seed 003 section 2.2; see the module docs).
+pub(crate) fn plan(
+    doc: &Document,
+    cache: &mut SceneCache,
+    opts: &SequenceOptions,
+) -> Result<SequencePlan, SequenceError> {
+    let mut ctx = Ctx::new(doc, cache, opts)?;
+    let n = ctx.n;
+    // Base candidates: the pinned one, or every component by size.
+    let bases: Vec<usize> = match &opts.base {
+        Some(b) => {
+            let base = doc.component_index(b).map_err(WorkspaceError::from)?;
+            // A pinned base starts its composite node.
+            let ni = ctx.graph.node_of(base);
+            let node = &mut ctx.graph.nodes[ni];
+            node.members.retain(|&x| x != base);
+            node.members.insert(0, base);
+            vec![base]
+        }
+        None => {
+            let mut c: Vec<usize> = (0..n).collect();
+            c.sort_by(|&a, &b| ctx.sizes[b].total_cmp(&ctx.sizes[a]).then(a.cmp(&b)));
+            c
+        }
+    };
+    let pins: Vec<usize> = opts
+        .order
+        .iter()
+        .map(|s| doc.component_index(s).map_err(WorkspaceError::from))
+        .collect::<Result<_, _>>()?;
+    let ctx = ctx;
+    let mut search = Search {
+        ctx: &ctx,
+        k: opts.max_sequences.max(1),
+        found: Vec::new(),
+        rejected: Vec::new(),
+        dead: HashSet::new(),
+        fallback: HashMap::new(),
+        before: vec![vec![0; n]; n],
+        complete_count: 0,
+        expanded: 0,
+        cut: false,
+        use_fallback: false,
+        pruned: false,
+    };
+    // Straight insertions first; the planners only when no sequence exists without
+    // them (they cost seconds where a sweep costs milliseconds).
+    let passes: &[bool] = if opts.planner_fallback {
+        &[false, true]
+    } else {
+        &[false]
+    };
+    for &fallback in passes {
+        if fallback && search.complete_count > 0 {
+            break;
+        }
+        search.use_fallback = fallback;
+        search.fallback_pass(&bases, &pins);
+    }
+    let found = std::mem::take(&mut search.found);
+    let rejected = std::mem::take(&mut search.rejected);
+    let before = std::mem::take(&mut search.before);
+    let (count, cut) = (search.complete_count, search.cut);
+    finish(&ctx, found, rejected, before, count, cut)
+}
+
+impl Search<'_, '_> {
+    fn fallback_pass(&mut self, bases: &[usize], pins: &[usize]) {
+        let ctx = self.ctx;
+        let opts = &ctx.opts;
+        let search = self;
+        for &base in bases {
+            if ctx.out_of_time() {
+                search.cut = true;
+                break;
+            }
+            // A base that does not start its composite node is not a base.
+            if ctx.graph.nodes[ctx.graph.node_of(base)].members[0] != base {
+                continue;
+            }
+            // Seed 003 section 2.2 step 2: a base much smaller than what it joins is
+            // inactive.
+            let biggest_related = members(ctx.related[base])
+                .map(|q| ctx.sizes[q])
+                .fold(0.0, f64::max);
+            if opts.base.is_none() && ctx.sizes[base] < opts.small_base_ratio * biggest_related {
+                search.reject(
+                    base,
+                    &[],
+                    format!(
+                        "inactive base: {} is much smaller ({:.0}) than a part it joins ({:.0})",
+                        ctx.names[base], ctx.sizes[base], biggest_related
+                    ),
+                );
+                continue;
+            }
+            search.dead.clear();
+            let mut choices = Vec::new();
+            search.dfs(base, bit(base), &mut choices, None, (0, 0, 0.0), pins);
+        }
+    }
+}
+
+fn finish(
+    ctx: &Ctx,
+    found: Vec<Found>,
+    mut rejected: Vec<Rejected>,
+    before: Vec<Vec<u32>>,
+    count: u32,
+    cut: bool,
+) -> Result<SequencePlan, SequenceError> {
+    let mut sequences = Vec::new();
+    for f in &found {
+        match build_sequence(ctx, f) {
+            Ok(s) => sequences.push(s),
+            Err(reason) => {
+                if rejected.len() < MAX_REJECTED {
+                    rejected.push(Rejected {
+                        order: std::iter::once(f.base)
+                            .chain(f.choices.iter().map(|c| c.part))
+                            .map(|i| ctx.names[i].clone())
+                            .collect(),
+                        reason,
+                    });
+                }
+            }
+        }
+    }
+    if sequences.is_empty() {
+        return Err(SequenceError::NoSequence {
+            timed_out: ctx.out_of_time(),
+            reasons: rejected
+                .iter()
+                .take(4)
+                .map(|r| format!("after [{}]: {}", r.order.join(", "), r.reason))
+                .collect(),
+        });
+    }
+    sequences.sort_by(|a, b| {
+        (a.mounts, a.direction_changes)
+            .cmp(&(b.mounts, b.direction_changes))
+            .then(a.path_length_mm.total_cmp(&b.path_length_mm))
+    });
+    // Precedence: a before b in every complete sequence seen, transitively reduced.
+    let n = ctx.n;
+    let rel = |a: usize, b: usize| count > 0 && before[a][b] == count;
+    let mut precedence = Vec::new();
+    for a in 0..n {
+        for b in 0..n {
+            if a != b && rel(a, b) && !(0..n).any(|c| c != a && c != b && rel(a, c) && rel(c, b)) {
+                precedence.push((ctx.names[a].clone(), ctx.names[b].clone()));
+            }
+        }
+    }
+    Ok(SequencePlan {
+        mode: ctx.opts.mode,
+        sequences,
+        rejected,
+        precedence,
+        complete: !cut,
+        graph: ctx.graph.clone(),
+        time_ms: ctx.started.elapsed().as_secs_f64() * 1e3,
+        sweeps: ctx.sweeps,
+    })
+}
+
+/// `Vec3` of the component's candidate directions that are free among every other
+/// component related to it (the seed's mating directions of a node; negated: the
+/// direction the part moves while it is joined).
+pub(crate) fn mating_directions_of(ctx: &Ctx, p: usize) -> Vec<Vec3> {
+    let mask = ctx.related[p];
+    ctx.free_dirs(p, mask)
+        .into_iter()
+        .map(|k| -ctx.dirs[p][k])
+        .collect()
+}
+
+/// Related components of `p`.
+pub(crate) fn related_of(ctx: &Ctx, p: usize) -> Mask {
+    ctx.related[p]
+}

@@ -1,0 +1,475 @@
+//! The skill manager (seed 003, section 3.3): pending, running and finished skills,
+//! dispatched to a controller over simple_message, with pause, resume, abort, edits
+//! of pending skills and manual commands.
+//!
+//! Faults: when the controller disconnects mid-skill the skill is marked
+//! interrupted, the manager reconnects (within
+//! [`ManagerOptions::reconnect_timeout`]) and resumes that skill from where the arm
+//! is; finished skills are never run again. A refusal, a controller error or a
+//! timeout stops the run with the reason. Pausing stops the arm at once; resuming
+//! continues the running skill from where it stopped.
+
+use super::program::{Command, Plan, PlanStep};
+use crate::manipulator::client::{resolve, Client, ClientOptions, ManipulatorError};
+use std::collections::VecDeque;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Where a skill is.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SkillStatus {
+    /// Not started.
+    Pending,
+    /// Being executed.
+    Running,
+    /// Cut off by a disconnection; resumes after reconnecting.
+    Interrupted,
+    /// Done.
+    Finished,
+    /// Stopped the run.
+    Failed(String),
+}
+
+/// What the manager reports while it runs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// Connected to the controller.
+    Connected(SocketAddr),
+    /// A skill started (id, description).
+    Started(usize, String),
+    /// A skill finished; the part is now in `state`.
+    Finished {
+        /// Skill id.
+        skill: usize,
+        /// The part.
+        part: String,
+        /// Its new state.
+        state: String,
+    },
+    /// The controller went away during a skill.
+    Interrupted(usize, String),
+    /// Reconnected; the interrupted skill resumes.
+    Reconnected,
+    /// Paused (the arm stopped).
+    Paused,
+    /// Resumed.
+    Resumed,
+    /// A pending skill was edited.
+    Edited(usize),
+    /// An edit was refused (the skill is not pending).
+    EditRefused(usize, String),
+    /// A manual command was executed.
+    Manual(String),
+    /// The run stopped on an error.
+    Failed(usize, String),
+    /// The run was aborted by the user.
+    Aborted,
+    /// Every skill finished.
+    Done,
+}
+
+/// Settings of a run.
+#[derive(Debug, Clone)]
+pub struct ManagerOptions {
+    /// Motion port address `HOST:PORT`.
+    pub target: String,
+    /// State port (default: the motion port + 2, as 11000 / 11002).
+    pub state_port: Option<u16>,
+    /// Client timeouts and the remote-dispatch switch.
+    pub client: ClientOptions,
+    /// Longest time one trajectory may take to finish after it was sent.
+    pub skill_timeout: Duration,
+    /// Longest time to get the controller back after a disconnection.
+    pub reconnect_timeout: Duration,
+    /// Joint tolerance for "arrived" (rad / mm).
+    pub tolerance: f64,
+}
+
+impl Default for ManagerOptions {
+    fn default() -> Self {
+        Self {
+            target: format!("127.0.0.1:{}", crate::manipulator::MOTION_PORT),
+            state_port: None,
+            client: ClientOptions::default(),
+            skill_timeout: Duration::from_secs(120),
+            reconnect_timeout: Duration::from_secs(30),
+            tolerance: 1e-3,
+        }
+    }
+}
+
+#[derive(Default)]
+struct Control {
+    paused: AtomicBool,
+    abort: AtomicBool,
+    manual: Mutex<VecDeque<Command>>,
+    edits: Mutex<VecDeque<(usize, PlanStep)>>,
+}
+
+/// A handle to steer a running manager from another thread.
+#[derive(Clone)]
+pub struct ManagerHandle(Arc<Control>);
+
+impl ManagerHandle {
+    /// Pauses: the arm stops now; the running skill resumes on [`resume`](Self::resume).
+    pub fn pause(&self) {
+        self.0.paused.store(true, Ordering::SeqCst);
+    }
+    /// Resumes after a pause.
+    pub fn resume(&self) {
+        self.0.paused.store(false, Ordering::SeqCst);
+    }
+    /// Stops the run (the arm stops; pending skills stay pending).
+    pub fn abort(&self) {
+        self.0.abort.store(true, Ordering::SeqCst);
+    }
+    /// Queues a manual command, run between skills or while paused.
+    pub fn manual(&self, command: Command) {
+        lock(&self.0.manual).push_back(command);
+    }
+    /// Replaces a pending skill's step (applied before the next dispatch; refused
+    /// with [`Event::EditRefused`] unless the skill is still pending).
+    pub fn edit(&self, skill: usize, step: PlanStep) {
+        lock(&self.0.edits).push_back((skill, step));
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// How a run ended with an error.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The user aborted.
+    #[error("aborted by the user")]
+    Aborted,
+    /// A skill failed (id, reason).
+    #[error("skill #{0} failed: {1}")]
+    Skill(usize, String),
+    /// The controller could not be reached.
+    #[error("{0}")]
+    Connection(ManipulatorError),
+}
+
+/// Runs a [`Plan`] on a controller.
+pub struct SkillManager {
+    plan: Plan,
+    status: Vec<SkillStatus>,
+    options: ManagerOptions,
+    control: Arc<Control>,
+}
+
+enum Outcome {
+    Done,
+    Paused,
+    Aborted,
+}
+
+impl SkillManager {
+    /// A manager for `plan`; every skill pending.
+    pub fn new(plan: Plan, options: ManagerOptions) -> Self {
+        let n = plan.steps.len();
+        Self {
+            plan,
+            status: vec![SkillStatus::Pending; n],
+            options,
+            control: Arc::new(Control::default()),
+        }
+    }
+
+    /// A handle for pause / resume / abort / edit / manual.
+    pub fn handle(&self) -> ManagerHandle {
+        ManagerHandle(self.control.clone())
+    }
+
+    /// Each skill's status, in plan order.
+    pub fn status(&self) -> &[SkillStatus] {
+        &self.status
+    }
+
+    /// The plan (with edits applied).
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    fn addresses(&self) -> Result<(SocketAddr, SocketAddr), ManipulatorError> {
+        let motion = resolve(&self.options.target, self.options.client.allow_remote)?;
+        let mut state = motion;
+        state.set_port(
+            self.options
+                .state_port
+                .unwrap_or_else(|| motion.port().wrapping_add(2)),
+        );
+        Ok((motion, state))
+    }
+
+    fn connect(&self, until: Instant) -> Result<Client, ManipulatorError> {
+        let (motion, state) = self.addresses()?;
+        loop {
+            match Client::connect(motion, state, self.plan.kinds(), &self.options.client) {
+                Ok(c) => return Ok(c),
+                Err(e @ ManipulatorError::NotLocal(_)) => return Err(e),
+                Err(e) => {
+                    if Instant::now() > until || self.control.abort.load(Ordering::SeqCst) {
+                        return Err(e);
+                    }
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+            }
+        }
+    }
+
+    /// Runs every pending skill in order, reporting [`Event`]s.
+    ///
+    /// # Errors
+    /// [`RunError`]: aborted, a skill that failed (refused, controller error,
+    /// timeout), a controller that could not be reached.
+    pub fn run(&mut self, on_event: &mut dyn FnMut(&Event)) -> Result<(), RunError> {
+        let mut client = self
+            .connect(Instant::now() + self.options.client.connect_timeout)
+            .map_err(RunError::Connection)?;
+        on_event(&Event::Connected(
+            self.addresses().map_err(RunError::Connection)?.0,
+        ));
+        let mut i = 0;
+        // Commands of the running skill already done (not repeated on resume).
+        let mut done_commands = 0;
+        while i < self.status.len() {
+            self.apply_edits(on_event);
+            if let Err(e) = self.manual_commands(&mut client, on_event) {
+                return self.fail(i, e, on_event);
+            }
+            if self.control.abort.load(Ordering::SeqCst) {
+                on_event(&Event::Aborted);
+                return Err(RunError::Aborted);
+            }
+            if self.control.paused.load(Ordering::SeqCst) {
+                std::thread::sleep(Duration::from_millis(20));
+                continue;
+            }
+            if self.status[i] == SkillStatus::Finished {
+                i += 1;
+                continue;
+            }
+            if self.status[i] == SkillStatus::Pending {
+                on_event(&Event::Started(i, self.plan.steps[i].description.clone()));
+                done_commands = 0;
+            }
+            self.status[i] = SkillStatus::Running;
+            match self.execute(&mut client, i, &mut done_commands) {
+                Ok(Outcome::Done) => {
+                    self.status[i] = SkillStatus::Finished;
+                    let s = &self.plan.steps[i];
+                    on_event(&Event::Finished {
+                        skill: i,
+                        part: s.part.clone(),
+                        state: s.end_state.clone(),
+                    });
+                    i += 1;
+                }
+                Ok(Outcome::Paused) => {
+                    on_event(&Event::Paused);
+                    while self.control.paused.load(Ordering::SeqCst)
+                        && !self.control.abort.load(Ordering::SeqCst)
+                    {
+                        if let Err(e) = self.manual_commands(&mut client, on_event) {
+                            return self.fail(i, e, on_event);
+                        }
+                        std::thread::sleep(Duration::from_millis(20));
+                    }
+                    if !self.control.abort.load(Ordering::SeqCst) {
+                        on_event(&Event::Resumed);
+                    }
+                }
+                Ok(Outcome::Aborted) => {
+                    on_event(&Event::Aborted);
+                    return Err(RunError::Aborted);
+                }
+                Err(ManipulatorError::Disconnected(why)) => {
+                    self.status[i] = SkillStatus::Interrupted;
+                    on_event(&Event::Interrupted(i, why));
+                    drop(client);
+                    client = self
+                        .connect(Instant::now() + self.options.reconnect_timeout)
+                        .map_err(|e| {
+                            self.status[i] = SkillStatus::Failed(e.to_string());
+                            on_event(&Event::Failed(i, e.to_string()));
+                            RunError::Connection(e)
+                        })?;
+                    on_event(&Event::Reconnected);
+                }
+                Err(e) => return self.fail(i, e, on_event),
+            }
+        }
+        on_event(&Event::Done);
+        Ok(())
+    }
+
+    fn fail(
+        &mut self,
+        i: usize,
+        e: ManipulatorError,
+        on_event: &mut dyn FnMut(&Event),
+    ) -> Result<(), RunError> {
+        let reason = e.to_string();
+        if i < self.status.len() {
+            self.status[i] = SkillStatus::Failed(reason.clone());
+        }
+        on_event(&Event::Failed(i, reason.clone()));
+        Err(RunError::Skill(i, reason))
+    }
+
+    fn apply_edits(&mut self, on_event: &mut dyn FnMut(&Event)) {
+        let edits: Vec<_> = lock(&self.control.edits).drain(..).collect();
+        for (id, step) in edits {
+            match self.status.get(id) {
+                Some(SkillStatus::Pending) => {
+                    self.plan.steps[id] = step;
+                    on_event(&Event::Edited(id));
+                }
+                Some(s) => on_event(&Event::EditRefused(id, format!("{s:?}"))),
+                None => on_event(&Event::EditRefused(id, "no such skill".into())),
+            }
+        }
+    }
+
+    fn manual_commands(
+        &mut self,
+        client: &mut Client,
+        on_event: &mut dyn FnMut(&Event),
+    ) -> Result<(), ManipulatorError> {
+        loop {
+            let Some(c) = lock(&self.control.manual).pop_front() else {
+                return Ok(());
+            };
+            let text = format!("{c:?}");
+            self.run_command(client, &c)?;
+            on_event(&Event::Manual(text));
+        }
+    }
+
+    fn cancelled(&self) -> bool {
+        self.control.paused.load(Ordering::SeqCst) || self.control.abort.load(Ordering::SeqCst)
+    }
+
+    /// Runs skill `i` from command `done`; returns when done, paused or aborted.
+    fn execute(
+        &self,
+        client: &mut Client,
+        i: usize,
+        done: &mut usize,
+    ) -> Result<Outcome, ManipulatorError> {
+        let commands = self.plan.steps[i].commands.clone();
+        while *done < commands.len() {
+            match self.run_command(client, &commands[*done])? {
+                Outcome::Done => *done += 1,
+                other => return Ok(other),
+            }
+        }
+        Ok(Outcome::Done)
+    }
+
+    fn run_command(&self, client: &mut Client, c: &Command) -> Result<Outcome, ManipulatorError> {
+        match c {
+            Command::Tool {
+                action,
+                index,
+                value,
+            } => {
+                let a = Command::tool_action(action).ok_or_else(|| ManipulatorError::Refused {
+                    what: action.clone(),
+                    code: None,
+                    reason: "unknown tool action".into(),
+                })?;
+                client.tool(a, *index, *value as f32)?;
+                Ok(Outcome::Done)
+            }
+            Command::Trajectory(points) => {
+                let Some(last) = points.last() else {
+                    return Ok(Outcome::Done);
+                };
+                let here = client.state()?.joints;
+                // Resume from where the arm is: skip the points already passed.
+                let dist = |q: &[f64]| {
+                    q.iter()
+                        .zip(&here)
+                        .map(|(a, b)| (a - b).abs())
+                        .fold(0.0, f64::max)
+                };
+                let nearest = (0..points.len())
+                    .min_by(|&a, &b| dist(&points[a].0).total_cmp(&dist(&points[b].0)))
+                    .unwrap_or(0);
+                if nearest + 1 < points.len() || dist(&last.0) > self.options.tolerance {
+                    let mut stream = vec![(here.clone(), 0.0)];
+                    stream.extend(
+                        points[(nearest + 1).min(points.len() - 1)..]
+                            .iter()
+                            .cloned(),
+                    );
+                    client.stream(&stream)?;
+                }
+                let cancel = || self.cancelled();
+                let arrived = client.wait_until_at(
+                    &last.0,
+                    self.options.tolerance,
+                    self.options.skill_timeout,
+                    &cancel,
+                )?;
+                if arrived {
+                    return Ok(Outcome::Done);
+                }
+                client.stop_motion()?;
+                if self.control.abort.load(Ordering::SeqCst) {
+                    Ok(Outcome::Aborted)
+                } else {
+                    Ok(Outcome::Paused)
+                }
+            }
+        }
+    }
+}
+
+impl Event {
+    /// The event as a log row: `(skill, event name, detail)`.
+    pub fn log_fields(&self) -> (Option<usize>, &'static str, String) {
+        match self {
+            Event::Connected(a) => (None, "connected", a.to_string()),
+            Event::Started(i, d) => (Some(*i), "started", d.clone()),
+            Event::Finished { skill, part, state } => {
+                (Some(*skill), "finished", format!("{part} {state}"))
+            }
+            Event::Interrupted(i, why) => (Some(*i), "interrupted", why.clone()),
+            Event::Reconnected => (None, "reconnected", String::new()),
+            Event::Paused => (None, "paused", String::new()),
+            Event::Resumed => (None, "resumed", String::new()),
+            Event::Edited(i) => (Some(*i), "edited", String::new()),
+            Event::EditRefused(i, why) => (Some(*i), "edit_refused", why.clone()),
+            Event::Manual(c) => (None, "manual", c.clone()),
+            Event::Failed(i, why) => (Some(*i), "failed", why.clone()),
+            Event::Aborted => (None, "aborted", String::new()),
+            Event::Done => (None, "done", String::new()),
+        }
+    }
+}
+
+/// Writes one manager event to the skill execution log of `db` (plan label `plan`);
+/// the part is taken from the plan's step.
+///
+/// # Errors
+/// The database's error.
+pub fn log_event(
+    db: &mut crate::db::Database,
+    run_id: Option<i64>,
+    plan_label: &str,
+    plan: &Plan,
+    event: &Event,
+) -> Result<i64, crate::db::DbError> {
+    let (skill, name, detail) = event.log_fields();
+    let part = skill
+        .and_then(|i| plan.steps.get(i))
+        .map(|s| s.part.as_str());
+    db.log_skill_event(run_id, plan_label, skill, part, name, &detail)
+}

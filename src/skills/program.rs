@@ -1,0 +1,356 @@
+//! Skills bound to a robot: each skill becomes the commands a controller runs (joint
+//! trajectories and tool commands), saved as a plan file (JSON) that
+//! `fitup skills run PLAN --target HOST:PORT` dispatches.
+//!
+//! On an arm every part motion (Move_Table, Move_Probe, Rotate_*, Insert, Screw,
+//! Line) is a straight TCP line of the tool holding the part (tool pose = grasp's
+//! tool-in-part, then the part's pose); Grasp first moves the arm (joint move) to
+//! the grasp, then closes the gripper; Release opens it; Touch asks the controller to
+//! move until contact. Joints are rad / mm; trajectory points carry the time from
+//! the previous point (s).
+
+use super::{Action, PartState, Skill};
+use crate::kinematics::{move_joint, move_line, JointKind, MotionOptions, Robot};
+use crate::manipulator::message::ToolAction;
+use crate::math::Transform;
+use crate::sequence::Task;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use thiserror::Error;
+
+/// One thing a controller does.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Command {
+    /// Joint trajectory: `(joints rad/mm, seconds from the previous point)`; the first
+    /// point is where the arm starts.
+    Trajectory(Vec<(Vec<f64>, f64)>),
+    /// A tool command of fitup's simple_message extension: `action` is `grasp`,
+    /// `release`, `touch` or `set_output`; `value` in metres (opening, distance) or
+    /// 0/1 for an output.
+    Tool {
+        /// Action name.
+        action: String,
+        /// Output index (set_output), else 0.
+        index: i32,
+        /// Value (m, or 0/1).
+        value: f64,
+    },
+}
+
+impl Command {
+    /// The wire action of a `Tool` command.
+    pub fn tool_action(name: &str) -> Option<ToolAction> {
+        Some(match name {
+            "grasp" => ToolAction::Grasp,
+            "release" => ToolAction::Release,
+            "touch" => ToolAction::Touch,
+            "set_output" => ToolAction::SetOutput,
+            _ => return None,
+        })
+    }
+
+    /// Parses a manual command line: `grasp W_MM`, `release W_MM`, `touch D_MM`,
+    /// `output I 0|1`.
+    pub fn parse_manual(line: &str) -> Option<Self> {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let num = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
+        Some(match w.as_slice() {
+            ["grasp", v] => Self::Tool {
+                action: "grasp".into(),
+                index: 0,
+                value: num(v)? / 1000.0,
+            },
+            ["release", v] => Self::Tool {
+                action: "release".into(),
+                index: 0,
+                value: num(v)? / 1000.0,
+            },
+            ["touch", v] => Self::Tool {
+                action: "touch".into(),
+                index: 0,
+                value: num(v)? / 1000.0,
+            },
+            ["output", i, v] => Self::Tool {
+                action: "set_output".into(),
+                index: i.parse().ok()?,
+                value: num(v)?,
+            },
+            _ => return None,
+        })
+    }
+}
+
+/// One skill of a plan, ready to dispatch.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanStep {
+    /// The skill's id.
+    pub skill: usize,
+    /// Task index.
+    pub task: usize,
+    /// The part.
+    pub part: String,
+    /// Seed action name (`Move_Table`, …).
+    pub action: String,
+    /// For people: `#3 Move_Table gear 120 mm`.
+    pub description: String,
+    /// The part's state once the skill finished (`Grasped`, …).
+    pub end_state: String,
+    /// What the controller does.
+    pub commands: Vec<Command>,
+}
+
+/// Skills bound to a robot.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// Format version (1).
+    pub version: u32,
+    /// The robot's name.
+    pub robot: String,
+    /// Joint kinds in joint order (`revolute` / `prismatic`): units on the wire.
+    pub joint_kinds: Vec<String>,
+    /// The steps, in order.
+    pub steps: Vec<PlanStep>,
+}
+
+/// Why skills cannot be bound to a robot.
+#[derive(Debug, Error)]
+pub enum BindError {
+    /// A part moves without a grasp.
+    #[error("skill #{skill} moves `{part}` but its task has no grasp")]
+    NoGrasp {
+        /// Skill id.
+        skill: usize,
+        /// Part.
+        part: String,
+    },
+    /// The robot cannot make a motion.
+    #[error("skill #{skill} ({action} {part}): {reason}")]
+    Motion {
+        /// Skill id.
+        skill: usize,
+        /// Action name.
+        action: &'static str,
+        /// Part.
+        part: String,
+        /// The motion error.
+        reason: String,
+    },
+    /// A plan file that cannot be read or written.
+    #[error("plan file: {0}")]
+    File(String),
+}
+
+/// Keeps a sample every `interval` seconds (and the last): `(joints, dt)`.
+fn points(
+    traj: &crate::kinematics::Trajectory,
+    start: &[f64],
+    interval: f64,
+) -> Vec<(Vec<f64>, f64)> {
+    let mut out = vec![(start.to_vec(), 0.0)];
+    let mut last_t = 0.0;
+    let n = traj.samples.len();
+    for (i, s) in traj.samples.iter().enumerate() {
+        if s.t - last_t >= interval || (i + 1 == n && s.t > last_t) {
+            out.push((s.joints.clone(), s.t - last_t));
+            last_t = s.t;
+        }
+    }
+    out
+}
+
+impl Plan {
+    /// Binds `skills` to `robot` from joints `start` (rad / mm). `tasks` give each
+    /// part's grasp (tool in part).
+    ///
+    /// # Errors
+    /// A part motion without a grasp, a motion the robot cannot make (unreachable,
+    /// singular, a joint limit).
+    pub fn bind(
+        skills: &[Skill],
+        tasks: &[Task],
+        robot: &Robot,
+        start: &[f64],
+        options: &MotionOptions,
+    ) -> Result<Self, BindError> {
+        let grasps: HashMap<usize, (Transform, f64)> = tasks
+            .iter()
+            .filter_map(|t| {
+                t.grasp
+                    .as_ref()
+                    .map(|g| (t.index, (g.tool_in_part, g.width)))
+            })
+            .collect();
+        let mut q = start.to_vec();
+        let mut steps = Vec::new();
+        for s in skills {
+            let motion_err = |reason: String| BindError::Motion {
+                skill: s.id,
+                action: s.action.name(),
+                part: s.part.clone(),
+                reason,
+            };
+            let grasp = || {
+                grasps
+                    .get(&s.task)
+                    .copied()
+                    .ok_or_else(|| BindError::NoGrasp {
+                        skill: s.id,
+                        part: s.part.clone(),
+                    })
+            };
+            let tool = |action: &str, value: f64| Command::Tool {
+                action: action.into(),
+                index: 0,
+                value,
+            };
+            let commands = match s.action {
+                Action::Touch => vec![tool(
+                    "touch",
+                    s.attribute("distance_mm").unwrap_or(0.0) / 1000.0,
+                )],
+                Action::Release => {
+                    let (_, width) = grasp()?;
+                    vec![tool("release", (width * 1.5 / 1000.0).min(1.0))]
+                }
+                Action::Grasp => {
+                    let (tip, width) = grasp()?;
+                    let target = tip.then(&s.start.0);
+                    let sol = robot
+                        .inverse_nearest(&target, &q, &options.ik)
+                        .map_err(|e| motion_err(e.to_string()))?;
+                    let traj = move_joint(robot, &q, &sol.joints, options)
+                        .map_err(|e| motion_err(e.to_string()))?;
+                    let pts = points(&traj, &q, 0.2);
+                    q = sol.joints;
+                    vec![
+                        Command::Trajectory(pts),
+                        tool("grasp", (width / 1000.0).min(1.0)),
+                    ]
+                }
+                _ => {
+                    let (tip, _) = grasp()?;
+                    let target = tip.then(&s.end.0);
+                    let traj = move_line(robot, &q, &target, options)
+                        .map_err(|e| motion_err(e.to_string()))?;
+                    let pts = points(&traj, &q, 0.2);
+                    if let Some(last) = traj.last_joints() {
+                        q = last.to_vec();
+                    }
+                    vec![Command::Trajectory(pts)]
+                }
+            };
+            steps.push(PlanStep {
+                skill: s.id,
+                task: s.task,
+                part: s.part.clone(),
+                action: s.action.name().into(),
+                description: s.describe(),
+                end_state: s.end.1.name().into(),
+                commands,
+            });
+        }
+        Ok(Self {
+            version: 1,
+            robot: robot.name().into(),
+            joint_kinds: robot
+                .joint_kinds()
+                .iter()
+                .map(|k| match k {
+                    JointKind::Prismatic => "prismatic".to_string(),
+                    _ => "revolute".to_string(),
+                })
+                .collect(),
+            steps,
+        })
+    }
+
+    /// The joint kinds of [`joint_kinds`](Self::joint_kinds).
+    pub fn kinds(&self) -> Vec<JointKind> {
+        self.joint_kinds
+            .iter()
+            .map(|k| {
+                if k == "prismatic" {
+                    JointKind::Prismatic
+                } else {
+                    JointKind::Revolute
+                }
+            })
+            .collect()
+    }
+
+    /// The plan as JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("plain data serializes")
+    }
+
+    /// Parses a plan file's JSON (`name` for errors).
+    ///
+    /// # Errors
+    /// Bad JSON (with line and column), a wrong version, non-finite joints, a
+    /// trajectory point of the wrong joint count, an unknown tool action, an unknown
+    /// part state.
+    pub fn from_json(name: &str, text: &str) -> Result<Self, BindError> {
+        let plan: Plan = serde_json::from_str(text)
+            .map_err(|e| BindError::File(format!("{name}:{}:{}: {e}", e.line(), e.column())))?;
+        let bad = |m: String| BindError::File(format!("{name}: {m}"));
+        if plan.version != 1 {
+            return Err(bad(format!(
+                "version {} (this build reads 1)",
+                plan.version
+            )));
+        }
+        let n = plan.joint_kinds.len();
+        if n == 0 || n > crate::manipulator::message::MAX_JOINTS {
+            return Err(bad(format!("{n} joints (1 to 10)")));
+        }
+        for s in &plan.steps {
+            if PartState::parse(&s.end_state).is_none() {
+                return Err(bad(format!(
+                    "skill #{}: unknown state `{}`",
+                    s.skill, s.end_state
+                )));
+            }
+            for c in &s.commands {
+                match c {
+                    Command::Trajectory(pts) => {
+                        for (q, d) in pts {
+                            if q.len() != n
+                                || !q.iter().chain([d]).all(|v| v.is_finite())
+                                || *d < 0.0
+                            {
+                                return Err(bad(format!(
+                                    "skill #{}: a trajectory point needs {n} finite joints and a duration ≥ 0",
+                                    s.skill
+                                )));
+                            }
+                        }
+                    }
+                    Command::Tool { action, value, .. } => {
+                        if Command::tool_action(action).is_none() || !value.is_finite() {
+                            return Err(bad(format!(
+                                "skill #{}: bad tool command `{action}`",
+                                s.skill
+                            )));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(plan)
+    }
+}
+
+/// [`Plan::bind`].
+///
+/// # Errors
+/// As [`Plan::bind`].
+pub fn bind(
+    skills: &[Skill],
+    tasks: &[Task],
+    robot: &Robot,
+    start: &[f64],
+    options: &MotionOptions,
+) -> Result<Plan, BindError> {
+    Plan::bind(skills, tasks, robot, start, options)
+}

@@ -1,0 +1,271 @@
+//! Task templates: the workflows of one operation, as editable YAML files validated
+//! with located errors (`file:line:col`).
+//!
+//! ```yaml
+//! operation: insertion        # insertion | screw | align
+//! workflows:                  # a chain: each `from` is the previous `to`
+//!   - {from: FREE, to: In_WS, generator: locate}
+//!   - {from: In_WS, to: Grasped, generator: grasp}
+//!   - {from: Grasped, to: Adjusted, generator: move}
+//!   - {from: Adjusted, to: Assembled, generator: insert}
+//! ```
+//!
+//! A user may delete states a fixture makes unnecessary (drop the `locate` line when
+//! the part sits in a fixture at a known pose) or add their own steps; the chain must
+//! stay contiguous and end at `Assembled`.
+
+use super::PartState;
+use crate::diagnostics::{locate, suggestion, SourceError};
+use crate::sequence::Operation;
+use serde::Deserialize;
+use std::path::Path;
+
+/// The skill generators a workflow can own.
+pub const GENERATORS: [&str; 6] = ["locate", "grasp", "move", "insert", "screw", "align"];
+
+/// One workflow of a template: from a state to the next, and its generator.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Workflow {
+    /// Start state.
+    pub from: PartState,
+    /// Goal state.
+    pub to: PartState,
+    /// The generator's name (one of [`GENERATORS`]).
+    pub generator: String,
+}
+
+impl Workflow {
+    /// `from->to`, the workflow's name in skills and logs.
+    pub fn name(&self) -> String {
+        format!("{}->{}", self.from.name(), self.to.name())
+    }
+}
+
+/// The workflows of one operation.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Template {
+    /// The operation the template is for.
+    pub operation: Operation,
+    /// The chain of workflows, in order.
+    pub workflows: Vec<Workflow>,
+}
+
+/// A template that cannot be used.
+pub type TemplateError = SourceError;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TemplateFile {
+    operation: String,
+    workflows: Vec<WorkflowFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WorkflowFile {
+    from: String,
+    to: String,
+    generator: String,
+}
+
+/// Which generators may take a part from `from` to `to`.
+fn generator_fits(generator: &str, from: PartState, to: PartState) -> bool {
+    use PartState::*;
+    match generator {
+        "locate" => to == InWs && from == Free,
+        "grasp" => to == Grasped && matches!(from, Free | InWs),
+        "move" => from == Grasped && to == Adjusted,
+        "insert" | "screw" | "align" => to == Assembled && matches!(from, Grasped | Adjusted),
+        _ => false,
+    }
+}
+
+impl Template {
+    /// Parses and validates a template; `path` names the file in errors.
+    ///
+    /// # Errors
+    /// A YAML error, an unknown field, operation, state or generator (with "did you
+    /// mean"), a broken chain, a generator that cannot make that step, a chain that
+    /// does not end at `Assembled` — each at its line and column.
+    pub fn parse(path: &Path, text: &str) -> Result<Self, TemplateError> {
+        let file: TemplateFile = serde_yaml::from_str(text).map_err(|e| {
+            let (line, col) = e.location().map_or((0, 0), |l| (l.line(), l.column()));
+            SourceError::new(path, line, col, e.to_string())
+        })?;
+        let at = |needle: &str, from_line: usize| locate(text, needle, from_line).unwrap_or((0, 0));
+        let err = |needle: &str, from_line: usize, msg: String| {
+            let (l, c) = at(needle, from_line);
+            SourceError::new(path, l, c, msg)
+        };
+        let operation = Operation::parse(&file.operation).ok_or_else(|| {
+            err(
+                &file.operation,
+                1,
+                format!("unknown operation `{}`", file.operation),
+            )
+            .with_help(suggestion(&file.operation, ["insertion", "screw", "align"]))
+        })?;
+        if file.workflows.is_empty() {
+            return Err(err(
+                "workflows",
+                1,
+                "a template needs at least one workflow".into(),
+            ));
+        }
+        let names: Vec<&str> = PartState::ALL.iter().map(|s| s.name()).collect();
+        let mut workflows = Vec::new();
+        let mut line = at("workflows", 1).0.max(1);
+        for w in &file.workflows {
+            // Errors point at this entry: search from the line of its `from`.
+            let entry_line = at(&format!("from: {}", w.from), line).0.max(line);
+            let state = |s: &str| {
+                PartState::parse(s).ok_or_else(|| {
+                    err(s, entry_line, format!("unknown part state `{s}`"))
+                        .with_help(suggestion(s, names.iter().copied()))
+                })
+            };
+            let from = state(&w.from)?;
+            let to = state(&w.to)?;
+            if !GENERATORS.contains(&w.generator.as_str()) {
+                return Err(err(
+                    &w.generator,
+                    entry_line,
+                    format!("unknown generator `{}`", w.generator),
+                )
+                .with_help(suggestion(&w.generator, GENERATORS)));
+            }
+            if let Some(prev) = workflows.last().map(|p: &Workflow| p.to) {
+                if prev != from {
+                    return Err(err(
+                        &w.from,
+                        entry_line,
+                        format!(
+                            "broken chain: this workflow starts at {} but the previous one ends at {}",
+                            from.name(),
+                            prev.name()
+                        ),
+                    ));
+                }
+            }
+            if from >= to {
+                return Err(err(
+                    &w.to,
+                    entry_line,
+                    format!(
+                        "a workflow must advance the part: {} -> {}",
+                        from.name(),
+                        to.name()
+                    ),
+                ));
+            }
+            if !generator_fits(&w.generator, from, to) {
+                return Err(err(
+                    &w.generator,
+                    entry_line,
+                    format!(
+                        "generator `{}` cannot take a part from {} to {}",
+                        w.generator,
+                        from.name(),
+                        to.name()
+                    ),
+                ));
+            }
+            workflows.push(Workflow {
+                from,
+                to,
+                generator: w.generator.clone(),
+            });
+            line = entry_line + 1;
+        }
+        let last = workflows.last().expect("not empty");
+        if last.to != PartState::Assembled {
+            return Err(err(
+                last.to.name(),
+                line.saturating_sub(1).max(1),
+                format!("the chain ends at {}, not Assembled", last.to.name()),
+            ));
+        }
+        Ok(Self {
+            operation,
+            workflows,
+        })
+    }
+
+    /// Reads and validates a template file.
+    ///
+    /// # Errors
+    /// An unreadable file, or as [`parse`](Self::parse).
+    pub fn read(path: &Path) -> Result<Self, TemplateError> {
+        let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Document)
+            .map_err(|e| SourceError::new(path, 0, 0, e.to_string()))?;
+        Self::parse(path, &text)
+    }
+}
+
+/// The default template text of an operation (the files of `models/templates/`).
+pub fn default_template_text(operation: Operation) -> &'static str {
+    match operation {
+        Operation::Insertion => include_str!("../../models/templates/insertion.yaml"),
+        Operation::Screw => include_str!("../../models/templates/screw.yaml"),
+        Operation::Align => include_str!("../../models/templates/align.yaml"),
+    }
+}
+
+/// The default template of an operation.
+pub fn default_template(operation: Operation) -> Template {
+    let name = format!("models/templates/{}.yaml", operation.name());
+    Template::parse(Path::new(&name), default_template_text(operation))
+        .expect("the bundled templates are valid (tested)")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bundled_templates_are_valid() {
+        for op in [Operation::Insertion, Operation::Screw, Operation::Align] {
+            let t = default_template(op);
+            assert_eq!(t.operation, op);
+            assert_eq!(t.workflows.last().unwrap().to, PartState::Assembled);
+        }
+    }
+
+    #[test]
+    fn a_fixture_template_without_locate_is_valid() {
+        let text = "operation: insertion\nworkflows:\n  - {from: In_WS, to: Grasped, generator: grasp}\n  - {from: Grasped, to: Adjusted, generator: move}\n  - {from: Adjusted, to: Assembled, generator: insert}\n";
+        let t = Template::parse(Path::new("t.yaml"), text).unwrap();
+        assert_eq!(t.workflows.len(), 3);
+        assert_eq!(t.workflows[0].from, PartState::InWs);
+    }
+
+    #[test]
+    fn errors_are_located() {
+        let p = Path::new("t.yaml");
+        let text = "operation: insertion\nworkflows:\n  - {from: FREE, to: In_WS, generator: locate}\n  - {from: In_WS, to: Grasped, generator: grab}\n";
+        let e = Template::parse(p, text).unwrap_err();
+        assert_eq!(e.line, Some(4), "{e}");
+        assert!(e.message.contains("grab"), "{e}");
+        assert!(e.help.as_deref().unwrap().contains("grasp"), "{e:?}");
+
+        let text = "operation: insertion\nworkflows:\n  - {from: FREE, to: In_WS, generator: locate}\n  - {from: Grasped, to: Adjusted, generator: move}\n";
+        let e = Template::parse(p, text).unwrap_err();
+        assert_eq!(e.line, Some(4), "{e}");
+        assert!(e.message.contains("broken chain"), "{e}");
+
+        let text =
+            "operation: insertion\nworkflows:\n  - {from: FREE, to: In_Ws, generator: locate}\n";
+        let e = Template::parse(p, text).unwrap_err();
+        assert_eq!(e.line, Some(3), "{e}");
+        assert!(e.help.as_deref().unwrap().contains("In_WS"), "{e:?}");
+
+        let text =
+            "operation: insertion\nworkflows:\n  - {from: FREE, to: In_WS, generator: locate}\n";
+        let e = Template::parse(p, text).unwrap_err();
+        assert!(e.message.contains("not Assembled"), "{e}");
+
+        let text = "operation: insertion\nworkflow: []\n";
+        let e = Template::parse(p, text).unwrap_err();
+        assert_eq!(e.line, Some(2), "{e}");
+    }
+}
