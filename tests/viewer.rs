@@ -121,7 +121,7 @@ fn a_followed_path_is_a_curve_and_its_steps_are_on_the_timeline() {
     let keys = rows_of(&rows, &["paths", "moving", "keys"], "LineStrips3D:strips");
     assert_eq!(keys.len(), 1, "the path once, at follow");
     let k = &keys[0].values;
-    assert!(k.len() >= 6 && k.len() % 3 == 0);
+    assert!(k.len() >= 6 && k.len().is_multiple_of(3));
     assert!(
         close(&k[..3], &[start.x, start.y, start.z], 1e-3),
         "starts at the peg: {:?}",

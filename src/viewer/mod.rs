@@ -39,7 +39,7 @@ mod server;
 #[cfg(feature = "viewer")]
 pub use read::{read_recording, Row};
 #[cfg(feature = "viewer")]
-pub use server::{content_security_policy, open_browser, Session, SessionOptions};
+pub use server::{content_security_policy, open_browser, Report, Session, SessionOptions};
 
 use crate::document::Document;
 use crate::math::Transform;

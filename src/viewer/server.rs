@@ -28,8 +28,11 @@ pub struct SessionOptions {
     /// Name of a first recording started at once (`None`: the first [`Viewer::new_run`]).
     pub first_run: Option<String>,
     /// Where the session reports problems (a recording that cannot be written…).
-    pub report: Option<Arc<dyn Fn(&str) + Send + Sync>>,
+    pub report: Option<Report>,
 }
+
+/// Where a session reports its problems (one line of text each).
+pub type Report = Arc<dyn Fn(&str) + Send + Sync>;
 
 /// A running viewer session. Dropping it stops the servers after a final flush.
 pub struct Session {
