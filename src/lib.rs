@@ -20,6 +20,7 @@
 //! | [`workspace`] | a document as a collision scene and every document-level request: interference, contact, clearance, sweeps, planning, revalidation, following |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
 //! | [`script`] | the Rhai sandbox and API bindings |
+//! | [`viewer`] | the live 3D viewer (Rerun): documents, robots, paths, interference; `.rrd` recordings |
 //! | [`watch`] | watch mode: rerun on every save, exactly once |
 //! | [`cli`] | the `fitup` command line |
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
@@ -43,6 +44,7 @@ pub mod project;
 pub mod script;
 pub mod sequence;
 pub mod skills;
+pub mod viewer;
 #[cfg(feature = "watch")]
 pub mod watch;
 pub mod workspace;

@@ -10,6 +10,7 @@ mod run;
 mod sequence;
 mod skills;
 mod skills_tui;
+mod view;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};
@@ -65,6 +66,25 @@ pub struct ScriptArgs {
     /// controller).
     #[arg(long, requires = "dispatch")]
     pub allow_remote: bool,
+    /// The live 3D viewer (`--view`, `--open`, `--record FILE.rrd`).
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// Options of the live 3D viewer (docs/viewer.md).
+#[derive(Debug, clap::Args, Clone, Default)]
+pub struct ViewArgs {
+    /// Show the run in the live 3D viewer: serves it on 127.0.0.1 and prints the address
+    /// (`run` keeps serving after the script until Ctrl-C; `watch` shows every rerun).
+    #[arg(long)]
+    pub view: bool,
+    /// With `--view`: also open the address in the default browser.
+    #[arg(long, requires = "view")]
+    pub open: bool,
+    /// Save the run as a Rerun recording (`.rrd`; `fitup view FILE` shows it again). In
+    /// watch mode the file holds the latest run.
+    #[arg(long, value_name = "FILE.rrd")]
+    pub record: Option<PathBuf>,
 }
 
 /// Options of `watch` (a Rhai script only: motion programs are run with `run`).
@@ -99,6 +119,9 @@ pub struct WatchArgs {
     /// controller).
     #[arg(long, requires = "dispatch")]
     pub allow_remote: bool,
+    /// The live 3D viewer (`--view`, `--open`, `--record FILE.rrd`).
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 impl From<WatchArgs> for ScriptArgs {
@@ -114,6 +137,7 @@ impl From<WatchArgs> for ScriptArgs {
             db: w.db,
             dispatch: w.dispatch,
             allow_remote: w.allow_remote,
+            view: w.view,
         }
     }
 }
@@ -147,6 +171,15 @@ pub enum Command {
     Manipulator(skills::ManipulatorArgs),
     /// Skills: `run PLAN --target HOST:PORT` dispatches a plan to a controller.
     Skills(skills::SkillsArgs),
+    /// Show a saved recording (`--record FILE.rrd`) in the viewer, served on 127.0.0.1
+    /// until Ctrl-C.
+    View {
+        /// The recording (`.rrd`).
+        file: PathBuf,
+        /// Also open the address in the default browser.
+        #[arg(long)]
+        open: bool,
+    },
     /// Write the demo project (seed 000 fig. 11) into a folder: `fitup.toml`,
     /// `models/cell.yaml` and `models/meshes/`.
     Demo {
@@ -235,6 +268,7 @@ pub fn main() -> i32 {
             max_sequences,
             json,
         }),
+        Command::View { file, open } => view::view_file(&file, open),
     };
     exit as i32
 }

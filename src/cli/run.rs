@@ -6,7 +6,7 @@ use crate::math::format;
 use crate::script::{
     run_script, Arguments, Caches, Dispatch, Limits, Project, RunOptions, ScriptError,
 };
-use crate::watch::{watch as watch_loop, WatchEvent};
+use crate::watch::{watch_with, WatchEvent};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -96,16 +96,43 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
             return Exit::Usage;
         }
     };
+    let live = match super::view::start(&a.view, &opts.project, Some(run_name(&opts.script, None)))
+    {
+        Ok(l) => l,
+        Err(e) => {
+            errln!("error: {e}");
+            return Exit::Usage;
+        }
+    };
     let recorder = super::db::Recorder::new(a, &mut opts);
     recorder.start(a, &opts);
-    let outcome = run_script(&opts, &Arc::new(Caches::default()));
+    let caches = Caches {
+        view: super::view::handle(&live),
+        ..Caches::default()
+    };
+    let outcome = run_script(&opts, &Arc::new(caches));
     recorder.finish(&outcome.result);
-    match outcome.result {
+    let exit = match outcome.result {
         Ok(()) => Exit::Ok,
         Err(e) => {
             errln!("error: {}", e.render());
             Exit::Failure
         }
+    };
+    super::view::finish(live);
+    exit
+}
+
+/// The name of a run's recording in the viewer: the script's file name (and the run
+/// number in watch mode).
+fn run_name(script: &std::path::Path, number: Option<u64>) -> String {
+    let file = script
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    match number {
+        Some(n) => format!("{file} run {n}"),
+        None => file,
     }
 }
 
@@ -117,6 +144,18 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
             return Exit::Usage;
         }
     };
+    let live = match super::view::start(&a.view, &opts.project, None) {
+        Ok(l) => l,
+        Err(e) => {
+            errln!("error: {e}");
+            return Exit::Usage;
+        }
+    };
+    let viewer = super::view::handle(&live);
+    let caches = Arc::new(Caches {
+        view: viewer.clone(),
+        ..Caches::default()
+    });
     let recorder = super::db::Recorder::new(a, &mut opts);
     let run_opts = opts.clone();
     let project = opts.project.clone();
@@ -125,8 +164,9 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
         "watching {} (Ctrl-C to stop)",
         project.display(&opts.script)
     );
-    let result = watch_loop(opts, stop, |event| match event {
+    let result = watch_with(opts, caches, stop, |event| match event {
         WatchEvent::RunStarted { number, changed } => {
+            viewer.new_run(&run_name(&run_opts.script, Some(number)));
             recorder.start(a, &run_opts);
             let what = if changed.is_empty() {
                 "first run".to_string()
@@ -223,6 +263,11 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
             &crate::kinematics::MotionOptions::default(),
         )
         .map_err(|e| fail(e.to_string()))?;
+    let live = super::view::start(&a.view, &project, Some(run_name(&program_path, None)))
+        .map_err(usage)?;
+    let viewer = super::view::handle(&live);
+    viewer.log_document(&doc);
+    viewer.log_trajectory(&doc, index, &trajectory);
     let csv = trajectory.to_csv(crate::math::AngleConvention::default());
     match &a.log {
         Some(log) => {
@@ -242,5 +287,6 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
         }
         None => super::out::write(super::out::Stream::Stdout, &csv),
     }
+    super::view::finish(live);
     Ok(())
 }

@@ -189,6 +189,7 @@ pub(crate) fn register_all(
     super::bind_db::register(&mut api, ctx);
     super::bind_sequence::register(&mut api);
     super::bind_skills::register(&mut api, ctx);
+    super::bind_view::register(&mut api);
     (api.sections, api.entries, api.overloads)
 }
 

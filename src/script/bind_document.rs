@@ -72,6 +72,7 @@ impl DocHandle {
         for f in doc.source_files() {
             ctx.record_read(&f);
         }
+        ctx.caches.view.log_document(&doc);
         Ok(Self {
             inner: Arc::new(Mutex::new(doc)),
             ctx: ctx.clone(),
@@ -109,17 +110,28 @@ impl ComponentHandle {
     }
 
     fn set_transform(&self, t: Transform) -> ScriptResult<()> {
-        self.doc
-            .lock()?
-            .set_transform_at(self.index, t)
-            .map_err(fail)
+        let mut doc = self.doc.lock()?;
+        doc.set_transform_at(self.index, t).map_err(fail)?;
+        self.show_pose(&doc);
+        Ok(())
+    }
+
+    /// Shows the new pose in the viewer as a new animation frame.
+    fn show_pose(&self, doc: &Document) {
+        let view = &self.doc.context().caches.view;
+        if view.is_live() {
+            let c = &doc.components()[self.index];
+            view.log_poses(doc, vec![(c.name.clone(), c.transform)], true);
+        }
     }
 
     /// Moves the component by `motion` applied after its pose (world frame), under one lock.
     fn move_by(&self, motion: Transform) -> ScriptResult<()> {
         let mut doc = self.doc.lock()?;
         let t = doc.components()[self.index].transform * motion;
-        doc.set_transform_at(self.index, t).map_err(fail)
+        doc.set_transform_at(self.index, t).map_err(fail)?;
+        self.show_pose(&doc);
+        Ok(())
     }
 
     fn transform(&self) -> ScriptResult<Transform> {

@@ -80,6 +80,14 @@ fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult
             ws.interferences(&o)
         }
         .map_err(fail)?;
+        let view = &d.context().caches.view;
+        if view.is_live() && !want_touching {
+            let pairs: Vec<_> = found
+                .iter()
+                .map(|p| (p.a, p.b, p.contact.depth()))
+                .collect();
+            view.log_interference(ws.document(), &pairs);
+        }
         Ok(found
             .into_iter()
             .map(|p| Dynamic::from_map(contact_map(&p.contact, ws.name(p.a), ws.name(p.b))))

@@ -463,7 +463,17 @@ fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> S
     let ctx = c.doc.context().clone();
     let mut doc = c.doc.lock()?;
     let name = doc.components()[c.index].name.clone();
+    let view = ctx.caches.view.clone();
+    view.log_path(&name, &p.0.poses);
+    let doc_name = crate::viewer::document_name(&doc);
     let n = crate::workspace::follow(&mut doc, &name, &p.0, step, |k, n, t| {
+        if view.is_live() {
+            view.send(crate::viewer::Event::Poses {
+                doc: doc_name.clone(),
+                poses: vec![(name.clone(), *t)],
+                advance: true,
+            });
+        }
         if print {
             ctx.print(&format!("follow {name} {k}/{n}: {t}"));
         }

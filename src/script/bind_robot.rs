@@ -91,6 +91,10 @@ impl RobotHandle {
         if stream {
             stream_samples(self.doc.context(), robot, &t);
         }
+        let view = &self.doc.context().caches.view;
+        if view.is_live() {
+            view.log_trajectory(&*self.doc.lock()?, self.index, &t);
+        }
         if let Some(q) = t.last_joints() {
             self.set_joints(q)?;
         }

@@ -15,6 +15,7 @@ mod bind_planning;
 mod bind_robot;
 mod bind_sequence;
 mod bind_skills;
+mod bind_view;
 mod convert;
 pub mod sandbox;
 
@@ -43,6 +44,8 @@ pub struct Caches {
     pub scene: Mutex<crate::workspace::SceneCache>,
     /// Parsed documents by file, reused while none of their source files changed.
     pub documents: Mutex<DocumentCache>,
+    /// The viewer session the runs log to (off unless `--view`/`--record`).
+    pub view: crate::viewer::Viewer,
 }
 
 /// A parsed document and the stamps of its source files when it was loaded.
@@ -351,6 +354,7 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
     let engine = engine(ctx, &opts.limits);
     let mut scope = Scope::new();
     scope.push_constant("args", ctx.args.to_map());
+    scope.push_constant("view", bind_view::ViewHandle::new(ctx));
     if let Some(doc_path) = &opts.doc {
         let doc = bind_document::DocHandle::open(ctx, &doc_path.to_string_lossy())
             .map_err(|e| ScriptError::Located(SourceError::new(doc_path, 0, 0, e.to_string())))?;

@@ -93,9 +93,20 @@ enum Msg {
 pub fn watch(
     opts: RunOptions,
     stop: Arc<AtomicBool>,
+    report: impl FnMut(WatchEvent),
+) -> notify::Result<()> {
+    watch_with(opts, Arc::new(Caches::default()), stop, report)
+}
+
+/// [`watch`] with caches the caller made (e.g. with a viewer session: every run logs
+/// to `caches.view`, which the caller switches to a new recording on each
+/// [`WatchEvent::RunStarted`]).
+pub fn watch_with(
+    opts: RunOptions,
+    caches: Arc<Caches>,
+    stop: Arc<AtomicBool>,
     mut report: impl FnMut(WatchEvent),
 ) -> notify::Result<()> {
-    let caches = Arc::new(Caches::default());
     let (tx, rx) = channel::<Msg>();
     let fs_tx = tx.clone();
     let mut watcher = notify::recommended_watcher(move |e| {

@@ -1,5 +1,7 @@
 //! Watch latency: from the save of the script to the end of the rerun, with a cached
 //! mesh set of ≥ 200k triangles. Run with `cargo bench --bench watch_latency`.
+//! With the `viewer` feature a second row runs `fitup watch --view` (a serving viewer
+//! session, no browser attached) on the same project.
 
 use fitup::demo;
 use fitup::document::file::{ComponentFile, PartFile};
@@ -10,6 +12,15 @@ use std::sync::mpsc::channel;
 use std::time::{Duration, Instant};
 
 fn main() {
+    measure(&[]);
+    if cfg!(feature = "viewer") {
+        measure(&["--view"]);
+    }
+}
+
+/// Runs `fitup watch` (with `extra` arguments) on a fresh project and prints the
+/// latencies of 60 saves.
+fn measure(extra: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let models = dir.path().join("models");
     demo::write_cell(&models).unwrap();
@@ -51,6 +62,7 @@ fn main() {
     let mut child = Command::new(env!("CARGO_BIN_EXE_fitup"))
         .current_dir(dir.path())
         .args(["watch", "scripts/w.rhai"])
+        .args(extra)
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()
@@ -106,7 +118,7 @@ fn main() {
     sorted.sort_by(f64::total_cmp);
     let q = |p: f64| sorted[((sorted.len() - 1) as f64 * p).round() as usize];
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-    println!("watch latency, save → end of rerun, {saves} saves (in-place and rename alternating), {triangles} cached triangles:");
+    println!("watch latency{}, save → end of rerun, {saves} saves (in-place and rename alternating), {triangles} cached triangles:", if extra.is_empty() { String::new() } else { format!(" with {}", extra.join(" ")) });
     println!(
         "  median {:.1} ms   p95 {:.1} ms   min {:.1} ms   max {:.1} ms",
         q(0.5),
