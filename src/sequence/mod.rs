@@ -73,12 +73,10 @@ pub fn plan_sequence(
 }
 
 /// The relation graph of `doc` from its mates, loops broken into composite nodes
-/// (composite bases chosen by mesh volume).
+/// (composite bases chosen by the components' `mass`, else mesh volume).
 pub fn relation_graph(doc: &Document) -> RelationGraph {
-    let vols: Vec<f64> = (0..doc.components().len())
-        .map(|i| doc.mesh_of(i).signed_volume().abs())
-        .collect();
-    RelationGraph::build(doc, &|i| vols[i])
+    let sizes = plan::component_sizes(doc, &SequenceOptions::default());
+    RelationGraph::build(doc, &|i| sizes[i])
 }
 
 /// The mating directions of component `name` (unit, assembly frame: the direction
