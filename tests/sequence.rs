@@ -616,3 +616,67 @@ fn gearbox_without_mates() {
     check_gearbox(&doc, &plan);
     assert!(plan.graph.loops.is_empty());
 }
+
+#[test]
+fn revalidation_after_an_edit_names_the_broken_steps() {
+    use fitup::math::Transform;
+    use fitup::sequence::revalidate;
+    let mut doc = open("models/gearbox.yaml");
+    let mut cache = SceneCache::new();
+    let plan = plan_sequence(&doc, &mut cache, &SequenceOptions::default()).unwrap();
+    let tol = fitup::collision::DEFAULT_TOLERANCE;
+    let seq = plan.best();
+    assert!(revalidate(seq, &doc, &mut cache, tol).unwrap().is_empty());
+    // The cover slid 30 mm right: over the cap's way down and off the screws' holes.
+    let cover = Transform::from_translation(Vec3::new(30.0, 0.0, 20.0));
+    doc.set_transform("cover", cover).unwrap();
+    let broken = revalidate(seq, &doc, &mut cache, tol).unwrap();
+    let why = |n: &str| {
+        broken
+            .iter()
+            .find(|b| b.part == n)
+            .map(|b| b.reason.clone())
+    };
+    assert!(why("cover").unwrap().contains("moved"), "{broken:#?}");
+    assert!(why("cap").unwrap().contains("hits cover"), "{broken:#?}");
+    assert!(why("screw2").unwrap().contains("cover"), "{broken:#?}");
+    // Every other broken step is blocked by the cover; the slider (in before it) and
+    // the screws left of its new place still hold.
+    for b in &broken {
+        assert!(
+            b.part == "cover" || b.reason.ends_with("hits cover"),
+            "{b:?}"
+        );
+    }
+    for n in ["slider", "screw1", "screw3"] {
+        assert!(why(n).is_none(), "{n}: {broken:#?}");
+    }
+    // In task order.
+    assert!(broken.windows(2).all(|w| w[0].index < w[1].index));
+}
+
+#[test]
+fn component_mass_and_threaded_are_read_and_validated() {
+    let doc = open("models/gearbox.yaml");
+    let c = |n: &str| doc.components()[doc.component_index(n).unwrap()].clone();
+    assert_eq!(c("housing").mass, Some(2.5));
+    assert_eq!(c("washer").mass, None);
+    assert!(c("cap").threaded && c("screw1").threaded && !c("gear").threaded);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("meshes")).unwrap();
+    std::fs::copy(
+        "models/meshes/gearbox_slider.stl",
+        dir.path().join("meshes/gearbox_slider.stl"),
+    )
+    .unwrap();
+    for (bad, what) in [("-1.0", "mass"), (".nan", "mass"), ("1e400", "mass")] {
+        let text = format!(
+            "parts:\n  slider:\n    stl: meshes/gearbox_slider.stl\ncomponents:\n- name: a\n  part: slider\n  mass: {bad}\n"
+        );
+        let path = dir.path().join("bad.yaml");
+        std::fs::write(&path, text).unwrap();
+        let e = Document::open(&path).unwrap_err().to_string();
+        assert!(e.contains(what) && e.contains("bad.yaml"), "{bad}: {e}");
+        assert!(e.contains(":7:"), "located on the mass line: {e}");
+    }
+}

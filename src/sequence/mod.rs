@@ -42,6 +42,7 @@ mod grasp;
 mod options;
 mod plan;
 mod report;
+mod revalidate;
 mod task;
 
 pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};
@@ -50,6 +51,7 @@ pub use options::{
     Gripper, Mode, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
     DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
 };
+pub use revalidate::{revalidate, BrokenStep};
 pub use task::{Grasp, Operation, Task};
 
 use crate::document::Document;

@@ -476,14 +476,26 @@ impl<'d> Ctx<'d> {
     /// The directional blocking graph: for every component, direction and other
     /// component, whether the straight removal hits it.
     fn build_blocking(&mut self) -> Result<(), SequenceError> {
-        let mut blocked = Vec::with_capacity(self.n);
+        let mut blocked: Vec<Vec<Mask>> = Vec::with_capacity(self.n);
         for p in 0..self.n {
             let mut row = Vec::new();
             for k in 0..self.dirs[p].len() {
                 let d = self.dirs[p][k];
                 let mut m: Mask = 0;
                 for q in 0..self.n {
-                    if q != p && self.sweep_hits(p, &d, q)? {
+                    if q == p {
+                        continue;
+                    }
+                    // p along d meets q exactly when q along −d meets p (the same
+                    // relative motion, the same separation length): reuse it.
+                    let mirrored = (q < p)
+                        .then(|| self.dirs[q].iter().position(|e| same_dir(e, &-d)))
+                        .flatten();
+                    let hit = match mirrored {
+                        Some(k2) => blocked[q][k2] & bit(p) != 0,
+                        None => self.sweep_hits(p, &d, q)?,
+                    };
+                    if hit {
                         m |= bit(q);
                     }
                 }
@@ -737,22 +749,32 @@ impl<'d> Ctx<'d> {
             .collect();
         let step = self.step.max(limit / 200.0);
         let start = self.scene.poses[p];
-        let mut s = self.opts.probe_mm;
-        while s < limit {
+        let free_at = |s: f64| {
+            let at = start.then(&Transform::from_translation(d * s));
+            others.iter().all(|e| {
+                let probe = at.then(&Transform::from_translation(e * self.opts.probe_mm));
+                !self.pose_hits(p, &probe, mask)
+            })
+        };
+        if self.opts.probe_mm >= limit || free_at(self.opts.probe_mm) {
+            return self.opts.probe_mm.min(limit);
+        }
+        // Bisection to one step: the part is held sideways until it clears what
+        // surrounds it, and free from there on (a handful of probes, not one per
+        // step — each probe is an exact query, costly on fine meshes).
+        let (mut lo, mut hi) = (self.opts.probe_mm, limit);
+        while hi - lo > step {
             if self.out_of_time() {
                 return limit;
             }
-            let at = start.then(&Transform::from_translation(d * s));
-            let free = others.iter().all(|e| {
-                let probe = at.then(&Transform::from_translation(e * self.opts.probe_mm));
-                !self.pose_hits(p, &probe, mask)
-            });
-            if free {
-                return s;
+            let mid = 0.5 * (lo + hi);
+            if free_at(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
             }
-            s += step;
         }
-        limit
+        hi
     }
 }
 
