@@ -475,6 +475,8 @@ impl<'d> Ctx<'d> {
 
     /// The directional blocking graph: for every component, direction and other
     /// component, whether the straight removal hits it.
+    // `q` indexes the rows built so far and the directions, not one slice.
+    #[allow(clippy::needless_range_loop)]
     fn build_blocking(&mut self) -> Result<(), SequenceError> {
         let mut blocked: Vec<Vec<Mask>> = Vec::with_capacity(self.n);
         for p in 0..self.n {
@@ -897,6 +899,8 @@ impl Search<'_, '_> {
 
     /// Depth-first over feasible next parts; returns whether a completion exists
     /// below (`self.cut` tells whether the answer is partial).
+    // The search state of one node, passed down by value (cheap copies).
+    #[allow(clippy::too_many_arguments)]
     fn dfs(
         &mut self,
         base: usize,
