@@ -121,6 +121,8 @@ fn component(name: &str, part: &str, fixed: bool, color: &str, t: Transform) -> 
         fixed,
         color: Some(serde_yaml::Value::String(color.into())),
         transform: Some(t.to_matrix()),
+        mass: None,
+        threaded: false,
     }
 }
 

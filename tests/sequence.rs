@@ -3,6 +3,8 @@
 //! sequence is re-checked step by step against exactly the parts assembled before.
 
 mod common;
+#[path = "common/gearbox.rs"]
+mod gearbox;
 #[path = "common/pegboard.rs"]
 mod pegboard;
 
@@ -79,7 +81,10 @@ fn wheel_meshes() -> Vec<(&'static str, Mesh)> {
 /// them).
 #[test]
 fn models_match_their_generators() {
-    for (path, mesh) in wheel_meshes() {
+    for (path, mesh) in wheel_meshes()
+        .into_iter()
+        .chain(gearbox::gearbox_meshes(32))
+    {
         assert!(mesh.inspect().is_watertight(), "{path}");
         if std::env::var_os("FITUP_REGENERATE").is_some() {
             fitup::mesh::write_stl(Path::new(path), &mesh).unwrap();
@@ -430,4 +435,248 @@ fn interfering_assembly_and_tiny_budgets_are_refused_in_bounded_time() {
     let r = plan_sequence(&doc, &mut SceneCache::new(), &o);
     assert!(r.is_err(), "1 ms cannot sequence the cell");
     assert!(t.elapsed().as_secs_f64() < 20.0, "{:?}", t.elapsed());
+}
+
+/// An independent dense re-check of every sequence: each task's path sampled every
+/// `step_mm` (and its rotation every 0.01 rad) is tested with the exact interference
+/// query against exactly the parts assembled before it, one pair at a time (no
+/// planner validator involved).
+fn dense_recheck(doc: &Document, plan: &SequencePlan, step_mm: f64) {
+    use fitup::collision::interferes;
+    let mut cache = SceneCache::new();
+    let ws = fitup::workspace::Workspace::new(doc, &mut cache).unwrap();
+    let scene = ws.scene();
+    let tol = fitup::collision::DEFAULT_TOLERANCE;
+    for s in &plan.sequences {
+        let order = s.order();
+        for (k, t) in s.tasks.iter().enumerate() {
+            let p = doc.component_index(&t.part).unwrap();
+            let before: Vec<usize> = order[..k + 1]
+                .iter()
+                .map(|n| doc.component_index(n).unwrap())
+                .collect();
+            for w in t.path.poses.windows(2) {
+                let (a, b) = (w[0], w[1]);
+                let len = (b.translation() - a.translation()).norm();
+                let rot = a.rotation().angle_to(&b.rotation());
+                let n = ((len / step_mm).max(rot / 0.01).ceil() as usize).max(1);
+                for i in 0..=n {
+                    let pose = a.interpolate(&b, i as f64 / n as f64);
+                    let bp = scene.colliders[p].world_bounds(&pose);
+                    for &q in &before {
+                        let bq = scene.colliders[q].world_bounds(&scene.poses[q]);
+                        if bp.overlap(&bq).min() <= tol {
+                            continue;
+                        }
+                        assert!(
+                            !interferes(
+                                &scene.colliders[p],
+                                &pose,
+                                &scene.colliders[q],
+                                &scene.poses[q],
+                                tol
+                            )
+                            .unwrap(),
+                            "{:?}: task {k} ({}) hits {} at sample {i}/{n}",
+                            order,
+                            t.part,
+                            order[before.iter().position(|&x| x == q).unwrap()]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The 12-part gearbox (tests/common/gearbox.rs): a loop of mates on the post, parts
+/// that must go in before their neighbours close them in, and a slider that needs a
+/// non-straight insertion.
+fn check_gearbox(doc: &Document, plan: &SequencePlan) {
+    let best = plan.best();
+    let order = best.order();
+    let pos = |n: &str| order.iter().position(|o| o == n).unwrap();
+    assert_eq!(order[0], "housing", "the heaviest part is the base");
+    // Before their neighbours block them.
+    assert!(pos("slider") < pos("cover"), "{order:?}");
+    for s in ["screw1", "screw2", "screw3", "screw4"] {
+        assert!(pos("cover") < pos(s), "{order:?}");
+    }
+    let stack = ["post", "bushing", "gear", "washer", "cap"];
+    for w in stack.windows(2) {
+        assert!(pos(w[0]) < pos(w[1]), "{order:?}");
+    }
+    // The slider: no straight insertion (roof above, walls around); its planned
+    // path slides under the roof, not along one line.
+    let k = best.tasks.iter().position(|t| t.part == "slider").unwrap();
+    assert!(best.steps[k].planned, "the slider's path is planned");
+    assert!(best.steps[k].mating_directions.is_empty());
+    let poses = &best.tasks[k].path.poses;
+    assert!(poses.len() >= 3, "{poses:?}");
+    let first = poses[1].translation() - poses[0].translation();
+    let last = poses[poses.len() - 1].translation() - poses[poses.len() - 2].translation();
+    assert!(
+        first.normalize().dot(&last.normalize()) < 0.9,
+        "not straight: {poses:?}"
+    );
+    // Threaded components are screwed.
+    for t in &best.tasks {
+        let threaded = t.part.starts_with("screw") || t.part == "cap";
+        assert_eq!(t.operation == Operation::Screw, threaded, "{}", t.part);
+    }
+    // Precedence: the order the geometry forces, in every sequence.
+    for (a, b) in [
+        ("slider", "cover"),
+        ("cover", "screw1"),
+        ("post", "bushing"),
+        ("bushing", "gear"),
+        ("gear", "washer"),
+        ("washer", "cap"),
+    ] {
+        assert!(
+            plan.precedence.contains(&(a.into(), b.into())),
+            "{a} before {b}: {:?}",
+            plan.precedence
+        );
+    }
+    // Cover before slider was tried and rejected with the reason.
+    assert!(
+        plan.rejected.iter().any(|r| {
+            let p = |n: &str| r.order.iter().position(|o| o == n);
+            p("cover").is_some()
+                && p("slider").is_none()
+                && r.reason.contains("slider is blocked along all")
+                && r.reason.contains("cover")
+        }),
+        "{:#?}",
+        plan.rejected
+    );
+    for s in &plan.sequences {
+        let k = s.tasks.iter().position(|t| t.part == "slider").unwrap();
+        assert!(s.steps[k].planned);
+    }
+    recheck(doc, plan);
+    dense_recheck(doc, plan, 0.1);
+}
+
+#[test]
+fn gearbox_with_mates() {
+    let doc = open("models/gearbox.yaml");
+    let plan = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default()).unwrap();
+    check_gearbox(&doc, &plan);
+    // The seed's loops: the post stack's mates are broken into one composite node
+    // based on the post (the heavier by its `mass`; by volume the gear is larger),
+    // its order the one the geometry allows.
+    let g = &plan.graph;
+    assert!(!g.loops.is_empty());
+    let idx = |n: &str| doc.component_index(n).unwrap();
+    let composite = g.nodes.iter().find(|n| n.is_composite()).unwrap();
+    assert_eq!(
+        composite.members,
+        [idx("post"), idx("gear"), idx("washer"), idx("cap")]
+    );
+    // By volume alone the gear would be the composite's base.
+    let vol = |i: usize| doc.mesh_of(i).signed_volume();
+    let by_volume = fitup::sequence::RelationGraph::build(&doc, &vol);
+    let c = by_volume.nodes.iter().find(|n| n.is_composite()).unwrap();
+    assert_eq!(c.members[0], idx("gear"));
+    assert_eq!(
+        relation_graph(&doc)
+            .nodes
+            .iter()
+            .find(|n| n.is_composite())
+            .unwrap()
+            .members[0],
+        idx("post")
+    );
+}
+
+#[test]
+fn gearbox_without_mates() {
+    // The same assembly with its mates deleted, planned from the meshes alone.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("models/gearbox.yaml").unwrap();
+    let text = &text[..text.find("\nmates:").unwrap() + 1];
+    std::fs::create_dir(dir.path().join("meshes")).unwrap();
+    for e in std::fs::read_dir("models/meshes").unwrap() {
+        let e = e.unwrap();
+        if e.file_name().to_string_lossy().starts_with("gearbox_") {
+            std::fs::copy(e.path(), dir.path().join("meshes").join(e.file_name())).unwrap();
+        }
+    }
+    let path = dir.path().join("gearbox.yaml");
+    std::fs::write(&path, text).unwrap();
+    let doc = Document::open(&path).unwrap();
+    assert!(doc.mates().is_empty());
+    let o = SequenceOptions {
+        mode: Mode::Geometry,
+        ..SequenceOptions::default()
+    };
+    let plan = plan_sequence(&doc, &mut SceneCache::new(), &o).unwrap();
+    check_gearbox(&doc, &plan);
+    assert!(plan.graph.loops.is_empty());
+}
+
+#[test]
+fn revalidation_after_an_edit_names_the_broken_steps() {
+    use fitup::math::Transform;
+    use fitup::sequence::revalidate;
+    let mut doc = open("models/gearbox.yaml");
+    let mut cache = SceneCache::new();
+    let plan = plan_sequence(&doc, &mut cache, &SequenceOptions::default()).unwrap();
+    let tol = fitup::collision::DEFAULT_TOLERANCE;
+    let seq = plan.best();
+    assert!(revalidate(seq, &doc, &mut cache, tol).unwrap().is_empty());
+    // The cover slid 30 mm right: over the cap's way down and off the screws' holes.
+    let cover = Transform::from_translation(Vec3::new(30.0, 0.0, 20.0));
+    doc.set_transform("cover", cover).unwrap();
+    let broken = revalidate(seq, &doc, &mut cache, tol).unwrap();
+    let why = |n: &str| {
+        broken
+            .iter()
+            .find(|b| b.part == n)
+            .map(|b| b.reason.clone())
+    };
+    assert!(why("cover").unwrap().contains("moved"), "{broken:#?}");
+    assert!(why("cap").unwrap().contains("hits cover"), "{broken:#?}");
+    assert!(why("screw2").unwrap().contains("cover"), "{broken:#?}");
+    // Every other broken step is blocked by the cover; the slider (in before it) and
+    // the screws left of its new place still hold.
+    for b in &broken {
+        assert!(
+            b.part == "cover" || b.reason.ends_with("hits cover"),
+            "{b:?}"
+        );
+    }
+    for n in ["slider", "screw1", "screw3"] {
+        assert!(why(n).is_none(), "{n}: {broken:#?}");
+    }
+    // In task order.
+    assert!(broken.windows(2).all(|w| w[0].index < w[1].index));
+}
+
+#[test]
+fn component_mass_and_threaded_are_read_and_validated() {
+    let doc = open("models/gearbox.yaml");
+    let c = |n: &str| doc.components()[doc.component_index(n).unwrap()].clone();
+    assert_eq!(c("housing").mass, Some(2.5));
+    assert_eq!(c("washer").mass, None);
+    assert!(c("cap").threaded && c("screw1").threaded && !c("gear").threaded);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("meshes")).unwrap();
+    std::fs::copy(
+        "models/meshes/gearbox_slider.stl",
+        dir.path().join("meshes/gearbox_slider.stl"),
+    )
+    .unwrap();
+    for (bad, what) in [("-1.0", "mass"), (".nan", "mass"), ("1e400", "mass")] {
+        let text = format!(
+            "parts:\n  slider:\n    stl: meshes/gearbox_slider.stl\ncomponents:\n- name: a\n  part: slider\n  mass: {bad}\n"
+        );
+        let path = dir.path().join("bad.yaml");
+        std::fs::write(&path, text).unwrap();
+        let e = Document::open(&path).unwrap_err().to_string();
+        assert!(e.contains(what) && e.contains("bad.yaml"), "{bad}: {e}");
+        assert!(e.contains(":7:"), "located on the mass line: {e}");
+    }
 }

@@ -131,6 +131,13 @@ pub struct ComponentFile {
     /// formula (1)), translation `j k l` in mm; identity when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transform: Option<[[f64; 4]; 4]>,
+    /// Mass in kg (optional, finite and > 0): sequence planning chooses the heaviest
+    /// part as the base (else the largest mesh volume).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    /// The component is screwed in: its assembly task is a `screw` operation.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub threaded: bool,
 }
 
 /// A mate between two reference entities `component/reference`.

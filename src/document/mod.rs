@@ -164,6 +164,10 @@ pub struct Component {
     pub color: Option<Color>,
     /// Pose: part frame → world (mm).
     pub transform: Transform,
+    /// Mass in kg when the document gives one (finite, > 0).
+    pub mass: Option<f64>,
+    /// Screwed in (its assembly task is a `screw` operation).
+    pub threaded: bool,
 }
 
 /// Why a document operation failed. Load errors carry file, line and column.
@@ -540,12 +544,30 @@ impl Document {
                     )
                 })?),
             };
+            if let Some(m) = c.mass {
+                if !(m.is_finite() && m > 0.0 && m <= MAX_ABS_VALUE) {
+                    let from = locate(text, &needle, 1).map(|l| l.0).unwrap_or(1);
+                    let (line, col) = locate(text, "mass", from).unwrap_or((0, 0));
+                    return Err(SourceError::new(
+                        path,
+                        line,
+                        col,
+                        format!(
+                            "component `{}`: mass must be a finite number of kg > 0, not {m}",
+                            c.name
+                        ),
+                    )
+                    .into());
+                }
+            }
             components.push(Component {
                 name: c.name.clone(),
                 part: c.part.clone(),
                 fixed: c.fixed,
                 color,
                 transform,
+                mass: c.mass,
+                threaded: c.threaded,
             });
         }
         // URDF robots: their links' meshes become generated parts and components.
@@ -1078,6 +1100,8 @@ impl Document {
                 fixed: c.fixed,
                 color: c.color.as_ref().map(color_value),
                 transform: Some(c.transform.to_matrix().map(|row| row.map(tidy))),
+                mass: c.mass,
+                threaded: c.threaded,
             })
             .collect();
         let mates = self
@@ -1276,6 +1300,8 @@ fn add_urdf_parts(
             fixed: false,
             color: None,
             transform: Transform::IDENTITY,
+            mass: None,
+            threaded: false,
         });
         generated.insert(name);
     }

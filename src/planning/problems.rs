@@ -198,6 +198,8 @@ impl Problem {
                 fixed: true,
                 color: Some(serde_yaml::Value::String("#8c8c8c".into())),
                 transform: Some(o.pose.to_matrix()),
+                mass: None,
+                threaded: false,
             })
             .collect();
         components.push(ComponentFile {
@@ -206,6 +208,8 @@ impl Problem {
             fixed: false,
             color: Some(serde_yaml::Value::String("#d4a72c".into())),
             transform: Some(self.start.to_matrix()),
+            mass: None,
+            threaded: false,
         });
         DocumentFile {
             units: "mm".into(),

@@ -42,6 +42,7 @@ mod grasp;
 mod options;
 mod plan;
 mod report;
+mod revalidate;
 mod task;
 
 pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};
@@ -50,6 +51,7 @@ pub use options::{
     Gripper, Mode, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
     DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
 };
+pub use revalidate::{revalidate, BrokenStep};
 pub use task::{Grasp, Operation, Task};
 
 use crate::document::Document;
@@ -73,12 +75,10 @@ pub fn plan_sequence(
 }
 
 /// The relation graph of `doc` from its mates, loops broken into composite nodes
-/// (composite bases chosen by mesh volume).
+/// (composite bases chosen by the components' `mass`, else mesh volume).
 pub fn relation_graph(doc: &Document) -> RelationGraph {
-    let vols: Vec<f64> = (0..doc.components().len())
-        .map(|i| doc.mesh_of(i).signed_volume().abs())
-        .collect();
-    RelationGraph::build(doc, &|i| vols[i])
+    let sizes = plan::component_sizes(doc, &SequenceOptions::default());
+    RelationGraph::build(doc, &|i| sizes[i])
 }
 
 /// The mating directions of component `name` (unit, assembly frame: the direction

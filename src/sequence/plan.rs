@@ -17,7 +17,7 @@ use crate::planning::{
     EdgeResolution, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace,
 };
 use crate::workspace::{Scene, SceneCache, WorkspaceError};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 use std::time::{Duration, Instant};
 
 type Mask = u128;
@@ -32,6 +32,41 @@ pub(crate) fn members_of(m: Mask) -> impl Iterator<Item = usize> {
 
 fn members(m: Mask) -> impl Iterator<Item = usize> {
     (0..128).filter(move |&i| m & bit(i) != 0)
+}
+
+/// The size of every component for the base choice (seed 003 section 2.2: volume or
+/// weight): its mass (`options.masses` by component or part, else the document's
+/// `mass`, kg) when one is known; else its mesh volume (mm³) times the median density
+/// of the components with a mass (so masses and volumes compare), or the bare volume
+/// when no component has a mass.
+pub(crate) fn component_sizes(doc: &Document, opts: &SequenceOptions) -> Vec<f64> {
+    let n = doc.components().len();
+    let volumes: Vec<f64> = (0..n)
+        .map(|i| doc.mesh_of(i).signed_volume().abs())
+        .collect();
+    let masses: Vec<Option<f64>> = doc
+        .components()
+        .iter()
+        .map(|c| {
+            opts.masses
+                .get(&c.name)
+                .or_else(|| opts.masses.get(&c.part))
+                .copied()
+                .or(c.mass)
+        })
+        .collect();
+    let mut densities: Vec<f64> = (0..n)
+        .filter_map(|i| {
+            masses[i]
+                .filter(|_| volumes[i] > 0.0)
+                .map(|m| m / volumes[i])
+        })
+        .collect();
+    densities.sort_by(f64::total_cmp);
+    let density = densities.get(densities.len() / 2).copied().unwrap_or(1.0);
+    (0..n)
+        .map(|i| masses[i].unwrap_or(volumes[i] * density))
+        .collect()
 }
 
 /// Everything the search needs, computed once per call.
@@ -202,16 +237,7 @@ impl<'d> Ctx<'d> {
             }
             boxes.push(scene.colliders[i].world_bounds(&scene.poses[i]));
         }
-        let sizes: Vec<f64> = (0..n)
-            .map(|i| {
-                let c = &doc.components()[i];
-                opts.masses
-                    .get(&c.name)
-                    .or_else(|| opts.masses.get(&c.part))
-                    .copied()
-                    .unwrap_or_else(|| doc.mesh_of(i).signed_volume().abs())
-            })
-            .collect();
+        let sizes = component_sizes(doc, opts);
         // The assembled state must be free of interference.
         let contacts = scene
             .contacts(crate::collision::Method::Exact, opts.tolerance)
@@ -287,7 +313,37 @@ impl<'d> Ctx<'d> {
         };
         ctx.dirs = (0..n).map(|i| ctx.candidate_directions(i)).collect();
         ctx.build_blocking()?;
+        ctx.order_composites();
         Ok(ctx)
+    }
+
+    /// The order a composite node implies (seed 003 section 2.1 step 3), from the
+    /// blocking graph: taken apart member by member (the first member, the node's
+    /// base, stays), each time one that can leave the others straight, the latest
+    /// in the loop-breaking order first; assembly is the reverse. A stack on a shaft
+    /// (bushing, gear, washer, cap) so comes out bottom-up whatever the sizes say.
+    /// Members that cannot be taken apart keep their loop-breaking order.
+    fn order_composites(&mut self) {
+        for ni in 0..self.graph.nodes.len() {
+            let members = self.graph.nodes[ni].members.clone();
+            if members.len() < 3 {
+                continue;
+            }
+            let mut left: Vec<usize> = members.clone();
+            let mut removed = Vec::new();
+            while left.len() > 1 {
+                let mask: Mask = left.iter().fold(0, |a, &m| a | bit(m));
+                let Some(pos) = (1..left.len())
+                    .rev()
+                    .find(|&i| !self.free_dirs(left[i], mask & !bit(left[i])).is_empty())
+                else {
+                    break;
+                };
+                removed.push(left.remove(pos));
+            }
+            left.extend(removed.into_iter().rev());
+            self.graph.nodes[ni].members = left;
+        }
     }
 
     pub fn out_of_time(&self) -> bool {
@@ -419,15 +475,29 @@ impl<'d> Ctx<'d> {
 
     /// The directional blocking graph: for every component, direction and other
     /// component, whether the straight removal hits it.
+    // `q` indexes the rows built so far and the directions, not one slice.
+    #[allow(clippy::needless_range_loop)]
     fn build_blocking(&mut self) -> Result<(), SequenceError> {
-        let mut blocked = Vec::with_capacity(self.n);
+        let mut blocked: Vec<Vec<Mask>> = Vec::with_capacity(self.n);
         for p in 0..self.n {
             let mut row = Vec::new();
             for k in 0..self.dirs[p].len() {
                 let d = self.dirs[p][k];
                 let mut m: Mask = 0;
                 for q in 0..self.n {
-                    if q != p && self.sweep_hits(p, &d, q)? {
+                    if q == p {
+                        continue;
+                    }
+                    // p along d meets q exactly when q along −d meets p (the same
+                    // relative motion, the same separation length): reuse it.
+                    let mirrored = (q < p)
+                        .then(|| self.dirs[q].iter().position(|e| same_dir(e, &-d)))
+                        .flatten();
+                    let hit = match mirrored {
+                        Some(k2) => blocked[q][k2] & bit(p) != 0,
+                        None => self.sweep_hits(p, &d, q)?,
+                    };
+                    if hit {
                         m |= bit(q);
                     }
                 }
@@ -480,19 +550,12 @@ impl<'d> Ctx<'d> {
         if pos > 0 {
             return mask & bit(node.members[pos - 1]) != 0;
         }
-        // The node's first member: a related node complete in `mask`, or the first
-        // node of a group nothing of which is assembled yet (its largest).
-        let node_mask: Mask = node.members.iter().fold(0, |a, &m| a | bit(m));
-        let mut rel: Mask = 0;
-        for &m in &node.members {
-            rel |= self.related[m];
-        }
-        rel &= !node_mask;
-        for q in members(rel & mask) {
-            let qn = &self.graph.nodes[self.node_index(q)];
-            if qn.members.iter().all(|&m| mask & bit(m) != 0) {
-                return true;
-            }
+        // The node's first member: related to an assembled component (composite
+        // nodes are assembled part by part, so a part may go onto the members of a
+        // composite already in place, between them), or the first node of a group
+        // nothing of which is assembled yet (its largest).
+        if self.related[p] & mask != 0 {
+            return true;
         }
         let group = self.group_of(p);
         if group & mask != 0 {
@@ -582,6 +645,82 @@ impl<'d> Ctx<'d> {
         path.found().then_some(path)
     }
 
+    /// A validator for `p` moving among the components of `mask`.
+    fn validator(&self, p: usize, mask: Mask, edge: EdgeResolution) -> Option<MeshValidator> {
+        let obstacles: Vec<_> = members(mask)
+            .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
+            .collect();
+        MeshValidator::new(
+            self.scene.colliders[p].clone(),
+            obstacles,
+            MeshValidatorOptions {
+                tolerance: self.opts.tolerance,
+                edge,
+                ..MeshValidatorOptions::default()
+            },
+        )
+        .ok()
+    }
+
+    /// The cheapest non-straight insertion: slide along one candidate direction
+    /// from the assembled pose, then leave straight along another (an L: under a
+    /// roof, then out of the opening). Tries slides of 1/8 … 8/8 of the free travel,
+    /// shortest first. Returns the insertion path (outside → corner → assembled),
+    /// checked continuously among `mask`.
+    fn two_segment(&self, p: usize, mask: Mask) -> Option<PlannedPath> {
+        let region = union_box(&self.boxes, mask)?;
+        let mut v = self.validator(p, mask, EdgeResolution::CONTINUOUS)?;
+        let start = self.scene.poses[p];
+        let mut leaves: Vec<Vec3> = axis_dirs().to_vec();
+        for d in &self.dirs[p] {
+            push_dir(&mut leaves, *d);
+        }
+        let mut best: Option<PlannedPath> = None;
+        for d1 in &self.dirs[p] {
+            // The free travel along d1: the first stepped pose that hits.
+            let limit = exit_distance(&self.boxes[p], &region, d1) + self.opts.probe_mm;
+            let step = self.step.max(limit / 100.0);
+            let mut travel = 0.0;
+            while travel + step < limit {
+                if self.out_of_time() {
+                    return best;
+                }
+                let at = start.then(&Transform::from_translation(d1 * (travel + step)));
+                if self.pose_hits(p, &at, mask) {
+                    break;
+                }
+                travel += step;
+            }
+            if travel < self.opts.probe_mm {
+                continue;
+            }
+            for k in 1..=8 {
+                let s = travel * k as f64 / 8.0;
+                let corner = start.then(&Transform::from_translation(d1 * s));
+                let moved = self.scene.colliders[p].world_bounds(&corner);
+                for d2 in leaves.iter().filter(|d2| d2.dot(d1).abs() < 0.9) {
+                    let out = exit_distance(&moved, &region, d2) + self.opts.probe_mm;
+                    let from = corner.then(&Transform::from_translation(d2 * out));
+                    let path = PlannedPath::given(
+                        "two_segment",
+                        vec![from, corner, start],
+                        v.options().edge,
+                    );
+                    if best.as_ref().is_some_and(|b| b.length_mm <= path.length_mm) {
+                        continue;
+                    }
+                    if path.revalidate(&mut v).is_ok() {
+                        best = Some(path);
+                    }
+                }
+                if best.is_some() {
+                    break;
+                }
+            }
+        }
+        best
+    }
+
     /// Static interference of `p` at `pose` with any component of `mask`.
     fn pose_hits(&self, p: usize, pose: &Transform, mask: Mask) -> bool {
         let b = self.scene.colliders[p].world_bounds(pose);
@@ -612,22 +751,32 @@ impl<'d> Ctx<'d> {
             .collect();
         let step = self.step.max(limit / 200.0);
         let start = self.scene.poses[p];
-        let mut s = self.opts.probe_mm;
-        while s < limit {
+        let free_at = |s: f64| {
+            let at = start.then(&Transform::from_translation(d * s));
+            others.iter().all(|e| {
+                let probe = at.then(&Transform::from_translation(e * self.opts.probe_mm));
+                !self.pose_hits(p, &probe, mask)
+            })
+        };
+        if self.opts.probe_mm >= limit || free_at(self.opts.probe_mm) {
+            return self.opts.probe_mm.min(limit);
+        }
+        // Bisection to one step: the part is held sideways until it clears what
+        // surrounds it, and free from there on (a handful of probes, not one per
+        // step — each probe is an exact query, costly on fine meshes).
+        let (mut lo, mut hi) = (self.opts.probe_mm, limit);
+        while hi - lo > step {
             if self.out_of_time() {
                 return limit;
             }
-            let at = start.then(&Transform::from_translation(d * s));
-            let free = others.iter().all(|e| {
-                let probe = at.then(&Transform::from_translation(e * self.opts.probe_mm));
-                !self.pose_hits(p, &probe, mask)
-            });
-            if free {
-                return s;
+            let mid = 0.5 * (lo + hi);
+            if free_at(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
             }
-            s += step;
         }
-        limit
+        hi
     }
 }
 
@@ -658,7 +807,11 @@ struct Search<'c, 'd> {
     found: Vec<Found>,
     rejected: Vec<Rejected>,
     dead: HashSet<Mask>,
-    fallback: HashMap<(usize, Mask), Option<PlannedPath>>,
+    /// Per part: the planned path found for it (reused wherever it is still free).
+    planned_ok: Vec<Option<PlannedPath>>,
+    /// Per part: the sets of assembled parts among which no path was found (a
+    /// superset cannot do better).
+    planned_failed: Vec<Vec<Mask>>,
     /// Pairs (a, b) with a before b, counted over every complete sequence seen.
     before: Vec<Vec<u32>>,
     complete_count: u32,
@@ -674,6 +827,31 @@ const MAX_EXPANDED: usize = 200_000;
 const MAX_REJECTED: usize = 50;
 
 impl Search<'_, '_> {
+    /// A planned insertion path for `p` onto `mask` (second pass only): the path
+    /// found for `p` before when it is still free; else, unless `p` had a straight
+    /// insertion earlier on this branch or failed among fewer parts, a two-segment
+    /// path or seed 002's disassembly planner. `None`: no path.
+    fn planned_path(&mut self, p: usize, mask: Mask, had_free: Mask) -> Option<PlannedPath> {
+        let ctx = self.ctx;
+        if let Some(path) = &self.planned_ok[p] {
+            // Reuse only: a part whose path the later parts block should have gone
+            // in earlier (that order is searched too).
+            let mut v = ctx.validator(p, mask, EdgeResolution::CONTINUOUS)?;
+            return path.revalidate(&mut v).is_ok().then(|| path.clone());
+        }
+        if had_free & bit(p) != 0 || self.planned_failed[p].iter().any(|&f| f & !mask == 0) {
+            return None;
+        }
+        let found = ctx
+            .two_segment(p, mask)
+            .or_else(|| ctx.plan_fallback(p, mask));
+        match &found {
+            Some(path) => self.planned_ok[p] = Some(path.clone()),
+            None => self.planned_failed[p].push(mask),
+        }
+        found
+    }
+
     fn mounts_for(&self, current: Option<Vec3>, mate: &Vec3) -> bool {
         match current {
             None => false,
@@ -721,6 +899,8 @@ impl Search<'_, '_> {
 
     /// Depth-first over feasible next parts; returns whether a completion exists
     /// below (`self.cut` tells whether the answer is partial).
+    // The search state of one node, passed down by value (cheap copies).
+    #[allow(clippy::too_many_arguments)]
     fn dfs(
         &mut self,
         base: usize,
@@ -729,6 +909,7 @@ impl Search<'_, '_> {
         current: Option<Vec3>,
         cost: (usize, usize, f64),
         pins: &[usize],
+        had_free: Mask,
     ) -> bool {
         let ctx = self.ctx;
         let all: Mask = if ctx.n == 128 { !0 } else { bit(ctx.n) - 1 };
@@ -783,21 +964,18 @@ impl Search<'_, '_> {
                 ));
             }
         }
-        if options.is_empty() && self.use_fallback {
-            // No straight insertion: ask the planners for the eligible parts.
+        if self.use_fallback {
+            // Parts without a straight insertion: a planned path (seed 002's
+            // disassembly, or a two-segment slide-and-lift first), tried as soon as
+            // the part is eligible — the fewer parts assembled, the likelier a path.
             for p in (0..ctx.n).filter(|&p| mask & bit(p) == 0) {
-                if pinned.is_some_and(|q| q != p) || !ctx.eligible(p, mask) {
+                if pinned.is_some_and(|q| q != p)
+                    || !ctx.eligible(p, mask)
+                    || options.iter().any(|o| o.2.part == p)
+                {
                     continue;
                 }
-                let path = match self.fallback.get(&(p, mask)) {
-                    Some(r) => r.clone(),
-                    None => {
-                        let r = ctx.plan_fallback(p, mask);
-                        self.fallback.insert((p, mask), r.clone());
-                        r
-                    }
-                };
-                if let Some(path) = path {
+                if let Some(path) = self.planned_path(p, mask, had_free) {
                     let n = path.poses.len();
                     let last = path.poses[n - 1].translation() - path.poses[n - 2].translation();
                     let leave = if last.norm() > 1e-9 {
@@ -832,11 +1010,19 @@ impl Search<'_, '_> {
             self.dead.insert(mask);
             return false;
         }
+        // A planned part goes first: what comes after may close its way in.
         options.sort_by(|a, b| {
             a.0.cmp(&b.0)
+                .then(a.2.planned.is_none().cmp(&b.2.planned.is_none()))
                 .then(a.1.total_cmp(&b.1))
                 .then(a.2.part.cmp(&b.2.part))
         });
+        // Parts that could go straight here: the planners are not asked for them
+        // further down this branch (the order where they go straight is searched).
+        let next_had_free = options
+            .iter()
+            .filter(|o| o.2.planned.is_none())
+            .fold(had_free, |a, o| a | bit(o.2.part));
         let (cut_before, pruned_before) = (self.cut, self.pruned);
         self.cut = false;
         self.pruned = false;
@@ -863,6 +1049,7 @@ impl Search<'_, '_> {
                 next_current,
                 next_cost,
                 pins,
+                next_had_free,
             );
             choices.pop();
         }
@@ -893,11 +1080,12 @@ fn step_info(ctx: &Ctx, p: usize, mask: Mask, order: &[usize]) -> (Vec<usize>, V
 /// The operation from the geometry (seed 003 section 2 step 9).
 fn operation(ctx: &Ctx, p: usize, receivers: &[usize], mate: &Vec3) -> Operation {
     let c = &ctx.doc.components()[p];
-    if ctx
-        .opts
-        .threaded
-        .iter()
-        .any(|t| t == &c.name || t == &c.part)
+    if c.threaded
+        || ctx
+            .opts
+            .threaded
+            .iter()
+            .any(|t| t == &c.name || t == &c.part)
     {
         return Operation::Screw;
     }
@@ -1098,7 +1286,8 @@ pub(crate) fn plan(
         found: Vec::new(),
         rejected: Vec::new(),
         dead: HashSet::new(),
-        fallback: HashMap::new(),
+        planned_ok: vec![None; n],
+        planned_failed: vec![Vec::new(); n],
         before: vec![vec![0; n]; n],
         complete_count: 0,
         expanded: 0,
@@ -1151,15 +1340,17 @@ impl Search<'_, '_> {
                     base,
                     &[],
                     format!(
-                        "inactive base: {} is much smaller ({:.0}) than a part it joins ({:.0})",
-                        ctx.names[base], ctx.sizes[base], biggest_related
+                        "inactive base: {} is much smaller ({}) than a part it joins ({})",
+                        ctx.names[base],
+                        crate::math::format::number(ctx.sizes[base], 3),
+                        crate::math::format::number(biggest_related, 3)
                     ),
                 );
                 continue;
             }
             search.dead.clear();
             let mut choices = Vec::new();
-            search.dfs(base, bit(base), &mut choices, None, (0, 0, 0.0), pins);
+            search.dfs(base, bit(base), &mut choices, None, (0, 0, 0.0), pins, 0);
         }
     }
 }

@@ -72,6 +72,8 @@ fn write_cell(dir: &Path, parts: usize) -> (std::path::PathBuf, usize) {
             fixed: false,
             color: None,
             transform: Some(Transform::from_translation(at).to_matrix()),
+            mass: None,
+            threaded: false,
         });
     }
     let path = dir.join("cell.yaml");

@@ -48,6 +48,8 @@ fn measure(extra: &[&str]) {
             fitup::math::Transform::from_translation(fitup::math::Vec3::new(0.0, 0.0, 800.0))
                 .to_matrix(),
         ),
+        mass: None,
+        threaded: false,
     });
     std::fs::write(models.join("big.yaml"), file.to_yaml().unwrap()).unwrap();
     // the project root: scripts/ resolves `models/…` against it

@@ -7,11 +7,17 @@ use std::path::{Path, PathBuf};
 /// and nine pegs seated in them (each concentric with its hole, head coincident with
 /// the plate's top); the plate is `fixed` or free. Returns the document's path.
 pub fn pegboard(dir: &Path, plate_fixed: bool) -> PathBuf {
+    pegboard_with(dir, plate_fixed, 16)
+}
+
+/// [`pegboard`] with `segments` facets around each hole and peg (a multiple of 4):
+/// the bench's fine variant tessellates it to ~150 000 triangles.
+pub fn pegboard_with(dir: &Path, plate_fixed: bool, segments: usize) -> PathBuf {
     std::fs::create_dir_all(dir).unwrap();
     let (pitch, t, r) = (10.0, 5.0, 2.0);
-    let plate = Mesh::perforated_plate(3, 3, pitch, t, r, 4, |_, _| true).unwrap();
+    let plate = Mesh::perforated_plate(3, 3, pitch, t, r, segments / 4, |_, _| true).unwrap();
     fitup::mesh::write_stl(&dir.join("plate.stl"), &plate).unwrap();
-    let rs = r * (std::f64::consts::PI / 16.0).cos() * 0.97;
+    let rs = r * (std::f64::consts::PI / segments as f64).cos() * 0.97;
     let peg = Mesh::lathe(
         &[
             (0.0, 0.0),
@@ -21,7 +27,7 @@ pub fn pegboard(dir: &Path, plate_fixed: bool) -> PathBuf {
             (1.6 * r, t + 2.0),
             (0.0, t + 2.0),
         ],
-        16,
+        segments,
     )
     .unwrap();
     fitup::mesh::write_stl(&dir.join("peg.stl"), &peg).unwrap();
