@@ -19,10 +19,6 @@ pub const MAX_COORDINATE: f64 = 1e9;
 /// nodes of 4 per leaf, for a few more triangle-box tests per leaf pair).
 const LEAF_SIZE: usize = 8;
 
-/// Oriented-box axes are fitted at every this many levels of the tree (see
-/// `Tree::build`).
-const AXES_EVERY: usize = 3;
-
 /// An oriented box (part frame, mm) fitted to a node's triangles: `axes` columns are
 /// orthonormal directions, `half` the half extents along them. Far tighter than the
 /// node's axis-aligned box for a surface patch that is tilted in the part frame, which
@@ -194,8 +190,12 @@ impl Collider {
         let mut items: Vec<Item> = (0..mesh.triangles.len())
             .filter_map(|i| {
                 let t = mesh.triangle(i);
-                ((t[1] - t[0]).cross(&(t[2] - t[0])).norm() > 1e-24 * scale * scale)
-                    .then(|| (nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]), i as u32))
+                ((t[1] - t[0]).cross(&(t[2] - t[0])).norm() > 1e-24 * scale * scale).then(|| {
+                    (
+                        nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]),
+                        i as u32,
+                    )
+                })
             })
             .collect();
         if items.is_empty() {
@@ -219,7 +219,7 @@ impl Collider {
             count: 0,
         });
         tree.obbs.push(Obb::BLANK);
-        tree.build(0, &mut items, 0, 0, &Matrix3::identity());
+        tree.build(0, &mut items, 0, None);
         let Tree { nodes, obbs, .. } = tree;
         Ok(Collider {
             nodes,
@@ -382,28 +382,21 @@ struct Tree<'m> {
 }
 
 impl Tree<'_> {
-    /// Builds node `at` over `items` (which start at `offset` in tree order) at
-    /// `depth`, and returns the extents of its vertices along `parent_axes` and its
-    /// axis-aligned box.
+    /// Builds node `at` over `items` (which start at `offset` in tree order) and
+    /// returns the extents of its vertices along `parent_axes` (none for the root)
+    /// and its axis-aligned box, so the parent's boxes need no pass of their own.
     ///
-    /// Oriented boxes cost a covariance and an eigen solve only at every
-    /// [`AXES_EVERY`]-th level; the levels between reuse those axes, so a node's
-    /// extents are the union of its children's (no pass over its vertices) and each
-    /// vertex is projected about once per group of levels instead of once per level.
+    /// Every node gets its own principal axes: reusing a parent's axes (tried, to
+    /// save eigen solves) made tilted surface patches' boxes several times thicker
+    /// and near-miss queries slower than FCL.
     fn build(
         &mut self,
         at: usize,
         items: &mut [Item],
         offset: usize,
-        depth: usize,
-        parent_axes: &Matrix3<f64>,
+        parent_axes: Option<&Matrix3<f64>>,
     ) -> (Vec3, Vec3, Aabb) {
-        let new_axes = depth % AXES_EVERY == 0;
-        let axes = if new_axes {
-            principal_axes(self.mesh, items)
-        } else {
-            *parent_axes
-        };
+        let axes = principal_axes(self.mesh, items);
         let (lo, hi, aabb) = if items.len() <= LEAF_SIZE {
             self.nodes[at].first = offset as u32;
             self.nodes[at].count = items.len() as u32;
@@ -432,16 +425,15 @@ impl Tree<'_> {
             self.nodes.extend([blank, blank]);
             self.obbs.extend([Obb::BLANK, Obb::BLANK]);
             let (l, r) = items.split_at_mut(mid);
-            let (llo, lhi, lb) = self.build(left, l, offset, depth + 1, &axes);
-            let (rlo, rhi, rb) = self.build(left + 1, r, offset + mid, depth + 1, &axes);
+            let (llo, lhi, lb) = self.build(left, l, offset, Some(&axes));
+            let (rlo, rhi, rb) = self.build(left + 1, r, offset + mid, Some(&axes));
             (llo.inf(&rlo), lhi.sup(&rhi), lb.union(&rb))
         };
         self.nodes[at].bounds = aabb;
         self.obbs[at] = Obb::from_extents(&axes, lo, hi, &aabb);
-        if new_axes && depth > 0 {
-            extents(self.mesh, items, parent_axes)
-        } else {
-            (lo, hi, aabb)
+        match parent_axes {
+            Some(p) => extents(self.mesh, items, p),
+            None => (lo, hi, aabb),
         }
     }
 }

@@ -9,8 +9,8 @@
 //! contact and distance against fitup's own queries, and ray casts (fitup has none).
 
 use fitup::collision::{
-    check, contact, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells, CutSpec,
-    Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
+    check, contact, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells,
+    CutSpec, Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
 };
 use fitup::math::{Point3, Rng, Transform, Vec3};
 use fitup::mesh::{write_stl, Mesh};
@@ -407,7 +407,11 @@ fn parry_rows(
     use parry3d_f64::query::{self, Ray, RayCast};
     use parry3d_f64::shape::TriMesh;
     let trimesh = |m: &Mesh| {
-        let v = m.vertices.iter().map(|p| Vector::new(p.x, p.y, p.z)).collect();
+        let v = m
+            .vertices
+            .iter()
+            .map(|p| Vector::new(p.x, p.y, p.z))
+            .collect();
         TriMesh::new(v, m.triangles.clone()).unwrap()
     };
     let ms = |f: &mut dyn FnMut()| {
@@ -427,7 +431,10 @@ fn parry_rows(
     let pose = |p: &Transform| {
         let t = p.translation();
         let q = p.rotation();
-        Pose::from_parts(Vector::new(t.x, t.y, t.z), Rot3::from_xyzw(q.i, q.j, q.k, q.w))
+        Pose::from_parts(
+            Vector::new(t.x, t.y, t.z),
+            Rot3::from_xyzw(q.i, q.j, q.k, q.w),
+        )
     };
     println!(
         "\n## parry3d-f64 on the same pairs, in this process: median of {PARRY_ROUNDS} rounds x {PARRY_PAIRS} pairs, µs/query"
@@ -440,40 +447,48 @@ fn parry_rows(
     for (cat, pairs) in cats {
         let pairs = &pairs[..PARRY_PAIRS.min(pairs.len())];
         let pp: Vec<(Pose, Pose)> = pairs.iter().map(|(x, y)| (pose(x), pose(y))).collect();
-        let time = |f: &mut dyn FnMut(usize) -> f64| -> (f64, Vec<f64>) {
+        // parry's mesh–mesh distance takes 0.1–0.3 s a pair: 10 pairs, one round
+        let time = |n: usize, f: &mut dyn FnMut(usize) -> f64| -> (f64, Vec<f64>) {
+            let (n, rounds) = if n < pairs.len() {
+                (n, 1)
+            } else {
+                (pairs.len(), PARRY_ROUNDS)
+            };
             let mut per = Vec::new();
             let mut out = Vec::new();
-            for _ in 0..PARRY_ROUNDS {
+            for _ in 0..rounds {
                 out.clear();
                 let t0 = Instant::now();
-                for k in 0..pairs.len() {
+                for k in 0..n {
                     out.push(f(k));
                 }
-                per.push(t0.elapsed().as_secs_f64() / pairs.len() as f64 * 1e6);
+                per.push(t0.elapsed().as_secs_f64() / n as f64 * 1e6);
             }
             (median(per), out)
         };
         let rows: [(&str, (f64, Vec<f64>), (f64, Vec<f64>), f64); 3] = [
             (
                 "intersection yes/no",
-                time(&mut |k| {
+                time(usize::MAX, &mut |k| {
                     let (x, y) = &pairs[k];
                     interferes(a, x, b, y, DEFAULT_TOLERANCE).unwrap() as u8 as f64
                 }),
-                time(&mut |k| {
+                time(usize::MAX, &mut |k| {
                     let (x, y) = &pp[k];
-                    query::intersection_test(x, &sa, y, &sb).unwrap().intersecting as u8 as f64
+                    query::intersection_test(x, &sa, y, &sb)
+                        .unwrap()
+                        .intersecting as u8 as f64
                 }),
                 0.5,
             ),
             (
                 "contact (fitup: verdict + depth; parry: deepest point pair)",
-                time(&mut |k| {
+                time(usize::MAX, &mut |k| {
                     let (x, y) = &pairs[k];
                     (contact(a, x, b, y, DEFAULT_TOLERANCE).unwrap()
                         != fitup::collision::Contact::Separate) as u8 as f64
                 }),
-                time(&mut |k| {
+                time(usize::MAX, &mut |k| {
                     let (x, y) = &pp[k];
                     query::contact(x, &sa, y, &sb, 0.0).unwrap().is_some() as u8 as f64
                 }),
@@ -481,11 +496,11 @@ fn parry_rows(
             ),
             (
                 "distance",
-                time(&mut |k| {
+                time(10, &mut |k| {
                     let (x, y) = &pairs[k];
                     surface_distance(a, x, b, y, 0.0).unwrap()
                 }),
-                time(&mut |k| {
+                time(10, &mut |k| {
                     let (x, y) = &pp[k];
                     query::distance(x, &sa, y, &sb).unwrap().distance
                 }),
@@ -510,7 +525,11 @@ fn parry_rows(
     let rays: Vec<Ray> = (0..10_000)
         .map(|_| {
             let o = Vec3::new(rng.normal(), rng.normal(), rng.normal()).normalize() * 150.0;
-            let t = Vec3::new(rng.range(-40.0, 40.0), rng.range(-40.0, 40.0), rng.range(-10.0, 10.0));
+            let t = Vec3::new(
+                rng.range(-40.0, 40.0),
+                rng.range(-40.0, 40.0),
+                rng.range(-10.0, 10.0),
+            );
             let d = (t - o).normalize();
             Ray::new(Vector::new(o.x, o.y, o.z), Vector::new(d.x, d.y, d.z))
         })
