@@ -466,7 +466,9 @@ fn parry_rows(
             }
             (median(per), out)
         };
-        let rows: [(&str, (f64, Vec<f64>), (f64, Vec<f64>), f64); 3] = [
+        // (query, fitup (µs, answers), parry (µs, answers), agreement threshold)
+        type Timed = (f64, Vec<f64>);
+        let rows: [(&str, Timed, Timed, f64); 3] = [
             (
                 "intersection yes/no",
                 time(usize::MAX, &mut |k| {
