@@ -130,7 +130,7 @@ impl CutCells {
             first..=last.min(n[axis] - 1)
         };
         let solid = collider.is_solid();
-        for t in &collider.tris {
+        for t in collider.tris() {
             let mut tb = Aabb::EMPTY;
             t.iter().for_each(|p| tb.grow(p));
             let poly: Vec<Point3> = t.to_vec();

@@ -9,7 +9,7 @@
 //! that can meet get their own conservative advancement, so the work goes where the
 //! parts are close, not into the whole part.
 
-use super::exact::{check_pose, check_tolerance, eps, leaf, obb_size, tri_box, Relative};
+use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box, Relative};
 use super::shape::{Collider, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
 use super::CollisionError;
@@ -144,7 +144,8 @@ pub fn edge_interferes(
         }
         match (no.count > 0, nm.count > 0) {
             (true, true) => {
-                for ta in &moving.tris[leaf(nm)] {
+                for ta in moving.leaf_tris(nm) {
+                    let ta = &ta;
                     let rho = ta.iter().map(|p| p.coords.norm()).fold(0.0, f64::max);
                     // the triangle's box over the edge: both ends, and the arc's bulge
                     // over the chord (at most rho·angle²/8)
@@ -154,7 +155,8 @@ pub fn edge_interferes(
                     b.grow(&e.lo);
                     b.grow(&e.hi);
                     let bulge = rho * angle * angle / 8.0 + pairs.eps;
-                    for tb in &obstacle.tris[leaf(no)] {
+                    for tb in obstacle.leaf_tris(no) {
+                        let tb = &tb;
                         if b.distance_to_box(&tri_box(tb)) > bulge
                             || pairs.plane_advance(&a0, rho, tb, &frames) >= 1.0
                         {

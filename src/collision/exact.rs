@@ -7,6 +7,7 @@ use super::triangle::{tri_distance, tri_tri, Tri};
 use super::{CollisionError, Contact, InterferenceKind, PairMember};
 use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3};
+use std::cell::Cell;
 use std::ops::ControlFlow;
 
 /// The pose of `b`'s part frame in `a`'s part frame, with what the node test needs.
@@ -96,10 +97,6 @@ impl Relative {
     }
 }
 
-pub(crate) fn leaf(n: &Node) -> std::ops::Range<usize> {
-    n.first as usize..(n.first + n.count) as usize
-}
-
 pub(crate) fn tri_box(t: &Tri) -> Aabb {
     Aabb {
         lo: t[0].inf(&t[1]).inf(&t[2]),
@@ -117,31 +114,45 @@ pub(crate) fn obb_size(o: &Obb) -> f64 {
 
 /// Calls `f` on every pair of triangles (b's already in a's frame) whose leaf boxes
 /// come within `margin`, until it breaks.
+///
+/// `floor` prunes by depth: node pairs whose crossing depth cannot exceed
+/// `floor.get()` are skipped. The crossing depth of two triangles ([`tri_tri`]) is
+/// at most the smaller triangle's diameter plus `margin`, and a triangle's diameter
+/// at most its box's diagonal; a negative floor prunes nothing.
 fn for_each_triangle_pair<B>(
     a: &Collider,
     b: &Collider,
     rel: &Relative,
     margin: f64,
+    floor: &Cell<f64>,
     mut f: impl FnMut(&Tri, &Tri) -> ControlFlow<B>,
 ) -> ControlFlow<B> {
     let mut stack: Vec<(u32, u32)> = Vec::with_capacity(64);
     stack.push((0, 0));
-    let mut moved: Vec<Tri> = Vec::with_capacity(8);
+    let mut moved: Vec<(Tri, Aabb)> = Vec::with_capacity(8);
     while let Some((i, j)) = stack.pop() {
         let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
-        if !rel.boxes_meet(&a.obbs[i as usize], &b.obbs[j as usize], margin) {
+        let (oa, ob) = (&a.obbs[i as usize], &b.obbs[j as usize]);
+        let least = floor.get();
+        if least >= 0.0 && 2.0 * oa.half.norm().min(ob.half.norm()) + margin <= least {
+            continue;
+        }
+        if !rel.boxes_meet(oa, ob, margin) {
             continue;
         }
         match (na.count > 0, nb.count > 0) {
             (true, true) => {
                 moved.clear();
-                moved.extend(b.tris[leaf(nb)].iter().map(|t| rel.tri(t)));
-                for ta in &a.tris[leaf(na)] {
-                    let ba = tri_box(ta);
-                    for tb in &moved {
+                moved.extend(b.leaf_tris(nb).map(|t| {
+                    let m = rel.tri(&t);
+                    (m, tri_box(&m))
+                }));
+                for ta in a.leaf_tris(na) {
+                    let ba = tri_box(&ta);
+                    for (tb, bb) in &moved {
                         // cheap reject before the exact test
-                        if ba.overlap(&tri_box(tb)).min() >= -margin {
-                            f(ta, tb)?;
+                        if ba.overlap(bb).min() >= -margin {
+                            f(&ta, tb)?;
                         }
                     }
                 }
@@ -150,24 +161,23 @@ fn for_each_triangle_pair<B>(
                 // A subtree of `a` on one side of every plane of `b`'s few triangles
                 // cannot cross them (`tri_tri` rejects such pairs first): a small
                 // part deep inside a large box never reaches the leaves.
-                let planes = b.tris[leaf(nb)].iter().map(|t| rel.tri(t));
-                if obb_meets_planes(&a.obbs[i as usize], planes, margin) {
+                let planes = b.leaf_tris(nb).map(|t| rel.tri(&t));
+                if obb_meets_planes(oa, planes, margin) {
                     stack.extend([(na.first, j), (na.first + 1, j)]);
                 }
             }
             (true, false) => {
-                let o = &b.obbs[j as usize];
                 let moved_obb = Obb {
-                    centre: rel.rot * o.centre + rel.iso.translation.vector,
-                    axes: rel.rot * o.axes,
-                    half: o.half,
+                    centre: rel.rot * ob.centre + rel.iso.translation.vector,
+                    axes: rel.rot * ob.axes,
+                    half: ob.half,
                 };
-                if obb_meets_planes(&moved_obb, a.tris[leaf(na)].iter().copied(), margin) {
+                if obb_meets_planes(&moved_obb, a.leaf_tris(na), margin) {
                     stack.extend([(i, nb.first), (i, nb.first + 1)]);
                 }
             }
             (false, false) => {
-                if obb_size(&a.obbs[i as usize]) >= obb_size(&b.obbs[j as usize]) {
+                if obb_size(oa) >= obb_size(ob) {
                     stack.extend([(na.first, j), (na.first + 1, j)]);
                 } else {
                     stack.extend([(i, nb.first), (i, nb.first + 1)]);
@@ -239,11 +249,16 @@ pub fn interferes(
     let eps = eps(a, b, pa, pb);
     let oriented = a.is_solid() && b.is_solid();
     let mut crossed = false;
-    let crossing = for_each_triangle_pair(a, b, &rel, eps, |ta, tb| {
+    // once some pair crosses, only a pair deeper than the tolerance can change the answer
+    let floor = Cell::new(-1.0);
+    let crossing = for_each_triangle_pair(a, b, &rel, eps, &floor, |ta, tb| {
         match tri_tri(ta, tb, eps, oriented) {
             Some(d) if d > tolerance => ControlFlow::Break(()),
             Some(d) => {
-                crossed |= d > 0.0;
+                if d > 0.0 {
+                    crossed = true;
+                    floor.set(tolerance);
+                }
                 ControlFlow::Continue(())
             }
             None => ControlFlow::Continue(()),
@@ -276,10 +291,17 @@ pub fn contact(
     let oriented = a.is_solid() && b.is_solid();
     let mut touching = false;
     let mut depth = 0.0f64;
-    let _ = for_each_triangle_pair::<()>(a, b, &rel, eps, |ta, tb| {
+    // Once some pair crosses, the verdict is `Touching` or `Interfering` with the
+    // largest depth: only a pair deeper than both the tolerance and the depth found
+    // can change it.
+    let floor = Cell::new(-1.0);
+    let _ = for_each_triangle_pair::<()>(a, b, &rel, eps, &floor, |ta, tb| {
         if let Some(d) = tri_tri(ta, tb, eps, oriented) {
             touching = true;
             depth = depth.max(d);
+            if depth > 0.0 {
+                floor.set(depth.max(tolerance));
+            }
         }
         ControlFlow::Continue(())
     });
@@ -333,8 +355,8 @@ fn containment(
 fn inside(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>, eps: f64) -> bool {
     let bounds = outer.bounds();
     let off = 1e3 * eps;
-    let vertices = inner.tris.iter().flat_map(|t| t.iter().copied());
-    let under_faces = inner.tris.iter().filter_map(|t| {
+    let vertices = inner.tris().flatten();
+    let under_faces = inner.tris().filter_map(|t| {
         let n = (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(0.0)?;
         let c = nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]);
         Some(c - n * off)
@@ -355,7 +377,7 @@ fn inside(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>, eps: f64) ->
 /// Largest distance from a vertex of `inner` to the surface of `outer`, mm.
 fn containment_depth(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>) -> f64 {
     let mut best = 0.0f64;
-    for t in &inner.tris {
+    for t in inner.tris() {
         for p in t {
             best = best.max(outer.distance_to_point(&(iso * p), 0.0));
         }
@@ -424,16 +446,16 @@ fn distance_search(
         let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
         if na.count > 0 && nb.count > 0 {
             moved_boxes.clear();
-            moved_boxes.extend(b.tris[leaf(nb)].iter().map(|t| {
-                let m = rel.tri(t);
+            moved_boxes.extend(b.leaf_tris(nb).map(|t| {
+                let m = rel.tri(&t);
                 (m, tri_box(&m))
             }));
-            for ta in &a.tris[leaf(na)] {
-                let ba = tri_box(ta);
+            for ta in a.leaf_tris(na) {
+                let ba = tri_box(&ta);
                 for (tb, bb) in &moved_boxes {
                     // the triangles' boxes bound their distance from below
                     if ba.distance_to_box(bb) * grow < best {
-                        best = best.min(tri_distance(ta, tb));
+                        best = best.min(tri_distance(&ta, tb));
                     }
                 }
             }

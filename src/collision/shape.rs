@@ -15,8 +15,9 @@ use std::sync::{Arc, Weak};
 /// exceeds the contact tolerances used here.
 pub const MAX_COORDINATE: f64 = 1e9;
 
-/// Triangles per BVH leaf.
-const LEAF_SIZE: usize = 4;
+/// Most triangles per BVH leaf (leaves hold 4 to 8 for large meshes: half the
+/// nodes of 4 per leaf, for a few more triangle-box tests per leaf pair).
+const LEAF_SIZE: usize = 8;
 
 /// An oriented box (part frame, mm) fitted to a node's triangles: `axes` columns are
 /// orthonormal directions, `half` the half extents along them. Far tighter than the
@@ -36,33 +37,15 @@ impl Obb {
         half: Vec3::new(0.0, 0.0, 0.0),
     };
 
-    /// The box along the principal axes of the triangles' vertices, or the
-    /// axis-aligned `aabb` when that is smaller; padded so rounding never leaves a
-    /// vertex outside.
-    fn fit(items: &[(Point3, Tri)], aabb: &Aabb) -> Obb {
-        let n = (3 * items.len()) as f64;
-        let mean = items
-            .iter()
-            .flat_map(|(_, t)| t.iter())
-            .fold(Vec3::zeros(), |m, p| m + p.coords)
-            / n;
-        let mut cov = Matrix3::zeros();
-        for p in items.iter().flat_map(|(_, t)| t.iter()) {
-            let d = p.coords - mean;
-            cov += d * d.transpose();
-        }
-        let axes = nalgebra::SymmetricEigen::new(cov).eigenvectors;
-        let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
-        for p in items.iter().flat_map(|(_, t)| t.iter()) {
-            let q = axes.tr_mul(&p.coords);
-            lo = lo.inf(&q);
-            hi = hi.sup(&q);
-        }
+    /// The box with extents `lo..hi` along the columns of `axes` (coordinates
+    /// `axesᵀ·p`), or the axis-aligned `aabb` when that is smaller; padded so rounding
+    /// never leaves a vertex outside.
+    fn from_extents(axes: &Matrix3<f64>, lo: Vec3, hi: Vec3, aabb: &Aabb) -> Obb {
         let ha = aabb.half_extents();
         let half = (hi - lo) * 0.5;
         let usable = axes.iter().all(|v| v.is_finite()) && half.iter().all(|v| v.is_finite());
         let (centre, axes, half) = if usable && half.product() < ha.product() {
-            (axes * ((lo + hi) * 0.5), axes, half)
+            (axes * ((lo + hi) * 0.5), *axes, half)
         } else {
             (aabb.centre().coords, Matrix3::identity(), ha)
         };
@@ -75,7 +58,44 @@ impl Obb {
     }
 }
 
-/// A node of the tree: `count > 0`: a leaf over `tris[first..first + count]`;
+/// The principal axes (columns, orthonormal) of the vertices of `items`' triangles:
+/// the eigenvectors of their covariance.
+fn principal_axes(mesh: &Mesh, items: &[Item]) -> Matrix3<f64> {
+    let corners = || items.iter().flat_map(|it| mesh.triangle(it.1 as usize));
+    let n = (3 * items.len()) as f64;
+    let mean = corners().fold(Vec3::zeros(), |m, p| m + p.coords) / n;
+    let mut cov = Matrix3::zeros();
+    for p in corners() {
+        let d = p.coords - mean;
+        cov += d * d.transpose();
+    }
+    let axes = nalgebra::SymmetricEigen::new(cov).eigenvectors;
+    if axes.iter().all(|v| v.is_finite()) {
+        axes
+    } else {
+        Matrix3::identity()
+    }
+}
+
+/// The extents of the vertices of `items`' triangles along the columns of `axes`,
+/// and their axis-aligned box.
+fn extents(mesh: &Mesh, items: &[Item], axes: &Matrix3<f64>) -> (Vec3, Vec3, Aabb) {
+    let (mut lo, mut hi) = (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
+    let mut aabb = Aabb::EMPTY;
+    for p in items.iter().flat_map(|it| mesh.triangle(it.1 as usize)) {
+        let q = axes.tr_mul(&p.coords);
+        lo = lo.inf(&q);
+        hi = hi.sup(&q);
+        aabb.grow(&p);
+    }
+    (lo, hi, aabb)
+}
+
+/// A triangle while the tree is built: its centroid and its index in the mesh.
+type Item = (Point3, u32);
+
+/// A node of the tree: `count > 0`: a leaf over the triangles
+/// `order[first..first + count]`;
 /// otherwise children `first` and `first + 1`.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Node {
@@ -96,8 +116,9 @@ pub struct Collider {
     pub(crate) nodes: Vec<Node>,
     /// The oriented box of each node (same index as `nodes`).
     pub(crate) obbs: Vec<Obb>,
-    /// Triangles in tree order.
-    pub(crate) tris: Vec<Tri>,
+    /// Mesh triangle indices in tree order (zero-area triangles left out): a leaf's
+    /// triangles are one run. The corners are read from the mesh, never copied.
+    order: Vec<u32>,
     report: MeshReport,
     radius: f64,
     pub(crate) eps: f64,
@@ -166,11 +187,18 @@ impl Collider {
             })
             .unwrap_or(1.0)
             .max(1.0);
-        let mut tris: Vec<Tri> = (0..mesh.triangles.len())
-            .map(|i| mesh.triangle(i))
-            .filter(|t| (t[1] - t[0]).cross(&(t[2] - t[0])).norm() > 1e-24 * scale * scale)
+        let mut items: Vec<Item> = (0..mesh.triangles.len())
+            .filter_map(|i| {
+                let t = mesh.triangle(i);
+                ((t[1] - t[0]).cross(&(t[2] - t[0])).norm() > 1e-24 * scale * scale).then(|| {
+                    (
+                        nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]),
+                        i as u32,
+                    )
+                })
+            })
             .collect();
-        if tris.is_empty() {
+        if items.is_empty() {
             return Err(CollisionError::BadMesh(
                 "the mesh has no triangle of non-zero area".into(),
             ));
@@ -180,27 +208,45 @@ impl Collider {
             .iter()
             .map(|p| p.coords.norm())
             .fold(0.0, f64::max);
-        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF_SIZE + 2);
-        nodes.push(Node {
+        let mut tree = Tree {
+            mesh: &mesh,
+            nodes: Vec::with_capacity(2 * items.len() / (LEAF_SIZE / 2) + 2),
+            obbs: Vec::with_capacity(2 * items.len() / (LEAF_SIZE / 2) + 2),
+        };
+        tree.nodes.push(Node {
             bounds: Aabb::EMPTY,
             first: 0,
             count: 0,
         });
-        let mut centroids: Vec<(Point3, Tri)> = tris
-            .drain(..)
-            .map(|t| (nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]), t))
-            .collect();
-        let mut obbs = vec![Obb::BLANK];
-        build(&mut nodes, &mut obbs, 0, &mut centroids, 0);
+        tree.obbs.push(Obb::BLANK);
+        tree.build(0, &mut items, 0, None);
+        let Tree { nodes, obbs, .. } = tree;
         Ok(Collider {
-            mesh,
             nodes,
             obbs,
-            tris: centroids.into_iter().map(|(_, t)| t).collect(),
+            order: items.into_iter().map(|(_, i)| i).collect(),
+            mesh,
             report,
             radius,
             eps: 1e-9 * scale,
         })
+    }
+
+    /// Triangle `k` in tree order (part frame, mm).
+    #[inline]
+    pub(crate) fn tri(&self, k: usize) -> Tri {
+        self.mesh.triangle(self.order[k] as usize)
+    }
+
+    /// Every (non-degenerate) triangle, in tree order.
+    pub(crate) fn tris(&self) -> impl Iterator<Item = Tri> + '_ {
+        (0..self.order.len()).map(|k| self.tri(k))
+    }
+
+    /// The triangles of leaf `n`.
+    #[inline]
+    pub(crate) fn leaf_tris(&self, n: &Node) -> impl Iterator<Item = Tri> + '_ {
+        (n.first as usize..(n.first + n.count) as usize).map(|k| self.tri(k))
     }
 
     /// The mesh this collider was built from.
@@ -247,7 +293,7 @@ impl Collider {
 
     /// Number of (non-degenerate) triangles.
     pub fn triangle_count(&self) -> usize {
-        self.tris.len()
+        self.order.len()
     }
 
     /// Distance from `p` (part frame) to the surface, stopping early once it is
@@ -261,8 +307,8 @@ impl Collider {
                 continue;
             }
             if node.count > 0 {
-                for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
-                    best = best.min((p - closest_on_triangle(p, t)).norm());
+                for t in self.leaf_tris(node) {
+                    best = best.min((p - closest_on_triangle(p, &t)).norm());
                 }
                 if best < stop {
                     return best;
@@ -294,8 +340,8 @@ impl Collider {
                 continue;
             }
             if node.count > 0 {
-                for t in &self.tris[node.first as usize..(node.first + node.count) as usize] {
-                    if let Some(x) = x_line_crossing(t, y0, z0) {
+                for t in self.leaf_tris(node) {
+                    if let Some(x) = x_line_crossing(&t, y0, z0) {
                         out.push(x);
                     }
                 }
@@ -328,51 +374,68 @@ impl Collider {
     }
 }
 
-fn build(
-    nodes: &mut Vec<Node>,
-    obbs: &mut Vec<Obb>,
-    at: usize,
-    items: &mut [(Point3, Tri)],
-    offset: usize,
-) {
-    let mut bounds = Aabb::EMPTY;
-    let mut cb = Aabb::EMPTY;
-    for (c, t) in items.iter() {
-        t.iter().for_each(|p| bounds.grow(p));
-        cb.grow(c);
+/// The tree under construction.
+struct Tree<'m> {
+    mesh: &'m Mesh,
+    nodes: Vec<Node>,
+    obbs: Vec<Obb>,
+}
+
+impl Tree<'_> {
+    /// Builds node `at` over `items` (which start at `offset` in tree order) and
+    /// returns the extents of its vertices along `parent_axes` (none for the root)
+    /// and its axis-aligned box, so the parent's boxes need no pass of their own.
+    ///
+    /// Every node gets its own principal axes: reusing a parent's axes (tried, to
+    /// save eigen solves) made tilted surface patches' boxes several times thicker
+    /// and near-miss queries slower than FCL.
+    fn build(
+        &mut self,
+        at: usize,
+        items: &mut [Item],
+        offset: usize,
+        parent_axes: Option<&Matrix3<f64>>,
+    ) -> (Vec3, Vec3, Aabb) {
+        let axes = principal_axes(self.mesh, items);
+        let (lo, hi, aabb) = if items.len() <= LEAF_SIZE {
+            self.nodes[at].first = offset as u32;
+            self.nodes[at].count = items.len() as u32;
+            extents(self.mesh, items, &axes)
+        } else {
+            let mut cb = Aabb::EMPTY;
+            items.iter().for_each(|(c, _)| cb.grow(c));
+            let ext = cb.hi - cb.lo;
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            let mid = items.len() / 2;
+            items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
+            let left = self.nodes.len();
+            self.nodes[at].first = left as u32;
+            self.nodes[at].count = 0;
+            let blank = Node {
+                bounds: Aabb::EMPTY,
+                first: 0,
+                count: 0,
+            };
+            self.nodes.extend([blank, blank]);
+            self.obbs.extend([Obb::BLANK, Obb::BLANK]);
+            let (l, r) = items.split_at_mut(mid);
+            let (llo, lhi, lb) = self.build(left, l, offset, Some(&axes));
+            let (rlo, rhi, rb) = self.build(left + 1, r, offset + mid, Some(&axes));
+            (llo.inf(&rlo), lhi.sup(&rhi), lb.union(&rb))
+        };
+        self.nodes[at].bounds = aabb;
+        self.obbs[at] = Obb::from_extents(&axes, lo, hi, &aabb);
+        match parent_axes {
+            Some(p) => extents(self.mesh, items, p),
+            None => (lo, hi, aabb),
+        }
     }
-    nodes[at].bounds = bounds;
-    obbs[at] = Obb::fit(items, &bounds);
-    if items.len() <= LEAF_SIZE {
-        nodes[at].first = offset as u32;
-        nodes[at].count = items.len() as u32;
-        return;
-    }
-    let ext = cb.hi - cb.lo;
-    let axis = if ext.x >= ext.y && ext.x >= ext.z {
-        0
-    } else if ext.y >= ext.z {
-        1
-    } else {
-        2
-    };
-    let mid = items.len() / 2;
-    items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
-    let left = nodes.len();
-    nodes[at].first = left as u32;
-    nodes[at].count = 0;
-    let blank = Node {
-        bounds: Aabb::EMPTY,
-        first: 0,
-        count: 0,
-    };
-    nodes.push(blank);
-    nodes.push(blank);
-    obbs.push(Obb::BLANK);
-    obbs.push(Obb::BLANK);
-    let (l, r) = items.split_at_mut(mid);
-    build(nodes, obbs, left, l, offset);
-    build(nodes, obbs, left + 1, r, offset + mid);
 }
 
 /// Colliders by mesh, so trees survive watch reruns while the mesh is unchanged.

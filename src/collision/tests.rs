@@ -272,8 +272,8 @@ fn tree_traversal_matches_brute_force() {
     let mut rng = Rng::new(4);
     for _ in 0..100 {
         let (pa, pb) = (random_pose(&mut rng, 12.0), random_pose(&mut rng, 12.0));
-        let ta: Vec<_> = a.tris.iter().map(|t| t.map(|p| pa.apply(&p))).collect();
-        let tb: Vec<_> = b.tris.iter().map(|t| t.map(|p| pb.apply(&p))).collect();
+        let ta: Vec<_> = a.tris().map(|t| t.map(|p| pa.apply(&p))).collect();
+        let tb: Vec<_> = b.tris().map(|t| t.map(|p| pb.apply(&p))).collect();
         let mut depth = None::<f64>;
         let mut dist = f64::INFINITY;
         for x in &ta {
@@ -312,8 +312,8 @@ fn coarse_box_against_fine_part_matches_brute_force() {
     let mut kinds = [0usize; 3];
     for _ in 0..150 {
         let (pa, pb) = (random_pose(&mut rng, 10.0), random_pose(&mut rng, 10.0));
-        let ta: Vec<_> = a.tris.iter().map(|t| t.map(|p| pa.apply(&p))).collect();
-        let tb: Vec<_> = b.tris.iter().map(|t| t.map(|p| pb.apply(&p))).collect();
+        let ta: Vec<_> = a.tris().map(|t| t.map(|p| pa.apply(&p))).collect();
+        let tb: Vec<_> = b.tris().map(|t| t.map(|p| pb.apply(&p))).collect();
         let mut depth = None::<f64>;
         for x in &ta {
             for y in &tb {
@@ -830,7 +830,7 @@ fn oriented_node_boxes_hold_their_triangles() {
     ] {
         for (i, o) in c.obbs.iter().enumerate() {
             let (lo, hi) = range(&c, i);
-            for p in c.tris[lo..hi].iter().flatten() {
+            for p in (lo..hi).flat_map(|k| c.tri(k)) {
                 let q = o.axes.tr_mul(&(p.coords - o.centre));
                 assert!(q.iter().zip(o.half.iter()).all(|(q, h)| q.abs() <= *h));
             }
@@ -865,8 +865,8 @@ fn near_misses_match_brute_force() {
         }
         // just outside, and just inside, first contact
         let pb = pose(if k % 2 == 0 { hi + 0.01 } else { lo - 0.01 });
-        let ta: Vec<_> = a.tris.iter().map(|t| t.map(|p| pa.apply(&p))).collect();
-        let tb: Vec<_> = b.tris.iter().map(|t| t.map(|p| pb.apply(&p))).collect();
+        let ta: Vec<_> = a.tris().map(|t| t.map(|p| pa.apply(&p))).collect();
+        let tb: Vec<_> = b.tris().map(|t| t.map(|p| pb.apply(&p))).collect();
         let mut depth = 0.0f64;
         for x in &ta {
             for y in &tb {
@@ -1000,4 +1000,80 @@ fn edge_check_refuses_bad_input() {
         ..Default::default()
     };
     assert!(edge_interferes(&c, &id, &at(1.0, 0.0, 0.0), &c, &at(5.0, 0.0, 0.0), &bad).is_err());
+}
+
+/// The trees (leaves of up to 8 triangles, oriented boxes whose axes are refitted
+/// every few levels, depth-floor pruning) give the verdicts of a brute-force check
+/// of every triangle pair, on random pairs of fine and coarse parts in random poses.
+mod trees_against_brute_force {
+    use super::*;
+    use crate::math::Rng;
+    use proptest::prelude::*;
+
+    /// A lathe part of ~`2 · segments · rings` triangles with a wavy profile.
+    fn wavy(segments: usize, rings: usize, phase: f64) -> Mesh {
+        let mut profile = vec![(0.0, 0.0)];
+        for k in 0..rings {
+            let s = (k as f64 + 0.5) / rings as f64;
+            profile.push((6.0 * (1.0 + 0.2 * (9.0 * s + phase).sin()), 14.0 * s));
+        }
+        profile.push((0.0, 14.0));
+        Mesh::lathe(&profile, segments).unwrap()
+    }
+
+    fn shape(kind: u8, phase: f64) -> Collider {
+        collider(match kind % 4 {
+            0 => fixtures::torus(10.0, 3.0, 40, 12),
+            1 => fixtures::sphere(6.0, 24, 12),
+            2 => wavy(36, 14, phase),
+            _ => Mesh::cuboid(Point3::new(-5.0, -4.0, -3.0), Point3::new(5.0, 4.0, 3.0)),
+        })
+    }
+
+    proptest! {
+        #![proptest_config(crate::test_support::proptest_config(24))]
+        #[test]
+        fn verdicts_depths_and_distances_match_all_pairs(
+            kinds in (0u8..4, 0u8..4),
+            phase in 0.0f64..6.0,
+            seed in 0u64..1_000_000,
+            tol in prop_oneof![Just(0.0), Just(DEFAULT_TOLERANCE), 0.0f64..2.0],
+        ) {
+            let (a, b) = (shape(kinds.0, phase), shape(kinds.1, phase + 1.0));
+            let mut rng = Rng::new(seed);
+            let (pa, pb) = (random_pose(&mut rng, 7.0), random_pose(&mut rng, 7.0));
+            let e = super::super::exact::eps(&a, &b, &pa, &pb);
+            let ta: Vec<_> = a.tris().map(|t| t.map(|p| pa.apply(&p))).collect();
+            let tb: Vec<_> = b.tris().map(|t| t.map(|p| pb.apply(&p))).collect();
+            let (mut depth, mut dist) = (None::<f64>, f64::INFINITY);
+            for x in &ta {
+                for y in &tb {
+                    if let Some(d) = tri_tri(x, y, e, true) {
+                        depth = Some(depth.unwrap_or(0.0).max(d));
+                    }
+                    dist = dist.min(tri_distance(x, y));
+                }
+            }
+            let c = contact(&a, &pa, &b, &pb, tol).unwrap();
+            let hit = interferes(&a, &pa, &b, &pb, tol).unwrap();
+            prop_assert_eq!(hit, c.is_interfering(), "{:?}", c);
+            match depth {
+                // verdicts within rounding of the tolerance may go either way
+                Some(d) if (d - tol).abs() < 1e-6 => {}
+                Some(d) if d > tol => {
+                    prop_assert!(hit, "brute force depth {}, tree {:?}", d, c);
+                    prop_assert!((c.depth() - d).abs() < 1e-6, "{:?} vs {}", c, d);
+                }
+                Some(d) if d > 1e-6 => prop_assert_eq!(c, Contact::Touching, "depth {}", d),
+                Some(_) => prop_assert!(c != Contact::Separate),
+                None => prop_assert!(!matches!(
+                    c,
+                    Contact::Touching
+                        | Contact::Interfering { kind: InterferenceKind::SurfacesCross, .. }
+                ), "{:?}", c),
+            }
+            let d = surface_distance(&a, &pa, &b, &pb, 0.0).unwrap();
+            prop_assert!((d - dist).abs() < 1e-6, "{} vs {}", d, dist);
+        }
+    }
 }

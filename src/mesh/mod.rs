@@ -12,6 +12,57 @@ pub use stl::{parse_stl, read_stl, write_stl, MeshError};
 
 use crate::math::{Point3, Vec3};
 use std::collections::HashMap;
+use std::hash::{BuildHasher, Hasher};
+
+/// The hash of the integer-keyed maps of mesh welding and edge counting (a third of
+/// opening and preparing a 10k-triangle part went to SipHash): a folded 64 × 64-bit
+/// multiply per word, keyed by a per-map random seed so that a crafted file cannot
+/// aim keys at one bucket.
+#[derive(Clone, Copy)]
+struct FoldState(u64);
+
+impl FoldState {
+    fn new() -> FoldState {
+        FoldState(std::collections::hash_map::RandomState::new().hash_one(0x5eed_u64))
+    }
+}
+
+impl BuildHasher for FoldState {
+    type Hasher = FoldHasher;
+    fn build_hasher(&self) -> FoldHasher {
+        FoldHasher(self.0)
+    }
+}
+
+/// See [`FoldState`].
+struct FoldHasher(u64);
+
+impl Hasher for FoldHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+    #[inline]
+    fn write_u64(&mut self, v: u64) {
+        let p = u128::from(self.0 ^ v) * 0x9e37_79b9_7f4a_7c15_u128;
+        self.0 = (p as u64) ^ ((p >> 64) as u64);
+    }
+    #[inline]
+    fn write_u32(&mut self, v: u32) {
+        self.write_u64(u64::from(v));
+    }
+    #[inline]
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
 
 /// An indexed triangle mesh in the part frame (mm). Triangles are counter-clockwise
 /// seen from outside when the mesh is oriented (STL convention).
@@ -72,7 +123,7 @@ impl Mesh {
     pub fn from_triangle_soup(
         corners: impl IntoIterator<Item = [Point3; 3]>,
     ) -> Result<Self, MeshError> {
-        let mut index: HashMap<[u64; 3], u32> = HashMap::new();
+        let mut index: HashMap<[u64; 3], u32, FoldState> = HashMap::with_hasher(FoldState::new());
         let mut vertices = Vec::new();
         let mut triangles = Vec::new();
         for tri in corners {
@@ -95,6 +146,7 @@ impl Mesh {
     }
 
     /// The three corners of triangle `i`.
+    #[inline]
     pub fn triangle(&self, i: usize) -> [Point3; 3] {
         let t = self.triangles[i];
         [
@@ -141,7 +193,9 @@ impl Mesh {
             .map(|b| (b.hi - b.lo).norm())
             .unwrap_or(1.0)
             .max(1e-9);
-        let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new(); // (forward, backward) counts
+        // (forward, backward) counts
+        let mut edges: HashMap<(u32, u32), (u32, u32), FoldState> =
+            HashMap::with_capacity_and_hasher(3 * self.triangles.len() / 2, FoldState::new());
         for (i, t) in self.triangles.iter().enumerate() {
             let [a, b, c] = self.triangle(i);
             if (b - a).cross(&(c - a)).norm() <= 1e-12 * scale * scale {

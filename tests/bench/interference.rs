@@ -4,11 +4,13 @@
 //! size), and continuous vs stepwise sweeps. Figures go to docs/interference.md.
 //!
 //! The peers run from `.venv/bin/python` when it exists (`pip install python-fcl coal
-//! numpy` in `.venv`); without it only fitup is timed.
+//! numpy` in `.venv`); without it only fitup is timed. parry3d-f64 (a dev-dependency
+//! used only here) runs in this process on the same pairs: mesh–mesh intersection,
+//! contact and distance against fitup's own queries, and ray casts (fitup has none).
 
 use fitup::collision::{
-    check, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells, CutSpec,
-    Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
+    check, contact, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells,
+    CutSpec, Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
 };
 use fitup::math::{Point3, Rng, Transform, Vec3};
 use fitup::mesh::{write_stl, Mesh};
@@ -170,6 +172,8 @@ fn main() {
             c / o
         );
     }
+
+    parry_rows(&a_mesh, &b_mesh, &a, &b, &cats);
 
     // `FITUP_BENCH_EXACT_ONLY=1`: the exact pair rows only (the other tables take minutes)
     if std::env::var_os("FITUP_BENCH_EXACT_ONLY").is_none() {
@@ -384,4 +388,163 @@ fn sweeps() {
             );
         }
     }
+}
+
+/// Pairs per pose category for the parry comparison, and rounds (median taken).
+const PARRY_PAIRS: usize = 200;
+const PARRY_ROUNDS: usize = 3;
+
+/// parry3d-f64 against fitup on the same pairs in this process: build, intersection
+/// (yes/no), contact, distance, and ray casts (which fitup lacks).
+fn parry_rows(
+    a_mesh: &Mesh,
+    b_mesh: &Mesh,
+    a: &Collider,
+    b: &Collider,
+    cats: &[(&str, Vec<(Transform, Transform)>)],
+) {
+    use parry3d_f64::math::{Pose, Rot3, Vector};
+    use parry3d_f64::query::{self, Ray, RayCast};
+    use parry3d_f64::shape::TriMesh;
+    let trimesh = |m: &Mesh| {
+        let v = m
+            .vertices
+            .iter()
+            .map(|p| Vector::new(p.x, p.y, p.z))
+            .collect();
+        TriMesh::new(v, m.triangles.clone()).unwrap()
+    };
+    let ms = |f: &mut dyn FnMut()| {
+        let t0 = Instant::now();
+        for _ in 0..5 {
+            f();
+        }
+        t0.elapsed().as_secs_f64() / 5.0 * 1e3
+    };
+    let fitup_build = ms(&mut || {
+        std::hint::black_box(Collider::new(Arc::new(a_mesh.clone())).unwrap());
+    });
+    let parry_build = ms(&mut || {
+        std::hint::black_box(trimesh(a_mesh));
+    });
+    let (sa, sb) = (trimesh(a_mesh), trimesh(b_mesh));
+    let pose = |p: &Transform| {
+        let t = p.translation();
+        let q = p.rotation();
+        Pose::from_parts(
+            Vector::new(t.x, t.y, t.z),
+            Rot3::from_xyzw(q.i, q.j, q.k, q.w),
+        )
+    };
+    println!(
+        "\n## parry3d-f64 on the same pairs, in this process: median of {PARRY_ROUNDS} rounds x {PARRY_PAIRS} pairs, µs/query"
+    );
+    println!(
+        "build of the torus (10k triangles): fitup Collider {fitup_build:.2} ms, parry TriMesh {parry_build:.2} ms"
+    );
+    println!("| poses | query | fitup µs | parry µs | parry/fitup | answers agree |");
+    println!("|---|---|---|---|---|---|");
+    for (cat, pairs) in cats {
+        let pairs = &pairs[..PARRY_PAIRS.min(pairs.len())];
+        let pp: Vec<(Pose, Pose)> = pairs.iter().map(|(x, y)| (pose(x), pose(y))).collect();
+        // parry's mesh–mesh distance takes 0.1–0.3 s a pair: 10 pairs, one round
+        let time = |n: usize, f: &mut dyn FnMut(usize) -> f64| -> (f64, Vec<f64>) {
+            let (n, rounds) = if n < pairs.len() {
+                (n, 1)
+            } else {
+                (pairs.len(), PARRY_ROUNDS)
+            };
+            let mut per = Vec::new();
+            let mut out = Vec::new();
+            for _ in 0..rounds {
+                out.clear();
+                let t0 = Instant::now();
+                for k in 0..n {
+                    out.push(f(k));
+                }
+                per.push(t0.elapsed().as_secs_f64() / n as f64 * 1e6);
+            }
+            (median(per), out)
+        };
+        // (query, fitup (µs, answers), parry (µs, answers), agreement threshold)
+        type Timed = (f64, Vec<f64>);
+        let rows: [(&str, Timed, Timed, f64); 3] = [
+            (
+                "intersection yes/no",
+                time(usize::MAX, &mut |k| {
+                    let (x, y) = &pairs[k];
+                    interferes(a, x, b, y, DEFAULT_TOLERANCE).unwrap() as u8 as f64
+                }),
+                time(usize::MAX, &mut |k| {
+                    let (x, y) = &pp[k];
+                    query::intersection_test(x, &sa, y, &sb)
+                        .unwrap()
+                        .intersecting as u8 as f64
+                }),
+                0.5,
+            ),
+            (
+                "contact (fitup: verdict + depth; parry: deepest point pair)",
+                time(usize::MAX, &mut |k| {
+                    let (x, y) = &pairs[k];
+                    (contact(a, x, b, y, DEFAULT_TOLERANCE).unwrap()
+                        != fitup::collision::Contact::Separate) as u8 as f64
+                }),
+                time(usize::MAX, &mut |k| {
+                    let (x, y) = &pp[k];
+                    query::contact(x, &sa, y, &sb, 0.0).unwrap().is_some() as u8 as f64
+                }),
+                0.5,
+            ),
+            (
+                "distance",
+                time(10, &mut |k| {
+                    let (x, y) = &pairs[k];
+                    surface_distance(a, x, b, y, 0.0).unwrap()
+                }),
+                time(10, &mut |k| {
+                    let (x, y) = &pp[k];
+                    query::distance(x, &sa, y, &sb).unwrap().distance
+                }),
+                1e-6,
+            ),
+        ];
+        for (name, (tf, af), (tp, ap), within) in rows {
+            let agree = af
+                .iter()
+                .zip(&ap)
+                .filter(|(x, y)| (*x - *y).abs() < within)
+                .count();
+            println!(
+                "| {cat} | {name} | {tf:.2} | {tp:.2} | {:.2} | {agree}/{} |",
+                tp / tf,
+                af.len()
+            );
+        }
+    }
+    // rays from a sphere of radius 150 mm at points near the torus (picking)
+    let mut rng = Rng::new(5);
+    let rays: Vec<Ray> = (0..10_000)
+        .map(|_| {
+            let o = Vec3::new(rng.normal(), rng.normal(), rng.normal()).normalize() * 150.0;
+            let t = Vec3::new(
+                rng.range(-40.0, 40.0),
+                rng.range(-40.0, 40.0),
+                rng.range(-10.0, 10.0),
+            );
+            let d = (t - o).normalize();
+            Ray::new(Vector::new(o.x, o.y, o.z), Vector::new(d.x, d.y, d.z))
+        })
+        .collect();
+    let at = Pose::from_translation(Vector::new(0.0, 0.0, 0.0));
+    let t0 = Instant::now();
+    let hits = rays
+        .iter()
+        .filter(|r| sa.cast_ray(&at, r, f64::MAX, true).is_some())
+        .count();
+    let us = t0.elapsed().as_secs_f64() / rays.len() as f64 * 1e6;
+    println!(
+        "ray casts at the torus (fitup has no ray query): parry {us:.2} µs/ray, {hits}/{} hit",
+        rays.len()
+    );
 }
