@@ -57,6 +57,17 @@ pub struct ScriptArgs {
     /// `open_db()` opens the same one.
     #[arg(long, num_args = 0..=1, default_missing_value = "")]
     pub db: Option<String>,
+    /// Whether the script may command a manipulator (`--dispatch`, `--allow-remote`).
+    #[command(flatten)]
+    pub dispatch: DispatchArgs,
+    /// The live 3D viewer (`--view`, `--open`, `--record FILE.rrd`).
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// Permission for a script's skill manager to reach a real controller (docs/skills.md).
+#[derive(Debug, clap::Args, Clone, Copy, Default)]
+pub struct DispatchArgs {
     /// Let the script's skill manager command a manipulator over TCP on this
     /// machine (`skill_manager(#{target: "127.0.0.1:11000"})`); without it only the
     /// in-process simulator (`target: "sim"`) runs.
@@ -66,9 +77,6 @@ pub struct ScriptArgs {
     /// controller).
     #[arg(long, requires = "dispatch")]
     pub allow_remote: bool,
-    /// The live 3D viewer (`--view`, `--open`, `--record FILE.rrd`).
-    #[command(flatten)]
-    pub view: ViewArgs,
 }
 
 /// Options of the live 3D viewer (docs/viewer.md).
@@ -110,15 +118,9 @@ pub struct WatchArgs {
     /// `open_db()` opens the same one.
     #[arg(long, num_args = 0..=1, default_missing_value = "")]
     pub db: Option<String>,
-    /// Let the script's skill manager command a manipulator over TCP on this
-    /// machine (`skill_manager(#{target: "127.0.0.1:11000"})`); without it only the
-    /// in-process simulator (`target: "sim"`) runs.
-    #[arg(long)]
-    pub dispatch: bool,
-    /// With `--dispatch`: also to an address that is not this machine (a real
-    /// controller).
-    #[arg(long, requires = "dispatch")]
-    pub allow_remote: bool,
+    /// Whether the script may command a manipulator (`--dispatch`, `--allow-remote`).
+    #[command(flatten)]
+    pub dispatch: DispatchArgs,
     /// The live 3D viewer (`--view`, `--open`, `--record FILE.rrd`).
     #[command(flatten)]
     pub view: ViewArgs,
@@ -136,7 +138,6 @@ impl From<WatchArgs> for ScriptArgs {
             args: w.args,
             db: w.db,
             dispatch: w.dispatch,
-            allow_remote: w.allow_remote,
             view: w.view,
         }
     }

@@ -23,7 +23,7 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
         project,
         limits: Limits {
             max_operations: a.max_operations,
-            dispatch: match (a.dispatch, a.allow_remote) {
+            dispatch: match (a.dispatch.dispatch, a.dispatch.allow_remote) {
                 (false, _) => Dispatch::Never,
                 (true, false) => Dispatch::Loopback,
                 (true, true) => Dispatch::Remote,
