@@ -105,74 +105,30 @@ fn run(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn the_wheel_and_the_cell_assemble_as_documented_in_process_and_over_tcp() {
-    // In-process simulator.
-    let o = run(&["run", "scripts/assemble_wheel.rhai", "--db", "out/wheel.db"]);
-    assert!(common::text(&o).contains("finished #13: cup Assembled"));
-    assert_assembled(
-        Path::new("out/assemble_wheel.plan.json"),
-        Path::new("out/wheel.db"),
-    );
-    run(&["run", "scripts/assemble_cell.rhai", "--db", "out/cell.db"]);
-    assert_assembled(
-        Path::new("out/assemble_cell.plan.json"),
-        Path::new("out/cell.db"),
-    );
-    // A separate `fitup manipulator` on the default ports.
-    {
-        let _sim = manipulator(&[
-            "--doc",
-            "models/mz07.yaml",
-            "--robot",
-            "mz07",
-            "--speed",
-            "20",
-        ]);
+    // Each example as documented: the in-process simulator, then a separate
+    // `fitup manipulator` on the default ports with `--dispatch`.
+    for (name, cell, last) in [
+        ("wheel", "models/mz07.yaml", "finished #13: cup Assembled"),
+        ("cell", "models/cell_arm.yaml", "Assembled"),
+    ] {
+        let script = format!("scripts/assemble_{name}.rhai");
+        let db = format!("out/{name}.db");
+        let plan = format!("out/assemble_{name}.plan.json");
+        let o = run(&["run", &script, "--db", &db]);
+        assert!(common::text(&o).contains(last), "{}", common::text(&o));
+        assert_assembled(Path::new(&plan), Path::new(&db));
+        let _sim = manipulator(&["--doc", cell, "--robot", "mz07", "--speed", "20"]);
         run(&[
             "run",
-            "scripts/assemble_wheel.rhai",
+            &script,
             "--dispatch",
             "--db",
-            "out/wheel.db",
+            &db,
             "--",
             "target=127.0.0.1:11000",
         ]);
-        assert_assembled(
-            Path::new("out/assemble_wheel.plan.json"),
-            Path::new("out/wheel.db"),
-        );
+        assert_assembled(Path::new(&plan), Path::new(&db));
     }
-    let _sim = manipulator(&[
-        "--doc",
-        "models/cell_arm.yaml",
-        "--robot",
-        "mz07",
-        "--speed",
-        "20",
-    ]);
-    run(&[
-        "run",
-        "scripts/assemble_cell.rhai",
-        "--dispatch",
-        "--db",
-        "out/cell.db",
-        "--",
-        "target=127.0.0.1:11000",
-    ]);
-    assert_assembled(
-        Path::new("out/assemble_cell.plan.json"),
-        Path::new("out/cell.db"),
-    );
-    // The plan file the script saved runs with `fitup skills run` too (the arm is
-    // back where the plan starts only for the first skill's joint move, which
-    // starts wherever the arm is).
-    let o = run(&[
-        "skills",
-        "run",
-        "out/assemble_cell.plan.json",
-        "--target",
-        "127.0.0.1:11000",
-    ]);
-    assert!(common::text(&o).ends_with("done\n"), "{}", common::text(&o));
 }
 
 #[test]

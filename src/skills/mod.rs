@@ -28,7 +28,7 @@ pub use generator::{
 pub use manager::{
     log_event, Event, ManagerHandle, ManagerOptions, RunError, SkillManager, SkillStatus,
 };
-pub use program::{bind, BindError, Command, Plan, PlanStep};
+pub use program::{BindError, Command, Plan, PlanStep};
 pub use template::{default_template, Template, TemplateError, Workflow};
 
 use crate::math::Transform;

@@ -355,17 +355,3 @@ impl Plan {
         Ok(plan)
     }
 }
-
-/// [`Plan::bind`].
-///
-/// # Errors
-/// As [`Plan::bind`].
-pub fn bind(
-    skills: &[Skill],
-    tasks: &[Task],
-    robot: &Robot,
-    start: &[f64],
-    options: &MotionOptions,
-) -> Result<Plan, BindError> {
-    Plan::bind(skills, tasks, robot, start, options)
-}
