@@ -680,3 +680,48 @@ fn component_mass_and_threaded_are_read_and_validated() {
         assert!(e.contains(":7:"), "located on the mass line: {e}");
     }
 }
+
+/// `Sequence.revalidate` from a script: plan the wheel, move the gear up 1 mm, and
+/// the broken steps are named with their reasons (the gear moved; the cup's way
+/// down now hits the gear); moved back, every step holds again.
+#[test]
+fn revalidate_from_a_script_names_the_broken_steps() {
+    let dir = common::project();
+    let p = dir.path();
+    let root = common::repo();
+    std::fs::create_dir_all(p.join("models/meshes")).unwrap();
+    std::fs::copy(root.join("models/wheel.yaml"), p.join("models/wheel.yaml")).unwrap();
+    for m in ["axis", "gear", "cup"] {
+        let f = format!("models/meshes/wheel_{m}.stl");
+        std::fs::copy(root.join(&f), p.join(&f)).unwrap();
+    }
+    std::fs::write(
+        p.join("scripts/reval.rhai"),
+        r#"let d = open_doc("models/wheel.yaml");
+let s = d.assembly_sequence();
+assert(s.order == ["axis", "gear", "cup"], `${s.order}`);
+assert(s.revalidate(d).is_empty(), "nothing moved: every step holds");
+d.set_transform("gear", [0, 0, 2.5, 0, 0, 0]);
+let broken = s.revalidate(d);
+for b in broken { print(`broken ${b.index} ${b.part}: ${b.reason}`); }
+assert(broken.len() == 2, `${broken}`);
+assert(broken[0].index == 0 && broken[0].part == "gear", `${broken}`);
+assert(broken[0].reason.contains("moved"), broken[0].reason);
+assert(broken[1].part == "cup" && broken[1].reason.contains("hits gear"), broken[1].reason);
+// A finer tolerance is accepted; a negative one is an error.
+assert(s.revalidate(d, 0.001).len() == 2);
+let bad = false;
+try { s.revalidate(d, -1.0); } catch (e) { bad = true; }
+assert(bad, "a negative tolerance is refused");
+d.set_transform("gear", [0, 0, 1.5, 0, 0, 0]);
+assert(s.revalidate(d).is_empty(), "moved back: every step holds");
+print("revalidate ok");
+"#,
+    )
+    .unwrap();
+    let out = common::run_in(p, &["run", "scripts/reval.rhai"]);
+    let text = common::text(&out);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("broken 0 gear:"), "{text}");
+    assert!(text.contains("revalidate ok"), "{text}");
+}

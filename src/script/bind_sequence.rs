@@ -14,9 +14,10 @@ use rhai::{Array, Dynamic, Map};
 use std::sync::Arc;
 
 /// The result of `doc.assembly_sequence` (cheap to clone); it keeps the run context
-/// so `save_csv` can check and record the file it writes.
+/// so `save_csv` can check and record the file it writes, and the penetration
+/// tolerance (mm) it was planned with, which `revalidate` re-checks with.
 #[derive(Clone)]
-pub struct SequenceHandle(pub(super) Arc<SequencePlan>, Arc<Context>);
+pub struct SequenceHandle(pub(super) Arc<SequencePlan>, Arc<Context>, f64);
 
 const KEYS: [&str; 11] = [
     "base",
@@ -382,6 +383,22 @@ pub(super) fn register(api: &mut Api) {
         |s: &mut SequenceHandle| s.0.summary(),
     );
     api.f(
+        "Sequence.revalidate(doc: Document) -> array",
+        "Re-checks the best sequence against `doc` as it is now (after a part moved, a mate or a mesh changed), with the tolerance it was planned with: the broken steps in task order as `#{index, part, reason}` — a component gone, the part moved from where its task ends, or its insertion path now hitting a part assembled before it (named). Empty: every step still holds.",
+        |s: &mut SequenceHandle, d: DocHandle| {
+            let tol = s.2;
+            revalidate(s, &d, tol)
+        },
+    );
+    api.f(
+        "Sequence.revalidate(doc: Document, tolerance: float) -> array",
+        "`revalidate` with another penetration tolerance (mm, ≥ 0).",
+        |s: &mut SequenceHandle, d: DocHandle, tolerance: Dynamic| {
+            let tol = num(&tolerance, "tolerance")?;
+            revalidate(s, &d, tol)
+        },
+    );
+    api.f(
         "Sequence.save_csv(file: string)",
         "Writes the best sequence's tasks as CSV inside the project, atomically: `index,base,part,operation,mate_x,mate_y,mate_z,safe_length_mm,mount,planned,path_length_mm,receivers,grasp_faces`.",
         |s: &mut SequenceHandle, file: &str| -> ScriptResult<()> {
@@ -399,5 +416,23 @@ fn plan(d: &DocHandle, opts: Option<&Map>) -> ScriptResult<SequenceHandle> {
     let o = options(opts)?;
     let ctx = d.context().clone();
     let p = run(d, |doc, c| sequence::plan_sequence(doc, c, &o))?.map_err(fail)?;
-    Ok(SequenceHandle(Arc::new(p), ctx))
+    Ok(SequenceHandle(Arc::new(p), ctx, o.tolerance))
+}
+
+/// `Sequence.revalidate`: the broken steps of the best sequence in `d` as it is now.
+fn revalidate(s: &SequenceHandle, d: &DocHandle, tolerance: f64) -> ScriptResult<Array> {
+    let broken = run(d, |doc, c| {
+        sequence::revalidate(s.0.best(), doc, c, tolerance)
+    })?
+    .map_err(fail)?;
+    Ok(broken
+        .into_iter()
+        .map(|b| {
+            let mut m = Map::new();
+            m.insert("index".into(), (b.index as i64).into());
+            m.insert("part".into(), b.part.into());
+            m.insert("reason".into(), b.reason.into());
+            Dynamic::from_map(m)
+        })
+        .collect())
 }

@@ -177,103 +177,173 @@ pub(crate) fn find_grasp(
     if pairs.is_empty() {
         pairs = grasp_planes(ctx, p, &[*mate]);
     }
-    for pair in pairs {
-        if let Some(g) = slide(ctx, &pose, mesh, &pair, &m, mask) {
-            return Some(g);
-        }
+    let slides: Vec<Slide> = pairs
+        .iter()
+        .filter_map(|pair| Slide::new(ctx, &pose, mesh, pair, &m))
+        .collect();
+    // Only the assembled components whose boxes meet the fingers' reach (their
+    // boxes from depth 0 to a full slide) can stop a finger: the grasp depends on
+    // them alone and is found once per such set.
+    let near: u128 = super::plan::members_of(mask)
+        .filter(|&q| {
+            slides
+                .iter()
+                .any(|s| ctx.boxes[q].overlap(&s.reach).min() > -ctx.opts.tolerance)
+        })
+        .fold(0, |a, q| a | (1u128 << q));
+    let key = (
+        p,
+        super::plan::dir_key(mate),
+        dirs.iter().map(super::plan::dir_key).collect(),
+        near,
+    );
+    if let Some(g) = ctx.grasps.lock().unwrap().get(&key) {
+        return g.clone();
     }
-    None
+    let found = slides.iter().find_map(|s| s.run(ctx, near));
+    ctx.grasps.lock().unwrap().insert(key, found.clone());
+    found
 }
 
-fn slide(
-    ctx: &Ctx,
-    pose: &Transform,
-    mesh: &Mesh,
-    pair: &FacePair,
-    m: &Vec3,
-    mask: u128,
-) -> Option<Grasp> {
-    let n = pair.normal;
-    // (n, u, m) right-handed.
-    let u = m.cross(&n).try_normalize(1e-9)?;
-    let proj = |d: &Vec3| {
-        mesh.vertices
-            .iter()
-            .map(|v| d.dot(&v.coords))
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-                (a.min(x), b.max(x))
-            })
-    };
-    let (lo_m, hi_m) = proj(m);
-    let (lo_u, hi_u) = proj(&u);
-    let extent = hi_m - lo_m;
-    if extent <= 0.0 {
-        return None;
-    }
-    let g = &ctx.opts.gripper;
-    let t = g.finger_thickness.max(1e-3);
-    let w = if g.finger_width > 0.0 {
-        g.finger_width
-    } else {
-        0.5 * (hi_u - lo_u)
-    };
-    let cu = 0.5 * (lo_u + hi_u);
-    let gap = ctx.opts.tolerance.max(1e-3) * 2.0;
-    let s1 = pair.offset;
-    let s2 = s1 - pair.width;
-    // Finger boxes in the (n, u, m) frame, at depth 0: just behind the part's
-    // trailing end (the side opposite the mating direction).
-    let frame = UnitQuaternion::from_matrix(&Matrix3::from_columns(&[n, u, *m]));
-    let finger = |a: f64, b: f64| -> Option<Arc<Collider>> {
-        let mesh = Mesh::cuboid(
-            Point3::new(a, cu - w / 2.0, lo_m - extent),
-            Point3::new(b, cu + w / 2.0, lo_m),
-        );
-        Collider::new(Arc::new(mesh)).ok().map(Arc::new)
-    };
-    let fa = finger(s1 + gap, s1 + gap + t)?;
-    let fb = finger(s2 - gap - t, s2 - gap)?;
-    let rot = Transform::from_parts(Vec3::zeros(), frame);
-    let hits = |depth: f64| {
-        // Finger frame (n, u, m) → part frame, slid by `depth` along m, then posed.
-        let local = rot.then(&Transform::from_translation(m * depth));
-        let world = local.then(pose);
-        [&fa, &fb].iter().any(|f| {
-            let b = f.world_bounds(&world);
-            super::plan::members_of(mask).any(|q| {
-                ctx.boxes[q].overlap(&b).min() > -ctx.opts.tolerance
-                    && interferes(
-                        f,
-                        &world,
-                        &ctx.scene.colliders[q],
-                        &ctx.scene.poses[q],
-                        ctx.opts.tolerance,
-                    )
-                    .unwrap_or(true)
-            })
-        })
-    };
-    let steps = 20;
-    let mut depth = 0.0;
-    for k in 1..=steps {
-        let d = extent * k as f64 / steps as f64;
-        if hits(d) {
-            break;
+/// Two finger boxes set up on a face pair, ready to slide along the mating
+/// direction (part frame `m`) from behind the part.
+struct Slide {
+    fingers: [Arc<Collider>; 2],
+    /// Finger frame (n, u, m) → part frame.
+    rot: Transform,
+    /// Part frame → world.
+    pose: Transform,
+    m: Vec3,
+    extent: f64,
+    /// Where the grasp point is, before the depth: across, along u, at the trailing end.
+    at: Vec3,
+    /// World box of every finger position over the whole slide.
+    reach: crate::math::Aabb,
+    pair: FacePair,
+    tool_rot: UnitQuaternion<f64>,
+}
+
+impl Slide {
+    fn new(ctx: &Ctx, pose: &Transform, mesh: &Mesh, pair: &FacePair, m: &Vec3) -> Option<Slide> {
+        let n = pair.normal;
+        // (n, u, m) right-handed.
+        let u = m.cross(&n).try_normalize(1e-9)?;
+        let proj = |d: &Vec3| {
+            mesh.vertices
+                .iter()
+                .map(|v| d.dot(&v.coords))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                    (a.min(x), b.max(x))
+                })
+        };
+        let (lo_m, hi_m) = proj(m);
+        let (lo_u, hi_u) = proj(&u);
+        let extent = hi_m - lo_m;
+        if extent <= 0.0 {
+            return None;
         }
-        depth = d;
+        let g = &ctx.opts.gripper;
+        let t = g.finger_thickness.max(1e-3);
+        let w = if g.finger_width > 0.0 {
+            g.finger_width
+        } else {
+            0.5 * (hi_u - lo_u)
+        };
+        let cu = 0.5 * (lo_u + hi_u);
+        let gap = ctx.opts.tolerance.max(1e-3) * 2.0;
+        let s1 = pair.offset;
+        let s2 = s1 - pair.width;
+        // Finger boxes in the (n, u, m) frame, at depth 0: just behind the part's
+        // trailing end (the side opposite the mating direction).
+        let frame = UnitQuaternion::from_matrix(&Matrix3::from_columns(&[n, u, *m]));
+        let finger = |a: f64, b: f64| -> Option<Arc<Collider>> {
+            let mesh = Mesh::cuboid(
+                Point3::new(a, cu - w / 2.0, lo_m - extent),
+                Point3::new(b, cu + w / 2.0, lo_m),
+            );
+            Collider::new(Arc::new(mesh)).ok().map(Arc::new)
+        };
+        let fingers = [
+            finger(s1 + gap, s1 + gap + t)?,
+            finger(s2 - gap - t, s2 - gap)?,
+        ];
+        let rot = Transform::from_parts(Vec3::zeros(), frame);
+        let mut slide = Slide {
+            fingers,
+            rot,
+            pose: *pose,
+            m: *m,
+            extent,
+            at: n * (0.5 * (s1 + s2)) + u * cu + m * lo_m,
+            reach: crate::math::Aabb::new(Point3::origin(), Point3::origin()),
+            pair: pair.clone(),
+            // Tool frame: z along the mating direction (approach), x the closing
+            // direction.
+            tool_rot: UnitQuaternion::from_matrix(&Matrix3::from_columns(&[n, m.cross(&n), *m])),
+        };
+        // A box translated along a line stays within the hull of its two ends.
+        let mut reach: Option<crate::math::Aabb> = None;
+        for depth in [0.0, extent] {
+            let world = slide.world(depth);
+            for f in &slide.fingers {
+                let b = f.world_bounds(&world);
+                reach = Some(match reach {
+                    None => b,
+                    Some(r) => crate::math::Aabb::new(r.lo.inf(&b.lo), r.hi.sup(&b.hi)),
+                });
+            }
+        }
+        slide.reach = reach?;
+        Some(slide)
     }
-    if depth <= 0.0 {
-        return None;
+
+    /// Finger frame → world with the fingers slid `depth` along the mating direction.
+    fn world(&self, depth: f64) -> Transform {
+        self.rot
+            .then(&Transform::from_translation(self.m * depth))
+            .then(&self.pose)
     }
-    let point = n * (0.5 * (s1 + s2)) + u * cu + m * (lo_m + 0.5 * depth);
-    // Tool frame: z along the mating direction (approach), x the closing direction.
-    let tool_rot = UnitQuaternion::from_matrix(&Matrix3::from_columns(&[n, m.cross(&n), *m]));
-    Some(Grasp {
-        faces: pair.faces.clone(),
-        normal: n,
-        width: pair.width,
-        point,
-        depth,
-        tool_in_part: Transform::from_parts(point, tool_rot),
-    })
+
+    /// Slides the fingers in 20 steps until they collide with a component of `mask`
+    /// or fully grip; `None` when even the first step collides.
+    fn run(&self, ctx: &Ctx, mask: u128) -> Option<Grasp> {
+        let hits = |depth: f64| {
+            let world = self.world(depth);
+            self.fingers.iter().any(|f| {
+                let b = f.world_bounds(&world);
+                super::plan::members_of(mask).any(|q| {
+                    ctx.boxes[q].overlap(&b).min() > -ctx.opts.tolerance
+                        && interferes(
+                            f,
+                            &world,
+                            &ctx.scene.colliders[q],
+                            &ctx.scene.poses[q],
+                            ctx.opts.tolerance,
+                        )
+                        .unwrap_or(true)
+                })
+            })
+        };
+        let steps = 20;
+        let mut depth = 0.0;
+        for k in 1..=steps {
+            let d = self.extent * k as f64 / steps as f64;
+            if hits(d) {
+                break;
+            }
+            depth = d;
+        }
+        if depth <= 0.0 {
+            return None;
+        }
+        let point = self.at + self.m * (0.5 * depth);
+        Some(Grasp {
+            faces: self.pair.faces.clone(),
+            normal: self.pair.normal,
+            width: self.pair.width,
+            point,
+            depth,
+            tool_in_part: Transform::from_parts(point, self.tool_rot),
+        })
+    }
 }

@@ -88,7 +88,8 @@ pub struct SequenceOptions {
     /// How far a part is separated along a free direction to test it (mm, larger than
     /// the largest fit clearance; seed 003 section 2.1 step 2). Default 0.5.
     pub probe_mm: f64,
-    /// Step of the blocking sweeps and the safe-length search (mm); 0: 1 % of the
+    /// Step of the safe-length search and the two-segment slide (mm; the blocking
+    /// sweeps are continuous and take no step); 0: 1 % of the
     /// smallest part's box diagonal, clamped to 0.05..2 mm.
     pub step_mm: f64,
     /// Mass (any unit) per component or part name, for the base choice; missing:

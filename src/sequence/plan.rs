@@ -9,16 +9,23 @@ use super::options::{
     Mode, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
     DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
 };
-use super::task::{Operation, Task};
-use crate::collision::{interferes, sweep, Aabb, Motion, Obstacle, SweepMethod, SweepOptions};
+use super::task::{Grasp, Operation, Task};
+use crate::collision::{edge_interferes, interferes, Aabb, EdgeOptions};
 use crate::document::{Document, MateKind, Reference};
 use crate::math::{Transform, Vec3};
 use crate::planning::{
     EdgeResolution, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace,
 };
 use crate::workspace::{Scene, SceneCache, WorkspaceError};
-use std::collections::HashSet;
+use rayon::prelude::*;
+use std::collections::{HashMap, HashSet};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
+
+/// The blocking sweeps run in pieces whose points move at most this far (mm),
+/// reading the deadline between them.
+const SWEEP_PIECE_MM: f64 = 10.0;
 
 type Mask = u128;
 
@@ -90,7 +97,24 @@ pub(crate) struct Ctx<'d> {
     pub step: f64,
     pub deadline: Instant,
     pub started: Instant,
-    pub sweeps: usize,
+    /// Blocking sweeps run (counted from the parallel sweeps).
+    pub sweeps: AtomicUsize,
+    /// Safe lengths found, by part, direction and the assembled parts that matter.
+    safe_lengths: Mutex<HashMap<SafeKey, f64>>,
+    /// Grasps found, by part, mating direction, free directions and the assembled
+    /// parts the fingers can reach.
+    pub(super) grasps: Mutex<HashMap<GraspKey, Option<Grasp>>>,
+}
+
+/// The key of [`Ctx::safe_lengths`]: part, direction bits, the parts that matter.
+type SafeKey = (usize, [u64; 3], Mask);
+
+/// The key of [`Ctx::grasps`].
+pub(super) type GraspKey = (usize, [u64; 3], Vec<[u64; 3]>, Mask);
+
+/// The bits of a direction, for exact-match memo keys.
+pub(super) fn dir_key(d: &Vec3) -> [u64; 3] {
+    [d.x.to_bits(), d.y.to_bits(), d.z.to_bits()]
 }
 
 fn same_dir(a: &Vec3, b: &Vec3) -> bool {
@@ -309,9 +333,17 @@ impl<'d> Ctx<'d> {
             step,
             deadline,
             started,
-            sweeps: 0,
+            sweeps: AtomicUsize::new(0),
+            safe_lengths: Mutex::new(HashMap::new()),
+            grasps: Mutex::new(HashMap::new()),
         };
-        ctx.dirs = (0..n).map(|i| ctx.candidate_directions(i)).collect();
+        // Independent per component (the contact normals walk the meshes): parallel.
+        let this = &ctx;
+        let dirs: Vec<Vec<Vec3>> = (0..n)
+            .into_par_iter()
+            .map(|i| this.candidate_directions(i))
+            .collect();
+        ctx.dirs = dirs;
         ctx.build_blocking()?;
         ctx.order_composites();
         Ok(ctx)
@@ -430,7 +462,16 @@ impl<'d> Ctx<'d> {
     }
 
     /// Whether `p` moved straight along `d` from its assembled pose hits `q`.
-    fn sweep_hits(&mut self, p: usize, d: &Vec3, q: usize) -> Result<bool, SequenceError> {
+    ///
+    /// One continuous check ([`edge_interferes`]) from the resting pose outward until
+    /// `p`'s box has left `q`'s by `probe_mm`: the assembled pose is known free (the
+    /// contacts were checked in [`Ctx::new`]), so the contact region is not walked
+    /// pose by pose — faces sliding on or leaving a face in contact are cleared by
+    /// their planes at once, and nothing is jumped over. Beyond that length the
+    /// boxes are apart for good (the box has passed `q`'s on an axis `d` keeps
+    /// moving along), so "not hit" proves the whole straight line along `d` free of
+    /// `q`: the tasks' straight insertions reuse this answer instead of checking again.
+    fn sweep_hits(&self, p: usize, d: &Vec3, q: usize) -> Result<bool, SequenceError> {
         let (bp, bq) = (self.boxes[p], self.boxes[q]);
         let len = exit_distance(&bp, &bq, d) + self.opts.probe_mm;
         let moved = Aabb::new(bp.lo + d * len, bp.hi + d * len);
@@ -440,70 +481,108 @@ impl<'d> Ctx<'d> {
         if swept.overlap(&bq).min() <= self.opts.tolerance {
             return Ok(false);
         }
-        let remaining = self.remaining_ms();
-        if remaining <= 0.0 {
-            return Err(SequenceError::TimeLimit(
+        let time_limit = || {
+            SequenceError::TimeLimit(
                 self.opts
                     .time_limit_ms
                     .unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS),
-            ));
-        }
-        self.sweeps += 1;
-        let motion = Motion::Translation {
-            start: self.scene.poses[p],
-            offset: d * len,
+            )
         };
-        let obstacle = [Obstacle {
-            collider: &self.scene.colliders[q],
-            pose: self.scene.poses[q],
-        }];
-        let options = SweepOptions {
-            method: SweepMethod::Stepwise { step_mm: self.step },
+        if self.out_of_time() {
+            return Err(time_limit());
+        }
+        self.sweeps.fetch_add(1, Ordering::Relaxed);
+        let options = EdgeOptions {
             tolerance: self.opts.tolerance,
-            time_limit_ms: Some(remaining),
+            contact_step: EdgeResolution::DEFAULT_CONTACT_STEP_MM,
         };
-        match sweep(&self.scene.colliders[p], &motion, &obstacle, &options) {
-            Ok(h) => Ok(h.hit),
-            Err(crate::collision::CollisionError::TimeLimit(_)) => Err(SequenceError::TimeLimit(
-                self.opts
-                    .time_limit_ms
-                    .unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS),
-            )),
-            Err(e) => Err(WorkspaceError::from(e).into()),
+        let start = self.scene.poses[p];
+        // In pieces growing from one probe length to SWEEP_PIECE_MM: a part blocked
+        // by what it rests against (a peg pushed sideways into its hole's wall) is
+        // hit within the first short piece, where few triangle pairs can meet,
+        // instead of after a walk over every pair the whole length could meet; the
+        // deadline is read between pieces.
+        let mut at = 0.0;
+        let mut piece = self.opts.probe_mm.min(SWEEP_PIECE_MM);
+        let mut a = start;
+        while at < len {
+            if self.out_of_time() {
+                return Err(time_limit());
+            }
+            let next = if len - (at + piece) < 0.25 * piece {
+                len
+            } else {
+                at + piece
+            };
+            at = next;
+            piece = (2.0 * piece).min(SWEEP_PIECE_MM);
+            let b = start.then(&Transform::from_translation(d * next));
+            let hit = edge_interferes(
+                &self.scene.colliders[p],
+                &a,
+                &b,
+                &self.scene.colliders[q],
+                &self.scene.poses[q],
+                &options,
+            )
+            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?;
+            if hit {
+                return Ok(true);
+            }
+            a = b;
         }
+        Ok(false)
     }
 
     /// The directional blocking graph: for every component, direction and other
-    /// component, whether the straight removal hits it.
-    // `q` indexes the rows built so far and the directions, not one slice.
-    #[allow(clippy::needless_range_loop)]
+    /// component, whether the straight removal hits it. The sweeps are independent
+    /// and run in parallel.
     fn build_blocking(&mut self) -> Result<(), SequenceError> {
-        let mut blocked: Vec<Vec<Mask>> = Vec::with_capacity(self.n);
+        // p along d meets q exactly when q along −d meets p (the same relative
+        // motion, the same separation length): only one of the two is swept.
+        let mirror = |p: usize, k: usize, q: usize| -> Option<usize> {
+            (q < p)
+                .then(|| {
+                    self.dirs[q]
+                        .iter()
+                        .position(|e| same_dir(e, &-self.dirs[p][k]))
+                })
+                .flatten()
+        };
+        let mut queries = Vec::new();
         for p in 0..self.n {
-            let mut row = Vec::new();
             for k in 0..self.dirs[p].len() {
-                let d = self.dirs[p][k];
-                let mut m: Mask = 0;
-                for q in 0..self.n {
-                    if q == p {
-                        continue;
-                    }
-                    // p along d meets q exactly when q along −d meets p (the same
-                    // relative motion, the same separation length): reuse it.
-                    let mirrored = (q < p)
-                        .then(|| self.dirs[q].iter().position(|e| same_dir(e, &-d)))
-                        .flatten();
-                    let hit = match mirrored {
-                        Some(k2) => blocked[q][k2] & bit(p) != 0,
-                        None => self.sweep_hits(p, &d, q)?,
-                    };
-                    if hit {
-                        m |= bit(q);
+                for q in (0..self.n).filter(|&q| q != p) {
+                    if mirror(p, k, q).is_none() {
+                        queries.push((p, k, q));
                     }
                 }
-                row.push(m);
             }
-            blocked.push(row);
+        }
+        let this = &*self;
+        let hits: Vec<bool> = queries
+            .par_iter()
+            .map(|&(p, k, q)| this.sweep_hits(p, &this.dirs[p][k], q))
+            .collect::<Result<_, _>>()?;
+        let mut blocked: Vec<Vec<Mask>> = (0..self.n)
+            .map(|p| vec![0 as Mask; self.dirs[p].len()])
+            .collect();
+        for (&(p, k, q), &hit) in queries.iter().zip(&hits) {
+            if hit {
+                blocked[p][k] |= bit(q);
+            }
+        }
+        // The mirrored half, from the swept one (its q < p: p ascending fills them).
+        for p in 0..self.n {
+            for k in 0..self.dirs[p].len() {
+                for q in (0..self.n).filter(|&q| q != p) {
+                    if let Some(k2) = mirror(p, k, q) {
+                        if blocked[q][k2] & bit(p) != 0 {
+                            blocked[p][k] |= bit(q);
+                        }
+                    }
+                }
+            }
         }
         self.blocked = blocked;
         Ok(())
@@ -737,13 +816,48 @@ impl<'d> Ctx<'d> {
         })
     }
 
+    /// The memo key of [`safe_length`](Self::safe_length): the part, the direction
+    /// and the components of `mask` its probes can reach.
+    fn safe_length_key(&self, p: usize, d: &Vec3, mask: Mask) -> SafeKey {
+        let Some(region) = union_box(&self.boxes, mask) else {
+            return (p, dir_key(d), 0);
+        };
+        let probe = self.opts.probe_mm;
+        // Every probe pose lies in p's box swept along d to the bracket's far end
+        // (at most `limit`: leaving a smaller region is never farther), grown by a
+        // probe: the boxes that cannot meet it never interfere.
+        let limit = exit_distance(&self.boxes[p], &region, d) + probe;
+        let bp = self.boxes[p];
+        let far = Aabb::new(bp.lo + d * limit, bp.hi + d * limit);
+        let reach = Aabb::new(
+            bp.lo.inf(&far.lo) - Vec3::repeat(probe),
+            bp.hi.sup(&far.hi) + Vec3::repeat(probe),
+        );
+        let near: Mask = members(mask)
+            .filter(|&q| boxes_meet(&reach, &self.boxes[q], self.opts.tolerance))
+            .fold(0, |a, q| a | bit(q));
+        (p, dir_key(d), near)
+    }
+
     /// Seed 003 section 2.1 step 6: step `p` out along `d` (unit) until a probe along
     /// every other candidate direction is free of `mask` (mm).
+    ///
+    /// Only the components of `mask` whose boxes the probes can reach take part (the
+    /// others can never answer "hit"), and the search's bracket is set by them too,
+    /// so the answer depends on the part, the direction and those components alone:
+    /// it is computed once per such key (the ranked sequences put the same part
+    /// onto the same neighbours in many orders).
     pub fn safe_length(&self, p: usize, d: &Vec3, mask: Mask) -> f64 {
-        let Some(region) = union_box(&self.boxes, mask) else {
-            return self.opts.probe_mm;
+        let probe = self.opts.probe_mm;
+        let key = self.safe_length_key(p, d, mask);
+        let near = key.2;
+        if let Some(&s) = self.safe_lengths.lock().unwrap().get(&key) {
+            return s;
+        }
+        let Some(region) = union_box(&self.boxes, near) else {
+            return probe;
         };
-        let limit = exit_distance(&self.boxes[p], &region, d) + self.opts.probe_mm;
+        let limit = exit_distance(&self.boxes[p], &region, d) + probe;
         let others: Vec<Vec3> = self.dirs[p]
             .iter()
             .filter(|e| e.dot(d).abs() < 0.9)
@@ -754,29 +868,33 @@ impl<'d> Ctx<'d> {
         let free_at = |s: f64| {
             let at = start.then(&Transform::from_translation(d * s));
             others.iter().all(|e| {
-                let probe = at.then(&Transform::from_translation(e * self.opts.probe_mm));
-                !self.pose_hits(p, &probe, mask)
+                let probe = at.then(&Transform::from_translation(e * probe));
+                !self.pose_hits(p, &probe, near)
             })
         };
-        if self.opts.probe_mm >= limit || free_at(self.opts.probe_mm) {
-            return self.opts.probe_mm.min(limit);
-        }
-        // Bisection to one step: the part is held sideways until it clears what
-        // surrounds it, and free from there on (a handful of probes, not one per
-        // step — each probe is an exact query, costly on fine meshes).
-        let (mut lo, mut hi) = (self.opts.probe_mm, limit);
-        while hi - lo > step {
-            if self.out_of_time() {
-                return limit;
+        let found = if probe >= limit || free_at(probe) {
+            probe.min(limit)
+        } else {
+            // Bisection to one step: the part is held sideways until it clears what
+            // surrounds it, and free from there on (a handful of probes, not one per
+            // step — each probe is an exact query, costly on fine meshes).
+            let (mut lo, mut hi) = (probe, limit);
+            while hi - lo > step {
+                if self.out_of_time() {
+                    // Not remembered: cut short, not the answer.
+                    return limit;
+                }
+                let mid = 0.5 * (lo + hi);
+                if free_at(mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
             }
-            let mid = 0.5 * (lo + hi);
-            if free_at(mid) {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        hi
+            hi
+        };
+        self.safe_lengths.lock().unwrap().insert(key, found);
+        found
     }
 }
 
@@ -1137,16 +1255,6 @@ fn operation(ctx: &Ctx, p: usize, receivers: &[usize], mate: &Vec3) -> Operation
     }
 }
 
-/// A straight path from `from` to `to` checked by `validator`.
-fn straight_path(
-    validator: &mut MeshValidator,
-    from: Transform,
-    to: Transform,
-) -> Option<PlannedPath> {
-    let path = PlannedPath::given("straight", vec![from, to], validator.options().edge);
-    path.revalidate(validator).is_ok().then_some(path)
-}
-
 /// Turns a found order into tasks: safe lengths, checked paths, grasps, boxes and
 /// frames. `Err(reason)` when a step's path cannot be checked free.
 fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
@@ -1163,39 +1271,39 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
         let (receivers, mating_directions) = step_info(ctx, p, mask, &order);
         let mate = -ch.leave;
         let assembled = ctx.scene.poses[p];
-        let obstacles: Vec<_> = members(mask)
-            .map(|q| (ctx.scene.colliders[q].clone(), ctx.scene.poses[q]))
-            .collect();
-        let mut validator = MeshValidator::new(
-            ctx.scene.colliders[p].clone(),
-            obstacles,
-            MeshValidatorOptions {
-                tolerance: ctx.opts.tolerance,
-                edge: EdgeResolution::CONTINUOUS,
-                ..MeshValidatorOptions::default()
-            },
-        )
-        .map_err(|e| e.to_string())?;
         let (safe, path) = match &ch.planned {
             Some(path) => {
+                let mut validator = ctx
+                    .validator(p, mask, EdgeResolution::CONTINUOUS)
+                    .ok_or_else(|| format!("no validator for {}", ctx.names[p]))?;
                 if path.revalidate(&mut validator).is_err() {
                     return Err(format!("the planned path of {} is blocked", ctx.names[p]));
                 }
                 (ctx.opts.probe_mm, path.clone())
             }
             None => {
+                // The blocking graph's continuous sweep of p along this direction
+                // found no component of `mask` on the whole straight line (see
+                // `Ctx::sweep_hits`): that is this path's check, already made.
+                let free = ctx.dirs[p]
+                    .iter()
+                    .position(|e| same_dir(e, &ch.leave))
+                    .is_some_and(|k| ctx.blocked[p][k] & mask == 0);
+                if !free {
+                    return Err(format!(
+                        "the straight insertion of {} along {:?} collides",
+                        ctx.names[p],
+                        mate.as_slice()
+                    ));
+                }
                 let safe = ctx.safe_length(p, &ch.leave, mask);
                 let from = assembled.then(&Transform::from_translation(ch.leave * safe));
-                match straight_path(&mut validator, from, assembled) {
-                    Some(path) => (safe, path),
-                    None => {
-                        return Err(format!(
-                            "the straight insertion of {} along {:?} collides",
-                            ctx.names[p],
-                            mate.as_slice()
-                        ))
-                    }
-                }
+                let path = PlannedPath::given(
+                    "straight",
+                    vec![from, assembled],
+                    EdgeResolution::CONTINUOUS,
+                );
+                (safe, path)
             }
         };
         let mount = current.is_some_and(|c| c.angle(&mate) > ctx.opts.max_tilt + 1e-9);
@@ -1363,6 +1471,22 @@ fn finish(
     count: u32,
     cut: bool,
 ) -> Result<SequencePlan, SequenceError> {
+    // The safe lengths of every straight task of the kept sequences, each distinct
+    // one once and in parallel (the sequences then read them from the memo).
+    let mut jobs: Vec<(usize, Vec3, Mask)> = Vec::new();
+    let mut keys = HashSet::new();
+    for f in &found {
+        let mut mask = bit(f.base);
+        for ch in &f.choices {
+            if ch.planned.is_none() && keys.insert(ctx.safe_length_key(ch.part, &ch.leave, mask)) {
+                jobs.push((ch.part, ch.leave, mask));
+            }
+            mask |= bit(ch.part);
+        }
+    }
+    jobs.par_iter().for_each(|(p, d, mask)| {
+        ctx.safe_length(*p, d, *mask);
+    });
     let mut sequences = Vec::new();
     for f in &found {
         match build_sequence(ctx, f) {
@@ -1414,7 +1538,7 @@ fn finish(
         complete: !cut,
         graph: ctx.graph.clone(),
         time_ms: ctx.started.elapsed().as_secs_f64() * 1e3,
-        sweeps: ctx.sweeps,
+        sweeps: ctx.sweeps.load(Ordering::Relaxed),
     })
 }
 

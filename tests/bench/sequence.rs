@@ -4,6 +4,9 @@
 //! gearbox (`models/gearbox.yaml`), and the pegboard tessellated to ~158 000 triangles
 //! from the meshes alone (one run). Medians of 5 runs; the goals are 10 parts
 //! with mates in ≤ 1 s and a 10-part mesh-only assembly of 150 000 triangles in ≤ 10 s.
+//!
+//! `FITUP_BENCH_SEQUENCE=fine` (any part of an assembly's name, e.g. `fine`, `wheel`)
+//! runs only the matching rows; the fine pegboard is generated only when it is run.
 
 use fitup::document::Document;
 use fitup::sequence::{plan_sequence, Mode, SequenceOptions};
@@ -48,32 +51,45 @@ fn time(
 
 fn main() {
     let dir = std::env::temp_dir().join(format!("fitup_bench_sequence_{}", std::process::id()));
-    let board = pegboard::pegboard(&dir, true);
-    // The mesh-only goal: 10 parts, ~150 000 triangles.
-    let fine = pegboard::pegboard_with(&dir.join("fine"), true, 1200);
-    let cases: Vec<(&str, Document, &[&str])> = vec![
+    let filter = std::env::var("FITUP_BENCH_SEQUENCE").unwrap_or_default();
+    // Name, document (opened only when the row runs), threaded parts.
+    type Open = Box<dyn Fn() -> Document>;
+    let (d1, d2) = (dir.clone(), dir.clone());
+    let all: Vec<(&str, Open, &[&str])> = vec![
         (
             "wheel (3 parts)",
-            Document::open(Path::new("models/wheel.yaml")).unwrap(),
+            Box::new(|| Document::open(Path::new("models/wheel.yaml")).unwrap()),
             &[],
         ),
         (
             "fig. 11 cell (8 parts)",
-            Document::open(Path::new("models/cell.yaml")).unwrap(),
+            Box::new(|| Document::open(Path::new("models/cell.yaml")).unwrap()),
             &["screw"],
         ),
-        ("pegboard (10 parts)", Document::open(&board).unwrap(), &[]),
+        (
+            "pegboard (10 parts)",
+            Box::new(move || Document::open(&pegboard::pegboard(&d1, true)).unwrap()),
+            &[],
+        ),
+        // The mesh-only goal: 10 parts, ~150 000 triangles.
         (
             "fine pegboard (10 parts)",
-            Document::open(&fine).unwrap(),
+            Box::new(move || {
+                Document::open(&pegboard::pegboard_with(&d2.join("fine"), true, 1200)).unwrap()
+            }),
             &[],
         ),
         (
             "gearbox (12 parts)",
-            Document::open(Path::new("models/gearbox.yaml")).unwrap(),
+            Box::new(|| Document::open(Path::new("models/gearbox.yaml")).unwrap()),
             &[],
         ),
     ];
+    let cases: Vec<(&str, Document, &[&str])> = all
+        .into_iter()
+        .filter(|(name, _, _)| name.contains(filter.as_str()))
+        .map(|(name, open, threaded)| (name, open(), threaded))
+        .collect();
     println!("| assembly | triangles | mode | median | sweeps | tasks |");
     println!("|---|---|---|---|---|---|");
     for (name, doc, threaded) in &cases {
