@@ -23,8 +23,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-/// The blocking sweeps run in pieces whose points move at most this far (mm),
-/// reading the deadline between them.
+/// The longest piece of a blocking sweep (mm): the pieces grow from the probe length
+/// to this, and the deadline is read between them.
 const SWEEP_PIECE_MM: f64 = 10.0;
 
 type Mask = u128;
