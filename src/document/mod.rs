@@ -808,7 +808,8 @@ impl Document {
     /// hot path of stepwise animations).
     pub fn set_transform_at(&mut self, i: usize, t: Transform) -> Result<(), DocumentError> {
         let name = &self.components[i].name;
-        check_pose(&t, &format!("the pose for `{name}`"))?;
+        // The name is formatted only for a refused pose (scripts move parts in loops).
+        check_pose(&t, format_args!("the pose for `{name}`"))?;
         // Setting the pose a component already has is not a move (Rhai writes a property
         // back after a method call on it, as in `table.transform.apply(p)`).
         if t == self.components[i].transform {
@@ -827,6 +828,44 @@ impl Document {
         self.components[i].transform = t;
         self.revision += 1;
         Ok(())
+    }
+
+    /// Moves component `i` by `motion` applied after its pose (a motion in the world
+    /// frame: `pose * motion` in the row-vector layout), with the checks of
+    /// [`set_transform_at`](Self::set_transform_at). Returns the new pose.
+    pub fn move_component_at(
+        &mut self,
+        i: usize,
+        motion: &Transform,
+    ) -> Result<Transform, DocumentError> {
+        let t = self.components[i].transform * *motion;
+        self.set_transform_at(i, t)?;
+        Ok(t)
+    }
+
+    /// Reference `name` of component `i`'s part (a user plane, axis or point, or a
+    /// built-in one such as `Origin`) in world coordinates at the component's pose (mm).
+    pub fn world_reference(&self, i: usize, name: &str) -> Result<Reference, DocumentError> {
+        let c = &self.components[i];
+        let part = self.part(&c.part)?;
+        let r = part
+            .reference(name)
+            .ok_or_else(|| DocumentError::NotFound {
+                what: "reference",
+                name: name.into(),
+                hint: format!(
+                    "part `{}` has none by that name; {}",
+                    part.name,
+                    suggestion(
+                        name,
+                        part.references
+                            .keys()
+                            .map(String::as_str)
+                            .chain(Reference::BUILTIN_NAMES)
+                    )
+                ),
+            })?;
+        Ok(r.posed(&c.transform))
     }
 
     /// Marks a component fixed or free.
@@ -1349,7 +1388,7 @@ fn canonical_target(p: &Path) -> PathBuf {
 }
 
 /// Checks a pose set through the API: finite, translation within [`MAX_ABS_VALUE`] mm.
-pub(crate) fn check_pose(t: &Transform, what: &str) -> Result<(), DocumentError> {
+pub(crate) fn check_pose(t: &Transform, what: impl std::fmt::Display) -> Result<(), DocumentError> {
     if !t.is_finite() {
         return Err(DocumentError::Invalid(format!("{what} is not finite")));
     }

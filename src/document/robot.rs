@@ -12,9 +12,9 @@ use super::file::{DhFile, LinkFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
-    read_urdf, resolve_mesh, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
-    JointLimits, KinematicTree, KinematicsError, Link, MotionOptions, Program, Robot, RunError,
-    Trajectory,
+    read_urdf, resolve_mesh, robot_by_name, run_program, DhConvention, DhRow, IkOptions,
+    IkSolution, Joint, JointKind, JointLimits, KinematicTree, KinematicsError, Link, MotionOptions,
+    Program, Robot, RunError, Trajectory,
 };
 use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{Mesh, MeshCache};
@@ -235,43 +235,72 @@ impl RobotInstance {
     }
 }
 
-/// Joint values from document units (degrees / mm) to radians / mm.
-pub fn joints_from_document(robot: &Robot, values: &[f64]) -> Vec<f64> {
-    values
+/// Inverse kinematics along a sequence of world poses: for each pose in `targets`,
+/// the solution nearest to the previous pose's solution (the first nearest to
+/// `start`, rad / mm), or `None` when the pose has no solution within the joint
+/// limits (the next pose is then solved near the last solution found). The robot
+/// does not move. This is what a loop over thousands of poses should call: one
+/// solver set-up, no per-pose overhead of the caller.
+pub fn inverse_chain(
+    robot: &Robot,
+    targets: &[Transform],
+    start: &[f64],
+    options: &IkOptions,
+) -> Vec<Option<IkSolution>> {
+    let mut reference = start.to_vec();
+    targets
         .iter()
-        .zip(
-            robot
-                .joint_kinds()
-                .into_iter()
-                .chain(std::iter::repeat(JointKind::Revolute)),
-        )
-        .map(|(v, k)| {
-            if k == JointKind::Prismatic {
-                *v
-            } else {
-                v.to_radians()
-            }
+        .map(|t| {
+            let sol = robot.inverse_nearest(t, &reference, options).ok()?;
+            reference.clone_from(&sol.joints);
+            Some(sol)
         })
         .collect()
 }
 
+/// Whether joint `i` of `robot` is prismatic (mm) rather than revolute (radians);
+/// joints past the robot's count are taken as revolute.
+fn is_prismatic(robot: &Robot, i: usize) -> bool {
+    robot
+        .joint_links()
+        .get(i)
+        .is_some_and(|&l| robot.tree().links()[l].joint.kind == JointKind::Prismatic)
+}
+
+/// Joint values from document units (degrees / mm) to radians / mm.
+pub fn joints_from_document(robot: &Robot, values: &[f64]) -> Vec<f64> {
+    let mut q = values.to_vec();
+    joints_from_document_in_place(robot, &mut q);
+    q
+}
+
+/// [`joints_from_document`] in place: degrees become radians, millimetres stay (no
+/// allocation, for per-call script conversions).
+pub fn joints_from_document_in_place(robot: &Robot, values: &mut [f64]) {
+    for (i, v) in values.iter_mut().enumerate() {
+        if !is_prismatic(robot, i) {
+            *v = v.to_radians();
+        }
+    }
+}
+
 /// Joint values from radians / mm to document units (degrees / mm).
 pub fn joints_to_document(robot: &Robot, q: &[f64]) -> Vec<f64> {
-    q.iter()
-        .zip(
-            robot
-                .joint_kinds()
-                .into_iter()
-                .chain(std::iter::repeat(JointKind::Revolute)),
-        )
-        .map(|(v, k)| {
-            if k == JointKind::Prismatic {
-                *v
-            } else {
-                v.to_degrees()
-            }
-        })
-        .collect()
+    joints_to_document_iter(robot, q).collect()
+}
+
+/// [`joints_to_document`] as an iterator (no intermediate vector).
+pub fn joints_to_document_iter<'a>(
+    robot: &'a Robot,
+    q: &'a [f64],
+) -> impl Iterator<Item = f64> + 'a {
+    q.iter().enumerate().map(move |(i, v)| {
+        if is_prismatic(robot, i) {
+            *v
+        } else {
+            v.to_degrees()
+        }
+    })
 }
 
 fn matrix(m: &Option<[[f64; 4]; 4]>, what: &str) -> Result<Option<Transform>, String> {
@@ -1069,6 +1098,54 @@ mod tests {
             alpha,
             joint: None,
             limits: None,
+        }
+    }
+
+    /// Each pose of a chain is solved near the previous solution: FK of the solutions
+    /// gives the targets back, a pose out of reach is `None` without breaking the
+    /// chain, and a path of nearby poses gets nearby joints (no branch flips).
+    #[test]
+    fn inverse_chain_follows_the_previous_solution() {
+        let robot = Catalog::NachiMz07.robot();
+        let start: Vec<f64> = [10.0f64, -20.0, 30.0, 40.0, -50.0, 60.0]
+            .iter()
+            .map(|v| v.to_radians())
+            .collect();
+        let mut targets: Vec<Transform> = (0..20)
+            .map(|k| {
+                let mut q = start.clone();
+                q[0] += 0.01 * k as f64;
+                q[4] += 0.005 * k as f64;
+                robot.tcp_pose(&q).unwrap()
+            })
+            .collect();
+        targets.insert(5, Transform::from_translation(Vec3::new(1e5, 0.0, 0.0)));
+        let out = inverse_chain(&robot, &targets, &start, &IkOptions::default());
+        assert_eq!(out.len(), targets.len());
+        assert!(out[5].is_none());
+        let mut previous = start.clone();
+        for (t, s) in targets.iter().zip(&out) {
+            let Some(s) = s else { continue };
+            assert!(robot.tcp_pose(&s.joints).unwrap().approx_eq(t, 1e-6, 1e-9));
+            let step = s
+                .joints
+                .iter()
+                .zip(&previous)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                step < 0.05,
+                "joint step {step} rad between neighbouring poses"
+            );
+            previous.clone_from(&s.joints);
+        }
+        // In-place and allocating unit conversions agree and invert each other.
+        let deg = joints_to_document(&robot, &start);
+        let mut back = deg.clone();
+        joints_from_document_in_place(&robot, &mut back);
+        assert_eq!(back, joints_from_document(&robot, &deg));
+        for (a, b) in back.iter().zip(&start) {
+            assert!((a - b).abs() < 1e-12);
         }
     }
 

@@ -128,8 +128,7 @@ impl ComponentHandle {
     /// Moves the component by `motion` applied after its pose (world frame), under one lock.
     fn move_by(&self, motion: Transform) -> ScriptResult<()> {
         let mut doc = self.doc.lock()?;
-        let t = doc.components()[self.index].transform * motion;
-        doc.set_transform_at(self.index, t).map_err(fail)?;
+        doc.move_component_at(self.index, &motion).map_err(fail)?;
         self.show_pose(&doc);
         Ok(())
     }
@@ -383,14 +382,8 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         },
     );
     api.f("Component.reference(name: string) -> map", "A reference of the part in world coordinates: `#{type, point, normal}` for planes, `#{type, point, direction}` for axes, `#{type, point}` for points (mm).", |c: &mut ComponentHandle, name: &str| -> ScriptResult<Map> {
-        let doc = c.doc.lock()?;
-        let comp = &doc.components()[c.index];
-        let part = doc.part(&comp.part).map_err(fail)?;
-        let r = part.reference(name).ok_or_else(|| {
-            let names = part.references.keys().map(String::as_str).chain(Reference::BUILTIN_NAMES);
-            fail(format!("part `{}` has no reference `{name}`: {}", part.name, crate::diagnostics::suggestion(name, names)))
-        })?;
-        Ok(reference_map(&r.posed(&comp.transform)))
+        let r = c.doc.lock()?.world_reference(c.index, name).map_err(fail)?;
+        Ok(reference_map(&r))
     });
     api.f(
         "Component.to_string() -> string",

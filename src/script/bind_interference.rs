@@ -11,7 +11,7 @@ use crate::collision::{
     Contact, CutSpec, InterferenceKind, Method, PairMember, SweepMethod, SweepOptions,
 };
 use crate::document::Feature;
-use crate::workspace::CheckOptions;
+use crate::workspace::{split_part, CheckOptions, CUT_CELLS_FEATURE};
 use rhai::{Array, Dynamic, Map};
 
 /// A part's cut-cells feature, by part and feature name.
@@ -102,6 +102,11 @@ fn pair(d: &DocHandle, a: &str, b: &str, opts: Option<&Map>) -> ScriptResult<Map
     })
 }
 
+fn interferes(d: &DocHandle, a: &str, b: &str, opts: Option<&Map>) -> ScriptResult<bool> {
+    let o = options(opts)?;
+    with_workspace(d, |ws| ws.interferes(a, b, &o).map_err(fail))
+}
+
 /// The waypoints of a motion: a Transform or pose, or an array of Transforms.
 fn waypoints(motion: &Dynamic) -> ScriptResult<Vec<crate::math::Transform>> {
     if let Some(arr) = motion.read_lock::<Array>() {
@@ -184,42 +189,19 @@ fn feature_map(part: &str, f: &Feature) -> Map {
 
 fn split(c: &ComponentHandle, spec: CutSpec) -> ScriptResult<FeatureHandle> {
     let mut doc = c.doc.lock()?;
-    let part = doc.components()[c.index].part.clone();
-    let name = "CutCells".to_string();
-    // Derive now so a bad size (too many cells) fails here, before it is stored.
-    let mesh = doc.mesh_of(c.index).clone();
-    c.doc
-        .context()
-        .scene_cache()?
-        .cells(&mesh, &spec)
-        .map_err(fail)?;
-    doc.set_feature(
-        &part,
-        Feature::CutCells {
-            name: name.clone(),
-            spec,
-        },
-    )
-    .map_err(fail)?;
+    let mut cache = c.doc.context().scene_cache()?;
+    let part = split_part(&mut doc, &mut cache, c.index, spec).map_err(fail)?;
     Ok(FeatureHandle {
         doc: c.doc.clone(),
         part,
-        name,
+        name: CUT_CELLS_FEATURE.to_string(),
     })
 }
 
 fn feature_cells(f: &FeatureHandle) -> ScriptResult<std::sync::Arc<crate::collision::CutCells>> {
     let doc = f.doc.lock()?;
-    let part = doc.part(&f.part).map_err(fail)?;
-    let Some(Feature::CutCells { spec, .. }) = part.features.iter().find(|x| x.name() == f.name)
-    else {
-        return err(format!(
-            "part `{}` has no feature `{}` any more",
-            f.part, f.name
-        ));
-    };
     let mut cache = f.doc.context().scene_cache()?;
-    cache.cells(&part.mesh, spec).map_err(fail)
+    crate::workspace::feature_cells(&doc, &mut cache, &f.part, &f.name).map_err(fail)
 }
 
 pub(super) fn register(api: &mut Api) {
@@ -248,20 +230,12 @@ pub(super) fn register(api: &mut Api) {
     api.f(
         "Document.interferes(a: string, b: string) -> bool",
         "Whether two components interfere (exact method, 0.01 mm tolerance).",
-        |d: &mut DocHandle, a: &str, b: &str| -> ScriptResult<bool> {
-            Ok(pair(d, a, b, None)?
-                .get("state")
-                .is_some_and(|s| s.to_string() == "interfering"))
-        },
+        |d: &mut DocHandle, a: &str, b: &str| interferes(d, a, b, None),
     );
     api.f(
         "Document.interferes(a: string, b: string, options: map) -> bool",
         "Whether two components interfere by `#{method: \"exact\"|\"aabb\"|\"cells\", tolerance}`.",
-        |d: &mut DocHandle, a: &str, b: &str, o: Map| -> ScriptResult<bool> {
-            Ok(pair(d, a, b, Some(&o))?
-                .get("state")
-                .is_some_and(|s| s.to_string() == "interfering"))
-        },
+        |d: &mut DocHandle, a: &str, b: &str, o: Map| interferes(d, a, b, Some(&o)),
     );
     api.f(
         "Document.contact(a: string, b: string) -> map",

@@ -1,7 +1,9 @@
 //! Bindings for `Transform` (the MathTransform of the SolidWorks API).
 
 use super::api::Api;
-use super::convert::{array3, box_text, err, fail, floats, num, numbers, point3, vec3};
+use super::convert::{
+    array3, box_text, err, fail, floats, num, numbers, numbers_into, point3, vec3,
+};
 use super::ScriptResult;
 use crate::math::{format, Aabb, AngleConvention, Transform, Vec3};
 use rhai::{Array, Dynamic};
@@ -51,8 +53,9 @@ pub fn to_transform(v: &Dynamic, what: &str) -> ScriptResult<Transform> {
             Transform::from_matrix(&m).map_err(fail)
         }
         6 => {
-            let n = numbers(v, 6, what)?;
-            Ok(pose_deg(&[n[0], n[1], n[2], n[3], n[4], n[5]], AngleConvention::default()))
+            let mut n = [0.0; 6];
+            numbers_into(v, &mut n, what)?;
+            Ok(pose_deg(&n, AngleConvention::default()))
         }
         16 => {
             let n = numbers(v, 16, what)?;

@@ -6,9 +6,13 @@
 use super::api::Api;
 use super::bind_document::DocHandle;
 use super::bind_math::{to_transform, xyzabc_deg};
-use super::convert::{array3, check_keys, err, fail, floats, numbers, opt_num, opt_str, vec3};
+use super::convert::{
+    array3, check_keys, err, fail, floats, numbers, numbers_into, opt_num, opt_str, vec3,
+};
 use super::{Context, ScriptResult};
-use crate::document::robot::{joints_from_document, joints_to_document};
+use crate::document::robot::{
+    inverse_chain, joints_from_document_in_place, joints_to_document, joints_to_document_iter,
+};
 use crate::kinematics::{
     drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
     DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkOptions, JointLimits, MotionOptions,
@@ -125,13 +129,18 @@ fn stream_samples(ctx: &Context, robot: &Robot, t: &Trajectory) {
     }
 }
 
+/// Joint values (rad / mm) from a script array of `dof` numbers (degrees / mm): one
+/// allocation, converted in place.
 fn joints_arg(robot: &Robot, v: &Dynamic, what: &str) -> ScriptResult<Vec<f64>> {
-    let n = numbers(v, robot.dof(), what)?;
-    Ok(joints_from_document(robot, &n))
+    let mut q = vec![0.0; robot.dof()];
+    numbers_into(v, &mut q, what)?;
+    joints_from_document_in_place(robot, &mut q);
+    Ok(q)
 }
 
+/// A script array of joint values (degrees / mm) from rad / mm.
 fn joints_out(robot: &Robot, q: &[f64]) -> Dynamic {
-    floats(joints_to_document(robot, q))
+    floats(joints_to_document_iter(robot, q))
 }
 
 const MOTION_KEYS: [&str; 5] = [
@@ -430,7 +439,9 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             list.iter()
                 .enumerate()
                 .map(|(i, j)| {
-                    let q = joints_arg(&robot, j, &format!("joints[{i}]"))?;
+                    // The entry's name is formatted only for an error message.
+                    let q = joints_arg(&robot, j, "joints")
+                        .or_else(|_| joints_arg(&robot, j, &format!("joints[{i}]")))?;
                     robot
                         .tcp_pose(&q)
                         .map(Dynamic::from)
@@ -443,20 +454,20 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Robot.ik_many(targets: array) -> array",
         "For each world pose in `targets` (Transforms or `[x,y,z,a,b,c]`), the joint solution (degrees) nearest to the previous entry's (the first nearest the current joints), or `()` when the pose has no solution within the limits; one call for thousands of poses. The robot does not move.",
         |r: &mut RobotHandle, list: Array| -> ScriptResult<Array> {
-            let (robot, mut q) = r.snapshot()?;
-            let opts = IkOptions::default();
-            let mut out = Array::with_capacity(list.len());
-            for (i, t) in list.iter().enumerate() {
-                let target = to_transform(t, &format!("targets[{i}]"))?;
-                match robot.inverse_nearest(&target, &q, &opts) {
-                    Ok(sol) => {
-                        out.push(joints_out(&robot, &sol.joints));
-                        q = sol.joints;
-                    }
-                    Err(_) => out.push(Dynamic::UNIT),
-                }
-            }
-            Ok(out)
+            let targets = list
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    // The entry's name is formatted only for an error message.
+                    to_transform(t, "target")
+                        .or_else(|_| to_transform(t, &format!("targets[{i}]")))
+                })
+                .collect::<ScriptResult<Vec<_>>>()?;
+            let (robot, q) = r.snapshot()?;
+            Ok(inverse_chain(&robot, &targets, &q, &IkOptions::default())
+                .into_iter()
+                .map(|s| s.map_or(Dynamic::UNIT, |s| joints_out(&robot, &s.joints)))
+                .collect())
         },
     );
     api.get(
@@ -490,7 +501,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         Ok(sols.iter().map(|s| joints_out(&robot, &s.joints)).collect())
     });
     api.f("Robot.ik_near(target, joints: array) -> array", "The joint solution (degrees) for the world pose `target` nearest to `joints` (degrees); the robot does not move.", |r: &mut RobotHandle, t: Dynamic, j: Dynamic| -> ScriptResult<Dynamic> {
-        let (robot, _) = r.snapshot()?;
+        let robot = r.shared()?;
         let target = to_transform(&t, "target")?;
         let reference = joints_arg(&robot, &j, "joints")?;
         let sol = robot.inverse_nearest(&target, &reference, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik_near: {e}", robot.name())))?;

@@ -37,8 +37,26 @@ pub fn num(v: &Dynamic, what: &str) -> ScriptResult<f64> {
     Ok(x)
 }
 
-/// A list of `n` numbers.
-pub fn numbers(v: &Dynamic, n: usize, what: &str) -> ScriptResult<Vec<f64>> {
+/// A finite number from an integer or a float, with the argument's name built only
+/// when the value is refused (hot paths call this per array element).
+fn num_at(v: &Dynamic, what: &str, i: usize) -> ScriptResult<f64> {
+    let x = match v.as_float() {
+        Ok(f) => f,
+        Err(_) => match v.as_int() {
+            Ok(i) => i as f64,
+            Err(_) => return num(v, &format!("{what}[{i}]")),
+        },
+    };
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        num(v, &format!("{what}[{i}]"))
+    }
+}
+
+/// Fills `out` from an array of exactly `out.len()` numbers (no allocation).
+pub fn numbers_into(v: &Dynamic, out: &mut [f64], what: &str) -> ScriptResult<()> {
+    let n = out.len();
     let arr = v.read_lock::<Array>().ok_or_else(|| {
         fail(format!(
             "{what} must be an array of {n} numbers, not {}",
@@ -51,15 +69,23 @@ pub fn numbers(v: &Dynamic, n: usize, what: &str) -> ScriptResult<Vec<f64>> {
             arr.len()
         ));
     }
-    arr.iter()
-        .enumerate()
-        .map(|(i, x)| num(x, &format!("{what}[{i}]")))
-        .collect()
+    for (i, (x, o)) in arr.iter().zip(out.iter_mut()).enumerate() {
+        *o = num_at(x, what, i)?;
+    }
+    Ok(())
+}
+
+/// A list of `n` numbers.
+pub fn numbers(v: &Dynamic, n: usize, what: &str) -> ScriptResult<Vec<f64>> {
+    let mut out = vec![0.0; n];
+    numbers_into(v, &mut out, what)?;
+    Ok(out)
 }
 
 /// A vector from `[x, y, z]`.
 pub fn vec3(v: &Dynamic, what: &str) -> ScriptResult<Vec3> {
-    let n = numbers(v, 3, what)?;
+    let mut n = [0.0; 3];
+    numbers_into(v, &mut n, what)?;
     Ok(Vec3::new(n[0], n[1], n[2]))
 }
 

@@ -265,7 +265,11 @@ pub fn engine(ctx: &Arc<Context>, limits: &Limits) -> Engine {
     let c = ctx.clone();
     let max_operations = limits.max_operations;
     engine.on_progress(move |_| {
-        let n = c.operations.fetch_add(1, Ordering::Relaxed) + 1;
+        // A run is evaluated by one thread at a time (the script's; callbacks and
+        // modules run on it too), so a plain load and store count the operations:
+        // an atomic read-modify-write on every operation cost more than many calls.
+        let n = c.operations.load(Ordering::Relaxed) + 1;
+        c.operations.store(n, Ordering::Relaxed);
         if c.cancelled() {
             Some("cancelled".into())
         } else if max_operations > 0 && n > max_operations {

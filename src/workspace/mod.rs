@@ -30,9 +30,11 @@
 //! assert!(gap > 0.0 && gap < 50.0, "{gap} mm");
 //! ```
 
+mod features;
 mod plan;
 mod scene;
 
+pub use features::{feature_cells, split_part, CUT_CELLS_FEATURE};
 pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_MM};
 pub use scene::{Scene, SceneCache};
 
