@@ -7,6 +7,8 @@
 //!
 //! `FITUP_BENCH_SEQUENCE=fine` (any part of an assembly's name, e.g. `fine`, `wheel`)
 //! runs only the matching rows; the fine pegboard is generated only when it is run.
+//! `FITUP_BENCH_SEQUENCE_JSON=DIR` writes each row's last plan as JSON (without its
+//! timing) to `DIR/<assembly>-<mode>.json`, to diff the results of two builds.
 
 use fitup::document::Document;
 use fitup::sequence::{plan_sequence, Mode, SequenceOptions};
@@ -24,12 +26,14 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Median time (ms) of `runs` calls, sweeps and tasks of the last; the call's own
 /// time limit is raised to `limit_ms` so a slow case reports its time, not an error.
+/// The last plan's JSON goes to `dump` when given.
 fn time(
     doc: &Document,
     mode: Mode,
     threaded: &[&str],
     runs: usize,
     limit_ms: f64,
+    dump: Option<&Path>,
 ) -> (f64, usize, usize) {
     let o = SequenceOptions {
         mode,
@@ -46,12 +50,23 @@ fn time(
         last = Some(p);
     }
     let p = last.unwrap();
+    if let Some(path) = dump {
+        let mut v = p.to_json_value();
+        // Timings and the sweep count differ run to run; the results must not.
+        v.as_object_mut()
+            .map(|o| (o.remove("time_ms"), o.remove("sweeps")));
+        std::fs::write(path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    }
     (median(ms), p.sweeps, p.best().tasks.len())
 }
 
 fn main() {
     let dir = std::env::temp_dir().join(format!("fitup_bench_sequence_{}", std::process::id()));
     let filter = std::env::var("FITUP_BENCH_SEQUENCE").unwrap_or_default();
+    let json_dir = std::env::var_os("FITUP_BENCH_SEQUENCE_JSON").map(std::path::PathBuf::from);
+    if let Some(d) = &json_dir {
+        std::fs::create_dir_all(d).unwrap();
+    }
     // Name, document (opened only when the row runs), threaded parts.
     type Open = Box<dyn Fn() -> Document>;
     let (d1, d2) = (dir.clone(), dir.clone());
@@ -105,7 +120,14 @@ fn main() {
         };
         for &mode in modes {
             let (runs, limit) = if fine { (1, 600_000.0) } else { (5, 30_000.0) };
-            let (ms, sweeps, tasks) = time(doc, mode, threaded, runs, limit);
+            let dump = json_dir.as_ref().map(|d| {
+                let stem: String = name
+                    .chars()
+                    .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                    .collect();
+                d.join(format!("{stem}-{}.json", mode.name()))
+            });
+            let (ms, sweeps, tasks) = time(doc, mode, threaded, runs, limit, dump.as_deref());
             println!(
                 "| {name} | {tris} | {} | {ms:.1} ms | {sweeps} | {tasks} |",
                 mode.name()
