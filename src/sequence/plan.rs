@@ -23,8 +23,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-/// The longest piece of a blocking sweep (mm): the pieces grow from the probe length
-/// to this, and the deadline is read between them.
+/// The longest piece of a blocking sweep (mm): past the point where the boxes first
+/// meet, the pieces grow from half the probe length to this, and the deadline is read
+/// between them.
 const SWEEP_PIECE_MM: f64 = 10.0;
 
 type Mask = u128;
@@ -171,6 +172,25 @@ fn exit_distance(b: &Aabb, region: &Aabb, d: &Vec3) -> f64 {
     } else {
         0.0
     }
+}
+
+/// How far `b` can move along unit `d` before it overlaps `region` deeper than
+/// `slack` (mm) on every axis `d` moves along (mm, ≥ 0; 0 when it already does):
+/// before that distance the two boxes are apart.
+fn entry_distance(b: &Aabb, region: &Aabb, d: &Vec3, slack: f64) -> f64 {
+    let mut worst = 0.0f64;
+    for k in 0..3 {
+        if d[k].abs() < 1e-12 {
+            continue;
+        }
+        let s = if d[k] > 0.0 {
+            (region.lo[k] + slack - b.hi[k]) / d[k]
+        } else {
+            (region.hi[k] - slack - b.lo[k]) / d[k]
+        };
+        worst = worst.max(s);
+    }
+    worst
 }
 
 fn boxes_meet(a: &Aabb, b: &Aabb, slack: f64) -> bool {
@@ -497,14 +517,34 @@ impl<'d> Ctx<'d> {
             contact_step: EdgeResolution::DEFAULT_CONTACT_STEP_MM,
         };
         let start = self.scene.poses[p];
-        // In pieces growing from one probe length to SWEEP_PIECE_MM: a part blocked
-        // by what it rests against (a peg pushed sideways into its hole's wall) is
-        // hit within the first short piece, where few triangle pairs can meet,
-        // instead of after a walk over every pair the whole length could meet; the
-        // deadline is read between pieces.
+        // In pieces: the stretch before `entry`, where the boxes are still apart
+        // (the trees' root boxes clear it at once), then pieces growing from half a
+        // probe length to SWEEP_PIECE_MM. A part blocked by what it rests against (a
+        // peg pushed sideways into its hole's wall) or by a neighbour it reaches (a
+        // peg's head meeting the next peg's) is hit within the first short piece,
+        // where few triangle pairs can meet, instead of after a walk over every pair
+        // a longer piece could meet (thin facets swept across many others, coplanar
+        // faces sliding past each other); the deadline is read between pieces.
+        let entry = entry_distance(&bp, &bq, d, self.opts.tolerance).min(len);
+        let mut piece = (0.5 * self.opts.probe_mm).min(SWEEP_PIECE_MM);
         let mut at = 0.0;
-        let mut piece = self.opts.probe_mm.min(SWEEP_PIECE_MM);
-        let mut a = start;
+        if entry > piece {
+            at = entry - 0.5 * piece;
+            let b = start.then(&Transform::from_translation(d * at));
+            let hit = edge_interferes(
+                &self.scene.colliders[p],
+                &start,
+                &b,
+                &self.scene.colliders[q],
+                &self.scene.poses[q],
+                &options,
+            )
+            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?;
+            if hit {
+                return Ok(true);
+            }
+        }
+        let mut a = start.then(&Transform::from_translation(d * at));
         while at < len {
             if self.out_of_time() {
                 return Err(time_limit());
