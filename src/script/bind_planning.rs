@@ -9,8 +9,8 @@ use super::{Context, ScriptResult};
 use crate::collision::Aabb;
 use crate::math::AngleConvention;
 use crate::planning::{
-    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, ProblemFile,
-    Progress, RotationFreedom, PLANNER_NAMES,
+    Control, EdgeResolution, MeshValidatorOptions, NarrowPassage, Phase, PlannedPath, Planner,
+    ProblemFile, Progress, RotationFreedom, PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -27,7 +27,8 @@ pub struct PathHandle(
     pub(super) MeshValidatorOptions,
 );
 
-const OPTION_KEYS: [&str; 20] = [
+const OPTION_KEYS: [&str; 21] = [
+    "narrow",
     "disassemble",
     "planner",
     "seed",
@@ -98,6 +99,18 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
                 .map_err(|t| fail(format!("smoothing must be true or false, not {t}")))?,
         );
     }
+    if let Some(n) = opts.get("narrow") {
+        let narrow = parse_narrow(n)?;
+        match planner.narrow_mut() {
+            Some(slot) => *slot = narrow,
+            None => {
+                return err(format!(
+                    "planner `{}` has no narrow-passage options (rrt, biased_rrt, local_rrt and rrt_connect have)",
+                    planner.name()
+                ))
+            }
+        }
+    }
     if let Planner::GreedyAnt(g) = &mut planner {
         if let Some(l) = opt_num(opts, "L")? {
             g.shortest_length = l;
@@ -167,6 +180,72 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
         disassemble,
         start: None,
     })
+}
+
+const NARROW_KEYS: [&str; 5] = [
+    "max_turn_deg",
+    "dynamic_domain",
+    "bridge",
+    "bridge_width",
+    "to_contact",
+];
+
+/// The `narrow` option: `false` (every measure off), `true` (fitup's defaults) or
+/// a map changing some of the defaults (`max_turn_deg` in degrees, 0 = no limit;
+/// `dynamic_domain` and `bridge_width` in mm of the metric, 0 = off; `bridge` a
+/// probability; `to_contact` a bool).
+fn parse_narrow(v: &Dynamic) -> ScriptResult<NarrowPassage> {
+    if let Ok(on) = v.as_bool() {
+        return Ok(if on {
+            NarrowPassage::default()
+        } else {
+            NarrowPassage::OFF
+        });
+    }
+    let Some(m) = v.read_lock::<Map>() else {
+        return err(format!(
+            "narrow must be true, false or a map like #{{max_turn_deg: 5}}, not {}",
+            v.type_name()
+        ));
+    };
+    check_keys(&m, &NARROW_KEYS, "narrow")?;
+    let mut n = NarrowPassage::default();
+    if let Some(t) = opt_num(&m, "max_turn_deg")? {
+        if !(t >= 0.0 && t <= 180.0) {
+            return err(format!(
+                "narrow.max_turn_deg must be in 0..180 (0: no limit), not {t}"
+            ));
+        }
+        n.max_turn = (t > 0.0).then(|| t.to_radians());
+    }
+    if let Some(r) = opt_num(&m, "dynamic_domain")? {
+        if !(r >= 0.0 && r.is_finite()) {
+            return err(format!(
+                "narrow.dynamic_domain must be ≥ 0 mm (0: off), not {r}"
+            ));
+        }
+        n.dynamic_domain = (r > 0.0).then_some(r);
+    }
+    if let Some(p) = opt_num(&m, "bridge")? {
+        if !(0.0..=1.0).contains(&p) {
+            return err(format!(
+                "narrow.bridge must be a probability in 0..1, not {p}"
+            ));
+        }
+        n.bridge = p;
+    }
+    if let Some(w) = opt_num(&m, "bridge_width")? {
+        if !(w > 0.0 && w.is_finite()) {
+            return err(format!("narrow.bridge_width must be > 0 mm, not {w}"));
+        }
+        n.bridge_width = w;
+    }
+    if let Some(c) = m.get("to_contact") {
+        n.to_contact = c
+            .as_bool()
+            .map_err(|t| fail(format!("narrow.to_contact must be true or false, not {t}")))?;
+    }
+    Ok(n)
 }
 
 fn progress_printer<'a>(
