@@ -223,7 +223,7 @@ impl NarrowPassage {
     /// Extension to contact: the farthest pose `near → blocked` whose edge from
     /// `near` is free, by 3 bisections (at least an eighth of the edge), added to
     /// `tree`; `None` when even an eighth is blocked.
-    pub(crate) fn to_contact(
+    pub(crate) fn extend_to_contact(
         &self,
         checker: &mut Checker<'_>,
         space: &PlanningSpace,

@@ -205,9 +205,14 @@ pub(crate) fn plan_tree(
         if let Err(candidate) = extended {
             // Extension to contact: the lattice then works from the contact pose.
             let mut from = near;
-            if let Some(c) =
-                narrow.to_contact(&mut checker, space, &reference, &mut tree, near, &candidate)
-            {
+            if let Some(c) = narrow.extend_to_contact(
+                &mut checker,
+                space,
+                &reference,
+                &mut tree,
+                near,
+                &candidate,
+            ) {
                 added.push(c);
                 from = c;
             }

@@ -140,7 +140,7 @@ pub fn rrt_connect(
         if let Err(candidate) = extended {
             // Extension to contact: the lattice then works from the contact pose.
             let mut from = near;
-            if let Some(c) = narrow.to_contact(
+            if let Some(c) = narrow.extend_to_contact(
                 &mut checker,
                 space,
                 &reference,
