@@ -3,6 +3,7 @@
 
 use super::disassembly::{disassemble, DisassemblyPlanner};
 use super::local_rrt::{Lattice, LocalRrtOptions};
+use super::narrow::NarrowPassage;
 use super::path::{measure, PlannedPath};
 use super::rrt_connect::{rrt_connect, RrtConnectOptions};
 use super::run::{PlanError, PlanLimits, ProgressFn};
@@ -18,7 +19,8 @@ use std::time::Instant;
 pub struct InsertionOptions {
     /// The disassembly search from the assembled end (its `limits.seed` seeds the
     /// whole run; its smoothing and time limit are not used). Default: `local_rrt`
-    /// with lazy validation and [`Lattice::RANDOM_MOVES`] random coordinated moves.
+    /// with lazy validation, [`Lattice::RANDOM_MOVES`] random coordinated moves,
+    /// [`Lattice::clearance_turns`] and [`NarrowPassage::default`].
     pub disassembly: DisassemblyPlanner,
     /// The search joining the free end to where the disassembly left the product
     /// (its seed is derived from the disassembly's; its smoothing and time limit are
@@ -35,7 +37,9 @@ impl Default for InsertionOptions {
     fn default() -> Self {
         let mut local = LocalRrtOptions::default();
         local.lattice.random_moves = Lattice::RANDOM_MOVES;
+        local.lattice.clearance_turns = true;
         local.rrt.lazy = Some(LazyValidation::default());
+        local.rrt.narrow = NarrowPassage::default();
         let mut disassembly = DisassemblyPlanner::LocalRrt(local);
         disassembly.rrt_mut().smoothing.enabled = false;
         let mut approach = RrtConnectOptions::default();

@@ -27,6 +27,7 @@ mod greedy_ant;
 mod insertion;
 mod local_rrt;
 mod mesh_validator;
+mod narrow;
 mod path;
 mod problem_file;
 pub mod problems;
@@ -50,6 +51,7 @@ pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
 pub use mesh_validator::{
     MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
 };
+pub use narrow::NarrowPassage;
 pub use path::{Failure, PlannedPath};
 pub use problem_file::{ProblemFile, ProblemFileError, MAX_PROBLEM_FILE_BYTES};
 pub use request::{Planner, PLANNER_NAMES};

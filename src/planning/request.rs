@@ -4,8 +4,8 @@
 use super::{
     biased_rrt, disassemble, greedy_ant, local_rrt, plan_insertion, rrt, rrt_connect, rrt_floyd,
     DisassemblyPlanner, GreedyAntOptions, InsertionOptions, LocalRrtOptions, MotionValidator,
-    PlanError, PlanLimits, PlannedPath, PlanningSpace, ProgressFn, RrtConnectOptions,
-    RrtFloydOptions, RrtOptions, Smoothing,
+    NarrowPassage, PlanError, PlanLimits, PlannedPath, PlanningSpace, ProgressFn,
+    RrtConnectOptions, RrtFloydOptions, RrtOptions, Smoothing,
 };
 use crate::collision::Aabb;
 use crate::math::Transform;
@@ -100,6 +100,18 @@ impl Planner {
             Planner::GreedyAnt(_) | Planner::RrtConnect(_) => return false,
         }
         true
+    }
+
+    /// The narrow-passage measures ([`NarrowPassage`]) of the tree planners `rrt`,
+    /// `biased_rrt`, `local_rrt` and `rrt_connect`; `None` for `greedy_ant` and
+    /// `rrt_floyd`, which have none.
+    pub fn narrow_mut(&mut self) -> Option<&mut NarrowPassage> {
+        match self {
+            Planner::Rrt(o) | Planner::BiasedRrt(o) => Some(&mut o.narrow),
+            Planner::LocalRrt(o) => Some(&mut o.rrt.narrow),
+            Planner::RrtConnect(o) => Some(&mut o.narrow),
+            Planner::GreedyAnt(_) | Planner::RrtFloyd(_) => None,
+        }
     }
 
     /// The path shortcutting settings.
@@ -211,6 +223,8 @@ impl Planner {
             Planner::RrtConnect(o) => {
                 options.approach = o.clone();
                 options.approach.limits.max_iterations = limits.max_iterations;
+                // The same narrow-passage measures for the disassembly search.
+                options.disassembly.rrt_mut().narrow = o.narrow;
             }
             Planner::GreedyAnt(_) | Planner::RrtFloyd(_) => {
                 return Err(PlanError::InvalidOption {

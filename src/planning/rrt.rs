@@ -2,11 +2,12 @@
 //! and the tree engine that [`local_rrt`](super::local_rrt) extends.
 
 use super::local_rrt::Lattice;
+use super::narrow::NarrowPassage;
 use super::path::PlannedPath;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::{shortcut, Smoothing};
 use super::space::PlanningSpace;
-use super::tree::{check_ends, steer, PoseTarget, Target, Tree};
+use super::tree::{check_ends, PoseTarget, Target, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Rng, Transform};
 
@@ -30,6 +31,12 @@ pub struct RrtOptions {
     /// ([`LazyValidation`]); `None` (default): every edge is checked by the
     /// validator when it is added.
     pub lazy: Option<LazyValidation>,
+    /// Narrow-passage measures of the extensions and the sampling
+    /// ([`NarrowPassage`]); goal-biased samples are drawn and approached as
+    /// before. Default [`NarrowPassage::OFF`] (seed 002's search);
+    /// [`InsertionOptions::default`](super::InsertionOptions) turns fitup's
+    /// defaults on for its disassembly.
+    pub narrow: NarrowPassage,
 }
 
 impl Default for RrtOptions {
@@ -42,6 +49,7 @@ impl Default for RrtOptions {
             goal_tolerance: 10.0,
             smoothing: Smoothing::default(),
             lazy: None,
+            narrow: NarrowPassage::OFF,
         }
     }
 }
@@ -63,6 +71,7 @@ impl RrtOptions {
         if let Some(l) = &self.lazy {
             l.validate()?;
         }
+        self.narrow.validate()?;
         self.smoothing.validate()
     }
 }
@@ -173,38 +182,59 @@ pub(crate) fn plan_tree(
             break Err(f);
         }
         let goal_biased = rng.uniform() < options.goal_bias;
-        let sample = if goal_biased {
-            target.sample(&mut rng, space, start)
+        let narrow = &options.narrow;
+        let (sample, near) = if goal_biased {
+            let s = target.sample(&mut rng, space, start);
+            (s, tree.nearest(&s, space).0)
         } else {
-            space.sample(&mut rng, &reference)
+            narrow.sample(&mut rng, &mut checker, space, &reference, &tree)
         };
-        let (near, _) = tree.nearest(&sample, space);
-        let near_pose = tree.poses[near];
-        let candidate = steer(&near_pose, &sample, options.step, space);
         let mut added = Vec::new();
-        if space.contains(&candidate, &reference)
-            && !tree.holds(&candidate)
-            && checker.edge_free(&near_pose, &candidate)
-        {
-            added.push(tree.add(candidate, near));
-        } else if let Some(local) = local {
-            let toward_sample = PoseTarget(sample);
-            let rank: &dyn Target = if goal_biased || !local.rank_toward_sample {
-                target
-            } else {
-                &toward_sample
-            };
-            local.expand(
+        let extended = narrow.extend(
+            &mut checker,
+            space,
+            &reference,
+            &mut tree,
+            near,
+            &sample,
+            options.step,
+        );
+        if let Ok(i) = extended {
+            added.push(i);
+        }
+        if let Err(candidate) = extended {
+            // Extension to contact: the lattice then works from the contact pose.
+            let mut from = near;
+            if let Some(c) = narrow.extend_to_contact(
                 &mut checker,
                 space,
+                &reference,
                 &mut tree,
                 near,
-                rank,
-                &reference,
-                options.step,
-                &mut rng,
-                &mut added,
-            );
+                &candidate,
+            ) {
+                added.push(c);
+                from = c;
+            }
+            if let Some(local) = local {
+                let toward_sample = PoseTarget(sample);
+                let rank: &dyn Target = if goal_biased || !local.rank_toward_sample {
+                    target
+                } else {
+                    &toward_sample
+                };
+                local.expand(
+                    &mut checker,
+                    space,
+                    &mut tree,
+                    from,
+                    rank,
+                    &reference,
+                    options.step,
+                    &mut rng,
+                    &mut added,
+                );
+            }
         }
         let mut done = None;
         for &i in &added {

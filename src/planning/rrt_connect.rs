@@ -2,6 +2,7 @@
 //! discretization as a fallback when an extension fails.
 
 use super::local_rrt::Lattice;
+use super::narrow::NarrowPassage;
 use super::path::PlannedPath;
 use super::rrt::finish;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
@@ -20,7 +21,8 @@ pub struct RrtConnectOptions {
     pub step: f64,
     /// The local discretization tried when an extension or a connection is blocked
     /// (`None`: plain RRT-Connect). Default: [`Lattice::default`] with
-    /// [`Lattice::RANDOM_MOVES`] random coordinated moves.
+    /// [`Lattice::RANDOM_MOVES`] random coordinated moves and
+    /// [`Lattice::clearance_turns`].
     pub lattice: Option<Lattice>,
     /// Shortcut smoothing of the found path.
     pub smoothing: Smoothing,
@@ -29,6 +31,9 @@ pub struct RrtConnectOptions {
     /// by the validator when it is added. The path is then labelled
     /// `lazy_rrt_connect`.
     pub lazy: Option<LazyValidation>,
+    /// Narrow-passage measures of the extensions and the sampling
+    /// ([`NarrowPassage`]). Default [`NarrowPassage::default`].
+    pub narrow: NarrowPassage,
 }
 
 impl Default for RrtConnectOptions {
@@ -38,10 +43,12 @@ impl Default for RrtConnectOptions {
             step: 10.0,
             lattice: Some(Lattice {
                 random_moves: Lattice::RANDOM_MOVES,
+                clearance_turns: true,
                 ..Lattice::default()
             }),
             smoothing: Smoothing::default(),
             lazy: Some(LazyValidation::default()),
+            narrow: NarrowPassage::default(),
         }
     }
 }
@@ -56,6 +63,7 @@ impl RrtConnectOptions {
         if let Some(l) = &self.lazy {
             l.validate()?;
         }
+        self.narrow.validate()?;
         self.smoothing.validate()
     }
 }
@@ -117,29 +125,49 @@ pub fn rrt_connect(
             break Err(f);
         }
         let b = 1 - a;
-        let sample = space.sample(&mut rng, &reference);
-        let (near, _) = trees[a].nearest(&sample, space);
-        let near_pose = trees[a].poses[near];
-        let candidate = steer(&near_pose, &sample, options.step, space);
+        let narrow = &options.narrow;
+        let (sample, near) = narrow.sample(&mut rng, &mut checker, space, &reference, &trees[a]);
         added.clear();
-        if space.contains(&candidate, &reference)
-            && !trees[a].holds(&candidate)
-            && checker.edge_free(&near_pose, &candidate)
-        {
-            added.push(trees[a].add(candidate, near));
-        } else if let Some(lattice) = &options.lattice {
-            let other_root = PoseTarget(trees[b].poses[0]);
-            lattice.expand(
+        let extended = narrow.extend(
+            &mut checker,
+            space,
+            &reference,
+            &mut trees[a],
+            near,
+            &sample,
+            options.step,
+        );
+        if let Err(candidate) = extended {
+            // Extension to contact: the lattice then works from the contact pose.
+            let mut from = near;
+            if let Some(c) = narrow.extend_to_contact(
                 &mut checker,
                 space,
+                &reference,
                 &mut trees[a],
                 near,
-                &other_root,
-                &reference,
-                options.step,
-                &mut rng,
-                &mut added,
-            );
+                &candidate,
+            ) {
+                added.push(c);
+                from = c;
+            }
+            if let Some(lattice) = &options.lattice {
+                let other_root = PoseTarget(trees[b].poses[0]);
+                lattice.expand(
+                    &mut checker,
+                    space,
+                    &mut trees[a],
+                    from,
+                    &other_root,
+                    &reference,
+                    options.step,
+                    &mut rng,
+                    &mut added,
+                );
+            }
+        }
+        if let Ok(i) = extended {
+            added.push(i);
         }
         if let Some(&last) = added.last() {
             let q = trees[a].poses[last];
@@ -223,6 +251,9 @@ fn connect(
         let from = tree.poses[node];
         let d = space.distance(&from, q);
         *best = best.min(d);
+        // The straight SE(3) edge toward `q`, not turn-limited: a turn limit would
+        // let the translation run ahead of the rotation, and an approach into a
+        // bore or a seat needs both to arrive together.
         let next = steer(&from, q, options.step, space);
         if space.contains(&next, reference) && checker.edge_free(&from, &next) {
             node = tree.add(next, node);

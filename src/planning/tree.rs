@@ -25,6 +25,9 @@ pub(crate) struct Tree {
     /// Whether the edge parent → node passed the validator's own edge check (the
     /// root's entry is true).
     certified: Vec<bool>,
+    /// Dynamic-domain radius of each node (metric mm; infinite until an extension
+    /// from it was blocked, see [`NarrowPassage`](super::NarrowPassage)).
+    domain: Vec<f64>,
 }
 
 impl Tree {
@@ -39,6 +42,7 @@ impl Tree {
             key_mm,
             dead: Vec::new(),
             certified: Vec::new(),
+            domain: Vec::new(),
         };
         t.add(root, 0);
         t.certified[0] = true;
@@ -58,7 +62,25 @@ impl Tree {
         self.rotations.push(pose.rotation());
         self.dead.push(false);
         self.certified.push(false);
+        self.domain.push(f64::INFINITY);
         i
+    }
+
+    /// Node `i`'s dynamic-domain radius (metric mm; infinite: unbounded).
+    pub fn domain(&self, i: usize) -> f64 {
+        self.domain[i]
+    }
+
+    /// An extension from node `i` was blocked: its domain becomes at most `radius`.
+    pub fn shrink_domain(&mut self, i: usize, radius: f64) {
+        self.domain[i] = self.domain[i].min(radius);
+    }
+
+    /// An extension from node `i` succeeded: a finite domain grows by `factor`.
+    pub fn grow_domain(&mut self, i: usize, factor: f64) {
+        if self.domain[i].is_finite() {
+            self.domain[i] *= factor;
+        }
     }
 
     /// Cuts node `i` and everything grown from it out of the tree (they stay in the

@@ -9,8 +9,8 @@ use super::{Context, ScriptResult};
 use crate::collision::Aabb;
 use crate::math::AngleConvention;
 use crate::planning::{
-    Control, EdgeResolution, MeshValidatorOptions, Phase, PlannedPath, Planner, ProblemFile,
-    Progress, RotationFreedom, PLANNER_NAMES,
+    Control, EdgeResolution, MeshValidatorOptions, NarrowPassage, Phase, PlannedPath, Planner,
+    ProblemFile, Progress, RotationFreedom, PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -27,7 +27,8 @@ pub struct PathHandle(
     pub(super) MeshValidatorOptions,
 );
 
-const OPTION_KEYS: [&str; 20] = [
+const OPTION_KEYS: [&str; 21] = [
+    "narrow",
     "disassemble",
     "planner",
     "seed",
@@ -98,6 +99,18 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
                 .map_err(|t| fail(format!("smoothing must be true or false, not {t}")))?,
         );
     }
+    if let Some(n) = opts.get("narrow") {
+        let narrow = parse_narrow(n)?;
+        match planner.narrow_mut() {
+            Some(slot) => *slot = narrow,
+            None => {
+                return err(format!(
+                    "planner `{}` has no narrow-passage options (rrt, biased_rrt, local_rrt and rrt_connect have)",
+                    planner.name()
+                ))
+            }
+        }
+    }
     if let Planner::GreedyAnt(g) = &mut planner {
         if let Some(l) = opt_num(opts, "L")? {
             g.shortest_length = l;
@@ -167,6 +180,72 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
         disassemble,
         start: None,
     })
+}
+
+const NARROW_KEYS: [&str; 5] = [
+    "max_turn_deg",
+    "dynamic_domain",
+    "bridge",
+    "bridge_width",
+    "to_contact",
+];
+
+/// The `narrow` option: `false` (every measure off), `true` (fitup's defaults) or
+/// a map changing some of the defaults (`max_turn_deg` in degrees, 0 = no limit;
+/// `dynamic_domain` and `bridge_width` in mm of the metric, 0 = off; `bridge` a
+/// probability; `to_contact` a bool).
+fn parse_narrow(v: &Dynamic) -> ScriptResult<NarrowPassage> {
+    if let Ok(on) = v.as_bool() {
+        return Ok(if on {
+            NarrowPassage::default()
+        } else {
+            NarrowPassage::OFF
+        });
+    }
+    let Some(m) = v.read_lock::<Map>() else {
+        return err(format!(
+            "narrow must be true, false or a map like #{{max_turn_deg: 5}}, not {}",
+            v.type_name()
+        ));
+    };
+    check_keys(&m, &NARROW_KEYS, "narrow")?;
+    let mut n = NarrowPassage::default();
+    if let Some(t) = opt_num(&m, "max_turn_deg")? {
+        if !(0.0..=180.0).contains(&t) {
+            return err(format!(
+                "narrow.max_turn_deg must be in 0..180 (0: no limit), not {t}"
+            ));
+        }
+        n.max_turn = (t > 0.0).then(|| t.to_radians());
+    }
+    if let Some(r) = opt_num(&m, "dynamic_domain")? {
+        if !(r >= 0.0 && r.is_finite()) {
+            return err(format!(
+                "narrow.dynamic_domain must be ≥ 0 mm (0: off), not {r}"
+            ));
+        }
+        n.dynamic_domain = (r > 0.0).then_some(r);
+    }
+    if let Some(p) = opt_num(&m, "bridge")? {
+        if !(0.0..=1.0).contains(&p) {
+            return err(format!(
+                "narrow.bridge must be a probability in 0..1, not {p}"
+            ));
+        }
+        n.bridge = p;
+    }
+    if let Some(w) = opt_num(&m, "bridge_width")? {
+        if !(w > 0.0 && w.is_finite()) {
+            return err(format!("narrow.bridge_width must be > 0 mm, not {w}"));
+        }
+        n.bridge_width = w;
+    }
+    if let Some(c) = m.get("to_contact") {
+        n.to_contact = c
+            .as_bool()
+            .map_err(|t| fail(format!("narrow.to_contact must be true or false, not {t}")))?;
+    }
+    Ok(n)
 }
 
 fn progress_printer<'a>(
@@ -272,7 +351,7 @@ fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transfor
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified). Fixed components are refused. A path that is not found says why in `reason`.");
+    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified). `narrow` (the narrow-passage measures of the tree planners, on by default for `rrt_connect` and `disassemble: true`, off for seed 002's `rrt`, `biased_rrt`, `local_rrt`): `false` (all off), `true` (defaults) or a map of `max_turn_deg` (degrees, default 5, 0 = none: a blocked extension is retried turning at most this much), `dynamic_domain` (mm of the metric, default 10, 0 = off), `bridge` (probability of a bridge-test sample, default 0.1), `bridge_width` (mm, default 5), `to_contact` (bool, default true: a blocked extension keeps its farthest free pose). Fixed components are refused. A path that is not found says why in `reason`.");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
     api.f(
@@ -485,4 +564,58 @@ fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> S
     })
     .map_err(fail)?;
     Ok(n as i64)
+}
+
+#[cfg(test)]
+mod narrow_option_tests {
+    use super::*;
+
+    fn map(pairs: &[(&str, Dynamic)]) -> Dynamic {
+        let mut m = Map::new();
+        for (k, v) in pairs {
+            m.insert((*k).into(), v.clone());
+        }
+        Dynamic::from_map(m)
+    }
+
+    #[test]
+    fn narrow_option_converts_degrees_and_switches() {
+        assert_eq!(
+            parse_narrow(&Dynamic::from_bool(false)).unwrap(),
+            NarrowPassage::OFF
+        );
+        assert_eq!(
+            parse_narrow(&Dynamic::from_bool(true)).unwrap(),
+            NarrowPassage::default()
+        );
+        let n = parse_narrow(&map(&[
+            ("max_turn_deg", Dynamic::from_float(10.0)),
+            ("dynamic_domain", Dynamic::from_float(0.0)),
+            ("to_contact", Dynamic::from_bool(false)),
+        ]))
+        .unwrap();
+        assert!((n.max_turn.unwrap() - 10f64.to_radians()).abs() < 1e-12);
+        assert_eq!(n.dynamic_domain, None);
+        assert!(!n.to_contact);
+        assert_eq!(n.bridge, NarrowPassage::default().bridge);
+        for bad in [
+            map(&[("bridge", Dynamic::from_float(1.5))]),
+            map(&[("max_turn_deg", Dynamic::from_float(-1.0))]),
+            map(&[("max_turn", Dynamic::from_float(5.0))]),
+            Dynamic::from_int(3),
+        ] {
+            assert!(parse_narrow(&bad).is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn narrow_option_reaches_the_planner() {
+        let mut opts = Map::new();
+        opts.insert("narrow".into(), Dynamic::from_bool(false));
+        let r = parse(&opts).unwrap();
+        let mut planner = r.planner;
+        assert_eq!(planner.narrow_mut().copied(), Some(NarrowPassage::OFF));
+        opts.insert("planner".into(), "greedy_ant".into());
+        assert!(parse(&opts).is_err());
+    }
 }

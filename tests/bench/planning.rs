@@ -12,7 +12,11 @@
 //! `FITUP_PROBLEM=name` (only problems whose name contains it),
 //! `FITUP_PROTOCOL=0` (skip seed 002's protocol), `FITUP_VALIDATOR=0` (skip the
 //! validator profile: pose and edge checks per problem), `FITUP_VARIANTS=1` (also
-//! fitup's exploration variants side by side: eager, lazy, random moves).
+//! fitup's exploration variants side by side: eager, lazy, random moves;
+//! `FITUP_VARIANTS=narrow`: the narrow-passage variants instead, `FITUP_VARIANT=a,b`
+//! only those named), `FITUP_BUDGET_MS` (fitup's budget per call,
+//! default 10000), `FITUP_DEFAULT=0` (skip the default rows: variants and peers only),
+//! `FITUP_SMOOTHED=0` (skip the smoothed row).
 
 use fitup::planning::problems::{self, Problem};
 use fitup::planning::{
@@ -88,11 +92,14 @@ struct Row {
     median_s: Option<f64>,
 }
 
-/// fitup's time budget per call in the benchmark (ms), the default one.
-const BUDGET_MS: f64 = fitup::planning::DEFAULT_TIME_LIMIT_MS;
+/// fitup's time budget per call in the benchmark (ms): the default one, or
+/// `FITUP_BUDGET_MS`.
+fn budget_ms() -> f64 {
+    env_or("FITUP_BUDGET_MS", fitup::planning::DEFAULT_TIME_LIMIT_MS)
+}
 
 /// The largest overrun of the time budget seen in this run (ms of wall time past
-/// `BUDGET_MS`, measured around each call), printed at the end.
+/// the budget, measured around each call), printed at the end.
 static WORST_OVERRUN_MS: std::sync::Mutex<f64> = std::sync::Mutex::new(f64::NEG_INFINITY);
 
 /// fitup's best planner on `p` for `runs` seeds; `smoothing` adds the shortcut
@@ -105,10 +112,11 @@ fn fitup_runs(
     variant: &dyn Fn(&mut InsertionOptions),
 ) -> Row {
     let mut times = Vec::new();
-    for seed in 0..runs as u64 {
+    let first: u64 = env_or("FITUP_FIRST_SEED", 0);
+    for seed in first..first + runs as u64 {
         let mut v = p.validator(options).unwrap();
         let mut plan = InsertionOptions::default().with_limits(seed, 5000);
-        plan.time_limit_ms = Some(BUDGET_MS);
+        plan.time_limit_ms = Some(budget_ms());
         if !smoothing {
             plan.smoothing = Smoothing::OFF;
         }
@@ -117,9 +125,22 @@ fn fitup_runs(
         let path = p.solve_with(&mut v, &plan).unwrap();
         let dt = t0.elapsed().as_secs_f64();
         let mut worst = WORST_OVERRUN_MS.lock().unwrap();
-        *worst = worst.max(dt * 1e3 - BUDGET_MS);
+        *worst = worst.max(dt * 1e3 - budget_ms());
         if path.found() {
             times.push(dt);
+        }
+        if std::env::var_os("FITUP_VERBOSE").is_some() {
+            eprintln!(
+                "  {} seed {seed}: {:.3} s {} {:?} iterations {} nodes {} pose checks {} edge checks {}",
+                p.name,
+                dt,
+                path.planner,
+                path.failure,
+                path.iterations,
+                path.nodes,
+                path.pose_checks,
+                path.edge_checks
+            );
         }
     }
     Row {
@@ -131,6 +152,107 @@ fn fitup_runs(
 
 /// A change to fitup's default options.
 type Variant = Box<dyn Fn(&mut InsertionOptions)>;
+
+/// The narrow-passage variants compared by `FITUP_VARIANTS=narrow`: each measure
+/// of [`NarrowPassage`] alone and combined, in both searches of `plan_insertion`,
+/// with and without the lattice's clearance-scaled turns (fitup's default is
+/// "all four + fine turns").
+fn narrow_variants() -> Vec<(&'static str, Variant)> {
+    use fitup::planning::NarrowPassage;
+    let off = NarrowPassage::OFF;
+    let turn = NarrowPassage {
+        max_turn: Some(5f64.to_radians()),
+        ..off
+    };
+    // The measure set `n` in both searches, the lattice's clearance-scaled turns
+    // on or off.
+    let fine = move |n: NarrowPassage, on: bool| -> Variant {
+        Box::new(move |o: &mut InsertionOptions| {
+            o.approach.narrow = n;
+            o.disassembly.rrt_mut().narrow = n;
+            if let Some(l) = o.approach.lattice.as_mut() {
+                l.clearance_turns = on;
+            }
+            if let DisassemblyPlanner::LocalRrt(d) = &mut o.disassembly {
+                d.lattice.clearance_turns = on;
+            }
+        })
+    };
+    let set = move |n: NarrowPassage| fine(n, false);
+    let mut out: Vec<(&'static str, Variant)> = vec![
+        ("narrow off", set(off)),
+        ("max_turn 5°", set(turn)),
+        (
+            "max_turn 10°",
+            set(NarrowPassage {
+                max_turn: Some(10f64.to_radians()),
+                ..off
+            }),
+        ),
+        (
+            "dynamic domain 10 mm",
+            set(NarrowPassage {
+                dynamic_domain: Some(10.0),
+                ..off
+            }),
+        ),
+        ("bridge 0.1", set(NarrowPassage { bridge: 0.1, ..off })),
+        (
+            "to contact",
+            set(NarrowPassage {
+                to_contact: true,
+                ..off
+            }),
+        ),
+        (
+            "turn + contact",
+            set(NarrowPassage {
+                to_contact: true,
+                ..turn
+            }),
+        ),
+        (
+            "turn + domain",
+            set(NarrowPassage {
+                dynamic_domain: Some(10.0),
+                ..turn
+            }),
+        ),
+        (
+            "all four",
+            set(NarrowPassage {
+                dynamic_domain: Some(10.0),
+                bridge: 0.1,
+                to_contact: true,
+                ..turn
+            }),
+        ),
+    ];
+    let all = NarrowPassage {
+        dynamic_domain: Some(10.0),
+        bridge: 0.1,
+        to_contact: true,
+        ..turn
+    };
+    out.push(("off + fine turns", fine(off, true)));
+    out.push(("all four + fine turns", fine(all, true)));
+    out.push(("all four, coarse turns", fine(all, false)));
+    out.push((
+        "turn + contact + fine turns",
+        fine(
+            NarrowPassage {
+                to_contact: true,
+                ..turn
+            },
+            true,
+        ),
+    ));
+    if let Ok(only) = std::env::var("FITUP_VARIANT") {
+        let names: Vec<&str> = only.split(',').collect();
+        out.retain(|(name, _)| names.contains(name));
+    }
+    out
+}
 
 /// The exploration variants compared by `FITUP_VARIANTS=1` (issue 12): eager
 /// validation (every edge checked continuously when added), lazy validation of the
@@ -445,6 +567,8 @@ fn main() {
     let stepwise = std::env::var_os("FITUP_STEPWISE").is_some();
     let only: Option<String> = std::env::var("FITUP_PROBLEM").ok();
     let compare = std::env::var_os("FITUP_VARIANTS").is_some();
+    let defaults = std::env::var("FITUP_DEFAULT").map_or(true, |v| v != "0");
+    let smoothed_rows = std::env::var("FITUP_SMOOTHED").map_or(true, |v| v != "0");
     println!(
         "planning: success and median time of successful runs; fitup = plan_insertion with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
     );
@@ -470,13 +594,31 @@ fn main() {
         std::fs::create_dir_all(&dir).unwrap();
         let spec = export(&p, &dir);
         if compare {
-            for (name, variant) in variants() {
+            let list = if std::env::var("FITUP_VARIANTS").is_ok_and(|v| v == "narrow") {
+                narrow_variants()
+            } else {
+                variants()
+            };
+            for (name, variant) in list {
                 let r = fitup_runs(&p, p.default_validator_options(), runs, false, &*variant);
                 println!("{:<18} {:>20} {}", "", fmt(&r), name);
             }
         }
-        let cont = fitup_runs(&p, p.default_validator_options(), runs, false, &|_| ());
-        let smoothed = fitup_runs(&p, p.default_validator_options(), runs, true, &|_| ());
+        let none = || Row {
+            solved: 0,
+            runs: 0,
+            median_s: None,
+        };
+        let cont = if defaults {
+            fitup_runs(&p, p.default_validator_options(), runs, false, &|_| ())
+        } else {
+            none()
+        };
+        let smoothed = if defaults && smoothed_rows {
+            fitup_runs(&p, p.default_validator_options(), runs, true, &|_| ())
+        } else {
+            none()
+        };
         let ompl = if peer {
             peer_runs(&py, &spec, "RRTConnect", peer_n, limit)
         } else {
@@ -529,7 +671,8 @@ fn main() {
     let worst = *WORST_OVERRUN_MS.lock().unwrap();
     if worst.is_finite() {
         println!(
-            "fitup's time budget: {BUDGET_MS} ms per call; largest overrun seen {worst:.1} ms (negative: every call ended within it)"
+            "fitup's time budget: {} ms per call; largest overrun seen {worst:.1} ms (negative: every call ended within it)",
+            budget_ms()
         );
     }
     if std::env::var("FITUP_PROTOCOL").map_or(true, |v| v != "0") {

@@ -1,0 +1,323 @@
+//! [`NarrowPassage`]: how the tree searches extend and sample where the way out is a
+//! narrow passage that needs rotation and translation together (rings threaded
+//! through slits, rods round corners, bars turned through slots).
+//!
+//! Four measures, each independent, all drawn from the search's seeded `Rng` so the
+//! same seed still gives the same path:
+//!
+//! * **turn-limited retry** (`max_turn`): an extension whose straight step toward
+//!   the sample is blocked is tried again turning by at most `max_turn` with the
+//!   same translation. A uniform sample's orientation is on average ≈ 2 rad away,
+//!   so a step mostly turns; in a narrow passage a small turn with a translation
+//!   is what fits. Limiting every step instead (not only blocked ones) turns the
+//!   orientation into a slow random walk of `max_turn` steps, and a part that must
+//!   reorient by 90° in open space (peg_tilt: lying through a window, standing in
+//!   the chamber) then runs out of time.
+//! * **dynamic-domain sampling** (Yershova et al. 2005): a node whose extension was
+//!   blocked gets a domain radius; samples farther than that from their nearest
+//!   node are redrawn, so boundary nodes inside a cavity stop attracting samples
+//!   from the whole space (which they can never reach) and the tree's real frontier
+//!   gets the iterations.
+//! * **bridge-test sampling** (Hsu et al. 2003): with probability `bridge`, a
+//!   sample is the free midpoint of two blocked poses a short distance apart, which
+//!   lands in the narrow passages between obstacles.
+//! * **extension to contact** (`to_contact`): a blocked extension keeps the farthest
+//!   free pose on its edge (bisection), so the tree reaches the obstacle's surface
+//!   instead of stopping a whole step short of it; the local discretization then
+//!   slides and turns from that contact pose.
+
+use super::run::PlanError;
+use super::space::PlanningSpace;
+use super::tree::{steer, Tree};
+use super::validator::Checker;
+use crate::math::{Rng, Transform, Vec3};
+use nalgebra::{Unit, UnitQuaternion};
+
+/// Narrow-passage measures of the tree searches ([`rrt_connect`](super::rrt_connect),
+/// and the single-tree search under [`local_rrt`](super::local_rrt) and
+/// [`disassemble`](super::disassemble)). Lengths are metric mm of the
+/// [`PlanningSpace`] (`|Δt| + rotation_weight · θ`), angles radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NarrowPassage {
+    /// Turn-limited retry (rad): an extension whose straight step is blocked is
+    /// tried again turning by at most this much, with the same translation.
+    /// `None`: no retry. Default `Some(5°)`.
+    pub max_turn: Option<f64>,
+    /// Dynamic-domain radius (metric mm) given to a node whose extension was
+    /// blocked: samples farther than it from their nearest node are redrawn (up to
+    /// [`NarrowPassage::DOMAIN_TRIES`] times). `None`: off. Default `Some(10)`
+    /// (one default extension step).
+    pub dynamic_domain: Option<f64>,
+    /// Probability of drawing a sample by the bridge test (two blocked poses
+    /// `bridge_width` apart with a free midpoint) instead of uniformly; 0: off.
+    /// Default 0.1.
+    pub bridge: f64,
+    /// Standard deviation (metric mm) of the bridge test's second pose around the
+    /// first. Default 5.
+    pub bridge_width: f64,
+    /// Keep the farthest free pose of a blocked extension (3 bisections of its
+    /// edge) and run the local discretization from there. Default true.
+    pub to_contact: bool,
+}
+
+impl Default for NarrowPassage {
+    /// fitup's defaults (see the field docs and docs/planning.md): what won on the
+    /// benchmark problems.
+    fn default() -> Self {
+        Self {
+            max_turn: Some(5f64.to_radians()),
+            dynamic_domain: Some(10.0),
+            bridge: 0.1,
+            bridge_width: 5.0,
+            to_contact: true,
+        }
+    }
+}
+
+impl NarrowPassage {
+    /// Every measure off: the plain extension and uniform sampling (seed 002's
+    /// baselines use this).
+    pub const OFF: Self = Self {
+        max_turn: None,
+        dynamic_domain: None,
+        bridge: 0.0,
+        bridge_width: 5.0,
+        to_contact: false,
+    };
+
+    /// How many samples dynamic-domain sampling draws before it takes the last one
+    /// whatever its distance.
+    pub const DOMAIN_TRIES: usize = 32;
+
+    /// How many first poses the bridge test draws before it falls back to a
+    /// uniform sample.
+    pub const BRIDGE_TRIES: usize = 16;
+
+    pub(crate) fn validate(&self) -> Result<(), PlanError> {
+        if let Some(t) = self.max_turn {
+            PlanError::positive("narrow.max_turn", t)?;
+        }
+        if let Some(r) = self.dynamic_domain {
+            PlanError::positive("narrow.dynamic_domain", r)?;
+        }
+        PlanError::probability("narrow.bridge", self.bridge)?;
+        PlanError::positive("narrow.bridge_width", self.bridge_width)
+    }
+
+    /// Whether every measure is off.
+    pub fn is_off(&self) -> bool {
+        self.max_turn.is_none()
+            && self.dynamic_domain.is_none()
+            && self.bridge == 0.0
+            && !self.to_contact
+    }
+
+    /// `candidate` (a step from `from`) with its rotation limited to `max_turn`
+    /// and its translation kept; `None` when it turns no more than that (or there
+    /// is no limit).
+    pub(crate) fn limit_turn(&self, from: &Transform, candidate: &Transform) -> Option<Transform> {
+        let max_turn = self.max_turn?;
+        let angle = from.rotation().angle_to(&candidate.rotation());
+        if angle <= max_turn {
+            return None;
+        }
+        let q = from
+            .rotation()
+            .try_slerp(&candidate.rotation(), max_turn / angle, 1e-12)
+            .unwrap_or(from.rotation());
+        Some(Transform::from_parts(candidate.translation(), q))
+    }
+
+    /// One extension of `tree` from node `near` toward `sample`: the step of at
+    /// most `step` (metric mm) along the straight edge; when that is blocked, the
+    /// same step turning at most `max_turn`. Returns the added node, or the last
+    /// blocked candidate. Keeps the dynamic domains up to date.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn extend(
+        &self,
+        checker: &mut Checker<'_>,
+        space: &PlanningSpace,
+        reference: &UnitQuaternion<f64>,
+        tree: &mut Tree,
+        near: usize,
+        sample: &Transform,
+        step: f64,
+    ) -> Result<usize, Transform> {
+        let from = tree.poses[near];
+        let mut candidate = steer(&from, sample, step, space);
+        let mut tries = [Some(candidate), self.limit_turn(&from, &candidate)];
+        for c in tries.iter_mut().filter_map(Option::take) {
+            candidate = c;
+            if space.contains(&c, reference) && !tree.holds(&c) && checker.edge_free(&from, &c) {
+                if self.dynamic_domain.is_some() {
+                    tree.grow_domain(near, 1.1);
+                }
+                return Ok(tree.add(c, near));
+            }
+        }
+        if let Some(r) = self.dynamic_domain {
+            tree.shrink_domain(near, r);
+        }
+        Err(candidate)
+    }
+
+    /// A sample for extending `tree`, and its nearest node: bridge test with
+    /// probability `bridge`, else uniform; redrawn while it lies outside the
+    /// nearest node's dynamic domain.
+    pub(crate) fn sample(
+        &self,
+        rng: &mut Rng,
+        checker: &mut Checker<'_>,
+        space: &PlanningSpace,
+        reference: &UnitQuaternion<f64>,
+        tree: &Tree,
+    ) -> (Transform, usize) {
+        let mut last = None;
+        let tries = if self.dynamic_domain.is_some() {
+            Self::DOMAIN_TRIES
+        } else {
+            1
+        };
+        for _ in 0..tries {
+            let s = if self.bridge > 0.0 && rng.uniform() < self.bridge {
+                self.bridge_sample(rng, checker, space, reference)
+                    .unwrap_or_else(|| space.sample(rng, reference))
+            } else {
+                space.sample(rng, reference)
+            };
+            let (near, d) = tree.nearest(&s, space);
+            if d <= tree.domain(near) {
+                return (s, near);
+            }
+            last = Some((s, near));
+        }
+        last.expect("at least one try")
+    }
+
+    /// The bridge test: a blocked pose, a second one about `bridge_width` away,
+    /// also blocked, and their midpoint when it is free and in the space.
+    fn bridge_sample(
+        &self,
+        rng: &mut Rng,
+        checker: &mut Checker<'_>,
+        space: &PlanningSpace,
+        reference: &UnitQuaternion<f64>,
+    ) -> Option<Transform> {
+        for _ in 0..Self::BRIDGE_TRIES {
+            let a = space.sample(rng, reference);
+            if checker.is_free(&a) {
+                continue;
+            }
+            let b = perturb(rng, &a, self.bridge_width, space);
+            if !space.contains(&b, reference) || checker.is_free(&b) {
+                continue;
+            }
+            let mid = a.interpolate(&b, 0.5);
+            if space.contains(&mid, reference) && checker.is_free(&mid) {
+                return Some(mid);
+            }
+        }
+        None
+    }
+
+    /// Extension to contact: the farthest pose `near → blocked` whose edge from
+    /// `near` is free, by 3 bisections (at least an eighth of the edge), added to
+    /// `tree`; `None` when even an eighth is blocked.
+    pub(crate) fn extend_to_contact(
+        &self,
+        checker: &mut Checker<'_>,
+        space: &PlanningSpace,
+        reference: &UnitQuaternion<f64>,
+        tree: &mut Tree,
+        near: usize,
+        blocked: &Transform,
+    ) -> Option<usize> {
+        if !self.to_contact {
+            return None;
+        }
+        let from = tree.poses[near];
+        let (mut lo, mut hi) = (0.0, 1.0);
+        let mut best = None;
+        for _ in 0..3 {
+            let mid = 0.5 * (lo + hi);
+            let pose = from.interpolate(blocked, mid);
+            if space.contains(&pose, reference)
+                && !tree.holds(&pose)
+                && checker.edge_free(&from, &pose)
+            {
+                lo = mid;
+                best = Some(pose);
+            } else {
+                hi = mid;
+            }
+        }
+        best.map(|p| tree.add(p, near))
+    }
+}
+
+/// `pose` moved by a random translation and turn whose sizes are normal with
+/// standard deviation `sigma` metric mm (the turn's share over the rotation weight).
+fn perturb(rng: &mut Rng, pose: &Transform, sigma: f64, space: &PlanningSpace) -> Transform {
+    let d = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * (sigma / 3f64.sqrt());
+    let axis = Vec3::new(rng.normal(), rng.normal(), rng.normal());
+    let angle = rng.normal() * sigma / space.rotation_weight;
+    let turn = Unit::try_new(axis, 1e-9).map_or(UnitQuaternion::identity(), |a| {
+        UnitQuaternion::from_axis_angle(&a, angle)
+    });
+    Transform::from_parts(pose.translation() + d, turn * pose.rotation())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Point3;
+
+    #[test]
+    fn limit_turn_keeps_the_translation() {
+        let space = PlanningSpace::new(Vec3::repeat(-100.0), Vec3::repeat(100.0))
+            .with_rotation_weight(10.0);
+        let from = Transform::IDENTITY;
+        let to = Transform::from_rotation_about(Point3::origin(), Vec3::z(), 2.0)
+            .unwrap()
+            .then(&Transform::from_translation(Vec3::new(40.0, 0.0, 0.0)));
+        let n = NarrowPassage {
+            max_turn: Some(0.1),
+            ..NarrowPassage::OFF
+        };
+        let plain = steer(&from, &to, 10.0, &space);
+        let s = n.limit_turn(&from, &plain).unwrap();
+        let (angle, _) = from.distance_to(&s);
+        assert!((angle - 0.1).abs() < 1e-9, "{angle}");
+        assert!((s.translation() - plain.translation()).norm() < 1e-12);
+        // A small turn is left alone, and without a limit nothing changes.
+        let near = Transform::from_rotation_about(Point3::origin(), Vec3::z(), 0.05).unwrap();
+        assert_eq!(n.limit_turn(&from, &near), None);
+        assert_eq!(NarrowPassage::OFF.limit_turn(&from, &plain), None);
+    }
+
+    #[test]
+    fn rejects_bad_options() {
+        for bad in [
+            NarrowPassage {
+                max_turn: Some(0.0),
+                ..NarrowPassage::OFF
+            },
+            NarrowPassage {
+                dynamic_domain: Some(f64::NAN),
+                ..NarrowPassage::OFF
+            },
+            NarrowPassage {
+                bridge: 1.5,
+                ..NarrowPassage::OFF
+            },
+            NarrowPassage {
+                bridge_width: -1.0,
+                ..NarrowPassage::OFF
+            },
+        ] {
+            assert!(bad.validate().is_err(), "{bad:?}");
+        }
+        NarrowPassage::default().validate().unwrap();
+        assert!(NarrowPassage::OFF.is_off());
+    }
+}
