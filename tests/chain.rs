@@ -135,35 +135,20 @@ fn the_wheel_and_the_cell_assemble_as_documented_in_process_and_over_tcp() {
 fn a_script_dispatches_over_tcp_only_when_the_command_line_says_so() {
     let root = common::repo();
     // No manipulator listens on this port: the refusal comes before any connection.
-    let o = common::run_bounded(
-        &root,
-        &[
-            "run",
-            "scripts/assemble_wheel.rhai",
-            "--",
-            "target=127.0.0.1:1",
-        ],
-        BOUND,
-    );
-    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
-    let err = String::from_utf8_lossy(&o.stderr);
+    // `fitup run scripts/assemble_wheel.rhai ARGS` fails with status 1; its stderr.
+    let refused = |args: &[&str]| {
+        let mut all = vec!["run", "scripts/assemble_wheel.rhai"];
+        all.extend_from_slice(args);
+        let o = common::run_bounded(&root, &all, BOUND);
+        assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = refused(&["--", "target=127.0.0.1:1"]);
     assert!(
         err.contains("--dispatch") && err.contains("assemble_wheel.rhai:"),
         "{err}"
     );
-    let o = common::run_bounded(
-        &root,
-        &[
-            "run",
-            "scripts/assemble_wheel.rhai",
-            "--dispatch",
-            "--",
-            "target=192.0.2.7:11000",
-        ],
-        BOUND,
-    );
-    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = refused(&["--dispatch", "--", "target=192.0.2.7:11000"]);
     assert!(err.contains("--allow-remote"), "{err}");
     // `--allow-remote` alone is a usage error.
     let o = common::run_in(
@@ -173,6 +158,17 @@ fn a_script_dispatches_over_tcp_only_when_the_command_line_says_so() {
     assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
 }
 
+/// The start of the chain scripts: the wheel's sequence and its skills for the MZ07
+/// at its home pose, the wheel placed 500 mm in front of it.
+const WHEEL_SKILLS: &str = r#"
+let wheel = open_doc("models/wheel.yaml");
+let seq = wheel.assembly_sequence(#{seed: 1});
+let cell = open_doc("models/mz07.yaml");
+let robot = cell.robot("mz07");
+robot.joints = robot.ik_near([500, 0, 250, 0, 0, 0], [0, 0, 0, 0, -90, 0]);
+let skills = wheel.skills(seq, #{robot: robot, place: [500, 0, 150, 0, 0, 0], tool: [0, 0, 0, 180, 0, 0]});
+"#;
+
 #[test]
 fn a_script_pauses_resumes_commands_by_hand_and_aborts_from_its_event_callback() {
     let root = common::repo();
@@ -180,14 +176,9 @@ fn a_script_pauses_resumes_commands_by_hand_and_aborts_from_its_event_callback()
     let script = root.join("out/test_chain_callback.rhai");
     std::fs::write(
         &script,
-        r#"
-let wheel = open_doc("models/wheel.yaml");
-let seq = wheel.assembly_sequence(#{seed: 1});
-let cell = open_doc("models/mz07.yaml");
-let robot = cell.robot("mz07");
-robot.joints = robot.ik_near([500, 0, 250, 0, 0, 0], [0, 0, 0, 0, -90, 0]);
-let skills = wheel.skills(seq, #{robot: robot, place: [500, 0, 150, 0, 0, 0], tool: [0, 0, 0, 180, 0, 0]});
-let m = skill_manager(#{target: "sim", robot: robot, speed: 20, quiet: true});
+        [
+            WHEEL_SKILLS,
+            r#"let m = skill_manager(#{target: "sim", robot: robot, speed: 20, quiet: true});
 // Skill 2 (a move of the gear) is paused as soon as it starts; on `paused` a manual
 // command is queued and the run resumed; the last skill is edited before it runs.
 m.edit(skills, skills.len - 1, #{commands: ["release 20"]});
@@ -209,6 +200,8 @@ assert(names[names.len() - 1] == "aborted", `${names}`);
 assert(events.filter(|e| e.event == "started").len() <= 3, `${names}`);
 print("callback ok");
 "#,
+        ]
+        .concat(),
     )
     .unwrap();
     let o = run(&["run", "out/test_chain_callback.rhai"]);
@@ -221,63 +214,28 @@ print("callback ok");
 
 #[test]
 fn a_new_save_aborts_a_running_manager_in_watch_mode() {
-    use std::io::BufRead;
     let root = common::repo();
     std::fs::create_dir_all(root.join("out")).unwrap();
     let script = root.join("out/test_chain_watch.rhai");
-    let text = r#"
-let wheel = open_doc("models/wheel.yaml");
-let seq = wheel.assembly_sequence(#{seed: 1});
-let cell = open_doc("models/mz07.yaml");
-let robot = cell.robot("mz07");
-robot.joints = robot.ik_near([500, 0, 250, 0, 0, 0], [0, 0, 0, 0, -90, 0]);
-let skills = wheel.skills(seq, #{robot: robot, place: [500, 0, 150, 0, 0, 0], tool: [0, 0, 0, 180, 0, 0]});
-// Real time and slow: the run lasts far longer than the test waits.
+    let text = [
+        WHEEL_SKILLS,
+        r#"// Real time and slow: the run lasts far longer than the test waits.
 let m = skill_manager(#{target: "sim", robot: robot, speed: 0.05});
 m.run(skills);
-"#;
-    std::fs::write(&script, text).unwrap();
-    let mut child = common::fitup()
-        .current_dir(&root)
-        .args(["watch", "out/test_chain_watch.rhai"])
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    let out = child.stdout.take().unwrap();
-    std::thread::spawn(move || {
-        for line in std::io::BufReader::new(out).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let mut seen = Vec::new();
-    let mut wait_for = |what: &str, seen: &mut Vec<String>| {
-        let start = Instant::now();
-        while start.elapsed() < Duration::from_secs(120) {
-            if let Ok(l) = rx.recv_timeout(Duration::from_millis(100)) {
-                let hit = l.contains(what);
-                seen.push(l);
-                if hit {
-                    return;
-                }
-            }
-        }
-        let _ = child.kill();
-        panic!("no `{what}` in watch output: {seen:#?}");
-    };
+"#,
+    ]
+    .concat();
+    std::fs::write(&script, &text).unwrap();
+    let mut w = common::Watch::start(&root, "out/test_chain_watch.rhai", &[]);
+    let bound = Duration::from_secs(120);
     // The arm is moving (skill #1 is the grasp's joint move), then a save.
-    wait_for("running #1", &mut seen);
+    w.out.wait_for("running #1", bound);
     std::thread::sleep(Duration::from_millis(300));
     std::fs::write(&script, format!("{text}\n// saved again\n")).unwrap();
-    wait_for("aborted", &mut seen);
+    w.out.wait_for("aborted", bound);
     // The new run starts from the beginning.
-    wait_for("running #0", &mut seen);
-    let _ = child.kill();
-    let _ = child.wait();
+    w.out.wait_for("running #0", bound);
+    let seen = &w.out.seen;
     let aborted = seen.iter().position(|l| l.contains("aborted")).unwrap();
     assert!(
         !seen[..aborted].iter().any(|l| l.contains("finished #1")),
@@ -342,44 +300,43 @@ fn the_terminal_ui_shows_the_run_and_takes_keys_under_tmux() {
     }
     let _server = Server(socket.clone());
     let screen = || tmux(&socket, &["capture-pane", "-p"]);
-    let wait_for = |what: &str| -> String {
+    // Waits for one screen that shows every one of `what` (a frame can be captured
+    // half drawn, so the needles of one frame are awaited together).
+    let wait_for = |what: &[&str]| -> String {
         let start = Instant::now();
         loop {
             let s = screen();
-            if s.contains(what) {
+            if what.iter().all(|w| s.contains(w)) {
                 return s;
             }
             assert!(
                 start.elapsed() < Duration::from_secs(120),
-                "no `{what}` on the screen:\n{s}"
+                "no screen with all of {what:?}:\n{s}"
             );
             std::thread::sleep(Duration::from_millis(100));
         }
     };
     // The lists and the live joints while the arm moves.
-    let s = wait_for("running:  #1 Grasp gear");
-    assert!(
-        s.contains("pending (") && s.contains("finished (1/14)"),
-        "{s}"
-    );
-    assert!(s.contains("parts:") && s.contains("gear In_WS"), "{s}");
-    assert!(s.contains("joints:") && s.contains('°'), "{s}");
+    wait_for(&[
+        "running:  #1 Grasp gear",
+        "pending (",
+        "finished (1/14)",
+        "parts:",
+        "gear In_WS",
+        "joints:",
+        "°",
+    ]);
     tmux(&socket, &["send-keys", "p"]);
-    let s = wait_for("state: paused");
-    assert!(s.contains("running:  #1 Grasp gear"), "{s}");
+    wait_for(&["state: paused", "running:  #1 Grasp gear"]);
     // A manual command while paused, then resume.
     tmux(&socket, &["send-keys", "m"]);
-    wait_for("manual command (");
+    wait_for(&["manual command ("]);
     tmux(&socket, &["send-keys", "output 3 1", "Enter"]);
-    wait_for("manual output 3 1");
+    wait_for(&["manual output 3 1"]);
     tmux(&socket, &["send-keys", "r"]);
-    wait_for("resumed");
-    let s = wait_for("state: done");
-    assert!(
-        s.contains("finished (14/14)") && s.contains("cup Assembled"),
-        "{s}"
-    );
+    wait_for(&["resumed"]);
+    wait_for(&["state: done", "finished (14/14)", "cup Assembled"]);
     tmux(&socket, &["send-keys", "q"]);
-    let s = wait_for("EXIT=");
+    let s = wait_for(&["EXIT="]);
     assert!(s.contains("EXIT=0"), "{s}");
 }

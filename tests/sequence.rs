@@ -100,6 +100,17 @@ fn open(path: &str) -> Document {
     Document::open(Path::new(path)).unwrap()
 }
 
+/// The component index of task `k`'s part and of the parts assembled before it (the
+/// base and the first `k` task parts, by `order`).
+fn step_parts(doc: &Document, order: &[String], k: usize, part: &str) -> (usize, Vec<usize>) {
+    let p = doc.component_index(part).unwrap();
+    let before = order[..k + 1]
+        .iter()
+        .map(|n| doc.component_index(n).unwrap())
+        .collect();
+    (p, before)
+}
+
 /// Re-checks every sequence step by step: each task's path is free against exactly
 /// the parts assembled before it (a fresh validator, continuous edges), starts away
 /// from the assembled pose and ends there; and each part goes in once.
@@ -114,11 +125,7 @@ fn recheck(doc: &Document, plan: &SequencePlan) {
         sorted.dedup();
         assert_eq!(sorted.len(), doc.components().len(), "{order:?}");
         for (k, t) in s.tasks.iter().enumerate() {
-            let p = doc.component_index(&t.part).unwrap();
-            let before: Vec<usize> = order[..k + 1]
-                .iter()
-                .map(|n| doc.component_index(n).unwrap())
-                .collect();
+            let (p, before) = step_parts(doc, &order, k, &t.part);
             assert!(!before.contains(&p));
             let mut v = MeshValidator::new(
                 scene.colliders[p].clone(),
@@ -450,11 +457,7 @@ fn dense_recheck(doc: &Document, plan: &SequencePlan, step_mm: f64) {
     for s in &plan.sequences {
         let order = s.order();
         for (k, t) in s.tasks.iter().enumerate() {
-            let p = doc.component_index(&t.part).unwrap();
-            let before: Vec<usize> = order[..k + 1]
-                .iter()
-                .map(|n| doc.component_index(n).unwrap())
-                .collect();
+            let (p, before) = step_parts(doc, &order, k, &t.part);
             for w in t.path.poses.windows(2) {
                 let (a, b) = (w[0], w[1]);
                 let len = (b.translation() - a.translation()).norm();
@@ -688,13 +691,7 @@ fn component_mass_and_threaded_are_read_and_validated() {
 fn revalidate_from_a_script_names_the_broken_steps() {
     let dir = common::project();
     let p = dir.path();
-    let root = common::repo();
-    std::fs::create_dir_all(p.join("models/meshes")).unwrap();
-    std::fs::copy(root.join("models/wheel.yaml"), p.join("models/wheel.yaml")).unwrap();
-    for m in ["axis", "gear", "cup"] {
-        let f = format!("models/meshes/wheel_{m}.stl");
-        std::fs::copy(root.join(&f), p.join(&f)).unwrap();
-    }
+    common::copy_wheel(p);
     std::fs::write(
         p.join("scripts/reval.rhai"),
         r#"let d = open_doc("models/wheel.yaml");

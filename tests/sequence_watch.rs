@@ -4,103 +4,14 @@
 
 mod common;
 
+use common::Watch;
+
 use fitup::document::Document;
 use fitup::math::{Point3, Transform, Vec3};
-use std::io::{BufRead, BufReader};
-use std::path::Path;
-use std::process::{Child, Stdio};
-use std::sync::mpsc::{channel, Receiver};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-/// `fitup watch SCRIPT` in `dir`, its stdout read line by line.
-struct Watch {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
-
-impl Watch {
-    fn start(dir: &Path, script: &str) -> Watch {
-        let mut child = common::fitup()
-            .current_dir(dir)
-            .arg("watch")
-            .arg(script)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let (tx, rx) = channel();
-        let out = child.stdout.take().unwrap();
-        std::thread::spawn(move || {
-            for line in BufReader::new(out).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        Watch {
-            child,
-            lines: rx,
-            seen: Vec::new(),
-        }
-    }
-
-    /// Waits until a line contains `needle`; fails with the transcript after 60 s (a
-    /// bound on hangs, not a speed assertion).
-    fn wait_for(&mut self, needle: &str) {
-        let deadline = Instant::now() + Duration::from_secs(60);
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.lines.recv_timeout(left) {
-                Ok(l) => {
-                    let hit = l.contains(needle);
-                    self.seen.push(l);
-                    if hit {
-                        return;
-                    }
-                }
-                Err(_) => panic!(
-                    "no `{needle}` within 60 s; output:\n{}",
-                    self.seen.join("\n")
-                ),
-            }
-        }
-    }
-
-    /// What arrives within `d`.
-    fn quiet(&mut self, d: Duration) -> Vec<String> {
-        let deadline = Instant::now() + d;
-        let mut got = Vec::new();
-        while let Ok(l) = self
-            .lines
-            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-        {
-            self.seen.push(l.clone());
-            got.push(l);
-        }
-        got
-    }
-
-    /// The lines of run `n` (between `== run n` and `== done n`).
-    fn run_lines(&self, n: usize) -> Vec<String> {
-        let start = format!("== run {n}");
-        let end = format!("== done {n}");
-        self.seen
-            .iter()
-            .skip_while(|l| !l.starts_with(&start))
-            .take_while(|l| !l.starts_with(&end))
-            .cloned()
-            .collect()
-    }
-}
-
-impl Drop for Watch {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+/// A bound on hangs while waiting for a watch line, not a speed assertion.
+const BOUND: Duration = Duration::from_secs(60);
 
 /// The tasks a run printed: `part onto base operation dz`.
 fn tasks(lines: &[String]) -> Vec<String> {
@@ -115,14 +26,7 @@ fn tasks(lines: &[String]) -> Vec<String> {
 fn moving_the_parts_and_saving_prints_the_new_sequence_once() {
     let dir = common::project();
     let p = dir.path();
-    // A copy of the wheel in the scratch project.
-    let root = common::repo();
-    std::fs::create_dir_all(p.join("models/meshes")).unwrap();
-    std::fs::copy(root.join("models/wheel.yaml"), p.join("models/wheel.yaml")).unwrap();
-    for m in ["axis", "gear", "cup"] {
-        let f = format!("models/meshes/wheel_{m}.stl");
-        std::fs::copy(root.join(&f), p.join(&f)).unwrap();
-    }
+    common::copy_wheel(p);
     std::fs::write(
         p.join("scripts/seq.rhai"),
         "let d = open_doc(\"models/wheel.yaml\");\n\
@@ -133,9 +37,9 @@ fn moving_the_parts_and_saving_prints_the_new_sequence_once() {
          }\n",
     )
     .unwrap();
-    let mut w = Watch::start(p, "scripts/seq.rhai");
-    w.wait_for("== done 1");
-    let first = w.run_lines(1);
+    let mut w = Watch::start(p, "scripts/seq.rhai", &[]);
+    w.out.wait_for("== done 1", BOUND);
+    let first = w.out.run(1);
     assert!(
         first
             .iter()
@@ -165,14 +69,14 @@ fn moving_the_parts_and_saving_prints_the_new_sequence_once() {
     }
     doc.save().unwrap();
 
-    w.wait_for("== done 2");
-    let after = w.quiet(Duration::from_millis(1500));
+    w.out.wait_for("== done 2", BOUND);
+    let after = w.out.quiet(Duration::from_millis(1500));
     assert!(
         !after.iter().any(|l| l.starts_with("== run ")),
         "one save, one rerun: {:?}",
-        w.seen
+        w.out.seen
     );
-    let second = w.run_lines(2);
+    let second = w.out.run(2);
     assert!(
         second
             .iter()

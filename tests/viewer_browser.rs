@@ -13,8 +13,8 @@ use common::{fitup, repo};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{channel, Receiver};
+use std::process::{Command, Stdio};
+use std::sync::mpsc::channel;
 use std::time::{Duration, Instant};
 
 /// The longest any single step may take (a connection, an answer, a frame).
@@ -58,54 +58,6 @@ fn chromium() -> Option<PathBuf> {
         .iter()
         .flat_map(|name| std::env::split_paths(&path).map(move |d| d.join(name)))
         .find(|p| p.is_file())
-}
-
-/// Kills the child when dropped (a failed assertion must not leave servers running).
-struct Killed(Child);
-
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-/// Lines of a child's output, read on a thread.
-fn lines(r: impl Read + Send + 'static) -> Receiver<String> {
-    let (tx, rx) = channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(r).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    rx
-}
-
-/// Waits for a line containing `needle`; returns it.
-fn wait_line(
-    rx: &Receiver<String>,
-    needle: &str,
-    bound: Duration,
-    seen: &mut Vec<String>,
-) -> String {
-    let end = Instant::now() + bound;
-    while let Some(left) = end.checked_duration_since(Instant::now()) {
-        match rx.recv_timeout(left) {
-            Ok(l) => {
-                seen.push(l.clone());
-                if l.contains(needle) {
-                    return l;
-                }
-            }
-            Err(_) => break,
-        }
-    }
-    panic!(
-        "no `{needle}` within {bound:?}; output:\n{}",
-        seen.join("\n")
-    );
 }
 
 // ---- a minimal WebSocket client (RFC 6455), enough for the DevTools protocol ----
@@ -386,26 +338,17 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
     let p = dir.path();
     let script = p.join("scripts/cell.rhai");
     std::fs::write(&script, SCRIPT.replace("LIFT", "20")).unwrap();
-    let mut watch = Killed(
-        fitup()
-            .current_dir(p)
-            .args(["watch", "scripts/cell.rhai", "--view"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap(),
-    );
-    let out = lines(watch.0.stdout.take().unwrap());
-    let mut seen = Vec::new();
+    let mut watch = common::Watch::start(p, "scripts/cell.rhai", &["--view"]);
     let bound = Duration::from_secs(120);
-    let url = wait_line(&out, "viewer: http://127.0.0.1:", bound, &mut seen)
+    let url = watch
+        .out
+        .wait_for("viewer: http://127.0.0.1:", bound)
         .trim_start_matches("viewer: ")
         .to_string();
-    wait_line(&out, "== done 1 ok", bound, &mut seen);
+    watch.out.wait_for("== done 1 ok", bound);
 
     let profile = tempfile::tempdir().unwrap();
-    let chrome = Killed(
+    let chrome = common::lines::Killed(
         Command::new(browser)
             .args([
                 "--headless=new",
@@ -421,7 +364,7 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
             .spawn()
             .unwrap(),
     );
-    let _watchdog = Watchdog::start(vec![watch.0.id(), chrome.0.id()]);
+    let _watchdog = Watchdog::start(vec![watch.process.0.id(), chrome.0.id()]);
     // Chromium writes its DevTools port (then the browser's path) once it listens.
     let port_file = profile.path().join("DevToolsActivePort");
     let start = Instant::now();
@@ -480,10 +423,10 @@ fn the_browser_shows_the_newest_run_and_asks_nothing_of_the_internet() {
 
     // Two saves: runs 2 and 3; the open page follows to the newest without a reload.
     std::fs::write(&script, SCRIPT.replace("LIFT", "60")).unwrap();
-    wait_line(&out, "== done 2 ok", bound, &mut seen);
+    watch.out.wait_for("== done 2 ok", bound);
     page.idle(Duration::from_secs(2));
     std::fs::write(&script, SCRIPT.replace("LIFT", "120")).unwrap();
-    wait_line(&out, "== done 3 ok", bound, &mut seen);
+    watch.out.wait_for("== done 3 ok", bound);
     page.idle(Duration::from_secs(15));
     let second = page.screenshot(&shots.join("browser-2.png"));
 

@@ -3,89 +3,17 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
+use common::Watch;
+
 use std::path::Path;
-use std::process::{Child, Stdio};
-use std::sync::mpsc::{channel, Receiver};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-struct Watch {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
+/// A bound on hangs while waiting for a watch line, not a speed assertion.
+const BOUND: Duration = Duration::from_secs(20);
 
-impl Watch {
-    fn start(dir: &Path, script: &str, extra: &[&str]) -> Watch {
-        let mut child = common::fitup()
-            .current_dir(dir)
-            .arg("watch")
-            .arg(script)
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let (tx, rx) = channel();
-        let out = child.stdout.take().unwrap();
-        std::thread::spawn(move || {
-            for line in BufReader::new(out).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        Watch {
-            child,
-            lines: rx,
-            seen: Vec::new(),
-        }
-    }
-
-    /// Waits until a line contains `needle`; panics with the transcript after 20 s.
-    fn wait_for(&mut self, needle: &str) -> String {
-        let deadline = Instant::now() + Duration::from_secs(20);
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.lines.recv_timeout(left) {
-                Ok(l) => {
-                    self.seen.push(l.clone());
-                    if l.contains(needle) {
-                        return l;
-                    }
-                }
-                Err(_) => panic!(
-                    "no `{needle}` within 20 s; output:\n{}",
-                    self.seen.join("\n")
-                ),
-            }
-        }
-    }
-
-    /// Collects what arrives within `d`.
-    fn quiet(&mut self, d: Duration) -> Vec<String> {
-        let deadline = Instant::now() + d;
-        let mut got = Vec::new();
-        while let Ok(l) = self
-            .lines
-            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-        {
-            self.seen.push(l.clone());
-            got.push(l);
-        }
-        got
-    }
-
-    fn runs_started(lines: &[String]) -> usize {
-        lines.iter().filter(|l| l.starts_with("== run ")).count()
-    }
-}
-
-impl Drop for Watch {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
+/// How many runs started among `lines`.
+fn runs_started(lines: &[String]) -> usize {
+    lines.iter().filter(|l| l.starts_with("== run ")).count()
 }
 
 const SETTLE: Duration = Duration::from_millis(700);
@@ -107,29 +35,33 @@ fn each_save_gives_exactly_one_rerun() {
     };
     std::fs::write(&script, body("one")).unwrap();
     let mut w = Watch::start(p, "scripts/w.rhai", &[]);
-    w.wait_for("== done 1 ok");
-    assert!(w.seen.iter().any(|l| l == "tag one 8"), "{:?}", w.seen);
+    w.out.wait_for("== done 1 ok", BOUND);
+    assert!(
+        w.out.seen.iter().any(|l| l == "tag one 8"),
+        "{:?}",
+        w.out.seen
+    );
 
     // 1. The script, written in place.
     std::fs::write(&script, body("two")).unwrap();
-    w.wait_for("== done 2");
-    let after = w.quiet(SETTLE);
+    w.out.wait_for("== done 2", BOUND);
+    let after = w.out.quiet(SETTLE);
     assert_eq!(
-        Watch::runs_started(&after),
+        runs_started(&after),
         0,
         "extra rerun after an in-place save: {after:?}"
     );
-    assert!(w.seen.iter().any(|l| l == "tag two 8"));
+    assert!(w.out.seen.iter().any(|l| l == "tag two 8"));
 
     // 2. The script, saved by rename (temporary file + rename).
     save_by_rename(&script, &body("three"));
-    w.wait_for("== done 3");
+    w.out.wait_for("== done 3", BOUND);
     assert_eq!(
-        Watch::runs_started(&w.quiet(SETTLE)),
+        runs_started(&w.out.quiet(SETTLE)),
         0,
         "extra rerun after a rename save"
     );
-    assert!(w.seen.iter().any(|l| l == "tag three 8"));
+    assert!(w.out.seen.iter().any(|l| l == "tag three 8"));
 
     // 3. The document.
     let yaml_path = p.join("models/cell.yaml");
@@ -139,11 +71,11 @@ fn each_save_gives_exactly_one_rerun() {
         yaml.replacen("description: '", "description: 'edited ", 1),
     )
     .unwrap();
-    let header = w.wait_for("== run 4");
+    let header = w.out.wait_for("== run 4", BOUND);
     assert!(header.contains("cell.yaml"), "{header}");
-    w.wait_for("== done 4");
+    w.out.wait_for("== done 4", BOUND);
     assert_eq!(
-        Watch::runs_started(&w.quiet(SETTLE)),
+        runs_started(&w.out.quiet(SETTLE)),
         0,
         "extra rerun after a document save"
     );
@@ -151,11 +83,11 @@ fn each_save_gives_exactly_one_rerun() {
     // 4. A mesh the run read (through the document).
     let screw = fitup::mesh::Mesh::cylinder(4.0, 12.0, 16);
     fitup::mesh::write_stl(&p.join("models/meshes/screw.stl"), &screw).unwrap();
-    let header = w.wait_for("== run 5");
+    let header = w.out.wait_for("== run 5", BOUND);
     assert!(header.contains("screw.stl"), "{header}");
-    w.wait_for("== done 5");
+    w.out.wait_for("== done 5", BOUND);
     assert_eq!(
-        Watch::runs_started(&w.quiet(SETTLE)),
+        runs_started(&w.out.quiet(SETTLE)),
         0,
         "extra rerun after a mesh save"
     );
@@ -163,16 +95,16 @@ fn each_save_gives_exactly_one_rerun() {
     // 5. A save that does not change the content: no rerun.
     std::fs::write(&script, body("three")).unwrap();
     assert_eq!(
-        Watch::runs_started(&w.quiet(SETTLE)),
+        runs_started(&w.out.quiet(SETTLE)),
         0,
         "rerun without a content change"
     );
 
     // 6. An error keeps the watcher going, and the next good save runs.
     std::fs::write(&script, "let x = ;\n").unwrap();
-    w.wait_for("== done 6 error");
+    w.out.wait_for("== done 6 error", BOUND);
     std::fs::write(&script, body("four")).unwrap();
-    w.wait_for("== done 7 ok");
+    w.out.wait_for("== done 7 ok", BOUND);
 }
 
 #[test]
@@ -181,12 +113,12 @@ fn files_the_script_did_not_read_do_not_trigger() {
     let p = dir.path();
     std::fs::write(p.join("scripts/plain.rhai"), "print(\"hello\");\n").unwrap();
     let mut w = Watch::start(p, "scripts/plain.rhai", &[]);
-    w.wait_for("== done 1 ok");
+    w.out.wait_for("== done 1 ok", BOUND);
     let yaml_path = p.join("models/cell.yaml");
     let yaml = std::fs::read_to_string(&yaml_path).unwrap();
     std::fs::write(&yaml_path, yaml + "\n").unwrap();
     std::fs::write(p.join("scripts/other.rhai"), "print(1);\n").unwrap();
-    assert_eq!(Watch::runs_started(&w.quiet(SETTLE)), 0);
+    assert_eq!(runs_started(&w.out.quiet(SETTLE)), 0);
 }
 
 #[test]
@@ -204,12 +136,12 @@ fn a_save_cancels_the_running_script() {
         "scripts/spin.rhai",
         &["--max-operations", "100000000000"],
     );
-    w.wait_for("spinning");
+    w.out.wait_for("spinning", BOUND);
     std::thread::sleep(Duration::from_millis(300));
     std::fs::write(&script, "print(\"fixed\");\n").unwrap();
-    w.wait_for("== done 1 cancelled");
-    w.wait_for("== done 2 ok");
-    assert!(w.seen.iter().any(|l| l == "fixed"));
+    w.out.wait_for("== done 1 cancelled", BOUND);
+    w.out.wait_for("== done 2 ok", BOUND);
+    assert!(w.out.seen.iter().any(|l| l == "fixed"));
 }
 
 /// Copies a folder tree (files and folders only).
@@ -247,25 +179,26 @@ fn write_slowly(path: &Path, text: &str) {
 
 /// Counts runs and checks each one saw the complete script (`end TAG` printed).
 fn assert_one_complete_run(w: &mut Watch, number: u64, tag: &str, how: &str) {
-    w.wait_for(&format!("== done {number}"));
-    let after = w.quiet(Duration::from_millis(1500));
+    w.out.wait_for(&format!("== done {number}"), BOUND);
+    let after = w.out.quiet(Duration::from_millis(1500));
     assert_eq!(
-        Watch::runs_started(&after),
+        runs_started(&after),
         0,
         "{how}: more than one run for one save: {:?}",
-        w.seen
+        w.out.seen
     );
     assert!(
-        w.seen.iter().any(|l| l == &format!("end {tag} 8")),
+        w.out.seen.iter().any(|l| l == &format!("end {tag} 8")),
         "{how}: the run did not see the complete file: {:?}",
-        w.seen
+        w.out.seen
     );
     assert!(
-        w.seen
+        w.out
+            .seen
             .iter()
             .any(|l| l.starts_with(&format!("== done {number} ok"))),
         "{how}: {:?}",
-        w.seen
+        w.out.seen
     );
 }
 
@@ -276,7 +209,7 @@ fn backup_and_rename_saves_give_one_run_of_the_complete_file() {
     let script = p.join("scripts/e.rhai");
     std::fs::write(&script, tagged("first")).unwrap();
     let mut w = Watch::start(p, "scripts/e.rhai", &[]);
-    w.wait_for("== done 1 ok");
+    w.out.wait_for("== done 1 ok", BOUND);
 
     // Emacs: rename the original to a backup, create the file, write it, close.
     let backup = p.join("scripts/e.rhai~");
@@ -304,8 +237,8 @@ fn backup_and_rename_saves_give_one_run_of_the_complete_file() {
 
     // Deleted: reported, no run; back with new content: one run.
     std::fs::remove_file(&script).unwrap();
-    w.wait_for("is gone");
-    assert_eq!(Watch::runs_started(&w.quiet(Duration::from_millis(800))), 0);
+    w.out.wait_for("is gone", BOUND);
+    assert_eq!(runs_started(&w.out.quiet(Duration::from_millis(800))), 0);
     std::fs::write(&script, tagged("back")).unwrap();
     assert_one_complete_run(&mut w, 6, "back", "file recreated");
 }
@@ -319,28 +252,28 @@ fn a_project_folder_moved_away_and_recreated_is_watched_again() {
     copy_tree(template.path(), &proj);
     std::fs::write(proj.join("scripts/r.rhai"), tagged("one")).unwrap();
     let mut w = Watch::start(&proj, "scripts/r.rhai", &[]);
-    w.wait_for("== done 1 ok");
+    w.out.wait_for("== done 1 ok", BOUND);
 
     // Move the whole project away and put an identical copy in its place.
     std::fs::rename(&proj, &moved).unwrap();
     std::thread::sleep(Duration::from_millis(500));
     copy_tree(&moved, &proj);
-    w.wait_for("is back");
-    let after = w.quiet(Duration::from_millis(1500));
+    w.out.wait_for("is back", BOUND);
+    let after = w.out.quiet(Duration::from_millis(1500));
     assert_eq!(
-        Watch::runs_started(&after),
+        runs_started(&after),
         0,
         "the same content came back: no run expected: {:?}",
-        w.seen
+        w.out.seen
     );
 
     // Saves in the moved-away copy are not the project's any more.
     std::fs::write(moved.join("scripts/r.rhai"), tagged("stale")).unwrap();
     assert_eq!(
-        Watch::runs_started(&w.quiet(Duration::from_millis(1000))),
+        runs_started(&w.out.quiet(Duration::from_millis(1000))),
         0,
         "{:?}",
-        w.seen
+        w.out.seen
     );
 
     // A save in the new folder: exactly one run, of the new content.
@@ -354,7 +287,7 @@ fn a_project_folder_moved_away_and_recreated_is_watched_again() {
         yaml.replacen("description: '", "description: 'edited ", 1),
     )
     .unwrap();
-    let header = w.wait_for("== run 3");
+    let header = w.out.wait_for("== run 3", BOUND);
     assert!(header.contains("cell.yaml"), "{header}");
 }
 
@@ -370,18 +303,18 @@ fn an_import_cycle_under_watch_is_an_error_run_not_a_crash() {
     )
     .unwrap();
     let mut w = Watch::start(p, "scripts/c.rhai", &[]);
-    w.wait_for("== done 1 ok");
+    w.out.wait_for("== done 1 ok", BOUND);
     // The library imports the script: a cycle.
     std::fs::write(
         p.join("scripts/lib.rhai"),
         "import \"c\" as c;\nfn one() { 1 }\n",
     )
     .unwrap();
-    w.wait_for("import cycle");
-    w.wait_for("== done 2 error");
+    w.out.wait_for("import cycle", BOUND);
+    w.out.wait_for("== done 2 error", BOUND);
     std::fs::write(p.join("scripts/lib.rhai"), "fn one() { 2 }\n").unwrap();
-    w.wait_for("== done 3 ok");
-    assert!(w.seen.iter().any(|l| l == "sum 2"), "{:?}", w.seen);
+    w.out.wait_for("== done 3 ok", BOUND);
+    assert!(w.out.seen.iter().any(|l| l == "sum 2"), "{:?}", w.out.seen);
 }
 
 #[test]
@@ -391,7 +324,7 @@ fn script_arguments_reach_every_run() {
     let script = p.join("scripts/a.rhai");
     std::fs::write(&script, "print(`n is ${args.n}`);\n").unwrap();
     let mut w = Watch::start(p, "scripts/a.rhai", &["--", "n=7"]);
-    w.wait_for("n is 7");
+    w.out.wait_for("n is 7", BOUND);
     std::fs::write(&script, "print(`n+1 is ${args.n + 1}`);\n").unwrap();
-    w.wait_for("n+1 is 8");
+    w.out.wait_for("n+1 is 8", BOUND);
 }

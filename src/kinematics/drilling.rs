@@ -22,6 +22,21 @@ pub struct Hole {
     pub line: usize,
 }
 
+impl Hole {
+    /// A hole at `position` (mm) drilled along `normal` (any length, in the frame of
+    /// `position`; stored as a unit vector). `None` when the normal is zero or not
+    /// finite. `line` is the 1-based line of its source, 0 when it has none.
+    pub fn new(id: Option<String>, position: Point3, normal: Vec3, line: usize) -> Option<Hole> {
+        let normal = normal.try_normalize(1e-12)?;
+        normal.iter().all(|c| c.is_finite()).then_some(Hole {
+            id,
+            position,
+            normal,
+            line,
+        })
+    }
+}
+
 /// A malformed hole table line.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{file}:{line}: {cause}")]
@@ -166,17 +181,14 @@ pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
                 }
             }
         }
-        let n = Vec3::new(v[3], v[4], v[5]);
-        let len = n.norm();
-        if len < 1e-12 {
-            return Err(err("the normal is zero".into()));
-        }
-        holes.push(Hole {
+        let hole = Hole::new(
             id,
-            position: Point3::new(v[0], v[1], v[2]),
-            normal: n / len,
+            Point3::new(v[0], v[1], v[2]),
+            Vec3::new(v[3], v[4], v[5]),
             line,
-        });
+        )
+        .ok_or_else(|| err("the normal is zero".into()))?;
+        holes.push(hole);
     }
     Ok(holes)
 }

@@ -196,21 +196,15 @@ fn hole_arg(v: &Dynamic, i: usize) -> ScriptResult<Hole> {
             .ok_or_else(|| fail(format!("hole {i} has no `{k}`")))
     };
     let position = vec3(get("position")?, &format!("hole {i} position"))?;
-    let normal = vec3(get("normal")?, &format!("hole {i} normal"))?
-        .try_normalize(1e-12)
-        .ok_or_else(|| fail(format!("hole {i}: the normal is zero")))?;
+    let normal = vec3(get("normal")?, &format!("hole {i} normal"))?;
     let id = m.get("id").map(|v| v.to_string()).filter(|s| !s.is_empty());
     let line = m
         .get("line")
         .and_then(|v| v.as_int().ok())
         .unwrap_or(0)
         .max(0) as usize;
-    Ok(Hole {
-        id,
-        position: position.into(),
-        normal,
-        line,
-    })
+    Hole::new(id, position.into(), normal, line)
+        .ok_or_else(|| fail(format!("hole {i}: the normal is zero")))
 }
 
 fn hole_map(h: &Hole) -> Map {

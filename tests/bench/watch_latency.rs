@@ -3,12 +3,13 @@
 //! With the `viewer` feature a second row runs `fitup watch --view` (a serving viewer
 //! session, no browser attached) on the same project.
 
+#[path = "../common/lines.rs"]
+mod lines;
+
 use fitup::demo;
 use fitup::document::file::{ComponentFile, PartFile};
 use fitup::mesh::{write_stl, Mesh};
-use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
-use std::sync::mpsc::channel;
 use std::time::{Duration, Instant};
 
 fn main() {
@@ -69,27 +70,11 @@ fn measure(extra: &[&str]) {
         .stderr(Stdio::inherit())
         .spawn()
         .unwrap();
-    let (tx, rx) = channel();
-    let out = child.stdout.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(out).lines().map_while(Result::ok) {
-            if tx.send((Instant::now(), line)).is_err() {
-                break;
-            }
-        }
-    });
-    let wait_done = |n: usize| -> Instant {
-        let mut seen = Vec::new();
-        loop {
-            let (t, l) = rx
-                .recv_timeout(Duration::from_secs(60))
-                .expect("watch output");
-            seen.push(l.clone());
-            if l.starts_with(&format!("== done {n} ")) {
-                assert!(l.contains(" ok "), "{}", seen.join("\n"));
-                return t;
-            }
-        }
+    let mut out = lines::Lines::read(child.stdout.take().unwrap());
+    let mut wait_done = |n: usize| -> Instant {
+        let (t, l) = out.wait_timed(&format!("== done {n} "), Duration::from_secs(60));
+        assert!(l.contains(" ok "), "{}", out.seen.join("\n"));
+        t
     };
     let t_first = Instant::now();
     wait_done(1);

@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+pub mod lines;
+
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -109,4 +111,46 @@ pub fn finish(mut child: Child, what: &str, bound: Duration) -> Output {
 /// `fitup ARGS` in `dir`, killed (failing the test) after `bound`.
 pub fn run_bounded(dir: &Path, args: &[&str], bound: Duration) -> Output {
     finish(spawn(dir, args), &args.join(" "), bound)
+}
+
+/// `fitup watch SCRIPT EXTRA…` in `dir`: the process (killed when dropped) and its
+/// stdout line by line (stderr is discarded).
+pub struct Watch {
+    /// The `fitup watch` process.
+    pub process: lines::Killed,
+    /// The watch's stdout.
+    pub out: lines::Lines,
+}
+
+impl Watch {
+    /// Starts the watch with no input.
+    pub fn start(dir: &Path, script: &str, extra: &[&str]) -> Watch {
+        let mut child = fitup()
+            .current_dir(dir)
+            .arg("watch")
+            .arg(script)
+            .args(extra)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let out = lines::Lines::read(child.stdout.take().unwrap());
+        Watch {
+            process: lines::Killed(child),
+            out,
+        }
+    }
+}
+
+/// Copies the micro-robot wheel (seed 003: `models/wheel.yaml` and its three meshes)
+/// into the project `p`.
+pub fn copy_wheel(p: &Path) {
+    let root = repo();
+    std::fs::create_dir_all(p.join("models/meshes")).unwrap();
+    std::fs::copy(root.join("models/wheel.yaml"), p.join("models/wheel.yaml")).unwrap();
+    for m in ["axis", "gear", "cup"] {
+        let f = format!("models/meshes/wheel_{m}.stl");
+        std::fs::copy(root.join(&f), p.join(&f)).unwrap();
+    }
 }
