@@ -8,7 +8,7 @@ use fitup::kinematics::JointKind;
 use fitup::manipulator::client::{Client, ClientOptions, ManipulatorError};
 use fitup::manipulator::message::{msg_type, Body, ByteOrder, Packet};
 use fitup::manipulator::RefusalCode;
-use fitup::skills::{Command as SkillCommand, Plan, PlanStep};
+use fitup::skills::{ControllerCommand, Plan, PlanStep};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::process::{Child, Stdio};
@@ -371,8 +371,8 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
             }
             .into(),
             commands: vec![
-                SkillCommand::Trajectory(pts),
-                SkillCommand::Tool {
+                ControllerCommand::Trajectory(pts),
+                ControllerCommand::Tool {
                     action: "set_output".into(),
                     index: 1,
                     value: 1.0,

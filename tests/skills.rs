@@ -10,7 +10,7 @@ use fitup::math::{Point3, Transform, Vec3};
 use fitup::planning::{EdgeResolution, PlannedPath};
 use fitup::sequence::{Grasp, Operation, Task};
 use fitup::skills::{
-    generate, Action, Event, GeneratorOptions, ManagerOptions, PartState, Plan, SegmentHit,
+    generate, Action, GeneratorOptions, ManagerEvent, ManagerOptions, PartState, Plan, SegmentHit,
     SkillManager, Template,
 };
 use std::path::Path;
@@ -272,14 +272,14 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
     let states: Vec<&str> = events
         .iter()
         .filter_map(|e| match e {
-            Event::Finished { state, .. } => Some(state.as_str()),
+            ManagerEvent::Finished { state, .. } => Some(state.as_str()),
             _ => None,
         })
         .collect();
     assert_eq!(states.len(), skills.len());
     assert_eq!(*states.last().unwrap(), "Assembled");
     assert!(states.contains(&"Grasped") && states.contains(&"Adjusted"));
-    assert_eq!(events.last(), Some(&Event::Done));
+    assert_eq!(events.last(), Some(&ManagerEvent::Done));
     // The arm holds the gear at its seat: FK of the controller's joints.
     let q = sim.joints();
     let at = robot.tcp_pose(&q).unwrap();
@@ -312,7 +312,7 @@ fn a_pending_skill_can_be_edited_and_a_finished_one_cannot() {
     let (plan, sim, n) = chain(50.0);
     // Edit the last skill (a Release): open wider.
     let mut last = plan.steps[n - 1].clone();
-    last.commands = vec![fitup::skills::Command::Tool {
+    last.commands = vec![fitup::skills::ControllerCommand::Tool {
         action: "release".into(),
         index: 0,
         value: 0.05,
@@ -325,7 +325,7 @@ fn a_pending_skill_can_be_edited_and_a_finished_one_cannot() {
     let mut edited_finished = false;
     manager
         .run(&mut |e| {
-            if let Event::Finished { skill: 0, .. } = e {
+            if let ManagerEvent::Finished { skill: 0, .. } = e {
                 if !edited_finished {
                     // Skill 0 is done: an edit of it is refused at the next dispatch.
                     h2.edit(
@@ -346,9 +346,11 @@ fn a_pending_skill_can_be_edited_and_a_finished_one_cannot() {
             events.push(e.clone());
         })
         .unwrap();
-    assert!(events.contains(&Event::Edited(n - 1)), "{events:?}");
+    assert!(events.contains(&ManagerEvent::Edited(n - 1)), "{events:?}");
     assert!(
-        events.iter().any(|e| matches!(e, Event::EditRefused(0, _))),
+        events
+            .iter()
+            .any(|e| matches!(e, ManagerEvent::EditRefused(0, _))),
         "{events:?}"
     );
     assert!((sim.gripper() - 0.05).abs() < 1e-6, "{}", sim.gripper());
@@ -372,7 +374,7 @@ fn a_skill_that_times_out_stops_the_run_with_the_reason() {
     let failed = events
         .iter()
         .find_map(|e| match e {
-            Event::Failed(i, why) => Some((*i, why.clone())),
+            ManagerEvent::Failed(i, why) => Some((*i, why.clone())),
             _ => None,
         })
         .unwrap();

@@ -4,7 +4,7 @@
 use super::out::{errln, outln};
 use super::Exit;
 use crate::manipulator::simulator::{Simulator, SimulatorOptions};
-use crate::skills::{Event, ManagerOptions, SkillManager};
+use crate::skills::{ManagerEvent, ManagerOptions, SkillManager};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -211,7 +211,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
     let mut manager = SkillManager::new(plan, options);
     let handle = manager.handle();
     let mut log_failed = false;
-    let mut record = move |e: &Event| {
+    let mut record = move |e: &ManagerEvent| {
         if let Some(db) = db.as_mut() {
             if let Err(err) = crate::skills::log_event(db, None, &label, &logged_plan, e) {
                 if !log_failed {
@@ -228,7 +228,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         let runner = std::thread::spawn(move || {
             let r = manager.run(&mut |e| {
                 record(e);
-                let _ = tx.send(super::skills_tui::Msg::Event(e.clone()));
+                let _ = tx.send(super::skills_tui::Msg::Manager(e.clone()));
             });
             let _ = tx.send(super::skills_tui::Msg::End(
                 r.as_ref().err().map(|e| e.to_string()),
@@ -242,7 +242,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         }
         runner
             .join()
-            .unwrap_or(Err(crate::skills::RunError::Aborted))
+            .unwrap_or(Err(crate::skills::ManagerError::Aborted))
     } else {
         // Commands from standard input; the thread ends with the process.
         std::thread::spawn(move || {
@@ -259,7 +259,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
                     "" => {}
                     _ => match l
                         .strip_prefix("manual ")
-                        .and_then(crate::skills::Command::parse_manual)
+                        .and_then(crate::skills::ControllerCommand::parse_manual)
                     {
                         Some(c) => handle.manual(c),
                         None => errln!(
@@ -288,6 +288,6 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
     }
 }
 
-fn print_event(e: &Event) {
+fn print_event(e: &ManagerEvent) {
     outln!("{}", e.describe());
 }

@@ -4,7 +4,7 @@
 //! once the run ended. Drawn with crossterm on the alternate screen, raw mode.
 
 use crate::kinematics::JointKind;
-use crate::skills::{Command, Event, ManagerHandle, Plan};
+use crate::skills::{ControllerCommand, ManagerEvent, ManagerHandle, Plan};
 use crossterm::event::{self, Event as TermEvent, KeyCode, KeyEventKind, KeyModifiers};
 use crossterm::{cursor, execute, queue, style::Print, terminal};
 use std::collections::{BTreeMap, VecDeque};
@@ -15,7 +15,7 @@ use std::time::Duration;
 /// What the manager's thread sends the UI.
 pub(super) enum Msg {
     /// A manager event.
-    Event(Event),
+    Manager(ManagerEvent),
     /// The run ended: `None` when every skill finished, else the reason.
     End(Option<String>),
 }
@@ -49,17 +49,21 @@ impl Ui<'_> {
 
     fn apply(&mut self, m: Msg) {
         match m {
-            Msg::Event(e) => {
+            Msg::Manager(e) => {
                 match &e {
-                    Event::Started(i, _) => self.set(*i, Status::Running),
-                    Event::Finished { skill, part, state } => {
+                    ManagerEvent::Started(i, _) => self.set(*i, Status::Running),
+                    ManagerEvent::Finished { skill, part, state } => {
                         self.set(*skill, Status::Finished);
                         self.parts.insert(part.clone(), state.clone());
                     }
-                    Event::Failed(i, _) => self.set(*i, Status::Failed),
-                    Event::Paused => self.state = "paused".into(),
-                    Event::Resumed | Event::Reconnected => self.state = "running".into(),
-                    Event::Interrupted(..) => self.state = "interrupted, reconnecting".into(),
+                    ManagerEvent::Failed(i, _) => self.set(*i, Status::Failed),
+                    ManagerEvent::Paused => self.state = "paused".into(),
+                    ManagerEvent::Resumed | ManagerEvent::Reconnected => {
+                        self.state = "running".into()
+                    }
+                    ManagerEvent::Interrupted(..) => {
+                        self.state = "interrupted, reconnecting".into()
+                    }
                     _ => {}
                 }
                 self.note(e.describe());
@@ -209,7 +213,7 @@ pub(super) fn run(
                     KeyCode::Esc => ui.input = None,
                     KeyCode::Enter => {
                         let t = ui.input.take().unwrap_or_default();
-                        match Command::parse_manual(t.trim()) {
+                        match ControllerCommand::parse_manual(t.trim()) {
                             Some(c) => {
                                 handle.manual(c);
                                 ui.note(format!("queued manual {}", t.trim()));

@@ -14,7 +14,7 @@ use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
     read_urdf, resolve_mesh, robot_by_name, run_program, DhConvention, DhRow, IkOptions,
     IkSolution, Joint, JointKind, JointLimits, KinematicTree, KinematicsError, Link, MotionOptions,
-    Program, Robot, RunError, Trajectory,
+    Program, ProgramRunError, Robot, Trajectory,
 };
 use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{Mesh, MeshCache};
@@ -67,7 +67,7 @@ pub enum RobotError {
         robot: String,
         /// The failing command and cause (boxed: keeps the error small).
         #[source]
-        source: Box<RunError>,
+        source: Box<ProgramRunError>,
     },
 }
 

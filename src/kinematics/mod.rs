@@ -40,7 +40,8 @@ pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions}
 pub use opw::{Branch, Branches, NotOpw, OpwSolver};
 pub use opw_params::OpwParameters;
 pub use program::{
-    parse_program, read_program, run_program, Command, Program, ProgramError, ProgramLine, RunError,
+    parse_program, read_program, run_program, Instruction, Program, ProgramError, ProgramLine,
+    ProgramRunError,
 };
 pub use robot::Robot;
 pub use trajectory::{Trajectory, TrajectorySample};

@@ -23,7 +23,7 @@ use std::path::Path;
 
 /// One command of a program (values as written: mm and degrees).
 #[derive(Debug, Clone, PartialEq)]
-pub enum Command {
+pub enum Instruction {
     /// Straight line to the world pose `x y z a b c` (mm, deg).
     Line([f64; 6]),
     /// Arc through the via pose to the end pose (mm, deg).
@@ -53,7 +53,7 @@ pub struct ProgramLine {
     /// 1-based line number.
     pub line: usize,
     /// The command.
-    pub command: Command,
+    pub command: Instruction,
 }
 
 /// A parsed program.
@@ -82,7 +82,7 @@ pub struct ProgramError {
 /// A motion error while running a program, with the command's place.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{file}:{line}: {source}")]
-pub struct RunError {
+pub struct ProgramRunError {
     /// Source name.
     pub file: String,
     /// 1-based line of the failing command.
@@ -156,10 +156,10 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
             }
         };
         let command = match keyword.to_ascii_lowercase().as_str() {
-            "line" => Command::Line(six(&numbers(Some(6))?)),
+            "line" => Instruction::Line(six(&numbers(Some(6))?)),
             "circle" => {
                 let v = numbers(Some(12))?;
-                Command::Circle {
+                Instruction::Circle {
                     via: six(&v[..6]),
                     end: six(&v[6..]),
                 }
@@ -169,12 +169,12 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
                 if v.is_empty() {
                     return Err(err(kcol, "Joint needs one value per joint".into()));
                 }
-                Command::Joint(v)
+                Instruction::Joint(v)
             }
-            "speed" => Command::Speed(positive(numbers(Some(1))?[0], "Speed")?),
-            "jointspeed" => Command::JointSpeed(positive(numbers(Some(1))?[0], "JointSpeed")?),
-            "interval" => Command::Interval(positive(numbers(Some(1))?[0], "Interval")?),
-            "tool" => Command::Tool(six(&numbers(Some(6))?)),
+            "speed" => Instruction::Speed(positive(numbers(Some(1))?[0], "Speed")?),
+            "jointspeed" => Instruction::JointSpeed(positive(numbers(Some(1))?[0], "JointSpeed")?),
+            "interval" => Instruction::Interval(positive(numbers(Some(1))?[0], "Interval")?),
+            "tool" => Instruction::Tool(six(&numbers(Some(6))?)),
             "angles" => {
                 let Some(&(col, name)) = args.first() else {
                     return Err(err(kcol, "Angles needs xyz or zyx".into()));
@@ -182,7 +182,7 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
                 if args.len() > 1 {
                     return Err(err(args[1].0, "Angles takes one name".into()));
                 }
-                Command::Angles(
+                Instruction::Angles(
                     AngleConvention::parse(name).ok_or_else(|| err(col, format!("unknown angle convention '{name}' (xyz or zyx)")))?,
                 )
             }
@@ -231,40 +231,40 @@ pub fn run_program(
     robot: &Robot,
     start: &[f64],
     options: &MotionOptions,
-) -> Result<Trajectory, RunError> {
+) -> Result<Trajectory, ProgramRunError> {
     let mut robot = robot.clone();
     let mut opts = options.clone();
     let mut conv = AngleConvention::default();
     let mut q = start.to_vec();
     let mut traj = Trajectory::new(robot.joint_kinds());
     for pl in &program.lines {
-        let fail = |source: MotionError| RunError {
+        let fail = |source: MotionError| ProgramRunError {
             file: program.file.clone(),
             line: pl.line,
             source,
         };
         let piece = match &pl.command {
-            Command::Speed(v) => {
+            Instruction::Speed(v) => {
                 opts.linear_speed = *v;
                 continue;
             }
-            Command::JointSpeed(v) => {
+            Instruction::JointSpeed(v) => {
                 opts.joint_speed = v.to_radians();
                 continue;
             }
-            Command::Interval(v) => {
+            Instruction::Interval(v) => {
                 opts.sample_interval = *v;
                 continue;
             }
-            Command::Angles(c) => {
+            Instruction::Angles(c) => {
                 conv = *c;
                 continue;
             }
-            Command::Tool(t) => {
+            Instruction::Tool(t) => {
                 robot.set_tool(pose(t, conv));
                 continue;
             }
-            Command::Joint(values) => {
+            Instruction::Joint(values) => {
                 if values.len() != robot.dof() {
                     return Err(fail(MotionError::Input(
                         super::KinematicsError::JointCount {
@@ -286,8 +286,8 @@ pub fn run_program(
                     .collect();
                 move_joint(&robot, &q, &target, &opts)
             }
-            Command::Line(p) => move_line(&robot, &q, &pose(p, conv), &opts),
-            Command::Circle { via, end } => {
+            Instruction::Line(p) => move_line(&robot, &q, &pose(p, conv), &opts),
+            Instruction::Circle { via, end } => {
                 move_circle(&robot, &q, &pose(via, conv), &pose(end, conv), &opts)
             }
         }
@@ -298,7 +298,7 @@ pub fn run_program(
         traj.append(piece);
     }
     if traj.samples.is_empty() {
-        let tcp = robot.tcp_pose(&q).map_err(|e| RunError {
+        let tcp = robot.tcp_pose(&q).map_err(|e| ProgramRunError {
             file: program.file.clone(),
             line: 0,
             source: e.into(),
@@ -326,15 +326,15 @@ mod tests {
             p.lines[0],
             ProgramLine {
                 line: 2,
-                command: Command::Speed(200.0)
+                command: Instruction::Speed(200.0)
             }
         );
         assert_eq!(
             p.lines[5].command,
-            Command::Joint(vec![0.0, 0.0, 0.0, 0.0, 45.0, 0.0])
+            Instruction::Joint(vec![0.0, 0.0, 0.0, 0.0, 45.0, 0.0])
         );
         assert_eq!(p.lines[6].line, 9);
-        assert!(matches!(p.lines[7].command, Command::Circle { .. }));
+        assert!(matches!(p.lines[7].command, Instruction::Circle { .. }));
     }
 
     #[test]
@@ -432,11 +432,11 @@ mod fuzz {
                 Ok(p) => {
                     for l in &p.lines {
                         let nums: Vec<f64> = match &l.command {
-                            Command::Line(v) | Command::Tool(v) => v.to_vec(),
-                            Command::Circle { via, end } => via.iter().chain(end).copied().collect(),
-                            Command::Joint(v) => v.clone(),
-                            Command::Speed(v) | Command::JointSpeed(v) | Command::Interval(v) => vec![*v],
-                            Command::Angles(_) => vec![],
+                            Instruction::Line(v) | Instruction::Tool(v) => v.to_vec(),
+                            Instruction::Circle { via, end } => via.iter().chain(end).copied().collect(),
+                            Instruction::Joint(v) => v.clone(),
+                            Instruction::Speed(v) | Instruction::JointSpeed(v) | Instruction::Interval(v) => vec![*v],
+                            Instruction::Angles(_) => vec![],
                         };
                         proptest::prop_assert!(nums.iter().all(|v| v.is_finite() && v.abs() <= 1e9));
                     }

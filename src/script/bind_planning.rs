@@ -547,7 +547,7 @@ fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> S
     let doc_name = crate::viewer::document_name(&doc);
     let n = crate::workspace::follow(&mut doc, &name, &p.0, step, |k, n, t| {
         if view.is_live() {
-            view.send(crate::viewer::Event::Poses {
+            view.send(crate::viewer::ViewEvent::Poses {
                 doc: doc_name.clone(),
                 poses: vec![(name.clone(), *t)],
                 advance: true,

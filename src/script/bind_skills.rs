@@ -20,8 +20,8 @@ use crate::manipulator::client::resolve;
 use crate::manipulator::simulator::{Simulator, SimulatorOptions};
 use crate::math::AngleConvention;
 use crate::skills::{
-    plan_chain, Chain, ChainOptions, Command, Condition, Event, ManagerHandle, ManagerOptions,
-    PlanStep, RunError, SkillManager, Template,
+    plan_chain, Chain, ChainOptions, Condition, ControllerCommand, ManagerError, ManagerEvent,
+    ManagerHandle, ManagerOptions, PlanStep, SkillManager, Template,
 };
 use rhai::{Array, Dynamic, FnPtr, Map, NativeCallContext};
 use std::collections::BTreeMap;
@@ -277,7 +277,7 @@ fn manager(ctx: &Arc<Context>, m: &Map) -> ScriptResult<ManagerObj> {
     })))
 }
 
-fn event_map(e: &Event, plan: &crate::skills::Plan) -> Dynamic {
+fn event_map(e: &ManagerEvent, plan: &crate::skills::Plan) -> Dynamic {
     let (skill, name, detail) = e.log_fields();
     let mut m = Map::new();
     m.insert("event".into(), name.into());
@@ -291,7 +291,7 @@ fn event_map(e: &Event, plan: &crate::skills::Plan) -> Dynamic {
             .and_then(|i| plan.steps.get(i))
             .map_or(Dynamic::UNIT, |s| s.part.clone().into()),
     );
-    if let Event::Finished { state, .. } = e {
+    if let ManagerEvent::Finished { state, .. } = e {
         m.insert("state".into(), state.clone().into());
     }
     m.insert("detail".into(), detail.into());
@@ -343,7 +343,7 @@ fn run(
                     }
                 }
             }
-            if let Event::Finished { part, state, .. } = e {
+            if let ManagerEvent::Finished { part, state, .. } = e {
                 if let Ok(mut p) = inner.parts.lock() {
                     p.insert(part.clone(), state.clone());
                 }
@@ -375,7 +375,7 @@ fn run(
         return err("cancelled");
     }
     match result {
-        Ok(()) | Err(RunError::Aborted) => Ok(events),
+        Ok(()) | Err(ManagerError::Aborted) => Ok(events),
         Err(e) => err(e.to_string()),
     }
 }
@@ -402,7 +402,7 @@ fn plan_step(m: &ManagerObj, plan: &SkillsHandle, id: i64, changes: &Map) -> Scr
                 let text = c
                     .into_string()
                     .map_err(|t| fail(format!("edit: a command must be a string, not {t}")))?;
-                Command::parse_manual(&text)
+                ControllerCommand::parse_manual(&text)
                     .ok_or_else(|| fail(format!("edit: bad command `{text}` ({MANUAL_HELP})")))
             })
             .collect::<ScriptResult<_>>()?;
@@ -508,7 +508,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "SkillManager.manual(command: string)",
         "Queues a manual tool command, run between skills or while paused: `grasp MM`, `release MM`, `touch MM`, `output I 0|1`.",
         |m: ManagerObj, cmd: &str| -> ScriptResult<()> {
-            let c = Command::parse_manual(cmd)
+            let c = ControllerCommand::parse_manual(cmd)
                 .ok_or_else(|| fail(format!("manual: bad command `{cmd}` ({MANUAL_HELP})")))?;
             m.0.handle.manual(c);
             Ok(())

@@ -9,7 +9,7 @@
 //! timeout stops the run with the reason. Pausing stops the arm at once; resuming
 //! continues the running skill from where it stopped.
 
-use super::program::{Command, Plan, PlanStep};
+use super::program::{ControllerCommand, Plan, PlanStep};
 use crate::manipulator::client::{resolve, Client, ClientOptions, ManipulatorError};
 use std::collections::VecDeque;
 use std::net::SocketAddr;
@@ -34,7 +34,7 @@ pub enum SkillStatus {
 
 /// What the manager reports while it runs.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Event {
+pub enum ManagerEvent {
     /// Connected to the controller.
     Connected(SocketAddr),
     /// A skill started (id, description).
@@ -104,7 +104,7 @@ impl Default for ManagerOptions {
 struct Control {
     paused: AtomicBool,
     abort: AtomicBool,
-    manual: Mutex<VecDeque<Command>>,
+    manual: Mutex<VecDeque<ControllerCommand>>,
     edits: Mutex<VecDeque<(usize, PlanStep)>>,
     /// The controller's joints last seen (rad / mm).
     joints: Mutex<Vec<f64>>,
@@ -153,11 +153,11 @@ impl ManagerHandle {
         self.0.abort.store(true, Ordering::SeqCst);
     }
     /// Queues a manual command, run between skills or while paused.
-    pub fn manual(&self, command: Command) {
+    pub fn manual(&self, command: ControllerCommand) {
         lock(&self.0.manual).push_back(command);
     }
     /// Replaces a pending skill's step (applied before the next dispatch; refused
-    /// with [`Event::EditRefused`] unless the skill is still pending).
+    /// with [`ManagerEvent::EditRefused`] unless the skill is still pending).
     pub fn edit(&self, skill: usize, step: PlanStep) {
         lock(&self.0.edits).push_back((skill, step));
     }
@@ -169,7 +169,7 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 /// How a run ended with an error.
 #[derive(Debug, thiserror::Error)]
-pub enum RunError {
+pub enum ManagerError {
     /// The user aborted.
     #[error("aborted by the user")]
     Aborted,
@@ -257,17 +257,17 @@ impl SkillManager {
         }
     }
 
-    /// Runs every pending skill in order, reporting [`Event`]s.
+    /// Runs every pending skill in order, reporting [`ManagerEvent`]s.
     ///
     /// # Errors
-    /// [`RunError`]: aborted, a skill that failed (refused, controller error,
+    /// [`ManagerError`]: aborted, a skill that failed (refused, controller error,
     /// timeout), a controller that could not be reached.
-    pub fn run(&mut self, on_event: &mut dyn FnMut(&Event)) -> Result<(), RunError> {
+    pub fn run(&mut self, on_event: &mut dyn FnMut(&ManagerEvent)) -> Result<(), ManagerError> {
         let mut client = self
             .connect(Instant::now() + self.options.client.connect_timeout)
-            .map_err(RunError::Connection)?;
-        on_event(&Event::Connected(
-            self.addresses().map_err(RunError::Connection)?.0,
+            .map_err(ManagerError::Connection)?;
+        on_event(&ManagerEvent::Connected(
+            self.addresses().map_err(ManagerError::Connection)?.0,
         ));
         let mut i = 0;
         // Commands of the running skill already done (not repeated on resume).
@@ -278,8 +278,8 @@ impl SkillManager {
                 return self.fail(i, e, on_event);
             }
             if self.control.abort.load(Ordering::SeqCst) {
-                on_event(&Event::Aborted);
-                return Err(RunError::Aborted);
+                on_event(&ManagerEvent::Aborted);
+                return Err(ManagerError::Aborted);
             }
             if self.control.paused.load(Ordering::SeqCst) {
                 std::thread::sleep(Duration::from_millis(20));
@@ -290,7 +290,10 @@ impl SkillManager {
                 continue;
             }
             if self.status[i] == SkillStatus::Pending {
-                on_event(&Event::Started(i, self.plan.steps[i].description.clone()));
+                on_event(&ManagerEvent::Started(
+                    i,
+                    self.plan.steps[i].description.clone(),
+                ));
                 done_commands = 0;
             }
             self.status[i] = SkillStatus::Running;
@@ -298,7 +301,7 @@ impl SkillManager {
                 Ok(Outcome::Done) => {
                     self.status[i] = SkillStatus::Finished;
                     let s = &self.plan.steps[i];
-                    on_event(&Event::Finished {
+                    on_event(&ManagerEvent::Finished {
                         skill: i,
                         part: s.part.clone(),
                         state: s.end_state.clone(),
@@ -306,7 +309,7 @@ impl SkillManager {
                     i += 1;
                 }
                 Ok(Outcome::Paused) => {
-                    on_event(&Event::Paused);
+                    on_event(&ManagerEvent::Paused);
                     while self.control.paused.load(Ordering::SeqCst)
                         && !self.control.abort.load(Ordering::SeqCst)
                     {
@@ -316,30 +319,30 @@ impl SkillManager {
                         std::thread::sleep(Duration::from_millis(20));
                     }
                     if !self.control.abort.load(Ordering::SeqCst) {
-                        on_event(&Event::Resumed);
+                        on_event(&ManagerEvent::Resumed);
                     }
                 }
                 Ok(Outcome::Aborted) => {
-                    on_event(&Event::Aborted);
-                    return Err(RunError::Aborted);
+                    on_event(&ManagerEvent::Aborted);
+                    return Err(ManagerError::Aborted);
                 }
                 Err(ManipulatorError::Disconnected(why)) => {
                     self.status[i] = SkillStatus::Interrupted;
-                    on_event(&Event::Interrupted(i, why));
+                    on_event(&ManagerEvent::Interrupted(i, why));
                     drop(client);
                     client = self
                         .connect(Instant::now() + self.options.reconnect_timeout)
                         .map_err(|e| {
                             self.status[i] = SkillStatus::Failed(e.to_string());
-                            on_event(&Event::Failed(i, e.to_string()));
-                            RunError::Connection(e)
+                            on_event(&ManagerEvent::Failed(i, e.to_string()));
+                            ManagerError::Connection(e)
                         })?;
-                    on_event(&Event::Reconnected);
+                    on_event(&ManagerEvent::Reconnected);
                 }
                 Err(e) => return self.fail(i, e, on_event),
             }
         }
-        on_event(&Event::Done);
+        on_event(&ManagerEvent::Done);
         Ok(())
     }
 
@@ -347,26 +350,26 @@ impl SkillManager {
         &mut self,
         i: usize,
         e: ManipulatorError,
-        on_event: &mut dyn FnMut(&Event),
-    ) -> Result<(), RunError> {
+        on_event: &mut dyn FnMut(&ManagerEvent),
+    ) -> Result<(), ManagerError> {
         let reason = e.to_string();
         if i < self.status.len() {
             self.status[i] = SkillStatus::Failed(reason.clone());
         }
-        on_event(&Event::Failed(i, reason.clone()));
-        Err(RunError::Skill(i, reason))
+        on_event(&ManagerEvent::Failed(i, reason.clone()));
+        Err(ManagerError::Skill(i, reason))
     }
 
-    fn apply_edits(&mut self, on_event: &mut dyn FnMut(&Event)) {
+    fn apply_edits(&mut self, on_event: &mut dyn FnMut(&ManagerEvent)) {
         let edits: Vec<_> = lock(&self.control.edits).drain(..).collect();
         for (id, step) in edits {
             match self.status.get(id) {
                 Some(SkillStatus::Pending) => {
                     self.plan.steps[id] = step;
-                    on_event(&Event::Edited(id));
+                    on_event(&ManagerEvent::Edited(id));
                 }
-                Some(s) => on_event(&Event::EditRefused(id, format!("{s:?}"))),
-                None => on_event(&Event::EditRefused(id, "no such skill".into())),
+                Some(s) => on_event(&ManagerEvent::EditRefused(id, format!("{s:?}"))),
+                None => on_event(&ManagerEvent::EditRefused(id, "no such skill".into())),
             }
         }
     }
@@ -374,7 +377,7 @@ impl SkillManager {
     fn manual_commands(
         &mut self,
         client: &mut Client,
-        on_event: &mut dyn FnMut(&Event),
+        on_event: &mut dyn FnMut(&ManagerEvent),
     ) -> Result<(), ManipulatorError> {
         loop {
             let Some(c) = lock(&self.control.manual).pop_front() else {
@@ -382,7 +385,7 @@ impl SkillManager {
             };
             let text = c.describe();
             self.run_command(client, &c)?;
-            on_event(&Event::Manual(text));
+            on_event(&ManagerEvent::Manual(text));
         }
     }
 
@@ -407,22 +410,28 @@ impl SkillManager {
         Ok(Outcome::Done)
     }
 
-    fn run_command(&self, client: &mut Client, c: &Command) -> Result<Outcome, ManipulatorError> {
+    fn run_command(
+        &self,
+        client: &mut Client,
+        c: &ControllerCommand,
+    ) -> Result<Outcome, ManipulatorError> {
         match c {
-            Command::Tool {
+            ControllerCommand::Tool {
                 action,
                 index,
                 value,
             } => {
-                let a = Command::tool_action(action).ok_or_else(|| ManipulatorError::Refused {
-                    what: action.clone(),
-                    code: None,
-                    reason: "unknown tool action".into(),
+                let a = ControllerCommand::tool_action(action).ok_or_else(|| {
+                    ManipulatorError::Refused {
+                        what: action.clone(),
+                        code: None,
+                        reason: "unknown tool action".into(),
+                    }
                 })?;
                 client.tool(a, *index, *value as f32)?;
                 Ok(Outcome::Done)
             }
-            Command::Trajectory(points) => {
+            ControllerCommand::Trajectory(points) => {
                 let Some(last) = points.last() else {
                     return Ok(Outcome::Done);
                 };
@@ -473,45 +482,47 @@ impl SkillManager {
     }
 }
 
-impl Event {
+impl ManagerEvent {
     /// The event as one line for people: `running #3 Move_Table gear 200 mm`,
     /// `finished #3: gear Grasped`, `paused`, `done`…
     pub fn describe(&self) -> String {
         match self {
-            Event::Connected(a) => format!("connected {a}"),
-            Event::Started(_, d) => format!("running {d}"),
-            Event::Finished { skill, part, state } => format!("finished #{skill}: {part} {state}"),
-            Event::Interrupted(i, why) => format!("interrupted #{i}: {why}"),
-            Event::Reconnected => "reconnected".into(),
-            Event::Paused => "paused".into(),
-            Event::Resumed => "resumed".into(),
-            Event::Edited(i) => format!("edited #{i}"),
-            Event::EditRefused(i, why) => format!("edit of #{i} refused: {why}"),
-            Event::Manual(c) => format!("manual {c}"),
-            Event::Failed(i, why) => format!("failed #{i}: {why}"),
-            Event::Aborted => "aborted".into(),
-            Event::Done => "done".into(),
+            ManagerEvent::Connected(a) => format!("connected {a}"),
+            ManagerEvent::Started(_, d) => format!("running {d}"),
+            ManagerEvent::Finished { skill, part, state } => {
+                format!("finished #{skill}: {part} {state}")
+            }
+            ManagerEvent::Interrupted(i, why) => format!("interrupted #{i}: {why}"),
+            ManagerEvent::Reconnected => "reconnected".into(),
+            ManagerEvent::Paused => "paused".into(),
+            ManagerEvent::Resumed => "resumed".into(),
+            ManagerEvent::Edited(i) => format!("edited #{i}"),
+            ManagerEvent::EditRefused(i, why) => format!("edit of #{i} refused: {why}"),
+            ManagerEvent::Manual(c) => format!("manual {c}"),
+            ManagerEvent::Failed(i, why) => format!("failed #{i}: {why}"),
+            ManagerEvent::Aborted => "aborted".into(),
+            ManagerEvent::Done => "done".into(),
         }
     }
 
     /// The event as a log row: `(skill, event name, detail)`.
     pub fn log_fields(&self) -> (Option<usize>, &'static str, String) {
         match self {
-            Event::Connected(a) => (None, "connected", a.to_string()),
-            Event::Started(i, d) => (Some(*i), "started", d.clone()),
-            Event::Finished { skill, part, state } => {
+            ManagerEvent::Connected(a) => (None, "connected", a.to_string()),
+            ManagerEvent::Started(i, d) => (Some(*i), "started", d.clone()),
+            ManagerEvent::Finished { skill, part, state } => {
                 (Some(*skill), "finished", format!("{part} {state}"))
             }
-            Event::Interrupted(i, why) => (Some(*i), "interrupted", why.clone()),
-            Event::Reconnected => (None, "reconnected", String::new()),
-            Event::Paused => (None, "paused", String::new()),
-            Event::Resumed => (None, "resumed", String::new()),
-            Event::Edited(i) => (Some(*i), "edited", String::new()),
-            Event::EditRefused(i, why) => (Some(*i), "edit_refused", why.clone()),
-            Event::Manual(c) => (None, "manual", c.clone()),
-            Event::Failed(i, why) => (Some(*i), "failed", why.clone()),
-            Event::Aborted => (None, "aborted", String::new()),
-            Event::Done => (None, "done", String::new()),
+            ManagerEvent::Interrupted(i, why) => (Some(*i), "interrupted", why.clone()),
+            ManagerEvent::Reconnected => (None, "reconnected", String::new()),
+            ManagerEvent::Paused => (None, "paused", String::new()),
+            ManagerEvent::Resumed => (None, "resumed", String::new()),
+            ManagerEvent::Edited(i) => (Some(*i), "edited", String::new()),
+            ManagerEvent::EditRefused(i, why) => (Some(*i), "edit_refused", why.clone()),
+            ManagerEvent::Manual(c) => (None, "manual", c.clone()),
+            ManagerEvent::Failed(i, why) => (Some(*i), "failed", why.clone()),
+            ManagerEvent::Aborted => (None, "aborted", String::new()),
+            ManagerEvent::Done => (None, "done", String::new()),
         }
     }
 }
@@ -526,7 +537,7 @@ pub fn log_event(
     run_id: Option<i64>,
     plan_label: &str,
     plan: &Plan,
-    event: &Event,
+    event: &ManagerEvent,
 ) -> Result<i64, crate::db::DbError> {
     let (skill, name, detail) = event.log_fields();
     let part = skill

@@ -26,9 +26,9 @@ pub use generator::{
     generate, segment_check_fn, GeneratorOptions, SegmentCheck, SegmentHit, SkillError,
 };
 pub use manager::{
-    log_event, Event, ManagerHandle, ManagerOptions, RunError, SkillManager, SkillStatus,
+    log_event, ManagerError, ManagerEvent, ManagerHandle, ManagerOptions, SkillManager, SkillStatus,
 };
-pub use program::{BindError, Command, Plan, PlanStep};
+pub use program::{BindError, ControllerCommand, Plan, PlanStep};
 pub use template::{default_template, Template, TemplateError, Workflow};
 
 use crate::math::Transform;

@@ -21,7 +21,7 @@ use thiserror::Error;
 /// One thing a controller does.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Command {
+pub enum ControllerCommand {
     /// Joint trajectory: `(joints rad/mm, seconds from the previous point)`; the first
     /// point is where the arm starts.
     Trajectory(Vec<(Vec<f64>, f64)>),
@@ -38,7 +38,7 @@ pub enum Command {
     },
 }
 
-impl Command {
+impl ControllerCommand {
     /// The wire action of a `Tool` command.
     pub fn tool_action(name: &str) -> Option<ToolAction> {
         Some(match name {
@@ -112,7 +112,7 @@ pub struct PlanStep {
     /// The part's state once the skill finished (`Grasped`, …).
     pub end_state: String,
     /// What the controller does.
-    pub commands: Vec<Command>,
+    pub commands: Vec<ControllerCommand>,
 }
 
 /// Skills bound to a robot.
@@ -214,7 +214,7 @@ impl Plan {
                         part: s.part.clone(),
                     })
             };
-            let tool = |action: &str, value: f64| Command::Tool {
+            let tool = |action: &str, value: f64| ControllerCommand::Tool {
                 action: action.into(),
                 index: 0,
                 value,
@@ -239,7 +239,7 @@ impl Plan {
                     let pts = points(&traj, &q, 0.2);
                     q = sol.joints;
                     vec![
-                        Command::Trajectory(pts),
+                        ControllerCommand::Trajectory(pts),
                         tool("grasp", (width / 1000.0).min(1.0)),
                     ]
                 }
@@ -252,7 +252,7 @@ impl Plan {
                     if let Some(last) = traj.last_joints() {
                         q = last.to_vec();
                     }
-                    vec![Command::Trajectory(pts)]
+                    vec![ControllerCommand::Trajectory(pts)]
                 }
             };
             steps.push(PlanStep {
@@ -328,7 +328,7 @@ impl Plan {
             }
             for c in &s.commands {
                 match c {
-                    Command::Trajectory(pts) => {
+                    ControllerCommand::Trajectory(pts) => {
                         for (q, d) in pts {
                             if q.len() != n
                                 || !q.iter().chain([d]).all(|v| v.is_finite())
@@ -341,8 +341,8 @@ impl Plan {
                             }
                         }
                     }
-                    Command::Tool { action, value, .. } => {
-                        if Command::tool_action(action).is_none() || !value.is_finite() {
+                    ControllerCommand::Tool { action, value, .. } => {
+                        if ControllerCommand::tool_action(action).is_none() || !value.is_finite() {
                             return Err(bad(format!(
                                 "skill #{}: bad tool command `{action}`",
                                 s.skill

@@ -1,6 +1,6 @@
-//! The worker that turns [`Event`]s into Rerun log calls, on its own thread.
+//! The worker that turns [`ViewEvent`]s into Rerun log calls, on its own thread.
 
-use super::{Event, PairView, PartView, RobotSample};
+use super::{PairView, PartView, RobotSample, ViewEvent};
 use crate::math::Transform;
 use crate::mesh::Mesh;
 use rerun::{EntityPath, EntityPathPart, RecordingStream};
@@ -39,7 +39,7 @@ struct Worker {
 
 /// Runs the worker until every sender is gone. `first` names the first recording.
 pub(crate) fn run(
-    rx: Receiver<Event>,
+    rx: Receiver<ViewEvent>,
     sinks: SinkFactory,
     first: Option<String>,
     report: Box<dyn Fn(&str) + Send>,
@@ -130,12 +130,12 @@ impl Worker {
         }
     }
 
-    fn handle(&mut self, event: Event) {
-        if let Event::NewRun(name) = &event {
+    fn handle(&mut self, event: ViewEvent) {
+        if let ViewEvent::NewRun(name) = &event {
             self.new_run(name);
             return;
         }
-        if let Event::Flush(done) = event {
+        if let ViewEvent::Flush(done) = event {
             if let Some(rec) = &self.rec {
                 let _ = rec.flush_blocking();
             }
@@ -147,9 +147,9 @@ impl Worker {
             self.new_run("fitup");
         }
         match event {
-            Event::Step(n) => self.set_step(n),
-            Event::Document { doc, parts } => self.document(&doc, &parts),
-            Event::Poses {
+            ViewEvent::Step(n) => self.set_step(n),
+            ViewEvent::Document { doc, parts } => self.document(&doc, &parts),
+            ViewEvent::Poses {
                 doc,
                 poses,
                 advance,
@@ -161,18 +161,18 @@ impl Worker {
                     self.log(path(&[&doc, name]), &transform3d(pose));
                 }
             }
-            Event::Path { name, poses } => self.path(&name, &poses),
-            Event::Trajectory {
+            ViewEvent::Path { name, poses } => self.path(&name, &poses),
+            ViewEvent::Trajectory {
                 doc,
                 robot,
                 samples,
             } => self.trajectory(&doc, &robot, &samples),
-            Event::Interference { doc, pairs } => self.interference(&doc, &pairs),
-            Event::Text(line) => self.log(path(&["log"]), &rerun::TextLog::new(line)),
-            Event::Scalar { name, value } => {
+            ViewEvent::Interference { doc, pairs } => self.interference(&doc, &pairs),
+            ViewEvent::Text(line) => self.log(path(&["log"]), &rerun::TextLog::new(line)),
+            ViewEvent::Scalar { name, value } => {
                 self.log(path(&["plots", &name]), &rerun::Scalars::single(value))
             }
-            Event::NewRun(_) | Event::Flush(_) => {}
+            ViewEvent::NewRun(_) | ViewEvent::Flush(_) => {}
         }
     }
 

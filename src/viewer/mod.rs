@@ -3,7 +3,7 @@
 //! recording.
 //!
 //! A [`Viewer`] is a cheap handle (clones share one session). Every `log_*` call copies
-//! what it needs into an [`Event`] and hands it to the session's worker thread over an
+//! what it needs into a [`ViewEvent`] and hands it to the session's worker thread over an
 //! unbounded channel, so logging never waits on the network, a file or the browser: the
 //! script goes on while the worker converts meshes and sends them. A disabled viewer
 //! ([`Viewer::default`]) drops events at once, so code can log unconditionally.
@@ -112,7 +112,7 @@ pub struct PairView {
 
 /// What the worker is asked to log. Built by the `log_*` methods of [`Viewer`].
 #[derive(Debug)]
-pub enum Event {
+pub enum ViewEvent {
     /// Start a new recording (a new run); the open viewer switches to it.
     NewRun(String),
     /// Set the `step` timeline.
@@ -172,7 +172,7 @@ pub enum Event {
 /// A handle on a viewer session (clones share it). See the [module docs](self).
 #[derive(Clone, Default)]
 pub struct Viewer {
-    tx: Option<Sender<Event>>,
+    tx: Option<Sender<ViewEvent>>,
 }
 
 impl std::fmt::Debug for Viewer {
@@ -197,7 +197,7 @@ pub fn document_name(doc: &Document) -> String {
 impl Viewer {
     /// A handle that sends to `tx` (the worker of a [`Session`] owns the receiver).
     #[cfg(any(feature = "viewer", test))]
-    pub(crate) fn from_sender(tx: Sender<Event>) -> Self {
+    pub(crate) fn from_sender(tx: Sender<ViewEvent>) -> Self {
         Self { tx: Some(tx) }
     }
 
@@ -207,7 +207,7 @@ impl Viewer {
     }
 
     /// Hands an event to the worker; never blocks. A session that ended drops it.
-    pub fn send(&self, event: Event) {
+    pub fn send(&self, event: ViewEvent) {
         if let Some(tx) = &self.tx {
             let _ = tx.send(event);
         }
@@ -215,22 +215,22 @@ impl Viewer {
 
     /// Starts a new recording named `name` (watch mode: one per run).
     pub fn new_run(&self, name: &str) {
-        self.send(Event::NewRun(name.to_string()));
+        self.send(ViewEvent::NewRun(name.to_string()));
     }
 
     /// Sets the `step` timeline to `n`.
     pub fn step(&self, n: i64) {
-        self.send(Event::Step(n));
+        self.send(ViewEvent::Step(n));
     }
 
     /// Logs a line of text.
     pub fn text(&self, line: &str) {
-        self.send(Event::Text(line.to_string()));
+        self.send(ViewEvent::Text(line.to_string()));
     }
 
     /// Adds `value` to the plot `plots/NAME` at the current step.
     pub fn scalar(&self, name: &str, value: f64) {
-        self.send(Event::Scalar {
+        self.send(ViewEvent::Scalar {
             name: name.to_string(),
             value,
         });
@@ -253,7 +253,7 @@ impl Viewer {
                 fixed: c.fixed,
             })
             .collect();
-        self.send(Event::Document {
+        self.send(ViewEvent::Document {
             doc: document_name(doc),
             parts,
         });
@@ -263,7 +263,7 @@ impl Viewer {
     /// animation frame (the step moves forward by one first).
     pub fn log_poses(&self, doc: &Document, poses: Vec<(String, Transform)>, advance: bool) {
         if self.is_live() {
-            self.send(Event::Poses {
+            self.send(ViewEvent::Poses {
                 doc: document_name(doc),
                 poses,
                 advance,
@@ -274,7 +274,7 @@ impl Viewer {
     /// Logs a path's key poses (mm) as a curve with a small frame at each.
     pub fn log_path(&self, name: &str, poses: &[Transform]) {
         if self.is_live() {
-            self.send(Event::Path {
+            self.send(ViewEvent::Path {
                 name: name.to_string(),
                 poses: poses.to_vec(),
             });
@@ -311,7 +311,7 @@ impl Viewer {
                     .collect(),
             })
             .collect();
-        self.send(Event::Trajectory {
+        self.send(ViewEvent::Trajectory {
             doc: document_name(doc),
             robot: instance.name().to_string(),
             samples,
@@ -328,7 +328,7 @@ impl Viewer {
             .iter()
             .filter_map(|&(a, b, depth)| pair_view(doc, a, b, depth))
             .collect();
-        self.send(Event::Interference {
+        self.send(ViewEvent::Interference {
             doc: document_name(doc),
             pairs,
         });
@@ -341,7 +341,7 @@ impl Viewer {
             return true;
         };
         let (done, wait) = std::sync::mpsc::sync_channel(1);
-        if tx.send(Event::Flush(done)).is_err() {
+        if tx.send(ViewEvent::Flush(done)).is_err() {
             return false;
         }
         wait.recv_timeout(timeout).is_ok()
@@ -412,12 +412,12 @@ mod tests {
         v.step(7);
         v.log_path("p", &[Transform::IDENTITY]);
         match rx.recv().unwrap() {
-            Event::NewRun(n) => assert_eq!(n, "run 1"),
+            ViewEvent::NewRun(n) => assert_eq!(n, "run 1"),
             e => panic!("{e:?}"),
         }
-        assert!(matches!(rx.recv().unwrap(), Event::Step(7)));
+        assert!(matches!(rx.recv().unwrap(), ViewEvent::Step(7)));
         match rx.recv().unwrap() {
-            Event::Path { name, poses } => {
+            ViewEvent::Path { name, poses } => {
                 assert_eq!(name, "p");
                 assert_eq!(poses.len(), 1);
             }
