@@ -22,7 +22,7 @@ const LEAF_SIZE: usize = 8;
 /// Nodes over more triangles than this take their oriented box around their
 /// children's boxes instead of scanning every corner (the scans of the top levels
 /// were most of the build; their boxes are a little looser).
-const EXACT_EXTENTS: usize = 256;
+const EXACT_EXTENTS: usize = 1024;
 
 /// An oriented box (part frame, mm) fitted to a node's triangles: `axes` columns are
 /// orthonormal directions, `half` the half extents along them. Far tighter than the

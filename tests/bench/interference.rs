@@ -603,8 +603,13 @@ fn script_rows() {
     }
     std::fs::write(root.join("models/pair.yaml"), file.to_yaml().unwrap()).unwrap();
 
-    let a = Collider::new(Arc::new(torus.clone())).unwrap();
-    let b = Collider::new(Arc::new(cube.clone())).unwrap();
+    // the meshes as the document has them (read back from the STL files: f32
+    // coordinates, welded), so the Rust rows query the same trees as the script
+    let read = |name: &str| {
+        let path = root.join(format!("models/meshes/{name}.stl"));
+        Collider::new(Arc::new(fitup::mesh::read_stl(&path).unwrap())).unwrap()
+    };
+    let (a, b) = (read("torus"), read("box"));
     let id = Transform::IDENTITY;
     let mut rng = Rng::new(12);
     let (mut apart, mut crossing) = (Vec::new(), Vec::new());
