@@ -19,6 +19,11 @@ pub const MAX_COORDINATE: f64 = 1e9;
 /// nodes of 4 per leaf, for a few more triangle-box tests per leaf pair).
 const LEAF_SIZE: usize = 8;
 
+/// Nodes over more triangles than this take their oriented box around their
+/// children's boxes instead of scanning every corner (the scans of the top levels
+/// were most of the build; their boxes are a little looser).
+const EXACT_EXTENTS: usize = 1024;
+
 /// An oriented box (part frame, mm) fitted to a node's triangles: `axes` columns are
 /// orthonormal directions, `half` the half extents along them. Far tighter than the
 /// node's axis-aligned box for a surface patch that is tilted in the part frame, which
@@ -58,23 +63,105 @@ impl Obb {
     }
 }
 
-/// The principal axes (columns, orthonormal) of the vertices of `items`' triangles:
-/// the eigenvectors of their covariance.
-fn principal_axes(mesh: &Mesh, items: &[Item]) -> Matrix3<f64> {
-    let corners = || items.iter().flat_map(|it| mesh.triangle(it.1 as usize));
-    let n = (3 * items.len()) as f64;
-    let mean = corners().fold(Vec3::zeros(), |m, p| m + p.coords) / n;
-    let mut cov = Matrix3::zeros();
-    for p in corners() {
-        let d = p.coords - mean;
-        cov += d * d.transpose();
+/// First and second moments of a set of triangle corners about a fixed reference
+/// point (the mesh's box centre, so the sums stay well conditioned for parts far
+/// from the origin): a node's are the sum of its children's, so the covariance of
+/// every node costs one pass over the triangles in all.
+#[derive(Debug, Clone, Copy)]
+struct Moments {
+    count: f64,
+    sum: Vec3,
+    outer: Matrix3<f64>,
+}
+
+impl Moments {
+    /// The moments of `items`' triangle corners about `origin`.
+    fn of(mesh: &Mesh, items: &[Item], origin: &Vec3) -> Moments {
+        let mut m = Moments {
+            count: 0.0,
+            sum: Vec3::zeros(),
+            outer: Matrix3::zeros(),
+        };
+        for p in items.iter().flat_map(|it| mesh.triangle(it.1 as usize)) {
+            let d = p.coords - origin;
+            m.count += 1.0;
+            m.sum += d;
+            m.outer += d * d.transpose();
+        }
+        m
     }
-    let axes = nalgebra::SymmetricEigen::new(cov).eigenvectors;
-    if axes.iter().all(|v| v.is_finite()) {
-        axes
-    } else {
-        Matrix3::identity()
+
+    fn add(&self, o: &Moments) -> Moments {
+        Moments {
+            count: self.count + o.count,
+            sum: self.sum + o.sum,
+            outer: self.outer + o.outer,
+        }
     }
+
+    /// The principal axes (columns, orthonormal) of the corners: the eigenvectors of
+    /// their covariance (the search starting from the orthonormal `start`), or the
+    /// part frame's axes when that is not finite.
+    fn principal_axes(&self, start: &Matrix3<f64>) -> Matrix3<f64> {
+        let mean = self.sum / self.count;
+        let cov = self.outer / self.count - mean * mean.transpose();
+        let axes = symmetric_eigenvectors(&cov, start);
+        if axes.iter().all(|v| v.is_finite()) {
+            axes
+        } else {
+            Matrix3::identity()
+        }
+    }
+}
+
+/// Orthonormal eigenvectors (columns) of the symmetric 3×3 matrix `m`, by cyclic
+/// Jacobi rotations from the orthonormal `start` (a child's axes for its parent:
+/// nearly right already, so one or two sweeps do), to a relative off-diagonal of
+/// 1e-6 (axes within about a microradian of the principal ones: as tight a box). Several times cheaper than a general solver for this size and orthonormal
+/// by construction (`start` times rotations) even for repeated eigenvalues, which is
+/// all an oriented box needs: any orthonormal axes give a box that bounds the
+/// points, the eigenvectors only make it tight.
+fn symmetric_eigenvectors(m: &Matrix3<f64>, start: &Matrix3<f64>) -> Matrix3<f64> {
+    let scale = m.abs().max();
+    if !(scale.is_finite() && scale > 0.0) {
+        return *start;
+    }
+    let mut a = start.tr_mul(&(m * start));
+    let mut v = *start;
+    for _sweep in 0..12 {
+        let off = a[(0, 1)].abs() + a[(0, 2)].abs() + a[(1, 2)].abs();
+        if off <= 1e-6 * scale {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            let apq = a[(p, q)];
+            if apq.abs() <= 1e-300 {
+                continue;
+            }
+            // the rotation that zeroes a[p][q] (Numerical Recipes' stable form)
+            let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for k in 0..3 {
+                let (akp, akq) = (a[(k, p)], a[(k, q)]);
+                a[(k, p)] = c * akp - s * akq;
+                a[(k, q)] = s * akp + c * akq;
+            }
+            for k in 0..3 {
+                let (apk, aqk) = (a[(p, k)], a[(q, k)]);
+                a[(p, k)] = c * apk - s * aqk;
+                a[(q, k)] = s * apk + c * aqk;
+            }
+            for k in 0..3 {
+                let (vkp, vkq) = (v[(k, p)], v[(k, q)]);
+                v[(k, p)] = c * vkp - s * vkq;
+                v[(k, q)] = s * vkp + c * vkq;
+            }
+        }
+    }
+    v
 }
 
 /// The extents of the vertices of `items`' triangles along the columns of `axes`,
@@ -210,6 +297,7 @@ impl Collider {
             .fold(0.0, f64::max);
         let mut tree = Tree {
             mesh: &mesh,
+            origin: mesh.bounds().map_or(Vec3::zeros(), |b| b.centre().coords),
             nodes: Vec::with_capacity(2 * items.len() / (LEAF_SIZE / 2) + 2),
             obbs: Vec::with_capacity(2 * items.len() / (LEAF_SIZE / 2) + 2),
         };
@@ -219,7 +307,7 @@ impl Collider {
             count: 0,
         });
         tree.obbs.push(Obb::BLANK);
-        tree.build(0, &mut items, 0, None);
+        let _ = tree.build(0, &mut items, 0, &Matrix3::identity());
         let Tree { nodes, obbs, .. } = tree;
         Ok(Collider {
             nodes,
@@ -377,30 +465,35 @@ impl Collider {
 /// The tree under construction.
 struct Tree<'m> {
     mesh: &'m Mesh,
+    /// Reference point of the moments (the mesh's box centre, part frame, mm).
+    origin: Vec3,
     nodes: Vec<Node>,
     obbs: Vec<Obb>,
 }
 
 impl Tree<'_> {
     /// Builds node `at` over `items` (which start at `offset` in tree order) and
-    /// returns the extents of its vertices along `parent_axes` (none for the root)
-    /// and its axis-aligned box, so the parent's boxes need no pass of their own.
+    /// returns the moments of its triangles' corners about `self.origin`.
     ///
-    /// Every node gets its own principal axes: reusing a parent's axes (tried, to
-    /// save eigen solves) made tilted surface patches' boxes several times thicker
-    /// and near-miss queries slower than FCL.
+    /// Every node gets its own principal axes (from its children's summed moments)
+    /// and its extents along them from one pass over its corners: reusing a parent's
+    /// axes (tried, to save work) made tilted surface patches' boxes several times
+    /// thicker and near-miss queries slower than FCL.
+    ///
+    /// `hint`: orthonormal axes of a nearby patch (a sibling's or an uncle's), where
+    /// the eigen search of a leaf starts.
     fn build(
         &mut self,
         at: usize,
         items: &mut [Item],
         offset: usize,
-        parent_axes: Option<&Matrix3<f64>>,
-    ) -> (Vec3, Vec3, Aabb) {
-        let axes = principal_axes(self.mesh, items);
-        let (lo, hi, aabb) = if items.len() <= LEAF_SIZE {
+        hint: &Matrix3<f64>,
+    ) -> (Moments, Matrix3<f64>) {
+        let (moments, start, children) = if items.len() <= LEAF_SIZE {
             self.nodes[at].first = offset as u32;
             self.nodes[at].count = items.len() as u32;
-            extents(self.mesh, items, &axes)
+            let m = Moments::of(self.mesh, items, &self.origin);
+            (m, *hint, None)
         } else {
             let mut cb = Aabb::EMPTY;
             items.iter().for_each(|(c, _)| cb.grow(c));
@@ -425,16 +518,37 @@ impl Tree<'_> {
             self.nodes.extend([blank, blank]);
             self.obbs.extend([Obb::BLANK, Obb::BLANK]);
             let (l, r) = items.split_at_mut(mid);
-            let (llo, lhi, lb) = self.build(left, l, offset, Some(&axes));
-            let (rlo, rhi, rb) = self.build(left + 1, r, offset + mid, Some(&axes));
-            (llo.inf(&rlo), lhi.sup(&rhi), lb.union(&rb))
+            let (ml, axes_l) = self.build(left, l, offset, hint);
+            let (mr, _) = self.build(left + 1, r, offset + mid, &axes_l);
+            (ml.add(&mr), axes_l, Some(left))
+        };
+        let axes = moments.principal_axes(&start);
+        let (lo, hi, aabb) = match children {
+            // a large node: the corners of its children's boxes along its axes (they
+            // hold every vertex; a little looser than the vertices, on few nodes)
+            Some(left) if items.len() > EXACT_EXTENTS => {
+                let (mut lo, mut hi) =
+                    (Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY));
+                for o in &self.obbs[left..left + 2] {
+                    for k in 0..8 {
+                        let sign = |b: usize| if k & (1 << b) == 0 { -1.0 } else { 1.0 };
+                        let corner = o.centre
+                            + o.axes.column(0) * (sign(0) * o.half.x)
+                            + o.axes.column(1) * (sign(1) * o.half.y)
+                            + o.axes.column(2) * (sign(2) * o.half.z);
+                        let q = axes.tr_mul(&corner);
+                        lo = lo.inf(&q);
+                        hi = hi.sup(&q);
+                    }
+                }
+                let aabb = self.nodes[left].bounds.union(&self.nodes[left + 1].bounds);
+                (lo, hi, aabb)
+            }
+            _ => extents(self.mesh, items, &axes),
         };
         self.nodes[at].bounds = aabb;
         self.obbs[at] = Obb::from_extents(&axes, lo, hi, &aabb);
-        match parent_axes {
-            Some(p) => extents(self.mesh, items, p),
-            None => (lo, hi, aabb),
-        }
+        (moments, axes)
     }
 }
 
@@ -517,5 +631,51 @@ impl ColliderCache {
     /// How many colliders were built (for tests and the watch header).
     pub fn build_count(&self) -> usize {
         self.builds
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rng;
+
+    /// The Jacobi solver's axes are orthonormal and diagonalise the matrix, for
+    /// random covariances and the awkward cases (repeated eigenvalues, rank 1 and 2,
+    /// zero, huge entries).
+    #[test]
+    fn jacobi_axes_diagonalise_symmetric_matrices() {
+        let mut rng = Rng::new(7);
+        let mut cases: Vec<Matrix3<f64>> = vec![
+            Matrix3::zeros(),
+            Matrix3::identity(),
+            Matrix3::from_diagonal(&Vec3::new(3.0, 3.0, 1.0)),
+            Matrix3::from_diagonal(&Vec3::new(0.0, 0.0, 1e12)),
+        ];
+        for _ in 0..500 {
+            let g = Matrix3::from_fn(|_, _| rng.normal() * 10f64.powf(rng.range(-3.0, 6.0)));
+            let rank = rng.below(3) + 1;
+            let mut m = Matrix3::zeros();
+            for k in 0..rank {
+                let c = g.column(k);
+                m += c * c.transpose();
+            }
+            cases.push(m);
+        }
+        for (k, m) in cases.into_iter().enumerate() {
+            let start = if k % 2 == 0 {
+                Matrix3::identity()
+            } else {
+                *rng.rotation().to_rotation_matrix().matrix()
+            };
+            let v = symmetric_eigenvectors(&m, &start);
+            let ortho = v.transpose() * v - Matrix3::identity();
+            assert!(ortho.abs().max() < 1e-12, "not orthonormal: {v} for {m}");
+            let d = v.transpose() * m * v;
+            let off = d[(0, 1)].abs().max(d[(0, 2)].abs()).max(d[(1, 2)].abs());
+            assert!(
+                off <= 1e-5 * m.abs().max().max(1e-300),
+                "off-diagonal {off} left for {m}"
+            );
+        }
     }
 }

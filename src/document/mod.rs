@@ -386,6 +386,14 @@ impl Document {
             .ok()
             .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
             .unwrap_or_else(|| project.root().to_path_buf());
+        // every part's mesh read and parsed at once, in parallel (the cost of opening
+        // a cell of many distinct parts); errors are reported by the loop below
+        let resolved: Vec<_> = file
+            .parts
+            .values()
+            .filter_map(|pf| project.resolve_from(&dir, &pf.stl).ok())
+            .collect();
+        cache.prefetch(&resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>());
         let mut parts = IndexMap::new();
         for (name, pf) in &file.parts {
             // The `stl:` value's own line, from the scan.

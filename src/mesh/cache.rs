@@ -60,6 +60,65 @@ impl MeshCache {
         Ok(mesh)
     }
 
+    /// Reads and parses the files of `paths` that are not cached or changed, in
+    /// parallel (one rayon task per file), so that the [`get`](Self::get) calls
+    /// that follow are cache hits: what opening a document of many distinct parts
+    /// costs once. A file that cannot be read or parsed is skipped here; its `get`
+    /// reports the error.
+    pub fn prefetch(&mut self, paths: &[&Path]) {
+        use rayon::prelude::*;
+        let mut wanted: Vec<(PathBuf, Stamp)> = Vec::new();
+        for path in paths {
+            let Ok(key) = path.canonicalize() else {
+                continue;
+            };
+            let Ok(now) = stamp(&key) else { continue };
+            let fresh = self.entries.get(&key).is_some_and(|e| e.stamp == now);
+            if !fresh && !wanted.iter().any(|(k, _)| *k == key) {
+                wanted.push((key, now));
+            }
+        }
+        if wanted.len() < 2 {
+            return; // nothing to share out; `get` reads it
+        }
+        let known: HashMap<&PathBuf, u64> = wanted
+            .iter()
+            .filter_map(|(k, _)| self.entries.get(k).map(|e| (k, e.hash)))
+            .collect();
+        let read: Vec<Option<(u64, Option<Mesh>)>> = wanted
+            .par_iter()
+            .map(|(key, _)| {
+                let bytes = crate::fsutil::read_file(key, crate::fsutil::FileKind::Mesh).ok()?;
+                let hash = content_hash(&bytes);
+                if known.get(key) == Some(&hash) {
+                    return Some((hash, None)); // same bytes: the cached mesh stands
+                }
+                Some((hash, Some(super::parse_stl(&bytes).ok()?)))
+            })
+            .collect();
+        for ((key, now), r) in wanted.into_iter().zip(read) {
+            match r {
+                Some((hash, Some(mesh))) => {
+                    self.loads += 1;
+                    self.entries.insert(
+                        key,
+                        Entry {
+                            stamp: now,
+                            hash,
+                            mesh: Arc::new(mesh),
+                        },
+                    );
+                }
+                Some((_, None)) => {
+                    if let Some(e) = self.entries.get_mut(&key) {
+                        e.stamp = now;
+                    }
+                }
+                None => {}
+            }
+        }
+    }
+
     /// How many times a file was actually parsed (for tests and the watch header).
     pub fn parse_count(&self) -> usize {
         self.loads
@@ -96,5 +155,37 @@ mod tests {
         let c = cache.get(&p).unwrap();
         assert_eq!(cache.parse_count(), 2);
         assert_eq!(c.bounds(), m2.bounds());
+    }
+
+    /// Prefetching parses each changed file once, leaves the `get`s that follow as
+    /// hits, and leaves errors to `get`.
+    #[test]
+    fn prefetch_fills_the_cache_and_leaves_errors_to_get() {
+        let dir = tempfile::tempdir().unwrap();
+        let paths: Vec<_> = (0..4)
+            .map(|i| dir.path().join(format!("{i}.stl")))
+            .collect();
+        for (i, p) in paths.iter().enumerate() {
+            let m = Mesh::cuboid(Point3::origin(), Point3::new(1.0 + i as f64, 1.0, 1.0));
+            super::super::write_stl(p, &m).unwrap();
+        }
+        let bad = dir.path().join("bad.stl");
+        std::fs::write(&bad, b"solid x\nfacet nonsense").unwrap();
+        let missing = dir.path().join("missing.stl");
+        let mut cache = MeshCache::new();
+        let mut all: Vec<&Path> = paths.iter().map(|p| p.as_path()).collect();
+        all.extend([bad.as_path(), missing.as_path(), paths[0].as_path()]);
+        cache.prefetch(&all);
+        assert_eq!(cache.parse_count(), 4);
+        for (i, p) in paths.iter().enumerate() {
+            let m = cache.get(p).unwrap();
+            assert_eq!(m.bounds().unwrap().hi.x, 1.0 + i as f64);
+        }
+        assert_eq!(cache.parse_count(), 4, "the gets after a prefetch are hits");
+        assert!(cache.get(&bad).is_err());
+        assert!(cache.get(&missing).is_err());
+        // nothing changed: a second prefetch parses nothing
+        cache.prefetch(&all);
+        assert_eq!(cache.parse_count(), 4);
     }
 }

@@ -229,7 +229,7 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f(
         "Document.interferes(a: string, b: string) -> bool",
-        "Whether two components interfere (exact method, 0.01 mm tolerance).",
+        "Whether two components interfere (exact method, 0.01 mm tolerance). The same answer as `contact(a, b).state == \"interfering\"`, but stops at the first crossing deeper than the tolerance instead of measuring the deepest: the cheap check for loops over many poses.",
         |d: &mut DocHandle, a: &str, b: &str| interferes(d, a, b, None),
     );
     api.f(

@@ -213,7 +213,10 @@ impl<'d> Workspace<'d> {
             .contact(ia, ib, options.method, options.tolerance)?)
     }
 
-    /// Whether components `a` and `b` interfere.
+    /// Whether components `a` and `b` interfere: the answer of
+    /// [`contact`](Self::contact)`.is_interfering()`, found without measuring the
+    /// depth (the exact method stops at the first crossing deeper than the
+    /// tolerance, mm).
     ///
     /// # Errors
     /// As [`contact`](Self::contact).
@@ -223,7 +226,10 @@ impl<'d> Workspace<'d> {
         b: &str,
         options: &CheckOptions,
     ) -> Result<bool, WorkspaceError> {
-        Ok(self.contact(a, b, options)?.is_interfering())
+        let (ia, ib) = self.pair(a, b)?;
+        Ok(self
+            .scene
+            .interferes(ia, ib, options.method, options.tolerance)?)
     }
 
     /// Distance between the surfaces of `a` and `b` (mm), 0 when they touch or

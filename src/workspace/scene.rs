@@ -4,9 +4,9 @@
 
 use super::WorkspaceError;
 use crate::collision::{
-    candidate_pairs, check, surface_distance, sweep, Collider, ColliderCache, CollisionError,
-    Contact, CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart, SweepHit,
-    SweepOptions,
+    candidate_pairs, check, interferes, surface_distance, sweep, Collider, ColliderCache,
+    CollisionError, Contact, CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart,
+    SweepHit, SweepOptions,
 };
 use crate::document::{Document, Feature};
 use crate::mesh::Mesh;
@@ -236,6 +236,31 @@ impl Scene {
         tolerance: f64,
     ) -> Result<Contact, CollisionError> {
         check(method, &self.posed(a), &self.posed(b), tolerance)
+    }
+
+    /// Whether components `a` and `b` interfere by `method` at penetration
+    /// `tolerance` (mm): the same answer as [`contact`](Self::contact)`.is_interfering()`,
+    /// but the exact method stops at the first crossing deeper than the tolerance
+    /// instead of measuring the deepest one (the planners' yes/no question).
+    pub fn interferes(
+        &self,
+        a: usize,
+        b: usize,
+        method: Method,
+        tolerance: f64,
+    ) -> Result<bool, CollisionError> {
+        match method {
+            Method::Exact => interferes(
+                &self.colliders[a],
+                &self.poses[a],
+                &self.colliders[b],
+                &self.poses[b],
+                tolerance,
+            ),
+            Method::Aabb | Method::Cells => {
+                Ok(check(method, &self.posed(a), &self.posed(b), tolerance)?.is_interfering())
+            }
+        }
     }
 
     /// Distance between the surfaces of `a` and `b` (mm); 0 when they touch or cross.

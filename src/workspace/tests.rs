@@ -242,3 +242,41 @@ fn repeated_contacts_reuse_only_unmoved_pairs() {
         "moving screw4 5 mm down must change a verdict"
     );
 }
+
+/// The yes/no query stops at the first deep crossing but must give the answer of
+/// the full verdict: every pair of the demo cell, with screw4 sunk by a range of
+/// depths around the tolerances, by every method.
+#[test]
+fn interferes_agrees_with_contact() {
+    let mut doc = open("models/cell.yaml");
+    let i = doc.component_index("screw4").unwrap();
+    let t = doc.components()[i].transform;
+    let names: Vec<String> = doc.components().iter().map(|c| c.name.clone()).collect();
+    let mut interfering = 0;
+    let mut agreed = 0;
+    for sink in [0.0, 0.004, 0.01, 0.02, 0.5, 5.0] {
+        doc.set_transform("screw4", shifted(&t, 0.0, 0.0, -sink))
+            .unwrap();
+        let mut cache = SceneCache::new();
+        let ws = Workspace::new(&doc, &mut cache).unwrap();
+        for method in [Method::Exact, Method::Aabb, Method::Cells] {
+            for tolerance in [0.0, 0.01, 0.1] {
+                let o = CheckOptions { method, tolerance };
+                for (ka, a) in names.iter().enumerate() {
+                    for b in &names[ka + 1..] {
+                        let full = ws.contact(a, b, &o).unwrap().is_interfering();
+                        assert_eq!(
+                            ws.interferes(a, b, &o).unwrap(),
+                            full,
+                            "{a} / {b}, sunk {sink} mm, {method:?} at {tolerance} mm"
+                        );
+                        interfering += full as usize;
+                        agreed += 1;
+                    }
+                }
+            }
+        }
+    }
+    // the cases include both answers
+    assert!(interfering > 0 && interfering < agreed);
+}

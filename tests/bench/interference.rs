@@ -12,8 +12,10 @@ use fitup::collision::{
     check, contact, interferes, method_disagreement, surface_distance, sweep, Collider, CutCells,
     CutSpec, Method, Motion, Obstacle, PosedPart, SweepMethod, SweepOptions, DEFAULT_TOLERANCE,
 };
+use fitup::document::file::{ComponentFile, DocumentFile, PartFile};
 use fitup::math::{Point3, Rng, Transform, Vec3};
 use fitup::mesh::{write_stl, Mesh};
+use fitup::script::{run_script, Caches, Limits, Project, RunOptions};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;
@@ -45,6 +47,10 @@ fn random_pose(rng: &mut Rng, spread: f64) -> Transform {
 }
 
 fn main() {
+    script_rows();
+    if std::env::var_os("FITUP_BENCH_SCRIPT_ONLY").is_some() {
+        return;
+    }
     let a_mesh = fixtures::torus(30.0, 10.0, 100, 50); // 10,000 triangles
     let b_mesh = fixtures::sphere(20.0, 100, 51); // 10,000 triangles
     let a = Collider::new(Arc::new(a_mesh.clone())).unwrap();
@@ -547,4 +553,219 @@ fn parry_rows(
         "ray casts at the torus (fitup has no ray query): parry {us:.2} µs/ray, {hits}/{} hit",
         rays.len()
     );
+}
+
+/// Rounds over the script case's poses per timed script run.
+const SCRIPT_ROUNDS: usize = 20;
+
+/// Issue 12's case from a script: a 6000-triangle torus against a 12-triangle box
+/// at 600 seeded random poses, split into separated and interfering poses:
+/// `doc.interferes` (the yes/no query, stops at the first crossing deeper than the
+/// tolerance) and `doc.contact` (the full verdict with the deepest crossing) from
+/// Rhai, the same two queries in Rust, and python-fcl / coal `collide` from Python
+/// on the same meshes and poses, in the same run.
+fn script_rows() {
+    let torus = fixtures::torus(20.0, 5.0, 100, 30); // 6000 triangles
+    let cube = Mesh::cuboid(
+        Point3::new(-15.0, -15.0, -15.0),
+        Point3::new(15.0, 15.0, 15.0),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path();
+    std::fs::create_dir_all(root.join("models/meshes")).unwrap();
+    std::fs::create_dir_all(root.join("scripts")).unwrap();
+    write_stl(&root.join("models/meshes/torus.stl"), &torus).unwrap();
+    write_stl(&root.join("models/meshes/box.stl"), &cube).unwrap();
+    let mut file = DocumentFile {
+        units: "mm".into(),
+        ..Default::default()
+    };
+    for name in ["torus", "box"] {
+        file.parts.insert(
+            name.into(),
+            PartFile {
+                stl: format!("meshes/{name}.stl"),
+                planes: Default::default(),
+                axes: Default::default(),
+                points: Default::default(),
+                features: vec![],
+            },
+        );
+        file.components.push(ComponentFile {
+            name: name.into(),
+            part: name.into(),
+            fixed: false,
+            color: None,
+            transform: None,
+            mass: None,
+            threaded: false,
+        });
+    }
+    std::fs::write(root.join("models/pair.yaml"), file.to_yaml().unwrap()).unwrap();
+
+    // the meshes as the document has them (read back from the STL files: f32
+    // coordinates, welded), so the Rust rows query the same trees as the script
+    let read = |name: &str| {
+        let path = root.join(format!("models/meshes/{name}.stl"));
+        Collider::new(Arc::new(fitup::mesh::read_stl(&path).unwrap())).unwrap()
+    };
+    let (a, b) = (read("torus"), read("box"));
+    let id = Transform::IDENTITY;
+    let mut rng = Rng::new(12);
+    let (mut apart, mut crossing) = (Vec::new(), Vec::new());
+    for _ in 0..600 {
+        let p = random_pose(&mut rng, 40.0);
+        if interferes(&a, &p, &b, &id, DEFAULT_TOLERANCE).unwrap() {
+            crossing.push(p);
+        } else {
+            apart.push(p);
+        }
+    }
+    println!(
+        "# script case: torus {} triangles, box {} triangles, 600 poses: {} separated, {} interfering",
+        a.triangle_count(),
+        b.triangle_count(),
+        apart.len(),
+        crossing.len()
+    );
+    let peers_dir = root.join("peers");
+    std::fs::create_dir_all(&peers_dir).unwrap();
+    write_stl(&peers_dir.join("a.stl"), &torus).unwrap();
+    write_stl(&peers_dir.join("b.stl"), &cube).unwrap();
+    let mut f = std::fs::File::create(peers_dir.join("poses.txt")).unwrap();
+    for (cat, poses) in [("separated", &apart), ("interfering", &crossing)] {
+        for p in poses {
+            writeln!(f, "{cat} {} {}", line(p), line(&id)).unwrap();
+        }
+    }
+    drop(f);
+
+    let rhai_seconds = |body: &str| {
+        let script = root.join("scripts/bench.rhai");
+        std::fs::write(&script, body).unwrap();
+        let opts = RunOptions {
+            script,
+            doc: None,
+            project: Project::new(root).unwrap(),
+            limits: Limits {
+                max_operations: u64::MAX / 2,
+                ..Limits::default()
+            },
+            cancel: Arc::new(std::sync::atomic::AtomicBool::new(false)),
+            output: Arc::new(|_: &str| {}),
+            args: Default::default(),
+        };
+        let t = Instant::now();
+        run_script(&opts, &Arc::new(Caches::default()))
+            .result
+            .expect("bench script");
+        t.elapsed().as_secs_f64()
+    };
+    let script_for = |poses: &[Transform], call: &str| {
+        let list: Vec<String> = poses
+            .iter()
+            .map(|p| {
+                let rows: Vec<String> = p
+                    .to_matrix()
+                    .iter()
+                    .map(|r| {
+                        let v: Vec<String> = r.iter().map(|x| format!("{x:.15}")).collect();
+                        format!("[{}]", v.join(", "))
+                    })
+                    .collect();
+                format!("[{}]", rows.join(", "))
+            })
+            .collect();
+        format!(
+            "let d = open_doc(\"models/pair.yaml\");\n\
+             let ts = []; for m in [{}] {{ ts.push(transform(m)); }}\n\
+             let w = d.contact(\"torus\", \"box\");\n\
+             for r in 0..{SCRIPT_ROUNDS} {{ for t in ts {{ d.set_transform(\"torus\", t); {call} }} }}\n",
+            list.join(", ")
+        )
+    };
+    let python = std::path::Path::new(".venv/bin/python");
+    let mut rows: std::collections::BTreeMap<(&str, String), Vec<f64>> = Default::default();
+    let mut peer_hits: std::collections::BTreeMap<(String, String), String> = Default::default();
+    for round in 0..ROUNDS {
+        for (cat, poses) in [("separated", &apart), ("interfering", &crossing)] {
+            let calls = (poses.len() * SCRIPT_ROUNDS) as f64;
+            let base = rhai_seconds(&script_for(poses, ""));
+            for (label, call) in [
+                (
+                    "script doc.interferes",
+                    "let x = d.interferes(\"torus\", \"box\");",
+                ),
+                (
+                    "script doc.contact",
+                    "let x = d.contact(\"torus\", \"box\");",
+                ),
+            ] {
+                let t = rhai_seconds(&script_for(poses, call));
+                rows.entry((cat, label.into()))
+                    .or_default()
+                    .push((t - base) / calls * 1e6);
+            }
+            let t0 = Instant::now();
+            let mut n = 0;
+            for p in poses.iter() {
+                n += interferes(&a, p, &b, &id, DEFAULT_TOLERANCE).unwrap() as usize;
+            }
+            rows.entry((cat, "Rust collision::interferes".into()))
+                .or_default()
+                .push(t0.elapsed().as_secs_f64() / poses.len() as f64 * 1e6);
+            assert_eq!(n, if cat == "separated" { 0 } else { poses.len() });
+            let t0 = Instant::now();
+            for p in poses.iter() {
+                let c = contact(&a, p, &b, &id, DEFAULT_TOLERANCE).unwrap();
+                assert_eq!(c.is_interfering(), cat == "interfering");
+            }
+            rows.entry((cat, "Rust collision::contact".into()))
+                .or_default()
+                .push(t0.elapsed().as_secs_f64() / poses.len() as f64 * 1e6);
+        }
+        if python.exists() {
+            let out = std::process::Command::new(python)
+                .arg("tests/bench/interference_peers.py")
+                .arg(&peers_dir)
+                .output()
+                .unwrap();
+            for l in String::from_utf8_lossy(&out.stdout).lines() {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                if w.len() == 4 && !l.starts_with('#') {
+                    let cat = if w[1] == "separated" {
+                        "separated"
+                    } else {
+                        "interfering"
+                    };
+                    rows.entry((cat, format!("Python {} collide", w[0])))
+                        .or_default()
+                        .push(w[2].parse().unwrap_or(f64::NAN));
+                    peer_hits.insert((w[0].to_string(), cat.to_string()), w[3].to_string());
+                } else if round == 0 {
+                    println!("{l}");
+                }
+            }
+        }
+        let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+        println!("# script case round {round} loadavg {}", load.trim());
+    }
+    println!("\n## issue 12 script case, median of {ROUNDS} rounds, µs per pose");
+    println!("| query | separated µs | interfering µs |");
+    println!("|---|---:|---:|");
+    let labels: std::collections::BTreeSet<String> = rows.keys().map(|(_, l)| l.clone()).collect();
+    for label in labels {
+        let get = |cat: &str| {
+            rows.get(&(cat, label.clone()))
+                .map_or(f64::NAN, |v| median(v.clone()))
+        };
+        println!(
+            "| {label} | {:.2} | {:.2} |",
+            get("separated"),
+            get("interfering")
+        );
+    }
+    for ((peer, cat), hits) in &peer_hits {
+        println!("# {peer} {cat}: {hits} collisions reported");
+    }
 }

@@ -3,7 +3,8 @@
 //! it: open the document (YAML + STL), the first full interference pass (every
 //! collider built), a repeat pass (nothing moved: colliders and pair verdicts
 //! reused), a pass after every component moved (trees reused, every pair
-//! rechecked), and the resident memory.
+//! rechecked), the CPU time of open + first pass (all threads: comparable under
+//! load, unlike the wall times) and the resident memory.
 //!
 //! `cargo bench --bench scale` prints the table for 10 → 200 parts, each row in a
 //! fresh process (so resident memory is that row's); `-- --parts 100` runs one row.
@@ -95,10 +96,27 @@ fn resident_mb() -> (f64, f64) {
     (field("VmRSS:"), field("VmHWM:"))
 }
 
+/// CPU time this process has used so far (all threads, user + system), s: with the
+/// machine shared, the load-independent companion of the wall times.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // fields after the command name, which is in parentheses and may hold spaces
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    // USER_HZ is 100 on Linux
+    f.iter().sum::<f64>() / 100.0
+}
+
 fn row(parts: usize) {
     let dir = tempfile::tempdir().unwrap();
     let (path, triangles) = write_cell(dir.path(), parts);
     let (base, _) = resident_mb();
+    let cpu0 = cpu_seconds();
     let t0 = Instant::now();
     let doc = Document::open(&path).unwrap();
     let open = t0.elapsed().as_secs_f64();
@@ -107,6 +125,7 @@ fn row(parts: usize) {
     let scene = Scene::new(&doc, &mut cache).unwrap();
     let found = scene.contacts(Method::Exact, DEFAULT_TOLERANCE).unwrap();
     let first = t1.elapsed().as_secs_f64();
+    let cpu = cpu_seconds() - cpu0;
     drop(scene);
     let mut repeat = f64::INFINITY;
     for _ in 0..5 {
@@ -131,16 +150,22 @@ fn row(parts: usize) {
     assert_eq!(moved.len(), found.len(), "a common shift keeps every pair");
     let (rss, peak) = resident_mb();
     println!(
-        "| {parts:>5} | {:>9} | {:>7.0} | {:>10.0} | {:>9.0} | {:>10.1} | {:>10.0} | {:>6} | {:>8.0} | {:>8.0} |",
+        "| {parts:>5} | {:>9} | {:>7.0} | {:>10.0} | {:>9.0} | {:>7.0} | {:>10.1} | {:>10.0} | {:>6} | {:>8.0} | {:>8.0} | {} |",
         triangles,
         open * 1e3,
         first * 1e3,
         (open + first) * 1e3,
+        cpu * 1e3,
         repeat * 1e3,
         recheck * 1e3,
         found.len(),
         rss - base,
         peak,
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .split_whitespace()
+            .next()
+            .unwrap_or("?"),
     );
 }
 
@@ -156,9 +181,9 @@ fn main() {
         rayon_threads()
     );
     println!(
-        "| parts | triangles | open ms | 1st pass ms | open+1st ms | repeat ms | moved ms | pairs | ΔRSS MB | peak MB |"
+        "| parts | triangles | open ms | 1st pass ms | open+1st ms | CPU ms | repeat ms | moved ms | pairs | ΔRSS MB | peak MB | load |"
     );
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let me = std::env::current_exe().unwrap();
     for n in [10, 25, 50, 100, 200] {
         let status = Command::new(&me)
