@@ -659,7 +659,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &motion,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Stepwise { step_mm: 5.0 },
+            method: SweepMethod::displacement_steps(5.0),
             tolerance: TOL,
             ..Default::default()
         },
@@ -678,7 +678,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &motion,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Stepwise { step_mm: TOL / 4.0 },
+            method: SweepMethod::displacement_steps(TOL / 4.0),
             tolerance: TOL,
             ..Default::default()
         },
@@ -713,7 +713,7 @@ fn continuous_rotation_and_pose_sequences_find_first_contact() {
         &rot,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Stepwise { step_mm: TOL / 2.0 },
+            method: SweepMethod::displacement_steps(TOL / 2.0),
             tolerance: TOL,
             ..Default::default()
         },
@@ -768,13 +768,13 @@ fn sweeps_refuse_bad_motions() {
         offset: Vec3::new(1e9, 0.0, 0.0),
     };
     let tiny = SweepOptions {
-        method: SweepMethod::Stepwise { step_mm: 1e-6 },
+        method: SweepMethod::displacement_steps(1e-6),
         tolerance: TOL,
         ..Default::default()
     };
     assert!(sweep(&mover, &ok, &obstacles, &tiny).is_err());
     let zero = SweepOptions {
-        method: SweepMethod::Stepwise { step_mm: 0.0 },
+        method: SweepMethod::displacement_steps(0.0),
         tolerance: TOL,
         ..Default::default()
     };
