@@ -5,6 +5,7 @@
 
 mod common;
 
+use fitup::collision::SweepMethod;
 use fitup::db::{
     pose_counts, Database, DbError, InterferencePair, NewRun, PathMeta, PathQuery, RunStatus,
     Snapshot, SqlValue, Target,
@@ -12,7 +13,7 @@ use fitup::db::{
 use fitup::document::DimensionKind;
 use fitup::kinematics::{JointKind, Trajectory, TrajectorySample};
 use fitup::math::{AngleConvention, Transform, Vec3};
-use fitup::planning::{EdgeResolution, Failure, PlannedPath};
+use fitup::planning::{Failure, PlannedPath};
 use std::process::Stdio;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -133,7 +134,7 @@ fn sample_path(n: usize) -> PlannedPath {
         time_ms: 12.5,
         search_ms: 10.0,
         smoothing_ms: 2.5,
-        resolution: EdgeResolution::Stepwise {
+        resolution: SweepMethod::Stepwise {
             step_mm: 0.1,
             step_rad: 0.002,
         },
@@ -177,7 +178,7 @@ fn every_stored_kind_round_trips() {
             .unwrap();
         let mut lost = sample_path(0);
         lost.failure = Some(Failure::Exhausted(4));
-        lost.resolution = EdgeResolution::Continuous {
+        lost.resolution = SweepMethod::Continuous {
             contact_step_mm: 0.05,
         };
         lost.planner = "plan_assembly";

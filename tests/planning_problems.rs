@@ -1,12 +1,15 @@
-//! The benchmark planning problems (`fitup::planning::problems`): the committed
+//! The benchmark planning problems (`tests/common/problems.rs`): the committed
 //! documents under `models/problems/` are exactly the generators' output
 //! (regenerate with `FITUP_BLESS=1 cargo test --test planning_problems`), and
 //! fitup's best planner solves them with paths that are collision-free at a fine
 //! resolution, start and end where asked, and repeat for a seed.
 
 use fitup::collision::{interferes, DEFAULT_TOLERANCE};
-use fitup::planning::problems::{self, Problem};
+#[path = "common/problems.rs"]
+mod problems;
+
 use fitup::planning::PlannedPath;
+use problems::Problem;
 use std::path::Path as FsPath;
 
 fn files(p: &Problem) -> Vec<String> {

@@ -3,11 +3,12 @@
 //! simulated manipulator (in process, over loopback).
 
 use fitup::collision::Aabb;
+use fitup::collision::SweepMethod;
 use fitup::document::Document;
 use fitup::kinematics::MotionOptions;
 use fitup::manipulator::simulator::{Simulator, SimulatorOptions};
 use fitup::math::{Point3, Transform, Vec3};
-use fitup::planning::{EdgeResolution, PlannedPath};
+use fitup::planning::PlannedPath;
 use fitup::sequence::{Grasp, Operation, Task};
 use fitup::skills::{
     generate, Action, GeneratorOptions, ManagerEvent, ManagerOptions, PartState, Plan, SegmentHit,
@@ -16,7 +17,7 @@ use fitup::skills::{
 use std::path::Path;
 
 fn path() -> PlannedPath {
-    let resolution = EdgeResolution::Stepwise {
+    let resolution = SweepMethod::Stepwise {
         step_mm: 1.0,
         step_rad: 0.01,
     };

@@ -21,10 +21,11 @@ use nalgebra::Isometry3;
 pub struct EdgeOptions {
     /// Penetration tolerance (mm, ≥ 0): surfaces crossing no deeper count as touching.
     pub tolerance: f64,
-    /// While two triangles touch (closer than half the tolerance), the largest
-    /// displacement of the moving one between two crossing checks (mm, > 0; raised
-    /// to half the tolerance). A contact that deepens and recedes within one such
-    /// step goes unseen.
+    /// While two triangles touch (within the [`contact_gap`](super::contact_gap)),
+    /// the largest displacement of the moving one between two crossing checks (mm, more
+    /// than 0; raised to half the tolerance by [`contact_step`](super::contact_step)).
+    /// A contact that deepens and recedes within one such step goes unseen. Default
+    /// [`SweepMethod::DEFAULT_CONTACT_STEP_MM`](super::SweepMethod::DEFAULT_CONTACT_STEP_MM).
     pub contact_step: f64,
 }
 
@@ -32,16 +33,8 @@ impl Default for EdgeOptions {
     fn default() -> Self {
         Self {
             tolerance: super::DEFAULT_TOLERANCE,
-            contact_step: 0.05,
+            contact_step: super::SweepMethod::DEFAULT_CONTACT_STEP_MM,
         }
-    }
-}
-
-impl EdgeOptions {
-    /// The contact step actually used: `contact_step`, at least half the tolerance, mm
-    /// (the one place this clamp is written).
-    pub fn effective_contact_step(&self) -> f64 {
-        self.contact_step.max(self.tolerance / 2.0)
     }
 }
 
@@ -133,7 +126,7 @@ pub fn edge_interferes(
         oriented: moving.is_solid() && obstacle.is_solid(),
         tolerance: options.tolerance,
         gap: super::contact_gap(options.tolerance),
-        contact_step: options.effective_contact_step(),
+        contact_step: super::contact_step(options.contact_step, options.tolerance),
     };
     let mut stack: Vec<(u32, u32)> = vec![(0, 0)];
     while let Some((i, j)) = stack.pop() {

@@ -15,21 +15,22 @@
 //! (lerp + slerp) in [`edge_interferes`].
 //!
 //! # Motion-check vocabulary
-//! One set of words for every check of a moving part (sweeps here, planner edges in
-//! `planning::EdgeResolution`):
-//! - **stepwise**: static checks at poses at most `step_mm` of point displacement
-//!   apart ([`SweepMethod::Stepwise`]); can jump over features thinner than a step.
+//! One type, [`SweepMethod`], for every check of a moving part (sweeps here, planner
+//! edges in `planning`; mm and radians):
+//! - **stepwise**: static checks at poses at most `step_mm` and `step_rad` apart
+//!   ([`SweepMethod::Stepwise`]); can jump over features thinner than a step.
 //! - **continuous**: conservative advancement ([`SweepMethod::Continuous`],
 //!   [`edge_interferes`]): every advance is shorter than the distance to the nearest
 //!   obstacle, so nothing is jumped over. Below the **contact gap**
 //!   ([`contact_gap`]) the part counts as in contact and advances by at most the
-//!   **contact step** ([`EdgeOptions::effective_contact_step`]).
+//!   **contact step** ([`contact_step`]).
 //!
 //! Every query validates its input and returns [`CollisionError`]; none panics.
 
 mod cells;
 mod edge;
 mod exact;
+mod method;
 mod shape;
 mod sweep;
 mod triangle;
@@ -39,21 +40,13 @@ pub use cells::{
 };
 pub use edge::{edge_interferes, EdgeOptions};
 pub use exact::{contact, distance_lower_bound, interferes, surface_distance};
+pub use method::{contact_gap, contact_step, SweepMethod, MIN_CONTACT_GAP_MM};
 pub use shape::{Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
-pub use sweep::{
-    sweep, Motion, Obstacle, SweepHit, SweepMethod, SweepOptions, DEFAULT_SWEEP_TIME_LIMIT_MS,
-};
+pub use sweep::{sweep, Motion, Obstacle, SweepHit, SweepOptions, DEFAULT_SWEEP_TIME_LIMIT_MS};
 
 pub use crate::math::Aabb;
 use crate::math::Transform;
 use rayon::prelude::*;
-
-/// The contact gap of a continuous check at penetration `tolerance` (mm): surfaces
-/// closer than this count as in contact, and the check switches from distance-sized
-/// advances to contact steps. Half the tolerance, at least 0.5 µm.
-pub fn contact_gap(tolerance: f64) -> f64 {
-    tolerance.max(1e-3) / 2.0
-}
 
 /// Default penetration tolerance, mm: crossings up to this depth count as touching.
 pub const DEFAULT_TOLERANCE: f64 = 0.01;

@@ -4,6 +4,7 @@
 //! jump over thin features.
 
 use super::exact::{distance_lower_bound, interferes};
+use super::method::{contact_gap, contact_step, SweepMethod};
 use super::shape::Collider;
 use super::CollisionError;
 use crate::math::{Point3, Transform, Vec3};
@@ -105,10 +106,11 @@ impl Motion {
     }
 
     /// Pieces of `t` on which the motion is smooth, with the largest distance any
-    /// point within `radius` of the part origin moves over each piece (mm).
-    fn pieces(&self, radius: f64) -> Vec<(f64, f64, f64)> {
+    /// point within `radius` of the part origin moves over each piece (mm) and the
+    /// piece's rotation (rad).
+    fn pieces(&self, radius: f64) -> Vec<(f64, f64, f64, f64)> {
         match self {
-            Motion::Translation { offset, .. } => vec![(0.0, 1.0, offset.norm())],
+            Motion::Translation { offset, .. } => vec![(0.0, 1.0, offset.norm(), 0.0)],
             Motion::Rotation {
                 start,
                 centre,
@@ -116,7 +118,7 @@ impl Motion {
                 ..
             } => {
                 let arm = (start.translation() - centre.coords).norm() + radius;
-                vec![(0.0, 1.0, angle.abs() * arm)]
+                vec![(0.0, 1.0, angle.abs() * arm, angle.abs())]
             }
             Motion::Poses(p) => {
                 let m = p.len().saturating_sub(1).max(1) as f64;
@@ -124,7 +126,12 @@ impl Motion {
                     .enumerate()
                     .map(|(k, w)| {
                         let (angle, dist) = w[0].distance_to(&w[1]);
-                        (k as f64 / m, (k + 1) as f64 / m, dist + angle * radius)
+                        (
+                            k as f64 / m,
+                            (k + 1) as f64 / m,
+                            dist + angle * radius,
+                            angle,
+                        )
                     })
                     .collect()
             }
@@ -141,27 +148,12 @@ pub struct Obstacle<'a> {
     pub pose: Transform,
 }
 
-/// How to sweep.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SweepMethod {
-    /// Stepwise (seed 000): a static check at the start and after every step; a step
-    /// moves no point of the part more than `step_mm` (so rotations are stepped too).
-    /// Can jump over features thinner than a step.
-    Stepwise {
-        /// Largest displacement of any point of the part per step, mm.
-        step_mm: f64,
-    },
-    /// Continuous (conservative advancement): advance by the surface distance divided
-    /// by the largest point speed; within the contact gap
-    /// ([`contact_gap`](super::contact_gap)), static checks every contact gap of
-    /// displacement. Does not miss contacts.
-    Continuous,
-}
-
 /// Options of [`sweep`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SweepOptions {
-    /// Stepwise or continuous.
+    /// Stepwise (`step_mm` bounds the displacement of every point of the part,
+    /// `step_rad` the rotation and may be infinite) or continuous. Default
+    /// [`SweepMethod::CONTINUOUS_FINE`] (contact steps of the contact gap).
     pub method: SweepMethod,
     /// Penetration tolerance of the static checks, mm.
     pub tolerance: f64,
@@ -176,7 +168,7 @@ pub const DEFAULT_SWEEP_TIME_LIMIT_MS: f64 = 10_000.0;
 impl Default for SweepOptions {
     fn default() -> Self {
         SweepOptions {
-            method: SweepMethod::Continuous,
+            method: SweepMethod::CONTINUOUS_FINE,
             tolerance: super::DEFAULT_TOLERANCE,
             time_limit_ms: None,
         }
@@ -270,18 +262,29 @@ pub fn sweep(
             Ok(None)
         };
     match options.method {
-        SweepMethod::Stepwise { step_mm: step } => {
+        SweepMethod::Stepwise {
+            step_mm: step,
+            step_rad,
+        } => {
             if !(step.is_finite() && step > 0.0) {
                 return Err(CollisionError::BadMotion(format!(
                     "the step must be a finite number > 0 mm, got {step}"
+                )));
+            }
+            if step_rad.is_nan() || step_rad <= 0.0 {
+                return Err(CollisionError::BadMotion(format!(
+                    "the rotation step must be > 0 rad (or infinite), got {step_rad}"
                 )));
             }
             let all: Vec<usize> = (0..obstacles.len()).collect();
             if let Some(i) = check(0.0, &all, &mut queries)? {
                 return Ok(hit_at(0.0, i, queries));
             }
-            for &(t0, t1, reach) in &pieces {
-                let n = (reach / step).ceil().max(1.0);
+            for &(t0, t1, reach, angle) in &pieces {
+                let n = (reach / step)
+                    .ceil()
+                    .max((angle / step_rad).ceil())
+                    .max(1.0);
                 if n * obstacles.len().max(1) as f64 > MAX_QUERIES as f64 {
                     return Err(CollisionError::BadMotion(format!(
                         "{n} steps of {step} mm would take more than {MAX_QUERIES} checks"
@@ -297,14 +300,20 @@ pub fn sweep(
                 }
             }
         }
-        SweepMethod::Continuous => {
+        SweepMethod::Continuous { contact_step_mm } => {
+            if !(contact_step_mm.is_finite() && contact_step_mm > 0.0) {
+                return Err(CollisionError::BadMotion(format!(
+                    "the contact step must be a finite number > 0 mm, got {contact_step_mm}"
+                )));
+            }
             let all: Vec<usize> = (0..obstacles.len()).collect();
             if let Some(i) = check(0.0, &all, &mut queries)? {
                 return Ok(hit_at(0.0, i, queries));
             }
             // gap below which static checks take over, and their spacing
-            let g = super::contact_gap(tol);
-            for &(t0, t1, reach) in &pieces {
+            let g = contact_gap(tol);
+            let in_contact = contact_step(contact_step_mm, tol);
+            for &(t0, t1, reach, _) in &pieces {
                 if reach <= 0.0 {
                     continue;
                 }
@@ -331,7 +340,7 @@ pub fn sweep(
                             moving, &pose, o.collider, &o.pose, g, cap, 0.25,
                         )?);
                     }
-                    let advance = if d > g { d - g / 2.0 } else { g };
+                    let advance = if d > g { d - g / 2.0 } else { in_contact };
                     let next = (t + advance / speed).min(t1);
                     if d <= g || next >= t1 {
                         if let Some(i) = check(next, &near, &mut queries)? {

@@ -659,7 +659,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &motion,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Stepwise { step_mm: 5.0 },
+            method: SweepMethod::displacement_steps(5.0),
             tolerance: TOL,
             ..Default::default()
         },
@@ -678,7 +678,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         &motion,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Stepwise { step_mm: TOL / 4.0 },
+            method: SweepMethod::displacement_steps(TOL / 4.0),
             tolerance: TOL,
             ..Default::default()
         },
@@ -713,7 +713,7 @@ fn continuous_rotation_and_pose_sequences_find_first_contact() {
         &rot,
         &obstacles,
         &SweepOptions {
-            method: SweepMethod::Stepwise { step_mm: TOL / 2.0 },
+            method: SweepMethod::displacement_steps(TOL / 2.0),
             tolerance: TOL,
             ..Default::default()
         },
@@ -768,13 +768,13 @@ fn sweeps_refuse_bad_motions() {
         offset: Vec3::new(1e9, 0.0, 0.0),
     };
     let tiny = SweepOptions {
-        method: SweepMethod::Stepwise { step_mm: 1e-6 },
+        method: SweepMethod::displacement_steps(1e-6),
         tolerance: TOL,
         ..Default::default()
     };
     assert!(sweep(&mover, &ok, &obstacles, &tiny).is_err());
     let zero = SweepOptions {
-        method: SweepMethod::Stepwise { step_mm: 0.0 },
+        method: SweepMethod::displacement_steps(0.0),
         tolerance: TOL,
         ..Default::default()
     };
@@ -1076,4 +1076,66 @@ mod trees_against_brute_force {
             prop_assert!((d - dist).abs() < 1e-6, "{} vs {}", d, dist);
         }
     }
+}
+
+/// A stepwise sweep honours `step_rad` as well as `step_mm`: a rotation whose
+/// points move less than one `step_mm` in total is still stepped by angle.
+#[test]
+fn stepwise_sweep_steps_rotations_by_step_rad() {
+    // a 1 mm post 30 mm from the axis at 0.5 rad; an arm 40 mm long turning 1 rad
+    let (c, s) = (30.0 * 0.5f64.cos(), 30.0 * 0.5f64.sin());
+    let post = cuboid([c - 0.5, s - 0.5, -5.0], [c + 0.5, s + 0.5, 5.0]);
+    let arm = cuboid([0.0, -0.5, -0.5], [40.0, 0.5, 0.5]);
+    let obstacles = [Obstacle {
+        collider: &post,
+        pose: Transform::IDENTITY,
+    }];
+    let motion = Motion::Rotation {
+        start: Transform::IDENTITY,
+        centre: Point3::origin(),
+        axis: Vec3::z(),
+        angle: 1.0,
+    };
+    let run = |method| {
+        sweep(
+            &arm,
+            &motion,
+            &obstacles,
+            &SweepOptions {
+                method,
+                tolerance: TOL,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    // one 100 mm step covers the whole turn: only the ends are checked
+    assert!(!run(SweepMethod::displacement_steps(100.0)).hit);
+    let stepped = run(SweepMethod::Stepwise {
+        step_mm: 100.0,
+        step_rad: 0.01,
+    });
+    assert!(
+        stepped.hit && stepped.t > 0.4 && stepped.t < 0.5,
+        "{stepped:?}"
+    );
+    assert!(interferes(&arm, &stepped.pose, &post, &Transform::IDENTITY, TOL).unwrap());
+}
+
+/// The sweep's default contact step is exactly the contact gap at every tolerance,
+/// and the clamp raises a contact step to half the tolerance.
+#[test]
+fn fine_continuous_steps_by_the_contact_gap() {
+    let SweepMethod::Continuous { contact_step_mm } = SweepMethod::CONTINUOUS_FINE else {
+        panic!("CONTINUOUS_FINE is continuous");
+    };
+    for tol in [0.0, 1e-4, 1e-3, 0.01, 0.3, 2.0] {
+        assert_eq!(
+            contact_step(contact_step_mm, tol),
+            contact_gap(tol),
+            "{tol}"
+        );
+    }
+    assert_eq!(contact_step(0.05, 0.2), 0.1);
+    assert_eq!(contact_step(0.05, 0.01), 0.05);
 }

@@ -3,10 +3,11 @@
 
 use super::backend::{Raw, SqlValue, Tx};
 use super::{now_utc, Database, DbError};
+use crate::collision::SweepMethod;
 use crate::document::DimensionKind;
 use crate::kinematics::{JointKind, Trajectory, TrajectorySample};
 use crate::math::{AngleConvention, Transform, Vec3};
-use crate::planning::{EdgeResolution, Failure, PlannedPath, PLANNER_NAMES};
+use crate::planning::{Failure, PlannedPath, PLANNER_NAMES};
 use nalgebra::{Quaternion, UnitQuaternion};
 
 /// How a run ended.
@@ -459,8 +460,8 @@ impl Database {
     ) -> Result<i64, DbError> {
         let now = now_utc();
         let (res, res_mm, res_rad) = match path.resolution {
-            EdgeResolution::Continuous { contact_step_mm } => ("continuous", contact_step_mm, None),
-            EdgeResolution::Stepwise { step_mm, step_rad } => ("stepwise", step_mm, Some(step_rad)),
+            SweepMethod::Continuous { contact_step_mm } => ("continuous", contact_step_mm, None),
+            SweepMethod::Stepwise { step_mm, step_rad } => ("stepwise", step_mm, Some(step_rad)),
         };
         let options = meta.options.as_ref().map(|o| o.to_string());
         let r = self.transaction("storing the path", |tx| {
@@ -884,10 +885,10 @@ fn path_from(tx: &mut dyn Tx, r: &[SqlValue], with_poses: bool) -> Result<Stored
         Vec::new()
     };
     let resolution = match r[20].as_str() {
-        Some("continuous") => EdgeResolution::Continuous {
+        Some("continuous") => SweepMethod::Continuous {
             contact_step_mm: real(&r[21]),
         },
-        _ => EdgeResolution::Stepwise {
+        _ => SweepMethod::Stepwise {
             step_mm: real(&r[21]),
             step_rad: real(&r[22]),
         },

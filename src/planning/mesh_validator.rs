@@ -1,9 +1,10 @@
 //! [`MeshValidator`]: the planners' [`MotionValidator`] over real meshes (exact
 //! interference of the moving part's collider with posed obstacle colliders).
 
-use super::validator::{stepwise_edge_free, EdgeResolution, MotionValidator};
+use super::validator::{stepwise_edge_free, MotionValidator};
 use crate::collision::{
-    edge_interferes, interferes, surface_distance, Aabb, Collider, CollisionError, EdgeOptions,
+    contact_step, edge_interferes, interferes, surface_distance, Aabb, Collider, CollisionError,
+    EdgeOptions, SweepMethod,
 };
 use crate::math::Transform;
 use std::sync::Arc;
@@ -24,17 +25,17 @@ pub struct MeshValidatorOptions {
     pub tolerance: f64,
     /// How edges are checked — the same type the validator reports in
     /// [`PlannedPath::resolution`](super::PlannedPath::resolution). Default
-    /// [`EdgeResolution::CONTINUOUS`]: [`edge_interferes`] (the part's boxes swept
+    /// [`SweepMethod::CONTINUOUS`]: [`edge_interferes`] (the part's boxes swept
     /// over the edge, then conservative advancement per triangle pair that can meet,
     /// so no obstacle is jumped over); a pair in contact (within `tolerance / 2`,
     /// touching or sliding) gets a crossing check every `contact_step_mm` (≥
     /// [`MIN_STEP_MM`], raised to half the tolerance; 0.05 by default: a sliding
     /// contact costs one check per 0.05 mm instead of one per 0.005 mm, and a contact
     /// can deepen by at most about half a step between two checks). Or
-    /// [`EdgeResolution::Stepwise`]: static checks at most `step_mm` (≥
-    /// [`MIN_STEP_MM`]) and `step_rad` (≥ [`MIN_STEP_RAD`]) apart, bisection order,
+    /// [`SweepMethod::Stepwise`]: static checks at most `step_mm` (≥
+    /// [`MIN_STEP_MM`]) of translation and `step_rad` (≥ [`MIN_STEP_RAD`]) of rotation apart, bisection order,
     /// end pose first; features thinner than a step can be missed.
-    pub edge: EdgeResolution,
+    pub edge: SweepMethod,
     /// Largest distance (mm) [`MotionValidator::clearance`] looks for; farther
     /// obstacles report this value. Default 20.
     pub clearance_cap: f64,
@@ -44,7 +45,7 @@ impl Default for MeshValidatorOptions {
     fn default() -> Self {
         Self {
             tolerance: crate::collision::DEFAULT_TOLERANCE,
-            edge: EdgeResolution::CONTINUOUS,
+            edge: SweepMethod::CONTINUOUS,
             clearance_cap: 20.0,
         }
     }
@@ -96,7 +97,7 @@ impl MeshValidator {
         if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
             return Err(CollisionError::BadTolerance(options.tolerance));
         }
-        if let EdgeResolution::Stepwise {
+        if let SweepMethod::Stepwise {
             step_mm: mm,
             step_rad: rad,
         } = options.edge
@@ -113,7 +114,7 @@ impl MeshValidator {
                 )));
             }
         }
-        if let EdgeResolution::Continuous { contact_step_mm: c } = options.edge {
+        if let SweepMethod::Continuous { contact_step_mm: c } = options.edge {
             if !(c.is_finite() && c >= MIN_STEP_MM) {
                 return Err(CollisionError::BadMotion(format!(
                     "the contact step must be a finite number of at least {MIN_STEP_MM} mm, got {c}"
@@ -230,8 +231,8 @@ impl MeshValidator {
         EdgeOptions {
             tolerance: self.options.tolerance,
             contact_step: match self.options.edge {
-                EdgeResolution::Continuous { contact_step_mm } => contact_step_mm,
-                EdgeResolution::Stepwise { .. } => EdgeResolution::DEFAULT_CONTACT_STEP_MM,
+                SweepMethod::Continuous { contact_step_mm } => contact_step_mm,
+                SweepMethod::Stepwise { .. } => SweepMethod::DEFAULT_CONTACT_STEP_MM,
             },
         }
     }
@@ -302,10 +303,13 @@ impl MotionValidator for MeshValidator {
         self.pose_free(pose)
     }
 
-    fn resolution(&self) -> EdgeResolution {
+    fn resolution(&self) -> SweepMethod {
         match self.options.edge {
-            EdgeResolution::Continuous { .. } => EdgeResolution::Continuous {
-                contact_step_mm: self.edge_options().effective_contact_step(),
+            SweepMethod::Continuous { .. } => SweepMethod::Continuous {
+                contact_step_mm: contact_step(
+                    self.edge_options().contact_step,
+                    self.options.tolerance,
+                ),
             },
             stepwise => stepwise,
         }
@@ -321,8 +325,8 @@ impl MotionValidator for MeshValidator {
             return false;
         }
         match self.options.edge {
-            EdgeResolution::Continuous { .. } => self.continuous_edge_free(from, to),
-            EdgeResolution::Stepwise {
+            SweepMethod::Continuous { .. } => self.continuous_edge_free(from, to),
+            SweepMethod::Stepwise {
                 step_mm: mm,
                 step_rad: rad,
             } => {
@@ -372,7 +376,7 @@ mod tests {
     }
 
     /// A 10 mm cube moving over a wall 1 mm thick at x = 50.
-    fn wall_scene(edge: EdgeResolution) -> MeshValidator {
+    fn wall_scene(edge: SweepMethod) -> MeshValidator {
         let cube = collider(Mesh::cuboid(
             Point3::new(-5.0, -5.0, -5.0),
             Point3::new(5.0, 5.0, 5.0),
@@ -398,7 +402,7 @@ mod tests {
 
     #[test]
     fn touching_is_free_and_crossing_is_not() {
-        let mut v = wall_scene(EdgeResolution::CONTINUOUS);
+        let mut v = wall_scene(SweepMethod::CONTINUOUS);
         assert!(v.is_free(&at(0.0)));
         assert!(v.is_free(&at(45.0)), "touching the wall");
         assert!(!v.is_free(&at(45.5)));
@@ -410,7 +414,7 @@ mod tests {
 
     #[test]
     fn continuous_edges_never_jump_a_thin_wall() {
-        let mut v = wall_scene(EdgeResolution::CONTINUOUS);
+        let mut v = wall_scene(SweepMethod::CONTINUOUS);
         // both ends free, the wall in between
         assert!(v.is_free(&at(70.0)));
         assert!(!v.edge_free(&at(0.0), &at(70.0)));
@@ -421,12 +425,12 @@ mod tests {
         let start = at(44.0);
         assert!(!v.edge_free(&start, &start.then(&turn)));
         // a coarse stepwise check jumps the wall, as documented
-        let mut s = wall_scene(EdgeResolution::Stepwise {
+        let mut s = wall_scene(SweepMethod::Stepwise {
             step_mm: 100.0,
             step_rad: 1.0,
         });
         assert!(s.edge_free(&at(0.0), &at(70.0)));
-        let mut s = wall_scene(EdgeResolution::Stepwise {
+        let mut s = wall_scene(SweepMethod::Stepwise {
             step_mm: 0.5,
             step_rad: 0.01,
         });
@@ -442,7 +446,7 @@ mod tests {
             ..Default::default()
         }));
         assert!(bad(MeshValidatorOptions {
-            edge: EdgeResolution::Stepwise {
+            edge: SweepMethod::Stepwise {
                 step_mm: 0.0,
                 step_rad: 0.1,
             },
@@ -457,7 +461,7 @@ mod tests {
             MeshValidator::new(cube.clone(), vec![(cube.clone(), nan)], Default::default())
                 .is_err()
         );
-        let mut v = wall_scene(EdgeResolution::CONTINUOUS);
+        let mut v = wall_scene(SweepMethod::CONTINUOUS);
         assert!(!v.is_free(&nan));
         assert!(!v.edge_free(&at(0.0), &nan));
     }

@@ -13,7 +13,7 @@
 //! | [`rrt`], [`biased_rrt`] | seed 002 baselines | reference only |
 //! | [`local_rrt`] | seed 002, local-discretization RRT | narrow passages, insertions |
 //! | [`rrt_connect`] | bidirectional RRT (+ the local discretization on failure) | general, fast |
-//! | [`plan_insertion`] | disassembly first, then RRT-Connect to the free end | the benchmark problems ([`problems`]) |
+//! | [`plan_insertion`] | disassembly first, then RRT-Connect to the free end | the benchmark problems (`models/problems/`, [`ProblemFile`]) |
 //! | [`disassemble`] | seed 002, "what can be taken apart can be assembled" | insertions with unknown approach |
 //!
 //! Every planner takes a seed ([`PlanLimits::seed`]); for a given seed the result is
@@ -30,7 +30,6 @@ mod mesh_validator;
 mod narrow;
 mod path;
 mod problem_file;
-pub mod problems;
 mod request;
 mod rrt;
 mod rrt_connect;
@@ -64,4 +63,4 @@ pub use run::{
 };
 pub use smoothing::{smooth, Smoothing};
 pub use space::{PlanningSpace, RotationFreedom};
-pub use validator::{stepwise_edge_free, EdgeResolution, LazyValidation, MotionValidator};
+pub use validator::{stepwise_edge_free, LazyValidation, MotionValidator};

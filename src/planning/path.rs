@@ -1,7 +1,8 @@
 //! [`PlannedPath`]: what a planner returns, found or not.
 
 use super::run::Run;
-use super::validator::{Checker, EdgeResolution, MotionValidator};
+use super::validator::{Checker, MotionValidator};
+use crate::collision::SweepMethod;
 use crate::math::{AngleConvention, Transform};
 use std::io::{self, Write};
 
@@ -70,7 +71,7 @@ pub struct PlannedPath {
     /// Of `time_ms`, the smoothing (ms); 0 when smoothing is off or no path was found.
     pub smoothing_ms: f64,
     /// How the validator checked the edges.
-    pub resolution: EdgeResolution,
+    pub resolution: SweepMethod,
     /// Which planner produced the path.
     pub planner: &'static str,
 }
@@ -127,7 +128,7 @@ impl PlannedPath {
     /// than searched — a straight line, a path written by hand: lengths measured
     /// (raw = final), no search counts. `resolution` is how it is meant to be checked
     /// ([`PlannedPath::revalidate`] uses the validator's own options).
-    pub fn given(planner: &'static str, poses: Vec<Transform>, resolution: EdgeResolution) -> Self {
+    pub fn given(planner: &'static str, poses: Vec<Transform>, resolution: SweepMethod) -> Self {
         let (length_mm, rotation_rad) = measure(&poses);
         Self {
             failure: None,
@@ -269,7 +270,7 @@ mod tests {
                 AngleConvention::XyzFixed,
             ),
         ];
-        PlannedPath::given("test", poses, EdgeResolution::DEFAULT)
+        PlannedPath::given("test", poses, SweepMethod::DEFAULT)
     }
 
     #[test]

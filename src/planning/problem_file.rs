@@ -2,7 +2,7 @@
 //! (`models/problems/<name>.plan.json`), so scripts and benchmarks run problems by
 //! name instead of repeating start, goal and bounds.
 //!
-//! The format is what [`Problem::plan_json`](super::problems::Problem::plan_json)
+//! The format is what `Problem::plan_json` (the generators in `tests/common/problems.rs`)
 //! writes: poses as `{"t": [x, y, z], "q": [w, x, y, z]}` (mm; unit quaternion acting
 //! on column vectors, `p' = R p + t`), boxes as `*_min` / `*_max` corners (mm), the
 //! rotation weight in mm per rad.

@@ -2,7 +2,7 @@
 //! checked exactly with a separating-axis test, and the planner property tests.
 
 use super::*;
-use crate::collision::Aabb;
+use crate::collision::{Aabb, SweepMethod};
 use crate::math::{Transform, Vec3};
 use nalgebra::Matrix3;
 
@@ -75,8 +75,8 @@ impl MotionValidator for BoxScene {
             obb_overlaps_aabb(&r, &c, &self.half, &b, &e)
         })
     }
-    fn resolution(&self) -> EdgeResolution {
-        EdgeResolution::Stepwise {
+    fn resolution(&self) -> SweepMethod {
+        SweepMethod::Stepwise {
             step_mm: self.step_mm,
             step_rad: self.step_rad,
         }

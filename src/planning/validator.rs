@@ -1,61 +1,8 @@
 //! [`MotionValidator`]: the one question planners ask about geometry.
 
+use crate::collision::SweepMethod;
 use crate::math::Transform;
 use std::time::Instant;
-
-/// How a validator checks a straight SE(3) edge (translation lerp + rotation slerp).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum EdgeResolution {
-    /// Conservative advancement: while the part is clear of every obstacle, each
-    /// advance is shorter than the distance to the nearest one, so nothing is jumped
-    /// over; while it touches one (within half the penetration tolerance), poses are
-    /// checked every `contact_step_mm` of point displacement, so a contact that
-    /// deepens and recedes within one such step can go unseen.
-    Continuous {
-        /// Largest displacement of any point of the part between two checked poses
-        /// while it touches an obstacle (mm).
-        contact_step_mm: f64,
-    },
-    /// Poses are checked at most `step_mm` of translation and `step_rad` of rotation
-    /// apart; an obstacle thinner than one step can be missed between two poses.
-    Stepwise {
-        /// Largest translation between two checked poses (mm).
-        step_mm: f64,
-        /// Largest rotation between two checked poses (rad).
-        step_rad: f64,
-    },
-}
-
-impl std::fmt::Display for EdgeResolution {
-    /// `continuous (0.05 mm steps in contact)` or `stepwise 0.1 mm / 0.115°`.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            EdgeResolution::Continuous { contact_step_mm } => {
-                write!(f, "continuous ({contact_step_mm} mm steps in contact)")
-            }
-            EdgeResolution::Stepwise { step_mm, step_rad } => {
-                write!(f, "stepwise {step_mm} mm / {:.4}°", step_rad.to_degrees())
-            }
-        }
-    }
-}
-
-impl EdgeResolution {
-    /// The contact step of [`EdgeResolution::CONTINUOUS`], mm.
-    pub const DEFAULT_CONTACT_STEP_MM: f64 = 0.05;
-
-    /// The continuous check with the default contact step (0.05 mm): the mesh
-    /// validator's default.
-    pub const CONTINUOUS: Self = Self::Continuous {
-        contact_step_mm: Self::DEFAULT_CONTACT_STEP_MM,
-    };
-
-    /// The resolution used by validators that do not state one: 0.1 mm, 0.002 rad.
-    pub const DEFAULT: Self = Self::Stepwise {
-        step_mm: 0.1,
-        step_rad: 0.002,
-    };
-}
 
 /// Lazy validation of a tree search: edges are explored with pose checks only
 /// (`is_free` at most `step_mm` of translation and `step_mm / rotation_weight` of
@@ -104,9 +51,11 @@ pub trait MotionValidator {
     /// Whether the component at `pose` is free of collision.
     fn is_free(&mut self, pose: &Transform) -> bool;
 
-    /// How [`edge_free`](Self::edge_free) covers an edge.
-    fn resolution(&self) -> EdgeResolution {
-        EdgeResolution::DEFAULT
+    /// How [`edge_free`](Self::edge_free) covers an edge (for an edge, a stepwise
+    /// `step_mm` bounds the translation of the part origin, mm, and `step_rad` its
+    /// rotation, rad).
+    fn resolution(&self) -> SweepMethod {
+        SweepMethod::DEFAULT
     }
 
     /// Whether the straight edge `from → to` (translation lerp + slerp) is free.
@@ -116,12 +65,14 @@ pub trait MotionValidator {
     ///
     /// The default checks poses at [`resolution`](Self::resolution) with
     /// [`stepwise_edge_free`]; a validator that reports
-    /// [`EdgeResolution::Continuous`] must override this method (the default then
-    /// falls back to [`EdgeResolution::DEFAULT`] steps).
+    /// [`SweepMethod::Continuous`] must override this method (the default then
+    /// falls back to [`SweepMethod::DEFAULT`] steps).
     fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
         let (step_mm, step_rad) = match self.resolution() {
-            EdgeResolution::Stepwise { step_mm, step_rad } => (step_mm, step_rad),
-            EdgeResolution::Continuous { .. } => (0.1, 0.002),
+            SweepMethod::Stepwise { step_mm, step_rad } => (step_mm, step_rad),
+            SweepMethod::Continuous { .. } => {
+                (SweepMethod::DEFAULT_STEP_MM, SweepMethod::DEFAULT_STEP_RAD)
+            }
         };
         stepwise_edge_free(|p| self.is_free(p), from, to, step_mm, step_rad)
     }
@@ -145,7 +96,7 @@ impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
     fn is_free(&mut self, pose: &Transform) -> bool {
         (**self).is_free(pose)
     }
-    fn resolution(&self) -> EdgeResolution {
+    fn resolution(&self) -> SweepMethod {
         (**self).resolution()
     }
     fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
@@ -164,8 +115,9 @@ impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
 ///
 /// The end pose is checked first (extensions mostly fail where they end), then the
 /// interior in bisection order (midpoint, quarter points, …) so that a blocked edge is
-/// usually rejected after few checks. Non-positive or non-finite steps fall back to
-/// [`EdgeResolution::DEFAULT`]; non-finite poses are reported as not free.
+/// usually rejected after few checks. Steps are in mm and rad; non-positive or
+/// non-finite steps fall back to [`SweepMethod::DEFAULT`]'s; non-finite poses are
+/// reported as not free.
 pub fn stepwise_edge_free(
     mut is_free: impl FnMut(&Transform) -> bool,
     from: &Transform,
@@ -173,24 +125,15 @@ pub fn stepwise_edge_free(
     step_mm: f64,
     step_rad: f64,
 ) -> bool {
-    let (step_mm, step_rad) = match EdgeResolution::DEFAULT {
-        EdgeResolution::Stepwise {
-            step_mm: dm,
-            step_rad: dr,
-        } => (
-            if step_mm.is_finite() && step_mm > 0.0 {
-                step_mm
-            } else {
-                dm
-            },
-            if step_rad.is_finite() && step_rad > 0.0 {
-                step_rad
-            } else {
-                dr
-            },
-        ),
-        EdgeResolution::Continuous { .. } => unreachable!("DEFAULT is stepwise"),
+    let valid_or = |x: f64, default: f64| {
+        if x.is_finite() && x > 0.0 {
+            x
+        } else {
+            default
+        }
     };
+    let step_mm = valid_or(step_mm, SweepMethod::DEFAULT_STEP_MM);
+    let step_rad = valid_or(step_rad, SweepMethod::DEFAULT_STEP_RAD);
     let (angle, dist) = from.distance_to(to);
     if !(angle.is_finite() && dist.is_finite()) {
         return false;
@@ -307,7 +250,7 @@ impl<'v> Checker<'v> {
             .filter(|c| c.is_finite() && *c >= 0.0)
     }
 
-    pub fn resolution(&self) -> EdgeResolution {
+    pub fn resolution(&self) -> SweepMethod {
         self.validator.resolution()
     }
 }

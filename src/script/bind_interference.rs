@@ -134,10 +134,8 @@ fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> Scr
         o.time_limit_ms = opt_num(m, "time_limit_ms")?;
         let step = opt_num(m, "step")?;
         o.method = match opt_str(m, "method")?.as_deref() {
-            None | Some("continuous") => SweepMethod::Continuous,
-            Some("step") => SweepMethod::Stepwise {
-                step_mm: step.unwrap_or(1.0),
-            },
+            None | Some("continuous") => SweepMethod::CONTINUOUS_FINE,
+            Some("step") => SweepMethod::displacement_steps(step.unwrap_or(1.0)),
             Some(other) => {
                 return err(format!(
                     "unknown sweep method `{other}`: \"step\" or \"continuous\""

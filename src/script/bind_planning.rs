@@ -6,11 +6,11 @@ use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
 use super::convert::{check_keys, err, fail, num, opt_num, opt_str};
 use super::{Context, ScriptResult};
-use crate::collision::Aabb;
+use crate::collision::{Aabb, SweepMethod};
 use crate::math::AngleConvention;
 use crate::planning::{
-    Control, EdgeResolution, MeshValidatorOptions, NarrowPassage, Phase, PlannedPath, Planner,
-    ProblemFile, Progress, RotationFreedom, PLANNER_NAMES,
+    Control, MeshValidatorOptions, NarrowPassage, Phase, PlannedPath, Planner, ProblemFile,
+    Progress, RotationFreedom, PLANNER_NAMES,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -127,11 +127,11 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
         validator.tolerance = t;
     }
     validator.edge = match opt_str(opts, "edge")?.as_deref() {
-        None | Some("continuous") => EdgeResolution::Continuous {
+        None | Some("continuous") => SweepMethod::Continuous {
             contact_step_mm: opt_num(opts, "contact_step")?
-                .unwrap_or(EdgeResolution::DEFAULT_CONTACT_STEP_MM),
+                .unwrap_or(SweepMethod::DEFAULT_CONTACT_STEP_MM),
         },
-        Some("step") => EdgeResolution::Stepwise {
+        Some("step") => SweepMethod::Stepwise {
             step_mm: opt_num(opts, "edge_step")?.unwrap_or(0.1),
             step_rad: opt_num(opts, "edge_step_deg")?.unwrap_or(0.1).to_radians(),
         },

@@ -10,12 +10,10 @@ use super::options::{
     DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
 };
 use super::task::{Grasp, Operation, Task};
-use crate::collision::{edge_interferes, interferes, Aabb, EdgeOptions};
+use crate::collision::{edge_interferes, interferes, Aabb, EdgeOptions, SweepMethod};
 use crate::document::{Document, MateKind, Reference};
 use crate::math::{Transform, Vec3};
-use crate::planning::{
-    EdgeResolution, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace,
-};
+use crate::planning::{MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace};
 use crate::workspace::{Scene, SceneCache, WorkspaceError};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
@@ -514,7 +512,7 @@ impl<'d> Ctx<'d> {
         self.sweeps.fetch_add(1, Ordering::Relaxed);
         let options = EdgeOptions {
             tolerance: self.opts.tolerance,
-            contact_step: EdgeResolution::DEFAULT_CONTACT_STEP_MM,
+            contact_step: SweepMethod::DEFAULT_CONTACT_STEP_MM,
         };
         let start = self.scene.poses[p];
         // In pieces: the stretch before `entry`, where the boxes are still apart
@@ -765,7 +763,7 @@ impl<'d> Ctx<'d> {
     }
 
     /// A validator for `p` moving among the components of `mask`.
-    fn validator(&self, p: usize, mask: Mask, edge: EdgeResolution) -> Option<MeshValidator> {
+    fn validator(&self, p: usize, mask: Mask, edge: SweepMethod) -> Option<MeshValidator> {
         let obstacles: Vec<_> = members(mask)
             .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
             .collect();
@@ -788,7 +786,7 @@ impl<'d> Ctx<'d> {
     /// checked continuously among `mask`.
     fn two_segment(&self, p: usize, mask: Mask) -> Option<PlannedPath> {
         let region = union_box(&self.boxes, mask)?;
-        let mut v = self.validator(p, mask, EdgeResolution::CONTINUOUS)?;
+        let mut v = self.validator(p, mask, SweepMethod::CONTINUOUS)?;
         let start = self.scene.poses[p];
         let mut leaves: Vec<Vec3> = axis_dirs().to_vec();
         for d in &self.dirs[p] {
@@ -994,7 +992,7 @@ impl Search<'_, '_> {
         if let Some(path) = &self.planned_ok[p] {
             // Reuse only: a part whose path the later parts block should have gone
             // in earlier (that order is searched too).
-            let mut v = ctx.validator(p, mask, EdgeResolution::CONTINUOUS)?;
+            let mut v = ctx.validator(p, mask, SweepMethod::CONTINUOUS)?;
             return path.revalidate(&mut v).is_ok().then(|| path.clone());
         }
         if had_free & bit(p) != 0 || self.planned_failed[p].iter().any(|&f| f & !mask == 0) {
@@ -1314,7 +1312,7 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
         let (safe, path) = match &ch.planned {
             Some(path) => {
                 let mut validator = ctx
-                    .validator(p, mask, EdgeResolution::CONTINUOUS)
+                    .validator(p, mask, SweepMethod::CONTINUOUS)
                     .ok_or_else(|| format!("no validator for {}", ctx.names[p]))?;
                 if path.revalidate(&mut validator).is_err() {
                     return Err(format!("the planned path of {} is blocked", ctx.names[p]));
@@ -1338,11 +1336,8 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
                 }
                 let safe = ctx.safe_length(p, &ch.leave, mask);
                 let from = assembled.then(&Transform::from_translation(ch.leave * safe));
-                let path = PlannedPath::given(
-                    "straight",
-                    vec![from, assembled],
-                    EdgeResolution::CONTINUOUS,
-                );
+                let path =
+                    PlannedPath::given("straight", vec![from, assembled], SweepMethod::CONTINUOUS);
                 (safe, path)
             }
         };

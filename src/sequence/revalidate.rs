@@ -3,9 +3,10 @@
 //! Units: millimetres, assembly frame.
 
 use super::options::{Sequence, SequenceError};
+use crate::collision::SweepMethod;
 use crate::document::Document;
 use crate::math::format::length as fmt_mm;
-use crate::planning::{EdgeResolution, MeshValidator, MeshValidatorOptions};
+use crate::planning::{MeshValidator, MeshValidatorOptions};
 use crate::workspace::{Scene, SceneCache, WorkspaceError};
 
 /// A step of a sequence that no longer holds in the edited document.
@@ -114,7 +115,7 @@ pub fn revalidate(
             .collect();
         let options = MeshValidatorOptions {
             tolerance,
-            edge: EdgeResolution::CONTINUOUS,
+            edge: SweepMethod::CONTINUOUS,
             ..MeshValidatorOptions::default()
         };
         let validator = |qs: &[usize]| {

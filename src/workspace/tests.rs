@@ -4,7 +4,7 @@
 use super::*;
 use crate::collision::SweepMethod;
 use crate::math::Vec3;
-use crate::planning::{EdgeResolution, Failure, Planner, RotationFreedom};
+use crate::planning::{Failure, Planner, RotationFreedom};
 use std::path::Path as FsPath;
 use std::time::Instant;
 
@@ -23,7 +23,10 @@ fn plan_path_ends_with_the_time_limit_outcome() {
     let doc = open("models/problems/ring_puzzle.yaml");
     let mut cache = SceneCache::new();
     let ws = Workspace::new(&doc, &mut cache).unwrap();
-    let goal = crate::planning::problems::ring_puzzle().unwrap().goal;
+    let goal =
+        crate::planning::ProblemFile::read(FsPath::new("models/problems/ring_puzzle.plan.json"))
+            .unwrap()
+            .goal;
     for disassemble in [false, true] {
         let mut request = PlanRequest {
             disassemble,
@@ -117,7 +120,7 @@ fn degenerate_resolutions_are_refused() {
     let ws = Workspace::new(&doc, &mut cache).unwrap();
     let goal = shifted(&ws.pose("screw5").unwrap(), 0.0, 0.0, 40.0);
     let mut request = PlanRequest::default();
-    request.validator.edge = EdgeResolution::Stepwise {
+    request.validator.edge = SweepMethod::Stepwise {
         step_mm: 1e-9,
         step_rad: 0.1f64.to_radians(),
     };
@@ -127,7 +130,7 @@ fn degenerate_resolutions_are_refused() {
         "{err}"
     );
     assert!(err.to_string().contains("at least"), "{err}");
-    request.validator.edge = EdgeResolution::Continuous {
+    request.validator.edge = SweepMethod::Continuous {
         contact_step_mm: 1e-12,
     };
     assert!(ws.plan_path("screw5", &goal, &request, None).is_err());
@@ -140,7 +143,7 @@ fn sweeps_honour_their_budget() {
     let ws = Workspace::new(&doc, &mut cache).unwrap();
     let to = shifted(&ws.pose("screw5").unwrap(), 0.0, 0.0, 300.0);
     let options = SweepOptions {
-        method: SweepMethod::Stepwise { step_mm: 0.01 },
+        method: SweepMethod::displacement_steps(0.01),
         time_limit_ms: Some(1.0),
         ..SweepOptions::default()
     };

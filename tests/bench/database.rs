@@ -4,10 +4,11 @@
 //! `FITUP_BENCH_POSTGRES=postgres://…` the same is timed on that PostgreSQL server.
 //! Figures go to docs/performance.md.
 
+use fitup::collision::SweepMethod;
 use fitup::db::{Database, PathMeta, PathQuery, Target};
 use fitup::kinematics::{JointKind, Trajectory, TrajectorySample};
 use fitup::math::{Rng, Transform, Vec3};
-use fitup::planning::{EdgeResolution, PlannedPath};
+use fitup::planning::PlannedPath;
 use std::time::Instant;
 
 const N: usize = 10_000;
@@ -55,7 +56,7 @@ fn data() -> (PlannedPath, Trajectory) {
         time_ms: 1.0,
         search_ms: 1.0,
         smoothing_ms: 0.0,
-        resolution: EdgeResolution::DEFAULT,
+        resolution: SweepMethod::DEFAULT,
         planner: "rrt_connect",
     };
     let mut t = Trajectory::new(vec![JointKind::Revolute; 6]);

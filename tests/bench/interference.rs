@@ -351,10 +351,10 @@ fn sweeps() {
     println!("|---|---|---|---|---|");
     for (mname, m) in [("box 12 tris", &mover), ("sphere 10k tris", &ball)] {
         for (name, method) in [
-            ("step 5 mm", SweepMethod::Stepwise { step_mm: 5.0 }),
-            ("step 1 mm", SweepMethod::Stepwise { step_mm: 1.0 }),
-            ("step 0.1 mm", SweepMethod::Stepwise { step_mm: 0.1 }),
-            ("continuous", SweepMethod::Continuous),
+            ("step 5 mm", SweepMethod::displacement_steps(5.0)),
+            ("step 1 mm", SweepMethod::displacement_steps(1.0)),
+            ("step 0.1 mm", SweepMethod::displacement_steps(0.1)),
+            ("continuous", SweepMethod::CONTINUOUS_FINE),
         ] {
             let mut rng = Rng::new(11);
             let (mut missed, mut err, mut n) = (0, 0.0, 0);

@@ -1,5 +1,5 @@
 //! Planning benchmark: fitup's best planner (`plan_insertion`) on the benchmark
-//! problems (`fitup::planning::problems`) against OMPL's RRTConnect (FCL collision,
+//! problems (`tests/common/problems.rs`) against OMPL's RRTConnect (FCL collision,
 //! `tests/bench/ompl_peer.py`) and OMPL 1.5 C++ RRTConnect and KPIECE1
 //! (`tests/bench/ompl/harness.cpp`, compiled here when `libompl-dev` and
 //! `libfcl-dev` are installed, skipped with a message otherwise) in the same run, and seed 002's protocol (100 runs ×
@@ -18,11 +18,14 @@
 //! default 10000), `FITUP_DEFAULT=0` (skip the default rows: variants and peers only),
 //! `FITUP_SMOOTHED=0` (skip the smoothed row).
 
-use fitup::planning::problems::{self, Problem};
+#[path = "../common/problems.rs"]
+mod problems;
+
 use fitup::planning::{
     disassemble, DisassemblyPlanner, InsertionOptions, LocalRrtOptions, MeshValidatorOptions,
     RrtOptions, Smoothing,
 };
+use problems::Problem;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -11,21 +11,36 @@
 //! | [`bar_slot`] | a flat bar turns 90° to pass a slot 0.3 mm wider than itself, then turns back |
 //! | [`peg_tilt`] | a peg taller than a window enters lying, stands up inside and drops into a 0.2 mm hole |
 //! | [`key_ring`] | a small ring threaded on a two-turn split key ring: out only along the spiral |
+//!
+//! Test scaffolding, not part of the library: users get the problems as files
+//! (`models/problems/<name>.yaml` + `.plan.json`, read with
+//! `fitup::planning::ProblemFile`). Included with `#[path]` by
+//! `tests/planning_problems.rs` (which rewrites the files with `FITUP_BLESS=1`) and
+//! the planning benchmark. Lengths in mm, angles in radians.
 
-use super::insertion::{plan_insertion, InsertionOptions};
-use super::path::PlannedPath;
-use super::run::PlanError;
-use super::space::PlanningSpace;
-use super::{EdgeResolution, MeshValidator, MeshValidatorOptions};
-use crate::collision::Aabb;
-use crate::collision::{Collider, CollisionError};
-use crate::document::file::{ComponentFile, DocumentFile, PartFile};
-use crate::math::{Point3, Transform, Vec3};
-use crate::mesh::{write_stl, Mesh, MeshError};
+#![allow(dead_code)]
+
+use fitup::collision::{Aabb, Collider, CollisionError, SweepMethod};
+use fitup::document::file::{ComponentFile, DocumentFile, PartFile};
+use fitup::math::{Point3, Transform, Vec3};
+use fitup::mesh::{write_stl, Mesh, MeshError};
+use fitup::planning::{
+    plan_insertion, InsertionOptions, MeshValidator, MeshValidatorOptions, PlanError, PlannedPath,
+    PlanningSpace,
+};
 use indexmap::IndexMap;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::path::Path as FsPath;
 use std::sync::Arc;
+
+/// A generator's own error (no file, no line).
+fn invalid(message: impl Into<String>) -> MeshError {
+    MeshError {
+        path: None,
+        line: None,
+        message: message.into(),
+    }
+}
 
 /// Obstacle colliders with their poses (part frame → assembly frame).
 pub type PosedColliders = Vec<(Arc<Collider>, Transform)>;
@@ -92,7 +107,7 @@ impl Problem {
 
     /// Colliders of the moving part and the obstacles (one per distinct part).
     pub fn colliders(&self) -> Result<(Arc<Collider>, PosedColliders), CollisionError> {
-        let mut cache = crate::collision::ColliderCache::new();
+        let mut cache = fitup::collision::ColliderCache::new();
         let moving = cache.get(&self.moving)?;
         let obstacles = self
             .obstacles
@@ -112,7 +127,7 @@ impl Problem {
     }
 
     /// The validator options the benchmarks and tests use: exact interference with
-    /// the default tolerance, continuous edges ([`EdgeResolution::CONTINUOUS`]).
+    /// the default tolerance, continuous edges ([`SweepMethod::CONTINUOUS`]).
     pub fn default_validator_options(&self) -> MeshValidatorOptions {
         MeshValidatorOptions::default()
     }
@@ -128,7 +143,7 @@ impl Problem {
             .map(|v| v.coords.norm())
             .fold(1.0, f64::max);
         MeshValidatorOptions {
-            edge: EdgeResolution::Stepwise {
+            edge: SweepMethod::Stepwise {
                 step_mm: 0.05,
                 step_rad: 0.05 / radius,
             },
@@ -268,11 +283,11 @@ impl Problem {
             .document()
             .to_yaml()
             .map_err(|e| ProblemError::Io(e.to_string()))?;
-        crate::fsutil::write_atomic(&dir.join(format!("{}.yaml", self.name)), yaml.as_bytes())
+        fitup::fsutil::write_atomic(&dir.join(format!("{}.yaml", self.name)), yaml.as_bytes())
             .map_err(io)?;
         let json = serde_json::to_string_pretty(&self.plan_json())
             .map_err(|e| ProblemError::Io(e.to_string()))?;
-        crate::fsutil::write_atomic(
+        fitup::fsutil::write_atomic(
             &dir.join(format!("{}.plan.json", self.name)),
             format!("{json}\n").as_bytes(),
         )
@@ -308,9 +323,7 @@ fn boxed(lo: [f64; 3], hi: [f64; 3]) -> Mesh {
 /// A clearance that is not finite and in `(0, 20)` mm.
 pub fn peg_in_hole(clearance: f64) -> Result<Problem, MeshError> {
     if !(clearance.is_finite() && clearance > 0.0 && clearance < 20.0) {
-        return Err(MeshError::invalid(
-            "the peg-in-hole clearance must be in (0, 20) mm",
-        ));
+        return Err(invalid("the peg-in-hole clearance must be in (0, 20) mm"));
     }
     let r = 10.0 + clearance;
     let block = Mesh::lathe(
@@ -326,7 +339,7 @@ pub fn peg_in_hole(clearance: f64) -> Result<Problem, MeshError> {
     )?;
     let peg = Mesh::cylinder(10.0, 100.0, 64);
     let lying = Transform::from_rotation_about(Point3::origin(), Vec3::y(), FRAC_PI_2)
-        .map_err(|e| MeshError::invalid(e.to_string()))?;
+        .map_err(|e| invalid(e.to_string()))?;
     let name = format!("peg_in_hole_{}", (clearance * 1000.0).round() as i64);
     Ok(Problem {
         description: format!(
@@ -406,7 +419,7 @@ pub fn piston_rod_cap() -> Result<Problem, MeshError> {
 /// # Errors
 /// None in practice (the generated meshes are valid).
 pub fn screw_cell() -> Result<Problem, MeshError> {
-    use crate::demo::{screw_mesh, table_mesh, HOLE_RADIUS, PLATE_THICKNESS, TABLE_TOP};
+    use fitup::demo::{screw_mesh, table_mesh, HOLE_RADIUS, PLATE_THICKNESS, TABLE_TOP};
     let screw = Arc::new(screw_mesh()?);
     let plate_a = Mesh::perforated_plate(3, 2, 100.0, PLATE_THICKNESS, HOLE_RADIUS, 8, |i, j| {
         [(0, 0), (1, 1), (2, 0)].contains(&(i, j))
@@ -520,10 +533,10 @@ pub fn ring_puzzle() -> Result<Problem, MeshError> {
     let fixed = ring(big, wire, 0.0, 96, 16)?;
     let slit_ring = ring(big, wire, gap, 96, 16)?;
     let upright = Transform::from_rotation_about(Point3::origin(), Vec3::x(), FRAC_PI_2)
-        .map_err(|e| MeshError::invalid(e.to_string()))?;
+        .map_err(|e| invalid(e.to_string()))?;
     // The slit faces away from the fixed ring's wire (local +X → world -X side turned).
     let turn = Transform::from_rotation_about(Point3::origin(), Vec3::z(), PI / 2.0)
-        .map_err(|e| MeshError::invalid(e.to_string()))?;
+        .map_err(|e| invalid(e.to_string()))?;
     let start = turn.then(&upright).then(&at(big, 0.0, 0.0));
     Ok(Problem {
         name: "ring_puzzle".into(),
@@ -547,7 +560,7 @@ pub fn ring_puzzle() -> Result<Problem, MeshError> {
 /// A rotation by `angle` (rad) about `axis` through the origin.
 fn turn(axis: Vec3, angle: f64) -> Result<Transform, MeshError> {
     Transform::from_rotation_about(Point3::origin(), axis, angle)
-        .map_err(|e| MeshError::invalid(e.to_string()))
+        .map_err(|e| invalid(e.to_string()))
 }
 
 /// A rod round a corner: a Ø6 × 40 mm rod (origin at its centre, axis X) in an
@@ -752,7 +765,7 @@ pub fn key_ring() -> Result<Problem, MeshError> {
     let align = Transform::from_parts(
         Vec3::zeros(),
         nalgebra::UnitQuaternion::rotation_between(&Vec3::z(), &tangent)
-            .ok_or_else(|| MeshError::invalid("degenerate key ring tangent"))?,
+            .ok_or_else(|| invalid("degenerate key ring tangent"))?,
     );
     let start = align.then(&at(radius * t0.cos(), radius * t0.sin(), lead * t0));
     Ok(Problem {
