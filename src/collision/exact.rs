@@ -387,12 +387,29 @@ fn deep_reach(
         v.dedup();
     }
     let a_in_b = Relative::new(pb, pa).iso;
-    let reach = climb(a, b, &a_in_b, &of_a, tolerance, eps, early);
-    if early && reach > tolerance {
-        return reach;
-    }
     let b_in_a = Relative::new(pa, pb).iso;
-    reach.max(climb(b, a, &b_in_a, &of_b, tolerance, eps, early))
+    // A witness of `a` deeper than the tolerance inside `b` lies in `a`'s box and in
+    // `b`'s box shrunk by the tolerance: when these do not meet (a plate on a table,
+    // a part near first contact in a sweep), no climb can find one.
+    let may_reach = |inner: &Collider, outer: &Collider, iso: &Isometry3<f64>| {
+        let b = outer.bounds();
+        let shrunk = Aabb {
+            lo: b.lo.map(|v| v + tolerance),
+            hi: b.hi.map(|v| v - tolerance),
+        };
+        inner.bounds().transformed(iso).overlap(&shrunk).min() >= 0.0
+    };
+    let mut reach = 0.0f64;
+    if may_reach(a, b, &a_in_b) {
+        reach = climb(a, b, &a_in_b, &of_a, tolerance, eps, early);
+        if early && reach > tolerance {
+            return reach;
+        }
+    }
+    if may_reach(b, a, &b_in_a) {
+        reach = reach.max(climb(b, a, &b_in_a, &of_b, tolerance, eps, early));
+    }
+    reach
 }
 
 /// [`deep_reach`] one way: triangles of `inner` (mapped into `outer`'s frame by
@@ -430,24 +447,29 @@ fn climb(
         let mut best = f64::NEG_INFINITY;
         for p in points {
             let (d, near) = outer.closest_triangle(&p);
-            let signed = if d <= eps {
-                0.0
-            } else if d > sure {
-                if outer.contains_point(&p) {
+            if d <= eps {
+                best = best.max(0.0);
+                continue;
+            }
+            let f = outer.tri(near);
+            let n = (f[1] - f[0]).cross(&(f[2] - f[0])).normalize();
+            let along = n.dot(&(p - closest_on_triangle(&p, &f)));
+            let signed = if d > sure {
+                // Closest to a face's interior (offset along its normal) and in
+                // front of it: outside for sure, no ray cast (most points of a
+                // touching part). Otherwise ray parity decides.
+                if along >= 0.999 * d {
+                    -d
+                } else if outer.contains_point(&p) {
                     *deepest = deepest.max(d);
                     d
                 } else {
                     -d
                 }
+            } else if along < 0.0 {
+                d
             } else {
-                let f = outer.tri(near);
-                let n = (f[1] - f[0]).cross(&(f[2] - f[0]));
-                let c = closest_on_triangle(&p, &f);
-                if n.dot(&(p - c)) < 0.0 {
-                    d
-                } else {
-                    -d
-                }
+                -d
             };
             best = best.max(signed);
         }
