@@ -722,3 +722,29 @@ print("revalidate ok");
     assert!(text.contains("broken 0 gear:"), "{text}");
     assert!(text.contains("revalidate ok"), "{text}");
 }
+
+/// The safe length does not depend on the tessellation: the fine pegboard's pegs
+/// (1200 facets of 0.0105 mm, about the tolerance) come out as far as the coarse
+/// ones'. Before the exact check's depth walk, every crossing pair of the fine
+/// meshes was within the tolerance and a peg pushed into its hole wall read as
+/// touching, giving 0.89 mm instead of the whole shaft.
+#[test]
+fn fine_pegboard_safe_length_matches_the_coarse_one() {
+    let dir = std::env::temp_dir().join(format!("fitup_seq_fine_peg_{}", std::process::id()));
+    let o = SequenceOptions {
+        mode: Mode::Geometry,
+        ..Default::default()
+    };
+    let mut lengths = Vec::new();
+    for segments in [16, 1200] {
+        let path = pegboard::pegboard_with(&dir.join(format!("s{segments}")), true, segments);
+        let doc = Document::open(&path).unwrap();
+        let mut cache = SceneCache::new();
+        let up = Vec3::new(0.0, 0.0, 1.0);
+        lengths.push(safe_length(&doc, &mut cache, "peg11", &up, &o).unwrap());
+    }
+    // the shaft is 5 mm long: free once it has left the plate
+    assert!(lengths[0] >= 5.0, "{lengths:?}");
+    assert_eq!(lengths[0], lengths[1], "coarse vs fine");
+    let _ = std::fs::remove_dir_all(&dir);
+}

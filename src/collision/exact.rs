@@ -3,11 +3,12 @@
 //! ray parity, and the minimum distance used by continuous sweeps.
 
 use super::shape::{Aabb, Collider, Node, Obb};
-use super::triangle::{tri_distance, tri_tri, Tri};
+use super::triangle::{closest_on_triangle, tri_distance, tri_tri, Tri};
 use super::{CollisionError, Contact, InterferenceKind, PairMember};
 use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3};
 use std::cell::Cell;
+use std::collections::{HashMap, HashSet};
 use std::ops::ControlFlow;
 
 /// The pose of `b`'s part frame in `a`'s part frame, with what the node test needs.
@@ -125,11 +126,11 @@ fn for_each_triangle_pair<B>(
     rel: &Relative,
     margin: f64,
     floor: &Cell<f64>,
-    mut f: impl FnMut(&Tri, &Tri) -> ControlFlow<B>,
+    mut f: impl FnMut(u32, &Tri, u32, &Tri) -> ControlFlow<B>,
 ) -> ControlFlow<B> {
     let mut stack: Vec<(u32, u32)> = Vec::with_capacity(64);
     stack.push((0, 0));
-    let mut moved: Vec<(Tri, Aabb)> = Vec::with_capacity(8);
+    let mut moved: Vec<(u32, Tri, Aabb)> = Vec::with_capacity(8);
     while let Some((i, j)) = stack.pop() {
         let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
         let (oa, ob) = (&a.obbs[i as usize], &b.obbs[j as usize]);
@@ -143,16 +144,17 @@ fn for_each_triangle_pair<B>(
         match (na.count > 0, nb.count > 0) {
             (true, true) => {
                 moved.clear();
-                moved.extend(b.leaf_tris(nb).map(|t| {
-                    let m = rel.tri(&t);
-                    (m, tri_box(&m))
+                moved.extend((nb.first..nb.first + nb.count).map(|kb| {
+                    let m = rel.tri(&b.tri(kb as usize));
+                    (kb, m, tri_box(&m))
                 }));
-                for ta in a.leaf_tris(na) {
+                for ka in na.first..na.first + na.count {
+                    let ta = a.tri(ka as usize);
                     let ba = tri_box(&ta);
-                    for (tb, bb) in &moved {
+                    for (kb, tb, bb) in &moved {
                         // cheap reject before the exact test
                         if ba.overlap(bb).min() >= -margin {
-                            f(&ta, tb)?;
+                            f(ka, &ta, *kb, tb)?;
                         }
                     }
                 }
@@ -249,26 +251,37 @@ pub fn interferes(
     let eps = eps(a, b, pa, pb);
     let oriented = a.is_solid() && b.is_solid();
     let mut crossed = false;
-    // once some pair crosses, only a pair deeper than the tolerance can change the answer
+    let mut seeds = Vec::new();
+    // Open meshes: once some pair crosses, only a pair deeper than the tolerance can
+    // change the answer. Solids: shallow crossings are seeds of the depth walk, so
+    // every one is visited (the same pairs as `contact` visits before a deep one).
     let floor = Cell::new(-1.0);
-    let crossing = for_each_triangle_pair(a, b, &rel, eps, &floor, |ta, tb| {
-        match tri_tri(ta, tb, eps, oriented) {
-            Some(d) if d > tolerance => ControlFlow::Break(()),
-            Some(d) => {
-                if d > 0.0 {
-                    crossed = true;
-                    floor.set(tolerance);
+    let crossing =
+        for_each_triangle_pair(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
+            match tri_tri(ta, tb, eps, oriented) {
+                Some(d) if d > tolerance => ControlFlow::Break(()),
+                Some(d) => {
+                    if d > 0.0 {
+                        crossed = true;
+                        if oriented {
+                            seeds.push((ka, kb));
+                        } else {
+                            floor.set(tolerance);
+                        }
+                    }
+                    ControlFlow::Continue(())
                 }
-                ControlFlow::Continue(())
+                None => ControlFlow::Continue(()),
             }
-            None => ControlFlow::Continue(()),
-        }
-    });
+        });
     if crossing.is_break() {
         return Ok(true);
     }
-    // surfaces that cross (even shallowly) cannot have one solid inside the other
-    Ok(!crossed && containment(a, pa, b, pb, eps).is_some())
+    if crossed {
+        // surfaces that cross (even shallowly) cannot have one solid inside the other
+        return Ok(oriented && deep_reach(a, pa, b, pb, &seeds, tolerance, eps, true) > tolerance);
+    }
+    Ok(containment(a, pa, b, pb, eps).is_some())
 }
 
 /// The full verdict for parts `a` at `pa` and `b` at `pb` (part frames → world):
@@ -291,15 +304,20 @@ pub fn contact(
     let oriented = a.is_solid() && b.is_solid();
     let mut touching = false;
     let mut depth = 0.0f64;
-    // Once some pair crosses, the verdict is `Touching` or `Interfering` with the
-    // largest depth: only a pair deeper than both the tolerance and the depth found
-    // can change it.
+    let mut seeds = Vec::new();
+    // Once some pair crosses deeper than the tolerance (or, for open meshes, at
+    // all), the verdict is `Touching` or `Interfering` with the largest pair depth:
+    // only a pair deeper than both the tolerance and the depth found can change it.
+    // Solids visit every shallow crossing first: they seed the depth walk.
     let floor = Cell::new(-1.0);
-    let _ = for_each_triangle_pair::<()>(a, b, &rel, eps, &floor, |ta, tb| {
+    let _ = for_each_triangle_pair::<()>(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
         if let Some(d) = tri_tri(ta, tb, eps, oriented) {
             touching = true;
             depth = depth.max(d);
-            if depth > 0.0 {
+            if oriented && d > 0.0 && d <= tolerance {
+                seeds.push((ka, kb));
+            }
+            if depth > tolerance || (!oriented && depth > 0.0) {
                 floor.set(depth.max(tolerance));
             }
         }
@@ -313,6 +331,15 @@ pub fn contact(
     }
     // surfaces that cross (even shallowly) cannot have one solid inside the other
     if depth > 0.0 {
+        if oriented {
+            let reach = deep_reach(a, pa, b, pb, &seeds, tolerance, eps, false);
+            if reach > tolerance {
+                return Ok(Contact::Interfering {
+                    depth: reach,
+                    kind: InterferenceKind::SurfacesCross,
+                });
+            }
+        }
         return Ok(Contact::Touching);
     }
     if let Some((inner, depth)) = containment(a, pa, b, pb, eps) {
@@ -326,6 +353,156 @@ pub fn contact(
     } else {
         Contact::Separate
     })
+}
+
+/// How deep the surface of one solid reaches into the other when their surfaces
+/// cross only shallowly (every pair of triangles within the tolerance), mm: the
+/// largest distance to `b`'s surface of a sample point (centroid, edge midpoints)
+/// of a triangle of `a` inside `b`, and vice versa, over the triangles reached by
+/// climbing from the crossing triangles `seeds` (`(a's, b's)` tree indices) to
+/// deeper and deeper edge neighbours. 0 when nothing is found deeper than the
+/// tolerance. With `early`, returns as soon as some point is deeper than
+/// `tolerance` (the verdict is the same: the climbs are deterministic).
+///
+/// Why: a crossing pair's depth cannot exceed the smaller facet, so on fine meshes
+/// (facets about the tolerance) a 0.5 mm overlap crosses only shallowly pair by
+/// pair; the surface inside the other solid still reaches 0.5 mm deep. Cheap when
+/// touching: every sample point near a contact line is within the tolerance of the
+/// other surface, so the climbs stop after a step or two.
+#[allow(clippy::too_many_arguments)]
+fn deep_reach(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    seeds: &[(u32, u32)],
+    tolerance: f64,
+    eps: f64,
+    early: bool,
+) -> f64 {
+    let mut of_a: Vec<u32> = seeds.iter().map(|s| s.0).collect();
+    let mut of_b: Vec<u32> = seeds.iter().map(|s| s.1).collect();
+    for v in [&mut of_a, &mut of_b] {
+        v.sort_unstable();
+        v.dedup();
+    }
+    let a_in_b = Relative::new(pb, pa).iso;
+    let b_in_a = Relative::new(pa, pb).iso;
+    // A witness of `a` deeper than the tolerance inside `b` lies in `a`'s box and in
+    // `b`'s box shrunk by the tolerance: when these do not meet (a plate on a table,
+    // a part near first contact in a sweep), no climb can find one.
+    let may_reach = |inner: &Collider, outer: &Collider, iso: &Isometry3<f64>| {
+        let b = outer.bounds();
+        let shrunk = Aabb {
+            lo: b.lo.map(|v| v + tolerance),
+            hi: b.hi.map(|v| v - tolerance),
+        };
+        inner.bounds().transformed(iso).overlap(&shrunk).min() >= 0.0
+    };
+    let mut reach = 0.0f64;
+    if may_reach(a, b, &a_in_b) {
+        reach = climb(a, b, &a_in_b, &of_a, tolerance, eps, early);
+        if early && reach > tolerance {
+            return reach;
+        }
+    }
+    if may_reach(b, a, &b_in_a) {
+        reach = reach.max(climb(b, a, &b_in_a, &of_b, tolerance, eps, early));
+    }
+    reach
+}
+
+/// [`deep_reach`] one way: triangles of `inner` (mapped into `outer`'s frame by
+/// `iso`) climbing into the solid `outer` from `seeds` (tree order).
+fn climb(
+    inner: &Collider,
+    outer: &Collider,
+    iso: &Isometry3<f64>,
+    seeds: &[u32],
+    tolerance: f64,
+    eps: f64,
+    early: bool,
+) -> f64 {
+    // Points farther than this from the surface are classified by ray parity and
+    // count as witnesses; nearer ones take the side of the nearest face's plane,
+    // which only steers the climb.
+    let sure = tolerance.max(100.0 * eps);
+    let mut deepest = 0.0f64;
+    let mut scores: HashMap<u32, f64> = HashMap::new();
+    let mut walked: HashSet<u32> = HashSet::new();
+    // signed depth of triangle k: the largest over its sample points of the
+    // distance to `outer`'s surface, negative outside
+    let mut score = |k: u32, deepest: &mut f64| -> f64 {
+        if let Some(&s) = scores.get(&k) {
+            return s;
+        }
+        let t = inner.tri(k as usize).map(|p| iso * p);
+        let centre = nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]);
+        let points = [
+            centre,
+            nalgebra::center(&t[0], &t[1]),
+            nalgebra::center(&t[1], &t[2]),
+            nalgebra::center(&t[2], &t[0]),
+        ];
+        let mut best = f64::NEG_INFINITY;
+        for p in points {
+            let (d, near) = outer.closest_triangle(&p);
+            if d <= eps {
+                best = best.max(0.0);
+                continue;
+            }
+            let f = outer.tri(near);
+            let n = (f[1] - f[0]).cross(&(f[2] - f[0])).normalize();
+            let along = n.dot(&(p - closest_on_triangle(&p, &f)));
+            let signed = if d > sure {
+                // Closest to a face's interior (offset along its normal) and in
+                // front of it: outside for sure, no ray cast (most points of a
+                // touching part). Otherwise ray parity decides.
+                if along >= 0.999 * d {
+                    -d
+                } else if outer.contains_point(&p) {
+                    *deepest = deepest.max(d);
+                    d
+                } else {
+                    -d
+                }
+            } else if along < 0.0 {
+                d
+            } else {
+                -d
+            };
+            best = best.max(signed);
+        }
+        scores.insert(k, best);
+        best
+    };
+    for &seed in seeds {
+        let mut here = seed;
+        let mut level = score(seed, &mut deepest);
+        while walked.insert(here) {
+            if early && deepest > tolerance {
+                return deepest;
+            }
+            let mut next = None;
+            for n in inner.neighbours(here as usize) {
+                if n == u32::MAX {
+                    continue;
+                }
+                let s = score(n, &mut deepest);
+                if s > level + eps && next.is_none_or(|(_, best)| s > best) {
+                    next = Some((n, s));
+                }
+            }
+            match next {
+                Some((n, s)) => (here, level) = (n, s),
+                None => break,
+            }
+        }
+        if early && deepest > tolerance {
+            return deepest;
+        }
+    }
+    deepest
 }
 
 /// When the surfaces do not cross: is one solid inside the other? Returns which

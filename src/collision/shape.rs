@@ -9,7 +9,7 @@ use crate::math::{Point3, Vec3};
 use crate::mesh::{Mesh, MeshReport};
 use nalgebra::Matrix3;
 use std::collections::HashMap;
-use std::sync::{Arc, Weak};
+use std::sync::{Arc, OnceLock, Weak};
 
 /// Largest coordinate magnitude (mm) a collider accepts: beyond it the f64 spacing
 /// exceeds the contact tolerances used here.
@@ -209,6 +209,9 @@ pub struct Collider {
     report: MeshReport,
     radius: f64,
     pub(crate) eps: f64,
+    /// Edge neighbours of each triangle in tree order (`u32::MAX`: none), built on
+    /// first use by the shallow-crossing depth walk (`exact::deep_reach`).
+    neighbours: OnceLock<Vec<[u32; 3]>>,
 }
 
 /// Something about a mesh that weakens the answers given for it.
@@ -317,6 +320,7 @@ impl Collider {
             report,
             radius,
             eps: 1e-9 * scale,
+            neighbours: OnceLock::new(),
         })
     }
 
@@ -414,6 +418,71 @@ impl Collider {
             }
         }
         best
+    }
+
+    /// Distance from `p` (part frame) to the surface and the tree-order index of a
+    /// closest triangle, mm.
+    pub(crate) fn closest_triangle(&self, p: &Point3) -> (f64, usize) {
+        let mut best = (f64::INFINITY, 0usize);
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i as usize];
+            if node.bounds.distance_to_point(p) >= best.0 {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.first as usize..(node.first + node.count) as usize {
+                    let d = (p - closest_on_triangle(p, &self.tri(k))).norm();
+                    if d < best.0 {
+                        best = (d, k);
+                    }
+                }
+            } else {
+                let (l, r) = (node.first, node.first + 1);
+                let dl = self.nodes[l as usize].bounds.distance_to_point(p);
+                let dr = self.nodes[r as usize].bounds.distance_to_point(p);
+                // nearer child last so it is popped first
+                if dl < dr {
+                    stack.extend([r, l]);
+                } else {
+                    stack.extend([l, r]);
+                }
+            }
+        }
+        best
+    }
+
+    /// The triangles (tree order) sharing an edge with triangle `k` (tree order);
+    /// `u32::MAX` where the edge has no single other triangle (open or non-manifold
+    /// edge, or a neighbour dropped as degenerate).
+    pub(crate) fn neighbours(&self, k: usize) -> [u32; 3] {
+        self.neighbours.get_or_init(|| {
+            let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * self.order.len());
+            for (k, &t) in self.order.iter().enumerate() {
+                let v = self.mesh.triangles[t as usize];
+                for e in 0..3 {
+                    let (a, b) = (v[e], v[(e + 1) % 3]);
+                    let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+                    edges.push((key, (k as u32) << 2 | e as u32));
+                }
+            }
+            edges.sort_unstable();
+            let mut out = vec![[u32::MAX; 3]; self.order.len()];
+            let mut i = 0;
+            while i < edges.len() {
+                let mut j = i + 1;
+                while j < edges.len() && edges[j].0 == edges[i].0 {
+                    j += 1;
+                }
+                if j - i == 2 {
+                    let (x, y) = (edges[i].1, edges[i + 1].1);
+                    out[(x >> 2) as usize][(x & 3) as usize] = y >> 2;
+                    out[(y >> 2) as usize][(y & 3) as usize] = x >> 2;
+                }
+                i = j;
+            }
+            out
+        })[k]
     }
 
     /// The `x` of every crossing of the line `y = y0, z = z0` (part frame) with the
