@@ -129,13 +129,7 @@ fn component(name: &str, part: &str, fixed: bool, color: &str, t: Transform) -> 
 /// The demo document (as its YAML schema), meshes named `meshes/*.stl`.
 pub fn cell_document() -> DocumentFile {
     let mut parts = IndexMap::new();
-    let mut table = PartFile {
-        stl: "meshes/table.stl".into(),
-        planes: IndexMap::new(),
-        axes: IndexMap::new(),
-        points: IndexMap::new(),
-        features: vec![],
-    };
+    let mut table = PartFile::from_stl("meshes/table.stl");
     table.planes.insert(
         "top_face".into(),
         plane([0.0, 0.0, TABLE_TOP], [0.0, 0.0, 1.0]),
@@ -157,13 +151,7 @@ pub fn cell_document() -> DocumentFile {
         "plate_b".into(),
         plate_part("meshes/plate_b.stl", 2, 2, &PLATE_B_HOLES),
     );
-    let mut screw = PartFile {
-        stl: "meshes/screw.stl".into(),
-        planes: IndexMap::new(),
-        axes: IndexMap::new(),
-        points: IndexMap::new(),
-        features: vec![],
-    };
+    let mut screw = PartFile::from_stl("meshes/screw.stl");
     screw
         .axes
         .insert("axis".into(), axis([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]));
@@ -355,13 +343,7 @@ fn mz07_parts(parts: &mut IndexMap<String, PartFile>) {
     for (name, _) in mz07_link_meshes() {
         parts.insert(
             name.clone(),
-            PartFile {
-                stl: format!("meshes/{name}.stl"),
-                planes: IndexMap::new(),
-                axes: IndexMap::new(),
-                points: IndexMap::new(),
-                features: vec![],
-            },
+            PartFile::from_stl(format!("meshes/{name}.stl")),
         );
     }
 }
@@ -434,13 +416,7 @@ pub fn cell_robots_document() -> DocumentFile {
     mz07_parts(&mut doc.parts);
     doc.parts.insert(
         "pedestal".into(),
-        PartFile {
-            stl: "meshes/pedestal.stl".into(),
-            planes: IndexMap::new(),
-            axes: IndexMap::new(),
-            points: IndexMap::new(),
-            features: vec![],
-        },
+        PartFile::from_stl("meshes/pedestal.stl"),
     );
     for (name, y, s, feature, color) in [
         ("mz07_a", -350.0, 1.0, "a角度", "#e8b020"),

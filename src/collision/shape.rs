@@ -391,38 +391,19 @@ impl Collider {
     /// Distance from `p` (part frame) to the surface, stopping early once it is
     /// known to be below `stop` (then the value returned is some distance `< stop`).
     pub fn distance_to_point(&self, p: &Point3, stop: f64) -> f64 {
-        let mut best = f64::INFINITY;
-        let mut stack = vec![0u32];
-        while let Some(i) = stack.pop() {
-            let node = &self.nodes[i as usize];
-            if node.bounds.distance_to_point(p) >= best {
-                continue;
-            }
-            if node.count > 0 {
-                for t in self.leaf_tris(node) {
-                    best = best.min((p - closest_on_triangle(p, &t)).norm());
-                }
-                if best < stop {
-                    return best;
-                }
-            } else {
-                let (l, r) = (node.first, node.first + 1);
-                let dl = self.nodes[l as usize].bounds.distance_to_point(p);
-                let dr = self.nodes[r as usize].bounds.distance_to_point(p);
-                // nearer child last so it is popped first
-                if dl < dr {
-                    stack.extend([r, l]);
-                } else {
-                    stack.extend([l, r]);
-                }
-            }
-        }
-        best
+        self.closest(p, stop).0
     }
 
     /// Distance from `p` (part frame) to the surface and the tree-order index of a
     /// closest triangle, mm.
     pub(crate) fn closest_triangle(&self, p: &Point3) -> (f64, usize) {
+        self.closest(p, 0.0)
+    }
+
+    /// The nearest triangle to `p` (part frame): distance (mm) and tree-order index,
+    /// best first through the tree; stops at the first leaf that brings the distance
+    /// below `stop` (0: never stops early).
+    fn closest(&self, p: &Point3, stop: f64) -> (f64, usize) {
         let mut best = (f64::INFINITY, 0usize);
         let mut stack = vec![0u32];
         while let Some(i) = stack.pop() {
@@ -436,6 +417,9 @@ impl Collider {
                     if d < best.0 {
                         best = (d, k);
                     }
+                }
+                if best.0 < stop {
+                    return best;
                 }
             } else {
                 let (l, r) = (node.first, node.first + 1);

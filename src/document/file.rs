@@ -59,6 +59,20 @@ pub struct PartFile {
     pub features: Vec<FeatureFile>,
 }
 
+impl PartFile {
+    /// A part that is only its mesh: `stl` relative to the document's folder, no
+    /// reference geometry, no features.
+    pub fn from_stl(stl: impl Into<String>) -> Self {
+        PartFile {
+            stl: stl.into(),
+            planes: IndexMap::new(),
+            axes: IndexMap::new(),
+            points: IndexMap::new(),
+            features: Vec::new(),
+        }
+    }
+}
+
 /// A feature of a part's feature tree.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]

@@ -38,26 +38,11 @@ impl MeshCache {
                 return Ok(e.mesh.clone());
             }
         }
-        let bytes = crate::fsutil::read_file(&key, crate::fsutil::FileKind::Mesh)
-            .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
-        let hash = content_hash(&bytes);
-        if let Some(e) = self.entries.get_mut(&key) {
-            if e.hash == hash {
-                e.stamp = now;
-                return Ok(e.mesh.clone());
-            }
-        }
-        let mesh = Arc::new(super::parse_stl(&bytes).map_err(|e| e.in_file(path))?);
-        self.loads += 1;
-        self.entries.insert(
-            key,
-            Entry {
-                stamp: now,
-                hash,
-                mesh: mesh.clone(),
-            },
-        );
-        Ok(mesh)
+        let known = self.entries.get(&key).map(|e| e.hash);
+        let (hash, mesh) = read_mesh(&key, path, known)?;
+        // `read_mesh` leaves out the mesh only when the bytes hash as the cached entry
+        self.store(key, now, hash, mesh)
+            .ok_or_else(|| MeshError::invalid("the cached mesh vanished").in_file(path))
     }
 
     /// Reads and parses the files of `paths` that are not cached or changed, in
@@ -87,36 +72,41 @@ impl MeshCache {
             .collect();
         let read: Vec<Option<(u64, Option<Mesh>)>> = wanted
             .par_iter()
-            .map(|(key, _)| {
-                let bytes = crate::fsutil::read_file(key, crate::fsutil::FileKind::Mesh).ok()?;
-                let hash = content_hash(&bytes);
-                if known.get(key) == Some(&hash) {
-                    return Some((hash, None)); // same bytes: the cached mesh stands
-                }
-                Some((hash, Some(super::parse_stl(&bytes).ok()?)))
-            })
+            .map(|(key, _)| read_mesh(key, key, known.get(key).copied()).ok())
             .collect();
         for ((key, now), r) in wanted.into_iter().zip(read) {
-            match r {
-                Some((hash, Some(mesh))) => {
-                    self.loads += 1;
-                    self.entries.insert(
-                        key,
-                        Entry {
-                            stamp: now,
-                            hash,
-                            mesh: Arc::new(mesh),
-                        },
-                    );
-                }
-                Some((_, None)) => {
-                    if let Some(e) = self.entries.get_mut(&key) {
-                        e.stamp = now;
-                    }
-                }
-                None => {}
+            if let Some((hash, mesh)) = r {
+                self.store(key, now, hash, mesh);
             }
         }
+    }
+
+    /// Records what [`read_mesh`] found for `key` at `stamp`: a parsed mesh replaces
+    /// the entry (one more load); no mesh (the bytes hash as cached) refreshes the
+    /// cached entry's stamp. Returns the entry's mesh (`None`: no mesh and no entry).
+    fn store(
+        &mut self,
+        key: PathBuf,
+        stamp: Stamp,
+        hash: u64,
+        mesh: Option<Mesh>,
+    ) -> Option<Arc<Mesh>> {
+        let Some(mesh) = mesh else {
+            let e = self.entries.get_mut(&key)?;
+            e.stamp = stamp;
+            return Some(e.mesh.clone());
+        };
+        let mesh = Arc::new(mesh);
+        self.loads += 1;
+        self.entries.insert(
+            key,
+            Entry {
+                stamp,
+                hash,
+                mesh: mesh.clone(),
+            },
+        );
+        Some(mesh)
     }
 
     /// How many times a file was actually parsed (for tests and the watch header).
@@ -128,6 +118,24 @@ impl MeshCache {
     pub fn read_uncached(path: &Path) -> Result<Mesh, MeshError> {
         read_stl(path)
     }
+}
+
+/// Reads the STL file `key` (canonical path; errors name `path`): its content hash and
+/// the parsed mesh, or `None` for the mesh when the bytes hash to `known` (the cached
+/// mesh stands).
+fn read_mesh(
+    key: &Path,
+    path: &Path,
+    known: Option<u64>,
+) -> Result<(u64, Option<Mesh>), MeshError> {
+    let bytes = crate::fsutil::read_file(key, crate::fsutil::FileKind::Mesh)
+        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
+    let hash = content_hash(&bytes);
+    if known == Some(hash) {
+        return Ok((hash, None));
+    }
+    let mesh = super::parse_stl(&bytes).map_err(|e| e.in_file(path))?;
+    Ok((hash, Some(mesh)))
 }
 
 #[cfg(test)]

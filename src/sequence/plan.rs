@@ -526,19 +526,21 @@ impl<'d> Ctx<'d> {
         let entry = entry_distance(&bp, &bq, d, self.opts.tolerance).min(len);
         let mut piece = (0.5 * self.opts.probe_mm).min(SWEEP_PIECE_MM);
         let mut at = 0.0;
-        if entry > piece {
-            at = entry - 0.5 * piece;
-            let b = start.then(&Transform::from_translation(d * at));
-            let hit = edge_interferes(
+        // whether the straight piece `a → b` of the sweep hits `q`
+        let hits = |a: &Transform, b: &Transform| {
+            edge_interferes(
                 &self.scene.colliders[p],
-                &start,
-                &b,
+                a,
+                b,
                 &self.scene.colliders[q],
                 &self.scene.poses[q],
                 &options,
             )
-            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?;
-            if hit {
+            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))
+        };
+        if entry > piece {
+            at = entry - 0.5 * piece;
+            if hits(&start, &start.then(&Transform::from_translation(d * at)))? {
                 return Ok(true);
             }
         }
@@ -555,16 +557,7 @@ impl<'d> Ctx<'d> {
             at = next;
             piece = (2.0 * piece).min(SWEEP_PIECE_MM);
             let b = start.then(&Transform::from_translation(d * next));
-            let hit = edge_interferes(
-                &self.scene.colliders[p],
-                &a,
-                &b,
-                &self.scene.colliders[q],
-                &self.scene.poses[q],
-                &options,
-            )
-            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?;
-            if hit {
+            if hits(&a, &b)? {
                 return Ok(true);
             }
             a = b;

@@ -583,13 +583,7 @@ fn script_rows() {
     for name in ["torus", "box"] {
         file.parts.insert(
             name.into(),
-            PartFile {
-                stl: format!("meshes/{name}.stl"),
-                planes: Default::default(),
-                axes: Default::default(),
-                points: Default::default(),
-                features: vec![],
-            },
+            PartFile::from_stl(format!("meshes/{name}.stl")),
         );
         file.components.push(ComponentFile {
             name: name.into(),

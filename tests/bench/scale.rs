@@ -58,13 +58,7 @@ fn write_cell(dir: &Path, parts: usize) -> (std::path::PathBuf, usize) {
         write_stl(&dir.join(format!("meshes/{name}.stl")), &mesh).unwrap();
         file.parts.insert(
             name.clone(),
-            PartFile {
-                stl: format!("meshes/{name}.stl"),
-                planes: Default::default(),
-                axes: Default::default(),
-                points: Default::default(),
-                features: vec![],
-            },
+            PartFile::from_stl(format!("meshes/{name}.stl")),
         );
         let at = Vec3::new((i % side) as f64 * PITCH, (i / side) as f64 * PITCH, 0.0);
         file.components.push(ComponentFile {

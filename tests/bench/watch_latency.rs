@@ -32,13 +32,7 @@ fn measure(extra: &[&str]) {
     let triangles: usize = sieve.triangles.len() + 60 + 928 + 640 + 5 * 256;
     file.parts.insert(
         "sieve".into(),
-        PartFile {
-            stl: "meshes/sieve.stl".into(),
-            planes: Default::default(),
-            axes: Default::default(),
-            points: Default::default(),
-            features: vec![],
-        },
+        PartFile::from_stl("meshes/sieve.stl"),
     );
     file.components.push(ComponentFile {
         name: "sieve".into(),

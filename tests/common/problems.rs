@@ -192,13 +192,7 @@ impl Problem {
     /// The problem as a document (moving component at its start pose, named
     /// `moving`; meshes `meshes/<name>_<part>.stl`).
     pub fn document(&self) -> DocumentFile {
-        let part = |p: &str| PartFile {
-            stl: format!("meshes/{}_{p}.stl", self.name),
-            planes: IndexMap::new(),
-            axes: IndexMap::new(),
-            points: IndexMap::new(),
-            features: vec![],
-        };
+        let part = |p: &str| PartFile::from_stl(format!("meshes/{}_{p}.stl", self.name));
         let mut parts = IndexMap::new();
         parts.insert(self.moving_part.clone(), part(&self.moving_part));
         for o in &self.obstacles {
