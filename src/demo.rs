@@ -414,10 +414,8 @@ pub fn cell_robots_document() -> DocumentFile {
     let mut doc = cell_document();
     doc.description = Some("Seed 000 demo cell with two NACHI MZ07 arms beside the table".into());
     mz07_parts(&mut doc.parts);
-    doc.parts.insert(
-        "pedestal".into(),
-        PartFile::from_stl("meshes/pedestal.stl"),
-    );
+    doc.parts
+        .insert("pedestal".into(), PartFile::from_stl("meshes/pedestal.stl"));
     for (name, y, s, feature, color) in [
         ("mz07_a", -350.0, 1.0, "a角度", "#e8b020"),
         ("mz07_b", 1150.0, -1.0, "b角度", "#d06020"),

@@ -114,6 +114,18 @@ impl Planner {
         }
     }
 
+    /// The share of the search's work the fallbacks of a blocked extension may take
+    /// ([`RrtConnectOptions::fallback_share`]) for the tree planners; `None` for
+    /// `greedy_ant` and `rrt_floyd`.
+    pub fn fallback_share_mut(&mut self) -> Option<&mut f64> {
+        match self {
+            Planner::Rrt(o) | Planner::BiasedRrt(o) => Some(&mut o.fallback_share),
+            Planner::LocalRrt(o) => Some(&mut o.rrt.fallback_share),
+            Planner::RrtConnect(o) => Some(&mut o.fallback_share),
+            Planner::GreedyAnt(_) | Planner::RrtFloyd(_) => None,
+        }
+    }
+
     /// The path shortcutting settings.
     pub fn smoothing(&self) -> Smoothing {
         match self {
@@ -223,8 +235,10 @@ impl Planner {
             Planner::RrtConnect(o) => {
                 options.approach = o.clone();
                 options.approach.limits.max_iterations = limits.max_iterations;
-                // The same narrow-passage measures for the disassembly search.
+                // The same narrow-passage measures and fallback share for the
+                // disassembly search.
                 options.disassembly.rrt_mut().narrow = o.narrow;
+                options.disassembly.rrt_mut().fallback_share = o.fallback_share;
             }
             Planner::GreedyAnt(_) | Planner::RrtFloyd(_) => {
                 return Err(PlanError::InvalidOption {

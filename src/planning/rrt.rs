@@ -7,7 +7,7 @@ use super::path::PlannedPath;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::{shortcut, Smoothing};
 use super::space::PlanningSpace;
-use super::tree::{check_ends, PoseTarget, Target, Tree};
+use super::tree::{check_ends, Effort, PoseTarget, Target, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Rng, Transform};
 
@@ -37,6 +37,12 @@ pub struct RrtOptions {
     /// [`InsertionOptions::default`](super::InsertionOptions) turns fitup's
     /// defaults on for its disassembly.
     pub narrow: NarrowPassage,
+    /// Largest share of the search's work the fallbacks of a blocked extension
+    /// (the lattice of [`local_rrt`](super::local_rrt), extension to contact,
+    /// bridge-test sampling, dynamic-domain redraws) may take, in `[0, 1]`; see
+    /// [`RrtConnectOptions::fallback_share`](super::RrtConnectOptions::fallback_share).
+    /// Default 1 (every blocked extension, seed 002's search).
+    pub fallback_share: f64,
 }
 
 impl Default for RrtOptions {
@@ -50,6 +56,7 @@ impl Default for RrtOptions {
             smoothing: Smoothing::default(),
             lazy: None,
             narrow: NarrowPassage::OFF,
+            fallback_share: 1.0,
         }
     }
 }
@@ -72,6 +79,7 @@ impl RrtOptions {
             l.validate()?;
         }
         self.narrow.validate()?;
+        PlanError::probability("fallback_share", self.fallback_share)?;
         self.smoothing.validate()
     }
 }
@@ -174,10 +182,12 @@ pub(crate) fn plan_tree(
     let mut tree = Tree::new(*start, key_mm);
     let reference = start.rotation();
     let mut best = target.distance(start, space);
+    let mut effort = Effort::new(options.fallback_share);
     let outcome = loop {
         if target.reached(start) {
             break Ok(0);
         }
+        effort.iteration(best);
         if let Err(f) = run.next(tree.len(), best) {
             break Err(f);
         }
@@ -187,7 +197,18 @@ pub(crate) fn plan_tree(
             let s = target.sample(&mut rng, space, start);
             (s, tree.nearest(&s, space).0)
         } else {
-            narrow.sample(&mut rng, &mut checker, space, &reference, &tree)
+            match effort.run(&mut checker, |checker| {
+                narrow.sample(&mut rng, checker, space, &reference, &tree)
+            }) {
+                Some((s, near, scans)) => {
+                    effort.charge_scans(scans - 1, tree.len());
+                    (s, near)
+                }
+                None => {
+                    let s = space.sample(&mut rng, &reference);
+                    (s, tree.nearest(&s, space).0)
+                }
+            }
         };
         let mut added = Vec::new();
         let extended = narrow.extend(
@@ -205,14 +226,9 @@ pub(crate) fn plan_tree(
         if let Err(candidate) = extended {
             // Extension to contact: the lattice then works from the contact pose.
             let mut from = near;
-            if let Some(c) = narrow.extend_to_contact(
-                &mut checker,
-                space,
-                &reference,
-                &mut tree,
-                near,
-                &candidate,
-            ) {
+            if let Some(Some(c)) = effort.run(&mut checker, |checker| {
+                narrow.extend_to_contact(checker, space, &reference, &mut tree, near, &candidate)
+            }) {
                 added.push(c);
                 from = c;
             }
@@ -223,17 +239,19 @@ pub(crate) fn plan_tree(
                 } else {
                     &toward_sample
                 };
-                local.expand(
-                    &mut checker,
-                    space,
-                    &mut tree,
-                    from,
-                    rank,
-                    &reference,
-                    options.step,
-                    &mut rng,
-                    &mut added,
-                );
+                effort.run(&mut checker, |checker| {
+                    local.expand(
+                        checker,
+                        space,
+                        &mut tree,
+                        from,
+                        rank,
+                        &reference,
+                        options.step,
+                        &mut rng,
+                        &mut added,
+                    );
+                });
             }
         }
         let mut done = None;

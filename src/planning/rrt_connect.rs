@@ -8,7 +8,7 @@ use super::rrt::finish;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
-use super::tree::{check_ends, steer, PoseTarget, Tree};
+use super::tree::{check_ends, steer, Effort, PoseTarget, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Rng, Transform};
 
@@ -24,6 +24,18 @@ pub struct RrtConnectOptions {
     /// [`Lattice::RANDOM_MOVES`] random coordinated moves and
     /// [`Lattice::clearance_turns`].
     pub lattice: Option<Lattice>,
+    /// Largest share of the search's work the fallbacks of a blocked extension
+    /// may take, in `[0, 1]`: the lattice, extension to contact, bridge-test
+    /// sampling and dynamic-domain redraws run only while their work so far is at
+    /// most this share of all work (pose and edge checks, clearance queries and
+    /// nearest-node scans in pose-check units); past it an iteration is a plain
+    /// RRT-Connect one (uniform sample, straight step, the turn-limited retry).
+    /// They cost tens of checks where a plain extension costs a few: where plain
+    /// extensions make progress (open space, a rod turning a corner) they must not
+    /// eat the budget, and where they do not (a part threading a slit, a peg in a
+    /// tight hole) they still get their share. 1: always (fitup before 2026-12).
+    /// Default 0.1.
+    pub fallback_share: f64,
     /// Shortcut smoothing of the found path.
     pub smoothing: Smoothing,
     /// Explore with pose checks and certify only the candidate path with the
@@ -46,6 +58,7 @@ impl Default for RrtConnectOptions {
                 clearance_turns: true,
                 ..Lattice::default()
             }),
+            fallback_share: 0.1,
             smoothing: Smoothing::default(),
             lazy: Some(LazyValidation::default()),
             narrow: NarrowPassage::default(),
@@ -64,6 +77,7 @@ impl RrtConnectOptions {
             l.validate()?;
         }
         self.narrow.validate()?;
+        PlanError::probability("fallback_share", self.fallback_share)?;
         self.smoothing.validate()
     }
 }
@@ -120,13 +134,30 @@ pub fn rrt_connect(
     let mut a = 0;
     let mut best = space.distance(start, goal);
     let mut added = Vec::new();
+    let mut effort = Effort::new(options.fallback_share);
     let joined = loop {
+        effort.iteration(best);
         if let Err(f) = run.next(trees[0].len() + trees[1].len(), best) {
             break Err(f);
         }
         let b = 1 - a;
         let narrow = &options.narrow;
-        let (sample, near) = narrow.sample(&mut rng, &mut checker, space, &reference, &trees[a]);
+        // The bridge test and dynamic-domain redraws are fallbacks: within the
+        // share they run, past it the sample is uniform. The extension below
+        // always keeps the domains up to date and retries with a limited turn.
+        let (sample, near) = match effort.run(&mut checker, |checker| {
+            narrow.sample(&mut rng, checker, space, &reference, &trees[a])
+        }) {
+            Some((s, near, scans)) => {
+                // One scan is the plain iteration's own; the redraws are extra.
+                effort.charge_scans(scans - 1, trees[a].len());
+                (s, near)
+            }
+            None => {
+                let s = space.sample(&mut rng, &reference);
+                (s, trees[a].nearest(&s, space).0)
+            }
+        };
         added.clear();
         let extended = narrow.extend(
             &mut checker,
@@ -140,30 +171,34 @@ pub fn rrt_connect(
         if let Err(candidate) = extended {
             // Extension to contact: the lattice then works from the contact pose.
             let mut from = near;
-            if let Some(c) = narrow.extend_to_contact(
-                &mut checker,
-                space,
-                &reference,
-                &mut trees[a],
-                near,
-                &candidate,
-            ) {
+            if let Some(Some(c)) = effort.run(&mut checker, |checker| {
+                narrow.extend_to_contact(
+                    checker,
+                    space,
+                    &reference,
+                    &mut trees[a],
+                    near,
+                    &candidate,
+                )
+            }) {
                 added.push(c);
                 from = c;
             }
             if let Some(lattice) = &options.lattice {
                 let other_root = PoseTarget(trees[b].poses[0]);
-                lattice.expand(
-                    &mut checker,
-                    space,
-                    &mut trees[a],
-                    from,
-                    &other_root,
-                    &reference,
-                    options.step,
-                    &mut rng,
-                    &mut added,
-                );
+                effort.run(&mut checker, |checker| {
+                    lattice.expand(
+                        checker,
+                        space,
+                        &mut trees[a],
+                        from,
+                        &other_root,
+                        &reference,
+                        options.step,
+                        &mut rng,
+                        &mut added,
+                    );
+                });
             }
         }
         if let Ok(i) = extended {
@@ -180,6 +215,7 @@ pub fn rrt_connect(
                 options,
                 &mut best,
                 &mut rng,
+                &mut effort,
             ) {
                 let (s, g) = if a == 0 {
                     (last, reached)
@@ -243,6 +279,7 @@ fn connect(
     options: &RrtConnectOptions,
     best: &mut f64,
     rng: &mut Rng,
+    effort: &mut Effort,
 ) -> Option<usize> {
     let (mut node, _) = tree.nearest(q, space);
     // Bounded: the distance shrinks by `step` each round, but poses far apart with a
@@ -264,17 +301,19 @@ fn connect(
         }
         if let Some(lattice) = &options.lattice {
             let mut added = Vec::new();
-            lattice.expand(
-                checker,
-                space,
-                tree,
-                node,
-                &PoseTarget(*q),
-                reference,
-                options.step,
-                rng,
-                &mut added,
-            );
+            effort.run(checker, |checker| {
+                lattice.expand(
+                    checker,
+                    space,
+                    tree,
+                    node,
+                    &PoseTarget(*q),
+                    reference,
+                    options.step,
+                    rng,
+                    &mut added,
+                );
+            });
             if let Some(&last) = added.last() {
                 if space.distance(&tree.poses[last], q) < 1e-9 {
                     return Some(last);

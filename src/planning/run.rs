@@ -14,6 +14,9 @@ pub struct PlanLimits {
     /// whenever the iteration limit, not the time limit, ends the search.
     pub seed: u64,
     /// Largest number of iterations (tree extensions, or layers for the greedy ant).
+    /// Default 1,000,000: the time budget is what normally ends a search (an
+    /// iteration of RRT-Connect can cost a few microseconds, so a smaller cap
+    /// would end a search long before the budget a user asked for).
     pub max_iterations: usize,
     /// Wall-clock budget of the whole call in milliseconds — search, smoothing and
     /// nested searches together (`None`: [`DEFAULT_TIME_LIMIT_MS`]). When it runs out
@@ -27,7 +30,7 @@ impl Default for PlanLimits {
     fn default() -> Self {
         Self {
             seed: 0,
-            max_iterations: 10_000,
+            max_iterations: 1_000_000,
             time_limit_ms: None,
         }
     }

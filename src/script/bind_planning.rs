@@ -27,8 +27,9 @@ pub struct PathHandle(
     pub(super) MeshValidatorOptions,
 );
 
-const OPTION_KEYS: [&str; 21] = [
+const OPTION_KEYS: [&str; 22] = [
     "narrow",
+    "fallback_share",
     "disassemble",
     "planner",
     "seed",
@@ -106,6 +107,20 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
             None => {
                 return err(format!(
                     "planner `{}` has no narrow-passage options (rrt, biased_rrt, local_rrt and rrt_connect have)",
+                    planner.name()
+                ))
+            }
+        }
+    }
+    if let Some(f) = opt_num(opts, "fallback_share")? {
+        if !(0.0..=1.0).contains(&f) {
+            return err(format!("fallback_share must be in 0..1, not {f}"));
+        }
+        match planner.fallback_share_mut() {
+            Some(slot) => *slot = f,
+            None => {
+                return err(format!(
+                    "planner `{}` has no fallback share (rrt, biased_rrt, local_rrt and rrt_connect have)",
                     planner.name()
                 ))
             }
@@ -351,7 +366,7 @@ fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transfor
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified). `narrow` (the narrow-passage measures of the tree planners, on by default for `rrt_connect` and `disassemble: true`, off for seed 002's `rrt`, `biased_rrt`, `local_rrt`): `false` (all off), `true` (defaults) or a map of `max_turn_deg` (degrees, default 5, 0 = none: a blocked extension is retried turning at most this much), `dynamic_domain` (mm of the metric, default 10, 0 = off), `bridge` (probability of a bridge-test sample, default 0.1), `bridge_width` (mm, default 5), `to_contact` (bool, default true: a blocked extension keeps its farthest free pose). Fixed components are refused. A path that is not found says why in `reason`.");
+    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked, within `fallback_share` of the work; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified). `narrow` (the narrow-passage measures of the tree planners, on by default for `rrt_connect` and `disassemble: true`, off for seed 002's `rrt`, `biased_rrt`, `local_rrt`): `false` (all off), `true` (defaults) or a map of `max_turn_deg` (degrees, default 5, 0 = none: a blocked extension is retried turning at most this much), `dynamic_domain` (mm of the metric, default 10, 0 = off), `bridge` (probability of a bridge-test sample, default 0.1), `bridge_width` (mm, default 5), `to_contact` (bool, default true: a blocked extension keeps its farthest free pose). `fallback_share` (0..1: the largest share of the search's checks that the lattice, extension to contact, bridge test and dynamic-domain redraws may take, the rest being plain RRT-Connect iterations; default 0.1 for `rrt_connect` and `disassemble: true`, 1 for seed 002's `rrt`, `biased_rrt`, `local_rrt`). Fixed components are refused. A path that is not found says why in `reason`.");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
     api.f(

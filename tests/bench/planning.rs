@@ -16,14 +16,18 @@
 //! `FITUP_VARIANTS=narrow`: the narrow-passage variants instead, `FITUP_VARIANT=a,b`
 //! only those named), `FITUP_BUDGET_MS` (fitup's budget per call,
 //! default 10000), `FITUP_DEFAULT=0` (skip the default rows: variants and peers only),
-//! `FITUP_SMOOTHED=0` (skip the smoothed row).
+//! `FITUP_SMOOTHED=0` (skip the smoothed row), `FITUP_VARIANTS=share` (the
+//! fallback-share variants), `FITUP_SOLVER=rrt_connect` (fitup runs `rrt_connect`
+//! alone, what `plan_path` does without `disassemble`, instead of
+//! `plan_insertion`), `FITUP_ITERATIONS` (iteration cap, default
+//! `PlanLimits::default()`'s: the time budget ends a search, as OMPL's).
 
 #[path = "../common/problems.rs"]
 mod problems;
 
 use fitup::planning::{
     disassemble, DisassemblyPlanner, InsertionOptions, LocalRrtOptions, MeshValidatorOptions,
-    RrtOptions, Smoothing,
+    PlanLimits, RrtOptions, Smoothing,
 };
 use problems::Problem;
 use std::path::{Path, PathBuf};
@@ -105,6 +109,12 @@ fn budget_ms() -> f64 {
 /// the budget, measured around each call), printed at the end.
 static WORST_OVERRUN_MS: std::sync::Mutex<f64> = std::sync::Mutex::new(f64::NEG_INFINITY);
 
+/// `FITUP_SOLVER=rrt_connect`: fitup runs `rrt_connect` alone instead of
+/// `plan_insertion`.
+fn rrt_connect_alone() -> bool {
+    std::env::var("FITUP_SOLVER").is_ok_and(|s| s == "rrt_connect")
+}
+
 /// fitup's best planner on `p` for `runs` seeds; `smoothing` adds the shortcut
 /// pass (OMPL's `solve` does not simplify either); `variant` adjusts the options.
 fn fitup_runs(
@@ -118,14 +128,27 @@ fn fitup_runs(
     let first: u64 = env_or("FITUP_FIRST_SEED", 0);
     for seed in first..first + runs as u64 {
         let mut v = p.validator(options).unwrap();
-        let mut plan = InsertionOptions::default().with_limits(seed, 5000);
+        let mut plan = InsertionOptions::default().with_limits(
+            seed,
+            env_or("FITUP_ITERATIONS", PlanLimits::default().max_iterations),
+        );
         plan.time_limit_ms = Some(budget_ms());
         if !smoothing {
             plan.smoothing = Smoothing::OFF;
         }
         variant(&mut plan);
         let t0 = Instant::now();
-        let path = p.solve_with(&mut v, &plan).unwrap();
+        let path = if rrt_connect_alone() {
+            // What `plan_path` runs by default: `rrt_connect` from start to goal,
+            // no disassembly.
+            let mut o = plan.approach.clone();
+            o.limits.time_limit_ms = plan.time_limit_ms;
+            o.limits.seed = seed;
+            o.smoothing = plan.smoothing;
+            fitup::planning::rrt_connect(&mut v, &p.space, &p.start, &p.goal, &o, None).unwrap()
+        } else {
+            p.solve_with(&mut v, &plan).unwrap()
+        };
         let dt = t0.elapsed().as_secs_f64();
         let mut worst = WORST_OVERRUN_MS.lock().unwrap();
         *worst = worst.max(dt * 1e3 - budget_ms());
@@ -297,6 +320,34 @@ fn variants() -> Vec<(&'static str, Variant)> {
                 if let DisassemblyPlanner::LocalRrt(d) = &mut o.disassembly {
                     d.lattice.random_moves = 8;
                 }
+            }),
+        ),
+    ]
+}
+
+/// The fallback-share variants compared by `FITUP_VARIANTS=share` (issue 12): how
+/// much of the work the lattice and the narrow-passage measures may take in both
+/// searches (1: every blocked extension falls back, fitup before 2026-12; 0.1:
+/// fitup's default), and plain RRT-Connect (no lattice, no measures) for the
+/// approach.
+fn share_variants() -> Vec<(&'static str, Variant)> {
+    use fitup::planning::NarrowPassage;
+    let share = |f: f64| -> Variant {
+        Box::new(move |o: &mut InsertionOptions| {
+            o.approach.fallback_share = f;
+            o.disassembly.rrt_mut().fallback_share = f;
+        })
+    };
+    vec![
+        ("fallback share 1", share(1.0)),
+        ("fallback share 0.3", share(0.3)),
+        ("fallback share 0.1", share(0.1)),
+        ("fallback share 0.05", share(0.05)),
+        (
+            "plain approach",
+            Box::new(|o: &mut InsertionOptions| {
+                o.approach.lattice = None;
+                o.approach.narrow = NarrowPassage::OFF;
             }),
         ),
     ]
@@ -573,7 +624,13 @@ fn main() {
     let defaults = std::env::var("FITUP_DEFAULT").map_or(true, |v| v != "0");
     let smoothed_rows = std::env::var("FITUP_SMOOTHED").map_or(true, |v| v != "0");
     println!(
-        "planning: success and median time of successful runs; fitup = plan_insertion with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= 5000 iterations; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s"
+        "planning: success and median time of successful runs; fitup = {} with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= {} ms; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s",
+        if rrt_connect_alone() {
+            "rrt_connect"
+        } else {
+            "plan_insertion"
+        },
+        budget_ms()
     );
     println!(
         "OMPL C++ (RRTConnect, KPIECE1; FCL validity at {RESOLUTION_MM} mm): {peer_n} runs x {limit} s; ratio = OMPL's best median / fitup's median"
@@ -599,6 +656,8 @@ fn main() {
         if compare {
             let list = if std::env::var("FITUP_VARIANTS").is_ok_and(|v| v == "narrow") {
                 narrow_variants()
+            } else if std::env::var("FITUP_VARIANTS").is_ok_and(|v| v == "share") {
+                share_variants()
             } else {
                 variants()
             };

@@ -30,10 +30,8 @@ fn measure(extra: &[&str]) {
     write_stl(&models.join("meshes/sieve.stl"), &sieve).unwrap();
     let mut file = demo::cell_document();
     let triangles: usize = sieve.triangles.len() + 60 + 928 + 640 + 5 * 256;
-    file.parts.insert(
-        "sieve".into(),
-        PartFile::from_stl("meshes/sieve.stl"),
-    );
+    file.parts
+        .insert("sieve".into(), PartFile::from_stl("meshes/sieve.stl"));
     file.components.push(ComponentFile {
         name: "sieve".into(),
         part: "sieve".into(),
