@@ -223,6 +223,8 @@ pub fn plan_insertion(
             progress.as_mut().map(|p| &mut **p as ProgressFn<'_>),
         )?
     };
+    // One clock read: two would make the search longer than the whole call.
+    let elapsed = ms_since(clock);
     let mut path = PlannedPath {
         failure: join.failure,
         poses: Vec::new(),
@@ -230,8 +232,8 @@ pub fn plan_insertion(
         nodes: apart.nodes + join.nodes,
         pose_checks: apart.pose_checks + join.pose_checks,
         edge_checks: apart.edge_checks + join.edge_checks,
-        time_ms: ms_since(clock),
-        search_ms: ms_since(clock),
+        time_ms: elapsed,
+        search_ms: elapsed,
         smoothing_ms: 0.0,
         planner: name,
         ..join.clone()

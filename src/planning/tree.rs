@@ -327,3 +327,88 @@ impl Target for PoseTarget {
         self.0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planning::validator::MotionValidator;
+
+    /// Every pose is free; counts nothing itself (the checker counts).
+    struct Open;
+    impl MotionValidator for Open {
+        fn is_free(&mut self, _: &Transform) -> bool {
+            true
+        }
+    }
+
+    #[test]
+    fn fallbacks_stay_within_their_share_and_get_more_when_the_search_stalls() {
+        let mut v = Open;
+        let mut checker = Checker::new(&mut v, None);
+        let mut effort = Effort::new(0.1);
+        let p = Transform::IDENTITY;
+        // Each iteration: 9 plain checks, then a fallback of 10 checks when allowed.
+        let mut ran = 0;
+        for i in 0..20_000 {
+            effort.iteration(1000.0 - i as f64); // progress every iteration
+            for _ in 0..9 {
+                checker.is_free(&p);
+            }
+            if effort
+                .run(&mut checker, |c| {
+                    for _ in 0..10 {
+                        c.is_free(&p);
+                    }
+                })
+                .is_some()
+            {
+                ran += 1;
+            }
+        }
+        // The fallbacks' share of all work is the base share (within one fallback).
+        let share = effort.spent as f64 / checker.work() as f64;
+        assert!((share - 0.1).abs() < 0.01, "{share}");
+        assert!(ran > 0);
+        // No progress for STAGNATION iterations: the share doubles; progress: back.
+        assert_eq!(effort.current_share(), 0.1);
+        let stuck = effort.best;
+        for _ in 0..Effort::STAGNATION - 1 {
+            effort.iteration(stuck);
+        }
+        assert_eq!(effort.current_share(), 0.1);
+        effort.iteration(stuck);
+        assert!((effort.current_share() - 0.2).abs() < 1e-12);
+        for _ in 0..10 * Effort::STAGNATION {
+            effort.iteration(stuck);
+        }
+        assert_eq!(effort.current_share(), 1.0);
+        effort.iteration(stuck - 1.0);
+        assert_eq!(effort.current_share(), 0.1);
+        // Share 1: always allowed.
+        let full = Effort::new(1.0);
+        assert!(full.allows(&checker));
+    }
+
+    #[test]
+    fn nearest_uses_the_metric_of_the_space() {
+        let space = PlanningSpace::new(Vec3::repeat(-100.0), Vec3::repeat(100.0))
+            .with_rotation_weight(10.0);
+        let turned = |deg: f64, x: f64| {
+            Transform::from_parts(
+                Vec3::new(x, 0.0, 0.0),
+                UnitQuaternion::from_axis_angle(&Vec3::z_axis(), deg.to_radians()),
+            )
+        };
+        let mut tree = Tree::new(turned(0.0, 0.0), 1e-3);
+        tree.add(turned(90.0, 1.0), 0);
+        tree.add(turned(-170.0, 5.0), 0);
+        // Target at 180°, x = 2: node 2 is 3 mm + 10° away, node 1 1 mm + 90°.
+        let target = turned(180.0, 2.0);
+        let (i, d) = tree.nearest(&target, &space);
+        assert_eq!(i, 2);
+        assert!(
+            (d - space.distance(&tree.poses[2], &target)).abs() < 1e-9,
+            "{d}"
+        );
+    }
+}

@@ -34,8 +34,8 @@ fn plan_path_ends_with_the_time_limit_outcome() {
         };
         let limits = request.planner.limits_mut();
         limits.max_iterations = usize::MAX;
-        // The disassembly variant solves this puzzle in well under a second.
-        limits.time_limit_ms = Some(if disassemble { 5.0 } else { 300.0 });
+        // Both solve this puzzle in tens of milliseconds on the luckiest seeds.
+        limits.time_limit_ms = Some(5.0);
         let clock = Instant::now();
         let path = ws.plan_path("moving", &goal, &request, None).unwrap();
         let wall = clock.elapsed().as_secs_f64() * 1e3;
