@@ -633,4 +633,19 @@ mod narrow_option_tests {
         opts.insert("planner".into(), "greedy_ant".into());
         assert!(parse(&opts).is_err());
     }
+
+    #[test]
+    fn fallback_share_reaches_the_planner_and_is_range_checked() {
+        let mut opts = Map::new();
+        opts.insert("fallback_share".into(), Dynamic::from_float(0.5));
+        let mut planner = parse(&opts).unwrap().planner;
+        assert_eq!(planner.fallback_share_mut().copied(), Some(0.5));
+        for bad in [1.5, -0.1, f64::NAN] {
+            opts.insert("fallback_share".into(), Dynamic::from_float(bad));
+            assert!(parse(&opts).is_err(), "{bad}");
+        }
+        opts.insert("fallback_share".into(), Dynamic::from_float(0.5));
+        opts.insert("planner".into(), "rrt_floyd".into());
+        assert!(parse(&opts).is_err());
+    }
 }
