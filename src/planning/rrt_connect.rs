@@ -33,8 +33,11 @@ pub struct RrtConnectOptions {
     /// They cost tens of checks where a plain extension costs a few: where plain
     /// extensions make progress (open space, a rod turning a corner) they must not
     /// eat the budget, and where they do not (a part threading a slit, a peg in a
-    /// tight hole) they still get their share. 1: always (fitup before 2026-12).
-    /// Default 0.1.
+    /// tight hole) they still get their share, and more when the search stalls:
+    /// the share doubles for every 10,000 iterations that bring the trees no
+    /// closer (up to 1), and returns to this value when they do. Work is counted,
+    /// not timed, so the same seed gives the same path. 0: never; 1: always
+    /// (fitup before 2026-12). Default 0.1.
     pub fallback_share: f64,
     /// Shortcut smoothing of the found path.
     pub smoothing: Smoothing,
