@@ -28,7 +28,7 @@
 
 use super::run::PlanError;
 use super::space::PlanningSpace;
-use super::tree::{steer, Tree};
+use super::tree::{steer, Effort, Tree};
 use super::validator::Checker;
 use crate::math::{Rng, Transform, Vec3};
 use nalgebra::{Unit, UnitQuaternion};
@@ -199,6 +199,33 @@ impl NarrowPassage {
             last = Some((s, near, k));
         }
         last.expect("at least one try")
+    }
+
+    /// [`NarrowPassage::sample`] while the fallbacks are within their share of the
+    /// work (`effort`, charged the bridge test's checks and the dynamic-domain
+    /// redraws' scans), else a uniform sample; with its nearest node.
+    pub(crate) fn sample_within(
+        &self,
+        effort: &mut Effort,
+        rng: &mut Rng,
+        checker: &mut Checker<'_>,
+        space: &PlanningSpace,
+        reference: &UnitQuaternion<f64>,
+        tree: &Tree,
+    ) -> (Transform, usize) {
+        match effort.run(checker, |checker| {
+            self.sample(rng, checker, space, reference, tree)
+        }) {
+            Some((s, near, scans)) => {
+                // One scan is the plain iteration's own; the redraws are extra.
+                effort.charge_scans(scans - 1, tree.len());
+                (s, near)
+            }
+            None => {
+                let s = space.sample(rng, reference);
+                (s, tree.nearest(&s, space).0)
+            }
+        }
     }
 
     /// The bridge test: a blocked pose, a second one about `bridge_width` away,

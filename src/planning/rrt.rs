@@ -197,18 +197,14 @@ pub(crate) fn plan_tree(
             let s = target.sample(&mut rng, space, start);
             (s, tree.nearest(&s, space).0)
         } else {
-            match effort.run(&mut checker, |checker| {
-                narrow.sample(&mut rng, checker, space, &reference, &tree)
-            }) {
-                Some((s, near, scans)) => {
-                    effort.charge_scans(scans - 1, tree.len());
-                    (s, near)
-                }
-                None => {
-                    let s = space.sample(&mut rng, &reference);
-                    (s, tree.nearest(&s, space).0)
-                }
-            }
+            narrow.sample_within(
+                &mut effort,
+                &mut rng,
+                &mut checker,
+                space,
+                &reference,
+                &tree,
+            )
         };
         let mut added = Vec::new();
         let extended = narrow.extend(

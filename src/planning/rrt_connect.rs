@@ -148,19 +148,14 @@ pub fn rrt_connect(
         // The bridge test and dynamic-domain redraws are fallbacks: within the
         // share they run, past it the sample is uniform. The extension below
         // always keeps the domains up to date and retries with a limited turn.
-        let (sample, near) = match effort.run(&mut checker, |checker| {
-            narrow.sample(&mut rng, checker, space, &reference, &trees[a])
-        }) {
-            Some((s, near, scans)) => {
-                // One scan is the plain iteration's own; the redraws are extra.
-                effort.charge_scans(scans - 1, trees[a].len());
-                (s, near)
-            }
-            None => {
-                let s = space.sample(&mut rng, &reference);
-                (s, trees[a].nearest(&s, space).0)
-            }
-        };
+        let (sample, near) = narrow.sample_within(
+            &mut effort,
+            &mut rng,
+            &mut checker,
+            space,
+            &reference,
+            &trees[a],
+        );
         added.clear();
         let extended = narrow.extend(
             &mut checker,
