@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{fitup, repo};
+use common::repo;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
