@@ -3,7 +3,7 @@
 //! ray parity, and the minimum distance used by continuous sweeps.
 
 use super::shape::{Aabb, Collider, Node, Obb};
-use super::triangle::{closest_on_triangle, tri_distance, tri_tri, Tri};
+use super::triangle::{tri_distance, tri_tri, Tri};
 use super::{CollisionError, Contact, InterferenceKind, PairMember};
 use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3};
@@ -446,14 +446,14 @@ fn climb(
         ];
         let mut best = f64::NEG_INFINITY;
         for p in points {
-            let (d, near) = outer.closest_triangle(&p);
+            let (d, near, on_surface) = outer.closest_triangle(&p);
             if d <= eps {
                 best = best.max(0.0);
                 continue;
             }
             let f = outer.tri(near);
             let n = (f[1] - f[0]).cross(&(f[2] - f[0])).normalize();
-            let along = n.dot(&(p - closest_on_triangle(&p, &f)));
+            let along = n.dot(&(p - on_surface));
             let signed = if d > sure {
                 // Closest to a face's interior (offset along its normal) and in
                 // front of it: outside for sure, no ray cast (most points of a

@@ -394,17 +394,17 @@ impl Collider {
         self.closest(p, stop).0
     }
 
-    /// Distance from `p` (part frame) to the surface and the tree-order index of a
-    /// closest triangle, mm.
-    pub(crate) fn closest_triangle(&self, p: &Point3) -> (f64, usize) {
+    /// The nearest point of the surface to `p` (part frame): its distance (mm), the
+    /// tree-order index of its triangle, and the point itself (part frame).
+    pub(crate) fn closest_triangle(&self, p: &Point3) -> (f64, usize, Point3) {
         self.closest(p, 0.0)
     }
 
-    /// The nearest triangle to `p` (part frame): distance (mm) and tree-order index,
-    /// best first through the tree; stops at the first leaf that brings the distance
-    /// below `stop` (0: never stops early).
-    fn closest(&self, p: &Point3, stop: f64) -> (f64, usize) {
-        let mut best = (f64::INFINITY, 0usize);
+    /// The nearest surface point to `p` (part frame): distance (mm), tree-order
+    /// index of its triangle and the point, best first through the tree; stops at
+    /// the first leaf that brings the distance below `stop` (0: never stops early).
+    fn closest(&self, p: &Point3, stop: f64) -> (f64, usize, Point3) {
+        let mut best = (f64::INFINITY, 0usize, *p);
         let mut stack = vec![0u32];
         while let Some(i) = stack.pop() {
             let node = &self.nodes[i as usize];
@@ -413,9 +413,10 @@ impl Collider {
             }
             if node.count > 0 {
                 for k in node.first as usize..(node.first + node.count) as usize {
-                    let d = (p - closest_on_triangle(p, &self.tri(k))).norm();
+                    let q = closest_on_triangle(p, &self.tri(k));
+                    let d = (p - q).norm();
                     if d < best.0 {
-                        best = (d, k);
+                        best = (d, k, q);
                     }
                 }
                 if best.0 < stop {

@@ -26,9 +26,10 @@
 //!   instead of stopping a whole step short of it; the local discretization then
 //!   slides and turns from that contact pose.
 
+use super::local_rrt::Lattice;
 use super::run::PlanError;
 use super::space::PlanningSpace;
-use super::tree::{steer, Effort, Tree};
+use super::tree::{steer, Effort, Target, Tree};
 use super::validator::Checker;
 use crate::math::{Rng, Transform, Vec3};
 use nalgebra::{Unit, UnitQuaternion};
@@ -252,6 +253,43 @@ impl NarrowPassage {
             }
         }
         None
+    }
+
+    /// What a tree search does when its extension from node `near` was blocked at
+    /// `candidate`, within the fallbacks' share of the work (`effort`): extension to
+    /// contact, then the local discretization `lattice` (candidates ranked toward
+    /// `rank`) from the contact pose, or from `near` when there is none. The nodes
+    /// added go to `added`; `step` is the search's extension step (metric mm).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn fall_back(
+        &self,
+        lattice: Option<&Lattice>,
+        effort: &mut Effort,
+        checker: &mut Checker<'_>,
+        space: &PlanningSpace,
+        reference: &UnitQuaternion<f64>,
+        tree: &mut Tree,
+        near: usize,
+        candidate: &Transform,
+        rank: &dyn Target,
+        step: f64,
+        rng: &mut Rng,
+        added: &mut Vec<usize>,
+    ) {
+        let mut from = near;
+        if let Some(Some(c)) = effort.run(checker, |checker| {
+            self.extend_to_contact(checker, space, reference, tree, near, candidate)
+        }) {
+            added.push(c);
+            from = c;
+        }
+        if let Some(lattice) = lattice {
+            effort.run(checker, |checker| {
+                lattice.expand(
+                    checker, space, tree, from, rank, reference, step, rng, added,
+                );
+            });
+        }
     }
 
     /// Extension to contact: the farthest pose `near → blocked` whose edge from

@@ -220,35 +220,26 @@ pub(crate) fn plan_tree(
             added.push(i);
         }
         if let Err(candidate) = extended {
-            // Extension to contact: the lattice then works from the contact pose.
-            let mut from = near;
-            if let Some(Some(c)) = effort.run(&mut checker, |checker| {
-                narrow.extend_to_contact(checker, space, &reference, &mut tree, near, &candidate)
-            }) {
-                added.push(c);
-                from = c;
-            }
-            if let Some(local) = local {
-                let toward_sample = PoseTarget(sample);
-                let rank: &dyn Target = if goal_biased || !local.rank_toward_sample {
-                    target
-                } else {
-                    &toward_sample
-                };
-                effort.run(&mut checker, |checker| {
-                    local.expand(
-                        checker,
-                        space,
-                        &mut tree,
-                        from,
-                        rank,
-                        &reference,
-                        options.step,
-                        &mut rng,
-                        &mut added,
-                    );
-                });
-            }
+            let toward_sample = PoseTarget(sample);
+            let rank: &dyn Target = if goal_biased || local.is_none_or(|l| !l.rank_toward_sample) {
+                target
+            } else {
+                &toward_sample
+            };
+            narrow.fall_back(
+                local,
+                &mut effort,
+                &mut checker,
+                space,
+                &reference,
+                &mut tree,
+                near,
+                &candidate,
+                rank,
+                options.step,
+                &mut rng,
+                &mut added,
+            );
         }
         let mut done = None;
         for &i in &added {

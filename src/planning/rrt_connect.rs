@@ -167,37 +167,21 @@ pub fn rrt_connect(
             options.step,
         );
         if let Err(candidate) = extended {
-            // Extension to contact: the lattice then works from the contact pose.
-            let mut from = near;
-            if let Some(Some(c)) = effort.run(&mut checker, |checker| {
-                narrow.extend_to_contact(
-                    checker,
-                    space,
-                    &reference,
-                    &mut trees[a],
-                    near,
-                    &candidate,
-                )
-            }) {
-                added.push(c);
-                from = c;
-            }
-            if let Some(lattice) = &options.lattice {
-                let other_root = PoseTarget(trees[b].poses[0]);
-                effort.run(&mut checker, |checker| {
-                    lattice.expand(
-                        checker,
-                        space,
-                        &mut trees[a],
-                        from,
-                        &other_root,
-                        &reference,
-                        options.step,
-                        &mut rng,
-                        &mut added,
-                    );
-                });
-            }
+            let other_root = PoseTarget(trees[b].poses[0]);
+            narrow.fall_back(
+                options.lattice.as_ref(),
+                &mut effort,
+                &mut checker,
+                space,
+                &reference,
+                &mut trees[a],
+                near,
+                &candidate,
+                &other_root,
+                options.step,
+                &mut rng,
+                &mut added,
+            );
         }
         if let Ok(i) = extended {
             added.push(i);
