@@ -143,7 +143,6 @@ fn fitup_runs(
             // no disassembly.
             let mut o = plan.approach.clone();
             o.limits.time_limit_ms = plan.time_limit_ms;
-            o.limits.seed = seed;
             o.smoothing = plan.smoothing;
             fitup::planning::rrt_connect(&mut v, &p.space, &p.start, &p.goal, &o, None).unwrap()
         } else {
@@ -654,12 +653,10 @@ fn main() {
         std::fs::create_dir_all(&dir).unwrap();
         let spec = export(&p, &dir);
         if compare {
-            let list = if std::env::var("FITUP_VARIANTS").is_ok_and(|v| v == "narrow") {
-                narrow_variants()
-            } else if std::env::var("FITUP_VARIANTS").is_ok_and(|v| v == "share") {
-                share_variants()
-            } else {
-                variants()
+            let list = match std::env::var("FITUP_VARIANTS").as_deref() {
+                Ok("narrow") => narrow_variants(),
+                Ok("share") => share_variants(),
+                _ => variants(),
             };
             for (name, variant) in list {
                 let r = fitup_runs(&p, p.default_validator_options(), runs, false, &*variant);

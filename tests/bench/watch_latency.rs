@@ -64,8 +64,13 @@ fn measure(extra: &[&str]) {
         .unwrap();
     let mut out = lines::Lines::read(child.stdout.take().unwrap());
     let mut wait_done = |n: usize| -> Instant {
-        let (t, l) = out.wait_timed(&format!("== done {n} "), Duration::from_secs(60));
-        assert!(l.contains(" ok "), "{}", out.seen.join("\n"));
+        let done = format!("== done {n} ");
+        let (t, l) = out.wait_timed(&done, Duration::from_secs(60));
+        assert!(
+            l.starts_with(&done) && l.contains(" ok "),
+            "{}",
+            out.seen.join("\n")
+        );
         t
     };
     let t_first = Instant::now();

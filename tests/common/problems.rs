@@ -88,12 +88,6 @@ pub enum ProblemError {
     /// A generated mesh is invalid.
     #[error(transparent)]
     Mesh(#[from] MeshError),
-    /// A collider could not be built.
-    #[error(transparent)]
-    Collision(#[from] CollisionError),
-    /// The planner refused its input.
-    #[error(transparent)]
-    Plan(#[from] PlanError),
     /// Writing the files failed.
     #[error("{0}")]
     Io(String),
@@ -149,23 +143,6 @@ impl Problem {
             },
             ..Default::default()
         }
-    }
-
-    /// Solves the problem with fitup's best planner ([`plan_insertion`], disassembly
-    /// first) for `seed`, at most `max_iterations` per search.
-    ///
-    /// # Errors
-    /// Only for invalid input (the problems are valid).
-    pub fn solve(
-        &self,
-        validator: &mut MeshValidator,
-        seed: u64,
-        max_iterations: usize,
-    ) -> Result<PlannedPath, PlanError> {
-        self.solve_with(
-            validator,
-            &InsertionOptions::default().with_limits(seed, max_iterations),
-        )
     }
 
     /// Solves the problem with [`plan_insertion`] and `options`.
@@ -332,8 +309,7 @@ pub fn peg_in_hole(clearance: f64) -> Result<Problem, MeshError> {
         64,
     )?;
     let peg = Mesh::cylinder(10.0, 100.0, 64);
-    let lying = Transform::from_rotation_about(Point3::origin(), Vec3::y(), FRAC_PI_2)
-        .map_err(|e| invalid(e.to_string()))?;
+    let lying = turn(Vec3::y(), FRAC_PI_2)?;
     let name = format!("peg_in_hole_{}", (clearance * 1000.0).round() as i64);
     Ok(Problem {
         description: format!(
@@ -463,29 +439,30 @@ pub fn screw_cell() -> Result<Problem, MeshError> {
     })
 }
 
-/// A ring of centre radius `big` and wire radius `wire` in its XY plane around the
-/// origin, leaving out the angles within `gap / 2` of +X (0: a closed torus; > 0:
-/// a slit ring closed by flat end caps). `nu` facets along, `nv` around the wire.
-fn ring(big: f64, wire: f64, gap: f64, nu: usize, nv: usize) -> Result<Mesh, MeshError> {
-    let closed = gap <= 0.0;
-    let (a0, span) = if closed {
-        (0.0, TAU)
-    } else {
-        (gap / 2.0, TAU - gap)
-    };
-    let rows = if closed { nu } else { nu + 1 };
+/// A tube of `nv` facets around, swept along a curve: `point(t, v)` is the surface
+/// point at curve parameter `t` and angle `v` around the wire, `centre(t)` the
+/// curve point (for the end caps). `n` facets along, from `t0` over `span`;
+/// `closed`: the tube joins itself (no caps), else flat end caps close it.
+/// Outward-oriented whatever the parametrisation's handedness.
+fn swept_tube(
+    point: impl Fn(f64, f64) -> Point3,
+    centre: impl Fn(f64) -> Point3,
+    (t0, span): (f64, f64),
+    n: usize,
+    nv: usize,
+    closed: bool,
+) -> Result<Mesh, MeshError> {
+    let rows = if closed { n } else { n + 1 };
+    let at = |i: usize| t0 + span * i as f64 / n as f64;
     let mut vertices = Vec::with_capacity(rows * nv + 2);
     for i in 0..rows {
-        let u = a0 + span * i as f64 / nu as f64;
         for j in 0..nv {
-            let v = TAU * j as f64 / nv as f64;
-            let rr = big + wire * v.cos();
-            vertices.push(Point3::new(rr * u.cos(), rr * u.sin(), wire * v.sin()));
+            vertices.push(point(at(i), TAU * j as f64 / nv as f64));
         }
     }
     let idx = |i: usize, j: usize| ((i % rows) * nv + j % nv) as u32;
     let mut triangles = Vec::new();
-    for i in 0..nu {
+    for i in 0..n {
         for j in 0..nv {
             let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
             triangles.push([a, b, c]);
@@ -494,9 +471,9 @@ fn ring(big: f64, wire: f64, gap: f64, nu: usize, nv: usize) -> Result<Mesh, Mes
     }
     if !closed {
         // each cap runs its boundary edges opposite to the tube's
-        for (i, u, first) in [(0usize, a0, true), (nu, a0 + span, false)] {
+        for (i, t, first) in [(0usize, t0, true), (n, t0 + span, false)] {
             let c = vertices.len() as u32;
-            vertices.push(Point3::new(big * u.cos(), big * u.sin(), 0.0));
+            vertices.push(centre(t));
             for j in 0..nv {
                 triangles.push(if first {
                     [c, idx(i, j), idx(i, j + 1)]
@@ -507,9 +484,31 @@ fn ring(big: f64, wire: f64, gap: f64, nu: usize, nv: usize) -> Result<Mesh, Mes
         }
     }
     let mut mesh = Mesh::new(vertices, triangles)?;
-    // Make it outward-oriented whatever the parametrisation's handedness.
     mesh.orient_outward();
     Ok(mesh)
+}
+
+/// A ring of centre radius `big` and wire radius `wire` in its XY plane around the
+/// origin, leaving out the angles within `gap / 2` of +X (0: a closed torus; > 0:
+/// a slit ring closed by flat end caps). `nu` facets along, `nv` around the wire.
+fn ring(big: f64, wire: f64, gap: f64, nu: usize, nv: usize) -> Result<Mesh, MeshError> {
+    let closed = gap <= 0.0;
+    let range = if closed {
+        (0.0, TAU)
+    } else {
+        (gap / 2.0, TAU - gap)
+    };
+    swept_tube(
+        |u, v| {
+            let rr = big + wire * v.cos();
+            Point3::new(rr * u.cos(), rr * u.sin(), wire * v.sin())
+        },
+        |u| Point3::new(big * u.cos(), big * u.sin(), 0.0),
+        range,
+        nu,
+        nv,
+        closed,
+    )
 }
 
 /// Two interlocked rings (centre radius 30 mm, wire radius 3 mm): the fixed one in
@@ -526,12 +525,11 @@ pub fn ring_puzzle() -> Result<Problem, MeshError> {
     let gap = 2.0 * (slit / (2.0 * (big - wire))).asin();
     let fixed = ring(big, wire, 0.0, 96, 16)?;
     let slit_ring = ring(big, wire, gap, 96, 16)?;
-    let upright = Transform::from_rotation_about(Point3::origin(), Vec3::x(), FRAC_PI_2)
-        .map_err(|e| invalid(e.to_string()))?;
+    let upright = turn(Vec3::x(), FRAC_PI_2)?;
     // The slit faces away from the fixed ring's wire (local +X → world -X side turned).
-    let turn = Transform::from_rotation_about(Point3::origin(), Vec3::z(), PI / 2.0)
-        .map_err(|e| invalid(e.to_string()))?;
-    let start = turn.then(&upright).then(&at(big, 0.0, 0.0));
+    let start = turn(Vec3::z(), PI / 2.0)?
+        .then(&upright)
+        .then(&at(big, 0.0, 0.0));
     Ok(Problem {
         name: "ring_puzzle".into(),
         description: format!(
@@ -699,42 +697,29 @@ fn helix_tube(
     nv: usize,
 ) -> Result<Mesh, MeshError> {
     let n = ((nu as f64) * turns).ceil().max(2.0) as usize;
+    swept_tube(
+        |t, v| {
+            let (centre, tangent) = helix_frame(radius, pitch, t);
+            let normal = Vec3::new(t.cos(), t.sin(), 0.0);
+            let binormal = tangent.cross(&normal);
+            centre + (normal * v.cos() + binormal * v.sin()) * wire
+        },
+        |t| helix_frame(radius, pitch, t).0,
+        (0.0, TAU * turns),
+        n,
+        nv,
+        false,
+    )
+}
+
+/// The point and unit tangent of the helix of radius `radius` and `pitch` (mm per
+/// turn) around +Z at angle `t` (rad, from +X).
+fn helix_frame(radius: f64, pitch: f64, t: f64) -> (Point3, Vec3) {
     let lead = pitch / TAU;
-    let mut vertices = Vec::with_capacity((n + 1) * nv + 2);
-    let centre = |t: f64| Point3::new(radius * t.cos(), radius * t.sin(), lead * t);
-    for i in 0..=n {
-        let t = TAU * turns * i as f64 / n as f64;
-        let tangent = Vec3::new(-radius * t.sin(), radius * t.cos(), lead).normalize();
-        let normal = Vec3::new(t.cos(), t.sin(), 0.0);
-        let binormal = tangent.cross(&normal);
-        for j in 0..nv {
-            let v = TAU * j as f64 / nv as f64;
-            vertices.push(centre(t) + (normal * v.cos() + binormal * v.sin()) * wire);
-        }
-    }
-    let idx = |i: usize, j: usize| (i * nv + j % nv) as u32;
-    let mut triangles = Vec::new();
-    for i in 0..n {
-        for j in 0..nv {
-            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
-    for (i, first) in [(0usize, true), (n, false)] {
-        let c = vertices.len() as u32;
-        vertices.push(centre(TAU * turns * i as f64 / n as f64));
-        for j in 0..nv {
-            triangles.push(if first {
-                [c, idx(i, j), idx(i, j + 1)]
-            } else {
-                [c, idx(i, j + 1), idx(i, j)]
-            });
-        }
-    }
-    let mut mesh = Mesh::new(vertices, triangles)?;
-    mesh.orient_outward();
-    Ok(mesh)
+    (
+        Point3::new(radius * t.cos(), radius * t.sin(), lead * t),
+        Vec3::new(-radius * t.sin(), radius * t.cos(), lead).normalize(),
+    )
 }
 
 /// A twisted puzzle in the spirit of the alpha puzzle: a split key ring (helix of
@@ -754,14 +739,13 @@ pub fn key_ring() -> Result<Problem, MeshError> {
     // On the spiral one turn from its end: centre on the wire, ring plane normal
     // to the wire's tangent (the ring's axis Z along the tangent).
     let t0 = TAU * (turns - 1.0);
-    let lead = pitch / TAU;
-    let tangent = Vec3::new(-radius * t0.sin(), radius * t0.cos(), lead).normalize();
+    let (on_wire, tangent) = helix_frame(radius, pitch, t0);
     let align = Transform::from_parts(
         Vec3::zeros(),
         nalgebra::UnitQuaternion::rotation_between(&Vec3::z(), &tangent)
             .ok_or_else(|| invalid("degenerate key ring tangent"))?,
     );
-    let start = align.then(&at(radius * t0.cos(), radius * t0.sin(), lead * t0));
+    let start = align.then(&Transform::from_translation(on_wire.coords));
     Ok(Problem {
         name: "key_ring".into(),
         description: "Key ring: a ring (R 4.5, wire r 1 mm) threaded on a two-turn split key ring (R 15, pitch 7.6, wire r 1.5 mm), off only along the spiral".into(),
@@ -794,13 +778,4 @@ pub fn all() -> Result<Vec<Problem>, MeshError> {
         peg_tilt()?,
         key_ring()?,
     ])
-}
-
-/// The benchmark problem called `name` (the file stem under `models/problems/`),
-/// `None` for an unknown name.
-///
-/// # Errors
-/// None in practice (the generated meshes are valid).
-pub fn by_name(name: &str) -> Result<Option<Problem>, MeshError> {
-    Ok(all()?.into_iter().find(|p| p.name == name))
 }
