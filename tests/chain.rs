@@ -5,11 +5,12 @@
 
 mod common;
 
+use common::lines::Killed;
+
 use fitup::db::{Database, SkillLogEntry, Target};
 use fitup::skills::Plan;
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::Child;
 use std::time::{Duration, Instant};
 
 const BOUND: Duration = Duration::from_secs(300);
@@ -55,22 +56,13 @@ fn assert_assembled(plan_file: &Path, db: &Path) {
     assert_eq!(log.last().unwrap().event, "done");
 }
 
-struct Manipulator(Child);
-
-impl Drop for Manipulator {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 /// `fitup manipulator ARGS` (from the repository root), once it listens.
-fn manipulator(args: &[&str]) -> Manipulator {
+fn manipulator(args: &[&str]) -> Killed {
     manipulator_on(args, 11002)
 }
 
 /// [`manipulator`] with its state port.
-fn manipulator_on(args: &[&str], state_port: u16) -> Manipulator {
+fn manipulator_on(args: &[&str], state_port: u16) -> Killed {
     let mut child = common::fitup()
         .current_dir(common::repo())
         .arg("manipulator")
@@ -89,7 +81,7 @@ fn manipulator_on(args: &[&str], state_port: u16) -> Manipulator {
         assert!(start.elapsed() < Duration::from_secs(60), "no manipulator");
         std::thread::sleep(Duration::from_millis(50));
     }
-    Manipulator(child)
+    Killed(child)
 }
 
 fn run(args: &[&str]) -> std::process::Output {

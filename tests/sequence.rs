@@ -730,7 +730,8 @@ print("revalidate ok");
 /// touching, giving 0.89 mm instead of the whole shaft.
 #[test]
 fn fine_pegboard_safe_length_matches_the_coarse_one() {
-    let dir = std::env::temp_dir().join(format!("fitup_seq_fine_peg_{}", std::process::id()));
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let o = SequenceOptions {
         mode: Mode::Geometry,
         ..Default::default()
@@ -746,5 +747,4 @@ fn fine_pegboard_safe_length_matches_the_coarse_one() {
     // the shaft is 5 mm long: free once it has left the plate
     assert!(lengths[0] >= 5.0, "{lengths:?}");
     assert_eq!(lengths[0], lengths[1], "coarse vs fine");
-    let _ = std::fs::remove_dir_all(&dir);
 }

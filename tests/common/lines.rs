@@ -6,7 +6,7 @@
 
 use std::io::{BufRead, BufReader, Read};
 use std::process::Child;
-use std::sync::mpsc::{channel, Receiver};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
 /// Lines of one output stream, each with the instant it arrived, and the transcript
@@ -48,8 +48,12 @@ impl Lines {
                         return (t, l);
                     }
                 }
-                Err(_) => panic!(
+                Err(RecvTimeoutError::Timeout) => panic!(
                     "no `{needle}` within {bound:?}; output:\n{}",
+                    self.seen.join("\n")
+                ),
+                Err(RecvTimeoutError::Disconnected) => panic!(
+                    "the output ended before `{needle}`; output:\n{}",
                     self.seen.join("\n")
                 ),
             }
