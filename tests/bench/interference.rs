@@ -15,13 +15,14 @@ use fitup::collision::{
 use fitup::document::file::{ComponentFile, DocumentFile, PartFile};
 use fitup::math::{Point3, Rng, Transform, Vec3};
 use fitup::mesh::{write_stl, Mesh};
-use fitup::script::{run_script, Caches, Limits, Project, RunOptions};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;
 
 #[path = "../common/fixtures.rs"]
 mod fixtures;
+#[path = "rhai_timing.rs"]
+mod rhai_timing;
 
 const PAIRS: usize = 1000;
 const ROUNDS: usize = 5;
@@ -634,27 +635,7 @@ fn script_rows() {
     }
     drop(f);
 
-    let rhai_seconds = |body: &str| {
-        let script = root.join("scripts/bench.rhai");
-        std::fs::write(&script, body).unwrap();
-        let opts = RunOptions {
-            script,
-            doc: None,
-            project: Project::new(root).unwrap(),
-            limits: Limits {
-                max_operations: u64::MAX / 2,
-                ..Limits::default()
-            },
-            cancel: Arc::new(std::sync::atomic::AtomicBool::new(false)),
-            output: Arc::new(|_: &str| {}),
-            args: Default::default(),
-        };
-        let t = Instant::now();
-        run_script(&opts, &Arc::new(Caches::default()))
-            .result
-            .expect("bench script");
-        t.elapsed().as_secs_f64()
-    };
+    let rhai_seconds = |body: &str| rhai_timing::rhai_seconds(root, body);
     let script_for = |poses: &[Transform], call: &str| {
         let list: Vec<String> = poses
             .iter()

@@ -7,11 +7,11 @@
 
 use fitup::document::Document;
 use fitup::kinematics::IkOptions;
-use fitup::script::{run_script, Caches, Limits, Project, RunOptions};
+#[path = "rhai_timing.rs"]
+mod rhai_timing;
+
 use std::hint::black_box;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 use std::time::Instant;
 
 const N: usize = 20_000;
@@ -24,25 +24,9 @@ let q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0];
 let t = arm.fk(q);
 "#;
 
+/// The script `body` after [`SETUP`].
 fn rhai_seconds(dir: &Path, body: &str) -> f64 {
-    let script = dir.join("scripts/bench.rhai");
-    std::fs::write(&script, format!("{SETUP}{body}\n")).unwrap();
-    let opts = RunOptions {
-        script,
-        doc: None,
-        project: Project::new(dir).unwrap(),
-        limits: Limits {
-            max_operations: u64::MAX / 2,
-            ..Limits::default()
-        },
-        cancel: Arc::new(AtomicBool::new(false)),
-        output: Arc::new(|l: &str| println!("{l}")),
-        args: Default::default(),
-    };
-    let caches = Arc::new(Caches::default());
-    let t = Instant::now();
-    run_script(&opts, &caches).result.expect("bench script");
-    t.elapsed().as_secs_f64()
+    rhai_timing::rhai_seconds(dir, &format!("{SETUP}{body}\n"))
 }
 
 fn median(v: &mut [f64]) -> f64 {

@@ -4,41 +4,22 @@
 //! translation, return `{"min": [..], "max": [..]}` from the cached rotated box).
 //! Run with `cargo bench --bench script_overhead`.
 
-use fitup::script::{run_script, Caches, Limits, Project, RunOptions};
 use std::path::Path;
 use std::process::Command;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
-use std::time::Instant;
+
+#[path = "rhai_timing.rs"]
+mod rhai_timing;
 
 const N: usize = 200_000;
 
+/// The script `body` after the setup lines (a document and a component).
 fn rhai_seconds(dir: &Path, body: &str) -> f64 {
-    let script = dir.join("scripts/bench.rhai");
-    std::fs::write(
-        &script,
-        format!(
+    rhai_timing::rhai_seconds(
+        dir,
+        &format!(
             "let d = open_doc(\"models/cell.yaml\");\nlet s = d.component(\"screw4\");\n{body}\n"
         ),
     )
-    .unwrap();
-    let opts = RunOptions {
-        script,
-        doc: None,
-        project: Project::new(dir).unwrap(),
-        limits: Limits {
-            max_operations: u64::MAX / 2,
-            ..Limits::default()
-        },
-        cancel: Arc::new(AtomicBool::new(false)),
-        output: Arc::new(|l: &str| println!("{l}")),
-        args: Default::default(),
-    };
-    let caches = Arc::new(Caches::default());
-    let t = Instant::now();
-    let out = run_script(&opts, &caches);
-    out.result.expect("bench script");
-    t.elapsed().as_secs_f64()
 }
 
 const C_SOURCE: &str = r#"
