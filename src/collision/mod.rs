@@ -26,6 +26,29 @@
 //!   **contact step** ([`contact_step`]).
 //!
 //! Every query validates its input and returns [`CollisionError`]; none panics.
+//!
+//! # Examples
+//!
+//! A 10 mm cube set on another touches it; lowered 1 mm further, the two interfere;
+//! lifted 5 mm, their surfaces are 5 mm apart:
+//!
+//! ```
+//! use fitup::collision::{contact, surface_distance, Collider, DEFAULT_TOLERANCE};
+//! use fitup::math::{Point3, Transform, Vec3};
+//! use fitup::mesh::Mesh;
+//! use std::sync::Arc;
+//!
+//! let cube = Mesh::cuboid(Point3::origin(), Point3::new(10.0, 10.0, 10.0));
+//! let cube = Collider::new(Arc::new(cube))?;
+//! let below = Transform::IDENTITY;
+//! let at = |z: f64| Transform::from_translation(Vec3::new(0.0, 0.0, z));
+//!
+//! assert!(contact(&cube, &below, &cube, &at(10.0), DEFAULT_TOLERANCE)?.is_touching());
+//! let pushed = contact(&cube, &below, &cube, &at(9.0), DEFAULT_TOLERANCE)?;
+//! assert!(pushed.is_interfering());
+//! assert!((surface_distance(&cube, &below, &cube, &at(15.0), 0.0)? - 5.0).abs() < 1e-9);
+//! # Ok::<(), fitup::collision::CollisionError>(())
+//! ```
 
 mod cells;
 mod edge;

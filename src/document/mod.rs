@@ -4,6 +4,27 @@
 //! A document is a YAML file (schema in [`file`]); meshes are STL files next to it.
 //! Lengths are millimetres, angles radians inside; the file writes angle mate values in
 //! degrees. Poses use the SolidWorks pose-matrix layout, see [`Transform`].
+//!
+//! # Examples
+//!
+//! Seed 000's macro `swDim.SystemValue = ang * PI / 180`, from Rust: drive the angle
+//! mate `D1@角度1` of the bundled cell and read the plate's pose the mates give.
+//!
+//! ```
+//! use fitup::document::Document;
+//! use fitup::math::AngleConvention;
+//!
+//! let mut doc = Document::open(std::path::Path::new("models/cell.yaml"))?;
+//! assert!(doc.component("table")?.fixed);
+//! doc.set_dimension("D1@角度1", 30f64.to_radians())?; // internal units: radians
+//! let angle = doc.dimension("D1@角度1")?;
+//! assert!((angle.document_value() - 30.0).abs() < 1e-9); // the file's degrees
+//! assert!((angle.system_value() - 30f64.to_radians()).abs() < 1e-12); // SI, as SolidWorks
+//! let plate = doc.component("plate_b")?.transform;
+//! let c = plate.to_xyzabc_deg(AngleConvention::XyzFixed)[5]; // about world Z, degrees
+//! assert!((c - 30.0).abs() < 1e-6);
+//! # Ok::<(), fitup::document::DocumentError>(())
+//! ```
 
 pub mod dimension;
 pub mod file;

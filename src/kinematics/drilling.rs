@@ -172,7 +172,7 @@ pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
         let mut v = [0.0; 6];
         for (k, (p, s)) in parsed.iter().zip(nums).enumerate() {
             match p {
-                Some(x) if x.is_finite() && x.abs() <= crate::document::MAX_ABS_VALUE => v[k] = *x,
+                Some(x) if x.is_finite() && x.abs() <= crate::math::MAX_ABS_VALUE => v[k] = *x,
                 _ => {
                     return Err(err(format!(
                         "column {}: '{s}' is not a finite number of magnitude at most 1e9",

@@ -135,7 +135,7 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
             }
             args.iter()
                 .map(|&(col, tok)| match tok.parse::<f64>() {
-                    Ok(v) if v.is_finite() && v.abs() <= crate::document::MAX_ABS_VALUE => Ok(v),
+                    Ok(v) if v.is_finite() && v.abs() <= crate::math::MAX_ABS_VALUE => Ok(v),
                     Ok(v) if v.is_finite() => Err(err(
                         col,
                         format!("'{tok}' is out of range (magnitude at most 1e9)"),

@@ -46,12 +46,6 @@ impl Aabb {
         }
     }
 
-    /// The box of a mesh's vertices in its own frame (mm); `None` when it has none
-    /// (the same as [`Mesh::bounds`](crate::mesh::Mesh::bounds)).
-    pub fn of_mesh(mesh: &crate::mesh::Mesh) -> Option<Aabb> {
-        mesh.bounds()
-    }
-
     /// The empty box (inverted), neutral for [`Aabb::grow`].
     pub const EMPTY: Aabb = Aabb {
         lo: Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),

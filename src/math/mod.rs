@@ -7,11 +7,13 @@
 mod aabb;
 mod euler;
 pub mod format;
+mod limits;
 mod rng;
 pub mod transform;
 
 pub use aabb::Aabb;
 pub use euler::AngleConvention;
+pub use limits::{in_range, MAX_ABS_VALUE};
 pub use rng::Rng;
 pub use transform::Transform;
 

@@ -2,6 +2,29 @@
 //! keeps meshes between watch reruns.
 //!
 //! Coordinates are millimetres in the part frame.
+//!
+//! # Examples
+//!
+//! A generated part, checked as a solid and written to STL and back:
+//!
+//! ```
+//! use fitup::math::Point3;
+//! use fitup::mesh::{parse_stl, write_stl, Mesh};
+//!
+//! let block = Mesh::cuboid(Point3::origin(), Point3::new(20.0, 10.0, 5.0));
+//! assert!(block.is_watertight());
+//! assert!((block.signed_volume() - 1000.0).abs() < 1e-9); // mm³, outward normals
+//! let bounds = block.bounds().expect("a mesh with vertices has bounds");
+//! assert_eq!(bounds.hi, Point3::new(20.0, 10.0, 5.0));
+//!
+//! let dir = tempfile::tempdir()?;
+//! let file = dir.path().join("block.stl");
+//! write_stl(&file, &block)?;
+//! let back = parse_stl(&std::fs::read(&file)?)?;
+//! assert_eq!(back.triangles.len(), block.triangles.len());
+//! assert!((back.signed_volume() - 1000.0).abs() < 1e-3); // STL stores f32
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod cache;
 mod shapes;

@@ -63,7 +63,7 @@ pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
 }
 
 /// Parses STL bytes (ASCII or binary). A mesh without facets, or with a coordinate
-/// beyond [`MAX_ABS_VALUE`](crate::document::MAX_ABS_VALUE) mm, is refused (ASCII
+/// beyond [`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE) mm, is refused (ASCII
 /// errors name the line).
 pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
     let mesh = parse_any(bytes)?;
@@ -75,7 +75,7 @@ pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
 
 /// A coordinate that is not finite or beyond the accepted range.
 fn check_coordinate(v: f64) -> Result<(), String> {
-    let max = crate::document::MAX_ABS_VALUE;
+    let max = crate::math::MAX_ABS_VALUE;
     if !v.is_finite() {
         Err(format!("coordinate {v} is not finite"))
     } else if v.abs() > max {
@@ -322,7 +322,7 @@ mod tests {
             -2e9f64..2e9,
             proptest::strategy::Just(1e39),
         ]) {
-            let ok = v.is_finite() && v.abs() <= crate::document::MAX_ABS_VALUE;
+            let ok = v.is_finite() && v.abs() <= crate::math::MAX_ABS_VALUE;
             let ascii = cube_ascii().replacen("vertex 0 0 0", &format!("vertex 0 {v:e} 0"), 1);
             let line = ascii.lines().position(|l| l.contains(&format!("{v:e}"))).map(|l| l + 1);
             match parse_stl(ascii.as_bytes()) {
@@ -339,7 +339,7 @@ mod tests {
             if write_stl(&p, &m).is_ok() {
                 // Binary STL stores f32: what counts is the value read back.
                 let stored = v as f32 as f64;
-                let ok = stored.is_finite() && stored.abs() <= crate::document::MAX_ABS_VALUE;
+                let ok = stored.is_finite() && stored.abs() <= crate::math::MAX_ABS_VALUE;
                 proptest::prop_assert_eq!(read_stl(&p).is_ok(), ok, "{:e}", v);
             }
         }

@@ -1,7 +1,8 @@
 //! Seed 000's single-ant dynamic greedy algorithm (section 5.2, table 4).
 
-use super::path::{Failure, PlannedPath};
+use super::path::PlannedPath;
 use super::rrt::finish;
+use super::run::Failure;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;

@@ -2,7 +2,8 @@
 //! "what can be taken apart can be assembled", joined to the free end by RRT-Connect).
 
 use super::disassembly::{disassemble, DisassemblyPlanner};
-use super::local_rrt::{Lattice, LocalRrtOptions};
+use super::lattice::Lattice;
+use super::local_rrt::LocalRrtOptions;
 use super::narrow::NarrowPassage;
 use super::path::{measure, PlannedPath};
 use super::rrt_connect::{rrt_connect, RrtConnectOptions};

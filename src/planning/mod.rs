@@ -25,6 +25,7 @@
 mod disassembly;
 mod greedy_ant;
 mod insertion;
+mod lattice;
 mod local_rrt;
 mod mesh_validator;
 mod narrow;
@@ -46,19 +47,20 @@ mod test_scenes;
 pub use disassembly::{disassemble, DisassemblyPlanner};
 pub use greedy_ant::{greedy_ant, GreedyAntOptions};
 pub use insertion::{plan_insertion, InsertionOptions};
-pub use local_rrt::{local_rrt, DiscretizationFrame, Lattice, LocalRrtOptions};
+pub use lattice::{DiscretizationFrame, Lattice};
+pub use local_rrt::{local_rrt, LocalRrtOptions};
 pub use mesh_validator::{
     MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
 };
 pub use narrow::NarrowPassage;
-pub use path::{Failure, PlannedPath};
+pub use path::PlannedPath;
 pub use problem_file::{ProblemFile, ProblemFileError, MAX_PROBLEM_FILE_BYTES};
 pub use request::{Planner, PLANNER_NAMES};
 pub use rrt::{biased_rrt, rrt, RrtOptions};
 pub use rrt_connect::{rrt_connect, RrtConnectOptions};
 pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
 pub use run::{
-    Control, Phase, PlanError, PlanLimits, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
+    Control, Failure, Phase, PlanError, PlanLimits, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
     SMOOTHING_PROGRESS_EVERY,
 };
 pub use smoothing::{smooth, Smoothing};

@@ -26,7 +26,7 @@
 //!   instead of stopping a whole step short of it; the local discretization then
 //!   slides and turns from that contact pose.
 
-use super::local_rrt::Lattice;
+use super::lattice::Lattice;
 use super::run::PlanError;
 use super::space::PlanningSpace;
 use super::tree::{steer, Effort, Target, Tree};

@@ -1,40 +1,10 @@
 //! [`PlannedPath`]: what a planner returns, found or not.
 
-use super::run::Run;
+use super::run::{Failure, Run};
 use super::validator::{Checker, MotionValidator};
 use crate::collision::SweepMethod;
 use crate::math::{AngleConvention, Transform};
 use std::io::{self, Write};
-
-/// Why a planner returned no path.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-pub enum Failure {
-    /// The iteration limit was reached.
-    #[error("iteration limit reached")]
-    IterationLimit,
-    /// The time limit was reached.
-    #[error("time limit reached")]
-    TimeLimit,
-    /// The start pose collides.
-    #[error("the start pose is in collision")]
-    StartInCollision,
-    /// The goal pose collides.
-    #[error("the goal pose is in collision")]
-    GoalInCollision,
-    /// The start pose is outside the planning space (box or allowed rotations).
-    #[error("the start pose is outside the planning space")]
-    StartOutOfBounds,
-    /// The goal pose is outside the planning space (box or allowed rotations).
-    #[error("the goal pose is outside the planning space")]
-    GoalOutOfBounds,
-    /// The progress callback asked to stop.
-    #[error("cancelled")]
-    Cancelled,
-    /// A deterministic search ran out of candidates (greedy ant: no free grid point
-    /// on layer `layer`; rrt_floyd: the graph does not join start and goal).
-    #[error("no free candidate left (layer or stage {0})")]
-    Exhausted(usize),
-}
 
 /// The result of a planning run.
 ///

@@ -1,7 +1,7 @@
 //! Seed 002's baselines: [`rrt`] (uniform sampling) and [`biased_rrt`] (goal bias p),
 //! and the tree engine that [`local_rrt`](super::local_rrt) extends.
 
-use super::local_rrt::Lattice;
+use super::lattice::Lattice;
 use super::narrow::NarrowPassage;
 use super::path::PlannedPath;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};

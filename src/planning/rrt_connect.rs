@@ -1,7 +1,7 @@
 //! [`rrt_connect`]: the bidirectional RRT (Kuffner & LaValle), with seed 002's local
 //! discretization as a fallback when an extension fails.
 
-use super::local_rrt::Lattice;
+use super::lattice::Lattice;
 use super::narrow::NarrowPassage;
 use super::path::PlannedPath;
 use super::rrt::finish;

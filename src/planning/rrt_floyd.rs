@@ -1,7 +1,8 @@
 //! Seed 000's random-walk RRT + Floyd shortest path.
 
-use super::path::{Failure, PlannedPath};
+use super::path::PlannedPath;
 use super::rrt::finish;
+use super::run::Failure;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;

@@ -1,6 +1,6 @@
 //! The search tree shared by the RRT family, and helpers every tree planner needs.
 
-use super::path::Failure;
+use super::run::Failure;
 use super::space::PlanningSpace;
 use super::validator::Checker;
 use crate::math::{Rng, Transform, Vec3};

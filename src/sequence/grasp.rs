@@ -4,7 +4,7 @@
 //! finger boxes slid along the grasp plane in the mating direction until they fully
 //! grip or collide. Units: mm; grasps are in the part frame.
 
-use super::plan::Ctx;
+use super::context::Ctx;
 use super::task::Grasp;
 use crate::collision::{interferes, Collider};
 use crate::document::Reference;
@@ -184,7 +184,7 @@ pub(crate) fn find_grasp(
     // Only the assembled components whose boxes meet the fingers' reach (their
     // boxes from depth 0 to a full slide) can stop a finger: the grasp depends on
     // them alone and is found once per such set.
-    let near: u128 = super::plan::members_of(mask)
+    let near: u128 = super::context::members_of(mask)
         .filter(|&q| {
             slides
                 .iter()
@@ -193,8 +193,8 @@ pub(crate) fn find_grasp(
         .fold(0, |a, q| a | (1u128 << q));
     let key = (
         p,
-        super::plan::dir_key(mate),
-        dirs.iter().map(super::plan::dir_key).collect(),
+        super::context::dir_key(mate),
+        dirs.iter().map(super::context::dir_key).collect(),
         near,
     );
     if let Some(g) = ctx.grasps.lock().unwrap().get(&key) {
@@ -311,7 +311,7 @@ impl Slide {
             let world = self.world(depth);
             self.fingers.iter().any(|f| {
                 let b = f.world_bounds(&world);
-                super::plan::members_of(mask).any(|q| {
+                super::context::members_of(mask).any(|q| {
                     ctx.boxes[q].overlap(&b).min() > -ctx.opts.tolerance
                         && interferes(
                             f,

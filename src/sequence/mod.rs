@@ -37,9 +37,12 @@
 //! assert_eq!(plan.best().mounts, 0);
 //! ```
 
+mod blocking;
+mod context;
 mod graph;
 mod grasp;
 mod options;
+mod paths;
 mod plan;
 mod report;
 mod revalidate;
@@ -77,7 +80,7 @@ pub fn plan_sequence(
 /// The relation graph of `doc` from its mates, loops broken into composite nodes
 /// (composite bases chosen by the components' `mass`, else mesh volume).
 pub fn relation_graph(doc: &Document) -> RelationGraph {
-    let sizes = plan::component_sizes(doc, &SequenceOptions::default());
+    let sizes = context::component_sizes(doc, &SequenceOptions::default());
     RelationGraph::build(doc, &|i| sizes[i])
 }
 
@@ -94,7 +97,7 @@ pub fn mating_directions(
     options: &SequenceOptions,
 ) -> Result<Vec<Vec3>, SequenceError> {
     let p = doc.component_index(name).map_err(WorkspaceError::from)?;
-    let ctx = plan::Ctx::new(doc, cache, options)?;
+    let ctx = context::Ctx::new(doc, cache, options)?;
     Ok(plan::mating_directions_of(&ctx, p))
 }
 
@@ -110,7 +113,7 @@ pub fn grasp_planes(
     options: &SequenceOptions,
 ) -> Result<Vec<FacePair>, SequenceError> {
     let p = doc.component_index(name).map_err(WorkspaceError::from)?;
-    let ctx = plan::Ctx::new(doc, cache, options)?;
+    let ctx = context::Ctx::new(doc, cache, options)?;
     let dirs = plan::mating_directions_of(&ctx, p);
     Ok(grasp::grasp_planes(&ctx, p, &dirs))
 }
@@ -136,6 +139,6 @@ pub fn safe_length(
             expected: "a finite non-zero vector",
         });
     }
-    let ctx = plan::Ctx::new(doc, cache, options)?;
+    let ctx = context::Ctx::new(doc, cache, options)?;
     Ok(ctx.safe_length(p, &direction.normalize(), plan::related_of(&ctx, p)))
 }

@@ -62,8 +62,8 @@ pub enum ViewerError {
         /// What went wrong.
         reason: String,
     },
-    /// This build has no viewer (`--no-default-features` without `viewer`).
-    #[error("this fitup was built without the `viewer` feature; rebuild with default features to use --view, --record and `fitup view`")]
+    /// This build has no viewer (the `viewer` feature is opt-in: it adds ≈ 430 crates).
+    #[error("this fitup was built without the viewer; to use --view, --record and `fitup view`, rebuild with it: cargo install --path . --features viewer (or cargo run --release --features viewer -- …)")]
     NotBuilt,
 }
 

@@ -15,7 +15,7 @@
 //! Test scaffolding, not part of the library: users get the problems as files
 //! (`models/problems/<name>.yaml` + `.plan.json`, read with
 //! `fitup::planning::ProblemFile`). Included with `#[path]` by
-//! `tests/planning_problems.rs` (which rewrites the files with `FITUP_BLESS=1`) and
+//! `tests/it/planning_problems.rs` (which rewrites the files with `FITUP_BLESS=1`) and
 //! the planning benchmark. Lengths in mm, angles in radians.
 
 #![allow(dead_code)]
@@ -96,7 +96,7 @@ pub enum ProblemError {
 impl Problem {
     /// The moving component's box in its own frame (mm).
     pub fn part_box(&self) -> Aabb {
-        Aabb::of_mesh(&self.moving).unwrap_or(Aabb::new(Point3::origin(), Point3::origin()))
+        self.moving.bounds().unwrap_or(Aabb::new(Point3::origin(), Point3::origin()))
     }
 
     /// Colliders of the moving part and the obstacles (one per distinct part).

@@ -2,7 +2,7 @@
 //! script API, programs through the CLI (and their located errors), save/load round
 //! trips, and the loader's located validation errors.
 
-mod common;
+use crate::common;
 
 use fitup::document::{DimensionKind, Document};
 use fitup::math::{Point3, Transform, Vec3};

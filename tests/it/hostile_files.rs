@@ -6,7 +6,7 @@
 //! bound on hangs, not a speed assertion) with a message naming file and line where
 //! there is one, and must leave the user's files exactly as they were.
 
-mod common;
+use crate::common;
 
 use common::{project, spawn};
 use std::collections::BTreeMap;

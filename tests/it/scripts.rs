@@ -2,7 +2,7 @@
 //! run exactly as the README shows: `fitup run scripts/NAME.rhai` from the repository
 //! root, with no set-up (scripts create the output folder `out/` they write to).
 
-mod common;
+use crate::common;
 
 #[test]
 fn every_example_script_runs() {

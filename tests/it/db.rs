@@ -3,7 +3,7 @@
 //! Without the variable the PostgreSQL half is skipped with a note, except under
 //! `CI=true`, where it fails: CI cannot skip it silently.
 
-mod common;
+use crate::common;
 
 use fitup::collision::SweepMethod;
 use fitup::db::{

@@ -5,7 +5,7 @@
 //! resolution, start and end where asked, and repeat for a seed.
 
 use fitup::collision::{interferes, DEFAULT_TOLERANCE};
-#[path = "common/problems.rs"]
+#[path = "../common/problems.rs"]
 mod problems;
 
 use fitup::planning::PlannedPath;

@@ -4,7 +4,7 @@
 //! test; this is not a speed test) with a human message naming file and line, and no
 //! panic.
 
-mod common;
+use crate::common;
 
 use common::{project, short_text as text, spawn};
 use std::path::Path;

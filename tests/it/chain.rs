@@ -3,7 +3,7 @@
 //! execution log in the database. The commands are those of docs/skills.md and the
 //! README, run from the repository root against the real binaries over loopback.
 
-mod common;
+use crate::common;
 
 use common::lines::Killed;
 

@@ -1,7 +1,7 @@
 //! The simulated manipulator and the skill manager over loopback, driving the real
 //! binaries: `fitup manipulator` and `fitup skills run`.
 
-mod common;
+use crate::common;
 
 use common::{fitup, repo};
 use fitup::kinematics::JointKind;

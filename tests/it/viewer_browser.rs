@@ -7,7 +7,7 @@
 //! `out/viewer-tests/browser-*.png` to look at.
 #![cfg(feature = "viewer")]
 
-mod common;
+use crate::common;
 
 use common::repo;
 use std::io::{BufRead, BufReader, Read, Write};

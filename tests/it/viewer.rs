@@ -3,7 +3,7 @@
 //! repository root) and the recording holds what docs/viewer.md promises.
 #![cfg(feature = "viewer")]
 
-mod common;
+use crate::common;
 
 use common::{repo, run_bounded, short_text};
 use fitup::document::Document;

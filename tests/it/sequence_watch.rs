@@ -2,7 +2,7 @@
 //! sequence"): `fitup watch` runs a script that prints the wheel's sequence; the
 //! document is edited and saved once; exactly one rerun prints the new sequence.
 
-mod common;
+use crate::common;
 
 use common::Watch;
 

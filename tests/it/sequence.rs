@@ -2,10 +2,10 @@
 //! micro-robot wheel, the fig. 11 cell, and the same without mates. Every returned
 //! sequence is re-checked step by step against exactly the parts assembled before.
 
-mod common;
-#[path = "common/gearbox.rs"]
+use crate::common;
+#[path = "../common/gearbox.rs"]
 mod gearbox;
-#[path = "common/pegboard.rs"]
+#[path = "../common/pegboard.rs"]
 mod pegboard;
 
 use fitup::document::Document;

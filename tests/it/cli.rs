@@ -1,7 +1,7 @@
 //! The command line as a user meets it: exit codes and error messages that point at
 //! the problem.
 
-mod common;
+use crate::common;
 
 use common::{project, run_in, text};
 
@@ -334,4 +334,26 @@ fn batch_runs_the_script_once_per_document() {
         t.contains("count 8") && t.contains("1 of 2 runs failed: models/none.yaml"),
         "{t}"
     );
+}
+
+/// A build without the opt-in viewer answers every viewer flag with the one command
+/// that adds it, before it runs anything, and exits non-zero.
+#[cfg(not(feature = "viewer"))]
+#[test]
+fn viewer_flags_without_the_viewer_name_the_build_that_adds_it() {
+    let dir = project();
+    let p = dir.path();
+    std::fs::write(p.join("scripts/ok.rhai"), "print(\"ran\");\n").unwrap();
+    for args in [
+        &["run", "scripts/ok.rhai", "--view"][..],
+        &["run", "scripts/ok.rhai", "--record", "out/x.rrd"][..],
+        &["view", "out/x.rrd"][..],
+    ] {
+        let o = run_in(p, args);
+        let t = text(&o);
+        assert_ne!(o.status.code(), Some(0), "{args:?}: {t}");
+        assert!(t.contains("--features viewer"), "{args:?}: {t}");
+        assert!(!t.contains("ran"), "{args:?} ran the script: {t}");
+        assert!(!p.join("out/x.rrd").exists());
+    }
 }

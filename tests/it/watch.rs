@@ -1,7 +1,7 @@
 //! `fitup watch` as a subprocess: every save of the script, the document or a mesh the
 //! script read gives exactly one rerun; a save during a run cancels it.
 
-mod common;
+use crate::common;
 
 use common::Watch;
 

@@ -1,0 +1,331 @@
+//! The directional blocking graph (seed 003 section 2.1 steps 2–4): candidate
+//! separation directions of each part, the sweeps that find which parts block it along
+//! each, and the safe length (how far a part can leave before anything blocks it).
+//! Units: millimetres and radians, assembly frame.
+
+use super::context::*;
+use super::graph::separation_directions;
+use super::options::{Mode, SequenceError, DEFAULT_SEQUENCE_TIME_LIMIT_MS};
+use crate::collision::{edge_interferes, interferes, Aabb, EdgeOptions, SweepMethod};
+use crate::math::{Transform, Vec3};
+use crate::workspace::WorkspaceError;
+use rayon::prelude::*;
+use std::sync::atomic::Ordering;
+
+impl Ctx<'_> {
+    /// Candidate separation directions of component `c`.
+    pub(super) fn candidate_directions(&self, c: usize) -> Vec<Vec3> {
+        let mut out = Vec::new();
+        match self.opts.mode {
+            Mode::Mates => {
+                for r in self.graph.relations.iter().filter(|r| r.a == c || r.b == c) {
+                    for (k, &m) in r.mates.iter().enumerate() {
+                        let mate = &self.doc.mates()[m];
+                        for d in separation_directions(self.doc, mate, c, &r.freedoms[k]) {
+                            push_dir(&mut out, d);
+                        }
+                    }
+                }
+                if out.is_empty() {
+                    for d in axis_dirs() {
+                        push_dir(&mut out, d);
+                    }
+                }
+            }
+            Mode::Geometry => {
+                for d in axis_dirs() {
+                    push_dir(&mut out, d);
+                }
+                for d in self.contact_normals(c) {
+                    push_dir(&mut out, d);
+                }
+            }
+        }
+        out
+    }
+
+    /// Directions leaving the faces of `c` that touch another component: minus the
+    /// outward normals of `c`'s triangles lying on a neighbour's surface (at most 6
+    /// new ones, largest touching area first).
+    pub(super) fn contact_normals(&self, c: usize) -> Vec<Vec3> {
+        let mesh = self.doc.mesh_of(c);
+        let pose = self.scene.poses[c];
+        let tol = (2.0 * self.opts.tolerance).max(1e-6);
+        let mut found: Vec<(Vec3, f64)> = Vec::new();
+        for q in members(self.related[c]) {
+            let qb = &self.boxes[q];
+            let inv = self.scene.poses[q].inverse();
+            for t in 0..mesh.triangles.len() {
+                if self.out_of_time() {
+                    return Vec::new();
+                }
+                let [a, b, cc] = mesh.triangle(t);
+                let area = 0.5 * (b - a).cross(&(cc - a)).norm();
+                if area <= 0.0 {
+                    continue;
+                }
+                let centroid = pose.apply(&nalgebra::Point3::from(
+                    (a.coords + b.coords + cc.coords) / 3.0,
+                ));
+                if qb.distance_to_point(&centroid) > tol {
+                    continue;
+                }
+                let local = inv.apply(&centroid);
+                if self.scene.colliders[q].distance_to_point(&local, tol * 2.0) > tol {
+                    continue;
+                }
+                let n = -pose.apply_vector(&mesh.triangle_normal(t));
+                match found.iter_mut().find(|(e, _)| (e - n).norm() < 1e-3) {
+                    Some((_, w)) => *w += area,
+                    None => found.push((n, area)),
+                }
+            }
+        }
+        found.sort_by(|a, b| b.1.total_cmp(&a.1));
+        found.into_iter().take(6).map(|(n, _)| n).collect()
+    }
+
+    /// Whether `p` moved straight along `d` from its assembled pose hits `q`.
+    ///
+    /// One continuous check ([`edge_interferes`]) from the resting pose outward until
+    /// `p`'s box has left `q`'s by `probe_mm`: the assembled pose is known free (the
+    /// contacts were checked in [`Ctx::new`]), so the contact region is not walked
+    /// pose by pose — faces sliding on or leaving a face in contact are cleared by
+    /// their planes at once, and nothing is jumped over. Beyond that length the
+    /// boxes are apart for good (the box has passed `q`'s on an axis `d` keeps
+    /// moving along), so "not hit" proves the whole straight line along `d` free of
+    /// `q`: the tasks' straight insertions reuse this answer instead of checking again.
+    pub(super) fn sweep_hits(&self, p: usize, d: &Vec3, q: usize) -> Result<bool, SequenceError> {
+        let (bp, bq) = (self.boxes[p], self.boxes[q]);
+        let len = exit_distance(&bp, &bq, d) + self.opts.probe_mm;
+        let moved = Aabb::new(bp.lo + d * len, bp.hi + d * len);
+        let swept = Aabb::new(bp.lo.inf(&moved.lo), bp.hi.sup(&moved.hi));
+        // Interference needs the boxes to overlap deeper than the tolerance on every
+        // axis: a part sliding on a face (a plate on the table) is never swept.
+        if swept.overlap(&bq).min() <= self.opts.tolerance {
+            return Ok(false);
+        }
+        let time_limit = || {
+            SequenceError::TimeLimit(
+                self.opts
+                    .time_limit_ms
+                    .unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS),
+            )
+        };
+        if self.out_of_time() {
+            return Err(time_limit());
+        }
+        self.sweeps.fetch_add(1, Ordering::Relaxed);
+        let options = EdgeOptions {
+            tolerance: self.opts.tolerance,
+            contact_step: SweepMethod::DEFAULT_CONTACT_STEP_MM,
+        };
+        let start = self.scene.poses[p];
+        // In pieces: the stretch before `entry`, where the boxes are still apart
+        // (the trees' root boxes clear it at once), then pieces growing from half a
+        // probe length to SWEEP_PIECE_MM. A part blocked by what it rests against (a
+        // peg pushed sideways into its hole's wall) or by a neighbour it reaches (a
+        // peg's head meeting the next peg's) is hit within the first short piece,
+        // where few triangle pairs can meet, instead of after a walk over every pair
+        // a longer piece could meet (thin facets swept across many others, coplanar
+        // faces sliding past each other); the deadline is read between pieces.
+        let entry = entry_distance(&bp, &bq, d, self.opts.tolerance).min(len);
+        let mut piece = (0.5 * self.opts.probe_mm).min(SWEEP_PIECE_MM);
+        let mut at = 0.0;
+        // whether the straight piece `a → b` of the sweep hits `q`
+        let hits = |a: &Transform, b: &Transform| {
+            edge_interferes(
+                &self.scene.colliders[p],
+                a,
+                b,
+                &self.scene.colliders[q],
+                &self.scene.poses[q],
+                &options,
+            )
+            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))
+        };
+        if entry > piece {
+            at = entry - 0.5 * piece;
+            if hits(&start, &start.then(&Transform::from_translation(d * at)))? {
+                return Ok(true);
+            }
+        }
+        let mut a = start.then(&Transform::from_translation(d * at));
+        while at < len {
+            if self.out_of_time() {
+                return Err(time_limit());
+            }
+            let next = if len - (at + piece) < 0.25 * piece {
+                len
+            } else {
+                at + piece
+            };
+            at = next;
+            piece = (2.0 * piece).min(SWEEP_PIECE_MM);
+            let b = start.then(&Transform::from_translation(d * next));
+            if hits(&a, &b)? {
+                return Ok(true);
+            }
+            a = b;
+        }
+        Ok(false)
+    }
+
+    /// The directional blocking graph: for every component, direction and other
+    /// component, whether the straight removal hits it. The sweeps are independent
+    /// and run in parallel.
+    pub(super) fn build_blocking(&mut self) -> Result<(), SequenceError> {
+        // p along d meets q exactly when q along −d meets p (the same relative
+        // motion, the same separation length): only one of the two is swept.
+        let mirror = |p: usize, k: usize, q: usize| -> Option<usize> {
+            (q < p)
+                .then(|| {
+                    self.dirs[q]
+                        .iter()
+                        .position(|e| same_dir(e, &-self.dirs[p][k]))
+                })
+                .flatten()
+        };
+        let mut queries = Vec::new();
+        for p in 0..self.n {
+            for k in 0..self.dirs[p].len() {
+                for q in (0..self.n).filter(|&q| q != p) {
+                    if mirror(p, k, q).is_none() {
+                        queries.push((p, k, q));
+                    }
+                }
+            }
+        }
+        let this = &*self;
+        let hits: Vec<bool> = queries
+            .par_iter()
+            .map(|&(p, k, q)| this.sweep_hits(p, &this.dirs[p][k], q))
+            .collect::<Result<_, _>>()?;
+        let mut blocked: Vec<Vec<Mask>> = (0..self.n)
+            .map(|p| vec![0 as Mask; self.dirs[p].len()])
+            .collect();
+        for (&(p, k, q), &hit) in queries.iter().zip(&hits) {
+            if hit {
+                blocked[p][k] |= bit(q);
+            }
+        }
+        // The mirrored half, from the swept one (its q < p: p ascending fills them).
+        for p in 0..self.n {
+            for k in 0..self.dirs[p].len() {
+                for q in (0..self.n).filter(|&q| q != p) {
+                    if let Some(k2) = mirror(p, k, q) {
+                        if blocked[q][k2] & bit(p) != 0 {
+                            blocked[p][k] |= bit(q);
+                        }
+                    }
+                }
+            }
+        }
+        self.blocked = blocked;
+        Ok(())
+    }
+
+    /// The free separation directions of `p` among the components of `mask`.
+    pub fn free_dirs(&self, p: usize, mask: Mask) -> Vec<usize> {
+        (0..self.dirs[p].len())
+            .filter(|&k| self.blocked[p][k] & mask == 0)
+            .collect()
+    }
+
+    /// Static interference of `p` at `pose` with any component of `mask`.
+    pub(super) fn pose_hits(&self, p: usize, pose: &Transform, mask: Mask) -> bool {
+        let b = self.scene.colliders[p].world_bounds(pose);
+        members(mask).any(|q| {
+            boxes_meet(&b, &self.boxes[q], self.opts.tolerance)
+                && interferes(
+                    &self.scene.colliders[p],
+                    pose,
+                    &self.scene.colliders[q],
+                    &self.scene.poses[q],
+                    self.opts.tolerance,
+                )
+                .unwrap_or(true)
+        })
+    }
+
+    /// The memo key of [`safe_length`](Self::safe_length): the part, the direction
+    /// and the components of `mask` its probes can reach.
+    pub(super) fn safe_length_key(&self, p: usize, d: &Vec3, mask: Mask) -> SafeKey {
+        let Some(region) = union_box(&self.boxes, mask) else {
+            return (p, dir_key(d), 0);
+        };
+        let probe = self.opts.probe_mm;
+        // Every probe pose lies in p's box swept along d to the bracket's far end
+        // (at most `limit`: leaving a smaller region is never farther), grown by a
+        // probe: the boxes that cannot meet it never interfere.
+        let limit = exit_distance(&self.boxes[p], &region, d) + probe;
+        let bp = self.boxes[p];
+        let far = Aabb::new(bp.lo + d * limit, bp.hi + d * limit);
+        let reach = Aabb::new(
+            bp.lo.inf(&far.lo) - Vec3::repeat(probe),
+            bp.hi.sup(&far.hi) + Vec3::repeat(probe),
+        );
+        let near: Mask = members(mask)
+            .filter(|&q| boxes_meet(&reach, &self.boxes[q], self.opts.tolerance))
+            .fold(0, |a, q| a | bit(q));
+        (p, dir_key(d), near)
+    }
+
+    /// Seed 003 section 2.1 step 6: step `p` out along `d` (unit) until a probe along
+    /// every other candidate direction is free of `mask` (mm).
+    ///
+    /// Only the components of `mask` whose boxes the probes can reach take part (the
+    /// others can never answer "hit"), and the search's bracket is set by them too,
+    /// so the answer depends on the part, the direction and those components alone:
+    /// it is computed once per such key (the ranked sequences put the same part
+    /// onto the same neighbours in many orders).
+    pub fn safe_length(&self, p: usize, d: &Vec3, mask: Mask) -> f64 {
+        let probe = self.opts.probe_mm;
+        let key = self.safe_length_key(p, d, mask);
+        let near = key.2;
+        if let Some(&s) = self.safe_lengths.lock().unwrap().get(&key) {
+            return s;
+        }
+        let Some(region) = union_box(&self.boxes, near) else {
+            return probe;
+        };
+        let limit = exit_distance(&self.boxes[p], &region, d) + probe;
+        let others: Vec<Vec3> = self.dirs[p]
+            .iter()
+            .filter(|e| e.dot(d).abs() < 0.9)
+            .copied()
+            .collect();
+        let step = self.step.max(limit / 200.0);
+        let start = self.scene.poses[p];
+        let free_at = |s: f64| {
+            let at = start.then(&Transform::from_translation(d * s));
+            others.iter().all(|e| {
+                let probe = at.then(&Transform::from_translation(e * probe));
+                !self.pose_hits(p, &probe, near)
+            })
+        };
+        let found = if probe >= limit || free_at(probe) {
+            probe.min(limit)
+        } else {
+            // Bisection to one step: the part is held sideways until it clears what
+            // surrounds it, and free from there on (a handful of probes, not one per
+            // step — each probe is an exact query, costly on fine meshes).
+            let (mut lo, mut hi) = (probe, limit);
+            while hi - lo > step {
+                if self.out_of_time() {
+                    // Not remembered: cut short, not the answer.
+                    return limit;
+                }
+                let mid = 0.5 * (lo + hi);
+                if free_at(mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            hi
+        };
+        self.safe_lengths.lock().unwrap().insert(key, found);
+        found
+    }
+}

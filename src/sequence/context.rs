@@ -1,0 +1,488 @@
+//! The context of one sequence search (seed 003 section 2.1): the components, their
+//! boxes and sizes, the relation graph, the candidate directions and the blocking
+//! they meet, the time budget; component sets as bit masks. Units: millimetres and
+//! radians, assembly frame.
+
+use super::graph::{Freedom, RelationGraph};
+use super::options::{
+    Mode, SequenceError, SequenceOptions, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
+};
+use super::task::Grasp;
+use crate::collision::Aabb;
+use crate::document::Document;
+use crate::math::{Transform, Vec3};
+use crate::workspace::{Scene, SceneCache, WorkspaceError};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::atomic::AtomicUsize;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// The longest piece of a blocking sweep (mm): past the point where the boxes first
+/// meet, the pieces grow from half the probe length to this, and the deadline is read
+/// between them.
+pub(super) const SWEEP_PIECE_MM: f64 = 10.0;
+
+pub(super) type Mask = u128;
+
+pub(super) fn bit(i: usize) -> Mask {
+    1u128 << i
+}
+
+pub(crate) fn members_of(m: Mask) -> impl Iterator<Item = usize> {
+    members(m)
+}
+
+pub(super) fn members(m: Mask) -> impl Iterator<Item = usize> {
+    (0..128).filter(move |&i| m & bit(i) != 0)
+}
+
+/// The size of every component for the base choice (seed 003 section 2.2: volume or
+/// weight): its mass (`options.masses` by component or part, else the document's
+/// `mass`, kg) when one is known; else its mesh volume (mm³) times the median density
+/// of the components with a mass (so masses and volumes compare), or the bare volume
+/// when no component has a mass.
+pub(crate) fn component_sizes(doc: &Document, opts: &SequenceOptions) -> Vec<f64> {
+    let n = doc.components().len();
+    let volumes: Vec<f64> = (0..n)
+        .map(|i| doc.mesh_of(i).signed_volume().abs())
+        .collect();
+    let masses: Vec<Option<f64>> = doc
+        .components()
+        .iter()
+        .map(|c| {
+            opts.masses
+                .get(&c.name)
+                .or_else(|| opts.masses.get(&c.part))
+                .copied()
+                .or(c.mass)
+        })
+        .collect();
+    let mut densities: Vec<f64> = (0..n)
+        .filter_map(|i| {
+            masses[i]
+                .filter(|_| volumes[i] > 0.0)
+                .map(|m| m / volumes[i])
+        })
+        .collect();
+    densities.sort_by(f64::total_cmp);
+    let density = densities.get(densities.len() / 2).copied().unwrap_or(1.0);
+    (0..n)
+        .map(|i| masses[i].unwrap_or(volumes[i] * density))
+        .collect()
+}
+
+/// Everything the search needs, computed once per call.
+pub(crate) struct Ctx<'d> {
+    pub doc: &'d Document,
+    pub scene: Scene,
+    pub opts: SequenceOptions,
+    pub n: usize,
+    pub names: Vec<String>,
+    /// World boxes in the assembled pose.
+    pub boxes: Vec<Aabb>,
+    /// Size (mass or volume) per component.
+    pub sizes: Vec<f64>,
+    pub graph: RelationGraph,
+    /// Related components (mates, or contacts in geometry mode).
+    pub related: Vec<Mask>,
+    /// Candidate separation directions per component (unit, world).
+    pub dirs: Vec<Vec<Vec3>>,
+    /// `blocked[p][k]`: the components that hit `p` moving along `dirs[p][k]`.
+    pub blocked: Vec<Vec<Mask>>,
+    pub step: f64,
+    pub deadline: Instant,
+    pub started: Instant,
+    /// Blocking sweeps run (counted from the parallel sweeps).
+    pub sweeps: AtomicUsize,
+    /// Safe lengths found, by part, direction and the assembled parts that matter.
+    pub(super) safe_lengths: Mutex<HashMap<SafeKey, f64>>,
+    /// Grasps found, by part, mating direction, free directions and the assembled
+    /// parts the fingers can reach.
+    pub(super) grasps: Mutex<HashMap<GraspKey, Option<Grasp>>>,
+}
+
+/// The key of [`Ctx::safe_lengths`]: part, direction bits, the parts that matter.
+pub(super) type SafeKey = (usize, [u64; 3], Mask);
+
+/// The key of [`Ctx::grasps`].
+pub(super) type GraspKey = (usize, [u64; 3], Vec<[u64; 3]>, Mask);
+
+/// The bits of a direction, for exact-match memo keys.
+pub(super) fn dir_key(d: &Vec3) -> [u64; 3] {
+    [d.x.to_bits(), d.y.to_bits(), d.z.to_bits()]
+}
+
+pub(super) fn same_dir(a: &Vec3, b: &Vec3) -> bool {
+    (a - b).norm() < 1e-6
+}
+
+pub(super) fn push_dir(v: &mut Vec<Vec3>, d: Vec3) {
+    if d.norm() < 1e-9 {
+        return;
+    }
+    let d = d.normalize();
+    if !v.iter().any(|e| same_dir(e, &d)) {
+        v.push(d);
+    }
+}
+
+pub(super) fn axis_dirs() -> [Vec3; 6] {
+    [
+        Vec3::x(),
+        -Vec3::x(),
+        Vec3::y(),
+        -Vec3::y(),
+        Vec3::z(),
+        -Vec3::z(),
+    ]
+}
+
+pub(super) fn union_box(boxes: &[Aabb], m: Mask) -> Option<Aabb> {
+    members(m)
+        .map(|i| boxes[i])
+        .reduce(|a, b| Aabb::new(a.lo.inf(&b.lo), a.hi.sup(&b.hi)))
+}
+
+pub(super) fn diag(b: &Aabb) -> f64 {
+    (b.hi - b.lo).norm()
+}
+
+/// How far `b` must move along unit `d` to leave `region` (mm, ≥ 0).
+pub(super) fn exit_distance(b: &Aabb, region: &Aabb, d: &Vec3) -> f64 {
+    let mut best = f64::INFINITY;
+    for k in 0..3 {
+        if d[k].abs() < 1e-12 {
+            continue;
+        }
+        let s = if d[k] > 0.0 {
+            (region.hi[k] - b.lo[k]) / d[k]
+        } else {
+            (region.lo[k] - b.hi[k]) / d[k]
+        };
+        best = best.min(s.max(0.0));
+    }
+    if best.is_finite() {
+        best
+    } else {
+        0.0
+    }
+}
+
+/// How far `b` can move along unit `d` before it overlaps `region` deeper than
+/// `slack` (mm) on every axis `d` moves along (mm, ≥ 0; 0 when it already does):
+/// before that distance the two boxes are apart.
+pub(super) fn entry_distance(b: &Aabb, region: &Aabb, d: &Vec3, slack: f64) -> f64 {
+    let mut worst = 0.0f64;
+    for k in 0..3 {
+        if d[k].abs() < 1e-12 {
+            continue;
+        }
+        let s = if d[k] > 0.0 {
+            (region.lo[k] + slack - b.hi[k]) / d[k]
+        } else {
+            (region.hi[k] - slack - b.lo[k]) / d[k]
+        };
+        worst = worst.max(s);
+    }
+    worst
+}
+
+pub(super) fn boxes_meet(a: &Aabb, b: &Aabb, slack: f64) -> bool {
+    a.overlap(b).min() > -slack
+}
+
+impl<'d> Ctx<'d> {
+    pub fn new(
+        doc: &'d Document,
+        cache: &mut SceneCache,
+        opts: &SequenceOptions,
+    ) -> Result<Ctx<'d>, SequenceError> {
+        let started = Instant::now();
+        let n = doc.components().len();
+        if n == 0 {
+            return Err(SequenceError::Empty);
+        }
+        if n > MAX_COMPONENTS {
+            return Err(SequenceError::TooManyComponents(n));
+        }
+        let bad = |option: &'static str, v: f64, expected: &'static str| {
+            Err(SequenceError::InvalidOption {
+                option,
+                value: v.to_string(),
+                expected,
+            })
+        };
+        let limit = opts.time_limit_ms.unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS);
+        if !(limit.is_finite() && limit > 0.0) {
+            return bad("time_limit_ms", limit, "a finite number of ms > 0");
+        }
+        if !(opts.tolerance.is_finite() && opts.tolerance >= 0.0) {
+            return bad("tolerance", opts.tolerance, "a finite number of mm ≥ 0");
+        }
+        if !(opts.probe_mm.is_finite() && opts.probe_mm > 0.0 && opts.probe_mm < 1e6) {
+            return bad("probe_mm", opts.probe_mm, "a finite number of mm > 0");
+        }
+        if !(opts.step_mm.is_finite() && opts.step_mm >= 0.0 && opts.step_mm < 1e6) {
+            return bad(
+                "step_mm",
+                opts.step_mm,
+                "a finite number of mm ≥ 0 (0: automatic)",
+            );
+        }
+        if !(opts.max_tilt.is_finite() && opts.max_tilt >= 0.0) {
+            return bad("max_tilt", opts.max_tilt, "a finite angle ≥ 0");
+        }
+        if !(opts.small_base_ratio.is_finite() && opts.small_base_ratio >= 0.0) {
+            return bad(
+                "small_base_ratio",
+                opts.small_base_ratio,
+                "a finite number ≥ 0",
+            );
+        }
+        if !(opts.fallback_time_limit_ms.is_finite() && opts.fallback_time_limit_ms > 0.0) {
+            return bad(
+                "fallback_time_limit_ms",
+                opts.fallback_time_limit_ms,
+                "a finite number of ms > 0",
+            );
+        }
+        if opts.max_sequences == 0 {
+            return Err(SequenceError::InvalidOption {
+                option: "max_sequences",
+                value: "0".into(),
+                expected: "at least 1",
+            });
+        }
+        for (k, v) in &opts.masses {
+            if !(v.is_finite() && *v > 0.0) {
+                return Err(SequenceError::InvalidOption {
+                    option: "masses",
+                    value: format!("{k}: {v}"),
+                    expected: "finite numbers > 0",
+                });
+            }
+        }
+        for name in opts.base.iter().chain(&opts.order) {
+            doc.component_index(name).map_err(WorkspaceError::from)?;
+        }
+        let deadline = started + Duration::from_secs_f64(limit.min(1e9) / 1e3);
+        let scene = Scene::new(doc, cache)?;
+        let names: Vec<String> = doc.components().iter().map(|c| c.name.clone()).collect();
+        let mut boxes = Vec::with_capacity(n);
+        for (i, name) in names.iter().enumerate() {
+            if doc.mesh_of(i).vertices.is_empty() {
+                return Err(WorkspaceError::EmptyMesh(name.clone()).into());
+            }
+            boxes.push(scene.colliders[i].world_bounds(&scene.poses[i]));
+        }
+        let sizes = component_sizes(doc, opts);
+        // The assembled state must be free of interference.
+        let contacts = scene
+            .contacts(crate::collision::Method::Exact, opts.tolerance)
+            .map_err(WorkspaceError::from)?;
+        if let Some(p) = contacts.iter().find(|p| p.contact.is_interfering()) {
+            return Err(SequenceError::AssembledInterference {
+                a: names[p.a].clone(),
+                b: names[p.b].clone(),
+                depth: p.contact.depth(),
+            });
+        }
+        let sizes_for = sizes.clone();
+        let mut graph = match opts.mode {
+            Mode::Mates => RelationGraph::build(doc, &|i| sizes_for[i]),
+            Mode::Geometry => RelationGraph {
+                components: names.clone(),
+                relations: Vec::new(),
+                nodes: (0..n)
+                    .map(|i| super::graph::Node { members: vec![i] })
+                    .collect(),
+                loops: Vec::new(),
+            },
+        };
+        let mut related = vec![0 as Mask; n];
+        match opts.mode {
+            Mode::Mates => {
+                for r in &graph.relations {
+                    related[r.a] |= bit(r.b);
+                    related[r.b] |= bit(r.a);
+                }
+            }
+            Mode::Geometry => {
+                for p in &contacts {
+                    related[p.a] |= bit(p.b);
+                    related[p.b] |= bit(p.a);
+                    let f = Freedom {
+                        frame: Transform::IDENTITY,
+                        translations: Vec::new(),
+                        rotations: Vec::new(),
+                    };
+                    graph.relations.push(super::graph::Relation {
+                        a: p.a,
+                        b: p.b,
+                        mates: Vec::new(),
+                        freedoms: Vec::new(),
+                        freedom: f,
+                    });
+                }
+            }
+        }
+        let step = if opts.step_mm > 0.0 {
+            opts.step_mm
+        } else {
+            let smallest = boxes.iter().map(diag).fold(f64::INFINITY, f64::min);
+            (0.01 * smallest).clamp(0.05, 2.0)
+        };
+        let mut ctx = Ctx {
+            doc,
+            scene,
+            opts: opts.clone(),
+            n,
+            names,
+            boxes,
+            sizes,
+            graph,
+            related,
+            dirs: Vec::new(),
+            blocked: Vec::new(),
+            step,
+            deadline,
+            started,
+            sweeps: AtomicUsize::new(0),
+            safe_lengths: Mutex::new(HashMap::new()),
+            grasps: Mutex::new(HashMap::new()),
+        };
+        // Independent per component (the contact normals walk the meshes): parallel.
+        let this = &ctx;
+        let dirs: Vec<Vec<Vec3>> = (0..n)
+            .into_par_iter()
+            .map(|i| this.candidate_directions(i))
+            .collect();
+        ctx.dirs = dirs;
+        ctx.build_blocking()?;
+        ctx.order_composites();
+        Ok(ctx)
+    }
+
+    /// The order a composite node implies (seed 003 section 2.1 step 3), from the
+    /// blocking graph: taken apart member by member (the first member, the node's
+    /// base, stays), each time one that can leave the others straight, the latest
+    /// in the loop-breaking order first; assembly is the reverse. A stack on a shaft
+    /// (bushing, gear, washer, cap) so comes out bottom-up whatever the sizes say.
+    /// Members that cannot be taken apart keep their loop-breaking order.
+    pub(super) fn order_composites(&mut self) {
+        for ni in 0..self.graph.nodes.len() {
+            let members = self.graph.nodes[ni].members.clone();
+            if members.len() < 3 {
+                continue;
+            }
+            let mut left: Vec<usize> = members.clone();
+            let mut removed = Vec::new();
+            while left.len() > 1 {
+                let mask: Mask = left.iter().fold(0, |a, &m| a | bit(m));
+                let Some(pos) = (1..left.len())
+                    .rev()
+                    .find(|&i| !self.free_dirs(left[i], mask & !bit(left[i])).is_empty())
+                else {
+                    break;
+                };
+                removed.push(left.remove(pos));
+            }
+            left.extend(removed.into_iter().rev());
+            self.graph.nodes[ni].members = left;
+        }
+    }
+
+    pub fn out_of_time(&self) -> bool {
+        Instant::now() >= self.deadline
+    }
+
+    pub(super) fn remaining_ms(&self) -> f64 {
+        self.deadline
+            .saturating_duration_since(Instant::now())
+            .as_secs_f64()
+            * 1e3
+    }
+
+    pub(super) fn node_index(&self, c: usize) -> usize {
+        self.graph.node_of(c)
+    }
+
+    pub(super) fn group_of(&self, c: usize) -> Mask {
+        let mut g = bit(c);
+        loop {
+            let mut next = g;
+            for i in members(g) {
+                next |= self.related[i];
+            }
+            if next == g {
+                return g;
+            }
+            g = next;
+        }
+    }
+
+    pub(super) fn node_size(&self, node: usize) -> f64 {
+        self.graph.nodes[node]
+            .members
+            .iter()
+            .map(|&m| self.sizes[m])
+            .sum()
+    }
+
+    /// Whether `p` may be assembled next onto `mask` (seed 003 section 2.2: nodes in
+    /// the relation graph, composite nodes in their implied order).
+    pub(super) fn eligible(&self, p: usize, mask: Mask) -> bool {
+        let node = &self.graph.nodes[self.node_index(p)];
+        let pos = node.members.iter().position(|&m| m == p).unwrap_or(0);
+        if pos > 0 {
+            return mask & bit(node.members[pos - 1]) != 0;
+        }
+        // The node's first member: related to an assembled component (composite
+        // nodes are assembled part by part, so a part may go onto the members of a
+        // composite already in place, between them), or the first node of a group
+        // nothing of which is assembled yet (its largest).
+        if self.related[p] & mask != 0 {
+            return true;
+        }
+        let group = self.group_of(p);
+        if group & mask != 0 {
+            return false;
+        }
+        let best = members(group)
+            .map(|c| self.node_index(c))
+            .max_by(|&a, &b| {
+                self.node_size(a)
+                    .total_cmp(&self.node_size(b))
+                    .then(b.cmp(&a))
+            })
+            .unwrap_or(usize::MAX);
+        best == self.node_index(p)
+    }
+
+    pub(super) fn why_not(&self, p: usize, mask: Mask) -> String {
+        if !self.eligible(p, mask) {
+            let node = &self.graph.nodes[self.node_index(p)];
+            let pos = node.members.iter().position(|&m| m == p).unwrap_or(0);
+            if pos > 0 {
+                return format!(
+                    "{} waits for {} (composite node order)",
+                    self.names[p],
+                    self.names[node.members[pos - 1]]
+                );
+            }
+            return format!("{} has nothing assembled to go onto", self.names[p]);
+        }
+        let mut by: Mask = 0;
+        for k in 0..self.dirs[p].len() {
+            by |= self.blocked[p][k] & mask;
+        }
+        let names: Vec<&str> = members(by).map(|i| self.names[i].as_str()).collect();
+        format!(
+            "{} is blocked along all {} directions by {}",
+            self.names[p],
+            self.dirs[p].len(),
+            names.join(", ")
+        )
+    }
+}

@@ -1,0 +1,139 @@
+//! Planned insertions for parts that no straight line brings in: a two-segment path
+//! (leave along one free direction, then another) and seed 002's disassembly planner
+//! (`local_rrt`), each checked against the parts already assembled. Units: millimetres
+//! and radians, assembly frame.
+
+use super::context::*;
+use crate::collision::{Aabb, SweepMethod};
+use crate::math::{Transform, Vec3};
+use crate::planning::{MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace};
+
+impl Ctx<'_> {
+    /// A path for `p` out of the components of `mask` found by fitup's planners
+    /// (seed 002's disassembly with `local_rrt`), ending assembled.
+    pub(super) fn plan_fallback(&self, p: usize, mask: Mask) -> Option<PlannedPath> {
+        let budget = self.opts.fallback_time_limit_ms.min(self.remaining_ms());
+        if budget < 1.0 {
+            return None;
+        }
+        let obstacles: Vec<_> = members(mask)
+            .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
+            .collect();
+        let product = union_box(&self.boxes, mask)?;
+        let mut validator = MeshValidator::new(
+            self.scene.colliders[p].clone(),
+            obstacles,
+            MeshValidatorOptions {
+                tolerance: self.opts.tolerance,
+                ..MeshValidatorOptions::default()
+            },
+        )
+        .ok()?;
+        let margin = diag(&self.boxes[p]).max(10.0);
+        let all = Aabb::new(
+            product.lo.inf(&self.boxes[p].lo),
+            product.hi.sup(&self.boxes[p].hi),
+        );
+        let space = PlanningSpace::new(
+            all.lo.coords - Vec3::repeat(margin),
+            all.hi.coords + Vec3::repeat(margin),
+        );
+        let mut planner = Planner::by_name("local_rrt")?;
+        planner.limits_mut().seed = self.opts.seed;
+        planner.limits_mut().time_limit_ms = Some(budget);
+        planner.limits_mut().max_iterations = 20_000;
+        let part_box = self.scene.colliders[p].bounds();
+        let path = planner
+            .plan_disassembly(
+                &mut validator,
+                &space,
+                &self.scene.poses[p],
+                &part_box,
+                &product,
+                None,
+            )
+            .ok()?;
+        path.found().then_some(path)
+    }
+
+    /// A validator for `p` moving among the components of `mask`.
+    pub(super) fn validator(
+        &self,
+        p: usize,
+        mask: Mask,
+        edge: SweepMethod,
+    ) -> Option<MeshValidator> {
+        let obstacles: Vec<_> = members(mask)
+            .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
+            .collect();
+        MeshValidator::new(
+            self.scene.colliders[p].clone(),
+            obstacles,
+            MeshValidatorOptions {
+                tolerance: self.opts.tolerance,
+                edge,
+                ..MeshValidatorOptions::default()
+            },
+        )
+        .ok()
+    }
+
+    /// The cheapest non-straight insertion: slide along one candidate direction
+    /// from the assembled pose, then leave straight along another (an L: under a
+    /// roof, then out of the opening). Tries slides of 1/8 … 8/8 of the free travel,
+    /// shortest first. Returns the insertion path (outside → corner → assembled),
+    /// checked continuously among `mask`.
+    pub(super) fn two_segment(&self, p: usize, mask: Mask) -> Option<PlannedPath> {
+        let region = union_box(&self.boxes, mask)?;
+        let mut v = self.validator(p, mask, SweepMethod::CONTINUOUS)?;
+        let start = self.scene.poses[p];
+        let mut leaves: Vec<Vec3> = axis_dirs().to_vec();
+        for d in &self.dirs[p] {
+            push_dir(&mut leaves, *d);
+        }
+        let mut best: Option<PlannedPath> = None;
+        for d1 in &self.dirs[p] {
+            // The free travel along d1: the first stepped pose that hits.
+            let limit = exit_distance(&self.boxes[p], &region, d1) + self.opts.probe_mm;
+            let step = self.step.max(limit / 100.0);
+            let mut travel = 0.0;
+            while travel + step < limit {
+                if self.out_of_time() {
+                    return best;
+                }
+                let at = start.then(&Transform::from_translation(d1 * (travel + step)));
+                if self.pose_hits(p, &at, mask) {
+                    break;
+                }
+                travel += step;
+            }
+            if travel < self.opts.probe_mm {
+                continue;
+            }
+            for k in 1..=8 {
+                let s = travel * k as f64 / 8.0;
+                let corner = start.then(&Transform::from_translation(d1 * s));
+                let moved = self.scene.colliders[p].world_bounds(&corner);
+                for d2 in leaves.iter().filter(|d2| d2.dot(d1).abs() < 0.9) {
+                    let out = exit_distance(&moved, &region, d2) + self.opts.probe_mm;
+                    let from = corner.then(&Transform::from_translation(d2 * out));
+                    let path = PlannedPath::given(
+                        "two_segment",
+                        vec![from, corner, start],
+                        v.options().edge,
+                    );
+                    if best.as_ref().is_some_and(|b| b.length_mm <= path.length_mm) {
+                        continue;
+                    }
+                    if path.revalidate(&mut v).is_ok() {
+                        best = Some(path);
+                    }
+                }
+                if best.is_some() {
+                    break;
+                }
+            }
+        }
+        best
+    }
+}

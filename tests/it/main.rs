@@ -1,0 +1,27 @@
+//! fitup's whole-workflow tests, in one binary (as ripgrep does): the crate and its
+//! dependencies are linked once, not once per file. Each module is one area; most drive
+//! the real `fitup` binary from the repository root or a scratch project, exactly as a
+//! user runs it. Helpers shared with the benchmarks live in `tests/common/`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod api_docs;
+mod chain;
+mod cli;
+mod db;
+mod hostile_files;
+mod hostile_runs;
+mod layers;
+mod manipulator;
+mod models;
+mod planning_problems;
+mod robots;
+mod scripts;
+mod sequence;
+mod sequence_watch;
+mod skills;
+mod urdf;
+mod viewer;
+mod viewer_browser;
+mod watch;
