@@ -12,7 +12,7 @@
 //! use fitup::mesh::{parse_stl, write_stl, Mesh};
 //!
 //! let block = Mesh::cuboid(Point3::origin(), Point3::new(20.0, 10.0, 5.0));
-//! assert!(block.is_watertight());
+//! assert!(block.inspect().is_watertight());
 //! assert!((block.signed_volume() - 1000.0).abs() < 1e-9); // mm³, outward normals
 //! let bounds = block.bounds().expect("a mesh with vertices has bounds");
 //! assert_eq!(bounds.hi, Point3::new(20.0, 10.0, 5.0));
