@@ -26,6 +26,8 @@
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`project`] | the project folder that bounds every file a run touches, and the path rule |
 //! | [`fsutil`] | atomic writes, capped reads of regular files only, content hashes, file stamps |
+#![warn(missing_docs)]
+
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod collision;
