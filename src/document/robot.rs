@@ -12,9 +12,9 @@ use super::file::{DhFile, LinkFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
-    read_urdf, resolve_mesh, robot_by_name, run_program, DhConvention, DhRow, IkOptions,
-    IkSolution, Joint, JointKind, JointLimits, KinematicTree, KinematicsError, Link, MotionOptions,
-    Program, ProgramRunError, Robot, Trajectory,
+    read_urdf, resolve_mesh, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
+    JointLimits, KinematicTree, KinematicsError, Link, MotionOptions, Program, ProgramRunError,
+    Robot, Trajectory,
 };
 use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{Mesh, MeshCache};
@@ -233,29 +233,6 @@ impl RobotInstance {
         );
         f
     }
-}
-
-/// Inverse kinematics along a sequence of world poses: for each pose in `targets`,
-/// the solution nearest to the previous pose's solution (the first nearest to
-/// `start`, rad / mm), or `None` when the pose has no solution within the joint
-/// limits (the next pose is then solved near the last solution found). The robot
-/// does not move. This is what a loop over thousands of poses should call: one
-/// solver set-up, no per-pose overhead of the caller.
-pub fn inverse_chain(
-    robot: &Robot,
-    targets: &[Transform],
-    start: &[f64],
-    options: &IkOptions,
-) -> Vec<Option<IkSolution>> {
-    let mut reference = start.to_vec();
-    targets
-        .iter()
-        .map(|t| {
-            let sol = robot.inverse_nearest(t, &reference, options).ok()?;
-            reference.clone_from(&sol.joints);
-            Some(sol)
-        })
-        .collect()
 }
 
 /// Whether joint `i` of `robot` is prismatic (mm) rather than revolute (radians);
@@ -1120,7 +1097,7 @@ mod tests {
             })
             .collect();
         targets.insert(5, Transform::from_translation(Vec3::new(1e5, 0.0, 0.0)));
-        let out = inverse_chain(&robot, &targets, &start, &IkOptions::default());
+        let out = robot.inverse_chain(&targets, &start, &IkOptions::default());
         assert_eq!(out.len(), targets.len());
         assert!(out[5].is_none());
         let mut previous = start.clone();

@@ -321,4 +321,27 @@ impl Robot {
         }
         Ok(all.swap_remove(0))
     }
+
+    /// Inverse kinematics along a sequence of world poses (mm): for each pose in
+    /// `targets`, the solution nearest to the previous pose's solution (the first
+    /// nearest to `start`, rad / mm), or `None` when the pose has no solution within the
+    /// joint limits (the next pose is then solved near the last solution found). The
+    /// robot does not move. This is what a loop over thousands of poses should call: one
+    /// solver set-up, no per-pose overhead of the caller.
+    pub fn inverse_chain(
+        &self,
+        targets: &[Transform],
+        start: &[f64],
+        options: &IkOptions,
+    ) -> Vec<Option<IkSolution>> {
+        let mut reference = start.to_vec();
+        targets
+            .iter()
+            .map(|t| {
+                let sol = self.inverse_nearest(t, &reference, options).ok()?;
+                reference.clone_from(&sol.joints);
+                Some(sol)
+            })
+            .collect()
+    }
 }

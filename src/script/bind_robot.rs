@@ -11,7 +11,7 @@ use super::convert::{
 };
 use super::{Context, ScriptResult};
 use crate::document::robot::{
-    inverse_chain, joints_from_document_in_place, joints_to_document, joints_to_document_iter,
+    joints_from_document_in_place, joints_to_document, joints_to_document_iter,
 };
 use crate::kinematics::{
     drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
@@ -458,7 +458,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
                 })
                 .collect::<ScriptResult<Vec<_>>>()?;
             let (robot, q) = r.snapshot()?;
-            Ok(inverse_chain(&robot, &targets, &q, &IkOptions::default())
+            Ok(robot.inverse_chain(&targets, &q, &IkOptions::default())
                 .into_iter()
                 .map(|s| s.map_or(Dynamic::UNIT, |s| joints_out(&robot, &s.joints)))
                 .collect())

@@ -116,7 +116,9 @@ impl Workspace<'_> {
     /// An unknown component or an empty mesh.
     pub fn part_box(&self, name: &str) -> Result<Aabb, WorkspaceError> {
         let index = self.index(name)?;
-        self.document().mesh_of(index).bounds()
+        self.document()
+            .mesh_of(index)
+            .bounds()
             .ok_or_else(|| WorkspaceError::EmptyMesh(name.to_string()))
     }
 

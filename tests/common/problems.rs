@@ -96,7 +96,9 @@ pub enum ProblemError {
 impl Problem {
     /// The moving component's box in its own frame (mm).
     pub fn part_box(&self) -> Aabb {
-        self.moving.bounds().unwrap_or(Aabb::new(Point3::origin(), Point3::origin()))
+        self.moving
+            .bounds()
+            .unwrap_or(Aabb::new(Point3::origin(), Point3::origin()))
     }
 
     /// Colliders of the moving part and the obstacles (one per distinct part).

@@ -44,7 +44,9 @@ fn crate_paths(text: &str) -> Vec<(usize, String)> {
     let mut out = Vec::new();
     for (i, line) in lines.iter().enumerate() {
         let next = lines.get(i + 1).map(|l| l.trim_start()).unwrap_or("");
-        if line.trim() == "#[cfg(test)]" && (next.starts_with("mod ") || next.starts_with("pub(crate) mod ")) {
+        if line.trim() == "#[cfg(test)]"
+            && (next.starts_with("mod ") || next.starts_with("pub(crate) mod "))
+        {
             break;
         }
         let code = line.split("//").next().unwrap_or("");
@@ -88,7 +90,10 @@ fn every_import_points_down_the_layers() {
             continue;
         }
         let Some(own) = layer_of(&top) else {
-            wrong.push(format!("src/{}: module `{top}` is on no layer of LAYERS", rel.display()));
+            wrong.push(format!(
+                "src/{}: module `{top}` is on no layer of LAYERS",
+                rel.display()
+            ));
             continue;
         };
         modules.insert(top.clone(), own);
@@ -109,19 +114,27 @@ fn every_import_points_down_the_layers() {
             }
         }
     }
-    assert!(wrong.is_empty(), "arrows that run up or sideways:\n{}", wrong.join("\n"));
+    assert!(
+        wrong.is_empty(),
+        "arrows that run up or sideways:\n{}",
+        wrong.join("\n")
+    );
     // Every layer's module exists: LAYERS is the house, not a wish list.
     for row in LAYERS {
         for m in *row {
-            assert!(modules.contains_key(*m), "LAYERS names `{m}`, which src/ does not have");
+            assert!(
+                modules.contains_key(*m),
+                "LAYERS names `{m}`, which src/ does not have"
+            );
         }
     }
 }
 
 #[test]
 fn architecture_doc_shows_the_layers_of_the_code() {
-    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/architecture.md"))
-        .unwrap();
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/architecture.md"))
+            .unwrap();
     let mut table = String::from("| layer | modules |\n|---|---|\n");
     for (i, row) in LAYERS.iter().enumerate() {
         let names: Vec<String> = row.iter().map(|m| format!("`{m}`")).collect();
