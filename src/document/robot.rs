@@ -1065,7 +1065,7 @@ impl Document {
 mod tests {
     use super::*;
     use crate::document::file::{DhRowFile, LinkFile};
-    use crate::kinematics::Catalog;
+    use crate::kinematics::{Catalog, IkOptions};
 
     fn row(theta: f64, d: f64, a: f64, alpha: f64) -> DhRowFile {
         DhRowFile {
