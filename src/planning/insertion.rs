@@ -10,7 +10,7 @@ use super::rrt_connect::{rrt_connect, RrtConnectOptions};
 use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::{smooth, Smoothing};
 use super::space::PlanningSpace;
-use super::validator::{LazyValidation, MotionValidator};
+use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::collision::Aabb;
 use crate::math::Transform;
 use std::time::Instant;
@@ -158,7 +158,18 @@ pub fn plan_insertion(
     );
     let mut approach = options.approach.clone();
     approach.smoothing.enabled = false;
-    if start_in == goal_in {
+    // A free straight line from start to goal needs no disassembly: RRT-Connect
+    // returns it after its first edge check.
+    let direct = {
+        let mut checker = Checker::new(validator, Some(deadline));
+        let reference = start.rotation();
+        space.contains(start, &reference)
+            && space.contains(goal, &reference)
+            && checker.is_free(start)
+            && checker.is_free(goal)
+            && checker.edge_free(start, goal)
+    };
+    if start_in == goal_in || direct {
         approach.limits.time_limit_ms = left();
         let mut path = rrt_connect(
             validator,

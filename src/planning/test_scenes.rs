@@ -694,3 +694,48 @@ fn separating_axis_test_sees_rotation() {
     );
     assert!(!s.is_free(&turned));
 }
+
+/// A straight line from start to goal through a 0.2 mm clearance (a plate slid onto a
+/// pin, issue 23): RRT-Connect and the insertion planner return it after the first edge
+/// check, whatever the seed, as the two-pose path. Sampling never draws it: before the
+/// direct edge, 98k iterations did not find it.
+#[test]
+fn a_free_straight_line_is_found_first() {
+    let scene = BoxScene {
+        inflate: 0.0,
+        ..slot_scene(0.2)
+    };
+    let (start, goal) = (at(-30.0, 0.0, 0.0), at(30.0, 0.0, 0.0));
+    for seed in 0..3 {
+        let p = plan(
+            "rrt_connect",
+            &space(),
+            &mut scene.clone(),
+            &start,
+            &goal,
+            seed,
+            50,
+        );
+        assert_valid(&p, &scene, &start, Some(&goal));
+        assert_eq!((p.poses.len(), p.iterations), (2, 0), "{:?}", p.poses);
+        let wall = aabb([-5.0, -60.0, -60.0], [5.0, 60.0, 60.0]);
+        let part = Aabb::new(Vec3::new(-8.0, -4.0, -4.0), Vec3::new(8.0, 4.0, 4.0));
+        let mut o = InsertionOptions::default().with_limits(seed, 50);
+        o.time_limit_ms = Some(10_000.0);
+        // Goal inside the product box: without the direct edge this is a disassembly.
+        let inside = at(0.0, 0.0, 0.0);
+        let p = plan_insertion(
+            &mut scene.clone(),
+            &space(),
+            &start,
+            &inside,
+            &part,
+            &wall,
+            &o,
+            None,
+        )
+        .unwrap();
+        assert_valid(&p, &scene, &start, Some(&inside));
+        assert_eq!(p.poses.len(), 2, "{}: {:?}", p.planner, p.poses);
+    }
+}
