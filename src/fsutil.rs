@@ -286,14 +286,14 @@ pub enum OutputError {
     #[error("refusing to write over fitup's own bookkeeping file (`{OUTPUT_REGISTRY}` or a `.fitup-*.tmp` file)")]
     Bookkeeping,
     /// A file the project uses: a document, mesh, script, … or a file the run read.
-    #[error("refusing to overwrite {what}, a file the project uses; write to another file, or pass --force (`overwrite: true` in a script) to replace it")]
+    #[error("refusing to overwrite {what}, a file the project uses; write to another file, or replace it on purpose with `overwrite: true` (a script's option) or `--force` (command line)")]
     InUse {
         /// What the file is ("a results database (SQLite)", "a file this run read", …).
         what: &'static str,
     },
     /// An existing file fitup did not write (not in the folder's registry with its
     /// current contents).
-    #[error("refusing to overwrite a file fitup did not write (it is not listed in {OUTPUT_REGISTRY} of its folder with its current contents); write to another file, or pass --force (`overwrite: true` in a script) to replace it")]
+    #[error("refusing to overwrite a file fitup did not write (it is not listed in {OUTPUT_REGISTRY} of its folder with its current contents); write to another file, or replace it on purpose with `overwrite: true` (a script's option) or `--force` (command line)")]
     NotOurs,
     /// The operating system refused (permissions, a full disk, …).
     #[error("cannot write: {0}")]
@@ -458,7 +458,7 @@ fn hex(bytes: &[u8]) -> String {
 }
 
 fn unhex(s: &str) -> Option<Vec<u8>> {
-    if s.len() % 2 != 0 || s.len() > 64 {
+    if !s.len().is_multiple_of(2) || s.len() > 64 {
         return None;
     }
     (0..s.len())

@@ -238,7 +238,7 @@ fn script_writers_never_replace_user_files() {
     let (code, t) = run(p, &["run", "scripts/clobber.rhai"]);
     assert_eq!(code, 1, "{t}");
     assert!(
-        t.contains("clobber.rhai:3") && t.contains("`fitup.db`") && t.contains("--force"),
+        t.contains("clobber.rhai:3") && t.contains("`fitup.db`") && t.contains("overwrite: true"),
         "{t}"
     );
     // A typo in the option is an error, not a silent default.
