@@ -263,6 +263,30 @@ pub fn write_project(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
+/// The files [`write_project`] writes, relative to its folder.
+pub const PROJECT_FILES: &[&str] = &[
+    crate::project::PROJECT_FILE,
+    "models/cell.yaml",
+    "models/meshes/table.stl",
+    "models/meshes/plate_a.stl",
+    "models/meshes/plate_b.stl",
+    "models/meshes/screw.stl",
+];
+
+/// [`write_project`] for `fitup demo`: every file first passes the write rule
+/// ([`crate::fsutil::check_output`]; `force` is `--force`), so nothing is written when
+/// one of them may not be replaced — and never through a symbolic link or over a
+/// folder or FIFO, even with `force`.
+pub fn write_project_checked(dir: &Path, force: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let rule = crate::fsutil::OutputRule::forced(force);
+    for file in PROJECT_FILES {
+        let path = dir.join(file);
+        crate::fsutil::check_output(&path, &rule)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    write_project(dir)
+}
+
 /// Writes the demo cell to `dir/cell.yaml` and `dir/meshes/*.stl` (atomically).
 pub fn write_cell(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir.join("meshes"))?;

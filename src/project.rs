@@ -34,6 +34,14 @@ pub enum PathError {
         /// The project root.
         root: PathBuf,
     },
+    /// An output refused by the write rule ([`crate::fsutil::check_output`]).
+    #[error("`{path}`: {cause}")]
+    Refused {
+        /// The path as written.
+        path: String,
+        /// Why.
+        cause: crate::fsutil::OutputError,
+    },
     /// The path cannot be resolved (an unreadable folder, …).
     #[error("`{path}` cannot be resolved: {message}")]
     Unresolvable {
@@ -183,26 +191,34 @@ impl Project {
     }
 
     /// [`resolve_for_write`](Self::resolve_for_write) for an output file (CSV logs,
-    /// key poses): refuses to replace a file that holds the user's work — a document,
-    /// mesh, script, program or project file (by extension: `yaml`, `yml`, `stl`,
-    /// `rhai`, `prg`, `toml`) — or anything that is not a regular file.
-    pub fn resolve_output(&self, path: &str) -> Result<PathBuf, PathError> {
-        let full = self.resolve_for_write(path)?;
-        let protected = full.extension().and_then(|e| e.to_str()).is_some_and(|e| {
-            ["yaml", "yml", "stl", "rhai", "prg", "toml"].contains(&e.to_ascii_lowercase().as_str())
-        });
-        match std::fs::metadata(&full) {
-            Ok(md) if !md.is_file() => Err(PathError::Unresolvable {
-                path: path.to_string(),
-                message: "refusing to write over something that is not a regular file".into(),
-            }),
-            Ok(_) if protected => Err(PathError::Unresolvable {
-                path: path.to_string(),
-                message: "refusing to overwrite a document, mesh, script or program with output"
-                    .into(),
-            }),
-            _ => Ok(full),
+    /// exports, plans, key poses, recordings): the path must also pass the one write
+    /// rule, [`crate::fsutil::check_output`] — never over a file the project uses or
+    /// that fitup did not write, unless `rule.force` (`--force`, `overwrite: true`);
+    /// never over a folder, FIFO, device or symbolic link. Write the output with
+    /// [`crate::fsutil::write_output`] (or register it with
+    /// [`crate::fsutil::register_output`]) so a later run may replace it.
+    pub fn resolve_output(
+        &self,
+        path: &str,
+        rule: &crate::fsutil::OutputRule,
+    ) -> Result<PathBuf, PathError> {
+        // `resolve` follows a symbolic link at the path itself; the rule must see it.
+        let written = Path::new(path);
+        let lexical = if written.is_absolute() {
+            written.to_path_buf()
+        } else {
+            self.root.join(written)
+        };
+        let refused = |cause| PathError::Refused {
+            path: path.to_string(),
+            cause,
+        };
+        if std::fs::symlink_metadata(&lexical).is_ok_and(|m| m.file_type().is_symlink()) {
+            return Err(refused(crate::fsutil::OutputError::Symlink));
         }
+        let full = self.resolve_for_write(path)?;
+        crate::fsutil::check_output(&full, rule).map_err(refused)?;
+        Ok(full)
     }
 
     /// `path` shown relative to the root when inside it.
@@ -254,12 +270,32 @@ mod tests {
         }
         let w = p.resolve_for_write("out/sub/x.csv").unwrap();
         assert!(w.parent().unwrap().is_dir());
+        let rule = crate::fsutil::OutputRule::default();
         std::fs::write(dir.path().join("models/cell.yaml"), "parts: {}\n").unwrap();
-        assert!(p.resolve_output("models/cell.yaml").is_err());
-        assert!(p.resolve_output("models").is_err());
-        assert!(p.resolve_output("models/new.yaml").is_ok());
+        assert!(p.resolve_output("models/cell.yaml", &rule).is_err());
+        assert!(p.resolve_output("models", &rule).is_err());
+        assert!(p.resolve_output("models/new.yaml", &rule).is_ok());
+        // A file fitup did not write is kept; one it wrote may be replaced.
         std::fs::write(&w, "a,b\n").unwrap();
-        assert!(p.resolve_output("out/sub/x.csv").is_ok());
+        assert!(matches!(
+            p.resolve_output("out/sub/x.csv", &rule),
+            Err(PathError::Refused {
+                cause: crate::fsutil::OutputError::NotOurs,
+                ..
+            })
+        ));
+        crate::fsutil::write_output(&w, b"c,d\n", &crate::fsutil::OutputRule::forced(true))
+            .unwrap();
+        assert!(p.resolve_output("out/sub/x.csv", &rule).is_ok());
+        #[cfg(unix)]
+        {
+            // A link at the output path itself is refused, even to a file inside.
+            std::os::unix::fs::symlink(&w, dir.path().join("link.csv")).unwrap();
+            let e = p
+                .resolve_output("link.csv", &crate::fsutil::OutputRule::forced(true))
+                .unwrap_err();
+            assert!(e.to_string().contains("symbolic link"), "{e}");
+        }
     }
 
     #[test]

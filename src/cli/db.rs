@@ -54,9 +54,15 @@ pub enum DbAction {
         /// JSON (every kind).
         #[arg(long)]
         json: bool,
-        /// Output file (inside the project) instead of standard output.
+        /// Output file (inside the project) instead of standard output. An existing
+        /// file is replaced only when fitup wrote it (see "What a run writes" in
+        /// docs/scripting.md), or with `--force`.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Let `--out` replace a file that the project uses or that fitup did not
+        /// write (never a folder, FIFO or symbolic link).
+        #[arg(long, requires = "out")]
+        force: bool,
     },
     /// Compare two runs: component poses, dimension values and paths by name.
     Diff {
@@ -201,7 +207,13 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
             let (kind, id) = parse_id(id).map_err(usage)?;
             show(&mut db, kind, id).map_err(e)?;
         }
-        DbAction::Export { id, csv, json, out } => {
+        DbAction::Export {
+            id,
+            csv,
+            json,
+            out,
+            force,
+        } => {
             let (kind, id) = parse_id(id).map_err(usage)?;
             if !csv && !json {
                 return Err(usage("say --csv or --json".into()));
@@ -215,11 +227,12 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                 Some(o) => {
                     let project = crate::script::Project::new(&root)
                         .map_err(|x| fail(format!("project folder {}: {x}", root.display())))?;
+                    let rule = crate::fsutil::OutputRule::forced(*force);
                     let path = project
-                        .resolve(&o.to_string_lossy())
-                        .map_err(|x| usage(format!("--out: {x}")))?;
-                    crate::fsutil::write_atomic(&path, text.as_bytes())
-                        .map_err(|x| fail(format!("cannot write {}: {x}", o.display())))?;
+                        .resolve_output(&o.to_string_lossy(), &rule)
+                        .map_err(|x| fail(format!("--out: {x}")))?;
+                    crate::fsutil::write_checked(&path, text.as_bytes())
+                        .map_err(|x| fail(format!("--out {}: {x}", o.display())))?;
                     outln!("wrote {}", o.display());
                 }
             }

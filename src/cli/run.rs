@@ -96,8 +96,12 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
             return Exit::Usage;
         }
     };
-    let live = match super::view::start(&a.view, &opts.project, Some(run_name(&opts.script, None)))
-    {
+    let live = match super::view::start(
+        &a.view,
+        a.force,
+        &opts.project,
+        Some(run_name(&opts.script, None)),
+    ) {
         Ok(l) => l,
         Err(e) => {
             errln!("error: {e}");
@@ -144,7 +148,7 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
             return Exit::Usage;
         }
     };
-    let live = match super::view::start(&a.view, &opts.project, None) {
+    let live = match super::view::start(&a.view, a.force, &opts.project, None) {
         Ok(l) => l,
         Err(e) => {
             errln!("error: {e}");
@@ -263,8 +267,13 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
             &crate::kinematics::MotionOptions::default(),
         )
         .map_err(|e| fail(e.to_string()))?;
-    let live = super::view::start(&a.view, &project, Some(run_name(&program_path, None)))
-        .map_err(usage)?;
+    let live = super::view::start(
+        &a.view,
+        a.force,
+        &project,
+        Some(run_name(&program_path, None)),
+    )
+    .map_err(usage)?;
     let viewer = super::view::handle(&live);
     viewer.log_document(&doc);
     viewer.log_trajectory(&doc, index, &trajectory);
@@ -272,11 +281,12 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     match &a.log {
         Some(log) => {
             let abs = std::path::absolute(log).map_err(|e| usage(format!("log: {e}")))?;
+            let rule = crate::fsutil::OutputRule::forced(a.force);
             let path = project
-                .resolve_output(&abs.to_string_lossy())
-                .map_err(|e| usage(format!("log: {e}")))?;
-            crate::fsutil::write_atomic(&path, csv.as_bytes())
-                .map_err(|e| fail(format!("cannot write {}: {e}", log.display())))?;
+                .resolve_output(&abs.to_string_lossy(), &rule)
+                .map_err(|e| fail(format!("--log: {e}")))?;
+            crate::fsutil::write_checked(&path, csv.as_bytes())
+                .map_err(|e| fail(format!("--log {}: {e}", log.display())))?;
             outln!(
                 "{}: {} samples, {} s; log written to {}",
                 doc.robots()[index].name(),

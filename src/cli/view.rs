@@ -19,6 +19,7 @@ pub(super) type Live = Option<std::convert::Infallible>;
 #[cfg(feature = "viewer")]
 pub(super) fn start(
     a: &ViewArgs,
+    force: bool,
     project: &Project,
     first_run: Option<String>,
 ) -> Result<Live, String> {
@@ -30,11 +31,15 @@ pub(super) fn start(
         Some(r) => {
             let abs =
                 std::path::absolute(r).map_err(|e| format!("--record {}: {e}", r.display()))?;
-            Some(
-                project
-                    .resolve_output(&abs.to_string_lossy())
-                    .map_err(|e| format!("--record: {e}"))?,
-            )
+            let rule = crate::fsutil::OutputRule::forced(force);
+            let path = project
+                .resolve_output(&abs.to_string_lossy(), &rule)
+                .map_err(|e| format!("--record: {e}"))?;
+            // The recording is streamed while the run goes on: listed as fitup's own
+            // by its magic, so the next run (or watch rerun) may replace it.
+            crate::fsutil::register_stream(&path, crate::fsutil::RRD_MAGIC)
+                .map_err(|e| format!("--record {}: {e}", r.display()))?;
+            Some(path)
         }
         None => None,
     };
@@ -54,6 +59,7 @@ pub(super) fn start(
 #[cfg(not(feature = "viewer"))]
 pub(super) fn start(
     a: &ViewArgs,
+    _force: bool,
     _project: &Project,
     _first_run: Option<String>,
 ) -> Result<Live, String> {

@@ -149,6 +149,16 @@ pub enum DbError {
         /// The driver's message.
         cause: String,
     },
+    /// An existing file that is not a fitup results database (another program's
+    /// SQLite database, a CSV named `x.db`): it is not opened, so nothing turns it
+    /// into one.
+    #[error("{target} is not a fitup results database: {cause}; it was left as it is (name a new file, or the project's own database)")]
+    Foreign {
+        /// The database file.
+        target: String,
+        /// What it is instead.
+        cause: String,
+    },
     /// The disk is full; the result was not stored (earlier results are intact).
     #[error("the disk holding {target} is full; the result was not stored: {cause}")]
     DiskFull {
@@ -262,8 +272,29 @@ impl Database {
                         open_err(e.to_string())
                     }
                 };
+                let foreign = |cause: &str| DbError::Foreign {
+                    target: name.clone(),
+                    cause: cause.into(),
+                };
+                // An existing file must already be SQLite before SQLite may touch it
+                // (opening in WAL mode rewrites its header).
+                let existing = std::fs::metadata(path).is_ok_and(|m| m.len() > 0);
+                if existing {
+                    let head =
+                        crate::fsutil::file_head(path, 16).map_err(|e| open_err(e.to_string()))?;
+                    if !head.starts_with(crate::fsutil::SQLITE_MAGIC) {
+                        return Err(foreign(
+                            "it is not a SQLite file (its first bytes are not SQLite's header)",
+                        ));
+                    }
+                }
                 let c = rusqlite::Connection::open(path).map_err(fail)?;
                 c.busy_timeout(BUSY_TIMEOUT).map_err(fail)?;
+                if existing && !is_fitup_sqlite(&c).map_err(fail)? {
+                    return Err(foreign(
+                        "it is a SQLite database of another program (it has tables but not fitup's schema_version)",
+                    ));
+                }
                 // A file that is not SQLite fails here with "file is not a database".
                 let mode: String = c
                     .query_row("PRAGMA journal_mode=WAL", [], |r| r.get(0))
@@ -493,6 +524,23 @@ impl Database {
     }
 }
 
+/// Whether an open SQLite database is fitup's (or empty): it has no tables, or it has
+/// fitup's `schema_version` table with its `fitup_version` column. Reads only.
+fn is_fitup_sqlite(c: &rusqlite::Connection) -> rusqlite::Result<bool> {
+    let tables: i64 = c.query_row(
+        "SELECT count(*) FROM sqlite_master WHERE type IN ('table', 'view', 'index', 'trigger')",
+        [],
+        |r| r.get(0),
+    )?;
+    if tables == 0 {
+        return Ok(true);
+    }
+    Ok(
+        c.prepare("SELECT version, fitup_version FROM schema_version LIMIT 0")
+            .is_ok(),
+    )
+}
+
 /// Whether the file cannot be written by this process.
 fn is_read_only(path: &Path) -> bool {
     std::fs::OpenOptions::new().append(true).open(path).is_err()
@@ -569,5 +617,36 @@ mod tests {
     #[test]
     fn placeholders_are_numbered_for_postgres() {
         assert_eq!(backend::numbered("a = ? AND b = ?"), "a = $1 AND b = $2");
+    }
+
+    #[test]
+    fn other_files_are_never_turned_into_databases() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // A CSV named x.db.
+        let csv = d.join("x.db");
+        std::fs::write(&csv, b"a,b\n1,2\n").unwrap();
+        let e = Database::open(&Target::Sqlite(csv.clone())).unwrap_err();
+        assert!(matches!(e, DbError::Foreign { .. }), "{e}");
+        assert!(e.to_string().contains("not a SQLite file"), "{e}");
+        assert_eq!(std::fs::read(&csv).unwrap(), b"a,b\n1,2\n");
+        // Another program's SQLite database.
+        let other = d.join("other.sqlite");
+        {
+            let c = rusqlite::Connection::open(&other).unwrap();
+            c.execute_batch("CREATE TABLE notes (t TEXT); INSERT INTO notes VALUES ('mine');")
+                .unwrap();
+        }
+        let before = std::fs::read(&other).unwrap();
+        let e = Database::open(&Target::Sqlite(other.clone())).unwrap_err();
+        assert!(e.to_string().contains("another program"), "{e}");
+        assert_eq!(std::fs::read(&other).unwrap(), before);
+        assert!(!d.join("other.sqlite-wal").exists());
+        // An empty file, a new file and fitup's own database open.
+        let empty = d.join("empty.db");
+        std::fs::write(&empty, b"").unwrap();
+        Database::open(&Target::Sqlite(empty.clone())).unwrap();
+        drop(Database::open(&Target::Sqlite(d.join("new.db"))).unwrap());
+        Database::open(&Target::Sqlite(d.join("new.db"))).unwrap();
     }
 }

@@ -4,6 +4,7 @@
 use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
+use super::convert::overwrite_option;
 use super::convert::{check_keys, err, fail, num, opt_num, opt_str};
 use super::{Context, ScriptResult};
 use crate::collision::{Aabb, SweepMethod};
@@ -521,14 +522,23 @@ pub(super) fn register(api: &mut Api) {
             }
         },
     );
-    api.f("Path.save_csv(file: string)", "Writes the key poses as CSV (`index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`) inside the project, atomically.", |p: &mut PathHandle, file: &str| -> ScriptResult<()> {
-        let full = p.1.project.resolve_output(file).map_err(fail)?;
+    fn save_path(p: &PathHandle, file: &str, overwrite: bool) -> ScriptResult<()> {
         let mut bytes = Vec::new();
-        p.0.write_csv(&mut bytes, AngleConvention::default()).map_err(fail)?;
-        crate::fsutil::write_atomic(&full, &bytes).map_err(fail)?;
-        p.1.record_write(&full);
+        p.0.write_csv(&mut bytes, AngleConvention::default())
+            .map_err(fail)?;
+        p.1.write_output(file, &bytes, overwrite)?;
         Ok(())
+    }
+    api.f("Path.save_csv(file: string)", "Writes the key poses as CSV (`index,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`) inside the project, atomically. Refuses to replace a file the project uses or one fitup did not write (see \"What a run writes\" in docs/scripting.md); `#{overwrite: true}` replaces it.", |p: &mut PathHandle, file: &str| -> ScriptResult<()> {
+        save_path(p, file, false)
     });
+    api.f(
+        "Path.save_csv(file: string, options: map)",
+        "`save_csv(file)` with `#{overwrite}` (bool, default false).",
+        |p: &mut PathHandle, file: &str, opts: Map| -> ScriptResult<()> {
+            save_path(p, file, overwrite_option(&opts, "save_csv")?)
+        },
+    );
     api.f("Document.revalidate(name: string, path: Path) -> map", "Checks a path again against the document as it is now, with the tolerance and edge check it was planned with (a path the planner accepted passes while nothing moved): `#{ok, segment, transform}` (the first blocked segment and pose when not ok).", |d: &mut DocHandle, name: &str, p: PathHandle| -> ScriptResult<Map> {
         let r = with_workspace(d, |ws| ws.revalidate(name, &p.0, &p.2).map_err(fail))?;
         let mut m = Map::new();

@@ -6,6 +6,7 @@
 use super::api::Api;
 use super::bind_document::DocHandle;
 use super::bind_math::{to_transform, xyzabc_deg};
+use super::convert::overwrite_option;
 use super::convert::{
     array3, check_keys, err, fail, floats, numbers, numbers_into, opt_num, opt_str, vec3,
 };
@@ -918,13 +919,21 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             Ok(xyzabc_deg(&sample(t, i)?.tcp, AngleConvention::default()))
         },
     );
-    api.f("Trajectory.save_csv(path: string)", "Writes the joint/TCP log as CSV inside the project, atomically: `t_s,j1_deg,…,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`.", |t: &mut TrajectoryHandle, path: &str| -> ScriptResult<()> {
-        let full = t.ctx.project.resolve_output(path).map_err(fail)?;
+    fn save_trajectory(t: &TrajectoryHandle, path: &str, overwrite: bool) -> ScriptResult<()> {
         let csv = t.trajectory.to_csv(AngleConvention::default());
-        crate::fsutil::write_atomic(&full, csv.as_bytes()).map_err(|e| fail(format!("cannot write {path}: {e}")))?;
-        t.ctx.record_write(&full);
+        t.ctx.write_output(path, csv.as_bytes(), overwrite)?;
         Ok(())
+    }
+    api.f("Trajectory.save_csv(path: string)", "Writes the joint/TCP log as CSV inside the project, atomically: `t_s,j1_deg,…,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`. Refuses to replace a file the project uses or one fitup did not write (see \"What a run writes\" in docs/scripting.md); `#{overwrite: true}` replaces it.", |t: &mut TrajectoryHandle, path: &str| -> ScriptResult<()> {
+        save_trajectory(t, path, false)
     });
+    api.f(
+        "Trajectory.save_csv(path: string, options: map)",
+        "`save_csv(path)` with `#{overwrite}` (bool, default false).",
+        |t: &mut TrajectoryHandle, path: &str, opts: Map| -> ScriptResult<()> {
+            save_trajectory(t, path, overwrite_option(&opts, "save_csv")?)
+        },
+    );
     api.f(
         "Trajectory.to_string() -> string",
         "`Trajectory(n samples, d s)`.",

@@ -6,6 +6,7 @@
 use super::api::Api;
 use super::bind_document::DocHandle;
 use super::bind_math::xyzabc_deg;
+use super::convert::overwrite_option;
 use super::convert::{array3, check_keys, err, fail, num, opt_num, opt_str, vec3};
 use super::{Context, ScriptResult};
 use crate::math::AngleConvention;
@@ -398,16 +399,22 @@ pub(super) fn register(api: &mut Api) {
             revalidate(s, &d, tol)
         },
     );
+    fn save_sequence(s: &SequenceHandle, file: &str, overwrite: bool) -> ScriptResult<()> {
+        let mut bytes = Vec::new();
+        s.0.best().write_csv(&mut bytes).map_err(fail)?;
+        s.1.write_output(file, &bytes, overwrite)?;
+        Ok(())
+    }
     api.f(
         "Sequence.save_csv(file: string)",
-        "Writes the best sequence's tasks as CSV inside the project, atomically: `index,base,part,operation,mate_x,mate_y,mate_z,safe_length_mm,mount,planned,path_length_mm,receivers,grasp_faces`.",
-        |s: &mut SequenceHandle, file: &str| -> ScriptResult<()> {
-            let full = s.1.project.resolve_output(file).map_err(fail)?;
-            let mut bytes = Vec::new();
-            s.0.best().write_csv(&mut bytes).map_err(fail)?;
-            crate::fsutil::write_atomic(&full, &bytes).map_err(fail)?;
-            s.1.record_write(&full);
-            Ok(())
+        "Writes the best sequence's tasks as CSV inside the project, atomically: `index,base,part,operation,mate_x,mate_y,mate_z,safe_length_mm,mount,planned,path_length_mm,receivers,grasp_faces`. Refuses to replace a file the project uses or one fitup did not write (see \"What a run writes\" in docs/scripting.md); `#{overwrite: true}` replaces it.",
+        |s: &mut SequenceHandle, file: &str| -> ScriptResult<()> { save_sequence(s, file, false) },
+    );
+    api.f(
+        "Sequence.save_csv(file: string, options: map)",
+        "`save_csv(file)` with `#{overwrite}` (bool, default false).",
+        |s: &mut SequenceHandle, file: &str, opts: Map| -> ScriptResult<()> {
+            save_sequence(s, file, overwrite_option(&opts, "save_csv")?)
         },
     );
 }

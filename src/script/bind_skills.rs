@@ -14,6 +14,7 @@ use super::bind_document::DocHandle;
 use super::bind_math::{to_transform, xyzabc_deg};
 use super::bind_robot::RobotHandle;
 use super::bind_sequence::SequenceHandle;
+use super::convert::overwrite_option;
 use super::convert::{check_keys, err, fail, opt_num, opt_str, vec3};
 use super::{Context, Dispatch, ScriptResult};
 use crate::manipulator::client::resolve;
@@ -465,11 +466,18 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     api.f(
         "Skills.save(file: string)",
-        "Writes the plan file (JSON, what `fitup skills run PLAN` dispatches) inside the project, atomically.",
+        "Writes the plan file (JSON, what `fitup skills run PLAN` dispatches) inside the project, atomically. Refuses to replace a file the project uses or one fitup did not write (see \"What a run writes\" in docs/scripting.md); `#{overwrite: true}` replaces it.",
         |s: &mut SkillsHandle, file: &str| -> ScriptResult<()> {
-            let full = s.1.project.resolve_output(file).map_err(fail)?;
-            crate::fsutil::write_atomic(&full, s.0.plan.to_json().as_bytes()).map_err(fail)?;
-            s.1.record_write(&full);
+            s.1.write_output(file, s.0.plan.to_json().as_bytes(), false)?;
+            Ok(())
+        },
+    );
+    api.f(
+        "Skills.save(file: string, options: map)",
+        "`save(file)` with `#{overwrite}` (bool, default false).",
+        |s: &mut SkillsHandle, file: &str, opts: Map| -> ScriptResult<()> {
+            let overwrite = overwrite_option(&opts, "save")?;
+            s.1.write_output(file, s.0.plan.to_json().as_bytes(), overwrite)?;
             Ok(())
         },
     );

@@ -155,6 +155,19 @@ pub fn opt_str(map: &Map, key: &str) -> ScriptResult<Option<String>> {
     }
 }
 
+/// The options map of an output writer (`save_csv(file, #{overwrite: true})`):
+/// whether it may replace an existing file (see "What a run writes" in
+/// docs/scripting.md).
+pub fn overwrite_option(map: &Map, what: &str) -> ScriptResult<bool> {
+    check_keys(map, &["overwrite"], what)?;
+    match map.get("overwrite") {
+        None => Ok(false),
+        Some(v) => v
+            .as_bool()
+            .map_err(|t| fail(format!("option `overwrite` must be true or false, not {t}"))),
+    }
+}
+
 /// Refuses keys that are not in `known` (a typo in an option name is an error, not a
 /// silent default).
 pub fn check_keys(map: &Map, known: &[&str], what: &str) -> ScriptResult<()> {

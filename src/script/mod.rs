@@ -178,6 +178,28 @@ impl Context {
         }
     }
 
+    /// Writes a script's output file `path` (inside the project) through the one write
+    /// rule ([`crate::fsutil::check_output`]): the files this run read count as files
+    /// the project uses; `overwrite` is the script's `overwrite: true`. Atomic, listed
+    /// in the folder's output registry, recorded as the run's write. Returns the
+    /// absolute path.
+    pub fn write_output(&self, path: &str, bytes: &[u8], overwrite: bool) -> ScriptResult<PathBuf> {
+        let used = |p: &Path| self.reads.lock().map_or(true, |r| r.contains(p));
+        let rule = crate::fsutil::OutputRule {
+            force: overwrite,
+            used: Some(&used),
+            signature: None,
+        };
+        let full = self
+            .project
+            .resolve_output(path, &rule)
+            .map_err(convert::fail)?;
+        crate::fsutil::write_checked(&full, bytes)
+            .map_err(|e| convert::fail(format!("`{path}`: {e}")))?;
+        self.record_write(&full);
+        Ok(full)
+    }
+
     /// Sends a line to the output.
     pub fn print(&self, line: &str) {
         (self.output)(line)
