@@ -12,6 +12,7 @@ mod cli;
 mod db;
 mod hostile_files;
 mod hostile_runs;
+mod hostile_writers;
 mod layers;
 mod manipulator;
 mod models;

@@ -10,7 +10,7 @@
 //! Bounds: every command is killed after 60 s, which fails the test (a hang, not a
 //! speed assertion); a FIFO target must not block a writer.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
