@@ -804,9 +804,10 @@ impl Document {
 
     /// The index of a robot, or an error listing close matches.
     pub fn robot_index(&self, name: &str) -> Result<usize, DocumentError> {
+        let nfc = super::nfc_name(name);
         self.robots
             .iter()
-            .position(|r| r.name() == name)
+            .position(|r| r.name() == nfc)
             .ok_or_else(|| DocumentError::NotFound {
                 what: "robot",
                 name: name.into(),
