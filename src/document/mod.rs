@@ -1462,6 +1462,19 @@ pub fn nfc_name(name: &str) -> std::borrow::Cow<'_, str> {
     }
 }
 
+/// A name given through the API (a new robot, …) as the document keeps it: NFC, and
+/// refused when it holds a control or invisible character (as in a file).
+pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> {
+    if let Some(c) = name.chars().find(|&c| crate::diagnostics::hidden_char(c).is_some()) {
+        return Err(DocumentError::Invalid(format!(
+            "{what} name `{}`: {} is not allowed in names (control and invisible characters hide or reorder what is shown)",
+            crate::diagnostics::printable(name, false),
+            crate::diagnostics::describe_char(c)
+        )));
+    }
+    Ok(nfc_name(name).into_owned())
+}
+
 /// The document file with every name in NFC: all text except file paths (`stl`,
 /// `urdf`, which name files on disk byte for byte) and `description`.
 fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {

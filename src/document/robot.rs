@@ -843,6 +843,8 @@ impl Document {
         robot: &Robot,
         base: Option<Transform>,
     ) -> Result<usize, DocumentError> {
+        let name = super::new_name(name, "robot")?;
+        let name = name.as_str();
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::Invalid(format!(
                 "robot names must be unique and non-empty: `{name}`"
@@ -895,6 +897,8 @@ impl Document {
         urdf: &Path,
         base: Option<Transform>,
     ) -> Result<usize, DocumentError> {
+        let name = super::new_name(name, "robot")?;
+        let name = name.as_str();
         let invalid = |m: String| DocumentError::Invalid(format!("robot `{name}`: {m}"));
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::Invalid(format!(

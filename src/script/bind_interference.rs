@@ -287,6 +287,7 @@ pub(super) fn register(api: &mut Api) {
         |d: &mut DocHandle, part: &str, name: &str| -> ScriptResult<FeatureHandle> {
             let doc = d.lock()?;
             let p = doc.part(part).map_err(fail)?;
+            let name = &*crate::document::nfc_name(name);
             if !p.features.iter().any(|f| f.name() == name) {
                 return err(format!("part `{part}` has no feature `{name}`"));
             }
