@@ -287,13 +287,19 @@ mod tests {
 
     #[test]
     fn printable_escapes_controls_and_invisible_characters_only() {
-        assert!(matches!(printable("角度1 plate_a", false), std::borrow::Cow::Borrowed(_)));
+        assert!(matches!(
+            printable("角度1 plate_a", false),
+            std::borrow::Cow::Borrowed(_)
+        ));
         assert_eq!(printable("a\u{1b}[31mb", false), "a<U+001B>[31mb");
         assert_eq!(printable("x\u{202e}y\u{200b}", false), "x<U+202E>y<U+200B>");
         assert_eq!(printable("l1\n\tl2\u{7}", true), "l1\n\tl2<U+0007>");
         assert_eq!(printable("l1\n", false), "l1<U+000A>");
         assert_eq!(hidden_char('é'), None);
-        assert_eq!(hidden_char('\u{feff}'), Some("ZERO WIDTH NO-BREAK SPACE (byte order mark)"));
+        assert_eq!(
+            hidden_char('\u{feff}'),
+            Some("ZERO WIDTH NO-BREAK SPACE (byte order mark)")
+        );
         assert_eq!(describe_char('\u{2066}'), "U+2066 (LEFT-TO-RIGHT ISOLATE)");
     }
 

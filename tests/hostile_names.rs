@@ -107,7 +107,8 @@ fn nfc_and_nfd_spellings_are_one_name() {
     assert_ne!(code, 0, "{out}");
     let line = line_of(&text, NFD_E);
     assert!(
-        out.contains(&format!("models/dup.yaml:{line}:")) && out.contains("duplicate component name"),
+        out.contains(&format!("models/dup.yaml:{line}:"))
+            && out.contains("duplicate component name"),
         "{out}"
     );
     nothing_raw(&out);
@@ -183,7 +184,10 @@ fn case_only_collisions_are_warned_by_check_and_run() {
     let (code, out) = run(p, &["run", "scripts/case.rhai"]);
     assert_eq!(code, 0, "{out}");
     // still two names: `plate` is the screw
-    assert!(out.contains("differ only by case") && out.contains("screw"), "{out}");
+    assert!(
+        out.contains("differ only by case") && out.contains("screw"),
+        "{out}"
+    );
     unchanged(&before, p);
 }
 
@@ -245,7 +249,8 @@ fn escape_sequences_are_refused_and_never_printed_raw() {
     // name (`"\e[2J"`, no raw byte in the file); an OSC title sequence in a part key
     let raw = doc(&[("ok", "plate"), ("x\u{1b}[31mred\u{7}", "screw")], "");
     let quoted = doc(&[("ok", "plate"), ("\"clear\\e[2J\\e[H\"", "screw")], "");
-    let osc = "parts:\n  \"t\\e]0;pwned\\a\":\n    stl: meshes/plate_a.stl\ncomponents: []\n".to_string();
+    let osc =
+        "parts:\n  \"t\\e]0;pwned\\a\":\n    stl: meshes/plate_a.stl\ncomponents: []\n".to_string();
     let cases = [("raw", raw), ("quoted", quoted), ("osc", osc)];
     for (file, text) in &cases {
         let rel = format!("models/esc_{file}.yaml");
@@ -254,7 +259,10 @@ fn escape_sequences_are_refused_and_never_printed_raw() {
         let (code, out) = run(p, &["check", &rel]);
         assert_ne!(code, 0, "{rel}: {out}");
         assert!(out.contains(&format!("{rel}:")), "{rel}: {out}");
-        assert!(out.contains("U+001B") || out.contains("U+0007"), "{rel}: {out}");
+        assert!(
+            out.contains("U+001B") || out.contains("U+0007"),
+            "{rel}: {out}"
+        );
         nothing_raw(&out);
         unchanged(&before, p);
     }

@@ -581,7 +581,11 @@ pub fn clearance(
     // The full search (stop 0): a `stop` above 0 would return the first leaf pair's
     // distance below it, not the minimum (clearance once answered 23 mm for touching
     // parts that way).
-    let cap = if cap.is_nan() { f64::INFINITY } else { cap.max(0.0) };
+    let cap = if cap.is_nan() {
+        f64::INFINITY
+    } else {
+        cap.max(0.0)
+    };
     let d = distance_search(a, pa, b, pb, 0.0, cap, 0.0)?;
     let eps = eps(a, b, pa, pb);
     // `tri_tri` counts pairs within `eps` of each other's planes as meeting; their

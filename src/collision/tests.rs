@@ -1375,7 +1375,10 @@ fn clearance_agrees_with_contact_and_brute_force() {
         // large triangles: a cube's edge on the interior of a slab's top facets
         (
             "edge on facets",
-            Mesh::cuboid(Point3::new(-10.0, -10.0, -10.0), Point3::new(10.0, 10.0, 0.0)),
+            Mesh::cuboid(
+                Point3::new(-10.0, -10.0, -10.0),
+                Point3::new(10.0, 10.0, 0.0),
+            ),
             Mesh::cuboid(Point3::new(-5.0, -5.0, -5.0), Point3::new(5.0, 5.0, 5.0)),
             turn_x.then(&at(0.0, 0.0, 5.0 * std::f64::consts::SQRT_2)),
         ),
@@ -1389,7 +1392,10 @@ fn clearance_agrees_with_contact_and_brute_force() {
         // a small cube inside a solid block (contained: interfering, clearance 0)
         (
             "cube in block",
-            Mesh::cuboid(Point3::new(-20.0, -20.0, -20.0), Point3::new(20.0, 20.0, 20.0)),
+            Mesh::cuboid(
+                Point3::new(-20.0, -20.0, -20.0),
+                Point3::new(20.0, 20.0, 20.0),
+            ),
             Mesh::cuboid(Point3::new(-4.0, -4.0, -4.0), Point3::new(4.0, 4.0, 4.0)),
             at(3.0, 0.0, 0.0),
         ),
@@ -1405,12 +1411,21 @@ fn clearance_agrees_with_contact_and_brute_force() {
             );
             let shift = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * spread;
             let world = random_pose(&mut rng, 50.0);
-            let pb = designed.then(&Transform::from_parts(shift, turn)).then(&world);
+            let pb = designed
+                .then(&Transform::from_parts(shift, turn))
+                .then(&world);
             let clr = clearance(&a, &world, &b, &pb, 1000.0).unwrap();
             for tol in [0.0, TOL, 0.1] {
                 let c = contact(&a, &world, &b, &pb, tol).unwrap();
                 *seen
-                    .entry((*name, format!("{c:?}").split([' ', '{', '(']).next().unwrap().to_string()))
+                    .entry((
+                        *name,
+                        format!("{c:?}")
+                            .split([' ', '{', '('])
+                            .next()
+                            .unwrap()
+                            .to_string(),
+                    ))
                     .or_insert(0) += 1;
                 let why = format!("{name} pose {k} tol {tol}: {c:?}, clearance {clr}");
                 match c {

@@ -645,9 +645,7 @@ impl Document {
             let needle = format!("name: {}", m.name);
             let err = |msg: String| at(&needle, "mates", msg);
             if mate_names.insert(m.name.clone(), ()).is_some() {
-                let (line, col) = positions
-                    .get(&format!("mates/{mi}/name"))
-                    .unwrap_or((0, 0));
+                let (line, col) = positions.get(&format!("mates/{mi}/name")).unwrap_or((0, 0));
                 return Err(SourceError::new(
                     path,
                     line,
@@ -809,11 +807,13 @@ impl Document {
 
     /// A part by name.
     pub fn part(&self, name: &str) -> Result<&Part, DocumentError> {
-        self.parts.get(&*nfc_name(name)).ok_or_else(|| DocumentError::NotFound {
-            what: "part",
-            name: name.into(),
-            hint: suggestion(name, self.parts.keys().map(String::as_str)),
-        })
+        self.parts
+            .get(&*nfc_name(name))
+            .ok_or_else(|| DocumentError::NotFound {
+                what: "part",
+                name: name.into(),
+                hint: suggestion(name, self.parts.keys().map(String::as_str)),
+            })
     }
 
     /// Components in file order.
@@ -1455,7 +1455,8 @@ pub(crate) fn check_pose(t: &Transform, what: impl std::fmt::Display) -> Result<
 /// NFC already (ASCII and most text).
 pub fn nfc_name(name: &str) -> std::borrow::Cow<'_, str> {
     use unicode_normalization::UnicodeNormalization;
-    if unicode_normalization::is_nfc_quick(name.chars()) == unicode_normalization::IsNormalized::Yes {
+    if unicode_normalization::is_nfc_quick(name.chars()) == unicode_normalization::IsNormalized::Yes
+    {
         std::borrow::Cow::Borrowed(name)
     } else {
         std::borrow::Cow::Owned(name.nfc().collect())
@@ -1465,7 +1466,10 @@ pub fn nfc_name(name: &str) -> std::borrow::Cow<'_, str> {
 /// A name given through the API (a new robot, …) as the document keeps it: NFC, and
 /// refused when it holds a control or invisible character (as in a file).
 pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> {
-    if let Some(c) = name.chars().find(|&c| crate::diagnostics::hidden_char(c).is_some()) {
+    if let Some(c) = name
+        .chars()
+        .find(|&c| crate::diagnostics::hidden_char(c).is_some())
+    {
         return Err(DocumentError::Invalid(format!(
             "{what} name `{}`: {} is not allowed in names (control and invisible characters hide or reorder what is shown)",
             crate::diagnostics::printable(name, false),
@@ -1508,11 +1512,13 @@ fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {
 
 /// Names of one kind that differ only by case, as located warnings (see
 /// [`Document::warnings`]).
+/// A name and where it is written (line, column), when the scan saw it.
+type Placed = (String, Option<(usize, usize)>);
+
 fn case_warnings(file: &DocumentFile, path: &Path, positions: &scan::Positions) -> Vec<String> {
     let mut out = Vec::new();
-    let mut kind = |what: &str, names: Vec<(String, Option<(usize, usize)>)>| {
-        let mut by_case: IndexMap<String, Vec<&(String, Option<(usize, usize)>)>> =
-            IndexMap::new();
+    let mut kind = |what: &str, names: Vec<Placed>| {
+        let mut by_case: IndexMap<String, Vec<&Placed>> = IndexMap::new();
         for n in &names {
             by_case.entry(n.0.to_lowercase()).or_default().push(n);
         }
@@ -1547,7 +1553,10 @@ fn case_warnings(file: &DocumentFile, path: &Path, positions: &scan::Positions) 
     let at = |p: String| positions.get(&p);
     kind(
         "parts",
-        file.parts.keys().map(|n| (n.clone(), at(format!("parts/{n}")))).collect(),
+        file.parts
+            .keys()
+            .map(|n| (n.clone(), at(format!("parts/{n}"))))
+            .collect(),
     );
     kind(
         "components",
@@ -1578,8 +1587,16 @@ fn case_warnings(file: &DocumentFile, path: &Path, positions: &scan::Positions) 
             .planes
             .keys()
             .map(|r| (r.clone(), at(format!("parts/{p}/planes/{r}"))))
-            .chain(pf.axes.keys().map(|r| (r.clone(), at(format!("parts/{p}/axes/{r}")))))
-            .chain(pf.points.keys().map(|r| (r.clone(), at(format!("parts/{p}/points/{r}")))))
+            .chain(
+                pf.axes
+                    .keys()
+                    .map(|r| (r.clone(), at(format!("parts/{p}/axes/{r}")))),
+            )
+            .chain(
+                pf.points
+                    .keys()
+                    .map(|r| (r.clone(), at(format!("parts/{p}/points/{r}")))),
+            )
             .collect();
         kind(&format!("references of part `{p}`:"), refs);
         kind(
@@ -1588,7 +1605,10 @@ fn case_warnings(file: &DocumentFile, path: &Path, positions: &scan::Positions) 
                 .iter()
                 .enumerate()
                 .map(|(i, f)| {
-                    (feature_name(f).to_string(), at(format!("parts/{p}/features/{i}/name")))
+                    (
+                        feature_name(f).to_string(),
+                        at(format!("parts/{p}/features/{i}/name")),
+                    )
                 })
                 .collect(),
         );

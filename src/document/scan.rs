@@ -162,8 +162,7 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
                     Some(Frame::Map { key: Some(k), .. }) if k == "description"
                 );
                 if let Some(c) = value.chars().find(|&c| {
-                    hidden_char(c).is_some()
-                        && !(in_description && matches!(c, '\n' | '\t' | '\r'))
+                    hidden_char(c).is_some() && !(in_description && matches!(c, '\n' | '\t' | '\r'))
                 }) {
                     let (line, column) =
                         char_position(text, mark.index(), c, value.len()).unwrap_or((line, column));

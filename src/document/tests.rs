@@ -306,16 +306,27 @@ fn names_are_nfc_and_case_twins_are_warned() {
     assert!(doc.component("c\u{e9}1").is_ok() && doc.component(&format!("c{nfd}1")).is_ok());
     assert_eq!(doc.component(&format!("c{nfd}1")).unwrap().name, "c\u{e9}1");
     assert!(doc.part("pl\u{e9}").is_ok());
-    assert!(doc.part("pl\u{e9}").unwrap().reference(&format!("f{nfd}ce")).is_some());
+    assert!(doc
+        .part("pl\u{e9}")
+        .unwrap()
+        .reference(&format!("f{nfd}ce"))
+        .is_some());
     assert!(doc.dimension("D1@d\u{e9}").is_ok());
     doc.set_dimension(&format!("D1@d{nfd}"), 12.0).unwrap();
     // `c…1` and `C…1` differ only by case: one warning at the second one's line
     assert_eq!(doc.warnings().len(), 1, "{:?}", doc.warnings());
-    assert!(doc.warnings()[0].contains("nfd.yaml:11:"), "{:?}", doc.warnings());
+    assert!(
+        doc.warnings()[0].contains("nfd.yaml:11:"),
+        "{:?}",
+        doc.warnings()
+    );
     assert!(doc.warnings()[0].contains("differ only by case"));
     doc.save().unwrap();
     let saved = std::fs::read_to_string(&p).unwrap();
-    assert!(!saved.contains(nfd) && saved.contains("c\u{e9}1"), "{saved}");
+    assert!(
+        !saved.contains(nfd) && saved.contains("c\u{e9}1"),
+        "{saved}"
+    );
     // a new robot name with an invisible character is refused, NFC kept
     let robot = crate::kinematics::Catalog::NachiMz07.robot();
     let e = doc.add_robot("arm\u{200b}", &robot, None).unwrap_err();

@@ -143,7 +143,11 @@ fn serve(mut client: TcpStream, upstream: SocketAddr, page_port: u16) -> io::Res
             break Some(i + 4);
         }
         if buf.len() > MAX_HEAD {
-            return refuse(client, "431 Request Header Fields Too Large", "request head too large");
+            return refuse(
+                client,
+                "431 Request Header Fields Too Large",
+                "request head too large",
+            );
         }
         let n = client.read(&mut chunk)?;
         if n == 0 {
@@ -267,7 +271,9 @@ mod tests {
                     }
                     got.extend_from_slice(&buf[..n]);
                 }
-                log.lock().unwrap().push(String::from_utf8_lossy(&got).into_owned());
+                log.lock()
+                    .unwrap()
+                    .push(String::from_utf8_lossy(&got).into_owned());
                 let _ = c.write_all(
                     b"HTTP/1.1 200 OK\r\nAccess-Control-Allow-Origin: https://rerun.io\r\nContent-Length: 2\r\n\r\nok",
                 );
@@ -303,10 +309,17 @@ mod tests {
             for method in ["OPTIONS", "POST"] {
                 let r = ask(gate.port(), req(Some(bad), method).as_bytes());
                 assert!(r.starts_with("HTTP/1.1 403"), "{bad} {method}: {r}");
-                assert!(!r.to_ascii_lowercase().contains("access-control-allow-origin"), "{r}");
+                assert!(
+                    !r.to_ascii_lowercase()
+                        .contains("access-control-allow-origin"),
+                    "{r}"
+                );
             }
         }
-        assert!(seen.lock().unwrap().is_empty(), "refused requests reached upstream");
+        assert!(
+            seen.lock().unwrap().is_empty(),
+            "refused requests reached upstream"
+        );
         let own = format!("http://127.0.0.1:{page}");
         let r = ask(gate.port(), req(Some(&own), "POST").as_bytes());
         assert!(r.starts_with("HTTP/1.1 200") && r.ends_with("ok"), "{r}");

@@ -4,9 +4,9 @@
 
 use super::WorkspaceError;
 use crate::collision::{
-    candidate_pairs, check, clearance, interferes, sweep, Collider, ColliderCache,
-    CollisionError, Contact, CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart,
-    SweepHit, SweepOptions,
+    candidate_pairs, check, clearance, interferes, sweep, Collider, ColliderCache, CollisionError,
+    Contact, CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart, SweepHit,
+    SweepOptions,
 };
 use crate::document::{Document, Feature};
 use crate::mesh::Mesh;

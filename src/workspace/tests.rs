@@ -293,9 +293,21 @@ fn clearance_agrees_with_contact_on_the_puzzles() {
     let mut cache = SceneCache::new();
     // (document, fixed component, x y z a b c of `moving`) found by random poses
     for (file, fixed, pose) in [
-        ("models/problems/ring_puzzle.yaml", "ring", [3.27, -3.0, -17.95, 106.0, 347.0, 0.0]),
-        ("models/problems/bar_slot.yaml", "wall_low", [11.93, -12.34, 8.79, 204.0, 93.0, 0.0]),
-        ("models/problems/peg_tilt.yaml", "base", [-18.84, 3.33, -0.62, 51.0, 240.0, 0.0]),
+        (
+            "models/problems/ring_puzzle.yaml",
+            "ring",
+            [3.27, -3.0, -17.95, 106.0, 347.0, 0.0],
+        ),
+        (
+            "models/problems/bar_slot.yaml",
+            "wall_low",
+            [11.93, -12.34, 8.79, 204.0, 93.0, 0.0],
+        ),
+        (
+            "models/problems/peg_tilt.yaml",
+            "base",
+            [-18.84, 3.33, -0.62, 51.0, 240.0, 0.0],
+        ),
     ] {
         let mut doc = open(file);
         let t = Transform::from_xyzabc(
@@ -309,6 +321,9 @@ fn clearance_agrees_with_contact_on_the_puzzles() {
         let c = ws.contact(fixed, "moving", &options).unwrap();
         let clr = ws.clearance(fixed, "moving", 1000.0).unwrap();
         assert_ne!(c, crate::collision::Contact::Separate, "{file}: {c:?}");
-        assert!(clr <= options.tolerance, "{file}: {c:?} with clearance {clr}");
+        assert!(
+            clr <= options.tolerance,
+            "{file}: {c:?} with clearance {clr}"
+        );
     }
 }
