@@ -44,6 +44,14 @@ impl SourceError {
         if let Some((line, text)) = self.line.and_then(|l| Some((l, source_text(&self.path)?))) {
             if let Some(full) = text.lines().nth(line - 1) {
                 let (src, column) = excerpt(full, self.column);
+                // The quoted line may hold what the error is about (an escape
+                // sequence, a bidi override): escaped, with the caret moved by the
+                // characters the escapes add before it.
+                let column = column.map(|c| {
+                    let before: String = src.chars().take(c.saturating_sub(1)).collect();
+                    printable(&before, false).chars().count() + 1
+                });
+                let src = printable(&src, false).into_owned();
                 let src = src.as_str();
                 let gutter = line.to_string();
                 out += &format!("\n {} |\n {} | {}\n", " ".repeat(gutter.len()), gutter, src);
@@ -168,6 +176,86 @@ pub fn suggestion<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str> 
     }
 }
 
+/// Why a character may not appear in a name: a control character (C0, DEL, C1,
+/// including ESC, which starts terminal escape sequences) or an invisible / format
+/// character (zero-width space, joiners, bidi embeddings, overrides and isolates,
+/// BOM, soft hyphen, variation selectors, tags, …) that makes two different names
+/// look the same or reorders the text around it on screen. `None` for every other
+/// character (letters of any script, CJK, digits, punctuation, ordinary spaces).
+pub fn hidden_char(c: char) -> Option<&'static str> {
+    let u = c as u32;
+    let name = match u {
+        0x1B => "ESCAPE",
+        0x09 => "TAB",
+        0x0A => "LINE FEED",
+        0x0D => "CARRIAGE RETURN",
+        0x00..=0x1F | 0x7F => "a control character",
+        0x80..=0x9F => "a C1 control character",
+        0x00AD => "SOFT HYPHEN",
+        0x034F => "COMBINING GRAPHEME JOINER",
+        0x061C => "ARABIC LETTER MARK",
+        0x115F | 0x1160 | 0x3164 | 0xFFA0 => "a HANGUL FILLER",
+        0x17B4 | 0x17B5 => "a KHMER INHERENT VOWEL",
+        0x180B..=0x180F => "a MONGOLIAN FREE VARIATION SELECTOR or VOWEL SEPARATOR",
+        0x200B => "ZERO WIDTH SPACE",
+        0x200C => "ZERO WIDTH NON-JOINER",
+        0x200D => "ZERO WIDTH JOINER",
+        0x200E => "LEFT-TO-RIGHT MARK",
+        0x200F => "RIGHT-TO-LEFT MARK",
+        0x2028 => "LINE SEPARATOR",
+        0x2029 => "PARAGRAPH SEPARATOR",
+        0x202A => "LEFT-TO-RIGHT EMBEDDING",
+        0x202B => "RIGHT-TO-LEFT EMBEDDING",
+        0x202C => "POP DIRECTIONAL FORMATTING",
+        0x202D => "LEFT-TO-RIGHT OVERRIDE",
+        0x202E => "RIGHT-TO-LEFT OVERRIDE",
+        0x2060 => "WORD JOINER",
+        0x2066 => "LEFT-TO-RIGHT ISOLATE",
+        0x2067 => "RIGHT-TO-LEFT ISOLATE",
+        0x2068 => "FIRST STRONG ISOLATE",
+        0x2069 => "POP DIRECTIONAL ISOLATE",
+        0x2061..=0x206F => "an invisible format character",
+        0xFE00..=0xFE0F | 0xE0100..=0xE01EF => "a VARIATION SELECTOR",
+        0xFEFF => "ZERO WIDTH NO-BREAK SPACE (byte order mark)",
+        0xFFF0..=0xFFFB => "an interlinear annotation or special character",
+        0xFFFE | 0xFFFF => "a noncharacter",
+        0x1D173..=0x1D17A => "a MUSICAL SYMBOL format character",
+        0xE0000..=0xE007F => "a TAG character",
+        _ => return None,
+    };
+    Some(name)
+}
+
+/// `U+XXXX (NAME)` for a message about a refused character.
+pub fn describe_char(c: char) -> String {
+    match hidden_char(c) {
+        Some(name) => format!("U+{:04X} ({name})", c as u32),
+        None => format!("U+{:04X}", c as u32),
+    }
+}
+
+/// `text` safe to print on a terminal: every character [`hidden_char`] refuses in
+/// names (control characters such as ESC, bidi overrides, zero-width characters) is
+/// written as `<U+XXXX>`, except newline and tab when `keep_lines`. The one
+/// escaping rule of every printer of user strings (the CLI writer, error snippets),
+/// so a name, a path or a script's message can neither move the cursor, recolour
+/// the terminal nor reorder what follows it. Borrows when nothing needs escaping.
+pub fn printable(text: &str, keep_lines: bool) -> std::borrow::Cow<'_, str> {
+    let escape = |c: char| hidden_char(c).is_some() && !(keep_lines && matches!(c, '\n' | '\t'));
+    if !text.chars().any(escape) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 16);
+    for c in text.chars() {
+        if escape(c) {
+            out.push_str(&format!("<U+{:04X}>", c as u32));
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -193,6 +281,38 @@ mod tests {
         let caret = r.lines().nth(3).unwrap();
         assert!(shown.contains('…') && shown.contains('X'), "{r}");
         // The caret still points at the X.
+        let x = shown.chars().position(|c| c == 'X').unwrap();
+        assert_eq!(caret.chars().position(|c| c == '^'), Some(x), "{r}");
+    }
+
+    #[test]
+    fn printable_escapes_controls_and_invisible_characters_only() {
+        assert!(matches!(
+            printable("角度1 plate_a", false),
+            std::borrow::Cow::Borrowed(_)
+        ));
+        assert_eq!(printable("a\u{1b}[31mb", false), "a<U+001B>[31mb");
+        assert_eq!(printable("x\u{202e}y\u{200b}", false), "x<U+202E>y<U+200B>");
+        assert_eq!(printable("l1\n\tl2\u{7}", true), "l1\n\tl2<U+0007>");
+        assert_eq!(printable("l1\n", false), "l1<U+000A>");
+        assert_eq!(hidden_char('é'), None);
+        assert_eq!(
+            hidden_char('\u{feff}'),
+            Some("ZERO WIDTH NO-BREAK SPACE (byte order mark)")
+        );
+        assert_eq!(describe_char('\u{2066}'), "U+2066 (LEFT-TO-RIGHT ISOLATE)");
+    }
+
+    #[test]
+    fn render_escapes_the_quoted_line_and_keeps_the_caret() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("x.yaml");
+        std::fs::write(&p, "- name: \u{1b}[2Jab\u{202e}X\n").unwrap();
+        // column of the X: `- name: ` is 8, then ESC [ 2 J a b RLO, X at 16
+        let r = SourceError::new(&p, 1, 16, "bad").render();
+        assert!(!r.contains('\u{1b}') && !r.contains('\u{202e}'), "{r:?}");
+        let shown = r.lines().nth(2).unwrap();
+        let caret = r.lines().nth(3).unwrap();
         let x = shown.chars().position(|c| c == 'X').unwrap();
         assert_eq!(caret.chars().position(|c| c == '^'), Some(x), "{r}");
     }

@@ -19,7 +19,10 @@ pub(super) fn check(path: &Path) -> Exit {
     if let Some(d) = doc.description() {
         println!("  {d}");
     }
-    let mut warnings = 0;
+    let mut warnings = doc.warnings().len();
+    for w in doc.warnings() {
+        println!("  warning: {w}");
+    }
     println!("  parts ({}):", doc.parts().count());
     for p in doc.parts() {
         let r = p.mesh.inspect();

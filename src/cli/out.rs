@@ -38,18 +38,23 @@ pub fn write(stream: Stream, text: &str) {
     }
 }
 
-/// `text` and a newline to standard output.
+/// `text` and a newline to standard output. Control and invisible characters of
+/// the text (a name's escape sequence, a bidi override; not newlines and tabs) are
+/// written escaped ([`crate::diagnostics::printable`]): every line fitup prints may
+/// hold user strings.
 pub fn line(text: &str) {
+    let text = crate::diagnostics::printable(text, true);
     let mut s = String::with_capacity(text.len() + 1);
-    s.push_str(text);
+    s.push_str(&text);
     s.push('\n');
     write(Stream::Stdout, &s);
 }
 
-/// `text` and a newline to standard error.
+/// `text` and a newline to standard error, escaped as by [`line`].
 pub fn error_line(text: &str) {
+    let text = crate::diagnostics::printable(text, true);
     let mut s = String::with_capacity(text.len() + 1);
-    s.push_str(text);
+    s.push_str(&text);
     s.push('\n');
     write(Stream::Stderr, &s);
 }

@@ -241,6 +241,9 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     let mut doc =
         crate::document::Document::load_in(&doc_path, &project, &mut crate::mesh::MeshCache::new())
             .map_err(|e| fail(e.render()))?;
+    for w in doc.warnings() {
+        super::out::error_line(&format!("warning: {w}"));
+    }
     let index = match &a.robot {
         Some(name) => doc.robot_index(name).map_err(|e| usage(e.to_string()))?,
         None => match doc.robots().len() {

@@ -59,5 +59,6 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
 }
 
 fn print(s: &str) {
-    super::out::write(super::out::Stream::Stdout, s);
+    let s = crate::diagnostics::printable(s, true);
+    super::out::write(super::out::Stream::Stdout, &s);
 }

@@ -142,6 +142,8 @@ fn draw(out: &mut impl Write, lines: &[String]) -> std::io::Result<()> {
     let (width, height) = terminal::size().unwrap_or((100, 40));
     queue!(out, cursor::MoveTo(0, 0))?;
     for (row, l) in lines.iter().take(height as usize).enumerate() {
+        // skill, part and robot names come from user files: escaped like every line
+        let l = crate::diagnostics::printable(l, false);
         let cut: String = l.chars().take(width as usize).collect();
         queue!(
             out,

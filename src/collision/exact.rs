@@ -562,6 +562,44 @@ fn containment_depth(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>) -
     best
 }
 
+/// The clearance between parts `a` at `pa` and `b` at `pb` (mm): the distance between
+/// their surfaces, searched up to `cap` mm (returns `cap` when nothing is nearer), and
+/// 0 when they meet or one solid lies inside the other — the same geometry
+/// [`contact`] judges, so the two agree at every tolerance `tol` ≥ 0:
+/// `Touching` or `Interfering` ⇒ clearance ≤ `tol` (0 for crossing or contained
+/// parts), and clearance > `tol` ⇒ `Separate`.
+///
+/// A surface distance within the pair's numerical slack (the colliders' `eps`, the
+/// distance at which [`contact`] counts surfaces as meeting) is reported as 0.
+pub fn clearance(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    cap: f64,
+) -> Result<f64, CollisionError> {
+    // The full search (stop 0): a `stop` above 0 would return the first leaf pair's
+    // distance below it, not the minimum (clearance once answered 23 mm for touching
+    // parts that way).
+    let cap = if cap.is_nan() {
+        f64::INFINITY
+    } else {
+        cap.max(0.0)
+    };
+    let d = distance_search(a, pa, b, pb, 0.0, cap, 0.0)?;
+    let eps = eps(a, b, pa, pb);
+    // `tri_tri` counts pairs within `eps` of each other's planes as meeting; their
+    // distance may be a few `eps` (corner to edge), never more than 4·eps.
+    if d <= 4.0 * eps {
+        return Ok(0.0);
+    }
+    // Surfaces apart: one solid may still hold the other (contact says Interfering).
+    if containment(a, pa, b, pb, eps).is_some() {
+        return Ok(0.0);
+    }
+    Ok(d)
+}
+
 /// Minimum distance between the surfaces of `a` at `pa` and `b` at `pb`, mm (0 when
 /// they touch or cross; for one part inside another it is the gap between the
 /// surfaces). Pruned by box distances; stops early once below `stop`.

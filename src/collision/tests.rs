@@ -1308,3 +1308,168 @@ fn fine_pin_pushed_into_its_hole_wall_interferes_by_the_push() {
         assert!(interferes(pin, &off, &plate, &Transform::IDENTITY, TOL).unwrap());
     }
 }
+
+/// The minimum triangle–triangle distance between two posed meshes by brute force
+/// over every pair, with parry3d-f64's triangle distance (independent of fitup's
+/// `tri_distance` and of the BVH search), mm.
+fn brute_distance(a: &Mesh, pa: &Transform, b: &Mesh, pb: &Transform) -> f64 {
+    use parry3d_f64::math::{Pose, Rot3, Vector};
+    use parry3d_f64::shape::Triangle;
+    let tris = |m: &Mesh, p: &Transform| -> Vec<Triangle> {
+        (0..m.triangles.len())
+            .map(|i| {
+                let t = m.triangle(i).map(|v| p.apply(&v));
+                let v = |q: Point3| Vector::new(q.x, q.y, q.z);
+                Triangle::new(v(t[0]), v(t[1]), v(t[2]))
+            })
+            .collect()
+    };
+    let (ta, tb) = (tris(a, pa), tris(b, pb));
+    let id = Pose::from_parts(Vector::ZERO, Rot3::IDENTITY);
+    let mut best = f64::INFINITY;
+    for x in &ta {
+        for y in &tb {
+            let d = parry3d_f64::query::distance(&id, x, &id, y)
+                .unwrap()
+                .distance;
+            best = best.min(d);
+        }
+    }
+    best
+}
+
+/// A closed box with a closed box-shaped cavity: outer shell outward, inner shell
+/// facing into the cavity (`lo`..`hi` outer, `ilo`..`ihi` cavity, mm).
+fn hollow_box(lo: f64, hi: f64, ilo: f64, ihi: f64) -> Mesh {
+    let mut m = Mesh::cuboid(Point3::new(lo, lo, lo), Point3::new(hi, hi, hi));
+    let inner = Mesh::cuboid(Point3::new(ilo, ilo, ilo), Point3::new(ihi, ihi, ihi));
+    let flipped = Mesh::new(
+        inner.vertices.clone(),
+        inner.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect(),
+    )
+    .unwrap();
+    m.append(&flipped);
+    m
+}
+
+/// `clearance` and `contact` agree on interlocked, touching, contained and caged
+/// pairs over many random poses near the contact: Touching ⇒ clearance ≤ tol,
+/// Interfering ⇒ 0, clearance > tol ⇒ Separate, at every tolerance; and a
+/// positive clearance is the brute-force minimum triangle distance.
+#[test]
+fn clearance_agrees_with_contact_and_brute_force() {
+    use nalgebra::UnitQuaternion;
+    let turn_x = Transform::from_parts(
+        Vec3::zeros(),
+        UnitQuaternion::from_axis_angle(&Vec3::x_axis(), std::f64::consts::FRAC_PI_4),
+    );
+    // (name, mesh a, mesh b, b's designed pose: touching or contained)
+    let pairs: Vec<(&str, Mesh, Mesh, Transform)> = vec![
+        // a ring around a rod, touching on the ring's inside (same facet angles)
+        (
+            "ring on rod",
+            fixtures::torus(20.0, 3.0, 16, 8),
+            Mesh::cylinder(17.0, 40.0, 16),
+            at(0.0, 0.0, -20.0),
+        ),
+        // large triangles: a cube's edge on the interior of a slab's top facets
+        (
+            "edge on facets",
+            Mesh::cuboid(
+                Point3::new(-10.0, -10.0, -10.0),
+                Point3::new(10.0, 10.0, 0.0),
+            ),
+            Mesh::cuboid(Point3::new(-5.0, -5.0, -5.0), Point3::new(5.0, 5.0, 5.0)),
+            turn_x.then(&at(0.0, 0.0, 5.0 * std::f64::consts::SQRT_2)),
+        ),
+        // a cube inside a cavity, against its wall
+        (
+            "cube in cavity",
+            hollow_box(-20.0, 20.0, -10.0, 10.0),
+            Mesh::cuboid(Point3::new(-4.0, -4.0, -4.0), Point3::new(4.0, 4.0, 4.0)),
+            at(6.0, 0.0, 0.0),
+        ),
+        // a small cube inside a solid block (contained: interfering, clearance 0)
+        (
+            "cube in block",
+            Mesh::cuboid(
+                Point3::new(-20.0, -20.0, -20.0),
+                Point3::new(20.0, 20.0, 20.0),
+            ),
+            Mesh::cuboid(Point3::new(-4.0, -4.0, -4.0), Point3::new(4.0, 4.0, 4.0)),
+            at(3.0, 0.0, 0.0),
+        ),
+    ];
+    let mut rng = Rng::new(22);
+    let mut seen = std::collections::HashMap::new();
+    for (name, ma, mb, designed) in &pairs {
+        let (a, b) = (collider(ma.clone()), collider(mb.clone()));
+        for k in 0..120 {
+            let spread = [0.0, 1e-3, 0.05, 0.5, 3.0][k % 5];
+            let turn = UnitQuaternion::from_scaled_axis(
+                Vec3::new(rng.normal(), rng.normal(), rng.normal()) * (spread * 0.02),
+            );
+            let shift = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * spread;
+            let world = random_pose(&mut rng, 50.0);
+            let pb = designed
+                .then(&Transform::from_parts(shift, turn))
+                .then(&world);
+            let clr = clearance(&a, &world, &b, &pb, 1000.0).unwrap();
+            for tol in [0.0, TOL, 0.1] {
+                let c = contact(&a, &world, &b, &pb, tol).unwrap();
+                *seen
+                    .entry((
+                        *name,
+                        format!("{c:?}")
+                            .split([' ', '{', '('])
+                            .next()
+                            .unwrap()
+                            .to_string(),
+                    ))
+                    .or_insert(0) += 1;
+                let why = format!("{name} pose {k} tol {tol}: {c:?}, clearance {clr}");
+                match c {
+                    Contact::Touching => assert!(clr <= tol, "{why}"),
+                    Contact::Interfering { .. } => assert_eq!(clr, 0.0, "{why}"),
+                    Contact::Separate => {}
+                }
+                if clr > tol {
+                    assert_eq!(c, Contact::Separate, "{why}");
+                }
+            }
+            if k % 3 == 0 {
+                let brute = brute_distance(ma, &world, mb, &pb);
+                let contained = matches!(
+                    contact(&a, &world, &b, &pb, TOL).unwrap(),
+                    Contact::Interfering {
+                        kind: InterferenceKind::Contained { .. },
+                        ..
+                    }
+                );
+                if clr > 0.0 {
+                    assert!(
+                        (clr - brute).abs() <= 1e-7 * (1.0 + brute),
+                        "{name} pose {k}: clearance {clr}, brute force {brute}"
+                    );
+                } else {
+                    assert!(
+                        contained || brute <= 1e-6,
+                        "{name} pose {k}: clearance 0, brute force {brute}"
+                    );
+                }
+            }
+        }
+    }
+    // every pair was seen in contact; the ring and the caged and resting cubes
+    // also touching, the last two also apart (a ring round a rod cannot move apart)
+    for (name, ..) in &pairs {
+        let n = |state: &str| seen.get(&(*name, state.to_string())).copied().unwrap_or(0);
+        assert!(n("Interfering") > 0, "{name}: {seen:?}");
+        if *name != "cube in block" {
+            assert!(n("Touching") > 0, "{name}: {seen:?}");
+        }
+        if matches!(*name, "edge on facets" | "cube in cavity") {
+            assert!(n("Separate") > 0, "{name}: {seen:?}");
+        }
+    }
+}

@@ -162,6 +162,7 @@ impl Part {
     /// A reference by name, including the built-ins (`origin`, `front`, `top`, `right`,
     /// `x_axis`, `y_axis`, `z_axis`).
     pub fn reference(&self, name: &str) -> Option<Reference> {
+        let name = &*nfc_name(name);
         self.references
             .get(name)
             .copied()
@@ -241,6 +242,8 @@ pub struct Document {
     /// Hash of the file's bytes when it was loaded or last saved: a save refuses to
     /// overwrite a file that changed on disk since (another writer's edits).
     disk_hash: Option<u64>,
+    /// Located warnings of the load (names that differ only by case).
+    warnings: Vec<String>,
 }
 
 /// A rotation and the box of a mesh rotated by it (mm).
@@ -364,6 +367,13 @@ impl Document {
                 .unwrap_or((0, 0));
             SourceError::new(path, line, col, format!("invalid document: {e}"))
         })?;
+        let file = if unicode_normalization::is_nfc(text) {
+            file
+        } else {
+            nfc_file(file).map_err(|e| {
+                SourceError::new(path, 0, 0, format!("invalid document after NFC: {e}"))
+            })?
+        };
         Ok((file, positions))
     }
 
@@ -516,21 +526,29 @@ impl Document {
         }
         let mut components = Vec::with_capacity(file.components.len());
         let mut by_name = HashMap::new();
-        for c in &file.components {
+        for (ci, c) in file.components.iter().enumerate() {
             let needle = format!("name: {}", c.name);
+            // The name's own line from the scan (the text may spell it in NFD).
+            let name_at = |message: String| -> DocumentError {
+                let (line, col) = positions
+                    .get(&format!("components/{ci}/name"))
+                    .unwrap_or((0, 0));
+                SourceError::new(path, line, col, message).into()
+            };
             if c.name.is_empty() || c.name.contains('/') {
-                return Err(at(
-                    &needle,
-                    "components",
-                    format!("component name `{}` must be non-empty without `/`", c.name),
-                ));
+                return Err(name_at(format!(
+                    "component name `{}` must be non-empty without `/`",
+                    c.name
+                )));
             }
-            if by_name.insert(c.name.clone(), components.len()).is_some() {
-                return Err(at(
-                    &needle,
-                    "components",
-                    format!("duplicate component name `{}`", c.name),
-                ));
+            if let Some(first) = by_name.insert(c.name.clone(), components.len()) {
+                let first_line = positions
+                    .get(&format!("components/{first}/name"))
+                    .map_or(String::new(), |(l, _)| format!(" (first at line {l})"));
+                return Err(name_at(format!(
+                    "duplicate component name `{}`{first_line}; names are compared in Unicode NFC, so two spellings of one name are the same",
+                    c.name
+                )));
             }
             if !parts.contains_key(&c.part) {
                 return Err(at(
@@ -641,13 +659,24 @@ impl Document {
             revision: 0,
             aabb_cache: AabbCache::default(),
             disk_hash: None,
+            warnings: Vec::new(),
         };
         let mut mate_names = HashMap::new();
-        for m in &file.mates {
+        for (mi, m) in file.mates.iter().enumerate() {
             let needle = format!("name: {}", m.name);
             let err = |msg: String| at(&needle, "mates", msg);
             if mate_names.insert(m.name.clone(), ()).is_some() {
-                return Err(err(format!("duplicate mate name `{}`", m.name)));
+                let (line, col) = positions.get(&format!("mates/{mi}/name")).unwrap_or((0, 0));
+                return Err(SourceError::new(
+                    path,
+                    line,
+                    col,
+                    format!(
+                        "duplicate mate name `{}` (names are compared in Unicode NFC)",
+                        m.name
+                    ),
+                )
+                .into());
             }
             let kind = MateKind::parse(&m.kind).ok_or_else(|| {
                 err(format!(
@@ -722,7 +751,15 @@ impl Document {
         for (c, p) in doc.components.iter_mut().zip(poses) {
             c.transform = p;
         }
+        doc.warnings = case_warnings(&file, path, positions);
         Ok(doc)
+    }
+
+    /// Warnings of the load, each `file:line:col: message`: names of one kind that
+    /// differ only by case (`Plate` and `plate`), which lookups keep apart. The CLI
+    /// prints them (`fitup check`, `fitup run`).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
@@ -791,11 +828,13 @@ impl Document {
 
     /// A part by name.
     pub fn part(&self, name: &str) -> Result<&Part, DocumentError> {
-        self.parts.get(name).ok_or_else(|| DocumentError::NotFound {
-            what: "part",
-            name: name.into(),
-            hint: suggestion(name, self.parts.keys().map(String::as_str)),
-        })
+        self.parts
+            .get(&*nfc_name(name))
+            .ok_or_else(|| DocumentError::NotFound {
+                what: "part",
+                name: name.into(),
+                hint: suggestion(name, self.parts.keys().map(String::as_str)),
+            })
     }
 
     /// Components in file order.
@@ -806,7 +845,7 @@ impl Document {
     /// The index of a component, or an error listing close matches.
     pub fn component_index(&self, name: &str) -> Result<usize, DocumentError> {
         self.by_name
-            .get(name)
+            .get(&*nfc_name(name))
             .copied()
             .ok_or_else(|| DocumentError::NotFound {
                 what: "component",
@@ -936,7 +975,7 @@ impl Document {
         }
         let p = self
             .parts
-            .get_mut(part)
+            .get_mut(&*nfc_name(part))
             .ok_or_else(|| DocumentError::NotFound {
                 what: "part",
                 name: part.into(),
@@ -1005,6 +1044,7 @@ impl Document {
     /// A dimension by full name (`D1@角度1`): a mate value or a robot joint
     /// (revolute joints are angles, prismatic joints lengths).
     pub fn dimension(&self, full_name: &str) -> Result<Dimension, DocumentError> {
+        let full_name = &*nfc_name(full_name);
         let (kind, value) = match self.dimension_target(full_name)? {
             DimensionTarget::Mate(i) => {
                 let m = &self.mates[i];
@@ -1045,6 +1085,7 @@ impl Document {
 
     /// What a dimension drives: a mate or a robot joint.
     pub fn dimension_target(&self, full_name: &str) -> Result<DimensionTarget, DocumentError> {
+        let full_name = &*nfc_name(full_name);
         let not_found = || self.dimension_not_found(full_name);
         let feature = dimension::mate_of(full_name).ok_or_else(not_found)?;
         match self.robot_dimension(feature) {
@@ -1065,6 +1106,7 @@ impl Document {
     /// Sets a dimension in internal units (mm or radians) and re-solves the mates, so
     /// every later query sees the driven poses. On failure nothing changes.
     pub fn set_dimension(&mut self, full_name: &str, value: f64) -> Result<(), DocumentError> {
+        let full_name = &*nfc_name(full_name);
         if !value.is_finite() {
             return Err(DocumentError::Invalid(format!(
                 "{full_name}: value {value} is not finite"
@@ -1427,6 +1469,172 @@ pub(crate) fn check_pose(t: &Transform, what: impl std::fmt::Display) -> Result<
         )));
     }
     Ok(())
+}
+
+/// `name` in Unicode NFC, the form every name of a document is kept in: lookups by
+/// another spelling of the same text (`é` decomposed) find it. Borrows when `name` is
+/// NFC already (ASCII and most text).
+pub fn nfc_name(name: &str) -> std::borrow::Cow<'_, str> {
+    use unicode_normalization::UnicodeNormalization;
+    if unicode_normalization::is_nfc_quick(name.chars()) == unicode_normalization::IsNormalized::Yes
+    {
+        std::borrow::Cow::Borrowed(name)
+    } else {
+        std::borrow::Cow::Owned(name.nfc().collect())
+    }
+}
+
+/// A name given through the API (a new robot, …) as the document keeps it: NFC, and
+/// refused when it holds a control or invisible character (as in a file).
+pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> {
+    if let Some(c) = name
+        .chars()
+        .find(|&c| crate::diagnostics::hidden_char(c).is_some())
+    {
+        return Err(DocumentError::Invalid(format!(
+            "{what} name `{}`: {} is not allowed in names (control and invisible characters hide or reorder what is shown)",
+            crate::diagnostics::printable(name, false),
+            crate::diagnostics::describe_char(c)
+        )));
+    }
+    Ok(nfc_name(name).into_owned())
+}
+
+/// The document file with every name in NFC: all text except file paths (`stl`,
+/// `urdf`, which name files on disk byte for byte) and `description`.
+fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {
+    fn walk(v: &mut serde_yaml::Value) {
+        use serde_yaml::Value;
+        match v {
+            Value::String(s) => *s = nfc_name(s).into_owned(),
+            Value::Sequence(items) => items.iter_mut().for_each(walk),
+            Value::Mapping(m) => {
+                let old = std::mem::take(m);
+                for (k, mut val) in old {
+                    let keep = matches!(k.as_str(), Some("stl" | "urdf" | "description"));
+                    let k = match k {
+                        Value::String(s) => Value::String(nfc_name(&s).into_owned()),
+                        other => other,
+                    };
+                    if !keep {
+                        walk(&mut val);
+                    }
+                    m.insert(k, val);
+                }
+            }
+            Value::Tagged(t) => walk(&mut t.value),
+            _ => {}
+        }
+    }
+    let mut v = serde_yaml::to_value(&file)?;
+    walk(&mut v);
+    serde_yaml::from_value(v)
+}
+
+/// Names of one kind that differ only by case, as located warnings (see
+/// [`Document::warnings`]).
+/// A name and where it is written (line, column), when the scan saw it.
+type Placed = (String, Option<(usize, usize)>);
+
+fn case_warnings(file: &DocumentFile, path: &Path, positions: &scan::Positions) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut kind = |what: &str, names: Vec<Placed>| {
+        let mut by_case: IndexMap<String, Vec<&Placed>> = IndexMap::new();
+        for n in &names {
+            by_case.entry(n.0.to_lowercase()).or_default().push(n);
+        }
+        for group in by_case.values() {
+            let mut spellings: Vec<&str> = group.iter().map(|n| n.0.as_str()).collect();
+            spellings.dedup();
+            if spellings.len() < 2 {
+                continue;
+            }
+            let (line, col) = group[1].1.unwrap_or((0, 0));
+            let list: Vec<String> = group
+                .iter()
+                .map(|(n, at)| match at {
+                    Some((l, _)) => format!("`{n}` (line {l})"),
+                    None => format!("`{n}`"),
+                })
+                .collect();
+            out.push(
+                SourceError::new(
+                    path,
+                    line,
+                    col,
+                    format!(
+                        "{what} {} differ only by case: they are different names (lookups are exact), which is easy to confuse; rename one",
+                        list.join(" and ")
+                    ),
+                )
+                .to_string(),
+            );
+        }
+    };
+    let at = |p: String| positions.get(&p);
+    kind(
+        "parts",
+        file.parts
+            .keys()
+            .map(|n| (n.clone(), at(format!("parts/{n}"))))
+            .collect(),
+    );
+    kind(
+        "components",
+        file.components
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.name.clone(), at(format!("components/{i}/name"))))
+            .collect(),
+    );
+    kind(
+        "mates",
+        file.mates
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (m.name.clone(), at(format!("mates/{i}/name"))))
+            .collect(),
+    );
+    kind(
+        "robots",
+        file.robots
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.name.clone(), at(format!("robots/{i}/name"))))
+            .collect(),
+    );
+    for (p, pf) in &file.parts {
+        let refs = pf
+            .planes
+            .keys()
+            .map(|r| (r.clone(), at(format!("parts/{p}/planes/{r}"))))
+            .chain(
+                pf.axes
+                    .keys()
+                    .map(|r| (r.clone(), at(format!("parts/{p}/axes/{r}")))),
+            )
+            .chain(
+                pf.points
+                    .keys()
+                    .map(|r| (r.clone(), at(format!("parts/{p}/points/{r}")))),
+            )
+            .collect();
+        kind(&format!("references of part `{p}`:"), refs);
+        kind(
+            &format!("features of part `{p}`:"),
+            pf.features
+                .iter()
+                .enumerate()
+                .map(|(i, f)| {
+                    (
+                        feature_name(f).to_string(),
+                        at(format!("parts/{p}/features/{i}/name")),
+                    )
+                })
+                .collect(),
+        );
+    }
+    out
 }
 
 /// `target` written relative to `base` when possible (both made absolute first).

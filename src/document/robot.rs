@@ -781,9 +781,10 @@ impl Document {
 
     /// The index of a robot, or an error listing close matches.
     pub fn robot_index(&self, name: &str) -> Result<usize, DocumentError> {
+        let nfc = super::nfc_name(name);
         self.robots
             .iter()
-            .position(|r| r.name() == name)
+            .position(|r| r.name() == nfc)
             .ok_or_else(|| DocumentError::NotFound {
                 what: "robot",
                 name: name.into(),
@@ -819,6 +820,8 @@ impl Document {
         robot: &Robot,
         base: Option<Transform>,
     ) -> Result<usize, DocumentError> {
+        let name = super::new_name(name, "robot")?;
+        let name = name.as_str();
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::Invalid(format!(
                 "robot names must be unique and non-empty: `{name}`"
@@ -871,6 +874,8 @@ impl Document {
         urdf: &Path,
         base: Option<Transform>,
     ) -> Result<usize, DocumentError> {
+        let name = super::new_name(name, "robot")?;
+        let name = name.as_str();
         let invalid = |m: String| DocumentError::Invalid(format!("robot `{name}`: {m}"));
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::Invalid(format!(

@@ -7,8 +7,16 @@
 //! beyond [`MAX_ABS_VALUE`], nesting deeper than [`MAX_DEPTH`], an empty file — each
 //! with its line and column. It also records where every key's value starts, so later
 //! errors (a bad mesh path, a bad pose) can point at their own line.
+//!
+//! Names are compared as Unicode NFC (two spellings of `é`, composed and decomposed,
+//! are one key, so a duplicate), and no key or value may hold a control or invisible
+//! character ([`crate::diagnostics::hidden_char`]: ESC, zero-width characters, bidi
+//! overrides and isolates, BOM, …; only `description` may hold newlines and tabs):
+//! the error names the character as `U+XXXX` at its own line and column.
 
+use crate::diagnostics::{describe_char, hidden_char};
 use std::collections::HashMap;
+use unicode_normalization::UnicodeNormalization;
 use yaml_rust2::parser::{Event, Parser};
 use yaml_rust2::scanner::TScalarStyle;
 
@@ -63,7 +71,8 @@ const TEXT_KEYS: &[&str] = &[
 enum Frame {
     Map {
         path: String,
-        keys: HashMap<String, usize>,
+        /// Keys seen, in NFC: the line and the spelling of the first.
+        keys: HashMap<String, (usize, String)>,
         key: Option<String>,
     },
     Seq {
@@ -146,6 +155,25 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
                 }
             }
             Event::Scalar(value, style, _, _) => {
+                let in_description = matches!(
+                    stack.last(),
+                    Some(Frame::Map { key: Some(k), .. }) if k == "description"
+                );
+                if let Some(c) = value.chars().find(|&c| {
+                    hidden_char(c).is_some() && !(in_description && matches!(c, '\n' | '\t' | '\r'))
+                }) {
+                    let (line, column) =
+                        char_position(text, mark.index(), c, value.len()).unwrap_or((line, column));
+                    return Err(ScanIssue {
+                        line,
+                        column,
+                        message: format!(
+                            "{} in `{}`: control and invisible characters are not allowed in a fitup document's names and text (they hide or reorder what is shown); remove it",
+                            describe_char(c),
+                            short(&value)
+                        ),
+                    });
+                }
                 if stack.is_empty() {
                     // A bare scalar at the top: empty (`~`, nothing) or not a mapping.
                     if !(value.is_empty() || value == "~" || value == "null") {
@@ -156,11 +184,20 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
                 let top = stack.len() - 1;
                 match &mut stack[top] {
                     Frame::Map { path, keys, key } if key.is_none() => {
-                        if let Some(first) = keys.insert(value.clone(), line) {
+                        // Names are NFC: `é` composed and decomposed is one key.
+                        let raw = value;
+                        let value = nfc(&raw);
+                        if let Some((first, spelling)) = keys.get(&value) {
+                            let same = if *spelling == raw {
+                                ""
+                            } else {
+                                " — the same name in another Unicode spelling (names are compared in NFC)"
+                            };
                             return Err(issue(format!(
-                                "duplicate key `{value}` (first at line {first}): each key may appear once"
+                                "duplicate key `{value}` (first at line {first}){same}: each key may appear once"
                             )));
                         }
+                        keys.insert(value.clone(), (line, raw));
                         let full = format!("{path}/{value}");
                         positions.0.insert(full, (line, column));
                         *key = Some(value);
@@ -246,6 +283,48 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
         .map(|(k, v)| (k.trim_start_matches('/').to_string(), v))
         .collect();
     Ok(positions)
+}
+
+/// The start of `value`, escaped, for a message (the value may be megabytes).
+fn short(value: &str) -> String {
+    let mut out: String = value.chars().take(60).collect();
+    if out.len() < value.len() {
+        out.push('…');
+    }
+    crate::diagnostics::printable(&out, false).into_owned()
+}
+
+/// `name` in Unicode NFC, the form fitup keeps and compares names in.
+pub fn nfc(name: &str) -> String {
+    if unicode_normalization::is_nfc(name) {
+        name.to_string()
+    } else {
+        name.nfc().collect()
+    }
+}
+
+/// The 1-based line and column of the first `c` in `text` at or after character
+/// `from` and within the `span` characters a scalar of `span` bytes can take in the
+/// text (quotes and escapes included); `None` when it is not there (written as an
+/// escape such as `"\e"`).
+fn char_position(text: &str, from: usize, c: char, span: usize) -> Option<(usize, usize)> {
+    let limit = from + 8 * span + 16;
+    let (mut line, mut column) = (1, 1);
+    for (i, ch) in text.chars().enumerate() {
+        if i > limit {
+            return None;
+        }
+        if i >= from && ch == c {
+            return Some((line, column));
+        }
+        if ch == '\n' {
+            line += 1;
+            column = 1;
+        } else {
+            column += 1;
+        }
+    }
+    None
 }
 
 /// The line and column of the last `&` before character `index` of `text`.

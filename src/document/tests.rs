@@ -287,3 +287,50 @@ proptest::proptest! {
         proptest::prop_assert_eq!(e.line, 1);
     }
 }
+
+/// Names are kept in NFC: the decomposed spelling in the file is found by either
+/// spelling (parts, components, references, mate dimensions), saved composed, and
+/// case-only twins are warned with their lines.
+#[test]
+fn names_are_nfc_and_case_twins_are_warned() {
+    let dir = write_demo();
+    let nfd = "e\u{301}"; // é decomposed
+    let text = format!(
+        "parts:\n  pl{nfd}:\n    stl: meshes/plate_a.stl\n    planes:\n      f{nfd}ce:\n        point: [0, 0, 0]\n        normal: [0, 0, 1]\n\
+         components:\n  - name: c{nfd}1\n    part: pl{nfd}\n  - name: C\u{e9}1\n    part: pl{nfd}\n    transform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 10, 1]]\n\
+         mates:\n  - name: d{nfd}\n    type: distance\n    entities: [c{nfd}1/f{nfd}ce, C\u{e9}1/f{nfd}ce]\n    value: 10\n    aligned: true\n"
+    );
+    let p = dir.path().join("nfd.yaml");
+    std::fs::write(&p, &text).unwrap();
+    let mut doc = Document::open(&p).unwrap();
+    assert!(doc.component("c\u{e9}1").is_ok() && doc.component(&format!("c{nfd}1")).is_ok());
+    assert_eq!(doc.component(&format!("c{nfd}1")).unwrap().name, "c\u{e9}1");
+    assert!(doc.part("pl\u{e9}").is_ok());
+    assert!(doc
+        .part("pl\u{e9}")
+        .unwrap()
+        .reference(&format!("f{nfd}ce"))
+        .is_some());
+    assert!(doc.dimension("D1@d\u{e9}").is_ok());
+    doc.set_dimension(&format!("D1@d{nfd}"), 12.0).unwrap();
+    // `c…1` and `C…1` differ only by case: one warning at the second one's line
+    assert_eq!(doc.warnings().len(), 1, "{:?}", doc.warnings());
+    assert!(
+        doc.warnings()[0].contains("nfd.yaml:11:"),
+        "{:?}",
+        doc.warnings()
+    );
+    assert!(doc.warnings()[0].contains("differ only by case"));
+    doc.save().unwrap();
+    let saved = std::fs::read_to_string(&p).unwrap();
+    assert!(
+        !saved.contains(nfd) && saved.contains("c\u{e9}1"),
+        "{saved}"
+    );
+    // a new robot name with an invisible character is refused, NFC kept
+    let robot = crate::kinematics::Catalog::NachiMz07.robot();
+    let e = doc.add_robot("arm\u{200b}", &robot, None).unwrap_err();
+    assert!(e.to_string().contains("U+200B"), "{e}");
+    doc.add_robot(&format!("arm{nfd}"), &robot, None).unwrap();
+    assert!(doc.robot("arm\u{e9}").is_ok());
+}

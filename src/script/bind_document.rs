@@ -72,6 +72,9 @@ impl DocHandle {
         for f in doc.source_files() {
             ctx.record_read(&f);
         }
+        for w in doc.warnings() {
+            ctx.print(&format!("warning: {w}"));
+        }
         ctx.caches.view.log_document(&doc);
         Ok(Self {
             inner: Arc::new(Mutex::new(doc)),

@@ -245,7 +245,7 @@ pub(super) fn register(api: &mut Api) {
         "The verdict for two components by `#{method, tolerance}`.",
         |d: &mut DocHandle, a: &str, b: &str, o: Map| pair(d, a, b, Some(&o)),
     );
-    api.f("Document.clearance(a: string, b: string) -> float", "Distance between the surfaces of two components (mm), 0 when they touch or cross; searched up to 1000 mm.", |d: &mut DocHandle, a: &str, b: &str| -> ScriptResult<f64> {
+    api.f("Document.clearance(a: string, b: string) -> float", "Distance between the surfaces of two components (mm), 0 when they touch, cross or one is inside the other (agrees with `contact`: not separate ⇒ at most the tolerance); searched up to 1000 mm (1000 when nothing is nearer).", |d: &mut DocHandle, a: &str, b: &str| -> ScriptResult<f64> {
         with_workspace(d, |ws| ws.clearance(a, b, 1000.0).map_err(fail))
     });
     api.f("Document.sweep(name: string, motion) -> map", "Dynamic interference: moves the component from its pose to `motion` (a Transform, or an array of Transforms visited in order; translation lerp + rotation slerp) and returns the first contact: `#{hit, t, transform, with, checks}` (`t` in 0..1 along the motion, `with` the other component — `with` is a Rhai keyword, read it as `hit[\"with\"]`). Continuous method: never misses a contact.", |d: &mut DocHandle, name: &str, motion: Dynamic| sweep(d, name, &motion, None));
@@ -287,6 +287,7 @@ pub(super) fn register(api: &mut Api) {
         |d: &mut DocHandle, part: &str, name: &str| -> ScriptResult<FeatureHandle> {
             let doc = d.lock()?;
             let p = doc.part(part).map_err(fail)?;
+            let name = &*crate::document::nfc_name(name);
             if !p.features.iter().any(|f| f.name() == name) {
                 return err(format!("part `{part}` has no feature `{name}`"));
             }

@@ -31,6 +31,7 @@
 
 #[cfg(feature = "viewer")]
 mod backend;
+pub mod origin;
 #[cfg(feature = "viewer")]
 mod read;
 #[cfg(feature = "viewer")]

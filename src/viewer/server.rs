@@ -40,6 +40,8 @@ pub struct Session {
     url: Option<String>,
     grpc: Option<Arc<rerun::grpc_server::GrpcServerSink>>,
     web: Option<WebServer>,
+    /// The published gRPC port: only the served page's origin gets through.
+    _gate: Option<super::origin::OriginGate>,
 }
 
 /// Flush timeout when a session ends: enough for a big scene over loopback.
@@ -51,22 +53,34 @@ impl Session {
     /// # Errors
     /// A server that cannot listen; a `record` folder that cannot be created.
     pub fn start(opts: SessionOptions) -> Result<Session, ViewerError> {
-        let (grpc, web, url) = if opts.serve {
-            let grpc_port = free_port()?;
+        let (grpc, web, url, gate) = if opts.serve {
+            // Rerun's server allows CORS from rerun.io and any localhost port, which
+            // its options cannot narrow: it listens on an unpublished port behind
+            // the origin gate, whose port is the one the page and its CSP name.
+            let server = |e: std::io::Error| ViewerError::Server(e.to_string());
+            let gate_listener = TcpListener::bind("127.0.0.1:0").map_err(server)?;
+            let grpc_port = gate_listener.local_addr().map_err(server)?.port();
+            let rerun_port = free_port()?;
             let grpc = rerun::grpc_server::GrpcServerSink::new(
                 "127.0.0.1",
-                grpc_port,
+                rerun_port,
                 rerun::ServerOptions::default(),
             )
             .map_err(|e| ViewerError::Server(e.to_string()))?;
             let web = WebServer::start(grpc_port)?;
+            let gate = super::origin::OriginGate::start(
+                gate_listener,
+                std::net::SocketAddr::from(([127, 0, 0, 1], rerun_port)),
+                web.port,
+            )
+            .map_err(server)?;
             let url = format!(
                 "http://127.0.0.1:{}/?url=rerun%2Bhttp%3A%2F%2F127.0.0.1%3A{grpc_port}%2Fproxy",
                 web.port
             );
-            (Some(Arc::new(grpc)), Some(web), Some(url))
+            (Some(Arc::new(grpc)), Some(web), Some(url), Some(gate))
         } else {
-            (None, None, None)
+            (None, None, None, None)
         };
         if let Some(file) = &opts.record {
             let dir = file
@@ -107,6 +121,7 @@ impl Session {
             url,
             grpc,
             web,
+            _gate: gate,
         })
     }
 

@@ -232,8 +232,11 @@ impl<'d> Workspace<'d> {
             .interferes(ia, ib, options.method, options.tolerance)?)
     }
 
-    /// Distance between the surfaces of `a` and `b` (mm), 0 when they touch or
-    /// cross; searched no farther than `stop_mm` (returns `stop_mm` or more beyond).
+    /// Clearance between `a` and `b` (mm, [`crate::collision::clearance`]): the distance
+    /// between their surfaces, 0 when they touch, cross or one solid lies inside the
+    /// other; searched no farther than `stop_mm` (returns `stop_mm` when nothing is
+    /// nearer). It agrees with [`contact`](Self::contact) at any tolerance: not
+    /// `Separate` ⇒ clearance ≤ tolerance, `Interfering` ⇒ 0.
     ///
     /// # Errors
     /// Unknown or equal components.

@@ -4,9 +4,9 @@
 
 use super::WorkspaceError;
 use crate::collision::{
-    candidate_pairs, check, interferes, surface_distance, sweep, Collider, ColliderCache,
-    CollisionError, Contact, CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart,
-    SweepHit, SweepOptions,
+    candidate_pairs, check, clearance, interferes, sweep, Collider, ColliderCache, CollisionError,
+    Contact, CutCells, CutSpec, Method, Motion, Obstacle, PairContact, PosedPart, SweepHit,
+    SweepOptions,
 };
 use crate::document::{Document, Feature};
 use crate::mesh::Mesh;
@@ -263,15 +263,16 @@ impl Scene {
         }
     }
 
-    /// Distance between the surfaces of `a` and `b` (mm); 0 when they touch or cross.
-    /// Searches no farther than `stop` mm (returns `stop` or more beyond it).
-    pub fn clearance(&self, a: usize, b: usize, stop: f64) -> Result<f64, CollisionError> {
-        surface_distance(
+    /// The clearance between components `a` and `b` (mm, [`clearance`]): the
+    /// distance between their surfaces, 0 when they touch, cross or one is inside
+    /// the other; searched up to `cap` mm (returns `cap` when nothing is nearer).
+    pub fn clearance(&self, a: usize, b: usize, cap: f64) -> Result<f64, CollisionError> {
+        clearance(
             &self.colliders[a],
             &self.poses[a],
             &self.colliders[b],
             &self.poses[b],
-            stop,
+            cap,
         )
     }
 

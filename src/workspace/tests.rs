@@ -283,3 +283,47 @@ fn interferes_agrees_with_contact() {
     // the cases include both answers
     assert!(interfering > 0 && interfering < agreed);
 }
+
+/// `clearance` agrees with `contact` on the committed puzzles: it once returned the
+/// distance of the first triangle pair the search reached (mm apart while touching
+/// or crossing).
+#[test]
+fn clearance_agrees_with_contact_on_the_puzzles() {
+    use crate::math::AngleConvention;
+    let mut cache = SceneCache::new();
+    // (document, fixed component, x y z a b c of `moving`) found by random poses
+    for (file, fixed, pose) in [
+        (
+            "models/problems/ring_puzzle.yaml",
+            "ring",
+            [3.27, -3.0, -17.95, 106.0, 347.0, 0.0],
+        ),
+        (
+            "models/problems/bar_slot.yaml",
+            "wall_low",
+            [11.93, -12.34, 8.79, 204.0, 93.0, 0.0],
+        ),
+        (
+            "models/problems/peg_tilt.yaml",
+            "base",
+            [-18.84, 3.33, -0.62, 51.0, 240.0, 0.0],
+        ),
+    ] {
+        let mut doc = open(file);
+        let t = Transform::from_xyzabc(
+            Vec3::new(pose[0], pose[1], pose[2]),
+            [pose[3], pose[4], pose[5]].map(f64::to_radians),
+            AngleConvention::default(),
+        );
+        doc.set_transform("moving", t).unwrap();
+        let ws = Workspace::new(&doc, &mut cache).unwrap();
+        let options = CheckOptions::default();
+        let c = ws.contact(fixed, "moving", &options).unwrap();
+        let clr = ws.clearance(fixed, "moving", 1000.0).unwrap();
+        assert_ne!(c, crate::collision::Contact::Separate, "{file}: {c:?}");
+        assert!(
+            clr <= options.tolerance,
+            "{file}: {c:?} with clearance {clr}"
+        );
+    }
+}
