@@ -8,7 +8,7 @@
 //! `U+XXXX`; nothing fitup prints holds a raw control or invisible character; and
 //! every user file keeps its exact bytes (compared in full, stronger than a hash).
 
-mod common;
+use crate::common;
 
 use common::{project, spawn};
 use std::collections::BTreeMap;
