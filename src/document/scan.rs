@@ -12,9 +12,8 @@ use std::collections::HashMap;
 use yaml_rust2::parser::{Event, Parser};
 use yaml_rust2::scanner::TScalarStyle;
 
-/// The largest magnitude of any number in a document (mm, degrees, …): far beyond any
-/// real cell (1000 km), small enough that products and squares stay finite.
-pub const MAX_ABS_VALUE: f64 = 1e9;
+// The number range is one of fitup's shared limits (`math::limits`).
+pub use crate::math::limits::MAX_ABS_VALUE;
 
 /// The deepest nesting of mappings and sequences a document may have.
 pub const MAX_DEPTH: usize = 64;

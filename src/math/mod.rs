@@ -7,11 +7,13 @@
 mod aabb;
 mod euler;
 pub mod format;
+pub mod limits;
 mod rng;
 pub mod transform;
 
 pub use aabb::Aabb;
 pub use euler::AngleConvention;
+pub use limits::{LimitError, SampleBudget, MAX_ABS_VALUE, MAX_SAMPLES};
 pub use rng::Rng;
 pub use transform::Transform;
 
