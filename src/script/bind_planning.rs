@@ -543,7 +543,7 @@ pub(super) fn register(api: &mut Api) {
         }
         Ok(m)
     });
-    api.f("Component.follow(path: Path, step) -> int", "Animates the component along the path in steps of at most `step` mm (and degrees), printing each step's pose (mm, degrees) — in watch mode each step shows. Returns the number of steps.", |c: &mut ComponentHandle, p: PathHandle, s: Dynamic| follow(c, &p, &s, true));
+    api.f("Component.follow(path: Path, step) -> int", "Animates the component along the path in steps of at most `step` mm (and degrees), printing each step's pose (mm, degrees) — in watch mode each step shows. Returns the number of steps. More than 1,000,000 steps (the cap of every call, docs/scripting.md \"Caps\") is an error naming `step`, before the component moves.", |c: &mut ComponentHandle, p: PathHandle, s: Dynamic| follow(c, &p, &s, true));
     api.f(
         "Component.follow(path: Path, step, print: bool) -> int",
         "As above; `print: false` moves silently.",
