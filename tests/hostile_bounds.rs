@@ -109,13 +109,25 @@ fn run(dir: &Path, args: &[&str]) -> Run {
             buf
         })
     };
-    let out = drain(child.stdout.take().map(|r| Box::new(r) as Box<dyn Read + Send>));
-    let err = drain(child.stderr.take().map(|r| Box::new(r) as Box<dyn Read + Send>));
+    let out = drain(
+        child
+            .stdout
+            .take()
+            .map(|r| Box::new(r) as Box<dyn Read + Send>),
+    );
+    let err = drain(
+        child
+            .stderr
+            .take()
+            .map(|r| Box::new(r) as Box<dyn Read + Send>),
+    );
     let start = Instant::now();
     let mut peak = 0;
     let status = loop {
         // Read before reaping: once waited for, /proc/PID is gone.
-        for pid in std::iter::once(child.id()).chain(children(child.id()).into_iter().map(|c| c as u32)) {
+        for pid in
+            std::iter::once(child.id()).chain(children(child.id()).into_iter().map(|c| c as u32))
+        {
             if let Some(kb) = peak_kb(pid) {
                 peak = peak.max(kb);
             }
@@ -125,7 +137,10 @@ fn run(dir: &Path, args: &[&str]) -> Run {
         }
         if start.elapsed() > BOUND {
             for c in children(child.id()) {
-                let _ = std::process::Command::new("kill").arg("-9").arg(c.to_string()).status();
+                let _ = std::process::Command::new("kill")
+                    .arg("-9")
+                    .arg(c.to_string())
+                    .status();
             }
             let _ = child.kill();
             let _ = child.wait();
@@ -138,7 +153,11 @@ fn run(dir: &Path, args: &[&str]) -> Run {
     };
     let elapsed = start.elapsed();
     let reported = std::fs::read_to_string(report.path()).unwrap_or_default();
-    if let Some(kb) = reported.lines().last().and_then(|l| l.trim().parse::<u64>().ok()) {
+    if let Some(kb) = reported
+        .lines()
+        .last()
+        .and_then(|l| l.trim().parse::<u64>().ok())
+    {
         peak = peak.max(kb);
     }
     let o = Output {
@@ -162,10 +181,18 @@ fn refused(dir: &Path, args: &[&str], needles: &[&str]) -> String {
     // The measured bounds, for `--nocapture`.
     eprintln!("`fitup {what}`: peak {} kB, {:?}", r.peak_kb, r.elapsed);
     assert_eq!(r.code, Some(1), "`fitup {what}`: {}", r.text);
-    assert!(r.peak_kb < MAX_RSS_KB, "`fitup {what}`: peak {} kB", r.peak_kb);
+    assert!(
+        r.peak_kb < MAX_RSS_KB,
+        "`fitup {what}`: peak {} kB",
+        r.peak_kb
+    );
     assert!(r.elapsed < BOUND, "`fitup {what}`");
     for n in needles {
-        assert!(r.text.contains(n), "`fitup {what}`: expected `{n}` in:\n{}", r.text);
+        assert!(
+            r.text.contains(n),
+            "`fitup {what}`: expected `{n}` in:\n{}",
+            r.text
+        );
     }
     assert!(!r.text.contains("panicked"), "`fitup {what}`: {}", r.text);
     r.text
@@ -176,7 +203,8 @@ fn refused(dir: &Path, args: &[&str], needles: &[&str]) -> String {
 const PLANNED: &str = "let doc = open_doc(\"models/cell.yaml\");\nlet s = doc.component(\"screw5\").transform.xyzabc;\nlet p = doc.plan_path(\"screw5\", [s[0], s[1], s[2] + 40.0, s[3], s[4], s[5]]);\n";
 
 /// A document with one catalog arm, `r` (no meshes).
-const ROBOT_DOC: &str = "robots:\n- name: r\n  catalog: nachi_mz07\n  joints: [0, 0, 0, 0, 45, 0]\n";
+const ROBOT_DOC: &str =
+    "robots:\n- name: r\n  catalog: nachi_mz07\n  joints: [0, 0, 0, 0, 45, 0]\n";
 
 /// `path.densify(1e-9)` and `follow(path, 1e-9)` asked for ≈ 10 GB and aborted
 /// (rc 134); a stepwise sweep of 1e-12 mm is 4e13 steps. Each is refused at once with
@@ -203,16 +231,27 @@ fn tiny_steps_along_paths_and_sweeps_are_refused_by_the_cap() {
         refused(
             p,
             &["run", &format!("scripts/{name}")],
-            &[&format!("scripts/{name}:4:"), needle, "more than the cap of 1000000"],
+            &[
+                &format!("scripts/{name}:4:"),
+                needle,
+                "more than the cap of 1000000",
+            ],
         );
     }
     // Bad steps are refused as such, not as a count.
     for (step, shown) in [("0.0", "0"), ("-1.0", "-1")] {
-        std::fs::write(p.join("scripts/bad.rhai"), format!("{PLANNED}p.densify({step});\n")).unwrap();
+        std::fs::write(
+            p.join("scripts/bad.rhai"),
+            format!("{PLANNED}p.densify({step});\n"),
+        )
+        .unwrap();
         refused(
             p,
             &["run", "scripts/bad.rhai"],
-            &["scripts/bad.rhai:4:", &format!("`step` must be a finite number > 0, not {shown}")],
+            &[
+                "scripts/bad.rhai:4:",
+                &format!("`step` must be a finite number > 0, not {shown}"),
+            ],
         );
     }
     // Within the cap the same calls work: 40 mm at 0.1 mm is 401 poses.
@@ -235,9 +274,17 @@ fn robot_programs_and_motions_are_capped_in_total() {
     let p = dir.path();
     std::fs::write(p.join("models/r.yaml"), ROBOT_DOC).unwrap();
     // 2 × 1e7 samples (60° at 60°/s, 1e-7 s apart).
-    std::fs::write(p.join("scripts/big.prg"), "Interval 0.0000001\nJoint 60 0 0 0 45 0\nJoint 0 0 0 0 45 0\n").unwrap();
+    std::fs::write(
+        p.join("scripts/big.prg"),
+        "Interval 0.0000001\nJoint 60 0 0 0 45 0\nJoint 0 0 0 0 45 0\n",
+    )
+    .unwrap();
     // 2 × 588,236: each move fits, the program does not; line 3 is the one refused.
-    std::fs::write(p.join("scripts/total.prg"), "Interval 0.0000017\nJoint 60 0 0 0 45 0\nJoint 0 0 0 0 45 0\n").unwrap();
+    std::fs::write(
+        p.join("scripts/total.prg"),
+        "Interval 0.0000017\nJoint 60 0 0 0 45 0\nJoint 0 0 0 0 45 0\n",
+    )
+    .unwrap();
     std::fs::write(
         p.join("scripts/prog.rhai"),
         "let d = open_doc(\"models/r.yaml\");\nlet t = d.robot(\"r\").run_program(\"scripts/big.prg\");\nprint(t.len);\n",
@@ -252,22 +299,36 @@ fn robot_programs_and_motions_are_capped_in_total() {
     refused(
         p,
         &["run", "scripts/big.prg", "--doc", "models/r.yaml"],
-        &["scripts/big.prg:2: `interval` = 0.0000001 would make 10000001 samples", "cap of 1000000"],
+        &[
+            "scripts/big.prg:2: `interval` = 0.0000001 would make 10000001 samples",
+            "cap of 1000000",
+        ],
     );
     refused(
         p,
         &["run", "scripts/total.prg", "--doc", "models/r.yaml"],
-        &["scripts/total.prg:3: `interval` = 0.0000017 would make 1176474 samples", "cap of 1000000"],
+        &[
+            "scripts/total.prg:3: `interval` = 0.0000017 would make 1176474 samples",
+            "cap of 1000000",
+        ],
     );
     refused(
         p,
         &["run", "scripts/prog.rhai"],
-        &["scripts/prog.rhai:2:", "scripts/big.prg:2:", "cap of 1000000"],
+        &[
+            "scripts/prog.rhai:2:",
+            "scripts/big.prg:2:",
+            "cap of 1000000",
+        ],
     );
     refused(
         p,
         &["run", "scripts/motion.rhai"],
-        &["scripts/motion.rhai:3:", "`interval` = 0.000000001 would make 1000000001 samples", "cap of 1000000"],
+        &[
+            "scripts/motion.rhai:3:",
+            "`interval` = 0.000000001 would make 1000000001 samples",
+            "cap of 1000000",
+        ],
     );
     let now = snapshot(p);
     for (path, hash) in &before {
@@ -289,7 +350,11 @@ fn urdf_project(p: &Path, joint_origin: &str, mesh_attrs: &str) {
         ),
     )
     .unwrap();
-    std::fs::write(p.join("models/urdf.yaml"), "robots:\n- name: r\n  urdf: r.urdf\n  joints: [10]\n").unwrap();
+    std::fs::write(
+        p.join("models/urdf.yaml"),
+        "robots:\n- name: r\n  urdf: r.urdf\n  joints: [10]\n",
+    )
+    .unwrap();
 }
 
 /// An origin of 1e200 m loaded, saved and reopened; a mesh scale of 1e306 passed
@@ -300,12 +365,27 @@ fn urdf_numbers_beyond_the_document_range_are_refused_with_file_and_line() {
     let dir = project();
     let p = dir.path();
     let cases = [
-        ("xyz=\"1e200 0 0\"", "", "r.urdf:4:", "xyz=\"1e200 0 0\": 1e200 is out of range"),
+        (
+            "xyz=\"1e200 0 0\"",
+            "",
+            "r.urdf:4:",
+            "xyz=\"1e200 0 0\": 1e200 is out of range",
+        ),
         ("xyz=\"0 0 2e6\"", "", "r.urdf:4:", "mm (metres × 1000)"),
         ("rpy=\"0 0 nan\"", "", "r.urdf:4:", "not finite"),
-        ("xyz=\"0 0 0.5\"", "scale=\"1e306 1 1\"", "r.urdf:8:", "scale=\"1e306 1 1\": 1e306 is out of range"),
+        (
+            "xyz=\"0 0 0.5\"",
+            "scale=\"1e306 1 1\"",
+            "r.urdf:8:",
+            "scale=\"1e306 1 1\": 1e306 is out of range",
+        ),
         // Each number in range, the scaled mesh is not: 1000 m × 1e6 × 1000 = 1e12 mm.
-        ("xyz=\"0 0 0.5\"", "scale=\"1e6 1 1\"", "r.urdf:8:", "beyond the 1e9 mm"),
+        (
+            "xyz=\"0 0 0.5\"",
+            "scale=\"1e6 1 1\"",
+            "r.urdf:8:",
+            "beyond the 1e9 mm",
+        ),
         ("xyz=\"0 0 0.5\"", "scale=\"0 1 1\"", "r.urdf:8:", "flat"),
     ];
     for (origin, mesh, place, needle) in cases {
@@ -333,27 +413,52 @@ fn stl_without_surface_or_with_trailing_text_is_refused_with_the_file() {
     let good = "solid g\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid g\n";
     let cases = [
         (flat.to_string(), "screw.stl:2: all 1 facets have zero area"),
-        (format!("{good}this is not STL\n"), "screw.stl:10: `this is not STL` after `endsolid` (line 9)"),
-        (format!("{good}\n\n{}", "x".repeat(1 << 20)), "screw.stl:12: `xxxxxxxx"),
+        (
+            format!("{good}this is not STL\n"),
+            "screw.stl:10: `this is not STL` after `endsolid` (line 9)",
+        ),
+        (
+            format!("{good}\n\n{}", "x".repeat(1 << 20)),
+            "screw.stl:12: `xxxxxxxx",
+        ),
     ];
     for (text, needle) in &cases {
         std::fs::write(&screw, text).unwrap();
         let before = snapshot(p);
         let out = refused(p, &["check", "models/cell.yaml"], &[needle]);
-        assert!(out.len() < 4000, "the message quotes a short excerpt: {} bytes", out.len());
+        assert!(
+            out.len() < 4000,
+            "the message quotes a short excerpt: {} bytes",
+            out.len()
+        );
         assert_eq!(before, snapshot(p), "files changed");
     }
     // The binary form of the zero-area mesh: named by file.
     let mut bin = vec![0u8; 84 + 50];
     bin[80] = 1;
-    for (k, v) in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0].iter().enumerate() {
+    for (k, v) in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0]
+        .iter()
+        .enumerate()
+    {
         bin[96 + 4 * k..100 + 4 * k].copy_from_slice(&v.to_le_bytes());
     }
     std::fs::write(&screw, &bin).unwrap();
-    refused(p, &["check", "models/cell.yaml"], &["screw.stl: binary STL: all 1 facets have zero area"]);
+    refused(
+        p,
+        &["check", "models/cell.yaml"],
+        &["screw.stl: binary STL: all 1 facets have zero area"],
+    );
     // Two bodies in one file are read.
-    std::fs::write(&screw, format!("{good}{}", good.replace("vertex 0 ", "vertex 5 "))).unwrap();
+    std::fs::write(
+        &screw,
+        format!("{good}{}", good.replace("vertex 0 ", "vertex 5 ")),
+    )
+    .unwrap();
     let r = run(p, &["check", "models/cell.yaml"]);
     assert_eq!(r.code, Some(0), "{}", r.text);
-    assert!(r.text.contains(" 2 triangles  meshes/screw.stl"), "{}", r.text);
+    assert!(
+        r.text.contains(" 2 triangles  meshes/screw.stl"),
+        "{}",
+        r.text
+    );
 }

@@ -209,9 +209,11 @@ impl MotionBudget {
             steps(rotation, options.max_step_rad),
         );
         if by_mm >= by_rad {
-            self.checks.take(by_mm, "max_step_mm", options.max_step_mm)?;
+            self.checks
+                .take(by_mm, "max_step_mm", options.max_step_mm)?;
         } else {
-            self.checks.take(by_rad, "max_step_rad", options.max_step_rad)?;
+            self.checks
+                .take(by_rad, "max_step_rad", options.max_step_rad)?;
         }
         Ok(())
     }

@@ -290,7 +290,9 @@ pub fn run_program(
                     .collect();
                 move_joint_within(&robot, &q, &target, &opts, &mut budget)
             }
-            Instruction::Line(p) => move_line_within(&robot, &q, &pose(p, conv), &opts, &mut budget),
+            Instruction::Line(p) => {
+                move_line_within(&robot, &q, &pose(p, conv), &opts, &mut budget)
+            }
             Instruction::Circle { via, end } => move_circle_within(
                 &robot,
                 &q,
@@ -431,7 +433,10 @@ mod cap_tests {
         };
         assert_eq!((*argument, *cap), ("interval", crate::math::MAX_SAMPLES));
         assert!(*count > 1.1e6, "{e}");
-        assert!(e.to_string().starts_with("p.prg:4: `interval` = 0.0000017"), "{e}");
+        assert!(
+            e.to_string().starts_with("p.prg:4: `interval` = 0.0000017"),
+            "{e}"
+        );
     }
 
     /// Tiny IK steps are counted too: a 10 mm line at 1e-9 mm per check is refused
@@ -441,14 +446,22 @@ mod cap_tests {
         let r = Catalog::NachiMz07.robot();
         let q0 = [0.1, -0.2, 0.3, 0.2, 0.6, -0.4];
         let p0 = r.tcp_pose(&q0).unwrap();
-        let end = Transform::from_parts(p0.translation() + Vec3::new(10.0, 0.0, 0.0), p0.rotation());
+        let end =
+            Transform::from_parts(p0.translation() + Vec3::new(10.0, 0.0, 0.0), p0.rotation());
         let options = MotionOptions {
             max_step_mm: 1e-9,
             ..MotionOptions::default()
         };
         let e = super::super::move_line(&r, &q0, &end, &options).unwrap_err();
         assert!(
-            matches!(&e, MotionError::Limit(crate::math::LimitError::TooMany { argument: "max_step_mm", what: "IK checks", .. })),
+            matches!(
+                &e,
+                MotionError::Limit(crate::math::LimitError::TooMany {
+                    argument: "max_step_mm",
+                    what: "IK checks",
+                    ..
+                })
+            ),
             "{e}"
         );
     }

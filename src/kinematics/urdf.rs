@@ -164,11 +164,10 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
         };
         let (parent, child) = (link_ref("parent")?, link_ref("child")?);
         let numbers = |node: roxmltree::Node, attr: &str, default: [f64; 3], unit: f64| {
-            attribute_numbers(&doc, path, node, attr, default, unit)
-                .map_err(|mut e| {
-                    e.message = format!("joint `{jn}`: {}", e.message);
-                    e
-                })
+            attribute_numbers(&doc, path, node, attr, default, unit).map_err(|mut e| {
+                e.message = format!("joint `{jn}`: {}", e.message);
+                e
+            })
         };
         let home = match n.children().find(|c| c.has_tag_name("origin")) {
             Some(o) => origin(
@@ -465,7 +464,11 @@ fn attribute_numbers<const N: usize>(
             return Err(fail(format!("{attr}=\"{shown}\": {t} is not finite")));
         }
         if !(v * unit).is_finite() || (v * unit).abs() > max {
-            let units = if unit == 1000.0 { " mm (metres × 1000)" } else { "" };
+            let units = if unit == 1000.0 {
+                " mm (metres × 1000)"
+            } else {
+                ""
+            };
             return Err(fail(format!(
                 "{attr}=\"{shown}\": {t} is out of range: fitup accepts magnitudes up to {max:e}{units}"
             )));
@@ -559,20 +562,30 @@ mod tests {
             let e = refused(&text);
             let shown = e.to_string();
             assert_eq!(e.line, Some(line), "{shown}");
-            assert!(shown.contains("r.urdf") && shown.contains(needle), "{shown}");
+            assert!(
+                shown.contains("r.urdf") && shown.contains(needle),
+                "{shown}"
+            );
             // The column is the attribute's value, not the element's start.
             let row = text.lines().nth(line - 1).unwrap();
             let col = e.column.unwrap();
             assert!(col > row.find('<').unwrap() + 1, "{shown}");
         }
         // In range: 1000 km (1e6 m = 1e9 mm) loads.
-        let ok = urdf("revolute", "<origin xyz=\"1e6 0 0\"/><axis xyz=\"0 0 1\"/>", "");
+        let ok = urdf(
+            "revolute",
+            "<origin xyz=\"1e6 0 0\"/><axis xyz=\"0 0 1\"/>",
+            "",
+        );
         assert!(parse_urdf(Path::new("r.urdf"), &ok, None).is_ok());
     }
 
     #[test]
     fn a_huge_attribute_is_quoted_short() {
-        let big = format!("<origin xyz=\"{} 0 0\"/><axis xyz=\"0 0 1\"/>", "9".repeat(1 << 20));
+        let big = format!(
+            "<origin xyz=\"{} 0 0\"/><axis xyz=\"0 0 1\"/>",
+            "9".repeat(1 << 20)
+        );
         let e = refused(&urdf("revolute", &big, ""));
         assert!(e.message.len() < 300, "{}", e.message.len());
     }

@@ -109,7 +109,9 @@ impl SampleBudget {
         value: f64,
     ) -> Result<usize, LimitError> {
         let total = self.used as f64 + count;
-        if !(count >= 0.0) || !(total <= self.cap as f64) {
+        // NaN counts fail both comparisons: refused like an infinite count.
+        let fits = count >= 0.0 && total <= self.cap as f64;
+        if !fits {
             return Err(LimitError::TooMany {
                 argument,
                 value,
@@ -155,7 +157,10 @@ mod tests {
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             assert!(matches!(
                 b.take_steps(1.0, bad, "step"),
-                Err(LimitError::BadStep { argument: "step", .. })
+                Err(LimitError::BadStep {
+                    argument: "step",
+                    ..
+                })
             ));
         }
         // 1 m at 1e-9 mm: 1e12 poses, refused with the count, the cap and the argument.
@@ -172,7 +177,10 @@ mod tests {
         assert_eq!((*argument, *cap), ("step", MAX_SAMPLES));
         assert!(*count > 1e12 - 1.0);
         let text = e.to_string();
-        assert!(text.contains("`step` = 0.000000001") && text.contains("1000000000011 poses"), "{text}");
+        assert!(
+            text.contains("`step` = 0.000000001") && text.contains("1000000000011 poses"),
+            "{text}"
+        );
         assert!(text.contains("cap of 1000000"), "{text}");
         // A refused request takes nothing.
         assert_eq!(b.used(), 11);
@@ -187,7 +195,9 @@ mod tests {
         assert_eq!(b.take(40.0, "interval", 0.1).unwrap(), 40);
         assert!(b.take(f64::INFINITY, "interval", 0.0).is_err());
         assert!(b.take(f64::NAN, "interval", 0.0).is_err());
-        let e = SampleBudget::new("poses").take(1e300, "step", 1e-300).unwrap_err();
+        let e = SampleBudget::new("poses")
+            .take(1e300, "step", 1e-300)
+            .unwrap_err();
         assert!(e.to_string().contains("1.000e300 poses"), "{e}");
     }
 }

@@ -374,15 +374,24 @@ mod tests {
         let p = dir.path().join("flat.stl");
         std::fs::write(&p, FLAT).unwrap();
         let e = read_stl(&p).unwrap_err();
-        assert!(e.to_string().starts_with(&format!("{}:2: all 1 facets", p.display())), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("{}:2: all 1 facets", p.display())),
+            "{e}"
+        );
         // Binary: the same rule, named by file.
         let flat = parse_ascii(FLAT.as_bytes()).unwrap().0;
         let b = dir.path().join("flat_bin.stl");
         write_stl(&b, &flat).unwrap();
         let e = read_stl(&b).unwrap_err();
-        assert!(e.to_string().starts_with(&format!("{}: binary STL: all 1 facets", b.display())), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("{}: binary STL: all 1 facets", b.display())),
+            "{e}"
+        );
         // One good facet among flat ones is enough: the flat ones are skipped later.
-        let mixed = cube_ascii().replacen("endsolid cube", &FLAT[8..FLAT.len() - 11], 1) + "endsolid cube\n";
+        let mixed = cube_ascii().replacen("endsolid cube", &FLAT[8..FLAT.len() - 11], 1)
+            + "endsolid cube\n";
         assert_eq!(parse_stl(mixed.as_bytes()).unwrap().triangles.len(), 13);
     }
 

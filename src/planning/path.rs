@@ -328,15 +328,23 @@ mod tests {
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             assert!(matches!(
                 p.densify(bad, 0.1),
-                Err(LimitError::BadStep { argument: "step_mm", .. })
+                Err(LimitError::BadStep {
+                    argument: "step_mm",
+                    ..
+                })
             ));
             assert!(matches!(
                 p.densify(1.0, bad),
-                Err(LimitError::BadStep { argument: "step_rad", .. })
+                Err(LimitError::BadStep {
+                    argument: "step_rad",
+                    ..
+                })
             ));
         }
         // 15 mm at 1e-9 mm: 1.5e10 poses (≈ 0.8 TB) would abort; refused at once.
-        let e = p.densify_as(1e-9, 1e-9f64.to_radians(), "step", 1e-9).unwrap_err();
+        let e = p
+            .densify_as(1e-9, 1e-9f64.to_radians(), "step", 1e-9)
+            .unwrap_err();
         match &e {
             LimitError::TooMany {
                 argument,
@@ -345,7 +353,10 @@ mod tests {
                 what,
                 ..
             } => {
-                assert_eq!((*argument, *cap, *what), ("step", crate::math::MAX_SAMPLES, "poses"));
+                assert_eq!(
+                    (*argument, *cap, *what),
+                    ("step", crate::math::MAX_SAMPLES, "poses")
+                );
                 assert!(*count > 1e10, "{e}");
             }
             other => panic!("{other}"),
@@ -360,7 +371,16 @@ mod tests {
         );
         assert_eq!(long.densify(0.5, 1.0).unwrap().len(), 2401);
         let e = long.densify(0.001, 1.0).unwrap_err();
-        assert!(matches!(e, LimitError::TooMany { argument: "step_mm", .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                LimitError::TooMany {
+                    argument: "step_mm",
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
 
     #[test]

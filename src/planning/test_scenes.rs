@@ -622,7 +622,11 @@ fn disassembly_leaves_the_product_box_and_ends_assembled() {
         assert!((0..3).any(|k| first.lo[k] >= product.hi[k] || first.hi[k] <= product.lo[k]));
         assert!(p.poses.last().unwrap().approx_eq(&assembled, 1e-9, 1e-9));
         let mut exact = scene.exact();
-        assert!(p.densify(0.05, 0.002).unwrap().iter().all(|q| exact.is_free(q)));
+        assert!(p
+            .densify(0.05, 0.002)
+            .unwrap()
+            .iter()
+            .all(|q| exact.is_free(q)));
     }
 }
 
