@@ -116,6 +116,10 @@ pub enum CollisionError {
     /// An unknown method name.
     #[error("unknown interference method \"{0}\": expected \"exact\", \"aabb\" or \"cells\"")]
     UnknownMethod(String),
+    /// A stepwise sweep would take more steps than the shared cap
+    /// ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)).
+    #[error(transparent)]
+    Limit(#[from] crate::math::LimitError),
 }
 
 /// One of the two parts of a pair query.

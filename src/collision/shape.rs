@@ -267,20 +267,11 @@ impl Collider {
             )));
         }
         let report = mesh.inspect();
-        let scale = mesh
-            .bounds()
-            .map(|b| {
-                (b.hi - b.lo)
-                    .norm()
-                    .max(b.lo.coords.amax())
-                    .max(b.hi.coords.amax())
-            })
-            .unwrap_or(1.0)
-            .max(1.0);
+        let scale = mesh.area_scale();
         let mut items: Vec<Item> = (0..mesh.triangles.len())
             .filter_map(|i| {
                 let t = mesh.triangle(i);
-                ((t[1] - t[0]).cross(&(t[2] - t[0])).norm() > 1e-24 * scale * scale).then(|| {
+                mesh.triangle_has_area(i, scale).then(|| {
                     (
                         nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]),
                         i as u32,

@@ -7,6 +7,7 @@ use super::exact::{distance_lower_bound, interferes};
 use super::method::{contact_gap, contact_step, SweepMethod};
 use super::shape::Collider;
 use super::CollisionError;
+use crate::math::limits::{steps, SampleBudget};
 use crate::math::{Point3, Transform, Vec3};
 
 /// A motion of the moving part, parametrised by `t ∈ [0, 1]` (world frame, mm, rad).
@@ -276,22 +277,32 @@ pub fn sweep(
                     "the rotation step must be > 0 rad (or infinite), got {step_rad}"
                 )));
             }
+            // The steps of the whole motion, counted against the shared cap before
+            // the first check (a step of 1e-12 mm is refused at once, not after the
+            // time budget).
+            let mut budget = SampleBudget::new("steps");
+            let counts = pieces
+                .iter()
+                .map(|&(_, _, reach, angle)| {
+                    let (by_mm, by_rad) = (steps(reach, step), steps(angle, step_rad));
+                    if by_mm >= by_rad {
+                        budget.take(by_mm, "step", step)
+                    } else {
+                        budget.take(by_rad, "step_rad", step_rad)
+                    }
+                })
+                .collect::<Result<Vec<usize>, _>>()?;
             let all: Vec<usize> = (0..obstacles.len()).collect();
             if let Some(i) = check(0.0, &all, &mut queries)? {
                 return Ok(hit_at(0.0, i, queries));
             }
-            for &(t0, t1, reach, angle) in &pieces {
-                let n = (reach / step)
-                    .ceil()
-                    .max((angle / step_rad).ceil())
-                    .max(1.0);
-                if n * obstacles.len().max(1) as f64 > MAX_QUERIES as f64 {
+            for (&(t0, t1, reach, _), &n) in pieces.iter().zip(&counts) {
+                if n as f64 * obstacles.len().max(1) as f64 > MAX_QUERIES as f64 {
                     return Err(CollisionError::BadMotion(format!(
                         "{n} steps of {step} mm would take more than {MAX_QUERIES} checks"
                     )));
                 }
                 let near = reachable(t0, reach);
-                let n = n as usize;
                 for k in 1..=n {
                     let t = t0 + (t1 - t0) * k as f64 / n as f64;
                     if let Some(i) = check(t, &near, &mut queries)? {

@@ -1473,3 +1473,40 @@ fn clearance_agrees_with_contact_and_brute_force() {
         }
     }
 }
+
+/// A stepwise sweep counts its steps against the shared cap before the first check:
+/// 20 mm at 1e-12 mm is 2e13 steps, refused at once naming `step`, not after the
+/// time budget.
+#[test]
+fn stepwise_sweeps_refuse_more_steps_than_the_cap() {
+    let (wall, mover, _) = thin_wall_scene();
+    let obstacles = [Obstacle {
+        collider: &wall,
+        pose: Transform::IDENTITY,
+    }];
+    let motion = Motion::Translation {
+        start: Transform::IDENTITY,
+        offset: Vec3::new(20.0, 0.0, 0.0),
+    };
+    let options = SweepOptions {
+        method: SweepMethod::displacement_steps(1e-12),
+        ..SweepOptions::default()
+    };
+    let clock = std::time::Instant::now();
+    let e = sweep(&mover, &motion, &obstacles, &options).unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            CollisionError::Limit(crate::math::LimitError::TooMany { argument: "step", cap, .. })
+                if *cap == crate::math::MAX_SAMPLES
+        ),
+        "{e}"
+    );
+    assert!(clock.elapsed().as_secs() < 5, "refused before any check");
+    // Within the cap the same sweep runs and finds the wall.
+    let fine = SweepOptions {
+        method: SweepMethod::displacement_steps(0.1),
+        ..SweepOptions::default()
+    };
+    assert!(sweep(&mover, &motion, &obstacles, &fine).unwrap().hit);
+}

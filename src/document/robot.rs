@@ -470,6 +470,19 @@ pub(super) fn read_urdf_robot(
             triangles: mesh.triangles.clone(),
         }
         .transformed(&m.origin);
+        // Scale and origin are each in range, their product with the mesh may not be.
+        let max = crate::math::MAX_ABS_VALUE;
+        if let Some(v) = scaled
+            .vertices
+            .iter()
+            .flat_map(|p| p.coords.iter())
+            .find(|v| !v.is_finite() || v.abs() > max)
+        {
+            return Err(at(format!(
+                "mesh `{}` scaled by {:?} (mm per unit) reaches {v:e} mm, beyond the {max:e} mm fitup accepts",
+                m.uri, m.scale
+            )));
+        }
         match &mut meshes[m.link] {
             Some(all) => all.append(&scaled),
             slot => *slot = Some(scaled),

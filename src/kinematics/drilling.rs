@@ -3,7 +3,8 @@
 //! to the current configuration, tool offset compensation) and drilling programs
 //! (initial posture, move keeping it, align to the normal, drill, retract).
 
-use super::{move_line, IkOptions, MotionError, MotionOptions, Robot, Trajectory};
+use super::motion::{move_line_within, MotionBudget};
+use super::{IkOptions, MotionError, MotionOptions, Robot, Trajectory};
 use crate::math::{Point3, Transform, Vec3};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 use std::path::Path;
@@ -280,6 +281,11 @@ fn best_spin(
 /// axis with the hole (spin chosen by sampling), (4) drill in to the hole and (5)
 /// retract along the normal. A hole that fails is reported with the step and cause and
 /// the robot continues from where it was before that hole.
+///
+/// # Errors
+/// A start outside the robot's reach, or a run whose samples, IK checks or spin
+/// samples (all holes together) pass the shared cap
+/// ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)): [`MotionError::Limit`].
 pub fn drill_program(
     robot: &Robot,
     start: &[f64],
@@ -295,7 +301,15 @@ pub fn drill_program(
         tcp: first,
     });
     let mut reports = Vec::with_capacity(holes.len());
+    // One budget for the whole run: every hole's moves and spin samples.
+    let mut budget = MotionBudget::new();
     for (index, hole) in holes.iter().enumerate() {
+        budget.take_ik_checks(
+            2.0 * options.spin_samples.max(1) as f64,
+            "spin_samples",
+            options.spin_samples as f64,
+        )?;
+        let mut cap: Option<MotionError> = None;
         let outcome = (|| -> Result<(f64, Vec<f64>, Trajectory), String> {
             let (spin, _) = best_spin(robot, hole, &q, options)?;
             let here = robot.tcp_pose(&q).map_err(|e| e.to_string())?;
@@ -320,8 +334,16 @@ pub fn drill_program(
             let mut cur = q.clone();
             let mut at_bottom = Vec::new();
             for (name, pose) in steps {
-                let t = move_line(robot, &cur, &pose, &options.motion)
-                    .map_err(|e| format!("{name}: {e}"))?;
+                let t = match move_line_within(robot, &cur, &pose, &options.motion, &mut budget) {
+                    Ok(t) => t,
+                    // The cap ends the whole run; it says nothing about this hole.
+                    Err(e @ MotionError::Limit(_)) => {
+                        let text = format!("{name}: {e}");
+                        cap = Some(e);
+                        return Err(text);
+                    }
+                    Err(e) => return Err(format!("{name}: {e}")),
+                };
                 if let Some(last) = t.last_joints() {
                     cur = last.to_vec();
                 }
@@ -332,6 +354,9 @@ pub fn drill_program(
             }
             Ok((spin, at_bottom, piece))
         })();
+        if let Some(e) = cap {
+            return Err(e);
+        }
         let outcome = match outcome {
             Ok((spin, joints, piece)) => {
                 if let Some(last) = piece.last_joints() {

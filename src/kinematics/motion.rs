@@ -11,6 +11,7 @@ use super::{
     Configuration, IkError, IkOptions, JointKind, KinematicsError, NumericIk, Robot, Trajectory,
     TrajectorySample,
 };
+use crate::math::limits::{steps, LimitError, SampleBudget};
 use crate::math::{Transform, Vec3};
 
 /// Speeds and resolutions of motions.
@@ -67,6 +68,10 @@ pub enum MotionError {
     /// Speeds or intervals not positive and finite.
     #[error("invalid motion options: {0}")]
     InvalidOptions(String),
+    /// The motion (or the whole program or drilling run) would produce more samples
+    /// or IK checks than the shared cap, [`MAX_SAMPLES`](crate::math::MAX_SAMPLES).
+    #[error(transparent)]
+    Limit(#[from] LimitError),
     /// A joint target or start lies outside the limits.
     #[error("joint {joint} value {value:.6} is outside its limits")]
     JointLimit {
@@ -164,23 +169,71 @@ fn sample(robot: &Robot, t: f64, q: Vec<f64>) -> Result<TrajectorySample, Motion
     Ok(TrajectorySample { t, joints: q, tcp })
 }
 
-/// Output times `0, dt, 2dt, …, duration` (the last interval may be shorter).
-fn output_times(duration: f64, dt: f64) -> Result<Vec<f64>, MotionError> {
+/// What one call may still produce: output samples and IK checks, each counted
+/// against the shared cap ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)) over the whole
+/// call — one motion, or every move of a program or a drilling run.
+#[derive(Debug, Clone)]
+pub(crate) struct MotionBudget {
+    samples: SampleBudget,
+    checks: SampleBudget,
+}
+
+impl MotionBudget {
+    pub(crate) fn new() -> Self {
+        Self {
+            samples: SampleBudget::new("samples"),
+            checks: SampleBudget::new("IK checks"),
+        }
+    }
+
+    /// Takes `count` IK checks that `argument = value` asked for (drilling's spin
+    /// samples).
+    pub(crate) fn take_ik_checks(
+        &mut self,
+        count: f64,
+        argument: &'static str,
+        value: f64,
+    ) -> Result<(), LimitError> {
+        self.checks.take(count, argument, value).map(|_| ())
+    }
+
+    /// Takes the IK checks of a Cartesian move of `length` mm and `rotation` rad.
+    fn take_checks(
+        &mut self,
+        length: f64,
+        rotation: f64,
+        options: &MotionOptions,
+    ) -> Result<(), LimitError> {
+        let (by_mm, by_rad) = (
+            steps(length, options.max_step_mm),
+            steps(rotation, options.max_step_rad),
+        );
+        if by_mm >= by_rad {
+            self.checks
+                .take(by_mm, "max_step_mm", options.max_step_mm)?;
+        } else {
+            self.checks
+                .take(by_rad, "max_step_rad", options.max_step_rad)?;
+        }
+        Ok(())
+    }
+}
+
+/// Output times `0, dt, 2dt, …, duration` (the last interval may be shorter), counted
+/// against `budget` before they are made.
+fn output_times(
+    duration: f64,
+    dt: f64,
+    budget: &mut MotionBudget,
+) -> Result<Vec<f64>, MotionError> {
     if duration <= 0.0 {
+        budget.samples.take(1.0, "interval", dt)?;
         return Ok(vec![0.0]);
     }
     let n = (duration / dt - 1e-9).ceil().max(1.0);
-    if n.is_nan() || n > MAX_SAMPLES as f64 {
-        return Err(MotionError::InvalidOptions(format!(
-            "{duration:.3} s at {dt} s per sample would need more than {MAX_SAMPLES} samples"
-        )));
-    }
-    let n = n as usize;
+    let n = budget.samples.take(n + 1.0, "interval", dt)? - 1;
     Ok((0..=n).map(|j| (j as f64 * dt).min(duration)).collect())
 }
-
-/// Most samples one motion may produce (guards against absurd intervals).
-pub const MAX_SAMPLES: usize = 10_000_000;
 
 /// A joint move from `start` to `target` (joint order, rad/mm): every joint moves
 /// linearly and all arrive together; the duration is set by the joint that moves most
@@ -190,6 +243,17 @@ pub fn move_joint(
     start: &[f64],
     target: &[f64],
     options: &MotionOptions,
+) -> Result<Trajectory, MotionError> {
+    move_joint_within(robot, start, target, options, &mut MotionBudget::new())
+}
+
+/// [`move_joint`] taking its samples from a caller's budget.
+pub(crate) fn move_joint_within(
+    robot: &Robot,
+    start: &[f64],
+    target: &[f64],
+    options: &MotionOptions,
+    budget: &mut MotionBudget,
 ) -> Result<Trajectory, MotionError> {
     check_options(options)?;
     check_joints(robot, start)?;
@@ -209,7 +273,7 @@ pub fn move_joint(
         })
         .fold(0.0, f64::max);
     let mut traj = Trajectory::new(kinds);
-    for t in output_times(duration, options.sample_interval)? {
+    for t in output_times(duration, options.sample_interval, budget)? {
         let s = if duration > 0.0 { t / duration } else { 1.0 };
         let q: Vec<f64> = start
             .iter()
@@ -231,10 +295,14 @@ fn track(
     length: f64,
     rotation: f64,
     options: &MotionOptions,
+    budget: &mut MotionBudget,
 ) -> Result<Trajectory, MotionError> {
     check_options(options)?;
     check_joints(robot, start)?;
     let duration = (length / options.linear_speed).max(rotation / options.angular_speed);
+    // Both counts before the first IK solve: samples and the checks between them.
+    let times = output_times(duration, options.sample_interval, budget)?;
+    budget.take_checks(length, rotation, options)?;
     let ik = IkOptions {
         max_solutions: 1,
         ..options.ik.clone()
@@ -252,10 +320,7 @@ fn track(
     let mut q = start.to_vec();
     let mut s_prev = 0.0;
     let mut step = 0usize;
-    for t in output_times(duration, options.sample_interval)?
-        .into_iter()
-        .skip(1)
-    {
+    for t in times.into_iter().skip(1) {
         let s_next = if duration > 0.0 { t / duration } else { 1.0 };
         let ds = s_next - s_prev;
         let sub = ((ds * length / options.max_step_mm).ceil())
@@ -332,6 +397,17 @@ pub fn move_line(
     end: &Transform,
     options: &MotionOptions,
 ) -> Result<Trajectory, MotionError> {
+    move_line_within(robot, start, end, options, &mut MotionBudget::new())
+}
+
+/// [`move_line`] taking its samples and IK checks from a caller's budget.
+pub(crate) fn move_line_within(
+    robot: &Robot,
+    start: &[f64],
+    end: &Transform,
+    options: &MotionOptions,
+    budget: &mut MotionBudget,
+) -> Result<Trajectory, MotionError> {
     let from = robot.tcp_pose(start)?;
     if !end.is_finite() {
         return Err(MotionError::Degenerate("end pose is not finite".into()));
@@ -345,6 +421,7 @@ pub fn move_line(
         length,
         rotation,
         options,
+        budget,
     )
 }
 
@@ -357,6 +434,18 @@ pub fn move_circle(
     via: &Transform,
     end: &Transform,
     options: &MotionOptions,
+) -> Result<Trajectory, MotionError> {
+    move_circle_within(robot, start, via, end, options, &mut MotionBudget::new())
+}
+
+/// [`move_circle`] taking its samples and IK checks from a caller's budget.
+pub(crate) fn move_circle_within(
+    robot: &Robot,
+    start: &[f64],
+    via: &Transform,
+    end: &Transform,
+    options: &MotionOptions,
+    budget: &mut MotionBudget,
 ) -> Result<Trajectory, MotionError> {
     let from = robot.tcp_pose(start)?;
     if !(via.is_finite() && end.is_finite()) {
@@ -405,7 +494,7 @@ pub fn move_circle(
         Transform::from_parts(p, r.rotation())
     };
     let rotation = from.distance_to(&via).0 + via.distance_to(&end).0;
-    track(robot, start, &path, radius * th2, rotation, options)
+    track(robot, start, &path, radius * th2, rotation, options, budget)
 }
 
 #[cfg(test)]

@@ -15,9 +15,8 @@
 //! Circle 450 50 300 180 0 0  500 0 300 180 0 0   # arc through a via pose to the end
 //! ```
 
-use super::{
-    move_circle, move_joint, move_line, JointKind, MotionError, MotionOptions, Robot, Trajectory,
-};
+use super::motion::{move_circle_within, move_joint_within, move_line_within, MotionBudget};
+use super::{JointKind, MotionError, MotionOptions, Robot, Trajectory};
 use crate::math::{AngleConvention, Transform, Vec3};
 use std::path::Path;
 
@@ -226,6 +225,10 @@ fn pose(v: &[f64; 6], conv: AngleConvention) -> Transform {
 /// Runs `program` on `robot` from joint values `start` (rad/mm) with `options` as the
 /// initial speeds, returning the whole motion as one trajectory, or the first failing
 /// command's line and motion error.
+///
+/// The samples and IK checks of all moves together are counted against the shared cap
+/// ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)): the move that would pass it fails with
+/// [`MotionError::Limit`] at its line, before its samples are made.
 pub fn run_program(
     program: &Program,
     robot: &Robot,
@@ -237,6 +240,7 @@ pub fn run_program(
     let mut conv = AngleConvention::default();
     let mut q = start.to_vec();
     let mut traj = Trajectory::new(robot.joint_kinds());
+    let mut budget = MotionBudget::new();
     for pl in &program.lines {
         let fail = |source: MotionError| ProgramRunError {
             file: program.file.clone(),
@@ -284,12 +288,19 @@ pub fn run_program(
                         }
                     })
                     .collect();
-                move_joint(&robot, &q, &target, &opts)
+                move_joint_within(&robot, &q, &target, &opts, &mut budget)
             }
-            Instruction::Line(p) => move_line(&robot, &q, &pose(p, conv), &opts),
-            Instruction::Circle { via, end } => {
-                move_circle(&robot, &q, &pose(via, conv), &pose(end, conv), &opts)
+            Instruction::Line(p) => {
+                move_line_within(&robot, &q, &pose(p, conv), &opts, &mut budget)
             }
+            Instruction::Circle { via, end } => move_circle_within(
+                &robot,
+                &q,
+                &pose(via, conv),
+                &pose(end, conv),
+                &opts,
+                &mut budget,
+            ),
         }
         .map_err(fail)?;
         if let Some(last) = piece.last_joints() {
@@ -386,6 +397,72 @@ mod tests {
                 .unwrap_err()
                 .line,
             2
+        );
+    }
+}
+
+#[cfg(test)]
+mod cap_tests {
+    use super::*;
+    use crate::kinematics::Catalog;
+
+    /// Two joint moves of 6e5 samples each: each alone fits the cap, the program does
+    /// not; the second move's line is named and nothing of it is sampled.
+    #[test]
+    fn the_cap_is_on_the_whole_program() {
+        let r = Catalog::NachiMz07.robot();
+        let q0 = [0.0, 0.0, 0.0, 0.0, 0.5, 0.0];
+        // 60° at 60°/s = 1 s, at 1e-6 s intervals ≈ 1e6 samples per move.
+        let one = parse_program("p.prg", "Interval 0.0000017\nJoint 60 0 0 0 28.6 0\n").unwrap();
+        assert!(run_program(&one, &r, &q0, &MotionOptions::default()).is_ok());
+        let two = parse_program(
+            "p.prg",
+            "Interval 0.0000017\nJoint 60 0 0 0 28.6 0\n\nJoint 0 0 0 0 28.6 0\n",
+        )
+        .unwrap();
+        let e = run_program(&two, &r, &q0, &MotionOptions::default()).unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        let MotionError::Limit(crate::math::LimitError::TooMany {
+            argument,
+            count,
+            cap,
+            ..
+        }) = &e.source
+        else {
+            panic!("{e}")
+        };
+        assert_eq!((*argument, *cap), ("interval", crate::math::MAX_SAMPLES));
+        assert!(*count > 1.1e6, "{e}");
+        assert!(
+            e.to_string().starts_with("p.prg:4: `interval` = 0.0000017"),
+            "{e}"
+        );
+    }
+
+    /// Tiny IK steps are counted too: a 10 mm line at 1e-9 mm per check is refused
+    /// before the first solve.
+    #[test]
+    fn ik_checks_along_a_line_are_capped() {
+        let r = Catalog::NachiMz07.robot();
+        let q0 = [0.1, -0.2, 0.3, 0.2, 0.6, -0.4];
+        let p0 = r.tcp_pose(&q0).unwrap();
+        let end =
+            Transform::from_parts(p0.translation() + Vec3::new(10.0, 0.0, 0.0), p0.rotation());
+        let options = MotionOptions {
+            max_step_mm: 1e-9,
+            ..MotionOptions::default()
+        };
+        let e = super::super::move_line(&r, &q0, &end, &options).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                MotionError::Limit(crate::math::LimitError::TooMany {
+                    argument: "max_step_mm",
+                    what: "IK checks",
+                    ..
+                })
+            ),
+            "{e}"
         );
     }
 }

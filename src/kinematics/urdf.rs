@@ -163,33 +163,22 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 .ok_or_else(|| err(e, format!("{tag} link `{l}` is not defined")))
         };
         let (parent, child) = (link_ref("parent")?, link_ref("child")?);
-        let numbers = |node: roxmltree::Node,
-                       attr: &str,
-                       default: [f64; 3]|
-         -> Result<[f64; 3], SourceError> {
-            let Some(s) = node.attribute(attr) else {
-                return Ok(default);
-            };
-            let v: Vec<f64> = s
-                .split_whitespace()
-                .map(|t| t.parse::<f64>())
-                .collect::<Result<_, _>>()
-                .map_err(|_| err(node, format!("{attr}=\"{s}\" is not three numbers")))?;
-            if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-                return Err(err(
-                    node,
-                    format!("{attr}=\"{s}\" is not three finite numbers"),
-                ));
-            }
-            Ok([v[0], v[1], v[2]])
+        let numbers = |node: roxmltree::Node, attr: &str, default: [f64; 3], unit: f64| {
+            attribute_numbers(&doc, path, node, attr, default, unit).map_err(|mut e| {
+                e.message = format!("joint `{jn}`: {}", e.message);
+                e
+            })
         };
         let home = match n.children().find(|c| c.has_tag_name("origin")) {
-            Some(o) => origin(numbers(o, "xyz", [0.0; 3])?, numbers(o, "rpy", [0.0; 3])?),
+            Some(o) => origin(
+                numbers(o, "xyz", [0.0; 3], 1000.0)?,
+                numbers(o, "rpy", [0.0; 3], 1.0)?,
+            ),
             None => Transform::IDENTITY,
         };
         let axis_node = n.children().find(|c| c.has_tag_name("axis"));
         let axis = match axis_node {
-            Some(a) => numbers(a, "xyz", [1.0, 0.0, 0.0])?,
+            Some(a) => numbers(a, "xyz", [1.0, 0.0, 0.0], 1.0)?,
             None => [1.0, 0.0, 0.0],
         };
         let axis = home.isometry().rotation * Vec3::new(axis[0], axis[1], axis[2]);
@@ -197,16 +186,13 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
         let limit = n.children().find(|c| c.has_tag_name("limit"));
         let bound = |attr: &str, scale: f64| -> Result<Option<f64>, SourceError> {
             let Some(l) = limit else { return Ok(None) };
-            let Some(s) = l.attribute(attr) else {
+            if l.attribute(attr).is_none() {
                 return Ok(None);
-            };
-            let v: f64 = s
-                .trim()
-                .parse()
-                .map_err(|_| err(l, format!("{attr}=\"{s}\" is not a number")))?;
-            if !v.is_finite() {
-                return Err(err(l, format!("{attr}=\"{s}\" is not finite")));
             }
+            let [v] = attribute_numbers(&doc, path, l, attr, [0.0], scale).map_err(|mut e| {
+                e.message = format!("joint `{jn}`: {}", e.message);
+                e
+            })?;
             Ok(Some(v * scale))
         };
         let limits = |scale: f64| -> Result<Option<JointLimits>, SourceError> {
@@ -375,28 +361,27 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
             let uri = m
                 .attribute("filename")
                 .ok_or_else(|| at(m, "<mesh> without a filename".into()))?;
-            let num3 =
-                |node: roxmltree::Node, attr: &str, d: [f64; 3]| -> Result<[f64; 3], SourceError> {
-                    let Some(s) = node.attribute(attr) else {
-                        return Ok(d);
-                    };
-                    let v: Vec<f64> = s
-                        .split_whitespace()
-                        .filter_map(|t| t.parse().ok())
-                        .collect();
-                    if v.len() != 3 || v.iter().any(|x: &f64| !x.is_finite()) {
-                        return Err(at(
-                            node,
-                            format!("{attr}=\"{s}\" is not three finite numbers"),
-                        ));
-                    }
-                    Ok([v[0], v[1], v[2]])
-                };
+            let num3 = |node: roxmltree::Node, attr: &str, d: [f64; 3], unit: f64| {
+                attribute_numbers(&doc, path, node, attr, d, unit)
+            };
             let origin_t = match v.children().find(|c| c.has_tag_name("origin")) {
-                Some(o) => origin(num3(o, "xyz", [0.0; 3])?, num3(o, "rpy", [0.0; 3])?),
+                Some(o) => origin(
+                    num3(o, "xyz", [0.0; 3], 1000.0)?,
+                    num3(o, "rpy", [0.0; 3], 1.0)?,
+                ),
                 None => Transform::IDENTITY,
             };
-            let s = num3(m, "scale", [1.0; 3])?;
+            // The scale times 1000 (m → mm) multiplies every vertex: in range, not 0.
+            let s = num3(m, "scale", [1.0; 3], 1000.0)?;
+            if s.contains(&0.0) {
+                let p = attribute_pos(&doc, m, "scale");
+                return Err(SourceError::new(
+                    path,
+                    p.0,
+                    p.1,
+                    "scale has a 0: the mesh would be flat",
+                ));
+            }
             meshes.push(UrdfMesh {
                 link: i,
                 uri: uri.to_string(),
@@ -431,10 +416,177 @@ pub fn read_urdf(path: &Path, tip: Option<&str>) -> Result<UrdfRobot, SourceErro
     parse_urdf(path, &text, tip)
 }
 
+/// The 1-based line and column of attribute `attr`'s value of `node` (the node's
+/// start when the attribute is missing).
+fn attribute_pos(doc: &roxmltree::Document, node: roxmltree::Node, attr: &str) -> (usize, usize) {
+    let at = node
+        .attribute_node(attr)
+        .map_or(node.range().start, |a| a.range_value().start);
+    let p = doc.text_pos_at(at);
+    (p.row as usize, p.col as usize)
+}
+
+/// The `N` numbers of attribute `attr` of `node` (`default` when it is missing), as
+/// written. Every number must parse, be finite and, times `unit` (1000 for metres →
+/// mm, 1 for radians and plain factors), lie within the document range
+/// ([`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE)); an error names the file and the
+/// attribute's line and column, quoting at most a short excerpt.
+fn attribute_numbers<const N: usize>(
+    doc: &roxmltree::Document,
+    path: &Path,
+    node: roxmltree::Node,
+    attr: &str,
+    default: [f64; N],
+    unit: f64,
+) -> Result<[f64; N], SourceError> {
+    let Some(s) = node.attribute(attr) else {
+        return Ok(default);
+    };
+    let (line, column) = attribute_pos(doc, node, attr);
+    let fail = |m: String| SourceError::new(path, line, column, m);
+    let shown = short(s);
+    let what = match N {
+        1 => "a number".to_string(),
+        n => format!("{n} numbers"),
+    };
+    let mut out = [0.0; N];
+    let mut tokens = s.split_whitespace();
+    for slot in out.iter_mut() {
+        let Some(t) = tokens.next() else {
+            return Err(fail(format!("{attr}=\"{shown}\" is not {what}")));
+        };
+        let v: f64 = t
+            .parse()
+            .map_err(|_| fail(format!("{attr}=\"{shown}\" is not {what}")))?;
+        let max = crate::math::MAX_ABS_VALUE;
+        let t = short(t);
+        if !v.is_finite() {
+            return Err(fail(format!("{attr}=\"{shown}\": {t} is not finite")));
+        }
+        if !(v * unit).is_finite() || (v * unit).abs() > max {
+            let units = if unit == 1000.0 {
+                " mm (metres × 1000)"
+            } else {
+                ""
+            };
+            return Err(fail(format!(
+                "{attr}=\"{shown}\": {t} is out of range: fitup accepts magnitudes up to {max:e}{units}"
+            )));
+        }
+        *slot = v;
+    }
+    if tokens.next().is_some() {
+        return Err(fail(format!("{attr}=\"{shown}\" is not {what}")));
+    }
+    Ok(out)
+}
+
+/// At most 40 characters of an attribute value, for messages (a value may be megabytes).
+fn short(s: &str) -> String {
+    if s.chars().count() <= 40 {
+        s.to_string()
+    } else {
+        format!("{}…", s.chars().take(40).collect::<String>())
+    }
+}
+
 /// A URDF origin (metres, rpy radians) as a transform in mm.
 fn origin(xyz: [f64; 3], rpy: [f64; 3]) -> Transform {
     Transform::from_isometry(Isometry3::from_parts(
         Translation3::new(xyz[0] * 1000.0, xyz[1] * 1000.0, xyz[2] * 1000.0),
         UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A two-link URDF with `joint` as the joint's inner elements and `visual` as the
+    /// child link's content; the joint is on line 3, the visual on line 4.
+    fn urdf(kind: &str, joint: &str, visual: &str) -> String {
+        format!(
+            "<robot name=\"r\">\n<link name=\"a\"/>\n<joint name=\"j\" type=\"{kind}\"><parent link=\"a\"/><child link=\"b\"/>{joint}</joint>\n<link name=\"b\">{visual}</link>\n</robot>"
+        )
+    }
+
+    fn refused(text: &str) -> SourceError {
+        parse_urdf(Path::new("r.urdf"), text, None).unwrap_err()
+    }
+
+    /// Every number read is finite and, after m → mm, within the document's range; the
+    /// error names the file, the attribute's line and column.
+    #[test]
+    fn numbers_out_of_the_document_range_are_refused_at_their_attribute() {
+        let axis = "<axis xyz=\"0 0 1\"/>";
+        let cases = [
+            ("revolute", format!("<origin xyz=\"1e200 0 0\"/>{axis}"), "", "xyz", 3),
+            // 1e7 m is 1e10 mm: finite, but beyond 1e9 mm.
+            ("revolute", format!("<origin xyz=\"0 1e7 0\"/>{axis}"), "", "xyz", 3),
+            ("revolute", format!("<origin rpy=\"0 0 1e300\"/>{axis}"), "", "rpy", 3),
+            ("revolute", "<axis xyz=\"0 0 1e300\"/>".to_string(), "", "xyz", 3),
+            ("revolute", format!("{axis}<limit lower=\"-1e300\" upper=\"1\"/>"), "", "lower", 3),
+            ("prismatic", format!("{axis}<limit lower=\"0\" upper=\"1e7\"/>"), "", "upper", 3),
+            ("revolute", format!("{axis}<origin xyz=\"0 0 0 0\"/>"), "", "xyz", 3),
+            (
+                "revolute",
+                axis.to_string(),
+                "<visual><geometry><mesh filename=\"m.stl\" scale=\"1e306 1 1\"/></geometry></visual>",
+                "scale",
+                4,
+            ),
+            (
+                "revolute",
+                axis.to_string(),
+                "<visual><origin xyz=\"1e200 0 0\"/><geometry><mesh filename=\"m.stl\"/></geometry></visual>",
+                "xyz",
+                4,
+            ),
+            (
+                "revolute",
+                axis.to_string(),
+                "<visual><geometry><mesh filename=\"m.stl\" scale=\"1 0 1\"/></geometry></visual>",
+                "flat",
+                4,
+            ),
+            (
+                "revolute",
+                axis.to_string(),
+                "<visual><geometry><mesh filename=\"m.stl\" scale=\"1 x 1\"/></geometry></visual>",
+                "scale",
+                4,
+            ),
+        ];
+        for (kind, joint, visual, needle, line) in cases {
+            let text = urdf(kind, &joint, visual);
+            let e = refused(&text);
+            let shown = e.to_string();
+            assert_eq!(e.line, Some(line), "{shown}");
+            assert!(
+                shown.contains("r.urdf") && shown.contains(needle),
+                "{shown}"
+            );
+            // The column is the attribute's value, not the element's start.
+            let row = text.lines().nth(line - 1).unwrap();
+            let col = e.column.unwrap();
+            assert!(col > row.find('<').unwrap() + 1, "{shown}");
+        }
+        // In range: 1000 km (1e6 m = 1e9 mm) loads.
+        let ok = urdf(
+            "revolute",
+            "<origin xyz=\"1e6 0 0\"/><axis xyz=\"0 0 1\"/>",
+            "",
+        );
+        assert!(parse_urdf(Path::new("r.urdf"), &ok, None).is_ok());
+    }
+
+    #[test]
+    fn a_huge_attribute_is_quoted_short() {
+        let big = format!(
+            "<origin xyz=\"{} 0 0\"/><axis xyz=\"0 0 1\"/>",
+            "9".repeat(1 << 20)
+        );
+        let e = refused(&urdf("revolute", &big, ""));
+        assert!(e.message.len() < 300, "{}", e.message.len());
+    }
 }

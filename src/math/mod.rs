@@ -7,13 +7,13 @@
 mod aabb;
 mod euler;
 pub mod format;
-mod limits;
+pub mod limits;
 mod rng;
 pub mod transform;
 
 pub use aabb::Aabb;
 pub use euler::AngleConvention;
-pub use limits::{in_range, MAX_ABS_VALUE};
+pub use limits::{LimitError, SampleBudget, MAX_ABS_VALUE, MAX_SAMPLES};
 pub use rng::Rng;
 pub use transform::Transform;
 

@@ -168,6 +168,36 @@ impl Mesh {
         Self::new(vertices, triangles)
     }
 
+    /// The length areas are measured against (mm): the larger of the bounding box's
+    /// diagonal and its largest coordinate magnitude, at least 1 mm (0 coordinates
+    /// far from the origin lose precision, so the scale grows with them).
+    pub fn area_scale(&self) -> f64 {
+        self.bounds()
+            .map(|b| {
+                (b.hi - b.lo)
+                    .norm()
+                    .max(b.lo.coords.amax())
+                    .max(b.hi.coords.amax())
+            })
+            .unwrap_or(1.0)
+            .max(1.0)
+    }
+
+    /// Whether triangle `i` has an area that counts, relative to `scale`
+    /// ([`Mesh::area_scale`]): twice its area above `1e-24·scale²`. The one rule for
+    /// "no surface": the collision layer keeps only these triangles, and a mesh file
+    /// without any is refused when it is read.
+    pub fn triangle_has_area(&self, i: usize, scale: f64) -> bool {
+        let t = self.triangle(i);
+        (t[1] - t[0]).cross(&(t[2] - t[0])).norm() > 1e-24 * scale * scale
+    }
+
+    /// Whether any triangle has an area ([`Mesh::triangle_has_area`]).
+    pub fn has_area(&self) -> bool {
+        let scale = self.area_scale();
+        (0..self.triangles.len()).any(|i| self.triangle_has_area(i, scale))
+    }
+
     /// The three corners of triangle `i`.
     #[inline]
     pub fn triangle(&self, i: usize) -> [Point3; 3] {

@@ -62,13 +62,25 @@ pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
     parse_stl(&bytes).map_err(|e| e.in_file(path))
 }
 
-/// Parses STL bytes (ASCII or binary). A mesh without facets, or with a coordinate
-/// beyond [`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE) mm, is refused (ASCII
-/// errors name the line).
+/// Parses STL bytes (ASCII or binary). A mesh without facets, one whose facets all
+/// have zero area ([`Mesh::has_area`]: nothing to collide with or show), a coordinate
+/// beyond [`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE) mm, or text after the last
+/// `endsolid` other than further `solid … endsolid` blocks (multi-body exporters write
+/// those; their facets are read too) is refused; ASCII errors name the line.
 pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
-    let mesh = parse_any(bytes)?;
+    let (mesh, first_facet) = parse_any(bytes)?;
     if mesh.triangles.is_empty() {
         return Err(MeshError::invalid("the STL has no facets"));
+    }
+    if !mesh.has_area() {
+        let message = format!(
+            "all {} facets have zero area (their corners are collinear or coincide): the mesh has no surface",
+            mesh.triangles.len()
+        );
+        return Err(match first_facet {
+            Some(line) => MeshError::at(line, message),
+            None => MeshError::invalid(format!("binary STL: {message}")),
+        });
     }
     Ok(mesh)
 }
@@ -87,11 +99,12 @@ fn check_coordinate(v: f64) -> Result<(), String> {
     }
 }
 
-fn parse_any(bytes: &[u8]) -> Result<Mesh, MeshError> {
+/// The mesh, and for an ASCII file the line of its first facet.
+fn parse_any(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
     if bytes.len() >= 84 {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
         if 84 + 50 * n == bytes.len() as u64 {
-            return parse_binary(bytes);
+            return Ok((parse_binary(bytes)?, None));
         }
     }
     let head = bytes
@@ -141,9 +154,10 @@ fn parse_binary(bytes: &[u8]) -> Result<Mesh, MeshError> {
 }
 
 /// ASCII STL: `solid name / facet normal … / outer loop / vertex x y z ×3 / endloop /
-/// endfacet / endsolid`. Written by hand rather than through stl_io so that every
-/// error carries its line number.
-fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
+/// endfacet / endsolid`, possibly several `solid … endsolid` blocks one after the other
+/// (multi-body exports). Written by hand rather than through stl_io so that every
+/// error carries its line number. Returns the mesh and the line of the first facet.
+fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = bytes[..e.valid_up_to()]
             .iter()
@@ -155,15 +169,41 @@ fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
     let mut soup = Vec::new();
     let mut corners: Vec<Point3> = Vec::with_capacity(3);
     let mut in_facet = false;
-    let mut ended = false;
+    // Inside a `solid … endsolid` block; `ended` is the line of the last `endsolid`.
+    let mut in_solid = false;
+    let mut ended: Option<usize> = None;
+    let mut first_facet = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
-        let mut words = raw.split_whitespace();
+        // NUL padding (fixed-size buffers of some exporters) counts as blank.
+        let mut words = raw
+            .split(|c: char| c.is_whitespace() || c == '\0')
+            .filter(|w| !w.is_empty());
         let Some(keyword) = words.next() else {
             continue;
         };
-        match keyword.to_ascii_lowercase().as_str() {
-            "solid" if i == 0 || soup.is_empty() => {}
+        let keyword = keyword.to_ascii_lowercase();
+        if let (Some(end), false) = (ended, in_solid) {
+            if keyword != "solid" {
+                return Err(MeshError::at(
+                    line,
+                    format!(
+                        "`{}` after `endsolid` (line {end}): only another `solid … endsolid` block may follow",
+                        short(raw.trim())
+                    ),
+                ));
+            }
+        }
+        match keyword.as_str() {
+            "solid" if !in_solid => in_solid = true,
+            // A repeated header before any facet (seen in hand-edited files).
+            "solid" if soup.is_empty() && !in_facet => {}
+            "solid" => {
+                return Err(MeshError::at(
+                    line,
+                    "`solid` inside a solid: the previous block has no `endsolid`",
+                ))
+            }
             "facet" => {
                 if in_facet {
                     return Err(MeshError::at(
@@ -172,6 +212,7 @@ fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
                     ));
                 }
                 in_facet = true;
+                first_facet.get_or_insert(line);
                 corners.clear();
             }
             "outer" | "endloop" => {}
@@ -184,9 +225,9 @@ fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
                     let w = words.next().ok_or_else(|| {
                         MeshError::at(line, format!("`vertex` needs 3 numbers, found {k}"))
                     })?;
-                    *c = w
-                        .parse::<f64>()
-                        .map_err(|_| MeshError::at(line, format!("`{w}` is not a number")))?;
+                    *c = w.parse::<f64>().map_err(|_| {
+                        MeshError::at(line, format!("`{}` is not a number", short(w)))
+                    })?;
                     check_coordinate(*c).map_err(|m| MeshError::at(line, m))?;
                 }
                 if corners.len() == 3 {
@@ -205,13 +246,19 @@ fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
                 in_facet = false;
             }
             "endsolid" => {
-                ended = true;
-                break;
+                if in_facet {
+                    return Err(MeshError::at(
+                        line,
+                        "`endsolid` inside a facet (no `endfacet`)",
+                    ));
+                }
+                ended = Some(line);
+                in_solid = false;
             }
             other => {
                 return Err(MeshError::at(
                     line,
-                    format!("unexpected `{other}` in ASCII STL"),
+                    format!("unexpected `{}` in ASCII STL", short(other)),
                 ))
             }
         }
@@ -222,13 +269,22 @@ fn parse_ascii(bytes: &[u8]) -> Result<Mesh, MeshError> {
             "the file ends inside a facet (truncated?)",
         ));
     }
-    if !ended && soup.is_empty() {
+    if ended.is_none() && soup.is_empty() {
         return Err(MeshError::at(
             text.lines().count().max(1),
             "no facets and no `endsolid` (truncated?)",
         ));
     }
-    Mesh::from_triangle_soup(soup)
+    Ok((Mesh::from_triangle_soup(soup)?, first_facet))
+}
+
+/// At most 40 characters of a token or line, for messages (a line may be megabytes).
+fn short(s: &str) -> String {
+    if s.chars().count() <= 40 {
+        s.to_string()
+    } else {
+        format!("{}…", s.chars().take(40).collect::<String>())
+    }
 }
 
 /// Writes a binary STL atomically (temporary file in the same folder, then rename), so
@@ -304,6 +360,63 @@ mod tests {
         let mut junk = vec![0u8; 200];
         junk[80] = 7;
         assert!(parse_stl(&junk).unwrap_err().message.contains("434 bytes"));
+    }
+
+    /// One facet with collinear corners, as ASCII.
+    const FLAT: &str = "solid d\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 1 1\nvertex 2 2 2\nendloop\nendfacet\nendsolid d\n";
+
+    #[test]
+    fn a_mesh_of_zero_area_facets_is_refused_with_file_and_line() {
+        let e = parse_stl(FLAT.as_bytes()).unwrap_err();
+        assert_eq!(e.line, Some(2), "{e}");
+        assert!(e.message.contains("all 1 facets have zero area"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("flat.stl");
+        std::fs::write(&p, FLAT).unwrap();
+        let e = read_stl(&p).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with(&format!("{}:2: all 1 facets", p.display())),
+            "{e}"
+        );
+        // Binary: the same rule, named by file.
+        let flat = parse_ascii(FLAT.as_bytes()).unwrap().0;
+        let b = dir.path().join("flat_bin.stl");
+        write_stl(&b, &flat).unwrap();
+        let e = read_stl(&b).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with(&format!("{}: binary STL: all 1 facets", b.display())),
+            "{e}"
+        );
+        // One good facet among flat ones is enough: the flat ones are skipped later.
+        let mixed = cube_ascii().replacen("endsolid cube", &FLAT[8..FLAT.len() - 11], 1)
+            + "endsolid cube\n";
+        assert_eq!(parse_stl(mixed.as_bytes()).unwrap().triangles.len(), 13);
+    }
+
+    #[test]
+    fn text_after_endsolid_is_refused_but_further_solids_are_read() {
+        let cube = cube_ascii();
+        let n = cube.lines().count();
+        let e = parse_stl(format!("{cube}\ngarbage here\n").as_bytes()).unwrap_err();
+        assert_eq!(e.line, Some(n + 2), "{e}");
+        assert!(e.message.contains("`garbage here` after `endsolid`"), "{e}");
+        assert!(e.message.contains(&format!("(line {n})")), "{e}");
+        // Two bodies in one file (multi-body exporters): both are read.
+        let two = format!("{cube}{}", cube.replace("vertex ", "vertex 10"));
+        assert_eq!(parse_stl(two.as_bytes()).unwrap().triangles.len(), 24);
+        // Blank lines and NUL padding after the end are not content.
+        let padded = format!("{cube}\n  \n\0\0\0\n");
+        assert!(parse_stl(padded.as_bytes()).is_ok());
+        // A second `solid` before the first block ends is an error at its line.
+        let nested = cube.replacen("  facet", "solid again\n  facet", 2);
+        let e = parse_stl(nested.as_bytes()).unwrap_err();
+        assert!(e.message.contains("`solid` inside a solid"), "{e}");
+        // A long garbage line is quoted short.
+        let long = format!("{cube}{}\n", "x".repeat(100_000));
+        let e = parse_stl(long.as_bytes()).unwrap_err();
+        assert!(e.message.len() < 300, "{}", e.message.len());
     }
 
     proptest::proptest! {

@@ -3,6 +3,7 @@
 use super::run::{Failure, Run};
 use super::validator::{Checker, MotionValidator};
 use crate::collision::SweepMethod;
+use crate::math::limits::{steps, LimitError, SampleBudget};
 use crate::math::{AngleConvention, Transform};
 use std::io::{self, Write};
 
@@ -151,28 +152,63 @@ impl PlannedPath {
     }
 
     /// The path with poses at most `step_mm` and `step_rad` apart along every edge
-    /// (for animation and fine re-checks); key poses are kept. Non-positive or
-    /// non-finite steps return the key poses unchanged.
-    pub fn densify(&self, step_mm: f64, step_rad: f64) -> Vec<Transform> {
-        let valid = |s: f64| s.is_finite() && s > 0.0;
-        if !(valid(step_mm) && valid(step_rad)) {
-            return self.poses.clone();
+    /// (for animation and fine re-checks); key poses are kept.
+    ///
+    /// # Errors
+    /// A step that is not a finite number > 0, or more poses in all than
+    /// [`MAX_SAMPLES`](crate::math::MAX_SAMPLES) — counted over all edges before
+    /// anything is allocated — is a [`LimitError`] naming `step_mm` or `step_rad`.
+    pub fn densify(&self, step_mm: f64, step_rad: f64) -> Result<Vec<Transform>, LimitError> {
+        self.densify_steps(step_mm, step_rad, None)
+    }
+
+    /// [`PlannedPath::densify`] for a caller whose one argument `argument = value`
+    /// set both steps (a script's `step`, in mm and as many degrees): errors name it.
+    pub fn densify_as(
+        &self,
+        step_mm: f64,
+        step_rad: f64,
+        argument: &'static str,
+        value: f64,
+    ) -> Result<Vec<Transform>, LimitError> {
+        self.densify_steps(step_mm, step_rad, Some((argument, value)))
+    }
+
+    fn densify_steps(
+        &self,
+        step_mm: f64,
+        step_rad: f64,
+        named: Option<(&'static str, f64)>,
+    ) -> Result<Vec<Transform>, LimitError> {
+        let (mm, rad) = match named {
+            Some((a, v)) => ((a, v), (a, v)),
+            None => (("step_mm", step_mm), ("step_rad", step_rad)),
+        };
+        for ((argument, value), step) in [(mm, step_mm), (rad, step_rad)] {
+            if !(step.is_finite() && step > 0.0) {
+                return Err(LimitError::BadStep { argument, value });
+            }
         }
-        let mut out = Vec::with_capacity(self.poses.len());
+        // Count first, allocate after: the key poses plus every edge's steps.
+        let mut budget = SampleBudget::new("poses");
+        budget.take(self.poses.len().min(1) as f64, mm.0, mm.1)?;
+        let mut counts = Vec::with_capacity(self.poses.len().saturating_sub(1));
+        for w in self.poses.windows(2) {
+            let (angle, dist) = w[0].distance_to(&w[1]);
+            let (by_mm, by_rad) = (steps(dist, step_mm), steps(angle, step_rad));
+            let (argument, value) = if by_mm >= by_rad { mm } else { rad };
+            counts.push(budget.take(by_mm.max(by_rad), argument, value)?);
+        }
+        let mut out = Vec::with_capacity(budget.used());
         if let Some(first) = self.poses.first() {
             out.push(*first);
         }
-        for w in self.poses.windows(2) {
-            let (angle, dist) = w[0].distance_to(&w[1]);
-            let n = (dist / step_mm)
-                .ceil()
-                .max((angle / step_rad).ceil())
-                .clamp(1.0, 1e7) as usize;
+        for (w, &n) in self.poses.windows(2).zip(&counts) {
             for k in 1..=n {
                 out.push(w[0].interpolate(&w[1], k as f64 / n as f64));
             }
         }
-        out
+        Ok(out)
     }
 
     /// Re-checks the path with `validator`: every key pose with `is_free`, every edge
@@ -247,13 +283,74 @@ mod tests {
     fn densify_keeps_ends_and_respects_steps() {
         let p = sample_path();
         assert!((p.length_mm - 15.0).abs() < 1e-9 && (p.rotation_rad - 0.5).abs() < 1e-9);
-        let d = p.densify(1.0, 0.05);
+        let d = p.densify(1.0, 0.05).unwrap();
         assert!(d[0].approx_eq(&p.poses[0], 1e-12, 1e-12));
         assert!(d.last().unwrap().approx_eq(&p.poses[2], 1e-9, 1e-9));
         for w in d.windows(2) {
             let (a, l) = w[0].distance_to(&w[1]);
             assert!(l <= 1.0 + 1e-9 && a <= 0.05 + 1e-9);
         }
+    }
+
+    #[test]
+    fn densify_refuses_bad_steps_and_counts_against_the_cap_before_allocating() {
+        let p = sample_path();
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(matches!(
+                p.densify(bad, 0.1),
+                Err(LimitError::BadStep {
+                    argument: "step_mm",
+                    ..
+                })
+            ));
+            assert!(matches!(
+                p.densify(1.0, bad),
+                Err(LimitError::BadStep {
+                    argument: "step_rad",
+                    ..
+                })
+            ));
+        }
+        // 15 mm at 1e-9 mm: 1.5e10 poses (≈ 0.8 TB) would abort; refused at once.
+        let e = p
+            .densify_as(1e-9, 1e-9f64.to_radians(), "step", 1e-9)
+            .unwrap_err();
+        match &e {
+            LimitError::TooMany {
+                argument,
+                count,
+                cap,
+                what,
+                ..
+            } => {
+                assert_eq!(
+                    (*argument, *cap, *what),
+                    ("step", crate::math::MAX_SAMPLES, "poses")
+                );
+                assert!(*count > 1e10, "{e}");
+            }
+            other => panic!("{other}"),
+        }
+        // The cap is on the whole path: each edge alone fits, the sum does not.
+        let long = PlannedPath::given(
+            "test",
+            (0..4)
+                .map(|i| Transform::from_translation(Vec3::new(i as f64 * 400.0, 0.0, 0.0)))
+                .collect(),
+            SweepMethod::DEFAULT,
+        );
+        assert_eq!(long.densify(0.5, 1.0).unwrap().len(), 2401);
+        let e = long.densify(0.001, 1.0).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                LimitError::TooMany {
+                    argument: "step_mm",
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
 
     #[test]

@@ -294,7 +294,7 @@ fn assert_valid(p: &PlannedPath, scene: &BoxScene, start: &Transform, goal: Opti
         );
     }
     let mut exact = scene.exact();
-    for (k, pose) in p.densify(0.05, 0.002).iter().enumerate() {
+    for (k, pose) in p.densify(0.05, 0.002).unwrap().iter().enumerate() {
         assert!(
             exact.is_free(pose),
             "{}: collision at dense pose {k}: {pose}",
@@ -529,7 +529,7 @@ fn lazy_search_certifies_its_path_and_repairs_jumped_walls() {
             "every edge of the path was certified"
         );
         // It went through the window.
-        let crossing = p.densify(0.5, 0.01);
+        let crossing = p.densify(0.5, 0.01).unwrap();
         assert!(crossing
             .iter()
             .filter(|q| q.translation().x.abs() < 2.8)
@@ -622,7 +622,11 @@ fn disassembly_leaves_the_product_box_and_ends_assembled() {
         assert!((0..3).any(|k| first.lo[k] >= product.hi[k] || first.hi[k] <= product.lo[k]));
         assert!(p.poses.last().unwrap().approx_eq(&assembled, 1e-9, 1e-9));
         let mut exact = scene.exact();
-        assert!(p.densify(0.05, 0.002).iter().all(|q| exact.is_free(q)));
+        assert!(p
+            .densify(0.05, 0.002)
+            .unwrap()
+            .iter()
+            .all(|q| exact.is_free(q)));
     }
 }
 

@@ -359,11 +359,10 @@ fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathH
 }
 
 fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transform>> {
-    if !(step.is_finite() && step > 0.0) {
-        return err(format!("step must be a finite number > 0 mm, not {step}"));
-    }
-    // Rotation steps follow the translation step: 1 mm ~ 1°.
-    Ok(p.densify(step, step.to_radians()))
+    // Rotation steps follow the translation step: 1 mm ~ 1°; the library refuses a bad
+    // step and counts the poses against the shared cap before making any.
+    p.densify_as(step, step.to_radians(), "step", step)
+        .map_err(|e| fail(format!("Path.densify: {e}")))
 }
 
 pub(super) fn register(api: &mut Api) {
@@ -491,7 +490,7 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f(
         "Path.densify(step) -> array",
-        "Poses along the path no more than `step` mm (and `step` degrees) apart, for animation.",
+        "Poses along the path no more than `step` mm (and `step` degrees) apart, for animation. More than 1,000,000 poses (the cap of every call, see docs/scripting.md \"Caps\") is an error naming `step`.",
         |p: &mut PathHandle, s: Dynamic| -> ScriptResult<Array> {
             Ok(densify(&p.0, num(&s, "step")?)?
                 .into_iter()
@@ -554,7 +553,7 @@ pub(super) fn register(api: &mut Api) {
         }
         Ok(m)
     });
-    api.f("Component.follow(path: Path, step) -> int", "Animates the component along the path in steps of at most `step` mm (and degrees), printing each step's pose (mm, degrees) — in watch mode each step shows. Returns the number of steps.", |c: &mut ComponentHandle, p: PathHandle, s: Dynamic| follow(c, &p, &s, true));
+    api.f("Component.follow(path: Path, step) -> int", "Animates the component along the path in steps of at most `step` mm (and degrees), printing each step's pose (mm, degrees) — in watch mode each step shows. Returns the number of steps. More than 1,000,000 steps (the cap of every call, docs/scripting.md \"Caps\") is an error naming `step`, before the component moves.", |c: &mut ComponentHandle, p: PathHandle, s: Dynamic| follow(c, &p, &s, true));
     api.f(
         "Component.follow(path: Path, step, print: bool) -> int",
         "As above; `print: false` moves silently.",

@@ -84,6 +84,10 @@ pub enum WorkspaceError {
     /// The caller's callback asked to stop.
     #[error("cancelled")]
     Cancelled,
+    /// A step that gives no number of poses, or more than the shared cap
+    /// ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)).
+    #[error(transparent)]
+    Limit(#[from] crate::math::LimitError),
 }
 
 /// Method and tolerance of a static interference request.

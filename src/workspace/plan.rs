@@ -360,8 +360,9 @@ impl Workspace<'_> {
 /// [`WorkspaceError::Cancelled`]. Returns the number of steps.
 ///
 /// # Errors
-/// A path that was not found, a step that is not a finite number > 0, an unknown or
-/// fixed component, cancellation.
+/// A path that was not found, a step that is not a finite number > 0 or that would
+/// make more than [`MAX_SAMPLES`](crate::math::MAX_SAMPLES) poses
+/// ([`WorkspaceError::Limit`]), an unknown or fixed component, cancellation.
 pub fn follow(
     doc: &mut Document,
     name: &str,
@@ -372,16 +373,10 @@ pub fn follow(
     if !path.found() {
         return Err(WorkspaceError::PathNotFound);
     }
-    if !(step_mm.is_finite() && step_mm > 0.0) {
-        return Err(WorkspaceError::InvalidOption {
-            option: "step",
-            value: step_mm.to_string(),
-            expected: "a finite number of mm > 0",
-        });
-    }
     let index = doc.component_index(name)?;
-    // Rotation steps follow the translation step: 1 mm ~ 1°.
-    let poses = path.densify(step_mm, step_mm.to_radians());
+    // Rotation steps follow the translation step: 1 mm ~ 1°. The poses are counted
+    // against the shared cap before any is made.
+    let poses = path.densify_as(step_mm, step_mm.to_radians(), "step", step_mm)?;
     let n = poses.len();
     for (k, t) in poses.iter().enumerate() {
         doc.set_transform_at(index, *t)?;

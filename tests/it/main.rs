@@ -10,6 +10,7 @@ mod api_docs;
 mod chain;
 mod cli;
 mod db;
+mod hostile_bounds;
 mod hostile_files;
 mod hostile_names;
 mod hostile_runs;

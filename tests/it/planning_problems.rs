@@ -81,6 +81,7 @@ fn assert_collision_free(p: &Problem, path: &PlannedPath) {
     let step = 0.01;
     for (k, pose) in path
         .densify(step, step / moving.radius())
+        .expect("within the pose cap")
         .iter()
         .enumerate()
     {
