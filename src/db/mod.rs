@@ -766,4 +766,42 @@ mod tests {
     fn placeholders_are_numbered_for_postgres() {
         assert_eq!(backend::numbered("a = ? AND b = ?"), "a = $1 AND b = $2");
     }
+
+    #[test]
+    fn credentials_never_show() {
+        let t = Target::Postgres(
+            "postgres://u:s3cr%40t@h:5/d?sslmode=disable&password=other1&application_name=a@b"
+                .into(),
+        );
+        for shown in [t.to_string(), format!("{t:?}")] {
+            assert!(!shown.contains("s3cr") && !shown.contains("other1"), "{shown}");
+            assert!(shown.contains("u@h:5/d"), "{shown}");
+            assert!(shown.contains("password=***"), "{shown}");
+            assert!(shown.contains("application_name=a@b"), "{shown}");
+        }
+        let scrubbed = t.scrub("bad password s3cr@t / s3cr%40t / other1");
+        assert_eq!(scrubbed, "bad password *** / *** / ***");
+        assert_eq!(
+            redact_url("postgres://u:p@ss@h/d"),
+            "postgres://u@h/d",
+            "a password with an @"
+        );
+        assert_eq!(redact_url("postgres://h/d"), "postgres://h/d");
+        assert_eq!(redact_url("postgres://u@h/d"), "postgres://u@h/d");
+    }
+
+    #[test]
+    fn a_silent_server_fails_within_the_connect_timeout() {
+        // Accepts (the kernel's backlog) and never answers.
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let port = listener.local_addr().unwrap().port();
+        let url = format!("postgres://u:verysecret@127.0.0.1:{port}/d?connect_timeout=1");
+        let start = std::time::Instant::now();
+        let e = Database::open(&Target::Postgres(url)).unwrap_err();
+        let shown = e.to_string();
+        assert!(start.elapsed() < Duration::from_secs(5), "{shown}");
+        assert!(shown.contains("no answer from the server within 1 s"), "{shown}");
+        assert!(!shown.contains("verysecret") && !format!("{e:?}").contains("verysecret"));
+        drop(listener);
+    }
 }

@@ -209,20 +209,18 @@ const READ_PRAGMAS: &[&str] = &[
     "quick_check",
 ];
 
-/// Settings a query may read, but only without a value (`PRAGMA user_version` reads;
-/// `PRAGMA user_version = 5` writes and is refused).
+/// Settings of the database file a query may read, but only without a value
+/// (`PRAGMA user_version` reads; `PRAGMA user_version = 5` writes and is refused).
+/// Per-connection settings (`foreign_keys`, `synchronous`, …) are not among them:
+/// the query connection's own values would say nothing about fitup's writes.
 const READ_SETTINGS: &[&str] = &[
     "application_id",
     "auto_vacuum",
-    "cache_size",
     "encoding",
-    "foreign_keys",
     "freelist_count",
-    "journal_mode",
     "page_count",
     "page_size",
     "schema_version",
-    "synchronous",
     "user_version",
     "data_version",
 ];
@@ -773,5 +771,176 @@ mod tests {
         ] {
             assert!(sqlite_refusal(&refused).is_some(), "{refused:?}");
         }
+    }
+
+    /// A fresh project database with one run.
+    fn db() -> (tempfile::TempDir, crate::db::Database) {
+        let dir = tempfile::tempdir().unwrap();
+        let mut db =
+            crate::db::Database::open(&crate::db::Target::Sqlite(dir.path().join("fitup.db")))
+                .unwrap();
+        db.start_run(&crate::db::NewRun::script("s.rhai")).unwrap();
+        (dir, db)
+    }
+
+    #[test]
+    fn attach_is_refused_and_creates_no_file() {
+        let (dir, mut db) = db();
+        let outside = tempfile::tempdir().unwrap();
+        let secret = outside.path().join("secret.db");
+        rusqlite::Connection::open(&secret)
+            .unwrap()
+            .execute_batch("CREATE TABLE s(x); INSERT INTO s VALUES ('hidden');")
+            .unwrap();
+        let missing = outside.path().join("new.db");
+        for file in [&secret, &missing] {
+            let sql = format!("ATTACH DATABASE '{}' AS o", file.display());
+            let e = db.query(&sql, &[]).unwrap_err();
+            assert!(matches!(e, DbError::WriteRefused { .. }), "{e}");
+            assert!(e.to_string().contains("ATTACH"), "{e}");
+        }
+        assert!(!missing.exists(), "ATTACH created {}", missing.display());
+        // Neither through the table-valued form nor VACUUM INTO.
+        let into = outside.path().join("copy.db");
+        let e = db
+            .query(&format!("VACUUM INTO '{}'", into.display()), &[])
+            .unwrap_err();
+        assert!(matches!(e, DbError::WriteRefused { .. }), "{e}");
+        assert!(!into.exists());
+        drop(dir);
+    }
+
+    #[test]
+    fn pragma_writes_and_table_writes_are_refused() {
+        let (_dir, mut db) = db();
+        for sql in [
+            "PRAGMA synchronous=OFF",
+            "PRAGMA foreign_keys=OFF",
+            "PRAGMA journal_mode=DELETE",
+            "PRAGMA user_version=7",
+            "PRAGMA wal_checkpoint",
+            "INSERT INTO runs (script, started_at, status, output, fitup_version) VALUES ('x', 'now', 'ok', '', '0')",
+            "UPDATE runs SET status = 'ok'",
+            "DELETE FROM runs",
+            "DROP TABLE runs",
+            "CREATE TABLE x(a)",
+            "CREATE TEMP TABLE x(a)",
+            "BEGIN",
+            "SELECT load_extension('/tmp/evil.so')",
+            "SELECT 1; DELETE FROM runs",
+        ] {
+            assert!(db.query(sql, &[]).is_err(), "{sql} was accepted");
+        }
+        // The state is as before: the run is there, the file still in WAL mode.
+        assert_eq!(db.runs().unwrap().len(), 1);
+        for setting in READ_SETTINGS.iter().chain(READ_PRAGMAS) {
+            if let Err(e) = db.query(&format!("PRAGMA {setting}"), &[]) {
+                panic!("PRAGMA {setting}: {e}");
+            }
+        }
+        let e = db.query("PRAGMA synchronous", &[]).unwrap_err();
+        assert!(e.to_string().contains("PRAGMA synchronous"), "{e}");
+        // Reads and schema queries work.
+        assert_eq!(
+            db.query("SELECT COUNT(*) FROM runs", &[]).unwrap().rows[0][0],
+            SqlValue::Int(1)
+        );
+        assert!(!db
+            .query("SELECT name FROM pragma_table_info('paths')", &[])
+            .unwrap()
+            .rows
+            .is_empty());
+        assert!(!db.query("PRAGMA table_info(paths)", &[]).unwrap().rows.is_empty());
+    }
+
+    #[test]
+    fn a_recursive_query_stops_at_its_time_limit() {
+        let (_dir, mut db) = db();
+        let limits = QueryLimits {
+            time: Duration::from_millis(300),
+            ..QueryLimits::DEFAULT
+        };
+        let start = Instant::now();
+        let e = db
+            .query_with(
+                "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c) SELECT COUNT(*) FROM c",
+                &[],
+                limits,
+                None,
+            )
+            .unwrap_err();
+        assert!(matches!(e, DbError::QueryTimeout { .. }), "{e}");
+        assert!(e.to_string().contains("query stopped after 0.3 s"), "{e}");
+        assert!(start.elapsed() < Duration::from_secs(5));
+        // The connection is usable afterwards, without the old deadline.
+        std::thread::sleep(Duration::from_millis(350));
+        assert!(db.query("SELECT 1", &[]).is_ok());
+    }
+
+    #[test]
+    fn a_cancelled_run_stops_its_query() {
+        let (_dir, mut db) = db();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let c = cancel.clone();
+        let t = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(200));
+            c.store(true, Ordering::Relaxed);
+        });
+        let e = db
+            .query_with(
+                "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c) SELECT COUNT(*) FROM c",
+                &[],
+                QueryLimits::DEFAULT,
+                Some(cancel),
+            )
+            .unwrap_err();
+        t.join().unwrap();
+        assert!(matches!(e, DbError::QueryCancelled { .. }), "{e}");
+    }
+
+    #[test]
+    fn results_past_the_caps_are_refused() {
+        let (_dir, mut db) = db();
+        let many = "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 5000000) SELECT x FROM c";
+        let e = db.query(many, &[]).unwrap_err();
+        assert!(matches!(e, DbError::QueryTooLarge { .. }), "{e}");
+        assert!(
+            e.to_string().contains("more than 100,000 rows or 64 MiB"),
+            "{e}"
+        );
+        let small = QueryLimits {
+            max_rows: 10,
+            ..QueryLimits::DEFAULT
+        };
+        let ten = "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 10) SELECT x FROM c";
+        assert_eq!(db.query_with(ten, &[], small, None).unwrap().rows.len(), 10);
+        let e = db
+            .query_with(&ten.replace("LIMIT 10", "LIMIT 11"), &[], small, None)
+            .unwrap_err();
+        assert!(e.to_string().contains("more than 10 rows"), "{e}");
+        // Bytes: 100 rows of 1 MiB text pass 64 MiB.
+        let wide = "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 100) SELECT x, zeroblob(1048576) || '' AS t FROM c";
+        let e = db.query(wide, &[]).unwrap_err();
+        assert!(matches!(e, DbError::QueryTooLarge { .. }), "{e}");
+        // One value past 16 MiB is SQLite's refusal.
+        let e = db.query("SELECT zeroblob(20000000)", &[]).unwrap_err();
+        assert!(e.to_string().contains("too big"), "{e}");
+    }
+
+    #[test]
+    fn limits_beyond_the_maxima_are_refused_before_running() {
+        let (_dir, mut db) = db();
+        let e = db
+            .query_with(
+                "SELECT 1",
+                &[],
+                QueryLimits {
+                    max_rows: 5_000_000,
+                    ..QueryLimits::DEFAULT
+                },
+                None,
+            )
+            .unwrap_err();
+        assert!(matches!(e, DbError::QueryLimit { name: "max_rows", .. }), "{e}");
     }
 }
