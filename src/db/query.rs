@@ -322,7 +322,13 @@ impl SqliteReader {
                 None => rusqlite::hooks::Authorization::Allow,
                 Some(why) => {
                     if let Ok(mut slot) = r.lock() {
-                        slot.get_or_insert(why);
+                        // The first refusal names the statement, except SQLite's own
+                        // bookkeeping (`DROP TABLE` first deletes from `sqlite_master`):
+                        // a later refusal naming the user's table says more.
+                        let internal = |w: &str| w.contains("`sqlite_");
+                        if slot.as_deref().is_none_or(internal) {
+                            *slot = Some(why);
+                        }
                     }
                     rusqlite::hooks::Authorization::Deny
                 }
