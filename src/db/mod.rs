@@ -231,7 +231,11 @@ fn percent_decode(s: &str) -> String {
     let mut i = 0;
     while i < b.len() {
         let hex = |c: u8| (c as char).to_digit(16);
-        match (b[i], b.get(i + 1).copied().and_then(hex), b.get(i + 2).copied().and_then(hex)) {
+        match (
+            b[i],
+            b.get(i + 1).copied().and_then(hex),
+            b.get(i + 2).copied().and_then(hex),
+        ) {
             (b'%', Some(h), Some(l)) => {
                 out.push((h * 16 + l) as u8);
                 i += 3;
@@ -326,7 +330,9 @@ pub enum DbError {
         target: String,
     },
     /// A query limit asked for by a script is out of range.
-    #[error("the query limit {name} = {value} is out of range: it must be positive and at most {max}")]
+    #[error(
+        "the query limit {name} = {value} is out of range: it must be positive and at most {max}"
+    )]
     QueryLimit {
         /// `max_seconds`, `max_rows` or `max_bytes`.
         name: &'static str,
@@ -625,12 +631,13 @@ impl Database {
                 let reader = match (&mut self.reader, &self.target) {
                     (Some(r), _) => r,
                     (slot @ None, Target::Sqlite(path)) => {
-                        let opened = query::SqliteReader::open(path, BUSY_TIMEOUT).map_err(|e| {
-                            DbError::Open {
-                                target: target.clone(),
-                                cause: format!("the read-only query connection: {}", e.message),
-                            }
-                        })?;
+                        let opened =
+                            query::SqliteReader::open(path, BUSY_TIMEOUT).map_err(|e| {
+                                DbError::Open {
+                                    target: target.clone(),
+                                    cause: format!("the read-only query connection: {}", e.message),
+                                }
+                            })?;
                         slot.insert(opened)
                     }
                     (None, Target::Postgres(_)) => {
@@ -774,7 +781,10 @@ mod tests {
                 .into(),
         );
         for shown in [t.to_string(), format!("{t:?}")] {
-            assert!(!shown.contains("s3cr") && !shown.contains("other1"), "{shown}");
+            assert!(
+                !shown.contains("s3cr") && !shown.contains("other1"),
+                "{shown}"
+            );
             assert!(shown.contains("u@h:5/d"), "{shown}");
             assert!(shown.contains("password=***"), "{shown}");
             assert!(shown.contains("application_name=a@b"), "{shown}");
@@ -800,7 +810,10 @@ mod tests {
         let e = Database::open(&Target::Postgres(url)).unwrap_err();
         let shown = e.to_string();
         assert!(start.elapsed() < Duration::from_secs(5), "{shown}");
-        assert!(shown.contains("no answer from the server within 1 s"), "{shown}");
+        assert!(
+            shown.contains("no answer from the server within 1 s"),
+            "{shown}"
+        );
         assert!(!shown.contains("verysecret") && !format!("{e:?}").contains("verysecret"));
         drop(listener);
     }

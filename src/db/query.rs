@@ -271,20 +271,41 @@ pub(crate) fn sqlite_refusal(action: &rusqlite::hooks::AuthAction<'_>) -> Option
         A::Transaction { .. } | A::Savepoint { .. } => {
             Some("transactions are fitup's (each query is one read)".into())
         }
+        // DROP, CREATE and ALTER are first asked as a write to the schema table (and
+        // end there).
+        A::Insert { table_name } | A::Update { table_name, .. } | A::Delete { table_name }
+            if is_schema_table(table_name) =>
+        {
+            Some("the statement changes the schema (DROP, CREATE or ALTER)".into())
+        }
         A::Insert { table_name } => Some(format!("INSERT into `{table_name}` writes")),
         A::Update { table_name, .. } => Some(format!("UPDATE of `{table_name}` writes")),
         A::Delete { table_name } => Some(format!("DELETE from `{table_name}` writes")),
         A::DropTable { table_name } | A::DropTempTable { table_name } => {
             Some(format!("DROP TABLE `{table_name}` writes"))
         }
-        other => Some(format!("{} writes or changes the schema", action_name(other))),
+        other => Some(format!(
+            "{} writes or changes the schema",
+            action_name(other)
+        )),
     }
+}
+
+/// SQLite's schema table under any of its names.
+fn is_schema_table(name: &str) -> bool {
+    matches!(
+        name.to_ascii_lowercase().as_str(),
+        "sqlite_master" | "sqlite_schema" | "sqlite_temp_master" | "sqlite_temp_schema"
+    )
 }
 
 /// A short name of an authorizer action for messages.
 fn action_name(a: &rusqlite::hooks::AuthAction<'_>) -> String {
     let d = format!("{a:?}");
-    d.split([' ', '{', '(']).next().unwrap_or("the statement").to_string()
+    d.split([' ', '{', '('])
+        .next()
+        .unwrap_or("the statement")
+        .to_string()
 }
 
 /// The read-only, jailed SQLite connection of scripts' queries.
@@ -317,23 +338,17 @@ impl SqliteReader {
         conn.execute_batch("PRAGMA cache_size=-16000")?;
         let refused = Arc::new(Mutex::new(None));
         let r = refused.clone();
-        conn.authorizer(Some(move |ctx: rusqlite::hooks::AuthContext<'_>| {
-            match sqlite_refusal(&ctx.action) {
+        conn.authorizer(Some(
+            move |ctx: rusqlite::hooks::AuthContext<'_>| match sqlite_refusal(&ctx.action) {
                 None => rusqlite::hooks::Authorization::Allow,
                 Some(why) => {
                     if let Ok(mut slot) = r.lock() {
-                        // The first refusal names the statement, except SQLite's own
-                        // bookkeeping (`DROP TABLE` first deletes from `sqlite_master`):
-                        // a later refusal naming the user's table says more.
-                        let internal = |w: &str| w.contains("`sqlite_");
-                        if slot.as_deref().is_none_or(internal) {
-                            *slot = Some(why);
-                        }
+                        slot.get_or_insert(why);
                     }
                     rusqlite::hooks::Authorization::Deny
                 }
-            }
-        }))?;
+            },
+        ))?;
         Ok(SqliteReader { conn, refused })
     }
 
@@ -351,21 +366,22 @@ impl SqliteReader {
         let why = Arc::new(AtomicU8::new(WHY_NONE));
         let deadline = Instant::now() + limits.time;
         let w = why.clone();
-        self.conn.progress_handler(
-            PROGRESS_STEPS,
-            Some(move || {
-                if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
-                    w.store(WHY_CANCEL, Ordering::Relaxed);
-                    true
-                } else if Instant::now() > deadline {
-                    w.store(WHY_TIME, Ordering::Relaxed);
-                    true
-                } else {
-                    false
-                }
-            }),
-        )
-        .map_err(Raw::from)?;
+        self.conn
+            .progress_handler(
+                PROGRESS_STEPS,
+                Some(move || {
+                    if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+                        w.store(WHY_CANCEL, Ordering::Relaxed);
+                        true
+                    } else if Instant::now() > deadline {
+                        w.store(WHY_TIME, Ordering::Relaxed);
+                        true
+                    } else {
+                        false
+                    }
+                }),
+            )
+            .map_err(Raw::from)?;
         let result = self.run(sql, params, limits);
         // A handler left behind would stop the next statement at this one's deadline.
         let _ = self.conn.progress_handler(0, None::<fn() -> bool>);
@@ -382,10 +398,17 @@ impl SqliteReader {
         })
     }
 
-    fn run(&self, sql: &str, params: &[SqlValue], limits: QueryLimits) -> Result<QueryResult, Stop> {
+    fn run(
+        &self,
+        sql: &str,
+        params: &[SqlValue],
+        limits: QueryLimits,
+    ) -> Result<QueryResult, Stop> {
         let mut stmt = self.conn.prepare(sql).map_err(Raw::from)?;
         if !stmt.readonly() {
-            return Err(Stop::Refused("the statement would change the database".into()));
+            return Err(Stop::Refused(
+                "the statement would change the database".into(),
+            ));
         }
         if stmt.parameter_count() != params.len() {
             return Err(Stop::Sql(Raw::other(format!(
@@ -579,9 +602,7 @@ fn pg_error(e: postgres::Error) -> Stop {
     use postgres::error::SqlState;
     match e.code() {
         Some(c) if *c == SqlState::QUERY_CANCELED => Stop::Timeout,
-        Some(c) if *c == SqlState::READ_ONLY_SQL_TRANSACTION => {
-            Stop::Refused(Raw::from(e).message)
-        }
+        Some(c) if *c == SqlState::READ_ONLY_SQL_TRANSACTION => Stop::Refused(Raw::from(e).message),
         _ => Stop::Sql(Raw::from(e)),
     }
 }
@@ -667,12 +688,20 @@ mod tests {
             max_rows: 0,
             ..QueryLimits::DEFAULT
         };
-        assert!(no_rows.checked().unwrap_err().to_string().contains("max_rows"));
+        assert!(no_rows
+            .checked()
+            .unwrap_err()
+            .to_string()
+            .contains("max_rows"));
         let huge = QueryLimits {
             max_bytes: (1 << 30) + 1,
             ..QueryLimits::DEFAULT
         };
-        assert!(huge.checked().unwrap_err().to_string().contains("max_bytes"));
+        assert!(huge
+            .checked()
+            .unwrap_err()
+            .to_string()
+            .contains("max_bytes"));
     }
 
     #[test]
@@ -749,9 +778,7 @@ mod tests {
             A::Attach {
                 filename: "/outside/secret.db",
             },
-            A::Detach {
-                database_name: "o",
-            },
+            A::Detach { database_name: "o" },
             A::Pragma {
                 pragma_name: "synchronous",
                 pragma_value: Some("OFF"),
@@ -771,7 +798,9 @@ mod tests {
                 function_name: "writefile",
             },
             A::Insert { table_name: "runs" },
-            A::Delete { table_name: "paths" },
+            A::Delete {
+                table_name: "paths",
+            },
             A::DropTable { table_name: "runs" },
             A::CreateTable { table_name: "x" },
         ] {
@@ -856,7 +885,11 @@ mod tests {
             .unwrap()
             .rows
             .is_empty());
-        assert!(!db.query("PRAGMA table_info(paths)", &[]).unwrap().rows.is_empty());
+        assert!(!db
+            .query("PRAGMA table_info(paths)", &[])
+            .unwrap()
+            .rows
+            .is_empty());
     }
 
     #[test]
@@ -947,6 +980,15 @@ mod tests {
                 None,
             )
             .unwrap_err();
-        assert!(matches!(e, DbError::QueryLimit { name: "max_rows", .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                DbError::QueryLimit {
+                    name: "max_rows",
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
 }
