@@ -33,6 +33,7 @@
 //! ```
 
 mod backend;
+mod query;
 pub mod recording;
 mod records;
 mod schema;
@@ -40,11 +41,14 @@ mod skill_log;
 pub use skill_log::SkillLogEntry;
 
 pub use backend::{Dialect, SqlValue};
+pub use query::QueryLimits;
 pub use records::*;
 pub use schema::LATEST as SCHEMA_VERSION;
 
 use backend::{Kind, PgTx, Raw, SqliteTx, Tx};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// The database file name at a project's root when nothing else is said.
@@ -59,8 +63,19 @@ const BUSY_TIMEOUT: Duration = Duration::from_secs(5);
 /// How many times a busy transaction is tried before giving up.
 const TRIES: u32 = 12;
 
-/// Where the data lives.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// How long opening a PostgreSQL database may take (TCP connect, TLS negotiation,
+/// authentication) unless the URL says `connect_timeout=N` (seconds).
+pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// The longest `connect_timeout` a URL may ask for.
+const MAX_CONNECT_TIMEOUT: Duration = Duration::from_secs(120);
+
+/// How long data sent to a PostgreSQL server may stay unacknowledged before the
+/// connection is dropped (a server or network that went away).
+const TCP_USER_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// Where the data lives. `Display` and `Debug` never show a password.
+#[derive(Clone, PartialEq, Eq)]
 pub enum Target {
     /// A SQLite file.
     Sqlite(PathBuf),
@@ -98,24 +113,140 @@ impl Target {
 }
 
 impl std::fmt::Display for Target {
-    /// The file path, or the URL without its password.
+    /// The file path, or the URL without its password ([`redact_url`]).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Target::Sqlite(p) => write!(f, "{}", p.display()),
-            Target::Postgres(url) => {
-                // postgres://user:secret@host/db → postgres://user@host/db
-                let shown = match (url.find("://"), url.rfind('@')) {
-                    (Some(s), Some(at)) if at > s => {
-                        let userinfo = &url[s + 3..at];
-                        let user = userinfo.split(':').next().unwrap_or("");
-                        format!("{}{user}{}", &url[..s + 3], &url[at..])
-                    }
-                    _ => url.clone(),
-                };
-                write!(f, "{shown}")
+            Target::Postgres(url) => write!(f, "{}", redact_url(url)),
+        }
+    }
+}
+
+impl std::fmt::Debug for Target {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Target::Sqlite(p) => f.debug_tuple("Sqlite").field(p).finish(),
+            Target::Postgres(url) => f.debug_tuple("Postgres").field(&redact_url(url)).finish(),
+        }
+    }
+}
+
+impl Target {
+    /// `message` with every credential of this target's URL replaced by `***` (for
+    /// driver messages, which might quote the connection string).
+    pub fn scrub(&self, message: &str) -> String {
+        let Target::Postgres(url) = self else {
+            return message.to_string();
+        };
+        let mut out = message.replace(url.as_str(), &redact_url(url));
+        for secret in url_secrets(url) {
+            // A one- to three-character password would garble the message; such a
+            // password is not worth keeping secret anyway, but it is still not quoted
+            // by fitup's own messages (the URL is always shown redacted).
+            if secret.chars().count() >= 4 {
+                out = out.replace(&secret, "***");
+            }
+        }
+        out
+    }
+}
+
+/// A connection URL as fitup shows it: the password of `user:password@` is dropped
+/// and the value of every `password=` (or other `…pass…=`) parameter becomes `***`.
+/// `postgres://u:secret@h:5/d?password=x&sslmode=disable` →
+/// `postgres://u@h:5/d?password=***&sslmode=disable`. Every message, listing and
+/// `Debug` output that names a PostgreSQL database goes through here.
+pub fn redact_url(url: &str) -> String {
+    let Some(scheme_end) = url.find("://").map(|s| s + 3) else {
+        return url.to_string();
+    };
+    let (main, query) = match url[scheme_end..].find('?') {
+        Some(q) => url.split_at(scheme_end + q),
+        None => (url, ""),
+    };
+    let mut out = String::with_capacity(url.len());
+    // userinfo ends at the last '@' before the path (a password may hold '@').
+    let path_start = main[scheme_end..]
+        .rfind('@')
+        .map(|at| scheme_end + at)
+        .and_then(|at| main[at..].find('/').map(|p| at + p))
+        .or_else(|| main[scheme_end..].find('/').map(|p| scheme_end + p))
+        .unwrap_or(main.len());
+    match main[scheme_end..path_start].rfind('@') {
+        Some(at) => {
+            let userinfo = &main[scheme_end..scheme_end + at];
+            let user = userinfo.split(':').next().unwrap_or("");
+            out.push_str(&main[..scheme_end]);
+            out.push_str(user);
+            out.push_str(&main[scheme_end + at..]);
+        }
+        None => out.push_str(main),
+    }
+    if let Some(params) = query.strip_prefix('?') {
+        out.push('?');
+        let shown: Vec<String> = params
+            .split('&')
+            .map(|kv| match kv.split_once('=') {
+                Some((k, _)) if k.to_ascii_lowercase().contains("pass") => format!("{k}=***"),
+                _ => kv.to_string(),
+            })
+            .collect();
+        out.push_str(&shown.join("&"));
+    }
+    out
+}
+
+/// The credentials written in a URL (the userinfo password and `…pass…=` values), as
+/// written and percent-decoded.
+fn url_secrets(url: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let Some(scheme_end) = url.find("://").map(|s| s + 3) else {
+        return out;
+    };
+    let (main, query) = match url[scheme_end..].find('?') {
+        Some(q) => url.split_at(scheme_end + q),
+        None => (url, ""),
+    };
+    if let Some(at) = main[scheme_end..].rfind('@') {
+        if let Some((_, pw)) = main[scheme_end..scheme_end + at].split_once(':') {
+            out.push(pw.to_string());
+        }
+    }
+    for kv in query.trim_start_matches('?').split('&') {
+        if let Some((k, v)) = kv.split_once('=') {
+            if k.to_ascii_lowercase().contains("pass") {
+                out.push(v.to_string());
             }
         }
     }
+    let decoded: Vec<String> = out.iter().map(|s| percent_decode(s)).collect();
+    out.extend(decoded);
+    out.retain(|s| !s.is_empty());
+    out
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        match (
+            b[i],
+            b.get(i + 1).copied().and_then(hex),
+            b.get(i + 2).copied().and_then(hex),
+        ) {
+            (b'%', Some(h), Some(l)) => {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+            }
+            (c, ..) => {
+                out.push(c);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
 }
 
 /// Why a database operation failed. Every variant names the database.
@@ -177,11 +308,48 @@ pub enum DbError {
         /// The driver's last message.
         cause: String,
     },
-    /// A read-only query tried to change the database.
-    #[error("db.query is read-only: {cause}")]
+    /// A read-only query tried to change the database, or to reach outside it
+    /// (ATTACH, a setting, a file or server function).
+    #[error("db.query is read-only and reads this database only: {cause}")]
     WriteRefused {
         /// What was refused.
         cause: String,
+    },
+    /// A query ran past its time limit and was stopped.
+    #[error("query stopped after {} s (the time limit of db.query on {target}; a script may raise it up to {} s with #{{max_seconds: …}})", .limit.as_secs_f64(), QueryLimits::MAX.time.as_secs())]
+    QueryTimeout {
+        /// The database.
+        target: String,
+        /// The limit that passed.
+        limit: Duration,
+    },
+    /// A query's result passed the row or byte cap; nothing of it is returned.
+    #[error("the query on {target} returned more than {} rows or {} (the result limit of db.query; a script may raise it up to {} rows and {} with #{{max_rows: …, max_bytes: …}}, or ask for fewer rows with LIMIT)", query::thousands(*.max_rows as u64), query::bytes(*.max_bytes), query::thousands(QueryLimits::MAX.max_rows as u64), query::bytes(QueryLimits::MAX.max_bytes))]
+    QueryTooLarge {
+        /// The database.
+        target: String,
+        /// The row cap.
+        max_rows: usize,
+        /// The byte cap.
+        max_bytes: usize,
+    },
+    /// The run was cancelled (a newer save in watch mode) while a query ran.
+    #[error("query on {target} cancelled")]
+    QueryCancelled {
+        /// The database.
+        target: String,
+    },
+    /// A query limit asked for by a script is out of range.
+    #[error(
+        "the query limit {name} = {value} is out of range: it must be positive and at most {max}"
+    )]
+    QueryLimit {
+        /// `max_seconds`, `max_rows` or `max_bytes`.
+        name: &'static str,
+        /// What was asked for.
+        value: String,
+        /// The hard maximum.
+        max: String,
     },
     /// No record with that id.
     #[error("no {what} with id {id} in {target}")]
@@ -221,6 +389,9 @@ enum Conn {
 pub struct Database {
     conn: Conn,
     target: Target,
+    /// The read-only, jailed connection of [`Database::query_with`] (SQLite; opened
+    /// on the first query).
+    reader: Option<query::SqliteReader>,
 }
 
 impl std::fmt::Debug for Database {
@@ -324,18 +495,26 @@ impl Database {
             Target::Postgres(url) => {
                 let mut config: postgres::Config = url
                     .parse()
-                    .map_err(|e: postgres::Error| open_err(e.to_string()))?;
-                config.connect_timeout(Duration::from_secs(10));
+                    .map_err(|e: postgres::Error| open_err(target.scrub(&e.to_string())))?;
+                let timeout = config
+                    .get_connect_timeout()
+                    .copied()
+                    .unwrap_or(CONNECT_TIMEOUT)
+                    .clamp(Duration::from_secs(1), MAX_CONNECT_TIMEOUT);
+                config.connect_timeout(timeout);
+                config.tcp_user_timeout(TCP_USER_TIMEOUT);
+                config.keepalives(true);
+                config.keepalives_idle(Duration::from_secs(30));
                 config.application_name("fitup");
-                let client = config
-                    .connect(postgres::NoTls)
-                    .map_err(|e| open_err(Raw::from(e).message))?;
+                let client = connect_within(config, timeout)
+                    .map_err(|cause| open_err(target.scrub(&cause)))?;
                 Conn::Postgres(Box::new(client))
             }
         };
         let mut db = Database {
             conn,
             target: target.clone(),
+            reader: None,
         };
         let target_version = version.min(schema::LATEST);
         let now = now_utc();
@@ -451,76 +630,100 @@ impl Database {
         }
     }
 
-    /// Runs a read-only SQL query (one `SELECT`, `?`-free: parameters are `?1`… in
-    /// SQLite and `$1`… in PostgreSQL) and returns its columns and rows. Writes are
-    /// refused: SQLite checks the statement is read-only and runs it with
-    /// `query_only`; PostgreSQL runs it in a `READ ONLY` transaction.
+    /// Runs one read-only SQL query within [`QueryLimits::DEFAULT`]: see
+    /// [`Database::query_with`].
     pub fn query(&mut self, sql: &str, params: &[SqlValue]) -> Result<QueryResult, DbError> {
+        self.query_with(sql, params, QueryLimits::DEFAULT, None)
+    }
+
+    /// Runs one read-only SQL query (parameters are `?1`… in SQLite and `$1`… in
+    /// PostgreSQL) and returns its columns and rows: what scripts' `db.query` runs.
+    ///
+    /// It reads this database only. SQLite: on a separate read-only connection whose
+    /// authorizer refuses ATTACH/DETACH, writes, transactions, pragmas that set
+    /// anything and file functions ([`DbError::WriteRefused`]). PostgreSQL: in a
+    /// `READ ONLY` transaction, plain queries only, no server-file or session
+    /// functions. It stops after `limits.time` ([`DbError::QueryTimeout`]), refuses a
+    /// result past `limits.max_rows` or `limits.max_bytes` before holding more of it
+    /// ([`DbError::QueryTooLarge`]), and stops when `cancel` is set
+    /// ([`DbError::QueryCancelled`]). Limits beyond [`QueryLimits::MAX`] are refused.
+    pub fn query_with(
+        &mut self,
+        sql: &str,
+        params: &[SqlValue],
+        limits: QueryLimits,
+        cancel: Option<Arc<AtomicBool>>,
+    ) -> Result<QueryResult, DbError> {
+        let limits = limits.checked()?;
         let target = self.target.to_string();
-        let sql_err = |e: Raw| match e.kind {
-            Kind::WriteRefused | Kind::ReadOnly => DbError::WriteRefused { cause: e.message },
-            _ => DbError::Sql {
-                target: target.clone(),
-                cause: e.message,
-            },
+        let result = match &mut self.conn {
+            Conn::Postgres(c) => query::pg_query(c, sql, params, limits, cancel),
+            Conn::Sqlite(_) => {
+                let reader = match (&mut self.reader, &self.target) {
+                    (Some(r), _) => r,
+                    (slot @ None, Target::Sqlite(path)) => {
+                        let opened =
+                            query::SqliteReader::open(path, BUSY_TIMEOUT).map_err(|e| {
+                                DbError::Open {
+                                    target: target.clone(),
+                                    cause: format!("the read-only query connection: {}", e.message),
+                                }
+                            })?;
+                        slot.insert(opened)
+                    }
+                    (None, Target::Postgres(_)) => {
+                        return Err(DbError::Open {
+                            target,
+                            cause: "a SQLite connection without a file".into(),
+                        })
+                    }
+                };
+                reader.query(sql, params, limits, cancel)
+            }
         };
-        match &mut self.conn {
-            Conn::Sqlite(c) => {
-                let run = |c: &rusqlite::Connection| -> Result<QueryResult, Raw> {
-                    let mut stmt = c.prepare(sql)?;
-                    if !stmt.readonly() {
-                        return Err(Raw {
-                            kind: Kind::WriteRefused,
-                            message: "the statement would change the database".into(),
-                        });
-                    }
-                    if stmt.parameter_count() != params.len() {
-                        return Err(Raw::other(format!(
-                            "the statement has {} parameters, {} given",
-                            stmt.parameter_count(),
-                            params.len()
-                        )));
-                    }
-                    let columns: Vec<String> = stmt.column_names().map(|s| s.to_string()).collect();
-                    let n = columns.len();
-                    let mut rows = stmt.query(rusqlite::params_from_iter(params.iter()))?;
-                    let mut out = Vec::new();
-                    while let Some(row) = rows.next()? {
-                        out.push(
-                            (0..n)
-                                .map(|i| row.get_ref(i).map(backend::sqlite_value))
-                                .collect::<Result<_, _>>()?,
-                        );
-                    }
-                    Ok(QueryResult { columns, rows: out })
-                };
-                c.execute_batch("PRAGMA query_only=ON")
-                    .map_err(|e| sql_err(e.into()))?;
-                let r = run(c);
-                let reset = c.execute_batch("PRAGMA query_only=OFF");
-                let r = r.map_err(sql_err)?;
-                reset.map_err(|e| sql_err(e.into()))?;
-                Ok(r)
-            }
-            Conn::Postgres(c) => {
-                let run = |c: &mut postgres::Client| -> Result<QueryResult, Raw> {
-                    let mut tx = c.build_transaction().read_only(true).start()?;
-                    let stmt = tx.prepare(sql)?;
-                    let columns: Vec<String> = stmt
-                        .columns()
-                        .iter()
-                        .map(|c| c.name().to_string())
-                        .collect();
-                    let boxed = backend::pg_bind(&stmt, params)?;
-                    let refs: Vec<&(dyn postgres::types::ToSql + Sync)> =
-                        boxed.iter().map(|b| b.as_ref()).collect();
-                    let rows = backend::pg_table(&tx.query(&stmt, &refs)?)?;
-                    tx.rollback()?;
-                    Ok(QueryResult { columns, rows })
-                };
-                run(c).map_err(sql_err)
-            }
-        }
+        result.map_err(|stop| match stop {
+            query::Stop::Refused(cause) => DbError::WriteRefused { cause },
+            query::Stop::Timeout => DbError::QueryTimeout {
+                target,
+                limit: limits.time,
+            },
+            query::Stop::Cancelled => DbError::QueryCancelled { target },
+            query::Stop::TooLarge => DbError::QueryTooLarge {
+                target,
+                max_rows: limits.max_rows,
+                max_bytes: limits.max_bytes,
+            },
+            query::Stop::Sql(e) => match e.kind {
+                Kind::WriteRefused | Kind::ReadOnly => DbError::WriteRefused { cause: e.message },
+                _ => DbError::Sql {
+                    target,
+                    cause: e.message,
+                },
+            },
+        })
+    }
+}
+
+/// Connects to PostgreSQL, giving up after `timeout`: the driver bounds the TCP
+/// connect only, so a server that accepts and then never answers would hang the
+/// handshake forever. The attempt runs on its own thread; one that has not finished
+/// in time is left to end by itself (when the server closes, or with the process).
+fn connect_within(config: postgres::Config, timeout: Duration) -> Result<postgres::Client, String> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("fitup-db-connect".into())
+        .spawn(move || {
+            let _ = tx.send(config.connect(postgres::NoTls));
+        })
+        .map_err(|e| format!("cannot start the connecting thread: {e}"))?;
+    match rx.recv_timeout(timeout) {
+        Ok(Ok(client)) => Ok(client),
+        Ok(Err(e)) => Err(Raw::from(e).message),
+        Err(_) => Err(format!(
+            "no answer from the server within {} s (the connect timeout; `connect_timeout=N` in the URL changes it, up to {} s)",
+            timeout.as_secs_f64(),
+            MAX_CONNECT_TIMEOUT.as_secs()
+        )),
     }
 }
 
@@ -648,5 +851,49 @@ mod tests {
         Database::open(&Target::Sqlite(empty.clone())).unwrap();
         drop(Database::open(&Target::Sqlite(d.join("new.db"))).unwrap());
         Database::open(&Target::Sqlite(d.join("new.db"))).unwrap();
+    }
+
+    #[test]
+    fn credentials_never_show() {
+        let t = Target::Postgres(
+            "postgres://u:s3cr%40t@h:5/d?sslmode=disable&password=other1&application_name=a@b"
+                .into(),
+        );
+        for shown in [t.to_string(), format!("{t:?}")] {
+            assert!(
+                !shown.contains("s3cr") && !shown.contains("other1"),
+                "{shown}"
+            );
+            assert!(shown.contains("u@h:5/d"), "{shown}");
+            assert!(shown.contains("password=***"), "{shown}");
+            assert!(shown.contains("application_name=a@b"), "{shown}");
+        }
+        let scrubbed = t.scrub("bad password s3cr@t / s3cr%40t / other1");
+        assert_eq!(scrubbed, "bad password *** / *** / ***");
+        assert_eq!(
+            redact_url("postgres://u:p@ss@h/d"),
+            "postgres://u@h/d",
+            "a password with an @"
+        );
+        assert_eq!(redact_url("postgres://h/d"), "postgres://h/d");
+        assert_eq!(redact_url("postgres://u@h/d"), "postgres://u@h/d");
+    }
+
+    #[test]
+    fn a_silent_server_fails_within_the_connect_timeout() {
+        // Accepts (the kernel's backlog) and never answers.
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let port = listener.local_addr().unwrap().port();
+        let url = format!("postgres://u:verysecret@127.0.0.1:{port}/d?connect_timeout=1");
+        let start = std::time::Instant::now();
+        let e = Database::open(&Target::Postgres(url)).unwrap_err();
+        let shown = e.to_string();
+        assert!(start.elapsed() < Duration::from_secs(5), "{shown}");
+        assert!(
+            shown.contains("no answer from the server within 1 s"),
+            "{shown}"
+        );
+        assert!(!shown.contains("verysecret") && !format!("{e:?}").contains("verysecret"));
+        drop(listener);
     }
 }

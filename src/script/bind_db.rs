@@ -8,7 +8,8 @@ use super::bind_robot::TrajectoryHandle;
 use super::convert::{check_keys, err, fail, opt_str};
 use super::{Context, ScriptResult};
 use crate::db::{
-    recording, Database, InterferencePair, PathMeta, PathQuery, Snapshot, SqlValue, Target,
+    recording, Database, InterferencePair, PathMeta, PathQuery, QueryLimits, Snapshot, SqlValue,
+    Target,
 };
 use crate::planning::MeshValidatorOptions;
 use rhai::{Array, Dynamic, Map};
@@ -220,20 +221,61 @@ fn paths(h: &DbHandle, filter: &Map) -> ScriptResult<Array> {
         .collect())
 }
 
-fn query(h: &DbHandle, sql: &str, params: &Array) -> ScriptResult<Array> {
+/// `#{max_seconds, max_rows, max_bytes}` over the defaults.
+fn query_limits(m: &Map) -> ScriptResult<QueryLimits> {
+    check_keys(m, &["max_seconds", "max_rows", "max_bytes"], "query limits")?;
+    let mut l = QueryLimits::DEFAULT;
+    if let Some(v) = m.get("max_seconds") {
+        let s = super::convert::num(v, "max_seconds")?;
+        if !(s > 0.0 && s <= QueryLimits::MAX.time.as_secs_f64()) {
+            return err(format!(
+                "max_seconds must be more than 0 and at most {} s, not {s}",
+                QueryLimits::MAX.time.as_secs()
+            ));
+        }
+        l.time = std::time::Duration::from_secs_f64(s);
+    }
+    let count = |k: &str| -> ScriptResult<Option<usize>> {
+        m.get(k)
+            .map(|v| {
+                let n = v
+                    .as_int()
+                    .map_err(|t| fail(format!("{k} must be an integer, not {t}")))?;
+                usize::try_from(n).map_err(|_| fail(format!("{k} must be positive, not {n}")))
+            })
+            .transpose()
+    };
+    if let Some(n) = count("max_rows")? {
+        l.max_rows = n;
+    }
+    if let Some(n) = count("max_bytes")? {
+        l.max_bytes = n;
+    }
+    // The maxima are the library's: it names the limit that is out of range.
+    l.checked().map_err(fail)
+}
+
+fn query(h: &DbHandle, sql: &str, params: &Array, limits: &Map) -> ScriptResult<Array> {
+    let limits = query_limits(limits)?;
     let params = params
         .iter()
         .enumerate()
         .map(|(i, v)| to_sql(v, i))
         .collect::<ScriptResult<Vec<_>>>()?;
-    let r = h.lock()?.query(sql, &params).map_err(fail)?;
+    // The run's cancel flag reaches the query: a newer save stops it mid-statement.
+    let r = h
+        .lock()?
+        .query_with(sql, &params, limits, Some(h.ctx.cancel.clone()))
+        .map_err(fail)?;
+    let columns = r.columns;
+    // Rows are dropped as they are converted: the result is not held twice.
     Ok(r.rows
-        .iter()
+        .into_iter()
         .map(|row| {
             Dynamic::from_map(
-                r.columns
+                columns
                     .iter()
-                    .zip(row)
+                    .zip(&row)
                     .map(|(c, v)| (c.as_str().into(), from_sql(v)))
                     .collect(),
             )
@@ -341,13 +383,18 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     api.f(
         "Database.query(sql: string) -> array",
-        "Runs one read-only SQL query; each row is a map column → value. Statements that write are refused.",
-        |h: &mut DbHandle, sql: &str| query(h, sql, &Array::new()),
+        "Runs one read-only SQL query on this database; each row is a map column → value. Writes, ATTACH, pragmas that set anything and file functions are refused. Stops after 10 s and refuses results over 100,000 rows or 64 MiB (see docs/database.md, *Queries from scripts*).",
+        |h: &mut DbHandle, sql: &str| query(h, sql, &Array::new(), &Map::new()),
     );
     api.f(
         "Database.query(sql: string, params: array) -> array",
         "As above with parameters (`?1`, `?2`… in SQLite, `$1`, `$2`… in PostgreSQL): numbers, strings, bools or `()`.",
-        |h: &mut DbHandle, sql: &str, params: Array| query(h, sql, &params),
+        |h: &mut DbHandle, sql: &str, params: Array| query(h, sql, &params, &Map::new()),
+    );
+    api.f(
+        "Database.query(sql: string, params: array, limits: map) -> array",
+        "As above within `#{max_seconds, max_rows, max_bytes}` instead of 10 s, 100,000 rows, 64 MiB; at most 600 s, 4,000,000 rows, 1 GiB.",
+        |h: &mut DbHandle, sql: &str, params: Array, limits: Map| query(h, sql, &params, &limits),
     );
     api.f(
         "Database.to_string() -> string",

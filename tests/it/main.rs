@@ -11,6 +11,7 @@ mod chain;
 mod cli;
 mod db;
 mod hostile_bounds;
+mod hostile_db;
 mod hostile_files;
 mod hostile_names;
 mod hostile_runs;

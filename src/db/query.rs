@@ -1,0 +1,994 @@
+//! Scripts' read-only queries ([`Database::query_with`](super::Database::query_with)):
+//! jailed to the results database, bounded in time, rows and bytes, and cancellable.
+//!
+//! SQLite: a separate connection opened `SQLITE_OPEN_READ_ONLY` (it cannot write any
+//! file, nor create one), with an authorizer that allows reading tables and calling
+//! ordinary functions only (no `ATTACH`, no `PRAGMA` that sets anything, no
+//! transactions, no file functions), no attached databases at all, values of at most
+//! 16 MiB, and a progress handler that stops the statement when its time is up or the
+//! run is cancelled. PostgreSQL: one `READ ONLY` transaction per query with a
+//! `statement_timeout`, statements that start with `SELECT`/`WITH`/`VALUES`/`TABLE`
+//! only, no server-file or session functions, rows fetched in batches so the caps hold
+//! before the rows are in memory, and a watcher thread that cancels the statement on
+//! the server when the run is cancelled.
+
+use super::backend::{self, Raw, SqlValue};
+use super::{DbError, QueryResult};
+use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// The bounds of one read-only query: wall time and the size of its result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct QueryLimits {
+    /// Wall time the statement may run (SQLite: until the last row is read;
+    /// PostgreSQL: `statement_timeout`, and the whole fetch).
+    pub time: Duration,
+    /// Rows the result may hold.
+    pub max_rows: usize,
+    /// Bytes the result may take in memory (values, text and row overhead as fitup
+    /// stores them).
+    pub max_bytes: usize,
+}
+
+impl QueryLimits {
+    /// What a query gets unless the script asks for more: 10 s, 100,000 rows, 64 MiB.
+    pub const DEFAULT: QueryLimits = QueryLimits {
+        time: Duration::from_secs(10),
+        max_rows: 100_000,
+        max_bytes: 64 << 20,
+    };
+
+    /// The most a script may ask for: 600 s, 4,000,000 rows (the script array limit),
+    /// 1 GiB.
+    pub const MAX: QueryLimits = QueryLimits {
+        time: Duration::from_secs(600),
+        max_rows: 4_000_000,
+        max_bytes: 1 << 30,
+    };
+
+    /// These limits if each is positive and within [`QueryLimits::MAX`], else
+    /// [`DbError::QueryLimit`] naming the first one that is not.
+    pub fn checked(self) -> Result<Self, DbError> {
+        let bad = |name: &'static str, value: String, max: String| {
+            Err(DbError::QueryLimit { name, value, max })
+        };
+        if self.time.is_zero() || self.time > Self::MAX.time {
+            return bad(
+                "max_seconds",
+                format!("{} s", self.time.as_secs_f64()),
+                format!("{} s", Self::MAX.time.as_secs()),
+            );
+        }
+        if self.max_rows == 0 || self.max_rows > Self::MAX.max_rows {
+            return bad(
+                "max_rows",
+                thousands(self.max_rows as u64),
+                thousands(Self::MAX.max_rows as u64),
+            );
+        }
+        if self.max_bytes == 0 || self.max_bytes > Self::MAX.max_bytes {
+            return bad(
+                "max_bytes",
+                thousands(self.max_bytes as u64),
+                format!("{} (1 GiB)", thousands(Self::MAX.max_bytes as u64)),
+            );
+        }
+        Ok(self)
+    }
+}
+
+impl Default for QueryLimits {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// `1234567` → `1,234,567`.
+pub(crate) fn thousands(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::with_capacity(s.len() + s.len() / 3);
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// `64 MiB`, `1.5 KiB`, `12 bytes`.
+pub(crate) fn bytes(n: usize) -> String {
+    const MIB: usize = 1 << 20;
+    const KIB: usize = 1 << 10;
+    let unit = |u: usize, name: &str| {
+        if n.is_multiple_of(u) {
+            format!("{} {name}", n / u)
+        } else {
+            format!("{:.1} {name}", n as f64 / u as f64)
+        }
+    };
+    if n >= MIB {
+        unit(MIB, "MiB")
+    } else if n >= KIB {
+        unit(KIB, "KiB")
+    } else {
+        format!("{n} bytes")
+    }
+}
+
+/// Why a query stopped before it returned its rows.
+#[derive(Debug)]
+pub(crate) enum Stop {
+    /// The jail refused the statement (what and why).
+    Refused(String),
+    /// The time limit passed.
+    Timeout,
+    /// The run was cancelled.
+    Cancelled,
+    /// The result passed the row or byte cap.
+    TooLarge,
+    /// Any other back-end error.
+    Sql(Raw),
+}
+
+impl From<Raw> for Stop {
+    fn from(e: Raw) -> Self {
+        Stop::Sql(e)
+    }
+}
+
+/// Why the progress handler or the watcher stopped a statement.
+const WHY_NONE: u8 = 0;
+const WHY_TIME: u8 = 1;
+const WHY_CANCEL: u8 = 2;
+
+/// Collects rows under the caps: counts rows and an estimate of the memory they take.
+struct Collector {
+    limits: QueryLimits,
+    rows: Vec<Vec<SqlValue>>,
+    bytes: usize,
+}
+
+impl Collector {
+    fn new(limits: QueryLimits, columns: &[String]) -> Self {
+        Collector {
+            limits,
+            rows: Vec::new(),
+            bytes: columns.iter().map(|c| c.len() + 24).sum(),
+        }
+    }
+
+    fn push(&mut self, row: Vec<SqlValue>) -> Result<(), Stop> {
+        // What the row costs as stored: the Vec, every value, the text's bytes.
+        let size = 24
+            + row
+                .iter()
+                .map(|v| {
+                    std::mem::size_of::<SqlValue>()
+                        + match v {
+                            SqlValue::Text(s) => s.len(),
+                            _ => 0,
+                        }
+                })
+                .sum::<usize>();
+        self.bytes += size;
+        if self.rows.len() >= self.limits.max_rows || self.bytes > self.limits.max_bytes {
+            return Err(Stop::TooLarge);
+        }
+        self.rows.push(row);
+        Ok(())
+    }
+}
+
+/// The longest text or blob value a script's SQLite query may build (also bounds
+/// `zeroblob`, `printf` and `group_concat` bombs): the script string limit.
+const MAX_VALUE_BYTES: i32 = 16 << 20;
+
+/// How many SQLite virtual-machine steps pass between two looks at the clock and
+/// the cancel flag (about a millisecond of work).
+const PROGRESS_STEPS: i32 = 10_000;
+
+/// Introspection pragmas a query may use, with or without an argument (they read the
+/// schema and never change anything).
+const READ_PRAGMAS: &[&str] = &[
+    "table_info",
+    "table_xinfo",
+    "table_list",
+    "index_list",
+    "index_info",
+    "index_xinfo",
+    "foreign_key_list",
+    "foreign_key_check",
+    "collation_list",
+    "function_list",
+    "module_list",
+    "pragma_list",
+    "database_list",
+    "integrity_check",
+    "quick_check",
+];
+
+/// Settings of the database file a query may read, but only without a value
+/// (`PRAGMA user_version` reads; `PRAGMA user_version = 5` writes and is refused).
+/// Per-connection settings (`foreign_keys`, `synchronous`, …) are not among them:
+/// the query connection's own values would say nothing about fitup's writes.
+const READ_SETTINGS: &[&str] = &[
+    "application_id",
+    "auto_vacuum",
+    "encoding",
+    "freelist_count",
+    "page_count",
+    "page_size",
+    "schema_version",
+    "user_version",
+    "data_version",
+];
+
+/// SQL functions refused although the statement only reads: they reach files or
+/// load code (most are absent from fitup's SQLite; refused should one ever appear).
+const DENIED_FUNCTIONS: &[&str] = &[
+    "load_extension",
+    "readfile",
+    "writefile",
+    "edit",
+    "fts3_tokenizer",
+    "lsmode",
+    "sqlar_compress",
+    "sqlar_uncompress",
+    "zipfile",
+];
+
+/// The authorizer's verdict on one action of a statement being prepared: `None`
+/// allows it, `Some(why)` refuses it.
+pub(crate) fn sqlite_refusal(action: &rusqlite::hooks::AuthAction<'_>) -> Option<String> {
+    use rusqlite::hooks::AuthAction as A;
+    match action {
+        A::Select | A::Read { .. } | A::Recursive => None,
+        A::Function { function_name } => {
+            let f = function_name.to_ascii_lowercase();
+            DENIED_FUNCTIONS
+                .contains(&f.as_str())
+                .then(|| format!("the function `{function_name}` reaches outside the database"))
+        }
+        A::Pragma {
+            pragma_name,
+            pragma_value,
+        } => {
+            let p = pragma_name.to_ascii_lowercase();
+            if READ_PRAGMAS.contains(&p.as_str())
+                || (pragma_value.is_none() && READ_SETTINGS.contains(&p.as_str()))
+            {
+                None
+            } else if pragma_value.is_some() {
+                Some(format!("`PRAGMA {pragma_name} = …` changes a setting"))
+            } else {
+                Some(format!("`PRAGMA {pragma_name}` is not a schema query"))
+            }
+        }
+        A::Attach { .. } => Some("ATTACH would open another database file".into()),
+        A::Detach { .. } => Some("DETACH changes the connection".into()),
+        A::Transaction { .. } | A::Savepoint { .. } => {
+            Some("transactions are fitup's (each query is one read)".into())
+        }
+        // DROP, CREATE and ALTER are first asked as a write to the schema table (and
+        // end there).
+        A::Insert { table_name } | A::Update { table_name, .. } | A::Delete { table_name }
+            if is_schema_table(table_name) =>
+        {
+            Some("the statement changes the schema (DROP, CREATE or ALTER)".into())
+        }
+        A::Insert { table_name } => Some(format!("INSERT into `{table_name}` writes")),
+        A::Update { table_name, .. } => Some(format!("UPDATE of `{table_name}` writes")),
+        A::Delete { table_name } => Some(format!("DELETE from `{table_name}` writes")),
+        A::DropTable { table_name } | A::DropTempTable { table_name } => {
+            Some(format!("DROP TABLE `{table_name}` writes"))
+        }
+        other => Some(format!(
+            "{} writes or changes the schema",
+            action_name(other)
+        )),
+    }
+}
+
+/// SQLite's schema table under any of its names.
+fn is_schema_table(name: &str) -> bool {
+    matches!(
+        name.to_ascii_lowercase().as_str(),
+        "sqlite_master" | "sqlite_schema" | "sqlite_temp_master" | "sqlite_temp_schema"
+    )
+}
+
+/// A short name of an authorizer action for messages.
+fn action_name(a: &rusqlite::hooks::AuthAction<'_>) -> String {
+    let d = format!("{a:?}");
+    d.split([' ', '{', '('])
+        .next()
+        .unwrap_or("the statement")
+        .to_string()
+}
+
+/// The read-only, jailed SQLite connection of scripts' queries.
+pub(crate) struct SqliteReader {
+    conn: rusqlite::Connection,
+    /// What the authorizer refused last (its messages say more than "not authorized").
+    refused: Arc<Mutex<Option<String>>>,
+}
+
+impl SqliteReader {
+    /// Opens `path` read-only (the file must exist: the writing connection made it).
+    pub fn open(path: &std::path::Path, busy: Duration) -> Result<Self, Raw> {
+        use rusqlite::limits::Limit;
+        use rusqlite::OpenFlags;
+        // No SQLITE_OPEN_URI: a file name is a file name, never `file:…?mode=rwc`.
+        let mut conn = rusqlite::Connection::open_with_flags(
+            path,
+            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+        )?;
+        conn.busy_timeout(busy)?;
+        conn.set_limit(Limit::SQLITE_LIMIT_ATTACHED, 0)?;
+        conn.set_limit(Limit::SQLITE_LIMIT_LENGTH, MAX_VALUE_BYTES)?;
+        conn.set_db_config(rusqlite::config::DbConfig::SQLITE_DBCONFIG_DEFENSIVE, true)?;
+        conn.set_db_config(
+            rusqlite::config::DbConfig::SQLITE_DBCONFIG_TRUSTED_SCHEMA,
+            false,
+        )?;
+        // A sort or a recursive CTE spills to temporary files past this cache (16 MB)
+        // rather than growing the process.
+        conn.execute_batch("PRAGMA cache_size=-16000")?;
+        let refused = Arc::new(Mutex::new(None));
+        let r = refused.clone();
+        conn.authorizer(Some(
+            move |ctx: rusqlite::hooks::AuthContext<'_>| match sqlite_refusal(&ctx.action) {
+                None => rusqlite::hooks::Authorization::Allow,
+                Some(why) => {
+                    if let Ok(mut slot) = r.lock() {
+                        slot.get_or_insert(why);
+                    }
+                    rusqlite::hooks::Authorization::Deny
+                }
+            },
+        ))?;
+        Ok(SqliteReader { conn, refused })
+    }
+
+    /// Runs one read-only statement within `limits`; `cancel` stops it when set.
+    pub fn query(
+        &mut self,
+        sql: &str,
+        params: &[SqlValue],
+        limits: QueryLimits,
+        cancel: Option<Arc<AtomicBool>>,
+    ) -> Result<QueryResult, Stop> {
+        if let Ok(mut slot) = self.refused.lock() {
+            *slot = None;
+        }
+        let why = Arc::new(AtomicU8::new(WHY_NONE));
+        let deadline = Instant::now() + limits.time;
+        let w = why.clone();
+        self.conn
+            .progress_handler(
+                PROGRESS_STEPS,
+                Some(move || {
+                    if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+                        w.store(WHY_CANCEL, Ordering::Relaxed);
+                        true
+                    } else if Instant::now() > deadline {
+                        w.store(WHY_TIME, Ordering::Relaxed);
+                        true
+                    } else {
+                        false
+                    }
+                }),
+            )
+            .map_err(Raw::from)?;
+        let result = self.run(sql, params, limits);
+        // A handler left behind would stop the next statement at this one's deadline.
+        let _ = self.conn.progress_handler(0, None::<fn() -> bool>);
+        result.map_err(|e| match e {
+            Stop::Sql(raw) => match why.load(Ordering::Relaxed) {
+                WHY_TIME => Stop::Timeout,
+                WHY_CANCEL => Stop::Cancelled,
+                _ => match self.refused.lock().ok().and_then(|mut s| s.take()) {
+                    Some(reason) => Stop::Refused(reason),
+                    None => Stop::Sql(raw),
+                },
+            },
+            other => other,
+        })
+    }
+
+    fn run(
+        &self,
+        sql: &str,
+        params: &[SqlValue],
+        limits: QueryLimits,
+    ) -> Result<QueryResult, Stop> {
+        let mut stmt = self.conn.prepare(sql).map_err(Raw::from)?;
+        if !stmt.readonly() {
+            return Err(Stop::Refused(
+                "the statement would change the database".into(),
+            ));
+        }
+        if stmt.parameter_count() != params.len() {
+            return Err(Stop::Sql(Raw::other(format!(
+                "the statement has {} parameters, {} given",
+                stmt.parameter_count(),
+                params.len()
+            ))));
+        }
+        let columns: Vec<String> = stmt.column_names().map(|s| s.to_string()).collect();
+        let n = columns.len();
+        let mut out = Collector::new(limits, &columns);
+        let mut rows = stmt
+            .query(rusqlite::params_from_iter(params.iter()))
+            .map_err(Raw::from)?;
+        while let Some(row) = rows.next().map_err(Raw::from)? {
+            out.push(
+                (0..n)
+                    .map(|i| row.get_ref(i).map(backend::sqlite_value))
+                    .collect::<Result<_, _>>()
+                    .map_err(Raw::from)?,
+            )?;
+        }
+        Ok(QueryResult {
+            columns,
+            rows: out.rows,
+        })
+    }
+}
+
+/// Words that may start a PostgreSQL query from a script.
+const PG_STATEMENTS: &[&str] = &["select", "with", "values", "table"];
+
+/// PostgreSQL functions refused anywhere in a script's query (also inside string
+/// literals, which `query_to_xml` and friends would run): they read or write server
+/// files, run other SQL, signal other sessions, change settings or take session locks
+/// that outlive the query.
+const PG_DENIED: &[&str] = &[
+    "pg_read_file",
+    "pg_read_binary_file",
+    "pg_ls_",
+    "pg_stat_file",
+    "pg_file_",
+    "lo_import",
+    "lo_export",
+    "dblink",
+    "query_to_xml",
+    "cursor_to_xml",
+    "table_to_xml",
+    "schema_to_xml",
+    "database_to_xml",
+    "ts_stat",
+    "ts_rewrite",
+    "set_config",
+    "pg_terminate_backend",
+    "pg_cancel_backend",
+    "pg_signal_backend",
+    "pg_reload_conf",
+    "pg_rotate_logfile",
+    "pg_promote",
+    "pg_switch_wal",
+    "pg_advisory_",
+    "pg_try_advisory_",
+    "pg_notify",
+    "pg_logical_",
+    "pg_replication_",
+    "pg_create_",
+    "pg_drop_",
+    "pg_log_backend",
+    "pg_import_system",
+];
+
+/// Refuses a PostgreSQL statement that is not a plain query or names a function of
+/// [`PG_DENIED`]; the message says which.
+pub(crate) fn pg_refusal(sql: &str) -> Option<String> {
+    let first = first_word(sql);
+    if !PG_STATEMENTS.contains(&first.as_str()) {
+        let shown = if first.is_empty() {
+            "an empty statement".to_string()
+        } else {
+            format!("`{}`", first.to_ascii_uppercase())
+        };
+        return Some(format!(
+            "{shown} is not a query: only SELECT, WITH, VALUES and TABLE statements run"
+        ));
+    }
+    let lower = sql.to_ascii_lowercase();
+    PG_DENIED.iter().find(|f| lower.contains(*f)).map(|f| {
+        format!(
+            "`{}…` reaches outside the results database (server files, other SQL, other sessions or settings)",
+            f.trim_end_matches('_')
+        )
+    })
+}
+
+/// The first keyword of a statement, after spaces, comments and opening parentheses,
+/// lowercased.
+fn first_word(sql: &str) -> String {
+    let b = sql.as_bytes();
+    let mut i = 0;
+    loop {
+        while i < b.len() && (b[i].is_ascii_whitespace() || b[i] == b'(') {
+            i += 1;
+        }
+        if b[i..].starts_with(b"--") {
+            while i < b.len() && b[i] != b'\n' {
+                i += 1;
+            }
+        } else if b[i..].starts_with(b"/*") {
+            // PostgreSQL block comments nest.
+            let mut depth = 0usize;
+            while i < b.len() {
+                if b[i..].starts_with(b"/*") {
+                    depth += 1;
+                    i += 2;
+                } else if b[i..].starts_with(b"*/") {
+                    depth -= 1;
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    i += 1;
+                }
+            }
+        } else {
+            break;
+        }
+    }
+    let end = b[i..]
+        .iter()
+        .position(|c| !c.is_ascii_alphanumeric() && *c != b'_')
+        .map_or(b.len(), |p| i + p);
+    sql[i..end].to_ascii_lowercase()
+}
+
+/// How many PostgreSQL rows are fetched per round trip: the caps are checked between
+/// batches, so at most this many rows past the cap are ever in memory.
+const PG_BATCH: i32 = 1000;
+
+/// How much longer than the server's `statement_timeout` the watcher waits before it
+/// cancels the statement itself (the server should have stopped it).
+const PG_GRACE: Duration = Duration::from_secs(2);
+
+/// Runs one read-only query on PostgreSQL within `limits`; `cancel` stops it.
+pub(crate) fn pg_query(
+    client: &mut postgres::Client,
+    sql: &str,
+    params: &[SqlValue],
+    limits: QueryLimits,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<QueryResult, Stop> {
+    if let Some(why) = pg_refusal(sql) {
+        return Err(Stop::Refused(why));
+    }
+    // The watcher is detached: a cancel request to a server that never answers must
+    // not hold up the script once the statement itself has returned.
+    let done = Arc::new(AtomicBool::new(false));
+    let why = Arc::new(AtomicU8::new(WHY_NONE));
+    {
+        let (done, why, token) = (done.clone(), why.clone(), client.cancel_token());
+        let deadline = Instant::now() + limits.time + PG_GRACE;
+        let _ = std::thread::Builder::new()
+            .name("fitup-db-watch".into())
+            .spawn(move || {
+                while !done.load(Ordering::Relaxed) {
+                    let reason = if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+                        WHY_CANCEL
+                    } else if Instant::now() > deadline {
+                        WHY_TIME
+                    } else {
+                        std::thread::sleep(Duration::from_millis(20));
+                        continue;
+                    };
+                    why.store(reason, Ordering::Relaxed);
+                    let _ = token.cancel_query(postgres::NoTls);
+                    return;
+                }
+            });
+    }
+    let start = Instant::now();
+    let result = pg_run(client, sql, params, limits, start);
+    done.store(true, Ordering::Relaxed);
+    result.map_err(|e| match (e, why.load(Ordering::Relaxed)) {
+        (_, WHY_CANCEL) => Stop::Cancelled,
+        (Stop::Sql(_), WHY_TIME) => Stop::Timeout,
+        (e, _) => e,
+    })
+}
+
+fn pg_error(e: postgres::Error) -> Stop {
+    use postgres::error::SqlState;
+    match e.code() {
+        Some(c) if *c == SqlState::QUERY_CANCELED => Stop::Timeout,
+        Some(c) if *c == SqlState::READ_ONLY_SQL_TRANSACTION => Stop::Refused(Raw::from(e).message),
+        _ => Stop::Sql(Raw::from(e)),
+    }
+}
+
+fn pg_run(
+    client: &mut postgres::Client,
+    sql: &str,
+    params: &[SqlValue],
+    limits: QueryLimits,
+    start: Instant,
+) -> Result<QueryResult, Stop> {
+    let mut tx = client
+        .build_transaction()
+        .read_only(true)
+        .start()
+        .map_err(pg_error)?;
+    // SET LOCAL ends with the transaction (always rolled back).
+    tx.batch_execute(&format!(
+        "SET LOCAL statement_timeout = {}",
+        limits.time.as_millis().max(1)
+    ))
+    .map_err(pg_error)?;
+    let stmt = tx.prepare(sql).map_err(pg_error)?;
+    let columns: Vec<String> = stmt
+        .columns()
+        .iter()
+        .map(|c| c.name().to_string())
+        .collect();
+    let boxed = backend::pg_bind(&stmt, params)?;
+    let refs: Vec<&(dyn postgres::types::ToSql + Sync)> =
+        boxed.iter().map(|b| b.as_ref()).collect();
+    let portal = tx.bind(&stmt, &refs).map_err(pg_error)?;
+    let mut out = Collector::new(limits, &columns);
+    loop {
+        let batch = tx.query_portal(&portal, PG_BATCH).map_err(pg_error)?;
+        if batch.is_empty() {
+            break;
+        }
+        let last = batch.len() < PG_BATCH as usize;
+        for row in backend::pg_table(&batch)? {
+            out.push(row)?;
+        }
+        if last {
+            break;
+        }
+        // Each batch is its own statement for the server's timeout: keep the total.
+        if start.elapsed() > limits.time {
+            return Err(Stop::Timeout);
+        }
+    }
+    tx.rollback().map_err(pg_error)?;
+    Ok(QueryResult {
+        columns,
+        rows: out.rows,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_written_for_people() {
+        assert_eq!(thousands(0), "0");
+        assert_eq!(thousands(100_000), "100,000");
+        assert_eq!(thousands(4_000_000), "4,000,000");
+        assert_eq!(bytes(64 << 20), "64 MiB");
+        assert_eq!(bytes(1536), "1.5 KiB");
+        assert_eq!(bytes(12), "12 bytes");
+    }
+
+    #[test]
+    fn limits_are_checked_against_the_maxima() {
+        assert!(QueryLimits::DEFAULT.checked().is_ok());
+        assert!(QueryLimits::MAX.checked().is_ok());
+        let too_long = QueryLimits {
+            time: Duration::from_secs(601),
+            ..QueryLimits::DEFAULT
+        };
+        let e = too_long.checked().unwrap_err().to_string();
+        assert!(e.contains("max_seconds") && e.contains("600 s"), "{e}");
+        let no_rows = QueryLimits {
+            max_rows: 0,
+            ..QueryLimits::DEFAULT
+        };
+        assert!(no_rows
+            .checked()
+            .unwrap_err()
+            .to_string()
+            .contains("max_rows"));
+        let huge = QueryLimits {
+            max_bytes: (1 << 30) + 1,
+            ..QueryLimits::DEFAULT
+        };
+        assert!(huge
+            .checked()
+            .unwrap_err()
+            .to_string()
+            .contains("max_bytes"));
+    }
+
+    #[test]
+    fn postgres_statements_other_than_queries_are_refused() {
+        for ok in [
+            "SELECT 1",
+            "  -- note\n select * from runs",
+            "/* a /* nested */ comment */ WITH x AS (SELECT 1) SELECT * FROM x",
+            "(SELECT 1) UNION (SELECT 2)",
+            "VALUES (1), (2)",
+            "TABLE runs",
+        ] {
+            assert_eq!(pg_refusal(ok), None, "{ok}");
+        }
+        for bad in [
+            "COPY runs TO '/tmp/x'",
+            "COPY (SELECT 1) TO PROGRAM 'id'",
+            "INSERT INTO runs DEFAULT VALUES",
+            "SET statement_timeout = 0",
+            "DO $$ BEGIN END $$",
+            "EXPLAIN ANALYZE DELETE FROM runs",
+            "",
+        ] {
+            assert!(pg_refusal(bad).unwrap().contains("is not a query"), "{bad}");
+        }
+        for bad in [
+            "SELECT pg_read_file('/etc/passwd')",
+            "select PG_CATALOG.Pg_Read_Binary_File('/x')",
+            "SELECT * FROM pg_ls_dir('.')",
+            "SELECT query_to_xml('select pg_'||'read_file(''/x'')', true, true, '')",
+            "SELECT set_config('statement_timeout', '0', false)",
+            "SELECT pg_advisory_lock(1)",
+            "SELECT lo_export(1, '/tmp/x')",
+        ] {
+            assert!(
+                pg_refusal(bad).unwrap().contains("reaches outside"),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_authorizer_allows_reads_only() {
+        use rusqlite::hooks::AuthAction as A;
+        assert_eq!(sqlite_refusal(&A::Select), None);
+        assert_eq!(
+            sqlite_refusal(&A::Read {
+                table_name: "runs",
+                column_name: "id"
+            }),
+            None
+        );
+        assert_eq!(
+            sqlite_refusal(&A::Function {
+                function_name: "count"
+            }),
+            None
+        );
+        assert_eq!(
+            sqlite_refusal(&A::Pragma {
+                pragma_name: "table_info",
+                pragma_value: Some("paths")
+            }),
+            None
+        );
+        assert_eq!(
+            sqlite_refusal(&A::Pragma {
+                pragma_name: "user_version",
+                pragma_value: None
+            }),
+            None
+        );
+        for refused in [
+            A::Attach {
+                filename: "/outside/secret.db",
+            },
+            A::Detach { database_name: "o" },
+            A::Pragma {
+                pragma_name: "synchronous",
+                pragma_value: Some("OFF"),
+            },
+            A::Pragma {
+                pragma_name: "foreign_keys",
+                pragma_value: Some("0"),
+            },
+            A::Pragma {
+                pragma_name: "wal_checkpoint",
+                pragma_value: None,
+            },
+            A::Function {
+                function_name: "LOAD_EXTENSION",
+            },
+            A::Function {
+                function_name: "writefile",
+            },
+            A::Insert { table_name: "runs" },
+            A::Delete {
+                table_name: "paths",
+            },
+            A::DropTable { table_name: "runs" },
+            A::CreateTable { table_name: "x" },
+        ] {
+            assert!(sqlite_refusal(&refused).is_some(), "{refused:?}");
+        }
+    }
+
+    /// A fresh project database with one run.
+    fn db() -> (tempfile::TempDir, crate::db::Database) {
+        let dir = tempfile::tempdir().unwrap();
+        let mut db =
+            crate::db::Database::open(&crate::db::Target::Sqlite(dir.path().join("fitup.db")))
+                .unwrap();
+        db.start_run(&crate::db::NewRun::script("s.rhai")).unwrap();
+        (dir, db)
+    }
+
+    #[test]
+    fn attach_is_refused_and_creates_no_file() {
+        let (dir, mut db) = db();
+        let outside = tempfile::tempdir().unwrap();
+        let secret = outside.path().join("secret.db");
+        rusqlite::Connection::open(&secret)
+            .unwrap()
+            .execute_batch("CREATE TABLE s(x); INSERT INTO s VALUES ('hidden');")
+            .unwrap();
+        let missing = outside.path().join("new.db");
+        for file in [&secret, &missing] {
+            let sql = format!("ATTACH DATABASE '{}' AS o", file.display());
+            let e = db.query(&sql, &[]).unwrap_err();
+            assert!(matches!(e, DbError::WriteRefused { .. }), "{e}");
+            assert!(e.to_string().contains("ATTACH"), "{e}");
+        }
+        assert!(!missing.exists(), "ATTACH created {}", missing.display());
+        // Neither through the table-valued form nor VACUUM INTO.
+        let into = outside.path().join("copy.db");
+        let e = db
+            .query(&format!("VACUUM INTO '{}'", into.display()), &[])
+            .unwrap_err();
+        assert!(matches!(e, DbError::WriteRefused { .. }), "{e}");
+        assert!(!into.exists());
+        drop(dir);
+    }
+
+    #[test]
+    fn pragma_writes_and_table_writes_are_refused() {
+        let (_dir, mut db) = db();
+        for sql in [
+            "PRAGMA synchronous=OFF",
+            "PRAGMA foreign_keys=OFF",
+            "PRAGMA journal_mode=DELETE",
+            "PRAGMA user_version=7",
+            "PRAGMA wal_checkpoint",
+            "INSERT INTO runs (script, started_at, status, output, fitup_version) VALUES ('x', 'now', 'ok', '', '0')",
+            "UPDATE runs SET status = 'ok'",
+            "DELETE FROM runs",
+            "DROP TABLE runs",
+            "CREATE TABLE x(a)",
+            "CREATE TEMP TABLE x(a)",
+            "BEGIN",
+            "SELECT load_extension('/tmp/evil.so')",
+            "SELECT 1; DELETE FROM runs",
+        ] {
+            assert!(db.query(sql, &[]).is_err(), "{sql} was accepted");
+        }
+        // The state is as before: the run is there, the file still in WAL mode.
+        assert_eq!(db.runs().unwrap().len(), 1);
+        for setting in READ_SETTINGS.iter().chain(READ_PRAGMAS) {
+            if let Err(e) = db.query(&format!("PRAGMA {setting}"), &[]) {
+                panic!("PRAGMA {setting}: {e}");
+            }
+        }
+        let e = db.query("PRAGMA synchronous", &[]).unwrap_err();
+        assert!(e.to_string().contains("PRAGMA synchronous"), "{e}");
+        // Reads and schema queries work.
+        assert_eq!(
+            db.query("SELECT COUNT(*) FROM runs", &[]).unwrap().rows[0][0],
+            SqlValue::Int(1)
+        );
+        assert!(!db
+            .query("SELECT name FROM pragma_table_info('paths')", &[])
+            .unwrap()
+            .rows
+            .is_empty());
+        assert!(!db
+            .query("PRAGMA table_info(paths)", &[])
+            .unwrap()
+            .rows
+            .is_empty());
+    }
+
+    #[test]
+    fn a_recursive_query_stops_at_its_time_limit() {
+        let (_dir, mut db) = db();
+        let limits = QueryLimits {
+            time: Duration::from_millis(300),
+            ..QueryLimits::DEFAULT
+        };
+        let start = Instant::now();
+        let e = db
+            .query_with(
+                "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c) SELECT COUNT(*) FROM c",
+                &[],
+                limits,
+                None,
+            )
+            .unwrap_err();
+        assert!(matches!(e, DbError::QueryTimeout { .. }), "{e}");
+        assert!(e.to_string().contains("query stopped after 0.3 s"), "{e}");
+        assert!(start.elapsed() < Duration::from_secs(5));
+        // The connection is usable afterwards, without the old deadline.
+        std::thread::sleep(Duration::from_millis(350));
+        assert!(db.query("SELECT 1", &[]).is_ok());
+    }
+
+    #[test]
+    fn a_cancelled_run_stops_its_query() {
+        let (_dir, mut db) = db();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let c = cancel.clone();
+        let t = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(200));
+            c.store(true, Ordering::Relaxed);
+        });
+        let e = db
+            .query_with(
+                "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c) SELECT COUNT(*) FROM c",
+                &[],
+                QueryLimits::DEFAULT,
+                Some(cancel),
+            )
+            .unwrap_err();
+        t.join().unwrap();
+        assert!(matches!(e, DbError::QueryCancelled { .. }), "{e}");
+    }
+
+    #[test]
+    fn results_past_the_caps_are_refused() {
+        let (_dir, mut db) = db();
+        let many = "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 5000000) SELECT x FROM c";
+        let e = db.query(many, &[]).unwrap_err();
+        assert!(matches!(e, DbError::QueryTooLarge { .. }), "{e}");
+        assert!(
+            e.to_string().contains("more than 100,000 rows or 64 MiB"),
+            "{e}"
+        );
+        let small = QueryLimits {
+            max_rows: 10,
+            ..QueryLimits::DEFAULT
+        };
+        let ten = "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 10) SELECT x FROM c";
+        assert_eq!(db.query_with(ten, &[], small, None).unwrap().rows.len(), 10);
+        let e = db
+            .query_with(&ten.replace("LIMIT 10", "LIMIT 11"), &[], small, None)
+            .unwrap_err();
+        assert!(e.to_string().contains("more than 10 rows"), "{e}");
+        // Bytes: 100 rows of 1 MiB text pass 64 MiB.
+        let wide = "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 100) SELECT x, zeroblob(1048576) || '' AS t FROM c";
+        let e = db.query(wide, &[]).unwrap_err();
+        assert!(matches!(e, DbError::QueryTooLarge { .. }), "{e}");
+        // One value past 16 MiB is SQLite's refusal.
+        let e = db.query("SELECT zeroblob(20000000)", &[]).unwrap_err();
+        assert!(e.to_string().contains("too big"), "{e}");
+    }
+
+    #[test]
+    fn limits_beyond_the_maxima_are_refused_before_running() {
+        let (_dir, mut db) = db();
+        let e = db
+            .query_with(
+                "SELECT 1",
+                &[],
+                QueryLimits {
+                    max_rows: 5_000_000,
+                    ..QueryLimits::DEFAULT
+                },
+                None,
+            )
+            .unwrap_err();
+        assert!(
+            matches!(
+                e,
+                DbError::QueryLimit {
+                    name: "max_rows",
+                    ..
+                }
+            ),
+            "{e}"
+        );
+    }
+}
