@@ -593,35 +593,16 @@ impl Packet {
         })
     }
 
-    /// Reads exactly one packet from a stream. The read is bounded: the length is
-    /// checked before anything is allocated, and the stream's own timeout (set by the
-    /// caller) bounds the wait. A stream that ends between packets gives
+    /// Reads exactly one packet from a blocking stream (a fresh [`FrameReader`]: bytes
+    /// of a packet cut short by a timeout are lost; keep a [`FrameReader`] for streams
+    /// with read timeouts). The read is bounded: the length is checked before anything
+    /// is read past the prefix. A stream that ends between packets gives
     /// `Io(UnexpectedEof)`; one that ends inside a packet gives `Truncated`.
     ///
     /// # Errors
     /// Any [`CodecError`].
     pub fn read_from(stream: &mut impl Read, order: ByteOrder) -> Result<Self, CodecError> {
-        let mut prefix = [0u8; PREFIX_SIZE];
-        let got = read_full(stream, &mut prefix)?;
-        if got == 0 {
-            return Err(CodecError::Io(std::io::ErrorKind::UnexpectedEof.into()));
-        }
-        if got < PREFIX_SIZE {
-            return Err(CodecError::Truncated {
-                expected: PREFIX_SIZE,
-                got,
-            });
-        }
-        let length = check_length(order.i32_at(&prefix, 0))?;
-        let mut message = vec![0u8; length];
-        let got = read_full(stream, &mut message)?;
-        if got < length {
-            return Err(CodecError::Truncated {
-                expected: PREFIX_SIZE + length,
-                got: PREFIX_SIZE + got,
-            });
-        }
-        Self::decode_message(&message, order)
+        FrameReader::new(order).read_packet(stream)
     }
 
     /// Writes the packet to a stream.
@@ -642,19 +623,74 @@ fn check_length(length: i32) -> Result<usize, CodecError> {
     Ok(length as usize)
 }
 
-/// Reads until `buf` is full or the stream ends; returns the bytes read. Errors
-/// (timeouts included) are passed on, except an interrupted read, which is retried.
-fn read_full(stream: &mut impl Read, buf: &mut [u8]) -> Result<usize, CodecError> {
-    let mut got = 0;
-    while got < buf.len() {
-        match stream.read(&mut buf[got..]) {
-            Ok(0) => break,
-            Ok(n) => got += n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(CodecError::Io(e)),
+/// The framing of one connection: reads packets from a stream whose reads may time
+/// out (`WouldBlock` / `TimedOut`) and keeps the bytes of a packet received so far
+/// across those timeouts, so a packet that arrives in parts, with pauses, is decoded
+/// whole. It never holds more than one packet ([`PREFIX_SIZE`] + [`MAX_LENGTH`]
+/// bytes): it reads only the bytes the current packet still needs.
+///
+/// After any error other than a timeout the stream cannot be re-synchronised
+/// (simple_message has only byte counting): the connection should be closed.
+#[derive(Debug)]
+pub struct FrameReader {
+    order: ByteOrder,
+    buf: Vec<u8>,
+}
+
+impl FrameReader {
+    /// An empty framing buffer for a connection of byte order `order`.
+    pub fn new(order: ByteOrder) -> Self {
+        Self {
+            order,
+            buf: Vec::with_capacity(PREFIX_SIZE + HEADER_SIZE + 52),
         }
     }
-    Ok(got)
+
+    /// Bytes of an incomplete packet held (0 between packets).
+    pub fn pending(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// Reads the next packet. A read timeout returns `Io(WouldBlock | TimedOut)` and
+    /// keeps the bytes read so far: call again to continue the same packet.
+    ///
+    /// # Errors
+    /// A timeout (retryable, see above), `Io(UnexpectedEof)` when the stream ends
+    /// between packets, `Truncated` when it ends inside one, a bad length prefix
+    /// (before anything past the prefix is read), or a packet that does not decode
+    /// (its bytes are consumed).
+    pub fn read_packet(&mut self, stream: &mut impl Read) -> Result<Packet, CodecError> {
+        loop {
+            let want = if self.buf.len() < PREFIX_SIZE {
+                PREFIX_SIZE
+            } else {
+                let length = check_length(self.order.i32_at(&self.buf, 0))?;
+                PREFIX_SIZE + length
+            };
+            if self.buf.len() == want && want > PREFIX_SIZE {
+                let packet = Packet::decode_message(&self.buf[PREFIX_SIZE..], self.order);
+                self.buf.clear();
+                return packet;
+            }
+            let mut chunk = [0u8; PREFIX_SIZE + MAX_LENGTH];
+            let need = want - self.buf.len();
+            match stream.read(&mut chunk[..need]) {
+                Ok(0) => {
+                    let got = std::mem::take(&mut self.buf).len();
+                    if got == 0 {
+                        return Err(CodecError::Io(std::io::ErrorKind::UnexpectedEof.into()));
+                    }
+                    return Err(CodecError::Truncated {
+                        expected: want,
+                        got,
+                    });
+                }
+                Ok(n) => self.buf.extend_from_slice(&chunk[..n.min(need)]),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(CodecError::Io(e)),
+            }
+        }
+    }
 }
 
 #[cfg(test)]
