@@ -15,7 +15,8 @@
 //! stay contiguous and end at `Assembled`.
 
 use super::PartState;
-use crate::diagnostics::{locate, suggestion, SourceError};
+use crate::diagnostics::{locate, shorten, suggestion, SourceError};
+use crate::document::scan::MAX_QUOTE;
 use crate::sequence::Operation;
 use serde::Deserialize;
 use std::path::Path;
@@ -88,10 +89,15 @@ impl Template {
     /// mean"), a broken chain, a generator that cannot make that step, a chain that
     /// does not end at `Assembled` — each at its line and column.
     pub fn parse(path: &Path, text: &str) -> Result<Self, TemplateError> {
-        let file: TemplateFile = serde_yaml::from_str(text).map_err(|e| {
-            let (line, col) = e.location().map_or((0, 0), |l| (l.line(), l.column()));
-            SourceError::new(path, line, col, e.to_string())
-        })?;
+        // The same YAML reader and budget as documents: no aliases (an alias bomb of
+        // 2 MB expands to gigabytes), no duplicate keys, bounded nesting.
+        let (file, _): (TemplateFile, _) = crate::document::scan::from_yaml(
+            text,
+            path,
+            "invalid template",
+            "the template is empty: a template is a YAML mapping with `operation:` and `workflows:`",
+        )?;
+        let q = |s: &str| shorten(s, MAX_QUOTE);
         let at = |needle: &str, from_line: usize| locate(text, needle, from_line).unwrap_or((0, 0));
         let err = |needle: &str, from_line: usize, msg: String| {
             let (l, c) = at(needle, from_line);
@@ -101,7 +107,7 @@ impl Template {
             err(
                 &file.operation,
                 1,
-                format!("unknown operation `{}`", file.operation),
+                format!("unknown operation `{}`", q(&file.operation)),
             )
             .with_help(suggestion(&file.operation, ["insertion", "screw", "align"]))
         })?;
@@ -120,7 +126,7 @@ impl Template {
             let entry_line = at(&format!("from: {}", w.from), line).0.max(line);
             let state = |s: &str| {
                 PartState::parse(s).ok_or_else(|| {
-                    err(s, entry_line, format!("unknown part state `{s}`"))
+                    err(s, entry_line, format!("unknown part state `{}`", q(s)))
                         .with_help(suggestion(s, names.iter().copied()))
                 })
             };
@@ -130,7 +136,7 @@ impl Template {
                 return Err(err(
                     &w.generator,
                     entry_line,
-                    format!("unknown generator `{}`", w.generator),
+                    format!("unknown generator `{}`", q(&w.generator)),
                 )
                 .with_help(suggestion(&w.generator, GENERATORS)));
             }
