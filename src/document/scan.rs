@@ -172,7 +172,7 @@ fn scan_with(text: &str, empty: &str) -> Result<Positions, ScanIssue> {
         let (event, mark) = parser.next_token().map_err(|e| ScanIssue {
             line: e.marker().line(),
             column: e.marker().col() + 1,
-            message: format!("invalid document: YAML syntax: {}", e.info()),
+            message: format!("YAML syntax error: {}", e.info()),
         })?;
         let (line, column) = (mark.line(), mark.col() + 1);
         let issue = |message: String| ScanIssue {

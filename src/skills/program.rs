@@ -437,3 +437,138 @@ impl Plan {
         Ok(plan)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan() -> Plan {
+        Plan {
+            version: 1,
+            robot: "r".into(),
+            joint_kinds: vec!["revolute".into(), "prismatic".into()],
+            steps: vec![PlanStep {
+                skill: 0,
+                task: 0,
+                part: "p".into(),
+                action: "Move_Table".into(),
+                description: "#0".into(),
+                end_state: "Grasped".into(),
+                commands: vec![
+                    ControllerCommand::Trajectory(vec![
+                        (vec![0.0, 0.0], 0.0),
+                        (vec![0.5, 250.0], 1.0),
+                    ]),
+                    ControllerCommand::Tool {
+                        action: "grasp".into(),
+                        index: 0,
+                        value: 0.01,
+                    },
+                ],
+            }],
+        }
+    }
+
+    #[test]
+    fn values_beyond_the_wire_are_refused_at_their_json_path() {
+        assert!(Plan::from_json("p.json", &plan().to_json()).is_ok());
+        let cases: [(fn(&mut Plan), &str); 5] = [
+            (
+                |p| {
+                    if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+                        t[1].0[0] = 1e39;
+                    }
+                },
+                "steps[0].commands[0].trajectory[1][0][0]",
+            ),
+            (
+                // A prismatic joint goes out in metres: 1e41 mm is 1e38 m, which fits.
+                |p| {
+                    if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+                        t[1].0[1] = 1e42;
+                    }
+                },
+                "steps[0].commands[0].trajectory[1][0][1]",
+            ),
+            (
+                |p| {
+                    if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+                        t[1].1 = 1e39;
+                    }
+                },
+                "steps[0].commands[0].trajectory[1][1]",
+            ),
+            (
+                |p| {
+                    if let ControllerCommand::Tool { value, .. } = &mut p.steps[0].commands[1] {
+                        *value = -1e300;
+                    }
+                },
+                "steps[0].commands[1].tool.value",
+            ),
+            (|p| p.joint_kinds = vec!["revolute".into(); 11], "joint_kinds"),
+        ];
+        for (edit, at) in cases {
+            let mut p = plan();
+            edit(&mut p);
+            let e = Plan::from_json("p.json", &p.to_json()).unwrap_err().to_string();
+            assert!(e.starts_with("plan file: p.json: "), "{e}");
+            assert!(e.contains(at), "{at}: {e}");
+        }
+        let mut p = plan();
+        if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+            t[1].0[1] = 1e41;
+        }
+        assert!(Plan::from_json("p.json", &p.to_json()).is_ok());
+    }
+
+    #[test]
+    fn deep_huge_and_non_finite_json_are_located_errors() {
+        let deep = format!("{}{}", "[".repeat(100_000), "]".repeat(100_000));
+        let e = Plan::from_json("d.json", &deep).unwrap_err().to_string();
+        assert!(e.starts_with("plan file: d.json:1:"), "{e}");
+        let text = plan().to_json().replace("250.0", "1e400");
+        let e = Plan::from_json("n.json", &text).unwrap_err().to_string();
+        assert!(e.starts_with("plan file: n.json:"), "{e}");
+        let text = plan().to_json().replace("250.0", "NaN");
+        assert!(Plan::from_json("n.json", &text).is_err());
+        let long = format!("{{\"version\": \"{}\"}}", "v".repeat(1 << 20));
+        let e = Plan::from_json("l.json", &long).unwrap_err().to_string();
+        assert!(e.len() < 400, "{} bytes", e.len());
+    }
+
+    proptest::proptest! {
+        #![proptest_config(crate::test_support::proptest_config(512))]
+
+        /// Random edits of a valid plan file never panic: the result is a plan or an
+        /// error that names the file.
+        #[test]
+        fn mutated_plans_are_ok_or_located_errors(
+            edits in proptest::collection::vec((0usize..2000, 0usize..8, 0u8..3), 1..6),
+        ) {
+            const INSERTS: [&str; 8] = ["1e39", "-", "[", "]", "\"", "NaN", "1e400", ","];
+            let mut text = plan().to_json();
+            for (at, what, how) in edits {
+                let mut at = at % (text.len() + 1);
+                while !text.is_char_boundary(at) {
+                    at -= 1;
+                }
+                match how {
+                    0 => text.insert_str(at, INSERTS[what]),
+                    1 if at < text.len() => {
+                        let mut end = at + 1;
+                        while !text.is_char_boundary(end) {
+                            end += 1;
+                        }
+                        text.replace_range(at..end, "");
+                    }
+                    _ => text.truncate(at),
+                }
+            }
+            if let Err(e) = Plan::from_json("m.json", &text) {
+                let e = e.to_string();
+                proptest::prop_assert!(e.starts_with("plan file: m.json"), "{}", e);
+            }
+        }
+    }
+}

@@ -274,4 +274,51 @@ mod tests {
         let e = Template::parse(p, text).unwrap_err();
         assert_eq!(e.line, Some(2), "{e}");
     }
+
+    #[test]
+    fn aliases_and_long_values_are_refused_with_short_messages() {
+        let p = Path::new("t.yaml");
+        let text = "x: &a [1, 2]\ny: [*a, *a]\noperation: insertion\nworkflows: []\n";
+        let e = Template::parse(p, text).unwrap_err();
+        assert_eq!(e.line, Some(1), "{e}");
+        assert!(e.message.contains("anchors"), "{e}");
+        let long = "q".repeat(100_000);
+        for text in [
+            format!("operation: {long}\nworkflows: []\n"),
+            // (YAML keys are at most 1024 characters.)
+            format!("operation: insertion\n{}: 1\n", &long[..900]),
+            format!("operation: insertion\nworkflows:\n  - {{from: {long}, to: In_WS, generator: locate}}\n"),
+        ] {
+            let e = Template::parse(p, &text).unwrap_err();
+            assert!(e.line.is_some(), "{e}");
+            assert!(e.to_string().len() < 600, "{} bytes", e.to_string().len());
+            assert!(e.message.contains('…'), "{}", e.message);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(crate::test_support::proptest_config(512))]
+
+        /// Random byte edits of a valid template never panic: the result is a
+        /// template or an error located in the file.
+        #[test]
+        fn mutated_templates_are_ok_or_located_errors(
+            edits in proptest::collection::vec((0usize..400, proptest::num::u8::ANY, 0u8..3), 1..8),
+        ) {
+            let mut bytes = default_template_text(Operation::Insertion).as_bytes().to_vec();
+            for (at, b, how) in edits {
+                let at = at % (bytes.len() + 1);
+                match how {
+                    0 if at < bytes.len() => bytes[at] = b,
+                    1 => bytes.insert(at, b),
+                    _ => bytes.truncate(at.max(1)),
+                }
+            }
+            let text = String::from_utf8_lossy(&bytes);
+            if let Err(e) = Template::parse(Path::new("m.yaml"), &text) {
+                proptest::prop_assert!(e.to_string().starts_with("m.yaml"), "{}", e);
+                proptest::prop_assert!(e.to_string().len() < 1000, "{}", e);
+            }
+        }
+    }
 }
