@@ -123,7 +123,7 @@ pub fn from_yaml<T: serde::de::DeserializeOwned>(
     empty: &str,
 ) -> Result<(T, Positions), crate::diagnostics::SourceError> {
     use crate::diagnostics::SourceError;
-    let positions = scan_with(text, empty)
+    let positions = scan_with(text, what, empty)
         .map_err(|i| SourceError::new(path, i.line, i.column, i.message))?;
     let value: T = serde_yaml::from_str(text).map_err(|e| {
         let (line, col) = e
@@ -158,11 +158,12 @@ fn quote_cut(message: &str) -> String {
 
 /// Checks the YAML text of a document; see the module documentation.
 pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
-    scan_with(text, DOCUMENT_EMPTY)
+    scan_with(text, "invalid document", DOCUMENT_EMPTY)
 }
 
-/// [`scan`] with `empty` as the message for a file without content.
-fn scan_with(text: &str, empty: &str) -> Result<Positions, ScanIssue> {
+/// [`scan`] with `what` naming the kind of file in syntax errors and `empty` as the
+/// message for a file without content.
+fn scan_with(text: &str, what: &str, empty: &str) -> Result<Positions, ScanIssue> {
     let mut parser = Parser::new_from_str(text);
     let mut stack: Vec<Frame> = Vec::new();
     let mut positions = Positions::default();
@@ -172,7 +173,7 @@ fn scan_with(text: &str, empty: &str) -> Result<Positions, ScanIssue> {
         let (event, mark) = parser.next_token().map_err(|e| ScanIssue {
             line: e.marker().line(),
             column: e.marker().col() + 1,
-            message: format!("YAML syntax error: {}", e.info()),
+            message: format!("{what}: YAML syntax: {}", e.info()),
         })?;
         let (line, column) = (mark.line(), mark.col() + 1);
         let issue = |message: String| ScanIssue {
