@@ -236,7 +236,10 @@ pub enum BoundedLine {
 ///
 /// # Errors
 /// The stream's error.
-pub fn read_line_bounded(r: &mut impl std::io::BufRead, max: usize) -> std::io::Result<BoundedLine> {
+pub fn read_line_bounded(
+    r: &mut impl std::io::BufRead,
+    max: usize,
+) -> std::io::Result<BoundedLine> {
     let mut line: Vec<u8> = Vec::new();
     let mut too_long: Option<u64> = None;
     loop {

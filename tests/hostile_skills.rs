@@ -185,11 +185,10 @@ fn fake_state_port(split: bool) -> SocketAddr {
                 let b = state_bytes();
                 loop {
                     let r = if split {
-                        c.write_all(&b[..7])
-                            .and_then(|_| {
-                                std::thread::sleep(Duration::from_millis(300));
-                                c.write_all(&b[7..])
-                            })
+                        c.write_all(&b[..7]).and_then(|_| {
+                            std::thread::sleep(Duration::from_millis(300));
+                            c.write_all(&b[7..])
+                        })
                     } else {
                         c.write_all(&b)
                     };
@@ -461,10 +460,11 @@ fn a_flood_of_idle_connections_does_not_starve_a_real_client() {
         let mut b = [0u8; 1];
         match x.read(&mut b) {
             Ok(0) => closed += 1,
-            Err(e) if !matches!(
-                e.kind(),
-                std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-            ) =>
+            Err(e)
+                if !matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
             {
                 closed += 1
             }
@@ -502,7 +502,9 @@ fn an_alias_bomb_template_is_refused_fast_with_a_short_message() {
         let prev = format!("*a{}", i - 1);
         t += &format!(
             "a{i}: &a{i} [{}]\n",
-            std::iter::repeat_n(prev.as_str(), 9).collect::<Vec<_>>().join(", ")
+            std::iter::repeat_n(prev.as_str(), 9)
+                .collect::<Vec<_>>()
+                .join(", ")
         );
         i += 1;
     }
@@ -524,7 +526,9 @@ fn an_alias_bomb_template_is_refused_fast_with_a_short_message() {
     let file = write(
         dir.path(),
         "long.yaml",
-        &format!("operation: {long}\nworkflows:\n  - {{from: FREE, to: In_WS, generator: locate}}\n"),
+        &format!(
+            "operation: {long}\nworkflows:\n  - {{from: FREE, to: In_WS, generator: locate}}\n"
+        ),
     );
     let o = common::run_bounded(
         dir.path(),
@@ -534,14 +538,21 @@ fn an_alias_bomb_template_is_refused_fast_with_a_short_message() {
     let text = common::text(&o);
     assert_eq!(o.status.code(), Some(1), "{}", common::short_text(&o));
     assert!(text.contains("long.yaml:1:"), "{}", common::short_text(&o));
-    assert!(text.contains("unknown operation"), "{}", common::short_text(&o));
+    assert!(
+        text.contains("unknown operation"),
+        "{}",
+        common::short_text(&o)
+    );
     assert!(text.contains('…'), "{}", common::short_text(&o));
     assert!(text.len() < 2_000, "{} bytes of output", text.len());
     // And a 2 MiB value the schema refuses (serde's own message) too.
     let file = write(
         dir.path(),
         "field.yaml",
-        &format!("operation: insertion\n{}: 1\nworkflows: []\n", &long[..1000]),
+        &format!(
+            "operation: insertion\n{}: 1\nworkflows: []\n",
+            &long[..1000]
+        ),
     );
     let o = common::run_bounded(
         dir.path(),

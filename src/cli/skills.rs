@@ -250,22 +250,24 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         std::thread::spawn(move || {
             let mut input = std::io::stdin().lock();
             loop {
-                let line =
-                    match crate::fsutil::read_line_bounded(&mut input, crate::fsutil::MAX_LINE_BYTES) {
-                        Ok(crate::fsutil::BoundedLine::Line(l)) => l,
-                        Ok(crate::fsutil::BoundedLine::TooLong { bytes }) => {
-                            errln!(
+                let line = match crate::fsutil::read_line_bounded(
+                    &mut input,
+                    crate::fsutil::MAX_LINE_BYTES,
+                ) {
+                    Ok(crate::fsutil::BoundedLine::Line(l)) => l,
+                    Ok(crate::fsutil::BoundedLine::TooLong { bytes }) => {
+                        errln!(
                                 "error: standard input: a command line of {bytes} bytes is longer than {} bytes: ignored",
                                 crate::fsutil::MAX_LINE_BYTES
                             );
-                            continue;
-                        }
-                        Ok(crate::fsutil::BoundedLine::End) => break,
-                        Err(e) => {
-                            errln!("error: standard input: {e}; commands are no longer read");
-                            break;
-                        }
-                    };
+                        continue;
+                    }
+                    Ok(crate::fsutil::BoundedLine::End) => break,
+                    Err(e) => {
+                        errln!("error: standard input: {e}; commands are no longer read");
+                        break;
+                    }
+                };
                 let l = line.trim();
                 match l {
                     "pause" => handle.pause(),

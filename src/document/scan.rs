@@ -130,7 +130,12 @@ pub fn from_yaml<T: serde::de::DeserializeOwned>(
             .location()
             .map(|l| (l.line(), l.column()))
             .unwrap_or((0, 0));
-        SourceError::new(path, line, col, format!("{what}: {}", quote_cut(&e.to_string())))
+        SourceError::new(
+            path,
+            line,
+            col,
+            format!("{what}: {}", quote_cut(&e.to_string())),
+        )
     })?;
     Ok((value, positions))
 }

@@ -950,7 +950,7 @@ mod tests {
             if self.pause_next && !self.chunks.is_empty() {
                 self.pause_next = false;
                 self.pauses += 1;
-                let kind = if self.pauses % 2 == 0 {
+                let kind = if self.pauses.is_multiple_of(2) {
                     std::io::ErrorKind::TimedOut
                 } else {
                     std::io::ErrorKind::WouldBlock

@@ -599,9 +599,7 @@ fn serve_motion_packets(
                 }
                 continue;
             }
-            Err(CodecError::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-                return None
-            }
+            Err(CodecError::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => return None,
             Err(_) if !conn.open(stop) => return None,
             // Byte counting is all simple_message has: after garbage the stream
             // cannot be re-synchronised, so this connection ends.

@@ -347,7 +347,11 @@ impl SkillManager {
                 }
                 Err(ManipulatorError::Disconnected(why)) => {
                     let at = (i, done_commands);
-                    drops = if drops.0 == at { (at, drops.1 + 1) } else { (at, 1) };
+                    drops = if drops.0 == at {
+                        (at, drops.1 + 1)
+                    } else {
+                        (at, 1)
+                    };
                     if drops.1 >= MAX_DROPS_AT_ONE_COMMAND {
                         let e = ManipulatorError::Disconnected(format!(
                             "{why}; the controller dropped the connection {} times at command {} of this skill: giving up (it refuses that command)",

@@ -381,7 +381,8 @@ impl Plan {
                             ));
                         }
                         for (pi, (q, d)) in pts.iter().enumerate() {
-                            let here = |k: String| at(format!(".commands[{ci}].trajectory[{pi}]{k}"));
+                            let here =
+                                |k: String| at(format!(".commands[{ci}].trajectory[{pi}]{k}"));
                             if q.len() != n {
                                 return Err(bad(
                                     here("[0]".into()),
@@ -472,7 +473,8 @@ mod tests {
     #[test]
     fn values_beyond_the_wire_are_refused_at_their_json_path() {
         assert!(Plan::from_json("p.json", &plan().to_json()).is_ok());
-        let cases: [(fn(&mut Plan), &str); 5] = [
+        type Edit = fn(&mut Plan);
+        let cases: [(Edit, &str); 5] = [
             (
                 |p| {
                     if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
@@ -506,12 +508,17 @@ mod tests {
                 },
                 "steps[0].commands[1].tool.value",
             ),
-            (|p| p.joint_kinds = vec!["revolute".into(); 11], "joint_kinds"),
+            (
+                |p| p.joint_kinds = vec!["revolute".into(); 11],
+                "joint_kinds",
+            ),
         ];
         for (edit, at) in cases {
             let mut p = plan();
             edit(&mut p);
-            let e = Plan::from_json("p.json", &p.to_json()).unwrap_err().to_string();
+            let e = Plan::from_json("p.json", &p.to_json())
+                .unwrap_err()
+                .to_string();
             assert!(e.starts_with("plan file: p.json: "), "{e}");
             assert!(e.contains(at), "{at}: {e}");
         }
