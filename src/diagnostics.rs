@@ -120,6 +120,15 @@ fn excerpt(line: &str, column: Option<usize>) -> (String, Option<usize>) {
     (shown, col_in)
 }
 
+/// `text` cut to at most `max` characters, with `…` where it was cut: for quoting a
+/// user's value (which may be megabytes long) in an error message.
+pub fn shorten(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        None => text.to_string(),
+        Some((byte, _)) => format!("{}…", &text[..byte]),
+    }
+}
+
 /// The 1-based line and column of the first occurrence of `needle` in `text` at or
 /// after line `from_line`, for errors found after parsing (an unknown part name, a
 /// duplicate component) that serde could not locate.

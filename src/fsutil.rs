@@ -563,9 +563,115 @@ fn register(path: &Path, entry: Entry) -> std::io::Result<()> {
     write_atomic(&reg, text.as_bytes())
 }
 
+/// Longest line fitup reads from a stream of commands (standard input of
+/// `fitup skills run`, the terminal UI's command line), in bytes.
+pub const MAX_LINE_BYTES: usize = 4096;
+
+/// One line read by [`read_line_bounded`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum BoundedLine {
+    /// A line (without its end of line), at most the cap long.
+    Line(String),
+    /// A line longer than the cap: its first bytes were dropped along with the rest
+    /// (read and discarded up to its newline, in bounded memory). `bytes` counts what
+    /// was read of it.
+    TooLong {
+        /// Bytes of the line read (all discarded).
+        bytes: u64,
+    },
+    /// The stream ended.
+    End,
+}
+
+/// Reads one line of at most `max` bytes from `r`. A longer line (e.g. a stream of
+/// gigabytes without a newline) is read to its end and discarded without being
+/// kept, so memory stays within `max` bytes whatever the input. Invalid UTF-8 is
+/// replaced.
+///
+/// # Errors
+/// The stream's error.
+pub fn read_line_bounded(
+    r: &mut impl std::io::BufRead,
+    max: usize,
+) -> std::io::Result<BoundedLine> {
+    let mut line: Vec<u8> = Vec::new();
+    let mut too_long: Option<u64> = None;
+    loop {
+        let buf = match r.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if buf.is_empty() {
+            return Ok(match too_long {
+                Some(bytes) => BoundedLine::TooLong { bytes },
+                None if line.is_empty() => BoundedLine::End,
+                None => BoundedLine::Line(String::from_utf8_lossy(&line).into_owned()),
+            });
+        }
+        let (chunk, done) = match buf.iter().position(|&b| b == b'\n') {
+            Some(i) => (&buf[..i], Some(i + 1)),
+            None => (buf, None),
+        };
+        match &mut too_long {
+            Some(n) => *n += chunk.len() as u64,
+            None if line.len() + chunk.len() > max => {
+                too_long = Some((line.len() + chunk.len()) as u64);
+                line = Vec::new();
+            }
+            None => line.extend_from_slice(chunk),
+        }
+        let used = done.unwrap_or(buf.len());
+        r.consume(used);
+        if done.is_some() {
+            return Ok(match too_long {
+                Some(bytes) => BoundedLine::TooLong { bytes },
+                None => {
+                    if line.last() == Some(&b'\r') {
+                        line.pop();
+                    }
+                    BoundedLine::Line(String::from_utf8_lossy(&line).into_owned())
+                }
+            });
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_lines_are_discarded_in_bounded_memory() {
+        let mut input: Vec<u8> = b"pause\r\n".to_vec();
+        input.extend(std::iter::repeat_n(b'a', 1 << 20));
+        input.extend(b"\nresume\nlast");
+        let mut r = std::io::BufReader::with_capacity(64, &input[..]);
+        let mut got = Vec::new();
+        loop {
+            match read_line_bounded(&mut r, 100).unwrap() {
+                BoundedLine::End => break,
+                l => got.push(l),
+            }
+        }
+        assert_eq!(
+            got,
+            [
+                BoundedLine::Line("pause".into()),
+                BoundedLine::TooLong { bytes: 1 << 20 },
+                BoundedLine::Line("resume".into()),
+                BoundedLine::Line("last".into()),
+            ]
+        );
+        // No newline at all.
+        let endless = vec![b'a'; 10_000];
+        let mut r = std::io::BufReader::with_capacity(16, &endless[..]);
+        assert_eq!(
+            read_line_bounded(&mut r, 100).unwrap(),
+            BoundedLine::TooLong { bytes: 10_000 }
+        );
+        assert_eq!(read_line_bounded(&mut r, 100).unwrap(), BoundedLine::End);
+    }
 
     #[test]
     fn special_files_and_oversized_files_are_refused() {

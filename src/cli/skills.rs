@@ -244,13 +244,30 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
             .join()
             .unwrap_or(Err(crate::skills::ManagerError::Aborted))
     } else {
-        // Commands from standard input; the thread ends with the process.
+        // Commands from standard input; the thread ends with the process. Lines are
+        // capped (fsutil::MAX_LINE_BYTES): a longer one is read and dropped in
+        // bounded memory, with an error.
         std::thread::spawn(move || {
-            let mut line = String::new();
-            while {
-                line.clear();
-                std::io::stdin().read_line(&mut line).is_ok_and(|n| n > 0)
-            } {
+            let mut input = std::io::stdin().lock();
+            loop {
+                let line = match crate::fsutil::read_line_bounded(
+                    &mut input,
+                    crate::fsutil::MAX_LINE_BYTES,
+                ) {
+                    Ok(crate::fsutil::BoundedLine::Line(l)) => l,
+                    Ok(crate::fsutil::BoundedLine::TooLong { bytes }) => {
+                        errln!(
+                                "error: standard input: a command line of {bytes} bytes is longer than {} bytes: ignored",
+                                crate::fsutil::MAX_LINE_BYTES
+                            );
+                        continue;
+                    }
+                    Ok(crate::fsutil::BoundedLine::End) => break,
+                    Err(e) => {
+                        errln!("error: standard input: {e}; commands are no longer read");
+                        break;
+                    }
+                };
                 let l = line.trim();
                 match l {
                     "pause" => handle.pause(),
@@ -263,7 +280,8 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
                     {
                         Some(c) => handle.manual(c),
                         None => errln!(
-                            "unknown command `{l}` (pause, resume, abort, manual grasp|release|touch MM, manual output I 0|1)"
+                            "unknown command `{}` (pause, resume, abort, manual grasp|release|touch MM, manual output I 0|1)",
+                            crate::diagnostics::shorten(l, crate::document::scan::MAX_QUOTE)
                         ),
                     },
                 }

@@ -12,6 +12,9 @@ use std::io::Write;
 use std::sync::mpsc::Receiver;
 use std::time::Duration;
 
+/// Longest manual command typed into the UI (bytes; further keys are ignored).
+const MAX_INPUT: usize = 256;
+
 /// What the manager's thread sends the UI.
 pub(super) enum Msg {
     /// A manager event.
@@ -208,7 +211,9 @@ pub(super) fn run(
             }
             if let Some(text) = ui.input.as_mut() {
                 match k.code {
-                    KeyCode::Char(c) => text.push(c),
+                    // The command line is capped like standard input's lines.
+                    KeyCode::Char(c) if text.len() + c.len_utf8() <= MAX_INPUT => text.push(c),
+                    KeyCode::Char(_) => {}
                     KeyCode::Backspace => {
                         text.pop();
                     }

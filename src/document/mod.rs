@@ -358,15 +358,8 @@ impl Document {
         text: &str,
         path: &Path,
     ) -> Result<(DocumentFile, scan::Positions), DocumentError> {
-        let positions =
-            scan::scan(text).map_err(|i| SourceError::new(path, i.line, i.column, i.message))?;
-        let file: DocumentFile = serde_yaml::from_str(text).map_err(|e| {
-            let (line, col) = e
-                .location()
-                .map(|l| (l.line(), l.column()))
-                .unwrap_or((0, 0));
-            SourceError::new(path, line, col, format!("invalid document: {e}"))
-        })?;
+        let (file, positions): (DocumentFile, scan::Positions) =
+            scan::from_yaml(text, path, "invalid document", scan::DOCUMENT_EMPTY)?;
         let file = if unicode_normalization::is_nfc(text) {
             file
         } else {

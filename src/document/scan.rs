@@ -1,6 +1,10 @@
 //! The pre-flight check of a document's YAML text, before it is deserialized: one
 //! pass over the parser's events, in time and memory linear in the text.
 //!
+//! [`from_yaml`] is the one entry point for every YAML file fitup reads (documents,
+//! task templates): the same pre-scan and budget for all, then serde, with errors
+//! located in the file and quoting at most [`MAX_QUOTE`] characters of a value.
+//!
 //! It refuses what the deserializer would accept silently or expand without bound —
 //! anchors and aliases (an "alias bomb" of a few hundred KB expands to gigabytes),
 //! duplicate keys anywhere (the last one would win), numbers that are not finite or
@@ -103,8 +107,75 @@ fn plain_number(s: &str) -> Option<Result<f64, String>> {
     Some(Ok(v))
 }
 
+/// The longest excerpt of a user's value quoted in an error (characters; longer
+/// values are cut with `…`).
+pub const MAX_QUOTE: usize = 80;
+
+/// The message for an empty document file.
+pub const DOCUMENT_EMPTY: &str =
+    "the document is empty: a fitup document is a YAML mapping with `parts:` and `components:`";
+
+/// Reads a fitup YAML file's text into `T`: [`scan`]'s checks first (aliases, anchors,
+/// duplicate keys, number ranges, nesting, an empty file: `empty` is the message for
+/// that), then the schema. Errors are located in `path` (line and column); serde's
+/// message is prefixed with `what` (`invalid document`, `invalid template`) and
+/// quotes of the text are cut to [`MAX_QUOTE`] characters.
+///
+/// # Errors
+/// The first problem found, as a located [`SourceError`].
+pub fn from_yaml<T: serde::de::DeserializeOwned>(
+    text: &str,
+    path: &std::path::Path,
+    what: &str,
+    empty: &str,
+) -> Result<(T, Positions), crate::diagnostics::SourceError> {
+    use crate::diagnostics::SourceError;
+    let positions = scan_with(text, what, empty)
+        .map_err(|i| SourceError::new(path, i.line, i.column, i.message))?;
+    let value: T = serde_yaml::from_str(text).map_err(|e| {
+        let (line, col) = e
+            .location()
+            .map(|l| (l.line(), l.column()))
+            .unwrap_or((0, 0));
+        SourceError::new(
+            path,
+            line,
+            col,
+            format!("{what}: {}", quote_cut(&e.to_string())),
+        )
+    })?;
+    Ok((value, positions))
+}
+
+/// A serde message with every quoted value (between backticks or double quotes) cut
+/// to [`MAX_QUOTE`] characters, and the whole to a few lines' worth.
+fn quote_cut(message: &str) -> String {
+    let mut out = String::new();
+    let mut rest = message;
+    while let Some(open) = rest.find(['`', '"']) {
+        let q = &rest[open..open + 1];
+        out += &rest[..=open];
+        rest = &rest[open + 1..];
+        let close = rest.find(q).unwrap_or(rest.len());
+        out += &crate::diagnostics::shorten(&rest[..close], MAX_QUOTE);
+        rest = &rest[close..];
+        if let Some(r) = rest.strip_prefix(q) {
+            out += q;
+            rest = r;
+        }
+    }
+    out += rest;
+    crate::diagnostics::shorten(&out, 4 * MAX_QUOTE)
+}
+
 /// Checks the YAML text of a document; see the module documentation.
 pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
+    scan_with(text, "invalid document", DOCUMENT_EMPTY)
+}
+
+/// [`scan`] with `what` naming the kind of file in syntax errors and `empty` as the
+/// message for a file without content.
+fn scan_with(text: &str, what: &str, empty: &str) -> Result<Positions, ScanIssue> {
     let mut parser = Parser::new_from_str(text);
     let mut stack: Vec<Frame> = Vec::new();
     let mut positions = Positions::default();
@@ -114,7 +185,7 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
         let (event, mark) = parser.next_token().map_err(|e| ScanIssue {
             line: e.marker().line(),
             column: e.marker().col() + 1,
-            message: format!("invalid document: YAML syntax: {}", e.info()),
+            message: format!("{what}: YAML syntax: {}", e.info()),
         })?;
         let (line, column) = (mark.line(), mark.col() + 1);
         let issue = |message: String| ScanIssue {
@@ -124,7 +195,7 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
         };
         let anchor = match &event {
             Event::Alias(_) => return Err(issue(
-                "YAML aliases (`*name`) are not allowed in fitup documents: write the value out"
+                "YAML aliases (`*name`) are not allowed in fitup YAML files: write the value out"
                     .into(),
             )),
             Event::Scalar(_, _, a, _) | Event::MappingStart(a, _) | Event::SequenceStart(a, _) => {
@@ -140,7 +211,7 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
                 line,
                 column,
                 message:
-                    "YAML anchors (`&name`) are not allowed in fitup documents: write the value out"
+                    "YAML anchors (`&name`) are not allowed in fitup YAML files: write the value out"
                         .into(),
             });
         }
@@ -273,7 +344,7 @@ pub fn scan(text: &str) -> Result<Positions, ScanIssue> {
         return Err(ScanIssue {
             line: 1,
             column: 1,
-            message: "the document is empty: a fitup document is a YAML mapping with `parts:` and `components:`".into(),
+            message: empty.into(),
         });
     }
     // Keys are stored without the leading `/`.

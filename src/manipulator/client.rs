@@ -4,11 +4,15 @@
 //!
 //! Every wait is bounded ([`ClientOptions`]); a connection that breaks, goes silent
 //! or sends garbage gives [`ManipulatorError::Disconnected`], so a caller can
-//! reconnect and resume.
+//! reconnect and resume. Replies and state messages may arrive in parts with pauses
+//! between them: each connection keeps its partial packet across read timeouts
+//! ([`FrameReader`]). A value that does not fit the wire (a 32-bit float, e.g. a
+//! joint of 1e39 rad) is refused before anything is sent
+//! ([`ManipulatorError::NotOnWire`]).
 
 use super::message::{
-    msg_type, special_seq, Body, ByteOrder, CodecError, CommType, JointTrajPt, Packet, ReplyCode,
-    Status, ToolAction, ToolCommand, TriState, TOOL_EXTENSION_VERSION,
+    msg_type, special_seq, Body, ByteOrder, CodecError, CommType, FrameReader, JointTrajPt, Packet,
+    ReplyCode, Status, ToolAction, ToolCommand, TriState, MAX_JOINTS, TOOL_EXTENSION_VERSION,
 };
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::kinematics::JointKind;
@@ -82,6 +86,26 @@ pub enum ManipulatorError {
     /// The controller reports an error state.
     #[error("controller in error (code {0})")]
     InError(i32),
+    /// A value that the wire format cannot carry (not finite as a 32-bit float, more
+    /// joints than simple_message carries); nothing was sent.
+    #[error("{what} cannot be sent: {reason}")]
+    NotOnWire {
+        /// What (e.g. `trajectory point 3`).
+        what: String,
+        /// Why, for people.
+        reason: String,
+    },
+}
+
+/// How often a blocked read wakes up to check its deadline and the stop flag.
+const READ_SLICE: Duration = Duration::from_millis(100);
+
+/// Whether an I/O error is a read timeout (retryable with a [`FrameReader`]).
+fn timed_out(e: &CodecError) -> bool {
+    matches!(e, CodecError::Io(io) if matches!(
+        io.kind(),
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+    ))
 }
 
 /// Joint state and status as last published by the controller.
@@ -106,6 +130,8 @@ struct Shared {
 /// A connection to a controller's motion and state ports.
 pub struct Client {
     motion: TcpStream,
+    /// The motion port's partial reply, kept across read timeouts.
+    frames: FrameReader,
     options: ClientOptions,
     kinds: Vec<JointKind>,
     shared: Arc<Mutex<Shared>>,
@@ -150,17 +176,26 @@ impl Client {
                 return Err(ManipulatorError::NotLocal(a.to_string()));
             }
         }
+        if kinds.len() > MAX_JOINTS {
+            return Err(ManipulatorError::NotOnWire {
+                what: "the robot".into(),
+                reason: format!(
+                    "{} joints, simple_message carries at most {MAX_JOINTS}",
+                    kinds.len()
+                ),
+            });
+        }
         let open = |addr: SocketAddr| {
             let s = TcpStream::connect_timeout(&addr, options.connect_timeout)
                 .map_err(|source| ManipulatorError::Connect { addr, source })?;
             let _ = s.set_nodelay(true);
-            let _ = s.set_read_timeout(Some(options.reply_timeout));
+            let _ = s.set_read_timeout(Some(READ_SLICE));
             let _ = s.set_write_timeout(Some(options.reply_timeout));
             Ok::<_, ManipulatorError>(s)
         };
         let motion = open(motion)?;
         let mut state_stream = open(state)?;
-        let _ = state_stream.set_read_timeout(Some(options.state_timeout));
+        let state_timeout = options.state_timeout;
         let shared = Arc::new(Mutex::new(Shared::default()));
         let stop = Arc::new(AtomicBool::new(false));
         let reader = {
@@ -170,12 +205,16 @@ impl Client {
                 kinds.clone(),
                 options.byte_order,
             );
+            let mut frames = FrameReader::new(order);
+            let mut last = Instant::now();
             std::thread::spawn(move || loop {
                 if stop.load(Ordering::Relaxed) {
                     return;
                 }
-                match Packet::read_from(&mut state_stream, order) {
+                match frames.read_packet(&mut state_stream) {
+                    Err(e) if timed_out(&e) && last.elapsed() <= state_timeout => continue,
                     Ok(p) => {
+                        last = Instant::now();
                         let mut s = lock(&shared);
                         s.last_rx = Some(Instant::now());
                         match p.body {
@@ -215,6 +254,7 @@ impl Client {
         };
         let client = Self {
             motion,
+            frames: FrameReader::new(options.byte_order),
             options: options.clone(),
             kinds,
             shared,
@@ -273,8 +313,21 @@ impl Client {
         let order = self.options.byte_order;
         let lost = |e: CodecError| ManipulatorError::Disconnected(format!("motion port: {e}"));
         p.write_to(&mut self.motion, order).map_err(lost)?;
+        let deadline = Instant::now() + self.options.reply_timeout;
         loop {
-            let r = Packet::read_from(&mut self.motion, order).map_err(lost)?;
+            let r = match self.frames.read_packet(&mut self.motion) {
+                Ok(r) => r,
+                Err(e) if timed_out(&e) => {
+                    if Instant::now() > deadline {
+                        return Err(ManipulatorError::Disconnected(format!(
+                            "motion port: no reply within {} s",
+                            self.options.reply_timeout.as_secs_f64()
+                        )));
+                    }
+                    continue;
+                }
+                Err(e) => return Err(lost(e)),
+            };
             // REP-I0006: replies nobody asked for and topics are ignored.
             if r.comm_type == CommType::ServiceReply && r.msg_type == p.msg_type {
                 return Ok(r);
@@ -333,12 +386,13 @@ impl Client {
         joints: &[f64],
         duration: f64,
     ) -> Result<(), ManipulatorError> {
-        let pt = JointTrajPt {
-            sequence,
-            joints: joints_to_wire(&self.kinds, joints),
-            velocity: 1.0,
-            duration: duration as f32,
-        };
+        let what = || format!("trajectory point {sequence}");
+        let pt = wire_point(&self.kinds, sequence, joints, duration).map_err(|reason| {
+            ManipulatorError::NotOnWire {
+                what: what(),
+                reason,
+            }
+        })?;
         let sent = Instant::now();
         let r = self.request(&Packet::request(
             msg_type::JOINT_TRAJ_PT,
@@ -349,7 +403,7 @@ impl Client {
         }
         let (code, reason) = self.refusal_reason(sent);
         Err(ManipulatorError::Refused {
-            what: format!("trajectory point {sequence}"),
+            what: what(),
             code,
             reason,
         })
@@ -386,6 +440,12 @@ impl Client {
         index: i32,
         value: f32,
     ) -> Result<f32, ManipulatorError> {
+        if !value.is_finite() {
+            return Err(ManipulatorError::NotOnWire {
+                what: format!("tool command {action:?}"),
+                reason: format!("value {value} is not a finite 32-bit float"),
+            });
+        }
         let r = self.request(&Packet::request(
             msg_type::FITUP_TOOL,
             Body::Tool(ToolCommand {
@@ -452,6 +512,48 @@ impl Client {
             std::thread::sleep(Duration::from_millis(10));
         }
     }
+}
+
+/// The JOINT_TRAJ_PT of one point (joints rad/mm, duration s), or why the wire cannot
+/// carry it: every value must be a finite 32-bit float after the unit conversion
+/// (prismatic joints in metres), and there must be exactly one value per joint.
+///
+/// # Errors
+/// The reason, naming the joint (1-based) and its value.
+pub fn wire_point(
+    kinds: &[JointKind],
+    sequence: i32,
+    joints: &[f64],
+    duration: f64,
+) -> Result<JointTrajPt, String> {
+    if joints.len() != kinds.len() || kinds.len() > MAX_JOINTS {
+        return Err(format!(
+            "{} joint values for a robot of {} joints (at most {MAX_JOINTS} on the wire)",
+            joints.len(),
+            kinds.len()
+        ));
+    }
+    let wire = joints_to_wire(kinds, joints);
+    if let Some(j) = wire.iter().position(|v| !v.is_finite()) {
+        return Err(format!(
+            "joint {} = {} does not fit the wire's 32-bit float (largest magnitude {:e})",
+            j + 1,
+            joints[j],
+            f32::MAX
+        ));
+    }
+    let d = duration as f32;
+    if !(d.is_finite() && d >= 0.0) {
+        return Err(format!(
+            "duration {duration} s is not a finite 32-bit float ≥ 0"
+        ));
+    }
+    Ok(JointTrajPt {
+        sequence,
+        joints: wire,
+        velocity: 1.0,
+        duration: d,
+    })
 }
 
 impl Drop for Client {

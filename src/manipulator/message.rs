@@ -593,35 +593,16 @@ impl Packet {
         })
     }
 
-    /// Reads exactly one packet from a stream. The read is bounded: the length is
-    /// checked before anything is allocated, and the stream's own timeout (set by the
-    /// caller) bounds the wait. A stream that ends between packets gives
+    /// Reads exactly one packet from a blocking stream (a fresh [`FrameReader`]: bytes
+    /// of a packet cut short by a timeout are lost; keep a [`FrameReader`] for streams
+    /// with read timeouts). The read is bounded: the length is checked before anything
+    /// is read past the prefix. A stream that ends between packets gives
     /// `Io(UnexpectedEof)`; one that ends inside a packet gives `Truncated`.
     ///
     /// # Errors
     /// Any [`CodecError`].
     pub fn read_from(stream: &mut impl Read, order: ByteOrder) -> Result<Self, CodecError> {
-        let mut prefix = [0u8; PREFIX_SIZE];
-        let got = read_full(stream, &mut prefix)?;
-        if got == 0 {
-            return Err(CodecError::Io(std::io::ErrorKind::UnexpectedEof.into()));
-        }
-        if got < PREFIX_SIZE {
-            return Err(CodecError::Truncated {
-                expected: PREFIX_SIZE,
-                got,
-            });
-        }
-        let length = check_length(order.i32_at(&prefix, 0))?;
-        let mut message = vec![0u8; length];
-        let got = read_full(stream, &mut message)?;
-        if got < length {
-            return Err(CodecError::Truncated {
-                expected: PREFIX_SIZE + length,
-                got: PREFIX_SIZE + got,
-            });
-        }
-        Self::decode_message(&message, order)
+        FrameReader::new(order).read_packet(stream)
     }
 
     /// Writes the packet to a stream.
@@ -642,19 +623,74 @@ fn check_length(length: i32) -> Result<usize, CodecError> {
     Ok(length as usize)
 }
 
-/// Reads until `buf` is full or the stream ends; returns the bytes read. Errors
-/// (timeouts included) are passed on, except an interrupted read, which is retried.
-fn read_full(stream: &mut impl Read, buf: &mut [u8]) -> Result<usize, CodecError> {
-    let mut got = 0;
-    while got < buf.len() {
-        match stream.read(&mut buf[got..]) {
-            Ok(0) => break,
-            Ok(n) => got += n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(CodecError::Io(e)),
+/// The framing of one connection: reads packets from a stream whose reads may time
+/// out (`WouldBlock` / `TimedOut`) and keeps the bytes of a packet received so far
+/// across those timeouts, so a packet that arrives in parts, with pauses, is decoded
+/// whole. It never holds more than one packet ([`PREFIX_SIZE`] + [`MAX_LENGTH`]
+/// bytes): it reads only the bytes the current packet still needs.
+///
+/// After any error other than a timeout the stream cannot be re-synchronised
+/// (simple_message has only byte counting): the connection should be closed.
+#[derive(Debug)]
+pub struct FrameReader {
+    order: ByteOrder,
+    buf: Vec<u8>,
+}
+
+impl FrameReader {
+    /// An empty framing buffer for a connection of byte order `order`.
+    pub fn new(order: ByteOrder) -> Self {
+        Self {
+            order,
+            buf: Vec::with_capacity(PREFIX_SIZE + HEADER_SIZE + 52),
         }
     }
-    Ok(got)
+
+    /// Bytes of an incomplete packet held (0 between packets).
+    pub fn pending(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// Reads the next packet. A read timeout returns `Io(WouldBlock | TimedOut)` and
+    /// keeps the bytes read so far: call again to continue the same packet.
+    ///
+    /// # Errors
+    /// A timeout (retryable, see above), `Io(UnexpectedEof)` when the stream ends
+    /// between packets, `Truncated` when it ends inside one, a bad length prefix
+    /// (before anything past the prefix is read), or a packet that does not decode
+    /// (its bytes are consumed).
+    pub fn read_packet(&mut self, stream: &mut impl Read) -> Result<Packet, CodecError> {
+        loop {
+            let want = if self.buf.len() < PREFIX_SIZE {
+                PREFIX_SIZE
+            } else {
+                let length = check_length(self.order.i32_at(&self.buf, 0))?;
+                PREFIX_SIZE + length
+            };
+            if self.buf.len() == want && want > PREFIX_SIZE {
+                let packet = Packet::decode_message(&self.buf[PREFIX_SIZE..], self.order);
+                self.buf.clear();
+                return packet;
+            }
+            let mut chunk = [0u8; PREFIX_SIZE + MAX_LENGTH];
+            let need = want - self.buf.len();
+            match stream.read(&mut chunk[..need]) {
+                Ok(0) => {
+                    let got = std::mem::take(&mut self.buf).len();
+                    if got == 0 {
+                        return Err(CodecError::Io(std::io::ErrorKind::UnexpectedEof.into()));
+                    }
+                    return Err(CodecError::Truncated {
+                        expected: want,
+                        got,
+                    });
+                }
+                Ok(n) => self.buf.extend_from_slice(&chunk[..n.min(need)]),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(CodecError::Io(e)),
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -878,6 +914,180 @@ mod tests {
             }
             let _ = Packet::decode(&b, ByteOrder::Big);
             let _ = Packet::read_from(&mut &b[..], ByteOrder::Big);
+        }
+    }
+
+    /// A stream that hands out `data` in the given chunks, with a timeout
+    /// (`WouldBlock` or `TimedOut`, alternately) between two chunks: a peer that
+    /// pauses mid-packet behind a socket read timeout.
+    struct Paused {
+        chunks: std::collections::VecDeque<Vec<u8>>,
+        pause_next: bool,
+        pauses: usize,
+    }
+
+    impl Paused {
+        fn new(data: &[u8], cuts: &[usize]) -> Self {
+            let mut chunks = std::collections::VecDeque::new();
+            let mut from = 0;
+            for &c in cuts.iter().chain([&data.len()]) {
+                let c = c.clamp(from, data.len());
+                if c > from {
+                    chunks.push_back(data[from..c].to_vec());
+                }
+                from = c;
+            }
+            Self {
+                chunks,
+                pause_next: false,
+                pauses: 0,
+            }
+        }
+    }
+
+    impl Read for Paused {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.pause_next && !self.chunks.is_empty() {
+                self.pause_next = false;
+                self.pauses += 1;
+                let kind = if self.pauses.is_multiple_of(2) {
+                    std::io::ErrorKind::TimedOut
+                } else {
+                    std::io::ErrorKind::WouldBlock
+                };
+                return Err(kind.into());
+            }
+            let Some(front) = self.chunks.front_mut() else {
+                return Ok(0);
+            };
+            let n = buf.len().min(front.len());
+            buf[..n].copy_from_slice(&front[..n]);
+            front.drain(..n);
+            if front.is_empty() {
+                self.chunks.pop_front();
+                self.pause_next = true;
+            }
+            Ok(n)
+        }
+    }
+
+    /// Every packet of `stream`, retrying after each timeout (as the simulator and
+    /// the client do), until the stream ends.
+    fn read_all(r: &mut impl Read, order: ByteOrder) -> (Vec<Packet>, Option<CodecError>) {
+        let mut frames = FrameReader::new(order);
+        let mut out = Vec::new();
+        loop {
+            match frames.read_packet(r) {
+                Ok(p) => out.push(p),
+                Err(CodecError::Io(e))
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) => {}
+                Err(CodecError::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                    return (out, None)
+                }
+                Err(e) => return (out, Some(e)),
+            }
+        }
+    }
+
+    fn sample_packets() -> Vec<Packet> {
+        let mut v = vec![
+            Packet::decode(&hex(JOINT_POSITION_EXAMPLE), ByteOrder::Big).unwrap(),
+            Packet::decode(&hex(JOINT_TRAJ_PT_EXAMPLE), ByteOrder::Big).unwrap(),
+            Packet::decode(&hex(STATUS_EXAMPLE), ByteOrder::Big).unwrap(),
+            Packet::request(msg_type::PING, Body::Ping),
+            Packet::reply(msg_type::JOINT_TRAJ_PT, ReplyCode::Failure, Body::Empty),
+        ];
+        v.push(Packet::request(
+            msg_type::FITUP_TOOL,
+            Body::Tool(ToolCommand {
+                version: 1,
+                action: ToolAction::Touch,
+                index: 0,
+                value: 0.01,
+            }),
+        ));
+        v
+    }
+
+    #[test]
+    fn a_stream_split_at_every_byte_with_pauses_decodes_the_same() {
+        for order in [ByteOrder::Big, ByteOrder::Little] {
+            let packets = sample_packets();
+            let bytes: Vec<u8> = packets.iter().flat_map(|p| p.encode(order)).collect();
+            // One cut at every boundary, and every byte on its own.
+            for cut in 0..=bytes.len() {
+                let (got, err) = read_all(&mut Paused::new(&bytes, &[cut]), order);
+                assert!(err.is_none(), "cut {cut}: {err:?}");
+                assert_eq!(got, packets, "cut {cut}");
+            }
+            let every: Vec<usize> = (1..bytes.len()).collect();
+            let mut r = Paused::new(&bytes, &every);
+            let (got, err) = read_all(&mut r, order);
+            assert!(err.is_none(), "{err:?}");
+            assert_eq!(got, packets);
+            assert_eq!(r.pauses, bytes.len() - 1);
+        }
+    }
+
+    #[test]
+    fn a_stream_that_ends_mid_packet_is_truncated_not_lost_silently() {
+        let bytes = hex(JOINT_TRAJ_PT_EXAMPLE);
+        for end in 1..bytes.len() {
+            let cuts: Vec<usize> = (1..end).collect();
+            let (got, err) = read_all(&mut Paused::new(&bytes[..end], &cuts), ByteOrder::Big);
+            assert!(got.is_empty());
+            assert!(
+                matches!(err, Some(CodecError::Truncated { .. })),
+                "{end}: {err:?}"
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(crate::test_support::proptest_config(256))]
+
+        /// Random chunkings of a random sequence of valid packets decode to the same
+        /// packets, whatever the pauses between chunks.
+        #[test]
+        fn random_chunkings_decode_to_the_same_packets(
+            picks in proptest::collection::vec(0usize..6, 1..12),
+            cuts in proptest::collection::vec(0usize..700, 0..40),
+            little in proptest::bool::ANY,
+        ) {
+            let order = if little { ByteOrder::Little } else { ByteOrder::Big };
+            let all = sample_packets();
+            let packets: Vec<Packet> = picks.iter().map(|&i| all[i].clone()).collect();
+            let bytes: Vec<u8> = packets.iter().flat_map(|p| p.encode(order)).collect();
+            let mut cuts = cuts;
+            cuts.sort_unstable();
+            let (got, err) = read_all(&mut Paused::new(&bytes, &cuts), order);
+            proptest::prop_assert!(err.is_none(), "{:?}", err);
+            proptest::prop_assert_eq!(got, packets);
+        }
+
+        /// Garbage, and any length prefix, give errors, never a panic, and nothing
+        /// past a bad prefix is read.
+        #[test]
+        fn garbage_and_bad_prefixes_are_errors(
+            prefix in proptest::num::i32::ANY,
+            tail in proptest::collection::vec(proptest::num::u8::ANY, 0..200),
+            cuts in proptest::collection::vec(0usize..210, 0..10),
+        ) {
+            let mut bytes = prefix.to_be_bytes().to_vec();
+            bytes.extend(&tail);
+            let mut cuts = cuts;
+            cuts.sort_unstable();
+            let (_, err) = read_all(&mut Paused::new(&bytes, &cuts), ByteOrder::Big);
+            if !(HEADER_SIZE as i32..=MAX_LENGTH as i32).contains(&prefix) {
+                proptest::prop_assert!(
+                    matches!(err, Some(CodecError::BadLength(_))),
+                    "{:?}",
+                    err
+                );
+            }
         }
     }
 }

@@ -14,10 +14,20 @@
 //!
 //! Clients that disconnect or send garbage only lose their own connection: the
 //! simulator logs the cause to standard error and keeps serving.
+//!
+//! Connections are bounded so that idle or hostile clients cannot starve a real
+//! one: at most [`MAX_CONNECTIONS`] per port. When a port is full, a new connection
+//! takes the place of the oldest motion connection that has not yet sent a whole
+//! packet (an idle one); when there is none (or on the state port, whose clients
+//! never send) the oldest connection is closed. A motion connection is closed when its first
+//! packet does not arrive within [`FIRST_PACKET_TIMEOUT`], when a packet it started
+//! is not complete within [`PARTIAL_PACKET_TIMEOUT`], and after [`IDLE_TIMEOUT`]
+//! without a packet. A packet may arrive in any number of parts with pauses between
+//! them (the bytes read so far are kept across read timeouts).
 
 use super::message::{
-    msg_type, special_seq, Body, ByteOrder, CodecError, JointTrajPt, Packet, ReplyCode, RobotMode,
-    Status, ToolAction, TriState,
+    msg_type, special_seq, Body, ByteOrder, CodecError, FrameReader, JointTrajPt, Packet,
+    ReplyCode, RobotMode, Status, ToolAction, TriState, MAX_JOINTS,
 };
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::document::Document;
@@ -30,6 +40,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use thiserror::Error;
+
+/// Most connections served at once on each port (motion, state).
+pub const MAX_CONNECTIONS: usize = 32;
+/// A motion connection that sends no whole packet this long after it opened is
+/// closed (a connection that never speaks holds a slot for nothing).
+pub const FIRST_PACKET_TIMEOUT: Duration = Duration::from_secs(10);
+/// A packet whose first bytes arrived must be complete within this time.
+pub const PARTIAL_PACKET_TIMEOUT: Duration = Duration::from_secs(10);
+/// A motion connection silent this long after its last packet is closed.
+pub const IDLE_TIMEOUT: Duration = Duration::from_secs(300);
 
 /// Settings of a [`Simulator`].
 #[derive(Debug, Clone)]
@@ -258,6 +278,12 @@ impl Simulator {
             .map_err(|e| SimulatorError::Setup(e.to_string()))?;
         let inst = &doc.robots()[index];
         let kinds = inst.robot().joint_kinds();
+        if kinds.len() > MAX_JOINTS {
+            return Err(SimulatorError::Setup(format!(
+                "robot `{robot}` has {} joints: simple_message (JOINT_TRAJ_PT, JOINT_POSITION) carries at most {MAX_JOINTS}",
+                kinds.len()
+            )));
+        }
         let links: HashSet<usize> = inst.links().iter().filter_map(|l| l.component).collect();
         let joints = inst.joints().to_vec();
         let mut cell = Cell {
@@ -317,7 +343,7 @@ impl Simulator {
             let (stop, state, opts) = (stop.clone(), state.clone(), options.clone());
             let kinds = kinds.clone();
             threads.push(std::thread::spawn(move || {
-                accept_loop(motion, &stop, |stream| {
+                accept_loop(motion, "motion", &stop, |stream, conn| {
                     let (stop, state, cell, kinds, opts) = (
                         stop.clone(),
                         state.clone(),
@@ -326,7 +352,7 @@ impl Simulator {
                         opts.clone(),
                     );
                     std::thread::spawn(move || {
-                        serve_motion(stream, &stop, &state, &cell, &kinds, &opts)
+                        serve_motion(stream, &conn, &stop, &state, &cell, &kinds, &opts)
                     });
                 })
             }));
@@ -335,10 +361,12 @@ impl Simulator {
         {
             let (stop, state, opts) = (stop.clone(), state.clone(), options.clone());
             threads.push(std::thread::spawn(move || {
-                accept_loop(state_l, &stop, |stream| {
+                accept_loop(state_l, "state", &stop, |stream, conn| {
                     let (stop, state, kinds, opts) =
                         (stop.clone(), state.clone(), kinds.clone(), opts.clone());
-                    std::thread::spawn(move || serve_state(stream, &stop, &state, &kinds, &opts));
+                    std::thread::spawn(move || {
+                        serve_state(stream, &conn, &stop, &state, &kinds, &opts)
+                    });
                 })
             }));
         }
@@ -395,13 +423,69 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-fn accept_loop(listener: TcpListener, stop: &AtomicBool, mut serve: impl FnMut(TcpStream)) {
+/// One served connection, as the accept loop sees it.
+struct Conn {
+    /// Set by the accept loop to make the serving thread close the connection.
+    closed: AtomicBool,
+    /// The connection sent a whole packet (it is a client, not an idle socket).
+    spoke: AtomicBool,
+    /// The serving thread ended.
+    ended: AtomicBool,
+    /// A handle to shut the socket down from the accept loop.
+    stream: Option<TcpStream>,
+    opened: Instant,
+}
+
+impl Conn {
+    fn close(&self) {
+        self.closed.store(true, Ordering::Relaxed);
+        if let Some(s) = &self.stream {
+            let _ = s.shutdown(std::net::Shutdown::Both);
+        }
+    }
+    fn open(&self, stop: &AtomicBool) -> bool {
+        !stop.load(Ordering::Relaxed) && !self.closed.load(Ordering::Relaxed)
+    }
+}
+
+/// Accepts connections, at most [`MAX_CONNECTIONS`] served at once (see the module
+/// documentation for which one gives way when the port is full).
+fn accept_loop(
+    listener: TcpListener,
+    port: &str,
+    stop: &AtomicBool,
+    mut serve: impl FnMut(TcpStream, Arc<Conn>),
+) {
+    let mut conns: Vec<Arc<Conn>> = Vec::new();
+    let mut warned = false;
     while !stop.load(Ordering::Relaxed) {
         match listener.accept() {
             Ok((stream, _)) => {
                 let _ = stream.set_nonblocking(false);
                 let _ = stream.set_nodelay(true);
-                serve(stream);
+                conns.retain(|c| !c.ended.load(Ordering::Relaxed));
+                if conns.len() >= MAX_CONNECTIONS {
+                    let victim = conns
+                        .iter()
+                        .position(|c| !c.spoke.load(Ordering::Relaxed))
+                        .unwrap_or(0);
+                    conns.remove(victim).close();
+                    if !warned {
+                        eprintln!(
+                            "manipulator: {port} port full ({MAX_CONNECTIONS} connections): closing the oldest idle one for each new one"
+                        );
+                        warned = true;
+                    }
+                }
+                let conn = Arc::new(Conn {
+                    closed: AtomicBool::new(false),
+                    spoke: AtomicBool::new(false),
+                    ended: AtomicBool::new(false),
+                    stream: stream.try_clone().ok(),
+                    opened: Instant::now(),
+                });
+                conns.push(conn.clone());
+                serve(stream, conn);
             }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
                 std::thread::sleep(Duration::from_millis(10));
@@ -412,17 +496,21 @@ fn accept_loop(listener: TcpListener, stop: &AtomicBool, mut serve: impl FnMut(T
             }
         }
     }
+    for c in conns {
+        c.close();
+    }
 }
 
 fn serve_state(
     mut stream: TcpStream,
+    conn: &Conn,
     stop: &AtomicBool,
     state: &Mutex<State>,
     kinds: &[JointKind],
     opts: &SimulatorOptions,
 ) {
     let _ = stream.set_write_timeout(Some(Duration::from_secs(2)));
-    while !stop.load(Ordering::Relaxed) {
+    while conn.open(stop) {
         let (joints, status) = {
             let s = lock(state);
             (joints_to_wire(kinds, &s.joints), s.status())
@@ -437,14 +525,16 @@ fn serve_state(
         .encode(opts.byte_order);
         bytes.extend(Packet::topic(msg_type::STATUS, Body::Status(status)).encode(opts.byte_order));
         if stream.write_all(&bytes).is_err() {
-            return; // the client left
+            break; // the client left, or reads nothing
         }
         std::thread::sleep(opts.publish_interval);
     }
+    conn.ended.store(true, Ordering::Relaxed);
 }
 
 fn serve_motion(
     mut stream: TcpStream,
+    conn: &Conn,
     stop: &AtomicBool,
     state: &Mutex<State>,
     cell: &Mutex<Cell>,
@@ -454,11 +544,32 @@ fn serve_motion(
     let peer = stream
         .peer_addr()
         .map_or_else(|_| "?".to_string(), |a| a.to_string());
-    // Short read timeouts so that shutdown is noticed; an idle client is fine.
+    if let Some(why) = serve_motion_packets(&mut stream, conn, stop, state, cell, kinds, opts) {
+        eprintln!("manipulator: {peer}: {why}; closing the connection");
+    }
+    conn.ended.store(true, Ordering::Relaxed);
+}
+
+/// Serves one motion connection until it ends; returns why it was closed when that
+/// is worth a log line.
+fn serve_motion_packets(
+    stream: &mut TcpStream,
+    conn: &Conn,
+    stop: &AtomicBool,
+    state: &Mutex<State>,
+    cell: &Mutex<Cell>,
+    kinds: &[JointKind],
+    opts: &SimulatorOptions,
+) -> Option<String> {
+    // Short read timeouts so that shutdown and the idle limits are noticed; the
+    // framing buffer keeps a packet's first bytes across them.
     let _ = stream.set_read_timeout(Some(Duration::from_millis(200)));
     let _ = stream.set_write_timeout(Some(Duration::from_secs(2)));
-    while !stop.load(Ordering::Relaxed) {
-        let packet = match Packet::read_from(&mut stream, opts.byte_order) {
+    let mut frames = FrameReader::new(opts.byte_order);
+    let mut last_packet = conn.opened;
+    let mut packet_started: Option<Instant> = None;
+    while conn.open(stop) {
+        let packet = match frames.read_packet(stream) {
             Ok(p) => p,
             Err(CodecError::Io(e))
                 if matches!(
@@ -466,24 +577,44 @@ fn serve_motion(
                     std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
                 ) =>
             {
-                continue
+                let now = Instant::now();
+                if frames.pending() > 0 {
+                    let since = *packet_started.get_or_insert(now);
+                    if now - since > PARTIAL_PACKET_TIMEOUT {
+                        return Some(format!(
+                            "a packet started {} s ago is still incomplete ({} bytes)",
+                            PARTIAL_PACKET_TIMEOUT.as_secs(),
+                            frames.pending()
+                        ));
+                    }
+                } else if !conn.spoke.load(Ordering::Relaxed)
+                    && now - last_packet > FIRST_PACKET_TIMEOUT
+                {
+                    return Some(format!(
+                        "no packet within {} s of connecting",
+                        FIRST_PACKET_TIMEOUT.as_secs()
+                    ));
+                } else if now - last_packet > IDLE_TIMEOUT {
+                    return Some(format!("idle for {} s", IDLE_TIMEOUT.as_secs()));
+                }
+                continue;
             }
-            Err(CodecError::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => return,
-            Err(e) => {
-                // Byte counting is all simple_message has: after garbage the stream
-                // cannot be re-synchronised, so this connection ends.
-                eprintln!("manipulator: {peer}: {e}; closing the connection");
-                return;
-            }
+            Err(CodecError::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => return None,
+            Err(_) if !conn.open(stop) => return None,
+            // Byte counting is all simple_message has: after garbage the stream
+            // cannot be re-synchronised, so this connection ends.
+            Err(e) => return Some(e.to_string()),
         };
-        let reply = handle(&packet, state, cell, kinds, opts);
-        if let Some(r) = reply {
-            if let Err(e) = r.write_to(&mut stream, opts.byte_order) {
-                eprintln!("manipulator: {peer}: {e}");
-                return;
+        packet_started = None;
+        last_packet = Instant::now();
+        conn.spoke.store(true, Ordering::Relaxed);
+        if let Some(r) = handle(&packet, state, cell, kinds, opts) {
+            if let Err(e) = r.write_to(stream, opts.byte_order) {
+                return Some(e.to_string());
             }
         }
     }
+    None
 }
 
 /// The reply to one request (None for topics, which need none).

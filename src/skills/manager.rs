@@ -3,10 +3,14 @@
 //! of pending skills and manual commands.
 //!
 //! Faults: when the controller disconnects mid-skill the skill is marked
-//! interrupted, the manager reconnects (within
-//! [`ManagerOptions::reconnect_timeout`]) and resumes that skill from where the arm
-//! is; finished skills are never run again. A refusal, a controller error or a
-//! timeout stops the run with the reason. Pausing stops the arm at once; resuming
+//! interrupted, the manager reconnects and resumes that skill from where the arm
+//! is; finished skills are never run again. Reconnection attempts back off (from
+//! [`RECONNECT_FIRST_DELAY`], doubling, to [`RECONNECT_MAX_DELAY`]) and give up after
+//! [`ManagerOptions::reconnect_timeout`]. A controller that drops the connection
+//! twice at the same command (as a simulator does on a point it cannot decode) has
+//! refused it: the run fails there instead of resending it forever. A refusal, a
+//! controller error, a value the wire cannot carry or a timeout stops the run with
+//! the reason. Pausing stops the arm at once; resuming
 //! continues the running skill from where it stopped.
 
 use super::program::{ControllerCommand, Plan, PlanStep};
@@ -16,6 +20,13 @@ use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+
+/// The first pause between two connection attempts.
+pub const RECONNECT_FIRST_DELAY: Duration = Duration::from_millis(100);
+/// The longest pause between two connection attempts (the pause doubles up to it).
+pub const RECONNECT_MAX_DELAY: Duration = Duration::from_secs(2);
+/// Disconnections at the same command of a skill that make it a failure.
+pub const MAX_DROPS_AT_ONE_COMMAND: usize = 2;
 
 /// Where a skill is.
 #[derive(Debug, Clone, PartialEq)]
@@ -243,15 +254,20 @@ impl SkillManager {
 
     fn connect(&self, until: Instant) -> Result<Client, ManipulatorError> {
         let (motion, state) = self.addresses()?;
+        let mut delay = RECONNECT_FIRST_DELAY;
         loop {
             match Client::connect(motion, state, self.plan.kinds(), &self.options.client) {
                 Ok(c) => return Ok(c),
-                Err(e @ ManipulatorError::NotLocal(_)) => return Err(e),
+                Err(e @ (ManipulatorError::NotLocal(_) | ManipulatorError::NotOnWire { .. })) => {
+                    return Err(e)
+                }
                 Err(e) => {
-                    if Instant::now() > until || self.control.abort.load(Ordering::SeqCst) {
+                    let now = Instant::now();
+                    if now > until || self.control.abort.load(Ordering::SeqCst) {
                         return Err(e);
                     }
-                    std::thread::sleep(Duration::from_millis(100));
+                    std::thread::sleep(delay.min(until - now));
+                    delay = (delay * 2).min(RECONNECT_MAX_DELAY);
                 }
             }
         }
@@ -272,6 +288,9 @@ impl SkillManager {
         let mut i = 0;
         // Commands of the running skill already done (not repeated on resume).
         let mut done_commands = 0;
+        // Where the last disconnection happened (skill, command) and how many times
+        // in a row it happened there.
+        let mut drops: ((usize, usize), usize) = ((usize::MAX, 0), 0);
         while i < self.status.len() {
             self.apply_edits(on_event);
             if let Err(e) = self.manual_commands(&mut client, on_event) {
@@ -327,6 +346,20 @@ impl SkillManager {
                     return Err(ManagerError::Aborted);
                 }
                 Err(ManipulatorError::Disconnected(why)) => {
+                    let at = (i, done_commands);
+                    drops = if drops.0 == at {
+                        (at, drops.1 + 1)
+                    } else {
+                        (at, 1)
+                    };
+                    if drops.1 >= MAX_DROPS_AT_ONE_COMMAND {
+                        let e = ManipulatorError::Disconnected(format!(
+                            "{why}; the controller dropped the connection {} times at command {} of this skill: giving up (it refuses that command)",
+                            drops.1,
+                            done_commands + 1
+                        ));
+                        return self.fail(i, e, on_event);
+                    }
                     self.status[i] = SkillStatus::Interrupted;
                     on_event(&ManagerEvent::Interrupted(i, why));
                     drop(client);

@@ -18,6 +18,10 @@ use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use thiserror::Error;
 
+/// The most trajectory points a plan file may hold (all skills together): far above
+/// any real plan (a point every 0.2 s is 55 hours), low enough that memory stays small.
+pub const MAX_PLAN_POINTS: usize = 1_000_000;
+
 /// One thing a controller does.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -299,59 +303,279 @@ impl Plan {
         serde_json::to_string_pretty(self).expect("plain data serializes")
     }
 
-    /// Parses a plan file's JSON (`name` for errors).
+    /// Parses a plan file's JSON (`name` for errors) and checks the whole plan before
+    /// anything is dispatched, so that a run never stops half-way on a value the
+    /// controller or the wire cannot take.
     ///
     /// # Errors
-    /// Bad JSON (with line and column), a wrong version, non-finite joints, a
-    /// trajectory point of the wrong joint count, an unknown tool action, an unknown
-    /// part state.
+    /// Bad JSON (with line and column; nesting deeper than serde_json's 128 levels
+    /// and numbers beyond f64 included), a wrong version, more than [`MAX_JOINTS`]
+    /// joints, more than [`MAX_PLAN_POINTS`] trajectory points, a joint or duration
+    /// that is not finite as a 32-bit float on the wire (prismatic joints in metres),
+    /// a trajectory point of the wrong joint count, a negative duration, an unknown
+    /// tool action or part state — each naming the file and the JSON path of the
+    /// value (`steps[2].commands[0].trajectory[5][1][3]`).
+    ///
+    /// [`MAX_JOINTS`]: crate::manipulator::message::MAX_JOINTS
     pub fn from_json(name: &str, text: &str) -> Result<Self, BindError> {
-        let plan: Plan = serde_json::from_str(text)
-            .map_err(|e| BindError::File(format!("{name}:{}:{}: {e}", e.line(), e.column())))?;
-        let bad = |m: String| BindError::File(format!("{name}: {m}"));
+        let plan: Plan = serde_json::from_str(text).map_err(|e| {
+            BindError::File(format!(
+                "{name}:{}:{}: {}",
+                e.line(),
+                e.column(),
+                crate::diagnostics::shorten(&e.to_string(), 200)
+            ))
+        })?;
+        let bad = |at: String, m: String| BindError::File(format!("{name}: {at}: {m}"));
         if plan.version != 1 {
-            return Err(bad(format!(
-                "version {} (this build reads 1)",
-                plan.version
-            )));
+            return Err(bad(
+                "version".into(),
+                format!("{} (this build reads 1)", plan.version),
+            ));
         }
         let n = plan.joint_kinds.len();
-        if n == 0 || n > crate::manipulator::message::MAX_JOINTS {
-            return Err(bad(format!("{n} joints (1 to 10)")));
+        let max = crate::manipulator::message::MAX_JOINTS;
+        if n == 0 || n > max {
+            return Err(bad(
+                "joint_kinds".into(),
+                format!("{n} joints (1 to {max}: what simple_message carries)"),
+            ));
         }
-        for s in &plan.steps {
+        if let Some((j, k)) = plan
+            .joint_kinds
+            .iter()
+            .enumerate()
+            .find(|(_, k)| !matches!(k.as_str(), "revolute" | "prismatic"))
+        {
+            return Err(bad(
+                format!("joint_kinds[{j}]"),
+                format!(
+                    "unknown joint kind `{}` (revolute or prismatic)",
+                    crate::diagnostics::shorten(k, 80)
+                ),
+            ));
+        }
+        let kinds = plan.kinds();
+        let mut total = 0usize;
+        for (si, s) in plan.steps.iter().enumerate() {
+            let at = |rest: String| format!("steps[{si}]{rest} (skill #{})", s.skill);
             if PartState::parse(&s.end_state).is_none() {
-                return Err(bad(format!(
-                    "skill #{}: unknown state `{}`",
-                    s.skill, s.end_state
-                )));
+                return Err(bad(
+                    at(".end_state".into()),
+                    format!(
+                        "unknown state `{}`",
+                        crate::diagnostics::shorten(&s.end_state, 80)
+                    ),
+                ));
             }
-            for c in &s.commands {
+            for (ci, c) in s.commands.iter().enumerate() {
                 match c {
                     ControllerCommand::Trajectory(pts) => {
-                        for (q, d) in pts {
-                            if q.len() != n
-                                || !q.iter().chain([d]).all(|v| v.is_finite())
-                                || *d < 0.0
+                        total += pts.len();
+                        if total > MAX_PLAN_POINTS {
+                            return Err(bad(
+                                at(format!(".commands[{ci}]")),
+                                format!(
+                                    "more than {MAX_PLAN_POINTS} trajectory points in the plan"
+                                ),
+                            ));
+                        }
+                        for (pi, (q, d)) in pts.iter().enumerate() {
+                            let here =
+                                |k: String| at(format!(".commands[{ci}].trajectory[{pi}]{k}"));
+                            if q.len() != n {
+                                return Err(bad(
+                                    here("[0]".into()),
+                                    format!("{} joint values, the robot has {n}", q.len()),
+                                ));
+                            }
+                            if !(d.is_finite() && *d >= 0.0 && (*d as f32).is_finite()) {
+                                return Err(bad(
+                                    here("[1]".into()),
+                                    format!("duration {d} s: a finite number ≥ 0 that fits a 32-bit float"),
+                                ));
+                            }
+                            if let Err(why) =
+                                crate::manipulator::client::wire_point(&kinds, 0, q, *d)
                             {
-                                return Err(bad(format!(
-                                    "skill #{}: a trajectory point needs {n} finite joints and a duration ≥ 0",
-                                    s.skill
-                                )));
+                                let j = q
+                                    .iter()
+                                    .zip(crate::manipulator::joints_to_wire(&kinds, q))
+                                    .position(|(_, w)| !w.is_finite())
+                                    .unwrap_or(0);
+                                return Err(bad(here(format!("[0][{j}]")), why));
                             }
                         }
                     }
-                    ControllerCommand::Tool { action, value, .. } => {
-                        if ControllerCommand::tool_action(action).is_none() || !value.is_finite() {
-                            return Err(bad(format!(
-                                "skill #{}: bad tool command `{action}`",
-                                s.skill
-                            )));
+                    ControllerCommand::Tool {
+                        action,
+                        value,
+                        index,
+                    } => {
+                        let here = |k: &str| at(format!(".commands[{ci}].tool.{k}"));
+                        if ControllerCommand::tool_action(action).is_none() {
+                            return Err(bad(
+                                here("action"),
+                                format!(
+                                    "unknown tool action `{}` (grasp, release, touch, set_output)",
+                                    crate::diagnostics::shorten(action, 80)
+                                ),
+                            ));
+                        }
+                        if !(value.is_finite() && (*value as f32).is_finite()) {
+                            return Err(bad(
+                                here("value"),
+                                format!("{value} does not fit the wire's 32-bit float"),
+                            ));
+                        }
+                        if *index < 0 {
+                            return Err(bad(here("index"), format!("{index} is negative")));
                         }
                     }
                 }
             }
         }
         Ok(plan)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan() -> Plan {
+        Plan {
+            version: 1,
+            robot: "r".into(),
+            joint_kinds: vec!["revolute".into(), "prismatic".into()],
+            steps: vec![PlanStep {
+                skill: 0,
+                task: 0,
+                part: "p".into(),
+                action: "Move_Table".into(),
+                description: "#0".into(),
+                end_state: "Grasped".into(),
+                commands: vec![
+                    ControllerCommand::Trajectory(vec![
+                        (vec![0.0, 0.0], 0.0),
+                        (vec![0.5, 250.0], 1.0),
+                    ]),
+                    ControllerCommand::Tool {
+                        action: "grasp".into(),
+                        index: 0,
+                        value: 0.01,
+                    },
+                ],
+            }],
+        }
+    }
+
+    #[test]
+    fn values_beyond_the_wire_are_refused_at_their_json_path() {
+        assert!(Plan::from_json("p.json", &plan().to_json()).is_ok());
+        type Edit = fn(&mut Plan);
+        let cases: [(Edit, &str); 5] = [
+            (
+                |p| {
+                    if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+                        t[1].0[0] = 1e39;
+                    }
+                },
+                "steps[0].commands[0].trajectory[1][0][0]",
+            ),
+            (
+                // A prismatic joint goes out in metres: 1e41 mm is 1e38 m, which fits.
+                |p| {
+                    if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+                        t[1].0[1] = 1e42;
+                    }
+                },
+                "steps[0].commands[0].trajectory[1][0][1]",
+            ),
+            (
+                |p| {
+                    if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+                        t[1].1 = 1e39;
+                    }
+                },
+                "steps[0].commands[0].trajectory[1][1]",
+            ),
+            (
+                |p| {
+                    if let ControllerCommand::Tool { value, .. } = &mut p.steps[0].commands[1] {
+                        *value = -1e300;
+                    }
+                },
+                "steps[0].commands[1].tool.value",
+            ),
+            (
+                |p| p.joint_kinds = vec!["revolute".into(); 11],
+                "joint_kinds",
+            ),
+        ];
+        for (edit, at) in cases {
+            let mut p = plan();
+            edit(&mut p);
+            let e = Plan::from_json("p.json", &p.to_json())
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("plan file: p.json: "), "{e}");
+            assert!(e.contains(at), "{at}: {e}");
+        }
+        let mut p = plan();
+        if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+            t[1].0[1] = 1e41;
+        }
+        assert!(Plan::from_json("p.json", &p.to_json()).is_ok());
+    }
+
+    #[test]
+    fn deep_huge_and_non_finite_json_are_located_errors() {
+        let deep = format!("{}{}", "[".repeat(100_000), "]".repeat(100_000));
+        let e = Plan::from_json("d.json", &deep).unwrap_err().to_string();
+        assert!(e.starts_with("plan file: d.json:1:"), "{e}");
+        let text = plan().to_json().replace("250.0", "1e400");
+        let e = Plan::from_json("n.json", &text).unwrap_err().to_string();
+        assert!(e.starts_with("plan file: n.json:"), "{e}");
+        let text = plan().to_json().replace("250.0", "NaN");
+        assert!(Plan::from_json("n.json", &text).is_err());
+        let long = format!("{{\"version\": \"{}\"}}", "v".repeat(1 << 20));
+        let e = Plan::from_json("l.json", &long).unwrap_err().to_string();
+        assert!(e.len() < 400, "{} bytes", e.len());
+    }
+
+    proptest::proptest! {
+        #![proptest_config(crate::test_support::proptest_config(512))]
+
+        /// Random edits of a valid plan file never panic: the result is a plan or an
+        /// error that names the file.
+        #[test]
+        fn mutated_plans_are_ok_or_located_errors(
+            edits in proptest::collection::vec((0usize..2000, 0usize..8, 0u8..3), 1..6),
+        ) {
+            const INSERTS: [&str; 8] = ["1e39", "-", "[", "]", "\"", "NaN", "1e400", ","];
+            let mut text = plan().to_json();
+            for (at, what, how) in edits {
+                let mut at = at % (text.len() + 1);
+                while !text.is_char_boundary(at) {
+                    at -= 1;
+                }
+                match how {
+                    0 => text.insert_str(at, INSERTS[what]),
+                    1 if at < text.len() => {
+                        let mut end = at + 1;
+                        while !text.is_char_boundary(end) {
+                            end += 1;
+                        }
+                        text.replace_range(at..end, "");
+                    }
+                    _ => text.truncate(at),
+                }
+            }
+            if let Err(e) = Plan::from_json("m.json", &text) {
+                let e = e.to_string();
+                proptest::prop_assert!(e.starts_with("plan file: m.json"), "{}", e);
+            }
+        }
     }
 }

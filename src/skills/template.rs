@@ -15,7 +15,8 @@
 //! stay contiguous and end at `Assembled`.
 
 use super::PartState;
-use crate::diagnostics::{locate, suggestion, SourceError};
+use crate::diagnostics::{locate, shorten, suggestion, SourceError};
+use crate::document::scan::MAX_QUOTE;
 use crate::sequence::Operation;
 use serde::Deserialize;
 use std::path::Path;
@@ -88,10 +89,15 @@ impl Template {
     /// mean"), a broken chain, a generator that cannot make that step, a chain that
     /// does not end at `Assembled` — each at its line and column.
     pub fn parse(path: &Path, text: &str) -> Result<Self, TemplateError> {
-        let file: TemplateFile = serde_yaml::from_str(text).map_err(|e| {
-            let (line, col) = e.location().map_or((0, 0), |l| (l.line(), l.column()));
-            SourceError::new(path, line, col, e.to_string())
-        })?;
+        // The same YAML reader and budget as documents: no aliases (an alias bomb of
+        // 2 MB expands to gigabytes), no duplicate keys, bounded nesting.
+        let (file, _): (TemplateFile, _) = crate::document::scan::from_yaml(
+            text,
+            path,
+            "invalid template",
+            "the template is empty: a template is a YAML mapping with `operation:` and `workflows:`",
+        )?;
+        let q = |s: &str| shorten(s, MAX_QUOTE);
         let at = |needle: &str, from_line: usize| locate(text, needle, from_line).unwrap_or((0, 0));
         let err = |needle: &str, from_line: usize, msg: String| {
             let (l, c) = at(needle, from_line);
@@ -101,7 +107,7 @@ impl Template {
             err(
                 &file.operation,
                 1,
-                format!("unknown operation `{}`", file.operation),
+                format!("unknown operation `{}`", q(&file.operation)),
             )
             .with_help(suggestion(&file.operation, ["insertion", "screw", "align"]))
         })?;
@@ -120,7 +126,7 @@ impl Template {
             let entry_line = at(&format!("from: {}", w.from), line).0.max(line);
             let state = |s: &str| {
                 PartState::parse(s).ok_or_else(|| {
-                    err(s, entry_line, format!("unknown part state `{s}`"))
+                    err(s, entry_line, format!("unknown part state `{}`", q(s)))
                         .with_help(suggestion(s, names.iter().copied()))
                 })
             };
@@ -130,7 +136,7 @@ impl Template {
                 return Err(err(
                     &w.generator,
                     entry_line,
-                    format!("unknown generator `{}`", w.generator),
+                    format!("unknown generator `{}`", q(&w.generator)),
                 )
                 .with_help(suggestion(&w.generator, GENERATORS)));
             }
@@ -267,5 +273,52 @@ mod tests {
         let text = "operation: insertion\nworkflow: []\n";
         let e = Template::parse(p, text).unwrap_err();
         assert_eq!(e.line, Some(2), "{e}");
+    }
+
+    #[test]
+    fn aliases_and_long_values_are_refused_with_short_messages() {
+        let p = Path::new("t.yaml");
+        let text = "x: &a [1, 2]\ny: [*a, *a]\noperation: insertion\nworkflows: []\n";
+        let e = Template::parse(p, text).unwrap_err();
+        assert_eq!(e.line, Some(1), "{e}");
+        assert!(e.message.contains("anchors"), "{e}");
+        let long = "q".repeat(100_000);
+        for text in [
+            format!("operation: {long}\nworkflows: []\n"),
+            // (YAML keys are at most 1024 characters.)
+            format!("operation: insertion\n{}: 1\n", &long[..900]),
+            format!("operation: insertion\nworkflows:\n  - {{from: {long}, to: In_WS, generator: locate}}\n"),
+        ] {
+            let e = Template::parse(p, &text).unwrap_err();
+            assert!(e.line.is_some(), "{e}");
+            assert!(e.to_string().len() < 600, "{} bytes", e.to_string().len());
+            assert!(e.message.contains('…'), "{}", e.message);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(crate::test_support::proptest_config(512))]
+
+        /// Random byte edits of a valid template never panic: the result is a
+        /// template or an error located in the file.
+        #[test]
+        fn mutated_templates_are_ok_or_located_errors(
+            edits in proptest::collection::vec((0usize..400, proptest::num::u8::ANY, 0u8..3), 1..8),
+        ) {
+            let mut bytes = default_template_text(Operation::Insertion).as_bytes().to_vec();
+            for (at, b, how) in edits {
+                let at = at % (bytes.len() + 1);
+                match how {
+                    0 if at < bytes.len() => bytes[at] = b,
+                    1 => bytes.insert(at, b),
+                    _ => bytes.truncate(at.max(1)),
+                }
+            }
+            let text = String::from_utf8_lossy(&bytes);
+            if let Err(e) = Template::parse(Path::new("m.yaml"), &text) {
+                proptest::prop_assert!(e.to_string().starts_with("m.yaml"), "{}", e);
+                proptest::prop_assert!(e.to_string().len() < 1000, "{}", e);
+            }
+        }
     }
 }

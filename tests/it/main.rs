@@ -15,6 +15,7 @@ mod hostile_db;
 mod hostile_files;
 mod hostile_names;
 mod hostile_runs;
+mod hostile_skills;
 mod hostile_writers;
 mod layers;
 mod manipulator;
