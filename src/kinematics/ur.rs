@@ -455,3 +455,135 @@ pub struct UrParameters {
     /// Distance from that last point to the TCP (`d6` for the flange, mm).
     pub tcp_offset: f64,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::{Catalog, DhConvention, DhRow, IkSolverKind, NumericIk};
+    use crate::math::Rng;
+    use std::f64::consts::FRAC_PI_2;
+
+    fn same_angles(a: &[f64], b: &[f64], tol: f64) -> bool {
+        a.iter().zip(b).all(|(x, y)| wrap(x - y).abs() < tol)
+    }
+
+    /// Every catalog UR arm gets the UR solver with its D-H lengths as the detected
+    /// parameters; the spherical-wrist arms keep OPW.
+    #[test]
+    fn catalog_arms_get_the_right_solver() {
+        for arm in Catalog::ALL {
+            let r = arm.robot();
+            match arm.ur_dh() {
+                Some([_, a2, a3, d4, d5, d6]) => {
+                    assert_eq!(r.solver(), IkSolverKind::Ur, "{}", arm.name());
+                    let p = r.ur_solver().unwrap().parameters();
+                    assert!((p.b.abs() - d4).abs() < 1e-9, "{}: {p:?}", arm.name());
+                    assert!((p.upper_arm[0].hypot(p.upper_arm[1]) - a2.abs()).abs() < 1e-9);
+                    assert!((p.forearm[0].hypot(p.forearm[1]) - a3.abs()).abs() < 1e-9);
+                    assert!((p.e5.abs() - d5).abs() < 1e-9);
+                    assert!((p.tcp_offset - d6).abs() < 1e-9);
+                }
+                None => assert_eq!(r.solver_name(), "opw", "{}", arm.name()),
+            }
+        }
+    }
+
+    /// A UR5 whose wrist 2 twist is off by 0.1 rad (axes 5 and 6 no longer at a right
+    /// angle) or whose forearm is lifted out of the arm plane's parallelism gets the
+    /// numeric solver: detection does not misfire.
+    #[test]
+    fn near_ur_geometries_fall_back_to_numeric() {
+        let [d1, a2, a3, d4, d5, d6] = Catalog::Ur5.ur_dh().unwrap();
+        let rows = |alpha3: f64, alpha5: f64| {
+            [
+                DhRow::revolute(0.0, d1, 0.0, FRAC_PI_2),
+                DhRow::revolute(0.0, 0.0, a2, 0.0),
+                DhRow::revolute(0.0, 0.0, a3, alpha3),
+                DhRow::revolute(0.0, d4, 0.0, FRAC_PI_2),
+                DhRow::revolute(0.0, d5, 0.0, alpha5),
+                DhRow::revolute(0.0, d6, 0.0, 0.0),
+            ]
+        };
+        let build = |r: [DhRow; 6]| {
+            Robot::from_dh("x", &r, DhConvention::Standard, Transform::IDENTITY).unwrap()
+        };
+        assert_eq!(build(rows(0.0, -FRAC_PI_2)).solver_name(), "ur");
+        let twisted = build(rows(0.0, -FRAC_PI_2 + 0.1));
+        assert_eq!(twisted.solver_name(), "numeric");
+        assert_eq!(
+            UrSolver::detect(&twisted).err(),
+            Some(NotUr::Axes56NotMeeting)
+        );
+        let skew = build(rows(0.05, -FRAC_PI_2));
+        assert_eq!(skew.solver_name(), "numeric");
+        assert_eq!(
+            UrSolver::detect(&skew).err(),
+            Some(NotUr::Axes234NotParallel)
+        );
+    }
+
+    /// A brute-force numeric search from many random starts finds no solution that the
+    /// closed form misses.
+    #[test]
+    fn no_branch_missing_against_brute_force() {
+        let mut rng = Rng::new(78);
+        let opts = IkOptions {
+            restarts: 1,
+            max_iterations: 80,
+            ..IkOptions::default()
+        };
+        let numeric = NumericIk::from_options(&opts);
+        for arm in Catalog::UR {
+            let r = arm.robot();
+            let s = r.ur_solver().unwrap();
+            for _ in 0..3 {
+                let q: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
+                let target = r.tcp_pose(&q).unwrap();
+                let br = s.branches(target.isometry(), 1e-9);
+                assert_eq!(br.len(), 8, "{}", arm.name());
+                let mut found = 0;
+                for _ in 0..60 {
+                    let start: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
+                    let d = numeric.descend(&r, target.isometry(), &start, false);
+                    if d.pos_err < 1e-6 && d.ang_err < 1e-9 {
+                        found += 1;
+                        assert!(
+                            br.as_slice()
+                                .iter()
+                                .any(|b| same_angles(&b.joints, &d.q, 1e-5)),
+                            "{}: numeric solution {:?} not among {:?}",
+                            arm.name(),
+                            d.q,
+                            br.as_slice()
+                        );
+                    }
+                }
+                assert!(found > 0, "{}: brute force found nothing", arm.name());
+            }
+        }
+    }
+
+    /// Out of reach, inside the shoulder cylinder and non-finite targets are errors, not
+    /// NaN joints.
+    #[test]
+    fn unreachable_targets_are_errors() {
+        let r = Catalog::Ur5e.robot();
+        let zero = [0.0; 6];
+        let opts = IkOptions::default();
+        let far = Transform::from_translation(crate::math::Vec3::new(3000.0, 0.0, 0.0));
+        assert!(matches!(
+            r.inverse(&far, &zero, &opts),
+            Err(IkError::Unreachable(_))
+        ));
+        // The wrist point W5 on axis 1 (inside the cylinder of radius d4).
+        let s = r.ur_solver().unwrap();
+        let p = crate::math::Vec3::new(0.0, 0.0, 300.0) - s.w5_tcp;
+        let inside = Transform::from_translation(p);
+        assert!(matches!(
+            r.inverse(&inside, &zero, &opts),
+            Err(IkError::Unreachable(_))
+        ));
+        let nan = Transform::from_translation(crate::math::Vec3::new(f64::NAN, 0.0, 0.0));
+        assert!(r.inverse(&nan, &zero, &opts).is_err());
+    }
+}
