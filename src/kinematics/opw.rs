@@ -666,82 +666,82 @@ pub(crate) fn solutions_within_limits(
     limits: &[Option<JointLimits>; 6],
     reference: &[f64],
 ) -> Result<Vec<IkSolution>, IkError> {
-        let mut out = Vec::new();
-        let mut first_violation: Option<(f64, usize, f64)> = None;
-        for br in branches {
-            let mut choices: [[f64; 4]; 6] = [[0.0; 4]; 6];
-            let mut counts = [0usize; 6];
-            for j in 0..6 {
-                let v = br.joints[j];
-                match limits[j] {
-                    None => {
-                        // Unlimited: the representative nearest the reference.
-                        let r = reference.get(j).copied().unwrap_or(0.0);
-                        choices[j][0] = v + TAU * ((r - v) / TAU).round();
-                        counts[j] = 1;
-                    }
-                    Some(l) => {
-                        let kmin = ((l.min - 1e-9 - v) / TAU).ceil() as i64;
-                        let kmax = ((l.max + 1e-9 - v) / TAU).floor() as i64;
-                        let mut k = kmin;
-                        while k <= kmax && counts[j] < 4 {
-                            choices[j][counts[j]] = (v + TAU * k as f64).clamp(l.min, l.max);
-                            counts[j] += 1;
-                            k += 1;
-                        }
+    let mut out = Vec::new();
+    let mut first_violation: Option<(f64, usize, f64)> = None;
+    for br in branches {
+        let mut choices: [[f64; 4]; 6] = [[0.0; 4]; 6];
+        let mut counts = [0usize; 6];
+        for j in 0..6 {
+            let v = br.joints[j];
+            match limits[j] {
+                None => {
+                    // Unlimited: the representative nearest the reference.
+                    let r = reference.get(j).copied().unwrap_or(0.0);
+                    choices[j][0] = v + TAU * ((r - v) / TAU).round();
+                    counts[j] = 1;
+                }
+                Some(l) => {
+                    let kmin = ((l.min - 1e-9 - v) / TAU).ceil() as i64;
+                    let kmax = ((l.max + 1e-9 - v) / TAU).floor() as i64;
+                    let mut k = kmin;
+                    while k <= kmax && counts[j] < 4 {
+                        choices[j][counts[j]] = (v + TAU * k as f64).clamp(l.min, l.max);
+                        counts[j] += 1;
+                        k += 1;
                     }
                 }
             }
-            if let Some(j) = counts.iter().position(|&c| c == 0) {
-                let dist: f64 = br
-                    .joints
-                    .iter()
-                    .zip(reference)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum();
-                if first_violation.is_none_or(|(d, _, _)| dist < d) {
-                    first_violation = Some((dist, j + 1, br.joints[j]));
-                }
-                continue;
+        }
+        if let Some(j) = counts.iter().position(|&c| c == 0) {
+            let dist: f64 = br
+                .joints
+                .iter()
+                .zip(reference)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum();
+            if first_violation.is_none_or(|(d, _, _)| dist < d) {
+                first_violation = Some((dist, j + 1, br.joints[j]));
             }
-            let mut idx = [0usize; 6];
+            continue;
+        }
+        let mut idx = [0usize; 6];
+        loop {
+            let joints: Vec<f64> = (0..6).map(|j| choices[j][idx[j]]).collect();
+            let distance = joints
+                .iter()
+                .zip(reference)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt();
+            out.push(IkSolution {
+                joints,
+                configuration: Some(br.configuration),
+                distance,
+                singular: br.singular,
+            });
+            let mut j = 0;
             loop {
-                let joints: Vec<f64> = (0..6).map(|j| choices[j][idx[j]]).collect();
-                let distance = joints
-                    .iter()
-                    .zip(reference)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum::<f64>()
-                    .sqrt();
-                out.push(IkSolution {
-                    joints,
-                    configuration: Some(br.configuration),
-                    distance,
-                    singular: br.singular,
-                });
-                let mut j = 0;
-                loop {
-                    idx[j] += 1;
-                    if idx[j] < counts[j] {
-                        break;
-                    }
-                    idx[j] = 0;
-                    j += 1;
-                    if j == 6 {
-                        break;
-                    }
+                idx[j] += 1;
+                if idx[j] < counts[j] {
+                    break;
                 }
+                idx[j] = 0;
+                j += 1;
                 if j == 6 {
                     break;
                 }
             }
+            if j == 6 {
+                break;
+            }
         }
-        if out.is_empty() {
-            let (_, joint, value) = first_violation.unwrap_or((0.0, 1, 0.0));
-            return Err(IkError::JointLimits { joint, value });
-        }
-        out.sort_by(|a, b| a.distance.total_cmp(&b.distance));
-        Ok(out)
+    }
+    if out.is_empty() {
+        let (_, joint, value) = first_violation.unwrap_or((0.0, 1, 0.0));
+        return Err(IkError::JointLimits { joint, value });
+    }
+    out.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+    Ok(out)
 }
 
 #[cfg(test)]

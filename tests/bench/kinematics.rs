@@ -248,7 +248,10 @@ fn ur_against_numeric() {
     println!("\nUR5e, medians over 7 rounds (CPU time per call, one core):");
     println!("| operation | time | branches found (of 8 per target, {NUM_CALLS} targets) |");
     println!("|---|---|---|");
-    println!("| UR closed form, all branches (`UrSolver::branches`) | {b:.1} ns | {:.2} |", ur_found as f64 / NUM_CALLS as f64);
+    println!(
+        "| UR closed form, all branches (`UrSolver::branches`) | {b:.1} ns | {:.2} |",
+        ur_found as f64 / NUM_CALLS as f64
+    );
     println!("| `Robot::inverse` (UR, limits ±360°: 512 solutions, sorted) | {i:.1} ns | – |");
     println!(
         "| numeric (`NumericIk`, 24 restarts, up to 8 solutions) | {n:.0} ns | {:.2} (generating config found {num_gen}/{NUM_CALLS}) |",
