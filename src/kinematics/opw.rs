@@ -626,12 +626,13 @@ impl OpwSolver {
     }
 }
 
+/// Six joint axis lines: unit direction and a point (mm).
+pub(crate) type AxisLines = [(Vector3<f64>, Point3<f64>); 6];
+
 /// Joint axis lines (unit direction, point) of a 6R robot at the zero configuration in
 /// the root frame, and the TCP pose at zero (mm); `None` unless the flange chain has
 /// exactly six joints, all revolute.
-pub(crate) fn zero_axis_lines(
-    robot: &Robot,
-) -> Option<([(Vector3<f64>, Point3<f64>); 6], Isometry3<f64>)> {
+pub(crate) fn zero_axis_lines(robot: &Robot) -> Option<(AxisLines, Isometry3<f64>)> {
     if robot.dof() != 6
         || robot
             .joint_kinds()

@@ -109,7 +109,11 @@ fn every_branch_exact_and_generating_configuration_found() {
             // A UR has 8 branches unless a shoulder/wrist choice puts axis 4 out of the
             // arm's reach (then that choice's two elbow branches do not exist; the
             // brute-force unit test shows none is missed).
-            assert!(count % 2 == 0 && count >= 2, "{}: {count}", arm.name());
+            assert!(
+                count.is_multiple_of(2) && count >= 2,
+                "{}: {count}",
+                arm.name()
+            );
             if count == 8 {
                 eight += 1;
             }
