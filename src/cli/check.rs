@@ -73,10 +73,10 @@ pub(super) fn check(path: &Path) -> Exit {
                 "    {:<12} {} joints, {} solver, TCP at {}",
                 r.name(),
                 r.robot().dof(),
-                if r.robot().analytic().is_some() {
-                    "closed-form"
-                } else {
-                    "numeric"
+                match r.robot().solver() {
+                    crate::kinematics::IkSolverKind::Opw => "closed-form (OPW)",
+                    crate::kinematics::IkSolverKind::Ur => "closed-form (UR)",
+                    crate::kinematics::IkSolverKind::Numeric => "numeric",
                 },
                 r.tcp()
             );

@@ -7,7 +7,9 @@
 //!   published with the ROS-Industrial `opw_kinematics` package (also shipped by
 //!   `rs-opw-kinematics`); Fanuc LR Mate 200iD and Stäubli TX2-60L: manufacturer
 //!   dimension drawings as tabulated in public kinematics catalogues.
-//! - UR5: the D-H table published by Universal Robots.
+//! - UR3, UR5, UR10, UR3e, UR5e, UR10e: the D-H tables published by Universal Robots
+//!   ("Parameters for calculations of kinematics and dynamics"), solved in closed form
+//!   by [`UrSolver`](super::UrSolver).
 //!
 //! Joint limits are the manufacturers' data-sheet ranges (see the docs for which
 //! could be confirmed).
@@ -29,20 +31,61 @@ pub enum Catalog {
     FanucLrMate200iD,
     /// Stäubli TX2-60L.
     StaubliTx2_60L,
-    /// Universal Robots UR5 (no spherical wrist: numeric IK).
+    /// Universal Robots UR5 (CB-Series; no spherical wrist: UR closed form).
     Ur5,
+    /// Universal Robots UR3 (CB-Series).
+    Ur3,
+    /// Universal Robots UR10 (CB-Series).
+    Ur10,
+    /// Universal Robots UR3e.
+    Ur3e,
+    /// Universal Robots UR5e.
+    Ur5e,
+    /// Universal Robots UR10e.
+    Ur10e,
 }
 
 impl Catalog {
     /// Every catalog arm.
-    pub const ALL: [Catalog; 6] = [
+    pub const ALL: [Catalog; 11] = [
         Catalog::NachiMz07,
         Catalog::AbbIrb2400,
         Catalog::KukaKr6R700,
         Catalog::FanucLrMate200iD,
         Catalog::StaubliTx2_60L,
         Catalog::Ur5,
+        Catalog::Ur3,
+        Catalog::Ur10,
+        Catalog::Ur3e,
+        Catalog::Ur5e,
+        Catalog::Ur10e,
     ];
+
+    /// The Universal Robots arms of the catalog.
+    pub const UR: [Catalog; 6] = [
+        Catalog::Ur3,
+        Catalog::Ur5,
+        Catalog::Ur10,
+        Catalog::Ur3e,
+        Catalog::Ur5e,
+        Catalog::Ur10e,
+    ];
+
+    /// The published standard D-H lengths `[d1, a2, a3, d4, d5, d6]` (mm) of a
+    /// Universal Robots arm (α = π/2, 0, 0, π/2, −π/2, 0; every θ offset 0), `None`
+    /// for the other arms. Source: Universal Robots, "Parameters for calculations of
+    /// kinematics and dynamics".
+    pub fn ur_dh(self) -> Option<[f64; 6]> {
+        Some(match self {
+            Catalog::Ur3 => [151.9, -243.65, -213.25, 112.35, 85.35, 81.9],
+            Catalog::Ur5 => [89.159, -425.0, -392.25, 109.15, 94.65, 82.3],
+            Catalog::Ur10 => [127.3, -612.0, -572.3, 163.941, 115.7, 92.2],
+            Catalog::Ur3e => [151.85, -243.55, -213.2, 131.05, 85.35, 92.1],
+            Catalog::Ur5e => [162.5, -425.0, -392.2, 133.3, 99.7, 99.6],
+            Catalog::Ur10e => [180.7, -612.7, -571.55, 174.15, 119.85, 116.55],
+            _ => return None,
+        })
+    }
 
     /// The catalog name (used by documents and scripts).
     pub fn name(self) -> &'static str {
@@ -53,6 +96,11 @@ impl Catalog {
             Catalog::FanucLrMate200iD => "fanuc_lrmate200id",
             Catalog::StaubliTx2_60L => "staubli_tx2_60l",
             Catalog::Ur5 => "ur5",
+            Catalog::Ur3 => "ur3",
+            Catalog::Ur10 => "ur10",
+            Catalog::Ur3e => "ur3e",
+            Catalog::Ur5e => "ur5e",
+            Catalog::Ur10e => "ur10e",
         }
     }
 
@@ -178,14 +226,22 @@ impl Catalog {
                     "unverified: data-sheet ranges from memory, no public source checked",
                 ))
             }
-            Catalog::Ur5 => {
+            Catalog::Ur3
+            | Catalog::Ur5
+            | Catalog::Ur10
+            | Catalog::Ur3e
+            | Catalog::Ur5e
+            | Catalog::Ur10e => {
+                let [d1, a2, a3, d4, d5, d6] = self
+                    .ur_dh()
+                    .unwrap_or_else(|| unreachable!("UR arms have a D-H table"));
                 let rows = [
-                    DhRow::revolute(0.0, 89.159, 0.0, FRAC_PI_2),
-                    DhRow::revolute(0.0, 0.0, -425.0, 0.0),
-                    DhRow::revolute(0.0, 0.0, -392.25, 0.0),
-                    DhRow::revolute(0.0, 109.15, 0.0, FRAC_PI_2),
-                    DhRow::revolute(0.0, 94.65, 0.0, -FRAC_PI_2),
-                    DhRow::revolute(0.0, 82.3, 0.0, 0.0),
+                    DhRow::revolute(0.0, d1, 0.0, FRAC_PI_2),
+                    DhRow::revolute(0.0, 0.0, a2, 0.0),
+                    DhRow::revolute(0.0, 0.0, a3, 0.0),
+                    DhRow::revolute(0.0, d4, 0.0, FRAC_PI_2),
+                    DhRow::revolute(0.0, d5, 0.0, -FRAC_PI_2),
+                    DhRow::revolute(0.0, d6, 0.0, 0.0),
                 ];
                 let rows: Vec<DhRow> = rows
                     .iter()
@@ -452,6 +508,7 @@ mod tests {
     fn ur5_numeric_round_trip() {
         let r = Catalog::Ur5.robot();
         assert!(r.analytic().is_none());
+        assert_eq!(r.solver_name(), "ur");
         let mut rng = Rng::new(3);
         let opts = IkOptions::default();
         let mut found_original = 0;

@@ -1,7 +1,7 @@
 //! Robot kinematics: kinematic trees of links and joints (seed 001), robots built
 //! from D-H tables (seed 000, table 2), a catalog of industrial arms, forward
 //! kinematics, closed-form inverse kinematics for ortho-parallel arms with a
-//! spherical wrist (all branches), numeric inverse kinematics for any chain,
+//! spherical wrist and for UR-type arms with an offset wrist (all branches), numeric inverse kinematics for any chain,
 //! joint and Cartesian motions sampled into trajectories, motion programs and
 //! drilling of hole tables.
 //!
@@ -24,6 +24,7 @@ mod program;
 mod robot;
 mod trajectory;
 mod tree;
+mod ur;
 mod urdf;
 
 pub use catalog::{catalog_names, robot_by_name, Catalog};
@@ -43,7 +44,8 @@ pub use program::{
     parse_program, read_program, run_program, Instruction, Program, ProgramError, ProgramLine,
     ProgramRunError,
 };
-pub use robot::Robot;
+pub use robot::{IkSolverKind, Robot};
 pub use trajectory::{Trajectory, TrajectorySample};
 pub use tree::{KinematicTree, Link};
+pub use ur::{NotUr, UrParameters, UrSolver};
 pub use urdf::{parse_urdf, read_urdf, resolve_mesh, UrdfMesh, UrdfRobot, MAX_URDF_BYTES};

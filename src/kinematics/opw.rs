@@ -111,7 +111,7 @@ impl Branches {
         singular: false,
     };
 
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self {
             items: [Self::EMPTY_BRANCH; 8],
             len: 0,
@@ -136,7 +136,7 @@ impl Branches {
     }
 
     #[inline]
-    fn push(&mut self, b: Branch) {
+    pub(crate) fn push(&mut self, b: Branch) {
         if self.len < 8 {
             self.items[self.len] = b;
             self.len += 1;
@@ -192,19 +192,19 @@ pub struct OpwSolver {
 
 /// Angle of the planar vector (x, z), increasing with right-hand rotation about +y.
 #[inline]
-fn ang(v: [f64; 2]) -> f64 {
+pub(crate) fn ang(v: [f64; 2]) -> f64 {
     v[0].atan2(v[1])
 }
 
 /// Rotation of the planar vector (x, z) about +y by the angle with sine `s`, cosine `c`.
 #[inline]
-fn rot2(v: [f64; 2], s: f64, c: f64) -> [f64; 2] {
+pub(crate) fn rot2(v: [f64; 2], s: f64, c: f64) -> [f64; 2] {
     [v[0] * c + v[1] * s, -v[0] * s + v[1] * c]
 }
 
 /// Rodrigues rotation of `v` about unit `k` by the angle with sine `s`, cosine `c`.
 #[inline]
-fn rot_vec(k: &Vector3<f64>, s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
+pub(crate) fn rot_vec(k: &Vector3<f64>, s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
     v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
 }
 
@@ -223,14 +223,14 @@ pub(crate) fn wrap(a: f64) -> f64 {
     r
 }
 
-const PARALLEL_TOL: f64 = 1e-9;
+pub(crate) const PARALLEL_TOL: f64 = 1e-9;
 /// Below this sine of the angle between axis 4 and the target's axis 6 the wrist is
 /// treated as exactly singular. The arm joints of a target taken near a shoulder or
 /// elbow singularity carry ~1e-13 rad of rounding, which shows up in that sine; 1e-10
 /// absorbs it while the orientation error of snapping (the sine itself) stays below
 /// 1e-10 rad.
-const WRIST_SNAP: f64 = 1e-10;
-const DISTANCE_TOL: f64 = 1e-6;
+pub(crate) const WRIST_SNAP: f64 = 1e-10;
+pub(crate) const DISTANCE_TOL: f64 = 1e-6;
 
 impl OpwSolver {
     /// Derives the solver from a robot's geometry at the zero configuration, or says
@@ -244,22 +244,7 @@ impl OpwSolver {
         {
             return Err(NotOpw::NotSixRevolute);
         }
-        // Axis lines at zero in the root frame.
-        let links = robot.tree().links();
-        let chain = robot
-            .tree()
-            .path_from_root(robot.flange())
-            .ok_or(NotOpw::NotSixRevolute)?;
-        let mut pose = Isometry3::identity();
-        let mut axes = Vec::with_capacity(6);
-        for &i in &chain {
-            let l = &links[i];
-            if l.joint.kind != JointKind::Fixed {
-                axes.push((pose.rotation * l.joint.axis, pose * l.joint.point));
-            }
-            pose *= l.home.isometry();
-        }
-        let tcp0 = pose * robot.tool().isometry();
+        let (axes, tcp0) = zero_axis_lines(robot).ok_or(NotOpw::NotSixRevolute)?;
         let (a1, p1) = axes[0];
         let (a2, p2) = axes[1];
         let (a3, p3) = axes[2];
@@ -630,82 +615,7 @@ impl OpwSolver {
                 ))
             });
         }
-        let mut out = Vec::new();
-        let mut first_violation: Option<(f64, usize, f64)> = None;
-        for br in branches.as_slice() {
-            let mut choices: [[f64; 4]; 6] = [[0.0; 4]; 6];
-            let mut counts = [0usize; 6];
-            for j in 0..6 {
-                let v = br.joints[j];
-                match self.limits[j] {
-                    None => {
-                        // Unlimited: the representative nearest the reference.
-                        let r = reference.get(j).copied().unwrap_or(0.0);
-                        choices[j][0] = v + TAU * ((r - v) / TAU).round();
-                        counts[j] = 1;
-                    }
-                    Some(l) => {
-                        let kmin = ((l.min - 1e-9 - v) / TAU).ceil() as i64;
-                        let kmax = ((l.max + 1e-9 - v) / TAU).floor() as i64;
-                        let mut k = kmin;
-                        while k <= kmax && counts[j] < 4 {
-                            choices[j][counts[j]] = (v + TAU * k as f64).clamp(l.min, l.max);
-                            counts[j] += 1;
-                            k += 1;
-                        }
-                    }
-                }
-            }
-            if let Some(j) = counts.iter().position(|&c| c == 0) {
-                let dist: f64 = br
-                    .joints
-                    .iter()
-                    .zip(reference)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum();
-                if first_violation.is_none_or(|(d, _, _)| dist < d) {
-                    first_violation = Some((dist, j + 1, br.joints[j]));
-                }
-                continue;
-            }
-            let mut idx = [0usize; 6];
-            loop {
-                let joints: Vec<f64> = (0..6).map(|j| choices[j][idx[j]]).collect();
-                let distance = joints
-                    .iter()
-                    .zip(reference)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum::<f64>()
-                    .sqrt();
-                out.push(IkSolution {
-                    joints,
-                    configuration: Some(br.configuration),
-                    distance,
-                    singular: br.singular,
-                });
-                let mut j = 0;
-                loop {
-                    idx[j] += 1;
-                    if idx[j] < counts[j] {
-                        break;
-                    }
-                    idx[j] = 0;
-                    j += 1;
-                    if j == 6 {
-                        break;
-                    }
-                }
-                if j == 6 {
-                    break;
-                }
-            }
-        }
-        if out.is_empty() {
-            let (_, joint, value) = first_violation.unwrap_or((0.0, 1, 0.0));
-            return Err(IkError::JointLimits { joint, value });
-        }
-        out.sort_by(|a, b| a.distance.total_cmp(&b.distance));
-        Ok(out)
+        solutions_within_limits(branches.as_slice(), &self.limits, reference)
     }
 
     /// Lateral offset `b` of the wrist centre from axis 1 (mm), upper-arm and
@@ -714,6 +624,125 @@ impl OpwSolver {
     pub fn parameters(&self) -> ([f64; 2], [f64; 2], [f64; 2], f64, [f64; 2]) {
         (self.p2, self.u2, self.u3, self.b, [self.s2, self.s3])
     }
+}
+
+/// Six joint axis lines: unit direction and a point (mm).
+pub(crate) type AxisLines = [(Vector3<f64>, Point3<f64>); 6];
+
+/// Joint axis lines (unit direction, point) of a 6R robot at the zero configuration in
+/// the root frame, and the TCP pose at zero (mm); `None` unless the flange chain has
+/// exactly six joints, all revolute.
+pub(crate) fn zero_axis_lines(robot: &Robot) -> Option<(AxisLines, Isometry3<f64>)> {
+    if robot.dof() != 6
+        || robot
+            .joint_kinds()
+            .iter()
+            .any(|k| *k != JointKind::Revolute)
+    {
+        return None;
+    }
+    let links = robot.tree().links();
+    let chain = robot.tree().path_from_root(robot.flange())?;
+    let mut pose = Isometry3::identity();
+    let mut axes = [(Vector3::zeros(), Point3::origin()); 6];
+    let mut k = 0;
+    for &i in &chain {
+        let l = &links[i];
+        if l.joint.kind != JointKind::Fixed {
+            axes[k] = (pose.rotation * l.joint.axis, pose * l.joint.point);
+            k += 1;
+        }
+        pose *= l.home.isometry();
+    }
+    Some((axes, pose * robot.tool().isometry()))
+}
+
+/// Expands principal branches (joint values in (−π, π]) into every solution within
+/// `limits`, with each ±2π variant a limit range allows (an unlimited joint takes the
+/// representative nearest the reference), sorted by Euclidean joint distance to
+/// `reference`; the error names the first violated joint of the nearest branch when
+/// every branch is outside the limits. Shared by the closed-form solvers.
+pub(crate) fn solutions_within_limits(
+    branches: &[Branch],
+    limits: &[Option<JointLimits>; 6],
+    reference: &[f64],
+) -> Result<Vec<IkSolution>, IkError> {
+    let mut out = Vec::new();
+    let mut first_violation: Option<(f64, usize, f64)> = None;
+    for br in branches {
+        let mut choices: [[f64; 4]; 6] = [[0.0; 4]; 6];
+        let mut counts = [0usize; 6];
+        for j in 0..6 {
+            let v = br.joints[j];
+            match limits[j] {
+                None => {
+                    // Unlimited: the representative nearest the reference.
+                    let r = reference.get(j).copied().unwrap_or(0.0);
+                    choices[j][0] = v + TAU * ((r - v) / TAU).round();
+                    counts[j] = 1;
+                }
+                Some(l) => {
+                    let kmin = ((l.min - 1e-9 - v) / TAU).ceil() as i64;
+                    let kmax = ((l.max + 1e-9 - v) / TAU).floor() as i64;
+                    let mut k = kmin;
+                    while k <= kmax && counts[j] < 4 {
+                        choices[j][counts[j]] = (v + TAU * k as f64).clamp(l.min, l.max);
+                        counts[j] += 1;
+                        k += 1;
+                    }
+                }
+            }
+        }
+        if let Some(j) = counts.iter().position(|&c| c == 0) {
+            let dist: f64 = br
+                .joints
+                .iter()
+                .zip(reference)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum();
+            if first_violation.is_none_or(|(d, _, _)| dist < d) {
+                first_violation = Some((dist, j + 1, br.joints[j]));
+            }
+            continue;
+        }
+        let mut idx = [0usize; 6];
+        loop {
+            let joints: Vec<f64> = (0..6).map(|j| choices[j][idx[j]]).collect();
+            let distance = joints
+                .iter()
+                .zip(reference)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt();
+            out.push(IkSolution {
+                joints,
+                configuration: Some(br.configuration),
+                distance,
+                singular: br.singular,
+            });
+            let mut j = 0;
+            loop {
+                idx[j] += 1;
+                if idx[j] < counts[j] {
+                    break;
+                }
+                idx[j] = 0;
+                j += 1;
+                if j == 6 {
+                    break;
+                }
+            }
+            if j == 6 {
+                break;
+            }
+        }
+    }
+    if out.is_empty() {
+        let (_, joint, value) = first_violation.unwrap_or((0.0, 1, 0.0));
+        return Err(IkError::JointLimits { joint, value });
+    }
+    out.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+    Ok(out)
 }
 
 #[cfg(test)]

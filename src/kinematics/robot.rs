@@ -3,7 +3,7 @@
 
 use super::{
     IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree, KinematicsError,
-    NumericIk, OpwSolver,
+    NumericIk, OpwSolver, UrSolver,
 };
 use crate::math::{AngleConvention, Transform};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
@@ -17,8 +17,9 @@ use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
 /// flange chain (e.g. gripper fingers) are held at 0 by [`Robot::link_poses`].
 ///
 /// When the chain is a 6R ortho-parallel arm with a spherical wrist (detected from
-/// the geometry, see [`OpwSolver::detect`]) the closed-form solver is used for inverse
-/// kinematics, otherwise the numeric one.
+/// the geometry, see [`OpwSolver::detect`]) or a UR-type arm (axes 2-3-4 parallel,
+/// offset wrist, see [`UrSolver::detect`]) a closed-form solver is used for inverse
+/// kinematics, otherwise the numeric one ([`Robot::solver`] says which).
 #[derive(Debug, Clone)]
 pub struct Robot {
     name: String,
@@ -29,7 +30,30 @@ pub struct Robot {
     joints: Vec<usize>,
     chain: Vec<usize>,
     analytic: Option<OpwSolver>,
+    ur: Option<UrSolver>,
     limits_source: Option<String>,
+}
+
+/// Which inverse-kinematics solver a [`Robot`] uses (chosen from its geometry).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum IkSolverKind {
+    /// Closed form, ortho-parallel arm with a spherical wrist ([`OpwSolver`]).
+    Opw,
+    /// Closed form, UR-type arm: axes 2-3-4 parallel, offset wrist ([`UrSolver`]).
+    Ur,
+    /// Numeric ([`NumericIk`]): any chain.
+    Numeric,
+}
+
+impl IkSolverKind {
+    /// `"opw"`, `"ur"` or `"numeric"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            IkSolverKind::Opw => "opw",
+            IkSolverKind::Ur => "ur",
+            IkSolverKind::Numeric => "numeric",
+        }
+    }
 }
 
 impl Robot {
@@ -66,9 +90,10 @@ impl Robot {
             joints,
             chain,
             analytic: None,
+            ur: None,
             limits_source: None,
         };
-        robot.analytic = OpwSolver::detect(&robot).ok();
+        robot.detect_solver();
         Ok(robot)
     }
 
@@ -137,7 +162,18 @@ impl Robot {
     /// Sets the tool frame (in the flange frame) and re-derives the analytic solver.
     pub fn set_tool(&mut self, tool: Transform) {
         self.tool = tool;
+        self.detect_solver();
+    }
+
+    /// OPW first (a spherical wrist), then UR: the two geometries exclude each other
+    /// except in degenerate cases, where the OPW solver is the established one.
+    fn detect_solver(&mut self) {
         self.analytic = OpwSolver::detect(self).ok();
+        self.ur = if self.analytic.is_none() {
+            UrSolver::detect(self).ok()
+        } else {
+            None
+        };
     }
 
     /// The same robot with another tool frame.
@@ -183,9 +219,35 @@ impl Robot {
         })
     }
 
-    /// The closed-form solver, when the robot qualifies.
+    /// The OPW closed-form solver, when the robot qualifies.
     pub fn analytic(&self) -> Option<&OpwSolver> {
         self.analytic.as_ref()
+    }
+
+    /// The UR closed-form solver, when the robot qualifies (and is not OPW).
+    pub fn ur_solver(&self) -> Option<&UrSolver> {
+        self.ur.as_ref()
+    }
+
+    /// Which solver [`Robot::inverse`] uses.
+    pub fn solver(&self) -> IkSolverKind {
+        if self.analytic.is_some() {
+            IkSolverKind::Opw
+        } else if self.ur.is_some() {
+            IkSolverKind::Ur
+        } else {
+            IkSolverKind::Numeric
+        }
+    }
+
+    /// The solver's name: `"opw"`, `"ur"` or `"numeric"`.
+    pub fn solver_name(&self) -> &'static str {
+        self.solver().name()
+    }
+
+    /// Whether inverse kinematics is solved in closed form (OPW or UR).
+    pub fn closed_form(&self) -> bool {
+        self.solver() != IkSolverKind::Numeric
     }
 
     /// Why the robot does not qualify for the closed-form solver (`None` if it does).
@@ -285,7 +347,7 @@ impl Robot {
     /// All joint solutions placing the TCP at the world pose `target`, within the
     /// joint limits, sorted by distance to `reference` (the current configuration).
     ///
-    /// Uses the closed-form solver when the robot qualifies (every branch, with ±360°
+    /// Uses a closed-form solver when the robot qualifies (every branch, with ±360°
     /// variants allowed by the limits), else the numeric solver with
     /// `options.numeric` settings. Errors name the cause: unreachable, singular,
     /// outside the joint limits.
@@ -302,10 +364,13 @@ impl Robot {
             )));
         }
         let local = Transform::from_isometry(self.base.isometry().inverse() * target.isometry());
-        match &self.analytic {
-            Some(solver) => solver.solve(self, &local, reference, options),
-            None => NumericIk::from_options(options).solve(self, &local, reference),
+        if let Some(solver) = &self.analytic {
+            return solver.solve(self, &local, reference, options);
         }
+        if let Some(solver) = &self.ur {
+            return solver.solve(&local, reference, options);
+        }
+        NumericIk::from_options(options).solve(self, &local, reference)
     }
 
     /// The solution nearest to `reference` (see [`Robot::inverse`]).

@@ -643,7 +643,8 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Number of joints.",
         |r: &mut RobotModel| -> ScriptResult<i64> { Ok(r.0.dof() as i64) },
     );
-    api.get("RobotModel.closed_form -> bool", "Whether inverse kinematics is solved in closed form (an OPW arm detected from the geometry) rather than numerically.", |r: &mut RobotModel| -> ScriptResult<bool> { Ok(r.0.analytic().is_some()) });
+    api.get("RobotModel.closed_form -> bool", "Whether inverse kinematics is solved in closed form (an OPW or UR-type arm detected from the geometry) rather than numerically.", |r: &mut RobotModel| -> ScriptResult<bool> { Ok(r.0.closed_form()) });
+    api.get("RobotModel.ik_solver -> string", "Which inverse-kinematics solver the geometry selects: `\"opw\"` (spherical wrist), `\"ur\"` (axes 2-3-4 parallel, offset wrist) or `\"numeric\"`.", |r: &mut RobotModel| -> ScriptResult<String> { Ok(r.0.solver_name().to_string()) });
     api.f(
         "RobotModel.fk(joints: array) -> Transform",
         "World pose of the TCP for the joint values (degrees / mm).",

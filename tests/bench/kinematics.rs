@@ -2,9 +2,12 @@
 //! (flange as TCP), fitup against the `rs-opw-kinematics` crate, interleaved in one
 //! run (A, B, A, B…), CPU time per call from /proc/thread-self/schedstat, medians.
 //!
+//! Then the UR5e (UR closed form, offset wrist) against fitup's numeric solver on the
+//! same targets: CPU time per call and how many of the 8 branches each finds.
+//!
 //! Run: `cargo bench --bench kinematics`
 
-use fitup::kinematics::{Catalog, IkOptions, Robot};
+use fitup::kinematics::{Catalog, IkOptions, NumericIk, Robot};
 use fitup::math::{Rng, Transform};
 use rs_opw_kinematics::kinematic_traits::Kinematics;
 use rs_opw_kinematics::kinematics_impl::OPWKinematics;
@@ -169,5 +172,90 @@ fn main() {
     );
     println!("| FK (generic tree walk, Robot::tcp_pose) | {ft:.1} ns | – | – |");
     println!("| Robot::inverse (limits, ±360° variants, sorted Vec) | {ifull:.1} ns | – | – |");
+    println!("loadavg at end: {}", loadavg());
+    ur_against_numeric();
+}
+
+/// UR5e: all-branch closed form (`UrSolver::branches`, `Robot::inverse`) against the
+/// numeric solver (`NumericIk` with its default 24 restarts and 8 solutions wanted)
+/// on the same targets; branch coverage counted modulo 2π.
+fn ur_against_numeric() {
+    const UR_CALLS: usize = 2_000;
+    const NUM_CALLS: usize = 50;
+    let ur5e = Catalog::Ur5e.robot();
+    let solver = ur5e.ur_solver().expect("UR5e uses the UR solver").clone();
+    let mut rng = Rng::new(43);
+    let joints: Vec<Vec<f64>> = (0..UR_CALLS)
+        .map(|_| (0..6).map(|_| rng.range(-3.0, 3.0)).collect())
+        .collect();
+    let targets: Vec<Transform> = joints.iter().map(|q| ur5e.tcp_pose(q).unwrap()).collect();
+    let opts = IkOptions::default();
+    let numeric = NumericIk::from_options(&IkOptions {
+        max_solutions: 8,
+        ..IkOptions::default()
+    });
+    let wrap = |a: f64| (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU);
+    let same = |a: &[f64], b: &[f64]| {
+        a.iter().zip(b).all(|(x, y)| {
+            let d = (wrap(*x) - wrap(*y)).abs();
+            d.min(std::f64::consts::TAU - d) < 1e-6
+        })
+    };
+    // Coverage on the first NUM_CALLS targets.
+    let (mut ur_found, mut num_found, mut num_gen) = (0usize, 0usize, 0usize);
+    for (q, t) in joints.iter().zip(&targets).take(NUM_CALLS) {
+        let br = solver.branches(t.isometry(), 1e-9);
+        ur_found += br.len();
+        let sols = numeric.solve(&ur5e, t, &[0.0; 6]).unwrap_or_default();
+        let mut distinct: Vec<&[f64]> = Vec::new();
+        for s in &sols {
+            if !distinct.iter().any(|d| same(d, &s.joints)) {
+                distinct.push(&s.joints);
+            }
+        }
+        num_found += distinct.len();
+        if distinct.iter().any(|d| same(d, q)) {
+            num_gen += 1;
+        }
+    }
+    let (mut br_t, mut inv_t, mut num_t) = (Vec::new(), Vec::new(), Vec::new());
+    for round in 0..7 {
+        let t0 = cpu_ns();
+        for _ in 0..50 {
+            for t in &targets {
+                black_box(solver.branches(black_box(t.isometry()), 1e-9));
+            }
+        }
+        br_t.push((cpu_ns() - t0) as f64 / (50 * UR_CALLS) as f64);
+        let t0 = cpu_ns();
+        for _ in 0..10 {
+            for (q, t) in joints.iter().zip(&targets) {
+                let _ = black_box(ur5e.inverse(black_box(t), q, &opts));
+            }
+        }
+        inv_t.push((cpu_ns() - t0) as f64 / (10 * UR_CALLS) as f64);
+        let t0 = cpu_ns();
+        for t in targets.iter().take(NUM_CALLS) {
+            let _ = black_box(numeric.solve(&ur5e, black_box(t), &[0.0; 6]));
+        }
+        num_t.push((cpu_ns() - t0) as f64 / NUM_CALLS as f64);
+        println!(
+            "UR round {round}: branches {:7.1} ns | Robot::inverse {:8.1} ns | numeric {:10.0} ns | loadavg {}",
+            br_t[round], inv_t[round], num_t[round], loadavg()
+        );
+    }
+    let (b, i, n) = (median(&mut br_t), median(&mut inv_t), median(&mut num_t));
+    println!("\nUR5e, medians over 7 rounds (CPU time per call, one core):");
+    println!("| operation | time | branches found (of 8 per target, {NUM_CALLS} targets) |");
+    println!("|---|---|---|");
+    println!(
+        "| UR closed form, all branches (`UrSolver::branches`) | {b:.1} ns | {:.2} |",
+        ur_found as f64 / NUM_CALLS as f64
+    );
+    println!("| `Robot::inverse` (UR, limits ±360°: 512 solutions, sorted) | {i:.1} ns | – |");
+    println!(
+        "| numeric (`NumericIk`, 24 restarts, up to 8 solutions) | {n:.0} ns | {:.2} (generating config found {num_gen}/{NUM_CALLS}) |",
+        num_found as f64 / NUM_CALLS as f64
+    );
     println!("loadavg at end: {}", loadavg());
 }
