@@ -265,9 +265,100 @@ pub fn printable(text: &str, keep_lines: bool) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(out)
 }
 
+/// A connection URL as fitup shows it: the password of `user:password@` is dropped
+/// and the value of every `password=` (or other `…pass…=`) parameter becomes `***`.
+/// `postgres://u:secret@h:5/d?password=x&sslmode=disable` →
+/// `postgres://u@h:5/d?password=***&sslmode=disable`. Every message, listing and
+/// `Debug` output that names a PostgreSQL database goes through here.
+pub fn redact_url(url: &str) -> String {
+    let Some(scheme_end) = url.find("://").map(|s| s + 3) else {
+        return url.to_string();
+    };
+    let (main, query) = match url[scheme_end..].find('?') {
+        Some(q) => url.split_at(scheme_end + q),
+        None => (url, ""),
+    };
+    let mut out = String::with_capacity(url.len());
+    // userinfo ends at the last '@' before the path (a password may hold '@').
+    let path_start = main[scheme_end..]
+        .rfind('@')
+        .map(|at| scheme_end + at)
+        .and_then(|at| main[at..].find('/').map(|p| at + p))
+        .or_else(|| main[scheme_end..].find('/').map(|p| scheme_end + p))
+        .unwrap_or(main.len());
+    match main[scheme_end..path_start].rfind('@') {
+        Some(at) => {
+            let userinfo = &main[scheme_end..scheme_end + at];
+            let user = userinfo.split(':').next().unwrap_or("");
+            out.push_str(&main[..scheme_end]);
+            out.push_str(user);
+            out.push_str(&main[scheme_end + at..]);
+        }
+        None => out.push_str(main),
+    }
+    if let Some(params) = query.strip_prefix('?') {
+        out.push('?');
+        let shown: Vec<String> = params
+            .split('&')
+            .map(|kv| match kv.split_once('=') {
+                Some((k, _)) if k.to_ascii_lowercase().contains("pass") => format!("{k}=***"),
+                _ => kv.to_string(),
+            })
+            .collect();
+        out.push_str(&shown.join("&"));
+    }
+    out
+}
+
+/// `text` with the credentials of every `postgres://` or `postgresql://` URL in it
+/// removed ([`redact_url`]): the one guard on everything fitup prints, so a password
+/// never reaches the terminal even where the text quotes a user's own line (a script
+/// line with `open_db("postgres://u:secret@…")` shown under its error).
+pub fn redact_credentials(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.contains("postgres") {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(at) = ["postgres://", "postgresql://"]
+        .iter()
+        .filter_map(|s| rest.find(s))
+        .min()
+    {
+        out.push_str(&rest[..at]);
+        let url_len = rest[at..]
+            .find(|c: char| {
+                c.is_whitespace() || matches!(c, '"' | '\'' | '`' | ')' | '>' | ',' | ';')
+            })
+            .unwrap_or(rest.len() - at);
+        out.push_str(&redact_url(&rest[at..at + url_len]));
+        rest = &rest[at + url_len..];
+    }
+    out.push_str(rest);
+    std::borrow::Cow::Owned(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn printed_text_never_carries_a_database_password() {
+        let line =
+            r#"3 | let db = open_db("postgres://u:s3cret@h:5/d?password=x2&sslmode=disable");"#;
+        let shown = redact_credentials(line);
+        assert!(
+            !shown.contains("s3cret") && !shown.contains("x2"),
+            "{shown}"
+        );
+        assert!(
+            shown.contains(r#"open_db("postgres://u@h:5/d?password=***&sslmode=disable");"#),
+            "{shown}"
+        );
+        assert_eq!(redact_credentials("no url here"), "no url here");
+        let two = redact_credentials("a postgresql://a:b@h/d and postgres://c:d@h/e");
+        assert_eq!(two, "a postgresql://a@h/d and postgres://c@h/e");
+    }
 
     #[test]
     fn locate_and_suggest() {

@@ -40,10 +40,12 @@ pub fn write(stream: Stream, text: &str) {
 
 /// `text` and a newline to standard output. Control and invisible characters of
 /// the text (a name's escape sequence, a bidi override; not newlines and tabs) are
-/// written escaped ([`crate::diagnostics::printable`]): every line fitup prints may
-/// hold user strings.
+/// written escaped ([`crate::diagnostics::printable`]) and database passwords removed
+/// ([`crate::diagnostics::redact_credentials`]): every line fitup prints may hold user
+/// strings.
 pub fn line(text: &str) {
-    let text = crate::diagnostics::printable(text, true);
+    let text = crate::diagnostics::redact_credentials(text);
+    let text = crate::diagnostics::printable(&text, true);
     let mut s = String::with_capacity(text.len() + 1);
     s.push_str(&text);
     s.push('\n');
@@ -52,7 +54,8 @@ pub fn line(text: &str) {
 
 /// `text` and a newline to standard error, escaped as by [`line`].
 pub fn error_line(text: &str) {
-    let text = crate::diagnostics::printable(text, true);
+    let text = crate::diagnostics::redact_credentials(text);
+    let text = crate::diagnostics::printable(&text, true);
     let mut s = String::with_capacity(text.len() + 1);
     s.push_str(&text);
     s.push('\n');

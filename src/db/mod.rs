@@ -151,50 +151,7 @@ impl Target {
     }
 }
 
-/// A connection URL as fitup shows it: the password of `user:password@` is dropped
-/// and the value of every `password=` (or other `…pass…=`) parameter becomes `***`.
-/// `postgres://u:secret@h:5/d?password=x&sslmode=disable` →
-/// `postgres://u@h:5/d?password=***&sslmode=disable`. Every message, listing and
-/// `Debug` output that names a PostgreSQL database goes through here.
-pub fn redact_url(url: &str) -> String {
-    let Some(scheme_end) = url.find("://").map(|s| s + 3) else {
-        return url.to_string();
-    };
-    let (main, query) = match url[scheme_end..].find('?') {
-        Some(q) => url.split_at(scheme_end + q),
-        None => (url, ""),
-    };
-    let mut out = String::with_capacity(url.len());
-    // userinfo ends at the last '@' before the path (a password may hold '@').
-    let path_start = main[scheme_end..]
-        .rfind('@')
-        .map(|at| scheme_end + at)
-        .and_then(|at| main[at..].find('/').map(|p| at + p))
-        .or_else(|| main[scheme_end..].find('/').map(|p| scheme_end + p))
-        .unwrap_or(main.len());
-    match main[scheme_end..path_start].rfind('@') {
-        Some(at) => {
-            let userinfo = &main[scheme_end..scheme_end + at];
-            let user = userinfo.split(':').next().unwrap_or("");
-            out.push_str(&main[..scheme_end]);
-            out.push_str(user);
-            out.push_str(&main[scheme_end + at..]);
-        }
-        None => out.push_str(main),
-    }
-    if let Some(params) = query.strip_prefix('?') {
-        out.push('?');
-        let shown: Vec<String> = params
-            .split('&')
-            .map(|kv| match kv.split_once('=') {
-                Some((k, _)) if k.to_ascii_lowercase().contains("pass") => format!("{k}=***"),
-                _ => kv.to_string(),
-            })
-            .collect();
-        out.push_str(&shown.join("&"));
-    }
-    out
-}
+pub use crate::diagnostics::redact_url;
 
 /// The credentials written in a URL (the userinfo password and `…pass…=` values), as
 /// written and percent-decoded.

@@ -85,7 +85,8 @@ fn a_goal_far_away_ends_within_the_budget() {
     let doc = open("models/cell.yaml");
     let mut cache = SceneCache::new();
     let ws = Workspace::new(&doc, &mut cache).unwrap();
-    let goal = shifted(&ws.pose("screw5").unwrap(), 1e12, 0.0, 0.0);
+    // 45° down through the table: no straight line, a real search until the budget.
+    let goal = shifted(&ws.pose("screw5").unwrap(), 1e12, 0.0, -1e12);
     let mut request = PlanRequest::default();
     request.planner.limits_mut().time_limit_ms = Some(500.0);
     request.planner.limits_mut().max_iterations = usize::MAX;
@@ -176,9 +177,13 @@ fn disassembly_labels_say_what_ran() {
     let path = ws.plan_path("screw5", &goal, &request, None).unwrap();
     assert!(path.found(), "{:?}", path.failure);
     assert_eq!(path.planner, "lazy_rrt_connect");
-    // screw1 sits in a plate hole: its removal is a real disassembly.
+    // screw1 sits in a plate hole. Straight up is free: that edge is the path.
     let seated = ws.pose("screw1").unwrap();
-    let away = shifted(&seated, 0.0, 0.0, 400.0);
+    let up = shifted(&seated, 0.0, 0.0, 400.0);
+    let path = ws.plan_path("screw1", &up, &request, None).unwrap();
+    assert_eq!((path.planner, path.poses.len()), ("lazy_rrt_connect", 2));
+    // Sideways it leaves the hole first: a real disassembly.
+    let away = shifted(&seated, 300.0, 0.0, 60.0);
     let path = ws.plan_path("screw1", &away, &request, None).unwrap();
     assert!(path.found(), "{:?}", path.failure);
     assert_eq!(path.planner, "lazy_disassemble_local_rrt+lazy_rrt_connect");

@@ -503,6 +503,22 @@ fn a_silent_postgres_server_fails_in_bounded_time_and_no_password_is_printed() {
         assert!(t.contains("not recorded"), "{code}: {t}");
         assert!(!t.contains("secret"), "the password was printed:\n{t}");
     }
+    // The URL written in the script itself: the error quotes that source line, and the
+    // password is still not printed.
+    std::fs::write(
+        p.join("scripts/inline.rhai"),
+        format!(
+            "let db = open_db(\"postgres://u:secret@127.0.0.1:{port}/db?connect_timeout=1\");\n"
+        ),
+    )
+    .unwrap();
+    let (code, t) = run(p, &["run", "scripts/inline.rhai"]);
+    assert_eq!(code, 1, "{t}");
+    assert!(
+        t.contains("inline.rhai:1") && t.contains("postgres://u@127.0.0.1"),
+        "{t}"
+    );
+    assert!(!t.contains("secret"), "the password was printed:\n{t}");
     // A malformed URL's error does not quote it either.
     let (code, t) = run(p, &["db", "runs", "--db", "postgres://u:secret@[::1/db"]);
     assert_eq!(code, 1, "{t}");
