@@ -464,10 +464,12 @@ fn a_file_that_is_not_a_database_is_a_clear_error() {
     let p = dir.path().join("fitup.db");
     std::fs::write(&p, "runs:\n  - not sqlite at all\n".repeat(100)).unwrap();
     let e = Database::open(&Target::Sqlite(p.clone())).unwrap_err();
-    assert!(matches!(e, DbError::Open { .. }), "{e}");
+    // Refused before SQLite touches it (the write rule: never turn a user's file into
+    // a database), the file left as it was.
+    assert!(matches!(e, DbError::Foreign { .. }), "{e}");
     assert!(
         e.to_string().contains(&p.display().to_string())
-            && e.to_string().contains("not a database"),
+            && e.to_string().contains("not a SQLite file"),
         "{e}"
     );
     assert_eq!(
