@@ -251,7 +251,10 @@ fn pragma_writes_and_writes_to_fitups_tables_are_refused() {
         (s("BEGIN IMMEDIATE"), "transactions are fitup's"),
         (s("REINDEX"), JAIL),
         (s("ANALYZE"), JAIL),
-        (s("SELECT 1; DELETE FROM snapshots"), "DELETE from `snapshots` writes"),
+        (
+            s("SELECT 1; DELETE FROM snapshots"),
+            "DELETE from `snapshots` writes",
+        ),
     ];
     let sqls: Vec<String> = cases.iter().map(|c| c.0.clone()).collect();
     let (code, t) = run_script(p, "writes.rhai", &each_refused_script(&sqls), &[]);
