@@ -154,3 +154,27 @@ pub fn copy_wheel(p: &Path) {
         std::fs::copy(root.join(&f), p.join(&f)).unwrap();
     }
 }
+
+/// sha256 of each regular file, by path: what the hostile tests compare before and
+/// after a run to show that nothing the user owns changed.
+pub type Snapshot = std::collections::BTreeMap<PathBuf, [u8; 32]>;
+
+/// sha256 of every regular file under `dir` (links, FIFOs and other special files are
+/// not read, so a planted FIFO cannot block the test).
+pub fn snapshot(dir: &Path) -> Snapshot {
+    use sha2::{Digest, Sha256};
+    let mut out = Snapshot::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            let md = std::fs::symlink_metadata(&p).unwrap();
+            if md.is_dir() {
+                stack.push(p);
+            } else if md.is_file() {
+                out.insert(p.clone(), Sha256::digest(std::fs::read(&p).unwrap()).into());
+            }
+        }
+    }
+    out
+}

@@ -9,12 +9,11 @@
 //! user file is the same after as before.
 
 use crate::common;
+use common::snapshot;
 
 use common::project;
-use sha2::{Digest, Sha256};
-use std::collections::BTreeMap;
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -23,24 +22,6 @@ const BOUND: Duration = Duration::from_secs(20);
 
 /// Peak resident memory every case stays under (kB): 500 MB.
 const MAX_RSS_KB: u64 = 500 * 1024;
-
-/// sha256 of every regular file under `dir`.
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, [u8; 32]> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            let md = std::fs::symlink_metadata(&p).unwrap();
-            if md.is_dir() {
-                stack.push(p);
-            } else if md.is_file() {
-                out.insert(p.clone(), Sha256::digest(std::fs::read(&p).unwrap()).into());
-            }
-        }
-    }
-    out
-}
 
 /// What a bounded run left: exit code, output, peak RSS (kB) and wall time.
 struct Run {

@@ -11,10 +11,10 @@
 //! `tests/db.rs`) and is skipped with a note otherwise.
 
 use crate::common;
+use common::{snapshot, Snapshot};
 
 use common::{project, spawn};
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// Generous bound on any single command.
@@ -38,29 +38,8 @@ fn run_script(dir: &Path, name: &str, source: &str, extra: &[&str]) -> (i32, Str
     run(dir, &args)
 }
 
-/// Content hashes of every regular file under `dir`.
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, u64> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            let md = std::fs::symlink_metadata(&p).unwrap();
-            if md.is_dir() {
-                stack.push(p);
-            } else if md.is_file() {
-                out.insert(
-                    p.clone(),
-                    fitup::fsutil::content_hash(&std::fs::read(&p).unwrap()),
-                );
-            }
-        }
-    }
-    out
-}
-
 /// The user's files (everything but the results database and its WAL) as hashes.
-fn user_files(dir: &Path) -> BTreeMap<PathBuf, u64> {
+fn user_files(dir: &Path) -> Snapshot {
     let mut s = snapshot(dir);
     s.retain(|p, _| {
         !p.file_name()
@@ -72,7 +51,7 @@ fn user_files(dir: &Path) -> BTreeMap<PathBuf, u64> {
 
 /// Every file of `before` is still there with the same content (files the test wrote
 /// since are not user files).
-fn unchanged(before: &BTreeMap<PathBuf, u64>, dir: &Path) {
+fn unchanged(before: &Snapshot, dir: &Path) {
     let now = user_files(dir);
     for (path, hash) in before {
         assert_eq!(

@@ -7,10 +7,10 @@
 //! there is one, and must leave the user's files exactly as they were.
 
 use crate::common;
+use common::{snapshot, Snapshot};
 
 use common::{project, spawn};
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Child;
 use std::time::Duration;
 
@@ -28,30 +28,9 @@ fn run(dir: &Path, args: &[&str]) -> (i32, String) {
     finish(spawn(dir, args), &args.join(" "))
 }
 
-/// Content hashes of every regular file under `dir` (special files are not read).
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, u64> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            let md = std::fs::symlink_metadata(&p).unwrap();
-            if md.is_dir() {
-                stack.push(p);
-            } else if md.is_file() {
-                out.insert(
-                    p.clone(),
-                    fitup::fsutil::content_hash(&std::fs::read(&p).unwrap()),
-                );
-            }
-        }
-    }
-    out
-}
-
 /// Every file of `before` is still there with the same content (files the test wrote
 /// since are not user files).
-fn unchanged(before: &BTreeMap<PathBuf, u64>, dir: &Path) {
+fn unchanged(before: &Snapshot, dir: &Path) {
     let now = snapshot(dir);
     for (path, hash) in before {
         assert_eq!(

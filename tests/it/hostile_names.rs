@@ -9,10 +9,10 @@
 //! every user file keeps its exact bytes (compared in full, stronger than a hash).
 
 use crate::common;
+use common::{snapshot, Snapshot};
 
 use common::{project, spawn};
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 const HANG: Duration = Duration::from_secs(30);
@@ -23,25 +23,7 @@ fn run(dir: &Path, args: &[&str]) -> (i32, String) {
     (o.status.code().unwrap_or(-1), common::text(&o))
 }
 
-/// The bytes of every regular file under `dir`.
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            let md = std::fs::symlink_metadata(&p).unwrap();
-            if md.is_dir() {
-                stack.push(p);
-            } else if md.is_file() {
-                out.insert(p.clone(), std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
-}
-
-fn unchanged(before: &BTreeMap<PathBuf, Vec<u8>>, dir: &Path) {
+fn unchanged(before: &Snapshot, dir: &Path) {
     let now = snapshot(dir);
     for (path, bytes) in before {
         assert!(
