@@ -31,12 +31,14 @@
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod collision;
+#[cfg(feature = "db")]
 pub mod db;
 pub mod demo;
 pub mod diagnostics;
 pub mod document;
 pub mod fsutil;
 pub mod kinematics;
+#[cfg(feature = "manipulator")]
 pub mod manipulator;
 pub mod math;
 pub mod mesh;
@@ -45,6 +47,7 @@ pub mod project;
 #[cfg(feature = "script")]
 pub mod script;
 pub mod sequence;
+#[cfg(feature = "skills")]
 pub mod skills;
 pub mod viewer;
 #[cfg(feature = "watch")]

@@ -533,102 +533,58 @@ fn csv_field(s: &str) -> String {
     }
 }
 
+/// Prints [`Database::diff_runs`] for people: one line per difference, angles in degrees.
 fn diff(db: &mut Database, a: i64, b: i64) -> Result<(), crate::db::DbError> {
-    let (ra, rb) = (db.run(a)?, db.run(b)?);
+    use crate::db::diff::{Change, Side};
+    let d = db.diff_runs(a, b)?;
     outln!(
         "run {a} ({}, {}) → run {b} ({}, {})",
-        ra.script,
-        ra.started_at,
-        rb.script,
-        rb.started_at
+        d.a.script,
+        d.a.started_at,
+        d.b.script,
+        d.b.started_at
     );
-    let mut differences = 0;
-    let last = |v: Vec<(i64, crate::db::Snapshot)>| v.into_iter().last().map(|(_, s)| s);
-    match (last(db.snapshots(Some(a))?), last(db.snapshots(Some(b))?)) {
-        (Some(sa), Some(sb)) => {
-            for (name, ta) in &sa.poses {
-                match sb.poses.iter().find(|(n, _)| n == name) {
-                    None => {
-                        differences += 1;
-                        outln!("  component {name}: only in run {a}");
+    let run = |s: &Side| if *s == Side::A { a } else { b };
+    for c in &d.changes {
+        match c {
+            Change::NoSnapshot { run: r } => outln!(
+                "  (no document snapshot in {}: store one with `db.save(doc)`)",
+                run(r)
+            ),
+            Change::ComponentOnlyIn { name, run: r } => {
+                outln!("  component {name}: only in run {}", run(r))
+            }
+            Change::ComponentMoved {
+                name,
+                distance_mm,
+                angle_rad,
+            } => outln!(
+                "  component {name}: moved {distance_mm:.3} mm, turned {:.3}°",
+                angle_rad.to_degrees()
+            ),
+            Change::DimensionChanged {
+                name,
+                kind,
+                from,
+                to,
+            } => {
+                let (x, y, unit) = match kind {
+                    crate::document::DimensionKind::Angle => {
+                        (from.to_degrees(), to.to_degrees(), "°")
                     }
-                    Some((_, tb)) => {
-                        let (angle, dist) = ta.distance_to(tb);
-                        if dist > 1e-6 || angle > 1e-9 {
-                            differences += 1;
-                            outln!(
-                                "  component {name}: moved {dist:.3} mm, turned {:.3}°",
-                                angle.to_degrees()
-                            );
-                        }
-                    }
-                }
+                    crate::document::DimensionKind::Length => (*from, *to, " mm"),
+                };
+                outln!("  dimension {name}: {x:.3}{unit} → {y:.3}{unit}");
             }
-            for (name, _) in sb
-                .poses
-                .iter()
-                .filter(|(n, _)| !sa.poses.iter().any(|(m, _)| m == n))
-            {
-                differences += 1;
-                outln!("  component {name}: only in run {b}");
-            }
-            for (name, kind, va) in &sa.dimensions {
-                if let Some((_, _, vb)) = sb.dimensions.iter().find(|(n, _, _)| n == name) {
-                    if (va - vb).abs() > 1e-9 {
-                        differences += 1;
-                        let (x, y, unit) = match kind {
-                            crate::document::DimensionKind::Angle => {
-                                (va.to_degrees(), vb.to_degrees(), "°")
-                            }
-                            crate::document::DimensionKind::Length => (*va, *vb, " mm"),
-                        };
-                        outln!("  dimension {name}: {x:.3}{unit} → {y:.3}{unit}");
-                    }
-                }
-            }
-        }
-        _ => outln!(
-            "  (no document snapshot in {}: store one with `db.save(doc)`)",
-            if db.snapshots(Some(a))?.is_empty() {
-                a
-            } else {
-                b
-            }
-        ),
-    }
-    let q = |run| PathQuery {
-        run_id: Some(run),
-        without_poses: true,
-        ..Default::default()
-    };
-    let (pa, pb) = (db.paths(&q(a))?, db.paths(&q(b))?);
-    let describe = |p: &StoredPath| match &p.path.failure {
-        None => format!(
-            "found, {} key poses, {:.1} mm",
-            p.pose_count, p.path.length_mm
-        ),
-        Some(f) => format!("not found ({f})"),
-    };
-    for p in &pa {
-        match pb.iter().rev().find(|x| x.name == p.name) {
-            None => {
-                differences += 1;
-                outln!("  path {}: only in run {a}", p.name);
-            }
-            Some(x) => {
-                let (da, dbb) = (describe(p), describe(x));
-                if da != dbb {
-                    differences += 1;
-                    outln!("  path {}: {da} → {dbb}", p.name);
-                }
-            }
+            Change::PathOnlyIn { name, run: r } => outln!("  path {name}: only in run {}", run(r)),
+            Change::PathChanged { name, from, to } => outln!("  path {name}: {from} → {to}"),
         }
     }
-    for p in pb.iter().filter(|x| !pa.iter().any(|y| y.name == x.name)) {
-        differences += 1;
-        outln!("  path {}: only in run {b}", p.name);
-    }
-    if differences == 0 {
+    if !d
+        .changes
+        .iter()
+        .any(|c| !matches!(c, Change::NoSnapshot { .. }))
+    {
         outln!("  no differences");
     }
     Ok(())

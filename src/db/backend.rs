@@ -2,8 +2,6 @@
 //! `rusqlite`, PostgreSQL through the synchronous `postgres` client. Everything above
 //! this file (schema, records) is written once against [`Tx`] with `?` placeholders.
 
-use postgres::types::{ToSql, Type};
-
 /// A value passed to or read from SQL: the four storage classes both back ends share.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SqlValue {
@@ -92,7 +90,9 @@ pub(crate) enum Kind {
     ReadOnly,
     /// No space left.
     Full,
-    /// A write inside a read-only query.
+    /// A write inside a read-only query (PostgreSQL's read-only transaction; SQLite's
+    /// jail refuses before running).
+    #[cfg_attr(not(feature = "postgres"), allow(dead_code))]
     WriteRefused,
     /// Anything else.
     Other,
@@ -127,33 +127,6 @@ impl From<rusqlite::Error> for Raw {
             kind,
             message: e.to_string(),
         }
-    }
-}
-
-impl From<postgres::Error> for Raw {
-    fn from(e: postgres::Error) -> Self {
-        use postgres::error::SqlState;
-        let kind = match e.code() {
-            Some(c) if *c == SqlState::READ_ONLY_SQL_TRANSACTION => Kind::WriteRefused,
-            Some(c)
-                if *c == SqlState::T_R_SERIALIZATION_FAILURE
-                    || *c == SqlState::T_R_DEADLOCK_DETECTED
-                    || *c == SqlState::LOCK_NOT_AVAILABLE =>
-            {
-                Kind::Busy
-            }
-            Some(c) if *c == SqlState::DISK_FULL => Kind::Full,
-            _ => Kind::Other,
-        };
-        // The server's own message (and detail) says more than the client's summary.
-        let message = match e.as_db_error() {
-            Some(db) => match db.detail() {
-                Some(d) => format!("{} ({d})", db.message()),
-                None => db.message().to_string(),
-            },
-            None => e.to_string(),
-        };
-        Raw { kind, message }
     }
 }
 
@@ -311,209 +284,5 @@ impl Tx for SqliteTx<'_> {
 
     fn dialect(&self) -> Dialect {
         Dialect::Sqlite
-    }
-}
-
-/// `?` placeholders → PostgreSQL's `$1, $2, …` (the SQL in this module has no `?`
-/// inside string literals).
-pub(crate) fn numbered(sql: &str) -> String {
-    let mut out = String::with_capacity(sql.len() + 8);
-    let mut n = 0;
-    for c in sql.chars() {
-        if c == '?' {
-            n += 1;
-            out.push('$');
-            out.push_str(&n.to_string());
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// Converts a value to what PostgreSQL expects for a parameter of type `ty`.
-pub(crate) fn pg_param(
-    v: &SqlValue,
-    ty: &Type,
-    index: usize,
-) -> Result<Box<dyn ToSql + Sync>, Raw> {
-    let bad = || {
-        Raw::other(format!(
-            "parameter {} ({v:?}) does not fit type {ty}",
-            index + 1
-        ))
-    };
-    Ok(match *ty {
-        Type::INT8 => Box::new(match v {
-            SqlValue::Null => None,
-            _ => Some(v.as_i64().ok_or_else(bad)?),
-        }),
-        Type::INT4 => Box::new(match v {
-            SqlValue::Null => None,
-            _ => Some(i32::try_from(v.as_i64().ok_or_else(bad)?).map_err(|_| bad())?),
-        }),
-        Type::INT2 => Box::new(match v {
-            SqlValue::Null => None,
-            _ => Some(i16::try_from(v.as_i64().ok_or_else(bad)?).map_err(|_| bad())?),
-        }),
-        Type::FLOAT8 => Box::new(match v {
-            SqlValue::Null => None,
-            _ => Some(v.as_f64().ok_or_else(bad)?),
-        }),
-        Type::FLOAT4 => Box::new(match v {
-            SqlValue::Null => None,
-            _ => Some(v.as_f64().ok_or_else(bad)? as f32),
-        }),
-        Type::BOOL => Box::new(match v {
-            SqlValue::Null => None,
-            _ => Some(v.as_i64().ok_or_else(bad)? != 0),
-        }),
-        Type::TEXT | Type::VARCHAR | Type::BPCHAR | Type::NAME | Type::UNKNOWN => {
-            Box::new(match v {
-                SqlValue::Null => None,
-                other => Some(other.to_string()),
-            })
-        }
-        _ => {
-            return Err(Raw::other(format!(
-                "parameter {} has type {ty}, which fitup does not bind: cast it (`$n::text`)",
-                index + 1
-            )))
-        }
-    })
-}
-
-/// Reads column `i` of a PostgreSQL row.
-pub(crate) fn pg_value(row: &postgres::Row, i: usize) -> Result<SqlValue, Raw> {
-    let col = &row.columns()[i];
-    let ty = col.type_();
-    let get_err = |e: postgres::Error| Raw::from(e);
-    Ok(match *ty {
-        Type::INT8 => row.try_get::<_, Option<i64>>(i).map_err(get_err)?.into(),
-        Type::INT4 => row
-            .try_get::<_, Option<i32>>(i)
-            .map_err(get_err)?
-            .map(i64::from)
-            .into(),
-        Type::INT2 => row
-            .try_get::<_, Option<i16>>(i)
-            .map_err(get_err)?
-            .map(i64::from)
-            .into(),
-        Type::OID => row
-            .try_get::<_, Option<u32>>(i)
-            .map_err(get_err)?
-            .map(i64::from)
-            .into(),
-        Type::FLOAT8 => row.try_get::<_, Option<f64>>(i).map_err(get_err)?.into(),
-        Type::FLOAT4 => row
-            .try_get::<_, Option<f32>>(i)
-            .map_err(get_err)?
-            .map(f64::from)
-            .into(),
-        Type::BOOL => row
-            .try_get::<_, Option<bool>>(i)
-            .map_err(get_err)?
-            .map(i64::from)
-            .into(),
-        Type::TEXT | Type::VARCHAR | Type::BPCHAR | Type::NAME | Type::UNKNOWN => {
-            row.try_get::<_, Option<String>>(i).map_err(get_err)?.into()
-        }
-        _ => {
-            return Err(Raw::other(format!(
-                "column `{}` has type {ty}, which fitup does not read: cast it (`{}::text`)",
-                col.name(),
-                col.name()
-            )))
-        }
-    })
-}
-
-/// The parameters of a prepared statement, converted to the types it declares; a
-/// wrong count is an error (zipping would silently drop or ignore parameters).
-pub(crate) fn pg_bind(
-    stmt: &postgres::Statement,
-    params: &[SqlValue],
-) -> Result<Vec<Box<dyn ToSql + Sync>>, Raw> {
-    if stmt.params().len() != params.len() {
-        return Err(Raw::other(format!(
-            "the statement has {} parameters, {} given",
-            stmt.params().len(),
-            params.len()
-        )));
-    }
-    params
-        .iter()
-        .zip(stmt.params())
-        .enumerate()
-        .map(|(i, (v, t))| pg_param(v, t, i))
-        .collect()
-}
-
-/// Every row of a query result as values.
-pub(crate) fn pg_table(rows: &[postgres::Row]) -> Result<Vec<Vec<SqlValue>>, Raw> {
-    rows.iter()
-        .map(|r| (0..r.len()).map(|i| pg_value(r, i)).collect())
-        .collect()
-}
-
-pub(crate) fn pg_rows(
-    client: &mut impl postgres::GenericClient,
-    sql: &str,
-    params: &[SqlValue],
-) -> Result<Vec<Vec<SqlValue>>, Raw> {
-    let stmt = client.prepare(&numbered(sql))?;
-    let boxed = pg_bind(&stmt, params)?;
-    let refs: Vec<&(dyn ToSql + Sync)> = boxed.iter().map(|b| b.as_ref()).collect();
-    pg_table(&client.query(&stmt, &refs)?)
-}
-
-/// A PostgreSQL transaction.
-pub(crate) struct PgTx<'a>(pub postgres::Transaction<'a>);
-
-impl Tx for PgTx<'_> {
-    fn exec(&mut self, sql: &str, params: &[SqlValue]) -> Result<u64, Raw> {
-        let stmt = self.0.prepare(&numbered(sql))?;
-        let boxed = pg_bind(&stmt, params)?;
-        let refs: Vec<&(dyn ToSql + Sync)> = boxed.iter().map(|b| b.as_ref()).collect();
-        Ok(self.0.execute(&stmt, &refs)?)
-    }
-
-    fn rows(&mut self, sql: &str, params: &[SqlValue]) -> Result<Vec<Vec<SqlValue>>, Raw> {
-        pg_rows(&mut self.0, sql, params)
-    }
-
-    fn insert_id(&mut self, sql: &str, params: &[SqlValue]) -> Result<i64, Raw> {
-        let rows = self.rows(&format!("{sql} RETURNING id"), params)?;
-        rows.first()
-            .and_then(|r| r.first())
-            .and_then(SqlValue::as_i64)
-            .ok_or_else(|| Raw::other("INSERT returned no id"))
-    }
-
-    fn insert_many(
-        &mut self,
-        table: &str,
-        columns: &[&str],
-        rows: &[Vec<SqlValue>],
-    ) -> Result<(), Raw> {
-        // Multi-row VALUES in chunks: one round trip per chunk instead of per row, and
-        // well under PostgreSQL's 65,535 parameters per statement.
-        let per = (4000 / columns.len().max(1)).max(1);
-        for chunk in rows.chunks(per) {
-            let one = format!("({})", vec!["?"; columns.len()].join(", "));
-            let sql = format!(
-                "INSERT INTO {table} ({}) VALUES {}",
-                columns.join(", "),
-                vec![one.as_str(); chunk.len()].join(", ")
-            );
-            let flat: Vec<SqlValue> = chunk.iter().flatten().cloned().collect();
-            self.exec(&sql, &flat)?;
-        }
-        Ok(())
-    }
-
-    fn dialect(&self) -> Dialect {
-        Dialect::Postgres
     }
 }

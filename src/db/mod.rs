@@ -33,6 +33,9 @@
 //! ```
 
 mod backend;
+pub mod diff;
+#[cfg(feature = "postgres")]
+mod pg;
 mod query;
 pub mod recording;
 mod records;
@@ -45,7 +48,7 @@ pub use query::QueryLimits;
 pub use records::*;
 pub use schema::LATEST as SCHEMA_VERSION;
 
-use backend::{Kind, PgTx, Raw, SqliteTx, Tx};
+use backend::{Kind, Raw, SqliteTx, Tx};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -66,13 +69,6 @@ const TRIES: u32 = 12;
 /// How long opening a PostgreSQL database may take (TCP connect, TLS negotiation,
 /// authentication) unless the URL says `connect_timeout=N` (seconds).
 pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
-
-/// The longest `connect_timeout` a URL may ask for.
-const MAX_CONNECT_TIMEOUT: Duration = Duration::from_secs(120);
-
-/// How long data sent to a PostgreSQL server may stay unacknowledged before the
-/// connection is dropped (a server or network that went away).
-const TCP_USER_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// Where the data lives. `Display` and `Debug` never show a password.
 #[derive(Clone, PartialEq, Eq)]
@@ -338,8 +334,13 @@ pub enum DbError {
 
 enum Conn {
     Sqlite(rusqlite::Connection),
+    #[cfg(feature = "postgres")]
     Postgres(Box<postgres::Client>),
 }
+
+/// What a `postgres://` target answers in a build without the `postgres` feature.
+#[cfg(not(feature = "postgres"))]
+const NO_POSTGRES: &str = "this fitup was built without PostgreSQL support: rebuild with `cargo install --path . --features postgres`";
 
 /// An open results database (SQLite file or PostgreSQL server), migrated to
 /// [`SCHEMA_VERSION`].
@@ -449,24 +450,12 @@ impl Database {
                 .map_err(fail)?;
                 Conn::Sqlite(c)
             }
-            Target::Postgres(url) => {
-                let mut config: postgres::Config = url
-                    .parse()
-                    .map_err(|e: postgres::Error| open_err(target.scrub(&e.to_string())))?;
-                let timeout = config
-                    .get_connect_timeout()
-                    .copied()
-                    .unwrap_or(CONNECT_TIMEOUT)
-                    .clamp(Duration::from_secs(1), MAX_CONNECT_TIMEOUT);
-                config.connect_timeout(timeout);
-                config.tcp_user_timeout(TCP_USER_TIMEOUT);
-                config.keepalives(true);
-                config.keepalives_idle(Duration::from_secs(30));
-                config.application_name("fitup");
-                let client = connect_within(config, timeout)
-                    .map_err(|cause| open_err(target.scrub(&cause)))?;
-                Conn::Postgres(Box::new(client))
-            }
+            #[cfg(feature = "postgres")]
+            Target::Postgres(url) => Conn::Postgres(Box::new(
+                pg::connect(url).map_err(|cause| open_err(target.scrub(&cause)))?,
+            )),
+            #[cfg(not(feature = "postgres"))]
+            Target::Postgres(_) => return Err(open_err(NO_POSTGRES.into())),
         };
         let mut db = Database {
             conn,
@@ -495,6 +484,7 @@ impl Database {
     pub fn dialect(&self) -> Dialect {
         match self.conn {
             Conn::Sqlite(_) => Dialect::Sqlite,
+            #[cfg(feature = "postgres")]
             Conn::Postgres(_) => Dialect::Postgres,
         }
     }
@@ -567,9 +557,10 @@ impl Database {
                     t.0.commit()?;
                     Ok(r)
                 })(),
+                #[cfg(feature = "postgres")]
                 Conn::Postgres(c) => (|| {
                     let tx = c.transaction()?;
-                    let mut t = PgTx(tx);
+                    let mut t = pg::PgTx(tx);
                     let r = f(&mut t)?;
                     t.0.commit()?;
                     Ok(r)
@@ -614,7 +605,8 @@ impl Database {
         let limits = limits.checked()?;
         let target = self.target.to_string();
         let result = match &mut self.conn {
-            Conn::Postgres(c) => query::pg_query(c, sql, params, limits, cancel),
+            #[cfg(feature = "postgres")]
+            Conn::Postgres(c) => pg::pg_query(c, sql, params, limits, cancel),
             Conn::Sqlite(_) => {
                 let reader = match (&mut self.reader, &self.target) {
                     (Some(r), _) => r,
@@ -658,29 +650,6 @@ impl Database {
                 },
             },
         })
-    }
-}
-
-/// Connects to PostgreSQL, giving up after `timeout`: the driver bounds the TCP
-/// connect only, so a server that accepts and then never answers would hang the
-/// handshake forever. The attempt runs on its own thread; one that has not finished
-/// in time is left to end by itself (when the server closes, or with the process).
-fn connect_within(config: postgres::Config, timeout: Duration) -> Result<postgres::Client, String> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::Builder::new()
-        .name("fitup-db-connect".into())
-        .spawn(move || {
-            let _ = tx.send(config.connect(postgres::NoTls));
-        })
-        .map_err(|e| format!("cannot start the connecting thread: {e}"))?;
-    match rx.recv_timeout(timeout) {
-        Ok(Ok(client)) => Ok(client),
-        Ok(Err(e)) => Err(Raw::from(e).message),
-        Err(_) => Err(format!(
-            "no answer from the server within {} s (the connect timeout; `connect_timeout=N` in the URL changes it, up to {} s)",
-            timeout.as_secs_f64(),
-            MAX_CONNECT_TIMEOUT.as_secs()
-        )),
     }
 }
 
@@ -775,8 +744,14 @@ mod tests {
     }
 
     #[test]
-    fn placeholders_are_numbered_for_postgres() {
-        assert_eq!(backend::numbered("a = ? AND b = ?"), "a = $1 AND b = $2");
+    #[cfg(not(feature = "postgres"))]
+    fn a_postgres_target_names_the_feature_that_adds_it() {
+        let e = Database::open(&Target::Postgres("postgres://u:secret@h/d".into())).unwrap_err();
+        let t = e.to_string();
+        assert!(
+            t.contains("--features postgres") && !t.contains("secret"),
+            "{t}"
+        );
     }
 
     #[test]

@@ -139,19 +139,19 @@ impl From<Raw> for Stop {
 }
 
 /// Why the progress handler or the watcher stopped a statement.
-const WHY_NONE: u8 = 0;
-const WHY_TIME: u8 = 1;
-const WHY_CANCEL: u8 = 2;
+pub(super) const WHY_NONE: u8 = 0;
+pub(super) const WHY_TIME: u8 = 1;
+pub(super) const WHY_CANCEL: u8 = 2;
 
 /// Collects rows under the caps: counts rows and an estimate of the memory they take.
-struct Collector {
+pub(super) struct Collector {
     limits: QueryLimits,
-    rows: Vec<Vec<SqlValue>>,
+    pub(super) rows: Vec<Vec<SqlValue>>,
     bytes: usize,
 }
 
 impl Collector {
-    fn new(limits: QueryLimits, columns: &[String]) -> Self {
+    pub(super) fn new(limits: QueryLimits, columns: &[String]) -> Self {
         Collector {
             limits,
             rows: Vec::new(),
@@ -159,7 +159,7 @@ impl Collector {
         }
     }
 
-    fn push(&mut self, row: Vec<SqlValue>) -> Result<(), Stop> {
+    pub(super) fn push(&mut self, row: Vec<SqlValue>) -> Result<(), Stop> {
         // What the row costs as stored: the Vec, every value, the text's bytes.
         let size = 24
             + row
@@ -438,228 +438,6 @@ impl SqliteReader {
     }
 }
 
-/// Words that may start a PostgreSQL query from a script.
-const PG_STATEMENTS: &[&str] = &["select", "with", "values", "table"];
-
-/// PostgreSQL functions refused anywhere in a script's query (also inside string
-/// literals, which `query_to_xml` and friends would run): they read or write server
-/// files, run other SQL, signal other sessions, change settings or take session locks
-/// that outlive the query.
-const PG_DENIED: &[&str] = &[
-    "pg_read_file",
-    "pg_read_binary_file",
-    "pg_ls_",
-    "pg_stat_file",
-    "pg_file_",
-    "lo_import",
-    "lo_export",
-    "dblink",
-    "query_to_xml",
-    "cursor_to_xml",
-    "table_to_xml",
-    "schema_to_xml",
-    "database_to_xml",
-    "ts_stat",
-    "ts_rewrite",
-    "set_config",
-    "pg_terminate_backend",
-    "pg_cancel_backend",
-    "pg_signal_backend",
-    "pg_reload_conf",
-    "pg_rotate_logfile",
-    "pg_promote",
-    "pg_switch_wal",
-    "pg_advisory_",
-    "pg_try_advisory_",
-    "pg_notify",
-    "pg_logical_",
-    "pg_replication_",
-    "pg_create_",
-    "pg_drop_",
-    "pg_log_backend",
-    "pg_import_system",
-];
-
-/// Refuses a PostgreSQL statement that is not a plain query or names a function of
-/// [`PG_DENIED`]; the message says which.
-pub(crate) fn pg_refusal(sql: &str) -> Option<String> {
-    let first = first_word(sql);
-    if !PG_STATEMENTS.contains(&first.as_str()) {
-        let shown = if first.is_empty() {
-            "an empty statement".to_string()
-        } else {
-            format!("`{}`", first.to_ascii_uppercase())
-        };
-        return Some(format!(
-            "{shown} is not a query: only SELECT, WITH, VALUES and TABLE statements run"
-        ));
-    }
-    let lower = sql.to_ascii_lowercase();
-    PG_DENIED.iter().find(|f| lower.contains(*f)).map(|f| {
-        format!(
-            "`{}…` reaches outside the results database (server files, other SQL, other sessions or settings)",
-            f.trim_end_matches('_')
-        )
-    })
-}
-
-/// The first keyword of a statement, after spaces, comments and opening parentheses,
-/// lowercased.
-fn first_word(sql: &str) -> String {
-    let b = sql.as_bytes();
-    let mut i = 0;
-    loop {
-        while i < b.len() && (b[i].is_ascii_whitespace() || b[i] == b'(') {
-            i += 1;
-        }
-        if b[i..].starts_with(b"--") {
-            while i < b.len() && b[i] != b'\n' {
-                i += 1;
-            }
-        } else if b[i..].starts_with(b"/*") {
-            // PostgreSQL block comments nest.
-            let mut depth = 0usize;
-            while i < b.len() {
-                if b[i..].starts_with(b"/*") {
-                    depth += 1;
-                    i += 2;
-                } else if b[i..].starts_with(b"*/") {
-                    depth -= 1;
-                    i += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    i += 1;
-                }
-            }
-        } else {
-            break;
-        }
-    }
-    let end = b[i..]
-        .iter()
-        .position(|c| !c.is_ascii_alphanumeric() && *c != b'_')
-        .map_or(b.len(), |p| i + p);
-    sql[i..end].to_ascii_lowercase()
-}
-
-/// How many PostgreSQL rows are fetched per round trip: the caps are checked between
-/// batches, so at most this many rows past the cap are ever in memory.
-const PG_BATCH: i32 = 1000;
-
-/// How much longer than the server's `statement_timeout` the watcher waits before it
-/// cancels the statement itself (the server should have stopped it).
-const PG_GRACE: Duration = Duration::from_secs(2);
-
-/// Runs one read-only query on PostgreSQL within `limits`; `cancel` stops it.
-pub(crate) fn pg_query(
-    client: &mut postgres::Client,
-    sql: &str,
-    params: &[SqlValue],
-    limits: QueryLimits,
-    cancel: Option<Arc<AtomicBool>>,
-) -> Result<QueryResult, Stop> {
-    if let Some(why) = pg_refusal(sql) {
-        return Err(Stop::Refused(why));
-    }
-    // The watcher is detached: a cancel request to a server that never answers must
-    // not hold up the script once the statement itself has returned.
-    let done = Arc::new(AtomicBool::new(false));
-    let why = Arc::new(AtomicU8::new(WHY_NONE));
-    {
-        let (done, why, token) = (done.clone(), why.clone(), client.cancel_token());
-        let deadline = Instant::now() + limits.time + PG_GRACE;
-        let _ = std::thread::Builder::new()
-            .name("fitup-db-watch".into())
-            .spawn(move || {
-                while !done.load(Ordering::Relaxed) {
-                    let reason = if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
-                        WHY_CANCEL
-                    } else if Instant::now() > deadline {
-                        WHY_TIME
-                    } else {
-                        std::thread::sleep(Duration::from_millis(20));
-                        continue;
-                    };
-                    why.store(reason, Ordering::Relaxed);
-                    let _ = token.cancel_query(postgres::NoTls);
-                    return;
-                }
-            });
-    }
-    let start = Instant::now();
-    let result = pg_run(client, sql, params, limits, start);
-    done.store(true, Ordering::Relaxed);
-    result.map_err(|e| match (e, why.load(Ordering::Relaxed)) {
-        (_, WHY_CANCEL) => Stop::Cancelled,
-        (Stop::Sql(_), WHY_TIME) => Stop::Timeout,
-        (e, _) => e,
-    })
-}
-
-fn pg_error(e: postgres::Error) -> Stop {
-    use postgres::error::SqlState;
-    match e.code() {
-        Some(c) if *c == SqlState::QUERY_CANCELED => Stop::Timeout,
-        Some(c) if *c == SqlState::READ_ONLY_SQL_TRANSACTION => Stop::Refused(Raw::from(e).message),
-        _ => Stop::Sql(Raw::from(e)),
-    }
-}
-
-fn pg_run(
-    client: &mut postgres::Client,
-    sql: &str,
-    params: &[SqlValue],
-    limits: QueryLimits,
-    start: Instant,
-) -> Result<QueryResult, Stop> {
-    let mut tx = client
-        .build_transaction()
-        .read_only(true)
-        .start()
-        .map_err(pg_error)?;
-    // SET LOCAL ends with the transaction (always rolled back).
-    tx.batch_execute(&format!(
-        "SET LOCAL statement_timeout = {}",
-        limits.time.as_millis().max(1)
-    ))
-    .map_err(pg_error)?;
-    let stmt = tx.prepare(sql).map_err(pg_error)?;
-    let columns: Vec<String> = stmt
-        .columns()
-        .iter()
-        .map(|c| c.name().to_string())
-        .collect();
-    let boxed = backend::pg_bind(&stmt, params)?;
-    let refs: Vec<&(dyn postgres::types::ToSql + Sync)> =
-        boxed.iter().map(|b| b.as_ref()).collect();
-    let portal = tx.bind(&stmt, &refs).map_err(pg_error)?;
-    let mut out = Collector::new(limits, &columns);
-    loop {
-        let batch = tx.query_portal(&portal, PG_BATCH).map_err(pg_error)?;
-        if batch.is_empty() {
-            break;
-        }
-        let last = batch.len() < PG_BATCH as usize;
-        for row in backend::pg_table(&batch)? {
-            out.push(row)?;
-        }
-        if last {
-            break;
-        }
-        // Each batch is its own statement for the server's timeout: keep the total.
-        if start.elapsed() > limits.time {
-            return Err(Stop::Timeout);
-        }
-    }
-    tx.rollback().map_err(pg_error)?;
-    Ok(QueryResult {
-        columns,
-        rows: out.rows,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -702,45 +480,6 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("max_bytes"));
-    }
-
-    #[test]
-    fn postgres_statements_other_than_queries_are_refused() {
-        for ok in [
-            "SELECT 1",
-            "  -- note\n select * from runs",
-            "/* a /* nested */ comment */ WITH x AS (SELECT 1) SELECT * FROM x",
-            "(SELECT 1) UNION (SELECT 2)",
-            "VALUES (1), (2)",
-            "TABLE runs",
-        ] {
-            assert_eq!(pg_refusal(ok), None, "{ok}");
-        }
-        for bad in [
-            "COPY runs TO '/tmp/x'",
-            "COPY (SELECT 1) TO PROGRAM 'id'",
-            "INSERT INTO runs DEFAULT VALUES",
-            "SET statement_timeout = 0",
-            "DO $$ BEGIN END $$",
-            "EXPLAIN ANALYZE DELETE FROM runs",
-            "",
-        ] {
-            assert!(pg_refusal(bad).unwrap().contains("is not a query"), "{bad}");
-        }
-        for bad in [
-            "SELECT pg_read_file('/etc/passwd')",
-            "select PG_CATALOG.Pg_Read_Binary_File('/x')",
-            "SELECT * FROM pg_ls_dir('.')",
-            "SELECT query_to_xml('select pg_'||'read_file(''/x'')', true, true, '')",
-            "SELECT set_config('statement_timeout', '0', false)",
-            "SELECT pg_advisory_lock(1)",
-            "SELECT lo_export(1, '/tmp/x')",
-        ] {
-            assert!(
-                pg_refusal(bad).unwrap().contains("reaches outside"),
-                "{bad}"
-            );
-        }
     }
 
     #[test]

@@ -64,6 +64,33 @@ pub enum ToolAxis {
     NegZ,
 }
 
+impl std::str::FromStr for ToolAxis {
+    type Err = UnknownToolAxis;
+
+    /// `"x"`, `"z"` or `"-z"`, as the scripting API spells them.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "x" => Ok(ToolAxis::X),
+            "z" => Ok(ToolAxis::Z),
+            "-z" => Ok(ToolAxis::NegZ),
+            other => Err(UnknownToolAxis {
+                given: other.to_string(),
+            }),
+        }
+    }
+}
+
+/// A tool axis name that is not `x`, `z` or `-z`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("tool_axis `{given}`: use \"x\", \"z\" or \"-z\"")]
+pub struct UnknownToolAxis {
+    /// The name given.
+    pub given: String,
+}
+
+/// The most spin angles sampled about the drill axis per hole (one every 0.1°).
+pub const MAX_SPIN_SAMPLES: usize = 3600;
+
 /// Settings of a drilling program.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DrillOptions {
@@ -83,6 +110,40 @@ pub struct DrillOptions {
     pub travel_orientation: Option<UnitQuaternion<f64>>,
     /// Speeds and checks of the motions.
     pub motion: MotionOptions,
+}
+
+impl DrillOptions {
+    /// Checks every setting: the motion options (see [`MotionOptions`]), approach and
+    /// retract distances finite and not negative (mm), a finite compensation, and
+    /// `spin_samples` between 1 and [`MAX_SPIN_SAMPLES`]. [`drill_program`] calls it
+    /// first; bindings call it to report a bad option before anything runs.
+    pub fn validate(&self) -> Result<(), MotionError> {
+        super::motion::check_options(&self.motion)?;
+        for (option, value) in [("approach", self.approach), ("retract", self.retract)] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(MotionError::InvalidOptions {
+                    option,
+                    value,
+                    rule: "finite and not negative (mm)",
+                });
+            }
+        }
+        if let Some(value) = self.compensation.iter().copied().find(|v| !v.is_finite()) {
+            return Err(MotionError::InvalidOptions {
+                option: "compensation",
+                value,
+                rule: "finite (mm)",
+            });
+        }
+        if !(1..=MAX_SPIN_SAMPLES).contains(&self.spin_samples) {
+            return Err(MotionError::InvalidOptions {
+                option: "spin_samples",
+                value: self.spin_samples as f64,
+                rule: "between 1 and 3600",
+            });
+        }
+        Ok(())
+    }
 }
 
 impl Default for DrillOptions {
@@ -292,6 +353,7 @@ pub fn drill_program(
     holes: &[Hole],
     options: &DrillOptions,
 ) -> Result<DrillReport, MotionError> {
+    options.validate()?;
     let mut q = start.to_vec();
     let first = robot.tcp_pose(&q)?;
     let mut traj = Trajectory::new(robot.joint_kinds());

@@ -65,9 +65,17 @@ pub enum MotionError {
     /// Bad joint vector.
     #[error(transparent)]
     Input(#[from] KinematicsError),
-    /// Speeds or intervals not positive and finite.
-    #[error("invalid motion options: {0}")]
-    InvalidOptions(String),
+    /// An option out of its range: speeds and intervals must be positive and finite,
+    /// drilling distances finite and not negative, spin samples within their bounds.
+    #[error("invalid motion options: {option} = {value} must be {rule}")]
+    InvalidOptions {
+        /// The option's name as the API spells it (`joint_speed`, `spin_samples`).
+        option: &'static str,
+        /// The value given (in the option's unit: mm, rad, s, mm/s, rad/s, a count).
+        value: f64,
+        /// The rule it breaks, for people ("positive and finite").
+        rule: &'static str,
+    },
     /// The motion (or the whole program or drilling run) would produce more samples
     /// or IK checks than the shared cap, [`MAX_SAMPLES`](crate::math::MAX_SAMPLES).
     #[error(transparent)]
@@ -133,7 +141,7 @@ pub enum MotionError {
     },
 }
 
-fn check_options(o: &MotionOptions) -> Result<(), MotionError> {
+pub(crate) fn check_options(o: &MotionOptions) -> Result<(), MotionError> {
     let vals = [
         ("joint_speed", o.joint_speed),
         ("linear_speed", o.linear_speed),
@@ -145,9 +153,11 @@ fn check_options(o: &MotionOptions) -> Result<(), MotionError> {
     ];
     for (name, v) in vals {
         if !(v.is_finite() && v > 0.0) {
-            return Err(MotionError::InvalidOptions(format!(
-                "{name} = {v} must be positive and finite"
-            )));
+            return Err(MotionError::InvalidOptions {
+                option: name,
+                value: v,
+                rule: "positive and finite",
+            });
         }
     }
     Ok(())

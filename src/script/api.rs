@@ -186,8 +186,10 @@ pub(crate) fn register_all(
     super::bind_interference::register(&mut api);
     super::bind_planning::register(&mut api);
     super::bind_robot::register(&mut api, ctx);
+    #[cfg(feature = "db")]
     super::bind_db::register(&mut api, ctx);
     super::bind_sequence::register(&mut api);
+    #[cfg(feature = "skills")]
     super::bind_skills::register(&mut api, ctx);
     super::bind_view::register(&mut api);
     (api.sections, api.entries, api.overloads)

@@ -17,7 +17,7 @@ use crate::document::robot::{
 use crate::kinematics::{
     drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
     DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkOptions, JointLimits, MotionOptions,
-    OpwParameters, Robot, ToolAxis, Trajectory,
+    OpwParameters, Robot, Trajectory,
 };
 use crate::math::{AngleConvention, Transform};
 use rhai::{Array, Dynamic, Map};
@@ -247,12 +247,7 @@ fn drill_options(m: &Map) -> ScriptResult<(DrillOptions, bool)> {
         ..DrillOptions::default()
     };
     if let Some(a) = opt_str(m, "tool_axis")? {
-        o.tool_axis = match a.as_str() {
-            "x" => ToolAxis::X,
-            "z" => ToolAxis::Z,
-            "-z" => ToolAxis::NegZ,
-            other => return err(format!("tool_axis `{other}`: use \"x\", \"z\" or \"-z\"")),
-        };
+        o.tool_axis = a.parse().map_err(fail)?;
     }
     if let Some(v) = m.get("compensation") {
         o.compensation = vec3(v, "compensation")?;
@@ -264,10 +259,12 @@ fn drill_options(m: &Map) -> ScriptResult<(DrillOptions, bool)> {
         o.retract = v;
     }
     if let Some(v) = opt_num(m, "spin_samples")? {
-        if !(1.0..=3600.0).contains(&v) {
-            return err(format!("spin_samples = {v} must be between 1 and 3600"));
+        // Converting to a count is this binding's job; the range is the library's
+        // (`validate` below). A negative count reads as 0, a huge one saturates.
+        if v.fract() != 0.0 {
+            return err(format!("spin_samples = {v} must be a whole number"));
         }
-        o.spin_samples = v as usize;
+        o.spin_samples = v.max(0.0) as usize;
     }
     if let Some(v) = m.get("travel") {
         let abc = numbers(v, 3, "travel")?;
@@ -277,6 +274,7 @@ fn drill_options(m: &Map) -> ScriptResult<(DrillOptions, bool)> {
             abc[2].to_radians(),
         ));
     }
+    o.validate().map_err(fail)?;
     Ok((o, stream))
 }
 
@@ -291,6 +289,16 @@ fn options_map(v: &Dynamic, what: &str) -> ScriptResult<Map> {
 
 pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.section("Robot", "A robot of a document (`robots:` in the YAML): a kinematic tree whose links move components. Joint arrays are **degrees** (mm for prismatic joints), in joint order; poses are Transforms or `[x, y, z, a, b, c]` (mm, degrees). Setting `joints`, a joint dimension (`D1@角度1`) or running a motion moves the link components. Motion options (a map, all optional): `speed` (TCP, mm/s), `joint_speed` (deg/s), `angular_speed` (deg/s), `interval` (sample interval, s), `stream: true` (print every sample `t joints tcp`, seed 001's live monitor; in `fitup watch` the lines stream to the output). Failures (unreachable, singular, joint limits) are script errors that say why and at which step. One call — a motion, a whole program, a whole drilling run — produces at most 1,000,000 samples and as many IK checks (docs/scripting.md \"Caps\"); more is an error naming `interval` (and the program line), before the samples are made.");
+    register_robots(api);
+    register_ik(api);
+    register_models(api, ctx);
+    register_motions(api, ctx);
+    register_drilling(api, ctx);
+    register_trajectory(api);
+}
+
+/// Robot handles of a document: names, joints, joint dimensions, poses of the base, flange and TCP.
+fn register_robots(api: &mut Api) {
     api.type_::<RobotHandle>("Robot");
     api.type_::<TrajectoryHandle>("Trajectory");
     api.f(
@@ -486,6 +494,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
                 .collect())
         },
     );
+}
+
+/// Inverse kinematics: every branch, the nearest one, branches with their configuration.
+fn register_ik(api: &mut Api) {
     api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. At a wrist singularity (joints 4 and 6 aligned) every branch still comes back with joint 5 exactly at its singular value and joint 4 kept at its current value (joint 6 takes the rest). An unreachable target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
         let (robot, q) = r.snapshot()?;
         let target = to_transform(&t, "target")?;
@@ -514,7 +526,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             Dynamic::from_map(m)
         }).collect())
     });
+}
 
+/// Robot models without a document (catalog, D-H, OPW, URDF) and adding them to a document.
+fn register_models(api: &mut Api, ctx: &Arc<Context>) {
     api.type_::<RobotModel>("RobotModel");
     api.f(
         "robot_opw(params: map) -> RobotModel",
@@ -696,7 +711,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             add_robot(d, name, &model, &Map::new())
         },
     );
+}
 
+/// Motions (joint, line, circle) and motion programs.
+fn register_motions(api: &mut Api, ctx: &Arc<Context>) {
     fn motion<F>(
         r: &RobotHandle,
         opts: Option<&Dynamic>,
@@ -787,7 +805,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     let rp2 = rp.clone();
     api.f("Robot.run_program(path: string) -> Trajectory", "Runs a motion program file (Line/Circle/Joint/Speed/Tool…, see docs/kinematics.md) from the current joints; a syntax or motion error names the file and line. The file is a dependency of the run (watch reruns on its saves).", move |r: &mut RobotHandle, p: &str| rp(r, p, None));
     api.f("Robot.run_program(path: string, options: map) -> Trajectory", "Runs a program file with motion options (the program's own Speed/Interval lines override them).", move |r: &mut RobotHandle, p: &str, o: Dynamic| rp2(r, p, Some(&o)));
+}
 
+/// Drilling programs and hole tables (seed 001).
+fn register_drilling(api: &mut Api, ctx: &Arc<Context>) {
     let dp = |r: &mut RobotHandle, holes: Array, o: Option<&Dynamic>| -> ScriptResult<Map> {
         let m = match o {
             Some(v) => options_map(v, "drilling")?,
@@ -855,7 +876,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         let holes = parse_holes(&c.project.display(&full), &text).map_err(fail)?;
         Ok(holes.iter().map(|h| Dynamic::from_map(hole_map(h))).collect())
     });
+}
 
+/// Trajectories: samples, joints and TCP poses over time, CSV logs.
+fn register_trajectory(api: &mut Api) {
     api.section("Trajectory", "A sampled motion: `len` samples at times `0 … duration` (s), each with joint values (degrees / mm) and the TCP pose. Sample indices may be negative (−1 = last).");
     fn sample(t: &TrajectoryHandle, i: i64) -> ScriptResult<&crate::kinematics::TrajectorySample> {
         let n = t.trajectory.samples.len() as i64;

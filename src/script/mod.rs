@@ -7,6 +7,7 @@
 
 mod api;
 mod args;
+#[cfg(feature = "db")]
 mod bind_db;
 mod bind_document;
 mod bind_interference;
@@ -14,6 +15,7 @@ mod bind_math;
 mod bind_planning;
 mod bind_robot;
 mod bind_sequence;
+#[cfg(feature = "skills")]
 mod bind_skills;
 mod bind_view;
 mod convert;

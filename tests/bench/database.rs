@@ -134,6 +134,7 @@ fn main() {
         "SQLite (WAL, synchronous=NORMAL)",
         bench(&mut make, &path, &t),
     );
+    #[cfg(feature = "postgres")]
     if let Ok(url) = std::env::var("FITUP_BENCH_POSTGRES") {
         let mut admin = postgres::Client::connect(&url, postgres::NoTls).unwrap();
         let mut n = 0;

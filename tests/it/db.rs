@@ -15,18 +15,32 @@ use fitup::kinematics::{JointKind, Trajectory, TrajectorySample};
 use fitup::math::{AngleConvention, Transform, Vec3};
 use fitup::planning::{Failure, PlannedPath};
 use std::process::Stdio;
+#[cfg(feature = "postgres")]
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// A fresh, empty database on one back end, removed when dropped.
-struct Fresh {
-    target: Target,
+pub(crate) struct Fresh {
+    pub(crate) target: Target,
     _dir: Option<tempfile::TempDir>,
+    #[cfg_attr(not(feature = "postgres"), allow(dead_code))]
     pg_drop: Option<(String, String)>,
+}
+
+#[cfg(feature = "postgres")]
+impl Fresh {
+    /// The PostgreSQL URL of this database (panics for SQLite).
+    pub(crate) fn url(&self) -> &str {
+        match &self.target {
+            Target::Postgres(u) => u,
+            Target::Sqlite(p) => panic!("{} is not a PostgreSQL database", p.display()),
+        }
+    }
 }
 
 impl Drop for Fresh {
     fn drop(&mut self) {
+        #[cfg(feature = "postgres")]
         if let Some((admin, name)) = &self.pg_drop {
             if let Ok(mut c) = postgres::Client::connect(admin, postgres::NoTls) {
                 let _ = c.batch_execute(&format!("DROP DATABASE IF EXISTS {name} WITH (FORCE)"));
@@ -45,6 +59,7 @@ fn sqlite() -> Fresh {
 }
 
 /// The PostgreSQL server's URL, or `None` (with a note) when there is none outside CI.
+#[cfg(feature = "postgres")]
 fn postgres_url() -> Option<String> {
     match std::env::var("FITUP_TEST_POSTGRES") {
         Ok(u) if !u.trim().is_empty() => Some(u),
@@ -63,8 +78,16 @@ fn postgres_url() -> Option<String> {
     }
 }
 
-/// A fresh database on the PostgreSQL server (created here, dropped afterwards).
-fn postgres() -> Option<Fresh> {
+/// A build without the `postgres` feature has no PostgreSQL back end to test.
+#[cfg(not(feature = "postgres"))]
+pub(crate) fn postgres() -> Option<Fresh> {
+    None
+}
+
+/// A fresh database on the PostgreSQL server of `FITUP_TEST_POSTGRES` (created here,
+/// dropped afterwards), or `None` with a note when there is none outside CI.
+#[cfg(feature = "postgres")]
+pub(crate) fn postgres() -> Option<Fresh> {
     static N: AtomicUsize = AtomicUsize::new(0);
     let admin = postgres_url()?;
     let name = format!(
@@ -419,10 +442,13 @@ fn raw_exec(target: &Target, sql: &str) {
             .unwrap()
             .execute_batch(sql)
             .unwrap(),
+        #[cfg(feature = "postgres")]
         Target::Postgres(u) => postgres::Client::connect(u, postgres::NoTls)
             .unwrap()
             .batch_execute(sql)
             .unwrap(),
+        #[cfg(not(feature = "postgres"))]
+        Target::Postgres(_) => unreachable!("no PostgreSQL back end in this build"),
     }
 }
 

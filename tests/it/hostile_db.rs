@@ -413,6 +413,7 @@ fn a_save_in_watch_mode_cancels_a_running_query() {
     assert!(w.out.seen.iter().any(|l| l == "fixed"));
 }
 
+#[cfg(feature = "postgres")]
 /// A TCP server on 127.0.0.1 that accepts every connection and never answers; the
 /// connections are held until the test ends.
 fn silent_server() -> (u16, std::thread::JoinHandle<()>) {
@@ -433,6 +434,7 @@ fn silent_server() -> (u16, std::thread::JoinHandle<()>) {
 }
 
 #[test]
+#[cfg(feature = "postgres")]
 fn a_silent_postgres_server_fails_in_bounded_time_and_no_password_is_printed() {
     let dir = project();
     let p = dir.path();
@@ -507,66 +509,15 @@ fn a_silent_postgres_server_fails_in_bounded_time_and_no_password_is_printed() {
     assert!(!t.contains("secret"), "the password was printed:\n{t}");
 }
 
-/// The PostgreSQL server of `FITUP_TEST_POSTGRES` with a fresh database (dropped
-/// afterwards), or `None` with a note.
-struct FreshPg {
-    admin: String,
-    name: String,
-    url: String,
-}
-
-impl Drop for FreshPg {
-    fn drop(&mut self) {
-        if let Ok(mut c) = postgres::Client::connect(&self.admin, postgres::NoTls) {
-            let _ = c.batch_execute(&format!(
-                "DROP DATABASE IF EXISTS {} WITH (FORCE)",
-                self.name
-            ));
-        }
-    }
-}
-
-fn fresh_postgres() -> Option<FreshPg> {
-    let admin = match std::env::var("FITUP_TEST_POSTGRES") {
-        Ok(u) if !u.trim().is_empty() => u,
-        _ => {
-            if std::env::var("CI").is_ok_and(|v| v == "true") {
-                panic!(
-                    "FITUP_TEST_POSTGRES is not set under CI=true: the PostgreSQL tests must run"
-                );
-            }
-            use std::io::Write;
-            let _ = writeln!(
-                std::io::stderr(),
-                "note: PostgreSQL hostile tests skipped: set FITUP_TEST_POSTGRES=postgres://user@host:port/db to run them"
-            );
-            return None;
-        }
-    };
-    let name = format!("fitup_h{}", std::process::id());
-    let mut c = postgres::Client::connect(&admin, postgres::NoTls)
-        .unwrap_or_else(|e| panic!("cannot reach FITUP_TEST_POSTGRES: {e}"));
-    c.batch_execute(&format!("CREATE DATABASE {name}")).unwrap();
-    let (base, query) = match admin.split_once('?') {
-        Some((b, q)) => (b.to_string(), format!("?{q}")),
-        None => (admin.clone(), String::new()),
-    };
-    let base = match base.rfind('/') {
-        Some(i) if i > base.find("://").map_or(0, |s| s + 2) => base[..i].to_string(),
-        _ => base,
-    };
-    let url = format!("{base}/{name}{query}");
-    Some(FreshPg { admin, name, url })
-}
-
 #[test]
+#[cfg(feature = "postgres")]
 fn postgres_queries_are_read_only_jailed_and_bounded() {
-    let Some(pg) = fresh_postgres() else {
+    let Some(pg) = crate::db::postgres() else {
         return;
     };
     let dir = project();
     let p = dir.path();
-    let url_arg = format!("url={}", pg.url);
+    let url_arg = format!("url={}", pg.url());
     // Store something first.
     let (code, t) = run_script(
         p,
@@ -614,7 +565,7 @@ fn postgres_queries_are_read_only_jailed_and_bounded() {
     assert_all_refused(&t, &cases);
     assert!(!copied.exists() && !Path::new("/tmp/fitup_pwned").exists());
     // The data is intact.
-    let mut c = postgres::Client::connect(&pg.url, postgres::NoTls).unwrap();
+    let mut c = postgres::Client::connect(pg.url(), postgres::NoTls).unwrap();
     let n: i64 = c
         .query_one("SELECT COUNT(*) FROM snapshots", &[])
         .unwrap()
