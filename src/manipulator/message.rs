@@ -520,8 +520,7 @@ impl Packet {
         // A reply may be header only (REP-I0006's *alternative* reply), whatever its
         // type; after FAILURE "any payload must be considered invalid" (it may be
         // uninitialised), so it is not decoded at all.
-        if comm_type == CommType::ServiceReply
-            && (b.is_empty() || reply_code == ReplyCode::Failure)
+        if comm_type == CommType::ServiceReply && (b.is_empty() || reply_code == ReplyCode::Failure)
         {
             if !matches!(
                 msg_type,
@@ -1335,8 +1334,12 @@ mod tests {
         let p = Packet::decode(&ping, ByteOrder::Big).unwrap();
         assert_eq!(p, Packet::request(msg_type::PING, Body::Empty));
         // After FAILURE the payload is invalid: not decoded (here: a NaN).
-        let mut fail = Packet::reply(msg_type::JOINT_TRAJ_PT, ReplyCode::Failure, Body::DummyReals)
-            .encode(ByteOrder::Big);
+        let mut fail = Packet::reply(
+            msg_type::JOINT_TRAJ_PT,
+            ReplyCode::Failure,
+            Body::DummyReals,
+        )
+        .encode(ByteOrder::Big);
         fail[16..20].copy_from_slice(&f32::NAN.to_be_bytes());
         let p = Packet::decode(&fail, ByteOrder::Big).unwrap();
         assert_eq!(p.reply_code, ReplyCode::Failure);

@@ -383,10 +383,7 @@ impl Simulator {
                     let (stop, state, kinds, opts) =
                         (stop.clone(), state.clone(), kinds.clone(), opts.clone());
                     // Fixed when the client connects: one stream, one order.
-                    let order = opts
-                        .byte_order
-                        .or(*lock(&heard))
-                        .unwrap_or(ByteOrder::Big);
+                    let order = opts.byte_order.or(*lock(&heard)).unwrap_or(ByteOrder::Big);
                     std::thread::spawn(move || {
                         serve_state(stream, &conn, &stop, &state, &kinds, &opts, order)
                     });
