@@ -14,8 +14,15 @@
 //! `shared_int` is a 32-bit two's-complement integer and `shared_real` a 32-bit IEEE
 //! float (the 4/4 variant of REP-I0006). The byte order is a property of the
 //! connection ([`ByteOrder`]): REP-I0006 lets a driver use either ("swap" or
-//! "non-swap" client nodes); fitup defaults to big-endian (network order), the order
-//! in which REP-I0006 prints its byte-stream examples.
+//! "non-swap" client nodes). A client chooses one (fitup's default is big-endian,
+//! network order, the order in which REP-I0006 prints its byte-stream examples); a
+//! server can detect it from the first length prefix ([`ByteOrder::detect`],
+//! [`FrameReader::detecting`]).
+//!
+//! Framing ([`FrameReader::read_frame`]) is separate from decoding
+//! ([`Frame::decode`]): a whole frame whose content is bad leaves the stream in step,
+//! so a receiver can answer it (FAILURE to a request) or ignore it (a topic) and go
+//! on, as REP-I0006 asks.
 //!
 //! Units on the wire follow REP-103: radians for revolute joints, **metres** for
 //! prismatic joints, seconds for durations. fitup works in millimetres: the

@@ -4,7 +4,9 @@
 //!
 //! Ports (REP-I0006 / `industrial_robot_client` defaults): motion **11000**
 //! (JOINT_TRAJ_PT requests and replies, FITUP_TOOL requests), state **11002**
-//! (JOINT_POSITION and STATUS published by the controller). Units inside fitup are
+//! (JOINT_POSITION and STATUS published by the controller); one rule on both sides
+//! puts the state port at the motion port + 2 unless given ([`state_port_for`]).
+//! Units inside fitup are
 //! millimetres and radians; on the wire prismatic joints are metres (REP-103).
 //!
 //! Safety: a [`client::Client`] refuses an address that is not loopback unless

@@ -12,6 +12,12 @@
 //! start-up are ignored), the sequence number is out of order, or the point is
 //! malformed. A new trajectory (sequence 0) clears the error.
 //!
+//! A request it does not serve, or one whose content does not decode (a NaN joint,
+//! an unknown type), gets a SERVICE_REPLY with FAILURE and the connection stays open
+//! (REP-I0006); topics it does not act on are ignored. Only framing garbage (a bad
+//! length prefix, a stream cut inside a frame) closes a connection. The byte order is
+//! detected per motion connection unless [`SimulatorOptions::byte_order`] forces one.
+//!
 //! Clients that disconnect or send garbage only lose their own connection: the
 //! simulator logs the cause to standard error and keeps serving.
 //!

@@ -417,6 +417,34 @@ fn unsupported_requests_get_failure_and_unknown_topics_are_ignored_in_both_order
 }
 
 #[test]
+fn a_flood_of_refused_requests_is_answered_each_and_logged_a_bounded_number_of_times() {
+    let (mut sim, _, m, _) = manipulator(&[]);
+    let n = 20_000;
+    let mut t = connect(m);
+    let o = Order::Little;
+    let one = frame(o, GET_VERSION, REQUEST, INVALID, &[]);
+    let all: Vec<u8> = (0..n).flat_map(|_| one.clone()).collect();
+    let mut w = t.try_clone().unwrap();
+    // Written from another thread: the replies come back while the requests go out.
+    let writer = std::thread::spawn(move || w.write_all(&all).is_ok());
+    for i in 0..n {
+        let r = read_msg(&mut t, o).unwrap_or_else(|e| panic!("reply {i}: {e}"));
+        assert_eq!((r.msg_type, r.reply), (GET_VERSION, FAILURE));
+    }
+    assert!(writer.join().unwrap());
+    let r = call(&mut t, o, &frame(o, PING, REQUEST, INVALID, &[]));
+    assert_eq!(r.reply, SUCCESS);
+    std::thread::sleep(Duration::from_millis(200));
+    let log = sim.drain();
+    let lines = log
+        .lines()
+        .filter(|l| l.contains("replied FAILURE"))
+        .count();
+    assert!((1..=8).contains(&lines), "{lines} log lines:\n{log}");
+    assert!(log.contains("not logged"), "{log}");
+}
+
+#[test]
 fn a_non_finite_or_out_of_range_point_gets_failure_and_code_4000_in_both_orders() {
     let (_sim, p, m, s) = manipulator(&[]);
     // The port rule: no --state-port given, the state port is P + 2.
