@@ -162,7 +162,10 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 impl Client {
     /// Connects to the motion and state ports of a controller whose robot has joints
-    /// of `kinds`, and waits for the first joint state.
+    /// of `kinds`, and waits for the first joint state. A PING goes out on the
+    /// motion port before the state port is opened (its reply is awaited for at most
+    /// a second and not required), so that a controller which detects the byte order
+    /// from a client's first frame publishes state in the client's order.
     ///
     /// # Errors
     /// Not loopback (see [`ClientOptions::allow_remote`]), no connection, no state.
