@@ -3,6 +3,7 @@
 
 use super::out::{errln, outln};
 use super::Exit;
+use crate::manipulator::message::ByteOrder;
 use crate::manipulator::simulator::{Simulator, SimulatorOptions};
 use crate::skills::{ManagerEvent, ManagerOptions, SkillManager};
 use std::io::IsTerminal;
@@ -20,12 +21,50 @@ pub struct ManipulatorArgs {
     /// Motion port on 127.0.0.1 (JOINT_TRAJ_PT, tool commands); 0 picks a free one.
     #[arg(long, default_value_t = crate::manipulator::MOTION_PORT)]
     pub port: u16,
-    /// State port on 127.0.0.1 (JOINT_POSITION, STATUS); 0 picks a free one.
-    #[arg(long, default_value_t = crate::manipulator::STATE_PORT)]
-    pub state_port: u16,
+    /// State port on 127.0.0.1 (JOINT_POSITION, STATUS); 0 picks a free one
+    /// [default: the motion port + 2, the rule `skills run` follows too].
+    #[arg(long)]
+    pub state_port: Option<u16>,
+    /// Byte order of simple_message: `auto` detects it per motion connection from its
+    /// first length prefix (a sane length reads sanely in one order only); a state
+    /// connection, whose client never sends, speaks the order of the last motion
+    /// connection heard before it connected, else big-endian. `big` or `little`
+    /// forces one on every connection (`little` for industrial_core's default x86
+    /// build when its state node connects first).
+    #[arg(long, value_enum, default_value_t = WireOrder::Auto)]
+    pub byte_order: WireOrder,
     /// Time scale: 1 is real time, 10 ten times faster.
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
+}
+
+/// `--byte-order` of `manipulator`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WireOrder {
+    /// Detect per connection.
+    Auto,
+    /// Big-endian (network order).
+    Big,
+    /// Little-endian.
+    Little,
+}
+
+/// `--byte-order` of `skills run`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ClientOrder {
+    /// Big-endian (network order).
+    Big,
+    /// Little-endian.
+    Little,
+}
+
+impl ClientOrder {
+    fn order(self) -> ByteOrder {
+        match self {
+            Self::Big => ByteOrder::Big,
+            Self::Little => ByteOrder::Little,
+        }
+    }
 }
 
 /// Options of `skills`.
@@ -51,9 +90,16 @@ pub enum SkillsCommand {
         /// The controller's motion port `HOST:PORT`.
         #[arg(long, default_value = "127.0.0.1:11000")]
         target: String,
-        /// The controller's state port [default: the motion port + 2].
+        /// The controller's state port [default: the motion port + 2, the rule
+        /// `fitup manipulator --port` follows too].
         #[arg(long)]
         state_port: Option<u16>,
+        /// Byte order of simple_message on both ports. Big-endian (network order,
+        /// REP-I0006's examples) is what big-endian controllers' drivers put on the
+        /// wire; `little` for a controller that speaks industrial_core's default x86
+        /// (non-swap) order. `fitup manipulator` detects either.
+        #[arg(long, value_enum, default_value_t = ClientOrder::Big)]
+        byte_order: ClientOrder,
         /// Allow a target that is not this machine (a real controller).
         #[arg(long)]
         allow_remote: bool,
@@ -94,10 +140,27 @@ pub(super) fn manipulator(a: &ManipulatorArgs) -> Exit {
             return Exit::Failure;
         }
     };
+    let Some(state_port) = a
+        .state_port
+        .or_else(|| crate::manipulator::state_port_for(a.port))
+    else {
+        errln!(
+            "error: --port {} leaves no state port at +{}: give --state-port",
+            a.port,
+            crate::manipulator::STATE_PORT_OFFSET
+        );
+        return Exit::Usage;
+    };
+    let byte_order = match a.byte_order {
+        WireOrder::Auto => None,
+        WireOrder::Big => Some(ByteOrder::Big),
+        WireOrder::Little => Some(ByteOrder::Little),
+    };
     let options = SimulatorOptions {
         motion_port: a.port,
-        state_port: a.state_port,
+        state_port,
         speed: a.speed,
+        byte_order,
         ..SimulatorOptions::default()
     };
     let sim = match Simulator::start(&doc, &a.robot, &options) {
@@ -108,10 +171,14 @@ pub(super) fn manipulator(a: &ManipulatorArgs) -> Exit {
         }
     };
     outln!(
-        "manipulator `{}` listening: motion {}, state {} (simple_message, big-endian), speed ×{}",
+        "manipulator `{}` listening: motion {}, state {} (simple_message, {}), speed ×{}",
         a.robot,
         sim.motion_addr(),
         sim.state_addr(),
+        byte_order.map_or_else(
+            || "byte order detected per connection".to_string(),
+            |o| o.to_string()
+        ),
         a.speed
     );
     loop {
@@ -150,6 +217,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         plan,
         target,
         state_port,
+        byte_order,
         allow_remote,
         reconnect_timeout,
         skill_timeout,
@@ -207,6 +275,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         ..ManagerOptions::default()
     };
     options.client.allow_remote = *allow_remote;
+    options.client.byte_order = byte_order.order();
     let logged_plan = plan.clone();
     let mut manager = SkillManager::new(plan, options);
     let handle = manager.handle();

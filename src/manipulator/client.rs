@@ -25,7 +25,8 @@ use thiserror::Error;
 /// Timeouts and safety settings of a [`Client`].
 #[derive(Debug, Clone)]
 pub struct ClientOptions {
-    /// Byte order of the controller.
+    /// Byte order of the controller (big-endian by default: REP-I0006's examples,
+    /// and the order the big-endian controllers' drivers put on the wire).
     pub byte_order: ByteOrder,
     /// Longest wait for a TCP connection.
     pub connect_timeout: Duration,
@@ -161,7 +162,10 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 impl Client {
     /// Connects to the motion and state ports of a controller whose robot has joints
-    /// of `kinds`, and waits for the first joint state.
+    /// of `kinds`, and waits for the first joint state. A PING goes out on the
+    /// motion port before the state port is opened (its reply is awaited for at most
+    /// a second and not required), so that a controller which detects the byte order
+    /// from a client's first frame publishes state in the client's order.
     ///
     /// # Errors
     /// Not loopback (see [`ClientOptions::allow_remote`]), no connection, no state.
@@ -193,7 +197,20 @@ impl Client {
             let _ = s.set_write_timeout(Some(options.reply_timeout));
             Ok::<_, ManipulatorError>(s)
         };
-        let motion = open(motion)?;
+        let mut motion = open(motion)?;
+        let mut frames = FrameReader::new(options.byte_order);
+        // A PING first, so that a controller which detects the byte order from a
+        // client's first frame (`fitup manipulator`) knows it before the state
+        // connection opens: state clients never send. Its answer is not required
+        // (a controller may not serve PING); a broken connection shows at the first
+        // request.
+        let _ = exchange(
+            &mut motion,
+            &mut frames,
+            options.byte_order,
+            &Packet::request(msg_type::PING, Body::Ping),
+            options.reply_timeout.min(ANNOUNCE_TIMEOUT),
+        );
         let mut state_stream = open(state)?;
         let state_timeout = options.state_timeout;
         let shared = Arc::new(Mutex::new(Shared::default()));
@@ -211,9 +228,19 @@ impl Client {
                 if stop.load(Ordering::Relaxed) {
                     return;
                 }
-                match frames.read_packet(&mut state_stream) {
+                let packet = frames.read_frame(&mut state_stream).and_then(|f| {
+                    let h = f.header();
+                    if !matches!(h.msg_type, msg_type::JOINT_POSITION | msg_type::STATUS) {
+                        // REP-I0006: topics one does not know are ignored
+                        // (JOINT_FEEDBACK, vendor messages…); the stream is in step.
+                        return Ok(None);
+                    }
+                    f.decode().map(Some)
+                });
+                match packet {
                     Err(e) if timed_out(&e) && last.elapsed() <= state_timeout => continue,
-                    Ok(p) => {
+                    Ok(None) => last = Instant::now(),
+                    Ok(Some(p)) => {
                         last = Instant::now();
                         let mut s = lock(&shared);
                         s.last_rx = Some(Instant::now());
@@ -254,7 +281,7 @@ impl Client {
         };
         let client = Self {
             motion,
-            frames: FrameReader::new(options.byte_order),
+            frames,
             options: options.clone(),
             kinds,
             shared,
@@ -310,29 +337,13 @@ impl Client {
     }
 
     fn request(&mut self, p: &Packet) -> Result<Packet, ManipulatorError> {
-        let order = self.options.byte_order;
-        let lost = |e: CodecError| ManipulatorError::Disconnected(format!("motion port: {e}"));
-        p.write_to(&mut self.motion, order).map_err(lost)?;
-        let deadline = Instant::now() + self.options.reply_timeout;
-        loop {
-            let r = match self.frames.read_packet(&mut self.motion) {
-                Ok(r) => r,
-                Err(e) if timed_out(&e) => {
-                    if Instant::now() > deadline {
-                        return Err(ManipulatorError::Disconnected(format!(
-                            "motion port: no reply within {} s",
-                            self.options.reply_timeout.as_secs_f64()
-                        )));
-                    }
-                    continue;
-                }
-                Err(e) => return Err(lost(e)),
-            };
-            // REP-I0006: replies nobody asked for and topics are ignored.
-            if r.comm_type == CommType::ServiceReply && r.msg_type == p.msg_type {
-                return Ok(r);
-            }
-        }
+        exchange(
+            &mut self.motion,
+            &mut self.frames,
+            self.options.byte_order,
+            p,
+            self.options.reply_timeout,
+        )
     }
 
     /// Sends PING and waits for the reply.
@@ -510,6 +521,43 @@ impl Client {
                 )));
             }
             std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+/// Longest wait for the reply to the PING a client sends when it connects.
+const ANNOUNCE_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// Sends request `p` on `motion` and waits up to `timeout` for its reply.
+/// REP-I0006: replies nobody asked for and topics (of any type, even unknown ones)
+/// are skipped without being decoded.
+fn exchange(
+    motion: &mut TcpStream,
+    frames: &mut FrameReader,
+    order: ByteOrder,
+    p: &Packet,
+    timeout: Duration,
+) -> Result<Packet, ManipulatorError> {
+    let lost = |e: CodecError| ManipulatorError::Disconnected(format!("motion port: {e}"));
+    p.write_to(motion, order).map_err(lost)?;
+    let deadline = Instant::now() + timeout;
+    loop {
+        let f = match frames.read_frame(motion) {
+            Ok(f) => f,
+            Err(e) if timed_out(&e) => {
+                if Instant::now() > deadline {
+                    return Err(ManipulatorError::Disconnected(format!(
+                        "motion port: no reply within {} s",
+                        timeout.as_secs_f64()
+                    )));
+                }
+                continue;
+            }
+            Err(e) => return Err(lost(e)),
+        };
+        let h = f.header();
+        if h.comm_type == CommType::ServiceReply as i32 && h.msg_type == p.msg_type {
+            return f.decode().map_err(lost);
         }
     }
 }

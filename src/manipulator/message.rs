@@ -14,8 +14,15 @@
 //! `shared_int` is a 32-bit two's-complement integer and `shared_real` a 32-bit IEEE
 //! float (the 4/4 variant of REP-I0006). The byte order is a property of the
 //! connection ([`ByteOrder`]): REP-I0006 lets a driver use either ("swap" or
-//! "non-swap" client nodes); fitup defaults to big-endian (network order), the order
-//! in which REP-I0006 prints its byte-stream examples.
+//! "non-swap" client nodes). A client chooses one (fitup's default is big-endian,
+//! network order, the order in which REP-I0006 prints its byte-stream examples); a
+//! server can detect it from the first length prefix ([`ByteOrder::detect`],
+//! [`FrameReader::detecting`]).
+//!
+//! Framing ([`FrameReader::read_frame`]) is separate from decoding
+//! ([`Frame::decode`]): a whole frame whose content is bad leaves the stream in step,
+//! so a receiver can answer it (FAILURE to a request) or ignore it (a topic) and go
+//! on, as REP-I0006 asks.
 //!
 //! Units on the wire follow REP-103: radians for revolute joints, **metres** for
 //! prismatic joints, seconds for durations. fitup works in millimetres: the
@@ -71,11 +78,60 @@ pub const TOOL_EXTENSION_VERSION: i32 = 1;
 /// Byte order of every `shared_int` / `shared_real` on a connection.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ByteOrder {
-    /// Network order (most significant byte first): fitup's default.
+    /// Network order (most significant byte first): fitup's default, and what the
+    /// big-endian controllers speak (the Fanuc and Motoman drivers run
+    /// industrial_core's *swap* nodes on x86 for them).
     #[default]
     Big,
-    /// Least significant byte first (the "non-swap" nodes on an x86 host).
+    /// Least significant byte first: industrial_core's default ("non-swap") build
+    /// on an x86 host.
     Little,
+}
+
+impl ByteOrder {
+    /// The byte order in which the 4-byte length prefix `prefix` reads as a sane
+    /// length (`HEADER_SIZE..=MAX_LENGTH`), or `None` when it is sane in neither.
+    ///
+    /// A sane length is sane in one order only: its two high bytes are 0 and its low
+    /// byte pair is not (a length ≥ 12), so the byte-reversed value, read unsigned, is
+    /// at least 2^16 (negative when read signed): far outside the sane range. This is how a server detects a client's order from its
+    /// first frame.
+    pub fn detect(prefix: [u8; PREFIX_SIZE]) -> Option<Self> {
+        let sane = |v: i32| (HEADER_SIZE as i32..=MAX_LENGTH as i32).contains(&v);
+        if sane(i32::from_be_bytes(prefix)) {
+            Some(Self::Big)
+        } else if sane(i32::from_le_bytes(prefix)) {
+            Some(Self::Little)
+        } else {
+            None
+        }
+    }
+
+    /// `big` or `little` (as the command line and scripts spell it).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Big => "big",
+            Self::Little => "little",
+        }
+    }
+
+    /// Parses [`name`](Self::name).
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "big" => Some(Self::Big),
+            "little" => Some(Self::Little),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for ByteOrder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Big => "big-endian",
+            Self::Little => "little-endian",
+        })
+    }
 }
 
 /// The header's communication type.
@@ -468,9 +524,11 @@ impl Packet {
             }
             Ok(j)
         };
-        // A reply may be header only (REP-I0006's *alternative* reply; after FAILURE
-        // the payload is invalid anyway), whatever its type.
-        if comm_type == CommType::ServiceReply && b.is_empty() {
+        // A reply may be header only (REP-I0006's *alternative* reply), whatever its
+        // type; after FAILURE "any payload must be considered invalid" (it may be
+        // uninitialised), so it is not decoded at all.
+        if comm_type == CommType::ServiceReply && (b.is_empty() || reply_code == ReplyCode::Failure)
+        {
             if !matches!(
                 msg_type,
                 msg_type::PING
@@ -495,11 +553,13 @@ impl Packet {
                 _ => return Err(size("40 (or 0)")),
             },
             msg_type::JOINT_TRAJ_PT => match comm_type {
-                CommType::ServiceReply => match b.len() {
+                CommType::ServiceReply if b.len() != 52 => match b.len() {
                     40 => Body::DummyReals,
                     0 => Body::Empty,
-                    _ => return Err(size("40 or 0")),
+                    _ => return Err(size("40, 52 or 0")),
                 },
+                // A request, or a reply that echoes the point (industrial_core's
+                // typed messages reply with their own body).
                 _ => {
                     if b.len() != 52 {
                         return Err(size("52"));
@@ -623,17 +683,86 @@ fn check_length(length: i32) -> Result<usize, CodecError> {
     Ok(length as usize)
 }
 
-/// The framing of one connection: reads packets from a stream whose reads may time
-/// out (`WouldBlock` / `TimedOut`) and keeps the bytes of a packet received so far
+/// The three header fields of a frame as received, before any validation: what a
+/// receiver needs to answer (or ignore) a message it cannot decode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawHeader {
+    /// `msg_type`, any value.
+    pub msg_type: i32,
+    /// `comm_type`, any value (valid ones are [`CommType`]'s).
+    pub comm_type: i32,
+    /// `reply_code`, any value.
+    pub reply_code: i32,
+}
+
+impl RawHeader {
+    /// A SERVICE_REQUEST: the sender waits for a reply, even one saying FAILURE.
+    pub fn is_request(&self) -> bool {
+        self.comm_type == CommType::ServiceRequest as i32
+    }
+}
+
+/// One whole frame as received: its length prefix was sane, so the stream is still
+/// in step after it, whether or not its content decodes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Frame {
+    order: ByteOrder,
+    /// Header and body (the bytes the length prefix counts, at least [`HEADER_SIZE`]).
+    message: Vec<u8>,
+}
+
+impl Frame {
+    /// The header, undecoded.
+    pub fn header(&self) -> RawHeader {
+        RawHeader {
+            msg_type: self.order.i32_at(&self.message, 0),
+            comm_type: self.order.i32_at(&self.message, 4),
+            reply_code: self.order.i32_at(&self.message, 8),
+        }
+    }
+
+    /// The byte order the frame was read in.
+    pub fn order(&self) -> ByteOrder {
+        self.order
+    }
+
+    /// Bytes of header and body (the length prefix's value).
+    pub fn len(&self) -> usize {
+        self.message.len()
+    }
+
+    /// Never true: a frame holds at least a header.
+    pub fn is_empty(&self) -> bool {
+        self.message.is_empty()
+    }
+
+    /// The packet.
+    ///
+    /// # Errors
+    /// Any [`CodecError`] of the content (unknown type, bad comm type or reply code,
+    /// body size, a non-finite real…); the connection stays usable.
+    pub fn decode(&self) -> Result<Packet, CodecError> {
+        Packet::decode_message(&self.message, self.order)
+    }
+}
+
+/// The framing of one connection: reads frames from a stream whose reads may time
+/// out (`WouldBlock` / `TimedOut`) and keeps the bytes of a frame received so far
 /// across those timeouts, so a packet that arrives in parts, with pauses, is decoded
-/// whole. It never holds more than one packet ([`PREFIX_SIZE`] + [`MAX_LENGTH`]
-/// bytes): it reads only the bytes the current packet still needs.
+/// whole. It never holds more than one frame ([`PREFIX_SIZE`] + [`MAX_LENGTH`]
+/// bytes): it reads only the bytes the current frame still needs.
 ///
-/// After any error other than a timeout the stream cannot be re-synchronised
-/// (simple_message has only byte counting): the connection should be closed.
+/// The byte order is fixed ([`new`](Self::new)) or detected from the first length
+/// prefix ([`detecting`](Self::detecting), see [`ByteOrder::detect`]) and then kept
+/// for the connection.
+///
+/// After a framing error (a bad length prefix, a stream that ends inside a frame, an
+/// I/O error other than a timeout) the stream cannot be re-synchronised
+/// (simple_message has only byte counting): the connection should be closed. A frame
+/// whose content does not decode ([`Frame::decode`]) leaves the stream in step.
 #[derive(Debug)]
 pub struct FrameReader {
-    order: ByteOrder,
+    order: Option<ByteOrder>,
     buf: Vec<u8>,
 }
 
@@ -641,9 +770,24 @@ impl FrameReader {
     /// An empty framing buffer for a connection of byte order `order`.
     pub fn new(order: ByteOrder) -> Self {
         Self {
-            order,
+            order: Some(order),
             buf: Vec::with_capacity(PREFIX_SIZE + HEADER_SIZE + 52),
         }
+    }
+
+    /// An empty framing buffer that takes the byte order from the first length
+    /// prefix it reads.
+    pub fn detecting() -> Self {
+        Self {
+            order: None,
+            buf: Vec::with_capacity(PREFIX_SIZE + HEADER_SIZE + 52),
+        }
+    }
+
+    /// The connection's byte order: fixed, or detected (`None` before the first
+    /// prefix of a detecting reader).
+    pub fn order(&self) -> Option<ByteOrder> {
+        self.order
     }
 
     /// Bytes of an incomplete packet held (0 between packets).
@@ -651,26 +795,50 @@ impl FrameReader {
         self.buf.len()
     }
 
-    /// Reads the next packet. A read timeout returns `Io(WouldBlock | TimedOut)` and
-    /// keeps the bytes read so far: call again to continue the same packet.
+    /// Reads the next packet: [`read_frame`](Self::read_frame), then
+    /// [`Frame::decode`].
+    ///
+    /// # Errors
+    /// As [`read_frame`](Self::read_frame), or a frame that does not decode (its
+    /// bytes are consumed).
+    pub fn read_packet(&mut self, stream: &mut impl Read) -> Result<Packet, CodecError> {
+        self.read_frame(stream)?.decode()
+    }
+
+    /// Reads the next whole frame. A read timeout returns `Io(WouldBlock | TimedOut)`
+    /// and keeps the bytes read so far: call again to continue the same frame.
     ///
     /// # Errors
     /// A timeout (retryable, see above), `Io(UnexpectedEof)` when the stream ends
-    /// between packets, `Truncated` when it ends inside one, a bad length prefix
-    /// (before anything past the prefix is read), or a packet that does not decode
-    /// (its bytes are consumed).
-    pub fn read_packet(&mut self, stream: &mut impl Read) -> Result<Packet, CodecError> {
+    /// between frames, `Truncated` when it ends inside one, a bad length prefix
+    /// (in the fixed order, or in both orders when detecting; before anything past
+    /// the prefix is read).
+    pub fn read_frame(&mut self, stream: &mut impl Read) -> Result<Frame, CodecError> {
         loop {
             let want = if self.buf.len() < PREFIX_SIZE {
                 PREFIX_SIZE
             } else {
-                let length = check_length(self.order.i32_at(&self.buf, 0))?;
+                let order = match self.order {
+                    Some(o) => o,
+                    None => {
+                        let prefix = [self.buf[0], self.buf[1], self.buf[2], self.buf[3]];
+                        let Some(o) = ByteOrder::detect(prefix) else {
+                            return Err(CodecError::BadLength(i32::from_be_bytes(prefix) as i64));
+                        };
+                        self.order = Some(o);
+                        o
+                    }
+                };
+                let length = check_length(order.i32_at(&self.buf, 0))?;
                 PREFIX_SIZE + length
             };
             if self.buf.len() == want && want > PREFIX_SIZE {
-                let packet = Packet::decode_message(&self.buf[PREFIX_SIZE..], self.order);
+                let frame = Frame {
+                    order: self.order.expect("set with the prefix"),
+                    message: self.buf[PREFIX_SIZE..].to_vec(),
+                };
                 self.buf.clear();
-                return packet;
+                return Ok(frame);
             }
             let mut chunk = [0u8; PREFIX_SIZE + MAX_LENGTH];
             let need = want - self.buf.len();
@@ -1044,6 +1212,151 @@ mod tests {
                 "{end}: {err:?}"
             );
         }
+    }
+
+    /// `bytes` with every 4-byte word reversed: the little-endian form of a
+    /// big-endian stream (every field of simple_message is 4 bytes).
+    fn swap_words(bytes: &[u8]) -> Vec<u8> {
+        bytes
+            .chunks(4)
+            .flat_map(|w| w.iter().rev().copied().collect::<Vec<_>>())
+            .collect()
+    }
+
+    #[test]
+    fn a_sane_length_reads_sanely_in_one_order_only() {
+        for len in HEADER_SIZE as i32..=MAX_LENGTH as i32 {
+            assert_eq!(ByteOrder::detect(len.to_be_bytes()), Some(ByteOrder::Big));
+            assert_eq!(
+                ByteOrder::detect(len.to_le_bytes()),
+                Some(ByteOrder::Little)
+            );
+            // The other reading is far out of range (≥ 2^16 unsigned).
+            assert!(u32::from_le_bytes(len.to_be_bytes()) >= 1 << 16);
+        }
+        for bad in [0i32, 11, 1025, -1, i32::MAX, 0x4745_5420] {
+            assert_eq!(ByteOrder::detect(bad.to_be_bytes()), None, "{bad}");
+        }
+        assert_eq!(ByteOrder::detect(*b"GET "), None);
+    }
+
+    #[test]
+    fn the_appendix_streams_in_little_endian_decode_the_same() {
+        for example in [
+            JOINT_POSITION_EXAMPLE,
+            JOINT_TRAJ_PT_EXAMPLE,
+            STATUS_EXAMPLE,
+        ] {
+            let big = hex(example);
+            let little = swap_words(&big);
+            let p = Packet::decode(&big, ByteOrder::Big).unwrap();
+            assert_eq!(Packet::decode(&little, ByteOrder::Little).unwrap(), p);
+            assert_eq!(p.encode(ByteOrder::Little), little);
+            for (bytes, order) in [(&big, ByteOrder::Big), (&little, ByteOrder::Little)] {
+                let mut frames = FrameReader::detecting();
+                assert_eq!(frames.order(), None);
+                assert_eq!(frames.read_packet(&mut &bytes[..]).unwrap(), p);
+                assert_eq!(frames.order(), Some(order));
+            }
+        }
+    }
+
+    #[test]
+    fn a_detecting_reader_keeps_the_first_order_and_refuses_garbage() {
+        let big = hex(STATUS_EXAMPLE);
+        let little = swap_words(&big);
+        // Little first: the big-endian frame after it is a bad length.
+        let mut stream = little.clone();
+        stream.extend(&big);
+        let mut frames = FrameReader::detecting();
+        let mut r = &stream[..];
+        frames.read_packet(&mut r).unwrap();
+        assert!(matches!(
+            frames.read_packet(&mut r),
+            Err(CodecError::BadLength(_))
+        ));
+        // A prefix sane in neither order (an HTTP request).
+        let mut frames = FrameReader::detecting();
+        assert!(matches!(
+            frames.read_packet(&mut &b"GET / HTTP/1.1\r\n"[..]),
+            Err(CodecError::BadLength(_))
+        ));
+        assert_eq!(frames.order(), None);
+    }
+
+    #[test]
+    fn a_frame_that_does_not_decode_leaves_the_stream_in_step() {
+        for order in [ByteOrder::Big, ByteOrder::Little] {
+            // GET_VERSION (2), header only; a JOINT_TRAJ_PT with a NaN joint; a
+            // topic of an unknown type with a body; then a PING.
+            let get_version = Packet::request(2, Body::Empty).encode(order);
+            let mut nan = Packet::decode(&hex(JOINT_TRAJ_PT_EXAMPLE), ByteOrder::Big)
+                .unwrap()
+                .encode(order);
+            let at = PREFIX_SIZE + HEADER_SIZE + 4;
+            nan[at..at + 4].copy_from_slice(&match order {
+                ByteOrder::Big => f32::NAN.to_be_bytes(),
+                ByteOrder::Little => f32::NAN.to_le_bytes(),
+            });
+            let mut unknown_topic = Packet::topic(15, Body::Ping).encode(order);
+            unknown_topic.extend(Packet::request(msg_type::PING, Body::Ping).encode(order));
+            let mut stream = get_version;
+            stream.extend(&nan);
+            stream.extend(&unknown_topic);
+            let mut frames = FrameReader::detecting();
+            let mut r = &stream[..];
+            let f = frames.read_frame(&mut r).unwrap();
+            assert_eq!(
+                f.header(),
+                RawHeader {
+                    msg_type: 2,
+                    comm_type: 2,
+                    reply_code: 0
+                }
+            );
+            assert!(f.header().is_request());
+            assert!(matches!(f.decode(), Err(CodecError::UnknownType(2))));
+            let f = frames.read_frame(&mut r).unwrap();
+            assert_eq!(f.header().msg_type, msg_type::JOINT_TRAJ_PT);
+            assert!(matches!(
+                f.decode(),
+                Err(CodecError::BadField {
+                    field: "joint_data",
+                    ..
+                })
+            ));
+            let f = frames.read_frame(&mut r).unwrap();
+            assert!(!f.header().is_request());
+            assert!(matches!(f.decode(), Err(CodecError::UnknownType(15))));
+            let p = frames.read_packet(&mut r).unwrap();
+            assert_eq!(p, Packet::request(msg_type::PING, Body::Ping));
+            assert_eq!(frames.order(), Some(order));
+        }
+    }
+
+    #[test]
+    fn header_only_ping_and_lenient_replies() {
+        // industrial_core's PingMessage: length 12, PING, SERVICE_REQUEST, INVALID.
+        let ping = hex("0000000C 00000001 00000002 00000000");
+        let p = Packet::decode(&ping, ByteOrder::Big).unwrap();
+        assert_eq!(p, Packet::request(msg_type::PING, Body::Empty));
+        // After FAILURE the payload is invalid: not decoded (here: a NaN).
+        let mut fail = Packet::reply(
+            msg_type::JOINT_TRAJ_PT,
+            ReplyCode::Failure,
+            Body::DummyReals,
+        )
+        .encode(ByteOrder::Big);
+        fail[16..20].copy_from_slice(&f32::NAN.to_be_bytes());
+        let p = Packet::decode(&fail, ByteOrder::Big).unwrap();
+        assert_eq!(p.reply_code, ReplyCode::Failure);
+        assert_eq!(p.body, Body::Empty);
+        // A reply that echoes the point (industrial_core's typed messages).
+        let pt = Packet::decode(&hex(JOINT_TRAJ_PT_EXAMPLE), ByteOrder::Big).unwrap();
+        let echo = Packet::reply(msg_type::JOINT_TRAJ_PT, ReplyCode::Success, pt.body.clone());
+        let bytes = echo.encode(ByteOrder::Big);
+        assert_eq!(bytes.len(), 68);
+        assert_eq!(Packet::decode(&bytes, ByteOrder::Big).unwrap(), echo);
     }
 
     proptest::proptest! {

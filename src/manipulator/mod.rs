@@ -4,7 +4,9 @@
 //!
 //! Ports (REP-I0006 / `industrial_robot_client` defaults): motion **11000**
 //! (JOINT_TRAJ_PT requests and replies, FITUP_TOOL requests), state **11002**
-//! (JOINT_POSITION and STATUS published by the controller). Units inside fitup are
+//! (JOINT_POSITION and STATUS published by the controller); one rule on both sides
+//! puts the state port at the motion port + 2 unless given ([`state_port_for`]).
+//! Units inside fitup are
 //! millimetres and radians; on the wire prismatic joints are metres (REP-103).
 //!
 //! Safety: a [`client::Client`] refuses an address that is not loopback unless
@@ -20,8 +22,23 @@ use message::MAX_JOINTS;
 
 /// Default motion port (JOINT_TRAJ_PT).
 pub const MOTION_PORT: u16 = 11000;
-/// Default state port (JOINT_POSITION, STATUS).
+/// Default state port (JOINT_POSITION, STATUS): [`state_port_for`]`(MOTION_PORT)`.
 pub const STATE_PORT: u16 = 11002;
+/// How far above the motion port the state port is, unless given
+/// (industrial_robot_client's 11000 / 11002).
+pub const STATE_PORT_OFFSET: u16 = 2;
+
+/// The state port that goes with motion port `motion`: `motion + 2`, and 0 (pick a
+/// free port) for 0. The one rule of both sides: `fitup manipulator --port P` listens
+/// for state on it and `skills run --target HOST:P` connects to it, unless
+/// `--state-port` says otherwise on that side. `None` when `motion + 2` is not a port
+/// (above 65535).
+pub fn state_port_for(motion: u16) -> Option<u16> {
+    match motion {
+        0 => Some(0),
+        p => p.checked_add(STATE_PORT_OFFSET),
+    }
+}
 
 /// Why the simulator refused a trajectory point: published as STATUS `error_code`
 /// (with `in_error` on) after a FAILURE reply.
@@ -111,6 +128,16 @@ pub fn joints_from_wire(kinds: &[JointKind], w: &[f32; MAX_JOINTS]) -> Vec<f64> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_state_port_rule() {
+        assert_eq!(state_port_for(MOTION_PORT), Some(STATE_PORT));
+        assert_eq!(state_port_for(12345), Some(12347));
+        assert_eq!(state_port_for(0), Some(0));
+        assert_eq!(state_port_for(65533), Some(65535));
+        assert_eq!(state_port_for(65534), None);
+        assert_eq!(state_port_for(65535), None);
+    }
 
     #[test]
     fn refusal_codes_round_trip() {

@@ -12,6 +12,12 @@
 //! start-up are ignored), the sequence number is out of order, or the point is
 //! malformed. A new trajectory (sequence 0) clears the error.
 //!
+//! A request it does not serve, or one whose content does not decode (a NaN joint,
+//! an unknown type), gets a SERVICE_REPLY with FAILURE and the connection stays open
+//! (REP-I0006); topics it does not act on are ignored. Only framing garbage (a bad
+//! length prefix, a stream cut inside a frame) closes a connection. The byte order is
+//! detected per motion connection unless [`SimulatorOptions::byte_order`] forces one.
+//!
 //! Clients that disconnect or send garbage only lose their own connection: the
 //! simulator logs the cause to standard error and keeps serving.
 //!
@@ -26,7 +32,7 @@
 //! them (the bytes read so far are kept across read timeouts).
 
 use super::message::{
-    msg_type, special_seq, Body, ByteOrder, CodecError, FrameReader, JointTrajPt, Packet,
+    msg_type, special_seq, Body, ByteOrder, CodecError, Frame, FrameReader, JointTrajPt, Packet,
     ReplyCode, RobotMode, Status, ToolAction, TriState, MAX_JOINTS,
 };
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
@@ -50,6 +56,10 @@ pub const FIRST_PACKET_TIMEOUT: Duration = Duration::from_secs(10);
 pub const PARTIAL_PACKET_TIMEOUT: Duration = Duration::from_secs(10);
 /// A motion connection silent this long after its last packet is closed.
 pub const IDLE_TIMEOUT: Duration = Duration::from_secs(300);
+/// Messages a motion connection sends that are answered FAILURE or ignored and
+/// logged; beyond this many per connection they are no longer logged (a flood of
+/// them cannot flood standard error).
+pub const MAX_LOGGED_PER_CONNECTION: usize = 8;
 
 /// Settings of a [`Simulator`].
 #[derive(Debug, Clone)]
@@ -60,8 +70,13 @@ pub struct SimulatorOptions {
     pub state_port: u16,
     /// Time scale: 1 is real time, 10 runs motions ten times faster.
     pub speed: f64,
-    /// Byte order of every connection.
-    pub byte_order: ByteOrder,
+    /// Byte order: `Some` forces one on every connection; `None` (the default)
+    /// detects it per motion connection from its first length prefix
+    /// ([`ByteOrder::detect`]). State clients never send, so a state connection
+    /// speaks the forced order, else the order of the last motion connection that
+    /// sent a frame before it connected (fitup's client pings first for this), else
+    /// big-endian.
+    pub byte_order: Option<ByteOrder>,
     /// Time between two JOINT_POSITION + STATUS publications (wall clock).
     pub publish_interval: Duration,
     /// Joint speed used when a point gives only a velocity fraction (rad/s at 1.0;
@@ -77,7 +92,7 @@ impl Default for SimulatorOptions {
             motion_port: super::MOTION_PORT,
             state_port: super::STATE_PORT,
             speed: 1.0,
-            byte_order: ByteOrder::Big,
+            byte_order: None,
             publish_interval: Duration::from_millis(50),
             max_joint_speed: 1.0,
             check_step: 2f64.to_radians(),
@@ -312,6 +327,7 @@ impl Simulator {
             l.set_nonblocking(true).expect("nonblocking listener");
         }
         let stop = Arc::new(AtomicBool::new(false));
+        let heard: Heard = Arc::new(Mutex::new(None));
         let state = Arc::new(Mutex::new(State {
             last_target: joints.clone(),
             joints,
@@ -341,18 +357,26 @@ impl Simulator {
         // Motion port.
         {
             let (stop, state, opts) = (stop.clone(), state.clone(), options.clone());
-            let kinds = kinds.clone();
+            let (kinds, heard) = (kinds.clone(), heard.clone());
             threads.push(std::thread::spawn(move || {
                 accept_loop(motion, "motion", &stop, |stream, conn| {
-                    let (stop, state, cell, kinds, opts) = (
+                    let (stop, state, cell, kinds, opts, heard) = (
                         stop.clone(),
                         state.clone(),
                         cell.clone(),
                         kinds.clone(),
                         opts.clone(),
+                        heard.clone(),
                     );
                     std::thread::spawn(move || {
-                        serve_motion(stream, &conn, &stop, &state, &cell, &kinds, &opts)
+                        let ctx = Ctx {
+                            state: &state,
+                            cell: &cell,
+                            kinds: &kinds,
+                            opts: &opts,
+                            heard: &heard,
+                        };
+                        serve_motion(stream, &conn, &stop, &ctx)
                     });
                 })
             }));
@@ -364,8 +388,10 @@ impl Simulator {
                 accept_loop(state_l, "state", &stop, |stream, conn| {
                     let (stop, state, kinds, opts) =
                         (stop.clone(), state.clone(), kinds.clone(), opts.clone());
+                    // Fixed when the client connects: one stream, one order.
+                    let order = opts.byte_order.or(*lock(&heard)).unwrap_or(ByteOrder::Big);
                     std::thread::spawn(move || {
-                        serve_state(stream, &conn, &stop, &state, &kinds, &opts)
+                        serve_state(stream, &conn, &stop, &state, &kinds, &opts, order)
                     });
                 })
             }));
@@ -501,6 +527,19 @@ fn accept_loop(
     }
 }
 
+/// The byte order of the last motion connection that sent a frame (what a state
+/// connection speaks when no order is forced).
+type Heard = Arc<Mutex<Option<ByteOrder>>>;
+
+/// What a motion connection's thread works on.
+struct Ctx<'a> {
+    state: &'a Mutex<State>,
+    cell: &'a Mutex<Cell>,
+    kinds: &'a [JointKind],
+    opts: &'a SimulatorOptions,
+    heard: &'a Mutex<Option<ByteOrder>>,
+}
+
 fn serve_state(
     mut stream: TcpStream,
     conn: &Conn,
@@ -508,6 +547,7 @@ fn serve_state(
     state: &Mutex<State>,
     kinds: &[JointKind],
     opts: &SimulatorOptions,
+    order: ByteOrder,
 ) {
     let _ = stream.set_write_timeout(Some(Duration::from_secs(2)));
     while conn.open(stop) {
@@ -522,8 +562,8 @@ fn serve_state(
                 joints,
             }),
         )
-        .encode(opts.byte_order);
-        bytes.extend(Packet::topic(msg_type::STATUS, Body::Status(status)).encode(opts.byte_order));
+        .encode(order);
+        bytes.extend(Packet::topic(msg_type::STATUS, Body::Status(status)).encode(order));
         if stream.write_all(&bytes).is_err() {
             break; // the client left, or reads nothing
         }
@@ -532,19 +572,11 @@ fn serve_state(
     conn.ended.store(true, Ordering::Relaxed);
 }
 
-fn serve_motion(
-    mut stream: TcpStream,
-    conn: &Conn,
-    stop: &AtomicBool,
-    state: &Mutex<State>,
-    cell: &Mutex<Cell>,
-    kinds: &[JointKind],
-    opts: &SimulatorOptions,
-) {
+fn serve_motion(mut stream: TcpStream, conn: &Conn, stop: &AtomicBool, ctx: &Ctx<'_>) {
     let peer = stream
         .peer_addr()
         .map_or_else(|_| "?".to_string(), |a| a.to_string());
-    if let Some(why) = serve_motion_packets(&mut stream, conn, stop, state, cell, kinds, opts) {
+    if let Some(why) = serve_motion_packets(&mut stream, &peer, conn, stop, ctx) {
         eprintln!("manipulator: {peer}: {why}; closing the connection");
     }
     conn.ended.store(true, Ordering::Relaxed);
@@ -554,23 +586,34 @@ fn serve_motion(
 /// is worth a log line.
 fn serve_motion_packets(
     stream: &mut TcpStream,
+    peer: &str,
     conn: &Conn,
     stop: &AtomicBool,
-    state: &Mutex<State>,
-    cell: &Mutex<Cell>,
-    kinds: &[JointKind],
-    opts: &SimulatorOptions,
+    ctx: &Ctx<'_>,
 ) -> Option<String> {
     // Short read timeouts so that shutdown and the idle limits are noticed; the
     // framing buffer keeps a packet's first bytes across them.
     let _ = stream.set_read_timeout(Some(Duration::from_millis(200)));
     let _ = stream.set_write_timeout(Some(Duration::from_secs(2)));
-    let mut frames = FrameReader::new(opts.byte_order);
+    let mut frames = ctx
+        .opts
+        .byte_order
+        .map_or_else(FrameReader::detecting, FrameReader::new);
     let mut last_packet = conn.opened;
     let mut packet_started: Option<Instant> = None;
+    let mut logged = 0usize;
+    let mut log = |line: String| {
+        logged += 1;
+        if logged <= MAX_LOGGED_PER_CONNECTION {
+            eprintln!("manipulator: {peer}: {line}");
+        }
+        if logged == MAX_LOGGED_PER_CONNECTION {
+            eprintln!("manipulator: {peer}: further refused or ignored messages of this connection are not logged");
+        }
+    };
     while conn.open(stop) {
-        let packet = match frames.read_packet(stream) {
-            Ok(p) => p,
+        let frame = match frames.read_frame(stream) {
+            Ok(f) => f,
             Err(CodecError::Io(e))
                 if matches!(
                     e.kind(),
@@ -601,15 +644,24 @@ fn serve_motion_packets(
             }
             Err(CodecError::Io(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => return None,
             Err(_) if !conn.open(stop) => return None,
-            // Byte counting is all simple_message has: after garbage the stream
-            // cannot be re-synchronised, so this connection ends.
+            // A bad length prefix or a stream cut inside a frame: byte counting is
+            // all simple_message has, so the stream cannot be re-synchronised and
+            // this connection ends.
             Err(e) => return Some(e.to_string()),
         };
         packet_started = None;
         last_packet = Instant::now();
-        conn.spoke.store(true, Ordering::Relaxed);
-        if let Some(r) = handle(&packet, state, cell, kinds, opts) {
-            if let Err(e) = r.write_to(stream, opts.byte_order) {
+        if !conn.spoke.swap(true, Ordering::Relaxed) {
+            // The first frame fixed this connection's order: later state clients
+            // speak it too (unless an order is forced).
+            *lock(ctx.heard) = Some(frame.order());
+        }
+        let reply = match frame.decode() {
+            Ok(packet) => handle(&packet, ctx, &mut log),
+            Err(e) => undecodable(&frame, &e, ctx, &mut log),
+        };
+        if let Some(r) = reply {
+            if let Err(e) = r.write_to(stream, frame.order()) {
                 return Some(e.to_string());
             }
         }
@@ -617,38 +669,83 @@ fn serve_motion_packets(
     None
 }
 
-/// The reply to one request (None for topics, which need none).
-fn handle(
-    p: &Packet,
-    state: &Mutex<State>,
-    cell: &Mutex<Cell>,
-    kinds: &[JointKind],
-    opts: &SimulatorOptions,
+/// The answer to a whole frame whose content does not decode (REP-I0006, header
+/// notes): a SERVICE_REQUEST gets a SERVICE_REPLY with FAILURE, header only, and the
+/// connection stays open; anything else (a topic of a type it does not know, a reply
+/// nobody asked for, a bad comm type) is ignored, with a log line. A JOINT_TRAJ_PT
+/// request is refused as a bad point (code 4000 in STATUS, motion stopped), as a
+/// point that decodes but cannot be executed is.
+fn undecodable(
+    frame: &Frame,
+    e: &CodecError,
+    ctx: &Ctx<'_>,
+    log: &mut impl FnMut(String),
 ) -> Option<Packet> {
-    use super::message::CommType;
-    if p.comm_type != CommType::ServiceRequest {
+    let h = frame.header();
+    if !h.is_request() {
+        let what = match h.comm_type {
+            1 => "topic",
+            3 => "reply",
+            _ => "message with an invalid comm_type",
+        };
+        log(format!("ignored a {what} of type {}: {e}", h.msg_type));
         return None;
+    }
+    if h.msg_type == msg_type::JOINT_TRAJ_PT {
+        refuse_point(ctx.state, RefusalCode::BadPoint);
+        log(format!(
+            "refused a trajectory point: {}: {e}",
+            RefusalCode::BadPoint.code()
+        ));
+    } else {
+        log(format!(
+            "replied FAILURE to a request of type {}: {e}",
+            h.msg_type
+        ));
+    }
+    Some(Packet::reply(h.msg_type, ReplyCode::Failure, Body::Empty))
+}
+
+/// Puts the controller in error with `code` and stops any motion (a refused point).
+fn refuse_point(state: &Mutex<State>, code: RefusalCode) {
+    let mut s = lock(state);
+    s.stop();
+    s.error = Some(code);
+    s.last_seq = None;
+}
+
+/// The reply to one request (None for topics, which need none).
+fn handle(p: &Packet, ctx: &Ctx<'_>, log: &mut impl FnMut(String)) -> Option<Packet> {
+    use super::message::CommType;
+    let state = ctx.state;
+    match p.comm_type {
+        CommType::ServiceRequest => {}
+        CommType::Topic => {
+            // REP-I0006: receivers ignore topics they do not act on.
+            log(format!("ignored a topic of type {}", p.msg_type));
+            return None;
+        }
+        CommType::ServiceReply => return None,
     }
     let ok = |t| Some(Packet::reply(t, ReplyCode::Success, Body::Empty));
     let fail = |t| Some(Packet::reply(t, ReplyCode::Failure, Body::Empty));
-    match &p.body {
-        Body::Ping => Some(Packet::reply(
+    match (p.msg_type, &p.body) {
+        // Either form: ten zero ints (REP-I0006) or header only (what
+        // industrial_core's PingMessage sends); the reply has the request's form.
+        (msg_type::PING, Body::Ping | Body::Empty) => Some(Packet::reply(
             msg_type::PING,
             ReplyCode::Success,
-            Body::Ping,
+            p.body.clone(),
         )),
-        Body::JointTrajPt(pt) => match enqueue(pt, state, cell, kinds, opts) {
+        (_, Body::JointTrajPt(pt)) => match enqueue(pt, state, ctx.cell, ctx.kinds, ctx.opts) {
             Ok(()) => ok(msg_type::JOINT_TRAJ_PT),
             Err((code, why)) => {
                 eprintln!("manipulator: refused point {}: {code}: {why}", pt.sequence);
-                let mut s = lock(state);
-                s.stop();
-                s.error = Some(code);
-                s.last_seq = None;
+                refuse_point(state, code);
                 fail(msg_type::JOINT_TRAJ_PT)
             }
         },
-        Body::Tool(t) => {
+        (_, Body::Tool(t)) => {
             let mut s = lock(state);
             let mut reply = *t;
             match t.action {
@@ -678,7 +775,13 @@ fn handle(
             ))
         }
         // REP-I0006: a request for an unsupported service gets FAILURE.
-        _ => fail(p.msg_type),
+        _ => {
+            log(format!(
+                "replied FAILURE to a request of type {} (not a service it offers)",
+                p.msg_type
+            ));
+            fail(p.msg_type)
+        }
     }
 }
 
@@ -736,6 +839,17 @@ fn enqueue(
             _ => (b - a).abs(),
         })
         .fold(0.0, f64::max);
+    // REP-I0006: durations or velocities outside the controller's bounds are an
+    // error. The codec already refused non-finite ones.
+    if pt.duration < 0.0 || !(0.0..=1.0).contains(&pt.velocity) {
+        return Err((
+            RefusalCode::BadPoint,
+            format!(
+                "duration {} s (must be ≥ 0) or velocity {} (must be in [0, 1])",
+                pt.duration, pt.velocity
+            ),
+        ));
+    }
     let duration = if pt.duration > 0.0 {
         pt.duration as f64
     } else if pt.velocity > 0.0 && pt.velocity <= 1.0 {

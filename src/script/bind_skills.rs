@@ -65,11 +65,12 @@ const SKILL_KEYS: [&str; 12] = [
     "check",
 ];
 
-const MANAGER_KEYS: [&str; 8] = [
+const MANAGER_KEYS: [&str; 9] = [
     "target",
     "robot",
     "speed",
     "state_port",
+    "byte_order",
     "skill_timeout_s",
     "reconnect_timeout_s",
     "db",
@@ -251,6 +252,18 @@ fn manager(ctx: &Arc<Context>, m: &Map) -> ScriptResult<ManagerObj> {
                 ));
             }
             options.state_port = Some(p as u16);
+        }
+        if let Some(v) = m.get("byte_order") {
+            let text = v.clone().into_string().ok();
+            options.client.byte_order = text
+                .as_deref()
+                .and_then(crate::manipulator::message::ByteOrder::parse)
+                .ok_or_else(|| {
+                    fail(format!(
+                        "skill_manager: `byte_order` must be \"big\" or \"little\", not {}",
+                        text.unwrap_or_else(|| v.type_name().to_string())
+                    ))
+                })?;
         }
     }
     let db = match m.get("db") {
@@ -484,7 +497,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     let c = ctx.clone();
     api.f(
         "skill_manager(options: map) -> SkillManager",
-        "A skill manager: `#{target: \"sim\" | \"HOST:PORT\" (motion port; the state port is +2 unless `state_port`), robot (the Robot the in-process simulator moves, target \"sim\"), speed (simulator time scale, 1), skill_timeout_s (120), reconnect_timeout_s (30), db (a Database: the execution log is written as it happens), quiet (false: print each event)}`. A TCP target needs `fitup run --dispatch`.",
+        "A skill manager: `#{target: \"sim\" | \"HOST:PORT\" (motion port; the state port is +2 unless `state_port`; `byte_order` \"big\" (default) or \"little\"), robot (the Robot the in-process simulator moves, target \"sim\"), speed (simulator time scale, 1), skill_timeout_s (120), reconnect_timeout_s (30), db (a Database: the execution log is written as it happens), quiet (false: print each event)}`. A TCP target needs `fitup run --dispatch`.",
         move |m: Map| manager(&c, &m),
     );
     api.f(

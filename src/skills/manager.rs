@@ -86,7 +86,8 @@ pub enum ManagerEvent {
 pub struct ManagerOptions {
     /// Motion port address `HOST:PORT`.
     pub target: String,
-    /// State port (default: the motion port + 2, as 11000 / 11002).
+    /// State port (default: [`crate::manipulator::state_port_for`] the motion port,
+    /// + 2 as 11000 / 11002).
     pub state_port: Option<u16>,
     /// Client timeouts and the remote-dispatch switch.
     pub client: ClientOptions,
@@ -244,11 +245,20 @@ impl SkillManager {
     fn addresses(&self) -> Result<(SocketAddr, SocketAddr), ManipulatorError> {
         let motion = resolve(&self.options.target, self.options.client.allow_remote)?;
         let mut state = motion;
-        state.set_port(
-            self.options
-                .state_port
-                .unwrap_or_else(|| motion.port().wrapping_add(2)),
-        );
+        let port = match self.options.state_port {
+            Some(p) => p,
+            None => crate::manipulator::state_port_for(motion.port()).ok_or_else(|| {
+                ManipulatorError::Address(
+                    self.options.target.clone(),
+                    format!(
+                        "no state port {} + {}: give the state port",
+                        motion.port(),
+                        crate::manipulator::STATE_PORT_OFFSET
+                    ),
+                )
+            })?,
+        };
+        state.set_port(port);
         Ok((motion, state))
     }
 

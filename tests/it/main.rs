@@ -25,6 +25,7 @@ mod robots;
 mod scripts;
 mod sequence;
 mod sequence_watch;
+mod simple_message_peer;
 mod skills;
 mod ur_ik;
 mod urdf;

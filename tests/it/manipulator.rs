@@ -226,11 +226,12 @@ fn a_trajectory_into_the_table_is_refused_as_a_collision() {
 #[test]
 fn malformed_messages_to_the_simulator_cost_only_that_connection() {
     let (mut sim, m, s) = simulator(0, 0, "10");
-    let garbage: [&[u8]; 4] = [
-        b"GET / HTTP/1.1\r\n\r\n",                           // a huge length prefix
-        &[0, 0, 0, 12, 0, 0, 0, 99, 0, 0, 0, 2, 0, 0, 0, 0], // unknown type
-        &[0, 0, 0, 64, 0, 0, 0, 11],                         // truncated, then silence
-        &[0xff, 0xff, 0xff, 0xff],                           // negative length
+    // Framing garbage (an unknown type in a sane frame is answered instead: see
+    // simple_message_peer.rs).
+    let garbage: [&[u8]; 3] = [
+        b"GET / HTTP/1.1\r\n\r\n",   // a length prefix sane in neither order
+        &[0, 0, 0, 64, 0, 0, 0, 11], // truncated, then silence
+        &[0xff, 0xff, 0xff, 0xff],   // negative length
     ];
     for g in garbage {
         let mut t = TcpStream::connect(m).unwrap();
