@@ -5,7 +5,7 @@ use super::out::{errln, outln};
 use super::Exit;
 use crate::manipulator::message::ByteOrder;
 use crate::manipulator::simulator::{Simulator, SimulatorOptions};
-use crate::skills::{ManagerEvent, ManagerOptions, SkillManager};
+use crate::skills::{ManagerEvent, ManagerOptions, SkillLog, SkillManager};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -253,7 +253,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
         }
     };
     let label = plan_label.clone();
-    let mut db = match db {
+    let db = match db {
         None => None,
         Some(d) => {
             let root = std::env::current_dir().unwrap_or_default();
@@ -276,29 +276,26 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
     };
     options.client.allow_remote = *allow_remote;
     options.client.byte_order = byte_order.order();
-    let logged_plan = plan.clone();
     let mut manager = SkillManager::new(plan, options);
     let handle = manager.handle();
-    let mut log_failed = false;
-    let mut record = move |e: &ManagerEvent| {
-        if let Some(db) = db.as_mut() {
-            if let Err(err) = crate::skills::log_event(db, None, &label, &logged_plan, e) {
-                if !log_failed {
-                    errln!("warning: the skill log could not be written: {err}");
-                    log_failed = true;
-                }
-            }
-        }
-    };
+    // Without `--db` nothing is logged; with it, the library's one policy (SkillLog):
+    // a write that fails stops the run at the next skill boundary.
+    let mut log = db.map(|db| {
+        (
+            db,
+            SkillLog::new(None, label, manager.plan(), handle.clone()),
+        )
+    });
     let tui = !*plain && std::io::stdout().is_terminal() && std::io::stdin().is_terminal();
     let result = if tui {
         let shown = manager.plan().clone();
         let (tx, rx) = std::sync::mpsc::channel();
         let runner = std::thread::spawn(move || {
             let r = manager.run(&mut |e| {
-                record(e);
+                record(&mut log, e);
                 let _ = tx.send(super::skills_tui::Msg::Manager(e.clone()));
             });
+            let r = finish(log, r);
             let _ = tx.send(super::skills_tui::Msg::End(
                 r.as_ref().err().map(|e| e.to_string()),
             ));
@@ -356,10 +353,11 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
                 }
             }
         });
-        manager.run(&mut |e| {
-            record(e);
+        let r = manager.run(&mut |e| {
+            record(&mut log, e);
             print_event(e)
-        })
+        });
+        finish(log, r)
     };
     match result {
         Ok(()) => {
@@ -372,6 +370,29 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
             errln!("error: {e}");
             Exit::Failure
         }
+    }
+}
+
+/// The skill log of a `skills run --db`: the database and the run's log.
+type Log = Option<(crate::db::Database, SkillLog)>;
+
+/// Writes one event to the log (when there is one), saying at once when it fails.
+fn record(log: &mut Log, e: &ManagerEvent) {
+    if let Some((db, l)) = log.as_mut() {
+        if let Some(err) = l.record(db, e) {
+            errln!("error: the skill log could not be written: {err}; the run stops at the next skill boundary");
+        }
+    }
+}
+
+/// The run's result with the log's (a failed write fails the run).
+fn finish(
+    log: Log,
+    r: Result<(), crate::skills::ManagerError>,
+) -> Result<(), crate::skills::ManagerError> {
+    match log {
+        Some((_, l)) => l.finish(r),
+        None => r,
     }
 }
 

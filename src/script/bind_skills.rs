@@ -22,7 +22,7 @@ use crate::manipulator::simulator::{Simulator, SimulatorOptions};
 use crate::math::AngleConvention;
 use crate::skills::{
     plan_chain, Chain, ChainOptions, Condition, ControllerCommand, ManagerError, ManagerEvent,
-    ManagerHandle, ManagerOptions, PlanStep, SkillManager, Template,
+    ManagerHandle, ManagerOptions, PlanStep, SkillLog, SkillManager, Template,
 };
 use rhai::{Array, Dynamic, FnPtr, Map, NativeCallContext};
 use std::collections::BTreeMap;
@@ -326,8 +326,13 @@ fn run(
     let finished = Arc::new(AtomicBool::new(false));
     let mut events = Array::new();
     let mut callback_error = None;
-    let mut log_error = None;
-    let label = format!("script:{}", steps.robot);
+    let mut log = SkillLog::new(
+        inner.db.as_ref().and_then(|d| d.run_id),
+        format!("script:{}", steps.robot),
+        &steps,
+        inner.handle.clone(),
+    );
+    let mut lock_error = None;
     let result = std::thread::scope(|s| {
         // A cancelled script (new save, Ctrl-C in watch) stops the arm promptly.
         let (done, handle, ctx) = (finished.clone(), inner.handle.clone(), inner.ctx.clone());
@@ -342,19 +347,15 @@ fn run(
         });
         let r = manager.run(&mut |e| {
             if let Some(db) = &inner.db {
-                let logged = db
-                    .db
-                    .lock()
-                    .map_err(|_| "the database lock is poisoned".to_string())
-                    .and_then(|mut d| {
-                        crate::skills::log_event(&mut d, db.run_id, &label, &steps, e)
-                            .map_err(|x| x.to_string())
-                    });
-                if let Err(x) = logged {
-                    if log_error.is_none() {
-                        inner.handle.abort();
-                        log_error = Some(x);
+                match db.db.lock() {
+                    Ok(mut d) => {
+                        log.record(&mut d, e);
                     }
+                    Err(_) if lock_error.is_none() => {
+                        inner.handle.abort();
+                        lock_error = Some("the database lock is poisoned");
+                    }
+                    Err(_) => {}
                 }
             }
             if let ManagerEvent::Finished { part, state, .. } = e {
@@ -382,9 +383,10 @@ fn run(
     if let Some(e) = callback_error {
         return Err(e);
     }
-    if let Some(e) = log_error {
+    if let Some(e) = lock_error {
         return err(format!("the skill log could not be written: {e}"));
     }
+    let result = log.finish(result);
     if inner.ctx.cancelled() {
         return err("cancelled");
     }

@@ -191,6 +191,10 @@ pub enum ManagerError {
     /// The controller could not be reached.
     #[error("{0}")]
     Connection(ManipulatorError),
+    /// An event could not be written to the skill log, so the run was stopped at the
+    /// next skill boundary ([`SkillLog`]).
+    #[error("the skill log could not be written, so the run was stopped: {0}")]
+    Log(crate::db::DbError),
 }
 
 /// Runs a [`Plan`] on a controller.
@@ -587,4 +591,114 @@ pub fn log_event(
         .and_then(|i| plan.steps.get(i))
         .map(|s| s.part.as_str());
     db.log_skill_event(run_id, plan_label, skill, part, name, &detail)
+}
+
+/// The skill log of one run: every event written to the results database as it
+/// happens ([`log_event`]), with one failure policy for every caller (CLI and scripts).
+///
+/// The log is the record of what a machine did, so a run whose record would be
+/// incomplete does not go on: the first write that fails aborts the run through its
+/// [`ManagerHandle`] (the manager stops at the next skill boundary, never inside a
+/// motion), later events are not written, and [`SkillLog::finish`] turns the run's
+/// result into [`ManagerError::Log`].
+pub struct SkillLog {
+    run_id: Option<i64>,
+    label: String,
+    plan: Plan,
+    handle: ManagerHandle,
+    failed: Option<crate::db::DbError>,
+}
+
+impl SkillLog {
+    /// The log of a run of `plan` (stored under `label`, e.g. the plan file, and the
+    /// script's run when there is one), steering the run through `handle`.
+    pub fn new(
+        run_id: Option<i64>,
+        label: impl Into<String>,
+        plan: &Plan,
+        handle: ManagerHandle,
+    ) -> Self {
+        Self {
+            run_id,
+            label: label.into(),
+            plan: plan.clone(),
+            handle,
+            failed: None,
+        }
+    }
+
+    /// Writes one event. On the first failure the run is aborted and the error kept;
+    /// returns that error the first time (for a caller that shows it at once), `None`
+    /// otherwise.
+    pub fn record(
+        &mut self,
+        db: &mut crate::db::Database,
+        event: &ManagerEvent,
+    ) -> Option<&crate::db::DbError> {
+        if self.failed.is_some() {
+            return None;
+        }
+        match log_event(db, self.run_id, &self.label, &self.plan, event) {
+            Ok(_) => None,
+            Err(e) => {
+                self.handle.abort();
+                self.failed = Some(e);
+                self.failed.as_ref()
+            }
+        }
+    }
+
+    /// Whether a write has failed.
+    pub fn failed(&self) -> bool {
+        self.failed.is_some()
+    }
+
+    /// The run's result with the log's: a failed write wins over success and over the
+    /// abort it caused.
+    pub fn finish(self, result: Result<(), ManagerError>) -> Result<(), ManagerError> {
+        match self.failed {
+            Some(e) => Err(ManagerError::Log(e)),
+            None => result,
+        }
+    }
+}
+
+#[cfg(test)]
+mod log_tests {
+    use super::*;
+    use crate::db::{Database, Target};
+
+    #[test]
+    fn a_failed_log_write_stops_the_run_and_fails_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("fitup.db");
+        let mut db = Database::open(&Target::Sqlite(path.clone())).unwrap();
+        let plan = Plan {
+            version: 1,
+            robot: "arm".into(),
+            joint_kinds: vec![],
+            steps: vec![],
+        };
+        let manager = SkillManager::new(plan.clone(), ManagerOptions::default());
+        let handle = manager.handle();
+        let mut log = SkillLog::new(None, "plan.json", &plan, handle.clone());
+        let event = ManagerEvent::Started(0, "Move".into());
+        assert!(log.record(&mut db, &event).is_none());
+        assert!(!handle.aborted());
+        // Another program breaks the table under the run: the next write fails.
+        rusqlite::Connection::open(&path)
+            .unwrap()
+            .execute_batch("DROP TABLE skill_log")
+            .unwrap();
+        assert!(
+            log.record(&mut db, &event).is_some(),
+            "the first failure is reported"
+        );
+        assert!(log.record(&mut db, &event).is_none(), "and only once");
+        assert!(handle.aborted(), "the run is stopped");
+        match log.finish(Err(ManagerError::Aborted)) {
+            Err(ManagerError::Log(e)) => assert!(e.to_string().contains("skill_log"), "{e}"),
+            other => panic!("{other:?}"),
+        }
+    }
 }

@@ -26,7 +26,8 @@ pub use generator::{
     generate, segment_check_fn, GeneratorOptions, SegmentCheck, SegmentHit, SkillError,
 };
 pub use manager::{
-    log_event, ManagerError, ManagerEvent, ManagerHandle, ManagerOptions, SkillManager, SkillStatus,
+    log_event, ManagerError, ManagerEvent, ManagerHandle, ManagerOptions, SkillLog, SkillManager,
+    SkillStatus,
 };
 pub use program::{BindError, ControllerCommand, Plan, PlanStep};
 pub use template::{default_template, Template, TemplateError, Workflow};
