@@ -36,16 +36,8 @@ impl Ctx<'_> {
                 for d in axis_dirs() {
                     push_dir(&mut out, d);
                 }
-                for d in self.contact_normals(c) {
-                    push_dir(&mut out, d);
-                }
-                // A clip in a slanted slot leaves along its long axis; a part
-                // between neighbours leaves away from them.
-                for d in principal_axes(self.doc.mesh_of(c), &self.scene.poses[c]) {
-                    push_dir(&mut out, d);
-                    push_dir(&mut out, -d);
-                }
-                for d in self.neighbour_directions(c) {
+                let tol = (2.0 * self.opts.tolerance).max(1e-6);
+                for d in self.contact_normals(c, tol) {
                     push_dir(&mut out, d);
                 }
             }
@@ -70,21 +62,50 @@ impl Ctx<'_> {
     }
 
     /// Parts whose candidate directions are all blocked by the rest of the product
-    /// (they could never go last) get more (geometry mode): a seeded sphere of
-    /// `sphere_directions` swept against the product; the free ones are refined to
-    /// the middle of their free cone, and when none is free the least blocked are
-    /// refined on a cone around them. At most 4 directions are added per part (the
-    /// freest first), each swept against every other component.
+    /// (they could never go last) get more (geometry mode), each swept against every
+    /// other product component: first the directions from their geometry (the
+    /// normals of faces near a neighbour, within the contact gap; the principal axes;
+    /// the directions away from the neighbours); those still stuck then a seeded
+    /// sphere of `sphere_directions`, the free ones refined to the middle of their
+    /// free cone, or when none is free the least blocked refined on a cone around
+    /// them (at most 4 added, the freest first). A part that can leave the whole
+    /// product along an axis or a contact normal never pays for these.
     pub(super) fn extend_directions(&mut self) {
-        if self.opts.mode != Mode::Geometry || self.opts.sphere_directions == 0 {
+        if self.opts.mode != Mode::Geometry {
             return;
         }
-        let stuck: Vec<usize> = members(self.active)
-            .filter(|&p| {
-                let others = self.active & !bit(p);
-                others != 0 && self.free_dirs(p, others).is_empty()
+        let stuck = self.stuck();
+        let this = &*self;
+        let tol = self.opts.contact_gap_mm.max(2.0 * self.opts.tolerance).max(1e-6);
+        let added: Vec<(usize, Vec<(Vec3, Mask)>)> = stuck
+            .par_iter()
+            .map(|&p| {
+                let mut dirs = Vec::new();
+                // A clip held 1 mm clear in a slot leaves along its walls or its
+                // long axis, a part between neighbours away from them.
+                for d in this.contact_normals(p, tol) {
+                    push_dir(&mut dirs, d);
+                }
+                for d in principal_axes(this.doc.mesh_of(p), &this.scene.poses[p]) {
+                    push_dir(&mut dirs, d);
+                    push_dir(&mut dirs, -d);
+                }
+                for d in this.neighbour_directions(p) {
+                    push_dir(&mut dirs, d);
+                }
+                let rows = dirs
+                    .into_iter()
+                    .filter(|d| !this.dirs[p].iter().any(|e| same_dir(e, d)))
+                    .map(|d| (d, this.blockers(p, &d)))
+                    .collect();
+                (p, rows)
             })
             .collect();
+        self.add_directions(added);
+        if self.opts.sphere_directions == 0 {
+            return;
+        }
+        let stuck = self.stuck();
         if stuck.is_empty() {
             return;
         }
@@ -96,6 +117,20 @@ impl Ctx<'_> {
             .par_iter()
             .map(|&p| (p, this.search_directions(p, &sphere, 0.5 * spacing)))
             .collect();
+        self.add_directions(added);
+    }
+
+    /// The product components with no candidate direction free of all the others.
+    fn stuck(&self) -> Vec<usize> {
+        members(self.active)
+            .filter(|&p| {
+                let others = self.active & !bit(p);
+                others != 0 && self.free_dirs(p, others).is_empty()
+            })
+            .collect()
+    }
+
+    fn add_directions(&mut self, added: Vec<(usize, Vec<(Vec3, Mask)>)>) {
         for (p, dirs) in added {
             for (d, blocked) in dirs {
                 if !self.dirs[p].iter().any(|e| same_dir(e, &d)) {
@@ -173,18 +208,11 @@ impl Ctx<'_> {
     }
 
     /// Directions leaving the faces of `c` that touch another component: minus the
-    /// outward normals of `c`'s triangles lying on a neighbour's surface (at most 6
-    /// new ones, largest touching area first).
-    pub(super) fn contact_normals(&self, c: usize) -> Vec<Vec3> {
+    /// outward normals of `c`'s triangles lying within `tol` (mm) of a neighbour's
+    /// surface (at most 6 new ones, largest area first).
+    pub(super) fn contact_normals(&self, c: usize, tol: f64) -> Vec<Vec3> {
         let mesh = self.doc.mesh_of(c);
         let pose = self.scene.poses[c];
-        // Touching faces, and in geometry mode the faces near a neighbour (within the
-        // contact gap: a clip held 1 mm clear in its slot leaves along its walls).
-        let tol = match self.opts.mode {
-            Mode::Geometry => self.opts.contact_gap_mm.max(2.0 * self.opts.tolerance),
-            Mode::Mates => 2.0 * self.opts.tolerance,
-        }
-        .max(1e-6);
         let mut found: Vec<(Vec3, f64)> = Vec::new();
         for q in members(self.related[c]) {
             let qb = &self.boxes[q];

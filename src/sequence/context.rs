@@ -663,6 +663,10 @@ impl<'d> Ctx<'d> {
         if self.related[p] & mask != 0 {
             return true;
         }
+        // Support off in geometry mode: a part may be placed where nothing holds it.
+        if self.opts.mode == Mode::Geometry && !self.opts.support {
+            return true;
+        }
         let group = self.group_of(p);
         if group & mask != 0 {
             return false;

@@ -27,10 +27,10 @@ pub enum Mode {
     #[default]
     Mates,
     /// Meshes only: contacts (within the contact gap) in the assembled pose and a
-    /// directional blocking graph over directions from the geometry: ±X/±Y/±Z, the
-    /// normals of touching and near faces, the part's principal axes, the directions
-    /// away from its neighbours, and, for parts none of those frees, a seeded sphere
-    /// of directions refined near the free ones (mates ignored).
+    /// directional blocking graph over ±X/±Y/±Z and the contact normals; parts those
+    /// do not free get directions from their geometry (normals of near faces,
+    /// principal axes, away from their neighbours), then a seeded sphere of
+    /// directions refined near the free ones (mates ignored).
     Geometry,
 }
 

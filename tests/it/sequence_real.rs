@@ -276,15 +276,26 @@ fn no_sub_assembly_has_a_floating_part() {
     let floating = floating_steps(&doc, &plan, o.contact_gap_mm);
     assert!(floating.is_empty(), "{floating:?}");
     dense_removal(&doc, &plan);
-    // Support off: the planner may place the top plate before its spacer (the
-    // check above is what tells those sequences apart).
-    let loose = SequenceOptions {
-        support: false,
+    // The top plate pinned right after the base: it would float, so no sequence …
+    let early = SequenceOptions {
         base: Some("plate".into()),
-        max_sequences: 20,
+        order: vec!["top".into()],
         ..SequenceOptions::default()
     };
+    match plan_sequence(&doc, &mut SceneCache::new(), &early) {
+        Err(SequenceError::NoSequence { reasons, .. }) => {
+            assert!(reasons.iter().any(|r| r.contains("would float")), "{reasons:?}")
+        }
+        other => panic!("{:?}", other.map(|p| p.summary())),
+    }
+    // … unless support is off: then the top plate floats until the spacer slides in
+    // under it (the independent check sees it).
+    let loose = SequenceOptions {
+        support: false,
+        ..early
+    };
     let plan = plan_sequence(&doc, &mut SceneCache::new(), &loose).unwrap();
+    assert_eq!(plan.best().order()[1], "top");
     dense_removal(&doc, &plan);
     assert!(
         !floating_steps(&doc, &plan, loose.contact_gap_mm).is_empty(),
