@@ -58,7 +58,10 @@ impl Ctx<'_> {
             .filter(|(n, _)| *n > 1e-6)
             .collect();
         near.sort_by(|a, b| a.0.total_cmp(&b.0));
-        near.into_iter().take(4).map(|(_, d)| d.normalize()).collect()
+        near.into_iter()
+            .take(4)
+            .map(|(_, d)| d.normalize())
+            .collect()
     }
 
     /// Parts whose candidate directions are all blocked by the rest of the product
@@ -76,7 +79,11 @@ impl Ctx<'_> {
         }
         let stuck = self.stuck();
         let this = &*self;
-        let tol = self.opts.contact_gap_mm.max(2.0 * self.opts.tolerance).max(1e-6);
+        let tol = self
+            .opts
+            .contact_gap_mm
+            .max(2.0 * self.opts.tolerance)
+            .max(1e-6);
         let added: Vec<(usize, Vec<(Vec3, Mask)>)> = stuck
             .par_iter()
             .map(|&p| {
@@ -528,8 +535,15 @@ pub(super) fn principal_axes(mesh: &crate::mesh::Mesh, pose: &Transform) -> Vec<
     let e = eig.eigenvalues;
     let scale = e.iter().fold(0.0f64, |a, &v| a.max(v.abs())).max(1e-12);
     (0..3)
-        .filter(|&i| (0..3).filter(|&j| j != i).all(|j| (e[i] - e[j]).abs() > 0.05 * scale))
-        .map(|i| pose.apply_vector(&eig.eigenvectors.column(i).into_owned()).normalize())
+        .filter(|&i| {
+            (0..3)
+                .filter(|&j| j != i)
+                .all(|j| (e[i] - e[j]).abs() > 0.05 * scale)
+        })
+        .map(|i| {
+            pose.apply_vector(&eig.eigenvectors.column(i).into_owned())
+                .normalize()
+        })
         .collect()
 }
 
@@ -550,7 +564,11 @@ pub(super) fn sphere_directions(n: usize, seed: u64) -> Vec<Vec3> {
 
 /// `k` unit directions at angle `angle` (rad) around unit `d`.
 pub(super) fn cone_around(d: &Vec3, angle: f64, k: usize) -> Vec<Vec3> {
-    let helper = if d.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+    let helper = if d.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
     let u = d.cross(&helper).normalize();
     let v = d.cross(&u);
     (0..k)
@@ -583,7 +601,8 @@ mod tests {
     #[test]
     fn principal_axes_of_a_long_box_and_none_of_a_cube() {
         use crate::math::Point3;
-        let bar = crate::mesh::Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 2.0, 20.0));
+        let bar =
+            crate::mesh::Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 2.0, 20.0));
         let turn = Transform::from_parts(
             Vec3::zeros(),
             nalgebra::UnitQuaternion::from_axis_angle(&Vec3::y_axis(), 30f64.to_radians()),
@@ -592,7 +611,8 @@ mod tests {
         assert_eq!(axes.len(), 1, "{axes:?}");
         let want = Vec3::new(0.5, 0.0, 3f64.sqrt() / 2.0);
         assert!(axes[0].dot(&want).abs() > 1.0 - 1e-9, "{axes:?}");
-        let cube = crate::mesh::Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 2.0, 2.0));
+        let cube =
+            crate::mesh::Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 2.0, 2.0));
         assert!(principal_axes(&cube, &Transform::IDENTITY).is_empty());
     }
 }

@@ -258,10 +258,7 @@ fn touching_pairs(
     let near: Vec<bool> = pairs
         .par_iter()
         .map(|&(a, b)| {
-            Instant::now() < deadline
-                && scene
-                    .clearance(a, b, gap + 1e-6)
-                    .is_ok_and(|c| c <= gap)
+            Instant::now() < deadline && scene.clearance(a, b, gap + 1e-6).is_ok_and(|c| c <= gap)
         })
         .collect();
     let mut out: Vec<(usize, usize)> = contacts.iter().map(|c| (c.a, c.b)).collect();
@@ -327,7 +324,11 @@ impl<'d> Ctx<'d> {
             );
         }
         if !(opts.contact_gap_mm.is_finite() && opts.contact_gap_mm >= 0.0) {
-            return bad("contact_gap_mm", opts.contact_gap_mm, "a finite number of mm ≥ 0");
+            return bad(
+                "contact_gap_mm",
+                opts.contact_gap_mm,
+                "a finite number of mm ≥ 0",
+            );
         }
         if !(opts.tight_clearance_mm.is_finite() && opts.tight_clearance_mm >= 0.0) {
             return bad(
@@ -383,11 +384,10 @@ impl<'d> Ctx<'d> {
         // Without mates among the product's components the mates mode has nothing
         // to go on (every part would look unrelated): the geometry decides.
         if opts.mode == Mode::Mates
-            && !doc.mates().iter().any(|m| {
-                m.entities
-                    .iter()
-                    .all(|e| active & bit(e.component) != 0)
-            })
+            && !doc
+                .mates()
+                .iter()
+                .any(|m| m.entities.iter().all(|e| active & bit(e.component) != 0))
         {
             opts.mode = Mode::Geometry;
         }
@@ -442,11 +442,11 @@ impl<'d> Ctx<'d> {
                 }
                 for a in 0..n {
                     for b in members(related[a]).filter(|&b| b > a) {
-                    let f = Freedom {
-                        frame: Transform::IDENTITY,
-                        translations: Vec::new(),
-                        rotations: Vec::new(),
-                    };
+                        let f = Freedom {
+                            frame: Transform::IDENTITY,
+                            translations: Vec::new(),
+                            rotations: Vec::new(),
+                        };
                         graph.relations.push(super::graph::Relation {
                             a,
                             b,
@@ -586,7 +586,11 @@ impl<'d> Ctx<'d> {
         if let Some(&t) = self.tight.lock().unwrap().get(&key) {
             return t;
         }
-        let helper = if mate.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+        let helper = if mate.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
         let u = mate.cross(&helper).normalize();
         let v = mate.cross(&u);
         let start = self.scene.poses[p];

@@ -707,7 +707,11 @@ fn ranking(ctx: &Ctx, sequences: &[Sequence], cut: bool) -> String {
     let Some(second) = sequences.get(1) else {
         return format!(
             "the only sequence found{}: {costs}",
-            if cut { " before the search was cut" } else { "" }
+            if cut {
+                " before the search was cut"
+            } else {
+                ""
+            }
         );
     };
     let why = if first.mounts != second.mounts {
