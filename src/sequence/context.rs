@@ -440,8 +440,8 @@ impl<'d> Ctx<'d> {
                     related[a] |= bit(b);
                     related[b] |= bit(a);
                 }
-                for a in 0..n {
-                    for b in members(related[a]).filter(|&b| b > a) {
+                for (a, &rel) in related.iter().enumerate() {
+                    for b in members(rel).filter(|&b| b > a) {
                         let f = Freedom {
                             frame: Transform::IDENTITY,
                             translations: Vec::new(),
