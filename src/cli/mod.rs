@@ -219,9 +219,23 @@ pub enum Command {
         /// Components or parts that are screwed (repeatable).
         #[arg(long)]
         threaded: Vec<String>,
-        /// Time budget of the whole call (ms); default 30000.
+        /// Time budget of the whole call (ms), honoured within 5 %; default 30000.
         #[arg(long)]
         time_limit_ms: Option<f64>,
+        /// A component that is not part of the product (fixture, table; repeatable).
+        /// Robot links are always left out.
+        #[arg(long)]
+        exclude: Vec<String>,
+        /// The product's components (repeatable; default: all but robots and `--exclude`).
+        #[arg(long)]
+        component: Vec<String>,
+        /// Allow parts that touch nothing placed yet (floating sub-assemblies).
+        #[arg(long)]
+        no_support: bool,
+        /// Respect gravity along this down direction, `x,y,z` (parts move down or
+        /// sideways into place).
+        #[arg(long, allow_hyphen_values = true)]
+        gravity: Option<String>,
         /// How many sequences to rank.
         #[arg(long, default_value_t = 5)]
         max_sequences: usize,
@@ -274,6 +288,10 @@ pub fn main() -> i32 {
             base,
             threaded,
             time_limit_ms,
+            exclude,
+            component,
+            no_support,
+            gravity,
             max_sequences,
             json,
         } => sequence::plan(sequence::Args {
@@ -282,6 +300,10 @@ pub fn main() -> i32 {
             base,
             threaded,
             time_limit_ms,
+            exclude,
+            components: component,
+            support: !no_support,
+            gravity,
             max_sequences,
             json,
         }),

@@ -1,5 +1,6 @@
 //! `fitup plan-sequence DOC [--mode mates|geometry] [--base NAME] [--threaded NAME…]
-//! [--time-limit-ms MS] [--json]`.
+//! [--time-limit-ms MS] [--exclude NAME…] [--component NAME…] [--no-support]
+//! [--gravity X,Y,Z] [--json]`.
 
 use super::out::{errln as eprintln, outln as println};
 use super::Exit;
@@ -15,6 +16,10 @@ pub(super) struct Args<'a> {
     pub base: Option<String>,
     pub threaded: Vec<String>,
     pub time_limit_ms: Option<f64>,
+    pub exclude: Vec<String>,
+    pub components: Vec<String>,
+    pub support: bool,
+    pub gravity: Option<String>,
     pub max_sequences: usize,
     pub json: bool,
 }
@@ -26,6 +31,17 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
             a.mode
         );
         return Exit::Usage;
+    };
+    let gravity = match a.gravity.as_deref().map(parse_vec3) {
+        None => None,
+        Some(Some(g)) => Some(g),
+        Some(None) => {
+            eprintln!(
+                "error: --gravity must be three numbers `x,y,z`, not `{}`",
+                a.gravity.unwrap_or_default()
+            );
+            return Exit::Usage;
+        }
     };
     let doc = match Document::open(a.doc) {
         Ok(d) => d,
@@ -40,6 +56,10 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
         threaded: a.threaded,
         time_limit_ms: a.time_limit_ms,
         max_sequences: a.max_sequences,
+        exclude: a.exclude,
+        components: a.components,
+        support: a.support,
+        gravity,
         ..SequenceOptions::default()
     };
     match plan_sequence(&doc, &mut SceneCache::new(), &o) {
@@ -61,4 +81,13 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
 fn print(s: &str) {
     let s = crate::diagnostics::printable(s, true);
     super::out::write(super::out::Stream::Stdout, &s);
+}
+
+/// `x,y,z` → a vector (finite numbers; the library checks it is non-zero).
+fn parse_vec3(s: &str) -> Option<crate::math::Vec3> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()?;
+    (v.len() == 3).then(|| crate::math::Vec3::new(v[0], v[1], v[2]))
 }

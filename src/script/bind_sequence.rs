@@ -20,7 +20,7 @@ use std::sync::Arc;
 #[derive(Clone)]
 pub struct SequenceHandle(pub(super) Arc<SequencePlan>, Arc<Context>, f64);
 
-const KEYS: [&str; 11] = [
+const KEYS: [&str; 17] = [
     "base",
     "order",
     "mode",
@@ -32,6 +32,12 @@ const KEYS: [&str; 11] = [
     "masses",
     "max_tilt_deg",
     "planner_fallback",
+    "components",
+    "exclude",
+    "support",
+    "contact_gap_mm",
+    "gravity",
+    "tight_clearance_mm",
 ];
 
 fn strings(v: &Dynamic, what: &str) -> ScriptResult<Vec<String>> {
@@ -89,6 +95,22 @@ fn options(m: Option<&Map>) -> ScriptResult<SequenceOptions> {
             .as_bool()
             .map_err(|t| fail(format!("planner_fallback must be a bool, not {t}")))?;
     }
+    if let Some(v) = m.get("components") {
+        o.components = strings(v, "components")?;
+    }
+    if let Some(v) = m.get("exclude") {
+        o.exclude = strings(v, "exclude")?;
+    }
+    if let Some(v) = m.get("support") {
+        o.support = v
+            .as_bool()
+            .map_err(|t| fail(format!("support must be a bool, not {t}")))?;
+    }
+    o.contact_gap_mm = opt_num(m, "contact_gap_mm")?.unwrap_or(o.contact_gap_mm);
+    o.tight_clearance_mm = opt_num(m, "tight_clearance_mm")?.unwrap_or(o.tight_clearance_mm);
+    if let Some(v) = m.get("gravity") {
+        o.gravity = Some(vec3(v, "gravity")?);
+    }
     if let Some(v) = m.get("masses") {
         let Some(mm) = v.clone().try_cast::<Map>() else {
             return err("`masses` must be a map of name: mass");
@@ -135,6 +157,7 @@ fn sequence_map(s: &sequence::Sequence) -> Map {
         (s.direction_changes as i64).into(),
     );
     m.insert("path_length".into(), Dynamic::from_float(s.path_length_mm));
+    m.insert("difficult".into(), (s.difficult as i64).into());
     m
 }
 
@@ -303,7 +326,7 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f(
         "Document.assembly_sequence(options: map) -> Sequence",
-        "Plans the assembly sequence: `#{base, order, mode: \"mates\"|\"geometry\", max_sequences (5), time_limit_ms (30000), seed, tolerance, threaded: [names], masses: #{name: mass}, max_tilt_deg (0), planner_fallback (true)}`. Fewest re-mountings of the base wins, then fewest direction changes, then the shortest insertion paths; every task's path is collision-free against the parts assembled before it.",
+        "Plans the assembly sequence: `#{base, order, mode: \"mates\"|\"geometry\", max_sequences (5), time_limit_ms (30000, the whole call within 5 %), seed, tolerance, threaded: [names], masses: #{name: mass}, max_tilt_deg (0), planner_fallback (true), components: [names] (the product; default all but robot links), exclude: [names] (fixtures, the table), support (true: every added part touches a placed one), contact_gap_mm (1.5), gravity: [x, y, z] (down; parts then move down or sideways into place), tight_clearance_mm (0.5)}`. A document without mates is planned from the geometry. Fewest re-mountings of the base wins, then fewest direction changes, then fewest difficult insertions (tight fits, planned paths), then the shortest insertion paths (`ranking` says why); every task's path is collision-free against the parts assembled before it.",
         |d: &mut DocHandle, o: Map| plan(d, Some(&o)),
     );
     api.get(
@@ -329,8 +352,18 @@ pub(super) fn register(api: &mut Api) {
         |s: &mut SequenceHandle| s.0.best().mounts as i64,
     );
     api.get(
+        "Sequence.ranking -> string",
+        "Why the best sequence ranked first: its costs against the runner-up's.",
+        |s: &mut SequenceHandle| s.0.ranking.clone(),
+    );
+    api.get(
+        "Sequence.complete -> bool",
+        "Whether the search ended by itself (false: the time limit or the expansion cap cut it; the sequences are the best found in time).",
+        |s: &mut SequenceHandle| s.0.complete,
+    );
+    api.get(
         "Sequence.sequences -> array",
-        "Every sequence found, best first: `#{base, order, mounts, direction_changes, path_length}`.",
+        "Every sequence found, best first: `#{base, order, mounts, direction_changes, difficult, path_length}`.",
         |s: &mut SequenceHandle| -> Array {
             s.0.sequences
                 .iter()

@@ -36,7 +36,8 @@ impl Ctx<'_> {
                 for d in axis_dirs() {
                     push_dir(&mut out, d);
                 }
-                for d in self.contact_normals(c) {
+                let tol = (2.0 * self.opts.tolerance).max(1e-6);
+                for d in self.contact_normals(c, tol) {
                     push_dir(&mut out, d);
                 }
             }
@@ -44,13 +45,181 @@ impl Ctx<'_> {
         out
     }
 
+    /// Directions from the centres of the (at most 4 nearest) components touching
+    /// `c` to `c`'s centre: the way out of what surrounds it.
+    fn neighbour_directions(&self, c: usize) -> Vec<Vec3> {
+        let centre = |i: usize| (self.boxes[i].lo.coords + self.boxes[i].hi.coords) * 0.5;
+        let here = centre(c);
+        let mut near: Vec<(f64, Vec3)> = members(self.related[c])
+            .map(|q| {
+                let d = here - centre(q);
+                (d.norm(), d)
+            })
+            .filter(|(n, _)| *n > 1e-6)
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        near.into_iter()
+            .take(4)
+            .map(|(_, d)| d.normalize())
+            .collect()
+    }
+
+    /// Parts whose candidate directions are all blocked by the rest of the product
+    /// (they could never go last) get more (geometry mode), each swept against every
+    /// other product component: first the directions from their geometry (the
+    /// normals of faces near a neighbour, within the contact gap; the principal axes;
+    /// the directions away from the neighbours); those still stuck then a seeded
+    /// sphere of `sphere_directions`, the free ones refined to the middle of their
+    /// free cone, or when none is free the least blocked refined on a cone around
+    /// them (at most 4 added, the freest first). A part that can leave the whole
+    /// product along an axis or a contact normal never pays for these.
+    pub(super) fn extend_directions(&mut self) {
+        if self.opts.mode != Mode::Geometry {
+            return;
+        }
+        let stuck = self.stuck();
+        let this = &*self;
+        let tol = self
+            .opts
+            .contact_gap_mm
+            .max(2.0 * self.opts.tolerance)
+            .max(1e-6);
+        let added: Vec<(usize, Vec<(Vec3, Mask)>)> = stuck
+            .par_iter()
+            .map(|&p| {
+                let mut dirs = Vec::new();
+                // A clip held 1 mm clear in a slot leaves along its walls or its
+                // long axis, a part between neighbours away from them.
+                for d in this.contact_normals(p, tol) {
+                    push_dir(&mut dirs, d);
+                }
+                for d in principal_axes(this.doc.mesh_of(p), &this.scene.poses[p]) {
+                    push_dir(&mut dirs, d);
+                    push_dir(&mut dirs, -d);
+                }
+                for d in this.neighbour_directions(p) {
+                    push_dir(&mut dirs, d);
+                }
+                let rows = dirs
+                    .into_iter()
+                    .filter(|d| !this.dirs[p].iter().any(|e| same_dir(e, d)))
+                    .map(|d| (d, this.blockers(p, &d)))
+                    .collect();
+                (p, rows)
+            })
+            .collect();
+        self.add_directions(added);
+        if self.opts.sphere_directions == 0 {
+            return;
+        }
+        let stuck = self.stuck();
+        if stuck.is_empty() {
+            return;
+        }
+        let sphere = sphere_directions(self.opts.sphere_directions, self.opts.seed);
+        // Half the spacing of the sphere's points (rad): the refinement cone.
+        let spacing = (4.0 * std::f64::consts::PI / sphere.len() as f64).sqrt();
+        let this = &*self;
+        let added: Vec<(usize, Vec<(Vec3, Mask)>)> = stuck
+            .par_iter()
+            .map(|&p| (p, this.search_directions(p, &sphere, 0.5 * spacing)))
+            .collect();
+        self.add_directions(added);
+    }
+
+    /// The product components with no candidate direction free of all the others.
+    fn stuck(&self) -> Vec<usize> {
+        members(self.active)
+            .filter(|&p| {
+                let others = self.active & !bit(p);
+                others != 0 && self.free_dirs(p, others).is_empty()
+            })
+            .collect()
+    }
+
+    fn add_directions(&mut self, added: Vec<(usize, Vec<(Vec3, Mask)>)>) {
+        for (p, dirs) in added {
+            for (d, blocked) in dirs {
+                if !self.dirs[p].iter().any(|e| same_dir(e, &d)) {
+                    self.dirs[p].push(d);
+                    self.blocked[p].push(blocked);
+                }
+            }
+        }
+    }
+
+    /// What blocks `p` along `d` among the other product components (a sweep cut by
+    /// the deadline counts as blocked).
+    fn blockers(&self, p: usize, d: &Vec3) -> Mask {
+        members(self.active & !bit(p))
+            .filter(|&q| self.sweep_hits(p, d, q).unwrap_or(true))
+            .fold(0, |a, q| a | bit(q))
+    }
+
+    fn search_directions(&self, p: usize, sphere: &[Vec3], cone: f64) -> Vec<(Vec3, Mask)> {
+        let mut scored: Vec<(Vec3, Mask)> = Vec::new();
+        for d in sphere {
+            if self.out_of_time() {
+                break;
+            }
+            scored.push((*d, self.blockers(p, d)));
+        }
+        scored.sort_by_key(|(_, m)| m.count_ones());
+        let free: Vec<Vec3> = scored
+            .iter()
+            .filter(|(_, m)| *m == 0)
+            .map(|(d, _)| *d)
+            .collect();
+        let mut out: Vec<(Vec3, Mask)> = Vec::new();
+        if !free.is_empty() {
+            // The middle of each free direction's free neighbourhood: more room on
+            // every side than the sampled point.
+            for d in free.iter().take(2) {
+                let mut sum = *d;
+                for e in cone_around(d, cone, 8) {
+                    if self.out_of_time() {
+                        break;
+                    }
+                    if self.blockers(p, &e) == 0 {
+                        sum += e;
+                    }
+                }
+                let mid = sum.normalize();
+                if self.blockers(p, &mid) == 0 {
+                    out.push((mid, 0));
+                } else {
+                    out.push((*d, 0));
+                }
+            }
+            for d in free.iter().skip(2).take(2) {
+                out.push((*d, 0));
+            }
+        } else {
+            // Nothing free on the sphere: look closer around the least blocked.
+            let mut near: Vec<(Vec3, Mask)> = Vec::new();
+            for (d, _) in scored.iter().take(3) {
+                for e in cone_around(d, cone, 8) {
+                    if self.out_of_time() {
+                        break;
+                    }
+                    near.push((e, self.blockers(p, &e)));
+                }
+            }
+            near.extend(scored.iter().take(3).copied());
+            near.sort_by_key(|(_, m)| m.count_ones());
+            out.extend(near.into_iter().take(4));
+        }
+        // Blocked by parts outside the product never happens (they are not swept);
+        // the full row: blockers among every product component.
+        out
+    }
+
     /// Directions leaving the faces of `c` that touch another component: minus the
-    /// outward normals of `c`'s triangles lying on a neighbour's surface (at most 6
-    /// new ones, largest touching area first).
-    pub(super) fn contact_normals(&self, c: usize) -> Vec<Vec3> {
+    /// outward normals of `c`'s triangles lying within `tol` (mm) of a neighbour's
+    /// surface (at most 6 new ones, largest area first).
+    pub(super) fn contact_normals(&self, c: usize, tol: f64) -> Vec<Vec3> {
         let mesh = self.doc.mesh_of(c);
         let pose = self.scene.poses[c];
-        let tol = (2.0 * self.opts.tolerance).max(1e-6);
         let mut found: Vec<(Vec3, f64)> = Vec::new();
         for q in members(self.related[c]) {
             let qb = &self.boxes[q];
@@ -171,10 +340,11 @@ impl Ctx<'_> {
         Ok(false)
     }
 
-    /// The directional blocking graph: for every component, direction and other
-    /// component, whether the straight removal hits it. The sweeps are independent
-    /// and run in parallel.
-    pub(super) fn build_blocking(&mut self) -> Result<(), SequenceError> {
+    /// The directional blocking graph: for every product component, direction and
+    /// other product component, whether the straight removal hits it. The sweeps are
+    /// independent and run in parallel. A sweep the deadline cuts counts as blocked
+    /// (never a wrong "free"): the search then reports what it could do in time.
+    pub(super) fn build_blocking(&mut self) {
         // p along d meets q exactly when q along −d meets p (the same relative
         // motion, the same separation length): only one of the two is swept.
         let mirror = |p: usize, k: usize, q: usize| -> Option<usize> {
@@ -187,9 +357,10 @@ impl Ctx<'_> {
                 .flatten()
         };
         let mut queries = Vec::new();
-        for p in 0..self.n {
+        let active = self.active;
+        for p in members(active) {
             for k in 0..self.dirs[p].len() {
-                for q in (0..self.n).filter(|&q| q != p) {
+                for q in members(active).filter(|&q| q != p) {
                     if mirror(p, k, q).is_none() {
                         queries.push((p, k, q));
                     }
@@ -199,8 +370,8 @@ impl Ctx<'_> {
         let this = &*self;
         let hits: Vec<bool> = queries
             .par_iter()
-            .map(|&(p, k, q)| this.sweep_hits(p, &this.dirs[p][k], q))
-            .collect::<Result<_, _>>()?;
+            .map(|&(p, k, q)| this.sweep_hits(p, &this.dirs[p][k], q).unwrap_or(true))
+            .collect();
         let mut blocked: Vec<Vec<Mask>> = (0..self.n)
             .map(|p| vec![0 as Mask; self.dirs[p].len()])
             .collect();
@@ -210,9 +381,9 @@ impl Ctx<'_> {
             }
         }
         // The mirrored half, from the swept one (its q < p: p ascending fills them).
-        for p in 0..self.n {
+        for p in members(active) {
             for k in 0..self.dirs[p].len() {
-                for q in (0..self.n).filter(|&q| q != p) {
+                for q in members(active).filter(|&q| q != p) {
                     if let Some(k2) = mirror(p, k, q) {
                         if blocked[q][k2] & bit(p) != 0 {
                             blocked[p][k] |= bit(q);
@@ -222,7 +393,6 @@ impl Ctx<'_> {
             }
         }
         self.blocked = blocked;
-        Ok(())
     }
 
     /// The free separation directions of `p` among the components of `mask`.
@@ -290,6 +460,11 @@ impl Ctx<'_> {
             return probe;
         };
         let limit = exit_distance(&self.boxes[p], &region, d) + probe;
+        if self.out_of_time() {
+            // The whole straight line is known free (the blocking sweep): leaving
+            // the bracket is safe, only not the shortest; not remembered.
+            return limit;
+        }
         let others: Vec<Vec3> = self.dirs[p]
             .iter()
             .filter(|e| e.dot(d).abs() < 0.9)
@@ -327,5 +502,117 @@ impl Ctx<'_> {
         };
         self.safe_lengths.lock().unwrap().insert(key, found);
         found
+    }
+}
+
+/// The principal axes (unit, world) of a mesh at `pose` whose spread differs from
+/// the other two by more than 5 % (a symmetric spread has no preferred axis): the
+/// eigenvectors of the covariance of its surface (exact per triangle, so the
+/// triangulation does not bias it).
+pub(super) fn principal_axes(mesh: &crate::mesh::Mesh, pose: &Transform) -> Vec<Vec3> {
+    let mut total = 0.0;
+    let mut first = Vec3::zeros();
+    let mut second = nalgebra::Matrix3::<f64>::zeros();
+    for t in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.triangle(t);
+        let area = 0.5 * (b - a).cross(&(c - a)).norm();
+        let sum = a.coords + b.coords + c.coords;
+        total += area;
+        first += sum * (area / 3.0);
+        // ∫ x xᵀ dA over a triangle = A/12 (Σ vᵢ vᵢᵀ + s sᵀ), s = Σ vᵢ.
+        second += (a.coords * a.coords.transpose()
+            + b.coords * b.coords.transpose()
+            + c.coords * c.coords.transpose()
+            + sum * sum.transpose())
+            * (area / 12.0);
+    }
+    if total <= 0.0 {
+        return Vec::new();
+    }
+    let mean = first / total;
+    let cov = second / total - mean * mean.transpose();
+    let eig = nalgebra::SymmetricEigen::new(cov);
+    let e = eig.eigenvalues;
+    let scale = e.iter().fold(0.0f64, |a, &v| a.max(v.abs())).max(1e-12);
+    (0..3)
+        .filter(|&i| {
+            (0..3)
+                .filter(|&j| j != i)
+                .all(|j| (e[i] - e[j]).abs() > 0.05 * scale)
+        })
+        .map(|i| {
+            pose.apply_vector(&eig.eigenvectors.column(i).into_owned())
+                .normalize()
+        })
+        .collect()
+}
+
+/// `n` directions spread evenly on the unit sphere (a Fibonacci lattice) turned by
+/// a rotation drawn from `seed`: deterministic for a seed.
+pub(super) fn sphere_directions(n: usize, seed: u64) -> Vec<Vec3> {
+    let turn = crate::math::Rng::new(seed ^ 0x5e9_d1c5).rotation();
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = golden * i as f64;
+            turn * Vec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}
+
+/// `k` unit directions at angle `angle` (rad) around unit `d`.
+pub(super) fn cone_around(d: &Vec3, angle: f64, k: usize) -> Vec<Vec3> {
+    let helper = if d.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    let u = d.cross(&helper).normalize();
+    let v = d.cross(&u);
+    (0..k)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / k as f64;
+            (d * angle.cos() + (u * a.cos() + v * a.sin()) * angle.sin()).normalize()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_is_seeded_unit_and_spread() {
+        let a = sphere_directions(48, 3);
+        assert_eq!(a, sphere_directions(48, 3));
+        assert_ne!(a, sphere_directions(48, 4));
+        assert!(a.iter().all(|d| (d.norm() - 1.0).abs() < 1e-12));
+        // Every direction has a sample within 35°.
+        for d in sphere_directions(200, 9) {
+            assert!(a.iter().any(|e| e.angle(&d) < 35f64.to_radians()));
+        }
+        for e in cone_around(&Vec3::z(), 0.1, 8) {
+            assert!((e.angle(&Vec3::z()) - 0.1).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn principal_axes_of_a_long_box_and_none_of_a_cube() {
+        use crate::math::Point3;
+        let bar =
+            crate::mesh::Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 2.0, 20.0));
+        let turn = Transform::from_parts(
+            Vec3::zeros(),
+            nalgebra::UnitQuaternion::from_axis_angle(&Vec3::y_axis(), 30f64.to_radians()),
+        );
+        let axes = principal_axes(&bar, &turn);
+        assert_eq!(axes.len(), 1, "{axes:?}");
+        let want = Vec3::new(0.5, 0.0, 3f64.sqrt() / 2.0);
+        assert!(axes[0].dot(&want).abs() > 1.0 - 1e-9, "{axes:?}");
+        let cube =
+            crate::mesh::Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 2.0, 2.0));
+        assert!(principal_axes(&cube, &Transform::IDENTITY).is_empty());
     }
 }

@@ -78,6 +78,14 @@ pub(crate) struct Ctx<'d> {
     pub scene: Scene,
     pub opts: SequenceOptions,
     pub n: usize,
+    /// The product: the components sequenced (robot links and excluded ones are
+    /// not; they are ignored, neither moved nor obstacles).
+    pub active: Mask,
+    /// Per component: the product's components it touches within the contact gap
+    /// (the support relation).
+    pub touching: Vec<Mask>,
+    /// Tight fits found, by part, mating direction and the placed parts near it.
+    pub(super) tight: Mutex<HashMap<SafeKey, bool>>,
     pub names: Vec<String>,
     /// World boxes in the assembled pose.
     pub boxes: Vec<Aabb>,
@@ -192,6 +200,73 @@ pub(super) fn boxes_meet(a: &Aabb, b: &Aabb, slack: f64) -> bool {
     a.overlap(b).min() > -slack
 }
 
+/// The product's components as a mask: `components` when given, else every
+/// component but robot links and `exclude`.
+fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, SequenceError> {
+    let n = doc.components().len();
+    let index = |name: &String| doc.component_index(name).map_err(WorkspaceError::from);
+    if !opts.components.is_empty() {
+        let mut m: Mask = 0;
+        for name in &opts.components {
+            m |= bit(index(name)?);
+        }
+        for name in &opts.exclude {
+            m &= !bit(index(name)?);
+        }
+        return Ok(m);
+    }
+    let mut m: Mask = if n == 128 { !0 } else { bit(n) - 1 };
+    for r in doc.robots() {
+        for l in r.links() {
+            if let Some(c) = l.component {
+                m &= !bit(c);
+            }
+        }
+    }
+    for name in &opts.exclude {
+        m &= !bit(index(name)?);
+    }
+    if m == 0 {
+        return Err(SequenceError::Empty);
+    }
+    Ok(m)
+}
+
+/// The pairs of product components `(a, b)`, `a < b`, that touch within
+/// `contact_gap_mm`: the exact contacts, and pairs whose surfaces are at most the gap
+/// apart (clearance searched only where the boxes are that close; skipped once the
+/// deadline has passed).
+fn touching_pairs(
+    scene: &Scene,
+    boxes: &[Aabb],
+    active: Mask,
+    opts: &SequenceOptions,
+    deadline: Instant,
+    contacts: &[crate::collision::PairContact],
+) -> Vec<(usize, usize)> {
+    let gap = opts.contact_gap_mm;
+    let mut pairs = Vec::new();
+    for a in members(active) {
+        for b in members(active).filter(|&b| b > a) {
+            if boxes_meet(&boxes[a], &boxes[b], gap + 1e-9)
+                && !contacts.iter().any(|c| c.a == a && c.b == b)
+            {
+                pairs.push((a, b));
+            }
+        }
+    }
+    let near: Vec<bool> = pairs
+        .par_iter()
+        .map(|&(a, b)| {
+            Instant::now() < deadline && scene.clearance(a, b, gap + 1e-6).is_ok_and(|c| c <= gap)
+        })
+        .collect();
+    let mut out: Vec<(usize, usize)> = contacts.iter().map(|c| (c.a, c.b)).collect();
+    out.extend(pairs.into_iter().zip(near).filter(|p| p.1).map(|p| p.0));
+    out.sort_unstable();
+    out
+}
+
 impl<'d> Ctx<'d> {
     pub fn new(
         doc: &'d Document,
@@ -199,6 +274,7 @@ impl<'d> Ctx<'d> {
         opts: &SequenceOptions,
     ) -> Result<Ctx<'d>, SequenceError> {
         let started = Instant::now();
+        let mut opts = opts.clone();
         let n = doc.components().len();
         if n == 0 {
             return Err(SequenceError::Empty);
@@ -247,6 +323,37 @@ impl<'d> Ctx<'d> {
                 "a finite number of ms > 0",
             );
         }
+        if !(opts.contact_gap_mm.is_finite() && opts.contact_gap_mm >= 0.0) {
+            return bad(
+                "contact_gap_mm",
+                opts.contact_gap_mm,
+                "a finite number of mm ≥ 0",
+            );
+        }
+        if !(opts.tight_clearance_mm.is_finite() && opts.tight_clearance_mm >= 0.0) {
+            return bad(
+                "tight_clearance_mm",
+                opts.tight_clearance_mm,
+                "a finite number of mm ≥ 0",
+            );
+        }
+        if opts.sphere_directions > 4096 {
+            return bad(
+                "sphere_directions",
+                opts.sphere_directions as f64,
+                "at most 4096",
+            );
+        }
+        if let Some(g) = opts.gravity {
+            if !(g.iter().all(|v| v.is_finite()) && g.norm() > 1e-12) {
+                return Err(SequenceError::InvalidOption {
+                    option: "gravity",
+                    value: format!("{:?}", g.as_slice()),
+                    expected: "a finite non-zero down direction",
+                });
+            }
+            opts.gravity = Some(g.normalize());
+        }
         if opts.max_sequences == 0 {
             return Err(SequenceError::InvalidOption {
                 option: "max_sequences",
@@ -263,8 +370,26 @@ impl<'d> Ctx<'d> {
                 });
             }
         }
+        let active = product_mask(doc, &opts)?;
         for name in opts.base.iter().chain(&opts.order) {
-            doc.component_index(name).map_err(WorkspaceError::from)?;
+            let i = doc.component_index(name).map_err(WorkspaceError::from)?;
+            if active & bit(i) == 0 {
+                return Err(SequenceError::InvalidOption {
+                    option: "base/order",
+                    value: name.clone(),
+                    expected: "a component of the product (not a robot link or excluded)",
+                });
+            }
+        }
+        // Without mates among the product's components the mates mode has nothing
+        // to go on (every part would look unrelated): the geometry decides.
+        if opts.mode == Mode::Mates
+            && !doc
+                .mates()
+                .iter()
+                .any(|m| m.entities.iter().all(|e| active & bit(e.component) != 0))
+        {
+            opts.mode = Mode::Geometry;
         }
         let deadline = started + Duration::from_secs_f64(limit.min(1e9) / 1e3);
         let scene = Scene::new(doc, cache)?;
@@ -276,11 +401,13 @@ impl<'d> Ctx<'d> {
             }
             boxes.push(scene.colliders[i].world_bounds(&scene.poses[i]));
         }
-        let sizes = component_sizes(doc, opts);
-        // The assembled state must be free of interference.
-        let contacts = scene
+        let sizes = component_sizes(doc, &opts);
+        // The assembled state must be free of interference (among the product: a
+        // robot's adjacent links may overlap, they are not sequenced).
+        let mut contacts = scene
             .contacts(crate::collision::Method::Exact, opts.tolerance)
             .map_err(WorkspaceError::from)?;
+        contacts.retain(|p| active & bit(p.a) != 0 && active & bit(p.b) != 0);
         if let Some(p) = contacts.iter().find(|p| p.contact.is_interfering()) {
             return Err(SequenceError::AssembledInterference {
                 a: names[p.a].clone(),
@@ -309,24 +436,48 @@ impl<'d> Ctx<'d> {
                 }
             }
             Mode::Geometry => {
-                for p in &contacts {
-                    related[p.a] |= bit(p.b);
-                    related[p.b] |= bit(p.a);
-                    let f = Freedom {
-                        frame: Transform::IDENTITY,
-                        translations: Vec::new(),
-                        rotations: Vec::new(),
-                    };
-                    graph.relations.push(super::graph::Relation {
-                        a: p.a,
-                        b: p.b,
-                        mates: Vec::new(),
-                        freedoms: Vec::new(),
-                        freedom: f,
-                    });
+                for (a, b) in touching_pairs(&scene, &boxes, active, &opts, deadline, &contacts) {
+                    related[a] |= bit(b);
+                    related[b] |= bit(a);
+                }
+                for (a, &rel) in related.iter().enumerate() {
+                    for b in members(rel).filter(|&b| b > a) {
+                        let f = Freedom {
+                            frame: Transform::IDENTITY,
+                            translations: Vec::new(),
+                            rotations: Vec::new(),
+                        };
+                        graph.relations.push(super::graph::Relation {
+                            a,
+                            b,
+                            mates: Vec::new(),
+                            freedoms: Vec::new(),
+                            freedom: f,
+                        });
+                    }
                 }
             }
         }
+        // Mates with a component outside the product relate nothing.
+        for (i, r) in related.iter_mut().enumerate() {
+            *r &= active;
+            if active & bit(i) == 0 {
+                *r = 0;
+            }
+        }
+        // Support: touching within the contact gap (geometry mode: the relations).
+        let touching = match opts.mode {
+            Mode::Geometry => related.clone(),
+            Mode::Mates if opts.support => {
+                let mut t = vec![0 as Mask; n];
+                for (a, b) in touching_pairs(&scene, &boxes, active, &opts, deadline, &contacts) {
+                    t[a] |= bit(b);
+                    t[b] |= bit(a);
+                }
+                t
+            }
+            Mode::Mates => related.clone(),
+        };
         let step = if opts.step_mm > 0.0 {
             opts.step_mm
         } else {
@@ -336,8 +487,11 @@ impl<'d> Ctx<'d> {
         let mut ctx = Ctx {
             doc,
             scene,
-            opts: opts.clone(),
+            opts,
             n,
+            active,
+            touching,
+            tight: Mutex::new(HashMap::new()),
             names,
             boxes,
             sizes,
@@ -356,10 +510,17 @@ impl<'d> Ctx<'d> {
         let this = &ctx;
         let dirs: Vec<Vec<Vec3>> = (0..n)
             .into_par_iter()
-            .map(|i| this.candidate_directions(i))
+            .map(|i| {
+                if active & bit(i) != 0 {
+                    this.candidate_directions(i)
+                } else {
+                    Vec::new()
+                }
+            })
             .collect();
         ctx.dirs = dirs;
-        ctx.build_blocking()?;
+        ctx.build_blocking();
+        ctx.extend_directions();
         ctx.order_composites();
         Ok(ctx)
     }
@@ -391,6 +552,64 @@ impl<'d> Ctx<'d> {
             left.extend(removed.into_iter().rev());
             self.graph.nodes[ni].members = left;
         }
+    }
+
+    /// The product's components not in `mask`, ascending.
+    pub(super) fn todo(&self, mask: Mask) -> impl Iterator<Item = usize> {
+        members(self.active & !mask)
+    }
+
+    /// Whether `p` may go in moving along `mate` (unit) by the gravity rule: down or
+    /// sideways, never up.
+    pub(super) fn gravity_allows(&self, mate: &Vec3) -> bool {
+        self.opts.gravity.is_none_or(|g| mate.dot(&g) > -1e-6)
+    }
+
+    /// Whether inserting `p` along `mate` (unit) onto `mask` is a tight fit: moved
+    /// `tight_clearance_mm` sideways in its assembled pose it hits a placed part in
+    /// at least three of the four directions across `mate` (held all round, a bore;
+    /// a part in a slot or on a face is not). Memoised by the placed parts near it.
+    pub(super) fn tight(&self, p: usize, mate: &Vec3, mask: Mask) -> bool {
+        let c = self.opts.tight_clearance_mm;
+        if c <= 0.0 || self.out_of_time() {
+            return false;
+        }
+        let bp = self.boxes[p];
+        let grown = Aabb::new(bp.lo - Vec3::repeat(c), bp.hi + Vec3::repeat(c));
+        let near: Mask = members(mask)
+            .filter(|&q| boxes_meet(&grown, &self.boxes[q], self.opts.tolerance))
+            .fold(0, |a, q| a | bit(q));
+        if near == 0 {
+            return false;
+        }
+        let key = (p, dir_key(mate), near);
+        if let Some(&t) = self.tight.lock().unwrap().get(&key) {
+            return t;
+        }
+        let helper = if mate.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
+        let u = mate.cross(&helper).normalize();
+        let v = mate.cross(&u);
+        let start = self.scene.poses[p];
+        let hits = [u, -u, v, -v]
+            .iter()
+            .filter(|e| {
+                let at = start.then(&Transform::from_translation(*e * c));
+                self.pose_hits(p, &at, near)
+            })
+            .count();
+        let t = hits >= 3;
+        self.tight.lock().unwrap().insert(key, t);
+        t
+    }
+
+    /// Whether `p` placed onto `mask` is held: it touches (within the contact gap) a
+    /// placed part, or support is off.
+    pub(super) fn supported(&self, p: usize, mask: Mask) -> bool {
+        !self.opts.support || self.touching[p] & mask != 0
     }
 
     pub fn out_of_time(&self) -> bool {
@@ -433,6 +652,9 @@ impl<'d> Ctx<'d> {
     /// Whether `p` may be assembled next onto `mask` (seed 003 section 2.2: nodes in
     /// the relation graph, composite nodes in their implied order).
     pub(super) fn eligible(&self, p: usize, mask: Mask) -> bool {
+        if !self.supported(p, mask) {
+            return false;
+        }
         let node = &self.graph.nodes[self.node_index(p)];
         let pos = node.members.iter().position(|&m| m == p).unwrap_or(0);
         if pos > 0 {
@@ -443,6 +665,10 @@ impl<'d> Ctx<'d> {
         // composite already in place, between them), or the first node of a group
         // nothing of which is assembled yet (its largest).
         if self.related[p] & mask != 0 {
+            return true;
+        }
+        // Support off in geometry mode: a part may be placed where nothing holds it.
+        if self.opts.mode == Mode::Geometry && !self.opts.support {
             return true;
         }
         let group = self.group_of(p);
@@ -461,6 +687,13 @@ impl<'d> Ctx<'d> {
     }
 
     pub(super) fn why_not(&self, p: usize, mask: Mask) -> String {
+        if !self.supported(p, mask) {
+            return format!(
+                "{} would float: it touches nothing placed within {} mm (support on)",
+                self.names[p],
+                crate::math::format::number(self.opts.contact_gap_mm, 3)
+            );
+        }
         if !self.eligible(p, mask) {
             let node = &self.graph.nodes[self.node_index(p)];
             let pos = node.members.iter().position(|&m| m == p).unwrap_or(0);

@@ -169,6 +169,10 @@ pub(crate) fn find_grasp(
     mate: &Vec3,
     mask: u128,
 ) -> Option<Grasp> {
+    // Past the deadline the answer is built without grasps (the budget is a limit).
+    if ctx.out_of_time() {
+        return None;
+    }
     let pose = ctx.scene.poses[p];
     let inv = pose.rotation().inverse();
     let m = (inv * mate).normalize();
@@ -327,6 +331,9 @@ impl Slide {
         let steps = 20;
         let mut depth = 0.0;
         for k in 1..=steps {
+            if ctx.out_of_time() {
+                return None;
+            }
             let d = self.extent * k as f64 / steps as f64;
             if hits(d) {
                 break;

@@ -20,9 +20,16 @@
 //!    rejected orders with their reason;
 //! 9. **tasks** `T = (base part, assembly part, operation)` with their checked paths.
 //!
-//! [`Mode::Geometry`] does the same from the meshes alone: contacts instead of mates,
-//! directions ±X/±Y/±Z and the contact normals, and a planner fallback (seed 002's
-//! disassembly) when no straight insertion exists.
+//! [`Mode::Geometry`] does the same from the meshes alone (and is what a document
+//! without mates gets): contacts within a gap instead of mates, directions ±X/±Y/±Z
+//! and the contact normals, then for parts those do not free directions from their
+//! geometry and a seeded sphere, and a planner fallback (seed 002's disassembly)
+//! when no straight insertion exists.
+//!
+//! Only the product is sequenced (robot links and `exclude`d fixtures are left out);
+//! every added part touches a placed one (`support`), the base is the largest part a
+//! sequence starts from, difficult insertions rank later, and one deadline bounds
+//! the whole call (see `docs/assembly.md`).
 //!
 //! # Examples
 //! ```

@@ -6,8 +6,14 @@ use crate::math::Vec3;
 use crate::workspace::WorkspaceError;
 use std::collections::BTreeMap;
 
-/// Default time budget of one sequence-planning call (ms): 30 s.
+/// Default time budget of one sequence-planning call (ms): 30 s, everything included
+/// (scene, contacts, blocking graph, direction search, planned paths, safe lengths,
+/// grasps); the call returns within 5 % of it.
 pub const DEFAULT_SEQUENCE_TIME_LIMIT_MS: f64 = 30_000.0;
+
+/// Default largest gap (mm) at which two components count as touching for support:
+/// a part held 1 mm clear inside a housing (a clip in a duct) is held by it.
+pub const DEFAULT_CONTACT_GAP_MM: f64 = 1.5;
 
 /// Most components a document may have for sequence planning.
 pub const MAX_COMPONENTS: usize = 128;
@@ -16,10 +22,15 @@ pub const MAX_COMPONENTS: usize = 128;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Mode {
     /// Seed 003: the document's mates (relation graph, freedoms, composite nodes).
+    /// A document without mates among the product's components is planned in
+    /// [`Mode::Geometry`] instead (the plan reports the mode used).
     #[default]
     Mates,
-    /// Meshes only: contacts in the assembled pose and a directional blocking graph
-    /// over ±X/±Y/±Z and the contact normals (mates ignored).
+    /// Meshes only: contacts (within the contact gap) in the assembled pose and a
+    /// directional blocking graph over ±X/±Y/±Z and the contact normals; parts those
+    /// do not free get directions from their geometry (normals of near faces,
+    /// principal axes, away from their neighbours), then a seeded sphere of
+    /// directions refined near the free ones (mates ignored).
     Geometry,
 }
 
@@ -110,6 +121,32 @@ pub struct SequenceOptions {
     pub fallback_time_limit_ms: f64,
     /// The gripper used for grasps.
     pub gripper: Gripper,
+    /// The product's components (names): only they are sequenced, and the other
+    /// components are ignored (neither moved nor obstacles). Empty (default): every
+    /// component except robot links and `exclude`.
+    pub components: Vec<String>,
+    /// Components that are not part of the product (fixtures, the table, pedestals):
+    /// ignored like robot links, which are always left out.
+    pub exclude: Vec<String>,
+    /// Physically plausible sequences (default true): every added part touches (within
+    /// `contact_gap_mm`) a part already placed, so no intermediate sub-assembly has
+    /// a floating part. `false`: parts may be placed where nothing holds them yet.
+    pub support: bool,
+    /// Largest gap (mm) at which two components count as touching (support, and the
+    /// contact graph of geometry mode). Default [`DEFAULT_CONTACT_GAP_MM`].
+    pub contact_gap_mm: f64,
+    /// The down direction (any non-zero length, assembly frame) when gravity must be
+    /// respected: every part then moves down or sideways into place (its mating
+    /// direction at most 90° from down). `None` (default): any direction.
+    pub gravity: Option<Vec3>,
+    /// An insertion is difficult (ranked after easier orders) when the part cannot
+    /// move this far (mm) sideways in its assembled pose among the parts already
+    /// placed in at least two directions across its mating direction (a bore), or
+    /// when its path is planned. Default 0.5.
+    pub tight_clearance_mm: f64,
+    /// Directions on the sampled sphere (geometry mode, parts no other candidate
+    /// frees; rotated by `seed`). Default 48; 0 turns the sphere off.
+    pub sphere_directions: usize,
 }
 
 impl Default for SequenceOptions {
@@ -131,6 +168,13 @@ impl Default for SequenceOptions {
             planner_fallback: true,
             fallback_time_limit_ms: 5_000.0,
             gripper: Gripper::default(),
+            components: Vec::new(),
+            exclude: Vec::new(),
+            support: true,
+            contact_gap_mm: DEFAULT_CONTACT_GAP_MM,
+            gravity: None,
+            tight_clearance_mm: 0.5,
+            sphere_directions: 48,
         }
     }
 }
@@ -192,6 +236,9 @@ pub struct StepInfo {
     pub planned: bool,
     /// Whether the mating direction differs from the previous task's.
     pub direction_change: bool,
+    /// Whether the insertion is difficult: a tight fit (the part cannot move
+    /// `tight_clearance_mm` sideways among the placed parts) or a planned path.
+    pub difficult: bool,
 }
 
 /// One assembly sequence: the tasks in order, with their costs.
@@ -209,6 +256,8 @@ pub struct Sequence {
     pub direction_changes: usize,
     /// Total length of the insertion paths (mm).
     pub path_length_mm: f64,
+    /// Difficult insertions (tight fits, planned paths; see [`StepInfo::difficult`]).
+    pub difficult: usize,
 }
 
 impl Sequence {
@@ -236,8 +285,14 @@ pub struct SequencePlan {
     /// The mode used.
     pub mode: Mode,
     /// The sequences found, best first: fewest mounts, then fewest direction changes,
-    /// then shortest total insertion path.
+    /// then fewest difficult insertions, then shortest total insertion path.
     pub sequences: Vec<Sequence>,
+    /// Why the first sequence ranked first, for people (its costs against the
+    /// runner-up's, or that it was the only one found).
+    pub ranking: String,
+    /// The components sequenced (the product), in document order; robot links and
+    /// excluded components are not among them.
+    pub product: Vec<String>,
     /// Orders that failed, with the reason (at most 50).
     pub rejected: Vec<Rejected>,
     /// Precedence: `(a, b)` means `a` is assembled before `b` in every complete

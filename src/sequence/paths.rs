@@ -6,7 +6,9 @@
 use super::context::*;
 use crate::collision::{Aabb, SweepMethod};
 use crate::math::{Transform, Vec3};
-use crate::planning::{MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace};
+use crate::planning::{
+    MeshValidator, MeshValidatorOptions, MotionValidator, PlannedPath, Planner, PlanningSpace,
+};
 
 impl Ctx<'_> {
     /// A path for `p` out of the components of `mask` found by fitup's planners
@@ -66,7 +68,7 @@ impl Ctx<'_> {
         let obstacles: Vec<_> = members(mask)
             .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
             .collect();
-        MeshValidator::new(
+        let mut v = MeshValidator::new(
             self.scene.colliders[p].clone(),
             obstacles,
             MeshValidatorOptions {
@@ -75,7 +77,11 @@ impl Ctx<'_> {
                 ..MeshValidatorOptions::default()
             },
         )
-        .ok()
+        .ok()?;
+        // The call's one deadline: past it every check answers "not free" at once
+        // (a path is then not taken, never wrongly taken).
+        v.set_deadline(Some(self.deadline));
+        Some(v)
     }
 
     /// The cheapest non-straight insertion: slide along one candidate direction

@@ -30,11 +30,15 @@ struct Choice {
 struct Found {
     base: usize,
     choices: Vec<Choice>,
-    cost: (usize, usize, f64),
+    cost: Cost,
 }
 
-fn cost_lt(a: &(usize, usize, f64), b: &(usize, usize, f64)) -> bool {
-    (a.0, a.1) < (b.0, b.1) || ((a.0, a.1) == (b.0, b.1) && a.2 < b.2 - 1e-9)
+/// The ranking of a (partial) sequence: mounts, direction changes, difficult
+/// insertions, total path length (mm); lexicographic.
+type Cost = (usize, usize, usize, f64);
+
+fn cost_lt(a: &Cost, b: &Cost) -> bool {
+    (a.0, a.1, a.2) < (b.0, b.1, b.2) || ((a.0, a.1, a.2) == (b.0, b.1, b.2) && a.3 < b.3 - 1e-9)
 }
 
 struct Search<'c, 'd> {
@@ -95,11 +99,11 @@ impl Search<'_, '_> {
         }
     }
 
-    fn worst_kept(&self) -> Option<(usize, usize, f64)> {
+    fn worst_kept(&self) -> Option<Cost> {
         (self.found.len() >= self.k).then(|| self.found[self.found.len() - 1].cost)
     }
 
-    fn record(&mut self, base: usize, choices: &[Choice], cost: (usize, usize, f64)) {
+    fn record(&mut self, base: usize, choices: &[Choice], cost: Cost) {
         let order: Vec<usize> = std::iter::once(base)
             .chain(choices.iter().map(|c| c.part))
             .collect();
@@ -143,13 +147,12 @@ impl Search<'_, '_> {
         mask: Mask,
         choices: &mut Vec<Choice>,
         current: Option<Vec3>,
-        cost: (usize, usize, f64),
+        cost: Cost,
         pins: &[usize],
         had_free: Mask,
     ) -> bool {
         let ctx = self.ctx;
-        let all: Mask = if ctx.n == 128 { !0 } else { bit(ctx.n) - 1 };
-        if mask == all {
+        if mask & ctx.active == ctx.active {
             self.record(base, choices, cost);
             return true;
         }
@@ -174,11 +177,15 @@ impl Search<'_, '_> {
         let region = union_box(&ctx.boxes, mask).unwrap_or(ctx.boxes[base]);
         // Options: (needs mount, exit distance, part, leave, planned).
         let mut options: Vec<(bool, f64, Choice)> = Vec::new();
-        for p in (0..ctx.n).filter(|&p| mask & bit(p) == 0) {
+        for p in ctx.todo(mask) {
             if pinned.is_some_and(|q| q != p) || !ctx.eligible(p, mask) {
                 continue;
             }
-            let free = ctx.free_dirs(p, mask);
+            let free: Vec<usize> = ctx
+                .free_dirs(p, mask)
+                .into_iter()
+                .filter(|&k| ctx.gravity_allows(&-ctx.dirs[p][k]))
+                .collect();
             // Keeping the current mount direction dominates every other choice.
             let keep = free
                 .iter()
@@ -204,7 +211,7 @@ impl Search<'_, '_> {
             // Parts without a straight insertion: a planned path (seed 002's
             // disassembly, or a two-segment slide-and-lift first), tried as soon as
             // the part is eligible — the fewer parts assembled, the likelier a path.
-            for p in (0..ctx.n).filter(|&p| mask & bit(p) == 0) {
+            for p in ctx.todo(mask) {
                 if pinned.is_some_and(|q| q != p)
                     || !ctx.eligible(p, mask)
                     || options.iter().any(|o| o.2.part == p)
@@ -219,6 +226,9 @@ impl Search<'_, '_> {
                     } else {
                         Vec3::z()
                     };
+                    if !ctx.gravity_allows(&-leave) {
+                        continue;
+                    }
                     options.push((
                         self.mounts_for(current, &-leave),
                         path.length_mm,
@@ -232,8 +242,8 @@ impl Search<'_, '_> {
             }
         }
         if options.is_empty() {
-            let reasons: Vec<String> = (0..ctx.n)
-                .filter(|&p| mask & bit(p) == 0)
+            let reasons: Vec<String> = ctx
+                .todo(mask)
                 .filter(|&p| pinned.is_none_or(|q| q == p))
                 .take(4)
                 .map(|p| ctx.why_not(p, mask))
@@ -271,10 +281,12 @@ impl Search<'_, '_> {
             } else {
                 current
             };
+            let hard = choice.planned.is_some() || ctx.tight(choice.part, &mate, mask);
             let next_cost = (
                 cost.0 + mount as usize,
                 cost.1 + change as usize,
-                cost.2 + len,
+                cost.2 + hard as usize,
+                cost.3 + len,
             );
             let part = choice.part;
             choices.push(choice);
@@ -382,7 +394,7 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
     let mut steps = Vec::new();
     let mut current: Option<Vec3> = None;
     let mut prev: Option<Vec3> = None;
-    let (mut mounts, mut changes, mut total) = (0, 0, 0.0);
+    let (mut mounts, mut changes, mut difficult, mut total) = (0, 0, 0, 0.0);
     let base_pose = ctx.scene.poses[f.base];
     for (index, ch) in f.choices.iter().enumerate() {
         let p = ch.part;
@@ -390,15 +402,10 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
         let mate = -ch.leave;
         let assembled = ctx.scene.poses[p];
         let (safe, path) = match &ch.planned {
-            Some(path) => {
-                let mut validator = ctx
-                    .validator(p, mask, SweepMethod::CONTINUOUS)
-                    .ok_or_else(|| format!("no validator for {}", ctx.names[p]))?;
-                if path.revalidate(&mut validator).is_err() {
-                    return Err(format!("the planned path of {} is blocked", ctx.names[p]));
-                }
-                (ctx.opts.probe_mm, path.clone())
-            }
+            // The search checked this path continuously against exactly `mask`
+            // when it chose it (found there, or a reused one re-validated there):
+            // not checked again, so that building the answer costs no budget.
+            Some(path) => (ctx.opts.probe_mm, path.clone()),
             None => {
                 // The blocking graph's continuous sweep of p along this direction
                 // found no component of `mask` on the whole straight line (see
@@ -453,11 +460,14 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
             mount,
             path,
         });
+        let hard = ch.planned.is_some() || ctx.tight(p, &mate, mask);
+        difficult += hard as usize;
         steps.push(StepInfo {
             receivers: receivers.iter().map(|&q| ctx.names[q].clone()).collect(),
             mating_directions,
             planned: ch.planned.is_some(),
             direction_change: change,
+            difficult: hard,
         });
         mask |= bit(p);
         order.push(p);
@@ -469,6 +479,7 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
         mounts,
         direction_changes: changes,
         path_length_mm: total,
+        difficult,
     })
 }
 
@@ -492,7 +503,7 @@ pub(crate) fn plan(
             vec![base]
         }
         None => {
-            let mut c: Vec<usize> = (0..n).collect();
+            let mut c: Vec<usize> = members(ctx.active).collect();
             c.sort_by(|&a, &b| ctx.sizes[b].total_cmp(&ctx.sizes[a]).then(a.cmp(&b)));
             c
         }
@@ -573,7 +584,12 @@ impl Search<'_, '_> {
             }
             search.dead.clear();
             let mut choices = Vec::new();
-            search.dfs(base, bit(base), &mut choices, None, (0, 0, 0.0), pins, 0);
+            search.dfs(base, bit(base), &mut choices, None, (0, 0, 0, 0.0), pins, 0);
+            // The base is the part a person would fix: the largest that works. A
+            // smaller base is tried only when no sequence starts from a larger one.
+            if search.complete_count > 0 {
+                break;
+            }
         }
     }
 }
@@ -630,10 +646,11 @@ fn finish(
         });
     }
     sequences.sort_by(|a, b| {
-        (a.mounts, a.direction_changes)
-            .cmp(&(b.mounts, b.direction_changes))
+        (a.mounts, a.direction_changes, a.difficult)
+            .cmp(&(b.mounts, b.direction_changes, b.difficult))
             .then(a.path_length_mm.total_cmp(&b.path_length_mm))
     });
+    let ranking = ranking(ctx, &sequences, cut);
     // Precedence: a before b in every complete sequence seen, transitively reduced.
     let n = ctx.n;
     let rel = |a: usize, b: usize| count > 0 && before[a][b] == count;
@@ -648,6 +665,8 @@ fn finish(
     Ok(SequencePlan {
         mode: ctx.opts.mode,
         sequences,
+        ranking,
+        product: members(ctx.active).map(|i| ctx.names[i].clone()).collect(),
         rejected,
         precedence,
         complete: !cut,
@@ -655,6 +674,68 @@ fn finish(
         time_ms: ctx.started.elapsed().as_secs_f64() * 1e3,
         sweeps: ctx.sweeps.load(Ordering::Relaxed),
     })
+}
+
+/// Why the first sequence ranked first, for people.
+fn ranking(ctx: &Ctx, sequences: &[Sequence], cut: bool) -> String {
+    let first = &sequences[0];
+    let hard: Vec<&str> = first
+        .tasks
+        .iter()
+        .zip(&first.steps)
+        .filter(|(_, s)| s.difficult)
+        .map(|(t, _)| t.part.as_str())
+        .collect();
+    let base_why = if ctx.opts.base.is_some() {
+        "pinned"
+    } else {
+        "the largest component that starts a sequence"
+    };
+    let costs = format!(
+        "base {} ({base_why}), {} mounts, {} direction changes, {} difficult insertions{}, {} mm of insertion paths",
+        first.base,
+        first.mounts,
+        first.direction_changes,
+        first.difficult,
+        if hard.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", hard.join(", "))
+        },
+        crate::math::format::number(first.path_length_mm, 4)
+    );
+    let Some(second) = sequences.get(1) else {
+        return format!(
+            "the only sequence found{}: {costs}",
+            if cut {
+                " before the search was cut"
+            } else {
+                ""
+            }
+        );
+    };
+    let why = if first.mounts != second.mounts {
+        format!("fewer mounts ({} vs {})", first.mounts, second.mounts)
+    } else if first.direction_changes != second.direction_changes {
+        format!(
+            "fewer direction changes ({} vs {})",
+            first.direction_changes, second.direction_changes
+        )
+    } else if first.difficult != second.difficult {
+        format!(
+            "fewer difficult insertions — tight fits or planned paths ({} vs {})",
+            first.difficult, second.difficult
+        )
+    } else if first.path_length_mm < second.path_length_mm - 1e-9 {
+        format!(
+            "shorter insertion paths ({} vs {} mm)",
+            crate::math::format::number(first.path_length_mm, 4),
+            crate::math::format::number(second.path_length_mm, 4)
+        )
+    } else {
+        "equal costs; found first".to_string()
+    };
+    format!("ranked first for {why} than the next: {costs}")
 }
 
 /// `Vec3` of the component's candidate directions that are free among every other

@@ -31,6 +31,7 @@ fn task_json(t: &Task, s: &super::options::StepInfo) -> Value {
         "mount": t.mount,
         "direction_change": s.direction_change,
         "planned": s.planned,
+        "difficult": s.difficult,
         "path_length_mm": t.path.length_mm,
         "path": t.path.poses.iter().map(pose).collect::<Vec<_>>(),
         "obstacle_box": {"min": [t.obstacle_box.lo.x, t.obstacle_box.lo.y, t.obstacle_box.lo.z],
@@ -57,6 +58,7 @@ impl Sequence {
             "order": self.order(),
             "mounts": self.mounts,
             "direction_changes": self.direction_changes,
+            "difficult": self.difficult,
             "path_length_mm": self.path_length_mm,
             "tasks": self.tasks.iter().zip(&self.steps).map(|(t, s)| task_json(t, s)).collect::<Vec<_>>(),
         })
@@ -100,16 +102,17 @@ impl Sequence {
     /// A few lines for people: the order and each task.
     pub fn summary(&self) -> String {
         let mut s = format!(
-            "base {}; {} mount(s), {} direction change(s), insertion paths {}\n",
+            "base {}; {} mount(s), {} direction change(s), {} difficult insertion(s), insertion paths {}\n",
             self.base,
             self.mounts,
             self.direction_changes,
+            self.difficult,
             fmt_mm(self.path_length_mm)
         );
         for (t, st) in self.tasks.iter().zip(&self.steps) {
             let d = t.mating_direction;
             s += &format!(
-                "  {}. {} {} onto {} along ({}, {}, {}), safe length {}{}{}\n",
+                "  {}. {} {} onto {} along ({}, {}, {}), safe length {}{}{}{}\n",
                 t.index + 1,
                 t.operation.name(),
                 t.part,
@@ -128,6 +131,11 @@ impl Sequence {
                     ""
                 },
                 if st.planned { ", planned path" } else { "" },
+                if st.difficult && !st.planned {
+                    ", tight fit"
+                } else {
+                    ""
+                },
             );
         }
         s
@@ -153,6 +161,8 @@ impl SequencePlan {
         let g = &self.graph;
         json!({
             "mode": self.mode.name(),
+            "product": self.product,
+            "ranking": self.ranking,
             "sequences": self.sequences.iter().map(|s| s.to_json_value()).collect::<Vec<_>>(),
             "rejected": self.rejected.iter().map(|r| json!({"order": r.order, "reason": r.reason})).collect::<Vec<_>>(),
             "precedence": self.precedence.iter().map(|(a, b)| json!([a, b])).collect::<Vec<_>>(),
@@ -193,14 +203,20 @@ impl SequencePlan {
         );
         for (i, q) in self.sequences.iter().enumerate() {
             if i == 0 {
-                s += &format!("best: {}\n{}", q.order().join(" → "), q.summary());
+                s += &format!(
+                    "best: {}\n{}{}\n",
+                    q.order().join(" → "),
+                    q.summary(),
+                    self.ranking
+                );
             } else {
                 s += &format!(
-                    "#{}: {} ({} mount(s), {} direction change(s), {})\n",
+                    "#{}: {} ({} mount(s), {} direction change(s), {} difficult, {})\n",
                     i + 1,
                     q.order().join(" → "),
                     q.mounts,
                     q.direction_changes,
+                    q.difficult,
                     fmt_mm(q.path_length_mm)
                 );
             }

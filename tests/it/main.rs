@@ -24,6 +24,7 @@ mod planning_problems;
 mod robots;
 mod scripts;
 mod sequence;
+mod sequence_real;
 mod sequence_watch;
 mod simple_message_peer;
 mod skills;
