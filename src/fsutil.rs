@@ -115,7 +115,7 @@ impl FileKind {
     pub const fn name(self) -> &'static str {
         match self {
             FileKind::Document => "a document",
-            FileKind::Mesh => "an STL mesh",
+            FileKind::Mesh => "a mesh",
             FileKind::Script => "a script",
             FileKind::Program => "a robot program",
             FileKind::Table => "a CSV table",
@@ -232,8 +232,12 @@ pub const RRD_MAGIC: &[u8; 4] = b"RRF2";
 /// programs, robot descriptions, the project file): never replaced by an output
 /// without `--force`, whoever wrote them.
 const PROJECT_EXTENSIONS: &[&str] = &[
-    "yaml", "yml", "stl", "obj", "rhai", "prg", "toml", "urdf", "xacro", "dae", "sdf",
+    "yaml", "yml", "stl", "obj", "ply", "gltf", "rhai", "prg", "toml", "urdf", "xacro", "dae",
+    "sdf",
 ];
+// `.glb` is not listed: `fitup export` writes it and replaces its own output; a GLB the
+// user made is still refused (not in the registry), and one the run read as a part mesh
+// is refused through `OutputRule::used`.
 
 /// How a writer may treat an existing file at its output path (see [`check_output`]).
 #[derive(Clone, Copy, Default)]

@@ -612,6 +612,7 @@ impl Document {
         }
         // URDF robots: their links' meshes become generated parts and components.
         let mut urdf = HashMap::new();
+        let mut urdf_warnings: Vec<String> = Vec::new();
         let mut generated = std::collections::HashSet::new();
         for rf in &file.robots {
             let Some(u) = &rf.urdf else { continue };
@@ -627,7 +628,9 @@ impl Document {
                     format!("robot `{}`: {m}", rf.name),
                 ))
             };
-            let loaded = robot::read_urdf_robot(project, &dir, u, cache).map_err(robot_at)?;
+            let loaded = robot::read_urdf_robot(project, &dir, u, rf.tip.as_deref(), cache)
+                .map_err(robot_at)?;
+            urdf_warnings.extend(loaded.warnings.iter().cloned());
             add_urdf_parts(
                 &rf.name,
                 u,
@@ -745,6 +748,7 @@ impl Document {
             c.transform = p;
         }
         doc.warnings = case_warnings(&file, path, positions);
+        doc.warnings.extend(urdf_warnings);
         Ok(doc)
     }
 
