@@ -316,7 +316,7 @@ fn io_err(e: std::io::Error) -> OutputError {
 ///    ([`OUTPUT_REGISTRY`], `.fitup-*.tmp`) — these hold even with `force`;
 /// 2. with `force`, any such file; otherwise
 /// 3. it is not a file the project uses: no project extension (`yaml`, `yml`, `stl`,
-///    `obj`, `rhai`, `prg`, `toml`, `urdf`, `xacro`, `dae`, `sdf`), not a SQLite
+///    `obj`, `ply`, `gltf`, `rhai`, `prg`, `toml`, `urdf`, `xacro`, `dae`, `sdf`), not a SQLite
 ///    database (by its first 16 bytes, whatever its name), not a file the run read
 ///    ([`OutputRule::used`]); and
 /// 4. fitup wrote it: the registry of its folder lists its name with its current size

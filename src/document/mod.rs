@@ -27,11 +27,13 @@
 //! ```
 
 pub mod dimension;
+mod export;
 pub mod file;
 pub mod mates;
 pub mod reference;
 pub mod robot;
 pub mod scan;
+pub use export::GlbExport;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use mates::{Mate, MateEntity, MateKind};

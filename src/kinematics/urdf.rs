@@ -9,15 +9,19 @@
 //! line in the parent frame (`R_origin·axis` through the origin's position), which
 //! gives the identical motion. Joint types: `revolute` and `continuous` (rad;
 //! `continuous` has no limits), `prismatic` (limits ×1000, mm), `fixed`; `floating` and
-//! `planar` are refused. The robot's flange is the link at the end of the chain with
-//! the most movable joints (then the deepest, e.g. a fixed `tool0`) unless a tip link
-//! is named;
-//! the tool is the identity. When the chain is an OPW arm the closed-form solver is
+//! `planar` are refused. `<mimic joint multiplier offset>` makes a joint follow its
+//! leader ([`crate::kinematics::Mimic`]): it is not a free joint. The robot's flange is
+//! the last link of the serial arm unless a tip link is named: the most free joints
+//! on links not moved by a mimic joint or a mimic's leader (a gripper's fingers), a
+//! link that does not carry such fingers before one that does, then the deepest (e.g.
+//! a fixed `tool0`); the tool is the identity. When the chain is an OPW arm the closed-form solver is
 //! chosen from the geometry (see [`Robot::analytic`]).
 //!
-//! Meshes: `<visual><geometry><mesh filename>` per link (or the link's `<collision>`
-//! meshes when it has no visual mesh) are listed in [`UrdfRobot::meshes`] (with the
-//! visual origin and scale); `package://PKG/rest` URIs resolve to
+//! Geometry: a link's `<visual>` elements when fitup reads all their meshes (STL, OBJ,
+//! PLY, glTF), else its `<collision>` elements when it reads those, else what it reads
+//! of either, each mesh left out a warning in [`UrdfRobot::warnings`]. Mesh files are
+//! listed in [`UrdfRobot::meshes`] (with the origin and scale); `<box>`, `<cylinder>`
+//! and `<sphere>` are meshed into [`UrdfRobot::primitives`]; `package://PKG/rest` URIs resolve to
 //! `rest` relative to the URDF's folder (ROS-Industrial support packages keep
 //! `urdf/` and `meshes/` side by side: a URDF in `PKG/urdf/` resolves
 //! `package://PKG/meshes/x.stl` to `PKG/urdf/../meshes/x.stl` — see [`resolve_mesh`]).

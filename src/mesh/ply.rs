@@ -223,14 +223,22 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                         if !(n >= 0.0 && n.fract() == 0.0) {
                             return Err(fail(format!("list length {n} is not a count")));
                         }
-                        // Checked before reading: a list cannot be longer than the
-                        // bytes left (binary: its items' size; ASCII: a byte each).
-                        let left = reader.bytes.len().saturating_sub(reader.pos) as f64;
-                        let per = if format == Format::Ascii { 1 } else { s.size() };
-                        if n * per as f64 > left {
-                            return Err(fail(format!(
-                                "a list of {n} items does not fit in the {left} bytes left (truncated?)"
-                            )));
+                        // Checked before reading: a list cannot be longer than what
+                        // is left (binary: its items' bytes; ASCII: the line's words).
+                        if format == Format::Ascii {
+                            let left = reader.words.len();
+                            if n > left as f64 {
+                                return Err(fail(format!(
+                                    "a list of {n} items, but the line has {left} values left"
+                                )));
+                            }
+                        } else {
+                            let left = reader.bytes.len().saturating_sub(reader.pos) as f64;
+                            if n * s.size() as f64 > left {
+                                return Err(fail(format!(
+                                    "a list of {n} items does not fit in the {left} bytes left (truncated?)"
+                                )));
+                            }
                         }
                         values.clear();
                         for _ in 0..n as usize {
