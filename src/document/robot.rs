@@ -528,7 +528,8 @@ fn build(
     if let (Some(t), None) = (&f.tip, &f.urdf) {
         return Err((
             format!("tip: {t}"),
-            "`tip` names the arm's last link of a `urdf:` robot; an explicit tree names `flange`".into(),
+            "`tip` names the arm's last link of a `urdf:` robot; an explicit tree names `flange`"
+                .into(),
         ));
     }
     let mut robot = match (&f.catalog, &f.dh) {

@@ -111,20 +111,24 @@ impl KinematicTree {
             };
             let movable = |i: usize| self.links.get(i).is_some_and(|l| l.joint.kind.is_movable());
             if !movable(f) || !movable(m.leader) || f == m.leader {
-                return Err(bad("a mimic joint and its leader must be two movable joints".into()));
+                return Err(bad(
+                    "a mimic joint and its leader must be two movable joints".into(),
+                ));
             }
             if !(m.multiplier.is_finite() && m.offset.is_finite()) {
                 return Err(bad("mimic multiplier and offset must be finite".into()));
             }
             table[f] = Some(m);
         }
-        if let Some(f) = (0..table.len())
-            .find(|&f| table[f].is_some_and(|m| table[m.leader].is_some()))
+        if let Some(f) =
+            (0..table.len()).find(|&f| table[f].is_some_and(|m| table[m.leader].is_some()))
         {
             return Err(KinematicsError::InvalidLink {
                 link: f,
                 name: self.links[f].name.clone().unwrap_or_default(),
-                cause: "its mimic leader follows another joint (resolve the chain to the first leader)".into(),
+                cause:
+                    "its mimic leader follows another joint (resolve the chain to the first leader)"
+                        .into(),
             });
         }
         self.mimics = if table.iter().any(Option::is_some) {

@@ -344,7 +344,15 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
         ));
     }
     let new_index: HashMap<usize, usize> = order.iter().enumerate().map(|(i, &l)| (l, i)).collect();
-    let mimics = mimics(&doc, path, &mimic_nodes, &joint_child, &parent_of, &new_index, &link_nodes)?;
+    let mimics = mimics(
+        &doc,
+        path,
+        &mimic_nodes,
+        &joint_child,
+        &parent_of,
+        &new_index,
+        &link_nodes,
+    )?;
     let follower: HashMap<usize, Mimic> = mimics.iter().copied().collect();
     let leaders: std::collections::HashSet<usize> = mimics.iter().map(|(_, m)| m.leader).collect();
     let mut links = Vec::with_capacity(order.len());
@@ -440,7 +448,8 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 .filter(|c| c.children().any(|g| g.has_tag_name("geometry")))
                 .collect::<Vec<_>>()
         };
-        let readable = |v: &roxmltree::Node| match v.descendants().find(|c| c.has_tag_name("mesh")) {
+        let readable = |v: &roxmltree::Node| match v.descendants().find(|c| c.has_tag_name("mesh"))
+        {
             Some(m) => m
                 .attribute("filename")
                 .is_none_or(|f| MeshFormat::from_path(Path::new(f)).is_some()),
@@ -493,6 +502,21 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 return Err(at(g, "<geometry> is empty".into()));
             };
             let line = doc.text_pos_at(shape.range().start).row as usize;
+            if !["mesh", "box", "cylinder", "sphere"].contains(&shape.tag_name().name()) {
+                // SDF-style shapes (capsule, …): the link loads without them.
+                let p = doc.text_pos_at(shape.range().start);
+                warnings.push(SourceError::new(
+                    path,
+                    p.row as usize,
+                    p.col as usize,
+                    format!(
+                        "link `{}`: <{}> geometry is not supported (mesh, box, cylinder, sphere): left out",
+                        link_nodes[l].attribute("name").unwrap_or(""),
+                        short(shape.tag_name().name())
+                    ),
+                ));
+                continue;
+            }
             if !shape.has_tag_name("mesh") {
                 let mesh = primitive(&doc, path, shape)?.transformed(&origin_t);
                 primitives.push(UrdfPrimitive {
@@ -560,7 +584,13 @@ fn mimics(
             .attribute("joint")
             .ok_or_else(|| at(m, format!("link `{lname}`: <mimic> without a joint")))?;
         let leader = *joint_child.get(leader_name).ok_or_else(|| {
-            at(m, format!("link `{lname}`: mimic joint `{}` is not defined", short(leader_name)))
+            at(
+                m,
+                format!(
+                    "link `{lname}`: mimic joint `{}` is not defined",
+                    short(leader_name)
+                ),
+            )
         })?;
         let [k] = attribute_numbers(doc, path, m, "multiplier", [1.0], 1.0)?;
         let [o] = attribute_numbers(doc, path, m, "offset", [0.0], 1000.0)?;
@@ -575,11 +605,20 @@ fn mimics(
             }
         }
         if leader == child {
-            return Err(at(m, format!("link `{lname}`: a joint cannot mimic itself")));
+            return Err(at(
+                m,
+                format!("link `{lname}`: a joint cannot mimic itself"),
+            ));
         }
         raw.insert(child, (leader, k, o, m));
     }
-    let unit = |link: usize| if parent_of.get(&link).is_some_and(|j| j.prismatic()) { 1000.0 } else { 1.0 };
+    let unit = |link: usize| {
+        if parent_of.get(&link).is_some_and(|j| j.prismatic()) {
+            1000.0
+        } else {
+            1.0
+        }
+    };
     let mut out = Vec::with_capacity(raw.len());
     for (&f, &(leader, k, o, node)) in &raw {
         // f = k·l + o, l = k2·l2 + o2, … down to a joint that leads only.
@@ -588,7 +627,10 @@ fn mimics(
         while let Some(&(next, k2, o2, _)) = raw.get(&lead) {
             steps += 1;
             if steps > raw.len() {
-                return Err(at(node, "mimic joints that follow each other in a cycle".into()));
+                return Err(at(
+                    node,
+                    "mimic joints that follow each other in a cycle".into(),
+                ));
             }
             o += k * o2;
             k *= k2;
@@ -617,20 +659,34 @@ trait JointOf {
 /// The closed mesh of a URDF `<box size>`, `<cylinder radius length>` (along Z) or
 /// `<sphere radius>`, centred on the geometry's origin, in mm. Errors name the
 /// attribute.
-fn primitive(doc: &roxmltree::Document, path: &Path, shape: roxmltree::Node) -> Result<Mesh, SourceError> {
+fn primitive(
+    doc: &roxmltree::Document,
+    path: &Path,
+    shape: roxmltree::Node,
+) -> Result<Mesh, SourceError> {
     let name = shape.tag_name().name();
     let positive = |attr: &str, v: f64| {
         if v > 0.0 {
             Ok(v * 1000.0)
         } else {
             let p = attribute_pos(doc, shape, attr);
-            Err(SourceError::new(path, p.0, p.1, format!("<{name}> {attr} must be > 0, not {v}")))
+            Err(SourceError::new(
+                path,
+                p.0,
+                p.1,
+                format!("<{name}> {attr} must be > 0, not {v}"),
+            ))
         }
     };
     let need = |attr: &str| {
         if shape.attribute(attr).is_none() {
             let p = doc.text_pos_at(shape.range().start);
-            return Err(SourceError::new(path, p.row as usize, p.col as usize, format!("<{name}> needs a `{attr}`")));
+            return Err(SourceError::new(
+                path,
+                p.row as usize,
+                p.col as usize,
+                format!("<{name}> needs a `{attr}`"),
+            ));
         }
         Ok(())
     };
@@ -638,8 +694,15 @@ fn primitive(doc: &roxmltree::Document, path: &Path, shape: roxmltree::Node) -> 
         "box" => {
             need("size")?;
             let s = attribute_numbers(doc, path, shape, "size", [0.0; 3], 1000.0)?;
-            let h = [positive("size", s[0])? / 2.0, positive("size", s[1])? / 2.0, positive("size", s[2])? / 2.0];
-            Ok(Mesh::cuboid(Point3::new(-h[0], -h[1], -h[2]), Point3::new(h[0], h[1], h[2])))
+            let h = [
+                positive("size", s[0])? / 2.0,
+                positive("size", s[1])? / 2.0,
+                positive("size", s[2])? / 2.0,
+            ];
+            Ok(Mesh::cuboid(
+                Point3::new(-h[0], -h[1], -h[2]),
+                Point3::new(h[0], h[1], h[2]),
+            ))
         }
         "cylinder" => {
             need("radius")?;
@@ -662,7 +725,10 @@ fn primitive(doc: &roxmltree::Document, path: &Path, shape: roxmltree::Node) -> 
                 path,
                 p.row as usize,
                 p.col as usize,
-                format!("<{}> geometry is not supported (mesh, box, cylinder, sphere)", short(other)),
+                format!(
+                    "<{}> geometry is not supported (mesh, box, cylinder, sphere)",
+                    short(other)
+                ),
             ))
         }
     }
@@ -671,8 +737,6 @@ fn primitive(doc: &roxmltree::Document, path: &Path, shape: roxmltree::Node) -> 
 /// Facets around a meshed cylinder or sphere: the volume is within 0.2 % (cylinder)
 /// and 0.5 % (sphere) of the exact one.
 const PRIMITIVE_SEGMENTS: usize = 64;
-
-
 
 /// Reads and parses a URDF file (see [`parse_urdf`]).
 pub fn read_urdf(path: &Path, tip: Option<&str>) -> Result<UrdfRobot, SourceError> {

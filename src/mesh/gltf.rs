@@ -117,8 +117,9 @@ pub fn glb_bytes(nodes: &[GlbNode]) -> Result<Vec<u8>, MeshError> {
         bin.push(0);
     }
     let total = 12 + 8 + text.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let total32 = u32::try_from(total)
-        .map_err(|_| MeshError::invalid(format!("{total} bytes: larger than a GLB can be (4 GiB)")))?;
+    let total32 = u32::try_from(total).map_err(|_| {
+        MeshError::invalid(format!("{total} bytes: larger than a GLB can be (4 GiB)"))
+    })?;
     let mut out = Vec::with_capacity(total);
     out.extend(b"glTF");
     out.extend(2u32.to_le_bytes());
@@ -181,7 +182,10 @@ mod read {
     /// whose count does not fit its buffer view (checked before anything is
     /// allocated), an index past its positions, more than [`MAX_TRIANGLES`]
     /// triangles, a file without triangles or whose triangles all have zero area.
-    pub fn parse_gltf(bytes: &[u8], folder: Option<&Path>) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
+    pub fn parse_gltf(
+        bytes: &[u8],
+        folder: Option<&Path>,
+    ) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
         let gltf = gltf::Gltf::from_slice(bytes).map_err(load_error)?;
         let doc = &gltf.document;
         let mut files = Vec::new();
@@ -191,10 +195,9 @@ mod read {
         for b in doc.buffers() {
             let here = format!("buffers[{}]", b.index());
             let data = match b.source() {
-                gltf::buffer::Source::Bin => gltf
-                    .blob
-                    .clone()
-                    .ok_or_else(|| MeshError::invalid(format!("{here}: no binary chunk in the file")))?,
+                gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                    MeshError::invalid(format!("{here}: no binary chunk in the file"))
+                })?,
                 gltf::buffer::Source::Uri(uri) => {
                     if let Some(rest) = uri.strip_prefix("data:") {
                         let (_, b64) = rest.split_once(";base64,").ok_or_else(|| {
@@ -241,11 +244,8 @@ mod read {
         let mut soup: Vec<[Point3; 3]> = Vec::new();
         // glTF's +Y up → fitup's +Z up: the inverse (transpose) of the export's root.
         let up = nalgebra::Matrix4::from_column_slice(&super::Z_UP_TO_Y_UP).transpose();
-        let mut stack: Vec<(gltf::Node, nalgebra::Matrix4<f64>, usize)> = roots
-            .into_iter()
-            .rev()
-            .map(|n| (n, up, 0))
-            .collect();
+        let mut stack: Vec<(gltf::Node, nalgebra::Matrix4<f64>, usize)> =
+            roots.into_iter().rev().map(|n| (n, up, 0)).collect();
         let mut visits = 0usize;
         let mut skipped = 0usize;
         while let Some((node, parent, depth)) = stack.pop() {
@@ -266,7 +266,10 @@ mod read {
                 };
                 for (pi, prim) in mesh.primitives().enumerate() {
                     let at = |m: String| MeshError::invalid(format!("{here} primitive {pi}: {m}"));
-                    if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+                    if !matches!(
+                        prim.mode(),
+                        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+                    ) {
                         skipped += 1;
                         continue;
                     }
@@ -280,7 +283,9 @@ mod read {
                     };
                     let tris = assemble(prim.mode(), &corners);
                     if soup.len() + tris.len() > MAX_TRIANGLES {
-                        return Err(at(format!("more than {MAX_TRIANGLES} triangles: larger than fitup reads")));
+                        return Err(at(format!(
+                            "more than {MAX_TRIANGLES} triangles: larger than fitup reads"
+                        )));
                     }
                     // A mirroring transform turns the winding inside out: swap back.
                     let mirrored = world.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
@@ -301,7 +306,9 @@ mod read {
             } else {
                 String::new()
             };
-            return Err(MeshError::invalid(format!("the glTF's scene has no triangles{why}")));
+            return Err(MeshError::invalid(format!(
+                "the glTF's scene has no triangles{why}"
+            )));
         }
         if !mesh.has_area() {
             return Err(MeshError::invalid(format!(
@@ -316,7 +323,9 @@ mod read {
     /// validation names.
     fn load_error(e: gltf::Error) -> MeshError {
         match e {
-            gltf::Error::Deserialize(j) => MeshError::at(j.line().max(1), format!("not valid glTF JSON: {j}")),
+            gltf::Error::Deserialize(j) => {
+                MeshError::at(j.line().max(1), format!("not valid glTF JSON: {j}"))
+            }
             gltf::Error::Validation(list) => {
                 let shown: Vec<String> = list
                     .iter()
@@ -324,7 +333,11 @@ mod read {
                     .map(|(path, err)| format!("{path}: {err}"))
                     .collect();
                 let more = list.len().saturating_sub(3);
-                let more = if more > 0 { format!(" (and {more} more)") } else { String::new() };
+                let more = if more > 0 {
+                    format!(" (and {more} more)")
+                } else {
+                    String::new()
+                };
                 MeshError::invalid(format!("invalid glTF: {}{more}", shown.join("; ")))
             }
             other => MeshError::invalid(format!("not a valid glTF/GLB file: {other}")),
@@ -336,19 +349,32 @@ mod read {
         let folder = folder.ok_or("external buffer files are not read here (use a .glb)")?;
         let decoded = percent_decode(uri)?;
         let rel = Path::new(&decoded);
-        if decoded.contains("://") || rel.is_absolute() || rel.components().any(|c| !matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir)) {
+        if decoded.contains("://")
+            || rel.is_absolute()
+            || rel.components().any(|c| {
+                !matches!(
+                    c,
+                    std::path::Component::Normal(_) | std::path::Component::CurDir
+                )
+            })
+        {
             return Err(format!(
                 "buffer `{}`: only files beside the glTF or below its folder are read (no absolute path, `..` or URL)",
                 short(uri)
             ));
         }
-        let base = folder.canonicalize().map_err(|e| format!("{}: {e}", folder.display()))?;
+        let base = folder
+            .canonicalize()
+            .map_err(|e| format!("{}: {e}", folder.display()))?;
         let file = base
             .join(rel)
             .canonicalize()
             .map_err(|e| format!("buffer `{}`: {e}", short(uri)))?;
         if !file.starts_with(&base) {
-            return Err(format!("buffer `{}` leads outside the glTF's folder (a symbolic link)", short(uri)));
+            return Err(format!(
+                "buffer `{}` leads outside the glTF's folder (a symbolic link)",
+                short(uri)
+            ));
         }
         Ok(file)
     }
@@ -419,10 +445,18 @@ mod read {
             .offset()
             .checked_add(view.length())
             .filter(|&e| e <= data.len())
-            .ok_or_else(|| format!("bufferViews[{}]: reaches past its buffer's {} bytes", view.index(), data.len()))?;
+            .ok_or_else(|| {
+                format!(
+                    "bufferViews[{}]: reaches past its buffer's {} bytes",
+                    view.index(),
+                    data.len()
+                )
+            })?;
         let stride = view.stride().unwrap_or(elem);
         if stride < elem {
-            return Err(format!("{here}: stride {stride} is smaller than an element ({elem} bytes)"));
+            return Err(format!(
+                "{here}: stride {stride} is smaller than an element ({elem} bytes)"
+            ));
         }
         let count = acc.count();
         let start = view.offset() + acc.offset();
@@ -438,8 +472,15 @@ mod read {
     }
 
     /// The positions of `acc` placed by `world` and scaled to mm, each checked.
-    fn positions(acc: &gltf::Accessor, buffers: &[Vec<u8>], world: &nalgebra::Matrix4<f64>) -> Result<Vec<Point3>, String> {
-        if acc.data_type() != DataType::F32 || acc.dimensions() != Dimensions::Vec3 || acc.normalized() {
+    fn positions(
+        acc: &gltf::Accessor,
+        buffers: &[Vec<u8>],
+        world: &nalgebra::Matrix4<f64>,
+    ) -> Result<Vec<Point3>, String> {
+        if acc.data_type() != DataType::F32
+            || acc.dimensions() != Dimensions::Vec3
+            || acc.normalized()
+        {
             return Err(format!(
                 "accessors[{}]: POSITION must be a float VEC3 (quantized positions are not supported)",
                 acc.index()
@@ -449,11 +490,18 @@ mod read {
         let mut out = Vec::with_capacity(count);
         for i in 0..count {
             let e = &bytes[i * stride..i * stride + 12];
-            let f = |k: usize| f32::from_le_bytes([e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]]) as f64;
+            let f = |k: usize| {
+                f32::from_le_bytes([e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]]) as f64
+            };
             let p = world * nalgebra::Vector4::new(f(0), f(1), f(2), 1.0);
             let p = Point3::new(p.x * 1000.0, p.y * 1000.0, p.z * 1000.0);
             for c in p.coords.iter() {
-                check_coordinate(*c).map_err(|m| format!("accessors[{}] element {i}: {m} (mm, once placed)", acc.index()))?;
+                check_coordinate(*c).map_err(|m| {
+                    format!(
+                        "accessors[{}] element {i}: {m} (mm, once placed)",
+                        acc.index()
+                    )
+                })?;
             }
             out.push(p);
         }
@@ -466,10 +514,18 @@ mod read {
             DataType::U8 => 1,
             DataType::U16 => 2,
             DataType::U32 => 4,
-            other => return Err(format!("accessors[{}]: indices of type {other:?} (must be unsigned)", acc.index())),
+            other => {
+                return Err(format!(
+                    "accessors[{}]: indices of type {other:?} (must be unsigned)",
+                    acc.index()
+                ))
+            }
         };
         if acc.dimensions() != Dimensions::Scalar {
-            return Err(format!("accessors[{}]: indices must be scalars", acc.index()));
+            return Err(format!(
+                "accessors[{}]: indices must be scalars",
+                acc.index()
+            ));
         }
         let (bytes, stride, count) = accessor_bytes(acc, buffers, size)?;
         let mut out = Vec::with_capacity(count);
@@ -481,7 +537,10 @@ mod read {
                 _ => u32::from_le_bytes([e[0], e[1], e[2], e[3]]),
             };
             if v as usize >= n {
-                return Err(format!("accessors[{}] element {i}: index {v} is past the {n} positions", acc.index()));
+                return Err(format!(
+                    "accessors[{}] element {i}: index {v} is past the {n} positions",
+                    acc.index()
+                ));
             }
             out.push(v);
         }
@@ -492,7 +551,13 @@ mod read {
     fn assemble(mode: Mode, c: &[u32]) -> Vec<[u32; 3]> {
         match mode {
             Mode::TriangleStrip => (2..c.len())
-                .map(|i| if i % 2 == 0 { [c[i - 2], c[i - 1], c[i]] } else { [c[i - 1], c[i - 2], c[i]] })
+                .map(|i| {
+                    if i % 2 == 0 {
+                        [c[i - 2], c[i - 1], c[i]]
+                    } else {
+                        [c[i - 1], c[i - 2], c[i]]
+                    }
+                })
                 .collect(),
             Mode::TriangleFan => (2..c.len()).map(|i| [c[0], c[i - 1], c[i]]).collect(),
             _ => c.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
@@ -510,8 +575,16 @@ mod tests {
         let cube = Mesh::cuboid(Point3::origin(), Point3::new(10.0, 20.0, 30.0));
         let at = Transform::from_translation(Vec3::new(100.0, 0.0, 0.0));
         let glb = glb_bytes(&[
-            GlbNode { name: "a", mesh: &cube, pose: Transform::IDENTITY },
-            GlbNode { name: "b", mesh: &cube, pose: at },
+            GlbNode {
+                name: "a",
+                mesh: &cube,
+                pose: Transform::IDENTITY,
+            },
+            GlbNode {
+                name: "b",
+                mesh: &cube,
+                pose: at,
+            },
         ])
         .unwrap();
         let g = gltf::Gltf::from_slice(&glb).unwrap();
@@ -520,9 +593,16 @@ mod tests {
         let (m, files) = parse_gltf(&glb, None).unwrap();
         assert!(files.is_empty());
         assert!(m.inspect().is_watertight());
-        assert!((m.signed_volume() - 2.0 * 6000.0).abs() < 1e-3 * 6000.0, "{}", m.signed_volume());
+        assert!(
+            (m.signed_volume() - 2.0 * 6000.0).abs() < 1e-3 * 6000.0,
+            "{}",
+            m.signed_volume()
+        );
         let b = m.bounds().unwrap();
         assert!((b.lo - Point3::origin()).norm() < 1e-4, "{b:?}");
-        assert!((b.hi - Point3::new(110.0, 20.0, 30.0)).norm() < 1e-4, "{b:?}");
+        assert!(
+            (b.hi - Point3::new(110.0, 20.0, 30.0)).norm() < 1e-4,
+            "{b:?}"
+        );
     }
 }

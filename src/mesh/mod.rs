@@ -35,9 +35,9 @@ mod ply;
 mod shapes;
 mod stl;
 
-pub use self::gltf::{glb_bytes, GlbNode, GLB_ROOT, Z_UP_TO_Y_UP};
 #[cfg(feature = "formats")]
 pub use self::gltf::parse_gltf;
+pub use self::gltf::{glb_bytes, GlbNode, GLB_ROOT, Z_UP_TO_Y_UP};
 pub use cache::MeshCache;
 pub use obj::parse_obj;
 pub use ply::parse_ply;
@@ -155,11 +155,7 @@ fn finish_read(
     if triangles.is_empty() {
         return Err(MeshError::invalid(format!("the {format} has no {what}")));
     }
-    let mesh = Mesh::from_triangle_soup(
-        triangles
-            .iter()
-            .map(|t| t.map(|i| vertices[i as usize])),
-    )?;
+    let mesh = Mesh::from_triangle_soup(triangles.iter().map(|t| t.map(|i| vertices[i as usize])))?;
     if !mesh.has_area() {
         let message = format!(
             "all {} triangles have zero area (their corners are collinear or coincide): the mesh has no surface",

@@ -12,14 +12,31 @@ use crate::math::Point3;
 /// Attribute and grouping statements that carry no geometry fitup uses (texture
 /// coordinates, normals, groups, materials, smoothing, lines and points): skipped.
 const IGNORED: &[&str] = &[
-    "vt", "vn", "vp", "g", "o", "s", "mg", "usemtl", "mtllib", "l", "p", "lod", "bevel",
-    "c_interp", "d_interp", "shadow_obj", "trace_obj", "maplib", "usemap",
+    "vt",
+    "vn",
+    "vp",
+    "g",
+    "o",
+    "s",
+    "mg",
+    "usemtl",
+    "mtllib",
+    "l",
+    "p",
+    "lod",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "shadow_obj",
+    "trace_obj",
+    "maplib",
+    "usemap",
 ];
 
 /// Free-form geometry, which would need a surface tessellator.
 const FREE_FORM: &[&str] = &[
-    "cstype", "deg", "bmat", "step", "curv", "curv2", "surf", "parm", "trim", "hole", "scrv",
-    "sp", "end", "con", "ctech", "stech",
+    "cstype", "deg", "bmat", "step", "curv", "curv2", "surf", "parm", "trim", "hole", "scrv", "sp",
+    "end", "con", "ctech", "stech",
 ];
 
 /// Parses OBJ bytes into a mesh (mm: OBJ has no units, fitup reads them as STL's).
@@ -158,14 +175,30 @@ f 1 3 2\nf 1 4 3\nf 5 6 7 8\nf 1/1/1 2/2/1 6/3/1\nf 1 6 5\nf -7 -6 -2\nf 2 7 6\n
     #[test]
     fn errors_name_their_line() {
         let cases = [
-            (CUBE.replacen("v 1 0 0", "v 1 x 0", 1), 3, "`x` is not a number"),
-            (CUBE.replacen("f 1 3 2", "f 1 3 99", 1), 11, "past the 8 vertices"),
+            (
+                CUBE.replacen("v 1 0 0", "v 1 x 0", 1),
+                3,
+                "`x` is not a number",
+            ),
+            (
+                CUBE.replacen("f 1 3 2", "f 1 3 99", 1),
+                11,
+                "past the 8 vertices",
+            ),
             (CUBE.replacen("f 1 3 2", "f 1 0 2", 1), 11, "index 0"),
-            (CUBE.replacen("f 1 3 2", "f 1 3", 1), 11, "at least 3 corners"),
+            (
+                CUBE.replacen("f 1 3 2", "f 1 3", 1),
+                11,
+                "at least 3 corners",
+            ),
             (CUBE.replacen("v 1 0 0", "v 1 nan 0", 1), 3, "not finite"),
             (CUBE.replacen("v 1 0 0", "v 1 2e9 0", 1), 3, "out of range"),
             (CUBE.replacen("vn 0 0 1", "curv 0 1 2", 1), 10, "free-form"),
-            (CUBE.replacen("vn 0 0 1", "bogus", 1), 10, "unexpected `bogus`"),
+            (
+                CUBE.replacen("vn 0 0 1", "bogus", 1),
+                10,
+                "unexpected `bogus`",
+            ),
         ];
         for (text, line, needle) in cases {
             let e = parse_obj(text.as_bytes()).unwrap_err();
@@ -174,6 +207,9 @@ f 1 3 2\nf 1 4 3\nf 5 6 7 8\nf 1/1/1 2/2/1 6/3/1\nf 1 6 5\nf -7 -6 -2\nf 2 7 6\n
         }
         let e = parse_obj(b"v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n").unwrap_err();
         assert!(e.message.contains("zero area") && e.line == Some(4), "{e}");
-        assert!(parse_obj(b"v 0 0 0\n").unwrap_err().message.contains("no faces"));
+        assert!(parse_obj(b"v 0 0 0\n")
+            .unwrap_err()
+            .message
+            .contains("no faces"));
     }
 }

@@ -203,9 +203,9 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
             for (pi, p) in e.properties.iter().enumerate() {
                 match p {
                     Property::Scalar(s, _) => {
-                        let v = reader.value(*s).map_err(|m| {
-                            reader_error(format, reader.line, &e.name, item, m)
-                        })?;
+                        let v = reader
+                            .value(*s)
+                            .map_err(|m| reader_error(format, reader.line, &e.name, item, m))?;
                         if ei == vi {
                             if let Some(k) = xyz.iter().position(|&x| x == pi) {
                                 check_coordinate(v).map_err(|m| {
@@ -216,9 +216,9 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                         }
                     }
                     Property::List(c, s, _) => {
-                        let n = reader.value(*c).map_err(|m| {
-                            reader_error(format, reader.line, &e.name, item, m)
-                        })?;
+                        let n = reader
+                            .value(*c)
+                            .map_err(|m| reader_error(format, reader.line, &e.name, item, m))?;
                         let fail = |m: String| reader_error(format, reader.line, &e.name, item, m);
                         if !(n >= 0.0 && n.fract() == 0.0) {
                             return Err(fail(format!("list length {n} is not a count")));
@@ -254,7 +254,9 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                     }
                 }
             }
-            reader.end_item().map_err(|m| reader_error(format, reader.line, &e.name, item, m))?;
+            reader
+                .end_item()
+                .map_err(|m| reader_error(format, reader.line, &e.name, item, m))?;
             if ei == vi {
                 vertices.push(Point3::new(coords[0], coords[1], coords[2]));
             }
@@ -380,7 +382,10 @@ impl<'a> Reader<'a> {
 /// The header: the format, the elements, and the offset of the body.
 fn header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize), MeshError> {
     if !bytes.starts_with(b"ply") {
-        return Err(MeshError::at(1, "not a PLY file: it does not start with `ply`"));
+        return Err(MeshError::at(
+            1,
+            "not a PLY file: it does not start with `ply`",
+        ));
     }
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
@@ -448,9 +453,9 @@ fn header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize), MeshError> {
             }
             "property" => {
                 let t = word("a type")?;
-                let e = elements.last_mut().ok_or_else(|| {
-                    MeshError::at(line, "`property` before any `element`")
-                })?;
+                let e = elements
+                    .last_mut()
+                    .ok_or_else(|| MeshError::at(line, "`property` before any `element`"))?;
                 let ty = |s: &str| {
                     Scalar::parse(s).ok_or_else(|| {
                         MeshError::at(line, format!("unknown property type `{}`", short(s)))
@@ -460,7 +465,10 @@ fn header(bytes: &[u8]) -> Result<(Format, Vec<Element>, usize), MeshError> {
                     let c = ty(words.next().unwrap_or(""))?;
                     let i = ty(words.next().unwrap_or(""))?;
                     if !c.is_integer() {
-                        return Err(MeshError::at(line, "a list's count type must be an integer"));
+                        return Err(MeshError::at(
+                            line,
+                            "a list's count type must be an integer",
+                        ));
                     }
                     let name = words
                         .next()
@@ -508,7 +516,11 @@ mod tests {
             } else {
                 for c in [v.x, v.y, v.z] {
                     let f = c as f32;
-                    out.extend(if big { f.to_be_bytes() } else { f.to_le_bytes() });
+                    out.extend(if big {
+                        f.to_be_bytes()
+                    } else {
+                        f.to_le_bytes()
+                    });
                 }
                 out.push(255);
             }
@@ -520,7 +532,11 @@ mod tests {
                 out.push(3);
                 for &i in t {
                     let i = i as i32;
-                    out.extend(if big { i.to_be_bytes() } else { i.to_le_bytes() });
+                    out.extend(if big {
+                        i.to_be_bytes()
+                    } else {
+                        i.to_le_bytes()
+                    });
                 }
             }
         }
@@ -546,12 +562,19 @@ mod tests {
         assert!(e.message.contains("`zero` is not a number"), "{e}");
         let e = parse_ply(ascii.replacen("3 0 2 1", "3 0 2 100", 1).as_bytes()).unwrap_err();
         assert!(e.message.contains("index 100"), "{e}");
-        let e = parse_ply(ascii.replacen("element vertex 8", "element vertex 99999999999", 1).as_bytes())
-            .unwrap_err();
+        let e = parse_ply(
+            ascii
+                .replacen("element vertex 8", "element vertex 99999999999", 1)
+                .as_bytes(),
+        )
+        .unwrap_err();
         assert_eq!(e.line, Some(4), "{e}");
         assert!(e.message.contains("declares 99999999999 items"), "{e}");
         let bin = cube_ply("binary_little_endian");
         let e = parse_ply(&bin[..bin.len() - 3]).unwrap_err();
-        assert!(e.message.contains("face 11") && e.message.contains("truncated"), "{e}");
+        assert!(
+            e.message.contains("face 11") && e.message.contains("truncated"),
+            "{e}"
+        );
     }
 }

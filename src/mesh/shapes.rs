@@ -14,7 +14,11 @@ impl Mesh {
             .map(|k| {
                 let t = std::f64::consts::PI * k as f64 / rings as f64;
                 // Exactly on the axis at the poles (the lathe requires it).
-                let r = if k == 0 || k == rings { 0.0 } else { radius * t.sin() };
+                let r = if k == 0 || k == rings {
+                    0.0
+                } else {
+                    radius * t.sin()
+                };
                 (r, -radius * t.cos())
             })
             .collect();

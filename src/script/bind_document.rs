@@ -278,7 +278,11 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Document.export_glb(file: string, options: map)",
         "`export_glb(file)` with `#{overwrite}` (bool, default false).",
         |d: &mut DocHandle, file: &str, opts: Map| -> ScriptResult<()> {
-            export_glb(d, file, super::convert::overwrite_option(&opts, "export_glb")?)
+            export_glb(
+                d,
+                file,
+                super::convert::overwrite_option(&opts, "export_glb")?,
+            )
         },
     );
     api.f(

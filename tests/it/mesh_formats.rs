@@ -29,7 +29,11 @@ fn obj_text(m: &Mesh) -> String {
 }
 
 fn ply_bytes(m: &Mesh, binary: bool) -> Vec<u8> {
-    let format = if binary { "binary_little_endian" } else { "ascii" };
+    let format = if binary {
+        "binary_little_endian"
+    } else {
+        "ascii"
+    };
     let mut out = format!(
         "ply\nformat {format} 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar uint vertex_indices\nend_header\n",
         m.vertices.len(),
@@ -94,10 +98,23 @@ fn formats_project() -> tempfile::TempDir {
     std::fs::create_dir(p.join("buffers")).unwrap();
     std::fs::write(p.join("buffers/block%.bin"), &bin).unwrap();
     json["buffers"][0]["uri"] = "buffers/block%25.bin".into();
-    std::fs::write(p.join("external.gltf"), serde_json::to_vec_pretty(&json).unwrap()).unwrap();
-    json["buffers"][0]["uri"] = format!("data:application/octet-stream;base64,{}", base64(&bin)).into();
+    std::fs::write(
+        p.join("external.gltf"),
+        serde_json::to_vec_pretty(&json).unwrap(),
+    )
+    .unwrap();
+    json["buffers"][0]["uri"] =
+        format!("data:application/octet-stream;base64,{}", base64(&bin)).into();
     std::fs::write(p.join("embedded.gltf"), serde_json::to_vec(&json).unwrap()).unwrap();
-    let names = ["block.stl", "block.obj", "ascii.ply", "binary.ply", "block.glb", "external.gltf", "embedded.gltf"];
+    let names = [
+        "block.stl",
+        "block.obj",
+        "ascii.ply",
+        "binary.ply",
+        "block.glb",
+        "external.gltf",
+        "embedded.gltf",
+    ];
     let mut yaml = String::from("parts:\n");
     for (i, n) in names.iter().enumerate() {
         yaml += &format!("  p{i}:\n    stl: {n}\n");
@@ -114,7 +131,9 @@ fn base64(b: &[u8]) -> String {
     const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut s = String::new();
     for c in b.chunks(3) {
-        let n = (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
+        let n = (u32::from(c[0]) << 16)
+            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+            | u32::from(*c.get(2).unwrap_or(&0));
         for k in 0..4 {
             if k <= c.len() {
                 s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
@@ -139,13 +158,26 @@ fn obj_ply_and_gltf_parts_load_as_the_same_solid() {
         assert!(m.inspect().is_watertight(), "{}: {:?}", p.stl, m.inspect());
         assert_eq!(m.triangles.len(), 12, "{}", p.stl);
         assert_eq!(m.vertices.len(), 8, "{}", p.stl);
-        assert!((m.signed_volume() - 1000.0).abs() < 1e-3, "{}: {}", p.stl, m.signed_volume());
+        assert!(
+            (m.signed_volume() - 1000.0).abs() < 1e-3,
+            "{}: {}",
+            p.stl,
+            m.signed_volume()
+        );
         let (a, b) = (m.bounds().unwrap(), reference.bounds().unwrap());
-        assert!((a.lo - b.lo).norm() < 1e-5 && (a.hi - b.hi).norm() < 1e-5, "{}: {a:?}", p.stl);
+        assert!(
+            (a.lo - b.lo).norm() < 1e-5 && (a.hi - b.hi).norm() < 1e-5,
+            "{}: {a:?}",
+            p.stl
+        );
     }
     let o = common::run_in(dir.path(), &["check", "cell.yaml"]);
     assert!(o.status.success(), "{}", common::text(&o));
-    assert!(!common::text(&o).contains("not watertight"), "{}", common::text(&o));
+    assert!(
+        !common::text(&o).contains("not watertight"),
+        "{}",
+        common::text(&o)
+    );
 }
 
 /// The cache keys every format by canonical path and stamp: a second lookup parses
@@ -166,7 +198,11 @@ fn the_mesh_cache_keys_every_format_like_stl() {
     for f in &files {
         cache.get(f).unwrap();
     }
-    assert_eq!(cache.parse_count(), 4, "unchanged files are not parsed again");
+    assert_eq!(
+        cache.parse_count(),
+        4,
+        "unchanged files are not parsed again"
+    );
     // A bigger block in the buffer file: the .gltf's own bytes are unchanged.
     std::thread::sleep(std::time::Duration::from_millis(20));
     let big = Mesh::cuboid(Point3::origin(), Point3::new(40.0, 10.0, 5.0));
@@ -185,9 +221,18 @@ fn a_gltf_buffer_outside_its_folder_is_refused() {
     std::fs::create_dir(p.join("sub")).unwrap();
     let (mut json, _) = gltf_parts(&block());
     json["buffers"][0]["uri"] = "../buffers/block%25.bin".into();
-    std::fs::write(p.join("sub/escape.gltf"), serde_json::to_vec(&json).unwrap()).unwrap();
-    let e = fitup::mesh::read_mesh_file(&p.join("sub/escape.gltf")).unwrap_err().to_string();
-    assert!(e.contains("escape.gltf") && e.contains("buffers[0]") && e.contains("`..`"), "{e}");
+    std::fs::write(
+        p.join("sub/escape.gltf"),
+        serde_json::to_vec(&json).unwrap(),
+    )
+    .unwrap();
+    let e = fitup::mesh::read_mesh_file(&p.join("sub/escape.gltf"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("escape.gltf") && e.contains("buffers[0]") && e.contains("`..`"),
+        "{e}"
+    );
 }
 
 /// A cell of two parts and three components (one turned, one lifted) exported by
@@ -211,7 +256,11 @@ fn export_writes_a_glb_with_the_documents_nodes() {
     .unwrap();
     let o = common::run_in(p, &["export", "cell.yaml", "cell.glb"]);
     assert!(o.status.success(), "{}", common::text(&o));
-    assert!(common::text(&o).contains("3 nodes, 2 meshes"), "{}", common::text(&o));
+    assert!(
+        common::text(&o).contains("3 nodes, 2 meshes"),
+        "{}",
+        common::text(&o)
+    );
     let doc = Document::open(&p.join("cell.yaml")).unwrap();
     let bytes = std::fs::read(p.join("cell.glb")).unwrap();
     let g = gltf::Gltf::from_slice(&bytes).unwrap();
@@ -236,7 +285,12 @@ fn export_writes_a_glb_with_the_documents_nodes() {
         for col in 0..4 {
             for row in 0..4 {
                 let want = expected[(row, col)] / if col == 3 && row < 3 { 1000.0 } else { 1.0 };
-                assert!((m[col][row] as f64 - want).abs() < 1e-6, "{}: [{col}][{row}] {} vs {want}", c.name, m[col][row]);
+                assert!(
+                    (m[col][row] as f64 - want).abs() < 1e-6,
+                    "{}: [{col}][{row}] {} vs {want}",
+                    c.name,
+                    m[col][row]
+                );
             }
         }
         let mesh = node.mesh().unwrap();
@@ -248,7 +302,9 @@ fn export_writes_a_glb_with_the_documents_nodes() {
         // The first vertex, in metres.
         let view = pos.view().unwrap();
         let at = view.offset() + pos.offset();
-        let f = |k: usize| f32::from_le_bytes(blob[at + 4 * k..at + 4 * k + 4].try_into().unwrap()) as f64;
+        let f = |k: usize| {
+            f32::from_le_bytes(blob[at + 4 * k..at + 4 * k + 4].try_into().unwrap()) as f64
+        };
         let v = part.vertices[0];
         assert!((Vec3::new(f(0), f(1), f(2)) - v.coords / 1000.0).norm() < 1e-7);
     }
@@ -256,21 +312,34 @@ fn export_writes_a_glb_with_the_documents_nodes() {
     let back = fitup::mesh::read_mesh_file(&p.join("cell.glb")).unwrap();
     let b = back.bounds().unwrap();
     let want = doc.assembly_aabb().unwrap();
-    assert!((b.lo - want.lo).norm() < 1e-3 && (b.hi - want.hi).norm() < 1e-3, "{b:?} vs {want:?}");
+    assert!(
+        (b.lo - want.lo).norm() < 1e-3 && (b.hi - want.hi).norm() < 1e-3,
+        "{b:?} vs {want:?}"
+    );
     // Its own output is replaced; the document's STL and a file fitup did not write are
     // not (unchanged), nor is anything written for a wrong extension.
-    assert!(common::run_in(p, &["export", "cell.yaml", "cell.glb"]).status.success());
+    assert!(common::run_in(p, &["export", "cell.yaml", "cell.glb"])
+        .status
+        .success());
     let stl = std::fs::read(p.join("block.stl")).unwrap();
     std::fs::write(p.join("theirs.glb"), b"not ours").unwrap();
     let o = common::run_in(p, &["export", "cell.yaml", "theirs.glb"]);
     assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
-    assert!(common::text(&o).contains("did not write"), "{}", common::text(&o));
+    assert!(
+        common::text(&o).contains("did not write"),
+        "{}",
+        common::text(&o)
+    );
     assert_eq!(std::fs::read(p.join("theirs.glb")).unwrap(), b"not ours");
     let o = common::run_in(p, &["export", "cell.yaml", "block.stl"]);
     assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
     assert_eq!(std::fs::read(p.join("block.stl")).unwrap(), stl);
     // In a script: the same bytes through the run's write rule.
-    std::fs::write(p.join("export.rhai"), "let doc = open_doc(\"cell.yaml\");\ndoc.export_glb(\"script.glb\");\n").unwrap();
+    std::fs::write(
+        p.join("export.rhai"),
+        "let doc = open_doc(\"cell.yaml\");\ndoc.export_glb(\"script.glb\");\n",
+    )
+    .unwrap();
     let o = common::run_in(p, &["run", "export.rhai"]);
     assert!(o.status.success(), "{}", common::text(&o));
     assert_eq!(std::fs::read(p.join("script.glb")).unwrap(), bytes);
@@ -283,9 +352,13 @@ fn readme_export_command() {
     let o = common::run_in(dir.path(), &["export", "models/cell.yaml", "out/cell.glb"]);
     assert!(o.status.success(), "{}", common::text(&o));
     let doc = Document::open(&dir.path().join("models/cell.yaml")).unwrap();
-    let g = gltf::Gltf::from_slice(&std::fs::read(dir.path().join("out/cell.glb")).unwrap()).unwrap();
+    let g =
+        gltf::Gltf::from_slice(&std::fs::read(dir.path().join("out/cell.glb")).unwrap()).unwrap();
     let root = g.document.default_scene().unwrap().nodes().next().unwrap();
-    let names: Vec<_> = root.children().map(|n| n.name().unwrap_or("").to_string()).collect();
+    let names: Vec<_> = root
+        .children()
+        .map(|n| n.name().unwrap_or("").to_string())
+        .collect();
     let want: Vec<_> = doc.components().iter().map(|c| c.name.clone()).collect();
     assert_eq!(names, want);
 }
@@ -294,7 +367,13 @@ fn readme_export_command() {
 /// gripper whose right finger mimics the left (multiplier −1, offset 1 mm), and a
 /// link of each primitive. `link_1`'s visual is COLLADA, its collision mesh STL.
 fn gripper_urdf() -> String {
-    let j = |name: &str, kind: &str, parent: &str, child: &str, xyz: &str, axis: &str, extra: &str| {
+    let j = |name: &str,
+             kind: &str,
+             parent: &str,
+             child: &str,
+             xyz: &str,
+             axis: &str,
+             extra: &str| {
         format!(
             "<joint name=\"{name}\" type=\"{kind}\"><origin xyz=\"{xyz}\"/><parent link=\"{parent}\"/><child link=\"{child}\"/><axis xyz=\"{axis}\"/><limit lower=\"-3\" upper=\"3\"/>{extra}</joint>\n"
         )
@@ -304,16 +383,50 @@ fn gripper_urdf() -> String {
     s += "<link name=\"link_2\"><visual><origin xyz=\"0 0 0.3\"/><geometry><cylinder radius=\"0.04\" length=\"0.5\"/></geometry></visual></link>\n";
     s += "<link name=\"link_3\"/><link name=\"link_4\"/>\n<link name=\"link_5\"><visual><geometry><sphere radius=\"0.05\"/></geometry></visual></link>\n";
     s += "<link name=\"link_6\"/><link name=\"flange\"/><link name=\"gripper_base\"/><link name=\"finger_left\"/><link name=\"finger_right\"/>\n";
-    s += &j("joint_1", "revolute", "base_link", "link_1", "0 0 0.45", "0 0 1", "");
-    s += &j("joint_2", "revolute", "link_1", "link_2", "0.15 0 0", "0 1 0", "");
-    s += &j("joint_3", "revolute", "link_2", "link_3", "0 0 0.6", "0 1 0", "");
-    s += &j("joint_4", "revolute", "link_3", "link_4", "0 0 0.12", "1 0 0", "");
-    s += &j("joint_5", "revolute", "link_4", "link_5", "0.55 0 0", "0 1 0", "");
-    s += &j("joint_6", "revolute", "link_5", "link_6", "0.1 0 0", "1 0 0", "");
+    s += &j(
+        "joint_1",
+        "revolute",
+        "base_link",
+        "link_1",
+        "0 0 0.45",
+        "0 0 1",
+        "",
+    );
+    s += &j(
+        "joint_2", "revolute", "link_1", "link_2", "0.15 0 0", "0 1 0", "",
+    );
+    s += &j(
+        "joint_3", "revolute", "link_2", "link_3", "0 0 0.6", "0 1 0", "",
+    );
+    s += &j(
+        "joint_4", "revolute", "link_3", "link_4", "0 0 0.12", "1 0 0", "",
+    );
+    s += &j(
+        "joint_5", "revolute", "link_4", "link_5", "0.55 0 0", "0 1 0", "",
+    );
+    s += &j(
+        "joint_6", "revolute", "link_5", "link_6", "0.1 0 0", "1 0 0", "",
+    );
     s += "<joint name=\"to_flange\" type=\"fixed\"><origin xyz=\"0 0 0\" rpy=\"0 1.5707963267948966 0\"/><parent link=\"link_6\"/><child link=\"flange\"/></joint>\n";
     s += "<joint name=\"to_gripper\" type=\"fixed\"><origin xyz=\"0 0 0.05\"/><parent link=\"flange\"/><child link=\"gripper_base\"/></joint>\n";
-    s += &j("finger_joint", "prismatic", "gripper_base", "finger_left", "0 0.01 0.04", "0 1 0", "");
-    s += &j("finger_mimic", "prismatic", "gripper_base", "finger_right", "0 -0.01 0.04", "0 1 0", "<mimic joint=\"finger_joint\" multiplier=\"-1\" offset=\"0.001\"/>");
+    s += &j(
+        "finger_joint",
+        "prismatic",
+        "gripper_base",
+        "finger_left",
+        "0 0.01 0.04",
+        "0 1 0",
+        "",
+    );
+    s += &j(
+        "finger_mimic",
+        "prismatic",
+        "gripper_base",
+        "finger_right",
+        "0 -0.01 0.04",
+        "0 1 0",
+        "<mimic joint=\"finger_joint\" multiplier=\"-1\" offset=\"0.001\"/>",
+    );
     s + "</robot>\n"
 }
 
@@ -335,13 +448,21 @@ fn a_gripper_with_a_mimic_finger_keeps_the_arm_closed_form() {
     let home = r.link_poses(&[0.0; 6]).unwrap();
     let base = home[tree.find("gripper_base").unwrap()];
     let y = |p: &Transform| (base.inverse() * *p).translation().y;
-    assert!((y(&home[right]) - (-10.0 + 1.0)).abs() < 1e-9, "{}", y(&home[right]));
+    assert!(
+        (y(&home[right]) - (-10.0 + 1.0)).abs() < 1e-9,
+        "{}",
+        y(&home[right])
+    );
     // Driven through the tree: the leader at 7 mm puts the follower at −7 + 1 mm.
     let mut values = vec![0.0; tree.len()];
     values[left] = 7.0;
     values[right] = 1234.0; // ignored: a follower takes its leader's value
     let poses = tree.link_poses(&Transform::IDENTITY, &values).unwrap();
-    let rel = |i: usize| (poses[tree.find("gripper_base").unwrap()].inverse() * poses[i]).translation().y;
+    let rel = |i: usize| {
+        (poses[tree.find("gripper_base").unwrap()].inverse() * poses[i])
+            .translation()
+            .y
+    };
     assert!((rel(left) - 17.0).abs() < 1e-9 && (rel(right) - (-10.0 - 7.0 + 1.0)).abs() < 1e-9);
     // Naming the leader finger as the tip: 7 joints, the follower follows joint 7.
     let u = parse_urdf(Path::new("arm.urdf"), &gripper_urdf(), Some("finger_left")).unwrap();
@@ -350,10 +471,16 @@ fn a_gripper_with_a_mimic_finger_keeps_the_arm_closed_form() {
     let p = u.robot.link_poses(&q).unwrap();
     let t = u.robot.tree();
     let gb = p[t.find("gripper_base").unwrap()].inverse();
-    assert!(((gb * p[t.find("finger_right").unwrap()]).translation().y - (-10.0 - 4.0 + 1.0)).abs() < 1e-9);
+    assert!(
+        ((gb * p[t.find("finger_right").unwrap()]).translation().y - (-10.0 - 4.0 + 1.0)).abs()
+            < 1e-9
+    );
     // A tip moved by a mimic joint is refused, naming it.
     let e = parse_urdf(Path::new("arm.urdf"), &gripper_urdf(), Some("finger_right")).unwrap_err();
-    assert!(e.to_string().contains("finger_right") && e.to_string().contains("mimic"), "{e}");
+    assert!(
+        e.to_string().contains("finger_right") && e.to_string().contains("mimic"),
+        "{e}"
+    );
 }
 
 /// In a document: `link_1` loads from its STL collision mesh (the visual is `.dae`),
@@ -373,14 +500,25 @@ fn a_urdf_document_robot_loads_collision_meshes_and_primitives() {
         &Mesh::cuboid(Point3::new(-0.05, -0.05, 0.0), Point3::new(0.05, 0.05, 0.1)),
     )
     .unwrap();
-    std::fs::write(p.join("cell.yaml"), "robots:\n- name: g\n  urdf: arm/urdf/arm.urdf\n").unwrap();
+    std::fs::write(
+        p.join("cell.yaml"),
+        "robots:\n- name: g\n  urdf: arm/urdf/arm.urdf\n",
+    )
+    .unwrap();
     let doc = Document::open(&p.join("cell.yaml")).unwrap();
     assert!(doc.warnings().is_empty(), "{:?}", doc.warnings());
     let robot = doc.robots()[0].robot();
     assert_eq!(robot.solver_name(), "opw");
-    assert_eq!(robot.tree().links()[robot.flange()].name.as_deref(), Some("flange"));
+    assert_eq!(
+        robot.tree().links()[robot.flange()].name.as_deref(),
+        Some("flange")
+    );
     let volume = |c: &str| doc.mesh_of(doc.component_index(c).unwrap()).signed_volume();
-    assert!((volume("g:link_1") - 1e6).abs() < 1.0, "{}", volume("g:link_1"));
+    assert!(
+        (volume("g:link_1") - 1e6).abs() < 1.0,
+        "{}",
+        volume("g:link_1")
+    );
     let cases = [
         ("g:base_link", 200.0 * 100.0 * 50.0, 1e-9),
         ("g:link_2", PI * 40.0 * 40.0 * 500.0, 0.005),
@@ -389,17 +527,41 @@ fn a_urdf_document_robot_loads_collision_meshes_and_primitives() {
     for (c, exact, tol) in cases {
         let v = volume(c);
         assert!((v - exact).abs() <= tol * exact, "{c}: {v} vs {exact}");
-        assert!(doc.mesh_of(doc.component_index(c).unwrap()).inspect().is_watertight(), "{c}");
+        assert!(
+            doc.mesh_of(doc.component_index(c).unwrap())
+                .inspect()
+                .is_watertight(),
+            "{c}"
+        );
     }
     // The cylinder's visual origin lifts it 300 mm: centred at z = 300 in link_2.
-    let b = doc.mesh_of(doc.component_index("g:link_2").unwrap()).bounds().unwrap();
-    assert!((b.lo.z - 50.0).abs() < 1e-9 && (b.hi.z - 550.0).abs() < 1e-9, "{b:?}");
+    let b = doc
+        .mesh_of(doc.component_index("g:link_2").unwrap())
+        .bounds()
+        .unwrap();
+    assert!(
+        (b.lo.z - 50.0).abs() < 1e-9 && (b.hi.z - 550.0).abs() < 1e-9,
+        "{b:?}"
+    );
     // `tip:` names the arm's last link.
-    std::fs::write(p.join("tip.yaml"), "robots:\n- name: g\n  urdf: arm/urdf/arm.urdf\n  tip: link_6\n").unwrap();
+    std::fs::write(
+        p.join("tip.yaml"),
+        "robots:\n- name: g\n  urdf: arm/urdf/arm.urdf\n  tip: link_6\n",
+    )
+    .unwrap();
     let doc = Document::open(&p.join("tip.yaml")).unwrap();
     let robot = doc.robots()[0].robot();
-    assert_eq!(robot.tree().links()[robot.flange()].name.as_deref(), Some("link_6"));
-    std::fs::write(p.join("bad_tip.yaml"), "robots:\n- name: g\n  urdf: arm/urdf/arm.urdf\n  tip: nowhere\n").unwrap();
-    let e = Document::open(&p.join("bad_tip.yaml")).unwrap_err().to_string();
+    assert_eq!(
+        robot.tree().links()[robot.flange()].name.as_deref(),
+        Some("link_6")
+    );
+    std::fs::write(
+        p.join("bad_tip.yaml"),
+        "robots:\n- name: g\n  urdf: arm/urdf/arm.urdf\n  tip: nowhere\n",
+    )
+    .unwrap();
+    let e = Document::open(&p.join("bad_tip.yaml"))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("bad_tip.yaml") && e.contains("nowhere"), "{e}");
 }
