@@ -248,10 +248,13 @@ fn export_writes_a_glb_with_the_documents_nodes() {
     write_stl(&p.join("pin.stl"), &Mesh::cylinder(3.0, 30.0, 24)).unwrap();
     std::fs::write(
         p.join("cell.yaml"),
-        "parts:\n  block:\n    stl: block.stl\n  pin:\n    stl: pin.stl\ncomponents:\n\
-  - name: base\n    part: block\n    fixed: true\n\
-  - name: lid\n    part: block\n    transform: [[0,1,0,0],[-1,0,0,0],[0,0,1,0],[5,40,5,1]]\n\
-  - name: pin ½\n    part: pin\n    transform: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[10,5,250,1]]\n",
+        [
+            "parts:\n  block:\n    stl: block.stl\n  pin:\n    stl: pin.stl\ncomponents:\n",
+            "  - name: base\n    part: block\n    fixed: true\n",
+            "  - name: lid\n    part: block\n    transform: [[0,1,0,0],[-1,0,0,0],[0,0,1,0],[5,40,5,1]]\n",
+            "  - name: pin ½\n    part: pin\n    transform: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[10,5,250,1]]\n",
+        ]
+        .concat(),
     )
     .unwrap();
     let o = common::run_in(p, &["export", "cell.yaml", "cell.glb"]);
@@ -447,7 +450,7 @@ fn a_gripper_with_a_mimic_finger_keeps_the_arm_closed_form() {
     // The leader is off the arm's chain: held at 0, so the follower sits at +1 mm.
     let home = r.link_poses(&[0.0; 6]).unwrap();
     let base = home[tree.find("gripper_base").unwrap()];
-    let y = |p: &Transform| (base.inverse() * *p).translation().y;
+    let y = |p: &Transform| (*p * base.inverse()).translation().y;
     assert!(
         (y(&home[right]) - (-10.0 + 1.0)).abs() < 1e-9,
         "{}",
@@ -459,7 +462,7 @@ fn a_gripper_with_a_mimic_finger_keeps_the_arm_closed_form() {
     values[right] = 1234.0; // ignored: a follower takes its leader's value
     let poses = tree.link_poses(&Transform::IDENTITY, &values).unwrap();
     let rel = |i: usize| {
-        (poses[tree.find("gripper_base").unwrap()].inverse() * poses[i])
+        (poses[i] * poses[tree.find("gripper_base").unwrap()].inverse())
             .translation()
             .y
     };
@@ -472,7 +475,7 @@ fn a_gripper_with_a_mimic_finger_keeps_the_arm_closed_form() {
     let t = u.robot.tree();
     let gb = p[t.find("gripper_base").unwrap()].inverse();
     assert!(
-        ((gb * p[t.find("finger_right").unwrap()]).translation().y - (-10.0 - 4.0 + 1.0)).abs()
+        ((p[t.find("finger_right").unwrap()] * gb).translation().y - (-10.0 - 4.0 + 1.0)).abs()
             < 1e-9
     );
     // A tip moved by a mimic joint is refused, naming it.
