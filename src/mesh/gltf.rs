@@ -110,10 +110,10 @@ pub fn glb_bytes(nodes: &[GlbNode]) -> Result<Vec<u8>, MeshError> {
         root["buffers"] = json!([{"byteLength": bin.len()}]);
     }
     let mut text = serde_json::to_vec(&root).map_err(|e| MeshError::invalid(e.to_string()))?;
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + text.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };

@@ -99,7 +99,7 @@ fn cube_glb_parts() -> (serde_json::Value, Vec<u8>) {
 /// A GLB container around `json` and `bin` (lengths as they are).
 fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
     let mut text = serde_json::to_vec(json).unwrap();
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
     let mut out = b"glTF".to_vec();
