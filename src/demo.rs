@@ -403,6 +403,7 @@ fn mz07_robot(
         base: Some(base),
         tool: Some(robot.tool().to_matrix()),
         flange: None,
+        tip: None,
         drawn_at_zero: true,
         links,
         joints: Some(vec![0.0; 6]),

@@ -115,7 +115,7 @@ impl FileKind {
     pub const fn name(self) -> &'static str {
         match self {
             FileKind::Document => "a document",
-            FileKind::Mesh => "an STL mesh",
+            FileKind::Mesh => "a mesh",
             FileKind::Script => "a script",
             FileKind::Program => "a robot program",
             FileKind::Table => "a CSV table",
@@ -232,8 +232,12 @@ pub const RRD_MAGIC: &[u8; 4] = b"RRF2";
 /// programs, robot descriptions, the project file): never replaced by an output
 /// without `--force`, whoever wrote them.
 const PROJECT_EXTENSIONS: &[&str] = &[
-    "yaml", "yml", "stl", "obj", "rhai", "prg", "toml", "urdf", "xacro", "dae", "sdf",
+    "yaml", "yml", "stl", "obj", "ply", "gltf", "rhai", "prg", "toml", "urdf", "xacro", "dae",
+    "sdf",
 ];
+// `.glb` is not listed: `fitup export` writes it and replaces its own output; a GLB the
+// user made is still refused (not in the registry), and one the run read as a part mesh
+// is refused through `OutputRule::used`.
 
 /// How a writer may treat an existing file at its output path (see [`check_output`]).
 #[derive(Clone, Copy, Default)]
@@ -312,7 +316,7 @@ fn io_err(e: std::io::Error) -> OutputError {
 ///    ([`OUTPUT_REGISTRY`], `.fitup-*.tmp`) — these hold even with `force`;
 /// 2. with `force`, any such file; otherwise
 /// 3. it is not a file the project uses: no project extension (`yaml`, `yml`, `stl`,
-///    `obj`, `rhai`, `prg`, `toml`, `urdf`, `xacro`, `dae`, `sdf`), not a SQLite
+///    `obj`, `ply`, `gltf`, `rhai`, `prg`, `toml`, `urdf`, `xacro`, `dae`, `sdf`), not a SQLite
 ///    database (by its first 16 bytes, whatever its name), not a file the run read
 ///    ([`OutputRule::used`]); and
 /// 4. fitup wrote it: the registry of its folder lists its name with its current size

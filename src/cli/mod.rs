@@ -169,6 +169,19 @@ pub enum Command {
         /// The document (`.yaml`).
         doc: PathBuf,
     },
+    /// Write a document as binary glTF (`.glb`) for other viewers: one node per
+    /// component at its pose, named as the component; metres, +Y up.
+    Export {
+        /// The document (`.yaml`).
+        doc: PathBuf,
+        /// The output file (`.glb`; its folder is created when missing). An existing
+        /// file is replaced only when fitup wrote it (or with `--force`), never a file
+        /// the document was built from.
+        out: PathBuf,
+        /// Replace `out` even when fitup did not write it.
+        #[arg(long)]
+        force: bool,
+    },
     /// Write the scripting API reference (generated from the registered functions).
     Docs {
         /// Output file (its folder is created when missing), or `-` for standard output.
@@ -279,6 +292,7 @@ pub fn main() -> i32 {
         Command::Db(a) => db::main(&a),
         Command::Check { doc } => check::check(&doc),
         Command::Docs { out, force } => docs(&out, force),
+        Command::Export { doc, out, force } => export(&doc, &out, force),
         Command::Demo { dir, force } => demo(&dir, force),
         Command::Manipulator(a) => skills::manipulator(&a),
         Command::Skills(a) => skills::skills(&a),
@@ -310,6 +324,53 @@ pub fn main() -> i32 {
         Command::View { file, open } => view::view_file(&file, open),
     };
     exit as i32
+}
+
+/// `fitup export DOC OUT.glb [--force]`: [`crate::document::Document::export_glb`].
+fn export(doc: &Path, out: &Path, force: bool) -> Exit {
+    if !out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+    {
+        errln!(
+            "error: {}: fitup exports binary glTF only; name the output `….glb`",
+            out.display()
+        );
+        return Exit::Usage;
+    }
+    let d = match crate::document::Document::open(doc) {
+        Ok(d) => d,
+        Err(e) => {
+            errln!("error: {}", e.render());
+            return Exit::Failure;
+        }
+    };
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        if let Err(e) = std::fs::create_dir_all(parent) {
+            errln!(
+                "error: cannot create the folder {} for {}: {e}",
+                parent.display(),
+                out.display()
+            );
+            return Exit::Failure;
+        }
+    }
+    match d.export_glb(out, force) {
+        Ok(x) => {
+            outln!(
+                "wrote {} ({} nodes, {} meshes, {} bytes)",
+                x.path.display(),
+                x.nodes,
+                x.meshes,
+                x.bytes
+            );
+            Exit::Ok
+        }
+        Err(e) => {
+            errln!("error: {e}");
+            Exit::Failure
+        }
+    }
 }
 
 /// `fitup docs [--out FILE|-] [--force]`: the output goes through the write rule

@@ -212,6 +212,10 @@ pub struct RobotFile {
     /// Explicit trees: the name of the link carrying the tool (default: the last link).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flange: Option<String>,
+    /// `urdf:` robots: the arm's last link, carrying the tool (default: the last link
+    /// of the serial arm, not a gripper finger; see `docs/robots.md`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip: Option<String>,
     /// Components' part frames coincide with the robot base frame when every joint is
     /// at 0 (meshes drawn in the zero configuration, as CAD models of robots usually
     /// are): the default `offset` of each link is then the inverse of its zero pose.

@@ -27,11 +27,13 @@
 //! ```
 
 pub mod dimension;
+mod export;
 pub mod file;
 pub mod mates;
 pub mod reference;
 pub mod robot;
 pub mod scan;
+pub use export::GlbExport;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use mates::{Mate, MateEntity, MateKind};
@@ -612,6 +614,7 @@ impl Document {
         }
         // URDF robots: their links' meshes become generated parts and components.
         let mut urdf = HashMap::new();
+        let mut urdf_warnings: Vec<String> = Vec::new();
         let mut generated = std::collections::HashSet::new();
         for rf in &file.robots {
             let Some(u) = &rf.urdf else { continue };
@@ -627,7 +630,9 @@ impl Document {
                     format!("robot `{}`: {m}", rf.name),
                 ))
             };
-            let loaded = robot::read_urdf_robot(project, &dir, u, cache).map_err(robot_at)?;
+            let loaded = robot::read_urdf_robot(project, &dir, u, rf.tip.as_deref(), cache)
+                .map_err(robot_at)?;
+            urdf_warnings.extend(loaded.warnings.iter().cloned());
             add_urdf_parts(
                 &rf.name,
                 u,
@@ -745,6 +750,7 @@ impl Document {
             c.transform = p;
         }
         doc.warnings = case_warnings(&file, path, positions);
+        doc.warnings.extend(urdf_warnings);
         Ok(doc)
     }
 

@@ -419,36 +419,46 @@ pub(super) struct UrdfLoaded {
     pub meshes: Vec<Option<Mesh>>,
     /// The URDF and every mesh file read (for watch mode).
     pub files: Vec<PathBuf>,
+    /// Located warnings of the URDF (meshes left out), `file:line:column: …`.
+    pub warnings: Vec<String>,
 }
 
 /// Reads the URDF `uri` of robot `name` (relative to the document folder `dir`,
-/// inside `project`) and its links' STL meshes: each mesh resolved by
-/// [`resolve_mesh`] and checked to lie inside the project, scaled (metres → mm and the
-/// URDF `scale`), moved by its visual origin into the link frame; the meshes of one
-/// link are merged. A mesh that is not STL (`.dae`, `.obj`, …) is an error naming the
-/// URDF line.
+/// inside `project`) and its links' geometry: each mesh file (STL, OBJ, PLY, glTF,
+/// read through `cache`) resolved by [`resolve_mesh`] and checked to lie inside the
+/// project, scaled (metres → mm and the URDF `scale`), moved by its visual origin into
+/// the link frame; box, cylinder and sphere primitives meshed; the geometry of one link
+/// merged. `tip` names the arm's last link (default: see
+/// [`crate::kinematics::parse_urdf`]). Meshes fitup does not read (`.dae`) are left
+/// out by the parser with located warnings (in [`UrdfLoaded::warnings`]) unless the
+/// link's collision geometry stands in.
 pub(super) fn read_urdf_robot(
     project: &Project,
     dir: &Path,
     uri: &str,
+    tip: Option<&str>,
     cache: &mut MeshCache,
 ) -> Result<UrdfLoaded, String> {
     let path = project
         .resolve_from(dir, uri)
         .map_err(|e| format!("URDF {e}"))?;
-    let u = read_urdf(&path, None).map_err(|e| e.to_string())?;
+    let u = read_urdf(&path, tip).map_err(|e| e.to_string())?;
     let tree = u.robot.tree();
     let mut meshes: Vec<Option<Mesh>> = vec![None; tree.len()];
     let mut files = vec![path.clone()];
+    let mut add = |link: usize, mesh: Mesh| match &mut meshes[link] {
+        Some(all) => all.append(&mesh),
+        slot => *slot = Some(mesh),
+    };
+    for p in &u.primitives {
+        add(p.link, p.mesh.clone());
+    }
     for m in &u.meshes {
         let link = tree.links()[m.link].name.clone().unwrap_or_default();
         let at = |msg: String| format!("{}:{}: link `{link}`: {msg}", path.display(), m.line);
-        let is_stl = Path::new(&m.uri)
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
-        if !is_stl {
+        if crate::mesh::MeshFormat::from_path(Path::new(&m.uri)).is_none() {
             return Err(at(format!(
-                "mesh `{}` is not an STL file: fitup reads only STL meshes (convert it, e.g. .dae/.obj to .stl)",
+                "mesh `{}` is not a format fitup reads (STL, OBJ, PLY, glTF)",
                 m.uri
             )));
         }
@@ -483,16 +493,14 @@ pub(super) fn read_urdf_robot(
                 m.uri, m.scale
             )));
         }
-        match &mut meshes[m.link] {
-            Some(all) => all.append(&scaled),
-            slot => *slot = Some(scaled),
-        }
+        add(m.link, scaled);
     }
     Ok(UrdfLoaded {
         robot: u.robot,
         path,
         meshes,
         files,
+        warnings: u.warnings.iter().map(|w| w.to_string()).collect(),
     })
 }
 
@@ -515,6 +523,13 @@ fn build(
     if sources.iter().filter(|&&x| x).count() > 1 {
         return Err(whole(
             "give one of `catalog`, `dh` or `urdf`, not several".into(),
+        ));
+    }
+    if let (Some(t), None) = (&f.tip, &f.urdf) {
+        return Err((
+            format!("tip: {t}"),
+            "`tip` names the arm's last link of a `urdf:` robot; an explicit tree names `flange`"
+                .into(),
         ));
     }
     let mut robot = match (&f.catalog, &f.dh) {
@@ -720,6 +735,7 @@ fn explicit_file(name: &str, robot: &Robot) -> RobotFile {
         base: Some(robot.base().to_matrix()),
         tool: Some(robot.tool().to_matrix()),
         flange: Some(link_name(robot.flange())),
+        tip: None,
         drawn_at_zero: false,
         links,
         joints: None,
@@ -913,7 +929,7 @@ impl Document {
         let uri =
             super::relative_path(urdf, &dir).unwrap_or_else(|| urdf.to_string_lossy().into_owned());
         let loaded =
-            read_urdf_robot(&project, &dir, &uri, &mut MeshCache::new()).map_err(invalid)?;
+            read_urdf_robot(&project, &dir, &uri, None, &mut MeshCache::new()).map_err(invalid)?;
         let mut next = self.clone();
         super::add_urdf_parts(
             name,
@@ -939,6 +955,7 @@ impl Document {
             base: Some(base.to_matrix()),
             tool: None,
             flange: None,
+            tip: None,
             drawn_at_zero: false,
             links: Vec::new(),
             joints: Some(joints_to_document(&loaded.robot, &zero)),
@@ -1201,6 +1218,7 @@ mod tests {
             base: Some(Transform::from_translation(Vec3::new(100.0, 0.0, 50.0)).to_matrix()),
             tool: None,
             flange: None,
+            tip: None,
             drawn_at_zero: true,
             links: (0..7)
                 .map(|i| LinkFile {

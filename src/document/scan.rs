@@ -62,6 +62,7 @@ const TEXT_KEYS: &[&str] = &[
     "type",
     "about",
     "flange",
+    "tip",
     "parent",
     "joint",
     "dimension",

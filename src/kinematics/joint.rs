@@ -138,6 +138,19 @@ impl Joint {
     }
 }
 
+/// A joint driven by another (URDF `<mimic>`): its value is `multiplier · leader +
+/// offset`, where `leader` is the leader link's joint value (rad or mm; the offset in
+/// the follower's unit). A follower is not a free joint of its robot.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mimic {
+    /// Index of the link whose joint leads (itself not a follower).
+    pub leader: usize,
+    /// Factor on the leader's value.
+    pub multiplier: f64,
+    /// Added to the product (rad or mm).
+    pub offset: f64,
+}
+
 fn normalised(v: Vec3) -> Vec3 {
     let n = v.norm();
     if n > 0.0 && n.is_finite() {

@@ -36,7 +36,7 @@ pub use drilling::{
 pub use error::KinematicsError;
 pub use ik::{Configuration, Elbow, IkError, IkOptions, IkSolution, Shoulder, Wrist};
 pub use ik_numeric::NumericIk;
-pub use joint::{Joint, JointKind, JointLimits};
+pub use joint::{Joint, JointKind, JointLimits, Mimic};
 pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
 pub use opw::{Branch, Branches, NotOpw, OpwSolver};
 pub use opw_params::OpwParameters;

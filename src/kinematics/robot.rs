@@ -14,7 +14,8 @@ use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
 ///
 /// Joint vectors passed to a robot have one value per joint, in that order (radians
 /// for revolute joints, mm for prismatic ones). Movable links that are not on the
-/// flange chain (e.g. gripper fingers) are held at 0 by [`Robot::link_poses`].
+/// flange chain (e.g. gripper fingers) are held at 0 by [`Robot::link_poses`], except
+/// mimic joints ([`KinematicTree::mimic`]), which follow their leader's value.
 ///
 /// When the chain is a 6R ortho-parallel arm with a spherical wrist (detected from
 /// the geometry, see [`OpwSolver::detect`]) or a UR-type arm (axes 2-3-4 parallel,
@@ -68,6 +69,17 @@ impl Robot {
         let chain = tree
             .path_from_root(flange)
             .ok_or(KinematicsError::NoSuchLink(flange))?;
+        // A mimic joint on the chain would need every solver to drive it from its
+        // leader; the URDF reader never chooses such a flange by itself.
+        if let Some(&i) = chain.iter().find(|&&i| tree.mimic(i).is_some()) {
+            return Err(KinematicsError::InvalidDescription(format!(
+                "link `{}` on the chain to the flange moves with a mimic joint (it follows link `{}`): choose a flange above it",
+                tree.links()[i].name.as_deref().unwrap_or(""),
+                tree.mimic(i)
+                    .and_then(|m| tree.links()[m.leader].name.as_deref())
+                    .unwrap_or("")
+            )));
+        }
         let joints: Vec<usize> = chain
             .iter()
             .copied()

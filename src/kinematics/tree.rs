@@ -1,7 +1,7 @@
 //! [`KinematicTree`]: links with parents, joints and home transforms (seed 001's tree of
 //! `CSTLModel` parts), and forward kinematics of every link.
 
-use super::{Joint, JointKind, KinematicsError};
+use super::{Joint, JointKind, KinematicsError, Mimic};
 use crate::math::Transform;
 use nalgebra::Isometry3;
 
@@ -44,6 +44,8 @@ impl Link {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct KinematicTree {
     links: Vec<Link>,
+    /// Per link: the joint it follows (URDF `<mimic>`); empty when none does.
+    mimics: Vec<Option<Mimic>>,
 }
 
 impl KinematicTree {
@@ -86,7 +88,60 @@ impl KinematicTree {
                 }
             }
         }
-        Ok(Self { links })
+        Ok(Self {
+            links,
+            mimics: Vec::new(),
+        })
+    }
+
+    /// The same tree with mimic joints: `mimics[k] = (follower link, mimic)`. Both
+    /// joints must be movable, the leader must not itself follow, and the multiplier
+    /// and offset must be finite.
+    pub fn with_mimics(mut self, mimics: &[(usize, Mimic)]) -> Result<Self, KinematicsError> {
+        let mut table = vec![None; self.links.len()];
+        for &(f, m) in mimics {
+            let bad = |cause: String| KinematicsError::InvalidLink {
+                link: f,
+                name: self
+                    .links
+                    .get(f)
+                    .and_then(|l| l.name.clone())
+                    .unwrap_or_default(),
+                cause,
+            };
+            let movable = |i: usize| self.links.get(i).is_some_and(|l| l.joint.kind.is_movable());
+            if !movable(f) || !movable(m.leader) || f == m.leader {
+                return Err(bad(
+                    "a mimic joint and its leader must be two movable joints".into(),
+                ));
+            }
+            if !(m.multiplier.is_finite() && m.offset.is_finite()) {
+                return Err(bad("mimic multiplier and offset must be finite".into()));
+            }
+            table[f] = Some(m);
+        }
+        if let Some(f) =
+            (0..table.len()).find(|&f| table[f].is_some_and(|m| table[m.leader].is_some()))
+        {
+            return Err(KinematicsError::InvalidLink {
+                link: f,
+                name: self.links[f].name.clone().unwrap_or_default(),
+                cause:
+                    "its mimic leader follows another joint (resolve the chain to the first leader)"
+                        .into(),
+            });
+        }
+        self.mimics = if table.iter().any(Option::is_some) {
+            table
+        } else {
+            Vec::new()
+        };
+        Ok(self)
+    }
+
+    /// The joint link `link` follows, if it is a mimic joint.
+    pub fn mimic(&self, link: usize) -> Option<&Mimic> {
+        self.mimics.get(link).and_then(Option::as_ref)
     }
 
     /// The links, parents first.
@@ -126,7 +181,8 @@ impl KinematicTree {
 
     /// World poses of every link, given the pose of the tree's base (roots are placed
     /// in the base frame) and one value per link (`values[i]` is link `i`'s joint
-    /// value, rad or mm; ignored for fixed joints). Values must be finite.
+    /// value, rad or mm; ignored for fixed joints and for mimic joints, which take
+    /// `multiplier · values[leader] + offset`). Values must be finite.
     pub fn link_poses(
         &self,
         base: &Transform,
@@ -142,7 +198,11 @@ impl KinematicTree {
             return Err(KinematicsError::NonFiniteJoint(i));
         }
         let mut out: Vec<Isometry3<f64>> = Vec::with_capacity(self.links.len());
-        for (link, &v) in self.links.iter().zip(values) {
+        for (i, (link, &v)) in self.links.iter().zip(values).enumerate() {
+            let v = match self.mimic(i) {
+                Some(m) => m.multiplier * values[m.leader] + m.offset,
+                None => v,
+            };
             let parent = match link.parent {
                 Some(p) => out[p],
                 None => *base.isometry(),

@@ -9,24 +9,29 @@
 //! line in the parent frame (`R_origin·axis` through the origin's position), which
 //! gives the identical motion. Joint types: `revolute` and `continuous` (rad;
 //! `continuous` has no limits), `prismatic` (limits ×1000, mm), `fixed`; `floating` and
-//! `planar` are refused. The robot's flange is the link at the end of the chain with
-//! the most movable joints (then the deepest, e.g. a fixed `tool0`) unless a tip link
-//! is named;
-//! the tool is the identity. When the chain is an OPW arm the closed-form solver is
+//! `planar` are refused. `<mimic joint multiplier offset>` makes a joint follow its
+//! leader ([`crate::kinematics::Mimic`]): it is not a free joint. The robot's flange is
+//! the last link of the serial arm unless a tip link is named: the most free joints
+//! on links not moved by a mimic joint or a mimic's leader (a gripper's fingers), a
+//! link that does not carry such fingers before one that does, then the deepest (e.g.
+//! a fixed `tool0`); the tool is the identity. When the chain is an OPW arm the closed-form solver is
 //! chosen from the geometry (see [`Robot::analytic`]).
 //!
-//! Meshes: `<visual><geometry><mesh filename>` per link (or the link's `<collision>`
-//! meshes when it has no visual mesh) are listed in [`UrdfRobot::meshes`] (with the
-//! visual origin and scale); `package://PKG/rest` URIs resolve to
+//! Geometry: a link's `<visual>` elements when fitup reads all their meshes (STL, OBJ,
+//! PLY, glTF), else its `<collision>` elements when it reads those, else what it reads
+//! of either, each mesh left out a warning in [`UrdfRobot::warnings`]. Mesh files are
+//! listed in [`UrdfRobot::meshes`] (with the origin and scale); `<box>`, `<cylinder>`
+//! and `<sphere>` are meshed into [`UrdfRobot::primitives`]; `package://PKG/rest` URIs resolve to
 //! `rest` relative to the URDF's folder (ROS-Industrial support packages keep
 //! `urdf/` and `meshes/` side by side: a URDF in `PKG/urdf/` resolves
 //! `package://PKG/meshes/x.stl` to `PKG/urdf/../meshes/x.stl` — see [`resolve_mesh`]).
 //!
 //! Errors are [`SourceError`]s naming the file, line and column.
 
-use super::{Joint, JointLimits, KinematicTree, Link, Robot};
+use super::{Joint, JointLimits, KinematicTree, Link, Mimic, Robot};
 use crate::diagnostics::SourceError;
 use crate::math::{Point3, Transform, Vec3};
+use crate::mesh::{Mesh, MeshFormat};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -49,13 +54,30 @@ pub struct UrdfMesh {
     pub line: usize,
 }
 
-/// A robot read from a URDF, with its link meshes.
+/// A `<box>`, `<cylinder>` or `<sphere>` geometry of a link, meshed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UrdfPrimitive {
+    /// Index of the link in the robot's tree.
+    pub link: usize,
+    /// `box`, `cylinder` or `sphere`.
+    pub shape: String,
+    /// The closed mesh in the link frame (mm), placed by the geometry's origin.
+    pub mesh: Mesh,
+    /// Line of the shape's element in the URDF.
+    pub line: usize,
+}
+
+/// A robot read from a URDF, with its link geometry.
 #[derive(Debug, Clone)]
 pub struct UrdfRobot {
     /// The kinematics (mm, rad).
     pub robot: Robot,
-    /// Visual meshes per link, in file order.
+    /// Mesh files per link, in file order (see the module docs for which geometry).
     pub meshes: Vec<UrdfMesh>,
+    /// Primitive shapes per link, meshed, in file order.
+    pub primitives: Vec<UrdfPrimitive>,
+    /// Located warnings: meshes left out (a `.dae` without a readable collision mesh).
+    pub warnings: Vec<SourceError>,
 }
 
 /// Where a mesh URI points, for a URDF at `urdf_path`: `package://PKG/rest` →
@@ -145,7 +167,18 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
         joint: Joint,
         home: Transform,
     }
+    impl JointOf for J<'_> {
+        fn movable(&self) -> bool {
+            self.joint.kind.is_movable()
+        }
+        fn prismatic(&self) -> bool {
+            self.joint.kind == super::JointKind::Prismatic
+        }
+    }
     let mut parent_of: HashMap<usize, J> = HashMap::new();
+    // Joint name → child link (file order), and the `<mimic>` elements to resolve.
+    let mut joint_child: HashMap<&str, usize> = HashMap::new();
+    let mut mimic_nodes: Vec<(usize, roxmltree::Node)> = Vec::new();
     for n in root.children().filter(|n| n.has_tag_name("joint")) {
         let jn = n.attribute("name").unwrap_or("");
         let err = |node: roxmltree::Node, m: String| at(node, format!("joint `{jn}`: {m}"));
@@ -246,6 +279,10 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 ),
             ));
         }
+        joint_child.entry(jn).or_insert(child);
+        if let Some(m) = n.children().find(|c| c.has_tag_name("mimic")) {
+            mimic_nodes.push((child, m));
+        }
         parent_of.insert(
             child,
             J {
@@ -307,60 +344,150 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
         ));
     }
     let new_index: HashMap<usize, usize> = order.iter().enumerate().map(|(i, &l)| (l, i)).collect();
+    let mimics = mimics(
+        &doc,
+        path,
+        &mimic_nodes,
+        &joint_child,
+        &parent_of,
+        &new_index,
+        &link_nodes,
+    )?;
+    let follower: HashMap<usize, Mimic> = mimics.iter().copied().collect();
+    let leaders: std::collections::HashSet<usize> = mimics.iter().map(|(_, m)| m.leader).collect();
     let mut links = Vec::with_capacity(order.len());
-    let mut movable_depth = vec![0usize; order.len()];
+    // Per link (new order): free joints above and at it (mimic joints do not count),
+    // depth, whether a follower moves it, and whether its last free joint leads a
+    // mimic (a gripper's driving finger: the hand, not the arm).
+    let mut free_depth = vec![0usize; order.len()];
     let mut depth = vec![0usize; order.len()];
+    let mut under_follower = vec![false; order.len()];
+    let mut last_free_leads = vec![false; order.len()];
+    let mut holds_gripper = vec![false; order.len()];
     for (i, &l) in order.iter().enumerate() {
         let lname = link_nodes[l].attribute("name").unwrap_or("");
         match parent_of.get(&l) {
             None => links.push(Link::new(lname, None, Transform::IDENTITY, Joint::fixed())),
             Some(j) => {
                 let p = new_index[&j.parent];
-                movable_depth[i] = movable_depth[p] + usize::from(j.joint.kind.is_movable());
+                let free = j.joint.kind.is_movable() && !follower.contains_key(&i);
+                free_depth[i] = free_depth[p] + usize::from(free);
                 depth[i] = depth[p] + 1;
+                under_follower[i] = under_follower[p] || follower.contains_key(&i);
+                last_free_leads[i] = if free {
+                    leaders.contains(&i)
+                } else {
+                    last_free_leads[p]
+                };
+                if follower.contains_key(&i) || leaders.contains(&i) {
+                    holds_gripper[p] = true;
+                }
                 links.push(Link::new(lname, Some(p), j.home, j.joint));
             }
         }
     }
     let flange = match tip {
-        Some(t) => *link_index
-            .get(t)
-            .map(|l| &new_index[l])
-            .ok_or_else(|| whole(format!("tip link `{t}` is not defined")))?,
+        Some(t) => {
+            let i = *link_index
+                .get(t)
+                .map(|l| &new_index[l])
+                .ok_or_else(|| whole(format!("tip link `{t}` is not defined")))?;
+            if under_follower[i] {
+                return Err(whole(format!(
+                    "tip link `{t}` moves with a mimic joint: the arm's chain cannot hold one (name a link above it)"
+                )));
+            }
+            i
+        }
         None => {
-            // Most movable joints, then the deepest link (a fixed `tool0` after the last
-            // joint), then the first in breadth-first order.
-            let key = |i: usize| (movable_depth[i], depth[i]);
-            let best = (0..order.len()).map(key).max().unwrap_or((0, 0));
-            (0..order.len()).position(|i| key(i) == best).unwrap_or(0)
+            // The serial arm's last link: the most free joints, a link that does not
+            // carry a gripper's fingers (the flange they hang on, or a TCP frame below
+            // the gripper body, rather than the body), then the deepest (a fixed
+            // `tool0` after the last joint), then the first in breadth-first order.
+            // Links moved by a mimic joint or by a mimic's leader are the hand's.
+            let arm = |i: usize| !under_follower[i] && !last_free_leads[i];
+            let key = |i: usize| (free_depth[i], !holds_gripper[i], depth[i]);
+            let best = (0..order.len()).filter(|&i| arm(i)).map(key).max();
+            match best {
+                Some(b) if b.0 > 0 => (0..order.len())
+                    .position(|i| arm(i) && key(i) == b)
+                    .unwrap_or(0),
+                // No free joint outside the hand: the most free joints anywhere.
+                _ => {
+                    let key = |i: usize| (free_depth[i], depth[i]);
+                    let b = (0..order.len())
+                        .filter(|&i| !under_follower[i])
+                        .map(key)
+                        .max()
+                        .unwrap_or((0, 0));
+                    (0..order.len())
+                        .position(|i| !under_follower[i] && key(i) == b)
+                        .unwrap_or(0)
+                }
+            }
         }
     };
-    let tree = KinematicTree::new(links).map_err(|e| whole(e.to_string()))?;
+    let tree = KinematicTree::new(links)
+        .and_then(|t| t.with_mimics(&mimics))
+        .map_err(|e| whole(e.to_string()))?;
     let robot = Robot::new(name, tree, flange, Transform::IDENTITY)
         .map_err(|e| whole(e.to_string()))?
         .with_limits_source(format!("URDF {}", path.display()));
     let mut meshes = Vec::new();
+    let mut primitives = Vec::new();
+    let mut warnings = Vec::new();
     for (i, &l) in order.iter().enumerate() {
-        // A link's `<visual>` meshes, or its `<collision>` meshes when it has no visual
-        // mesh (fitup uses one geometry per link for display and interference).
-        let with_mesh = |tag: &str| {
+        // One geometry per link for display and interference: its `<visual>`
+        // elements when fitup reads all of them, else its `<collision>` elements when
+        // it reads all of those (a visual `.dae` with an STL collision mesh), else
+        // what it reads of either, with a warning for each mesh left out.
+        let with_geometry = |tag: &str| {
             link_nodes[l]
                 .children()
                 .filter(|c| c.has_tag_name(tag))
-                .filter(|c| c.descendants().any(|d| d.has_tag_name("mesh")))
+                .filter(|c| c.children().any(|g| g.has_tag_name("geometry")))
                 .collect::<Vec<_>>()
         };
-        let mut geometry = with_mesh("visual");
-        if geometry.is_empty() {
-            geometry = with_mesh("collision");
-        }
+        let readable = |v: &roxmltree::Node| match v.descendants().find(|c| c.has_tag_name("mesh"))
+        {
+            Some(m) => m
+                .attribute("filename")
+                .is_none_or(|f| MeshFormat::from_path(Path::new(f)).is_some()),
+            None => true,
+        };
+        let visual = with_geometry("visual");
+        let collision = with_geometry("collision");
+        let geometry = if !visual.is_empty() && visual.iter().all(readable) {
+            visual
+        } else if !collision.is_empty() && collision.iter().all(readable) {
+            collision
+        } else {
+            let from = if visual.iter().any(readable) || collision.is_empty() {
+                visual
+            } else {
+                collision
+            };
+            let lname = link_nodes[l].attribute("name").unwrap_or("");
+            for v in from.iter().filter(|v| !readable(v)) {
+                if let Some(m) = v.descendants().find(|c| c.has_tag_name("mesh")) {
+                    let p = attribute_pos(&doc, m, "filename");
+                    warnings.push(SourceError::new(
+                        path,
+                        p.0,
+                        p.1,
+                        format!(
+                            "link `{lname}`: mesh `{}` is not a format fitup reads (STL, OBJ, PLY, glTF) and the link has no <collision> mesh it reads: left out (no display, no interference); convert it, e.g. to STL",
+                            short(m.attribute("filename").unwrap_or(""))
+                        ),
+                    ));
+                }
+            }
+            from.into_iter().filter(readable).collect()
+        };
         for v in geometry {
-            let Some(m) = v.descendants().find(|c| c.has_tag_name("mesh")) else {
+            let Some(g) = v.children().find(|c| c.has_tag_name("geometry")) else {
                 continue;
             };
-            let uri = m
-                .attribute("filename")
-                .ok_or_else(|| at(m, "<mesh> without a filename".into()))?;
             let num3 = |node: roxmltree::Node, attr: &str, d: [f64; 3], unit: f64| {
                 attribute_numbers(&doc, path, node, attr, d, unit)
             };
@@ -371,6 +498,39 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 ),
                 None => Transform::IDENTITY,
             };
+            let Some(shape) = g.children().find(|c| c.is_element()) else {
+                return Err(at(g, "<geometry> is empty".into()));
+            };
+            let line = doc.text_pos_at(shape.range().start).row as usize;
+            if !["mesh", "box", "cylinder", "sphere"].contains(&shape.tag_name().name()) {
+                // SDF-style shapes (capsule, …): the link loads without them.
+                let p = doc.text_pos_at(shape.range().start);
+                warnings.push(SourceError::new(
+                    path,
+                    p.row as usize,
+                    p.col as usize,
+                    format!(
+                        "link `{}`: <{}> geometry is not supported (mesh, box, cylinder, sphere): left out",
+                        link_nodes[l].attribute("name").unwrap_or(""),
+                        short(shape.tag_name().name())
+                    ),
+                ));
+                continue;
+            }
+            if !shape.has_tag_name("mesh") {
+                let mesh = primitive(&doc, path, shape)?.transformed(&origin_t);
+                primitives.push(UrdfPrimitive {
+                    link: i,
+                    shape: shape.tag_name().name().to_string(),
+                    mesh,
+                    line,
+                });
+                continue;
+            }
+            let m = shape;
+            let uri = m
+                .attribute("filename")
+                .ok_or_else(|| at(m, "<mesh> without a filename".into()))?;
             // The scale times 1000 (m → mm) multiplies every vertex: in range, not 0.
             let s = num3(m, "scale", [1.0; 3], 1000.0)?;
             if s.contains(&0.0) {
@@ -387,12 +547,196 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 uri: uri.to_string(),
                 origin: origin_t,
                 scale: s.map(|x| x * 1000.0),
-                line: doc.text_pos_at(m.range().start).row as usize,
+                line,
             });
         }
     }
-    Ok(UrdfRobot { robot, meshes })
+    Ok(UrdfRobot {
+        robot,
+        meshes,
+        primitives,
+        warnings,
+    })
 }
+
+/// The `<mimic joint multiplier offset>` elements resolved to (follower link, leader
+/// link) in the tree's order, a chain of mimics folded onto its first leader, units
+/// converted (offsets of prismatic joints m → mm; the multiplier by the ratio of the
+/// follower's to the leader's unit). Errors name the `<mimic>` element.
+fn mimics(
+    doc: &roxmltree::Document,
+    path: &Path,
+    nodes: &[(usize, roxmltree::Node)],
+    joint_child: &HashMap<&str, usize>,
+    parent_of: &HashMap<usize, impl JointOf>,
+    new_index: &HashMap<usize, usize>,
+    link_nodes: &[roxmltree::Node],
+) -> Result<Vec<(usize, Mimic)>, SourceError> {
+    let at = |node: roxmltree::Node, m: String| {
+        let p = doc.text_pos_at(node.range().start);
+        SourceError::new(path, p.row as usize, p.col as usize, m)
+    };
+    // follower (file index) → (leader file index, multiplier, offset), URDF units.
+    let mut raw: HashMap<usize, (usize, f64, f64, roxmltree::Node)> = HashMap::new();
+    for &(child, m) in nodes {
+        let lname = link_nodes[child].attribute("name").unwrap_or("");
+        let leader_name = m
+            .attribute("joint")
+            .ok_or_else(|| at(m, format!("link `{lname}`: <mimic> without a joint")))?;
+        let leader = *joint_child.get(leader_name).ok_or_else(|| {
+            at(
+                m,
+                format!(
+                    "link `{lname}`: mimic joint `{}` is not defined",
+                    short(leader_name)
+                ),
+            )
+        })?;
+        let [k] = attribute_numbers(doc, path, m, "multiplier", [1.0], 1.0)?;
+        let [o] = attribute_numbers(doc, path, m, "offset", [0.0], 1000.0)?;
+        for (link, role) in [(child, "mimic"), (leader, "leader")] {
+            if !parent_of.get(&link).is_some_and(|j| j.movable()) {
+                return Err(at(
+                    m,
+                    format!(
+                        "link `{lname}`: the {role} joint must be revolute, continuous or prismatic"
+                    ),
+                ));
+            }
+        }
+        if leader == child {
+            return Err(at(
+                m,
+                format!("link `{lname}`: a joint cannot mimic itself"),
+            ));
+        }
+        raw.insert(child, (leader, k, o, m));
+    }
+    let unit = |link: usize| {
+        if parent_of.get(&link).is_some_and(|j| j.prismatic()) {
+            1000.0
+        } else {
+            1.0
+        }
+    };
+    let mut out = Vec::with_capacity(raw.len());
+    for (&f, &(leader, k, o, node)) in &raw {
+        // f = k·l + o, l = k2·l2 + o2, … down to a joint that leads only.
+        let (mut lead, mut k, mut o) = (leader, k, o);
+        let mut steps = 0;
+        while let Some(&(next, k2, o2, _)) = raw.get(&lead) {
+            steps += 1;
+            if steps > raw.len() {
+                return Err(at(
+                    node,
+                    "mimic joints that follow each other in a cycle".into(),
+                ));
+            }
+            o += k * o2;
+            k *= k2;
+            lead = next;
+        }
+        let mimic = Mimic {
+            leader: new_index[&lead],
+            multiplier: k * unit(f) / unit(lead),
+            offset: o * unit(f),
+        };
+        if !(mimic.multiplier.is_finite() && mimic.multiplier.abs() <= crate::math::MAX_ABS_VALUE) {
+            return Err(at(node, "the mimic multiplier is out of range".into()));
+        }
+        out.push((new_index[&f], mimic));
+    }
+    out.sort_by_key(|(f, _)| *f);
+    Ok(out)
+}
+
+/// What [`mimics`] asks of a parsed joint.
+trait JointOf {
+    fn movable(&self) -> bool;
+    fn prismatic(&self) -> bool;
+}
+
+/// The closed mesh of a URDF `<box size>`, `<cylinder radius length>` (along Z) or
+/// `<sphere radius>`, centred on the geometry's origin, in mm. Errors name the
+/// attribute.
+fn primitive(
+    doc: &roxmltree::Document,
+    path: &Path,
+    shape: roxmltree::Node,
+) -> Result<Mesh, SourceError> {
+    let name = shape.tag_name().name();
+    let positive = |attr: &str, v: f64| {
+        if v > 0.0 {
+            Ok(v * 1000.0)
+        } else {
+            let p = attribute_pos(doc, shape, attr);
+            Err(SourceError::new(
+                path,
+                p.0,
+                p.1,
+                format!("<{name}> {attr} must be > 0, not {v}"),
+            ))
+        }
+    };
+    let need = |attr: &str| {
+        if shape.attribute(attr).is_none() {
+            let p = doc.text_pos_at(shape.range().start);
+            return Err(SourceError::new(
+                path,
+                p.row as usize,
+                p.col as usize,
+                format!("<{name}> needs a `{attr}`"),
+            ));
+        }
+        Ok(())
+    };
+    match name {
+        "box" => {
+            need("size")?;
+            let s = attribute_numbers(doc, path, shape, "size", [0.0; 3], 1000.0)?;
+            let h = [
+                positive("size", s[0])? / 2.0,
+                positive("size", s[1])? / 2.0,
+                positive("size", s[2])? / 2.0,
+            ];
+            Ok(Mesh::cuboid(
+                Point3::new(-h[0], -h[1], -h[2]),
+                Point3::new(h[0], h[1], h[2]),
+            ))
+        }
+        "cylinder" => {
+            need("radius")?;
+            need("length")?;
+            let [r] = attribute_numbers(doc, path, shape, "radius", [0.0], 1000.0)?;
+            let [l] = attribute_numbers(doc, path, shape, "length", [0.0], 1000.0)?;
+            let (r, l) = (positive("radius", r)?, positive("length", l)?);
+            Ok(Mesh::cylinder(r, l, PRIMITIVE_SEGMENTS)
+                .transformed(&Transform::from_translation(Vec3::new(0.0, 0.0, -l / 2.0))))
+        }
+        "sphere" => {
+            need("radius")?;
+            let [r] = attribute_numbers(doc, path, shape, "radius", [0.0], 1000.0)?;
+            let r = positive("radius", r)?;
+            Ok(Mesh::uv_sphere(r, PRIMITIVE_SEGMENTS))
+        }
+        other => {
+            let p = doc.text_pos_at(shape.range().start);
+            Err(SourceError::new(
+                path,
+                p.row as usize,
+                p.col as usize,
+                format!(
+                    "<{}> geometry is not supported (mesh, box, cylinder, sphere)",
+                    short(other)
+                ),
+            ))
+        }
+    }
+}
+
+/// Facets around a meshed cylinder or sphere: the volume is within 0.2 % (cylinder)
+/// and 0.5 % (sphere) of the exact one.
+const PRIMITIVE_SEGMENTS: usize = 64;
 
 /// Reads and parses a URDF file (see [`parse_urdf`]).
 pub fn read_urdf(path: &Path, tip: Option<&str>) -> Result<UrdfRobot, SourceError> {

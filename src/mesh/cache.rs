@@ -1,6 +1,6 @@
 //! [`MeshCache`]: meshes kept between watch reruns, re-read only when their file changed.
 
-use super::{read_stl, Mesh, MeshError};
+use super::{Mesh, MeshError};
 use crate::fsutil::{content_hash, stamp, Stamp};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -9,11 +9,28 @@ use std::sync::Arc;
 struct Entry {
     stamp: Stamp,
     hash: u64,
+    /// The other files the mesh was read from (a `.gltf`'s buffers) and their stamps.
+    deps: Vec<(PathBuf, Stamp)>,
     mesh: Arc<Mesh>,
 }
 
-/// Loaded meshes by canonical path. A lookup costs one `stat` when the file did not
-/// change; a file whose stamp changed is re-read, and re-parsed only when its bytes did.
+impl Entry {
+    /// Whether the file's buffers are as they were read.
+    fn deps_fresh(&self) -> bool {
+        self.deps
+            .iter()
+            .all(|(p, s)| stamp(p).is_ok_and(|now| now == *s))
+    }
+}
+
+/// What [`read_mesh`] found: the main file's content hash, the other files read with
+/// their stamps, and the mesh (`None`: unchanged, the cached mesh stands).
+type Read = (u64, Vec<(PathBuf, Stamp)>, Option<Mesh>);
+
+/// Loaded meshes (every format [`super::read_mesh_file`] reads) by canonical path. A
+/// lookup costs one `stat` when the file did not change (and one per buffer file of a
+/// `.gltf`); a file whose stamp changed is re-read, and re-parsed only when its bytes
+/// (or a buffer file) did.
 #[derive(Default)]
 pub struct MeshCache {
     entries: HashMap<PathBuf, Entry>,
@@ -26,7 +43,8 @@ impl MeshCache {
         Self::default()
     }
 
-    /// The mesh of the STL file at `path`, from the cache when the file is unchanged.
+    /// The mesh of the file at `path` (STL, OBJ, PLY, glTF/GLB), from the cache when
+    /// the file is unchanged.
     pub fn get(&mut self, path: &Path) -> Result<Arc<Mesh>, MeshError> {
         let key = path
             .canonicalize()
@@ -34,14 +52,14 @@ impl MeshCache {
         let now = stamp(&key)
             .map_err(|e| MeshError::invalid(format!("cannot stat: {e}")).in_file(path))?;
         if let Some(e) = self.entries.get(&key) {
-            if e.stamp == now {
+            if e.stamp == now && e.deps_fresh() {
                 return Ok(e.mesh.clone());
             }
         }
-        let known = self.entries.get(&key).map(|e| e.hash);
-        let (hash, mesh) = read_mesh(&key, path, known)?;
+        let known = self.known(&key);
+        let (hash, deps, mesh) = read_mesh(&key, path, known)?;
         // `read_mesh` leaves out the mesh only when the bytes hash as the cached entry
-        self.store(key, now, hash, mesh)
+        self.store(key, now, hash, deps, mesh)
             .ok_or_else(|| MeshError::invalid("the cached mesh vanished").in_file(path))
     }
 
@@ -58,7 +76,10 @@ impl MeshCache {
                 continue;
             };
             let Ok(now) = stamp(&key) else { continue };
-            let fresh = self.entries.get(&key).is_some_and(|e| e.stamp == now);
+            let fresh = self
+                .entries
+                .get(&key)
+                .is_some_and(|e| e.stamp == now && e.deps_fresh());
             if !fresh && !wanted.iter().any(|(k, _)| *k == key) {
                 wanted.push((key, now));
             }
@@ -68,17 +89,26 @@ impl MeshCache {
         }
         let known: HashMap<&PathBuf, u64> = wanted
             .iter()
-            .filter_map(|(k, _)| self.entries.get(k).map(|e| (k, e.hash)))
+            .filter_map(|(k, _)| self.known(k).map(|h| (k, h)))
             .collect();
-        let read: Vec<Option<(u64, Option<Mesh>)>> = wanted
+        let read: Vec<Option<Read>> = wanted
             .par_iter()
             .map(|(key, _)| read_mesh(key, key, known.get(key).copied()).ok())
             .collect();
         for ((key, now), r) in wanted.into_iter().zip(read) {
-            if let Some((hash, mesh)) = r {
-                self.store(key, now, hash, mesh);
+            if let Some((hash, deps, mesh)) = r {
+                self.store(key, now, hash, deps, mesh);
             }
         }
+    }
+
+    /// The cached hash of `key` that lets [`read_mesh`] skip parsing: only while the
+    /// entry's buffer files are unchanged (their bytes are not hashed).
+    fn known(&self, key: &Path) -> Option<u64> {
+        self.entries
+            .get(key)
+            .filter(|e| e.deps_fresh())
+            .map(|e| e.hash)
     }
 
     /// Records what [`read_mesh`] found for `key` at `stamp`: a parsed mesh replaces
@@ -89,6 +119,7 @@ impl MeshCache {
         key: PathBuf,
         stamp: Stamp,
         hash: u64,
+        deps: Vec<(PathBuf, Stamp)>,
         mesh: Option<Mesh>,
     ) -> Option<Arc<Mesh>> {
         let Some(mesh) = mesh else {
@@ -103,6 +134,7 @@ impl MeshCache {
             Entry {
                 stamp,
                 hash,
+                deps,
                 mesh: mesh.clone(),
             },
         );
@@ -114,28 +146,35 @@ impl MeshCache {
         self.loads
     }
 
-    /// Reads without caching (one-off use).
+    /// Reads without caching (one-off use), any format ([`super::read_mesh_file`]).
     pub fn read_uncached(path: &Path) -> Result<Mesh, MeshError> {
-        read_stl(path)
+        super::read_mesh_file(path)
     }
 }
 
-/// Reads the STL file `key` (canonical path; errors name `path`): its content hash and
-/// the parsed mesh, or `None` for the mesh when the bytes hash to `known` (the cached
-/// mesh stands).
-fn read_mesh(
-    key: &Path,
-    path: &Path,
-    known: Option<u64>,
-) -> Result<(u64, Option<Mesh>), MeshError> {
+/// Reads the mesh file `key` (canonical path; errors name `path`), any format: its
+/// content hash, the other files read (a `.gltf`'s buffers) with their stamps, and the
+/// parsed mesh, or `None` for the mesh when the bytes hash to `known` (the cached
+/// mesh stands; the caller passes `known` only while the buffer files are unchanged).
+fn read_mesh(key: &Path, path: &Path, known: Option<u64>) -> Result<Read, MeshError> {
     let bytes = crate::fsutil::read_file(key, crate::fsutil::FileKind::Mesh)
         .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
     let hash = content_hash(&bytes);
     if known == Some(hash) {
-        return Ok((hash, None));
+        return Ok((hash, Vec::new(), None));
     }
-    let mesh = super::parse_stl(&bytes).map_err(|e| e.in_file(path))?;
-    Ok((hash, Some(mesh)))
+    let format = super::MeshFormat::detect(path, &bytes).map_err(|e| e.in_file(path))?;
+    let (mesh, files) =
+        super::parse_mesh(&bytes, format, key.parent()).map_err(|e| e.in_file(path))?;
+    let deps = files
+        .into_iter()
+        .map(|f| {
+            let s = stamp(&f)
+                .map_err(|e| MeshError::invalid(format!("cannot stat {}: {e}", f.display())))?;
+            Ok((f, s))
+        })
+        .collect::<Result<_, MeshError>>()?;
+    Ok((hash, deps, Some(mesh)))
 }
 
 #[cfg(test)]

@@ -1,7 +1,9 @@
-//! Triangle meshes of parts: STL reading and writing, validation, and the cache that
-//! keeps meshes between watch reruns.
+//! Triangle meshes of parts: reading STL, OBJ, PLY and glTF/GLB (one dispatch,
+//! [`read_mesh_file`]), writing STL and GLB, validation, and the cache that keeps
+//! meshes between watch reruns.
 //!
-//! Coordinates are millimetres in the part frame.
+//! Coordinates are millimetres in the part frame (glTF's metres are converted, see
+//! [`parse_gltf`]).
 //!
 //! # Examples
 //!
@@ -27,11 +29,145 @@
 //! ```
 
 mod cache;
+mod gltf;
+mod obj;
+mod ply;
 mod shapes;
 mod stl;
 
+#[cfg(feature = "formats")]
+pub use self::gltf::parse_gltf;
+pub use self::gltf::{glb_bytes, GlbNode, GLB_ROOT, Z_UP_TO_Y_UP};
 pub use cache::MeshCache;
+pub use obj::parse_obj;
+pub use ply::parse_ply;
 pub use stl::{parse_stl, read_stl, write_stl, MeshError};
+
+use std::path::{Path, PathBuf};
+
+/// The most triangles one mesh file may hold, whatever its format: what the largest
+/// binary STL fitup reads holds (256 MiB / 50 bytes ≈ 5.4 million), rounded up. A
+/// reader stops at the triangle past the cap, so a face list or accessor that claims
+/// more cannot fill the memory.
+pub const MAX_TRIANGLES: usize = 6_000_000;
+
+/// A mesh file format fitup reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum MeshFormat {
+    /// STL, ASCII or binary (`.stl`).
+    Stl,
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+    /// Stanford PLY, ASCII or binary (`.ply`).
+    Ply,
+    /// glTF 2.0, JSON (`.gltf`) or binary (`.glb`); needs the `formats` feature.
+    Gltf,
+}
+
+impl MeshFormat {
+    /// The format of a file by its extension (case-insensitive), if fitup reads it.
+    pub fn from_path(path: &Path) -> Option<MeshFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "stl" => MeshFormat::Stl,
+            "obj" => MeshFormat::Obj,
+            "ply" => MeshFormat::Ply,
+            "gltf" | "glb" => MeshFormat::Gltf,
+            _ => return None,
+        })
+    }
+
+    /// The format of `bytes` read from `path`: binary glTF by its `glTF` magic
+    /// whatever the name, else by the extension; an unknown extension is an error
+    /// naming the formats fitup reads.
+    pub fn detect(path: &Path, bytes: &[u8]) -> Result<MeshFormat, MeshError> {
+        if bytes.starts_with(b"glTF") {
+            return Ok(MeshFormat::Gltf);
+        }
+        Self::from_path(path).ok_or_else(|| {
+            let ext = path
+                .extension()
+                .map(|e| format!("`.{}`", e.to_string_lossy()))
+                .unwrap_or_else(|| "no extension".into());
+            let hint = if ext.eq_ignore_ascii_case("`.dae`") {
+                " (COLLADA is not read: export STL, OBJ, PLY or glTF)"
+            } else {
+                ""
+            };
+            MeshError::invalid(format!(
+                "{ext} is not a mesh format fitup reads{hint}: .stl, .obj, .ply, .gltf, .glb"
+            ))
+        })
+    }
+}
+
+/// Parses mesh `bytes` of `format`; `folder` is where a `.gltf` finds its buffer files
+/// (`None`: only embedded buffers). Returns the mesh (mm) and the other files read.
+pub fn parse_mesh(
+    bytes: &[u8],
+    format: MeshFormat,
+    folder: Option<&Path>,
+) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
+    match format {
+        MeshFormat::Stl => Ok((parse_stl(bytes)?, Vec::new())),
+        MeshFormat::Obj => Ok((parse_obj(bytes)?, Vec::new())),
+        MeshFormat::Ply => Ok((parse_ply(bytes)?, Vec::new())),
+        #[cfg(feature = "formats")]
+        MeshFormat::Gltf => parse_gltf(bytes, folder),
+        #[cfg(not(feature = "formats"))]
+        MeshFormat::Gltf => {
+            let _ = folder;
+            Err(MeshError::invalid(
+                "glTF/GLB meshes need fitup built with the `formats` feature (on by default): rebuild with `--features formats`",
+            ))
+        }
+    }
+}
+
+/// Reads a mesh file of any format fitup reads ([`MeshFormat::detect`]), with the
+/// same checks whatever the format: coordinates finite and within
+/// [`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE) mm, at most [`MAX_TRIANGLES`]
+/// triangles, at least one with an area, errors naming the file and the line (text
+/// formats) or element. A mesh that is open is read; [`Mesh::inspect`] reports it.
+pub fn read_mesh_file(path: &Path) -> Result<Mesh, MeshError> {
+    read_mesh_with_files(path).map(|(m, _)| m)
+}
+
+/// [`read_mesh_file`], with the other files read (a `.gltf`'s buffers).
+pub(crate) fn read_mesh_with_files(path: &Path) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
+    let bytes = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh)
+        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
+    let format = MeshFormat::detect(path, &bytes).map_err(|e| e.in_file(path))?;
+    parse_mesh(&bytes, format, path.parent()).map_err(|e| e.in_file(path))
+}
+
+/// The end of every indexed reader (OBJ, PLY): no triangles or none with an area is
+/// refused (at `first_line`, the first face's line, when known); unused vertices are
+/// dropped and bit-identical positions merged.
+fn finish_read(
+    format: &str,
+    what: &str,
+    vertices: Vec<Point3>,
+    triangles: Vec<[u32; 3]>,
+    first_line: Option<usize>,
+) -> Result<Mesh, MeshError> {
+    if triangles.is_empty() {
+        return Err(MeshError::invalid(format!("the {format} has no {what}")));
+    }
+    let mesh = Mesh::from_triangle_soup(triangles.iter().map(|t| t.map(|i| vertices[i as usize])))?;
+    if !mesh.has_area() {
+        let message = format!(
+            "all {} triangles have zero area (their corners are collinear or coincide): the mesh has no surface",
+            mesh.triangles.len()
+        );
+        return Err(match first_line {
+            Some(line) => MeshError::at(line, message),
+            None => MeshError::invalid(format!("{format}: {message}")),
+        });
+    }
+    Ok(mesh)
+}
 
 use crate::math::{Point3, Vec3};
 use std::collections::HashMap;

@@ -5,6 +5,30 @@ use super::{Mesh, MeshError};
 use crate::math::Point3;
 
 impl Mesh {
+    /// A closed sphere of `radius` (mm) about the origin: `segments` facets around
+    /// (at least 4) and half as many from pole to pole.
+    pub fn uv_sphere(radius: f64, segments: usize) -> Mesh {
+        let n = segments.max(4);
+        let rings = n / 2;
+        let profile: Vec<(f64, f64)> = (0..=rings)
+            .map(|k| {
+                let t = std::f64::consts::PI * k as f64 / rings as f64;
+                // Exactly on the axis at the poles (the lathe requires it).
+                let r = if k == 0 || k == rings {
+                    0.0
+                } else {
+                    radius * t.sin()
+                };
+                (r, -radius * t.cos())
+            })
+            .collect();
+        // A finite radius gives a valid profile; a bad one an empty mesh.
+        Mesh::lathe(&profile, n).unwrap_or(Mesh {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        })
+    }
+
     /// A solid of revolution about +Z: `profile` lists `(radius, z)` pairs (mm) from
     /// the bottom to the top; the first and last must lie on the axis (radius 0).
     /// `segments` facets around (at least 3).

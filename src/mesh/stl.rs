@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 pub struct MeshError {
     /// The file, when there is one.
     pub path: Option<PathBuf>,
-    /// 1-based line of an ASCII STL, when known.
+    /// 1-based line of a text format (ASCII STL, OBJ, ASCII PLY, .gltf JSON), when known.
     pub line: Option<usize>,
     /// What is wrong.
     pub message: String,
@@ -29,7 +29,7 @@ impl MeshError {
         }
     }
 
-    fn at(line: usize, message: impl Into<String>) -> Self {
+    pub(crate) fn at(line: usize, message: impl Into<String>) -> Self {
         Self {
             path: None,
             line: Some(line),
@@ -86,7 +86,7 @@ pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
 }
 
 /// A coordinate that is not finite or beyond the accepted range.
-fn check_coordinate(v: f64) -> Result<(), String> {
+pub(super) fn check_coordinate(v: f64) -> Result<(), String> {
     let max = crate::math::MAX_ABS_VALUE;
     if !v.is_finite() {
         Err(format!("coordinate {v} is not finite"))
@@ -279,7 +279,7 @@ fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
 }
 
 /// At most 40 characters of a token or line, for messages (a line may be megabytes).
-fn short(s: &str) -> String {
+pub(super) fn short(s: &str) -> String {
     if s.chars().count() <= 40 {
         s.to_string()
     } else {

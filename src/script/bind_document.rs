@@ -266,6 +266,25 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         c.record_write(&full);
         Ok(())
     });
+    fn export_glb(d: &DocHandle, file: &str, overwrite: bool) -> ScriptResult<()> {
+        let bytes = d.lock()?.glb_bytes().map_err(fail)?;
+        d.ctx.write_output(file, &bytes, overwrite)?;
+        Ok(())
+    }
+    api.f("Document.export_glb(file: string)", "Writes the document as binary glTF (one node per component, named as it, at its pose; metres and +Y up as glTF wants, see docs/document.md) inside the project, atomically. Refuses to replace a file the project uses or one fitup did not write; `#{overwrite: true}` replaces it.", |d: &mut DocHandle, file: &str| -> ScriptResult<()> {
+        export_glb(d, file, false)
+    });
+    api.f(
+        "Document.export_glb(file: string, options: map)",
+        "`export_glb(file)` with `#{overwrite}` (bool, default false).",
+        |d: &mut DocHandle, file: &str, opts: Map| -> ScriptResult<()> {
+            export_glb(
+                d,
+                file,
+                super::convert::overwrite_option(&opts, "export_glb")?,
+            )
+        },
+    );
     api.f(
         "Document.to_string() -> string",
         "A one-line summary.",

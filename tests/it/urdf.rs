@@ -305,7 +305,8 @@ fn document_urdf_robot_meshes_are_posed_and_saved() {
 }
 
 /// A mesh path leading outside the project is refused (the file outside is never
-/// read); a `.dae` mesh is reported with the URDF line.
+/// read); a `.dae` mesh without a collision mesh fitup reads is left out with a
+/// warning naming the URDF line (the robot's kinematics still load).
 #[test]
 fn urdf_mesh_escape_refused_and_dae_reported() {
     let (_dir, path) = urdf_project("../elsewhere.stl");
@@ -315,9 +316,12 @@ fn urdf_mesh_escape_refused_and_dae_reported() {
         "{e}"
     );
     let (_dir, path) = urdf_project("package://r_support/meshes/arm.dae");
-    let e = Document::open(&path).unwrap_err().to_string();
+    let doc = Document::open(&path).unwrap();
+    let w = doc.warnings().join("\n");
     assert!(
-        e.contains("cell.yaml:3") && e.contains("r.urdf:4") && e.contains("not an STL"),
-        "{e}"
+        w.contains("r.urdf:4") && w.contains("arm.dae") && w.contains("left out"),
+        "{w}"
     );
+    assert!(doc.component_index("r:arm").is_err());
+    assert_eq!(doc.robots()[0].robot().dof(), 1);
 }

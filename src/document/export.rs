@@ -1,0 +1,78 @@
+//! A document written as binary glTF (GLB) for other viewers: `fitup export`,
+//! `doc.export_glb(file)` in scripts.
+
+use super::{Document, DocumentError};
+use crate::mesh::{glb_bytes, GlbNode};
+use std::path::{Path, PathBuf};
+
+/// What [`Document::export_glb`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GlbExport {
+    /// The file written.
+    pub path: PathBuf,
+    /// glTF nodes: one per component (robot links' generated components included).
+    pub nodes: usize,
+    /// glTF meshes: one per distinct part mesh.
+    pub meshes: usize,
+    /// Bytes written.
+    pub bytes: usize,
+}
+
+impl Document {
+    /// The document as GLB bytes: one node per component, named as the component, at
+    /// its current pose (robot links where the joints put them), showing its part's
+    /// mesh (one glTF mesh per part, shared by its components). Metres and +Y up as
+    /// glTF wants: see [`crate::mesh::glb_bytes`] (a root node `fitup` turns fitup's
+    /// +Z-up world; each component node's matrix is its pose with the translation
+    /// in metres).
+    pub fn glb_bytes(&self) -> Result<Vec<u8>, DocumentError> {
+        let nodes: Vec<GlbNode> = self
+            .components()
+            .iter()
+            .enumerate()
+            .map(|(i, c)| GlbNode {
+                name: &c.name,
+                mesh: self.mesh_of(i).as_ref(),
+                pose: c.transform,
+            })
+            .collect();
+        glb_bytes(&nodes).map_err(|e| DocumentError::Invalid(format!("GLB export: {e}")))
+    }
+
+    /// Writes [`Document::glb_bytes`] to `path` through the project's write rule
+    /// ([`crate::fsutil::check_output`]): a file this document was built from (its
+    /// YAML, meshes, URDF) is never replaced, an existing file only when fitup wrote it
+    /// or with `force`; written atomically (a reader never sees half a file), and
+    /// checked before anything is built.
+    pub fn export_glb(&self, path: &Path, force: bool) -> Result<GlbExport, DocumentError> {
+        let sources: Vec<PathBuf> = self
+            .source_files()
+            .iter()
+            .filter_map(|p| p.canonicalize().ok())
+            .collect();
+        let used = |p: &Path| p.canonicalize().is_ok_and(|c| sources.contains(&c));
+        let rule = crate::fsutil::OutputRule {
+            force,
+            used: Some(&used),
+            signature: None,
+        };
+        let write_error = |message: String| DocumentError::Write {
+            path: path.to_path_buf(),
+            message,
+        };
+        crate::fsutil::check_output(path, &rule).map_err(|e| write_error(e.to_string()))?;
+        let bytes = self.glb_bytes()?;
+        crate::fsutil::write_checked(path, &bytes).map_err(|e| write_error(e.to_string()))?;
+        let mut meshes: Vec<*const crate::mesh::Mesh> = (0..self.components().len())
+            .map(|i| std::sync::Arc::as_ptr(self.mesh_of(i)))
+            .collect();
+        meshes.sort();
+        meshes.dedup();
+        Ok(GlbExport {
+            path: path.to_path_buf(),
+            nodes: self.components().len(),
+            meshes: meshes.len(),
+            bytes: bytes.len(),
+        })
+    }
+}
