@@ -21,6 +21,7 @@ mod layers;
 mod manipulator;
 mod models;
 mod planning_problems;
+mod planning_puzzles;
 mod robots;
 mod scripts;
 mod sequence;
