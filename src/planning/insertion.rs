@@ -305,9 +305,7 @@ fn finish(
     let budget = options
         .time_limit_ms
         .unwrap_or(super::run::DEFAULT_TIME_LIMIT_MS);
-    let share = options
-        .smoothing
-        .time_ms(budget, left_ms.unwrap_or(budget));
+    let share = options.smoothing.time_ms(budget, left_ms.unwrap_or(budget));
     // No share (or nothing left): the path as the search found it.
     if share > 0.0 {
         smooth(

@@ -193,7 +193,13 @@ impl Tree {
         let (tt, tq) = (target.translation(), target.rotation());
         let mut best = (0, f64::INFINITY);
         for i in 0..self.len() {
-            let d = metric(&self.translations[i], &self.rotations[i], &tt, &tq, space.rotation_weight);
+            let d = metric(
+                &self.translations[i],
+                &self.rotations[i],
+                &tt,
+                &tq,
+                space.rotation_weight,
+            );
             if d < best.1 && !self.dead[i] {
                 best = (i, d);
             }

@@ -9,7 +9,7 @@
 //! `.venv/bin/python`) exists. Environment: `FITUP_RUNS` (fitup runs per problem,
 //! 10), `FITUP_OMPL_RUNS` (5), `FITUP_OMPL_LIMIT_S` (10), `FITUP_OMPL_RRT=1` (also
 //! OMPL's plain RRT), `FITUP_STEPWISE=1` (also fitup with stepwise edges),
-//! `FITUP_PROBLEM=name` (only problems whose name contains it),
+//! `FITUP_PROBLEM=name[,name…]` (only problems whose name contains one of them),
 //! `FITUP_PROTOCOL=0` (skip seed 002's protocol), `FITUP_VALIDATOR=0` (skip the
 //! validator profile: pose and edge checks per problem), `FITUP_VARIANTS=1` (also
 //! fitup's exploration variants side by side: eager, lazy, random moves;
@@ -655,7 +655,10 @@ fn main() {
         problems::all().unwrap()
     };
     for p in list {
-        if only.as_ref().is_some_and(|o| !p.name.contains(o.as_str())) {
+        if only
+            .as_ref()
+            .is_some_and(|o| !o.split(',').any(|o| p.name.contains(o)))
+        {
             continue;
         }
         let dir = tmp.path().join(&p.name);

@@ -807,7 +807,8 @@ pub fn twisted_tubes() -> Result<Problem, MeshError> {
     let centre = move |u: f64| Point3::new(r * u.cos(), r * u.sin(), a * (2.0 * u).sin());
     let twisted = swept_tube(
         move |u, v| {
-            let tangent = Vec3::new(-r * u.sin(), r * u.cos(), 2.0 * a * (2.0 * u).cos()).normalize();
+            let tangent =
+                Vec3::new(-r * u.sin(), r * u.cos(), 2.0 * a * (2.0 * u).cos()).normalize();
             let radial = Vec3::new(u.cos(), u.sin(), 0.0);
             let normal = (radial - tangent * radial.dot(&tangent)).normalize();
             let binormal = tangent.cross(&normal);
@@ -908,9 +909,15 @@ pub fn twisted_slot() -> Result<Problem, MeshError> {
     let q = std::f64::consts::FRAC_PI_4;
     let sections = [
         ("slot_0", holed_frame(0.0, 4.0, hy, hz, 40.0, 0.0)?),
-        ("chamber_1", holed_frame(4.0, 11.0, chamber, chamber, 40.0, 0.0)?),
+        (
+            "chamber_1",
+            holed_frame(4.0, 11.0, chamber, chamber, 40.0, 0.0)?,
+        ),
         ("slot_45", holed_frame(11.0, 15.0, hy, hz, 40.0, q)?),
-        ("chamber_2", holed_frame(15.0, 22.0, chamber, chamber, 40.0, 0.0)?),
+        (
+            "chamber_2",
+            holed_frame(15.0, 22.0, chamber, chamber, 40.0, 0.0)?,
+        ),
         ("slot_90", holed_frame(22.0, 26.0, hy, hz, 40.0, 2.0 * q)?),
         ("outer", holed_frame(0.0, 26.0, 28.0, 28.0, 90.0, 0.0)?),
     ];

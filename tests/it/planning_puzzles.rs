@@ -8,8 +8,8 @@ mod problems;
 
 use fitup::collision::{interferes, DEFAULT_TOLERANCE};
 use fitup::planning::{Failure, InsertionOptions, MotionValidator, PlannedPath};
-use std::time::Instant;
 use problems::Problem;
+use std::time::Instant;
 
 /// Every pose of the densified path (0.01 mm; the rotation moving no point more
 /// than 0.01 mm) is free by the exact interference test and inside the bounds.
@@ -42,7 +42,10 @@ fn assert_collision_free(p: &Problem, path: &PlannedPath) {
 #[ignore]
 fn explore_puzzles() {
     for p in problems::puzzles().unwrap() {
-        let ms: f64 = std::env::var("FITUP_MS").ok().and_then(|v| v.parse().ok()).unwrap_or(3000.0);
+        let ms: f64 = std::env::var("FITUP_MS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(3000.0);
         let mut v = p.validator(p.default_validator_options()).unwrap();
         let mut o = InsertionOptions::default().with_limits(1, usize::MAX / 2);
         o.time_limit_ms = Some(ms);
@@ -72,7 +75,11 @@ fn puzzles_are_well_posed() {
         assert!(v.is_free(&p.goal), "{}: goal", p.name);
         for end in [p.start, p.goal] {
             let t = end.translation();
-            assert!((0..3).all(|i| t[i] >= p.space.min[i] && t[i] <= p.space.max[i]), "{}", p.name);
+            assert!(
+                (0..3).all(|i| t[i] >= p.space.min[i] && t[i] <= p.space.max[i]),
+                "{}",
+                p.name
+            );
         }
         assert_eq!(
             v.edge_free(&p.start, &p.goal),
@@ -94,7 +101,11 @@ fn check_solves(p: &Problem, seed: u64, iterations: usize) -> PlannedPath {
     let mut v = p.validator(p.default_validator_options()).unwrap();
     let path = p.solve_with(&mut v, &options).unwrap();
     assert!(path.found(), "{}: {:?}", p.name, path.failure);
-    assert!(path.poses[0].approx_eq(&p.start, 1e-9, 1e-9), "{}: start", p.name);
+    assert!(
+        path.poses[0].approx_eq(&p.start, 1e-9, 1e-9),
+        "{}: start",
+        p.name
+    );
     assert!(
         path.poses.last().unwrap().approx_eq(&p.goal, 1e-9, 1e-9),
         "{}: goal",
@@ -169,8 +180,16 @@ fn smoothing_stays_within_its_share_and_the_raw_path_is_returned_without_it() {
     let path = p.solve_with(&mut v, &options).unwrap();
     assert!(path.found(), "{:?}", path.failure);
     let share = options.smoothing.budget_share * budget;
-    assert!(path.smoothing_ms <= 1.05 * share, "{} > {share}", path.smoothing_ms);
-    assert!(path.smoothing_ms > 0.5 * share.min(budget - path.search_ms), "{}", path.smoothing_ms);
+    assert!(
+        path.smoothing_ms <= 1.05 * share,
+        "{} > {share}",
+        path.smoothing_ms
+    );
+    assert!(
+        path.smoothing_ms > 0.5 * share.min(budget - path.search_ms),
+        "{}",
+        path.smoothing_ms
+    );
     assert!(path.time_ms <= 1.05 * budget);
     assert_collision_free(&p, &path);
 
