@@ -15,7 +15,7 @@ use crate::math::Vec3;
 use nalgebra::UnitQuaternion;
 
 /// Points per leaf.
-const LEAF: usize = 8;
+const LEAF: usize = 24;
 
 /// The exact metric distance the linear scan computes (kept bit-identical).
 #[inline]
@@ -37,11 +37,13 @@ pub(crate) fn metric(
 struct Cell {
     lo: [f64; 7],
     hi: [f64; 7],
-    /// Leaf: `order[start..end]`; inner: children `left`, `left + 1`… stored as
-    /// indices into `cells`.
+    /// The nodes `order[start..end]` (a leaf scans them).
     start: usize,
     end: usize,
+    /// Inner cells: the two children (indices into `cells`).
     children: Option<(usize, usize)>,
+    /// Inner cells: the split axis and the coordinate the children divide at.
+    split: (usize, f64),
 }
 
 /// A static k-d tree over the first `len()` nodes of a tree; the planner's tree
@@ -102,46 +104,57 @@ impl KdIndex {
             return best;
         }
         let q = point(tt, tq);
-        let mut stack: Vec<(usize, f64)> = Vec::with_capacity(64);
-        stack.push((0, 0.0));
-        while let Some((c, lb)) = stack.pop() {
-            if lb > best.1 {
-                continue;
-            }
-            let cell = &self.cells[c];
-            match cell.children {
-                None => {
-                    for &i in &self.order[cell.start..cell.end] {
-                        if skip(i) {
-                            continue;
-                        }
-                        let d = metric(&translations[i], &rotations[i], tt, tq, w);
-                        if d < best.1 || (d == best.1 && i < best.0) {
-                            best = (i, d);
-                        }
+        self.search(0, translations, rotations, &q, tt, tq, w, skip, &mut best);
+        best
+    }
+
+    /// Depth first, the child on the query's side of the split first; a cell is
+    /// entered only when its lower bound does not exceed the best distance so far
+    /// (the far child's bound is computed after the near child has tightened it).
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &self,
+        c: usize,
+        translations: &[Vec3],
+        rotations: &[UnitQuaternion<f64>],
+        q: &[f64; 7],
+        tt: &Vec3,
+        tq: &UnitQuaternion<f64>,
+        w: f64,
+        skip: &dyn Fn(usize) -> bool,
+        best: &mut (usize, f64),
+    ) {
+        let cell = &self.cells[c];
+        match cell.children {
+            None => {
+                for &i in &self.order[cell.start..cell.end] {
+                    // The translation alone already too far: the scan's own reject.
+                    if (translations[i] - tt).norm() > best.1 || skip(i) {
+                        continue;
+                    }
+                    let d = metric(&translations[i], &rotations[i], tt, tq, w);
+                    if d < best.1 || (d == best.1 && i < best.0) {
+                        *best = (i, d);
                     }
                 }
-                Some((a, b)) => {
-                    let la = self.bound(a, &q, w);
-                    let lb_b = self.bound(b, &q, w);
-                    // Nearer child popped first.
-                    if la <= lb_b {
-                        stack.push((b, lb_b));
-                        stack.push((a, la));
-                    } else {
-                        stack.push((a, la));
-                        stack.push((b, lb_b));
+            }
+            Some((a, b)) => {
+                let (axis, at) = cell.split;
+                let (near, far) = if q[axis] < at { (a, b) } else { (b, a) };
+                for child in [near, far] {
+                    if self.bound(child, q, w, best.1) <= best.1 {
+                        self.search(child, translations, rotations, q, tt, tq, w, skip, best);
                     }
                 }
             }
         }
-        best
     }
 
     /// A lower bound of the metric distance from the query point `q` to any point
     /// of cell `c` (slightly shrunk for rounding, so that it never exceeds the
     /// distance the scan computes).
-    fn bound(&self, c: usize, q: &[f64; 7], w: f64) -> f64 {
+    /// Stops early (returning the translation part alone) once that exceeds `cap`.
+    fn bound(&self, c: usize, q: &[f64; 7], w: f64, cap: f64) -> f64 {
         let cell = &self.cells[c];
         let gap = |x: f64, lo: f64, hi: f64| {
             if x < lo {
@@ -157,6 +170,10 @@ impl KdIndex {
             let g = gap(q[k], cell.lo[k], cell.hi[k]);
             t2 += g * g;
         }
+        let t = t2.sqrt();
+        if t > cap * (1.0 + 1e-9) + 1e-9 {
+            return t * (1.0 - 1e-9) - 1e-9;
+        }
         let (mut plus, mut minus) = (0.0, 0.0);
         for k in 3..7 {
             let g = gap(q[k], cell.lo[k], cell.hi[k]);
@@ -165,7 +182,7 @@ impl KdIndex {
             minus += g * g;
         }
         let chord = plus.min(minus).sqrt();
-        (t2.sqrt() + 2.0 * w * chord) * (1.0 - 1e-9) - 1e-9
+        (t + 2.0 * w * chord) * (1.0 - 1e-9) - 1e-9
     }
 }
 
@@ -193,6 +210,7 @@ fn split(
         start,
         end,
         children: None,
+        split: (0, 0.0),
     });
     if end - start <= LEAF {
         return me;
@@ -207,9 +225,11 @@ fn split(
     order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
         points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b))
     });
+    let at = points[order[mid]][axis];
     let a = split(points, order, start, mid, weight, cells);
     let b = split(points, order, mid, end, weight, cells);
     cells[me].children = Some((a, b));
+    cells[me].split = (axis, at);
     me
 }
 
