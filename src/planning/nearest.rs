@@ -89,6 +89,7 @@ impl KdIndex {
     /// The covered node nearest to `(tt, tq)` in the metric with rotation weight
     /// `w`, skipping nodes `skip` says are gone; ties to the lowest index. `best`
     /// is the incumbent `(index, distance)` (e.g. `(0, ∞)`).
+    #[allow(clippy::too_many_arguments)]
     pub fn nearest(
         &self,
         translations: &[Vec3],
@@ -154,6 +155,8 @@ impl KdIndex {
     /// of cell `c` (slightly shrunk for rounding, so that it never exceeds the
     /// distance the scan computes).
     /// Stops early (returning the translation part alone) once that exceeds `cap`.
+    // Three arrays indexed in lockstep: a range loop reads clearest.
+    #[allow(clippy::needless_range_loop)]
     fn bound(&self, c: usize, q: &[f64; 7], w: f64, cap: f64) -> f64 {
         let cell = &self.cells[c];
         let gap = |x: f64, lo: f64, hi: f64| {

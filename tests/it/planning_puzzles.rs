@@ -3,8 +3,8 @@
 //! the easy ones are planned with a fixed seed, and every returned path is
 //! re-checked independently at dense poses with the collision API.
 
-#[path = "../common/problems.rs"]
-mod problems;
+// The generators, loaded once in the binary (by planning_problems).
+use super::planning_problems::problems;
 
 use fitup::collision::{interferes, DEFAULT_TOLERANCE};
 use fitup::planning::{Failure, InsertionOptions, MotionValidator, PlannedPath};
@@ -34,33 +34,6 @@ fn assert_collision_free(p: &Problem, path: &PlannedPath) {
             (0..3).all(|i| t[i] >= p.space.min[i] - 1e-9 && t[i] <= p.space.max[i] + 1e-9),
             "{}: pose {k} leaves the bounds",
             p.name
-        );
-    }
-}
-
-#[test]
-#[ignore]
-fn explore_puzzles() {
-    for p in problems::puzzles().unwrap() {
-        let ms: f64 = std::env::var("FITUP_MS")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(3000.0);
-        let mut v = p.validator(p.default_validator_options()).unwrap();
-        let mut o = InsertionOptions::default().with_limits(1, usize::MAX / 2);
-        o.time_limit_ms = Some(ms);
-        let path = p.solve_with(&mut v, &o).unwrap();
-        eprintln!(
-            "{}: found {} {:?} time {:.0} search {:.0} smooth {:.0} poses {} checks {} planner {}",
-            p.name,
-            path.found(),
-            path.failure,
-            path.time_ms,
-            path.search_ms,
-            path.smoothing_ms,
-            path.poses.len(),
-            path.collision_checks(),
-            path.planner
         );
     }
 }
