@@ -302,14 +302,21 @@ fn finish(
     // The searches' own smoothing was off: their times are search only.
     path.search_ms = ms_since(clock);
     path.smoothing_ms = 0.0;
-    smooth(
-        validator,
-        space,
-        path,
-        &options.smoothing,
-        seed,
-        left_ms,
-        progress,
-    );
+    let budget = options
+        .time_limit_ms
+        .unwrap_or(super::run::DEFAULT_TIME_LIMIT_MS);
+    let share = options.smoothing.time_ms(budget, left_ms.unwrap_or(budget));
+    // No share (or nothing left): the path as the search found it.
+    if share > 0.0 {
+        smooth(
+            validator,
+            space,
+            path,
+            &options.smoothing,
+            seed,
+            Some(share),
+            progress,
+        );
+    }
     path.time_ms = ms_since(clock);
 }

@@ -29,6 +29,7 @@ mod lattice;
 mod local_rrt;
 mod mesh_validator;
 mod narrow;
+mod nearest;
 mod path;
 mod problem_file;
 mod request;
@@ -63,6 +64,6 @@ pub use run::{
     Control, Failure, Phase, PlanError, PlanLimits, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
     SMOOTHING_PROGRESS_EVERY,
 };
-pub use smoothing::{smooth, Smoothing};
+pub use smoothing::{smooth, Smoothing, DEFAULT_SMOOTHING_SHARE};
 pub use space::{PlanningSpace, RotationFreedom};
 pub use validator::{stepwise_edge_free, LazyValidation, MotionValidator};

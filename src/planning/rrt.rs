@@ -309,6 +309,16 @@ pub(crate) fn finish(
     // A different stream than the planner's, so smoothing does not depend on how many
     // numbers the search drew.
     let mut rng = Rng::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
-    shortcut(checker, space, &mut poses, smoothing, &mut rng, run);
+    // Smoothing's share of the budget, at most what is left of it.
+    let left_ms = run
+        .deadline()
+        .saturating_duration_since(std::time::Instant::now())
+        .as_secs_f64()
+        * 1e3;
+    let until = super::run::deadline_after(
+        std::time::Instant::now(),
+        smoothing.time_ms(run.budget_ms(), left_ms),
+    );
+    shortcut(checker, space, &mut poses, smoothing, &mut rng, run, until);
     PlannedPath::found_with(planner, poses, raw, run.iterations, nodes, checker, run)
 }

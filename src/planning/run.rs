@@ -239,6 +239,11 @@ impl<'p> Run<'p> {
         Instant::now() >= self.deadline
     }
 
+    /// The call's whole time budget (ms).
+    pub fn budget_ms(&self) -> f64 {
+        self.limits.budget_ms()
+    }
+
     /// Marks the end of the search (smoothing follows).
     pub fn end_search(&mut self) {
         self.search_ms = Some(self.elapsed_ms());
@@ -246,9 +251,15 @@ impl<'p> Run<'p> {
 
     /// Called once per shortcut attempt while smoothing: reports progress every
     /// [`SMOOTHING_PROGRESS_EVERY`] attempts; `false` when smoothing must stop
-    /// (budget spent or cancelled).
-    pub fn smoothing_tick(&mut self, attempt: usize, key_poses: usize, length: f64) -> bool {
-        if self.expired() {
+    /// (budget or smoothing's share of it, `until`, spent, or cancelled).
+    pub fn smoothing_tick(
+        &mut self,
+        attempt: usize,
+        key_poses: usize,
+        length: f64,
+        until: Instant,
+    ) -> bool {
+        if self.expired() || Instant::now() >= until {
             return false;
         }
         if attempt.is_multiple_of(SMOOTHING_PROGRESS_EVERY) && attempt > 0 {

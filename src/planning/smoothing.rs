@@ -5,26 +5,36 @@ use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::space::PlanningSpace;
 use super::validator::{Checker, MotionValidator};
 use crate::math::{Rng, Transform};
+use std::time::Instant;
 
 /// How a found path is shortened.
 ///
 /// First a linear pass drops every key pose whose neighbours see each other; then
 /// `shortcut_attempts` random shortcuts join two random points of the path (anywhere
 /// on its edges) by a straight edge when that edge is free. Every kept edge has been
-/// accepted by the validator.
+/// accepted by the validator. Smoothing takes at most `budget_share` of the call's
+/// time budget (and never more than is left of it): a search that found its path
+/// late still returns it, unsmoothed when nothing is left.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Smoothing {
     /// Whether to smooth at all. Default true.
     pub enabled: bool,
     /// Random shortcut attempts after the linear pass. Default 100.
     pub shortcut_attempts: usize,
+    /// Largest share of the call's time budget smoothing may take, in [0, 1].
+    /// Default 0.2: smoothing that outlasts the search is a budget bug (issue 23).
+    pub budget_share: f64,
 }
+
+/// Default [`Smoothing::budget_share`].
+pub const DEFAULT_SMOOTHING_SHARE: f64 = 0.2;
 
 impl Default for Smoothing {
     fn default() -> Self {
         Self {
             enabled: true,
             shortcut_attempts: 100,
+            budget_share: DEFAULT_SMOOTHING_SHARE,
         }
     }
 }
@@ -34,16 +44,24 @@ impl Smoothing {
     pub const OFF: Self = Self {
         enabled: false,
         shortcut_attempts: 0,
+        budget_share: DEFAULT_SMOOTHING_SHARE,
     };
 
     pub(crate) fn validate(&self) -> Result<(), PlanError> {
-        Ok(())
+        PlanError::probability("smoothing.budget_share", self.budget_share)
+    }
+
+    /// Smoothing's time, ms, in a call of `budget_ms` with `left_ms` remaining:
+    /// its share of the budget, at most what is left.
+    pub fn time_ms(&self, budget_ms: f64, left_ms: f64) -> f64 {
+        (self.budget_share * budget_ms).min(left_ms).max(0.0)
     }
 }
 
 /// Smooths a found `path` in place with `validator`, costs in `space`'s metric,
-/// seeded by `seed`, within `time_limit_ms` (`None`: the default budget,
-/// [`DEFAULT_TIME_LIMIT_MS`](super::DEFAULT_TIME_LIMIT_MS)). Anytime: when the budget
+/// seeded by `seed`, within `time_limit_ms` — smoothing's own time, which the caller
+/// sizes with [`Smoothing::time_ms`] (`None`: the default budget,
+/// [`DEFAULT_TIME_LIMIT_MS`](super::DEFAULT_TIME_LIMIT_MS), all of it for smoothing). Anytime: when the budget
 /// is spent or `progress` cancels, the shortest path so far is kept (every kept edge
 /// was accepted by the validator). Updates the lengths, check counts, `smoothing_ms`
 /// and `time_ms` (`raw_*` keep the lengths before).
@@ -68,6 +86,7 @@ pub fn smooth(
     run.end_search();
     let mut checker = Checker::new(validator, Some(run.deadline()));
     let mut rng = Rng::new(seed);
+    let until = run.deadline();
     shortcut(
         &mut checker,
         space,
@@ -75,6 +94,7 @@ pub fn smooth(
         smoothing,
         &mut rng,
         &mut run,
+        until,
     );
     let (l, r) = measure(&path.poses);
     path.length_mm = l;
@@ -86,6 +106,8 @@ pub fn smooth(
     path.time_ms += ms;
 }
 
+/// Shortcuts `poses` until `until` (smoothing's deadline, at most the call's): the
+/// checker's deadline is narrowed to it meanwhile, so no edge check outlives it.
 pub(crate) fn shortcut(
     checker: &mut Checker<'_>,
     space: &PlanningSpace,
@@ -93,15 +115,32 @@ pub(crate) fn shortcut(
     smoothing: &Smoothing,
     rng: &mut Rng,
     run: &mut Run<'_>,
+    until: Instant,
 ) {
-    if !smoothing.enabled || poses.len() < 3 {
+    // No time for smoothing (a zero share, or the budget spent): the path as found.
+    if !smoothing.enabled || poses.len() < 3 || Instant::now() >= until {
         return;
     }
+    let call = checker.deadline();
+    checker.set_deadline(Some(call.map_or(until, |d| d.min(until))));
+    shortcut_until(checker, space, poses, smoothing, rng, run, until);
+    checker.set_deadline(call);
+}
+
+fn shortcut_until(
+    checker: &mut Checker<'_>,
+    space: &PlanningSpace,
+    poses: &mut Vec<Transform>,
+    smoothing: &Smoothing,
+    rng: &mut Rng,
+    run: &mut Run<'_>,
+    until: Instant,
+) {
     linear_pass(checker, poses);
     for attempt in 0..smoothing.shortcut_attempts {
         // Anytime: every accepted shortcut leaves a valid path, so stopping here
         // keeps the best one so far.
-        if !run.smoothing_tick(attempt, poses.len(), space.distance_along(poses)) {
+        if !run.smoothing_tick(attempt, poses.len(), space.distance_along(poses), until) {
             return;
         }
         let edges = poses.len() - 1;

@@ -1,5 +1,6 @@
 //! The search tree shared by the RRT family, and helpers every tree planner needs.
 
+use super::nearest::{metric, KdIndex};
 use super::run::Failure;
 use super::space::PlanningSpace;
 use super::validator::Checker;
@@ -9,9 +10,10 @@ use std::collections::HashSet;
 
 /// A tree of poses rooted at index 0.
 ///
-/// Nearest-neighbour queries scan all nodes but reject most of them on translation
-/// alone, so a query costs a few nanoseconds per node: cheaper than one mesh
-/// collision check up to several thousand nodes.
+/// Nearest-neighbour queries go through a k-d tree in the space's SE(3) metric
+/// ([`KdIndex`]) rebuilt as the tree grows by a quarter, plus a scan of the nodes
+/// added since; the answer is exactly the linear scan's (same distances, ties to
+/// the lowest index), so paths do not depend on when the index was rebuilt.
 pub(crate) struct Tree {
     pub poses: Vec<Transform>,
     pub parent: Vec<usize>,
@@ -28,7 +30,14 @@ pub(crate) struct Tree {
     /// Dynamic-domain radius of each node (metric mm; infinite until an extension
     /// from it was blocked, see [`NarrowPassage`](super::NarrowPassage)).
     domain: Vec<f64>,
+    /// The k-d tree over the first `index.len()` nodes.
+    index: KdIndex,
+    /// The rotation weight of the last query (steers the next rebuild's splits).
+    weight: std::cell::Cell<f64>,
 }
+
+/// Below this many nodes a query scans them all.
+const INDEX_FROM: usize = 128;
 
 impl Tree {
     /// A tree holding `root`; `key_mm` is the translation quantum of duplicate detection.
@@ -43,6 +52,8 @@ impl Tree {
             dead: Vec::new(),
             certified: Vec::new(),
             domain: Vec::new(),
+            index: KdIndex::default(),
+            weight: std::cell::Cell::new(25.0),
         };
         t.add(root, 0);
         t.certified[0] = true;
@@ -63,6 +74,10 @@ impl Tree {
         self.dead.push(false);
         self.certified.push(false);
         self.domain.push(f64::INFINITY);
+        let built = self.index.len();
+        if self.poses.len() >= INDEX_FROM && self.poses.len() - built > (built / 4).max(32) {
+            self.index = KdIndex::build(&self.translations, &self.rotations, self.weight.get());
+        }
         i
     }
 
@@ -146,17 +161,46 @@ impl Tree {
         let tt = target.translation();
         let tq = target.rotation();
         let w = space.rotation_weight;
-        let mut best = (0, f64::INFINITY);
-        for (i, t) in self.translations.iter().enumerate() {
-            let d = (t - tt).norm();
+        self.weight.set(w);
+        let built = self.index.len();
+        let mut best = self.index.nearest(
+            &self.translations,
+            &self.rotations,
+            &tt,
+            &tq,
+            w,
+            &|i| self.dead[i],
+            (0, f64::INFINITY),
+        );
+        // The nodes added since the last rebuild: all indices above the index's, so
+        // a strict `<` keeps ties at the lowest index.
+        for i in built..self.len() {
+            let d = (self.translations[i] - tt).norm();
             if d >= best.1 || self.dead[i] {
                 continue;
             }
-            // 2·acos|q·q'| is the angle between the rotations; nalgebra's
-            // `angle_to` goes through atan2, which took most of a query's time.
-            let dot = self.rotations[i].coords.dot(&tq.coords).abs().min(1.0);
-            let d = d + w * 2.0 * dot.acos();
+            let d = metric(&self.translations[i], &self.rotations[i], &tt, &tq, w);
             if d < best.1 {
+                best = (i, d);
+            }
+        }
+        best
+    }
+
+    /// The linear scan [`Tree::nearest`] must agree with.
+    #[cfg(test)]
+    fn nearest_by_scan(&self, target: &Transform, space: &PlanningSpace) -> (usize, f64) {
+        let (tt, tq) = (target.translation(), target.rotation());
+        let mut best = (0, f64::INFINITY);
+        for i in 0..self.len() {
+            let d = metric(
+                &self.translations[i],
+                &self.rotations[i],
+                &tt,
+                &tq,
+                space.rotation_weight,
+            );
+            if d < best.1 && !self.dead[i] {
                 best = (i, d);
             }
         }
@@ -390,6 +434,34 @@ mod tests {
         // Share 1: always allowed.
         let full = Effort::new(1.0);
         assert!(full.allows(&checker));
+    }
+
+    /// A grown tree (index rebuilt several times, nodes added since the last
+    /// rebuild, a cut branch) answers every query as the linear scan does.
+    #[test]
+    fn nearest_through_the_index_is_the_linear_scan() {
+        let space = PlanningSpace::new(Vec3::repeat(-100.0), Vec3::repeat(100.0))
+            .with_rotation_weight(30.0);
+        let mut rng = Rng::new(11);
+        let mut tree = Tree::new(Transform::IDENTITY, 1e-6);
+        for k in 1..2500 {
+            let pose = Transform::from_parts(
+                Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 200.0
+                    - Vec3::repeat(100.0),
+                rng.rotation(),
+            );
+            tree.add(pose, rng.below(k));
+        }
+        tree.cut(700);
+        assert!(tree.index.len() > 1500 && tree.index.len() < tree.len());
+        for _ in 0..500 {
+            let q = Transform::from_parts(
+                Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 200.0
+                    - Vec3::repeat(100.0),
+                rng.rotation(),
+            );
+            assert_eq!(tree.nearest(&q, &space), tree.nearest_by_scan(&q, &space));
+        }
     }
 
     #[test]

@@ -215,6 +215,18 @@ impl<'v> Checker<'v> {
         !self.expired() && self.validator.edge_free(from, to)
     }
 
+    /// The deadline every check honours (`None`: none).
+    pub fn deadline(&self) -> Option<Instant> {
+        self.deadline
+    }
+
+    /// Moves the deadline (smoothing narrows it to its share of the budget, then
+    /// puts the call's back).
+    pub fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.deadline = deadline;
+        self.validator.set_deadline(deadline);
+    }
+
     /// Whether the deadline has passed.
     pub fn expired(&self) -> bool {
         self.deadline.is_some_and(|d| Instant::now() >= d)

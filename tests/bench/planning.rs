@@ -9,7 +9,7 @@
 //! `.venv/bin/python`) exists. Environment: `FITUP_RUNS` (fitup runs per problem,
 //! 10), `FITUP_OMPL_RUNS` (5), `FITUP_OMPL_LIMIT_S` (10), `FITUP_OMPL_RRT=1` (also
 //! OMPL's plain RRT), `FITUP_STEPWISE=1` (also fitup with stepwise edges),
-//! `FITUP_PROBLEM=name` (only problems whose name contains it),
+//! `FITUP_PROBLEM=name[,name…]` (only problems whose name contains one of them),
 //! `FITUP_PROTOCOL=0` (skip seed 002's protocol), `FITUP_VALIDATOR=0` (skip the
 //! validator profile: pose and edge checks per problem), `FITUP_VARIANTS=1` (also
 //! fitup's exploration variants side by side: eager, lazy, random moves;
@@ -156,9 +156,11 @@ fn fitup_runs(
         }
         if std::env::var_os("FITUP_VERBOSE").is_some() {
             eprintln!(
-                "  {} seed {seed}: {:.3} s {} {:?} iterations {} nodes {} pose checks {} edge checks {}",
+                "  {} seed {seed}: {:.3} s (search {:.0} ms, smoothing {:.0} ms) {} {:?} iterations {} nodes {} pose checks {} edge checks {}",
                 p.name,
                 dt,
+                path.search_ms,
+                path.smoothing_ms,
                 path.planner,
                 path.failure,
                 path.iterations,
@@ -622,6 +624,7 @@ fn main() {
     let compare = std::env::var_os("FITUP_VARIANTS").is_some();
     let defaults = std::env::var("FITUP_DEFAULT").map_or(true, |v| v != "0");
     let smoothed_rows = std::env::var("FITUP_SMOOTHED").map_or(true, |v| v != "0");
+    let puzzles = std::env::var("FITUP_PUZZLES").is_ok_and(|v| v == "1");
     println!(
         "planning: success and median time of successful runs; fitup = {} with continuous edges, no smoothing (as OMPL's solve), {runs} seeds x <= {} ms; OMPL (Python, FCL validity at {RESOLUTION_MM} mm) {peer_n} runs x {limit} s",
         if rrt_connect_alone() {
@@ -632,7 +635,8 @@ fn main() {
         budget_ms()
     );
     println!(
-        "OMPL C++ (RRTConnect, KPIECE1; FCL validity at {RESOLUTION_MM} mm): {peer_n} runs x {limit} s; ratio = OMPL's best median / fitup's median"
+        "OMPL C++ (RRTConnect, KPIECE1{}; FCL validity at {RESOLUTION_MM} mm): {peer_n} runs x {limit} s; ratio = OMPL's best median / fitup's median",
+        if puzzles { ", BiTRRT" } else { "" }
     );
     println!(
         "{:<18} {:>20} {:>20} {:>10} {:>20} {:>20} {:>20} {:>20}",
@@ -645,8 +649,16 @@ fn main() {
         "C++ RRTConnect",
         "C++ KPIECE1"
     );
-    for p in problems::all().unwrap() {
-        if only.as_ref().is_some_and(|o| !p.name.contains(o.as_str())) {
+    let list = if puzzles {
+        problems::puzzles().unwrap()
+    } else {
+        problems::all().unwrap()
+    };
+    for p in list {
+        if only
+            .as_ref()
+            .is_some_and(|o| !o.split(',').any(|o| p.name.contains(o)))
+        {
             continue;
         }
         let dir = tmp.path().join(&p.name);
@@ -701,7 +713,11 @@ fn main() {
         let c_kp = cpp
             .as_ref()
             .and_then(|e| cpp_runs(e, &spec, "KPIECE1", peer_n, limit));
-        let best = [&ompl, &c_rrt, &c_kp]
+        let c_bit = cpp
+            .as_ref()
+            .filter(|_| puzzles)
+            .and_then(|e| cpp_runs(e, &spec, "BiTRRT", peer_n, limit));
+        let best = [&ompl, &c_rrt, &c_kp, &c_bit]
             .iter()
             .filter_map(|r| r.as_ref().and_then(|r| r.median_s))
             .fold(None, |b: Option<f64>, t| Some(b.map_or(t, |b| b.min(t))));
@@ -721,6 +737,13 @@ fn main() {
             c_rrt.as_ref().map_or("-".into(), fmt),
             c_kp.as_ref().map_or("-".into(), fmt),
         );
+        if let Some(r) = &c_bit {
+            println!("{:<18} {:>20} {}", "", "C++ BiTRRT", fmt(r));
+        }
+        if puzzles {
+            let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+            println!("{:<18} load {}", "", load.trim());
+        }
         if peer && std::env::var_os("FITUP_OMPL_RRT").is_some() {
             if let Some(r) = peer_runs(&py, &spec, "RRT", peer_n, limit) {
                 println!("{:<18} {:>20} {:>20}", "", "OMPL RRT", fmt(&r));

@@ -762,9 +762,233 @@ pub fn key_ring() -> Result<Problem, MeshError> {
     })
 }
 
+/// Boxes merged into one mesh (no vertex merging: each box stays a closed shell).
+fn boxes(pieces: &[([f64; 3], [f64; 3])]) -> Mesh {
+    let mut m = boxed(pieces[0].0, pieces[0].1);
+    for (lo, hi) in &pieces[1..] {
+        m.append(&boxed(*lo, *hi));
+    }
+    m
+}
+
+/// A frame in the plane x = `x0 .. x1` around a rectangular hole `±hy × ±hz` (mm),
+/// outer half-size `e` (the side boxes 1 mm less): four boxes in one mesh, turned
+/// by `roll` (rad) about X.
+fn holed_frame(x0: f64, x1: f64, hy: f64, hz: f64, e: f64, roll: f64) -> Result<Mesh, MeshError> {
+    let m = boxes(&[
+        ([x0, -e, -e], [x1, e, -hz]),
+        ([x0, -e, hz], [x1, e, e]),
+        // Inset 1 mm from the outer edge: no edge of one box coincides with an
+        // edge of another, so the mesh stays manifold once STL merges vertices.
+        ([x0, 1.0 - e, -hz], [x1, -hy, hz]),
+        ([x0, hy, -hz], [x1, e - 1.0, hz]),
+    ]);
+    Ok(if roll == 0.0 {
+        m
+    } else {
+        m.transformed(&turn(Vec3::x(), roll)?)
+    })
+}
+
+/// Alpha-puzzle class: two interlocked twisted tubes. The fixed one is a helical
+/// tube (radius 15 mm, pitch 24 mm, 1.5 turns, wire radius 2 mm); the moving one a
+/// closed tube loop twisted out of its plane (centre radius 6.5 mm, ±1.5 mm
+/// saddle, wire radius 1.5 mm) threaded on it 0.75 turns from either end. The loop
+/// comes off only over an end, so the way out is a long screw-like motion:
+/// ≈ 70 mm along the helix while turning 270° with its tangent. Start: threaded;
+/// goal: free, beside the helix.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn twisted_tubes() -> Result<Problem, MeshError> {
+    let (radius, pitch, turns) = (15.0, 24.0, 1.5);
+    let helix = helix_tube(radius, pitch, turns, 2.0, 48, 12)?;
+    let (r, a, wire): (f64, f64, f64) = (6.5, 1.5, 1.5);
+    let centre = move |u: f64| Point3::new(r * u.cos(), r * u.sin(), a * (2.0 * u).sin());
+    let twisted = swept_tube(
+        move |u, v| {
+            let tangent =
+                Vec3::new(-r * u.sin(), r * u.cos(), 2.0 * a * (2.0 * u).cos()).normalize();
+            let radial = Vec3::new(u.cos(), u.sin(), 0.0);
+            let normal = (radial - tangent * radial.dot(&tangent)).normalize();
+            let binormal = tangent.cross(&normal);
+            centre(u) + (normal * v.cos() + binormal * v.sin()) * wire
+        },
+        centre,
+        (0.0, TAU),
+        48,
+        10,
+        true,
+    )?;
+    let t0 = TAU * 0.75;
+    let (on_wire, tangent) = helix_frame(radius, pitch, t0);
+    let align = Transform::from_parts(
+        Vec3::zeros(),
+        nalgebra::UnitQuaternion::rotation_between(&Vec3::z(), &tangent)
+            .ok_or_else(|| invalid("degenerate helix tangent"))?,
+    );
+    Ok(Problem {
+        name: "twisted_tubes".into(),
+        description: "Alpha-puzzle class: a twisted tube loop (R 6.5, wire r 1.5 mm) threaded on a helical tube (R 15, pitch 24, 1.5 turns, wire r 2 mm), off only by a long screw-like motion".into(),
+        moving_part: "loop".into(),
+        moving: Arc::new(twisted),
+        obstacles: vec![obstacle("helix", "helix", helix, Transform::IDENTITY)],
+        start: align.then(&Transform::from_translation(on_wire.coords)),
+        goal: at(55.0, 0.0, 18.0),
+        space: PlanningSpace::new(Vec3::new(-35.0, -35.0, -15.0), Vec3::new(65.0, 35.0, 50.0))
+            .with_rotation_weight(8.0),
+        product_box: Aabb::new(Vec3::new(-17.0, -17.0, -2.0), Vec3::new(17.0, 17.0, 38.0)),
+    })
+}
+
+/// Home class: a piano mover in a three-room house (rooms about 100 × 100 mm,
+/// 40 mm high, under a ceiling). An L-shaped body (a 50 × 8 × 8 mm arm with a 22 mm
+/// leg at one end: 30 mm across) goes from room A through a door 24 mm wide and
+/// 34 mm high into room B, then through a second such door into room C: it fits a
+/// door only rolled so that its leg stands up, and it must yaw 90° in room B.
+/// Start: lying in room A; goal: lying in room C, turned 90°.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn house() -> Result<Problem, MeshError> {
+    let body = boxes(&[
+        ([-25.0, -4.0, -4.0], [25.0, 4.0, 4.0]),
+        // 0.5 mm short of the arm's end: no shared edge once STL merges vertices
+        ([17.0, 4.0, -4.0], [24.5, 26.0, 4.0]),
+    ]);
+    let (h, door_h) = (40.0, 34.0);
+    let pieces: [(&str, [f64; 3], [f64; 3]); 15] = [
+        ("floor", [-4.0, -4.0, -5.0], [204.0, 204.0, 0.0]),
+        ("ceiling", [-4.0, -4.0, h], [204.0, 204.0, h + 5.0]),
+        ("south", [-4.0, -4.0, 0.0], [204.0, 0.0, h]),
+        ("west_a", [-4.0, 0.0, 0.0], [0.0, 102.0, h]),
+        ("north_a", [-4.0, 98.0, 0.0], [98.0, 102.0, h]),
+        ("west_c", [98.0, 98.0, 0.0], [102.0, 204.0, h]),
+        ("north_c", [98.0, 200.0, 0.0], [204.0, 204.0, h]),
+        ("east", [200.0, 0.0, 0.0], [204.0, 200.0, h]),
+        // A | B at x = 98..102, door y = 38..62
+        ("ab_south", [98.0, 0.0, 0.0], [102.0, 38.0, h]),
+        ("ab_north", [98.0, 62.0, 0.0], [102.0, 98.0, h]),
+        ("ab_lintel", [98.0, 38.0, door_h], [102.0, 62.0, h]),
+        // B | C at y = 98..102, door x = 138..162
+        ("bc_west", [102.0, 98.0, 0.0], [138.0, 102.0, h]),
+        ("bc_east", [162.0, 98.0, 0.0], [200.0, 102.0, h]),
+        ("bc_lintel", [138.0, 98.0, door_h], [162.0, 102.0, h]),
+        ("corner", [98.0, 98.0, 0.0], [102.0, 102.0, h]),
+    ];
+    let obstacles = pieces
+        .iter()
+        .map(|(n, lo, hi)| obstacle(n, n, boxed(*lo, *hi), Transform::IDENTITY))
+        .collect();
+    Ok(Problem {
+        name: "house".into(),
+        description: "Home class: an L-shaped body (50 × 30 × 8 mm) through two doors 24 × 34 mm of a three-room house: roll to pass, yaw 90° between the doors".into(),
+        moving_part: "l_body".into(),
+        moving: Arc::new(body),
+        obstacles,
+        start: at(35.0, 40.0, 4.5),
+        goal: turn(Vec3::z(), FRAC_PI_2)?.then(&at(170.0, 150.0, 4.5)),
+        space: PlanningSpace::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(200.0, 200.0, h))
+            .with_rotation_weight(25.0),
+        product_box: Aabb::new(Vec3::new(-4.0, -4.0, -5.0), Vec3::new(204.0, 204.0, h + 5.0)),
+    })
+}
+
+/// Twistycool class: a wall with a twisted narrow slot. The wall (26 mm thick) is
+/// pierced by three slot sections 4 mm deep, each 21 × 5 mm, turned 0°, 45° and
+/// 90° about the wall normal, joined by two chambers 7 mm deep and 26 mm square. A
+/// 5 × 20 × 4 mm plate (0.5 mm clearance in every slot) passes a slot only aligned
+/// with it and can turn only while wholly inside a chamber (1 mm of play along the
+/// wall normal). Start and goal: either side of the wall, untwisted.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn twisted_slot() -> Result<Problem, MeshError> {
+    let plate = boxed([-2.5, -10.0, -2.0], [2.5, 10.0, 2.0]);
+    let (hy, hz, chamber) = (10.5, 2.5, 13.0);
+    let q = std::f64::consts::FRAC_PI_4;
+    let sections = [
+        ("slot_0", holed_frame(0.0, 4.0, hy, hz, 40.0, 0.0)?),
+        (
+            "chamber_1",
+            holed_frame(4.0, 11.0, chamber, chamber, 40.0, 0.0)?,
+        ),
+        ("slot_45", holed_frame(11.0, 15.0, hy, hz, 40.0, q)?),
+        (
+            "chamber_2",
+            holed_frame(15.0, 22.0, chamber, chamber, 40.0, 0.0)?,
+        ),
+        ("slot_90", holed_frame(22.0, 26.0, hy, hz, 40.0, 2.0 * q)?),
+        ("outer", holed_frame(0.0, 26.0, 28.0, 28.0, 90.0, 0.0)?),
+    ];
+    let obstacles = sections
+        .into_iter()
+        .map(|(n, m)| obstacle(n, n, m, Transform::IDENTITY))
+        .collect();
+    Ok(Problem {
+        name: "twisted_slot".into(),
+        description: "Twistycool class: a 5 × 20 × 4 mm plate through a slot 21 × 5 mm that turns 0°, 45°, 90° through a 26 mm wall (0.5 mm clearance, turning only in two 7 mm chambers)".into(),
+        moving_part: "plate".into(),
+        moving: Arc::new(plate),
+        obstacles,
+        start: at(-20.0, 0.0, 0.0),
+        goal: at(46.0, 0.0, 0.0),
+        space: PlanningSpace::new(Vec3::new(-30.0, -40.0, -40.0), Vec3::new(56.0, 40.0, 40.0))
+            .with_rotation_weight(10.0),
+        product_box: Aabb::new(Vec3::new(0.0, -90.0, -90.0), Vec3::new(26.0, 90.0, 90.0)),
+    })
+}
+
+/// A plate hole reached by a straight line: a 20 × 20 × 30 mm square peg (origin
+/// at the centre of its bottom face) goes down into a 20.4 × 20.4 mm square hole
+/// through a 10 mm plate (0.2 mm clearance each side) until it stands 10 mm
+/// through. The straight line from start (above, aligned) to goal is free.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn plate_hole() -> Result<Problem, MeshError> {
+    let peg = boxed([-10.0, -10.0, 0.0], [10.0, 10.0, 30.0]);
+    let h = 10.2;
+    let plate = boxes(&[
+        ([-50.0, -50.0, 0.0], [50.0, -h, 10.0]),
+        ([-50.0, h, 0.0], [50.0, 50.0, 10.0]),
+        ([-49.0, -h, 0.0], [-h, h, 10.0]),
+        ([h, -h, 0.0], [49.0, h, 10.0]),
+    ]);
+    Ok(Problem {
+        name: "plate_hole".into(),
+        description: "Plate hole on a straight line: 20 × 20 mm square peg into a 20.4 mm square hole through a 10 mm plate (0.2 mm clearance), the straight line free".into(),
+        moving_part: "peg".into(),
+        moving: Arc::new(peg),
+        obstacles: vec![obstacle("plate", "plate", plate, Transform::IDENTITY)],
+        start: at(0.0, 0.0, 40.0),
+        goal: at(0.0, 0.0, -10.0),
+        space: PlanningSpace::new(Vec3::new(-80.0, -80.0, -40.0), Vec3::new(80.0, 80.0, 80.0))
+            .with_rotation_weight(20.0),
+        product_box: Aabb::new(Vec3::new(-50.0, -50.0, 0.0), Vec3::new(50.0, 50.0, 10.0)),
+    })
+}
+
+/// The standard rigid-body puzzle classes of issue 23, the ones fitup solves
+/// first (so a benchmark cut short still has them): the twisted tubes, the house,
+/// the plate hole on a straight line, the twisted slot, the slot roll
+/// ([`bar_slot`]).
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn puzzles() -> Result<Vec<Problem>, MeshError> {
+    Ok(vec![
+        twisted_tubes()?,
+        house()?,
+        plate_hole()?,
+        twisted_slot()?,
+        bar_slot()?,
+    ])
+}
+
 /// Every benchmark problem: peg in hole at 0.5 and 0.1 mm, piston-rod cap, screw
 /// cell, ring puzzle, rod round a corner, bar through a slot, peg that needs a
-/// tilt, key ring.
+/// tilt, key ring, and the puzzles of [`puzzles`] not listed before.
 ///
 /// # Errors
 /// None in practice (the generated meshes are valid).
@@ -779,5 +1003,9 @@ pub fn all() -> Result<Vec<Problem>, MeshError> {
         bar_slot()?,
         peg_tilt()?,
         key_ring()?,
+        twisted_tubes()?,
+        house()?,
+        twisted_slot()?,
+        plate_hole()?,
     ])
 }

@@ -23,6 +23,7 @@ mod manipulator;
 mod mesh_formats;
 mod models;
 mod planning_problems;
+mod planning_puzzles;
 mod robots;
 mod scripts;
 mod sequence;

@@ -6,7 +6,7 @@
 
 use fitup::collision::{interferes, DEFAULT_TOLERANCE};
 #[path = "../common/problems.rs"]
-mod problems;
+pub(super) mod problems;
 
 use fitup::planning::PlannedPath;
 use problems::Problem;

@@ -4,13 +4,14 @@
 // spec the bench writes (problem.txt, one `key values...` line each):
 //   moving FILE | obstacle FILE (world coordinates) | bounds x0 y0 z0 x1 y1 z1
 //   start x y z qw qx qy qz | goal ... | rotation_weight W | resolution_mm R | lift_mm L
-// Usage: harness SPEC PLANNER(RRTConnect|KPIECE1) RUNS TIME_LIMIT_S
+// Usage: harness SPEC PLANNER(RRTConnect|KPIECE1|BiTRRT) RUNS TIME_LIMIT_S
 // Prints {"planner": ..., "runs": n, "solved": k, "times_s": [t or null, ...]}.
 // Validity: FCL mesh collision (BVH of OBBRSS); motion: OMPL's discrete checker at
 // `resolution_mm` of the SE(3) metric (translation + rotation_weight * angle).
 #include <ompl/base/spaces/SE3StateSpace.h>
 #include <ompl/geometric/SimpleSetup.h>
 #include <ompl/geometric/planners/kpiece/KPIECE1.h>
+#include <ompl/geometric/planners/rrt/BiTRRT.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
 #include <ompl/util/RandomNumbers.h>
@@ -154,6 +155,8 @@ int main(int argc, char **argv) {
         ss.setStartAndGoalStates(s, g);
         if (planner == "KPIECE1")
             ss.setPlanner(std::make_shared<og::KPIECE1>(si));
+        else if (planner == "BiTRRT")
+            ss.setPlanner(std::make_shared<og::BiTRRT>(si));
         else
             ss.setPlanner(std::make_shared<og::RRTConnect>(si));
         auto t0 = std::chrono::steady_clock::now();
