@@ -28,6 +28,7 @@
 
 pub mod dimension;
 pub mod file;
+pub mod import;
 pub mod mates;
 pub mod reference;
 pub mod robot;

@@ -1,5 +1,5 @@
-//! Triangle meshes of parts: STL reading and writing, validation, and the cache that
-//! keeps meshes between watch reruns.
+//! Triangle meshes of parts: STL reading and writing, STEP reading ([`step`], feature
+//! `step`), validation, and the cache that keeps meshes between watch reruns.
 //!
 //! Coordinates are millimetres in the part frame.
 //!
@@ -28,6 +28,9 @@
 
 mod cache;
 mod shapes;
+pub mod step;
+#[cfg(feature = "step")]
+mod step_ffi;
 mod stl;
 
 pub use cache::MeshCache;

@@ -26,6 +26,7 @@ mod scripts;
 mod sequence;
 mod sequence_watch;
 mod skills;
+mod step_import;
 mod ur_ik;
 mod urdf;
 mod viewer;
