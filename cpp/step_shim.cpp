@@ -114,10 +114,10 @@ struct Walker {
     }
   }
 
-  // Meshes the solid (unplaced, its own frame) once; returns its part index.
-  uint32_t part_of(const TopoDS_Shape &placed, const std::string &product, uint32_t solid_index,
-                   uint32_t solids) {
-    const void *key = placed.TShape().get();
+  // Meshes the solid (unplaced, its own frame) once per `key` (its TShape, or the
+  // shell's it was made of); returns its part index.
+  uint32_t part_of(const TopoDS_Shape &placed, const void *key, const std::string &product,
+                   uint32_t solid_index, uint32_t solids) {
     auto found = parts.find(key);
     if (found != parts.end()) {
       return found->second;
@@ -131,6 +131,11 @@ struct Walker {
     GProp_GProps props;
     BRepGProp::VolumeProperties(solid, props);
     part.exact_volume = props.Mass();
+    if (part.exact_volume < 0) {
+      // An inside-out solid (a shell oriented inwards): turned, so normals point out.
+      solid.Reverse();
+      part.exact_volume = -part.exact_volume;
+    }
     const Clock::time_point t0 = Clock::now();
     IMeshTools_Parameters params;
     params.Deflection = options.linear_deflection;
@@ -215,17 +220,35 @@ struct Walker {
     for (TopExp_Explorer sx(shape, TopAbs_SOLID); sx.More(); sx.Next()) {
       ++solids;
     }
-    for (TopExp_Explorer sx(shape, TopAbs_SHELL, TopAbs_SOLID); sx.More(); sx.Next()) {
-      model.shells_without_solid += 1;
-    }
     for (TopExp_Explorer fx(shape, TopAbs_FACE, TopAbs_SHELL); fx.More(); fx.Next()) {
       model.faces_without_solid += 1;
     }
     uint32_t i = 0;
     for (TopExp_Explorer sx(shape, TopAbs_SOLID); sx.More(); sx.Next()) {
       ++i;
-      const uint32_t part = part_of(sx.Current(), name, i, solids);
+      const uint32_t part = part_of(sx.Current(), sx.Current().TShape().get(), name, i, solids);
       add_instance(sx.Current(), placement, part, instance, path);
+    }
+    // Shells outside any solid: a closed one (some exporters write solids as surface
+    // models) is taken as the solid it bounds; an open one is reported.
+    for (TopExp_Explorer sx(shape, TopAbs_SHELL, TopAbs_SOLID); sx.More(); sx.Next()) {
+      model.shells_without_solid += 1;
+      const TopoDS_Shape &shell = sx.Current();
+      if (!BRep_Tool::IsClosed(shell)) {
+        if (model.open_shells == 0) {
+          model.first_open_shell = lossy(path.empty() ? name : path);
+        }
+        model.open_shells += 1;
+        continue;
+      }
+      BRep_Builder b;
+      TopoDS_Solid solid;
+      b.MakeSolid(solid);
+      b.Add(solid, shell.Located(TopLoc_Location()));
+      const TopoDS_Shape placed = solid.Located(shell.Location());
+      ++i;
+      const uint32_t part = part_of(placed, shell.TShape().get(), name, i, solids);
+      add_instance(placed, placement, part, instance, path);
     }
   }
 
@@ -276,6 +299,7 @@ Model read(rust::Str path, const ReadOptions &options) {
   Model model;
   model.shells_without_solid = 0;
   model.faces_without_solid = 0;
+  model.open_shells = 0;
   STEPCAFControl_Reader reader;
   reader.SetNameMode(Standard_True);
   reader.SetColorMode(Standard_False);
@@ -407,7 +431,14 @@ void write_test(const std::string &kind, const std::string &file) {
     TopoDS_Solid solid;
     b.MakeSolid(solid);
     b.Add(solid, shell);
-    named(tool, solid, "lidless");
+    // In an assembly beside a sound block, so the error must name which one.
+    TDF_Label lidless = named(tool, solid, "lidless");
+    TDF_Label block = named(tool, BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape(), "block");
+    TDF_Label cell = tool->NewShape();
+    TDataStd_Name::Set(cell, "cell");
+    TDataStd_Name::Set(tool->AddComponent(cell, block, TopLoc_Location()), "block-1");
+    TDataStd_Name::Set(tool->AddComponent(cell, lidless, at(20, 0, 0)), "lidless-1");
+    tool->UpdateAssemblies();
     write_doc(doc, file);
   } else if (kind == "no_solid") {
     write_shape(BRepBuilderAPI_MakeFace(gp_Pln(), 0.0, 10.0, 0.0, 10.0).Shape(), file);

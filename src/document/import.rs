@@ -175,6 +175,7 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
     let mut stems = HashSet::new();
     let mut parts = Vec::with_capacity(model.parts.len());
     let mut doc = DocumentFile {
+        units: "mm".into(),
         description: Some(format!(
             "Imported from {} by `fitup import` (file unit {}; tessellation: linear deflection {} mm, angular deflection {} rad)",
             document_name(

@@ -175,6 +175,17 @@ pub enum StepError {
         /// Faces outside any shell.
         faces: u32,
     },
+    /// A shell outside any solid that is not closed (a surface body, or a solid with a
+    /// face missing).
+    #[error("{}: `{solid}` is not closed: an open shell ({count} in the file; a surface body, or a solid with a face missing): fitup needs closed solids", path.display())]
+    OpenShell {
+        /// The file.
+        path: PathBuf,
+        /// The product holding the first, by its place in the assembly tree.
+        solid: String,
+        /// How many open shells the file has.
+        count: u32,
+    },
     /// Faces of a solid that Open CASCADE could not tessellate.
     #[error("{}: solid `{solid}`: face {face} of {faces} did not mesh ({count} faces without triangles): the B-rep is broken there; repair it in CAD or try another --deflection", path.display())]
     UnmeshedFace {
@@ -317,6 +328,13 @@ mod imp {
                 path: path.into(),
                 shells: model.shells_without_solid,
                 faces: model.faces_without_solid,
+            });
+        }
+        if model.open_shells > 0 {
+            return Err(StepError::OpenShell {
+                path: path.into(),
+                solid: model.first_open_shell,
+                count: model.open_shells,
             });
         }
         // Where each part is first placed: how errors about the solid name it.

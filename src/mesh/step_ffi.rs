@@ -61,6 +61,9 @@ pub(crate) mod ffi {
         /// Shells outside any solid, faces outside any shell (surface models).
         shells_without_solid: u32,
         faces_without_solid: u32,
+        /// Shells outside any solid that are not closed, and where the first is.
+        open_shells: u32,
+        first_open_shell: String,
     }
 
     unsafe extern "C++" {

@@ -282,3 +282,47 @@ mod with_occt {
         assert!(Document::open(&dir.path().join("models/box.yaml")).is_ok());
     }
 }
+
+/// README's "Importing a STEP assembly" section, run as written (its `fitup` lines in
+/// order, its script saved where the commands expect it) on an assembly made by OCCT.
+#[cfg(feature = "step")]
+#[test]
+fn the_readme_step_workflow_runs_as_documented() {
+    let readme = std::fs::read_to_string(common::repo().join("README.md")).unwrap();
+    let section = readme
+        .split("## Importing a STEP assembly")
+        .nth(1)
+        .expect("README has the section")
+        .split("\n## ")
+        .next()
+        .unwrap();
+    let block = |lang: &str| -> String {
+        let start = section.find(&format!("```{lang}\n")).unwrap() + lang.len() + 4;
+        let len = section[start..].find("```").unwrap();
+        section[start..start + len].to_string()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    fitup::mesh::step::write_test_step("assembly", &dir.path().join("bracket_asm.step")).unwrap();
+    let commands: Vec<String> = block("sh")
+        .lines()
+        .filter(|l| l.starts_with("fitup "))
+        .map(|l| l.split(" #").next().unwrap().trim().to_string())
+        .collect();
+    assert_eq!(commands.len(), 4, "{commands:?}");
+    for (i, line) in commands.iter().enumerate() {
+        if line.starts_with("fitup run ") {
+            std::fs::write(dir.path().join("bracket/check_fit.rhai"), block("rhai")).unwrap();
+        }
+        let args: Vec<&str> = line.split_whitespace().skip(1).collect();
+        let o = common::run_in(dir.path(), &args);
+        let t = common::text(&o);
+        assert!(o.status.success(), "`{line}`: {}", common::short_text(&o));
+        if i == 0 {
+            assert!(dir.path().join("bracket/fitup.toml").is_file());
+        }
+        if line.starts_with("fitup run ") {
+            assert!(t.contains("4 components, 2 distinct parts"), "{t}");
+            assert!(t.contains("0 interfering pairs"), "{t}");
+        }
+    }
+}
