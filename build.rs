@@ -15,7 +15,10 @@ fn step() {
         std::env::var("OCCT_INCLUDE_DIR").unwrap_or_else(|_| "/usr/include/opencascade".into());
     println!("cargo:rerun-if-env-changed=OCCT_INCLUDE_DIR");
     println!("cargo:rerun-if-env-changed=OCCT_LIB_DIR");
-    if !std::path::Path::new(&include).join("STEPCAFControl_Reader.hxx").exists() {
+    if !std::path::Path::new(&include)
+        .join("STEPCAFControl_Reader.hxx")
+        .exists()
+    {
         panic!(
             "feature `step` needs Open CASCADE's headers in {include}: on Debian/Ubuntu \
              `apt-get install libocct-data-exchange-dev libocct-modeling-algorithms-dev`, \
@@ -36,9 +39,28 @@ fn step() {
         println!("cargo:rustc-link-search=native={dir}");
     }
     for lib in [
-        "TKXDESTEP", "TKSTEP", "TKSTEPBase", "TKSTEPAttr", "TKSTEP209", "TKXSBase", "TKXCAF",
-        "TKLCAF", "TKCAF", "TKCDF", "TKMesh", "TKBO", "TKPrim", "TKTopAlgo", "TKShHealing",
-        "TKGeomAlgo", "TKGeomBase", "TKBRep", "TKG3d", "TKG2d", "TKMath", "TKernel",
+        "TKXDESTEP",
+        "TKSTEP",
+        "TKSTEPBase",
+        "TKSTEPAttr",
+        "TKSTEP209",
+        "TKXSBase",
+        "TKXCAF",
+        "TKLCAF",
+        "TKCAF",
+        "TKCDF",
+        "TKMesh",
+        "TKBO",
+        "TKPrim",
+        "TKTopAlgo",
+        "TKShHealing",
+        "TKGeomAlgo",
+        "TKGeomBase",
+        "TKBRep",
+        "TKG3d",
+        "TKG2d",
+        "TKMath",
+        "TKernel",
     ] {
         println!("cargo:rustc-link-lib=dylib={lib}");
     }

@@ -65,14 +65,22 @@ pub(super) fn import(a: &ImportArgs) -> Exit {
     };
     let t = &report.model.timings;
     outln!(
-        "wrote {} ({} parts, {} components; file unit {}, deflection {} mm / {}°){}",
+        "wrote {} ({} parts, {} components; file unit {}, deflection {} mm / {:.1}°){}",
         report.document.display(),
         report.parts.len(),
         report.components,
-        if report.model.file_unit.is_empty() { "?" } else { &report.model.file_unit },
+        if report.model.file_unit.is_empty() {
+            "?"
+        } else {
+            &report.model.file_unit
+        },
         a.deflection,
         a.angle,
-        if report.new_project { ", a new project" } else { "" }
+        if report.new_project {
+            ", a new project"
+        } else {
+            ""
+        }
     );
     for p in &report.parts {
         let off = (p.volume_ratio - 1.0).abs() > 0.015;
@@ -83,7 +91,11 @@ pub(super) fn import(a: &ImportArgs) -> Exit {
             p.volume_ratio,
             p.instances,
             crate::diagnostics::printable(&p.stl, false),
-            if off { "  warning: more than 1.5 % off the exact volume: use a smaller --deflection" } else { "" }
+            if off {
+                "  warning: more than 1.5 % off the exact volume: use a smaller --deflection"
+            } else {
+                ""
+            }
         );
     }
     outln!(

@@ -195,7 +195,8 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
         }
         let name = unique(base, &mut part_names);
         let stl = format!("meshes/{}.stl", file_stem(&name, &mut stems));
-        doc.parts.insert(name.clone(), PartFile::from_stl(stl.clone()));
+        doc.parts
+            .insert(name.clone(), PartFile::from_stl(stl.clone()));
         parts.push(ImportedPart {
             name,
             stl,
@@ -237,7 +238,10 @@ pub fn import_step(
         .to_yaml()
         .map_err(|e| ImportError::Document(DocumentError::Invalid(e.to_string())))?;
     let stem = document_name(
-        &step.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default(),
+        &step
+            .file_stem()
+            .map(|s| s.to_string_lossy())
+            .unwrap_or_default(),
         "assembly",
     );
     let doc_name = format!("{}.yaml", file_stem(&stem, &mut HashSet::new()));
@@ -262,7 +266,9 @@ pub fn import_step(
     // What was written loads as a document (meshes and all).
     let loaded = Document::open(&document)?;
     for p in &mut parts {
-        p.triangles = loaded.part(&p.name).map_or(p.triangles, |q| q.mesh.triangles.len());
+        p.triangles = loaded
+            .part(&p.name)
+            .map_or(p.triangles, |q| q.mesh.triangles.len());
     }
     Ok(ImportReport {
         document,
@@ -294,8 +300,7 @@ fn write_new(
         crate::mesh::write_stl(&tmp.path().join(rel), mesh)?;
     }
     let toml = tmp.path().join("fitup.toml");
-    crate::fsutil::write_atomic(&toml, PROJECT_TOML.as_bytes())
-        .map_err(|e| io_err(&toml, e))?;
+    crate::fsutil::write_atomic(&toml, PROJECT_TOML.as_bytes()).map_err(|e| io_err(&toml, e))?;
     let doc = tmp.path().join(doc_name);
     crate::fsutil::write_atomic(&doc, text.as_bytes()).map_err(|e| io_err(&doc, e))?;
     // An empty `out` (checked by the caller) is replaced; rename refuses a non-empty one.
@@ -318,7 +323,11 @@ fn write_into(
 ) -> Result<(), ImportError> {
     let rule = OutputRule::forced(force);
     let doc = out.join(doc_name);
-    for path in meshes.iter().map(|(rel, _)| out.join(rel)).chain([doc.clone()]) {
+    for path in meshes
+        .iter()
+        .map(|(rel, _)| out.join(rel))
+        .chain([doc.clone()])
+    {
         crate::fsutil::check_output(&path, &rule)
             .map_err(|source| ImportError::Output { path, source })?;
     }

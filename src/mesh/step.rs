@@ -239,7 +239,10 @@ pub enum StepError {
 fn check_options(options: &StepOptions) -> Result<(), StepError> {
     for (what, value) in [
         ("the linear deflection (mm)", options.linear_deflection),
-        ("the angular deflection (radians)", options.angular_deflection),
+        (
+            "the angular deflection (radians)",
+            options.angular_deflection,
+        ),
     ] {
         if !(value.is_finite() && value > 0.0) {
             return Err(StepError::Option { what, value });
@@ -251,14 +254,16 @@ fn check_options(options: &StepOptions) -> Result<(), StepError> {
 /// Checks the file before Open CASCADE sees it: a regular file within the size cap
 /// that begins like a STEP file (so a mistaken path fails fast and clearly).
 fn check_file(path: &Path) -> Result<(), StepError> {
-    let bytes = crate::fsutil::read_file(path, FileKind::Step).map_err(|source| {
-        StepError::Read {
+    let bytes =
+        crate::fsutil::read_file(path, FileKind::Step).map_err(|source| StepError::Read {
             path: path.into(),
             source,
-        }
-    })?;
+        })?;
     let text = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes);
-    let start = text.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(text.len());
+    let start = text
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(text.len());
     if !text[start..].starts_with(b"ISO-10303-21") {
         return Err(StepError::NotStep { path: path.into() });
     }
@@ -392,7 +397,10 @@ mod imp {
             }
             let transform = pose(&inst.matrix).ok_or_else(|| StepError::Occt {
                 path: path.into(),
-                message: format!("instance `{}`: its placement is not a rigid motion", inst.path),
+                message: format!(
+                    "instance `{}`: its placement is not a rigid motion",
+                    inst.path
+                ),
             })?;
             instances.push(StepInstance {
                 name: inst.name,
@@ -423,11 +431,11 @@ mod imp {
             return None;
         }
         let mut sw = [[0.0; 4]; 4];
-        for r in 0..3 {
-            for c in 0..3 {
-                sw[c][r] = m[r * 4 + c];
+        for (r, row) in m.chunks_exact(4).enumerate() {
+            for (c, v) in row[..3].iter().enumerate() {
+                sw[c][r] = *v;
             }
-            sw[3][r] = m[r * 4 + 3];
+            sw[3][r] = row[3];
         }
         sw[3][3] = 1.0;
         Transform::from_matrix(&sw).ok()

@@ -11,7 +11,11 @@ use std::path::Path;
 #[test]
 fn without_the_feature_a_step_file_asks_for_a_rebuild() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("arm.step"), "ISO-10303-21;\nHEADER;\nENDSEC;\n").unwrap();
+    std::fs::write(
+        dir.path().join("arm.step"),
+        "ISO-10303-21;\nHEADER;\nENDSEC;\n",
+    )
+    .unwrap();
     let before = common::snapshot(dir.path());
     let o = common::run_in(dir.path(), &["import", "arm.step", "--out", "arm"]);
     let t = common::text(&o);
@@ -29,7 +33,10 @@ fn without_the_feature_a_step_file_asks_for_a_rebuild() {
         &fitup::mesh::step::StepOptions::default(),
     )
     .unwrap_err();
-    assert!(matches!(e, fitup::mesh::step::StepError::NotBuilt { .. }), "{e}");
+    assert!(
+        matches!(e, fitup::mesh::step::StepError::NotBuilt { .. }),
+        "{e}"
+    );
 }
 
 #[cfg(feature = "step")]
@@ -53,6 +60,31 @@ mod with_occt {
         }
     }
 
+    /// Every kind of test file is a STEP file; with `FITUP_STEP_SAMPLES=DIR` they are
+    /// written there (the files docs/performance.md measures).
+    #[test]
+    fn every_test_file_kind_is_a_step_file() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = std::env::var_os("FITUP_STEP_SAMPLES")
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| tmp.path().to_path_buf());
+        std::fs::create_dir_all(&dir).unwrap();
+        for kind in [
+            "box",
+            "cylinder_hole",
+            "assembly",
+            "inch_box",
+            "open_shell",
+            "no_solid",
+        ] {
+            let text = std::fs::read_to_string(made(&dir, kind)).unwrap();
+            assert!(text.starts_with("ISO-10303-21;"), "{kind}");
+            assert!(text.trim_end().ends_with("END-ISO-10303-21;"), "{kind}");
+        }
+        let e = write_test_step("sphere", &dir.join("x.step")).unwrap_err();
+        assert!(e.to_string().contains("unknown test file kind"), "{e}");
+    }
+
     #[test]
     fn a_box_is_one_closed_part_with_its_exact_volume() {
         let dir = tempfile::tempdir().unwrap();
@@ -69,7 +101,7 @@ mod with_occt {
         assert!(m.instances[0]
             .transform
             .approx_eq(&Transform::IDENTITY, 1e-12, 1e-12));
-        assert_eq!(m.file_unit.to_ascii_uppercase(), "MM");
+        assert_eq!(m.file_unit.to_ascii_uppercase(), "MILLIMETRE");
 
         // The command: a new project, the document loads, `fitup check` passes.
         let o = common::run_in(dir.path(), &["import", "box.step", "--out", "cell"]);
@@ -84,7 +116,11 @@ mod with_occt {
         assert!(d.contains("linear deflection 0.1 mm"), "{d}");
         let o = common::run_in(&out, &["check", "box.yaml"]);
         assert!(o.status.success(), "{}", common::short_text(&o));
-        assert!(!common::text(&o).contains("warning"), "{}", common::text(&o));
+        assert!(
+            !common::text(&o).contains("warning"),
+            "{}",
+            common::text(&o)
+        );
         no_leftovers(dir.path());
     }
 
@@ -103,9 +139,16 @@ mod with_occt {
             assert_eq!(p.product, "bushing");
             let r = p.mesh.inspect();
             assert!(r.is_watertight(), "{r:?}");
-            assert!((p.exact_volume / analytic - 1.0).abs() < 1e-6, "{}", p.exact_volume);
+            assert!(
+                (p.exact_volume / analytic - 1.0).abs() < 1e-6,
+                "{}",
+                p.exact_volume
+            );
             let ratio = p.mesh.signed_volume() / analytic;
-            assert!((ratio - 1.0).abs() < 0.015, "deflection {deflection}: ratio {ratio}");
+            assert!(
+                (ratio - 1.0).abs() < 0.015,
+                "deflection {deflection}: ratio {ratio}"
+            );
             assert!((p.volume_ratio() - ratio).abs() < 1e-6);
             if deflection == 0.01 {
                 assert!((ratio - 1.0).abs() < 0.002, "finer is closer: {ratio}");
@@ -124,7 +167,14 @@ mod with_occt {
         made(dir.path(), "assembly");
         let o = common::run_in(
             dir.path(),
-            &["import", "assembly.step", "--out", "cell", "--deflection", "0.05"],
+            &[
+                "import",
+                "assembly.step",
+                "--out",
+                "cell",
+                "--deflection",
+                "0.05",
+            ],
         );
         let t = common::text(&o);
         assert!(o.status.success(), "{t}");
@@ -135,7 +185,9 @@ mod with_occt {
         let mut parts: Vec<_> = doc.parts().map(|p| p.name.clone()).collect();
         parts.sort();
         assert_eq!(parts, ["peg", "plate"]);
-        let stls = std::fs::read_dir(dir.path().join("cell/meshes")).unwrap().count();
+        let stls = std::fs::read_dir(dir.path().join("cell/meshes"))
+            .unwrap()
+            .count();
         assert_eq!(stls, 2);
         let names: Vec<_> = doc.components().iter().map(|c| c.name.as_str()).collect();
         assert_eq!(names, ["plate-1", "peg-1", "peg-2", "peg-3"]);
@@ -147,13 +199,10 @@ mod with_occt {
         assert!(near(translation_of(&doc, "peg-2").0, [80.0, 30.0, 10.0]));
         let (at, lying) = translation_of(&doc, "peg-3");
         assert!(near(at, [50.0, 45.0, 14.0]), "{at}");
-        let expected = Transform::from_rotation_about(
-            Point3::new(0.0, 0.0, 0.0),
-            Vec3::x(),
-            PI / 2.0,
-        )
-        .unwrap()
-        .then(&Transform::from_translation(Vec3::new(50.0, 45.0, 14.0)));
+        let expected =
+            Transform::from_rotation_about(Point3::new(0.0, 0.0, 0.0), Vec3::x(), PI / 2.0)
+                .unwrap()
+                .then(&Transform::from_translation(Vec3::new(50.0, 45.0, 14.0)));
         assert!(lying.approx_eq(&expected, 1e-9, 1e-9), "{lying}");
         // The lying peg's axis runs along -Y in the world: its tip is at y = 45 - 30.
         let tip = lying.apply(&Point3::new(0.0, 0.0, 30.0));
@@ -165,7 +214,13 @@ mod with_occt {
         // A mate-free imported assembly goes straight into sequence planning.
         let o = common::run_in(
             &dir.path().join("cell"),
-            &["plan-sequence", "assembly.yaml", "--mode", "geometry", "--json"],
+            &[
+                "plan-sequence",
+                "assembly.yaml",
+                "--mode",
+                "geometry",
+                "--json",
+            ],
         );
         let t = common::text(&o);
         assert!(o.status.success(), "{}", common::short_text(&o));
@@ -216,7 +271,10 @@ mod with_occt {
         let text = dir.path().join("notes.step");
         std::fs::write(&text, "these are my notes\n").unwrap();
         let e = read_step(&text, &StepOptions::default()).unwrap_err();
-        assert!(e.to_string().contains("notes.step:1: not a STEP file"), "{e}");
+        assert!(
+            e.to_string().contains("notes.step:1: not a STEP file"),
+            "{e}"
+        );
 
         // A syntactically broken STEP body.
         let broken = dir.path().join("broken.step");
