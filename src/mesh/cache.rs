@@ -128,6 +128,9 @@ fn read_mesh(
     path: &Path,
     known: Option<u64>,
 ) -> Result<(u64, Option<Mesh>), MeshError> {
+    if super::step::is_step_path(path) {
+        return Err(MeshError::invalid(super::step::not_a_part_mesh()).in_file(path));
+    }
     let bytes = crate::fsutil::read_file(key, crate::fsutil::FileKind::Mesh)
         .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
     let hash = content_hash(&bytes);

@@ -236,6 +236,24 @@ pub enum StepError {
     },
 }
 
+/// Whether `path` names a STEP file by its extension (`.step`, `.stp`, any case).
+pub fn is_step_path(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("step") || e.eq_ignore_ascii_case("stp"))
+}
+
+/// Why a STEP file cannot be a part's `stl:` mesh, and what to do instead.
+pub fn not_a_part_mesh() -> String {
+    let mut m = String::from(
+        "a STEP file, not an STL mesh: a part cannot name a STEP file yet; turn it into a document with `fitup import FILE.step`",
+    );
+    if !AVAILABLE {
+        m += " (this fitup was built without the `step` feature: rebuild with `cargo install --path . --features step`)";
+    }
+    m
+}
+
 fn check_options(options: &StepOptions) -> Result<(), StepError> {
     for (what, value) in [
         ("the linear deflection (mm)", options.linear_deflection),

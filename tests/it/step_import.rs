@@ -7,6 +7,28 @@
 use crate::common;
 use std::path::Path;
 
+/// A part whose `stl:` names a STEP file says how to import it (and, without the
+/// feature, how to rebuild), at the `stl:` line.
+#[test]
+fn a_step_file_as_a_part_mesh_says_how_to_import_it() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("arm.step"), "ISO-10303-21;\nHEADER;\nENDSEC;\n").unwrap();
+    std::fs::write(
+        dir.path().join("cell.yaml"),
+        "parts:\n  arm:\n    stl: arm.step\ncomponents:\n  - {name: arm-1, part: arm}\n",
+    )
+    .unwrap();
+    let o = common::run_in(dir.path(), &["check", "cell.yaml"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("cell.yaml:3"), "at the stl: line: {t}");
+    assert!(t.contains("fitup import"), "{t}");
+    if !fitup::mesh::step::AVAILABLE {
+        assert!(t.contains("--features step"), "{t}");
+    }
+    assert!(!t.contains("panicked"), "{t}");
+}
+
 #[cfg(not(feature = "step"))]
 #[test]
 fn without_the_feature_a_step_file_asks_for_a_rebuild() {
