@@ -5,7 +5,6 @@
 //! the "rebuild with --features step" answer.
 
 use crate::common;
-use std::path::Path;
 
 /// A part whose `stl:` names a STEP file says how to import it (and, without the
 /// feature, how to rebuild), at the `stl:` line.
@@ -64,6 +63,7 @@ fn without_the_feature_a_step_file_asks_for_a_rebuild() {
 #[cfg(feature = "step")]
 mod with_occt {
     use super::*;
+    use std::path::Path;
     use fitup::document::Document;
     use fitup::math::{Point3, Transform, Vec3};
     use fitup::mesh::step::{read_step, write_test_step, StepError, StepOptions};
