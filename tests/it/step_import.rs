@@ -11,7 +11,11 @@ use crate::common;
 #[test]
 fn a_step_file_as_a_part_mesh_says_how_to_import_it() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("arm.step"), "ISO-10303-21;\nHEADER;\nENDSEC;\n").unwrap();
+    std::fs::write(
+        dir.path().join("arm.step"),
+        "ISO-10303-21;\nHEADER;\nENDSEC;\n",
+    )
+    .unwrap();
     std::fs::write(
         dir.path().join("cell.yaml"),
         "parts:\n  arm:\n    stl: arm.step\ncomponents:\n  - {name: arm-1, part: arm}\n",
@@ -63,11 +67,11 @@ fn without_the_feature_a_step_file_asks_for_a_rebuild() {
 #[cfg(feature = "step")]
 mod with_occt {
     use super::*;
-    use std::path::Path;
     use fitup::document::Document;
     use fitup::math::{Point3, Transform, Vec3};
     use fitup::mesh::step::{read_step, write_test_step, StepError, StepOptions};
     use std::f64::consts::PI;
+    use std::path::Path;
 
     fn made(dir: &Path, kind: &str) -> std::path::PathBuf {
         let path = dir.join(format!("{kind}.step"));
