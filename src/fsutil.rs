@@ -97,6 +97,8 @@ pub enum FileKind {
     Program,
     /// A CSV table (hole tables, …).
     Table,
+    /// A STEP file (ISO 10303-21), read by Open CASCADE (feature `step`).
+    Step,
 }
 
 impl FileKind {
@@ -108,6 +110,9 @@ impl FileKind {
             FileKind::Mesh => 256 << 20,
             FileKind::Script => 4 << 20,
             FileKind::Program | FileKind::Table => 64 << 20,
+            // Open CASCADE holds a STEP model in ≈ 10–30 times the file's size; the
+            // cap keeps one import within a few GB (docs/performance.md).
+            FileKind::Step => 64 << 20,
         }
     }
 
@@ -119,6 +124,7 @@ impl FileKind {
             FileKind::Script => "a script",
             FileKind::Program => "a robot program",
             FileKind::Table => "a CSV table",
+            FileKind::Step => "a STEP file",
         }
     }
 }
@@ -233,7 +239,7 @@ pub const RRD_MAGIC: &[u8; 4] = b"RRF2";
 /// without `--force`, whoever wrote them.
 const PROJECT_EXTENSIONS: &[&str] = &[
     "yaml", "yml", "stl", "obj", "ply", "gltf", "rhai", "prg", "toml", "urdf", "xacro", "dae",
-    "sdf",
+    "sdf", "step", "stp",
 ];
 // `.glb` is not listed: `fitup export` writes it and replaces its own output; a GLB the
 // user made is still refused (not in the registry), and one the run read as a part mesh
@@ -316,7 +322,7 @@ fn io_err(e: std::io::Error) -> OutputError {
 ///    ([`OUTPUT_REGISTRY`], `.fitup-*.tmp`) — these hold even with `force`;
 /// 2. with `force`, any such file; otherwise
 /// 3. it is not a file the project uses: no project extension (`yaml`, `yml`, `stl`,
-///    `obj`, `ply`, `gltf`, `rhai`, `prg`, `toml`, `urdf`, `xacro`, `dae`, `sdf`), not a SQLite
+///    `obj`, `ply`, `gltf`, `rhai`, `prg`, `toml`, `urdf`, `xacro`, `dae`, `sdf`, `step`, `stp`), not a SQLite
 ///    database (by its first 16 bytes, whatever its name), not a file the run read
 ///    ([`OutputRule::used`]); and
 /// 4. fitup wrote it: the registry of its folder lists its name with its current size

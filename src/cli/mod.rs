@@ -5,6 +5,7 @@
 mod batch;
 mod check;
 mod db;
+mod import;
 pub(crate) mod out;
 mod run;
 mod sequence;
@@ -219,6 +220,9 @@ pub enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Import a STEP assembly (SolidWorks, CATIA, … export) as a new document: one part
+    /// per distinct solid (STL), one component per placed solid (needs `--features step`).
+    Import(import::ImportArgs),
     /// Plan the assembly sequence of a document (seed 003): tasks, mounts, precedence.
     PlanSequence {
         /// The document (`.yaml`).
@@ -296,6 +300,7 @@ pub fn main() -> i32 {
         Command::Demo { dir, force } => demo(&dir, force),
         Command::Manipulator(a) => skills::manipulator(&a),
         Command::Skills(a) => skills::skills(&a),
+        Command::Import(a) => import::import(&a),
         Command::PlanSequence {
             doc,
             mode,

@@ -29,6 +29,7 @@
 pub mod dimension;
 mod export;
 pub mod file;
+pub mod import;
 pub mod mates;
 pub mod reference;
 pub mod robot;

@@ -157,6 +157,9 @@ impl MeshCache {
 /// parsed mesh, or `None` for the mesh when the bytes hash to `known` (the cached
 /// mesh stands; the caller passes `known` only while the buffer files are unchanged).
 fn read_mesh(key: &Path, path: &Path, known: Option<u64>) -> Result<Read, MeshError> {
+    if super::step::is_step_path(path) {
+        return Err(MeshError::invalid(super::step::not_a_part_mesh()).in_file(path));
+    }
     let bytes = crate::fsutil::read_file(key, crate::fsutil::FileKind::Mesh)
         .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
     let hash = content_hash(&bytes);

@@ -1,6 +1,6 @@
 //! Triangle meshes of parts: reading STL, OBJ, PLY and glTF/GLB (one dispatch,
-//! [`read_mesh_file`]), writing STL and GLB, validation, and the cache that keeps
-//! meshes between watch reruns.
+//! [`read_mesh_file`]), writing STL and GLB, STEP reading ([`step`], feature `step`),
+//! validation, and the cache that keeps meshes between watch reruns.
 //!
 //! Coordinates are millimetres in the part frame (glTF's metres are converted, see
 //! [`parse_gltf`]).
@@ -33,6 +33,9 @@ mod gltf;
 mod obj;
 mod ply;
 mod shapes;
+pub mod step;
+#[cfg(feature = "step")]
+mod step_ffi;
 mod stl;
 
 #[cfg(feature = "formats")]

@@ -57,6 +57,9 @@ impl fmt::Display for MeshError {
 
 /// Reads an STL file (ASCII or binary) into an indexed mesh (mm).
 pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
+    if super::step::is_step_path(path) {
+        return Err(MeshError::invalid(super::step::not_a_part_mesh()).in_file(path));
+    }
     let bytes = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh)
         .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
     parse_stl(&bytes).map_err(|e| e.in_file(path))

@@ -31,6 +31,7 @@ mod sequence_real;
 mod sequence_watch;
 mod simple_message_peer;
 mod skills;
+mod step_import;
 mod ur_ik;
 mod urdf;
 mod viewer;

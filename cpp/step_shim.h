@@ -1,0 +1,20 @@
+// The C++ side of fitup's STEP reader (feature `step`): Open CASCADE (Debian's 7.6)
+// reads a STEP file through XCAF, meshes every distinct solid once and hands the
+// triangles, the exact B-rep volumes and the placed instances to Rust
+// (src/mesh/step_ffi.rs declares these functions; src/mesh/step.rs is the API).
+#pragma once
+#include "rust/cxx.h"
+
+namespace fitup_step {
+struct ReadOptions;
+struct Model;
+
+// Reads, transfers and meshes the STEP file at `path`; lengths in mm.
+// Throws (as a Rust error) on any Open CASCADE failure, the time limit or the
+// triangle cap.
+Model read_step(rust::Str path, const ReadOptions &options);
+
+// Writes one of the STEP files the tests use (`kind`: box, cylinder_hole,
+// assembly, inch_box, open_shell, no_solid), made with Open CASCADE itself.
+void write_test_step(rust::Str kind, rust::Str path);
+} // namespace fitup_step

@@ -1,0 +1,383 @@
+//! A STEP assembly as a new document (`fitup import`): one part per distinct solid
+//! (meshed once, written as a binary STL under `meshes/`), one component per placed
+//! solid at its pose from the assembly tree, names from the product tree made unique
+//! and safe, the tessellation recorded in the document's description.
+//!
+//! Nothing is half-written: the STEP file is read and every output checked by the
+//! write rule ([`crate::fsutil::check_output`]) before the first byte is written. A new
+//! project folder is built in a temporary folder beside it and renamed into place; in
+//! an existing folder each file is written atomically, the document last, and the
+//! meshes written so far are removed when a later write fails.
+
+use super::file::{ComponentFile, DocumentFile, PartFile};
+use super::{Document, DocumentError};
+use crate::fsutil::{OutputError, OutputRule};
+use crate::mesh::step::{read_step, StepError, StepModel, StepOptions};
+use crate::mesh::MeshError;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// How to import.
+#[derive(Debug, Clone, Default)]
+pub struct ImportOptions {
+    /// Reading and tessellation (deflection, time limit, triangle cap).
+    pub step: StepOptions,
+    /// Replace existing files at the output paths (`--force`), never a folder, FIFO or
+    /// symbolic link.
+    pub force: bool,
+}
+
+/// One part the import wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedPart {
+    /// Its name in the document.
+    pub name: String,
+    /// Its STL, relative to the document's folder.
+    pub stl: String,
+    /// Triangles of its mesh.
+    pub triangles: usize,
+    /// Mesh volume over the exact B-rep volume.
+    pub volume_ratio: f64,
+    /// How many components place it.
+    pub instances: usize,
+}
+
+/// What [`import_step`] wrote.
+#[derive(Debug, Clone)]
+pub struct ImportReport {
+    /// The document.
+    pub document: PathBuf,
+    /// Whether the folder was created (with a `fitup.toml`).
+    pub new_project: bool,
+    /// The parts, in document order.
+    pub parts: Vec<ImportedPart>,
+    /// How many components.
+    pub components: usize,
+    /// The read itself: units, options, timings.
+    pub model: StepModel,
+}
+
+/// Why an import wrote nothing (or removed what it had written).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ImportError {
+    /// The STEP file could not be read (see [`StepError`]).
+    #[error(transparent)]
+    Step(#[from] StepError),
+    /// An output may not be written (the write rule refused it).
+    #[error("{}: {source}", path.display())]
+    Output {
+        /// The output.
+        path: PathBuf,
+        /// Why.
+        source: OutputError,
+    },
+    /// The operating system refused (creating a folder, renaming, …).
+    #[error("{}: {message}", path.display())]
+    Io {
+        /// The path.
+        path: PathBuf,
+        /// The OS message.
+        message: String,
+    },
+    /// A mesh could not be written.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// The document made would not load again (a bug: reported, nothing kept).
+    #[error("the imported document would not load: {0}")]
+    Document(#[from] DocumentError),
+}
+
+fn io_err(path: &Path, e: std::io::Error) -> ImportError {
+    ImportError::Io {
+        path: path.into(),
+        message: e.to_string(),
+    }
+}
+
+/// What a new project's `fitup.toml` says (the mark of a project root).
+const PROJECT_TOML: &str = "# Marks the root of a fitup project (written by `fitup import`): scripts below this\n# folder resolve their paths against it and may use files inside it only (docs/scripting.md).\n";
+
+/// The longest name (characters) the import gives a part or component.
+const MAX_NAME_CHARS: usize = 80;
+
+/// A name from the file as a document name: NFC, control and invisible characters
+/// ([`crate::diagnostics::hidden_char`]) and `/` (which separates component and
+/// reference) replaced by `_`, trimmed, at most [`MAX_NAME_CHARS`]; `fallback` when
+/// nothing is left.
+pub fn document_name(raw: &str, fallback: &str) -> String {
+    let name: String = super::nfc_name(raw)
+        .chars()
+        .map(|c| {
+            if c == '/' || crate::diagnostics::hidden_char(c).is_some() {
+                '_'
+            } else {
+                c
+            }
+        })
+        .take(MAX_NAME_CHARS)
+        .collect();
+    let name = name.trim();
+    if name.is_empty() {
+        fallback.to_string()
+    } else {
+        name.to_string()
+    }
+}
+
+/// `name`, or `name_2`, `name_3`, … : the first not in `taken` (compared as given,
+/// so in NFC), which it joins.
+fn unique(name: String, taken: &mut HashSet<String>) -> String {
+    let mut candidate = name.clone();
+    let mut k = 2;
+    while taken.contains(&candidate) {
+        candidate = format!("{name}_{k}");
+        k += 1;
+    }
+    taken.insert(candidate.clone());
+    candidate
+}
+
+/// A file name for a part's STL: letters and digits of any script, `-`, `_` and `.`
+/// kept, anything else `_`, no leading `.`; unique ignoring case (`taken` holds
+/// lower-case stems), since macOS and Windows file systems ignore it.
+fn file_stem(name: &str, taken: &mut HashSet<String>) -> String {
+    let stem: String = name
+        .chars()
+        .map(|c| {
+            if c.is_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .take(MAX_NAME_CHARS)
+        .collect();
+    let stem = stem.trim_start_matches('.');
+    let stem = if stem.is_empty() { "part" } else { stem };
+    let mut candidate = stem.to_string();
+    let mut k = 2;
+    while !taken.insert(candidate.to_lowercase()) {
+        candidate = format!("{stem}_{k}");
+        k += 1;
+    }
+    candidate
+}
+
+/// The document (not yet written) and the meshes' relative paths for `model`.
+fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
+    let step_stem = model
+        .path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut part_names = HashSet::new();
+    let mut stems = HashSet::new();
+    let mut parts = Vec::with_capacity(model.parts.len());
+    let mut doc = DocumentFile {
+        units: "mm".into(),
+        description: Some(format!(
+            "Imported from {} by `fitup import` (file unit {}; tessellation: linear deflection {} mm, angular deflection {} rad)",
+            document_name(
+                &model.path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
+                "a STEP file"
+            ),
+            if model.file_unit.is_empty() { "not stated" } else { &model.file_unit },
+            model.options.linear_deflection,
+            model.options.angular_deflection,
+        )),
+        ..DocumentFile::default()
+    };
+    for p in &model.parts {
+        let mut base = document_name(&p.product, &document_name(&step_stem, "part"));
+        if p.solid.1 > 1 {
+            base = format!("{base}-solid{}", p.solid.0);
+        }
+        let name = unique(base, &mut part_names);
+        let stl = format!("meshes/{}.stl", file_stem(&name, &mut stems));
+        doc.parts
+            .insert(name.clone(), PartFile::from_stl(stl.clone()));
+        parts.push(ImportedPart {
+            name,
+            stl,
+            triangles: p.mesh.triangles.len(),
+            volume_ratio: p.volume_ratio(),
+            instances: 0,
+        });
+    }
+    let mut component_names = HashSet::new();
+    for inst in &model.instances {
+        let part = &mut parts[inst.part];
+        part.instances += 1;
+        let base = document_name(&inst.name, &format!("{}-{}", part.name, part.instances));
+        doc.components.push(ComponentFile {
+            name: unique(base, &mut component_names),
+            part: part.name.clone(),
+            fixed: false,
+            color: None,
+            transform: Some(inst.transform.to_matrix()),
+            mass: None,
+            threaded: false,
+        });
+    }
+    (doc, parts)
+}
+
+/// Reads `step` and writes a document for it into `out`: `out/<stem>.yaml` and
+/// `out/meshes/*.stl`. A missing or empty `out` becomes a new project (with a
+/// `fitup.toml`); in an existing folder the files are added beside what is there, and
+/// any existing file at an output path is refused unless `options.force`.
+pub fn import_step(
+    step: &Path,
+    out: &Path,
+    options: &ImportOptions,
+) -> Result<ImportReport, ImportError> {
+    let model = read_step(step, &options.step)?;
+    let (doc, mut parts) = build(&model);
+    let text = doc
+        .to_yaml()
+        .map_err(|e| ImportError::Document(DocumentError::Invalid(e.to_string())))?;
+    let stem = document_name(
+        &step
+            .file_stem()
+            .map(|s| s.to_string_lossy())
+            .unwrap_or_default(),
+        "assembly",
+    );
+    let doc_name = format!("{}.yaml", file_stem(&stem, &mut HashSet::new()));
+    // The text must load as a document before anything is written.
+    Document::parse_text(&text, &out.join(&doc_name))?;
+    let new_project = match std::fs::read_dir(out) {
+        Ok(mut entries) => entries.next().is_none(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => true,
+        Err(e) => return Err(io_err(out, e)),
+    };
+    let meshes: Vec<(PathBuf, &crate::mesh::Mesh)> = parts
+        .iter()
+        .zip(&model.parts)
+        .map(|(p, m)| (PathBuf::from(&p.stl), &m.mesh))
+        .collect();
+    if new_project {
+        write_new(out, &doc_name, &text, &meshes)?;
+    } else {
+        write_into(out, &doc_name, &text, &meshes, options.force)?;
+    }
+    let document = out.join(&doc_name);
+    // What was written loads as a document (meshes and all).
+    let loaded = Document::open(&document)?;
+    for p in &mut parts {
+        p.triangles = loaded
+            .part(&p.name)
+            .map_or(p.triangles, |q| q.mesh.triangles.len());
+    }
+    Ok(ImportReport {
+        document,
+        new_project,
+        components: doc.components.len(),
+        parts,
+        model,
+    })
+}
+
+/// A new project: everything in a temporary folder beside `out`, renamed into place.
+fn write_new(
+    out: &Path,
+    doc_name: &str,
+    text: &str,
+    meshes: &[(PathBuf, &crate::mesh::Mesh)],
+) -> Result<(), ImportError> {
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(parent).map_err(|e| io_err(parent, e))?;
+    let tmp = tempfile::Builder::new()
+        .prefix(".fitup-import-")
+        .tempdir_in(parent)
+        .map_err(|e| io_err(parent, e))?;
+    std::fs::create_dir(tmp.path().join("meshes")).map_err(|e| io_err(tmp.path(), e))?;
+    for (rel, mesh) in meshes {
+        crate::mesh::write_stl(&tmp.path().join(rel), mesh)?;
+    }
+    let toml = tmp.path().join("fitup.toml");
+    crate::fsutil::write_atomic(&toml, PROJECT_TOML.as_bytes()).map_err(|e| io_err(&toml, e))?;
+    let doc = tmp.path().join(doc_name);
+    crate::fsutil::write_atomic(&doc, text.as_bytes()).map_err(|e| io_err(&doc, e))?;
+    // An empty `out` (checked by the caller) is replaced; rename refuses a non-empty one.
+    if out.exists() {
+        std::fs::remove_dir(out).map_err(|e| io_err(out, e))?;
+    }
+    std::fs::rename(tmp.path(), out).map_err(|e| io_err(out, e))?;
+    let _ = tmp.keep();
+    Ok(())
+}
+
+/// An existing folder: every output checked first, then the meshes, then the
+/// document; on a failure the meshes this call created are removed again.
+fn write_into(
+    out: &Path,
+    doc_name: &str,
+    text: &str,
+    meshes: &[(PathBuf, &crate::mesh::Mesh)],
+    force: bool,
+) -> Result<(), ImportError> {
+    let rule = OutputRule::forced(force);
+    let doc = out.join(doc_name);
+    for path in meshes
+        .iter()
+        .map(|(rel, _)| out.join(rel))
+        .chain([doc.clone()])
+    {
+        crate::fsutil::check_output(&path, &rule)
+            .map_err(|source| ImportError::Output { path, source })?;
+    }
+    let dir = out.join("meshes");
+    let made_dir = !dir.exists();
+    std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
+    let mut created = Vec::new();
+    let result = (|| {
+        for (rel, mesh) in meshes {
+            let path = out.join(rel);
+            let existed = path.exists();
+            crate::mesh::write_stl(&path, mesh)?;
+            if !existed {
+                created.push(path);
+            }
+        }
+        crate::fsutil::write_atomic(&doc, text.as_bytes()).map_err(|e| io_err(&doc, e))
+    })();
+    if result.is_err() {
+        for path in &created {
+            let _ = std::fs::remove_file(path);
+        }
+        if made_dir {
+            let _ = std::fs::remove_dir(&dir);
+        }
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_safe_and_unique() {
+        assert_eq!(document_name("peg/1", "x"), "peg_1");
+        assert_eq!(document_name("a\u{1b}[31mb", "x"), "a_[31mb");
+        assert_eq!(document_name("  \u{200b} ", "fallback"), "_");
+        assert_eq!(document_name("   ", "fallback"), "fallback");
+        // NFD in, NFC out.
+        assert_eq!(document_name("cafe\u{301}", "x"), "café");
+        assert_eq!(document_name("角度", "x"), "角度");
+        let mut taken = HashSet::new();
+        assert_eq!(unique("peg".into(), &mut taken), "peg");
+        assert_eq!(unique("peg".into(), &mut taken), "peg_2");
+        assert_eq!(unique("peg".into(), &mut taken), "peg_3");
+        let mut stems = HashSet::new();
+        assert_eq!(file_stem("Plate", &mut stems), "Plate");
+        assert_eq!(file_stem("plate", &mut stems), "plate_2");
+        assert_eq!(file_stem("../etc", &mut stems), "_etc");
+        assert_eq!(file_stem("角度 1", &mut stems), "角度_1");
+    }
+}
