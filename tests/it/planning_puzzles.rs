@@ -195,3 +195,4 @@ fn a_heavily_smoothed_path_passes_the_dense_recheck() {
         assert_collision_free(&p, &path);
     }
 }
+
