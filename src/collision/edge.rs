@@ -23,8 +23,10 @@ pub struct EdgeOptions {
     pub tolerance: f64,
     /// While two triangles touch (within the [`contact_gap`](super::contact_gap)),
     /// the largest displacement of the moving one between two crossing checks (mm, more
-    /// than 0; raised to half the tolerance by [`contact_step`](super::contact_step)).
-    /// A contact that deepens and recedes within one such step goes unseen. Default
+    /// than 0; raised to half the tolerance by [`contact_step`](super::contact_step)),
+    /// and never more than the room left between the pair's crossing depth and the
+    /// tolerance (at least 0.0005 mm), so a crossing deeper than the tolerance is not
+    /// stepped over. Default
     /// [`SweepMethod::DEFAULT_CONTACT_STEP_MM`](super::SweepMethod::DEFAULT_CONTACT_STEP_MM).
     pub contact_step: f64,
 }
