@@ -193,4 +193,3 @@ fn a_heavily_smoothed_path_passes_the_dense_recheck() {
         assert_collision_free(&p, &path);
     }
 }
-
