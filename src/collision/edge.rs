@@ -23,8 +23,10 @@ pub struct EdgeOptions {
     pub tolerance: f64,
     /// While two triangles touch (within the [`contact_gap`](super::contact_gap)),
     /// the largest displacement of the moving one between two crossing checks (mm, more
-    /// than 0; raised to half the tolerance by [`contact_step`](super::contact_step)).
-    /// A contact that deepens and recedes within one such step goes unseen. Default
+    /// than 0; raised to half the tolerance by [`contact_step`](super::contact_step)),
+    /// and never more than the room left between the pair's crossing depth and the
+    /// tolerance (at least 0.0005 mm), so a crossing deeper than the tolerance is not
+    /// stepped over. Default
     /// [`SweepMethod::DEFAULT_CONTACT_STEP_MM`](super::SweepMethod::DEFAULT_CONTACT_STEP_MM).
     pub contact_step: f64,
 }
@@ -288,14 +290,19 @@ impl PairCheck {
                 if d > self.gap {
                     dt = dt.max((d - self.gap / 2.0) / reach);
                 } else {
-                    if t > 0.0 {
-                        if let Some(depth) = tri_tri(&a, tb, self.eps, self.oriented) {
-                            if depth > self.tolerance {
-                                return Some(t);
-                            }
-                        }
+                    let depth = tri_tri(&a, tb, self.eps, self.oriented).unwrap_or(0.0);
+                    if t > 0.0 && depth > self.tolerance {
+                        return Some(t);
                     }
-                    dt = contact_dt;
+                    // In contact the pair may deepen as fast as its fastest vertex
+                    // moves: a fixed contact step let a corner sliding past a wall's
+                    // edge cross deeper than the tolerance and leave again between
+                    // two checks (the house puzzle's shortcut, see the tests). So
+                    // the step is at most the room left under the tolerance, floored
+                    // at the finest contact gap (0.0005 mm) so a contact resting at
+                    // the tolerance (or at depth 0 with tolerance 0) still advances.
+                    let room = (self.tolerance - depth).max(super::MIN_CONTACT_GAP_MM);
+                    dt = dt.max(contact_dt.min(room / reach)).max(f64::MIN_POSITIVE);
                 }
             }
             t += dt;
@@ -304,5 +311,78 @@ impl PairCheck {
             }
         }
         Some(t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::{interferes, DEFAULT_TOLERANCE};
+    use crate::math::Point3;
+    use crate::mesh::Mesh;
+    use nalgebra::{Quaternion, UnitQuaternion};
+    use std::sync::Arc;
+
+    fn pose(t: [f64; 3], q: [f64; 4]) -> Transform {
+        // q as nalgebra stores it: (i, j, k, w)
+        Transform::from_parts(
+            Vec3::from(t),
+            UnitQuaternion::new_unchecked(Quaternion::new(q[3], q[0], q[1], q[2])),
+        )
+    }
+
+    /// The house puzzle's L-shaped body and its wall `bc_west` (tests/common/
+    /// problems.rs), with the shortcut edge of a smoothed path (seed 1) along which
+    /// a pose 2 % in crosses the wall deeper than the tolerance.
+    fn house_edge() -> (Collider, Collider, Transform, Transform) {
+        let mut body = Mesh::cuboid(Point3::new(-25.0, -4.0, -4.0), Point3::new(25.0, 4.0, 4.0));
+        body.append(&Mesh::cuboid(
+            Point3::new(17.0, 4.0, -4.0),
+            Point3::new(24.5, 26.0, 4.0),
+        ));
+        let wall = Mesh::cuboid(
+            Point3::new(102.0, 98.0, 0.0),
+            Point3::new(138.0, 102.0, 40.0),
+        );
+        let from = pose(
+            [138.47476156413913, 71.1652024404471, 17.036050881367885],
+            [
+                0.22564051165602422,
+                0.18844296049983245,
+                0.28878100353997727,
+                0.911142766710576,
+            ],
+        );
+        let to = pose(
+            [143.4204233408139, 84.10582743025753, 15.764837185916395],
+            [
+                0.20150130705585204,
+                0.20209277427677474,
+                0.4279286591324698,
+                0.8575737849050905,
+            ],
+        );
+        (
+            Collider::new(Arc::new(body)).unwrap(),
+            Collider::new(Arc::new(wall)).unwrap(),
+            from,
+            to,
+        )
+    }
+
+    #[test]
+    fn a_shortcut_crossing_a_wall_corner_is_seen() {
+        let (body, wall, from, to) = house_edge();
+        let id = Transform::IDENTITY;
+        assert!(!interferes(&body, &from, &wall, &id, DEFAULT_TOLERANCE).unwrap());
+        assert!(!interferes(&body, &to, &wall, &id, DEFAULT_TOLERANCE).unwrap());
+        let n = 2000;
+        let first = (1..n).find(|&k| {
+            let p = from.interpolate(&to, k as f64 / n as f64);
+            interferes(&body, &p, &wall, &id, DEFAULT_TOLERANCE).unwrap()
+        });
+        println!("first interfering sample {first:?}");
+        assert!(first.is_some());
+        assert!(edge_interferes(&body, &from, &to, &wall, &id, &EdgeOptions::default()).unwrap());
     }
 }

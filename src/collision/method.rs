@@ -25,8 +25,9 @@ pub enum SweepMethod {
     /// Conservative advancement: while the part is clear of every obstacle, each
     /// advance is shorter than the distance to the nearest one, so nothing is jumped
     /// over; within the contact gap ([`contact_gap`]) poses are checked every contact
-    /// step ([`contact_step`]: `contact_step_mm`, at least half the tolerance), so a
-    /// contact that deepens and recedes within one such step can go unseen.
+    /// step ([`contact_step`]: `contact_step_mm`, at least half the tolerance) and
+    /// never more than the room left under the tolerance (at least 0.0005 mm), so a
+    /// crossing deeper than the tolerance is not stepped over.
     Continuous {
         /// Largest displacement of any point of the part between two checks while it
         /// touches an obstacle, mm (> 0; raised to half the tolerance).

@@ -294,8 +294,10 @@ impl MeshValidator {
 /// 15 inner poses before the continuous pass.
 const PRESAMPLE_REACH_MM: f64 = 10.0;
 /// The continuous check runs in pieces whose points move at most this far (mm),
-/// reading the deadline between them.
-const PIECE_REACH_MM: f64 = 10.0;
+/// reading the deadline between them. 2 mm: in a sliding contact the check steps
+/// by at most the tolerance (0.01 mm by default), so a piece must be short for the
+/// deadline to be read often enough.
+const PIECE_REACH_MM: f64 = 2.0;
 
 impl MotionValidator for MeshValidator {
     fn is_free(&mut self, pose: &Transform) -> bool {

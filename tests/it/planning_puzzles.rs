@@ -165,7 +165,7 @@ fn smoothing_stays_within_its_share_and_the_raw_path_is_returned_without_it() {
     );
     assert!(path.time_ms <= 1.05 * budget);
     // The heavily shortcut path is re-checked in
-    // `a_heavily_smoothed_path_passes_the_dense_recheck` (ignored: a known failure).
+    // `a_heavily_smoothed_path_passes_the_dense_recheck`.
 
     options.smoothing.budget_share = 0.0;
     let mut v = p.validator(p.default_validator_options()).unwrap();
@@ -176,13 +176,11 @@ fn smoothing_stays_within_its_share_and_the_raw_path_is_returned_without_it() {
     assert_collision_free(&p, &raw);
 }
 
-/// Known failure (issue 23 work, 2026-12-02): with unlimited shortcut attempts for
-/// 400 ms, one run's smoothed house path had a pose of its 0.01 mm densification
-/// crossing `bc_west` deeper than the tolerance, though every edge was accepted by
-/// the continuous edge check. Time-dependent (how many shortcuts fit), so it does
-/// not fail every run. Run with `--ignored` to reproduce.
+/// With unlimited shortcut attempts, every edge of the smoothed house path passes
+/// the dense re-check (issue 23 work, 2026-12-02: seed 1 had a shortcut whose
+/// corner crossed `bc_west` deeper than the tolerance between two contact steps
+/// of the continuous edge check; the edge is a unit test in `collision::edge`).
 #[test]
-#[ignore = "known: a shortcut accepted by the continuous edge check can fail the dense re-check"]
 fn a_heavily_smoothed_path_passes_the_dense_recheck() {
     let p = problems::house().unwrap();
     for seed in 1..6 {
