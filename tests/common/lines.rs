@@ -60,6 +60,42 @@ impl Lines {
         }
     }
 
+    /// Reads a child's stdout and stderr into one stream, stderr lines prefixed
+    /// `stderr: ` (for tests that look for a line wherever the program prints it).
+    pub fn read_merged(out: impl Read + Send + 'static, err: impl Read + Send + 'static) -> Lines {
+        let (tx, rx) = channel();
+        let tx2 = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(out).lines().map_while(Result::ok) {
+                if tx.send((Instant::now(), line)).is_err() {
+                    break;
+                }
+            }
+        });
+        std::thread::spawn(move || {
+            for line in BufReader::new(err).lines().map_while(Result::ok) {
+                if tx2
+                    .send((Instant::now(), format!("stderr: {line}")))
+                    .is_err()
+                {
+                    break;
+                }
+            }
+        });
+        Lines {
+            rx,
+            seen: Vec::new(),
+        }
+    }
+
+    /// Every line so far, without waiting, as one text.
+    pub fn drain(&mut self) -> String {
+        while let Ok((_, l)) = self.rx.try_recv() {
+            self.seen.push(l);
+        }
+        self.seen.join("\n")
+    }
+
     /// [`Lines::wait_timed`] without the time.
     pub fn wait_for(&mut self, needle: &str, bound: Duration) -> String {
         self.wait_timed(needle, bound).1
@@ -89,6 +125,55 @@ impl Lines {
             .take_while(|l| !l.starts_with(&end))
             .cloned()
             .collect()
+    }
+}
+
+/// A running program with its stdout and stderr in one [`Lines`] stream
+/// ([`Lines::read_merged`]); killed when dropped.
+pub struct Proc {
+    /// The process.
+    pub child: Killed,
+    /// Its output, stdout and stderr merged.
+    pub lines: Lines,
+}
+
+impl Proc {
+    /// Starts `cmd` with stdout and stderr piped (stdin as the caller set it).
+    pub fn spawn(cmd: &mut std::process::Command) -> Proc {
+        use std::process::Stdio;
+        let mut child = cmd
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let lines = Lines::read_merged(child.stdout.take().unwrap(), child.stderr.take().unwrap());
+        Proc {
+            child: Killed(child),
+            lines,
+        }
+    }
+
+    /// Waits (bounded: a hang fails the test) for a line containing `pat`.
+    pub fn wait_for(&mut self, pat: &str, bound: Duration) -> String {
+        self.lines.wait_for(pat, bound)
+    }
+
+    /// Every line so far (without waiting).
+    pub fn drain(&mut self) -> String {
+        self.lines.drain()
+    }
+
+    /// Every line received so far.
+    pub fn seen(&self) -> &[String] {
+        &self.lines.seen
+    }
+
+    /// Writes one line to the program's stdin (piped by the caller).
+    pub fn send(&mut self, line: &str) {
+        use std::io::Write;
+        let stdin = self.child.0.stdin.as_mut().unwrap();
+        writeln!(stdin, "{line}").unwrap();
+        stdin.flush().unwrap();
     }
 }
 

@@ -24,11 +24,11 @@ const BOUND: Duration = Duration::from_secs(20);
 const MAX_RSS_KB: u64 = 500 * 1024;
 
 /// What a bounded run left: exit code, output, peak RSS (kB) and wall time.
-struct Run {
-    code: Option<i32>,
-    text: String,
-    peak_kb: u64,
-    elapsed: Duration,
+pub(crate) struct Run {
+    pub(crate) code: Option<i32>,
+    pub(crate) text: String,
+    pub(crate) peak_kb: u64,
+    pub(crate) elapsed: Duration,
 }
 
 /// The `VmHWM` (peak resident set, kB) of a running process, if it can be read.
@@ -59,7 +59,7 @@ fn children(pid: u32) -> Vec<i32> {
 /// GNU time's `%M` when it is installed (`-o` a file, so the output is untouched),
 /// and in any case `VmHWM` of the child polled every 5 ms (a run of a few ms may
 /// end between two polls; GNU time sees it).
-fn run(dir: &Path, args: &[&str]) -> Run {
+pub(crate) fn run(dir: &Path, args: &[&str]) -> Run {
     let report = tempfile::NamedTempFile::new().unwrap();
     let mut command = match gnu_time() {
         Some(time) => {

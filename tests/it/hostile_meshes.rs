@@ -4,80 +4,25 @@
 //! node hierarchy that loops, more triangles than the cap.
 //!
 //! Bounds of every case (not speed assertions: a case far past them is broken): exit 1
-//! (never an abort), within [`BOUND`], peak resident memory (VmHWM polled from /proc)
+//! (never an abort), within the hostile runner's 20 s bound, peak resident memory
+//! (GNU time or VmHWM)
 //! under [`MAX_RSS_KB`], the message names the mesh file and the line or element; the
 //! user's files are byte for byte as before. Every file is generated here.
 
 use crate::common;
 use fitup::math::{Point3, Transform};
 use fitup::mesh::{glb_bytes, GlbNode, Mesh};
-use std::io::Read;
 use std::path::Path;
-use std::process::Stdio;
-use std::time::{Duration, Instant};
-
-/// Every case ends within this.
-const BOUND: Duration = Duration::from_secs(20);
 
 /// Peak resident memory every case stays under (kB): 300 MB, far below what the
 /// headers ask for (a 4-billion-vertex PLY is 48 GB of positions).
 const MAX_RSS_KB: u64 = 300 * 1024;
 
-/// `fitup check cell.yaml` in `dir`: exit code, output, peak RSS (kB).
+/// `fitup check cell.yaml` in `dir`, bounded in time (the hostile suites' one runner,
+/// [`crate::hostile_bounds::run`]): exit code, output, peak RSS (kB).
 fn check(dir: &Path) -> (Option<i32>, String, u64) {
-    let mut child = common::fitup()
-        .current_dir(dir)
-        .args(["check", "cell.yaml"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let drain = |r: Option<Box<dyn Read + Send>>| {
-        std::thread::spawn(move || {
-            let mut buf = Vec::new();
-            if let Some(mut r) = r {
-                let _ = r.read_to_end(&mut buf);
-            }
-            String::from_utf8_lossy(&buf).into_owned()
-        })
-    };
-    let out = drain(
-        child
-            .stdout
-            .take()
-            .map(|r| Box::new(r) as Box<dyn Read + Send>),
-    );
-    let err = drain(
-        child
-            .stderr
-            .take()
-            .map(|r| Box::new(r) as Box<dyn Read + Send>),
-    );
-    let start = Instant::now();
-    let mut peak = 0u64;
-    let status = loop {
-        if let Ok(s) = std::fs::read_to_string(format!("/proc/{}/status", child.id())) {
-            if let Some(kb) = s
-                .lines()
-                .find_map(|l| l.strip_prefix("VmHWM:"))
-                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-            {
-                peak = peak.max(kb);
-            }
-        }
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > BOUND {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("`fitup check` still running after {BOUND:?} (peak {peak} kB)");
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    };
-    let text = format!("{}{}", out.join().unwrap(), err.join().unwrap());
-    (status.code(), text, peak)
+    let r = crate::hostile_bounds::run(dir, &["check", "cell.yaml"]);
+    (r.code, r.text, r.peak_kb)
 }
 
 /// A GLB of the unit cube, as its JSON and binary chunk.

@@ -3,89 +3,27 @@
 
 use crate::common;
 
+use common::lines::Proc;
 use common::{fitup, repo};
 use fitup::kinematics::JointKind;
 use fitup::manipulator::client::{Client, ClientOptions, ManipulatorError};
 use fitup::manipulator::message::{msg_type, Body, ByteOrder, Packet};
 use fitup::manipulator::RefusalCode;
 use fitup::skills::{ControllerCommand, Plan, PlanStep};
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::process::{Child, Stdio};
-use std::sync::mpsc::{channel, Receiver};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 const KINDS: [JointKind; 6] = [JointKind::Revolute; 6];
 
-/// A child whose stdout lines arrive on a channel; killed on drop.
-struct Proc {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
-
-impl Proc {
-    fn spawn(args: &[&str], stdin: bool) -> Self {
-        let mut child = fitup()
-            .current_dir(repo())
-            .args(args)
-            .stdin(if stdin { Stdio::piped() } else { Stdio::null() })
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let (tx, rx) = channel();
-        let out = child.stdout.take().unwrap();
-        let err = child.stderr.take().unwrap();
-        let tx2 = tx.clone();
-        std::thread::spawn(move || {
-            for l in BufReader::new(out).lines().map_while(Result::ok) {
-                let _ = tx.send(l);
-            }
-        });
-        std::thread::spawn(move || {
-            for l in BufReader::new(err).lines().map_while(Result::ok) {
-                let _ = tx2.send(format!("stderr: {l}"));
-            }
-        });
-        Self {
-            child,
-            lines: rx,
-            seen: Vec::new(),
-        }
-    }
-
-    /// Waits (bounded: a hang fails the test) for a line containing `pat`.
-    fn wait_for(&mut self, pat: &str, bound: Duration) -> String {
-        let end = Instant::now() + bound;
-        while let Some(left) = end.checked_duration_since(Instant::now()) {
-            if let Ok(l) = self.lines.recv_timeout(left) {
-                self.seen.push(l.clone());
-                if l.contains(pat) {
-                    return l;
-                }
-            } else {
-                break;
-            }
-        }
-        panic!(
-            "no line with `{pat}` within {bound:?}; seen:\n{}",
-            self.seen.join("\n")
-        );
-    }
-
-    fn send(&mut self, line: &str) {
-        let stdin = self.child.stdin.as_mut().unwrap();
-        writeln!(stdin, "{line}").unwrap();
-        stdin.flush().unwrap();
-    }
-}
-
-impl Drop for Proc {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
+/// `fitup ARGS…` from the repository root, its output lines on a channel.
+fn spawn(args: &[&str], stdin: bool) -> Proc {
+    Proc::spawn(fitup().current_dir(repo()).args(args).stdin(if stdin {
+        Stdio::piped()
+    } else {
+        Stdio::null()
+    }))
 }
 
 fn free_port() -> u16 {
@@ -109,7 +47,7 @@ fn simulator_of(
     speed: &str,
 ) -> (Proc, SocketAddr, SocketAddr) {
     let (p, s) = (port.to_string(), state.to_string());
-    let mut sim = Proc::spawn(
+    let mut sim = spawn(
         &[
             "manipulator",
             "--doc",
@@ -401,7 +339,7 @@ fn pause_and_resume_mid_run() {
     let plan = write_plan(&joint_plan(3, 2.0));
     let target = m.to_string();
     let state = s.port().to_string();
-    let mut run = Proc::spawn(
+    let mut run = spawn(
         &[
             "skills",
             "run",
@@ -431,11 +369,11 @@ fn pause_and_resume_mid_run() {
     run.wait_for("resumed", Duration::from_secs(10));
     run.wait_for("done", Duration::from_secs(60));
     let finished: Vec<_> = run
-        .seen
+        .seen()
         .iter()
         .filter(|l| l.starts_with("finished"))
         .collect();
-    assert_eq!(finished.len(), 3, "{:?}", run.seen);
+    assert_eq!(finished.len(), 3, "{:?}", run.seen());
     let mut end_q = vec![0.0; 6];
     end_q[0] = 0.3;
     end_q[2] = 0.15;
@@ -451,7 +389,7 @@ fn killing_the_simulator_mid_skill_interrupts_and_resumes_without_repeating() {
     let plan = write_plan(&joint_plan(3, 2.0));
     let db_dir = tempfile::tempdir().unwrap();
     let db_file = db_dir.path().join("log.db");
-    let mut run = Proc::spawn(
+    let mut run = spawn(
         &[
             "skills",
             "run",
@@ -473,11 +411,11 @@ fn killing_the_simulator_mid_skill_interrupts_and_resumes_without_repeating() {
     let (_sim2, _, _) = simulator(port, state_port, "1");
     run.wait_for("reconnected", Duration::from_secs(30));
     run.wait_for("done", Duration::from_secs(60));
-    let count = |p: &str| run.seen.iter().filter(|l| l.starts_with(p)).count();
-    assert_eq!(count("running #0"), 1, "{:?}", run.seen);
-    assert_eq!(count("finished #0"), 1, "{:?}", run.seen);
-    assert_eq!(count("finished #1"), 1, "{:?}", run.seen);
-    assert_eq!(count("finished #2"), 1, "{:?}", run.seen);
+    let count = |p: &str| run.seen().iter().filter(|l| l.starts_with(p)).count();
+    assert_eq!(count("running #0"), 1, "{:?}", run.seen());
+    assert_eq!(count("finished #0"), 1, "{:?}", run.seen());
+    assert_eq!(count("finished #1"), 1, "{:?}", run.seen());
+    assert_eq!(count("finished #2"), 1, "{:?}", run.seen());
     // The execution log is in the database, written as it happened.
     let mut db = fitup::db::Database::open(&fitup::db::Target::Sqlite(db_file.clone())).unwrap();
     let log = db.skill_log(None).unwrap();

@@ -7,13 +7,13 @@
 
 use crate::common;
 
+use common::lines::Proc;
 use common::{fitup, repo};
 use fitup::skills::{ControllerCommand, Plan, PlanStep};
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::process::{Child, Stdio};
+use std::process::Stdio;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, Receiver};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -160,78 +160,9 @@ const APPENDIX_STATUS: &str = "00000028 0000000D 00000001 00000000 00000001 FFFF
 
 // ---- Driving `fitup manipulator` ---------------------------------------------------
 
-/// A child whose output lines arrive on a channel; killed on drop.
-struct Proc {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
-
-impl Proc {
-    fn spawn(args: &[&str]) -> Self {
-        let mut child = fitup()
-            .current_dir(repo())
-            .args(args)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let (tx, rx) = channel();
-        let tx2 = tx.clone();
-        let out = child.stdout.take().unwrap();
-        let err = child.stderr.take().unwrap();
-        std::thread::spawn(move || {
-            for l in BufReader::new(out).lines().map_while(Result::ok) {
-                let _ = tx.send(l);
-            }
-        });
-        std::thread::spawn(move || {
-            for l in BufReader::new(err).lines().map_while(Result::ok) {
-                let _ = tx2.send(format!("stderr: {l}"));
-            }
-        });
-        Self {
-            child,
-            lines: rx,
-            seen: Vec::new(),
-        }
-    }
-
-    /// The first line containing `pat`, waiting at most `bound` (a hang fails).
-    fn wait_for(&mut self, pat: &str, bound: Duration) -> String {
-        let end = Instant::now() + bound;
-        while let Some(left) = end.checked_duration_since(Instant::now()) {
-            match self.lines.recv_timeout(left) {
-                Ok(l) => {
-                    self.seen.push(l.clone());
-                    if l.contains(pat) {
-                        return l;
-                    }
-                }
-                Err(_) => break,
-            }
-        }
-        panic!(
-            "no line with `{pat}` within {bound:?}; seen:\n{}",
-            self.seen.join("\n")
-        );
-    }
-
-    /// Every line so far (without waiting).
-    fn drain(&mut self) -> String {
-        while let Ok(l) = self.lines.try_recv() {
-            self.seen.push(l);
-        }
-        self.seen.join("\n")
-    }
-}
-
-impl Drop for Proc {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
+/// `fitup ARGS…` from the repository root, its output lines on a channel.
+fn spawn(args: &[&str]) -> Proc {
+    Proc::spawn(fitup().current_dir(repo()).args(args).stdin(Stdio::null()))
 }
 
 /// A free port P whose P + 2 is free too (for the port rule).
@@ -263,7 +194,7 @@ fn manipulator(extra: &[&str]) -> (Proc, u16, SocketAddr, SocketAddr) {
         "20",
     ];
     args.extend(extra);
-    let mut sim = Proc::spawn(&args);
+    let mut sim = spawn(&args);
     let line = sim.wait_for("listening", Duration::from_secs(60));
     let addr = |key: &str| -> SocketAddr {
         let rest = &line[line.find(key).unwrap() + key.len()..];
