@@ -1,0 +1,112 @@
+//! numpy ↔ library values: poses, pose arrays, joint arrays. The one place where the
+//! Python convention (column vectors, `T @ p`) meets the library's `Transform`
+//! (SolidWorks row-vector matrix, `a * b` = a, then b).
+
+use crate::error::{Error, Result};
+use fitup::math::Transform;
+use numpy::ndarray::{Array1, Array2, Array3, ArrayView1, ArrayView2, ArrayView3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use pyo3::prelude::*;
+
+/// The column-vector 4×4 matrix of a pose (mm): the transpose of the document's
+/// row-vector matrix.
+pub fn matrix(t: &Transform) -> [[f64; 4]; 4] {
+    let m = t.to_matrix();
+    let mut c = [[0.0; 4]; 4];
+    for (i, row) in c.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = m[j][i];
+        }
+    }
+    c
+}
+
+/// A pose from a column-vector 4×4 view (mm), checked to be a rigid motion.
+pub fn pose_of(a: ArrayView2<'_, f64>, argument: &'static str) -> Result<Transform> {
+    if a.shape() != [4, 4] {
+        return Err(Error::Shape {
+            argument,
+            expected: "(4, 4)",
+            shape: a.shape().to_vec(),
+        });
+    }
+    let mut m = [[0.0; 4]; 4];
+    for i in 0..4 {
+        for j in 0..4 {
+            m[j][i] = a[[i, j]];
+        }
+    }
+    Transform::from_matrix(&m).map_err(|source| Error::Pose { argument, source })
+}
+
+/// Poses from an `(N, 4, 4)` view; a single `(4, 4)` is one pose.
+pub fn poses_of(a: ArrayView3<'_, f64>, argument: &'static str) -> Result<Vec<Transform>> {
+    if a.shape()[1..] != [4, 4] {
+        return Err(Error::Shape {
+            argument,
+            expected: "(N, 4, 4)",
+            shape: a.shape().to_vec(),
+        });
+    }
+    a.outer_iter().map(|p| pose_of(p, argument)).collect()
+}
+
+/// A pose as a new `(4, 4)` numpy array (the buffer is handed to numpy, not copied).
+pub fn pose_array<'py>(py: Python<'py>, t: &Transform) -> Bound<'py, PyArray2<f64>> {
+    let c = matrix(t);
+    Array2::from_shape_fn((4, 4), |(i, j)| c[i][j]).into_pyarray(py)
+}
+
+/// Poses as a new `(N, 4, 4)` numpy array.
+pub fn poses_array<'py>(py: Python<'py>, ts: &[Transform]) -> Bound<'py, PyArray3<f64>> {
+    let cs: Vec<[[f64; 4]; 4]> = ts.iter().map(matrix).collect();
+    Array3::from_shape_fn((cs.len(), 4, 4), |(k, i, j)| cs[k][i][j]).into_pyarray(py)
+}
+
+/// A vector of numbers as a numpy array (the Vec's buffer becomes numpy's).
+pub fn vector<'py>(py: Python<'py>, v: Vec<f64>) -> Bound<'py, PyArray1<f64>> {
+    Array1::from_vec(v).into_pyarray(py)
+}
+
+/// Rows of equal length as an `(N, width)` array; `width` fixes the shape when there
+/// are no rows.
+pub fn rows<'py>(py: Python<'py>, rows: &[Vec<f64>], width: usize) -> Bound<'py, PyArray2<f64>> {
+    Array2::from_shape_fn((rows.len(), width), |(i, j)| {
+        rows[i].get(j).copied().unwrap_or(f64::NAN)
+    })
+    .into_pyarray(py)
+}
+
+/// A joint array (rad, mm for prismatic joints) as a Vec.
+pub fn joints_of(a: ArrayView1<'_, f64>) -> Vec<f64> {
+    a.iter().copied().collect()
+}
+
+/// A 3-vector (mm) from a view of shape `(3,)`.
+pub fn vec3_of(a: ArrayView1<'_, f64>, argument: &'static str) -> Result<fitup::math::Vec3> {
+    if a.len() != 3 {
+        return Err(Error::Shape {
+            argument,
+            expected: "(3,)",
+            shape: a.shape().to_vec(),
+        });
+    }
+    Ok(fitup::math::Vec3::new(a[0], a[1], a[2]))
+}
+
+/// A number a keyword must hold: finite and `> 0` (or `>= 0` with `zero_ok`).
+pub fn positive(option: &'static str, v: f64, zero_ok: bool) -> Result<f64> {
+    if v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0)) {
+        Ok(v)
+    } else {
+        Err(Error::Option {
+            option,
+            value: v.to_string(),
+            expected: if zero_ok {
+                "a finite number >= 0"
+            } else {
+                "a finite number > 0"
+            },
+        })
+    }
+}

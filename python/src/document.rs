@@ -1,0 +1,590 @@
+//! `fitup.Document`: an assembly document and every document-level request
+//! (interference, sweeps, planning, robots, programs, sequences).
+
+use crate::convert;
+use crate::error::{Error, Result};
+use crate::options::{self, Keywords};
+use crate::path::Path;
+use fitup::collision::Contact;
+use fitup::document::{Dimension, DimensionKind};
+use fitup::planning::Control;
+use fitup::workspace::{Revalidation, SceneCache, Workspace};
+use numpy::{AllowTypeChange, PyArray2, PyArrayLike2, PyArrayLike3};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::{Mutex, MutexGuard};
+
+/// The document and the collision scene cache kept between calls (colliders are
+/// built once per mesh).
+pub(crate) struct Inner {
+    pub(crate) doc: fitup::document::Document,
+    pub(crate) scene: SceneCache,
+}
+
+/// An assembly document (YAML + meshes): parts, components at poses, mates,
+/// dimensions, robots.
+///
+/// ``Document(path)`` loads and validates the file and its meshes and solves the mates;
+/// errors are ``DocumentError`` with ``file``, ``line`` and ``column``. Poses are
+/// column-vector 4×4 numpy arrays (part frame → world, mm); lengths mm, angles
+/// radians. Long calls (planning, sequences, sweeps, interference) release the GIL;
+/// calls on one document from several threads run one at a time.
+#[pyclass(module = "fitup", name = "Document", frozen)]
+pub struct Document {
+    inner: Mutex<Inner>,
+}
+
+impl Document {
+    pub(crate) fn lock(&self) -> Result<MutexGuard<'_, Inner>> {
+        self.inner
+            .lock()
+            .map_err(|_| Error::Poisoned { what: "document" })
+    }
+
+    /// Runs `f` on the workspace of the document as it is now, GIL released.
+    fn with_workspace<R: Send>(
+        &self,
+        py: Python<'_>,
+        f: impl FnOnce(&Workspace) -> Result<R> + Send,
+    ) -> Result<R> {
+        py.detach(|| {
+            let mut inner = self.lock()?;
+            let Inner { doc, scene } = &mut *inner;
+            let ws = Workspace::new(doc, scene)?;
+            f(&ws)
+        })
+    }
+}
+
+fn contact_dict<'py>(py: Python<'py>, c: &Contact) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let state = match c {
+        Contact::Separate => "separate",
+        Contact::Touching => "touching",
+        Contact::Interfering { .. } => "interfering",
+        // The library may add verdicts; say so rather than guess.
+        #[allow(unreachable_patterns)]
+        _ => "unknown",
+    };
+    d.set_item("state", state)?;
+    d.set_item("depth_mm", c.depth())?;
+    Ok(d)
+}
+
+#[pymethods]
+impl Document {
+    /// Loads the document at ``path`` (its meshes inside its project: the nearest
+    /// folder holding ``fitup.toml``, else the document's folder).
+    #[new]
+    fn new(py: Python<'_>, path: std::path::PathBuf) -> Result<Self> {
+        let doc = py.detach(|| fitup::document::Document::open(&path))?;
+        Ok(Self {
+            inner: Mutex::new(Inner {
+                doc,
+                scene: SceneCache::new(),
+            }),
+        })
+    }
+
+    /// The document's file.
+    #[getter]
+    fn path(&self) -> Result<std::path::PathBuf> {
+        Ok(self.lock()?.doc.path().to_path_buf())
+    }
+
+    /// Component names in file order.
+    fn components(&self) -> Result<Vec<String>> {
+        Ok(self
+            .lock()?
+            .doc
+            .components()
+            .iter()
+            .map(|c| c.name.clone())
+            .collect())
+    }
+
+    /// Part names in file order.
+    fn parts(&self) -> Result<Vec<String>> {
+        Ok(self.lock()?.doc.parts().map(|p| p.name.clone()).collect())
+    }
+
+    /// One component as a dict: ``name``, ``part``, ``fixed``, ``pose`` (4×4, mm),
+    /// ``mass`` (kg or None), ``threaded``, ``color`` (RGB in 0..1 or None).
+    fn component<'py>(&self, py: Python<'py>, name: &str) -> Result<Bound<'py, PyDict>> {
+        let inner = self.lock()?;
+        let c = inner.doc.component(name)?;
+        let d = PyDict::new(py);
+        d.set_item("name", &c.name)?;
+        d.set_item("part", &c.part)?;
+        d.set_item("fixed", c.fixed)?;
+        d.set_item("pose", convert::pose_array(py, &c.transform))?;
+        d.set_item("mass", c.mass)?;
+        d.set_item("threaded", c.threaded)?;
+        d.set_item("color", c.color.map(|c| c.to_vec()))?;
+        Ok(d)
+    }
+
+    /// The pose of component ``name``: 4×4 column-vector matrix, part frame → world, mm.
+    fn pose<'py>(&self, py: Python<'py>, name: &str) -> Result<Bound<'py, PyArray2<f64>>> {
+        let inner = self.lock()?;
+        Ok(convert::pose_array(py, &inner.doc.component(name)?.transform))
+    }
+
+    /// Sets the pose of component ``name`` (4×4, mm; a rigid motion). Fixed and
+    /// robot-driven components are refused; mates are not re-solved.
+    fn set_pose(&self, name: &str, pose: PyArrayLike2<'_, f64, AllowTypeChange>) -> Result<()> {
+        let t = convert::pose_of(pose.as_array(), "pose")?;
+        self.lock()?.doc.set_transform(name, t)?;
+        Ok(())
+    }
+
+    /// A reference (plane, axis or point of the component's part) in the world at
+    /// the component's pose: a dict ``kind`` (``"plane"``, ``"axis"``, ``"point"``),
+    /// ``point`` (mm, ``(3,)``) and ``direction`` (the unit normal or axis direction,
+    /// None for a point).
+    fn reference<'py>(
+        &self,
+        py: Python<'py>,
+        component: &str,
+        name: &str,
+    ) -> Result<Bound<'py, PyDict>> {
+        let inner = self.lock()?;
+        let i = inner.doc.component_index(component)?;
+        let r = inner.doc.world_reference(i, name)?;
+        let d = PyDict::new(py);
+        d.set_item("kind", r.kind_name())?;
+        let p = r.anchor();
+        d.set_item("point", convert::vector(py, vec![p.x, p.y, p.z]))?;
+        d.set_item(
+            "direction",
+            r.direction().map(|v| convert::vector(py, vec![v.x, v.y, v.z])),
+        )?;
+        Ok(d)
+    }
+
+    /// Marks a component fixed (never moved by mates or planners) or free.
+    fn set_fixed(&self, name: &str, fixed: bool) -> Result<()> {
+        self.lock()?.doc.set_fixed(name, fixed)?;
+        Ok(())
+    }
+
+    /// Full names of the driving dimensions (``D1@<mate>`` and robot joints).
+    fn dimensions(&self) -> Result<Vec<String>> {
+        Ok(self.lock()?.doc.dimensions())
+    }
+
+    /// A dimension's value in SolidWorks' ``SystemValue`` units: metres for lengths,
+    /// radians for angles.
+    fn system_value(&self, name: &str) -> Result<f64> {
+        Ok(self.lock()?.doc.dimension(name)?.system_value())
+    }
+
+    /// Sets a dimension in SI units (metres or radians), as ``IDimension.SystemValue``,
+    /// and re-solves the mates; on failure nothing changes.
+    fn set_system_value(&self, name: &str, value: f64) -> Result<()> {
+        let mut inner = self.lock()?;
+        let kind = inner.doc.dimension(name)?.kind;
+        inner
+            .doc
+            .set_dimension(name, Dimension::from_system(kind, value))?;
+        Ok(())
+    }
+
+    /// A dimension as a dict: ``name``, ``kind`` (``"length"``/``"angle"``), ``value``
+    /// (mm or rad), ``system_value`` (m or rad), ``document_value`` (mm or degrees,
+    /// as the file holds it).
+    fn dimension<'py>(&self, py: Python<'py>, name: &str) -> Result<Bound<'py, PyDict>> {
+        let d = self.lock()?.doc.dimension(name)?;
+        let out = PyDict::new(py);
+        let kind = match d.kind {
+            DimensionKind::Length => "length",
+            DimensionKind::Angle => "angle",
+            #[allow(unreachable_patterns)]
+            _ => "other",
+        };
+        out.set_item("name", &d.name)?;
+        out.set_item("kind", kind)?;
+        out.set_item("value", d.value)?;
+        out.set_item("system_value", d.system_value())?;
+        out.set_item("document_value", d.document_value())?;
+        Ok(out)
+    }
+
+    /// Writes the document back to its file atomically (refused when the file changed
+    /// on disk since it was loaded).
+    fn save(&self, py: Python<'_>) -> Result<()> {
+        py.detach(|| Ok(self.lock()?.doc.save()?))
+    }
+
+    /// Writes the document to ``path`` atomically and makes it the document's file.
+    fn save_as(&self, py: Python<'_>, path: std::path::PathBuf) -> Result<()> {
+        py.detach(|| Ok(self.lock()?.doc.save_as(&path)?))
+    }
+
+    /// The document as YAML text (what ``save`` writes).
+    fn to_yaml(&self) -> Result<String> {
+        Ok(self.lock()?.doc.to_yaml())
+    }
+
+    /// Every pair that touches or interferes: a list of dicts ``a``, ``b``, ``state``
+    /// (``"touching"``/``"interfering"``), ``depth_mm``. ``method``: ``"exact"``,
+    /// ``"aabb"`` or ``"cells"``; ``tolerance`` (mm): crossings up to this depth are
+    /// touching (default 0.01).
+    #[pyo3(signature = (method = "exact", tolerance = None))]
+    fn contacts<'py>(
+        &self,
+        py: Python<'py>,
+        method: &str,
+        tolerance: Option<f64>,
+    ) -> Result<Vec<Bound<'py, PyDict>>> {
+        let o = options::check_options(method, tolerance)?;
+        let pairs = self.with_workspace(py, |ws| {
+            Ok(ws
+                .contacts(&o)?
+                .into_iter()
+                .map(|p| (ws.name(p.a).to_string(), ws.name(p.b).to_string(), p.contact))
+                .collect::<Vec<_>>())
+        })?;
+        pairs
+            .into_iter()
+            .map(|(a, b, c)| {
+                let d = contact_dict(py, &c)?;
+                d.set_item("a", a)?;
+                d.set_item("b", b)?;
+                Ok(d)
+            })
+            .collect::<PyResult<_>>()
+            .map_err(Error::from)
+    }
+
+    /// Every interfering pair (as ``contacts``, interfering only).
+    #[pyo3(signature = (method = "exact", tolerance = None))]
+    fn interferences<'py>(
+        &self,
+        py: Python<'py>,
+        method: &str,
+        tolerance: Option<f64>,
+    ) -> Result<Vec<Bound<'py, PyDict>>> {
+        Ok(self
+            .contacts(py, method, tolerance)?
+            .into_iter()
+            .filter(|d| {
+                d.get_item("state")
+                    .ok()
+                    .flatten()
+                    .and_then(|s| s.extract::<String>().ok())
+                    .is_some_and(|s| s == "interfering")
+            })
+            .collect())
+    }
+
+    /// The verdict for components ``a`` and ``b``: a dict ``state``
+    /// (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``.
+    #[pyo3(signature = (a, b, method = "exact", tolerance = None))]
+    fn contact<'py>(
+        &self,
+        py: Python<'py>,
+        a: &str,
+        b: &str,
+        method: &str,
+        tolerance: Option<f64>,
+    ) -> Result<Bound<'py, PyDict>> {
+        let o = options::check_options(method, tolerance)?;
+        let c = self.with_workspace(py, |ws| Ok(ws.contact(a, b, &o)?))?;
+        Ok(contact_dict(py, &c)?)
+    }
+
+    /// Whether components ``a`` and ``b`` interfere (crossing deeper than
+    /// ``tolerance`` mm, or one solid inside the other).
+    #[pyo3(signature = (a, b, method = "exact", tolerance = None))]
+    fn interferes(
+        &self,
+        py: Python<'_>,
+        a: &str,
+        b: &str,
+        method: &str,
+        tolerance: Option<f64>,
+    ) -> Result<bool> {
+        let o = options::check_options(method, tolerance)?;
+        self.with_workspace(py, |ws| Ok(ws.interferes(a, b, &o)?))
+    }
+
+    /// The distance between the surfaces of ``a`` and ``b`` (mm): 0 when they touch,
+    /// cross or one lies inside the other; ``stop_mm`` when nothing is nearer.
+    #[pyo3(signature = (a, b, stop_mm = 1000.0))]
+    fn clearance(&self, py: Python<'_>, a: &str, b: &str, stop_mm: f64) -> Result<f64> {
+        self.with_workspace(py, |ws| Ok(ws.clearance(a, b, stop_mm)?))
+    }
+
+    /// Sweeps component ``name`` from its pose through ``waypoints`` (``(N, 4, 4)``,
+    /// world, mm; translation lerp + rotation slerp between them) and returns the first
+    /// contact: a dict ``hit``, ``t`` (0..1 along the motion), ``pose`` (4×4),
+    /// ``with`` (the component hit, or None). Continuous (no obstacle is jumped over).
+    #[pyo3(signature = (name, waypoints, tolerance = None, time_limit_ms = None))]
+    fn sweep<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+        waypoints: PyArrayLike3<'py, f64, AllowTypeChange>,
+        tolerance: Option<f64>,
+        time_limit_ms: Option<f64>,
+    ) -> Result<Bound<'py, PyDict>> {
+        let poses = convert::poses_of(waypoints.as_array(), "waypoints")?;
+        let o = options::sweep_options(tolerance, time_limit_ms);
+        let (hit, with) = self.with_workspace(py, |ws| {
+            let hit = ws.sweep_through(name, &poses, &o)?;
+            let with = hit.with.map(|i| ws.name(i).to_string());
+            Ok((hit, with))
+        })?;
+        let d = PyDict::new(py);
+        d.set_item("hit", hit.hit)?;
+        d.set_item("t", hit.t)?;
+        d.set_item("pose", convert::pose_array(py, &hit.pose))?;
+        d.set_item("with", with)?;
+        Ok(d)
+    }
+
+    /// Plans a collision-free path for component ``name`` from its pose (or
+    /// ``start``) to ``goal`` (4×4, world, mm) among all the other components.
+    ///
+    /// Keywords: ``planner`` (``"rrt_connect"`` default; see ``planner_names()``),
+    /// ``seed`` (same seed, same path), ``time_limit_ms`` (budget of the whole call,
+    /// default 10000), ``max_iterations``, ``step`` (mm), ``goal_bias``, ``smoothing``,
+    /// ``tolerance`` (mm), ``edge`` (``"continuous"``/``"step"``), ``contact_step``,
+    /// ``edge_step`` (mm), ``edge_step_rad``, ``bounds`` (``[[min xyz], [max xyz]]``
+    /// mm, for the part origin), ``margin`` (mm), ``rotation`` (bool),
+    /// ``rotation_weight`` (mm per rad), ``fallback_share``, ``start`` (4×4).
+    /// A path that is not found is returned with ``found == False`` and a ``reason``.
+    #[pyo3(signature = (name, goal, **options))]
+    fn plan_path(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        goal: PyArrayLike2<'_, f64, AllowTypeChange>,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> Result<Path> {
+        let goal = convert::pose_of(goal.as_array(), "goal")?;
+        self.plan(py, name, Some(goal), options, "rrt_connect", false)
+    }
+
+    /// Seed 002's insertion: plans the disassembly from whichever end (start or
+    /// ``goal``) lies inside the box of the other components until the part leaves
+    /// it, and joins the other end with RRT-Connect; the way into tight clearances.
+    /// Keywords as ``plan_path``.
+    #[pyo3(signature = (name, goal, **options))]
+    fn plan_insertion(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        goal: PyArrayLike2<'_, f64, AllowTypeChange>,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> Result<Path> {
+        let goal = convert::pose_of(goal.as_array(), "goal")?;
+        self.plan(py, name, Some(goal), options, "rrt_connect", true)
+    }
+
+    /// Seed 002's "can be disassembled, can be assembled": plans from the component's
+    /// assembled pose until its box leaves the box of the other components, then
+    /// reverses the path so it ends assembled. Planner ``"local_rrt"`` by default
+    /// (``"rrt"``, ``"biased_rrt"`` too); keywords as ``plan_path``.
+    #[pyo3(signature = (name, **options))]
+    fn plan_disassembly(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> Result<Path> {
+        self.plan(py, name, None, options, "local_rrt", false)
+    }
+
+    /// Checks ``path`` again against the document as it is now, with the tolerance
+    /// and edge check it was planned with: a dict ``ok``, and when blocked
+    /// ``segment`` (the first blocked edge) and ``pose`` (4×4).
+    fn revalidate<'py>(&self, py: Python<'py>, path: &Path) -> Result<Bound<'py, PyDict>> {
+        let r = self.with_workspace(py, |ws| {
+            Ok(ws.revalidate(&path.component, &path.path, &path.validator)?)
+        })?;
+        let d = PyDict::new(py);
+        match r {
+            Revalidation::Valid => d.set_item("ok", true)?,
+            Revalidation::Blocked { segment, pose } => {
+                d.set_item("ok", false)?;
+                d.set_item("segment", segment)?;
+                d.set_item("pose", convert::pose_array(py, &pose))?;
+            }
+            #[allow(unreachable_patterns)]
+            _ => d.set_item("ok", false)?,
+        }
+        Ok(d)
+    }
+
+    /// Moves the path's component along ``path`` in steps of at most ``step_mm`` (and
+    /// as many degrees); it ends at the path's last pose. Returns the number of steps.
+    fn follow(&self, py: Python<'_>, path: &Path, step_mm: f64) -> Result<usize> {
+        py.detach(|| {
+            let mut inner = self.lock()?;
+            Ok(fitup::workspace::follow(
+                &mut inner.doc,
+                &path.component,
+                &path.path,
+                step_mm,
+                |_, _, _| Control::Continue,
+            )?)
+        })
+    }
+
+    /// Robot names.
+    fn robots(&self) -> Result<Vec<String>> {
+        Ok(self
+            .lock()?
+            .doc
+            .robots()
+            .iter()
+            .map(|r| r.name().to_string())
+            .collect())
+    }
+
+    /// Robot ``name`` as a ``Robot`` (its kinematics with the document's base and
+    /// tool; a copy: moving it does not move the document's robot).
+    fn robot(&self, name: &str) -> Result<crate::robot::Robot> {
+        let inner = self.lock()?;
+        let r = inner.doc.robot(name)?;
+        Ok(crate::robot::Robot::from_shared(r.shared_robot()))
+    }
+
+    /// The joints of robot ``name`` (rad, mm for prismatic joints).
+    fn joints<'py>(
+        &self,
+        py: Python<'py>,
+        robot: &str,
+    ) -> Result<Bound<'py, numpy::PyArray1<f64>>> {
+        let inner = self.lock()?;
+        Ok(convert::vector(py, inner.doc.robot(robot)?.joints().to_vec()))
+    }
+
+    /// Sets the joints of robot ``robot`` (rad, mm for prismatic joints; within the
+    /// limits); its link components move.
+    fn set_joints(
+        &self,
+        robot: &str,
+        joints: numpy::PyArrayLike1<'_, f64, AllowTypeChange>,
+    ) -> Result<()> {
+        let q = convert::joints_of(joints.as_array());
+        let mut inner = self.lock()?;
+        let i = inner.doc.robot_index(robot)?;
+        inner.doc.set_robot_joints(i, &q)?;
+        Ok(())
+    }
+
+    /// Runs a motion program (Line/Circle/Joint commands, ``.prg``) on robot
+    /// ``robot`` from its current joints: ``file`` names a program file, or ``text``
+    /// gives the program itself. The robot ends where the program ends. Returns the
+    /// trajectory as a dict of arrays: ``t`` (s, ``(N,)``), ``joints`` (rad/mm,
+    /// ``(N, dof)``), ``tcp`` (``(N, 4, 4)``, world, mm). Errors name file and line.
+    #[pyo3(signature = (robot, file = None, text = None))]
+    fn run_program<'py>(
+        &self,
+        py: Python<'py>,
+        robot: &str,
+        file: Option<std::path::PathBuf>,
+        text: Option<String>,
+    ) -> Result<Bound<'py, PyDict>> {
+        let program = match (file, text) {
+            (Some(f), None) => fitup::kinematics::read_program(&f)?,
+            (None, Some(t)) => fitup::kinematics::parse_program("<python>", &t)?,
+            _ => {
+                return Err(Error::Option {
+                    option: "file",
+                    value: "file and text".into(),
+                    expected: "either `file` or `text`, not both or neither",
+                })
+            }
+        };
+        let traj = py.detach(|| {
+            let mut inner = self.lock()?;
+            let i = inner.doc.robot_index(robot)?;
+            Ok::<_, Error>(inner.doc.run_robot_program(
+                i,
+                &program,
+                &fitup::kinematics::MotionOptions::default(),
+            )?)
+        })?;
+        let dof = traj.joint_kinds.len();
+        let t: Vec<f64> = traj.samples.iter().map(|s| s.t).collect();
+        let q: Vec<Vec<f64>> = traj.samples.iter().map(|s| s.joints.clone()).collect();
+        let tcp: Vec<fitup::math::Transform> = traj.samples.iter().map(|s| s.tcp).collect();
+        let d = PyDict::new(py);
+        d.set_item("t", convert::vector(py, t))?;
+        d.set_item("joints", convert::rows(py, &q, dof))?;
+        d.set_item("tcp", convert::poses_array(py, &tcp))?;
+        Ok(d)
+    }
+
+    /// Plans the assembly sequences (seed 003's task layer) and returns the plan as a
+    /// dict (the JSON of ``fitup plan-sequence --json``): ``sequences`` best first,
+    /// each with ``order``, ``mounts``, ``tasks`` (mating directions, safe lengths,
+    /// grasps, mm), and ``rejected``, ``precedence``, ``time_ms``.
+    ///
+    /// Keywords: ``mode`` (``"mates"``/``"geometry"``), ``base``, ``order``,
+    /// ``max_sequences``, ``time_limit_ms`` (the whole call), ``seed``, ``tolerance``
+    /// (mm), ``components``, ``exclude``, ``threaded``, ``support``, ``gravity``
+    /// (a down vector), ``planner_fallback``, ``fallback_time_limit_ms``, ``max_tilt``
+    /// (rad), ``sphere_directions``.
+    #[pyo3(signature = (**options))]
+    fn plan_sequence<'py>(
+        &self,
+        py: Python<'py>,
+        options: Option<&Bound<'py, PyDict>>,
+    ) -> Result<Bound<'py, PyAny>> {
+        let kw = Keywords::new(options, &options::SEQUENCE_KEYS)?;
+        let o = options::sequence_options(&kw)?;
+        let json = py.detach(|| {
+            let mut inner = self.lock()?;
+            let Inner { doc, scene } = &mut *inner;
+            Ok::<_, Error>(fitup::sequence::plan_sequence(doc, scene, &o)?.to_json())
+        })?;
+        Ok(py.import("json")?.call_method1("loads", (json,))?)
+    }
+
+    fn __repr__(&self) -> String {
+        match self.lock() {
+            Ok(i) => format!(
+                "Document({:?}: {} components, {} robots)",
+                i.doc.path().display().to_string(),
+                i.doc.components().len(),
+                i.doc.robots().len()
+            ),
+            Err(_) => "Document(<poisoned>)".into(),
+        }
+    }
+}
+
+impl Document {
+    fn plan(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        goal: Option<fitup::math::Transform>,
+        options: Option<&Bound<'_, PyDict>>,
+        default_planner: &str,
+        disassemble: bool,
+    ) -> Result<Path> {
+        let kw = Keywords::new(options, &options::PLAN_KEYS)?;
+        let (mut request, seed) = options::plan_request(&kw, default_planner)?;
+        request.disassemble = disassemble;
+        let json = kw.to_json();
+        let path = self.with_workspace(py, |ws| {
+            Ok(match &goal {
+                Some(g) => ws.plan_path(name, g, &request, None)?,
+                None => ws.plan_disassembly(name, &request, None)?,
+            })
+        })?;
+        Ok(Path {
+            path,
+            validator: request.validator,
+            component: fitup::document::nfc_name(name).into_owned(),
+            seed,
+            options: json,
+        })
+    }
+}
