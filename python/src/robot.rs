@@ -62,7 +62,7 @@ impl Robot {
 
 #[pymethods]
 impl Robot {
-    /// A robot of the built-in catalog (``catalog_names()``: ``"mz07"``, ``"ur5"``,
+    /// A robot of the built-in catalog (``catalog_names()``: ``"nachi_mz07"``, ``"ur5"``,
     /// ``"kuka_kr6_r700"``, …), base at the origin, tool at the flange.
     #[staticmethod]
     fn catalog(name: &str) -> Result<Self> {

@@ -1,0 +1,271 @@
+"""The native module: documents, interference, sweeps, planning, robots, programs,
+sequences, the results database, scripts, and the typed errors."""
+
+import math
+import pickle
+import threading
+
+import numpy as np
+import pytest
+
+import fitup
+from conftest import MODELS, REPO
+
+CELL = MODELS / "cell.yaml"
+
+
+def test_poses_are_column_vector_matrices_of_the_document():
+    yaml = pytest.importorskip("yaml")
+    doc = fitup.Document(CELL)
+    assert "screw4" in doc.components() and "plate_b" in doc.parts()
+    raw = {c["name"]: c for c in yaml.safe_load(CELL.read_text())["components"]}
+    for name in ("table", "screw5"):
+        t = doc.pose(name)
+        m = np.array(raw[name]["transform"], dtype=float)
+        # The document's SolidWorks matrix acts on row vectors; ours is its transpose.
+        assert np.allclose(t, m.T, atol=1e-9), name
+        assert np.array_equal(t[3], [0, 0, 0, 1])
+    c = doc.component("screw5")
+    assert c["part"] == "screw" and not c["fixed"]
+    assert np.array_equal(c["pose"], doc.pose("screw5"))
+
+
+def test_a_reference_is_posed_by_the_component_pose():
+    doc = fitup.Document(CELL)
+    world = doc.reference("plate_b", "hole1")
+    t = doc.pose("plate_b")
+    moved = fitup.translation(0, 0, 25) @ t
+    doc.set_pose("plate_b", moved)
+    again = doc.reference("plate_b", "hole1")
+    assert np.allclose(again["point"], world["point"] + [0, 0, 25], atol=1e-9)
+
+
+def test_system_value_drives_the_angle_mate_in_si_units():
+    doc = fitup.Document(CELL)
+    doc.set_system_value("D1@角度1", math.radians(30))
+    assert doc.system_value("D1@角度1") == pytest.approx(math.radians(30))
+    d = doc.dimension("D1@角度1")
+    assert d["kind"] == "angle" and d["document_value"] == pytest.approx(30)
+    t = doc.pose("plate_b")
+    assert math.degrees(math.atan2(t[1, 0], t[0, 0])) == pytest.approx(30, abs=1e-6)
+
+
+def test_interference_contact_clearance_and_sweep():
+    doc = fitup.Document(CELL)
+    assert doc.interferences() == []
+    assert not doc.interferes("screw1", "plate_a")
+    gap = doc.clearance("screw4", "screw5")
+    assert 0 < gap < 50
+    assert doc.contact("screw4", "screw5")["state"] == "separate"
+    # Slide screw5 60 mm along -X: it meets screw4 first.
+    to = fitup.translation(-60, 0, 0) @ doc.pose("screw5")
+    hit = doc.sweep("screw5", to[None])
+    assert hit["hit"] and hit["with"] == "screw4" and 0 < hit["t"] < 1
+    # Put screw5 onto screw4: they interfere, deeper than the tolerance.
+    doc.set_pose("screw5", doc.pose("screw4"))
+    assert doc.interferes("screw4", "screw5")
+    c = doc.contact("screw4", "screw5")
+    assert c["state"] == "interfering" and c["depth_mm"] > 0.01
+    pairs = {(p["a"], p["b"]) for p in doc.interferences()}
+    assert ("screw4", "screw5") in pairs
+
+
+def test_plan_path_is_free_deterministic_and_revalidates():
+    doc = fitup.Document(CELL)
+    start = doc.pose("screw4")
+    goal = fitup.translation(*doc.reference("plate_b", "hole1")["point"])
+    path = doc.plan_insertion("screw4", goal, seed=1, smoothing=False, time_limit_ms=30000)
+    assert path.found, path.reason
+    poses = path.poses
+    assert poses.shape[1:] == (4, 4) and len(path) == poses.shape[0] >= 2
+    assert np.allclose(poses[0], start) and np.allclose(poses[-1], goal)
+    assert doc.revalidate(path)["ok"]
+    # Every pose along it (2 mm apart) is free: an independent static re-check.
+    for t in path.densify(2.0):
+        doc.set_pose("screw4", t)
+        assert doc.interferences() == [], t
+    doc.set_pose("screw4", start)
+    again = doc.plan_insertion("screw4", goal, seed=1, smoothing=False, time_limit_ms=30000)
+    assert np.array_equal(again.poses, poses)
+    assert path.to_dict()["key_poses"] == len(path)
+    # Following it seats the screw.
+    doc.follow(path, 10.0)
+    assert np.allclose(doc.pose("screw4"), goal)
+
+
+def test_plan_path_and_disassembly_return_paths():
+    doc = fitup.Document(CELL)
+    goal = fitup.translation(0, 0, 40) @ doc.pose("screw5")
+    p = doc.plan_path("screw5", goal, planner="rrt_connect", seed=3)
+    assert p.found and p.planner.endswith("rrt_connect") and p.seed == 3
+    d = doc.plan_disassembly("screw1", time_limit_ms=20000, seed=2)
+    assert isinstance(d, fitup.Path)
+    if d.found:
+        assert np.allclose(d.poses[-1], doc.pose("screw1"))
+    assert "rrt_connect" in fitup.planner_names()
+
+
+def test_fixed_components_and_bad_options_are_refused():
+    doc = fitup.Document(CELL)
+    with pytest.raises(fitup.WorkspaceError, match="fixed"):
+        doc.plan_path("table", np.eye(4))
+    with pytest.raises(fitup.InputError, match="time_limit"):
+        doc.plan_path("screw5", doc.pose("screw5"), time_limt_ms=5)
+    with pytest.raises(fitup.InputError, match="planner"):
+        doc.plan_path("screw5", doc.pose("screw5"), planner="rrt_conect")
+    with pytest.raises(fitup.DocumentError, match="screw5"):
+        doc.pose("screw55")
+
+
+def test_bad_arrays_are_input_errors_and_value_errors():
+    doc = fitup.Document(CELL)
+    with pytest.raises(fitup.InputError, match=r"\(4, 4\)"):
+        doc.set_pose("screw5", np.eye(3))
+    scaled = np.eye(4) * 2
+    scaled[3, 3] = 1
+    with pytest.raises(ValueError, match="rigid"):
+        doc.set_pose("screw5", scaled)
+    nan = np.eye(4)
+    nan[0, 3] = np.nan
+    with pytest.raises(fitup.InputError):
+        doc.set_pose("screw5", nan)
+
+
+def test_a_bad_document_raises_a_located_error(tmp_path):
+    (tmp_path / "fitup.toml").write_text("")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("parts:\n  a:\n    stl: missing.stl\ncomponents:\n  - name: [oops\n")
+    with pytest.raises(fitup.DocumentError) as e:
+        fitup.Document(bad)
+    assert e.value.file.endswith("bad.yaml") and e.value.line is not None
+    back = pickle.loads(pickle.dumps(e.value))
+    assert type(back) is fitup.DocumentError
+    assert (back.file, back.line, back.column, str(back)) == (
+        e.value.file, e.value.line, e.value.column, str(e.value))
+
+
+def test_save_as_writes_a_document_that_loads_again(project):
+    doc = fitup.Document(project / "models" / "cell.yaml")
+    moved = fitup.translation(5, 0, 0) @ doc.pose("screw5")
+    doc.set_pose("screw5", moved)
+    out = project / "models" / "cell_moved.yaml"
+    doc.save_as(out)
+    assert np.allclose(fitup.Document(out).pose("screw5"), moved)
+
+
+def test_robot_fk_and_every_ik_branch():
+    r = fitup.Robot.catalog("nachi_mz07")
+    assert r.dof == 6 and r.solver == "opw"
+    q = np.radians([10, -20, 30, 40, -50, 60])
+    t = r.fk(q)
+    branches = r.ik(t, reference=q)
+    assert branches.shape[1] == 6 and branches.shape[0] >= 2
+    assert np.allclose(branches[0], q, atol=1e-7)  # sorted by distance to the reference
+    for b in branches:
+        assert np.allclose(r.fk(b), t, atol=1e-6)
+    batch = r.fk_batch(np.stack([q, q * 0.5, np.zeros(6)]))
+    assert np.allclose(batch[1], r.fk(q * 0.5))
+    per = r.ik_batch(batch)
+    assert len(per) == 3 and all(len(p) >= 1 for p in per)
+    unreachable = fitup.translation(1e5, 0, 0)
+    assert r.ik(unreachable).shape == (0, 6)
+    with pytest.raises(fitup.RobotError, match="6 joint values"):
+        r.fk(np.zeros(5))
+    assert "ur5" in fitup.catalog_names()
+
+
+def test_ik_along_a_path_follows_the_line():
+    r = fitup.Robot.catalog("nachi_mz07")
+    q0 = np.radians([0, 10, -10, 0, 30, 0])
+    start = r.fk(q0)
+    line = np.stack([fitup.translation(0, 2.0 * k, 0) @ start for k in range(50)])
+    q = r.ik_path(line, start=q0)
+    assert q.shape == (50, 6) and not np.isnan(q).any()
+    assert np.allclose(r.fk_batch(q), line, atol=1e-6)
+    assert np.abs(np.diff(q, axis=0)).max() < math.radians(5)  # one branch, no flips
+
+
+def test_a_program_runs_on_the_document_robot():
+    doc = fitup.Document(MODELS / "mz07.yaml")
+    assert doc.robots() == ["mz07"]
+    traj = doc.run_program("mz07", MODELS / "mz07_demo.prg")
+    t, q, tcp = traj["t"], traj["joints"], traj["tcp"]
+    assert len(t) == len(q) == len(tcp) > 10 and (np.diff(t) >= 0).all()
+    robot = doc.robot("mz07")
+    assert np.allclose(robot.fk_batch(q[:5]), tcp[:5], atol=1e-6)
+    assert np.allclose(doc.joints("mz07"), q[-1])
+    with pytest.raises(fitup.RobotError) as e:
+        doc.run_program("mz07", text="Joint 0 0 0 0 0 0\nLine 1e6 0 0 0 0 0\n")
+    assert e.value.line == 2
+
+
+def test_sequence_of_the_wheel():
+    doc = fitup.Document(MODELS / "wheel.yaml")
+    plan = doc.plan_sequence()
+    assert plan["sequences"][0]["order"] == ["axis", "gear", "cup"]
+    assert plan["sequences"][0]["mounts"] == 0
+
+
+def test_results_database_round_trip(tmp_path):
+    db = fitup.Database(str(tmp_path / "fitup.db"))
+    doc = fitup.Document(CELL)
+    goal = fitup.translation(0, 0, 40) @ doc.pose("screw5")
+    path = doc.plan_path("screw5", goal, seed=7)
+    run = db.start_run("python test", str(CELL))
+    pid = db.save_path("lift", path, run_id=run)
+    db.finish_run(run, "ok", "stored one path")
+    (stored,) = db.paths(name="lift")
+    assert stored["id"] == pid and stored["run_id"] == run and stored["seed"] == 7
+    assert np.allclose(stored["poses"], path.poses, atol=1e-12)
+    assert [r["status"] for r in db.runs()] == ["ok"]
+    cols, rows = db.query("SELECT name, component FROM paths WHERE id = ?", [pid])
+    assert cols == ["name", "component"] and rows == [["lift", "screw5"]]
+    with pytest.raises(fitup.DatabaseError):
+        db.query("DELETE FROM paths")
+
+
+def test_run_script_with_arguments_and_located_failure(project):
+    (project / "twice.rhai").write_text(
+        'print(`${args.n * 2} ${args.name}`);\nassert(args.fast, "fast is off");\n'
+    )
+    r = fitup.run_script(project / "twice.rhai", args={"n": 3, "name": "x", "fast": True})
+    assert r["output"] == ["6 x"]
+    with pytest.raises(fitup.ScriptError) as e:
+        fitup.run_script(project / "twice.rhai", args={"n": 1, "name": "y", "fast": False})
+    assert e.value.file.endswith("twice.rhai") and e.value.line == 2
+    assert e.value.output == ["2 y"]
+    db = project / "runs.db"
+    fitup.run_script(
+        project / "twice.rhai", doc=project / "models" / "cell.yaml",
+        args={"n": 1, "name": "z", "fast": True}, db=str(db),
+    )
+    (run,) = fitup.Database(str(db)).runs()
+    assert run["status"] == "ok" and "2 z" in run["output"]
+
+
+def test_long_calls_release_the_gil(project):
+    (project / "spin.rhai").write_text("let x = 0;\nfor i in 0..3000000 { x += 1; }\nprint(x);\n")
+    done = threading.Event()
+    out = {}
+
+    def work():
+        out["r"] = fitup.run_script(project / "spin.rhai")
+        done.set()
+
+    th = threading.Thread(target=work)
+    th.start()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1  # runs only while the script's thread does not hold the GIL
+    th.join()
+    assert out["r"]["output"] == ["3000000"]
+    assert ticks > 10_000, ticks
+
+
+def test_the_readme_python_example_runs_as_written(monkeypatch, capsys):
+    text = (REPO / "README.md").read_text()
+    block = text.split("### From Python", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(REPO)
+    exec(compile(block, "README.md", "exec"), {})
+    out = capsys.readouterr().out
+    assert out.startswith("Path(lazy_rrt_connect: ") and out.rstrip().endswith(", 4, 4)")
