@@ -36,6 +36,9 @@ impl Database {
     }
 }
 
+/// A query's answer: column names and rows.
+type QueryRows<'py> = (Vec<String>, Vec<Vec<Bound<'py, PyAny>>>);
+
 fn status_of(s: &str) -> Result<RunStatus> {
     Ok(match s {
         "ok" => RunStatus::Ok,
@@ -129,7 +132,13 @@ impl Database {
     /// Stores ``path`` (found or not, with its key poses, planner, seed and options)
     /// under ``name``; ``run_id`` files it under a run. Returns its id.
     #[pyo3(signature = (name, path, run_id = None))]
-    fn save_path(&self, py: Python<'_>, name: &str, path: &Path, run_id: Option<i64>) -> Result<i64> {
+    fn save_path(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        path: &Path,
+        run_id: Option<i64>,
+    ) -> Result<i64> {
         let meta = PathMeta {
             component: Some(path.component.clone()),
             seed: Some(path.seed),
@@ -208,13 +217,17 @@ impl Database {
         py: Python<'py>,
         sql: &str,
         params: Vec<Bound<'py, PyAny>>,
-    ) -> Result<(Vec<String>, Vec<Vec<Bound<'py, PyAny>>>)> {
+    ) -> Result<QueryRows<'py>> {
         let params = params.iter().map(sql_value).collect::<Result<Vec<_>>>()?;
         let r = self.with(py, |db| db.query(sql, &params))?;
         let rows = r
             .rows
             .iter()
-            .map(|row| row.iter().map(|v| py_value(py, v)).collect::<PyResult<Vec<_>>>())
+            .map(|row| {
+                row.iter()
+                    .map(|v| py_value(py, v))
+                    .collect::<PyResult<Vec<_>>>()
+            })
             .collect::<PyResult<Vec<_>>>()?;
         Ok((r.columns, rows))
     }

@@ -127,7 +127,10 @@ impl Document {
     /// The pose of component ``name``: 4×4 column-vector matrix, part frame → world, mm.
     fn pose<'py>(&self, py: Python<'py>, name: &str) -> Result<Bound<'py, PyArray2<f64>>> {
         let inner = self.lock()?;
-        Ok(convert::pose_array(py, &inner.doc.component(name)?.transform))
+        Ok(convert::pose_array(
+            py,
+            &inner.doc.component(name)?.transform,
+        ))
     }
 
     /// Sets the pose of component ``name`` (4×4, mm; a rigid motion). Fixed and
@@ -157,7 +160,8 @@ impl Document {
         d.set_item("point", convert::vector(py, vec![p.x, p.y, p.z]))?;
         d.set_item(
             "direction",
-            r.direction().map(|v| convert::vector(py, vec![v.x, v.y, v.z])),
+            r.direction()
+                .map(|v| convert::vector(py, vec![v.x, v.y, v.z])),
         )?;
         Ok(d)
     }
@@ -242,7 +246,13 @@ impl Document {
             Ok(ws
                 .contacts(&o)?
                 .into_iter()
-                .map(|p| (ws.name(p.a).to_string(), ws.name(p.b).to_string(), p.contact))
+                .map(|p| {
+                    (
+                        ws.name(p.a).to_string(),
+                        ws.name(p.b).to_string(),
+                        p.contact,
+                    )
+                })
                 .collect::<Vec<_>>())
         })?;
         pairs
@@ -459,7 +469,10 @@ impl Document {
         robot: &str,
     ) -> Result<Bound<'py, numpy::PyArray1<f64>>> {
         let inner = self.lock()?;
-        Ok(convert::vector(py, inner.doc.robot(robot)?.joints().to_vec()))
+        Ok(convert::vector(
+            py,
+            inner.doc.robot(robot)?.joints().to_vec(),
+        ))
     }
 
     /// Sets the joints of robot ``robot`` (rad, mm for prismatic joints; within the

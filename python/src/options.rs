@@ -59,7 +59,10 @@ impl<'py> Keywords<'py> {
     /// A number (ints are accepted).
     pub fn f64(&self, key: &'static str) -> Result<Option<f64>> {
         self.get(key)
-            .map(|v| v.extract::<f64>().map_err(|_| Self::bad(key, v, "a number")))
+            .map(|v| {
+                v.extract::<f64>()
+                    .map_err(|_| Self::bad(key, v, "a number"))
+            })
             .transpose()
     }
 
@@ -86,7 +89,10 @@ impl<'py> Keywords<'py> {
     /// Text.
     pub fn str(&self, key: &'static str) -> Result<Option<String>> {
         self.get(key)
-            .map(|v| v.extract::<String>().map_err(|_| Self::bad(key, v, "a str")))
+            .map(|v| {
+                v.extract::<String>()
+                    .map_err(|_| Self::bad(key, v, "a str"))
+            })
             .transpose()
     }
 
@@ -131,7 +137,8 @@ impl<'py> Keywords<'py> {
         let a = a.as_array();
         let lo = fitup::math::Point3::new(a[[0, 0]], a[[0, 1]], a[[0, 2]]);
         let hi = fitup::math::Point3::new(a[[1, 0]], a[[1, 1]], a[[1, 2]]);
-        if (0..3).any(|i| !(lo[i] < hi[i])) {
+        // NaN compares as neither below nor above: refused as well.
+        if (0..3).any(|i| lo[i].partial_cmp(&hi[i]) != Some(std::cmp::Ordering::Less)) {
             return Err(Self::bad(
                 key,
                 v,
@@ -146,9 +153,8 @@ impl<'py> Keywords<'py> {
         match self.get(key) {
             None => Ok(None),
             Some(v) => {
-                let a: PyArrayLike1<'py, f64, AllowTypeChange> = v
-                    .extract()
-                    .map_err(|_| Self::bad(key, v, "3 numbers"))?;
+                let a: PyArrayLike1<'py, f64, AllowTypeChange> =
+                    v.extract().map_err(|_| Self::bad(key, v, "3 numbers"))?;
                 convert::vec3_of(a.as_array(), key).map(Some)
             }
         }

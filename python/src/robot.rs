@@ -4,7 +4,9 @@ use crate::convert;
 use crate::error::{Error, Result};
 use fitup::kinematics::{IkError, IkOptions, IkSolution};
 use fitup::math::Transform;
-use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArray3, PyArrayLike1, PyArrayLike2, PyArrayLike3};
+use numpy::{
+    AllowTypeChange, PyArray1, PyArray2, PyArray3, PyArrayLike1, PyArrayLike2, PyArrayLike3,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use std::sync::Arc;
@@ -50,7 +52,10 @@ impl Robot {
         }
     }
 
-    fn reference(&self, reference: Option<PyArrayLike1<'_, f64, AllowTypeChange>>) -> Result<Vec<f64>> {
+    fn reference(
+        &self,
+        reference: Option<PyArrayLike1<'_, f64, AllowTypeChange>>,
+    ) -> Result<Vec<f64>> {
         let q = match reference {
             Some(r) => convert::joints_of(r.as_array()),
             None => vec![0.0; self.robot.dof()],
@@ -174,9 +179,7 @@ impl Robot {
         py: Python<'py>,
         q: PyArrayLike1<'py, f64, AllowTypeChange>,
     ) -> Result<Bound<'py, PyArray3<f64>>> {
-        let poses = self
-            .robot
-            .link_poses(&convert::joints_of(q.as_array()))?;
+        let poses = self.robot.link_poses(&convert::joints_of(q.as_array()))?;
         Ok(convert::poses_array(py, &poses))
     }
 

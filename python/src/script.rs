@@ -20,7 +20,12 @@ fn words(args: Option<&Bound<'_, PyDict>>) -> Result<Vec<String>> {
         for (k, v) in d.iter() {
             let k: String = k.str()?.to_string();
             let v = if v.is_instance_of::<PyBool>() {
-                if v.extract::<bool>()? { "true" } else { "false" }.to_string()
+                if v.extract::<bool>()? {
+                    "true"
+                } else {
+                    "false"
+                }
+                .to_string()
             } else {
                 v.str()?.to_string()
             };
