@@ -30,6 +30,7 @@ pub const MAX_DROPS_AT_ONE_COMMAND: usize = 2;
 
 /// Where a skill is.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum SkillStatus {
     /// Not started.
     Pending,
@@ -45,6 +46,7 @@ pub enum SkillStatus {
 
 /// What the manager reports while it runs.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum ManagerEvent {
     /// Connected to the controller.
     Connected(SocketAddr),
@@ -181,6 +183,7 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 /// How a run ended with an error.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ManagerError {
     /// The user aborted.
     #[error("aborted by the user")]
