@@ -571,7 +571,9 @@ pub fn micro_meshes() -> Vec<(&'static str, Mesh)> {
             "micro_probe_r",
             boxes(&[
                 ([-7.0, -0.5, h + 4.5], [7.0, 0.5, h + 5.5]),
-                ([-1.0, 0.5, h + 4.5], [1.0, 8.0, h + 5.5]),
+                // Overlapping the bar (no shared vertices or faces: one closed shell
+                // each, watertight).
+                ([-1.0, 0.2, h + 4.6], [1.0, 8.0, h + 5.4]),
             ]),
         ),
         ("micro_finger_a", boxes(&[([-0.6, -0.3, h - 0.5], [0.0, 0.3, h + 4.5])])),
@@ -579,7 +581,7 @@ pub fn micro_meshes() -> Vec<(&'static str, Mesh)> {
         (
             "micro_frame",
             boxes(&[
-                ([-20.0, 120.0, -30.0], [20.0, 135.0, 37.0]),
+                ([-18.0, 122.0, -30.0], [18.0, 133.0, 40.0]),
                 ([-20.0, 40.0, 37.0], [20.0, 135.0, 43.0]),
             ]),
         ),

@@ -331,7 +331,9 @@ fn a_sequence_is_planned_on_a_cell_with_robots() {
     std::fs::write(
         root.join(script),
         r#"let doc = open_doc("models/cell_robots.yaml");
-let seq = doc.assembly_sequence(#{seed: 1, time_limit_ms: 20000});
+// The robots' links are left out by themselves; the pedestals stand apart from the
+// product (nothing of it touches them), so they are named as not to be sequenced.
+let seq = doc.assembly_sequence(#{seed: 1, time_limit_ms: 20000, exclude: ["mz07_a_pedestal", "mz07_b_pedestal"]});
 print(`order: ${seq.order}`);
 for name in seq.order {
     assert(!name.contains("_link") && !name.ends_with("_base"), `robot link ${name} sequenced`);
