@@ -560,13 +560,31 @@ pub fn micro_meshes() -> Vec<(&'static str, Mesh)> {
         ));
     }
     vec![
-        ("micro_base", boxes(&[([-120.0, -100.0, -40.0], [120.0, 100.0, -30.0])])),
-        ("micro_table_x", boxes(&[([-60.0, -25.0, -30.0], [60.0, 25.0, -20.0])])),
-        ("micro_table_y", boxes(&[([-25.0, -60.0, -20.0], [25.0, 60.0, -10.0])])),
+        (
+            "micro_base",
+            boxes(&[([-120.0, -100.0, -40.0], [120.0, 100.0, -30.0])]),
+        ),
+        (
+            "micro_table_x",
+            boxes(&[([-60.0, -25.0, -30.0], [60.0, 25.0, -20.0])]),
+        ),
+        (
+            "micro_table_y",
+            boxes(&[([-25.0, -60.0, -20.0], [25.0, 60.0, -10.0])]),
+        ),
         ("micro_table_c", table),
-        ("micro_probe_x", boxes(&[([-15.0, 20.0, 30.0], [15.0, 50.0, 36.0])])),
-        ("micro_probe_y", boxes(&[([-8.0, 14.0, 26.0], [8.0, 22.0, 30.0])])),
-        ("micro_probe_z", boxes(&[([-4.0, 8.0, 12.0], [4.0, 16.0, 26.0])])),
+        (
+            "micro_probe_x",
+            boxes(&[([-15.0, 20.0, 30.0], [15.0, 50.0, 36.0])]),
+        ),
+        (
+            "micro_probe_y",
+            boxes(&[([-8.0, 14.0, 26.0], [8.0, 22.0, 30.0])]),
+        ),
+        (
+            "micro_probe_z",
+            boxes(&[([-4.0, 8.0, 12.0], [4.0, 16.0, 26.0])]),
+        ),
         (
             "micro_probe_r",
             boxes(&[
@@ -576,8 +594,14 @@ pub fn micro_meshes() -> Vec<(&'static str, Mesh)> {
                 ([-1.0, 0.2, h + 4.6], [1.0, 8.0, h + 5.4]),
             ]),
         ),
-        ("micro_finger_a", boxes(&[([-0.6, -0.3, h - 0.5], [0.0, 0.3, h + 4.5])])),
-        ("micro_finger_b", boxes(&[([0.0, -0.3, h - 0.5], [0.6, 0.3, h + 4.5])])),
+        (
+            "micro_finger_a",
+            boxes(&[([-0.6, -0.3, h - 0.5], [0.0, 0.3, h + 4.5])]),
+        ),
+        (
+            "micro_finger_b",
+            boxes(&[([0.0, -0.3, h - 0.5], [0.6, 0.3, h + 4.5])]),
+        ),
         (
             "micro_frame",
             boxes(&[
@@ -597,7 +621,10 @@ pub fn micro_cell_document() -> DocumentFile {
     let mut components = Vec::new();
     let mut links = Vec::new();
     for (name, _) in micro_meshes() {
-        parts.insert(name.to_string(), PartFile::from_stl(format!("meshes/{name}.stl")));
+        parts.insert(
+            name.to_string(),
+            PartFile::from_stl(format!("meshes/{name}.stl")),
+        );
         let color = match name {
             "micro_frame" | "micro_base" => "#707070",
             "micro_finger_a" | "micro_finger_b" => "#d04040",

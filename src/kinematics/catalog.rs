@@ -517,7 +517,11 @@ mod tests {
             let r = robot_by_name(name).unwrap();
             // The arms have 6 joints; the precision manipulator 4 on its chain and 5
             // external axes.
-            let dof = if name == crate::kinematics::PRECISION_NAME { 9 } else { 6 };
+            let dof = if name == crate::kinematics::PRECISION_NAME {
+                9
+            } else {
+                6
+            };
             assert_eq!(r.dof(), dof);
             assert_eq!(r.name(), name);
         }

@@ -53,7 +53,8 @@ pub const FINGER_OPEN: f64 = 6.0;
 /// The two-finger precision manipulator (see the module docs), base at the origin.
 pub fn precision_manipulator() -> Result<Robot, KinematicsError> {
     let none = Transform::IDENTITY;
-    let p = |axis: Vec3, half: f64| Joint::prismatic(axis).with_limits(JointLimits::symmetric(half));
+    let p =
+        |axis: Vec3, half: f64| Joint::prismatic(axis).with_limits(JointLimits::symmetric(half));
     let links = vec![
         Link::new("base", None, none, Joint::fixed()),
         Link::new("table_x", Some(0), none, p(Vec3::x(), TABLE_STROKE)),
@@ -101,7 +102,11 @@ pub fn precision_manipulator() -> Result<Robot, KinematicsError> {
     );
     Robot::new(PRECISION_NAME, tree, 7, tool)?
         .with_external_axes(&[1, 2, 3, 8, 9])
-        .map(|r| r.with_limits_source("fitup's model of seed 003 §4.1 (ranges chosen for mm-sized parts)"))
+        .map(|r| {
+            r.with_limits_source(
+                "fitup's model of seed 003 §4.1 (ranges chosen for mm-sized parts)",
+            )
+        })
 }
 
 /// Which axes a [`PrecisionAxes::solve`] may move; the others keep their values.
@@ -268,7 +273,7 @@ impl PrecisionAxes {
         ];
         let mut j = [0usize; 9];
         for (k, n) in names.iter().enumerate() {
-            j[k] = joint(*n)?;
+            j[k] = joint(n)?;
         }
         let links = tree.links();
         let link = |k: usize| &links[robot.joint_links()[j[k]]];
@@ -284,15 +289,49 @@ impl PrecisionAxes {
         let identity = |k: usize| link(k).home.approx_eq(&Transform::IDENTITY, 1e-12, 1e-12);
         let checks: [(usize, bool); 9] = [
             // probe_x hangs from the root; its home places the grasp point.
-            (0, link(0).parent.is_some_and(|p| links[p].parent.is_none()) && pure(&link(0).home) && axis_is(0, Vec3::x())),
-            (1, parent_name(1) == "probe_x" && identity(1) && axis_is(1, Vec3::y())),
-            (2, parent_name(2) == "probe_y" && identity(2) && axis_is(2, Vec3::z())),
-            (3, parent_name(3) == "probe_z" && identity(3) && axis_is(3, Vec3::x()) && at_origin(3)),
-            (4, link(4).parent.is_some_and(|p| links[p].parent.is_none() && pure(&links[p].home) && links[p].home.translation().norm() < 1e-12) && identity(4) && axis_is(4, Vec3::x())),
-            (5, parent_name(5) == "table_x" && identity(5) && axis_is(5, Vec3::y())),
-            (6, parent_name(6) == "table_y" && identity(6) && axis_is(6, Vec3::z()) && at_origin(6)),
-            (7, parent_name(7) == "probe_r" && identity(7) && axis_is(7, -Vec3::x())),
-            (8, parent_name(8) == "probe_r" && identity(8) && axis_is(8, Vec3::x())),
+            (
+                0,
+                link(0).parent.is_some_and(|p| links[p].parent.is_none())
+                    && pure(&link(0).home)
+                    && axis_is(0, Vec3::x()),
+            ),
+            (
+                1,
+                parent_name(1) == "probe_x" && identity(1) && axis_is(1, Vec3::y()),
+            ),
+            (
+                2,
+                parent_name(2) == "probe_y" && identity(2) && axis_is(2, Vec3::z()),
+            ),
+            (
+                3,
+                parent_name(3) == "probe_z" && identity(3) && axis_is(3, Vec3::x()) && at_origin(3),
+            ),
+            (
+                4,
+                link(4).parent.is_some_and(|p| {
+                    links[p].parent.is_none()
+                        && pure(&links[p].home)
+                        && links[p].home.translation().norm() < 1e-12
+                }) && identity(4)
+                    && axis_is(4, Vec3::x()),
+            ),
+            (
+                5,
+                parent_name(5) == "table_x" && identity(5) && axis_is(5, Vec3::y()),
+            ),
+            (
+                6,
+                parent_name(6) == "table_y" && identity(6) && axis_is(6, Vec3::z()) && at_origin(6),
+            ),
+            (
+                7,
+                parent_name(7) == "probe_r" && identity(7) && axis_is(7, -Vec3::x()),
+            ),
+            (
+                8,
+                parent_name(8) == "probe_r" && identity(8) && axis_is(8, Vec3::x()),
+            ),
         ];
         if let Some(&(k, _)) = checks.iter().find(|c| !c.1) {
             return Err(NotPrecision::Layout(names[k]));
@@ -453,7 +492,17 @@ mod tests {
         assert_eq!(r.dof(), 9);
         assert_eq!(r.chain_dof(), 4);
         let a = PrecisionAxes::detect(&r).unwrap();
-        let q = [1.0, 2.0, -4.0, 30f64.to_radians(), 5.0, -3.0, PI / 2.0, 1.5, 2.5];
+        let q = [
+            1.0,
+            2.0,
+            -4.0,
+            30f64.to_radians(),
+            5.0,
+            -3.0,
+            PI / 2.0,
+            1.5,
+            2.5,
+        ];
         let tcp = r.tcp_pose(&q).unwrap();
         assert!((tcp.translation() - Vec3::new(1.0, 2.0, 6.0)).norm() < 1e-12);
         // Tool z down turned 30° about X; x along X.
@@ -462,7 +511,10 @@ mod tests {
         assert!((z - want).norm() < 1e-12, "{z}");
         assert!((tcp.apply_vector(&Vec3::x()) - Vec3::x()).norm() < 1e-12);
         let t = a.tool_in_work(&r, &q).unwrap();
-        assert!((t.translation() - Vec3::new(5.0, 4.0, 6.0)).norm() < 1e-12, "{t}");
+        assert!(
+            (t.translation() - Vec3::new(5.0, 4.0, 6.0)).norm() < 1e-12,
+            "{t}"
+        );
         // The fingers open along the closing axis, each from the grasp point.
         let poses = r.link_poses(&q).unwrap();
         assert!((poses[8].translation() - Vec3::new(-0.5, 2.0, 6.0)).norm() < 1e-12);
@@ -494,9 +546,18 @@ mod tests {
                 (Free::TABLE, vec![a.table[0], a.table[1]]),
                 (Free::PROBES, a.probe.to_vec()),
                 (Free::TABLE_TURN, vec![a.table[0], a.table[1], a.table_c]),
-                (Free::PROBE_TURN, vec![a.probe[0], a.probe[1], a.probe[2], a.probe_r]),
-                (Free::SCREW, vec![a.table[0], a.table[1], a.table_c, a.probe[2]]),
-                (Free::GRASP, vec![a.table[0], a.table[1], a.table_c, a.probe[2], a.probe_r]),
+                (
+                    Free::PROBE_TURN,
+                    vec![a.probe[0], a.probe[1], a.probe[2], a.probe_r],
+                ),
+                (
+                    Free::SCREW,
+                    vec![a.table[0], a.table[1], a.table_c, a.probe[2]],
+                ),
+                (
+                    Free::GRASP,
+                    vec![a.table[0], a.table[1], a.table_c, a.probe[2], a.probe_r],
+                ),
             ] {
                 // A target made by moving only those axes.
                 let mut qt = q0.clone();
@@ -511,7 +572,10 @@ mod tests {
                     }
                 }
                 let got = a.tool_in_work(&r, &q).unwrap();
-                assert!(got.approx_eq(&target, 1e-9, 1e-9), "{free:?}: {got} vs {target}");
+                assert!(
+                    got.approx_eq(&target, 1e-9, 1e-9),
+                    "{free:?}: {got} vs {target}"
+                );
             }
             // The table cannot lift: a target 1 mm higher needs the probes.
             let up = a
@@ -520,21 +584,28 @@ mod tests {
                 .then(&Transform::from_translation(Vec3::new(0.0, 0.0, 1.0)));
             let e = a.solve(&r, &q0, &up, Free::TABLE).unwrap_err();
             assert!(
-                matches!(e, PrecisionError::Needs { axis: "probe_z", .. }),
+                matches!(
+                    e,
+                    PrecisionError::Needs {
+                        axis: "probe_z",
+                        ..
+                    }
+                ),
                 "{e}"
             );
         }
         // A tilt of the closing axis is no turn of table and probes.
         let q0 = vec![0.0; 9];
-        let t = a.tool_in_work(&r, &q0).unwrap().then(&Transform::from_xyzabc(
-            Vec3::zeros(),
-            [0.0, 0.2, 0.0],
-            AngleConvention::default(),
-        ));
-        let tilted = Transform::from_parts(
-            a.tool_in_work(&r, &q0).unwrap().translation(),
-            t.rotation(),
-        );
+        let t = a
+            .tool_in_work(&r, &q0)
+            .unwrap()
+            .then(&Transform::from_xyzabc(
+                Vec3::zeros(),
+                [0.0, 0.2, 0.0],
+                AngleConvention::default(),
+            ));
+        let tilted =
+            Transform::from_parts(a.tool_in_work(&r, &q0).unwrap().translation(), t.rotation());
         assert!(matches!(
             a.solve(&r, &q0, &tilted, Free::GRASP),
             Err(PrecisionError::Tilted { .. })

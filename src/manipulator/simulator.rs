@@ -39,8 +39,8 @@ use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::document::Document;
 use crate::kinematics::{IkOptions, JointKind};
 use crate::math::Transform;
-use nalgebra::Vector3;
 use crate::workspace::{CheckOptions, SceneCache, Workspace};
+use nalgebra::Vector3;
 use std::collections::{HashSet, VecDeque};
 use std::io::Write;
 use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
@@ -218,12 +218,18 @@ impl Cell {
                 .inverse_nearest(&target, near, &ik)
                 .map_err(|e| format!("the tool cannot go {s:.3} mm along its axis: {e}"))?;
             if let Some(j) = robot.limit_violation(&sol.joints) {
-                return Err(format!("joint {} leaves its limits {s:.3} mm along the touch", j + 1));
+                return Err(format!(
+                    "joint {} leaves its limits {s:.3} mm along the touch",
+                    j + 1
+                ));
             }
             Ok(sol.joints)
         };
-        let baseline: HashSet<(usize, usize)> =
-            self.contacts(q0).map_err(|e| e.to_string())?.into_iter().collect();
+        let baseline: HashSet<(usize, usize)> = self
+            .contacts(q0)
+            .map_err(|e| e.to_string())?
+            .into_iter()
+            .collect();
         let n = ((distance / 0.2).ceil() as usize).clamp(1, 100_000);
         let (mut free_s, mut free_q) = (0.0, q0.to_vec());
         for k in 1..=n {
@@ -259,7 +265,11 @@ impl Cell {
                     }
                 }
                 let c = self.doc.components();
-                let other = if self.links.contains(&with.0) { with.1 } else { with.0 };
+                let other = if self.links.contains(&with.0) {
+                    with.1
+                } else {
+                    with.0
+                };
                 return Ok((lo, free_q, Some(c[other].name.clone())));
             }
             free_s = s;
@@ -413,9 +423,7 @@ impl Simulator {
         robot: &str,
         options: &SimulatorOptions,
     ) -> Result<Self, SimulatorError> {
-        let index = doc
-            .robot_index(robot)
-            .map_err(SimulatorError::Robot)?;
+        let index = doc.robot_index(robot).map_err(SimulatorError::Robot)?;
         let inst = &doc.robots()[index];
         let kinds = inst.robot().joint_kinds();
         if kinds.len() > MAX_JOINTS {
@@ -872,12 +880,17 @@ fn handle(p: &Packet, ctx: &Ctx<'_>, log: &mut impl FnMut(String)) -> Option<Pac
         },
         (_, Body::Tool(t)) if t.action == ToolAction::Touch => {
             let Some(direction) = touch_direction(t.index) else {
-                log(format!("refused TOUCH along axis index {} (0..=5)", t.index));
+                log(format!(
+                    "refused TOUCH along axis index {} (0..=5)",
+                    t.index
+                ));
                 return fail(msg_type::FITUP_TOOL);
             };
             let distance = f64::from(t.value) * 1000.0;
             if !(distance.is_finite() && (0.0..=MAX_TOUCH_MM).contains(&distance)) {
-                log(format!("refused TOUCH of {distance} mm (0 to {MAX_TOUCH_MM} mm)"));
+                log(format!(
+                    "refused TOUCH of {distance} mm (0 to {MAX_TOUCH_MM} mm)"
+                ));
                 return fail(msg_type::FITUP_TOOL);
             }
             let q0 = {

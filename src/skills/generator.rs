@@ -60,7 +60,7 @@ impl Default for GeneratorOptions {
 pub type SegmentCheck<'a> = dyn FnMut(&Task, &Transform, &Transform) -> Result<(), SegmentHit> + 'a;
 
 /// Why a segment of a part's motion is refused by a [`SegmentCheck`].
-#[derive(Debug, Clone, PartialEq, Error)]
+#[derive(Debug, Clone, Error)]
 #[non_exhaustive]
 pub enum SegmentHit {
     /// The part hits a component of the cell.
@@ -73,7 +73,7 @@ pub enum SegmentHit {
     },
     /// The segment could not be checked (the cell's geometry, the part's name).
     #[error("the segment cannot be checked: {0}")]
-    Unchecked(String),
+    Unchecked(std::sync::Arc<crate::workspace::WorkspaceError>),
 }
 
 /// What is wrong with a task or the generators' settings.
@@ -231,7 +231,11 @@ pub fn skill_pose_at(skill: &Skill, pivot: &Vec3, s: f64) -> Transform {
             let rel = b.rotation() * a.rotation().inverse();
             let part = UnitQuaternion::identity()
                 .try_slerp(&rel, s, 1e-12)
-                .unwrap_or(if s < 0.5 { UnitQuaternion::identity() } else { rel });
+                .unwrap_or(if s < 0.5 {
+                    UnitQuaternion::identity()
+                } else {
+                    rel
+                });
             turn_about(a, pivot, &part)
         }
         _ => a.interpolate(b, s),
@@ -241,15 +245,39 @@ pub fn skill_pose_at(skill: &Skill, pivot: &Vec3, s: f64) -> Transform {
 fn check_options(o: &GeneratorOptions) -> Result<(), TaskProblem> {
     let ge0 = "a finite number ≥ 0";
     for (option, value, rule, ok) in [
-        ("long_range_mm", o.long_range_mm, ge0, o.long_range_mm >= 0.0),
+        (
+            "long_range_mm",
+            o.long_range_mm,
+            ge0,
+            o.long_range_mm >= 0.0,
+        ),
         ("clearance_mm", o.clearance_mm, ge0, o.clearance_mm >= 0.0),
-        ("touch_distance_mm", o.touch_distance_mm, ge0, o.touch_distance_mm >= 0.0),
+        (
+            "touch_distance_mm",
+            o.touch_distance_mm,
+            ge0,
+            o.touch_distance_mm >= 0.0,
+        ),
         ("screw_turns", o.screw_turns, ge0, o.screw_turns >= 0.0),
-        ("contact_force_n", o.contact_force_n, ge0, o.contact_force_n >= 0.0),
-        ("screw_pitch_mm", o.screw_pitch_mm, "a finite number > 0", o.screw_pitch_mm > 0.0),
+        (
+            "contact_force_n",
+            o.contact_force_n,
+            ge0,
+            o.contact_force_n >= 0.0,
+        ),
+        (
+            "screw_pitch_mm",
+            o.screw_pitch_mm,
+            "a finite number > 0",
+            o.screw_pitch_mm > 0.0,
+        ),
     ] {
         if !(value.is_finite() && ok) {
-            return Err(TaskProblem::Option { option, value, rule });
+            return Err(TaskProblem::Option {
+                option,
+                value,
+                rule,
+            });
         }
     }
     Ok(())
@@ -322,15 +350,14 @@ pub fn generate(
             let contact = Condition::Contact {
                 force_n: options.contact_force_n,
             };
-            let interferes = |action: Action, segment: &str, reason: SegmentHit| {
-                SkillError::Interference {
+            let interferes =
+                |action: Action, segment: &str, reason: SegmentHit| SkillError::Interference {
                     task: task.index,
                     part: task.part.clone(),
                     action: action.name(),
                     segment: segment.to_string(),
                     reason,
-                }
-            };
+                };
             match w.generator.as_str() {
                 "locate" => push(
                     Action::Touch,
@@ -358,17 +385,16 @@ pub fn generate(
                     );
                 }
                 "move" => {
-                    let pivot = task
-                        .grasp
-                        .as_ref()
-                        .map(|g| g.tool_in_part.translation());
+                    let pivot = task.grasp.as_ref().map(|g| g.tool_in_part.translation());
                     for (action, from, to, segment) in move_path(task, pose, options) {
                         let (r, d) = from.distance_to(&to);
                         let turn = matches!(action, Action::RotateTable | Action::RotateProbe);
                         if turn {
                             // The arc about the grasp point, in pieces of at most 10°
                             // (a sweep between two poses follows the chord).
-                            let p = from.apply(&Point3::from(pivot.unwrap_or_else(Vec3::zeros))).coords;
+                            let p = from
+                                .apply(&Point3::from(pivot.unwrap_or_else(Vec3::zeros)))
+                                .coords;
                             let n = (r / 10f64.to_radians()).ceil().max(1.0) as usize;
                             let probe = Skill {
                                 id: 0,
@@ -419,23 +445,29 @@ pub fn generate(
                     let length = attr("length_mm", pose.distance_to(&end).1, Source::Cad);
                     push(action, end, w.to, vec![length], condition, pose);
                     pose = end;
-                    push(Action::Release, end, w.to, vec![], Condition::PartIn(w.to), end);
+                    push(
+                        Action::Release,
+                        end,
+                        w.to,
+                        vec![],
+                        Condition::PartIn(w.to),
+                        end,
+                    );
                 }
                 "screw" => {
                     let end = task.assembled_pose;
                     // The screw is symmetric about its axis: the straight segment is
                     // the swept volume of the turning one.
-                    check(task, &pose, &end).map_err(|r| interferes(Action::Screw, "P3->assembled", r))?;
+                    check(task, &pose, &end)
+                        .map_err(|r| interferes(Action::Screw, "P3->assembled", r))?;
                     let length = pose.distance_to(&end).1;
                     let pitch = options.screw_pitch_mm;
                     let advance = (pitch * options.screw_turns).min(length);
                     let turns = advance / pitch;
                     let axis = task.mating_direction.normalize();
                     // Up to the thread: a straight push.
-                    let engage = Transform::from_parts(
-                        end.translation() - axis * advance,
-                        end.rotation(),
-                    );
+                    let engage =
+                        Transform::from_parts(end.translation() - axis * advance, end.rotation());
                     if length - advance > 1e-9 {
                         let l = attr("length_mm", length - advance, Source::Cad);
                         push(Action::Insert, engage, w.from, vec![l], contact, pose);
@@ -454,7 +486,14 @@ pub fn generate(
                         engage,
                     );
                     pose = screwed;
-                    push(Action::Release, screwed, w.to, vec![], Condition::PartIn(w.to), screwed);
+                    push(
+                        Action::Release,
+                        screwed,
+                        w.to,
+                        vec![],
+                        Condition::PartIn(w.to),
+                        screwed,
+                    );
                 }
                 other => return Err(bad(TaskProblem::UnknownGenerator(other.to_string()))),
             }
@@ -560,14 +599,14 @@ pub fn segment_check_fn(
     let mut cache = crate::workspace::SceneCache::new();
     move |task, from, to| {
         let ws = crate::workspace::Workspace::new(doc, &mut cache)
-            .map_err(|e| SegmentHit::Unchecked(e.to_string()))?;
+            .map_err(|e| SegmentHit::Unchecked(std::sync::Arc::new(e)))?;
         let hit = ws
             .sweep(
                 &task.part,
                 &crate::collision::Motion::Poses(vec![*from, *to]),
                 &crate::collision::SweepOptions::default(),
             )
-            .map_err(|e| SegmentHit::Unchecked(e.to_string()))?;
+            .map_err(|e| SegmentHit::Unchecked(std::sync::Arc::new(e)))?;
         if hit.hit {
             return Err(SegmentHit::Component {
                 with: hit.with.map_or("?", |i| ws.name(i)).to_string(),

@@ -188,9 +188,14 @@ pub enum ManagerError {
     /// The user aborted.
     #[error("aborted by the user")]
     Aborted,
-    /// A skill failed (id, reason).
-    #[error("skill #{0} failed: {1}")]
-    Skill(usize, String),
+    /// A skill failed: the controller refused it, timed out or went away.
+    #[error("skill #{skill} failed: {source}")]
+    Skill {
+        /// The skill's id.
+        skill: usize,
+        /// What the controller (or the connection to it) said.
+        source: ManipulatorError,
+    },
     /// The controller could not be reached.
     #[error("{0}")]
     Connection(ManipulatorError),
@@ -407,7 +412,10 @@ impl SkillManager {
             self.status[i] = SkillStatus::Failed(reason.clone());
         }
         on_event(&ManagerEvent::Failed(i, reason.clone()));
-        Err(ManagerError::Skill(i, reason))
+        Err(ManagerError::Skill {
+            skill: i,
+            source: e,
+        })
     }
 
     fn apply_edits(&mut self, on_event: &mut dyn FnMut(&ManagerEvent)) {

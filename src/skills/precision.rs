@@ -81,7 +81,11 @@ pub(super) fn bind(
 ) -> Result<Plan, BindError> {
     let grasps: HashMap<usize, (Transform, f64)> = tasks
         .iter()
-        .filter_map(|t| t.grasp.as_ref().map(|g| (t.index, (g.tool_in_part, g.width))))
+        .filter_map(|t| {
+            t.grasp
+                .as_ref()
+                .map(|g| (t.index, (g.tool_in_part, g.width)))
+        })
         .collect();
     let mut q = start.to_vec();
     let mut steps = Vec::new();
@@ -95,10 +99,13 @@ pub(super) fn bind(
             source,
         };
         let grasp = || {
-            grasps.get(&s.task).copied().ok_or_else(|| BindError::NoGrasp {
-                skill: s.id,
-                part: s.part.clone(),
-            })
+            grasps
+                .get(&s.task)
+                .copied()
+                .ok_or_else(|| BindError::NoGrasp {
+                    skill: s.id,
+                    part: s.part.clone(),
+                })
         };
         let tool = |action: &str, value: f64| ControllerCommand::Tool {
             action: action.into(),
@@ -127,7 +134,9 @@ pub(super) fn bind(
                 let target = g.then(&s.start.0);
                 let q_open = open(&q, width);
                 let q_up = up(&q_open);
-                let q_at = axes.solve(robot, &q_up, &target, Free::GRASP).map_err(fail)?;
+                let q_at = axes
+                    .solve(robot, &q_up, &target, Free::GRASP)
+                    .map_err(fail)?;
                 let mut q_over = q_at.clone();
                 q_over[axes.probe[2]] = q_up[axes.probe[2]];
                 let mut q_closed = q_at.clone();

@@ -297,14 +297,15 @@ impl Plan {
                 Action::Grasp => {
                     let (tip, width) = grasp()?;
                     let target = tip.then(&s.start.0);
-                    let sol = robot
-                        .inverse_nearest(&target, &q, &options.ik)
-                        .map_err(|source| BindError::Ik {
-                            skill: s.id,
-                            action: s.action.name(),
-                            part: s.part.clone(),
-                            source,
-                        })?;
+                    let sol =
+                        robot
+                            .inverse_nearest(&target, &q, &options.ik)
+                            .map_err(|source| BindError::Ik {
+                                skill: s.id,
+                                action: s.action.name(),
+                                part: s.part.clone(),
+                                source,
+                            })?;
                     let traj = move_joint(robot, &q, &sol.joints, options).map_err(motion_err)?;
                     let pts = points(&traj, &q, 0.2);
                     q = sol.joints;
@@ -324,7 +325,11 @@ impl Plan {
                             .clamp(1.0, 10_000.0) as usize,
                         _ => 1,
                     };
-                    let pivot = s.start.0.apply(&crate::math::Point3::from(tip.translation())).coords;
+                    let pivot = s
+                        .start
+                        .0
+                        .apply(&crate::math::Point3::from(tip.translation()))
+                        .coords;
                     let mut pts: Vec<(Vec<f64>, f64)> = vec![(q.clone(), 0.0)];
                     for k in 1..=pieces {
                         let pose = if pieces == 1 {

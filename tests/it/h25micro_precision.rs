@@ -50,7 +50,11 @@ fn committed_micro_cell_matches_generator_and_its_links_follow_the_joints() {
     }
     let mut doc = Document::open(&models.join("micro_cell.yaml")).unwrap();
     for i in 0..doc.components().len() {
-        assert!(doc.mesh_of(i).inspect().is_watertight(), "{}", doc.components()[i].name);
+        assert!(
+            doc.mesh_of(i).inspect().is_watertight(),
+            "{}",
+            doc.components()[i].name
+        );
     }
     let r = doc.robot("micro").unwrap();
     assert_eq!(r.robot().dof(), 9);
@@ -65,7 +69,10 @@ fn committed_micro_cell_matches_generator_and_its_links_follow_the_joints() {
     doc.set_robot_joints(i, &q).unwrap();
     let table = doc.component("micro_table_c").unwrap().transform;
     let pad = table.apply(&Point3::new(15.0, 0.0, 1.0));
-    assert!((pad.coords - Vec3::new(10.0, 15.0, 1.0)).norm() < 1e-9, "{pad}");
+    assert!(
+        (pad.coords - Vec3::new(10.0, 15.0, 1.0)).norm() < 1e-9,
+        "{pad}"
+    );
     let finger = doc.component("micro_finger_a").unwrap().transform;
     let tip = finger.apply(&Point3::new(0.0, 0.0, PROBE_HEIGHT - 0.5));
     assert!((tip.z - (PROBE_HEIGHT - 5.5)).abs() < 1e-9, "{tip}");
@@ -144,7 +151,10 @@ fn the_generator_chooses_table_or_probes_by_the_seeds_rules() {
         (deg(-60.0, 0.0, 0.0), &[Action::RotateProbe]),
         // From a fixture that holds the part turned 90° about the vertical and
         // tilted 60° about its closing axis: both turns, the probes' first.
-        (deg(-60.0, 0.0, 0.0) * deg(0.0, 0.0, -90.0), &[Action::RotateProbe, Action::RotateTable]),
+        (
+            deg(-60.0, 0.0, 0.0) * deg(0.0, 0.0, -90.0),
+            &[Action::RotateProbe, Action::RotateTable],
+        ),
     ];
     for (turn, want) in cases {
         // At the fixture 10 mm to +X the part is turned by the inverse of `turn`.
@@ -222,14 +232,20 @@ fn a_screw_turns_about_its_axis_and_advances_by_its_pitch() {
         &mut no_check,
     )
     .unwrap();
-    let k = skills.iter().position(|s| s.action == Action::Screw).unwrap();
+    let k = skills
+        .iter()
+        .position(|s| s.action == Action::Screw)
+        .unwrap();
     let screw = &skills[k];
     // The straight push before the thread engages: 1 − 0.375 mm.
     assert_eq!(skills[k - 1].action, Action::Insert);
     assert!((skills[k - 1].attribute("length_mm").unwrap() - (1.0 - 0.375)).abs() < 1e-9);
     let (s0, s1) = (screw.start.0, screw.end.0);
     let advance = s1.translation() - s0.translation();
-    assert!((advance - Vec3::new(0.0, 0.0, -0.375)).norm() < 1e-12, "{advance}");
+    assert!(
+        (advance - Vec3::new(0.0, 0.0, -0.375)).norm() < 1e-12,
+        "{advance}"
+    );
     let turned = UnitQuaternion::from_axis_angle(&Unit::new_normalize(-Vec3::z()), 2.0 * PI * 0.75);
     assert!((turned * s0.rotation()).angle_to(&s1.rotation()) < 1e-12);
     assert!(s1.approx_eq(&screw_pose(&s0, &-Vec3::z(), 0.5, 0.75), 1e-12, 1e-12));
@@ -241,8 +257,14 @@ fn a_screw_turns_about_its_axis_and_advances_by_its_pitch() {
     let axes = PrecisionAxes::detect(&robot).unwrap();
     let mut q0 = vec![0.0; 9];
     q0[axes.probe[2]] = 10.0;
-    let plan = Plan::bind(&skills, std::slice::from_ref(&t), &robot, &q0, &MotionOptions::default())
-        .unwrap();
+    let plan = Plan::bind(
+        &skills,
+        std::slice::from_ref(&t),
+        &robot,
+        &q0,
+        &MotionOptions::default(),
+    )
+    .unwrap();
     let step = plan.steps.iter().find(|s| s.action == "Screw").unwrap();
     let ControllerCommand::Trajectory(pts) = &step.commands[0] else {
         panic!("{step:?}")
@@ -302,8 +324,13 @@ fn touch_stops_at_the_first_contact_and_reports_where() {
     )
     .unwrap();
     let kinds = doc.robot("micro").unwrap().robot().joint_kinds();
-    let mut c = Client::connect(sim.motion_addr(), sim.state_addr(), kinds, &ClientOptions::default())
-        .unwrap();
+    let mut c = Client::connect(
+        sim.motion_addr(),
+        sim.state_addr(),
+        kinds,
+        &ClientOptions::default(),
+    )
+    .unwrap();
     // Down (the tool's z) for at most 10 mm: the tips meet the block after 5.5 mm.
     let travelled = f64::from(c.tool(ToolAction::Touch, 0, 0.010).unwrap()) * 1000.0;
     let tol = fitup::collision::DEFAULT_TOLERANCE;
@@ -359,7 +386,10 @@ fn manipulator(args: &[&str], state_port: u16) -> Killed {
         .unwrap();
     let start = Instant::now();
     while std::net::TcpStream::connect(("127.0.0.1", state_port)).is_err() {
-        assert!(child.try_wait().unwrap().is_none(), "fitup manipulator exited");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "fitup manipulator exited"
+        );
         assert!(start.elapsed() < Duration::from_secs(60), "no manipulator");
         std::thread::sleep(Duration::from_millis(50));
     }
@@ -397,7 +427,12 @@ fn the_precision_manipulator_assembles_the_wheel_in_process_and_over_tcp() {
     let root = common::repo();
     let run = |args: &[&str]| {
         let o = common::run_bounded(&root, args, BOUND);
-        assert!(o.status.success(), "fitup {}: {}", args.join(" "), common::text(&o));
+        assert!(
+            o.status.success(),
+            "fitup {}: {}",
+            args.join(" "),
+            common::text(&o)
+        );
         common::text(&o)
     };
     let plan_file = root.join("out/assemble_micro.plan.json");
@@ -406,7 +441,14 @@ fn the_precision_manipulator_assembles_the_wheel_in_process_and_over_tcp() {
         assert_eq!(plan.robot, "micro");
         assert_eq!(plan.joint_kinds.len(), 9);
         let actions: Vec<&str> = plan.steps.iter().map(|s| s.action.as_str()).collect();
-        for a in ["Grasp", "Rotate_Table", "Move_Table", "Move_Probe", "Insert", "Release"] {
+        for a in [
+            "Grasp",
+            "Rotate_Table",
+            "Move_Table",
+            "Move_Probe",
+            "Insert",
+            "Release",
+        ] {
             assert!(actions.contains(&a), "{a}: {actions:?}");
         }
         assert_assembled(&plan, &root.join(db));
@@ -415,7 +457,16 @@ fn the_precision_manipulator_assembles_the_wheel_in_process_and_over_tcp() {
     assert!(out.contains("cup Assembled"), "{out}");
     check("out/micro.db");
     let _sim = manipulator(
-        &["--doc", "models/micro_cell.yaml", "--robot", "micro", "--port", "11100", "--speed", "20"],
+        &[
+            "--doc",
+            "models/micro_cell.yaml",
+            "--robot",
+            "micro",
+            "--port",
+            "11100",
+            "--speed",
+            "20",
+        ],
         11102,
     );
     run(&[
