@@ -524,3 +524,159 @@ pub fn write_arm6_meshes(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     write_stl(&dir.join("urdf/obstacle.stl"), &obstacle)?;
     Ok(())
 }
+
+/// Boxes `(min, max)` (mm) as one mesh of closed shells.
+fn boxes(list: &[([f64; 3], [f64; 3])]) -> Mesh {
+    let mut m = Mesh::cuboid(Point3::from(list[0].0), Point3::from(list[0].1));
+    for (lo, hi) in &list[1..] {
+        m.append(&Mesh::cuboid(Point3::from(*lo), Point3::from(*hi)));
+    }
+    m
+}
+
+/// Where the fixtures of the precision manipulator's rotary table hold the wheel's
+/// gear and cup (work frame, mm): pads 1 mm high, 15 mm either side of the seat of
+/// the axis at the centre.
+pub const MICRO_FIXTURES: [(&str, [f64; 3]); 3] = [
+    ("axis", [0.0, 0.0, 1.0]),
+    ("gear", [15.0, 0.0, 1.0]),
+    ("cup", [-15.0, 0.0, 1.0]),
+];
+
+/// The meshes of `models/micro_cell.yaml` (part name, mesh), drawn in the world
+/// frame at joints 0 (`drawn_at_zero`): the base slab, the two table carriages,
+/// the rotary table with its three fixture pads, the probe stage's three slides,
+/// the probes' hub and the two probes (needles 0.6 mm square whose tips end 0.5 mm
+/// below the grasp point, at z = [`PROBE_HEIGHT`](crate::kinematics::PROBE_HEIGHT)),
+/// and the frame (column and beam) that carries the probe stage.
+pub fn micro_meshes() -> Vec<(&'static str, Mesh)> {
+    let h = crate::kinematics::PROBE_HEIGHT;
+    let mut table = Mesh::cylinder(30.0, 10.0, 48)
+        .transformed(&Transform::from_translation(Vec3::new(0.0, 0.0, -10.0)));
+    for (_, [x, y, z]) in MICRO_FIXTURES {
+        table.append(&Mesh::cuboid(
+            Point3::new(x - 4.0, y - 4.0, 0.0),
+            Point3::new(x + 4.0, y + 4.0, z),
+        ));
+    }
+    vec![
+        (
+            "micro_base",
+            boxes(&[([-120.0, -100.0, -40.0], [120.0, 100.0, -30.0])]),
+        ),
+        (
+            "micro_table_x",
+            boxes(&[([-60.0, -25.0, -30.0], [60.0, 25.0, -20.0])]),
+        ),
+        (
+            "micro_table_y",
+            boxes(&[([-25.0, -60.0, -20.0], [25.0, 60.0, -10.0])]),
+        ),
+        ("micro_table_c", table),
+        (
+            "micro_probe_x",
+            boxes(&[([-15.0, 20.0, 30.0], [15.0, 50.0, 36.0])]),
+        ),
+        (
+            "micro_probe_y",
+            boxes(&[([-8.0, 14.0, 26.0], [8.0, 22.0, 30.0])]),
+        ),
+        (
+            "micro_probe_z",
+            boxes(&[([-4.0, 8.0, 12.0], [4.0, 16.0, 26.0])]),
+        ),
+        (
+            "micro_probe_r",
+            boxes(&[
+                ([-7.0, -0.5, h + 4.5], [7.0, 0.5, h + 5.5]),
+                // Overlapping the bar (no shared vertices or faces: one closed shell
+                // each, watertight).
+                ([-1.0, 0.2, h + 4.6], [1.0, 8.0, h + 5.4]),
+            ]),
+        ),
+        (
+            "micro_finger_a",
+            boxes(&[([-0.6, -0.3, h - 0.5], [0.0, 0.3, h + 4.5])]),
+        ),
+        (
+            "micro_finger_b",
+            boxes(&[([0.0, -0.3, h - 0.5], [0.6, 0.3, h + 4.5])]),
+        ),
+        (
+            "micro_frame",
+            boxes(&[
+                ([-18.0, 122.0, -30.0], [18.0, 133.0, 40.0]),
+                ([-20.0, 40.0, 37.0], [20.0, 135.0, 43.0]),
+            ]),
+        ),
+    ]
+}
+
+/// `models/micro_cell.yaml`: seed 003's two-finger precision manipulator (the
+/// catalog's `precision_2finger`, robot `micro`) on its base, each link displayed by
+/// a component `micro_<link>`, and the frame that carries the probe stage (a fixed
+/// component, not a link: the simulator checks the machine against it).
+pub fn micro_cell_document() -> DocumentFile {
+    let mut parts = IndexMap::new();
+    let mut components = Vec::new();
+    let mut links = Vec::new();
+    for (name, _) in micro_meshes() {
+        parts.insert(
+            name.to_string(),
+            PartFile::from_stl(format!("meshes/{name}.stl")),
+        );
+        let color = match name {
+            "micro_frame" | "micro_base" => "#707070",
+            "micro_finger_a" | "micro_finger_b" => "#d04040",
+            n if n.starts_with("micro_table") => "#3070b0",
+            _ => "#c0a030",
+        };
+        components.push(component(
+            name,
+            name,
+            matches!(name, "micro_frame" | "micro_base"),
+            color,
+            Transform::IDENTITY,
+        ));
+        if name != "micro_frame" {
+            links.push(LinkFile {
+                component: Some(name.to_string()),
+                ..LinkFile::default()
+            });
+        }
+    }
+    let robot = RobotFile {
+        name: "micro".into(),
+        catalog: Some(crate::kinematics::PRECISION_NAME.into()),
+        dh: None,
+        urdf: None,
+        base: Some(Transform::IDENTITY.to_matrix()),
+        tool: None,
+        flange: None,
+        tip: None,
+        drawn_at_zero: true,
+        links,
+        joints: Some(vec![0.0; 9]),
+    };
+    DocumentFile {
+        units: "mm".into(),
+        description: Some(
+            "Seed 003 section 4.1: two-finger precision manipulator. XY table (±50 mm) with a rotary table (±720°), probe stage (±3 mm in X and Y, ±10 mm in Z), two probes turning about their closing axis (±100°), each tip 0 to 6 mm from the grasp point. Joints: probe_x, probe_y, probe_z, probe_r, table_x, table_y, table_c, finger_a, finger_b (mm, degrees). Generated by fitup::demo::write_micro.".into(),
+        ),
+        parts,
+        components,
+        mates: vec![],
+        robots: vec![robot],
+    }
+}
+
+/// Writes `dir/micro_cell.yaml` and its meshes (atomically).
+pub fn write_micro(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir.join("meshes"))?;
+    for (name, mesh) in micro_meshes() {
+        write_stl(&dir.join(format!("meshes/{name}.stl")), &mesh)?;
+    }
+    let text = micro_cell_document().to_yaml()?;
+    crate::fsutil::write_atomic(&dir.join("micro_cell.yaml"), text.as_bytes())?;
+    Ok(())
+}

@@ -11,6 +11,10 @@
 //!   ("Parameters for calculations of kinematics and dynamics"), solved in closed form
 //!   by [`UrSolver`](super::UrSolver).
 //!
+//! - Seed 003's two-finger precision manipulator (section 4.1): fitup's model of the
+//!   machine the paper describes (XY table with a rotary table, probe stage, two
+//!   probes), see [`precision_manipulator`](super::precision_manipulator).
+//!
 //! Joint limits are the manufacturers' data-sheet ranges (see the docs for which
 //! could be confirmed).
 
@@ -18,8 +22,9 @@ use super::{DhConvention, DhRow, JointLimits, KinematicsError, OpwParameters, Ro
 use crate::math::{Transform, Vec3};
 use std::f64::consts::{FRAC_PI_2, PI};
 
-/// The arms of the catalog.
+/// The arms (and seed 003's precision manipulator) of the catalog.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Catalog {
     /// NACHI MZ07 (seed 000, table 2).
     NachiMz07,
@@ -43,6 +48,10 @@ pub enum Catalog {
     Ur5e,
     /// Universal Robots UR10e.
     Ur10e,
+    /// Seed 003's two-finger precision manipulator: XY table with a rotary table,
+    /// a probe stage and two probes ([`precision_manipulator`](super::precision_manipulator);
+    /// not an arm, so not in [`Catalog::ALL`]).
+    PrecisionTwoFinger,
 }
 
 impl Catalog {
@@ -60,6 +69,9 @@ impl Catalog {
         Catalog::Ur5e,
         Catalog::Ur10e,
     ];
+
+    /// The machines of the catalog that are not 6-axis arms.
+    pub const MACHINES: [Catalog; 1] = [Catalog::PrecisionTwoFinger];
 
     /// The Universal Robots arms of the catalog.
     pub const UR: [Catalog; 6] = [
@@ -101,6 +113,7 @@ impl Catalog {
             Catalog::Ur3e => "ur3e",
             Catalog::Ur5e => "ur5e",
             Catalog::Ur10e => "ur10e",
+            Catalog::PrecisionTwoFinger => super::precision::PRECISION_NAME,
         }
     }
 
@@ -118,6 +131,7 @@ impl Catalog {
         let deg = JointLimits::degrees;
         let rad = JointLimits::new;
         match self {
+            Catalog::PrecisionTwoFinger => super::precision_manipulator(),
             Catalog::NachiMz07 => {
                 let limits = [
                     deg(-170.0, 170.0),
@@ -266,15 +280,20 @@ pub const MZ07_FLANGE: f64 = 80.0;
 /// Seed 000 table 2's |d6|: the tool point's distance from the wrist centre (mm).
 pub const MZ07_TOOL_POINT: f64 = 516.9;
 
-/// Names of the catalog arms.
+/// Names of the catalog's arms and machines.
 pub fn catalog_names() -> Vec<&'static str> {
-    Catalog::ALL.iter().map(|c| c.name()).collect()
+    Catalog::ALL
+        .iter()
+        .chain(&Catalog::MACHINES)
+        .map(|c| c.name())
+        .collect()
 }
 
-/// The catalog arm called `name` (see [`Catalog::name`]).
+/// The catalog robot called `name` (see [`Catalog::name`]).
 pub fn robot_by_name(name: &str) -> Option<Robot> {
     Catalog::ALL
         .iter()
+        .chain(&Catalog::MACHINES)
         .find(|c| c.name() == name)
         .map(|c| c.robot())
 }
@@ -496,7 +515,14 @@ mod tests {
     fn catalog_names_resolve() {
         for name in catalog_names() {
             let r = robot_by_name(name).unwrap();
-            assert_eq!(r.dof(), 6);
+            // The arms have 6 joints; the precision manipulator 4 on its chain and 5
+            // external axes.
+            let dof = if name == crate::kinematics::PRECISION_NAME {
+                9
+            } else {
+                6
+            };
+            assert_eq!(r.dof(), dof);
             assert_eq!(r.name(), name);
         }
         assert!(robot_by_name("nope").is_none());

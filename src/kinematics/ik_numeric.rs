@@ -172,9 +172,23 @@ impl NumericIk {
             .collect()
     }
 
+    /// A random start for the chain's joints; external axes stay at the reference's
+    /// values (they do not move the TCP, so a random value would only be carried
+    /// into the solution).
+    fn restart(robot: &Robot, rng: &mut Rng, reference: &[f64]) -> Vec<f64> {
+        let mut q = Self::random_start(robot, rng);
+        let n = robot.chain_dof();
+        q[n..].copy_from_slice(&reference[n..]);
+        q
+    }
+
     /// Smallest singular value of the Jacobian divided by the largest.
     pub fn conditioning(robot: &Robot, q: &[f64]) -> f64 {
-        let mut jac = Self::jacobian(robot, q);
+        // External axes do not move the TCP: their columns are zero and say nothing
+        // about the chain's singularity.
+        let mut jac = Self::jacobian(robot, q)
+            .columns(0, robot.chain_dof())
+            .into_owned();
         for col in 0..jac.ncols() {
             for row in 3..6 {
                 jac[(row, col)] *= Self::LENGTH_SCALE;
@@ -225,7 +239,7 @@ impl NumericIk {
             let start = if attempt == 0 {
                 reference.to_vec()
             } else {
-                Self::random_start(robot, &mut rng)
+                Self::restart(robot, &mut rng, reference)
             };
             let d = self.descend(robot, &target, &start, true);
             if converged(&d) {
@@ -275,7 +289,7 @@ impl NumericIk {
             let start = if attempt == 0 {
                 reference.to_vec()
             } else {
-                Self::random_start(robot, &mut rng)
+                Self::restart(robot, &mut rng, reference)
             };
             let d = self.descend(robot, &target, &start, false);
             if converged(&d) {

@@ -20,6 +20,7 @@ mod joint;
 mod motion;
 mod opw;
 mod opw_params;
+mod precision;
 mod program;
 mod robot;
 mod trajectory;
@@ -40,6 +41,11 @@ pub use joint::{Joint, JointKind, JointLimits, Mimic};
 pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
 pub use opw::{Branch, Branches, NotOpw, OpwSolver};
 pub use opw_params::OpwParameters;
+pub use precision::{
+    precision_manipulator, Free, NotPrecision, PrecisionAxes, PrecisionError, FINGER_OPEN,
+    PRECISION_NAME, PROBE_HEIGHT, PROBE_STROKE_XY, PROBE_STROKE_Z, PROBE_TURN, TABLE_STROKE,
+    TABLE_TURN,
+};
 pub use program::{
     parse_program, read_program, run_program, Instruction, Program, ProgramError, ProgramLine,
     ProgramRunError,

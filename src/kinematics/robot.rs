@@ -29,6 +29,8 @@ pub struct Robot {
     flange: usize,
     tool: Transform,
     joints: Vec<usize>,
+    /// How many of `joints` are on the flange chain (the rest are external axes).
+    chain_dof: usize,
     chain: Vec<usize>,
     analytic: Option<OpwSolver>,
     ur: Option<UrSolver>,
@@ -99,6 +101,7 @@ impl Robot {
             base: Transform::IDENTITY,
             flange,
             tool,
+            chain_dof: joints.len(),
             joints,
             chain,
             analytic: None,
@@ -195,9 +198,65 @@ impl Robot {
         self
     }
 
-    /// Number of joints (degrees of freedom).
+    /// Number of joints (degrees of freedom), external axes included.
     pub fn dof(&self) -> usize {
         self.joints.len()
+    }
+
+    /// Number of joints on the chain from the root to the flange: the first
+    /// `chain_dof` values of a joint vector; the rest are external axes.
+    pub fn chain_dof(&self) -> usize {
+        self.chain_dof
+    }
+
+    /// Link indices of the external axes, in joint order (after the chain's joints).
+    pub fn external_axes(&self) -> &[usize] {
+        &self.joints[self.chain_dof..]
+    }
+
+    /// The same robot with **external axes**: movable links off the flange chain (a
+    /// turntable or an XY table carrying the work, gripper fingers) that are joints of
+    /// the robot all the same, appended to the joint vector after the chain's joints in
+    /// the order given. They move their links in [`Robot::link_poses`] but not the
+    /// flange; inverse kinematics solves the chain and keeps them at the reference's
+    /// values. A robot with external axes uses the numeric solver (the closed forms
+    /// are for 6-joint chains).
+    ///
+    /// # Errors
+    /// [`KinematicsError::InvalidLink`]: a link that does not exist, is fixed, lies on
+    /// the flange chain, follows a mimic joint or is listed twice.
+    pub fn with_external_axes(mut self, links: &[usize]) -> Result<Self, KinematicsError> {
+        for (k, &i) in links.iter().enumerate() {
+            let bad = |cause: &str| KinematicsError::InvalidLink {
+                link: i,
+                name: self
+                    .tree
+                    .links()
+                    .get(i)
+                    .and_then(|l| l.name.clone())
+                    .unwrap_or_default(),
+                cause: cause.to_string(),
+            };
+            let Some(link) = self.tree.links().get(i) else {
+                return Err(KinematicsError::NoSuchLink(i));
+            };
+            if !link.joint.kind.is_movable() {
+                return Err(bad("an external axis must be a movable joint"));
+            }
+            if self.chain.contains(&i) {
+                return Err(bad("an external axis must be off the flange chain"));
+            }
+            if self.tree.mimic(i).is_some() {
+                return Err(bad("an external axis cannot follow a mimic joint"));
+            }
+            if links[..k].contains(&i) {
+                return Err(bad("the link is listed twice as an external axis"));
+            }
+        }
+        self.joints.truncate(self.chain_dof);
+        self.joints.extend_from_slice(links);
+        self.detect_solver();
+        Ok(self)
     }
 
     /// Link indices of the joints, in joint order.

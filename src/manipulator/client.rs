@@ -53,6 +53,7 @@ impl Default for ClientOptions {
 
 /// What went wrong talking to a controller.
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum ManipulatorError {
     /// The address is not loopback and remote dispatch was not allowed.
     #[error("{0} is not the local simulator (127.0.0.1): pass --allow-remote to command a real controller")]

@@ -77,6 +77,7 @@ pub const TOOL_EXTENSION_VERSION: i32 = 1;
 
 /// Byte order of every `shared_int` / `shared_real` on a connection.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum ByteOrder {
     /// Network order (most significant byte first): fitup's default, and what the
     /// big-endian controllers speak (the Fanuc and Motoman drivers run
@@ -136,6 +137,7 @@ impl std::fmt::Display for ByteOrder {
 
 /// The header's communication type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum CommType {
     /// Needs no acknowledgement (published state).
     Topic = 1,
@@ -147,6 +149,7 @@ pub enum CommType {
 
 /// The header's reply code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ReplyCode {
     /// Unused (topics and requests).
     Invalid = 0,
@@ -158,6 +161,7 @@ pub enum ReplyCode {
 
 /// A STATUS tri-state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum TriState {
     /// Cannot be determined.
     Unknown = -1,
@@ -180,6 +184,7 @@ impl TriState {
 
 /// Controller mode of STATUS (ISO 10218-1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum RobotMode {
     /// Cannot be determined.
     Unknown = -1,
@@ -233,13 +238,15 @@ pub struct Status {
 
 /// A tool action of fitup's extension (FITUP_TOOL, version 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ToolAction {
     /// Close the gripper to `value` (opening, m).
     Grasp = 1,
     /// Open the gripper to `value` (opening, m).
     Release = 2,
-    /// Move until contact, at most `value` (m) along the tool's Z; the reply's value
-    /// is the distance travelled (m).
+    /// Guarded move: the tool moves straight, at most `value` (m), along the tool
+    /// axis `index` names (0 +z, the default, 1 −z, 2 +x, 3 −x, 4 +y, 5 −y) and stops
+    /// at the first contact; the reply's value is the distance travelled (m).
     Touch = 3,
     /// Set digital output `index` to `value` (0 or 1).
     SetOutput = 4,
@@ -253,7 +260,8 @@ pub struct ToolCommand {
     pub version: i32,
     /// What to do.
     pub action: ToolAction,
-    /// Output index ([`ToolAction::SetOutput`]), else 0.
+    /// Output index ([`ToolAction::SetOutput`]), the tool axis of a
+    /// [`ToolAction::Touch`], else 0.
     pub index: i32,
     /// The action's value (see [`ToolAction`]); in a reply, the measured value.
     pub value: f32,
@@ -261,6 +269,7 @@ pub struct ToolCommand {
 
 /// The body of a packet.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum Body {
     /// Nothing after the header (an acknowledgement, the *alternative* replies).
     Empty,
@@ -293,6 +302,7 @@ pub struct Packet {
 
 /// A packet that cannot be decoded (or a connection that broke while reading one).
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum CodecError {
     /// The length prefix is negative, smaller than the header or above [`MAX_LENGTH`].
     #[error("bad length prefix {0} (must be {HEADER_SIZE}..={MAX_LENGTH} bytes)")]

@@ -51,6 +51,7 @@ pub fn state_port_for(motion: u16) -> Option<u16> {
 /// | 4000 | bad point: wrong joint count, non-finite, no usable duration or velocity |
 /// | 5000 | bad tool command |
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum RefusalCode {
     /// Joint (0-based) outside its limits.
     JointLimit(usize),

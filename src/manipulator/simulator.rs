@@ -37,8 +37,10 @@ use super::message::{
 };
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::document::Document;
-use crate::kinematics::JointKind;
+use crate::kinematics::{IkOptions, JointKind};
+use crate::math::Transform;
 use crate::workspace::{CheckOptions, SceneCache, Workspace};
+use nalgebra::Vector3;
 use std::collections::{HashSet, VecDeque};
 use std::io::Write;
 use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
@@ -60,6 +62,23 @@ pub const IDLE_TIMEOUT: Duration = Duration::from_secs(300);
 /// logged; beyond this many per connection they are no longer logged (a flood of
 /// them cannot flood standard error).
 pub const MAX_LOGGED_PER_CONNECTION: usize = 8;
+
+/// Longest guarded move a TOUCH may ask for (mm).
+pub const MAX_TOUCH_MM: f64 = 1000.0;
+
+/// The tool-frame direction of FITUP_TOOL TOUCH's `index`: 0 +z (the default: the
+/// tool's approach), 1 −z, 2 +x, 3 −x, 4 +y, 5 −y; `None` for any other index.
+pub fn touch_direction(index: i32) -> Option<Vector3<f64>> {
+    Some(match index {
+        0 => Vector3::z(),
+        1 => -Vector3::z(),
+        2 => Vector3::x(),
+        3 => -Vector3::x(),
+        4 => Vector3::y(),
+        5 => -Vector3::y(),
+        _ => return None,
+    })
+}
 
 /// Settings of a [`Simulator`].
 #[derive(Debug, Clone)]
@@ -102,10 +121,22 @@ impl Default for SimulatorOptions {
 
 /// A simulator that cannot start.
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum SimulatorError {
-    /// No such robot, or a robot whose start pose cannot be checked.
-    #[error("{0}")]
-    Setup(String),
+    /// No such robot in the document.
+    #[error(transparent)]
+    Robot(#[from] crate::document::DocumentError),
+    /// A robot with more joints than simple_message carries.
+    #[error("robot `{robot}` has {joints} joints: simple_message (JOINT_TRAJ_PT, JOINT_POSITION) carries at most {max}", max = MAX_JOINTS)]
+    TooManyJoints {
+        /// The robot.
+        robot: String,
+        /// Its joint count.
+        joints: usize,
+    },
+    /// The cell cannot be checked at the robot's start pose.
+    #[error("the cell cannot be checked at the robot's start pose: {0}")]
+    Cell(#[source] CellError),
     /// A port cannot be bound.
     #[error("cannot listen on 127.0.0.1:{port}: {source}")]
     Bind {
@@ -114,6 +145,18 @@ pub enum SimulatorError {
         /// The cause.
         source: std::io::Error,
     },
+}
+
+/// Why the simulator cannot check its cell at some joints.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum CellError {
+    /// The joints cannot be set (count, limits, non-finite).
+    #[error(transparent)]
+    Joints(#[from] crate::document::DocumentError),
+    /// The collision check failed (a mesh, a tolerance).
+    #[error(transparent)]
+    Check(#[from] crate::workspace::WorkspaceError),
 }
 
 /// The cell as the simulator checks it: the document, the robot and the pairs that
@@ -130,19 +173,109 @@ struct Cell {
 
 impl Cell {
     /// Robot-vs-cell interfering pairs at joints `q` (component indices).
-    fn pairs(&mut self, q: &[f64]) -> Result<Vec<(usize, usize)>, String> {
-        self.doc
-            .set_robot_joints(self.robot, q)
-            .map_err(|e| e.to_string())?;
-        let ws = Workspace::new(&self.doc, &mut self.cache).map_err(|e| e.to_string())?;
-        let all = ws
-            .interferences(&CheckOptions::default())
-            .map_err(|e| e.to_string())?;
+    fn pairs(&mut self, q: &[f64]) -> Result<Vec<(usize, usize)>, CellError> {
+        self.doc.set_robot_joints(self.robot, q)?;
+        let ws = Workspace::new(&self.doc, &mut self.cache)?;
+        let all = ws.interferences(&CheckOptions::default())?;
         Ok(all
             .into_iter()
             .filter(|p| self.links.contains(&p.a) != self.links.contains(&p.b))
             .map(|p| (p.a, p.b))
             .collect())
+    }
+
+    /// Robot-vs-cell pairs in contact (touching or interfering) at joints `q`.
+    fn contacts(&mut self, q: &[f64]) -> Result<Vec<(usize, usize)>, CellError> {
+        self.doc.set_robot_joints(self.robot, q)?;
+        let ws = Workspace::new(&self.doc, &mut self.cache)?;
+        let all = ws.contacts(&CheckOptions::default())?;
+        Ok(all
+            .into_iter()
+            .filter(|p| self.links.contains(&p.a) != self.links.contains(&p.b))
+            .map(|p| (p.a, p.b))
+            .collect())
+    }
+
+    /// The guarded move of TOUCH: from joints `q0` the tool moves straight along
+    /// `direction` (tool frame, unit) for at most `distance` mm and stops at the
+    /// first contact of a link with another component of the cell (pairs already
+    /// in contact at `q0` are ignored). Returns the distance travelled (mm), the
+    /// joints there and the component touched (`None`: no contact, the whole
+    /// distance). The contact is found in steps of at most 0.2 mm, then bisected to
+    /// 1e-4 mm: the tool stops with the surfaces within the collision tolerance.
+    fn touch(
+        &mut self,
+        q0: &[f64],
+        direction: Vector3<f64>,
+        distance: f64,
+    ) -> Result<(f64, Vec<f64>, Option<String>), String> {
+        let robot = self.doc.robots()[self.robot].shared_robot();
+        let tcp0 = robot.tcp_pose(q0).map_err(|e| e.to_string())?;
+        let ik = IkOptions::default();
+        let at = |s: f64, near: &[f64]| -> Result<Vec<f64>, String> {
+            let target = Transform::from_translation(direction * s).then(&tcp0);
+            let sol = robot
+                .inverse_nearest(&target, near, &ik)
+                .map_err(|e| format!("the tool cannot go {s:.3} mm along its axis: {e}"))?;
+            if let Some(j) = robot.limit_violation(&sol.joints) {
+                return Err(format!(
+                    "joint {} leaves its limits {s:.3} mm along the touch",
+                    j + 1
+                ));
+            }
+            Ok(sol.joints)
+        };
+        let baseline: HashSet<(usize, usize)> = self
+            .contacts(q0)
+            .map_err(|e| e.to_string())?
+            .into_iter()
+            .collect();
+        let n = ((distance / 0.2).ceil() as usize).clamp(1, 100_000);
+        let (mut free_s, mut free_q) = (0.0, q0.to_vec());
+        for k in 1..=n {
+            let s = distance * k as f64 / n as f64;
+            let q = at(s, &free_q)?;
+            let hit: Vec<_> = self
+                .contacts(&q)
+                .map_err(|e| e.to_string())?
+                .into_iter()
+                .filter(|p| !baseline.contains(p))
+                .collect();
+            if let Some(&(a, b)) = hit.first() {
+                // Bisect between the last free step and this one.
+                let (mut lo, mut hi, mut with) = (free_s, s, (a, b));
+                while hi - lo > 1e-4 {
+                    let mid = 0.5 * (lo + hi);
+                    let qm = at(mid, &free_q)?;
+                    let hit: Vec<_> = self
+                        .contacts(&qm)
+                        .map_err(|e| e.to_string())?
+                        .into_iter()
+                        .filter(|p| !baseline.contains(p))
+                        .collect();
+                    match hit.first() {
+                        Some(&p) => {
+                            hi = mid;
+                            with = p;
+                        }
+                        None => {
+                            lo = mid;
+                            free_q = qm;
+                        }
+                    }
+                }
+                let c = self.doc.components();
+                let other = if self.links.contains(&with.0) {
+                    with.1
+                } else {
+                    with.0
+                };
+                return Ok((lo, free_q, Some(c[other].name.clone())));
+            }
+            free_s = s;
+            free_q = q;
+        }
+        Ok((free_s, free_q, None))
     }
 
     /// Checks limits at `to` and interference along `from → to`.
@@ -177,7 +310,9 @@ impl Cell {
         for i in 1..=n {
             let s = i as f64 / n as f64;
             let q: Vec<f64> = from.iter().zip(to).map(|(a, b)| a + (b - a) * s).collect();
-            let pairs = self.pairs(&q).map_err(|e| (RefusalCode::BadPoint, e))?;
+            let pairs = self
+                .pairs(&q)
+                .map_err(|e| (RefusalCode::BadPoint, e.to_string()))?;
             if let Some(&(a, b)) = pairs.iter().find(|p| !self.baseline.contains(p)) {
                 let c = self.doc.components();
                 return Err((
@@ -288,16 +423,14 @@ impl Simulator {
         robot: &str,
         options: &SimulatorOptions,
     ) -> Result<Self, SimulatorError> {
-        let index = doc
-            .robot_index(robot)
-            .map_err(|e| SimulatorError::Setup(e.to_string()))?;
+        let index = doc.robot_index(robot).map_err(SimulatorError::Robot)?;
         let inst = &doc.robots()[index];
         let kinds = inst.robot().joint_kinds();
         if kinds.len() > MAX_JOINTS {
-            return Err(SimulatorError::Setup(format!(
-                "robot `{robot}` has {} joints: simple_message (JOINT_TRAJ_PT, JOINT_POSITION) carries at most {MAX_JOINTS}",
-                kinds.len()
-            )));
+            return Err(SimulatorError::TooManyJoints {
+                robot: robot.to_string(),
+                joints: kinds.len(),
+            });
         }
         let links: HashSet<usize> = inst.links().iter().filter_map(|l| l.component).collect();
         let joints = inst.joints().to_vec();
@@ -312,7 +445,7 @@ impl Simulator {
         };
         cell.baseline = cell
             .pairs(&joints)
-            .map_err(SimulatorError::Setup)?
+            .map_err(SimulatorError::Cell)?
             .into_iter()
             .collect();
         let bind = |port: u16| {
@@ -745,9 +878,58 @@ fn handle(p: &Packet, ctx: &Ctx<'_>, log: &mut impl FnMut(String)) -> Option<Pac
                 fail(msg_type::JOINT_TRAJ_PT)
             }
         },
+        (_, Body::Tool(t)) if t.action == ToolAction::Touch => {
+            let Some(direction) = touch_direction(t.index) else {
+                log(format!(
+                    "refused TOUCH along axis index {} (0..=5)",
+                    t.index
+                ));
+                return fail(msg_type::FITUP_TOOL);
+            };
+            let distance = f64::from(t.value) * 1000.0;
+            if !(distance.is_finite() && (0.0..=MAX_TOUCH_MM).contains(&distance)) {
+                log(format!(
+                    "refused TOUCH of {distance} mm (0 to {MAX_TOUCH_MM} mm)"
+                ));
+                return fail(msg_type::FITUP_TOOL);
+            }
+            let q0 = {
+                let s = lock(state);
+                if s.in_motion() || s.error.is_some() {
+                    log("refused TOUCH while moving or in error".into());
+                    return fail(msg_type::FITUP_TOOL);
+                }
+                s.joints.clone()
+            };
+            let result = lock(ctx.cell).touch(&q0, direction, distance);
+            match result {
+                Ok((travelled, q, with)) => {
+                    match &with {
+                        Some(c) => eprintln!(
+                            "manipulator: touch: contact with `{c}` after {travelled:.4} mm"
+                        ),
+                        None => eprintln!("manipulator: touch: no contact within {distance} mm"),
+                    }
+                    let mut s = lock(state);
+                    s.joints.clone_from(&q);
+                    s.stop();
+                    let mut reply = *t;
+                    reply.value = (travelled / 1000.0) as f32;
+                    Some(Packet::reply(
+                        msg_type::FITUP_TOOL,
+                        ReplyCode::Success,
+                        Body::Tool(reply),
+                    ))
+                }
+                Err(why) => {
+                    eprintln!("manipulator: touch refused: {why}");
+                    fail(msg_type::FITUP_TOOL)
+                }
+            }
+        }
         (_, Body::Tool(t)) => {
             let mut s = lock(state);
-            let mut reply = *t;
+            let reply = *t;
             match t.action {
                 ToolAction::Grasp | ToolAction::Release => {
                     if !(0.0..=1.0).contains(&t.value) {
@@ -755,9 +937,8 @@ fn handle(p: &Packet, ctx: &Ctx<'_>, log: &mut impl FnMut(String)) -> Option<Pac
                     }
                     s.gripper = t.value;
                 }
-                // The simulator has no contact sensing: contact is reported at the
-                // full distance asked for.
-                ToolAction::Touch => reply.value = t.value,
+                // Served above (the guarded move).
+                ToolAction::Touch => return fail(msg_type::FITUP_TOOL),
                 ToolAction::SetOutput => {
                     let Some(o) = usize::try_from(t.index)
                         .ok()

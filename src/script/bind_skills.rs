@@ -50,7 +50,7 @@ struct ManagerInner {
     parts: Mutex<BTreeMap<String, String>>,
 }
 
-const SKILL_KEYS: [&str; 12] = [
+const SKILL_KEYS: [&str; 13] = [
     "robot",
     "supply",
     "tool",
@@ -61,6 +61,7 @@ const SKILL_KEYS: [&str; 12] = [
     "clearance_mm",
     "touch_distance_mm",
     "screw_turns",
+    "screw_pitch_mm",
     "contact_force_n",
     "check",
 ];
@@ -113,6 +114,7 @@ fn skills(d: &DocHandle, seq: &SequenceHandle, m: &Map) -> ScriptResult<SkillsHa
         ("clearance_mm", &mut g.clearance_mm),
         ("touch_distance_mm", &mut g.touch_distance_mm),
         ("screw_turns", &mut g.screw_turns),
+        ("screw_pitch_mm", &mut g.screw_pitch_mm),
         ("contact_force_n", &mut g.contact_force_n),
     ] {
         if let Some(v) = opt_num(m, key)? {
@@ -435,7 +437,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.type_::<ManagerObj>("SkillManager");
     api.f(
         "Document.skills(sequence: Sequence, options: map) -> Skills",
-        "The whole chain for the sequence's tasks (this document is the assembly): skills from the templates, checked for interference against the assembly as it is at each task (earlier parts assembled, later ones waiting), bound to a robot. Options: `robot` (a Robot, required; its current joints are the start), `templates: [files]` (override the defaults per operation, validated), `tool` (the robot's tool frame in the grasp frame, whose z is the approach and x the closing direction; identity — `[0, 0, 0, 180, 0, 0]` for a tool whose z points back at the flange), `place` (where the assembly sits in the robot's cell, Transform or `[x,y,z,a,b,c]`; identity), `supply_offset: [x,y,z]` (the parts wait in a row before their tasks: the k-th task's part, from 0, at its assembled pose moved by (k + 1) × this; assembly frame, mm; `[0, 60, 0]`), `supply: #{part: pose}` (where given parts wait instead, assembly frame), `long_range_mm` (50), `clearance_mm` (20), `touch_distance_mm` (10), `screw_turns` (2), `contact_force_n` (2), `check` (true).",
+        "The whole chain for the sequence's tasks (this document is the assembly): skills from the templates, checked for interference against the assembly as it is at each task (earlier parts assembled, later ones waiting), bound to a robot. Options: `robot` (a Robot, required; its current joints are the start), `templates: [files]` (override the defaults per operation, validated), `tool` (the robot's tool frame in the grasp frame, whose z is the approach and x the closing direction; identity — `[0, 0, 0, 180, 0, 0]` for a tool whose z points back at the flange), `place` (where the assembly sits in the robot's cell, Transform or `[x,y,z,a,b,c]`; identity), `supply_offset: [x,y,z]` (the parts wait in a row before their tasks: the k-th task's part, from 0, at its assembled pose moved by (k + 1) × this; assembly frame, mm; `[0, 60, 0]`), `supply: #{part: pose}` (where given parts wait instead, assembly frame), `long_range_mm` (50), `clearance_mm` (20), `touch_distance_mm` (10), `screw_turns` (1: the turns of thread engagement), `screw_pitch_mm` (0.5, > 0), `contact_force_n` (2), `check` (true). A `robot` with the precision manipulator's layout (catalog `precision_2finger`, `models/micro_cell.yaml`) is bound by its own rules: each action moves only its axes, and `place` puts the assembly in the rotary table's frame.",
         |d: &mut DocHandle, seq: SequenceHandle, m: Map| skills(d, &seq, &m),
     );
     api.get(

@@ -90,6 +90,7 @@ pub struct Chain {
 
 /// Why the chain cannot be planned.
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum ChainError {
     /// A task's part is not a component of the assembly document.
     #[error("task {task}: `{part}` is not a component of the assembly document")]

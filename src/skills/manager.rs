@@ -30,6 +30,7 @@ pub const MAX_DROPS_AT_ONE_COMMAND: usize = 2;
 
 /// Where a skill is.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum SkillStatus {
     /// Not started.
     Pending,
@@ -45,6 +46,7 @@ pub enum SkillStatus {
 
 /// What the manager reports while it runs.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum ManagerEvent {
     /// Connected to the controller.
     Connected(SocketAddr),
@@ -181,13 +183,19 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 /// How a run ended with an error.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ManagerError {
     /// The user aborted.
     #[error("aborted by the user")]
     Aborted,
-    /// A skill failed (id, reason).
-    #[error("skill #{0} failed: {1}")]
-    Skill(usize, String),
+    /// A skill failed: the controller refused it, timed out or went away.
+    #[error("skill #{skill} failed: {source}")]
+    Skill {
+        /// The skill's id.
+        skill: usize,
+        /// What the controller (or the connection to it) said.
+        source: ManipulatorError,
+    },
     /// The controller could not be reached.
     #[error("{0}")]
     Connection(ManipulatorError),
@@ -404,7 +412,10 @@ impl SkillManager {
             self.status[i] = SkillStatus::Failed(reason.clone());
         }
         on_event(&ManagerEvent::Failed(i, reason.clone()));
-        Err(ManagerError::Skill(i, reason))
+        Err(ManagerError::Skill {
+            skill: i,
+            source: e,
+        })
     }
 
     fn apply_edits(&mut self, on_event: &mut dyn FnMut(&ManagerEvent)) {

@@ -18,24 +18,27 @@
 pub mod chain;
 pub mod generator;
 pub mod manager;
+mod precision;
 pub mod program;
 mod template;
 
 pub use chain::{plan_chain, Chain, ChainError, ChainOptions};
 pub use generator::{
-    generate, segment_check_fn, GeneratorOptions, SegmentCheck, SegmentHit, SkillError,
+    generate, orientation_turns, screw_pose, segment_check_fn, skill_pose_at, turn_about,
+    GeneratorOptions, SegmentCheck, SegmentHit, SkillError, TaskProblem,
 };
 pub use manager::{
     log_event, ManagerError, ManagerEvent, ManagerHandle, ManagerOptions, SkillLog, SkillManager,
     SkillStatus,
 };
-pub use program::{BindError, ControllerCommand, Plan, PlanStep};
+pub use program::{touch_index, BindError, ControllerCommand, Plan, PlanStep};
 pub use template::{default_template, Template, TemplateError, Workflow};
 
 use crate::math::Transform;
 
 /// What a skill does: the seed's actions plus the arm motions fitup already has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Action {
     /// Long-range straight move of the part (the XY table on seed 003's stage).
     MoveTable,
@@ -112,6 +115,7 @@ impl Action {
 
 /// Where an assembly part is in its assembly cycle.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
 pub enum PartState {
     /// Somewhere, position unknown.
     Free,
@@ -154,6 +158,7 @@ impl PartState {
 
 /// Where an attribute's value comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Source {
     /// Derived from the CAD model (the task).
     Cad,
@@ -178,6 +183,7 @@ pub struct Attribute {
 
 /// The condition under which a skill runs and ends.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum Condition {
     /// Runs once the previous skill finished; ends at its end pose.
     Always,

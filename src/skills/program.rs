@@ -25,6 +25,7 @@ pub const MAX_PLAN_POINTS: usize = 1_000_000;
 /// One thing a controller does.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum ControllerCommand {
     /// Joint trajectory: `(joints rad/mm, seconds from the previous point)`; the first
     /// point is where the arm starts.
@@ -134,6 +135,7 @@ pub struct Plan {
 
 /// Why skills cannot be bound to a robot.
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum BindError {
     /// A part moves without a grasp.
     #[error("skill #{skill} moves `{part}` but its task has no grasp")]
@@ -144,7 +146,7 @@ pub enum BindError {
         part: String,
     },
     /// The robot cannot make a motion.
-    #[error("skill #{skill} ({action} {part}): {reason}")]
+    #[error("skill #{skill} ({action} {part}): {source}")]
     Motion {
         /// Skill id.
         skill: usize,
@@ -153,11 +155,51 @@ pub enum BindError {
         /// Part.
         part: String,
         /// The motion error.
-        reason: String,
+        source: crate::kinematics::MotionError,
+    },
+    /// The robot cannot reach a grasp.
+    #[error("skill #{skill} ({action} {part}): {source}")]
+    Ik {
+        /// Skill id.
+        skill: usize,
+        /// Action name.
+        action: &'static str,
+        /// Part.
+        part: String,
+        /// The inverse-kinematics error.
+        source: crate::kinematics::IkError,
+    },
+    /// The precision manipulator's axes for this skill cannot make the motion.
+    #[error("skill #{skill} ({action} {part}): {source}")]
+    Precision {
+        /// Skill id.
+        skill: usize,
+        /// Action name.
+        action: &'static str,
+        /// Part.
+        part: String,
+        /// Which axis, and why.
+        source: crate::kinematics::PrecisionError,
     },
     /// A plan file that cannot be read or written.
     #[error("plan file: {0}")]
     File(String),
+}
+
+/// The FITUP_TOOL TOUCH `index` of the tool axis nearest `direction` (tool
+/// frame): 0 +z, 1 −z, 2 +x, 3 −x, 4 +y, 5 −y
+/// ([`crate::manipulator::simulator::touch_direction`]).
+pub fn touch_index(direction: &crate::math::Vec3) -> i32 {
+    let d = direction;
+    let (k, v) = [(0, d.z), (2, d.x), (4, d.y)]
+        .into_iter()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .unwrap_or((0, 1.0));
+    if v < 0.0 {
+        k + 1
+    } else {
+        k
+    }
 }
 
 /// Keeps a sample every `interval` seconds (and the last): `(joints, dt)`.
@@ -180,7 +222,10 @@ fn points(
 
 impl Plan {
     /// Binds `skills` to `robot` from joints `start` (rad / mm). `tasks` give each
-    /// part's grasp (tool in part).
+    /// part's grasp (tool in part). A robot with the precision manipulator's layout
+    /// ([`crate::kinematics::PrecisionAxes::detect`]) is bound by its own rules
+    /// (each action moves only its axes, the part poses are in the rotary table's
+    /// frame; `options` are not used); any other robot as an arm.
     ///
     /// # Errors
     /// A part motion without a grasp, a motion the robot cannot make (unreachable,
@@ -200,14 +245,18 @@ impl Plan {
                     .map(|g| (t.index, (g.tool_in_part, g.width)))
             })
             .collect();
+        if let Ok(axes) = crate::kinematics::PrecisionAxes::detect(robot) {
+            return super::precision::bind(skills, tasks, robot, &axes, start);
+        }
+        let by_task: HashMap<usize, &Task> = tasks.iter().map(|t| (t.index, t)).collect();
         let mut q = start.to_vec();
         let mut steps = Vec::new();
         for s in skills {
-            let motion_err = |reason: String| BindError::Motion {
+            let motion_err = |source| BindError::Motion {
                 skill: s.id,
                 action: s.action.name(),
                 part: s.part.clone(),
-                reason,
+                source,
             };
             let grasp = || {
                 grasps
@@ -218,43 +267,82 @@ impl Plan {
                         part: s.part.clone(),
                     })
             };
-            let tool = |action: &str, value: f64| ControllerCommand::Tool {
+            let tool = |action: &str, index: i32, value: f64| ControllerCommand::Tool {
                 action: action.into(),
-                index: 0,
+                index,
                 value,
             };
             let commands = match s.action {
-                Action::Touch => vec![tool(
-                    "touch",
-                    s.attribute("distance_mm").unwrap_or(0.0) / 1000.0,
-                )],
+                Action::Touch => {
+                    // Along the tool axis nearest the approach (the mating direction,
+                    // in the tool frame of the grasp).
+                    let index = by_task
+                        .get(&s.task)
+                        .and_then(|t| {
+                            let g = t.grasp.as_ref()?;
+                            let m = t.assembled_pose.inverse().apply_vector(&t.mating_direction);
+                            Some(touch_index(&g.tool_in_part.inverse().apply_vector(&m)))
+                        })
+                        .unwrap_or(0);
+                    vec![tool(
+                        "touch",
+                        index,
+                        s.attribute("distance_mm").unwrap_or(0.0) / 1000.0,
+                    )]
+                }
                 Action::Release => {
                     let (_, width) = grasp()?;
-                    vec![tool("release", (width * 1.5 / 1000.0).min(1.0))]
+                    vec![tool("release", 0, (width * 1.5 / 1000.0).min(1.0))]
                 }
                 Action::Grasp => {
                     let (tip, width) = grasp()?;
                     let target = tip.then(&s.start.0);
-                    let sol = robot
-                        .inverse_nearest(&target, &q, &options.ik)
-                        .map_err(|e| motion_err(e.to_string()))?;
-                    let traj = move_joint(robot, &q, &sol.joints, options)
-                        .map_err(|e| motion_err(e.to_string()))?;
+                    let sol =
+                        robot
+                            .inverse_nearest(&target, &q, &options.ik)
+                            .map_err(|source| BindError::Ik {
+                                skill: s.id,
+                                action: s.action.name(),
+                                part: s.part.clone(),
+                                source,
+                            })?;
+                    let traj = move_joint(robot, &q, &sol.joints, options).map_err(motion_err)?;
                     let pts = points(&traj, &q, 0.2);
                     q = sol.joints;
                     vec![
                         ControllerCommand::Trajectory(pts),
-                        tool("grasp", (width / 1000.0).min(1.0)),
+                        tool("grasp", 0, (width / 1000.0).min(1.0)),
                     ]
                 }
                 _ => {
                     let (tip, _) = grasp()?;
-                    let target = tip.then(&s.end.0);
-                    let traj = move_line(robot, &q, &target, options)
-                        .map_err(|e| motion_err(e.to_string()))?;
-                    let pts = points(&traj, &q, 0.2);
-                    if let Some(last) = traj.last_joints() {
-                        q = last.to_vec();
+                    // A screw's helix in pieces of at most 30° (each a straight line
+                    // of the tool: exact about an axis through the tool point); any
+                    // other motion in one line.
+                    let pieces = match s.action {
+                        Action::Screw => (s.attribute("turns").unwrap_or(0.0).abs() * 12.0)
+                            .ceil()
+                            .clamp(1.0, 10_000.0) as usize,
+                        _ => 1,
+                    };
+                    let pivot = s
+                        .start
+                        .0
+                        .apply(&crate::math::Point3::from(tip.translation()))
+                        .coords;
+                    let mut pts: Vec<(Vec<f64>, f64)> = vec![(q.clone(), 0.0)];
+                    for k in 1..=pieces {
+                        let pose = if pieces == 1 {
+                            s.end.0
+                        } else {
+                            super::generator::skill_pose_at(s, &pivot, k as f64 / pieces as f64)
+                        };
+                        let target = tip.then(&pose);
+                        let traj = move_line(robot, &q, &target, options).map_err(motion_err)?;
+                        pts.extend(points(&traj, &q, 0.2).into_iter().skip(1));
+                        if let Some(last) = traj.last_joints() {
+                            q = last.to_vec();
+                        }
                     }
                     vec![ControllerCommand::Trajectory(pts)]
                 }
@@ -269,7 +357,12 @@ impl Plan {
                 commands,
             });
         }
-        Ok(Self {
+        Ok(Self::for_robot(robot, steps))
+    }
+
+    /// A plan of `steps` for `robot` (its name and joint kinds).
+    pub(super) fn for_robot(robot: &Robot, steps: Vec<PlanStep>) -> Self {
+        Self {
             version: 1,
             robot: robot.name().into(),
             joint_kinds: robot
@@ -281,7 +374,7 @@ impl Plan {
                 })
                 .collect(),
             steps,
-        })
+        }
     }
 
     /// The joint kinds of [`joint_kinds`](Self::joint_kinds).

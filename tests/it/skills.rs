@@ -87,7 +87,8 @@ fn the_move_generator_goes_around_the_obstacle_box() {
             Action::Touch,
             Action::Grasp,
             Action::RotateTable,
-            Action::MoveTable,
+            // Vertical: the probes (the table has no Z axis), however long.
+            Action::MoveProbe,
             Action::MoveTable,
             Action::MoveProbe,
             Action::Insert,
@@ -110,9 +111,11 @@ fn the_move_generator_goes_around_the_obstacle_box() {
     assert_eq!(skills[5].end.1, PartState::Adjusted);
     assert_eq!(skills[6].end.1, PartState::Assembled);
     assert_eq!(skills[6].attribute("length_mm"), Some(30.0));
-    // Every motion segment went through the interference check.
-    assert_eq!(checked.len(), 5);
-    // Segment lengths decide table (> 50 mm) or probe: 70 mm up, 200 across, 30 down.
+    // Every motion segment went through the interference check, the 30° turn in
+    // three arcs of 10°.
+    assert_eq!(checked.len(), 7);
+    // Horizontal segments longer than 50 mm go to the table: 70 mm up (probes), 200
+    // across (table), 30 down (probes).
     assert_eq!(skills[3].attribute("length_mm"), Some(70.0));
     assert_eq!(skills[4].attribute("length_mm"), Some(200.0));
     // Ids in execution order.
