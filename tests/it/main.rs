@@ -10,7 +10,7 @@ mod api_docs;
 mod chain;
 mod cli;
 mod db;
-mod h25micro_precision;
+mod precision_manipulator;
 mod hostile_bounds;
 mod hostile_db;
 mod hostile_files;

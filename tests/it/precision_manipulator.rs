@@ -45,7 +45,7 @@ fn committed_micro_cell_matches_generator_and_its_links_follow_the_joints() {
         let generated = std::fs::read(fresh.path().join(f)).unwrap();
         assert!(
             committed == generated,
-            "models/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test it h25micro"
+            "models/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test it precision_manipulator"
         );
     }
     let mut doc = Document::open(&models.join("micro_cell.yaml")).unwrap();
@@ -354,7 +354,7 @@ fn touch_stops_at_the_first_contact_and_reports_where() {
 fn a_sequence_is_planned_on_a_cell_with_robots() {
     let root = common::repo();
     std::fs::create_dir_all(root.join("out")).unwrap();
-    let script = "out/test_h25micro_cell_robots.rhai";
+    let script = "out/test_precision_cell_robots.rhai";
     std::fs::write(
         root.join(script),
         r#"let doc = open_doc("models/cell_robots.yaml");
