@@ -4,7 +4,7 @@
 
 use super::shape::{Aabb, Collider, Node, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
-use super::{CollisionError, Contact, InterferenceKind, PairMember};
+use super::{CollisionError, Contact, InterferenceKind, PairMember, PoseFault};
 use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3};
 use std::cell::Cell;
@@ -214,9 +214,7 @@ pub(crate) fn check_pose(p: &Transform) -> Result<(), CollisionError> {
     if p.is_finite() {
         Ok(())
     } else {
-        Err(CollisionError::BadPose(
-            "the pose has a NaN or infinite entry".into(),
-        ))
+        Err(CollisionError::BadPose(PoseFault::Part))
     }
 }
 

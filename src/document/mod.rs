@@ -197,6 +197,7 @@ pub struct Component {
 
 /// Why a document operation failed. Load errors carry file, line and column.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DocumentError {
     /// An error in a file the user wrote (YAML, STL, …), located.
     #[error("{0}")]

@@ -112,6 +112,7 @@ impl Default for IkOptions {
 
 /// Why inverse kinematics found no usable solution.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum IkError {
     /// The target lies outside the workspace (reason says which condition failed).
     #[error("target unreachable: {0}")]

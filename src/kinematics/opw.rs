@@ -52,6 +52,7 @@ use std::f64::consts::{PI, TAU};
 
 /// Why a robot does not qualify for the closed-form solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum NotOpw {
     /// The chain does not have exactly six revolute joints.
     #[error("the chain does not have exactly six revolute joints")]

@@ -47,6 +47,7 @@ use std::f64::consts::PI;
 
 /// Why a robot does not qualify for the UR closed-form solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum NotUr {
     /// The chain does not have exactly six revolute joints.
     #[error("the chain does not have exactly six revolute joints")]
