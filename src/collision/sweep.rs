@@ -196,6 +196,37 @@ const MAX_QUERIES: usize = 2_000_000;
 
 /// The first `t` at which `moving` (moved by `motion`) interferes with one of
 /// `obstacles`, by `options.method`.
+///
+/// # Examples
+/// A 10 mm cube pushed 30 mm along +X toward a cube standing 20 mm away stops where
+/// the faces meet (within the tolerance, 0.01 mm by default).
+/// ```
+/// use fitup::collision::{sweep, Collider, Motion, Obstacle, SweepOptions};
+/// use fitup::math::{Point3, Transform, Vec3};
+/// use fitup::mesh::Mesh;
+/// use std::sync::Arc;
+///
+/// let cube = Collider::new(Arc::new(Mesh::cuboid(
+///     Point3::new(0.0, 0.0, 0.0),
+///     Point3::new(10.0, 10.0, 10.0),
+/// )))
+/// .unwrap();
+/// let wall = Obstacle {
+///     collider: &cube,
+///     pose: Transform::from_translation(Vec3::new(20.0, 0.0, 0.0)),
+/// };
+/// let motion = Motion::Translation {
+///     start: Transform::IDENTITY,
+///     offset: Vec3::new(30.0, 0.0, 0.0),
+/// };
+/// let hit = sweep(&cube, &motion, &[wall], &SweepOptions::default()).unwrap();
+/// assert!(hit.hit && hit.with == Some(0));
+/// assert!((hit.pose.translation().x - 10.0).abs() < 0.05); // mm
+/// ```
+///
+/// # Errors
+/// An unusable motion or option ([`CollisionError::BadMotion`]), a bad pose or
+/// tolerance, or the time limit ([`CollisionError::TimeLimit`]).
 pub fn sweep(
     moving: &Collider,
     motion: &Motion,

@@ -337,6 +337,24 @@ impl Document {
     }
 
     /// Loads a document with a private mesh cache.
+    ///
+    /// # Examples
+    /// Drive a mate's dimension (internal units: radians) and read the driven pose
+    /// (world frame, mm):
+    /// ```
+    /// use fitup::document::Document;
+    ///
+    /// let mut doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+    /// doc.set_dimension("D1@角度1", 30f64.to_radians()).unwrap();
+    /// let angle = doc.dimension("D1@角度1").unwrap();
+    /// assert!((angle.document_value() - 30.0).abs() < 1e-9); // degrees in the file
+    /// let plate = doc.component("plate_b").unwrap();
+    /// assert!(plate.transform.translation().z > 700.0); // on the table, mm
+    /// ```
+    ///
+    /// # Errors
+    /// The file cannot be read, is not a valid document (located [`SourceError`]),
+    /// or its mates cannot be solved.
     pub fn open(path: &Path) -> Result<Self, DocumentError> {
         Self::load(path, &mut MeshCache::new())
     }

@@ -2,8 +2,8 @@
 //! the ordered list of its movable joints.
 
 use super::{
-    IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree, KinematicsError,
-    NumericIk, OpwSolver, UrSolver,
+    ClosedFormIk, IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree,
+    KinematicsError, NumericIk, OpwSolver, UrSolver,
 };
 use crate::math::{AngleConvention, Transform};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
@@ -377,7 +377,7 @@ impl Robot {
         }
         let local = Transform::from_isometry(self.base.isometry().inverse() * target.isometry());
         if let Some(solver) = &self.analytic {
-            return solver.solve(self, &local, reference, options);
+            return solver.solve(&local, reference, options);
         }
         if let Some(solver) = &self.ur {
             return solver.solve(&local, reference, options);
@@ -394,7 +394,7 @@ impl Robot {
     ) -> Result<IkSolution, IkError> {
         let mut all = self.inverse(target, reference, options)?;
         if all.is_empty() {
-            return Err(IkError::Unreachable("no solution".into()));
+            return Err(IkError::Unreachable(super::Unreachable::NoSolution));
         }
         Ok(all.swap_remove(0))
     }
