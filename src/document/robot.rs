@@ -853,9 +853,7 @@ impl Document {
         let name = super::new_name(name, "robot")?;
         let name = name.as_str();
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
-            return Err(DocumentError::Invalid(format!(
-                "robot names must be unique and non-empty: `{name}`"
-            )));
+            return Err(DocumentError::RobotName(name.to_string()));
         }
         let base = base.unwrap_or(robot.base());
         if !base.is_finite() {
@@ -881,9 +879,10 @@ impl Document {
             .into_iter()
             .find(|d| taken.contains(d))
         {
-            return Err(DocumentError::Invalid(format!(
-                "robot `{name}`: dimension `{d}` already exists"
-            )));
+            return Err(DocumentError::DimensionTaken {
+                robot: name.to_string(),
+                dimension: d,
+            });
         }
         Arc::make_mut(&mut inst.robot).set_limits_source(robot.limits_source().map(String::from));
         self.robots.push(inst);
@@ -908,9 +907,7 @@ impl Document {
         let name = name.as_str();
         let invalid = |m: String| DocumentError::Invalid(format!("robot `{name}`: {m}"));
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
-            return Err(DocumentError::Invalid(format!(
-                "robot names must be unique and non-empty: `{name}`"
-            )));
+            return Err(DocumentError::RobotName(name.to_string()));
         }
         let base = base.unwrap_or(Transform::IDENTITY);
         if !base.is_finite() {
