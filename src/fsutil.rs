@@ -131,6 +131,7 @@ impl FileKind {
 
 /// Why a file could not be read.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReadError {
     /// The operating system refused (missing file, permissions, …).
     #[error("cannot read: {0}")]
@@ -284,6 +285,7 @@ impl<'a> OutputRule<'a> {
 
 /// Why a writer refused to write its output (nothing was written).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum OutputError {
     /// A folder, FIFO, device or socket is at the path.
     #[error("refusing to write over {0}: outputs replace only regular files")]

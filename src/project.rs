@@ -21,6 +21,7 @@ pub const PROJECT_FILE: &str = "fitup.toml";
 
 /// Why a path was refused or could not be resolved.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum PathError {
     /// An empty path.
     #[error("empty path")]

@@ -374,9 +374,9 @@ fn show(db: &mut Database, kind: Kind, id: i64) -> Result<(), crate::db::DbError
                     "  {} – {}: {} {:.3} mm {}",
                     p.a,
                     p.b,
-                    p.state,
-                    p.depth_mm,
-                    p.kind
+                    p.state(),
+                    p.depth_mm(),
+                    p.kind()
                 );
             }
         }
@@ -459,7 +459,7 @@ fn export(
             let r = db.interference(id).map_err(Ok)?;
             let mut s = String::from("a,b,state,depth_mm,kind\n");
             for p in r.pairs {
-                s += &format!("{},{},{},{},{}\n", csv_field(&p.a), csv_field(&p.b), p.state, p.depth_mm, csv_field(&p.kind));
+                s += &format!("{},{},{},{},{}\n", csv_field(&p.a), csv_field(&p.b), p.state(), p.depth_mm(), csv_field(&p.kind()));
             }
             s
         }
@@ -468,7 +468,7 @@ fn export(
             let pairs: Vec<serde_json::Value> = r
                 .pairs
                 .iter()
-                .map(|p| serde_json::json!({"a": p.a, "b": p.b, "state": p.state, "depth_mm": p.depth_mm, "kind": p.kind}))
+                .map(|p| serde_json::json!({"a": p.a, "b": p.b, "state": p.state(), "depth_mm": p.depth_mm(), "kind": p.kind()}))
                 .collect();
             pretty(serde_json::json!({"id": r.id, "name": r.name, "run": r.run_id, "created_at": r.created_at, "pairs": pairs}))
         }

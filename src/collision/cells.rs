@@ -2,7 +2,7 @@
 //! box per cell, and the box tests of the `aabb` and `cells` methods.
 
 use super::shape::{Aabb, Collider};
-use super::{CollisionError, Contact, InterferenceKind, Method, PosedPart};
+use super::{CellsFault, CollisionError, Contact, InterferenceKind, Method, PoseFault, PosedPart};
 use crate::math::{Point3, Rng, Transform};
 
 /// Most cells a cut may make.
@@ -67,9 +67,7 @@ fn boundaries(lo: f64, hi: f64, spec: &CutSpec, axis: usize) -> Result<Vec<f64>,
         CutSpec::Planes { x, y, z } => {
             let planes = [x, y, z][axis];
             if let Some(p) = planes.iter().find(|p| !p.is_finite()) {
-                return Err(CollisionError::BadCells(format!(
-                    "cut plane position {p} is not finite"
-                )));
+                return Err(CollisionError::BadCells(CellsFault::PlanePosition(*p)));
             }
             let mut inner: Vec<f64> = planes
                 .iter()
@@ -96,9 +94,7 @@ impl CutCells {
         let counts: [f64; 3] = match &spec {
             CutSpec::Size(s) => {
                 if !(s.is_finite() && *s > 0.0) {
-                    return Err(CollisionError::BadCells(format!(
-                        "the cell size must be a finite number > 0 mm, got {s}"
-                    )));
+                    return Err(CollisionError::BadCells(CellsFault::CellSize(*s)));
                 }
                 [0, 1, 2].map(|k| (ext[k] / s).ceil().max(1.0))
             }
@@ -318,9 +314,7 @@ pub(crate) fn boxes_contact(
         return Err(CollisionError::BadTolerance(tolerance));
     }
     if !(pa.is_finite() && pb.is_finite()) {
-        return Err(CollisionError::BadPose(
-            "the pose has a NaN or infinite entry".into(),
-        ));
+        return Err(CollisionError::BadPose(PoseFault::Part));
     }
     let world = |boxes: &[Aabb], p: &Transform| -> Vec<Aabb> {
         boxes.iter().map(|x| x.transformed(p.isometry())).collect()

@@ -12,7 +12,7 @@
 use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box, Relative};
 use super::shape::{Collider, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
-use super::CollisionError;
+use super::{CollisionError, MotionFault};
 use crate::math::{Transform, Vec3};
 use nalgebra::Isometry3;
 
@@ -97,10 +97,11 @@ pub fn edge_interferes(
     check_pose(pose)?;
     check_tolerance(options.tolerance)?;
     if !(options.contact_step.is_finite() && options.contact_step > 0.0) {
-        return Err(CollisionError::BadMotion(format!(
-            "the contact step must be a finite number > 0 mm, got {}",
-            options.contact_step
-        )));
+        return Err(MotionFault::option(
+            "contact step",
+            options.contact_step,
+            "a finite number > 0 mm",
+        ));
     }
     let (angle, shift) = from.distance_to(to);
     if angle > MAX_EDGE_ANGLE {

@@ -4,7 +4,7 @@
 
 use super::shape::{Aabb, Collider, Node, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
-use super::{CollisionError, Contact, InterferenceKind, PairMember};
+use super::{CollisionError, Contact, InterferenceKind, PairMember, PoseFault};
 use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3};
 use std::cell::Cell;
@@ -214,9 +214,7 @@ pub(crate) fn check_pose(p: &Transform) -> Result<(), CollisionError> {
     if p.is_finite() {
         Ok(())
     } else {
-        Err(CollisionError::BadPose(
-            "the pose has a NaN or infinite entry".into(),
-        ))
+        Err(CollisionError::BadPose(PoseFault::Part))
     }
 }
 
@@ -289,6 +287,29 @@ pub fn interferes(
 /// interfering with the largest crossing depth, or by containment.
 /// Symmetric: swapping the parts gives the same verdict and depth (with
 /// [`InterferenceKind::Contained`]'s `inner` swapped).
+///
+/// # Examples
+/// Two 10 mm cubes: apart, face to face, then 0.5 mm into each other.
+/// ```
+/// use fitup::collision::{contact, Collider, Contact, DEFAULT_TOLERANCE};
+/// use fitup::math::{Point3, Transform, Vec3};
+/// use fitup::mesh::Mesh;
+/// use std::sync::Arc;
+///
+/// let cube = Collider::new(Arc::new(Mesh::cuboid(
+///     Point3::new(0.0, 0.0, 0.0),
+///     Point3::new(10.0, 10.0, 10.0),
+/// )))
+/// .unwrap();
+/// let at = |x: f64| Transform::from_translation(Vec3::new(x, 0.0, 0.0));
+/// let verdict = |x| contact(&cube, &at(0.0), &cube, &at(x), DEFAULT_TOLERANCE).unwrap();
+/// assert_eq!(verdict(15.0), Contact::Separate);
+/// assert_eq!(verdict(10.0), Contact::Touching);
+/// assert!((verdict(9.5).depth() - 0.5).abs() < 1e-9);
+/// ```
+///
+/// # Errors
+/// A pose with NaN or infinite entries, a negative or non-finite tolerance.
 pub fn contact(
     a: &Collider,
     pa: &Transform,

@@ -76,20 +76,21 @@ pub const DEFAULT_TOLERANCE: f64 = 0.01;
 
 /// Why a collision query could not be answered.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum CollisionError {
     /// The mesh cannot be used (no triangle of non-zero area, NaN or huge
     /// coordinates, bad indices).
     #[error("unusable mesh: {0}")]
-    BadMesh(String),
+    BadMesh(MeshFault),
     /// A pose has NaN or infinite entries.
     #[error("bad pose: {0}")]
-    BadPose(String),
+    BadPose(PoseFault),
     /// The penetration tolerance is negative or not finite.
     #[error("the penetration tolerance must be a finite number >= 0 mm, got {0}")]
     BadTolerance(f64),
     /// The cell size or cut planes are unusable.
     #[error("bad cut cells: {0}")]
-    BadCells(String),
+    BadCells(CellsFault),
     /// The cut would make more cells than [`MAX_CELLS`].
     #[error("the cut would make {count} cells ({nx} x {ny} x {nz}), more than the limit of {limit}; use a larger cell size")]
     TooManyCells {
@@ -109,7 +110,7 @@ pub enum CollisionError {
     MissingCells,
     /// The motion or sweep options are unusable (NaN, zero axis, empty, step <= 0).
     #[error("bad motion: {0}")]
-    BadMotion(String),
+    BadMotion(MotionFault),
     /// A sweep ran out of its time budget (ms) before it could answer.
     #[error("the sweep ran out of its time limit of {0} ms before reaching the end of the motion; give it a larger `time_limit_ms` or a coarser method")]
     TimeLimit(f64),
@@ -120,6 +121,128 @@ pub enum CollisionError {
     /// ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)).
     #[error(transparent)]
     Limit(#[from] crate::math::LimitError),
+}
+
+/// What makes a mesh unusable for collision queries.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshFault {
+    /// A vertex is not finite or lies beyond [`MAX_COORDINATE`] mm.
+    #[error("vertex {index} ({}, {}, {}) is not finite or beyond {:e} mm", .position[0], .position[1], .position[2], MAX_COORDINATE)]
+    VertexOutOfRange {
+        /// The vertex's index.
+        index: usize,
+        /// Its coordinates (mm, part frame).
+        position: [f64; 3],
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error("triangle {triangle} refers to a vertex past the {vertices} vertices")]
+    BadIndex {
+        /// The triangle's index.
+        triangle: usize,
+        /// How many vertices the mesh has.
+        vertices: usize,
+    },
+    /// Every triangle is degenerate.
+    #[error("the mesh has no triangle of non-zero area")]
+    NoArea,
+}
+
+/// Which pose of a query has NaN or infinite entries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PoseFault {
+    /// The pose of a queried part.
+    #[error("the pose has a NaN or infinite entry")]
+    Part,
+    /// The pose of obstacle `n` (in the order given).
+    #[error("obstacle {0} has a NaN or infinite pose")]
+    Obstacle(usize),
+}
+
+/// What makes a cut-cells request unusable.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum CellsFault {
+    /// The cell size (mm) is not a finite number > 0.
+    #[error("the cell size must be a finite number > 0 mm, got {0}")]
+    CellSize(f64),
+    /// A cut plane's position (mm) is not finite.
+    #[error("cut plane position {0} is not finite")]
+    PlanePosition(f64),
+}
+
+/// What makes a motion, a sweep or an edge check unusable.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MotionFault {
+    /// Part of the motion (named) has NaN or infinite values.
+    #[error("{0} has NaN or infinite values")]
+    NonFinite(&'static str),
+    /// A rotation about an axis of zero length.
+    #[error("the rotation axis has zero length")]
+    ZeroAxis,
+    /// A motion through no poses.
+    #[error("the pose sequence is empty")]
+    NoPoses,
+    /// A step, time limit or cap of the query is out of range.
+    #[error("the {option} must be {expected}, got {value}")]
+    Option {
+        /// The option, in words (e.g. `contact step`).
+        option: &'static str,
+        /// The value given.
+        value: f64,
+        /// What is accepted.
+        expected: &'static str,
+    },
+    /// A stepwise sweep would check more than the cap.
+    #[error("{steps} steps would take more than {limit} checks")]
+    TooManySteps {
+        /// Steps of the piece.
+        steps: usize,
+        /// The cap on checks.
+        limit: usize,
+    },
+    /// A continuous sweep used up its query cap.
+    #[error("the continuous sweep took more than {0} queries")]
+    TooManyQueries(usize),
+}
+
+impl MotionFault {
+    /// An option out of range, as a [`CollisionError`].
+    pub(crate) fn option(
+        option: &'static str,
+        value: f64,
+        expected: &'static str,
+    ) -> CollisionError {
+        CollisionError::BadMotion(MotionFault::Option {
+            option,
+            value,
+            expected,
+        })
+    }
+}
+
+/// Why a verdict written in words ([`Contact::from_text`]) is not one.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ContactTextError {
+    /// The state is not `separate`, `touching` or `interfering`.
+    #[error("unknown contact state `{0}`: expected \"separate\", \"touching\" or \"interfering\"")]
+    UnknownState(String),
+    /// The kind of an interfering pair is not one of the words.
+    #[error("unknown interference kind `{kind}` for `{a}` and `{b}`: expected \"surfaces cross\", \"{a} inside {b}\", \"{b} inside {a}\" or \"boxes overlap\"")]
+    UnknownKind {
+        /// The kind given.
+        kind: String,
+        /// The first part.
+        a: String,
+        /// The second part.
+        b: String,
+    },
+    /// The depth of an interfering pair is negative or not finite (mm).
+    #[error("the penetration depth must be a finite number ≥ 0 mm, got {0}")]
+    BadDepth(f64),
 }
 
 /// One of the two parts of a pair query.
@@ -181,6 +304,81 @@ impl Contact {
         match self {
             Contact::Interfering { depth, .. } => *depth,
             _ => 0.0,
+        }
+    }
+
+    /// `separate`, `touching` or `interfering`: the word scripts, reports and the
+    /// results database use for the verdict.
+    pub fn state_name(&self) -> &'static str {
+        match self {
+            Contact::Separate => "separate",
+            Contact::Touching => "touching",
+            Contact::Interfering { .. } => "interfering",
+        }
+    }
+
+    /// How the pair `a`, `b` interferes, in words: `surfaces cross`, `A inside B`,
+    /// `boxes overlap`; empty unless interfering.
+    pub fn kind_text(&self, a: &str, b: &str) -> String {
+        match self {
+            Contact::Interfering { kind, .. } => match kind {
+                InterferenceKind::SurfacesCross => "surfaces cross".into(),
+                InterferenceKind::Contained {
+                    inner: PairMember::First,
+                } => format!("{a} inside {b}"),
+                InterferenceKind::Contained {
+                    inner: PairMember::Second,
+                } => format!("{b} inside {a}"),
+                InterferenceKind::BoxesOverlap => "boxes overlap".into(),
+            },
+            _ => String::new(),
+        }
+    }
+
+    /// The verdict written as [`state_name`](Self::state_name), depth (mm) and
+    /// [`kind_text`](Self::kind_text) for the pair `a`, `b`: the inverse of those
+    /// two, for results read back from a script or a database.
+    ///
+    /// # Errors
+    /// [`ContactTextError`] naming the state, kind or depth that is not one of the
+    /// words (or not a finite depth ≥ 0).
+    pub fn from_text(
+        state: &str,
+        depth_mm: f64,
+        kind: &str,
+        a: &str,
+        b: &str,
+    ) -> Result<Contact, ContactTextError> {
+        match state {
+            "separate" => Ok(Contact::Separate),
+            "touching" => Ok(Contact::Touching),
+            "interfering" => {
+                if !(depth_mm.is_finite() && depth_mm >= 0.0) {
+                    return Err(ContactTextError::BadDepth(depth_mm));
+                }
+                let kind = match kind {
+                    "surfaces cross" => InterferenceKind::SurfacesCross,
+                    "boxes overlap" => InterferenceKind::BoxesOverlap,
+                    k if k == format!("{a} inside {b}") => InterferenceKind::Contained {
+                        inner: PairMember::First,
+                    },
+                    k if k == format!("{b} inside {a}") => InterferenceKind::Contained {
+                        inner: PairMember::Second,
+                    },
+                    _ => {
+                        return Err(ContactTextError::UnknownKind {
+                            kind: kind.to_string(),
+                            a: a.to_string(),
+                            b: b.to_string(),
+                        })
+                    }
+                };
+                Ok(Contact::Interfering {
+                    depth: depth_mm,
+                    kind,
+                })
+            }
+            _ => Err(ContactTextError::UnknownState(state.to_string())),
         }
     }
 
@@ -330,9 +528,7 @@ pub fn candidate_pairs(parts: &[PosedPart]) -> Result<Vec<(usize, usize)>, Colli
             if p.pose.is_finite() {
                 Ok(p.collider.world_bounds(&p.pose))
             } else {
-                Err(CollisionError::BadPose(
-                    "the pose has a NaN or infinite entry".into(),
-                ))
+                Err(CollisionError::BadPose(PoseFault::Part))
             }
         })
         .collect::<Result<_, _>>()?;

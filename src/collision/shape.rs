@@ -3,7 +3,7 @@
 //! across watch reruns while the mesh is unchanged.
 
 use super::triangle::{closest_on_triangle, x_line_crossing, Tri};
-use super::CollisionError;
+use super::{CollisionError, MeshFault};
 pub use crate::math::Aabb;
 use crate::math::{Point3, Vec3};
 use crate::mesh::{Mesh, MeshReport};
@@ -246,15 +246,16 @@ impl Collider {
     /// Errors: a mesh without any non-degenerate triangle, or with a coordinate that
     /// is not finite or beyond [`MAX_COORDINATE`].
     pub fn new(mesh: Arc<Mesh>) -> Result<Collider, CollisionError> {
-        if let Some(p) = mesh.vertices.iter().find(|p| {
+        if let Some(index) = mesh.vertices.iter().position(|p| {
             !p.coords
                 .iter()
                 .all(|v| v.is_finite() && v.abs() <= MAX_COORDINATE)
         }) {
-            return Err(CollisionError::BadMesh(format!(
-                "vertex ({}, {}, {}) is not finite or beyond {MAX_COORDINATE:e} mm",
-                p.x, p.y, p.z
-            )));
+            let p = mesh.vertices[index];
+            return Err(CollisionError::BadMesh(MeshFault::VertexOutOfRange {
+                index,
+                position: [p.x, p.y, p.z],
+            }));
         }
         let n = mesh.vertices.len();
         if let Some(i) = mesh
@@ -262,9 +263,10 @@ impl Collider {
             .iter()
             .position(|t| t.iter().any(|&v| v as usize >= n))
         {
-            return Err(CollisionError::BadMesh(format!(
-                "triangle {i} refers to a vertex past the {n} vertices"
-            )));
+            return Err(CollisionError::BadMesh(MeshFault::BadIndex {
+                triangle: i,
+                vertices: n,
+            }));
         }
         let report = mesh.inspect();
         let scale = mesh.area_scale();
@@ -280,9 +282,7 @@ impl Collider {
             })
             .collect();
         if items.is_empty() {
-            return Err(CollisionError::BadMesh(
-                "the mesh has no triangle of non-zero area".into(),
-            ));
+            return Err(CollisionError::BadMesh(MeshFault::NoArea));
         }
         let radius = mesh
             .vertices

@@ -6,7 +6,7 @@
 use super::exact::{distance_lower_bound, interferes};
 use super::method::{contact_gap, contact_step, SweepMethod};
 use super::shape::Collider;
-use super::CollisionError;
+use super::{CollisionError, MotionFault, PoseFault};
 use crate::math::limits::{steps, SampleBudget};
 use crate::math::{Point3, Transform, Vec3};
 
@@ -40,11 +40,11 @@ pub enum Motion {
 
 impl Motion {
     fn validate(&self) -> Result<(), CollisionError> {
-        let bad = |m: &str| Err(CollisionError::BadMotion(m.to_string()));
+        let bad = |f: MotionFault| Err(CollisionError::BadMotion(f));
         match self {
             Motion::Translation { start, offset } => {
                 if !start.is_finite() || !offset.iter().all(|v| v.is_finite()) {
-                    return bad("the start pose or the offset has NaN or infinite values");
+                    return bad(MotionFault::NonFinite("the start pose or the offset"));
                 }
             }
             Motion::Rotation {
@@ -61,18 +61,18 @@ impl Motion {
                         .all(|v| v.is_finite())
                     || !angle.is_finite()
                 {
-                    return bad("the rotation has NaN or infinite values");
+                    return bad(MotionFault::NonFinite("the rotation"));
                 }
                 if axis.norm() < 1e-12 {
-                    return bad("the rotation axis has zero length");
+                    return bad(MotionFault::ZeroAxis);
                 }
             }
             Motion::Poses(p) => {
                 if p.is_empty() {
-                    return bad("the pose sequence is empty");
+                    return bad(MotionFault::NoPoses);
                 }
                 if p.iter().any(|t| !t.is_finite()) {
-                    return bad("a pose of the sequence has NaN or infinite values");
+                    return bad(MotionFault::NonFinite("a pose of the sequence"));
                 }
             }
         }
@@ -196,6 +196,37 @@ const MAX_QUERIES: usize = 2_000_000;
 
 /// The first `t` at which `moving` (moved by `motion`) interferes with one of
 /// `obstacles`, by `options.method`.
+///
+/// # Examples
+/// A 10 mm cube pushed 30 mm along +X toward a cube standing 20 mm away stops where
+/// the faces meet (within the tolerance, 0.01 mm by default).
+/// ```
+/// use fitup::collision::{sweep, Collider, Motion, Obstacle, SweepOptions};
+/// use fitup::math::{Point3, Transform, Vec3};
+/// use fitup::mesh::Mesh;
+/// use std::sync::Arc;
+///
+/// let cube = Collider::new(Arc::new(Mesh::cuboid(
+///     Point3::new(0.0, 0.0, 0.0),
+///     Point3::new(10.0, 10.0, 10.0),
+/// )))
+/// .unwrap();
+/// let wall = Obstacle {
+///     collider: &cube,
+///     pose: Transform::from_translation(Vec3::new(20.0, 0.0, 0.0)),
+/// };
+/// let motion = Motion::Translation {
+///     start: Transform::IDENTITY,
+///     offset: Vec3::new(30.0, 0.0, 0.0),
+/// };
+/// let hit = sweep(&cube, &motion, &[wall], &SweepOptions::default()).unwrap();
+/// assert!(hit.hit && hit.with == Some(0));
+/// assert!((hit.pose.translation().x - 10.0).abs() < 0.05); // mm
+/// ```
+///
+/// # Errors
+/// An unusable motion or option ([`CollisionError::BadMotion`]), a bad pose or
+/// tolerance, or the time limit ([`CollisionError::TimeLimit`]).
 pub fn sweep(
     moving: &Collider,
     motion: &Motion,
@@ -207,17 +238,16 @@ pub fn sweep(
     if !(tol.is_finite() && tol >= 0.0) {
         return Err(CollisionError::BadTolerance(tol));
     }
-    if let Some(o) = obstacles.iter().find(|o| !o.pose.is_finite()) {
-        let _ = o;
-        return Err(CollisionError::BadPose(
-            "an obstacle pose has NaN or infinite values".into(),
-        ));
+    if let Some(i) = obstacles.iter().position(|o| !o.pose.is_finite()) {
+        return Err(CollisionError::BadPose(PoseFault::Obstacle(i)));
     }
     let budget_ms = options.time_limit_ms.unwrap_or(DEFAULT_SWEEP_TIME_LIMIT_MS);
     if !(budget_ms.is_finite() && budget_ms > 0.0) {
-        return Err(CollisionError::BadMotion(format!(
-            "the sweep's time limit must be a finite number of ms > 0, got {budget_ms}"
-        )));
+        return Err(MotionFault::option(
+            "sweep's time limit",
+            budget_ms,
+            "a finite number of ms > 0",
+        ));
     }
     let deadline = std::time::Instant::now().checked_add(std::time::Duration::from_secs_f64(
         budget_ms.min(1e12) / 1e3,
@@ -268,14 +298,14 @@ pub fn sweep(
             step_rad,
         } => {
             if !(step.is_finite() && step > 0.0) {
-                return Err(CollisionError::BadMotion(format!(
-                    "the step must be a finite number > 0 mm, got {step}"
-                )));
+                return Err(MotionFault::option("step", step, "a finite number > 0 mm"));
             }
             if step_rad.is_nan() || step_rad <= 0.0 {
-                return Err(CollisionError::BadMotion(format!(
-                    "the rotation step must be > 0 rad (or infinite), got {step_rad}"
-                )));
+                return Err(MotionFault::option(
+                    "rotation step",
+                    step_rad,
+                    "> 0 rad (or infinite)",
+                ));
             }
             // The steps of the whole motion, counted against the shared cap before
             // the first check (a step of 1e-12 mm is refused at once, not after the
@@ -298,9 +328,10 @@ pub fn sweep(
             }
             for (&(t0, t1, reach, _), &n) in pieces.iter().zip(&counts) {
                 if n as f64 * obstacles.len().max(1) as f64 > MAX_QUERIES as f64 {
-                    return Err(CollisionError::BadMotion(format!(
-                        "{n} steps of {step} mm would take more than {MAX_QUERIES} checks"
-                    )));
+                    return Err(CollisionError::BadMotion(MotionFault::TooManySteps {
+                        steps: n,
+                        limit: MAX_QUERIES,
+                    }));
                 }
                 let near = reachable(t0, reach);
                 for k in 1..=n {
@@ -313,9 +344,11 @@ pub fn sweep(
         }
         SweepMethod::Continuous { contact_step_mm } => {
             if !(contact_step_mm.is_finite() && contact_step_mm > 0.0) {
-                return Err(CollisionError::BadMotion(format!(
-                    "the contact step must be a finite number > 0 mm, got {contact_step_mm}"
-                )));
+                return Err(MotionFault::option(
+                    "contact step",
+                    contact_step_mm,
+                    "a finite number > 0 mm",
+                ));
             }
             let all: Vec<usize> = (0..obstacles.len()).collect();
             if let Some(i) = check(0.0, &all, &mut queries)? {
@@ -333,8 +366,8 @@ pub fn sweep(
                 let mut t = t0;
                 while t < t1 {
                     if queries > MAX_QUERIES {
-                        return Err(CollisionError::BadMotion(format!(
-                            "the continuous sweep took more than {MAX_QUERIES} queries"
+                        return Err(CollisionError::BadMotion(MotionFault::TooManyQueries(
+                            MAX_QUERIES,
                         )));
                     }
                     if out_of_time() {

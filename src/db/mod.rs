@@ -204,6 +204,7 @@ fn percent_decode(s: &str) -> String {
 
 /// Why a database operation failed. Every variant names the database.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DbError {
     /// The database was written by a newer fitup.
     #[error("{target} was written by a newer fitup (schema version {found}; this fitup {ours} knows versions up to {supported}): upgrade fitup to use it")]
@@ -419,15 +420,15 @@ impl Database {
                 }
                 let c = rusqlite::Connection::open(path).map_err(fail)?;
                 c.busy_timeout(BUSY_TIMEOUT).map_err(fail)?;
-                if existing && !is_fitup_sqlite(&c).map_err(fail)? {
+                if existing && !retry_locked(|| is_fitup_sqlite(&c)).map_err(fail)? {
                     return Err(foreign(
                         "it is a SQLite database of another program (it has tables but not fitup's schema_version)",
                     ));
                 }
                 // A file that is not SQLite fails here with "file is not a database".
-                let mode: String = c
-                    .query_row("PRAGMA journal_mode=WAL", [], |r| r.get(0))
-                    .map_err(fail)?;
+                let mode: String =
+                    retry_locked(|| c.query_row("PRAGMA journal_mode=WAL", [], |r| r.get(0)))
+                        .map_err(fail)?;
                 if mode != "wal" {
                     // Read-only media cannot switch; reads still work.
                     if path.exists() && is_read_only(path) {
@@ -444,9 +445,11 @@ impl Database {
                 // instead of SQLite's 1,000, so a run storing a few large results does
                 // not pay for one in the middle of a commit; the last connection to close
                 // checkpoints the rest.
-                c.execute_batch(
-                    "PRAGMA foreign_keys=ON; PRAGMA synchronous=NORMAL; PRAGMA cache_size=-16000; PRAGMA wal_autocheckpoint=4096;",
-                )
+                retry_locked(|| {
+                    c.execute_batch(
+                        "PRAGMA foreign_keys=ON; PRAGMA synchronous=NORMAL; PRAGMA cache_size=-16000; PRAGMA wal_autocheckpoint=4096;",
+                    )
+                })
                 .map_err(fail)?;
                 Conn::Sqlite(c)
             }
@@ -655,6 +658,31 @@ impl Database {
 
 /// Whether an open SQLite database is fitup's (or empty): it has no tables, or it has
 /// fitup's `schema_version` table with its `fitup_version` column. Reads only.
+/// Runs `f` again while SQLite answers "database is locked" or "busy", for up to
+/// [`BUSY_TIMEOUT`] with a growing, per-process staggered pause. Opening needs it:
+/// SQLite answers the switch to WAL (and a first read of a file another process is
+/// creating) at once, without waiting in its busy handler, so four processes opening a
+/// new database together lost one run record to "database is locked".
+fn retry_locked<T>(mut f: impl FnMut() -> rusqlite::Result<T>) -> rusqlite::Result<T> {
+    let started = std::time::Instant::now();
+    let jitter = u64::from(std::process::id() % 7);
+    let mut attempt = 0u64;
+    loop {
+        match f() {
+            Err(rusqlite::Error::SqliteFailure(e, _))
+                if matches!(
+                    e.code,
+                    rusqlite::ErrorCode::DatabaseBusy | rusqlite::ErrorCode::DatabaseLocked
+                ) && started.elapsed() < BUSY_TIMEOUT =>
+            {
+                attempt += 1;
+                std::thread::sleep(Duration::from_millis((5 * attempt).min(100) + jitter));
+            }
+            r => return r,
+        }
+    }
+}
+
 fn is_fitup_sqlite(c: &rusqlite::Connection) -> rusqlite::Result<bool> {
     let tables: i64 = c.query_row(
         "SELECT count(*) FROM sqlite_master WHERE type IN ('table', 'view', 'index', 'trigger')",

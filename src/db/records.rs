@@ -3,7 +3,7 @@
 
 use super::backend::{Raw, SqlValue, Tx};
 use super::{now_utc, Database, DbError};
-use crate::collision::SweepMethod;
+use crate::collision::{Contact, SweepMethod};
 use crate::document::DimensionKind;
 use crate::kinematics::{JointKind, Trajectory, TrajectorySample};
 use crate::math::{AngleConvention, Transform, Vec3};
@@ -180,19 +180,34 @@ impl Snapshot {
     }
 }
 
-/// One pair of an interference result.
+/// One pair of an interference result: the two components and the verdict.
+/// Stored as the verdict's words ([`Contact::state_name`], depth in mm,
+/// [`Contact::kind_text`]), read back by [`Contact::from_text`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct InterferencePair {
     /// First component.
     pub a: String,
     /// Second component.
     pub b: String,
+    /// The verdict (its depth in mm).
+    pub contact: Contact,
+}
+
+impl InterferencePair {
     /// `separate`, `touching` or `interfering`.
-    pub state: String,
-    /// Penetration estimate (mm).
-    pub depth_mm: f64,
-    /// `surfaces cross`, `X inside Y`, `boxes overlap`, or empty.
-    pub kind: String,
+    pub fn state(&self) -> &'static str {
+        self.contact.state_name()
+    }
+
+    /// Penetration estimate (mm), 0 unless interfering.
+    pub fn depth_mm(&self) -> f64 {
+        self.contact.depth()
+    }
+
+    /// `surfaces cross`, `A inside B`, `boxes overlap`, or empty.
+    pub fn kind(&self) -> String {
+        self.contact.kind_text(&self.a, &self.b)
+    }
 }
 
 /// A stored interference result.
@@ -355,7 +370,7 @@ fn finite(what: &str, values: &[f64]) -> Result<(), Raw> {
     }
 }
 
-const PATH_COLUMNS: &str = "id, run_id, name, created_at, component, seed, options, planner, found, reason, pose_count, length_mm, rotation_rad, raw_length_mm, raw_rotation_rad, iterations, nodes, pose_checks, edge_checks, time_ms, resolution, resolution_mm, resolution_rad, search_ms, smoothing_ms";
+const PATH_COLUMNS: &str = "id, run_id, name, created_at, component, seed, options, planner, found, reason, pose_count, length_mm, rotation_rad, raw_length_mm, raw_rotation_rad, iterations, nodes, pose_checks, edge_checks, time_ms, resolution, resolution_mm, resolution_rad, search_ms, smoothing_ms, tolerance_mm";
 
 impl Database {
     fn invalid(&self, what: &str, e: DbError) -> DbError {
@@ -476,6 +491,7 @@ impl Database {
                     path.search_ms,
                     path.smoothing_ms,
                     res_mm,
+                    path.tolerance_mm,
                 ],
             )?;
             let poses = path
@@ -490,7 +506,7 @@ impl Database {
                 })
                 .collect::<Result<Vec<_>, Raw>>()?;
             let id = tx.insert_id(
-                "INSERT INTO paths (run_id, name, created_at, component, seed, options, planner, found, reason, pose_count, length_mm, rotation_rad, raw_length_mm, raw_rotation_rad, iterations, nodes, pose_checks, edge_checks, time_ms, resolution, resolution_mm, resolution_rad, search_ms, smoothing_ms) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                "INSERT INTO paths (run_id, name, created_at, component, seed, options, planner, found, reason, pose_count, length_mm, rotation_rad, raw_length_mm, raw_rotation_rad, iterations, nodes, pose_checks, edge_checks, time_ms, resolution, resolution_mm, resolution_rad, search_ms, smoothing_ms, tolerance_mm) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                 &[
                     run_id.into(),
                     name.into(),
@@ -516,6 +532,7 @@ impl Database {
                     res_rad.into(),
                     path.search_ms.into(),
                     path.smoothing_ms.into(),
+                    path.tolerance_mm.into(),
                 ],
             )?;
             let poses: Vec<Vec<SqlValue>> = poses
@@ -806,15 +823,15 @@ impl Database {
                 .iter()
                 .enumerate()
                 .map(|(i, p)| {
-                    finite("the depth", &[p.depth_mm])?;
+                    finite("the depth", &[p.depth_mm()])?;
                     Ok(vec![
                         SqlValue::Int(id),
                         SqlValue::Int(i as i64),
                         p.a.as_str().into(),
                         p.b.as_str().into(),
-                        p.state.as_str().into(),
-                        p.depth_mm.into(),
-                        p.kind.as_str().into(),
+                        p.state().into(),
+                        p.depth_mm().into(),
+                        p.kind().into(),
                     ])
                 })
                 .collect::<Result<Vec<_>, Raw>>()?;
@@ -834,14 +851,15 @@ impl Database {
             let pairs = tx
                 .rows("SELECT a, b, state, depth_mm, kind FROM interference_pairs WHERE result_id = ? ORDER BY idx", &[id.into()])?
                 .iter()
-                .map(|r| InterferencePair {
-                    a: text(&r[0]).unwrap_or_default(),
-                    b: text(&r[1]).unwrap_or_default(),
-                    state: text(&r[2]).unwrap_or_default(),
-                    depth_mm: real(&r[3]),
-                    kind: text(&r[4]).unwrap_or_default(),
+                .map(|r| {
+                    let (a, b) = (text(&r[0]).unwrap_or_default(), text(&r[1]).unwrap_or_default());
+                    let state = text(&r[2]).unwrap_or_default();
+                    let kind = text(&r[4]).unwrap_or_default();
+                    let contact = Contact::from_text(&state, real(&r[3]), &kind, &a, &b)
+                        .map_err(|e| Raw::other(format!("stored pair `{a}`–`{b}`: {e}")))?;
+                    Ok(InterferencePair { a, b, contact })
                 })
-                .collect();
+                .collect::<Result<Vec<_>, Raw>>()?;
             Ok(Some(StoredInterference {
                 id,
                 run_id: h[0].as_i64(),
@@ -929,6 +947,11 @@ fn path_from(tx: &mut dyn Tx, r: &[SqlValue], with_poses: bool) -> Result<Stored
             search_ms: real(&r[23]),
             smoothing_ms: real(&r[24]),
             resolution,
+            // Rows from before schema 5 have none: every planner used the default
+            // unless told otherwise.
+            tolerance_mm: r[25]
+                .as_f64()
+                .unwrap_or(crate::collision::DEFAULT_TOLERANCE),
             planner: planner_name(r[7].as_str().unwrap_or("")),
         },
     })

@@ -10,7 +10,7 @@
 use super::backend::{Dialect, Raw, SqlValue, Tx};
 
 /// The schema version this fitup writes.
-pub const LATEST: u32 = 4;
+pub const LATEST: u32 = 5;
 
 /// One step of the schema.
 struct Migration {
@@ -158,6 +158,13 @@ CREATE TABLE skill_log (
     created_at TEXT NOT NULL
 );
 CREATE INDEX skill_log_by_plan ON skill_log(plan, id)
+",
+    },
+    Migration {
+        version: 5,
+        what: "the penetration tolerance a path was planned with",
+        sql: "
+ALTER TABLE paths ADD COLUMN tolerance_mm {real}
 ",
     },
 ];

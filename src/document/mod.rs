@@ -197,6 +197,7 @@ pub struct Component {
 
 /// Why a document operation failed. Load errors carry file, line and column.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DocumentError {
     /// An error in a file the user wrote (YAML, STL, …), located.
     #[error("{0}")]
@@ -211,9 +212,61 @@ pub enum DocumentError {
         /// Close matches or what exists.
         hint: String,
     },
-    /// An operation that is not allowed (moving a fixed component, a bad value…).
+    /// An operation a lower layer refused, in its words (a robot definition, the
+    /// mates' solver, a GLB export).
     #[error("{0}")]
     Invalid(String),
+    /// Fixed components do not move.
+    #[error("component `{0}` is fixed; set `fixed: false` to move it")]
+    FixedComponent(String),
+    /// A robot's links move with its joints, not on their own.
+    #[error("component `{component}` is a link of robot `{robot}`: set the robot's joints (or base) to move it")]
+    RobotLink {
+        /// The component asked to move.
+        component: String,
+        /// The robot that drives it.
+        robot: String,
+    },
+    /// A value out of range for what it sets.
+    #[error("{what}: {value} is out of range: {rule}")]
+    OutOfRange {
+        /// What was set (a dimension's full name, a pose, cut cells `name`).
+        what: String,
+        /// The value given (document units: mm or degrees; a pose as text).
+        value: String,
+        /// What is accepted.
+        rule: &'static str,
+    },
+    /// A new robot's name is empty or taken.
+    #[error("robot names must be unique and non-empty: `{0}`")]
+    RobotName(String),
+    /// A new robot would add a dimension that exists.
+    #[error("robot `{robot}`: dimension `{dimension}` already exists")]
+    DimensionTaken {
+        /// The robot being added.
+        robot: String,
+        /// The dimension's full name.
+        dimension: String,
+    },
+    /// A name with a control or invisible character (they hide or reorder what is
+    /// shown).
+    #[error("{what} name `{name}`: {character} is not allowed in names (control and invisible characters hide or reorder what is shown)")]
+    HiddenCharacter {
+        /// What is named (`robot`, …).
+        what: String,
+        /// The name, printable.
+        name: String,
+        /// The character, described.
+        character: String,
+    },
+    /// `save_as` onto one of the document's own meshes.
+    #[error("refusing to save over {}: it is the mesh of part `{part}`", .path.display())]
+    OverMesh {
+        /// The target path.
+        path: PathBuf,
+        /// The part whose mesh it is.
+        part: String,
+    },
     /// A robot refused an operation (kinematics, joint limits, program).
     #[error(transparent)]
     Robot(#[from] robot::RobotError),
@@ -336,6 +389,24 @@ impl Document {
     }
 
     /// Loads a document with a private mesh cache.
+    ///
+    /// # Examples
+    /// Drive a mate's dimension (internal units: radians) and read the driven pose
+    /// (world frame, mm):
+    /// ```
+    /// use fitup::document::Document;
+    ///
+    /// let mut doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+    /// doc.set_dimension("D1@角度1", 30f64.to_radians()).unwrap();
+    /// let angle = doc.dimension("D1@角度1").unwrap();
+    /// assert!((angle.document_value() - 30.0).abs() < 1e-9); // degrees in the file
+    /// let plate = doc.component("plate_b").unwrap();
+    /// assert!(plate.transform.translation().z > 700.0); // on the table, mm
+    /// ```
+    ///
+    /// # Errors
+    /// The file cannot be read, is not a valid document (located [`SourceError`]),
+    /// or its mates cannot be solved.
     pub fn open(path: &Path) -> Result<Self, DocumentError> {
         Self::load(path, &mut MeshCache::new())
     }
@@ -884,14 +955,13 @@ impl Document {
             return Ok(());
         }
         if self.components[i].fixed {
-            return Err(DocumentError::Invalid(format!(
-                "component `{name}` is fixed; set `fixed: false` to move it"
-            )));
+            return Err(DocumentError::FixedComponent(name.to_string()));
         }
         if let Some(robot) = self.driving_robot(i) {
-            return Err(DocumentError::Invalid(format!(
-                "component `{name}` is a link of robot `{robot}`: set the robot's joints (or base) to move it"
-            )));
+            return Err(DocumentError::RobotLink {
+                component: name.to_string(),
+                robot: robot.to_string(),
+            });
         }
         self.components[i].transform = t;
         self.revision += 1;
@@ -952,9 +1022,11 @@ impl Document {
                 name,
             } => {
                 if !(s.is_finite() && *s > 0.0 && *s <= MAX_ABS_VALUE) {
-                    return Err(DocumentError::Invalid(format!(
-                        "cut cells `{name}`: cell size must be a number > 0 mm and at most {MAX_ABS_VALUE:e} mm, not {s}"
-                    )));
+                    return Err(DocumentError::OutOfRange {
+                        what: format!("cut cells `{name}`: cell size"),
+                        value: format!("{s} mm"),
+                        rule: "a number > 0 mm and at most 1e9 mm (MAX_ABS_VALUE)",
+                    });
                 }
             }
             Feature::CutCells {
@@ -967,9 +1039,11 @@ impl Document {
                     .chain(z)
                     .find(|v| !v.is_finite() || v.abs() > MAX_ABS_VALUE)
                 {
-                    return Err(DocumentError::Invalid(format!(
-                        "cut cells `{name}`: plane position {v} is not finite or beyond {MAX_ABS_VALUE:e} mm"
-                    )));
+                    return Err(DocumentError::OutOfRange {
+                        what: format!("cut cells `{name}`: plane position"),
+                        value: format!("{v} mm"),
+                        rule: "finite and at most 1e9 mm from the origin (MAX_ABS_VALUE)",
+                    });
                 }
             }
         }
@@ -1108,9 +1182,11 @@ impl Document {
     pub fn set_dimension(&mut self, full_name: &str, value: f64) -> Result<(), DocumentError> {
         let full_name = &*nfc_name(full_name);
         if !value.is_finite() {
-            return Err(DocumentError::Invalid(format!(
-                "{full_name}: value {value} is not finite"
-            )));
+            return Err(DocumentError::OutOfRange {
+                what: full_name.to_string(),
+                value: value.to_string(),
+                rule: "a finite number",
+            });
         }
         // The range is checked in document units (mm, degrees), as the file holds them.
         let doc_value = Dimension {
@@ -1120,9 +1196,11 @@ impl Document {
         }
         .document_value();
         if !doc_value.is_finite() || doc_value.abs() > MAX_ABS_VALUE {
-            return Err(DocumentError::Invalid(format!(
-                "{full_name}: value {doc_value:e} is out of range (at most {MAX_ABS_VALUE:e} mm or degrees)"
-            )));
+            return Err(DocumentError::OutOfRange {
+                what: full_name.to_string(),
+                value: format!("{doc_value:e}"),
+                rule: "at most 1e9 mm or degrees (MAX_ABS_VALUE)",
+            });
         }
         let i = match self.dimension_target(full_name)? {
             DimensionTarget::Mate(i) => i,
@@ -1135,9 +1213,11 @@ impl Document {
             }
         };
         if self.mates[i].kind == MateKind::Distance && value < 0.0 {
-            return Err(DocumentError::Invalid(format!(
-                "{full_name}: a distance cannot be negative ({value} mm)"
-            )));
+            return Err(DocumentError::OutOfRange {
+                what: full_name.to_string(),
+                value: format!("{value} mm"),
+                rule: "a distance cannot be negative",
+            });
         }
         let before = (
             self.mates[i].value,
@@ -1277,11 +1357,10 @@ impl Document {
             .values()
             .find(|p| canonical_target(&p.mesh_path) == target)
         {
-            return Err(DocumentError::Invalid(format!(
-                "refusing to save over {}: it is the mesh of part `{}`",
-                path.display(),
-                p.name
-            )));
+            return Err(DocumentError::OverMesh {
+                path: path.to_path_buf(),
+                part: p.name.clone(),
+            });
         }
         let expected = (target == canonical_target(&self.path))
             .then_some(self.disk_hash)
@@ -1461,12 +1540,18 @@ fn canonical_target(p: &Path) -> PathBuf {
 /// Checks a pose set through the API: finite, translation within [`MAX_ABS_VALUE`] mm.
 pub(crate) fn check_pose(t: &Transform, what: impl std::fmt::Display) -> Result<(), DocumentError> {
     if !t.is_finite() {
-        return Err(DocumentError::Invalid(format!("{what} is not finite")));
+        return Err(DocumentError::OutOfRange {
+            what: what.to_string(),
+            value: format!("{t}"),
+            rule: "a pose with finite entries",
+        });
     }
     if t.translation().iter().any(|v| v.abs() > MAX_ABS_VALUE) {
-        return Err(DocumentError::Invalid(format!(
-            "{what} is out of range: translations are at most {MAX_ABS_VALUE:e} mm"
-        )));
+        return Err(DocumentError::OutOfRange {
+            what: what.to_string(),
+            value: format!("{t}"),
+            rule: "translations are at most 1e9 mm (MAX_ABS_VALUE)",
+        });
     }
     Ok(())
 }
@@ -1491,11 +1576,11 @@ pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> 
         .chars()
         .find(|&c| crate::diagnostics::hidden_char(c).is_some())
     {
-        return Err(DocumentError::Invalid(format!(
-            "{what} name `{}`: {} is not allowed in names (control and invisible characters hide or reorder what is shown)",
-            crate::diagnostics::printable(name, false),
-            crate::diagnostics::describe_char(c)
-        )));
+        return Err(DocumentError::HiddenCharacter {
+            what: what.to_string(),
+            name: crate::diagnostics::printable(name, false).into_owned(),
+            character: crate::diagnostics::describe_char(c),
+        });
     }
     Ok(nfc_name(name).into_owned())
 }

@@ -2,6 +2,7 @@
 
 /// Why a tree, a robot or a joint vector is not valid.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum KinematicsError {
     /// A link of a tree is malformed.
     #[error("link {link} ({name}): {cause}")]

@@ -110,16 +110,62 @@ impl Default for IkOptions {
     }
 }
 
+/// Why a target is out of reach, as each solver sees it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Unreachable {
+    /// The target pose or the reference joints have NaN or infinite values.
+    #[error("the target or the reference is not finite")]
+    NotFinite,
+    /// A closed-form solver's wrist point is outside the arm's reach.
+    #[error("{wrist_point} is outside the arm's reach ({min_mm:.3}..{max_mm:.3} mm from axis 2, at least {offset_mm:.3} mm from axis 1)")]
+    BeyondReach {
+        /// Which point (the wrist centre; a UR's wrist point on axis 4).
+        wrist_point: &'static str,
+        /// Nearest reach from axis 2 (mm).
+        min_mm: f64,
+        /// Farthest reach from axis 2 (mm).
+        max_mm: f64,
+        /// The lateral offset the point keeps from axis 1 (mm).
+        offset_mm: f64,
+    },
+    /// The numeric solver's descents did not converge.
+    #[error("no descent converged; closest approach {distance_mm:.3} mm / {angle_rad:.3e} rad")]
+    NoConvergence {
+        /// Closest position error reached (mm).
+        distance_mm: f64,
+        /// Its orientation error (rad).
+        angle_rad: f64,
+    },
+    /// A solver returned no solution and no reason.
+    #[error("no solution")]
+    NoSolution,
+}
+
+/// Which joints a singular target leaves undetermined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Singularity {
+    /// A closed-form solver's wrist point is on axis 1 or axis 2: joint 1 or 2 is
+    /// undetermined.
+    #[error("the wrist point is on axis 1 or axis 2 (joint 1 or 2 undetermined)")]
+    JointUndetermined,
+    /// The numeric solver converged where the Jacobian is rank-deficient.
+    #[error("the solution has a rank-deficient Jacobian")]
+    RankDeficient,
+}
+
 /// Why inverse kinematics found no usable solution.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum IkError {
-    /// The target lies outside the workspace (reason says which condition failed).
+    /// The target lies outside the workspace (which condition failed).
     #[error("target unreachable: {0}")]
-    Unreachable(String),
+    Unreachable(Unreachable),
     /// The target is at a singularity: infinitely many solutions (which joints are
-    /// coupled is in the message).
+    /// coupled).
     #[error("target at a singularity: {0}")]
-    Singular(String),
+    Singular(Singularity),
     /// Solutions exist but every one violates a joint limit.
     #[error("every solution violates a joint limit (first: joint {joint} = {value:.6})")]
     JointLimits {

@@ -1,7 +1,7 @@
 //! [`NumericIk`]: damped least squares (Levenberg–Marquardt) inverse kinematics for any
 //! chain, with seeded random restarts.
 
-use super::{IkError, IkOptions, IkSolution, JointKind, Robot};
+use super::{IkError, IkOptions, IkSolution, JointKind, Robot, Singularity, Unreachable};
 use crate::math::{Rng, Transform};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
@@ -222,9 +222,7 @@ impl NumericIk {
             }));
         }
         if reference.iter().any(|v| !v.is_finite()) || !target.is_finite() {
-            return Err(IkError::Unreachable(
-                "the target or the reference is not finite".into(),
-            ));
+            return Err(IkError::Unreachable(Unreachable::NotFinite));
         }
         let o = &self.options;
         let target = *target.isometry();
@@ -279,9 +277,7 @@ impl NumericIk {
             return Ok(found);
         }
         if singular {
-            return Err(IkError::Singular(
-                "the solution has a rank-deficient Jacobian".into(),
-            ));
+            return Err(IkError::Singular(Singularity::RankDeficient));
         }
         // Would it converge without the limits?
         let mut rng = Rng::new(o.seed ^ 0x5eed);
@@ -301,9 +297,9 @@ impl NumericIk {
                 }
             }
         }
-        Err(IkError::Unreachable(format!(
-            "no descent converged; closest approach {:.3} mm / {:.3e} rad",
-            best.0, best.1
-        )))
+        Err(IkError::Unreachable(Unreachable::NoConvergence {
+            distance_mm: best.0,
+            angle_rad: best.1,
+        }))
     }
 }

@@ -11,6 +11,7 @@
 //! the frame conventions and the derivation of the analytic solver.
 
 mod catalog;
+mod closed_form;
 mod dh;
 mod drilling;
 mod error;
@@ -29,17 +30,20 @@ mod ur;
 mod urdf;
 
 pub use catalog::{catalog_names, robot_by_name, Catalog};
+pub use closed_form::{Branch, Branches, ClosedFormIk};
 pub use dh::{DhConvention, DhRow};
 pub use drilling::{
     drill_program, hole_tool_pose, parse_holes, read_holes, DrillError, DrillOptions, DrillReport,
     Hole, HoleOutcome, HoleReport, ToolAxis,
 };
 pub use error::KinematicsError;
-pub use ik::{Configuration, Elbow, IkError, IkOptions, IkSolution, Shoulder, Wrist};
+pub use ik::{
+    Configuration, Elbow, IkError, IkOptions, IkSolution, Shoulder, Singularity, Unreachable, Wrist,
+};
 pub use ik_numeric::NumericIk;
 pub use joint::{Joint, JointKind, JointLimits, Mimic};
 pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
-pub use opw::{Branch, Branches, NotOpw, OpwSolver};
+pub use opw::{NotOpw, OpwSolver};
 pub use opw_params::OpwParameters;
 pub use precision::{
     precision_manipulator, Free, NotPrecision, PrecisionAxes, PrecisionError, FINGER_OPEN,

@@ -61,6 +61,7 @@ impl Default for MotionOptions {
 
 /// Why a motion cannot be carried out.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum MotionError {
     /// Bad joint vector.
     #[error(transparent)]

@@ -40,18 +40,21 @@
 //! When the two `q₅` roots coincide
 //! (`sin(acos(a₄·t)) = 0`) axes 4 and 6 line up: the wrist singularity.
 
-use super::{
-    Configuration, Elbow, IkError, IkOptions, IkSolution, JointKind, JointLimits, Robot, Shoulder,
-    Wrist,
+use super::closed_form::{
+    ang, rot2, rot_vec, wrap, zero_axis_lines, DISTANCE_TOL, PARALLEL_TOL, WRIST_SNAP,
 };
-use crate::math::Transform;
+use super::{
+    Branch, Branches, ClosedFormIk, Configuration, Elbow, JointKind, JointLimits, Robot, Shoulder,
+    Unreachable, Wrist,
+};
 use nalgebra::{
     Isometry3, Matrix3, Point3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3,
 };
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 
 /// Why a robot does not qualify for the closed-form solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum NotOpw {
     /// The chain does not have exactly six revolute joints.
     #[error("the chain does not have exactly six revolute joints")]
@@ -71,77 +74,6 @@ pub enum NotOpw {
     /// Axis 3 or the wrist centre lies on the previous axis (zero link length).
     #[error("zero upper-arm or forearm length")]
     Degenerate,
-}
-
-/// The configuration tag of one principal branch.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Branch {
-    /// Joint values in (−π, π] (rad).
-    pub joints: [f64; 6],
-    /// Shoulder, elbow and wrist choice.
-    pub configuration: Configuration,
-    /// Axes 4 and 6 are (within the singularity threshold) aligned: joints 4 and 6
-    /// are ill-conditioned; at the singularity itself joint 5 is exactly φ₅ (0 for the
-    /// usual wrist) and joint 4 keeps the seed (see [`OpwSolver::branches_seeded`]).
-    pub singular: bool,
-}
-
-/// Up to eight principal branches (joint values in (−π, π], no limits applied), in a
-/// fixed-capacity array so that solving allocates nothing.
-#[derive(Debug, Clone, Copy)]
-pub struct Branches {
-    items: [Branch; 8],
-    len: usize,
-    /// The target is at or near a singularity: some branch is flagged
-    /// [`Branch::singular`] (wrist), or branches were dropped because joint 1 or
-    /// joint 2 is undetermined (wrist centre on axis 1 or on axis 2).
-    pub singular: bool,
-    /// Some branch was dropped because the wrist centre is out of reach.
-    pub out_of_reach: bool,
-}
-
-impl Branches {
-    const EMPTY_BRANCH: Branch = Branch {
-        joints: [0.0; 6],
-        configuration: Configuration {
-            shoulder: Shoulder::Front,
-            elbow: Elbow::Up,
-            wrist: Wrist::NoFlip,
-        },
-        singular: false,
-    };
-
-    pub(crate) fn new() -> Self {
-        Self {
-            items: [Self::EMPTY_BRANCH; 8],
-            len: 0,
-            singular: false,
-            out_of_reach: false,
-        }
-    }
-
-    /// The branches found.
-    pub fn as_slice(&self) -> &[Branch] {
-        &self.items[..self.len]
-    }
-
-    /// Number of branches found (0..=8).
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    /// Whether no branch was found.
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    #[inline]
-    pub(crate) fn push(&mut self, b: Branch) {
-        if self.len < 8 {
-            self.items[self.len] = b;
-            self.len += 1;
-        }
-    }
 }
 
 /// Closed-form solver for one robot (tool included), with every parameter
@@ -189,48 +121,6 @@ pub struct OpwSolver {
     q0: Quaternion<f64>,
     limits: [Option<JointLimits>; 6],
 }
-
-/// Angle of the planar vector (x, z), increasing with right-hand rotation about +y.
-#[inline]
-pub(crate) fn ang(v: [f64; 2]) -> f64 {
-    v[0].atan2(v[1])
-}
-
-/// Rotation of the planar vector (x, z) about +y by the angle with sine `s`, cosine `c`.
-#[inline]
-pub(crate) fn rot2(v: [f64; 2], s: f64, c: f64) -> [f64; 2] {
-    [v[0] * c + v[1] * s, -v[0] * s + v[1] * c]
-}
-
-/// Rodrigues rotation of `v` about unit `k` by the angle with sine `s`, cosine `c`.
-#[inline]
-pub(crate) fn rot_vec(k: &Vector3<f64>, s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
-    v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
-}
-
-/// Wraps an angle into (−π, π].
-#[inline]
-pub(crate) fn wrap(a: f64) -> f64 {
-    // Inputs here are sums of a few angles in (−π, π]: subtracting turns is cheaper
-    // than a floating-point remainder; the remainder covers anything larger.
-    let mut r = if a.abs() > 4.0 * TAU { a % TAU } else { a };
-    while r > PI {
-        r -= TAU;
-    }
-    while r <= -PI {
-        r += TAU;
-    }
-    r
-}
-
-pub(crate) const PARALLEL_TOL: f64 = 1e-9;
-/// Below this sine of the angle between axis 4 and the target's axis 6 the wrist is
-/// treated as exactly singular. The arm joints of a target taken near a shoulder or
-/// elbow singularity carry ~1e-13 rad of rounding, which shows up in that sine; 1e-10
-/// absorbs it while the orientation error of snapping (the sine itself) stays below
-/// 1e-10 rad.
-pub(crate) const WRIST_SNAP: f64 = 1e-10;
-pub(crate) const DISTANCE_TOL: f64 = 1e-6;
 
 impl OpwSolver {
     /// Derives the solver from a robot's geometry at the zero configuration, or says
@@ -384,13 +274,16 @@ impl OpwSolver {
         self.root_from_c * Isometry3::from_parts(Translation3::from(p), r)
     }
 
-    /// Every principal branch (up to 8) reaching the TCP pose `target` given in the
-    /// root frame; joint values in (−π, π], no limits applied; at a wrist singularity
-    /// joint 4 is 0 (see [`Self::branches_seeded`]).
-    #[inline]
-    pub fn branches(&self, target: &Isometry3<f64>, singularity_threshold: f64) -> Branches {
-        self.branches_seeded(target, singularity_threshold, 0.0)
+    /// Lateral offset `b` of the wrist centre from axis 1 (mm), upper-arm and
+    /// forearm vectors in the arm plane `(x, z)` (mm), and the signs of axes 2, 3
+    /// relative to the canonical `y`: the detected ortho-parallel parameters.
+    pub fn parameters(&self) -> ([f64; 2], [f64; 2], [f64; 2], f64, [f64; 2]) {
+        (self.p2, self.u2, self.u3, self.b, [self.s2, self.s3])
     }
+}
+
+impl ClosedFormIk for OpwSolver {
+    const SEED_JOINT: usize = 3;
 
     /// Every principal branch reaching `target` (root frame, mm); joint values in
     /// (−π, π], no limits applied.
@@ -405,7 +298,7 @@ impl OpwSolver {
     /// The shoulder singularity (wrist centre on axis 1) and the wrist centre on axis 2
     /// leave joint 1 or 2 undetermined: those branches are dropped and
     /// [`Branches::singular`] set.
-    pub fn branches_seeded(
+    fn branches_seeded(
         &self,
         target: &Isometry3<f64>,
         singularity_threshold: f64,
@@ -587,169 +480,27 @@ impl OpwSolver {
         out
     }
 
-    /// All solutions for the TCP pose `target` (root frame) within the joint limits,
-    /// with every ±360° variant the limits allow, sorted by Euclidean joint distance to
-    /// `reference`.
-    pub fn solve(
-        &self,
-        _robot: &Robot,
-        target: &Transform,
-        reference: &[f64],
-        options: &IkOptions,
-    ) -> Result<Vec<IkSolution>, IkError> {
-        let seed4 = reference.get(3).copied().unwrap_or(0.0);
-        let branches =
-            self.branches_seeded(target.isometry(), options.singularity_threshold, seed4);
-        if branches.is_empty() {
-            return Err(if branches.singular {
-                IkError::Singular(
-                    "the wrist centre is on axis 1 or axes 4 and 6 are aligned (joint 1 or joints 4+6 undetermined)"
-                        .into(),
-                )
-            } else {
-                IkError::Unreachable(format!(
-                    "the wrist centre is outside the arm's reach ({:.3}..{:.3} mm from axis 2, at least {:.3} mm from axis 1)",
-                    self.reach[0],
-                    self.reach[1],
-                    self.b.abs()
-                ))
-            });
-        }
-        solutions_within_limits(branches.as_slice(), &self.limits, reference)
+    fn joint_limits(&self) -> &[Option<JointLimits>; 6] {
+        &self.limits
     }
 
-    /// Lateral offset `b` of the wrist centre from axis 1 (mm), upper-arm and
-    /// forearm vectors in the arm plane `(x, z)` (mm), and the signs of axes 2, 3
-    /// relative to the canonical `y`: the detected ortho-parallel parameters.
-    pub fn parameters(&self) -> ([f64; 2], [f64; 2], [f64; 2], f64, [f64; 2]) {
-        (self.p2, self.u2, self.u3, self.b, [self.s2, self.s3])
-    }
-}
-
-/// Six joint axis lines: unit direction and a point (mm).
-pub(crate) type AxisLines = [(Vector3<f64>, Point3<f64>); 6];
-
-/// Joint axis lines (unit direction, point) of a 6R robot at the zero configuration in
-/// the root frame, and the TCP pose at zero (mm); `None` unless the flange chain has
-/// exactly six joints, all revolute.
-pub(crate) fn zero_axis_lines(robot: &Robot) -> Option<(AxisLines, Isometry3<f64>)> {
-    if robot.dof() != 6
-        || robot
-            .joint_kinds()
-            .iter()
-            .any(|k| *k != JointKind::Revolute)
-    {
-        return None;
-    }
-    let links = robot.tree().links();
-    let chain = robot.tree().path_from_root(robot.flange())?;
-    let mut pose = Isometry3::identity();
-    let mut axes = [(Vector3::zeros(), Point3::origin()); 6];
-    let mut k = 0;
-    for &i in &chain {
-        let l = &links[i];
-        if l.joint.kind != JointKind::Fixed {
-            axes[k] = (pose.rotation * l.joint.axis, pose * l.joint.point);
-            k += 1;
-        }
-        pose *= l.home.isometry();
-    }
-    Some((axes, pose * robot.tool().isometry()))
-}
-
-/// Expands principal branches (joint values in (−π, π]) into every solution within
-/// `limits`, with each ±2π variant a limit range allows (an unlimited joint takes the
-/// representative nearest the reference), sorted by Euclidean joint distance to
-/// `reference`; the error names the first violated joint of the nearest branch when
-/// every branch is outside the limits. Shared by the closed-form solvers.
-pub(crate) fn solutions_within_limits(
-    branches: &[Branch],
-    limits: &[Option<JointLimits>; 6],
-    reference: &[f64],
-) -> Result<Vec<IkSolution>, IkError> {
-    let mut out = Vec::new();
-    let mut first_violation: Option<(f64, usize, f64)> = None;
-    for br in branches {
-        let mut choices: [[f64; 4]; 6] = [[0.0; 4]; 6];
-        let mut counts = [0usize; 6];
-        for j in 0..6 {
-            let v = br.joints[j];
-            match limits[j] {
-                None => {
-                    // Unlimited: the representative nearest the reference.
-                    let r = reference.get(j).copied().unwrap_or(0.0);
-                    choices[j][0] = v + TAU * ((r - v) / TAU).round();
-                    counts[j] = 1;
-                }
-                Some(l) => {
-                    let kmin = ((l.min - 1e-9 - v) / TAU).ceil() as i64;
-                    let kmax = ((l.max + 1e-9 - v) / TAU).floor() as i64;
-                    let mut k = kmin;
-                    while k <= kmax && counts[j] < 4 {
-                        choices[j][counts[j]] = (v + TAU * k as f64).clamp(l.min, l.max);
-                        counts[j] += 1;
-                        k += 1;
-                    }
-                }
-            }
-        }
-        if let Some(j) = counts.iter().position(|&c| c == 0) {
-            let dist: f64 = br
-                .joints
-                .iter()
-                .zip(reference)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum();
-            if first_violation.is_none_or(|(d, _, _)| dist < d) {
-                first_violation = Some((dist, j + 1, br.joints[j]));
-            }
-            continue;
-        }
-        let mut idx = [0usize; 6];
-        loop {
-            let joints: Vec<f64> = (0..6).map(|j| choices[j][idx[j]]).collect();
-            let distance = joints
-                .iter()
-                .zip(reference)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum::<f64>()
-                .sqrt();
-            out.push(IkSolution {
-                joints,
-                configuration: Some(br.configuration),
-                distance,
-                singular: br.singular,
-            });
-            let mut j = 0;
-            loop {
-                idx[j] += 1;
-                if idx[j] < counts[j] {
-                    break;
-                }
-                idx[j] = 0;
-                j += 1;
-                if j == 6 {
-                    break;
-                }
-            }
-            if j == 6 {
-                break;
-            }
+    fn unreachable(&self) -> Unreachable {
+        Unreachable::BeyondReach {
+            wrist_point: "the wrist centre",
+            min_mm: self.reach[0],
+            max_mm: self.reach[1],
+            offset_mm: self.b.abs(),
         }
     }
-    if out.is_empty() {
-        let (_, joint, value) = first_violation.unwrap_or((0.0, 1, 0.0));
-        return Err(IkError::JointLimits { joint, value });
-    }
-    out.sort_by(|a, b| a.distance.total_cmp(&b.distance));
-    Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{Catalog, Joint, KinematicTree, Link, NumericIk, OpwParameters};
-    use crate::math::{Rng, Vec3};
+    use crate::kinematics::{
+        Catalog, IkError, IkOptions, Joint, KinematicTree, Link, NumericIk, OpwParameters,
+    };
+    use crate::math::{Rng, Transform, Vec3};
 
     /// The parameters extracted from the MZ07 tree are table 2's: upper arm 330 mm,
     /// forearm √(340² + 45²) mm, no lateral offset, axis 2 at 50 mm out and 340 mm up.

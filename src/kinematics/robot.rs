@@ -2,8 +2,8 @@
 //! the ordered list of its movable joints.
 
 use super::{
-    IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree, KinematicsError,
-    NumericIk, OpwSolver, UrSolver,
+    ClosedFormIk, IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree,
+    KinematicsError, NumericIk, OpwSolver, UrSolver,
 };
 use crate::math::{AngleConvention, Transform};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
@@ -436,7 +436,7 @@ impl Robot {
         }
         let local = Transform::from_isometry(self.base.isometry().inverse() * target.isometry());
         if let Some(solver) = &self.analytic {
-            return solver.solve(self, &local, reference, options);
+            return solver.solve(&local, reference, options);
         }
         if let Some(solver) = &self.ur {
             return solver.solve(&local, reference, options);
@@ -453,7 +453,7 @@ impl Robot {
     ) -> Result<IkSolution, IkError> {
         let mut all = self.inverse(target, reference, options)?;
         if all.is_empty() {
-            return Err(IkError::Unreachable("no solution".into()));
+            return Err(IkError::Unreachable(super::Unreachable::NoSolution));
         }
         Ok(all.swap_remove(0))
     }
@@ -479,5 +479,51 @@ impl Robot {
                 Some(sol)
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::kinematics::{Catalog, IkOptions};
+    use crate::math::{Transform, Vec3};
+
+    /// Each pose of a chain is solved near the previous solution: FK of the solutions
+    /// gives the targets back, a pose out of reach is `None` without breaking the
+    /// chain, and a path of nearby poses gets nearby joints (no branch flips).
+    #[test]
+    fn inverse_chain_follows_the_previous_solution() {
+        let robot = Catalog::NachiMz07.robot();
+        let start: Vec<f64> = [10.0f64, -20.0, 30.0, 40.0, -50.0, 60.0]
+            .iter()
+            .map(|v| v.to_radians())
+            .collect();
+        let mut targets: Vec<Transform> = (0..20)
+            .map(|k| {
+                let mut q = start.clone();
+                q[0] += 0.01 * k as f64;
+                q[4] += 0.005 * k as f64;
+                robot.tcp_pose(&q).unwrap()
+            })
+            .collect();
+        targets.insert(5, Transform::from_translation(Vec3::new(1e5, 0.0, 0.0)));
+        let out = robot.inverse_chain(&targets, &start, &IkOptions::default());
+        assert_eq!(out.len(), targets.len());
+        assert!(out[5].is_none());
+        let mut previous = start.clone();
+        for (t, s) in targets.iter().zip(&out) {
+            let Some(s) = s else { continue };
+            assert!(robot.tcp_pose(&s.joints).unwrap().approx_eq(t, 1e-6, 1e-9));
+            let step = s
+                .joints
+                .iter()
+                .zip(&previous)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                step < 0.05,
+                "joint step {step} rad between neighbouring poses"
+            );
+            previous.clone_from(&s.joints);
+        }
     }
 }

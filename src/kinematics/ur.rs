@@ -33,20 +33,19 @@
 //!   solved as in the OPW solver (elbow up/down; `|κ| = 1` is the stretched or folded
 //!   elbow with one double root); `q₄ = s₄(θ₂₃₄ − θ₂ − θ₃)`.
 
-use super::opw::{
-    ang, rot2, rot_vec, solutions_within_limits, wrap, zero_axis_lines, DISTANCE_TOL, PARALLEL_TOL,
-    WRIST_SNAP,
+use super::closed_form::{
+    ang, rot2, rot_vec, wrap, zero_axis_lines, DISTANCE_TOL, PARALLEL_TOL, WRIST_SNAP,
 };
 use super::{
-    Branch, Branches, Configuration, Elbow, IkError, IkOptions, IkSolution, JointLimits, Robot,
-    Shoulder, Wrist,
+    Branch, Branches, ClosedFormIk, Configuration, Elbow, JointLimits, Robot, Shoulder,
+    Unreachable, Wrist,
 };
-use crate::math::Transform;
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 /// Why a robot does not qualify for the UR closed-form solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum NotUr {
     /// The chain does not have exactly six revolute joints.
     #[error("the chain does not have exactly six revolute joints")]
@@ -220,13 +219,23 @@ impl UrSolver {
         })
     }
 
-    /// Every principal branch reaching `target` (root frame); joint values in
-    /// (−π, π], no limits applied; at a wrist singularity joint 6 is 0 (see
-    /// [`Self::branches_seeded`]).
-    #[inline]
-    pub fn branches(&self, target: &Isometry3<f64>, singularity_threshold: f64) -> Branches {
-        self.branches_seeded(target, singularity_threshold, 0.0)
+    /// The detected parameters: lateral offset `b` of axis 5 from axis 1 (mm), the
+    /// upper-arm and forearm vectors in the arm plane `(x, z)` (mm), the signed
+    /// distance `e5` between the wrist points on axis 5 (mm) and the distance from
+    /// `W₅` to the TCP (mm).
+    pub fn parameters(&self) -> UrParameters {
+        UrParameters {
+            b: self.b,
+            upper_arm: self.u2,
+            forearm: self.u3,
+            e5: self.e5,
+            tcp_offset: self.w5_tcp.norm(),
+        }
     }
+}
+
+impl ClosedFormIk for UrSolver {
+    const SEED_JOINT: usize = 5;
 
     /// Every principal branch (up to 8: shoulder × wrist × elbow) reaching `target`
     /// (root frame, mm); joint values in (−π, π], no limits applied.
@@ -241,7 +250,7 @@ impl UrSolver {
     /// elbow** (`|κ| = 1`): the two roots coincide and come back once. With no lateral
     /// offset and `W₅` on axis 1, or `W₄` on axis 2, joint 1 or 2 is undetermined:
     /// those branches are dropped and [`Branches::singular`] set.
-    pub fn branches_seeded(
+    fn branches_seeded(
         &self,
         target: &Isometry3<f64>,
         singularity_threshold: f64,
@@ -404,46 +413,16 @@ impl UrSolver {
         out
     }
 
-    /// All solutions for the TCP pose `target` (root frame, mm) within the joint
-    /// limits, with every ±2π variant the limits allow, sorted by Euclidean joint
-    /// distance to `reference` (the same rule as [`OpwSolver::solve`](super::OpwSolver::solve)).
-    pub fn solve(
-        &self,
-        target: &Transform,
-        reference: &[f64],
-        options: &IkOptions,
-    ) -> Result<Vec<IkSolution>, IkError> {
-        let seed6 = reference.get(5).copied().unwrap_or(0.0);
-        let branches =
-            self.branches_seeded(target.isometry(), options.singularity_threshold, seed6);
-        if branches.is_empty() {
-            return Err(if branches.singular {
-                IkError::Singular(
-                    "the wrist point is on axis 1 or axis 2 (joint 1 or 2 undetermined)".into(),
-                )
-            } else {
-                IkError::Unreachable(format!(
-                    "the wrist is outside the arm's reach (axis 4 {:.3}..{:.3} mm from axis 2, axis 5 at least {:.3} mm from axis 1)",
-                    self.reach[0],
-                    self.reach[1],
-                    self.b.abs()
-                ))
-            });
-        }
-        solutions_within_limits(branches.as_slice(), &self.limits, reference)
+    fn joint_limits(&self) -> &[Option<JointLimits>; 6] {
+        &self.limits
     }
 
-    /// The detected parameters: lateral offset `b` of axis 5 from axis 1 (mm), the
-    /// upper-arm and forearm vectors in the arm plane `(x, z)` (mm), the signed
-    /// distance `e5` between the wrist points on axis 5 (mm) and the distance from
-    /// `W₅` to the TCP (mm).
-    pub fn parameters(&self) -> UrParameters {
-        UrParameters {
-            b: self.b,
-            upper_arm: self.u2,
-            forearm: self.u3,
-            e5: self.e5,
-            tcp_offset: self.w5_tcp.norm(),
+    fn unreachable(&self) -> Unreachable {
+        Unreachable::BeyondReach {
+            wrist_point: "axis 4's wrist point",
+            min_mm: self.reach[0],
+            max_mm: self.reach[1],
+            offset_mm: self.b.abs(),
         }
     }
 }
@@ -467,8 +446,10 @@ pub struct UrParameters {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{Catalog, DhConvention, DhRow, IkSolverKind, NumericIk};
-    use crate::math::Rng;
+    use crate::kinematics::{
+        Catalog, DhConvention, DhRow, IkError, IkOptions, IkSolverKind, NumericIk,
+    };
+    use crate::math::{Rng, Transform};
     use std::f64::consts::FRAC_PI_2;
 
     fn same_angles(a: &[f64], b: &[f64], tol: f64) -> bool {

@@ -24,6 +24,7 @@ pub const MAX_SAMPLES: usize = 1_000_000;
 /// A step size that cannot be turned into a number of samples, or one that would give
 /// more than [`MAX_SAMPLES`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum LimitError {
     /// The step is not a finite number > 0.
     #[error("`{argument}` must be a finite number > 0, not {value}")]

@@ -31,6 +31,7 @@ pub struct Transform {
 
 /// Why a 4×4 matrix is not a rigid pose matrix.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum TransformError {
     /// A value is NaN or infinite.
     #[error("the pose matrix has a non-finite value (NaN or infinity)")]

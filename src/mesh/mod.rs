@@ -133,6 +133,14 @@ pub fn parse_mesh(
 /// [`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE) mm, at most [`MAX_TRIANGLES`]
 /// triangles, at least one with an area, errors naming the file and the line (text
 /// formats) or element. A mesh that is open is read; [`Mesh::inspect`] reports it.
+///
+/// # Examples
+/// ```
+/// let mesh = fitup::mesh::read_mesh_file(std::path::Path::new("models/meshes/screw.stl")).unwrap();
+/// assert!(mesh.inspect().is_watertight());
+/// let b = mesh.bounds().unwrap(); // part frame, mm
+/// assert!(b.hi.z - b.lo.z > 1.0);
+/// ```
 pub fn read_mesh_file(path: &Path) -> Result<Mesh, MeshError> {
     read_mesh_with_files(path).map(|(m, _)| m)
 }

@@ -50,7 +50,7 @@ impl Default for GreedyAntOptions {
 }
 
 impl GreedyAntOptions {
-    fn validate(&self) -> Result<(), PlanError> {
+    pub(crate) fn validate(&self) -> Result<(), PlanError> {
         self.limits.validate()?;
         if self.step == Some(0) {
             return Err(PlanError::invalid("step", "0".into(), "at least 1 segment"));

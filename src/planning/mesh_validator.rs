@@ -4,7 +4,7 @@
 use super::validator::{stepwise_edge_free, MotionValidator};
 use crate::collision::{
     contact_step, edge_interferes, interferes, surface_distance, Aabb, Collider, CollisionError,
-    EdgeOptions, SweepMethod,
+    EdgeOptions, MotionFault, PoseFault, SweepMethod,
 };
 use crate::math::Transform;
 use std::sync::Arc;
@@ -103,29 +103,35 @@ impl MeshValidator {
         } = options.edge
         {
             if !(mm.is_finite() && mm >= MIN_STEP_MM) {
-                return Err(CollisionError::BadMotion(format!(
-                    "the stepwise edge step must be a finite number of at least {MIN_STEP_MM} mm, got {mm} mm"
-                )));
+                return Err(MotionFault::option(
+                    "stepwise edge step (mm)",
+                    mm,
+                    "a finite number of at least MIN_STEP_MM = 1e-4 mm",
+                ));
             }
             if !(rad.is_finite() && rad >= MIN_STEP_RAD) {
-                return Err(CollisionError::BadMotion(format!(
-                    "the stepwise edge rotation step must be a finite angle of at least {MIN_STEP_RAD} rad ({:.6}°), got {rad} rad",
-                    MIN_STEP_RAD.to_degrees()
-                )));
+                return Err(MotionFault::option(
+                    "stepwise edge rotation step (rad)",
+                    rad,
+                    "a finite angle of at least MIN_STEP_RAD = 1e-6 rad",
+                ));
             }
         }
         if let SweepMethod::Continuous { contact_step_mm: c } = options.edge {
             if !(c.is_finite() && c >= MIN_STEP_MM) {
-                return Err(CollisionError::BadMotion(format!(
-                    "the contact step must be a finite number of at least {MIN_STEP_MM} mm, got {c}"
-                )));
+                return Err(MotionFault::option(
+                    "contact step (mm)",
+                    c,
+                    "a finite number of at least MIN_STEP_MM = 1e-4 mm",
+                ));
             }
         }
         if !(options.clearance_cap.is_finite() && options.clearance_cap > 0.0) {
-            return Err(CollisionError::BadMotion(format!(
-                "the clearance cap must be a finite number > 0 mm, got {}",
-                options.clearance_cap
-            )));
+            return Err(MotionFault::option(
+                "clearance cap",
+                options.clearance_cap,
+                "a finite number > 0 mm",
+            ));
         }
         let obstacles = obstacles
             .into_iter()
@@ -135,9 +141,7 @@ impl MeshValidator {
                     let b = c.world_bounds(&pose);
                     Ok((c, pose, b))
                 } else {
-                    Err(CollisionError::BadPose(format!(
-                        "obstacle {i} has a NaN or infinite pose"
-                    )))
+                    Err(CollisionError::BadPose(PoseFault::Obstacle(i)))
                 }
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -303,6 +307,10 @@ impl MotionValidator for MeshValidator {
     fn is_free(&mut self, pose: &Transform) -> bool {
         self.stats.pose_checks += 1;
         self.pose_free(pose)
+    }
+
+    fn tolerance(&self) -> f64 {
+        self.options.tolerance
     }
 
     fn resolution(&self) -> SweepMethod {

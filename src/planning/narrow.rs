@@ -96,7 +96,13 @@ impl NarrowPassage {
 
     pub(crate) fn validate(&self) -> Result<(), PlanError> {
         if let Some(t) = self.max_turn {
-            PlanError::positive("narrow.max_turn", t)?;
+            if !(t > 0.0 && t <= std::f64::consts::PI) {
+                return Err(PlanError::invalid(
+                    "narrow.max_turn",
+                    format!("{t} rad ({:.3}°)", t.to_degrees()),
+                    "an angle in (0, π] rad (None: no limit)",
+                ));
+            }
         }
         if let Some(r) = self.dynamic_domain {
             PlanError::positive("narrow.dynamic_domain", r)?;

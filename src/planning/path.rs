@@ -43,6 +43,10 @@ pub struct PlannedPath {
     pub smoothing_ms: f64,
     /// How the validator checked the edges.
     pub resolution: SweepMethod,
+    /// The validator's penetration tolerance (mm): crossings up to this depth
+    /// counted as touching. With `resolution` it is the rule to check the path again
+    /// by ([`PlannedPath::validator_options`]).
+    pub tolerance_mm: f64,
     /// Which planner produced the path.
     pub planner: &'static str,
 }
@@ -91,6 +95,7 @@ impl PlannedPath {
             search_ms: time_ms,
             smoothing_ms: 0.0,
             resolution: checker.resolution(),
+            tolerance_mm: checker.tolerance(),
             planner,
         }
     }
@@ -98,7 +103,9 @@ impl PlannedPath {
     /// A path through `poses` (part poses, mm, world frame) that was given rather
     /// than searched — a straight line, a path written by hand: lengths measured
     /// (raw = final), no search counts. `resolution` is how it is meant to be checked
-    /// ([`PlannedPath::revalidate`] uses the validator's own options).
+    /// ([`PlannedPath::revalidate`] uses the validator's own options); its tolerance
+    /// is the default [`DEFAULT_TOLERANCE`](crate::collision::DEFAULT_TOLERANCE)
+    /// until [`with_tolerance`](Self::with_tolerance) says otherwise.
     pub fn given(planner: &'static str, poses: Vec<Transform>, resolution: SweepMethod) -> Self {
         let (length_mm, rotation_rad) = measure(&poses);
         Self {
@@ -116,7 +123,25 @@ impl PlannedPath {
             search_ms: 0.0,
             smoothing_ms: 0.0,
             resolution,
+            tolerance_mm: crate::collision::DEFAULT_TOLERANCE,
             planner,
+        }
+    }
+
+    /// The same path, recorded as checked with penetration tolerance `mm`.
+    #[must_use]
+    pub fn with_tolerance(mut self, mm: f64) -> Self {
+        self.tolerance_mm = mm;
+        self
+    }
+
+    /// The mesh validator's options that check this path again by the rule it was
+    /// planned with: its `tolerance_mm` and its edge `resolution` (the rest default).
+    pub fn validator_options(&self) -> super::MeshValidatorOptions {
+        super::MeshValidatorOptions {
+            tolerance: self.tolerance_mm,
+            edge: self.resolution,
+            ..super::MeshValidatorOptions::default()
         }
     }
 
@@ -147,6 +172,7 @@ impl PlannedPath {
             search_ms,
             smoothing_ms: time_ms - search_ms,
             resolution: checker.resolution(),
+            tolerance_mm: checker.tolerance(),
             planner,
         }
     }

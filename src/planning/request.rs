@@ -27,7 +27,10 @@ pub enum Planner {
     RrtConnect(RrtConnectOptions),
 }
 
-/// The planner names accepted by [`Planner::by_name`].
+/// The tree planners, which have narrow-passage measures and a fallback share.
+const TREE_PLANNERS: &str = "rrt, biased_rrt, local_rrt and rrt_connect";
+
+/// The planner names accepted by [`Planner::by_name`] and [`str::parse`].
 pub const PLANNER_NAMES: [&str; 6] = [
     "greedy_ant",
     "rrt_floyd",
@@ -36,6 +39,21 @@ pub const PLANNER_NAMES: [&str; 6] = [
     "local_rrt",
     "rrt_connect",
 ];
+
+impl std::str::FromStr for Planner {
+    type Err = PlanError;
+
+    /// The planner called `name` with its default options.
+    ///
+    /// # Errors
+    /// [`PlanError::UnknownPlanner`], with the closest names.
+    fn from_str(name: &str) -> Result<Self, PlanError> {
+        Planner::by_name(name).ok_or_else(|| PlanError::UnknownPlanner {
+            name: name.to_string(),
+            suggestion: crate::diagnostics::suggestion(name, PLANNER_NAMES),
+        })
+    }
+}
 
 impl Planner {
     /// The planner called `name` with its default options.
@@ -49,6 +67,22 @@ impl Planner {
             "rrt_connect" => Planner::RrtConnect(RrtConnectOptions::default()),
             _ => return None,
         })
+    }
+
+    /// Checks every option of the planner (ranges, finiteness), as planning does
+    /// first: a caller with a long set-up (meshes, scenes) can refuse bad options
+    /// before it.
+    ///
+    /// # Errors
+    /// [`PlanError::InvalidOption`] naming the option, its value and the rule.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        match self {
+            Planner::GreedyAnt(o) => o.validate(),
+            Planner::RrtFloyd(o) => o.validate(),
+            Planner::Rrt(o) | Planner::BiasedRrt(o) => o.validate(),
+            Planner::LocalRrt(o) => o.validate(),
+            Planner::RrtConnect(o) => o.validate(),
+        }
     }
 
     /// The planner's name.
@@ -83,7 +117,9 @@ impl Planner {
     /// `step` is the number of segments of the line s → e (seed 000 table 4).
     pub fn set_step(&mut self, step: f64) {
         match self {
-            Planner::GreedyAnt(o) => o.step = Some(step.round().max(1.0) as usize),
+            // A step that rounds below 1 segment (or is not finite) becomes 0, which
+            // validation refuses, instead of silently planning with 1.
+            Planner::GreedyAnt(o) => o.step = Some(step.round().max(0.0) as usize),
             Planner::RrtFloyd(o) => o.step = step,
             Planner::Rrt(o) | Planner::BiasedRrt(o) => o.step = step,
             Planner::LocalRrt(o) => o.rrt.step = step,
@@ -91,15 +127,87 @@ impl Planner {
         }
     }
 
-    /// Sets the goal bias `p` where the planner has one; `false` otherwise.
-    pub fn set_goal_bias(&mut self, p: f64) -> bool {
+    /// Sets the goal bias `p` (a probability, checked when planning) where the
+    /// planner has one.
+    ///
+    /// # Errors
+    /// [`PlanError::NotAnOption`] for `greedy_ant` and `rrt_connect`, which have none.
+    pub fn set_goal_bias(&mut self, p: f64) -> Result<(), PlanError> {
         match self {
             Planner::RrtFloyd(o) => o.goal_bias = p,
             Planner::Rrt(o) | Planner::BiasedRrt(o) => o.goal_bias = p,
             Planner::LocalRrt(o) => o.rrt.goal_bias = p,
-            Planner::GreedyAnt(_) | Planner::RrtConnect(_) => return false,
+            Planner::GreedyAnt(_) | Planner::RrtConnect(_) => {
+                return Err(
+                    self.not_an_option("goal_bias", "rrt_floyd, rrt, biased_rrt and local_rrt")
+                )
+            }
         }
-        true
+        Ok(())
+    }
+
+    /// Sets the narrow-passage measures of the tree planners.
+    ///
+    /// # Errors
+    /// [`PlanError::NotAnOption`] for `greedy_ant` and `rrt_floyd`, which have none.
+    pub fn set_narrow(&mut self, narrow: NarrowPassage) -> Result<(), PlanError> {
+        match self.narrow_mut() {
+            Some(slot) => *slot = narrow,
+            None => return Err(self.not_an_option("narrow", TREE_PLANNERS)),
+        }
+        Ok(())
+    }
+
+    /// Sets the share of the search the fallbacks of a blocked extension may take
+    /// (a probability, checked when planning) for the tree planners.
+    ///
+    /// # Errors
+    /// [`PlanError::NotAnOption`] for `greedy_ant` and `rrt_floyd`.
+    pub fn set_fallback_share(&mut self, share: f64) -> Result<(), PlanError> {
+        match self.fallback_share_mut() {
+            Some(slot) => *slot = share,
+            None => return Err(self.not_an_option("fallback_share", TREE_PLANNERS)),
+        }
+        Ok(())
+    }
+
+    /// Sets seed 000's greedy-ant parameters: `shortest_length` (`L`, mm), `dis`
+    /// (mm) and `radius` (mm); `None` keeps the current value.
+    ///
+    /// # Errors
+    /// [`PlanError::NotAnOption`] for every planner but `greedy_ant`.
+    pub fn set_greedy_ant(
+        &mut self,
+        shortest_length: Option<f64>,
+        dis: Option<f64>,
+        radius: Option<f64>,
+    ) -> Result<(), PlanError> {
+        let Planner::GreedyAnt(g) = self else {
+            let option = match (shortest_length, dis) {
+                (Some(_), _) => "L",
+                (None, Some(_)) => "dis",
+                (None, None) => "radius",
+            };
+            return Err(self.not_an_option(option, "greedy_ant"));
+        };
+        if let Some(l) = shortest_length {
+            g.shortest_length = l;
+        }
+        if let Some(d) = dis {
+            g.dis = d;
+        }
+        if radius.is_some() {
+            g.radius = radius;
+        }
+        Ok(())
+    }
+
+    fn not_an_option(&self, option: &'static str, planners: &'static str) -> PlanError {
+        PlanError::NotAnOption {
+            option,
+            planner: self.name(),
+            planners,
+        }
     }
 
     /// The narrow-passage measures ([`NarrowPassage`]) of the tree planners `rrt`,

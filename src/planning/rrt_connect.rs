@@ -70,7 +70,7 @@ impl Default for RrtConnectOptions {
 }
 
 impl RrtConnectOptions {
-    fn validate(&self) -> Result<(), PlanError> {
+    pub(crate) fn validate(&self) -> Result<(), PlanError> {
         self.limits.validate()?;
         PlanError::positive("step", self.step)?;
         if let Some(l) = &self.lattice {

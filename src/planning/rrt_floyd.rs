@@ -50,7 +50,7 @@ impl Default for RrtFloydOptions {
 }
 
 impl RrtFloydOptions {
-    fn validate(&self) -> Result<(), PlanError> {
+    pub(crate) fn validate(&self) -> Result<(), PlanError> {
         self.limits.validate()?;
         PlanError::positive("step", self.step)?;
         PlanError::probability("goal_bias", self.goal_bias)?;

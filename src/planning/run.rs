@@ -147,7 +147,26 @@ const CLOCK_EVERY: usize = 16;
 
 /// Why a planner refused its input before planning.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum PlanError {
+    /// No planner has this name.
+    #[error("unknown planner `{name}`: {suggestion}")]
+    UnknownPlanner {
+        /// The name given.
+        name: String,
+        /// The closest names, or the list of names.
+        suggestion: String,
+    },
+    /// The option exists, but not for this planner.
+    #[error("planner `{planner}` has no option `{option}` ({planners} have)")]
+    NotAnOption {
+        /// The option's name.
+        option: &'static str,
+        /// The planner it was given to.
+        planner: &'static str,
+        /// The planners that have it.
+        planners: &'static str,
+    },
     /// An option, bound or pose has a value the planner cannot use.
     #[error("invalid planning option `{option}` = {value}: expected {expected}")]
     InvalidOption {

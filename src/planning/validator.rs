@@ -58,6 +58,13 @@ pub trait MotionValidator {
         SweepMethod::DEFAULT
     }
 
+    /// Penetration depth (mm) this validator still counts as free (touching); it is
+    /// recorded in [`PlannedPath::tolerance_mm`](super::PlannedPath::tolerance_mm)
+    /// so the path can be checked again with the rule it was planned with. Default 0.
+    fn tolerance(&self) -> f64 {
+        0.0
+    }
+
     /// Whether the straight edge `from → to` (translation lerp + slerp) is free.
     ///
     /// `from` is assumed already validated (it is a node the planner holds); every
@@ -98,6 +105,9 @@ impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
     }
     fn resolution(&self) -> SweepMethod {
         (**self).resolution()
+    }
+    fn tolerance(&self) -> f64 {
+        (**self).tolerance()
     }
     fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
         (**self).edge_free(from, to)
@@ -268,6 +278,10 @@ impl<'v> Checker<'v> {
 
     pub fn resolution(&self) -> SweepMethod {
         self.validator.resolution()
+    }
+
+    pub fn tolerance(&self) -> f64 {
+        self.validator.tolerance()
     }
 
     /// The work done so far in pose-check units: pose and edge checks, and each

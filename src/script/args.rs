@@ -56,6 +56,7 @@ impl ArgValue {
 
 /// Why the script arguments are refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ArgError {
     /// An argument without `=`.
     #[error("script argument `{0}` is not `key=value` (e.g. `fast=true`)")]

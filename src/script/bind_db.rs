@@ -7,11 +7,11 @@ use super::bind_planning::PathHandle;
 use super::bind_robot::TrajectoryHandle;
 use super::convert::{check_keys, err, fail, opt_str};
 use super::{Context, ScriptResult};
+use crate::collision::Contact;
 use crate::db::{
     recording, Database, InterferencePair, PathMeta, PathQuery, QueryLimits, Snapshot, SqlValue,
     Target,
 };
-use crate::planning::MeshValidatorOptions;
 use rhai::{Array, Dynamic, Map};
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -150,13 +150,12 @@ fn save_interference(h: &DbHandle, results: &Array, name: &str) -> ScriptResult<
             .map(|d| super::convert::num(d, "depth"))
             .transpose()?
             .unwrap_or(0.0);
-        pairs.push(InterferencePair {
-            a: s("a")?,
-            b: s("b")?,
-            state: s("state")?,
-            depth_mm: depth,
-            kind: m.get("kind").map(|v| v.to_string()).unwrap_or_default(),
-        });
+        let (a, b) = (s("a")?, s("b")?);
+        let kind = m.get("kind").map(|v| v.to_string()).unwrap_or_default();
+        // The verdict's words are the library's (`Contact::from_text`).
+        let contact = Contact::from_text(&s("state")?, depth, &kind, &a, &b)
+            .map_err(|e| fail(format!("results[{i}]: {e}")))?;
+        pairs.push(InterferencePair { a, b, contact });
     }
     h.lock()?
         .save_interference(h.run_id, name, &pairs)
@@ -207,14 +206,9 @@ fn paths(h: &DbHandle, filter: &Map) -> ScriptResult<Array> {
             m.insert("created_at".into(), s.created_at.into());
             m.insert("planner".into(), s.path.planner.into());
             m.insert("found".into(), s.path.found().into());
-            // Revalidated with the edge resolution it was planned with.
-            let options = MeshValidatorOptions {
-                edge: s.path.resolution,
-                ..MeshValidatorOptions::default()
-            };
             m.insert(
                 "path".into(),
-                Dynamic::from(PathHandle(Arc::new(s.path), h.ctx.clone(), options)),
+                Dynamic::from(PathHandle(Arc::new(s.path), h.ctx.clone())),
             );
             Dynamic::from_map(m)
         })

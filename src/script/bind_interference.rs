@@ -7,9 +7,7 @@ use super::bind_math::to_transform;
 use super::bind_planning::with_workspace;
 use super::convert::{box_value, check_keys, err, fail, floats, num, opt_num, opt_str};
 use super::ScriptResult;
-use crate::collision::{
-    Contact, CutSpec, InterferenceKind, Method, PairMember, SweepMethod, SweepOptions,
-};
+use crate::collision::{Contact, CutSpec, Method, SweepMethod, SweepOptions};
 use crate::document::Feature;
 use crate::workspace::{split_part, CheckOptions, CUT_CELLS_FEATURE};
 use rhai::{Array, Dynamic, Map};
@@ -41,32 +39,14 @@ fn options(map: Option<&Map>) -> ScriptResult<CheckOptions> {
     Ok(o)
 }
 
-fn kind_name(k: &InterferenceKind, a: &str, b: &str) -> String {
-    match k {
-        InterferenceKind::SurfacesCross => "surfaces cross".into(),
-        InterferenceKind::Contained {
-            inner: PairMember::First,
-        } => format!("{a} inside {b}"),
-        InterferenceKind::Contained {
-            inner: PairMember::Second,
-        } => format!("{b} inside {a}"),
-        InterferenceKind::BoxesOverlap => "boxes overlap".into(),
-    }
-}
-
 fn contact_map(c: &Contact, a: &str, b: &str) -> Map {
     let mut m = Map::new();
     m.insert("a".into(), a.into());
     m.insert("b".into(), b.into());
-    let state = match c {
-        Contact::Separate => "separate",
-        Contact::Touching => "touching",
-        Contact::Interfering { .. } => "interfering",
-    };
-    m.insert("state".into(), state.into());
+    m.insert("state".into(), c.state_name().into());
     m.insert("depth".into(), Dynamic::from_float(c.depth()));
-    if let Contact::Interfering { kind, .. } = c {
-        m.insert("kind".into(), kind_name(kind, a, b).into());
+    if c.is_interfering() {
+        m.insert("kind".into(), c.kind_text(a, b).into());
     }
     m
 }

@@ -7,11 +7,11 @@ use super::bind_math::{to_transform, xyzabc_deg};
 use super::convert::overwrite_option;
 use super::convert::{check_keys, err, fail, num, opt_num, opt_str};
 use super::{Context, ScriptResult};
-use crate::collision::{Aabb, SweepMethod};
+use crate::collision::SweepMethod;
 use crate::math::AngleConvention;
 use crate::planning::{
     Control, MeshValidatorOptions, NarrowPassage, Phase, PlannedPath, Planner, ProblemFile,
-    Progress, RotationFreedom, PLANNER_NAMES,
+    Progress, RotationFreedom,
 };
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
@@ -19,14 +19,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// A planned path (cheap to clone); it keeps the run context so `save_csv` can check
-/// and record the file it writes, and the validator options it was planned with so
-/// `revalidate` applies the same tolerance rule.
+/// and record the file it writes. `revalidate` takes the tolerance rule from the
+/// path itself ([`PlannedPath::validator_options`]).
 #[derive(Clone)]
-pub struct PathHandle(
-    pub(super) Arc<PlannedPath>,
-    pub(super) Arc<Context>,
-    pub(super) MeshValidatorOptions,
-);
+pub struct PathHandle(pub(super) Arc<PlannedPath>, pub(super) Arc<Context>);
 
 const OPTION_KEYS: [&str; 22] = [
     "narrow",
@@ -53,16 +49,17 @@ const OPTION_KEYS: [&str; 22] = [
     "radius",
 ];
 
-/// The planning request of the script's options.
+/// The planning request of the script's options. This only converts: names and
+/// units (degrees to radians, `0` = off) and types. Every range is checked once, by
+/// the library when it plans (`PlanError`, `CollisionError`, `WorkspaceError`), so a
+/// script and a Rust caller get the same rule and the same words.
 fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
     check_keys(opts, &OPTION_KEYS, "planning")?;
-    let name = opt_str(opts, "planner")?.unwrap_or_else(|| "rrt_connect".into());
-    let mut planner = Planner::by_name(&name).ok_or_else(|| {
-        fail(format!(
-            "unknown planner `{name}`: {}",
-            crate::diagnostics::suggestion(&name, PLANNER_NAMES)
-        ))
-    })?;
+    let mut planner: Planner = opt_str(opts, "planner")?
+        .as_deref()
+        .unwrap_or("rrt_connect")
+        .parse()
+        .map_err(fail)?;
     let limits = planner.limits_mut();
     if let Some(s) = opts.get("seed") {
         limits.seed =
@@ -70,30 +67,19 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
                 .map_err(|t| fail(format!("seed must be an integer, not {t}")))? as u64;
     }
     if let Some(n) = opt_num(opts, "max_iterations")? {
-        if n < 1.0 {
-            return err(format!("max_iterations must be ≥ 1, not {n}"));
-        }
-        limits.max_iterations = n as usize;
+        // A count: NaN and negatives become 0, which the library refuses.
+        limits.max_iterations = if n.is_finite() && n > 0.0 {
+            n as usize
+        } else {
+            0
+        };
     }
-    if let Some(t) = opt_num(opts, "time_limit_ms")? {
-        if t <= 0.0 {
-            return err(format!("time_limit_ms must be > 0, not {t}"));
-        }
-        limits.time_limit_ms = Some(t);
-    }
+    limits.time_limit_ms = opt_num(opts, "time_limit_ms")?.or(limits.time_limit_ms);
     if let Some(s) = opt_num(opts, "step")? {
-        if s <= 0.0 {
-            return err(format!("step must be > 0, not {s}"));
-        }
         planner.set_step(s);
     }
     if let Some(p) = opt_num(opts, "goal_bias")? {
-        if !(0.0..=1.0).contains(&p) {
-            return err(format!("goal_bias must be in 0..1, not {p}"));
-        }
-        if !planner.set_goal_bias(p) {
-            return err(format!("planner `{}` has no goal bias", planner.name()));
-        }
+        planner.set_goal_bias(p).map_err(fail)?;
     }
     if let Some(s) = opts.get("smoothing") {
         planner.set_smoothing(
@@ -102,41 +88,18 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
         );
     }
     if let Some(n) = opts.get("narrow") {
-        let narrow = parse_narrow(n)?;
-        match planner.narrow_mut() {
-            Some(slot) => *slot = narrow,
-            None => {
-                return err(format!(
-                    "planner `{}` has no narrow-passage options (rrt, biased_rrt, local_rrt and rrt_connect have)",
-                    planner.name()
-                ))
-            }
-        }
+        planner.set_narrow(parse_narrow(n)?).map_err(fail)?;
     }
     if let Some(f) = opt_num(opts, "fallback_share")? {
-        if !(0.0..=1.0).contains(&f) {
-            return err(format!("fallback_share must be in 0..1, not {f}"));
-        }
-        match planner.fallback_share_mut() {
-            Some(slot) => *slot = f,
-            None => {
-                return err(format!(
-                    "planner `{}` has no fallback share (rrt, biased_rrt, local_rrt and rrt_connect have)",
-                    planner.name()
-                ))
-            }
-        }
+        planner.set_fallback_share(f).map_err(fail)?;
     }
-    if let Planner::GreedyAnt(g) = &mut planner {
-        if let Some(l) = opt_num(opts, "L")? {
-            g.shortest_length = l;
-        }
-        if let Some(d) = opt_num(opts, "dis")? {
-            g.dis = d;
-        }
-        g.radius = opt_num(opts, "radius")?.or(g.radius);
-    } else if ["L", "dis", "radius"].iter().any(|k| opts.contains_key(*k)) {
-        return err("options `L`, `dis` and `radius` belong to planner \"greedy_ant\"");
+    let (l, dis, radius) = (
+        opt_num(opts, "L")?,
+        opt_num(opts, "dis")?,
+        opt_num(opts, "radius")?,
+    );
+    if l.is_some() || dis.is_some() || radius.is_some() {
+        planner.set_greedy_ant(l, dis, radius).map_err(fail)?;
     }
     let mut validator = MeshValidatorOptions::default();
     if let Some(t) = opt_num(opts, "tolerance")? {
@@ -159,41 +122,26 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
     };
     let bounds = match opts.get("bounds") {
         None => None,
-        Some(b) => {
-            let Aabb { lo, hi } = super::convert::to_box(b, "bounds")?;
-            if (0..3).any(|i| lo[i] >= hi[i]) {
-                return err(format!(
-                    "bounds are empty: min {lo:?} is not below max {hi:?} on every axis"
-                ));
-            }
-            Some(Aabb::new(lo, hi))
-        }
+        Some(b) => Some(super::convert::to_box(b, "bounds")?),
     };
-    let margin = opt_num(opts, "margin")?.unwrap_or(crate::workspace::DEFAULT_MARGIN_MM);
-    let rotation = match opts.get("rotation") {
-        None => true,
-        Some(r) => r
-            .as_bool()
-            .map_err(|t| fail(format!("rotation must be true or false, not {t}")))?,
-    };
-    let disassemble = match opts.get("disassemble") {
-        None => false,
-        Some(r) => r
-            .as_bool()
-            .map_err(|t| fail(format!("disassemble must be true or false, not {t}")))?,
+    let flag = |key: &str, default: bool| -> ScriptResult<bool> {
+        opts.get(key).map_or(Ok(default), |v| {
+            v.as_bool()
+                .map_err(|t| fail(format!("{key} must be true or false, not {t}")))
+        })
     };
     Ok(PlanRequest {
         planner,
         validator,
         bounds,
-        margin_mm: margin,
-        rotation: if rotation {
+        margin_mm: opt_num(opts, "margin")?.unwrap_or(crate::workspace::DEFAULT_MARGIN_MM),
+        rotation: if flag("rotation", true)? {
             RotationFreedom::Free
         } else {
             RotationFreedom::Fixed
         },
         rotation_weight: opt_num(opts, "rotation_weight")?,
-        disassemble,
+        disassemble: flag("disassemble", false)?,
         start: None,
     })
 }
@@ -209,7 +157,8 @@ const NARROW_KEYS: [&str; 5] = [
 /// The `narrow` option: `false` (every measure off), `true` (fitup's defaults) or
 /// a map changing some of the defaults (`max_turn_deg` in degrees, 0 = no limit;
 /// `dynamic_domain` and `bridge_width` in mm of the metric, 0 = off; `bridge` a
-/// probability; `to_contact` a bool).
+/// probability; `to_contact` a bool). Ranges are the library's
+/// (`NarrowPassage::validate`, when planning).
 fn parse_narrow(v: &Dynamic) -> ScriptResult<NarrowPassage> {
     if let Ok(on) = v.as_bool() {
         return Ok(if on {
@@ -227,33 +176,15 @@ fn parse_narrow(v: &Dynamic) -> ScriptResult<NarrowPassage> {
     check_keys(&m, &NARROW_KEYS, "narrow")?;
     let mut n = NarrowPassage::default();
     if let Some(t) = opt_num(&m, "max_turn_deg")? {
-        if !(0.0..=180.0).contains(&t) {
-            return err(format!(
-                "narrow.max_turn_deg must be in 0..180 (0: no limit), not {t}"
-            ));
-        }
-        n.max_turn = (t > 0.0).then(|| t.to_radians());
+        n.max_turn = (t != 0.0).then(|| t.to_radians());
     }
     if let Some(r) = opt_num(&m, "dynamic_domain")? {
-        if !(r >= 0.0 && r.is_finite()) {
-            return err(format!(
-                "narrow.dynamic_domain must be ≥ 0 mm (0: off), not {r}"
-            ));
-        }
-        n.dynamic_domain = (r > 0.0).then_some(r);
+        n.dynamic_domain = (r != 0.0).then_some(r);
     }
     if let Some(p) = opt_num(&m, "bridge")? {
-        if !(0.0..=1.0).contains(&p) {
-            return err(format!(
-                "narrow.bridge must be a probability in 0..1, not {p}"
-            ));
-        }
         n.bridge = p;
     }
     if let Some(w) = opt_num(&m, "bridge_width")? {
-        if !(w > 0.0 && w.is_finite()) {
-            return err(format!("narrow.bridge_width must be > 0 mm, not {w}"));
-        }
         n.bridge_width = w;
     }
     if let Some(c) = m.get("to_contact") {
@@ -311,7 +242,7 @@ fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<P
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");
     }
-    Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
+    Ok(PathHandle(Arc::new(path), ctx.clone()))
 }
 
 /// A planning problem read from a `.plan.json` file (cheap to clone).
@@ -339,7 +270,7 @@ fn plan_problem(d: &DocHandle, p: &ProblemHandle, opts: &Map) -> ScriptResult<Pa
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");
     }
-    Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
+    Ok(PathHandle(Arc::new(path), ctx.clone()))
 }
 
 fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathHandle> {
@@ -355,7 +286,7 @@ fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathH
     if path.failure.is_some() && ctx.cancelled() {
         return err("cancelled");
     }
-    Ok(PathHandle(Arc::new(path), ctx.clone(), req.validator))
+    Ok(PathHandle(Arc::new(path), ctx.clone()))
 }
 
 fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transform>> {
@@ -484,6 +415,11 @@ pub(super) fn register(api: &mut Api) {
         |p: &mut PathHandle| p.0.planner.to_string(),
     );
     api.get(
+        "Path.tolerance -> float",
+        "The penetration tolerance (mm) the path was planned with: crossings up to this depth counted as touching.",
+        |p: &mut PathHandle| p.0.tolerance_mm,
+    );
+    api.get(
         "Path.resolution -> string",
         "How edges were validated (continuous, or the stepwise resolution).",
         |p: &mut PathHandle| p.0.resolution.to_string(),
@@ -539,7 +475,7 @@ pub(super) fn register(api: &mut Api) {
         },
     );
     api.f("Document.revalidate(name: string, path: Path) -> map", "Checks a path again against the document as it is now, with the tolerance and edge check it was planned with (a path the planner accepted passes while nothing moved): `#{ok, segment, transform}` (the first blocked segment and pose when not ok).", |d: &mut DocHandle, name: &str, p: PathHandle| -> ScriptResult<Map> {
-        let r = with_workspace(d, |ws| ws.revalidate(name, &p.0, &p.2).map_err(fail))?;
+        let r = with_workspace(d, |ws| ws.revalidate(name, &p.0, &p.0.validator_options()).map_err(fail))?;
         let mut m = Map::new();
         match r {
             Revalidation::Valid => {
@@ -622,13 +558,22 @@ mod narrow_option_tests {
         assert_eq!(n.dynamic_domain, None);
         assert!(!n.to_contact);
         assert_eq!(n.bridge, NarrowPassage::default().bridge);
+        // Not a narrow option: refused by the conversion.
         for bad in [
-            map(&[("bridge", Dynamic::from_float(1.5))]),
-            map(&[("max_turn_deg", Dynamic::from_float(-1.0))]),
             map(&[("max_turn", Dynamic::from_float(5.0))]),
             Dynamic::from_int(3),
         ] {
             assert!(parse_narrow(&bad).is_err(), "{bad:?}");
+        }
+        // Out of range: converted, then refused by the library's one rule.
+        for bad in [
+            map(&[("bridge", Dynamic::from_float(1.5))]),
+            map(&[("max_turn_deg", Dynamic::from_float(-1.0))]),
+            map(&[("max_turn_deg", Dynamic::from_float(190.0))]),
+            map(&[("dynamic_domain", Dynamic::from_float(-2.0))]),
+        ] {
+            let n = parse_narrow(&bad).unwrap();
+            assert!(n.validate().is_err(), "{bad:?}");
         }
     }
 
@@ -649,9 +594,23 @@ mod narrow_option_tests {
         opts.insert("fallback_share".into(), Dynamic::from_float(0.5));
         let mut planner = parse(&opts).unwrap().planner;
         assert_eq!(planner.fallback_share_mut().copied(), Some(0.5));
-        for bad in [1.5, -0.1, f64::NAN] {
+        // A number that is not one is refused by the conversion…
+        opts.insert("fallback_share".into(), Dynamic::from_float(f64::NAN));
+        assert!(parse(&opts).is_err());
+        // …one out of range by the library.
+        for bad in [1.5, -0.1] {
             opts.insert("fallback_share".into(), Dynamic::from_float(bad));
-            assert!(parse(&opts).is_err(), "{bad}");
+            let planner = parse(&opts).unwrap().planner;
+            assert!(
+                matches!(
+                    planner.validate(),
+                    Err(crate::planning::PlanError::InvalidOption {
+                        option: "fallback_share",
+                        ..
+                    })
+                ),
+                "{bad}"
+            );
         }
         opts.insert("fallback_share".into(), Dynamic::from_float(0.5));
         opts.insert("planner".into(), "rrt_floyd".into());

@@ -234,6 +234,7 @@ pub struct RunOptions {
 
 /// Why a run failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ScriptError {
     /// A syntax error, a runtime error or a failed `assert`, located in a file.
     #[error("{0}")]

@@ -127,7 +127,8 @@ impl Ctx<'_> {
                         "two_segment",
                         vec![from, corner, start],
                         v.options().edge,
-                    );
+                    )
+                    .with_tolerance(v.options().tolerance);
                     if best.as_ref().is_some_and(|b| b.length_mm <= path.length_mm) {
                         continue;
                     }

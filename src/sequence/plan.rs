@@ -424,7 +424,8 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
                 let safe = ctx.safe_length(p, &ch.leave, mask);
                 let from = assembled.then(&Transform::from_translation(ch.leave * safe));
                 let path =
-                    PlannedPath::given("straight", vec![from, assembled], SweepMethod::CONTINUOUS);
+                    PlannedPath::given("straight", vec![from, assembled], SweepMethod::CONTINUOUS)
+                        .with_tolerance(ctx.opts.tolerance);
                 (safe, path)
             }
         };

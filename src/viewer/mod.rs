@@ -51,6 +51,7 @@ use std::time::Duration;
 
 /// Why a viewer session could not start or a recording could not be read.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ViewerError {
     /// The web or gRPC server could not listen.
     #[error("cannot start the viewer server: {0}")]

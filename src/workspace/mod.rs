@@ -47,6 +47,7 @@ use crate::planning::PlanError;
 
 /// Why a workspace request could not be answered.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum WorkspaceError {
     /// The document refused (unknown component or part, a fixed component moved…).
     #[error(transparent)]

@@ -192,7 +192,10 @@ impl Workspace<'_> {
         if self.document().components()[index].fixed {
             return Err(WorkspaceError::FixedComponent(name.to_string()));
         }
+        // Bad options are refused before the validator's meshes and trees are built.
+        request.planner.validate()?;
         let space = self.planning_space(name, request, through)?;
+        space.validate()?;
         let product = match self.product_box(name)? {
             Some(p) => p,
             None => Aabb::new(space.min, space.max),

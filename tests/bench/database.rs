@@ -57,6 +57,7 @@ fn data() -> (PlannedPath, Trajectory) {
         search_ms: 1.0,
         smoothing_ms: 0.0,
         resolution: SweepMethod::DEFAULT,
+        tolerance_mm: fitup::collision::DEFAULT_TOLERANCE,
         planner: "rrt_connect",
     };
     let mut t = Trajectory::new(vec![JointKind::Revolute; 6]);

@@ -7,7 +7,7 @@
 //!
 //! Run: `cargo bench --bench kinematics`
 
-use fitup::kinematics::{Catalog, IkOptions, NumericIk, Robot};
+use fitup::kinematics::{Catalog, ClosedFormIk, IkOptions, NumericIk, Robot};
 use fitup::math::{Rng, Transform};
 use rs_opw_kinematics::kinematic_traits::Kinematics;
 use rs_opw_kinematics::kinematics_impl::OPWKinematics;

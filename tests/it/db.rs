@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use fitup::collision::SweepMethod;
+use fitup::collision::{Contact, InterferenceKind, PairMember, SweepMethod};
 use fitup::db::{
     pose_counts, Database, DbError, InterferencePair, NewRun, PathMeta, PathQuery, RunStatus,
     Snapshot, SqlValue, Target,
@@ -161,6 +161,8 @@ fn sample_path(n: usize) -> PlannedPath {
             step_mm: 0.1,
             step_rad: 0.002,
         },
+        // Not the default: a stored path must keep the rule it was planned with.
+        tolerance_mm: 0.05,
         planner: "rrt_connect",
     }
 }
@@ -291,16 +293,25 @@ fn every_stored_kind_round_trips() {
             InterferencePair {
                 a: "screw4".into(),
                 b: "plate_b".into(),
-                state: "interfering".into(),
-                depth_mm: 0.25,
-                kind: "surfaces cross".into(),
+                contact: Contact::Interfering {
+                    depth: 0.25,
+                    kind: InterferenceKind::SurfacesCross,
+                },
+            },
+            InterferencePair {
+                a: "screw4".into(),
+                b: "plate_a".into(),
+                contact: Contact::Interfering {
+                    depth: 1.5,
+                    kind: InterferenceKind::Contained {
+                        inner: PairMember::Second,
+                    },
+                },
             },
             InterferencePair {
                 a: "plate_b".into(),
                 b: "table, top".into(),
-                state: "touching".into(),
-                depth_mm: 0.0,
-                kind: String::new(),
+                contact: Contact::Touching,
             },
         ];
         let iid = db
@@ -417,6 +428,8 @@ fn migration_from_the_previous_schema_keeps_the_data() {
         );
         assert_eq!(old.path.poses.len(), 2);
         assert!((old.path.poses[1].translation().x - 10.0).abs() < 1e-12);
+        // Schema 1 did not record the tolerance: read as the default every planner used.
+        assert_eq!(old.path.tolerance_mm, fitup::collision::DEFAULT_TOLERANCE);
         assert_eq!(db.runs().unwrap()[0].script, "old.rhai");
         // The new kinds can be stored now.
         let t = Trajectory::new(vec![JointKind::Revolute]);
@@ -430,7 +443,8 @@ fn migration_from_the_previous_schema_keeps_the_data() {
                 vec![SqlValue::Int(1)],
                 vec![SqlValue::Int(2)],
                 vec![SqlValue::Int(3)],
-                vec![SqlValue::Int(4)]
+                vec![SqlValue::Int(4)],
+                vec![SqlValue::Int(5)]
             ]
         );
     });
@@ -541,6 +555,48 @@ print(`saved by run ${{db.run}}`);
         .unwrap();
     }
     dir
+}
+
+/// Processes opening a new SQLite database at the same moment: SQLite answers the
+/// switch to WAL with "database is locked" at once, without waiting; every run must
+/// still be recorded (one in four was lost to a warning before).
+#[test]
+fn processes_opening_a_new_database_together_all_record_their_run() {
+    let dir = common::project();
+    std::fs::write(
+        dir.path().join("scripts/open.rhai"),
+        "let db = open_db();\nprint(`run ${db.run}`);\n",
+    )
+    .unwrap();
+    for trial in 0..4 {
+        let db = format!("t{trial}.db");
+        let children: Vec<_> = (0..6)
+            .map(|_| {
+                common::fitup()
+                    .current_dir(dir.path())
+                    .args(["run", "scripts/open.rhai", "--db", &db])
+                    .stdout(Stdio::piped())
+                    .stderr(Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        let mut ids: Vec<i64> = children
+            .into_iter()
+            .map(|c| {
+                let out = c.wait_with_output().unwrap();
+                let text = common::text(&out);
+                assert!(out.status.success(), "{text}");
+                assert!(!text.contains("warning"), "trial {trial}: {text}");
+                text.lines()
+                    .find_map(|l| l.strip_prefix("run "))
+                    .and_then(|n| n.trim().parse().ok())
+                    .unwrap_or_else(|| panic!("no run id printed: {text}"))
+            })
+            .collect();
+        ids.sort_unstable();
+        assert_eq!(ids, (1..=6).collect::<Vec<i64>>(), "trial {trial}");
+    }
 }
 
 #[test]

@@ -7,7 +7,7 @@
 //! equivalent; targets at the wrist, shoulder and elbow singularities are solved
 //! completely; a URDF in ROS `ur_description` form gives the same FK and the UR solver.
 
-use fitup::kinematics::{parse_urdf, Catalog, IkOptions, IkSolverKind, Robot};
+use fitup::kinematics::{parse_urdf, Catalog, ClosedFormIk, IkOptions, IkSolverKind, Robot};
 use fitup::math::{Rng, Transform, Vec3};
 use nalgebra::{Isometry3, UnitQuaternion};
 use std::f64::consts::{PI, TAU};
