@@ -129,7 +129,10 @@ impl Ctx<'_> {
 
     /// The product components with no candidate direction free of all the others.
     fn stuck(&self) -> Vec<usize> {
-        members(self.active)
+        // In parallel: the sweeps left for later run here for every part.
+        let parts: Vec<usize> = members(self.active).collect();
+        parts
+            .into_par_iter()
             .filter(|&p| {
                 let others = self.active & !bit(p);
                 others != 0
@@ -303,35 +306,9 @@ impl Ctx<'_> {
         // a longer piece could meet (thin facets swept across many others, coplanar
         // faces sliding past each other); the deadline is read between pieces.
         let entry = entry_distance(&bp, &bq, d, self.opts.tolerance).min(len);
-        // A part that comes from outside `q`'s box into it: first one static exact
-        // query where the two boxes overlap most (their centres closest along the
-        // line). An interference there blocks the line at once, without walking
-        // every triangle pair the continuous check would meet on the way in (two
-        // equal parts side by side pushed into each other: thousands of pairs per
-        // piece). It also sees what the continuous check cannot: the exact query
-        // tests containment, so two equal boxes pushed through each other face-on,
-        // whose surfaces only ever meet in coplanar faces and edges lying on faces
-        // (crossing depth 0), are blocked, not free.
-        if entry > 0.0 {
-            let cp = (bp.lo.coords + bp.hi.coords) * 0.5;
-            let cq = (bq.lo.coords + bq.hi.coords) * 0.5;
-            let at = (cq - cp).dot(d).clamp(entry, len);
-            let pose = self.scene.poses[p].then(&Transform::from_translation(d * at));
-            let hit = interferes(
-                &self.scene.colliders[p],
-                &pose,
-                &self.scene.colliders[q],
-                &self.scene.poses[q],
-                self.opts.tolerance,
-            )
-            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?;
-            if hit {
-                return Ok(true);
-            }
-        }
         // Two large parts: shorter pieces, so the deadline is read often enough
         // (a piece of such a pair can walk many thousands of triangle pairs).
-        let large = |i: usize| self.scene.colliders[i].triangle_count() > LAZY_TRIANGLES;
+        let large = |i: usize| self.scene.colliders[i].triangle_count() > PIECE_TRIANGLES;
         let longest = if large(p) && large(q) {
             LARGE_SWEEP_PIECE_MM
         } else {

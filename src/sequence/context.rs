@@ -23,8 +23,12 @@ use std::time::{Duration, Instant};
 /// between them.
 pub(super) const SWEEP_PIECE_MM: f64 = 10.0;
 
-/// The longest piece of a sweep between two parts over [`LAZY_TRIANGLES`] each (mm).
+/// The longest piece of a sweep between two parts over [`PIECE_TRIANGLES`] each (mm).
 pub(super) const LARGE_SWEEP_PIECE_MM: f64 = 2.0;
+
+/// Parts with more triangles than this sweep each other in pieces of at most
+/// [`LARGE_SWEEP_PIECE_MM`].
+pub(super) const PIECE_TRIANGLES: usize = 1_000;
 
 pub(super) type Mask = u128;
 
@@ -152,7 +156,7 @@ pub(super) struct Blocking {
 
 /// Sweeps between two parts with more triangles than this each are run only when
 /// the search needs their answer (see [`Ctx::build_blocking`]).
-pub(super) const LAZY_TRIANGLES: usize = 1_000;
+pub(super) const LAZY_TRIANGLES: usize = 20_000;
 
 /// The key of [`Ctx::safe_lengths`]: part, direction bits, the parts that matter.
 pub(super) type SafeKey = (usize, [u64; 3], Mask);
@@ -720,7 +724,6 @@ impl<'d> Ctx<'d> {
             .as_secs_f64()
             * 1e3
     }
-
 
     pub(super) fn node_index(&self, c: usize) -> usize {
         self.graph.node_of(c)

@@ -620,7 +620,10 @@ fn a_part_that_only_a_bent_path_brings_in_is_planned() {
     );
     let k = best.tasks.iter().position(|t| t.part == "slider").unwrap();
     assert!(best.steps[k].planned, "{}", plan.summary());
-    assert!(best.steps[k].difficult, "a planned path is a difficult insertion");
+    assert!(
+        best.steps[k].difficult,
+        "a planned path is a difficult insertion"
+    );
     assert!(
         best.tasks[k].path.poses.len() > 2,
         "not straight: {:?}",
@@ -663,7 +666,10 @@ fn components_the_document_marks_as_fixtures_are_not_sequenced() {
     let plan = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default()).unwrap();
     for p in pedestals {
         assert!(!plan.product.iter().any(|n| n == p), "{p} sequenced");
-        assert!(plan.sequences.iter().all(|s| !s.order().iter().any(|n| n == p)));
+        assert!(plan
+            .sequences
+            .iter()
+            .all(|s| !s.order().iter().any(|n| n == p)));
     }
     assert!(plan.product.contains(&"plate_b".to_string()));
     dense_removal(&doc, &plan);
