@@ -123,6 +123,7 @@ fn component(name: &str, part: &str, fixed: bool, color: &str, t: Transform) -> 
         transform: Some(t.to_matrix()),
         mass: None,
         threaded: false,
+        fixture: false,
     }
 }
 

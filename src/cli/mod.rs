@@ -240,7 +240,7 @@ pub enum Command {
         #[arg(long)]
         time_limit_ms: Option<f64>,
         /// A component that is not part of the product (fixture, table; repeatable).
-        /// Robot links are always left out.
+        /// Robot links and components marked `fixture: true` are always left out.
         #[arg(long)]
         exclude: Vec<String>,
         /// The product's components (repeatable; default: all but robots and `--exclude`).

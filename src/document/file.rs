@@ -152,6 +152,11 @@ pub struct ComponentFile {
     /// The component is screwed in: its assembly task is a `screw` operation.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub threaded: bool,
+    /// The component is not part of the product (a fixture, the table, a pedestal, a
+    /// robot shown by a plain mesh): sequence planning leaves it out, like robot
+    /// links and `exclude`d components.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixture: bool,
 }
 
 /// A mate between two reference entities `component/reference`.

@@ -218,6 +218,7 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
             transform: Some(inst.transform.to_matrix()),
             mass: None,
             threaded: false,
+            fixture: false,
         });
     }
     (doc, parts)

@@ -193,6 +193,9 @@ pub struct Component {
     pub mass: Option<f64>,
     /// Screwed in (its assembly task is a `screw` operation).
     pub threaded: bool,
+    /// Not part of the product (a fixture, the table): sequence planning leaves it
+    /// out (document key `fixture: true`).
+    pub fixture: bool,
 }
 
 /// Why a document operation failed. Load errors carry file, line and column.
@@ -682,6 +685,7 @@ impl Document {
                 transform,
                 mass: c.mass,
                 threaded: c.threaded,
+                fixture: c.fixture,
             });
         }
         // URDF robots: their links' meshes become generated parts and components.
@@ -1292,6 +1296,7 @@ impl Document {
                 transform: Some(c.transform.to_matrix().map(|row| row.map(tidy))),
                 mass: c.mass,
                 threaded: c.threaded,
+                fixture: c.fixture,
             })
             .collect();
         let mates = self
@@ -1491,6 +1496,7 @@ fn add_urdf_parts(
             transform: Transform::IDENTITY,
             mass: None,
             threaded: false,
+            fixture: false,
         });
         generated.insert(name);
     }

@@ -326,7 +326,7 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f(
         "Document.assembly_sequence(options: map) -> Sequence",
-        "Plans the assembly sequence: `#{base, order, mode: \"mates\"|\"geometry\", max_sequences (5), time_limit_ms (30000, the whole call within 5 %), seed, tolerance, threaded: [names], masses: #{name: mass}, max_tilt_deg (0), planner_fallback (true), components: [names] (the product; default all but robot links), exclude: [names] (fixtures, the table), support (true: every added part touches a placed one), contact_gap_mm (1.5), gravity: [x, y, z] (down; parts then move down or sideways into place), tight_clearance_mm (0.5)}`. A document without mates is planned from the geometry. Fewest re-mountings of the base wins, then fewest direction changes, then fewest difficult insertions (tight fits, planned paths), then the shortest insertion paths (`ranking` says why); every task's path is collision-free against the parts assembled before it.",
+        "Plans the assembly sequence: `#{base, order, mode: \"mates\"|\"geometry\", max_sequences (5), time_limit_ms (30000, the whole call within 5 %), seed, tolerance, threaded: [names], masses: #{name: mass}, max_tilt_deg (0), planner_fallback (true), components: [names] (the product; default all but robot links and components marked `fixture: true`), exclude: [names] (fixtures, the table), support (true: every added part touches a placed one), contact_gap_mm (1.5), gravity: [x, y, z] (down; parts then move down or sideways into place), tight_clearance_mm (0.5)}`. A document without mates is planned from the geometry. Fewest re-mountings of the base wins, then fewest direction changes, then fewest difficult insertions (tight fits, planned paths), then the shortest insertion paths (`ranking` says why); every task's path is collision-free against the parts assembled before it.",
         |d: &mut DocHandle, o: Map| plan(d, Some(&o)),
     );
     api.get(
@@ -400,7 +400,7 @@ pub(super) fn register(api: &mut Api) {
                             .collect::<Array>()
                             .into(),
                     );
-                    m.insert("reason".into(), r.reason.clone().into());
+                    m.insert("reason".into(), r.reason.to_string().into());
                     Dynamic::from_map(m)
                 })
                 .collect()

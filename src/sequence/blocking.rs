@@ -129,20 +129,27 @@ impl Ctx<'_> {
 
     /// The product components with no candidate direction free of all the others.
     fn stuck(&self) -> Vec<usize> {
-        members(self.active)
+        // In parallel: the sweeps left for later run here for every part.
+        let parts: Vec<usize> = members(self.active).collect();
+        parts
+            .into_par_iter()
             .filter(|&p| {
                 let others = self.active & !bit(p);
-                others != 0 && self.free_dirs(p, others).is_empty()
+                others != 0
+                    && (0..self.dirs[p].len()).all(|k| self.blockers_in(p, k, others, false) != 0)
             })
             .collect()
     }
 
     fn add_directions(&mut self, added: Vec<(usize, Vec<(Vec3, Mask)>)>) {
+        let b = self.blocking.get_mut().unwrap();
         for (p, dirs) in added {
             for (d, blocked) in dirs {
                 if !self.dirs[p].iter().any(|e| same_dir(e, &d)) {
                     self.dirs[p].push(d);
-                    self.blocked[p].push(blocked);
+                    // Swept against every other product component.
+                    b.hit[p].push(blocked);
+                    b.known[p].push(self.active & !bit(p));
                 }
             }
         }
@@ -299,7 +306,15 @@ impl Ctx<'_> {
         // a longer piece could meet (thin facets swept across many others, coplanar
         // faces sliding past each other); the deadline is read between pieces.
         let entry = entry_distance(&bp, &bq, d, self.opts.tolerance).min(len);
-        let mut piece = (0.5 * self.opts.probe_mm).min(SWEEP_PIECE_MM);
+        // Two large parts: shorter pieces, so the deadline is read often enough
+        // (a piece of such a pair can walk many thousands of triangle pairs).
+        let large = |i: usize| self.scene.colliders[i].triangle_count() > PIECE_TRIANGLES;
+        let longest = if large(p) && large(q) {
+            LARGE_SWEEP_PIECE_MM
+        } else {
+            SWEEP_PIECE_MM
+        };
+        let mut piece = (0.5 * self.opts.probe_mm).min(longest);
         let mut at = 0.0;
         // whether the straight piece `a → b` of the sweep hits `q`
         let hits = |a: &Transform, b: &Transform| {
@@ -330,7 +345,7 @@ impl Ctx<'_> {
                 at + piece
             };
             at = next;
-            piece = (2.0 * piece).min(SWEEP_PIECE_MM);
+            piece = (2.0 * piece).min(longest);
             let b = start.then(&Transform::from_translation(d * next));
             if hits(&a, &b)? {
                 return Ok(true);
@@ -344,6 +359,13 @@ impl Ctx<'_> {
     /// other product component, whether the straight removal hits it. The sweeps are
     /// independent and run in parallel. A sweep the deadline cuts counts as blocked
     /// (never a wrong "free"): the search then reports what it could do in time.
+    ///
+    /// Sweeps between two large parts (both over [`LAZY_TRIANGLES`]) are left for
+    /// when the search asks ([`Ctx::blockers_in`]): a part moving into a large
+    /// neighbour walks many triangle pairs, and the answer is often not needed — a
+    /// smaller part already placed blocks the same direction (a tube pushed
+    /// sideways meets the clip inside its neighbour before the neighbour's walls
+    /// matter), or the search never asks for that direction among those parts.
     pub(super) fn build_blocking(&mut self) {
         // p along d meets q exactly when q along −d meets p (the same relative
         // motion, the same separation length): only one of the two is swept.
@@ -356,12 +378,13 @@ impl Ctx<'_> {
                 })
                 .flatten()
         };
+        let large = |i: usize| self.scene.colliders[i].triangle_count() > LAZY_TRIANGLES;
         let mut queries = Vec::new();
         let active = self.active;
         for p in members(active) {
             for k in 0..self.dirs[p].len() {
                 for q in members(active).filter(|&q| q != p) {
-                    if mirror(p, k, q).is_none() {
+                    if mirror(p, k, q).is_none() && !(large(p) && large(q)) {
                         queries.push((p, k, q));
                     }
                 }
@@ -372,33 +395,64 @@ impl Ctx<'_> {
             .par_iter()
             .map(|&(p, k, q)| this.sweep_hits(p, &this.dirs[p][k], q).unwrap_or(true))
             .collect();
-        let mut blocked: Vec<Vec<Mask>> = (0..self.n)
-            .map(|p| vec![0 as Mask; self.dirs[p].len()])
-            .collect();
+        let mut b = Blocking {
+            hit: (0..self.n)
+                .map(|p| vec![0 as Mask; self.dirs[p].len()])
+                .collect(),
+            known: (0..self.n)
+                .map(|p| vec![0 as Mask; self.dirs[p].len()])
+                .collect(),
+        };
         for (&(p, k, q), &hit) in queries.iter().zip(&hits) {
+            self.record(&mut b, p, k, q, hit);
+        }
+        *self.blocking.get_mut().unwrap() = b;
+    }
+
+    /// Records the sweep of `p` along `dirs[p][k]` against `q`, and its mirror (`q`
+    /// along the opposite direction against `p`) when `q` has that direction.
+    fn record(&self, b: &mut Blocking, p: usize, k: usize, q: usize, hit: bool) {
+        b.known[p][k] |= bit(q);
+        if hit {
+            b.hit[p][k] |= bit(q);
+        }
+        if let Some(k2) = self.dirs[q]
+            .iter()
+            .position(|e| same_dir(e, &-self.dirs[p][k]))
+        {
+            b.known[q][k2] |= bit(p);
             if hit {
-                blocked[p][k] |= bit(q);
+                b.hit[q][k2] |= bit(p);
             }
         }
-        // The mirrored half, from the swept one (its q < p: p ascending fills them).
-        for p in members(active) {
-            for k in 0..self.dirs[p].len() {
-                for q in members(active).filter(|&q| q != p) {
-                    if let Some(k2) = mirror(p, k, q) {
-                        if blocked[q][k2] & bit(p) != 0 {
-                            blocked[p][k] |= bit(q);
-                        }
-                    }
-                }
+    }
+
+    /// The components of `mask` that block `p` along `dirs[p][k]`: every one with
+    /// `all`, else as soon as one is found (enough to say the direction is not
+    /// free). Sweeps not run yet are run here, the smallest part first.
+    pub(super) fn blockers_in(&self, p: usize, k: usize, mask: Mask, all: bool) -> Mask {
+        let mask = mask & self.active & !bit(p);
+        loop {
+            let (hit, unknown) = {
+                let b = self.blocking.lock().unwrap();
+                (b.hit[p][k] & mask, mask & !b.known[p][k])
+            };
+            if unknown == 0 || (hit != 0 && !all) {
+                return hit;
             }
+            let q = members(unknown)
+                .min_by_key(|&q| (self.scene.colliders[q].triangle_count(), q))
+                .unwrap_or(0);
+            let h = self.sweep_hits(p, &self.dirs[p][k], q).unwrap_or(true);
+            let mut b = self.blocking.lock().unwrap();
+            self.record(&mut b, p, k, q, h);
         }
-        self.blocked = blocked;
     }
 
     /// The free separation directions of `p` among the components of `mask`.
     pub fn free_dirs(&self, p: usize, mask: Mask) -> Vec<usize> {
         (0..self.dirs[p].len())
-            .filter(|&k| self.blocked[p][k] & mask == 0)
+            .filter(|&k| self.blockers_in(p, k, mask, false) == 0)
             .collect()
     }
 

@@ -5,7 +5,7 @@
 
 use super::graph::{Freedom, RelationGraph};
 use super::options::{
-    Mode, SequenceError, SequenceOptions, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
+    Mode, SequenceError, SequenceOptions, Stuck, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
 };
 use super::task::Grasp;
 use crate::collision::Aabb;
@@ -23,7 +23,27 @@ use std::time::{Duration, Instant};
 /// between them.
 pub(super) const SWEEP_PIECE_MM: f64 = 10.0;
 
+/// The longest piece of a sweep between two parts over [`PIECE_TRIANGLES`] each (mm).
+pub(super) const LARGE_SWEEP_PIECE_MM: f64 = 2.0;
+
+/// Parts with more triangles than this sweep each other in pieces of at most
+/// [`LARGE_SWEEP_PIECE_MM`].
+pub(super) const PIECE_TRIANGLES: usize = 1_000;
+
 pub(super) type Mask = u128;
+
+/// The share of the time limit the work may use: the rest (3 %) is kept for what
+/// is in flight when the deadline passes (a sweep piece, an exact query, on a
+/// loaded machine) and for returning, so the call ends within its limit.
+pub(super) const DEADLINE_SHARE: f64 = 0.97;
+
+/// The share of the time limit after which the search stops: what is left builds
+/// the answer (safe lengths and grasps of the sequences kept) before the deadline.
+pub(super) const SEARCH_SHARE: f64 = 0.9;
+
+/// Triangles per batch of trees built (the deadline is read between batches; a
+/// batch of this size takes tens of ms).
+const TREE_BATCH_TRIANGLES: usize = 50_000;
 
 pub(super) fn bit(i: usize) -> Mask {
     1u128 << i
@@ -33,8 +53,16 @@ pub(crate) fn members_of(m: Mask) -> impl Iterator<Item = usize> {
     members(m)
 }
 
+/// The members of `m`, ascending (one step per member, not per bit).
 pub(super) fn members(m: Mask) -> impl Iterator<Item = usize> {
-    (0..128).filter(move |&i| m & bit(i) != 0)
+    let mut rest = m;
+    std::iter::from_fn(move || {
+        (rest != 0).then(|| {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            i
+        })
+    })
 }
 
 /// The size of every component for the base choice (seed 003 section 2.2: volume or
@@ -86,6 +114,9 @@ pub(crate) struct Ctx<'d> {
     pub touching: Vec<Mask>,
     /// Tight fits found, by part, mating direction and the placed parts near it.
     pub(super) tight: Mutex<HashMap<SafeKey, bool>>,
+    /// Per component: the product's components whose boxes its box grown by
+    /// `tight_clearance_mm` meets (the only ones a tight-fit probe can hit).
+    pub(super) tight_near: Vec<Mask>,
     pub names: Vec<String>,
     /// World boxes in the assembled pose.
     pub boxes: Vec<Aabb>,
@@ -96,10 +127,14 @@ pub(crate) struct Ctx<'d> {
     pub related: Vec<Mask>,
     /// Candidate separation directions per component (unit, world).
     pub dirs: Vec<Vec<Vec3>>,
-    /// `blocked[p][k]`: the components that hit `p` moving along `dirs[p][k]`.
-    pub blocked: Vec<Vec<Mask>>,
+    /// The blocking graph as far as it is swept (see [`Ctx::blockers_in`]).
+    pub(super) blocking: Mutex<Blocking>,
     pub step: f64,
+    /// The one deadline of the call (every check reads it).
     pub deadline: Instant,
+    /// When the search stops ([`SEARCH_SHARE`] of the limit, or the deadline when
+    /// the search starts later): the rest of the budget builds the answer.
+    pub search_deadline: Instant,
     pub started: Instant,
     /// Blocking sweeps run (counted from the parallel sweeps).
     pub sweeps: AtomicUsize,
@@ -109,6 +144,19 @@ pub(crate) struct Ctx<'d> {
     /// parts the fingers can reach.
     pub(super) grasps: Mutex<HashMap<GraspKey, Option<Grasp>>>,
 }
+
+/// The directional blocking graph as far as it is known: per component `p` and
+/// direction `k`, the components found to hit `p` moving along `dirs[p][k]`
+/// (`hit`) and those swept at all (`known`).
+#[derive(Default)]
+pub(super) struct Blocking {
+    pub hit: Vec<Vec<Mask>>,
+    pub known: Vec<Vec<Mask>>,
+}
+
+/// Sweeps between two parts with more triangles than this each are run only when
+/// the search needs their answer (see [`Ctx::build_blocking`]).
+pub(super) const LAZY_TRIANGLES: usize = 20_000;
 
 /// The key of [`Ctx::safe_lengths`]: part, direction bits, the parts that matter.
 pub(super) type SafeKey = (usize, [u64; 3], Mask);
@@ -200,8 +248,9 @@ pub(super) fn boxes_meet(a: &Aabb, b: &Aabb, slack: f64) -> bool {
     a.overlap(b).min() > -slack
 }
 
-/// The product's components as a mask: `components` when given, else every
-/// component but robot links and `exclude`.
+/// The product's components as a mask: `components` when given (naming a component
+/// marked `fixture` takes it in), else every component but robot links, components
+/// the document marks `fixture: true`, and `exclude`.
 fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, SequenceError> {
     let n = doc.components().len();
     let index = |name: &String| doc.component_index(name).map_err(WorkspaceError::from);
@@ -221,6 +270,11 @@ fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, Sequence
             if let Some(c) = l.component {
                 m &= !bit(c);
             }
+        }
+    }
+    for (i, c) in doc.components().iter().enumerate() {
+        if c.fixture {
+            m &= !bit(i);
         }
     }
     for name in &opts.exclude {
@@ -391,8 +445,31 @@ impl<'d> Ctx<'d> {
         {
             opts.mode = Mode::Geometry;
         }
-        let deadline = started + Duration::from_secs_f64(limit.min(1e9) / 1e3);
+        let deadline = started + Duration::from_secs_f64(limit.min(1e9) / 1e3 * DEADLINE_SHARE);
+        // The setup reads the one deadline too: between the batches of trees built,
+        // and after each of its phases (a budget spent there is reported as such).
+        let spent = || -> Result<(), SequenceError> {
+            if Instant::now() >= deadline {
+                Err(SequenceError::TimeLimit(limit))
+            } else {
+                Ok(())
+            }
+        };
+        let mut batch: Vec<&std::sync::Arc<crate::mesh::Mesh>> = Vec::new();
+        let mut batch_tris = 0;
+        for i in 0..n {
+            let mesh = doc.mesh_of(i);
+            batch.push(mesh);
+            batch_tris += mesh.triangles.len();
+            if batch_tris >= TREE_BATCH_TRIANGLES || i + 1 == n {
+                spent()?;
+                cache.colliders(&batch).map_err(WorkspaceError::from)?;
+                batch.clear();
+                batch_tris = 0;
+            }
+        }
         let scene = Scene::new(doc, cache)?;
+        spent()?;
         let names: Vec<String> = doc.components().iter().map(|c| c.name.clone()).collect();
         let mut boxes = Vec::with_capacity(n);
         for (i, name) in names.iter().enumerate() {
@@ -408,6 +485,7 @@ impl<'d> Ctx<'d> {
             .contacts(crate::collision::Method::Exact, opts.tolerance)
             .map_err(WorkspaceError::from)?;
         contacts.retain(|p| active & bit(p.a) != 0 && active & bit(p.b) != 0);
+        spent()?;
         if let Some(p) = contacts.iter().find(|p| p.contact.is_interfering()) {
             return Err(SequenceError::AssembledInterference {
                 a: names[p.a].clone(),
@@ -458,6 +536,7 @@ impl<'d> Ctx<'d> {
                 }
             }
         }
+        spent()?;
         // Mates with a component outside the product relate nothing.
         for (i, r) in related.iter_mut().enumerate() {
             *r &= active;
@@ -484,8 +563,19 @@ impl<'d> Ctx<'d> {
             let smallest = boxes.iter().map(diag).fold(f64::INFINITY, f64::min);
             (0.01 * smallest).clamp(0.05, 2.0)
         };
+        let c = opts.tight_clearance_mm;
+        let tight_near: Vec<Mask> = boxes
+            .iter()
+            .map(|bp| {
+                let grown = Aabb::new(bp.lo - Vec3::repeat(c), bp.hi + Vec3::repeat(c));
+                members(active)
+                    .filter(|&q| boxes_meet(&grown, &boxes[q], opts.tolerance))
+                    .fold(0, |a, q| a | bit(q))
+            })
+            .collect();
         let mut ctx = Ctx {
             doc,
+            tight_near,
             scene,
             opts,
             n,
@@ -498,9 +588,10 @@ impl<'d> Ctx<'d> {
             graph,
             related,
             dirs: Vec::new(),
-            blocked: Vec::new(),
+            blocking: Mutex::new(Blocking::default()),
             step,
             deadline,
+            search_deadline: started + Duration::from_secs_f64(limit.min(1e9) / 1e3 * SEARCH_SHARE),
             started,
             sweeps: AtomicUsize::new(0),
             safe_lengths: Mutex::new(HashMap::new()),
@@ -519,8 +610,13 @@ impl<'d> Ctx<'d> {
             })
             .collect();
         ctx.dirs = dirs;
+        spent()?;
         ctx.build_blocking();
+        // Sweeps the deadline cut count as blocked; with no time left there is
+        // nothing to search: say so.
+        spent()?;
         ctx.extend_directions();
+        spent()?;
         ctx.order_composites();
         Ok(ctx)
     }
@@ -571,20 +667,20 @@ impl<'d> Ctx<'d> {
     /// a part in a slot or on a face is not). Memoised by the placed parts near it.
     pub(super) fn tight(&self, p: usize, mate: &Vec3, mask: Mask) -> bool {
         let c = self.opts.tight_clearance_mm;
-        if c <= 0.0 || self.out_of_time() {
+        if c <= 0.0 {
             return false;
         }
-        let bp = self.boxes[p];
-        let grown = Aabb::new(bp.lo - Vec3::repeat(c), bp.hi + Vec3::repeat(c));
-        let near: Mask = members(mask)
-            .filter(|&q| boxes_meet(&grown, &self.boxes[q], self.opts.tolerance))
-            .fold(0, |a, q| a | bit(q));
+        let near = self.tight_near[p] & mask;
         if near == 0 {
             return false;
         }
         let key = (p, dir_key(mate), near);
         if let Some(&t) = self.tight.lock().unwrap().get(&key) {
             return t;
+        }
+        // Past the deadline an unknown fit counts as easy (not remembered).
+        if self.out_of_time() {
+            return false;
         }
         let helper = if mate.x.abs() < 0.9 {
             Vec3::x()
@@ -616,8 +712,14 @@ impl<'d> Ctx<'d> {
         Instant::now() >= self.deadline
     }
 
-    pub(super) fn remaining_ms(&self) -> f64 {
-        self.deadline
+    /// Whether the search must stop (see [`Ctx::search_deadline`]).
+    pub(super) fn search_out_of_time(&self) -> bool {
+        Instant::now() >= self.search_deadline
+    }
+
+    /// What is left of the search's time (ms).
+    pub(super) fn search_remaining_ms(&self) -> f64 {
+        self.search_deadline
             .saturating_duration_since(Instant::now())
             .as_secs_f64()
             * 1e3
@@ -686,36 +788,33 @@ impl<'d> Ctx<'d> {
         best == self.node_index(p)
     }
 
-    pub(super) fn why_not(&self, p: usize, mask: Mask) -> String {
+    pub(super) fn why_not(&self, p: usize, mask: Mask) -> Stuck {
+        let part = self.names[p].clone();
         if !self.supported(p, mask) {
-            return format!(
-                "{} would float: it touches nothing placed within {} mm (support on)",
-                self.names[p],
-                crate::math::format::number(self.opts.contact_gap_mm, 3)
-            );
+            return Stuck::Floats {
+                part,
+                gap_mm: self.opts.contact_gap_mm,
+            };
         }
         if !self.eligible(p, mask) {
             let node = &self.graph.nodes[self.node_index(p)];
             let pos = node.members.iter().position(|&m| m == p).unwrap_or(0);
             if pos > 0 {
-                return format!(
-                    "{} waits for {} (composite node order)",
-                    self.names[p],
-                    self.names[node.members[pos - 1]]
-                );
+                return Stuck::WaitsFor {
+                    part,
+                    before: self.names[node.members[pos - 1]].clone(),
+                };
             }
-            return format!("{} has nothing assembled to go onto", self.names[p]);
+            return Stuck::NothingToGoOnto { part };
         }
         let mut by: Mask = 0;
         for k in 0..self.dirs[p].len() {
-            by |= self.blocked[p][k] & mask;
+            by |= self.blockers_in(p, k, mask, true);
         }
-        let names: Vec<&str> = members(by).map(|i| self.names[i].as_str()).collect();
-        format!(
-            "{} is blocked along all {} directions by {}",
-            self.names[p],
-            self.dirs[p].len(),
-            names.join(", ")
-        )
+        Stuck::Blocked {
+            part,
+            directions: self.dirs[p].len(),
+            by: members(by).map(|i| self.names[i].clone()).collect(),
+        }
     }
 }

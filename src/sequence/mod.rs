@@ -58,8 +58,8 @@ mod task;
 pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};
 pub use grasp::{face_pairs, FacePair};
 pub use options::{
-    Gripper, Mode, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
-    DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
+    Gripper, Mode, RejectReason, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan,
+    StepInfo, Stuck, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
 };
 pub use revalidate::{revalidate, BrokenStep};
 pub use task::{Grasp, Operation, Task};

@@ -20,6 +20,7 @@ pub const MAX_COMPONENTS: usize = 128;
 
 /// Where the relations between components come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum Mode {
     /// Seed 003: the document's mates (relation graph, freedoms, composite nodes).
     /// A document without mates among the product's components is planned in
@@ -123,7 +124,8 @@ pub struct SequenceOptions {
     pub gripper: Gripper,
     /// The product's components (names): only they are sequenced, and the other
     /// components are ignored (neither moved nor obstacles). Empty (default): every
-    /// component except robot links and `exclude`.
+    /// component except robot links, components the document marks `fixture: true`
+    /// and `exclude` (a fixture named here is taken in).
     pub components: Vec<String>,
     /// Components that are not part of the product (fixtures, the table, pedestals):
     /// ignored like robot links, which are always left out.
@@ -181,6 +183,7 @@ impl Default for SequenceOptions {
 
 /// Why sequence planning could not answer.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SequenceError {
     /// The workspace refused (unknown component, unusable mesh, bad tolerance…).
     #[error(transparent)]
@@ -212,12 +215,12 @@ pub enum SequenceError {
         depth: f64,
     },
     /// No order assembles every component (every try is in `rejected`).
-    #[error("no assembly sequence found{}: {}", if *.timed_out { " within the time limit" } else { "" }, .reasons.join("; "))]
+    #[error("no assembly sequence found{}: {}", if *.timed_out { " within the time limit" } else { "" }, rejected_list(.rejected))]
     NoSequence {
         /// Whether the time budget ran out first.
         timed_out: bool,
-        /// Why the orders tried failed (the first few).
-        reasons: Vec<String>,
+        /// The orders tried that failed and why (the first four).
+        rejected: Vec<Rejected>,
     },
     /// The time budget ran out before the blocking graph was built.
     #[error("the time limit of {0} ms ran out before the blocking graph was complete")]
@@ -275,7 +278,136 @@ pub struct Rejected {
     /// The components placed before it failed, base first.
     pub order: Vec<String>,
     /// Why no component could go next (per remaining component, or a pin or base rule).
-    pub reason: String,
+    pub reason: RejectReason,
+}
+
+/// `after [a, b]: reason; after [a, c]: reason` (the error's text).
+fn rejected_list(rejected: &[Rejected]) -> String {
+    let list: Vec<String> = rejected
+        .iter()
+        .map(|r| format!("after [{}]: {}", r.order.join(", "), r.reason))
+        .collect();
+    list.join("; ")
+}
+
+/// Why an order of the search was given up.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum RejectReason {
+    /// No remaining component can go next: why not, for each of the first four (or
+    /// for the pinned one).
+    DeadEnd {
+        /// The component the pinned order puts next, when there is one.
+        pinned: Option<String>,
+        /// Why each component looked at cannot go next.
+        parts: Vec<Stuck>,
+    },
+    /// Seed 003 section 2.2 step 2: the base is much smaller than a part it joins.
+    InactiveBase {
+        /// The base.
+        base: String,
+        /// Its size (mass, or mesh volume in mm³ scaled to a mass; see
+        /// [`SequenceOptions::masses`]).
+        size: f64,
+        /// The size of the largest component related to it.
+        largest_related: f64,
+    },
+    /// A straight insertion of a found order is not free (never expected: the
+    /// blocking graph found it free).
+    StraightCollides {
+        /// The component.
+        part: String,
+        /// Its mating direction (unit, assembly frame).
+        direction: Vec3,
+    },
+}
+
+/// Why one component cannot be assembled next at a dead end of the search.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Stuck {
+    /// Support on: it touches nothing placed within the contact gap.
+    Floats {
+        /// The component.
+        part: String,
+        /// The contact gap (mm).
+        gap_mm: f64,
+    },
+    /// It is a member of a composite node and waits for the member before it.
+    WaitsFor {
+        /// The component.
+        part: String,
+        /// The member that goes before it.
+        before: String,
+    },
+    /// Nothing it relates to is assembled, and it does not start its group.
+    NothingToGoOnto {
+        /// The component.
+        part: String,
+    },
+    /// Every candidate separation direction is blocked by placed components.
+    Blocked {
+        /// The component.
+        part: String,
+        /// How many directions were tried.
+        directions: usize,
+        /// The placed components blocking it along at least one of them.
+        by: Vec<String>,
+    },
+}
+
+impl std::fmt::Display for Stuck {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stuck::Floats { part, gap_mm } => write!(
+                f,
+                "{part} would float: it touches nothing placed within {} mm (support on)",
+                crate::math::format::number(*gap_mm, 3)
+            ),
+            Stuck::WaitsFor { part, before } => {
+                write!(f, "{part} waits for {before} (composite node order)")
+            }
+            Stuck::NothingToGoOnto { part } => write!(f, "{part} has nothing assembled to go onto"),
+            Stuck::Blocked {
+                part,
+                directions,
+                by,
+            } => write!(
+                f,
+                "{part} is blocked along all {directions} directions by {}",
+                by.join(", ")
+            ),
+        }
+    }
+}
+
+impl std::fmt::Display for RejectReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RejectReason::DeadEnd { pinned, parts } => {
+                let list: Vec<String> = parts.iter().map(|p| p.to_string()).collect();
+                match pinned {
+                    Some(q) => write!(f, "pinned order: {q} cannot go next: {}", list.join("; ")),
+                    None => write!(f, "{}", list.join("; ")),
+                }
+            }
+            RejectReason::InactiveBase {
+                base,
+                size,
+                largest_related,
+            } => write!(
+                f,
+                "inactive base: {base} is much smaller ({}) than a part it joins ({})",
+                crate::math::format::number(*size, 3),
+                crate::math::format::number(*largest_related, 3)
+            ),
+            RejectReason::StraightCollides { part, direction } => write!(
+                f,
+                "the straight insertion of {part} along {:?} collides",
+                direction.as_slice()
+            ),
+        }
+    }
 }
 
 /// The result of [`plan_sequence`](super::plan_sequence): ranked sequences and what

@@ -14,7 +14,10 @@ impl Ctx<'_> {
     /// A path for `p` out of the components of `mask` found by fitup's planners
     /// (seed 002's disassembly with `local_rrt`), ending assembled.
     pub(super) fn plan_fallback(&self, p: usize, mask: Mask) -> Option<PlannedPath> {
-        let budget = self.opts.fallback_time_limit_ms.min(self.remaining_ms());
+        let budget = self
+            .opts
+            .fallback_time_limit_ms
+            .min(self.search_remaining_ms());
         if budget < 1.0 {
             return None;
         }

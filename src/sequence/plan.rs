@@ -5,7 +5,9 @@
 
 use super::context::*;
 use super::grasp::find_grasp;
-use super::options::{Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo};
+use super::options::{
+    RejectReason, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
+};
 use super::task::{Operation, Task};
 use crate::collision::SweepMethod;
 use crate::document::{Document, MateKind, Reference};
@@ -13,7 +15,7 @@ use crate::math::{Transform, Vec3};
 use crate::planning::PlannedPath;
 use crate::workspace::{SceneCache, WorkspaceError};
 use rayon::prelude::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::Ordering;
 
 /// One choice of the search: a part and how it goes in.
@@ -47,6 +49,14 @@ struct Search<'c, 'd> {
     found: Vec<Found>,
     rejected: Vec<Rejected>,
     dead: HashSet<Mask>,
+    /// Per search state (placed parts, mount direction, and in the second pass the
+    /// parts that had a straight insertion): the best `k` costs it was reached
+    /// with. What can follow depends on the state alone, so a later arrival no
+    /// better than `k` earlier ones cannot rank among the kept sequences (the same
+    /// completions after `k` cheaper prefixes): it is skipped. This cuts the
+    /// re-orderings of independent parts (a dozen clips in any order) that branch
+    /// and bound alone cannot, as their partial costs stay below the worst kept.
+    seen: HashMap<StateKey, Vec<Cost>>,
     /// Per part: the planned path found for it (reused wherever it is still free).
     planned_ok: Vec<Option<PlannedPath>>,
     /// Per part: the sets of assembled parts among which no path was found (a
@@ -62,6 +72,9 @@ struct Search<'c, 'd> {
     /// Whether branch and bound cut a subtree below the current node.
     pruned: bool,
 }
+
+/// The key of [`Search::seen`].
+type StateKey = (Mask, Option<[u64; 3]>, Mask);
 
 const MAX_EXPANDED: usize = 200_000;
 const MAX_REJECTED: usize = 50;
@@ -127,7 +140,7 @@ impl Search<'_, '_> {
         self.found.truncate(self.k);
     }
 
-    fn reject(&mut self, base: usize, choices: &[Choice], reason: String) {
+    fn reject(&mut self, base: usize, choices: &[Choice], reason: RejectReason) {
         if self.rejected.len() < MAX_REJECTED {
             let order = std::iter::once(base)
                 .chain(choices.iter().map(|c| c.part))
@@ -156,12 +169,20 @@ impl Search<'_, '_> {
             self.record(base, choices, cost);
             return true;
         }
-        if ctx.out_of_time() || self.expanded >= MAX_EXPANDED {
+        if ctx.search_out_of_time() || self.expanded >= MAX_EXPANDED {
             self.cut = true;
             return false;
         }
         if let Some(w) = self.worst_kept() {
-            if !cost_lt(&cost, &w) {
+            // Straight insertions only (first pass): each part still to come travels
+            // at least its way out of today's product box (the box only grows), so
+            // that much path length is certain to be added.
+            let bound = if self.use_fallback {
+                cost
+            } else {
+                (cost.0, cost.1, cost.2, cost.3 + length_bound(ctx, mask))
+            };
+            if !cost_lt(&bound, &w) {
                 // Branch and bound: nothing below can rank among the kept ones. The
                 // mask is not dead, so it is not memoised either.
                 self.pruned = true;
@@ -171,6 +192,22 @@ impl Search<'_, '_> {
         if self.dead.contains(&mask) {
             return false;
         }
+        let key = (
+            mask,
+            current.map(|c| dir_key(&c)),
+            if self.use_fallback { had_free } else { 0 },
+        );
+        let costs = self.seen.entry(key).or_default();
+        if costs.len() >= self.k && !cost_lt(&cost, &costs[self.k - 1]) {
+            self.pruned = true;
+            return false;
+        }
+        let at = costs
+            .iter()
+            .position(|c| cost_lt(&cost, c))
+            .unwrap_or(costs.len());
+        costs.insert(at, cost);
+        costs.truncate(self.k);
         self.expanded += 1;
         let depth = choices.len();
         let pinned = pins.get(depth).copied();
@@ -181,18 +218,22 @@ impl Search<'_, '_> {
             if pinned.is_some_and(|q| q != p) || !ctx.eligible(p, mask) {
                 continue;
             }
-            let free: Vec<usize> = ctx
-                .free_dirs(p, mask)
-                .into_iter()
-                .filter(|&k| ctx.gravity_allows(&-ctx.dirs[p][k]))
-                .collect();
-            // Keeping the current mount direction dominates every other choice.
-            let keep = free
-                .iter()
-                .find(|&&k| current.is_some_and(|c| !self.mounts_for(Some(c), &-ctx.dirs[p][k])));
+            let allowed = |k: usize| ctx.gravity_allows(&-ctx.dirs[p][k]);
+            // Keeping the current mount direction dominates every other choice: the
+            // first free direction that keeps it is the only option (looked for
+            // first, so the other directions' sweeps are not needed here).
+            let keep = (0..ctx.dirs[p].len()).find(|&k| {
+                current.is_some_and(|c| !self.mounts_for(Some(c), &-ctx.dirs[p][k]))
+                    && allowed(k)
+                    && ctx.blockers_in(p, k, mask, false) == 0
+            });
             let ks: Vec<usize> = match keep {
-                Some(&k) => vec![k],
-                None => free,
+                Some(k) => vec![k],
+                None => ctx
+                    .free_dirs(p, mask)
+                    .into_iter()
+                    .filter(|&k| allowed(k))
+                    .collect(),
             };
             for k in ks {
                 let d = ctx.dirs[p][k];
@@ -242,16 +283,16 @@ impl Search<'_, '_> {
             }
         }
         if options.is_empty() {
-            let reasons: Vec<String> = ctx
+            let parts = ctx
                 .todo(mask)
                 .filter(|&p| pinned.is_none_or(|q| q == p))
                 .take(4)
                 .map(|p| ctx.why_not(p, mask))
                 .collect();
-            let mut reason = reasons.join("; ");
-            if let Some(q) = pinned {
-                reason = format!("pinned order: {} cannot go next: {reason}", ctx.names[q]);
-            }
+            let reason = RejectReason::DeadEnd {
+                pinned: pinned.map(|q| ctx.names[q].clone()),
+                parts,
+            };
             self.reject(base, choices, reason);
             self.dead.insert(mask);
             return false;
@@ -308,6 +349,28 @@ impl Search<'_, '_> {
         self.pruned |= pruned_before;
         any
     }
+}
+
+/// A lower bound of the straight insertion length (mm) still to come onto `mask`:
+/// per part not placed, the shortest way its box leaves the box of `mask` along one
+/// of its candidate directions not blocked among `mask` (the box of what is placed
+/// only grows, and so does what blocks a direction).
+fn length_bound(ctx: &Ctx, mask: Mask) -> f64 {
+    let Some(region) = union_box(&ctx.boxes, mask) else {
+        return 0.0;
+    };
+    let b = ctx.blocking.lock().unwrap();
+    ctx.todo(mask)
+        .map(|p| {
+            // Along the directions not known to be blocked among `mask` (a later
+            // straight insertion is free among a superset of it); no sweep is run.
+            (0..ctx.dirs[p].len())
+                .filter(|&k| b.hit[p][k] & mask == 0)
+                .map(|k| exit_distance(&ctx.boxes[p], &region, &ctx.dirs[p][k]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .filter(|l| l.is_finite())
+        .sum()
 }
 
 /// The mating directions of `p` against `mask` (negated free separations).
@@ -375,7 +438,7 @@ fn operation(ctx: &Ctx, p: usize, receivers: &[usize], mate: &Vec3) -> Operation
             ctx.dirs[p]
                 .iter()
                 .position(|e| same_dir(e, d))
-                .is_some_and(|k| ctx.blocked[p][k] & mask != 0)
+                .is_some_and(|k| ctx.blockers_in(p, k, mask, false) != 0)
         })
         .count();
     if blocked_across >= 2 {
@@ -387,7 +450,7 @@ fn operation(ctx: &Ctx, p: usize, receivers: &[usize], mate: &Vec3) -> Operation
 
 /// Turns a found order into tasks: safe lengths, checked paths, grasps, boxes and
 /// frames. `Err(reason)` when a step's path cannot be checked free.
-fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
+fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, RejectReason> {
     let mut mask = bit(f.base);
     let mut order = vec![f.base];
     let mut tasks = Vec::new();
@@ -413,13 +476,12 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, String> {
                 let free = ctx.dirs[p]
                     .iter()
                     .position(|e| same_dir(e, &ch.leave))
-                    .is_some_and(|k| ctx.blocked[p][k] & mask == 0);
+                    .is_some_and(|k| ctx.blockers_in(p, k, mask, false) == 0);
                 if !free {
-                    return Err(format!(
-                        "the straight insertion of {} along {:?} collides",
-                        ctx.names[p],
-                        mate.as_slice()
-                    ));
+                    return Err(RejectReason::StraightCollides {
+                        part: ctx.names[p].clone(),
+                        direction: mate,
+                    });
                 }
                 let safe = ctx.safe_length(p, &ch.leave, mask);
                 let from = assembled.then(&Transform::from_translation(ch.leave * safe));
@@ -514,6 +576,11 @@ pub(crate) fn plan(
         .iter()
         .map(|s| doc.component_index(s).map_err(WorkspaceError::from))
         .collect::<Result<_, _>>()?;
+    // A search that starts after its share of the budget runs to the deadline (the
+    // answer is then built with what is left, without the unspent work).
+    if std::time::Instant::now() >= ctx.search_deadline {
+        ctx.search_deadline = ctx.deadline;
+    }
     let ctx = ctx;
     let mut search = Search {
         ctx: &ctx,
@@ -521,6 +588,7 @@ pub(crate) fn plan(
         found: Vec::new(),
         rejected: Vec::new(),
         dead: HashSet::new(),
+        seen: HashMap::new(),
         planned_ok: vec![None; n],
         planned_failed: vec![Vec::new(); n],
         before: vec![vec![0; n]; n],
@@ -557,7 +625,7 @@ impl Search<'_, '_> {
         let opts = &ctx.opts;
         let search = self;
         for &base in bases {
-            if ctx.out_of_time() {
+            if ctx.search_out_of_time() {
                 search.cut = true;
                 break;
             }
@@ -574,16 +642,16 @@ impl Search<'_, '_> {
                 search.reject(
                     base,
                     &[],
-                    format!(
-                        "inactive base: {} is much smaller ({}) than a part it joins ({})",
-                        ctx.names[base],
-                        crate::math::format::number(ctx.sizes[base], 3),
-                        crate::math::format::number(biggest_related, 3)
-                    ),
+                    RejectReason::InactiveBase {
+                        base: ctx.names[base].clone(),
+                        size: ctx.sizes[base],
+                        largest_related: biggest_related,
+                    },
                 );
                 continue;
             }
             search.dead.clear();
+            search.seen.clear();
             let mut choices = Vec::new();
             search.dfs(base, bit(base), &mut choices, None, (0, 0, 0, 0.0), pins, 0);
             // The base is the part a person would fix: the largest that works. A
@@ -639,11 +707,7 @@ fn finish(
     if sequences.is_empty() {
         return Err(SequenceError::NoSequence {
             timed_out: ctx.out_of_time(),
-            reasons: rejected
-                .iter()
-                .take(4)
-                .map(|r| format!("after [{}]: {}", r.order.join(", "), r.reason))
-                .collect(),
+            rejected: rejected.into_iter().take(4).collect(),
         });
     }
     sequences.sort_by(|a, b| {

@@ -164,7 +164,7 @@ impl SequencePlan {
             "product": self.product,
             "ranking": self.ranking,
             "sequences": self.sequences.iter().map(|s| s.to_json_value()).collect::<Vec<_>>(),
-            "rejected": self.rejected.iter().map(|r| json!({"order": r.order, "reason": r.reason})).collect::<Vec<_>>(),
+            "rejected": self.rejected.iter().map(|r| json!({"order": r.order, "reason": r.reason.to_string()})).collect::<Vec<_>>(),
             "precedence": self.precedence.iter().map(|(a, b)| json!([a, b])).collect::<Vec<_>>(),
             "complete": self.complete,
             "relations": g.relations.iter().map(|r| json!({

@@ -14,6 +14,7 @@ use crate::planning::PlannedPath;
 
 /// What the robot does to join the assembly part to what is already assembled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Operation {
     /// Push the part along its mating direction (concentric + coplanar mates, a peg in a
     /// hole, a gear onto an axis).

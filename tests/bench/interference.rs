@@ -594,6 +594,7 @@ fn script_rows() {
             transform: None,
             mass: None,
             threaded: false,
+            fixture: false,
         });
     }
     std::fs::write(root.join("models/pair.yaml"), file.to_yaml().unwrap()).unwrap();

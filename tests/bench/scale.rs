@@ -69,6 +69,7 @@ fn write_cell(dir: &Path, parts: usize) -> (std::path::PathBuf, usize) {
             transform: Some(Transform::from_translation(at).to_matrix()),
             mass: None,
             threaded: false,
+            fixture: false,
         });
     }
     let path = dir.join("cell.yaml");

@@ -43,6 +43,7 @@ fn measure(extra: &[&str]) {
         ),
         mass: None,
         threaded: false,
+        fixture: false,
     });
     std::fs::write(models.join("big.yaml"), file.to_yaml().unwrap()).unwrap();
     // the project root: scripts/ resolves `models/…` against it

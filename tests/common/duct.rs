@@ -66,3 +66,60 @@ pub fn duct_grid(dir: &Path, slices: usize) -> PathBuf {
     let refs: Vec<(&str, Mesh)> = parts.iter().map(|(n, m)| (n.as_str(), m.clone())).collect();
     write_doc(dir, &refs)
 }
+
+/// The grid of [`duct_grid`] with each tube one closed surface (a watertight solid,
+/// as a CAD tessellation gives it: no faces inside the walls) whose eight wall faces
+/// are cut in `strips` strips along the tube: `16 · strips + 16` triangles per tube.
+/// (The bench's mesh-only scale row; used by the bench, not the tests.)
+#[allow(dead_code)]
+pub fn duct_grid_solid(dir: &Path, strips: usize) -> PathBuf {
+    let mut parts: Vec<(String, Mesh)> = Vec::new();
+    let plate = boxes(
+        &[([-20.0, -20.0, -40.0], [120.0, 150.0, -35.0])],
+        &Transform::IDENTITY,
+    );
+    parts.push(("plate".into(), plate));
+    let (z0, z1) = (-35.0, 21.0);
+    let outer = [(-7.0, -7.0), (7.0, -7.0), (7.0, 7.0), (-7.0, 7.0)];
+    let inner = [(-5.0, -5.0), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)];
+    for i in 0..3 {
+        for j in 0..4 {
+            let (dx, dy) = (40.0 * i as f64, 35.0 * j as f64);
+            let p = |c: (f64, f64), z: f64| Point3::new(c.0 + dx, c.1 + dy, z);
+            let mut soup: Vec<[Point3; 3]> = Vec::new();
+            let h = (z1 - z0) / strips as f64;
+            // The same bits for a level wherever it is used (the soup's vertices
+            // are merged by their bits): the last level is the top itself.
+            let level = |s: usize| if s == strips { z1 } else { z0 + h * s as f64 };
+            for s in 0..strips {
+                let (za, zb) = (level(s), level(s + 1));
+                for k in 0..4 {
+                    let (o0, o1) = (outer[k], outer[(k + 1) % 4]);
+                    soup.push([p(o0, za), p(o1, za), p(o1, zb)]);
+                    soup.push([p(o0, za), p(o1, zb), p(o0, zb)]);
+                    // The inner walls face the bore (reversed).
+                    let (i0, i1) = (inner[k], inner[(k + 1) % 4]);
+                    soup.push([p(i0, za), p(i1, zb), p(i1, za)]);
+                    soup.push([p(i0, za), p(i0, zb), p(i1, zb)]);
+                }
+            }
+            for k in 0..4 {
+                let (o0, o1, i0, i1) = (outer[k], outer[(k + 1) % 4], inner[k], inner[(k + 1) % 4]);
+                // Bottom ring facing down, top ring facing up.
+                soup.push([p(o0, z0), p(i1, z0), p(o1, z0)]);
+                soup.push([p(o0, z0), p(i0, z0), p(i1, z0)]);
+                soup.push([p(o0, z1), p(o1, z1), p(i1, z1)]);
+                soup.push([p(o0, z1), p(i1, z1), p(i0, z1)]);
+            }
+            parts.push((
+                format!("tube{i}{j}"),
+                Mesh::from_triangle_soup(soup).unwrap(),
+            ));
+            let at = Transform::from_translation(Vec3::new(dx, dy, 0.0));
+            let clip = boxes(&[([-4.0, -4.0, -30.0], [4.0, 4.0, 10.0])], &at);
+            parts.push((format!("clip{i}{j}"), clip));
+        }
+    }
+    let refs: Vec<(&str, Mesh)> = parts.iter().map(|(n, m)| (n.as_str(), m.clone())).collect();
+    write_doc(dir, &refs)
+}

@@ -188,6 +188,7 @@ impl Problem {
                 transform: Some(o.pose.to_matrix()),
                 mass: None,
                 threaded: false,
+                fixture: false,
             })
             .collect();
         components.push(ComponentFile {
@@ -198,6 +199,7 @@ impl Problem {
             transform: Some(self.start.to_matrix()),
             mass: None,
             threaded: false,
+            fixture: false,
         });
         DocumentFile {
             units: "mm".into(),

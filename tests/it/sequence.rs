@@ -237,11 +237,7 @@ fn wheel_sequence_is_the_papers_answer() {
     assert!(gear.safe_length > 9.0, "{}", gear.safe_length);
     recheck(&doc, &plan);
     // Cup first is rejected: the gear cannot get in under it.
-    assert!(
-        plan.precedence.contains(&("gear".into(), "cup".into())),
-        "{:?}",
-        plan.precedence
-    );
+    assert!(precedes(&plan, "gear", "cup"), "{:?}", plan.precedence);
 }
 
 #[test]
@@ -296,9 +292,27 @@ fn cell_screws_go_into_the_plates_holes() {
     assert_eq!(plate_b.base, "table");
     assert_eq!(plate_b.operation, Operation::Insertion);
     recheck(&doc, &plan);
-    assert!(plan
-        .precedence
-        .contains(&("plate_a".into(), "screw1".into())));
+    assert!(
+        precedes(&plan, "plate_a", "screw1"),
+        "{:?}",
+        plan.precedence
+    );
+}
+
+/// Whether `a` comes before `b` by the plan's (transitively reduced) precedence.
+fn precedes(plan: &SequencePlan, a: &str, b: &str) -> bool {
+    let mut reach = vec![a.to_string()];
+    let mut i = 0;
+    while i < reach.len() {
+        let from = reach[i].clone();
+        for (x, y) in &plan.precedence {
+            if *x == from && !reach.contains(y) {
+                reach.push(y.clone());
+            }
+        }
+        i += 1;
+    }
+    reach.iter().skip(1).any(|n| n == b)
 }
 
 #[test]
@@ -537,7 +551,7 @@ fn check_gearbox(doc: &Document, plan: &SequencePlan) {
         ("washer", "cap"),
     ] {
         assert!(
-            plan.precedence.contains(&(a.into(), b.into())),
+            precedes(plan, a, b),
             "{a} before {b}: {:?}",
             plan.precedence
         );
@@ -548,8 +562,8 @@ fn check_gearbox(doc: &Document, plan: &SequencePlan) {
             let p = |n: &str| r.order.iter().position(|o| o == n);
             p("cover").is_some()
                 && p("slider").is_none()
-                && r.reason.contains("slider is blocked along all")
-                && r.reason.contains("cover")
+                && r.reason.to_string().contains("slider is blocked along all")
+                && r.reason.to_string().contains("cover")
         }),
         "{:#?}",
         plan.rejected
@@ -732,8 +746,11 @@ print("revalidate ok");
 fn fine_pegboard_safe_length_matches_the_coarse_one() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
+    // The setup of the fine board (its blocking graph) on a loaded machine can take
+    // longer than the default 30 s; this test is about the answer, not the budget.
     let o = SequenceOptions {
         mode: Mode::Geometry,
+        time_limit_ms: Some(600_000.0),
         ..Default::default()
     };
     let mut lengths = Vec::new();

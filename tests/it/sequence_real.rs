@@ -9,7 +9,9 @@ use fitup::collision::{clearance, interferes, Aabb, DEFAULT_TOLERANCE};
 use fitup::document::Document;
 use fitup::math::{Transform, Vec3};
 use fitup::mesh::Mesh;
-use fitup::sequence::{plan_sequence, Mode, SequenceError, SequenceOptions, SequencePlan};
+use fitup::sequence::{
+    plan_sequence, Mode, RejectReason, SequenceError, SequenceOptions, SequencePlan, Stuck,
+};
 use fitup::workspace::{SceneCache, Workspace};
 use std::path::Path;
 use std::time::Instant;
@@ -299,11 +301,14 @@ fn no_sub_assembly_has_a_floating_part() {
         ..SequenceOptions::default()
     };
     match plan_sequence(&doc, &mut SceneCache::new(), &early) {
-        Err(SequenceError::NoSequence { reasons, .. }) => {
-            assert!(
-                reasons.iter().any(|r| r.contains("would float")),
-                "{reasons:?}"
-            )
+        Err(SequenceError::NoSequence { rejected, .. }) => {
+            let floats = |r: &fitup::sequence::Rejected| match &r.reason {
+                RejectReason::DeadEnd { parts, .. } => parts
+                    .iter()
+                    .any(|p| matches!(p, Stuck::Floats { part, .. } if part == "top")),
+                _ => false,
+            };
+            assert!(rejected.iter().any(floats), "{rejected:?}")
         }
         other => panic!("{:?}", other.map(|p| p.summary())),
     }
@@ -466,10 +471,217 @@ fn the_time_limit_is_a_limit() {
                 );
                 dense_removal(&doc, &plan);
             }
-            Err(SequenceError::NoSequence { timed_out, reasons }) => {
-                assert!(timed_out, "{reasons:?}");
+            Err(SequenceError::NoSequence {
+                timed_out,
+                rejected,
+            }) => {
+                assert!(timed_out, "{rejected:?}");
             }
+            Err(SequenceError::TimeLimit(l)) => assert_eq!(l, limit),
             Err(e) => panic!("{e}"),
         }
     }
+}
+
+/// A budget spent before the setup ends is reported as such, without finishing the
+/// setup: a spent budget builds no collision tree at all, and with the trees cached
+/// a 1 ms budget returns at once.
+#[test]
+fn a_spent_budget_is_reported_without_finishing_the_setup() {
+    let dir = tempfile::tempdir().unwrap();
+    let doc = Document::open(&duct::duct_grid(dir.path(), 28)).unwrap();
+    let spent = SequenceOptions {
+        time_limit_ms: Some(1e-6),
+        ..SequenceOptions::default()
+    };
+    let mut cache = SceneCache::new();
+    let t = Instant::now();
+    let r = plan_sequence(&doc, &mut cache, &spent);
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    assert!(
+        matches!(r, Err(SequenceError::TimeLimit(l)) if l == 1e-6),
+        "{:?}",
+        r.map(|p| p.summary())
+    );
+    assert_eq!(cache.collider_builds(), 0, "trees built after the deadline");
+    assert!(ms < 50.0, "{ms:.1} ms");
+    // The trees cached (the 25 parts' 16 284 triangles), a 1 ms budget: it runs out
+    // in the contacts or the sweeps and the call returns within its bound.
+    Workspace::new(&doc, &mut cache).unwrap();
+    let one = SequenceOptions {
+        time_limit_ms: Some(1.0),
+        ..SequenceOptions::default()
+    };
+    let t = Instant::now();
+    let r = plan_sequence(&doc, &mut cache, &one);
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    eprintln!("1 ms budget, trees cached: returned after {ms:.1} ms");
+    assert!(ms < 1.05 + 50.0, "{ms:.1} ms");
+    assert!(
+        matches!(r, Err(SequenceError::TimeLimit(l)) if l == 1.0),
+        "{:?}",
+        r.map(|p| p.summary())
+    );
+}
+
+/// A frame with a pocket under a roof (one part: floor, four walls, a roof over the
+/// left half of the pocket), a slider resting on the floor under the roof, 0.5 mm
+/// clear of the walls, and a cover that closes the open half. The slider comes out
+/// only along a bent path: along +X from under the roof, then up through the
+/// opening (no straight line: moving up it hits the roof, sideways the walls, and a
+/// slope that passes under the roof's edge meets the far wall below its top).
+fn roofed_pocket(dir: &Path) -> Document {
+    let id = Transform::IDENTITY;
+    let frame = boxes(
+        &[
+            ([-3.0, -3.0, -3.0], [27.0, 13.0, 0.0]),
+            ([-3.0, -3.0, 0.0], [0.0, 13.0, 10.0]),
+            ([24.0, -3.0, 0.0], [27.0, 13.0, 10.0]),
+            ([0.0, -3.0, 0.0], [24.0, 0.0, 10.0]),
+            ([0.0, 10.0, 0.0], [24.0, 13.0, 10.0]),
+            ([-3.0, -3.0, 10.0], [12.0, 13.0, 13.0]),
+        ],
+        &id,
+    );
+    let slider = boxes(&[([0.5, 0.5, 0.0], [10.5, 9.5, 6.0])], &id);
+    let cover = boxes(&[([12.0, -3.0, 10.0], [27.0, 13.0, 13.0])], &id);
+    write_doc(
+        dir,
+        &[("frame", frame), ("slider", slider), ("cover", cover)],
+    )
+}
+
+/// `n` unit directions spread over the sphere (Fibonacci lattice), for the
+/// independent "no straight line" check.
+fn fibonacci(n: usize) -> Vec<Vec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = golden * i as f64;
+            Vec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}
+
+#[test]
+fn a_part_that_only_a_bent_path_brings_in_is_planned() {
+    let dir = tempfile::tempdir().unwrap();
+    let doc = roofed_pocket(dir.path());
+    // Independently: no straight line takes the slider out of the frame (400
+    // directions, 0.2 mm steps, exact interference, until its box leaves the frame's).
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(&doc, &mut cache).unwrap();
+    let scene = ws.scene();
+    let (s, f) = (
+        doc.component_index("slider").unwrap(),
+        doc.component_index("frame").unwrap(),
+    );
+    let frame_box = grow(&scene.colliders[f].world_bounds(&scene.poses[f]), 0.5);
+    for d in fibonacci(400) {
+        let mut hit = false;
+        for i in 1..=300 {
+            let pose = Transform::from_parts(
+                scene.poses[s].translation() + d * (0.2 * i as f64),
+                scene.poses[s].rotation(),
+            );
+            if scene.colliders[s]
+                .world_bounds(&pose)
+                .overlap(&frame_box)
+                .min()
+                < 0.0
+            {
+                break;
+            }
+            if interferes(
+                &scene.colliders[s],
+                &pose,
+                &scene.colliders[f],
+                &scene.poses[f],
+                DEFAULT_TOLERANCE,
+            )
+            .unwrap()
+            {
+                hit = true;
+                break;
+            }
+        }
+        assert!(hit, "the slider leaves straight along {d:?}");
+    }
+    let plan = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default()).unwrap();
+    let best = plan.best();
+    // The slider before the cover (the cover closes its way), along a planned path.
+    assert_eq!(
+        best.order(),
+        ["frame", "slider", "cover"],
+        "{}",
+        plan.summary()
+    );
+    let k = best.tasks.iter().position(|t| t.part == "slider").unwrap();
+    assert!(best.steps[k].planned, "{}", plan.summary());
+    assert!(
+        best.steps[k].difficult,
+        "a planned path is a difficult insertion"
+    );
+    assert!(
+        best.tasks[k].path.poses.len() > 2,
+        "not straight: {:?}",
+        best.tasks[k].path.poses
+    );
+    dense_removal(&doc, &plan);
+    assert!(floating_steps(&doc, &plan, 1.5).is_empty());
+    // Without the planners no sequence exists.
+    let straight = SequenceOptions {
+        planner_fallback: false,
+        ..SequenceOptions::default()
+    };
+    match plan_sequence(&doc, &mut SceneCache::new(), &straight) {
+        Err(SequenceError::NoSequence { .. }) => {}
+        other => panic!("{:?}", other.map(|p| p.summary())),
+    }
+}
+
+/// The robot cell with its two pedestals marked `fixture: true` in the document
+/// (copied with its meshes): they are left out without `exclude`, as robot links are.
+#[test]
+fn components_the_document_marks_as_fixtures_are_not_sequenced() {
+    let dir = tempfile::tempdir().unwrap();
+    let meshes = dir.path().join("meshes");
+    std::fs::create_dir_all(&meshes).unwrap();
+    for e in std::fs::read_dir("models/meshes").unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), meshes.join(e.file_name())).unwrap();
+    }
+    let text = std::fs::read_to_string("models/cell_robots.yaml").unwrap();
+    let marked = text.replace("  part: pedestal\n", "  part: pedestal\n  fixture: true\n");
+    assert_eq!(marked.matches("fixture: true").count(), 2);
+    let path = dir.path().join("cell.yaml");
+    std::fs::write(&path, &marked).unwrap();
+    let doc = Document::open(&path).unwrap();
+    let pedestals = ["mz07_a_pedestal", "mz07_b_pedestal"];
+    for p in pedestals {
+        assert!(doc.components()[doc.component_index(p).unwrap()].fixture);
+    }
+    let plan = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default()).unwrap();
+    for p in pedestals {
+        assert!(!plan.product.iter().any(|n| n == p), "{p} sequenced");
+        assert!(plan
+            .sequences
+            .iter()
+            .all(|s| !s.order().iter().any(|n| n == p)));
+    }
+    assert!(plan.product.contains(&"plate_b".to_string()));
+    dense_removal(&doc, &plan);
+    // The same as excluding them by name from the unmarked document.
+    let unmarked = Document::open(Path::new("models/cell_robots.yaml")).unwrap();
+    let o = SequenceOptions {
+        exclude: pedestals.iter().map(|s| s.to_string()).collect(),
+        ..SequenceOptions::default()
+    };
+    let by_name = plan_sequence(&unmarked, &mut SceneCache::new(), &o).unwrap();
+    assert_eq!(by_name.product, plan.product);
+    assert_eq!(by_name.best().order(), plan.best().order());
+    // The mark survives a save.
+    assert_eq!(doc.to_yaml().matches("fixture: true").count(), 2);
 }
