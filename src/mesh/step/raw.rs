@@ -417,9 +417,9 @@ pub(super) fn serve_child(args: &[std::ffi::OsString]) -> i32 {
         }
         Err(what) => {
             // Open CASCADE's parser catches its own allocation failures and only says
-            // the file did not parse: a failure with the address space near the cap is
-            // the cap.
-            let at_cap = memory > 0 && status_kb("VmPeak:") * 1024 >= memory - memory / 8;
+            // the file did not parse: a failure with the address space within 32 MiB
+            // of the cap is the cap.
+            let at_cap = memory > 0 && status_kb("VmPeak:") * 1024 + (32 << 20) >= memory;
             w.0.push(1);
             w.str(if at_cap { "fitup:oom" } else { &what });
         }
