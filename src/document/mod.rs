@@ -472,12 +472,14 @@ impl Document {
                     "part `{name}`: `deflection:` and `angle:` tessellate a `step:` part; an `stl:` mesh is used as it is"
                 )));
             }
-            let mesh_path = project
-                .resolve_from(&dir, source)
-                .map_err(|e| {
-                    let what = if pf.step.is_some() { "STEP file" } else { "mesh" };
-                    stl_at(format!("part `{name}`: {what} {e}"))
-                })?;
+            let mesh_path = project.resolve_from(&dir, source).map_err(|e| {
+                let what = if pf.step.is_some() {
+                    "STEP file"
+                } else {
+                    "mesh"
+                };
+                stl_at(format!("part `{name}`: {what} {e}"))
+            })?;
             let (mesh, mesh_files, step) = if pf.step.is_some() {
                 let (mesh, geometry) = step_part(
                     pf,
@@ -1464,9 +1466,7 @@ fn step_part(
     }
     let options = StepOptions {
         linear_deflection: pf.deflection.unwrap_or(DEFAULT_LINEAR_DEFLECTION),
-        angular_deflection: pf
-            .angle
-            .map_or(DEFAULT_ANGULAR_DEFLECTION, f64::to_radians),
+        angular_deflection: pf.angle.map_or(DEFAULT_ANGULAR_DEFLECTION, f64::to_radians),
         ..StepOptions::default()
     };
     let got = cache
@@ -1625,8 +1625,7 @@ fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {
             Value::Mapping(m) => {
                 let old = std::mem::take(m);
                 for (k, mut val) in old {
-                    let keep =
-                        matches!(k.as_str(), Some("stl" | "step" | "urdf" | "description"));
+                    let keep = matches!(k.as_str(), Some("stl" | "step" | "urdf" | "description"));
                     let k = match k {
                         Value::String(s) => Value::String(nfc_name(&s).into_owned()),
                         other => other,

@@ -947,7 +947,10 @@ mod tests {
                 }
             }
         );
-        assert!(e.to_string().starts_with("a.step: Open CASCADE failed"), "{e}");
+        assert!(
+            e.to_string().starts_with("a.step: Open CASCADE failed"),
+            "{e}"
+        );
         assert!(matches!(
             shim_error(p, &o, "fitup:deep:/a/b"),
             StepError::Occt { failure: OcctFailure::TooDeep { at }, .. } if at == "/a/b"
@@ -964,11 +967,7 @@ mod tests {
                 name: "block".into(),
                 solid_index: 1,
                 solids_in_product: 1,
-                vertices: m
-                    .vertices
-                    .iter()
-                    .flat_map(|p| [p.x, p.y, p.z])
-                    .collect(),
+                vertices: m.vertices.iter().flat_map(|p| [p.x, p.y, p.z]).collect(),
                 triangles: m.triangles.iter().flatten().copied().collect(),
                 exact_volume: 24.0,
                 faces: 6,
