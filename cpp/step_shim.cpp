@@ -26,6 +26,7 @@
 #include <STEPControl_Reader.hxx>
 #include <STEPControl_Writer.hxx>
 #include <Standard_Failure.hxx>
+#include <Standard_OutOfMemory.hxx>
 #include <TColStd_SequenceOfAsciiString.hxx>
 #include <TDF_LabelSequence.hxx>
 #include <TDataStd_Name.hxx>
@@ -40,6 +41,9 @@
 #include <XCAFDoc_ShapeTool.hxx>
 #include <gp_Ax2.hxx>
 #include <gp_Pln.hxx>
+#include <gp_Ax3.hxx>
+#include <Geom_Plane.hxx>
+#include <TopTools_ListOfShape.hxx>
 #include <gp_Trsf.hxx>
 
 #include <chrono>
@@ -108,9 +112,8 @@ struct Walker {
 
   void check_time(const char *stage) const {
     if (Clock::now() > end) {
-      throw std::runtime_error(std::string("time limit of ") +
-                               std::to_string(options.time_limit_s) + " s reached while " +
-                               stage);
+      // fitup:<code>[:<detail>]: src/mesh/step.rs (shim_error) makes a typed error of it.
+      throw std::runtime_error(std::string("fitup:time:") + stage);
     }
   }
 
@@ -122,7 +125,7 @@ struct Walker {
     if (found != parts.end()) {
       return found->second;
     }
-    check_time("meshing");
+    check_time("mesh");
     TopoDS_Shape solid = placed.Located(TopLoc_Location());
     SolidPart part;
     part.name = lossy(product);
@@ -144,7 +147,7 @@ struct Walker {
     Handle(Deadline) progress = new Deadline(end);
     BRepMesh_IncrementalMesh mesher(solid, params, progress->Start());
     mesh_s += seconds_since(t0);
-    check_time("meshing");
+    check_time("mesh");
     part.faces = 0;
     part.unmeshed_faces = 0;
     part.first_unmeshed_face = 0;
@@ -162,8 +165,7 @@ struct Walker {
       }
       triangles += static_cast<uint64_t>(tri->NbTriangles());
       if (triangles > options.max_triangles) {
-        throw std::runtime_error("more than " + std::to_string(options.max_triangles) +
-                                 " triangles: raise --deflection for a coarser mesh");
+        throw std::runtime_error("fitup:triangles");
       }
       const gp_Trsf tr = loc.Transformation();
       const uint32_t base = static_cast<uint32_t>(part.vertices.size() / 3);
@@ -255,7 +257,7 @@ struct Walker {
   void walk(const TDF_Label &label, const gp_Trsf &placement, const std::string &instance,
             const std::string &path, int depth) {
     if (depth > 64) {
-      throw std::runtime_error("assembly nested deeper than 64 levels at " + path);
+      throw std::runtime_error("fitup:deep:" + path);
     }
     if (XCAFDoc_ShapeTool::IsAssembly(label)) {
       TDF_LabelSequence components;
@@ -306,7 +308,7 @@ Model read(rust::Str path, const ReadOptions &options) {
   reader.SetLayerMode(Standard_False);
   const std::string file(path.data(), path.size());
   if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) {
-    throw std::runtime_error("not a STEP file Open CASCADE can parse (ISO 10303-21)");
+    throw std::runtime_error("fitup:parse");
   }
   model.read_s = seconds_since(start);
   read_units(reader.ChangeReader(), model);
@@ -319,10 +321,10 @@ Model read(rust::Str path, const ReadOptions &options) {
   const bool ok = reader.Transfer(doc, progress->Start());
   model.transfer_s = seconds_since(t1);
   Walker w{XCAFDoc_DocumentTool::ShapeTool(doc->Main()), options, end, model, {}, 0, 0};
-  w.check_time("transferring the B-rep");
+  w.check_time("transfer");
   if (!ok) {
     app->Close(doc);
-    throw std::runtime_error("Open CASCADE could not transfer the file's shapes");
+    throw std::runtime_error("fitup:transfer");
   }
   TDF_LabelSequence roots;
   w.tool->GetFreeShapes(roots);
@@ -440,6 +442,58 @@ void write_test(const std::string &kind, const std::string &file) {
     TDataStd_Name::Set(tool->AddComponent(cell, lidless, at(20, 0, 0)), "lidless-1");
     tool->UpdateAssemblies();
     write_doc(doc, file);
+  } else if (kind == "bad_face") {
+    // A cube whose top face is put on the plane x = 0, at right angles to its own
+    // edges: read back, its boundary projects onto that plane as a loop without area,
+    // which BRepMesh cannot fill (a face that does not mesh).
+    TopoDS_Shape cube = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape();
+    BRep_Builder b;
+    TopoDS_Shell shell;
+    b.MakeShell(shell);
+    int n = 0;
+    for (TopExp_Explorer fx(cube, TopAbs_FACE); fx.More(); fx.Next()) {
+      const TopoDS_Face &f = TopoDS::Face(fx.Current());
+      if (++n == 6) { // BRepPrim's face order: x-, x+, y-, y+, z-, z+
+        TopoDS_Face bad;
+        b.MakeFace(bad, new Geom_Plane(gp_Ax3(gp_Pnt(0, 0, 0), gp::DX())), 1e-7);
+        for (TopExp_Explorer wx(f, TopAbs_WIRE); wx.More(); wx.Next()) {
+          b.Add(bad, wx.Current());
+        }
+        bad.Orientation(f.Orientation());
+        b.Add(shell, bad);
+      } else {
+        b.Add(shell, f);
+      }
+    }
+    TopoDS_Solid solid;
+    b.MakeSolid(solid);
+    b.Add(solid, shell);
+    named(tool, solid, "warped");
+    write_doc(doc, file);
+  } else if (kind == "plate_holes") {
+    // A 200 × 200 × 10 mm plate with 12 × 12 holes of r 4 mm (the larger file the
+    // performance notes time).
+    TopoDS_Shape plate = BRepPrimAPI_MakeBox(200.0, 200.0, 10.0).Shape();
+    TopTools_ListOfShape tools;
+    for (int i = 0; i < 12; ++i) {
+      for (int j = 0; j < 12; ++j) {
+        tools.Append(BRepPrimAPI_MakeCylinder(
+                         gp_Ax2(gp_Pnt(12.0 + 16.0 * i, 12.0 + 16.0 * j, -1.0), gp::DZ()), 4.0,
+                         12.0)
+                         .Shape());
+      }
+    }
+    TopTools_ListOfShape args;
+    args.Append(plate);
+    BRepAlgoAPI_Cut cut;
+    cut.SetArguments(args);
+    cut.SetTools(tools);
+    cut.Build();
+    if (!cut.IsDone()) {
+      throw std::runtime_error("the boolean cut failed");
+    }
+    named(tool, cut.Shape(), "perforated");
+    write_doc(doc, file);
   } else if (kind == "no_solid") {
     write_shape(BRepBuilderAPI_MakeFace(gp_Pln(), 0.0, 10.0, 0.0, 10.0).Shape(), file);
   } else {
@@ -456,10 +510,19 @@ template <class F> auto guarded(F f) -> decltype(f()) {
     return f();
   } catch (const Standard_Failure &e) {
     const char *what = e.GetMessageString();
-    throw std::runtime_error(std::string("Open CASCADE failed: ") + e.DynamicType()->Name() +
-                             (what && *what ? std::string(": ") + what : std::string()));
+    if (e.IsKind(STANDARD_TYPE(Standard_OutOfMemory))) {
+      throw std::runtime_error("fitup:oom");
+    }
+    throw std::runtime_error(std::string("fitup:occt:") + e.DynamicType()->Name() + ":" +
+                             (what ? what : ""));
   } catch (const std::bad_alloc &) {
-    throw std::runtime_error("out of memory");
+    throw std::runtime_error("fitup:oom");
+  } catch (const std::runtime_error &) {
+    throw; // the shim's own fitup:<code> messages
+  } catch (const std::exception &e) {
+    throw std::runtime_error(std::string("fitup:occt:std::exception:") + e.what());
+  } catch (...) {
+    throw std::runtime_error("fitup:occt:unknown C++ exception:");
   }
 }
 

@@ -11,10 +11,12 @@ struct Model;
 
 // Reads, transfers and meshes the STEP file at `path`; lengths in mm.
 // Throws (as a Rust error) on any Open CASCADE failure, the time limit or the
-// triangle cap.
+// triangle cap, with a `fitup:<code>[:<detail>]` message that src/mesh/step.rs turns
+// into a typed error.
 Model read_step(rust::Str path, const ReadOptions &options);
 
 // Writes one of the STEP files the tests use (`kind`: box, cylinder_hole,
-// assembly, inch_box, open_shell, no_solid), made with Open CASCADE itself.
+// assembly, inch_box, open_shell, no_solid, bad_face, plate_holes), made with Open
+// CASCADE itself.
 void write_test_step(rust::Str kind, rust::Str path);
 } // namespace fitup_step

@@ -92,11 +92,9 @@ fn plate_part(stl: &str, nx: usize, ny: usize, holes: &[(usize, usize)]) -> Part
         axes.insert(format!("hole{}", k + 1), axis(c, [0.0, 0.0, 1.0]));
     }
     PartFile {
-        stl: stl.into(),
         planes,
         axes,
-        points: IndexMap::new(),
-        features: vec![],
+        ..PartFile::from_stl(stl)
     }
 }
 

@@ -37,8 +37,21 @@ pub(super) fn check(path: &Path) -> Exit {
             notes.push(format!("{} degenerate triangles", r.degenerate_triangles));
         }
         warnings += notes.len();
+        // A STEP part: how its tessellation relates to the exact solid, and whether it
+        // came from the project's store (no Open CASCADE read this time).
+        let step = p.step.as_ref().map_or(String::new(), |g| {
+            format!(
+                " (STEP, volume {:.4} of exact, {})",
+                g.volume_ratio,
+                if g.from_store {
+                    "stored tessellation"
+                } else {
+                    "tessellated now"
+                }
+            )
+        });
         println!(
-            "    {:<12} {:>7} triangles  {}{}",
+            "    {:<12} {:>7} triangles  {}{step}{}",
             p.name,
             p.mesh.triangles.len(),
             p.stl,

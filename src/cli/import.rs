@@ -1,10 +1,12 @@
-//! `fitup import FILE.step [--out DIR] [--deflection MM] [--force]`: a STEP assembly as
+//! `fitup import FILE.step [--out DIR] [--deflection MM] [--memory-limit-mb MB] [--force]`: a STEP assembly as
 //! a new document (library: [`crate::document::import`]).
 
 use super::out::{errln, outln};
 use super::Exit;
 use crate::document::import::{import_step, ImportOptions};
-use crate::mesh::step::{StepOptions, DEFAULT_ANGULAR_DEFLECTION, DEFAULT_LINEAR_DEFLECTION};
+use crate::mesh::step::{
+    ChildReader, Isolation, StepOptions, DEFAULT_ANGULAR_DEFLECTION, DEFAULT_LINEAR_DEFLECTION,
+};
 use std::path::PathBuf;
 
 /// Options of `import`.
@@ -26,6 +28,9 @@ pub struct ImportArgs {
     /// Time limit of reading and meshing, seconds.
     #[arg(long, default_value_t = 300.0)]
     pub time_limit_s: f64,
+    /// Memory cap of the Open CASCADE reader (a child process), MiB.
+    #[arg(long, default_value_t = crate::mesh::step::DEFAULT_MEMORY_LIMIT >> 20)]
+    pub memory_limit_mb: u64,
     /// Replace existing files at the output paths (never a folder, FIFO or link).
     #[arg(long)]
     pub force: bool,
@@ -34,6 +39,10 @@ pub struct ImportArgs {
 pub(super) fn import(a: &ImportArgs) -> Exit {
     if !(a.time_limit_s.is_finite() && a.time_limit_s > 0.0 && a.time_limit_s <= 86_400.0) {
         errln!("error: --time-limit-s must be a number of seconds in (0, 86400]");
+        return Exit::Usage;
+    }
+    if a.memory_limit_mb < 64 || a.memory_limit_mb > 1 << 20 {
+        errln!("error: --memory-limit-mb must be between 64 and 1048576");
         return Exit::Usage;
     }
     let out = a.out.clone().unwrap_or_else(|| {
@@ -49,6 +58,13 @@ pub(super) fn import(a: &ImportArgs) -> Exit {
             linear_deflection: a.deflection,
             angular_deflection: a.angle.to_radians(),
             time_limit: std::time::Duration::from_secs_f64(a.time_limit_s),
+            isolation: match Isolation::process_default() {
+                Isolation::Child(c) => Isolation::Child(ChildReader {
+                    memory_limit: a.memory_limit_mb << 20,
+                    ..c
+                }),
+                other => other,
+            },
             ..StepOptions::default()
         },
         force: a.force,
@@ -99,10 +115,17 @@ pub(super) fn import(a: &ImportArgs) -> Exit {
         );
     }
     outln!(
-        "  Open CASCADE: parse {:.3} s, transfer {:.3} s, mesh {:.3} s; import {:.3} s in all",
+        "  Open CASCADE: parse {:.3} s, transfer {:.3} s, mesh {:.3} s{}; import {:.3} s in all",
         t.parse.as_secs_f64(),
         t.transfer.as_secs_f64(),
         t.mesh.as_secs_f64(),
+        report
+            .model
+            .reader_peak_memory
+            .map_or(String::new(), |m| format!(
+                " (a child process, peak {} MB)",
+                m / 1_000_000
+            )),
         t.total.as_secs_f64()
     );
     Exit::Ok

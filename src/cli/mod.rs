@@ -275,6 +275,21 @@ pub enum Exit {
 
 /// Runs the command line; returns the process exit code.
 pub fn main() -> i32 {
+    // The STEP child reader (`fitup __step-read …`, src/mesh/step.rs): this binary
+    // re-executed so that Open CASCADE runs in a process of its own, capped in time and
+    // memory; every STEP read of this process goes there.
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if args
+        .get(1)
+        .is_some_and(|a| a == crate::mesh::step::CHILD_COMMAND)
+    {
+        return crate::mesh::step::serve_child(&args[2..]);
+    }
+    if crate::mesh::step::AVAILABLE {
+        if let Ok(me) = std::env::current_exe() {
+            crate::mesh::step::read_in_child_processes(me);
+        }
+    }
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {

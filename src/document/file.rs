@@ -43,8 +43,22 @@ fn is_default_units(u: &String) -> bool {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PartFile {
-    /// STL file, relative to the document's folder.
+    /// Mesh file (STL, OBJ, PLY, glTF/GLB), relative to the document's folder; empty
+    /// when the part is a `step:` part.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub stl: String,
+    /// A STEP file (relative to the document's folder) whose solids, at their
+    /// placements in the file, are the part's geometry: tessellated when the document
+    /// loads (feature `step`), the result kept in the project's tessellation store.
+    /// Exactly one of `stl` and `step` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step: Option<String>,
+    /// `step:` parts: the tessellation's linear deflection, mm (default 0.1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deflection: Option<f64>,
+    /// `step:` parts: the tessellation's angular deflection, degrees (default 28.6).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle: Option<f64>,
     /// Reference planes: point + normal.
     #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
     pub planes: IndexMap<String, PlaneFile>,
@@ -65,6 +79,9 @@ impl PartFile {
     pub fn from_stl(stl: impl Into<String>) -> Self {
         PartFile {
             stl: stl.into(),
+            step: None,
+            deflection: None,
+            angle: None,
             planes: IndexMap::new(),
             axes: IndexMap::new(),
             points: IndexMap::new(),

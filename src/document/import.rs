@@ -73,12 +73,18 @@ pub enum ImportError {
         source: OutputError,
     },
     /// The operating system refused (creating a folder, renaming, …).
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {source}", path.display())]
     Io {
         /// The path.
         path: PathBuf,
-        /// The OS message.
-        message: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The document could not be written as YAML (a bug: reported, nothing kept).
+    #[error("the imported document cannot be written as YAML: {source}")]
+    Yaml {
+        /// The serializer's error.
+        source: serde_yaml::Error,
     },
     /// A mesh could not be written.
     #[error(transparent)]
@@ -88,10 +94,10 @@ pub enum ImportError {
     Document(#[from] DocumentError),
 }
 
-fn io_err(path: &Path, e: std::io::Error) -> ImportError {
+fn io_err(path: &Path, source: std::io::Error) -> ImportError {
     ImportError::Io {
         path: path.into(),
-        message: e.to_string(),
+        source,
     }
 }
 
@@ -237,7 +243,7 @@ pub fn import_step(
     let (doc, mut parts) = build(&model);
     let text = doc
         .to_yaml()
-        .map_err(|e| ImportError::Document(DocumentError::Invalid(e.to_string())))?;
+        .map_err(|source| ImportError::Yaml { source })?;
     let stem = document_name(
         &step
             .file_stem()

@@ -61,10 +61,15 @@ use std::sync::Arc;
 pub struct Part {
     /// Part name.
     pub name: String,
-    /// The STL path as written in the document (relative to the document's folder).
+    /// The geometry file's path as written in the document (relative to the
+    /// document's folder): the `stl:` mesh, or the `step:` file of a STEP part.
     pub stl: String,
-    /// The STL path resolved on disk.
+    /// That file resolved on disk.
     pub mesh_path: PathBuf,
+    /// The other files its mesh was read from (a `.gltf`'s buffers), on disk.
+    pub mesh_files: Vec<PathBuf>,
+    /// For a `step:` part, how it was tessellated (`None`: an `stl:` mesh).
+    pub step: Option<StepGeometry>,
     /// The triangle mesh (mm, part frame).
     pub mesh: Arc<Mesh>,
     /// Named references (planes, axes, points) in the part frame, in file order.
@@ -159,6 +164,20 @@ impl Feature {
             },
         }
     }
+}
+
+/// How a `step:` part's STEP file was tessellated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepGeometry {
+    /// `deflection:` as written (mm), if given.
+    pub deflection: Option<f64>,
+    /// `angle:` as written (degrees), if given.
+    pub angle: Option<f64>,
+    /// Mesh volume over the exact B-rep volume of the solids.
+    pub volume_ratio: f64,
+    /// Whether Open CASCADE's result came from the project's tessellation store
+    /// ([`crate::mesh::step::STEP_STORE`]) instead of a read.
+    pub from_store: bool,
 }
 
 impl Part {
@@ -492,24 +511,74 @@ impl Document {
         let resolved: Vec<_> = file
             .parts
             .values()
+            .filter(|pf| pf.step.is_none())
             .filter_map(|pf| project.resolve_from(&dir, &pf.stl).ok())
             .collect();
         cache.prefetch(&resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>());
         let mut parts = IndexMap::new();
+        let mut warnings = Vec::new();
         for (name, pf) in &file.parts {
-            // The `stl:` value's own line, from the scan.
+            let key = if pf.step.is_some() { "step" } else { "stl" };
+            // The `stl:` (or `step:`) value's own line, from the scan.
             let stl_at = |message: String| -> DocumentError {
                 let (line, col) = positions
-                    .get(&format!("parts/{name}/stl"))
+                    .get(&format!("parts/{name}/{key}"))
+                    .or_else(|| positions.get(&format!("parts/{name}")))
                     .unwrap_or((0, 0));
                 SourceError::new(path, line, col, message).into()
             };
-            let mesh_path = project
-                .resolve_from(&dir, &pf.stl)
-                .map_err(|e| stl_at(format!("part `{name}`: mesh {e}")))?;
-            let mesh = cache
-                .get(&mesh_path)
-                .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
+            let source = match (&pf.step, pf.stl.is_empty()) {
+                (Some(step), true) => step,
+                (None, false) => &pf.stl,
+                (Some(_), false) => {
+                    return Err(stl_at(format!(
+                        "part `{name}`: give either `stl:` (a mesh file) or `step:` (a STEP file), not both"
+                    )))
+                }
+                (None, true) => {
+                    return Err(stl_at(format!(
+                        "part `{name}` has no geometry: give `stl:` (a mesh file) or `step:` (a STEP file)"
+                    )))
+                }
+            };
+            if pf.step.is_none() && (pf.deflection.is_some() || pf.angle.is_some()) {
+                return Err(stl_at(format!(
+                    "part `{name}`: `deflection:` and `angle:` tessellate a `step:` part; an `stl:` mesh is used as it is"
+                )));
+            }
+            let mesh_path = project.resolve_from(&dir, source).map_err(|e| {
+                let what = if pf.step.is_some() {
+                    "STEP file"
+                } else {
+                    "mesh"
+                };
+                stl_at(format!("part `{name}`: {what} {e}"))
+            })?;
+            let (mesh, mesh_files, step) = if pf.step.is_some() {
+                let (mesh, geometry) = step_part(
+                    pf,
+                    &mesh_path,
+                    &project.root().join(crate::mesh::step::STEP_STORE),
+                    cache,
+                )
+                .map_err(|m| stl_at(format!("part `{name}`: {m}")))?;
+                if (geometry.volume_ratio - 1.0).abs() > 0.015 {
+                    let (line, col) = positions
+                        .get(&format!("parts/{name}/step"))
+                        .unwrap_or((0, 0));
+                    warnings.push(format!(
+                        "{}:{line}:{col}: part `{name}`: its mesh is {:.4} of the exact volume (more than 1.5 % off): set a smaller `deflection:`",
+                        path.display(),
+                        geometry.volume_ratio
+                    ));
+                }
+                (mesh, Vec::new(), Some(geometry))
+            } else {
+                let mesh = cache
+                    .get(&mesh_path)
+                    .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
+                (mesh, cache.files_of(&mesh_path), None)
+            };
             let mut references = IndexMap::new();
             for (rname, p) in &pf.planes {
                 let normal = vec3(p.normal).try_normalize(1e-12).ok_or_else(|| {
@@ -586,8 +655,10 @@ impl Document {
                 name.clone(),
                 Part {
                     name: name.clone(),
-                    stl: pf.stl.clone(),
+                    stl: source.clone(),
                     mesh_path,
+                    mesh_files,
+                    step,
                     mesh,
                     references,
                     features,
@@ -827,6 +898,7 @@ impl Document {
         }
         doc.warnings = case_warnings(&file, path, positions);
         doc.warnings.extend(urdf_warnings);
+        doc.warnings.extend(warnings);
         Ok(doc)
     }
 
@@ -1249,12 +1321,14 @@ impl Document {
             .filter(|p| !self.generated.contains(&p.name))
             .map(|p| {
                 let mut pf = PartFile {
-                    stl: p.stl.clone(),
-                    planes: IndexMap::new(),
-                    axes: IndexMap::new(),
-                    points: IndexMap::new(),
                     features: p.features.iter().map(Feature::to_file).collect(),
+                    ..PartFile::from_stl(p.stl.clone())
                 };
+                if let Some(step) = &p.step {
+                    pf.step = Some(std::mem::take(&mut pf.stl));
+                    pf.deflection = step.deflection;
+                    pf.angle = step.angle;
+                }
                 for (n, r) in &p.references {
                     let a = |v: Vec3| [v.x, v.y, v.z];
                     match *r {
@@ -1443,14 +1517,52 @@ impl Document {
         Ok(())
     }
 
-    /// Every file this document was built from (the document and its meshes), for
-    /// watch mode.
+    /// Every file this document was built from (the document, its meshes and the
+    /// files they were read from — a `.gltf`'s buffers —, its STEP files), for watch
+    /// mode.
     pub fn source_files(&self) -> Vec<PathBuf> {
         std::iter::once(self.path.clone())
-            .chain(self.parts.values().map(|p| p.mesh_path.clone()))
+            .chain(self.parts.values().flat_map(|p| {
+                std::iter::once(p.mesh_path.clone()).chain(p.mesh_files.iter().cloned())
+            }))
             .chain(self.robots.iter().flat_map(|r| r.urdf_files().to_vec()))
             .collect()
     }
+}
+
+/// A `step:` part's mesh through the mesh cache and the project's tessellation store
+/// `store`, with the part's `deflection:` (mm) and `angle:` (degrees); the message of
+/// an error names the file (and, without the `step` feature, the rebuild command).
+fn step_part(
+    pf: &PartFile,
+    file: &Path,
+    store: &Path,
+    cache: &mut MeshCache,
+) -> Result<(Arc<Mesh>, StepGeometry), String> {
+    use crate::mesh::step::{StepOptions, DEFAULT_ANGULAR_DEFLECTION, DEFAULT_LINEAR_DEFLECTION};
+    for (key, v) in [("deflection", pf.deflection), ("angle", pf.angle)] {
+        if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+            return Err(format!("`{key}:` must be a number > 0"));
+        }
+    }
+    if pf.angle.is_some_and(|a| a >= 180.0) {
+        return Err("`angle:` is in degrees and must be below 180".into());
+    }
+    let options = StepOptions {
+        linear_deflection: pf.deflection.unwrap_or(DEFAULT_LINEAR_DEFLECTION),
+        angular_deflection: pf.angle.map_or(DEFAULT_ANGULAR_DEFLECTION, f64::to_radians),
+        ..StepOptions::default()
+    };
+    let got = cache
+        .get_step(file, &options, Some(store))
+        .map_err(|e| e.to_string())?;
+    let geometry = StepGeometry {
+        deflection: pf.deflection,
+        angle: pf.angle,
+        volume_ratio: got.mesh.signed_volume() / got.exact_volume,
+        from_store: got.from_store,
+    };
+    Ok((got.mesh, geometry))
 }
 
 /// Adds the parts and components of a URDF robot's link meshes (named by
@@ -1482,6 +1594,8 @@ fn add_urdf_parts(
                 name: name.clone(),
                 stl: uri.to_string(),
                 mesh_path: loaded.path.clone(),
+                mesh_files: Vec::new(),
+                step: None,
                 mesh: Arc::new(mesh.clone()),
                 references: IndexMap::new(),
                 features: Vec::new(),
@@ -1592,7 +1706,7 @@ pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> 
 }
 
 /// The document file with every name in NFC: all text except file paths (`stl`,
-/// `urdf`, which name files on disk byte for byte) and `description`.
+/// `step`, `urdf`, which name files on disk byte for byte) and `description`.
 fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {
     fn walk(v: &mut serde_yaml::Value) {
         use serde_yaml::Value;
@@ -1602,7 +1716,7 @@ fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {
             Value::Mapping(m) => {
                 let old = std::mem::take(m);
                 for (k, mut val) in old {
-                    let keep = matches!(k.as_str(), Some("stl" | "urdf" | "description"));
+                    let keep = matches!(k.as_str(), Some("stl" | "step" | "urdf" | "description"));
                     let k = match k {
                         Value::String(s) => Value::String(nfc_name(&s).into_owned()),
                         other => other,

@@ -57,6 +57,7 @@ const TEXT_KEYS: &[&str] = &[
     "name",
     "part",
     "stl",
+    "step",
     "description",
     "units",
     "type",

@@ -1,5 +1,6 @@
 //! [`MeshCache`]: meshes kept between watch reruns, re-read only when their file changed.
 
+use super::step::{read_step, read_step_stored, StepError, StepOptions};
 use super::{Mesh, MeshError};
 use crate::fsutil::{content_hash, stamp, Stamp};
 use std::collections::HashMap;
@@ -34,7 +35,22 @@ type Read = (u64, Vec<(PathBuf, Stamp)>, Option<Mesh>);
 #[derive(Default)]
 pub struct MeshCache {
     entries: HashMap<PathBuf, Entry>,
+    /// STEP geometry by (canonical path, deflection bits, angle bits), with the stamp
+    /// of the STEP file it was read from.
+    steps: HashMap<(PathBuf, u64, u64), (Stamp, StepMesh)>,
     loads: usize,
+}
+
+/// A STEP file's geometry as one mesh ([`MeshCache::get_step`]).
+#[derive(Debug, Clone)]
+pub struct StepMesh {
+    /// Every placed solid at its placement in the file's root frame, mm
+    /// ([`super::step::StepModel::placed_mesh`]).
+    pub mesh: Arc<Mesh>,
+    /// Their exact B-rep volume together, mm³.
+    pub exact_volume: f64,
+    /// Whether Open CASCADE's result came from the tessellation store.
+    pub from_store: bool,
 }
 
 impl MeshCache {
@@ -61,6 +77,55 @@ impl MeshCache {
         // `read_mesh` leaves out the mesh only when the bytes hash as the cached entry
         self.store(key, now, hash, deps, mesh)
             .ok_or_else(|| MeshError::invalid("the cached mesh vanished").in_file(path))
+    }
+
+    /// The other files the cached mesh of `path` was read from (a `.gltf`'s buffers):
+    /// what a change of must reload it, as the file itself.
+    pub fn files_of(&self, path: &Path) -> Vec<PathBuf> {
+        path.canonicalize()
+            .ok()
+            .and_then(|key| self.entries.get(&key))
+            .map(|e| e.deps.iter().map(|(p, _)| p.clone()).collect())
+            .unwrap_or_default()
+    }
+
+    /// The geometry of the STEP file at `path` tessellated with `options`' deflection
+    /// and angle: from memory while the file's stamp is unchanged, else read through
+    /// the tessellation store `store` ([`read_step_stored`]; `None`: read with Open
+    /// CASCADE every time the file changes).
+    pub fn get_step(
+        &mut self,
+        path: &Path,
+        options: &StepOptions,
+        store: Option<&Path>,
+    ) -> Result<StepMesh, StepError> {
+        let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+        let key = (
+            canonical,
+            options.linear_deflection.to_bits(),
+            options.angular_deflection.to_bits(),
+        );
+        // Stamped before reading: a change during the read is seen by the next get.
+        let now = stamp(&key.0).ok();
+        if let (Some(now), Some((then, mesh))) = (now, self.steps.get(&key)) {
+            if now == *then {
+                return Ok(mesh.clone());
+            }
+        }
+        let model = match store {
+            Some(store) => read_step_stored(path, options, store)?,
+            None => read_step(path, options)?,
+        };
+        let mesh = StepMesh {
+            mesh: Arc::new(model.placed_mesh()),
+            exact_volume: model.placed_exact_volume(),
+            from_store: model.from_store,
+        };
+        self.loads += 1;
+        if let Some(now) = now {
+            self.steps.insert(key, (now, mesh.clone()));
+        }
+        Ok(mesh)
     }
 
     /// Reads and parses the files of `paths` that are not cached or changed, in

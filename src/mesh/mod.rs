@@ -41,7 +41,7 @@ mod stl;
 #[cfg(feature = "formats")]
 pub use self::gltf::parse_gltf;
 pub use self::gltf::{glb_bytes, GlbNode, GLB_ROOT, Z_UP_TO_Y_UP};
-pub use cache::MeshCache;
+pub use cache::{MeshCache, StepMesh};
 pub use obj::parse_obj;
 pub use ply::parse_ply;
 pub use stl::{parse_stl, read_stl, write_stl, MeshError};

@@ -10,17 +10,36 @@
 //! Without the feature every call returns [`StepError::NotBuilt`], whose message says
 //! how to rebuild.
 //!
+//! **Isolation.** Open CASCADE is a large C++ library that can crash (a null handle on a
+//! malformed entity), loop or allocate without bound on a hostile file. With
+//! [`Isolation::Child`] (what the `fitup` binary uses, see [`read_in_child_processes`])
+//! the read runs in a child process — the program re-executed with the hidden command
+//! [`CHILD_COMMAND`] — under an address-space cap ([`ChildReader::memory_limit`]) and
+//! killed at the time limit, so a crash, hang or memory blow-up becomes a
+//! [`StepError`] naming the file, in bounded time and memory, never an abort of the
+//! caller. [`Isolation::InProcess`] (the library's default when no child program was
+//! registered) reads in this process.
+//!
 //! Bounds: the file must be at most [`FileKind::Step`]'s cap (64 MiB) — Open CASCADE
 //! holds a model in about 10–30 times the file's size —, the transfer and the meshing
 //! stop at [`StepOptions::time_limit`] (OCCT polls it through its progress indicator;
-//! parsing, linear in the file's size, is bounded by the cap), and all meshes together
-//! have at most [`StepOptions::max_triangles`]. The read runs in this process: OCCT's
-//! own exceptions become [`StepError::Occt`].
+//! in a child the whole read is also killed shortly after it), and all meshes together
+//! have at most [`StepOptions::max_triangles`].
+//!
+//! **Tessellation store.** [`read_step_stored`] keeps what Open CASCADE returned in a
+//! folder (a project's [`STEP_STORE`]), one file per STEP content hash, deflection and
+//! angle, written by the project's write rule ([`crate::fsutil::write_output`]); a
+//! later read of the same bytes with the same tessellation skips Open CASCADE. Stored
+//! files are checked like a fresh read (and ignored when damaged).
+
+mod raw;
 
 use super::{Mesh, MeshError};
 use crate::fsutil::{FileKind, ReadError};
 use crate::math::Transform;
+use raw::RawModel;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 use std::time::Duration;
 
 /// Default linear deflection of the tessellation: the largest distance between a
@@ -31,8 +50,64 @@ pub const DEFAULT_LINEAR_DEFLECTION: f64 = 0.1;
 /// normals of neighbouring triangles on a curved face, radians (OCCT's default, ≈ 28.6°).
 pub const DEFAULT_ANGULAR_DEFLECTION: f64 = 0.5;
 
+/// Default address-space cap of a child reader, bytes (4 GiB: Open CASCADE holds a
+/// model in 10–30 times the file's size, and files are at most 64 MiB).
+pub const DEFAULT_MEMORY_LIMIT: u64 = 4 << 30;
+
+/// The hidden command a child reader is started with (`PROGRAM __step-read …`); a
+/// program that registers itself with [`read_in_child_processes`] must hand it to
+/// [`serve_child`] before anything else.
+pub const CHILD_COMMAND: &str = "__step-read";
+
+/// The project-relative folder where documents keep the tessellations of their `step:`
+/// parts ([`read_step_stored`]).
+pub const STEP_STORE: &str = ".fitup-cache/step";
+
 /// Whether this build reads STEP files (the `step` feature).
 pub const AVAILABLE: bool = cfg!(feature = "step");
+
+/// A child reader: the program re-executed to read a STEP file, and its memory cap.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChildReader {
+    /// The program; it must call [`serve_child`] when started with [`CHILD_COMMAND`]
+    /// (the `fitup` binary does).
+    pub program: PathBuf,
+    /// The child's address-space cap (`RLIMIT_AS`), bytes; 0: none.
+    pub memory_limit: u64,
+}
+
+/// Where Open CASCADE runs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Isolation {
+    /// In this process: a crash in Open CASCADE ends the process.
+    InProcess,
+    /// In a child process, bounded in time and memory (see the module documentation).
+    Child(ChildReader),
+}
+
+static CHILD_PROGRAM: OnceLock<PathBuf> = OnceLock::new();
+
+/// Makes every later [`StepOptions::default`] read in a child process running
+/// `program` (which must serve [`CHILD_COMMAND`] through [`serve_child`]); the
+/// `fitup` binary registers itself at start. The first registration stands.
+pub fn read_in_child_processes(program: PathBuf) {
+    let _ = CHILD_PROGRAM.set(program);
+}
+
+impl Isolation {
+    /// A child running the program registered with [`read_in_child_processes`], with
+    /// [`DEFAULT_MEMORY_LIMIT`]; in this process when none was registered.
+    pub fn process_default() -> Isolation {
+        match CHILD_PROGRAM.get() {
+            Some(program) => Isolation::Child(ChildReader {
+                program: program.clone(),
+                memory_limit: DEFAULT_MEMORY_LIMIT,
+            }),
+            None => Isolation::InProcess,
+        }
+    }
+}
 
 /// How to read and mesh a STEP file.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,6 +120,8 @@ pub struct StepOptions {
     pub time_limit: Duration,
     /// The most triangles of all solids together.
     pub max_triangles: u64,
+    /// Where Open CASCADE runs.
+    pub isolation: Isolation,
 }
 
 impl Default for StepOptions {
@@ -54,6 +131,7 @@ impl Default for StepOptions {
             angular_deflection: DEFAULT_ANGULAR_DEFLECTION,
             time_limit: Duration::from_secs(300),
             max_triangles: 20_000_000,
+            isolation: Isolation::process_default(),
         }
     }
 }
@@ -102,7 +180,7 @@ pub struct StepTimings {
     pub transfer: Duration,
     /// Tessellation (`BRepMesh_IncrementalMesh`).
     pub mesh: Duration,
-    /// The whole [`read_step`] call, checks and welding included.
+    /// The whole [`read_step`] call, checks, welding and the child process included.
     pub total: Duration,
 }
 
@@ -119,8 +197,129 @@ pub struct StepModel {
     pub file_unit: String,
     /// The options it was meshed with.
     pub options: StepOptions,
-    /// Where the time went.
+    /// Where the time went (of the read that made a stored tessellation, when
+    /// `from_store`).
     pub timings: StepTimings,
+    /// The child reader's peak resident memory (bytes), when the read ran in a child.
+    pub reader_peak_memory: Option<u64>,
+    /// Whether Open CASCADE's result came from the tessellation store
+    /// ([`read_step_stored`]) instead of a read.
+    pub from_store: bool,
+}
+
+impl StepModel {
+    /// Every placed solid's mesh at its placement, as one mesh in the file's root frame
+    /// (mm): a `step:` part's geometry. Each solid stays closed, so the whole is closed.
+    pub fn placed_mesh(&self) -> Mesh {
+        let mut all = Mesh {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for inst in &self.instances {
+            all.append(&self.parts[inst.part].mesh.transformed(&inst.transform));
+        }
+        all
+    }
+
+    /// The exact volume of every placed solid together, mm³.
+    pub fn placed_exact_volume(&self) -> f64 {
+        self.instances
+            .iter()
+            .map(|i| self.parts[i.part].exact_volume)
+            .sum()
+    }
+}
+
+/// What Open CASCADE was doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum StepStage {
+    /// Parsing the file, or an unknown stage (a child killed from outside).
+    Reading,
+    /// Building the B-rep and the assembly tree.
+    Transferring,
+    /// Tessellating.
+    Meshing,
+}
+
+impl std::fmt::Display for StepStage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StepStage::Reading => "reading the file",
+            StepStage::Transferring => "transferring the B-rep",
+            StepStage::Meshing => "meshing",
+        })
+    }
+}
+
+/// What went wrong inside Open CASCADE (or fitup's shim around it).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum OcctFailure {
+    /// `ReadFile` failed: not ISO 10303-21 that Open CASCADE can parse.
+    #[error("not a STEP file Open CASCADE can parse (ISO 10303-21)")]
+    Parse,
+    /// `Transfer` failed: no shapes could be built from the entities.
+    #[error("Open CASCADE could not transfer the file's shapes")]
+    Transfer,
+    /// The meshes passed [`StepOptions::max_triangles`].
+    #[error("more than {cap} triangles: raise --deflection for a coarser mesh")]
+    TooManyTriangles {
+        /// The cap.
+        cap: u64,
+    },
+    /// The assembly tree is nested deeper than 64 levels.
+    #[error("assembly nested deeper than 64 levels at `{at}`")]
+    TooDeep {
+        /// The assembly path where it stopped.
+        at: String,
+    },
+    /// An allocation failed (in a child reader: its memory cap).
+    #[error("out of memory")]
+    OutOfMemory,
+    /// One of Open CASCADE's exceptions.
+    #[error("Open CASCADE failed: {kind}{}", if detail.is_empty() { String::new() } else { format!(": {detail}") })]
+    Exception {
+        /// The exception's class (`Standard_NullObject`, …).
+        kind: String,
+        /// Its own message (may be empty).
+        detail: String,
+    },
+}
+
+/// Why a child reader gave no answer.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ChildFailure {
+    /// The program could not be started.
+    #[error("cannot start the reader `{}`: {kind}", program.display())]
+    Spawn {
+        /// The program.
+        program: PathBuf,
+        /// The operating system's answer.
+        kind: std::io::ErrorKind,
+    },
+    /// It exited with a failure code without an answer.
+    #[error("the reader exited with code {code} without an answer")]
+    Exit {
+        /// Its exit code.
+        code: i32,
+    },
+    /// Its answer was missing or malformed (a program that does not serve
+    /// [`CHILD_COMMAND`]).
+    #[error("the reader's answer is {what} (is `{}` a fitup that serves `{CHILD_COMMAND}`?)", program.display())]
+    BadReply {
+        /// The program.
+        program: PathBuf,
+        /// What is wrong with it.
+        what: &'static str,
+    },
+    /// A temporary file for its answer could not be made or read.
+    #[error("cannot exchange the reader's answer through a temporary file: {kind}")]
+    Io {
+        /// The operating system's answer.
+        kind: std::io::ErrorKind,
+    },
 }
 
 /// Why a STEP file could not be read. Every variant names the file; those about one
@@ -156,14 +355,53 @@ pub enum StepError {
         /// Its value.
         value: f64,
     },
-    /// Open CASCADE failed (its exception, a parse failure, the time limit, the
-    /// triangle cap).
-    #[error("{}: {message}", path.display())]
+    /// The path is not UTF-8 (Open CASCADE takes UTF-8 paths).
+    #[error("{}: the path is not UTF-8 (Open CASCADE takes UTF-8 paths): rename the file", path.display())]
+    NonUtf8Path {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Open CASCADE failed.
+    #[error("{}: {failure}", path.display())]
     Occt {
         /// The file.
         path: PathBuf,
-        /// What Open CASCADE or the shim said.
-        message: String,
+        /// What failed.
+        failure: OcctFailure,
+    },
+    /// The read passed its time limit.
+    #[error("{}: time limit of {:.1} s reached while {stage}: raise --time-limit-s, or the file is hostile", path.display(), limit.as_secs_f64())]
+    TimeLimit {
+        /// The file.
+        path: PathBuf,
+        /// The limit.
+        limit: Duration,
+        /// Where it stopped.
+        stage: StepStage,
+    },
+    /// The child reader ran out of its memory cap.
+    #[error("{}: Open CASCADE ran out of memory reading it (the reader's cap is {} MiB): raise --memory-limit-mb, or the file is hostile", path.display(), limit >> 20)]
+    MemoryLimit {
+        /// The file.
+        path: PathBuf,
+        /// The cap, bytes.
+        limit: u64,
+    },
+    /// The child reader crashed (Open CASCADE on a malformed file).
+    #[error("{}: Open CASCADE crashed reading it (signal {signal}{}); the file is malformed: export it again from CAD", path.display(), signal_name(*signal))]
+    Crashed {
+        /// The file.
+        path: PathBuf,
+        /// The signal that ended the reader.
+        signal: i32,
+    },
+    /// The child reader gave no usable answer.
+    #[error("{}: {failure}", path.display())]
+    Child {
+        /// The file.
+        path: PathBuf,
+        /// What happened.
+        failure: ChildFailure,
     },
     /// No solid in the file (a surface model, wireframe or empty file).
     #[error("{}: the file holds no solid ({shells} shells and {faces} faces outside any solid): fitup needs closed solids to check interference; export solid bodies", path.display())]
@@ -224,6 +462,14 @@ pub enum StepError {
         /// The placement's scale factor (negative: mirrored).
         scale: f64,
     },
+    /// A placement whose matrix is not a rotation and translation.
+    #[error("{}: instance `{instance}`: its placement is not a rigid motion", path.display())]
+    BadPlacement {
+        /// The file.
+        path: PathBuf,
+        /// The instance, by its place in the assembly tree.
+        instance: String,
+    },
     /// A mesh the shim returned was not valid (non-finite or out-of-range vertices).
     #[error("{}: solid `{solid}`: {source}", path.display())]
     Mesh {
@@ -236,6 +482,19 @@ pub enum StepError {
     },
 }
 
+/// ` SIGSEGV` and the like, for the signals a crash gives.
+fn signal_name(signal: i32) -> &'static str {
+    match signal {
+        4 => ", SIGILL",
+        6 => ", SIGABRT",
+        7 => ", SIGBUS",
+        8 => ", SIGFPE",
+        9 => ", SIGKILL",
+        11 => ", SIGSEGV",
+        _ => "",
+    }
+}
+
 /// Whether `path` names a STEP file by its extension (`.step`, `.stp`, any case).
 pub fn is_step_path(path: &Path) -> bool {
     path.extension()
@@ -246,7 +505,7 @@ pub fn is_step_path(path: &Path) -> bool {
 /// Why a STEP file cannot be a part's `stl:` mesh, and what to do instead.
 pub fn not_a_part_mesh() -> String {
     let mut m = String::from(
-        "a STEP file, not an STL mesh: a part cannot name a STEP file yet; turn it into a document with `fitup import FILE.step`",
+        "a STEP file, not a mesh: name it with `step:` instead of `stl:` (tessellated when the document loads), or turn a whole assembly into a document with `fitup import FILE.step`",
     );
     if !AVAILABLE {
         m += " (this fitup was built without the `step` feature: rebuild with `cargo install --path . --features step`)";
@@ -270,8 +529,9 @@ fn check_options(options: &StepOptions) -> Result<(), StepError> {
 }
 
 /// Checks the file before Open CASCADE sees it: a regular file within the size cap
-/// that begins like a STEP file (so a mistaken path fails fast and clearly).
-fn check_file(path: &Path) -> Result<(), StepError> {
+/// that begins like a STEP file (so a mistaken path fails fast and clearly). Returns
+/// its bytes (the store's key is their hash).
+fn check_file(path: &Path) -> Result<Vec<u8>, StepError> {
     let bytes =
         crate::fsutil::read_file(path, FileKind::Step).map_err(|source| StepError::Read {
             path: path.into(),
@@ -285,211 +545,355 @@ fn check_file(path: &Path) -> Result<(), StepError> {
     if !text[start..].starts_with(b"ISO-10303-21") {
         return Err(StepError::NotStep { path: path.into() });
     }
-    Ok(())
+    Ok(bytes)
 }
 
 /// Reads a STEP file: its distinct solids meshed with `options`, its placed
 /// instances, lengths in mm. Errors are located in the file and, for one solid, by its
 /// place in the assembly tree; nothing is written.
 pub fn read_step(path: &Path, options: &StepOptions) -> Result<StepModel, StepError> {
+    let start = std::time::Instant::now();
     if !AVAILABLE {
         return Err(StepError::NotBuilt { path: path.into() });
     }
     check_options(options)?;
     check_file(path)?;
-    imp::read(path, options)
+    let raw = read_raw(path, options)?;
+    from_raw(path, options, raw, false, start)
+}
+
+/// [`read_step`] through the tessellation store in folder `store` (created when
+/// missing): Open CASCADE's result for these bytes and this deflection and angle is
+/// taken from there when present and sound, else read and kept there (written by the
+/// write rule; a store that cannot be written only means the next read reads again).
+pub fn read_step_stored(
+    path: &Path,
+    options: &StepOptions,
+    store: &Path,
+) -> Result<StepModel, StepError> {
+    let start = std::time::Instant::now();
+    if !AVAILABLE {
+        return Err(StepError::NotBuilt { path: path.into() });
+    }
+    check_options(options)?;
+    let bytes = check_file(path)?;
+    let key = raw::StoreKey::new(&bytes, options);
+    drop(bytes);
+    if let Some(raw) = raw::load_stored(store, &key) {
+        return from_raw(path, options, raw, true, start);
+    }
+    let raw = read_raw(path, options)?;
+    raw::store(store, &key, &raw);
+    from_raw(path, options, raw, false, start)
+}
+
+/// Open CASCADE's read, in this process or in a child.
+fn read_raw(path: &Path, options: &StepOptions) -> Result<RawModel, StepError> {
+    let utf8 = path
+        .to_str()
+        .ok_or_else(|| StepError::NonUtf8Path { path: path.into() })?;
+    match &options.isolation {
+        Isolation::InProcess => {
+            imp::occt_read(utf8, options).map_err(|what| shim_error(path, options, &what))
+        }
+        Isolation::Child(child) => raw::read_in_child(path, options, child),
+    }
+}
+
+/// The shim's failure message (`fitup:<code>[:<detail>]`, see `cpp/step_shim.cpp`) as
+/// a typed error.
+fn shim_error(path: &Path, options: &StepOptions, what: &str) -> StepError {
+    let occt = |failure| StepError::Occt {
+        path: path.into(),
+        failure,
+    };
+    let rest = what.strip_prefix("fitup:").unwrap_or(what);
+    let (code, detail) = rest.split_once(':').unwrap_or((rest, ""));
+    match code {
+        "parse" => occt(OcctFailure::Parse),
+        "transfer" => occt(OcctFailure::Transfer),
+        "time" => StepError::TimeLimit {
+            path: path.into(),
+            limit: options.time_limit,
+            stage: match detail {
+                "transfer" => StepStage::Transferring,
+                "mesh" => StepStage::Meshing,
+                _ => StepStage::Reading,
+            },
+        },
+        "triangles" => occt(OcctFailure::TooManyTriangles {
+            cap: options.max_triangles,
+        }),
+        "deep" => occt(OcctFailure::TooDeep { at: detail.into() }),
+        "oom" => match &options.isolation {
+            Isolation::Child(c) if c.memory_limit > 0 => StepError::MemoryLimit {
+                path: path.into(),
+                limit: c.memory_limit,
+            },
+            _ => occt(OcctFailure::OutOfMemory),
+        },
+        "occt" => {
+            let (kind, detail) = detail.split_once(':').unwrap_or((detail, ""));
+            occt(OcctFailure::Exception {
+                kind: kind.into(),
+                detail: detail.into(),
+            })
+        }
+        _ => occt(OcctFailure::Exception {
+            kind: "unknown".into(),
+            detail: what.into(),
+        }),
+    }
+}
+
+/// Serves [`CHILD_COMMAND`]: `args` are what follows it on the command line. Reads the
+/// file with Open CASCADE under the memory cap and writes the answer to the file the
+/// parent named; returns the exit code. Only for programs that registered themselves
+/// with [`read_in_child_processes`].
+pub fn serve_child(args: &[std::ffi::OsString]) -> i32 {
+    raw::serve_child(args)
+}
+
+/// Checks what Open CASCADE returned and makes the model of it.
+fn from_raw(
+    path: &Path,
+    options: &StepOptions,
+    model: RawModel,
+    from_store: bool,
+    start: std::time::Instant,
+) -> Result<StepModel, StepError> {
+    if model.instances.is_empty() {
+        return Err(StepError::NoSolids {
+            path: path.into(),
+            shells: model.shells_without_solid,
+            faces: model.faces_without_solid,
+        });
+    }
+    if model.open_shells > 0 {
+        return Err(StepError::OpenShell {
+            path: path.into(),
+            solid: model.first_open_shell,
+            count: model.open_shells,
+        });
+    }
+    // Where each part is first placed: how errors about the solid name it.
+    let mut first_path = vec![String::new(); model.parts.len()];
+    for inst in model.instances.iter().rev() {
+        match first_path.get_mut(inst.part as usize) {
+            Some(p) => p.clone_from(&inst.path),
+            None => {
+                return Err(StepError::BadPlacement {
+                    path: path.into(),
+                    instance: inst.path.clone(),
+                })
+            }
+        }
+    }
+    let mut parts = Vec::with_capacity(model.parts.len());
+    for (i, p) in model.parts.into_iter().enumerate() {
+        let mut solid = first_path[i].clone();
+        if p.solids_in_product > 1 {
+            solid += &format!(" (solid {} of {})", p.solid_index, p.solids_in_product);
+        }
+        if p.unmeshed_faces > 0 {
+            return Err(StepError::UnmeshedFace {
+                path: path.into(),
+                solid,
+                face: p.first_unmeshed_face,
+                faces: p.faces,
+                count: p.unmeshed_faces,
+            });
+        }
+        let mesh = weld(&p.vertices, &p.triangles).map_err(|source| StepError::Mesh {
+            path: path.into(),
+            solid: solid.clone(),
+            source,
+        })?;
+        let report = mesh.inspect();
+        if mesh.triangles.is_empty() || !report.is_watertight() {
+            return Err(StepError::OpenSolid {
+                path: path.into(),
+                solid,
+                boundary_edges: report.boundary_edges,
+                non_manifold_edges: report.non_manifold_edges,
+                misoriented_edges: report.misoriented_edges,
+            });
+        }
+        parts.push(StepPart {
+            product: p.name,
+            solid: (p.solid_index, p.solids_in_product),
+            mesh,
+            exact_volume: p.exact_volume,
+        });
+    }
+    let mut instances = Vec::with_capacity(model.instances.len());
+    for inst in model.instances {
+        if !inst.scale.is_finite() || (inst.scale - 1.0).abs() > 1e-9 {
+            return Err(StepError::NotRigid {
+                path: path.into(),
+                instance: inst.path,
+                scale: inst.scale,
+            });
+        }
+        let Some(transform) = pose(&inst.matrix) else {
+            return Err(StepError::BadPlacement {
+                path: path.into(),
+                instance: inst.path,
+            });
+        };
+        instances.push(StepInstance {
+            name: inst.name,
+            path: inst.path,
+            part: inst.part as usize,
+            transform,
+        });
+    }
+    let secs = |s: f64| Duration::try_from_secs_f64(s.max(0.0)).unwrap_or_default();
+    Ok(StepModel {
+        path: path.into(),
+        parts,
+        instances,
+        file_unit: model.length_unit,
+        options: options.clone(),
+        timings: StepTimings {
+            parse: secs(model.read_s),
+            transfer: secs(model.transfer_s),
+            mesh: secs(model.mesh_s),
+            total: start.elapsed(),
+        },
+        reader_peak_memory: (model.peak_memory > 0).then_some(model.peak_memory),
+        from_store,
+    })
+}
+
+/// The shim's 3 × 4 row-major `[R | t]` (column vectors) as a [`Transform`]
+/// (whose matrix is SolidWorks' row-vector layout: the transpose).
+fn pose(m: &[f64]) -> Option<Transform> {
+    if m.len() != 12 {
+        return None;
+    }
+    let mut sw = [[0.0; 4]; 4];
+    for (r, row) in m.chunks_exact(4).enumerate() {
+        for (c, v) in row[..3].iter().enumerate() {
+            sw[c][r] = *v;
+        }
+        sw[3][r] = row[3];
+    }
+    sw[3][3] = 1.0;
+    Transform::from_matrix(&sw).ok()
+}
+
+/// Face meshes side by side → one indexed mesh: the nodes OCCT puts on an edge
+/// are the same points on both faces, so merging identical vertices closes it.
+fn weld(vertices: &[f64], triangles: &[u32]) -> Result<Mesh, MeshError> {
+    use crate::math::Point3;
+    let n = vertices.len() / 3;
+    let point = |i: u32| -> Result<Point3, MeshError> {
+        let i = i as usize;
+        if i >= n {
+            return Err(MeshError::invalid(format!(
+                "a triangle refers to vertex {i} of {n}"
+            )));
+        }
+        let p = Point3::new(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
+        let ok = |v: f64| v.is_finite() && v.abs() <= crate::math::MAX_ABS_VALUE;
+        if !(ok(p.x) && ok(p.y) && ok(p.z)) {
+            return Err(MeshError::invalid(format!(
+                "vertex {i} is not finite or beyond {:e} mm",
+                crate::math::MAX_ABS_VALUE
+            )));
+        }
+        Ok(p)
+    };
+    let soup = triangles
+        .chunks_exact(3)
+        .map(|t| Ok([point(t[0])?, point(t[1])?, point(t[2])?]))
+        .collect::<Result<Vec<_>, MeshError>>()?;
+    Mesh::from_triangle_soup(soup)
 }
 
 /// Writes a STEP file made with Open CASCADE for the tests (`kind`: `box`,
-/// `cylinder_hole`, `assembly`, `inch_box`, `open_shell`, `no_solid`); see
-/// `cpp/step_shim.cpp` for their shapes. Not a stable API.
+/// `cylinder_hole`, `assembly`, `inch_box`, `open_shell`, `no_solid`, `bad_face`,
+/// `plate_holes`); see `cpp/step_shim.cpp` for their shapes. Not a stable API.
 #[doc(hidden)]
 pub fn write_test_step(kind: &str, path: &Path) -> Result<(), StepError> {
-    imp::write_test(kind, path)
+    let utf8 = path
+        .to_str()
+        .ok_or_else(|| StepError::NonUtf8Path { path: path.into() })?;
+    imp::write_test(kind, utf8).map_err(|what| StepError::Occt {
+        path: path.into(),
+        failure: OcctFailure::Exception {
+            kind: "write".into(),
+            detail: what,
+        },
+    })
 }
 
 #[cfg(feature = "step")]
 mod imp {
+    use super::raw::{RawInstance, RawPart};
     use super::*;
-    use crate::math::Point3;
     use crate::mesh::step_ffi::ffi;
     use std::sync::Mutex;
-    use std::time::Instant;
 
     /// Open CASCADE's reader settings are process-wide (`Interface_Static`): one read
     /// or write at a time.
     static OCCT: Mutex<()> = Mutex::new(());
 
-    fn occt_err(path: &Path, e: cxx::Exception) -> StepError {
-        StepError::Occt {
-            path: path.into(),
-            message: e.what().to_string(),
-        }
-    }
-
-    fn utf8(path: &Path) -> Result<&str, StepError> {
-        path.to_str().ok_or_else(|| StepError::Occt {
-            path: path.into(),
-            message: "the path is not UTF-8 (Open CASCADE takes UTF-8 paths)".into(),
-        })
-    }
-
-    pub(super) fn read(path: &Path, options: &StepOptions) -> Result<StepModel, StepError> {
-        let start = Instant::now();
+    /// The shim's read as plain data; `Err` is the shim's `fitup:<code>` message.
+    pub(super) fn occt_read(path: &str, options: &StepOptions) -> Result<RawModel, String> {
         let opts = ffi::ReadOptions {
             linear_deflection: options.linear_deflection,
             angular_deflection: options.angular_deflection,
             time_limit_s: options.time_limit.as_secs_f64(),
             max_triangles: options.max_triangles,
         };
-        let model = {
+        let m = {
             let _one = OCCT.lock().unwrap_or_else(|e| e.into_inner());
-            ffi::read_step(utf8(path)?, &opts).map_err(|e| occt_err(path, e))?
+            ffi::read_step(path, &opts).map_err(|e| e.what().to_string())?
         };
-        if model.instances.is_empty() {
-            return Err(StepError::NoSolids {
-                path: path.into(),
-                shells: model.shells_without_solid,
-                faces: model.faces_without_solid,
-            });
-        }
-        if model.open_shells > 0 {
-            return Err(StepError::OpenShell {
-                path: path.into(),
-                solid: model.first_open_shell,
-                count: model.open_shells,
-            });
-        }
-        // Where each part is first placed: how errors about the solid name it.
-        let mut first_path = vec![String::new(); model.parts.len()];
-        for inst in model.instances.iter().rev() {
-            if let Some(p) = first_path.get_mut(inst.part as usize) {
-                p.clone_from(&inst.path);
-            }
-        }
-        let mut parts = Vec::with_capacity(model.parts.len());
-        for (i, p) in model.parts.into_iter().enumerate() {
-            let mut solid = first_path[i].clone();
-            if p.solids_in_product > 1 {
-                solid += &format!(" (solid {} of {})", p.solid_index, p.solids_in_product);
-            }
-            if p.unmeshed_faces > 0 {
-                return Err(StepError::UnmeshedFace {
-                    path: path.into(),
-                    solid,
-                    face: p.first_unmeshed_face,
+        Ok(RawModel {
+            parts: m
+                .parts
+                .into_iter()
+                .map(|p| RawPart {
+                    name: p.name,
+                    solid_index: p.solid_index,
+                    solids_in_product: p.solids_in_product,
+                    vertices: p.vertices,
+                    triangles: p.triangles,
+                    exact_volume: p.exact_volume,
                     faces: p.faces,
-                    count: p.unmeshed_faces,
-                });
-            }
-            let mesh = weld(&p.vertices, &p.triangles).map_err(|source| StepError::Mesh {
-                path: path.into(),
-                solid: solid.clone(),
-                source,
-            })?;
-            let report = mesh.inspect();
-            if mesh.triangles.is_empty() || !report.is_watertight() {
-                return Err(StepError::OpenSolid {
-                    path: path.into(),
-                    solid,
-                    boundary_edges: report.boundary_edges,
-                    non_manifold_edges: report.non_manifold_edges,
-                    misoriented_edges: report.misoriented_edges,
-                });
-            }
-            parts.push(StepPart {
-                product: p.name,
-                solid: (p.solid_index, p.solids_in_product),
-                mesh,
-                exact_volume: p.exact_volume,
-            });
-        }
-        let mut instances = Vec::with_capacity(model.instances.len());
-        for inst in model.instances {
-            if (inst.scale - 1.0).abs() > 1e-9 {
-                return Err(StepError::NotRigid {
-                    path: path.into(),
-                    instance: inst.path,
-                    scale: inst.scale,
-                });
-            }
-            let transform = pose(&inst.matrix).ok_or_else(|| StepError::Occt {
-                path: path.into(),
-                message: format!(
-                    "instance `{}`: its placement is not a rigid motion",
-                    inst.path
-                ),
-            })?;
-            instances.push(StepInstance {
-                name: inst.name,
-                path: inst.path,
-                part: inst.part as usize,
-                transform,
-            });
-        }
-        Ok(StepModel {
-            path: path.into(),
-            parts,
-            instances,
-            file_unit: model.length_unit,
-            options: options.clone(),
-            timings: StepTimings {
-                parse: Duration::from_secs_f64(model.read_s.max(0.0)),
-                transfer: Duration::from_secs_f64(model.transfer_s.max(0.0)),
-                mesh: Duration::from_secs_f64(model.mesh_s.max(0.0)),
-                total: start.elapsed(),
-            },
+                    unmeshed_faces: p.unmeshed_faces,
+                    first_unmeshed_face: p.first_unmeshed_face,
+                })
+                .collect(),
+            instances: m
+                .instances
+                .into_iter()
+                .map(|i| RawInstance {
+                    name: i.name,
+                    path: i.path,
+                    part: i.part,
+                    matrix: i.matrix,
+                    scale: i.scale,
+                })
+                .collect(),
+            length_unit: m.length_unit,
+            read_s: m.read_s,
+            transfer_s: m.transfer_s,
+            mesh_s: m.mesh_s,
+            shells_without_solid: m.shells_without_solid,
+            faces_without_solid: m.faces_without_solid,
+            open_shells: m.open_shells,
+            first_open_shell: m.first_open_shell,
+            peak_memory: 0,
         })
     }
 
-    /// The shim's 3 × 4 row-major `[R | t]` (column vectors) as a [`Transform`]
-    /// (whose matrix is SolidWorks' row-vector layout: the transpose).
-    fn pose(m: &[f64]) -> Option<Transform> {
-        if m.len() != 12 {
-            return None;
-        }
-        let mut sw = [[0.0; 4]; 4];
-        for (r, row) in m.chunks_exact(4).enumerate() {
-            for (c, v) in row[..3].iter().enumerate() {
-                sw[c][r] = *v;
-            }
-            sw[3][r] = row[3];
-        }
-        sw[3][3] = 1.0;
-        Transform::from_matrix(&sw).ok()
-    }
-
-    /// Face meshes side by side → one indexed mesh: the nodes OCCT puts on an edge
-    /// are the same points on both faces, so merging identical vertices closes it.
-    fn weld(vertices: &[f64], triangles: &[u32]) -> Result<Mesh, MeshError> {
-        let n = vertices.len() / 3;
-        let point = |i: u32| -> Result<Point3, MeshError> {
-            let i = i as usize;
-            if i >= n {
-                return Err(MeshError::invalid(format!(
-                    "a triangle refers to vertex {i} of {n}"
-                )));
-            }
-            let p = Point3::new(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
-            let ok = |v: f64| v.is_finite() && v.abs() <= crate::math::MAX_ABS_VALUE;
-            if !(ok(p.x) && ok(p.y) && ok(p.z)) {
-                return Err(MeshError::invalid(format!(
-                    "vertex {i} is not finite or beyond {:e} mm",
-                    crate::math::MAX_ABS_VALUE
-                )));
-            }
-            Ok(p)
-        };
-        let soup = triangles
-            .chunks_exact(3)
-            .map(|t| Ok([point(t[0])?, point(t[1])?, point(t[2])?]))
-            .collect::<Result<Vec<_>, MeshError>>()?;
-        Mesh::from_triangle_soup(soup)
-    }
-
-    pub(super) fn write_test(kind: &str, path: &Path) -> Result<(), StepError> {
+    pub(super) fn write_test(kind: &str, path: &str) -> Result<(), String> {
         let _one = OCCT.lock().unwrap_or_else(|e| e.into_inner());
-        ffi::write_test_step(kind, utf8(path)?).map_err(|e| occt_err(path, e))
+        ffi::write_test_step(kind, path).map_err(|e| e.what().to_string())
     }
 }
 
@@ -497,11 +901,116 @@ mod imp {
 mod imp {
     use super::*;
 
-    pub(super) fn read(path: &Path, _: &StepOptions) -> Result<StepModel, StepError> {
-        Err(StepError::NotBuilt { path: path.into() })
+    pub(super) fn occt_read(_: &str, _: &StepOptions) -> Result<RawModel, String> {
+        Err("fitup:occt:NotBuilt:this build has no Open CASCADE".into())
     }
 
-    pub(super) fn write_test(_: &str, path: &Path) -> Result<(), StepError> {
-        Err(StepError::NotBuilt { path: path.into() })
+    pub(super) fn write_test(_: &str, _: &str) -> Result<(), String> {
+        Err("this build has no Open CASCADE (feature `step`)".into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::raw::{RawInstance, RawPart};
+    use super::*;
+
+    #[test]
+    fn shim_messages_become_typed_errors() {
+        let p = Path::new("a.step");
+        let o = StepOptions {
+            isolation: Isolation::Child(ChildReader {
+                program: "fitup".into(),
+                memory_limit: 1 << 30,
+            }),
+            ..StepOptions::default()
+        };
+        assert!(matches!(
+            shim_error(p, &o, "fitup:time:mesh"),
+            StepError::TimeLimit {
+                stage: StepStage::Meshing,
+                ..
+            }
+        ));
+        assert!(matches!(
+            shim_error(p, &o, "fitup:oom"),
+            StepError::MemoryLimit { limit, .. } if limit == 1 << 30
+        ));
+        let e = shim_error(p, &o, "fitup:occt:Standard_NullObject:null handle");
+        assert_eq!(
+            e,
+            StepError::Occt {
+                path: p.into(),
+                failure: OcctFailure::Exception {
+                    kind: "Standard_NullObject".into(),
+                    detail: "null handle".into()
+                }
+            }
+        );
+        assert!(
+            e.to_string().starts_with("a.step: Open CASCADE failed"),
+            "{e}"
+        );
+        assert!(matches!(
+            shim_error(p, &o, "fitup:deep:/a/b"),
+            StepError::Occt { failure: OcctFailure::TooDeep { at }, .. } if at == "/a/b"
+        ));
+    }
+
+    fn one_box() -> RawModel {
+        let m = Mesh::cuboid(
+            crate::math::Point3::origin(),
+            crate::math::Point3::new(2.0, 3.0, 4.0),
+        );
+        RawModel {
+            parts: vec![RawPart {
+                name: "block".into(),
+                solid_index: 1,
+                solids_in_product: 1,
+                vertices: m.vertices.iter().flat_map(|p| [p.x, p.y, p.z]).collect(),
+                triangles: m.triangles.iter().flatten().copied().collect(),
+                exact_volume: 24.0,
+                faces: 6,
+                unmeshed_faces: 0,
+                first_unmeshed_face: 0,
+            }],
+            instances: vec![RawInstance {
+                name: "block-1".into(),
+                path: "block-1".into(),
+                part: 0,
+                matrix: vec![1., 0., 0., 5., 0., 1., 0., 0., 0., 0., 1., 0.],
+                scale: 1.0,
+            }],
+            length_unit: "MM".into(),
+            ..RawModel::default()
+        }
+    }
+
+    #[test]
+    fn a_raw_model_is_checked_and_placed() {
+        let start = std::time::Instant::now();
+        let o = StepOptions::default();
+        let m = from_raw(Path::new("b.step"), &o, one_box(), false, start).unwrap();
+        assert!((m.placed_mesh().bounds().unwrap().lo.x - 5.0).abs() < 1e-12);
+        assert!((m.placed_exact_volume() - 24.0).abs() < 1e-12);
+        // A part index past the parts, a NaN placement, a face without triangles.
+        let mut bad = one_box();
+        bad.instances[0].part = 7;
+        assert!(matches!(
+            from_raw(Path::new("b.step"), &o, bad, false, start),
+            Err(StepError::BadPlacement { .. })
+        ));
+        let mut bad = one_box();
+        bad.instances[0].matrix[0] = f64::NAN;
+        assert!(from_raw(Path::new("b.step"), &o, bad, false, start).is_err());
+        let mut bad = one_box();
+        bad.parts[0].unmeshed_faces = 1;
+        bad.parts[0].first_unmeshed_face = 4;
+        let e = from_raw(Path::new("b.step"), &o, bad, false, start).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("solid `block-1`: face 4 of 6 did not mesh"),
+            "{e}"
+        );
     }
 }

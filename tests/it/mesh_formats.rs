@@ -63,7 +63,7 @@ fn ply_bytes(m: &Mesh, binary: bool) -> Vec<u8> {
 }
 
 /// The GLB of `m` split into its JSON and binary chunk (for a `.gltf` + `.bin`).
-fn gltf_parts(m: &Mesh) -> (serde_json::Value, Vec<u8>) {
+pub(crate) fn gltf_parts(m: &Mesh) -> (serde_json::Value, Vec<u8>) {
     let glb = glb_bytes(&[GlbNode {
         name: "block",
         mesh: m,

@@ -102,6 +102,8 @@ mod with_occt {
             "inch_box",
             "open_shell",
             "no_solid",
+            "bad_face",
+            "plate_holes",
         ] {
             let text = std::fs::read_to_string(made(&dir, kind)).unwrap();
             assert!(text.starts_with("ISO-10303-21;"), "{kind}");
@@ -408,5 +410,468 @@ fn the_readme_step_workflow_runs_as_documented() {
             assert!(t.contains("4 components, 2 distinct parts"), "{t}");
             assert!(t.contains("0 interfering pairs"), "{t}");
         }
+    }
+}
+
+/// Without the feature, a `step:` part is refused at its `step:` line, naming the file
+/// and the command that adds the feature.
+#[cfg(not(feature = "step"))]
+#[test]
+fn without_the_feature_a_step_part_asks_for_a_rebuild() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("fitup.toml"), "").unwrap();
+    std::fs::write(
+        dir.path().join("arm.step"),
+        "ISO-10303-21;\nHEADER;\nENDSEC;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("cell.yaml"),
+        "parts:\n  arm:\n    step: arm.step\ncomponents:\n  - {name: arm-1, part: arm}\n",
+    )
+    .unwrap();
+    let before = common::snapshot(dir.path());
+    let o = common::run_in(dir.path(), &["check", "cell.yaml"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("cell.yaml:3"), "at the step: line: {t}");
+    assert!(t.contains("arm.step"), "{t}");
+    assert!(t.contains("cargo install --path . --features step"), "{t}");
+    assert_eq!(common::snapshot(dir.path()), before, "nothing written");
+}
+
+/// A part whose geometry is its STEP file (`step:`): tessellated when the document
+/// loads, kept in the project's tessellation store by content and tessellation, so
+/// the next load reads no STEP; a damaged store file is read again, never trusted.
+#[cfg(feature = "step")]
+mod step_parts {
+    use super::*;
+    use fitup::document::Document;
+    use fitup::mesh::step::{write_test_step, STEP_STORE};
+    use std::f64::consts::PI;
+    use std::path::{Path, PathBuf};
+
+    /// `fitup.toml`, `parts/<kind>.step` and `cell.yaml` with part `p` made of it
+    /// (plus `extra` lines under the part) and one component `p-1`.
+    fn step_project(dir: &Path, kind: &str, extra: &str) -> PathBuf {
+        std::fs::write(dir.join("fitup.toml"), "").unwrap();
+        std::fs::create_dir_all(dir.join("parts")).unwrap();
+        write_test_step(kind, &dir.join(format!("parts/{kind}.step"))).unwrap();
+        let doc = dir.join("cell.yaml");
+        std::fs::write(
+            &doc,
+            format!("parts:\n  p:\n    step: parts/{kind}.step\n{extra}components:\n  - {{name: p-1, part: p}}\n"),
+        )
+        .unwrap();
+        doc
+    }
+
+    fn stored(dir: &Path) -> Vec<PathBuf> {
+        let mut v: Vec<_> = std::fs::read_dir(dir.join(STEP_STORE))
+            .map(|d| d.map(|e| e.unwrap().path()).collect())
+            .unwrap_or_default();
+        v.retain(|p: &PathBuf| p.extension().is_some_and(|e| e == "tess"));
+        v.sort();
+        v
+    }
+
+    fn check(dir: &Path) -> String {
+        let o = common::run_in(dir, &["check", "cell.yaml"]);
+        let t = common::text(&o);
+        assert!(o.status.success(), "{t}");
+        t
+    }
+
+    #[test]
+    fn a_step_part_is_tessellated_on_load_and_kept_in_the_store() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        let doc_path = step_project(p, "cylinder_hole", "    deflection: 0.05\n");
+        let t = check(p);
+        assert!(t.contains("parts/cylinder_hole.step"), "{t}");
+        assert!(t.contains("tessellated now"), "{t}");
+        assert_eq!(stored(p).len(), 1, "one stored tessellation");
+
+        // The part: one closed mesh within 1.5 % of the analytic volume, from the
+        // store this time (no Open CASCADE read).
+        let doc = Document::open(&doc_path).unwrap();
+        let part = doc.part("p").unwrap();
+        let g = part.step.as_ref().expect("a STEP part");
+        assert!(g.from_store);
+        assert_eq!(g.deflection, Some(0.05));
+        assert!(part.mesh.inspect().is_watertight());
+        let analytic = PI * (10.0f64.powi(2) - 3.0f64.powi(2)) * 20.0;
+        let ratio = part.mesh.signed_volume() / analytic;
+        assert!((ratio - 1.0).abs() < 0.015, "{ratio}");
+        assert!((g.volume_ratio - ratio).abs() < 1e-6);
+        assert!(doc
+            .source_files()
+            .iter()
+            .any(|f| f.ends_with("parts/cylinder_hole.step")));
+        assert!(check(p).contains("stored tessellation"));
+
+        // Saving keeps the `step:` key and the tessellation as written.
+        let mut doc = doc;
+        doc.save_as(&p.join("copy.yaml")).unwrap();
+        let copy = std::fs::read_to_string(p.join("copy.yaml")).unwrap();
+        assert!(copy.contains("step: parts/cylinder_hole.step"), "{copy}");
+        assert!(
+            copy.contains("deflection: 0.05") && !copy.contains("stl:"),
+            "{copy}"
+        );
+
+        // Another deflection is another tessellation, kept beside the first.
+        let yaml = std::fs::read_to_string(&doc_path).unwrap();
+        std::fs::write(&doc_path, yaml.replace("0.05", "0.02")).unwrap();
+        assert!(check(p).contains("tessellated now"));
+        assert_eq!(stored(p).len(), 2);
+
+        // A damaged store file is a miss: read again, and replaced.
+        for f in stored(p) {
+            let mut bytes = std::fs::read(&f).unwrap();
+            bytes.truncate(bytes.len() / 2);
+            std::fs::write(&f, bytes).unwrap();
+        }
+        assert!(check(p).contains("tessellated now"));
+        assert!(check(p).contains("stored tessellation"));
+
+        // A new export of the file (other bytes) is read, not served from the store.
+        write_test_step("box", &p.join("parts/cylinder_hole.step")).unwrap();
+        let t = check(p);
+        assert!(
+            t.contains("tessellated now") && t.contains("  12 triangles"),
+            "{t}"
+        );
+    }
+
+    /// An assembly file as one part: every solid at its placement, one closed mesh.
+    #[test]
+    fn an_assembly_file_as_a_part_is_all_its_solids_in_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let doc = Document::open(&step_project(dir.path(), "assembly", "")).unwrap();
+        let m = &doc.part("p").unwrap().mesh;
+        assert!(m.inspect().is_watertight());
+        // plate 100 × 60 × 10 and three pegs r 4 × 30 (chordal: a little less).
+        let exact = 100.0 * 60.0 * 10.0 + 3.0 * PI * 16.0 * 30.0;
+        let v = m.signed_volume();
+        assert!(v < exact && v > 0.985 * exact, "{v} of {exact}");
+        let b = m.bounds().unwrap();
+        assert!((b.hi.z - 40.0).abs() < 1e-6, "pegs stand 10 mm up: {b:?}");
+    }
+
+    /// Part keys out of place are located errors.
+    #[test]
+    fn bad_step_part_keys_are_located() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        for (extra, needle) in [
+            ("    stl: parts/box.stl\n", "not both"),
+            ("    deflection: 0\n", "`deflection:` must be a number > 0"),
+            ("    angle: 200\n", "below 180"),
+        ] {
+            step_project(p, "box", extra);
+            let o = common::run_in(p, &["check", "cell.yaml"]);
+            let t = common::text(&o);
+            assert_eq!(o.status.code(), Some(1), "{t}");
+            assert!(t.contains("cell.yaml:"), "{t}");
+            assert!(t.contains(needle), "{needle}: {t}");
+        }
+        std::fs::write(
+            p.join("cell.yaml"),
+            "parts:\n  p:\n    stl: parts/box.stl\n    deflection: 0.1\ncomponents: []\n",
+        )
+        .unwrap();
+        let o = common::run_in(p, &["check", "cell.yaml"]);
+        assert!(common::text(&o).contains("tessellate a `step:` part"));
+    }
+
+    /// A face that does not mesh: the error names the solid and the face.
+    #[test]
+    fn a_face_that_does_not_mesh_names_its_solid_and_face() {
+        use fitup::mesh::step::{read_step, StepError, StepOptions};
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("bad_face.step");
+        write_test_step("bad_face", &file).unwrap();
+        let e = read_step(&file, &StepOptions::default()).unwrap_err();
+        match &e {
+            StepError::UnmeshedFace {
+                solid,
+                faces,
+                count,
+                ..
+            } => {
+                assert_eq!(solid, "warped", "{e}");
+                assert_eq!((*faces, *count), (6, 1), "{e}");
+            }
+            other => panic!("not an unmeshed face: {other}"),
+        }
+        let o = common::run_in(dir.path(), &["import", "bad_face.step", "--out", "out"]);
+        let t = common::text(&o);
+        assert_eq!(o.status.code(), Some(1), "{t}");
+        assert!(
+            t.contains("bad_face.step") && t.contains("solid `warped`: face"),
+            "{t}"
+        );
+        assert!(!dir.path().join("out").exists());
+    }
+}
+
+/// Open CASCADE in a child process: a crash, a hang or a memory blow-up on a hostile
+/// file becomes a located error in bounded time and memory, and nothing is written.
+#[cfg(all(feature = "step", unix))]
+mod hostile {
+    use super::*;
+    use fitup::mesh::step::{
+        read_step, write_test_step, ChildFailure, ChildReader, Isolation, StepError, StepOptions,
+    };
+    use std::path::{Path, PathBuf};
+    use std::time::{Duration, Instant};
+
+    fn child(program: &Path, memory_limit: u64, time_limit: Duration) -> StepOptions {
+        StepOptions {
+            time_limit,
+            isolation: Isolation::Child(ChildReader {
+                program: program.into(),
+                memory_limit,
+            }),
+            ..StepOptions::default()
+        }
+    }
+
+    /// A shell script standing in for a child reader.
+    fn stand_in(dir: &Path, name: &str, body: &str) -> PathBuf {
+        use std::os::unix::fs::PermissionsExt;
+        let p = dir.join(name);
+        std::fs::write(&p, format!("#!/bin/sh\n{body}\n")).unwrap();
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o755)).unwrap();
+        p
+    }
+
+    /// `read_step`, retried while the script is "busy" (another test thread forked
+    /// while it was open for writing: ETXTBSY, not what is tested).
+    fn read(file: &Path, o: &StepOptions) -> Result<fitup::mesh::step::StepModel, StepError> {
+        for _ in 0..100 {
+            match read_step(file, o) {
+                Err(StepError::Child {
+                    failure: ChildFailure::Spawn { kind, .. },
+                    ..
+                }) if kind == std::io::ErrorKind::ExecutableFileBusy => {
+                    std::thread::sleep(Duration::from_millis(20))
+                }
+                r => return r,
+            }
+        }
+        panic!("the stand-in stayed busy")
+    }
+
+    #[test]
+    fn the_child_reader_turns_crashes_hangs_and_exhaustion_into_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("box.step");
+        write_test_step("box", &file).unwrap();
+        let fitup = PathBuf::from(env!("CARGO_BIN_EXE_fitup"));
+        let limit = Duration::from_secs(20);
+
+        // The real child reads what this process reads, and says its peak memory.
+        let a = read(&file, &child(&fitup, 1 << 30, limit)).unwrap();
+        let in_process = StepOptions {
+            isolation: Isolation::InProcess,
+            ..StepOptions::default()
+        };
+        let b = read_step(&file, &in_process).unwrap();
+        assert_eq!(a.parts[0].mesh, b.parts[0].mesh);
+        assert_eq!(a.instances.len(), b.instances.len());
+        assert!(a.reader_peak_memory.is_some_and(|m| m > 1 << 20));
+
+        // A child that crashes, hangs, runs out of memory, or is no reader at all.
+        let crash = stand_in(dir.path(), "crash", "kill -SEGV $$");
+        let e = read(&file, &child(&crash, 0, limit)).unwrap_err();
+        assert!(matches!(e, StepError::Crashed { signal: 11, .. }), "{e}");
+        assert!(
+            e.to_string().contains("box.step: Open CASCADE crashed"),
+            "{e}"
+        );
+
+        let hang = stand_in(dir.path(), "hang", "exec sleep 60");
+        let started = Instant::now();
+        let e = read(&file, &child(&hang, 0, Duration::from_secs(1))).unwrap_err();
+        assert!(matches!(e, StepError::TimeLimit { .. }), "{e}");
+        assert!(started.elapsed() < Duration::from_secs(10), "bounded");
+
+        let oom = stand_in(
+            dir.path(),
+            "oom",
+            "echo 'memory allocation of 4096 bytes failed' >&2; kill -ABRT $$",
+        );
+        let e = read(&file, &child(&oom, 256 << 20, limit)).unwrap_err();
+        assert!(
+            matches!(e, StepError::MemoryLimit { limit, .. } if limit == 256 << 20),
+            "{e}"
+        );
+        assert!(e.to_string().contains("256 MiB"), "{e}");
+
+        let silent = stand_in(dir.path(), "silent", "exit 0");
+        let e = read(&file, &child(&silent, 0, limit)).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                StepError::Child {
+                    failure: ChildFailure::BadReply {
+                        what: "missing",
+                        ..
+                    },
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let failing = stand_in(dir.path(), "failing", "exit 3");
+        let e = read(&file, &child(&failing, 0, limit)).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                StepError::Child {
+                    failure: ChildFailure::Exit { code: 3 },
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let forged = stand_in(
+            dir.path(),
+            "forged",
+            "printf 'fitup-step-reply 1\\n\\000\\377\\377\\377\\377\\377\\377\\377\\177' > \"$3\"",
+        );
+        let e = read(&file, &child(&forged, 0, limit)).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                StepError::Child {
+                    failure: ChildFailure::BadReply { .. },
+                    ..
+                }
+            ),
+            "{e}"
+        );
+    }
+
+    /// A deterministic pseudo-random byte stream (no RNG crate needed).
+    fn noise(n: usize, mut x: u64) -> Vec<u8> {
+        (0..n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                (x >> 24) as u8
+            })
+            .collect()
+    }
+
+    /// Hostile STEP files through `fitup import`: each ends with exit 1 and a message
+    /// naming the file, within the hostile suites' time bound and under 600 MB (the
+    /// whole process tree), nothing written.
+    #[test]
+    fn hostile_step_files_are_located_errors_in_bounded_time_and_memory() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        let asm = p.join("assembly.step");
+        write_test_step("assembly", &asm).unwrap();
+        let whole = std::fs::read(&asm).unwrap();
+        std::fs::write(p.join("truncated.step"), &whole[..whole.len() / 2]).unwrap();
+        let mut garbage = b"ISO-10303-21;\nHEADER;\n".to_vec();
+        garbage.extend(noise(1 << 20, 0x9e37_79b9_7f4a_7c15));
+        std::fs::write(p.join("garbage.step"), garbage).unwrap();
+        // Huge counts: a million entities in one list, 53 MB (under the 64 MiB cap).
+        let mut huge = String::from(
+            "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('','',(''),(''),'','','');\nFILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\nENDSEC;\nDATA;\n",
+        );
+        let n = 1_000_000;
+        for i in 1..=n {
+            huge += &format!("#{i}=CARTESIAN_POINT('',(0.,{i}.,0.));\n");
+        }
+        huge += &format!("#{}=POLYLINE('',(", n + 1);
+        huge += &(1..=n)
+            .map(|i| format!("#{i}"))
+            .collect::<Vec<_>>()
+            .join(",");
+        huge += "));\nENDSEC;\nEND-ISO-10303-21;\n";
+        std::fs::write(p.join("huge.step"), huge).unwrap();
+        // A memory blow-up: 400,000 points need ≈ 200 MB in Open CASCADE (300,000
+        // peaked at 159 MB uncapped), over a 100 MiB cap.
+        let mut points = String::from(
+            "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('','',(''),(''),'','','');\nFILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\nENDSEC;\nDATA;\n",
+        );
+        for i in 1..=400_000 {
+            points += &format!("#{i}=CARTESIAN_POINT('',(0.,{i}.,0.));\n");
+        }
+        points += "ENDSEC;\nEND-ISO-10303-21;\n";
+        std::fs::write(p.join("points.step"), points).unwrap();
+        // An entity number near 2^63, and entities of the wrong type where face
+        // bounds are expected.
+        let text = String::from_utf8(whole.clone()).unwrap();
+        std::fs::write(
+            p.join("numbers.step"),
+            text.replacen("#1=", "#9223372036854775807=", 1),
+        )
+        .unwrap();
+        let confused = text
+            .lines()
+            .map(|l| {
+                if l.contains("FACE_BOUND(") {
+                    let id = l.split('=').next().unwrap();
+                    format!("{id}=CARTESIAN_POINT('',(0.,0.,0.));")
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        std::fs::write(p.join("confused.step"), confused).unwrap();
+
+        // What each one says with Debian's Open CASCADE 7.6: the wrong-type entities
+        // crash it (SIGSEGV) — in the child, so fitup reports it; the list of a
+        // million points parses for minutes and is killed at the time limit.
+        for (file, extra, says) in [
+            ("truncated.step", &[][..], "can parse"),
+            ("garbage.step", &[][..], "can parse"),
+            (
+                "huge.step",
+                &["--time-limit-s", "2"][..],
+                "time limit of 2.0 s",
+            ),
+            (
+                "points.step",
+                &["--memory-limit-mb", "100", "--time-limit-s", "15"][..],
+                "ran out of memory",
+            ),
+            ("confused.step", &[][..], "Open CASCADE crashed"),
+        ] {
+            let before = common::snapshot(p);
+            let mut args = vec!["import", file, "--out", "out"];
+            args.extend(extra);
+            let r = crate::hostile_bounds::run(p, &args);
+            let what = format!("{file} {extra:?}: {} ({} kB)", r.text, r.peak_kb);
+            assert_eq!(r.code, Some(1), "{what}");
+            assert!(r.text.contains(file), "{what}");
+            assert!(r.text.contains(says), "{says}: {what}");
+            assert!(!r.text.contains("panicked"), "{what}");
+            assert!(r.peak_kb < 600 * 1024, "{what}");
+            if file == "points.step" {
+                // The cap holds the whole process tree well under what the read needs.
+                assert!(r.peak_kb < 150 * 1024, "{what}");
+            }
+            assert_eq!(common::snapshot(p), before, "{what}");
+            assert!(!p.join("out").exists(), "{what}");
+            eprintln!(
+                "{file} {extra:?}: {:?}, {} kB: {}",
+                r.elapsed,
+                r.peak_kb,
+                r.text.trim()
+            );
+        }
+        // An entity numbered near 2^63 is read like any other: no table sized by it.
+        let r = crate::hostile_bounds::run(p, &["import", "numbers.step", "--out", "out"]);
+        assert_eq!(r.code, Some(0), "{}", r.text);
+        assert!(r.peak_kb < 600 * 1024, "{} kB", r.peak_kb);
     }
 }

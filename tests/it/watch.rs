@@ -328,3 +328,99 @@ fn script_arguments_reach_every_run() {
     std::fs::write(&script, "print(`n+1 is ${args.n + 1}`);\n").unwrap();
     w.out.wait_for("n+1 is 8", BOUND);
 }
+
+/// A `.gltf` part's `.bin` buffer is a file the run read: saving it reruns the script
+/// (the buffer is among the document's source files), and the rerun sees the new mesh.
+#[test]
+fn a_saved_gltf_buffer_reruns_the_script() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    let block = |x: f64| {
+        fitup::mesh::Mesh::cuboid(
+            fitup::math::Point3::origin(),
+            fitup::math::Point3::new(x, 10.0, 5.0),
+        )
+    };
+    let (mut json, bin) = crate::mesh_formats::gltf_parts(&block(20.0));
+    std::fs::write(p.join("block.bin"), &bin).unwrap();
+    json["buffers"][0]["uri"] = "block.bin".into();
+    std::fs::write(
+        p.join("block.gltf"),
+        serde_json::to_vec_pretty(&json).unwrap(),
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("cell.yaml"),
+        "parts:\n  block:\n    stl: block.gltf\ncomponents:\n  - {name: block-1, part: block}\n",
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("w.rhai"),
+        "let d = open_doc(\"cell.yaml\");\nlet b = d.component(\"block-1\").aabb();\nprint(`width ${b.max[0].round()}`);\n",
+    )
+    .unwrap();
+    let mut w = Watch::start(p, "w.rhai", &[]);
+    w.out.wait_for("== done 1 ok", BOUND);
+    assert!(
+        w.out.seen.iter().any(|l| l == "width 20.0"),
+        "{:?}",
+        w.out.seen
+    );
+    // Only the buffer changes: the .gltf's own bytes stay the same.
+    let (_, wider) = crate::mesh_formats::gltf_parts(&block(40.0));
+    assert_eq!(wider.len(), bin.len());
+    std::fs::write(p.join("block.bin"), &wider).unwrap();
+    let header = w.out.wait_for("== run 2", BOUND);
+    assert!(header.contains("block.bin"), "{header}");
+    w.out.wait_for("== done 2 ok", BOUND);
+    assert!(
+        w.out.seen.iter().any(|l| l == "width 40.0"),
+        "{:?}",
+        w.out.seen
+    );
+    assert_eq!(runs_started(&w.out.quiet(SETTLE)), 0, "one rerun per save");
+}
+
+/// A `step:` part's STEP file is a file the run read: re-exporting it from CAD reruns
+/// the script with the new geometry (feature `step`; run by `.ci/run` with the STEP
+/// tests).
+#[cfg(feature = "step")]
+#[test]
+fn step_part_saved_again_reruns_the_script() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    std::fs::create_dir(p.join("parts")).unwrap();
+    let file = p.join("parts/block.step");
+    fitup::mesh::step::write_test_step("box", &file).unwrap();
+    std::fs::write(
+        p.join("cell.yaml"),
+        "parts:\n  block:\n    step: parts/block.step\ncomponents:\n  - {name: block-1, part: block}\n",
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("w.rhai"),
+        "let d = open_doc(\"cell.yaml\");\nlet b = d.component(\"block-1\").aabb();\nprint(`height ${b.max[2].round()}`);\n",
+    )
+    .unwrap();
+    let mut w = Watch::start(p, "w.rhai", &[]);
+    w.out.wait_for("== done 1 ok", BOUND);
+    assert!(
+        w.out.seen.iter().any(|l| l == "height 5.0"),
+        "{:?}",
+        w.out.seen
+    );
+    // The CAD re-export: another solid in the same file (written beside, renamed over).
+    let tmp = p.join("parts/new.step.part");
+    fitup::mesh::step::write_test_step("inch_box", &tmp).unwrap();
+    std::fs::rename(&tmp, &file).unwrap();
+    let header = w.out.wait_for("== run 2", BOUND);
+    assert!(header.contains("block.step"), "{header}");
+    w.out.wait_for("== done 2 ok", BOUND);
+    assert!(
+        w.out.seen.iter().any(|l| l == "height 76.0"),
+        "{:?}",
+        w.out.seen
+    );
+}
