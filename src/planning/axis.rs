@@ -133,7 +133,8 @@ impl AxisSearch {
         for axis in 0..3 {
             let e = Unit::new_unchecked(Vec3::ith(axis, 1.0));
             for angle in TURNS {
-                let turned = Transform::from_parts(t, q * UnitQuaternion::from_axis_angle(&e, angle));
+                let turned =
+                    Transform::from_parts(t, q * UnitQuaternion::from_axis_angle(&e, angle));
                 if space.contains(&turned, reference)
                     && !tree.holds(&turned)
                     && checker.edge_free(&from, &turned)

@@ -248,9 +248,7 @@ impl ProblemFile {
         let product_box = match (j.product_box_min, j.product_box_max) {
             (Some(lo), Some(hi)) => Some(boxed("product_box_min", lo, hi)?),
             (None, None) => None,
-            _ => {
-                return Err(value("product_box_min", ValueProblem::Unpaired))
-            }
+            _ => return Err(value("product_box_min", ValueProblem::Unpaired)),
         };
         Ok(Self {
             name: j.name,
