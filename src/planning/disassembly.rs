@@ -26,6 +26,7 @@ pub(crate) fn validate_box(b: &Aabb, option: &'static str) -> Result<(), PlanErr
 
 /// Which tree planner searches the disassembly path.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum DisassemblyPlanner {
     /// [`rrt`](super::rrt) / [`biased_rrt`](super::biased_rrt) with these options.
     Rrt(RrtOptions),

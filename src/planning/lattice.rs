@@ -12,6 +12,7 @@ use nalgebra::{Unit, UnitQuaternion};
 
 /// The axes of the local lattice and of the single-axis rotations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum DiscretizationFrame {
     /// The assembly frame's X, Y, Z (seed 002's figures).
     World,

@@ -22,6 +22,7 @@
 //! [`DEFAULT_TIME_LIMIT_MS`]) over search and smoothing together.
 //! Details, options and defaults: `docs/planning.md`.
 
+mod axis;
 mod disassembly;
 mod greedy_ant;
 mod insertion;
@@ -55,7 +56,9 @@ pub use mesh_validator::{
 };
 pub use narrow::NarrowPassage;
 pub use path::PlannedPath;
-pub use problem_file::{ProblemFile, ProblemFileError, MAX_PROBLEM_FILE_BYTES};
+pub use problem_file::{
+    ProblemFile, ProblemFileError, ReadCause, ValueProblem, MAX_PROBLEM_FILE_BYTES,
+};
 pub use request::{Planner, PLANNER_NAMES};
 pub use rrt::{biased_rrt, rrt, RrtOptions};
 pub use rrt_connect::{rrt_connect, RrtConnectOptions};

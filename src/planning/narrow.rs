@@ -59,6 +59,17 @@ pub struct NarrowPassage {
     /// Keep the farthest free pose of a blocked extension (3 bisections of its
     /// edge) and run the local discretization from there. Default true.
     pub to_contact: bool,
+    /// Largest share of [`rrt_connect`](super::rrt_connect)'s work, in `[0, 1]`,
+    /// that the axis-move search may take: a deterministic best-first search over
+    /// the poses each tree reaches by turning about the part's own axes by 45° or
+    /// 90° and sliding along its own (or the start's) axes to contact or to the
+    /// other root's coordinate (`planning/axis.rs`, docs/planning.md "Axis
+    /// moves"). It finds passages aligned with the part's axes that are far too
+    /// narrow to sample (a bar rolled 90° through a slot 0.3 mm wider than
+    /// itself). 0: off. Default 0.1 (0.2 made the house puzzle's slow seeds 2–3×
+    /// slower; 0.05 doubled the slots' times). The single-tree searches do not
+    /// use it.
+    pub axis_moves: f64,
 }
 
 impl Default for NarrowPassage {
@@ -71,6 +82,7 @@ impl Default for NarrowPassage {
             bridge: 0.1,
             bridge_width: 5.0,
             to_contact: true,
+            axis_moves: 0.1,
         }
     }
 }
@@ -84,6 +96,7 @@ impl NarrowPassage {
         bridge: 0.0,
         bridge_width: 5.0,
         to_contact: false,
+        axis_moves: 0.0,
     };
 
     /// How many samples dynamic-domain sampling draws before it takes the last one
@@ -108,6 +121,7 @@ impl NarrowPassage {
             PlanError::positive("narrow.dynamic_domain", r)?;
         }
         PlanError::probability("narrow.bridge", self.bridge)?;
+        PlanError::probability("narrow.axis_moves", self.axis_moves)?;
         PlanError::positive("narrow.bridge_width", self.bridge_width)
     }
 
@@ -117,6 +131,7 @@ impl NarrowPassage {
             && self.dynamic_domain.is_none()
             && self.bridge == 0.0
             && !self.to_contact
+            && self.axis_moves == 0.0
     }
 
     /// `candidate` (a step from `from`) with its rotation limited to `max_turn`
@@ -390,6 +405,10 @@ mod tests {
             },
             NarrowPassage {
                 bridge_width: -1.0,
+                ..NarrowPassage::OFF
+            },
+            NarrowPassage {
+                axis_moves: 1.5,
                 ..NarrowPassage::OFF
             },
         ] {

@@ -230,9 +230,15 @@ impl PlannedPath {
             out.push(*first);
         }
         for (w, &n) in self.poses.windows(2).zip(&counts) {
-            for k in 1..=n {
+            for k in 1..n {
                 out.push(w[0].interpolate(&w[1], k as f64 / n as f64));
             }
+            // The key pose itself, not its slerp at 1 (which differs in the last
+            // bits): the planner checked this pose, and near a face-on-face
+            // contact the interference verdict can flip between the two (issue
+            // 23: a house key pose free with depth 0, its slerp at 1 crossing
+            // 0.0101 mm).
+            out.push(w[1]);
         }
         Ok(out)
     }

@@ -18,6 +18,7 @@ pub const MAX_PROBLEM_FILE_BYTES: u64 = 1 << 20;
 
 /// Why a problem file could not be used; the message names the file and the field.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ProblemFileError {
     /// Reading the file failed (missing, unreadable, too large, not a regular file).
     #[error("{file}: {cause}")]
@@ -25,11 +26,11 @@ pub enum ProblemFileError {
         /// The file.
         file: String,
         /// What went wrong.
-        cause: String,
+        cause: ReadCause,
     },
     /// The text is not the problem format (JSON syntax, a missing or unknown field),
     /// with the line and column serde reports.
-    #[error("{file}:{line}:{column}: {cause}")]
+    #[error("{file}:{line}:{column}: {source}")]
     Syntax {
         /// The file.
         file: String,
@@ -38,19 +39,70 @@ pub enum ProblemFileError {
         /// Column (1-based).
         column: usize,
         /// What the parser expected.
-        cause: String,
+        source: serde_json::Error,
     },
     /// A value is out of range (non-finite number, quaternion far from unit length,
     /// inverted box, a pose outside the bounds).
-    #[error("{file}: `{field}` {cause}")]
+    #[error("{file}: `{field}` {problem}")]
     Value {
         /// The file.
         file: String,
         /// The field.
         field: &'static str,
         /// What is wrong with it.
-        cause: String,
+        problem: ValueProblem,
     },
+}
+
+/// Why a problem file could not be read ([`ProblemFileError::Read`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReadCause {
+    /// The file system refused (missing, no permission…).
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    /// The path is a folder, a device or a pipe.
+    #[error("not a regular file")]
+    NotAFile,
+    /// Larger than [`MAX_PROBLEM_FILE_BYTES`].
+    #[error("{bytes} bytes is too large for a problem file (at most {max})")]
+    TooLarge {
+        /// The file's size (bytes).
+        bytes: u64,
+        /// The largest accepted (bytes).
+        max: u64,
+    },
+}
+
+/// What is wrong with a field of a problem file ([`ProblemFileError::Value`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ValueProblem {
+    /// A coordinate is NaN or infinite.
+    #[error("has a non-finite number")]
+    NonFinite,
+    /// The rotation quaternion's length is not 1 (± 1e-6).
+    #[error("has a rotation quaternion of length {length}, expected 1")]
+    QuaternionLength {
+        /// Its length.
+        length: f64,
+    },
+    /// A box's minimum is above its maximum on some axis.
+    #[error("has a minimum above its maximum")]
+    InvertedBox,
+    /// An end pose's translation lies outside `bounds_min`..`bounds_max`.
+    #[error("lies outside the bounds")]
+    OutsideBounds,
+    /// A number that must be finite and positive is not (mm/rad for the rotation
+    /// weight).
+    #[error("must be a finite number > 0, not {value}")]
+    NotPositive {
+        /// The value given.
+        value: f64,
+    },
+    /// Only one of `product_box_min` / `product_box_max` is given.
+    #[error("and `product_box_max` come together")]
+    Unpaired,
 }
 
 #[derive(Deserialize)]
@@ -119,21 +171,21 @@ impl ProblemFile {
     /// unknown field, or a value out of range.
     pub fn read(path: &Path) -> Result<Self, ProblemFileError> {
         let file = path.display().to_string();
-        let read = |cause: String| ProblemFileError::Read {
+        let read = |cause: ReadCause| ProblemFileError::Read {
             file: file.clone(),
             cause,
         };
-        let meta = std::fs::metadata(path).map_err(|e| read(e.to_string()))?;
+        let meta = std::fs::metadata(path).map_err(|e| read(e.into()))?;
         if !meta.is_file() {
-            return Err(read("not a regular file".into()));
+            return Err(read(ReadCause::NotAFile));
         }
         if meta.len() > MAX_PROBLEM_FILE_BYTES {
-            return Err(read(format!(
-                "{} bytes is too large for a problem file (at most {MAX_PROBLEM_FILE_BYTES})",
-                meta.len()
-            )));
+            return Err(read(ReadCause::TooLarge {
+                bytes: meta.len(),
+                max: MAX_PROBLEM_FILE_BYTES,
+            }));
         }
-        let text = std::fs::read_to_string(path).map_err(|e| read(e.to_string()))?;
+        let text = std::fs::read_to_string(path).map_err(|e| read(e.into()))?;
         Self::parse(&text, &file)
     }
 
@@ -146,18 +198,18 @@ impl ProblemFile {
             file: file.into(),
             line: e.line(),
             column: e.column(),
-            cause: e.to_string(),
+            source: e,
         })?;
-        let value = |field: &'static str, cause: String| ProblemFileError::Value {
+        let value = |field: &'static str, problem: ValueProblem| ProblemFileError::Value {
             file: file.into(),
             field,
-            cause,
+            problem,
         };
         let finite3 = |field: &'static str, v: [f64; 3]| {
             if v.iter().all(|x| x.is_finite()) {
                 Ok(Vec3::from(v))
             } else {
-                Err(value(field, "has a non-finite number".into()))
+                Err(value(field, ValueProblem::NonFinite))
             }
         };
         let pose = |field: &'static str, p: &PoseJson| {
@@ -166,17 +218,14 @@ impl ProblemFile {
             let q = Quaternion::new(w, x, y, z);
             let n = q.norm();
             if !(n.is_finite() && (n - 1.0).abs() <= 1e-6) {
-                return Err(value(
-                    field,
-                    format!("has a rotation quaternion of length {n}, expected 1"),
-                ));
+                return Err(value(field, ValueProblem::QuaternionLength { length: n }));
             }
             Ok(Transform::from_parts(t, UnitQuaternion::new_normalize(q)))
         };
         let boxed = |field: &'static str, lo: [f64; 3], hi: [f64; 3]| {
             let (lo, hi) = (finite3(field, lo)?, finite3(field, hi)?);
             if (0..3).any(|i| lo[i] > hi[i]) {
-                return Err(value(field, "has a minimum above its maximum".into()));
+                return Err(value(field, ValueProblem::InvertedBox));
             }
             Ok(Aabb::new(lo, hi))
         };
@@ -185,26 +234,21 @@ impl ProblemFile {
         let bounds = boxed("bounds_min", j.bounds_min, j.bounds_max)?;
         for (field, p) in [("start", &start), ("goal", &goal)] {
             if bounds.distance_to_point(&p.translation().into()) > 0.0 {
-                return Err(value(field, "lies outside the bounds".into()));
+                return Err(value(field, ValueProblem::OutsideBounds));
             }
         }
         if let Some(w) = j.rotation_weight_mm_per_rad {
             if !(w.is_finite() && w > 0.0) {
                 return Err(value(
                     "rotation_weight_mm_per_rad",
-                    format!("must be a finite number > 0, not {w}"),
+                    ValueProblem::NotPositive { value: w },
                 ));
             }
         }
         let product_box = match (j.product_box_min, j.product_box_max) {
             (Some(lo), Some(hi)) => Some(boxed("product_box_min", lo, hi)?),
             (None, None) => None,
-            _ => {
-                return Err(value(
-                    "product_box_min",
-                    "and `product_box_max` come together".into(),
-                ))
-            }
+            _ => return Err(value("product_box_min", ValueProblem::Unpaired)),
         };
         Ok(Self {
             name: j.name,

@@ -12,6 +12,7 @@ use crate::math::Transform;
 
 /// A planner and its options.
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub enum Planner {
     /// Seed 000's single-ant dynamic greedy algorithm.
     GreedyAnt(GreedyAntOptions),

@@ -1,6 +1,7 @@
 //! [`rrt_connect`]: the bidirectional RRT (Kuffner & LaValle), with seed 002's local
 //! discretization as a fallback when an extension fails.
 
+use super::axis::AxisSearch;
 use super::lattice::Lattice;
 use super::narrow::NarrowPassage;
 use super::path::PlannedPath;
@@ -158,6 +159,13 @@ pub fn rrt_connect(
     let mut closest_to_root = [best; 2];
     let mut added = Vec::new();
     let mut effort = Effort::new(options.fallback_share);
+    // The axis-move search of each tree, toward the other tree's root, and the
+    // work it has done (pose-check units, like the fallbacks' share).
+    let mut axis = [
+        AxisSearch::new(&trees[0], goal, space),
+        AxisSearch::new(&trees[1], start, space),
+    ];
+    let mut axis_spent = 0u64;
     let joined = loop {
         effort.iteration(best);
         if let Err(f) = run.next(trees[0].len() + trees[1].len(), best) {
@@ -165,6 +173,69 @@ pub fn rrt_connect(
         }
         let b = 1 - a;
         let narrow = &options.narrow;
+        // An axis-move iteration: within its share of the work, expand tree
+        // `a`'s best aligned node, and try to meet the other tree from what it
+        // added (the other root, or its aligned nodes of the same orientation).
+        if narrow.axis_moves > 0.0
+            && axis[a].has_open()
+            && axis_spent as f64 <= narrow.axis_moves * checker.work() as f64
+        {
+            let before = checker.work();
+            added.clear();
+            let target = trees[b].poses[0];
+            axis[a].expand(
+                &mut checker,
+                space,
+                &reference,
+                &mut trees[a],
+                &target,
+                &mut added,
+            );
+            let mut met = None;
+            for &i in &added {
+                // A failed certification below may have cut it.
+                if !trees[a].alive(i) {
+                    continue;
+                }
+                let q = trees[a].poses[i];
+                let to_root = space.distance(&q, &target);
+                best = best.min(to_root);
+                let mut reached = None;
+                // A slide stops at the root's coordinate: from the root's own
+                // place only a turn is left, always worth its one check.
+                let at_root = (q.translation() - target.translation()).norm() < 1e-9;
+                if to_root < closest_to_root[b] || at_root {
+                    closest_to_root[b] = closest_to_root[b].min(to_root);
+                    if checker.edge_free(&target, &q) {
+                        reached = Some(trees[b].add(q, 0));
+                    }
+                }
+                if reached.is_none() {
+                    for m in axis[b].same_orientation(&trees[b], &q) {
+                        if checker.edge_free(&trees[b].poses[m], &q) {
+                            reached = Some(trees[b].add(q, m));
+                            break;
+                        }
+                    }
+                }
+                if let Some(r) = reached {
+                    let (s, g) = if a == 0 { (i, r) } else { (r, i) };
+                    if !checker.is_lazy()
+                        || (trees[0].certify_branch(s, &mut checker)
+                            && trees[1].certify_branch(g, &mut checker))
+                    {
+                        met = Some((s, g));
+                        break;
+                    }
+                }
+            }
+            axis_spent += checker.work() - before;
+            if let Some(m) = met {
+                break Ok(m);
+            }
+            a = b;
+            continue;
+        }
         // The bridge test and dynamic-domain redraws are fallbacks: within the
         // share they run, past it the sample is uniform. The extension below
         // always keeps the domains up to date and retries with a limited turn.

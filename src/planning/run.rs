@@ -4,6 +4,7 @@ use std::time::{Duration, Instant};
 
 /// Why a planner returned no path.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum Failure {
     /// The iteration limit was reached.
     #[error("iteration limit reached")]
@@ -101,6 +102,7 @@ pub(crate) fn deadline_after(started: Instant, ms: f64) -> Instant {
 
 /// What a planning call is doing when it reports progress.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Phase {
     /// Searching for a path.
     Search,
@@ -128,6 +130,7 @@ pub struct Progress {
 
 /// The callback's answer: go on or stop the run (reported as [`Failure::Cancelled`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Control {
     /// Keep planning.
     Continue,

@@ -7,6 +7,7 @@ use nalgebra::UnitQuaternion;
 
 /// Which orientations the moving component may take.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum RotationFreedom {
     /// The orientation stays that of the start pose (translation-only planning).
     Fixed,

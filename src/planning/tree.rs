@@ -135,6 +135,12 @@ impl Tree {
         true
     }
 
+    /// Whether node `i` is still part of the tree (not cut by a failed
+    /// certification).
+    pub fn alive(&self, i: usize) -> bool {
+        !self.dead[i]
+    }
+
     /// Whether a pose equal to `pose` (up to the quantum) is already a node.
     pub fn holds(&self, pose: &Transform) -> bool {
         self.keys.contains(&self.key(pose))

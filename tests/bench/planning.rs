@@ -480,6 +480,7 @@ fn protocol() {
                     o.rrt.limits.seed = seed;
                     o.rrt.limits.max_iterations = 100;
                 }
+                other => unreachable!("not one of seed 002's planners: {other:?}"),
             }
             let mut v = p.validator(options).unwrap();
             let t0 = Instant::now();

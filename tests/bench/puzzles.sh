@@ -7,7 +7,9 @@
 # bench says so and runs fitup alone without them). Environment overrides:
 # FITUP_BUDGET_MS (fitup's budget per call, 20000), FITUP_OMPL_LIMIT_S (20),
 # FITUP_RUNS / FITUP_OMPL_RUNS (seeds, 5 each), FITUP_PROBLEM (name filter).
-# The load before and after goes with the figures (docs/performance.md).
+# The load before and after goes with the figures (docs/performance.md). The bench
+# needs only the library's core layers, so it is built without the default
+# features (no SQLite, PostgreSQL, Rhai or CLI in its release build).
 set -eu
 cd "$(dirname "$0")/../.."
 export FITUP_PUZZLES=1
@@ -20,5 +22,5 @@ export FITUP_PROTOCOL=0
 export FITUP_SMOOTHED="${FITUP_SMOOTHED:-0}"
 export FITUP_VERBOSE="${FITUP_VERBOSE:-1}"
 uptime
-cargo bench --bench planning
+cargo bench --no-default-features --bench planning
 uptime
