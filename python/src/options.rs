@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use fitup::collision::{Aabb, Method, SweepMethod, SweepOptions};
 use fitup::planning::{Planner, RotationFreedom, PLANNER_NAMES};
 use fitup::sequence::{Mode, SequenceOptions};
-use fitup::workspace::{CheckOptions, PlanRequest};
+use fitup::workspace::{CheckOptions, PlanRequest, WorkspaceError};
 use numpy::{AllowTypeChange, PyArrayLike1, PyArrayLike2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -227,29 +227,16 @@ pub fn plan_request(kw: &Keywords<'_>, default_planner: &str) -> Result<(PlanReq
     if let Some(s) = kw.f64("step")? {
         planner.set_step(convert::positive("step", s, false)?);
     }
+    // The library says which planners have the option (`PlanError::NotAnOption`).
+    let refused = |e: fitup::planning::PlanError| Error::Workspace(WorkspaceError::Plan(e));
     if let Some(p) = kw.f64("goal_bias")? {
-        if !planner.set_goal_bias(p) {
-            return Err(Error::Option {
-                option: "goal_bias",
-                value: p.to_string(),
-                expected: "no goal bias: this planner has none (rrt, biased_rrt, local_rrt and rrt_floyd have)",
-            });
-        }
+        planner.set_goal_bias(p).map_err(refused)?;
     }
     if let Some(on) = kw.bool("smoothing")? {
         planner.set_smoothing(on);
     }
     if let Some(f) = kw.f64("fallback_share")? {
-        match planner.fallback_share_mut() {
-            Some(slot) => *slot = f,
-            None => {
-                return Err(Error::Option {
-                    option: "fallback_share",
-                    value: f.to_string(),
-                    expected: "no fallback share: this planner has none (rrt, biased_rrt, local_rrt and rrt_connect have)",
-                })
-            }
-        }
+        planner.set_fallback_share(f).map_err(refused)?;
     }
     let mut request = PlanRequest {
         planner,
