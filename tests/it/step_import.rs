@@ -653,11 +653,13 @@ mod hostile {
         for _ in 0..100 {
             match read_step(file, o) {
                 Err(StepError::Child {
-                    failure: ChildFailure::Spawn { kind, .. },
+                    failure:
+                        ChildFailure::Spawn {
+                            kind: std::io::ErrorKind::ExecutableFileBusy,
+                            ..
+                        },
                     ..
-                }) if kind == std::io::ErrorKind::ExecutableFileBusy => {
-                    std::thread::sleep(Duration::from_millis(20))
-                }
+                }) => std::thread::sleep(Duration::from_millis(20)),
                 r => return r,
             }
         }
