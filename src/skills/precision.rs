@@ -22,12 +22,10 @@
 //! axis.
 
 use super::generator::skill_pose_at;
-use super::program::{BindError, ControllerCommand, Plan, PlanStep};
+use super::program::{BindError, ControllerCommand, Grasps, Plan, PlanStep};
 use super::{Action, Skill};
 use crate::kinematics::{Free, PrecisionAxes, Robot, FINGER_OPEN};
-use crate::math::{Point3, Transform};
-use crate::sequence::Task;
-use std::collections::HashMap;
+use crate::math::Point3;
 
 /// Speeds of the precision manipulator's axes used to time trajectory points:
 /// table 10 mm/s, rotary table 60°/s, probe stage 2 mm/s, probes' turn 30°/s,
@@ -74,19 +72,11 @@ fn trajectory(axes: &PrecisionAxes, q: &[f64], qs: &[Vec<f64>]) -> ControllerCom
 /// `robot` from joints `start`.
 pub(super) fn bind(
     skills: &[Skill],
-    tasks: &[Task],
+    grasps: &Grasps,
     robot: &Robot,
     axes: &PrecisionAxes,
     start: &[f64],
 ) -> Result<Plan, BindError> {
-    let grasps: HashMap<usize, (Transform, f64)> = tasks
-        .iter()
-        .filter_map(|t| {
-            t.grasp
-                .as_ref()
-                .map(|g| (t.index, (g.tool_in_part, g.width)))
-        })
-        .collect();
     let mut q = start.to_vec();
     let mut steps = Vec::new();
     let top = robot.joint_limits()[axes.probe[2]].map_or(0.0, |l| l.max);
@@ -98,15 +88,7 @@ pub(super) fn bind(
             part: s.part.clone(),
             source,
         };
-        let grasp = || {
-            grasps
-                .get(&s.task)
-                .copied()
-                .ok_or_else(|| BindError::NoGrasp {
-                    skill: s.id,
-                    part: s.part.clone(),
-                })
-        };
+        let grasp = || grasps.of_skill(s);
         let tool = |action: &str, value: f64| ControllerCommand::Tool {
             action: action.into(),
             index: 0,

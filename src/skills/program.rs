@@ -220,6 +220,36 @@ fn points(
     out
 }
 
+/// Each task's grasp (tool pose in the part frame, mm; gripper width, mm), by task
+/// index: what both binders (arm and precision manipulator) look up per skill.
+pub(super) struct Grasps(HashMap<usize, (Transform, f64)>);
+
+impl Grasps {
+    pub(super) fn of(tasks: &[Task]) -> Self {
+        Self(
+            tasks
+                .iter()
+                .filter_map(|t| {
+                    t.grasp
+                        .as_ref()
+                        .map(|g| (t.index, (g.tool_in_part, g.width)))
+                })
+                .collect(),
+        )
+    }
+
+    /// The grasp of skill `s`'s task; a part motion without one is an error.
+    pub(super) fn of_skill(&self, s: &Skill) -> Result<(Transform, f64), BindError> {
+        self.0
+            .get(&s.task)
+            .copied()
+            .ok_or_else(|| BindError::NoGrasp {
+                skill: s.id,
+                part: s.part.clone(),
+            })
+    }
+}
+
 impl Plan {
     /// Binds `skills` to `robot` from joints `start` (rad / mm). `tasks` give each
     /// part's grasp (tool in part). A robot with the precision manipulator's layout
@@ -237,16 +267,9 @@ impl Plan {
         start: &[f64],
         options: &MotionOptions,
     ) -> Result<Self, BindError> {
-        let grasps: HashMap<usize, (Transform, f64)> = tasks
-            .iter()
-            .filter_map(|t| {
-                t.grasp
-                    .as_ref()
-                    .map(|g| (t.index, (g.tool_in_part, g.width)))
-            })
-            .collect();
+        let grasps = Grasps::of(tasks);
         if let Ok(axes) = crate::kinematics::PrecisionAxes::detect(robot) {
-            return super::precision::bind(skills, tasks, robot, &axes, start);
+            return super::precision::bind(skills, &grasps, robot, &axes, start);
         }
         let by_task: HashMap<usize, &Task> = tasks.iter().map(|t| (t.index, t)).collect();
         let mut q = start.to_vec();
@@ -258,15 +281,7 @@ impl Plan {
                 part: s.part.clone(),
                 source,
             };
-            let grasp = || {
-                grasps
-                    .get(&s.task)
-                    .copied()
-                    .ok_or_else(|| BindError::NoGrasp {
-                        skill: s.id,
-                        part: s.part.clone(),
-                    })
-            };
+            let grasp = || grasps.of_skill(s);
             let tool = |action: &str, index: i32, value: f64| ControllerCommand::Tool {
                 action: action.into(),
                 index,
