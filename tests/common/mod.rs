@@ -178,3 +178,30 @@ pub fn snapshot(dir: &Path) -> Snapshot {
     }
     out
 }
+
+/// `fitup manipulator ARGS` started from the repository root, returned once its state
+/// port (`state_port`, on 127.0.0.1) accepts connections; killed when dropped.
+pub fn manipulator(args: &[&str], state_port: u16) -> lines::Killed {
+    let mut child = fitup()
+        .current_dir(repo())
+        .arg("manipulator")
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while std::net::TcpStream::connect(("127.0.0.1", state_port)).is_err() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "fitup manipulator exited"
+        );
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(60),
+            "no manipulator"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    lines::Killed(child)
+}

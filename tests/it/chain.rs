@@ -58,30 +58,7 @@ fn assert_assembled(plan_file: &Path, db: &Path) {
 
 /// `fitup manipulator ARGS` (from the repository root), once it listens.
 fn manipulator(args: &[&str]) -> Killed {
-    manipulator_on(args, 11002)
-}
-
-/// [`manipulator`] with its state port.
-fn manipulator_on(args: &[&str], state_port: u16) -> Killed {
-    let mut child = common::fitup()
-        .current_dir(common::repo())
-        .arg("manipulator")
-        .args(args)
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while std::net::TcpStream::connect(("127.0.0.1", state_port)).is_err() {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "fitup manipulator exited"
-        );
-        assert!(start.elapsed() < Duration::from_secs(60), "no manipulator");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    Killed(child)
+    common::manipulator(args, 11002)
 }
 
 fn run(args: &[&str]) -> std::process::Output {
@@ -250,7 +227,7 @@ fn the_terminal_ui_shows_the_run_and_takes_keys_under_tmux() {
     let root = common::repo();
     // The plan the wheel script saves (deterministic: the same file every run).
     run(&["run", "scripts/assemble_wheel.rhai"]);
-    let _sim = manipulator_on(
+    let _sim = common::manipulator(
         &[
             "--doc",
             "models/mz07.yaml",

@@ -6,7 +6,6 @@
 
 use crate::common;
 
-use common::lines::Killed;
 use fitup::collision::{Aabb, SweepMethod};
 use fitup::db::{Database, Target};
 use fitup::document::Document;
@@ -24,7 +23,7 @@ use nalgebra::{Unit, UnitQuaternion};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const BOUND: Duration = Duration::from_secs(300);
 
@@ -373,29 +372,6 @@ assert(seq.order.contains("plate_b"), `${seq.order}`);
     assert!(o.status.success(), "{}", common::text(&o));
 }
 
-/// `fitup manipulator ARGS` (from the repository root), once its state port listens.
-fn manipulator(args: &[&str], state_port: u16) -> Killed {
-    let mut child = common::fitup()
-        .current_dir(common::repo())
-        .arg("manipulator")
-        .args(args)
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while std::net::TcpStream::connect(("127.0.0.1", state_port)).is_err() {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "fitup manipulator exited"
-        );
-        assert!(start.elapsed() < Duration::from_secs(60), "no manipulator");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    Killed(child)
-}
-
 /// Every skill of the plan finished once and every part ended Assembled, from the
 /// database's last run.
 fn assert_assembled(plan: &Plan, db: &Path) {
@@ -456,7 +432,7 @@ fn the_precision_manipulator_assembles_the_wheel_in_process_and_over_tcp() {
     let out = run(&["run", "scripts/assemble_micro.rhai", "--db", "out/micro.db"]);
     assert!(out.contains("cup Assembled"), "{out}");
     check("out/micro.db");
-    let _sim = manipulator(
+    let _sim = common::manipulator(
         &[
             "--doc",
             "models/micro_cell.yaml",
