@@ -5,7 +5,7 @@
 //! vertices and triangles kept are what the lines hold, capped by
 //! [`MAX_TRIANGLES`](super::MAX_TRIANGLES).
 
-use super::stl::{check_coordinate, short};
+use super::stl::{read_xyz, short};
 use super::{finish_read, MeshError, MAX_TRIANGLES};
 use crate::math::Point3;
 
@@ -72,16 +72,7 @@ pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
         };
         match keyword {
             "v" => {
-                let mut xyz = [0.0; 3];
-                for (k, c) in xyz.iter_mut().enumerate() {
-                    let w = words.next().ok_or_else(|| {
-                        MeshError::at(line, format!("`v` needs 3 numbers, found {k}"))
-                    })?;
-                    *c = w.parse::<f64>().map_err(|_| {
-                        MeshError::at(line, format!("`{}` is not a number", short(w)))
-                    })?;
-                    check_coordinate(*c).map_err(|m| MeshError::at(line, m))?;
-                }
+                let xyz = read_xyz(&mut words, "v", line)?;
                 // `w` or vertex colours may follow; they must still be numbers.
                 for w in words {
                     w.parse::<f64>().map_err(|_| {

@@ -89,6 +89,26 @@ pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
 }
 
 /// A coordinate that is not finite or beyond the accepted range.
+/// The three coordinates (mm) after `keyword` on text line `line` (ASCII STL's
+/// `vertex`, OBJ's `v`): each a number within the accepted range.
+pub(super) fn read_xyz<'a>(
+    words: &mut impl Iterator<Item = &'a str>,
+    keyword: &str,
+    line: usize,
+) -> Result<[f64; 3], MeshError> {
+    let mut xyz = [0.0; 3];
+    for (k, c) in xyz.iter_mut().enumerate() {
+        let w = words.next().ok_or_else(|| {
+            MeshError::at(line, format!("`{keyword}` needs 3 numbers, found {k}"))
+        })?;
+        *c = w
+            .parse::<f64>()
+            .map_err(|_| MeshError::at(line, format!("`{}` is not a number", short(w))))?;
+        check_coordinate(*c).map_err(|m| MeshError::at(line, m))?;
+    }
+    Ok(xyz)
+}
+
 pub(super) fn check_coordinate(v: f64) -> Result<(), String> {
     let max = crate::math::MAX_ABS_VALUE;
     if !v.is_finite() {
@@ -223,16 +243,7 @@ fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
                 if !in_facet {
                     return Err(MeshError::at(line, "`vertex` outside a facet"));
                 }
-                let mut xyz = [0.0; 3];
-                for (k, c) in xyz.iter_mut().enumerate() {
-                    let w = words.next().ok_or_else(|| {
-                        MeshError::at(line, format!("`vertex` needs 3 numbers, found {k}"))
-                    })?;
-                    *c = w.parse::<f64>().map_err(|_| {
-                        MeshError::at(line, format!("`{}` is not a number", short(w)))
-                    })?;
-                    check_coordinate(*c).map_err(|m| MeshError::at(line, m))?;
-                }
+                let xyz = read_xyz(&mut words, "vertex", line)?;
                 if corners.len() == 3 {
                     return Err(MeshError::at(line, "a facet has more than 3 vertices"));
                 }
