@@ -20,6 +20,7 @@ from ._fitup import (  # noqa: F401
     planner_names,
     run_script,
 )
+from . import errors
 from .errors import (  # noqa: F401
     DatabaseError,
     DocumentError,
@@ -82,12 +83,5 @@ __all__ = [
     "open",
     "translation",
     "rotation",
-    "FitupError",
-    "DocumentError",
-    "WorkspaceError",
-    "SequenceError",
-    "RobotError",
-    "DatabaseError",
-    "ScriptError",
-    "InputError",
+    *errors.__all__,
 ]

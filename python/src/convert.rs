@@ -93,20 +93,3 @@ pub fn vec3_of(a: ArrayView1<'_, f64>, argument: &'static str) -> Result<fitup::
     }
     Ok(fitup::math::Vec3::new(a[0], a[1], a[2]))
 }
-
-/// A number a keyword must hold: finite and `> 0` (or `>= 0` with `zero_ok`).
-pub fn positive(option: &'static str, v: f64, zero_ok: bool) -> Result<f64> {
-    if v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0)) {
-        Ok(v)
-    } else {
-        Err(Error::Option {
-            option,
-            value: v.to_string(),
-            expected: if zero_ok {
-                "a finite number >= 0"
-            } else {
-                "a finite number > 0"
-            },
-        })
-    }
-}

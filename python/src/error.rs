@@ -111,6 +111,8 @@ impl Error {
             Error::Document(DocumentError::Robot(_)) => "RobotError",
             Error::Document(_) => "DocumentError",
             Error::Workspace(WorkspaceError::Document(_)) => "DocumentError",
+            // A planner option the library refuses is a bad argument.
+            Error::Workspace(WorkspaceError::Plan(_)) => "InputError",
             Error::Workspace(_) => "WorkspaceError",
             Error::Sequence(_) => "SequenceError",
             Error::Kinematics(_) | Error::Ik(_) | Error::Program(_) => "RobotError",

@@ -6,7 +6,7 @@
 use crate::convert;
 use crate::error::{Error, Result};
 use fitup::collision::{Aabb, Method, SweepMethod, SweepOptions};
-use fitup::planning::{Planner, RotationFreedom, PLANNER_NAMES};
+use fitup::planning::{Planner, RotationFreedom};
 use fitup::sequence::{Mode, SequenceOptions};
 use fitup::workspace::{CheckOptions, PlanRequest, WorkspaceError};
 use numpy::{AllowTypeChange, PyArrayLike1, PyArrayLike2, PyUntypedArrayMethods};
@@ -210,11 +210,10 @@ pub const PLAN_KEYS: [&str; 18] = [
 /// Returns the request and its seed.
 pub fn plan_request(kw: &Keywords<'_>, default_planner: &str) -> Result<(PlanRequest, u64)> {
     let name = kw.str("planner")?.unwrap_or_else(|| default_planner.into());
-    let mut planner = Planner::by_name(&name).ok_or_else(|| Error::Unknown {
-        what: "planner",
-        hint: fitup::diagnostics::suggestion(&name, PLANNER_NAMES),
-        name: name.clone(),
-    })?;
+    // Names, option ranges and which planner has which option are the library's
+    // rules (`PlanError`), the same words a script gets.
+    let refused = |e: fitup::planning::PlanError| Error::Workspace(WorkspaceError::Plan(e));
+    let mut planner: Planner = name.parse().map_err(refused)?;
     let seed = kw.u64("seed")?.unwrap_or(0);
     {
         let limits = planner.limits_mut();
@@ -225,10 +224,8 @@ pub fn plan_request(kw: &Keywords<'_>, default_planner: &str) -> Result<(PlanReq
         limits.time_limit_ms = kw.f64("time_limit_ms")?;
     }
     if let Some(s) = kw.f64("step")? {
-        planner.set_step(convert::positive("step", s, false)?);
+        planner.set_step(s);
     }
-    // The library says which planners have the option (`PlanError::NotAnOption`).
-    let refused = |e: fitup::planning::PlanError| Error::Workspace(WorkspaceError::Plan(e));
     if let Some(p) = kw.f64("goal_bias")? {
         planner.set_goal_bias(p).map_err(refused)?;
     }
