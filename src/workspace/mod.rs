@@ -275,14 +275,23 @@ impl<'d> Workspace<'d> {
     /// use fitup::math::{Transform, Vec3};
     /// use fitup::workspace::{SceneCache, Workspace};
     ///
-    /// let doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+    /// use fitup::document::Reference;
+    ///
+    /// let mut doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+    /// // screw4 40 mm above plate_b's first hole.
+    /// let plate_b = doc.component_index("plate_b").unwrap();
+    /// let Reference::Axis { point: hole, .. } = doc.world_reference(plate_b, "hole1").unwrap() else {
+    ///     unreachable!("hole1 is an axis")
+    /// };
+    /// let at = |dz: f64| Transform::from_translation(Vec3::new(hole.x, hole.y, hole.z + dz));
+    /// doc.set_transform("screw4", at(40.0)).unwrap();
     /// let mut cache = SceneCache::new();
     /// let ws = Workspace::new(&doc, &mut cache).unwrap();
-    /// // Slide screw5 toward screw4 along -X: it hits it.
-    /// let to = ws.pose("screw5").unwrap().then(&Transform::from_translation(Vec3::new(-60.0, 0.0, 0.0)));
-    /// let hit = ws.sweep_through("screw5", &[to], &SweepOptions::default()).unwrap();
+    /// // Lower it 60 mm into the hole: the head lands on the plate (10 mm thick) after 40 mm.
+    /// let hit = ws.sweep_through("screw4", &[at(-20.0)], &SweepOptions::default()).unwrap();
     /// assert!(hit.hit);
-    /// assert_eq!(ws.name(hit.with.unwrap()), "screw4");
+    /// assert!((hit.t - 40.0 / 60.0).abs() < 0.002, "t = {}", hit.t);
+    /// assert!(["plate_b", "table"].contains(&ws.name(hit.with.unwrap())));
     /// ```
     ///
     /// # Errors
