@@ -6,7 +6,8 @@
 //!   by writing a temporary file and renaming it over the original are seen;
 //! - a rerun starts as soon as the writer closes the file (inotify's close-write) or a
 //!   rename lands on it; a bare "modified" event (which on Linux arrives before the
-//!   writer is done) only arms a fallback timer (300 ms, re-armed by every further modification);
+//!   writer is done) only arms a fallback timer ([`MODIFY_FALLBACK`], re-armed by every further modification);
+//!   opening or reading a file (the run's reads, the watcher's own) is no news at all;
 //! - a file counts as changed only when its content hash differs from the one the last
 //!   run saw, so duplicate events, `touch`, and the run's own writes trigger nothing;
 //! - a file that is missing or empty when checked is given [`MODIFY_FALLBACK`] to come
@@ -36,8 +37,11 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// How long a bare "modified" event waits for the writer's close before the file is
-/// checked anyway (writers that keep the file open, network file systems).
-pub const MODIFY_FALLBACK: Duration = Duration::from_millis(300);
+/// checked anyway (writers that keep the file open, network file systems). Long
+/// enough that a writer stalled between two writes by a busy machine (a build running
+/// beside the watch) is not read half-way; every editor closes the file, which starts
+/// the run at once.
+pub const MODIFY_FALLBACK: Duration = Duration::from_millis(1000);
 
 /// How often watched folders are checked for having been moved, deleted or replaced.
 pub const FOLDER_POLL: Duration = Duration::from_millis(200);
@@ -226,6 +230,14 @@ pub fn watch_with(
         };
         match msg {
             Ok(Msg::Fs(Ok(event))) => {
+                // Opening and reading a file (the run reading it, the watcher hashing it)
+                // says nothing about its content. Counting those events re-armed the
+                // timer by the watcher's own reads: every dependency was read again
+                // every MODIFY_FALLBACK, for ever, however big.
+                if matches!(event.kind, EventKind::Access(a) if a != AccessKind::Close(AccessMode::Write))
+                {
+                    continue;
+                }
                 // A save is complete when its writer closes the file or a rename lands
                 // on it; the rename's target is the last path of a "both" event.
                 let landed = match event.kind {

@@ -424,3 +424,46 @@ fn step_part_saved_again_reruns_the_script() {
         w.out.seen
     );
 }
+
+/// Bytes the process has read so far (Linux `/proc/PID/io`, `rchar`).
+#[cfg(target_os = "linux")]
+fn bytes_read(pid: u32) -> u64 {
+    let io = std::fs::read_to_string(format!("/proc/{pid}/io")).unwrap();
+    io.lines()
+        .find_map(|l| l.strip_prefix("rchar: "))
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+/// An idle watch reads nothing: its own reads of a dependency (hashing it, the run
+/// reading it) are not saves. They used to re-arm the fallback timer, so every
+/// dependency was read again every 300 ms for as long as the watch ran.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_idle_watch_does_not_read_its_dependencies_again() {
+    let dir = common::project();
+    let p = dir.path();
+    // A 1 MB script (comments): one read of it is plain in the process's read count.
+    let mut text =
+        "// padding padding padding padding padding padding padding padding\n".repeat(16_000);
+    text.push_str(&tagged("big"));
+    let size = text.len() as u64;
+    std::fs::write(p.join("scripts/big.rhai"), &text).unwrap();
+    let mut w = Watch::start(p, "scripts/big.rhai", &[]);
+    w.out.wait_for("== done 1 ok", BOUND);
+    // Let the events of the first run's reads settle, then count what an idle watch reads.
+    w.out.quiet(Duration::from_millis(1500));
+    let pid = w.process.0.id();
+    let before = bytes_read(pid);
+    assert_eq!(runs_started(&w.out.quiet(Duration::from_millis(3500))), 0);
+    let idle = bytes_read(pid) - before;
+    assert!(
+        idle < size / 2,
+        "an idle watch read {idle} bytes in 3.5 s (the script is {size} bytes)"
+    );
+    // And it still sees a save.
+    std::fs::write(p.join("scripts/big.rhai"), text.replace("big", "again")).unwrap();
+    assert_one_complete_run(&mut w, 2, "again", "save after idling");
+}
