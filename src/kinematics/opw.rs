@@ -497,8 +497,9 @@ impl ClosedFormIk for OpwSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kinematics::closed_form::testing::{assert_no_branch_missing, same_angles};
     use crate::kinematics::{
-        Catalog, IkError, IkOptions, Joint, KinematicTree, Link, NumericIk, OpwParameters,
+        Catalog, IkError, IkOptions, Joint, KinematicTree, Link, OpwParameters,
     };
     use crate::math::{Rng, Transform, Vec3};
 
@@ -532,10 +533,6 @@ mod tests {
             *v = rng.range(l.min.max(-PI), l.max.min(PI));
         }
         q
-    }
-
-    fn same_angles(a: &[f64], b: &[f64], tol: f64) -> bool {
-        a.iter().zip(b).all(|(x, y)| wrap(x - y).abs() < tol)
     }
 
     #[test]
@@ -616,46 +613,13 @@ mod tests {
     /// closed form misses.
     #[test]
     fn no_branch_missing_against_brute_force() {
-        let mut rng = Rng::new(77);
-        let opts = IkOptions {
-            restarts: 1,
-            max_iterations: 60,
-            ..IkOptions::default()
-        };
-        let numeric = NumericIk::from_options(&opts);
-        for arm in OPW_ARMS {
-            let r = arm.robot();
-            let s = r.analytic().unwrap();
-            for _ in 0..3 {
-                let q = random_q(&mut rng, &r);
-                let target = r.tcp_pose(&q).unwrap();
-                let local = Transform::from_isometry(*target.isometry());
-                let br = s.branches(target.isometry(), 1e-9);
-                let mut numeric_found = 0;
-                for _ in 0..60 {
-                    let start: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
-                    // Unlimited descent (the branch set ignores limits).
-                    let d = numeric.descend(&r, local.isometry(), &start, false);
-                    if d.pos_err < 1e-6 && d.ang_err < 1e-9 {
-                        numeric_found += 1;
-                        assert!(
-                            br.as_slice()
-                                .iter()
-                                .any(|b| same_angles(&b.joints, &d.q, 1e-5)),
-                            "{}: numeric solution {:?} not among {:?}",
-                            arm.name(),
-                            d.q,
-                            br.as_slice()
-                        );
-                    }
-                }
-                assert!(
-                    numeric_found > 0,
-                    "{}: brute force found nothing",
-                    arm.name()
-                );
-            }
-        }
+        assert_no_branch_missing(
+            &OPW_ARMS,
+            77,
+            60,
+            |rng, r| random_q(rng, r).to_vec(),
+            |r, target| r.analytic().unwrap().branches(target, 1e-9),
+        );
     }
 
     /// Joint 5 values at and around the wrist singularity (issue 11).

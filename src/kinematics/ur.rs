@@ -446,15 +446,10 @@ pub struct UrParameters {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{
-        Catalog, DhConvention, DhRow, IkError, IkOptions, IkSolverKind, NumericIk,
-    };
-    use crate::math::{Rng, Transform};
+    use crate::kinematics::closed_form::testing::assert_no_branch_missing;
+    use crate::kinematics::{Catalog, DhConvention, DhRow, IkError, IkOptions, IkSolverKind};
+    use crate::math::Transform;
     use std::f64::consts::FRAC_PI_2;
-
-    fn same_angles(a: &[f64], b: &[f64], tol: f64) -> bool {
-        a.iter().zip(b).all(|(x, y)| wrap(x - y).abs() < tol)
-    }
 
     /// Every catalog UR arm gets the UR solver with its D-H lengths as the detected
     /// parameters; the spherical-wrist arms keep OPW.
@@ -512,45 +507,17 @@ mod tests {
     }
 
     /// A brute-force numeric search from many random starts finds no solution that the
-    /// closed form misses.
+    /// closed form misses (fewer than 8 branches where a shoulder/wrist choice puts W4
+    /// out of reach, never none).
     #[test]
     fn no_branch_missing_against_brute_force() {
-        let mut rng = Rng::new(78);
-        let opts = IkOptions {
-            restarts: 1,
-            max_iterations: 80,
-            ..IkOptions::default()
-        };
-        let numeric = NumericIk::from_options(&opts);
-        for arm in Catalog::UR {
-            let r = arm.robot();
-            let s = r.ur_solver().unwrap();
-            for _ in 0..3 {
-                let q: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
-                let target = r.tcp_pose(&q).unwrap();
-                let br = s.branches(target.isometry(), 1e-9);
-                // Fewer than 8 when a shoulder/wrist choice puts W4 out of reach.
-                assert!(!br.is_empty(), "{}", arm.name());
-                let mut found = 0;
-                for _ in 0..60 {
-                    let start: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
-                    let d = numeric.descend(&r, target.isometry(), &start, false);
-                    if d.pos_err < 1e-6 && d.ang_err < 1e-9 {
-                        found += 1;
-                        assert!(
-                            br.as_slice()
-                                .iter()
-                                .any(|b| same_angles(&b.joints, &d.q, 1e-5)),
-                            "{}: numeric solution {:?} not among {:?}",
-                            arm.name(),
-                            d.q,
-                            br.as_slice()
-                        );
-                    }
-                }
-                assert!(found > 0, "{}: brute force found nothing", arm.name());
-            }
-        }
+        assert_no_branch_missing(
+            &Catalog::UR,
+            78,
+            80,
+            |rng, _| (0..6).map(|_| rng.range(-PI, PI)).collect(),
+            |r, target| r.ur_solver().unwrap().branches(target, 1e-9),
+        );
     }
 
     /// Out of reach, inside the shoulder cylinder and non-finite targets are errors, not
