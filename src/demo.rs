@@ -433,7 +433,8 @@ pub fn mz07_document() -> DocumentFile {
 /// `models/cell_robots.yaml`: the demo cell of [`cell_document`] with two MZ07 arms on
 /// pedestals on either side of the table (seed 000's demo has two arms): `mz07_a` at
 /// (600, −350) facing +Y, `mz07_b` at (600, 1150) facing −Y; dimensions `D1@a角度n`,
-/// `D1@b角度n`.
+/// `D1@b角度n`. The pedestals are marked `fixture: true` (not part of the product);
+/// the table and what is on it are the product a sequence is planned for.
 pub fn cell_robots_document() -> DocumentFile {
     let mut doc = cell_document();
     doc.description = Some("Seed 000 demo cell with two NACHI MZ07 arms beside the table".into());
@@ -445,13 +446,20 @@ pub fn cell_robots_document() -> DocumentFile {
         ("mz07_b", 1150.0, -1.0, "b角度", "#d06020"),
     ] {
         let at = Vec3::new(600.0, y, 0.0);
-        doc.components.push(component(
-            &format!("{name}_pedestal"),
-            "pedestal",
-            true,
-            "#606060",
-            Transform::from_translation(at),
-        ));
+        // The pedestals carry the arms, not the product: marked `fixture: true` so
+        // `fitup plan-sequence` leaves them out with its defaults (they touch nothing
+        // of the product, and support checking would refuse them). The table stays
+        // in: the plates sit on it, it is the base the sequence starts from.
+        doc.components.push(ComponentFile {
+            fixture: true,
+            ..component(
+                &format!("{name}_pedestal"),
+                "pedestal",
+                true,
+                "#606060",
+                Transform::from_translation(at),
+            )
+        });
         // Turned ±90° about Z (written exactly, so the file holds clean 0s and 1s).
         let base = [
             [0.0, s, 0.0, 0.0],

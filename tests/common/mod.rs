@@ -179,29 +179,112 @@ pub fn snapshot(dir: &Path) -> Snapshot {
     out
 }
 
-/// `fitup manipulator ARGS` started from the repository root, returned once its state
-/// port (`state_port`, on 127.0.0.1) accepts connections; killed when dropped.
-pub fn manipulator(args: &[&str], state_port: u16) -> lines::Killed {
-    let mut child = fitup()
-        .current_dir(repo())
-        .arg("manipulator")
-        .args(args)
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let start = std::time::Instant::now();
-    while std::net::TcpStream::connect(("127.0.0.1", state_port)).is_err() {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "fitup manipulator exited"
-        );
-        assert!(
-            start.elapsed() < std::time::Duration::from_secs(60),
-            "no manipulator"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(50));
+/// A free port P on 127.0.0.1 whose P + 2 is free too (the port rule: the state port
+/// is the motion port + 2). Free when asked; whoever binds first gets it, so callers
+/// start their process and check that it bound ([`manipulator`] retries).
+pub fn free_pair() -> u16 {
+    for _ in 0..100 {
+        let a = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let p = a.local_addr().unwrap().port();
+        if p < 65000 && std::net::TcpListener::bind(("127.0.0.1", p + 2)).is_ok() {
+            return p;
+        }
     }
-    lines::Killed(child)
+    panic!("no free port pair");
+}
+
+/// A `fitup manipulator` started by [`manipulator`]: killed when dropped.
+pub struct Manipulator {
+    /// The process and its output.
+    pub proc: lines::Proc,
+    /// The motion port it listens on (127.0.0.1), from its own `listening` line.
+    pub port: u16,
+    /// The state port it listens on.
+    pub state_port: u16,
+}
+
+impl Manipulator {
+    /// `127.0.0.1:PORT`, the motion address a client is given.
+    pub fn target(&self) -> String {
+        format!("127.0.0.1:{}", self.port)
+    }
+}
+
+/// `fitup manipulator ARGS` started from the repository root, returned once **this**
+/// process has printed its `listening` line — it prints it after binding both ports,
+/// so a client connecting then cannot be refused, and a port some other process holds
+/// (another test run, another checkout's tests, a leftover manipulator) is never
+/// taken for this one's (bounded: 60 s per start). The ports of `ARGS` (the
+/// documented ones) are tried first; when this process cannot bind them it is
+/// started again without `--port`/`--state-port` and with `--port P` on a free pair
+/// ([`free_pair`], state port by the rule), up to 5 times. Callers address it by
+/// [`Manipulator::port`].
+pub fn manipulator(args: &[&str]) -> Manipulator {
+    let bound = Duration::from_secs(60);
+    let mut args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+    for attempt in 0..5 {
+        let mut proc = lines::Proc::spawn(
+            fitup()
+                .current_dir(repo())
+                .arg("manipulator")
+                .args(&args)
+                .stdin(Stdio::null()),
+        );
+        let start = Instant::now();
+        let line = loop {
+            let got = proc.drain();
+            if let Some(l) = proc.seen().iter().find(|l| l.contains(" listening: motion ")) {
+                break Some(l.clone());
+            }
+            if proc.child.0.try_wait().unwrap().is_some() {
+                // Exited before listening: a port in use is retried elsewhere,
+                // anything else is the failure. (Its last lines arrive until the
+                // streams end.)
+                proc.lines.quiet(Duration::from_secs(5));
+                let got = proc.drain();
+                assert!(
+                    got.contains("cannot listen on"),
+                    "fitup manipulator {} exited: {got}",
+                    args.join(" ")
+                );
+                break None;
+            }
+            assert!(
+                start.elapsed() < bound,
+                "fitup manipulator {}: not listening after {bound:?}: {got}",
+                args.join(" ")
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        if let Some(line) = line {
+            let port = |key: &str| -> u16 {
+                let rest = &line[line.find(key).unwrap() + key.len()..];
+                let addr: std::net::SocketAddr = rest
+                    .split([',', ' '])
+                    .find(|w| !w.is_empty())
+                    .unwrap()
+                    .parse()
+                    .unwrap();
+                addr.port()
+            };
+            return Manipulator {
+                port: port("motion "),
+                state_port: port("state "),
+                proc,
+            };
+        }
+        eprintln!("fitup manipulator: ports in use (attempt {attempt}), moving to a free pair");
+        let mut kept = Vec::new();
+        let mut it = args.iter();
+        while let Some(a) = it.next() {
+            if a == "--port" || a == "--state-port" {
+                it.next();
+            } else {
+                kept.push(a.clone());
+            }
+        }
+        kept.extend(["--port".to_string(), free_pair().to_string()]);
+        args = kept;
+    }
+    panic!("fitup manipulator: no free ports after 5 starts");
 }

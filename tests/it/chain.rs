@@ -5,7 +5,6 @@
 
 use crate::common;
 
-use common::lines::Killed;
 
 use fitup::db::{Database, SkillLogEntry, Target};
 use fitup::skills::Plan;
@@ -56,10 +55,6 @@ fn assert_assembled(plan_file: &Path, db: &Path) {
     assert_eq!(log.last().unwrap().event, "done");
 }
 
-/// `fitup manipulator ARGS` (from the repository root), once it listens.
-fn manipulator(args: &[&str]) -> Killed {
-    common::manipulator(args, 11002)
-}
 
 fn run(args: &[&str]) -> std::process::Output {
     let o = common::run_bounded(&common::repo(), args, BOUND);
@@ -86,16 +81,11 @@ fn the_wheel_and_the_cell_assemble_as_documented_in_process_and_over_tcp() {
         let o = run(&["run", &script, "--db", &db]);
         assert!(common::text(&o).contains(last), "{}", common::text(&o));
         assert_assembled(Path::new(&plan), Path::new(&db));
-        let _sim = manipulator(&["--doc", cell, "--robot", "mz07", "--speed", "20"]);
-        run(&[
-            "run",
-            &script,
-            "--dispatch",
-            "--db",
-            &db,
-            "--",
-            "target=127.0.0.1:11000",
-        ]);
+        // The documented default ports (11000, 11002) when they are free; another
+        // run's manipulator holding them moves this one to a free pair.
+        let sim = common::manipulator(&["--doc", cell, "--robot", "mz07", "--speed", "20"]);
+        let target = format!("target={}", sim.target());
+        run(&["run", &script, "--dispatch", "--db", &db, "--", &target]);
         assert_assembled(Path::new(&plan), Path::new(&db));
     }
 }
@@ -227,25 +217,23 @@ fn the_terminal_ui_shows_the_run_and_takes_keys_under_tmux() {
     let root = common::repo();
     // The plan the wheel script saves (deterministic: the same file every run).
     run(&["run", "scripts/assemble_wheel.rhai"]);
-    let _sim = common::manipulator(
-        &[
-            "--doc",
-            "models/mz07.yaml",
-            "--robot",
-            "mz07",
-            "--speed",
-            "3",
-            "--port",
-            "11300",
-            "--state-port",
-            "11302",
-        ],
-        11302,
-    );
+    let sim = common::manipulator(&[
+        "--doc",
+        "models/mz07.yaml",
+        "--robot",
+        "mz07",
+        "--speed",
+        "3",
+        "--port",
+        "11300",
+        "--state-port",
+        "11302",
+    ]);
     let socket = format!("fitup-chain-test-{}", std::process::id());
     let command = format!(
-        "{} skills run out/assemble_wheel.plan.json --target 127.0.0.1:11300; echo EXIT=$?; sleep 60",
-        env!("CARGO_BIN_EXE_fitup")
+        "{} skills run out/assemble_wheel.plan.json --target {}; echo EXIT=$?; sleep 60",
+        env!("CARGO_BIN_EXE_fitup"),
+        sim.target()
     );
     tmux(
         &socket,

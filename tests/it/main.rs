@@ -28,6 +28,7 @@ mod precision_manipulator;
 mod robots;
 mod scripts;
 mod sequence;
+mod sequence_cell_robots;
 mod sequence_real;
 mod sequence_watch;
 mod simple_message_peer;

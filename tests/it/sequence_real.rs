@@ -7,7 +7,7 @@
 
 use fitup::collision::{clearance, interferes, Aabb, DEFAULT_TOLERANCE};
 use fitup::document::Document;
-use fitup::math::{Transform, Vec3};
+use fitup::math::{AngleConvention, Transform, Vec3};
 use fitup::mesh::Mesh;
 use fitup::sequence::{
     plan_sequence, Mode, RejectReason, SequenceError, SequenceOptions, SequencePlan, Stuck,
@@ -35,12 +35,101 @@ fn grow(b: &Aabb, by: f64) -> Aabb {
 /// direction until its box is 0.5 mm clear of every part placed before it; at every
 /// sample the exact interference query is asked against each of those parts.
 fn dense_removal(doc: &Document, plan: &SequencePlan) {
+    let sequences: Vec<Removal> = plan
+        .sequences
+        .iter()
+        .map(|s| Removal {
+            order: s.order(),
+            tasks: s
+                .tasks
+                .iter()
+                .map(|t| RemovalTask {
+                    part: t.part.clone(),
+                    mating_direction: t.mating_direction,
+                    path: t.path.poses.clone(),
+                })
+                .collect(),
+        })
+        .collect();
+    dense_removal_of(doc, &sequences);
+}
+
+/// One sequence as the dense re-check reads it: the order (base first) and, per task
+/// (the parts after the base), the part, its mating direction and its path (poses in
+/// the assembly frame, safe-length pose first, assembled pose last).
+pub(crate) struct Removal {
+    pub order: Vec<String>,
+    pub tasks: Vec<RemovalTask>,
+}
+
+/// One task of a [`Removal`].
+pub(crate) struct RemovalTask {
+    pub part: String,
+    pub mating_direction: Vec3,
+    pub path: Vec<Transform>,
+}
+
+/// [`dense_removal`] on the JSON `fitup plan-sequence --json` prints (poses
+/// `[X, Y, Z, A, B, C]`, mm and degrees), read here without the library's types.
+pub(crate) fn dense_removal_json(doc: &Document, plan: &serde_json::Value) {
+    let num = |v: &serde_json::Value| v.as_f64().expect("a number");
+    let sequences: Vec<Removal> = plan["sequences"]
+        .as_array()
+        .expect("sequences")
+        .iter()
+        .map(|s| Removal {
+            order: s["order"]
+                .as_array()
+                .expect("order")
+                .iter()
+                .map(|n| n.as_str().expect("a name").to_string())
+                .collect(),
+            tasks: s["tasks"]
+                .as_array()
+                .expect("tasks")
+                .iter()
+                .map(|t| {
+                    let d: Vec<f64> = t["mating_direction"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .map(num)
+                        .collect();
+                    RemovalTask {
+                        part: t["part"].as_str().unwrap().to_string(),
+                        mating_direction: Vec3::new(d[0], d[1], d[2]),
+                        path: t["path"]
+                            .as_array()
+                            .unwrap()
+                            .iter()
+                            .map(|p| {
+                                let p: Vec<f64> =
+                                    p.as_array().unwrap().iter().map(num).collect();
+                                Transform::from_xyzabc(
+                                    Vec3::new(p[0], p[1], p[2]),
+                                    [p[3].to_radians(), p[4].to_radians(), p[5].to_radians()],
+                                    AngleConvention::default(),
+                                )
+                            })
+                            .collect(),
+                    }
+                })
+                .collect(),
+        })
+        .collect();
+    assert!(!sequences.is_empty(), "no sequence in {plan}");
+    dense_removal_of(doc, &sequences);
+}
+
+/// The re-check itself, on plain orders, directions and poses.
+pub(crate) fn dense_removal_of(doc: &Document, sequences: &[Removal]) {
     let mut cache = SceneCache::new();
     let ws = Workspace::new(doc, &mut cache).unwrap();
     let scene = ws.scene();
     let tol = DEFAULT_TOLERANCE;
-    for s in &plan.sequences {
-        let order = s.order();
+    for s in sequences {
+        let order = &s.order;
+        assert_eq!(order.len(), s.tasks.len() + 1, "{order:?}: one task per part after the base");
         let idx: Vec<usize> = order
             .iter()
             .map(|n| doc.component_index(n).unwrap())
@@ -81,12 +170,12 @@ fn dense_removal(doc: &Document, plan: &SequencePlan) {
                     );
                 }
             };
-            let mut way: Vec<Transform> = t.path.poses.iter().rev().copied().collect();
+            let mut way: Vec<Transform> = t.path.iter().rev().copied().collect();
             assert!(
                 way[0].approx_eq(&scene.poses[p], 1e-9, 1e-9),
                 "starts assembled"
             );
-            if !t.path.poses.is_empty() && t.path.poses.len() == 2 {
+            if t.path.len() == 2 {
                 // A straight task goes along its reported mating direction.
                 let d = way[1].translation() - way[0].translation();
                 assert!(
@@ -642,23 +731,14 @@ fn a_part_that_only_a_bent_path_brings_in_is_planned() {
     }
 }
 
-/// The robot cell with its two pedestals marked `fixture: true` in the document
-/// (copied with its meshes): they are left out without `exclude`, as robot links are.
+/// The robot cell marks its two pedestals `fixture: true` (models/cell_robots.yaml):
+/// they are left out without `exclude`, as robot links are. The same cell with the
+/// marks removed (written here from the generator) fails with the defaults — the
+/// pedestals touch nothing of the product — and excluding them by name gives the
+/// marked document's plan.
 #[test]
 fn components_the_document_marks_as_fixtures_are_not_sequenced() {
-    let dir = tempfile::tempdir().unwrap();
-    let meshes = dir.path().join("meshes");
-    std::fs::create_dir_all(&meshes).unwrap();
-    for e in std::fs::read_dir("models/meshes").unwrap() {
-        let e = e.unwrap();
-        std::fs::copy(e.path(), meshes.join(e.file_name())).unwrap();
-    }
-    let text = std::fs::read_to_string("models/cell_robots.yaml").unwrap();
-    let marked = text.replace("  part: pedestal\n", "  part: pedestal\n  fixture: true\n");
-    assert_eq!(marked.matches("fixture: true").count(), 2);
-    let path = dir.path().join("cell.yaml");
-    std::fs::write(&path, &marked).unwrap();
-    let doc = Document::open(&path).unwrap();
+    let doc = Document::open(Path::new("models/cell_robots.yaml")).unwrap();
     let pedestals = ["mz07_a_pedestal", "mz07_b_pedestal"];
     for p in pedestals {
         assert!(doc.components()[doc.component_index(p).unwrap()].fixture);
@@ -673,8 +753,24 @@ fn components_the_document_marks_as_fixtures_are_not_sequenced() {
     }
     assert!(plan.product.contains(&"plate_b".to_string()));
     dense_removal(&doc, &plan);
-    // The same as excluding them by name from the unmarked document.
-    let unmarked = Document::open(Path::new("models/cell_robots.yaml")).unwrap();
+    // The unmarked variant: the generator's document with the marks taken off.
+    let dir = tempfile::tempdir().unwrap();
+    fitup::demo::write_robots(dir.path()).unwrap();
+    let mut file = fitup::demo::cell_robots_document();
+    let mut marks = 0;
+    for c in &mut file.components {
+        marks += usize::from(c.fixture);
+        c.fixture = false;
+    }
+    assert_eq!(marks, 2, "the generator marks the two pedestals");
+    let path = dir.path().join("cell_unmarked.yaml");
+    std::fs::write(&path, file.to_yaml().unwrap()).unwrap();
+    let unmarked = Document::open(&path).unwrap();
+    assert!(unmarked.components().iter().all(|c| !c.fixture));
+    match plan_sequence(&unmarked, &mut SceneCache::new(), &SequenceOptions::default()) {
+        Err(SequenceError::NoSequence { .. }) => {}
+        other => panic!("unmarked: {:?}", other.map(|p| p.summary())),
+    }
     let o = SequenceOptions {
         exclude: pedestals.iter().map(|s| s.to_string()).collect(),
         ..SequenceOptions::default()

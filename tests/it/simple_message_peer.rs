@@ -8,7 +8,7 @@
 use crate::common;
 
 use common::lines::Proc;
-use common::{fitup, repo};
+use common::{fitup, free_pair, repo};
 use fitup::skills::{ControllerCommand, Plan, PlanStep};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -165,17 +165,6 @@ fn spawn(args: &[&str]) -> Proc {
     Proc::spawn(fitup().current_dir(repo()).args(args).stdin(Stdio::null()))
 }
 
-/// A free port P whose P + 2 is free too (for the port rule).
-fn free_pair() -> u16 {
-    for _ in 0..100 {
-        let a = TcpListener::bind("127.0.0.1:0").unwrap();
-        let p = a.local_addr().unwrap().port();
-        if p < 65000 && TcpListener::bind(("127.0.0.1", p + 2)).is_ok() {
-            return p;
-        }
-    }
-    panic!("no free port pair");
-}
 
 /// `fitup manipulator --port P` on the MZ07 (no `--state-port`: the rule gives it),
 /// with `extra` arguments; returns it and the ports it printed.
