@@ -233,7 +233,11 @@ pub fn manipulator(args: &[&str]) -> Manipulator {
         let start = Instant::now();
         let line = loop {
             let got = proc.drain();
-            if let Some(l) = proc.seen().iter().find(|l| l.contains(" listening: motion ")) {
+            if let Some(l) = proc
+                .seen()
+                .iter()
+                .find(|l| l.contains(" listening: motion "))
+            {
                 break Some(l.clone());
             }
             if proc.child.0.try_wait().unwrap().is_some() {

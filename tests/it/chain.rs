@@ -5,7 +5,6 @@
 
 use crate::common;
 
-
 use fitup::db::{Database, SkillLogEntry, Target};
 use fitup::skills::Plan;
 use std::collections::BTreeMap;
@@ -54,7 +53,6 @@ fn assert_assembled(plan_file: &Path, db: &Path) {
     }
     assert_eq!(log.last().unwrap().event, "done");
 }
-
 
 fn run(args: &[&str]) -> std::process::Output {
     let o = common::run_bounded(&common::repo(), args, BOUND);

@@ -45,7 +45,9 @@ fn the_robot_cell_is_sequenced_with_the_defaults() {
     assert_eq!(best.first(), Some(&"table"), "{text}");
     for name in &left_out {
         assert!(
-            !text.split(|c: char| !(c.is_alphanumeric() || c == '_')).any(|w| w == name.as_str()),
+            !text
+                .split(|c: char| !(c.is_alphanumeric() || c == '_'))
+                .any(|w| w == name.as_str()),
             "{name} appears in the plan:\n{text}"
         );
     }
@@ -80,7 +82,10 @@ fn the_robot_cell_is_sequenced_with_the_defaults() {
         want.sort();
         assert_eq!(sorted, want);
         for name in &left_out {
-            assert!(!order.contains(&name.as_str()), "{name} sequenced: {order:?}");
+            assert!(
+                !order.contains(&name.as_str()),
+                "{name} sequenced: {order:?}"
+            );
         }
     }
     for name in &left_out {

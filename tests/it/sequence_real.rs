@@ -103,8 +103,7 @@ pub(crate) fn dense_removal_json(doc: &Document, plan: &serde_json::Value) {
                             .unwrap()
                             .iter()
                             .map(|p| {
-                                let p: Vec<f64> =
-                                    p.as_array().unwrap().iter().map(num).collect();
+                                let p: Vec<f64> = p.as_array().unwrap().iter().map(num).collect();
                                 Transform::from_xyzabc(
                                     Vec3::new(p[0], p[1], p[2]),
                                     [p[3].to_radians(), p[4].to_radians(), p[5].to_radians()],
@@ -129,7 +128,11 @@ pub(crate) fn dense_removal_of(doc: &Document, sequences: &[Removal]) {
     let tol = DEFAULT_TOLERANCE;
     for s in sequences {
         let order = &s.order;
-        assert_eq!(order.len(), s.tasks.len() + 1, "{order:?}: one task per part after the base");
+        assert_eq!(
+            order.len(),
+            s.tasks.len() + 1,
+            "{order:?}: one task per part after the base"
+        );
         let idx: Vec<usize> = order
             .iter()
             .map(|n| doc.component_index(n).unwrap())
@@ -767,7 +770,11 @@ fn components_the_document_marks_as_fixtures_are_not_sequenced() {
     std::fs::write(&path, file.to_yaml().unwrap()).unwrap();
     let unmarked = Document::open(&path).unwrap();
     assert!(unmarked.components().iter().all(|c| !c.fixture));
-    match plan_sequence(&unmarked, &mut SceneCache::new(), &SequenceOptions::default()) {
+    match plan_sequence(
+        &unmarked,
+        &mut SceneCache::new(),
+        &SequenceOptions::default(),
+    ) {
         Err(SequenceError::NoSequence { .. }) => {}
         other => panic!("unmarked: {:?}", other.map(|p| p.summary())),
     }

@@ -165,7 +165,6 @@ fn spawn(args: &[&str]) -> Proc {
     Proc::spawn(fitup().current_dir(repo()).args(args).stdin(Stdio::null()))
 }
 
-
 /// `fitup manipulator --port P` on the MZ07 (no `--state-port`: the rule gives it),
 /// with `extra` arguments; returns it and the ports it printed.
 fn manipulator(extra: &[&str]) -> (Proc, u16, SocketAddr, SocketAddr) {
