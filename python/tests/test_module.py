@@ -379,3 +379,27 @@ def test_the_stubs_name_every_public_member_and_each_says_its_units():
             # A member taking poses says their unit (and the docstrings their frame).
             if "_Pose" in members[n]:
                 assert "mm" in doc, f"{cls}.{n}: {doc}"
+
+
+def test_keyword_values_of_the_wrong_type_name_the_keyword_and_what_it_takes():
+    doc = fitup.Document(CELL)
+    goal = doc.pose("screw5")
+    cases = [
+        ({"seed": "x"}, "`seed` = 'x': expected a whole number >= 0"),
+        ({"seed": -1}, "`seed` = -1: expected a whole number >= 0"),
+        ({"time_limit_ms": "soon"}, "`time_limit_ms` = 'soon': expected a number"),
+        ({"smoothing": "yes"}, "`smoothing` = 'yes': expected True or False"),
+        ({"planner": 3}, "`planner` = 3: expected a str"),
+        ({"start": "here"}, "`start` = 'here': expected a 4x4 array of numbers"),
+        ({"bounds": [[0, 0, 0], [0, 1, 1]]},
+         "`bounds` = [[0, 0, 0], [0, 1, 1]]: expected a box whose min is below its max"),
+    ]
+    for kw, message in cases:
+        with pytest.raises(fitup.InputError) as e:
+            doc.plan_path("screw5", goal, **kw)
+        assert str(e.value).startswith(message), (kw, str(e.value))
+    wheel = fitup.Document(MODELS / "wheel.yaml")
+    with pytest.raises(fitup.InputError, match="`order` = 'axis': expected a list of names"):
+        wheel.plan_sequence(order="axis")
+    with pytest.raises(fitup.InputError, match=r"`gravity` = 'down': expected 3 numbers"):
+        wheel.plan_sequence(gravity="down")
