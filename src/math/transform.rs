@@ -343,7 +343,7 @@ impl fmt::Display for Transform {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::f64::consts::FRAC_PI_2;
+    use std::f64::consts::{FRAC_PI_2, PI};
 
     #[test]
     fn row_vector_layout_matches_seed_formula() {
@@ -381,8 +381,12 @@ mod tests {
     /// (half turns included) and for blocks rounded to 6 digits, which are projected.
     #[test]
     fn from_matrix_matches_the_nearest_rotation() {
-        let mut angles = vec![[0.0, 0.0, 0.0], [3.14159, 0.0, 0.0], [0.0, 3.14159, 0.0]];
-        angles.extend([[0.0, 0.0, std::f64::consts::PI], [0.3, -0.2, 1.1]]);
+        let mut angles = vec![
+            [0.0, 0.0, 0.0],
+            [PI - 1e-5, 0.0, 0.0],
+            [0.0, PI - 1e-5, 0.0],
+        ];
+        angles.extend([[0.0, 0.0, PI], [0.3, -0.2, 1.1]]);
         angles.extend([[2.9, 1.4, -2.8], [-1.2, 0.1, 3.0], [1.0, 3.1, 0.5]]);
         for abc in angles {
             let t =
