@@ -1,30 +1,78 @@
-"""A Python call's overhead against the same call from Rhai (in the same process,
-through fitup.run_script) — the Rust side is `cargo bench --bench robot_script`, run
-back to back (docs/performance.md, "Python").
+"""One call's cost from Python against the same call from Rhai and from Rust, in one
+run (docs/performance.md, "Python").
 
-Run from the repository root: python python/bench/overhead.py
-Calls: FK of the demo MZ07 (`Robot.fk` vs `arm.fk(q)`), nearest IK (`Robot.ik_path`
-of one pose vs `arm.ik_near(t, q)`), and the batch forms per pose (`fk_batch`,
-`ik_path` of 20 000 poses vs `fk_many`, `ik_many`). Medians of 7 rounds of 20 000
-calls, wall clock; Rhai figures minus an empty loop of the same shape, as in the Rust
-bench.
+Run from the repository root, in the virtualenv holding the module:
+
+    python python/bench/overhead.py            # runs the Rust bench first
+    python python/bench/overhead.py --no-rust  # Python and Rhai only
+
+The Rust and Rhai columns come from `cargo bench --profile dev --bench call_overhead`
+(tests/bench/call_overhead.rs), started by this script, the dev profile being the one
+`.ci/run` builds the module with; the Python column and a second Rhai column (through
+`fitup.run_script` in this process, the module's own build) are timed here right
+after. Calls: FK of the demo MZ07 (`Robot.fk`), IK of every branch (`Robot.ik`), an
+interference check of one pair of the demo cell (`Document.interferes`), a short plan
+(screw5 lifted 40 mm, RRT-Connect, seed 3), and the batch forms per pose
+(`fk_batch`, `ik_batch`, 20 000 poses). Medians of 7 rounds, wall clock; Rhai figures
+minus an empty loop of the same shape, as in the Rust bench.
 """
 
+import os
 import pathlib
+import shutil
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 
-import numpy as np
+# numpy's BLAS threads spin between calls and take a core from the timed loop.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import fitup
+import numpy as np  # noqa: E402
 
-N = 20_000
+import fitup  # noqa: E402
+
 ROUNDS = 7
+N_KINEMATICS = 20_000
+N_CHECK = 2_000
+N_PLAN = 20
 REPO = pathlib.Path(__file__).resolve().parents[2]
 
+# The same setup and calls as tests/bench/call_overhead.rs.
+SETUP = """let d = open_doc("models/mz07.yaml");
+let arm = d.robot("mz07");
+let q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0];
+arm.joints = q;
+let t = arm.fk(q);
+let cell = open_doc("models/cell.yaml");
+let goal = cell.component("screw5").transform * translation(0.0, 0.0, 40.0);
+let opts = #{planner: "rrt_connect", seed: 3};
+cell.interferes("screw4", "screw5");
+"""
+RHAI = {
+    "fk": ("arm.fk(q)", N_KINEMATICS),
+    "ik_all": ("arm.ik(t)", N_KINEMATICS),
+    "interferes": ('cell.interferes("screw4", "screw5")', N_CHECK),
+    "plan_short": ('cell.plan_path("screw5", goal, opts)', N_PLAN),
+}
 
-def median_ns(f, n=N):
+
+def loadavg():
+    return pathlib.Path("/proc/loadavg").read_text().split()[:3]
+
+
+def median_ns(f, n):
+    out = []
+    for _ in range(ROUNDS):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            f()
+        out.append((time.perf_counter() - t0) / n * 1e9)
+    return statistics.median(out)
+
+
+def median_batch_ns(f, n):
     out = []
     for _ in range(ROUNDS):
         t0 = time.perf_counter()
@@ -33,75 +81,73 @@ def median_ns(f, n=N):
     return statistics.median(out)
 
 
-def rhai_ns(project, body, empty, n=N):
-    setup = (
-        'let d = open_doc("models/mz07.yaml");\nlet arm = d.robot("mz07");\n'
-        "let q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0];\nlet t = arm.fk(q);\n"
-    )
-    (project / "call.rhai").write_text(setup + body + "\n")
-    (project / "empty.rhai").write_text(setup + empty + "\n")
-
-    def wall(script):
+def rhai_ns(project, call, n):
+    def wall(expr):
+        script = project / "scripts" / "bench.rhai"
+        script.write_text(SETUP + f"for i in 0..{n} {{ let x = {expr}; }}\n")
         t0 = time.perf_counter()
-        fitup.run_script(project / script, max_operations=0)
+        fitup.run_script(script, max_operations=0)
         return time.perf_counter() - t0
 
     out = []
     for _ in range(ROUNDS):
-        out.append((wall("call.rhai") - wall("empty.rhai")) / n * 1e9)
+        out.append((wall(call) - wall("q")) / n * 1e9)
     return statistics.median(out)
 
 
+def rust_rows():
+    """`CALL name rust rhai` lines of the Rust bench, by name."""
+    cmd = ["cargo", "bench", "--profile", "dev", "--bench", "call_overhead"]
+    print("$", " ".join(cmd), " # load", *loadavg(), flush=True)
+    out = subprocess.run(cmd, cwd=REPO, check=True, capture_output=True, text=True).stdout
+    rows = {}
+    for line in out.splitlines():
+        if line.startswith("CALL "):
+            _, name, rust, rhai = line.split()
+            rows[name] = (float(rust), float(rhai))
+    return rows
+
+
 def main():
-    doc = fitup.Document(REPO / "models" / "mz07.yaml")
-    arm = doc.robot("mz07")
+    rust = {} if "--no-rust" in sys.argv else rust_rows()
+    print("python calls, load", *loadavg(), flush=True)
+    arm = fitup.Document(REPO / "models" / "mz07.yaml").robot("mz07")
     q = np.radians([10.0, -20.0, 30.0, 40.0, -50.0, 60.0])
     t = arm.fk(q)
-    qs = np.tile(q, (N, 1))
-    ts = np.tile(t, (N, 1, 1))
-    one = t[None]
-
-    def fk():
-        for _ in range(N):
-            arm.fk(q)
-
-    def ik():
-        for _ in range(N):
-            arm.ik_path(one, q)
-
+    cell = fitup.Document(REPO / "models" / "cell.yaml")
+    goal = fitup.translation(0, 0, 40) @ cell.pose("screw5")
+    assert cell.plan_path("screw5", goal, planner="rrt_connect", seed=3).found
+    assert len(arm.ik(t, q)) > 1
     py = {
-        "fk": median_ns(fk),
-        "ik_near": median_ns(ik),
-        "fk_many": median_ns(lambda: arm.fk_batch(qs)),
-        "ik_many": median_ns(lambda: arm.ik_path(ts, q)),
+        "fk": median_ns(lambda: arm.fk(q), N_KINEMATICS),
+        "ik_all": median_ns(lambda: arm.ik(t, q), N_KINEMATICS),
+        "interferes": median_ns(lambda: cell.interferes("screw4", "screw5"), N_CHECK),
+        "plan_short": median_ns(
+            lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3), N_PLAN
+        ),
+    }
+    qs = np.tile(q, (N_KINEMATICS, 1))
+    ts = np.tile(t, (N_KINEMATICS, 1, 1))
+    batch = {
+        "fk": median_batch_ns(lambda: arm.fk_batch(qs), N_KINEMATICS),
+        "ik_all": median_batch_ns(lambda: arm.ik_batch(ts, q), N_KINEMATICS),
     }
     with tempfile.TemporaryDirectory() as d:
         p = pathlib.Path(d)
         (p / "fitup.toml").write_text("")
-        fitup_models = p / "models"
-        import shutil
-
-        shutil.copytree(REPO / "models", fitup_models)
-        loop = f"for i in 0..{N} {{ let x = CALL; }}"
-        rh = {
-            "fk": rhai_ns(p, loop.replace("CALL", "arm.fk(q)"), loop.replace("CALL", "q")),
-            "ik_near": rhai_ns(p, loop.replace("CALL", "arm.ik_near(t, q)"), loop.replace("CALL", "q")),
-            "fk_many": rhai_ns(
-                p,
-                f"let qs = []; for i in 0..{N} {{ qs.push(q); }}\nfor k in 0..10 {{ let x = arm.fk_many(qs); }}",
-                f"let qs = []; for i in 0..{N} {{ qs.push(q); }}\nfor k in 0..10 {{ let x = 0; }}",
-                n=10 * N,
-            ),
-            "ik_many": rhai_ns(
-                p,
-                f"let ts = []; for i in 0..{N} {{ ts.push(t); }}\nfor k in 0..10 {{ let x = arm.ik_many(ts); }}",
-                f"let ts = []; for i in 0..{N} {{ ts.push(t); }}\nfor k in 0..10 {{ let x = 0; }}",
-                n=10 * N,
-            ),
-        }
-    print("call        python ns   rhai ns")
+        (p / "scripts").mkdir()
+        shutil.copytree(REPO / "models", p / "models")
+        rh = {k: rhai_ns(p, call, n) for k, (call, n) in RHAI.items()}
+    print("done, load", *loadavg())
+    print()
+    print("ns per call | Rust | Rhai (cargo bench) | Rhai (in Python) | Python | Python − Rust")
+    print("---|---|---|---|---|---")
     for k in py:
-        print(f"{k:10} {py[k]:10.0f} {rh[k]:9.0f}")
+        r, rb = rust.get(k, (float("nan"), float("nan")))
+        print(f"{k} | {r:.0f} | {rb:.0f} | {rh[k]:.0f} | {py[k]:.0f} | {py[k] - r:.0f}")
+    for k in batch:
+        r = rust.get(k, (float("nan"),))[0]
+        print(f"{k} batch, per pose | {r:.0f} | | | {batch[k]:.0f} | {batch[k] - r:.0f}")
 
 
 if __name__ == "__main__":

@@ -380,7 +380,7 @@ impl Document {
     /// Seed 002's insertion: plans the disassembly from whichever end (start or
     /// ``goal``) lies inside the box of the other components until the part leaves
     /// it, and joins the other end with RRT-Connect; the way into tight clearances.
-    /// Keywords as ``plan_path``.
+    /// ``goal``: the seated pose (4×4, world, mm). Keywords as ``plan_path``.
     #[pyo3(signature = (name, goal, **options))]
     fn plan_insertion(
         &self,
@@ -524,11 +524,14 @@ impl Document {
         })?;
         let dof = traj.joint_kinds.len();
         let t: Vec<f64> = traj.samples.iter().map(|s| s.t).collect();
-        let q: Vec<Vec<f64>> = traj.samples.iter().map(|s| s.joints.clone()).collect();
+
         let tcp: Vec<fitup::math::Transform> = traj.samples.iter().map(|s| s.tcp).collect();
         let d = PyDict::new(py);
         d.set_item("t", convert::vector(py, t))?;
-        d.set_item("joints", convert::rows(py, &q, dof))?;
+        d.set_item(
+            "joints",
+            convert::rows(py, traj.samples.iter().map(|s| &s.joints), dof),
+        )?;
         d.set_item("tcp", convert::poses_array(py, &tcp))?;
         Ok(d)
     }

@@ -56,77 +56,67 @@ impl<'py> Keywords<'py> {
         }
     }
 
+    /// The value of `key` as a `T`, None when it is absent (or None); a value that
+    /// is not a `T` is an `OptionError` saying it expected `expected`. Every typed
+    /// reader below is this with its type and words.
+    fn value<T: FromPyObjectOwned<'py>>(
+        &self,
+        key: &'static str,
+        expected: &'static str,
+    ) -> Result<Option<T>> {
+        self.get(key)
+            .map(|v| Self::value_of(v, key, expected))
+            .transpose()
+    }
+
+    /// `v`, the value of `key`, as a `T` (see [`Keywords::value`]).
+    fn value_of<T: FromPyObjectOwned<'py>>(
+        v: &Bound<'py, PyAny>,
+        key: &'static str,
+        expected: &'static str,
+    ) -> Result<T> {
+        v.extract::<T>().map_err(|_| Self::bad(key, v, expected))
+    }
+
     /// A number (ints are accepted).
     pub fn f64(&self, key: &'static str) -> Result<Option<f64>> {
-        self.get(key)
-            .map(|v| {
-                v.extract::<f64>()
-                    .map_err(|_| Self::bad(key, v, "a number"))
-            })
-            .transpose()
+        self.value(key, "a number")
     }
 
     /// A whole number ≥ 0.
     pub fn u64(&self, key: &'static str) -> Result<Option<u64>> {
-        self.get(key)
-            .map(|v| {
-                v.extract::<u64>()
-                    .map_err(|_| Self::bad(key, v, "a whole number >= 0"))
-            })
-            .transpose()
+        self.value(key, "a whole number >= 0")
     }
 
     /// True or False.
     pub fn bool(&self, key: &'static str) -> Result<Option<bool>> {
-        self.get(key)
-            .map(|v| {
-                v.extract::<bool>()
-                    .map_err(|_| Self::bad(key, v, "True or False"))
-            })
-            .transpose()
+        self.value(key, "True or False")
     }
 
     /// Text.
     pub fn str(&self, key: &'static str) -> Result<Option<String>> {
-        self.get(key)
-            .map(|v| {
-                v.extract::<String>()
-                    .map_err(|_| Self::bad(key, v, "a str"))
-            })
-            .transpose()
+        self.value(key, "a str")
     }
 
-    /// A list of names.
+    /// A list of names (none when absent).
     pub fn names(&self, key: &'static str) -> Result<Vec<String>> {
-        match self.get(key) {
-            None => Ok(Vec::new()),
-            Some(v) => v
-                .extract::<Vec<String>>()
-                .map_err(|_| Self::bad(key, v, "a list of names")),
-        }
+        Ok(self.value(key, "a list of names")?.unwrap_or_default())
     }
 
     /// A pose: a 4×4 array-like (column-vector matrix, mm).
     pub fn pose(&self, key: &'static str) -> Result<Option<fitup::math::Transform>> {
-        match self.get(key) {
-            None => Ok(None),
-            Some(v) => {
-                let a: PyArrayLike2<'py, f64, AllowTypeChange> = v
-                    .extract()
-                    .map_err(|_| Self::bad(key, v, "a 4x4 array of numbers"))?;
-                convert::pose_of(a.as_array(), key).map(Some)
-            }
-        }
+        self.value::<PyArrayLike2<'py, f64, AllowTypeChange>>(key, "a 4x4 array of numbers")?
+            .map(|a| convert::pose_of(a.as_array(), key))
+            .transpose()
     }
 
     /// A box `[[xmin, ymin, zmin], [xmax, ymax, zmax]]` (mm, world).
     pub fn bounds(&self, key: &'static str) -> Result<Option<Aabb>> {
+        const BOX: &str = "[[xmin, ymin, zmin], [xmax, ymax, zmax]] in mm";
         let Some(v) = self.get(key) else {
             return Ok(None);
         };
-        let a: PyArrayLike2<'py, f64, AllowTypeChange> = v
-            .extract()
-            .map_err(|_| Self::bad(key, v, "[[xmin, ymin, zmin], [xmax, ymax, zmax]] in mm"))?;
+        let a: PyArrayLike2<'py, f64, AllowTypeChange> = Self::value_of(v, key, BOX)?;
         if a.shape() != [2, 3] {
             return Err(Error::Shape {
                 argument: key,
@@ -150,14 +140,9 @@ impl<'py> Keywords<'py> {
 
     /// A 3-vector (mm or a direction).
     pub fn vec3(&self, key: &'static str) -> Result<Option<fitup::math::Vec3>> {
-        match self.get(key) {
-            None => Ok(None),
-            Some(v) => {
-                let a: PyArrayLike1<'py, f64, AllowTypeChange> =
-                    v.extract().map_err(|_| Self::bad(key, v, "3 numbers"))?;
-                convert::vec3_of(a.as_array(), key).map(Some)
-            }
-        }
+        self.value::<PyArrayLike1<'py, f64, AllowTypeChange>>(key, "3 numbers")?
+            .map(|a| convert::vec3_of(a.as_array(), key))
+            .transpose()
     }
 
     /// The keywords as JSON (numbers, booleans, text; anything else as its repr), as

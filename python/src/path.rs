@@ -49,13 +49,11 @@ impl Path {
     /// Key-pose positions, ``(N, 3)``, mm, world frame.
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let rows: Vec<Vec<f64>> = self
-            .path
-            .poses
-            .iter()
-            .map(|t| t.translation().iter().copied().collect())
-            .collect();
-        convert::rows(py, &rows, 3)
+        let rows = self.path.poses.iter().map(|t| {
+            let p = t.translation();
+            [p.x, p.y, p.z]
+        });
+        convert::rows(py, rows, 3)
     }
 
     /// The component the path moves.

@@ -45,7 +45,10 @@ impl Robot {
     /// Every solution for `target` near `reference`, sorted by distance to it; an
     /// unreachable target or one whose solutions all break a joint limit has none.
     fn solutions(&self, target: &Transform, reference: &[f64]) -> Result<Vec<IkSolution>> {
-        match self.robot.inverse(target, reference, &IkOptions::default()) {
+        match self
+            .robot
+            .inverse(target, reference, &IkOptions::every_branch())
+        {
             Ok(s) => Ok(s),
             Err(IkError::Unreachable(_)) | Err(IkError::JointLimits { .. }) => Ok(Vec::new()),
             Err(e) => Err(e.into()),
@@ -103,16 +106,11 @@ impl Robot {
     /// joint has none).
     #[getter]
     fn limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let rows: Vec<Vec<f64>> = self
-            .robot
-            .joint_limits()
-            .iter()
-            .map(|l| match l {
-                Some(l) => vec![l.min, l.max],
-                None => vec![f64::NEG_INFINITY, f64::INFINITY],
-            })
-            .collect();
-        convert::rows(py, &rows, 2)
+        let rows = self.robot.joint_limits().into_iter().map(|l| match l {
+            Some(l) => [l.min, l.max],
+            None => [f64::NEG_INFINITY, f64::INFINITY],
+        });
+        convert::rows(py, rows, 2)
     }
 
     /// The base pose (world → robot root), 4×4, mm.
@@ -153,8 +151,9 @@ impl Robot {
         Ok(convert::pose_array(py, &t))
     }
 
-    /// Forward kinematics of many configurations: ``q`` is ``(N, dof)``; returns the
-    /// TCP poses ``(N, 4, 4)``.
+    /// Forward kinematics of many configurations: ``q`` is ``(N, dof)`` (rad/mm,
+    /// read in place when C-ordered); returns the TCP poses ``(N, 4, 4)`` (world, mm).
+    /// GIL released.
     fn fk_batch<'py>(
         &self,
         py: Python<'py>,
@@ -162,11 +161,10 @@ impl Robot {
     ) -> Result<Bound<'py, PyArray3<f64>>> {
         let q = q.as_array();
         self.check_width(q.ncols())?;
-        let rows: Vec<Vec<f64>> = q.outer_iter().map(|r| r.to_vec()).collect();
-        let robot = self.robot.clone();
+        // The rows are read in place (C layout), GIL released.
         let poses = py.detach(|| {
-            rows.iter()
-                .map(|r| robot.tcp_pose(r))
+            convert::map_rows(q, |r| self.robot.tcp_pose(r))
+                .into_iter()
                 .collect::<std::result::Result<Vec<_>, _>>()
         })?;
         Ok(convert::poses_array(py, &poses))
@@ -196,12 +194,23 @@ impl Robot {
     ) -> Result<Bound<'py, PyArray2<f64>>> {
         let t = convert::pose_of(target.as_array(), "target")?;
         let r = self.reference(reference)?;
-        let s = py.detach(|| self.solutions(&t, &r))?;
-        let rows: Vec<Vec<f64>> = s.into_iter().map(|s| s.joints).collect();
-        Ok(convert::rows(py, &rows, self.robot.dof()))
+        // A closed-form call is a few µs: releasing the GIL would cost a fair share of
+        // it. The numeric solver's restarts can take milliseconds: released.
+        let s = if self.robot.closed_form() {
+            self.solutions(&t, &r)?
+        } else {
+            py.detach(|| self.solutions(&t, &r))?
+        };
+        Ok(convert::rows(
+            py,
+            s.iter().map(|s| &s.joints),
+            self.robot.dof(),
+        ))
     }
 
-    /// Every branch for many targets (``(N, 4, 4)``): a list of ``(K_i, dof)`` arrays.
+    /// Every branch for many targets (``(N, 4, 4)``, world, mm): a list of
+    /// ``(K_i, dof)`` arrays (rad/mm), each as ``ik`` gives it; GIL released. A
+    /// C-ordered array is read in place.
     #[pyo3(signature = (targets, reference = None))]
     fn ik_batch<'py>(
         &self,
@@ -219,17 +228,15 @@ impl Robot {
         let dof = self.robot.dof();
         let arrays: Vec<Bound<'py, PyArray2<f64>>> = all
             .into_iter()
-            .map(|s| {
-                let rows: Vec<Vec<f64>> = s.into_iter().map(|s| s.joints).collect();
-                convert::rows(py, &rows, dof)
-            })
+            .map(|s| convert::rows(py, s.iter().map(|s| &s.joints), dof))
             .collect();
         Ok(PyList::new(py, arrays)?)
     }
 
-    /// IK along a path of poses (``(N, 4, 4)``): for each, the solution nearest to the
-    /// previous one (the first nearest to ``start``), ``(N, dof)``; a row of NaN where
-    /// a pose has no solution (the next is solved near the last one found).
+    /// IK along a path of poses (``(N, 4, 4)``, world, mm): for each, the solution
+    /// nearest to the previous one (the first nearest to ``start``), ``(N, dof)``
+    /// (rad/mm); a row of NaN where a pose has no solution (the next is solved near
+    /// the last one found). GIL released.
     #[pyo3(signature = (targets, start = None))]
     fn ik_path<'py>(
         &self,
@@ -241,11 +248,15 @@ impl Robot {
         let s = self.reference(start)?;
         let dof = self.robot.dof();
         let chain = py.detach(|| self.robot.inverse_chain(&ts, &s, &IkOptions::default()));
-        let rows: Vec<Vec<f64>> = chain
-            .into_iter()
-            .map(|s| s.map(|s| s.joints).unwrap_or_else(|| vec![f64::NAN; dof]))
-            .collect();
-        Ok(convert::rows(py, &rows, dof))
+        // A pose without a solution is a row of NaN (`rows` pads a short row).
+        let none: [f64; 0] = [];
+        Ok(convert::rows(
+            py,
+            chain
+                .iter()
+                .map(|s| s.as_ref().map_or(&none[..], |s| &s.joints[..])),
+            dof,
+        ))
     }
 
     /// The joint index (0-based) of the first joint of ``q`` outside its limits, or

@@ -107,3 +107,24 @@ def test_dask_cluster_with_a_killed_worker_matches_a_serial_run(tmp_path):
     stored = fitup.Database(str(tmp_path / "dask.db")).paths()
     ids = {p["id"] for p in stored}
     assert all(r["path_id"] in ids for r in rows)
+
+
+def test_the_same_jobs_on_ray_match_a_serial_run(monkeypatch):
+    """docs/python.md's Ray form: `ray.remote(run_job)` on a local Ray (loopback, no
+    dashboard, no usage report); skipped where Ray is not installed (CI)."""
+    ray = pytest.importorskip("ray")
+    monkeypatch.setenv("RAY_USAGE_STATS_ENABLED", "0")
+    jobs = insertion_jobs(4)
+    serial = [batch.run_job(j, None, i) for i, j in enumerate(jobs)]
+    ray.init(num_cpus=2, include_dashboard=False, _node_ip_address="127.0.0.1",
+             log_to_driver=False)
+    try:
+        remote = ray.remote(max_retries=3)(batch.run_job)
+        rows = ray.get([remote.remote(job, None, i) for i, job in enumerate(jobs)])
+    finally:
+        ray.shutdown()
+    table = batch.table(rows, frame=False)
+    assert [r["index"] for r in table] == list(range(len(jobs)))
+    for r, s in zip(table, serial):
+        assert r["ok"] and r["found"], r["error"]
+        assert np.array_equal(r["poses"], s["poses"]) and r["iterations"] == s["iterations"]

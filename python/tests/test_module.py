@@ -3,7 +3,9 @@ sequences, the results database, scripts, and the typed errors."""
 
 import math
 import pickle
+import re
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -269,3 +271,135 @@ def test_the_readme_python_example_runs_as_written(monkeypatch, capsys):
     exec(compile(block, "README.md", "exec"), {})
     out = capsys.readouterr().out
     assert out.startswith("Path(lazy_rrt_connect: ") and out.rstrip().endswith(", 4, 4)")
+
+
+def test_ik_of_a_numeric_robot_gives_every_branch_it_finds(tmp_path):
+    # models/urdf's arm with its wrist moved 40 mm off the forearm's axis: no closed
+    # form. `ik` asks the numeric solver for every solution (as a script's `ik`
+    # does), not only the first one it finds.
+    urdf = (MODELS / "urdf" / "fitup_arm6.urdf").read_text()
+    urdf = re.sub(r'<link name="(\w+)">.*?</link>', r'<link name="\1"/>', urdf)
+    wrist = '<origin xyz="0.55 0 0" rpy="0 0 0"/><parent link="link_4"/>'
+    assert wrist in urdf
+    (tmp_path / "arm.urdf").write_text(urdf.replace(wrist, wrist.replace("0.55 0 0", "0.55 0.04 0")))
+    (tmp_path / "fitup.toml").write_text("")
+    (tmp_path / "arm.yaml").write_text(
+        "parts: {}\ncomponents: []\nrobots:\n- name: arm\n  urdf: arm.urdf\n")
+    r = fitup.Document(tmp_path / "arm.yaml").robot("arm")
+    assert r.solver == "numeric"
+    q = np.array([0.3, -0.4, 0.6, 0.5, -0.7, 0.2])
+    t = r.fk(q)
+    branches = r.ik(t, reference=q)
+    assert branches.shape[0] >= 2 and branches.shape[1] == 6
+    assert np.allclose(branches[0], q, atol=1e-6)  # nearest the reference first
+    assert len({tuple(np.round(b, 4)) for b in branches}) == branches.shape[0]
+    for b in branches:
+        assert np.allclose(r.fk(b), t, atol=1e-5)
+        assert r.limit_violation(b) is None
+
+
+def test_batch_forms_read_any_layout_of_their_arrays():
+    # C-ordered arrays are read in place; Fortran-ordered and strided views (a copy
+    # of each row) give the same answers.
+    r = fitup.Robot.catalog("nachi_mz07")
+    q = np.radians(np.linspace(-40, 40, 60).reshape(10, 6))
+    want = r.fk_batch(q)
+    assert want.flags["C_CONTIGUOUS"] and want.shape == (10, 4, 4)
+    for view in (np.asfortranarray(q), np.repeat(q, 2, axis=0)[::2], q.astype(np.float32)):
+        assert np.allclose(r.fk_batch(view), want, atol=1e-3 if view.dtype == np.float32 else 0)
+    poses = np.asfortranarray(want)
+    per = r.ik_batch(poses, reference=q[0])
+    assert [len(p) > 0 for p in per] == [True] * 10
+    assert np.allclose(r.ik_path(poses[::-1], start=q[-1]), q[::-1], atol=1e-7)
+
+
+def ticks_during(call):
+    """Main-thread loop turns stamped while `call` ran in another thread, 10 ms in
+    from each end of the call (a thread holding the GIL through a native call lets
+    none happen there), the window's length in s, and the call's result."""
+    window = {}
+    done = threading.Event()
+
+    def work():
+        window["start"] = time.perf_counter()
+        window["result"] = call()
+        window["end"] = time.perf_counter()
+        done.set()
+
+    stamps = []
+    th = threading.Thread(target=work)
+    th.start()
+    while not done.is_set():
+        stamps.append(time.perf_counter())
+    th.join()
+    lo, hi = window["start"] + 0.01, window["end"] - 0.01
+    return sum(lo < s < hi for s in stamps), hi - lo, window["result"]
+
+
+def test_long_library_calls_release_the_gil():
+    cell = fitup.Document(CELL)
+    goal = fitup.translation(*cell.reference("plate_b", "hole1")["point"])
+    wheel = fitup.Document(MODELS / "wheel.yaml")
+    r = fitup.Robot.catalog("nachi_mz07")
+    q = np.radians([10, -20, 30, 40, -50, 60])
+    poses = np.tile(r.fk(q), (40_000, 1, 1))
+    calls = {
+        "plan_insertion": lambda: cell.plan_insertion(
+            "screw4", goal, seed=1, smoothing=False, time_limit_ms=30000).found,
+        "plan_sequence": lambda: len(wheel.plan_sequence(max_sequences=50)["sequences"]),
+        "ik_batch": lambda: len(r.ik_batch(poses, reference=q)),
+        "ik_path": lambda: len(r.ik_path(poses, start=q)),
+    }
+    for name, call in calls.items():
+        ticks, window, result = ticks_during(call)
+        assert result, name
+        if window > 0.02:  # long enough here to tell
+            assert ticks > 0, (name, window)
+
+
+def test_the_stubs_name_every_public_member_and_each_says_its_units():
+    import ast
+
+    tree = ast.parse((REPO / "python" / "fitup" / "_fitup.pyi").read_text())
+    stubs = {
+        c.name: {f.name: ast.unparse(f) for f in c.body if isinstance(f, ast.FunctionDef)}
+        for c in tree.body
+        if isinstance(c, ast.ClassDef)
+    }
+    functions = {f.name for f in tree.body if isinstance(f, ast.FunctionDef)}
+    native = fitup._fitup
+    assert functions == {n for n in dir(native) if callable(getattr(native, n))
+                         and not n.startswith("_") and n not in stubs}
+    for cls, members in stubs.items():
+        public = {n for n in dir(getattr(native, cls)) if not n.startswith("_")}
+        assert public == {n for n in members if not n.startswith("_")}, cls
+        for n in public:
+            doc = getattr(native, cls).__dict__[n].__doc__
+            assert doc and doc.strip(), f"{cls}.{n} has no docstring"
+            # A member taking poses says their unit (and the docstrings their frame).
+            if "_Pose" in members[n]:
+                assert "mm" in doc, f"{cls}.{n}: {doc}"
+
+
+def test_keyword_values_of_the_wrong_type_name_the_keyword_and_what_it_takes():
+    doc = fitup.Document(CELL)
+    goal = doc.pose("screw5")
+    cases = [
+        ({"seed": "x"}, "`seed` = 'x': expected a whole number >= 0"),
+        ({"seed": -1}, "`seed` = -1: expected a whole number >= 0"),
+        ({"time_limit_ms": "soon"}, "`time_limit_ms` = 'soon': expected a number"),
+        ({"smoothing": "yes"}, "`smoothing` = 'yes': expected True or False"),
+        ({"planner": 3}, "`planner` = 3: expected a str"),
+        ({"start": "here"}, "`start` = 'here': expected a 4x4 array of numbers"),
+        ({"bounds": [[0, 0, 0], [0, 1, 1]]},
+         "`bounds` = [[0, 0, 0], [0, 1, 1]]: expected a box whose min is below its max"),
+    ]
+    for kw, message in cases:
+        with pytest.raises(fitup.InputError) as e:
+            doc.plan_path("screw5", goal, **kw)
+        assert str(e.value).startswith(message), (kw, str(e.value))
+    wheel = fitup.Document(MODELS / "wheel.yaml")
+    with pytest.raises(fitup.InputError, match="`order` = 'axis': expected a list of names"):
+        wheel.plan_sequence(order="axis")
+    with pytest.raises(fitup.InputError, match=r"`gravity` = 'down': expected 3 numbers"):
+        wheel.plan_sequence(gravity="down")

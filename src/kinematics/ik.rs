@@ -110,6 +110,22 @@ impl Default for IkOptions {
     }
 }
 
+impl IkOptions {
+    /// Numeric solutions searched for by [`IkOptions::every_branch`].
+    pub const EVERY_BRANCH: usize = 16;
+
+    /// The defaults, asking for every solution: the closed-form solvers give every
+    /// branch anyway; the numeric solver keeps restarting until it has
+    /// [`IkOptions::EVERY_BRANCH`] distinct solutions or runs out of restarts. What a
+    /// script's `ik` and Python's `Robot.ik` ask for.
+    pub fn every_branch() -> Self {
+        Self {
+            max_solutions: Self::EVERY_BRANCH,
+            ..Self::default()
+        }
+    }
+}
+
 /// Why a target is out of reach, as each solver sees it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]

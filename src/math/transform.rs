@@ -77,6 +77,10 @@ impl From<Transform> for Isometry3<f64> {
 /// Orthonormality tolerance of the `a..i` block.
 pub const ORTHONORMAL_TOLERANCE: f64 = 1e-6;
 
+/// Orthonormality error (`|RᵀR − I|` max) below which `from_matrix` takes the block as
+/// a rotation as it is: rounding of products of a few rotations stays far below it.
+const EXACTLY_ORTHONORMAL: f64 = 1e-12;
+
 impl Transform {
     /// The identity.
     pub const IDENTITY: Self = Self {
@@ -173,7 +177,24 @@ impl Transform {
                 err.max(if r.determinant() < 0.0 { 2.0 } else { 0.0 }),
             ));
         }
-        let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+        // An orthonormal block (every pose fitup writes, numpy's products of rotations)
+        // is its own nearest rotation: the closed-form quaternion is exact, without
+        // nalgebra's iterative projection, which started at the identity and took
+        // several µs per pose (most of an IK call from Python, docs/performance.md).
+        // A block only orthonormal within the tolerance (6-digit matrices) is still
+        // projected, started at the closed-form guess.
+        let closed = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+        let guess = UnitQuaternion::new_normalize(closed.into_inner());
+        let rot = if err <= EXACTLY_ORTHONORMAL {
+            guess
+        } else {
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_eps(
+                &r,
+                f64::EPSILON,
+                0,
+                guess.to_rotation_matrix(),
+            ))
+        };
         Ok(Self::from_parts(Vec3::new(m[3][0], m[3][1], m[3][2]), rot))
     }
 
@@ -322,7 +343,7 @@ impl fmt::Display for Transform {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::f64::consts::FRAC_PI_2;
+    use std::f64::consts::{FRAC_PI_2, PI};
 
     #[test]
     fn row_vector_layout_matches_seed_formula() {
@@ -353,6 +374,44 @@ mod tests {
         assert!(t.approx_eq(&back, 1e-12, 1e-12));
         let back = Transform::from_array_data(&t.to_array_data()).unwrap();
         assert!(t.approx_eq(&back, 1e-12, 1e-12));
+    }
+
+    /// The closed-form conversion gives the rotation nalgebra's projection gives (the
+    /// old `from_matrix`), for exact blocks on every branch of the quaternion formula
+    /// (half turns included) and for blocks rounded to 6 digits, which are projected.
+    #[test]
+    fn from_matrix_matches_the_nearest_rotation() {
+        let mut angles = vec![
+            [0.0, 0.0, 0.0],
+            [PI - 1e-5, 0.0, 0.0],
+            [0.0, PI - 1e-5, 0.0],
+        ];
+        angles.extend([[0.0, 0.0, PI], [0.3, -0.2, 1.1]]);
+        angles.extend([[2.9, 1.4, -2.8], [-1.2, 0.1, 3.0], [1.0, 3.1, 0.5]]);
+        for abc in angles {
+            let t =
+                Transform::from_xyzabc(Vec3::new(1.0, -2.0, 3.5), abc, AngleConvention::XyzFixed);
+            for digits in [None, Some(1e6)] {
+                let mut m = t.to_matrix();
+                if let Some(scale) = digits {
+                    m.iter_mut()
+                        .flatten()
+                        .for_each(|v| *v = (*v * scale).round() / scale);
+                }
+                let got = Transform::from_matrix(&m).unwrap();
+                let r = Matrix3::new(
+                    m[0][0], m[1][0], m[2][0], m[0][1], m[1][1], m[2][1], m[0][2], m[1][2], m[2][2],
+                );
+                let nearest = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+                assert!(
+                    got.rotation().angle_to(&nearest) < 1e-12,
+                    "{abc:?} {digits:?}"
+                );
+                if digits.is_none() {
+                    assert!(got.approx_eq(&t, 1e-12, 1e-12), "{abc:?}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -181,10 +181,7 @@ fn motion_options(m: &Map) -> ScriptResult<(MotionOptions, bool)> {
 }
 
 fn ik_all() -> IkOptions {
-    IkOptions {
-        max_solutions: 16,
-        ..IkOptions::default()
-    }
+    IkOptions::every_branch()
 }
 
 /// A hole from a `load_holes` map (`position`, `normal`, optional `id`).
