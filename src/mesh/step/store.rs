@@ -22,7 +22,7 @@
 //!   temporary files left by a writer that died an hour or more ago, and then the
 //!   least recently used down to [`PruneOptions::max_bytes`].
 //!
-//! Writers and pruners take turns on the folder's lock ([`crate::fsutil::lock_folder`]);
+//! Writers' sweeps and pruners take turns on the folder's lock ([`crate::fsutil::lock_folder`]);
 //! readers take no lock: removing an entry only unlinks it (a reader that has it open
 //! reads it whole; one that comes later misses and reads the STEP file again).
 
@@ -145,7 +145,6 @@ pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawMode
     if std::fs::create_dir_all(store).is_err() {
         return;
     }
-    let _turn = crate::fsutil::lock_folder(store);
     let source = source_text(source);
     let mut w = Writer(STORE_MAGIC.to_vec());
     key.write(&mut w);
@@ -161,6 +160,9 @@ pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawMode
     if crate::fsutil::write_output(&store.join(&name), &w.0, &rule).is_err() {
         return;
     }
+    // The sweep takes turns with other writers' sweeps and with prune (the write
+    // itself cannot: the write rule's registry takes the same folder lock).
+    let _turn = crate::fsutil::lock_folder(store);
     let Ok(found) = scan(store) else { return };
     let mut kept = Vec::new();
     for e in found.entries {
