@@ -3,9 +3,9 @@
 //! 2 usage).
 
 mod batch;
+mod cache;
 mod check;
 mod db;
-mod cache;
 mod import;
 pub(crate) mod out;
 mod run;

@@ -33,8 +33,8 @@ pub mod import;
 pub mod mates;
 pub mod reference;
 pub mod robot;
-pub mod tessellations;
 pub mod scan;
+pub mod tessellations;
 pub use export::GlbExport;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};

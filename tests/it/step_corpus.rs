@@ -28,7 +28,11 @@ mod with_occt {
             .filter(|p| p.is_file() && fitup::mesh::step::is_step_path(p))
             .collect();
         files.sort();
-        assert!(!files.is_empty(), "no .step/.stp file in {}", root.display());
+        assert!(
+            !files.is_empty(),
+            "no .step/.stp file in {}",
+            root.display()
+        );
         files
     }
 
@@ -53,18 +57,29 @@ mod with_occt {
         /// Whether `pose` moves the part frame as this placement does (within
         /// `tol` mm at the origin and at 100 mm along each axis).
         fn placed_as(&self, pose: &Transform, tol: f64) -> bool {
-            [[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 100.0, 0.0], [0.0, 0.0, 100.0]]
-                .iter()
-                .all(|p| {
-                    (pose.apply(&Point3::new(p[0], p[1], p[2])) - self.apply(*p)).norm() <= tol
-                })
+            [
+                [0.0, 0.0, 0.0],
+                [100.0, 0.0, 0.0],
+                [0.0, 100.0, 0.0],
+                [0.0, 0.0, 100.0],
+            ]
+            .iter()
+            .all(|p| (pose.apply(&Point3::new(p[0], p[1], p[2])) - self.apply(*p)).norm() <= tol)
         }
     }
 
     /// occt_check's reading: the file's length unit and its placed solids.
     fn reference(check: &Path, file: &Path) -> (String, Vec<Reference>) {
-        let o = std::process::Command::new(check).arg(file).output().unwrap();
-        assert!(o.status.success(), "occt_check {}: {}", file.display(), common::text(&o));
+        let o = std::process::Command::new(check)
+            .arg(file)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "occt_check {}: {}",
+            file.display(),
+            common::text(&o)
+        );
         let text = String::from_utf8(o.stdout).unwrap();
         let mut unit = String::new();
         let mut solids = Vec::new();
@@ -81,11 +96,7 @@ mod with_occt {
                         path: f[1].to_string(),
                         product: f[2].to_string(),
                         volume,
-                        r: [
-                            [m[0], m[1], m[2]],
-                            [m[4], m[5], m[6]],
-                            [m[8], m[9], m[10]],
-                        ],
+                        r: [[m[0], m[1], m[2]], [m[4], m[5], m[6]], [m[8], m[9], m[10]]],
                         t: [m[3], m[7], m[11]],
                     });
                 }
@@ -113,17 +124,27 @@ mod with_occt {
             let wall = start.elapsed();
             let t = common::text(&o);
             assert!(o.status.success(), "{}: {t}", file.display());
-            eprintln!("{}: fitup import {:.2} s\n{t}", file.display(), wall.as_secs_f64());
+            eprintln!(
+                "{}: fitup import {:.2} s\n{t}",
+                file.display(),
+                wall.as_secs_f64()
+            );
             let stem = file.file_stem().unwrap().to_string_lossy().into_owned();
             let doc = Document::open(&dir.path().join(format!("cell/{stem}.yaml"))).unwrap();
             for p in doc.parts() {
                 let r = p.mesh.inspect();
-                assert!(r.is_watertight(), "{}: part {} is not closed: {r:?}", file.display(), p.name);
+                assert!(
+                    r.is_watertight(),
+                    "{}: part {} is not closed: {r:?}",
+                    file.display(),
+                    p.name
+                );
             }
             for c in doc.components() {
-                let generated = c.name.strip_prefix("NAUO").is_some_and(|n| {
-                    !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit())
-                });
+                let generated = c
+                    .name
+                    .strip_prefix("NAUO")
+                    .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
                 assert!(
                     !generated,
                     "{}: component {} is named by the exporter's occurrence id",

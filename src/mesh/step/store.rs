@@ -128,7 +128,10 @@ fn touch(file: &Path) {
     let now = SystemTime::now();
     let recent = std::fs::metadata(file)
         .and_then(|m| m.modified())
-        .is_ok_and(|t| now.duration_since(t).is_ok_and(|d| d < Duration::from_secs(60)));
+        .is_ok_and(|t| {
+            now.duration_since(t)
+                .is_ok_and(|d| d < Duration::from_secs(60))
+        });
     if !recent {
         if let Ok(f) = std::fs::OpenOptions::new().write(true).open(file) {
             let _ = f.set_modified(now);
@@ -230,12 +233,11 @@ fn scan(store: &Path) -> std::io::Result<Scan> {
         }
         let is_entry_name = name.len() == 21
             && name.ends_with(".tess")
-            && name[..16].bytes().all(|b| b.is_ascii_hexdigit());
+            && name.as_bytes()[..16].iter().all(u8::is_ascii_hexdigit);
         if !is_entry_name {
             continue;
         }
-        let Ok(head) = crate::fsutil::file_head(&e.path(), (MAX_SOURCE_BYTES + 128) as u64)
-        else {
+        let Ok(head) = crate::fsutil::file_head(&e.path(), (MAX_SOURCE_BYTES + 128) as u64) else {
             continue;
         };
         if !head.starts_with(ANY_STORE_MAGIC) {
@@ -455,7 +457,10 @@ pub fn prune_store(store: &Path, options: &PruneOptions) -> Result<PruneReport, 
     let mut stale = Vec::new();
     let now = SystemTime::now();
     for (file, bytes, modified) in found.leftovers {
-        if now.duration_since(modified).is_ok_and(|age| age >= LEFTOVER_AGE) {
+        if now
+            .duration_since(modified)
+            .is_ok_and(|age| age >= LEFTOVER_AGE)
+        {
             stale.push(Pruned {
                 file,
                 bytes,
@@ -632,7 +637,11 @@ mod tests {
         // a.step is saved again with other contents and read.
         let (_, new) = source(dir.path(), "a.step", b"ISO-10303-21; v2!", 0.1);
         store(&st, &new, &a, &model("v2"), DEFAULT_STORE_CAP);
-        assert_eq!(load_stored(&st, &old), None, "the old contents' entry is gone");
+        assert_eq!(
+            load_stored(&st, &old),
+            None,
+            "the old contents' entry is gone"
+        );
         assert_eq!(load_stored(&st, &old_fine), None, "at every deflection");
         assert_eq!(load_stored(&st, &new), Some(model("v2")));
         assert_eq!(load_stored(&st, &other), Some(model("b")), "b.step's stays");
@@ -662,7 +671,10 @@ mod tests {
         assert!(load_stored(&st, &keys[0].1).is_some());
         let (p, k) = source(dir.path(), "3.step", b"ISO-10303-21; 3", 0.1);
         store(&st, &k, &p, &model("m"), 3 * one);
-        assert!(load_stored(&st, &keys[1].1).is_none(), "the least recently used goes");
+        assert!(
+            load_stored(&st, &keys[1].1).is_none(),
+            "the least recently used goes"
+        );
         for k in [&keys[0].1, &keys[2].1, &k] {
             assert!(load_stored(&st, k).is_some());
         }
@@ -686,7 +698,13 @@ mod tests {
         store(&st, &gone_key, &gone, &model("gone"), DEFAULT_STORE_CAP);
         std::fs::remove_file(&gone).unwrap();
         let (edited, edited_key) = source(dir.path(), "edited.step", b"ISO-10303-21; aaaa", 0.1);
-        store(&st, &edited_key, &edited, &model("edited"), DEFAULT_STORE_CAP);
+        store(
+            &st,
+            &edited_key,
+            &edited,
+            &model("edited"),
+            DEFAULT_STORE_CAP,
+        );
         std::fs::write(&edited, b"ISO-10303-21; bbbb").unwrap(); // same length
         let old_format = st.join("00000000000000a1.tess");
         std::fs::write(&old_format, b"fitup-tessellation 1\nwhatever").unwrap();
@@ -718,11 +736,20 @@ mod tests {
         };
         let before = std::fs::read_dir(&st).unwrap().count();
         let dry = prune_store(&st, &o).unwrap();
-        assert_eq!(std::fs::read_dir(&st).unwrap().count(), before, "a dry run removes nothing");
+        assert_eq!(
+            std::fs::read_dir(&st).unwrap().count(),
+            before,
+            "a dry run removes nothing"
+        );
         let mut reasons: Vec<(String, StaleReason)> = dry
             .removed
             .iter()
-            .map(|p| (p.file.file_name().unwrap().to_string_lossy().into_owned(), p.reason))
+            .map(|p| {
+                (
+                    p.file.file_name().unwrap().to_string_lossy().into_owned(),
+                    p.reason,
+                )
+            })
             .collect();
         reasons.sort_by_key(|(n, _)| n.clone());
         let name = |k: &StoreKey| k.file_name();
@@ -790,7 +817,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let real = dir.path().join("elsewhere");
         std::fs::create_dir(&real).unwrap();
-        std::fs::write(real.join("00000000000000a1.tess"), b"fitup-tessellation 1\n").unwrap();
+        std::fs::write(
+            real.join("00000000000000a1.tess"),
+            b"fitup-tessellation 1\n",
+        )
+        .unwrap();
         let link = dir.path().join("store");
         std::os::unix::fs::symlink(&real, &link).unwrap();
         let e = prune_store(&link, &PruneOptions::default()).unwrap_err();
@@ -806,7 +837,9 @@ mod tests {
         let st = dir.path().join("store");
         let (a, key) = source(dir.path(), "a.step", b"ISO-10303-21; a", 0.1);
         let big = RawModel {
-            parts: (0..50).map(|i| model(&format!("p{i}")).parts[0].clone()).collect(),
+            parts: (0..50)
+                .map(|i| model(&format!("p{i}")).parts[0].clone())
+                .collect(),
             ..model("m")
         };
         store(&st, &key, &a, &big, DEFAULT_STORE_CAP);
