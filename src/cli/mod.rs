@@ -3,6 +3,7 @@
 //! 2 usage).
 
 mod batch;
+mod cache;
 mod check;
 mod db;
 mod import;
@@ -223,6 +224,8 @@ pub enum Command {
     /// Import a STEP assembly (SolidWorks, CATIA, … export) as a new document: one part
     /// per distinct solid (STL), one component per placed solid (needs `--features step`).
     Import(import::ImportArgs),
+    /// The project's caches: `prune` removes stale STEP tessellations.
+    Cache(cache::CacheArgs),
     /// Plan the assembly sequence of a document (seed 003): tasks, mounts, precedence.
     PlanSequence {
         /// The document (`.yaml`).
@@ -316,6 +319,7 @@ pub fn main() -> i32 {
         Command::Manipulator(a) => skills::manipulator(&a),
         Command::Skills(a) => skills::skills(&a),
         Command::Import(a) => import::import(&a),
+        Command::Cache(a) => cache::cache(&a),
         Command::PlanSequence {
             doc,
             mode,

@@ -170,6 +170,15 @@ fn file_stem(name: &str, taken: &mut HashSet<String>) -> String {
     candidate
 }
 
+/// Whether `name` is an occurrence id an exporter generated (`NAUO12`: SolidWorks names
+/// every NEXT_ASSEMBLY_USAGE_OCCURRENCE so) rather than a name a user gave.
+fn generated_occurrence_id(name: &str) -> bool {
+    let n = name.trim();
+    n.get(..4).is_some_and(|p| p.eq_ignore_ascii_case("NAUO"))
+        && n.len() > 4
+        && n[4..].bytes().all(|b| b.is_ascii_digit())
+}
+
 /// The document (not yet written) and the meshes' relative paths for `model`.
 fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
     let step_stem = model
@@ -215,7 +224,14 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
     for inst in &model.instances {
         let part = &mut parts[inst.part];
         part.instances += 1;
-        let base = document_name(&inst.name, &format!("{}-{}", part.name, part.instances));
+        // SolidWorks (and other exporters) name every occurrence `NAUO<n>`, which says
+        // nothing; such components are named as SolidWorks' own tree names them.
+        let given = if generated_occurrence_id(&inst.name) {
+            ""
+        } else {
+            &inst.name
+        };
+        let base = document_name(given, &format!("{}-{}", part.name, part.instances));
         doc.components.push(ComponentFile {
             name: unique(base, &mut component_names),
             part: part.name.clone(),
@@ -367,6 +383,16 @@ fn write_into(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn generated_occurrence_ids_are_not_names() {
+        for id in ["NAUO1", "nauo12", " NAUO7 "] {
+            assert!(generated_occurrence_id(id), "{id}");
+        }
+        for name in ["NAUO", "NAUO1a", "bracket-1", "NAUÖ1", "", "ÄNAUO1"] {
+            assert!(!generated_occurrence_id(name), "{name}");
+        }
+    }
 
     #[test]
     fn names_are_safe_and_unique() {

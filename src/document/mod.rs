@@ -34,6 +34,7 @@ pub mod mates;
 pub mod reference;
 pub mod robot;
 pub mod scan;
+pub mod tessellations;
 pub use export::GlbExport;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
@@ -1539,7 +1540,7 @@ fn step_part(
     store: &Path,
     cache: &mut MeshCache,
 ) -> Result<(Arc<Mesh>, StepGeometry), String> {
-    use crate::mesh::step::{StepOptions, DEFAULT_ANGULAR_DEFLECTION, DEFAULT_LINEAR_DEFLECTION};
+    use crate::mesh::step::StepOptions;
     for (key, v) in [("deflection", pf.deflection), ("angle", pf.angle)] {
         if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
             return Err(format!("`{key}:` must be a number > 0"));
@@ -1548,9 +1549,10 @@ fn step_part(
     if pf.angle.is_some_and(|a| a >= 180.0) {
         return Err("`angle:` is in degrees and must be below 180".into());
     }
+    let (linear_deflection, angular_deflection) = tessellations::of_part(pf);
     let options = StepOptions {
-        linear_deflection: pf.deflection.unwrap_or(DEFAULT_LINEAR_DEFLECTION),
-        angular_deflection: pf.angle.map_or(DEFAULT_ANGULAR_DEFLECTION, f64::to_radians),
+        linear_deflection,
+        angular_deflection,
         ..StepOptions::default()
     };
     let got = cache

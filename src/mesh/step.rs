@@ -30,9 +30,18 @@
 //! folder (a project's [`STEP_STORE`]), one file per STEP content hash, deflection and
 //! angle, written by the project's write rule ([`crate::fsutil::write_output`]); a
 //! later read of the same bytes with the same tessellation skips Open CASCADE. Stored
-//! files are checked like a fresh read (and ignored when damaged).
+//! files are checked like a fresh read (and ignored when damaged). Writing an entry
+//! removes the entries of the same STEP file's older contents and keeps the folder
+//! under [`DEFAULT_STORE_CAP`] (least recently used first); [`prune_store`] removes
+//! the rest of what is stale (`fitup cache prune`; see the `store` module).
 
 mod raw;
+mod store;
+
+pub use store::{
+    prune_store, PruneOptions, PruneReport, Pruned, StaleReason, StoreError, Tessellation,
+    DEFAULT_STORE_CAP,
+};
 
 use super::{Mesh, MeshError};
 use crate::fsutil::{FileKind, ReadError};
@@ -577,13 +586,13 @@ pub fn read_step_stored(
     }
     check_options(options)?;
     let bytes = check_file(path)?;
-    let key = raw::StoreKey::new(&bytes, options);
+    let key = store::StoreKey::new(&bytes, options);
     drop(bytes);
-    if let Some(raw) = raw::load_stored(store, &key) {
+    if let Some(raw) = store::load_stored(store, &key) {
         return from_raw(path, options, raw, true, start);
     }
     let raw = read_raw(path, options)?;
-    raw::store(store, &key, &raw);
+    store::store(store, &key, path, &raw, DEFAULT_STORE_CAP);
     from_raw(path, options, raw, false, start)
 }
 

@@ -33,6 +33,8 @@ mod sequence_real;
 mod sequence_watch;
 mod simple_message_peer;
 mod skills;
+mod step_cache;
+mod step_corpus;
 mod step_import;
 mod ur_ik;
 mod urdf;

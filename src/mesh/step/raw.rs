@@ -4,7 +4,7 @@
 //! confused child is refused, never trusted.
 
 use super::{ChildFailure, ChildReader, StepError, StepOptions, CHILD_COMMAND};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// One distinct solid as the shim returns it.
@@ -53,29 +53,29 @@ pub(crate) struct RawModel {
 // ---- the byte format ---------------------------------------------------------------
 
 #[derive(Default)]
-struct Writer(Vec<u8>);
+pub(super) struct Writer(pub(super) Vec<u8>);
 
 impl Writer {
-    fn u32(&mut self, v: u32) {
+    pub(super) fn u32(&mut self, v: u32) {
         self.0.extend(v.to_le_bytes());
     }
-    fn u64(&mut self, v: u64) {
+    pub(super) fn u64(&mut self, v: u64) {
         self.0.extend(v.to_le_bytes());
     }
-    fn f64(&mut self, v: f64) {
+    pub(super) fn f64(&mut self, v: f64) {
         self.0.extend(v.to_le_bytes());
     }
-    fn str(&mut self, s: &str) {
+    pub(super) fn str(&mut self, s: &str) {
         self.u64(s.len() as u64);
         self.0.extend(s.as_bytes());
     }
-    fn f64s(&mut self, v: &[f64]) {
+    pub(super) fn f64s(&mut self, v: &[f64]) {
         self.u64(v.len() as u64);
         for x in v {
             self.f64(*x);
         }
     }
-    fn u32s(&mut self, v: &[u32]) {
+    pub(super) fn u32s(&mut self, v: &[u32]) {
         self.u64(v.len() as u64);
         for x in v {
             self.u32(*x);
@@ -83,13 +83,13 @@ impl Writer {
     }
 }
 
-struct Reader<'a>(&'a [u8]);
+pub(super) struct Reader<'a>(pub(super) &'a [u8]);
 
 /// The decoder's only failure: the bytes are not a model (what is wrong).
-type Bad = &'static str;
+pub(super) type Bad = &'static str;
 
 impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Result<&'a [u8], Bad> {
+    pub(super) fn take(&mut self, n: usize) -> Result<&'a [u8], Bad> {
         if self.0.len() < n {
             return Err("truncated");
         }
@@ -97,42 +97,42 @@ impl<'a> Reader<'a> {
         self.0 = b;
         Ok(a)
     }
-    fn u32(&mut self) -> Result<u32, Bad> {
+    pub(super) fn u32(&mut self) -> Result<u32, Bad> {
         Ok(u32::from_le_bytes(
             self.take(4)?.try_into().map_err(|_| "truncated")?,
         ))
     }
-    fn u64(&mut self) -> Result<u64, Bad> {
+    pub(super) fn u64(&mut self) -> Result<u64, Bad> {
         Ok(u64::from_le_bytes(
             self.take(8)?.try_into().map_err(|_| "truncated")?,
         ))
     }
-    fn f64(&mut self) -> Result<f64, Bad> {
+    pub(super) fn f64(&mut self) -> Result<f64, Bad> {
         Ok(f64::from_bits(self.u64()?))
     }
     /// A count of items of `size` bytes each, checked against what is left.
-    fn count(&mut self, size: usize) -> Result<usize, Bad> {
+    pub(super) fn count(&mut self, size: usize) -> Result<usize, Bad> {
         let n = self.u64()?;
         if n > (self.0.len() / size) as u64 {
             return Err("a length past its end");
         }
         Ok(n as usize)
     }
-    fn str(&mut self) -> Result<String, Bad> {
+    pub(super) fn str(&mut self) -> Result<String, Bad> {
         let n = self.count(1)?;
         String::from_utf8(self.take(n)?.to_vec()).map_err(|_| "not UTF-8 text")
     }
-    fn f64s(&mut self) -> Result<Vec<f64>, Bad> {
+    pub(super) fn f64s(&mut self) -> Result<Vec<f64>, Bad> {
         let n = self.count(8)?;
         (0..n).map(|_| self.f64()).collect()
     }
-    fn u32s(&mut self) -> Result<Vec<u32>, Bad> {
+    pub(super) fn u32s(&mut self) -> Result<Vec<u32>, Bad> {
         let n = self.count(4)?;
         (0..n).map(|_| self.u32()).collect()
     }
 }
 
-fn encode_model(w: &mut Writer, m: &RawModel) {
+pub(super) fn encode_model(w: &mut Writer, m: &RawModel) {
     w.u64(m.parts.len() as u64);
     for p in &m.parts {
         w.str(&p.name);
@@ -164,7 +164,7 @@ fn encode_model(w: &mut Writer, m: &RawModel) {
     w.u64(m.peak_memory);
 }
 
-fn decode_model(r: &mut Reader) -> Result<RawModel, Bad> {
+pub(super) fn decode_model(r: &mut Reader) -> Result<RawModel, Bad> {
     // The smallest encoded part is 52 bytes, the smallest instance 36.
     let n = r.count(52)?;
     let mut parts = Vec::with_capacity(n);
@@ -491,101 +491,6 @@ fn status_kb(key: &str) -> u64 {
         .unwrap_or(0)
 }
 
-// ---- the tessellation store ------------------------------------------------------------
-
-/// How a stored file begins.
-const STORE_MAGIC: &[u8] = b"fitup-tessellation 1\n";
-
-/// What a stored tessellation is of: the STEP bytes (their hash and length) and the
-/// deflection and angle it was meshed with.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct StoreKey {
-    hash: u64,
-    len: u64,
-    linear: u64,
-    angular: u64,
-}
-
-impl StoreKey {
-    pub(super) fn new(bytes: &[u8], options: &StepOptions) -> StoreKey {
-        StoreKey {
-            hash: crate::fsutil::content_hash(bytes),
-            len: bytes.len() as u64,
-            linear: options.linear_deflection.to_bits(),
-            angular: options.angular_deflection.to_bits(),
-        }
-    }
-
-    /// The stored file's name: the key, hashed.
-    fn file_name(&self) -> String {
-        let mut w = Writer::default();
-        for v in [self.hash, self.len, self.linear, self.angular] {
-            w.u64(v);
-        }
-        format!("{:016x}.tess", crate::fsutil::content_hash(&w.0))
-    }
-
-    fn write(&self, w: &mut Writer) {
-        for v in [self.hash, self.len, self.linear, self.angular] {
-            w.u64(v);
-        }
-    }
-
-    fn read(r: &mut Reader) -> Result<StoreKey, Bad> {
-        Ok(StoreKey {
-            hash: r.u64()?,
-            len: r.u64()?,
-            linear: r.u64()?,
-            angular: r.u64()?,
-        })
-    }
-}
-
-/// The stored tessellation for `key` in `store`, when present and sound (anything
-/// else — missing, damaged, another key — is a miss).
-pub(super) fn load_stored(store: &Path, key: &StoreKey) -> Option<RawModel> {
-    let file = store.join(key.file_name());
-    let bytes = crate::fsutil::read_file(&file, crate::fsutil::FileKind::Mesh).ok()?;
-    let mut r = Reader(bytes.strip_prefix(STORE_MAGIC)?);
-    if StoreKey::read(&mut r).ok()? != *key {
-        return None;
-    }
-    let model = decode_model(&mut r).ok()?;
-    r.0.is_empty().then_some(model)
-}
-
-/// Keeps `model` for `key` in `store`, through the write rule (a file there that
-/// fitup did not write is left alone); failures are ignored: the store only saves time.
-pub(super) fn store(store: &Path, key: &StoreKey, model: &RawModel) {
-    if std::fs::create_dir_all(store).is_err() {
-        return;
-    }
-    let mut w = Writer(STORE_MAGIC.to_vec());
-    key.write(&mut w);
-    let mut m = model.clone();
-    m.peak_memory = 0;
-    encode_model(&mut w, &m);
-    let rule = crate::fsutil::OutputRule {
-        signature: Some(STORE_MAGIC),
-        ..crate::fsutil::OutputRule::forced(false)
-    };
-    let _ = crate::fsutil::write_output(&store.join(key.file_name()), &w.0, &rule);
-}
-
-/// The stored files of a store (for tests and tools).
-#[allow(dead_code)]
-pub(crate) fn stored_files(store: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(store)
-        .map(|d| {
-            d.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|e| e == "tess"))
-                .collect()
-        })
-        .unwrap_or_default();
-    v.sort();
-    v
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -635,42 +540,5 @@ mod tests {
             decode_model(&mut Reader(&huge.0)).unwrap_err(),
             "a length past its end"
         );
-    }
-
-    #[test]
-    fn the_store_serves_only_its_key_and_ignores_damage() {
-        let dir = tempfile::tempdir().unwrap();
-        let o = StepOptions::default();
-        let key = StoreKey::new(b"ISO-10303-21; one", &o);
-        store(dir.path(), &key, &model());
-        let mut expected = model();
-        expected.peak_memory = 0;
-        assert_eq!(load_stored(dir.path(), &key), Some(expected));
-        // Other bytes, another deflection: misses.
-        assert_eq!(
-            load_stored(dir.path(), &StoreKey::new(b"ISO-10303-21; two", &o)),
-            None
-        );
-        let finer = StepOptions {
-            linear_deflection: 0.01,
-            ..StepOptions::default()
-        };
-        assert_eq!(
-            load_stored(dir.path(), &StoreKey::new(b"ISO-10303-21; one", &finer)),
-            None
-        );
-        // A damaged file is a miss, and a rewrite replaces it (it is fitup's).
-        let files = stored_files(dir.path());
-        assert_eq!(files.len(), 1);
-        let mut bytes = std::fs::read(&files[0]).unwrap();
-        bytes.truncate(bytes.len() - 3);
-        std::fs::write(&files[0], &bytes).unwrap();
-        assert_eq!(load_stored(dir.path(), &key), None);
-        store(dir.path(), &key, &model());
-        assert!(load_stored(dir.path(), &key).is_some());
-        // A file fitup did not write at that name is left alone.
-        std::fs::write(&files[0], b"my notes").unwrap();
-        store(dir.path(), &key, &model());
-        assert_eq!(std::fs::read(&files[0]).unwrap(), b"my notes");
     }
 }

@@ -1,0 +1,131 @@
+//! The STEP tessellations a project's documents ask for, and pruning the project's
+//! tessellation store ([`crate::mesh::step::STEP_STORE`]) by them: what
+//! `fitup cache prune` does (library: [`prune_project_store`]).
+
+use super::file::{DocumentFile, PartFile};
+use crate::mesh::step::{
+    prune_store, PruneOptions, PruneReport, StoreError, Tessellation, DEFAULT_ANGULAR_DEFLECTION,
+    DEFAULT_LINEAR_DEFLECTION, STEP_STORE,
+};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// A `step:` part's tessellation: its linear deflection (mm) and angular deflection
+/// (radians), from its `deflection:` (mm) and `angle:` (degrees) or the defaults —
+/// the one place both the loader and the pruner take them from, so they agree bit for
+/// bit.
+pub fn of_part(pf: &PartFile) -> (f64, f64) {
+    (
+        pf.deflection.unwrap_or(DEFAULT_LINEAR_DEFLECTION),
+        pf.angle.map_or(DEFAULT_ANGULAR_DEFLECTION, f64::to_radians),
+    )
+}
+
+/// The most files [`in_use`] looks at, and how deep it goes: a project is a folder of
+/// documents, not a disk.
+const MAX_FILES: usize = 100_000;
+const MAX_DEPTH: usize = 16;
+
+/// What the documents of a project ask for.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct InUse {
+    /// Every `step:` part's file (canonical) and tessellation.
+    pub tessellations: HashSet<Tessellation>,
+    /// How many documents name a `step:` part.
+    pub documents: usize,
+    /// YAML files that name `step:` but could not be read as documents, and why: while
+    /// there is one, what they ask for is not known.
+    pub unreadable: Vec<(PathBuf, String)>,
+}
+
+/// The tessellations the documents under `root` ask for: every `.yaml`/`.yml` file
+/// below it (not in hidden folders such as `.fitup-cache` or `.git`, nor `target`)
+/// that mentions `step:` is read as a document, and each `step:` part's file is
+/// resolved from the document's folder.
+pub fn in_use(root: &Path) -> InUse {
+    let mut found = InUse::default();
+    let Ok(project) = crate::project::Project::new(root) else {
+        return found;
+    };
+    let mut stack = vec![(project.root().to_path_buf(), 0)];
+    let mut seen = 0;
+    while let Some((dir, depth)) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            seen += 1;
+            if seen > MAX_FILES {
+                return found;
+            }
+            let name = e.file_name().to_string_lossy().into_owned();
+            let Ok(kind) = e.file_type() else { continue };
+            if kind.is_dir() {
+                if depth < MAX_DEPTH && !name.starts_with('.') && name != "target" {
+                    stack.push((e.path(), depth + 1));
+                }
+                continue;
+            }
+            let yaml = name.ends_with(".yaml") || name.ends_with(".yml");
+            if !kind.is_file() || !yaml {
+                continue;
+            }
+            let path = e.path();
+            let Ok(text) = crate::fsutil::read_text(&path, crate::fsutil::FileKind::Document)
+            else {
+                continue;
+            };
+            if !text.contains("step:") {
+                continue;
+            }
+            match super::scan::from_yaml::<DocumentFile>(&text, &path, "document", "") {
+                Err(e) => found.unreadable.push((path, e.to_string())),
+                Ok((doc, _)) => {
+                    let mut any = false;
+                    for pf in doc.parts.values() {
+                        let Some(step) = &pf.step else { continue };
+                        any = true;
+                        let Ok(file) = project.resolve_from(&dir, step) else {
+                            continue;
+                        };
+                        let (linear, angular) = of_part(pf);
+                        if let Some(t) = Tessellation::new(&file, linear, angular) {
+                            found.tessellations.insert(t);
+                        }
+                    }
+                    found.documents += usize::from(any);
+                }
+            }
+        }
+    }
+    found
+}
+
+/// Prunes the tessellation store of the project at `root` ([`prune_store`]): entries
+/// whose STEP file is gone or changed, of an old format or damaged, whose tessellation
+/// no document asks for (only while every document that names `step:` could be read),
+/// dead writers' temporary files, then the least recently used down to `max_bytes`.
+/// Nothing outside `root/.fitup-cache/step` is touched; a store reached through a
+/// symbolic link is refused. Returns what was (or, with `dry_run`, would be) removed
+/// and what the documents ask for.
+pub fn prune_project_store(
+    root: &Path,
+    dry_run: bool,
+    max_bytes: u64,
+) -> Result<(PruneReport, InUse), StoreError> {
+    let cache = root.join(".fitup-cache");
+    if std::fs::symlink_metadata(&cache).is_ok_and(|m| !m.is_dir()) {
+        return Err(StoreError::NotAFolder { path: cache });
+    }
+    let used = in_use(root);
+    let options = PruneOptions {
+        dry_run,
+        max_bytes,
+        in_use: used
+            .unreadable
+            .is_empty()
+            .then(|| used.tessellations.clone()),
+    };
+    let report = prune_store(&root.join(STEP_STORE), &options)?;
+    Ok((report, used))
+}

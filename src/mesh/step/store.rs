@@ -1,0 +1,884 @@
+//! The tessellation store: what Open CASCADE returned for a STEP file, kept in a folder
+//! (a project's [`super::STEP_STORE`]) so that a later read of the same bytes with the
+//! same tessellation skips Open CASCADE — and the rules that keep it from growing
+//! without end.
+//!
+//! **Entries.** One file `<16 hex digits>.tess` per STEP content (its hash and length)
+//! and tessellation (linear and angular deflection); it records the STEP file it was
+//! read from (its canonical path). Entries are written by the project's write rule
+//! ([`crate::fsutil::write_output`]: a temporary file renamed into place), so a reader
+//! never sees half an entry, and a file there that fitup did not write is never
+//! replaced. A hit refreshes the entry's modification time: its last use.
+//!
+//! **What removes an entry** (never anything but fitup's own entries and its own
+//! leftover temporary files, and only inside the store folder):
+//! - *on write* of an entry for a source, the entries recorded for the same source
+//!   with other contents: that file changed, they can never be hit from it again; and
+//!   then, while the store is over its size cap ([`DEFAULT_STORE_CAP`]), the least
+//!   recently used entries (never the one just written);
+//! - *on [`prune_store`]* (`fitup cache prune`): entries whose source is gone or
+//!   changed, entries of the old format or damaged, entries whose tessellation no
+//!   document asks for any more (when the caller knows, [`PruneOptions::in_use`]),
+//!   temporary files left by a writer that died an hour or more ago, and then the
+//!   least recently used down to [`PruneOptions::max_bytes`].
+//!
+//! Writers' sweeps and pruners take turns on the folder's lock ([`crate::fsutil::lock_folder`]);
+//! readers take no lock: removing an entry only unlinks it (a reader that has it open
+//! reads it whole; one that comes later misses and reads the STEP file again).
+
+use super::raw::{decode_model, encode_model, Bad, RawModel, Reader, Writer};
+use super::StepOptions;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, SystemTime};
+
+/// How an entry begins (format 2: with the source's path).
+const STORE_MAGIC: &[u8] = b"fitup-tessellation 2\n";
+
+/// What every format of entry begins with (format 1 had no source).
+const ANY_STORE_MAGIC: &[u8] = b"fitup-tessellation ";
+
+/// The default size cap of a store, bytes (1 GiB): past it, writing an entry evicts the
+/// least recently used.
+pub const DEFAULT_STORE_CAP: u64 = 1 << 30;
+
+/// The longest source path an entry records, bytes.
+const MAX_SOURCE_BYTES: usize = 4096;
+
+/// How old a writer's temporary file must be before [`prune_store`] takes it for a
+/// leftover of a writer that died (a live writer renames it within seconds).
+const LEFTOVER_AGE: Duration = Duration::from_secs(3600);
+
+/// What a stored tessellation is of: the STEP bytes (their hash and length) and the
+/// deflection and angle it was meshed with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct StoreKey {
+    hash: u64,
+    len: u64,
+    linear: u64,
+    angular: u64,
+}
+
+impl StoreKey {
+    pub(super) fn new(bytes: &[u8], options: &StepOptions) -> StoreKey {
+        StoreKey {
+            hash: crate::fsutil::content_hash(bytes),
+            len: bytes.len() as u64,
+            linear: options.linear_deflection.to_bits(),
+            angular: options.angular_deflection.to_bits(),
+        }
+    }
+
+    /// The stored file's name: the key, hashed.
+    fn file_name(&self) -> String {
+        let mut w = Writer::default();
+        self.write(&mut w);
+        format!("{:016x}.tess", crate::fsutil::content_hash(&w.0))
+    }
+
+    fn write(&self, w: &mut Writer) {
+        for v in [self.hash, self.len, self.linear, self.angular] {
+            w.u64(v);
+        }
+    }
+
+    fn read(r: &mut Reader) -> Result<StoreKey, Bad> {
+        Ok(StoreKey {
+            hash: r.u64()?,
+            len: r.u64()?,
+            linear: r.u64()?,
+            angular: r.u64()?,
+        })
+    }
+}
+
+/// The source as an entry records it: its canonical path, as UTF-8 (empty when it has
+/// none or is too long: such an entry is never taken for any file's).
+fn source_text(source: &Path) -> String {
+    source
+        .canonicalize()
+        .ok()
+        .and_then(|p| p.to_str().map(str::to_string))
+        .filter(|s| s.len() <= MAX_SOURCE_BYTES)
+        .unwrap_or_default()
+}
+
+/// The stored tessellation for `key` in `store`, when present and sound (anything
+/// else — missing, damaged, another key, the old format — is a miss). A hit marks the
+/// entry used now.
+pub(super) fn load_stored(store: &Path, key: &StoreKey) -> Option<RawModel> {
+    let file = store.join(key.file_name());
+    let bytes = crate::fsutil::read_file(&file, crate::fsutil::FileKind::Mesh).ok()?;
+    let mut r = Reader(bytes.strip_prefix(STORE_MAGIC)?);
+    if StoreKey::read(&mut r).ok()? != *key {
+        return None;
+    }
+    r.str().ok()?;
+    let model = decode_model(&mut r).ok()?;
+    if !r.0.is_empty() {
+        return None;
+    }
+    touch(&file);
+    Some(model)
+}
+
+/// Marks `file` used now (its modification time), unless it was within the last
+/// minute; failures only make it look older to the size cap.
+fn touch(file: &Path) {
+    let now = SystemTime::now();
+    let recent = std::fs::metadata(file)
+        .and_then(|m| m.modified())
+        .is_ok_and(|t| {
+            now.duration_since(t)
+                .is_ok_and(|d| d < Duration::from_secs(60))
+        });
+    if !recent {
+        if let Ok(f) = std::fs::OpenOptions::new().write(true).open(file) {
+            let _ = f.set_modified(now);
+        }
+    }
+}
+
+/// Keeps `model` for `key` (read from the STEP file `source`) in `store`, through the
+/// write rule (a file there that fitup did not write is left alone), then removes what
+/// the write made stale: the entries of `source` with other contents, and the least
+/// recently used while the store holds more than `cap` bytes. Failures are ignored:
+/// the store only saves time.
+pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawModel, cap: u64) {
+    if std::fs::create_dir_all(store).is_err() {
+        return;
+    }
+    let source = source_text(source);
+    let mut w = Writer(STORE_MAGIC.to_vec());
+    key.write(&mut w);
+    w.str(&source);
+    let mut m = model.clone();
+    m.peak_memory = 0;
+    encode_model(&mut w, &m);
+    let rule = crate::fsutil::OutputRule {
+        signature: Some(ANY_STORE_MAGIC),
+        ..crate::fsutil::OutputRule::forced(false)
+    };
+    let name = key.file_name();
+    if crate::fsutil::write_output(&store.join(&name), &w.0, &rule).is_err() {
+        return;
+    }
+    // The sweep takes turns with other writers' sweeps and with prune (the write
+    // itself cannot: the write rule's registry takes the same folder lock).
+    let _turn = crate::fsutil::lock_folder(store);
+    let Ok(found) = scan(store) else { return };
+    let mut kept = Vec::new();
+    for e in found.entries {
+        let changed = matches!(&e.header, Ok(h) if !source.is_empty()
+            && h.source == source
+            && (h.key.hash, h.key.len) != (key.hash, key.len));
+        if changed {
+            let _ = std::fs::remove_file(&e.file);
+        } else if e.name != name {
+            kept.push(e);
+        }
+    }
+    let total: u64 = kept.iter().map(|e| e.bytes).sum::<u64>() + w.0.len() as u64;
+    for e in over_cap(kept, total, cap) {
+        let _ = std::fs::remove_file(&e.file);
+    }
+}
+
+/// An entry's head: its key and source.
+#[derive(Debug, Clone)]
+struct Header {
+    key: StoreKey,
+    source: String,
+}
+
+/// A file of the store that fitup wrote (it begins with the store's magic).
+#[derive(Debug)]
+struct Found {
+    file: PathBuf,
+    name: String,
+    bytes: u64,
+    modified: SystemTime,
+    /// The head; `Err` for the old format or a damaged head.
+    header: Result<Header, StaleReason>,
+}
+
+/// What [`scan`] found: fitup's entries and its writers' temporary files (with their
+/// age); everything else in the folder is not fitup's and is left out.
+struct Scan {
+    entries: Vec<Found>,
+    leftovers: Vec<(PathBuf, u64, SystemTime)>,
+}
+
+/// The entries and leftovers of `store`. Only regular files are looked at (a symbolic
+/// link is never followed), named as an entry (`<16 hex digits>.tess`) and beginning
+/// with the store's magic, or as a writer's temporary file (`.fitup-*.tmp`).
+fn scan(store: &Path) -> std::io::Result<Scan> {
+    let mut out = Scan {
+        entries: Vec::new(),
+        leftovers: Vec::new(),
+    };
+    for e in std::fs::read_dir(store)? {
+        let Ok(e) = e else { continue };
+        let Ok(md) = std::fs::symlink_metadata(e.path()) else {
+            continue;
+        };
+        if !md.is_file() {
+            continue;
+        }
+        let name = e.file_name().to_string_lossy().into_owned();
+        let modified = md.modified().unwrap_or(SystemTime::UNIX_EPOCH);
+        if name.starts_with(".fitup-") && name.ends_with(".tmp") {
+            out.leftovers.push((e.path(), md.len(), modified));
+            continue;
+        }
+        let is_entry_name = name.len() == 21
+            && name.ends_with(".tess")
+            && name.as_bytes()[..16].iter().all(u8::is_ascii_hexdigit);
+        if !is_entry_name {
+            continue;
+        }
+        let Ok(head) = crate::fsutil::file_head(&e.path(), (MAX_SOURCE_BYTES + 128) as u64) else {
+            continue;
+        };
+        if !head.starts_with(ANY_STORE_MAGIC) {
+            continue; // not fitup's
+        }
+        let header = match head.strip_prefix(STORE_MAGIC) {
+            None => Err(StaleReason::OldFormat),
+            Some(rest) => {
+                let mut r = Reader(rest);
+                match (StoreKey::read(&mut r), r.str()) {
+                    (Ok(key), Ok(source)) => Ok(Header { key, source }),
+                    _ => Err(StaleReason::Damaged),
+                }
+            }
+        };
+        out.entries.push(Found {
+            file: e.path(),
+            name,
+            bytes: md.len(),
+            modified,
+            header,
+        });
+    }
+    Ok(out)
+}
+
+/// The entries to evict so that `kept` (holding `total` bytes with what else the store
+/// keeps) fits in `cap`: the least recently used first.
+fn over_cap(mut kept: Vec<Found>, mut total: u64, cap: u64) -> Vec<Found> {
+    kept.sort_by_key(|e| e.modified);
+    let mut evict = Vec::new();
+    for e in kept {
+        if total <= cap {
+            break;
+        }
+        total -= e.bytes;
+        evict.push(e);
+    }
+    evict
+}
+
+/// Why [`prune_store`] removes a file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum StaleReason {
+    /// The STEP file it was read from is gone.
+    SourceGone,
+    /// The STEP file it was read from has other contents now.
+    SourceChanged,
+    /// Written by an older fitup (no source recorded): never read any more.
+    OldFormat,
+    /// Its head is cut or garbled.
+    Damaged,
+    /// No document asks for this file with this tessellation any more (another
+    /// `deflection:` or `angle:`, or the part is gone).
+    Unused,
+    /// Least recently used while the store was over its size cap.
+    OverCap,
+    /// A temporary file a writer left when it died.
+    Leftover,
+}
+
+impl std::fmt::Display for StaleReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StaleReason::SourceGone => "its STEP file is gone",
+            StaleReason::SourceChanged => "its STEP file changed",
+            StaleReason::OldFormat => "an older fitup's format",
+            StaleReason::Damaged => "damaged",
+            StaleReason::Unused => "no document uses this tessellation",
+            StaleReason::OverCap => "least recently used, over the size cap",
+            StaleReason::Leftover => "a dead writer's temporary file",
+        })
+    }
+}
+
+/// What a tessellation is of, as documents ask for it: the STEP file's canonical path
+/// and the linear and angular deflection (mm, radians) as [`StepOptions`] holds them.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Tessellation {
+    /// The STEP file (canonical).
+    pub source: PathBuf,
+    /// [`StepOptions::linear_deflection`]'s bits.
+    pub linear_bits: u64,
+    /// [`StepOptions::angular_deflection`]'s bits.
+    pub angular_bits: u64,
+}
+
+impl Tessellation {
+    /// The tessellation of `source` with `linear` (mm) and `angular` (radians)
+    /// deflection; `None` when `source` does not exist.
+    pub fn new(source: &Path, linear: f64, angular: f64) -> Option<Self> {
+        Some(Tessellation {
+            source: source.canonicalize().ok()?,
+            linear_bits: linear.to_bits(),
+            angular_bits: angular.to_bits(),
+        })
+    }
+}
+
+/// How [`prune_store`] prunes.
+#[derive(Debug, Clone)]
+pub struct PruneOptions {
+    /// Only say what would be removed.
+    pub dry_run: bool,
+    /// The size the store is brought down to, bytes (least recently used first).
+    pub max_bytes: u64,
+    /// The tessellations the project's documents ask for: an entry of a current
+    /// source that is not among them is removed. `None`: not known (an unreadable
+    /// document); such entries are kept.
+    pub in_use: Option<HashSet<Tessellation>>,
+}
+
+impl Default for PruneOptions {
+    fn default() -> Self {
+        PruneOptions {
+            dry_run: false,
+            max_bytes: DEFAULT_STORE_CAP,
+            in_use: None,
+        }
+    }
+}
+
+/// A file [`prune_store`] removed (or would remove).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pruned {
+    /// The file in the store.
+    pub file: PathBuf,
+    /// Its size, bytes.
+    pub bytes: u64,
+    /// Why.
+    pub reason: StaleReason,
+    /// The STEP file it was read from, when recorded.
+    pub source: Option<PathBuf>,
+    /// Its tessellation's linear deflection (mm), when the head is readable.
+    pub deflection: Option<f64>,
+}
+
+/// What [`prune_store`] did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PruneReport {
+    /// Removed (with [`PruneOptions::dry_run`]: would be removed).
+    pub removed: Vec<Pruned>,
+    /// Entries kept, and their bytes.
+    pub kept: usize,
+    /// Bytes of the kept entries.
+    pub kept_bytes: u64,
+    /// Files that could not be removed, and why.
+    pub failed: Vec<(PathBuf, std::io::ErrorKind)>,
+}
+
+/// Why a store could not be pruned (nothing was removed).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StoreError {
+    /// The store's path is a symbolic link or not a folder: pruning it could reach
+    /// outside the project.
+    #[error("{}: the tessellation store is not a folder (a symbolic link or a file): refusing to prune it", path.display())]
+    NotAFolder {
+        /// The store.
+        path: PathBuf,
+    },
+    /// The folder could not be listed.
+    #[error("{}: cannot list the tessellation store: {kind}", path.display())]
+    Io {
+        /// The store.
+        path: PathBuf,
+        /// The operating system's answer.
+        kind: std::io::ErrorKind,
+    },
+}
+
+/// Whether the source an entry records is the file it was read from: `None` when it
+/// is, else why not. A source that cannot be read for another reason counts as
+/// current (kept).
+fn source_state(h: &Header) -> Option<StaleReason> {
+    if h.source.is_empty() {
+        return Some(StaleReason::SourceGone);
+    }
+    let path = Path::new(&h.source);
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Some(StaleReason::SourceGone),
+        Err(_) => None,
+        Ok(md) if !md.is_file() => Some(StaleReason::SourceGone),
+        Ok(md) if md.len() != h.key.len => Some(StaleReason::SourceChanged),
+        Ok(_) => match crate::fsutil::read_file(path, crate::fsutil::FileKind::Step) {
+            Ok(bytes) if crate::fsutil::content_hash(&bytes) != h.key.hash => {
+                Some(StaleReason::SourceChanged)
+            }
+            _ => None,
+        },
+    }
+}
+
+/// Removes the stale files of the store folder `store` (see the module documentation
+/// for the rules), or with [`PruneOptions::dry_run`] only lists them. A store that does
+/// not exist is empty. Only fitup's entries and its writers' leftovers inside `store`
+/// are ever removed; `store` must be a real folder, not a symbolic link.
+pub fn prune_store(store: &Path, options: &PruneOptions) -> Result<PruneReport, StoreError> {
+    let mut report = PruneReport::default();
+    match std::fs::symlink_metadata(store) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(report),
+        Err(e) => {
+            return Err(StoreError::Io {
+                path: store.into(),
+                kind: e.kind(),
+            })
+        }
+        Ok(md) if !md.is_dir() => return Err(StoreError::NotAFolder { path: store.into() }),
+        Ok(_) => {}
+    }
+    let _turn = crate::fsutil::lock_folder(store);
+    let found = scan(store).map_err(|e| StoreError::Io {
+        path: store.into(),
+        kind: e.kind(),
+    })?;
+    let mut stale = Vec::new();
+    let now = SystemTime::now();
+    for (file, bytes, modified) in found.leftovers {
+        if now
+            .duration_since(modified)
+            .is_ok_and(|age| age >= LEFTOVER_AGE)
+        {
+            stale.push(Pruned {
+                file,
+                bytes,
+                reason: StaleReason::Leftover,
+                source: None,
+                deflection: None,
+            });
+        }
+    }
+    let mut kept = Vec::new();
+    for e in found.entries {
+        let reason = match &e.header {
+            Err(r) => Some(*r),
+            Ok(h) => source_state(h).or_else(|| {
+                let t = Tessellation {
+                    source: PathBuf::from(&h.source),
+                    linear_bits: h.key.linear,
+                    angular_bits: h.key.angular,
+                };
+                options
+                    .in_use
+                    .as_ref()
+                    .is_some_and(|u| !u.contains(&t))
+                    .then_some(StaleReason::Unused)
+            }),
+        };
+        match reason {
+            Some(reason) => stale.push(pruned(&e, reason)),
+            None => kept.push(e),
+        }
+    }
+    let total: u64 = kept.iter().map(|e| e.bytes).sum();
+    report.kept = kept.len();
+    let evicted = over_cap(kept, total, options.max_bytes);
+    report.kept -= evicted.len();
+    report.kept_bytes = total - evicted.iter().map(|e| e.bytes).sum::<u64>();
+    for e in &evicted {
+        stale.push(pruned(e, StaleReason::OverCap));
+    }
+    for p in stale {
+        if !options.dry_run {
+            if let Err(e) = std::fs::remove_file(&p.file) {
+                if e.kind() != std::io::ErrorKind::NotFound {
+                    report.failed.push((p.file.clone(), e.kind()));
+                    continue;
+                }
+            }
+        }
+        report.removed.push(p);
+    }
+    Ok(report)
+}
+
+fn pruned(e: &Found, reason: StaleReason) -> Pruned {
+    let h = e.header.as_ref().ok();
+    Pruned {
+        file: e.file.clone(),
+        bytes: e.bytes,
+        reason,
+        source: h
+            .filter(|h| !h.source.is_empty())
+            .map(|h| PathBuf::from(&h.source)),
+        deflection: h.map(|h| f64::from_bits(h.key.linear)),
+    }
+}
+
+/// The stored files of a store (for tests and tools).
+#[allow(dead_code)]
+pub(crate) fn stored_files(store: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(store)
+        .map(|d| {
+            d.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "tess"))
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::raw::{RawInstance, RawPart};
+    use super::*;
+
+    fn model(name: &str) -> RawModel {
+        RawModel {
+            parts: vec![RawPart {
+                name: name.into(),
+                solid_index: 1,
+                solids_in_product: 1,
+                vertices: vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.5],
+                triangles: vec![0, 1, 2],
+                exact_volume: 12.5,
+                faces: 3,
+                ..RawPart::default()
+            }],
+            instances: vec![RawInstance {
+                name: "peg-1".into(),
+                path: "cell/peg-1".into(),
+                part: 0,
+                matrix: (0..12).map(f64::from).collect(),
+                scale: 1.0,
+            }],
+            length_unit: "MILLIMETRE".into(),
+            ..RawModel::default()
+        }
+    }
+
+    fn options(linear: f64) -> StepOptions {
+        StepOptions {
+            linear_deflection: linear,
+            ..StepOptions::default()
+        }
+    }
+
+    /// A source file with `bytes` and its key at `linear` deflection.
+    fn source(dir: &Path, name: &str, bytes: &[u8], linear: f64) -> (PathBuf, StoreKey) {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        (p, StoreKey::new(bytes, &options(linear)))
+    }
+
+    fn age(file: &Path, secs: u64) {
+        let f = std::fs::OpenOptions::new().write(true).open(file).unwrap();
+        f.set_modified(SystemTime::now() - Duration::from_secs(secs))
+            .unwrap();
+    }
+
+    #[test]
+    fn the_store_serves_only_its_key_and_ignores_damage() {
+        let dir = tempfile::tempdir().unwrap();
+        let st = dir.path().join("store");
+        let (a, key) = source(dir.path(), "a.step", b"ISO-10303-21; one", 0.1);
+        store(&st, &key, &a, &model("peg"), DEFAULT_STORE_CAP);
+        assert_eq!(load_stored(&st, &key), Some(model("peg")));
+        let (_, other) = source(dir.path(), "b.step", b"ISO-10303-21; two", 0.1);
+        assert_eq!(load_stored(&st, &other), None);
+        assert_eq!(
+            load_stored(&st, &StoreKey::new(b"ISO-10303-21; one", &options(0.01))),
+            None
+        );
+        // A damaged file is a miss, and a rewrite replaces it (it is fitup's).
+        let files = stored_files(&st);
+        assert_eq!(files.len(), 1);
+        let mut bytes = std::fs::read(&files[0]).unwrap();
+        bytes.truncate(bytes.len() - 3);
+        std::fs::write(&files[0], &bytes).unwrap();
+        assert_eq!(load_stored(&st, &key), None);
+        store(&st, &key, &a, &model("peg"), DEFAULT_STORE_CAP);
+        assert!(load_stored(&st, &key).is_some());
+        // A file fitup did not write at that name is left alone.
+        std::fs::write(&files[0], b"my notes").unwrap();
+        store(&st, &key, &a, &model("peg"), DEFAULT_STORE_CAP);
+        assert_eq!(std::fs::read(&files[0]).unwrap(), b"my notes");
+    }
+
+    /// Writing the entry of a changed STEP file removes the entries of its older
+    /// contents, and only those: other files' entries and the same contents at another
+    /// deflection stay.
+    #[test]
+    fn writing_an_entry_removes_the_same_files_older_contents() {
+        let dir = tempfile::tempdir().unwrap();
+        let st = dir.path().join("store");
+        let (a, old) = source(dir.path(), "a.step", b"ISO-10303-21; v1", 0.1);
+        store(&st, &old, &a, &model("v1"), DEFAULT_STORE_CAP);
+        let (_, old_fine) = source(dir.path(), "a.step", b"ISO-10303-21; v1", 0.01);
+        store(&st, &old_fine, &a, &model("v1 fine"), DEFAULT_STORE_CAP);
+        let (b, other) = source(dir.path(), "b.step", b"ISO-10303-21; b", 0.1);
+        store(&st, &other, &b, &model("b"), DEFAULT_STORE_CAP);
+        assert_eq!(stored_files(&st).len(), 3);
+        // Another deflection of the same contents is not stale.
+        assert!(load_stored(&st, &old).is_some());
+        // a.step is saved again with other contents and read.
+        let (_, new) = source(dir.path(), "a.step", b"ISO-10303-21; v2!", 0.1);
+        store(&st, &new, &a, &model("v2"), DEFAULT_STORE_CAP);
+        assert_eq!(
+            load_stored(&st, &old),
+            None,
+            "the old contents' entry is gone"
+        );
+        assert_eq!(load_stored(&st, &old_fine), None, "at every deflection");
+        assert_eq!(load_stored(&st, &new), Some(model("v2")));
+        assert_eq!(load_stored(&st, &other), Some(model("b")), "b.step's stays");
+        assert_eq!(stored_files(&st).len(), 2);
+    }
+
+    /// Over the size cap, writing evicts the least recently used entries — a hit
+    /// counts as a use — and never the entry just written.
+    #[test]
+    fn the_size_cap_evicts_the_least_recently_used() {
+        let dir = tempfile::tempdir().unwrap();
+        let st = dir.path().join("store");
+        let keys: Vec<(PathBuf, StoreKey)> = (0..3)
+            .map(|i| {
+                let bytes = format!("ISO-10303-21; {i}");
+                source(dir.path(), &format!("{i}.step"), bytes.as_bytes(), 0.1)
+            })
+            .collect();
+        for (i, (p, k)) in keys.iter().enumerate() {
+            store(&st, k, p, &model("m"), DEFAULT_STORE_CAP);
+            age(&st.join(k.file_name()), 1000 - 100 * i as u64);
+        }
+        let one = std::fs::metadata(st.join(keys[0].1.file_name()))
+            .unwrap()
+            .len();
+        // Entry 0 is the oldest, but a hit makes it the most recent.
+        assert!(load_stored(&st, &keys[0].1).is_some());
+        let (p, k) = source(dir.path(), "3.step", b"ISO-10303-21; 3", 0.1);
+        store(&st, &k, &p, &model("m"), 3 * one);
+        assert!(
+            load_stored(&st, &keys[1].1).is_none(),
+            "the least recently used goes"
+        );
+        for k in [&keys[0].1, &keys[2].1, &k] {
+            assert!(load_stored(&st, k).is_some());
+        }
+        // A cap smaller than one entry still keeps the entry just written.
+        let (p, k) = source(dir.path(), "4.step", b"ISO-10303-21; 4", 0.1);
+        store(&st, &k, &p, &model("m"), 1);
+        assert_eq!(stored_files(&st), vec![st.join(k.file_name())]);
+    }
+
+    /// `prune_store` removes exactly what is stale, lists it first with `dry_run`,
+    /// and leaves everything that is not fitup's — even named like an entry.
+    #[test]
+    fn pruning_removes_what_is_stale_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let st = dir.path().join("store");
+        let (used, used_key) = source(dir.path(), "used.step", b"ISO-10303-21; used", 0.1);
+        store(&st, &used_key, &used, &model("used"), DEFAULT_STORE_CAP);
+        let (_, finer) = source(dir.path(), "used.step", b"ISO-10303-21; used", 0.05);
+        store(&st, &finer, &used, &model("finer"), DEFAULT_STORE_CAP);
+        let (gone, gone_key) = source(dir.path(), "gone.step", b"ISO-10303-21; gone", 0.1);
+        store(&st, &gone_key, &gone, &model("gone"), DEFAULT_STORE_CAP);
+        std::fs::remove_file(&gone).unwrap();
+        let (edited, edited_key) = source(dir.path(), "edited.step", b"ISO-10303-21; aaaa", 0.1);
+        store(
+            &st,
+            &edited_key,
+            &edited,
+            &model("edited"),
+            DEFAULT_STORE_CAP,
+        );
+        std::fs::write(&edited, b"ISO-10303-21; bbbb").unwrap(); // same length
+        let old_format = st.join("00000000000000a1.tess");
+        std::fs::write(&old_format, b"fitup-tessellation 1\nwhatever").unwrap();
+        let damaged = st.join("00000000000000d2.tess");
+        std::fs::write(&damaged, b"fitup-tessellation 2\n\x01\x02").unwrap();
+        let not_ours = st.join("00000000000000e3.tess");
+        std::fs::write(&not_ours, b"my own notes").unwrap();
+        let notes = st.join("README.txt");
+        std::fs::write(&notes, b"fitup-tessellation 2\n but a user's file").unwrap();
+        let dead = st.join(".fitup-dead.tmp");
+        std::fs::write(&dead, b"half").unwrap();
+        age(&dead, 2 * 3600);
+        let live = st.join(".fitup-live.tmp");
+        std::fs::write(&live, b"being written").unwrap();
+        #[cfg(unix)]
+        let outside = {
+            let target = dir.path().join("precious.tess");
+            std::fs::write(&target, b"fitup-tessellation 1\n").unwrap();
+            std::os::unix::fs::symlink(&target, st.join("00000000000000f4.tess")).unwrap();
+            target
+        };
+        let in_use: HashSet<Tessellation> =
+            [Tessellation::new(&used, 0.1, StepOptions::default().angular_deflection).unwrap()]
+                .into();
+        let mut o = PruneOptions {
+            dry_run: true,
+            in_use: Some(in_use),
+            ..PruneOptions::default()
+        };
+        let before = std::fs::read_dir(&st).unwrap().count();
+        let dry = prune_store(&st, &o).unwrap();
+        assert_eq!(
+            std::fs::read_dir(&st).unwrap().count(),
+            before,
+            "a dry run removes nothing"
+        );
+        let mut reasons: Vec<(String, StaleReason)> = dry
+            .removed
+            .iter()
+            .map(|p| {
+                (
+                    p.file.file_name().unwrap().to_string_lossy().into_owned(),
+                    p.reason,
+                )
+            })
+            .collect();
+        reasons.sort_by_key(|(n, _)| n.clone());
+        let name = |k: &StoreKey| k.file_name();
+        let mut expected = vec![
+            (".fitup-dead.tmp".to_string(), StaleReason::Leftover),
+            ("00000000000000a1.tess".into(), StaleReason::OldFormat),
+            ("00000000000000d2.tess".into(), StaleReason::Damaged),
+            (name(&finer), StaleReason::Unused),
+            (name(&gone_key), StaleReason::SourceGone),
+            (name(&edited_key), StaleReason::SourceChanged),
+        ];
+        expected.sort_by_key(|(n, _)| n.clone());
+        assert_eq!(reasons, expected);
+        assert_eq!(dry.kept, 1);
+        o.dry_run = false;
+        let done = prune_store(&st, &o).unwrap();
+        assert_eq!(done.removed, dry.removed);
+        assert!(done.failed.is_empty());
+        let mut left: Vec<String> = std::fs::read_dir(&st)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n != crate::fsutil::OUTPUT_REGISTRY)
+            .collect();
+        left.sort();
+        let mut keep = vec![
+            name(&used_key),
+            "00000000000000e3.tess".into(),
+            "README.txt".into(),
+            ".fitup-live.tmp".into(),
+        ];
+        #[cfg(unix)]
+        keep.push("00000000000000f4.tess".into());
+        keep.sort();
+        assert_eq!(left, keep);
+        assert_eq!(load_stored(&st, &used_key), Some(model("used")));
+        #[cfg(unix)]
+        assert_eq!(std::fs::read(&outside).unwrap(), b"fitup-tessellation 1\n");
+        // Without knowing what documents use, another deflection is kept; the cap
+        // still applies.
+        store(&st, &finer, &used, &model("finer"), DEFAULT_STORE_CAP);
+        let r = prune_store(&st, &PruneOptions::default()).unwrap();
+        assert!(r.removed.is_empty(), "{r:?}");
+        assert_eq!(r.kept, 2);
+        let r = prune_store(
+            &st,
+            &PruneOptions {
+                max_bytes: 0,
+                ..PruneOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(r.removed.len(), 2);
+        assert!(r.removed.iter().all(|p| p.reason == StaleReason::OverCap));
+        assert_eq!((r.kept, r.kept_bytes), (0, 0));
+        // A missing store is empty.
+        assert_eq!(
+            prune_store(&dir.path().join("none"), &PruneOptions::default()).unwrap(),
+            PruneReport::default()
+        );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_store_reached_through_a_symbolic_link_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("elsewhere");
+        std::fs::create_dir(&real).unwrap();
+        std::fs::write(
+            real.join("00000000000000a1.tess"),
+            b"fitup-tessellation 1\n",
+        )
+        .unwrap();
+        let link = dir.path().join("store");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        let e = prune_store(&link, &PruneOptions::default()).unwrap_err();
+        assert!(matches!(e, StoreError::NotAFolder { .. }), "{e}");
+        assert!(real.join("00000000000000a1.tess").exists());
+    }
+
+    /// Readers take no lock: while one thread prunes and rewrites an entry over and
+    /// over, another reading it gets the whole model or a miss, never part of one.
+    #[test]
+    fn a_reader_sees_a_whole_entry_or_none_while_the_store_is_pruned() {
+        let dir = tempfile::tempdir().unwrap();
+        let st = dir.path().join("store");
+        let (a, key) = source(dir.path(), "a.step", b"ISO-10303-21; a", 0.1);
+        let big = RawModel {
+            parts: (0..50)
+                .map(|i| model(&format!("p{i}")).parts[0].clone())
+                .collect(),
+            ..model("m")
+        };
+        store(&st, &key, &a, &big, DEFAULT_STORE_CAP);
+        let stop = std::sync::atomic::AtomicBool::new(false);
+        let (hits, misses) = std::thread::scope(|s| {
+            let reader = s.spawn(|| {
+                let (mut hits, mut misses) = (0, 0);
+                while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                    match load_stored(&st, &key) {
+                        Some(m) => {
+                            assert_eq!(m, big);
+                            hits += 1;
+                        }
+                        None => misses += 1,
+                    }
+                }
+                (hits, misses)
+            });
+            for _ in 0..200 {
+                let r = prune_store(
+                    &st,
+                    &PruneOptions {
+                        max_bytes: 0,
+                        ..PruneOptions::default()
+                    },
+                )
+                .unwrap();
+                assert!(r.failed.is_empty());
+                store(&st, &key, &a, &big, DEFAULT_STORE_CAP);
+            }
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            reader.join().unwrap()
+        });
+        assert!(hits + misses > 0);
+        let left: Vec<_> = std::fs::read_dir(&st)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".fitup-") && n.ends_with(".tmp"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
+}
