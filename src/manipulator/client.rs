@@ -58,9 +58,15 @@ pub enum ManipulatorError {
     /// The address is not loopback and remote dispatch was not allowed.
     #[error("{0} is not the local simulator (127.0.0.1): pass --allow-remote to command a real controller")]
     NotLocal(String),
-    /// The address cannot be resolved.
-    #[error("bad address `{0}`: {1}")]
-    Address(String, String),
+    /// The address cannot be used.
+    #[error("bad address `{addr}`: {cause}")]
+    Address {
+        /// The address as given (`HOST:PORT`).
+        addr: String,
+        /// Why it cannot be used.
+        #[source]
+        cause: AddressError,
+    },
     /// No connection.
     #[error("cannot connect to {addr}: {source}")]
     Connect {
@@ -70,33 +76,207 @@ pub enum ManipulatorError {
         source: std::io::Error,
     },
     /// The connection broke, went silent, or the controller sent garbage.
-    #[error("controller disconnected: {0}")]
-    Disconnected(String),
-    /// The controller refused a request, with its reason.
-    #[error("controller refused {what}: {reason}")]
+    #[error("controller disconnected: {port} port: {cause}")]
+    Disconnected {
+        /// The connection that was lost.
+        port: Port,
+        /// How it was lost.
+        #[source]
+        cause: Lost,
+    },
+    /// The controller dropped the connection every time one command of a skill was
+    /// sent ([`crate::skills`]' manager gives up: the controller refuses that command).
+    #[error("controller disconnected: {port} port: {cause}; the controller dropped the connection {drops} times at command {command} of this skill: giving up (it refuses that command)")]
+    DroppedAt {
+        /// The connection lost the last time.
+        port: Port,
+        /// How it was lost the last time.
+        #[source]
+        cause: Lost,
+        /// How many times in a row.
+        drops: usize,
+        /// The command of the skill (1-based).
+        command: usize,
+    },
+    /// The controller refused a request (a FAILURE reply).
+    #[error("controller refused {request}: {}", refusal_text(*.code, *.error_code))]
     Refused {
-        /// What was refused (e.g. `trajectory point 3`).
-        what: String,
-        /// The controller's reason, when it reported one.
+        /// What was refused.
+        request: Request,
+        /// The simple_message type of the refused request ([`msg_type`]).
+        msg_type: i32,
+        /// The controller's reason, when it is one fitup knows.
         code: Option<RefusalCode>,
-        /// The reason, for people.
-        reason: String,
+        /// The STATUS `error_code` that followed the refusal, when one did.
+        error_code: Option<i32>,
     },
     /// The controller did not finish in time.
-    #[error("timeout: {0}")]
-    Timeout(String),
+    #[error("timeout: the controller did not reach the target within {} s", .waited.as_secs_f64())]
+    Timeout {
+        /// How long it was waited for.
+        waited: Duration,
+    },
     /// The controller reports an error state.
     #[error("controller in error (code {0})")]
     InError(i32),
     /// A value that the wire format cannot carry (not finite as a 32-bit float, more
     /// joints than simple_message carries); nothing was sent.
-    #[error("{what} cannot be sent: {reason}")]
+    #[error("{request} cannot be sent: {cause}")]
     NotOnWire {
-        /// What (e.g. `trajectory point 3`).
-        what: String,
-        /// Why, for people.
-        reason: String,
+        /// What could not be sent.
+        request: Request,
+        /// Why.
+        #[source]
+        cause: WireError,
     },
+}
+
+/// The reason text of [`ManipulatorError::Refused`].
+fn refusal_text(code: Option<RefusalCode>, error_code: Option<i32>) -> String {
+    match (code, error_code) {
+        (Some(c), _) => c.to_string(),
+        (None, Some(n)) => format!("controller error code {n}"),
+        (None, None) => "FAILURE reply without a reason in STATUS".into(),
+    }
+}
+
+/// Why an address cannot be used ([`ManipulatorError::Address`]).
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum AddressError {
+    /// `HOST:PORT` does not parse or the host does not resolve.
+    #[error("{0}")]
+    Resolve(#[source] std::io::Error),
+    /// It resolves to no address at all.
+    #[error("it resolves to no address")]
+    NoAddress,
+    /// The state port by the rule (motion port + [`super::STATE_PORT_OFFSET`]) is
+    /// beyond 65535.
+    #[error("no state port {port} + {}: give the state port", super::STATE_PORT_OFFSET)]
+    NoStatePort {
+        /// The motion port.
+        port: u16,
+    },
+}
+
+/// A controller connection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Port {
+    /// The motion port (requests and their replies).
+    Motion,
+    /// The state port (JOINT_POSITION and STATUS topics).
+    State,
+}
+
+impl std::fmt::Display for Port {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Motion => "motion",
+            Self::State => "state",
+        })
+    }
+}
+
+/// How a connection was lost ([`ManipulatorError::Disconnected`]). Cheap to clone:
+/// the state port's reader keeps it and every later call reports it.
+#[derive(Debug, Clone, Error)]
+#[non_exhaustive]
+pub enum Lost {
+    /// The controller closed the connection.
+    #[error("connection closed")]
+    Closed,
+    /// Nothing came within the wait: no reply (motion port), no state message or no
+    /// first joint state (state port).
+    #[error("no {awaited} within {} s", .waited.as_secs_f64())]
+    Silent {
+        /// What was awaited (`reply`, `state message`, `joint state`).
+        awaited: &'static str,
+        /// How long.
+        waited: Duration,
+    },
+    /// A read or write failed, or the controller sent bytes that are not a
+    /// simple_message packet.
+    #[error("{0}")]
+    Codec(#[source] Arc<CodecError>),
+}
+
+impl From<CodecError> for Lost {
+    /// An end of stream is [`Lost::Closed`]; anything else is kept.
+    fn from(e: CodecError) -> Self {
+        match e {
+            CodecError::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => Self::Closed,
+            e => Self::Codec(Arc::new(e)),
+        }
+    }
+}
+
+/// A request to the controller, as errors name it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Request {
+    /// PING.
+    Ping,
+    /// One JOINT_TRAJ_PT.
+    Point {
+        /// Its sequence number.
+        sequence: i32,
+    },
+    /// A tool command of fitup's extension (FITUP_TOOL).
+    Tool {
+        /// The action as the plan names it (`grasp`, `Touch`…).
+        action: String,
+    },
+    /// The robot itself (its joint count), checked when connecting.
+    Robot,
+}
+
+impl std::fmt::Display for Request {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Ping => write!(f, "ping"),
+            Self::Point { sequence } => write!(f, "trajectory point {sequence}"),
+            Self::Tool { action } => write!(f, "tool command {action}"),
+            Self::Robot => write!(f, "the robot"),
+        }
+    }
+}
+
+/// Why a value cannot go on the wire ([`ManipulatorError::NotOnWire`], [`wire_point`]).
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum WireError {
+    /// More joints than simple_message carries.
+    #[error("{joints} joints, simple_message carries at most {MAX_JOINTS}")]
+    TooManyJoints {
+        /// The robot's joint count.
+        joints: usize,
+    },
+    /// Not one value per joint.
+    #[error("{got} joint values for a robot of {joints} joints (at most {MAX_JOINTS} on the wire)")]
+    JointCount {
+        /// Values given.
+        got: usize,
+        /// The robot's joint count.
+        joints: usize,
+    },
+    /// A joint value that is not a finite 32-bit float on the wire.
+    #[error("joint {} = {value} does not fit the wire's 32-bit float (largest magnitude {:e})", .joint + 1, f32::MAX)]
+    Joint {
+        /// The joint (0-based; the message counts from 1).
+        joint: usize,
+        /// Its value (rad or mm).
+        value: f64,
+    },
+    /// A duration that is not a finite 32-bit float ≥ 0.
+    #[error("duration {0} s is not a finite 32-bit float ≥ 0")]
+    Duration(f64),
+    /// A tool value that is not finite.
+    #[error("value {0} is not a finite 32-bit float")]
+    ToolValue(f32),
+    /// A tool action fitup's extension does not have.
+    #[error("unknown tool action")]
+    UnknownTool,
 }
 
 /// How often a blocked read wakes up to check its deadline and the stop flag.
@@ -126,7 +306,7 @@ struct Shared {
     /// When the last STATUS arrived.
     status_at: Option<Instant>,
     last_rx: Option<Instant>,
-    broken: Option<String>,
+    broken: Option<Lost>,
 }
 
 /// A connection to a controller's motion and state ports.
@@ -148,9 +328,15 @@ pub struct Client {
 pub fn resolve(addr: &str, allow_remote: bool) -> Result<SocketAddr, ManipulatorError> {
     let a = addr
         .to_socket_addrs()
-        .map_err(|e| ManipulatorError::Address(addr.into(), e.to_string()))?
+        .map_err(|e| ManipulatorError::Address {
+            addr: addr.into(),
+            cause: AddressError::Resolve(e),
+        })?
         .next()
-        .ok_or_else(|| ManipulatorError::Address(addr.into(), "no address".into()))?;
+        .ok_or_else(|| ManipulatorError::Address {
+            addr: addr.into(),
+            cause: AddressError::NoAddress,
+        })?;
     if !allow_remote && !a.ip().is_loopback() {
         return Err(ManipulatorError::NotLocal(addr.into()));
     }
@@ -183,11 +369,10 @@ impl Client {
         }
         if kinds.len() > MAX_JOINTS {
             return Err(ManipulatorError::NotOnWire {
-                what: "the robot".into(),
-                reason: format!(
-                    "{} joints, simple_message carries at most {MAX_JOINTS}",
-                    kinds.len()
-                ),
+                request: Request::Robot,
+                cause: WireError::TooManyJoints {
+                    joints: kinds.len(),
+                },
             });
         }
         let open = |addr: SocketAddr| {
@@ -258,21 +443,13 @@ impl Client {
                         }
                     }
                     Err(e) => {
-                        let why = match e {
-                            CodecError::Io(io)
-                                if matches!(
-                                    io.kind(),
-                                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                                ) =>
-                            {
-                                "no state message within the state timeout".to_string()
+                        let why = if timed_out(&e) {
+                            Lost::Silent {
+                                awaited: "state message",
+                                waited: state_timeout,
                             }
-                            CodecError::Io(io)
-                                if io.kind() == std::io::ErrorKind::UnexpectedEof =>
-                            {
-                                "state connection closed".to_string()
-                            }
-                            e => format!("state port: {e}"),
+                        } else {
+                            Lost::from(e)
                         };
                         lock(&shared).broken = Some(why);
                         return;
@@ -297,13 +474,14 @@ impl Client {
                     break;
                 }
                 if let Some(b) = &s.broken {
-                    return Err(ManipulatorError::Disconnected(b.clone()));
+                    return Err(state_lost(b.clone()));
                 }
             }
             if Instant::now() > deadline {
-                return Err(ManipulatorError::Disconnected(
-                    "no joint state from the state port".into(),
-                ));
+                return Err(state_lost(Lost::Silent {
+                    awaited: "joint state",
+                    waited: options.state_timeout,
+                }));
             }
             std::thread::sleep(Duration::from_millis(5));
         }
@@ -322,14 +500,15 @@ impl Client {
     pub fn state(&self) -> Result<RobotState, ManipulatorError> {
         let s = lock(&self.shared);
         if let Some(b) = &s.broken {
-            return Err(ManipulatorError::Disconnected(b.clone()));
+            return Err(state_lost(b.clone()));
         }
         if s.last_rx
             .is_none_or(|t| t.elapsed() > self.options.state_timeout)
         {
-            return Err(ManipulatorError::Disconnected(
-                "no state message within the state timeout".into(),
-            ));
+            return Err(state_lost(Lost::Silent {
+                awaited: "state message",
+                waited: self.options.state_timeout,
+            }));
         }
         Ok(RobotState {
             joints: s.joints.clone().unwrap_or_default(),
@@ -355,28 +534,25 @@ impl Client {
         let r = self.request(&Packet::request(msg_type::PING, Body::Ping))?;
         if r.reply_code != ReplyCode::Success {
             return Err(ManipulatorError::Refused {
-                what: "ping".into(),
+                request: Request::Ping,
+                msg_type: msg_type::PING,
                 code: None,
-                reason: "FAILURE reply".into(),
+                error_code: None,
             });
         }
         Ok(())
     }
 
-    /// The reason of a refusal: the next STATUS after `since` with `in_error`.
-    fn refusal_reason(&self, since: Instant) -> (Option<RefusalCode>, String) {
+    /// The reason of a refusal: the error code of the next STATUS after `since` with
+    /// `in_error`, and the code fitup knows it as.
+    fn refusal_reason(&self, since: Instant) -> (Option<RefusalCode>, Option<i32>) {
         let deadline = Instant::now() + self.options.reply_timeout.min(Duration::from_secs(2));
         while Instant::now() < deadline {
             {
                 let s = lock(&self.shared);
                 if let (Some(st), Some(at)) = (s.status, s.status_at) {
                     if at >= since && st.in_error == TriState::On {
-                        let code = RefusalCode::from_code(st.error_code);
-                        let text = code.map_or_else(
-                            || format!("controller error code {}", st.error_code),
-                            |c| c.to_string(),
-                        );
-                        return (code, text);
+                        return (RefusalCode::from_code(st.error_code), Some(st.error_code));
                     }
                 }
                 if s.broken.is_some() {
@@ -385,7 +561,7 @@ impl Client {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
-        (None, "FAILURE reply without a reason in STATUS".into())
+        (None, None)
     }
 
     /// Sends one JOINT_TRAJ_PT (joints rad/mm, duration s).
@@ -398,11 +574,11 @@ impl Client {
         joints: &[f64],
         duration: f64,
     ) -> Result<(), ManipulatorError> {
-        let what = || format!("trajectory point {sequence}");
-        let pt = wire_point(&self.kinds, sequence, joints, duration).map_err(|reason| {
+        let request = || Request::Point { sequence };
+        let pt = wire_point(&self.kinds, sequence, joints, duration).map_err(|cause| {
             ManipulatorError::NotOnWire {
-                what: what(),
-                reason,
+                request: request(),
+                cause,
             }
         })?;
         let sent = Instant::now();
@@ -413,11 +589,12 @@ impl Client {
         if r.reply_code == ReplyCode::Success {
             return Ok(());
         }
-        let (code, reason) = self.refusal_reason(sent);
+        let (code, error_code) = self.refusal_reason(sent);
         Err(ManipulatorError::Refused {
-            what: what(),
+            request: request(),
+            msg_type: msg_type::JOINT_TRAJ_PT,
             code,
-            reason,
+            error_code,
         })
     }
 
@@ -452,10 +629,13 @@ impl Client {
         index: i32,
         value: f32,
     ) -> Result<f32, ManipulatorError> {
+        let request = || Request::Tool {
+            action: format!("{action:?}"),
+        };
         if !value.is_finite() {
             return Err(ManipulatorError::NotOnWire {
-                what: format!("tool command {action:?}"),
-                reason: format!("value {value} is not a finite 32-bit float"),
+                request: request(),
+                cause: WireError::ToolValue(value),
             });
         }
         let r = self.request(&Packet::request(
@@ -470,9 +650,10 @@ impl Client {
         match (r.reply_code, r.body) {
             (ReplyCode::Success, Body::Tool(t)) => Ok(t.value),
             _ => Err(ManipulatorError::Refused {
-                what: format!("tool command {action:?}"),
+                request: request(),
+                msg_type: msg_type::FITUP_TOOL,
                 code: Some(RefusalCode::BadTool),
-                reason: "the controller cannot do it".into(),
+                error_code: None,
             }),
         }
     }
@@ -516,13 +697,18 @@ impl Client {
                 return Ok(false);
             }
             if Instant::now() > deadline {
-                return Err(ManipulatorError::Timeout(format!(
-                    "the controller did not reach the target within {} s",
-                    timeout.as_secs_f64()
-                )));
+                return Err(ManipulatorError::Timeout { waited: timeout });
             }
             std::thread::sleep(Duration::from_millis(10));
         }
+    }
+}
+
+/// The state port lost, `cause` how.
+fn state_lost(cause: Lost) -> ManipulatorError {
+    ManipulatorError::Disconnected {
+        port: Port::State,
+        cause,
     }
 }
 
@@ -539,7 +725,10 @@ fn exchange(
     p: &Packet,
     timeout: Duration,
 ) -> Result<Packet, ManipulatorError> {
-    let lost = |e: CodecError| ManipulatorError::Disconnected(format!("motion port: {e}"));
+    let lost = |e: CodecError| ManipulatorError::Disconnected {
+        port: Port::Motion,
+        cause: Lost::from(e),
+    };
     p.write_to(motion, order).map_err(lost)?;
     let deadline = Instant::now() + timeout;
     loop {
@@ -547,10 +736,13 @@ fn exchange(
             Ok(f) => f,
             Err(e) if timed_out(&e) => {
                 if Instant::now() > deadline {
-                    return Err(ManipulatorError::Disconnected(format!(
-                        "motion port: no reply within {} s",
-                        timeout.as_secs_f64()
-                    )));
+                    return Err(ManipulatorError::Disconnected {
+                        port: Port::Motion,
+                        cause: Lost::Silent {
+                            awaited: "reply",
+                            waited: timeout,
+                        },
+                    });
                 }
                 continue;
             }
@@ -568,34 +760,29 @@ fn exchange(
 /// (prismatic joints in metres), and there must be exactly one value per joint.
 ///
 /// # Errors
-/// The reason, naming the joint (1-based) and its value.
+/// [`WireError`]: the joint count, the joint (with its value) or the duration.
 pub fn wire_point(
     kinds: &[JointKind],
     sequence: i32,
     joints: &[f64],
     duration: f64,
-) -> Result<JointTrajPt, String> {
+) -> Result<JointTrajPt, WireError> {
     if joints.len() != kinds.len() || kinds.len() > MAX_JOINTS {
-        return Err(format!(
-            "{} joint values for a robot of {} joints (at most {MAX_JOINTS} on the wire)",
-            joints.len(),
-            kinds.len()
-        ));
+        return Err(WireError::JointCount {
+            got: joints.len(),
+            joints: kinds.len(),
+        });
     }
     let wire = joints_to_wire(kinds, joints);
     if let Some(j) = wire.iter().position(|v| !v.is_finite()) {
-        return Err(format!(
-            "joint {} = {} does not fit the wire's 32-bit float (largest magnitude {:e})",
-            j + 1,
-            joints[j],
-            f32::MAX
-        ));
+        return Err(WireError::Joint {
+            joint: j,
+            value: joints[j],
+        });
     }
     let d = duration as f32;
     if !(d.is_finite() && d >= 0.0) {
-        return Err(format!(
-            "duration {duration} s is not a finite 32-bit float ≥ 0"
-        ));
+        return Err(WireError::Duration(duration));
     }
     Ok(JointTrajPt {
         sequence,

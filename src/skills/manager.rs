@@ -14,7 +14,9 @@
 //! continues the running skill from where it stopped.
 
 use super::program::{ControllerCommand, Plan, PlanStep};
-use crate::manipulator::client::{resolve, Client, ClientOptions, ManipulatorError};
+use crate::manipulator::client::{
+    resolve, AddressError, Client, ClientOptions, ManipulatorError, Request, WireError,
+};
 use std::collections::VecDeque;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -260,14 +262,12 @@ impl SkillManager {
         let port = match self.options.state_port {
             Some(p) => p,
             None => crate::manipulator::state_port_for(motion.port()).ok_or_else(|| {
-                ManipulatorError::Address(
-                    self.options.target.clone(),
-                    format!(
-                        "no state port {} + {}: give the state port",
-                        motion.port(),
-                        crate::manipulator::STATE_PORT_OFFSET
-                    ),
-                )
+                ManipulatorError::Address {
+                    addr: self.options.target.clone(),
+                    cause: AddressError::NoStatePort {
+                        port: motion.port(),
+                    },
+                }
             })?,
         };
         state.set_port(port);
@@ -367,7 +367,7 @@ impl SkillManager {
                     on_event(&ManagerEvent::Aborted);
                     return Err(ManagerError::Aborted);
                 }
-                Err(ManipulatorError::Disconnected(why)) => {
+                Err(ManipulatorError::Disconnected { port, cause }) => {
                     let at = (i, done_commands);
                     drops = if drops.0 == at {
                         (at, drops.1 + 1)
@@ -375,15 +375,16 @@ impl SkillManager {
                         (at, 1)
                     };
                     if drops.1 >= MAX_DROPS_AT_ONE_COMMAND {
-                        let e = ManipulatorError::Disconnected(format!(
-                            "{why}; the controller dropped the connection {} times at command {} of this skill: giving up (it refuses that command)",
-                            drops.1,
-                            done_commands + 1
-                        ));
+                        let e = ManipulatorError::DroppedAt {
+                            port,
+                            cause,
+                            drops: drops.1,
+                            command: done_commands + 1,
+                        };
                         return self.fail(i, e, on_event);
                     }
                     self.status[i] = SkillStatus::Interrupted;
-                    on_event(&ManagerEvent::Interrupted(i, why));
+                    on_event(&ManagerEvent::Interrupted(i, format!("{port} port: {cause}")));
                     drop(client);
                     client = self
                         .connect(Instant::now() + self.options.reconnect_timeout)
@@ -480,10 +481,11 @@ impl SkillManager {
                 value,
             } => {
                 let a = ControllerCommand::tool_action(action).ok_or_else(|| {
-                    ManipulatorError::Refused {
-                        what: action.clone(),
-                        code: None,
-                        reason: "unknown tool action".into(),
+                    ManipulatorError::NotOnWire {
+                        request: Request::Tool {
+                            action: action.clone(),
+                        },
+                        cause: WireError::UnknownTool,
                     }
                 })?;
                 client.tool(a, *index, *value as f32)?;

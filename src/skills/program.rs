@@ -506,12 +506,14 @@ impl Plan {
                             if let Err(why) =
                                 crate::manipulator::client::wire_point(&kinds, 0, q, *d)
                             {
-                                let j = q
-                                    .iter()
-                                    .zip(crate::manipulator::joints_to_wire(&kinds, q))
-                                    .position(|(_, w)| !w.is_finite())
-                                    .unwrap_or(0);
-                                return Err(bad(here(format!("[0][{j}]")), why));
+                                let j = match why {
+                                    crate::manipulator::client::WireError::Joint {
+                                        joint,
+                                        ..
+                                    } => joint,
+                                    _ => 0,
+                                };
+                                return Err(bad(here(format!("[0][{j}]")), why.to_string()));
                             }
                         }
                     }

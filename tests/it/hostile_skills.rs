@@ -8,7 +8,7 @@ use crate::common;
 use common::lines::{Killed, Lines};
 use common::{fitup, repo};
 use fitup::kinematics::JointKind;
-use fitup::manipulator::client::{Client, ClientOptions, ManipulatorError};
+use fitup::manipulator::client::{Client, ClientOptions, ManipulatorError, Port};
 use fitup::manipulator::message::{
     msg_type, Body, ByteOrder, JointPosition, Packet, ReplyCode, RobotMode, Status, TriState,
 };
@@ -489,7 +489,40 @@ fn ping_errors_are_typed_not_panics_on_a_closed_port() {
     let mut c = Client::connect(motion, state, KINDS.to_vec(), &ClientOptions::default())
         .unwrap_or_else(|e| panic!("{e}"));
     let e = c.ping().unwrap_err();
-    assert!(matches!(e, ManipulatorError::Disconnected(_)), "{e}");
+    assert!(
+        matches!(
+            e,
+            ManipulatorError::Disconnected {
+                port: Port::Motion,
+                ..
+            }
+        ),
+        "{e}"
+    );
+}
+
+/// A motion port whose state port by the rule (+2) would be beyond 65535 is refused
+/// before any connection, with the port as a value.
+#[test]
+fn a_motion_port_without_a_state_port_by_the_rule_is_a_typed_address_error() {
+    use fitup::manipulator::client::AddressError;
+    use fitup::skills::{ManagerError, ManagerOptions, SkillManager};
+    let options = ManagerOptions {
+        target: "127.0.0.1:65535".into(),
+        ..ManagerOptions::default()
+    };
+    let mut manager = SkillManager::new(joint_plan(1, 0.1), options);
+    let t0 = Instant::now();
+    let e = manager.run(&mut |_| {}).unwrap_err();
+    match &e {
+        ManagerError::Connection(ManipulatorError::Address {
+            addr,
+            cause: AddressError::NoStatePort { port: 65535 },
+        }) => assert_eq!(addr, "127.0.0.1:65535"),
+        other => panic!("{other}"),
+    }
+    assert!(e.to_string().contains("give the state port"), "{e}");
+    assert!(t0.elapsed() < Duration::from_secs(10));
 }
 
 #[test]

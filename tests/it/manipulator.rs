@@ -6,7 +6,7 @@ use crate::common;
 use common::lines::Proc;
 use common::{fitup, repo};
 use fitup::kinematics::JointKind;
-use fitup::manipulator::client::{Client, ClientOptions, ManipulatorError};
+use fitup::manipulator::client::{Client, ClientOptions, Lost, ManipulatorError, Port, Request};
 use fitup::manipulator::message::{msg_type, Body, ByteOrder, Packet};
 use fitup::manipulator::RefusalCode;
 use fitup::skills::{ControllerCommand, Plan, PlanStep};
@@ -92,9 +92,17 @@ fn a_joint_limit_trajectory_is_refused_with_the_reason() {
     bad[1] = (-150f64).to_radians();
     let e = c.stream(&[(home.clone(), 0.0), (bad, 1.0)]).unwrap_err();
     match &e {
-        ManipulatorError::Refused { code, reason, .. } => {
+        ManipulatorError::Refused {
+            request,
+            msg_type,
+            code,
+            error_code,
+        } => {
+            assert_eq!(*request, Request::Point { sequence: 1 }, "{e}");
+            assert_eq!(*msg_type, fitup::manipulator::message::msg_type::JOINT_TRAJ_PT);
             assert_eq!(*code, Some(RefusalCode::JointLimit(1)), "{e}");
-            assert!(reason.contains("joint 2"), "{e}");
+            assert_eq!(*error_code, Some(1001), "{e}");
+            assert!(e.to_string().contains("joint 2"), "{e}");
         }
         other => panic!("{other}"),
     }
@@ -237,7 +245,16 @@ fn malformed_messages_from_the_controller_are_typed_errors() {
     // Garbage on the state port.
     let (m, s) = fake_controller(b"\x7f\xff\xff\xff garbage".to_vec(), vec![]);
     let e = Client::connect(m, s, KINDS.to_vec(), &opts).err().unwrap();
-    assert!(matches!(e, ManipulatorError::Disconnected(_)), "{e}");
+    assert!(
+        matches!(
+            e,
+            ManipulatorError::Disconnected {
+                port: Port::State,
+                cause: Lost::Codec(_)
+            }
+        ),
+        "{e}"
+    );
     assert!(e.to_string().contains("bad length prefix"), "{e}");
     // A truncated JOINT_POSITION.
     let jp = Packet::topic(
@@ -255,7 +272,16 @@ fn malformed_messages_from_the_controller_are_typed_errors() {
     let (m, s) = fake_controller(vec![], vec![]);
     let t0 = Instant::now();
     let e = Client::connect(m, s, KINDS.to_vec(), &opts).err().unwrap();
-    assert!(matches!(e, ManipulatorError::Disconnected(_)), "{e}");
+    assert!(
+        matches!(
+            e,
+            ManipulatorError::Disconnected {
+                port: Port::State,
+                cause: Lost::Closed | Lost::Silent { .. }
+            }
+        ),
+        "{e}"
+    );
     assert!(t0.elapsed() < Duration::from_secs(30));
 }
 
@@ -444,4 +470,84 @@ fn killing_the_simulator_mid_skill_interrupts_and_resumes_without_repeating() {
     assert!(c
         .wait_until_at(&end_q, 1e-3, Duration::from_secs(10), &|| false)
         .unwrap());
+}
+
+/// The client's errors carry their causes as values (issue 25): an address that
+/// does not parse keeps its `io::Error`, a value the wire cannot carry names the
+/// request, the joint and the value, a tool value the same, a wait that ran out
+/// names how long — and every one still reads clearly.
+#[test]
+fn client_errors_name_their_causes_in_fields() {
+    use fitup::manipulator::client::{resolve, AddressError, WireError};
+    use fitup::manipulator::message::ToolAction;
+    use std::error::Error as _;
+    let e = resolve("127.0.0.1:notaport", false).unwrap_err();
+    match &e {
+        ManipulatorError::Address {
+            addr,
+            cause: AddressError::Resolve(io),
+        } => {
+            assert_eq!(addr, "127.0.0.1:notaport");
+            assert_eq!(io.kind(), std::io::ErrorKind::InvalidInput, "{e}");
+        }
+        other => panic!("{other}"),
+    }
+    assert!(e.source().is_some(), "the cause is the error's source");
+    assert!(e.to_string().starts_with("bad address `127.0.0.1:notaport`: "), "{e}");
+
+    let (_sim, m, s) = simulator(0, 0, "10");
+    let mut c = client(m, s);
+    let mut q = vec![0.0; 6];
+    q[2] = 1e39; // finite in f64, infinite as the wire's f32
+    let e = c.send_point(0, &q, 0.1).unwrap_err();
+    match &e {
+        ManipulatorError::NotOnWire {
+            request: Request::Point { sequence: 0 },
+            cause: WireError::Joint { joint: 2, value },
+        } => assert_eq!(*value, 1e39),
+        other => panic!("{other}"),
+    }
+    assert!(e.to_string().contains("trajectory point 0 cannot be sent: joint 3 = "), "{e}");
+    let e = c.send_point(0, &[0.0; 6], f64::NAN).unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            ManipulatorError::NotOnWire {
+                cause: WireError::Duration(d),
+                ..
+            } if d.is_nan()
+        ),
+        "{e}"
+    );
+    let e = c.send_point(0, &[0.0; 5], 0.1).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ManipulatorError::NotOnWire {
+                cause: WireError::JointCount { got: 5, joints: 6 },
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = c.tool(ToolAction::Grasp, 0, f32::INFINITY).unwrap_err();
+    match &e {
+        ManipulatorError::NotOnWire {
+            request: Request::Tool { action },
+            cause: WireError::ToolValue(v),
+        } => {
+            assert_eq!(action, "Grasp");
+            assert!(v.is_infinite());
+        }
+        other => panic!("{other}"),
+    }
+    // A target the arm does not reach within the wait (nothing was sent).
+    let e = c
+        .wait_until_at(&[1.0; 6], 1e-6, Duration::from_millis(50), &|| false)
+        .unwrap_err();
+    match &e {
+        ManipulatorError::Timeout { waited } => assert_eq!(*waited, Duration::from_millis(50)),
+        other => panic!("{other}"),
+    }
+    assert!(e.to_string().contains("within 0.05 s"), "{e}");
 }
