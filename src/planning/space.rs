@@ -168,11 +168,7 @@ impl PlanningSpace {
     /// Draws a pose uniformly: translation uniform in the box, orientation uniform
     /// over the allowed set (relative to `reference`).
     pub fn sample(&self, rng: &mut Rng, reference: &UnitQuaternion<f64>) -> Transform {
-        let t = Vec3::new(
-            rng.range(self.min.x, self.max.x),
-            rng.range(self.min.y, self.max.y),
-            rng.range(self.min.z, self.max.z),
-        );
+        let t = self.sample_translation(rng);
         let q = match self.rotation {
             RotationFreedom::Fixed => *reference,
             RotationFreedom::Free => rng.rotation(),
@@ -189,6 +185,16 @@ impl PlanningSpace {
             }
         };
         Transform::from_parts(t, q)
+    }
+
+    /// A translation uniform in the box (mm), drawn from `rng` as
+    /// [`sample`](Self::sample) draws it.
+    pub(crate) fn sample_translation(&self, rng: &mut Rng) -> Vec3 {
+        Vec3::new(
+            rng.range(self.min.x, self.max.x),
+            rng.range(self.min.y, self.max.y),
+            rng.range(self.min.z, self.max.z),
+        )
     }
 }
 

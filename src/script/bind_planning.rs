@@ -146,18 +146,22 @@ fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
     })
 }
 
-const NARROW_KEYS: [&str; 5] = [
+const NARROW_KEYS: [&str; 7] = [
     "max_turn_deg",
     "dynamic_domain",
     "bridge",
     "bridge_width",
     "to_contact",
+    "axis_moves",
+    "axis_samples",
 ];
 
 /// The `narrow` option: `false` (every measure off), `true` (fitup's defaults) or
 /// a map changing some of the defaults (`max_turn_deg` in degrees, 0 = no limit;
 /// `dynamic_domain` and `bridge_width` in mm of the metric, 0 = off; `bridge` a
-/// probability; `to_contact` a bool). Ranges are the library's
+/// probability; `to_contact` a bool; `axis_moves` the axis-move search's share of
+/// the work, 0..1, 0 = off; `axis_samples` the probability of an axis-aligned
+/// sample, 0..1). Ranges are the library's
 /// (`NarrowPassage::validate`, when planning).
 fn parse_narrow(v: &Dynamic) -> ScriptResult<NarrowPassage> {
     if let Ok(on) = v.as_bool() {
@@ -186,6 +190,12 @@ fn parse_narrow(v: &Dynamic) -> ScriptResult<NarrowPassage> {
     }
     if let Some(w) = opt_num(&m, "bridge_width")? {
         n.bridge_width = w;
+    }
+    if let Some(a) = opt_num(&m, "axis_moves")? {
+        n.axis_moves = a;
+    }
+    if let Some(a) = opt_num(&m, "axis_samples")? {
+        n.axis_samples = a;
     }
     if let Some(c) = m.get("to_contact") {
         n.to_contact = c
@@ -297,7 +307,7 @@ fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transfor
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked, within `fallback_share` of the work; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified). `narrow` (the narrow-passage measures of the tree planners, on by default for `rrt_connect` and `disassemble: true`, off for seed 002's `rrt`, `biased_rrt`, `local_rrt`): `false` (all off), `true` (defaults) or a map of `max_turn_deg` (degrees, default 5, 0 = none: a blocked extension is retried turning at most this much), `dynamic_domain` (mm of the metric, default 10, 0 = off), `bridge` (probability of a bridge-test sample, default 0.1), `bridge_width` (mm, default 5), `to_contact` (bool, default true: a blocked extension keeps its farthest free pose). `fallback_share` (0..1: the largest share of the search's checks that the lattice, extension to contact, bridge test and dynamic-domain redraws may take, the rest being plain RRT-Connect iterations; default 0.1 for `rrt_connect` and `disassemble: true`, 1 for seed 002's `rrt`, `biased_rrt`, `local_rrt`). Fixed components are refused. A path that is not found says why in `reason`.");
+    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked, within `fallback_share` of the work; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified). `narrow` (the narrow-passage measures of the tree planners, on by default for `rrt_connect` and `disassemble: true`, off for seed 002's `rrt`, `biased_rrt`, `local_rrt`): `false` (all off), `true` (defaults) or a map of `max_turn_deg` (degrees, default 5, 0 = none: a blocked extension is retried turning at most this much), `dynamic_domain` (mm of the metric, default 10, 0 = off), `bridge` (probability of a bridge-test sample, default 0.1), `bridge_width` (mm, default 5), `to_contact` (bool, default true: a blocked extension keeps its farthest free pose), `axis_moves` (0..1, default 0.1: the share of `rrt_connect`'s work for its axis-move search — quarter and eighth turns about the part's own axes and slides along them to contact, what finds slots aligned with the part; 0 = off), `axis_samples` (0..1, default 0: the probability that a sample keeps the tree root's orientation turned about one axis of the assembly frame, for parts moving in a flat corridor). `fallback_share` (0..1: the largest share of the search's checks that the lattice, extension to contact, bridge test and dynamic-domain redraws may take, the rest being plain RRT-Connect iterations; default 0.1 for `rrt_connect` and `disassemble: true`, 1 for seed 002's `rrt`, `biased_rrt`, `local_rrt`). Fixed components are refused. A path that is not found says why in `reason`.");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
     api.f(
@@ -552,9 +562,17 @@ mod narrow_option_tests {
             ("max_turn_deg", Dynamic::from_float(10.0)),
             ("dynamic_domain", Dynamic::from_float(0.0)),
             ("to_contact", Dynamic::from_bool(false)),
+            ("axis_moves", Dynamic::from_float(0.0)),
         ]))
         .unwrap();
         assert!((n.max_turn.unwrap() - 10f64.to_radians()).abs() < 1e-12);
+        assert_eq!(n.axis_moves, 0.0);
+        assert_eq!(
+            parse_narrow(&map(&[("axis_moves", Dynamic::from_float(0.3))]))
+                .unwrap()
+                .axis_moves,
+            0.3
+        );
         assert_eq!(n.dynamic_domain, None);
         assert!(!n.to_contact);
         assert_eq!(n.bridge, NarrowPassage::default().bridge);
@@ -571,6 +589,8 @@ mod narrow_option_tests {
             map(&[("max_turn_deg", Dynamic::from_float(-1.0))]),
             map(&[("max_turn_deg", Dynamic::from_float(190.0))]),
             map(&[("dynamic_domain", Dynamic::from_float(-2.0))]),
+            map(&[("axis_moves", Dynamic::from_float(1.5))]),
+            map(&[("axis_samples", Dynamic::from_float(-0.5))]),
         ] {
             let n = parse_narrow(&bad).unwrap();
             assert!(n.validate().is_err(), "{bad:?}");

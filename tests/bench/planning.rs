@@ -20,7 +20,9 @@
 //! fallback-share variants), `FITUP_SOLVER=rrt_connect` (fitup runs `rrt_connect`
 //! alone, what `plan_path` does without `disassemble`, instead of
 //! `plan_insertion`), `FITUP_ITERATIONS` (iteration cap, default
-//! `PlanLimits::default()`'s: the time budget ends a search, as OMPL's).
+//! `PlanLimits::default()`'s: the time budget ends a search, as OMPL's),
+//! `FITUP_PROBE_MS` (also a row per problem at this short budget with smoothing
+//! on, and the largest overrun of each call's budget, setup included, in %).
 
 #[path = "../common/problems.rs"]
 mod problems;
@@ -97,6 +99,13 @@ struct Row {
     solved: usize,
     runs: usize,
     median_s: Option<f64>,
+    /// fitup only: the largest overrun of the budget over these runs, in % of the
+    /// budget, measured by the caller's clock around setup (the validator's
+    /// colliders) and the call together (negative: every run ended within it).
+    overrun_pct: f64,
+    /// fitup only: the largest `smoothing_ms` less smoothing's share of the
+    /// budget, ms (negative: within its share).
+    smoothing_over_ms: f64,
 }
 
 /// fitup's time budget per call in the benchmark (ms): the default one, or
@@ -124,15 +133,31 @@ fn fitup_runs(
     smoothing: bool,
     variant: &dyn Fn(&mut InsertionOptions),
 ) -> Row {
+    fitup_runs_within(p, options, runs, smoothing, variant, budget_ms())
+}
+
+/// [`fitup_runs`] with a budget of `budget` ms per call.
+fn fitup_runs_within(
+    p: &Problem,
+    options: MeshValidatorOptions,
+    runs: usize,
+    smoothing: bool,
+    variant: &dyn Fn(&mut InsertionOptions),
+    budget: f64,
+) -> Row {
     let mut times = Vec::new();
+    let (mut overrun_pct, mut smoothing_over_ms) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
     let first: u64 = env_or("FITUP_FIRST_SEED", 0);
     for seed in first..first + runs as u64 {
+        // Setup (the colliders) counts against the budget in the overrun figure.
+        let setup = Instant::now();
         let mut v = p.validator(options).unwrap();
+        let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
         let mut plan = InsertionOptions::default().with_limits(
             seed,
             env_or("FITUP_ITERATIONS", PlanLimits::default().max_iterations),
         );
-        plan.time_limit_ms = Some(budget_ms());
+        plan.time_limit_ms = Some(budget);
         if !smoothing {
             plan.smoothing = Smoothing::OFF;
         }
@@ -149,14 +174,20 @@ fn fitup_runs(
             p.solve_with(&mut v, &plan).unwrap()
         };
         let dt = t0.elapsed().as_secs_f64();
+        let over_ms = setup_ms + dt * 1e3 - budget;
         let mut worst = WORST_OVERRUN_MS.lock().unwrap();
-        *worst = worst.max(dt * 1e3 - budget_ms());
+        *worst = worst.max(over_ms);
+        overrun_pct = overrun_pct.max(100.0 * over_ms / budget);
+        if plan.smoothing.enabled {
+            smoothing_over_ms = smoothing_over_ms
+                .max(path.smoothing_ms - plan.smoothing.budget_share * budget);
+        }
         if path.found() {
             times.push(dt);
         }
         if std::env::var_os("FITUP_VERBOSE").is_some() {
             eprintln!(
-                "  {} seed {seed}: {:.3} s (search {:.0} ms, smoothing {:.0} ms) {} {:?} iterations {} nodes {} pose checks {} edge checks {}",
+                "  {} seed {seed} budget {budget} ms: {:.3} s (setup {setup_ms:.1} ms, search {:.0} ms, smoothing {:.0} ms) {} {:?} iterations {} nodes {} pose checks {} edge checks {}",
                 p.name,
                 dt,
                 path.search_ms,
@@ -174,6 +205,8 @@ fn fitup_runs(
         solved: times.len(),
         runs,
         median_s: median(&mut times),
+        overrun_pct,
+        smoothing_over_ms,
     }
 }
 
@@ -430,6 +463,8 @@ fn parse_peer(out: std::process::Output) -> Option<Row> {
         solved: v["solved"].as_u64()? as usize,
         runs: v["runs"].as_u64()? as usize,
         median_s: median(&mut times),
+        overrun_pct: f64::NAN,
+        smoothing_over_ms: f64::NAN,
     })
 }
 
@@ -680,6 +715,8 @@ fn main() {
             solved: 0,
             runs: 0,
             median_s: None,
+            overrun_pct: f64::NAN,
+            smoothing_over_ms: f64::NAN,
         };
         let cont = if defaults {
             fitup_runs(&p, p.default_validator_options(), runs, false, &|_| ())
@@ -743,7 +780,27 @@ fn main() {
         }
         if puzzles {
             let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-            println!("{:<18} load {}", "", load.trim());
+            println!(
+                "{:<18} load {}; fitup's largest overrun {:.2} % of {} ms (setup + call)",
+                "",
+                load.trim(),
+                cont.overrun_pct,
+                budget_ms()
+            );
+        }
+        // Budget probe: a budget short enough that the hard seeds run out, with
+        // smoothing on at its default share, so the deadline of every stage is
+        // exercised (`FITUP_PROBE_MS`, 0: off).
+        let probe: f64 = env_or("FITUP_PROBE_MS", 0.0);
+        if probe > 0.0 {
+            let r = fitup_runs_within(&p, p.default_validator_options(), runs, true, &|_| (), probe);
+            println!(
+                "{:<18} budget probe {probe} ms with smoothing: {}; largest overrun {:.2} % (setup + call); smoothing {:+.2} ms over its share",
+                "",
+                fmt(&r),
+                r.overrun_pct,
+                r.smoothing_over_ms
+            );
         }
         if peer && std::env::var_os("FITUP_OMPL_RRT").is_some() {
             if let Some(r) = peer_runs(&py, &spec, "RRT", peer_n, limit) {

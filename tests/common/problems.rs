@@ -11,6 +11,8 @@
 //! | [`bar_slot`] | a flat bar turns 90° to pass a slot 0.3 mm wider than itself, then turns back |
 //! | [`peg_tilt`] | a peg taller than a window enters lying, stands up inside and drops into a 0.2 mm hole |
 //! | [`key_ring`] | a small ring threaded on a two-turn split key ring: out only along the spiral |
+//! | [`rod_corridor`] | a 12 mm rod turns the corner of a 7 mm corridor under a 5 mm ceiling, near the ladder limit |
+//! | [`zigzag_tunnel`] | the same rod through a 7 mm tunnel with four 90° bends, left and right |
 //!
 //! Test scaffolding, not part of the library: users get the problems as files
 //! (`models/problems/<name>.yaml` + `.plan.json`, read with
@@ -971,10 +973,157 @@ pub fn plate_hole() -> Result<Problem, MeshError> {
     })
 }
 
+/// The walls of a planar tunnel of height `h` (mm, z = 0 .. h) inside the region
+/// `region` (x and y ranges), open where one of the axis-aligned rectangles
+/// `corridors` (`([x0, x1], [y0, y1])`) is: the region minus the corridors cut on
+/// the grid of all their edges, runs along X merged, each run one obstacle
+/// (`{prefix}_wall_{k}`), plus a floor and a ceiling 3 mm thick. Separate meshes:
+/// boxes that touch share no mesh, so every mesh stays a closed solid.
+fn planar_tunnel(
+    prefix: &str,
+    region: ([f64; 2], [f64; 2]),
+    corridors: &[([f64; 2], [f64; 2])],
+    h: f64,
+) -> Vec<ProblemObstacle> {
+    let mut xs = vec![region.0[0], region.0[1]];
+    let mut ys = vec![region.1[0], region.1[1]];
+    for (cx, cy) in corridors {
+        xs.extend(cx);
+        ys.extend(cy);
+    }
+    for v in [&mut xs, &mut ys] {
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+    }
+    let open = |x: f64, y: f64| {
+        corridors
+            .iter()
+            .any(|(cx, cy)| x > cx[0] && x < cx[1] && y > cy[0] && y < cy[1])
+    };
+    let mut out = Vec::new();
+    for j in 0..ys.len() - 1 {
+        let y = 0.5 * (ys[j] + ys[j + 1]);
+        let mut run: Option<f64> = None;
+        for i in 0..xs.len() - 1 {
+            let solid = !open(0.5 * (xs[i] + xs[i + 1]), y);
+            match (solid, run) {
+                (true, None) => run = Some(xs[i]),
+                (false, Some(x0)) => {
+                    let name = format!("{prefix}_wall_{}", out.len());
+                    out.push(obstacle(
+                        &name,
+                        &name,
+                        boxed([x0, ys[j], 0.0], [xs[i], ys[j + 1], h]),
+                        Transform::IDENTITY,
+                    ));
+                    run = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(x0) = run {
+            let name = format!("{prefix}_wall_{}", out.len());
+            out.push(obstacle(
+                &name,
+                &name,
+                boxed([x0, ys[j], 0.0], [*xs.last().unwrap(), ys[j + 1], h]),
+                Transform::IDENTITY,
+            ));
+        }
+    }
+    let (lo, hi) = ([region.0[0], region.1[0]], [region.0[1], region.1[1]]);
+    for (name, z0, z1) in [("floor", -3.0, 0.0), ("ceiling", h, h + 3.0)] {
+        let name = format!("{prefix}_{name}");
+        out.push(obstacle(
+            &name,
+            &name,
+            boxed([lo[0], lo[1], z0], [hi[0], hi[1], z1]),
+            Transform::IDENTITY,
+        ));
+    }
+    out
+}
+
+/// The rod of [`rod_corridor`] and [`zigzag_tunnel`]: Ø3 × 12 mm, origin at its
+/// centre, axis X.
+fn short_rod() -> Result<Mesh, MeshError> {
+    Ok(Mesh::cylinder(1.5, 12.0, 24)
+        .transformed(&at(0.0, 0.0, -6.0))
+        .transformed(&turn(Vec3::y(), FRAC_PI_2)?))
+}
+
+/// Rod round a 7 mm corridor corner (issue 23's corridor class): a Ø3 × 12 mm rod
+/// in an L-shaped corridor 7 mm wide and 5 mm high. The rod is 1.7 times as long
+/// as the corridor is wide and cannot tilt much under the ceiling, so it passes
+/// the corner only turning about Z while it moves, close to the ladder limit
+/// (2·(√2·7 − 3) ≈ 13.8 mm for a 3 mm thick rod). Start: lying along the X leg;
+/// goal: along the Y leg, turned 90°.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn rod_corridor() -> Result<Problem, MeshError> {
+    let (w, h) = (7.0, 5.0);
+    let c = w / 2.0;
+    let obstacles = planar_tunnel(
+        "corridor",
+        ([-44.0, 8.0], [-8.0, 44.0]),
+        &[([-40.0, c], [-c, c]), ([-c, c], [-c, 40.0])],
+        h,
+    );
+    Ok(Problem {
+        name: "rod_corridor".into(),
+        description: "Rod round a 7 mm corridor corner: Ø3 × 12 mm rod, L-shaped corridor 7 mm wide and 5 mm high".into(),
+        moving_part: "rod".into(),
+        moving: Arc::new(short_rod()?),
+        obstacles,
+        start: at(-25.0, 0.0, h / 2.0),
+        goal: turn(Vec3::z(), FRAC_PI_2)?.then(&at(0.0, 25.0, h / 2.0)),
+        space: PlanningSpace::new(Vec3::new(-38.0, -c, 0.0), Vec3::new(c, 38.0, h))
+            .with_rotation_weight(6.0),
+        product_box: Aabb::new(Vec3::new(-44.0, -8.0, -3.0), Vec3::new(8.0, 44.0, h + 3.0)),
+    })
+}
+
+/// Zigzag tunnel (issue 23's tunnel class): the Ø3 × 12 mm rod of
+/// [`rod_corridor`] through a staircase tunnel 7 mm wide and 5 mm high that turns
+/// left, right, left, right (legs 28, 21, 21, 21 and 28 mm between the bends'
+/// centres), so the rod turns +90° and −90° about Z four times, each while it
+/// moves. Start and goal: lying along X in the first and the last leg.
+///
+/// # Errors
+/// None in practice (the generated meshes are valid).
+pub fn zigzag_tunnel() -> Result<Problem, MeshError> {
+    let (w, h) = (7.0, 5.0);
+    let c = w / 2.0;
+    // the centreline's bends: (28, 0), (28, 21), (49, 21), (49, 42)
+    let corridors = [
+        ([-6.0, 28.0 + c], [-c, c]),
+        ([28.0 - c, 28.0 + c], [-c, 21.0 + c]),
+        ([28.0 - c, 49.0 + c], [21.0 - c, 21.0 + c]),
+        ([49.0 - c, 49.0 + c], [21.0 - c, 42.0 + c]),
+        ([49.0 - c, 83.0], [42.0 - c, 42.0 + c]),
+    ];
+    let obstacles = planar_tunnel("tunnel", ([-10.0, 87.0], [-8.0, 50.0]), &corridors, h);
+    Ok(Problem {
+        name: "zigzag_tunnel".into(),
+        description: "Zigzag tunnel: Ø3 × 12 mm rod through a staircase tunnel 7 mm wide and 5 mm high with four 90° bends, left and right".into(),
+        moving_part: "rod".into(),
+        moving: Arc::new(short_rod()?),
+        obstacles,
+        start: at(4.0, 0.0, h / 2.0),
+        goal: at(75.0, 42.0, h / 2.0),
+        space: PlanningSpace::new(Vec3::new(0.0, -c, 0.0), Vec3::new(77.0, 42.0 + c, h))
+            .with_rotation_weight(6.0),
+        product_box: Aabb::new(Vec3::new(-10.0, -8.0, -3.0), Vec3::new(87.0, 50.0, h + 3.0)),
+    })
+}
+
 /// The standard rigid-body puzzle classes of issue 23, the ones fitup solves
 /// first (so a benchmark cut short still has them): the twisted tubes, the house,
 /// the plate hole on a straight line, the twisted slot, the slot roll
-/// ([`bar_slot`]).
+/// ([`bar_slot`]), then the rings with a slit ([`ring_puzzle`]), the rod round a
+/// 7 mm corridor corner ([`rod_corridor`]) and the zigzag tunnel
+/// ([`zigzag_tunnel`]).
 ///
 /// # Errors
 /// None in practice (the generated meshes are valid).
@@ -985,6 +1134,9 @@ pub fn puzzles() -> Result<Vec<Problem>, MeshError> {
         plate_hole()?,
         twisted_slot()?,
         bar_slot()?,
+        ring_puzzle()?,
+        rod_corridor()?,
+        zigzag_tunnel()?,
     ])
 }
 
@@ -1009,5 +1161,7 @@ pub fn all() -> Result<Vec<Problem>, MeshError> {
         house()?,
         twisted_slot()?,
         plate_hole()?,
+        rod_corridor()?,
+        zigzag_tunnel()?,
     ])
 }

@@ -146,6 +146,37 @@ fn twisted_slot_is_solved_collision_free_and_deterministic() {
     }
 }
 
+/// The corridor classes: the 12 mm rod turns the 7 mm corridor's corner, and the
+/// four bends of the zigzag tunnel, turning about Z while it moves; densely
+/// re-checked, same path for the same seed, every seed of 5. Ignored: fitup's
+/// defaults do not solve them within this yet (issue 23, docs/planning.md Known
+/// limits); `cargo test --test it -- --ignored rod_corridor` runs it.
+#[test]
+#[ignore = "issue 23: the corridor classes are not solved within 40 000 iterations yet"]
+fn rod_corridor_and_zigzag_tunnel_are_solved_collision_free_and_deterministic() {
+    for p in [
+        problems::rod_corridor().unwrap(),
+        problems::zigzag_tunnel().unwrap(),
+    ] {
+        for seed in 1..6 {
+            let path = check_solves(&p, seed, 40_000);
+            assert!(path.rotation_rad > 1.5, "{}: {}", p.name, path.rotation_rad);
+        }
+    }
+}
+
+/// How long (ms) this thread has waited runnable for a CPU since it started
+/// (`/proc/thread-self/schedstat`, Linux; 0 elsewhere). On a loaded machine a
+/// planner preempted past its deadline overruns it in wall time through no
+/// work of its own: the budget checks below leave out that wait, measured, and
+/// keep the 5 % bound on what the planner did (unchanged on an idle machine).
+fn run_delay_ms() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().nth(1)?.parse::<f64>().ok())
+        .map_or(0.0, |ns| ns * 1e-6)
+}
+
 /// A search that cannot finish (the twisted slot in half a second without the
 /// axis moves, which solve it) ends with the time limit, within 5 % of its
 /// budget by its own clock, and well within a generous bound by the caller's.
@@ -159,10 +190,16 @@ fn a_spent_budget_is_not_overrun() {
     options.approach.narrow.axis_moves = 0.0;
     options.disassembly.rrt_mut().narrow.axis_moves = 0.0;
     let clock = Instant::now();
+    let waited = run_delay_ms();
     let path = p.solve_with(&mut v, &options).unwrap();
+    let waited = run_delay_ms() - waited;
     let wall = clock.elapsed().as_secs_f64() * 1e3;
     assert_eq!(path.failure, Some(Failure::TimeLimit));
-    assert!(path.time_ms <= 1.05 * budget, "{} ms", path.time_ms);
+    assert!(
+        path.time_ms - waited <= 1.05 * budget,
+        "{} ms ({waited} ms waiting for a CPU)",
+        path.time_ms
+    );
     assert!(wall <= 2.0 * budget, "{wall} ms");
 }
 
@@ -177,12 +214,14 @@ fn smoothing_stays_within_its_share_and_the_raw_path_is_returned_without_it() {
     options.time_limit_ms = Some(budget);
     options.smoothing.shortcut_attempts = usize::MAX;
     let mut v = p.validator(p.default_validator_options()).unwrap();
+    let waited = run_delay_ms();
     let path = p.solve_with(&mut v, &options).unwrap();
+    let waited = run_delay_ms() - waited;
     assert!(path.found(), "{:?}", path.failure);
     let share = options.smoothing.budget_share * budget;
     assert!(
-        path.smoothing_ms <= 1.05 * share,
-        "{} > {share}",
+        path.smoothing_ms - waited <= 1.05 * share,
+        "{} > {share} ({waited} ms waiting for a CPU)",
         path.smoothing_ms
     );
     assert!(
@@ -190,7 +229,7 @@ fn smoothing_stays_within_its_share_and_the_raw_path_is_returned_without_it() {
         "{}",
         path.smoothing_ms
     );
-    assert!(path.time_ms <= 1.05 * budget);
+    assert!(path.time_ms - waited <= 1.05 * budget, "{}", path.time_ms);
     // The heavily shortcut path is re-checked in
     // `a_heavily_smoothed_path_passes_the_dense_recheck`.
 
