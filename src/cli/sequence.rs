@@ -5,7 +5,9 @@
 use super::out::{errln as eprintln, outln as println};
 use super::Exit;
 use crate::document::Document;
-use crate::sequence::{plan_sequence, Mode, SequenceOptions};
+use crate::sequence::{
+    plan_sequence, Mode, SequenceError, SequenceOptions, DEFAULT_SEQUENCE_TIME_LIMIT_MS,
+};
 use crate::workspace::SceneCache;
 use std::path::Path;
 
@@ -43,6 +45,9 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
             return Exit::Usage;
         }
     };
+    // The limit covers reading the document and its meshes too (a 500k-triangle
+    // product takes a second or more to read): the planner gets what is left.
+    let started = std::time::Instant::now();
     let doc = match Document::open(a.doc) {
         Ok(d) => d,
         Err(e) => {
@@ -50,11 +55,25 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
             return Exit::Failure;
         }
     };
+    let limit = a.time_limit_ms.unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS);
+    let mut left = a.time_limit_ms;
+    if limit.is_finite() && limit > 0.0 {
+        let spent = started.elapsed().as_secs_f64() * 1e3;
+        if spent >= limit {
+            eprintln!(
+                "error: {}: {}",
+                a.doc.display(),
+                SequenceError::TimeLimit(limit)
+            );
+            return Exit::Failure;
+        }
+        left = Some(limit - spent);
+    }
     let o = SequenceOptions {
         mode,
         base: a.base,
         threaded: a.threaded,
-        time_limit_ms: a.time_limit_ms,
+        time_limit_ms: left,
         max_sequences: a.max_sequences,
         exclude: a.exclude,
         components: a.components,
@@ -72,6 +91,11 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
             Exit::Ok
         }
         Err(e) => {
+            // The user's limit, not what was left of it after reading.
+            let e = match e {
+                SequenceError::TimeLimit(_) => SequenceError::TimeLimit(limit),
+                e => e,
+            };
             eprintln!("error: {}: {e}", a.doc.display());
             Exit::Failure
         }

@@ -9,6 +9,7 @@
 //! that can meet get their own conservative advancement, so the work goes where the
 //! parts are close, not into the whole part.
 
+use super::containment::coplanar_overlap;
 use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box, Relative};
 use super::shape::{Collider, Obb};
 use super::triangle::{tri_distance, tri_tri, Tri};
@@ -76,9 +77,12 @@ impl EdgeFrames {
 /// Whether `moving`, carried from `from` to `to` (part frame → world; translation
 /// lerp, rotation slerp about the part origin), interferes with `obstacle` at
 /// `pose` anywhere after `from`: some pair of triangles crosses deeper than the
-/// tolerance. `from` is taken as free; containment is not tested here — a solid
-/// can only get inside another through a crossing, and the caller checks `to`
-/// with [`interferes`](super::interferes).
+/// tolerance, or (both meshes bounding volumes, a translation) faces of the two
+/// lying in one plane and facing the same way overlap wider than the tolerance —
+/// the two solids then share the material behind them though no pair crosses (a
+/// wall pushed into an equal wall). `from` is taken as free; containment without
+/// any contact is not tested here — a solid can only get inside another through
+/// its surface, and the caller checks `to` with [`interferes`](super::interferes).
 ///
 /// Edges turning by more than 3 rad are refused as interfering (split them).
 ///
@@ -92,6 +96,39 @@ pub fn edge_interferes(
     pose: &Transform,
     options: &EdgeOptions,
 ) -> Result<bool, CollisionError> {
+    edge_check(moving, from, to, obstacle, pose, options, None).map(|hit| hit.unwrap_or(true))
+}
+
+/// [`edge_interferes`] that gives up at `deadline`: `Ok(None)` when it passed before
+/// the answer was known. The clock is read between node pairs of the traversal and
+/// before each triangle pair's advancement, so a call returns within about one
+/// triangle pair's walk after the deadline, however many pairs the edge meets.
+///
+/// # Errors
+/// As [`edge_interferes`].
+pub fn edge_interferes_until(
+    moving: &Collider,
+    from: &Transform,
+    to: &Transform,
+    obstacle: &Collider,
+    pose: &Transform,
+    options: &EdgeOptions,
+    deadline: std::time::Instant,
+) -> Result<Option<bool>, CollisionError> {
+    edge_check(moving, from, to, obstacle, pose, options, Some(deadline))
+}
+
+/// The check of [`edge_interferes`]; `None`: `deadline` passed first.
+fn edge_check(
+    moving: &Collider,
+    from: &Transform,
+    to: &Transform,
+    obstacle: &Collider,
+    pose: &Transform,
+    options: &EdgeOptions,
+    deadline: Option<std::time::Instant>,
+) -> Result<Option<bool>, CollisionError> {
+    let late = || deadline.is_some_and(|d| std::time::Instant::now() >= d);
     check_pose(from)?;
     check_pose(to)?;
     check_pose(pose)?;
@@ -105,10 +142,10 @@ pub fn edge_interferes(
     }
     let (angle, shift) = from.distance_to(to);
     if angle > MAX_EDGE_ANGLE {
-        return Ok(true);
+        return Ok(Some(true));
     }
     if angle == 0.0 && shift == 0.0 {
-        return Ok(false);
+        return Ok(Some(false));
     }
     let frames = EdgeFrames {
         obstacle_inv: pose.isometry().inverse(),
@@ -127,12 +164,19 @@ pub fn edge_interferes(
     let pairs = PairCheck {
         eps: eps(moving, obstacle, from, pose).max(eps(moving, obstacle, to, pose)),
         oriented: moving.is_solid() && obstacle.is_solid(),
+        // Only translations keep faces in one plane (see below).
+        shared_faces: angle == 0.0 && moving.encloses_volume() && obstacle.encloses_volume(),
         tolerance: options.tolerance,
         gap: super::contact_gap(options.tolerance),
         contact_step: super::contact_step(options.contact_step, options.tolerance),
     };
     let mut stack: Vec<(u32, u32)> = vec![(0, 0)];
+    let mut popped = 0u32;
     while let Some((i, j)) = stack.pop() {
+        popped = popped.wrapping_add(1);
+        if popped % 64 == 0 && late() {
+            return Ok(None);
+        }
         let (no, nm) = (&obstacle.nodes[i as usize], &moving.nodes[j as usize]);
         let swept = swept_obb(&moving.obbs[j as usize], &sweep, angle);
         if !rel.boxes_meet(&obstacle.obbs[i as usize], &swept, pairs.eps) {
@@ -146,20 +190,34 @@ pub fn edge_interferes(
                     // the triangle's box over the edge: both ends, and the arc's bulge
                     // over the chord (at most rho·angle²/8)
                     let a0 = ta.map(|p| at_start * p);
+                    let a1 = ta.map(|p| at_end * p);
                     let mut b = tri_box(&a0);
-                    let e = tri_box(&ta.map(|p| at_end * p));
+                    let e = tri_box(&a1);
                     b.grow(&e.lo);
                     b.grow(&e.hi);
                     let bulge = rho * angle * angle / 8.0 + pairs.eps;
                     for tb in obstacle.leaf_tris(no) {
                         let tb = &tb;
-                        if b.distance_to_box(&tri_box(tb)) > bulge
-                            || pairs.plane_advance(&a0, rho, tb, &frames) >= 1.0
-                        {
+                        if b.distance_to_box(&tri_box(tb)) > bulge {
                             continue;
                         }
+                        if pairs.plane_advance(&a0, rho, tb, &frames) >= 1.0 {
+                            // Cleared by the planes — but two closed solids' faces
+                            // sliding in one plane and facing the same way share the
+                            // material behind them, with no pair crossing (a wall
+                            // pushed into an equal wall): containment.rs.
+                            if pairs.shared_faces
+                                && coplanar_overlap(&a0, &a1, tb, pairs.eps) > pairs.tolerance
+                            {
+                                return Ok(Some(true));
+                            }
+                            continue;
+                        }
+                        if late() {
+                            return Ok(None);
+                        }
                         if pairs.first_crossing(ta, rho, tb, &frames).is_some() {
-                            return Ok(true);
+                            return Ok(Some(true));
                         }
                     }
                 }
@@ -175,7 +233,7 @@ pub fn edge_interferes(
             }
         }
     }
-    Ok(false)
+    Ok(Some(false))
 }
 
 /// A box (moving part frame at the edge start) holding every position of `b` over
@@ -200,6 +258,9 @@ fn normal(t: &Tri) -> Option<Vec3> {
 struct PairCheck {
     eps: f64,
     oriented: bool,
+    /// Both parts bound volumes and the edge only translates: coplanar faces
+    /// facing the same way are tested for shared material.
+    shared_faces: bool,
     tolerance: f64,
     /// Below this distance the pair is in contact, mm.
     gap: f64,

@@ -242,6 +242,35 @@ pub fn interferes(
     pb: &Transform,
     tolerance: f64,
 ) -> Result<bool, CollisionError> {
+    interferes_by(a, pa, b, pb, tolerance, None).map(|v| v.unwrap_or(true))
+}
+
+/// [`interferes`] that gives up at `deadline`: `Ok(None)` when it passed before the
+/// answer was known (the clock is read every 256 triangle pairs, so parts seated in
+/// each other over many fine facets do not hold the caller past its budget).
+///
+/// # Errors
+/// As [`interferes`].
+pub fn interferes_until(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    tolerance: f64,
+    deadline: std::time::Instant,
+) -> Result<Option<bool>, CollisionError> {
+    interferes_by(a, pa, b, pb, tolerance, Some(deadline))
+}
+
+/// [`interferes`]; `None`: `deadline` passed first.
+fn interferes_by(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    tolerance: f64,
+    deadline: Option<std::time::Instant>,
+) -> Result<Option<bool>, CollisionError> {
     check_pose(pa)?;
     check_pose(pb)?;
     check_tolerance(tolerance)?;
@@ -254,8 +283,14 @@ pub fn interferes(
     // change the answer. Solids: shallow crossings are seeds of the depth walk, so
     // every one is visited (the same pairs as `contact` visits before a deep one).
     let floor = Cell::new(-1.0);
+    let (mut visited, mut late) = (0u32, false);
     let crossing =
         for_each_triangle_pair(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
+            visited = visited.wrapping_add(1);
+            if visited % 256 == 0 && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+                late = true;
+                return ControlFlow::Break(());
+            }
             match tri_tri(ta, tb, eps, oriented) {
                 Some(d) if d > tolerance => ControlFlow::Break(()),
                 Some(d) => {
@@ -272,14 +307,19 @@ pub fn interferes(
                 None => ControlFlow::Continue(()),
             }
         });
+    if late {
+        return Ok(None);
+    }
     if crossing.is_break() {
-        return Ok(true);
+        return Ok(Some(true));
     }
     if crossed {
         // surfaces that cross (even shallowly) cannot have one solid inside the other
-        return Ok(oriented && deep_reach(a, pa, b, pb, &seeds, tolerance, eps, true) > tolerance);
+        return Ok(Some(
+            oriented && deep_reach(a, pa, b, pb, &seeds, tolerance, eps, true) > tolerance,
+        ));
     }
-    Ok(containment(a, pa, b, pb, eps).is_some())
+    Ok(Some(containment(a, pa, b, pb, eps).is_some()))
 }
 
 /// The full verdict for parts `a` at `pa` and `b` at `pb` (part frames → world):

@@ -51,6 +51,7 @@
 //! ```
 
 mod cells;
+mod containment;
 mod edge;
 mod exact;
 mod method;
@@ -61,8 +62,10 @@ mod triangle;
 pub use cells::{
     cells_contact, method_disagreement, Cell, CutCells, CutSpec, Disagreement, MAX_CELLS,
 };
-pub use edge::{edge_interferes, EdgeOptions};
-pub use exact::{clearance, contact, distance_lower_bound, interferes, surface_distance};
+pub use edge::{edge_interferes, edge_interferes_until, EdgeOptions};
+pub use exact::{
+    clearance, contact, distance_lower_bound, interferes, interferes_until, surface_distance,
+};
 pub use method::{contact_gap, contact_step, SweepMethod, MIN_CONTACT_GAP_MM};
 pub use shape::{Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
 pub use sweep::{sweep, Motion, Obstacle, SweepHit, SweepOptions, DEFAULT_SWEEP_TIME_LIMIT_MS};

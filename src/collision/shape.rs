@@ -212,6 +212,9 @@ pub struct Collider {
     /// Edge neighbours of each triangle in tree order (`u32::MAX`: none), built on
     /// first use by the shallow-crossing depth walk (`exact::deep_reach`).
     neighbours: OnceLock<Vec<[u32; 3]>>,
+    /// Whether the mesh bounds a volume, watertight or not (see
+    /// `containment::encloses_volume`), found on first use by the edge check.
+    encloses: OnceLock<bool>,
 }
 
 /// Something about a mesh that weakens the answers given for it.
@@ -312,6 +315,7 @@ impl Collider {
             radius,
             eps: 1e-9 * scale,
             neighbours: OnceLock::new(),
+            encloses: OnceLock::new(),
         })
     }
 
@@ -341,6 +345,14 @@ impl Collider {
     /// containment can be decided.
     pub fn is_solid(&self) -> bool {
         self.report.is_watertight()
+    }
+
+    /// Whether the mesh bounds a volume even where it is not a 2-manifold (closed
+    /// slices stacked on their faces): see `containment::encloses_volume`.
+    pub(crate) fn encloses_volume(&self) -> bool {
+        *self
+            .encloses
+            .get_or_init(|| super::containment::encloses_volume(&self.mesh))
     }
 
     /// What weakens the answers for this mesh (not watertight, degenerate triangles).

@@ -6,7 +6,7 @@
 use super::context::*;
 use super::graph::separation_directions;
 use super::options::{Mode, SequenceError, DEFAULT_SEQUENCE_TIME_LIMIT_MS};
-use crate::collision::{edge_interferes, interferes, Aabb, EdgeOptions, SweepMethod};
+use crate::collision::{edge_interferes_until, interferes, Aabb, EdgeOptions, SweepMethod};
 use crate::math::{Transform, Vec3};
 use crate::workspace::WorkspaceError;
 use rayon::prelude::*;
@@ -316,17 +316,21 @@ impl Ctx<'_> {
         };
         let mut piece = (0.5 * self.opts.probe_mm).min(longest);
         let mut at = 0.0;
-        // whether the straight piece `a → b` of the sweep hits `q`
+        // whether the straight piece `a → b` of the sweep hits `q`; each piece
+        // stops at the one deadline too (a piece between two large parts can meet
+        // many thousands of triangle pairs)
         let hits = |a: &Transform, b: &Transform| {
-            edge_interferes(
+            edge_interferes_until(
                 &self.scene.colliders[p],
                 a,
                 b,
                 &self.scene.colliders[q],
                 &self.scene.poses[q],
                 &options,
+                self.deadline,
             )
-            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))
+            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?
+            .ok_or_else(&time_limit)
         };
         if entry > piece {
             at = entry - 0.5 * piece;

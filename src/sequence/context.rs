@@ -45,6 +45,10 @@ pub(super) const SEARCH_SHARE: f64 = 0.9;
 /// batch of this size takes tens of ms).
 const TREE_BATCH_TRIANGLES: usize = 50_000;
 
+/// Triangles of the first batch of trees (smallest meshes first), whose time
+/// predicts the rest's: enough that a tree's fixed costs do not dominate it.
+const FIRST_BATCH_TRIANGLES: usize = 1_000;
+
 pub(super) fn bit(i: usize) -> Mask {
     1u128 << i
 }
@@ -287,38 +291,49 @@ fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, Sequence
 }
 
 /// The pairs of product components `(a, b)`, `a < b`, that touch within
-/// `contact_gap_mm`: the exact contacts, and pairs whose surfaces are at most the gap
-/// apart (clearance searched only where the boxes are that close; skipped once the
-/// deadline has passed).
+/// `contact_gap_mm`: pairs whose surfaces are at most the gap apart (0 for surfaces
+/// that meet; searched only where the boxes are that close; skipped once the
+/// deadline has passed). The assembled pose is known free of interference, so no
+/// part lies inside another.
 fn touching_pairs(
     scene: &Scene,
     boxes: &[Aabb],
     active: Mask,
     opts: &SequenceOptions,
     deadline: Instant,
-    contacts: &[crate::collision::PairContact],
 ) -> Vec<(usize, usize)> {
     let gap = opts.contact_gap_mm;
     let mut pairs = Vec::new();
     for a in members(active) {
         for b in members(active).filter(|&b| b > a) {
-            if boxes_meet(&boxes[a], &boxes[b], gap + 1e-9)
-                && !contacts.iter().any(|c| c.a == a && c.b == b)
-            {
+            if boxes_meet(&boxes[a], &boxes[b], gap + 1e-9) {
                 pairs.push((a, b));
             }
         }
     }
+    // "Within the gap?" only: the distance search stops at the first pair of
+    // triangles nearer than the gap (the exact clearance of two parts seated in
+    // each other walks every facet pair along the seat: seconds on fine meshes).
     let near: Vec<bool> = pairs
         .par_iter()
         .map(|&(a, b)| {
-            Instant::now() < deadline && scene.clearance(a, b, gap + 1e-6).is_ok_and(|c| c <= gap)
+            Instant::now() < deadline
+                && crate::collision::surface_distance(
+                    &scene.colliders[a],
+                    &scene.poses[a],
+                    &scene.colliders[b],
+                    &scene.poses[b],
+                    gap + 1e-6,
+                )
+                .is_ok_and(|d| d <= gap)
         })
         .collect();
-    let mut out: Vec<(usize, usize)> = contacts.iter().map(|c| (c.a, c.b)).collect();
-    out.extend(pairs.into_iter().zip(near).filter(|p| p.1).map(|p| p.0));
-    out.sort_unstable();
-    out
+    pairs
+        .into_iter()
+        .zip(near)
+        .filter(|p| p.1)
+        .map(|p| p.0)
+        .collect()
 }
 
 impl<'d> Ctx<'d> {
@@ -457,13 +472,33 @@ impl<'d> Ctx<'d> {
         };
         let mut batch: Vec<&std::sync::Arc<crate::mesh::Mesh>> = Vec::new();
         let mut batch_tris = 0;
-        for i in 0..n {
+        // Smallest meshes first, the first batch as soon as it holds
+        // FIRST_BATCH_TRIANGLES: the time it takes per triangle predicts the next
+        // batches', and a batch that cannot end before the deadline
+        // is not started (the call could only run out of time in it; one large
+        // mesh takes 0.1–1 s on a loaded machine).
+        let (trees_started, mut built) = (Instant::now(), 0usize);
+        let mut by_size: Vec<usize> = (0..n).collect();
+        by_size.sort_by_key(|&i| doc.mesh_of(i).triangles.len());
+        for (k, &i) in by_size.iter().enumerate() {
             let mesh = doc.mesh_of(i);
             batch.push(mesh);
             batch_tris += mesh.triangles.len();
-            if batch_tris >= TREE_BATCH_TRIANGLES || i + 1 == n {
+            if batch_tris >= TREE_BATCH_TRIANGLES
+                || (built == 0 && batch_tris >= FIRST_BATCH_TRIANGLES)
+                || k + 1 == n
+            {
                 spent()?;
+                if built > 0 {
+                    let per = trees_started.elapsed().as_secs_f64() / built as f64;
+                    if Instant::now() + Duration::from_secs_f64(per * batch_tris as f64)
+                        > deadline
+                    {
+                        return Err(SequenceError::TimeLimit(limit));
+                    }
+                }
                 cache.colliders(&batch).map_err(WorkspaceError::from)?;
+                built += batch_tris;
                 batch.clear();
                 batch_tris = 0;
             }
@@ -481,16 +516,55 @@ impl<'d> Ctx<'d> {
         let sizes = component_sizes(doc, &opts);
         // The assembled state must be free of interference (among the product: a
         // robot's adjacent links may overlap, they are not sequenced).
-        let mut contacts = scene
-            .contacts(crate::collision::Method::Exact, opts.tolerance)
+        // Pair by pair in parallel, each query stopping at the deadline (parts
+        // seated in each other over fine facets take seconds a pair).
+        let mut near = Vec::new();
+        for a in members(active) {
+            for b in members(active).filter(|&b| b > a) {
+                if boxes_meet(&boxes[a], &boxes[b], opts.tolerance) {
+                    near.push((a, b));
+                }
+            }
+        }
+        let verdicts: Vec<Option<bool>> = near
+            .par_iter()
+            .map(|&(a, b)| {
+                if Instant::now() >= deadline {
+                    return Ok(None);
+                }
+                crate::collision::interferes_until(
+                    &scene.colliders[a],
+                    &scene.poses[a],
+                    &scene.colliders[b],
+                    &scene.poses[b],
+                    opts.tolerance,
+                    deadline,
+                )
+            })
+            .collect::<Result<_, _>>()
             .map_err(WorkspaceError::from)?;
-        contacts.retain(|p| active & bit(p.a) != 0 && active & bit(p.b) != 0);
-        spent()?;
-        if let Some(p) = contacts.iter().find(|p| p.contact.is_interfering()) {
+        if verdicts.iter().any(Option::is_none) {
+            return Err(SequenceError::TimeLimit(limit));
+        }
+        if let Some(&(a, b)) = near
+            .iter()
+            .zip(&verdicts)
+            .find(|(_, v)| **v == Some(true))
+            .map(|(p, _)| p)
+        {
+            // The depth for the message: one full query, on the error path only.
+            let depth = crate::collision::contact(
+                &scene.colliders[a],
+                &scene.poses[a],
+                &scene.colliders[b],
+                &scene.poses[b],
+                opts.tolerance,
+            )
+            .map_or(0.0, |c| c.depth());
             return Err(SequenceError::AssembledInterference {
-                a: names[p.a].clone(),
-                b: names[p.b].clone(),
-                depth: p.contact.depth(),
+                a: names[a].clone(),
+                b: names[b].clone(),
+                depth,
             });
         }
         let sizes_for = sizes.clone();
@@ -514,7 +588,7 @@ impl<'d> Ctx<'d> {
                 }
             }
             Mode::Geometry => {
-                for (a, b) in touching_pairs(&scene, &boxes, active, &opts, deadline, &contacts) {
+                for (a, b) in touching_pairs(&scene, &boxes, active, &opts, deadline) {
                     related[a] |= bit(b);
                     related[b] |= bit(a);
                 }
@@ -549,7 +623,7 @@ impl<'d> Ctx<'d> {
             Mode::Geometry => related.clone(),
             Mode::Mates if opts.support => {
                 let mut t = vec![0 as Mask; n];
-                for (a, b) in touching_pairs(&scene, &boxes, active, &opts, deadline, &contacts) {
+                for (a, b) in touching_pairs(&scene, &boxes, active, &opts, deadline) {
                     t[a] |= bit(b);
                     t[b] |= bit(a);
                 }

@@ -432,8 +432,9 @@ pub struct SequencePlan {
     /// that cannot rank among the kept ones, so this is the precedence of the best
     /// sequences, not of every feasible one.
     pub precedence: Vec<(String, String)>,
-    /// Whether the search ended by itself (not cut by the time limit or the 200 000
-    /// expansions): the sequences returned are then the best by the ranking.
+    /// Whether the search ended by itself (not cut by the time limit or by its
+    /// memory bound of 200 000 search states): the sequences returned are then the
+    /// best by the ranking.
     pub complete: bool,
     /// The relation graph used (mates mode), or the contact graph (geometry mode,
     /// relations without mates).

@@ -76,7 +76,13 @@ struct Search<'c, 'd> {
 /// The key of [`Search::seen`].
 type StateKey = (Mask, Option<[u64; 3]>, Mask);
 
-const MAX_EXPANDED: usize = 200_000;
+/// The memory bound of the search: its memo holds at most this many states
+/// ([`Search::seen`] and [`Search::dead`], ≈ 400 bytes a state with the default five
+/// sequences kept: ≈ 80 MB). The search stops there as at its deadline
+/// (`complete: false`). A bound on memory, not on time: the search expands tens of
+/// thousands of states a second, so without it a long budget would grow the memo
+/// by gigabytes; within it the budget decides.
+const MAX_SEARCH_STATES: usize = 200_000;
 const MAX_REJECTED: usize = 50;
 
 impl Search<'_, '_> {
@@ -169,7 +175,7 @@ impl Search<'_, '_> {
             self.record(base, choices, cost);
             return true;
         }
-        if ctx.search_out_of_time() || self.expanded >= MAX_EXPANDED {
+        if ctx.search_out_of_time() || self.seen.len() + self.dead.len() >= MAX_SEARCH_STATES {
             self.cut = true;
             return false;
         }

@@ -39,14 +39,19 @@ pub fn write_doc(dir: &Path, parts: &[(&str, Mesh)]) -> PathBuf {
 /// (10 × 10 mm inside, 56 mm long, their walls cut in `slices` slices along the tube:
 /// 48 triangles per slice) with a clip in each, 1 mm clear of its walls.
 pub fn duct_grid(dir: &Path, slices: usize) -> PathBuf {
+    duct_grid_of(dir, slices, 3, 4)
+}
+
+/// [`duct_grid`] with `nx` × `ny` tubes (`2 · nx · ny + 1` parts) on the same plate.
+pub fn duct_grid_of(dir: &Path, slices: usize, nx: usize, ny: usize) -> PathBuf {
     let mut parts: Vec<(String, Mesh)> = Vec::new();
     let plate = boxes(
         &[([-20.0, -20.0, -40.0], [120.0, 150.0, -35.0])],
         &Transform::IDENTITY,
     );
     parts.push(("plate".into(), plate));
-    for i in 0..3 {
-        for j in 0..4 {
+    for i in 0..nx {
+        for j in 0..ny {
             let at = Transform::from_translation(Vec3::new(40.0 * i as f64, 35.0 * j as f64, 0.0));
             // Walls cut in slices along the tube: many triangles per sweep.
             let mut walls = Vec::new();

@@ -10,6 +10,7 @@ mod api_docs;
 mod chain;
 mod cli;
 mod db;
+mod h26c_sliced_walls;
 mod hostile_bounds;
 mod hostile_db;
 mod hostile_files;

@@ -1,0 +1,296 @@
+//! Containment along a motion: when two closed solids share material without any
+//! pair of their triangles crossing.
+//!
+//! The crossing depth of a triangle pair ([`tri_tri`](super::triangle::tri_tri)) is 0
+//! for coplanar faces and for edges lying on faces, so a part whose cross-section
+//! equals its neighbour's (two equal tubes, a wall sliding into an equal wall) can
+//! slide into it with every pair at depth 0: each face it pushes in lies in the plane
+//! of one of the neighbour's faces, or meets them only edge-on. The volumes overlap
+//! all the same, and there the two solids' faces lie in one plane **facing the same
+//! way**, with both solids' material behind them — faces of solids that only touch
+//! face opposite ways (a plate on a table, a peg in its hole). This module tests
+//! that: the overlap of two coplanar, equally facing triangles of closed meshes over
+//! a straight translation, in millimetres.
+//!
+//! "Closed" here ([`encloses_volume`]) is weaker than watertight: every edge is
+//! used as often in one direction as in the other, so the surface is the boundary of
+//! a volume even where it is not a 2-manifold — a wall cut in stacked closed slices,
+//! a union of closed boxes sharing faces (CAD exports, the bench's sliced ducts).
+
+use super::triangle::Tri;
+use crate::math::Vec3;
+use crate::mesh::Mesh;
+use std::collections::HashMap;
+
+/// Whether `mesh` bounds a volume with its normals outward: every edge is
+/// traversed as often in one direction as in the other (a closed, consistently
+/// oriented surface, possibly non-manifold: stacked closed slices share their faces
+/// and edges), and its signed volume is positive (an inside-out mesh resting on a
+/// part would otherwise seem to share its faces' material).
+pub(crate) fn encloses_volume(mesh: &Mesh) -> bool {
+    let mut balance: HashMap<(u32, u32), i32> = HashMap::with_capacity(3 * mesh.triangles.len());
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            if u == v {
+                continue;
+            }
+            *balance.entry((u.min(v), u.max(v))).or_default() += if u < v { 1 } else { -1 };
+        }
+    }
+    !mesh.triangles.is_empty() && balance.values().all(|&b| b == 0) && mesh.signed_volume() > 0.0
+}
+
+/// How far (mm) moving triangle `a` (at `a0` at the start of a straight
+/// translation, at `a1` at its end; obstacle frame) and obstacle triangle `b`
+/// overlap at most over the motion when both lie in one plane facing the same way
+/// (unit normals within 1e-9): the largest over the motion of the overlap's least
+/// width — how far `a` must move in the plane to leave `b`, as a crossing depth is
+/// how far one triangle reaches through the other. Only overlaps wider than at the
+/// start count (the start is taken as free): a part sliding out of such an
+/// overlap gets 0. 0 as well when they do not stay in one plane (`eps`, mm: off
+/// the plane within it counts as on it), face opposite ways, or the motion turns
+/// `a`.
+///
+/// The overlap of two convex sets, one translated along a line, has a least width
+/// that is concave in the translation (Brunn–Minkowski: the overlap halfway
+/// contains the mean of the two end overlaps), so a ternary search over the
+/// translations where the two meet finds its largest value.
+pub(crate) fn coplanar_overlap(a0: &Tri, a1: &Tri, b: &Tri, eps: f64) -> f64 {
+    let (Some(na), Some(nb)) = (normal(a0), normal(b)) else {
+        return 0.0;
+    };
+    if na.dot(&nb) < 1.0 - 1e-9 {
+        return 0.0;
+    }
+    let v = a1[0] - a0[0];
+    // a translation: every corner moves by the same vector
+    if (1..3).any(|k| ((a1[k] - a0[k]) - v).norm() > eps) {
+        return 0.0;
+    }
+    let off = |p: &crate::math::Point3| nb.dot(&(p - b[0]));
+    if a0.iter().any(|p| off(p).abs() > eps) || nb.dot(&v).abs() > eps {
+        return 0.0;
+    }
+    // In-plane coordinates about b[0].
+    let e1 = (b[1] - b[0]).normalize();
+    let e2 = nb.cross(&e1);
+    let flat = |p: &crate::math::Point3| [e1.dot(&(p - b[0])), e2.dot(&(p - b[0]))];
+    let pa = [flat(&a0[0]), flat(&a0[1]), flat(&a0[2])];
+    let pb = [flat(&b[0]), flat(&b[1]), flat(&b[2])];
+    let dv = [e1.dot(&v), e2.dot(&v)];
+    let width = |t: f64| {
+        let moved = pa.map(|p| [p[0] + t * dv[0], p[1] + t * dv[1]]);
+        overlap_width(&moved, &pb)
+    };
+    let start = width(0.0);
+    let len2 = dv[0] * dv[0] + dv[1] * dv[1];
+    if len2 <= eps * eps {
+        return 0.0;
+    }
+    // The translations t·dv at which the triangles meet: the line through the
+    // origin along dv inside the Minkowski difference b − a (the hull of the nine
+    // corner differences), as an interval of t.
+    let perp = [-dv[1], dv[0]];
+    let diffs: Vec<[f64; 2]> = pb
+        .iter()
+        .flat_map(|q| pa.iter().map(move |p| [q[0] - p[0], q[1] - p[1]]))
+        .collect();
+    let side = |d: &[f64; 2]| d[0] * perp[0] + d[1] * perp[1];
+    let along = |d: &[f64; 2]| (d[0] * dv[0] + d[1] * dv[1]) / len2;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (i, d) in diffs.iter().enumerate() {
+        let s = side(d);
+        if s.abs() <= eps * len2.sqrt() {
+            lo = lo.min(along(d));
+            hi = hi.max(along(d));
+        }
+        for e in &diffs[i + 1..] {
+            let r = side(e);
+            if (s < 0.0) != (r < 0.0) && (s - r).abs() > 0.0 {
+                let f = s / (s - r);
+                let c = [d[0] + f * (e[0] - d[0]), d[1] + f * (e[1] - d[1])];
+                lo = lo.min(along(&c));
+                hi = hi.max(along(&c));
+            }
+        }
+    }
+    let (mut lo, mut hi) = (lo.max(0.0), hi.min(1.0));
+    if lo > hi {
+        return 0.0;
+    }
+    for _ in 0..60 {
+        if hi - lo <= 1e-12 {
+            break;
+        }
+        let m1 = lo + (hi - lo) / 3.0;
+        let m2 = hi - (hi - lo) / 3.0;
+        if width(m1) < width(m2) {
+            lo = m1;
+        } else {
+            hi = m2;
+        }
+    }
+    let best = width(0.5 * (lo + hi)).max(width(1.0_f64.min(hi)));
+    if best > start + eps.max(1e-12) {
+        best
+    } else {
+        0.0
+    }
+}
+
+fn normal(t: &Tri) -> Option<Vec3> {
+    (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(1e-300)
+}
+
+/// The least width (mm) of the overlap of two plane triangles: `a` clipped by the
+/// three edges of `b`, then the smallest over the clipped polygon's edges of its
+/// extent across that edge (a convex polygon is narrowest across one of its
+/// edges). 0 when they meet in less than an area.
+fn overlap_width(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3]) -> f64 {
+    let cross = |o: [f64; 2], p: [f64; 2], q: [f64; 2]| {
+        (p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0])
+    };
+    // b counter-clockwise, so "inside" is the left of each edge
+    let ccw = cross(b[0], b[1], b[2]) > 0.0;
+    let mut poly = [[0.0; 2]; 9];
+    let mut len = 3;
+    poly[..3].copy_from_slice(a);
+    for k in 0..3 {
+        let (u, w) = if ccw {
+            (b[k], b[(k + 1) % 3])
+        } else {
+            (b[(k + 1) % 3], b[k])
+        };
+        let mut next = [[0.0; 2]; 9];
+        let mut count = 0;
+        for i in 0..len {
+            let (p, q) = (poly[i], poly[(i + 1) % len]);
+            let (sp, sq) = (cross(u, w, p), cross(u, w, q));
+            if sp >= 0.0 && count < next.len() {
+                next[count] = p;
+                count += 1;
+            }
+            if (sp >= 0.0) != (sq >= 0.0) && count < next.len() {
+                let f = sp / (sp - sq);
+                next[count] = [p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])];
+                count += 1;
+            }
+        }
+        poly = next;
+        len = count;
+        if len < 3 {
+            return 0.0;
+        }
+    }
+    let poly = &poly[..len];
+    let mut least = f64::INFINITY;
+    for i in 0..len {
+        let (p, q) = (poly[i], poly[(i + 1) % len]);
+        let l = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+        if l <= 1e-15 {
+            continue;
+        }
+        let across = poly
+            .iter()
+            .map(|&r| cross(p, q, r).abs() / l)
+            .fold(0.0f64, f64::max);
+        least = least.min(across);
+    }
+    if least.is_finite() {
+        least
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::{edge_interferes, Collider, EdgeOptions};
+    use crate::math::{Point3, Transform};
+    use std::sync::Arc;
+
+    /// A block `lo..hi` cut in `slices` stacked closed boxes along Z (closed, not a
+    /// 2-manifold: the slices share their faces), as the bench's sliced ducts.
+    fn sliced(lo: [f64; 3], hi: [f64; 3], slices: usize) -> Mesh {
+        let mut soup = Vec::new();
+        let h = (hi[2] - lo[2]) / slices as f64;
+        for s in 0..slices {
+            let z0 = lo[2] + h * s as f64;
+            let z1 = if s + 1 == slices { hi[2] } else { z0 + h };
+            let m = Mesh::cuboid(Point3::new(lo[0], lo[1], z0), Point3::new(hi[0], hi[1], z1));
+            for k in 0..m.triangles.len() {
+                soup.push(m.triangle(k));
+            }
+        }
+        Mesh::from_triangle_soup(soup).unwrap()
+    }
+
+    fn at(x: f64, y: f64, z: f64) -> Transform {
+        Transform::from_translation(Vec3::new(x, y, z))
+    }
+
+    #[test]
+    fn stacked_slices_enclose_a_volume_an_open_box_does_not() {
+        let block = sliced([0.0; 3], [10.0, 10.0, 10.0], 4);
+        assert!(encloses_volume(&block));
+        assert!(!Collider::new(Arc::new(block)).unwrap().is_solid());
+        let mut open = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+        open.triangles.pop();
+        assert!(!encloses_volume(&open));
+        let mut inside_out = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+        for t in &mut inside_out.triangles {
+            t.swap(1, 2);
+        }
+        assert!(!encloses_volume(&inside_out));
+    }
+
+    #[test]
+    fn a_block_sliding_into_an_equal_block_interferes() {
+        // Two equal sliced blocks side by side along Y, 2 mm apart: moved +Y by
+        // 4 mm, the first is 2 mm deep inside the second, though every face it
+        // pushes in meets the other's only coplanar or edge-on (depth 0).
+        let block = Collider::new(Arc::new(sliced([0.0; 3], [10.0, 10.0, 10.0], 8))).unwrap();
+        let o = EdgeOptions::default();
+        let other = at(0.0, 12.0, 0.0);
+        let hit = |from: Transform, to: Transform| {
+            edge_interferes(&block, &from, &to, &block, &other, &o).unwrap()
+        };
+        assert!(hit(at(0.0, 0.0, 0.0), at(0.0, 4.0, 0.0)));
+        assert!(hit(at(0.0, -5.0, 0.0), at(0.0, 40.0, 0.0)));
+        // Stopping flush against it, sliding along it and on top of it: free.
+        assert!(!hit(at(0.0, 0.0, 0.0), at(0.0, 2.0, 0.0)));
+        let beside = at(10.0, 12.0, 0.0);
+        let slide = |from: Transform, to: Transform, obstacle: &Transform| {
+            edge_interferes(&block, &from, &to, &block, obstacle, &o).unwrap()
+        };
+        assert!(!slide(at(0.0, 0.0, 0.0), at(0.0, 20.0, 0.0), &beside));
+        let below = at(0.0, 12.0, -10.0);
+        assert!(!slide(at(0.0, 0.0, 0.0), at(0.0, 20.0, 0.0), &below));
+    }
+
+    #[test]
+    fn coplanar_overlap_is_the_widest_overlap_met() {
+        let p = |x: f64, y: f64| Point3::new(x, y, 0.0);
+        let b = [p(0.0, 0.0), p(4.0, 0.0), p(0.0, 4.0)];
+        let a0 = [p(-10.0, 0.0), p(-6.0, 0.0), p(-10.0, 4.0)];
+        let a1 = a0.map(|q| q + Vec3::new(20.0, 0.0, 0.0));
+        // Passing right over it: the widest overlap is the triangle itself (its
+        // least width, the height over the hypotenuse, 4/√2).
+        let w = coplanar_overlap(&a0, &a1, &b, 1e-9);
+        assert!((w - 4.0 / 2f64.sqrt()).abs() < 1e-6, "{w}");
+        // Facing the other way (a face against a face): no shared material.
+        let flipped = [a0[0], a0[2], a0[1]];
+        let flipped1 = [a1[0], a1[2], a1[1]];
+        assert_eq!(coplanar_overlap(&flipped, &flipped1, &b, 1e-9), 0.0);
+        // Leaving an overlap: 0 (the start is taken as free).
+        let on = b;
+        let away = b.map(|q| q + Vec3::new(-10.0, 0.0, 0.0));
+        assert_eq!(coplanar_overlap(&on, &away, &b, 1e-9), 0.0);
+        // Off the plane: not coplanar.
+        let lifted = a0.map(|q| q + Vec3::new(0.0, 0.0, 0.5));
+        let lifted1 = a1.map(|q| q + Vec3::new(0.0, 0.0, 0.5));
+        assert_eq!(coplanar_overlap(&lifted, &lifted1, &b, 1e-9), 0.0);
+    }
+}
