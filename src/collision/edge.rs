@@ -174,7 +174,7 @@ fn edge_check(
     let mut popped = 0u32;
     while let Some((i, j)) = stack.pop() {
         popped = popped.wrapping_add(1);
-        if popped % 64 == 0 && late() {
+        if popped.is_multiple_of(64) && late() {
             return Ok(None);
         }
         let (no, nm) = (&obstacle.nodes[i as usize], &moving.nodes[j as usize]);

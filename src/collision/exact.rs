@@ -284,29 +284,28 @@ fn interferes_by(
     // every one is visited (the same pairs as `contact` visits before a deep one).
     let floor = Cell::new(-1.0);
     let (mut visited, mut late) = (0u32, false);
-    let crossing =
-        for_each_triangle_pair(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
-            visited = visited.wrapping_add(1);
-            if visited % 256 == 0 && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
-                late = true;
-                return ControlFlow::Break(());
-            }
-            match tri_tri(ta, tb, eps, oriented) {
-                Some(d) if d > tolerance => ControlFlow::Break(()),
-                Some(d) => {
-                    if d > 0.0 {
-                        crossed = true;
-                        if oriented {
-                            seeds.push((ka, kb));
-                        } else {
-                            floor.set(tolerance);
-                        }
+    let crossing = for_each_triangle_pair(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
+        visited = visited.wrapping_add(1);
+        if visited % 256 == 0 && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+            late = true;
+            return ControlFlow::Break(());
+        }
+        match tri_tri(ta, tb, eps, oriented) {
+            Some(d) if d > tolerance => ControlFlow::Break(()),
+            Some(d) => {
+                if d > 0.0 {
+                    crossed = true;
+                    if oriented {
+                        seeds.push((ka, kb));
+                    } else {
+                        floor.set(tolerance);
                     }
-                    ControlFlow::Continue(())
                 }
-                None => ControlFlow::Continue(()),
+                ControlFlow::Continue(())
             }
-        });
+            None => ControlFlow::Continue(()),
+        }
+    });
     if late {
         return Ok(None);
     }

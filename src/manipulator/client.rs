@@ -152,7 +152,10 @@ pub enum AddressError {
     NoAddress,
     /// The state port by the rule (motion port + [`super::STATE_PORT_OFFSET`]) is
     /// beyond 65535.
-    #[error("no state port {port} + {}: give the state port", super::STATE_PORT_OFFSET)]
+    #[error(
+        "no state port {port} + {}: give the state port",
+        super::STATE_PORT_OFFSET
+    )]
     NoStatePort {
         /// The motion port.
         port: u16,
@@ -253,7 +256,9 @@ pub enum WireError {
         joints: usize,
     },
     /// Not one value per joint.
-    #[error("{got} joint values for a robot of {joints} joints (at most {MAX_JOINTS} on the wire)")]
+    #[error(
+        "{got} joint values for a robot of {joints} joints (at most {MAX_JOINTS} on the wire)"
+    )]
     JointCount {
         /// Values given.
         got: usize,

@@ -523,7 +523,8 @@ mod tests {
                     last = free;
                     if (push - tol).abs() > 1e-6 {
                         assert_eq!(free, push < tol, "push {push}, tilt {tilt} about {axis:?}");
-                        let far = pose.then(&Transform::from_translation(Vec3::new(-30.0, 1.0, 2.0)));
+                        let far =
+                            pose.then(&Transform::from_translation(Vec3::new(-30.0, 1.0, 2.0)));
                         let again = far.interpolate(&pose, 1.0);
                         assert_eq!(v.is_free(&again), free, "re-interpolated, push {push}");
                     }

@@ -465,7 +465,9 @@ mod tests {
                 space.sample(&mut b, &reference)
             );
         }
-        let fixed = space.clone().with_rotation(super::super::space::RotationFreedom::Fixed);
+        let fixed = space
+            .clone()
+            .with_rotation(super::super::space::RotationFreedom::Fixed);
         let s = n.draw(&mut a, &fixed, &reference, &tree);
         assert!(s.rotation().angle_to(&reference) < 1e-12);
     }

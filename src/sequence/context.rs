@@ -491,8 +491,7 @@ impl<'d> Ctx<'d> {
                 spent()?;
                 if built > 0 {
                     let per = trees_started.elapsed().as_secs_f64() / built as f64;
-                    if Instant::now() + Duration::from_secs_f64(per * batch_tris as f64)
-                        > deadline
+                    if Instant::now() + Duration::from_secs_f64(per * batch_tris as f64) > deadline
                     {
                         return Err(SequenceError::TimeLimit(limit));
                     }

@@ -384,7 +384,10 @@ impl SkillManager {
                         return self.fail(i, e, on_event);
                     }
                     self.status[i] = SkillStatus::Interrupted;
-                    on_event(&ManagerEvent::Interrupted(i, format!("{port} port: {cause}")));
+                    on_event(&ManagerEvent::Interrupted(
+                        i,
+                        format!("{port} port: {cause}"),
+                    ));
                     drop(client);
                     client = self
                         .connect(Instant::now() + self.options.reconnect_timeout)

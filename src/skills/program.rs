@@ -508,8 +508,7 @@ impl Plan {
                             {
                                 let j = match why {
                                     crate::manipulator::client::WireError::Joint {
-                                        joint,
-                                        ..
+                                        joint, ..
                                     } => joint,
                                     _ => 0,
                                 };

@@ -179,8 +179,8 @@ fn fitup_runs_within(
         *worst = worst.max(over_ms);
         overrun_pct = overrun_pct.max(100.0 * over_ms / budget);
         if plan.smoothing.enabled {
-            smoothing_over_ms = smoothing_over_ms
-                .max(path.smoothing_ms - plan.smoothing.budget_share * budget);
+            smoothing_over_ms =
+                smoothing_over_ms.max(path.smoothing_ms - plan.smoothing.budget_share * budget);
         }
         if path.found() {
             times.push(dt);
@@ -793,7 +793,14 @@ fn main() {
         // exercised (`FITUP_PROBE_MS`, 0: off).
         let probe: f64 = env_or("FITUP_PROBE_MS", 0.0);
         if probe > 0.0 {
-            let r = fitup_runs_within(&p, p.default_validator_options(), runs, true, &|_| (), probe);
+            let r = fitup_runs_within(
+                &p,
+                p.default_validator_options(),
+                runs,
+                true,
+                &|_| (),
+                probe,
+            );
             println!(
                 "{:<18} budget probe {probe} ms with smoothing: {}; largest overrun {:.2} % (setup + call); smoothing {:+.2} ms over its share",
                 "",

@@ -3,6 +3,7 @@
 
 #![allow(dead_code)]
 
+pub mod duct;
 pub mod lines;
 
 use std::io::Read;

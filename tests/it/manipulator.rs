@@ -99,7 +99,10 @@ fn a_joint_limit_trajectory_is_refused_with_the_reason() {
             error_code,
         } => {
             assert_eq!(*request, Request::Point { sequence: 1 }, "{e}");
-            assert_eq!(*msg_type, fitup::manipulator::message::msg_type::JOINT_TRAJ_PT);
+            assert_eq!(
+                *msg_type,
+                fitup::manipulator::message::msg_type::JOINT_TRAJ_PT
+            );
             assert_eq!(*code, Some(RefusalCode::JointLimit(1)), "{e}");
             assert_eq!(*error_code, Some(1001), "{e}");
             assert!(e.to_string().contains("joint 2"), "{e}");
@@ -493,7 +496,11 @@ fn client_errors_name_their_causes_in_fields() {
         other => panic!("{other}"),
     }
     assert!(e.source().is_some(), "the cause is the error's source");
-    assert!(e.to_string().starts_with("bad address `127.0.0.1:notaport`: "), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("bad address `127.0.0.1:notaport`: "),
+        "{e}"
+    );
 
     let (_sim, m, s) = simulator(0, 0, "10");
     let mut c = client(m, s);
@@ -507,7 +514,11 @@ fn client_errors_name_their_causes_in_fields() {
         } => assert_eq!(*value, 1e39),
         other => panic!("{other}"),
     }
-    assert!(e.to_string().contains("trajectory point 0 cannot be sent: joint 3 = "), "{e}");
+    assert!(
+        e.to_string()
+            .contains("trajectory point 0 cannot be sent: joint 3 = "),
+        "{e}"
+    );
     let e = c.send_point(0, &[0.0; 6], f64::NAN).unwrap_err();
     assert!(
         matches!(

@@ -6,19 +6,20 @@
 //! steps, exact interference), not by the sequencer's own checks.
 
 use super::common;
-use super::sequence_real::dense_removal_json;
+use super::sequence_real::{dense_removal_json, robot_link_names};
 use fitup::document::Document;
+
+/// A JSON array of names as strings.
+fn names(v: &serde_json::Value) -> Vec<&str> {
+    let array = v.as_array().unwrap_or_else(|| panic!("not an array: {v}"));
+    array.iter().map(|n| n.as_str().unwrap()).collect()
+}
 
 #[test]
 fn the_robot_cell_is_sequenced_with_the_defaults() {
     let root = common::repo();
     let doc = Document::open(&root.join("models/cell_robots.yaml")).unwrap();
-    let robot_links: Vec<String> = doc
-        .robots()
-        .iter()
-        .flat_map(|r| r.links().iter().filter_map(|l| l.component))
-        .map(|c| doc.components()[c].name.clone())
-        .collect();
+    let robot_links = robot_link_names(&doc);
     assert_eq!(robot_links.len(), 14, "{robot_links:?}");
     let fixtures: Vec<String> = doc
         .components()
@@ -60,21 +61,11 @@ fn the_robot_cell_is_sequenced_with_the_defaults() {
         .unwrap();
     assert!(o.status.success(), "{}", common::short_text(&o));
     let plan: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let product: Vec<&str> = plan["product"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|n| n.as_str().unwrap())
-        .collect();
+    let product = names(&plan["product"]);
     let sequences = plan["sequences"].as_array().unwrap();
     assert!(!sequences.is_empty());
     for s in sequences {
-        let order: Vec<&str> = s["order"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|n| n.as_str().unwrap())
-            .collect();
+        let order = names(&s["order"]);
         // Every part of the product once, nothing else.
         let mut sorted = order.clone();
         sorted.sort();
@@ -94,12 +85,10 @@ fn the_robot_cell_is_sequenced_with_the_defaults() {
     for part in ["table", "plate_a", "plate_b", "screw1", "screw5"] {
         assert!(product.contains(&part), "{part} missing: {product:?}");
     }
-    let first: Vec<&str> = sequences[0]["order"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|n| n.as_str().unwrap())
-        .collect();
-    assert_eq!(first, best, "the text's best is the JSON's first");
+    assert_eq!(
+        names(&sequences[0]["order"]),
+        best,
+        "the text's best is the JSON's first"
+    );
     dense_removal_json(&doc, &plan);
 }

@@ -16,8 +16,7 @@ use fitup::workspace::{SceneCache, Workspace};
 use std::path::Path;
 use std::time::Instant;
 
-#[path = "../common/duct.rs"]
-mod duct;
+use crate::common::duct;
 use duct::boxes;
 
 /// A document in `dir` with one component per mesh (identity poses), no mates.
@@ -452,15 +451,19 @@ fn gravity_keeps_every_insertion_down_or_sideways() {
     );
 }
 
-#[test]
-fn robots_and_fixtures_are_not_sequenced() {
-    let doc = Document::open(Path::new("models/cell_robots.yaml")).unwrap();
-    let links: Vec<String> = doc
-        .robots()
+/// The names of the components that are links of the document's robots.
+pub(crate) fn robot_link_names(doc: &Document) -> Vec<String> {
+    doc.robots()
         .iter()
         .flat_map(|r| r.links().iter().filter_map(|l| l.component))
         .map(|c| doc.components()[c].name.clone())
-        .collect();
+        .collect()
+}
+
+#[test]
+fn robots_and_fixtures_are_not_sequenced() {
+    let doc = Document::open(Path::new("models/cell_robots.yaml")).unwrap();
+    let links = robot_link_names(&doc);
     assert!(links.len() >= 12, "{links:?}");
     let pedestals: Vec<String> = doc
         .components()
@@ -551,10 +554,7 @@ fn the_time_limit_is_a_limit() {
         eprintln!("time limit {limit} ms: returned after {ms:.0} ms");
         // A bound, not a speed figure (the machine is shared with other builds):
         // the overrun itself is measured in docs/performance.md.
-        assert!(
-            ms <= limit + 1000.0,
-            "limit {limit} ms, took {ms:.0} ms"
-        );
+        assert!(ms <= limit + 1000.0, "limit {limit} ms, took {ms:.0} ms");
         // What was done is reported: a partial plan, or the timeout and its reasons.
         match r {
             Ok(plan) => {

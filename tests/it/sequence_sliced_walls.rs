@@ -12,9 +12,7 @@ use fitup::mesh::Mesh;
 use fitup::sequence::{plan_sequence, SequenceOptions};
 use fitup::workspace::SceneCache;
 
-#[allow(dead_code)]
-#[path = "../common/duct.rs"]
-mod duct;
+use crate::common::duct;
 
 type Boxes = Vec<([f64; 3], [f64; 3])>;
 
