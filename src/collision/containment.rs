@@ -41,6 +41,13 @@ pub(crate) fn encloses_volume(mesh: &Mesh) -> bool {
     !mesh.triangles.is_empty() && balance.values().all(|&b| b == 0) && mesh.signed_volume() > 0.0
 }
 
+/// How far apart (mm) two faces facing the same way may lie and still count as in one
+/// plane. STL stores f32 coordinates (7 significant digits), so faces that coincide in
+/// the CAD differ by up to ≈ 6e-5 mm for parts placed 1 m from their origin; same-facing
+/// faces with both solids' material behind them share that material whatever their
+/// offset, so a wider band only catches more real overlaps.
+const PLANE_TOLERANCE: f64 = 1e-3;
+
 /// How far (mm) moving triangle `a` (at `a0` at the start of a straight
 /// translation, at `a1` at its end; obstacle frame) and obstacle triangle `b`
 /// overlap at most over the motion when both lie in one plane facing the same way
@@ -48,9 +55,9 @@ pub(crate) fn encloses_volume(mesh: &Mesh) -> bool {
 /// width — how far `a` must move in the plane to leave `b`, as a crossing depth is
 /// how far one triangle reaches through the other. Only overlaps wider than at the
 /// start count (the start is taken as free): a part sliding out of such an
-/// overlap gets 0. 0 as well when they do not stay in one plane (`eps`, mm: off
-/// the plane within it counts as on it), face opposite ways, or the motion turns
-/// `a`.
+/// overlap gets 0. 0 as well when they do not stay in one plane (within
+/// [`PLANE_TOLERANCE`], or `eps` mm if larger), face opposite ways, or the motion
+/// turns `a`.
 ///
 /// The overlap of two convex sets, one translated along a line, has a least width
 /// that is concave in the translation (Brunn–Minkowski: the overlap halfway
@@ -68,8 +75,12 @@ pub(crate) fn coplanar_overlap(a0: &Tri, a1: &Tri, b: &Tri, eps: f64) -> f64 {
     if (1..3).any(|k| ((a1[k] - a0[k]) - v).norm() > eps) {
         return 0.0;
     }
+    // On the plane within PLANE_TOLERANCE at both ends of the motion, not `eps`:
+    // faces that meet in the CAD are a few f32 roundings apart once their parts are
+    // placed.
+    let plane = eps.max(PLANE_TOLERANCE);
     let off = |p: &crate::math::Point3| nb.dot(&(p - b[0]));
-    if a0.iter().any(|p| off(p).abs() > eps) || nb.dot(&v).abs() > eps {
+    if a0.iter().chain(a1).any(|p| off(p).abs() > plane) {
         return 0.0;
     }
     // In-plane coordinates about b[0].
@@ -215,10 +226,10 @@ mod tests {
     /// 2-manifold: the slices share their faces), as the bench's sliced ducts.
     fn sliced(lo: [f64; 3], hi: [f64; 3], slices: usize) -> Mesh {
         let mut soup = Vec::new();
-        let h = (hi[2] - lo[2]) / slices as f64;
+        // One expression per level, so the two slices meeting there share its bits.
+        let level = |k: usize| lo[2] + (hi[2] - lo[2]) * k as f64 / slices as f64;
         for s in 0..slices {
-            let z0 = lo[2] + h * s as f64;
-            let z1 = if s + 1 == slices { hi[2] } else { z0 + h };
+            let (z0, z1) = (level(s), level(s + 1));
             let m = Mesh::cuboid(Point3::new(lo[0], lo[1], z0), Point3::new(hi[0], hi[1], z1));
             for k in 0..m.triangles.len() {
                 soup.push(m.triangle(k));
@@ -288,6 +299,12 @@ mod tests {
         let on = b;
         let away = b.map(|q| q + Vec3::new(-10.0, 0.0, 0.0));
         assert_eq!(coplanar_overlap(&on, &away, &b, 1e-9), 0.0);
+        // A few f32 roundings off the plane (a placed STL part): still one plane,
+        // at both ends of the motion.
+        let rounded = a0.map(|q| q + Vec3::new(0.0, 0.0, 2e-5));
+        let rounded1 = a1.map(|q| q + Vec3::new(0.0, 0.0, -3e-5));
+        let w = coplanar_overlap(&rounded, &rounded1, &b, 1e-9);
+        assert!((w - 4.0 / 2f64.sqrt()).abs() < 1e-4, "{w}");
         // Off the plane: not coplanar.
         let lifted = a0.map(|q| q + Vec3::new(0.0, 0.0, 0.5));
         let lifted1 = a1.map(|q| q + Vec3::new(0.0, 0.0, 0.5));

@@ -246,8 +246,10 @@ pub fn interferes(
 }
 
 /// [`interferes`] that gives up at `deadline`: `Ok(None)` when it passed before the
-/// answer was known (the clock is read every 256 triangle pairs, so parts seated in
-/// each other over many fine facets do not hold the caller past its budget).
+/// answer was known. The clock is read every 256 triangle pairs of the crossing walk,
+/// so parts seated in each other over many fine facets do not hold the caller past
+/// its budget; the depth walk and the containment test that may follow it are not
+/// interrupted (they run once, after the walk).
 ///
 /// # Errors
 /// As [`interferes`].
@@ -286,7 +288,7 @@ fn interferes_by(
     let (mut visited, mut late) = (0u32, false);
     let crossing = for_each_triangle_pair(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
         visited = visited.wrapping_add(1);
-        if visited % 256 == 0 && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+        if visited.is_multiple_of(256) && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
             late = true;
             return ControlFlow::Break(());
         }

@@ -325,7 +325,9 @@ fn touching_pairs(
                     &scene.poses[b],
                     gap + 1e-6,
                 )
-                .is_ok_and(|d| d <= gap)
+                // The search returns the first distance below its stop, not the
+                // least: compare against the same stop.
+                .is_ok_and(|d| d < gap + 1e-6)
         })
         .collect();
     pairs
@@ -542,9 +544,6 @@ impl<'d> Ctx<'d> {
             })
             .collect::<Result<_, _>>()
             .map_err(WorkspaceError::from)?;
-        if verdicts.iter().any(Option::is_none) {
-            return Err(SequenceError::TimeLimit(limit));
-        }
         if let Some(&(a, b)) = near
             .iter()
             .zip(&verdicts)
@@ -565,6 +564,10 @@ impl<'d> Ctx<'d> {
                 b: names[b].clone(),
                 depth,
             });
+        }
+        // An interference found is the answer even when another pair ran out of time.
+        if verdicts.iter().any(Option::is_none) {
+            return Err(SequenceError::TimeLimit(limit));
         }
         let sizes_for = sizes.clone();
         let mut graph = match opts.mode {

@@ -65,7 +65,6 @@ struct Search<'c, 'd> {
     /// Pairs (a, b) with a before b, counted over every complete sequence seen.
     before: Vec<Vec<u32>>,
     complete_count: u32,
-    expanded: usize,
     cut: bool,
     /// Whether dead ends ask the planners (second pass).
     use_fallback: bool,
@@ -214,7 +213,6 @@ impl Search<'_, '_> {
             .unwrap_or(costs.len());
         costs.insert(at, cost);
         costs.truncate(self.k);
-        self.expanded += 1;
         let depth = choices.len();
         let pinned = pins.get(depth).copied();
         let region = union_box(&ctx.boxes, mask).unwrap_or(ctx.boxes[base]);
@@ -599,7 +597,6 @@ pub(crate) fn plan(
         planned_failed: vec![Vec::new(); n],
         before: vec![vec![0; n]; n],
         complete_count: 0,
-        expanded: 0,
         cut: false,
         use_fallback: false,
         pruned: false,

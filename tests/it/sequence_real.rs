@@ -552,9 +552,11 @@ fn the_time_limit_is_a_limit() {
         let r = plan_sequence(&doc, &mut SceneCache::new(), &o);
         let ms = t.elapsed().as_secs_f64() * 1e3;
         eprintln!("time limit {limit} ms: returned after {ms:.0} ms");
-        // A bound, not a speed figure (the machine is shared with other builds):
-        // the overrun itself is measured in docs/performance.md.
-        assert!(ms <= limit + 1000.0, "limit {limit} ms, took {ms:.0} ms");
+        // Within 5 %, plus 100 ms for a machine shared with other builds.
+        assert!(
+            ms <= 1.05 * limit + 100.0,
+            "limit {limit} ms, took {ms:.0} ms"
+        );
         // What was done is reported: a partial plan, or the timeout and its reasons.
         match r {
             Ok(plan) => {

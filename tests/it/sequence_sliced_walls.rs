@@ -19,13 +19,10 @@ type Boxes = Vec<([f64; 3], [f64; 3])>;
 /// A block `lo..hi` cut in `slices` stacked boxes along Z, as one closed,
 /// non-manifold mesh (the slices share their faces).
 fn sliced(lo: [f64; 3], hi: [f64; 3], slices: usize) -> Mesh {
-    let h = (hi[2] - lo[2]) / slices as f64;
+    // One expression per level, so the two slices meeting there share its bits.
+    let level = |k: usize| lo[2] + (hi[2] - lo[2]) * k as f64 / slices as f64;
     let list: Boxes = (0..slices)
-        .map(|s| {
-            let z0 = lo[2] + h * s as f64;
-            let z1 = if s + 1 == slices { hi[2] } else { z0 + h };
-            ([lo[0], lo[1], z0], [hi[0], hi[1], z1])
-        })
+        .map(|s| ([lo[0], lo[1], level(s)], [hi[0], hi[1], level(s + 1)]))
         .collect();
     duct::boxes(&list, &Transform::IDENTITY)
 }
@@ -84,6 +81,11 @@ fn an_equal_sliced_neighbour_blocks_the_way() {
     };
     let plan = plan_sequence(&doc, &mut SceneCache::new(), &o).unwrap();
     let boxes_of = |name: &str| &parts.iter().find(|(n, _)| *n == name).unwrap().1;
+    assert!(
+        plan.complete && !plan.sequences.is_empty(),
+        "{}",
+        plan.summary()
+    );
     for s in &plan.sequences {
         let order = s.order();
         // Before the fix the sequencer also returned frame, b, a: `a` pushed out
