@@ -46,7 +46,7 @@ pub(crate) fn encloses_volume(mesh: &Mesh) -> bool {
 /// the CAD differ by up to ≈ 6e-5 mm for parts placed 1 m from their origin; same-facing
 /// faces with both solids' material behind them share that material whatever their
 /// offset, so a wider band only catches more real overlaps.
-const PLANE_TOLERANCE: f64 = 1e-3;
+pub(crate) const PLANE_TOLERANCE: f64 = 1e-3;
 
 /// How far (mm) moving triangle `a` (at `a0` at the start of a straight
 /// translation, at `a1` at its end; obstacle frame) and obstacle triangle `b`
@@ -148,6 +148,26 @@ pub(crate) fn coplanar_overlap(a0: &Tri, a1: &Tri, b: &Tri, eps: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+/// The least width (mm) of the overlap of triangles `a` and `b` (one frame) when they
+/// lie in one plane (within [`PLANE_TOLERANCE`]) and face the same way: the static
+/// form of [`coplanar_overlap`], for a pose rather than a motion. Two closed solids
+/// whose faces overlap so share the material behind them; 0 otherwise.
+pub(crate) fn shared_face_overlap(a: &Tri, b: &Tri) -> f64 {
+    let (Some(na), Some(nb)) = (normal(a), normal(b)) else {
+        return 0.0;
+    };
+    if na.dot(&nb) < 1.0 - 1e-9
+        || a.iter()
+            .any(|p| nb.dot(&(p - b[0])).abs() > PLANE_TOLERANCE)
+    {
+        return 0.0;
+    }
+    let e1 = (b[1] - b[0]).normalize();
+    let e2 = nb.cross(&e1);
+    let flat = |p: &crate::math::Point3| [e1.dot(&(p - b[0])), e2.dot(&(p - b[0]))];
+    overlap_width(&a.each_ref().map(flat), &b.each_ref().map(flat))
 }
 
 fn normal(t: &Tri) -> Option<Vec3> {
@@ -279,6 +299,35 @@ mod tests {
         assert!(!slide(at(0.0, 0.0, 0.0), at(0.0, 20.0, 0.0), &beside));
         let below = at(0.0, 12.0, -10.0);
         assert!(!slide(at(0.0, 0.0, 0.0), at(0.0, 20.0, 0.0), &below));
+    }
+
+    /// The static checks follow the edge check's rule: equal sliced blocks 2 mm into
+    /// each other interfere (by shared faces), side by side or stacked they touch,
+    /// and a few f32 roundings off the plane change nothing.
+    #[test]
+    fn static_checks_see_shared_faces_as_the_edge_check_does() {
+        use crate::collision::{contact, interferes, Contact, InterferenceKind};
+        let block = Collider::new(Arc::new(sliced([0.0; 3], [10.0, 10.0, 10.0], 8))).unwrap();
+        let tol = 0.01;
+        let verdict = |other: Transform| {
+            let i = interferes(&block, &Transform::IDENTITY, &block, &other, tol).unwrap();
+            let c = contact(&block, &Transform::IDENTITY, &block, &other, tol).unwrap();
+            assert_eq!(i, c.is_interfering(), "{c:?}");
+            c
+        };
+        for off in [0.0, 2e-5, -2e-5] {
+            match verdict(at(0.0, 8.0, off)) {
+                Contact::Interfering {
+                    depth,
+                    kind: InterferenceKind::FacesOverlap,
+                } => assert!((depth - 2.0).abs() < 1e-3, "{depth}"),
+                other => panic!("offset {off}: {other:?}"),
+            }
+        }
+        for beside in [at(0.0, 10.0, 0.0), at(0.0, 0.0, 10.0), at(10.0, 10.0, 0.0)] {
+            assert_eq!(verdict(beside), Contact::Touching, "{beside:?}");
+        }
+        assert_eq!(verdict(at(0.0, 10.5, 0.0)), Contact::Separate);
     }
 
     #[test]

@@ -286,13 +286,30 @@ fn interferes_by(
     // every one is visited (the same pairs as `contact` visits before a deep one).
     let floor = Cell::new(-1.0);
     let (mut visited, mut late) = (0u32, false);
-    let crossing = for_each_triangle_pair(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
+    // Closed solids (watertight or stacked slices) also interfere where their faces
+    // overlap in one plane facing the same way, with no pair crossing (an equal wall
+    // pushed into an equal wall): the edge check's rule, containment.rs. Such faces
+    // may lie a few f32 roundings apart, so the walk reaches that far.
+    let shared = a.encloses_volume() && b.encloses_volume();
+    let margin = if shared {
+        eps.max(super::containment::PLANE_TOLERANCE)
+    } else {
+        eps
+    };
+    let crossing = for_each_triangle_pair(a, b, &rel, margin, &floor, |ka, ta, kb, tb| {
         visited = visited.wrapping_add(1);
         if visited.is_multiple_of(256) && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
             late = true;
             return ControlFlow::Break(());
         }
-        match tri_tri(ta, tb, eps, oriented) {
+        let depth = tri_tri(ta, tb, eps, oriented);
+        if shared
+            && depth.is_none_or(|d| d <= tolerance)
+            && super::containment::shared_face_overlap(ta, tb) > tolerance
+        {
+            return ControlFlow::Break(());
+        }
+        match depth {
             Some(d) if d > tolerance => ControlFlow::Break(()),
             Some(d) => {
                 if d > 0.0 {
@@ -372,8 +389,20 @@ pub fn contact(
     // only a pair deeper than both the tolerance and the depth found can change it.
     // Solids visit every shallow crossing first: they seed the depth walk.
     let floor = Cell::new(-1.0);
-    let _ = for_each_triangle_pair::<()>(a, b, &rel, eps, &floor, |ka, ta, kb, tb| {
-        if let Some(d) = tri_tri(ta, tb, eps, oriented) {
+    // The shared-face rule of `interferes_by`.
+    let shared = a.encloses_volume() && b.encloses_volume();
+    let margin = if shared {
+        eps.max(super::containment::PLANE_TOLERANCE)
+    } else {
+        eps
+    };
+    let mut faces = 0.0f64;
+    let _ = for_each_triangle_pair::<()>(a, b, &rel, margin, &floor, |ka, ta, kb, tb| {
+        let crossing = tri_tri(ta, tb, eps, oriented);
+        if shared && crossing.is_none_or(|d| d <= tolerance) {
+            faces = faces.max(super::containment::shared_face_overlap(ta, tb));
+        }
+        if let Some(d) = crossing {
             touching = true;
             depth = depth.max(d);
             if oriented && d > 0.0 && d <= tolerance {
@@ -389,6 +418,12 @@ pub fn contact(
         return Ok(Contact::Interfering {
             depth,
             kind: InterferenceKind::SurfacesCross,
+        });
+    }
+    if faces > tolerance {
+        return Ok(Contact::Interfering {
+            depth: faces,
+            kind: InterferenceKind::FacesOverlap,
         });
     }
     // surfaces that cross (even shallowly) cannot have one solid inside the other

@@ -269,6 +269,11 @@ pub enum InterferenceKind {
         /// The part inside.
         inner: PairMember,
     },
+    /// No surfaces cross, but faces of the two closed solids overlap in one plane
+    /// facing the same way, so the solids share the material behind them (a wall
+    /// pushed into an equal wall, solids cut in stacked slices); the depth is the
+    /// overlap's least width, mm.
+    FacesOverlap,
     /// Approximate methods ([`Method::Aabb`], [`Method::Cells`]): boxes overlap
     /// deeper than the tolerance on all three axes.
     BoxesOverlap,
@@ -321,7 +326,7 @@ impl Contact {
     }
 
     /// How the pair `a`, `b` interferes, in words: `surfaces cross`, `A inside B`,
-    /// `boxes overlap`; empty unless interfering.
+    /// `faces overlap`, `boxes overlap`; empty unless interfering.
     pub fn kind_text(&self, a: &str, b: &str) -> String {
         match self {
             Contact::Interfering { kind, .. } => match kind {
@@ -333,6 +338,7 @@ impl Contact {
                     inner: PairMember::Second,
                 } => format!("{b} inside {a}"),
                 InterferenceKind::BoxesOverlap => "boxes overlap".into(),
+                InterferenceKind::FacesOverlap => "faces overlap".into(),
             },
             _ => String::new(),
         }
@@ -362,6 +368,7 @@ impl Contact {
                 let kind = match kind {
                     "surfaces cross" => InterferenceKind::SurfacesCross,
                     "boxes overlap" => InterferenceKind::BoxesOverlap,
+                    "faces overlap" => InterferenceKind::FacesOverlap,
                     k if k == format!("{a} inside {b}") => InterferenceKind::Contained {
                         inner: PairMember::First,
                     },
