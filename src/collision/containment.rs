@@ -290,6 +290,19 @@ mod tests {
         };
         assert!(hit(at(0.0, 0.0, 0.0), at(0.0, 4.0, 0.0)));
         assert!(hit(at(0.0, -5.0, 0.0), at(0.0, 40.0, 0.0)));
+        // The same a few f32 roundings above or below the other's planes.
+        for off in [2e-5, -2e-5] {
+            let o2 = at(off, 12.0, -off);
+            let e = edge_interferes(
+                &block,
+                &at(0.0, 0.0, 0.0),
+                &at(0.0, 4.0, 0.0),
+                &block,
+                &o2,
+                &o,
+            );
+            assert!(e.unwrap(), "offset {off}");
+        }
         // Stopping flush against it, sliding along it and on top of it: free.
         assert!(!hit(at(0.0, 0.0, 0.0), at(0.0, 2.0, 0.0)));
         let beside = at(10.0, 12.0, 0.0);
@@ -316,7 +329,7 @@ mod tests {
             c
         };
         for off in [0.0, 2e-5, -2e-5] {
-            match verdict(at(0.0, 8.0, off)) {
+            match verdict(at(off, 8.0, -off)) {
                 Contact::Interfering {
                     depth,
                     kind: InterferenceKind::FacesOverlap,

@@ -170,6 +170,13 @@ fn edge_check(
         gap: super::contact_gap(options.tolerance),
         contact_step: super::contact_step(options.contact_step, options.tolerance),
     };
+    // Shared faces may lie a few f32 roundings apart (containment.rs): the walk
+    // reaches that far for them.
+    let margin = if pairs.shared_faces {
+        pairs.eps.max(super::containment::PLANE_TOLERANCE)
+    } else {
+        pairs.eps
+    };
     let mut stack: Vec<(u32, u32)> = vec![(0, 0)];
     let mut popped = 0u32;
     while let Some((i, j)) = stack.pop() {
@@ -179,7 +186,7 @@ fn edge_check(
         }
         let (no, nm) = (&obstacle.nodes[i as usize], &moving.nodes[j as usize]);
         let swept = swept_obb(&moving.obbs[j as usize], &sweep, angle);
-        if !rel.boxes_meet(&obstacle.obbs[i as usize], &swept, pairs.eps) {
+        if !rel.boxes_meet(&obstacle.obbs[i as usize], &swept, margin) {
             continue;
         }
         match (no.count > 0, nm.count > 0) {
@@ -195,28 +202,26 @@ fn edge_check(
                     let e = tri_box(&a1);
                     b.grow(&e.lo);
                     b.grow(&e.hi);
-                    let bulge = rho * angle * angle / 8.0 + pairs.eps;
+                    let bulge = rho * angle * angle / 8.0 + margin;
                     for tb in obstacle.leaf_tris(no) {
                         let tb = &tb;
                         if b.distance_to_box(&tri_box(tb)) > bulge {
                             continue;
                         }
-                        if pairs.plane_advance(&a0, rho, tb, &frames) >= 1.0 {
-                            // Cleared by the planes — but two closed solids' faces
-                            // sliding in one plane and facing the same way share the
-                            // material behind them, with no pair crossing (a wall
-                            // pushed into an equal wall): containment.rs.
-                            if pairs.shared_faces
-                                && coplanar_overlap(&a0, &a1, tb, pairs.eps) > pairs.tolerance
-                            {
+                        if pairs.plane_advance(&a0, rho, tb, &frames) < 1.0 {
+                            if late() {
+                                return Ok(None);
+                            }
+                            if pairs.first_crossing(ta, rho, tb, &frames).is_some() {
                                 return Ok(Some(true));
                             }
-                            continue;
                         }
-                        if late() {
-                            return Ok(None);
-                        }
-                        if pairs.first_crossing(ta, rho, tb, &frames).is_some() {
+                        // No crossing — but two closed solids' faces sliding in one
+                        // plane and facing the same way share the material behind
+                        // them (a wall pushed into an equal wall): containment.rs.
+                        if pairs.shared_faces
+                            && coplanar_overlap(&a0, &a1, tb, pairs.eps) > pairs.tolerance
+                        {
                             return Ok(Some(true));
                         }
                     }
