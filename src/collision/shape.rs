@@ -213,8 +213,9 @@ pub struct Collider {
     /// first use by the shallow-crossing depth walk (`exact::deep_reach`).
     neighbours: OnceLock<Vec<[u32; 3]>>,
     /// Whether the mesh bounds a volume, watertight or not (see
-    /// `containment::encloses_volume`), found on first use by the edge check.
-    encloses: OnceLock<bool>,
+    /// `containment::encloses_volume`). Found with the tree, so that no check pays
+    /// for it after its deadline.
+    encloses: bool,
 }
 
 /// Something about a mesh that weakens the answers given for it.
@@ -272,6 +273,12 @@ impl Collider {
             }));
         }
         let report = mesh.inspect();
+        // A watertight mesh's edges balance already: only its orientation is left.
+        let encloses = if report.is_watertight() {
+            mesh.signed_volume() > 0.0
+        } else {
+            super::containment::encloses_volume(&mesh)
+        };
         let scale = mesh.area_scale();
         let mut items: Vec<Item> = (0..mesh.triangles.len())
             .filter_map(|i| {
@@ -315,7 +322,7 @@ impl Collider {
             radius,
             eps: 1e-9 * scale,
             neighbours: OnceLock::new(),
-            encloses: OnceLock::new(),
+            encloses,
         })
     }
 
@@ -350,9 +357,7 @@ impl Collider {
     /// Whether the mesh bounds a volume even where it is not a 2-manifold (closed
     /// slices stacked on their faces): see `containment::encloses_volume`.
     pub(crate) fn encloses_volume(&self) -> bool {
-        *self
-            .encloses
-            .get_or_init(|| super::containment::encloses_volume(&self.mesh))
+        self.encloses
     }
 
     /// What weakens the answers for this mesh (not watertight, degenerate triangles).
