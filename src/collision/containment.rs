@@ -17,8 +17,8 @@
 //! a volume even where it is not a 2-manifold — a wall cut in stacked closed slices,
 //! a union of closed boxes sharing faces (CAD exports, the bench's sliced ducts).
 
-use super::triangle::Tri;
-use crate::math::Vec3;
+use super::triangle::{unit_normal, Tri};
+use crate::math::{Point3, Vec3};
 use crate::mesh::Mesh;
 use std::collections::HashMap;
 
@@ -64,32 +64,18 @@ pub(crate) const PLANE_TOLERANCE: f64 = 1e-3;
 /// contains the mean of the two end overlaps), so a ternary search over the
 /// translations where the two meet finds its largest value.
 pub(crate) fn coplanar_overlap(a0: &Tri, a1: &Tri, b: &Tri, eps: f64) -> f64 {
-    let (Some(na), Some(nb)) = (normal(a0), normal(b)) else {
-        return 0.0;
-    };
-    if na.dot(&nb) < 1.0 - 1e-9 {
-        return 0.0;
-    }
     let v = a1[0] - a0[0];
     // a translation: every corner moves by the same vector
     if (1..3).any(|k| ((a1[k] - a0[k]) - v).norm() > eps) {
         return 0.0;
     }
-    // On the plane within PLANE_TOLERANCE at both ends of the motion, not `eps`:
-    // faces that meet in the CAD are a few f32 roundings apart once their parts are
-    // placed.
-    let plane = eps.max(PLANE_TOLERANCE);
-    let off = |p: &crate::math::Point3| nb.dot(&(p - b[0]));
-    if a0.iter().chain(a1).any(|p| off(p).abs() > plane) {
+    // On the plane at both ends of the motion.
+    let Some(plane) = Flat::shared(a0, b, a0.iter().chain(a1), eps.max(PLANE_TOLERANCE)) else {
         return 0.0;
-    }
-    // In-plane coordinates about b[0].
-    let e1 = (b[1] - b[0]).normalize();
-    let e2 = nb.cross(&e1);
-    let flat = |p: &crate::math::Point3| [e1.dot(&(p - b[0])), e2.dot(&(p - b[0]))];
-    let pa = [flat(&a0[0]), flat(&a0[1]), flat(&a0[2])];
-    let pb = [flat(&b[0]), flat(&b[1]), flat(&b[2])];
-    let dv = [e1.dot(&v), e2.dot(&v)];
+    };
+    let pa = a0.each_ref().map(|p| plane.at(p));
+    let pb = b.each_ref().map(|p| plane.at(p));
+    let dv = plane.along(&v);
     let width = |t: f64| {
         let moved = pa.map(|p| [p[0] + t * dv[0], p[1] + t * dv[1]]);
         overlap_width(&moved, &pb)
@@ -155,23 +141,53 @@ pub(crate) fn coplanar_overlap(a0: &Tri, a1: &Tri, b: &Tri, eps: f64) -> f64 {
 /// form of [`coplanar_overlap`], for a pose rather than a motion. Two closed solids
 /// whose faces overlap so share the material behind them; 0 otherwise.
 pub(crate) fn shared_face_overlap(a: &Tri, b: &Tri) -> f64 {
-    let (Some(na), Some(nb)) = (normal(a), normal(b)) else {
-        return 0.0;
-    };
-    if na.dot(&nb) < 1.0 - 1e-9
-        || a.iter()
-            .any(|p| nb.dot(&(p - b[0])).abs() > PLANE_TOLERANCE)
-    {
-        return 0.0;
+    match Flat::shared(a, b, a, PLANE_TOLERANCE) {
+        Some(plane) => overlap_width(
+            &a.each_ref().map(|p| plane.at(p)),
+            &b.each_ref().map(|p| plane.at(p)),
+        ),
+        None => 0.0,
     }
-    let e1 = (b[1] - b[0]).normalize();
-    let e2 = nb.cross(&e1);
-    let flat = |p: &crate::math::Point3| [e1.dot(&(p - b[0])), e2.dot(&(p - b[0]))];
-    overlap_width(&a.each_ref().map(flat), &b.each_ref().map(flat))
 }
 
-fn normal(t: &Tri) -> Option<Vec3> {
-    (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(1e-300)
+/// The plane of triangle `b` with in-plane coordinates (mm) about its first corner.
+struct Flat {
+    origin: Point3,
+    e1: Vec3,
+    e2: Vec3,
+}
+
+impl Flat {
+    /// `b`'s plane when `a` faces the same way (unit normals within 1e-9) and every
+    /// point of `near` lies within `band` mm of it; `None` otherwise.
+    fn shared<'p>(
+        a: &Tri,
+        b: &Tri,
+        near: impl IntoIterator<Item = &'p Point3>,
+        band: f64,
+    ) -> Option<Flat> {
+        let (na, nb) = (unit_normal(a)?, unit_normal(b)?);
+        let on = |p: &Point3| nb.dot(&(p - b[0])).abs() <= band;
+        if na.dot(&nb) < 1.0 - 1e-9 || !near.into_iter().all(on) {
+            return None;
+        }
+        let e1 = (b[1] - b[0]).normalize();
+        Some(Flat {
+            origin: b[0],
+            e1,
+            e2: nb.cross(&e1),
+        })
+    }
+
+    /// A point's in-plane coordinates.
+    fn at(&self, p: &Point3) -> [f64; 2] {
+        self.along(&(p - self.origin))
+    }
+
+    /// A vector's in-plane components.
+    fn along(&self, v: &Vec3) -> [f64; 2] {
+        [self.e1.dot(v), self.e2.dot(v)]
+    }
 }
 
 /// The least width (mm) of the overlap of two plane triangles: `a` clipped by the

@@ -12,7 +12,7 @@
 use super::containment::coplanar_overlap;
 use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box, Relative};
 use super::shape::{Collider, Obb};
-use super::triangle::{tri_distance, tri_tri, Tri};
+use super::triangle::{tri_distance, tri_tri, unit_normal, Tri};
 use super::{CollisionError, MotionFault};
 use crate::math::{Transform, Vec3};
 use nalgebra::Isometry3;
@@ -254,11 +254,6 @@ fn swept_obb(b: &Obb, sweep: &Vec3, angle: f64) -> Obb {
     }
 }
 
-/// Unit normal of a triangle (right-hand order), if it has an area.
-fn normal(t: &Tri) -> Option<Vec3> {
-    (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(1e-300)
-}
-
 /// The per-triangle-pair conservative advancement.
 struct PairCheck {
     eps: f64,
@@ -307,7 +302,7 @@ impl PairCheck {
             (s[0].min(s[1]).min(s[2]), s[0].max(s[1]).max(s[2]))
         };
         let mut dt = 0.0f64;
-        if let Some(n) = normal(tb) {
+        if let Some(n) = unit_normal(tb) {
             let (lo, hi) = shadow(a, &n);
             dt = dt.max(limit(
                 lo,
@@ -320,7 +315,7 @@ impl PairCheck {
         // a translating triangle keeps its normal: its plane only shifts, which moves
         // b's shadow relative to it the other way
         if frames.angle == 0.0 {
-            if let Some(n) = normal(a) {
+            if let Some(n) = unit_normal(a) {
                 let (lo, hi) = shadow(tb, &n);
                 dt = dt.max(limit(
                     lo,

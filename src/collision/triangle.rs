@@ -73,7 +73,9 @@ pub(crate) fn tri_tri(a: &Tri, b: &Tri, eps: f64, oriented: bool) -> Option<f64>
     )
 }
 
-fn unit_normal(t: &Tri) -> Option<Vec3> {
+/// The triangle's unit normal (right-hand order of its corners); `None` when it has
+/// no area.
+pub(crate) fn unit_normal(t: &Tri) -> Option<Vec3> {
     (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(0.0)
 }
 

@@ -492,21 +492,22 @@ fn status_kb(key: &str) -> u64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn model() -> RawModel {
+    /// One part of one triangle placed once, named `name`: the tests' model (here
+    /// and in the tessellation store's tests).
+    pub(crate) fn sample_model(name: &str) -> RawModel {
         RawModel {
             parts: vec![RawPart {
-                name: "peg ✓".into(),
+                name: name.into(),
                 solid_index: 1,
-                solids_in_product: 2,
+                solids_in_product: 1,
                 vertices: vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.5],
                 triangles: vec![0, 1, 2],
                 exact_volume: 12.5,
                 faces: 3,
-                unmeshed_faces: 1,
-                first_unmeshed_face: 2,
+                ..RawPart::default()
             }],
             instances: vec![RawInstance {
                 name: "peg-1".into(),
@@ -516,11 +517,17 @@ mod tests {
                 scale: 1.0,
             }],
             length_unit: "MILLIMETRE".into(),
-            read_s: 0.25,
-            first_open_shell: "x".into(),
-            peak_memory: 7,
             ..RawModel::default()
         }
+    }
+
+    /// The sample with every field set, for the codec.
+    fn model() -> RawModel {
+        let mut m = sample_model("peg ✓");
+        let p = &mut m.parts[0];
+        (p.solids_in_product, p.unmeshed_faces, p.first_unmeshed_face) = (2, 1, 2);
+        (m.read_s, m.first_open_shell, m.peak_memory) = (0.25, "x".into(), 7);
+        m
     }
 
     #[test]

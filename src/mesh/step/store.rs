@@ -543,32 +543,8 @@ pub(crate) fn stored_files(store: &Path) -> Vec<PathBuf> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::raw::{RawInstance, RawPart};
+    use super::super::raw::tests::sample_model as model;
     use super::*;
-
-    fn model(name: &str) -> RawModel {
-        RawModel {
-            parts: vec![RawPart {
-                name: name.into(),
-                solid_index: 1,
-                solids_in_product: 1,
-                vertices: vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.5],
-                triangles: vec![0, 1, 2],
-                exact_volume: 12.5,
-                faces: 3,
-                ..RawPart::default()
-            }],
-            instances: vec![RawInstance {
-                name: "peg-1".into(),
-                path: "cell/peg-1".into(),
-                part: 0,
-                matrix: (0..12).map(f64::from).collect(),
-                scale: 1.0,
-            }],
-            length_unit: "MILLIMETRE".into(),
-            ..RawModel::default()
-        }
-    }
 
     fn options(linear: f64) -> StepOptions {
         StepOptions {
