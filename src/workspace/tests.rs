@@ -34,8 +34,10 @@ fn plan_path_ends_with_the_time_limit_outcome() {
         };
         let limits = request.planner.limits_mut();
         limits.max_iterations = usize::MAX;
-        // Both solve this puzzle in tens of milliseconds on the luckiest seeds.
-        limits.time_limit_ms = Some(5.0);
+        // The disassembly solves this puzzle in about 5 ms on its luckiest seeds (it
+        // did within a 5 ms budget once the colliders' volume test moved into their
+        // build): 1 ms runs out every time.
+        limits.time_limit_ms = Some(1.0);
         let clock = Instant::now();
         let path = ws.plan_path("moving", &goal, &request, None).unwrap();
         let wall = clock.elapsed().as_secs_f64() * 1e3;
