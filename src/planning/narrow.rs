@@ -42,12 +42,13 @@ use nalgebra::{Unit, UnitQuaternion};
 pub struct NarrowPassage {
     /// Turn-limited retry (rad): an extension whose straight step is blocked is
     /// tried again turning by at most this much, with the same translation.
-    /// `None`: no retry. Default `Some(5°)`.
+    /// `None`: no retry. Default `Some(15°)` ([`NarrowPassage::MAX_TURN_DEG`]).
     pub max_turn: Option<f64>,
     /// Dynamic-domain radius (metric mm) given to a node whose extension was
     /// blocked: samples farther than it from their nearest node are redrawn (up to
     /// [`NarrowPassage::DOMAIN_TRIES`] times). `None`: off. Default `Some(10)`
-    /// (one default extension step).
+    /// (the seed 002 planners' default extension step; three of
+    /// `rrt_connect`'s).
     pub dynamic_domain: Option<f64>,
     /// Probability of drawing a sample by the bridge test (two blocked poses
     /// `bridge_width` apart with a free midpoint) instead of uniformly; 0: off.
@@ -91,7 +92,7 @@ impl Default for NarrowPassage {
     /// benchmark problems.
     fn default() -> Self {
         Self {
-            max_turn: Some(5f64.to_radians()),
+            max_turn: Some(Self::MAX_TURN_DEG.to_radians()),
             dynamic_domain: Some(10.0),
             bridge: 0.1,
             bridge_width: 5.0,
@@ -114,6 +115,12 @@ impl NarrowPassage {
         axis_moves: 0.0,
         axis_samples: 0.0,
     };
+
+    /// The default turn-limited retry, degrees. With 3 mm extension steps
+    /// ([`RrtConnectOptions::STEP`](super::RrtConnectOptions::STEP)) 15° halved
+    /// the zigzag tunnel's median against 5° and left the other puzzles as they
+    /// were (docs/performance.md, "Issue 23, round 4").
+    pub const MAX_TURN_DEG: f64 = 15.0;
 
     /// How many samples dynamic-domain sampling draws before it takes the last one
     /// whatever its distance.

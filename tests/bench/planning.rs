@@ -13,7 +13,8 @@
 //! `FITUP_PROTOCOL=0` (skip seed 002's protocol), `FITUP_VALIDATOR=0` (skip the
 //! validator profile: pose and edge checks per problem), `FITUP_VARIANTS=1` (also
 //! fitup's exploration variants side by side: eager, lazy, random moves;
-//! `FITUP_VARIANTS=narrow`: the narrow-passage variants instead, `FITUP_VARIANT=a,b`
+//! `FITUP_VARIANTS=narrow`: the narrow-passage variants instead, `FITUP_VARIANTS=step`:
+//! the extension-step variants, `FITUP_VARIANT=a,b`
 //! only those named), `FITUP_BUDGET_MS` (fitup's budget per call,
 //! default 10000), `FITUP_DEFAULT=0` (skip the default rows: variants and peers only),
 //! `FITUP_SMOOTHED=0` (skip the smoothed row), `FITUP_VARIANTS=share` (the
@@ -387,6 +388,34 @@ fn share_variants() -> Vec<(&'static str, Variant)> {
     ]
 }
 
+/// The extension-step variants compared by `FITUP_VARIANTS=step` (issue 23,
+/// round 4): fitup's defaults before 2026-12-02 (a 10 mm step, a 5° turn-limited
+/// retry) and the steps and turns between them and today's (3 mm, 15°), in both
+/// searches of `plan_insertion` (the approach's step; the disassembly's own RRT
+/// step is left alone). `FITUP_VARIANT=a,b` keeps only those named.
+fn step_variants() -> Vec<(&'static str, Variant)> {
+    let set = |step: f64, turn_deg: f64| -> Variant {
+        Box::new(move |o: &mut InsertionOptions| {
+            o.approach.step = step;
+            o.approach.narrow.max_turn = Some(turn_deg.to_radians());
+            o.disassembly.rrt_mut().narrow.max_turn = Some(turn_deg.to_radians());
+        })
+    };
+    let mut out: Vec<(&'static str, Variant)> = vec![
+        ("step 10, turn 5° (before)", set(10.0, 5.0)),
+        ("step 10, turn 15°", set(10.0, 15.0)),
+        ("step 5, turn 5°", set(5.0, 5.0)),
+        ("step 5, turn 15°", set(5.0, 15.0)),
+        ("step 3, turn 5°", set(3.0, 5.0)),
+        ("step 3, turn 15° (default)", set(3.0, 15.0)),
+    ];
+    if let Ok(only) = std::env::var("FITUP_VARIANT") {
+        let names: Vec<&str> = only.split(',').collect();
+        out.retain(|(name, _)| names.contains(name));
+    }
+    out
+}
+
 /// Compiles the OMPL C++ harness (tests/bench/ompl/harness.cpp) when OMPL 1.5 and
 /// FCL headers and g++ are installed; `None` (with a message) otherwise.
 fn build_cpp_peer(out_dir: &Path) -> Option<PathBuf> {
@@ -704,6 +733,7 @@ fn main() {
             let list = match std::env::var("FITUP_VARIANTS").as_deref() {
                 Ok("narrow") => narrow_variants(),
                 Ok("share") => share_variants(),
+                Ok("step") => step_variants(),
                 _ => variants(),
             };
             for (name, variant) in list {
