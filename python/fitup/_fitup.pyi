@@ -19,8 +19,10 @@ _StrPath = Union[str, "PathLike[str]"]
 
 __version__: str
 
-def catalog_names() -> List[str]: ...
-def planner_names() -> List[str]: ...
+def catalog_names() -> List[str]:
+    """Names of the built-in catalog robots."""
+def planner_names() -> List[str]:
+    """The planner names ``plan_path`` accepts."""
 def run_script(
     script: _StrPath,
     doc: Optional[_StrPath] = None,
@@ -28,130 +30,384 @@ def run_script(
     root: Optional[_StrPath] = None,
     db: Optional[str] = None,
     max_operations: Optional[int] = None,
-) -> Dict[str, Any]: ...
+) -> Dict[str, Any]:
+    """Runs the Rhai script ``script`` to completion, as ``fitup run`` does: sandboxed,
+    file access bounded by its project (``root``, else the nearest folder holding
+    ``fitup.toml``, else the script's folder).
+
+    ``doc``: a document the script sees as ``doc``; ``args``: a dict the script sees
+    as the map ``args`` (values typed like ``fitup run SCRIPT -- key=value``: ints,
+    floats, ``true``/``false``, else text); ``db``: record the run in this results
+    database (a file or ``postgres://`` URL; the script's ``open_db()`` of the same
+    database files its results under the run); ``max_operations``: the operation
+    limit (0 = none).
+
+    Returns a dict ``output`` (the printed lines), ``files_read``, ``files_written``,
+    ``elapsed_s``, ``operations``. A failing script raises ``ScriptError`` with the
+    script's ``file``, ``line`` and ``column`` and the ``output`` printed before it.
+    The GIL is released while the script runs.
+    """
 
 class Path:
-    """A planned path; ``poses`` is ``(N, 4, 4)`` (empty when not found)."""
+    """A planned path for one component (``Document.plan_path``, ``plan_insertion``,
+    ``plan_disassembly``).
+
+    ``poses`` are the key poses, start first and goal last, as an ``(N, 4, 4)`` array
+    of column-vector pose matrices (part frame → world, mm); consecutive poses are
+    joined by straight edges (translation lerp + rotation slerp) that the validator
+    accepted. Empty (``N = 0``) when no path was found: ``reason`` says why.
+    """
 
     @property
-    def found(self) -> bool: ...
+    def found(self) -> bool:
+        """Whether a path was found."""
     @property
-    def reason(self) -> Optional[str]: ...
+    def reason(self) -> Optional[str]:
+        """Why no path was found (time limit, start in collision, …); None when found."""
     @property
-    def poses(self) -> _F64: ...
+    def poses(self) -> _F64:
+        """Key poses, ``(N, 4, 4)``, column-vector matrices, mm, world frame."""
     @property
-    def positions(self) -> _F64: ...
+    def positions(self) -> _F64:
+        """Key-pose positions, ``(N, 3)``, mm, world frame."""
     @property
-    def component(self) -> str: ...
+    def component(self) -> str:
+        """The component the path moves."""
     @property
-    def planner(self) -> str: ...
+    def planner(self) -> str:
+        """The planner that made it (e.g. ``"rrt_connect"``,
+        ``"lazy_disassemble_local_rrt+lazy_rrt_connect"``).
+        """
     @property
-    def seed(self) -> int: ...
+    def seed(self) -> int:
+        """The seed it was planned with (same seed, same path, when the iteration limit
+        and not the time limit ends the search).
+        """
     @property
-    def length_mm(self) -> float: ...
+    def length_mm(self) -> float:
+        """Translation length after smoothing, mm."""
     @property
-    def rotation_rad(self) -> float: ...
+    def rotation_rad(self) -> float:
+        """Total rotation along the path, radians."""
     @property
-    def iterations(self) -> int: ...
+    def iterations(self) -> int:
+        """Planner iterations."""
     @property
-    def checks(self) -> int: ...
+    def checks(self) -> int:
+        """Collision checks made (poses + edges)."""
     @property
-    def time_ms(self) -> float: ...
+    def time_ms(self) -> float:
+        """Wall time of the whole call (search and smoothing), ms."""
     @property
-    def resolution(self) -> str: ...
-    def densify(self, step_mm: float) -> _F64: ...
-    def to_dict(self) -> Dict[str, Any]: ...
+    def resolution(self) -> str:
+        """How edges were checked (``continuous`` or the stepwise resolution)."""
+    def densify(self, step_mm: float) -> _F64:
+        """Poses along the path at most ``step_mm`` mm (and as many degrees) apart,
+        ``(M, 4, 4)``; key poses are kept. More than 1,000,000 poses is an
+        ``InputError`` naming ``step_mm``, raised before anything is allocated.
+        """
+    def to_dict(self) -> Dict[str, Any]:
+        """The path as a plain dict (picklable, for tables and batches): ``found``,
+        ``reason``, ``planner``, ``component``, ``seed``, ``length_mm``,
+        ``rotation_rad``, ``iterations``, ``checks``, ``time_ms``, ``key_poses`` and
+        ``poses`` (the ``(N, 4, 4)`` array).
+        """
     def __len__(self) -> int: ...
 
 class Robot:
-    """A serial robot: FK, IK of every branch, batch forms."""
+    """A serial robot: kinematic tree, base (world → robot root), tool (flange → TCP),
+    joint limits and its inverse-kinematics solver (closed form for OPW and UR arms,
+    numeric otherwise).
+
+    Joint arrays are radians (mm for prismatic joints), in joint order; poses are
+    column-vector 4×4 arrays, world frame, mm. Batch forms take ``(N, dof)`` joints or
+    ``(N, 4, 4)`` poses and release the GIL.
+    """
 
     @staticmethod
-    def catalog(name: str) -> "Robot": ...
+    def catalog(name: str) -> "Robot":
+        """staticmethod(function) -> method
+
+        Convert a function to be a static method.
+
+        A static method does not receive an implicit first argument.
+        To declare a static method, use this idiom:
+
+             class C:
+                 @staticmethod
+                 def f(arg1, arg2, argN):
+                     ...
+
+        It can be called either on the class (e.g. C.f()) or on an instance
+        (e.g. C().f()). Both the class and the instance are ignored, and
+        neither is passed implicitly as the first argument to the method.
+
+        Static methods in Python are similar to those found in Java or C++.
+        For a more advanced concept, see the classmethod builtin.
+        """
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The robot's name."""
     @property
-    def dof(self) -> int: ...
+    def dof(self) -> int:
+        """Number of joints."""
     @property
-    def solver(self) -> str: ...
+    def solver(self) -> str:
+        """The IK solver: ``"opw"``, ``"ur"`` (closed form, every branch) or ``"numeric"``."""
     @property
-    def limits(self) -> _F64: ...
+    def limits(self) -> _F64:
+        """Joint limits as an ``(dof, 2)`` array ``[min, max]`` (rad/mm; ±inf when a
+        joint has none).
+        """
     @property
-    def base(self) -> _F64: ...
+    def base(self) -> _F64:
+        """The base pose (world → robot root), 4×4, mm."""
     @property
-    def tool(self) -> _F64: ...
-    def with_base(self, base: _Pose) -> "Robot": ...
-    def with_tool(self, tool: _Pose) -> "Robot": ...
-    def fk(self, q: _Joints) -> _F64: ...
-    def fk_batch(self, q: npt.ArrayLike) -> _F64: ...
-    def link_poses(self, q: _Joints) -> _F64: ...
-    def ik(self, target: _Pose, reference: Optional[_Joints] = None) -> _F64: ...
-    def ik_batch(self, targets: _Poses, reference: Optional[_Joints] = None) -> List[_F64]: ...
-    def ik_path(self, targets: _Poses, start: Optional[_Joints] = None) -> _F64: ...
-    def limit_violation(self, q: _Joints) -> Optional[int]: ...
-    def zeros(self) -> _F64: ...
+    def tool(self) -> _F64:
+        """The tool (flange → TCP), 4×4, mm."""
+    def with_base(self, base: _Pose) -> "Robot":
+        """A copy with another base pose (world → robot root, 4×4, mm)."""
+    def with_tool(self, tool: _Pose) -> "Robot":
+        """A copy with another tool (flange → TCP, 4×4, mm)."""
+    def fk(self, q: _Joints) -> _F64:
+        """Forward kinematics: the TCP pose (4×4, world, mm) for joints ``q`` (rad/mm)."""
+    def fk_batch(self, q: npt.ArrayLike) -> _F64:
+        """Forward kinematics of many configurations: ``q`` is ``(N, dof)`` (rad/mm,
+        read in place when C-ordered); returns the TCP poses ``(N, 4, 4)`` (world, mm).
+        GIL released.
+        """
+    def link_poses(self, q: _Joints) -> _F64:
+        """World poses of every link of the kinematic tree for joints ``q``:
+        ``(links, 4, 4)``.
+        """
+    def ik(self, target: _Pose, reference: Optional[_Joints] = None) -> _F64:
+        """Inverse kinematics, every branch: the joint solutions ``(K, dof)`` (rad/mm)
+        that put the TCP at ``target`` (4×4, world, mm) within the joint limits,
+        sorted by distance to ``reference`` (default all zeros). ``K = 0`` when the
+        target is unreachable.
+        """
+    def ik_batch(self, targets: _Poses, reference: Optional[_Joints] = None) -> List[_F64]:
+        """Every branch for many targets (``(N, 4, 4)``, world, mm): a list of
+        ``(K_i, dof)`` arrays (rad/mm), each as ``ik`` gives it; GIL released. A
+        C-ordered array is read in place.
+        """
+    def ik_path(self, targets: _Poses, start: Optional[_Joints] = None) -> _F64:
+        """IK along a path of poses (``(N, 4, 4)``, world, mm): for each, the solution
+        nearest to the previous one (the first nearest to ``start``), ``(N, dof)``
+        (rad/mm); a row of NaN where a pose has no solution (the next is solved near
+        the last one found). GIL released.
+        """
+    def limit_violation(self, q: _Joints) -> Optional[int]:
+        """The joint index (0-based) of the first joint of ``q`` outside its limits, or
+        None.
+        """
+    def zeros(self) -> _F64:
+        """Joints as an array helper: zeros of the robot's width."""
 
 class Document:
-    """An assembly document (YAML + meshes)."""
+    """An assembly document (YAML + meshes): parts, components at poses, mates,
+    dimensions, robots.
+
+    ``Document(path)`` loads and validates the file and its meshes and solves the mates;
+    errors are ``DocumentError`` with ``file``, ``line`` and ``column``. Poses are
+    column-vector 4×4 numpy arrays (part frame → world, mm); lengths mm, angles
+    radians. Long calls (planning, sequences, sweeps, interference) release the GIL;
+    calls on one document from several threads run one at a time.
+    """
 
     def __init__(self, path: _StrPath) -> None: ...
     @property
-    def path(self) -> Any: ...
-    def components(self) -> List[str]: ...
-    def parts(self) -> List[str]: ...
-    def component(self, name: str) -> Dict[str, Any]: ...
-    def pose(self, name: str) -> _F64: ...
-    def set_pose(self, name: str, pose: _Pose) -> None: ...
-    def reference(self, component: str, name: str) -> Dict[str, Any]: ...
-    def set_fixed(self, name: str, fixed: bool) -> None: ...
-    def dimensions(self) -> List[str]: ...
-    def system_value(self, name: str) -> float: ...
-    def set_system_value(self, name: str, value: float) -> None: ...
-    def dimension(self, name: str) -> Dict[str, Any]: ...
-    def save(self) -> None: ...
-    def save_as(self, path: _StrPath) -> None: ...
-    def to_yaml(self) -> str: ...
-    def contacts(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]: ...
-    def interferences(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]: ...
-    def contact(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> Dict[str, Any]: ...
-    def interferes(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> bool: ...
-    def clearance(self, a: str, b: str, stop_mm: float = 1000.0) -> float: ...
+    def path(self) -> Any:
+        """The document's file."""
+    def components(self) -> List[str]:
+        """Component names in file order."""
+    def parts(self) -> List[str]:
+        """Part names in file order."""
+    def component(self, name: str) -> Dict[str, Any]:
+        """One component as a dict: ``name``, ``part``, ``fixed``, ``pose`` (4×4, mm),
+        ``mass`` (kg or None), ``threaded``, ``color`` (RGB in 0..1 or None).
+        """
+    def pose(self, name: str) -> _F64:
+        """The pose of component ``name``: 4×4 column-vector matrix, part frame → world, mm."""
+    def set_pose(self, name: str, pose: _Pose) -> None:
+        """Sets the pose of component ``name`` (4×4, mm; a rigid motion). Fixed and
+        robot-driven components are refused; mates are not re-solved.
+        """
+    def reference(self, component: str, name: str) -> Dict[str, Any]:
+        """A reference (plane, axis or point of the component's part) in the world at
+        the component's pose: a dict ``kind`` (``"plane"``, ``"axis"``, ``"point"``),
+        ``point`` (mm, ``(3,)``) and ``direction`` (the unit normal or axis direction,
+        None for a point).
+        """
+    def set_fixed(self, name: str, fixed: bool) -> None:
+        """Marks a component fixed (never moved by mates or planners) or free."""
+    def dimensions(self) -> List[str]:
+        """Full names of the driving dimensions (``D1@<mate>`` and robot joints)."""
+    def system_value(self, name: str) -> float:
+        """A dimension's value in SolidWorks' ``SystemValue`` units: metres for lengths,
+        radians for angles.
+        """
+    def set_system_value(self, name: str, value: float) -> None:
+        """Sets a dimension in SI units (metres or radians), as ``IDimension.SystemValue``,
+        and re-solves the mates; on failure nothing changes.
+        """
+    def dimension(self, name: str) -> Dict[str, Any]:
+        """A dimension as a dict: ``name``, ``kind`` (``"length"``/``"angle"``), ``value``
+        (mm or rad), ``system_value`` (m or rad), ``document_value`` (mm or degrees,
+        as the file holds it).
+        """
+    def save(self) -> None:
+        """Writes the document back to its file atomically (refused when the file changed
+        on disk since it was loaded).
+        """
+    def save_as(self, path: _StrPath) -> None:
+        """Writes the document to ``path`` atomically and makes it the document's file."""
+    def to_yaml(self) -> str:
+        """The document as YAML text (what ``save`` writes)."""
+    def contacts(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]:
+        """Every pair that touches or interferes: a list of dicts ``a``, ``b``, ``state``
+        (``"touching"``/``"interfering"``), ``depth_mm``. ``method``: ``"exact"``,
+        ``"aabb"`` or ``"cells"``; ``tolerance`` (mm): crossings up to this depth are
+        touching (default 0.01).
+        """
+    def interferences(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]:
+        """Every interfering pair (as ``contacts``, interfering only)."""
+    def contact(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> Dict[str, Any]:
+        """The verdict for components ``a`` and ``b``: a dict ``state``
+        (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``.
+        """
+    def interferes(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> bool:
+        """Whether components ``a`` and ``b`` interfere (crossing deeper than
+        ``tolerance`` mm, or one solid inside the other).
+        """
+    def clearance(self, a: str, b: str, stop_mm: float = 1000.0) -> float:
+        """The distance between the surfaces of ``a`` and ``b`` (mm): 0 when they touch,
+        cross or one lies inside the other; ``stop_mm`` when nothing is nearer.
+        """
     def sweep(
         self,
         name: str,
         waypoints: _Poses,
         tolerance: Optional[float] = None,
         time_limit_ms: Optional[float] = None,
-    ) -> Dict[str, Any]: ...
-    def plan_path(self, name: str, goal: _Pose, **options: Any) -> Path: ...
-    def plan_insertion(self, name: str, goal: _Pose, **options: Any) -> Path: ...
-    def plan_disassembly(self, name: str, **options: Any) -> Path: ...
-    def revalidate(self, path: Path) -> Dict[str, Any]: ...
-    def follow(self, path: Path, step_mm: float) -> int: ...
-    def robots(self) -> List[str]: ...
-    def robot(self, name: str) -> Robot: ...
-    def joints(self, robot: str) -> _F64: ...
-    def set_joints(self, robot: str, joints: _Joints) -> None: ...
+    ) -> Dict[str, Any]:
+        """Sweeps component ``name`` from its pose through ``waypoints`` (``(N, 4, 4)``,
+        world, mm; translation lerp + rotation slerp between them) and returns the first
+        contact: a dict ``hit``, ``t`` (0..1 along the motion), ``pose`` (4×4),
+        ``with`` (the component hit, or None). Continuous (no obstacle is jumped over).
+        """
+    def plan_path(self, name: str, goal: _Pose, **options: Any) -> Path:
+        """Plans a collision-free path for component ``name`` from its pose (or
+        ``start``) to ``goal`` (4×4, world, mm) among all the other components.
+
+        Keywords: ``planner`` (``"rrt_connect"`` default; see ``planner_names()``),
+        ``seed`` (same seed, same path), ``time_limit_ms`` (budget of the whole call,
+        default 10000), ``max_iterations``, ``step`` (mm), ``goal_bias``, ``smoothing``,
+        ``tolerance`` (mm), ``edge`` (``"continuous"``/``"step"``), ``contact_step``,
+        ``edge_step`` (mm), ``edge_step_rad``, ``bounds`` (``[[min xyz], [max xyz]]``
+        mm, for the part origin), ``margin`` (mm), ``rotation`` (bool),
+        ``rotation_weight`` (mm per rad), ``fallback_share``, ``start`` (4×4).
+        A path that is not found is returned with ``found == False`` and a ``reason``.
+        """
+    def plan_insertion(self, name: str, goal: _Pose, **options: Any) -> Path:
+        """Seed 002's insertion: plans the disassembly from whichever end (start or
+        ``goal``) lies inside the box of the other components until the part leaves
+        it, and joins the other end with RRT-Connect; the way into tight clearances.
+        ``goal``: the seated pose (4×4, world, mm). Keywords as ``plan_path``.
+        """
+    def plan_disassembly(self, name: str, **options: Any) -> Path:
+        """Seed 002's "can be disassembled, can be assembled": plans from the component's
+        assembled pose until its box leaves the box of the other components, then
+        reverses the path so it ends assembled. Planner ``"local_rrt"`` by default
+        (``"rrt"``, ``"biased_rrt"`` too); keywords as ``plan_path``.
+        """
+    def revalidate(self, path: Path) -> Dict[str, Any]:
+        """Checks ``path`` again against the document as it is now, with the tolerance
+        and edge check it was planned with: a dict ``ok``, and when blocked
+        ``segment`` (the first blocked edge) and ``pose`` (4×4).
+        """
+    def follow(self, path: Path, step_mm: float) -> int:
+        """Moves the path's component along ``path`` in steps of at most ``step_mm`` (and
+        as many degrees); it ends at the path's last pose. Returns the number of steps.
+        """
+    def robots(self) -> List[str]:
+        """Robot names."""
+    def robot(self, name: str) -> Robot:
+        """Robot ``name`` as a ``Robot`` (its kinematics with the document's base and
+        tool; a copy: moving it does not move the document's robot).
+        """
+    def joints(self, robot: str) -> _F64:
+        """The joints of robot ``name`` (rad, mm for prismatic joints)."""
+    def set_joints(self, robot: str, joints: _Joints) -> None:
+        """Sets the joints of robot ``robot`` (rad, mm for prismatic joints; within the
+        limits); its link components move.
+        """
     def run_program(
         self, robot: str, file: Optional[_StrPath] = None, text: Optional[str] = None
-    ) -> Dict[str, _F64]: ...
-    def plan_sequence(self, **options: Any) -> Dict[str, Any]: ...
+    ) -> Dict[str, _F64]:
+        """Runs a motion program (Line/Circle/Joint commands, ``.prg``) on robot
+        ``robot`` from its current joints: ``file`` names a program file, or ``text``
+        gives the program itself. The robot ends where the program ends. Returns the
+        trajectory as a dict of arrays: ``t`` (s, ``(N,)``), ``joints`` (rad/mm,
+        ``(N, dof)``), ``tcp`` (``(N, 4, 4)``, world, mm). Errors name file and line.
+        """
+    def plan_sequence(self, **options: Any) -> Dict[str, Any]:
+        """Plans the assembly sequences (seed 003's task layer) and returns the plan as a
+        dict (the JSON of ``fitup plan-sequence --json``): ``sequences`` best first,
+        each with ``order``, ``mounts``, ``tasks`` (mating directions, safe lengths,
+        grasps, mm), and ``rejected``, ``precedence``, ``time_ms``.
+
+        Keywords: ``mode`` (``"mates"``/``"geometry"``), ``base``, ``order``,
+        ``max_sequences``, ``time_limit_ms`` (the whole call), ``seed``, ``tolerance``
+        (mm), ``components``, ``exclude``, ``threaded``, ``support``, ``gravity``
+        (a down vector), ``planner_fallback``, ``fallback_time_limit_ms``, ``max_tilt``
+        (rad), ``sphere_directions``.
+        """
 
 class Database:
-    """The results database: a SQLite file or a ``postgres://`` URL."""
+    """The results database: runs, paths with their key poses, trajectories, document
+    snapshots (``docs/database.md``).
+
+    ``Database(target)``: a SQLite file (created when missing; relative paths from the
+    current folder) or a ``postgres://user@host:port/db`` URL, which a batch on a
+    cluster shares. Every stored result is one transaction. Poses come back as
+    column-vector 4×4 arrays (mm), exactly as stored (quaternions).
+    """
 
     def __init__(self, target: str) -> None: ...
     @property
-    def target(self) -> str: ...
-    def start_run(self, script: str, document: Optional[str] = None) -> int: ...
-    def finish_run(self, run_id: int, status: str, output: str = "") -> None: ...
-    def save_path(self, name: str, path: Path, run_id: Optional[int] = None) -> int: ...
+    def target(self) -> str:
+        """The database, without a password."""
+    def start_run(self, script: str, document: Optional[str] = None) -> int:
+        """Records the start of a run (``script``: what ran, e.g. a batch job's
+        description; ``document``: its document). Returns the run's id.
+        """
+    def finish_run(self, run_id: int, status: str, output: str = "") -> None:
+        """Records the end of run ``run_id``: ``status`` ``"ok"``, ``"failed"`` or
+        ``"cancelled"`` and its output text.
+        """
+    def save_path(self, name: str, path: Path, run_id: Optional[int] = None) -> int:
+        """Stores ``path`` (found or not, with its key poses, planner, seed and options)
+        under ``name``; ``run_id`` files it under a run. Returns its id.
+        """
     def paths(
         self,
         name: Optional[str] = None,
         planner: Optional[str] = None,
         component: Optional[str] = None,
         run_id: Optional[int] = None,
-    ) -> List[Dict[str, Any]]: ...
-    def runs(self) -> List[Dict[str, Any]]: ...
-    def query(self, sql: str, params: Sequence[Any] = ...) -> Tuple[List[str], List[List[Any]]]: ...
+    ) -> List[Dict[str, Any]]:
+        """Stored paths, oldest first, as dicts: ``id``, ``run_id``, ``name``,
+        ``created_at``, ``component``, ``seed``, ``planner``, ``found``, ``reason``,
+        ``length_mm``, ``time_ms``, ``poses`` (``(N, 4, 4)``). Filters: ``name``,
+        ``planner``, ``component``, ``run_id``.
+        """
+    def runs(self) -> List[Dict[str, Any]]:
+        """Recorded runs, oldest first, as dicts: ``id``, ``script``, ``document``,
+        ``started_at``, ``finished_at``, ``status``, ``output``, ``fitup_version``.
+        """
+    def query(self, sql: str, params: Sequence[Any] = ...) -> Tuple[List[str], List[List[Any]]]:
+        """A read-only SQL query (SELECT/WITH/VALUES; writes, ATTACH and settings are
+        refused; time, row and byte limits apply) with ``?`` parameters. Returns
+        ``(columns, rows)``.
+        """

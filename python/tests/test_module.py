@@ -381,6 +381,38 @@ def test_the_stubs_name_every_public_member_and_each_says_its_units():
                 assert "mm" in doc, f"{cls}.{n}: {doc}"
 
 
+def test_the_stub_docstrings_are_the_modules():
+    """Editors show the stubs' docstrings: each is the native member's own text
+    (the Rust doc comment), so the two cannot drift apart. On a mismatch run
+    ``python python/tools/stub_docs.py``."""
+    import ast
+    import inspect
+
+    tree = ast.parse((REPO / "python" / "fitup" / "_fitup.pyi").read_text())
+    native = fitup._fitup
+    seen = 0
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            items = [(node, getattr(native, node.name))]
+        elif isinstance(node, ast.ClassDef):
+            cls = getattr(native, node.name)
+            items = [(node, cls)] + [
+                (m, cls.__dict__[m.name])
+                for m in node.body
+                if isinstance(m, ast.FunctionDef) and not m.name.startswith("_")
+            ]
+        else:
+            continue
+        for stub, obj in items:
+            want = inspect.cleandoc(obj.__doc__)
+            assert ast.get_docstring(stub) == want, (
+                f"{stub.name}: the stub's docstring differs from the module's; "
+                "run `python python/tools/stub_docs.py`"
+            )
+            seen += 1
+    assert seen > 50, seen
+
+
 def test_keyword_values_of_the_wrong_type_name_the_keyword_and_what_it_takes():
     doc = fitup.Document(CELL)
     goal = doc.pose("screw5")
