@@ -65,7 +65,7 @@ pub use rrt_connect::{rrt_connect, RrtConnectOptions};
 pub use rrt_floyd::{rrt_floyd, RrtFloydOptions, MAX_FLOYD_NODES};
 pub use run::{
     Control, Failure, Phase, PlanError, PlanLimits, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
-    SMOOTHING_PROGRESS_EVERY,
+    PROGRESS_EVERY, SMOOTHING_PROGRESS_EVERY,
 };
 pub use smoothing::{smooth, Smoothing, DEFAULT_SMOOTHING_SHARE};
 pub use space::{PlanningSpace, RotationFreedom};
