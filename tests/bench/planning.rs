@@ -23,7 +23,9 @@
 //! `plan_insertion`), `FITUP_ITERATIONS` (iteration cap, default
 //! `PlanLimits::default()`'s: the time budget ends a search, as OMPL's),
 //! `FITUP_PROBE_MS` (also a row per problem at this short budget with smoothing
-//! on, and the largest overrun of each call's budget, setup included, in %).
+//! on, and the largest overrun of each call's budget, setup included, in %),
+//! `FITUP_SCALE=k` (every problem scaled by k: meshes, poses, bounds and the
+//! rotation weight).
 
 #[path = "../common/problems.rs"]
 mod problems;
@@ -402,18 +404,48 @@ fn step_variants() -> Vec<(&'static str, Variant)> {
         })
     };
     let mut out: Vec<(&'static str, Variant)> = vec![
-        ("step 10, turn 5° (before)", set(10.0, 5.0)),
-        ("step 10, turn 15°", set(10.0, 15.0)),
-        ("step 5, turn 5°", set(5.0, 5.0)),
-        ("step 5, turn 15°", set(5.0, 15.0)),
-        ("step 3, turn 5°", set(3.0, 5.0)),
-        ("step 3, turn 15° (default)", set(3.0, 15.0)),
+        ("step 10 / 5° (before)", set(10.0, 5.0)),
+        ("step 10 / 15°", set(10.0, 15.0)),
+        ("step 5 / 5°", set(5.0, 5.0)),
+        ("step 5 / 15°", set(5.0, 15.0)),
+        ("step 3 / 5°", set(3.0, 5.0)),
+        ("step 3 / 15° (default)", set(3.0, 15.0)),
+        ("step 30 / 15°", set(30.0, 15.0)),
     ];
     if let Ok(only) = std::env::var("FITUP_VARIANT") {
         let names: Vec<&str> = only.split(',').collect();
         out.retain(|(name, _)| names.contains(name));
     }
     out
+}
+
+/// `p` scaled by `k` about the assembly origin: meshes, pose translations, the
+/// bounds, the product box and the rotation weight (so the metric scales too).
+fn scaled(p: &Problem, k: f64) -> Problem {
+    use fitup::math::Transform;
+    use fitup::mesh::Mesh;
+    let mesh = |m: &Mesh| {
+        Mesh::new(
+            m.vertices.iter().map(|v| (v.coords * k).into()).collect(),
+            m.triangles.clone(),
+        )
+        .expect("a scaled valid mesh is valid")
+    };
+    let pose = |t: &Transform| Transform::from_parts(t.translation() * k, t.rotation());
+    let mut q = p.clone();
+    q.moving = std::sync::Arc::new(mesh(&p.moving));
+    for o in &mut q.obstacles {
+        o.mesh = std::sync::Arc::new(mesh(&o.mesh));
+        o.pose = pose(&o.pose);
+    }
+    q.start = pose(&p.start);
+    q.goal = pose(&p.goal);
+    q.space.min = p.space.min * k;
+    q.space.max = p.space.max * k;
+    q.space.rotation_weight = p.space.rotation_weight * k;
+    q.product_box = fitup::collision::Aabb::new(p.product_box.lo * k, p.product_box.hi * k);
+    q.name = format!("{}_x{k}", p.name);
+    q
 }
 
 /// Compiles the OMPL C++ harness (tests/bench/ompl/harness.cpp) when OMPL 1.5 and
@@ -719,6 +751,10 @@ fn main() {
     } else {
         problems::all().unwrap()
     };
+    // `FITUP_SCALE=k`: every problem scaled by k (meshes, poses, bounds and the
+    // rotation weight), to see how the planner's mm-valued defaults carry over to
+    // bigger (or smaller) scenes.
+    let scale: f64 = env_or("FITUP_SCALE", 1.0);
     for p in list {
         if only
             .as_ref()
@@ -726,6 +762,7 @@ fn main() {
         {
             continue;
         }
+        let p = if scale == 1.0 { p } else { scaled(&p, scale) };
         let dir = tmp.path().join(&p.name);
         std::fs::create_dir_all(&dir).unwrap();
         let spec = export(&p, &dir);
