@@ -375,6 +375,36 @@ pub fn contact(
     pb: &Transform,
     tolerance: f64,
 ) -> Result<Contact, CollisionError> {
+    contact_by(a, pa, b, pb, tolerance, None).map(|c| c.expect("no deadline, no give-up"))
+}
+
+/// [`contact`] that gives up at `deadline`: `Ok(None)` when it passed before the
+/// verdict was known. As in [`interferes_until`], the clock is read every 256
+/// triangle pairs of the crossing walk; the depth walk and the containment test
+/// that may follow it run once and are not interrupted.
+///
+/// # Errors
+/// As [`contact`].
+pub fn contact_until(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    tolerance: f64,
+    deadline: std::time::Instant,
+) -> Result<Option<Contact>, CollisionError> {
+    contact_by(a, pa, b, pb, tolerance, Some(deadline))
+}
+
+/// [`contact`]; `None`: `deadline` passed first.
+fn contact_by(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    tolerance: f64,
+    deadline: Option<std::time::Instant>,
+) -> Result<Option<Contact>, CollisionError> {
     check_pose(pa)?;
     check_pose(pb)?;
     check_tolerance(tolerance)?;
@@ -397,7 +427,12 @@ pub fn contact(
         eps
     };
     let mut faces = 0.0f64;
-    let _ = for_each_triangle_pair::<()>(a, b, &rel, margin, &floor, |ka, ta, kb, tb| {
+    let mut visited = 0u32;
+    let walk = for_each_triangle_pair::<()>(a, b, &rel, margin, &floor, |ka, ta, kb, tb| {
+        visited = visited.wrapping_add(1);
+        if visited.is_multiple_of(256) && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+            return ControlFlow::Break(());
+        }
         let crossing = tri_tri(ta, tb, eps, oriented);
         if shared && crossing.is_none_or(|d| d <= tolerance) {
             faces = faces.max(super::containment::shared_face_overlap(ta, tb));
@@ -414,42 +449,46 @@ pub fn contact(
         }
         ControlFlow::Continue(())
     });
+    // The walk breaks only for the deadline.
+    if walk.is_break() {
+        return Ok(None);
+    }
     if depth > tolerance {
-        return Ok(Contact::Interfering {
+        return Ok(Some(Contact::Interfering {
             depth,
             kind: InterferenceKind::SurfacesCross,
-        });
+        }));
     }
     if faces > tolerance {
-        return Ok(Contact::Interfering {
+        return Ok(Some(Contact::Interfering {
             depth: faces,
             kind: InterferenceKind::FacesOverlap,
-        });
+        }));
     }
     // surfaces that cross (even shallowly) cannot have one solid inside the other
     if depth > 0.0 {
         if oriented {
             let reach = deep_reach(a, pa, b, pb, &seeds, tolerance, eps, false);
             if reach > tolerance {
-                return Ok(Contact::Interfering {
+                return Ok(Some(Contact::Interfering {
                     depth: reach,
                     kind: InterferenceKind::SurfacesCross,
-                });
+                }));
             }
         }
-        return Ok(Contact::Touching);
+        return Ok(Some(Contact::Touching));
     }
     if let Some((inner, depth)) = containment(a, pa, b, pb, eps) {
-        return Ok(Contact::Interfering {
+        return Ok(Some(Contact::Interfering {
             depth,
             kind: InterferenceKind::Contained { inner },
-        });
+        }));
     }
-    Ok(if touching {
+    Ok(Some(if touching {
         Contact::Touching
     } else {
         Contact::Separate
-    })
+    }))
 }
 
 /// How deep the surface of one solid reaches into the other when their surfaces

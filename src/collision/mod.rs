@@ -64,7 +64,8 @@ pub use cells::{
 };
 pub use edge::{edge_interferes, edge_interferes_until, EdgeOptions};
 pub use exact::{
-    clearance, contact, distance_lower_bound, interferes, interferes_until, surface_distance,
+    clearance, contact, contact_until, distance_lower_bound, interferes, interferes_until,
+    surface_distance,
 };
 pub use method::{contact_gap, contact_step, SweepMethod, MIN_CONTACT_GAP_MM};
 pub use shape::{Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};

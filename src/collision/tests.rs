@@ -1510,3 +1510,30 @@ fn stepwise_sweeps_refuse_more_steps_than_the_cap() {
     };
     assert!(sweep(&mover, &motion, &obstacles, &fine).unwrap().hit);
 }
+
+/// The deadline-bounded checks give up once their deadline has passed and
+/// otherwise answer as the unbounded ones: a fine cylinder inside a slightly
+/// wider and taller one (thousands of side-by-side facet pairs to walk, none
+/// crossing, caps 0.1 mm apart, so nothing ends the walk early).
+#[test]
+fn bounded_checks_give_up_at_a_passed_deadline_and_agree_before_it() {
+    let a = collider(Mesh::cylinder(10.0, 100.0, 1024));
+    let b = collider(Mesh::cylinder(10.001, 100.2, 1024));
+    let pa = Transform::IDENTITY;
+    let pb = Transform::from_translation(Vec3::new(0.0, 0.0, -0.1));
+    let tol = DEFAULT_TOLERANCE;
+    let past = std::time::Instant::now();
+    assert_eq!(contact_until(&a, &pa, &b, &pb, tol, past).unwrap(), None);
+    assert_eq!(interferes_until(&a, &pa, &b, &pb, tol, past).unwrap(), None);
+    let later = std::time::Instant::now() + std::time::Duration::from_secs(600);
+    let full = contact(&a, &pa, &b, &pb, tol).unwrap();
+    assert!(full.depth() > 0.0, "{full:?}");
+    assert_eq!(
+        contact_until(&a, &pa, &b, &pb, tol, later).unwrap(),
+        Some(full)
+    );
+    assert_eq!(
+        interferes_until(&a, &pa, &b, &pb, tol, later).unwrap(),
+        Some(interferes(&a, &pa, &b, &pb, tol).unwrap())
+    );
+}

@@ -550,15 +550,19 @@ impl<'d> Ctx<'d> {
             .find(|(_, v)| **v == Some(true))
             .map(|(p, _)| p)
         {
-            // The depth for the message: one full query, on the error path only.
-            let depth = crate::collision::contact(
+            // The depth for the message: one full query, on the error path only,
+            // within what is left of the budget (unknown when it runs out).
+            let depth = crate::collision::contact_until(
                 &scene.colliders[a],
                 &scene.poses[a],
                 &scene.colliders[b],
                 &scene.poses[b],
                 opts.tolerance,
+                deadline,
             )
-            .map_or(0.0, |c| c.depth());
+            .ok()
+            .flatten()
+            .map(|c| c.depth());
             return Err(SequenceError::AssembledInterference {
                 a: names[a].clone(),
                 b: names[b].clone(),

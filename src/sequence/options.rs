@@ -205,14 +205,15 @@ pub enum SequenceError {
     #[error("the document has {0} components; sequence planning handles at most {MAX_COMPONENTS}")]
     TooManyComponents(usize),
     /// Components interfere in the assembled pose: no order can join them.
-    #[error("components `{a}` and `{b}` interfere in the assembled pose (depth {depth:.3} mm); fix the model or raise `tolerance`")]
+    #[error("components `{a}` and `{b}` interfere in the assembled pose ({}); fix the model or raise `tolerance`", depth_text(*.depth))]
     AssembledInterference {
         /// One component.
         a: String,
         /// The other.
         b: String,
-        /// Penetration depth, mm.
-        depth: f64,
+        /// Penetration depth, mm; `None` when the time budget ran out before the
+        /// depth was measured (the interference itself is certain).
+        depth: Option<f64>,
     },
     /// No order assembles every component (every try is in `rejected`).
     #[error("no assembly sequence found{}: {}", if *.timed_out { " within the time limit" } else { "" }, rejected_list(.rejected))]
@@ -279,6 +280,14 @@ pub struct Rejected {
     pub order: Vec<String>,
     /// Why no component could go next (per remaining component, or a pin or base rule).
     pub reason: RejectReason,
+}
+
+/// The depth part of [`SequenceError::AssembledInterference`]'s message.
+fn depth_text(depth: Option<f64>) -> String {
+    match depth {
+        Some(d) => format!("depth {d:.3} mm"),
+        None => "depth not measured: the time limit ran out".into(),
+    }
 }
 
 /// `after [a, b]: reason; after [a, c]: reason` (the error's text).

@@ -441,11 +441,13 @@ fn interfering_assembly_and_tiny_budgets_are_refused_in_bounded_time() {
     let sunk = Transform::from_translation(Vec3::new(0.0, 0.0, 0.5));
     doc.set_transform("gear", sunk).unwrap();
     let e = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default()).unwrap_err();
+    // Measured within the default budget: the depth of the overlap.
     assert!(
-        matches!(e, SequenceError::AssembledInterference { .. }),
+        matches!(e, SequenceError::AssembledInterference { depth: Some(d), .. } if d > 0.0),
         "{e}"
     );
     assert!(e.to_string().contains("gear"), "{e}");
+    assert!(e.to_string().contains(" mm)"), "{e}");
     // A budget too small for the blocking graph: an error, quickly.
     let doc = open("models/cell.yaml");
     let o = SequenceOptions {
