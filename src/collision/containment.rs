@@ -48,6 +48,18 @@ pub(crate) fn encloses_volume(mesh: &Mesh) -> bool {
 /// offset, so a wider band only catches more real overlaps.
 pub(crate) const PLANE_TOLERANCE: f64 = 1e-3;
 
+/// How far apart (mm) a walk over triangle pairs looks: the pair's numerical slack
+/// `eps`, widened to [`PLANE_TOLERANCE`] when the shared-face rule applies
+/// (`shared`: both parts enclose a volume), since such faces may lie a few f32
+/// roundings apart.
+pub(crate) fn walk_margin(shared: bool, eps: f64) -> f64 {
+    if shared {
+        eps.max(PLANE_TOLERANCE)
+    } else {
+        eps
+    }
+}
+
 /// How far (mm) moving triangle `a` (at `a0` at the start of a straight
 /// translation, at `a1` at its end; obstacle frame) and obstacle triangle `b`
 /// overlap at most over the motion when both lie in one plane facing the same way

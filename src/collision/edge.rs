@@ -172,11 +172,7 @@ fn edge_check(
     };
     // Shared faces may lie a few f32 roundings apart (containment.rs): the walk
     // reaches that far for them.
-    let margin = if pairs.shared_faces {
-        pairs.eps.max(super::containment::PLANE_TOLERANCE)
-    } else {
-        pairs.eps
-    };
+    let margin = super::containment::walk_margin(pairs.shared_faces, pairs.eps);
     let mut stack: Vec<(u32, u32)> = vec![(0, 0)];
     let mut popped = 0u32;
     while let Some((i, j)) = stack.pop() {

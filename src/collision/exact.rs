@@ -264,6 +264,31 @@ pub fn interferes_until(
     interferes_by(a, pa, b, pb, tolerance, Some(deadline))
 }
 
+/// The deadline of a static pair walk, read every 256 triangle pairs (a clock read
+/// per pair would cost more than the pair test).
+struct PairClock {
+    deadline: Option<std::time::Instant>,
+    visited: u32,
+}
+
+impl PairClock {
+    fn new(deadline: Option<std::time::Instant>) -> Self {
+        Self {
+            deadline,
+            visited: 0,
+        }
+    }
+
+    /// Counts one pair; whether the deadline has passed (read on every 256th).
+    fn passed(&mut self) -> bool {
+        self.visited = self.visited.wrapping_add(1);
+        self.visited.is_multiple_of(256)
+            && self
+                .deadline
+                .is_some_and(|d| std::time::Instant::now() >= d)
+    }
+}
+
 /// [`interferes`]; `None`: `deadline` passed first.
 fn interferes_by(
     a: &Collider,
@@ -285,20 +310,15 @@ fn interferes_by(
     // change the answer. Solids: shallow crossings are seeds of the depth walk, so
     // every one is visited (the same pairs as `contact` visits before a deep one).
     let floor = Cell::new(-1.0);
-    let (mut visited, mut late) = (0u32, false);
+    let mut clock = PairClock::new(deadline);
+    let mut late = false;
     // Closed solids (watertight or stacked slices) also interfere where their faces
     // overlap in one plane facing the same way, with no pair crossing (an equal wall
-    // pushed into an equal wall): the edge check's rule, containment.rs. Such faces
-    // may lie a few f32 roundings apart, so the walk reaches that far.
+    // pushed into an equal wall): the edge check's rule, containment.rs.
     let shared = a.encloses_volume() && b.encloses_volume();
-    let margin = if shared {
-        eps.max(super::containment::PLANE_TOLERANCE)
-    } else {
-        eps
-    };
+    let margin = super::containment::walk_margin(shared, eps);
     let crossing = for_each_triangle_pair(a, b, &rel, margin, &floor, |ka, ta, kb, tb| {
-        visited = visited.wrapping_add(1);
-        if visited.is_multiple_of(256) && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+        if clock.passed() {
             late = true;
             return ControlFlow::Break(());
         }
@@ -421,16 +441,11 @@ fn contact_by(
     let floor = Cell::new(-1.0);
     // The shared-face rule of `interferes_by`.
     let shared = a.encloses_volume() && b.encloses_volume();
-    let margin = if shared {
-        eps.max(super::containment::PLANE_TOLERANCE)
-    } else {
-        eps
-    };
+    let margin = super::containment::walk_margin(shared, eps);
     let mut faces = 0.0f64;
-    let mut visited = 0u32;
+    let mut clock = PairClock::new(deadline);
     let walk = for_each_triangle_pair::<()>(a, b, &rel, margin, &floor, |ka, ta, kb, tb| {
-        visited = visited.wrapping_add(1);
-        if visited.is_multiple_of(256) && deadline.is_some_and(|d| std::time::Instant::now() >= d) {
+        if clock.passed() {
             return ControlFlow::Break(());
         }
         let crossing = tri_tri(ta, tb, eps, oriented);
