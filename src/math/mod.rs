@@ -1,10 +1,12 @@
 //! Rigid transforms and angle conventions: the pose matrix of the SolidWorks API
-//! (`IMathTransform`) on top of nalgebra.
+//! (`IMathTransform`) on top of nalgebra; axis-aligned boxes; the shared limits of
+//! every call (number ranges, sample counts, the [`Deadline`] of a time budget).
 //!
 //! Units: millimetres for lengths, radians for angles (degrees only in the
 //! user-facing `X Y Z A B C` pose triples, see [`AngleConvention`]).
 
 mod aabb;
+pub mod deadline;
 mod euler;
 pub mod format;
 pub mod limits;
@@ -12,6 +14,7 @@ mod rng;
 pub mod transform;
 
 pub use aabb::Aabb;
+pub use deadline::Deadline;
 pub use euler::AngleConvention;
 pub use limits::{LimitError, SampleBudget, MAX_ABS_VALUE, MAX_SAMPLES};
 pub use rng::Rng;

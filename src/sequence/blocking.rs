@@ -327,7 +327,7 @@ impl Ctx<'_> {
                 &self.scene.colliders[q],
                 &self.scene.poses[q],
                 &options,
-                self.deadline,
+                self.deadline.instant(),
             )
             .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?
             .ok_or_else(&time_limit)

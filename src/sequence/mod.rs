@@ -53,6 +53,7 @@ mod paths;
 mod plan;
 mod report;
 mod revalidate;
+mod setup;
 mod task;
 
 pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};

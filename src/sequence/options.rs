@@ -181,6 +181,121 @@ impl Default for SequenceOptions {
     }
 }
 
+impl SequenceOptions {
+    /// Checks every option's range (the one place they are checked, before anything
+    /// is built); returns the call's time limit (ms), the default when none is given.
+    ///
+    /// # Errors
+    /// [`SequenceError::InvalidOption`] naming the first option out of range, its
+    /// value and what is accepted.
+    pub fn validate(&self) -> Result<f64, SequenceError> {
+        let bad = |option: &'static str, v: f64, expected: &'static str| {
+            Err(SequenceError::InvalidOption {
+                option,
+                value: v.to_string(),
+                expected,
+            })
+        };
+        let limit = self.time_limit_ms.unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS);
+        let finite_at_least = |v: f64, min: f64| v.is_finite() && v >= min;
+        let finite_above = |v: f64, min: f64| v.is_finite() && v > min;
+        let checks: [(&'static str, f64, bool, &'static str); 9] = [
+            (
+                "time_limit_ms",
+                limit,
+                finite_above(limit, 0.0),
+                "a finite number of ms > 0",
+            ),
+            (
+                "tolerance",
+                self.tolerance,
+                finite_at_least(self.tolerance, 0.0),
+                "a finite number of mm ≥ 0",
+            ),
+            (
+                "probe_mm",
+                self.probe_mm,
+                finite_above(self.probe_mm, 0.0) && self.probe_mm < 1e6,
+                "a finite number of mm > 0",
+            ),
+            (
+                "step_mm",
+                self.step_mm,
+                finite_at_least(self.step_mm, 0.0) && self.step_mm < 1e6,
+                "a finite number of mm ≥ 0 (0: automatic)",
+            ),
+            (
+                "max_tilt",
+                self.max_tilt,
+                finite_at_least(self.max_tilt, 0.0),
+                "a finite angle ≥ 0",
+            ),
+            (
+                "small_base_ratio",
+                self.small_base_ratio,
+                finite_at_least(self.small_base_ratio, 0.0),
+                "a finite number ≥ 0",
+            ),
+            (
+                "fallback_time_limit_ms",
+                self.fallback_time_limit_ms,
+                finite_above(self.fallback_time_limit_ms, 0.0),
+                "a finite number of ms > 0",
+            ),
+            (
+                "contact_gap_mm",
+                self.contact_gap_mm,
+                finite_at_least(self.contact_gap_mm, 0.0),
+                "a finite number of mm ≥ 0",
+            ),
+            (
+                "tight_clearance_mm",
+                self.tight_clearance_mm,
+                finite_at_least(self.tight_clearance_mm, 0.0),
+                "a finite number of mm ≥ 0",
+            ),
+        ];
+        if let Some(&(option, v, _, expected)) = checks.iter().find(|c| !c.2) {
+            return bad(option, v, expected);
+        }
+        if self.sphere_directions > 4096 {
+            return bad(
+                "sphere_directions",
+                self.sphere_directions as f64,
+                "at most 4096",
+            );
+        }
+        if let Some(g) = self.gravity {
+            if !(g.iter().all(|v| v.is_finite()) && g.norm() > 1e-12) {
+                return Err(SequenceError::InvalidOption {
+                    option: "gravity",
+                    value: format!("{:?}", g.as_slice()),
+                    expected: "a finite non-zero down direction",
+                });
+            }
+        }
+        if self.max_sequences == 0 {
+            return Err(SequenceError::InvalidOption {
+                option: "max_sequences",
+                value: "0".into(),
+                expected: "at least 1",
+            });
+        }
+        if let Some((k, v)) = self
+            .masses
+            .iter()
+            .find(|(_, v)| !(v.is_finite() && **v > 0.0))
+        {
+            return Err(SequenceError::InvalidOption {
+                option: "masses",
+                value: format!("{k}: {v}"),
+                expected: "finite numbers > 0",
+            });
+        }
+        Ok(limit)
+    }
+}
+
 /// Why sequence planning could not answer.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]

@@ -83,7 +83,7 @@ impl Ctx<'_> {
         .ok()?;
         // The call's one deadline: past it every check answers "not free" at once
         // (a path is then not taken, never wrongly taken).
-        v.set_deadline(Some(self.deadline));
+        v.set_deadline(Some(self.deadline.instant()));
         Some(v)
     }
 

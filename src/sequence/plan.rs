@@ -582,7 +582,7 @@ pub(crate) fn plan(
         .collect::<Result<_, _>>()?;
     // A search that starts after its share of the budget runs to the deadline (the
     // answer is then built with what is left, without the unspent work).
-    if std::time::Instant::now() >= ctx.search_deadline {
+    if ctx.search_out_of_time() {
         ctx.search_deadline = ctx.deadline;
     }
     let ctx = ctx;
