@@ -247,7 +247,7 @@ pub fn plan_request(kw: &Keywords<'_>, default_planner: &str) -> Result<(PlanReq
     };
     request.bounds = kw.bounds("bounds")?;
     if let Some(m) = kw.f64("margin")? {
-        request.margin_mm = m;
+        request.margin_mm = Some(m);
     }
     if kw.bool("rotation")? == Some(false) {
         request.rotation = RotationFreedom::Fixed;

@@ -194,7 +194,17 @@ pub fn plan_insertion(
     approach.limits.seed = options.approach.limits.seed ^ 0x9E37_79B9_7F4A_7C15;
     let name = label(&options.disassembly, &options.approach);
     let assembled = if goal_in { goal } else { start };
-    let mut out = options.disassembly.clone();
+    // With a scale-free approach the disassembly's lengths (given for the 3 mm
+    // reference step) follow the problem too.
+    let mut out = match options.approach.step {
+        Some(_) => options.disassembly.clone(),
+        None => {
+            let scale = super::ProblemScale::of(space, &*validator);
+            options
+                .disassembly
+                .scaled(scale.narrow_step() / RrtConnectOptions::STEP)
+        }
+    };
     out.rrt_mut().smoothing.enabled = false;
     out.rrt_mut().limits.time_limit_ms = left();
     // `disassemble` returns the path outside → assembled.

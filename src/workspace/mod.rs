@@ -10,7 +10,7 @@
 //! and cut cells while meshes are unchanged) and the rules that turn a component
 //! name into a planning problem: the obstacles (every other component), the
 //! planning bounds (default: the product box with start and goal, grown by
-//! [`DEFAULT_MARGIN_MM`]), the component's box for disassembly, and one tolerance
+//! [`DEFAULT_MARGIN_DIAMETERS`] of the part), the component's box for disassembly, and one tolerance
 //! rule shared by planners, [`Workspace::revalidate`] and [`Workspace::contact`].
 //!
 //! Units: millimetres and radians; poses are [`Transform`]s (part frame → world).
@@ -35,7 +35,7 @@ mod plan;
 mod scene;
 
 pub use features::{feature_cells, split_part, CUT_CELLS_FEATURE};
-pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_MM};
+pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_DIAMETERS};
 pub use scene::{Scene, SceneCache};
 
 use crate::collision::{

@@ -48,6 +48,19 @@ fn env_or<T: std::str::FromStr>(key: &str, default: T) -> T {
         .unwrap_or(default)
 }
 
+/// CPU time of this process so far (user + system, s), from /proc.
+fn cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = s.rsplit_once(')')?.1.to_string();
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+            Some(ticks / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
 fn load() -> String {
     std::fs::read_to_string("/proc/loadavg")
         .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
@@ -159,6 +172,84 @@ fn scaled_copy(src: &Path, name: &str, k: f64, out: &Path) -> PathBuf {
     lines[last] = format!("  - [{}, {}, {}, 1.0]", row[0] * k, row[1] * k, row[2] * k);
     std::fs::write(dir.join(format!("{name}.yaml")), lines.join("\n") + "\n").unwrap();
     dir
+}
+
+/// fitup's own puzzle classes (issue 23), `models/problems/NAME.{yaml,plan.json}`.
+const PUZZLES: [&str; 8] = [
+    "twisted_tubes",
+    "house",
+    "plate_hole",
+    "twisted_slot",
+    "bar_slot",
+    "ring_puzzle",
+    "rod_corridor",
+    "zigzag_tunnel",
+];
+
+/// Writes puzzle `name` of `models/problems/` in the OMPL.app layout under
+/// `root/NAME/` (prefixed `fitup-`): every fixed component's mesh at its pose as the
+/// environment, the moving part in its own frame as the robot, the problem file's
+/// start, goal and bounds.
+fn convert_puzzle(name: &str, root: &Path) {
+    use fitup::planning::ProblemFile;
+    let problem = ProblemFile::read(format!("models/problems/{name}.plan.json").as_ref())
+        .expect("a puzzle file");
+    let doc = Document::open(&Path::new("models/problems").join(&problem.document))
+        .expect("the puzzle's document");
+    let stem = format!("fitup-{name}");
+    let dir = root.join(&stem);
+    std::fs::create_dir_all(&dir).expect("puzzle folder");
+    let mut env = Vec::new();
+    let mut robot = Vec::new();
+    for (i, c) in doc.components().iter().enumerate() {
+        let mesh = doc.mesh_of(i);
+        let moving = c.name == problem.moving_component;
+        for k in 0..mesh.triangles.len() {
+            let t = mesh.triangle(k);
+            let v = |p: &fitup::math::Point3| {
+                let q = if moving { *p } else { c.transform.apply(p) };
+                stl_io::Vertex::new([q.x as f32, q.y as f32, q.z as f32])
+            };
+            let tri = stl_io::Triangle {
+                normal: stl_io::Normal::new([0.0, 0.0, 0.0]),
+                vertices: [v(&t[0]), v(&t[1]), v(&t[2])],
+            };
+            if moving {
+                robot.push(tri);
+            } else {
+                env.push(tri);
+            }
+        }
+    }
+    for (part, tris) in [("env", &env), ("robot", &robot)] {
+        let mut w = std::fs::File::create(dir.join(format!("{stem}_{part}.stl"))).expect("stl");
+        stl_io::write_stl(&mut w, tris.iter()).expect("write stl");
+    }
+    let m = |t: &Transform| {
+        let m = t.to_matrix();
+        serde_json::json!({ "matrix": m })
+    };
+    let b = &problem.bounds;
+    let json = serde_json::json!({
+        "name": stem,
+        "environment": format!("{stem}_env.stl"),
+        "robot": format!("{stem}_robot.stl"),
+        "start": m(&problem.start),
+        "goal": m(&problem.goal),
+        "bounds": { "min": [b.lo.x, b.lo.y, b.lo.z], "max": [b.hi.x, b.hi.y, b.hi.z] },
+    });
+    std::fs::write(
+        dir.join(format!("{stem}.json")),
+        serde_json::to_string_pretty(&json).unwrap(),
+    )
+    .unwrap();
+    let row = |r: [f64; 4]| format!("  - [{}, {}, {}, {}]", r[0], r[1], r[2], r[3]);
+    let start = problem.start.to_matrix();
+    let yaml = format!(
+        "description: 'fitup puzzle {name}'\nparts:\n  env:\n    stl: {stem}_env.stl\n  robot:\n    stl: {stem}_robot.stl\ncomponents:\n- name: env\n  part: env\n  fixed: true\n  transform:\n  - [1.0, 0.0, 0.0, 0.0]\n  - [0.0, 1.0, 0.0, 0.0]\n  - [0.0, 0.0, 1.0, 0.0]\n  - [0.0, 0.0, 0.0, 1.0]\n- name: robot\n  part: robot\n  transform:\n{}\n",
+        start.map(row).join("\n")
+    );
+    std::fs::write(dir.join(format!("{stem}.yaml")), yaml).unwrap();
 }
 
 /// One run's outcome.
@@ -289,10 +380,12 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
     request.planner.limits_mut().time_limit_ms = Some(budget_s * 1e3);
     experiment(p, &ws, &mut request);
     let t0 = std::time::Instant::now();
+    let c0 = cpu_s();
     let path = ws
         .plan_path("robot", &p.goal, &request, None)
         .expect("a planning call");
     let wall = t0.elapsed().as_secs_f64();
+    let cpu = cpu_s() - c0;
     let mut check = String::new();
     if path.found() && recheck {
         let r = Recheck::new(p, &ws);
@@ -305,7 +398,7 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
         );
     }
     let line = format!(
-        "fitup seed={seed} solved={} time_s={wall:.3} search_s={:.3} smooth_s={:.3} trans={:.1} rot={:.2} raw_trans={:.1} raw_rot={:.2} keyposes={} iterations={} nodes={} pose_checks={} edge_checks={} failure={:?}{check}",
+        "fitup seed={seed} solved={} time_s={wall:.3} cpu_s={cpu:.2} search_s={:.3} smooth_s={:.3} trans={:.1} rot={:.2} raw_trans={:.1} raw_rot={:.2} keyposes={} iterations={} nodes={} pose_checks={} edge_checks={} failure={:?}{check}",
         u8::from(path.found()),
         path.search_ms / 1e3,
         path.smoothing_ms / 1e3,
@@ -341,7 +434,7 @@ fn experiment(p: &ProblemJson, ws: &Workspace<'_>, request: &mut PlanRequest) {
         return;
     };
     if let Ok(f) = std::env::var("FITUP_X_STEP") {
-        o.step = f.parse::<f64>().unwrap() * diag;
+        o.step = Some(f.parse::<f64>().unwrap() * diag);
     }
     if let Ok(f) = std::env::var("FITUP_X_LAZY") {
         o.lazy = Some(fitup::planning::LazyValidation {
@@ -422,6 +515,13 @@ fn main() {
         );
         Vec::new()
     };
+    // `FITUP_PUZZLES=1`: fitup's own puzzle classes (models/problems/) join the
+    // problems, converted to the same layout, so both run with the same defaults.
+    if std::env::var("FITUP_PUZZLES").is_ok_and(|v| v == "1") {
+        for name in PUZZLES {
+            convert_puzzle(name, &root);
+        }
+    }
     let mut names: Vec<String> = std::fs::read_dir(&root)
         .expect("the FITUP_OMPLAPP folder")
         .filter_map(|e| {

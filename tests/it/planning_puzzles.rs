@@ -213,6 +213,7 @@ fn smoothing_stays_within_its_share_and_the_raw_path_is_returned_without_it() {
     let mut options = InsertionOptions::default().with_limits(1, 40_000);
     options.time_limit_ms = Some(budget);
     options.smoothing.shortcut_attempts = usize::MAX;
+    options.smoothing.patience = usize::MAX;
     let mut v = p.validator(p.default_validator_options()).unwrap();
     let waited = run_delay_ms();
     let path = p.solve_with(&mut v, &options).unwrap();
@@ -255,6 +256,7 @@ fn a_heavily_smoothed_path_passes_the_dense_recheck() {
         let mut options = InsertionOptions::default().with_limits(seed, 40_000);
         options.time_limit_ms = Some(4000.0);
         options.smoothing.shortcut_attempts = usize::MAX;
+        options.smoothing.patience = usize::MAX;
         let mut v = p.validator(p.default_validator_options()).unwrap();
         let path = p.solve_with(&mut v, &options).unwrap();
         assert!(
