@@ -127,7 +127,10 @@ impl MeshValidator {
                 ));
             }
         }
-        if let Some(cap) = options.clearance_cap.filter(|c| !(c.is_finite() && *c > 0.0)) {
+        if let Some(cap) = options
+            .clearance_cap
+            .filter(|c| !(c.is_finite() && *c > 0.0))
+        {
             return Err(MotionFault::option(
                 "clearance cap",
                 cap,

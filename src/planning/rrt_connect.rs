@@ -154,16 +154,18 @@ impl Strategy {
     /// The long-range search: OMPL's RRT-Connect range and resolution as shares
     /// of the space's metric extent, no fallbacks; what crosses open, twisting
     /// space (a table carried through a house) fastest.
-    fn long_range(options: &RrtConnectOptions, space: &PlanningSpace, scale: &ProblemScale) -> Self {
+    fn long_range(
+        options: &RrtConnectOptions,
+        space: &PlanningSpace,
+        scale: &ProblemScale,
+    ) -> Self {
         let step = scale.range();
         let res = scale.resolution();
         Self {
             step,
             lattice: None,
             narrow: NarrowPassage::OFF,
-            lazy: options
-                .lazy
-                .map(|_| (res, res / space.rotation_weight)),
+            lazy: options.lazy.map(|_| (res, res / space.rotation_weight)),
             fallback_share: 0.0,
             unit: 1.0,
             key_mm: res * 1e-3,
@@ -507,11 +509,7 @@ impl Rival {
 
 /// One iteration of `search` within the race: `Some` when it found its path, must
 /// stop, or is outrun by a rival that found its path with less work.
-fn step(
-    search: &mut Search<'_, '_>,
-    run: &mut Run<'_>,
-    rival: &Rival,
-) -> Option<Outcome> {
+fn step(search: &mut Search<'_, '_>, run: &mut Run<'_>, rival: &Rival) -> Option<Outcome> {
     if rival.stop.load(Ordering::Relaxed) {
         return Some(Outcome::Failed(
             Failure::Cancelled,
@@ -670,11 +668,7 @@ fn race(
 /// [`race`] on one thread: the search with the least work so far (the first on
 /// a tie) takes the next iteration; the first search's run reports progress, and
 /// its cancellation stops the others.
-fn interleave(
-    searches: &mut [Search<'_, '_>],
-    run: &mut Run<'_>,
-    rival: &Rival,
-) -> Vec<Outcome> {
+fn interleave(searches: &mut [Search<'_, '_>], run: &mut Run<'_>, rival: &Rival) -> Vec<Outcome> {
     let mut runs: Vec<Run<'_>> = (1..searches.len()).map(|_| run.sibling()).collect();
     let mut done: Vec<Option<Outcome>> = searches.iter().map(|_| None).collect();
     while let Some(i) = (0..searches.len())
@@ -947,8 +941,7 @@ mod tests {
             let two = rrt_connect(&mut v, &space, &start, &goal, &o, None).unwrap();
             assert!(two.found(), "seed {seed}: {:?}", two.failure);
             let (v, ..) = window(1.0);
-            let one =
-                rrt_connect(&mut OneThread(v), &space, &start, &goal, &o, None).unwrap();
+            let one = rrt_connect(&mut OneThread(v), &space, &start, &goal, &o, None).unwrap();
             assert_eq!(one.poses, two.poses, "seed {seed}");
             assert_eq!(
                 (one.iterations, one.nodes, one.pose_checks, one.edge_checks),
@@ -961,23 +954,60 @@ mod tests {
         }
     }
 
-    /// Scale-free defaults: the same problem 10× larger (meshes, poses, bounds,
-    /// rotation weight) is solved by the same moves, so the path is the first one
-    /// scaled (the penetration tolerance, a physical 0.01 mm, is the only length
-    /// that does not scale, and nothing here touches).
+    /// Scale-free defaults: every length of both searches follows the problem, so
+    /// the same problem 10× larger gets the same strategies with every length 10×.
     #[test]
-    fn a_scaled_problem_gets_the_scaled_path() {
-        for seed in 0..3 {
-            let (mut v, space, start, goal) = window(1.0);
-            let a = rrt_connect(&mut v, &space, &start, &goal, &options(seed), None).unwrap();
-            let (mut v, space, start, goal) = window(10.0);
-            let b = rrt_connect(&mut v, &space, &start, &goal, &options(seed), None).unwrap();
-            assert!(a.found() && b.found(), "seed {seed}");
-            assert_eq!(a.iterations, b.iterations, "seed {seed}");
-            assert_eq!(a.poses.len(), b.poses.len(), "seed {seed}");
-            for (p, q) in a.poses.iter().zip(&b.poses) {
-                let scaled = Transform::from_parts(p.translation() * 10.0, p.rotation());
-                assert!(scaled.approx_eq(q, 1e-6, 1e-9), "seed {seed}: {scaled} ≠ {q}");
+    fn the_strategies_scale_with_the_problem() {
+        let o = RrtConnectOptions::default();
+        let at = |k: f64| {
+            let (v, space, ..) = window(k);
+            let scale = ProblemScale::of(&space, &v);
+            (
+                Strategy::long_range(&o, &space, &scale),
+                Strategy::narrow(&o, &space, &scale),
+            )
+        };
+        let close = |a: f64, b: f64| (a * 10.0 - b).abs() <= 1e-9 * b.abs().max(1.0);
+        let ((l1, n1), (l10, n10)) = (at(1.0), at(10.0));
+        for (a, b) in [(&l1, &l10), (&n1, &n10)] {
+            assert!(close(a.step, b.step), "step {} → {}", a.step, b.step);
+            assert!(close(a.key_mm, b.key_mm));
+            assert!(close(a.rotation_weight, b.rotation_weight));
+            let (la, lb) = (a.lazy.unwrap(), b.lazy.unwrap());
+            assert!(
+                close(la.0, lb.0) && (la.1 - lb.1).abs() < 1e-12,
+                "{la:?} → {lb:?}"
+            );
+        }
+        let (la, lb) = (n1.lattice.unwrap(), n10.lattice.unwrap());
+        assert!(close(la.edge_length_max, lb.edge_length_max));
+        assert!(close(la.edge_length_min, lb.edge_length_min));
+        assert_eq!(la.alpha, lb.alpha, "angles do not scale");
+        assert!(close(n1.unit, n10.unit));
+        assert!(close(n1.narrow.bridge_width, n10.narrow.bridge_width));
+        assert!(close(
+            n1.narrow.dynamic_domain.unwrap(),
+            n10.narrow.dynamic_domain.unwrap()
+        ));
+        assert!(l1.lattice.is_none() && l1.narrow == NarrowPassage::OFF);
+    }
+
+    /// The same defaults solve the window at a tenth, at one and at ten times its
+    /// size, and every path they return is free pose by pose and edge by edge.
+    /// (Not the identical path: the validator's contact resolution, 0.01 mm, is a
+    /// physical length, and the narrow search moves to contact.)
+    #[test]
+    fn the_defaults_solve_the_problem_at_every_scale() {
+        for k in [0.1, 1.0, 10.0] {
+            for seed in 0..3 {
+                let (mut v, space, start, goal) = window(k);
+                let p = rrt_connect(&mut v, &space, &start, &goal, &options(seed), None).unwrap();
+                assert!(p.found(), "k {k} seed {seed}: {:?}", p.failure);
+                assert!(p.poses.iter().all(|q| v.is_free(q)), "k {k} seed {seed}");
+                assert!(
+                    p.poses.windows(2).all(|w| v.edge_free(&w[0], &w[1])),
+                    "k {k} seed {seed}"
+                );
             }
         }
     }

@@ -49,7 +49,11 @@ impl ProblemScale {
     /// The scale of `space` for a moving part of radius `part_radius` and thinnest
     /// extent `part_thickness` (mm; `None` or not a finite number > 0: the space's
     /// rotation weight stands for the radius, the radius for the thickness).
-    pub fn new(space: &PlanningSpace, part_radius: Option<f64>, part_thickness: Option<f64>) -> Self {
+    pub fn new(
+        space: &PlanningSpace,
+        part_radius: Option<f64>,
+        part_thickness: Option<f64>,
+    ) -> Self {
         let extent = (space.max - space.min).norm();
         let positive = |x: Option<f64>| x.filter(|r| r.is_finite() && *r > 0.0);
         let part_radius = positive(part_radius).unwrap_or(space.rotation_weight);
@@ -106,7 +110,8 @@ mod tests {
             .with_rotation_weight(12.0);
         let a = ProblemScale::new(&space, Some(12.0), Some(3.0));
         let k = 37.5;
-        let scaled = PlanningSpace::new(space.min * k, space.max * k).with_rotation_weight(12.0 * k);
+        let scaled =
+            PlanningSpace::new(space.min * k, space.max * k).with_rotation_weight(12.0 * k);
         let b = ProblemScale::new(&scaled, Some(12.0 * k), Some(3.0 * k));
         for (x, y) in [
             (a.range(), b.range()),
@@ -120,6 +125,9 @@ mod tests {
         // for the thickness.
         let c = ProblemScale::new(&space, None, None);
         assert_eq!((c.part_radius, c.part_thickness), (12.0, 12.0));
-        assert_eq!(ProblemScale::new(&space, Some(f64::NAN), None).part_radius, 12.0);
+        assert_eq!(
+            ProblemScale::new(&space, Some(f64::NAN), None).part_radius,
+            12.0
+        );
     }
 }

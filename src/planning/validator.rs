@@ -325,11 +325,6 @@ impl<'v> Checker<'v> {
         super::ProblemScale::of(space, &*self.validator)
     }
 
-    /// The moving part's radius, when the validator knows it.
-    pub fn part_radius(&self) -> Option<f64> {
-        self.validator.part_radius()
-    }
-
     pub fn tolerance(&self) -> f64 {
         self.validator.tolerance()
     }

@@ -378,7 +378,6 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
     };
     request.planner.limits_mut().seed = seed;
     request.planner.limits_mut().time_limit_ms = Some(budget_s * 1e3);
-    experiment(p, &ws, &mut request);
     let t0 = std::time::Instant::now();
     let c0 = cpu_s();
     let path = ws
@@ -422,37 +421,6 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
         },
         line,
     )
-}
-
-/// Development knobs (not part of the benchmark's figures): `FITUP_X_STEP` (range as
-/// a fraction of the bounds' diagonal), `FITUP_X_LAZY` (lazy step, same),
-/// `FITUP_X_PLAIN=1` (no lattice, no narrow-passage measures), `FITUP_X_W=1` (the
-/// rotation weight is the robot's radius).
-fn experiment(p: &ProblemJson, ws: &Workspace<'_>, request: &mut PlanRequest) {
-    let diag = (p.max - p.min).norm();
-    let fitup::planning::Planner::RrtConnect(o) = &mut request.planner else {
-        return;
-    };
-    if let Ok(f) = std::env::var("FITUP_X_STEP") {
-        o.step = Some(f.parse::<f64>().unwrap() * diag);
-    }
-    if let Ok(f) = std::env::var("FITUP_X_LAZY") {
-        o.lazy = Some(fitup::planning::LazyValidation {
-            step_mm: f.parse::<f64>().unwrap() * diag,
-        });
-    }
-    if std::env::var("FITUP_X_PLAIN").is_ok_and(|v| v == "1") {
-        o.lattice = None;
-        o.narrow = fitup::planning::NarrowPassage::OFF;
-    }
-    if std::env::var("FITUP_X_W").is_ok_and(|v| v == "1") {
-        let r = ws
-            .validator("robot", &Default::default())
-            .unwrap()
-            .moving()
-            .radius();
-        request.rotation_weight = Some(r);
-    }
 }
 
 fn field(line: &str, key: &str) -> Option<f64> {
