@@ -515,7 +515,10 @@ impl Document {
             .filter(|pf| pf.step.is_none())
             .filter_map(|pf| project.resolve_from(&dir, &pf.stl).ok())
             .collect();
-        cache.prefetch(&resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>());
+        cache.prefetch_in(
+            project,
+            &resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>(),
+        );
         let mut parts = IndexMap::new();
         let mut warnings = Vec::new();
         for (name, pf) in &file.parts {
@@ -576,7 +579,7 @@ impl Document {
                 (mesh, Vec::new(), Some(geometry))
             } else {
                 let mesh = cache
-                    .get(&mesh_path)
+                    .get_in(project, &mesh_path)
                     .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
                 (mesh, cache.files_of(&mesh_path), None)
             };
@@ -1694,17 +1697,13 @@ pub fn nfc_name(name: &str) -> std::borrow::Cow<'_, str> {
 /// A name given through the API (a new robot, …) as the document keeps it: NFC, and
 /// refused when it holds a control or invisible character (as in a file).
 pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> {
-    if let Some(c) = name
-        .chars()
-        .find(|&c| crate::diagnostics::hidden_char(c).is_some())
-    {
-        return Err(DocumentError::HiddenCharacter {
+    crate::diagnostics::checked_name(name)
+        .map(std::borrow::Cow::into_owned)
+        .map_err(|c| DocumentError::HiddenCharacter {
             what: what.to_string(),
             name: crate::diagnostics::printable(name, false).into_owned(),
             character: crate::diagnostics::describe_char(c),
-        });
-    }
-    Ok(nfc_name(name).into_owned())
+        })
 }
 
 /// The document file with every name in NFC: all text except file paths (`stl`,
