@@ -485,7 +485,7 @@ mod read {
             world: &nalgebra::Matrix4<f64>,
         ) -> Result<[Point3; 3], MeshError> {
             let ks = match self.mode {
-                Mode::TriangleStrip if t % 2 == 0 => [t, t + 1, t + 2],
+                Mode::TriangleStrip if t.is_multiple_of(2) => [t, t + 1, t + 2],
                 Mode::TriangleStrip => [t + 1, t, t + 2],
                 Mode::TriangleFan => [0, t + 1, t + 2],
                 _ => [3 * t, 3 * t + 1, 3 * t + 2],
