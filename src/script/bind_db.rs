@@ -256,11 +256,17 @@ fn query(h: &DbHandle, sql: &str, params: &Array, limits: &Map) -> ScriptResult<
         .enumerate()
         .map(|(i, v)| to_sql(v, i))
         .collect::<ScriptResult<Vec<_>>>()?;
-    // The run's cancel flag reaches the query: a newer save stops it mid-statement.
+    // The run's cancel flag reaches the query: a newer save stops it mid-statement;
+    // and the run's queries share one time budget.
+    let mut db = h.lock()?;
     let r = h
-        .lock()?
-        .query_with(sql, &params, limits, Some(h.ctx.cancel.clone()))
+        .ctx
+        .query_budget
+        .run(limits, |limits| {
+            db.query_with(sql, &params, limits, Some(h.ctx.cancel.clone()))
+        })
         .map_err(fail)?;
+    drop(db);
     let columns = r.columns;
     // Rows are dropped as they are converted: the result is not held twice.
     Ok(r.rows
