@@ -35,9 +35,10 @@ impl DbHandle {
         };
         let mut db = Database::open(&target).map_err(fail)?;
         if let Target::Sqlite(p) = &target {
-            // The run's own writes are not user saves (watch mode).
+            // The run's own writes are not user saves (watch mode); never read back
+            // while SQLite holds them (see `record_write_unread`).
             for suffix in ["", "-wal", "-shm"] {
-                ctx.record_write(std::path::Path::new(&format!("{}{suffix}", p.display())));
+                ctx.record_write_unread(std::path::Path::new(&format!("{}{suffix}", p.display())));
             }
         }
         let run_id = recording::run_id_for(&mut db).map_err(fail)?;

@@ -184,9 +184,7 @@ impl Context {
     /// Records a file the run wrote, so watch mode does not mistake the run's own
     /// output for a user's save.
     pub fn record_write(&self, path: &Path) {
-        if let Ok(mut w) = self.writes.lock() {
-            w.insert(path.to_path_buf());
-        }
+        self.record_write_unread(path);
         // Seen by watch mode at once, while the run goes on.
         if let Ok(bytes) = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh) {
             let hash = crate::fsutil::content_hash(&bytes);
@@ -194,6 +192,18 @@ impl Context {
                 let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
                 own.insert(key, hash);
             }
+        }
+    }
+
+    /// [`record_write`](Self::record_write) without reading the file back: for the
+    /// files of an open SQLite database. Opening and closing a descriptor on them in
+    /// this process would drop the POSIX locks SQLite holds on them (an `fcntl` lock
+    /// belongs to the process and goes with any close of that file), and another
+    /// process would then take itself for the only one and truncate the shared-memory
+    /// file under this one's mapping (a bus error).
+    pub fn record_write_unread(&self, path: &Path) {
+        if let Ok(mut w) = self.writes.lock() {
+            w.insert(path.to_path_buf());
         }
     }
 
