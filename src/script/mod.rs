@@ -48,6 +48,10 @@ pub struct Caches {
     pub documents: Mutex<DocumentCache>,
     /// The viewer session the runs log to (off unless `--view`/`--record`).
     pub view: crate::viewer::Viewer,
+    /// What the runs wrote, as they wrote it: the content hash of each file by path.
+    /// Watch mode takes a file whose bytes are what a run wrote there for that run's
+    /// own write, not a save (a script that rewrites itself does not cancel itself).
+    pub own_writes: Mutex<std::collections::HashMap<PathBuf, u64>>,
 }
 
 /// A parsed document and the stamps of its source files when it was loaded.
@@ -111,6 +115,9 @@ pub struct Context {
     pub args: Arguments,
     /// Whether skills may be dispatched over TCP (`fitup run --dispatch`).
     pub dispatch: Dispatch,
+    /// The time budget all of this run's `db.query` calls share.
+    #[cfg(feature = "db")]
+    pub query_budget: crate::db::RunQueryBudget,
     reads: Mutex<BTreeSet<PathBuf>>,
     writes: Mutex<BTreeSet<PathBuf>>,
     operations: AtomicU64,
@@ -142,6 +149,8 @@ impl Context {
             output,
             args: Arguments::default(),
             dispatch: Dispatch::Never,
+            #[cfg(feature = "db")]
+            query_budget: crate::db::RunQueryBudget::default(),
             reads: Mutex::default(),
             writes: Mutex::default(),
             operations: AtomicU64::new(0),
@@ -175,6 +184,24 @@ impl Context {
     /// Records a file the run wrote, so watch mode does not mistake the run's own
     /// output for a user's save.
     pub fn record_write(&self, path: &Path) {
+        self.record_write_unread(path);
+        // Seen by watch mode at once, while the run goes on.
+        if let Ok(bytes) = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh) {
+            let hash = crate::fsutil::content_hash(&bytes);
+            if let Ok(mut own) = self.caches.own_writes.lock() {
+                let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+                own.insert(key, hash);
+            }
+        }
+    }
+
+    /// [`record_write`](Self::record_write) without reading the file back: for the
+    /// files of an open SQLite database. Opening and closing a descriptor on them in
+    /// this process would drop the POSIX locks SQLite holds on them (an `fcntl` lock
+    /// belongs to the process and goes with any close of that file), and another
+    /// process would then take itself for the only one and truncate the shared-memory
+    /// file under this one's mapping (a bus error).
+    pub fn record_write_unread(&self, path: &Path) {
         if let Ok(mut w) = self.writes.lock() {
             w.insert(path.to_path_buf());
         }
@@ -192,12 +219,11 @@ impl Context {
             used: Some(&used),
             signature: None,
         };
+        // Checked and written through one folder handle walked from the project root.
         let full = self
             .project
-            .resolve_output(path, &rule)
+            .write_output(path, bytes, &rule)
             .map_err(convert::fail)?;
-        crate::fsutil::write_checked(&full, bytes)
-            .map_err(|e| convert::fail(format!("`{path}`: {e}")))?;
         self.record_write(&full);
         Ok(full)
     }

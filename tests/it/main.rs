@@ -13,8 +13,11 @@ mod db;
 mod hostile_bounds;
 mod hostile_db;
 mod hostile_files;
+mod hostile_memory;
 mod hostile_meshes;
 mod hostile_names;
+#[cfg(unix)]
+mod hostile_races;
 mod hostile_runs;
 mod hostile_skills;
 mod hostile_writers;
