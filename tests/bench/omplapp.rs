@@ -517,6 +517,8 @@ fn main() {
         return;
     }
     let mut table = Vec::new();
+    // Every fitup call's wall time over its budget (the budget holds end to end).
+    let mut overruns: Vec<f64> = Vec::new();
     for name in &names {
         let src = root.join(name);
         let dir = if scale == 1.0 {
@@ -531,6 +533,7 @@ fn main() {
         for seed in 1..=runs {
             let (o, line) = run_fitup(&p, seed, budget, recheck);
             println!("  {line} load={}", load());
+            overruns.push(o.time_s / budget);
             fitup.push(o);
             for planner in &planners {
                 let o = run_ompl(&bin, &p, planner, seed, budget);
@@ -583,6 +586,12 @@ fn main() {
     for row in table {
         println!("{row}");
     }
+    let over = overruns.iter().filter(|r| **r > 1.05).count();
+    println!(
+        "fitup calls over 1.05 × budget: {over} of {}; largest time / budget {:.3}",
+        overruns.len(),
+        overruns.iter().copied().fold(0.0, f64::max)
+    );
     println!("load at the end: {}", load());
 }
 
