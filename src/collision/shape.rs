@@ -2,7 +2,7 @@
 //! part frame), built once and shared, and [`ColliderCache`] which keeps colliders
 //! across watch reruns while the mesh is unchanged.
 
-use super::triangle::{closest_on_triangle, x_line_crossing, Tri};
+use super::triangle::{closest_on_triangle, unit_normal, x_line_crossing, Tri};
 use super::{CollisionError, MeshFault};
 pub use crate::math::Aabb;
 use crate::math::{Point3, Vec3};
@@ -17,7 +17,7 @@ pub const MAX_COORDINATE: f64 = 1e9;
 
 /// Most triangles per BVH leaf (leaves hold 4 to 8 for large meshes: half the
 /// nodes of 4 per leaf, for a few more triangle-box tests per leaf pair).
-const LEAF_SIZE: usize = 8;
+pub(crate) const LEAF_SIZE: usize = 8;
 
 /// Nodes over more triangles than this take their oriented box around their
 /// children's boxes instead of scanning every corner (the scans of the top levels
@@ -178,6 +178,50 @@ fn extents(mesh: &Mesh, items: &[Item], axes: &Matrix3<f64>) -> (Vec3, Vec3, Aab
     (lo, hi, aabb)
 }
 
+/// The plane of a triangle: its unit normal as
+/// [`unit_normal`](super::triangle::unit_normal) computes it (zero for a triangle
+/// without area) and the normal's dot product with the first corner (mm).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Plane {
+    pub(crate) normal: Vec3,
+    pub(crate) offset: f64,
+}
+
+impl Plane {
+    pub(crate) fn of(t: &Tri) -> Plane {
+        let normal = unit_normal(t).unwrap_or_else(Vec3::zeros);
+        Plane {
+            normal,
+            offset: normal.dot(&t[0].coords),
+        }
+    }
+
+    /// The plane with unit normal `normal` (or zero) through `p`.
+    #[inline]
+    pub(crate) fn through(normal: &Vec3, p: &Point3) -> Plane {
+        Plane {
+            normal: *normal,
+            offset: normal.dot(&p.coords),
+        }
+    }
+
+    /// Whether the oriented box `o` (same frame) reaches within `margin` mm of the
+    /// plane; a plane without a normal meets nothing (its triangle has no area).
+    /// Conservative against rounding by a bias of 1e-9 of the distances involved.
+    #[inline]
+    pub(crate) fn meets_obb(&self, o: &Obb, margin: f64) -> bool {
+        let n = &self.normal;
+        if *n == Vec3::zeros() {
+            return false;
+        }
+        let c = n.dot(&o.centre) - self.offset;
+        let r = o.half[0] * n.dot(&o.axes.column(0)).abs()
+            + o.half[1] * n.dot(&o.axes.column(1)).abs()
+            + o.half[2] * n.dot(&o.axes.column(2)).abs();
+        c.abs() <= r + margin + 1e-9 * (1.0 + c.abs() + self.offset.abs())
+    }
+}
+
 /// A triangle while the tree is built: its centroid and its index in the mesh.
 type Item = (Point3, u32);
 
@@ -206,6 +250,10 @@ pub struct Collider {
     /// Mesh triangle indices in tree order (zero-area triangles left out): a leaf's
     /// triangles are one run. The corners are read from the mesh, never copied.
     order: Vec<u32>,
+    /// The plane of each triangle in tree order: the static side of a pair query
+    /// reads its planes from here instead of normalising a cross product for every
+    /// pair it tests.
+    planes: Vec<Plane>,
     report: MeshReport,
     radius: f64,
     pub(crate) eps: f64,
@@ -313,10 +361,16 @@ impl Collider {
         tree.obbs.push(Obb::BLANK);
         let _ = tree.build(0, &mut items, 0, &Matrix3::identity());
         let Tree { nodes, obbs, .. } = tree;
+        let order: Vec<u32> = items.into_iter().map(|(_, i)| i).collect();
+        let planes = order
+            .iter()
+            .map(|&i| Plane::of(&mesh.triangle(i as usize)))
+            .collect();
         Ok(Collider {
             nodes,
             obbs,
-            order: items.into_iter().map(|(_, i)| i).collect(),
+            order,
+            planes,
             mesh,
             report,
             radius,
@@ -330,6 +384,12 @@ impl Collider {
     #[inline]
     pub(crate) fn tri(&self, k: usize) -> Tri {
         self.mesh.triangle(self.order[k] as usize)
+    }
+
+    /// The plane of triangle `k` in tree order (part frame).
+    #[inline]
+    pub(crate) fn plane(&self, k: usize) -> &Plane {
+        &self.planes[k]
     }
 
     /// Every (non-degenerate) triangle, in tree order.
