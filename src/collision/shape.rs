@@ -17,7 +17,7 @@ pub const MAX_COORDINATE: f64 = 1e9;
 
 /// Most triangles per BVH leaf (leaves hold 4 to 8 for large meshes: half the
 /// nodes of 4 per leaf, for a few more triangle-box tests per leaf pair).
-pub(crate) const LEAF_SIZE: usize = 8;
+pub(crate) const LEAF_SIZE: usize = 4;
 
 /// Nodes over more triangles than this take their oriented box around their
 /// children's boxes instead of scanning every corner (the scans of the top levels
