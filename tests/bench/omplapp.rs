@@ -586,10 +586,6 @@ fn pose_checks(p: &ProblemJson, n: usize, root: &Path) {
             }
         }
         check_verdicts(&p.name, set, &verdicts);
-        let c = fitup::collision::probe::take();
-        let q = c[0] as f64;
-        println!("  probe per query: nodepairs {:.1} met {:.1} leafleaf {:.1} cols {:.1} rows {:.1} pairboxes {:.1} pairs {:.1} node-leaf {:.1} leaf-node {:.1} interval {:.1} crossing {:.2}",
-            c[1] as f64/q, c[2] as f64/q, c[3] as f64/q, c[4] as f64/q, c[5] as f64/q, c[6] as f64/q, c[7] as f64/q, c[8] as f64/q, c[9] as f64/q, c[10] as f64/q, c[11] as f64/q);
         let colliding = verdicts.iter().filter(|&&c| c).count();
         let agree = fcl_verdicts
             .iter()
