@@ -30,44 +30,7 @@ impl Relative {
     /// normalised (length ≤ 1), so the margin they apply is at least `margin`.
     #[inline]
     pub(crate) fn boxes_meet(&self, a: &Obb, b: &Obb, margin: f64) -> bool {
-        let d = self.rot * b.centre + self.iso.translation.vector - a.centre;
-        let reach = a.half.norm() + b.half.norm() + margin;
-        if d.norm_squared() > reach * reach {
-            return false;
-        }
-        // b's axes and the centre offset in a's box frame
-        let r = a.axes.tr_mul(&(self.rot * b.axes));
-        let t = a.axes.tr_mul(&d);
-        // the small bias keeps near-parallel axes conservative
-        let ar = r.abs().add_scalar(1e-12);
-        let (ha, hb) = (&a.half, &b.half);
-        for i in 0..3 {
-            let rb = hb[0] * ar[(i, 0)] + hb[1] * ar[(i, 1)] + hb[2] * ar[(i, 2)];
-            if t[i].abs() > ha[i] + rb + margin {
-                return false;
-            }
-        }
-        for j in 0..3 {
-            let ra = ha[0] * ar[(0, j)] + ha[1] * ar[(1, j)] + ha[2] * ar[(2, j)];
-            let tj = t[0] * r[(0, j)] + t[1] * r[(1, j)] + t[2] * r[(2, j)];
-            if tj.abs() > ra + hb[j] + margin {
-                return false;
-            }
-        }
-        // axis a_i × b_j
-        for i in 0..3 {
-            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
-            for j in 0..3 {
-                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-                let ra = ha[i1] * ar[(i2, j)] + ha[i2] * ar[(i1, j)];
-                let rb = hb[j1] * ar[(i, j2)] + hb[j2] * ar[(i, j1)];
-                let tl = t[i2] * r[(i1, j)] - t[i1] * r[(i2, j)];
-                if tl.abs() > ra + rb + margin {
-                    return false;
-                }
-            }
-        }
-        true
+        obbs_meet(a, &self.obb(b), margin)
     }
 
     /// Lower bound of the distance between oriented boxes `a` (frame A) and `b`
@@ -77,7 +40,7 @@ impl Relative {
     fn obb_gap(&self, a: &Obb, b: &Obb) -> f64 {
         let d = self.rot * b.centre + self.iso.translation.vector - a.centre;
         let (ha, hb) = (&a.half, &b.half);
-        let mut gap = d.norm() - ha.norm() - hb.norm();
+        let mut gap = d.norm() - a.radius - b.radius;
         let r = a.axes.tr_mul(&(self.rot * b.axes));
         let t = a.axes.tr_mul(&d);
         let ar = r.abs();
@@ -104,8 +67,55 @@ impl Relative {
             centre: self.rot * b.centre + self.iso.translation.vector,
             axes: self.rot * b.axes,
             half: b.half,
+            radius: b.radius,
         }
     }
+}
+
+/// [`Relative::boxes_meet`] with `b` already in `a`'s frame: a bounding-sphere
+/// reject, then the separating-axis test on the 15 axes (faces of both boxes,
+/// then edge cross products). Conservative: cross axes are not normalised
+/// (length ≤ 1), so the margin they apply is at least `margin`.
+#[inline]
+pub(crate) fn obbs_meet(a: &Obb, b: &Obb, margin: f64) -> bool {
+    let d = b.centre - a.centre;
+    let reach = a.radius + b.radius + margin;
+    if d.norm_squared() > reach * reach {
+        return false;
+    }
+    // b's axes and the centre offset in a's box frame
+    let r = a.axes.tr_mul(&b.axes);
+    let t = a.axes.tr_mul(&d);
+    // the small bias keeps near-parallel axes conservative
+    let ar = r.abs().add_scalar(1e-12);
+    let (ha, hb) = (&a.half, &b.half);
+    for i in 0..3 {
+        let rb = hb[0] * ar[(i, 0)] + hb[1] * ar[(i, 1)] + hb[2] * ar[(i, 2)];
+        if t[i].abs() > ha[i] + rb + margin {
+            return false;
+        }
+    }
+    for j in 0..3 {
+        let ra = ha[0] * ar[(0, j)] + ha[1] * ar[(1, j)] + ha[2] * ar[(2, j)];
+        let tj = t[0] * r[(0, j)] + t[1] * r[(1, j)] + t[2] * r[(2, j)];
+        if tj.abs() > ra + hb[j] + margin {
+            return false;
+        }
+    }
+    // axis a_i × b_j
+    for i in 0..3 {
+        let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+        for j in 0..3 {
+            let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+            let ra = ha[i1] * ar[(i2, j)] + ha[i2] * ar[(i1, j)];
+            let rb = hb[j1] * ar[(i, j2)] + hb[j2] * ar[(i, j1)];
+            let tl = t[i2] * r[(i1, j)] - t[i1] * r[(i2, j)];
+            if tl.abs() > ra + rb + margin {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 pub(crate) fn tri_box(t: &Tri) -> Aabb {
@@ -157,6 +167,10 @@ struct PairScratch {
     leaves: Vec<MovedLeaf>,
     moved: Vec<Moved>,
     stack: Vec<(u32, u32)>,
+    /// `b`'s node `j`'s oriented box in `a`'s frame, valid where
+    /// `box_stamp[j] == generation` (a node meets several of `a`'s).
+    box_stamp: Vec<u32>,
+    boxes: Vec<Obb>,
 }
 
 impl PairScratch {
@@ -165,15 +179,29 @@ impl PairScratch {
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
             self.stamp.fill(0);
+            self.box_stamp.fill(0);
             self.generation = 1;
         }
         if self.stamp.len() < nodes {
             self.stamp.resize(nodes, 0);
             self.slot.resize(nodes, 0);
+            self.box_stamp.resize(nodes, 0);
+            self.boxes.resize(nodes, Obb::BLANK);
         }
         self.leaves.clear();
         self.moved.clear();
         self.stack.clear();
+    }
+
+    /// `b`'s node `j`'s oriented box in `a`'s frame, moved on first use.
+    #[inline]
+    fn obb(&mut self, b: &Collider, j: u32, rel: &Relative) -> &Obb {
+        let at = j as usize;
+        if self.box_stamp[at] != self.generation {
+            self.box_stamp[at] = self.generation;
+            self.boxes[at] = rel.obb(&b.obbs[at]);
+        }
+        &self.boxes[at]
     }
 
     /// `b`'s leaf `j` in `a`'s frame, moved on first use in this query.
@@ -196,7 +224,7 @@ impl PairScratch {
             first,
             count: node.count,
             bx,
-            obb: rel.obb(&b.obbs[at]),
+            obb: *self.obb(b, j, rel),
         };
         self.stamp[at] = self.generation;
         self.slot[at] = self.leaves.len() as u32;
@@ -224,7 +252,7 @@ pub(crate) struct Face<'t> {
 /// 4.5e-5 × the two faces' extent further.
 fn tilt_slack(shared: bool, a: &Obb, b: &Obb) -> f64 {
     if shared {
-        1e-4 * (a.half.norm() + b.half.norm())
+        1e-4 * (a.radius + b.radius)
     } else {
         0.0
     }
@@ -288,10 +316,10 @@ fn walk_pairs<B>(
         let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
         let (oa, ob) = (&a.obbs[i as usize], &b.obbs[j as usize]);
         let least = floor.get();
-        if least >= 0.0 && 2.0 * oa.half.norm().min(ob.half.norm()) + margin <= least {
+        if least >= 0.0 && 2.0 * oa.radius.min(ob.radius) + margin <= least {
             continue;
         }
-        if !rel.boxes_meet(oa, ob, margin) {
+        if !obbs_meet(oa, s.obb(b, j, rel), margin) {
             continue;
         }
         match (na.count > 0, nb.count > 0) {
@@ -359,7 +387,7 @@ fn walk_pairs<B>(
                 }
             }
             (true, false) => {
-                let moved_obb = rel.obb(ob);
+                let moved_obb = *s.obb(b, j, rel);
                 let row_margin = margin + tilt_slack(shared, oa, ob);
                 if (na.first..na.first + na.count)
                     .any(|k| a.plane(k as usize).meets_obb(&moved_obb, row_margin))
@@ -883,7 +911,7 @@ fn inside(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>, eps: f64) ->
         if bounds.distance_to_point(&q) > eps {
             return false;
         }
-        if outer.distance_to_point(&q, eps) <= eps {
+        if outer.within(&q, eps) {
             continue;
         }
         return outer.contains_point(&q);
@@ -1176,7 +1204,10 @@ mod tests {
         let grid = |rng: &mut Rng| (rng.range(-20.0, 20.0) * 2.0).round() / 2.0;
         let quarter = |rng: &mut Rng| {
             let axis = [Vec3::x_axis(), Vec3::y_axis(), Vec3::z_axis()][rng.below(3)];
-            UnitQuaternion::from_axis_angle(&axis, std::f64::consts::FRAC_PI_2 * rng.below(4) as f64)
+            UnitQuaternion::from_axis_angle(
+                &axis,
+                std::f64::consts::FRAC_PI_2 * rng.below(4) as f64,
+            )
         };
         match style % 4 {
             0 => Transform::from_parts(
@@ -1194,7 +1225,11 @@ mod tests {
                 UnitQuaternion::from_scaled_axis(Vec3::new(rng.range(-3e-5, 3e-5), 0.0, 0.0)),
             ),
             _ => Transform::from_parts(
-                Vec3::new(rng.range(-8.0, 8.0), rng.range(-8.0, 8.0), rng.range(-8.0, 8.0)),
+                Vec3::new(
+                    rng.range(-8.0, 8.0),
+                    rng.range(-8.0, 8.0),
+                    rng.range(-8.0, 8.0),
+                ),
                 rng.rotation(),
             ),
         }

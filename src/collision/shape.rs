@@ -33,6 +33,8 @@ pub(crate) struct Obb {
     pub(crate) centre: Vec3,
     pub(crate) axes: Matrix3<f64>,
     pub(crate) half: Vec3,
+    /// `half.norm()`, kept: the bounding-sphere reject of every node pair reads it.
+    pub(crate) radius: f64,
 }
 
 impl Obb {
@@ -40,7 +42,19 @@ impl Obb {
         centre: Vec3::new(0.0, 0.0, 0.0),
         axes: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
         half: Vec3::new(0.0, 0.0, 0.0),
+        radius: 0.0,
     };
+
+    /// The box with these centre, axes and half extents.
+    #[inline]
+    pub(crate) fn new(centre: Vec3, axes: Matrix3<f64>, half: Vec3) -> Obb {
+        Obb {
+            centre,
+            axes,
+            half,
+            radius: half.norm(),
+        }
+    }
 
     /// The box with extents `lo..hi` along the columns of `axes` (coordinates
     /// `axesᵀ·p`), or the axis-aligned `aabb` when that is smaller; padded so rounding
@@ -55,11 +69,7 @@ impl Obb {
             (aabb.centre().coords, Matrix3::identity(), ha)
         };
         let pad = 1e-12 * (centre.amax() + half.amax());
-        Obb {
-            centre,
-            axes,
-            half: half.add_scalar(pad),
-        }
+        Obb::new(centre, axes, half.add_scalar(pad))
     }
 }
 
@@ -462,6 +472,36 @@ impl Collider {
         self.closest(p, stop).0
     }
 
+    /// Whether some triangle lies within `eps` mm of `p` (part frame): the same
+    /// answer as `distance_to_point(p, eps) <= eps`, visiting only the nodes whose
+    /// boxes come within `eps` of `p` instead of searching for the nearest triangle.
+    pub(crate) fn within(&self, p: &Point3, eps: f64) -> bool {
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if node.bounds.distance_to_point(p) > eps {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.first as usize..(node.first + node.count) as usize {
+                    if (p - closest_on_triangle(p, &self.tri(k))).norm() <= eps {
+                        return true;
+                    }
+                }
+            } else if top + 2 <= stack.len() {
+                stack[top] = node.first;
+                stack[top + 1] = node.first + 1;
+                top += 2;
+            } else {
+                // deeper than any tree built here (depth ≈ log2 of the leaves)
+                return self.distance_to_point(p, eps) <= eps;
+            }
+        }
+        false
+    }
+
     /// The nearest point of the surface to `p` (part frame): its distance (mm), the
     /// tree-order index of its triangle, and the point itself (part frame).
     pub(crate) fn closest_triangle(&self, p: &Point3) -> (f64, usize, Point3) {
@@ -578,9 +618,28 @@ impl Collider {
         }
         // a line lying in a face plane has no defined parity: shift it off by far
         // less than the contact resolution (callers keep points `eps` off the surface)
-        let mut xs = Vec::new();
-        self.x_line_crossings(p.y + 0.0707 * self.eps, p.z + 0.0577 * self.eps, &mut xs);
-        xs.iter().filter(|&&x| x > p.x).count() % 2 == 1
+        let (y0, z0) = (p.y + 0.0707 * self.eps, p.z + 0.0577 * self.eps);
+        // Only crossings beyond `p.x` count: nodes wholly before it are skipped (a
+        // crossing's `x` is a convex combination of its triangle's corners').
+        let mut beyond = 0usize;
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i as usize];
+            let b = &node.bounds;
+            if y0 < b.lo.y || y0 > b.hi.y || z0 < b.lo.z || z0 > b.hi.z || b.hi.x < p.x {
+                continue;
+            }
+            if node.count > 0 {
+                for t in self.leaf_tris(node) {
+                    if x_line_crossing(&t, y0, z0).is_some_and(|x| x > p.x) {
+                        beyond += 1;
+                    }
+                }
+            } else {
+                stack.extend([node.first, node.first + 1]);
+            }
+        }
+        beyond % 2 == 1
     }
 }
 
