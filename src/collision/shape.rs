@@ -38,7 +38,7 @@ pub(crate) struct Obb {
 }
 
 impl Obb {
-    const BLANK: Obb = Obb {
+    pub(crate) const BLANK: Obb = Obb {
         centre: Vec3::new(0.0, 0.0, 0.0),
         axes: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
         half: Vec3::new(0.0, 0.0, 0.0),
