@@ -83,13 +83,22 @@ pub(crate) fn obbs_meet(a: &Obb, b: &Obb, margin: f64) -> bool {
     if d.norm_squared() > reach * reach {
         return false;
     }
-    // b's axes and the centre offset in a's box frame
-    let r = a.axes.tr_mul(&b.axes);
-    let t = a.axes.tr_mul(&d);
-    // the small bias keeps near-parallel axes conservative
-    let ar = r.abs().add_scalar(1e-12);
+    // b's axes and the centre offset in a's box frame, a row at a time: most pairs
+    // that miss are told apart by one of a's face axes, before the rest is computed
     let (ha, hb) = (&a.half, &b.half);
+    let bc = [b.axes.column(0), b.axes.column(1), b.axes.column(2)];
+    let mut r = Matrix3::<f64>::zeros();
+    // the small bias keeps near-parallel axes conservative
+    let mut ar = Matrix3::<f64>::zeros();
+    let mut t = Vec3::zeros();
     for i in 0..3 {
+        let ai = a.axes.column(i);
+        t[i] = ai.dot(&d);
+        for j in 0..3 {
+            let v = ai.dot(&bc[j]);
+            r[(i, j)] = v;
+            ar[(i, j)] = v.abs() + 1e-12;
+        }
         let rb = hb[0] * ar[(i, 0)] + hb[1] * ar[(i, 1)] + hb[2] * ar[(i, 2)];
         if t[i].abs() > ha[i] + rb + margin {
             return false;
@@ -396,10 +405,29 @@ fn walk_pairs<B>(
                 }
             }
             (false, false) => {
-                if obb_size(oa) >= obb_size(ob) {
-                    s.stack.extend([(na.first, j), (na.first + 1, j)]);
+                // The larger box is split; the child nearer the other box is walked
+                // first (pushed last), so a crossing, when there is one, is found
+                // sooner. The order changes no verdict: every pair that can meet is
+                // visited unless the visitor breaks.
+                if oa.radius >= ob.radius {
+                    let other = s.obb(b, j, rel).centre;
+                    let (l, r) = (na.first, na.first + 1);
+                    let dl = (a.obbs[l as usize].centre - other).norm_squared();
+                    let dr = (a.obbs[r as usize].centre - other).norm_squared();
+                    if dl <= dr {
+                        s.stack.extend([(r, j), (l, j)]);
+                    } else {
+                        s.stack.extend([(l, j), (r, j)]);
+                    }
                 } else {
-                    s.stack.extend([(i, nb.first), (i, nb.first + 1)]);
+                    let (l, r) = (nb.first, nb.first + 1);
+                    let dl = (s.obb(b, l, rel).centre - oa.centre).norm_squared();
+                    let dr = (s.obb(b, r, rel).centre - oa.centre).norm_squared();
+                    if dl <= dr {
+                        s.stack.extend([(i, r), (i, l)]);
+                    } else {
+                        s.stack.extend([(i, l), (i, r)]);
+                    }
                 }
             }
         }
