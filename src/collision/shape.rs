@@ -15,8 +15,8 @@ use std::sync::{Arc, OnceLock, Weak};
 /// exceeds the contact tolerances used here.
 pub const MAX_COORDINATE: f64 = 1e9;
 
-/// Most triangles per BVH leaf (leaves hold 4 to 8 for large meshes: half the
-/// nodes of 4 per leaf, for a few more triangle-box tests per leaf pair).
+/// Most triangles per BVH leaf (leaves hold 2 to 4): small leaves keep the leaf
+/// boxes tight, and a leaf pair's triangles are culled by plane before pairing.
 pub(crate) const LEAF_SIZE: usize = 4;
 
 /// Nodes over more triangles than this take their oriented box around their
@@ -69,6 +69,12 @@ impl Obb {
             (aabb.centre().coords, Matrix3::identity(), ha)
         };
         let pad = 1e-12 * (centre.amax() + half.amax());
+        // thinnest axis first: the separating-axis test tries it first, and a
+        // surface patch's box is most often told apart along its thin side
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&i, &j| half[i].total_cmp(&half[j]));
+        let axes = Matrix3::from_columns(&order.map(|k| axes.column(k).into_owned()));
+        let half = Vec3::from(order.map(|k| half[k]));
         Obb::new(centre, axes, half.add_scalar(pad))
     }
 }
