@@ -276,6 +276,15 @@ class Document:
         """The verdict for components ``a`` and ``b``: a dict ``state``
         (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``.
         """
+    def overlap(self, a: str, b: str, time_limit_ms: Optional[float] = None) -> Dict[str, Any]:
+        """x"""
+    def mass_properties(
+        self,
+        components: Optional[List[str]] = None,
+        density: Optional[float] = None,
+        frame: Optional[_Pose] = None,
+    ) -> Dict[str, Any]:
+        """x"""
     def interferes(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> bool:
         """Whether components ``a`` and ``b`` interfere (crossing deeper than
         ``tolerance`` mm, or one solid inside the other).

@@ -30,6 +30,7 @@
 
 mod cache;
 mod gltf;
+mod mass;
 mod obj;
 mod ply;
 mod shapes;
@@ -42,6 +43,7 @@ mod stl;
 pub use self::gltf::parse_gltf;
 pub use self::gltf::{glb_bytes, GlbNode, GLB_ROOT, Z_UP_TO_Y_UP};
 pub use cache::{MeshCache, StepMesh};
+pub use mass::{MassError, MassProperties, MassSpec};
 pub use obj::parse_obj;
 pub use ply::parse_ply;
 pub use stl::{parse_stl, read_stl, write_stl, MeshError};

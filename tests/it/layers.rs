@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     &["math", "fsutil"],
     &["diagnostics", "mesh", "project"],
-    &["collision", "kinematics"],
+    &["collision", "kinematics", "files"],
     &["planning", "document"],
     &["workspace", "db", "viewer", "demo"],
     &["sequence", "manipulator"],
