@@ -46,7 +46,7 @@ pub use cache::{MeshCache, StepMesh};
 pub use mass::{MassError, MassProperties, MassSpec};
 pub use obj::parse_obj;
 pub use ply::parse_ply;
-pub use stl::{parse_stl, read_stl, write_stl, MeshError};
+pub use stl::{parse_stl, read_stl, stl_bytes, write_stl, MeshError};
 
 use std::path::{Path, PathBuf};
 

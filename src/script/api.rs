@@ -212,6 +212,7 @@ pub(crate) fn register_all(
     super::bind_files::register(&mut api, ctx);
     super::bind_interference::register(&mut api);
     super::bind_mass::register(&mut api);
+    super::bind_mass::register_export(&mut api);
     super::bind_planning::register(&mut api);
     super::bind_robot::register(&mut api, ctx);
     #[cfg(feature = "db")]

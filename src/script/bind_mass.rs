@@ -107,3 +107,59 @@ fn overlap(d: &DocHandle, a: &str, b: &str, o: &OverlapOptions) -> ScriptResult<
     m.insert("direction".into(), array3(&v.direction));
     Ok(m)
 }
+
+/// The components and frame of an export's options map, and `overwrite`.
+fn export_options(d: &DocHandle, o: &Map, default: Vec<usize>) -> ScriptResult<(Vec<usize>, Option<crate::math::Transform>, bool)> {
+    super::convert::check_keys(o, &["components", "frame", "overwrite"], "export_stl")?;
+    let which = match o.get("components") {
+        Some(v) => {
+            let names = v
+                .read_lock::<Array>()
+                .ok_or_else(|| fail("option `components` must be an array of names"))?
+                .clone();
+            indices(d, &names)?
+        }
+        None => default,
+    };
+    let frame = o.get("frame").map(|f| to_transform(f, "frame")).transpose()?;
+    let overwrite = match o.get("overwrite") {
+        Some(v) => v.as_bool().map_err(|t| fail(format!("option `overwrite` must be true or false, not {t}")))?,
+        None => false,
+    };
+    Ok((which, frame, overwrite))
+}
+
+fn export_stl(d: &DocHandle, file: &str, which: &[usize], frame: Option<&crate::math::Transform>, overwrite: bool) -> ScriptResult<()> {
+    let bytes = {
+        let doc = d.lock()?;
+        crate::mesh::stl_bytes(&crate::workspace::world_mesh(&doc, which, frame))
+    };
+    d.context().write_output(file, &bytes, overwrite)?;
+    Ok(())
+}
+
+pub(super) fn register_export(api: &mut Api) {
+    api.section("Export", "Component meshes with their pose baked in (CodeStack's \"Export Part Or Component To STL\", \"Export Relative To Coordinate System\"): binary STL in mm, in world coordinates or in a coordinate system `frame` (its pose in the world: a Transform, 4×4 matrix or `[x,y,z,a,b,c]`). Writers go through the write rule (see \"What a run writes\" in docs/scripting.md).");
+    api.f("Component.world_mesh() -> map", "The component's mesh at its pose: `#{vertices: [[x,y,z], …] (mm, world), triangles: [[i,j,k], …]}`.", |c: &mut ComponentHandle| -> ScriptResult<Map> {
+        let mesh = {
+            let doc = c.doc.lock()?;
+            crate::workspace::world_mesh(&doc, &[c.index], None)
+        };
+        let mut m = Map::new();
+        m.insert("vertices".into(), Dynamic::from_array(mesh.vertices.iter().map(|p| array3(&p.coords)).collect()));
+        m.insert("triangles".into(), Dynamic::from_array(mesh.triangles.iter().map(|t| Dynamic::from_array(t.iter().map(|&i| Dynamic::from_int(i64::from(i))).collect())).collect()));
+        Ok(m)
+    });
+    api.f("Component.export_stl(file: string)", "Writes the component's mesh at its pose (world, mm) as binary STL.", |c: &mut ComponentHandle, file: &str| -> ScriptResult<()> {
+        export_stl(&c.doc, file, &[c.index], None, false)
+    });
+    api.f("Component.export_stl(file: string, options: map)", "As above with `#{frame, overwrite}`.", |c: &mut ComponentHandle, file: &str, o: Map| -> ScriptResult<()> {
+        let (which, frame, overwrite) = export_options(&c.doc, &o, vec![c.index])?;
+        export_stl(&c.doc, file, &which, frame.as_ref(), overwrite)
+    });
+    api.f("Document.export_stl(file: string, options: map)", "Writes components at their poses as one binary STL: `#{components: [names] (default all), frame, overwrite}`.", |d: &mut DocHandle, file: &str, o: Map| -> ScriptResult<()> {
+        let all: Vec<usize> = (0..d.lock()?.components().len()).collect();
+        let (which, frame, overwrite) = export_options(d, &o, all)?;
+        export_stl(d, file, &which, frame.as_ref(), overwrite)
+    });
+}

@@ -165,3 +165,24 @@ impl Workspace<'_> {
         }
     }
 }
+
+/// The meshes of components `which` (indices) of `doc` at their poses, in one mesh,
+/// expressed in the coordinate system `frame` (its pose in the world; `None`: the
+/// world), mm: what a per-component export writes, with the transform baked in
+/// (CodeStack's "Export Part Or Component To STL").
+pub fn world_mesh(doc: &Document, which: &[usize], frame: Option<&crate::math::Transform>) -> crate::mesh::Mesh {
+    let to_frame = frame.map(|f| f.inverse());
+    let mut out = crate::mesh::Mesh {
+        vertices: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for &i in which {
+        let pose = doc.components()[i].transform;
+        let pose = match &to_frame {
+            Some(f) => pose.then(f),
+            None => pose,
+        };
+        out.append(&doc.mesh_of(i).transformed(&pose));
+    }
+    out
+}
