@@ -168,9 +168,7 @@ pub struct Table {
 pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
     let d = options.delimiter;
     if d == '"' || d == '\n' || d == '\r' {
-        return Err(DataError::Options(format!(
-            "`delimiter` cannot be {d:?}"
-        )));
+        return Err(DataError::Options(format!("`delimiter` cannot be {d:?}")));
     }
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let bad = |line: usize, message: String| DataError::Parse {
@@ -209,12 +207,11 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                     let opened = line;
                     loop {
                         match chars.next() {
-                            None => {
-                                return Err(bad(
-                                    opened,
-                                    "a quoted field is never closed (a `\"` without its closing `\"`)".into(),
-                                ))
-                            }
+                            None => return Err(bad(
+                                opened,
+                                "a quoted field is never closed (a `\"` without its closing `\"`)"
+                                    .into(),
+                            )),
                             Some('"') if chars.peek() == Some(&'"') => {
                                 chars.next();
                                 field.push('"');
@@ -271,7 +268,9 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
     let mut rows = rows.into_iter();
     if options.header {
         match rows.next() {
-            Some((_, h)) => table.columns = h.into_iter().map(|(t, _)| t.trim().to_string()).collect(),
+            Some((_, h)) => {
+                table.columns = h.into_iter().map(|(t, _)| t.trim().to_string()).collect()
+            }
             None => return Ok(table),
         }
         for (i, name) in table.columns.iter().enumerate() {
@@ -352,9 +351,8 @@ pub fn read_json(project: &Project, path: &str) -> Result<(PathBuf, serde_json::
 /// One field as CSV text: quoted when it holds the delimiter, a quote, a line break
 /// or leading/trailing spaces (inner quotes doubled).
 pub fn csv_field(text: &str, delimiter: char) -> String {
-    let needs = text.contains([delimiter, '"', '\n', '\r'])
-        || text.starts_with(' ')
-        || text.ends_with(' ');
+    let needs =
+        text.contains([delimiter, '"', '\n', '\r']) || text.starts_with(' ') || text.ends_with(' ');
     if needs {
         format!("\"{}\"", text.replace('"', "\"\""))
     } else {
@@ -388,8 +386,18 @@ mod tests {
         )
         .unwrap();
         assert_eq!(t.columns, ["a", "b", "c"]);
-        assert_eq!(t.rows[0], [Cell::Int(1), Cell::Text("x;y".into()), Cell::Bool(true)]);
-        assert_eq!(t.rows[1], [Cell::Text("multi\nline".into()), Cell::Float(-2000.0), Cell::Text(" 7".into())]);
+        assert_eq!(
+            t.rows[0],
+            [Cell::Int(1), Cell::Text("x;y".into()), Cell::Bool(true)]
+        );
+        assert_eq!(
+            t.rows[1],
+            [
+                Cell::Text("multi\nline".into()),
+                Cell::Float(-2000.0),
+                Cell::Text(" 7".into())
+            ]
+        );
         assert_eq!(t.lines, [2, 4]);
         // no header, ragged rows, comments
         let t = parse_csv(
@@ -401,7 +409,10 @@ mod tests {
             },
         )
         .unwrap();
-        assert_eq!(t.rows, [vec![Cell::Int(1), Cell::Int(2)], vec![Cell::Int(3)]]);
+        assert_eq!(
+            t.rows,
+            [vec![Cell::Int(1), Cell::Int(2)], vec![Cell::Int(3)]]
+        );
         // untyped keeps the text; inf, nan and hex stay text
         let t = parse_csv("x\ninf\nNaN\n0x10\n1e999\n", &CsvOptions::default()).unwrap();
         assert!(t.rows.iter().all(|r| matches!(r[0], Cell::Text(_))));
@@ -429,6 +440,12 @@ mod tests {
         ];
         let text = csv_text(&rows, ',');
         let t = parse_csv(&text, &CsvOptions::default()).unwrap();
-        assert_eq!(t.rows[0], [Cell::Text("a,b".into()), Cell::Text("say \"hi\"\nbye".into())]);
+        assert_eq!(
+            t.rows[0],
+            [
+                Cell::Text("a,b".into()),
+                Cell::Text("say \"hi\"\nbye".into())
+            ]
+        );
     }
 }

@@ -327,7 +327,10 @@ impl Document {
         let d = PyDict::new(py);
         d.set_item("volume_mm3", v.volume)?;
         d.set_item("depth_mm", v.depth)?;
-        d.set_item("direction", v.direction.iter().copied().collect::<Vec<f64>>())?;
+        d.set_item(
+            "direction",
+            v.direction.iter().copied().collect::<Vec<f64>>(),
+        )?;
         Ok(d)
     }
 
@@ -374,7 +377,14 @@ impl Document {
         d.set_item("area_mm2", m.area)?;
         d.set_item("mass_kg", m.mass)?;
         d.set_item("density_kg_m3", m.density())?;
-        d.set_item("centre_of_mass", m.centre_of_mass.coords.iter().copied().collect::<Vec<f64>>())?;
+        d.set_item(
+            "centre_of_mass",
+            m.centre_of_mass
+                .coords
+                .iter()
+                .copied()
+                .collect::<Vec<f64>>(),
+        )?;
         d.set_item(
             "inertia",
             (0..3)
@@ -384,7 +394,9 @@ impl Document {
         d.set_item("principal_moments", moments.to_vec())?;
         d.set_item(
             "principal_axes",
-            axes.iter().map(|a| a.iter().copied().collect::<Vec<f64>>()).collect::<Vec<_>>(),
+            axes.iter()
+                .map(|a| a.iter().copied().collect::<Vec<f64>>())
+                .collect::<Vec<_>>(),
         )?;
         Ok(d)
     }

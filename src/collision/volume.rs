@@ -33,7 +33,9 @@ use std::time::{Duration, Instant};
 #[non_exhaustive]
 pub enum VolumeError {
     /// A mesh does not bound a solid (holes, non-manifold or misoriented edges).
-    #[error("the {0} part's mesh is not a closed solid: an overlap volume or depth is undefined for it")]
+    #[error(
+        "the {0} part's mesh is not a closed solid: an overlap volume or depth is undefined for it"
+    )]
     NotSolid(&'static str),
     /// A pose with NaN or infinite entries.
     #[error("a pose is not finite")]
@@ -150,12 +152,19 @@ pub fn intersection_volume(
         return Ok(0.0);
     }
     let origin = nalgebra::center(&lo, &hi);
-    let rect = [lo.x - origin.x, lo.y - origin.y, hi.x - origin.x, hi.y - origin.y];
+    let rect = [
+        lo.x - origin.x,
+        lo.y - origin.y,
+        hi.x - origin.x,
+        hi.y - origin.y,
+    ];
     let prisms = |c: &Collider, pose: &Transform| -> Vec<Prism> {
         world_tris(c, pose, &origin)
             .iter()
             .filter_map(Prism::new)
-            .filter(|p| p.lo[0] < rect[2] && p.hi[0] > rect[0] && p.lo[1] < rect[3] && p.hi[1] > rect[1])
+            .filter(|p| {
+                p.lo[0] < rect[2] && p.hi[0] > rect[0] && p.lo[1] < rect[3] && p.hi[1] > rect[1]
+            })
             .collect()
     };
     let pa = prisms(a, pose_a);
@@ -165,7 +174,10 @@ pub fn intersection_volume(
     }
     // A grid over the box's footprint holding B's prisms.
     let n = ((pb.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
-    let (w, h) = ((rect[2] - rect[0]) / n as f64, (rect[3] - rect[1]) / n as f64);
+    let (w, h) = (
+        (rect[2] - rect[0]) / n as f64,
+        (rect[3] - rect[1]) / n as f64,
+    );
     let cell = |x: f64, wdt: f64, lo: f64| (((x - lo) / wdt).floor().max(0.0) as usize).min(n - 1);
     let mut grid: Vec<Vec<u32>> = vec![Vec::new(); n * n];
     for (k, p) in pb.iter().enumerate() {
@@ -194,7 +206,11 @@ pub fn intersection_volume(
                     seen[kb as usize] = ka as u32;
                     clock.tick()?;
                     let q = &pb[kb as usize];
-                    if q.lo[0] >= p.hi[0] || q.hi[0] <= p.lo[0] || q.lo[1] >= p.hi[1] || q.hi[1] <= p.lo[1] {
+                    if q.lo[0] >= p.hi[0]
+                        || q.hi[0] <= p.lo[0]
+                        || q.lo[1] >= p.hi[1]
+                        || q.hi[1] <= p.lo[1]
+                    {
                         continue;
                     }
                     poly.clear();
@@ -253,10 +269,19 @@ impl Prism {
         Some(Prism {
             corners,
             plane: [alpha, beta, gamma],
-            zr: [t[0].z.min(t[1].z).min(t[2].z), t[0].z.max(t[1].z).max(t[2].z)],
+            zr: [
+                t[0].z.min(t[1].z).min(t[2].z),
+                t[0].z.max(t[1].z).max(t[2].z),
+            ],
             sign: n.z.signum(),
-            lo: [t[0].x.min(t[1].x).min(t[2].x), t[0].y.min(t[1].y).min(t[2].y)],
-            hi: [t[0].x.max(t[1].x).max(t[2].x), t[0].y.max(t[1].y).max(t[2].y)],
+            lo: [
+                t[0].x.min(t[1].x).min(t[2].x),
+                t[0].y.min(t[1].y).min(t[2].y),
+            ],
+            hi: [
+                t[0].x.max(t[1].x).max(t[2].x),
+                t[0].y.max(t[1].y).max(t[2].y),
+            ],
         })
     }
 
@@ -308,7 +333,10 @@ fn integrate(poly: &[[f64; 2]], plane: &Prism) -> f64 {
     let (mut a2, mut cx, mut cy) = (0.0, 0.0, 0.0);
     let o = poly[0];
     for k in 1..poly.len() - 1 {
-        let (p, q) = ([poly[k][0] - o[0], poly[k][1] - o[1]], [poly[k + 1][0] - o[0], poly[k + 1][1] - o[1]]);
+        let (p, q) = (
+            [poly[k][0] - o[0], poly[k][1] - o[1]],
+            [poly[k + 1][0] - o[0], poly[k + 1][1] - o[1]],
+        );
         let cr = p[0] * q[1] - p[1] * q[0];
         a2 += cr;
         cx += cr * (p[0] + q[0]);
@@ -362,7 +390,12 @@ impl<'a> Side<'a> {
         keys.dedup();
         let edges = keys
             .iter()
-            .map(|&(a, b)| [pose.apply(&mesh.vertices[a as usize]), pose.apply(&mesh.vertices[b as usize])])
+            .map(|&(a, b)| {
+                [
+                    pose.apply(&mesh.vertices[a as usize]),
+                    pose.apply(&mesh.vertices[b as usize]),
+                ]
+            })
             .collect();
         Side {
             c,
@@ -375,7 +408,12 @@ impl<'a> Side<'a> {
 
     /// The largest `t ≥ 0` at which the world ray `p + t·d` crosses this part's
     /// surface; `None` when it never does.
-    fn last_hit(&self, p: &Point3, d: &Vec3, clock: &mut Clock) -> Result<Option<f64>, VolumeError> {
+    fn last_hit(
+        &self,
+        p: &Point3,
+        d: &Vec3,
+        clock: &mut Clock,
+    ) -> Result<Option<f64>, VolumeError> {
         let o = self.inv.apply(p);
         let dir = self.inv.apply_vector(d);
         let mut best: Option<f64> = None;
@@ -406,7 +444,13 @@ impl<'a> Side<'a> {
 
     /// The largest `t ≥ 0` at which the world segment `e + t·d` crosses an edge of
     /// this part.
-    fn last_edge_hit(&self, e: &[Point3; 2], d: &Vec3, reach: f64, clock: &mut Clock) -> Result<Option<f64>, VolumeError> {
+    fn last_edge_hit(
+        &self,
+        e: &[Point3; 2],
+        d: &Vec3,
+        reach: f64,
+        clock: &mut Clock,
+    ) -> Result<Option<f64>, VolumeError> {
         let (p0, p1) = (self.inv.apply(&e[0]), self.inv.apply(&e[1]));
         let dir = self.inv.apply_vector(d);
         let mut sweep = Aabb::around(&[p0, p1]);
@@ -503,7 +547,13 @@ fn segment_sweep(p0: &Point3, p1: &Point3, d: &Vec3, q0: &Point3, q1: &Point3) -
 /// How far `a` must be pulled along the unit world direction `d` to be clear of `b`
 /// (the last contact coming back from far away). Stops early, returning `None`, as
 /// soon as the answer is known to be at least `stop`.
-fn pull_out(a: &Side, b: &Side, d: &Vec3, stop: f64, clock: &mut Clock) -> Result<Option<f64>, VolumeError> {
+fn pull_out(
+    a: &Side,
+    b: &Side,
+    d: &Vec3,
+    stop: f64,
+    clock: &mut Clock,
+) -> Result<Option<f64>, VolumeError> {
     let mut worst = 0.0f64;
     let over = |t: f64| t >= stop;
     // vertices of A meeting B's faces, then B's vertices meeting A's faces (A moves
@@ -528,7 +578,8 @@ fn pull_out(a: &Side, b: &Side, d: &Vec3, stop: f64, clock: &mut Clock) -> Resul
     // edges crossing edges; a pull beyond both boxes' extents cannot meet anything
     let ab = a.c.world_bounds(&a.pose);
     let bb = b.c.world_bounds(&b.pose);
-    let reach = (ab.hi - ab.lo).norm() + (bb.hi - bb.lo).norm() + (ab.centre() - bb.centre()).norm();
+    let reach =
+        (ab.hi - ab.lo).norm() + (bb.hi - bb.lo).norm() + (ab.centre() - bb.centre()).norm();
     for e in &a.edges {
         if let Some(t) = b.last_edge_hit(e, d, reach, clock)? {
             if over(t) {
@@ -620,7 +671,9 @@ pub fn separation(
     // refinement cover the rest.
     if cands.len() > 600 {
         let step = cands.len() as f64 / 600.0;
-        cands = (0..600).map(|k| cands[(k as f64 * step) as usize]).collect();
+        cands = (0..600)
+            .map(|k| cands[(k as f64 * step) as usize])
+            .collect();
     }
     for d in sphere_directions(162) {
         push(d, &mut cands);
@@ -648,7 +701,13 @@ pub fn separation(
         let (mut t, mut d) = (t0, d0);
         let mut step = 0.05;
         while step > 1e-5 {
-            let u = d.cross(&if d.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() }).normalize();
+            let u = d
+                .cross(&if d.x.abs() < 0.9 {
+                    Vec3::x()
+                } else {
+                    Vec3::y()
+                })
+                .normalize();
             let v = d.cross(&u);
             let mut improved = false;
             for (du, dv) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)] {
@@ -705,22 +764,42 @@ mod tests {
 
     #[test]
     fn boxes_overlap_by_their_common_box() {
-        let c = col(Mesh::cuboid(Point3::origin(), Point3::new(10.0, 10.0, 10.0)));
+        let c = col(Mesh::cuboid(
+            Point3::origin(),
+            Point3::new(10.0, 10.0, 10.0),
+        ));
         let id = Transform::default();
-        for (x, y, z) in [(4.0, 3.0, 0.0), (-2.5, 1.0, 7.0), (0.0, 0.0, 0.0), (9.0, 9.0, 9.0)] {
+        for (x, y, z) in [
+            (4.0, 3.0, 0.0),
+            (-2.5, 1.0, 7.0),
+            (0.0, 0.0, 0.0),
+            (9.0, 9.0, 9.0),
+        ] {
             let v = intersection_volume(&c, &id, &c, &at(x, y, z), T).unwrap();
             let want = (10.0 - f64::abs(x)) * (10.0 - f64::abs(y)) * (10.0 - f64::abs(z));
-            assert!((v - want).abs() < 1e-9 * 1000.0, "{x} {y} {z}: {v} vs {want}");
+            assert!(
+                (v - want).abs() < 1e-9 * 1000.0,
+                "{x} {y} {z}: {v} vs {want}"
+            );
         }
         // a box standing on another, off the origin (coplanar faces): nothing
-        let low = col(Mesh::cuboid(Point3::new(0.0, 0.0, 0.0), Point3::new(10.0, 10.0, 3.0)));
+        let low = col(Mesh::cuboid(
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(10.0, 10.0, 3.0),
+        ));
         let v = intersection_volume(&low, &at(5.0, 5.0, 40.0), &c, &at(0.0, 0.0, 43.0), T).unwrap();
         assert_eq!(v, 0.0);
         let v = intersection_volume(&low, &at(5.0, 5.0, 41.0), &c, &at(0.0, 0.0, 43.0), T).unwrap();
         assert!((v - 25.0).abs() < 1e-9, "{v}");
         // touching faces and apart: nothing
-        assert_eq!(intersection_volume(&c, &id, &c, &at(10.0, 0.0, 0.0), T).unwrap(), 0.0);
-        assert_eq!(intersection_volume(&c, &id, &c, &at(30.0, 0.0, 0.0), T).unwrap(), 0.0);
+        assert_eq!(
+            intersection_volume(&c, &id, &c, &at(10.0, 0.0, 0.0), T).unwrap(),
+            0.0
+        );
+        assert_eq!(
+            intersection_volume(&c, &id, &c, &at(30.0, 0.0, 0.0), T).unwrap(),
+            0.0
+        );
     }
 
     #[test]
@@ -728,7 +807,10 @@ mod tests {
         let ball = Mesh::uv_sphere(4.0, 48);
         let vol = ball.signed_volume();
         let b = col(ball);
-        let big = col(Mesh::cuboid(Point3::new(-20.0, -20.0, -20.0), Point3::new(20.0, 20.0, 20.0)));
+        let big = col(Mesh::cuboid(
+            Point3::new(-20.0, -20.0, -20.0),
+            Point3::new(20.0, 20.0, 20.0),
+        ));
         let id = Transform::default();
         let v = intersection_volume(&b, &at(3.0, -2.0, 1.0), &big, &id, T).unwrap();
         assert!((v - vol).abs() < 1e-9 * vol, "{v} vs {vol}");
@@ -736,15 +818,22 @@ mod tests {
         let v = intersection_volume(&b, &id, &b, &id, T).unwrap();
         assert!((v - vol).abs() < 1e-9 * vol, "{v} vs {vol}");
         // a rotated copy of a box inside a box: the small box's volume
-        let small = col(Mesh::cuboid(Point3::new(-3.0, -2.0, -1.0), Point3::new(3.0, 2.0, 1.0)));
-        let r = Transform::from_rotation_about(Point3::origin(), Vec3::new(1.0, 1.0, 0.3), 0.8).unwrap();
+        let small = col(Mesh::cuboid(
+            Point3::new(-3.0, -2.0, -1.0),
+            Point3::new(3.0, 2.0, 1.0),
+        ));
+        let r = Transform::from_rotation_about(Point3::origin(), Vec3::new(1.0, 1.0, 0.3), 0.8)
+            .unwrap();
         let v = intersection_volume(&small, &r, &big, &id, T).unwrap();
         assert!((v - 48.0).abs() < 1e-9 * 48.0, "{v}");
     }
 
     #[test]
     fn a_pin_pushed_into_a_plate() {
-        let plate = col(Mesh::cuboid(Point3::new(-50.0, -50.0, -20.0), Point3::new(50.0, 50.0, 0.0)));
+        let plate = col(Mesh::cuboid(
+            Point3::new(-50.0, -50.0, -20.0),
+            Point3::new(50.0, 50.0, 0.0),
+        ));
         let n = 64;
         let pin = col(Mesh::cylinder(3.0, 30.0, n));
         let area = n as f64 * 9.0 * (std::f64::consts::TAU / n as f64).sin() / 2.0;
@@ -753,13 +842,25 @@ mod tests {
             .unwrap();
         let v = intersection_volume(&pin, &at(0.0, 0.0, -5.0), &plate, &id, T).unwrap();
         assert!((v - 5.0 * area).abs() < 1e-9 * v, "{v}");
-        let s = separation(&pin, &at(0.0, 0.0, -5.0), &plate, &id, &SeparationOptions::default())
-            .unwrap();
+        let s = separation(
+            &pin,
+            &at(0.0, 0.0, -5.0),
+            &plate,
+            &id,
+            &SeparationOptions::default(),
+        )
+        .unwrap();
         assert!((s.distance - 5.0).abs() < 1e-9, "{s:?}");
         assert!((s.direction - Vec3::z()).norm() < 1e-9);
         // B's view: the plate comes out downwards by the same 5 mm
-        let s = separation(&plate, &id, &pin, &at(0.0, 0.0, -5.0), &SeparationOptions::default())
-            .unwrap();
+        let s = separation(
+            &plate,
+            &id,
+            &pin,
+            &at(0.0, 0.0, -5.0),
+            &SeparationOptions::default(),
+        )
+        .unwrap();
         assert!((s.distance - 5.0).abs() < 1e-9 && (s.direction + Vec3::z()).norm() < 1e-9);
         // tilted, the deepest rim point decides: out along the plate's normal
         let pose = tilt.then(&at(0.0, 0.0, -5.0));
@@ -767,10 +868,16 @@ mod tests {
         let deepest = (0..n)
             .map(|k| {
                 let a = std::f64::consts::TAU * k as f64 / n as f64;
-                -pose.apply(&Point3::new(3.0 * a.cos(), 3.0 * a.sin(), 0.0)).z
+                -pose
+                    .apply(&Point3::new(3.0 * a.cos(), 3.0 * a.sin(), 0.0))
+                    .z
             })
             .fold(0.0, f64::max);
-        assert!((s.distance - deepest).abs() < 1e-6, "{} vs {deepest}", s.distance);
+        assert!(
+            (s.distance - deepest).abs() < 1e-6,
+            "{} vs {deepest}",
+            s.distance
+        );
         // resting on it: nothing to separate
         let s = separation(&pin, &id, &plate, &id, &SeparationOptions::default()).unwrap();
         assert_eq!(s.distance, 0.0);
@@ -780,13 +887,29 @@ mod tests {
     fn crossed_bars_need_the_edge_events() {
         // a bar with a sharp bottom edge (a box rotated 45° about X) dipping 1 mm into
         // a block narrower than it: no vertex of either lies in the other
-        let block = col(Mesh::cuboid(Point3::new(-5.0, -5.0, -10.0), Point3::new(5.0, 5.0, 0.0)));
-        let bar = col(Mesh::cuboid(Point3::new(-20.0, -2.0, -2.0), Point3::new(20.0, 2.0, 2.0)));
-        let pose = Transform::from_rotation_about(Point3::origin(), Vec3::x(), std::f64::consts::FRAC_PI_4)
-            .unwrap()
-            .then(&at(0.0, 0.0, 8f64.sqrt() - 1.0));
-        let s = separation(&bar, &pose, &block, &Transform::default(), &SeparationOptions::default())
-            .unwrap();
+        let block = col(Mesh::cuboid(
+            Point3::new(-5.0, -5.0, -10.0),
+            Point3::new(5.0, 5.0, 0.0),
+        ));
+        let bar = col(Mesh::cuboid(
+            Point3::new(-20.0, -2.0, -2.0),
+            Point3::new(20.0, 2.0, 2.0),
+        ));
+        let pose = Transform::from_rotation_about(
+            Point3::origin(),
+            Vec3::x(),
+            std::f64::consts::FRAC_PI_4,
+        )
+        .unwrap()
+        .then(&at(0.0, 0.0, 8f64.sqrt() - 1.0));
+        let s = separation(
+            &bar,
+            &pose,
+            &block,
+            &Transform::default(),
+            &SeparationOptions::default(),
+        )
+        .unwrap();
         assert!((s.distance - 1.0).abs() < 1e-6, "{s:?}");
     }
 

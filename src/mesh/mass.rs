@@ -366,16 +366,31 @@ mod tests {
     #[test]
     fn box_matches_closed_form() {
         let (a, b, c) = (30.0, 20.0, 10.0);
-        let mesh = Mesh::cuboid(Point3::new(5.0, -7.0, 100.0), Point3::new(5.0 + a, 13.0, 110.0));
+        let mesh = Mesh::cuboid(
+            Point3::new(5.0, -7.0, 100.0),
+            Point3::new(5.0 + a, 13.0, 110.0),
+        );
         let m = MassProperties::of_mesh(&mesh, 2700.0).unwrap();
         let mass = 2700.0 * a * b * c * 1e-9;
         assert!(close(m.volume, a * b * c, 1e-12));
         assert!(close(m.mass, mass, 1e-12));
         assert!(close(m.area, 2.0 * (a * b + b * c + c * a), 1e-12));
         assert!((m.centre_of_mass - Point3::new(20.0, 3.0, 105.0)).norm() < 1e-10);
-        assert!(close(m.inertia[(0, 0)], mass * (b * b + c * c) / 12.0, 1e-10));
-        assert!(close(m.inertia[(1, 1)], mass * (a * a + c * c) / 12.0, 1e-10));
-        assert!(close(m.inertia[(2, 2)], mass * (a * a + b * b) / 12.0, 1e-10));
+        assert!(close(
+            m.inertia[(0, 0)],
+            mass * (b * b + c * c) / 12.0,
+            1e-10
+        ));
+        assert!(close(
+            m.inertia[(1, 1)],
+            mass * (a * a + c * c) / 12.0,
+            1e-10
+        ));
+        assert!(close(
+            m.inertia[(2, 2)],
+            mass * (a * a + b * b) / 12.0,
+            1e-10
+        ));
         for (i, j) in [(0, 1), (1, 2), (0, 2)] {
             assert!(m.inertia[(i, j)].abs() < 1e-12 * mass * a * a);
         }
@@ -399,14 +414,23 @@ mod tests {
         let jz = n as f64 * r.powi(4) * t.sin() * (2.0 + t.cos()) / 12.0;
         let izz = jz * h * 1e-6;
         let ixx = jz / 2.0 * h * 1e-6 + mass * h * h / 12.0;
-        assert!(close(m.inertia[(2, 2)], izz, 1e-10), "{} {}", m.inertia[(2, 2)], izz);
+        assert!(
+            close(m.inertia[(2, 2)], izz, 1e-10),
+            "{} {}",
+            m.inertia[(2, 2)],
+            izz
+        );
         assert!(close(m.inertia[(0, 0)], ixx, 1e-10));
         assert!(close(m.inertia[(1, 1)], ixx, 1e-10));
         assert!((m.centre_of_mass - Point3::new(0.0, 0.0, h / 2.0)).norm() < 1e-12);
         // fine facets approach the round cylinder
         let fine = MassProperties::of_mesh(&Mesh::cylinder(r, h, 2000), 1000.0).unwrap();
         assert!(close(fine.volume, PI * r * r * h, 1e-5));
-        assert!(close(fine.inertia[(2, 2)], PI * r * r * h * 1e-6 * r * r / 2.0, 1e-5));
+        assert!(close(
+            fine.inertia[(2, 2)],
+            PI * r * r * h * 1e-6 * r * r / 2.0,
+            1e-5
+        ));
     }
 
     #[test]
@@ -444,8 +468,8 @@ mod tests {
     #[test]
     fn principal_axes_of_a_rotated_box() {
         let mesh = Mesh::cuboid(Point3::origin(), Point3::new(40.0, 20.0, 10.0));
-        let pose =
-            Transform::from_rotation_about(Point3::origin(), Vec3::new(0.0, 0.0, 1.0), 0.5).unwrap();
+        let pose = Transform::from_rotation_about(Point3::origin(), Vec3::new(0.0, 0.0, 1.0), 0.5)
+            .unwrap();
         let m = MassProperties::of_mesh(&mesh, 1000.0).unwrap().moved(&pose);
         let (moments, axes) = m.principal();
         let mass = m.mass;
@@ -468,7 +492,10 @@ mod tests {
         let m = MassProperties::of_mesh(&inward, 1000.0).unwrap();
         assert!(close(m.volume, 6.0, 1e-12));
         // a mm-sized part 1e6 mm from the origin keeps its precision
-        let far = Mesh::cuboid(Point3::new(1e6, 1e6, 1e6), Point3::new(1e6 + 1.0, 1e6 + 2.0, 1e6 + 3.0));
+        let far = Mesh::cuboid(
+            Point3::new(1e6, 1e6, 1e6),
+            Point3::new(1e6 + 1.0, 1e6 + 2.0, 1e6 + 3.0),
+        );
         let f = MassProperties::of_mesh(&far, 1000.0).unwrap();
         assert!(close(f.volume, 6.0, 1e-9));
         assert!(close(f.inertia[(0, 0)], f.mass * (4.0 + 9.0) / 12.0, 1e-6));
@@ -491,6 +518,9 @@ mod tests {
         }
         let m = MassProperties::of_mesh_with(&cube, MassSpec::Mass(2.0)).unwrap();
         assert!(close(m.mass, 2.0, 1e-15) && close(m.density(), 2e9, 1e-12));
-        assert!(matches!(MassProperties::combine(&[]), Err(MassError::Empty)));
+        assert!(matches!(
+            MassProperties::combine(&[]),
+            Err(MassError::Empty)
+        ));
     }
 }

@@ -178,7 +178,9 @@ impl<'e> Api<'e> {
         let own = format!("{ty}.set_{prop}(");
         if !self.entries.iter().any(|e| e.signature.starts_with(&own)) {
             FuncRegistration::new(format!("set_{prop}"))
-                .with_comments([format!("/// Sets `{signature}` (the method form of the setter).")])
+                .with_comments([format!(
+                    "/// Sets `{signature}` (the method form of the setter)."
+                )])
                 .register_into_engine(self.engine, func.clone());
             self.overloads += 1;
             self.aliases.insert(format!("{ty}.set_{prop}"));

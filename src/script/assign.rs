@@ -75,7 +75,19 @@ fn tokens(text: &str) -> Vec<Tok> {
                 let prev = i.checked_sub(1).map(|p| b[p]);
                 let compound = matches!(
                     prev,
-                    Some(b'=' | b'!' | b'<' | b'>' | b'+' | b'-' | b'*' | b'/' | b'%' | b'&' | b'|' | b'^')
+                    Some(
+                        b'=' | b'!'
+                            | b'<'
+                            | b'>'
+                            | b'+'
+                            | b'-'
+                            | b'*'
+                            | b'/'
+                            | b'%'
+                            | b'&'
+                            | b'|'
+                            | b'^'
+                    )
                 );
                 if next == Some(b'=') || next == Some(b'>') {
                     out.push(Tok::Other);
@@ -170,7 +182,10 @@ mod tests {
     use super::*;
 
     fn setters() -> HashSet<String> {
-        ["fixed", "transform"].iter().map(|s| s.to_string()).collect()
+        ["fixed", "transform"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
     }
 
     #[test]
@@ -181,8 +196,11 @@ mod tests {
             "doc.component(\"a\").set_fixed( true);\nlet x = 1;"
         );
         assert_eq!(
-            rewrite("for c in doc.components() { doc.component(c.name).fixed = f(1, [2]) }", &s)
-                .unwrap(),
+            rewrite(
+                "for c in doc.components() { doc.component(c.name).fixed = f(1, [2]) }",
+                &s
+            )
+            .unwrap(),
             "for c in doc.components() { doc.component(c.name).set_fixed( f(1, [2])) }"
         );
         assert_eq!(

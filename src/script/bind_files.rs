@@ -31,7 +31,11 @@ pub(crate) fn to_json(v: &Dynamic, what: &str) -> ScriptResult<serde_json::Value
     if let Ok(f) = v.as_float() {
         return serde_json::Number::from_f64(f)
             .map(Value::Number)
-            .ok_or_else(|| fail(format!("{what}: {f} has no JSON spelling (JSON numbers are finite)")));
+            .ok_or_else(|| {
+                fail(format!(
+                    "{what}: {f} has no JSON spelling (JSON numbers are finite)"
+                ))
+            });
     }
     if let Ok(c) = v.as_char() {
         return Ok(Value::String(c.to_string()));
@@ -201,11 +205,15 @@ fn write_csv(c: &Context, path: &str, rows: &Array, o: &WriteCsvOptions) -> Scri
 pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.section("Files", "Data files inside the project: CSV tables, JSON and text (UTF-8; at most 64 MiB). A file read is a dependency of the run (`fitup watch` reruns when it changes); a parse error names the file and line. Writers go through the write rule (see \"What a run writes\" in docs/scripting.md): a new file is written, an existing one replaced only when fitup wrote it, or with `#{overwrite: true}`; atomic. Diagnostics (document warnings) go to stderr, so a script's `print` output is its own.");
     let c = ctx.clone();
-    api.f("read_text(path: string) -> string", "The whole text of a file inside the project.", move |path: &str| -> ScriptResult<String> {
-        let (full, text) = files::read_text(&c.project, path).map_err(fail)?;
-        c.record_read(&full);
-        Ok(text)
-    });
+    api.f(
+        "read_text(path: string) -> string",
+        "The whole text of a file inside the project.",
+        move |path: &str| -> ScriptResult<String> {
+            let (full, text) = files::read_text(&c.project, path).map_err(fail)?;
+            c.record_read(&full);
+            Ok(text)
+        },
+    );
     let c = ctx.clone();
     api.f("read_csv(path: string) -> array", "A CSV table (RFC 4180 quoting; `,` separated; the first row names the columns): one map per row, column name → value. Unquoted fields are typed: whole numbers integers, other numbers floats, `true`/`false` booleans, empty fields `()`; quoted fields stay text. A row with another number of fields than the header is an error naming its line.", move |path: &str| -> ScriptResult<Array> {
         read_csv(&c, path, &CsvOptions::default())
@@ -226,10 +234,15 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         c.write_output(path, text.as_bytes(), false).map(|_| ())
     });
     let c = ctx.clone();
-    api.f("write_text(path: string, text: string, options: map)", "`write_text` with `#{overwrite: bool}`.", move |path: &str, text: &str, o: Map| -> ScriptResult<()> {
-        let o: WriteOptions = options(&o, "write_text")?;
-        c.write_output(path, text.as_bytes(), o.overwrite).map(|_| ())
-    });
+    api.f(
+        "write_text(path: string, text: string, options: map)",
+        "`write_text` with `#{overwrite: bool}`.",
+        move |path: &str, text: &str, o: Map| -> ScriptResult<()> {
+            let o: WriteOptions = options(&o, "write_text")?;
+            c.write_output(path, text.as_bytes(), o.overwrite)
+                .map(|_| ())
+        },
+    );
     let c = ctx.clone();
     api.f("write_csv(path: string, rows: array)", "Writes rows as CSV: each row an array of values, or each a map (then the first row's keys, in order, are the header). Fields holding the delimiter, quotes or line breaks are quoted; floats keep every digit; `()` is an empty field.", move |path: &str, rows: Array| -> ScriptResult<()> {
         write_csv(&c, path, &rows, &WriteCsvOptions::default())
@@ -246,10 +259,15 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         c.write_output(path, text.as_bytes(), false).map(|_| ())
     });
     let c = ctx.clone();
-    api.f("write_json(path: string, value, options: map)", "`write_json` with `#{overwrite: bool}`.", move |path: &str, v: Dynamic, o: Map| -> ScriptResult<()> {
-        let o: WriteOptions = options(&o, "write_json")?;
-        let j = to_json(&v, "write_json")?;
-        let text = serde_json::to_string_pretty(&j).map_err(fail)? + "\n";
-        c.write_output(path, text.as_bytes(), o.overwrite).map(|_| ())
-    });
+    api.f(
+        "write_json(path: string, value, options: map)",
+        "`write_json` with `#{overwrite: bool}`.",
+        move |path: &str, v: Dynamic, o: Map| -> ScriptResult<()> {
+            let o: WriteOptions = options(&o, "write_json")?;
+            let j = to_json(&v, "write_json")?;
+            let text = serde_json::to_string_pretty(&j).map_err(fail)? + "\n";
+            c.write_output(path, text.as_bytes(), o.overwrite)
+                .map(|_| ())
+        },
+    );
 }

@@ -72,9 +72,9 @@ fn matrix_in(v: &Dynamic, unit: &str, what: &str) -> ScriptResult<[[f64; 4]; 4]>
         "m" => 1000.0,
         u => return err(format!("{what}: unit must be \"mm\" or \"m\", not {u:?}")),
     };
-    let arr = v.read_lock::<Array>().ok_or_else(|| {
-        fail(format!("{what} must be an array, not {}", v.type_name()))
-    })?;
+    let arr = v
+        .read_lock::<Array>()
+        .ok_or_else(|| fail(format!("{what} must be an array, not {}", v.type_name())))?;
     let mut m = [[0.0; 4]; 4];
     match arr.len() {
         4 => {
@@ -92,7 +92,11 @@ fn matrix_in(v: &Dynamic, unit: &str, what: &str) -> ScriptResult<[[f64; 4]; 4]>
                 [d[9], d[10], d[11], d[12]],
             ];
         }
-        n => return err(format!("{what}: an array of {n} elements is neither a 4×4 matrix nor 16 ArrayData numbers")),
+        n => {
+            return err(format!(
+                "{what}: an array of {n} elements is neither a 4×4 matrix nor 16 ArrayData numbers"
+            ))
+        }
     }
     for v in &mut m[3][..3] {
         *v *= scale;

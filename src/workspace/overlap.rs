@@ -46,7 +46,12 @@ impl Workspace<'_> {
     /// # Errors
     /// Unknown or equal components, a mesh that is not a closed solid, a spent time
     /// budget.
-    pub fn overlap(&self, a: &str, b: &str, options: &OverlapOptions) -> Result<Overlap, WorkspaceError> {
+    pub fn overlap(
+        &self,
+        a: &str,
+        b: &str,
+        options: &OverlapOptions,
+    ) -> Result<Overlap, WorkspaceError> {
         let (ia, ib) = self.pair(a, b)?;
         let scene = self.scene();
         let (ca, cb) = (&scene.colliders[ia], &scene.colliders[ib]);
@@ -62,8 +67,16 @@ impl Workspace<'_> {
             });
         }
         let left = (options.time_limit_ms - start.elapsed().as_secs_f64() * 1000.0).max(0.0);
-        let s = separation(ca, &pa, cb, &pb, &SeparationOptions { time_limit_ms: left })
-            .map_err(|e| WorkspaceError::overlap(a, b, e))?;
+        let s = separation(
+            ca,
+            &pa,
+            cb,
+            &pb,
+            &SeparationOptions {
+                time_limit_ms: left,
+            },
+        )
+        .map_err(|e| WorkspaceError::overlap(a, b, e))?;
         Ok(Overlap {
             volume,
             depth: s.distance,
@@ -107,9 +120,11 @@ pub fn mass_properties(
             Some(kg) => MassSpec::Mass(kg),
             None => MassSpec::Density(options.density),
         };
-        let m = MassProperties::of_mesh_with(doc.mesh_of(i), spec).map_err(|e| WorkspaceError::Mass {
-            component: c.name.clone(),
-            source: e,
+        let m = MassProperties::of_mesh_with(doc.mesh_of(i), spec).map_err(|e| {
+            WorkspaceError::Mass {
+                component: c.name.clone(),
+                source: e,
+            }
         })?;
         bodies.push(m.moved(&c.transform));
     }
@@ -170,7 +185,11 @@ impl Workspace<'_> {
 /// expressed in the coordinate system `frame` (its pose in the world; `None`: the
 /// world), mm: what a per-component export writes, with the transform baked in
 /// (CodeStack's "Export Part Or Component To STL").
-pub fn world_mesh(doc: &Document, which: &[usize], frame: Option<&crate::math::Transform>) -> crate::mesh::Mesh {
+pub fn world_mesh(
+    doc: &Document,
+    which: &[usize],
+    frame: Option<&crate::math::Transform>,
+) -> crate::mesh::Mesh {
     let to_frame = frame.map(|f| f.inverse());
     let mut out = crate::mesh::Mesh {
         vertices: Vec::new(),

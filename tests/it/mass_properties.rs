@@ -78,7 +78,10 @@ fn meshes(dir: &Path) -> Vec<PathBuf> {
     for (name, mesh) in [
         ("sphere.stl", Mesh::uv_sphere(12.5, 64)),
         ("screw.stl", screw),
-        ("cylinder.stl", Mesh::cylinder(6.0, 30.0, 40).transformed(&pose)),
+        (
+            "cylinder.stl",
+            Mesh::cylinder(6.0, 30.0, 40).transformed(&pose),
+        ),
     ] {
         let f = dir.join(name);
         write_stl(&f, &mesh).unwrap();
@@ -103,9 +106,19 @@ fn mass_properties_equal_trimesh_on_closed_meshes() {
         let m = MassProperties::of_mesh(&mesh, 1e9).unwrap();
         let size = mesh.bounds().map(|b| (b.hi - b.lo).norm()).unwrap();
         let name = f.file_name().unwrap().to_string_lossy();
-        assert!(rel_close(m.volume, r[0], r[0].abs()), "{name}: volume {} vs trimesh {}", m.volume, r[0]);
+        assert!(
+            rel_close(m.volume, r[0], r[0].abs()),
+            "{name}: volume {} vs trimesh {}",
+            m.volume,
+            r[0]
+        );
         assert!(rel_close(m.mass, r[0], r[0].abs()), "{name}: mass");
-        assert!(rel_close(m.area, r[13], r[13]), "{name}: area {} vs {}", m.area, r[13]);
+        assert!(
+            rel_close(m.area, r[13], r[13]),
+            "{name}: area {} vs {}",
+            m.area,
+            r[13]
+        );
         let c = m.centre_of_mass;
         for (k, v) in [c.x, c.y, c.z].into_iter().enumerate() {
             // relative to the part's size: a centre at 0 has no relative scale of its own
@@ -137,7 +150,11 @@ fn closed_forms() {
     )
     .unwrap();
     let mass = 6000.0;
-    assert!(rel_close(b.inertia[(0, 0)], mass * (400.0 + 100.0) / 12.0, b.inertia[(0, 0)]));
+    assert!(rel_close(
+        b.inertia[(0, 0)],
+        mass * (400.0 + 100.0) / 12.0,
+        b.inertia[(0, 0)]
+    ));
     let (r, h, n) = (8.0f64, 40.0, 24usize);
     let t = std::f64::consts::TAU / n as f64;
     let c = MassProperties::of_mesh(&Mesh::cylinder(r, h, n), 1e9).unwrap();

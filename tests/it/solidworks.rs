@@ -14,13 +14,22 @@ fn every_ported_macro_runs() {
         .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
         .collect();
     scripts.sort();
-    assert!(scripts.len() >= 14, "expected the ported macros, found {scripts:?}");
+    assert!(
+        scripts.len() >= 14,
+        "expected the ported macros, found {scripts:?}"
+    );
     let mut failures = Vec::new();
     for s in &scripts {
-        let rel = s.strip_prefix(&root).unwrap().to_string_lossy().into_owned();
+        let rel = s
+            .strip_prefix(&root)
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
         let text = std::fs::read_to_string(s).unwrap();
         assert!(
-            text.lines().take(3).any(|l| l.contains("Ports CodeStack's")),
+            text.lines()
+                .take(3)
+                .any(|l| l.contains("Ports CodeStack's")),
             "{rel} names the macro it ports in its first lines"
         );
         let out = common::run_in(&root, &["run", &rel]);
@@ -28,7 +37,11 @@ fn every_ported_macro_runs() {
             failures.push(format!("{rel}:\n{}", common::text(&out)));
         }
     }
-    assert!(failures.is_empty(), "failing ports:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "failing ports:\n{}",
+        failures.join("\n")
+    );
 }
 
 /// A scratch project with the demo cell and one script.
@@ -57,9 +70,18 @@ fn document_warnings_go_to_stderr_not_into_the_scripts_output() {
     assert!(out.status.success(), "{}", common::text(&out));
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stdout.starts_with("name,x\n"), "the CSV starts with its own header: {stdout:?}");
-    assert!(!stdout.contains("warning"), "no warning in the script's output: {stdout:?}");
-    assert!(stderr.contains("warning") && stderr.contains("Screw4"), "the warning is on stderr: {stderr:?}");
+    assert!(
+        stdout.starts_with("name,x\n"),
+        "the CSV starts with its own header: {stdout:?}"
+    );
+    assert!(
+        !stdout.contains("warning"),
+        "no warning in the script's output: {stdout:?}"
+    );
+    assert!(
+        stderr.contains("warning") && stderr.contains("Screw4"),
+        "the warning is on stderr: {stderr:?}"
+    );
 }
 
 #[test]
@@ -73,8 +95,15 @@ fn a_screw_pushed_5_mm_into_the_table_reads_5_mm() {
          print(`${i[0].depth}`);\n",
     );
     assert!(out.status.success(), "{}", common::text(&out));
-    let lines: Vec<String> = String::from_utf8_lossy(&out.stdout).lines().map(String::from).collect();
-    let depth: f64 = lines[0].strip_prefix("interfering ").unwrap().parse().unwrap();
+    let lines: Vec<String> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(String::from)
+        .collect();
+    let depth: f64 = lines[0]
+        .strip_prefix("interfering ")
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!((depth - 5.0).abs() < 1e-6, "contact depth {depth}");
     let listed: f64 = lines[1].parse().unwrap();
     assert!((listed - 5.0).abs() < 1e-6, "interferences depth {listed}");
@@ -91,20 +120,31 @@ fn fixed_is_set_on_a_calls_result() {
          print(`${d.component(\"screw4\").transform.translation}`);\n",
     );
     assert!(out.status.success(), "{}", common::text(&out));
-    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "[1.0, 2.0, 3.0]");
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        "[1.0, 2.0, 3.0]"
+    );
     // errors keep their line after the rewrite
     let out = run_script("let d = open_doc(\"models/cell.yaml\");\nd.component(\"screw4\").fixed = true;\nd.component(\"nope\").fixed = true;\n");
     assert!(!out.status.success());
-    assert!(common::text(&out).contains("t.rhai:3"), "{}", common::text(&out));
+    assert!(
+        common::text(&out).contains("t.rhai:3"),
+        "{}",
+        common::text(&out)
+    );
 }
 
 #[test]
 fn sixteen_numbers_say_their_unit() {
     // SolidWorks' ArrayData (metres) pasted into transform(): refused, not read as mm
-    let out = run_script("let t = transform([1, 0, 0, 0, 1, 0, 0, 0, 1, 0.1, 0.2, 0.3, 1, 0, 0, 0]);\n");
+    let out =
+        run_script("let t = transform([1, 0, 0, 0, 1, 0, 0, 0, 1, 0.1, 0.2, 0.3, 1, 0, 0, 0]);\n");
     assert!(!out.status.success());
     let text = common::text(&out);
-    assert!(text.contains("metres") && text.contains("create_transform"), "{text}");
+    assert!(
+        text.contains("metres") && text.contains("create_transform"),
+        "{text}"
+    );
     let out = run_script(
         "let d = [1, 0, 0, 0, 1, 0, 0, 0, 1, 0.1, 0.2, 0.3, 1, 0, 0, 0];\n\
          assert(create_transform(d) == translation(100, 200, 300), \"metres\");\n\
@@ -128,7 +168,11 @@ fn data_files_are_read_and_written_inside_the_project() {
     let dir = common::project();
     std::fs::create_dir_all(dir.path().join("data")).unwrap();
     std::fs::write(dir.path().join("data/t.csv"), "name;x\n\"a;b\";1.5\nc;2\n").unwrap();
-    std::fs::write(dir.path().join("data/s.json"), "{\"steps\": [1, 2.5, null], \"name\": \"x\"}").unwrap();
+    std::fs::write(
+        dir.path().join("data/s.json"),
+        "{\"steps\": [1, 2.5, null], \"name\": \"x\"}",
+    )
+    .unwrap();
     std::fs::write(
         dir.path().join("scripts/t.rhai"),
         "let t = read_csv(\"data/t.csv\", #{delimiter: \";\"});\n\
@@ -155,13 +199,28 @@ fn data_files_are_read_and_written_inside_the_project() {
     assert!(json.contains("\"n\": 3"), "{json}");
     // a file the user owns is never replaced by a script's writer
     std::fs::write(dir.path().join("out/mine.txt"), "mine").unwrap();
-    std::fs::write(dir.path().join("scripts/w.rhai"), "write_text(\"out/mine.txt\", \"theirs\");\n").unwrap();
+    std::fs::write(
+        dir.path().join("scripts/w.rhai"),
+        "write_text(\"out/mine.txt\", \"theirs\");\n",
+    )
+    .unwrap();
     let out = common::run_in(dir.path(), &["run", "scripts/w.rhai"]);
     assert!(!out.status.success());
-    assert_eq!(std::fs::read_to_string(dir.path().join("out/mine.txt")).unwrap(), "mine");
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("out/mine.txt")).unwrap(),
+        "mine"
+    );
     // a bad CSV names its line
     std::fs::write(dir.path().join("data/bad.csv"), "a,b\n1,2\n3\n").unwrap();
-    std::fs::write(dir.path().join("scripts/b.rhai"), "read_csv(\"data/bad.csv\");\n").unwrap();
+    std::fs::write(
+        dir.path().join("scripts/b.rhai"),
+        "read_csv(\"data/bad.csv\");\n",
+    )
+    .unwrap();
     let out = common::run_in(dir.path(), &["run", "scripts/b.rhai"]);
-    assert!(common::text(&out).contains("data/bad.csv:3"), "{}", common::text(&out));
+    assert!(
+        common::text(&out).contains("data/bad.csv:3"),
+        "{}",
+        common::text(&out)
+    );
 }
