@@ -79,7 +79,7 @@ impl Clock {
     #[inline]
     fn tick(&mut self) -> Result<(), VolumeError> {
         self.ticks = self.ticks.wrapping_add(1);
-        if self.ticks % 1024 == 0 {
+        if self.ticks.is_multiple_of(1024) {
             if let Some(d) = self.deadline {
                 if Instant::now() > d {
                     return Err(VolumeError::TimeLimit(self.limit_ms));
@@ -257,7 +257,7 @@ impl Prism {
     fn new(t: &[Point3; 3]) -> Option<Prism> {
         let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
         // A footprint of no area bounds no prism.
-        if !(n.z.abs() > 1e-14 * n.norm()) {
+        if n.z.abs().partial_cmp(&(1e-14 * n.norm())) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         let mut corners = [[t[0].x, t[0].y], [t[1].x, t[1].y], [t[2].x, t[2].y]];

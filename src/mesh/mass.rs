@@ -141,7 +141,9 @@ impl MassProperties {
         let unit = volume_integrals(mesh);
         // relative to the part's own size, wherever it stands
         let size = mesh.bounds().map(|b| (b.hi - b.lo).norm()).unwrap_or(0.0);
-        if !(unit.volume.abs() > 1e-12 * size * size * size) {
+        if unit.volume.abs().partial_cmp(&(1e-12 * size * size * size))
+            != Some(std::cmp::Ordering::Greater)
+        {
             return Err(MassError::NoVolume(unit.volume));
         }
         let density_per_mm3 = match spec {
