@@ -66,6 +66,10 @@ pub trait ClosedFormIk {
     /// module docs).
     fn model_error(&self) -> ModelError;
 
+    /// The TCP pose (root frame, mm) of the idealized arm the closed form solves, at
+    /// joint values `q` (rad).
+    fn idealized_forward(&self, q: &[f64; 6]) -> Isometry3<f64>;
+
     /// [`branches_seeded`](Self::branches_seeded) with seed 0.
     #[inline]
     fn branches(&self, target: &Isometry3<f64>, singularity_threshold: f64) -> Branches {
@@ -133,12 +137,84 @@ pub(crate) fn solve<S: ClosedFormIk>(
             IkError::Unreachable(solver.unreachable())
         });
     }
+    let model = solver.model_error();
     if let Some(robot) = robot {
-        if !solver.model_error().is_exact() {
+        if !model.is_exact() {
             let threshold = options.singularity_threshold;
+            let x = target.isometry();
+            let mut corrected = Vec::new();
             for b in branches.items[..branches.len].iter_mut().filter(|b| b.polish) {
-                polish(solver, robot, target.isometry(), threshold, seed, b);
+                corrected.push(polish(solver, robot, x, threshold, seed, b));
             }
+            // Far from the tree's solution (a near-singular wrist turns the model
+            // error into large joint errors) the first pass can miss a branch whose
+            // wrist point it put beyond the reach; asked for a corrected target the
+            // idealized arm finds it: such branches are polished and kept if they
+            // reach the target (provisional).
+            for y in corrected {
+                let again = solver.branches_seeded(&y, threshold, seed);
+                for c in again.as_slice() {
+                    if branches
+                        .as_slice()
+                        .iter()
+                        .any(|b| b.configuration == c.configuration)
+                    {
+                        continue;
+                    }
+                    let mut c = *c;
+                    polish(solver, robot, x, threshold, seed, &mut c);
+                    c.provisional = true;
+                    branches.push(c);
+                }
+            }
+            // The solution at the reference, unless another branch holds it already
+            // (near a shoulder or elbow singularity distinct branches are close).
+            for i in 0..branches.len {
+                if !branches.items[i].polish {
+                    continue;
+                }
+                let Some(q) = toward_reference(robot, x, reference, &branches.items[i]) else {
+                    continue;
+                };
+                let taken = branches.as_slice().iter().enumerate().any(|(j, b)| {
+                    j != i
+                        && b.joints
+                            .iter()
+                            .zip(&q)
+                            .all(|(u, v)| wrap(u - v).abs() < 1e-7)
+                });
+                if !taken {
+                    branches.items[i].joints = q;
+                }
+            }
+        }
+    }
+    // Provisional branches stay only if they reach the target (within the model
+    // error, against the tree; within rounding, against the idealized arm).
+    if branches.as_slice().iter().any(|b| b.provisional) {
+        let (mm, rad) = match robot {
+            Some(_) => (8.0 * model.mm + 1e-9, 8.0 * model.rad + 1e-12),
+            None => (1e-9, 1e-12),
+        };
+        let mut kept = Branches::new();
+        for b in branches.as_slice() {
+            let pose = match robot {
+                Some(r) => r.tcp_in_root(&b.joints),
+                None => solver.idealized_forward(&b.joints),
+            };
+            let d = target.isometry().rotation * pose.rotation.inverse();
+            let ok = (target.isometry().translation.vector - pose.translation.vector).norm() <= mm
+                && 2.0 * d.imag().norm().min(1.0).asin() <= rad;
+            if !b.provisional || ok {
+                kept.push(*b);
+            }
+        }
+        kept.singular = branches.singular;
+        kept.undetermined = branches.undetermined;
+        kept.out_of_reach = true;
+        branches = kept;
+        if branches.is_empty() {
+            return Err(IkError::Unreachable(solver.unreachable()));
         }
     }
     solutions_within_limits(branches.as_slice(), solver.joint_limits(), reference)
@@ -158,6 +234,10 @@ pub struct Branch {
     /// Near a singularity but outside the model-error bands: the idealized arm's
     /// error is amplified here, so [`Robot::inverse`] polishes the branch on the tree.
     pub(crate) polish: bool,
+    /// Accepted only within the widened reach of a near-singular wrist (see
+    /// [`ArmPlane::elbow`]): kept by [`solve`] only if it reaches the target after the
+    /// polish (on the robot's tree, or on the idealized arm without a robot).
+    pub(crate) provisional: bool,
 }
 
 /// Up to eight principal branches (joint values in (−π, π], no limits applied), in a
@@ -187,6 +267,7 @@ impl Branches {
         },
         singular: false,
         polish: false,
+        provisional: false,
     };
 
     pub(crate) fn new() -> Self {
@@ -354,6 +435,8 @@ pub(crate) struct ElbowRoot {
     pub(crate) first: bool,
     /// Sine of the elbow angle: distance to stretched or folded (0 there).
     pub(crate) margin: f64,
+    /// Beyond the reach by more than the position band (within `slack`).
+    pub(crate) beyond: bool,
     /// Taken as exactly stretched or folded (within the model error).
     pub(crate) snapped: bool,
 }
@@ -447,33 +530,34 @@ impl ArmPlane {
 
     /// Joints 2 and 3 putting the wrist point at `p2 + d` (arm plane, mm):
     /// `|u₂ + R(θ₃)u₃| = |d|`, `θ₃ = ±acos κ − γ`, θ₂ turning `u₂ + R(θ₃)u₃` onto
-    /// `d`. With `|d|` within `band` (mm: the position band, widened where the wrist
-    /// amplifies the model error) of the longest or shortest reach (stretched or
-    /// folded) the one double root; beyond the reach by more than the band nothing
-    /// (flag set); `d` on axis 2 leaves joint 2 undetermined (flags set).
+    /// `d`. With `|d|` within the position band `tol.len` of the longest or shortest
+    /// reach (stretched or folded) the one double root; beyond the reach by up to
+    /// `slack` (mm, at least `tol.len`: where the wrist amplifies the model error the
+    /// wrist point itself is that uncertain) the same double root, to be polished;
+    /// farther nothing (flag set); `d` on axis 2 leaves joint 2 undetermined (flags
+    /// set).
     #[inline]
     pub(crate) fn elbow(
         &self,
         d: [f64; 2],
-        band: f64,
+        slack: f64,
         tol: &Tolerances,
         out: &mut Branches,
     ) -> ([ElbowRoot; 2], usize) {
         let mut roots = [ElbowRoot::default(); 2];
         let d2 = d[0] * d[0] + d[1] * d[1];
         let [lo, hi] = self.reach;
-        let tol = &Tolerances { len: band, ..*tol };
-
-
+        let (band, slack) = (tol.len, slack.max(tol.len));
         // Bands in length, not in κ: snapping κ moves the wrist point by
         // Δκ·2|u2||u3| / 2|d|, which is large where |d| is short (folded).
-        if d2 > (hi + tol.len) * (hi + tol.len) || (lo > tol.len && d2 < (lo - tol.len) * (lo - tol.len)) {
+        if d2 > (hi + slack) * (hi + slack) || (lo > slack && d2 < (lo - slack) * (lo - slack)) {
             out.out_of_reach = true;
             return (roots, 0);
         }
-        let (kappa, snapped) = if d2 >= (hi - tol.len) * (hi - tol.len) {
+        let beyond = d2 > (hi + band) * (hi + band) || (lo > band && d2 < (lo - band) * (lo - band));
+        let (kappa, snapped) = if d2 >= (hi - band) * (hi - band) {
             (1.0, true)
-        } else if d2 <= (lo + tol.len) * (lo + tol.len) {
+        } else if d2 <= (lo + band) * (lo + band) {
             (-1.0, true)
         } else {
             (((d2 - self.len_sq) / self.len_prod2).clamp(-1.0, 1.0), false)
@@ -512,6 +596,7 @@ impl ArmPlane {
                 c23: c2a * ct - s2a * st,
                 first: el > 0.0,
                 margin: sk,
+                beyond,
                 snapped,
             };
             n += 1;
@@ -594,7 +679,9 @@ pub(crate) fn measure_model_error(
 /// (`Y ← Y·T(q)⁻¹·X`, the same branch by its configuration), until the tree's pose
 /// stops improving (at most four rounds). The correction varies with the joints
 /// only at the model error's own scale, so this converges where a Newton step on the
-/// near-singular Jacobian would overshoot along its valley.
+/// near-singular Jacobian would overshoot along its valley. Returns the corrected
+/// target for the final branch (where the idealized arm's other branches near this
+/// one are found too).
 pub(crate) fn polish<S: ClosedFormIk>(
     solver: &S,
     robot: &Robot,
@@ -602,7 +689,7 @@ pub(crate) fn polish<S: ClosedFormIk>(
     threshold: f64,
     seed: f64,
     branch: &mut Branch,
-) {
+) -> Isometry3<f64> {
     let residual = |q: &[f64; 6]| {
         let c = robot.tcp_in_root(q);
         let d = target.rotation * c.rotation.inverse();
@@ -611,12 +698,13 @@ pub(crate) fn polish<S: ClosedFormIk>(
         (c, e)
     };
     let (mut real, mut err) = residual(&branch.joints);
-    let mut asked = *target;
+    // `used`: the target the idealized arm was asked for the current branch.
+    let mut used = *target;
     for _ in 0..4 {
         if err == 0.0 {
             break;
         }
-        asked = asked * real.inverse() * target;
+        let asked = used * real.inverse() * target;
         let again = solver.branches_seeded(&asked, threshold, seed);
         let Some(next) = again
             .as_slice()
@@ -640,9 +728,77 @@ pub(crate) fn polish<S: ClosedFormIk>(
             break;
         }
         branch.joints = next.joints;
+        used = asked;
         real = r;
         err = e;
     }
+    used * real.inverse() * target
+}
+
+/// Near a singularity a description that is not exactly the idealized arm has
+/// solutions in close pairs (a general 6R arm has up to 16; the idealized arm's
+/// double roots split by the model error): the polished branch may be the partner
+/// of the one at `reference`, a few 1e-6 rad away. When `reference` is that close
+/// to the branch (every joint within 1e-4 rad, modulo 2π), Newton steps on the tree
+/// started from the reference find the solution there: returned when it reaches the
+/// target as well as the branch and stays that close.
+fn toward_reference(
+    robot: &Robot,
+    target: &Isometry3<f64>,
+    reference: &[f64],
+    branch: &Branch,
+) -> Option<[f64; 6]> {
+    const NEAR: f64 = 1e-4;
+    if reference.len() < 6 || robot.dof() != 6 {
+        return None;
+    }
+    let mut q = [0.0; 6];
+    for (k, v) in q.iter_mut().enumerate() {
+        let d = wrap(reference[k] - branch.joints[k]);
+        if !(d.abs() < NEAR) {
+            return None;
+        }
+        *v = branch.joints[k] + d;
+    }
+    let s = super::NumericIk::LENGTH_SCALE;
+    let error = |q: &[f64; 6]| {
+        let c = robot.tcp_in_root(q);
+        let dp = target.translation.vector - c.translation.vector;
+        let dr = (target.rotation * c.rotation.inverse()).scaled_axis() * s;
+        nalgebra::Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
+    };
+    let start = error(&branch.joints).norm();
+    let mut e = error(&q);
+    for _ in 0..8 {
+        if e.norm() <= start.min(1e-12) {
+            break;
+        }
+        let mut jac = super::NumericIk::jacobian(robot, &q);
+        for col in 0..6 {
+            for row in 3..6 {
+                jac[(row, col)] *= s;
+            }
+        }
+        let rhs = nalgebra::DVector::from_column_slice(e.as_slice());
+        let Ok(dq) = jac.svd(true, true).solve(&rhs, 1e-14 * s) else {
+            return None;
+        };
+        let mut next = q;
+        for (k, v) in next.iter_mut().enumerate() {
+            *v += dq[k];
+        }
+        let en = error(&next);
+        if !(en.norm() < e.norm()) {
+            break;
+        }
+        q = next;
+        e = en;
+    }
+    let stays = q
+        .iter()
+        .zip(&branch.joints)
+        .all(|(a, b)| (a - b).abs() < NEAR);
+    (stays && e.norm() <= start.max(1e-12)).then(|| q.map(wrap))
 }
 
 /// Six joint axis lines: unit direction and a point (mm).

@@ -332,6 +332,7 @@ impl ClosedFormIk for OpwSolver {
                             },
                             singular: true,
                             polish: false,
+                            provisional: false,
                         });
                     }
                     continue;
@@ -363,6 +364,7 @@ impl ClosedFormIk for OpwSolver {
                     },
                     singular: near_singular,
                     polish,
+                    provisional: false,
                 });
                 // The flip root follows without trigonometry: since a5 ⟂ a4 and
                 // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
@@ -383,6 +385,7 @@ impl ClosedFormIk for OpwSolver {
                     },
                     singular: near_singular,
                     polish,
+                    provisional: false,
                 });
             }
         }
@@ -404,6 +407,10 @@ impl ClosedFormIk for OpwSolver {
 
     fn model_error(&self) -> ModelError {
         self.tol.model
+    }
+
+    fn idealized_forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
+        self.forward(q)
     }
 }
 

@@ -268,14 +268,36 @@ impl ClosedFormIk for UrSolver {
         let (shoulders, n_sh) = self.arm.shoulder(&w, tol, singularity_threshold, &mut out);
         // At the wrist singularity joint 6 is the seed on every branch.
         let seeded = q6_seed.sin_cos();
+        let rho = w.x.hypot(w.y);
+        let t6h = t6.x.hypot(t6.y);
         for sh in &shoulders[..n_sh] {
-            let (s1, c1) = (sh.s1, sh.c1);
+            let mut sh = *sh;
             // t = Rz(−q1)·t6; the wrist sine and cosine δ = ∠(y, t).
-            let tx = c1 * t6.x + s1 * t6.y;
-            let cw = -s1 * t6.x + c1 * t6.y;
-            let sd = tx.hypot(t6.z);
+            let tx = sh.c1 * t6.x + sh.s1 * t6.y;
+            let mut cw = -sh.s1 * t6.x + sh.c1 * t6.y;
+            let mut sd = tx.hypot(t6.z);
+            // At the wrist singularity axis 6 lies along axes 2–4, Rz(q1)·y: joint 1
+            // follows from the orientation alone, where the position's joint 1 is off
+            // by the position band over x' (x' = √(ρ² − b²) near the shoulder
+            // singularity): when axis 6 is level within the wrist band and the
+            // position's joint 1 agrees within its own error, the wrist is singular
+            // and joint 1 the orientation's.
+            let xp_eff = sh.xp.abs().max(tol.disc.sqrt());
+            let dq1 = tol.len / rho + self.arm.b.abs() * tol.len / (rho * xp_eff);
+            let mut snapped = sd < tol.wrist;
+            if !snapped && t6.z.abs() < tol.wrist && sd < tol.wrist + dq1 && t6h > 0.5 {
+                let sign = cw.signum();
+                let (s1, c1) = (-sign * t6.x / t6h, sign * t6.y / t6h);
+                sh.s1 = s1;
+                sh.c1 = c1;
+                sh.q1 = s1.atan2(c1);
+                sh.xp = c1 * w.x + s1 * w.y;
+                cw = sign * t6h;
+                sd = t6.z.abs();
+                snapped = true;
+            }
+            let (s1, c1) = (sh.s1, sh.c1);
             let near_singular = sd < singularity_threshold;
-            let snapped = sd < tol.wrist;
             out.singular |= near_singular || snapped;
             // No-flip wrist: q5 = φ5 + δ, and q6 turns Mᵀy onto Rot(a5,−q5)y about a6
             // with M = Rz(−q1)·R_X·R₀ᵀ. In the basis (a5, a6 × a5) of the plane ⟂ a6 the
@@ -323,11 +345,16 @@ impl ClosedFormIk for UrSolver {
                     sh.xp - sgn * self.e5 * a5r[0] - self.arm.p2[0],
                     w.z - sgn * self.e5 * a5r[1] - self.arm.p2[1],
                 ];
-                // Near the wrist singularity θ234 carries the orientation band over the
-                // wrist sine, and W4 that times e5: the elbow's band widens by it (the
-                // branch is then polished on the tree).
-                let band = tol.len + self.e5.abs() * tol.ang / sd.max(tol.wrist);
-                let (elbows, n_el) = self.arm.elbow(d, band, tol, &mut out);
+                // Near the wrist singularity (not on it) θ234 carries the orientation
+                // band and joint 1's error over the wrist sine (together the wrist
+                // band), and W4 that times e5: a wrist point that far beyond the
+                // reach is taken as stretched (and polished).
+                let slack = if snapped || tol.model.is_exact() {
+                    tol.len
+                } else {
+                    tol.len + self.e5.abs() * tol.wrist / sd
+                };
+                let (elbows, n_el) = self.arm.elbow(d, slack, tol, &mut out);
                 for el in &elbows[..n_el] {
                     let elbow = if el.first == sh.front {
                         Elbow::Up
@@ -355,6 +382,7 @@ impl ClosedFormIk for UrSolver {
                         },
                         singular: near_singular || snapped,
                         polish: margin < POLISH_NEAR && !(snapped || sh.snapped),
+                        provisional: el.beyond,
                     });
                 }
             }
@@ -377,6 +405,10 @@ impl ClosedFormIk for UrSolver {
 
     fn model_error(&self) -> ModelError {
         self.tol.model
+    }
+
+    fn idealized_forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
+        self.forward(q)
     }
 }
 

@@ -304,6 +304,18 @@ fn singular_targets(name: &str, r: &Robot, seed: u64) {
         let mut q = draw(&mut rng);
         q[4] = [1e-6, -1e-6, 1e-7, -1e-7, PI - 1e-6][k % 5];
         check(returns_generating(r, &q, "near the wrist singularity", 1e-6));
+        // From a reference 1e-5 rad off in every joint: still the generating joints.
+        let target = r.tcp_pose(&q).unwrap();
+        let near: Vec<f64> = q.iter().map(|v| v + rng.range(-1e-5, 1e-5)).collect();
+        match r.inverse(&target, &near, &IkOptions::default()) {
+            Ok(sols) if joint_gap(&sols[0].joints, &q) > 1e-6 => check(Err(format!(
+                "near the wrist singularity, reference {near:?}: nearest {:?} is {:e} rad from the generating {q:?}",
+                sols[0].joints,
+                joint_gap(&sols[0].joints, &q)
+            ))),
+            Ok(_) => {}
+            Err(e) => check(Err(format!("near the wrist singularity: {q:?}: {e}"))),
+        }
     }
     assert!(
         failures.is_empty(),
@@ -436,3 +448,20 @@ fn branch_sets_equal_ur_kin_cpp() {
 }
 
 
+
+#[test]
+fn zz_debug_shoulder() {
+    use fitup::kinematics::ClosedFormIk;
+    let Some(dir) = real_dir() else { return };
+    let path = dir.join("ur3e.urdf");
+    let r = robot_of(&path, &std::fs::read_to_string(&path).unwrap());
+    let q = [0.03101519809972375, 2.5516112500892394, -1.9236287080428005, -0.9859345632277559, -0.2685641481416612, -2.5747574893657315];
+    let t = r.tcp_pose(&q).unwrap();
+    let local = r.base().isometry().inverse() * t.isometry();
+    let s = r.ur_solver().unwrap();
+    let b = s.branches_seeded(&local, 1e-9, q[5]);
+    for x in b.as_slice() { println!("{:?} {:?}", x.joints, x.configuration); }
+    println!("{:?}", s.model_error());
+    let sols = r.inverse(&t, &q, &IkOptions::default()).unwrap();
+    for s in distinct(sols.into_iter().map(|s| s.joints), 1e-4) { println!("{:?} {:?}", s, pose_gap(&r.tcp_pose(&s).unwrap(), &t)); }
+}
