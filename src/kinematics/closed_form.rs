@@ -143,7 +143,10 @@ pub(crate) fn solve<S: ClosedFormIk>(
             let threshold = options.singularity_threshold;
             let x = target.isometry();
             let mut corrected = Vec::new();
-            for b in branches.items[..branches.len].iter_mut().filter(|b| b.polish) {
+            for b in branches.items[..branches.len]
+                .iter_mut()
+                .filter(|b| b.polish)
+            {
                 corrected.push(polish(solver, robot, x, threshold, seed, b));
             }
             // Far from the tree's solution (a near-singular wrist turns the model
@@ -554,13 +557,17 @@ impl ArmPlane {
             out.out_of_reach = true;
             return (roots, 0);
         }
-        let beyond = d2 > (hi + band) * (hi + band) || (lo > band && d2 < (lo - band) * (lo - band));
+        let beyond =
+            d2 > (hi + band) * (hi + band) || (lo > band && d2 < (lo - band) * (lo - band));
         let (kappa, snapped) = if d2 >= (hi - band) * (hi - band) {
             (1.0, true)
         } else if d2 <= (lo + band) * (lo + band) {
             (-1.0, true)
         } else {
-            (((d2 - self.len_sq) / self.len_prod2).clamp(-1.0, 1.0), false)
+            (
+                ((d2 - self.len_sq) / self.len_prod2).clamp(-1.0, 1.0),
+                false,
+            )
         };
         let sk = if snapped {
             0.0
@@ -652,7 +659,7 @@ pub(crate) fn measure_model_error(
     robot: &Robot,
     forward: impl Fn(&[f64; 6]) -> Isometry3<f64>,
 ) -> ModelError {
-    let mut rng = Rng::new(0x0cf_1d);
+    let mut rng = Rng::new(0xcf1d);
     let mut e = ModelError::default();
     for k in 0..33 {
         let mut q = [0.0; 6];
@@ -663,9 +670,8 @@ pub(crate) fn measure_model_error(
         }
         let a = forward(&q);
         let b = robot.tcp_in_root(&q);
-        e.mm = e
-            .mm
-            .max((a.translation.vector - b.translation.vector).norm());
+        e.mm =
+            e.mm.max((a.translation.vector - b.translation.vector).norm());
         // 2·asin(|imag|) keeps small angles that acos of the scalar part rounds away.
         let d = a.rotation.inverse() * b.rotation;
         e.rad = e.rad.max(2.0 * d.imag().norm().min(1.0).asin());
@@ -698,13 +704,17 @@ pub(crate) fn polish<S: ClosedFormIk>(
         (c, e)
     };
     let (mut real, mut err) = residual(&branch.joints);
-    // `used`: the target the idealized arm was asked for the current branch.
-    let mut used = *target;
-    for _ in 0..4 {
+    // The tree's pose is E·(the idealized arm's) with E varying slowly with the
+    // joints: ask the idealized arm for E⁻¹·target, E from the current branch (its
+    // own idealized pose, not the target it was asked for: a branch taken as
+    // stretched within the reach slack does not reach that one).
+    let corrected =
+        |q: &[f64; 6], real: &Isometry3<f64>| solver.idealized_forward(q) * real.inverse() * target;
+    for _ in 0..6 {
         if err == 0.0 {
             break;
         }
-        let asked = used * real.inverse() * target;
+        let asked = corrected(&branch.joints, &real);
         let again = solver.branches_seeded(&asked, threshold, seed);
         let Some(next) = again
             .as_slice()
@@ -724,15 +734,14 @@ pub(crate) fn polish<S: ClosedFormIk>(
             break;
         };
         let (r, e) = residual(&next.joints);
-        if !(e < err) {
+        if e.is_nan() || e >= err {
             break;
         }
         branch.joints = next.joints;
-        used = asked;
         real = r;
         err = e;
     }
-    used * real.inverse() * target
+    corrected(&branch.joints, &real)
 }
 
 /// Near a singularity a description that is not exactly the idealized arm has
@@ -755,7 +764,7 @@ fn toward_reference(
     let mut q = [0.0; 6];
     for (k, v) in q.iter_mut().enumerate() {
         let d = wrap(reference[k] - branch.joints[k]);
-        if !(d.abs() < NEAR) {
+        if d.is_nan() || d.abs() >= NEAR {
             return None;
         }
         *v = branch.joints[k] + d;
@@ -788,7 +797,7 @@ fn toward_reference(
             *v += dq[k];
         }
         let en = error(&next);
-        if !(en.norm() < e.norm()) {
+        if en.norm().is_nan() || en.norm() >= e.norm() {
             break;
         }
         q = next;

@@ -41,8 +41,8 @@
 //! (`sin(acos(a₄·t)) = 0`) axes 4 and 6 line up: the wrist singularity.
 
 use super::closed_form::{
-    canonical_frame, measure_model_error, rot_vec, wrap, zero_axis_lines, ArmPlane,
-    ModelError, Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
+    canonical_frame, measure_model_error, rot_vec, wrap, zero_axis_lines, ArmPlane, ModelError,
+    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::ur::snap_phi;
 use super::{
@@ -337,8 +337,8 @@ impl ClosedFormIk for OpwSolver {
                     }
                     continue;
                 }
-                let polish = sd.min(el.margin).min(sh.margin) < POLISH_NEAR
-                    && !(sh.snapped || el.snapped);
+                let polish =
+                    sd.min(el.margin).min(sh.margin) < POLISH_NEAR && !(sh.snapped || el.snapped);
                 let delta = sd.atan2(cw);
                 let tp = t - self.a4 * self.a4.dot(&t);
                 // No-flip root q5 = φ5 + δ.

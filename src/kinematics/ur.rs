@@ -315,12 +315,7 @@ impl ClosedFormIk for UrSolver {
                 let r1 = -s1 * ra5.x + c1 * ra5.y;
                 let r2 = -s1 * ra65.x + c1 * ra65.y;
                 let n = r1.hypot(r2);
-                (
-                    wrap(self.phi5 + sd.atan2(cw)),
-                    r1.atan2(r2),
-                    r1 / n,
-                    r2 / n,
-                )
+                (wrap(self.phi5 + sd.atan2(cw)), r1.atan2(r2), r1 / n, r2 / n)
             };
             // Ry(θ234)·a5 = M·Rot(a6,−q6)·a5 = Rz(−q1)·(c6·R a5 − s6·R (a6×a5)), in xz.
             let m = ra5 * c6 - ra65 * s6;
@@ -334,11 +329,7 @@ impl ClosedFormIk for UrSolver {
                 let (q5w, q6w, th) = if sgn > 0.0 {
                     (q5, q6, th234)
                 } else {
-                    (
-                        wrap(2.0 * self.phi5 - q5),
-                        wrap(q6 + PI),
-                        wrap(th234 + PI),
-                    )
+                    (wrap(2.0 * self.phi5 - q5), wrap(q6 + PI), wrap(th234 + PI))
                 };
                 // W4 in the arm plane: Rz(−q1)W5 − e5·Ry(θ234)a5.
                 let d = [

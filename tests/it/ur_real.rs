@@ -47,9 +47,15 @@ fn joint_gap(a: &[f64], b: &[f64]) -> f64 {
 
 /// The published D-H lengths `[d1, a2, a3, d4, d5, d6]` (metres) of the e-Series arms.
 const E_SERIES: [(&str, [f64; 6]); 4] = [
-    ("ur3e", [0.15185, -0.24355, -0.2132, 0.13105, 0.08535, 0.0921]),
+    (
+        "ur3e",
+        [0.15185, -0.24355, -0.2132, 0.13105, 0.08535, 0.0921],
+    ),
     ("ur5e", [0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996]),
-    ("ur10e", [0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655]),
+    (
+        "ur10e",
+        [0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655],
+    ),
     ("ur16e", [0.1807, -0.4784, -0.36, 0.17415, 0.11985, 0.11655]),
 ];
 
@@ -60,14 +66,15 @@ const E_SERIES: [(&str, [f64; 6]); 4] = [
 /// π; `base_link` → `base_link_inertia` turned by π, `flange` and `tool0` frames.
 fn rounded_ur_description(name: &str, dh: [f64; 6]) -> String {
     let [d1, a2, a3, d4, d5, d6] = dh;
+    // Exactly the rounded value ur_description writes, not π/2: the point of the file.
+    #[allow(clippy::approx_constant)]
     let roll = 1.570796327_f64;
     let slack = roll - FRAC_PI_2;
     let joint = |n: &str, parent: &str, child: &str, xyz: String, rpy: String| {
         format!(
             r#"  <joint name="{n}" type="revolute"><parent link="{parent}"/><child link="{child}"/><origin rpy="{rpy}" xyz="{xyz}"/><axis xyz="0 0 1"/><limit effort="150" lower="{}" upper="{}" velocity="3.14"/></joint>
 "#,
-            -TAU,
-            TAU
+            -TAU, TAU
         )
     };
     let mut s = format!(
@@ -303,7 +310,12 @@ fn singular_targets(name: &str, r: &Robot, seed: u64) {
     for k in 0..30 {
         let mut q = draw(&mut rng);
         q[4] = [1e-6, -1e-6, 1e-7, -1e-7, PI - 1e-6][k % 5];
-        check(returns_generating(r, &q, "near the wrist singularity", 1e-6));
+        check(returns_generating(
+            r,
+            &q,
+            "near the wrist singularity",
+            1e-6,
+        ));
         // From a reference 1e-5 rad off in every joint: still the generating joints.
         let target = r.tcp_pose(&q).unwrap();
         let near: Vec<f64> = q.iter().map(|v| v + rng.range(-1e-5, 1e-5)).collect();
@@ -353,7 +365,10 @@ fn generated_rounded_urdfs_equal_the_real_ones() {
         for _ in 0..100 {
             let q: Vec<f64> = (0..6).map(|_| rng.range(-PI, PI)).collect();
             let (dist, ang) = pose_gap(&g.tcp_pose(&q).unwrap(), &r.tcp_pose(&q).unwrap());
-            assert!(dist < 1e-9 && ang < 1e-12, "{gn} / {rn}: {dist:e} mm {ang:e}");
+            assert!(
+                dist < 1e-9 && ang < 1e-12,
+                "{gn} / {rn}: {dist:e} mm {ang:e}"
+            );
         }
     }
 }
@@ -421,9 +436,7 @@ fn branch_sets_equal_ur_kin_cpp() {
                 .unwrap_or_else(|e| panic!("{name}: {q:?}: {e}"));
             let mine = distinct(mine.into_iter().map(|s| s.joints), 1e-4);
             let peer_sols = distinct(
-                peer.ik(&row_major(&ee))
-                    .into_iter()
-                    .map(|s| s.to_vec()),
+                peer.ik(&row_major(&ee)).into_iter().map(|s| s.to_vec()),
                 1e-4,
             );
             assert_eq!(
@@ -445,23 +458,4 @@ fn branch_sets_equal_ur_kin_cpp() {
         println!("{name}: {compared} targets, branch sets equal to ur_kin.cpp's");
     }
     let _ = std::fs::remove_dir_all(&out_dir);
-}
-
-
-
-#[test]
-fn zz_debug_shoulder() {
-    use fitup::kinematics::ClosedFormIk;
-    let Some(dir) = real_dir() else { return };
-    let path = dir.join("ur3e.urdf");
-    let r = robot_of(&path, &std::fs::read_to_string(&path).unwrap());
-    let q = [0.03101519809972375, 2.5516112500892394, -1.9236287080428005, -0.9859345632277559, -0.2685641481416612, -2.5747574893657315];
-    let t = r.tcp_pose(&q).unwrap();
-    let local = r.base().isometry().inverse() * t.isometry();
-    let s = r.ur_solver().unwrap();
-    let b = s.branches_seeded(&local, 1e-9, q[5]);
-    for x in b.as_slice() { println!("{:?} {:?}", x.joints, x.configuration); }
-    println!("{:?}", s.model_error());
-    let sols = r.inverse(&t, &q, &IkOptions::default()).unwrap();
-    for s in distinct(sols.into_iter().map(|s| s.joints), 1e-4) { println!("{:?} {:?}", s, pose_gap(&r.tcp_pose(&s).unwrap(), &t)); }
 }
