@@ -137,11 +137,17 @@ impl Error {
             )
         }
         use fitup::sequence::SequenceError as S;
+        let document = match self {
+            Error::Document(d)
+            | Error::Workspace(WorkspaceError::Document(d))
+            | Error::Sequence(S::Workspace(WorkspaceError::Document(d))) => Some(d),
+            _ => None,
+        };
+        if let Some(s) = document.and_then(DocumentError::location) {
+            return source(s);
+        }
         match self {
-            Error::Document(DocumentError::Source(s))
-            | Error::Workspace(WorkspaceError::Document(DocumentError::Source(s)))
-            | Error::Sequence(S::Workspace(WorkspaceError::Document(DocumentError::Source(s))))
-            | Error::Script(fitup::script::ScriptError::Located(s)) => source(s),
+            Error::Script(fitup::script::ScriptError::Located(s)) => source(s),
             Error::Program(p) => (
                 Some(p.file.clone()),
                 (p.line > 0).then_some(p.line),

@@ -139,11 +139,21 @@ fn default_aligned(kind: MateKind, a: &Reference) -> Option<bool> {
     }
 }
 
+/// The distance a coincident or distance mate keeps (mm; coincident: 0).
+fn kept_distance(mate: &Mate) -> f64 {
+    if mate.kind == MateKind::Distance {
+        mate.value.unwrap_or(0.0)
+    } else {
+        0.0
+    }
+}
+
 fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -> f64 {
     use Reference::*;
     let dir_err =
         |u: &Vec3, v: &Vec3| target_direction(mate, u, v, default_aligned(mate.kind, a)).angle(v);
     let value = mate.value.unwrap_or(0.0);
+    let d = kept_distance(mate);
     match (mate.kind, a, b) {
         (
             MateKind::Coincident | MateKind::Distance,
@@ -155,14 +165,7 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
                 point: pb,
                 normal: nb,
             },
-        ) => {
-            let d = if mate.kind == MateKind::Distance {
-                value
-            } else {
-                0.0
-            };
-            dir_err(na, nb).max((na.dot(&(pb - pa)) - d).abs())
-        }
+        ) => dir_err(na, nb).max((na.dot(&(pb - pa)) - d).abs()),
         (
             MateKind::Coincident | MateKind::Distance,
             Plane {
@@ -178,20 +181,8 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
                 point: pa,
                 normal: na,
             },
-        ) => {
-            let d = if mate.kind == MateKind::Distance {
-                value
-            } else {
-                0.0
-            };
-            (na.dot(&(pb - pa)).abs() - d).abs()
-        }
+        ) => (na.dot(&(pb - pa)).abs() - d).abs(),
         (MateKind::Coincident | MateKind::Distance, Point(pa), Point(pb)) => {
-            let d = if mate.kind == MateKind::Distance {
-                value
-            } else {
-                0.0
-            };
             ((pb - pa).norm() - d).abs()
         }
         (
@@ -294,7 +285,7 @@ fn rotate_about(point: &Point3, q: UnitQuaternion<f64>) -> Transform {
 /// The world correction that makes `b` (on the mover) satisfy the mate against `a`.
 fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -> Transform {
     use Reference::*;
-    let value = mate.value.unwrap_or(0.0);
+    let d = kept_distance(mate);
     let translate = |v: Vec3| Transform::from_translation(v);
     let align = |u: &Vec3, v: &Vec3, at: &Point3| {
         let t = target_direction(mate, u, v, default_aligned(mate.kind, a));
@@ -312,11 +303,6 @@ fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Referenc
                 normal: nb,
             },
         ) => {
-            let d = if mate.kind == MateKind::Distance {
-                value
-            } else {
-                0.0
-            };
             let r = align(na, nb, pb);
             r * translate(na * (d - na.dot(&(pb - pa))))
         }
@@ -328,11 +314,6 @@ fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Referenc
             },
             Point(pb),
         ) => {
-            let d = if mate.kind == MateKind::Distance {
-                value
-            } else {
-                0.0
-            };
             let s = na.dot(&(pb - pa));
             let target = if s < 0.0 { -d } else { d };
             translate(na * (target - s))
@@ -346,21 +327,11 @@ fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Referenc
             },
         ) => {
             // The mover carries the plane: move it so that the point lies at the distance.
-            let d = if mate.kind == MateKind::Distance {
-                value
-            } else {
-                0.0
-            };
             let s = na.dot(&(pb - pa));
             let target = if s < 0.0 { -d } else { d };
             translate(-na * (target - s))
         }
         (MateKind::Coincident | MateKind::Distance, Point(pa), Point(pb)) => {
-            let d = if mate.kind == MateKind::Distance {
-                value
-            } else {
-                0.0
-            };
             let r = pb - pa;
             let dir = r.try_normalize(1e-12).unwrap_or_else(Vec3::x);
             translate(pa + dir * d - pb)
@@ -403,51 +374,64 @@ fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Referenc
             rot * translate(-(r - da * da.dot(&r)))
         }
         (MateKind::Parallel | MateKind::Perpendicular | MateKind::Angle, _, _) => {
-            let (u, v) = (
-                a.direction().unwrap_or_default(),
-                b.direction().unwrap_or_default(),
-            );
-            let at = b.anchor();
-            match (
-                mate.kind,
-                about.and_then(|r| Some((r.anchor(), r.direction()?))),
-            ) {
-                (MateKind::Angle, Some((ap, axis))) => {
-                    let delta = wrap(value - signed_angle(&u, &v, &axis));
-                    rotate_about(
-                        &ap,
-                        UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), delta),
-                    )
-                }
-                (kind, _) => {
-                    let target_angle = match kind {
-                        MateKind::Parallel => {
-                            if u.dot(&v) >= 0.0 {
-                                0.0
-                            } else {
-                                std::f64::consts::PI
-                            }
-                        }
-                        MateKind::Perpendicular => std::f64::consts::FRAC_PI_2,
-                        _ => value,
-                    };
-                    let axis = u.cross(&v).try_normalize(1e-12).unwrap_or_else(|| {
-                        let perp = if u.x.abs() < 0.9 {
-                            Vec3::x()
-                        } else {
-                            Vec3::y()
-                        };
-                        u.cross(&perp).normalize()
-                    });
-                    let delta = target_angle - u.angle(&v);
-                    rotate_about(
-                        &at,
-                        UnitQuaternion::from_axis_angle(&Unit::new_unchecked(axis), delta),
-                    )
-                }
-            }
+            angular_correction(mate, a, b, about)
         }
         _ => Transform::IDENTITY,
+    }
+}
+
+/// The rotation that makes `b`'s direction (on the mover) parallel, perpendicular or
+/// at the mate's angle (radians) to `a`'s; an angle mate with an `about` axis turns
+/// about that axis.
+fn angular_correction(
+    mate: &Mate,
+    a: &Reference,
+    b: &Reference,
+    about: Option<&Reference>,
+) -> Transform {
+    let value = mate.value.unwrap_or(0.0);
+    let (u, v) = (
+        a.direction().unwrap_or_default(),
+        b.direction().unwrap_or_default(),
+    );
+    let at = b.anchor();
+    match (
+        mate.kind,
+        about.and_then(|r| Some((r.anchor(), r.direction()?))),
+    ) {
+        (MateKind::Angle, Some((ap, axis))) => {
+            let delta = wrap(value - signed_angle(&u, &v, &axis));
+            rotate_about(
+                &ap,
+                UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), delta),
+            )
+        }
+        (kind, _) => {
+            let target_angle = match kind {
+                MateKind::Parallel => {
+                    if u.dot(&v) >= 0.0 {
+                        0.0
+                    } else {
+                        std::f64::consts::PI
+                    }
+                }
+                MateKind::Perpendicular => std::f64::consts::FRAC_PI_2,
+                _ => value,
+            };
+            let axis = u.cross(&v).try_normalize(1e-12).unwrap_or_else(|| {
+                let perp = if u.x.abs() < 0.9 {
+                    Vec3::x()
+                } else {
+                    Vec3::y()
+                };
+                u.cross(&perp).normalize()
+            });
+            let delta = target_angle - u.angle(&v);
+            rotate_about(
+                &at,
+                UnitQuaternion::from_axis_angle(&Unit::new_unchecked(axis), delta),
+            )
+        }
     }
 }
 

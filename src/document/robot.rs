@@ -468,7 +468,7 @@ pub(super) fn read_urdf_robot(
             .resolve_from(dir, &resolved.to_string_lossy())
             .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
         let mesh = cache
-            .get(&file)
+            .get_in(project, &file)
             .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
         files.push(file);
         let [sx, sy, sz] = m.scale;
@@ -533,6 +533,47 @@ fn build(
                 .into(),
         ));
     }
+    let robot = kinematics_of(f, urdf)?;
+    let links = link_displays(f, &robot, components, urdf)?;
+    let dimensions = joint_dimensions(f, &robot)?;
+    let joints = match &f.joints {
+        None => vec![0.0; robot.dof()],
+        Some(v) => {
+            if v.len() != robot.dof() {
+                return Err((
+                    "joints:".into(),
+                    format!(
+                        "{} joint values given, the robot has {}",
+                        v.len(),
+                        robot.dof()
+                    ),
+                ));
+            }
+            joints_from_document(&robot, v)
+        }
+    };
+    let inst = RobotInstance {
+        robot: Arc::new(robot),
+        links,
+        joints,
+        dimensions,
+        file: RobotFile {
+            base: None,
+            tool: None,
+            joints: None,
+            ..f.clone()
+        },
+        urdf_files: urdf.map(|u| u.files.clone()).unwrap_or_default(),
+    };
+    inst.check_joints(&inst.joints)
+        .map_err(|m| ("joints:".to_string(), m.to_string()))?;
+    Ok(inst)
+}
+
+/// The kinematics of a file's robot (catalog, D-H table, URDF or explicit tree), named
+/// as the document names it, with its base and tool. Errors as [`build`]'s.
+fn kinematics_of(f: &RobotFile, urdf: Option<&UrdfLoaded>) -> Result<Robot, (String, String)> {
+    let whole = |m: String| (format!("name: {}", f.name), m);
     let mut robot = match (&f.catalog, &f.dh) {
         _ if f.urdf.is_some() => match urdf {
             Some(u) => u.robot.clone(),
@@ -562,6 +603,18 @@ fn build(
     if let Some(t) = matrix(&f.tool, "tool").map_err(|m| ("tool:".to_string(), m))? {
         robot.set_tool(t);
     }
+    Ok(robot)
+}
+
+/// How each link of a file's robot is displayed: its component and the component's
+/// offset in the link frame. Errors as [`build`]'s.
+fn link_displays(
+    f: &RobotFile,
+    robot: &Robot,
+    components: &HashMap<String, usize>,
+    urdf: Option<&UrdfLoaded>,
+) -> Result<Vec<LinkDisplay>, (String, String)> {
+    let whole = |m: String| (format!("name: {}", f.name), m);
     let explicit = f.catalog.is_none() && f.dh.is_none() && f.urdf.is_none();
     let tree = robot.tree().clone();
     if f.links.len() > tree.len() {
@@ -632,6 +685,13 @@ fn build(
         };
         links.push(LinkDisplay { component, offset });
     }
+    Ok(links)
+}
+
+/// The dimension name of each joint of a file's robot (`角度<n>@<robot>` or
+/// `距离<n>@<robot>` unless the link names one). Errors as [`build`]'s.
+fn joint_dimensions(f: &RobotFile, robot: &Robot) -> Result<Vec<String>, (String, String)> {
+    let whole = |m: String| (format!("name: {}", f.name), m);
     let mut dimensions = Vec::with_capacity(robot.dof());
     let kinds = robot.joint_kinds();
     for (j, &li) in robot.joint_links().iter().enumerate() {
@@ -655,38 +715,7 @@ fn build(
             ));
         }
     }
-    let joints = match &f.joints {
-        None => vec![0.0; robot.dof()],
-        Some(v) => {
-            if v.len() != robot.dof() {
-                return Err((
-                    "joints:".into(),
-                    format!(
-                        "{} joint values given, the robot has {}",
-                        v.len(),
-                        robot.dof()
-                    ),
-                ));
-            }
-            joints_from_document(&robot, v)
-        }
-    };
-    let inst = RobotInstance {
-        robot: Arc::new(robot),
-        links,
-        joints,
-        dimensions,
-        file: RobotFile {
-            base: None,
-            tool: None,
-            joints: None,
-            ..f.clone()
-        },
-        urdf_files: urdf.map(|u| u.files.clone()).unwrap_or_default(),
-    };
-    inst.check_joints(&inst.joints)
-        .map_err(|m| ("joints:".to_string(), m.to_string()))?;
-    Ok(inst)
+    Ok(dimensions)
 }
 
 /// The explicit-tree file form of `robot` (links, axes, homes, limits, flange, base,
@@ -924,21 +953,12 @@ impl Document {
             .ok()
             .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
             .unwrap_or_else(|| project.root().to_path_buf());
-        let uri =
-            super::relative_path(urdf, &dir).unwrap_or_else(|| urdf.to_string_lossy().into_owned());
+        let uri = super::save::relative_path(urdf, &dir)
+            .unwrap_or_else(|| urdf.to_string_lossy().into_owned());
         let loaded =
             read_urdf_robot(&project, &dir, &uri, None, &mut MeshCache::new()).map_err(invalid)?;
         let mut next = self.clone();
-        super::add_urdf_parts(
-            name,
-            &uri,
-            &loaded,
-            &mut next.parts,
-            &mut next.components,
-            &mut next.by_name,
-            &mut next.generated,
-        )
-        .map_err(invalid)?;
+        next.add_urdf_parts(name, &uri, &loaded).map_err(invalid)?;
         let zero: Vec<f64> = loaded
             .robot
             .joint_limits()

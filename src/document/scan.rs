@@ -195,28 +195,7 @@ fn scan_with(text: &str, what: &str, empty: &str) -> Result<Positions, ScanIssue
             column,
             message,
         };
-        let anchor = match &event {
-            Event::Alias(_) => return Err(issue(
-                "YAML aliases (`*name`) are not allowed in fitup YAML files: write the value out"
-                    .into(),
-            )),
-            Event::Scalar(_, _, a, _) | Event::MappingStart(a, _) | Event::SequenceStart(a, _) => {
-                *a
-            }
-            _ => 0,
-        };
-        if anchor > 0 {
-            // The parser marks the node, which may start on a later line than its
-            // `&name`: point at the `&`.
-            let (line, column) = anchor_position(text, mark.index()).unwrap_or((line, column));
-            return Err(ScanIssue {
-                line,
-                column,
-                message:
-                    "YAML anchors (`&name`) are not allowed in fitup YAML files: write the value out"
-                        .into(),
-            });
-        }
+        no_alias_or_anchor(&event, text, mark.index(), (line, column))?;
         match event {
             Event::StreamEnd => break,
             Event::DocumentStart => {
@@ -228,77 +207,16 @@ fn scan_with(text: &str, what: &str, empty: &str) -> Result<Positions, ScanIssue
                 }
             }
             Event::Scalar(value, style, _, _) => {
-                let in_description = matches!(
-                    stack.last(),
-                    Some(Frame::Map { key: Some(k), .. }) if k == "description"
-                );
-                if let Some(c) = value.chars().find(|&c| {
-                    hidden_char(c).is_some() && !(in_description && matches!(c, '\n' | '\t' | '\r'))
-                }) {
-                    let (line, column) =
-                        char_position(text, mark.index(), c, value.len()).unwrap_or((line, column));
-                    return Err(ScanIssue {
-                        line,
-                        column,
-                        message: format!(
-                            "{} in `{}`: control and invisible characters are not allowed in a fitup document's names and text (they hide or reorder what is shown); remove it",
-                            describe_char(c),
-                            short(&value)
-                        ),
-                    });
-                }
+                let at = (line, column, mark.index());
                 if stack.is_empty() {
                     // A bare scalar at the top: empty (`~`, nothing) or not a mapping.
+                    check_characters(&value, false, text, at)?;
                     if !(value.is_empty() || value == "~" || value == "null") {
                         content = true;
                     }
                     continue;
                 }
-                let top = stack.len() - 1;
-                match &mut stack[top] {
-                    Frame::Map { path, keys, key } if key.is_none() => {
-                        // Names are NFC: `é` composed and decomposed is one key.
-                        let raw = value;
-                        let value = nfc(&raw);
-                        if let Some((first, spelling)) = keys.get(&value) {
-                            let same = if *spelling == raw {
-                                ""
-                            } else {
-                                " — the same name in another Unicode spelling (names are compared in NFC)"
-                            };
-                            return Err(issue(format!(
-                                "duplicate key `{value}` (first at line {first}){same}: each key may appear once"
-                            )));
-                        }
-                        keys.insert(value.clone(), (line, raw));
-                        let full = format!("{path}/{value}");
-                        positions.0.insert(full, (line, column));
-                        *key = Some(value);
-                    }
-                    Frame::Map { path, key, .. } => {
-                        let k = key.take().unwrap_or_default();
-                        if style == TScalarStyle::Plain && !TEXT_KEYS.contains(&k.as_str()) {
-                            if let Some(Err(m)) = plain_number(&value) {
-                                return Err(issue(format!("`{}`: {m}", &path_key(path, &k))));
-                            }
-                        }
-                        positions.0.insert(format!("{path}/{k}"), (line, column));
-                    }
-                    Frame::Seq { path, next } => {
-                        let p = format!("{path}/{next}");
-                        *next += 1;
-                        let text_list = path
-                            .rsplit('/')
-                            .next()
-                            .is_some_and(|k| TEXT_KEYS.contains(&k));
-                        if style == TScalarStyle::Plain && !text_list {
-                            if let Some(Err(m)) = plain_number(&value) {
-                                return Err(issue(format!("`{}`: {m}", p.trim_start_matches('/'))));
-                            }
-                        }
-                        positions.0.insert(p, (line, column));
-                    }
-                }
+                scalar(&mut stack, &mut positions, value, style, text, at)?;
             }
             Event::MappingStart(..) | Event::SequenceStart(..) => {
                 content = true;
@@ -356,6 +274,139 @@ fn scan_with(text: &str, what: &str, empty: &str) -> Result<Positions, ScanIssue
         .map(|(k, v)| (k.trim_start_matches('/').to_string(), v))
         .collect();
     Ok(positions)
+}
+
+/// Refuses YAML aliases and anchors (they expand without bound): `index` is the
+/// event's byte offset, `at` its line and column.
+fn no_alias_or_anchor(
+    event: &Event,
+    text: &str,
+    index: usize,
+    at: (usize, usize),
+) -> Result<(), ScanIssue> {
+    let anchor = match event {
+        Event::Alias(_) => return Err(ScanIssue {
+            line: at.0,
+            column: at.1,
+            message:
+                "YAML aliases (`*name`) are not allowed in fitup YAML files: write the value out"
+                    .into(),
+        }),
+        Event::Scalar(_, _, a, _) | Event::MappingStart(a, _) | Event::SequenceStart(a, _) => *a,
+        _ => 0,
+    };
+    if anchor > 0 {
+        // The parser marks the node, which may start on a later line than its
+        // `&name`: point at the `&`.
+        let (line, column) = anchor_position(text, index).unwrap_or(at);
+        return Err(ScanIssue {
+            line,
+            column,
+            message:
+                "YAML anchors (`&name`) are not allowed in fitup YAML files: write the value out"
+                    .into(),
+        });
+    }
+    Ok(())
+}
+
+/// Refuses a scalar holding a control or invisible character (a `description`'s
+/// text may hold line breaks and tabs). `at`: line, column and byte offset.
+fn check_characters(
+    value: &str,
+    in_description: bool,
+    text: &str,
+    at: (usize, usize, usize),
+) -> Result<(), ScanIssue> {
+    let (line, column, index) = at;
+    if let Some(c) = value
+        .chars()
+        .find(|&c| hidden_char(c).is_some() && !(in_description && matches!(c, '\n' | '\t' | '\r')))
+    {
+        let (line, column) = char_position(text, index, c, value.len()).unwrap_or((line, column));
+        return Err(ScanIssue {
+            line,
+            column,
+            message: format!(
+                "{} in `{}`: control and invisible characters are not allowed in a fitup document's names and text (they hide or reorder what is shown); remove it",
+                describe_char(c),
+                short(value)
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// A scalar inside a mapping or list (`stack` not empty): a key (unique in NFC) or a
+/// value (a plain number in range), its position recorded. `at`: line, column and
+/// byte offset.
+fn scalar(
+    stack: &mut [Frame],
+    positions: &mut Positions,
+    value: String,
+    style: TScalarStyle,
+    text: &str,
+    at: (usize, usize, usize),
+) -> Result<(), ScanIssue> {
+    let (line, column, _) = at;
+    let issue = |message: String| ScanIssue {
+        line,
+        column,
+        message,
+    };
+    let in_description = matches!(
+        stack.last(),
+        Some(Frame::Map { key: Some(k), .. }) if k == "description"
+    );
+    check_characters(&value, in_description, text, at)?;
+    let Some(top) = stack.last_mut() else {
+        return Ok(());
+    };
+    match top {
+        Frame::Map { path, keys, key } if key.is_none() => {
+            // Names are NFC: `é` composed and decomposed is one key.
+            let raw = value;
+            let value = nfc(&raw);
+            if let Some((first, spelling)) = keys.get(&value) {
+                let same = if *spelling == raw {
+                    ""
+                } else {
+                    " — the same name in another Unicode spelling (names are compared in NFC)"
+                };
+                return Err(issue(format!(
+                    "duplicate key `{value}` (first at line {first}){same}: each key may appear once"
+                )));
+            }
+            keys.insert(value.clone(), (line, raw));
+            let full = format!("{path}/{value}");
+            positions.0.insert(full, (line, column));
+            *key = Some(value);
+        }
+        Frame::Map { path, key, .. } => {
+            let k = key.take().unwrap_or_default();
+            if style == TScalarStyle::Plain && !TEXT_KEYS.contains(&k.as_str()) {
+                if let Some(Err(m)) = plain_number(&value) {
+                    return Err(issue(format!("`{}`: {m}", &path_key(path, &k))));
+                }
+            }
+            positions.0.insert(format!("{path}/{k}"), (line, column));
+        }
+        Frame::Seq { path, next } => {
+            let p = format!("{path}/{next}");
+            *next += 1;
+            let text_list = path
+                .rsplit('/')
+                .next()
+                .is_some_and(|k| TEXT_KEYS.contains(&k));
+            if style == TScalarStyle::Plain && !text_list {
+                if let Some(Err(m)) = plain_number(&value) {
+                    return Err(issue(format!("`{}`: {m}", p.trim_start_matches('/'))));
+                }
+            }
+            positions.0.insert(p, (line, column));
+        }
+    }
+    Ok(())
 }
 
 /// The start of `value`, escaped, for a message (the value may be megabytes).

@@ -1,5 +1,5 @@
 use super::*;
-use crate::math::{AngleConvention, Point3};
+use crate::math::{AngleConvention, Point3, Vec3};
 use proptest::strategy::Strategy;
 
 fn write_demo() -> tempfile::TempDir {

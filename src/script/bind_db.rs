@@ -35,9 +35,10 @@ impl DbHandle {
         };
         let mut db = Database::open(&target).map_err(fail)?;
         if let Target::Sqlite(p) = &target {
-            // The run's own writes are not user saves (watch mode).
+            // The run's own writes are not user saves (watch mode); never read back
+            // while SQLite holds them (see `record_write_unread`).
             for suffix in ["", "-wal", "-shm"] {
-                ctx.record_write(std::path::Path::new(&format!("{}{suffix}", p.display())));
+                ctx.record_write_unread(std::path::Path::new(&format!("{}{suffix}", p.display())));
             }
         }
         let run_id = recording::run_id_for(&mut db).map_err(fail)?;
@@ -256,11 +257,17 @@ fn query(h: &DbHandle, sql: &str, params: &Array, limits: &Map) -> ScriptResult<
         .enumerate()
         .map(|(i, v)| to_sql(v, i))
         .collect::<ScriptResult<Vec<_>>>()?;
-    // The run's cancel flag reaches the query: a newer save stops it mid-statement.
+    // The run's cancel flag reaches the query: a newer save stops it mid-statement;
+    // and the run's queries share one time budget.
+    let mut db = h.lock()?;
     let r = h
-        .lock()?
-        .query_with(sql, &params, limits, Some(h.ctx.cancel.clone()))
+        .ctx
+        .query_budget
+        .run(limits, |limits| {
+            db.query_with(sql, &params, limits, Some(h.ctx.cancel.clone()))
+        })
         .map_err(fail)?;
+    drop(db);
     let columns = r.columns;
     // Rows are dropped as they are converted: the result is not held twice.
     Ok(r.rows

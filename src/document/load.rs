@@ -1,0 +1,922 @@
+//! Loading a document: YAML text checked and located, meshes read, references,
+//! components, URDF robots and mates built, the mates solved.
+
+use super::file::{ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile};
+use super::{
+    mates, nfc_name, robot, scan, tessellations, AabbCache, Color, Component, Document,
+    DocumentError, Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry,
+    MAX_ABS_VALUE,
+};
+use crate::collision::CutSpec;
+use crate::diagnostics::{locate, suggestion, SourceError};
+use crate::fsutil::{content_hash, FileKind};
+use crate::math::{Transform, Vec3};
+use crate::mesh::{Mesh, MeshCache};
+use crate::project::Project;
+use indexmap::IndexMap;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+impl Document {
+    /// Loads a document and its meshes (through `cache`, so unchanged meshes are not
+    /// re-read), validates it and solves its mates.
+    ///
+    /// The project (which bounds its mesh paths) is found by the path rule of
+    /// [`Project::for_file`]: the nearest folder holding `fitup.toml`, else the
+    /// document's folder.
+    pub fn load(path: &Path, cache: &mut MeshCache) -> Result<Self, DocumentError> {
+        let project = Project::for_file(path)
+            .map_err(|e| SourceError::new(path, 0, 0, format!("cannot read the document: {e}")))?;
+        Self::load_in(path, &project, cache)
+    }
+
+    /// Loads a document whose meshes must lie inside `project` (a mesh path leading
+    /// outside it is refused at its `stl:` line, and the outside file is never opened).
+    pub fn load_in(
+        path: &Path,
+        project: &Project,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
+        let text = crate::fsutil::read_text(path, FileKind::Document)
+            .map_err(|e| SourceError::new(path, 0, 0, format!("cannot read the document: {e}")))?;
+        let mut doc = Self::from_yaml_in(&text, path, project, cache)?;
+        doc.disk_hash = Some(content_hash(text.as_bytes()));
+        Ok(doc)
+    }
+
+    /// Loads a document with a private mesh cache.
+    ///
+    /// # Examples
+    /// Drive a mate's dimension (internal units: radians) and read the driven pose
+    /// (world frame, mm):
+    /// ```
+    /// use fitup::document::Document;
+    ///
+    /// let mut doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+    /// doc.set_dimension("D1@角度1", 30f64.to_radians()).unwrap();
+    /// let angle = doc.dimension("D1@角度1").unwrap();
+    /// assert!((angle.document_value() - 30.0).abs() < 1e-9); // degrees in the file
+    /// let plate = doc.component("plate_b").unwrap();
+    /// assert!(plate.transform.translation().z > 700.0); // on the table, mm
+    /// ```
+    ///
+    /// # Errors
+    /// The file cannot be read, is not a valid document (located [`SourceError`]),
+    /// or its mates cannot be solved.
+    pub fn open(path: &Path) -> Result<Self, DocumentError> {
+        Self::load(path, &mut MeshCache::new())
+    }
+
+    /// Builds a document from YAML text; `path` names the file in messages and anchors
+    /// relative mesh paths (which must stay inside the folder [`Project::for_file`]
+    /// finds for `path`, or `path`'s folder when `path` does not exist).
+    pub fn from_yaml(
+        text: &str,
+        path: &Path,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
+        let project = Project::for_file(path)
+            .or_else(|_| Project::new(path.parent().unwrap_or(Path::new("."))))
+            .map_err(|e| SourceError::new(path, 0, 0, format!("cannot resolve its folder: {e}")))?;
+        Self::from_yaml_in(text, path, &project, cache)
+    }
+
+    /// Parses and checks document text without loading meshes: the checks of
+    /// [`scan`] (aliases, duplicate keys, number ranges, empty files), then the schema.
+    /// Errors are located in `path`.
+    pub fn parse_text(
+        text: &str,
+        path: &Path,
+    ) -> Result<(DocumentFile, scan::Positions), DocumentError> {
+        let (file, positions): (DocumentFile, scan::Positions) =
+            scan::from_yaml(text, path, "invalid document", scan::DOCUMENT_EMPTY)?;
+        let file = if unicode_normalization::is_nfc(text) {
+            file
+        } else {
+            nfc_file(file).map_err(|e| {
+                SourceError::new(path, 0, 0, format!("invalid document after NFC: {e}"))
+            })?
+        };
+        Ok((file, positions))
+    }
+
+    /// [`from_yaml`](Self::from_yaml) with meshes bounded by `project`.
+    pub fn from_yaml_in(
+        text: &str,
+        path: &Path,
+        project: &Project,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
+        let (file, positions) = Self::parse_text(text, path)?;
+        Self::from_file(file, text, path, project, &positions, cache)
+    }
+
+    /// Builds the document of a parsed file: its parts (meshes read), components, the
+    /// parts of its URDF robots, its mates and robots, then solves the mates. Errors
+    /// are located in `text` (the file's text) by `positions` (the scan's).
+    fn from_file(
+        file: DocumentFile,
+        text: &str,
+        path: &Path,
+        project: &Project,
+        positions: &scan::Positions,
+        cache: &mut MeshCache,
+    ) -> Result<Self, DocumentError> {
+        let load = Loader {
+            text,
+            path,
+            project,
+            positions,
+            dir: std::path::absolute(path)
+                .ok()
+                .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
+                .unwrap_or_else(|| project.root().to_path_buf()),
+        };
+        if file.units != "mm" {
+            return Err(load.at(
+                "units",
+                "units",
+                format!(
+                    "units `{}` are not supported: fitup documents are in mm",
+                    file.units
+                ),
+            ));
+        }
+        let mut step_warnings = Vec::new();
+        let parts = load.parts(&file, cache, &mut step_warnings)?;
+        let (components, by_name) = load.components(&file, &parts)?;
+        let mut doc = Document {
+            path: path.to_path_buf(),
+            generated: Default::default(),
+            description: file.description.clone(),
+            parts,
+            components,
+            by_name,
+            mates: Vec::new(),
+            robots: Vec::new(),
+            revision: 0,
+            aabb_cache: AabbCache::default(),
+            disk_hash: None,
+            warnings: Vec::new(),
+        };
+        let urdf = load.urdf_robots(&file, &mut doc, cache)?;
+        doc.mates = load.mates(&file, &doc)?;
+        let mate_dimensions = doc
+            .mates
+            .iter()
+            .filter(|m| m.kind.has_dimension())
+            .map(|m| m.name.clone())
+            .collect();
+        doc.robots = robot::load(
+            &file.robots,
+            &doc.by_name,
+            &urdf.loaded,
+            &mate_dimensions,
+            text,
+            path,
+        )?;
+        doc.solve_mates().map_err(|source| {
+            let (line, col) = load.locate(&format!("name: {}", source.mate), "mates");
+            DocumentError::Mates {
+                at: Some(Box::new(SourceError::new(
+                    path,
+                    line,
+                    col,
+                    source.to_string(),
+                ))),
+                source,
+            }
+        })?;
+        doc.warnings = case_warnings(&file, path, positions);
+        doc.warnings.extend(urdf.warnings);
+        doc.warnings.extend(step_warnings);
+        Ok(doc)
+    }
+
+    fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
+        let (comp, reference) = spec
+            .split_once('/')
+            .ok_or_else(|| format!("entity `{spec}` must be written `component/reference`"))?;
+        let &component = self.by_name.get(comp).ok_or_else(|| {
+            format!(
+                "no component `{comp}` ({})",
+                suggestion(comp, self.by_name.keys().map(String::as_str))
+            )
+        })?;
+        let part = &self.parts[&self.components[component].part];
+        let geometry = part.reference(reference).ok_or_else(|| {
+            let names = part
+                .references
+                .keys()
+                .map(String::as_str)
+                .chain(Reference::BUILTIN_NAMES);
+            format!(
+                "part `{}` has no reference `{reference}` ({})",
+                part.name,
+                suggestion(reference, names)
+            )
+        })?;
+        Ok(MateEntity {
+            component,
+            reference: reference.to_string(),
+            geometry,
+        })
+    }
+}
+
+/// What one load reads from: the file's text (to locate errors), its path, the
+/// project that bounds its files and the scan's positions of its keys.
+struct Loader<'a> {
+    text: &'a str,
+    path: &'a Path,
+    project: &'a Project,
+    positions: &'a scan::Positions,
+    /// The document's folder (canonical), where relative file names start.
+    dir: PathBuf,
+}
+
+/// The URDF robots of a document, loaded: by robot name, with their warnings.
+struct UrdfRobots {
+    loaded: HashMap<String, robot::UrdfLoaded>,
+    warnings: Vec<String>,
+}
+
+impl Loader<'_> {
+    /// Line and column of the first `needle` at or after the line of `section:`
+    /// (0, 0 when not found).
+    fn locate(&self, needle: &str, section: &str) -> (usize, usize) {
+        self.after(&format!("{section}:"), needle)
+    }
+
+    /// Line and column of the first `needle` at or after the first line holding
+    /// `anchor` (the whole text when there is none; 0, 0 when not found).
+    fn after(&self, anchor: &str, needle: &str) -> (usize, usize) {
+        let from = locate(self.text, anchor, 1).map(|l| l.0).unwrap_or(1);
+        locate(self.text, needle, from).unwrap_or((0, 0))
+    }
+
+    /// An error at the first `needle` at or after the line of `section:`.
+    fn at(&self, needle: &str, section: &str, message: String) -> DocumentError {
+        let (line, col) = self.locate(needle, section);
+        SourceError::new(self.path, line, col, message).into()
+    }
+
+    /// An error at the first of `keys` the scan placed (unplaced: no line).
+    fn at_key(&self, keys: &[&str], message: String) -> DocumentError {
+        let (line, col) = keys
+            .iter()
+            .find_map(|k| self.positions.get(k))
+            .unwrap_or((0, 0));
+        SourceError::new(self.path, line, col, message).into()
+    }
+
+    /// Every part, its mesh read; a STEP part whose mesh is far from the exact volume
+    /// adds a warning to `warnings`.
+    fn parts(
+        &self,
+        file: &DocumentFile,
+        cache: &mut MeshCache,
+        warnings: &mut Vec<String>,
+    ) -> Result<IndexMap<String, Part>, DocumentError> {
+        // every part's mesh read and parsed at once, in parallel (the cost of opening
+        // a cell of many distinct parts); errors are reported by the loop below
+        let resolved: Vec<_> = file
+            .parts
+            .values()
+            .filter(|pf| pf.step.is_none())
+            .filter_map(|pf| self.project.resolve_from(&self.dir, &pf.stl).ok())
+            .collect();
+        cache.prefetch_in(
+            self.project,
+            &resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>(),
+        );
+        let mut parts = IndexMap::new();
+        for (name, pf) in &file.parts {
+            parts.insert(name.clone(), self.part(name, pf, cache, warnings)?);
+        }
+        Ok(parts)
+    }
+
+    /// One part: its geometry file, mesh, references and features.
+    fn part(
+        &self,
+        name: &str,
+        pf: &PartFile,
+        cache: &mut MeshCache,
+        warnings: &mut Vec<String>,
+    ) -> Result<Part, DocumentError> {
+        let key = if pf.step.is_some() { "step" } else { "stl" };
+        // The `stl:` (or `step:`) value's own line, from the scan.
+        let stl_at = |message: String| {
+            self.at_key(
+                &[&format!("parts/{name}/{key}"), &format!("parts/{name}")],
+                message,
+            )
+        };
+        let source = match (&pf.step, pf.stl.is_empty()) {
+            (Some(step), true) => step,
+            (None, false) => &pf.stl,
+            (Some(_), false) => {
+                return Err(stl_at(format!(
+                    "part `{name}`: give either `stl:` (a mesh file) or `step:` (a STEP file), not both"
+                )))
+            }
+            (None, true) => {
+                return Err(stl_at(format!(
+                    "part `{name}` has no geometry: give `stl:` (a mesh file) or `step:` (a STEP file)"
+                )))
+            }
+        };
+        if pf.step.is_none() && (pf.deflection.is_some() || pf.angle.is_some()) {
+            return Err(stl_at(format!(
+                "part `{name}`: `deflection:` and `angle:` tessellate a `step:` part; an `stl:` mesh is used as it is"
+            )));
+        }
+        let mesh_path = self.project.resolve_from(&self.dir, source).map_err(|e| {
+            let what = if pf.step.is_some() {
+                "STEP file"
+            } else {
+                "mesh"
+            };
+            stl_at(format!("part `{name}`: {what} {e}"))
+        })?;
+        let (mesh, mesh_files, step) = if pf.step.is_some() {
+            let (mesh, geometry) = step_part(
+                pf,
+                &mesh_path,
+                &self.project.root().join(crate::mesh::step::STEP_STORE),
+                cache,
+            )
+            .map_err(|m| stl_at(format!("part `{name}`: {m}")))?;
+            if (geometry.volume_ratio - 1.0).abs() > 0.015 {
+                let (line, col) = self
+                    .positions
+                    .get(&format!("parts/{name}/step"))
+                    .unwrap_or((0, 0));
+                warnings.push(format!(
+                    "{}:{line}:{col}: part `{name}`: its mesh is {:.4} of the exact volume (more than 1.5 % off): set a smaller `deflection:`",
+                    self.path.display(),
+                    geometry.volume_ratio
+                ));
+            }
+            (mesh, Vec::new(), Some(geometry))
+        } else {
+            let mesh = cache
+                .get_in(self.project, &mesh_path)
+                .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
+            (mesh, cache.files_of(&mesh_path), None)
+        };
+        let references = self.references(name, pf)?;
+        let features = self.features(name, pf)?;
+        for (rname, r) in &references {
+            let finite = r
+                .anchor()
+                .coords
+                .iter()
+                .chain(r.direction().unwrap_or_default().iter())
+                .all(|v| v.is_finite());
+            if !finite {
+                return Err(self.at(
+                    rname,
+                    "parts",
+                    format!("reference `{rname}` of part `{name}` is not finite"),
+                ));
+            }
+        }
+        Ok(Part {
+            name: name.to_string(),
+            stl: source.clone(),
+            mesh_path,
+            mesh_files,
+            step,
+            mesh,
+            references,
+            features,
+        })
+    }
+
+    /// A part's named planes, axes and points (part frame, mm), in that order.
+    fn references(
+        &self,
+        name: &str,
+        pf: &PartFile,
+    ) -> Result<IndexMap<String, Reference>, DocumentError> {
+        let mut references = IndexMap::new();
+        for (rname, p) in &pf.planes {
+            let normal = vec3(p.normal).try_normalize(1e-12).ok_or_else(|| {
+                self.at(
+                    rname,
+                    "parts",
+                    format!("plane `{rname}` of part `{name}` has a zero normal"),
+                )
+            })?;
+            references.insert(
+                rname.clone(),
+                Reference::Plane {
+                    point: vec3(p.point).into(),
+                    normal,
+                },
+            );
+        }
+        for (rname, a) in &pf.axes {
+            let direction = vec3(a.direction).try_normalize(1e-12).ok_or_else(|| {
+                self.at(
+                    rname,
+                    "parts",
+                    format!("axis `{rname}` of part `{name}` has a zero direction"),
+                )
+            })?;
+            references.insert(
+                rname.clone(),
+                Reference::Axis {
+                    point: vec3(a.point).into(),
+                    direction,
+                },
+            );
+        }
+        for (rname, p) in &pf.points {
+            references.insert(rname.clone(), Reference::Point(vec3(*p).into()));
+        }
+        Ok(references)
+    }
+
+    /// A part's feature tree, names unique.
+    fn features(&self, name: &str, pf: &PartFile) -> Result<Vec<Feature>, DocumentError> {
+        let mut features: Vec<Feature> = Vec::new();
+        for f in &pf.features {
+            let feature = Feature::from_file(f).map_err(|m| {
+                self.at(
+                    &format!("name: {}", feature_name(f)),
+                    "parts",
+                    format!("part `{name}`: {m}"),
+                )
+            })?;
+            if features.iter().any(|g| g.name() == feature.name()) {
+                return Err(self.at(
+                    &format!("name: {}", feature.name()),
+                    "parts",
+                    format!("part `{name}`: duplicate feature name `{}`", feature.name()),
+                ));
+            }
+            features.push(feature);
+        }
+        Ok(features)
+    }
+
+    /// The components, names unique, and their indices by name.
+    fn components(
+        &self,
+        file: &DocumentFile,
+        parts: &IndexMap<String, Part>,
+    ) -> Result<(Vec<Component>, HashMap<String, usize>), DocumentError> {
+        let mut components = Vec::with_capacity(file.components.len());
+        let mut by_name = HashMap::new();
+        for (ci, c) in file.components.iter().enumerate() {
+            // The name's own line from the scan (the text may spell it in NFD).
+            let name_at =
+                |message: String| self.at_key(&[&format!("components/{ci}/name")], message);
+            if c.name.is_empty() || c.name.contains('/') {
+                return Err(name_at(format!(
+                    "component name `{}` must be non-empty without `/`",
+                    c.name
+                )));
+            }
+            if let Some(first) = by_name.insert(c.name.clone(), components.len()) {
+                let first_line = self
+                    .positions
+                    .get(&format!("components/{first}/name"))
+                    .map_or(String::new(), |(l, _)| format!(" (first at line {l})"));
+                return Err(name_at(format!(
+                    "duplicate component name `{}`{first_line}; names are compared in Unicode NFC, so two spellings of one name are the same",
+                    c.name
+                )));
+            }
+            components.push(self.component(c, parts)?);
+        }
+        Ok((components, by_name))
+    }
+
+    /// One component: its part, pose, colour and mass checked.
+    fn component(
+        &self,
+        c: &ComponentFile,
+        parts: &IndexMap<String, Part>,
+    ) -> Result<Component, DocumentError> {
+        let needle = format!("name: {}", c.name);
+        if !parts.contains_key(&c.part) {
+            return Err(self
+                .at(
+                    &format!("part: {}", c.part),
+                    &needle,
+                    format!("component `{}` uses unknown part `{}`", c.name, c.part),
+                )
+                .with_help(suggestion(&c.part, parts.keys().map(String::as_str))));
+        }
+        // A key of this component's entry, located after its name.
+        let key_at = |key: &str, message: String| -> DocumentError {
+            let (line, col) = self.after(&needle, key);
+            SourceError::new(self.path, line, col, message).into()
+        };
+        let transform = match &c.transform {
+            None => Transform::IDENTITY,
+            Some(m) if m.iter().flatten().any(|v| !v.is_finite() || v.abs() > MAX_ABS_VALUE) => {
+                return Err(self.at(
+                    "transform",
+                    &needle,
+                    format!("component `{}`: pose entries must be finite and at most {MAX_ABS_VALUE:e} in magnitude", c.name),
+                ))
+            }
+            Some(m) => Transform::from_matrix(m)
+                .map_err(|e| key_at("transform", format!("component `{}`: {e}", c.name)))?,
+        };
+        let color = match &c.color {
+            None => None,
+            Some(v) => Some(parse_color(v).ok_or_else(|| {
+                self.at(
+                    &needle,
+                    "components",
+                    format!(
+                        "component `{}`: colour must be [r, g, b] in 0..1 or \"#rrggbb\"",
+                        c.name
+                    ),
+                )
+            })?),
+        };
+        if let Some(m) = c.mass {
+            if !(m.is_finite() && m > 0.0 && m <= MAX_ABS_VALUE) {
+                return Err(key_at(
+                    "mass",
+                    format!(
+                        "component `{}`: mass must be a finite number of kg > 0, not {m}",
+                        c.name
+                    ),
+                ));
+            }
+        }
+        Ok(Component {
+            name: c.name.clone(),
+            part: c.part.clone(),
+            fixed: c.fixed,
+            color,
+            transform,
+            mass: c.mass,
+            threaded: c.threaded,
+            fixture: c.fixture,
+        })
+    }
+
+    /// The `urdf:` robots: read, their links' meshes added to `doc` as generated
+    /// parts and components.
+    fn urdf_robots(
+        &self,
+        file: &DocumentFile,
+        doc: &mut Document,
+        cache: &mut MeshCache,
+    ) -> Result<UrdfRobots, DocumentError> {
+        let mut out = UrdfRobots {
+            loaded: HashMap::new(),
+            warnings: Vec::new(),
+        };
+        for rf in &file.robots {
+            let Some(u) = &rf.urdf else { continue };
+            let robot_at = |m: String| -> DocumentError {
+                let (line, col) = self.after(&format!("name: {}", rf.name), "urdf:");
+                SourceError::new(self.path, line, col, format!("robot `{}`: {m}", rf.name)).into()
+            };
+            let loaded =
+                robot::read_urdf_robot(self.project, &self.dir, u, rf.tip.as_deref(), cache)
+                    .map_err(robot_at)?;
+            out.warnings.extend(loaded.warnings.iter().cloned());
+            doc.add_urdf_parts(&rf.name, u, &loaded).map_err(robot_at)?;
+            out.loaded.insert(rf.name.clone(), loaded);
+        }
+        Ok(out)
+    }
+
+    /// The mates, names unique, their entities found in `doc`'s components.
+    fn mates(&self, file: &DocumentFile, doc: &Document) -> Result<Vec<Mate>, DocumentError> {
+        let mut mates = Vec::with_capacity(file.mates.len());
+        let mut names = std::collections::HashSet::new();
+        for (mi, m) in file.mates.iter().enumerate() {
+            if !names.insert(m.name.clone()) {
+                return Err(self.at_key(
+                    &[&format!("mates/{mi}/name")],
+                    format!(
+                        "duplicate mate name `{}` (names are compared in Unicode NFC)",
+                        m.name
+                    ),
+                ));
+            }
+            mates.push(self.mate(m, doc)?);
+        }
+        Ok(mates)
+    }
+
+    /// One mate: its kind, entities, `about` axis and value (radians or mm) checked.
+    fn mate(&self, m: &MateFile, doc: &Document) -> Result<Mate, DocumentError> {
+        let needle = format!("name: {}", m.name);
+        let err = |msg: String| self.at(&needle, "mates", msg);
+        let entity = |spec: &str| {
+            doc.mate_entity(spec)
+                .map_err(|e| err(format!("mate `{}`: {e}", m.name)))
+        };
+        let kind = MateKind::parse(&m.kind).ok_or_else(|| {
+            err(format!(
+                "mate `{}`: unknown type `{}` (coincident, concentric, parallel, perpendicular, distance, angle)",
+                m.name, m.kind
+            ))
+        })?;
+        let ea = entity(&m.entities[0])?;
+        let eb = entity(&m.entities[1])?;
+        mates::check_entities(kind, &ea.geometry, &eb.geometry)
+            .map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
+        let about = match &m.about {
+            None => None,
+            Some(s) => {
+                let e = entity(s)?;
+                if !matches!(e.geometry, Reference::Axis { .. }) {
+                    return Err(err(format!("mate `{}`: `about` must name an axis", m.name)));
+                }
+                Some(e)
+            }
+        };
+        let value = match (kind, m.value) {
+            (MateKind::Angle, Some(v)) => Some(v.to_radians()),
+            (MateKind::Distance, Some(v)) => Some(v),
+            (k, None) if k.has_dimension() => {
+                return Err(err(format!(
+                    "{} mate `{}` needs a `value`",
+                    k.name(),
+                    m.name
+                )))
+            }
+            (_, None) => None,
+            (k, Some(_)) => return Err(err(format!("a {} mate takes no `value`", k.name()))),
+        };
+        if value.is_some_and(|v| !v.is_finite()) {
+            return Err(err(format!("mate `{}`: value is not finite", m.name)));
+        }
+        Ok(Mate {
+            name: m.name.clone(),
+            kind,
+            entities: [ea, eb],
+            value,
+            aligned: m.aligned,
+            about,
+        })
+    }
+}
+
+impl Feature {
+    fn from_file(f: &FeatureFile) -> Result<Feature, String> {
+        match f {
+            FeatureFile::CutCells {
+                name,
+                cell_size,
+                planes,
+            } => {
+                let spec = match (cell_size, planes) {
+                    (Some(s), None) if s.is_finite() && *s > 0.0 => CutSpec::Size(*s),
+                    (Some(s), None) => {
+                        return Err(format!(
+                            "cut cells `{name}`: cell_size must be a number > 0 mm, not {s}"
+                        ))
+                    }
+                    (None, Some(p)) => {
+                        if p.x.iter().chain(&p.y).chain(&p.z).any(|v| !v.is_finite()) {
+                            return Err(format!(
+                                "cut cells `{name}`: plane positions must be finite"
+                            ));
+                        }
+                        CutSpec::Planes {
+                            x: p.x.clone(),
+                            y: p.y.clone(),
+                            z: p.z.clone(),
+                        }
+                    }
+                    _ => {
+                        return Err(format!(
+                            "cut cells `{name}`: give exactly one of `cell_size` and `planes`"
+                        ))
+                    }
+                };
+                Ok(Feature::CutCells {
+                    name: name.clone(),
+                    spec,
+                })
+            }
+        }
+    }
+}
+
+fn vec3(v: [f64; 3]) -> Vec3 {
+    Vec3::new(v[0], v[1], v[2])
+}
+
+fn parse_color(v: &serde_yaml::Value) -> Option<Color> {
+    match v {
+        serde_yaml::Value::String(s) => {
+            let h = s.strip_prefix('#')?;
+            if h.len() != 6 {
+                return None;
+            }
+            let c = |i: usize| {
+                u8::from_str_radix(&h[i..i + 2], 16)
+                    .ok()
+                    .map(|x| x as f64 / 255.0)
+            };
+            Some([c(0)?, c(2)?, c(4)?])
+        }
+        serde_yaml::Value::Sequence(s) if s.len() == 3 => {
+            let mut out = [0.0; 3];
+            for (o, x) in out.iter_mut().zip(s) {
+                *o = x.as_f64()?;
+                if !(0.0..=1.0).contains(o) {
+                    return None;
+                }
+            }
+            Some(out)
+        }
+        _ => None,
+    }
+}
+
+/// A `step:` part's mesh through the mesh cache and the project's tessellation store
+/// `store`, with the part's `deflection:` (mm) and `angle:` (degrees); the message of
+/// an error names the file (and, without the `step` feature, the rebuild command).
+fn step_part(
+    pf: &PartFile,
+    file: &Path,
+    store: &Path,
+    cache: &mut MeshCache,
+) -> Result<(Arc<Mesh>, StepGeometry), String> {
+    use crate::mesh::step::StepOptions;
+    for (key, v) in [("deflection", pf.deflection), ("angle", pf.angle)] {
+        if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+            return Err(format!("`{key}:` must be a number > 0"));
+        }
+    }
+    if pf.angle.is_some_and(|a| a >= 180.0) {
+        return Err("`angle:` is in degrees and must be below 180".into());
+    }
+    let (linear_deflection, angular_deflection) = tessellations::of_part(pf);
+    let options = StepOptions {
+        linear_deflection,
+        angular_deflection,
+        ..StepOptions::default()
+    };
+    let got = cache
+        .get_step(file, &options, Some(store))
+        .map_err(|e| e.to_string())?;
+    let geometry = StepGeometry {
+        deflection: pf.deflection,
+        angle: pf.angle,
+        volume_ratio: got.mesh.signed_volume() / got.exact_volume,
+        from_store: got.from_store,
+    };
+    Ok((got.mesh, geometry))
+}
+
+fn feature_name(f: &FeatureFile) -> &str {
+    match f {
+        FeatureFile::CutCells { name, .. } => name,
+    }
+}
+
+/// The document file with every name in NFC: all text except file paths (`stl`,
+/// `step`, `urdf`, which name files on disk byte for byte) and `description`.
+fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {
+    fn walk(v: &mut serde_yaml::Value) {
+        use serde_yaml::Value;
+        match v {
+            Value::String(s) => *s = nfc_name(s).into_owned(),
+            Value::Sequence(items) => items.iter_mut().for_each(walk),
+            Value::Mapping(m) => {
+                let old = std::mem::take(m);
+                for (k, mut val) in old {
+                    let keep = matches!(k.as_str(), Some("stl" | "step" | "urdf" | "description"));
+                    let k = match k {
+                        Value::String(s) => Value::String(nfc_name(&s).into_owned()),
+                        other => other,
+                    };
+                    if !keep {
+                        walk(&mut val);
+                    }
+                    m.insert(k, val);
+                }
+            }
+            Value::Tagged(t) => walk(&mut t.value),
+            _ => {}
+        }
+    }
+    let mut v = serde_yaml::to_value(&file)?;
+    walk(&mut v);
+    serde_yaml::from_value(v)
+}
+
+/// Names of one kind that differ only by case, as located warnings (see
+/// [`Document::warnings`]).
+/// A name and where it is written (line, column), when the scan saw it.
+type Placed = (String, Option<(usize, usize)>);
+
+fn case_warnings(file: &DocumentFile, path: &Path, positions: &scan::Positions) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut kind = |what: &str, names: Vec<Placed>| {
+        let mut by_case: IndexMap<String, Vec<&Placed>> = IndexMap::new();
+        for n in &names {
+            by_case.entry(n.0.to_lowercase()).or_default().push(n);
+        }
+        for group in by_case.values() {
+            let mut spellings: Vec<&str> = group.iter().map(|n| n.0.as_str()).collect();
+            spellings.dedup();
+            if spellings.len() < 2 {
+                continue;
+            }
+            let (line, col) = group[1].1.unwrap_or((0, 0));
+            let list: Vec<String> = group
+                .iter()
+                .map(|(n, at)| match at {
+                    Some((l, _)) => format!("`{n}` (line {l})"),
+                    None => format!("`{n}`"),
+                })
+                .collect();
+            out.push(
+                SourceError::new(
+                    path,
+                    line,
+                    col,
+                    format!(
+                        "{what} {} differ only by case: they are different names (lookups are exact), which is easy to confuse; rename one",
+                        list.join(" and ")
+                    ),
+                )
+                .to_string(),
+            );
+        }
+    };
+    let at = |p: String| positions.get(&p);
+    kind(
+        "parts",
+        file.parts
+            .keys()
+            .map(|n| (n.clone(), at(format!("parts/{n}"))))
+            .collect(),
+    );
+    kind(
+        "components",
+        file.components
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.name.clone(), at(format!("components/{i}/name"))))
+            .collect(),
+    );
+    kind(
+        "mates",
+        file.mates
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (m.name.clone(), at(format!("mates/{i}/name"))))
+            .collect(),
+    );
+    kind(
+        "robots",
+        file.robots
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.name.clone(), at(format!("robots/{i}/name"))))
+            .collect(),
+    );
+    for (p, pf) in &file.parts {
+        let refs = pf
+            .planes
+            .keys()
+            .map(|r| (r.clone(), at(format!("parts/{p}/planes/{r}"))))
+            .chain(
+                pf.axes
+                    .keys()
+                    .map(|r| (r.clone(), at(format!("parts/{p}/axes/{r}")))),
+            )
+            .chain(
+                pf.points
+                    .keys()
+                    .map(|r| (r.clone(), at(format!("parts/{p}/points/{r}")))),
+            )
+            .collect();
+        kind(&format!("references of part `{p}`:"), refs);
+        kind(
+            &format!("features of part `{p}`:"),
+            pf.features
+                .iter()
+                .enumerate()
+                .map(|(i, f)| {
+                    (
+                        feature_name(f).to_string(),
+                        at(format!("parts/{p}/features/{i}/name")),
+                    )
+                })
+                .collect(),
+        );
+    }
+    out
+}

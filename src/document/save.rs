@@ -1,0 +1,292 @@
+//! Writing a document: its YAML schema, and the checked atomic save.
+
+use super::file::{
+    AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile, PlaneFile, PlanesFile,
+};
+use super::{Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance};
+use crate::collision::CutSpec;
+use crate::fsutil::{content_hash, FileKind};
+use crate::math::Vec3;
+use std::path::{Path, PathBuf};
+
+impl Document {
+    /// The document as its YAML schema (what `save` writes).
+    pub fn to_file(&self) -> DocumentFile {
+        let parts = self
+            .parts
+            .values()
+            .filter(|p| !self.generated.contains(&p.name))
+            .map(|p| {
+                let mut pf = PartFile {
+                    features: p.features.iter().map(Feature::to_file).collect(),
+                    ..PartFile::from_stl(p.stl.clone())
+                };
+                if let Some(step) = &p.step {
+                    pf.step = Some(std::mem::take(&mut pf.stl));
+                    pf.deflection = step.deflection;
+                    pf.angle = step.angle;
+                }
+                for (n, r) in &p.references {
+                    let a = |v: Vec3| [v.x, v.y, v.z];
+                    match *r {
+                        Reference::Plane { point, normal } => {
+                            pf.planes.insert(
+                                n.clone(),
+                                PlaneFile {
+                                    point: a(point.coords),
+                                    normal: a(normal),
+                                },
+                            );
+                        }
+                        Reference::Axis { point, direction } => {
+                            pf.axes.insert(
+                                n.clone(),
+                                AxisFile {
+                                    point: a(point.coords),
+                                    direction: a(direction),
+                                },
+                            );
+                        }
+                        Reference::Point(point) => {
+                            pf.points.insert(n.clone(), a(point.coords));
+                        }
+                    }
+                }
+                (p.name.clone(), pf)
+            })
+            .collect();
+        let components = self
+            .components
+            .iter()
+            .filter(|c| !self.generated.contains(&c.part))
+            .map(|c| ComponentFile {
+                name: c.name.clone(),
+                part: c.part.clone(),
+                fixed: c.fixed,
+                color: c.color.as_ref().map(color_value),
+                transform: Some(c.transform.to_matrix().map(|row| row.map(tidy))),
+                mass: c.mass,
+                threaded: c.threaded,
+                fixture: c.fixture,
+            })
+            .collect();
+        let mates = self
+            .mates
+            .iter()
+            .map(|m| MateFile {
+                name: m.name.clone(),
+                kind: m.kind.name().into(),
+                entities: m
+                    .entities
+                    .clone()
+                    .map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+                value: m.value.map(|v| {
+                    if m.kind == MateKind::Angle {
+                        tidy(v.to_degrees())
+                    } else {
+                        tidy(v)
+                    }
+                }),
+                aligned: m.aligned,
+                about: m
+                    .about
+                    .as_ref()
+                    .map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+            })
+            .collect();
+        DocumentFile {
+            units: "mm".into(),
+            description: self.description.clone(),
+            parts,
+            components,
+            mates,
+            robots: self.robots.iter().map(RobotInstance::to_file).collect(),
+        }
+    }
+
+    /// The document as YAML text.
+    pub fn to_yaml(&self) -> String {
+        self.to_file().to_yaml().unwrap_or_default()
+    }
+
+    /// Writes the document back to its file atomically.
+    ///
+    /// Refused, with nothing written, when the text would not load again (a value out
+    /// of range, …) or when the file changed on disk since the document was loaded or
+    /// last saved (another writer's edits are never overwritten silently: reopen the
+    /// document and apply the change again).
+    pub fn save(&mut self) -> Result<(), DocumentError> {
+        let path = self.path.clone();
+        let expected = self.disk_hash;
+        self.write_checked(&path, expected)
+    }
+
+    /// Writes the document to `path` atomically and makes it the document's file.
+    /// Relative mesh paths are rewritten so they still point at the same meshes.
+    ///
+    /// Refuses to overwrite a mesh of this document and any existing file that is not
+    /// a fitup document; over its own file it behaves as [`save`](Self::save).
+    pub fn save_as(&mut self, path: &Path) -> Result<(), DocumentError> {
+        let target = canonical_target(path);
+        if let Some(p) = self
+            .parts
+            .values()
+            .find(|p| canonical_target(&p.mesh_path) == target)
+        {
+            return Err(DocumentError::OverMesh {
+                path: path.to_path_buf(),
+                part: p.name.clone(),
+            });
+        }
+        let expected = (target == canonical_target(&self.path))
+            .then_some(self.disk_hash)
+            .flatten();
+        let new_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let old = self.parts.clone();
+        let old_robots = self.robots.clone();
+        for p in self.parts.values_mut() {
+            if let Some(rel) = relative_path(&p.mesh_path, &new_dir) {
+                p.stl = rel;
+            }
+        }
+        for r in &mut self.robots {
+            r.rebase_urdf(|f| relative_path(f, &new_dir));
+        }
+        if let Err(e) = self.write_checked(path, expected) {
+            self.parts = old;
+            self.robots = old_robots;
+            return Err(e);
+        }
+        self.path = path.to_path_buf();
+        Ok(())
+    }
+
+    /// Validates the text, then, holding a lock on the folder (so concurrent fitup
+    /// writers take turns), checks what is on disk — the bytes hashed to `expected`, or
+    /// else no file or a fitup document — and replaces it atomically.
+    fn write_checked(&mut self, path: &Path, expected: Option<u64>) -> Result<(), DocumentError> {
+        let write_err = |message: String| DocumentError::Write {
+            path: path.into(),
+            message,
+        };
+        let text = self
+            .to_file()
+            .to_yaml()
+            .map_err(|e| write_err(e.to_string()))?;
+        if let Err(e) = Self::parse_text(&text, path) {
+            let why = match &e {
+                DocumentError::Source(s) => s.message.clone(),
+                other => other.to_string(),
+            };
+            return Err(write_err(format!(
+                "not saved: the document would not open again ({why})"
+            )));
+        }
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let _lock = crate::fsutil::lock_folder(dir);
+        match crate::fsutil::read_file(path, FileKind::Document) {
+            Err(crate::fsutil::ReadError::Io(_)) if !path.exists() => {}
+            Ok(bytes) => match expected {
+                Some(h) if content_hash(&bytes) != h => {
+                    return Err(write_err(
+                        "not saved: the file changed on disk since it was loaded (another program or script saved it); open it again and redo the change".into(),
+                    ))
+                }
+                Some(_) => {}
+                None => {
+                    let is_document = std::str::from_utf8(&bytes)
+                        .ok()
+                        .is_some_and(|t| Self::parse_text(t, path).is_ok());
+                    if !is_document {
+                        return Err(write_err(
+                            "refusing to overwrite a file that is not a fitup document".into(),
+                        ));
+                    }
+                }
+            },
+            Err(e) => return Err(write_err(format!("refusing to overwrite it: {e}"))),
+        }
+        crate::fsutil::write_atomic(path, text.as_bytes()).map_err(|e| write_err(e.to_string()))?;
+        self.disk_hash = Some(content_hash(text.as_bytes()));
+        Ok(())
+    }
+}
+
+fn color_value(c: &Color) -> serde_yaml::Value {
+    let h = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    serde_yaml::Value::String(format!("#{:02x}{:02x}{:02x}", h(c[0]), h(c[1]), h(c[2])))
+}
+
+/// Snaps round-off (|x| < 1e-14 → 0) so saved matrices read cleanly; idempotent.
+fn tidy(x: f64) -> f64 {
+    if x.abs() < 1e-14 {
+        0.0
+    } else {
+        x
+    }
+}
+
+/// The canonical form of a path that may not exist yet (its folder canonicalized), to
+/// tell whether two paths name the same file.
+fn canonical_target(p: &Path) -> PathBuf {
+    if let Ok(c) = p.canonicalize() {
+        return c;
+    }
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    match (
+        abs.parent().and_then(|d| d.canonicalize().ok()),
+        abs.file_name(),
+    ) {
+        (Some(d), Some(n)) => d.join(n),
+        _ => abs,
+    }
+}
+
+/// `target` written relative to `base` when possible (both made absolute first).
+pub(super) fn relative_path(target: &Path, base: &Path) -> Option<String> {
+    let abs = |p: &Path| std::path::absolute(p).ok();
+    let (t, b) = (abs(target)?, abs(base)?);
+    let (tc, bc): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
+    let common = tc.iter().zip(&bc).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        return Some(t.to_string_lossy().into_owned());
+    }
+    let mut out = PathBuf::new();
+    for _ in common..bc.len() {
+        out.push("..");
+    }
+    for c in &tc[common..] {
+        out.push(c);
+    }
+    Some(out.to_string_lossy().replace('\\', "/"))
+}
+
+impl Feature {
+    fn to_file(&self) -> FeatureFile {
+        match self {
+            Feature::CutCells {
+                name,
+                spec: CutSpec::Size(s),
+            } => FeatureFile::CutCells {
+                name: name.clone(),
+                cell_size: Some(*s),
+                planes: None,
+            },
+            Feature::CutCells {
+                name,
+                spec: CutSpec::Planes { x, y, z },
+            } => FeatureFile::CutCells {
+                name: name.clone(),
+                cell_size: None,
+                planes: Some(PlanesFile {
+                    x: x.clone(),
+                    y: y.clone(),
+                    z: z.clone(),
+                }),
+            },
+        }
+    }
+}
