@@ -26,6 +26,7 @@
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`project`] | the project folder that bounds every file a run touches, and the path rule |
 //! | [`fsutil`] | atomic writes, capped reads of regular files only, content hashes, file stamps |
+//! | [`files`] | data files a script reads inside the project: CSV tables, JSON, text |
 #![warn(missing_docs)]
 
 #[cfg(feature = "cli")]
@@ -36,6 +37,7 @@ pub mod db;
 pub mod demo;
 pub mod diagnostics;
 pub mod document;
+pub mod files;
 pub mod fsutil;
 pub mod kinematics;
 #[cfg(feature = "manipulator")]

@@ -276,6 +276,26 @@ class Document:
         """The verdict for components ``a`` and ``b``: a dict ``state``
         (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``.
         """
+    def overlap(self, a: str, b: str, time_limit_ms: Optional[float] = None) -> Dict[str, Any]:
+        """How much interfering components ``a`` and ``b`` overlap: a dict ``volume_mm3``
+        (the intersection volume, SolidWorks' interference volume), ``depth_mm`` (the
+        shortest translation of ``a`` that clears ``b``) and ``direction`` (unit
+        vector, world). Exact for closed meshes; zeros when they only touch.
+        """
+    def mass_properties(
+        self,
+        components: Optional[List[str]] = None,
+        density: Optional[float] = None,
+        frame: Optional[_Pose] = None,
+    ) -> Dict[str, Any]:
+        """Mass properties of ``components`` (names; all when None) together, in world
+        coordinates, or in the coordinate system ``frame`` (a 4×4 pose, mm) when given:
+        a dict ``volume_mm3``, ``area_mm2``, ``mass_kg``, ``density_kg_m3``,
+        ``centre_of_mass`` (mm), ``inertia`` (3×3 tensor about the centre of mass,
+        kg·mm², physics sign as trimesh), ``principal_moments``, ``principal_axes``
+        (rows). A component's ``mass`` (kg) in the document wins over ``density``
+        (kg/m³, default 1000).
+        """
     def interferes(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> bool:
         """Whether components ``a`` and ``b`` interfere (crossing deeper than
         ``tolerance`` mm, or one solid inside the other).

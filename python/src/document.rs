@@ -250,7 +250,7 @@ impl Document {
                     (
                         ws.name(p.a).to_string(),
                         ws.name(p.b).to_string(),
-                        p.contact,
+                        ws.with_separation_depth(p.a, p.b, p.contact),
                     )
                 })
                 .collect::<Vec<_>>())
@@ -300,8 +300,105 @@ impl Document {
         tolerance: Option<f64>,
     ) -> Result<Bound<'py, PyDict>> {
         let o = options::check_options(method, tolerance)?;
-        let c = self.with_workspace(py, |ws| Ok(ws.contact(a, b, &o)?))?;
+        let c = self.with_workspace(py, |ws| {
+            let c = ws.contact(a, b, &o)?;
+            Ok(ws.with_separation_depth(ws.index(a)?, ws.index(b)?, c))
+        })?;
         Ok(contact_dict(py, &c)?)
+    }
+
+    /// How much interfering components ``a`` and ``b`` overlap: a dict ``volume_mm3``
+    /// (the intersection volume, SolidWorks' interference volume), ``depth_mm`` (the
+    /// shortest translation of ``a`` that clears ``b``) and ``direction`` (unit
+    /// vector, world). Exact for closed meshes; zeros when they only touch.
+    #[pyo3(signature = (a, b, time_limit_ms = None))]
+    fn overlap<'py>(
+        &self,
+        py: Python<'py>,
+        a: &str,
+        b: &str,
+        time_limit_ms: Option<f64>,
+    ) -> Result<Bound<'py, PyDict>> {
+        let mut o = fitup::workspace::OverlapOptions::default();
+        if let Some(t) = time_limit_ms {
+            o.time_limit_ms = t;
+        }
+        let v = self.with_workspace(py, |ws| Ok(ws.overlap(a, b, &o)?))?;
+        let d = PyDict::new(py);
+        d.set_item("volume_mm3", v.volume)?;
+        d.set_item("depth_mm", v.depth)?;
+        d.set_item(
+            "direction",
+            v.direction.iter().copied().collect::<Vec<f64>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// Mass properties of ``components`` (names; all when None) together, in world
+    /// coordinates, or in the coordinate system ``frame`` (a 4×4 pose, mm) when given:
+    /// a dict ``volume_mm3``, ``area_mm2``, ``mass_kg``, ``density_kg_m3``,
+    /// ``centre_of_mass`` (mm), ``inertia`` (3×3 tensor about the centre of mass,
+    /// kg·mm², physics sign as trimesh), ``principal_moments``, ``principal_axes``
+    /// (rows). A component's ``mass`` (kg) in the document wins over ``density``
+    /// (kg/m³, default 1000).
+    #[pyo3(signature = (components = None, density = None, frame = None))]
+    fn mass_properties<'py>(
+        &self,
+        py: Python<'py>,
+        components: Option<Vec<String>>,
+        density: Option<f64>,
+        frame: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
+    ) -> Result<Bound<'py, PyDict>> {
+        let mut o = fitup::workspace::MassOptions::default();
+        if let Some(d) = density {
+            o.density = d;
+        }
+        let frame = frame
+            .map(|f| convert::pose_of(f.as_array(), "frame"))
+            .transpose()?;
+        let m = {
+            let inner = self.lock()?;
+            let which: Vec<usize> = match &components {
+                Some(names) => names
+                    .iter()
+                    .map(|n| inner.doc.component_index(n))
+                    .collect::<std::result::Result<_, _>>()?,
+                None => (0..inner.doc.components().len()).collect(),
+            };
+            fitup::workspace::mass_properties(&inner.doc, &which, &o)?
+        };
+        let m = match frame {
+            Some(f) => m.in_frame(&f),
+            None => m,
+        };
+        let (moments, axes) = m.principal();
+        let d = PyDict::new(py);
+        d.set_item("volume_mm3", m.volume)?;
+        d.set_item("area_mm2", m.area)?;
+        d.set_item("mass_kg", m.mass)?;
+        d.set_item("density_kg_m3", m.density())?;
+        d.set_item(
+            "centre_of_mass",
+            m.centre_of_mass
+                .coords
+                .iter()
+                .copied()
+                .collect::<Vec<f64>>(),
+        )?;
+        d.set_item(
+            "inertia",
+            (0..3)
+                .map(|i| (0..3).map(|j| m.inertia[(i, j)]).collect::<Vec<f64>>())
+                .collect::<Vec<_>>(),
+        )?;
+        d.set_item("principal_moments", moments.to_vec())?;
+        d.set_item(
+            "principal_axes",
+            axes.iter()
+                .map(|a| a.iter().copied().collect::<Vec<f64>>())
+                .collect::<Vec<_>>(),
+        )?;
+        Ok(d)
     }
 
     /// Whether components ``a`` and ``b`` interfere (crossing deeper than

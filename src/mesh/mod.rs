@@ -31,6 +31,7 @@
 mod cache;
 mod error;
 mod gltf;
+mod mass;
 mod obj;
 mod ply;
 mod shapes;
@@ -44,9 +45,10 @@ pub use self::gltf::parse_gltf;
 pub use self::gltf::{glb_bytes, GlbNode, GLB_ROOT, Z_UP_TO_Y_UP};
 pub use cache::{MeshCache, StepMesh};
 pub use error::{MeshError, MeshErrorKind};
+pub use mass::{MassError, MassProperties, MassSpec};
 pub use obj::parse_obj;
 pub use ply::parse_ply;
-pub use stl::{parse_stl, read_stl, write_stl};
+pub use stl::{parse_stl, read_stl, stl_bytes, write_stl};
 
 use std::path::{Path, PathBuf};
 

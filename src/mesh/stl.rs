@@ -270,6 +270,26 @@ pub(super) fn short(s: &str) -> String {
     }
 }
 
+/// A mesh as the bytes of a binary STL (f32 coordinates, mm, normals from the
+/// winding), for writers that go through the output rule.
+pub fn stl_bytes(mesh: &Mesh) -> Vec<u8> {
+    let triangles: Vec<stl_io::Triangle> = (0..mesh.triangles.len())
+        .map(|i| {
+            let [a, b, c] = mesh.triangle(i);
+            let n = mesh.triangle_normal(i);
+            let v = |p: Point3| stl_io::Vertex::new([p.x as f32, p.y as f32, p.z as f32]);
+            stl_io::Triangle {
+                normal: stl_io::Normal::new([n.x as f32, n.y as f32, n.z as f32]),
+                vertices: [v(a), v(b), v(c)],
+            }
+        })
+        .collect();
+    let mut bytes = Vec::with_capacity(84 + 50 * triangles.len());
+    // writing into a Vec cannot fail
+    let _ = stl_io::write_stl(&mut bytes, triangles.iter());
+    bytes
+}
+
 /// Writes a binary STL atomically (temporary file in the same folder, then rename), so
 /// a reader never sees a half-written file.
 pub fn write_stl(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {

@@ -24,6 +24,11 @@ pub struct Api<'e> {
     sections: Vec<(String, String)>,
     /// Typed overloads registered without an entry of their own.
     overloads: usize,
+    /// Names of the properties that have a setter.
+    setters: std::collections::HashSet<String>,
+    /// The `Type.set_prop` method aliases registered (an entry of the same name
+    /// registered later replaces the alias).
+    aliases: std::collections::HashSet<String>,
 }
 
 /// The Rhai function name for a signature: `name(..)`, `Type.name(..)`, `Type.prop`
@@ -57,6 +62,8 @@ impl<'e> Api<'e> {
             entries: Vec::new(),
             sections: Vec::new(),
             overloads: 0,
+            setters: Default::default(),
+            aliases: Default::default(),
         }
     }
 
@@ -89,6 +96,12 @@ impl<'e> Api<'e> {
             .map(|s| s.0.clone())
             .unwrap_or_default();
         let comments: Vec<String> = doc.lines().map(|l| format!("/// {l}")).collect();
+        if let Some(head) = signature.split('(').next() {
+            if self.aliases.remove(head) {
+                // this entry replaces the setter's alias of the same name
+                self.overloads -= 1;
+            }
+        }
         FuncRegistration::new(name)
             .with_comments([comments.join("\n")])
             .register_into_engine(self.engine, func);
@@ -150,14 +163,29 @@ impl<'e> Api<'e> {
         self.add(rhai_name(signature, Some("get")), signature, doc, func);
     }
 
-    /// Registers a property setter (`Type.prop = value`), documented with its getter.
+    /// Registers a property setter (`Type.prop = value`), documented with its getter,
+    /// and the same setter as the method `set_prop(value)` (unless the type has its
+    /// own `set_prop`): what `call().prop = value` is spelled as (see `assign.rs`).
     pub fn set<A: 'static, const N: usize, const X: bool, const F: bool>(
         &mut self,
         signature: &str,
-        func: impl RhaiNativeFunc<A, N, X, (), F> + Send + Sync + 'static,
+        func: impl RhaiNativeFunc<A, N, X, (), F> + Clone + Send + Sync + 'static,
     ) {
         let name = rhai_name(signature, Some("set"));
         let comments = vec![format!("/// Sets `{signature}`.")];
+        let prop = name.trim_start_matches("set$").to_string();
+        let ty = signature.split('.').next().unwrap_or("");
+        let own = format!("{ty}.set_{prop}(");
+        if !self.entries.iter().any(|e| e.signature.starts_with(&own)) {
+            FuncRegistration::new(format!("set_{prop}"))
+                .with_comments([format!(
+                    "/// Sets `{signature}` (the method form of the setter)."
+                )])
+                .register_into_engine(self.engine, func.clone());
+            self.overloads += 1;
+            self.aliases.insert(format!("{ty}.set_{prop}"));
+        }
+        self.setters.insert(prop);
         FuncRegistration::new(name)
             .with_comments(comments)
             .register_into_engine(self.engine, func);
@@ -183,7 +211,10 @@ pub(crate) fn register_all(
     let mut api = Api::new(engine);
     super::bind_math::register(&mut api);
     super::bind_document::register(&mut api, ctx);
+    super::bind_files::register(&mut api, ctx);
     super::bind_interference::register(&mut api);
+    super::bind_mass::register(&mut api);
+    super::bind_mass::register_export(&mut api);
     super::bind_planning::register(&mut api);
     super::bind_robot::register(&mut api, ctx);
     #[cfg(feature = "db")]
@@ -192,6 +223,7 @@ pub(crate) fn register_all(
     #[cfg(feature = "skills")]
     super::bind_skills::register(&mut api, ctx);
     super::bind_view::register(&mut api);
+    let _ = ctx.setters.set(api.setters.clone());
     (api.sections, api.entries, api.overloads)
 }
 

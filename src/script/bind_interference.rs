@@ -70,7 +70,10 @@ fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult
         }
         Ok(found
             .into_iter()
-            .map(|p| Dynamic::from_map(contact_map(&p.contact, ws.name(p.a), ws.name(p.b))))
+            .map(|p| {
+                let c = ws.with_separation_depth(p.a, p.b, p.contact);
+                Dynamic::from_map(contact_map(&c, ws.name(p.a), ws.name(p.b)))
+            })
             .collect())
     })
 }
@@ -78,7 +81,9 @@ fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult
 fn pair(d: &DocHandle, a: &str, b: &str, opts: Option<&Map>) -> ScriptResult<Map> {
     let o = options(opts)?;
     with_workspace(d, |ws| {
-        Ok(contact_map(&ws.contact(a, b, &o).map_err(fail)?, a, b))
+        let c = ws.contact(a, b, &o).map_err(fail)?;
+        let (ia, ib) = (ws.index(a).map_err(fail)?, ws.index(b).map_err(fail)?);
+        Ok(contact_map(&ws.with_separation_depth(ia, ib, c), a, b))
     })
 }
 
@@ -183,7 +188,7 @@ fn feature_cells(f: &FeatureHandle) -> ScriptResult<std::sync::Arc<crate::collis
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Interference", "Static interference between components, seed 000 style. Methods: `\"exact\"` (default: solid semantics — surfaces crossing deeper than the tolerance, or one part inside the other), `\"aabb\"` (whole-part world boxes) and `\"cells\"` (whole-part boxes, then the boxes of the parts' cut cells). Parts whose surfaces only meet (a plate on the table, a screw resting in a hole of its diameter) are *touching*, not interfering. `tolerance` is the penetration tolerance in mm (default 0.01). Results are maps `#{a, b, state, depth, kind}`: `state` is `\"separate\"`, `\"touching\"` or `\"interfering\"`, `depth` the penetration estimate in mm, `kind` `\"surfaces cross\"`, `\"X inside Y\"`, `\"faces overlap\"` (closed solids whose faces overlap in one plane facing the same way: equal walls pushed into each other) or `\"boxes overlap\"`.");
+    api.section("Interference", "Static interference between components, seed 000 style. Methods: `\"exact\"` (default: solid semantics — surfaces crossing deeper than the tolerance, or one part inside the other), `\"aabb\"` (whole-part world boxes) and `\"cells\"` (whole-part boxes, then the boxes of the parts' cut cells). Parts whose surfaces only meet (a plate on the table, a screw resting in a hole of its diameter) are *touching*, not interfering. `tolerance` is the penetration tolerance in mm (default 0.01). Results are maps `#{a, b, state, depth, kind}`: `state` is `\"separate\"`, `\"touching\"` or `\"interfering\"`, `depth` the interference depth in mm (for closed solids the shortest translation that separates them, as `overlap` measures it, within 2 s; else the crossing estimate), `kind` `\"surfaces cross\"`, `\"X inside Y\"`, `\"faces overlap\"` (closed solids whose faces overlap in one plane facing the same way: equal walls pushed into each other) or `\"boxes overlap\"`.");
     api.type_::<FeatureHandle>("Feature");
     api.f(
         "Document.interferences() -> array",

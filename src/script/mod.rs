@@ -7,10 +7,13 @@
 
 mod api;
 mod args;
+mod assign;
 #[cfg(feature = "db")]
 mod bind_db;
 mod bind_document;
+mod bind_files;
 mod bind_interference;
+mod bind_mass;
 mod bind_math;
 mod bind_planning;
 mod bind_robot;
@@ -121,6 +124,9 @@ pub struct Context {
     reads: Mutex<BTreeSet<PathBuf>>,
     writes: Mutex<BTreeSet<PathBuf>>,
     operations: AtomicU64,
+    /// The properties with a setter (`set_<name>` methods), known once the engine is
+    /// built.
+    setters: std::sync::OnceLock<std::collections::HashSet<String>>,
 }
 
 impl Context {
@@ -154,6 +160,7 @@ impl Context {
             reads: Mutex::default(),
             writes: Mutex::default(),
             operations: AtomicU64::new(0),
+            setters: Default::default(),
         }
     }
 
@@ -231,6 +238,15 @@ impl Context {
     /// Sends a line to the output.
     pub fn print(&self, line: &str) {
         (self.output)(line)
+    }
+
+    /// A diagnostic (a document warning): to stderr, escaped, never into the script's
+    /// own output (a CSV a script prints must start with its own first line).
+    pub fn warn(&self, line: &str) {
+        use std::io::Write;
+        let text = crate::diagnostics::printable(line, false);
+        // a closed stderr loses the warning, never the run
+        let _ = writeln!(std::io::stderr().lock(), "warning: {text}");
     }
 
     /// Whether the run was cancelled.
@@ -415,14 +431,26 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
             .map_err(|e| ScriptError::Located(SourceError::new(doc_path, 0, 0, e.to_string())))?;
         scope.push("doc", doc);
     }
-    let mut ast = engine.compile_with_scope(&scope, &text).map_err(|e| {
+    let compiled = engine.compile_with_scope(&scope, &text).or_else(|e| {
+        // `doc.component("x").fixed = true`: spelled with the setter method, the way
+        // a macro author means it (assign.rs); any other error stays the error
+        if !matches!(*e.0, rhai::ParseErrorType::AssignmentToInvalidLHS(..)) {
+            return Err(e);
+        }
+        let setters = ctx.setters.get().cloned().unwrap_or_default();
+        match assign::rewrite(&text, &setters) {
+            Some(t) => engine.compile_with_scope(&scope, &t).map_err(|_| e),
+            None => Err(e),
+        }
+    });
+    let mut ast = compiled.map_err(|e| {
         let (line, col) = (e.1.line().unwrap_or(0), e.1.position().unwrap_or(0));
         let located = SourceError::new(&script, line, col, format!("syntax error: {}", e.0));
         ScriptError::Located(match *e.0 {
             rhai::ParseErrorType::AssignmentToInvalidLHS(..) => located.with_help(
-                "Rhai cannot set a property of a function call's result \
-                 (`doc.component(\"x\").transform = m`); write `doc.set_transform(\"x\", m)`, \
-                 `doc.component(\"x\").set_transform(m)`, or `let c = doc.component(\"x\"); c.transform = m;`",
+                "only a property of a variable, or of a call's result that has a setter \
+                 (`doc.component(\"x\").fixed = true`), can be assigned; for anything else \
+                 keep the value in a variable first: `let c = doc.component(\"x\"); c.fixed = true;`",
             ),
             _ => located,
         })

@@ -31,10 +31,14 @@
 //! ```
 
 mod features;
+mod overlap;
 mod plan;
 mod scene;
 
 pub use features::{feature_cells, split_part, CUT_CELLS_FEATURE};
+pub use overlap::{
+    mass_properties, part_frame_mass_properties, world_mesh, MassOptions, Overlap, OverlapOptions,
+};
 pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_DIAMETERS};
 pub use scene::{Scene, SceneCache};
 
@@ -89,6 +93,36 @@ pub enum WorkspaceError {
     /// ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)).
     #[error(transparent)]
     Limit(#[from] crate::math::LimitError),
+    /// The overlap of two components cannot be measured.
+    #[error("`{a}` and `{b}`: {source}")]
+    Overlap {
+        /// The first component.
+        a: String,
+        /// The second component.
+        b: String,
+        /// Why.
+        #[source]
+        source: crate::collision::VolumeError,
+    },
+    /// A component has no mass properties (empty `component` for the combination).
+    #[error("{}{source}", if component.is_empty() { String::new() } else { format!("component `{component}`: ") })]
+    Mass {
+        /// The component.
+        component: String,
+        /// Why.
+        #[source]
+        source: crate::mesh::MassError,
+    },
+}
+
+impl WorkspaceError {
+    fn overlap(a: &str, b: &str, source: crate::collision::VolumeError) -> Self {
+        WorkspaceError::Overlap {
+            a: a.to_string(),
+            b: b.to_string(),
+            source,
+        }
+    }
 }
 
 /// Method and tolerance of a static interference request.

@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["math", "fsutil"],
     &["project"],
     &["diagnostics", "mesh"],
-    &["collision", "kinematics"],
+    &["collision", "kinematics", "files"],
     &["planning", "document"],
     &["workspace", "db", "viewer", "demo"],
     &["sequence", "manipulator"],
