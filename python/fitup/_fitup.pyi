@@ -23,6 +23,8 @@ def catalog_names() -> List[str]:
     """Names of the built-in catalog robots."""
 def planner_names() -> List[str]:
     """The planner names ``plan_path`` accepts."""
+def option_keys(request: str) -> List[Dict[str, Any]]:
+    """placeholder"""
 def run_script(
     script: _StrPath,
     doc: Optional[_StrPath] = None,
@@ -264,33 +266,27 @@ class Document:
         """Writes the document to ``path`` atomically and makes it the document's file."""
     def to_yaml(self) -> str:
         """The document as YAML text (what ``save`` writes)."""
-    def contacts(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]:
+    def contacts(self, **options: Any) -> List[Dict[str, Any]]:
         """Every pair that touches or interferes: a list of dicts ``a``, ``b``, ``state``
         (``"touching"``/``"interfering"``), ``depth_mm``. ``method``: ``"exact"``,
         ``"aabb"`` or ``"cells"``; ``tolerance`` (mm): crossings up to this depth are
         touching (default 0.01).
         """
-    def interferences(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]:
+    def interferences(self, **options: Any) -> List[Dict[str, Any]]:
         """Every interfering pair (as ``contacts``, interfering only)."""
-    def contact(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> Dict[str, Any]:
+    def contact(self, a: str, b: str, **options: Any) -> Dict[str, Any]:
         """The verdict for components ``a`` and ``b``: a dict ``state``
         (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``.
         """
-    def interferes(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> bool:
+    def interferes(self, a: str, b: str, **options: Any) -> bool:
         """Whether components ``a`` and ``b`` interfere (crossing deeper than
         ``tolerance`` mm, or one solid inside the other).
         """
-    def clearance(self, a: str, b: str, stop_mm: float = 1000.0) -> float:
+    def clearance(self, a: str, b: str, stop_mm: Optional[float] = None) -> float:
         """The distance between the surfaces of ``a`` and ``b`` (mm): 0 when they touch,
         cross or one lies inside the other; ``stop_mm`` when nothing is nearer.
         """
-    def sweep(
-        self,
-        name: str,
-        waypoints: _Poses,
-        tolerance: Optional[float] = None,
-        time_limit_ms: Optional[float] = None,
-    ) -> Dict[str, Any]:
+    def sweep(self, name: str, waypoints: _Poses, **options: Any) -> Dict[str, Any]:
         """Sweeps component ``name`` from its pose through ``waypoints`` (``(N, 4, 4)``,
         world, mm; translation lerp + rotation slerp between them) and returns the first
         contact: a dict ``hit``, ``t`` (0..1 along the motion), ``pose`` (4×4),

@@ -18,6 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["workspace", "db", "viewer", "demo"],
     &["sequence", "manipulator"],
     &["skills"],
+    &["options"],
     &["script"],
     &["watch"],
     &["cli"],

@@ -22,6 +22,7 @@ mod layers;
 mod manipulator;
 mod mesh_formats;
 mod models;
+mod option_keys;
 mod planning_problems;
 mod planning_puzzles;
 mod precision_manipulator;
