@@ -386,13 +386,7 @@ class Database:
         """Stores ``path`` (found or not, with its key poses, planner, seed and options)
         under ``name``; ``run_id`` files it under a run. Returns its id.
         """
-    def paths(
-        self,
-        name: Optional[str] = None,
-        planner: Optional[str] = None,
-        component: Optional[str] = None,
-        run_id: Optional[int] = None,
-    ) -> List[Dict[str, Any]]:
+    def paths(self, **filter: Any) -> List[Dict[str, Any]]:
         """Stored paths, oldest first, as dicts: ``id``, ``run_id``, ``name``,
         ``created_at``, ``component``, ``seed``, ``planner``, ``found``, ``reason``,
         ``length_mm``, ``time_ms``, ``poses`` (``(N, 4, 4)``). Filters: ``name``,
@@ -402,7 +396,7 @@ class Database:
         """Recorded runs, oldest first, as dicts: ``id``, ``script``, ``document``,
         ``started_at``, ``finished_at``, ``status``, ``output``, ``fitup_version``.
         """
-    def query(self, sql: str, params: Sequence[Any] = ...) -> Tuple[List[str], List[List[Any]]]:
+    def query(self, sql: str, params: Sequence[Any] = ..., **limits: Any) -> Tuple[List[str], List[List[Any]]]:
         """A read-only SQL query (SELECT/WITH/VALUES; writes, ATTACH and settings are
         refused; time, row and byte limits apply) with ``?`` parameters. Returns
         ``(columns, rows)``.

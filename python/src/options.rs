@@ -50,7 +50,7 @@ fn keywords_json(
                 }
                 Kind::Box => box_json(vocabulary, key.name, &v)?,
                 Kind::Switch(nested) if v.is_instance_of::<PyDict>() => {
-                    Value::Object(keywords_json(v.cast::<PyDict>()?, nested)?)
+                    Value::Object(keywords_json(v.cast::<PyDict>().map_err(PyErr::from)?, nested)?)
                 }
                 _ => json_of(vocabulary, &name, &v)?,
             },

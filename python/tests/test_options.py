@@ -66,8 +66,23 @@ def test_every_keyword_call_takes_exactly_its_vocabularys_keys():
             call(time_limt_ms=1)
 
 
+def test_database_filters_and_limits_are_their_tables(tmp_path):
+    db = fitup.Database(str(tmp_path / "o.db"))
+    for key in fitup.option_keys("path filter"):
+        assert db.paths(**{key["key"]: sample(key)}) == []
+    for key in fitup.option_keys("query limits"):
+        db.query("SELECT 1", [], **{key["key"]: 3})
+    with pytest.raises(fitup.InputError, match="did you mean `max_rows`"):
+        db.query("SELECT 1", [], max_row=3)
+    with pytest.warns(DeprecationWarning, match="`run_id` is deprecated"):
+        assert db.paths(run_id=1) == []
+    with pytest.raises(fitup.DatabaseError, match="max_seconds"):
+        db.query("SELECT 1", [], max_seconds=0)
+
+
 def test_every_request_has_a_table():
-    for request in ("planning", "narrow", "interference", "sweep", "sequence", "motion", "drilling"):
+    for request in ("planning", "narrow", "interference", "sweep", "sequence", "motion", "drilling",
+                    "path filter", "query limits"):
         for key in fitup.option_keys(request):
             assert key["meaning"] and key["kind"]
     with pytest.raises(fitup.InputError, match="planning"):

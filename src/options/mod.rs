@@ -30,11 +30,15 @@
 //! ```
 
 mod check;
+#[cfg(feature = "db")]
+mod db;
 mod motion;
 mod plan;
 mod sequence;
 
 pub use check::{Check, Sweep};
+#[cfg(feature = "db")]
+pub use db::{Limits, PathFilter};
 pub use motion::{Drill, Motion};
 pub use plan::{Narrow, NarrowSwitch, Plan};
 pub use sequence::Sequence;
@@ -555,6 +559,10 @@ pub fn vocabularies() -> Vec<&'static Vocabulary> {
         Sequence::VOCABULARY,
         Motion::VOCABULARY,
         Drill::VOCABULARY,
+        #[cfg(feature = "db")]
+        PathFilter::VOCABULARY,
+        #[cfg(feature = "db")]
+        Limits::VOCABULARY,
     ]
 }
 

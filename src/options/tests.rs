@@ -48,7 +48,12 @@ fn every_vocabulary_is_its_structs() {
     holds::<Sequence>();
     holds::<Motion>();
     holds::<Drill>();
-    assert_eq!(vocabularies().len(), 7);
+    #[cfg(feature = "db")]
+    {
+        holds::<PathFilter>();
+        holds::<Limits>();
+    }
+    assert_eq!(vocabularies().len(), if cfg!(feature = "db") { 9 } else { 7 });
 }
 
 #[test]

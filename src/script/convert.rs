@@ -198,8 +198,8 @@ fn json_of(v: &Dynamic, request: &str, path: &str, kind: &str) -> ScriptResult<s
             .map(Value::Number)
             .ok_or_else(|| fail(format!("{request} option `{path}` must be finite, not {x}")));
     }
-    if let Some(s) = v.read_lock::<rhai::ImmutableString>() {
-        return Ok(Value::String(s.to_string()));
+    if v.is_string() {
+        return Ok(Value::String(v.to_string()));
     }
     if let Some(a) = v.read_lock::<Array>() {
         return a

@@ -7,7 +7,9 @@
 //! (python/tests/test_options.py walks `fitup.option_keys`).
 
 use crate::common;
-use fitup::options::{Check, Drill, Kind, Motion, Options, Plan, Sequence, Sweep, Vocabulary};
+use fitup::options::{
+    Check, Drill, Kind, Limits, Motion, Options, PathFilter, Plan, Sequence, Sweep, Vocabulary,
+};
 
 /// A Rhai value of `kind`.
 fn sample(kind: &Kind) -> String {
@@ -76,6 +78,16 @@ const CALLS: &[Calls] = &[
         calls: &["arm.drill_program([#{}], OPTS)"],
         fast: &[],
     },
+    Calls {
+        vocabulary: PathFilter::VOCABULARY,
+        calls: &["db.paths(OPTS)"],
+        fast: &[],
+    },
+    Calls {
+        vocabulary: Limits::VOCABULARY,
+        calls: &["db.query(\"SELECT 1\", [], OPTS)"],
+        fast: &[],
+    },
 ];
 
 /// `#{key: value, …}` for `key`, with the call's fast keys.
@@ -95,7 +107,8 @@ fn every_script_call_takes_exactly_its_vocabularys_keys() {
     fitup::demo::write_robots(&dir.path().join("models")).unwrap();
     let mut script = String::from(
         "let d = open_doc(\"models/cell.yaml\");\n\
-         let arm = open_doc(\"models/mz07.yaml\").robot(\"mz07\");\n",
+         let arm = open_doc(\"models/mz07.yaml\").robot(\"mz07\");\n\
+         let db = open_db(\"keys.db\");\n",
     );
     let mut expected = 0;
     for c in CALLS {
@@ -103,7 +116,7 @@ fn every_script_call_takes_exactly_its_vocabularys_keys() {
             for k in c.vocabulary.keys {
                 let opts = map(c, k.name, &sample(&k.kind));
                 script += &format!(
-                    "try {{ {}; print(\"KEY {} {} ok\"); }} catch (e) {{ print(`KEY {} {} ${{e}}`); }}\n",
+                    "try {{ {}; print(\"KEY|{}|{}|ok\"); }} catch (e) {{ print(`KEY|{}|{}|${{e}}`); }}\n",
                     call.replace("OPTS", &opts),
                     c.vocabulary.request,
                     k.name,
@@ -114,7 +127,7 @@ fn every_script_call_takes_exactly_its_vocabularys_keys() {
             }
             let opts = map(c, "time_limt_ms", "1");
             script += &format!(
-                "try {{ {}; print(\"BOGUS {} accepted\"); }} catch (e) {{ print(`BOGUS {} ${{e}}`); }}\n",
+                "try {{ {}; print(\"BOGUS|{}|accepted\"); }} catch (e) {{ print(`BOGUS|{}|${{e}}`); }}\n",
                 call.replace("OPTS", &opts),
                 c.vocabulary.request,
                 c.vocabulary.request
@@ -125,10 +138,10 @@ fn every_script_call_takes_exactly_its_vocabularys_keys() {
     let out = common::run_in(dir.path(), &["run", "scripts/keys.rhai"]);
     let text = common::text(&out);
     assert!(out.status.success(), "{text}");
-    let keys: Vec<&str> = text.lines().filter(|l| l.starts_with("KEY ")).collect();
+    let keys: Vec<&str> = text.lines().filter(|l| l.starts_with("KEY|")).collect();
     assert_eq!(keys.len(), expected, "{text}");
     for line in keys {
-        let mut words = line.splitn(4, ' ');
+        let mut words = line.splitn(4, '|');
         let (_, request, key) = (words.next(), words.next().unwrap(), words.next().unwrap());
         assert!(
             !line.contains(&format!("unknown {request} option"))
@@ -137,11 +150,18 @@ fn every_script_call_takes_exactly_its_vocabularys_keys() {
             "the library's key `{key}` of `{request}` is refused by a script call: {line}"
         );
     }
-    let bogus: Vec<&str> = text.lines().filter(|l| l.starts_with("BOGUS ")).collect();
+    let bogus: Vec<&str> = text.lines().filter(|l| l.starts_with("BOGUS|")).collect();
     assert_eq!(bogus.len(), CALLS.iter().map(|c| c.calls.len()).sum::<usize>());
     for line in bogus {
+        let request = line.split('|').nth(1).unwrap();
+        let c = CALLS.iter().find(|c| c.vocabulary.request == request).unwrap();
+        let hinted = if c.vocabulary.key("time_limit_ms").is_some() {
+            line.contains("did you mean `time_limit_ms`")
+        } else {
+            line.contains("did you mean") || line.contains("known: ")
+        };
         assert!(
-            line.contains("option `time_limt_ms`") && line.contains("did you mean `time_limit_ms`"),
+            line.contains(&format!("unknown {request} option `time_limt_ms`")) && hinted,
             "a key outside the table must be refused with close matches: {line}"
         );
     }
