@@ -4,10 +4,10 @@
 use crate::convert;
 use crate::error::{Error, Result};
 use crate::options;
-use fitup::options::{Check, Plan, Sequence, Sweep};
 use crate::path::Path;
 use fitup::collision::Contact;
 use fitup::document::{Dimension, DimensionKind};
+use fitup::options::{Check, Plan, Sequence, Sweep};
 use fitup::planning::Control;
 use fitup::workspace::{Revalidation, SceneCache, Workspace};
 use numpy::{AllowTypeChange, PyArray2, PyArrayLike2, PyArrayLike3};
@@ -598,9 +598,9 @@ impl Document {
     ) -> Result<Path> {
         let (o, json) = options::read::<Plan>(py, options)?;
         let seed = o.seed;
-        let mut request = o.request(default_planner).map_err(|e| {
-            Error::Workspace(fitup::workspace::WorkspaceError::Plan(e))
-        })?;
+        let mut request = o
+            .request(default_planner)
+            .map_err(|e| Error::Workspace(fitup::workspace::WorkspaceError::Plan(e)))?;
         request.disassemble |= disassemble;
         let path = self.with_workspace(py, |ws| {
             Ok(match &goal {

@@ -49,9 +49,9 @@ fn keywords_json(
                     pose_value(&convert::pose_of(a.as_array(), key.name)?)
                 }
                 Kind::Box => box_json(vocabulary, key.name, &v)?,
-                Kind::Switch(nested) if v.is_instance_of::<PyDict>() => {
-                    Value::Object(keywords_json(v.cast::<PyDict>().map_err(PyErr::from)?, nested)?)
-                }
+                Kind::Switch(nested) if v.is_instance_of::<PyDict>() => Value::Object(
+                    keywords_json(v.cast::<PyDict>().map_err(PyErr::from)?, nested)?,
+                ),
                 _ => json_of(vocabulary, &name, &v)?,
             },
             // Unknown: the vocabulary names it with close matches.
@@ -78,9 +78,8 @@ fn refused(vocabulary: &Vocabulary, key: &str, v: &Bound<'_, PyAny>, expected: &
 /// A box keyword: `[[xmin, ymin, zmin], [xmax, ymax, zmax]]` (mm, world).
 fn box_json(vocabulary: &Vocabulary, key: &'static str, v: &Bound<'_, PyAny>) -> Result<Value> {
     const BOX: &str = "[[xmin, ymin, zmin], [xmax, ymax, zmax]] in mm";
-    let a: PyArrayLike2<'_, f64, AllowTypeChange> = v
-        .extract()
-        .map_err(|_| refused(vocabulary, key, v, BOX))?;
+    let a: PyArrayLike2<'_, f64, AllowTypeChange> =
+        v.extract().map_err(|_| refused(vocabulary, key, v, BOX))?;
     if a.shape() != [2, 3] {
         return Err(Error::Shape {
             argument: key,
@@ -145,7 +144,12 @@ fn json_of(vocabulary: &Vocabulary, key: &str, v: &Bound<'_, PyAny>) -> Result<V
             return json_of(vocabulary, key, &plain);
         }
     }
-    Err(refused(vocabulary, key, v, "a number, bool, str, list or dict"))
+    Err(refused(
+        vocabulary,
+        key,
+        v,
+        "a number, bool, str, list or dict",
+    ))
 }
 
 /// The keys of a request's options — the table every keyword argument of it is

@@ -67,7 +67,8 @@ impl Options for PathFilter {
                 name: "since",
                 kind: Kind::Text,
                 unit: "UTC",
-                meaning: "stored at or after this time (ISO 8601, or a prefix such as `2026-11-30`)",
+                meaning:
+                    "stored at or after this time (ISO 8601, or a prefix such as `2026-11-30`)",
                 default: ANY,
             },
             Key {

@@ -289,7 +289,11 @@ impl Vocabulary {
     ///
     /// # Errors
     /// [`OptionError`] naming the first key refused.
-    pub fn check(&self, map: &mut Map<String, Value>, prefix: &str) -> Result<Vec<String>, OptionError> {
+    pub fn check(
+        &self,
+        map: &mut Map<String, Value>,
+        prefix: &str,
+    ) -> Result<Vec<String>, OptionError> {
         if let Some(name) = map
             .keys()
             .find(|k| self.key(k).is_none() && !self.deprecated.iter().any(|d| d.old == *k))
@@ -349,7 +353,8 @@ impl Vocabulary {
     /// The reference table of the keys (Markdown): key, type, unit, default, meaning.
     /// `defaults` is the struct's [`Default`] as JSON ([`Options::defaults`]).
     pub fn markdown(&self, defaults: &Map<String, Value>) -> String {
-        let mut out = String::from("| key | type | unit | default | meaning |\n|---|---|---|---|---|\n");
+        let mut out =
+            String::from("| key | type | unit | default | meaning |\n|---|---|---|---|---|\n");
         for k in self.keys {
             let default = match k.default {
                 Some(text) => text.to_string(),
@@ -492,12 +497,11 @@ pub trait Options: Default + Serialize + DeserializeOwned {
             });
         };
         let warnings = Self::VOCABULARY.check(&mut map, "")?;
-        let options = serde_json::from_value(Value::Object(map)).map_err(|e| {
-            OptionError::Internal {
+        let options =
+            serde_json::from_value(Value::Object(map)).map_err(|e| OptionError::Internal {
                 request,
                 detail: e.to_string(),
-            }
-        })?;
+            })?;
         Ok(Parsed { options, warnings })
     }
 

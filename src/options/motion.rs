@@ -49,7 +49,10 @@ const MOTION_KEYS: [Key; 5] = [
 ];
 
 /// `a` then `b` (a const table from two).
-const fn concat<const A: usize, const B: usize, const C: usize>(a: [Key; A], b: [Key; B]) -> [Key; C] {
+const fn concat<const A: usize, const B: usize, const C: usize>(
+    a: [Key; A],
+    b: [Key; B],
+) -> [Key; C] {
     let mut out = [a[0]; C];
     let mut i = 0;
     while i < A {

@@ -430,11 +430,7 @@ impl Plan {
     /// An unknown planner, or an option the chosen planner does not have
     /// ([`PlanError::NotAnOption`]).
     pub fn request(&self, default_planner: &str) -> Result<PlanRequest, PlanError> {
-        let mut planner: Planner = self
-            .planner
-            .as_deref()
-            .unwrap_or(default_planner)
-            .parse()?;
+        let mut planner: Planner = self.planner.as_deref().unwrap_or(default_planner).parse()?;
         {
             let limits = planner.limits_mut();
             limits.seed = self.seed;

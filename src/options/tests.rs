@@ -53,7 +53,10 @@ fn every_vocabulary_is_its_structs() {
         holds::<PathFilter>();
         holds::<Limits>();
     }
-    assert_eq!(vocabularies().len(), if cfg!(feature = "db") { 9 } else { 7 });
+    assert_eq!(
+        vocabularies().len(),
+        if cfg!(feature = "db") { 9 } else { 7 }
+    );
 }
 
 #[test]
@@ -97,12 +100,13 @@ fn values_are_checked_against_their_kind_with_unit() {
 
 #[test]
 fn deprecated_keys_are_converted_with_a_warning() {
-    let p = Plan::from_value(json!({"edge": "step", "edge_step_rad": 0.5f64.to_radians()}))
-        .unwrap();
+    let p =
+        Plan::from_value(json!({"edge": "step", "edge_step_rad": 0.5f64.to_radians()})).unwrap();
     assert!((p.options.edge_step_deg - 0.5).abs() < 1e-12);
     assert_eq!(p.warnings.len(), 1);
     assert!(
-        p.warnings[0].contains("`edge_step_rad` is deprecated") && p.warnings[0].contains("`edge_step_deg`"),
+        p.warnings[0].contains("`edge_step_rad` is deprecated")
+            && p.warnings[0].contains("`edge_step_deg`"),
         "{:?}",
         p.warnings
     );
@@ -118,9 +122,18 @@ fn the_default_plan_is_the_default_request() {
     assert_eq!(r.validator, d.validator);
     assert_eq!(r.margin_mm, d.margin_mm);
     assert_eq!(r.rotation, d.rotation);
-    assert_eq!(r.planner.limits().budget_ms(), d.planner.limits().budget_ms());
-    assert_eq!(r.planner.limits().max_iterations, d.planner.limits().max_iterations);
-    assert_eq!(Narrow::default().passage(), crate::planning::NarrowPassage::default());
+    assert_eq!(
+        r.planner.limits().budget_ms(),
+        d.planner.limits().budget_ms()
+    );
+    assert_eq!(
+        r.planner.limits().max_iterations,
+        d.planner.limits().max_iterations
+    );
+    assert_eq!(
+        Narrow::default().passage(),
+        crate::planning::NarrowPassage::default()
+    );
     assert_eq!(
         NarrowSwitch::On(false).passage(),
         crate::planning::NarrowPassage::OFF
@@ -142,8 +155,14 @@ fn the_default_plan_is_the_default_request() {
         p.request("rrt_connect"),
         Err(crate::planning::PlanError::NotAnOption { .. })
     ));
-    assert_eq!(Check::default().check_options(), crate::workspace::CheckOptions::default());
-    assert_eq!(Sweep::default().sweep_options().method, crate::collision::SweepOptions::default().method);
+    assert_eq!(
+        Check::default().check_options(),
+        crate::workspace::CheckOptions::default()
+    );
+    assert_eq!(
+        Sweep::default().sweep_options().method,
+        crate::collision::SweepOptions::default().method
+    );
 }
 
 use crate::collision::SweepMethod;
@@ -153,8 +172,20 @@ fn the_other_defaults_are_the_librarys() {
     let s = Sequence::default().sequence_options();
     let d = crate::sequence::SequenceOptions::default();
     assert_eq!(
-        (s.max_sequences, s.tolerance, s.support, s.max_tilt, s.sphere_directions),
-        (d.max_sequences, d.tolerance, d.support, d.max_tilt, d.sphere_directions)
+        (
+            s.max_sequences,
+            s.tolerance,
+            s.support,
+            s.max_tilt,
+            s.sphere_directions
+        ),
+        (
+            d.max_sequences,
+            d.tolerance,
+            d.support,
+            d.max_tilt,
+            d.sphere_directions
+        )
     );
     let p = Sequence::from_value(json!({"max_tilt": std::f64::consts::FRAC_PI_2})).unwrap();
     assert!((p.options.max_tilt_deg - 90.0).abs() < 1e-9 && p.warnings.len() == 1);
@@ -164,6 +195,12 @@ fn the_other_defaults_are_the_librarys() {
     assert!((m.joint_speed - d.joint_speed).abs() < 1e-12 && m.linear_speed == d.linear_speed);
     let dr = Drill::default().drill_options();
     let d = crate::kinematics::DrillOptions::default();
-    assert_eq!((dr.tool_axis, dr.approach, dr.spin_samples), (d.tool_axis, d.approach, d.spin_samples));
-    assert_eq!(Drill::VOCABULARY.keys.len(), 6 + Motion::VOCABULARY.keys.len());
+    assert_eq!(
+        (dr.tool_axis, dr.approach, dr.spin_samples),
+        (d.tool_axis, d.approach, d.spin_samples)
+    );
+    assert_eq!(
+        Drill::VOCABULARY.keys.len(),
+        6 + Motion::VOCABULARY.keys.len()
+    );
 }

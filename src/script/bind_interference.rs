@@ -8,8 +8,8 @@ use super::bind_planning::with_workspace;
 use super::convert::{box_value, check_keys, err, fail, floats, num, read_options};
 use super::ScriptResult;
 use crate::collision::{Contact, CutSpec, SweepOptions};
-use crate::options::{Check, Sweep};
 use crate::document::Feature;
+use crate::options::{Check, Sweep};
 use crate::workspace::{split_part, CheckOptions, CUT_CELLS_FEATURE};
 use rhai::{Array, Dynamic, Map};
 

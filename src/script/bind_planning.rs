@@ -375,7 +375,12 @@ mod option_tests {
     }
 
     fn map(pairs: &[(&str, Dynamic)]) -> Dynamic {
-        Dynamic::from_map(pairs.iter().map(|(k, v)| ((*k).into(), v.clone())).collect())
+        Dynamic::from_map(
+            pairs
+                .iter()
+                .map(|(k, v)| ((*k).into(), v.clone()))
+                .collect(),
+        )
     }
 
     #[test]
@@ -399,7 +404,10 @@ mod option_tests {
         assert!(!n.to_contact);
         assert_eq!(n.bridge, NarrowPassage::default().bridge);
         // Not a narrow option, or not a map: refused by the vocabulary, by name.
-        for bad in [map(&[("max_turn", Dynamic::from_float(5.0))]), Dynamic::from_int(3)] {
+        for bad in [
+            map(&[("max_turn", Dynamic::from_float(5.0))]),
+            Dynamic::from_int(3),
+        ] {
             let e = request(&[("narrow", bad.clone())], "rrt_connect").unwrap_err();
             assert!(e.to_string().contains("narrow"), "{bad:?}: {e}");
         }
@@ -415,7 +423,11 @@ mod option_tests {
             assert!(narrow(bad.clone()).validate().is_err(), "{bad:?}");
         }
         // A planner without the measures refuses the key.
-        assert!(request(&[("narrow", Dynamic::FALSE), ("planner", "greedy_ant".into())], "rrt").is_err());
+        assert!(request(
+            &[("narrow", Dynamic::FALSE), ("planner", "greedy_ant".into())],
+            "rrt"
+        )
+        .is_err());
     }
 
     #[test]
@@ -442,7 +454,10 @@ mod option_tests {
             );
         }
         assert!(request(
-            &[("fallback_share", Dynamic::from_float(0.5)), ("planner", "rrt_floyd".into())],
+            &[
+                ("fallback_share", Dynamic::from_float(0.5)),
+                ("planner", "rrt_floyd".into())
+            ],
             "rrt_connect"
         )
         .is_err());
@@ -452,14 +467,27 @@ mod option_tests {
     fn poses_and_boxes_convert_as_script_values() {
         let r = request(
             &[
-                ("start", Dynamic::from_array(vec![
-                    Dynamic::from_int(1), Dynamic::from_int(2), Dynamic::from_int(3),
-                    Dynamic::from_int(0), Dynamic::from_int(0), Dynamic::from_int(90),
-                ])),
-                ("bounds", map(&[
-                    ("min", Dynamic::from_array(vec![Dynamic::from_int(-1); 3])),
-                    ("max", Dynamic::from_array(vec![Dynamic::from_float(5.0); 3])),
-                ])),
+                (
+                    "start",
+                    Dynamic::from_array(vec![
+                        Dynamic::from_int(1),
+                        Dynamic::from_int(2),
+                        Dynamic::from_int(3),
+                        Dynamic::from_int(0),
+                        Dynamic::from_int(0),
+                        Dynamic::from_int(90),
+                    ]),
+                ),
+                (
+                    "bounds",
+                    map(&[
+                        ("min", Dynamic::from_array(vec![Dynamic::from_int(-1); 3])),
+                        (
+                            "max",
+                            Dynamic::from_array(vec![Dynamic::from_float(5.0); 3]),
+                        ),
+                    ]),
+                ),
             ],
             "rrt_connect",
         )

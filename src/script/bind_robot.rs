@@ -216,7 +216,9 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     register_robots(api);
     register_ik(api);
     register_models(api, ctx);
-    api.options::<Motion>("Motion options (`move_joint`, `move_line`, `move_circle`, `run_program`):");
+    api.options::<Motion>(
+        "Motion options (`move_joint`, `move_line`, `move_circle`, `run_program`):",
+    );
     api.options::<Drill>("Options of `drill_program`:");
     register_motions(api, ctx);
     register_drilling(api, ctx);
@@ -778,7 +780,11 @@ fn register_drilling(api: &mut Api, ctx: &Arc<Context>) {
         Ok(out)
     };
     api.f("Robot.drill_program(holes: array) -> map", "Drills the holes (from `load_holes`) in order (seed 001 §2.2: travel posture, line to the approach point, align, drill, retract). Returns `#{trajectory, holes, drilled, unreachable}`; each hole row is the hole map plus `index`, `reachable`, `reason` (which step failed and why), and for drilled holes `spin` (degrees) and `joints` at the hole. Unreachable holes are reported, not errors.", move |r: &mut RobotHandle, h: Array| dp(r, h, None));
-    api.f("Robot.drill_program(holes: array, options: map) -> map", "Drilling with the options of the drilling table below (its own keys and the motion keys).", move |r: &mut RobotHandle, h: Array, o: Dynamic| dp(r, h, Some(&o)));
+    api.f(
+        "Robot.drill_program(holes: array, options: map) -> map",
+        "Drilling with the options of the drilling table below (its own keys and the motion keys).",
+        move |r: &mut RobotHandle, h: Array, o: Dynamic| dp(r, h, Some(&o)),
+    );
     api.f(
         "Robot.to_string() -> string",
         "`Robot(name: joints …)`.",

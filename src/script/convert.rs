@@ -212,7 +212,10 @@ fn json_of(v: &Dynamic, request: &str, path: &str, kind: &str) -> ScriptResult<s
     if let Some(m) = v.read_lock::<Map>() {
         let mut out = serde_json::Map::new();
         for (k, x) in m.iter() {
-            out.insert(k.to_string(), json_of(x, request, &format!("{path}.{k}"), kind)?);
+            out.insert(
+                k.to_string(),
+                json_of(x, request, &format!("{path}.{k}"), kind)?,
+            );
         }
         return Ok(Value::Object(out));
     }
@@ -256,10 +259,7 @@ fn options_json(
 /// The options `T` of a script's options map, by `T`'s vocabulary (one table for
 /// Rhai and Python: unknown keys with close matches, values against their kind);
 /// a deprecated key's warning goes to `warn`.
-pub fn read_options<T: crate::options::Options>(
-    map: &Map,
-    warn: &dyn Fn(&str),
-) -> ScriptResult<T> {
+pub fn read_options<T: crate::options::Options>(map: &Map, warn: &dyn Fn(&str)) -> ScriptResult<T> {
     let json = options_json(map, T::VOCABULARY, "")?;
     let parsed = T::from_value(serde_json::Value::Object(json)).map_err(fail)?;
     for w in &parsed.warnings {

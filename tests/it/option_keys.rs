@@ -151,10 +151,16 @@ fn every_script_call_takes_exactly_its_vocabularys_keys() {
         );
     }
     let bogus: Vec<&str> = text.lines().filter(|l| l.starts_with("BOGUS|")).collect();
-    assert_eq!(bogus.len(), CALLS.iter().map(|c| c.calls.len()).sum::<usize>());
+    assert_eq!(
+        bogus.len(),
+        CALLS.iter().map(|c| c.calls.len()).sum::<usize>()
+    );
     for line in bogus {
         let request = line.split('|').nth(1).unwrap();
-        let c = CALLS.iter().find(|c| c.vocabulary.request == request).unwrap();
+        let c = CALLS
+            .iter()
+            .find(|c| c.vocabulary.request == request)
+            .unwrap();
         let hinted = if c.vocabulary.key("time_limit_ms").is_some() {
             line.contains("did you mean `time_limit_ms`")
         } else {
@@ -185,7 +191,10 @@ fn script_option_errors_name_key_value_and_rule() {
     for (line, words) in errors.iter().zip([
         &["planning option `step` must be a number (mm), not \"fast\""][..],
         &["`narrow.max_turn`", "did you mean `max_turn_deg`"],
-        &["option `edge` must be one of `continuous`, `step`", "\"stepwise\""],
+        &[
+            "option `edge` must be one of `continuous`, `step`",
+            "\"stepwise\"",
+        ],
         &["option `seed` must be a whole number ≥ 0, not -1"],
         &["interference option `tolerance` must be a number (mm), not \"0.1\""],
     ]) {
