@@ -44,6 +44,7 @@ mod step_cache;
 mod step_corpus;
 mod step_import;
 mod ur_ik;
+mod ur_real;
 mod urdf;
 mod viewer;
 mod viewer_browser;
