@@ -22,6 +22,17 @@
 //! and OMPL alike, written to `$FITUP_OMPLAPP/scaled-k/`), `FITUP_RECHECK=0` (skip
 //! the independent re-check).
 //!
+//! Pose-check mode, no planning: `FITUP_CHECKS=N` times fitup's pose check against
+//! FCL's on N poses of two sets per problem (uniform, and near contact as a planner
+//! checks them; `pose_checks`), `FITUP_ROUNDS` (default 3) interleaved rounds,
+//! `FITUP_EDGES=N` adds fitup's continuous edge check on N planner-like edges,
+//! `FITUP_VERDICTS=DIR` records the verdicts or asserts they are unchanged:
+//!
+//! ```sh
+//! FITUP_OMPLAPP=/work/omplapp FITUP_CHECKS=20000 FITUP_EDGES=2000 FITUP_VERDICTS=target/verdicts \\
+//!     cargo bench --no-default-features --bench omplapp
+//! ```
+//!
 //! Every fitup path is re-checked independently with parry3d-f64: the robot's and
 //! the environment's meshes as parry `TriMesh`es, `intersection_test` at poses at
 //! most 1 % of the robot's radius (and 0.01 rad) apart along every edge. A pose
@@ -443,6 +454,9 @@ fn main() {
     );
     let checks: usize = env_or("FITUP_CHECKS", 0);
     if checks > 0 {
+        println!(
+            "| problem | poses | n | fitup colliding | fitup ns | FCL ns | FCL / fitup time | verdicts agree | load |\n|---|---|---|---|---|---|---|---|---|"
+        );
         for name in &names {
             pose_checks(&read_problem(&root.join(name), name), checks, &root);
         }
@@ -520,8 +534,17 @@ fn main() {
 
 /// Pose-check throughput, fitup's planner check (`MeshValidator::is_free`) against
 /// FCL's `collide` as OMPL's validity checker calls it (`fcl_poses`, built beside
-/// `se3stl` from tests/bench/omplapp/fcl_poses.cpp), on the same `n` poses drawn
-/// uniformly in the problem's bounds with uniform rotations (seed 7).
+/// `se3stl` from tests/bench/omplapp/fcl_poses.cpp), on the same `n` poses of two
+/// sets: `uniform` (drawn uniformly in the problem's bounds with uniform rotations,
+/// seed 7: mostly colliding) and `near` ([`near_poses`]: what a planner checks,
+/// mostly near contact). Rounds (`FITUP_ROUNDS`, default 3) alternate fitup's best
+/// of 5 passes with one `fcl_poses` run (its best of 5); the best of each is
+/// reported, with the load.
+///
+/// `FITUP_VERDICTS=DIR`: fitup's verdicts are written to `DIR/NAME-SET.txt`, or,
+/// when that file exists, compared with it and the bench panics on any difference
+/// (a speed change must not change a verdict). `FITUP_EDGES=N`: also time
+/// [`edge_checks`] on `N` planner-like edges.
 fn pose_checks(p: &ProblemJson, n: usize, root: &Path) {
     use fitup::planning::MotionValidator;
     let doc = Document::open(&p.dir.join(format!("{}.yaml", p.name))).expect("the document");
@@ -531,52 +554,225 @@ fn pose_checks(p: &ProblemJson, n: usize, root: &Path) {
     let space = fitup::planning::PlanningSpace::new(p.min, p.max);
     let mut rng = fitup::math::Rng::new(7);
     let reference = nalgebra::UnitQuaternion::identity();
-    let poses: Vec<Transform> = (0..n).map(|_| space.sample(&mut rng, &reference)).collect();
-    let mut verdicts = vec![false; n];
+    let uniform: Vec<Transform> = (0..n).map(|_| space.sample(&mut rng, &reference)).collect();
+    let near = near_poses(&mut v, &space, n, 11);
+    let rounds: usize = env_or("FITUP_ROUNDS", 3);
+    for (set, poses) in [("uniform", &uniform), ("near", &near)] {
+        let file = std::env::temp_dir().join(format!("fitup-poses-{}-{set}.txt", p.name));
+        let text: String = poses
+            .iter()
+            .map(|q| {
+                let t = q.translation();
+                let r = q.rotation();
+                format!("{} {} {} {} {} {} {}\n", t.x, t.y, t.z, r.w, r.i, r.j, r.k)
+            })
+            .collect();
+        std::fs::write(&file, text).unwrap();
+        let mut verdicts = vec![false; poses.len()];
+        let mut best = f64::INFINITY;
+        let mut fcl_ns = f64::NAN;
+        let mut fcl_verdicts: Vec<bool> = Vec::new();
+        for _ in 0..rounds.max(1) {
+            for _ in 0..5 {
+                let t0 = std::time::Instant::now();
+                for (k, q) in poses.iter().enumerate() {
+                    verdicts[k] = !v.is_free(q);
+                }
+                best = best.min(t0.elapsed().as_secs_f64());
+            }
+            if let Some((ns, hits)) = run_fcl_poses(root, p, &file) {
+                fcl_ns = if fcl_ns.is_nan() { ns } else { fcl_ns.min(ns) };
+                fcl_verdicts = hits;
+            }
+        }
+        check_verdicts(&p.name, set, &verdicts);
+        let colliding = verdicts.iter().filter(|&&c| c).count();
+        let agree = fcl_verdicts
+            .iter()
+            .zip(&verdicts)
+            .filter(|(f, c)| f == c)
+            .count();
+        let fitup_ns = 1e9 * best / poses.len() as f64;
+        println!(
+            "| {} | {set} | {} | {colliding} | {fitup_ns:.0} | {fcl_ns:.0} | {:.2} | {agree} | {} |",
+            p.name,
+            poses.len(),
+            fcl_ns / fitup_ns,
+            load()
+        );
+    }
+    let edges: usize = env_or("FITUP_EDGES", 0);
+    if edges > 0 {
+        edge_checks(&mut v, &near, edges, &p.name);
+    }
+}
+
+/// A step like a planner's extension from `from`: a random direction up to
+/// `radius` mm and a random turn up to 0.5 rad.
+fn random_step(rng: &mut fitup::math::Rng, from: &Transform, radius: f64) -> Transform {
+    let axis = nalgebra::Unit::new_normalize(Vec3::new(rng.normal(), rng.normal(), rng.normal()));
+    let turn = nalgebra::UnitQuaternion::from_axis_angle(&axis, rng.range(0.0, 0.5));
+    let dir = Vec3::new(rng.normal(), rng.normal(), rng.normal()).normalize();
+    Transform::from_parts(
+        from.translation() + dir * rng.range(0.0, radius),
+        turn * from.rotation(),
+    )
+}
+
+/// `n` poses like those a planner checks, drawn with `seed`: half free poses
+/// within 5 % of the robot's radius of contact, a quarter poses crossing an
+/// obstacle by less than that, a quarter free poses drawn uniformly. From a free
+/// uniform pose, a [`random_step`] that collides is bisected until its two ends
+/// are less than 5 % of the radius apart (largest point displacement): its free
+/// end's clearance and its colliding end's penetration are below that.
+fn near_poses(
+    v: &mut fitup::planning::MeshValidator,
+    space: &fitup::planning::PlanningSpace,
+    n: usize,
+    seed: u64,
+) -> Vec<Transform> {
+    use fitup::planning::MotionValidator;
+    let radius = v.moving().radius();
+    let close = 0.05 * radius;
+    let mut rng = fitup::math::Rng::new(seed);
+    let reference = nalgebra::UnitQuaternion::identity();
+    let (mut free_near, mut hit_near, mut free_far) = (Vec::new(), Vec::new(), Vec::new());
+    let far = n - n / 2 - n / 4;
+    let mut attempts = 0usize;
+    while (free_near.len() < n / 2 || hit_near.len() < n / 4 || free_far.len() < far)
+        && attempts < 1000 * n.max(1)
+    {
+        attempts += 1;
+        let from = space.sample(&mut rng, &reference);
+        if !v.is_free(&from) {
+            continue;
+        }
+        if free_far.len() < far {
+            free_far.push(from);
+        }
+        let to = random_step(&mut rng, &from, radius);
+        if v.is_free(&to) {
+            continue;
+        }
+        let (angle, dist) = from.distance_to(&to);
+        let reach = dist + angle * radius;
+        let (mut lo, mut hi) = (0.0, 1.0);
+        while (hi - lo) * reach >= close {
+            let m = 0.5 * (lo + hi);
+            if v.is_free(&from.interpolate(&to, m)) {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        if free_near.len() < n / 2 {
+            free_near.push(from.interpolate(&to, lo));
+        }
+        if hit_near.len() < n / 4 {
+            hit_near.push(from.interpolate(&to, hi));
+        }
+    }
+    let mut all: Vec<Transform> = free_near
+        .into_iter()
+        .chain(hit_near)
+        .chain(free_far)
+        .collect();
+    // one deterministic order mixing the three kinds
+    for i in (1..all.len()).rev() {
+        all.swap(i, rng.below(i + 1));
+    }
+    all
+}
+
+/// Runs `fcl_poses` on the pose file: its ns per check and verdicts.
+fn run_fcl_poses(root: &Path, p: &ProblemJson, file: &Path) -> Option<(f64, Vec<bool>)> {
+    let out = Command::new(root.join("bin/fcl_poses"))
+        .arg(p.dir.join(format!("{}_env.stl", p.name)))
+        .arg(p.dir.join(format!("{}_robot.stl", p.name)))
+        .arg(file)
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        return None;
+    }
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let mut lines = text.lines();
+    let ns = field(lines.next()?, "ns_per_check")?;
+    Some((ns, lines.map(|l| l.trim() == "1").collect()))
+}
+
+/// `FITUP_VERDICTS=DIR`: writes fitup's verdicts on a pose set, or compares them
+/// with the ones written before and panics on a difference.
+fn check_verdicts(name: &str, set: &str, verdicts: &[bool]) {
+    let Ok(dir) = std::env::var("FITUP_VERDICTS") else {
+        return;
+    };
+    let file = Path::new(&dir).join(format!("{name}-{set}.txt"));
+    let text: String = verdicts
+        .iter()
+        .map(|&c| if c { '1' } else { '0' })
+        .collect();
+    match std::fs::read_to_string(&file) {
+        Ok(before) => {
+            let differ: Vec<usize> = before
+                .trim()
+                .chars()
+                .zip(text.chars())
+                .enumerate()
+                .filter(|(_, (a, b))| a != b)
+                .map(|(k, _)| k)
+                .collect();
+            assert!(
+                differ.is_empty() && before.trim().len() == text.len(),
+                "{name} {set}: {} verdicts differ from {} (poses {:?}…)",
+                differ.len(),
+                file.display(),
+                &differ[..differ.len().min(10)]
+            );
+            println!("  {name} {set}: verdicts identical to {}", file.display());
+        }
+        Err(_) => {
+            std::fs::create_dir_all(&dir).expect("the verdicts folder");
+            std::fs::write(&file, text).expect("the verdicts file");
+        }
+    }
+}
+
+/// Edge-check throughput: `MeshValidator::edge_free` (the continuous check) on
+/// `n` edges from the free poses of `near` by a [`random_step`] (seed 13) to a
+/// free end, best of 3 passes; the verdicts go through [`check_verdicts`] as set
+/// `edges`.
+fn edge_checks(v: &mut fitup::planning::MeshValidator, near: &[Transform], n: usize, name: &str) {
+    use fitup::planning::MotionValidator;
+    let radius = v.moving().radius();
+    let mut rng = fitup::math::Rng::new(13);
+    let starts: Vec<Transform> = near.iter().filter(|q| v.is_free(q)).copied().collect();
+    let mut edges = Vec::new();
+    let mut attempts = 0usize;
+    while edges.len() < n && !starts.is_empty() && attempts < 1000 * n {
+        attempts += 1;
+        let from = starts[rng.below(starts.len())];
+        let to = random_step(&mut rng, &from, radius);
+        if v.is_free(&to) {
+            edges.push((from, to));
+        }
+    }
+    let mut verdicts = vec![false; edges.len()];
     let mut best = f64::INFINITY;
-    for _ in 0..5 {
+    for _ in 0..3 {
         let t0 = std::time::Instant::now();
-        for (k, q) in poses.iter().enumerate() {
-            verdicts[k] = !v.is_free(q);
+        for (k, (a, b)) in edges.iter().enumerate() {
+            verdicts[k] = !v.edge_free(a, b);
         }
         best = best.min(t0.elapsed().as_secs_f64());
     }
-    let colliding = verdicts.iter().filter(|&&c| c).count();
-    let fitup_ns = 1e9 * best / n as f64;
-    let file = std::env::temp_dir().join(format!("fitup-poses-{}.txt", p.name));
-    let text: String = poses
-        .iter()
-        .map(|q| {
-            let t = q.translation();
-            let r = q.rotation();
-            format!("{} {} {} {} {} {} {}\n", t.x, t.y, t.z, r.w, r.i, r.j, r.k)
-        })
-        .collect();
-    std::fs::write(&file, text).unwrap();
-    let fcl = root.join("bin/fcl_poses");
-    let peer = Command::new(&fcl)
-        .arg(p.dir.join(format!("{}_env.stl", p.name)))
-        .arg(p.dir.join(format!("{}_robot.stl", p.name)))
-        .arg(&file)
-        .output();
-    let (fcl_ns, agree) = match peer {
-        Ok(out) if out.status.success() => {
-            let text = String::from_utf8_lossy(&out.stdout).to_string();
-            let mut lines = text.lines();
-            let head = lines.next().unwrap_or_default().to_string();
-            let ns = field(&head, "ns_per_check").unwrap_or(f64::NAN);
-            let agree = lines
-                .zip(&verdicts)
-                .filter(|(l, &c)| (l.trim() == "1") == c)
-                .count();
-            (ns, agree)
-        }
-        _ => (f64::NAN, 0),
-    };
+    check_verdicts(name, "edges", &verdicts);
+    let blocked = verdicts.iter().filter(|&&b| b).count();
     println!(
-        "| {} | {n} | {colliding} | {fitup_ns:.0} | {fcl_ns:.0} | {:.2} | {agree} |",
-        p.name,
-        fcl_ns / fitup_ns
+        "| {name} | edges | {} | {blocked} | {:.1} µs per edge | | | | {} |",
+        edges.len(),
+        1e6 * best / edges.len().max(1) as f64,
+        load()
     );
 }
 
