@@ -19,6 +19,7 @@
 //! | [`sequence`] | assembly sequences: tasks (base part, assembly part, operation) for a robot |
 //! | [`workspace`] | a document as a collision scene and every document-level request: interference, contact, clearance, sweeps, planning, revalidation, following |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
+//! | [`options`] | one vocabulary per request: the option keys of Rhai maps and Python keywords, their kinds, units, defaults and reference tables |
 //! | [`script`] | the Rhai sandbox and API bindings |
 //! | [`viewer`] | the live 3D viewer (Rerun): documents, robots, paths, interference; `.rrd` recordings |
 //! | [`watch`] | watch mode: rerun on every save, exactly once |
@@ -44,6 +45,7 @@ pub mod kinematics;
 pub mod manipulator;
 pub mod math;
 pub mod mesh;
+pub mod options;
 pub mod planning;
 pub mod project;
 #[cfg(feature = "script")]

@@ -42,6 +42,10 @@ pub use overlap::{
 pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_DIAMETERS};
 pub use scene::{Scene, SceneCache};
 
+/// How far [`Workspace::clearance`] searches when the caller names no distance (mm):
+/// the scripting and Python faces' default.
+pub const DEFAULT_CLEARANCE_SEARCH_MM: f64 = 1000.0;
+
 use crate::collision::{
     CollisionError, Contact, Method, Motion, PairContact, SweepHit, SweepOptions, DEFAULT_TOLERANCE,
 };

@@ -19,6 +19,7 @@ const LAYERS: &[&[&str]] = &[
     &["workspace", "db", "viewer", "demo"],
     &["sequence", "manipulator"],
     &["skills"],
+    &["options"],
     &["script"],
     &["watch"],
     &["cli"],

@@ -26,6 +26,7 @@ mod manipulator;
 mod mass_properties;
 mod mesh_formats;
 mod models;
+mod option_keys;
 mod planning_problems;
 mod planning_puzzles;
 mod precision_manipulator;
