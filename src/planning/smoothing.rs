@@ -157,6 +157,13 @@ fn shortcut_until(
         (r, r / space.rotation_weight)
     };
     linear_pass(checker, poses, screen);
+    // Pieces of a continuously certified edge need no check of their own (the
+    // interpolation of a piece is the same motion: linear translation, slerp).
+    let exact = !checker.is_lazy()
+        && matches!(
+            checker.resolution(),
+            crate::collision::SweepMethod::Continuous { .. }
+        );
     let mut stalled = 0;
     for attempt in 0..smoothing.shortcut_attempts {
         if stalled >= smoothing.patience.max(1) {
@@ -188,11 +195,14 @@ fn shortcut_until(
         if new >= old - 1e-9 {
             continue;
         }
-        // p[i]→a and b→p[j+1] lie on accepted edges, but a stepwise validator checks
-        // other poses on them: re-check so that every kept edge was itself accepted.
+        // p[i]→a and b→p[j+1] lie on accepted edges. A continuous check certified
+        // every pose of those edges, so their pieces are free; a stepwise validator
+        // checks other poses on them: re-check so that every kept edge was itself
+        // accepted.
         if screened(checker, &a, &b, screen)
-            && screened(checker, &poses[i], &a, screen)
-            && screened(checker, &b, &poses[j + 1], screen)
+            && (exact
+                || (screened(checker, &poses[i], &a, screen)
+                    && screened(checker, &b, &poses[j + 1], screen)))
         {
             if old - new > Smoothing::GAIN * space.distance_along(poses) {
                 stalled = 0;
