@@ -185,6 +185,29 @@ pub fn suggestion<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str> 
     }
 }
 
+/// `name` in Unicode NFC (borrowed when it already is): how fitup keeps and compares
+/// every name, so a composed and a decomposed `café` are one name.
+pub fn nfc(name: &str) -> std::borrow::Cow<'_, str> {
+    use unicode_normalization::UnicodeNormalization;
+    if unicode_normalization::is_nfc_quick(name.chars()) == unicode_normalization::IsNormalized::Yes
+    {
+        std::borrow::Cow::Borrowed(name)
+    } else {
+        std::borrow::Cow::Owned(name.nfc().collect())
+    }
+}
+
+/// The one rule for names, whatever their source (a document's keys, URDF links and
+/// joints, names given through the API): a name may not hold a control or invisible
+/// character ([`hidden_char`]; `Err` is the first one), and it is kept and compared in
+/// NFC ([`nfc`]).
+pub fn checked_name(name: &str) -> Result<std::borrow::Cow<'_, str>, char> {
+    match name.chars().find(|&c| hidden_char(c).is_some()) {
+        Some(c) => Err(c),
+        None => Ok(nfc(name)),
+    }
+}
+
 /// Why a character may not appear in a name: a control character (C0, DEL, C1,
 /// including ESC, which starts terminal escape sequences) or an invisible / format
 /// character (zero-width space, joiners, bidi embeddings, overrides and isolates,

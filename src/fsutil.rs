@@ -1,8 +1,12 @@
 //! File-system helpers shared by every writer: atomic writes, the one rule on what an
 //! output may replace ([`check_output`]), capped reads of regular files.
 
+mod jail;
+
+pub use jail::Dir;
+pub(crate) use jail::Kind;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed
 /// and synced, then renamed over the target. A crash or error leaves the old file
@@ -181,7 +185,6 @@ fn file_type_name(md: &std::fs::Metadata) -> &'static str {
 /// the file is opened, so a FIFO cannot block) and files over [`FileKind::max_bytes`].
 /// The read itself is bounded too, in case the file grows while it is read.
 pub fn read_file(path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
-    use std::io::Read;
     let cap = kind.max_bytes();
     let too_large = |size| ReadError::TooLarge {
         size,
@@ -197,9 +200,26 @@ pub fn read_file(path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
     }
     let file = std::fs::File::open(path).map_err(|e| ReadError::Io(e.to_string()))?;
     // The path may have been replaced between the check and the open.
+    read_opened(file, kind)
+}
+
+/// Reads an opened file of `kind` whole: refused when the handle is not a regular file
+/// or holds more than [`FileKind::max_bytes`] (checked on the handle, and the read is
+/// bounded too, in case the file grows while it is read).
+pub fn read_opened(file: std::fs::File, kind: FileKind) -> Result<Vec<u8>, ReadError> {
+    use std::io::Read;
+    let cap = kind.max_bytes();
+    let too_large = |size| ReadError::TooLarge {
+        size,
+        cap: cap >> 20,
+        what: kind.name(),
+    };
     let md = file.metadata().map_err(|e| ReadError::Io(e.to_string()))?;
     if !md.is_file() {
         return Err(ReadError::NotRegular(file_type_name(&md)));
+    }
+    if md.len() > cap {
+        return Err(too_large(md.len()));
     }
     let mut bytes = Vec::with_capacity(md.len().min(cap) as usize);
     file.take(cap + 1)
@@ -335,25 +355,57 @@ fn io_err(e: std::io::Error) -> OutputError {
 /// A file that does not exist may always be written. Checked before anything is
 /// written; nothing is changed here.
 pub fn check_output(path: &Path, rule: &OutputRule) -> Result<(), OutputError> {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-    if name == OUTPUT_REGISTRY || (name.starts_with(".fitup-") && name.ends_with(".tmp")) {
+    // A folder that does not exist yet holds nothing to replace.
+    if path
+        .parent()
+        .is_some_and(|d| !d.as_os_str().is_empty() && std::fs::symlink_metadata(d).is_err())
+    {
+        return Ok(());
+    }
+    let (dir, name) = open_parent(path)?;
+    check_output_in(&dir, &name, path, rule)
+}
+
+/// The folder of `path` held open, and the file's name in it: what a writer checks
+/// and writes through, so that the check and the write see the same folder.
+fn open_parent(path: &Path) -> Result<(Dir, std::ffi::OsString), OutputError> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| OutputError::Io(format!("{}: not a file name", path.display())))?
+        .to_os_string();
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    Ok((Dir::open(dir).map_err(io_err)?, name))
+}
+
+/// [`check_output`] for the file `name` of the held folder `dir` (`path`, its full
+/// path, for [`OutputRule::used`]): every look at the file and at the registry goes
+/// through `dir`, never through a link.
+pub(crate) fn check_output_in(
+    dir: &Dir,
+    name: &std::ffi::OsStr,
+    path: &Path,
+    rule: &OutputRule,
+) -> Result<(), OutputError> {
+    let text_name = name.to_str().unwrap_or("");
+    if text_name == OUTPUT_REGISTRY
+        || (text_name.starts_with(".fitup-") && text_name.ends_with(".tmp"))
+    {
         return Err(OutputError::Bookkeeping);
     }
-    let md = match std::fs::symlink_metadata(path) {
-        Ok(md) => md,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(io_err(e)),
+    let len = match dir.stat(name).map_err(io_err)? {
+        None => return Ok(()),
+        Some(Kind::Symlink) => return Err(OutputError::Symlink),
+        Some(Kind::Dir) => return Err(OutputError::NotRegular("a folder")),
+        Some(Kind::Special(what)) => return Err(OutputError::NotRegular(what)),
+        Some(Kind::File(len)) => len,
     };
-    if md.file_type().is_symlink() {
-        return Err(OutputError::Symlink);
-    }
-    if !md.is_file() {
-        return Err(OutputError::NotRegular(file_type_name(&md)));
-    }
     if rule.force {
         return Ok(());
     }
-    let ext = path
+    let ext = Path::new(name)
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
@@ -364,7 +416,14 @@ pub fn check_output(path: &Path, rule: &OutputRule) -> Result<(), OutputError> {
         });
     }
     let sig_len = rule.signature.map_or(0, <[u8]>::len) as u64;
-    let head = file_head(path, sig_len.max(16)).map_err(io_err)?;
+    let head = {
+        use std::io::Read;
+        let mut head = Vec::new();
+        dir.open_file(name)
+            .and_then(|f| f.take(sig_len.max(16)).read_to_end(&mut head))
+            .map_err(io_err)?;
+        head
+    };
     if head.starts_with(SQLITE_MAGIC) {
         return Err(OutputError::InUse {
             what: "a SQLite database (a results database)",
@@ -381,7 +440,7 @@ pub fn check_output(path: &Path, rule: &OutputRule) -> Result<(), OutputError> {
     {
         return Ok(());
     }
-    match registered(path, name, md.len(), &head) {
+    match registered(dir, text_name, len, &head) {
         Ok(true) => Ok(()),
         Ok(false) => Err(OutputError::NotOurs),
         Err(e) => Err(io_err(e)),
@@ -389,21 +448,32 @@ pub fn check_output(path: &Path, rule: &OutputRule) -> Result<(), OutputError> {
 }
 
 /// [`check_output`], then [`write_atomic`], then [`register_output`]: how every
-/// writer of a whole file writes its output.
+/// writer of a whole file writes its output. The folder is opened once; the check,
+/// the temporary file, the rename and the registry all go through that handle.
 pub fn write_output(path: &Path, bytes: &[u8], rule: &OutputRule) -> Result<(), OutputError> {
-    check_output(path, rule)?;
-    write_checked(path, bytes)
+    let (dir, name) = open_parent(path)?;
+    check_output_in(&dir, &name, path, rule)?;
+    write_in(&dir, &name, bytes)
 }
 
 /// The second half of [`write_output`] for a path that already passed
-/// [`check_output`] (through [`crate::project::Project::resolve_output`]):
-/// [`write_atomic`], then the registry entry.
+/// [`check_output`]: [`write_atomic`], then the registry entry. A project's writers
+/// use [`crate::project::Project::write_output`], which checks and writes through one
+/// handle walked from the project root.
 pub fn write_checked(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    write_atomic(path, bytes).map_err(io_err)?;
+    let (dir, name) = open_parent(path)?;
+    write_in(&dir, &name, bytes)
+}
+
+/// Writes `bytes` as `name` in the held folder `dir` atomically, then lists it in the
+/// folder's registry.
+pub(crate) fn write_in(dir: &Dir, name: &std::ffi::OsStr, bytes: &[u8]) -> Result<(), OutputError> {
+    dir.write_atomic(name, bytes).map_err(io_err)?;
     // The output is written; a registry that cannot be updated (a read-only folder
     // entry, a full disk) only means a later write there needs --force.
     let _ = register(
-        path,
+        dir,
+        name,
         Entry::File {
             len: bytes.len() as u64,
             hash: content_hash(bytes),
@@ -416,15 +486,17 @@ pub fn write_checked(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
 /// later [`check_output`] knows fitup wrote it. For writers that produce the file
 /// themselves (after [`check_output`]).
 pub fn register_output(path: &Path) -> std::io::Result<()> {
-    let (len, hash) = hash_file(path)?;
-    register(path, Entry::File { len, hash })
+    let (dir, name) = open_parent(path).map_err(std::io::Error::other)?;
+    let (len, hash) = hash_file(&dir, &name)?;
+    register(&dir, &name, Entry::File { len, hash })
 }
 
 /// Lists `path` in its folder's [`OUTPUT_REGISTRY`] as a file fitup streams (a `.rrd`
 /// recording, written while the run goes on, so its final contents are not known):
 /// [`check_output`] accepts the file while it starts with `magic`.
 pub fn register_stream(path: &Path, magic: &[u8]) -> std::io::Result<()> {
-    register(path, Entry::Stream(magic.to_vec()))
+    let (dir, name) = open_parent(path).map_err(std::io::Error::other)?;
+    register(&dir, &name, Entry::Stream(magic.to_vec()))
 }
 
 /// The first `n` bytes of a file (fewer when it is shorter).
@@ -435,15 +507,19 @@ pub(crate) fn file_head(path: &Path, n: u64) -> std::io::Result<Vec<u8>> {
     Ok(head)
 }
 
-/// Size and [`content_hash`] of a file, read in chunks (outputs can be large).
-fn hash_file(path: &Path) -> std::io::Result<(u64, u64)> {
-    use std::io::Read;
-    let mut f = std::fs::File::open(path)?;
+/// Size and [`content_hash`] of the file `name` of `dir`, read in chunks (outputs can
+/// be large), never through a link.
+fn hash_file(dir: &Dir, name: &std::ffi::OsStr) -> std::io::Result<(u64, u64)> {
+    hash_reader(dir.open_file(name)?)
+}
+
+/// Size and [`content_hash`] of what `r` reads, in chunks.
+pub(crate) fn hash_reader(mut r: impl std::io::Read) -> std::io::Result<(u64, u64)> {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut len = 0u64;
     let mut buf = vec![0u8; 1 << 16];
     loop {
-        let n = f.read(&mut buf)?;
+        let n = r.read(&mut buf)?;
         if n == 0 {
             break;
         }
@@ -479,23 +555,17 @@ fn unhex(s: &str) -> Option<Vec<u8>> {
         .collect()
 }
 
-fn registry_path(path: &Path) -> PathBuf {
-    match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.join(OUTPUT_REGISTRY),
-        _ => PathBuf::from(OUTPUT_REGISTRY),
-    }
-}
-
 /// The registry's entries, in file order (later lines win). A missing, foreign,
-/// oversized or unreadable registry lists nothing: the safe reading.
-fn read_registry(reg: &Path) -> Vec<(String, Entry)> {
-    let Ok(md) = std::fs::symlink_metadata(reg) else {
+/// oversized or unreadable registry (or a link in its place) lists nothing: the safe
+/// reading.
+fn read_registry(dir: &Dir) -> Vec<(String, Entry)> {
+    let Ok(Some(bytes)) = dir.read_capped(
+        std::ffi::OsStr::new(OUTPUT_REGISTRY),
+        2 * REGISTRY_MAX_BYTES as u64,
+    ) else {
         return Vec::new();
     };
-    if !md.is_file() || md.len() > 2 * REGISTRY_MAX_BYTES as u64 {
-        return Vec::new();
-    }
-    let Ok(text) = std::fs::read_to_string(reg) else {
+    let Ok(text) = String::from_utf8(bytes) else {
         return Vec::new();
     };
     let mut lines = text.lines();
@@ -519,9 +589,9 @@ fn read_registry(reg: &Path) -> Vec<(String, Entry)> {
         .collect()
 }
 
-/// Whether the registry of the file's folder says fitup wrote it as it is now.
-fn registered(path: &Path, name: &str, len: u64, head: &[u8]) -> std::io::Result<bool> {
-    let entries = read_registry(&registry_path(path));
+/// Whether the registry of `dir` says fitup wrote its file `name` as it is now.
+fn registered(dir: &Dir, name: &str, len: u64, head: &[u8]) -> std::io::Result<bool> {
+    let entries = read_registry(dir);
     let Some((_, entry)) = entries.iter().rev().find(|(n, _)| n == name) else {
         return Ok(false);
     };
@@ -529,28 +599,26 @@ fn registered(path: &Path, name: &str, len: u64, head: &[u8]) -> std::io::Result
         Entry::Stream(magic) => !magic.is_empty() && head.starts_with(magic),
         Entry::File { len: l, hash } => {
             *l == len && {
-                let (len_now, hash_now) = hash_file(path)?;
+                let (len_now, hash_now) = hash_file(dir, std::ffi::OsStr::new(name))?;
                 len_now == *l && hash_now == *hash
             }
         }
     })
 }
 
-/// Adds (or replaces) the entry of `path` in its folder's registry, atomically and
+/// Adds (or replaces) the entry of `name` in the registry of `dir`, atomically and
 /// under the folder's lock (parallel runs of `fitup batch` write in the same folder).
-fn register(path: &Path, entry: Entry) -> std::io::Result<()> {
-    let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+fn register(dir: &Dir, name: &std::ffi::OsStr, entry: Entry) -> std::io::Result<()> {
+    let Some(name) = name.to_str() else {
         return Ok(()); // Not listed: a later write needs --force.
     };
     if name.contains(['\n', '\r']) {
         return Ok(());
     }
-    let reg = registry_path(path);
-    let dir = reg.parent().unwrap_or(Path::new("."));
-    let _lock = lock_folder(dir);
-    let mut entries: Vec<(String, Entry)> = read_registry(&reg)
+    let _lock = dir.lock();
+    let mut entries: Vec<(String, Entry)> = read_registry(dir)
         .into_iter()
-        .filter(|(n, _)| n != name && dir.join(n).exists())
+        .filter(|(n, _)| n != name && dir.stat(std::ffi::OsStr::new(n)).is_ok_and(|k| k.is_some()))
         .collect();
     entries.push((name.to_string(), entry));
     let line = |(n, e): &(String, Entry)| match e {
@@ -571,8 +639,8 @@ fn register(path: &Path, entry: Entry) -> std::io::Result<()> {
     text.push('\n');
     lines.iter().for_each(|l| text.push_str(l));
     // A registry that is not a regular file (a link planted by someone) is not
-    // followed: write_atomic replaces the link itself, inside this folder.
-    write_atomic(&reg, text.as_bytes())
+    // followed: the rename replaces the link itself, inside this folder.
+    dir.write_atomic(std::ffi::OsStr::new(OUTPUT_REGISTRY), text.as_bytes())
 }
 
 /// Longest line fitup reads from a stream of commands (standard input of

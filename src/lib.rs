@@ -19,6 +19,7 @@
 //! | [`sequence`] | assembly sequences: tasks (base part, assembly part, operation) for a robot |
 //! | [`workspace`] | a document as a collision scene and every document-level request: interference, contact, clearance, sweeps, planning, revalidation, following |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
+//! | [`options`] | one vocabulary per request: the option keys of Rhai maps and Python keywords, their kinds, units, defaults and reference tables |
 //! | [`script`] | the Rhai sandbox and API bindings |
 //! | [`viewer`] | the live 3D viewer (Rerun): documents, robots, paths, interference; `.rrd` recordings |
 //! | [`watch`] | watch mode: rerun on every save, exactly once |
@@ -26,6 +27,7 @@
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
 //! | [`project`] | the project folder that bounds every file a run touches, and the path rule |
 //! | [`fsutil`] | atomic writes, capped reads of regular files only, content hashes, file stamps |
+//! | [`files`] | data files a script reads inside the project: CSV tables, JSON, text |
 #![warn(missing_docs)]
 
 #[cfg(feature = "cli")]
@@ -36,12 +38,14 @@ pub mod db;
 pub mod demo;
 pub mod diagnostics;
 pub mod document;
+pub mod files;
 pub mod fsutil;
 pub mod kinematics;
 #[cfg(feature = "manipulator")]
 pub mod manipulator;
 pub mod math;
 pub mod mesh;
+pub mod options;
 pub mod planning;
 pub mod project;
 #[cfg(feature = "script")]

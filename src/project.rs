@@ -55,17 +55,75 @@ pub enum PathError {
 
 /// The folder a run may read and write in. Relative paths are resolved against it;
 /// anything that resolves outside it is refused.
-#[derive(Debug, Clone, PartialEq, Eq)]
+///
+/// The root folder is held open ([`crate::fsutil::Dir`]): files are opened and
+/// written by walking from that handle without following a symbolic link
+/// ([`Project::open_file`], [`Project::write_output`]), so a folder swapped for a link
+/// between the path check and the use is refused, never followed outside.
+#[derive(Debug, Clone)]
 pub struct Project {
     root: PathBuf,
+    dir: std::sync::Arc<crate::fsutil::Dir>,
 }
 
+impl PartialEq for Project {
+    fn eq(&self, other: &Self) -> bool {
+        self.root == other.root
+    }
+}
+
+impl Eq for Project {}
+
 impl Project {
-    /// A project rooted at `root` (made absolute and canonical).
+    /// A project rooted at `root` (made absolute and canonical), its folder held open.
     pub fn new(root: &Path) -> std::io::Result<Self> {
+        let root = root.canonicalize()?;
+        let dir = crate::fsutil::Dir::open(&root)?;
         Ok(Self {
-            root: root.canonicalize()?,
+            root,
+            dir: std::sync::Arc::new(dir),
         })
+    }
+
+    /// The folder `folder` (absolute, inside the root, as [`resolve`](Self::resolve)
+    /// returns it) held open, reached from the root's handle one folder at a time
+    /// without following a link; with `create`, missing folders are made.
+    pub fn folder(&self, folder: &Path, create: bool) -> std::io::Result<crate::fsutil::Dir> {
+        let rel = folder.strip_prefix(&self.root).map_err(|_| {
+            std::io::Error::other(format!(
+                "{} is outside the project folder {}",
+                folder.display(),
+                self.root.display()
+            ))
+        })?;
+        self.dir.walk(rel, create)
+    }
+
+    /// Opens the regular file at `path` (absolute, inside the root, as
+    /// [`resolve`](Self::resolve) returns it) for reading, through the root's handle:
+    /// a link met on the way or at the file is refused, and a FIFO, device or socket
+    /// is refused without blocking.
+    pub fn open_file(&self, path: &Path) -> std::io::Result<std::fs::File> {
+        let (Some(parent), Some(name)) = (path.parent(), path.file_name()) else {
+            return Err(std::io::Error::other(format!(
+                "{}: not a file name",
+                path.display()
+            )));
+        };
+        self.folder(parent, false)?.open_file(name)
+    }
+
+    /// Reads the file at `path` (see [`open_file`](Self::open_file)) whole, within the
+    /// cap of `kind`.
+    pub fn read_file(
+        &self,
+        path: &Path,
+        kind: crate::fsutil::FileKind,
+    ) -> Result<Vec<u8>, crate::fsutil::ReadError> {
+        let f = self
+            .open_file(path)
+            .map_err(|e| crate::fsutil::ReadError::Io(e.to_string()))?;
+        crate::fsutil::read_opened(f, kind)
     }
 
     /// The project of a script or document at `file` when no `--root` is given: the
@@ -172,21 +230,13 @@ impl Project {
     pub fn resolve_for_write(&self, path: &str) -> Result<PathBuf, PathError> {
         let full = self.resolve(path)?;
         if let Some(parent) = full.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| PathError::Unresolvable {
-                path: path.to_string(),
-                message: format!("cannot create its folder: {e}"),
-            })?;
-            // A folder created through a link planted meanwhile would be outside.
-            let canon = parent.canonicalize().map_err(|e| PathError::Unresolvable {
-                path: path.to_string(),
-                message: e.to_string(),
-            })?;
-            if !canon.starts_with(&self.root) {
-                return Err(PathError::Outside {
+            // Made by walking from the root's handle: a folder swapped for a link
+            // meanwhile is refused, and no folder is ever made outside.
+            self.folder(parent, true)
+                .map_err(|e| PathError::Unresolvable {
                     path: path.to_string(),
-                    root: self.root.clone(),
-                });
-            }
+                    message: format!("cannot create its folder: {e}"),
+                })?;
         }
         Ok(full)
     }
@@ -195,31 +245,79 @@ impl Project {
     /// exports, plans, key poses, recordings): the path must also pass the one write
     /// rule, [`crate::fsutil::check_output`] — never over a file the project uses or
     /// that fitup did not write, unless `rule.force` (`--force`, `overwrite: true`);
-    /// never over a folder, FIFO, device or symbolic link. Write the output with
-    /// [`crate::fsutil::write_output`] (or register it with
-    /// [`crate::fsutil::register_output`]) so a later run may replace it.
+    /// never over a folder, FIFO, device or symbolic link. This only checks (for
+    /// writers that refuse before working); write with
+    /// [`write_output`](Self::write_output), which checks again through the handle
+    /// it writes with.
     pub fn resolve_output(
         &self,
         path: &str,
         rule: &crate::fsutil::OutputRule,
     ) -> Result<PathBuf, PathError> {
-        // `resolve` follows a symbolic link at the path itself; the rule must see it.
+        let (full, dir) = self.output_folder(path)?;
+        let name = full.file_name().unwrap_or_default();
+        crate::fsutil::check_output_in(&dir, name, &full, rule).map_err(|cause| {
+            PathError::Refused {
+                path: path.to_string(),
+                cause,
+            }
+        })?;
+        Ok(full)
+    }
+
+    /// Writes `bytes` as the output `path` (relative to the root): resolved inside the
+    /// project, its folder made and held open by walking from the root's handle, the
+    /// write rule checked ([`crate::fsutil::check_output`]) and the file written
+    /// atomically and listed in the folder's registry — all through that one handle,
+    /// so a folder swapped for a link midway is refused and nothing (the output, its
+    /// temporary file, the registry) lands outside. Returns the file's path.
+    pub fn write_output(
+        &self,
+        path: &str,
+        bytes: &[u8],
+        rule: &crate::fsutil::OutputRule,
+    ) -> Result<PathBuf, PathError> {
+        let (full, dir) = self.output_folder(path)?;
+        let name = full.file_name().unwrap_or_default();
+        let refused = |cause| PathError::Refused {
+            path: path.to_string(),
+            cause,
+        };
+        crate::fsutil::check_output_in(&dir, name, &full, rule).map_err(refused)?;
+        crate::fsutil::write_in(&dir, name, bytes).map_err(refused)?;
+        Ok(full)
+    }
+
+    /// The full path of the output `path` and its folder held open (made when
+    /// missing); a link at the path itself is refused by name first, since
+    /// [`resolve`](Self::resolve) would follow it.
+    fn output_folder(&self, path: &str) -> Result<(PathBuf, crate::fsutil::Dir), PathError> {
         let written = Path::new(path);
         let lexical = if written.is_absolute() {
             written.to_path_buf()
         } else {
             self.root.join(written)
         };
-        let refused = |cause| PathError::Refused {
-            path: path.to_string(),
-            cause,
-        };
         if std::fs::symlink_metadata(&lexical).is_ok_and(|m| m.file_type().is_symlink()) {
-            return Err(refused(crate::fsutil::OutputError::Symlink));
+            return Err(PathError::Refused {
+                path: path.to_string(),
+                cause: crate::fsutil::OutputError::Symlink,
+            });
         }
-        let full = self.resolve_for_write(path)?;
-        crate::fsutil::check_output(&full, rule).map_err(refused)?;
-        Ok(full)
+        let full = self.resolve(path)?;
+        let (Some(parent), Some(_)) = (full.parent(), full.file_name()) else {
+            return Err(PathError::Unresolvable {
+                path: path.to_string(),
+                message: "not a file name".into(),
+            });
+        };
+        let dir = self
+            .folder(parent, true)
+            .map_err(|e| PathError::Unresolvable {
+                path: path.to_string(),
+                message: format!("cannot open its folder: {e}"),
+            })?;
+        Ok((full, dir))
     }
 
     /// `path` shown relative to the root when inside it.

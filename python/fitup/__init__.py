@@ -17,6 +17,7 @@ from ._fitup import (  # noqa: F401
     Robot,
     __version__,
     catalog_names,
+    option_keys,
     planner_names,
     run_script,
 )

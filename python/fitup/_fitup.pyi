@@ -23,6 +23,15 @@ def catalog_names() -> List[str]:
     """Names of the built-in catalog robots."""
 def planner_names() -> List[str]:
     """The planner names ``plan_path`` accepts."""
+def option_keys(request: str) -> List[Dict[str, Any]]:
+    """The keys of a request's options — the table every keyword argument of it is
+    checked against, and that ``docs/api.md`` prints: a list of dicts ``key``,
+    ``kind`` (``"number"``, ``"count"``, ``"bool"``, ``"text"``, ``"choice"``,
+    ``"names"``, ``"vector"``, ``"box"``, ``"pose"``, ``"number_map"``,
+    ``"switch"``), ``choices`` (the names of a choice, else None), ``unit`` and
+    ``meaning``. ``request``: ``"planning"``, ``"narrow"``, ``"interference"``,
+    ``"sweep"``, ``"sequence"``, ``"motion"`` or ``"drilling"``.
+    """
 def run_script(
     script: _StrPath,
     doc: Optional[_StrPath] = None,
@@ -264,49 +273,76 @@ class Document:
         """Writes the document to ``path`` atomically and makes it the document's file."""
     def to_yaml(self) -> str:
         """The document as YAML text (what ``save`` writes)."""
-    def contacts(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]:
+    def contacts(self, **options: Any) -> List[Dict[str, Any]]:
         """Every pair that touches or interferes: a list of dicts ``a``, ``b``, ``state``
-        (``"touching"``/``"interfering"``), ``depth_mm``. ``method``: ``"exact"``,
-        ``"aabb"`` or ``"cells"``; ``tolerance`` (mm): crossings up to this depth are
-        touching (default 0.01).
+        (``"touching"``/``"interfering"``), ``depth_mm``.
+
+        Keywords (the interference table of docs/api.md): ``method`` (``"exact"``,
+        ``"aabb"`` or ``"cells"``), ``tolerance`` (mm: crossings up to this depth are
+        touching).
         """
-    def interferences(self, method: str = "exact", tolerance: Optional[float] = None) -> List[Dict[str, Any]]:
-        """Every interfering pair (as ``contacts``, interfering only)."""
-    def contact(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> Dict[str, Any]:
+    def interferences(self, **options: Any) -> List[Dict[str, Any]]:
+        """Every interfering pair (as ``contacts``, interfering only; the same
+        keywords).
+        """
+    def contact(self, a: str, b: str, **options: Any) -> Dict[str, Any]:
         """The verdict for components ``a`` and ``b``: a dict ``state``
-        (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``.
+        (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``;
+        keywords as ``contacts``.
         """
-    def interferes(self, a: str, b: str, method: str = "exact", tolerance: Optional[float] = None) -> bool:
-        """Whether components ``a`` and ``b`` interfere (crossing deeper than
-        ``tolerance`` mm, or one solid inside the other).
+    def overlap(self, a: str, b: str, time_limit_ms: Optional[float] = None) -> Dict[str, Any]:
+        """How much interfering components ``a`` and ``b`` overlap: a dict ``volume_mm3``
+        (the intersection volume, SolidWorks' interference volume), ``depth_mm`` (the
+        shortest translation of ``a`` that clears ``b``) and ``direction`` (unit
+        vector, world). Exact for closed meshes; zeros when they only touch.
         """
-    def clearance(self, a: str, b: str, stop_mm: float = 1000.0) -> float:
-        """The distance between the surfaces of ``a`` and ``b`` (mm): 0 when they touch,
-        cross or one lies inside the other; ``stop_mm`` when nothing is nearer.
-        """
-    def sweep(
+    def mass_properties(
         self,
-        name: str,
-        waypoints: _Poses,
-        tolerance: Optional[float] = None,
-        time_limit_ms: Optional[float] = None,
+        components: Optional[List[str]] = None,
+        density: Optional[float] = None,
+        frame: Optional[_Pose] = None,
     ) -> Dict[str, Any]:
+        """Mass properties of ``components`` (names; all when None) together, in world
+        coordinates, or in the coordinate system ``frame`` (a 4×4 pose, mm) when given:
+        a dict ``volume_mm3``, ``area_mm2``, ``mass_kg``, ``density_kg_m3``,
+        ``centre_of_mass`` (mm), ``inertia`` (3×3 tensor about the centre of mass,
+        kg·mm², physics sign as trimesh), ``principal_moments``, ``principal_axes``
+        (rows). A component's ``mass`` (kg) in the document wins over ``density``
+        (kg/m³, default 1000).
+        """
+    def interferes(self, a: str, b: str, **options: Any) -> bool:
+        """Whether components ``a`` and ``b`` interfere (crossing deeper than
+        ``tolerance`` mm, or one solid inside the other); keywords as ``contacts``.
+        """
+    def clearance(self, a: str, b: str, stop_mm: Optional[float] = None) -> float:
+        """The distance between the surfaces of ``a`` and ``b`` (mm): 0 when they touch,
+        cross or one lies inside the other; ``stop_mm`` (default 1000) when nothing is
+        nearer.
+        """
+    def sweep(self, name: str, waypoints: _Poses, **options: Any) -> Dict[str, Any]:
         """Sweeps component ``name`` from its pose through ``waypoints`` (``(N, 4, 4)``,
         world, mm; translation lerp + rotation slerp between them) and returns the first
         contact: a dict ``hit``, ``t`` (0..1 along the motion), ``pose`` (4×4),
-        ``with`` (the component hit, or None). Continuous (no obstacle is jumped over).
+        ``with`` (the component hit, or None).
+
+        Keywords (the sweep table of docs/api.md): ``method`` (``"continuous"``
+        default: no obstacle is jumped over; ``"step"``), ``step`` (mm),
+        ``tolerance`` (mm), ``time_limit_ms``.
         """
     def plan_path(self, name: str, goal: _Pose, **options: Any) -> Path:
         """Plans a collision-free path for component ``name`` from its pose (or
         ``start``) to ``goal`` (4×4, world, mm) among all the other components.
 
-        Keywords: ``planner`` (``"rrt_connect"`` default; see ``planner_names()``),
-        ``seed`` (same seed, same path), ``time_limit_ms`` (budget of the whole call,
-        default 10000), ``max_iterations``, ``step`` (mm), ``goal_bias``, ``smoothing``,
+        Keywords: the planning table of docs/api.md, the keys of a script's options
+        map: ``planner`` (``"rrt_connect"`` default; see ``planner_names()``),
+        ``seed`` (same seed, same path), ``time_limit_ms`` (budget of the whole
+        call), ``max_iterations``, ``step`` (mm), ``goal_bias``, ``smoothing``,
+        ``narrow`` (bool or dict), ``fallback_share``, ``L``, ``dis``, ``radius``,
         ``tolerance`` (mm), ``edge`` (``"continuous"``/``"step"``), ``contact_step``,
-        ``edge_step`` (mm), ``edge_step_rad``, ``bounds`` (``[[min xyz], [max xyz]]``
-        mm, for the part origin), ``margin`` (mm), ``rotation`` (bool),
-        ``rotation_weight`` (mm per rad), ``fallback_share``, ``start`` (4×4).
+        ``edge_step`` (mm), ``edge_step_deg`` (degrees), ``bounds``
+        (``[[min xyz], [max xyz]]`` mm, for the part origin), ``margin`` (mm),
+        ``rotation`` (bool), ``rotation_weight`` (mm per rad), ``disassemble``,
+        ``start`` (4×4).
         A path that is not found is returned with ``found == False`` and a ``reason``.
         """
     def plan_insertion(self, name: str, goal: _Pose, **options: Any) -> Path:
@@ -357,11 +393,14 @@ class Document:
         each with ``order``, ``mounts``, ``tasks`` (mating directions, safe lengths,
         grasps, mm), and ``rejected``, ``precedence``, ``time_ms``.
 
-        Keywords: ``mode`` (``"mates"``/``"geometry"``), ``base``, ``order``,
-        ``max_sequences``, ``time_limit_ms`` (the whole call), ``seed``, ``tolerance``
-        (mm), ``components``, ``exclude``, ``threaded``, ``support``, ``gravity``
-        (a down vector), ``planner_fallback``, ``fallback_time_limit_ms``, ``max_tilt``
-        (rad), ``sphere_directions``.
+        Keywords: the sequence table of docs/api.md, the keys of a script's
+        ``assembly_sequence`` map: ``mode`` (``"mates"``/``"geometry"``), ``base``,
+        ``order``, ``max_sequences``, ``time_limit_ms`` (the whole call), ``seed``,
+        ``tolerance`` (mm), ``components``, ``exclude``, ``threaded``, ``masses``,
+        ``support``, ``contact_gap_mm``, ``gravity`` (a down vector),
+        ``tight_clearance_mm``, ``planner_fallback``, ``fallback_time_limit_ms``,
+        ``max_tilt_deg`` (degrees; ``max_tilt`` in radians is deprecated),
+        ``sphere_directions``.
         """
 
 class Database:
@@ -390,24 +429,21 @@ class Database:
         """Stores ``path`` (found or not, with its key poses, planner, seed and options)
         under ``name``; ``run_id`` files it under a run. Returns its id.
         """
-    def paths(
-        self,
-        name: Optional[str] = None,
-        planner: Optional[str] = None,
-        component: Optional[str] = None,
-        run_id: Optional[int] = None,
-    ) -> List[Dict[str, Any]]:
+    def paths(self, **filter: Any) -> List[Dict[str, Any]]:
         """Stored paths, oldest first, as dicts: ``id``, ``run_id``, ``name``,
         ``created_at``, ``component``, ``seed``, ``planner``, ``found``, ``reason``,
-        ``length_mm``, ``time_ms``, ``poses`` (``(N, 4, 4)``). Filters: ``name``,
-        ``planner``, ``component``, ``run_id``.
+        ``length_mm``, ``time_ms``, ``poses`` (``(N, 4, 4)``). Filters (the
+        path-filter table of docs/api.md, a script's ``paths`` map): ``name``,
+        ``planner``, ``component``, ``since`` (UTC time or date prefix), ``run`` (a
+        run id; ``run_id`` is its deprecated spelling).
         """
     def runs(self) -> List[Dict[str, Any]]:
         """Recorded runs, oldest first, as dicts: ``id``, ``script``, ``document``,
         ``started_at``, ``finished_at``, ``status``, ``output``, ``fitup_version``.
         """
-    def query(self, sql: str, params: Sequence[Any] = ...) -> Tuple[List[str], List[List[Any]]]:
+    def query(self, sql: str, params: Sequence[Any] = ..., **limits: Any) -> Tuple[List[str], List[List[Any]]]:
         """A read-only SQL query (SELECT/WITH/VALUES; writes, ATTACH and settings are
-        refused; time, row and byte limits apply) with ``?`` parameters. Returns
-        ``(columns, rows)``.
+        refused) with ``?`` parameters, within the time, row and byte limits
+        ``max_seconds``, ``max_rows``, ``max_bytes`` (keywords; the query-limits table
+        of docs/api.md). Returns ``(columns, rows)``.
         """

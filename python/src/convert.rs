@@ -113,15 +113,3 @@ pub fn map_rows<T>(a: ArrayView2<'_, f64>, mut f: impl FnMut(&[f64]) -> T) -> Ve
 pub fn joints_of(a: ArrayView1<'_, f64>) -> Vec<f64> {
     a.iter().copied().collect()
 }
-
-/// A 3-vector (mm) from a view of shape `(3,)`.
-pub fn vec3_of(a: ArrayView1<'_, f64>, argument: &'static str) -> Result<fitup::math::Vec3> {
-    if a.len() != 3 {
-        return Err(Error::Shape {
-            argument,
-            expected: "(3,)",
-            shape: a.shape().to_vec(),
-        });
-    }
-    Ok(fitup::math::Vec3::new(a[0], a[1], a[2]))
-}

@@ -3,7 +3,8 @@
 use crate::convert;
 use crate::error::{Error, Result};
 use crate::path::Path;
-use fitup::db::{Database as Db, NewRun, PathMeta, PathQuery, RunStatus, SqlValue, Target};
+use fitup::db::{Database as Db, NewRun, PathMeta, RunStatus, SqlValue, Target};
+use fitup::options::{Limits, PathFilter};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::Mutex;
@@ -149,24 +150,17 @@ impl Database {
 
     /// Stored paths, oldest first, as dicts: ``id``, ``run_id``, ``name``,
     /// ``created_at``, ``component``, ``seed``, ``planner``, ``found``, ``reason``,
-    /// ``length_mm``, ``time_ms``, ``poses`` (``(N, 4, 4)``). Filters: ``name``,
-    /// ``planner``, ``component``, ``run_id``.
-    #[pyo3(signature = (name = None, planner = None, component = None, run_id = None))]
+    /// ``length_mm``, ``time_ms``, ``poses`` (``(N, 4, 4)``). Filters (the
+    /// path-filter table of docs/api.md, a script's ``paths`` map): ``name``,
+    /// ``planner``, ``component``, ``since`` (UTC time or date prefix), ``run`` (a
+    /// run id; ``run_id`` is its deprecated spelling).
+    #[pyo3(signature = (**filter))]
     fn paths<'py>(
         &self,
         py: Python<'py>,
-        name: Option<String>,
-        planner: Option<String>,
-        component: Option<String>,
-        run_id: Option<i64>,
+        filter: Option<&Bound<'py, PyDict>>,
     ) -> Result<Vec<Bound<'py, PyDict>>> {
-        let q = PathQuery {
-            name,
-            planner,
-            component,
-            run_id,
-            ..PathQuery::default()
-        };
+        let q = crate::options::read::<PathFilter>(py, filter)?.0.query();
         let stored = self.with(py, |db| db.paths(&q))?;
         let mut out = Vec::with_capacity(stored.len());
         for s in stored {
@@ -209,17 +203,20 @@ impl Database {
     }
 
     /// A read-only SQL query (SELECT/WITH/VALUES; writes, ATTACH and settings are
-    /// refused; time, row and byte limits apply) with ``?`` parameters. Returns
-    /// ``(columns, rows)``.
-    #[pyo3(signature = (sql, params = Vec::new()))]
+    /// refused) with ``?`` parameters, within the time, row and byte limits
+    /// ``max_seconds``, ``max_rows``, ``max_bytes`` (keywords; the query-limits table
+    /// of docs/api.md). Returns ``(columns, rows)``.
+    #[pyo3(signature = (sql, params = Vec::new(), **limits))]
     fn query<'py>(
         &self,
         py: Python<'py>,
         sql: &str,
         params: Vec<Bound<'py, PyAny>>,
+        limits: Option<&Bound<'py, PyDict>>,
     ) -> Result<QueryRows<'py>> {
+        let limits = crate::options::read::<Limits>(py, limits)?.0.limits()?;
         let params = params.iter().map(sql_value).collect::<Result<Vec<_>>>()?;
-        let r = self.with(py, |db| db.query(sql, &params))?;
+        let r = self.with(py, |db| db.query_with(sql, &params, limits, None))?;
         let rows = r
             .rows
             .iter()

@@ -3,10 +3,11 @@
 
 use crate::convert;
 use crate::error::{Error, Result};
-use crate::options::{self, Keywords};
+use crate::options;
 use crate::path::Path;
 use fitup::collision::Contact;
 use fitup::document::{Dimension, DimensionKind};
+use fitup::options::{Check, Plan, Sequence, Sweep};
 use fitup::planning::Control;
 use fitup::workspace::{Revalidation, SceneCache, Workspace};
 use numpy::{AllowTypeChange, PyArray2, PyArrayLike2, PyArrayLike3};
@@ -231,17 +232,18 @@ impl Document {
     }
 
     /// Every pair that touches or interferes: a list of dicts ``a``, ``b``, ``state``
-    /// (``"touching"``/``"interfering"``), ``depth_mm``. ``method``: ``"exact"``,
-    /// ``"aabb"`` or ``"cells"``; ``tolerance`` (mm): crossings up to this depth are
-    /// touching (default 0.01).
-    #[pyo3(signature = (method = "exact", tolerance = None))]
+    /// (``"touching"``/``"interfering"``), ``depth_mm``.
+    ///
+    /// Keywords (the interference table of docs/api.md): ``method`` (``"exact"``,
+    /// ``"aabb"`` or ``"cells"``), ``tolerance`` (mm: crossings up to this depth are
+    /// touching).
+    #[pyo3(signature = (**options))]
     fn contacts<'py>(
         &self,
         py: Python<'py>,
-        method: &str,
-        tolerance: Option<f64>,
+        options: Option<&Bound<'py, PyDict>>,
     ) -> Result<Vec<Bound<'py, PyDict>>> {
-        let o = options::check_options(method, tolerance)?;
+        let o = options::read::<Check>(py, options)?.0.check_options();
         let pairs = self.with_workspace(py, |ws| {
             Ok(ws
                 .contacts(&o)?
@@ -250,7 +252,7 @@ impl Document {
                     (
                         ws.name(p.a).to_string(),
                         ws.name(p.b).to_string(),
-                        p.contact,
+                        ws.with_separation_depth(p.a, p.b, p.contact),
                     )
                 })
                 .collect::<Vec<_>>())
@@ -267,16 +269,16 @@ impl Document {
             .map_err(Error::from)
     }
 
-    /// Every interfering pair (as ``contacts``, interfering only).
-    #[pyo3(signature = (method = "exact", tolerance = None))]
+    /// Every interfering pair (as ``contacts``, interfering only; the same
+    /// keywords).
+    #[pyo3(signature = (**options))]
     fn interferences<'py>(
         &self,
         py: Python<'py>,
-        method: &str,
-        tolerance: Option<f64>,
+        options: Option<&Bound<'py, PyDict>>,
     ) -> Result<Vec<Bound<'py, PyDict>>> {
         Ok(self
-            .contacts(py, method, tolerance)?
+            .contacts(py, options)?
             .into_iter()
             .filter(|d| {
                 d.get_item("state")
@@ -289,58 +291,159 @@ impl Document {
     }
 
     /// The verdict for components ``a`` and ``b``: a dict ``state``
-    /// (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``.
-    #[pyo3(signature = (a, b, method = "exact", tolerance = None))]
+    /// (``"separate"``, ``"touching"``, ``"interfering"``) and ``depth_mm``;
+    /// keywords as ``contacts``.
+    #[pyo3(signature = (a, b, **options))]
     fn contact<'py>(
         &self,
         py: Python<'py>,
         a: &str,
         b: &str,
-        method: &str,
-        tolerance: Option<f64>,
+        options: Option<&Bound<'py, PyDict>>,
     ) -> Result<Bound<'py, PyDict>> {
-        let o = options::check_options(method, tolerance)?;
-        let c = self.with_workspace(py, |ws| Ok(ws.contact(a, b, &o)?))?;
+        let o = options::read::<Check>(py, options)?.0.check_options();
+        let c = self.with_workspace(py, |ws| {
+            let c = ws.contact(a, b, &o)?;
+            Ok(ws.with_separation_depth(ws.index(a)?, ws.index(b)?, c))
+        })?;
         Ok(contact_dict(py, &c)?)
     }
 
+    /// How much interfering components ``a`` and ``b`` overlap: a dict ``volume_mm3``
+    /// (the intersection volume, SolidWorks' interference volume), ``depth_mm`` (the
+    /// shortest translation of ``a`` that clears ``b``) and ``direction`` (unit
+    /// vector, world). Exact for closed meshes; zeros when they only touch.
+    #[pyo3(signature = (a, b, time_limit_ms = None))]
+    fn overlap<'py>(
+        &self,
+        py: Python<'py>,
+        a: &str,
+        b: &str,
+        time_limit_ms: Option<f64>,
+    ) -> Result<Bound<'py, PyDict>> {
+        let mut o = fitup::workspace::OverlapOptions::default();
+        if let Some(t) = time_limit_ms {
+            o.time_limit_ms = t;
+        }
+        let v = self.with_workspace(py, |ws| Ok(ws.overlap(a, b, &o)?))?;
+        let d = PyDict::new(py);
+        d.set_item("volume_mm3", v.volume)?;
+        d.set_item("depth_mm", v.depth)?;
+        d.set_item(
+            "direction",
+            v.direction.iter().copied().collect::<Vec<f64>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// Mass properties of ``components`` (names; all when None) together, in world
+    /// coordinates, or in the coordinate system ``frame`` (a 4×4 pose, mm) when given:
+    /// a dict ``volume_mm3``, ``area_mm2``, ``mass_kg``, ``density_kg_m3``,
+    /// ``centre_of_mass`` (mm), ``inertia`` (3×3 tensor about the centre of mass,
+    /// kg·mm², physics sign as trimesh), ``principal_moments``, ``principal_axes``
+    /// (rows). A component's ``mass`` (kg) in the document wins over ``density``
+    /// (kg/m³, default 1000).
+    #[pyo3(signature = (components = None, density = None, frame = None))]
+    fn mass_properties<'py>(
+        &self,
+        py: Python<'py>,
+        components: Option<Vec<String>>,
+        density: Option<f64>,
+        frame: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
+    ) -> Result<Bound<'py, PyDict>> {
+        let mut o = fitup::workspace::MassOptions::default();
+        if let Some(d) = density {
+            o.density = d;
+        }
+        let frame = frame
+            .map(|f| convert::pose_of(f.as_array(), "frame"))
+            .transpose()?;
+        let m = {
+            let inner = self.lock()?;
+            let which: Vec<usize> = match &components {
+                Some(names) => names
+                    .iter()
+                    .map(|n| inner.doc.component_index(n))
+                    .collect::<std::result::Result<_, _>>()?,
+                None => (0..inner.doc.components().len()).collect(),
+            };
+            fitup::workspace::mass_properties(&inner.doc, &which, &o)?
+        };
+        let m = match frame {
+            Some(f) => m.in_frame(&f),
+            None => m,
+        };
+        let (moments, axes) = m.principal();
+        let d = PyDict::new(py);
+        d.set_item("volume_mm3", m.volume)?;
+        d.set_item("area_mm2", m.area)?;
+        d.set_item("mass_kg", m.mass)?;
+        d.set_item("density_kg_m3", m.density())?;
+        d.set_item(
+            "centre_of_mass",
+            m.centre_of_mass
+                .coords
+                .iter()
+                .copied()
+                .collect::<Vec<f64>>(),
+        )?;
+        d.set_item(
+            "inertia",
+            (0..3)
+                .map(|i| (0..3).map(|j| m.inertia[(i, j)]).collect::<Vec<f64>>())
+                .collect::<Vec<_>>(),
+        )?;
+        d.set_item("principal_moments", moments.to_vec())?;
+        d.set_item(
+            "principal_axes",
+            axes.iter()
+                .map(|a| a.iter().copied().collect::<Vec<f64>>())
+                .collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
     /// Whether components ``a`` and ``b`` interfere (crossing deeper than
-    /// ``tolerance`` mm, or one solid inside the other).
-    #[pyo3(signature = (a, b, method = "exact", tolerance = None))]
+    /// ``tolerance`` mm, or one solid inside the other); keywords as ``contacts``.
+    #[pyo3(signature = (a, b, **options))]
     fn interferes(
         &self,
         py: Python<'_>,
         a: &str,
         b: &str,
-        method: &str,
-        tolerance: Option<f64>,
+        options: Option<&Bound<'_, PyDict>>,
     ) -> Result<bool> {
-        let o = options::check_options(method, tolerance)?;
+        let o = options::read::<Check>(py, options)?.0.check_options();
         self.with_workspace(py, |ws| Ok(ws.interferes(a, b, &o)?))
     }
 
     /// The distance between the surfaces of ``a`` and ``b`` (mm): 0 when they touch,
-    /// cross or one lies inside the other; ``stop_mm`` when nothing is nearer.
-    #[pyo3(signature = (a, b, stop_mm = 1000.0))]
-    fn clearance(&self, py: Python<'_>, a: &str, b: &str, stop_mm: f64) -> Result<f64> {
+    /// cross or one lies inside the other; ``stop_mm`` (default 1000) when nothing is
+    /// nearer.
+    #[pyo3(signature = (a, b, stop_mm = None))]
+    fn clearance(&self, py: Python<'_>, a: &str, b: &str, stop_mm: Option<f64>) -> Result<f64> {
+        let stop_mm = stop_mm.unwrap_or(fitup::workspace::DEFAULT_CLEARANCE_SEARCH_MM);
         self.with_workspace(py, |ws| Ok(ws.clearance(a, b, stop_mm)?))
     }
 
     /// Sweeps component ``name`` from its pose through ``waypoints`` (``(N, 4, 4)``,
     /// world, mm; translation lerp + rotation slerp between them) and returns the first
     /// contact: a dict ``hit``, ``t`` (0..1 along the motion), ``pose`` (4×4),
-    /// ``with`` (the component hit, or None). Continuous (no obstacle is jumped over).
-    #[pyo3(signature = (name, waypoints, tolerance = None, time_limit_ms = None))]
+    /// ``with`` (the component hit, or None).
+    ///
+    /// Keywords (the sweep table of docs/api.md): ``method`` (``"continuous"``
+    /// default: no obstacle is jumped over; ``"step"``), ``step`` (mm),
+    /// ``tolerance`` (mm), ``time_limit_ms``.
+    #[pyo3(signature = (name, waypoints, **options))]
     fn sweep<'py>(
         &self,
         py: Python<'py>,
         name: &str,
         waypoints: PyArrayLike3<'py, f64, AllowTypeChange>,
-        tolerance: Option<f64>,
-        time_limit_ms: Option<f64>,
+        options: Option<&Bound<'py, PyDict>>,
     ) -> Result<Bound<'py, PyDict>> {
         let poses = convert::poses_of(waypoints.as_array(), "waypoints")?;
-        let o = options::sweep_options(tolerance, time_limit_ms);
+        let o = options::read::<Sweep>(py, options)?.0.sweep_options();
         let (hit, with) = self.with_workspace(py, |ws| {
             let hit = ws.sweep_through(name, &poses, &o)?;
             let with = hit.with.map(|i| ws.name(i).to_string());
@@ -357,13 +460,16 @@ impl Document {
     /// Plans a collision-free path for component ``name`` from its pose (or
     /// ``start``) to ``goal`` (4×4, world, mm) among all the other components.
     ///
-    /// Keywords: ``planner`` (``"rrt_connect"`` default; see ``planner_names()``),
-    /// ``seed`` (same seed, same path), ``time_limit_ms`` (budget of the whole call,
-    /// default 10000), ``max_iterations``, ``step`` (mm), ``goal_bias``, ``smoothing``,
+    /// Keywords: the planning table of docs/api.md, the keys of a script's options
+    /// map: ``planner`` (``"rrt_connect"`` default; see ``planner_names()``),
+    /// ``seed`` (same seed, same path), ``time_limit_ms`` (budget of the whole
+    /// call), ``max_iterations``, ``step`` (mm), ``goal_bias``, ``smoothing``,
+    /// ``narrow`` (bool or dict), ``fallback_share``, ``L``, ``dis``, ``radius``,
     /// ``tolerance`` (mm), ``edge`` (``"continuous"``/``"step"``), ``contact_step``,
-    /// ``edge_step`` (mm), ``edge_step_rad``, ``bounds`` (``[[min xyz], [max xyz]]``
-    /// mm, for the part origin), ``margin`` (mm), ``rotation`` (bool),
-    /// ``rotation_weight`` (mm per rad), ``fallback_share``, ``start`` (4×4).
+    /// ``edge_step`` (mm), ``edge_step_deg`` (degrees), ``bounds``
+    /// (``[[min xyz], [max xyz]]`` mm, for the part origin), ``margin`` (mm),
+    /// ``rotation`` (bool), ``rotation_weight`` (mm per rad), ``disassemble``,
+    /// ``start`` (4×4).
     /// A path that is not found is returned with ``found == False`` and a ``reason``.
     #[pyo3(signature = (name, goal, **options))]
     fn plan_path(
@@ -541,19 +647,21 @@ impl Document {
     /// each with ``order``, ``mounts``, ``tasks`` (mating directions, safe lengths,
     /// grasps, mm), and ``rejected``, ``precedence``, ``time_ms``.
     ///
-    /// Keywords: ``mode`` (``"mates"``/``"geometry"``), ``base``, ``order``,
-    /// ``max_sequences``, ``time_limit_ms`` (the whole call), ``seed``, ``tolerance``
-    /// (mm), ``components``, ``exclude``, ``threaded``, ``support``, ``gravity``
-    /// (a down vector), ``planner_fallback``, ``fallback_time_limit_ms``, ``max_tilt``
-    /// (rad), ``sphere_directions``.
+    /// Keywords: the sequence table of docs/api.md, the keys of a script's
+    /// ``assembly_sequence`` map: ``mode`` (``"mates"``/``"geometry"``), ``base``,
+    /// ``order``, ``max_sequences``, ``time_limit_ms`` (the whole call), ``seed``,
+    /// ``tolerance`` (mm), ``components``, ``exclude``, ``threaded``, ``masses``,
+    /// ``support``, ``contact_gap_mm``, ``gravity`` (a down vector),
+    /// ``tight_clearance_mm``, ``planner_fallback``, ``fallback_time_limit_ms``,
+    /// ``max_tilt_deg`` (degrees; ``max_tilt`` in radians is deprecated),
+    /// ``sphere_directions``.
     #[pyo3(signature = (**options))]
     fn plan_sequence<'py>(
         &self,
         py: Python<'py>,
         options: Option<&Bound<'py, PyDict>>,
     ) -> Result<Bound<'py, PyAny>> {
-        let kw = Keywords::new(options, &options::SEQUENCE_KEYS)?;
-        let o = options::sequence_options(&kw)?;
+        let o = options::read::<Sequence>(py, options)?.0.sequence_options();
         let json = py.detach(|| {
             let mut inner = self.lock()?;
             let Inner { doc, scene } = &mut *inner;
@@ -585,10 +693,12 @@ impl Document {
         default_planner: &str,
         disassemble: bool,
     ) -> Result<Path> {
-        let kw = Keywords::new(options, &options::PLAN_KEYS)?;
-        let (mut request, seed) = options::plan_request(&kw, default_planner)?;
-        request.disassemble = disassemble;
-        let json = kw.to_json();
+        let (o, json) = options::read::<Plan>(py, options)?;
+        let seed = o.seed;
+        let mut request = o
+            .request(default_planner)
+            .map_err(|e| Error::Workspace(fitup::workspace::WorkspaceError::Plan(e)))?;
+        request.disassemble |= disassemble;
         let path = self.with_workspace(py, |ws| {
             Ok(match &goal {
                 Some(g) => ws.plan_path(name, g, &request, None)?,

@@ -70,6 +70,10 @@ pub enum Error {
         /// Why not.
         source: fitup::math::transform::TransformError,
     },
+    /// Keyword arguments the request's vocabulary refuses (an unknown key, a value
+    /// not of its kind).
+    #[error(transparent)]
+    Options(#[from] fitup::options::OptionError),
     /// A keyword argument with a value the call cannot use.
     #[error("`{option}` = {value}: expected {expected}")]
     Option {
@@ -121,7 +125,7 @@ impl Error {
             Error::Project { .. } => "DocumentError",
             Error::Shape { .. } | Error::Pose { .. } | Error::Option { .. } => "InputError",
             Error::Path(_) => "InputError",
-            Error::Unknown { .. } => "InputError",
+            Error::Unknown { .. } | Error::Options(_) => "InputError",
             Error::Poisoned { .. } | Error::Python(_) => "FitupError",
         }
     }

@@ -36,6 +36,7 @@ fn _fitup(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(script::run_script, m)?)?;
     m.add_function(wrap_pyfunction!(robot::catalog_names, m)?)?;
     m.add_function(wrap_pyfunction!(path::planner_names, m)?)?;
+    m.add_function(wrap_pyfunction!(options::option_keys, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

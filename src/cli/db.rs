@@ -228,11 +228,9 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                     let project = crate::script::Project::new(&root)
                         .map_err(|x| fail(format!("project folder {}: {x}", root.display())))?;
                     let rule = crate::fsutil::OutputRule::forced(*force);
-                    let path = project
-                        .resolve_output(&o.to_string_lossy(), &rule)
+                    project
+                        .write_output(&o.to_string_lossy(), text.as_bytes(), &rule)
                         .map_err(|x| fail(format!("--out: {x}")))?;
-                    crate::fsutil::write_checked(&path, text.as_bytes())
-                        .map_err(|x| fail(format!("--out {}: {x}", o.display())))?;
                     outln!("wrote {}", o.display());
                 }
             }

@@ -285,11 +285,9 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
         Some(log) => {
             let abs = std::path::absolute(log).map_err(|e| usage(format!("log: {e}")))?;
             let rule = crate::fsutil::OutputRule::forced(a.force);
-            let path = project
-                .resolve_output(&abs.to_string_lossy(), &rule)
+            project
+                .write_output(&abs.to_string_lossy(), csv.as_bytes(), &rule)
                 .map_err(|e| fail(format!("--log: {e}")))?;
-            crate::fsutil::write_checked(&path, csv.as_bytes())
-                .map_err(|e| fail(format!("--log {}: {e}", log.display())))?;
             outln!(
                 "{}: {} samples, {} s; log written to {}",
                 doc.robots()[index].name(),

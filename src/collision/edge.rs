@@ -241,13 +241,13 @@ fn edge_check(
 /// the edge: swept along `sweep` (mm) and grown by the arc `angle · ρ` its points
 /// travel at most (ρ: the box's farthest point from the origin).
 fn swept_obb(b: &Obb, sweep: &Vec3, angle: f64) -> Obb {
-    let rho = b.centre.norm() + b.half.norm();
+    let rho = b.centre.norm() + b.radius;
     let along = b.axes.tr_mul(sweep).abs() / 2.0;
-    Obb {
-        centre: b.centre + sweep / 2.0,
-        axes: b.axes,
-        half: b.half + along + Vec3::repeat(angle * rho),
-    }
+    Obb::new(
+        b.centre + sweep / 2.0,
+        b.axes,
+        b.half + along + Vec3::repeat(angle * rho),
+    )
 }
 
 /// The per-triangle-pair conservative advancement.

@@ -58,6 +58,7 @@ mod method;
 mod shape;
 mod sweep;
 mod triangle;
+mod volume;
 
 pub use cells::{
     cells_contact, method_disagreement, Cell, CutCells, CutSpec, Disagreement, MAX_CELLS,
@@ -70,6 +71,10 @@ pub use exact::{
 pub use method::{contact_gap, contact_step, SweepMethod, MIN_CONTACT_GAP_MM};
 pub use shape::{Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
 pub use sweep::{sweep, Motion, Obstacle, SweepHit, SweepOptions, DEFAULT_SWEEP_TIME_LIMIT_MS};
+pub use volume::{
+    intersection_volume, separation, Separation, SeparationOptions, VolumeError,
+    DEFAULT_OVERLAP_TIME_LIMIT_MS,
+};
 
 pub use crate::math::Aabb;
 use crate::math::Transform;

@@ -2,7 +2,7 @@
 //! part frame), built once and shared, and [`ColliderCache`] which keeps colliders
 //! across watch reruns while the mesh is unchanged.
 
-use super::triangle::{closest_on_triangle, x_line_crossing, Tri};
+use super::triangle::{closest_on_triangle, unit_normal, x_line_crossing, Tri};
 use super::{CollisionError, MeshFault};
 pub use crate::math::Aabb;
 use crate::math::{Point3, Vec3};
@@ -15,9 +15,9 @@ use std::sync::{Arc, OnceLock, Weak};
 /// exceeds the contact tolerances used here.
 pub const MAX_COORDINATE: f64 = 1e9;
 
-/// Most triangles per BVH leaf (leaves hold 4 to 8 for large meshes: half the
-/// nodes of 4 per leaf, for a few more triangle-box tests per leaf pair).
-const LEAF_SIZE: usize = 8;
+/// Most triangles per BVH leaf (leaves hold 2 to 4): small leaves keep the leaf
+/// boxes tight, and a leaf pair's triangles are culled by plane before pairing.
+pub(crate) const LEAF_SIZE: usize = 4;
 
 /// Nodes over more triangles than this take their oriented box around their
 /// children's boxes instead of scanning every corner (the scans of the top levels
@@ -33,14 +33,28 @@ pub(crate) struct Obb {
     pub(crate) centre: Vec3,
     pub(crate) axes: Matrix3<f64>,
     pub(crate) half: Vec3,
+    /// `half.norm()`, kept: the bounding-sphere reject of every node pair reads it.
+    pub(crate) radius: f64,
 }
 
 impl Obb {
-    const BLANK: Obb = Obb {
+    pub(crate) const BLANK: Obb = Obb {
         centre: Vec3::new(0.0, 0.0, 0.0),
         axes: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
         half: Vec3::new(0.0, 0.0, 0.0),
+        radius: 0.0,
     };
+
+    /// The box with these centre, axes and half extents.
+    #[inline]
+    pub(crate) fn new(centre: Vec3, axes: Matrix3<f64>, half: Vec3) -> Obb {
+        Obb {
+            centre,
+            axes,
+            half,
+            radius: half.norm(),
+        }
+    }
 
     /// The box with extents `lo..hi` along the columns of `axes` (coordinates
     /// `axesᵀ·p`), or the axis-aligned `aabb` when that is smaller; padded so rounding
@@ -55,11 +69,13 @@ impl Obb {
             (aabb.centre().coords, Matrix3::identity(), ha)
         };
         let pad = 1e-12 * (centre.amax() + half.amax());
-        Obb {
-            centre,
-            axes,
-            half: half.add_scalar(pad),
-        }
+        // thinnest axis first: the separating-axis test tries it first, and a
+        // surface patch's box is most often told apart along its thin side
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&i, &j| half[i].total_cmp(&half[j]));
+        let axes = Matrix3::from_columns(&order.map(|k| axes.column(k).into_owned()));
+        let half = Vec3::from(order.map(|k| half[k]));
+        Obb::new(centre, axes, half.add_scalar(pad))
     }
 }
 
@@ -178,6 +194,50 @@ fn extents(mesh: &Mesh, items: &[Item], axes: &Matrix3<f64>) -> (Vec3, Vec3, Aab
     (lo, hi, aabb)
 }
 
+/// The plane of a triangle: its unit normal as
+/// [`unit_normal`](super::triangle::unit_normal) computes it (zero for a triangle
+/// without area) and the normal's dot product with the first corner (mm).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Plane {
+    pub(crate) normal: Vec3,
+    pub(crate) offset: f64,
+}
+
+impl Plane {
+    pub(crate) fn of(t: &Tri) -> Plane {
+        let normal = unit_normal(t).unwrap_or_else(Vec3::zeros);
+        Plane {
+            normal,
+            offset: normal.dot(&t[0].coords),
+        }
+    }
+
+    /// The plane with unit normal `normal` (or zero) through `p`.
+    #[inline]
+    pub(crate) fn through(normal: &Vec3, p: &Point3) -> Plane {
+        Plane {
+            normal: *normal,
+            offset: normal.dot(&p.coords),
+        }
+    }
+
+    /// Whether the oriented box `o` (same frame) reaches within `margin` mm of the
+    /// plane; a plane without a normal meets nothing (its triangle has no area).
+    /// Conservative against rounding by a bias of 1e-9 of the distances involved.
+    #[inline]
+    pub(crate) fn meets_obb(&self, o: &Obb, margin: f64) -> bool {
+        let n = &self.normal;
+        if *n == Vec3::zeros() {
+            return false;
+        }
+        let c = n.dot(&o.centre) - self.offset;
+        let r = o.half[0] * n.dot(&o.axes.column(0)).abs()
+            + o.half[1] * n.dot(&o.axes.column(1)).abs()
+            + o.half[2] * n.dot(&o.axes.column(2)).abs();
+        c.abs() <= r + margin + 1e-9 * (1.0 + c.abs() + self.offset.abs())
+    }
+}
+
 /// A triangle while the tree is built: its centroid and its index in the mesh.
 type Item = (Point3, u32);
 
@@ -206,6 +266,10 @@ pub struct Collider {
     /// Mesh triangle indices in tree order (zero-area triangles left out): a leaf's
     /// triangles are one run. The corners are read from the mesh, never copied.
     order: Vec<u32>,
+    /// The plane of each triangle in tree order: the static side of a pair query
+    /// reads its planes from here instead of normalising a cross product for every
+    /// pair it tests.
+    planes: Vec<Plane>,
     report: MeshReport,
     radius: f64,
     pub(crate) eps: f64,
@@ -313,10 +377,16 @@ impl Collider {
         tree.obbs.push(Obb::BLANK);
         let _ = tree.build(0, &mut items, 0, &Matrix3::identity());
         let Tree { nodes, obbs, .. } = tree;
+        let order: Vec<u32> = items.into_iter().map(|(_, i)| i).collect();
+        let planes = order
+            .iter()
+            .map(|&i| Plane::of(&mesh.triangle(i as usize)))
+            .collect();
         Ok(Collider {
             nodes,
             obbs,
-            order: items.into_iter().map(|(_, i)| i).collect(),
+            order,
+            planes,
             mesh,
             report,
             radius,
@@ -330,6 +400,12 @@ impl Collider {
     #[inline]
     pub(crate) fn tri(&self, k: usize) -> Tri {
         self.mesh.triangle(self.order[k] as usize)
+    }
+
+    /// The plane of triangle `k` in tree order (part frame).
+    #[inline]
+    pub(crate) fn plane(&self, k: usize) -> &Plane {
+        &self.planes[k]
     }
 
     /// Every (non-degenerate) triangle, in tree order.
@@ -400,6 +476,36 @@ impl Collider {
     /// known to be below `stop` (then the value returned is some distance `< stop`).
     pub fn distance_to_point(&self, p: &Point3, stop: f64) -> f64 {
         self.closest(p, stop).0
+    }
+
+    /// Whether some triangle lies within `eps` mm of `p` (part frame): the same
+    /// answer as `distance_to_point(p, eps) <= eps`, visiting only the nodes whose
+    /// boxes come within `eps` of `p` instead of searching for the nearest triangle.
+    pub(crate) fn within(&self, p: &Point3, eps: f64) -> bool {
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if node.bounds.distance_to_point(p) > eps {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.first as usize..(node.first + node.count) as usize {
+                    if (p - closest_on_triangle(p, &self.tri(k))).norm() <= eps {
+                        return true;
+                    }
+                }
+            } else if top + 2 <= stack.len() {
+                stack[top] = node.first;
+                stack[top + 1] = node.first + 1;
+                top += 2;
+            } else {
+                // deeper than any tree built here (depth ≈ log2 of the leaves)
+                return self.distance_to_point(p, eps) <= eps;
+            }
+        }
+        false
     }
 
     /// The nearest point of the surface to `p` (part frame): its distance (mm), the
@@ -518,9 +624,28 @@ impl Collider {
         }
         // a line lying in a face plane has no defined parity: shift it off by far
         // less than the contact resolution (callers keep points `eps` off the surface)
-        let mut xs = Vec::new();
-        self.x_line_crossings(p.y + 0.0707 * self.eps, p.z + 0.0577 * self.eps, &mut xs);
-        xs.iter().filter(|&&x| x > p.x).count() % 2 == 1
+        let (y0, z0) = (p.y + 0.0707 * self.eps, p.z + 0.0577 * self.eps);
+        // Only crossings beyond `p.x` count: nodes wholly before it are skipped (a
+        // crossing's `x` is a convex combination of its triangle's corners').
+        let mut beyond = 0usize;
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i as usize];
+            let b = &node.bounds;
+            if y0 < b.lo.y || y0 > b.hi.y || z0 < b.lo.z || z0 > b.hi.z || b.hi.x < p.x {
+                continue;
+            }
+            if node.count > 0 {
+                for t in self.leaf_tris(node) {
+                    if x_line_crossing(&t, y0, z0).is_some_and(|x| x > p.x) {
+                        beyond += 1;
+                    }
+                }
+            } else {
+                stack.extend([node.first, node.first + 1]);
+            }
+        }
+        beyond % 2 == 1
     }
 }
 

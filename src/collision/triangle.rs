@@ -23,8 +23,26 @@ pub(crate) type Tri = [Point3; 3];
 ///
 /// Distances within `eps` (mm) of a plane count as on it.
 pub(crate) fn tri_tri(a: &Tri, b: &Tri, eps: f64, oriented: bool) -> Option<f64> {
-    let na = unit_normal(a)?;
-    let nb = unit_normal(b)?;
+    tri_tri_with(a, &unit_normal(a)?, b, &unit_normal(b)?, eps, oriented)
+}
+
+/// [`tri_tri`] with the triangles' unit normals `na`, `nb` given (as
+/// [`unit_normal`] computes them; a zero normal is a triangle without area, which
+/// meets nothing): the same answer, bit for bit, without normalising two cross
+/// products per pair. The pair queries keep the normals of the static side in the
+/// collider and those of the moved side once per query.
+pub(crate) fn tri_tri_with(
+    a: &Tri,
+    na: &Vec3,
+    b: &Tri,
+    nb: &Vec3,
+    eps: f64,
+    oriented: bool,
+) -> Option<f64> {
+    if *na == Vec3::zeros() || *nb == Vec3::zeros() {
+        return None;
+    }
+    let (na, nb) = (*na, *nb);
     let db = [
         snap(na.dot(&(b[0] - a[0])), eps),
         snap(na.dot(&(b[1] - a[0])), eps),

@@ -34,6 +34,7 @@
 
 mod backend;
 pub mod diff;
+mod functions;
 #[cfg(feature = "postgres")]
 mod pg;
 mod query;
@@ -44,7 +45,7 @@ mod skill_log;
 pub use skill_log::SkillLogEntry;
 
 pub use backend::{Dialect, SqlValue};
-pub use query::QueryLimits;
+pub use query::{QueryLimits, RunQueryBudget, RUN_QUERY_BUDGET, SQLITE_HEAP_LIMIT};
 pub use records::*;
 pub use schema::LATEST as SCHEMA_VERSION;
 
@@ -286,6 +287,12 @@ pub enum DbError {
         max_rows: usize,
         /// The byte cap.
         max_bytes: usize,
+    },
+    /// The run's queries used up their shared time budget ([`RunQueryBudget`]).
+    #[error("the queries of this run have used their time budget of {} s (db.query's run budget: {} s, or the largest max_seconds a query of the run asked for; docs/database.md)", .budget.as_secs_f64(), query::RUN_QUERY_BUDGET.as_secs())]
+    QueryBudget {
+        /// The budget that was used up.
+        budget: Duration,
     },
     /// The run was cancelled (a newer save in watch mode) while a query ran.
     #[error("query on {target} cancelled")]

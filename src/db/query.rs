@@ -84,6 +84,60 @@ impl Default for QueryLimits {
     }
 }
 
+/// The time all of a run's queries may take together, by default: a script that calls
+/// an endless query a hundred times stops after this, not after a hundred time limits.
+pub const RUN_QUERY_BUDGET: Duration = Duration::from_secs(60);
+
+/// One time budget for all the queries of a run (a script's `db.query` calls): each
+/// query runs within its own limit and within what is left of the budget; the budget is
+/// [`RUN_QUERY_BUDGET`], or the largest `time` a query of the run asked for when that
+/// is more (so [`QueryLimits::MAX`] stays reachable by one query).
+#[derive(Debug)]
+pub struct RunQueryBudget {
+    inner: Mutex<(Duration, Duration)>,
+}
+
+impl Default for RunQueryBudget {
+    fn default() -> Self {
+        RunQueryBudget {
+            inner: Mutex::new((RUN_QUERY_BUDGET, Duration::ZERO)),
+        }
+    }
+}
+
+impl RunQueryBudget {
+    /// Runs `query` with `limits` cut to what is left of the budget; a query stopped
+    /// by the budget (not by its own limit) is [`DbError::QueryBudget`], and so is any
+    /// query once the budget is used up.
+    pub fn run<T>(
+        &self,
+        limits: QueryLimits,
+        query: impl FnOnce(QueryLimits) -> Result<T, DbError>,
+    ) -> Result<T, DbError> {
+        let (budget, left) = {
+            let mut g = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+            g.0 = g.0.max(limits.time);
+            (g.0, g.0.saturating_sub(g.1))
+        };
+        if left.is_zero() {
+            return Err(DbError::QueryBudget { budget });
+        }
+        let cut = left < limits.time;
+        let start = Instant::now();
+        let result = query(QueryLimits {
+            time: limits.time.min(left),
+            ..limits
+        });
+        let spent = start.elapsed();
+        let mut g = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+        g.1 += spent;
+        match result {
+            Err(DbError::QueryTimeout { .. }) if cut => Err(DbError::QueryBudget { budget }),
+            other => other,
+        }
+    }
+}
+
 /// `1234567` → `1,234,567`.
 pub(crate) fn thousands(n: u64) -> String {
     let s = n.to_string();
@@ -183,11 +237,19 @@ impl Collector {
 
 /// The longest text or blob value a script's SQLite query may build (also bounds
 /// `zeroblob`, `printf` and `group_concat` bombs): the script string limit.
-const MAX_VALUE_BYTES: i32 = 16 << 20;
+pub(crate) const MAX_VALUE_BYTES: i32 = 16 << 20;
 
-/// How many SQLite virtual-machine steps pass between two looks at the clock and
-/// the cancel flag (about a millisecond of work).
-const PROGRESS_STEPS: i32 = 10_000;
+/// How many SQLite virtual-machine steps pass between two looks at the cancel flag
+/// and the clock by the progress handler (a few microseconds of work). The clock is
+/// also watched by time, by a watchdog thread that interrupts the statement at its
+/// deadline however long one step takes ([`SqliteReader::query`]).
+const PROGRESS_STEPS: i32 = 1_000;
+
+/// The most memory SQLite itself may take in a fitup process (page caches, sorts,
+/// temporary tables and indices of every connection), bytes: a query's sort or
+/// temporary table is kept in memory (never in the system's temporary folder,
+/// outside the project) and stops with "out of memory" past this.
+pub const SQLITE_HEAP_LIMIT: i64 = 512 << 20;
 
 /// Introspection pragmas a query may use, with or without an argument (they read the
 /// schema and never change anything).
@@ -313,6 +375,20 @@ pub(crate) struct SqliteReader {
     conn: rusqlite::Connection,
     /// What the authorizer refused last (its messages say more than "not authorized").
     refused: Arc<Mutex<Option<String>>>,
+    /// The running query's deadline and cancel flag, read by fitup's own functions.
+    clock: Arc<super::functions::Clock>,
+}
+
+/// Sets SQLite's process-wide heap limit ([`SQLITE_HEAP_LIMIT`]) once.
+fn limit_sqlite_heap() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // SAFETY: sqlite3_hard_heap_limit64 only sets a number SQLite's allocator
+        // reads; it may be called at any time from any thread.
+        unsafe {
+            rusqlite::ffi::sqlite3_hard_heap_limit64(SQLITE_HEAP_LIMIT);
+        }
+    });
 }
 
 impl SqliteReader {
@@ -333,9 +409,16 @@ impl SqliteReader {
             rusqlite::config::DbConfig::SQLITE_DBCONFIG_TRUSTED_SCHEMA,
             false,
         )?;
-        // A sort or a recursive CTE spills to temporary files past this cache (16 MB)
-        // rather than growing the process.
-        conn.execute_batch("PRAGMA cache_size=-16000")?;
+        // Sorts, temporary tables and indices stay in memory (never a file in the
+        // system's temporary folder, outside the project), under SQLite's heap limit.
+        conn.execute_batch("PRAGMA cache_size=-16000; PRAGMA temp_store=MEMORY")?;
+        limit_sqlite_heap();
+        conn.set_limit(
+            Limit::SQLITE_LIMIT_LIKE_PATTERN_LENGTH,
+            super::functions::MAX_PATTERN_BYTES as i32,
+        )?;
+        let clock = Arc::new(super::functions::Clock::new());
+        super::functions::register(&conn, &clock)?;
         let refused = Arc::new(Mutex::new(None));
         let r = refused.clone();
         conn.authorizer(Some(
@@ -349,7 +432,11 @@ impl SqliteReader {
                 }
             },
         ))?;
-        Ok(SqliteReader { conn, refused })
+        Ok(SqliteReader {
+            conn,
+            refused,
+            clock,
+        })
     }
 
     /// Runs one read-only statement within `limits`; `cancel` stops it when set.
@@ -366,11 +453,12 @@ impl SqliteReader {
         let why = Arc::new(AtomicU8::new(WHY_NONE));
         let deadline = Instant::now() + limits.time;
         let w = why.clone();
+        let c = cancel.clone();
         self.conn
             .progress_handler(
                 PROGRESS_STEPS,
                 Some(move || {
-                    if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+                    if c.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
                         w.store(WHY_CANCEL, Ordering::Relaxed);
                         true
                     } else if Instant::now() > deadline {
@@ -382,12 +470,27 @@ impl SqliteReader {
                 }),
             )
             .map_err(Raw::from)?;
+        self.clock.start(deadline, cancel.clone());
+        // The clock read by time, not by steps: a watchdog interrupts the statement at
+        // its deadline (or when the run is cancelled) however long one step takes,
+        // and is joined before the query returns (an interrupt never reaches the
+        // next statement).
+        let watchdog = Watchdog::start(
+            self.conn.get_interrupt_handle(),
+            deadline,
+            cancel,
+            why.clone(),
+        );
         let result = self.run(sql, params, limits);
+        watchdog.stop();
+        self.clock.stop();
         // A handler left behind would stop the next statement at this one's deadline.
         let _ = self.conn.progress_handler(0, None::<fn() -> bool>);
         result.map_err(|e| match e {
             Stop::Sql(raw) => match why.load(Ordering::Relaxed) {
                 WHY_TIME => Stop::Timeout,
+                // One of fitup's functions saw the deadline before the watchdog did.
+                WHY_NONE if Instant::now() >= deadline => Stop::Timeout,
                 WHY_CANCEL => Stop::Cancelled,
                 _ => match self.refused.lock().ok().and_then(|mut s| s.take()) {
                     Some(reason) => Stop::Refused(reason),
@@ -435,6 +538,49 @@ impl SqliteReader {
             columns,
             rows: out.rows,
         })
+    }
+}
+
+/// The thread that interrupts one statement at its deadline or on cancel.
+struct Watchdog {
+    done: std::sync::mpsc::Sender<()>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Watchdog {
+    /// How often the watchdog looks at the cancel flag.
+    const POLL: Duration = Duration::from_millis(20);
+
+    fn start(
+        handle: rusqlite::InterruptHandle,
+        deadline: Instant,
+        cancel: Option<Arc<AtomicBool>>,
+        why: Arc<AtomicU8>,
+    ) -> Watchdog {
+        let (done, rx) = std::sync::mpsc::channel::<()>();
+        let thread = std::thread::spawn(move || loop {
+            let now = Instant::now();
+            if now >= deadline {
+                why.store(WHY_TIME, Ordering::Relaxed);
+                handle.interrupt();
+                return;
+            }
+            if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+                why.store(WHY_CANCEL, Ordering::Relaxed);
+                handle.interrupt();
+                return;
+            }
+            match rx.recv_timeout((deadline - now).min(Self::POLL)) {
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+                _ => return, // the statement ended
+            }
+        });
+        Watchdog { done, thread }
+    }
+
+    fn stop(self) {
+        let _ = self.done.send(());
+        let _ = self.thread.join();
     }
 }
 

@@ -62,7 +62,8 @@ impl Document {
         };
         crate::fsutil::check_output(path, &rule).map_err(|e| write_error(e.to_string()))?;
         let bytes = self.glb_bytes()?;
-        crate::fsutil::write_checked(path, &bytes).map_err(|e| write_error(e.to_string()))?;
+        // Checked again through the folder handle it is written with.
+        crate::fsutil::write_output(path, &bytes, &rule).map_err(|e| write_error(e.to_string()))?;
         let mut meshes: Vec<*const crate::mesh::Mesh> = (0..self.components().len())
             .map(|i| std::sync::Arc::as_ptr(self.mesh_of(i)))
             .collect();

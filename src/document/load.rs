@@ -287,7 +287,10 @@ impl Loader<'_> {
             .filter(|pf| pf.step.is_none())
             .filter_map(|pf| self.project.resolve_from(&self.dir, &pf.stl).ok())
             .collect();
-        cache.prefetch(&resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>());
+        cache.prefetch_in(
+            self.project,
+            &resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>(),
+        );
         let mut parts = IndexMap::new();
         for (name, pf) in &file.parts {
             parts.insert(name.clone(), self.part(name, pf, cache, warnings)?);
@@ -360,7 +363,7 @@ impl Loader<'_> {
             (mesh, Vec::new(), Some(geometry))
         } else {
             let mesh = cache
-                .get(&mesh_path)
+                .get_in(self.project, &mesh_path)
                 .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
             (mesh, cache.files_of(&mesh_path), None)
         };

@@ -673,17 +673,13 @@ pub fn nfc_name(name: &str) -> std::borrow::Cow<'_, str> {
 /// A name given through the API (a new robot, …) as the document keeps it: NFC, and
 /// refused when it holds a control or invisible character (as in a file).
 pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> {
-    if let Some(c) = name
-        .chars()
-        .find(|&c| crate::diagnostics::hidden_char(c).is_some())
-    {
-        return Err(DocumentError::HiddenCharacter {
+    crate::diagnostics::checked_name(name)
+        .map(std::borrow::Cow::into_owned)
+        .map_err(|c| DocumentError::HiddenCharacter {
             what: what.to_string(),
             name: crate::diagnostics::printable(name, false).into_owned(),
             character: crate::diagnostics::describe_char(c),
-        });
-    }
-    Ok(nfc_name(name).into_owned())
+        })
 }
 
 #[cfg(test)]

@@ -468,7 +468,7 @@ pub(super) fn read_urdf_robot(
             .resolve_from(dir, &resolved.to_string_lossy())
             .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
         let mesh = cache
-            .get(&file)
+            .get_in(project, &file)
             .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
         files.push(file);
         let [sx, sy, sz] = m.scale;

@@ -2,16 +2,32 @@
 //! of a target (up to 8, no limits applied), the expansion into every solution
 //! within the joint limits, the [`ClosedFormIk`] trait that
 //! [`OpwSolver`](super::OpwSolver) (spherical wrists) and
-//! [`UrSolver`](super::UrSolver) (UR-type offset wrists) implement, and the planar
-//! and axis helpers of their derivations. Lengths mm, angles rad, poses in the
-//! robot's root frame.
+//! [`UrSolver`](super::UrSolver) (UR-type offset wrists) implement, and the steps
+//! both derivations take: the canonical frame on axis 1, the arm plane (joint 1 from
+//! the wrist point, joints 2 and 3 as a planar two-link problem), the tolerances that
+//! follow the geometry, and the polish of a branch on the robot's own tree. Lengths
+//! mm, angles rad, poses in the robot's root frame.
+//!
+//! # Tolerances follow the geometry
+//! A closed form solves an *idealized* arm: axes exactly parallel or perpendicular,
+//! wrist axes meeting exactly. Real descriptions are rounded (ROS-Industrial's
+//! `ur_description` writes a roll of `1.570796327`), so the idealized arm differs from
+//! the robot's tree by a model error (`ε_mm`, `ε_rad`) that detection measures on
+//! sample configurations ([`ClosedFormIk::model_error`]). Every decision the closed
+//! form takes at a singularity is taken within that error: the wrist point within
+//! it of the shoulder cylinder is *on* it (one shoulder root, never a false
+//! "unreachable"), the elbow within it of stretched *is* stretched (one elbow root),
+//! axis 6 within it of axes 2–4 (or 4 and 6 of a spherical wrist) *is* aligned (the
+//! free joint keeps the reference's value). Branches near a singularity but outside
+//! those bands are polished on the robot's tree ([`Robot::inverse`]) when the
+//! idealized arm is not exact, since the model error is amplified there.
 
 use super::{
     Configuration, Elbow, IkError, IkOptions, IkSolution, JointKind, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
-use crate::math::Transform;
-use nalgebra::{Isometry3, Point3, Vector3};
+use crate::math::{Rng, Transform};
+use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::{PI, TAU};
 
 /// A closed-form inverse-kinematics solver of a 6R arm: every principal branch of a
@@ -43,6 +59,17 @@ pub trait ClosedFormIk {
     /// reach as detected.
     fn unreachable(&self) -> Unreachable;
 
+    /// How far the solver's idealized arm is from the robot it was detected on: the
+    /// largest TCP position (mm) and orientation (rad) difference between the two over
+    /// sample configurations. ~1e-13 mm for an exact description; ~1e-7 mm for a
+    /// URDF with rounded angles. The singularity tolerances follow it (see the
+    /// module docs).
+    fn model_error(&self) -> ModelError;
+
+    /// The TCP pose (root frame, mm) of the idealized arm the closed form solves, at
+    /// joint values `q` (rad).
+    fn idealized_forward(&self, q: &[f64; 6]) -> Isometry3<f64>;
+
     /// [`branches_seeded`](Self::branches_seeded) with seed 0.
     #[inline]
     fn branches(&self, target: &Isometry3<f64>, singularity_threshold: f64) -> Branches {
@@ -52,7 +79,8 @@ pub trait ClosedFormIk {
     /// All solutions for the TCP pose `target` (root frame, mm) within the joint
     /// limits, with every ±2π variant the limits allow, sorted by Euclidean joint
     /// distance to `reference` (rad); the wrist-singularity seed is the reference's
-    /// [`SEED_JOINT`](Self::SEED_JOINT).
+    /// [`SEED_JOINT`](Self::SEED_JOINT). The idealized arm's solutions, not polished on
+    /// a robot's tree ([`Robot::inverse`](super::Robot::inverse) polishes).
     ///
     /// # Errors
     /// [`IkError::Singular`] when joint 1 or 2 is undetermined (the wrist point on
@@ -63,18 +91,136 @@ pub trait ClosedFormIk {
         target: &Transform,
         reference: &[f64],
         options: &IkOptions,
-    ) -> Result<Vec<IkSolution>, IkError> {
-        let seed = reference.get(Self::SEED_JOINT).copied().unwrap_or(0.0);
-        let branches = self.branches_seeded(target.isometry(), options.singularity_threshold, seed);
-        if branches.is_empty() {
-            return Err(if branches.singular {
-                IkError::Singular(super::Singularity::JointUndetermined)
-            } else {
-                IkError::Unreachable(self.unreachable())
-            });
-        }
-        solutions_within_limits(branches.as_slice(), self.joint_limits(), reference)
+    ) -> Result<Vec<IkSolution>, IkError>
+    where
+        Self: Sized,
+    {
+        solve(self, None, target, reference, options)
     }
+}
+
+/// How far a closed form's idealized arm is from the robot's tree (see
+/// [`ClosedFormIk::model_error`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ModelError {
+    /// Largest TCP position difference (mm).
+    pub mm: f64,
+    /// Largest TCP orientation difference (rad).
+    pub rad: f64,
+}
+
+impl ModelError {
+    /// The idealized arm is the robot up to floating-point rounding: nothing to polish.
+    pub fn is_exact(&self) -> bool {
+        self.mm < 1e-10 && self.rad < 1e-13
+    }
+}
+
+/// The shared steps of [`ClosedFormIk::solve`] and [`Robot::inverse`]: the branches
+/// (seeded with the reference's free joint), the error when there is none, the
+/// polish of near-singular branches on `robot`'s tree when the idealized arm is not
+/// exact, and the expansion into every solution within the limits.
+pub(crate) fn solve<S: ClosedFormIk>(
+    solver: &S,
+    robot: Option<&Robot>,
+    target: &Transform,
+    reference: &[f64],
+    options: &IkOptions,
+) -> Result<Vec<IkSolution>, IkError> {
+    let seed = reference.get(S::SEED_JOINT).copied().unwrap_or(0.0);
+    let mut branches =
+        solver.branches_seeded(target.isometry(), options.singularity_threshold, seed);
+    if branches.is_empty() {
+        return Err(if branches.undetermined {
+            IkError::Singular(super::Singularity::JointUndetermined)
+        } else {
+            IkError::Unreachable(solver.unreachable())
+        });
+    }
+    let model = solver.model_error();
+    if let Some(robot) = robot {
+        if !model.is_exact() {
+            let threshold = options.singularity_threshold;
+            let x = target.isometry();
+            let mut corrected = Vec::new();
+            for b in branches.items[..branches.len]
+                .iter_mut()
+                .filter(|b| b.polish)
+            {
+                corrected.push(polish(solver, robot, x, threshold, seed, b));
+            }
+            // Far from the tree's solution (a near-singular wrist turns the model
+            // error into large joint errors) the first pass can miss a branch whose
+            // wrist point it put beyond the reach; asked for a corrected target the
+            // idealized arm finds it: such branches are polished and kept if they
+            // reach the target (provisional).
+            for y in corrected {
+                let again = solver.branches_seeded(&y, threshold, seed);
+                for c in again.as_slice() {
+                    if branches
+                        .as_slice()
+                        .iter()
+                        .any(|b| b.configuration == c.configuration)
+                    {
+                        continue;
+                    }
+                    let mut c = *c;
+                    polish(solver, robot, x, threshold, seed, &mut c);
+                    c.provisional = true;
+                    branches.push(c);
+                }
+            }
+            // The solution at the reference, unless another branch holds it already
+            // (near a shoulder or elbow singularity distinct branches are close).
+            for i in 0..branches.len {
+                if !branches.items[i].polish {
+                    continue;
+                }
+                let Some(q) = toward_reference(robot, x, reference, &branches.items[i]) else {
+                    continue;
+                };
+                let taken = branches.as_slice().iter().enumerate().any(|(j, b)| {
+                    j != i
+                        && b.joints
+                            .iter()
+                            .zip(&q)
+                            .all(|(u, v)| wrap(u - v).abs() < 1e-7)
+                });
+                if !taken {
+                    branches.items[i].joints = q;
+                }
+            }
+        }
+    }
+    // Provisional branches stay only if they reach the target (within the model
+    // error, against the tree; within rounding, against the idealized arm).
+    if branches.as_slice().iter().any(|b| b.provisional) {
+        let (mm, rad) = match robot {
+            Some(_) => (8.0 * model.mm + 1e-9, 8.0 * model.rad + 1e-12),
+            None => (1e-9, 1e-12),
+        };
+        let mut kept = Branches::new();
+        for b in branches.as_slice() {
+            let pose = match robot {
+                Some(r) => r.tcp_in_root(&b.joints),
+                None => solver.idealized_forward(&b.joints),
+            };
+            let d = target.isometry().rotation * pose.rotation.inverse();
+            let ok = (target.isometry().translation.vector - pose.translation.vector).norm() <= mm
+                && 2.0 * d.imag().norm().min(1.0).asin() <= rad;
+            if !b.provisional || ok {
+                kept.push(*b);
+            }
+        }
+        kept.singular = branches.singular;
+        kept.undetermined = branches.undetermined;
+        kept.out_of_reach = true;
+        branches = kept;
+        if branches.is_empty() {
+            return Err(IkError::Unreachable(solver.unreachable()));
+        }
+    }
+    solutions_within_limits(branches.as_slice(), solver.joint_limits(), reference)
 }
 
 /// The configuration tag of one principal branch.
@@ -88,6 +234,13 @@ pub struct Branch {
     /// are ill-conditioned; at the singularity itself joint 5 is exactly φ₅ (0 for the
     /// usual wrist) and joint 4 keeps the seed (see [`ClosedFormIk::branches_seeded`]).
     pub singular: bool,
+    /// Near a singularity but outside the model-error bands: the idealized arm's
+    /// error is amplified here, so [`Robot::inverse`] polishes the branch on the tree.
+    pub(crate) polish: bool,
+    /// Accepted only within the widened reach of a near-singular wrist (see
+    /// [`ArmPlane::elbow`]): kept by [`solve`] only if it reaches the target after the
+    /// polish (on the robot's tree, or on the idealized arm without a robot).
+    pub(crate) provisional: bool,
 }
 
 /// Up to eight principal branches (joint values in (−π, π], no limits applied), in a
@@ -100,6 +253,9 @@ pub struct Branches {
     /// [`Branch::singular`] (wrist), or branches were dropped because joint 1 or
     /// joint 2 is undetermined (wrist centre on axis 1 or on axis 2).
     pub singular: bool,
+    /// Branches were dropped because joint 1 or joint 2 is undetermined (the wrist
+    /// point on axis 1 or on axis 2).
+    pub undetermined: bool,
     /// Some branch was dropped because the wrist centre is out of reach.
     pub out_of_reach: bool,
 }
@@ -113,6 +269,8 @@ impl Branches {
             wrist: Wrist::NoFlip,
         },
         singular: false,
+        polish: false,
+        provisional: false,
     };
 
     pub(crate) fn new() -> Self {
@@ -120,6 +278,7 @@ impl Branches {
             items: [Self::EMPTY_BRANCH; 8],
             len: 0,
             singular: false,
+            undetermined: false,
             out_of_reach: false,
         }
     }
@@ -189,6 +348,467 @@ pub(crate) const PARALLEL_TOL: f64 = 1e-9;
 /// 1e-10 rad.
 pub(crate) const WRIST_SNAP: f64 = 1e-10;
 pub(crate) const DISTANCE_TOL: f64 = 1e-6;
+
+/// Branches nearer a singularity than this (the sine of the wrist or elbow angle,
+/// the shoulder root over the wrist point's radius) are polished on the robot's tree
+/// when the idealized arm is not exact: the model error divided by this stays below
+/// 1e-7 rad elsewhere for any rounded description (model errors ≲ 1e-9 rad).
+pub(crate) const POLISH_NEAR: f64 = 1e-2;
+
+/// The canonical frame C of a closed form (returned as root ← C): origin on axis 1
+/// (`p1`), `z = a1`, `x ⟂ a2` on the side of `w` (the wrist point at zero) or, when
+/// `w` lies on axis 1, of `p3` (axis 3's point), `y = z × x` (axes 2 and 3 are `±y`).
+pub(crate) fn canonical_frame(
+    a1: Vector3<f64>,
+    p1: Point3<f64>,
+    a2: Vector3<f64>,
+    w: Point3<f64>,
+    p3: Point3<f64>,
+) -> Isometry3<f64> {
+    let ez = a1;
+    let mut ex = a2.cross(&ez).normalize();
+    let side = (w - p1).dot(&ex);
+    let side = if side.abs() > DISTANCE_TOL {
+        side
+    } else {
+        (p3 - p1).dot(&ex)
+    };
+    if side < -DISTANCE_TOL {
+        ex = -ex;
+    }
+    let ey = ez.cross(&ex);
+    let rc = Matrix3::from_columns(&[ex, ey, ez]);
+    Isometry3::from_parts(
+        Translation3::from(p1.coords),
+        UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rc)),
+    )
+}
+
+/// The arm plane of both closed forms, in the canonical frame C: axes 2 and 3 are
+/// parallel to `y` and cross the `xz` plane at `p2` and `p2 + u2`; the wrist point
+/// (OPW: the wrist centre; UR: where axes 4 and 5 meet) is at `p2 + u2 + u3` at zero
+/// and keeps `y = b`. Joint 1 comes from the wrist point's distance to axis 1, joints
+/// 2 and 3 from a planar two-link problem. Lengths mm.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ArmPlane {
+    /// Axis 2 in the arm plane (x, z).
+    pub(crate) p2: [f64; 2],
+    /// Upper arm (axis 2 → axis 3) and forearm (axis 3 → wrist point) at zero, (x, z).
+    pub(crate) u2: [f64; 2],
+    pub(crate) u3: [f64; 2],
+    /// Lateral offset of the wrist point along y.
+    pub(crate) b: f64,
+    /// |u2|² + |u3|², 2|u2||u3|.
+    len_sq: f64,
+    len_prod2: f64,
+    /// Angle from u2 to u3, its sine and cosine.
+    pub(crate) gamma: f64,
+    sg: f64,
+    cg: f64,
+    /// Reach of the wrist point from axis 2.
+    pub(crate) reach: [f64; 2],
+}
+
+/// One root of joint 1 (see [`ArmPlane::shoulder`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct ShoulderRoot {
+    /// The wrist point's abscissa in the arm plane (mm).
+    pub(crate) xp: f64,
+    /// Sine, cosine and value of joint 1 (rad).
+    pub(crate) s1: f64,
+    pub(crate) c1: f64,
+    pub(crate) q1: f64,
+    /// Front (x' ≥ 0) or back.
+    pub(crate) front: bool,
+    /// |x'| / ρ: distance to the shoulder singularity (0 there).
+    pub(crate) margin: f64,
+    /// Taken as exactly singular (within the model error).
+    pub(crate) snapped: bool,
+}
+
+/// One root of joints 2 and 3 (see [`ArmPlane::elbow`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct ElbowRoot {
+    /// Geometric angles of axes 2 and 3 about C's y (rad), and sine, cosine of their sum.
+    pub(crate) th2: f64,
+    pub(crate) th3: f64,
+    pub(crate) s23: f64,
+    pub(crate) c23: f64,
+    /// The first (`el = +1`) root.
+    pub(crate) first: bool,
+    /// Sine of the elbow angle: distance to stretched or folded (0 there).
+    pub(crate) margin: f64,
+    /// Beyond the reach by more than the position band (within `slack`).
+    pub(crate) beyond: bool,
+    /// Taken as exactly stretched or folded (within the model error).
+    pub(crate) snapped: bool,
+}
+
+impl ArmPlane {
+    /// The arm plane from axis 2's and 3's points and the wrist point at zero, in C
+    /// (mm); `None` when the upper arm or the forearm has zero length.
+    pub(crate) fn new(p2: Point3<f64>, p3: Point3<f64>, w: Point3<f64>) -> Option<Self> {
+        let u2 = [p3.x - p2.x, p3.z - p2.z];
+        let u3 = [w.x - p3.x, w.z - p3.z];
+        let (l2, l3) = (u2[0].hypot(u2[1]), u3[0].hypot(u3[1]));
+        if l2 < DISTANCE_TOL || l3 < DISTANCE_TOL {
+            return None;
+        }
+        let gamma = ang(u3) - ang(u2);
+        Some(Self {
+            p2: [p2.x, p2.z],
+            u2,
+            u3,
+            b: w.y,
+            len_sq: l2 * l2 + l3 * l3,
+            len_prod2: 2.0 * l2 * l3,
+            gamma,
+            sg: gamma.sin(),
+            cg: gamma.cos(),
+            reach: [(l2 - l3).abs(), l2 + l3],
+        })
+    }
+
+    /// The wrist point in the arm plane (x, z) at geometric angles `th2`, `th3` (rad).
+    pub(crate) fn wrist(&self, th2: f64, th3: f64) -> [f64; 2] {
+        let (st, ct) = th3.sin_cos();
+        let (s2, c2) = th2.sin_cos();
+        let f = rot2(self.u3, st, ct);
+        let arm = rot2([self.u2[0] + f[0], self.u2[1] + f[1]], s2, c2);
+        [self.p2[0] + arm[0], self.p2[1] + arm[1]]
+    }
+
+    /// Joint 1 for the wrist point `w` (C, mm): `Rz(−q₁)·w = (x', b, ·)` with
+    /// `x' = ±√(ρ² − b²)`, front first. Within the model error of the shoulder
+    /// cylinder (`ρ = |b|`) the one double root `x' = 0`; beyond it out of reach (flag
+    /// set in `out`); on axis 1 with no offset joint 1 is undetermined (flags set).
+    #[inline]
+    pub(crate) fn shoulder(
+        &self,
+        w: &Vector3<f64>,
+        tol: &Tolerances,
+        threshold: f64,
+        out: &mut Branches,
+    ) -> ([ShoulderRoot; 2], usize) {
+        let mut roots = [ShoulderRoot::default(); 2];
+        let rho_sq = w.x * w.x + w.y * w.y;
+        let disc = rho_sq - self.b * self.b;
+        if disc < -tol.disc {
+            out.out_of_reach = true;
+            return (roots, 0);
+        }
+        let rho = rho_sq.sqrt();
+        let snapped = disc <= tol.disc;
+        // |(x', b)| = ρ, or |b| where ρ is snapped onto the cylinder.
+        let norm = if snapped { rho * self.b.abs() } else { rho_sq };
+        if (rho < threshold * tol.scale && self.b.abs() < DISTANCE_TOL) || norm <= 0.0 {
+            out.singular = true;
+            out.undetermined = true;
+            return (roots, 0);
+        }
+        let root = if snapped { 0.0 } else { disc.sqrt() };
+        let mut n = 0;
+        for sh in [1.0_f64, -1.0] {
+            if sh < 0.0 && snapped {
+                break;
+            }
+            let xp = sh * root;
+            let (s1, c1) = (
+                (xp * w.y - self.b * w.x) / norm,
+                (xp * w.x + self.b * w.y) / norm,
+            );
+            roots[n] = ShoulderRoot {
+                xp,
+                s1,
+                c1,
+                q1: s1.atan2(c1),
+                front: sh > 0.0,
+                margin: root / rho,
+                snapped,
+            };
+            n += 1;
+        }
+        (roots, n)
+    }
+
+    /// Joints 2 and 3 putting the wrist point at `p2 + d` (arm plane, mm):
+    /// `|u₂ + R(θ₃)u₃| = |d|`, `θ₃ = ±acos κ − γ`, θ₂ turning `u₂ + R(θ₃)u₃` onto
+    /// `d`. With `|d|` within the position band `tol.len` of the longest or shortest
+    /// reach (stretched or folded) the one double root; beyond the reach by up to
+    /// `slack` (mm, at least `tol.len`: where the wrist amplifies the model error the
+    /// wrist point itself is that uncertain) the same double root, to be polished;
+    /// farther nothing (flag set); `d` on axis 2 leaves joint 2 undetermined (flags
+    /// set).
+    #[inline]
+    pub(crate) fn elbow(
+        &self,
+        d: [f64; 2],
+        slack: f64,
+        tol: &Tolerances,
+        out: &mut Branches,
+    ) -> ([ElbowRoot; 2], usize) {
+        let mut roots = [ElbowRoot::default(); 2];
+        let d2 = d[0] * d[0] + d[1] * d[1];
+        let [lo, hi] = self.reach;
+        let (band, slack) = (tol.len, slack.max(tol.len));
+        // Bands in length, not in κ: snapping κ moves the wrist point by
+        // Δκ·2|u2||u3| / 2|d|, which is large where |d| is short (folded).
+        if d2 > (hi + slack) * (hi + slack) || (lo > slack && d2 < (lo - slack) * (lo - slack)) {
+            out.out_of_reach = true;
+            return (roots, 0);
+        }
+        let beyond =
+            d2 > (hi + band) * (hi + band) || (lo > band && d2 < (lo - band) * (lo - band));
+        let (kappa, snapped) = if d2 >= (hi - band) * (hi - band) {
+            (1.0, true)
+        } else if d2 <= (lo + band) * (lo + band) {
+            (-1.0, true)
+        } else {
+            (
+                ((d2 - self.len_sq) / self.len_prod2).clamp(-1.0, 1.0),
+                false,
+            )
+        };
+        let sk = if snapped {
+            0.0
+        } else {
+            (1.0 - kappa * kappa).sqrt()
+        };
+        let acos_k = kappa.acos();
+        let mut n = 0;
+        for el in [1.0_f64, -1.0] {
+            if el < 0.0 && snapped {
+                break;
+            }
+            // θ = el·acos κ − γ, its sine and cosine by the angle difference.
+            let (sa, ca) = (el * sk, kappa);
+            let (st, ct) = (sa * self.cg - ca * self.sg, ca * self.cg + sa * self.sg);
+            let f = rot2(self.u3, st, ct);
+            let v = [self.u2[0] + f[0], self.u2[1] + f[1]];
+            // Angle from v to d about +y.
+            let crs = d[0] * v[1] - d[1] * v[0];
+            let dot = d[0] * v[0] + d[1] * v[1];
+            let nrm = crs.hypot(dot);
+            if nrm < 1e-12 * tol.scale * tol.scale {
+                // The wrist point on axis 2: joint 2 undetermined.
+                out.singular = true;
+                out.undetermined = true;
+                continue;
+            }
+            let (s2a, c2a) = (crs / nrm, dot / nrm);
+            roots[n] = ElbowRoot {
+                th2: crs.atan2(dot),
+                th3: el * acos_k - self.gamma,
+                s23: s2a * ct + c2a * st,
+                c23: c2a * ct - s2a * st,
+                first: el > 0.0,
+                margin: sk,
+                beyond,
+                snapped,
+            };
+            n += 1;
+        }
+        (roots, n)
+    }
+}
+
+/// The singularity bands of one closed form, from its model error (see the module
+/// docs). Lengths mm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Tolerances {
+    /// The measured model error.
+    pub(crate) model: ModelError,
+    /// Length scale of the arm (1 mm + reach + wrist offsets).
+    pub(crate) scale: f64,
+    /// Position band: four times the model error plus rounding.
+    pub(crate) len: f64,
+    /// Band of ρ² − b² around the shoulder cylinder (mm²): ρ within `len` of |b|.
+    pub(crate) disc: f64,
+    /// Band of the wrist sine around 0.
+    pub(crate) wrist: f64,
+    /// Orientation band (rad): four times the model error plus rounding.
+    pub(crate) ang: f64,
+}
+
+impl Tolerances {
+    /// The bands of an arm whose idealized form is `model` away from the tree;
+    /// `lever` (mm) is the wrist's extent beyond the wrist point (UR: |e5|).
+    pub(crate) fn new(arm: &ArmPlane, model: ModelError, lever: f64) -> Self {
+        let scale = 1.0 + arm.reach[1] + lever;
+        // The closed forms' own rounding reaches ~2e-10 mm on metre arms near a
+        // shoulder singularity (x' = √(ρ² − b²) amplifies the target's last digits).
+        let len = 4.0 * model.mm + 1e-12 * scale;
+        let b = arm.b.abs();
+        // Joint 1 moves the wrist sine through the wrist point's angle about axis 1,
+        // wrong by up to len / ρ (ρ ≥ |b|, and the forearm for arms without offset).
+        let lever1 = b.max(0.1 * arm.reach[0].max(0.1 * arm.reach[1]));
+        Self {
+            model,
+            scale,
+            len,
+            disc: 2.0 * b * len + len * len + 1e-16 * scale * scale,
+            wrist: WRIST_SNAP.max(4.0 * model.rad + 2.0 * len / lever1),
+            ang: 4.0 * model.rad + 1e-15,
+        }
+    }
+}
+
+/// The model error of a closed form whose forward kinematics (root frame) is
+/// `forward`, against `robot`'s tree: the zero configuration and 32 seeded ones.
+pub(crate) fn measure_model_error(
+    robot: &Robot,
+    forward: impl Fn(&[f64; 6]) -> Isometry3<f64>,
+) -> ModelError {
+    let mut rng = Rng::new(0xcf1d);
+    let mut e = ModelError::default();
+    for k in 0..33 {
+        let mut q = [0.0; 6];
+        if k > 0 {
+            for v in &mut q {
+                *v = rng.range(-PI, PI);
+            }
+        }
+        let a = forward(&q);
+        let b = robot.tcp_in_root(&q);
+        e.mm =
+            e.mm.max((a.translation.vector - b.translation.vector).norm());
+        // 2·asin(|imag|) keeps small angles that acos of the scalar part rounds away.
+        let d = a.rotation.inverse() * b.rotation;
+        e.rad = e.rad.max(2.0 * d.imag().norm().min(1.0).asin());
+    }
+    e
+}
+
+/// Takes a closed-form branch of the idealized arm to the robot's own tree: the
+/// tree's pose at `branch` differs from `target` by the model error, so the
+/// idealized arm is asked again for the target corrected by that difference
+/// (`Y ← Y·T(q)⁻¹·X`, the same branch by its configuration), until the tree's pose
+/// stops improving (at most four rounds). The correction varies with the joints
+/// only at the model error's own scale, so this converges where a Newton step on the
+/// near-singular Jacobian would overshoot along its valley. Returns the corrected
+/// target for the final branch (where the idealized arm's other branches near this
+/// one are found too).
+pub(crate) fn polish<S: ClosedFormIk>(
+    solver: &S,
+    robot: &Robot,
+    target: &Isometry3<f64>,
+    threshold: f64,
+    seed: f64,
+    branch: &mut Branch,
+) -> Isometry3<f64> {
+    let residual = |q: &[f64; 6]| {
+        let c = robot.tcp_in_root(q);
+        let d = target.rotation * c.rotation.inverse();
+        let e = (target.translation.vector - c.translation.vector).norm()
+            + 2.0 * super::NumericIk::LENGTH_SCALE * d.imag().norm();
+        (c, e)
+    };
+    let (mut real, mut err) = residual(&branch.joints);
+    // The tree's pose is E·(the idealized arm's) with E varying slowly with the
+    // joints: ask the idealized arm for E⁻¹·target, E from the current branch (its
+    // own idealized pose, not the target it was asked for: a branch taken as
+    // stretched within the reach slack does not reach that one).
+    let corrected =
+        |q: &[f64; 6], real: &Isometry3<f64>| solver.idealized_forward(q) * real.inverse() * target;
+    for _ in 0..6 {
+        if err == 0.0 {
+            break;
+        }
+        let asked = corrected(&branch.joints, &real);
+        let again = solver.branches_seeded(&asked, threshold, seed);
+        let Some(next) = again
+            .as_slice()
+            .iter()
+            .filter(|b| b.configuration == branch.configuration)
+            .min_by(|a, b| {
+                let d = |x: &Branch| -> f64 {
+                    x.joints
+                        .iter()
+                        .zip(&branch.joints)
+                        .map(|(u, v)| wrap(u - v).abs())
+                        .sum()
+                };
+                d(a).total_cmp(&d(b))
+            })
+        else {
+            break;
+        };
+        let (r, e) = residual(&next.joints);
+        if e.is_nan() || e >= err {
+            break;
+        }
+        branch.joints = next.joints;
+        real = r;
+        err = e;
+    }
+    corrected(&branch.joints, &real)
+}
+
+/// Near a singularity a description that is not exactly the idealized arm has
+/// solutions in close pairs (a general 6R arm has up to 16; the idealized arm's
+/// double roots split by the model error): the polished branch may be the partner
+/// of the one at `reference`, a few 1e-6 rad away. When `reference` is that close
+/// to the branch (every joint within 1e-4 rad, modulo 2π), Newton steps on the tree
+/// started from the reference find the solution there: returned when it reaches the
+/// target as well as the branch and stays that close.
+fn toward_reference(
+    robot: &Robot,
+    target: &Isometry3<f64>,
+    reference: &[f64],
+    branch: &Branch,
+) -> Option<[f64; 6]> {
+    const NEAR: f64 = 1e-4;
+    if reference.len() < 6 || robot.dof() != 6 {
+        return None;
+    }
+    let mut q = [0.0; 6];
+    for (k, v) in q.iter_mut().enumerate() {
+        let d = wrap(reference[k] - branch.joints[k]);
+        if d.is_nan() || d.abs() >= NEAR {
+            return None;
+        }
+        *v = branch.joints[k] + d;
+    }
+    let s = super::NumericIk::LENGTH_SCALE;
+    let error = |q: &[f64; 6]| {
+        let c = robot.tcp_in_root(q);
+        let dp = target.translation.vector - c.translation.vector;
+        let dr = (target.rotation * c.rotation.inverse()).scaled_axis() * s;
+        nalgebra::Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
+    };
+    let start = error(&branch.joints).norm();
+    let mut e = error(&q);
+    for _ in 0..8 {
+        if e.norm() <= start.min(1e-12) {
+            break;
+        }
+        let mut jac = super::NumericIk::jacobian(robot, &q);
+        for col in 0..6 {
+            for row in 3..6 {
+                jac[(row, col)] *= s;
+            }
+        }
+        let rhs = nalgebra::DVector::from_column_slice(e.as_slice());
+        let Ok(dq) = jac.svd(true, true).solve(&rhs, 1e-14 * s) else {
+            return None;
+        };
+        let mut next = q;
+        for (k, v) in next.iter_mut().enumerate() {
+            *v += dq[k];
+        }
+        let en = error(&next);
+        if en.norm().is_nan() || en.norm() >= e.norm() {
+            break;
+        }
+        q = next;
+        e = en;
+    }
+    let stays = q
+        .iter()
+        .zip(&branch.joints)
+        .all(|(a, b)| (a - b).abs() < NEAR);
+    (stays && e.norm() <= start.max(1e-12)).then(|| q.map(wrap))
+}
 
 /// Six joint axis lines: unit direction and a point (mm).
 pub(crate) type AxisLines = [(Vector3<f64>, Point3<f64>); 6];

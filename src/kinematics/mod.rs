@@ -30,7 +30,7 @@ mod ur;
 mod urdf;
 
 pub use catalog::{catalog_names, robot_by_name, Catalog};
-pub use closed_form::{Branch, Branches, ClosedFormIk};
+pub use closed_form::{Branch, Branches, ClosedFormIk, ModelError};
 pub use dh::{DhConvention, DhRow};
 pub use drilling::{
     drill_program, hole_tool_pose, parse_holes, read_holes, DrillError, DrillOptions, DrillReport,
@@ -54,7 +54,7 @@ pub use program::{
     parse_program, read_program, run_program, Instruction, Program, ProgramError, ProgramLine,
     ProgramRunError,
 };
-pub use robot::{IkSolverKind, Robot};
+pub use robot::{IkSolver, IkSolverKind, Robot};
 pub use trajectory::{Trajectory, TrajectorySample};
 pub use tree::{KinematicTree, Link};
 pub use ur::{NotUr, UrParameters, UrSolver};

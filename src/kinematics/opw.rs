@@ -41,15 +41,15 @@
 //! (`sin(acos(a₄·t)) = 0`) axes 4 and 6 line up: the wrist singularity.
 
 use super::closed_form::{
-    ang, rot2, rot_vec, wrap, zero_axis_lines, DISTANCE_TOL, PARALLEL_TOL, WRIST_SNAP,
+    canonical_frame, measure_model_error, rot_vec, wrap, zero_axis_lines, ArmPlane, ModelError,
+    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
+use super::ur::snap_phi;
 use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointKind, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
-use nalgebra::{
-    Isometry3, Matrix3, Point3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3,
-};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 /// Why a robot does not qualify for the closed-form solver.
@@ -85,19 +85,8 @@ pub struct OpwSolver {
     root_from_c: Isometry3<f64>,
     /// C ← root frame.
     c_from_root: Isometry3<f64>,
-    /// Axis 2 in the arm plane (x, z), mm.
-    p2: [f64; 2],
-    /// Upper arm (axis 2 → axis 3) and forearm (axis 3 → wrist centre) at zero, (x, z).
-    u2: [f64; 2],
-    u3: [f64; 2],
-    /// Lateral offset of the wrist centre along y (mm).
-    b: f64,
-    /// |u2|² + |u3|², 2|u2||u3|, angle from u2 to u3.
-    len_sq: f64,
-    len_prod2: f64,
-    gamma: f64,
-    /// Reach limits of the wrist centre from axis 2 (mm).
-    reach: [f64; 2],
+    /// Axes 2, 3 and the wrist centre in the arm plane.
+    arm: ArmPlane,
     s2: f64,
     s3: f64,
     /// Wrist axes at zero in C.
@@ -110,15 +99,13 @@ pub struct OpwSolver {
     phi5: f64,
     s_phi5: f64,
     c_phi5: f64,
-    /// Sine and cosine of γ.
-    sg: f64,
-    cg: f64,
     /// Wrist centre in the TCP frame.
     w_tcp: Vector3<f64>,
     /// R0ᵀ·a6 and R0ᵀ·a5 (R0: TCP rotation at zero in C), and R0 as a quaternion.
     r0t_a6: Vector3<f64>,
     r0t_a5: Vector3<f64>,
     q0: Quaternion<f64>,
+    tol: Tolerances,
     limits: [Option<JointLimits>; 6],
 }
 
@@ -170,70 +157,32 @@ impl OpwSolver {
             return Err(NotOpw::WristNotOrthogonal);
         }
         // Canonical frame C on axis 1.
-        let ez = a1;
-        let ey0 = a2;
-        let mut ex = ey0.cross(&ez).normalize();
-        let side = (w0 - p1).dot(&ex);
-        let side = if side.abs() > DISTANCE_TOL {
-            side
-        } else {
-            (p3 - p1).dot(&ex)
-        };
-        if side < -DISTANCE_TOL {
-            ex = -ex;
-        }
-        let ey = ez.cross(&ex);
-        let rc = Matrix3::from_columns(&[ex, ey, ez]);
-        let root_from_c = Isometry3::from_parts(
-            Translation3::from(p1.coords),
-            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rc)),
-        );
+        let root_from_c = canonical_frame(a1, p1, a2, w0, p3);
         let c_from_root = root_from_c.inverse();
+        let ey = root_from_c.rotation * Vector3::y();
         let inc = |p: &Point3<f64>| c_from_root * p;
-        let (q2, q3, qw) = (inc(&p2), inc(&p3), inc(&w0));
-        let p2c = [q2.x, q2.z];
-        let u2 = [q3.x - q2.x, q3.z - q2.z];
-        let u3 = [qw.x - q3.x, qw.z - q3.z];
-        let (l2, l3) = (u2[0].hypot(u2[1]), u3[0].hypot(u3[1]));
-        if l2 < DISTANCE_TOL || l3 < DISTANCE_TOL {
-            return Err(NotOpw::Degenerate);
-        }
+        let arm = ArmPlane::new(inc(&p2), inc(&p3), inc(&w0)).ok_or(NotOpw::Degenerate)?;
+        // The idealized wrist: a5 ⟂ a4, a6 ⟂ a5.
         let to_c = |v: &Vector3<f64>| c_from_root.rotation * v;
-        let (a4c, a5c, a6c) = (to_c(&a4), to_c(&a5), to_c(&a6));
+        let a4c = to_c(&a4);
+        let a5c = to_c(&a5);
+        let a5c = (a5c - a4c * a4c.dot(&a5c)).normalize();
+        let a6c = to_c(&a6);
+        let a6c = (a6c - a5c * a5c.dot(&a6c)).normalize();
         let limits_v = robot.joint_limits();
         let mut limits = [None; 6];
         limits.copy_from_slice(&limits_v[..6]);
         let tcp0_c = c_from_root * tcp0;
-        let gamma = ang(u3) - ang(u2);
-        let phi5 = a4c.dot(&a5c.cross(&a6c)).atan2(a4c.dot(&a6c));
-        // Axes built by rotations carry rounding: the usual wrist has φ5 = 0 (or π)
-        // exactly, so that singular targets give joint 5 exactly 0.
-        let phi5 = if phi5.abs() < 1e-12 {
-            0.0
-        } else if (phi5.abs() - PI).abs() < 1e-12 {
-            PI
-        } else {
-            phi5
-        };
-        Ok(Self {
+        let phi5 = snap_phi(a4c.dot(&a5c.cross(&a6c)).atan2(a4c.dot(&a6c)));
+        let mut solver = Self {
             root_from_c,
             c_from_root,
-            p2: p2c,
-            u2,
-            u3,
-            b: qw.y,
-            len_sq: l2 * l2 + l3 * l3,
-            len_prod2: 2.0 * l2 * l3,
-            gamma,
-            reach: [(l2 - l3).abs(), l2 + l3],
             s2: ey.dot(&a2).signum(),
             s3: ey.dot(&a3).signum(),
             a5x6: a5c.cross(&a6c),
             phi5,
             s_phi5: phi5.sin(),
             c_phi5: phi5.cos(),
-            sg: gamma.sin(),
-            cg: gamma.cos(),
             a4: a4c,
             a5: a5c,
             a6: a6c,
@@ -241,23 +190,24 @@ impl OpwSolver {
             r0t_a6: tcp0_c.rotation.inverse() * a6c,
             r0t_a5: tcp0_c.rotation.inverse() * a5c,
             q0: *tcp0_c.rotation.quaternion(),
+            tol: Tolerances::new(&arm, ModelError::default(), 0.0),
+            arm,
             limits,
-        })
+        };
+        let model = measure_model_error(robot, |q| solver.forward(q));
+        solver.tol = Tolerances::new(&solver.arm, model, 0.0);
+        Ok(solver)
     }
 
     /// TCP pose in the root frame for joint values `q` (rad), in closed form.
     pub fn forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
         let th = self.s3 * q[2];
         let th2 = self.s2 * q[1];
-        let (st, ct) = th.sin_cos();
-        let (s2, c2) = th2.sin_cos();
-        let f = rot2(self.u3, st, ct);
-        let arm = rot2([self.u2[0] + f[0], self.u2[1] + f[1]], s2, c2);
-        let (x, z) = (self.p2[0] + arm[0], self.p2[1] + arm[1]);
+        let [x, z] = self.arm.wrist(th2, th);
         // Half angles build the rotation as a quaternion product (cheaper than matrices).
         let (sh1, ch1) = (0.5 * q[0]).sin_cos();
         let (s1, c1) = (2.0 * sh1 * ch1, ch1 * ch1 - sh1 * sh1);
-        let w = Vector3::new(c1 * x - s1 * self.b, s1 * x + c1 * self.b, z);
+        let w = Vector3::new(c1 * x - s1 * self.arm.b, s1 * x + c1 * self.arm.b, z);
         let (sh23, ch23) = (0.5 * (th + th2)).sin_cos();
         let quat = |axis: &Vector3<f64>, angle: f64| {
             let (s, c) = (0.5 * angle).sin_cos();
@@ -278,7 +228,8 @@ impl OpwSolver {
     /// forearm vectors in the arm plane `(x, z)` (mm), and the signs of axes 2, 3
     /// relative to the canonical `y`: the detected ortho-parallel parameters.
     pub fn parameters(&self) -> ([f64; 2], [f64; 2], [f64; 2], f64, [f64; 2]) {
-        (self.p2, self.u2, self.u3, self.b, [self.s2, self.s3])
+        let a = &self.arm;
+        (a.p2, a.u2, a.u3, a.b, [self.s2, self.s3])
     }
 }
 
@@ -317,66 +268,23 @@ impl ClosedFormIk for OpwSolver {
         // Only Rw·a6 and Rw·a5 are needed: R_E·a = R_X·(R0ᵀ·a), the bracket precomputed.
         let re_a6 = rx * self.r0t_a6;
         let re_a5 = rx * self.r0t_a5;
-        let rho_sq = w.x * w.x + w.y * w.y;
-        let disc = rho_sq - self.b * self.b;
-        let scale = 1.0 + self.reach[1];
-        if disc < -1e-12 * scale * scale {
-            out.out_of_reach = true;
-            return out;
-        }
-        if rho_sq.sqrt() < singularity_threshold * scale && self.b.abs() < DISTANCE_TOL {
-            out.singular = true;
-            return out;
-        }
-        let root = disc.max(0.0).sqrt();
-        for sh in [1.0_f64, -1.0] {
-            if sh < 0.0 && root < 1e-12 * scale {
-                // Both shoulder roots coincide: the second is a duplicate.
-                break;
-            }
-            let xp = sh * root;
-            // Rz(q1)·(x', b) = (Wx, Wy).
-            let (s1, c1) = (
-                (xp * w.y - self.b * w.x) / rho_sq,
-                (xp * w.x + self.b * w.y) / rho_sq,
-            );
-            let q1 = s1.atan2(c1);
-            let d = [xp - self.p2[0], w.z - self.p2[1]];
-            let kappa = (d[0] * d[0] + d[1] * d[1] - self.len_sq) / self.len_prod2;
-            if kappa.abs() > 1.0 + 1e-12 {
-                out.out_of_reach = true;
-                continue;
-            }
-            let kappa = kappa.clamp(-1.0, 1.0);
-            let acos_k = kappa.acos();
-            let sk = (1.0 - kappa * kappa).sqrt();
+        let tol = &self.tol;
+        let (shoulders, n_sh) = self.arm.shoulder(&w, tol, singularity_threshold, &mut out);
+        for sh in &shoulders[..n_sh] {
+            let (s1, c1, q1) = (sh.s1, sh.c1, sh.q1);
+            let d = [sh.xp - self.arm.p2[0], w.z - self.arm.p2[1]];
             // Rz(−q1)·R_E·a6 and ·a5.
             let rz =
                 |v: &Vector3<f64>| Vector3::new(c1 * v.x + s1 * v.y, -s1 * v.x + c1 * v.y, v.z);
             let (r1_a6, r1_a5) = (rz(&re_a6), rz(&re_a5));
-            for el in [1.0_f64, -1.0] {
-                if el < 0.0 && sk < 1e-12 {
-                    // Arm stretched or folded: both elbow roots coincide.
-                    break;
-                }
-                // θ = el·acos κ − γ, its sine and cosine by the angle difference.
-                let (sa, ca) = (el * sk, kappa);
-                let (st, ct) = (sa * self.cg - ca * self.sg, ca * self.cg + sa * self.sg);
-                let th = el * acos_k - self.gamma;
-                let f = rot2(self.u3, st, ct);
-                let v = [self.u2[0] + f[0], self.u2[1] + f[1]];
-                // Angle from v to d about +y.
-                let crs = d[0] * v[1] - d[1] * v[0];
-                let dot = d[0] * v[0] + d[1] * v[1];
-                let nrm = (crs * crs + dot * dot).sqrt();
-                if nrm < 1e-12 * scale * scale {
-                    // Wrist centre on axis 2: joint 2 undetermined.
-                    out.singular = true;
-                    continue;
-                }
-                let th2 = crs.atan2(dot);
-                let (s2a, c2a) = (crs / nrm, dot / nrm);
-                let (s23, c23) = (s2a * ct + c2a * st, c2a * ct - s2a * st);
+            let shoulder = if sh.front {
+                Shoulder::Front
+            } else {
+                Shoulder::Back
+            };
+            let (elbows, n_el) = self.arm.elbow(d, tol.len, tol, &mut out);
+            for el in &elbows[..n_el] {
+                let (s23, c23) = (el.s23, el.c23);
                 // Ry(−θ23)·….
                 let ry = |v: &Vector3<f64>| {
                     Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
@@ -386,24 +294,20 @@ impl ClosedFormIk for OpwSolver {
                 // digits near the singularity (δ = 1e-7 would come back ±1e-9 off).
                 let cw = self.a4.dot(&t);
                 let sd = self.a4.cross(&t).norm();
-                let elbow = if (el > 0.0) == (sh > 0.0) {
+                let elbow = if el.first == sh.front {
                     Elbow::Up
                 } else {
                     Elbow::Down
                 };
-                let shoulder = if sh > 0.0 {
-                    Shoulder::Front
-                } else {
-                    Shoulder::Back
-                };
                 let rw_a5 = ry(&r1_a5);
-                let q2 = wrap(self.s2 * th2);
-                let q3 = wrap(self.s3 * th);
+                let q2 = wrap(self.s2 * el.th2);
+                let q3 = wrap(self.s3 * el.th3);
                 let near_singular = sd < singularity_threshold;
-                if near_singular {
+                let snapped = sd < tol.wrist;
+                if near_singular || snapped {
                     out.singular = true;
                 }
-                if sd < WRIST_SNAP {
+                if snapped {
                     // Axes 4 and 6 aligned (cw > 0) or opposed: q5 is exactly φ5 or
                     // φ5 + π and only q4 + q6 (or q4 − q6) is determined; it equals ψ,
                     // the angle about a4 from a5 to Rw·a5. Rule: q4 keeps the seed,
@@ -427,10 +331,14 @@ impl ClosedFormIk for OpwSolver {
                                 wrist,
                             },
                             singular: true,
+                            polish: false,
+                            provisional: false,
                         });
                     }
                     continue;
                 }
+                let polish =
+                    sd.min(el.margin).min(sh.margin) < POLISH_NEAR && !(sh.snapped || el.snapped);
                 let delta = sd.atan2(cw);
                 let tp = t - self.a4 * self.a4.dot(&t);
                 // No-flip root q5 = φ5 + δ.
@@ -455,6 +363,8 @@ impl ClosedFormIk for OpwSolver {
                         wrist: Wrist::NoFlip,
                     },
                     singular: near_singular,
+                    polish,
+                    provisional: false,
                 });
                 // The flip root follows without trigonometry: since a5 ⟂ a4 and
                 // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
@@ -474,6 +384,8 @@ impl ClosedFormIk for OpwSolver {
                         wrist: Wrist::Flip,
                     },
                     singular: near_singular,
+                    polish,
+                    provisional: false,
                 });
             }
         }
@@ -487,10 +399,18 @@ impl ClosedFormIk for OpwSolver {
     fn unreachable(&self) -> Unreachable {
         Unreachable::BeyondReach {
             wrist_point: "the wrist centre",
-            min_mm: self.reach[0],
-            max_mm: self.reach[1],
-            offset_mm: self.b.abs(),
+            min_mm: self.arm.reach[0],
+            max_mm: self.arm.reach[1],
+            offset_mm: self.arm.b.abs(),
         }
+    }
+
+    fn model_error(&self) -> ModelError {
+        self.tol.model
+    }
+
+    fn idealized_forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
+        self.forward(q)
     }
 }
 

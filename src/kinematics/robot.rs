@@ -1,9 +1,10 @@
 //! [`Robot`]: a kinematic tree with a base pose, a flange link, a tool (TCP) frame and
 //! the ordered list of its movable joints.
 
+use super::closed_form;
 use super::{
-    ClosedFormIk, IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree,
-    KinematicsError, NumericIk, OpwSolver, UrSolver,
+    IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree, KinematicsError,
+    NumericIk, OpwSolver, UrSolver,
 };
 use crate::math::{AngleConvention, Transform};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
@@ -32,9 +33,45 @@ pub struct Robot {
     /// How many of `joints` are on the flange chain (the rest are external axes).
     chain_dof: usize,
     chain: Vec<usize>,
-    analytic: Option<OpwSolver>,
-    ur: Option<UrSolver>,
+    solver: IkSolver,
     limits_source: Option<String>,
+}
+
+/// The inverse-kinematics solver of a [`Robot`], chosen from its geometry when the
+/// robot is built (or its tool or external axes change): one closed form per arm
+/// type, the numeric solver for any other chain. [`Robot::inverse`] dispatches on it.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub enum IkSolver {
+    /// Ortho-parallel arm with a spherical wrist ([`OpwSolver::detect`]).
+    Opw(OpwSolver),
+    /// UR-type arm: axes 2-3-4 parallel, offset wrist ([`UrSolver::detect`]).
+    Ur(UrSolver),
+    /// Any chain ([`NumericIk`], settings from the call's [`IkOptions`]).
+    Numeric,
+}
+
+impl IkSolver {
+    /// OPW first (a spherical wrist), then UR: the two geometries exclude each other
+    /// except in degenerate cases, where the OPW solver is the established one.
+    fn detect(robot: &Robot) -> Self {
+        if let Ok(s) = OpwSolver::detect(robot) {
+            IkSolver::Opw(s)
+        } else if let Ok(s) = UrSolver::detect(robot) {
+            IkSolver::Ur(s)
+        } else {
+            IkSolver::Numeric
+        }
+    }
+
+    /// Which kind of solver this is.
+    pub fn kind(&self) -> IkSolverKind {
+        match self {
+            IkSolver::Opw(_) => IkSolverKind::Opw,
+            IkSolver::Ur(_) => IkSolverKind::Ur,
+            IkSolver::Numeric => IkSolverKind::Numeric,
+        }
+    }
 }
 
 /// Which inverse-kinematics solver a [`Robot`] uses (chosen from its geometry).
@@ -104,8 +141,7 @@ impl Robot {
             chain_dof: joints.len(),
             joints,
             chain,
-            analytic: None,
-            ur: None,
+            solver: IkSolver::Numeric,
             limits_source: None,
         };
         robot.detect_solver();
@@ -180,15 +216,8 @@ impl Robot {
         self.detect_solver();
     }
 
-    /// OPW first (a spherical wrist), then UR: the two geometries exclude each other
-    /// except in degenerate cases, where the OPW solver is the established one.
     fn detect_solver(&mut self) {
-        self.analytic = OpwSolver::detect(self).ok();
-        self.ur = if self.analytic.is_none() {
-            UrSolver::detect(self).ok()
-        } else {
-            None
-        };
+        self.solver = IkSolver::detect(self);
     }
 
     /// The same robot with another tool frame.
@@ -292,23 +321,28 @@ impl Robot {
 
     /// The OPW closed-form solver, when the robot qualifies.
     pub fn analytic(&self) -> Option<&OpwSolver> {
-        self.analytic.as_ref()
+        match &self.solver {
+            IkSolver::Opw(s) => Some(s),
+            _ => None,
+        }
     }
 
     /// The UR closed-form solver, when the robot qualifies (and is not OPW).
     pub fn ur_solver(&self) -> Option<&UrSolver> {
-        self.ur.as_ref()
+        match &self.solver {
+            IkSolver::Ur(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The solver [`Robot::inverse`] uses.
+    pub fn ik_solver(&self) -> &IkSolver {
+        &self.solver
     }
 
     /// Which solver [`Robot::inverse`] uses.
     pub fn solver(&self) -> IkSolverKind {
-        if self.analytic.is_some() {
-            IkSolverKind::Opw
-        } else if self.ur.is_some() {
-            IkSolverKind::Ur
-        } else {
-            IkSolverKind::Numeric
-        }
+        self.solver.kind()
     }
 
     /// The solver's name: `"opw"`, `"ur"` or `"numeric"`.
@@ -435,13 +469,11 @@ impl Robot {
             )));
         }
         let local = Transform::from_isometry(self.base.isometry().inverse() * target.isometry());
-        if let Some(solver) = &self.analytic {
-            return solver.solve(&local, reference, options);
+        match &self.solver {
+            IkSolver::Opw(s) => closed_form::solve(s, Some(self), &local, reference, options),
+            IkSolver::Ur(s) => closed_form::solve(s, Some(self), &local, reference, options),
+            IkSolver::Numeric => NumericIk::from_options(options).solve(self, &local, reference),
         }
-        if let Some(solver) = &self.ur {
-            return solver.solve(&local, reference, options);
-        }
-        NumericIk::from_options(options).solve(self, &local, reference)
     }
 
     /// The solution nearest to `reference` (see [`Robot::inverse`]).

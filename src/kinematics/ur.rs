@@ -34,13 +34,14 @@
 //!   elbow with one double root); `q₄ = s₄(θ₂₃₄ − θ₂ − θ₃)`.
 
 use super::closed_form::{
-    ang, rot2, rot_vec, wrap, zero_axis_lines, DISTANCE_TOL, PARALLEL_TOL, WRIST_SNAP,
+    canonical_frame, measure_model_error, rot2, wrap, zero_axis_lines, ArmPlane, ModelError,
+    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
-use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
 /// Why a robot does not qualify for the UR closed-form solver.
@@ -68,42 +69,33 @@ pub enum NotUr {
 }
 
 /// Closed-form solver of a UR-type arm (tool included), every parameter precomputed
-/// from the tree geometry at the zero configuration. Works in the robot's root frame
-/// (the [`Robot`] applies its base pose). Lengths in mm, angles in radians.
+/// from the tree geometry at the zero configuration and idealized (axis 5 exactly
+/// perpendicular to axes 2–4, axis 6 to axis 5); the difference to the tree is
+/// [`ClosedFormIk::model_error`]. Works in the robot's root frame (the [`Robot`]
+/// applies its base pose). Lengths in mm, angles in radians.
 #[derive(Debug, Clone, PartialEq)]
 pub struct UrSolver {
-    /// C ← root frame.
+    /// C ← root frame and back.
     c_from_root: Isometry3<f64>,
-    /// Axis 2 in the arm plane (x, z), mm.
-    p2: [f64; 2],
-    /// Upper arm (axis 2 → axis 3) and forearm (axis 3 → W₄) at zero, (x, z), mm.
-    u2: [f64; 2],
-    u3: [f64; 2],
-    /// Lateral offset of axis 5 along y (mm).
-    b: f64,
-    /// |u2|² + |u3|², 2|u2||u3|, angle from u2 to u3 and its sine and cosine.
-    len_sq: f64,
-    len_prod2: f64,
-    gamma: f64,
-    sg: f64,
-    cg: f64,
-    /// Reach limits of W₄ from axis 2 (mm).
-    reach: [f64; 2],
+    root_from_c: Isometry3<f64>,
+    /// Axes 2, 3 and the wrist point W₄ (where axes 4 and 5 meet) in the arm plane.
+    arm: ArmPlane,
     /// Signs of axes 2, 3, 4 relative to C's y.
     s: [f64; 3],
-    /// Axes 5 and 6 at zero in C.
+    /// Axes 5 and 6 at zero in C (a5 ⟂ y, a6 ⟂ a5) and a6 × a5.
     a5: Vector3<f64>,
     a6: Vector3<f64>,
+    a6x5: Vector3<f64>,
     /// Signed distance W₄ → W₅ along a₅ (mm).
     e5: f64,
-    /// φ₅ = atan2(y·(a₅×a₆), y·a₆), its sine and cosine.
+    /// φ₅ = atan2(y·(a₅×a₆), y·a₆).
     phi5: f64,
-    s_phi5: f64,
-    c_phi5: f64,
     /// W₅ in the TCP frame (mm).
     w5_tcp: Vector3<f64>,
-    /// R₀ᵀ (R₀: TCP rotation at zero in C).
+    /// R₀ (TCP rotation at zero in C) and R₀ᵀ.
+    r0: UnitQuaternion<f64>,
     r0t: Matrix3<f64>,
+    tol: Tolerances,
     limits: [Option<JointLimits>; 6],
 }
 
@@ -122,6 +114,19 @@ fn meet(pa: Point3<f64>, a: Vector3<f64>, pb: Point3<f64>, b: Vector3<f64>) -> O
     let ca = pa + a * s;
     let cb = pb + b * t;
     ((ca - cb).norm() <= DISTANCE_TOL).then(|| Point3::from((ca.coords + cb.coords) * 0.5))
+}
+
+/// `φ` snapped onto 0 or π when within the detection tolerance of it: rounded
+/// descriptions put the UR wrist's φ₅ a few 1e-10 off, and the exact value makes
+/// singular targets give joint 5 exactly 0 (or π).
+pub(crate) fn snap_phi(phi: f64) -> f64 {
+    if phi.abs() < PARALLEL_TOL {
+        0.0
+    } else if (phi.abs() - PI).abs() < PARALLEL_TOL {
+        PI
+    } else {
+        phi
+    }
 }
 
 impl UrSolver {
@@ -145,59 +150,24 @@ impl UrSolver {
         }
         let w5 = meet(p5, a5, p6, a6).ok_or(NotUr::Axes56NotMeeting)?;
         // Canonical frame C on axis 1, x towards W₅ at zero (as the OPW solver does).
-        let ez = a1;
-        let mut ex = a2.cross(&ez).normalize();
-        let side = (w5 - p1).dot(&ex);
-        let side = if side.abs() > DISTANCE_TOL {
-            side
-        } else {
-            (p3 - p1).dot(&ex)
-        };
-        if side < -DISTANCE_TOL {
-            ex = -ex;
-        }
-        let ey = ez.cross(&ex);
-        let rc = Matrix3::from_columns(&[ex, ey, ez]);
-        let root_from_c = Isometry3::from_parts(
-            Translation3::from(p1.coords),
-            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rc)),
-        );
+        let root_from_c = canonical_frame(a1, p1, a2, w5, p3);
         let c_from_root = root_from_c.inverse();
-        let (q2, q3, q4) = (c_from_root * p2, c_from_root * p3, c_from_root * w4);
-        let u2 = [q3.x - q2.x, q3.z - q2.z];
-        let u3 = [q4.x - q3.x, q4.z - q3.z];
-        let (l2, l3) = (u2[0].hypot(u2[1]), u3[0].hypot(u3[1]));
-        if l2 < DISTANCE_TOL || l3 < DISTANCE_TOL {
-            return Err(NotUr::Degenerate);
-        }
+        let ey = root_from_c.rotation * Vector3::y();
+        let arm = ArmPlane::new(c_from_root * p2, c_from_root * p3, c_from_root * w4)
+            .ok_or(NotUr::Degenerate)?;
+        // The idealized wrist: a5 ⟂ y (axes 2–4), a6 ⟂ a5.
         let a5c = c_from_root.rotation * a5;
+        let a5c = Vector3::new(a5c.x, 0.0, a5c.z).normalize();
         let a6c = c_from_root.rotation * a6;
-        let phi5 = a5c.cross(&a6c).y.atan2(a6c.y);
-        // Axes built by rotations carry rounding: the UR wrist has φ5 = 0 (or π)
-        // exactly, so that singular targets give joint 5 exactly that value.
-        let phi5 = if phi5.abs() < 1e-12 {
-            0.0
-        } else if (phi5.abs() - PI).abs() < 1e-12 {
-            PI
-        } else {
-            phi5
-        };
-        let gamma = ang(u3) - ang(u2);
+        let a6c = (a6c - a5c * a5c.dot(&a6c)).normalize();
+        let phi5 = snap_phi(a5c.cross(&a6c).y.atan2(a6c.y));
         let tcp0_c = c_from_root * tcp0;
+        let e5 = (w5 - w4).dot(&a5);
         let mut limits = [None; 6];
         limits.copy_from_slice(&robot.joint_limits()[..6]);
-        Ok(Self {
+        let mut solver = Self {
             c_from_root,
-            p2: [q2.x, q2.z],
-            u2,
-            u3,
-            b: q4.y,
-            len_sq: l2 * l2 + l3 * l3,
-            len_prod2: 2.0 * l2 * l3,
-            gamma,
-            sg: gamma.sin(),
-            cg: gamma.cos(),
-            reach: [(l2 - l3).abs(), l2 + l3],
+            root_from_c,
             s: [
                 ey.dot(&a2).signum(),
                 ey.dot(&a3).signum(),
@@ -205,18 +175,23 @@ impl UrSolver {
             ],
             a5: a5c,
             a6: a6c,
-            e5: (w5 - w4).dot(&a5),
+            a6x5: a6c.cross(&a5c),
+            e5,
             phi5,
-            s_phi5: phi5.sin(),
-            c_phi5: phi5.cos(),
             w5_tcp: (tcp0.inverse() * w5).coords,
+            r0: tcp0_c.rotation,
             r0t: tcp0_c
                 .rotation
                 .to_rotation_matrix()
                 .into_inner()
                 .transpose(),
+            tol: Tolerances::new(&arm, ModelError::default(), e5.abs()),
+            arm,
             limits,
-        })
+        };
+        let model = measure_model_error(robot, |q| solver.forward(q));
+        solver.tol = Tolerances::new(&solver.arm, model, e5.abs());
+        Ok(solver)
     }
 
     /// The detected parameters: lateral offset `b` of axis 5 from axis 1 (mm), the
@@ -225,12 +200,32 @@ impl UrSolver {
     /// `W₅` to the TCP (mm).
     pub fn parameters(&self) -> UrParameters {
         UrParameters {
-            b: self.b,
-            upper_arm: self.u2,
-            forearm: self.u3,
+            b: self.arm.b,
+            upper_arm: self.arm.u2,
+            forearm: self.arm.u3,
             e5: self.e5,
             tcp_offset: self.w5_tcp.norm(),
         }
+    }
+
+    /// TCP pose in the root frame for joint values `q` (rad) of the idealized arm, in
+    /// closed form: `Rz(q₁)·[W₄(θ₂, θ₃) + e₅·Ry(θ₂₃₄)a₅] − R·w₅` with
+    /// `R = Rz(q₁)·Ry(θ₂₃₄)·Rot(a₅,q₅)·Rot(a₆,q₆)·R₀`.
+    pub fn forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
+        let (th2, th3) = (self.s[0] * q[1], self.s[1] * q[2]);
+        let th = th2 + th3 + self.s[2] * q[3];
+        let [x, z] = self.arm.wrist(th2, th3);
+
+        let (st, ct) = th.sin_cos();
+        let a5r = rot2([self.a5.x, self.a5.z], st, ct);
+        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[0]);
+        let w5 = rz * Vector3::new(x + self.e5 * a5r[0], self.arm.b, z + self.e5 * a5r[1]);
+        let r = rz
+            * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), th)
+            * UnitQuaternion::from_axis_angle(&Unit::new_unchecked(self.a5), q[4])
+            * UnitQuaternion::from_axis_angle(&Unit::new_unchecked(self.a6), q[5])
+            * self.r0;
+        self.root_from_c * Isometry3::from_parts(Translation3::from(w5 - r * self.w5_tcp), r)
     }
 }
 
@@ -240,16 +235,17 @@ impl ClosedFormIk for UrSolver {
     /// Every principal branch (up to 8: shoulder × wrist × elbow) reaching `target`
     /// (root frame, mm); joint values in (−π, π], no limits applied.
     ///
-    /// **Wrist singularity** (axis 6 parallel to axes 2–4, `sin δ < 1e-10`): every arm
-    /// branch still comes back with both wrist labels and `singular` set; joint 5 is
-    /// exactly φ₅ (0 on a UR; φ₅ + π when the axes are opposed) and only
-    /// `θ₂₃₄ ± q₆` is determined. Rule: joint 6 keeps `q6_seed` (wrapped) on the no-flip
-    /// branch and `q6_seed + π` on the flip branch; joints 2–4 take the rest. Near the
-    /// singularity (sine below `singularity_threshold`) branches are solved normally
-    /// and flagged. **Shoulder singularity** (`ρ = |b|`) and **stretched or folded
-    /// elbow** (`|κ| = 1`): the two roots coincide and come back once. With no lateral
-    /// offset and `W₅` on axis 1, or `W₄` on axis 2, joint 1 or 2 is undetermined:
-    /// those branches are dropped and [`Branches::singular`] set.
+    /// **Wrist singularity** (axis 6 parallel to axes 2–4: the wrist sine within the
+    /// model error of 0, at least 1e-10): every arm branch still comes back with both
+    /// wrist labels and `singular` set; joint 5 is exactly φ₅ (0 on a UR; φ₅ + π when
+    /// the axes are opposed) and only `θ₂₃₄ ± q₆` is determined. Rule: joint 6 keeps
+    /// `q6_seed` (wrapped) on the no-flip branch and `q6_seed + π` on the flip branch;
+    /// joints 2–4 take the rest. Near the singularity (sine below
+    /// `singularity_threshold`) branches are solved normally and flagged. **Shoulder
+    /// singularity** (`ρ = |b|`) and **stretched or folded elbow** (`|κ| = 1`), each
+    /// within the model error: the two roots coincide and come back once. With no
+    /// lateral offset and `W₅` on axis 1, or `W₄` on axis 2, joint 1 or 2 is
+    /// undetermined: those branches are dropped and [`Branches::undetermined`] set.
     fn branches_seeded(
         &self,
         target: &Isometry3<f64>,
@@ -264,148 +260,120 @@ impl ClosedFormIk for UrSolver {
             out.out_of_reach = true;
             return out;
         }
-        // R_X·R₀ᵀ = Rz(q1)·Ry(θ234)·Rot(a5,q5)·Rot(a6,q6).
+        // R_X·R₀ᵀ = Rz(q1)·Ry(θ234)·Rot(a5,q5)·Rot(a6,q6), and its images of a6, a5
+        // and a6 × a5: everything the wrist needs.
         let rt = rx * self.r0t;
-        let t6 = rt * self.a6;
-        let rho_sq = w.x * w.x + w.y * w.y;
-        let disc = rho_sq - self.b * self.b;
-        let scale = 1.0 + self.reach[1] + self.e5.abs();
-        if disc < -1e-12 * scale * scale {
-            out.out_of_reach = true;
-            return out;
-        }
-        if rho_sq.sqrt() < singularity_threshold * scale && self.b.abs() < DISTANCE_TOL {
-            out.singular = true;
-            return out;
-        }
-        let root = disc.max(0.0).sqrt();
-        let y = Vector3::y();
-        for sh in [1.0_f64, -1.0] {
-            if sh < 0.0 && root < 1e-12 * scale {
-                // Shoulder singularity: both roots coincide.
-                break;
+        let (t6, ra5, ra65) = (rt * self.a6, rt * self.a5, rt * self.a6x5);
+        let tol = &self.tol;
+        let (shoulders, n_sh) = self.arm.shoulder(&w, tol, singularity_threshold, &mut out);
+        // At the wrist singularity joint 6 is the seed on every branch.
+        let seeded = q6_seed.sin_cos();
+        let rho = w.x.hypot(w.y);
+        let t6h = t6.x.hypot(t6.y);
+        for sh in &shoulders[..n_sh] {
+            let mut sh = *sh;
+            // t = Rz(−q1)·t6; the wrist sine and cosine δ = ∠(y, t).
+            let tx = sh.c1 * t6.x + sh.s1 * t6.y;
+            let mut cw = -sh.s1 * t6.x + sh.c1 * t6.y;
+            let mut sd = tx.hypot(t6.z);
+            // At the wrist singularity axis 6 lies along axes 2–4, Rz(q1)·y: joint 1
+            // follows from the orientation alone, where the position's joint 1 is off
+            // by the position band over x' (x' = √(ρ² − b²) near the shoulder
+            // singularity): when axis 6 is level within the wrist band and the
+            // position's joint 1 agrees within its own error, the wrist is singular
+            // and joint 1 the orientation's.
+            let xp_eff = sh.xp.abs().max(tol.disc.sqrt());
+            let dq1 = tol.len / rho + self.arm.b.abs() * tol.len / (rho * xp_eff);
+            let mut snapped = sd < tol.wrist;
+            if !snapped && t6.z.abs() < tol.wrist && sd < tol.wrist + dq1 && t6h > 0.5 {
+                let sign = cw.signum();
+                let (s1, c1) = (-sign * t6.x / t6h, sign * t6.y / t6h);
+                sh.s1 = s1;
+                sh.c1 = c1;
+                sh.q1 = s1.atan2(c1);
+                sh.xp = c1 * w.x + s1 * w.y;
+                cw = sign * t6h;
+                sd = t6.z.abs();
+                snapped = true;
             }
-            let xp = sh * root;
-            let (s1, c1) = (
-                (xp * w.y - self.b * w.x) / rho_sq,
-                (xp * w.x + self.b * w.y) / rho_sq,
-            );
-            let q1 = s1.atan2(c1);
-            let rz_inv =
-                |v: &Vector3<f64>| Vector3::new(c1 * v.x + s1 * v.y, -s1 * v.x + c1 * v.y, v.z);
-            let t = rz_inv(&t6);
-            // δ = ∠(y, t) from its sine and cosine (acos loses digits near 0).
-            let (cw, sd) = (t.y, t.x.hypot(t.z));
-            // Mᵀy = (R_X R₀ᵀ)ᵀ·Rz(q1)·y.
-            let u = rt.tr_mul(&Vector3::new(-s1, c1, 0.0));
+            let (s1, c1) = (sh.s1, sh.c1);
             let near_singular = sd < singularity_threshold;
-            if near_singular {
-                out.singular = true;
-            }
-            // (q5, q6, label) for the two wrist roots.
-            let mut wrists = [(0.0, 0.0, Wrist::NoFlip); 2];
-            if sd < WRIST_SNAP {
+            out.singular |= near_singular || snapped;
+            // No-flip wrist: q5 = φ5 + δ, and q6 turns Mᵀy onto Rot(a5,−q5)y about a6
+            // with M = Rz(−q1)·R_X·R₀ᵀ. In the basis (a5, a6 × a5) of the plane ⟂ a6 the
+            // former is (r1, r2) = (Rz(q1)y)·(R a5, R (a6×a5)) and the latter
+            // (0, sin(q5 − φ5)): q6 = atan2(r1, r2), both components computed
+            // directly (no difference of nearly equal numbers near the singularity).
+            let (q5, q6, s6, c6) = if snapped {
                 let q5 = if cw > 0.0 {
                     self.phi5
                 } else {
                     wrap(self.phi5 + PI)
                 };
-                wrists[0] = (q5, wrap(q6_seed), Wrist::NoFlip);
-                wrists[1] = (q5, wrap(q6_seed + PI), Wrist::Flip);
+                (q5, wrap(q6_seed), seeded.0, seeded.1)
             } else {
-                let delta = sd.atan2(cw);
-                for (k, (sgn, label)) in [(1.0, Wrist::NoFlip), (-1.0, Wrist::Flip)]
-                    .into_iter()
-                    .enumerate()
-                {
-                    let (sdl, cdl) = (sgn * sd, cw);
-                    let s5 = self.s_phi5 * cdl + self.c_phi5 * sdl;
-                    let c5 = self.c_phi5 * cdl - self.s_phi5 * sdl;
-                    let v = rot_vec(&self.a5, -s5, c5, &y);
-                    let a6u = self.a6.dot(&u);
-                    let q6 = self
-                        .a6
-                        .dot(&u.cross(&v))
-                        .atan2(u.dot(&v) - a6u * self.a6.dot(&v));
-                    wrists[k] = (wrap(self.phi5 + sgn * delta), q6, label);
-                }
-            }
-            let wrist_singular = sd < WRIST_SNAP || near_singular;
-            for (q5, q6, wrist) in wrists {
-                let (s5, c5) = q5.sin_cos();
-                let (s6, c6) = q6.sin_cos();
-                // θ234: angle about y of M·Rot(a6,−q6)·Rot(a5,−q5), read off its x column.
-                let p = rot_vec(
-                    &self.a6,
-                    -s6,
-                    c6,
-                    &rot_vec(&self.a5, -s5, c5, &Vector3::x()),
-                );
-                let mp = rz_inv(&(rt * p));
-                let n = mp.x.hypot(mp.z);
-                let (s234, c234) = (-mp.z / n, mp.x / n);
-                let th234 = s234.atan2(c234);
+                let r1 = -s1 * ra5.x + c1 * ra5.y;
+                let r2 = -s1 * ra65.x + c1 * ra65.y;
+                let n = r1.hypot(r2);
+                (wrap(self.phi5 + sd.atan2(cw)), r1.atan2(r2), r1 / n, r2 / n)
+            };
+            // Ry(θ234)·a5 = M·Rot(a6,−q6)·a5 = Rz(−q1)·(c6·R a5 − s6·R (a6×a5)), in xz.
+            let m = ra5 * c6 - ra65 * s6;
+            let a5r = [c1 * m.x + s1 * m.y, m.z];
+            let (ax, az) = (self.a5.x, self.a5.z);
+            let th234 = (az * a5r[0] - ax * a5r[1]).atan2(ax * a5r[0] + az * a5r[1]);
+            // The flip wrist: Ry(π)·Rot(a5, q5)·Ry(π)⁻¹ = Rot(a5, −q5) and a6 ∥ y at
+            // φ5 = 0, so (θ234 + π, 2φ5 − q5, q6 + π) gives the same orientation: a5r
+            // turns over, nothing else to compute.
+            for (sgn, wrist) in [(1.0_f64, Wrist::NoFlip), (-1.0, Wrist::Flip)] {
+                let (q5w, q6w, th) = if sgn > 0.0 {
+                    (q5, q6, th234)
+                } else {
+                    (wrap(2.0 * self.phi5 - q5), wrap(q6 + PI), wrap(th234 + PI))
+                };
                 // W4 in the arm plane: Rz(−q1)W5 − e5·Ry(θ234)a5.
-                let a5r = [
-                    c234 * self.a5.x + s234 * self.a5.z,
-                    -s234 * self.a5.x + c234 * self.a5.z,
-                ];
                 let d = [
-                    xp - self.e5 * a5r[0] - self.p2[0],
-                    w.z - self.e5 * a5r[1] - self.p2[1],
+                    sh.xp - sgn * self.e5 * a5r[0] - self.arm.p2[0],
+                    w.z - sgn * self.e5 * a5r[1] - self.arm.p2[1],
                 ];
-                let kappa = (d[0] * d[0] + d[1] * d[1] - self.len_sq) / self.len_prod2;
-                if kappa.abs() > 1.0 + 1e-12 {
-                    out.out_of_reach = true;
-                    continue;
-                }
-                let kappa = kappa.clamp(-1.0, 1.0);
-                let acos_k = kappa.acos();
-                let sk = (1.0 - kappa * kappa).sqrt();
-                for el in [1.0_f64, -1.0] {
-                    if el < 0.0 && sk < 1e-12 {
-                        // Elbow stretched or folded: both roots coincide.
-                        break;
-                    }
-                    let (sa, ca) = (el * sk, kappa);
-                    let (st, ct) = (sa * self.cg - ca * self.sg, ca * self.cg + sa * self.sg);
-                    let th3 = el * acos_k - self.gamma;
-                    let f = rot2(self.u3, st, ct);
-                    let v = [self.u2[0] + f[0], self.u2[1] + f[1]];
-                    let crs = d[0] * v[1] - d[1] * v[0];
-                    let dot = d[0] * v[0] + d[1] * v[1];
-                    if crs.hypot(dot) < 1e-12 * scale * scale {
-                        // W4 on axis 2: joint 2 undetermined.
-                        out.singular = true;
-                        continue;
-                    }
-                    let th2 = crs.atan2(dot);
-                    let th4 = th234 - th2 - th3;
-                    let elbow = if (el > 0.0) == (sh > 0.0) {
+                // Near the wrist singularity (not on it) θ234 carries the orientation
+                // band and joint 1's error over the wrist sine (together the wrist
+                // band), and W4 that times e5: a wrist point that far beyond the
+                // reach is taken as stretched (and polished).
+                let slack = if snapped || tol.model.is_exact() {
+                    tol.len
+                } else {
+                    tol.len + self.e5.abs() * tol.wrist / sd
+                };
+                let (elbows, n_el) = self.arm.elbow(d, slack, tol, &mut out);
+                for el in &elbows[..n_el] {
+                    let elbow = if el.first == sh.front {
                         Elbow::Up
                     } else {
                         Elbow::Down
                     };
-                    let shoulder = if sh > 0.0 {
-                        Shoulder::Front
-                    } else {
-                        Shoulder::Back
-                    };
+                    let margin = sd.min(el.margin).min(sh.margin);
                     out.push(Branch {
                         joints: [
-                            q1,
-                            wrap(self.s[0] * th2),
-                            wrap(self.s[1] * th3),
-                            wrap(self.s[2] * th4),
-                            q5,
-                            q6,
+                            sh.q1,
+                            wrap(self.s[0] * el.th2),
+                            wrap(self.s[1] * el.th3),
+                            wrap(self.s[2] * (th - el.th2 - el.th3)),
+                            q5w,
+                            q6w,
                         ],
                         configuration: Configuration {
-                            shoulder,
+                            shoulder: if sh.front {
+                                Shoulder::Front
+                            } else {
+                                Shoulder::Back
+                            },
                             elbow,
                             wrist,
                         },
-                        singular: wrist_singular,
+                        singular: near_singular || snapped,
+                        polish: margin < POLISH_NEAR && !(snapped || sh.snapped),
+                        provisional: el.beyond,
                     });
                 }
             }
@@ -420,10 +388,18 @@ impl ClosedFormIk for UrSolver {
     fn unreachable(&self) -> Unreachable {
         Unreachable::BeyondReach {
             wrist_point: "axis 4's wrist point",
-            min_mm: self.reach[0],
-            max_mm: self.reach[1],
-            offset_mm: self.b.abs(),
+            min_mm: self.arm.reach[0],
+            max_mm: self.arm.reach[1],
+            offset_mm: self.arm.b.abs(),
         }
+    }
+
+    fn model_error(&self) -> ModelError {
+        self.tol.model
+    }
+
+    fn idealized_forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
+        self.forward(q)
     }
 }
 

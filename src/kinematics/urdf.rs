@@ -147,14 +147,24 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
     let name = root.attribute("name").unwrap_or("urdf").to_string();
     // Links, in file order.
     let mut link_nodes = Vec::new();
-    let mut link_index: HashMap<&str, usize> = HashMap::new();
+    let mut link_index: HashMap<String, usize> = HashMap::new();
     for n in root.children().filter(|n| n.has_tag_name("link")) {
-        let ln = n
+        let raw = n
             .attribute("name")
             .ok_or_else(|| at(n, "<link> without a name".into()))?;
-        if link_index.insert(ln, link_nodes.len()).is_some() {
-            return Err(at(n, format!("link `{ln}` is defined twice")));
+        // The one name rule (documents' too): no control or invisible character, and
+        // kept in NFC, so `café` composed and decomposed are one link (a twin is
+        // defined twice) and either spelling reaches it.
+        let ln = crate::diagnostics::checked_name(raw)
+            .map_err(|c| at(n, hidden_in_name("link", raw, c)))?
+            .into_owned();
+        if link_index.contains_key(ln.as_str()) {
+            return Err(at(
+                n,
+                format!("link `{ln}` is defined twice (names are compared in Unicode NFC)"),
+            ));
         }
+        link_index.insert(ln, link_nodes.len());
         link_nodes.push(n);
     }
     if link_nodes.is_empty() {
@@ -177,10 +187,14 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
     }
     let mut parent_of: HashMap<usize, J> = HashMap::new();
     // Joint name → child link (file order), and the `<mimic>` elements to resolve.
-    let mut joint_child: HashMap<&str, usize> = HashMap::new();
+    let mut joint_child: HashMap<String, usize> = HashMap::new();
     let mut mimic_nodes: Vec<(usize, roxmltree::Node)> = Vec::new();
     for n in root.children().filter(|n| n.has_tag_name("joint")) {
-        let jn = n.attribute("name").unwrap_or("");
+        let raw = n.attribute("name").unwrap_or("");
+        let jn = crate::diagnostics::checked_name(raw)
+            .map_err(|c| at(n, hidden_in_name("joint", raw, c)))?
+            .into_owned();
+        let jn = jn.as_str();
         let err = |node: roxmltree::Node, m: String| at(node, format!("joint `{jn}`: {m}"));
         let link_ref = |tag: &str| -> Result<usize, SourceError> {
             let e = n
@@ -191,7 +205,7 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 .attribute("link")
                 .ok_or_else(|| err(e, format!("<{tag}> without a link")))?;
             link_index
-                .get(l)
+                .get(crate::diagnostics::nfc(l).as_ref())
                 .copied()
                 .ok_or_else(|| err(e, format!("{tag} link `{l}` is not defined")))
         };
@@ -274,12 +288,12 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 n,
                 format!(
                     "link `{}` already has a parent joint (line {}): a URDF is a tree",
-                    link_nodes[child].attribute("name").unwrap_or(""),
+                    link_name(link_nodes[child]),
                     p.row
                 ),
             ));
         }
-        joint_child.entry(jn).or_insert(child);
+        joint_child.entry(jn.to_string()).or_insert(child);
         if let Some(m) = n.children().find(|c| c.has_tag_name("mimic")) {
             mimic_nodes.push((child, m));
         }
@@ -309,8 +323,8 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                 link_nodes[roots[1]],
                 format!(
                     "two root links (`{}` and `{}`): every link but one needs a parent joint",
-                    link_nodes[roots[0]].attribute("name").unwrap_or(""),
-                    link_nodes[roots[1]].attribute("name").unwrap_or("")
+                    link_name(link_nodes[roots[0]]),
+                    link_name(link_nodes[roots[1]])
                 ),
             ))
         }
@@ -339,7 +353,7 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
             link_nodes[lost],
             format!(
                 "link `{}` is on a cycle of joints, not connected to the root",
-                link_nodes[lost].attribute("name").unwrap_or("")
+                link_name(link_nodes[lost])
             ),
         ));
     }
@@ -365,7 +379,7 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
     let mut last_free_leads = vec![false; order.len()];
     let mut holds_gripper = vec![false; order.len()];
     for (i, &l) in order.iter().enumerate() {
-        let lname = link_nodes[l].attribute("name").unwrap_or("");
+        let lname = link_name(link_nodes[l]);
         match parent_of.get(&l) {
             None => links.push(Link::new(lname, None, Transform::IDENTITY, Joint::fixed())),
             Some(j) => {
@@ -435,6 +449,7 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
         .with_limits_source(format!("URDF {}", path.display()));
     let mut meshes = Vec::new();
     let mut primitives = Vec::new();
+    let mut primitive_triangles = 0usize;
     let mut warnings = Vec::new();
     for (i, &l) in order.iter().enumerate() {
         // One geometry per link for display and interference: its `<visual>`
@@ -467,7 +482,7 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
             } else {
                 collision
             };
-            let lname = link_nodes[l].attribute("name").unwrap_or("");
+            let lname = link_name(link_nodes[l]);
             for v in from.iter().filter(|v| !readable(v)) {
                 if let Some(m) = v.descendants().find(|c| c.has_tag_name("mesh")) {
                     let p = attribute_pos(&doc, m, "filename");
@@ -511,7 +526,7 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
                     p.col as usize,
                     format!(
                         "link `{}`: <{}> geometry is not supported (mesh, box, cylinder, sphere): left out",
-                        link_nodes[l].attribute("name").unwrap_or(""),
+                        link_name(link_nodes[l]),
                         short(shape.tag_name().name())
                     ),
                 ));
@@ -519,6 +534,24 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
             }
             if !shape.has_tag_name("mesh") {
                 let mesh = primitive(&doc, path, shape)?.transformed(&origin_t);
+                // Counted before it is kept: thousands of spheres on a link stop at the
+                // cap, not in the memory (link meshes are added to the same count when
+                // the document reads them).
+                primitive_triangles += mesh.triangles.len();
+                if primitive_triangles > crate::mesh::MAX_TRIANGLES {
+                    return Err(at(
+                        shape,
+                        format!(
+                            "link `{}`: the robot's primitive shapes make {}",
+                            link_name(link_nodes[l]),
+                            crate::mesh::MeshError::too_many(
+                                crate::mesh::MAX_TRIANGLES,
+                                "triangles"
+                            )
+                            .message
+                        ),
+                    ));
+                }
                 primitives.push(UrdfPrimitive {
                     link: i,
                     shape: shape.tag_name().name().to_string(),
@@ -567,7 +600,7 @@ fn mimics(
     doc: &roxmltree::Document,
     path: &Path,
     nodes: &[(usize, roxmltree::Node)],
-    joint_child: &HashMap<&str, usize>,
+    joint_child: &HashMap<String, usize>,
     parent_of: &HashMap<usize, impl JointOf>,
     new_index: &HashMap<usize, usize>,
     link_nodes: &[roxmltree::Node],
@@ -579,19 +612,21 @@ fn mimics(
     // follower (file index) → (leader file index, multiplier, offset), URDF units.
     let mut raw: HashMap<usize, (usize, f64, f64, roxmltree::Node)> = HashMap::new();
     for &(child, m) in nodes {
-        let lname = link_nodes[child].attribute("name").unwrap_or("");
+        let lname = link_name(link_nodes[child]);
         let leader_name = m
             .attribute("joint")
             .ok_or_else(|| at(m, format!("link `{lname}`: <mimic> without a joint")))?;
-        let leader = *joint_child.get(leader_name).ok_or_else(|| {
-            at(
-                m,
-                format!(
-                    "link `{lname}`: mimic joint `{}` is not defined",
-                    short(leader_name)
-                ),
-            )
-        })?;
+        let leader = *joint_child
+            .get(crate::diagnostics::nfc(leader_name).as_ref())
+            .ok_or_else(|| {
+                at(
+                    m,
+                    format!(
+                        "link `{lname}`: mimic joint `{}` is not defined",
+                        short(leader_name)
+                    ),
+                )
+            })?;
         let [k] = attribute_numbers(doc, path, m, "multiplier", [1.0], 1.0)?;
         let [o] = attribute_numbers(doc, path, m, "offset", [0.0], 1000.0)?;
         for (link, role) in [(child, "mimic"), (leader, "leader")] {
@@ -732,6 +767,20 @@ fn primitive(
             ))
         }
     }
+}
+
+/// A link's name as the robot keeps it (NFC; checked when the links were read).
+fn link_name(n: roxmltree::Node) -> String {
+    crate::diagnostics::nfc(n.attribute("name").unwrap_or("")).into_owned()
+}
+
+/// The message for a URDF name with a control or invisible character.
+fn hidden_in_name(what: &str, name: &str, c: char) -> String {
+    format!(
+        "{what} name `{}`: {} is not allowed in names (control and invisible characters hide or reorder what is shown)",
+        crate::diagnostics::printable(name, false),
+        crate::diagnostics::describe_char(c)
+    )
 }
 
 /// Facets around a meshed cylinder or sphere: the volume is within 0.2 % (cylinder)

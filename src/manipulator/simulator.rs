@@ -647,6 +647,8 @@ fn accept_loop(
                 serve(stream, conn);
             }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                // Ended connections give their socket back now, not at the next accept.
+                conns.retain(|c| !c.ended.load(Ordering::Relaxed));
                 std::thread::sleep(Duration::from_millis(10));
             }
             Err(e) => {
@@ -702,6 +704,7 @@ fn serve_state(
         }
         std::thread::sleep(opts.publish_interval);
     }
+    let _ = stream.shutdown(std::net::Shutdown::Both);
     conn.ended.store(true, Ordering::Relaxed);
 }
 
@@ -712,6 +715,10 @@ fn serve_motion(mut stream: TcpStream, conn: &Conn, stop: &AtomicBool, ctx: &Ctx
     if let Some(why) = serve_motion_packets(&mut stream, &peer, conn, stop, ctx) {
         eprintln!("manipulator: {peer}: {why}; closing the connection");
     }
+    // Closed now, whoever else holds the socket (the accept loop keeps a clone to
+    // close it from outside): the peer reads EOF at once, not when the slot is
+    // reused by a later connection.
+    let _ = stream.shutdown(std::net::Shutdown::Both);
     conn.ended.store(true, Ordering::Relaxed);
 }
 

@@ -48,7 +48,16 @@ pub enum TransformError {
     /// The axis of a rotation has zero length.
     #[error("the rotation axis has zero length")]
     ZeroAxis,
+    /// [`Transform::orthonormalized`]: the block is farther from a rotation than
+    /// rounding explains.
+    #[error("the rotation block a..i is {0:.2e} from the nearest rotation (more than {max:.0e}): that is not rounding, it is scaling, shear or a wrong matrix", max = MAX_ORTHONORMALIZE)]
+    FarFromRotation(f64),
 }
+
+/// How far (largest entry of `|RᵀR − I|`) a block may be from a rotation for
+/// [`Transform::orthonormalized`]: numbers rounded to 3 significant digits are within
+/// about 1e-3 of one.
+pub const MAX_ORTHONORMALIZE: f64 = 1e-2;
 
 /// A nalgebra isometry (column-vector convention, mm) is a pose: part frame → world.
 ///
@@ -231,6 +240,77 @@ impl Transform {
             [d[6], d[7], d[8], d[15]],
             [d[9], d[10], d[11], d[12]],
         ])
+    }
+
+    /// The 16 numbers of `IMathTransform.ArrayData` in SolidWorks' own units: as
+    /// [`to_array_data`](Self::to_array_data) with the translation `j k l` in
+    /// **metres**.
+    pub fn to_array_data_si(&self) -> [f64; 16] {
+        let mut d = self.to_array_data();
+        for v in &mut d[9..12] {
+            *v /= 1000.0;
+        }
+        d
+    }
+
+    /// Inverse of [`to_array_data_si`](Self::to_array_data_si): SolidWorks'
+    /// `IMathUtility.CreateTransform(ArrayData)`, translation in **metres**.
+    pub fn from_array_data_si(d: &[f64; 16]) -> Result<Self, TransformError> {
+        let mut mm = *d;
+        for v in &mut mm[9..12] {
+            *v *= 1000.0;
+        }
+        Self::from_array_data(&mm)
+    }
+
+    /// The rigid pose nearest to a 4×4 matrix whose rotation block was rounded (a
+    /// spreadsheet's six digits, a CSV of a macro's output): the block's nearest
+    /// rotation (polar decomposition), the translation as given (mm).
+    ///
+    /// Refused: non-finite values, a mirror (determinant < 0), a block farther than
+    /// [`MAX_ORTHONORMALIZE`] from a rotation, and `m`, `n o p` off 1, 0 0 0 by more
+    /// than that.
+    ///
+    /// # Examples
+    /// ```
+    /// use fitup::math::Transform;
+    /// // 30° about Z, rounded to 4 digits
+    /// let m = [[0.866, 0.5, 0.0, 0.0], [-0.5, 0.866, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [10.0, 0.0, 0.0, 1.0]];
+    /// assert!(Transform::from_matrix(&m).is_err());
+    /// let t = Transform::orthonormalized(&m)?;
+    /// assert!((t.rotation().angle().to_degrees() - 30.0).abs() < 0.01);
+    /// # Ok::<(), fitup::math::transform::TransformError>(())
+    /// ```
+    pub fn orthonormalized(m: &[[f64; 4]; 4]) -> Result<Self, TransformError> {
+        if m.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(TransformError::NonFinite);
+        }
+        if (m[3][3] - 1.0).abs() > MAX_ORTHONORMALIZE {
+            return Err(TransformError::Scale(m[3][3]));
+        }
+        let npo = [m[0][3], m[1][3], m[2][3]];
+        if npo.iter().any(|v| v.abs() > MAX_ORTHONORMALIZE) {
+            return Err(TransformError::Projective(npo));
+        }
+        let r = Matrix3::new(
+            m[0][0], m[1][0], m[2][0], //
+            m[0][1], m[1][1], m[2][1], //
+            m[0][2], m[1][2], m[2][2],
+        );
+        let err = (r.transpose() * r - Matrix3::identity()).abs().max();
+        if r.determinant() <= 0.0 {
+            return Err(TransformError::NotOrthonormal(2.0));
+        }
+        if err > MAX_ORTHONORMALIZE {
+            return Err(TransformError::FarFromRotation(err));
+        }
+        let svd = r.svd(true, true);
+        let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+            return Err(TransformError::FarFromRotation(err));
+        };
+        let nearest = u * v_t;
+        let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(nearest));
+        Ok(Self::from_parts(Vec3::new(m[3][0], m[3][1], m[3][2]), rot))
     }
 
     /// The translation part (mm).

@@ -1,8 +1,9 @@
 //! [`MeshCache`]: meshes kept between watch reruns, re-read only when their file changed.
 
 use super::step::{read_step, read_step_stored, StepError, StepOptions};
-use super::{Mesh, MeshError};
-use crate::fsutil::{content_hash, stamp, Stamp};
+use super::{Mesh, MeshError, MeshErrorKind};
+use crate::fsutil::{content_hash, stamp, FileKind, Stamp};
+use crate::project::Project;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -62,21 +63,41 @@ impl MeshCache {
     /// The mesh of the file at `path` (STL, OBJ, PLY, glTF/GLB), from the cache when
     /// the file is unchanged.
     pub fn get(&mut self, path: &Path) -> Result<Arc<Mesh>, MeshError> {
-        let key = path
-            .canonicalize()
-            .map_err(|e| MeshError::invalid(format!("cannot open: {e}")).in_file(path))?;
-        let now = stamp(&key)
-            .map_err(|e| MeshError::invalid(format!("cannot stat: {e}")).in_file(path))?;
+        let key = path.canonicalize().map_err(|e| {
+            MeshError::new(MeshErrorKind::Read, format!("cannot open: {e}")).in_file(path)
+        })?;
+        self.get_with(key, path, Opener::Path)
+    }
+
+    /// [`get`](Self::get) for a mesh of `project` at `path` (absolute and inside the
+    /// project, as [`Project::resolve_from`] returns it): the file (and a `.gltf`'s
+    /// buffer files) are read through the project's held root without following a
+    /// link ([`Project::read_file`]), so a folder swapped for a link after the path
+    /// was checked is refused, never read outside.
+    pub fn get_in(&mut self, project: &Project, path: &Path) -> Result<Arc<Mesh>, MeshError> {
+        self.get_with(path.to_path_buf(), path, Opener::Project(project))
+    }
+
+    fn get_with(
+        &mut self,
+        key: PathBuf,
+        path: &Path,
+        opener: Opener<'_>,
+    ) -> Result<Arc<Mesh>, MeshError> {
+        let now = stamp(&key).map_err(|e| {
+            MeshError::new(MeshErrorKind::Read, format!("cannot stat: {e}")).in_file(path)
+        })?;
         if let Some(e) = self.entries.get(&key) {
             if e.stamp == now && e.deps_fresh() {
                 return Ok(e.mesh.clone());
             }
         }
         let known = self.known(&key);
-        let (hash, deps, mesh) = read_mesh(&key, path, known)?;
+        let (hash, deps, mesh) = read_mesh(&key, path, known, opener)?;
         // `read_mesh` leaves out the mesh only when the bytes hash as the cached entry
-        self.store(key, now, hash, deps, mesh)
-            .ok_or_else(|| MeshError::invalid("the cached mesh vanished").in_file(path))
+        self.store(key, now, hash, deps, mesh).ok_or_else(|| {
+            MeshError::new(MeshErrorKind::Read, "the cached mesh vanished").in_file(path)
+        })
     }
 
     /// The other files the cached mesh of `path` was read from (a `.gltf`'s buffers):
@@ -134,11 +155,25 @@ impl MeshCache {
     /// costs once. A file that cannot be read or parsed is skipped here; its `get`
     /// reports the error.
     pub fn prefetch(&mut self, paths: &[&Path]) {
+        self.prefetch_with(paths, Opener::Path)
+    }
+
+    /// [`prefetch`](Self::prefetch) of meshes of `project` (paths as for
+    /// [`get_in`](Self::get_in)), read through its held root.
+    pub fn prefetch_in(&mut self, project: &Project, paths: &[&Path]) {
+        self.prefetch_with(paths, Opener::Project(project))
+    }
+
+    fn prefetch_with(&mut self, paths: &[&Path], opener: Opener<'_>) {
         use rayon::prelude::*;
         let mut wanted: Vec<(PathBuf, Stamp)> = Vec::new();
         for path in paths {
-            let Ok(key) = path.canonicalize() else {
-                continue;
+            let key = match opener {
+                Opener::Path => match path.canonicalize() {
+                    Ok(k) => k,
+                    Err(_) => continue,
+                },
+                Opener::Project(_) => path.to_path_buf(),
             };
             let Ok(now) = stamp(&key) else { continue };
             let fresh = self
@@ -158,7 +193,7 @@ impl MeshCache {
             .collect();
         let read: Vec<Option<Read>> = wanted
             .par_iter()
-            .map(|(key, _)| read_mesh(key, key, known.get(key).copied()).ok())
+            .map(|(key, _)| read_mesh(key, key, known.get(key).copied(), opener).ok())
             .collect();
         for ((key, now), r) in wanted.into_iter().zip(read) {
             if let Some((hash, deps, mesh)) = r {
@@ -221,28 +256,75 @@ impl MeshCache {
 /// content hash, the other files read (a `.gltf`'s buffers) with their stamps, and the
 /// parsed mesh, or `None` for the mesh when the bytes hash to `known` (the cached
 /// mesh stands; the caller passes `known` only while the buffer files are unchanged).
-fn read_mesh(key: &Path, path: &Path, known: Option<u64>) -> Result<Read, MeshError> {
+fn read_mesh(
+    key: &Path,
+    path: &Path,
+    known: Option<u64>,
+    opener: Opener<'_>,
+) -> Result<Read, MeshError> {
     if super::step::is_step_path(path) {
-        return Err(MeshError::invalid(super::step::not_a_part_mesh()).in_file(path));
+        return Err(
+            MeshError::new(MeshErrorKind::Unsupported, super::step::not_a_part_mesh())
+                .in_file(path),
+        );
     }
-    let bytes = crate::fsutil::read_file(key, crate::fsutil::FileKind::Mesh)
-        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
+    let bytes = opener.read(key).map_err(|e| e.in_file(path))?;
+    let read = |f: &Path| {
+        opener
+            .read(f)
+            .map_err(|e| crate::fsutil::ReadError::Io(e.message))
+    };
     let hash = content_hash(&bytes);
     if known == Some(hash) {
         return Ok((hash, Vec::new(), None));
     }
     let format = super::MeshFormat::detect(path, &bytes).map_err(|e| e.in_file(path))?;
     let (mesh, files) =
-        super::parse_mesh(&bytes, format, key.parent()).map_err(|e| e.in_file(path))?;
+        super::parse_mesh_with(&bytes, format, key.parent(), &read).map_err(|e| e.in_file(path))?;
     let deps = files
         .into_iter()
         .map(|f| {
-            let s = stamp(&f)
-                .map_err(|e| MeshError::invalid(format!("cannot stat {}: {e}", f.display())))?;
+            let s = stamp(&f).map_err(|e| {
+                MeshError::new(
+                    MeshErrorKind::Read,
+                    format!("cannot stat {}: {e}", f.display()),
+                )
+            })?;
             Ok((f, s))
         })
         .collect::<Result<_, MeshError>>()?;
     Ok((hash, deps, Some(mesh)))
+}
+
+/// How the cache opens files: by path (a library user's own paths, [`MeshCache::get`]),
+/// or through a project's held root without following a link ([`MeshCache::get_in`]).
+#[derive(Clone, Copy)]
+enum Opener<'a> {
+    Path,
+    Project(&'a Project),
+}
+
+impl Opener<'_> {
+    /// The file's bytes, after [`super::precheck`] on its first bytes: a binary STL or
+    /// PLY whose header passes a cap is refused before the file is read.
+    fn read(&self, path: &Path) -> Result<Vec<u8>, MeshError> {
+        use crate::fsutil::ReadError;
+        let file = match self {
+            Opener::Path => {
+                // Refused before the open (a FIFO must not block it).
+                let md = std::fs::metadata(path).map_err(|e| ReadError::Io(e.to_string()))?;
+                if !md.is_file() {
+                    return Ok(crate::fsutil::read_file(path, FileKind::Mesh)?);
+                }
+                std::fs::File::open(path).map_err(|e| ReadError::Io(e.to_string()))?
+            }
+            Opener::Project(p) => p
+                .open_file(path)
+                .map_err(|e| ReadError::Io(e.to_string()))?,
+        };
+        super::precheck(&file, path)?;
+        Ok(crate::fsutil::read_opened(file, FileKind::Mesh)?)
+    }
 }
 
 #[cfg(test)]

@@ -149,11 +149,13 @@ fn pose_matrix(t: &Transform) -> [f64; 16] {
 
 #[cfg(feature = "formats")]
 pub use read::parse_gltf;
+#[cfg(feature = "formats")]
+pub(crate) use read::parse_gltf_with;
 
 #[cfg(feature = "formats")]
 mod read {
     use super::super::stl::{check_coordinate, short};
-    use super::super::{Mesh, MeshError, MAX_TRIANGLES};
+    use super::super::{Mesh, MeshError, MeshErrorKind, Welder, MAX_TRIANGLES};
     use crate::math::Point3;
     use gltf::accessor::{DataType, Dimensions};
     use gltf::mesh::Mode;
@@ -186,6 +188,18 @@ mod read {
         bytes: &[u8],
         folder: Option<&Path>,
     ) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
+        parse_gltf_with(bytes, folder, &|f: &Path| {
+            crate::fsutil::read_file(f, crate::fsutil::FileKind::Mesh)
+        })
+    }
+
+    /// [`parse_gltf`], reading buffer files with `read`.
+    pub(crate) fn parse_gltf_with(
+        bytes: &[u8],
+        folder: Option<&Path>,
+        read: &dyn Fn(&Path) -> Result<Vec<u8>, crate::fsutil::ReadError>,
+    ) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
+        check_json_size(bytes)?;
         let gltf = gltf::Gltf::from_slice(bytes).map_err(load_error)?;
         let doc = &gltf.document;
         let mut files = Vec::new();
@@ -207,8 +221,9 @@ mod read {
                     } else {
                         let file = external(folder, uri)
                             .map_err(|m| MeshError::invalid(format!("{here}: {m}")))?;
-                        let data = crate::fsutil::read_file(&file, crate::fsutil::FileKind::Mesh)
-                            .map_err(|e| MeshError::invalid(format!("{here}: {e}")))?;
+                        let data = read(&file).map_err(|e| {
+                            MeshError::new(MeshErrorKind::Read, format!("{here}: {e}"))
+                        })?;
                         files.push(file);
                         data
                     }
@@ -241,82 +256,287 @@ mod read {
                 doc.nodes().filter(|n| !child[n.index()]).collect()
             }
         };
-        let mut soup: Vec<[Point3; 3]> = Vec::new();
+        let mut mesh = Welder::new(0);
         // glTF's +Y up → fitup's +Z up: the inverse (transpose) of the export's root.
         let up = nalgebra::Matrix4::from_column_slice(&super::Z_UP_TO_Y_UP).transpose();
-        let mut stack: Vec<(gltf::Node, nalgebra::Matrix4<f64>, usize)> =
-            roots.into_iter().rev().map(|n| (n, up, 0)).collect();
-        let mut visits = 0usize;
         let mut skipped = 0usize;
-        while let Some((node, parent, depth)) = stack.pop() {
-            visits += 1;
-            if visits > MAX_NODE_VISITS || depth > MAX_DEPTH {
-                return Err(MeshError::invalid(format!(
-                    "nodes[{}]: the node hierarchy is deeper than {MAX_DEPTH} levels or repeats subtrees past {MAX_NODE_VISITS} visits (a cycle?)",
-                    node.index()
-                )));
-            }
-            let local = node.transform().matrix();
-            let local = nalgebra::Matrix4::from_fn(|r, c| local[c][r] as f64);
-            let world = parent * local;
-            if let Some(mesh) = node.mesh() {
-                let here = match mesh.name() {
-                    Some(n) => format!("meshes[{}] `{}`", mesh.index(), short(n)),
-                    None => format!("meshes[{}]", mesh.index()),
-                };
-                for (pi, prim) in mesh.primitives().enumerate() {
-                    let at = |m: String| MeshError::invalid(format!("{here} primitive {pi}: {m}"));
-                    if !matches!(
-                        prim.mode(),
-                        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-                    ) {
-                        skipped += 1;
-                        continue;
-                    }
-                    let pos = prim
-                        .get(&gltf::Semantic::Positions)
-                        .ok_or_else(|| at("no POSITION attribute".into()))?;
-                    let points = positions(&pos, &buffers, &world).map_err(&at)?;
-                    let corners: Vec<u32> = match prim.indices() {
-                        Some(a) => indices(&a, &buffers, points.len()).map_err(&at)?,
-                        None => (0..points.len() as u32).collect(),
+        // Two walks of the scene: the first only counts every node's triangles (and
+        // checks the primitives), so a file past the cap — by instancing too — is
+        // refused before one triangle is made; the second places and welds them.
+        let mut counted = 0usize;
+        for counting in [true, false] {
+            let mut stack: Vec<(gltf::Node, nalgebra::Matrix4<f64>, usize)> =
+                roots.iter().rev().map(|n| (n.clone(), up, 0)).collect();
+            let mut visits = 0usize;
+            while let Some((node, parent, depth)) = stack.pop() {
+                visits += 1;
+                if visits > MAX_NODE_VISITS || depth > MAX_DEPTH {
+                    return Err(MeshError::new(
+                    MeshErrorKind::TooLarge,
+                    format!(
+                        "nodes[{}]: the node hierarchy is deeper than {MAX_DEPTH} levels or repeats subtrees past {MAX_NODE_VISITS} visits (a cycle?)",
+                        node.index()
+                    ),
+                ));
+                }
+                let local = node.transform().matrix();
+                let local = nalgebra::Matrix4::from_fn(|r, c| local[c][r] as f64);
+                let world = parent * local;
+                if let Some(m) = node.mesh() {
+                    let here = match m.name() {
+                        Some(n) => format!("meshes[{}] `{}`", m.index(), short(n)),
+                        None => format!("meshes[{}]", m.index()),
                     };
-                    let tris = assemble(prim.mode(), &corners);
-                    if soup.len() + tris.len() > MAX_TRIANGLES {
-                        return Err(at(format!(
-                            "more than {MAX_TRIANGLES} triangles: larger than fitup reads"
-                        )));
-                    }
-                    // A mirroring transform turns the winding inside out: swap back.
-                    let mirrored = world.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
-                    for t in tris {
-                        let [a, b, c] = t.map(|i| points[i as usize]);
-                        soup.push(if mirrored { [a, c, b] } else { [a, b, c] });
+                    for (pi, prim) in m.primitives().enumerate() {
+                        let at = |e: MeshError| e.prefixed(&format!("{here} primitive {pi}: "));
+                        if !matches!(
+                            prim.mode(),
+                            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+                        ) {
+                            skipped += usize::from(!counting);
+                            continue;
+                        }
+                        // Only views into the buffers: nothing of the primitive is decoded
+                        // or allocated, so a mesh that many nodes reuse costs each node its
+                        // triangles, never its positions again.
+                        let view = Primitive::new(&prim, &buffers).map_err(at)?;
+                        // Counted before any triangle is made (every node's instance
+                        // counts: instancing cannot pass the cap either).
+                        if counting {
+                            counted += view.triangles;
+                            if counted > MAX_TRIANGLES {
+                                return Err(at(MeshError::too_many(MAX_TRIANGLES, "triangles")));
+                            }
+                            continue;
+                        }
+                        // A mirroring transform turns the winding inside out: swap back.
+                        let mirrored = world.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
+                        for t in 0..view.triangles {
+                            let [a, b, c] = view.triangle(t, &world).map_err(at)?;
+                            mesh.push(if mirrored { [a, c, b] } else { [a, b, c] });
+                        }
                     }
                 }
-            }
-            for c in node.children().collect::<Vec<_>>().into_iter().rev() {
-                stack.push((c, world, depth + 1));
+                for c in node.children().collect::<Vec<_>>().into_iter().rev() {
+                    stack.push((c, world, depth + 1));
+                }
             }
         }
-        let mesh = Mesh::from_triangle_soup(soup)?;
-        if mesh.triangles.is_empty() {
+        if mesh.len() == 0 {
             let why = if skipped > 0 {
                 format!(" ({skipped} primitives of points or lines were skipped)")
             } else {
                 String::new()
             };
-            return Err(MeshError::invalid(format!(
-                "the glTF's scene has no triangles{why}"
-            )));
+            return Err(MeshError::new(
+                MeshErrorKind::NoSurface,
+                format!("the glTF's scene has no triangles{why}"),
+            ));
         }
+        let mesh = mesh.finish()?;
         if !mesh.has_area() {
-            return Err(MeshError::invalid(format!(
-                "all {} triangles have zero area (their corners are collinear or coincide): the mesh has no surface",
-                mesh.triangles.len()
-            )));
+            return Err(MeshError::new(
+                MeshErrorKind::NoSurface,
+                format!(
+                    "all {} triangles have zero area (their corners are collinear or coincide): the mesh has no surface",
+                    mesh.triangles.len()
+                ),
+            ));
         }
         Ok((mesh, files))
+    }
+
+    /// One primitive's positions and corner list as views into the buffers (checked
+    /// against their buffer views when made), and how many triangles it makes.
+    struct Primitive<'b> {
+        positions: Elements<'b>,
+        /// The index accessor; `None`: the positions in order.
+        indices: Option<Elements<'b>>,
+        mode: Mode,
+        triangles: usize,
+    }
+
+    /// The elements of one accessor: its bytes from the first element, the stride,
+    /// the count, the element size and the accessor's number (for messages).
+    struct Elements<'b> {
+        bytes: &'b [u8],
+        stride: usize,
+        count: usize,
+        size: usize,
+        accessor: usize,
+    }
+
+    impl<'b> Primitive<'b> {
+        fn new(prim: &gltf::Primitive, buffers: &'b [Vec<u8>]) -> Result<Self, MeshError> {
+            let pos = prim
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| MeshError::invalid("no POSITION attribute"))?;
+            if pos.data_type() != DataType::F32
+                || pos.dimensions() != Dimensions::Vec3
+                || pos.normalized()
+            {
+                return Err(MeshError::new(
+                    MeshErrorKind::Unsupported,
+                    format!(
+                        "accessors[{}]: POSITION must be a float VEC3 (quantized positions are not supported)",
+                        pos.index()
+                    ),
+                ));
+            }
+            let positions = accessor_bytes(&pos, buffers, 12)?;
+            let indices = match prim.indices() {
+                None => None,
+                Some(a) => {
+                    let size = match a.data_type() {
+                        DataType::U8 => 1,
+                        DataType::U16 => 2,
+                        DataType::U32 => 4,
+                        other => {
+                            return Err(MeshError::invalid(format!(
+                                "accessors[{}]: indices of type {other:?} (must be unsigned)",
+                                a.index()
+                            )))
+                        }
+                    };
+                    if a.dimensions() != Dimensions::Scalar {
+                        return Err(MeshError::invalid(format!(
+                            "accessors[{}]: indices must be scalars",
+                            a.index()
+                        )));
+                    }
+                    Some(accessor_bytes(&a, buffers, size)?)
+                }
+            };
+            let corners = indices.as_ref().unwrap_or(&positions).count;
+            let triangles = match prim.mode() {
+                Mode::TriangleStrip | Mode::TriangleFan => corners.saturating_sub(2),
+                _ => corners / 3,
+            };
+            Ok(Primitive {
+                positions,
+                indices,
+                mode: prim.mode(),
+                triangles,
+            })
+        }
+
+        /// The position number of corner `k` of the corner list.
+        fn corner(&self, k: usize) -> Result<usize, MeshError> {
+            let Some(ix) = &self.indices else {
+                return Ok(k);
+            };
+            let e = &ix.bytes[k * ix.stride..];
+            let v = match ix.size {
+                1 => u32::from(e[0]),
+                2 => u32::from(u16::from_le_bytes([e[0], e[1]])),
+                _ => u32::from_le_bytes([e[0], e[1], e[2], e[3]]),
+            } as usize;
+            if v >= self.positions.count {
+                return Err(MeshError::new(
+                    MeshErrorKind::Index,
+                    format!(
+                        "accessors[{}] element {k}: index {v} is past the {} positions",
+                        ix.accessor, self.positions.count
+                    ),
+                ));
+            }
+            Ok(v)
+        }
+
+        /// Position `i` placed by `world` and scaled to mm, checked.
+        fn point(&self, i: usize, world: &nalgebra::Matrix4<f64>) -> Result<Point3, MeshError> {
+            let p = &self.positions;
+            let e = &p.bytes[i * p.stride..i * p.stride + 12];
+            let f = |k: usize| {
+                f32::from_le_bytes([e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]]) as f64
+            };
+            let (x, y, z) = (f(0), f(1), f(2));
+            for c in [x, y, z] {
+                if !c.is_finite() {
+                    return Err(MeshError::new(
+                        MeshErrorKind::Coordinate,
+                        format!(
+                            "accessors[{}] element {i}: coordinate {c} is not finite",
+                            p.accessor
+                        ),
+                    ));
+                }
+            }
+            let q = world * nalgebra::Vector4::new(x, y, z, 1.0);
+            let q = Point3::new(q.x * 1000.0, q.y * 1000.0, q.z * 1000.0);
+            for c in q.coords.iter() {
+                check_coordinate(*c).map_err(|m| {
+                    MeshError::new(
+                        MeshErrorKind::Coordinate,
+                        format!(
+                            "accessors[{}] element {i}: {m} (mm, once placed)",
+                            p.accessor
+                        ),
+                    )
+                })?;
+            }
+            Ok(q)
+        }
+
+        /// Triangle `t` (of [`Primitive::triangles`]) placed by `world`.
+        fn triangle(
+            &self,
+            t: usize,
+            world: &nalgebra::Matrix4<f64>,
+        ) -> Result<[Point3; 3], MeshError> {
+            let ks = match self.mode {
+                Mode::TriangleStrip if t.is_multiple_of(2) => [t, t + 1, t + 2],
+                Mode::TriangleStrip => [t + 1, t, t + 2],
+                Mode::TriangleFan => [0, t + 1, t + 2],
+                _ => [3 * t, 3 * t + 1, 3 * t + 2],
+            };
+            let mut out = [Point3::origin(); 3];
+            for (o, k) in out.iter_mut().zip(ks) {
+                *o = self.point(self.corner(k)?, world)?;
+            }
+            Ok(out)
+        }
+    }
+
+    /// The most JSON objects (`{…}`) a glTF's JSON may hold: real files have one per
+    /// node, mesh, accessor and view, thousands; a parsed object takes a few hundred
+    /// bytes, so a file of millions of `{}` would take gigabytes to parse.
+    const MAX_JSON_OBJECTS: usize = 1_000_000;
+
+    /// Counts the JSON's objects (outside strings) before it is parsed: past
+    /// [`MAX_JSON_OBJECTS`] the file is refused, in one pass and no allocation.
+    fn check_json_size(bytes: &[u8]) -> Result<(), MeshError> {
+        let json = if bytes.starts_with(b"glTF") && bytes.len() >= 20 {
+            let n = u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize;
+            &bytes[20..(20usize.saturating_add(n)).min(bytes.len())]
+        } else {
+            bytes
+        };
+        let (mut objects, mut in_string, mut escaped) = (0usize, false, false);
+        let mut line = 1;
+        for &b in json {
+            if b == b'\n' {
+                line += 1;
+            }
+            if in_string {
+                match b {
+                    _ if escaped => escaped = false,
+                    b'\\' => escaped = true,
+                    b'"' => in_string = false,
+                    _ => {}
+                }
+            } else if b == b'"' {
+                in_string = true;
+            } else if b == b'{' {
+                objects += 1;
+                if objects > MAX_JSON_OBJECTS {
+                    return Err(MeshError::too_many(MAX_JSON_OBJECTS, "JSON objects")
+                        .prefixed("the glTF JSON has ")
+                        .on_line(line));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// A load error of the `gltf` crate, located: the JSON line, or the elements
@@ -423,145 +643,60 @@ mod read {
         Ok(out)
     }
 
-    /// The bytes of `acc`'s elements: the slice from its first element, the stride,
-    /// and the count; the whole extent is checked against its view and buffer before
-    /// anything is read or allocated.
+    /// The elements of `acc` (`elem` bytes each): the whole extent is checked against
+    /// its view and buffer before anything is read.
     fn accessor_bytes<'b>(
         acc: &gltf::Accessor,
         buffers: &'b [Vec<u8>],
         elem: usize,
-    ) -> Result<(&'b [u8], usize, usize), String> {
+    ) -> Result<Elements<'b>, MeshError> {
         let here = format!("accessors[{}]", acc.index());
         if acc.sparse().is_some() {
-            return Err(format!("{here}: sparse accessors are not supported"));
+            return Err(MeshError::new(
+                MeshErrorKind::Unsupported,
+                format!("{here}: sparse accessors are not supported"),
+            ));
         }
         let view = acc
             .view()
-            .ok_or_else(|| format!("{here}: no buffer view (all zeros)"))?;
+            .ok_or_else(|| MeshError::invalid(format!("{here}: no buffer view (all zeros)")))?;
         let data = buffers
             .get(view.buffer().index())
-            .ok_or_else(|| format!("{here}: no such buffer"))?;
+            .ok_or_else(|| MeshError::invalid(format!("{here}: no such buffer")))?;
         let vend = view
             .offset()
             .checked_add(view.length())
             .filter(|&e| e <= data.len())
             .ok_or_else(|| {
-                format!(
+                MeshError::invalid(format!(
                     "bufferViews[{}]: reaches past its buffer's {} bytes",
                     view.index(),
                     data.len()
-                )
+                ))
             })?;
         let stride = view.stride().unwrap_or(elem);
         if stride < elem {
-            return Err(format!(
+            return Err(MeshError::invalid(format!(
                 "{here}: stride {stride} is smaller than an element ({elem} bytes)"
-            ));
+            )));
         }
         let count = acc.count();
         let start = view.offset() + acc.offset();
         if count > 0 {
             let need = (count as u128 - 1) * stride as u128 + elem as u128 + start as u128;
             if need > vend as u128 {
-                return Err(format!(
+                return Err(MeshError::invalid(format!(
                     "{here}: {count} elements need {need} bytes, its buffer view ends at {vend} (a count larger than the data)"
-                ));
+                )));
             }
         }
-        Ok((&data[start.min(vend)..vend], stride, count))
-    }
-
-    /// The positions of `acc` placed by `world` and scaled to mm, each checked.
-    fn positions(
-        acc: &gltf::Accessor,
-        buffers: &[Vec<u8>],
-        world: &nalgebra::Matrix4<f64>,
-    ) -> Result<Vec<Point3>, String> {
-        if acc.data_type() != DataType::F32
-            || acc.dimensions() != Dimensions::Vec3
-            || acc.normalized()
-        {
-            return Err(format!(
-                "accessors[{}]: POSITION must be a float VEC3 (quantized positions are not supported)",
-                acc.index()
-            ));
-        }
-        let (bytes, stride, count) = accessor_bytes(acc, buffers, 12)?;
-        let mut out = Vec::with_capacity(count);
-        for i in 0..count {
-            let e = &bytes[i * stride..i * stride + 12];
-            let f = |k: usize| {
-                f32::from_le_bytes([e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]]) as f64
-            };
-            let p = world * nalgebra::Vector4::new(f(0), f(1), f(2), 1.0);
-            let p = Point3::new(p.x * 1000.0, p.y * 1000.0, p.z * 1000.0);
-            for c in p.coords.iter() {
-                check_coordinate(*c).map_err(|m| {
-                    format!(
-                        "accessors[{}] element {i}: {m} (mm, once placed)",
-                        acc.index()
-                    )
-                })?;
-            }
-            out.push(p);
-        }
-        Ok(out)
-    }
-
-    /// The indices of `acc`, each below `n`.
-    fn indices(acc: &gltf::Accessor, buffers: &[Vec<u8>], n: usize) -> Result<Vec<u32>, String> {
-        let size = match acc.data_type() {
-            DataType::U8 => 1,
-            DataType::U16 => 2,
-            DataType::U32 => 4,
-            other => {
-                return Err(format!(
-                    "accessors[{}]: indices of type {other:?} (must be unsigned)",
-                    acc.index()
-                ))
-            }
-        };
-        if acc.dimensions() != Dimensions::Scalar {
-            return Err(format!(
-                "accessors[{}]: indices must be scalars",
-                acc.index()
-            ));
-        }
-        let (bytes, stride, count) = accessor_bytes(acc, buffers, size)?;
-        let mut out = Vec::with_capacity(count);
-        for i in 0..count {
-            let e = &bytes[i * stride..];
-            let v = match size {
-                1 => u32::from(e[0]),
-                2 => u32::from(u16::from_le_bytes([e[0], e[1]])),
-                _ => u32::from_le_bytes([e[0], e[1], e[2], e[3]]),
-            };
-            if v as usize >= n {
-                return Err(format!(
-                    "accessors[{}] element {i}: index {v} is past the {n} positions",
-                    acc.index()
-                ));
-            }
-            out.push(v);
-        }
-        Ok(out)
-    }
-
-    /// Triangles from a primitive's corner list.
-    fn assemble(mode: Mode, c: &[u32]) -> Vec<[u32; 3]> {
-        match mode {
-            Mode::TriangleStrip => (2..c.len())
-                .map(|i| {
-                    if i % 2 == 0 {
-                        [c[i - 2], c[i - 1], c[i]]
-                    } else {
-                        [c[i - 1], c[i - 2], c[i]]
-                    }
-                })
-                .collect(),
-            Mode::TriangleFan => (2..c.len()).map(|i| [c[0], c[i - 1], c[i]]).collect(),
-            _ => c.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
-        }
+        Ok(Elements {
+            bytes: &data[start.min(vend)..vend],
+            stride,
+            count,
+            size: elem,
+            accessor: acc.index(),
+        })
     }
 }
 

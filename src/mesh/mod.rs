@@ -29,7 +29,9 @@
 //! ```
 
 mod cache;
+mod error;
 mod gltf;
+mod mass;
 mod obj;
 mod ply;
 mod shapes;
@@ -42,17 +44,35 @@ mod stl;
 pub use self::gltf::parse_gltf;
 pub use self::gltf::{glb_bytes, GlbNode, GLB_ROOT, Z_UP_TO_Y_UP};
 pub use cache::{MeshCache, StepMesh};
+pub use error::{MeshError, MeshErrorKind};
+pub use mass::{MassError, MassProperties, MassSpec};
 pub use obj::parse_obj;
 pub use ply::parse_ply;
-pub use stl::{parse_stl, read_stl, write_stl, MeshError};
+pub use stl::{parse_stl, read_stl, stl_bytes, write_stl};
 
 use std::path::{Path, PathBuf};
 
-/// The most triangles one mesh file may hold, whatever its format: what the largest
-/// binary STL fitup reads holds (256 MiB / 50 bytes ≈ 5.4 million), rounded up. A
-/// reader stops at the triangle past the cap, so a face list or accessor that claims
-/// more cannot fill the memory.
-pub const MAX_TRIANGLES: usize = 6_000_000;
+/// The most triangles one mesh file may hold, whatever its format. Every reader
+/// counts before it stores: a header, accessor or face list that would pass the cap
+/// is refused before its storage is allocated.
+///
+/// What the cap costs: a mesh of `n` triangles takes at most 84·n bytes once read
+/// (worst case, no shared corners: 3n positions of 24 bytes and n index triples of 12;
+/// a closed mesh shares corners and takes about 24·n), and reading it at most
+/// [`READ_BYTES_PER_TRIANGLE`]·n more besides the file's own bytes (capped by
+/// [`FileKind::Mesh`](crate::fsutil::FileKind::Mesh), 256 MiB). At the cap that is
+/// under 700 MB for the reader (docs/document.md, "Mesh files", lists the measured
+/// peaks per format).
+pub const MAX_TRIANGLES: usize = 2_000_000;
+
+/// The most vertices an indexed mesh file (OBJ, PLY, glTF accessors) may define: three
+/// per triangle of [`MAX_TRIANGLES`] (a file that shares no corner), so that vertices
+/// no face uses cannot fill the memory either.
+pub const MAX_VERTICES: usize = 3 * MAX_TRIANGLES;
+
+/// Bytes per triangle a reader may take beyond the mesh it returns (the welding table
+/// and an indexed format's own vertex and face lists), at most: see [`MAX_TRIANGLES`].
+pub const READ_BYTES_PER_TRIANGLE: usize = 192;
 
 /// A mesh file format fitup reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -98,9 +118,12 @@ impl MeshFormat {
             } else {
                 ""
             };
-            MeshError::invalid(format!(
-                "{ext} is not a mesh format fitup reads{hint}: .stl, .obj, .ply, .gltf, .glb"
-            ))
+            MeshError::new(
+                MeshErrorKind::Unsupported,
+                format!(
+                    "{ext} is not a mesh format fitup reads{hint}: .stl, .obj, .ply, .gltf, .glb"
+                ),
+            )
         })
     }
 }
@@ -112,16 +135,30 @@ pub fn parse_mesh(
     format: MeshFormat,
     folder: Option<&Path>,
 ) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
+    parse_mesh_with(bytes, format, folder, &|f: &Path| {
+        crate::fsutil::read_file(f, crate::fsutil::FileKind::Mesh)
+    })
+}
+
+/// [`parse_mesh`], reading a `.gltf`'s buffer files with `read` (the mesh cache reads
+/// them through the project's held root).
+pub(crate) fn parse_mesh_with(
+    bytes: &[u8],
+    format: MeshFormat,
+    folder: Option<&Path>,
+    read: &dyn Fn(&Path) -> Result<Vec<u8>, crate::fsutil::ReadError>,
+) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
     match format {
         MeshFormat::Stl => Ok((parse_stl(bytes)?, Vec::new())),
         MeshFormat::Obj => Ok((parse_obj(bytes)?, Vec::new())),
         MeshFormat::Ply => Ok((parse_ply(bytes)?, Vec::new())),
         #[cfg(feature = "formats")]
-        MeshFormat::Gltf => parse_gltf(bytes, folder),
+        MeshFormat::Gltf => gltf::parse_gltf_with(bytes, folder, read),
         #[cfg(not(feature = "formats"))]
         MeshFormat::Gltf => {
-            let _ = folder;
-            Err(MeshError::invalid(
+            let _ = (folder, read);
+            Err(MeshError::new(
+                MeshErrorKind::Unsupported,
                 "glTF/GLB meshes need fitup built with the `formats` feature (on by default): rebuild with `--features formats`",
             ))
         }
@@ -147,10 +184,52 @@ pub fn read_mesh_file(path: &Path) -> Result<Mesh, MeshError> {
 
 /// [`read_mesh_file`], with the other files read (a `.gltf`'s buffers).
 pub(crate) fn read_mesh_with_files(path: &Path) -> Result<(Mesh, Vec<PathBuf>), MeshError> {
+    if let Ok(f) = std::fs::File::open(path).and_then(|f| {
+        f.metadata()?
+            .is_file()
+            .then_some(f)
+            .ok_or_else(|| std::io::Error::other("not a file"))
+    }) {
+        precheck(&f, path).map_err(|e| e.in_file(path))?;
+    }
     let bytes = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh)
-        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
+        .map_err(|e| MeshError::from(e).in_file(path))?;
     let format = MeshFormat::detect(path, &bytes).map_err(|e| e.in_file(path))?;
     parse_mesh(&bytes, format, path.parent()).map_err(|e| e.in_file(path))
+}
+
+/// The caps a file's first bytes already tell, checked before the file is read whole:
+/// a binary STL's facet count (its size is `84 + 50·n`) and a PLY header's vertex and
+/// face counts. So a 250 MB STL of 5 million facets is refused having read 84 bytes.
+pub(crate) fn precheck(file: &std::fs::File, path: &Path) -> Result<(), MeshError> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileExt;
+        let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+        let mut head = vec![0u8; 4096];
+        let mut got = 0;
+        while got < head.len() {
+            match file.read_at(&mut head[got..], got as u64) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => got += n,
+            }
+        }
+        head.truncate(got);
+        let format = MeshFormat::from_path(path);
+        if head.len() >= 84 && format == Some(MeshFormat::Stl) {
+            let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+            if 84 + 50 * n == len && n > MAX_TRIANGLES as u64 {
+                return Err(MeshError::too_many(MAX_TRIANGLES, "triangles")
+                    .prefixed(&format!("a binary STL of {n} facets: ")));
+            }
+        }
+        if format == Some(MeshFormat::Ply) && head.starts_with(b"ply") {
+            ply::precheck(&head)?;
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = (file, path);
+    Ok(())
 }
 
 /// The end of every indexed reader (OBJ, PLY): no triangles or none with an area is
@@ -164,17 +243,25 @@ fn finish_read(
     first_line: Option<usize>,
 ) -> Result<Mesh, MeshError> {
     if triangles.is_empty() {
-        return Err(MeshError::invalid(format!("the {format} has no {what}")));
+        return Err(MeshError::new(
+            MeshErrorKind::NoSurface,
+            format!("the {format} has no {what}"),
+        ));
     }
-    let mesh = Mesh::from_triangle_soup(triangles.iter().map(|t| t.map(|i| vertices[i as usize])))?;
+    let mut w = Welder::new(triangles.len());
+    for t in &triangles {
+        w.push(t.map(|i| vertices[i as usize]));
+    }
+    drop((vertices, triangles));
+    let mesh = w.finish()?;
     if !mesh.has_area() {
         let message = format!(
             "all {} triangles have zero area (their corners are collinear or coincide): the mesh has no surface",
             mesh.triangles.len()
         );
         return Err(match first_line {
-            Some(line) => MeshError::at(line, message),
-            None => MeshError::invalid(format!("{format}: {message}")),
+            Some(line) => MeshError::new(MeshErrorKind::NoSurface, message).on_line(line),
+            None => MeshError::new(MeshErrorKind::NoSurface, format!("{format}: {message}")),
         });
     }
     Ok(mesh)
@@ -231,6 +318,92 @@ impl Hasher for FoldHasher {
     #[inline]
     fn finish(&self) -> u64 {
         self.0
+    }
+}
+
+/// Builds an indexed mesh triangle by triangle, merging bit-identical positions as it
+/// goes: what every reader feeds, so no reader keeps a triangle soup (72 bytes per
+/// triangle) besides the mesh. The table holds only 32-bit vertex numbers (about 5
+/// bytes per slot; a map keyed by the coordinates took 33), hashed by the positions'
+/// bits with [`FoldState`].
+pub(crate) struct Welder {
+    table: hashbrown::HashTable<u32>,
+    hasher: FoldState,
+    vertices: Vec<Point3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// The bits a position is welded by (+0.0 and −0.0 are the same point).
+#[inline]
+fn weld_key(p: &Point3) -> [u64; 3] {
+    [
+        (p.x + 0.0).to_bits(),
+        (p.y + 0.0).to_bits(),
+        (p.z + 0.0).to_bits(),
+    ]
+}
+
+impl Welder {
+    /// A welder for about `triangles` triangles (a count already checked against
+    /// [`MAX_TRIANGLES`]). The triangle list and a table of one slot per triangle
+    /// (a closed mesh has about half as many vertices) are reserved; pages of the
+    /// reservation not yet used take no memory.
+    pub(crate) fn new(triangles: usize) -> Welder {
+        let triangles = triangles.min(MAX_TRIANGLES);
+        Welder {
+            table: hashbrown::HashTable::with_capacity(triangles),
+            hasher: FoldState::new(),
+            vertices: Vec::new(),
+            triangles: Vec::with_capacity(triangles),
+        }
+    }
+
+    /// Triangles so far.
+    pub(crate) fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The vertex number of `p`, merged with an equal position seen before.
+    fn vertex(&mut self, p: &Point3) -> u32 {
+        let key = weld_key(p);
+        let hasher = self.hasher;
+        let hash = |k: &[u64; 3]| {
+            let mut h = hasher.build_hasher();
+            for w in k {
+                h.write_u64(*w);
+            }
+            h.finish()
+        };
+        let vertices = &mut self.vertices;
+        match self.table.entry(
+            hash(&key),
+            |&i| weld_key(&vertices[i as usize]) == key,
+            |&i| hash(&weld_key(&vertices[i as usize])),
+        ) {
+            hashbrown::hash_table::Entry::Occupied(e) => *e.get(),
+            hashbrown::hash_table::Entry::Vacant(e) => {
+                let i = vertices.len() as u32;
+                vertices.push(*p);
+                e.insert(i);
+                i
+            }
+        }
+    }
+
+    /// Adds one triangle (the caller has checked the cap and the coordinates).
+    pub(crate) fn push(&mut self, tri: [Point3; 3]) {
+        let ids = [
+            self.vertex(&tri[0]),
+            self.vertex(&tri[1]),
+            self.vertex(&tri[2]),
+        ];
+        self.triangles.push(ids);
+    }
+
+    /// The mesh (coordinates checked once more by [`Mesh::new`]).
+    pub(crate) fn finish(self) -> Result<Mesh, MeshError> {
+        drop(self.table);
+        Mesh::new(self.vertices, self.triangles)
     }
 }
 
@@ -293,26 +466,11 @@ impl Mesh {
     pub fn from_triangle_soup(
         corners: impl IntoIterator<Item = [Point3; 3]>,
     ) -> Result<Self, MeshError> {
-        let mut index: HashMap<[u64; 3], u32, FoldState> = HashMap::with_hasher(FoldState::new());
-        let mut vertices = Vec::new();
-        let mut triangles = Vec::new();
+        let mut w = Welder::new(0);
         for tri in corners {
-            let mut ids = [0u32; 3];
-            for (k, p) in tri.iter().enumerate() {
-                // +0.0 and -0.0 are the same point.
-                let key = [
-                    (p.x + 0.0).to_bits(),
-                    (p.y + 0.0).to_bits(),
-                    (p.z + 0.0).to_bits(),
-                ];
-                ids[k] = *index.entry(key).or_insert_with(|| {
-                    vertices.push(*p);
-                    (vertices.len() - 1) as u32
-                });
-            }
-            triangles.push(ids);
+            w.push(tri);
         }
-        Self::new(vertices, triangles)
+        w.finish()
     }
 
     /// The length areas are measured against (mm): the larger of the bounding box's

@@ -6,7 +6,7 @@
 //! [`MAX_TRIANGLES`](super::MAX_TRIANGLES).
 
 use super::stl::{read_xyz, short};
-use super::{finish_read, MeshError, MAX_TRIANGLES};
+use super::{finish_read, MeshError, MeshErrorKind, MAX_TRIANGLES, MAX_VERTICES};
 use crate::math::Point3;
 
 /// Attribute and grouping statements that carry no geometry fitup uses (texture
@@ -79,14 +79,19 @@ pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                         MeshError::at(line, format!("`{}` is not a number", short(w)))
                     })?;
                 }
-                if vertices.len() >= u32::MAX as usize {
-                    return Err(MeshError::at(line, "more vertices than fitup indexes"));
+                if vertices.len() >= MAX_VERTICES {
+                    return Err(MeshError::too_many(MAX_VERTICES, "vertices").on_line(line));
                 }
                 vertices.push(Point3::new(xyz[0], xyz[1], xyz[2]));
             }
             "f" | "fo" => {
                 corners.clear();
                 for w in words {
+                    // Counted before it is kept: one line of millions of corners
+                    // stops at the cap, not at the end of the line.
+                    if triangles.len() + corners.len().saturating_sub(1) > MAX_TRIANGLES {
+                        return Err(MeshError::too_many(MAX_TRIANGLES, "triangles").on_line(line));
+                    }
                     let index = w.split('/').next().unwrap_or("");
                     let n: i64 = index.parse().map_err(|_| {
                         MeshError::at(line, format!("`{}` is not a vertex index", short(w)))
@@ -108,7 +113,8 @@ pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                             format!(
                                 "vertex index {n} refers past the {count} vertices defined before this line"
                             ),
-                        ));
+                        )
+                        .kind(MeshErrorKind::Index));
                     }
                     corners.push(resolved as u32);
                 }
@@ -119,10 +125,7 @@ pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                     ));
                 }
                 if triangles.len() + corners.len() - 2 > MAX_TRIANGLES {
-                    return Err(MeshError::at(
-                        line,
-                        format!("more than {MAX_TRIANGLES} triangles: larger than fitup reads"),
-                    ));
+                    return Err(MeshError::too_many(MAX_TRIANGLES, "triangles").on_line(line));
                 }
                 first_face.get_or_insert(line);
                 for k in 1..corners.len() - 1 {
@@ -134,7 +137,8 @@ pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                 return Err(MeshError::at(
                     line,
                     format!("`{k}`: free-form curves and surfaces are not supported (export the part as a polygon mesh)"),
-                ))
+                )
+                .kind(MeshErrorKind::Unsupported))
             }
             other => {
                 return Err(MeshError::at(

@@ -8,7 +8,7 @@
 //! errors name the line; binary errors name the element and item.
 
 use super::stl::{check_coordinate, short};
-use super::{finish_read, MeshError, MAX_TRIANGLES};
+use super::{finish_read, MeshError, MeshErrorKind, MAX_TRIANGLES, MAX_VERTICES};
 use crate::math::Point3;
 
 /// The longest header accepted (bytes): real headers are a few hundred bytes.
@@ -142,6 +142,23 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
     }
     let vertex = elements.iter().position(|e| e.name == "vertex");
     let face = elements.iter().position(|e| e.name == "face");
+    // The caps, from the header's counts, before anything is stored: every face makes
+    // at least one triangle.
+    for (i, cap, what) in [
+        (vertex, MAX_VERTICES, "vertices"),
+        (face, MAX_TRIANGLES, "triangles"),
+    ] {
+        if let Some(e) = i.map(|i| &elements[i]) {
+            if e.count > cap as u64 {
+                return Err(MeshError::too_many(cap, what)
+                    .prefixed(&format!(
+                        "element `{}` declares {} items: ",
+                        e.name, e.count
+                    ))
+                    .on_line(e.line));
+            }
+        }
+    }
     let (Some(vi), Some(fi)) = (vertex, face) else {
         return Err(MeshError::at(
             1,
@@ -188,7 +205,7 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
         bytes: rest,
         pos: 0,
         line: header_lines,
-        words: Vec::new(),
+        words: "".split_ascii_whitespace(),
     };
     let mut vertices: Vec<Point3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
@@ -210,6 +227,7 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                             if let Some(k) = xyz.iter().position(|&x| x == pi) {
                                 check_coordinate(v).map_err(|m| {
                                     reader_error(format, reader.line, &e.name, item, m)
+                                        .kind(MeshErrorKind::Coordinate)
                                 })?;
                                 coords[k] = v;
                             }
@@ -223,10 +241,23 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                         if !(n >= 0.0 && n.fract() == 0.0) {
                             return Err(fail(format!("list length {n} is not a count")));
                         }
+                        let keep = ei == fi && pi == indices;
                         // Checked before reading: a list cannot be longer than what
-                        // is left (binary: its items' bytes; ASCII: the line's words).
+                        // is left (binary: its items' bytes; ASCII: the line's words),
+                        // and a face list cannot pass the triangle cap.
+                        if keep && n - 2.0 + triangles.len() as f64 > MAX_TRIANGLES as f64 {
+                            let cap = MeshError::too_many(MAX_TRIANGLES, "triangles");
+                            return Err(reader_error(
+                                format,
+                                reader.line,
+                                &e.name,
+                                item,
+                                format!("a list of {n} corners: {}", cap.message),
+                            )
+                            .kind(MeshErrorKind::TooLarge));
+                        }
                         if format == Format::Ascii {
-                            let left = reader.words.len();
+                            let left = reader.words.clone().count();
                             if n > left as f64 {
                                 return Err(fail(format!(
                                     "a list of {n} items, but the line has {left} values left"
@@ -242,11 +273,15 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                         }
                         values.clear();
                         for _ in 0..n as usize {
-                            values.push(reader.value(*s).map_err(|m| {
-                                reader_error(format, reader.line, &e.name, item, m)
-                            })?);
+                            let v = reader
+                                .value(*s)
+                                .map_err(|m| reader_error(format, reader.line, &e.name, item, m))?;
+                            // Only the face list is kept; other lists are read past.
+                            if keep {
+                                values.push(v);
+                            }
                         }
-                        if ei == fi && pi == indices {
+                        if keep {
                             face_triangles(&values, vertices.len(), &mut triangles)
                                 .map_err(|m| reader_error(format, reader.line, &e.name, item, m))?;
                             first_face.get_or_insert(reader.line);
@@ -266,6 +301,30 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
     finish_read("PLY", "faces", vertices, triangles, first)
 }
 
+/// The header's caps from the file's first bytes (when `end_header` is among them):
+/// the same refusals [`parse_ply`] makes, before the file is read whole.
+pub(super) fn precheck(head: &[u8]) -> Result<(), MeshError> {
+    let Ok((_, elements, _)) = header(head) else {
+        return Ok(()); // the whole read says what is wrong
+    };
+    for e in &elements {
+        let (cap, what) = match e.name.as_str() {
+            "vertex" => (MAX_VERTICES, "vertices"),
+            "face" => (MAX_TRIANGLES, "triangles"),
+            _ => continue,
+        };
+        if e.count > cap as u64 {
+            return Err(MeshError::too_many(cap, what)
+                .prefixed(&format!(
+                    "element `{}` declares {} items: ",
+                    e.name, e.count
+                ))
+                .on_line(e.line));
+        }
+    }
+    Ok(())
+}
+
 /// An error in the body: ASCII at its line, binary naming the element and item.
 fn reader_error(format: Format, line: usize, element: &str, item: u64, m: String) -> MeshError {
     let element = short(element);
@@ -281,11 +340,6 @@ fn face_triangles(idx: &[f64], vertex_count: usize, out: &mut Vec<[u32; 3]>) -> 
         return Err(format!(
             "a face needs at least 3 corners, this one has {}",
             idx.len()
-        ));
-    }
-    if out.len() + idx.len() - 2 > MAX_TRIANGLES {
-        return Err(format!(
-            "more than {MAX_TRIANGLES} triangles: larger than fitup reads"
         ));
     }
     let mut c = Vec::with_capacity(idx.len());
@@ -310,8 +364,9 @@ struct Reader<'a> {
     pos: usize,
     /// ASCII: the 1-based line of the current item.
     line: usize,
-    /// ASCII: the words of the current item's line not yet read (reversed).
-    words: Vec<&'a str>,
+    /// ASCII: the words of the current item's line not yet read (an iterator over the
+    /// line: a line of millions of values is not split into a list).
+    words: std::str::SplitAsciiWhitespace<'a>,
 }
 
 impl<'a> Reader<'a> {
@@ -336,13 +391,13 @@ impl<'a> Reader<'a> {
             if t.is_empty() || t.starts_with("comment") {
                 continue;
             }
-            self.words = t.split_whitespace().rev().collect();
+            self.words = t.split_ascii_whitespace();
             return Ok(());
         }
     }
 
     fn end_item(&mut self) -> Result<(), String> {
-        match self.words.last() {
+        match self.words.next() {
             Some(w) if self.format == Format::Ascii => Err(format!(
                 "`{}`: more values on the line than the header's properties",
                 short(w)
@@ -356,7 +411,7 @@ impl<'a> Reader<'a> {
             Format::Ascii => {
                 let w = self
                     .words
-                    .pop()
+                    .next()
                     .ok_or("fewer values on the line than the header's properties")?;
                 let v: f64 = w
                     .parse()

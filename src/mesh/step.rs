@@ -589,7 +589,12 @@ pub fn read_step_stored(
     let key = store::StoreKey::new(&bytes, options);
     drop(bytes);
     if let Some(raw) = store::load_stored(store, &key) {
-        return from_raw(path, options, raw, true, start);
+        // A stored answer that does not make a model is the store's damage, not the
+        // STEP file's: discarded, and the file read again.
+        if let Ok(model) = from_raw(path, options, raw, true, start) {
+            return Ok(model);
+        }
+        store::discard(store, &key);
     }
     let raw = read_raw(path, options)?;
     store::store(store, &key, path, &raw, DEFAULT_STORE_CAP);

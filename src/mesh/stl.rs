@@ -4,56 +4,9 @@
 //! their header: SolidWorks writes binary STL whose 80-byte header starts with
 //! `solid`, which fools parsers that look at the first word.
 
-use super::Mesh;
+use super::{Mesh, MeshError, MeshErrorKind, Welder, MAX_TRIANGLES};
 use crate::math::Point3;
-use std::fmt;
-use std::path::{Path, PathBuf};
-
-/// A mesh that could not be read or written: which file, where in it, and why.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub struct MeshError {
-    /// The file, when there is one.
-    pub path: Option<PathBuf>,
-    /// 1-based line of a text format (ASCII STL, OBJ, ASCII PLY, .gltf JSON), when known.
-    pub line: Option<usize>,
-    /// What is wrong.
-    pub message: String,
-}
-
-impl MeshError {
-    pub(crate) fn invalid(message: impl Into<String>) -> Self {
-        Self {
-            path: None,
-            line: None,
-            message: message.into(),
-        }
-    }
-
-    pub(crate) fn at(line: usize, message: impl Into<String>) -> Self {
-        Self {
-            path: None,
-            line: Some(line),
-            message: message.into(),
-        }
-    }
-
-    /// The same error, naming `path`.
-    pub fn in_file(mut self, path: &Path) -> Self {
-        self.path = Some(path.to_path_buf());
-        self
-    }
-}
-
-impl fmt::Display for MeshError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match (&self.path, self.line) {
-            (Some(p), Some(l)) => write!(f, "{}:{}: {}", p.display(), l, self.message),
-            (Some(p), None) => write!(f, "{}: {}", p.display(), self.message),
-            (None, Some(l)) => write!(f, "line {}: {}", l, self.message),
-            (None, None) => write!(f, "{}", self.message),
-        }
-    }
-}
+use std::path::Path;
 
 /// Reads an STL file (ASCII or binary) into an indexed mesh (mm).
 pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
@@ -61,7 +14,7 @@ pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
         return Err(MeshError::invalid(super::step::not_a_part_mesh()).in_file(path));
     }
     let bytes = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh)
-        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
+        .map_err(|e| MeshError::from(e).in_file(path))?;
     parse_stl(&bytes).map_err(|e| e.in_file(path))
 }
 
@@ -73,7 +26,10 @@ pub fn read_stl(path: &Path) -> Result<Mesh, MeshError> {
 pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
     let (mesh, first_facet) = parse_any(bytes)?;
     if mesh.triangles.is_empty() {
-        return Err(MeshError::invalid("the STL has no facets"));
+        return Err(MeshError::new(
+            MeshErrorKind::NoSurface,
+            "the STL has no facets",
+        ));
     }
     if !mesh.has_area() {
         let message = format!(
@@ -81,8 +37,8 @@ pub fn parse_stl(bytes: &[u8]) -> Result<Mesh, MeshError> {
             mesh.triangles.len()
         );
         return Err(match first_facet {
-            Some(line) => MeshError::at(line, message),
-            None => MeshError::invalid(format!("binary STL: {message}")),
+            Some(line) => MeshError::new(MeshErrorKind::NoSurface, message).on_line(line),
+            None => MeshError::new(MeshErrorKind::NoSurface, format!("binary STL: {message}")),
         });
     }
     Ok(mesh)
@@ -104,7 +60,8 @@ pub(super) fn read_xyz<'a>(
         *c = w
             .parse::<f64>()
             .map_err(|_| MeshError::at(line, format!("`{}` is not a number", short(w))))?;
-        check_coordinate(*c).map_err(|m| MeshError::at(line, m))?;
+        check_coordinate(*c)
+            .map_err(|m| MeshError::new(MeshErrorKind::Coordinate, m).on_line(line))?;
     }
     Ok(xyz)
 }
@@ -127,6 +84,10 @@ fn parse_any(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
     if bytes.len() >= 84 {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
         if 84 + 50 * n == bytes.len() as u64 {
+            if n > MAX_TRIANGLES as u64 {
+                return Err(MeshError::too_many(MAX_TRIANGLES, "triangles")
+                    .prefixed(&format!("a binary STL of {n} facets: ")));
+            }
             return Ok((parse_binary(bytes)?, None));
         }
     }
@@ -155,8 +116,9 @@ fn parse_any(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
 
 fn parse_binary(bytes: &[u8]) -> Result<Mesh, MeshError> {
     // 80-byte header, u32 count, then per facet: normal (3 f32), 3 vertices (9 f32),
-    // u16 attribute. The size was checked by the caller.
-    let mut soup = Vec::with_capacity((bytes.len() - 84) / 50);
+    // u16 attribute. The size and the count (at most MAX_TRIANGLES) were checked by
+    // the caller; facets go straight into the welder, no soup is kept.
+    let mut mesh = Welder::new((bytes.len() - 84) / 50);
     for (i, facet) in bytes[84..].chunks_exact(50).enumerate() {
         let f = |k: usize| {
             let o = 12 + 4 * k;
@@ -168,12 +130,16 @@ fn parse_binary(bytes: &[u8]) -> Result<Mesh, MeshError> {
             Point3::new(f(6), f(7), f(8)),
         ];
         for v in corners.iter().flat_map(|c| c.coords.iter()) {
-            check_coordinate(*v)
-                .map_err(|m| MeshError::invalid(format!("binary STL facet {i}: {m}")))?;
+            check_coordinate(*v).map_err(|m| {
+                MeshError::new(
+                    MeshErrorKind::Coordinate,
+                    format!("binary STL facet {i}: {m}"),
+                )
+            })?;
         }
-        soup.push(corners);
+        mesh.push(corners);
     }
-    Mesh::from_triangle_soup(soup)
+    mesh.finish()
 }
 
 /// ASCII STL: `solid name / facet normal … / outer loop / vertex x y z ×3 / endloop /
@@ -189,7 +155,7 @@ fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
             + 1;
         MeshError::at(line, "ASCII STL contains bytes that are not UTF-8 text")
     })?;
-    let mut soup = Vec::new();
+    let mut soup = Welder::new(0);
     let mut corners: Vec<Point3> = Vec::with_capacity(3);
     let mut in_facet = false;
     // Inside a `solid … endsolid` block; `ended` is the line of the last `endsolid`.
@@ -220,7 +186,7 @@ fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
         match keyword.as_str() {
             "solid" if !in_solid => in_solid = true,
             // A repeated header before any facet (seen in hand-edited files).
-            "solid" if soup.is_empty() && !in_facet => {}
+            "solid" if soup.len() == 0 && !in_facet => {}
             "solid" => {
                 return Err(MeshError::at(
                     line,
@@ -256,6 +222,9 @@ fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
                         format!("a facet has {} vertices, expected 3", corners.len()),
                     ));
                 }
+                if soup.len() >= MAX_TRIANGLES {
+                    return Err(MeshError::too_many(MAX_TRIANGLES, "triangles").on_line(line));
+                }
                 soup.push([corners[0], corners[1], corners[2]]);
                 in_facet = false;
             }
@@ -283,13 +252,13 @@ fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
             "the file ends inside a facet (truncated?)",
         ));
     }
-    if ended.is_none() && soup.is_empty() {
+    if ended.is_none() && soup.len() == 0 {
         return Err(MeshError::at(
             text.lines().count().max(1),
             "no facets and no `endsolid` (truncated?)",
         ));
     }
-    Ok((Mesh::from_triangle_soup(soup)?, first_facet))
+    Ok((soup.finish()?, first_facet))
 }
 
 /// At most 40 characters of a token or line, for messages (a line may be megabytes).
@@ -299,6 +268,26 @@ pub(super) fn short(s: &str) -> String {
     } else {
         format!("{}…", s.chars().take(40).collect::<String>())
     }
+}
+
+/// A mesh as the bytes of a binary STL (f32 coordinates, mm, normals from the
+/// winding), for writers that go through the output rule.
+pub fn stl_bytes(mesh: &Mesh) -> Vec<u8> {
+    let triangles: Vec<stl_io::Triangle> = (0..mesh.triangles.len())
+        .map(|i| {
+            let [a, b, c] = mesh.triangle(i);
+            let n = mesh.triangle_normal(i);
+            let v = |p: Point3| stl_io::Vertex::new([p.x as f32, p.y as f32, p.z as f32]);
+            stl_io::Triangle {
+                normal: stl_io::Normal::new([n.x as f32, n.y as f32, n.z as f32]),
+                vertices: [v(a), v(b), v(c)],
+            }
+        })
+        .collect();
+    let mut bytes = Vec::with_capacity(84 + 50 * triangles.len());
+    // writing into a Vec cannot fail
+    let _ = stl_io::write_stl(&mut bytes, triangles.iter());
+    bytes
 }
 
 /// Writes a binary STL atomically (temporary file in the same folder, then rename), so
@@ -317,9 +306,9 @@ pub fn write_stl(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {
         .collect();
     let mut bytes = Vec::with_capacity(84 + 50 * triangles.len());
     stl_io::write_stl(&mut bytes, triangles.iter())
-        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))?;
+        .map_err(|e| MeshError::new(MeshErrorKind::Write, e.to_string()).in_file(path))?;
     crate::fsutil::write_atomic(path, &bytes)
-        .map_err(|e| MeshError::invalid(e.to_string()).in_file(path))
+        .map_err(|e| MeshError::new(MeshErrorKind::Write, e.to_string()).in_file(path))
 }
 
 #[cfg(test)]

@@ -83,14 +83,19 @@ pub(crate) struct AxisSearch {
     open: BinaryHeap<Reverse<(Key, usize)>>,
     /// Every aligned node of the tree (the root and what axis moves added).
     nodes: Vec<usize>,
+    /// Length unit of the slides (1 for the lengths in mm above; the scale-free
+    /// search's narrow step over its 3 mm reference, so slides scale with the
+    /// problem).
+    unit: f64,
 }
 
 impl AxisSearch {
     /// The search of `tree`, whose root is the first aligned node.
-    pub fn new(tree: &Tree, target: &Transform, space: &PlanningSpace) -> Self {
+    pub fn new(tree: &Tree, target: &Transform, space: &PlanningSpace, unit: f64) -> Self {
         let mut s = Self {
             open: BinaryHeap::new(),
             nodes: Vec::new(),
+            unit,
         };
         s.push(tree, 0, target, space);
         s
@@ -146,7 +151,7 @@ impl AxisSearch {
             }
         }
         for d in directions(&q, reference) {
-            if let Some(to) = slide(checker, space, reference, &from, &d, target) {
+            if let Some(to) = slide(checker, space, reference, &from, &d, target, self.unit) {
                 if !tree.holds(&to) {
                     let i = tree.add(to, node);
                     self.push(tree, i, target, space);
@@ -205,9 +210,9 @@ fn room(t: &Vec3, d: &Vec3, min: &Vec3, max: &Vec3) -> f64 {
 
 /// The farthest free pose of the pure translation from `from` along `d`: as far
 /// as the other tree's root's coordinate along `d` when that lies ahead, else as
-/// far as the bounds; checked in [`PIECE_MM`] pieces, the first blocked one
-/// bisected and the slide backed off by [`BACK_OFF_MM`] from where it was
-/// blocked. `None` when it moves less than [`MIN_SLIDE_MM`].
+/// far as the bounds; checked in [`PIECE_MM`] pieces (times `unit`), the first
+/// blocked one bisected and the slide backed off by [`BACK_OFF_MM`] from where it
+/// was blocked. `None` when it moves less than [`MIN_SLIDE_MM`] (times `unit`).
 fn slide(
     checker: &mut Checker<'_>,
     space: &PlanningSpace,
@@ -215,22 +220,24 @@ fn slide(
     from: &Transform,
     d: &Vec3,
     target: &Transform,
+    unit: f64,
 ) -> Option<Transform> {
+    let (piece, min_slide) = (PIECE_MM * unit, MIN_SLIDE_MM * unit);
     let (t, q) = (from.translation(), from.rotation());
     let bound = room(&t, d, &space.min, &space.max);
     let ahead = (target.translation() - t).dot(d);
-    let cap = if ahead > MIN_SLIDE_MM {
+    let cap = if ahead > min_slide {
         ahead.min(bound)
     } else {
         bound
     };
-    if cap < MIN_SLIDE_MM {
+    if cap < min_slide {
         return None;
     }
     let at = |s: f64| Transform::from_parts(t + d * s, q);
     let mut lo = 0.0;
     while lo < cap {
-        let hi = (lo + PIECE_MM).min(cap);
+        let hi = (lo + piece).min(cap);
         let (a, b) = (at(lo), at(hi));
         if space.contains(&b, reference) && checker.edge_free(&a, &b) {
             lo = hi;
@@ -252,7 +259,7 @@ fn slide(
         lo = (lo - BACK_OFF_MM).max(0.0);
         break;
     }
-    (lo >= MIN_SLIDE_MM).then(|| at(lo))
+    (lo >= min_slide).then(|| at(lo))
 }
 
 #[cfg(test)]

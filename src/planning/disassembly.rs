@@ -43,6 +43,30 @@ impl DisassemblyPlanner {
         }
     }
 
+    /// The same search with every length times `k` (step, goal tolerance, the
+    /// narrow-passage measures', the lazy step and `local_rrt`'s lattice): how a
+    /// scale-free [`plan_insertion`](super::plan_insertion) fits the defaults,
+    /// given for a 3 mm step, to its problem.
+    #[must_use]
+    pub fn scaled(&self, k: f64) -> DisassemblyPlanner {
+        let rrt = |o: &RrtOptions| RrtOptions {
+            step: o.step * k,
+            goal_tolerance: o.goal_tolerance * k,
+            narrow: o.narrow.scaled(k),
+            lazy: o.lazy.map(|l| super::LazyValidation {
+                step_mm: l.step_mm * k,
+            }),
+            ..o.clone()
+        };
+        match self {
+            DisassemblyPlanner::Rrt(o) => DisassemblyPlanner::Rrt(rrt(o)),
+            DisassemblyPlanner::LocalRrt(o) => DisassemblyPlanner::LocalRrt(LocalRrtOptions {
+                rrt: rrt(&o.rrt),
+                lattice: o.lattice.scaled(k),
+            }),
+        }
+    }
+
     /// The tree search options (for `local_rrt`, those of its underlying RRT).
     pub fn rrt(&self) -> &RrtOptions {
         match self {

@@ -194,7 +194,18 @@ pub fn plan_insertion(
     approach.limits.seed = options.approach.limits.seed ^ 0x9E37_79B9_7F4A_7C15;
     let name = label(&options.disassembly, &options.approach);
     let assembled = if goal_in { goal } else { start };
-    let mut out = options.disassembly.clone();
+    // With a scale-free approach the disassembly's lengths (given for the 3 mm
+    // reference step) shrink with a thin part, but never grow: a fit's clearance
+    // does not grow with the part (a Ø20 mm peg in a bore 0.2 mm wider fails at
+    // 3.3× the lengths, tests/it/planning_problems.rs `peg_tilt`).
+    let mut out = match options.approach.step {
+        Some(_) => options.disassembly.clone(),
+        None => {
+            let scale = super::ProblemScale::of(space, &*validator);
+            let k = (scale.narrow_step() / RrtConnectOptions::STEP).min(1.0);
+            options.disassembly.scaled(k)
+        }
+    };
     out.rrt_mut().smoothing.enabled = false;
     out.rrt_mut().limits.time_limit_ms = left();
     // `disassemble` returns the path outside → assembled.

@@ -91,6 +91,18 @@ impl Lattice {
     /// rotations alone (docs/performance.md). [`Lattice::default`] keeps seed 002's 0.
     pub const RANDOM_MOVES: usize = 8;
 
+    /// The same lattice with its edge lengths times `k` (angles unchanged): the
+    /// scale-free search's lattice, `k` its narrow step over the 3 mm the defaults
+    /// were measured with.
+    #[must_use]
+    pub fn scaled(&self, k: f64) -> Lattice {
+        Lattice {
+            edge_length_max: self.edge_length_max * k,
+            edge_length_min: self.edge_length_min * k,
+            ..self.clone()
+        }
+    }
+
     pub(crate) fn validate(&self) -> Result<(), PlanError> {
         PlanError::positive("edge_length_max", self.edge_length_max)?;
         PlanError::positive("edge_length_min", self.edge_length_min)?;

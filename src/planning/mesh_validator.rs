@@ -37,8 +37,9 @@ pub struct MeshValidatorOptions {
     /// end pose first; features thinner than a step can be missed.
     pub edge: SweepMethod,
     /// Largest distance (mm) [`MotionValidator::clearance`] looks for; farther
-    /// obstacles report this value. Default 20.
-    pub clearance_cap: f64,
+    /// obstacles report this value. `None` (default): the moving part's radius, so
+    /// the search scales with the part (scale-free, like the planner's defaults).
+    pub clearance_cap: Option<f64>,
 }
 
 impl Default for MeshValidatorOptions {
@@ -46,7 +47,7 @@ impl Default for MeshValidatorOptions {
         Self {
             tolerance: crate::collision::DEFAULT_TOLERANCE,
             edge: SweepMethod::CONTINUOUS,
-            clearance_cap: 20.0,
+            clearance_cap: None,
         }
     }
 }
@@ -126,10 +127,13 @@ impl MeshValidator {
                 ));
             }
         }
-        if !(options.clearance_cap.is_finite() && options.clearance_cap > 0.0) {
+        if let Some(cap) = options
+            .clearance_cap
+            .filter(|c| !(c.is_finite() && *c > 0.0))
+        {
             return Err(MotionFault::option(
                 "clearance cap",
-                options.clearance_cap,
+                cap,
                 "a finite number > 0 mm",
             ));
         }
@@ -252,7 +256,8 @@ impl MeshValidator {
         // Long edges (shortcuts, direct connections) that fail mostly fail somewhere
         // in the middle, where a continuous pass would crawl along a near contact
         // first: 15 static checks in bisection order reject them cheaply.
-        if dist + angle * self.moving.radius() > PRESAMPLE_REACH_MM {
+        let r = self.moving.radius();
+        if dist + angle * r > PRESAMPLE_REACH * r {
             for level in 1..=4u32 {
                 let n = 1u32 << level;
                 for m in (1..n).step_by(2) {
@@ -268,8 +273,10 @@ impl MeshValidator {
         // pieces of at most PIECE_REACH_MM (a piece of a straight SE(3) edge is
         // the straight edge between its ends, so nothing changes but where the
         // deadline is read) no single call overruns the caller's budget by much.
-        let reach = dist + angle * self.moving.radius();
-        let pieces = (reach / PIECE_REACH_MM).ceil().clamp(1.0, 1e6) as u32;
+        let reach = dist + angle * r;
+        let pieces = (reach / (PIECE_REACH * r).max(MIN_PIECE_MM))
+            .ceil()
+            .clamp(1.0, 1e6) as u32;
         let mut a = *from;
         for i in 1..=pieces {
             let b = if i == pieces {
@@ -294,14 +301,19 @@ impl MeshValidator {
     }
 }
 
-/// Edges longer than this (largest point displacement, mm) get static checks at
-/// 15 inner poses before the continuous pass.
-const PRESAMPLE_REACH_MM: f64 = 10.0;
-/// The continuous check runs in pieces whose points move at most this far (mm),
-/// reading the deadline between them. 2 mm: in a sliding contact the check steps
-/// by at most the tolerance (0.01 mm by default), so a piece must be short for the
-/// deadline to be read often enough.
-const PIECE_REACH_MM: f64 = 2.0;
+/// Edges longer than this (largest point displacement, in radii of the moving
+/// part) get static checks at 15 inner poses before the continuous pass.
+const PRESAMPLE_REACH: f64 = 0.5;
+/// The continuous check runs in pieces whose points move at most this far (in
+/// radii of the moving part, at least [`MIN_PIECE_MM`]), reading the deadline
+/// between them: in a sliding contact the check steps by about the contact step
+/// (0.05 mm by default), so a piece must be short enough for the deadline to be
+/// read often; but each piece is a traversal of the trees of its own, which long
+/// edges of a large part in open space (a table carried through a house: edges
+/// of 200 mm) must not pay hundreds of times.
+const PIECE_REACH: f64 = 0.25;
+/// The shortest piece (mm).
+const MIN_PIECE_MM: f64 = 2.0;
 
 impl MotionValidator for MeshValidator {
     fn is_free(&mut self, pose: &Transform) -> bool {
@@ -354,12 +366,32 @@ impl MotionValidator for MeshValidator {
         self.deadline = deadline;
     }
 
+    fn part_radius(&self) -> Option<f64> {
+        Some(self.moving.radius())
+    }
+
+    fn part_thickness(&self) -> Option<f64> {
+        let b = self.moving.bounds();
+        Some((b.hi - b.lo).min())
+    }
+
+    /// A copy sharing the colliders (`Arc`s), with zeroed counters and no deadline.
+    fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+        let mut copy = self.clone();
+        copy.stats = ValidatorStats::default();
+        copy.deadline = None;
+        Some(Box::new(copy))
+    }
+
     fn clearance(&mut self, pose: &Transform) -> Option<f64> {
         self.stats.clearance_checks += 1;
         if !pose.is_finite() {
             return None;
         }
-        let cap = self.options.clearance_cap;
+        let cap = self
+            .options
+            .clearance_cap
+            .unwrap_or_else(|| self.moving.radius());
         let b = self.moving.world_bounds(pose);
         self.collect_near(&b, cap);
         let mut d = cap;
@@ -417,8 +449,10 @@ mod tests {
         assert!(v.is_free(&at(45.0)), "touching the wall");
         assert!(!v.is_free(&at(45.5)));
         assert!(!v.is_free(&at(50.5)), "straddling the wall");
+        // The default cap is the part's radius (a 10 mm cube: 8.66 mm).
+        let cap = v.moving().radius();
         assert_eq!(v.clearance(&at(40.0)), Some(5.0));
-        assert!(v.clearance(&at(0.0)).unwrap() >= 20.0 - 1e-9);
+        assert!((v.clearance(&at(0.0)).unwrap() - cap).abs() < 1e-9);
         assert_eq!(v.stats().pose_checks, 4);
     }
 
@@ -463,7 +497,7 @@ mod tests {
             ..Default::default()
         }));
         assert!(bad(MeshValidatorOptions {
-            clearance_cap: f64::NAN,
+            clearance_cap: Some(f64::NAN),
             ..Default::default()
         }));
         let nan = Transform::from_translation(Vec3::new(f64::NAN, 0.0, 0.0));

@@ -38,6 +38,7 @@ mod rrt;
 mod rrt_connect;
 mod rrt_floyd;
 mod run;
+mod scale;
 mod smoothing;
 mod space;
 mod tree;
@@ -67,6 +68,7 @@ pub use run::{
     Control, Failure, Phase, PlanError, PlanLimits, Progress, ProgressFn, DEFAULT_TIME_LIMIT_MS,
     PROGRESS_EVERY, SMOOTHING_PROGRESS_EVERY,
 };
+pub use scale::ProblemScale;
 pub use smoothing::{smooth, Smoothing, DEFAULT_SMOOTHING_SHARE};
 pub use space::{PlanningSpace, RotationFreedom};
 pub use validator::{stepwise_edge_free, LazyValidation, MotionValidator};

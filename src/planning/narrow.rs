@@ -130,6 +130,18 @@ impl NarrowPassage {
     /// uniform sample.
     pub const BRIDGE_TRIES: usize = 16;
 
+    /// The same measures with their lengths (`dynamic_domain`, `bridge_width`)
+    /// times `k`: the scale-free search's, `k` its narrow step over the 3 mm the
+    /// defaults were measured with.
+    #[must_use]
+    pub fn scaled(&self, k: f64) -> NarrowPassage {
+        NarrowPassage {
+            dynamic_domain: self.dynamic_domain.map(|d| d * k),
+            bridge_width: self.bridge_width * k,
+            ..*self
+        }
+    }
+
     pub(crate) fn validate(&self) -> Result<(), PlanError> {
         if let Some(t) = self.max_turn {
             if !(t > 0.0 && t <= std::f64::consts::PI) {

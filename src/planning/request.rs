@@ -124,7 +124,7 @@ impl Planner {
             Planner::RrtFloyd(o) => o.step = step,
             Planner::Rrt(o) | Planner::BiasedRrt(o) => o.step = step,
             Planner::LocalRrt(o) => o.rrt.step = step,
-            Planner::RrtConnect(o) => o.step = step,
+            Planner::RrtConnect(o) => o.step = Some(step),
         }
     }
 

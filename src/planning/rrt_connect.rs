@@ -1,30 +1,40 @@
-//! [`rrt_connect`]: the bidirectional RRT (Kuffner & LaValle), with seed 002's local
-//! discretization as a fallback when an extension fails.
+//! [`rrt_connect`]: the bidirectional RRT (Kuffner & LaValle), fitup's default
+//! planner: with scale-free defaults, a long-range search for open space and a
+//! narrow-passage search for tight assemblies race on two cores, deterministically.
 
 use super::axis::AxisSearch;
 use super::lattice::Lattice;
 use super::narrow::NarrowPassage;
 use super::path::PlannedPath;
 use super::rrt::finish;
-use super::run::{PlanError, PlanLimits, ProgressFn, Run};
+use super::run::{Failure, PlanError, PlanLimits, ProgressFn, Run};
+use super::scale::ProblemScale;
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
 use super::tree::{check_ends, steer, Effort, PoseTarget, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Rng, Transform};
+use nalgebra::UnitQuaternion;
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
 
 /// Options of [`rrt_connect`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct RrtConnectOptions {
-    /// Seed and limits.
+    /// Seed and limits (each search of a race has its own iteration count).
     pub limits: PlanLimits,
-    /// Largest extension, in metric mm (see [`PlanningSpace`]). Default
-    /// [`RrtConnectOptions::STEP`], 3.
-    pub step: f64,
+    /// Largest extension, in metric mm (see [`PlanningSpace`]). `None` (default):
+    /// scale-free — every length comes from the problem ([`ProblemScale`]) and two
+    /// searches race (see [`rrt_connect`]). `Some(step)`: one search with this
+    /// step, and the lengths of `lattice`, `narrow` and `lazy` as given.
+    pub step: Option<f64>,
     /// The local discretization tried when an extension or a connection is blocked
     /// (`None`: plain RRT-Connect). Default: [`Lattice::default`] with
     /// [`Lattice::RANDOM_MOVES`] random coordinated moves and
-    /// [`Lattice::clearance_turns`].
+    /// [`Lattice::clearance_turns`]. Its lengths are for a step of
+    /// [`RrtConnectOptions::STEP`]; the scale-free narrow-passage search scales them
+    /// with its own step.
     pub lattice: Option<Lattice>,
     /// Largest share of the search's work the fallbacks of a blocked extension
     /// may take, in `[0, 1]`: the lattice, extension to contact, bridge-test
@@ -39,29 +49,33 @@ pub struct RrtConnectOptions {
     /// the share doubles for every 10,000 iterations that bring the trees no
     /// closer (up to 1), and returns to this value when they do. Work is counted,
     /// not timed, so the same seed gives the same path. 0: never; 1: always
-    /// (fitup before 2026-12). Default 0.1.
+    /// (fitup before 2026-12). Default 0.1. The long-range search of a race has
+    /// no fallbacks.
     pub fallback_share: f64,
     /// Shortcut smoothing of the found path.
     pub smoothing: Smoothing,
     /// Explore with pose checks and certify only the candidate path with the
     /// validator's edge check ([`LazyValidation`]); `None`: every edge is checked
     /// by the validator when it is added. The path is then labelled
-    /// `lazy_rrt_connect`.
+    /// `lazy_rrt_connect`. With a scale-free `step` the explored resolution is
+    /// derived too: the long-range search's is [`ProblemScale::resolution`], the
+    /// narrow-passage search's `step_mm` scaled like its lattice.
     pub lazy: Option<LazyValidation>,
     /// Narrow-passage measures of the extensions and the sampling
-    /// ([`NarrowPassage`]). Default [`NarrowPassage::default`].
+    /// ([`NarrowPassage`]). Default [`NarrowPassage::default`]; lengths for a step
+    /// of [`RrtConnectOptions::STEP`] (the scale-free narrow-passage search scales
+    /// them); the long-range search of a race uses none.
     pub narrow: NarrowPassage,
 }
 
 impl RrtConnectOptions {
-    /// The default extension step, metric mm. Measured on issue 23's puzzles
-    /// (docs/performance.md, "Issue 23, round 4"): a step below the width of a
-    /// passage keeps extensions inside it. In a 7 mm corridor a 10 mm step ends
-    /// in a wall almost every time (97 % of the extensions of the rod round the
-    /// corner were blocked); 3 mm solved the corridor corner 30× and the zigzag
-    /// tunnel from 0/5 to 5/5, and the open puzzles (house, tubes) kept their
-    /// times, since a node that comes closer to the other tree's root tries the
-    /// straight edge to it whatever the step.
+    /// The reference extension step, metric mm, that the lengths of the default
+    /// lattice, narrow-passage measures and lazy resolution were measured with
+    /// (issue 23's puzzles, parts of ≈ 25 mm radius: a step below the width of a
+    /// passage keeps extensions inside it; 3 mm solved the 7 mm corridor corner
+    /// and the zigzag tunnel). The scale-free narrow-passage search's step is
+    /// [`ProblemScale::narrow_step`], and it scales those lengths by its ratio to
+    /// this one.
     pub const STEP: f64 = 3.0;
 }
 
@@ -69,7 +83,7 @@ impl Default for RrtConnectOptions {
     fn default() -> Self {
         Self {
             limits: PlanLimits::default(),
-            step: Self::STEP,
+            step: None,
             lattice: Some(Lattice {
                 random_moves: Lattice::RANDOM_MOVES,
                 clearance_turns: true,
@@ -86,7 +100,9 @@ impl Default for RrtConnectOptions {
 impl RrtConnectOptions {
     pub(crate) fn validate(&self) -> Result<(), PlanError> {
         self.limits.validate()?;
-        PlanError::positive("step", self.step)?;
+        if let Some(step) = self.step {
+            PlanError::positive("step", step)?;
+        }
         if let Some(l) = &self.lattice {
             l.validate()?;
         }
@@ -99,14 +115,627 @@ impl RrtConnectOptions {
     }
 }
 
+/// How one search extends: its step, fallbacks and exploration resolution, all
+/// lengths resolved (metric mm).
+#[derive(Debug, Clone)]
+struct Strategy {
+    step: f64,
+    lattice: Option<Lattice>,
+    narrow: NarrowPassage,
+    /// Lazy exploration `(mm, rad)`, or `None` for the validator's own edge check.
+    lazy: Option<(f64, f64)>,
+    fallback_share: f64,
+    /// Length unit of the axis-move slides (1: mm as given).
+    unit: f64,
+    /// Translation quantum of the trees' duplicate detection (mm).
+    key_mm: f64,
+    /// Offset of the search's random stream from the seed's.
+    stream: u64,
+    /// The rotation weight of the search's metric (mm per rad).
+    rotation_weight: f64,
+}
+
+impl Strategy {
+    /// One search with the options as given (`step` explicit).
+    fn explicit(options: &RrtConnectOptions, space: &PlanningSpace, step: f64) -> Self {
+        Self {
+            step,
+            lattice: options.lattice.clone(),
+            narrow: options.narrow,
+            lazy: options.lazy.map(|l| l.steps(space)),
+            fallback_share: options.fallback_share,
+            unit: 1.0,
+            key_mm: key_mm(options.lattice.as_ref(), step),
+            stream: 0,
+            rotation_weight: space.rotation_weight,
+        }
+    }
+
+    /// The long-range search: OMPL's RRT-Connect range and resolution as shares
+    /// of the space's metric extent, no fallbacks; what crosses open, twisting
+    /// space (a table carried through a house) fastest.
+    fn long_range(
+        options: &RrtConnectOptions,
+        space: &PlanningSpace,
+        scale: &ProblemScale,
+    ) -> Self {
+        let step = scale.range();
+        let res = scale.resolution();
+        Self {
+            step,
+            lattice: None,
+            narrow: NarrowPassage::OFF,
+            lazy: options.lazy.map(|_| (res, res / space.rotation_weight)),
+            fallback_share: 0.0,
+            unit: 1.0,
+            key_mm: res * 1e-3,
+            stream: 0,
+            rotation_weight: space.rotation_weight,
+        }
+    }
+
+    /// The narrow-passage search: fitup's measures (lattice, turn-limited retry,
+    /// dynamic domains, bridge test, axis moves) with every length scaled from
+    /// their 3 mm reference to [`ProblemScale::narrow_step`]; what threads a part
+    /// through a slit or into a bore.
+    fn narrow(options: &RrtConnectOptions, space: &PlanningSpace, scale: &ProblemScale) -> Self {
+        let step = scale.narrow_step();
+        let k = step / RrtConnectOptions::STEP;
+        let lattice = options.lattice.as_ref().map(|l| l.scaled(k));
+        Self {
+            step,
+            key_mm: key_mm(lattice.as_ref(), step),
+            lattice,
+            narrow: options.narrow.scaled(k),
+            lazy: options.lazy.map(|l| {
+                let mm = l.step_mm * k;
+                (mm, mm / space.rotation_weight)
+            }),
+            fallback_share: options.fallback_share,
+            unit: k,
+            stream: 0x9E37_79B9_7F4A_7C15,
+            rotation_weight: space.rotation_weight,
+        }
+    }
+}
+
+/// The duplicate-detection quantum: a quarter of the finest lattice edge, or a
+/// thousandth of the step.
+fn key_mm(lattice: Option<&Lattice>, step: f64) -> f64 {
+    lattice.map_or(step * 1e-3, |l| l.edge_length_min * 0.25)
+}
+
+/// One RRT-Connect search, iterated by a driver (one thread, or one of a race).
+struct Search<'v, 's> {
+    checker: Checker<'v>,
+    /// The search's space: the call's, with the strategy's rotation weight.
+    space: &'s PlanningSpace,
+    s: Strategy,
+    trees: [Tree; 2],
+    axis: [AxisSearch; 2],
+    rng: Rng,
+    effort: Effort,
+    /// The closest any node came to the other tree's root (metric mm).
+    best: f64,
+    /// Per tree: how close any node of the other tree has come to its root. A new
+    /// node closer than that tries the straight edge to the root (one check, and
+    /// only on progress, so open space is crossed in one edge once the trees see
+    /// each other's ends).
+    closest_to_root: [f64; 2],
+    added: Vec<usize>,
+    axis_spent: u64,
+    /// The tree extending this iteration (0 grows from the start, 1 from the goal).
+    a: usize,
+    reference: UnitQuaternion<f64>,
+}
+
+impl<'v, 's> Search<'v, 's> {
+    fn new(
+        mut checker: Checker<'v>,
+        space: &'s PlanningSpace,
+        start: &Transform,
+        goal: &Transform,
+        s: Strategy,
+        seed: u64,
+    ) -> Self {
+        checker.set_lazy(s.lazy);
+        let trees = [Tree::new(*start, s.key_mm), Tree::new(*goal, s.key_mm)];
+        let axis = [
+            AxisSearch::new(&trees[0], goal, space, s.unit),
+            AxisSearch::new(&trees[1], start, space, s.unit),
+        ];
+        let best = space.distance(start, goal);
+        Self {
+            checker,
+            space,
+            rng: Rng::new(seed ^ s.stream),
+            effort: Effort::new(s.fallback_share),
+            s,
+            trees,
+            axis,
+            best,
+            closest_to_root: [best; 2],
+            added: Vec::new(),
+            axis_spent: 0,
+            a: 0,
+            reference: start.rotation(),
+        }
+    }
+
+    fn nodes(&self) -> usize {
+        self.trees[0].len() + self.trees[1].len()
+    }
+
+    fn work(&self) -> u64 {
+        self.checker.work()
+    }
+
+    /// The joined path: from the start tree's node `s` and the goal tree's `g`.
+    fn path(&self, (s, g): (usize, usize)) -> Vec<Transform> {
+        let mut poses = self.trees[0].branch(s);
+        let mut back = self.trees[1].branch(g);
+        back.reverse();
+        // The meeting pose is in both branches.
+        poses.extend(back.into_iter().skip(1));
+        poses
+    }
+
+    /// Whether the branches to `s` (start tree) and `g` (goal tree) hold: always
+    /// when eager; lazily, once both pass the validator's own check (a failed edge
+    /// is cut with its subtree, and the search goes on).
+    fn certified(&mut self, s: usize, g: usize) -> bool {
+        !self.checker.is_lazy()
+            || (self.trees[0].certify_branch(s, &mut self.checker)
+                && self.trees[1].certify_branch(g, &mut self.checker))
+    }
+
+    /// One iteration; the joined nodes (start tree, goal tree) once the trees meet.
+    fn iterate(&mut self) -> Option<(usize, usize)> {
+        let space = self.space;
+        self.effort.iteration(self.best);
+        let (a, b) = (self.a, 1 - self.a);
+        self.a = b;
+        let narrow = self.s.narrow;
+        // An axis-move iteration: within its share of the work, expand tree
+        // `a`'s best aligned node, and try to meet the other tree from what it
+        // added (the other root, or its aligned nodes of the same orientation).
+        if narrow.axis_moves > 0.0
+            && self.axis[a].has_open()
+            && self.axis_spent as f64 <= narrow.axis_moves * self.checker.work() as f64
+        {
+            let before = self.checker.work();
+            let met = self.axis_iteration(a, b);
+            self.axis_spent += self.checker.work() - before;
+            return met;
+        }
+        // The bridge test and dynamic-domain redraws are fallbacks: within the
+        // share they run, past it the sample is uniform. The extension below
+        // always keeps the domains up to date and retries with a limited turn.
+        let (sample, near) = narrow.sample_within(
+            &mut self.effort,
+            &mut self.rng,
+            &mut self.checker,
+            space,
+            &self.reference,
+            &self.trees[a],
+        );
+        self.added.clear();
+        let extended = narrow.extend(
+            &mut self.checker,
+            space,
+            &self.reference,
+            &mut self.trees[a],
+            near,
+            &sample,
+            self.s.step,
+        );
+        match extended {
+            Ok(i) => self.added.push(i),
+            Err(candidate) => {
+                let other_root = PoseTarget(self.trees[b].poses[0]);
+                narrow.fall_back(
+                    self.s.lattice.as_ref(),
+                    &mut self.effort,
+                    &mut self.checker,
+                    space,
+                    &self.reference,
+                    &mut self.trees[a],
+                    near,
+                    &candidate,
+                    &other_root,
+                    self.s.step,
+                    &mut self.rng,
+                    &mut self.added,
+                );
+            }
+        }
+        let &last = self.added.last()?;
+        let q = self.trees[a].poses[last];
+        let root = self.trees[b].poses[0];
+        let to_root = space.distance(&q, &root);
+        let direct = if to_root < self.closest_to_root[b] {
+            self.closest_to_root[b] = to_root;
+            self.best = self.best.min(to_root);
+            // The meeting pose `q` joins the other tree as a child of its root.
+            self.checker
+                .edge_free(&root, &q)
+                .then(|| self.trees[b].add(q, 0))
+        } else {
+            None
+        };
+        let reached = direct.or_else(|| self.connect(b, &q))?;
+        let (s, g) = if a == 0 {
+            (last, reached)
+        } else {
+            (reached, last)
+        };
+        self.certified(s, g).then_some((s, g))
+    }
+
+    /// The axis-move part of an iteration of tree `a` toward tree `b`'s root.
+    fn axis_iteration(&mut self, a: usize, b: usize) -> Option<(usize, usize)> {
+        let space = self.space;
+        self.added.clear();
+        let target = self.trees[b].poses[0];
+        self.axis[a].expand(
+            &mut self.checker,
+            space,
+            &self.reference,
+            &mut self.trees[a],
+            &target,
+            &mut self.added,
+        );
+        for k in 0..self.added.len() {
+            let i = self.added[k];
+            // A failed certification below may have cut it.
+            if !self.trees[a].alive(i) {
+                continue;
+            }
+            let q = self.trees[a].poses[i];
+            let to_root = space.distance(&q, &target);
+            self.best = self.best.min(to_root);
+            let mut reached = None;
+            // A slide stops at the root's coordinate: from the root's own
+            // place only a turn is left, always worth its one check.
+            let at_root = (q.translation() - target.translation()).norm() < 1e-9;
+            if to_root < self.closest_to_root[b] || at_root {
+                self.closest_to_root[b] = self.closest_to_root[b].min(to_root);
+                if self.checker.edge_free(&target, &q) {
+                    reached = Some(self.trees[b].add(q, 0));
+                }
+            }
+            if reached.is_none() {
+                for m in self.axis[b].same_orientation(&self.trees[b], &q) {
+                    if self.checker.edge_free(&self.trees[b].poses[m], &q) {
+                        reached = Some(self.trees[b].add(q, m));
+                        break;
+                    }
+                }
+            }
+            if let Some(r) = reached {
+                let (s, g) = if a == 0 { (i, r) } else { (r, i) };
+                if self.certified(s, g) {
+                    return Some((s, g));
+                }
+            }
+        }
+        None
+    }
+
+    /// Grows tree `t` straight toward `q` in steps; returns the node equal to `q`
+    /// when reached. A blocked step tries the lattice once around the blocked node.
+    fn connect(&mut self, t: usize, q: &Transform) -> Option<usize> {
+        let space = self.space;
+        let tree = &mut self.trees[t];
+        let (mut node, _) = tree.nearest(q, space);
+        let step = self.s.step;
+        // Bounded: the distance shrinks by `step` each round, but poses far apart
+        // with a tiny step must not stall one iteration for long.
+        for _ in 0..10_000 {
+            let from = tree.poses[node];
+            let d = space.distance(&from, q);
+            self.best = self.best.min(d);
+            // The straight SE(3) edge toward `q`, not turn-limited: a turn limit
+            // would let the translation run ahead of the rotation, and an approach
+            // into a bore or a seat needs both to arrive together.
+            let next = steer(&from, q, step, space);
+            if space.contains(&next, &self.reference) && self.checker.edge_free(&from, &next) {
+                node = tree.add(next, node);
+                if d <= step {
+                    return Some(node);
+                }
+                continue;
+            }
+            if let Some(lattice) = &self.s.lattice {
+                let mut added = Vec::new();
+                let (rng, reference) = (&mut self.rng, &self.reference);
+                self.effort.run(&mut self.checker, |checker| {
+                    lattice.expand(
+                        checker,
+                        space,
+                        tree,
+                        node,
+                        &PoseTarget(*q),
+                        reference,
+                        step,
+                        rng,
+                        &mut added,
+                    );
+                });
+                if let Some(&last) = added.last() {
+                    if space.distance(&tree.poses[last], q) < 1e-9 {
+                        return Some(last);
+                    }
+                }
+            }
+            return None;
+        }
+        None
+    }
+}
+
+/// What a search of a race ended with.
+enum Outcome {
+    /// The trees met and the path was certified, after `work` (pose-check units).
+    Found {
+        poses: Vec<Transform>,
+        work: u64,
+        nodes: usize,
+        iterations: usize,
+        pose_checks: u64,
+        edge_checks: u64,
+    },
+    /// Another search found its path with less work: this one cannot win.
+    Outrun,
+    /// Stopped (time or iteration limit, cancelled).
+    Failed(Failure, usize, usize),
+}
+
+/// What the searches of a race share: the least work at which one found its path
+/// (`u64::MAX`: none yet), and the stop signal of a cancelled call.
+struct Rival {
+    best: AtomicU64,
+    stop: AtomicBool,
+}
+
+impl Rival {
+    fn new() -> Self {
+        Self {
+            best: AtomicU64::new(u64::MAX),
+            stop: AtomicBool::new(false),
+        }
+    }
+}
+
+/// One iteration of `search` within the race: `Some` when it found its path, must
+/// stop, or is outrun by a rival that found its path with less work.
+fn step(search: &mut Search<'_, '_>, run: &mut Run<'_>, rival: &Rival) -> Option<Outcome> {
+    if rival.stop.load(Ordering::Relaxed) {
+        return Some(Outcome::Failed(
+            Failure::Cancelled,
+            run.iterations,
+            search.nodes(),
+        ));
+    }
+    if search.work() > rival.best.load(Ordering::Relaxed) {
+        return Some(Outcome::Outrun);
+    }
+    if let Err(f) = run.next(search.nodes(), search.best) {
+        return Some(Outcome::Failed(f, run.iterations, search.nodes()));
+    }
+    let joined = search.iterate()?;
+    let work = search.work();
+    rival.best.fetch_min(work, Ordering::Relaxed);
+    Some(Outcome::Found {
+        poses: search.path(joined),
+        work,
+        nodes: search.nodes(),
+        iterations: run.iterations,
+        pose_checks: search.checker.pose_checks,
+        edge_checks: search.checker.edge_checks,
+    })
+}
+
+/// Runs `search` to its outcome ([`step`] after step).
+fn drive(search: &mut Search<'_, '_>, run: &mut Run<'_>, rival: &Rival) -> Outcome {
+    loop {
+        if let Some(o) = step(search, run, rival) {
+            return o;
+        }
+    }
+}
+
+/// The race's winner: the path found with the least work (the first search on a
+/// tie); without one, the first search's failure.
+fn winner(outcomes: Vec<Outcome>) -> Outcome {
+    let mut best: Option<Outcome> = None;
+    let mut first_failure = None;
+    for o in outcomes {
+        match o {
+            Outcome::Found { work, .. } => {
+                let better = match &best {
+                    Some(Outcome::Found { work: w, .. }) => work < *w,
+                    _ => true,
+                };
+                if better {
+                    best = Some(o);
+                }
+            }
+            Outcome::Failed(..) if first_failure.is_none() => first_failure = Some(o),
+            _ => {}
+        }
+    }
+    best.or(first_failure)
+        .unwrap_or(Outcome::Failed(Failure::Cancelled, 0, 0))
+}
+
+/// The problem every search of a race solves.
+struct Problem<'a> {
+    space: &'a PlanningSpace,
+    start: &'a Transform,
+    goal: &'a Transform,
+    seed: u64,
+    deadline: Instant,
+}
+
+impl Problem<'_> {
+    /// The space of a search with `strategy`: the call's, with the strategy's
+    /// rotation weight.
+    fn space_for(&self, strategy: &Strategy) -> PlanningSpace {
+        self.space
+            .clone()
+            .with_rotation_weight(strategy.rotation_weight)
+    }
+
+    /// A search of this problem with `strategy` in `space`, checking through
+    /// `checker`.
+    fn search<'v, 's>(
+        &self,
+        checker: Checker<'v>,
+        space: &'s PlanningSpace,
+        strategy: Strategy,
+    ) -> Search<'v, 's> {
+        Search::new(checker, space, self.start, self.goal, strategy, self.seed)
+    }
+}
+
+/// Races `strategies` (at least one): the first on this thread with the call's
+/// progress, each other in a thread of its own on a fork of the validator; when
+/// the validator cannot be forked, interleaves them on this thread, always
+/// advancing the search with the least work so far. The same winner either way.
+fn race(
+    validator: &mut dyn MotionValidator,
+    strategies: Vec<Strategy>,
+    p: &Problem<'_>,
+    run: &mut Run<'_>,
+) -> Outcome {
+    let rival = Rival::new();
+    let spaces: Vec<PlanningSpace> = strategies.iter().map(|s| p.space_for(s)).collect();
+    let mut strategies = strategies.into_iter().zip(&spaces);
+    let (first, first_space) = strategies.next().expect("at least one strategy");
+    let others: Vec<(Strategy, &PlanningSpace)> = strategies.collect();
+    let forks: Option<Vec<Box<dyn MotionValidator + Send>>> =
+        others.iter().map(|_| validator.fork()).collect();
+    let Some(forks) = forks else {
+        let shared = RefCell::new(validator);
+        let mut views: Vec<Shared<'_, '_>> = (0..=others.len()).map(|_| Shared(&shared)).collect();
+        let mut views = views.iter_mut();
+        let mut searches = vec![p.search(
+            Checker::new(views.next().expect("a view"), Some(p.deadline)),
+            first_space,
+            first,
+        )];
+        for (v, (s, space)) in views.zip(others) {
+            searches.push(p.search(Checker::new(v, Some(p.deadline)), space, s));
+        }
+        return winner(interleave(&mut searches, run, &rival));
+    };
+    let outcomes = std::thread::scope(|scope| {
+        let handles: Vec<_> = forks
+            .into_iter()
+            .zip(others)
+            .map(|(mut v, (strategy, space))| {
+                let rival = &rival;
+                let clock = run.clock();
+                scope.spawn(move || {
+                    let mut sibling = Run::of_clock(clock);
+                    let checker = Checker::new(&mut *v, Some(p.deadline));
+                    let mut search = p.search(checker, space, strategy);
+                    drive(&mut search, &mut sibling, rival)
+                })
+            })
+            .collect();
+        let mut main = p.search(
+            Checker::new(validator, Some(p.deadline)),
+            first_space,
+            first,
+        );
+        let mine = drive(&mut main, run, &rival);
+        if matches!(mine, Outcome::Failed(Failure::Cancelled, ..)) {
+            rival.stop.store(true, Ordering::Relaxed);
+        }
+        let mut all = vec![mine];
+        for h in handles {
+            // A search that panicked is a bug; it loses the race rather than
+            // taking the call down.
+            all.push(h.join().unwrap_or(Outcome::Outrun));
+        }
+        all
+    });
+    winner(outcomes)
+}
+
+/// [`race`] on one thread: the search with the least work so far (the first on
+/// a tie) takes the next iteration; the first search's run reports progress, and
+/// its cancellation stops the others.
+fn interleave(searches: &mut [Search<'_, '_>], run: &mut Run<'_>, rival: &Rival) -> Vec<Outcome> {
+    let mut runs: Vec<Run<'_>> = (1..searches.len()).map(|_| run.sibling()).collect();
+    let mut done: Vec<Option<Outcome>> = searches.iter().map(|_| None).collect();
+    while let Some(i) = (0..searches.len())
+        .filter(|&i| done[i].is_none())
+        .min_by_key(|&i| (searches[i].work(), i))
+    {
+        let r = if i == 0 { &mut *run } else { &mut runs[i - 1] };
+        if let Some(o) = step(&mut searches[i], r, rival) {
+            if i == 0 && matches!(o, Outcome::Failed(Failure::Cancelled, ..)) {
+                rival.stop.store(true, Ordering::Relaxed);
+            }
+            done[i] = Some(o);
+        }
+    }
+    done.into_iter().flatten().collect()
+}
+
+/// A view of one validator shared by the searches of an interleaved race (one
+/// thread: each call borrows it in turn).
+struct Shared<'c, 'v>(&'c RefCell<&'v mut dyn MotionValidator>);
+
+impl MotionValidator for Shared<'_, '_> {
+    fn is_free(&mut self, pose: &Transform) -> bool {
+        self.0.borrow_mut().is_free(pose)
+    }
+    fn resolution(&self) -> crate::collision::SweepMethod {
+        self.0.borrow().resolution()
+    }
+    fn tolerance(&self) -> f64 {
+        self.0.borrow().tolerance()
+    }
+    fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
+        self.0.borrow_mut().edge_free(from, to)
+    }
+    fn clearance(&mut self, pose: &Transform) -> Option<f64> {
+        self.0.borrow_mut().clearance(pose)
+    }
+    fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.0.borrow_mut().set_deadline(deadline)
+    }
+    fn part_radius(&self) -> Option<f64> {
+        self.0.borrow().part_radius()
+    }
+    fn part_thickness(&self) -> Option<f64> {
+        self.0.borrow().part_thickness()
+    }
+}
+
 /// Plans from `start` to `goal` with two trees, one rooted at each end.
 ///
-/// Each iteration extends one tree by `step` toward a uniform sample, then grows the
-/// other tree straight toward the new node until it is reached (a path) or blocked;
-/// the trees then swap roles. With a [`Lattice`], a blocked extension or connection
+/// Each iteration extends one tree toward a uniform sample, then grows the other
+/// tree straight toward the new node until it is reached (a path) or blocked; the
+/// trees then swap roles. With a [`Lattice`], a blocked extension or connection
 /// falls back to the local discretization around the blocked node, ranked by the
 /// distance to the other tree's root (or to the node being connected to), which
 /// lets the trees creep through narrow passages.
+///
+/// **Scale-free defaults** (`step: None`): every length comes from the problem
+/// ([`ProblemScale`]), and two searches race, each on its own core (on a
+/// [`fork`](MotionValidator::fork) of the validator): a long-range search
+/// ([`ProblemScale::range`], explored at [`ProblemScale::resolution`], no
+/// fallbacks — open, twisting spaces) and the narrow-passage search
+/// ([`ProblemScale::narrow_step`] with every measure of [`NarrowPassage`] and the
+/// lattice — tight assembly clearances). The path found with the least work
+/// (pose-check units) wins, whichever thread finished first: a search stops only
+/// once it has done more work than a path already found took, so the same seed
+/// gives the same path. Counts in the returned path are the winning search's.
 ///
 /// # Errors
 /// Invalid options, bounds or non-finite poses.
@@ -154,271 +783,232 @@ pub fn rrt_connect(
             2,
         ));
     }
-    checker.set_lazy(options.lazy.map(|l| l.steps(space)));
-    let mut rng = Rng::new(options.limits.seed);
-    let reference = start.rotation();
-    let key_mm = options
-        .lattice
-        .as_ref()
-        .map_or(options.step * 1e-3, |l| l.edge_length_min * 0.25);
-    // trees[0] grows from the start, trees[1] from the goal; `a` is the one extending.
-    let mut trees = [Tree::new(*start, key_mm), Tree::new(*goal, key_mm)];
-    let mut a = 0;
-    let mut best = space.distance(start, goal);
-    // Per tree: how close any node of the other tree has come to its root. A new node
-    // closer than that tries the straight edge to the root (one check, and only on
-    // progress, so open space is crossed in one edge once the trees see each other's
-    // ends).
-    let mut closest_to_root = [best; 2];
-    let mut added = Vec::new();
-    let mut effort = Effort::new(options.fallback_share);
-    // The axis-move search of each tree, toward the other tree's root, and the
-    // work it has done (pose-check units, like the fallbacks' share).
-    let mut axis = [
-        AxisSearch::new(&trees[0], goal, space),
-        AxisSearch::new(&trees[1], start, space),
-    ];
-    let mut axis_spent = 0u64;
-    let joined = loop {
-        effort.iteration(best);
-        if let Err(f) = run.next(trees[0].len() + trees[1].len(), best) {
-            break Err(f);
+    let seed = options.limits.seed;
+    let strategies = match options.step {
+        Some(step) => vec![Strategy::explicit(options, space, step)],
+        None => {
+            let scale = checker.scale(space);
+            vec![
+                Strategy::long_range(options, space, &scale),
+                Strategy::narrow(options, space, &scale),
+            ]
         }
-        let b = 1 - a;
-        let narrow = &options.narrow;
-        // An axis-move iteration: within its share of the work, expand tree
-        // `a`'s best aligned node, and try to meet the other tree from what it
-        // added (the other root, or its aligned nodes of the same orientation).
-        if narrow.axis_moves > 0.0
-            && axis[a].has_open()
-            && axis_spent as f64 <= narrow.axis_moves * checker.work() as f64
-        {
-            let before = checker.work();
-            added.clear();
-            let target = trees[b].poses[0];
-            axis[a].expand(
-                &mut checker,
-                space,
-                &reference,
-                &mut trees[a],
-                &target,
-                &mut added,
-            );
-            let mut met = None;
-            for &i in &added {
-                // A failed certification below may have cut it.
-                if !trees[a].alive(i) {
-                    continue;
-                }
-                let q = trees[a].poses[i];
-                let to_root = space.distance(&q, &target);
-                best = best.min(to_root);
-                let mut reached = None;
-                // A slide stops at the root's coordinate: from the root's own
-                // place only a turn is left, always worth its one check.
-                let at_root = (q.translation() - target.translation()).norm() < 1e-9;
-                if to_root < closest_to_root[b] || at_root {
-                    closest_to_root[b] = closest_to_root[b].min(to_root);
-                    if checker.edge_free(&target, &q) {
-                        reached = Some(trees[b].add(q, 0));
-                    }
-                }
-                if reached.is_none() {
-                    for m in axis[b].same_orientation(&trees[b], &q) {
-                        if checker.edge_free(&trees[b].poses[m], &q) {
-                            reached = Some(trees[b].add(q, m));
-                            break;
-                        }
-                    }
-                }
-                if let Some(r) = reached {
-                    let (s, g) = if a == 0 { (i, r) } else { (r, i) };
-                    if !checker.is_lazy()
-                        || (trees[0].certify_branch(s, &mut checker)
-                            && trees[1].certify_branch(g, &mut checker))
-                    {
-                        met = Some((s, g));
-                        break;
-                    }
-                }
-            }
-            axis_spent += checker.work() - before;
-            if let Some(m) = met {
-                break Ok(m);
-            }
-            a = b;
-            continue;
-        }
-        // The bridge test and dynamic-domain redraws are fallbacks: within the
-        // share they run, past it the sample is uniform. The extension below
-        // always keeps the domains up to date and retries with a limited turn.
-        let (sample, near) = narrow.sample_within(
-            &mut effort,
-            &mut rng,
-            &mut checker,
-            space,
-            &reference,
-            &trees[a],
-        );
-        added.clear();
-        let extended = narrow.extend(
-            &mut checker,
-            space,
-            &reference,
-            &mut trees[a],
-            near,
-            &sample,
-            options.step,
-        );
-        if let Err(candidate) = extended {
-            let other_root = PoseTarget(trees[b].poses[0]);
-            narrow.fall_back(
-                options.lattice.as_ref(),
-                &mut effort,
-                &mut checker,
-                space,
-                &reference,
-                &mut trees[a],
-                near,
-                &candidate,
-                &other_root,
-                options.step,
-                &mut rng,
-                &mut added,
-            );
-        }
-        if let Ok(i) = extended {
-            added.push(i);
-        }
-        if let Some(&last) = added.last() {
-            let q = trees[a].poses[last];
-            let root = trees[b].poses[0];
-            let to_root = space.distance(&q, &root);
-            let direct = if to_root < closest_to_root[b] {
-                closest_to_root[b] = to_root;
-                best = best.min(to_root);
-                // The meeting pose `q` joins the other tree as a child of its root.
-                checker.edge_free(&root, &q).then(|| trees[b].add(q, 0))
-            } else {
-                None
-            };
-            if let Some(reached) = direct.or_else(|| {
-                connect(
-                    &mut checker,
-                    space,
-                    &mut trees[b],
-                    &q,
-                    &reference,
-                    options,
-                    &mut best,
-                    &mut rng,
-                    &mut effort,
-                )
-            }) {
-                let (s, g) = if a == 0 {
-                    (last, reached)
-                } else {
-                    (reached, last)
-                };
-                // Lazy: the trees met through explored edges; the path is found
-                // once both branches pass the validator's own check (a failed edge
-                // is cut with its subtree, and the search goes on).
-                if !checker.is_lazy()
-                    || (trees[0].certify_branch(s, &mut checker)
-                        && trees[1].certify_branch(g, &mut checker))
-                {
-                    break Ok((s, g));
-                }
-            }
-        }
-        a = b;
     };
-    let nodes = trees[0].len() + trees[1].len();
-    match joined {
-        Err(f) => Ok(PlannedPath::failed(
-            name,
-            f,
-            run.iterations,
+    let ends = (checker.pose_checks, checker.edge_checks);
+    drop(checker);
+    let problem = Problem {
+        space,
+        start,
+        goal,
+        seed,
+        deadline: run.deadline(),
+    };
+    let outcome = race(&mut *validator, strategies, &problem, &mut run);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
+    match outcome {
+        Outcome::Found {
+            poses,
             nodes,
-            &checker,
-            run.elapsed_ms(),
-        )),
-        Ok((from_start, from_goal)) => {
-            let mut poses = trees[0].branch(from_start);
-            let mut back = trees[1].branch(from_goal);
-            back.reverse();
-            // The meeting pose is in both branches.
-            poses.extend(back.into_iter().skip(1));
+            iterations,
+            pose_checks,
+            edge_checks,
+            ..
+        } => {
+            // The counts are the winning search's (and the ends' checks), on
+            // whichever thread it ran.
+            checker.pose_checks = ends.0 + pose_checks;
+            checker.edge_checks = ends.1 + edge_checks;
+            run.iterations = iterations;
             // Smoothing keeps only edges the validator itself accepts.
-            checker.set_lazy(None);
             Ok(finish(
                 name,
                 poses,
                 &mut checker,
                 space,
                 &options.smoothing,
-                options.limits.seed,
+                seed,
                 &mut run,
                 nodes,
             ))
         }
+        Outcome::Failed(f, iterations, nodes) => Ok(PlannedPath::failed(
+            name,
+            f,
+            iterations,
+            nodes,
+            &checker,
+            run.elapsed_ms(),
+        )),
+        Outcome::Outrun => Ok(PlannedPath::failed(
+            name,
+            Failure::Cancelled,
+            run.iterations,
+            0,
+            &checker,
+            run.elapsed_ms(),
+        )),
     }
 }
 
-/// Grows `tree` straight toward `q` in `step`s; returns the node equal to `q` when
-/// reached. A blocked step tries the lattice once around the blocked node.
-#[allow(clippy::too_many_arguments)]
-fn connect(
-    checker: &mut Checker<'_>,
-    space: &PlanningSpace,
-    tree: &mut Tree,
-    q: &Transform,
-    reference: &nalgebra::UnitQuaternion<f64>,
-    options: &RrtConnectOptions,
-    best: &mut f64,
-    rng: &mut Rng,
-    effort: &mut Effort,
-) -> Option<usize> {
-    let (mut node, _) = tree.nearest(q, space);
-    // Bounded: the distance shrinks by `step` each round, but poses far apart with a
-    // tiny step must not stall one iteration for long.
-    for _ in 0..10_000 {
-        let from = tree.poses[node];
-        let d = space.distance(&from, q);
-        *best = best.min(d);
-        // The straight SE(3) edge toward `q`, not turn-limited: a turn limit would
-        // let the translation run ahead of the rotation, and an approach into a
-        // bore or a seat needs both to arrive together.
-        let next = steer(&from, q, options.step, space);
-        if space.contains(&next, reference) && checker.edge_free(&from, &next) {
-            node = tree.add(next, node);
-            if d <= options.step {
-                return Some(node);
-            }
-            continue;
-        }
-        if let Some(lattice) = &options.lattice {
-            let mut added = Vec::new();
-            effort.run(checker, |checker| {
-                lattice.expand(
-                    checker,
-                    space,
-                    tree,
-                    node,
-                    &PoseTarget(*q),
-                    reference,
-                    options.step,
-                    rng,
-                    &mut added,
-                );
-            });
-            if let Some(&last) = added.last() {
-                if space.distance(&tree.poses[last], q) < 1e-9 {
-                    return Some(last);
-                }
-            }
-        }
-        return None;
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::Collider;
+    use crate::math::{Point3, Vec3};
+    use crate::mesh::Mesh;
+    use crate::planning::{MeshValidator, MeshValidatorOptions};
+    use std::sync::Arc;
+
+    /// A wall 2k thick at x = 0 with a square window of half width 8k, and a cube
+    /// of side 10k that must pass it from y = 20k on one side to y = 20k on the
+    /// other (the straight line hits the wall), in bounds 80k × 80k × 40k; all
+    /// lengths times `k`.
+    fn window(k: f64) -> (MeshValidator, PlanningSpace, Transform, Transform) {
+        let collider = |lo: [f64; 3], hi: [f64; 3]| {
+            let m = Mesh::cuboid(
+                Point3::new(lo[0] * k, lo[1] * k, lo[2] * k),
+                Point3::new(hi[0] * k, hi[1] * k, hi[2] * k),
+            );
+            Arc::new(Collider::new(Arc::new(m)).unwrap())
+        };
+        let wall = [
+            ([-1.0, -40.0, 8.0], [1.0, 40.0, 20.0]),
+            ([-1.0, -40.0, -20.0], [1.0, 40.0, -8.0]),
+            ([-1.0, 8.0, -8.0], [1.0, 40.0, 8.0]),
+            ([-1.0, -40.0, -8.0], [1.0, -8.0, 8.0]),
+        ];
+        let obstacles = wall
+            .iter()
+            .map(|(lo, hi)| (collider(*lo, *hi), Transform::IDENTITY))
+            .collect();
+        let cube = collider([-5.0; 3], [5.0; 3]);
+        let radius = cube.radius();
+        let v = MeshValidator::new(cube, obstacles, MeshValidatorOptions::default()).unwrap();
+        let space = PlanningSpace::new(
+            Vec3::new(-40.0, -40.0, -20.0) * k,
+            Vec3::new(40.0, 40.0, 20.0) * k,
+        )
+        .with_rotation_weight(radius);
+        let at = |x: f64| Transform::from_translation(Vec3::new(x * k, 20.0 * k, 0.0));
+        (v, space, at(-30.0), at(30.0))
     }
-    None
+
+    /// The mesh validator without [`MotionValidator::fork`]: its race runs
+    /// interleaved on one thread.
+    struct OneThread(MeshValidator);
+
+    impl MotionValidator for OneThread {
+        fn is_free(&mut self, pose: &Transform) -> bool {
+            self.0.is_free(pose)
+        }
+        fn resolution(&self) -> crate::collision::SweepMethod {
+            self.0.resolution()
+        }
+        fn tolerance(&self) -> f64 {
+            self.0.tolerance()
+        }
+        fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
+            self.0.edge_free(from, to)
+        }
+        fn clearance(&mut self, pose: &Transform) -> Option<f64> {
+            self.0.clearance(pose)
+        }
+        fn set_deadline(&mut self, deadline: Option<Instant>) {
+            self.0.set_deadline(deadline)
+        }
+        fn part_radius(&self) -> Option<f64> {
+            self.0.part_radius()
+        }
+        fn part_thickness(&self) -> Option<f64> {
+            self.0.part_thickness()
+        }
+    }
+
+    fn options(seed: u64) -> RrtConnectOptions {
+        let mut o = RrtConnectOptions::default();
+        o.limits.seed = seed;
+        o.limits.max_iterations = 200_000;
+        o.limits.time_limit_ms = Some(120_000.0);
+        o.smoothing = Smoothing::OFF;
+        o
+    }
+
+    #[test]
+    fn the_race_finds_the_same_path_on_two_threads_and_on_one() {
+        for seed in 0..4 {
+            let (mut v, space, start, goal) = window(1.0);
+            let o = options(seed);
+            let two = rrt_connect(&mut v, &space, &start, &goal, &o, None).unwrap();
+            assert!(two.found(), "seed {seed}: {:?}", two.failure);
+            let (v, ..) = window(1.0);
+            let one = rrt_connect(&mut OneThread(v), &space, &start, &goal, &o, None).unwrap();
+            assert_eq!(one.poses, two.poses, "seed {seed}");
+            assert_eq!(
+                (one.iterations, one.nodes, one.pose_checks, one.edge_checks),
+                (two.iterations, two.nodes, two.pose_checks, two.edge_checks),
+                "seed {seed}"
+            );
+            let (mut v, ..) = window(1.0);
+            let again = rrt_connect(&mut v, &space, &start, &goal, &o, None).unwrap();
+            assert_eq!(again.poses, two.poses, "seed {seed}: same seed, same path");
+        }
+    }
+
+    /// Scale-free defaults: every length of both searches follows the problem, so
+    /// the same problem 10× larger gets the same strategies with every length 10×.
+    #[test]
+    fn the_strategies_scale_with_the_problem() {
+        let o = RrtConnectOptions::default();
+        let at = |k: f64| {
+            let (v, space, ..) = window(k);
+            let scale = ProblemScale::of(&space, &v);
+            (
+                Strategy::long_range(&o, &space, &scale),
+                Strategy::narrow(&o, &space, &scale),
+            )
+        };
+        let close = |a: f64, b: f64| (a * 10.0 - b).abs() <= 1e-9 * b.abs().max(1.0);
+        let ((l1, n1), (l10, n10)) = (at(1.0), at(10.0));
+        for (a, b) in [(&l1, &l10), (&n1, &n10)] {
+            assert!(close(a.step, b.step), "step {} → {}", a.step, b.step);
+            assert!(close(a.key_mm, b.key_mm));
+            assert!(close(a.rotation_weight, b.rotation_weight));
+            let (la, lb) = (a.lazy.unwrap(), b.lazy.unwrap());
+            assert!(
+                close(la.0, lb.0) && (la.1 - lb.1).abs() < 1e-12,
+                "{la:?} → {lb:?}"
+            );
+        }
+        let (la, lb) = (n1.lattice.unwrap(), n10.lattice.unwrap());
+        assert!(close(la.edge_length_max, lb.edge_length_max));
+        assert!(close(la.edge_length_min, lb.edge_length_min));
+        assert_eq!(la.alpha, lb.alpha, "angles do not scale");
+        assert!(close(n1.unit, n10.unit));
+        assert!(close(n1.narrow.bridge_width, n10.narrow.bridge_width));
+        assert!(close(
+            n1.narrow.dynamic_domain.unwrap(),
+            n10.narrow.dynamic_domain.unwrap()
+        ));
+        assert!(l1.lattice.is_none() && l1.narrow == NarrowPassage::OFF);
+    }
+
+    /// The same defaults solve the window at a tenth, at one and at ten times its
+    /// size, and every path they return is free pose by pose and edge by edge.
+    /// (Not the identical path: the validator's contact resolution, 0.01 mm, is a
+    /// physical length, and the narrow search moves to contact.)
+    #[test]
+    fn the_defaults_solve_the_problem_at_every_scale() {
+        for k in [0.1, 1.0, 10.0] {
+            for seed in 0..3 {
+                let (mut v, space, start, goal) = window(k);
+                let p = rrt_connect(&mut v, &space, &start, &goal, &options(seed), None).unwrap();
+                assert!(p.found(), "k {k} seed {seed}: {:?}", p.failure);
+                assert!(p.poses.iter().all(|q| v.is_free(q)), "k {k} seed {seed}");
+                assert!(
+                    p.poses.windows(2).all(|w| v.edge_free(&w[0], &w[1])),
+                    "k {k} seed {seed}"
+                );
+            }
+        }
+    }
 }

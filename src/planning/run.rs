@@ -223,6 +223,14 @@ impl PlanError {
     }
 }
 
+/// The start, deadline and limits a run shares with its siblings.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RunClock {
+    started: Instant,
+    deadline: Instant,
+    limits: PlanLimits,
+}
+
 /// The clock, counters and callback of one run.
 pub(crate) struct Run<'p> {
     started: Instant,
@@ -242,6 +250,33 @@ impl<'p> Run<'p> {
             deadline: limits.deadline(started),
             limits,
             progress,
+            iterations: 0,
+            search_ms: None,
+        }
+    }
+
+    /// The run of another search of the same call (a race's): the same start,
+    /// deadline and limits, its own iteration count, no progress callback.
+    pub fn sibling<'q>(&self) -> Run<'q> {
+        Run::of_clock(self.clock())
+    }
+
+    /// What a sibling run shares with this one (sendable to another thread).
+    pub fn clock(&self) -> RunClock {
+        RunClock {
+            started: self.started,
+            deadline: self.deadline,
+            limits: self.limits,
+        }
+    }
+
+    /// A run on `clock`, with no progress callback.
+    pub fn of_clock<'q>(clock: RunClock) -> Run<'q> {
+        Run {
+            started: clock.started,
+            deadline: clock.deadline,
+            limits: clock.limits,
+            progress: None,
             iterations: 0,
             search_ms: None,
         }

@@ -463,7 +463,7 @@ fn bad_options_are_rejected_with_their_name() {
     };
     assert!(err(rrt_floyd(&mut v, &s, &a, &b, &o, None)).contains("max_nodes"));
     let o = RrtConnectOptions {
-        step: 0.0,
+        step: Some(0.0),
         ..Default::default()
     };
     assert!(err(rrt_connect(&mut v, &s, &a, &b, &o, None)).contains("step"));
@@ -519,6 +519,8 @@ fn lazy_search_certifies_its_path_and_repairs_jumped_walls() {
         // seed short once it took its share.
         let o = RrtConnectOptions {
             limits: limits(seed, 10_000),
+            // An explicit step: the lazy step as given (coarser than the wall).
+            step: Some(RrtConnectOptions::STEP),
             lazy: Some(LazyValidation { step_mm: 8.0 }),
             smoothing: Smoothing::OFF,
             ..Default::default()

@@ -97,6 +97,30 @@ pub trait MotionValidator {
     /// check cannot overrun the budget; planners set it for the duration of a call
     /// and clear it afterwards. The default ignores it.
     fn set_deadline(&mut self, _deadline: Option<Instant>) {}
+
+    /// Radius of the moving part about its own origin (mm), when the validator
+    /// knows it: the scale-free defaults derive their lengths from it
+    /// ([`ProblemScale`](super::ProblemScale)). Default `None`.
+    fn part_radius(&self) -> Option<f64> {
+        None
+    }
+
+    /// The moving part's thinnest extent (mm): the smallest side of its box in its
+    /// own frame, when the validator knows it. The scale-free narrow-passage search
+    /// steps by a share of it ([`ProblemScale`](super::ProblemScale)). Default
+    /// `None`.
+    fn part_thickness(&self) -> Option<f64> {
+        None
+    }
+
+    /// An independent copy of this validator for another thread (same geometry and
+    /// rule, its own counters and deadline), or `None` when it cannot be copied.
+    /// The default planner races two searches with it, one per core
+    /// ([`rrt_connect`](super::rrt_connect)); without a copy it interleaves them on
+    /// one thread, with the same result.
+    fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+        None
+    }
 }
 
 impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
@@ -117,6 +141,15 @@ impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
     }
     fn set_deadline(&mut self, deadline: Option<Instant>) {
         (**self).set_deadline(deadline)
+    }
+    fn part_radius(&self) -> Option<f64> {
+        (**self).part_radius()
+    }
+    fn part_thickness(&self) -> Option<f64> {
+        (**self).part_thickness()
+    }
+    fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+        (**self).fork()
     }
 }
 
@@ -253,6 +286,13 @@ impl<'v> Checker<'v> {
         let Some((mm, rad)) = self.lazy else {
             return self.certify(from, to);
         };
+        self.screen(from, to, (mm, rad))
+    }
+
+    /// Pose checks along `from → to` at most `(mm, rad)` apart, whatever the mode
+    /// (a cheap screen before [`edge_free`](Self::edge_free) of a candidate edge:
+    /// a blocked one is rejected after a few checks).
+    pub fn screen(&mut self, from: &Transform, to: &Transform, (mm, rad): (f64, f64)) -> bool {
         if self.expired() {
             return false;
         }
@@ -278,6 +318,11 @@ impl<'v> Checker<'v> {
 
     pub fn resolution(&self) -> SweepMethod {
         self.validator.resolution()
+    }
+
+    /// The problem's scale in `space` for the validator's part.
+    pub fn scale(&self, space: &super::PlanningSpace) -> super::ProblemScale {
+        super::ProblemScale::of(space, &*self.validator)
     }
 
     pub fn tolerance(&self) -> f64 {

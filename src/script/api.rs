@@ -22,8 +22,15 @@ pub struct Api<'e> {
     engine: &'e mut Engine,
     entries: Vec<ApiEntry>,
     sections: Vec<(String, String)>,
+    /// The option tables of each section: (section, heading, Markdown table).
+    options: Vec<(String, String, String)>,
     /// Typed overloads registered without an entry of their own.
     overloads: usize,
+    /// Names of the properties that have a setter.
+    setters: std::collections::HashSet<String>,
+    /// The `Type.set_prop` method aliases registered (an entry of the same name
+    /// registered later replaces the alias).
+    aliases: std::collections::HashSet<String>,
 }
 
 /// The Rhai function name for a signature: `name(..)`, `Type.name(..)`, `Type.prop`
@@ -56,13 +63,30 @@ impl<'e> Api<'e> {
             engine,
             entries: Vec::new(),
             sections: Vec::new(),
+            options: Vec::new(),
             overloads: 0,
+            setters: Default::default(),
+            aliases: Default::default(),
         }
     }
 
     /// Starts a section of the reference.
     pub fn section(&mut self, title: &str, intro: &str) {
         self.sections.push((title.to_string(), intro.to_string()));
+    }
+
+    /// Documents the options map of the section's requests: the table of `T`'s
+    /// vocabulary (key, type, unit, default, meaning), printed after the section's
+    /// functions under `heading`. The bindings read the map with
+    /// [`read_options`](super::convert::read_options), so the table is what they take.
+    pub fn options<T: crate::options::Options>(&mut self, heading: &str) {
+        let section = self
+            .sections
+            .last()
+            .map(|s| s.0.clone())
+            .unwrap_or_default();
+        self.options
+            .push((section, heading.to_string(), T::markdown()));
     }
 
     /// Registers a custom type under its script name.
@@ -89,6 +113,12 @@ impl<'e> Api<'e> {
             .map(|s| s.0.clone())
             .unwrap_or_default();
         let comments: Vec<String> = doc.lines().map(|l| format!("/// {l}")).collect();
+        if let Some(head) = signature.split('(').next() {
+            if self.aliases.remove(head) {
+                // this entry replaces the setter's alias of the same name
+                self.overloads -= 1;
+            }
+        }
         FuncRegistration::new(name)
             .with_comments([comments.join("\n")])
             .register_into_engine(self.engine, func);
@@ -150,14 +180,29 @@ impl<'e> Api<'e> {
         self.add(rhai_name(signature, Some("get")), signature, doc, func);
     }
 
-    /// Registers a property setter (`Type.prop = value`), documented with its getter.
+    /// Registers a property setter (`Type.prop = value`), documented with its getter,
+    /// and the same setter as the method `set_prop(value)` (unless the type has its
+    /// own `set_prop`): what `call().prop = value` is spelled as (see `assign.rs`).
     pub fn set<A: 'static, const N: usize, const X: bool, const F: bool>(
         &mut self,
         signature: &str,
-        func: impl RhaiNativeFunc<A, N, X, (), F> + Send + Sync + 'static,
+        func: impl RhaiNativeFunc<A, N, X, (), F> + Clone + Send + Sync + 'static,
     ) {
         let name = rhai_name(signature, Some("set"));
         let comments = vec![format!("/// Sets `{signature}`.")];
+        let prop = name.trim_start_matches("set$").to_string();
+        let ty = signature.split('.').next().unwrap_or("");
+        let own = format!("{ty}.set_{prop}(");
+        if !self.entries.iter().any(|e| e.signature.starts_with(&own)) {
+            FuncRegistration::new(format!("set_{prop}"))
+                .with_comments([format!(
+                    "/// Sets `{signature}` (the method form of the setter)."
+                )])
+                .register_into_engine(self.engine, func.clone());
+            self.overloads += 1;
+            self.aliases.insert(format!("{ty}.set_{prop}"));
+        }
+        self.setters.insert(prop);
         FuncRegistration::new(name)
             .with_comments(comments)
             .register_into_engine(self.engine, func);
@@ -174,16 +219,30 @@ impl<'e> Api<'e> {
     }
 }
 
-/// Registers the whole fitup API for a run: the reference's sections and entries, and
-/// how many undocumented typed overloads of documented functions were added.
-pub(crate) fn register_all(
-    engine: &mut Engine,
-    ctx: &Arc<Context>,
-) -> (Vec<(String, String)>, Vec<ApiEntry>, usize) {
+/// What [`register_all`] registered: the reference's sections, entries and option
+/// tables, and how many undocumented typed overloads of documented functions were
+/// added.
+pub(crate) struct Registered {
+    /// (title, intro) of each section, in order.
+    pub sections: Vec<(String, String)>,
+    /// Every documented function and property.
+    pub entries: Vec<ApiEntry>,
+    /// (section, heading, table) of each options map.
+    pub options: Vec<(String, String, String)>,
+    /// Typed overloads without an entry of their own (the registry test counts them).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub overloads: usize,
+}
+
+/// Registers the whole fitup API for a run (see [`Registered`]).
+pub(crate) fn register_all(engine: &mut Engine, ctx: &Arc<Context>) -> Registered {
     let mut api = Api::new(engine);
     super::bind_math::register(&mut api);
     super::bind_document::register(&mut api, ctx);
+    super::bind_files::register(&mut api, ctx);
     super::bind_interference::register(&mut api);
+    super::bind_mass::register(&mut api);
+    super::bind_mass::register_export(&mut api);
     super::bind_planning::register(&mut api);
     super::bind_robot::register(&mut api, ctx);
     #[cfg(feature = "db")]
@@ -192,7 +251,13 @@ pub(crate) fn register_all(
     #[cfg(feature = "skills")]
     super::bind_skills::register(&mut api, ctx);
     super::bind_view::register(&mut api);
-    (api.sections, api.entries, api.overloads)
+    let _ = ctx.setters.set(api.setters.clone());
+    Registered {
+        sections: api.sections,
+        entries: api.entries,
+        options: api.options,
+        overloads: api.overloads,
+    }
 }
 
 /// The scripting API reference as Markdown (what `fitup docs` writes to docs/api.md).
@@ -207,7 +272,12 @@ pub fn api_reference() -> String {
         Arc::new(|_| {}),
     ));
     let mut engine = Engine::new();
-    let (sections, entries, _) = register_all(&mut engine, &ctx);
+    let Registered {
+        sections,
+        entries,
+        options,
+        ..
+    } = register_all(&mut engine, &ctx);
     let mut out = String::from(
         "# fitup scripting API\n\n\
          Generated by `fitup docs` from the functions registered in the engine; do not edit.\n\n\
@@ -225,6 +295,9 @@ pub fn api_reference() -> String {
                 e.signature.replace('|', "\\|"),
                 e.doc.replace('\n', " ").replace('|', "\\|")
             );
+        }
+        for (_, heading, table) in options.iter().filter(|o| &o.0 == title) {
+            out += &format!("\n{heading}\n\n{table}");
         }
     }
     out
@@ -268,7 +341,9 @@ mod tests {
             Arc::new(|_| {}),
         ));
         let mut engine = Engine::new_raw();
-        let (_, entries, overloads) = register_all(&mut engine, &ctx);
+        let Registered {
+            entries, overloads, ..
+        } = register_all(&mut engine, &ctx);
         let setters = entries
             .iter()
             .filter(|e| e.signature.ends_with("(get/set)"))

@@ -5,13 +5,13 @@ use super::api::Api;
 use super::bind_document::DocHandle;
 use super::bind_planning::PathHandle;
 use super::bind_robot::TrajectoryHandle;
-use super::convert::{check_keys, err, fail, opt_str};
+use super::convert::{check_keys, err, fail, opt_str, read_options};
 use super::{Context, ScriptResult};
 use crate::collision::Contact;
 use crate::db::{
-    recording, Database, InterferencePair, PathMeta, PathQuery, QueryLimits, Snapshot, SqlValue,
-    Target,
+    recording, Database, InterferencePair, PathMeta, QueryLimits, Snapshot, SqlValue, Target,
 };
+use crate::options::{Limits, PathFilter};
 use rhai::{Array, Dynamic, Map};
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -35,9 +35,10 @@ impl DbHandle {
         };
         let mut db = Database::open(&target).map_err(fail)?;
         if let Target::Sqlite(p) = &target {
-            // The run's own writes are not user saves (watch mode).
+            // The run's own writes are not user saves (watch mode); never read back
+            // while SQLite holds them (see `record_write_unread`).
             for suffix in ["", "-wal", "-shm"] {
-                ctx.record_write(std::path::Path::new(&format!("{}{suffix}", p.display())));
+                ctx.record_write_unread(std::path::Path::new(&format!("{}{suffix}", p.display())));
             }
         }
         let run_id = recording::run_id_for(&mut db).map_err(fail)?;
@@ -163,25 +164,7 @@ fn save_interference(h: &DbHandle, results: &Array, name: &str) -> ScriptResult<
 }
 
 fn paths(h: &DbHandle, filter: &Map) -> ScriptResult<Array> {
-    check_keys(
-        filter,
-        &["name", "planner", "component", "since", "run"],
-        "path filter",
-    )?;
-    let q = PathQuery {
-        name: opt_str(filter, "name")?,
-        planner: opt_str(filter, "planner")?,
-        component: opt_str(filter, "component")?,
-        since: opt_str(filter, "since")?,
-        run_id: match filter.get("run") {
-            None => None,
-            Some(r) => Some(
-                r.as_int()
-                    .map_err(|t| fail(format!("run must be a run id (integer), not {t}")))?,
-            ),
-        },
-        without_poses: false,
-    };
+    let q = read_options::<PathFilter>(filter, &|w| h.ctx.print(w))?.query();
     let stored = h.lock()?.paths(&q).map_err(fail)?;
     Ok(stored
         .into_iter()
@@ -215,38 +198,10 @@ fn paths(h: &DbHandle, filter: &Map) -> ScriptResult<Array> {
         .collect())
 }
 
-/// `#{max_seconds, max_rows, max_bytes}` over the defaults.
+/// `#{max_seconds, max_rows, max_bytes}` over the defaults (the library's
+/// [`Limits`] vocabulary; the maxima are its rule and name the limit out of range).
 fn query_limits(m: &Map) -> ScriptResult<QueryLimits> {
-    check_keys(m, &["max_seconds", "max_rows", "max_bytes"], "query limits")?;
-    let mut l = QueryLimits::DEFAULT;
-    if let Some(v) = m.get("max_seconds") {
-        let s = super::convert::num(v, "max_seconds")?;
-        if !(s > 0.0 && s <= QueryLimits::MAX.time.as_secs_f64()) {
-            return err(format!(
-                "max_seconds must be more than 0 and at most {} s, not {s}",
-                QueryLimits::MAX.time.as_secs()
-            ));
-        }
-        l.time = std::time::Duration::from_secs_f64(s);
-    }
-    let count = |k: &str| -> ScriptResult<Option<usize>> {
-        m.get(k)
-            .map(|v| {
-                let n = v
-                    .as_int()
-                    .map_err(|t| fail(format!("{k} must be an integer, not {t}")))?;
-                usize::try_from(n).map_err(|_| fail(format!("{k} must be positive, not {n}")))
-            })
-            .transpose()
-    };
-    if let Some(n) = count("max_rows")? {
-        l.max_rows = n;
-    }
-    if let Some(n) = count("max_bytes")? {
-        l.max_bytes = n;
-    }
-    // The maxima are the library's: it names the limit that is out of range.
-    l.checked().map_err(fail)
+    read_options::<Limits>(m, &|_| {})?.limits().map_err(fail)
 }
 
 fn query(h: &DbHandle, sql: &str, params: &Array, limits: &Map) -> ScriptResult<Array> {
@@ -256,11 +211,17 @@ fn query(h: &DbHandle, sql: &str, params: &Array, limits: &Map) -> ScriptResult<
         .enumerate()
         .map(|(i, v)| to_sql(v, i))
         .collect::<ScriptResult<Vec<_>>>()?;
-    // The run's cancel flag reaches the query: a newer save stops it mid-statement.
+    // The run's cancel flag reaches the query: a newer save stops it mid-statement;
+    // and the run's queries share one time budget.
+    let mut db = h.lock()?;
     let r = h
-        .lock()?
-        .query_with(sql, &params, limits, Some(h.ctx.cancel.clone()))
+        .ctx
+        .query_budget
+        .run(limits, |limits| {
+            db.query_with(sql, &params, limits, Some(h.ctx.cancel.clone()))
+        })
         .map_err(fail)?;
+    drop(db);
     let columns = r.columns;
     // Rows are dropped as they are converted: the result is not held twice.
     Ok(r.rows
@@ -343,6 +304,8 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Stores interference results (the maps of `doc.interferences()` / `doc.touching()`); returns its id.",
         |h: &mut DbHandle, r: Array, name: &str| save_interference(h, &r, name),
     );
+    api.options::<PathFilter>("The filter of `paths` (Python: keywords of `Database.paths`):");
+    api.options::<Limits>("The limits of `query` (Python: keywords of `Database.query`):");
     api.f(
         "Database.paths() -> array",
         "Every stored path, oldest first, as maps `#{id, name, component, seed, run, created_at, planner, found, path}`; `path` is a Path for `follow`, `doc.revalidate` and the Path properties.",
@@ -350,7 +313,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     api.f(
         "Database.paths(filter: map) -> array",
-        "Stored paths by `#{name, planner, component, since, run}` (`since`: UTC time or date prefix, `\"2026-11-30\"`).",
+        "Stored paths by the keys of the path-filter table below.",
         |h: &mut DbHandle, f: Map| paths(h, &f),
     );
     api.f(
@@ -377,7 +340,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     api.f(
         "Database.query(sql: string) -> array",
-        "Runs one read-only SQL query on this database; each row is a map column → value. Writes, ATTACH, pragmas that set anything and file functions are refused. Stops after 10 s and refuses results over 100,000 rows or 64 MiB (see docs/database.md, *Queries from scripts*).",
+        "Runs one read-only SQL query on this database; each row is a map column → value. Writes, ATTACH, pragmas that set anything and file functions are refused. Stops at the default limits of the query-limits table below and refuses results over them (see docs/database.md, *Queries from scripts*).",
         |h: &mut DbHandle, sql: &str| query(h, sql, &Array::new(), &Map::new()),
     );
     api.f(
@@ -387,7 +350,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     api.f(
         "Database.query(sql: string, params: array, limits: map) -> array",
-        "As above within `#{max_seconds, max_rows, max_bytes}` instead of 10 s, 100,000 rows, 64 MiB; at most 600 s, 4,000,000 rows, 1 GiB.",
+        "As above within the limits of the query-limits table below (keys `max_seconds`, `max_rows`, `max_bytes`).",
         |h: &mut DbHandle, sql: &str, params: Array, limits: Map| query(h, sql, &params, &limits),
     );
     api.f(

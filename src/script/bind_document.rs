@@ -73,7 +73,7 @@ impl DocHandle {
             ctx.record_read(&f);
         }
         for w in doc.warnings() {
-            ctx.print(&format!("warning: {w}"));
+            ctx.warn(w);
         }
         ctx.caches.view.log_document(&doc);
         Ok(Self {

@@ -5,10 +5,11 @@ use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
 use super::bind_planning::with_workspace;
-use super::convert::{box_value, check_keys, err, fail, floats, num, opt_num, opt_str};
+use super::convert::{box_value, check_keys, err, fail, floats, num, read_options};
 use super::ScriptResult;
-use crate::collision::{Contact, CutSpec, Method, SweepMethod, SweepOptions};
+use crate::collision::{Contact, CutSpec, SweepOptions};
 use crate::document::Feature;
+use crate::options::{Check, Sweep};
 use crate::workspace::{split_part, CheckOptions, CUT_CELLS_FEATURE};
 use rhai::{Array, Dynamic, Map};
 
@@ -20,23 +21,13 @@ pub struct FeatureHandle {
     name: String,
 }
 
+/// The check options of a script's map (the library's [`Check`] vocabulary; the
+/// tolerance's range is the library's rule, when checking).
 fn options(map: Option<&Map>) -> ScriptResult<CheckOptions> {
-    let mut o = CheckOptions::default();
-    let Some(m) = map else {
-        return Ok(o);
-    };
-    check_keys(m, &["method", "tolerance"], "interference")?;
-    if let Some(s) = opt_str(m, "method")? {
-        o.method = s.parse::<Method>().map_err(fail)?;
-    }
-    o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
-    if !(o.tolerance.is_finite() && o.tolerance >= 0.0) {
-        return err(format!(
-            "tolerance must be a finite number ≥ 0 mm, not {}",
-            o.tolerance
-        ));
-    }
-    Ok(o)
+    Ok(match map {
+        None => CheckOptions::default(),
+        Some(m) => read_options::<Check>(m, &|_| {})?.check_options(),
+    })
 }
 
 fn contact_map(c: &Contact, a: &str, b: &str) -> Map {
@@ -70,7 +61,10 @@ fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult
         }
         Ok(found
             .into_iter()
-            .map(|p| Dynamic::from_map(contact_map(&p.contact, ws.name(p.a), ws.name(p.b))))
+            .map(|p| {
+                let c = ws.with_separation_depth(p.a, p.b, p.contact);
+                Dynamic::from_map(contact_map(&c, ws.name(p.a), ws.name(p.b)))
+            })
             .collect())
     })
 }
@@ -78,7 +72,9 @@ fn pairs(d: &DocHandle, opts: Option<&Map>, want_touching: bool) -> ScriptResult
 fn pair(d: &DocHandle, a: &str, b: &str, opts: Option<&Map>) -> ScriptResult<Map> {
     let o = options(opts)?;
     with_workspace(d, |ws| {
-        Ok(contact_map(&ws.contact(a, b, &o).map_err(fail)?, a, b))
+        let c = ws.contact(a, b, &o).map_err(fail)?;
+        let (ia, ib) = (ws.index(a).map_err(fail)?, ws.index(b).map_err(fail)?);
+        Ok(contact_map(&ws.with_separation_depth(ia, ib, c), a, b))
     })
 }
 
@@ -103,26 +99,10 @@ fn waypoints(motion: &Dynamic) -> ScriptResult<Vec<crate::math::Transform>> {
 }
 
 fn sweep(d: &DocHandle, name: &str, motion: &Dynamic, opts: Option<&Map>) -> ScriptResult<Map> {
-    let mut o = SweepOptions::default();
-    if let Some(m) = opts {
-        check_keys(
-            m,
-            &["method", "step", "tolerance", "time_limit_ms"],
-            "sweep",
-        )?;
-        o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
-        o.time_limit_ms = opt_num(m, "time_limit_ms")?;
-        let step = opt_num(m, "step")?;
-        o.method = match opt_str(m, "method")?.as_deref() {
-            None | Some("continuous") => SweepMethod::CONTINUOUS_FINE,
-            Some("step") => SweepMethod::displacement_steps(step.unwrap_or(1.0)),
-            Some(other) => {
-                return err(format!(
-                    "unknown sweep method `{other}`: \"step\" or \"continuous\""
-                ))
-            }
-        };
-    }
+    let o = match opts {
+        None => SweepOptions::default(),
+        Some(m) => read_options::<Sweep>(m, &|_| {})?.sweep_options(),
+    };
     let to = waypoints(motion)?;
     with_workspace(d, |ws| {
         let hit = ws.sweep_through(name, &to, &o).map_err(fail)?;
@@ -183,7 +163,9 @@ fn feature_cells(f: &FeatureHandle) -> ScriptResult<std::sync::Arc<crate::collis
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Interference", "Static interference between components, seed 000 style. Methods: `\"exact\"` (default: solid semantics — surfaces crossing deeper than the tolerance, or one part inside the other), `\"aabb\"` (whole-part world boxes) and `\"cells\"` (whole-part boxes, then the boxes of the parts' cut cells). Parts whose surfaces only meet (a plate on the table, a screw resting in a hole of its diameter) are *touching*, not interfering. `tolerance` is the penetration tolerance in mm (default 0.01). Results are maps `#{a, b, state, depth, kind}`: `state` is `\"separate\"`, `\"touching\"` or `\"interfering\"`, `depth` the penetration estimate in mm, `kind` `\"surfaces cross\"`, `\"X inside Y\"`, `\"faces overlap\"` (closed solids whose faces overlap in one plane facing the same way: equal walls pushed into each other) or `\"boxes overlap\"`.");
+    api.section("Interference", "Static interference between components, seed 000 style. Methods: `\"exact\"` (default: solid semantics — surfaces crossing deeper than the tolerance, or one part inside the other), `\"aabb\"` (whole-part world boxes) and `\"cells\"` (whole-part boxes, then the boxes of the parts' cut cells). Parts whose surfaces only meet (a plate on the table, a screw resting in a hole of its diameter) are *touching*, not interfering. The options maps take the keys of the table below (`tolerance`: the penetration tolerance). Results are maps `#{a, b, state, depth, kind}`: `state` is `\"separate\"`, `\"touching\"` or `\"interfering\"`, `depth` the interference depth in mm (for closed solids the shortest translation that separates them, as `overlap` measures it, within 2 s; else the crossing estimate), `kind` `\"surfaces cross\"`, `\"X inside Y\"`, `\"faces overlap\"` (closed solids whose faces overlap in one plane facing the same way: equal walls pushed into each other) or `\"boxes overlap\"`.");
+    api.options::<Check>("Options of `interferences`, `touching`, `interferes`, `contact`:");
+    api.options::<Sweep>("Options of `sweep`:");
     api.type_::<FeatureHandle>("Feature");
     api.f(
         "Document.interferences() -> array",
@@ -207,7 +189,7 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f(
         "Document.interferes(a: string, b: string) -> bool",
-        "Whether two components interfere (exact method, 0.01 mm tolerance). The same answer as `contact(a, b).state == \"interfering\"`, but stops at the first crossing deeper than the tolerance instead of measuring the deepest: the cheap check for loops over many poses.",
+        "Whether two components interfere (exact method, the default tolerance). The same answer as `contact(a, b).state == \"interfering\"`, but stops at the first crossing deeper than the tolerance instead of measuring the deepest: the cheap check for loops over many poses.",
         |d: &mut DocHandle, a: &str, b: &str| interferes(d, a, b, None),
     );
     api.f(
@@ -226,10 +208,10 @@ pub(super) fn register(api: &mut Api) {
         |d: &mut DocHandle, a: &str, b: &str, o: Map| pair(d, a, b, Some(&o)),
     );
     api.f("Document.clearance(a: string, b: string) -> float", "Distance between the surfaces of two components (mm), 0 when they touch, cross or one is inside the other (agrees with `contact`: not separate ⇒ at most the tolerance); searched up to 1000 mm (1000 when nothing is nearer).", |d: &mut DocHandle, a: &str, b: &str| -> ScriptResult<f64> {
-        with_workspace(d, |ws| ws.clearance(a, b, 1000.0).map_err(fail))
+        with_workspace(d, |ws| ws.clearance(a, b, crate::workspace::DEFAULT_CLEARANCE_SEARCH_MM).map_err(fail))
     });
     api.f("Document.sweep(name: string, motion) -> map", "Dynamic interference: moves the component from its pose to `motion` (a Transform, or an array of Transforms visited in order; translation lerp + rotation slerp) and returns the first contact: `#{hit, t, transform, with, checks}` (`t` in 0..1 along the motion, `with` the other component — `with` is a Rhai keyword, read it as `hit[\"with\"]`). Continuous method: never misses a contact.", |d: &mut DocHandle, name: &str, motion: Dynamic| sweep(d, name, &motion, None));
-    api.f("Document.sweep(name: string, motion, options: map) -> map", "As above with `#{method: \"step\"|\"continuous\", step: mm, tolerance: mm, time_limit_ms}` (default budget 10 s; a sweep that runs out of it fails with an error); `\"step\"` is seed 000's static check after every step (no point of the part moves more than `step` mm between checks) and can jump over thin features.", |d: &mut DocHandle, name: &str, motion: Dynamic, o: Map| sweep(d, name, &motion, Some(&o)));
+    api.f("Document.sweep(name: string, motion, options: map) -> map", "As above with the options of the section's sweep table (`method`, `step`, `tolerance`, `time_limit_ms`); `\"step\"` is seed 000's static check after every step and can jump over thin features.", |d: &mut DocHandle, name: &str, motion: Dynamic, o: Map| sweep(d, name, &motion, Some(&o)));
 
     api.section("Cut cells", "Seed 000's finite subdivision: a part cut by arrays of planes into cells, one box per cell, stored as a feature in the part's feature tree (saved with the document, re-derived when the mesh changes). Cells are in the part frame (mm).");
     api.f("Component.split(cell_size) -> Feature", "Cuts the component's part into cubic cells of `cell_size` mm (plane arrays from the part's minimum corner) and stores the feature `CutCells` in the part's tree (replacing an earlier one). Refuses sizes that would make more than 100,000 cells.", |c: &mut ComponentHandle, size: Dynamic| -> ScriptResult<FeatureHandle> {

@@ -31,8 +31,8 @@ pub fn xyzabc_deg(t: &Transform, conv: AngleConvention) -> Dynamic {
     floats(t.to_xyzabc_deg(conv))
 }
 
-/// A Transform from a script value: a Transform, a 4×4 matrix, 16 array-data numbers
-/// or a pose `[x, y, z, a, b, c]` (mm, degrees).
+/// A Transform from a script value: a Transform, a 4×4 matrix (mm) or a pose
+/// `[x, y, z, a, b, c]` (mm, degrees).
 pub fn to_transform(v: &Dynamic, what: &str) -> ScriptResult<Transform> {
     if let Some(t) = v.read_lock::<Transform>() {
         return Ok(*t);
@@ -57,14 +57,51 @@ pub fn to_transform(v: &Dynamic, what: &str) -> ScriptResult<Transform> {
             numbers_into(v, &mut n, what)?;
             Ok(pose_deg(&n, AngleConvention::default()))
         }
-        16 => {
-            let n = numbers(v, 16, what)?;
-            let mut d = [0.0; 16];
-            d.copy_from_slice(&n);
-            Transform::from_array_data(&d).map_err(fail)
-        }
-        n => err(format!("{what}: an array of {n} elements is not a 4×4 matrix, a pose [x,y,z,a,b,c] or 16 array-data numbers")),
+        // SolidWorks' ArrayData is in metres, fitup's matrices in mm: which one a
+        // pasted list of 16 numbers is cannot be told, so the caller says it.
+        16 => err(format!("{what}: 16 numbers are IMathTransform.ArrayData, whose translation SolidWorks gives in metres: write `create_transform(d)` for metres (as IMathUtility.CreateTransform) or `transform(d, \"mm\")` for millimetres")),
+        n => err(format!("{what}: an array of {n} elements is not a 4×4 matrix (mm) or a pose [x,y,z,a,b,c] (mm, degrees); 16 ArrayData numbers go to `create_transform(d)` (metres) or `transform(d, \"mm\")`")),
     }
+}
+
+/// The 4×4 matrix (document layout) of a 4×4 array or 16 ArrayData numbers, with the
+/// translation converted from `unit` (`"mm"` or `"m"`) to mm.
+fn matrix_in(v: &Dynamic, unit: &str, what: &str) -> ScriptResult<[[f64; 4]; 4]> {
+    let scale = match unit {
+        "mm" => 1.0,
+        "m" => 1000.0,
+        u => return err(format!("{what}: unit must be \"mm\" or \"m\", not {u:?}")),
+    };
+    let arr = v
+        .read_lock::<Array>()
+        .ok_or_else(|| fail(format!("{what} must be an array, not {}", v.type_name())))?;
+    let mut m = [[0.0; 4]; 4];
+    match arr.len() {
+        4 => {
+            for (i, row) in arr.iter().enumerate() {
+                let r = numbers(row, 4, &format!("{what} row {}", i + 1))?;
+                m[i].copy_from_slice(&r);
+            }
+        }
+        16 => {
+            let d = numbers(v, 16, what)?;
+            m = [
+                [d[0], d[1], d[2], d[13]],
+                [d[3], d[4], d[5], d[14]],
+                [d[6], d[7], d[8], d[15]],
+                [d[9], d[10], d[11], d[12]],
+            ];
+        }
+        n => {
+            return err(format!(
+                "{what}: an array of {n} elements is neither a 4×4 matrix nor 16 ArrayData numbers"
+            ))
+        }
+    }
+    for v in &mut m[3][..3] {
+        *v *= scale;
+    }
+    Ok(m)
 }
 
 /// `v` for people: numbers to `decimals` places without noise or `-0`, arrays element
@@ -171,15 +208,35 @@ pub(super) fn register(api: &mut Api) {
             ))
         },
     );
-    api.f("transform(m: array) -> Transform", "A Transform from a 4×4 matrix (layout above), 16 array-data numbers or a pose `[x,y,z,a,b,c]`; checks that it is rigid.", |m: Dynamic| to_transform(&m, "transform"));
+    api.f("transform(m: array) -> Transform", "A Transform from a 4×4 matrix (layout above, mm) or a pose `[x,y,z,a,b,c]` (mm, degrees); checks that it is rigid. 16 ArrayData numbers are refused here (SolidWorks gives their translation in metres): use `create_transform(d)` (metres) or `transform(d, \"mm\")`.", |m: Dynamic| to_transform(&m, "transform"));
     api.get(
         "Transform.matrix -> array",
         "The 4×4 matrix, rows `[a b c 0] [d e f 0] [g h i 0] [j k l 1]` (mm).",
         |t: &mut Transform| matrix_array(t),
     );
+    api.f("transform(m: array, unit: string) -> Transform", "A Transform from a 4×4 matrix (layout above) or 16 IMathTransform.ArrayData numbers (a..i, j k l, scale, n o p) whose translation is in `unit`: `\"mm\"` or `\"m\"`; checks that it is rigid.", |m: Dynamic, unit: &str| -> ScriptResult<Transform> {
+        Transform::from_matrix(&matrix_in(&m, unit, "transform")?).map_err(fail)
+    });
+    api.f("create_transform(array_data: array) -> Transform", "SolidWorks' IMathUtility.CreateTransform: 16 ArrayData numbers a..i, j k l (**metres**, as SolidWorks gives them), scale, n o p; checks that it is rigid (see `orthonormalize` for rounded rotations).", |d: Dynamic| -> ScriptResult<Transform> {
+        if d.read_lock::<Array>().is_none_or(|a| a.len() != 16) {
+            return err("create_transform: ArrayData is 16 numbers (a..i, j k l in metres, scale, n o p)");
+        }
+        Transform::from_matrix(&matrix_in(&d, "m", "create_transform")?).map_err(fail)
+    });
+    api.f("orthonormalize(m: array) -> Transform", "The rigid pose nearest to a 4×4 matrix (mm) whose rotation was rounded (a spreadsheet's digits): the nearest rotation to the a..i block, the translation as given. Refuses a mirror, and a block more than 0.01 from a rotation (that is not rounding).", |m: Dynamic| -> ScriptResult<Transform> {
+        Transform::orthonormalized(&matrix_in(&m, "mm", "orthonormalize")?).map_err(fail)
+    });
+    api.f("orthonormalize(m: array, unit: string) -> Transform", "`orthonormalize` of a 4×4 matrix or 16 ArrayData numbers whose translation is in `unit` (`\"mm\"` or `\"m\"`).", |m: Dynamic, unit: &str| -> ScriptResult<Transform> {
+        Transform::orthonormalized(&matrix_in(&m, unit, "orthonormalize")?).map_err(fail)
+    });
     api.get(
         "Transform.array_data -> array",
-        "The 16 numbers of IMathTransform.ArrayData: a..i, j k l (mm, not metres), scale 1, 0 0 0.",
+        "The 16 numbers of IMathTransform.ArrayData in SolidWorks' units: a..i, j k l in **metres**, scale 1, 0 0 0 (`create_transform` reads them back).",
+        |t: &mut Transform| floats(t.to_array_data_si()),
+    );
+    api.get(
+        "Transform.array_data_mm -> array",
+        "`array_data` with the translation j k l in mm (`transform(d, \"mm\")` reads it back).",
         |t: &mut Transform| floats(t.to_array_data()),
     );
     api.get(

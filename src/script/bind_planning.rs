@@ -5,14 +5,11 @@ use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::{to_transform, xyzabc_deg};
 use super::convert::overwrite_option;
-use super::convert::{check_keys, err, fail, num, opt_num, opt_str};
+use super::convert::{err, fail, num, read_options};
 use super::{Context, ScriptResult};
-use crate::collision::SweepMethod;
 use crate::math::AngleConvention;
-use crate::planning::{
-    Control, MeshValidatorOptions, NarrowPassage, Phase, PlannedPath, Planner, ProblemFile,
-    Progress, RotationFreedom,
-};
+use crate::options::{Narrow, Plan};
+use crate::planning::{Control, Phase, PlannedPath, ProblemFile, Progress};
 use crate::workspace::{PlanRequest, Revalidation, Workspace};
 use rhai::{Array, Dynamic, Map};
 use std::sync::Arc;
@@ -24,185 +21,14 @@ use std::time::Instant;
 #[derive(Clone)]
 pub struct PathHandle(pub(super) Arc<PlannedPath>, pub(super) Arc<Context>);
 
-const OPTION_KEYS: [&str; 22] = [
-    "narrow",
-    "fallback_share",
-    "disassemble",
-    "planner",
-    "seed",
-    "max_iterations",
-    "time_limit_ms",
-    "step",
-    "goal_bias",
-    "smoothing",
-    "bounds",
-    "margin",
-    "rotation",
-    "rotation_weight",
-    "tolerance",
-    "edge",
-    "edge_step",
-    "edge_step_deg",
-    "contact_step",
-    "L",
-    "dis",
-    "radius",
-];
-
-/// The planning request of the script's options. This only converts: names and
-/// units (degrees to radians, `0` = off) and types. Every range is checked once, by
-/// the library when it plans (`PlanError`, `CollisionError`, `WorkspaceError`), so a
-/// script and a Rust caller get the same rule and the same words.
-fn parse(opts: &Map) -> ScriptResult<PlanRequest> {
-    check_keys(opts, &OPTION_KEYS, "planning")?;
-    let mut planner: Planner = opt_str(opts, "planner")?
-        .as_deref()
-        .unwrap_or("rrt_connect")
-        .parse()
-        .map_err(fail)?;
-    let limits = planner.limits_mut();
-    if let Some(s) = opts.get("seed") {
-        limits.seed =
-            s.as_int()
-                .map_err(|t| fail(format!("seed must be an integer, not {t}")))? as u64;
-    }
-    if let Some(n) = opt_num(opts, "max_iterations")? {
-        // A count: NaN and negatives become 0, which the library refuses.
-        limits.max_iterations = if n.is_finite() && n > 0.0 {
-            n as usize
-        } else {
-            0
-        };
-    }
-    limits.time_limit_ms = opt_num(opts, "time_limit_ms")?.or(limits.time_limit_ms);
-    if let Some(s) = opt_num(opts, "step")? {
-        planner.set_step(s);
-    }
-    if let Some(p) = opt_num(opts, "goal_bias")? {
-        planner.set_goal_bias(p).map_err(fail)?;
-    }
-    if let Some(s) = opts.get("smoothing") {
-        planner.set_smoothing(
-            s.as_bool()
-                .map_err(|t| fail(format!("smoothing must be true or false, not {t}")))?,
-        );
-    }
-    if let Some(n) = opts.get("narrow") {
-        planner.set_narrow(parse_narrow(n)?).map_err(fail)?;
-    }
-    if let Some(f) = opt_num(opts, "fallback_share")? {
-        planner.set_fallback_share(f).map_err(fail)?;
-    }
-    let (l, dis, radius) = (
-        opt_num(opts, "L")?,
-        opt_num(opts, "dis")?,
-        opt_num(opts, "radius")?,
-    );
-    if l.is_some() || dis.is_some() || radius.is_some() {
-        planner.set_greedy_ant(l, dis, radius).map_err(fail)?;
-    }
-    let mut validator = MeshValidatorOptions::default();
-    if let Some(t) = opt_num(opts, "tolerance")? {
-        validator.tolerance = t;
-    }
-    validator.edge = match opt_str(opts, "edge")?.as_deref() {
-        None | Some("continuous") => SweepMethod::Continuous {
-            contact_step_mm: opt_num(opts, "contact_step")?
-                .unwrap_or(SweepMethod::DEFAULT_CONTACT_STEP_MM),
-        },
-        Some("step") => SweepMethod::Stepwise {
-            step_mm: opt_num(opts, "edge_step")?.unwrap_or(0.1),
-            step_rad: opt_num(opts, "edge_step_deg")?.unwrap_or(0.1).to_radians(),
-        },
-        Some(o) => {
-            return err(format!(
-                "edge must be \"continuous\" or \"step\", not `{o}`"
-            ))
-        }
-    };
-    let bounds = match opts.get("bounds") {
-        None => None,
-        Some(b) => Some(super::convert::to_box(b, "bounds")?),
-    };
-    let flag = |key: &str, default: bool| -> ScriptResult<bool> {
-        opts.get(key).map_or(Ok(default), |v| {
-            v.as_bool()
-                .map_err(|t| fail(format!("{key} must be true or false, not {t}")))
-        })
-    };
-    Ok(PlanRequest {
-        planner,
-        validator,
-        bounds,
-        margin_mm: opt_num(opts, "margin")?.unwrap_or(crate::workspace::DEFAULT_MARGIN_MM),
-        rotation: if flag("rotation", true)? {
-            RotationFreedom::Free
-        } else {
-            RotationFreedom::Fixed
-        },
-        rotation_weight: opt_num(opts, "rotation_weight")?,
-        disassemble: flag("disassemble", false)?,
-        start: None,
-    })
-}
-
-const NARROW_KEYS: [&str; 7] = [
-    "max_turn_deg",
-    "dynamic_domain",
-    "bridge",
-    "bridge_width",
-    "to_contact",
-    "axis_moves",
-    "axis_samples",
-];
-
-/// The `narrow` option: `false` (every measure off), `true` (fitup's defaults) or
-/// a map changing some of the defaults (`max_turn_deg` in degrees, 0 = no limit;
-/// `dynamic_domain` and `bridge_width` in mm of the metric, 0 = off; `bridge` a
-/// probability; `to_contact` a bool; `axis_moves` the axis-move search's share of
-/// the work, 0..1, 0 = off; `axis_samples` the probability of an axis-aligned
-/// sample, 0..1). Ranges are the library's
-/// (`NarrowPassage::validate`, when planning).
-fn parse_narrow(v: &Dynamic) -> ScriptResult<NarrowPassage> {
-    if let Ok(on) = v.as_bool() {
-        return Ok(if on {
-            NarrowPassage::default()
-        } else {
-            NarrowPassage::OFF
-        });
-    }
-    let Some(m) = v.read_lock::<Map>() else {
-        return err(format!(
-            "narrow must be true, false or a map like #{{max_turn_deg: 5}}, not {}",
-            v.type_name()
-        ));
-    };
-    check_keys(&m, &NARROW_KEYS, "narrow")?;
-    let mut n = NarrowPassage::default();
-    if let Some(t) = opt_num(&m, "max_turn_deg")? {
-        n.max_turn = (t != 0.0).then(|| t.to_radians());
-    }
-    if let Some(r) = opt_num(&m, "dynamic_domain")? {
-        n.dynamic_domain = (r != 0.0).then_some(r);
-    }
-    if let Some(p) = opt_num(&m, "bridge")? {
-        n.bridge = p;
-    }
-    if let Some(w) = opt_num(&m, "bridge_width")? {
-        n.bridge_width = w;
-    }
-    if let Some(a) = opt_num(&m, "axis_moves")? {
-        n.axis_moves = a;
-    }
-    if let Some(a) = opt_num(&m, "axis_samples")? {
-        n.axis_samples = a;
-    }
-    if let Some(c) = m.get("to_contact") {
-        n.to_contact = c
-            .as_bool()
-            .map_err(|t| fail(format!("narrow.to_contact must be true or false, not {t}")))?;
-    }
-    Ok(n)
+/// The planning request of the script's options: the library's vocabulary
+/// ([`Plan`]), which converts names and units (degrees to radians, `0` = off) and
+/// types. Every range is checked once, by the library when it plans (`PlanError`,
+/// `CollisionError`, `WorkspaceError`), so a script and a Rust caller get the same
+/// rule and the same words.
+fn parse(opts: &Map, default_planner: &str, ctx: &Context) -> ScriptResult<PlanRequest> {
+    let o: Plan = read_options(opts, &|w| ctx.print(w))?;
+    o.request(default_planner).map_err(fail)
 }
 
 fn progress_printer<'a>(
@@ -243,8 +69,8 @@ pub(super) fn with_workspace<R>(
 
 fn plan(d: &DocHandle, name: &str, goal: &Dynamic, opts: &Map) -> ScriptResult<PathHandle> {
     let goal = to_transform(goal, "goal")?;
-    let req = parse(opts)?;
     let ctx = d.context().clone();
+    let req = parse(opts, "rrt_connect", &ctx)?;
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path = with_workspace(d, |ws| {
         ws.plan_path(name, &goal, &req, Some(&mut cb)).map_err(fail)
@@ -271,8 +97,8 @@ fn load_problem(d: &DocHandle, path: &str) -> ScriptResult<ProblemHandle> {
 }
 
 fn plan_problem(d: &DocHandle, p: &ProblemHandle, opts: &Map) -> ScriptResult<PathHandle> {
-    let req = parse(opts)?;
     let ctx = d.context().clone();
+    let req = parse(opts, "rrt_connect", &ctx)?;
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path = with_workspace(d, |ws| {
         ws.plan_problem(&p.0, &req, Some(&mut cb)).map_err(fail)
@@ -284,11 +110,8 @@ fn plan_problem(d: &DocHandle, p: &ProblemHandle, opts: &Map) -> ScriptResult<Pa
 }
 
 fn plan_disassembly(d: &DocHandle, name: &str, opts: &Map) -> ScriptResult<PathHandle> {
-    let mut opts = opts.clone();
-    opts.entry("planner".into())
-        .or_insert_with(|| "local_rrt".into());
-    let req = parse(&opts)?;
     let ctx = d.context().clone();
+    let req = parse(opts, "local_rrt", &ctx)?;
     let mut cb = progress_printer(&ctx, req.planner.name());
     let path = with_workspace(d, |ws| {
         ws.plan_disassembly(name, &req, Some(&mut cb)).map_err(fail)
@@ -307,12 +130,14 @@ fn densify(p: &PlannedPath, step: f64) -> ScriptResult<Vec<crate::math::Transfor
 }
 
 pub(super) fn register(api: &mut Api) {
-    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked, within `fallback_share` of the work; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). Options: `seed` (same seed, same path), `max_iterations`, `time_limit_ms` (the budget of the whole call — search and smoothing — default 10000 ms; smoothing stops when it is spent and keeps the best path so far; progress is printed every second), `step` (mm), `goal_bias`, `smoothing` (bool, shortcutting), `bounds: #{min, max}` for the part origin (default: the assembly box with start and goal grown by `margin`, 50 mm), `rotation` (bool, default true), `rotation_weight` (mm per rad in the metric), `tolerance` (penetration tolerance, mm; touching is allowed), `edge: \"continuous\"` (default: conservative advancement, which cannot jump over an obstacle; while the part touches one, static checks every `contact_step` mm, default 0.05) or `\"step\"` with `edge_step` (mm, at least 0.0001) and `edge_step_deg`, `disassemble: true` (seed 002: the end — start or goal — whose box overlaps the box of the other components is the assembled one; plan the disassembly from it until the part leaves that box, and join the other end to where it left with `rrt_connect`; the way into tight clearances. `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused. When both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified). `narrow` (the narrow-passage measures of the tree planners, on by default for `rrt_connect` and `disassemble: true`, off for seed 002's `rrt`, `biased_rrt`, `local_rrt`): `false` (all off), `true` (defaults) or a map of `max_turn_deg` (degrees, default 15, 0 = none: a blocked extension is retried turning at most this much), `dynamic_domain` (mm of the metric, default 10, 0 = off), `bridge` (probability of a bridge-test sample, default 0.1), `bridge_width` (mm, default 5), `to_contact` (bool, default true: a blocked extension keeps its farthest free pose), `axis_moves` (0..1, default 0.1: the share of `rrt_connect`'s work for its axis-move search — quarter and eighth turns about the part's own axes and slides along them to contact, what finds slots aligned with the part; 0 = off), `axis_samples` (0..1, default 0: the probability that a sample keeps the tree root's orientation turned about one axis of the assembly frame, for parts moving in a flat corridor). `fallback_share` (0..1: the largest share of the search's checks that the lattice, extension to contact, bridge test and dynamic-domain redraws may take, the rest being plain RRT-Connect iterations; default 0.1 for `rrt_connect` and `disassemble: true`, 1 for seed 002's `rrt`, `biased_rrt`, `local_rrt`). Fixed components are refused. A path that is not found says why in `reason`.");
+    api.section("Path planning", "Collision-free paths for one component (position and orientation) among the others, seeds 000 and 002. Planners: `\"greedy_ant\"` (seed 000's single-ant dynamic greedy: options `step` = segments of s→e, `L`, `dis`, `radius`), `\"rrt_floyd\"` (seed 000's random-walk tree + Floyd shortest path), `\"rrt\"`, `\"biased_rrt\"` (seed 002's baselines, `goal_bias` p), `\"local_rrt\"` (seed 002's improved RRT: local discretization — 26 translation neighbours at an edge length adapting to the clearance, then the 6 single-axis rotations), `\"rrt_connect\"` (default; bidirectional, with the local lattice and random coordinated moves when an extension is blocked, within `fallback_share` of the work; it explores lazily with pose checks and returns only a path whose every edge passed the `edge` check). With `disassemble: true`, `rrt`, `biased_rrt` and `local_rrt` search the disassembly, with `rrt_connect` (default) `local_rrt` does; `greedy_ant` and `rrt_floyd` are refused; when both or neither end is inside, there is nothing to disassemble and the call is plain `rrt_connect`. `Path.planner` says what ran, e.g. `\"lazy_disassemble_local_rrt+lazy_rrt_connect\"`, `lazy_` marking a search explored lazily and certified. Progress is printed every second. Fixed components are refused. A path that is not found says why in `reason`. The options maps of `plan_path`, `plan_disassembly` and `plan_problem` take the keys of the tables below (Python's keywords are the same); an unknown key is an error naming the close ones");
+    api.options::<Plan>("Options of `plan_path`, `plan_disassembly`, `plan_problem`:");
+    api.options::<Narrow>("The map of `narrow`:");
     api.type_::<PathHandle>("Path");
     api.f("Document.plan_path(name: string, goal) -> Path", "Plans a path for the component from its current pose to `goal` (a Transform or a pose `[x,y,z,a,b,c]`) with the default planner (`rrt_connect`).", |d: &mut DocHandle, name: &str, goal: Dynamic| plan(d, name, &goal, &Map::new()));
     api.f(
         "Document.plan_path(name: string, goal, options: map) -> Path",
-        "Plans a path with options (see the section).",
+        "Plans a path with options (the section's table).",
         |d: &mut DocHandle, name: &str, goal: Dynamic, o: Map| plan(d, name, &goal, &o),
     );
     api.f("Document.plan_disassembly(name: string) -> Path", "Seed 002's \"can be disassembled, can be assembled\": plans from the component's (assembled) pose until its box is outside the box of the other components, then reverses the path, so it ends assembled. Default planner `local_rrt`.", |d: &mut DocHandle, name: &str| plan_disassembly(d, name, &Map::new()));
@@ -537,51 +362,54 @@ fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> S
 }
 
 #[cfg(test)]
-mod narrow_option_tests {
+mod option_tests {
     use super::*;
 
+    fn request(pairs: &[(&str, Dynamic)], default_planner: &str) -> ScriptResult<PlanRequest> {
+        let m: Map = pairs
+            .iter()
+            .map(|(k, v)| ((*k).into(), v.clone()))
+            .collect();
+        let o: Plan = read_options(&m, &|w| panic!("{w}"))?;
+        o.request(default_planner).map_err(fail)
+    }
+
     fn map(pairs: &[(&str, Dynamic)]) -> Dynamic {
-        let mut m = Map::new();
-        for (k, v) in pairs {
-            m.insert((*k).into(), v.clone());
-        }
-        Dynamic::from_map(m)
+        Dynamic::from_map(
+            pairs
+                .iter()
+                .map(|(k, v)| ((*k).into(), v.clone()))
+                .collect(),
+        )
     }
 
     #[test]
     fn narrow_option_converts_degrees_and_switches() {
-        assert_eq!(
-            parse_narrow(&Dynamic::from_bool(false)).unwrap(),
-            NarrowPassage::OFF
-        );
-        assert_eq!(
-            parse_narrow(&Dynamic::from_bool(true)).unwrap(),
-            NarrowPassage::default()
-        );
-        let n = parse_narrow(&map(&[
+        use crate::planning::NarrowPassage;
+        let narrow = |v: Dynamic| {
+            let mut r = request(&[("narrow", v)], "rrt_connect").unwrap();
+            *r.planner.narrow_mut().unwrap()
+        };
+        assert_eq!(narrow(Dynamic::from_bool(false)), NarrowPassage::OFF);
+        assert_eq!(narrow(Dynamic::from_bool(true)), NarrowPassage::default());
+        let n = narrow(map(&[
             ("max_turn_deg", Dynamic::from_float(10.0)),
-            ("dynamic_domain", Dynamic::from_float(0.0)),
+            ("dynamic_domain", Dynamic::from_int(0)),
             ("to_contact", Dynamic::from_bool(false)),
             ("axis_moves", Dynamic::from_float(0.0)),
-        ]))
-        .unwrap();
+        ]));
         assert!((n.max_turn.unwrap() - 10f64.to_radians()).abs() < 1e-12);
         assert_eq!(n.axis_moves, 0.0);
-        assert_eq!(
-            parse_narrow(&map(&[("axis_moves", Dynamic::from_float(0.3))]))
-                .unwrap()
-                .axis_moves,
-            0.3
-        );
         assert_eq!(n.dynamic_domain, None);
         assert!(!n.to_contact);
         assert_eq!(n.bridge, NarrowPassage::default().bridge);
-        // Not a narrow option: refused by the conversion.
+        // Not a narrow option, or not a map: refused by the vocabulary, by name.
         for bad in [
             map(&[("max_turn", Dynamic::from_float(5.0))]),
             Dynamic::from_int(3),
         ] {
-            assert!(parse_narrow(&bad).is_err(), "{bad:?}");
+            let e = request(&[("narrow", bad.clone())], "rrt_connect").unwrap_err();
+            assert!(e.to_string().contains("narrow"), "{bad:?}: {e}");
         }
         // Out of range: converted, then refused by the library's one rule.
         for bad in [
@@ -592,38 +420,31 @@ mod narrow_option_tests {
             map(&[("axis_moves", Dynamic::from_float(1.5))]),
             map(&[("axis_samples", Dynamic::from_float(-0.5))]),
         ] {
-            let n = parse_narrow(&bad).unwrap();
-            assert!(n.validate().is_err(), "{bad:?}");
+            assert!(narrow(bad.clone()).validate().is_err(), "{bad:?}");
         }
-    }
-
-    #[test]
-    fn narrow_option_reaches_the_planner() {
-        let mut opts = Map::new();
-        opts.insert("narrow".into(), Dynamic::from_bool(false));
-        let r = parse(&opts).unwrap();
-        let mut planner = r.planner;
-        assert_eq!(planner.narrow_mut().copied(), Some(NarrowPassage::OFF));
-        opts.insert("planner".into(), "greedy_ant".into());
-        assert!(parse(&opts).is_err());
+        // A planner without the measures refuses the key.
+        assert!(request(
+            &[("narrow", Dynamic::FALSE), ("planner", "greedy_ant".into())],
+            "rrt"
+        )
+        .is_err());
     }
 
     #[test]
     fn fallback_share_reaches_the_planner_and_is_range_checked() {
-        let mut opts = Map::new();
-        opts.insert("fallback_share".into(), Dynamic::from_float(0.5));
-        let mut planner = parse(&opts).unwrap().planner;
-        assert_eq!(planner.fallback_share_mut().copied(), Some(0.5));
+        let share = |x: f64| request(&[("fallback_share", Dynamic::from_float(x))], "rrt_connect");
+        assert_eq!(
+            share(0.5).unwrap().planner.fallback_share_mut().copied(),
+            Some(0.5)
+        );
         // A number that is not one is refused by the conversion…
-        opts.insert("fallback_share".into(), Dynamic::from_float(f64::NAN));
-        assert!(parse(&opts).is_err());
+        let e = share(f64::NAN).unwrap_err();
+        assert!(e.to_string().contains("fallback_share"), "{e}");
         // …one out of range by the library.
         for bad in [1.5, -0.1] {
-            opts.insert("fallback_share".into(), Dynamic::from_float(bad));
-            let planner = parse(&opts).unwrap().planner;
             assert!(
                 matches!(
-                    planner.validate(),
+                    share(bad).unwrap().planner.validate(),
                     Err(crate::planning::PlanError::InvalidOption {
                         option: "fallback_share",
                         ..
@@ -632,8 +453,49 @@ mod narrow_option_tests {
                 "{bad}"
             );
         }
-        opts.insert("fallback_share".into(), Dynamic::from_float(0.5));
-        opts.insert("planner".into(), "rrt_floyd".into());
-        assert!(parse(&opts).is_err());
+        assert!(request(
+            &[
+                ("fallback_share", Dynamic::from_float(0.5)),
+                ("planner", "rrt_floyd".into())
+            ],
+            "rrt_connect"
+        )
+        .is_err());
+    }
+
+    #[test]
+    fn poses_and_boxes_convert_as_script_values() {
+        let r = request(
+            &[
+                (
+                    "start",
+                    Dynamic::from_array(vec![
+                        Dynamic::from_int(1),
+                        Dynamic::from_int(2),
+                        Dynamic::from_int(3),
+                        Dynamic::from_int(0),
+                        Dynamic::from_int(0),
+                        Dynamic::from_int(90),
+                    ]),
+                ),
+                (
+                    "bounds",
+                    map(&[
+                        ("min", Dynamic::from_array(vec![Dynamic::from_int(-1); 3])),
+                        (
+                            "max",
+                            Dynamic::from_array(vec![Dynamic::from_float(5.0); 3]),
+                        ),
+                    ]),
+                ),
+            ],
+            "rrt_connect",
+        )
+        .unwrap();
+        let t = r.start.unwrap();
+        assert!((t.translation() - crate::math::Vec3::new(1.0, 2.0, 3.0)).norm() < 1e-12);
+        assert_eq!(r.bounds.unwrap().hi.x, 5.0);
+        let e = request(&[("start", Dynamic::from_int(3))], "rrt").unwrap_err();
+        assert!(e.to_string().contains("start"), "{e}");
     }
 }

@@ -8,7 +8,8 @@ use super::bind_document::DocHandle;
 use super::bind_math::{to_transform, xyzabc_deg};
 use super::convert::overwrite_option;
 use super::convert::{
-    array3, check_keys, err, fail, floats, numbers, numbers_into, opt_num, opt_str, vec3,
+    array3, check_keys, err, fail, floats, numbers, numbers_into, opt_num, opt_str, read_options,
+    vec3,
 };
 use super::{Context, ScriptResult};
 use crate::document::robot::{
@@ -20,6 +21,7 @@ use crate::kinematics::{
     OpwParameters, Robot, Trajectory,
 };
 use crate::math::{AngleConvention, Transform};
+use crate::options::{Drill, Motion};
 use rhai::{Array, Dynamic, Map};
 use std::sync::Arc;
 
@@ -144,40 +146,12 @@ fn joints_out(robot: &Robot, q: &[f64]) -> Dynamic {
     floats(joints_to_document_iter(robot, q))
 }
 
-const MOTION_KEYS: [&str; 5] = [
-    "speed",
-    "joint_speed",
-    "angular_speed",
-    "interval",
-    "stream",
-];
-
-fn stream_flag(m: &Map) -> ScriptResult<bool> {
-    match m.get("stream") {
-        None => Ok(false),
-        Some(v) => v
-            .as_bool()
-            .map_err(|t| fail(format!("option `stream` must be true or false, not {t}"))),
-    }
-}
-
-/// Motion options from a map: `speed` (mm/s), `joint_speed` and `angular_speed`
-/// (deg/s), `interval` (s); returns them with the `stream` flag.
+/// Motion options from a map (the library's [`Motion`] vocabulary: `speed` mm/s,
+/// `joint_speed` and `angular_speed` deg/s, `interval` s); returns them with the
+/// `stream` flag.
 fn motion_options(m: &Map) -> ScriptResult<(MotionOptions, bool)> {
-    let mut o = MotionOptions::default();
-    if let Some(v) = opt_num(m, "speed")? {
-        o.linear_speed = v;
-    }
-    if let Some(v) = opt_num(m, "joint_speed")? {
-        o.joint_speed = v.to_radians();
-    }
-    if let Some(v) = opt_num(m, "angular_speed")? {
-        o.angular_speed = v.to_radians();
-    }
-    if let Some(v) = opt_num(m, "interval")? {
-        o.sample_interval = v;
-    }
-    Ok((o, stream_flag(m)?))
+    let o: Motion = read_options(m, &|_| {})?;
+    Ok((o.motion_options(), o.stream))
 }
 
 fn ik_all() -> IkOptions {
@@ -219,60 +193,13 @@ fn hole_map(h: &Hole) -> Map {
     m
 }
 
-/// Drilling options from a map (see the API doc of `Robot.drill_program`).
+/// Drilling options from a map (the library's [`Drill`] vocabulary), checked by the
+/// library's rule before anything runs; with the `stream` flag.
 fn drill_options(m: &Map) -> ScriptResult<(DrillOptions, bool)> {
-    check_keys(
-        m,
-        &[
-            "tool_axis",
-            "compensation",
-            "approach",
-            "retract",
-            "spin_samples",
-            "travel",
-            "speed",
-            "joint_speed",
-            "angular_speed",
-            "interval",
-            "stream",
-        ],
-        "drilling",
-    )?;
-    let (motion, stream) = motion_options(m)?;
-    let mut o = DrillOptions {
-        motion,
-        ..DrillOptions::default()
-    };
-    if let Some(a) = opt_str(m, "tool_axis")? {
-        o.tool_axis = a.parse().map_err(fail)?;
-    }
-    if let Some(v) = m.get("compensation") {
-        o.compensation = vec3(v, "compensation")?;
-    }
-    if let Some(v) = opt_num(m, "approach")? {
-        o.approach = v;
-    }
-    if let Some(v) = opt_num(m, "retract")? {
-        o.retract = v;
-    }
-    if let Some(v) = opt_num(m, "spin_samples")? {
-        // Converting to a count is this binding's job; the range is the library's
-        // (`validate` below). A negative count reads as 0, a huge one saturates.
-        if v.fract() != 0.0 {
-            return err(format!("spin_samples = {v} must be a whole number"));
-        }
-        o.spin_samples = v.max(0.0) as usize;
-    }
-    if let Some(v) = m.get("travel") {
-        let abc = numbers(v, 3, "travel")?;
-        o.travel_orientation = Some(AngleConvention::default().rotation(
-            abc[0].to_radians(),
-            abc[1].to_radians(),
-            abc[2].to_radians(),
-        ));
-    }
-    o.validate().map_err(fail)?;
-    Ok((o, stream))
+    let o: Drill = read_options(m, &|_| {})?;
+    let d = o.drill_options();
+    d.validate().map_err(fail)?;
+    Ok((d, o.stream))
 }
 
 fn options_map(v: &Dynamic, what: &str) -> ScriptResult<Map> {
@@ -285,10 +212,14 @@ fn options_map(v: &Dynamic, what: &str) -> ScriptResult<Map> {
 }
 
 pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
-    api.section("Robot", "A robot of a document (`robots:` in the YAML): a kinematic tree whose links move components. Joint arrays are **degrees** (mm for prismatic joints), in joint order; poses are Transforms or `[x, y, z, a, b, c]` (mm, degrees). Setting `joints`, a joint dimension (`D1@角度1`) or running a motion moves the link components. Motion options (a map, all optional): `speed` (TCP, mm/s), `joint_speed` (deg/s), `angular_speed` (deg/s), `interval` (sample interval, s), `stream: true` (print every sample `t joints tcp`, seed 001's live monitor; in `fitup watch` the lines stream to the output). Failures (unreachable, singular, joint limits) are script errors that say why and at which step. One call — a motion, a whole program, a whole drilling run — produces at most 1,000,000 samples and as many IK checks (docs/scripting.md \"Caps\"); more is an error naming `interval` (and the program line), before the samples are made.");
+    api.section("Robot", "A robot of a document (`robots:` in the YAML): a kinematic tree whose links move components. Joint arrays are **degrees** (mm for prismatic joints), in joint order; poses are Transforms or `[x, y, z, a, b, c]` (mm, degrees). Setting `joints`, a joint dimension (`D1@角度1`) or running a motion moves the link components. Motion options: a map of the keys in the motion table below, all optional. Failures (unreachable, singular, joint limits) are script errors that say why and at which step. One call — a motion, a whole program, a whole drilling run — produces at most 1,000,000 samples and as many IK checks (docs/scripting.md \"Caps\"); more is an error naming `interval` (and the program line), before the samples are made.");
     register_robots(api);
     register_ik(api);
     register_models(api, ctx);
+    api.options::<Motion>(
+        "Motion options (`move_joint`, `move_line`, `move_circle`, `run_program`):",
+    );
+    api.options::<Drill>("Options of `drill_program`:");
     register_motions(api, ctx);
     register_drilling(api, ctx);
     register_trajectory(api);
@@ -725,7 +656,6 @@ fn register_motions(api: &mut Api, ctx: &Arc<Context>) {
             Some(v) => options_map(v, what)?,
             None => Map::new(),
         };
-        check_keys(&m, &MOTION_KEYS, what)?;
         let (o, stream) = motion_options(&m)?;
         let (robot, q) = r.snapshot()?;
         let t = f(&robot, &q, &o)
@@ -850,7 +780,11 @@ fn register_drilling(api: &mut Api, ctx: &Arc<Context>) {
         Ok(out)
     };
     api.f("Robot.drill_program(holes: array) -> map", "Drills the holes (from `load_holes`) in order (seed 001 §2.2: travel posture, line to the approach point, align, drill, retract). Returns `#{trajectory, holes, drilled, unreachable}`; each hole row is the hole map plus `index`, `reachable`, `reason` (which step failed and why), and for drilled holes `spin` (degrees) and `joints` at the hole. Unreachable holes are reported, not errors.", move |r: &mut RobotHandle, h: Array| dp(r, h, None));
-    api.f("Robot.drill_program(holes: array, options: map) -> map", "Drilling with options: `tool_axis` (`\"x\"` seed 001, `\"z\"`, `\"-z\"` e.g. the MZ07 tool point), `compensation` `[x,y,z]` (drill tip in the TCP frame, mm), `approach` / `retract` (mm), `spin_samples`, `travel` `[a,b,c]` (degrees, travel orientation), and the motion options.", move |r: &mut RobotHandle, h: Array, o: Dynamic| dp(r, h, Some(&o)));
+    api.f(
+        "Robot.drill_program(holes: array, options: map) -> map",
+        "Drilling with the options of the drilling table below (its own keys and the motion keys).",
+        move |r: &mut RobotHandle, h: Array, o: Dynamic| dp(r, h, Some(&o)),
+    );
     api.f(
         "Robot.to_string() -> string",
         "`Robot(name: joints …)`.",

@@ -7,10 +7,11 @@ use super::api::Api;
 use super::bind_document::DocHandle;
 use super::bind_math::xyzabc_deg;
 use super::convert::overwrite_option;
-use super::convert::{array3, check_keys, err, fail, num, opt_num, opt_str, vec3};
+use super::convert::{array3, fail, num, read_options, vec3};
 use super::{Context, ScriptResult};
 use crate::math::AngleConvention;
-use crate::sequence::{self, Mode, SequenceOptions, SequencePlan};
+use crate::options::Sequence;
+use crate::sequence::{self, SequenceOptions, SequencePlan};
 use rhai::{Array, Dynamic, Map};
 use std::sync::Arc;
 
@@ -20,106 +21,13 @@ use std::sync::Arc;
 #[derive(Clone)]
 pub struct SequenceHandle(pub(super) Arc<SequencePlan>, Arc<Context>, f64);
 
-const KEYS: [&str; 17] = [
-    "base",
-    "order",
-    "mode",
-    "max_sequences",
-    "time_limit_ms",
-    "seed",
-    "tolerance",
-    "threaded",
-    "masses",
-    "max_tilt_deg",
-    "planner_fallback",
-    "components",
-    "exclude",
-    "support",
-    "contact_gap_mm",
-    "gravity",
-    "tight_clearance_mm",
-];
-
-fn strings(v: &Dynamic, what: &str) -> ScriptResult<Vec<String>> {
-    let Some(a) = v.clone().try_cast::<Array>() else {
-        return err(format!("`{what}` must be an array of names"));
-    };
-    a.into_iter()
-        .map(|x| {
-            x.into_string()
-                .map_err(|t| fail(format!("`{what}` must hold strings, not {t}")))
-        })
-        .collect()
-}
-
-fn options(m: Option<&Map>) -> ScriptResult<SequenceOptions> {
-    let mut o = SequenceOptions::default();
-    let Some(m) = m else {
-        return Ok(o);
-    };
-    check_keys(m, &KEYS, "sequence")?;
-    o.base = opt_str(m, "base")?;
-    if let Some(v) = m.get("order") {
-        o.order = strings(v, "order")?;
-    }
-    if let Some(v) = m.get("threaded") {
-        o.threaded = strings(v, "threaded")?;
-    }
-    if let Some(s) = opt_str(m, "mode")? {
-        o.mode = Mode::parse(&s).ok_or_else(|| {
-            fail(format!(
-                "mode must be \"mates\" or \"geometry\", not \"{s}\""
-            ))
-        })?;
-    }
-    let count = |key: &str, v: f64| -> ScriptResult<u64> {
-        if v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v <= 1e15 {
-            Ok(v as u64)
-        } else {
-            err(format!("{key} must be a whole number ≥ 0, not {v}"))
-        }
-    };
-    if let Some(v) = opt_num(m, "max_sequences")? {
-        o.max_sequences = count("max_sequences", v)? as usize;
-    }
-    if let Some(v) = opt_num(m, "seed")? {
-        o.seed = count("seed", v)?;
-    }
-    o.time_limit_ms = opt_num(m, "time_limit_ms")?;
-    o.tolerance = opt_num(m, "tolerance")?.unwrap_or(o.tolerance);
-    if let Some(v) = opt_num(m, "max_tilt_deg")? {
-        o.max_tilt = v.to_radians();
-    }
-    if let Some(v) = m.get("planner_fallback") {
-        o.planner_fallback = v
-            .as_bool()
-            .map_err(|t| fail(format!("planner_fallback must be a bool, not {t}")))?;
-    }
-    if let Some(v) = m.get("components") {
-        o.components = strings(v, "components")?;
-    }
-    if let Some(v) = m.get("exclude") {
-        o.exclude = strings(v, "exclude")?;
-    }
-    if let Some(v) = m.get("support") {
-        o.support = v
-            .as_bool()
-            .map_err(|t| fail(format!("support must be a bool, not {t}")))?;
-    }
-    o.contact_gap_mm = opt_num(m, "contact_gap_mm")?.unwrap_or(o.contact_gap_mm);
-    o.tight_clearance_mm = opt_num(m, "tight_clearance_mm")?.unwrap_or(o.tight_clearance_mm);
-    if let Some(v) = m.get("gravity") {
-        o.gravity = Some(vec3(v, "gravity")?);
-    }
-    if let Some(v) = m.get("masses") {
-        let Some(mm) = v.clone().try_cast::<Map>() else {
-            return err("`masses` must be a map of name: mass");
-        };
-        for (k, x) in mm {
-            o.masses.insert(k.to_string(), num(&x, "mass")?);
-        }
-    }
-    Ok(o)
+/// The sequence options of a script's map (the library's [`Sequence`] vocabulary;
+/// ranges are `SequenceOptions`' own rule, when planning).
+fn options(m: Option<&Map>, ctx: &Context) -> ScriptResult<SequenceOptions> {
+    Ok(match m {
+        None => SequenceOptions::default(),
+        Some(m) => read_options::<Sequence>(m, &|w| ctx.print(w))?.sequence_options(),
+    })
 }
 
 fn run<R>(
@@ -319,6 +227,7 @@ pub(super) fn register(api: &mut Api) {
             run(d, |doc, c| sequence::safe_length(doc, c, name, &v, &o))?.map_err(fail)
         },
     );
+    api.options::<Sequence>("Options of `assembly_sequence` (Python: `plan_sequence`):");
     api.f(
         "Document.assembly_sequence() -> Sequence",
         "Plans the assembly sequence from the mates with the defaults (see the map form).",
@@ -326,7 +235,7 @@ pub(super) fn register(api: &mut Api) {
     );
     api.f(
         "Document.assembly_sequence(options: map) -> Sequence",
-        "Plans the assembly sequence: `#{base, order, mode: \"mates\"|\"geometry\", max_sequences (5), time_limit_ms (30000, the whole call within 5 %), seed, tolerance, threaded: [names], masses: #{name: mass}, max_tilt_deg (0), planner_fallback (true), components: [names] (the product; default all but robot links and components marked `fixture: true`), exclude: [names] (fixtures, the table), support (true: every added part touches a placed one), contact_gap_mm (1.5), gravity: [x, y, z] (down; parts then move down or sideways into place), tight_clearance_mm (0.5)}`. A document without mates is planned from the geometry. Fewest re-mountings of the base wins, then fewest direction changes, then fewest difficult insertions (tight fits, planned paths), then the shortest insertion paths (`ranking` says why); every task's path is collision-free against the parts assembled before it.",
+        "Plans the assembly sequence with the options of the section's table (the whole call within `time_limit_ms`, 5 %). A document without mates is planned from the geometry. Fewest re-mountings of the base wins, then fewest direction changes, then fewest difficult insertions (tight fits, planned paths), then the shortest insertion paths (`ranking` says why); every task's path is collision-free against the parts assembled before it.",
         |d: &mut DocHandle, o: Map| plan(d, Some(&o)),
     );
     api.get(
@@ -453,8 +362,8 @@ pub(super) fn register(api: &mut Api) {
 }
 
 fn plan(d: &DocHandle, opts: Option<&Map>) -> ScriptResult<SequenceHandle> {
-    let o = options(opts)?;
     let ctx = d.context().clone();
+    let o = options(opts, &ctx)?;
     let p = run(d, |doc, c| sequence::plan_sequence(doc, c, &o))?.map_err(fail)?;
     Ok(SequenceHandle(Arc::new(p), ctx, o.tolerance))
 }

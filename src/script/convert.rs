@@ -179,3 +179,91 @@ pub fn check_keys(map: &Map, known: &[&str], what: &str) -> ScriptResult<()> {
     }
     Ok(())
 }
+
+/// A script value as JSON, for an options vocabulary: numbers, booleans, strings,
+/// arrays, maps; `()` is absent (null). `path` names the key in messages.
+fn json_of(v: &Dynamic, request: &str, path: &str, kind: &str) -> ScriptResult<serde_json::Value> {
+    use serde_json::Value;
+    if v.is_unit() {
+        return Ok(Value::Null);
+    }
+    if let Ok(b) = v.as_bool() {
+        return Ok(Value::Bool(b));
+    }
+    if let Ok(i) = v.as_int() {
+        return Ok(Value::from(i));
+    }
+    if let Ok(x) = v.as_float() {
+        return serde_json::Number::from_f64(x)
+            .map(Value::Number)
+            .ok_or_else(|| fail(format!("{request} option `{path}` must be finite, not {x}")));
+    }
+    if v.is_string() {
+        return Ok(Value::String(v.to_string()));
+    }
+    if let Some(a) = v.read_lock::<Array>() {
+        return a
+            .iter()
+            .enumerate()
+            .map(|(i, x)| json_of(x, request, &format!("{path}[{i}]"), kind))
+            .collect::<ScriptResult<Vec<_>>>()
+            .map(Value::Array);
+    }
+    if let Some(m) = v.read_lock::<Map>() {
+        let mut out = serde_json::Map::new();
+        for (k, x) in m.iter() {
+            out.insert(
+                k.to_string(),
+                json_of(x, request, &format!("{path}.{k}"), kind)?,
+            );
+        }
+        return Ok(Value::Object(out));
+    }
+    err(format!(
+        "{request} option `{path}` must be {kind}, not {}",
+        v.type_name()
+    ))
+}
+
+/// A script options map as the JSON map of `vocabulary`: poses (Transforms,
+/// `[x, y, z, a, b, c]`, 4×4 matrices) and boxes (`Box`, `#{min, max}`) converted the
+/// way every script argument is, nested switches (`narrow`) recursively, the rest
+/// as plain values. Keys are not checked here: the vocabulary does that.
+fn options_json(
+    map: &Map,
+    vocabulary: &crate::options::Vocabulary,
+    prefix: &str,
+) -> ScriptResult<serde_json::Map<String, serde_json::Value>> {
+    use crate::options::{box_value, pose_value, Kind};
+    let mut out = serde_json::Map::new();
+    for (k, v) in map.iter() {
+        let path = format!("{prefix}{k}");
+        let key = vocabulary.key_for(k);
+        let phrase = key.map_or_else(|| "a value".to_string(), |k| k.kind.phrase());
+        let value = match key.map(|k| k.kind) {
+            _ if v.is_unit() => serde_json::Value::Null,
+            Some(Kind::Pose) => pose_value(&super::bind_math::to_transform(v, &path)?),
+            Some(Kind::Box) => box_value(&to_box(v, &path)?),
+            Some(Kind::Switch(nested)) if v.is_map() => serde_json::Value::Object(options_json(
+                &v.read_lock::<Map>().expect("a map"),
+                nested,
+                &format!("{path}."),
+            )?),
+            _ => json_of(v, vocabulary.request, &path, &phrase)?,
+        };
+        out.insert(k.to_string(), value);
+    }
+    Ok(out)
+}
+
+/// The options `T` of a script's options map, by `T`'s vocabulary (one table for
+/// Rhai and Python: unknown keys with close matches, values against their kind);
+/// a deprecated key's warning goes to `warn`.
+pub fn read_options<T: crate::options::Options>(map: &Map, warn: &dyn Fn(&str)) -> ScriptResult<T> {
+    let json = options_json(map, T::VOCABULARY, "")?;
+    let parsed = T::from_value(serde_json::Value::Object(json)).map_err(fail)?;
+    for w in &parsed.warnings {
+        warn(&format!("warning: {w}"));
+    }
+    Ok(parsed.options)
+}

@@ -7,10 +7,13 @@
 
 mod api;
 mod args;
+mod assign;
 #[cfg(feature = "db")]
 mod bind_db;
 mod bind_document;
+mod bind_files;
 mod bind_interference;
+mod bind_mass;
 mod bind_math;
 mod bind_planning;
 mod bind_robot;
@@ -48,6 +51,10 @@ pub struct Caches {
     pub documents: Mutex<DocumentCache>,
     /// The viewer session the runs log to (off unless `--view`/`--record`).
     pub view: crate::viewer::Viewer,
+    /// What the runs wrote, as they wrote it: the content hash of each file by path.
+    /// Watch mode takes a file whose bytes are what a run wrote there for that run's
+    /// own write, not a save (a script that rewrites itself does not cancel itself).
+    pub own_writes: Mutex<std::collections::HashMap<PathBuf, u64>>,
 }
 
 /// A parsed document and the stamps of its source files when it was loaded.
@@ -111,9 +118,15 @@ pub struct Context {
     pub args: Arguments,
     /// Whether skills may be dispatched over TCP (`fitup run --dispatch`).
     pub dispatch: Dispatch,
+    /// The time budget all of this run's `db.query` calls share.
+    #[cfg(feature = "db")]
+    pub query_budget: crate::db::RunQueryBudget,
     reads: Mutex<BTreeSet<PathBuf>>,
     writes: Mutex<BTreeSet<PathBuf>>,
     operations: AtomicU64,
+    /// The properties with a setter (`set_<name>` methods), known once the engine is
+    /// built.
+    setters: std::sync::OnceLock<std::collections::HashSet<String>>,
 }
 
 impl Context {
@@ -142,9 +155,12 @@ impl Context {
             output,
             args: Arguments::default(),
             dispatch: Dispatch::Never,
+            #[cfg(feature = "db")]
+            query_budget: crate::db::RunQueryBudget::default(),
             reads: Mutex::default(),
             writes: Mutex::default(),
             operations: AtomicU64::new(0),
+            setters: Default::default(),
         }
     }
 
@@ -175,6 +191,24 @@ impl Context {
     /// Records a file the run wrote, so watch mode does not mistake the run's own
     /// output for a user's save.
     pub fn record_write(&self, path: &Path) {
+        self.record_write_unread(path);
+        // Seen by watch mode at once, while the run goes on.
+        if let Ok(bytes) = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh) {
+            let hash = crate::fsutil::content_hash(&bytes);
+            if let Ok(mut own) = self.caches.own_writes.lock() {
+                let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+                own.insert(key, hash);
+            }
+        }
+    }
+
+    /// [`record_write`](Self::record_write) without reading the file back: for the
+    /// files of an open SQLite database. Opening and closing a descriptor on them in
+    /// this process would drop the POSIX locks SQLite holds on them (an `fcntl` lock
+    /// belongs to the process and goes with any close of that file), and another
+    /// process would then take itself for the only one and truncate the shared-memory
+    /// file under this one's mapping (a bus error).
+    pub fn record_write_unread(&self, path: &Path) {
         if let Ok(mut w) = self.writes.lock() {
             w.insert(path.to_path_buf());
         }
@@ -192,12 +226,11 @@ impl Context {
             used: Some(&used),
             signature: None,
         };
+        // Checked and written through one folder handle walked from the project root.
         let full = self
             .project
-            .resolve_output(path, &rule)
+            .write_output(path, bytes, &rule)
             .map_err(convert::fail)?;
-        crate::fsutil::write_checked(&full, bytes)
-            .map_err(|e| convert::fail(format!("`{path}`: {e}")))?;
         self.record_write(&full);
         Ok(full)
     }
@@ -205,6 +238,15 @@ impl Context {
     /// Sends a line to the output.
     pub fn print(&self, line: &str) {
         (self.output)(line)
+    }
+
+    /// A diagnostic (a document warning): to stderr, escaped, never into the script's
+    /// own output (a CSV a script prints must start with its own first line).
+    pub fn warn(&self, line: &str) {
+        use std::io::Write;
+        let text = crate::diagnostics::printable(line, false);
+        // a closed stderr loses the warning, never the run
+        let _ = writeln!(std::io::stderr().lock(), "warning: {text}");
     }
 
     /// Whether the run was cancelled.
@@ -389,14 +431,26 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
             .map_err(|e| ScriptError::Located(SourceError::new(doc_path, 0, 0, e.to_string())))?;
         scope.push("doc", doc);
     }
-    let mut ast = engine.compile_with_scope(&scope, &text).map_err(|e| {
+    let compiled = engine.compile_with_scope(&scope, &text).or_else(|e| {
+        // `doc.component("x").fixed = true`: spelled with the setter method, the way
+        // a macro author means it (assign.rs); any other error stays the error
+        if !matches!(*e.0, rhai::ParseErrorType::AssignmentToInvalidLHS(..)) {
+            return Err(e);
+        }
+        let setters = ctx.setters.get().cloned().unwrap_or_default();
+        match assign::rewrite(&text, &setters) {
+            Some(t) => engine.compile_with_scope(&scope, &t).map_err(|_| e),
+            None => Err(e),
+        }
+    });
+    let mut ast = compiled.map_err(|e| {
         let (line, col) = (e.1.line().unwrap_or(0), e.1.position().unwrap_or(0));
         let located = SourceError::new(&script, line, col, format!("syntax error: {}", e.0));
         ScriptError::Located(match *e.0 {
             rhai::ParseErrorType::AssignmentToInvalidLHS(..) => located.with_help(
-                "Rhai cannot set a property of a function call's result \
-                 (`doc.component(\"x\").transform = m`); write `doc.set_transform(\"x\", m)`, \
-                 `doc.component(\"x\").set_transform(m)`, or `let c = doc.component(\"x\"); c.transform = m;`",
+                "only a property of a variable, or of a call's result that has a setter \
+                 (`doc.component(\"x\").fixed = true`), can be assigned; for anything else \
+                 keep the value in a variable first: `let c = doc.component(\"x\"); c.fixed = true;`",
             ),
             _ => located,
         })

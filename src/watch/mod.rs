@@ -325,7 +325,19 @@ pub fn watch_with(
             for p in due {
                 pending.remove(&p);
                 let hash = hash_file(&p);
-                if baseline.get(&p).is_none_or(|h| *h == hash) {
+                // A run's own write (a script rewriting a file it read, itself even):
+                // the new baseline, not a save.
+                let own = hash.is_some()
+                    && caches
+                        .own_writes
+                        .lock()
+                        .ok()
+                        .and_then(|w| w.get(&p).copied())
+                        == hash;
+                if own {
+                    baseline.insert(p.clone(), hash);
+                }
+                if own || baseline.get(&p).is_none_or(|h| *h == hash) {
                     settling.remove(&p);
                     missing.remove(&p);
                     continue;

@@ -10,7 +10,7 @@
 //! and cut cells while meshes are unchanged) and the rules that turn a component
 //! name into a planning problem: the obstacles (every other component), the
 //! planning bounds (default: the product box with start and goal, grown by
-//! [`DEFAULT_MARGIN_MM`]), the component's box for disassembly, and one tolerance
+//! [`DEFAULT_MARGIN_DIAMETERS`] of the part), the component's box for disassembly, and one tolerance
 //! rule shared by planners, [`Workspace::revalidate`] and [`Workspace::contact`].
 //!
 //! Units: millimetres and radians; poses are [`Transform`]s (part frame → world).
@@ -31,12 +31,20 @@
 //! ```
 
 mod features;
+mod overlap;
 mod plan;
 mod scene;
 
 pub use features::{feature_cells, split_part, CUT_CELLS_FEATURE};
-pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_MM};
+pub use overlap::{
+    mass_properties, part_frame_mass_properties, world_mesh, MassOptions, Overlap, OverlapOptions,
+};
+pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_DIAMETERS};
 pub use scene::{Scene, SceneCache};
+
+/// How far [`Workspace::clearance`] searches when the caller names no distance (mm):
+/// the scripting and Python faces' default.
+pub const DEFAULT_CLEARANCE_SEARCH_MM: f64 = 1000.0;
 
 use crate::collision::{
     CollisionError, Contact, Method, Motion, PairContact, SweepHit, SweepOptions, DEFAULT_TOLERANCE,
@@ -89,6 +97,36 @@ pub enum WorkspaceError {
     /// ([`MAX_SAMPLES`](crate::math::MAX_SAMPLES)).
     #[error(transparent)]
     Limit(#[from] crate::math::LimitError),
+    /// The overlap of two components cannot be measured.
+    #[error("`{a}` and `{b}`: {source}")]
+    Overlap {
+        /// The first component.
+        a: String,
+        /// The second component.
+        b: String,
+        /// Why.
+        #[source]
+        source: crate::collision::VolumeError,
+    },
+    /// A component has no mass properties (empty `component` for the combination).
+    #[error("{}{source}", if component.is_empty() { String::new() } else { format!("component `{component}`: ") })]
+    Mass {
+        /// The component.
+        component: String,
+        /// Why.
+        #[source]
+        source: crate::mesh::MassError,
+    },
+}
+
+impl WorkspaceError {
+    fn overlap(a: &str, b: &str, source: crate::collision::VolumeError) -> Self {
+        WorkspaceError::Overlap {
+            a: a.to_string(),
+            b: b.to_string(),
+            source,
+        }
+    }
 }
 
 /// Method and tolerance of a static interference request.

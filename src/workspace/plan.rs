@@ -10,9 +10,10 @@ use crate::planning::{
     ProgressFn, RotationFreedom,
 };
 
-/// Default growth (mm) of the planning bounds around the product box, start and
-/// goal.
-pub const DEFAULT_MARGIN_MM: f64 = 50.0;
+/// Default growth of the planning bounds around the product box, start and goal,
+/// in diameters of the moving part (scale-free: room for the part to pass round
+/// the product on every side).
+pub const DEFAULT_MARGIN_DIAMETERS: f64 = 1.0;
 
 /// How to plan a path for one component of a document.
 #[derive(Debug, Clone)]
@@ -28,11 +29,15 @@ pub struct PlanRequest {
     /// Bounds of the component's origin (world, mm); `None`: the box of the other
     /// components with start and goal, grown by `margin_mm`.
     pub bounds: Option<Aabb>,
-    /// Growth of the default bounds, mm. Default [`DEFAULT_MARGIN_MM`].
-    pub margin_mm: f64,
+    /// Growth of the default bounds, mm. `None` (default):
+    /// [`DEFAULT_MARGIN_DIAMETERS`] diameters of the component's part (twice its
+    /// radius about its origin).
+    pub margin_mm: Option<f64>,
     /// Whether the component may turn. Default [`RotationFreedom::Free`].
     pub rotation: RotationFreedom,
-    /// Weight of rotation in the metric (mm per rad); `None`: the space's default.
+    /// Weight of rotation in the metric (mm per rad); `None`: the radius of the
+    /// component's part about its origin (scale-free: turning by θ then weighs
+    /// what it moves the part's farthest point).
     pub rotation_weight: Option<f64>,
     /// Seed 002's disassembly first (see [`Planner::plan_via_disassembly`]): the end
     /// inside the product box is the assembled one. Default false.
@@ -47,7 +52,7 @@ impl Default for PlanRequest {
             planner: Planner::by_name("rrt_connect").expect("a planner name"),
             validator: MeshValidatorOptions::default(),
             bounds: None,
-            margin_mm: DEFAULT_MARGIN_MM,
+            margin_mm: None,
             rotation: RotationFreedom::Free,
             rotation_weight: None,
             disassemble: false,
@@ -154,7 +159,10 @@ impl Workspace<'_> {
         let (lo, hi) = match request.bounds {
             Some(b) => (b.lo.coords, b.hi.coords),
             None => {
-                let m = request.margin_mm;
+                let radius = self.scene().colliders[self.index(name)?].radius();
+                let m = request
+                    .margin_mm
+                    .unwrap_or(DEFAULT_MARGIN_DIAMETERS * 2.0 * radius);
                 if !(m.is_finite() && m >= 0.0) {
                     return Err(WorkspaceError::InvalidOption {
                         option: "margin",
@@ -175,11 +183,17 @@ impl Workspace<'_> {
                 (lo - Vec3::repeat(m), hi + Vec3::repeat(m))
             }
         };
-        let mut space = PlanningSpace::new(lo, hi).with_rotation(request.rotation);
-        if let Some(w) = request.rotation_weight {
-            space = space.with_rotation_weight(w);
-        }
-        Ok(space)
+        let weight = match request.rotation_weight {
+            Some(w) => w,
+            None => self.scene().colliders[self.index(name)?].radius(),
+        };
+        // A part that is a single point has no radius: the space's default weight.
+        let space = PlanningSpace::new(lo, hi).with_rotation(request.rotation);
+        Ok(if weight > 0.0 {
+            space.with_rotation_weight(weight)
+        } else {
+            space
+        })
     }
 
     fn problem(

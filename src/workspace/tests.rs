@@ -65,6 +65,7 @@ fn smoothing_is_anytime_within_the_budget() {
     let mut request = PlanRequest::default();
     if let Planner::RrtConnect(o) = &mut request.planner {
         o.smoothing.shortcut_attempts = usize::MAX;
+        o.smoothing.patience = usize::MAX;
         o.limits.time_limit_ms = Some(1500.0);
         o.limits.seed = 3;
     }

@@ -22,6 +22,17 @@
 //! and OMPL alike, written to `$FITUP_OMPLAPP/scaled-k/`), `FITUP_RECHECK=0` (skip
 //! the independent re-check).
 //!
+//! Pose-check mode, no planning: `FITUP_CHECKS=N` times fitup's pose check against
+//! FCL's on N poses of two sets per problem (uniform, and near contact as a planner
+//! checks them; `pose_checks`), `FITUP_ROUNDS` (default 3) interleaved rounds,
+//! `FITUP_EDGES=N` adds fitup's continuous edge check on N planner-like edges,
+//! `FITUP_VERDICTS=DIR` records the verdicts or asserts they are unchanged:
+//!
+//! ```sh
+//! FITUP_OMPLAPP=/work/omplapp FITUP_CHECKS=20000 FITUP_EDGES=2000 FITUP_VERDICTS=target/verdicts \\
+//!     cargo bench --no-default-features --bench omplapp
+//! ```
+//!
 //! Every fitup path is re-checked independently with parry3d-f64: the robot's and
 //! the environment's meshes as parry `TriMesh`es, `intersection_test` at poses at
 //! most 1 % of the robot's radius (and 0.01 rad) apart along every edge. A pose
@@ -46,6 +57,19 @@ fn env_or<T: std::str::FromStr>(key: &str, default: T) -> T {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
+}
+
+/// CPU time of this process so far (user + system, s), from /proc.
+fn cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = s.rsplit_once(')')?.1.to_string();
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+            Some(ticks / 100.0)
+        })
+        .unwrap_or(f64::NAN)
 }
 
 fn load() -> String {
@@ -159,6 +183,84 @@ fn scaled_copy(src: &Path, name: &str, k: f64, out: &Path) -> PathBuf {
     lines[last] = format!("  - [{}, {}, {}, 1.0]", row[0] * k, row[1] * k, row[2] * k);
     std::fs::write(dir.join(format!("{name}.yaml")), lines.join("\n") + "\n").unwrap();
     dir
+}
+
+/// fitup's own puzzle classes (issue 23), `models/problems/NAME.{yaml,plan.json}`.
+const PUZZLES: [&str; 8] = [
+    "twisted_tubes",
+    "house",
+    "plate_hole",
+    "twisted_slot",
+    "bar_slot",
+    "ring_puzzle",
+    "rod_corridor",
+    "zigzag_tunnel",
+];
+
+/// Writes puzzle `name` of `models/problems/` in the OMPL.app layout under
+/// `root/NAME/` (prefixed `fitup-`): every fixed component's mesh at its pose as the
+/// environment, the moving part in its own frame as the robot, the problem file's
+/// start, goal and bounds.
+fn convert_puzzle(name: &str, root: &Path) {
+    use fitup::planning::ProblemFile;
+    let problem = ProblemFile::read(format!("models/problems/{name}.plan.json").as_ref())
+        .expect("a puzzle file");
+    let doc = Document::open(&Path::new("models/problems").join(&problem.document))
+        .expect("the puzzle's document");
+    let stem = format!("fitup-{name}");
+    let dir = root.join(&stem);
+    std::fs::create_dir_all(&dir).expect("puzzle folder");
+    let mut env = Vec::new();
+    let mut robot = Vec::new();
+    for (i, c) in doc.components().iter().enumerate() {
+        let mesh = doc.mesh_of(i);
+        let moving = c.name == problem.moving_component;
+        for k in 0..mesh.triangles.len() {
+            let t = mesh.triangle(k);
+            let v = |p: &fitup::math::Point3| {
+                let q = if moving { *p } else { c.transform.apply(p) };
+                stl_io::Vertex::new([q.x as f32, q.y as f32, q.z as f32])
+            };
+            let tri = stl_io::Triangle {
+                normal: stl_io::Normal::new([0.0, 0.0, 0.0]),
+                vertices: [v(&t[0]), v(&t[1]), v(&t[2])],
+            };
+            if moving {
+                robot.push(tri);
+            } else {
+                env.push(tri);
+            }
+        }
+    }
+    for (part, tris) in [("env", &env), ("robot", &robot)] {
+        let mut w = std::fs::File::create(dir.join(format!("{stem}_{part}.stl"))).expect("stl");
+        stl_io::write_stl(&mut w, tris.iter()).expect("write stl");
+    }
+    let m = |t: &Transform| {
+        let m = t.to_matrix();
+        serde_json::json!({ "matrix": m })
+    };
+    let b = &problem.bounds;
+    let json = serde_json::json!({
+        "name": stem,
+        "environment": format!("{stem}_env.stl"),
+        "robot": format!("{stem}_robot.stl"),
+        "start": m(&problem.start),
+        "goal": m(&problem.goal),
+        "bounds": { "min": [b.lo.x, b.lo.y, b.lo.z], "max": [b.hi.x, b.hi.y, b.hi.z] },
+    });
+    std::fs::write(
+        dir.join(format!("{stem}.json")),
+        serde_json::to_string_pretty(&json).unwrap(),
+    )
+    .unwrap();
+    let row = |r: [f64; 4]| format!("  - [{}, {}, {}, {}]", r[0], r[1], r[2], r[3]);
+    let start = problem.start.to_matrix();
+    let yaml = format!(
+        "description: 'fitup puzzle {name}'\nparts:\n  env:\n    stl: {stem}_env.stl\n  robot:\n    stl: {stem}_robot.stl\ncomponents:\n- name: env\n  part: env\n  fixed: true\n  transform:\n  - [1.0, 0.0, 0.0, 0.0]\n  - [0.0, 1.0, 0.0, 0.0]\n  - [0.0, 0.0, 1.0, 0.0]\n  - [0.0, 0.0, 0.0, 1.0]\n- name: robot\n  part: robot\n  transform:\n{}\n",
+        start.map(row).join("\n")
+    );
+    std::fs::write(dir.join(format!("{stem}.yaml")), yaml).unwrap();
 }
 
 /// One run's outcome.
@@ -287,12 +389,13 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
     };
     request.planner.limits_mut().seed = seed;
     request.planner.limits_mut().time_limit_ms = Some(budget_s * 1e3);
-    experiment(p, &ws, &mut request);
     let t0 = std::time::Instant::now();
+    let c0 = cpu_s();
     let path = ws
         .plan_path("robot", &p.goal, &request, None)
         .expect("a planning call");
     let wall = t0.elapsed().as_secs_f64();
+    let cpu = cpu_s() - c0;
     let mut check = String::new();
     if path.found() && recheck {
         let r = Recheck::new(p, &ws);
@@ -305,7 +408,7 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
         );
     }
     let line = format!(
-        "fitup seed={seed} solved={} time_s={wall:.3} search_s={:.3} smooth_s={:.3} trans={:.1} rot={:.2} raw_trans={:.1} raw_rot={:.2} keyposes={} iterations={} nodes={} pose_checks={} edge_checks={} failure={:?}{check}",
+        "fitup seed={seed} solved={} time_s={wall:.3} cpu_s={cpu:.2} search_s={:.3} smooth_s={:.3} trans={:.1} rot={:.2} raw_trans={:.1} raw_rot={:.2} keyposes={} iterations={} nodes={} pose_checks={} edge_checks={} failure={:?}{check}",
         u8::from(path.found()),
         path.search_ms / 1e3,
         path.smoothing_ms / 1e3,
@@ -329,37 +432,6 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
         },
         line,
     )
-}
-
-/// Development knobs (not part of the benchmark's figures): `FITUP_X_STEP` (range as
-/// a fraction of the bounds' diagonal), `FITUP_X_LAZY` (lazy step, same),
-/// `FITUP_X_PLAIN=1` (no lattice, no narrow-passage measures), `FITUP_X_W=1` (the
-/// rotation weight is the robot's radius).
-fn experiment(p: &ProblemJson, ws: &Workspace<'_>, request: &mut PlanRequest) {
-    let diag = (p.max - p.min).norm();
-    let fitup::planning::Planner::RrtConnect(o) = &mut request.planner else {
-        return;
-    };
-    if let Ok(f) = std::env::var("FITUP_X_STEP") {
-        o.step = f.parse::<f64>().unwrap() * diag;
-    }
-    if let Ok(f) = std::env::var("FITUP_X_LAZY") {
-        o.lazy = Some(fitup::planning::LazyValidation {
-            step_mm: f.parse::<f64>().unwrap() * diag,
-        });
-    }
-    if std::env::var("FITUP_X_PLAIN").is_ok_and(|v| v == "1") {
-        o.lattice = None;
-        o.narrow = fitup::planning::NarrowPassage::OFF;
-    }
-    if std::env::var("FITUP_X_W").is_ok_and(|v| v == "1") {
-        let r = ws
-            .validator("robot", &Default::default())
-            .unwrap()
-            .moving()
-            .radius();
-        request.rotation_weight = Some(r);
-    }
 }
 
 fn field(line: &str, key: &str) -> Option<f64> {
@@ -422,6 +494,13 @@ fn main() {
         );
         Vec::new()
     };
+    // `FITUP_PUZZLES=1`: fitup's own puzzle classes (models/problems/) join the
+    // problems, converted to the same layout, so both run with the same defaults.
+    if std::env::var("FITUP_PUZZLES").is_ok_and(|v| v == "1") {
+        for name in PUZZLES {
+            convert_puzzle(name, &root);
+        }
+    }
     let mut names: Vec<String> = std::fs::read_dir(&root)
         .expect("the FITUP_OMPLAPP folder")
         .filter_map(|e| {
@@ -443,12 +522,17 @@ fn main() {
     );
     let checks: usize = env_or("FITUP_CHECKS", 0);
     if checks > 0 {
+        println!(
+            "| problem | poses | n | fitup colliding | fitup ns | FCL ns | FCL / fitup time | verdicts agree | load |\n|---|---|---|---|---|---|---|---|---|"
+        );
         for name in &names {
             pose_checks(&read_problem(&root.join(name), name), checks, &root);
         }
         return;
     }
     let mut table = Vec::new();
+    // Every fitup call's wall time over its budget (the budget holds end to end).
+    let mut overruns: Vec<f64> = Vec::new();
     for name in &names {
         let src = root.join(name);
         let dir = if scale == 1.0 {
@@ -463,6 +547,7 @@ fn main() {
         for seed in 1..=runs {
             let (o, line) = run_fitup(&p, seed, budget, recheck);
             println!("  {line} load={}", load());
+            overruns.push(o.time_s / budget);
             fitup.push(o);
             for planner in &planners {
                 let o = run_ompl(&bin, &p, planner, seed, budget);
@@ -515,13 +600,28 @@ fn main() {
     for row in table {
         println!("{row}");
     }
+    let over = overruns.iter().filter(|r| **r > 1.05).count();
+    println!(
+        "fitup calls over 1.05 × budget: {over} of {}; largest time / budget {:.3}",
+        overruns.len(),
+        overruns.iter().copied().fold(0.0, f64::max)
+    );
     println!("load at the end: {}", load());
 }
 
 /// Pose-check throughput, fitup's planner check (`MeshValidator::is_free`) against
 /// FCL's `collide` as OMPL's validity checker calls it (`fcl_poses`, built beside
-/// `se3stl` from tests/bench/omplapp/fcl_poses.cpp), on the same `n` poses drawn
-/// uniformly in the problem's bounds with uniform rotations (seed 7).
+/// `se3stl` from tests/bench/omplapp/fcl_poses.cpp), on the same `n` poses of two
+/// sets: `uniform` (drawn uniformly in the problem's bounds with uniform rotations,
+/// seed 7: mostly colliding) and `near` ([`near_poses`]: what a planner checks,
+/// mostly near contact). Rounds (`FITUP_ROUNDS`, default 3) alternate fitup's best
+/// of 5 passes with one `fcl_poses` run (its best of 5); the best of each is
+/// reported, with the load.
+///
+/// `FITUP_VERDICTS=DIR`: fitup's verdicts are written to `DIR/NAME-SET.txt`, or,
+/// when that file exists, compared with it and the bench panics on any difference
+/// (a speed change must not change a verdict). `FITUP_EDGES=N`: also time
+/// [`edge_checks`] on `N` planner-like edges.
 fn pose_checks(p: &ProblemJson, n: usize, root: &Path) {
     use fitup::planning::MotionValidator;
     let doc = Document::open(&p.dir.join(format!("{}.yaml", p.name))).expect("the document");
@@ -531,52 +631,225 @@ fn pose_checks(p: &ProblemJson, n: usize, root: &Path) {
     let space = fitup::planning::PlanningSpace::new(p.min, p.max);
     let mut rng = fitup::math::Rng::new(7);
     let reference = nalgebra::UnitQuaternion::identity();
-    let poses: Vec<Transform> = (0..n).map(|_| space.sample(&mut rng, &reference)).collect();
-    let mut verdicts = vec![false; n];
+    let uniform: Vec<Transform> = (0..n).map(|_| space.sample(&mut rng, &reference)).collect();
+    let near = near_poses(&mut v, &space, n, 11);
+    let rounds: usize = env_or("FITUP_ROUNDS", 3);
+    for (set, poses) in [("uniform", &uniform), ("near", &near)] {
+        let file = std::env::temp_dir().join(format!("fitup-poses-{}-{set}.txt", p.name));
+        let text: String = poses
+            .iter()
+            .map(|q| {
+                let t = q.translation();
+                let r = q.rotation();
+                format!("{} {} {} {} {} {} {}\n", t.x, t.y, t.z, r.w, r.i, r.j, r.k)
+            })
+            .collect();
+        std::fs::write(&file, text).unwrap();
+        let mut verdicts = vec![false; poses.len()];
+        let mut best = f64::INFINITY;
+        let mut fcl_ns = f64::NAN;
+        let mut fcl_verdicts: Vec<bool> = Vec::new();
+        for _ in 0..rounds.max(1) {
+            for _ in 0..5 {
+                let t0 = std::time::Instant::now();
+                for (k, q) in poses.iter().enumerate() {
+                    verdicts[k] = !v.is_free(q);
+                }
+                best = best.min(t0.elapsed().as_secs_f64());
+            }
+            if let Some((ns, hits)) = run_fcl_poses(root, p, &file) {
+                fcl_ns = if fcl_ns.is_nan() { ns } else { fcl_ns.min(ns) };
+                fcl_verdicts = hits;
+            }
+        }
+        check_verdicts(&p.name, set, &verdicts);
+        let colliding = verdicts.iter().filter(|&&c| c).count();
+        let agree = fcl_verdicts
+            .iter()
+            .zip(&verdicts)
+            .filter(|(f, c)| f == c)
+            .count();
+        let fitup_ns = 1e9 * best / poses.len() as f64;
+        println!(
+            "| {} | {set} | {} | {colliding} | {fitup_ns:.0} | {fcl_ns:.0} | {:.2} | {agree} | {} |",
+            p.name,
+            poses.len(),
+            fcl_ns / fitup_ns,
+            load()
+        );
+    }
+    let edges: usize = env_or("FITUP_EDGES", 0);
+    if edges > 0 {
+        edge_checks(&mut v, &near, edges, &p.name);
+    }
+}
+
+/// A step like a planner's extension from `from`: a random direction up to
+/// `radius` mm and a random turn up to 0.5 rad.
+fn random_step(rng: &mut fitup::math::Rng, from: &Transform, radius: f64) -> Transform {
+    let axis = nalgebra::Unit::new_normalize(Vec3::new(rng.normal(), rng.normal(), rng.normal()));
+    let turn = nalgebra::UnitQuaternion::from_axis_angle(&axis, rng.range(0.0, 0.5));
+    let dir = Vec3::new(rng.normal(), rng.normal(), rng.normal()).normalize();
+    Transform::from_parts(
+        from.translation() + dir * rng.range(0.0, radius),
+        turn * from.rotation(),
+    )
+}
+
+/// `n` poses like those a planner checks, drawn with `seed`: half free poses
+/// within 5 % of the robot's radius of contact, a quarter poses crossing an
+/// obstacle by less than that, a quarter free poses drawn uniformly. From a free
+/// uniform pose, a [`random_step`] that collides is bisected until its two ends
+/// are less than 5 % of the radius apart (largest point displacement): its free
+/// end's clearance and its colliding end's penetration are below that.
+fn near_poses(
+    v: &mut fitup::planning::MeshValidator,
+    space: &fitup::planning::PlanningSpace,
+    n: usize,
+    seed: u64,
+) -> Vec<Transform> {
+    use fitup::planning::MotionValidator;
+    let radius = v.moving().radius();
+    let close = 0.05 * radius;
+    let mut rng = fitup::math::Rng::new(seed);
+    let reference = nalgebra::UnitQuaternion::identity();
+    let (mut free_near, mut hit_near, mut free_far) = (Vec::new(), Vec::new(), Vec::new());
+    let far = n - n / 2 - n / 4;
+    let mut attempts = 0usize;
+    while (free_near.len() < n / 2 || hit_near.len() < n / 4 || free_far.len() < far)
+        && attempts < 1000 * n.max(1)
+    {
+        attempts += 1;
+        let from = space.sample(&mut rng, &reference);
+        if !v.is_free(&from) {
+            continue;
+        }
+        if free_far.len() < far {
+            free_far.push(from);
+        }
+        let to = random_step(&mut rng, &from, radius);
+        if v.is_free(&to) {
+            continue;
+        }
+        let (angle, dist) = from.distance_to(&to);
+        let reach = dist + angle * radius;
+        let (mut lo, mut hi) = (0.0, 1.0);
+        while (hi - lo) * reach >= close {
+            let m = 0.5 * (lo + hi);
+            if v.is_free(&from.interpolate(&to, m)) {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        if free_near.len() < n / 2 {
+            free_near.push(from.interpolate(&to, lo));
+        }
+        if hit_near.len() < n / 4 {
+            hit_near.push(from.interpolate(&to, hi));
+        }
+    }
+    let mut all: Vec<Transform> = free_near
+        .into_iter()
+        .chain(hit_near)
+        .chain(free_far)
+        .collect();
+    // one deterministic order mixing the three kinds
+    for i in (1..all.len()).rev() {
+        all.swap(i, rng.below(i + 1));
+    }
+    all
+}
+
+/// Runs `fcl_poses` on the pose file: its ns per check and verdicts.
+fn run_fcl_poses(root: &Path, p: &ProblemJson, file: &Path) -> Option<(f64, Vec<bool>)> {
+    let out = Command::new(root.join("bin/fcl_poses"))
+        .arg(p.dir.join(format!("{}_env.stl", p.name)))
+        .arg(p.dir.join(format!("{}_robot.stl", p.name)))
+        .arg(file)
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        return None;
+    }
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let mut lines = text.lines();
+    let ns = field(lines.next()?, "ns_per_check")?;
+    Some((ns, lines.map(|l| l.trim() == "1").collect()))
+}
+
+/// `FITUP_VERDICTS=DIR`: writes fitup's verdicts on a pose set, or compares them
+/// with the ones written before and panics on a difference.
+fn check_verdicts(name: &str, set: &str, verdicts: &[bool]) {
+    let Ok(dir) = std::env::var("FITUP_VERDICTS") else {
+        return;
+    };
+    let file = Path::new(&dir).join(format!("{name}-{set}.txt"));
+    let text: String = verdicts
+        .iter()
+        .map(|&c| if c { '1' } else { '0' })
+        .collect();
+    match std::fs::read_to_string(&file) {
+        Ok(before) => {
+            let differ: Vec<usize> = before
+                .trim()
+                .chars()
+                .zip(text.chars())
+                .enumerate()
+                .filter(|(_, (a, b))| a != b)
+                .map(|(k, _)| k)
+                .collect();
+            assert!(
+                differ.is_empty() && before.trim().len() == text.len(),
+                "{name} {set}: {} verdicts differ from {} (poses {:?}…)",
+                differ.len(),
+                file.display(),
+                &differ[..differ.len().min(10)]
+            );
+            println!("  {name} {set}: verdicts identical to {}", file.display());
+        }
+        Err(_) => {
+            std::fs::create_dir_all(&dir).expect("the verdicts folder");
+            std::fs::write(&file, text).expect("the verdicts file");
+        }
+    }
+}
+
+/// Edge-check throughput: `MeshValidator::edge_free` (the continuous check) on
+/// `n` edges from the free poses of `near` by a [`random_step`] (seed 13) to a
+/// free end, best of 3 passes; the verdicts go through [`check_verdicts`] as set
+/// `edges`.
+fn edge_checks(v: &mut fitup::planning::MeshValidator, near: &[Transform], n: usize, name: &str) {
+    use fitup::planning::MotionValidator;
+    let radius = v.moving().radius();
+    let mut rng = fitup::math::Rng::new(13);
+    let starts: Vec<Transform> = near.iter().filter(|q| v.is_free(q)).copied().collect();
+    let mut edges = Vec::new();
+    let mut attempts = 0usize;
+    while edges.len() < n && !starts.is_empty() && attempts < 1000 * n {
+        attempts += 1;
+        let from = starts[rng.below(starts.len())];
+        let to = random_step(&mut rng, &from, radius);
+        if v.is_free(&to) {
+            edges.push((from, to));
+        }
+    }
+    let mut verdicts = vec![false; edges.len()];
     let mut best = f64::INFINITY;
-    for _ in 0..5 {
+    for _ in 0..3 {
         let t0 = std::time::Instant::now();
-        for (k, q) in poses.iter().enumerate() {
-            verdicts[k] = !v.is_free(q);
+        for (k, (a, b)) in edges.iter().enumerate() {
+            verdicts[k] = !v.edge_free(a, b);
         }
         best = best.min(t0.elapsed().as_secs_f64());
     }
-    let colliding = verdicts.iter().filter(|&&c| c).count();
-    let fitup_ns = 1e9 * best / n as f64;
-    let file = std::env::temp_dir().join(format!("fitup-poses-{}.txt", p.name));
-    let text: String = poses
-        .iter()
-        .map(|q| {
-            let t = q.translation();
-            let r = q.rotation();
-            format!("{} {} {} {} {} {} {}\n", t.x, t.y, t.z, r.w, r.i, r.j, r.k)
-        })
-        .collect();
-    std::fs::write(&file, text).unwrap();
-    let fcl = root.join("bin/fcl_poses");
-    let peer = Command::new(&fcl)
-        .arg(p.dir.join(format!("{}_env.stl", p.name)))
-        .arg(p.dir.join(format!("{}_robot.stl", p.name)))
-        .arg(&file)
-        .output();
-    let (fcl_ns, agree) = match peer {
-        Ok(out) if out.status.success() => {
-            let text = String::from_utf8_lossy(&out.stdout).to_string();
-            let mut lines = text.lines();
-            let head = lines.next().unwrap_or_default().to_string();
-            let ns = field(&head, "ns_per_check").unwrap_or(f64::NAN);
-            let agree = lines
-                .zip(&verdicts)
-                .filter(|(l, &c)| (l.trim() == "1") == c)
-                .count();
-            (ns, agree)
-        }
-        _ => (f64::NAN, 0),
-    };
+    check_verdicts(name, "edges", &verdicts);
+    let blocked = verdicts.iter().filter(|&&b| b).count();
     println!(
-        "| {} | {n} | {colliding} | {fitup_ns:.0} | {fcl_ns:.0} | {:.2} | {agree} |",
-        p.name,
-        fcl_ns / fitup_ns
+        "| {name} | edges | {} | {blocked} | {:.1} µs per edge | | | | {} |",
+        edges.len(),
+        1e6 * best / edges.len().max(1) as f64,
+        load()
     );
 }
 

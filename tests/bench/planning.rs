@@ -398,7 +398,7 @@ fn share_variants() -> Vec<(&'static str, Variant)> {
 fn step_variants() -> Vec<(&'static str, Variant)> {
     let set = |step: f64, turn_deg: f64| -> Variant {
         Box::new(move |o: &mut InsertionOptions| {
-            o.approach.step = step;
+            o.approach.step = Some(step);
             o.approach.narrow.max_turn = Some(turn_deg.to_radians());
             o.disassembly.rrt_mut().narrow.max_turn = Some(turn_deg.to_radians());
         })

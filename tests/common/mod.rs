@@ -5,6 +5,7 @@
 
 pub mod duct;
 pub mod lines;
+pub mod ur_kin;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -37,11 +37,7 @@ use std::sync::Arc;
 
 /// A generator's own error (no file, no line).
 fn invalid(message: impl Into<String>) -> MeshError {
-    MeshError {
-        path: None,
-        line: None,
-        message: message.into(),
-    }
+    MeshError::new(fitup::mesh::MeshErrorKind::Malformed, message)
 }
 
 /// Obstacle colliders with their poses (part frame → assembly frame).

@@ -28,7 +28,9 @@
 
 use super::raw::{decode_model, encode_model, Bad, RawModel, Reader, Writer};
 use super::StepOptions;
-use std::collections::HashSet;
+use crate::fsutil::{Dir, FileKind, Kind};
+use std::collections::{HashMap, HashSet};
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 
@@ -103,37 +105,160 @@ fn source_text(source: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// The stored tessellation for `key` in `store`, when present and sound (anything
-/// else — missing, damaged, another key, the old format — is a miss). A hit marks the
-/// entry used now.
-pub(super) fn load_stored(store: &Path, key: &StoreKey) -> Option<RawModel> {
-    let file = store.join(key.file_name());
-    let bytes = crate::fsutil::read_file(&file, crate::fsutil::FileKind::Mesh).ok()?;
-    let mut r = Reader(bytes.strip_prefix(STORE_MAGIC)?);
-    if StoreKey::read(&mut r).ok()? != *key {
-        return None;
-    }
-    r.str().ok()?;
-    let model = decode_model(&mut r).ok()?;
-    if !r.0.is_empty() {
-        return None;
-    }
-    touch(&file);
-    Some(model)
+/// The largest entry read, bytes (256 MiB, [`FileKind::Mesh`]'s cap; ≈ 10 million
+/// triangles of a closed solid). A larger file is not read (a miss) and is removed:
+/// decoding holds the entry and the model it decodes to (about twice its size), so
+/// this bounds a stored read at about 512 MB.
+pub const MAX_ENTRY_BYTES: u64 = FileKind::Mesh.max_bytes();
+
+/// The store folder held open, walked from the folder that holds it without following
+/// a link (`.fitup-cache/step` below the project root: a link at `.fitup-cache` or
+/// `step` is refused, so the store cannot be pointed outside the project); with
+/// `create`, made when missing.
+pub(super) fn open_store(store: &Path, create: bool) -> std::io::Result<Dir> {
+    let depth = Path::new(super::STEP_STORE).components().count();
+    let (base, rel) = if store.ends_with(super::STEP_STORE) {
+        let mut base = store;
+        for _ in 0..depth {
+            base = base.parent().unwrap_or(base);
+        }
+        (base, Path::new(super::STEP_STORE))
+    } else {
+        let name = store
+            .file_name()
+            .ok_or_else(|| std::io::Error::other("the store has no folder name"))?;
+        (store.parent().unwrap_or(Path::new(".")), Path::new(name))
+    };
+    let base = if base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base
+    };
+    Dir::open(base)?.walk(rel, create)
 }
 
-/// Marks `file` used now (its modification time), unless it was within the last
-/// minute; failures only make it look older to the size cap.
-fn touch(file: &Path) {
+/// The stored tessellation for `key` in `store`, when present and sound (anything
+/// else — missing, another key, the old format — is a miss). An entry that is a
+/// symbolic link, larger than [`MAX_ENTRY_BYTES`], cut, or poisoned (a coordinate
+/// that is not finite or beyond [`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE), an
+/// index past its vertices, a placement that is not finite) is removed and
+/// is a miss: the STEP file is read again and the entry rebuilt; the STEP file is
+/// never blamed for what the store holds. A hit marks the entry used now.
+pub(super) fn load_stored(store: &Path, key: &StoreKey) -> Option<RawModel> {
+    let dir = open_store(store, false).ok()?;
+    let name = key.file_name();
+    let name = OsStr::new(&name);
+    // Removes what is at the name when it is a link (the link itself) or fitup's
+    // (begins with the store's magic): never a file someone else put there.
+    let bad = |dir: &Dir| {
+        // Under the folder's lock: a sweep or a prune is not racing on the same name.
+        let _turn = dir.lock();
+        let ours = match dir.stat(name) {
+            Ok(Some(Kind::Symlink)) => true,
+            Ok(Some(Kind::File(_))) => {
+                use std::io::Read;
+                let mut head = Vec::new();
+                dir.open_file(name)
+                    .and_then(|f| f.take(ANY_STORE_MAGIC.len() as u64).read_to_end(&mut head))
+                    .is_ok()
+                    && head.starts_with(ANY_STORE_MAGIC)
+            }
+            _ => false,
+        };
+        if ours {
+            let _ = dir.remove(name);
+        }
+        None
+    };
+    match dir.stat(name) {
+        Ok(Some(Kind::File(len))) if len <= MAX_ENTRY_BYTES => {}
+        Ok(None) | Err(_) => return None,
+        Ok(Some(_)) => return bad(&dir),
+    }
+    let Ok(Some(bytes)) = dir.read_capped(name, MAX_ENTRY_BYTES) else {
+        return bad(&dir);
+    };
+    let Some(rest) = bytes.strip_prefix(STORE_MAGIC) else {
+        return None; // not this format: prune's business
+    };
+    let mut r = Reader(rest);
+    match StoreKey::read(&mut r) {
+        Ok(k) if k == *key => {}
+        Ok(_) => return None,
+        Err(_) => return bad(&dir),
+    }
+    let decoded = r
+        .str()
+        .and_then(|_| decode_model(&mut r))
+        .and_then(|m| {
+            if r.0.is_empty() {
+                Ok(m)
+            } else {
+                Err("bytes after the model")
+            }
+        })
+        .and_then(|m| sound(&m).map(|()| m));
+    drop(bytes);
+    match decoded {
+        Ok(model) => {
+            touch(&dir, name);
+            Some(model)
+        }
+        Err(_) => bad(&dir),
+    }
+}
+
+/// Whether a decoded entry can be what Open CASCADE returned: coordinates finite and
+/// in range, indices within their part's vertices, placements finite and of a part
+/// that exists, volumes finite.
+fn sound(m: &RawModel) -> Result<(), Bad> {
+    let max = crate::math::MAX_ABS_VALUE;
+    for p in &m.parts {
+        if p.vertices.len() % 3 != 0 || p.triangles.len() % 3 != 0 {
+            return Err("a partial vertex or triangle");
+        }
+        if p.vertices.iter().any(|v| !v.is_finite() || v.abs() > max) {
+            return Err("a coordinate that is not finite or out of range");
+        }
+        let n = (p.vertices.len() / 3) as u64;
+        if p.triangles.iter().any(|&i| u64::from(i) >= n) {
+            return Err("an index past the vertices");
+        }
+        if !p.exact_volume.is_finite() {
+            return Err("a volume that is not finite");
+        }
+    }
+    for i in &m.instances {
+        if i.part as usize >= m.parts.len()
+            || !i.scale.is_finite()
+            || i.matrix.iter().any(|v| !v.is_finite() || v.abs() > max)
+        {
+            // (Whether it is a rigid motion is the model's check: a stored model
+            // that fails it is discarded by the reader, `read_step_stored`.)
+            return Err("a placement that is not finite or names no stored part");
+        }
+    }
+    Ok(())
+}
+
+/// Removes the entry for `key` (one that did not make a model: damaged).
+pub(super) fn discard(store: &Path, key: &StoreKey) {
+    if let Ok(dir) = open_store(store, false) {
+        let _turn = dir.lock();
+        let _ = dir.remove(OsStr::new(&key.file_name()));
+    }
+}
+
+/// Marks the entry `name` used now (its modification time), unless it was within the
+/// last minute; failures only make it look older to the size cap.
+fn touch(dir: &Dir, name: &OsStr) {
     let now = SystemTime::now();
-    let recent = std::fs::metadata(file)
-        .and_then(|m| m.modified())
-        .is_ok_and(|t| {
+    if let Ok(f) = dir.open_file_rw(name) {
+        let recent = f.metadata().and_then(|m| m.modified()).is_ok_and(|t| {
             now.duration_since(t)
                 .is_ok_and(|d| d < Duration::from_secs(60))
         });
-    if !recent {
-        if let Ok(f) = std::fs::OpenOptions::new().write(true).open(file) {
+        if !recent {
             let _ = f.set_modified(now);
         }
     }
@@ -142,12 +267,13 @@ fn touch(file: &Path) {
 /// Keeps `model` for `key` (read from the STEP file `source`) in `store`, through the
 /// write rule (a file there that fitup did not write is left alone), then removes what
 /// the write made stale: the entries of `source` with other contents, and the least
-/// recently used while the store holds more than `cap` bytes. Failures are ignored:
-/// the store only saves time.
+/// recently used while the store holds more than `cap` bytes. Everything goes through
+/// the store folder held open (never through a link). Failures are ignored: the store
+/// only saves time.
 pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawModel, cap: u64) {
-    if std::fs::create_dir_all(store).is_err() {
+    let Ok(dir) = open_store(store, true) else {
         return;
-    }
+    };
     let source = source_text(source);
     let mut w = Writer(STORE_MAGIC.to_vec());
     key.write(&mut w);
@@ -155,32 +281,44 @@ pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawMode
     let mut m = model.clone();
     m.peak_memory = 0;
     encode_model(&mut w, &m);
+    drop(m);
+    if w.0.len() as u64 > MAX_ENTRY_BYTES {
+        return; // never read back: not kept
+    }
     let rule = crate::fsutil::OutputRule {
         signature: Some(ANY_STORE_MAGIC),
         ..crate::fsutil::OutputRule::forced(false)
     };
     let name = key.file_name();
-    if crate::fsutil::write_output(&store.join(&name), &w.0, &rule).is_err() {
+    let os_name = OsStr::new(&name);
+    // A link planted at the entry's name is removed first (the write rule would
+    // refuse to write over it, and the entry would never be kept again).
+    if matches!(dir.stat(os_name), Ok(Some(Kind::Symlink))) {
+        let _ = dir.remove(os_name);
+    }
+    if crate::fsutil::check_output_in(&dir, os_name, &store.join(&name), &rule).is_err()
+        || crate::fsutil::write_in(&dir, os_name, &w.0).is_err()
+    {
         return;
     }
     // The sweep takes turns with other writers' sweeps and with prune (the write
     // itself cannot: the write rule's registry takes the same folder lock).
-    let _turn = crate::fsutil::lock_folder(store);
-    let Ok(found) = scan(store) else { return };
+    let _turn = dir.lock();
+    let Ok(found) = scan(&dir) else { return };
     let mut kept = Vec::new();
     for e in found.entries {
         let changed = matches!(&e.header, Ok(h) if !source.is_empty()
             && h.source == source
             && (h.key.hash, h.key.len) != (key.hash, key.len));
         if changed {
-            let _ = std::fs::remove_file(&e.file);
+            let _ = dir.remove(OsStr::new(&e.name));
         } else if e.name != name {
             kept.push(e);
         }
     }
     let total: u64 = kept.iter().map(|e| e.bytes).sum::<u64>() + w.0.len() as u64;
     for e in over_cap(kept, total, cap) {
-        let _ = std::fs::remove_file(&e.file);
+        let _ = dir.remove(OsStr::new(&e.name));
     }
 }
 
@@ -212,23 +350,26 @@ struct Scan {
 /// The entries and leftovers of `store`. Only regular files are looked at (a symbolic
 /// link is never followed), named as an entry (`<16 hex digits>.tess`) and beginning
 /// with the store's magic, or as a writer's temporary file (`.fitup-*.tmp`).
-fn scan(store: &Path) -> std::io::Result<Scan> {
+fn scan(dir: &Dir) -> std::io::Result<Scan> {
+    use std::io::Read;
     let mut out = Scan {
         entries: Vec::new(),
         leftovers: Vec::new(),
     };
-    for e in std::fs::read_dir(store)? {
-        let Ok(e) = e else { continue };
-        let Ok(md) = std::fs::symlink_metadata(e.path()) else {
-            continue;
-        };
-        if !md.is_file() {
+    for (name, kind) in dir.entries()? {
+        if !matches!(kind, Kind::File(_)) {
             continue;
         }
-        let name = e.file_name().to_string_lossy().into_owned();
+        let name = name.to_string_lossy().into_owned();
+        let os_name = OsStr::new(&name);
+        let Ok(file) = dir.open_file(os_name) else {
+            continue;
+        };
+        let Ok(md) = file.metadata() else { continue };
         let modified = md.modified().unwrap_or(SystemTime::UNIX_EPOCH);
+        let path = dir.path().join(&name);
         if name.starts_with(".fitup-") && name.ends_with(".tmp") {
-            out.leftovers.push((e.path(), md.len(), modified));
+            out.leftovers.push((path, md.len(), modified));
             continue;
         }
         let is_entry_name = name.len() == 21
@@ -237,9 +378,14 @@ fn scan(store: &Path) -> std::io::Result<Scan> {
         if !is_entry_name {
             continue;
         }
-        let Ok(head) = crate::fsutil::file_head(&e.path(), (MAX_SOURCE_BYTES + 128) as u64) else {
+        let mut head = Vec::new();
+        if file
+            .take((MAX_SOURCE_BYTES + 128) as u64)
+            .read_to_end(&mut head)
+            .is_err()
+        {
             continue;
-        };
+        }
         if !head.starts_with(ANY_STORE_MAGIC) {
             continue; // not fitup's
         }
@@ -254,7 +400,7 @@ fn scan(store: &Path) -> std::io::Result<Scan> {
             }
         };
         out.entries.push(Found {
-            file: e.path(),
+            file: path,
             name,
             bytes: md.len(),
             modified,
@@ -287,6 +433,9 @@ pub enum StaleReason {
     SourceGone,
     /// The STEP file it was read from has other contents now.
     SourceChanged,
+    /// The STEP file it names is outside the project that holds the store (a forged
+    /// or moved entry): never opened.
+    SourceOutside,
     /// Written by an older fitup (no source recorded): never read any more.
     OldFormat,
     /// Its head is cut or garbled.
@@ -305,6 +454,7 @@ impl std::fmt::Display for StaleReason {
         f.write_str(match self {
             StaleReason::SourceGone => "its STEP file is gone",
             StaleReason::SourceChanged => "its STEP file changed",
+            StaleReason::SourceOutside => "it names a file outside the project",
             StaleReason::OldFormat => "an older fitup's format",
             StaleReason::Damaged => "damaged",
             StaleReason::Unused => "no document uses this tessellation",
@@ -410,50 +560,154 @@ pub enum StoreError {
     },
 }
 
-/// Whether the source an entry records is the file it was read from: `None` when it
-/// is, else why not. A source that cannot be read for another reason counts as
-/// current (kept).
-fn source_state(h: &Header) -> Option<StaleReason> {
-    if h.source.is_empty() {
-        return Some(StaleReason::SourceGone);
+/// What [`prune_store`] knows of the sources entries name: each file looked at (and
+/// hashed, streaming) at most once per prune, however many entries name it; only files
+/// inside the project, reached from its folder without following a link.
+struct Sources {
+    /// The project folder (the store's owner), canonical and held open; `None`: it
+    /// cannot be opened (every source then counts as current).
+    root: Option<(PathBuf, Dir)>,
+    seen: HashMap<String, Seen>,
+}
+
+/// What [`Sources`] found of one source path.
+#[derive(Clone, Copy)]
+enum Seen {
+    /// Gone, outside the project, or not a regular file.
+    Stale(StaleReason),
+    /// A regular file of this length; its hash once computed.
+    File { len: u64, hash: Option<u64> },
+    /// Could not be looked at (kept).
+    Unknown,
+}
+
+impl Sources {
+    fn new(store: &Path) -> Sources {
+        let depth = Path::new(super::STEP_STORE).components().count();
+        let root = if store.ends_with(super::STEP_STORE) {
+            store.ancestors().nth(depth).map(Path::to_path_buf)
+        } else {
+            store.parent().map(Path::to_path_buf)
+        };
+        let root = root
+            .and_then(|r| r.canonicalize().ok())
+            .and_then(|r| Dir::open(&r).ok().map(|d| (r, d)));
+        Sources {
+            root,
+            seen: HashMap::new(),
+        }
     }
-    let path = Path::new(&h.source);
-    match std::fs::metadata(path) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Some(StaleReason::SourceGone),
-        Err(_) => None,
-        Ok(md) if !md.is_file() => Some(StaleReason::SourceGone),
-        Ok(md) if md.len() != h.key.len => Some(StaleReason::SourceChanged),
-        Ok(_) => match crate::fsutil::read_file(path, crate::fsutil::FileKind::Step) {
-            Ok(bytes) if crate::fsutil::content_hash(&bytes) != h.key.hash => {
-                Some(StaleReason::SourceChanged)
+
+    /// Whether the source an entry records is the file it was read from: `None` when
+    /// it is, else why not. A source outside the project is never opened (stale: a
+    /// project's store names only the project's files); one that cannot be looked at
+    /// for another reason counts as current (kept).
+    fn state(&mut self, h: &Header) -> Option<StaleReason> {
+        if h.source.is_empty() {
+            return Some(StaleReason::SourceGone);
+        }
+        let seen = match self.seen.get(&h.source) {
+            Some(s) => *s,
+            None => {
+                let s = self.look(&h.source);
+                self.seen.insert(h.source.clone(), s);
+                s
             }
-            _ => None,
-        },
+        };
+        match seen {
+            Seen::Stale(r) => Some(r),
+            Seen::Unknown => None,
+            Seen::File { len, .. } if len != h.key.len => Some(StaleReason::SourceChanged),
+            Seen::File { len, hash } => {
+                let hash = match hash {
+                    Some(x) => Some(x),
+                    None => {
+                        let x = self.hash(&h.source);
+                        self.seen
+                            .insert(h.source.clone(), Seen::File { len, hash: x });
+                        x
+                    }
+                };
+                match hash {
+                    Some(x) if x != h.key.hash => Some(StaleReason::SourceChanged),
+                    _ => None,
+                }
+            }
+        }
+    }
+
+    /// The folder of `source` (inside the root) held open, and the file's name.
+    fn folder(&self, source: &str) -> Result<(Dir, std::ffi::OsString), Seen> {
+        let Some((root, dir)) = &self.root else {
+            return Err(Seen::Unknown);
+        };
+        let Ok(rel) = Path::new(source).strip_prefix(root) else {
+            return Err(Seen::Stale(StaleReason::SourceOutside));
+        };
+        let (Some(parent), Some(name)) = (rel.parent(), rel.file_name()) else {
+            return Err(Seen::Stale(StaleReason::SourceGone));
+        };
+        match dir.walk(parent, false) {
+            Ok(d) => Ok((d, name.to_os_string())),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                Err(Seen::Stale(StaleReason::SourceGone))
+            }
+            // A link (or a file) where a folder was: not the file it was read from.
+            Err(e) if e.kind() == std::io::ErrorKind::Other => {
+                Err(Seen::Stale(StaleReason::SourceGone))
+            }
+            Err(_) => Err(Seen::Unknown),
+        }
+    }
+
+    fn look(&self, source: &str) -> Seen {
+        let (dir, name) = match self.folder(source) {
+            Ok(f) => f,
+            Err(seen) => return seen,
+        };
+        match dir.stat(&name) {
+            Ok(Some(Kind::File(len))) => Seen::File { len, hash: None },
+            Ok(_) => Seen::Stale(StaleReason::SourceGone),
+            Err(_) => Seen::Unknown,
+        }
+    }
+
+    /// The content hash of `source`, streamed (never read whole), through its held
+    /// folder without following a link.
+    fn hash(&self, source: &str) -> Option<u64> {
+        let (dir, name) = self.folder(source).ok()?;
+        let f = dir.open_file(&name).ok()?;
+        crate::fsutil::hash_reader(f).ok().map(|(_, h)| h)
     }
 }
 
 /// Removes the stale files of the store folder `store` (see the module documentation
 /// for the rules), or with [`PruneOptions::dry_run`] only lists them. A store that does
 /// not exist is empty. Only fitup's entries and its writers' leftovers inside `store`
-/// are ever removed; `store` must be a real folder, not a symbolic link.
+/// are ever removed, through the store folder held open; `store` must be a real folder
+/// (reached without a symbolic link). The sources entries name are looked at only
+/// inside the project that holds the store, each once.
 pub fn prune_store(store: &Path, options: &PruneOptions) -> Result<PruneReport, StoreError> {
     let mut report = PruneReport::default();
-    match std::fs::symlink_metadata(store) {
+    let dir = match open_store(store, false) {
+        Ok(d) => d,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(report),
+        Err(e) if e.kind() == std::io::ErrorKind::Other => {
+            return Err(StoreError::NotAFolder { path: store.into() })
+        }
         Err(e) => {
             return Err(StoreError::Io {
                 path: store.into(),
                 kind: e.kind(),
             })
         }
-        Ok(md) if !md.is_dir() => return Err(StoreError::NotAFolder { path: store.into() }),
-        Ok(_) => {}
-    }
-    let _turn = crate::fsutil::lock_folder(store);
-    let found = scan(store).map_err(|e| StoreError::Io {
+    };
+    let _turn = dir.lock();
+    let found = scan(&dir).map_err(|e| StoreError::Io {
         path: store.into(),
         kind: e.kind(),
     })?;
+    let mut sources = Sources::new(store);
     let mut stale = Vec::new();
     let now = SystemTime::now();
     for (file, bytes, modified) in found.leftovers {
@@ -474,7 +728,7 @@ pub fn prune_store(store: &Path, options: &PruneOptions) -> Result<PruneReport, 
     for e in found.entries {
         let reason = match &e.header {
             Err(r) => Some(*r),
-            Ok(h) => source_state(h).or_else(|| {
+            Ok(h) => sources.state(h).or_else(|| {
                 let t = Tessellation {
                     source: PathBuf::from(&h.source),
                     linear_bits: h.key.linear,
@@ -502,7 +756,8 @@ pub fn prune_store(store: &Path, options: &PruneOptions) -> Result<PruneReport, 
     }
     for p in stale {
         if !options.dry_run {
-            if let Err(e) = std::fs::remove_file(&p.file) {
+            let name = p.file.file_name().unwrap_or_default();
+            if let Err(e) = dir.remove(name) {
                 if e.kind() != std::io::ErrorKind::NotFound {
                     report.failed.push((p.file.clone(), e.kind()));
                     continue;
@@ -592,6 +847,64 @@ mod tests {
         std::fs::write(&files[0], b"my notes").unwrap();
         store(&st, &key, &a, &model("peg"), DEFAULT_STORE_CAP);
         assert_eq!(std::fs::read(&files[0]).unwrap(), b"my notes");
+    }
+
+    /// A poisoned entry (NaN or 1e300 coordinates, an index past the vertices), a cut
+    /// one, one larger than the bound and a link to a file outside are misses and are
+    /// removed (a rewrite then keeps the good model); none is read through a link.
+    #[test]
+    fn poisoned_linked_and_oversized_entries_are_misses_and_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let st = dir.path().join("store");
+        let (a, key) = source(dir.path(), "a.step", b"ISO-10303-21; one", 0.1);
+        let poisons: [fn(&mut RawModel); 4] = [
+            |m| m.parts[0].vertices[0] = f64::NAN,
+            |m| m.parts[0].vertices[4] = 1e300,
+            |m| m.parts[0].triangles[2] = 99,
+            |m| m.instances[0].part = 7,
+        ];
+        for poison in poisons {
+            let mut m = model("peg");
+            poison(&mut m);
+            store(&st, &key, &a, &m, DEFAULT_STORE_CAP);
+            assert_eq!(stored_files(&st).len(), 1);
+            assert_eq!(load_stored(&st, &key), None);
+            assert!(
+                stored_files(&st).is_empty(),
+                "the poisoned entry is removed"
+            );
+            store(&st, &key, &a, &model("peg"), DEFAULT_STORE_CAP);
+            assert_eq!(load_stored(&st, &key), Some(model("peg")));
+        }
+        // Larger than the bound: not read, removed.
+        let file = stored_files(&st)[0].clone();
+        let f = std::fs::OpenOptions::new().write(true).open(&file).unwrap();
+        f.set_len(MAX_ENTRY_BYTES + 1).unwrap();
+        assert_eq!(load_stored(&st, &key), None);
+        assert!(!file.exists());
+        // A link to a sound entry outside the store: not followed, the link removed,
+        // the outside file untouched.
+        #[cfg(unix)]
+        {
+            let outside = tempfile::tempdir().unwrap();
+            let st2 = outside.path().join("store");
+            store(&st2, &key, &a, &model("peg"), DEFAULT_STORE_CAP);
+            let target = stored_files(&st2)[0].clone();
+            let before = std::fs::read(&target).unwrap();
+            std::os::unix::fs::symlink(&target, &file).unwrap();
+            assert_eq!(load_stored(&st, &key), None);
+            assert!(
+                std::fs::symlink_metadata(&file).is_err(),
+                "the link is removed"
+            );
+            assert_eq!(std::fs::read(&target).unwrap(), before);
+            // The store folder itself a link: not used.
+            let moved = dir.path().join("real");
+            std::fs::rename(&st, &moved).unwrap();
+            std::os::unix::fs::symlink(&st2, &st).unwrap();
+            assert_eq!(load_stored(&st, &key), None);
+            assert!(prune_store(&st, &PruneOptions::default()).is_err());
+        }
     }
 
     /// Writing the entry of a changed STEP file removes the entries of its older

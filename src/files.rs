@@ -1,0 +1,458 @@
+//! Data files a script reads and writes inside the project: CSV tables, JSON and
+//! plain text (a macro's spreadsheets, lookup tables, reports).
+//!
+//! Reading goes through the project's path rule ([`Project::resolve`]: nothing
+//! outside the project folder, regular files only) and the table cap
+//! ([`FileKind::Table`], 64 MiB); the text must be UTF-8 (a byte order mark is
+//! skipped). Every parse error names the file, the line and the cause. Writing is
+//! the caller's: text goes through the output rule (`fsutil::check_output`, the
+//! project's output registry), see [`csv_text`] for the CSV spelling.
+//!
+//! # Examples
+//!
+//! ```
+//! use fitup::files::{parse_csv, Cell, CsvOptions};
+//!
+//! let table = parse_csv("name,x,y\nbolt-1,10,2.5\n\"a, b\",-3,\n", &CsvOptions::default())?;
+//! assert_eq!(table.columns, ["name", "x", "y"]);
+//! assert_eq!(table.rows[0], [Cell::Text("bolt-1".into()), Cell::Int(10), Cell::Float(2.5)]);
+//! assert_eq!(table.rows[1][0], Cell::Text("a, b".into()));
+//! assert_eq!(table.rows[1][2], Cell::Empty);
+//! # Ok::<(), fitup::files::DataError>(())
+//! ```
+
+use crate::fsutil::{FileKind, ReadError};
+use crate::project::Project;
+use std::path::{Path, PathBuf};
+
+/// A data file that cannot be read, located where possible.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DataError {
+    /// The path is outside the project or unusable.
+    #[error("`{path}`: {message}")]
+    Path {
+        /// The path as given.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// The file cannot be read (missing, a folder, too large, not UTF-8).
+    #[error("{}: {message}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// The content is malformed at `line` (1-based; 0 when unknown).
+    #[error("{}:{line}: {message}", path.display())]
+    Parse {
+        /// The file (empty for text parsed from memory).
+        path: PathBuf,
+        /// The line, 1-based.
+        line: usize,
+        /// Why.
+        message: String,
+    },
+    /// Bad options.
+    #[error("{0}")]
+    Options(String),
+}
+
+impl DataError {
+    fn at(self, file: &Path) -> Self {
+        match self {
+            DataError::Parse { line, message, .. } => DataError::Parse {
+                path: file.to_path_buf(),
+                line,
+                message,
+            },
+            e => e,
+        }
+    }
+}
+
+/// One CSV field, typed from its text when [`CsvOptions::typed`]: whole numbers are
+/// `Int`, other numbers `Float`, `true`/`false` `Bool`, an empty unquoted field
+/// `Empty`, anything else (and every quoted field) `Text`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cell {
+    /// An empty unquoted field.
+    Empty,
+    /// A whole number.
+    Int(i64),
+    /// A number with a fraction or exponent (finite).
+    Float(f64),
+    /// `true` or `false`.
+    Bool(bool),
+    /// Text.
+    Text(String),
+}
+
+impl Cell {
+    /// The number in the field, if it is one.
+    pub fn as_f64(&self) -> Option<f64> {
+        match self {
+            Cell::Int(i) => Some(*i as f64),
+            Cell::Float(f) => Some(*f),
+            _ => None,
+        }
+    }
+
+    fn from_field(text: String, quoted: bool, typed: bool) -> Cell {
+        if quoted || !typed {
+            return Cell::Text(text);
+        }
+        let t = text.trim();
+        if t.is_empty() {
+            return Cell::Empty;
+        }
+        if let Ok(i) = t.parse::<i64>() {
+            return Cell::Int(i);
+        }
+        if t.bytes().any(|b| b.is_ascii_digit()) && !t.contains(['x', 'X']) {
+            if let Ok(f) = t.parse::<f64>() {
+                if f.is_finite() {
+                    return Cell::Float(f);
+                }
+            }
+        }
+        match t {
+            "true" => Cell::Bool(true),
+            "false" => Cell::Bool(false),
+            _ => Cell::Text(text),
+        }
+    }
+}
+
+/// How to read a CSV table (the options map of `read_csv`).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CsvOptions {
+    /// The first row names the columns (default true).
+    pub header: bool,
+    /// The field separator, one character (default `,`; `;` and tab are common).
+    pub delimiter: char,
+    /// Lines starting with this character are skipped (default none).
+    pub comment: Option<char>,
+    /// Type unquoted fields as numbers and booleans (default true).
+    pub typed: bool,
+}
+
+impl Default for CsvOptions {
+    fn default() -> Self {
+        CsvOptions {
+            header: true,
+            delimiter: ',',
+            comment: None,
+            typed: true,
+        }
+    }
+}
+
+/// A CSV table: the column names (empty without a header) and the rows.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    /// The header's names, in order.
+    pub columns: Vec<String>,
+    /// The rows, each with the 1-based line it starts on.
+    pub rows: Vec<Vec<Cell>>,
+    /// The line each row starts on (1-based), for messages.
+    pub lines: Vec<usize>,
+}
+
+/// Parses CSV text (RFC 4180: fields in double quotes may hold the delimiter, line
+/// breaks and doubled quotes; `\r\n` or `\n` line ends). Empty lines are skipped.
+/// With a header every row must have as many fields as the header.
+pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
+    let d = options.delimiter;
+    if d == '"' || d == '\n' || d == '\r' {
+        return Err(DataError::Options(format!("`delimiter` cannot be {d:?}")));
+    }
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let bad = |line: usize, message: String| DataError::Parse {
+        path: PathBuf::new(),
+        line,
+        message,
+    };
+    let mut rows: Vec<(usize, Vec<(String, bool)>)> = Vec::new();
+    let mut chars = text.chars().peekable();
+    let mut line = 1usize;
+    while chars.peek().is_some() {
+        let start = line;
+        // a comment or empty line
+        if options.comment.is_some() && chars.peek() == options.comment.as_ref() {
+            for c in chars.by_ref() {
+                if c == '\n' {
+                    break;
+                }
+            }
+            line += 1;
+            continue;
+        }
+        let mut fields: Vec<(String, bool)> = Vec::new();
+        let mut field = String::new();
+        let mut quoted = false;
+        let mut at_start = true;
+        loop {
+            match chars.next() {
+                None => {
+                    fields.push((std::mem::take(&mut field), quoted));
+                    break;
+                }
+                Some('"') if at_start => {
+                    quoted = true;
+                    at_start = false;
+                    let opened = line;
+                    loop {
+                        match chars.next() {
+                            None => return Err(bad(
+                                opened,
+                                "a quoted field is never closed (a `\"` without its closing `\"`)"
+                                    .into(),
+                            )),
+                            Some('"') if chars.peek() == Some(&'"') => {
+                                chars.next();
+                                field.push('"');
+                            }
+                            Some('"') => break,
+                            Some('\n') => {
+                                line += 1;
+                                field.push('\n');
+                            }
+                            Some(c) => field.push(c),
+                        }
+                    }
+                    // only the delimiter or the line end may follow the closing quote
+                    match chars.peek() {
+                        None | Some('\n') | Some('\r') => {}
+                        Some(&c) if c == d => {}
+                        Some(&c) => {
+                            return Err(bad(
+                                line,
+                                format!("{c:?} after a closing quote: a quoted field ends at the delimiter {d:?} or the line end"),
+                            ))
+                        }
+                    }
+                }
+                Some(c) if c == d => {
+                    fields.push((std::mem::take(&mut field), quoted));
+                    quoted = false;
+                    at_start = true;
+                }
+                Some('\r') if chars.peek() == Some(&'\n') => {}
+                Some('\n') => {
+                    line += 1;
+                    fields.push((std::mem::take(&mut field), quoted));
+                    break;
+                }
+                Some(c) => {
+                    if c == '"' {
+                        return Err(bad(
+                            line,
+                            "a `\"` inside an unquoted field: quote the whole field and double the inner quotes".into(),
+                        ));
+                    }
+                    at_start = false;
+                    field.push(c);
+                }
+            }
+        }
+        let empty = fields.len() == 1 && !fields[0].1 && fields[0].0.trim().is_empty();
+        if !empty {
+            rows.push((start, fields));
+        }
+    }
+    let mut table = Table::default();
+    let mut rows = rows.into_iter();
+    if options.header {
+        match rows.next() {
+            Some((_, h)) => {
+                table.columns = h.into_iter().map(|(t, _)| t.trim().to_string()).collect()
+            }
+            None => return Ok(table),
+        }
+        for (i, name) in table.columns.iter().enumerate() {
+            if table.columns[..i].contains(name) {
+                return Err(bad(1, format!("the header names column `{name}` twice")));
+            }
+        }
+    }
+    for (l, fields) in rows {
+        if options.header && fields.len() != table.columns.len() {
+            return Err(bad(
+                l,
+                format!(
+                    "{} fields, but the header has {} columns",
+                    fields.len(),
+                    table.columns.len()
+                ),
+            ));
+        }
+        table.rows.push(
+            fields
+                .into_iter()
+                .map(|(t, q)| Cell::from_field(t, q, options.typed))
+                .collect(),
+        );
+        table.lines.push(l);
+    }
+    Ok(table)
+}
+
+/// Reads a text file inside the project: the resolved path and its text.
+pub fn read_text(project: &Project, path: &str) -> Result<(PathBuf, String), DataError> {
+    let full = project.resolve(path).map_err(|e| DataError::Path {
+        path: path.to_string(),
+        message: e.to_string(),
+    })?;
+    // Read through the project's held root: a folder swapped for a link after the
+    // path check is refused, never followed outside.
+    let text = project
+        .read_file(&full, FileKind::Table)
+        .and_then(|b| {
+            String::from_utf8(b).map_err(|e| ReadError::NotText(e.utf8_error().valid_up_to()))
+        })
+        .map_err(|e| DataError::Read {
+            path: PathBuf::from(path),
+            message: e.to_string(),
+        })?;
+    let text = match text.strip_prefix('\u{feff}') {
+        Some(t) => t.to_string(),
+        None => text,
+    };
+    Ok((full, text))
+}
+
+/// Reads a CSV table inside the project ([`parse_csv`]).
+pub fn read_csv(
+    project: &Project,
+    path: &str,
+    options: &CsvOptions,
+) -> Result<(PathBuf, Table), DataError> {
+    let (full, text) = read_text(project, path)?;
+    let table = parse_csv(&text, options).map_err(|e| e.at(Path::new(path)))?;
+    Ok((full, table))
+}
+
+/// The deepest nesting a JSON file may have (serde_json's own recursion limit).
+pub const MAX_JSON_DEPTH: usize = 128;
+
+/// Parses JSON text; an error names the line and column.
+pub fn parse_json(text: &str) -> Result<serde_json::Value, DataError> {
+    serde_json::from_str(text).map_err(|e| DataError::Parse {
+        path: PathBuf::new(),
+        line: e.line(),
+        message: format!("column {}: {e}", e.column()),
+    })
+}
+
+/// Reads a JSON file inside the project ([`parse_json`]).
+pub fn read_json(project: &Project, path: &str) -> Result<(PathBuf, serde_json::Value), DataError> {
+    let (full, text) = read_text(project, path)?;
+    let v = parse_json(&text).map_err(|e| e.at(Path::new(path)))?;
+    Ok((full, v))
+}
+
+/// One field as CSV text: quoted when it holds the delimiter, a quote, a line break
+/// or leading/trailing spaces (inner quotes doubled).
+pub fn csv_field(text: &str, delimiter: char) -> String {
+    let needs =
+        text.contains([delimiter, '"', '\n', '\r']) || text.starts_with(' ') || text.ends_with(' ');
+    if needs {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// Rows of fields as CSV text (`\n` line ends), each field through [`csv_field`].
+pub fn csv_text<R: AsRef<[String]>>(rows: &[R], delimiter: char) -> String {
+    let mut out = String::new();
+    for r in rows {
+        let line: Vec<String> = r.as_ref().iter().map(|f| csv_field(f, delimiter)).collect();
+        out.push_str(&line.join(&delimiter.to_string()));
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quoting_typing_and_line_ends() {
+        let t = parse_csv(
+            "a;b;c\r\n1;\"x;y\";true\r\n\r\n\"multi\nline\";-2e3;\" 7\"\n",
+            &CsvOptions {
+                delimiter: ';',
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(t.columns, ["a", "b", "c"]);
+        assert_eq!(
+            t.rows[0],
+            [Cell::Int(1), Cell::Text("x;y".into()), Cell::Bool(true)]
+        );
+        assert_eq!(
+            t.rows[1],
+            [
+                Cell::Text("multi\nline".into()),
+                Cell::Float(-2000.0),
+                Cell::Text(" 7".into())
+            ]
+        );
+        assert_eq!(t.lines, [2, 4]);
+        // no header, ragged rows, comments
+        let t = parse_csv(
+            "# holes\n1,2\n3\n",
+            &CsvOptions {
+                header: false,
+                comment: Some('#'),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            t.rows,
+            [vec![Cell::Int(1), Cell::Int(2)], vec![Cell::Int(3)]]
+        );
+        // untyped keeps the text; inf, nan and hex stay text
+        let t = parse_csv("x\ninf\nNaN\n0x10\n1e999\n", &CsvOptions::default()).unwrap();
+        assert!(t.rows.iter().all(|r| matches!(r[0], Cell::Text(_))));
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = parse_csv("a,b\n1,2\n3\n", &CsvOptions::default()).unwrap_err();
+        assert_eq!(e.to_string(), ":3: 1 fields, but the header has 2 columns");
+        let e = parse_csv("a\n\"open\n\n", &CsvOptions::default()).unwrap_err();
+        assert!(matches!(e, DataError::Parse { line: 2, .. }), "{e}");
+        let e = parse_csv("a\nx\"y\n", &CsvOptions::default()).unwrap_err();
+        assert!(matches!(e, DataError::Parse { line: 2, .. }), "{e}");
+        let e = parse_csv("a,a\n", &CsvOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("twice"));
+        let e = parse_json("{\n  \"a\": [1,\n}").unwrap_err();
+        assert!(matches!(e, DataError::Parse { line: 3, .. }), "{e}");
+    }
+
+    #[test]
+    fn written_csv_reads_back() {
+        let rows = vec![
+            vec!["name".to_string(), "note".to_string()],
+            vec!["a,b".to_string(), "say \"hi\"\nbye".to_string()],
+        ];
+        let text = csv_text(&rows, ',');
+        let t = parse_csv(&text, &CsvOptions::default()).unwrap();
+        assert_eq!(
+            t.rows[0],
+            [
+                Cell::Text("a,b".into()),
+                Cell::Text("say \"hi\"\nbye".into())
+            ]
+        );
+    }
+}

@@ -1,0 +1,133 @@
+//! [`ProblemScale`]: the lengths of one planning problem that fitup's scale-free
+//! defaults derive from, so that the same defaults serve a 20 mm peg in a bore and
+//! a table carried through a 700 mm house.
+
+use super::space::PlanningSpace;
+
+/// The characteristic lengths of a planning problem (mm).
+///
+/// Every length default of the default planner ([`rrt_connect`](super::rrt_connect)
+/// with `step: None`) is a multiple of one of these, never an absolute number of
+/// millimetres: scaling a problem (meshes, poses, bounds) by `k` scales every
+/// derived length by `k`, so the search draws the same numbers and makes the same
+/// moves, and finds the same path scaled by `k`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProblemScale {
+    /// Diagonal of the translation bounds (mm).
+    pub extent: f64,
+    /// Radius of the moving part about its own origin (mm): how far its farthest
+    /// point moves per radian of rotation. The validator's
+    /// [`part_radius`](super::MotionValidator::part_radius), or the space's
+    /// rotation weight when the validator knows no part.
+    pub part_radius: f64,
+    /// The moving part's thinnest extent (mm): the smallest side of its box in its
+    /// own frame ([`part_thickness`](super::MotionValidator::part_thickness)), or
+    /// its radius when the validator knows no part.
+    pub part_thickness: f64,
+    /// The space's rotation weight (mm per rad).
+    pub rotation_weight: f64,
+}
+
+impl ProblemScale {
+    /// Share of the [metric extent](Self::metric_extent) the long-range search
+    /// extends by at most: OMPL's RRT-Connect default (its `range` is 0.2 of the
+    /// space's maximum extent).
+    pub const RANGE_SHARE: f64 = 0.2;
+
+    /// Share of the metric extent between two poses the long-range search explores
+    /// an edge with (lazily: pose checks that far apart, the path certified by the
+    /// validator's own edge check): OMPL's default state-validity resolution, 1 %.
+    pub const RESOLUTION_SHARE: f64 = 0.01;
+
+    /// Share of the part's thickness the narrow-passage search extends by: a step
+    /// below the width of a passage keeps extensions inside it, and a passage is at
+    /// least as wide as the part is thin. On issue 23's puzzles (parts 3–8 mm
+    /// thick) this is 1.5–4 mm, about the 3 mm step their measures were tuned
+    /// with.
+    pub const NARROW_STEP_SHARE: f64 = 0.5;
+
+    /// The scale of `space` for a moving part of radius `part_radius` and thinnest
+    /// extent `part_thickness` (mm; `None` or not a finite number > 0: the space's
+    /// rotation weight stands for the radius, the radius for the thickness).
+    pub fn new(
+        space: &PlanningSpace,
+        part_radius: Option<f64>,
+        part_thickness: Option<f64>,
+    ) -> Self {
+        let extent = (space.max - space.min).norm();
+        let positive = |x: Option<f64>| x.filter(|r| r.is_finite() && *r > 0.0);
+        let part_radius = positive(part_radius).unwrap_or(space.rotation_weight);
+        Self {
+            extent,
+            part_radius,
+            part_thickness: positive(part_thickness).unwrap_or(part_radius),
+            rotation_weight: space.rotation_weight,
+        }
+    }
+
+    /// The scale of `space` for the part `validator` moves.
+    pub fn of(space: &PlanningSpace, validator: &dyn super::MotionValidator) -> Self {
+        Self::new(space, validator.part_radius(), validator.part_thickness())
+    }
+
+    /// The largest metric distance between two poses of the space (mm): the
+    /// bounds' diagonal plus half a turn weighted by the rotation weight.
+    pub fn metric_extent(&self) -> f64 {
+        self.extent + self.rotation_weight * std::f64::consts::PI
+    }
+
+    /// The long-range search's extension (metric mm): [`RANGE_SHARE`](Self::RANGE_SHARE)
+    /// of the metric extent.
+    pub fn range(&self) -> f64 {
+        Self::RANGE_SHARE * self.metric_extent()
+    }
+
+    /// The long-range search's exploration resolution (metric mm):
+    /// [`RESOLUTION_SHARE`](Self::RESOLUTION_SHARE) of the metric extent, at most
+    /// a quarter of the part's radius (a part small against its space must not
+    /// jump over thin walls between two checks it would then only find when the
+    /// path is certified).
+    pub fn resolution(&self) -> f64 {
+        (Self::RESOLUTION_SHARE * self.metric_extent()).min(0.25 * self.part_radius)
+    }
+
+    /// The narrow-passage search's extension (metric mm):
+    /// [`NARROW_STEP_SHARE`](Self::NARROW_STEP_SHARE) of the part's thickness, at
+    /// most the long range.
+    pub fn narrow_step(&self) -> f64 {
+        (Self::NARROW_STEP_SHARE * self.part_thickness).min(self.range())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    #[test]
+    fn every_derived_length_scales_with_the_problem() {
+        let space = PlanningSpace::new(Vec3::new(-10.0, 0.0, 5.0), Vec3::new(90.0, 40.0, 25.0))
+            .with_rotation_weight(12.0);
+        let a = ProblemScale::new(&space, Some(12.0), Some(3.0));
+        let k = 37.5;
+        let scaled =
+            PlanningSpace::new(space.min * k, space.max * k).with_rotation_weight(12.0 * k);
+        let b = ProblemScale::new(&scaled, Some(12.0 * k), Some(3.0 * k));
+        for (x, y) in [
+            (a.range(), b.range()),
+            (a.resolution(), b.resolution()),
+            (a.narrow_step(), b.narrow_step()),
+            (a.metric_extent(), b.metric_extent()),
+        ] {
+            assert!((y - k * x).abs() <= 1e-9 * y, "{x} × {k} ≠ {y}");
+        }
+        // Without a part radius the rotation weight stands for it, and the radius
+        // for the thickness.
+        let c = ProblemScale::new(&space, None, None);
+        assert_eq!((c.part_radius, c.part_thickness), (12.0, 12.0));
+        assert_eq!(
+            ProblemScale::new(&space, Some(f64::NAN), None).part_radius,
+            12.0
+        );
+    }
+}

@@ -1,0 +1,155 @@
+//! Jails under races: a swapper thread replaces a project folder with a symbolic link
+//! to a folder outside the project, and back, over and over (a bounded number of
+//! times), while fitup writes outputs into that folder or reads a mesh from it. The
+//! writer and the mesh cache check and use the same opened folder handle (walked from
+//! the project root without following a link), so:
+//!
+//! - nothing is ever written outside (the outside folder stays empty: no output, no
+//!   registry, no temporary file), and no temporary file is left inside;
+//! - the outside mesh is never loaded (its triangle count never appears);
+//! - every run ends (exit 0 or a located error) within the runner's bound, and the
+//!   user's files are byte for byte as before.
+
+use crate::common;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// How many times the swapper swaps (each swap: the folder away, a link in its place,
+/// a pause, the folder back).
+const SWAPS: usize = 400;
+
+/// Swaps `folder` for a link to `outside` and back until `stop` or [`SWAPS`] swaps.
+fn swapper(
+    folder: PathBuf,
+    outside: PathBuf,
+    stop: Arc<AtomicBool>,
+) -> std::thread::JoinHandle<usize> {
+    std::thread::spawn(move || {
+        let away = folder.with_extension("away");
+        let mut swaps = 0;
+        while swaps < SWAPS && !stop.load(Ordering::Relaxed) {
+            if std::fs::rename(&folder, &away).is_ok() {
+                let _ = std::os::unix::fs::symlink(&outside, &folder);
+                std::thread::sleep(Duration::from_micros(300));
+                let _ = std::fs::remove_file(&folder);
+                let _ = std::fs::rename(&away, &folder);
+                swaps += 1;
+            }
+            std::thread::sleep(Duration::from_micros(300));
+        }
+        // Leave the real folder in place whatever happened.
+        if !folder.is_dir() {
+            let _ = std::fs::remove_file(&folder);
+            let _ = std::fs::rename(&away, &folder);
+        }
+        swaps
+    })
+}
+
+/// Every file below `dir` whose name is a writer's temporary file.
+fn temporaries(dir: &Path) -> Vec<PathBuf> {
+    common::snapshot(dir)
+        .into_keys()
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with(".fitup-") && n.ends_with(".tmp"))
+        })
+        .collect()
+}
+
+/// A script writing outputs into `out/` 300 times while `out` is swapped for a link
+/// to a folder outside: the outside folder stays empty, nothing is left behind.
+#[test]
+fn outputs_never_land_outside_while_their_folder_is_swapped() {
+    let dir = common::project();
+    let p = dir.path();
+    let outside = tempfile::tempdir().unwrap();
+    std::fs::create_dir(p.join("out")).unwrap();
+    std::fs::write(
+        p.join("scripts/write.rhai"),
+        "let d = open_doc(\"models/cell.yaml\");\nlet ok = 0;\nfor i in 0..300 {\n    try {\n        d.export_glb(`out/cell_${i % 7}.glb`, #{overwrite: true});\n        ok += 1;\n    } catch (e) {}\n}\nprint(`written ${ok}`);\n",
+    )
+    .unwrap();
+    let before = common::snapshot(p);
+    let stop = Arc::new(AtomicBool::new(false));
+    let swap = swapper(p.join("out"), outside.path().to_path_buf(), stop.clone());
+    let r = crate::hostile_bounds::run(p, &["run", "scripts/write.rhai"]);
+    stop.store(true, Ordering::Relaxed);
+    let swaps = swap.join().unwrap();
+    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
+    let leaked: Vec<_> = std::fs::read_dir(outside.path()).unwrap().collect();
+    assert!(leaked.is_empty(), "written outside: {leaked:?}");
+    assert_eq!(
+        temporaries(p),
+        Vec::<PathBuf>::new(),
+        "temporary files left"
+    );
+    // The user's files are as they were (outputs in out/ are fitup's own).
+    let now = common::snapshot(p);
+    for (path, hash) in &before {
+        assert_eq!(now.get(path), Some(hash), "{} changed", path.display());
+    }
+}
+
+/// `fitup check` run again and again while the mesh folder is swapped for a link to a
+/// folder holding another `screw.stl`: the outside mesh is never loaded.
+#[test]
+fn the_mesh_cache_never_reads_through_a_swapped_folder() {
+    let dir = common::project();
+    let p = dir.path();
+    let outside = tempfile::tempdir().unwrap();
+    // The outside screw: a different mesh (a box split finer: 24 triangles).
+    let mut other = fitup::mesh::Mesh::cuboid(
+        fitup::math::Point3::origin(),
+        fitup::math::Point3::new(1.0, 1.0, 1.0),
+    );
+    other.append(&fitup::mesh::Mesh::cuboid(
+        fitup::math::Point3::new(2.0, 0.0, 0.0),
+        fitup::math::Point3::new(3.0, 1.0, 1.0),
+    ));
+    for f in std::fs::read_dir(p.join("models/meshes")).unwrap() {
+        let name = f.unwrap().file_name();
+        fitup::mesh::write_stl(&outside.path().join(&name), &other).unwrap();
+    }
+    let outside_before = common::snapshot(outside.path());
+    let inside = crate::hostile_bounds::run(p, &["check", "models/cell.yaml"]);
+    assert_eq!(inside.code, Some(0), "{}", inside.text);
+    assert!(!inside.text.contains(" 24 triangles"), "{}", inside.text);
+    let before = common::snapshot(p);
+    let stop = Arc::new(AtomicBool::new(false));
+    let swap = swapper(
+        p.join("models/meshes"),
+        outside.path().to_path_buf(),
+        stop.clone(),
+    );
+    let (mut ok, mut refused) = (0, 0);
+    for _ in 0..40 {
+        let r = crate::hostile_bounds::run(p, &["check", "models/cell.yaml"]);
+        assert!(!r.text.contains("panicked"), "{}", r.text);
+        assert!(
+            !r.text.contains(" 24 triangles"),
+            "the outside mesh was loaded:\n{}",
+            r.text
+        );
+        match r.code {
+            Some(0) => ok += 1,
+            Some(1) => {
+                // Located: the document line of the part.
+                assert!(r.text.contains("cell.yaml:"), "{}", r.text);
+                refused += 1;
+            }
+            other => panic!("exit {other:?}: {}", r.text),
+        }
+    }
+    stop.store(true, Ordering::Relaxed);
+    let swaps = swap.join().unwrap();
+    eprintln!("{swaps} swaps; {ok} runs read the inside meshes, {refused} were refused");
+    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
+    assert_eq!(common::snapshot(outside.path()), outside_before);
+    assert_eq!(common::snapshot(p), before);
+}

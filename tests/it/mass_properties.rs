@@ -1,0 +1,163 @@
+//! Mass properties against an independent reference: trimesh's `mass_properties`
+//! (Python), run at test time on the same files fitup reads — the repository's
+//! meshes and generated curved solids written to binary STL. The Python is
+//! `FITUP_PYTHON` or `python3`; without trimesh importable the test says so and
+//! compares against closed forms instead (a box, a faceted cylinder's polygon
+//! formulas). Tolerance: 1e-6 relative, on closed meshes.
+
+use crate::common;
+use fitup::math::{Point3, Transform, Vec3};
+use fitup::mesh::{read_mesh_file, write_stl, MassProperties, Mesh};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// trimesh's numbers for `files` (density 1): `[volume, cx, cy, cz, I (9), area]`
+/// per file, or `None` when no Python with trimesh is available.
+fn trimesh_reference(files: &[PathBuf]) -> Option<Vec<Vec<f64>>> {
+    let python = std::env::var("FITUP_PYTHON").unwrap_or_else(|_| "python3".into());
+    let script = r#"
+import json, sys
+import trimesh
+out = []
+for f in sys.argv[1:]:
+    m = trimesh.load(f, process=False, force="mesh")
+    p = trimesh.triangles.mass_properties(m.triangles, density=1.0)
+    out.append([float(p["volume"])] + [float(v) for v in p["center_mass"]]
+               + [float(v) for v in p["inertia"].flatten()] + [float(m.area)])
+print(json.dumps(out))
+"#;
+    let out = Command::new(&python)
+        .arg("-c")
+        .arg(script)
+        .args(files)
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        eprintln!(
+            "note: no trimesh reference ({python}: {}); comparing with closed forms only",
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .last()
+                .unwrap_or("")
+        );
+        return None;
+    }
+    let v: Vec<Vec<f64>> = serde_json::from_slice(&out.stdout).ok()?;
+    Some(v)
+}
+
+fn rel_close(a: f64, b: f64, scale: f64) -> bool {
+    (a - b).abs() <= 1e-6 * scale
+}
+
+/// Closed meshes to compare: every closed mesh of `models/meshes`, and generated
+/// curved solids (sphere, screw-like lathe, a rotated cylinder far from the origin).
+fn meshes(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(common::repo().join("models/meshes"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "stl"))
+        .filter(|p| read_mesh_file(p).unwrap().inspect().is_watertight())
+        .collect();
+    files.sort();
+    let screw = Mesh::lathe(
+        &[
+            (0.0, 0.0),
+            (2.0, 0.5),
+            (2.0, 20.0),
+            (3.5, 20.0),
+            (3.5, 23.0),
+            (0.0, 23.0),
+        ],
+        48,
+    )
+    .unwrap();
+    let pose = Transform::from_rotation_about(Point3::origin(), Vec3::new(1.0, -2.0, 0.5), 1.1)
+        .unwrap()
+        .then(&Transform::from_translation(Vec3::new(250.0, -80.0, 40.0)));
+    for (name, mesh) in [
+        ("sphere.stl", Mesh::uv_sphere(12.5, 64)),
+        ("screw.stl", screw),
+        (
+            "cylinder.stl",
+            Mesh::cylinder(6.0, 30.0, 40).transformed(&pose),
+        ),
+    ] {
+        let f = dir.join(name);
+        write_stl(&f, &mesh).unwrap();
+        files.push(f);
+    }
+    files
+}
+
+#[test]
+fn mass_properties_equal_trimesh_on_closed_meshes() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    assert!(files.len() >= 10, "expected the models' meshes: {files:?}");
+    let Some(reference) = trimesh_reference(&files) else {
+        closed_forms();
+        return;
+    };
+    assert_eq!(reference.len(), files.len());
+    for (f, r) in files.iter().zip(&reference) {
+        let mesh = read_mesh_file(f).unwrap();
+        // density 1e9 kg/m³ = 1 kg/mm³: the numbers are trimesh's at density 1
+        let m = MassProperties::of_mesh(&mesh, 1e9).unwrap();
+        let size = mesh.bounds().map(|b| (b.hi - b.lo).norm()).unwrap();
+        let name = f.file_name().unwrap().to_string_lossy();
+        assert!(
+            rel_close(m.volume, r[0], r[0].abs()),
+            "{name}: volume {} vs trimesh {}",
+            m.volume,
+            r[0]
+        );
+        assert!(rel_close(m.mass, r[0], r[0].abs()), "{name}: mass");
+        assert!(
+            rel_close(m.area, r[13], r[13]),
+            "{name}: area {} vs {}",
+            m.area,
+            r[13]
+        );
+        let c = m.centre_of_mass;
+        for (k, v) in [c.x, c.y, c.z].into_iter().enumerate() {
+            // relative to the part's size: a centre at 0 has no relative scale of its own
+            assert!(
+                rel_close(v, r[1 + k], size.max(r[1 + k].abs())),
+                "{name}: centre of mass [{k}] {v} vs trimesh {}",
+                r[1 + k]
+            );
+        }
+        let largest = (0..9).map(|k| r[4 + k].abs()).fold(0.0, f64::max);
+        for k in 0..9 {
+            let v = m.inertia[(k / 3, k % 3)];
+            assert!(
+                rel_close(v, r[4 + k], largest),
+                "{name}: inertia [{}][{}] {v} vs trimesh {}",
+                k / 3,
+                k % 3,
+                r[4 + k]
+            );
+        }
+    }
+}
+
+/// Without trimesh: the box and the faceted cylinder's closed forms.
+fn closed_forms() {
+    let b = MassProperties::of_mesh(
+        &Mesh::cuboid(Point3::origin(), Point3::new(30.0, 20.0, 10.0)),
+        1e9,
+    )
+    .unwrap();
+    let mass = 6000.0;
+    assert!(rel_close(
+        b.inertia[(0, 0)],
+        mass * (400.0 + 100.0) / 12.0,
+        b.inertia[(0, 0)]
+    ));
+    let (r, h, n) = (8.0f64, 40.0, 24usize);
+    let t = std::f64::consts::TAU / n as f64;
+    let c = MassProperties::of_mesh(&Mesh::cylinder(r, h, n), 1e9).unwrap();
+    let jz = n as f64 * r.powi(4) * t.sin() * (2.0 + t.cos()) / 12.0 * h;
+    assert!(rel_close(c.inertia[(2, 2)], jz, jz));
+}

@@ -1,0 +1,226 @@
+//! The SolidWorks macro author's document (issue 37): the CodeStack macros ported
+//! under `scripts/solidworks/` run as documented (`fitup run
+//! scripts/solidworks/NAME.rhai` from the repository root, no other argument), and
+//! the bugs found porting them stay fixed.
+
+use crate::common;
+
+#[test]
+fn every_ported_macro_runs() {
+    let root = common::repo();
+    let mut scripts: Vec<_> = std::fs::read_dir(root.join("scripts/solidworks"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+        .collect();
+    scripts.sort();
+    assert!(
+        scripts.len() >= 14,
+        "expected the ported macros, found {scripts:?}"
+    );
+    let mut failures = Vec::new();
+    for s in &scripts {
+        let rel = s
+            .strip_prefix(&root)
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        let text = std::fs::read_to_string(s).unwrap();
+        assert!(
+            text.lines()
+                .take(3)
+                .any(|l| l.contains("Ports CodeStack's")),
+            "{rel} names the macro it ports in its first lines"
+        );
+        let out = common::run_in(&root, &["run", &rel]);
+        if !out.status.success() {
+            failures.push(format!("{rel}:\n{}", common::text(&out)));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "failing ports:\n{}",
+        failures.join("\n")
+    );
+}
+
+/// A scratch project with the demo cell and one script.
+fn run_script(body: &str) -> std::process::Output {
+    let dir = common::project();
+    std::fs::write(dir.path().join("scripts/t.rhai"), body).unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/t.rhai"]);
+    // keep the folder alive until the run is over
+    drop(dir);
+    out
+}
+
+#[test]
+fn document_warnings_go_to_stderr_not_into_the_scripts_output() {
+    let dir = common::project();
+    // two component names that differ only by case: a document warning
+    let doc = dir.path().join("models/cell.yaml");
+    let text = std::fs::read_to_string(&doc).unwrap();
+    std::fs::write(&doc, text.replacen("- name: screw5", "- name: Screw4", 1)).unwrap();
+    std::fs::write(
+        dir.path().join("scripts/t.rhai"),
+        "let d = open_doc(\"models/cell.yaml\");\nprint(\"name,x\");\nfor c in d.components() { print(`${c.name},${c.transform.translation[0]}`); }\n",
+    )
+    .unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/t.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stdout.starts_with("name,x\n"),
+        "the CSV starts with its own header: {stdout:?}"
+    );
+    assert!(
+        !stdout.contains("warning"),
+        "no warning in the script's output: {stdout:?}"
+    );
+    assert!(
+        stderr.contains("warning") && stderr.contains("Screw4"),
+        "the warning is on stderr: {stderr:?}"
+    );
+}
+
+#[test]
+fn a_screw_pushed_5_mm_into_the_table_reads_5_mm() {
+    let out = run_script(
+        "let d = open_doc(\"models/cell.yaml\");\n\
+         d.component(\"screw4\").translate(0, 0, -5);\n\
+         let c = d.contact(\"screw4\", \"table\");\n\
+         print(`${c.state} ${c.depth}`);\n\
+         let i = d.interferences().filter(|p| p.a == \"screw4\" || p.b == \"screw4\");\n\
+         print(`${i[0].depth}`);\n",
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+    let lines: Vec<String> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(String::from)
+        .collect();
+    let depth: f64 = lines[0]
+        .strip_prefix("interfering ")
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((depth - 5.0).abs() < 1e-6, "contact depth {depth}");
+    let listed: f64 = lines[1].parse().unwrap();
+    assert!((listed - 5.0).abs() < 1e-6, "interferences depth {listed}");
+}
+
+#[test]
+fn fixed_is_set_on_a_calls_result() {
+    let out = run_script(
+        "let d = open_doc(\"models/cell.yaml\");\n\
+         d.component(\"screw4\").fixed = true;\n\
+         assert(d.component(\"screw4\").fixed, \"fixed\");\n\
+         d.component(\"screw4\").fixed = false;\n\
+         d.component(\"screw4\").transform = translation(1, 2, 3);\n\
+         print(`${d.component(\"screw4\").transform.translation}`);\n",
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        "[1.0, 2.0, 3.0]"
+    );
+    // errors keep their line after the rewrite
+    let out = run_script("let d = open_doc(\"models/cell.yaml\");\nd.component(\"screw4\").fixed = true;\nd.component(\"nope\").fixed = true;\n");
+    assert!(!out.status.success());
+    assert!(
+        common::text(&out).contains("t.rhai:3"),
+        "{}",
+        common::text(&out)
+    );
+}
+
+#[test]
+fn sixteen_numbers_say_their_unit() {
+    // SolidWorks' ArrayData (metres) pasted into transform(): refused, not read as mm
+    let out =
+        run_script("let t = transform([1, 0, 0, 0, 1, 0, 0, 0, 1, 0.1, 0.2, 0.3, 1, 0, 0, 0]);\n");
+    assert!(!out.status.success());
+    let text = common::text(&out);
+    assert!(
+        text.contains("metres") && text.contains("create_transform"),
+        "{text}"
+    );
+    let out = run_script(
+        "let d = [1, 0, 0, 0, 1, 0, 0, 0, 1, 0.1, 0.2, 0.3, 1, 0, 0, 0];\n\
+         assert(create_transform(d) == translation(100, 200, 300), \"metres\");\n\
+         assert(transform(d, \"mm\") == translation(0.1, 0.2, 0.3), \"mm\");\n\
+         assert(transform(d, \"m\").array_data == d, \"round trip in SI\");\n\
+         let r = [[0.866, 0.5, 0, 0], [-0.5, 0.866, 0, 0], [0, 0, 1, 0], [10, 0, 0, 1]];\n\
+         let refused = false;\n\
+         try { transform(r); } catch (e) { refused = true; }\n\
+         assert(refused, \"rounded rotations are not rigid\");\n\
+         let t = orthonormalize(r);\n\
+         assert_near(t.xyzabc[5], 30.0, 0.01);\n\
+         let mirror = false;\n\
+         try { orthonormalize([[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]); } catch (e) { mirror = true; }\n\
+         assert(mirror, \"a mirror is refused\");\n",
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+}
+
+#[test]
+fn data_files_are_read_and_written_inside_the_project() {
+    let dir = common::project();
+    std::fs::create_dir_all(dir.path().join("data")).unwrap();
+    std::fs::write(dir.path().join("data/t.csv"), "name;x\n\"a;b\";1.5\nc;2\n").unwrap();
+    std::fs::write(
+        dir.path().join("data/s.json"),
+        "{\"steps\": [1, 2.5, null], \"name\": \"x\"}",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("scripts/t.rhai"),
+        "let t = read_csv(\"data/t.csv\", #{delimiter: \";\"});\n\
+         assert(t[0].name == \"a;b\" && t[0].x == 1.5 && t[1].x == 2, `${t}`);\n\
+         let j = read_json(\"data/s.json\");\n\
+         assert(j.steps[0] == 1 && j.steps[1] == 2.5 && j.steps[2] == (), `${j}`);\n\
+         write_csv(\"out/r.csv\", [[\"a\", 1], [\"b,c\", 2.5]]);\n\
+         write_json(\"out/r.json\", #{pose: translation(1, 2, 3), n: 3});\n\
+         write_text(\"out/r.txt\", \"hello\\n\");\n\
+         assert(read_text(\"out/r.txt\") == \"hello\\n\", \"text\");\n\
+         let back = read_csv(\"out/r.csv\", #{header: false});\n\
+         assert(back[1][0] == \"b,c\" && back[1][1] == 2.5, `${back}`);\n\
+         let outside = false;\n\
+         try { read_text(\"../x.txt\"); } catch (e) { outside = true; }\n\
+         assert(outside, \"outside the project\");\n\
+         let bad = false;\n\
+         try { read_csv(\"data/t.csv\", #{delimter: \";\"}); } catch (e) { bad = `${e}`.contains(\"delimiter\"); }\n\
+         assert(bad, \"a misspelt option names the right one\");\n",
+    )
+    .unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/t.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    let json = std::fs::read_to_string(dir.path().join("out/r.json")).unwrap();
+    assert!(json.contains("\"n\": 3"), "{json}");
+    // a file the user owns is never replaced by a script's writer
+    std::fs::write(dir.path().join("out/mine.txt"), "mine").unwrap();
+    std::fs::write(
+        dir.path().join("scripts/w.rhai"),
+        "write_text(\"out/mine.txt\", \"theirs\");\n",
+    )
+    .unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/w.rhai"]);
+    assert!(!out.status.success());
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("out/mine.txt")).unwrap(),
+        "mine"
+    );
+    // a bad CSV names its line
+    std::fs::write(dir.path().join("data/bad.csv"), "a,b\n1,2\n3\n").unwrap();
+    std::fs::write(
+        dir.path().join("scripts/b.rhai"),
+        "read_csv(\"data/bad.csv\");\n",
+    )
+    .unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/b.rhai"]);
+    assert!(
+        common::text(&out).contains("data/bad.csv:3"),
+        "{}",
+        common::text(&out)
+    );
+}
