@@ -90,6 +90,28 @@ pub const ORTHONORMAL_TOLERANCE: f64 = 1e-6;
 /// a rotation as it is: rounding of products of a few rotations stays far below it.
 const EXACTLY_ORTHONORMAL: f64 = 1e-12;
 
+/// The 3×3 block of a 4×4 SolidWorks-layout matrix as the rotation's matrix (the
+/// block rows are the images of the axes, i.e. the columns of R), after checking
+/// that every entry is finite and that the last row/column is (0, 0, 0, 1) within
+/// `tolerance`.
+fn rotation_block(m: &[[f64; 4]; 4], tolerance: f64) -> Result<Matrix3<f64>, TransformError> {
+    if m.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(TransformError::NonFinite);
+    }
+    if (m[3][3] - 1.0).abs() > tolerance {
+        return Err(TransformError::Scale(m[3][3]));
+    }
+    let npo = [m[0][3], m[1][3], m[2][3]];
+    if npo.iter().any(|v| v.abs() > tolerance) {
+        return Err(TransformError::Projective(npo));
+    }
+    Ok(Matrix3::new(
+        m[0][0], m[1][0], m[2][0], //
+        m[0][1], m[1][1], m[2][1], //
+        m[0][2], m[1][2], m[2][2],
+    ))
+}
+
 impl Transform {
     /// The identity.
     pub const IDENTITY: Self = Self {
@@ -164,22 +186,7 @@ impl Transform {
     /// Builds a transform from the 4×4 SolidWorks layout (rows as written in the
     /// document), checking that it is a rigid motion.
     pub fn from_matrix(m: &[[f64; 4]; 4]) -> Result<Self, TransformError> {
-        if m.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(TransformError::NonFinite);
-        }
-        if (m[3][3] - 1.0).abs() > ORTHONORMAL_TOLERANCE {
-            return Err(TransformError::Scale(m[3][3]));
-        }
-        let npo = [m[0][3], m[1][3], m[2][3]];
-        if npo.iter().any(|v| v.abs() > ORTHONORMAL_TOLERANCE) {
-            return Err(TransformError::Projective(npo));
-        }
-        // The block rows are the images of the axes, i.e. the columns of R.
-        let r = Matrix3::new(
-            m[0][0], m[1][0], m[2][0], //
-            m[0][1], m[1][1], m[2][1], //
-            m[0][2], m[1][2], m[2][2],
-        );
+        let r = rotation_block(m, ORTHONORMAL_TOLERANCE)?;
         let err = (r.transpose() * r - Matrix3::identity()).abs().max();
         if err > ORTHONORMAL_TOLERANCE || r.determinant() < 0.0 {
             return Err(TransformError::NotOrthonormal(
@@ -282,21 +289,7 @@ impl Transform {
     /// # Ok::<(), fitup::math::transform::TransformError>(())
     /// ```
     pub fn orthonormalized(m: &[[f64; 4]; 4]) -> Result<Self, TransformError> {
-        if m.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(TransformError::NonFinite);
-        }
-        if (m[3][3] - 1.0).abs() > MAX_ORTHONORMALIZE {
-            return Err(TransformError::Scale(m[3][3]));
-        }
-        let npo = [m[0][3], m[1][3], m[2][3]];
-        if npo.iter().any(|v| v.abs() > MAX_ORTHONORMALIZE) {
-            return Err(TransformError::Projective(npo));
-        }
-        let r = Matrix3::new(
-            m[0][0], m[1][0], m[2][0], //
-            m[0][1], m[1][1], m[2][1], //
-            m[0][2], m[1][2], m[2][2],
-        );
+        let r = rotation_block(m, MAX_ORTHONORMALIZE)?;
         let err = (r.transpose() * r - Matrix3::identity()).abs().max();
         if r.determinant() <= 0.0 {
             return Err(TransformError::NotOrthonormal(2.0));

@@ -293,20 +293,7 @@ pub fn stl_bytes(mesh: &Mesh) -> Vec<u8> {
 /// Writes a binary STL atomically (temporary file in the same folder, then rename), so
 /// a reader never sees a half-written file.
 pub fn write_stl(path: &Path, mesh: &Mesh) -> Result<(), MeshError> {
-    let triangles: Vec<stl_io::Triangle> = (0..mesh.triangles.len())
-        .map(|i| {
-            let [a, b, c] = mesh.triangle(i);
-            let n = mesh.triangle_normal(i);
-            let v = |p: Point3| stl_io::Vertex::new([p.x as f32, p.y as f32, p.z as f32]);
-            stl_io::Triangle {
-                normal: stl_io::Normal::new([n.x as f32, n.y as f32, n.z as f32]),
-                vertices: [v(a), v(b), v(c)],
-            }
-        })
-        .collect();
-    let mut bytes = Vec::with_capacity(84 + 50 * triangles.len());
-    stl_io::write_stl(&mut bytes, triangles.iter())
-        .map_err(|e| MeshError::new(MeshErrorKind::Write, e.to_string()).in_file(path))?;
+    let bytes = stl_bytes(mesh);
     crate::fsutil::write_atomic(path, &bytes)
         .map_err(|e| MeshError::new(MeshErrorKind::Write, e.to_string()).in_file(path))
 }
