@@ -35,7 +35,9 @@ pub fn ur_description(name: &str, dh_m: [f64; 6], roll: f64) -> String {
   <joint name="base_link-base_link_inertia" type="fixed"><parent link="base_link"/><child link="base_link_inertia"/><origin xyz="0 0 0" rpy="0 0 {PI}"/></joint>
 "#
     );
-    let rows: [(&str, &str, &str, [f64; 3], [f64; 3]); 6] = [
+    // Joint, parent, child, origin xyz (m), origin rpy.
+    type Row<'a> = (&'a str, &'a str, &'a str, [f64; 3], [f64; 3]);
+    let rows: [Row; 6] = [
         (
             "shoulder_pan_joint",
             "base_link_inertia",

@@ -16,7 +16,7 @@ use crate::common::ur_kin::{self, UrKin};
 use crate::common::ur_urdf::{ur_description, ROUNDED_ROLL};
 use fitup::kinematics::{parse_urdf, IkOptions, IkSolverKind, Robot};
 use fitup::math::{Rng, Transform};
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
 fn wrap(a: f64) -> f64 {
