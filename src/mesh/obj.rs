@@ -5,7 +5,7 @@
 //! vertices and triangles kept are what the lines hold, capped by
 //! [`MAX_TRIANGLES`](super::MAX_TRIANGLES).
 
-use super::stl::{read_xyz, short};
+use super::stl::{read_xyz, short, utf8_text};
 use super::{finish_read, MeshError, MeshErrorKind, MAX_TRIANGLES, MAX_VERTICES};
 use crate::math::Point3;
 
@@ -52,14 +52,7 @@ const FREE_FORM: &[&str] = &[
 /// statement, more than [`MAX_TRIANGLES`] triangles; a file without faces or whose
 /// faces all have zero area ([`super::Mesh::has_area`]).
 pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1;
-        MeshError::at(line, "OBJ contains bytes that are not UTF-8 text")
-    })?;
+    let text = utf8_text(bytes, "OBJ")?;
     let mut vertices: Vec<Point3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut first_face = None;
