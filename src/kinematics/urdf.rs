@@ -213,7 +213,11 @@ pub fn parse_urdf(path: &Path, text: &str, tip: Option<&str>) -> Result<UrdfRobo
             ),
         ));
     }
-    let name = root.attribute("name").unwrap_or("urdf").to_string();
+    // The robot's name follows the one name rule too (it is the robot's `name`).
+    let raw = root.attribute("name").unwrap_or("urdf");
+    let name = crate::diagnostics::checked_name(raw)
+        .map_err(|c| at(root, hidden_in_name("robot", raw, c)))?
+        .into_owned();
     // Links, in file order.
     let mut link_nodes = Vec::new();
     let mut link_index: HashMap<String, usize> = HashMap::new();

@@ -151,7 +151,10 @@ pub(super) fn utf8_text<'a>(bytes: &'a [u8], what: &str) -> Result<&'a str, Mesh
             .filter(|&&b| b == b'\n')
             .count()
             + 1;
-        MeshError::at(line, format!("{what} contains bytes that are not UTF-8 text"))
+        MeshError::at(
+            line,
+            format!("{what} contains bytes that are not UTF-8 text"),
+        )
     })
 }
 
