@@ -1055,7 +1055,7 @@ mod tests {
         };
         let start = std::time::Instant::now();
         let o = StepOptions::default();
-        let m = from_raw(Path::new("s.step"), &o, raw(&soup), false, start).unwrap();
+        let m = from_raw(Path::new("s.step"), &o, &raw(&soup), false, start).unwrap();
         let mesh = &m.parts[0].mesh;
         assert_eq!(
             mesh.triangles.len(),
@@ -1067,7 +1067,7 @@ mod tests {
         assert!(v > 0.95 && v < 1.0, "{v}");
         let mut open = soup.clone();
         open.remove(1); // a triangle with area, at the pole
-        let Err(e) = from_raw(Path::new("s.step"), &o, raw(&open), false, start) else {
+        let Err(e) = from_raw(Path::new("s.step"), &o, &raw(&open), false, start) else {
             panic!("a sphere with a hole imported");
         };
         let e = e.to_string();
