@@ -148,14 +148,14 @@ pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
 /// last character other than white space is `\` continues on the next one (Wavefront's
 /// line continuation), joined with a space in its place.
 fn logical_lines(text: &str) -> impl Iterator<Item = (usize, std::borrow::Cow<'_, str>)> {
-    let mut physical = text.lines().enumerate().peekable();
+    let mut physical = text.lines().enumerate();
     std::iter::from_fn(move || {
         let (i, first) = physical.next()?;
         let Some(head) = first.trim_end().strip_suffix('\\') else {
             return Some((i + 1, std::borrow::Cow::Borrowed(first)));
         };
         let mut joined = String::from(head);
-        while let Some((_, next)) = physical.next() {
+        for (_, next) in physical.by_ref() {
             joined.push(' ');
             match next.trim_end().strip_suffix('\\') {
                 Some(part) => joined.push_str(part),
