@@ -19,6 +19,7 @@ impl Document {
             .map(|p| {
                 let mut pf = PartFile {
                     features: p.features.iter().map(Feature::to_file).collect(),
+                    properties: property_values(&p.properties),
                     ..PartFile::from_stl(p.stl.clone())
                 };
                 if let Some(step) = &p.step {
@@ -68,6 +69,9 @@ impl Document {
                 mass: c.mass,
                 threaded: c.threaded,
                 fixture: c.fixture,
+                suppressed: c.suppressed,
+                hidden: c.hidden,
+                properties: property_values(&c.properties),
             })
             .collect();
         let mates = self
@@ -92,6 +96,7 @@ impl Document {
                     .about
                     .as_ref()
                     .map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+                suppressed: m.suppressed,
             })
             .collect();
         DocumentFile {
@@ -213,6 +218,14 @@ impl Document {
         self.disk_hash = Some(content_hash(text.as_bytes()));
         Ok(())
     }
+}
+
+fn property_values(
+    p: &indexmap::IndexMap<String, String>,
+) -> indexmap::IndexMap<String, serde_yaml::Value> {
+    p.iter()
+        .map(|(k, v)| (k.clone(), serde_yaml::Value::String(v.clone())))
+        .collect()
 }
 
 fn color_value(c: &Color) -> serde_yaml::Value {

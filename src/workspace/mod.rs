@@ -183,7 +183,11 @@ impl<'d> Workspace<'d> {
     /// # Errors
     /// [`DocumentError::NotFound`] with close matches.
     pub fn index(&self, name: &str) -> Result<usize, WorkspaceError> {
-        Ok(self.doc.component_index(name)?)
+        let i = self.doc.component_index(name)?;
+        if self.doc.components()[i].suppressed {
+            return Err(DocumentError::Suppressed(self.doc.components()[i].name.clone()).into());
+        }
+        Ok(i)
     }
 
     /// The name of component `index`.
