@@ -726,8 +726,8 @@ impl Feature {
     }
 }
 
-/// Custom properties as the document keeps them: every value a text (numbers and
-/// true/false written as YAML scalars are kept in their written form).
+/// Custom properties as the document keeps them: every value a text (a number
+/// becomes its decimal text, `42.50` → `42.5`; true/false their words).
 pub(super) fn properties(
     file: &IndexMap<String, serde_yaml::Value>,
 ) -> Result<IndexMap<String, String>, String> {

@@ -298,6 +298,9 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             ))
         },
     );
+    api.f("Component.property_names() -> array", "The names of the component's own properties in document order (a map's keys are sorted by name).", |c: &mut ComponentHandle| -> ScriptResult<Array> {
+        Ok(c.doc.lock()?.components()[c.index].properties.keys().map(|k| Dynamic::from(k.clone())).collect())
+    });
     api.f(
         "Component.property(name: string) -> string",
         "A property of the component, else of its part (how a BOM reads it), else `()`.",
@@ -350,6 +353,18 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
                     .properties(PropertyOwner::Part(part))
                     .map_err(fail)?,
             ))
+        },
+    );
+    api.f(
+        "Document.part_property_names(part: string) -> array",
+        "The names of a part's properties in document order (a map's keys are sorted by name).",
+        |d: &mut DocHandle, part: &str| -> ScriptResult<Array> {
+            Ok(d.lock()?
+                .properties(PropertyOwner::Part(part))
+                .map_err(fail)?
+                .keys()
+                .map(|k| Dynamic::from(k.clone()))
+                .collect())
         },
     );
     api.f(
