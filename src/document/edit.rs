@@ -465,4 +465,69 @@ impl Document {
         self.revision += 1;
         Ok(name)
     }
+
+    /// Adds or replaces a named reference (plane, axis or point, part frame, mm) of a
+    /// part (SolidWorks' reference geometry); directions are normalised. Mates using
+    /// the reference follow it and are re-solved; refused, with nothing changed, when
+    /// they cannot be satisfied, for a built-in name (`origin`, `front`, …) or for a
+    /// non-finite or zero-length vector.
+    pub fn set_reference(
+        &mut self,
+        part: &str,
+        name: &str,
+        reference: Reference,
+    ) -> Result<(), DocumentError> {
+        let part = self.part(part)?.name.clone();
+        let name = super::new_name(name, "reference name")?;
+        let bad =
+            |m: String| DocumentError::Invalid(format!("reference `{name}` of part `{part}`: {m}"));
+        if name.is_empty() || Reference::BUILTIN_NAMES.contains(&name.as_str()) {
+            return Err(bad("a built-in or empty name cannot be redefined".into()));
+        }
+        let finite = reference
+            .anchor()
+            .coords
+            .iter()
+            .chain(reference.direction().unwrap_or_default().iter())
+            .all(|v| v.is_finite() && v.abs() <= super::MAX_ABS_VALUE);
+        if !finite {
+            return Err(bad("its numbers must be finite and at most 1e9".into()));
+        }
+        let reference = match reference {
+            Reference::Plane { point, normal } => Reference::Plane {
+                point,
+                normal: normal
+                    .try_normalize(1e-12)
+                    .ok_or_else(|| bad("a zero normal".into()))?,
+            },
+            Reference::Axis { point, direction } => Reference::Axis {
+                point,
+                direction: direction
+                    .try_normalize(1e-12)
+                    .ok_or_else(|| bad("a zero direction".into()))?,
+            },
+            p @ Reference::Point(_) => p,
+        };
+        let mut mates = self.mates.clone();
+        for m in &mut mates {
+            for e in m.entities.iter_mut().chain(m.about.iter_mut()) {
+                if self.components[e.component].part == part && e.reference == name {
+                    e.geometry = reference;
+                }
+            }
+            let [a, b] = &m.entities;
+            mates::check_entities(m.kind, &a.geometry, &b.geometry)
+                .map_err(|e| DocumentError::Invalid(format!("mate `{}`: {e}", m.name)))?;
+        }
+        let old = self.parts[&part].references.clone();
+        let result = self.change_and_rebuild(|d| {
+            d.mates = mates;
+            d.parts[&part].references.insert(name.clone(), reference);
+            Ok(())
+        });
+        if result.is_err() {
+            self.parts[&part].references = old;
+        }
+        result
+    }
 }

@@ -6,9 +6,9 @@
 use super::api::Api;
 use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
-use super::convert::{fail, read_options};
+use super::convert::{fail, point3, read_options, vec3};
 use super::{Context, ScriptResult};
-use crate::document::{Document, PropertyOwner};
+use crate::document::{Document, PropertyOwner, Reference};
 use crate::math::Transform;
 use crate::options::AddMate;
 use rhai::{Array, Dynamic, Map};
@@ -70,6 +70,35 @@ fn mate_handles(d: &DocHandle, names: Vec<String>) -> Array {
 fn part_file(d: &DocHandle, part: &str) -> ScriptResult<String> {
     let path = d.lock()?.part(part).map_err(fail)?.mesh_path.clone();
     Ok(d.context().project.display(&path))
+}
+
+/// A reference from its script map `#{type, point, normal | direction}` (mm).
+fn reference_of(m: &Map) -> ScriptResult<Reference> {
+    let get = |k: &str| {
+        m.get(k)
+            .cloned()
+            .ok_or_else(|| fail(format!("a reference needs `{k}`")))
+    };
+    let kind = get("type")?
+        .into_string()
+        .map_err(|t| fail(format!("`type` must be a string, not {t}")))?;
+    let point = point3(&get("point")?, "point")?;
+    Ok(match kind.as_str() {
+        "plane" => Reference::Plane {
+            point,
+            normal: vec3(&get("normal")?, "normal")?,
+        },
+        "axis" => Reference::Axis {
+            point,
+            direction: vec3(&get("direction")?, "direction")?,
+        },
+        "point" => Reference::Point(point),
+        other => {
+            return Err(fail(format!(
+                "reference type `{other}`: plane, axis or point"
+            )))
+        }
+    })
 }
 
 pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
@@ -434,6 +463,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         let part = doc.part(&name).map_err(fail)?;
         c.record_read(&part.mesh_path);
         Ok(name)
+    });
+    api.f("Document.set_reference(part: string, name: string, reference: map)", "Adds or replaces a reference of a part, in the part frame (mm): `#{type: \"plane\", point, normal}`, `#{type: \"axis\", point, direction}` or `#{type: \"point\", point}` (what `Component.reference` gives, in world coordinates). Mates using it follow and are re-solved.", |d: &mut DocHandle, part: &str, name: &str, r: Map| -> ScriptResult<()> {
+        let r = reference_of(&r)?;
+        d.lock()?.set_reference(part, name, r).map_err(fail)
     });
     api.set(
         "Component.name",

@@ -15,7 +15,7 @@ fn every_ported_macro_runs() {
         .collect();
     scripts.sort();
     assert!(
-        scripts.len() >= 14,
+        scripts.len() >= 30,
         "expected the ported macros, found {scripts:?}"
     );
     let mut failures = Vec::new();
