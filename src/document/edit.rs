@@ -530,4 +530,13 @@ impl Document {
         }
         result
     }
+
+    /// [`add_part`](Self::add_part) in the document's own project (the nearest folder
+    /// of the document holding `fitup.toml`, else its folder), reading the mesh
+    /// afresh.
+    pub fn add_part_file(&mut self, name: &str, file: &str) -> Result<String, DocumentError> {
+        let project = Project::for_file(&self.path)
+            .map_err(|e| DocumentError::Invalid(format!("part `{name}`: {e}")))?;
+        self.add_part(name, file, &project, &mut MeshCache::new())
+    }
 }

@@ -37,7 +37,8 @@ mod scene;
 
 pub use features::{feature_cells, split_part, CUT_CELLS_FEATURE};
 pub use overlap::{
-    mass_properties, part_frame_mass_properties, world_mesh, MassOptions, Overlap, OverlapOptions,
+    export_stl, mass_properties, part_frame_mass_properties, world_mesh, MassOptions, Overlap,
+    OverlapOptions,
 };
 pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_DIAMETERS};
 pub use scene::{Scene, SceneCache};
