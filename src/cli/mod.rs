@@ -256,7 +256,7 @@ pub enum Command {
         /// sideways into place).
         #[arg(long, allow_hyphen_values = true)]
         gravity: Option<String>,
-        /// How many sequences to rank.
+        /// How many sequences to rank (1 to 1000).
         #[arg(long, default_value_t = 5)]
         max_sequences: usize,
         /// Print the plan as JSON.

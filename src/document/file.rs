@@ -265,6 +265,12 @@ pub struct RobotFile {
     /// `docs/robots.md`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub urdf: Option<String>,
+    /// `urdf:` robots: folders (relative to the document's folder, inside the project)
+    /// where `package://PKG/…` mesh URIs find the folder `PKG`, searched after the
+    /// URDF's own package and before the folders beside and above it (ROS's package
+    /// path; see `docs/robots.md`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub package_path: Vec<String>,
     /// World pose of the robot's root link (pose matrix like components; identity when
     /// absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]

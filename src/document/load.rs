@@ -599,9 +599,15 @@ impl Loader<'_> {
                 let (line, col) = self.after(&format!("name: {}", rf.name), "urdf:");
                 SourceError::new(self.path, line, col, format!("robot `{}`: {m}", rf.name)).into()
             };
-            let loaded =
-                robot::read_urdf_robot(self.project, &self.dir, u, rf.tip.as_deref(), cache)
-                    .map_err(robot_at)?;
+            let loaded = robot::read_urdf_robot(
+                self.project,
+                &self.dir,
+                u,
+                &rf.package_path,
+                rf.tip.as_deref(),
+                cache,
+            )
+            .map_err(robot_at)?;
             out.warnings.extend(loaded.warnings.iter().cloned());
             doc.add_urdf_parts(&rf.name, u, &loaded).map_err(robot_at)?;
             out.loaded.insert(rf.name.clone(), loaded);

@@ -12,9 +12,9 @@ use super::file::{DhFile, LinkFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
-    read_urdf, resolve_mesh, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
-    JointLimits, KinematicTree, KinematicsError, Link, MotionOptions, Program, ProgramRunError,
-    Robot, Trajectory,
+    read_urdf, resolve_mesh_in, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
+    JointLimits, KinematicTree, KinematicsError, Link, MotionOptions, PackageFound, Program,
+    ProgramRunError, Robot, Trajectory,
 };
 use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{Mesh, MeshCache};
@@ -92,6 +92,8 @@ pub struct RobotInstance {
     file: RobotFile,
     /// For a `urdf:` robot: the URDF and its mesh files.
     urdf_files: Vec<PathBuf>,
+    /// For a `urdf:` robot: its `package_path` folders, resolved.
+    package_path: Vec<PathBuf>,
 }
 
 impl RobotInstance {
@@ -197,12 +199,19 @@ impl RobotInstance {
         &self.urdf_files
     }
 
-    /// Rewrites the `urdf:` path with `relative` (the URDF file → its path from a new
-    /// document folder), for `save_as`.
+    /// Rewrites the `urdf:` path and the `package_path` folders with `relative` (a
+    /// file or folder → its path from a new document folder), for `save_as`.
     pub(super) fn rebase_urdf(&mut self, relative: impl Fn(&Path) -> Option<String>) {
         if let (Some(_), Some(f)) = (&self.file.urdf, self.urdf_files.first()) {
             if let Some(rel) = relative(f) {
                 self.file.urdf = Some(rel);
+            }
+        }
+        if self.package_path.len() == self.file.package_path.len() {
+            for (written, folder) in self.file.package_path.iter_mut().zip(&self.package_path) {
+                if let Some(rel) = relative(folder) {
+                    *written = rel;
+                }
             }
         }
     }
@@ -416,6 +425,8 @@ pub(super) struct UrdfLoaded {
     pub robot: Robot,
     /// The URDF file on disk (for watch mode and `save_as`).
     pub path: PathBuf,
+    /// The folders of the robot's `package_path`, resolved (for `save_as`).
+    pub package_path: Vec<PathBuf>,
     /// Per link of the tree: its merged mesh (link frame, mm), if it has one.
     pub meshes: Vec<Option<Mesh>>,
     /// The URDF and every mesh file read (for watch mode).
@@ -437,12 +448,23 @@ pub(super) fn read_urdf_robot(
     project: &Project,
     dir: &Path,
     uri: &str,
+    package_path: &[String],
     tip: Option<&str>,
     cache: &mut MeshCache,
 ) -> Result<UrdfLoaded, String> {
     let path = project
         .resolve_from(dir, uri)
         .map_err(|e| format!("URDF {e}"))?;
+    let mut roots = Vec::with_capacity(package_path.len());
+    for p in package_path {
+        let root = project
+            .resolve_from(dir, p)
+            .map_err(|e| format!("package_path {e}"))?;
+        if project.folder(&root, false).is_err() {
+            return Err(format!("package_path `{p}` is not a folder"));
+        }
+        roots.push(root);
+    }
     let u = read_urdf(&path, tip).map_err(|e| e.to_string())?;
     let tree = u.robot.tree();
     let mut meshes: Vec<Option<Mesh>> = vec![None; tree.len()];
@@ -463,13 +485,23 @@ pub(super) fn read_urdf_robot(
                 m.uri
             )));
         }
-        let resolved = resolve_mesh(&path, &m.uri);
+        let (resolved, found) = resolve_mesh_in(project, &path, &m.uri, &roots);
+        // A package no folder is named after: say so beside the missing file.
+        let unfound = |e: String| {
+            match (found, m.uri.strip_prefix("package://")) {
+            (PackageFound::OwnPackage, Some(rest)) => format!(
+                "{e} (no folder named `{}` in the URDF's folders, on `package_path` or beside or above the URDF inside the project, so the URDF's own package was used; name the folder that holds it with `package_path:`)",
+                rest.split('/').next().unwrap_or_default()
+            ),
+            _ => e,
+        }
+        };
         let file = project
             .resolve_from(dir, &resolved.to_string_lossy())
-            .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
+            .map_err(|e| at(unfound(format!("mesh `{}`: {e}", m.uri))))?;
         let mesh = cache
             .get_in(project, &file)
-            .map_err(|e| at(format!("mesh `{}`: {e}", m.uri)))?;
+            .map_err(|e| at(unfound(format!("mesh `{}`: {e}", m.uri))))?;
         files.push(file);
         let [sx, sy, sz] = m.scale;
         let scaled = Mesh {
@@ -499,6 +531,7 @@ pub(super) fn read_urdf_robot(
     Ok(UrdfLoaded {
         robot: u.robot,
         path,
+        package_path: roots,
         meshes,
         files,
         warnings: u.warnings.iter().map(|w| w.to_string()).collect(),
@@ -564,6 +597,7 @@ fn build(
             ..f.clone()
         },
         urdf_files: urdf.map(|u| u.files.clone()).unwrap_or_default(),
+        package_path: urdf.map(|u| u.package_path.clone()).unwrap_or_default(),
     };
     inst.check_joints(&inst.joints)
         .map_err(|m| ("joints:".to_string(), m.to_string()))?;
@@ -762,6 +796,7 @@ fn explicit_file(name: &str, robot: &Robot) -> RobotFile {
         catalog: None,
         dh: None,
         urdf: None,
+        package_path: Vec::new(),
         base: Some(robot.base().to_matrix()),
         tool: Some(robot.tool().to_matrix()),
         flange: Some(link_name(robot.flange())),
@@ -955,8 +990,8 @@ impl Document {
             .unwrap_or_else(|| project.root().to_path_buf());
         let uri = super::save::relative_path(urdf, &dir)
             .unwrap_or_else(|| urdf.to_string_lossy().into_owned());
-        let loaded =
-            read_urdf_robot(&project, &dir, &uri, None, &mut MeshCache::new()).map_err(invalid)?;
+        let loaded = read_urdf_robot(&project, &dir, &uri, &[], None, &mut MeshCache::new())
+            .map_err(invalid)?;
         let mut next = self.clone();
         next.add_urdf_parts(name, &uri, &loaded).map_err(invalid)?;
         let zero: Vec<f64> = loaded
@@ -970,6 +1005,7 @@ impl Document {
             catalog: None,
             dh: None,
             urdf: Some(uri),
+            package_path: Vec::new(),
             base: Some(base.to_matrix()),
             tool: None,
             flange: None,
@@ -1202,6 +1238,7 @@ mod tests {
             catalog: Some("nachi_mz07".into()),
             dh: None,
             urdf: None,
+            package_path: Vec::new(),
             base: Some(Transform::from_translation(Vec3::new(100.0, 0.0, 50.0)).to_matrix()),
             tool: None,
             flange: None,

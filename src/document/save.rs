@@ -123,7 +123,18 @@ impl Document {
     pub fn save(&mut self) -> Result<(), DocumentError> {
         let path = self.path.clone();
         let expected = self.disk_hash;
-        self.write_checked(&path, expected)
+        self.write_checked(&path, expected, None)
+    }
+
+    /// [`save`](Self::save) through `folder`, the document's folder already held open
+    /// (a project's writer walks it from the project root without following a link,
+    /// [`crate::project::Project::folder`]): the check of what is on disk and the
+    /// write go through that handle, so a folder swapped for a link to somewhere else
+    /// cannot redirect either.
+    pub fn save_in(&mut self, folder: crate::fsutil::Dir) -> Result<(), DocumentError> {
+        let path = self.path.clone();
+        let expected = self.disk_hash;
+        self.write_checked(&path, expected, Some(folder))
     }
 
     /// Writes the document to `path` atomically and makes it the document's file.
@@ -132,6 +143,24 @@ impl Document {
     /// Refuses to overwrite a mesh of this document and any existing file that is not
     /// a fitup document; over its own file it behaves as [`save`](Self::save).
     pub fn save_as(&mut self, path: &Path) -> Result<(), DocumentError> {
+        self.save_as_through(path, None)
+    }
+
+    /// [`save_as`](Self::save_as) through `folder`, the target's folder already held
+    /// open (see [`save_in`](Self::save_in)).
+    pub fn save_as_in(
+        &mut self,
+        path: &Path,
+        folder: crate::fsutil::Dir,
+    ) -> Result<(), DocumentError> {
+        self.save_as_through(path, Some(folder))
+    }
+
+    fn save_as_through(
+        &mut self,
+        path: &Path,
+        folder: Option<crate::fsutil::Dir>,
+    ) -> Result<(), DocumentError> {
         let target = canonical_target(path);
         if let Some(p) = self
             .parts
@@ -157,7 +186,7 @@ impl Document {
         for r in &mut self.robots {
             r.rebase_urdf(|f| relative_path(f, &new_dir));
         }
-        if let Err(e) = self.write_checked(path, expected) {
+        if let Err(e) = self.write_checked(path, expected, folder) {
             self.parts = old;
             self.robots = old_robots;
             return Err(e);
@@ -169,7 +198,12 @@ impl Document {
     /// Validates the text, then, holding a lock on the folder (so concurrent fitup
     /// writers take turns), checks what is on disk — the bytes hashed to `expected`, or
     /// else no file or a fitup document — and replaces it atomically.
-    fn write_checked(&mut self, path: &Path, expected: Option<u64>) -> Result<(), DocumentError> {
+    fn write_checked(
+        &mut self,
+        path: &Path,
+        expected: Option<u64>,
+        folder: Option<crate::fsutil::Dir>,
+    ) -> Result<(), DocumentError> {
         let write_err = |message: String| DocumentError::Write {
             path: path.into(),
             message,
@@ -187,14 +221,49 @@ impl Document {
                 "not saved: the document would not open again ({why})"
             )));
         }
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
+        // The folder is opened once: the lock, the check of what is on disk and the
+        // write all go through that handle (never a second lookup by name).
+        let dir = match folder {
+            Some(d) => d,
+            None => {
+                let parent = match path.parent() {
+                    Some(d) if !d.as_os_str().is_empty() => d,
+                    _ => Path::new("."),
+                };
+                crate::fsutil::Dir::open(parent).map_err(|e| write_err(e.to_string()))?
+            }
         };
-        let _lock = crate::fsutil::lock_folder(dir);
-        match crate::fsutil::read_file(path, FileKind::Document) {
-            Err(crate::fsutil::ReadError::Io(_)) if !path.exists() => {}
-            Ok(bytes) => match expected {
+        let Some(name) = path.file_name() else {
+            return Err(write_err("not a file name".into()));
+        };
+        let _lock = dir.lock();
+        let on_disk = match dir.stat(name) {
+            Ok(None) => None,
+            Ok(Some(crate::fsutil::Kind::File(size))) => {
+                match dir.read_capped(name, FileKind::Document.max_bytes()) {
+                    Ok(Some(bytes)) => Some(Ok(bytes)),
+                    Ok(None) => Some(Err(crate::fsutil::ReadError::TooLarge {
+                        size,
+                        cap: FileKind::Document.max_bytes() >> 20,
+                        what: FileKind::Document.name(),
+                    })),
+                    Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.to_string()))),
+                }
+            }
+            Ok(Some(crate::fsutil::Kind::Symlink)) => {
+                Some(Err(crate::fsutil::ReadError::NotRegular("a symbolic link")))
+            }
+            Ok(Some(crate::fsutil::Kind::Dir)) => {
+                Some(Err(crate::fsutil::ReadError::NotRegular("a folder")))
+            }
+            Ok(Some(crate::fsutil::Kind::Special(what))) => {
+                Some(Err(crate::fsutil::ReadError::NotRegular(what)))
+            }
+            Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.to_string()))),
+        };
+        match on_disk {
+            None => {}
+            Some(Ok(bytes)) => match expected {
                 Some(h) if content_hash(&bytes) != h => {
                     return Err(write_err(
                         "not saved: the file changed on disk since it was loaded (another program or script saved it); open it again and redo the change".into(),
@@ -212,9 +281,10 @@ impl Document {
                     }
                 }
             },
-            Err(e) => return Err(write_err(format!("refusing to overwrite it: {e}"))),
+            Some(Err(e)) => return Err(write_err(format!("refusing to overwrite it: {e}"))),
         }
-        crate::fsutil::write_atomic(path, text.as_bytes()).map_err(|e| write_err(e.to_string()))?;
+        dir.write_atomic(name, text.as_bytes())
+            .map_err(|e| write_err(e.to_string()))?;
         self.disk_hash = Some(content_hash(text.as_bytes()));
         Ok(())
     }

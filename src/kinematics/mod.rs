@@ -58,4 +58,7 @@ pub use robot::{IkSolver, IkSolverKind, Robot};
 pub use trajectory::{Trajectory, TrajectorySample};
 pub use tree::{KinematicTree, Link};
 pub use ur::{NotUr, UrParameters, UrSolver};
-pub use urdf::{parse_urdf, read_urdf, resolve_mesh, UrdfMesh, UrdfRobot, MAX_URDF_BYTES};
+pub use urdf::{
+    parse_urdf, read_urdf, resolve_mesh, resolve_mesh_in, PackageFound, UrdfMesh, UrdfRobot,
+    MAX_URDF_BYTES,
+};

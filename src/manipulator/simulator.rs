@@ -278,9 +278,21 @@ impl Cell {
         Ok((free_s, free_q, None))
     }
 
-    /// Checks limits at `to` and interference along `from → to`.
-    fn check(&mut self, from: &[f64], to: &[f64]) -> Result<(), (RefusalCode, String)> {
+    /// Checks limits at `to` and interference along `from → to`. A joint that
+    /// passes a limit by no more than the wire's rounding of that limit is put at
+    /// the limit first ([`snap_to_limits`]).
+    fn check(&mut self, from: &[f64], to: &mut [f64]) -> Result<(), (RefusalCode, String)> {
         let robot = self.doc.robots()[self.robot].shared_robot();
+        snap_to_limits(
+            &self.kinds,
+            &robot
+                .joint_limits()
+                .iter()
+                .map(|l| l.map(|l| (l.min, l.max)))
+                .collect::<Vec<_>>(),
+            to,
+        );
+        let to = &*to;
         if let Some(j) = robot.limit_violation(to) {
             let lim = robot.joint_limits()[j];
             return Err((
@@ -846,6 +858,33 @@ fn undecodable(
     Some(Packet::reply(h.msg_type, ReplyCode::Failure, Body::Empty))
 }
 
+/// Puts every joint of `q` (rad, mm) that passes one of its `limits` by no more than
+/// the wire's rounding of that limit at the limit. simple_message carries joints as
+/// f32 (rad, m): a controller at a limit reports the f32 nearest to it, which can be
+/// a hair past it (3 mm is 0.003000000026 m), and a client that sends that state
+/// back as the first point of a new trajectory (the rule that clears an error) must
+/// not be refused for the rounding — that left a controller in error for good.
+pub(crate) fn snap_to_limits(kinds: &[JointKind], limits: &[Option<(f64, f64)>], q: &mut [f64]) {
+    for ((v, k), lim) in q.iter_mut().zip(kinds).zip(limits) {
+        let Some((lo, hi)) = *lim else { continue };
+        let scale = match k {
+            JointKind::Prismatic => 1000.0,
+            _ => 1.0,
+        };
+        // The rounding of a limit on the wire, in joint units: the distance to its
+        // f32, plus one f32 step there (the value may have been rounded once more).
+        let slack = |l: f64| {
+            let w = l / scale;
+            ((f64::from(w as f32) - w).abs() + w.abs() * f64::from(f32::EPSILON)) * scale
+        };
+        if *v > hi && *v - hi <= slack(hi) {
+            *v = hi;
+        } else if *v < lo && lo - *v <= slack(lo) {
+            *v = lo;
+        }
+    }
+}
+
 /// Puts the controller in error with `code` and stops any motion (a refused point).
 fn refuse_point(state: &Mutex<State>, code: RefusalCode) {
     let mut s = lock(state);
@@ -1053,7 +1092,8 @@ fn enqueue(
             ),
         ));
     };
-    lock(cell).check(&from, &target)?;
+    let mut target = target;
+    lock(cell).check(&from, &mut target)?;
     let mut s = lock(state);
     s.last_seq = Some(pt.sequence);
     s.last_target = target.clone();

@@ -568,7 +568,7 @@ pub fn read_step(path: &Path, options: &StepOptions) -> Result<StepModel, StepEr
     check_options(options)?;
     check_file(path)?;
     let raw = read_raw(path, options)?;
-    from_raw(path, options, raw, false, start)
+    from_raw(path, options, &raw, false, start)
 }
 
 /// [`read_step`] through the tessellation store in folder `store` (created when
@@ -591,14 +591,19 @@ pub fn read_step_stored(
     if let Some(raw) = store::load_stored(store, &key) {
         // A stored answer that does not make a model is the store's damage, not the
         // STEP file's: discarded, and the file read again.
-        if let Ok(model) = from_raw(path, options, raw, true, start) {
+        if let Ok(model) = from_raw(path, options, &raw, true, start) {
             return Ok(model);
         }
+        drop(raw);
         store::discard(store, &key);
     }
     let raw = read_raw(path, options)?;
+    // Only what makes a model is kept: an answer refused here (too many triangles, an
+    // open solid) would otherwise be read whole from the store on every load, found
+    // wanting and read again from the STEP file.
+    let model = from_raw(path, options, &raw, false, start)?;
     store::store(store, &key, path, &raw, DEFAULT_STORE_CAP);
-    from_raw(path, options, raw, false, start)
+    Ok(model)
 }
 
 /// Open CASCADE's read, in this process or in a child.
@@ -672,7 +677,7 @@ pub fn serve_child(args: &[std::ffi::OsString]) -> i32 {
 fn from_raw(
     path: &Path,
     options: &StepOptions,
-    model: RawModel,
+    model: &RawModel,
     from_store: bool,
     start: std::time::Instant,
 ) -> Result<StepModel, StepError> {
@@ -686,7 +691,7 @@ fn from_raw(
     if model.open_shells > 0 {
         return Err(StepError::OpenShell {
             path: path.into(),
-            solid: model.first_open_shell,
+            solid: model.first_open_shell.clone(),
             count: model.open_shells,
         });
     }
@@ -704,7 +709,7 @@ fn from_raw(
         }
     }
     let mut parts = Vec::with_capacity(model.parts.len());
-    for (i, p) in model.parts.into_iter().enumerate() {
+    for (i, p) in model.parts.iter().enumerate() {
         let mut solid = first_path[i].clone();
         if p.solids_in_product > 1 {
             solid += &format!(" (solid {} of {})", p.solid_index, p.solids_in_product);
@@ -734,30 +739,30 @@ fn from_raw(
             });
         }
         parts.push(StepPart {
-            product: p.name,
+            product: p.name.clone(),
             solid: (p.solid_index, p.solids_in_product),
             mesh,
             exact_volume: p.exact_volume,
         });
     }
     let mut instances = Vec::with_capacity(model.instances.len());
-    for inst in model.instances {
+    for inst in &model.instances {
         if !inst.scale.is_finite() || (inst.scale - 1.0).abs() > 1e-9 {
             return Err(StepError::NotRigid {
                 path: path.into(),
-                instance: inst.path,
+                instance: inst.path.clone(),
                 scale: inst.scale,
             });
         }
         let Some(transform) = pose(&inst.matrix) else {
             return Err(StepError::BadPlacement {
                 path: path.into(),
-                instance: inst.path,
+                instance: inst.path.clone(),
             });
         };
         instances.push(StepInstance {
-            name: inst.name,
-            path: inst.path,
+            name: inst.name.clone(),
+            path: inst.path.clone(),
             part: inst.part as usize,
             transform,
         });
@@ -767,7 +772,7 @@ fn from_raw(
         path: path.into(),
         parts,
         instances,
-        file_unit: model.length_unit,
+        file_unit: model.length_unit.clone(),
         options: options.clone(),
         timings: StepTimings {
             parse: secs(model.read_s),
@@ -819,11 +824,17 @@ fn weld(vertices: &[f64], triangles: &[u32]) -> Result<Mesh, MeshError> {
         }
         Ok(p)
     };
-    let soup = triangles
-        .chunks_exact(3)
-        .map(|t| Ok([point(t[0])?, point(t[1])?, point(t[2])?]))
-        .collect::<Result<Vec<_>, MeshError>>()?;
-    Mesh::from_triangle_soup(soup)
+    // Counted before anything is kept, and welded as it goes (no soup of corners:
+    // that took 72 bytes a triangle more, 1.4 GB at 20 million).
+    let n = triangles.len() / 3;
+    if n > crate::mesh::MAX_TRIANGLES {
+        return Err(MeshError::too_many(crate::mesh::MAX_TRIANGLES, "triangles"));
+    }
+    let mut w = crate::mesh::Welder::new(n);
+    for t in triangles.chunks_exact(3) {
+        w.push([point(t[0])?, point(t[1])?, point(t[2])?]);
+    }
+    w.finish()
 }
 
 /// Writes a STEP file made with Open CASCADE for the tests (`kind`: `box`,
@@ -1004,23 +1015,23 @@ mod tests {
     fn a_raw_model_is_checked_and_placed() {
         let start = std::time::Instant::now();
         let o = StepOptions::default();
-        let m = from_raw(Path::new("b.step"), &o, one_box(), false, start).unwrap();
+        let m = from_raw(Path::new("b.step"), &o, &one_box(), false, start).unwrap();
         assert!((m.placed_mesh().bounds().unwrap().lo.x - 5.0).abs() < 1e-12);
         assert!((m.placed_exact_volume() - 24.0).abs() < 1e-12);
         // A part index past the parts, a NaN placement, a face without triangles.
         let mut bad = one_box();
         bad.instances[0].part = 7;
         assert!(matches!(
-            from_raw(Path::new("b.step"), &o, bad, false, start),
+            from_raw(Path::new("b.step"), &o, &bad, false, start),
             Err(StepError::BadPlacement { .. })
         ));
         let mut bad = one_box();
         bad.instances[0].matrix[0] = f64::NAN;
-        assert!(from_raw(Path::new("b.step"), &o, bad, false, start).is_err());
+        assert!(from_raw(Path::new("b.step"), &o, &bad, false, start).is_err());
         let mut bad = one_box();
         bad.parts[0].unmeshed_faces = 1;
         bad.parts[0].first_unmeshed_face = 4;
-        let e = from_raw(Path::new("b.step"), &o, bad, false, start).unwrap_err();
+        let e = from_raw(Path::new("b.step"), &o, &bad, false, start).unwrap_err();
         assert!(
             e.to_string()
                 .contains("solid `block-1`: face 4 of 6 did not mesh"),

@@ -138,7 +138,7 @@ impl Options for Sequence {
                 name: "max_sequences",
                 kind: Kind::Count,
                 unit: "",
-                meaning: "how many sequences to return, best first",
+                meaning: "how many sequences to return, best first (1 to 1000)",
                 default: None,
             },
             Key {

@@ -222,6 +222,34 @@ fn query(h: &DbHandle, sql: &str, params: &Array, limits: &Map) -> ScriptResult<
         })
         .map_err(fail)?;
     drop(db);
+    // Counted before a script value is built: a result the sandbox cannot hold (it
+    // would be refused after the conversion, having cost ≈ 500 bytes a row and every
+    // text twice) is refused here, naming the limit.
+    let lim = &h.ctx.limits;
+    let rows = r.rows.len();
+    let values = rows.saturating_mul(r.columns.len());
+    let text: usize = r
+        .rows
+        .iter()
+        .flatten()
+        .map(|v| match v {
+            SqlValue::Text(s) => s.len(),
+            _ => 0,
+        })
+        .sum();
+    if rows > lim.max_array_size || values > lim.max_map_size || text > lim.max_string_size {
+        return Err(fail(format!(
+            "the query on {} returned {} rows × {} columns ({} values, {} characters of text): more than a script may hold (arrays up to {} elements, maps up to {} properties, strings up to {} characters in all); ask for fewer rows with LIMIT or fewer columns",
+            h.lock()?.target(),
+            crate::math::format::count(rows as u64),
+            r.columns.len(),
+            crate::math::format::count(values as u64),
+            crate::math::format::count(text as u64),
+            crate::math::format::count(lim.max_array_size as u64),
+            crate::math::format::count(lim.max_map_size as u64),
+            crate::math::format::count(lim.max_string_size as u64),
+        )));
+    }
     let columns = r.columns;
     // Rows are dropped as they are converted: the result is not held twice.
     Ok(r.rows

@@ -254,16 +254,20 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Writes the document back to its file atomically (temporary file, then rename). Refused, with nothing written, when the file changed on disk since it was opened or last saved (another writer's edits are kept), or when a value would make the document unloadable.",
         |d: &mut DocHandle| -> ScriptResult<()> {
             let mut doc = d.lock()?;
-            doc.save().map_err(fail)?;
-            d.ctx.record_write(doc.path());
+            let path = doc.path().to_path_buf();
+            // Through the document's folder walked from the project root without
+            // following a link (a folder swapped for a link cannot redirect the save).
+            let folder = d.ctx.document_folder(&path)?;
+            d.ctx.writing(&path, || doc.save_in(folder)).map_err(fail)?;
             Ok(())
         },
     );
     let c = ctx.clone();
     api.f("Document.save_as(path: string)", "Writes the document to a new file (inside the project; missing folders are created) atomically and makes it the document's file; mesh paths are rewritten relative to it. Refuses to overwrite a mesh of the document or any file that is not a fitup document.", move |d: &mut DocHandle, path: &str| -> ScriptResult<()> {
         let full = c.project.resolve_for_write(path).map_err(fail)?;
-        d.lock()?.save_as(&full).map_err(fail)?;
-        c.record_write(&full);
+        let mut doc = d.lock()?;
+        let folder = c.document_folder(&full)?;
+        c.writing(&full, || doc.save_as_in(&full, folder)).map_err(fail)?;
         Ok(())
     });
     fn export_glb(d: &DocHandle, file: &str, overwrite: bool) -> ScriptResult<()> {

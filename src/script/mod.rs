@@ -56,6 +56,24 @@ pub struct Caches {
     /// Watch mode takes a file whose bytes are what a run wrote there for that run's
     /// own write, not a save (a script that rewrites itself does not cancel itself).
     pub own_writes: Mutex<std::collections::HashMap<PathBuf, u64>>,
+    /// Files a run is writing now (marked before the write begins, cleared once its
+    /// hash is in [`own_writes`](Self::own_writes)): watch mode holds its verdict on
+    /// such a file until the write is recorded, so the rename that lands the run's
+    /// own bytes is never taken for a save in the instant before they are recorded.
+    pub writing: Mutex<std::collections::HashSet<PathBuf>>,
+}
+
+/// The key of [`Caches::own_writes`] and [`Caches::writing`]: the path with its folder
+/// canonicalized (the file itself may not exist yet), as watch mode spells event paths.
+pub fn write_key(path: &Path) -> PathBuf {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    match (
+        abs.parent().and_then(|d| d.canonicalize().ok()),
+        abs.file_name(),
+    ) {
+        (Some(dir), Some(name)) => dir.join(name),
+        _ => abs,
+    }
 }
 
 /// A parsed document and the stamps of its source files when it was loaded.
@@ -119,6 +137,9 @@ pub struct Context {
     pub args: Arguments,
     /// Whether skills may be dispatched over TCP (`fitup run --dispatch`).
     pub dispatch: Dispatch,
+    /// The run's sandbox limits (the data sizes bindings check a result against
+    /// before they build it).
+    pub limits: Limits,
     /// The time budget all of this run's `db.query` calls share.
     #[cfg(feature = "db")]
     pub query_budget: crate::db::RunQueryBudget,
@@ -156,6 +177,7 @@ impl Context {
             output,
             args: Arguments::default(),
             dispatch: Dispatch::Never,
+            limits: Limits::default(),
             #[cfg(feature = "db")]
             query_budget: crate::db::RunQueryBudget::default(),
             reads: Mutex::default(),
@@ -177,6 +199,12 @@ impl Context {
         self
     }
 
+    /// The same context with the run's sandbox limits.
+    pub fn with_limits(mut self, limits: Limits) -> Self {
+        self.limits = limits;
+        self
+    }
+
     /// Operations evaluated so far in this run, over the script and all its modules.
     pub fn operations(&self) -> u64 {
         self.operations.load(Ordering::Relaxed)
@@ -194,13 +222,46 @@ impl Context {
     pub fn record_write(&self, path: &Path) {
         self.record_write_unread(path);
         // Seen by watch mode at once, while the run goes on.
+        let key = write_key(path);
         if let Ok(bytes) = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh) {
             let hash = crate::fsutil::content_hash(&bytes);
             if let Ok(mut own) = self.caches.own_writes.lock() {
-                let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-                own.insert(key, hash);
+                own.insert(key.clone(), hash);
             }
         }
+        if let Ok(mut w) = self.caches.writing.lock() {
+            w.remove(&key);
+        }
+    }
+
+    /// The folder of the document file `path` (inside the project) held open, walked
+    /// from the project root without following a link; missing folders are made (a
+    /// `save_as` into a new folder).
+    pub(crate) fn document_folder(&self, path: &Path) -> ScriptResult<crate::fsutil::Dir> {
+        let parent = path.parent().unwrap_or(Path::new("."));
+        self.project
+            .folder(parent, true)
+            .map_err(|e| convert::fail(format!("cannot save {}: {e}", self.project.display(path))))
+    }
+
+    /// Runs `write`, a write of this run to `path`, with `path` marked as being
+    /// written ([`Caches::writing`]) until the write is recorded: watch mode waits for
+    /// the mark to go before it judges the file, so the run's own bytes landing are
+    /// not a save. The written file is recorded ([`record_write`](Self::record_write))
+    /// when `write` succeeds; the mark goes either way.
+    pub fn writing<T, E>(&self, path: &Path, write: impl FnOnce() -> Result<T, E>) -> Result<T, E> {
+        let key = write_key(path);
+        if let Ok(mut w) = self.caches.writing.lock() {
+            w.insert(key.clone());
+        }
+        let result = write();
+        if result.is_ok() {
+            self.record_write(path);
+        }
+        if let Ok(mut w) = self.caches.writing.lock() {
+            w.remove(&key);
+        }
+        result
     }
 
     /// [`record_write`](Self::record_write) without reading the file back: for the
@@ -228,11 +289,18 @@ impl Context {
             signature: None,
         };
         // Checked and written through one folder handle walked from the project root.
-        let full = self
-            .project
-            .write_output(path, bytes, &rule)
-            .map_err(convert::fail)?;
-        self.record_write(&full);
+        // Marked as the run's write before it lands (see `writing`); the path is the
+        // one the writer resolves (an unresolvable one fails in the writer itself).
+        let target = self.project.resolve(path).ok();
+        let write = || self.project.write_output(path, bytes, &rule);
+        let full = match &target {
+            Some(t) => self.writing(t, write),
+            None => write(),
+        }
+        .map_err(convert::fail)?;
+        if target.as_deref() != Some(full.as_path()) {
+            self.record_write(&full);
+        }
         Ok(full)
     }
 
@@ -366,7 +434,8 @@ pub fn run_script(opts: &RunOptions, caches: &Arc<Caches>) -> RunOutcome {
             opts.output.clone(),
         )
         .with_args(opts.args.clone())
-        .with_dispatch(opts.limits.dispatch),
+        .with_dispatch(opts.limits.dispatch)
+        .with_limits(opts.limits),
     );
     let result = std::thread::scope(|s| {
         let run = std::thread::Builder::new()

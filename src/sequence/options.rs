@@ -77,6 +77,11 @@ impl Default for Gripper {
     }
 }
 
+/// The most sequences a call ranks ([`SequenceOptions::max_sequences`]): each one kept
+/// becomes tasks with safe lengths and grasps, and the search's memo keeps up to this
+/// many costs a state (within [`MAX_SEARCH_MEMO_BYTES`](crate::sequence::MAX_SEARCH_MEMO_BYTES)).
+pub const MAX_SEQUENCES: usize = 1000;
+
 /// How to plan an assembly sequence. Lengths mm, angles radians.
 #[derive(Debug, Clone)]
 pub struct SequenceOptions {
@@ -274,11 +279,11 @@ impl SequenceOptions {
                 });
             }
         }
-        if self.max_sequences == 0 {
+        if self.max_sequences == 0 || self.max_sequences > MAX_SEQUENCES {
             return Err(SequenceError::InvalidOption {
                 option: "max_sequences",
-                value: "0".into(),
-                expected: "at least 1",
+                value: self.max_sequences.to_string(),
+                expected: "1 to 1000 (each sequence kept is built into tasks; the search's memo keeps up to this many costs a state)",
             });
         }
         if let Some((k, v)) = self
@@ -557,7 +562,7 @@ pub struct SequencePlan {
     /// sequences, not of every feasible one.
     pub precedence: Vec<(String, String)>,
     /// Whether the search ended by itself (not cut by the time limit or by its
-    /// memory bound of 200 000 search states): the sequences returned are then the
+    /// memory bound of its memo, `MAX_SEARCH_MEMO_BYTES`): the sequences returned are then the
     /// best by the ranking.
     pub complete: bool,
     /// The relation graph used (mates mode), or the contact graph (geometry mode,

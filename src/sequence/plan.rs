@@ -65,6 +65,8 @@ struct Search<'c, 'd> {
     /// Pairs (a, b) with a before b, counted over every complete sequence seen.
     before: Vec<Vec<u32>>,
     complete_count: u32,
+    /// The memo's size as counted against [`MAX_SEARCH_MEMO_BYTES`].
+    memo_bytes: usize,
     cut: bool,
     /// Whether dead ends ask the planners (second pass).
     use_fallback: bool,
@@ -75,13 +77,19 @@ struct Search<'c, 'd> {
 /// The key of [`Search::seen`].
 type StateKey = (Mask, Option<[u64; 3]>, Mask);
 
-/// The memory bound of the search: its memo holds at most this many states
-/// ([`Search::seen`] and [`Search::dead`], ≈ 400 bytes a state with the default five
-/// sequences kept: ≈ 80 MB). The search stops there as at its deadline
-/// (`complete: false`). A bound on memory, not on time: the search expands tens of
-/// thousands of states a second, so without it a long budget would grow the memo
-/// by gigabytes; within it the budget decides.
-const MAX_SEARCH_STATES: usize = 200_000;
+/// The memory bound of the search, bytes: its memo ([`Search::seen`], up to
+/// `max_sequences` costs a state, and [`Search::dead`]) is counted as it grows
+/// ([`MEMO_STATE_BYTES`] a state, the size of a cost per cost kept) and the search
+/// stops there as at its deadline (`complete: false`): ≈ 200,000 states of one cost
+/// each (as before the bound was counted in bytes), fewer when states keep more. A bound on memory, not on time: the
+/// search expands tens of thousands of states a second, so without it a long budget
+/// (or a large `max_sequences`: 1,000,000 of them on 128 parts passed 8 GB) would
+/// grow the memo by gigabytes; within it the budget decides.
+pub const MAX_SEARCH_MEMO_BYTES: usize = 80 << 20;
+
+/// What one memo state counts besides its costs, bytes (its key, the map's slot and
+/// the costs' vector): 400 bytes with its first cost.
+const MEMO_STATE_BYTES: usize = 368;
 const MAX_REJECTED: usize = 50;
 
 impl Search<'_, '_> {
@@ -174,7 +182,7 @@ impl Search<'_, '_> {
             self.record(base, choices, cost);
             return true;
         }
-        if ctx.search_out_of_time() || self.seen.len() + self.dead.len() >= MAX_SEARCH_STATES {
+        if ctx.search_out_of_time() || self.memo_bytes >= MAX_SEARCH_MEMO_BYTES {
             self.cut = true;
             return false;
         }
@@ -202,6 +210,7 @@ impl Search<'_, '_> {
             current.map(|c| dir_key(&c)),
             if self.use_fallback { had_free } else { 0 },
         );
+        let fresh = !self.seen.contains_key(&key);
         let costs = self.seen.entry(key).or_default();
         if costs.len() >= self.k && !cost_lt(&cost, &costs[self.k - 1]) {
             self.pruned = true;
@@ -211,8 +220,12 @@ impl Search<'_, '_> {
             .iter()
             .position(|c| cost_lt(&cost, c))
             .unwrap_or(costs.len());
+        let before = costs.len();
         costs.insert(at, cost);
         costs.truncate(self.k);
+        let grown = costs.len() - before;
+        self.memo_bytes +=
+            grown * std::mem::size_of::<Cost>() + usize::from(fresh) * MEMO_STATE_BYTES;
         let depth = choices.len();
         let pinned = pins.get(depth).copied();
         let region = union_box(&ctx.boxes, mask).unwrap_or(ctx.boxes[base]);
@@ -298,7 +311,9 @@ impl Search<'_, '_> {
                 parts,
             };
             self.reject(base, choices, reason);
-            self.dead.insert(mask);
+            if self.dead.insert(mask) {
+                self.memo_bytes += MEMO_STATE_BYTES;
+            }
             return false;
         }
         // A planned part goes first: what comes after may close its way in.
@@ -346,8 +361,8 @@ impl Search<'_, '_> {
             );
             choices.pop();
         }
-        if !any && !self.cut && !self.pruned {
-            self.dead.insert(mask);
+        if !any && !self.cut && !self.pruned && self.dead.insert(mask) {
+            self.memo_bytes += MEMO_STATE_BYTES;
         }
         self.cut |= cut_before;
         self.pruned |= pruned_before;
@@ -597,6 +612,7 @@ pub(crate) fn plan(
         planned_failed: vec![Vec::new(); n],
         before: vec![vec![0; n]; n],
         complete_count: 0,
+        memo_bytes: 0,
         cut: false,
         use_fallback: false,
         pruned: false,

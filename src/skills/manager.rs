@@ -491,6 +491,7 @@ impl SkillManager {
                         cause: WireError::UnknownTool,
                     }
                 })?;
+                clear_error(client)?;
                 client.tool(a, *index, *value as f32)?;
                 Ok(Outcome::Done)
             }
@@ -498,7 +499,7 @@ impl SkillManager {
                 let Some(last) = points.last() else {
                     return Ok(Outcome::Done);
                 };
-                let here = client.state()?.joints;
+                let here = clear_error(client)?;
                 // Resume from where the arm is: skip the points already passed.
                 let dist = |q: &[f64]| {
                     q.iter()
@@ -677,6 +678,22 @@ impl SkillLog {
             None => result,
         }
     }
+}
+
+/// Clears an error an earlier refusal left on the controller, the one way every
+/// simulated and REP-I0006 controller knows: a new trajectory, whose first point
+/// (sequence 0, where the arm is) clears it. Returns where the arm is. Without it a
+/// skill whose arm was already at its target, or a tool command the controller
+/// refuses while in error (a touch), failed on the old error until a restart.
+fn clear_error(client: &mut Client) -> Result<Vec<f64>, ManipulatorError> {
+    let state = client.state()?;
+    let in_error = state
+        .status
+        .is_some_and(|s| s.in_error == crate::manipulator::message::TriState::On);
+    if in_error {
+        client.stream(&[(state.joints.clone(), 0.0)])?;
+    }
+    Ok(state.joints)
 }
 
 #[cfg(test)]

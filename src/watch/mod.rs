@@ -43,6 +43,10 @@ use std::time::{Duration, Instant};
 /// the run at once.
 pub const MODIFY_FALLBACK: Duration = Duration::from_millis(1000);
 
+/// How soon a file a run is writing ([`crate::script::Caches::writing`]) is looked at
+/// again.
+const OWN_WRITE_RECHECK: Duration = Duration::from_millis(20);
+
 /// How often watched folders are checked for having been moved, deleted or replaced.
 pub const FOLDER_POLL: Duration = Duration::from_millis(200);
 
@@ -324,6 +328,12 @@ pub fn watch_with(
             let mut changed = Vec::new();
             for p in due {
                 pending.remove(&p);
+                // The run is writing this file now: its bytes are recorded as the
+                // run's own once the write returns; judge it then.
+                if caches.writing.lock().is_ok_and(|w| w.contains(&p)) {
+                    pending.insert(p, now + OWN_WRITE_RECHECK);
+                    continue;
+                }
                 let hash = hash_file(&p);
                 // A run's own write (a script rewriting a file it read, itself even):
                 // the new baseline, not a save.

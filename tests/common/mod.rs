@@ -6,6 +6,7 @@
 pub mod duct;
 pub mod lines;
 pub mod ur_kin;
+pub mod ur_urdf;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -153,3 +153,78 @@ fn the_mesh_cache_never_reads_through_a_swapped_folder() {
     assert_eq!(common::snapshot(outside.path()), outside_before);
     assert_eq!(common::snapshot(p), before);
 }
+
+/// Inode and modification time of every file below `dir`: a write replaces the inode
+/// (atomic rename) even when it writes the same bytes.
+fn identities(dir: &Path) -> Vec<(PathBuf, u64, std::time::SystemTime)> {
+    use std::os::unix::fs::MetadataExt;
+    let mut out: Vec<_> = common::snapshot(dir)
+        .into_keys()
+        .map(|p| {
+            let md = std::fs::symlink_metadata(&p).unwrap();
+            (p, md.ino(), md.modified().unwrap())
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// A script saving its document 200 times (`save` and `save_as` over itself, the same
+/// text each time) while the document's folder is swapped for a link to a folder
+/// holding an identical copy of it: the check of what is on disk and the write go
+/// through one folder handle walked from the project root, so the outside copy is
+/// never replaced (its files keep their inodes and times), and no temporary file is
+/// left on either side.
+#[test]
+fn document_saves_never_land_outside_while_their_folder_is_swapped() {
+    let dir = common::project();
+    let p = dir.path();
+    let outside = tempfile::tempdir().unwrap();
+    // The attacker's copy: the same document and meshes, so a save that looked there
+    // would find "its" file unchanged and replace it.
+    for f in common::snapshot(&p.join("models")).into_keys() {
+        let rel = f.strip_prefix(p.join("models")).unwrap();
+        let to = outside.path().join(rel);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(&f, &to).unwrap();
+    }
+    std::fs::write(
+        p.join("scripts/save.rhai"),
+        "let d = open_doc(\"models/cell.yaml\");\nd.save();\nlet ok = 0;\nfor i in 0..200 {\n    try {\n        if i % 2 == 0 { d.save(); } else { d.save_as(\"models/cell.yaml\"); }\n        ok += 1;\n    } catch (e) {}\n}\nprint(`saved ${ok}`);\n",
+    )
+    .unwrap();
+    // The first save normalises the file; start from there.
+    let r = crate::hostile_bounds::run(p, &["run", "scripts/save.rhai"]);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    std::fs::copy(p.join("models/cell.yaml"), outside.path().join("cell.yaml")).unwrap();
+    let outside_before = identities(outside.path());
+    let outside_hashes = common::snapshot(outside.path());
+    let stop = Arc::new(AtomicBool::new(false));
+    let swap = swapper(p.join("models"), outside.path().to_path_buf(), stop.clone());
+    let r = crate::hostile_bounds::run_within(
+        p,
+        &["run", "scripts/save.rhai"],
+        Duration::from_secs(60),
+    );
+    stop.store(true, Ordering::Relaxed);
+    let swaps = swap.join().unwrap();
+    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    assert!(!r.text.contains("panicked"), "{}", r.text);
+    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
+    assert_eq!(
+        identities(outside.path()),
+        outside_before,
+        "written outside"
+    );
+    assert_eq!(common::snapshot(outside.path()), outside_hashes);
+    assert_eq!(
+        temporaries(p),
+        Vec::<PathBuf>::new(),
+        "temporary files left"
+    );
+    assert_eq!(
+        temporaries(outside.path()),
+        Vec::<PathBuf>::new(),
+        "temporary files outside"
+    );
+}

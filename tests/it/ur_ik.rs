@@ -7,10 +7,11 @@
 //! equivalent; targets at the wrist, shoulder and elbow singularities are solved
 //! completely; a URDF in ROS `ur_description` form gives the same FK and the UR solver.
 
+use crate::common::ur_urdf::ur_description;
 use fitup::kinematics::{parse_urdf, Catalog, ClosedFormIk, IkOptions, IkSolverKind, Robot};
 use fitup::math::{Rng, Transform, Vec3};
 use nalgebra::{Isometry3, UnitQuaternion};
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::path::Path;
 
 fn wrap(a: f64) -> f64 {
@@ -277,80 +278,6 @@ fn shoulder_singularity_is_complete() {
     }
 }
 
-/// A URDF in ROS `ur_description` joint-origin form (metres; base_link →
-/// base_link_inertia turned by π as there; `flange` and `tool0` frames), built from the
-/// published D-H numbers.
-fn ur_description(name: &str, dh: [f64; 6]) -> String {
-    let [d1, a2, a3, d4, d5, d6] = dh.map(|v| v / 1000.0);
-    let (h, p) = (std::f64::consts::FRAC_PI_2, PI);
-    let joint = |n: &str, parent: &str, child: &str, xyz: [f64; 3], rpy: [f64; 3]| {
-        format!(
-            r#"  <joint name="{n}" type="revolute"><origin xyz="{} {} {}" rpy="{} {} {}"/><parent link="{parent}"/><child link="{child}"/><axis xyz="0 0 1"/><limit lower="{}" upper="{}" effort="150" velocity="3.14"/></joint>
-"#,
-            xyz[0], xyz[1], xyz[2], rpy[0], rpy[1], rpy[2], -TAU, TAU
-        )
-    };
-    let mut s = format!(
-        r#"<?xml version="1.0"?>
-<robot name="{name}">
-  <link name="base_link"/><link name="base_link_inertia"/><link name="shoulder_link"/>
-  <link name="upper_arm_link"/><link name="forearm_link"/><link name="wrist_1_link"/>
-  <link name="wrist_2_link"/><link name="wrist_3_link"/><link name="flange"/><link name="tool0"/>
-  <joint name="base_link-base_link_inertia" type="fixed"><parent link="base_link"/><child link="base_link_inertia"/><origin xyz="0 0 0" rpy="0 0 {p}"/></joint>
-"#
-    );
-    s += &joint(
-        "shoulder_pan_joint",
-        "base_link_inertia",
-        "shoulder_link",
-        [0.0, 0.0, d1],
-        [0.0; 3],
-    );
-    s += &joint(
-        "shoulder_lift_joint",
-        "shoulder_link",
-        "upper_arm_link",
-        [0.0; 3],
-        [h, 0.0, 0.0],
-    );
-    s += &joint(
-        "elbow_joint",
-        "upper_arm_link",
-        "forearm_link",
-        [a2, 0.0, 0.0],
-        [0.0; 3],
-    );
-    s += &joint(
-        "wrist_1_joint",
-        "forearm_link",
-        "wrist_1_link",
-        [a3, 0.0, d4],
-        [0.0; 3],
-    );
-    s += &joint(
-        "wrist_2_joint",
-        "wrist_1_link",
-        "wrist_2_link",
-        [0.0, -d5, 0.0],
-        [h, 0.0, 0.0],
-    );
-    s += &joint(
-        "wrist_3_joint",
-        "wrist_2_link",
-        "wrist_3_link",
-        [0.0, d6, 0.0],
-        [h, p, p],
-    );
-    s += &format!(
-        r#"  <joint name="wrist_3-flange" type="fixed"><parent link="wrist_3_link"/><child link="flange"/><origin xyz="0 0 0" rpy="0 {} {}"/></joint>
-  <joint name="flange-tool0" type="fixed"><parent link="flange"/><child link="tool0"/><origin xyz="0 0 0" rpy="{h} 0 {h}"/></joint>
-</robot>
-"#,
-        -h, -h
-    );
-    s
-}
-
 /// The catalog D-H arms against the URDF form of the same published numbers: FK of
 /// both agree at 200 random joint vectors (tool0 is D-H frame 6, the URDF base is
 /// turned by π about z), the URDF gets the UR solver and its IK round-trips.
@@ -362,7 +289,11 @@ fn urdf_form_matches_catalog_and_selects_ur_solver() {
         UnitQuaternion::from_axis_angle(&Vec3::z_axis(), PI),
     );
     for arm in Catalog::UR {
-        let text = ur_description(arm.name(), arm.ur_dh().unwrap());
+        let text = ur_description(
+            arm.name(),
+            arm.ur_dh().unwrap().map(|v| v / 1000.0),
+            FRAC_PI_2,
+        );
         let u = parse_urdf(Path::new("ur.urdf"), &text, None)
             .unwrap_or_else(|e| panic!("{}: {e}", arm.name()));
         let urdf = u.robot;
@@ -408,7 +339,12 @@ fn detection_from_urdf_does_not_misfire() {
     let r = parse_urdf(Path::new("s.urdf"), opw, None).unwrap().robot;
     assert_eq!(r.solver(), IkSolverKind::Opw);
     // The UR URDF with wrist 2 tilted by 0.05 rad about x: not UR any more.
-    let text = ur_description("bent", Catalog::Ur5e.ur_dh().unwrap()).replacen(
+    let text = ur_description(
+        "bent",
+        Catalog::Ur5e.ur_dh().unwrap().map(|v| v / 1000.0),
+        FRAC_PI_2,
+    )
+    .replacen(
         r#"rpy="1.5707963267948966 0 0"/><parent link="wrist_1_link""#,
         r#"rpy="1.6207963267948966 0 0"/><parent link="wrist_1_link""#,
         1,

@@ -13,9 +13,10 @@
 //! are skipped with a note.
 
 use crate::common::ur_kin::{self, UrKin};
+use crate::common::ur_urdf::{ur_description, ROUNDED_ROLL};
 use fitup::kinematics::{parse_urdf, IkOptions, IkSolverKind, Robot};
 use fitup::math::{Rng, Transform};
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
 fn wrap(a: f64) -> f64 {
@@ -59,82 +60,6 @@ const E_SERIES: [(&str, [f64; 6]); 4] = [
     ("ur16e", [0.1807, -0.4784, -0.36, 0.17415, 0.11985, 0.11655]),
 ];
 
-/// A URDF written the way `ur_description` (noetic) writes one from its
-/// `default_kinematics.yaml`: the twists of joints 2 and 5 are the 10-digit roll
-/// `1.570796327`, joint 5's and 6's origins carry the offsets that make up for it
-/// along the rounded axis, and joint 6's roll is `π − 1.570796327` with pitch and yaw
-/// π; `base_link` → `base_link_inertia` turned by π, `flange` and `tool0` frames.
-fn rounded_ur_description(name: &str, dh: [f64; 6]) -> String {
-    let [d1, a2, a3, d4, d5, d6] = dh;
-    // Exactly the rounded value ur_description writes, not π/2: the point of the file.
-    #[allow(clippy::approx_constant)]
-    let roll = 1.570796327_f64;
-    let slack = roll - FRAC_PI_2;
-    let joint = |n: &str, parent: &str, child: &str, xyz: String, rpy: String| {
-        format!(
-            r#"  <joint name="{n}" type="revolute"><parent link="{parent}"/><child link="{child}"/><origin rpy="{rpy}" xyz="{xyz}"/><axis xyz="0 0 1"/><limit effort="150" lower="{}" upper="{}" velocity="3.14"/></joint>
-"#,
-            -TAU, TAU
-        )
-    };
-    let mut s = format!(
-        r#"<?xml version="1.0"?>
-<robot name="{name}">
-  <link name="base_link"/><link name="base_link_inertia"/><link name="shoulder_link"/>
-  <link name="upper_arm_link"/><link name="forearm_link"/><link name="wrist_1_link"/>
-  <link name="wrist_2_link"/><link name="wrist_3_link"/><link name="flange"/><link name="tool0"/>
-  <joint name="base_link-base_link_inertia" type="fixed"><parent link="base_link"/><child link="base_link_inertia"/><origin rpy="0 0 3.141592653589793" xyz="0 0 0"/></joint>
-"#
-    );
-    s += &joint(
-        "shoulder_pan_joint",
-        "base_link_inertia",
-        "shoulder_link",
-        format!("0 0 {d1}"),
-        "0 0 0".into(),
-    );
-    s += &joint(
-        "shoulder_lift_joint",
-        "shoulder_link",
-        "upper_arm_link",
-        "0 0 0".into(),
-        "1.570796327 0 0".into(),
-    );
-    s += &joint(
-        "elbow_joint",
-        "upper_arm_link",
-        "forearm_link",
-        format!("{a2} 0 0"),
-        "0 0 0".into(),
-    );
-    s += &joint(
-        "wrist_1_joint",
-        "forearm_link",
-        "wrist_1_link",
-        format!("{a3} 0 {d4}"),
-        "0 0 0".into(),
-    );
-    s += &joint(
-        "wrist_2_joint",
-        "wrist_1_link",
-        "wrist_2_link",
-        format!("0 {} {}", -d5, -d5 * slack),
-        "1.570796327 0 0".into(),
-    );
-    s += &joint(
-        "wrist_3_joint",
-        "wrist_2_link",
-        "wrist_3_link",
-        format!("0 {d6} {}", -d6 * slack),
-        format!("{} {PI} {PI}", PI - roll),
-    );
-    s += r#"  <joint name="wrist_3-flange" type="fixed"><parent link="wrist_3_link"/><child link="flange"/><origin rpy="0 -1.5707963267948966 -1.5707963267948966" xyz="0 0 0"/></joint>
-  <joint name="flange-tool0" type="fixed"><parent link="flange"/><child link="tool0"/><origin rpy="1.5707963267948966 0 1.5707963267948966" xyz="0 0 0"/></joint>
-</robot>
-"#;
-    s
-}
-
 fn robot_of(path: &Path, text: &str) -> Robot {
     let r = parse_urdf(path, text, None)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -154,7 +79,7 @@ fn generated() -> Vec<(String, Robot)> {
     E_SERIES
         .iter()
         .map(|(name, dh)| {
-            let text = rounded_ur_description(name, *dh);
+            let text = ur_description(name, *dh, ROUNDED_ROLL);
             (
                 format!("generated {name}"),
                 robot_of(Path::new(&format!("{name}.urdf")), &text),

@@ -325,3 +325,185 @@ fn urdf_mesh_escape_refused_and_dae_reported() {
     assert!(doc.component_index("r:arm").is_err());
     assert_eq!(doc.robots()[0].robot().dof(), 1);
 }
+
+/// The docs/robots.md example's `robots:` block (the `ur5e_robotiq` entry), as written.
+fn docs_arm_and_gripper_entry() -> String {
+    let md =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/robots.md")).unwrap();
+    let block = md
+        .split("```yaml")
+        .skip(1)
+        .filter_map(|b| b.split("```").next())
+        .find(|b| b.contains("ur5e_robotiq"))
+        .expect("docs/robots.md shows the ur5e_robotiq entry");
+    let lines: Vec<&str> = block.lines().filter(|l| !l.trim().is_empty()).collect();
+    let indent = lines[0].len() - lines[0].trim_start().len();
+    lines
+        .iter()
+        .map(|l| format!("{}\n", &l[indent..]))
+        .collect()
+}
+
+/// Edge of the cube standing for each package's meshes (metres): which file was read
+/// shows in the component's volume.
+const UR_CUBE: f64 = 0.06;
+const ROBOTIQ_CUBE: f64 = 0.08;
+
+/// A project holding two ROS packages side by side, as a ROS workspace does:
+/// `ur_description/urdf/ur5e_robotiq.urdf` (a UR5e, every arm link's visual mesh in
+/// `package://ur_description/meshes/ur5e/visual/`, carrying a two-finger gripper on
+/// `tool0` whose meshes are in `package://robotiq_2f_85_gripper_visualization/meshes/`)
+/// and the gripper package at `gripper_parent/robotiq_2f_85_gripper_visualization`.
+fn arm_and_gripper_project(gripper_parent: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("proj");
+    let ur = p.join("ur_description");
+    let robotiq = p
+        .join(gripper_parent)
+        .join("robotiq_2f_85_gripper_visualization");
+    std::fs::create_dir_all(ur.join("urdf")).unwrap();
+    std::fs::create_dir_all(ur.join("meshes/ur5e/visual")).unwrap();
+    std::fs::create_dir_all(robotiq.join("meshes/visual")).unwrap();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    let cube = |e: f64| Mesh::cuboid(Point3::new(-e, -e, -e) / 2.0, Point3::new(e, e, e) / 2.0);
+    let dh = fitup::kinematics::Catalog::Ur5e.ur_dh().unwrap();
+    let mut urdf =
+        crate::common::ur_urdf::ur_description("ur5e_robotiq", dh.map(|v| v / 1000.0), FRAC_PI_2);
+    let visual = |link: &str, uri: String| {
+        format!("<link name=\"{link}\"><visual><geometry><mesh filename=\"{uri}\"/></geometry></visual></link>")
+    };
+    for link in [
+        "base_link",
+        "shoulder_link",
+        "upper_arm_link",
+        "forearm_link",
+    ] {
+        let file = format!("meshes/ur5e/visual/{link}.stl");
+        write_stl(&ur.join(&file), &cube(UR_CUBE)).unwrap();
+        urdf = urdf.replace(
+            &format!("<link name=\"{link}\"/>"),
+            &visual(link, format!("package://ur_description/{file}")),
+        );
+    }
+    let mut gripper = String::new();
+    for link in ["robotiq_arg2f_base_link", "left_finger", "right_finger"] {
+        let file = format!("meshes/visual/{link}.stl");
+        write_stl(&robotiq.join(&file), &cube(ROBOTIQ_CUBE)).unwrap();
+        gripper += &visual(
+            link,
+            format!("package://robotiq_2f_85_gripper_visualization/{file}"),
+        );
+    }
+    gripper += r#"
+  <joint name="tool0-gripper" type="fixed"><parent link="tool0"/><child link="robotiq_arg2f_base_link"/><origin xyz="0 0 0"/></joint>
+  <joint name="finger_joint" type="prismatic"><parent link="robotiq_arg2f_base_link"/><child link="left_finger"/><origin xyz="0 0.01 0.1"/><axis xyz="0 1 0"/><limit lower="0" upper="0.04"/></joint>
+  <joint name="right_finger_joint" type="prismatic"><parent link="robotiq_arg2f_base_link"/><child link="right_finger"/><origin xyz="0 -0.01 0.1"/><axis xyz="0 1 0"/><limit lower="-0.04" upper="0"/><mimic joint="finger_joint" multiplier="-1"/></joint>
+</robot>"#;
+    urdf = urdf.replace("</robot>", &gripper);
+    std::fs::write(ur.join("urdf/ur5e_robotiq.urdf"), urdf).unwrap();
+    std::fs::write(p.join("cell.yaml"), docs_arm_and_gripper_entry()).unwrap();
+    dir
+}
+
+/// An arm and a gripper from two packages (issue 38): `package://OTHER_PKG/…` is looked
+/// up by the package's name (beside the URDF's package, or on the robot's
+/// `package_path`), never read from the URDF's own package; the docs example entry
+/// loads as written, the gripper's meshes follow `tool0`.
+#[test]
+fn an_arm_and_a_gripper_from_two_packages_load() {
+    let dir = arm_and_gripper_project("");
+    let cell = dir.path().join("proj/cell.yaml");
+    let doc = Document::open(&cell).unwrap();
+    assert!(doc.warnings().is_empty(), "{:?}", doc.warnings());
+    let robot = doc.robots()[0].robot();
+    assert_eq!((robot.dof(), robot.solver_name()), (6, "ur"));
+    let volume = |d: &Document, c: &str| {
+        d.mesh_of(d.component_index(c).unwrap_or_else(|e| panic!("{c}: {e}")))
+            .signed_volume()
+    };
+    let cube = |e: f64| (e * 1000.0).powi(3);
+    for (c, e) in [
+        ("ur:shoulder_link", UR_CUBE),
+        ("ur:robotiq_arg2f_base_link", ROBOTIQ_CUBE),
+        ("ur:right_finger", ROBOTIQ_CUBE),
+    ] {
+        assert!((volume(&doc, c) - cube(e)).abs() < 1e-6 * cube(e), "{c}");
+    }
+    // The gripper body is centred on tool0.
+    let c = doc.component_index("ur:robotiq_arg2f_base_link").unwrap();
+    let t = doc.components()[c].transform;
+    let b = doc.mesh_of(c).transformed(&t).bounds().unwrap();
+    let centre = (b.lo.coords + b.hi.coords) / 2.0;
+    let tcp = robot.tcp_pose(&[0.0; 6]).unwrap().translation();
+    assert!((centre - tcp).norm() < 1e-6, "{centre:?} vs {tcp:?}");
+
+    // The gripper package elsewhere: not found by name, the error says where it looked
+    // and what to write; named on `package_path`, it loads and saves relative.
+    let dir = arm_and_gripper_project("vendor");
+    let p = dir.path().join("proj");
+    let e = Document::open(&p.join("cell.yaml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("ur5e_robotiq.urdf:")
+            && e.contains("no folder named `robotiq_2f_85_gripper_visualization`")
+            && e.contains("package_path"),
+        "{e}"
+    );
+    let entry = docs_arm_and_gripper_entry() + "  package_path: [vendor]\n";
+    std::fs::write(p.join("cell.yaml"), &entry).unwrap();
+    let mut doc = Document::open(&p.join("cell.yaml")).unwrap();
+    assert!((volume(&doc, "ur:left_finger") - cube(ROBOTIQ_CUBE)).abs() < 1.0);
+    let moved = p.join("sub/cell.yaml");
+    std::fs::create_dir_all(p.join("sub")).unwrap();
+    doc.save_as(&moved).unwrap();
+    let text = std::fs::read_to_string(&moved).unwrap();
+    assert!(text.contains("../vendor"), "{text}");
+    assert!(Document::open(&moved)
+        .unwrap()
+        .component_index("ur:left_finger")
+        .is_ok());
+
+    // The package path comes before a folder of that name beside the URDF.
+    let beside = p.join("robotiq_2f_85_gripper_visualization/meshes/visual");
+    std::fs::create_dir_all(&beside).unwrap();
+    for link in ["robotiq_arg2f_base_link", "left_finger", "right_finger"] {
+        let m = Mesh::cuboid(Point3::origin(), Point3::new(0.01, 0.01, 0.01));
+        write_stl(&beside.join(format!("{link}.stl")), &m).unwrap();
+    }
+    let doc = Document::open(&p.join("cell.yaml")).unwrap();
+    assert!((volume(&doc, "ur:left_finger") - cube(ROBOTIQ_CUBE)).abs() < 1.0);
+    let bare = p.join("bare.yaml");
+    std::fs::write(&bare, docs_arm_and_gripper_entry()).unwrap();
+    let doc = Document::open(&bare).unwrap();
+    assert!((volume(&doc, "ur:left_finger") - cube(0.01)).abs() < 1e-3);
+}
+
+/// The package search stays in the project: a `package_path` folder outside is
+/// refused, and a package folder that is a link leading out is not followed.
+#[cfg(unix)]
+#[test]
+fn package_search_stays_inside_the_project() {
+    let dir = arm_and_gripper_project("../outside");
+    let p = dir.path().join("proj");
+    let entry = docs_arm_and_gripper_entry() + "  package_path: [../outside]\n";
+    std::fs::write(p.join("cell.yaml"), &entry).unwrap();
+    let e = Document::open(&p.join("cell.yaml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("package_path") && e.contains("outside the project"),
+        "{e}"
+    );
+    std::os::unix::fs::symlink(
+        dir.path()
+            .join("outside/robotiq_2f_85_gripper_visualization"),
+        p.join("robotiq_2f_85_gripper_visualization"),
+    )
+    .unwrap();
+    std::fs::write(p.join("cell.yaml"), docs_arm_and_gripper_entry()).unwrap();
+    let e = Document::open(&p.join("cell.yaml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("robotiq_2f_85_gripper_visualization"), "{e}");
+}

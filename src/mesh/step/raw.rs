@@ -110,6 +110,12 @@ impl<'a> Reader<'a> {
     pub(super) fn f64(&mut self) -> Result<f64, Bad> {
         Ok(f64::from_bits(self.u64()?))
     }
+    /// The next count, not consumed.
+    pub(super) fn peek_count(&self) -> Result<u64, Bad> {
+        let b = self.0.get(..8).ok_or("truncated")?;
+        Ok(u64::from_le_bytes(b.try_into().map_err(|_| "truncated")?))
+    }
+
     /// A count of items of `size` bytes each, checked against what is left.
     pub(super) fn count(&mut self, size: usize) -> Result<usize, Bad> {
         let n = self.u64()?;
@@ -165,14 +171,31 @@ pub(super) fn encode_model(w: &mut Writer, m: &RawModel) {
 }
 
 pub(super) fn decode_model(r: &mut Reader) -> Result<RawModel, Bad> {
+    decode_model_within(r, usize::MAX)
+}
+
+/// [`decode_model`] refusing, before it allocates them, a part of more than
+/// `max_part_triangles` triangles or more than three vertices a triangle allowed (what
+/// could never become one mesh: [`MAX_TRIANGLES`](crate::mesh::MAX_TRIANGLES)).
+pub(super) fn decode_model_within(
+    r: &mut Reader,
+    max_part_triangles: usize,
+) -> Result<RawModel, Bad> {
     // The smallest encoded part is 52 bytes, the smallest instance 36.
     let n = r.count(52)?;
     let mut parts = Vec::with_capacity(n);
+    let max_corners = max_part_triangles.saturating_mul(3);
     for _ in 0..n {
         let name = r.str()?;
         let solid_index = r.u32()?;
         let solids_in_product = r.u32()?;
+        if r.peek_count()? > max_corners.saturating_mul(3) as u64 {
+            return Err("a part with more vertices than one mesh may hold");
+        }
         let vertices = r.f64s()?;
+        if r.peek_count()? > max_corners as u64 {
+            return Err("a part with more triangles than one mesh may hold");
+        }
         let triangles = r.u32s()?;
         if vertices.len() % 3 != 0 || triangles.len() % 3 != 0 {
             return Err("a mesh with a partial vertex or triangle");

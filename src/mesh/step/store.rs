@@ -26,7 +26,7 @@
 //! readers take no lock: removing an entry only unlinks it (a reader that has it open
 //! reads it whole; one that comes later misses and reads the STEP file again).
 
-use super::raw::{decode_model, encode_model, Bad, RawModel, Reader, Writer};
+use super::raw::{decode_model_within, encode_model, Bad, RawModel, Reader, Writer};
 use super::StepOptions;
 use crate::fsutil::{Dir, FileKind, Kind};
 use std::collections::{HashMap, HashSet};
@@ -106,9 +106,12 @@ fn source_text(source: &Path) -> String {
 }
 
 /// The largest entry read, bytes (256 MiB, [`FileKind::Mesh`]'s cap; ≈ 10 million
-/// triangles of a closed solid). A larger file is not read (a miss) and is removed:
-/// decoding holds the entry and the model it decodes to (about twice its size), so
-/// this bounds a stored read at about 512 MB.
+/// triangles of a closed solid). A larger file is not read (a miss) and is removed.
+/// Decoding holds the entry and the model it decodes to (about twice its size), and
+/// refuses a part past [`MAX_TRIANGLES`](crate::mesh::MAX_TRIANGLES) from its count,
+/// before the part is allocated; the entry is dropped before the meshes are welded
+/// (no corner soup). A stored read therefore takes at most ≈ 512 MB while decoding
+/// and the model plus its meshes after (docs/document.md, "What reading takes").
 pub const MAX_ENTRY_BYTES: u64 = FileKind::Mesh.max_bytes();
 
 /// The store folder held open, walked from the folder that holds it without following
@@ -189,7 +192,7 @@ pub(super) fn load_stored(store: &Path, key: &StoreKey) -> Option<RawModel> {
     }
     let decoded = r
         .str()
-        .and_then(|_| decode_model(&mut r))
+        .and_then(|_| decode_model_within(&mut r, crate::mesh::MAX_TRIANGLES))
         .and_then(|m| {
             if r.0.is_empty() {
                 Ok(m)
