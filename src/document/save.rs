@@ -208,7 +208,16 @@ impl Document {
             path: path.into(),
             message,
         };
-        let text = self
+        // A save solves what loading solves (SolidWorks rebuilds on save): the file
+        // holds the poses the mates give, and a document whose mates cannot be
+        // satisfied (a mated component moved, then fixed) is refused, not written.
+        let mut solved = self.clone();
+        solved.solve_mates().map_err(|e| {
+            write_err(format!(
+                "not saved: the document would not open again ({e}); move the component back, float it, or delete or suppress the mate"
+            ))
+        })?;
+        let text = solved
             .to_file()
             .to_yaml()
             .map_err(|e| write_err(e.to_string()))?;
@@ -286,6 +295,14 @@ impl Document {
         dir.write_atomic(name, text.as_bytes())
             .map_err(|e| write_err(e.to_string()))?;
         self.disk_hash = Some(content_hash(text.as_bytes()));
+        let mut moved = false;
+        for (c, s) in self.components.iter_mut().zip(&solved.components) {
+            moved |= c.transform != s.transform;
+            c.transform = s.transform;
+        }
+        if moved {
+            self.revision += 1;
+        }
         Ok(())
     }
 }
