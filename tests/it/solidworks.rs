@@ -253,8 +253,10 @@ fn a_save_solves_what_loading_solves() {
     let out = common::run_in(dir.path(), &["run", "scripts/t.rhai"]);
     assert!(out.status.success(), "{}", common::text(&out));
     let after = std::fs::read_to_string(dir.path().join("models/cell.yaml")).unwrap();
-    assert_eq!(
-        before, after,
-        "the saved file is the solved document, which is the one it was"
+    // the file holds the poses the mates give (the demo's own file holds unsolved ones)
+    assert!(
+        before.contains("[690.0, 310.0, 753.0, 1.0]")
+            && after.contains("[700.0, 300.0, 750.0, 1.0]"),
+        "{after}"
     );
 }
