@@ -1,6 +1,6 @@
 #!/bin/sh
 # `fitup import` on real CAD exports against Open CASCADE's own reading of the same
-# files, in one run (docs/performance.md, "STEP import: real CAD exports"). The files
+# files, in one run (docs/performance.md, "STEP import: a real SolidWorks export"). The files
 # are third-party and never committed: FITUP_STEP_CORPUS names a folder of .step/.stp
 # files. Builds tests/bench/step/occt_check.cpp (the independent reference: placements,
 # exact volumes, product names, unit) and occt_peer.cpp (the timing peer) with g++

@@ -83,57 +83,96 @@ impl Writer {
     }
 }
 
-pub(super) struct Reader<'a>(pub(super) &'a [u8]);
+/// Reads the byte format from a slice or a stream (a store entry is decoded as it is
+/// read, never held whole), knowing how many bytes are left: every count is checked
+/// against them before anything is allocated.
+pub(super) struct Reader<'a> {
+    src: Box<dyn std::io::Read + 'a>,
+    left: u64,
+}
 
 /// The decoder's only failure: the bytes are not a model (what is wrong).
 pub(super) type Bad = &'static str;
 
 impl<'a> Reader<'a> {
-    pub(super) fn take(&mut self, n: usize) -> Result<&'a [u8], Bad> {
-        if self.0.len() < n {
+    /// A reader of `bytes`.
+    pub(super) fn new(bytes: &'a [u8]) -> Reader<'a> {
+        Reader {
+            left: bytes.len() as u64,
+            src: Box::new(bytes),
+        }
+    }
+
+    /// A reader of `len` bytes from `src` (a file: buffered here).
+    pub(super) fn stream(src: impl std::io::Read + 'a, len: u64) -> Reader<'a> {
+        Reader {
+            src: Box::new(std::io::BufReader::with_capacity(1 << 20, src)),
+            left: len,
+        }
+    }
+
+    /// Whether every byte was read.
+    pub(super) fn is_empty(&self) -> bool {
+        self.left == 0
+    }
+
+    fn array<const N: usize>(&mut self) -> Result<[u8; N], Bad> {
+        if self.left < N as u64 {
             return Err("truncated");
         }
-        let (a, b) = self.0.split_at(n);
-        self.0 = b;
-        Ok(a)
+        let mut b = [0u8; N];
+        self.src.read_exact(&mut b).map_err(|_| "truncated")?;
+        self.left -= N as u64;
+        Ok(b)
+    }
+
+    pub(super) fn take(&mut self, n: usize) -> Result<Vec<u8>, Bad> {
+        if self.left < n as u64 {
+            return Err("truncated");
+        }
+        let mut b = vec![0u8; n];
+        self.src.read_exact(&mut b).map_err(|_| "truncated")?;
+        self.left -= n as u64;
+        Ok(b)
     }
     pub(super) fn u32(&mut self) -> Result<u32, Bad> {
-        Ok(u32::from_le_bytes(
-            self.take(4)?.try_into().map_err(|_| "truncated")?,
-        ))
+        Ok(u32::from_le_bytes(self.array()?))
     }
     pub(super) fn u64(&mut self) -> Result<u64, Bad> {
-        Ok(u64::from_le_bytes(
-            self.take(8)?.try_into().map_err(|_| "truncated")?,
-        ))
+        Ok(u64::from_le_bytes(self.array()?))
     }
     pub(super) fn f64(&mut self) -> Result<f64, Bad> {
         Ok(f64::from_bits(self.u64()?))
     }
-    /// The next count, not consumed.
-    pub(super) fn peek_count(&self) -> Result<u64, Bad> {
-        let b = self.0.get(..8).ok_or("truncated")?;
-        Ok(u64::from_le_bytes(b.try_into().map_err(|_| "truncated")?))
-    }
-
     /// A count of items of `size` bytes each, checked against what is left.
     pub(super) fn count(&mut self, size: usize) -> Result<usize, Bad> {
         let n = self.u64()?;
-        if n > (self.0.len() / size) as u64 {
+        if n > self.left / size as u64 {
             return Err("a length past its end");
         }
         Ok(n as usize)
     }
     pub(super) fn str(&mut self) -> Result<String, Bad> {
         let n = self.count(1)?;
-        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| "not UTF-8 text")
+        String::from_utf8(self.take(n)?).map_err(|_| "not UTF-8 text")
     }
     pub(super) fn f64s(&mut self) -> Result<Vec<f64>, Bad> {
+        self.f64s_within(usize::MAX, "")
+    }
+    /// [`f64s`](Self::f64s) of at most `max` values (else `why`), counted first.
+    pub(super) fn f64s_within(&mut self, max: usize, why: Bad) -> Result<Vec<f64>, Bad> {
         let n = self.count(8)?;
+        if n > max {
+            return Err(why);
+        }
         (0..n).map(|_| self.f64()).collect()
     }
-    pub(super) fn u32s(&mut self) -> Result<Vec<u32>, Bad> {
+    /// [`u32s`](Self::u32s) of at most `max` values (else `why`), counted first.
+    pub(super) fn u32s_within(&mut self, max: usize, why: Bad) -> Result<Vec<u32>, Bad> {
         let n = self.count(4)?;
+        if n > max {
+            return Err(why);
+        }
         (0..n).map(|_| self.u32()).collect()
     }
 }
@@ -189,14 +228,14 @@ pub(super) fn decode_model_within(
         let name = r.str()?;
         let solid_index = r.u32()?;
         let solids_in_product = r.u32()?;
-        if r.peek_count()? > max_corners.saturating_mul(3) as u64 {
-            return Err("a part with more vertices than one mesh may hold");
-        }
-        let vertices = r.f64s()?;
-        if r.peek_count()? > max_corners as u64 {
-            return Err("a part with more triangles than one mesh may hold");
-        }
-        let triangles = r.u32s()?;
+        let vertices = r.f64s_within(
+            max_corners.saturating_mul(3),
+            "a part with more vertices than one mesh may hold",
+        )?;
+        let triangles = r.u32s_within(
+            max_corners,
+            "a part with more triangles than one mesh may hold",
+        )?;
         if vertices.len() % 3 != 0 || triangles.len() % 3 != 0 {
             return Err("a mesh with a partial vertex or triangle");
         }
@@ -380,7 +419,7 @@ pub(super) fn read_in_child(
     if bytes.len() as u64 > max_reply(options) {
         return Err(bad("larger than the triangle cap allows"));
     }
-    let mut r = Reader(
+    let mut r = Reader::new(
         bytes
             .strip_prefix(REPLY_MAGIC)
             .ok_or_else(|| bad("not a fitup reader's answer"))?,
@@ -388,7 +427,7 @@ pub(super) fn read_in_child(
     match r.take(1).map_err(bad)?[0] {
         0 => {
             let model = decode_model(&mut r).map_err(bad)?;
-            if !r.0.is_empty() {
+            if !r.is_empty() {
                 return Err(bad("longer than its contents"));
             }
             Ok(model)
@@ -557,17 +596,20 @@ pub(crate) mod tests {
     fn a_model_round_trips_and_every_cut_is_refused() {
         let mut w = Writer::default();
         encode_model(&mut w, &model());
-        let back = decode_model(&mut Reader(&w.0)).unwrap();
+        let back = decode_model(&mut Reader::new(&w.0)).unwrap();
         assert_eq!(back, model());
         // Every truncation fails cleanly (no panic, no huge allocation).
         for n in 0..w.0.len() {
-            assert!(decode_model(&mut Reader(&w.0[..n])).is_err(), "cut at {n}");
+            assert!(
+                decode_model(&mut Reader::new(&w.0[..n])).is_err(),
+                "cut at {n}"
+            );
         }
         // A count claiming 2^60 items is refused before allocating.
         let mut huge = Writer::default();
         huge.u64(1 << 60);
         assert_eq!(
-            decode_model(&mut Reader(&huge.0)).unwrap_err(),
+            decode_model(&mut Reader::new(&huge.0)).unwrap_err(),
             "a length past its end"
         );
     }

@@ -107,11 +107,11 @@ fn source_text(source: &Path) -> String {
 
 /// The largest entry read, bytes (256 MiB, [`FileKind::Mesh`]'s cap; ≈ 10 million
 /// triangles of a closed solid). A larger file is not read (a miss) and is removed.
-/// Decoding holds the entry and the model it decodes to (about twice its size), and
-/// refuses a part past [`MAX_TRIANGLES`](crate::mesh::MAX_TRIANGLES) from its count,
-/// before the part is allocated; the entry is dropped before the meshes are welded
-/// (no corner soup). A stored read therefore takes at most ≈ 512 MB while decoding
-/// and the model plus its meshes after (docs/document.md, "What reading takes").
+/// An entry is decoded as it is read (a 1 MiB buffer, never the file whole), a part
+/// past [`MAX_TRIANGLES`](crate::mesh::MAX_TRIANGLES) refused from its count before it
+/// is allocated, and the meshes welded without a corner soup: a stored read takes
+/// the decoded model (at most about the entry's size) and then its meshes
+/// (docs/document.md, "What reading takes").
 pub const MAX_ENTRY_BYTES: u64 = FileKind::Mesh.max_bytes();
 
 /// The store folder held open, walked from the folder that holds it without following
@@ -178,13 +178,22 @@ pub(super) fn load_stored(store: &Path, key: &StoreKey) -> Option<RawModel> {
         Ok(None) | Err(_) => return None,
         Ok(Some(_)) => return bad(&dir),
     }
-    let Ok(Some(bytes)) = dir.read_capped(name, MAX_ENTRY_BYTES) else {
+    // Decoded as it is read (never held whole): a count past its part's cap or past
+    // the bytes left is refused before anything is allocated for it.
+    let Ok(file) = dir.open_file(name) else {
         return bad(&dir);
     };
-    let Some(rest) = bytes.strip_prefix(STORE_MAGIC) else {
-        return None; // not this format: prune's business
+    let Ok(len) = file.metadata().map(|m| m.len()) else {
+        return bad(&dir);
     };
-    let mut r = Reader(rest);
+    if len > MAX_ENTRY_BYTES {
+        return bad(&dir);
+    }
+    let mut r = Reader::stream(file, len);
+    match r.take(STORE_MAGIC.len()) {
+        Ok(m) if m == STORE_MAGIC => {}
+        _ => return None, // not this format: prune's business
+    }
     match StoreKey::read(&mut r) {
         Ok(k) if k == *key => {}
         Ok(_) => return None,
@@ -194,14 +203,14 @@ pub(super) fn load_stored(store: &Path, key: &StoreKey) -> Option<RawModel> {
         .str()
         .and_then(|_| decode_model_within(&mut r, crate::mesh::MAX_TRIANGLES))
         .and_then(|m| {
-            if r.0.is_empty() {
+            if r.is_empty() {
                 Ok(m)
             } else {
                 Err("bytes after the model")
             }
         })
         .and_then(|m| sound(&m).map(|()| m));
-    drop(bytes);
+    drop(r);
     match decoded {
         Ok(model) => {
             touch(&dir, name);
@@ -395,7 +404,7 @@ fn scan(dir: &Dir) -> std::io::Result<Scan> {
         let header = match head.strip_prefix(STORE_MAGIC) {
             None => Err(StaleReason::OldFormat),
             Some(rest) => {
-                let mut r = Reader(rest);
+                let mut r = Reader::new(rest);
                 match (StoreKey::read(&mut r), r.str()) {
                     (Ok(key), Ok(source)) => Ok(Header { key, source }),
                     _ => Err(StaleReason::Damaged),
