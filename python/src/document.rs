@@ -71,6 +71,9 @@ fn shown(doc: &fitup::document::Document, names: Option<Vec<String>>) -> Result<
     })
 }
 
+/// A mesh as numpy arrays: vertices `(N, 3)` and triangles `(M, 3)`.
+type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+
 /// A value the document refuses.
 fn invalid(message: String) -> Error {
     Error::Document(fitup::document::DocumentError::Invalid(message))
@@ -451,7 +454,7 @@ impl Document {
         py: Python<'py>,
         components: Option<Vec<String>>,
         frame: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
-    ) -> Result<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+    ) -> Result<MeshArrays<'py>> {
         let frame = frame
             .map(|f| convert::pose_of(f.as_array(), "frame"))
             .transpose()?;
