@@ -10,7 +10,9 @@
 #include <BRepGProp.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <GProp_GProps.hxx>
@@ -493,6 +495,14 @@ void write_test(const std::string &kind, const std::string &file) {
       throw std::runtime_error("the boolean cut failed");
     }
     named(tool, cut.Shape(), "perforated");
+    write_doc(doc, file);
+  } else if (kind == "sphere") {
+    // r 10 mm: Open CASCADE meshes its poles with several nodes at one point.
+    named(tool, BRepPrimAPI_MakeSphere(10.0).Shape(), "ball");
+    write_doc(doc, file);
+  } else if (kind == "cone") {
+    // r 8 mm at the base, 15 mm high, to an apex.
+    named(tool, BRepPrimAPI_MakeCone(8.0, 0.0, 15.0).Shape(), "tip");
     write_doc(doc, file);
   } else if (kind == "no_solid") {
     write_shape(BRepBuilderAPI_MakeFace(gp_Pln(), 0.0, 10.0, 0.0, 10.0).Shape(), file);

@@ -40,8 +40,8 @@ pub const Z_UP_TO_Y_UP: [f64; 16] = [
 
 /// A binary glTF (GLB) of `nodes`: one glTF mesh per distinct [`Mesh`] (by address),
 /// positions in metres as f32, `u32` indices, one child node of [`GLB_ROOT`] per entry
-/// with its name and its pose as a column-major matrix whose translation is in metres.
-/// Fails only when the result would pass GLB's 4 GiB size limit.
+/// with its name and its pose as a column-major matrix whose translation is in metres
+/// (none at the identity, glTF's default). Fails only when the result would pass GLB's 4 GiB size limit.
 pub fn glb_bytes(nodes: &[GlbNode]) -> Result<Vec<u8>, MeshError> {
     use serde_json::json;
     let mut bin: Vec<u8> = Vec::new();
@@ -94,7 +94,13 @@ pub fn glb_bytes(nodes: &[GlbNode]) -> Result<Vec<u8>, MeshError> {
             *t /= 1000.0;
         }
         children.push(json_nodes.len());
-        json_nodes.push(json!({"name": node.name, "mesh": mesh_index, "matrix": matrix}));
+        // The identity is glTF's default: written out, validators flag it
+        // (NODE_MATRIX_DEFAULT), so a node at the identity carries no matrix.
+        let mut json_node = json!({"name": node.name, "mesh": mesh_index});
+        if matrix != IDENTITY_MATRIX {
+            json_node["matrix"] = json!(matrix);
+        }
+        json_nodes.push(json_node);
     }
     json_nodes[0] = json!({"name": GLB_ROOT, "matrix": Z_UP_TO_Y_UP, "children": children});
     let mut root = json!({
@@ -134,6 +140,11 @@ pub fn glb_bytes(nodes: &[GlbNode]) -> Result<Vec<u8>, MeshError> {
     }
     Ok(out)
 }
+
+/// glTF's default node matrix (column-major), which a node leaves out.
+const IDENTITY_MATRIX: [f64; 16] = [
+    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+];
 
 /// A pose as glTF's column-major 4×4 matrix (mm, as the pose is).
 fn pose_matrix(t: &Transform) -> [f64; 16] {
@@ -724,6 +735,16 @@ mod tests {
         .unwrap();
         let g = gltf::Gltf::from_slice(&glb).unwrap();
         assert_eq!(g.document.meshes().len(), 1, "one mesh for one part");
+        // The node at the identity leaves out glTF's default matrix; the other has one.
+        let chunk = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        let json: serde_json::Value = serde_json::from_slice(&glb[20..20 + chunk]).unwrap();
+        let nodes = json["nodes"].as_array().unwrap();
+        let matrix = |name: &str| {
+            let n = nodes.iter().find(|n| n["name"] == name).unwrap();
+            n.get("matrix").cloned()
+        };
+        assert_eq!(matrix("a"), None);
+        assert!(matrix("b").is_some());
         // Read back in fitup's frame and mm: the two boxes where they were placed.
         let (m, files) = parse_gltf(&glb, None).unwrap();
         assert!(files.is_empty());

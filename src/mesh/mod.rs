@@ -543,7 +543,8 @@ impl Mesh {
     }
 
     /// Checks for degenerate triangles, holes, non-manifold edges and inconsistent
-    /// winding.
+    /// winding. Edges are counted over the triangles with three distinct vertices: a
+    /// collapsed triangle (two corners one vertex) is only counted as degenerate.
     pub fn inspect(&self) -> MeshReport {
         let mut report = MeshReport::default();
         let scale = self
@@ -559,11 +560,14 @@ impl Mesh {
             if (b - a).cross(&(c - a)).norm() <= 1e-12 * scale * scale {
                 report.degenerate_triangles += 1;
             }
+            // A collapsed triangle (two corners one vertex: a tessellator's pole or apex
+            // after welding) is a segment, no surface: its edge is not counted, so it
+            // cannot make a closed mesh "non-manifold".
+            if t[0] == t[1] || t[1] == t[2] || t[2] == t[0] {
+                continue;
+            }
             for k in 0..3 {
                 let (u, v) = (t[k], t[(k + 1) % 3]);
-                if u == v {
-                    continue;
-                }
                 let e = edges.entry((u.min(v), u.max(v))).or_default();
                 if u < v {
                     e.0 += 1
@@ -688,7 +692,7 @@ impl Mesh {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -710,6 +714,71 @@ mod tests {
         let mut b = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
         b.triangles[0].swap(1, 2);
         assert!(b.inspect().misoriented_edges > 0);
+    }
+
+    /// A sphere meshed the way Open CASCADE meshes a sphere face: a (u, v) grid whose
+    /// pole rows are many nodes at one point, each grid cell two triangles. Welded, the
+    /// cells at the poles leave collapsed triangles (two corners one vertex); they have
+    /// no surface and do not make the closed sphere non-manifold (issue 38).
+    pub(crate) fn pole_sphere(r: f64, nu: usize, nv: usize) -> Mesh {
+        Mesh::from_triangle_soup(pole_sphere_soup(r, nu, nv)).unwrap()
+    }
+
+    /// [`pole_sphere`]'s triangles before welding, every corner its own point.
+    pub(crate) fn pole_sphere_soup(r: f64, nu: usize, nv: usize) -> Vec<[Point3; 3]> {
+        use std::f64::consts::{PI, TAU};
+        let node = |i: usize, j: usize| {
+            let (u, v) = (
+                TAU * i as f64 / nu as f64,
+                -PI / 2.0 + PI * j as f64 / nv as f64,
+            );
+            let (x, y, z) = (r * v.cos() * u.cos(), r * v.cos() * u.sin(), r * v.sin());
+            // The seam and the poles as the same bits, as a welder needs them.
+            let snap = |c: f64| if c.abs() < 1e-12 * r { 0.0 } else { c };
+            let i = i % nu;
+            let (x, y) = if j == 0 || j == nv {
+                (0.0, 0.0)
+            } else {
+                (x, y)
+            };
+            let (x, y) = if i == 0 { (r * v.cos(), 0.0) } else { (x, y) };
+            Point3::new(snap(x), snap(y), snap(z))
+        };
+        let mut soup = Vec::new();
+        for i in 0..nu {
+            for j in 0..nv {
+                let (a, b, c, d) = (
+                    node(i, j),
+                    node(i + 1, j),
+                    node(i + 1, j + 1),
+                    node(i, j + 1),
+                );
+                soup.push([a, b, c]);
+                soup.push([a, c, d]);
+            }
+        }
+        soup
+    }
+
+    #[test]
+    fn collapsed_pole_triangles_leave_a_sphere_closed() {
+        let m = pole_sphere(10.0, 24, 12);
+        let collapsed = m
+            .triangles
+            .iter()
+            .filter(|t| t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+            .count();
+        assert_eq!(collapsed, 2 * 24, "one per cell at each pole");
+        let report = m.inspect();
+        assert!(report.is_watertight(), "{report:?}");
+        assert_eq!(report.degenerate_triangles, collapsed);
+        assert!(m.signed_volume() > 0.95 * 4.0 / 3.0 * std::f64::consts::PI * 1000.0);
+        // A real non-manifold edge still counts: a third triangle on a cube's edge.
+        let mut b = Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0));
+        let [u, v, _] = b.triangles[0];
+        b.vertices.push(Point3::new(-1.0, -1.0, -1.0));
+        b.triangles.push([u, v, b.vertices.len() as u32 - 1]);
+        assert!(b.inspect().non_manifold_edges > 0, "{:?}", b.inspect());
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! vertices and triangles kept are what the lines hold, capped by
 //! [`MAX_TRIANGLES`](super::MAX_TRIANGLES).
 
-use super::stl::{read_xyz, short};
+use super::stl::{read_xyz, short, utf8_text};
 use super::{finish_read, MeshError, MeshErrorKind, MAX_TRIANGLES, MAX_VERTICES};
 use crate::math::Point3;
 
@@ -42,7 +42,8 @@ const FREE_FORM: &[&str] = &[
 /// Parses OBJ bytes into a mesh (mm: OBJ has no units, fitup reads them as STL's).
 ///
 /// `v x y z [w]` (extra colour numbers after `z` are allowed) and `f i j k …` with
-/// `i`, `i/t`, `i//n` or `i/t/n` corners, 1-based or negative (relative) indices;
+/// `i`, `i/t`, `i//n` or `i/t/n` corners, 1-based or negative (relative) indices; a
+/// line ending in `\` continues on the next (errors name the statement's first line);
 /// a polygon of n corners becomes n − 2 triangles around its first corner. A vertex
 /// no face uses is dropped, bit-identical positions are merged. Refused, at its line:
 /// text that is not UTF-8, a number that does not parse or is beyond
@@ -51,20 +52,12 @@ const FREE_FORM: &[&str] = &[
 /// statement, more than [`MAX_TRIANGLES`] triangles; a file without faces or whose
 /// faces all have zero area ([`super::Mesh::has_area`]).
 pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1;
-        MeshError::at(line, "OBJ contains bytes that are not UTF-8 text")
-    })?;
+    let text = utf8_text(bytes, "OBJ")?;
     let mut vertices: Vec<Point3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut first_face = None;
     let mut corners: Vec<u32> = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
+    for (line, raw) in logical_lines(text) {
         let content = raw.split('#').next().unwrap_or("");
         let mut words = content.split_whitespace();
         let Some(keyword) = words.next() else {
@@ -151,6 +144,31 @@ pub fn parse_obj(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
     finish_read("OBJ", "faces", vertices, triangles, first_face)
 }
 
+/// The statements of OBJ text with their first line numbers (1-based): a line whose
+/// last character other than white space is `\` continues on the next one (Wavefront's
+/// line continuation), joined with a space in its place.
+fn logical_lines(text: &str) -> impl Iterator<Item = (usize, std::borrow::Cow<'_, str>)> {
+    let mut physical = text.lines().enumerate();
+    std::iter::from_fn(move || {
+        let (i, first) = physical.next()?;
+        let Some(head) = first.trim_end().strip_suffix('\\') else {
+            return Some((i + 1, std::borrow::Cow::Borrowed(first)));
+        };
+        let mut joined = String::from(head);
+        for (_, next) in physical.by_ref() {
+            joined.push(' ');
+            match next.trim_end().strip_suffix('\\') {
+                Some(part) => joined.push_str(part),
+                None => {
+                    joined.push_str(next);
+                    break;
+                }
+            }
+        }
+        Some((i + 1, std::borrow::Cow::Owned(joined)))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -165,6 +183,30 @@ f 1 3 2\nf 1 4 3\nf 5 6 7 8\nf 1/1/1 2/2/1 6/3/1\nf 1 6 5\nf -7 -6 -2\nf 2 7 6\n
         assert_eq!(m.vertices.len(), 8);
         assert!(m.inspect().is_watertight(), "{:?}", m.inspect());
         assert!((m.signed_volume() - 1.0).abs() < 1e-12);
+    }
+
+    /// Wavefront's `\` line continuation (read by trimesh): a statement split over
+    /// lines, with spaces or `\r` after the backslash, reads as the joined line; line
+    /// numbers of later statements stay those of the file.
+    #[test]
+    fn backslash_continues_a_statement_on_the_next_line() {
+        let split = CUBE
+            .replacen("f 1 3 2\n", "f 1 \\\n3 \\  \r\n2\n", 1)
+            .replacen("v 1 1 1\n", "v 1\\\n1 \\\n1\n", 1)
+            .replacen("f 5 6 7 8\n", "f 5 6 \\\n\\\n7 8\n", 1);
+        assert_eq!(split.matches('\\').count(), 6);
+        let m = parse_obj(split.as_bytes()).unwrap();
+        assert_eq!(m, parse_obj(CUBE.as_bytes()).unwrap());
+        // An error in a continued statement names its first line; one after it, its own.
+        let bad = split.replacen("f 1 \\\n3", "f 1 \\\n99", 1);
+        let first = split.lines().position(|l| l.starts_with("f 1 \\")).unwrap() + 1;
+        assert_eq!(first, 13);
+        assert_eq!(parse_obj(bad.as_bytes()).unwrap_err().line, Some(first));
+        let late = split.replacen("f 4 5 8", "f 4 5 x", 1);
+        let lines = late.lines().count();
+        assert_eq!(parse_obj(late.as_bytes()).unwrap_err().line, Some(lines));
+        // A backslash on the last line ends the file.
+        assert!(parse_obj(format!("{CUBE}f 1 2 \\").as_bytes()).is_err());
     }
 
     #[test]

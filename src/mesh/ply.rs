@@ -142,23 +142,8 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
     }
     let vertex = elements.iter().position(|e| e.name == "vertex");
     let face = elements.iter().position(|e| e.name == "face");
-    // The caps, from the header's counts, before anything is stored: every face makes
-    // at least one triangle.
-    for (i, cap, what) in [
-        (vertex, MAX_VERTICES, "vertices"),
-        (face, MAX_TRIANGLES, "triangles"),
-    ] {
-        if let Some(e) = i.map(|i| &elements[i]) {
-            if e.count > cap as u64 {
-                return Err(MeshError::too_many(cap, what)
-                    .prefixed(&format!(
-                        "element `{}` declares {} items: ",
-                        e.name, e.count
-                    ))
-                    .on_line(e.line));
-            }
-        }
-    }
+    // The caps, from the header's counts, before anything is stored.
+    check_counts(&elements)?;
     let (Some(vi), Some(fi)) = (vertex, face) else {
         return Err(MeshError::at(
             1,
@@ -307,7 +292,13 @@ pub(super) fn precheck(head: &[u8]) -> Result<(), MeshError> {
     let Ok((_, elements, _)) = header(head) else {
         return Ok(()); // the whole read says what is wrong
     };
-    for e in &elements {
+    check_counts(&elements)
+}
+
+/// The caps against the header's counts: vertices, and triangles (every face makes at
+/// least one).
+fn check_counts(elements: &[Element]) -> Result<(), MeshError> {
+    for e in elements {
         let (cap, what) = match e.name.as_str() {
             "vertex" => (MAX_VERTICES, "vertices"),
             "face" => (MAX_TRIANGLES, "triangles"),

@@ -448,7 +448,7 @@ pub enum StepError {
         count: u32,
     },
     /// A solid whose mesh is not closed or not consistently oriented (an open shell).
-    #[error("{}: solid `{solid}` is not closed: its mesh has {boundary_edges} open, {non_manifold_edges} non-manifold and {misoriented_edges} misoriented edges (an open shell or a gap between faces); fitup needs closed solids", path.display())]
+    #[error("{}: solid `{solid}` is not closed: its mesh has {boundary_edges} open, {non_manifold_edges} non-manifold and {misoriented_edges} misoriented edges ({}); fitup needs closed solids", path.display(), open_solid_cause(*boundary_edges, *non_manifold_edges, *misoriented_edges))]
     OpenSolid {
         /// The file.
         path: PathBuf,
@@ -802,8 +802,29 @@ fn pose(m: &[f64]) -> Option<Transform> {
     Transform::from_matrix(&sw).ok()
 }
 
+/// What the edge counts of [`StepError::OpenSolid`] say is wrong, each count that is
+/// not zero by its usual cause.
+fn open_solid_cause(open: usize, non_manifold: usize, misoriented: usize) -> String {
+    let mut causes = Vec::new();
+    if open > 0 {
+        causes.push("open edges: a face missing or a gap between faces");
+    }
+    if non_manifold > 0 {
+        causes.push("non-manifold edges: more than two faces meet at an edge, as where two bodies touch along it");
+    }
+    if misoriented > 0 {
+        causes.push("misoriented edges: faces turned against their neighbours");
+    }
+    if causes.is_empty() {
+        causes.push("no triangles");
+    }
+    causes.join("; ")
+}
+
 /// Face meshes side by side → one indexed mesh: the nodes OCCT puts on an edge
 /// are the same points on both faces, so merging identical vertices closes it.
+/// Triangles that collapse in the merge (two nodes at one point: a sphere's pole, a
+/// cone's apex) have no surface and are left out.
 fn weld(vertices: &[f64], triangles: &[u32]) -> Result<Mesh, MeshError> {
     use crate::math::Point3;
     let n = vertices.len() / 3;
@@ -834,12 +855,15 @@ fn weld(vertices: &[f64], triangles: &[u32]) -> Result<Mesh, MeshError> {
     for t in triangles.chunks_exact(3) {
         w.push([point(t[0])?, point(t[1])?, point(t[2])?]);
     }
-    w.finish()
+    let mut mesh = w.finish()?;
+    mesh.triangles
+        .retain(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0]);
+    Ok(mesh)
 }
 
 /// Writes a STEP file made with Open CASCADE for the tests (`kind`: `box`,
 /// `cylinder_hole`, `assembly`, `inch_box`, `open_shell`, `no_solid`, `bad_face`,
-/// `plate_holes`); see `cpp/step_shim.cpp` for their shapes. Not a stable API.
+/// `plate_holes`, `sphere`, `cone`); see `cpp/step_shim.cpp` for their shapes. Not a stable API.
 #[doc(hidden)]
 pub fn write_test_step(kind: &str, path: &Path) -> Result<(), StepError> {
     let utf8 = path
@@ -1009,6 +1033,50 @@ mod tests {
             length_unit: "MM".into(),
             ..RawModel::default()
         }
+    }
+
+    /// Open CASCADE's sphere faces put several nodes at a pole: welded, their
+    /// triangles collapse. The solid imports closed, without them, at its volume; a
+    /// solid really open is refused, the message naming open edges only (issue 38).
+    #[test]
+    fn collapsed_pole_triangles_do_not_refuse_a_closed_solid() {
+        let soup = crate::mesh::tests::pole_sphere_soup(10.0, 24, 12);
+        let raw = |soup: &[[crate::math::Point3; 3]]| {
+            let mut model = one_box();
+            let part = &mut model.parts[0];
+            part.vertices = soup
+                .iter()
+                .flatten()
+                .flat_map(|p| [p.x, p.y, p.z])
+                .collect();
+            part.triangles = (0..3 * soup.len() as u32).collect();
+            part.exact_volume = 4.0 / 3.0 * std::f64::consts::PI * 1000.0;
+            model
+        };
+        let start = std::time::Instant::now();
+        let o = StepOptions::default();
+        let m = from_raw(Path::new("s.step"), &o, &raw(&soup), false, start).unwrap();
+        let mesh = &m.parts[0].mesh;
+        assert_eq!(
+            mesh.triangles.len(),
+            soup.len() - 2 * 24,
+            "collapsed ones left out"
+        );
+        assert!(mesh.inspect().is_watertight() && mesh.inspect().degenerate_triangles == 0);
+        let v = mesh.signed_volume() / m.parts[0].exact_volume;
+        assert!(v > 0.95 && v < 1.0, "{v}");
+        let mut open = soup.clone();
+        open.remove(1); // a triangle with area, at the pole
+        let Err(e) = from_raw(Path::new("s.step"), &o, &raw(&open), false, start) else {
+            panic!("a sphere with a hole imported");
+        };
+        let e = e.to_string();
+        assert!(
+            e.contains("3 open, 0 non-manifold")
+                && e.contains("open edges: a face missing")
+                && !e.contains("non-manifold edges:"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -142,19 +142,28 @@ fn parse_binary(bytes: &[u8]) -> Result<Mesh, MeshError> {
     mesh.finish()
 }
 
-/// ASCII STL: `solid name / facet normal … / outer loop / vertex x y z ×3 / endloop /
-/// endfacet / endsolid`, possibly several `solid … endsolid` blocks one after the other
-/// (multi-body exports). Written by hand rather than through stl_io so that every
-/// error carries its line number. Returns the mesh and the line of the first facet.
-fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
+/// `bytes` as text, or an error at the line of the first byte that is not UTF-8 (`what`
+/// names the format).
+pub(super) fn utf8_text<'a>(bytes: &'a [u8], what: &str) -> Result<&'a str, MeshError> {
+    std::str::from_utf8(bytes).map_err(|e| {
         let line = bytes[..e.valid_up_to()]
             .iter()
             .filter(|&&b| b == b'\n')
             .count()
             + 1;
-        MeshError::at(line, "ASCII STL contains bytes that are not UTF-8 text")
-    })?;
+        MeshError::at(
+            line,
+            format!("{what} contains bytes that are not UTF-8 text"),
+        )
+    })
+}
+
+/// ASCII STL: `solid name / facet normal … / outer loop / vertex x y z ×3 / endloop /
+/// endfacet / endsolid`, possibly several `solid … endsolid` blocks one after the other
+/// (multi-body exports). Written by hand rather than through stl_io so that every
+/// error carries its line number. Returns the mesh and the line of the first facet.
+fn parse_ascii(bytes: &[u8]) -> Result<(Mesh, Option<usize>), MeshError> {
+    let text = utf8_text(bytes, "ASCII STL")?;
     let mut soup = Welder::new(0);
     let mut corners: Vec<Point3> = Vec::with_capacity(3);
     let mut in_facet = false;

@@ -18,57 +18,19 @@ pub(crate) fn options<T: serde::de::DeserializeOwned>(map: &Map, what: &str) -> 
 /// A script value as JSON: `()` is null; numbers, strings, booleans, arrays and maps
 /// as themselves; a Transform as its 4×4 matrix; anything else is refused.
 pub(crate) fn to_json(v: &Dynamic, what: &str) -> ScriptResult<serde_json::Value> {
-    use serde_json::Value;
-    if v.is_unit() {
-        return Ok(Value::Null);
-    }
-    if let Ok(b) = v.as_bool() {
-        return Ok(Value::Bool(b));
-    }
-    if let Ok(i) = v.as_int() {
-        return Ok(Value::from(i));
-    }
-    if let Ok(f) = v.as_float() {
-        return serde_json::Number::from_f64(f)
-            .map(Value::Number)
-            .ok_or_else(|| {
-                fail(format!(
-                    "{what}: {f} has no JSON spelling (JSON numbers are finite)"
-                ))
-            });
-    }
-    if let Ok(c) = v.as_char() {
-        return Ok(Value::String(c.to_string()));
-    }
-    if let Some(s) = v.read_lock::<rhai::ImmutableString>() {
-        return Ok(Value::String(s.to_string()));
-    }
-    if let Some(a) = v.read_lock::<Array>() {
-        return a
-            .iter()
-            .map(|x| to_json(x, what))
-            .collect::<ScriptResult<Vec<_>>>()
-            .map(Value::Array);
-    }
-    if let Some(m) = v.read_lock::<Map>() {
-        let mut o = serde_json::Map::new();
-        for (k, x) in m.iter() {
-            o.insert(k.to_string(), to_json(x, what)?);
-        }
-        return Ok(Value::Object(o));
-    }
-    if let Some(t) = v.read_lock::<crate::math::Transform>() {
-        return Ok(Value::Array(
-            t.to_matrix()
-                .iter()
-                .map(|r| Value::Array(r.iter().map(|x| Value::from(*x)).collect()))
-                .collect(),
-        ));
-    }
-    err(format!(
-        "{what}: a {} cannot be written as JSON (numbers, strings, booleans, arrays, maps and Transforms can)",
-        v.type_name()
-    ))
+    super::convert::json_value(
+        v,
+        "",
+        &super::convert::JsonRule {
+            loose: true,
+            non_finite: &|_, f| {
+                format!("{what}: {f} has no JSON spelling (JSON numbers are finite)")
+            },
+            other: &|_, t| {
+                format!("{what}: a {t} cannot be written as JSON (numbers, strings, booleans, arrays, maps and Transforms can)")
+            },
+        },
+    )
 }
 
 /// JSON as a script value: null is `()`, whole numbers that fit are integers, other

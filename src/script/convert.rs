@@ -180,9 +180,25 @@ pub fn check_keys(map: &Map, known: &[&str], what: &str) -> ScriptResult<()> {
     Ok(())
 }
 
-/// A script value as JSON, for an options vocabulary: numbers, booleans, strings,
-/// arrays, maps; `()` is absent (null). `path` names the key in messages.
-fn json_of(v: &Dynamic, request: &str, path: &str, kind: &str) -> ScriptResult<serde_json::Value> {
+/// How [`json_value`] reads a script value and words a refusal.
+pub(crate) struct JsonRule<'a> {
+    /// Whether a character is a string and a Transform its 4×4 matrix (data files);
+    /// otherwise both are refused (option values).
+    pub loose: bool,
+    /// The message for a number JSON cannot spell, from the value's path and the number.
+    pub non_finite: &'a dyn Fn(&str, f64) -> String,
+    /// The message for a value of another type, from the path and the type name.
+    pub other: &'a dyn Fn(&str, &str) -> String,
+}
+
+/// A script value as JSON: `()` is null; booleans, numbers, strings, arrays and maps as
+/// themselves (elements at `path[i]`, entries at `path.key`); characters and
+/// Transforms as `rule` says; anything else refused with `rule`'s message.
+pub(crate) fn json_value(
+    v: &Dynamic,
+    path: &str,
+    rule: &JsonRule,
+) -> ScriptResult<serde_json::Value> {
     use serde_json::Value;
     if v.is_unit() {
         return Ok(Value::Null);
@@ -196,33 +212,49 @@ fn json_of(v: &Dynamic, request: &str, path: &str, kind: &str) -> ScriptResult<s
     if let Ok(x) = v.as_float() {
         return serde_json::Number::from_f64(x)
             .map(Value::Number)
-            .ok_or_else(|| fail(format!("{request} option `{path}` must be finite, not {x}")));
+            .ok_or_else(|| fail((rule.non_finite)(path, x)));
     }
-    if v.is_string() {
+    if v.is_string() || (rule.loose && v.is_char()) {
         return Ok(Value::String(v.to_string()));
     }
     if let Some(a) = v.read_lock::<Array>() {
         return a
             .iter()
             .enumerate()
-            .map(|(i, x)| json_of(x, request, &format!("{path}[{i}]"), kind))
+            .map(|(i, x)| json_value(x, &format!("{path}[{i}]"), rule))
             .collect::<ScriptResult<Vec<_>>>()
             .map(Value::Array);
     }
     if let Some(m) = v.read_lock::<Map>() {
         let mut out = serde_json::Map::new();
         for (k, x) in m.iter() {
-            out.insert(
-                k.to_string(),
-                json_of(x, request, &format!("{path}.{k}"), kind)?,
-            );
+            out.insert(k.to_string(), json_value(x, &format!("{path}.{k}"), rule)?);
         }
         return Ok(Value::Object(out));
     }
-    err(format!(
-        "{request} option `{path}` must be {kind}, not {}",
-        v.type_name()
-    ))
+    if let (true, Some(t)) = (rule.loose, v.read_lock::<crate::math::Transform>()) {
+        return Ok(Value::Array(
+            t.to_matrix()
+                .iter()
+                .map(|r| Value::Array(r.iter().map(|x| Value::from(*x)).collect()))
+                .collect(),
+        ));
+    }
+    err((rule.other)(path, v.type_name()))
+}
+
+/// A script value as JSON, for an options vocabulary: numbers, booleans, strings,
+/// arrays, maps; `()` is absent (null). `path` names the key in messages.
+fn json_of(v: &Dynamic, request: &str, path: &str, kind: &str) -> ScriptResult<serde_json::Value> {
+    json_value(
+        v,
+        path,
+        &JsonRule {
+            loose: false,
+            non_finite: &|path, x| format!("{request} option `{path}` must be finite, not {x}"),
+            other: &|path, t| format!("{request} option `{path}` must be {kind}, not {t}"),
+        },
+    )
 }
 
 /// A script options map as the JSON map of `vocabulary`: poses (Transforms,
