@@ -109,6 +109,7 @@ fn mate(name: &str, kind: &str, a: &str, b: &str) -> MateFile {
         value: None,
         aligned: None,
         about: None,
+        suppressed: false,
     }
 }
 
@@ -122,6 +123,9 @@ fn component(name: &str, part: &str, fixed: bool, color: &str, t: Transform) -> 
         mass: None,
         threaded: false,
         fixture: false,
+        suppressed: false,
+        hidden: false,
+        properties: Default::default(),
     }
 }
 

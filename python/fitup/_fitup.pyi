@@ -234,7 +234,9 @@ class Document:
         """Part names in file order."""
     def component(self, name: str) -> Dict[str, Any]:
         """One component as a dict: ``name``, ``part``, ``fixed``, ``pose`` (4×4, mm),
-        ``mass`` (kg or None), ``threaded``, ``color`` (RGB in 0..1 or None).
+        ``mass`` (kg or None), ``threaded``, ``color`` (RGB in 0..1 or None),
+        ``suppressed``, ``hidden``, ``properties`` (its own custom properties as
+        ``(name, text)`` pairs in document order), ``part_file`` (its part's file).
         """
     def pose(self, name: str) -> _F64:
         """The pose of component ``name``: 4×4 column-vector matrix, part frame → world, mm."""
@@ -247,6 +249,94 @@ class Document:
         the component's pose: a dict ``kind`` (``"plane"``, ``"axis"``, ``"point"``),
         ``point`` (mm, ``(3,)``) and ``direction`` (the unit normal or axis direction,
         None for a point).
+        """
+    def world_mesh(self, components: Optional[List[str]] = None, frame: Optional[_Pose] = None) -> Tuple[_F64, _F64]:
+        """The meshes of ``components`` (names; default: every component neither
+        suppressed nor hidden) at their poses, in the coordinate system ``frame`` (its
+        4×4 pose in the world; default the world): ``(vertices (N, 3) mm, triangles
+        (M, 3))``, what ``export_stl`` writes.
+        """
+    def export_stl(self, path: _StrPath, components: Optional[List[str]] = None, frame: Optional[_Pose] = None, overwrite: bool = False) -> int:
+        """Writes ``world_mesh(components, frame)`` as binary STL (mm) to ``path``: never
+        over a file the document was built from, over an existing file only when
+        fitup wrote it or with ``overwrite``.
+        """
+    def export_glb(self, path: _StrPath, overwrite: bool = False) -> int:
+        """Writes the document as binary glTF (one node per component neither
+        suppressed nor hidden; metres, +Y up) to ``path``; returns the nodes written.
+        """
+    def mates(self) -> List[Dict[str, Any]]:
+        """Every mate in document order as dicts: ``name``, ``type``, ``entities``
+        (``component/reference`` twice), ``value`` (mm or degrees, None), ``aligned``
+        (None for mates of points), ``suppressed``, ``active`` (solved: neither it nor
+        a component it joins is suppressed).
+        """
+    def add_mate(self, name: str, type: str, a: str, b: str, **options: Any) -> None:
+        """Adds a mate of ``type`` (``"coincident"``, ``"concentric"``, ``"parallel"``,
+        ``"perpendicular"``, ``"distance"``, ``"angle"``) between entities ``a`` and
+        ``b`` (``component/reference``) and solves it. Keywords (the mate table of
+        docs/api.md): ``value`` (mm or degrees), ``aligned``, ``about``.
+        """
+    def delete_mate(self, name: str) -> None:
+        """Deletes a mate; nothing moves."""
+    def flip_mate(self, name: str) -> None:
+        """Flips a mate between aligned and anti-aligned and re-solves."""
+    def set_mate_aligned(self, name: str, aligned: Optional[bool]) -> None:
+        """Sets a mate aligned (True), anti-aligned (False) or to its kind's default
+        (None), and re-solves.
+        """
+    def set_mate_suppressed(self, name: str, suppressed: bool) -> None:
+        """Suppresses or unsuppresses a mate and re-solves."""
+    def set_suppressed(self, name: str, suppressed: bool) -> None:
+        """Suppresses or unsuppresses a component (not checked, planned around,
+        sequenced, weighed or exported; its mates inactive) and re-solves.
+        """
+    def set_hidden(self, name: str, hidden: bool) -> None:
+        """Hides (checked, not exported) or shows a component."""
+    def properties(self, component: Optional[str] = None, part: Optional[str] = None) -> List[Tuple[str, str]]:
+        """The custom properties of a component or a part (give exactly one), as
+        ``(name, text)`` pairs in document order.
+        """
+    def set_property(
+        self,
+        key: str,
+        value: Union[str, float, int, bool],
+        component: Optional[str] = None,
+        part: Optional[str] = None,
+    ) -> None:
+        """Sets a custom property of a component or a part (a str, number or bool, kept
+        as text).
+        """
+    def remove_property(
+        self, key: str, component: Optional[str] = None, part: Optional[str] = None
+    ) -> Optional[str]:
+        """Deletes a custom property; returns its value (None when there was none)."""
+    def part_file(self, part: str) -> Any:
+        """A part's geometry file (its mesh or STEP file)."""
+    def add_part(self, name: str, file: str) -> str:
+        """Adds a part whose mesh is ``file`` (relative to the document's folder, inside
+        its project); returns its name.
+        """
+    def add_component(self, part: str, pose: Optional[_Pose] = None, name: Optional[str] = None) -> str:
+        """Adds a component of ``part`` at ``pose`` (4×4, mm; identity when None), named
+        ``name`` or ``part-N`` with the first free N; returns its name.
+        """
+    def rename_component(self, old: str, new: str) -> None:
+        """Renames a component; mates and robots follow."""
+    def replace_part(self, name: str, part: str) -> None:
+        """Makes component ``name`` an instance of ``part`` (its mates' references must
+        exist in it) and re-solves.
+        """
+    def set_reference(
+        self,
+        part: str,
+        name: str,
+        kind: str,
+        point: Sequence[float],
+        direction: Optional[Sequence[float]] = None,
+    ) -> None:
+        """Adds or replaces a reference of a part in the part frame (mm): ``kind``
+        ``"plane"`` (``direction`` is the normal), ``"axis"`` or ``"point"``.
         """
     def set_fixed(self, name: str, fixed: bool) -> None:
         """Marks a component fixed (never moved by mates or planners) or free."""
@@ -302,7 +392,8 @@ class Document:
         density: Optional[float] = None,
         frame: Optional[_Pose] = None,
     ) -> Dict[str, Any]:
-        """Mass properties of ``components`` (names; all when None) together, in world
+        """Mass properties of ``components`` (names; every component not suppressed when
+        None) together, in world
         coordinates, or in the coordinate system ``frame`` (a 4×4 pose, mm) when given:
         a dict ``volume_mm3``, ``area_mm2``, ``mass_kg``, ``density_kg_m3``,
         ``centre_of_mass`` (mm), ``inertia`` (3×3 tensor about the centre of mass,

@@ -7,7 +7,7 @@ use crate::options;
 use crate::path::Path;
 use fitup::collision::Contact;
 use fitup::document::{Dimension, DimensionKind};
-use fitup::options::{Check, Plan, Sequence, Sweep};
+use fitup::options::{AddMate, Check, Plan, Sequence, Sweep};
 use fitup::planning::Control;
 use fitup::workspace::{Revalidation, SceneCache, Workspace};
 use numpy::{AllowTypeChange, PyArray2, PyArrayLike2, PyArrayLike3};
@@ -54,6 +54,40 @@ impl Document {
             let ws = Workspace::new(doc, scene)?;
             f(&ws)
         })
+    }
+}
+
+/// The indices of the named components, or of every component neither suppressed
+/// nor hidden.
+fn shown(doc: &fitup::document::Document, names: Option<Vec<String>>) -> Result<Vec<usize>> {
+    Ok(match names {
+        Some(n) => n
+            .iter()
+            .map(|c| doc.component_index(c))
+            .collect::<std::result::Result<_, _>>()?,
+        None => (0..doc.components().len())
+            .filter(|&i| !doc.components()[i].suppressed && !doc.components()[i].hidden)
+            .collect(),
+    })
+}
+
+/// A mesh as numpy arrays: vertices `(N, 3)` and triangles `(M, 3)`.
+type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+
+/// A value the document refuses.
+fn invalid(message: String) -> Error {
+    Error::Document(fitup::document::DocumentError::Invalid(message))
+}
+
+/// Whose properties: exactly one of a component and a part.
+fn owner<'a>(
+    component: Option<&'a str>,
+    part: Option<&'a str>,
+) -> Result<fitup::document::PropertyOwner<'a>> {
+    match (component, part) {
+        (Some(c), None) => Ok(fitup::document::PropertyOwner::Component(c)),
+        (None, Some(p)) => Ok(fitup::document::PropertyOwner::Part(p)),
+        _ => Err(invalid("give exactly one of `component` and `part`".into())),
     }
 }
 
@@ -110,7 +144,9 @@ impl Document {
     }
 
     /// One component as a dict: ``name``, ``part``, ``fixed``, ``pose`` (4×4, mm),
-    /// ``mass`` (kg or None), ``threaded``, ``color`` (RGB in 0..1 or None).
+    /// ``mass`` (kg or None), ``threaded``, ``color`` (RGB in 0..1 or None),
+    /// ``suppressed``, ``hidden``, ``properties`` (its own custom properties as
+    /// ``(name, text)`` pairs in document order), ``part_file`` (its part's file).
     fn component<'py>(&self, py: Python<'py>, name: &str) -> Result<Bound<'py, PyDict>> {
         let inner = self.lock()?;
         let c = inner.doc.component(name)?;
@@ -122,6 +158,13 @@ impl Document {
         d.set_item("mass", c.mass)?;
         d.set_item("threaded", c.threaded)?;
         d.set_item("color", c.color.map(|c| c.to_vec()))?;
+        d.set_item("suppressed", c.suppressed)?;
+        d.set_item("hidden", c.hidden)?;
+        d.set_item(
+            "properties",
+            c.properties.clone().into_iter().collect::<Vec<_>>(),
+        )?;
+        d.set_item("part_file", inner.doc.part(&c.part)?.mesh_path.clone())?;
         Ok(d)
     }
 
@@ -165,6 +208,302 @@ impl Document {
                 .map(|v| convert::vector(py, vec![v.x, v.y, v.z])),
         )?;
         Ok(d)
+    }
+
+    /// Every mate in document order as dicts: ``name``, ``type``, ``entities``
+    /// (``component/reference`` twice), ``value`` (mm or degrees, None), ``aligned``
+    /// (None for mates of points), ``suppressed``, ``active`` (solved: neither it nor
+    /// a component it joins is suppressed).
+    fn mates<'py>(&self, py: Python<'py>) -> Result<Vec<Bound<'py, PyDict>>> {
+        let inner = self.lock()?;
+        let doc = &inner.doc;
+        let mut out = Vec::new();
+        for m in doc.mates() {
+            let d = PyDict::new(py);
+            d.set_item("name", &m.name)?;
+            d.set_item("type", m.kind.name())?;
+            let entities: Vec<String> = m
+                .entities
+                .iter()
+                .map(|e| format!("{}/{}", doc.components()[e.component].name, e.reference))
+                .collect();
+            d.set_item("entities", entities)?;
+            d.set_item(
+                "value",
+                m.value.map(|v| {
+                    if m.kind == fitup::document::MateKind::Angle {
+                        v.to_degrees()
+                    } else {
+                        v
+                    }
+                }),
+            )?;
+            d.set_item("aligned", doc.mate_alignment(&m.name)?)?;
+            d.set_item("suppressed", m.suppressed)?;
+            d.set_item("active", doc.mate_active(m))?;
+            out.push(d);
+        }
+        Ok(out)
+    }
+
+    /// Adds a mate of ``type`` (``"coincident"``, ``"concentric"``, ``"parallel"``,
+    /// ``"perpendicular"``, ``"distance"``, ``"angle"``) between entities ``a`` and
+    /// ``b`` (``component/reference``) and solves it. Keywords (the mate table of
+    /// docs/api.md): ``value`` (mm or degrees), ``aligned``, ``about``.
+    #[pyo3(signature = (name, r#type, a, b, **options))]
+    fn add_mate(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        r#type: &str,
+        a: &str,
+        b: &str,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> Result<()> {
+        let (o, _) = options::read::<AddMate>(py, options)?;
+        let spec = o.spec(name, r#type, a, b)?;
+        self.lock()?.doc.add_mate(&spec)?;
+        Ok(())
+    }
+
+    /// Deletes a mate; nothing moves.
+    fn delete_mate(&self, name: &str) -> Result<()> {
+        self.lock()?.doc.delete_mate(name)?;
+        Ok(())
+    }
+
+    /// Flips a mate between aligned and anti-aligned and re-solves.
+    fn flip_mate(&self, name: &str) -> Result<()> {
+        self.lock()?.doc.flip_mate(name)?;
+        Ok(())
+    }
+
+    /// Sets a mate aligned (True), anti-aligned (False) or to its kind's default
+    /// (None), and re-solves.
+    fn set_mate_aligned(&self, name: &str, aligned: Option<bool>) -> Result<()> {
+        self.lock()?.doc.set_mate_aligned(name, aligned)?;
+        Ok(())
+    }
+
+    /// Suppresses or unsuppresses a mate and re-solves.
+    fn set_mate_suppressed(&self, name: &str, suppressed: bool) -> Result<()> {
+        self.lock()?.doc.set_mate_suppressed(name, suppressed)?;
+        Ok(())
+    }
+
+    /// Suppresses or unsuppresses a component (not checked, planned around,
+    /// sequenced, weighed or exported; its mates inactive) and re-solves.
+    fn set_suppressed(&self, name: &str, suppressed: bool) -> Result<()> {
+        self.lock()?.doc.set_suppressed(name, suppressed)?;
+        Ok(())
+    }
+
+    /// Hides (checked, not exported) or shows a component.
+    fn set_hidden(&self, name: &str, hidden: bool) -> Result<()> {
+        self.lock()?.doc.set_hidden(name, hidden)?;
+        Ok(())
+    }
+
+    /// The custom properties of a component or a part (give exactly one), as
+    /// ``(name, text)`` pairs in document order.
+    #[pyo3(signature = (component = None, part = None))]
+    fn properties(
+        &self,
+        component: Option<&str>,
+        part: Option<&str>,
+    ) -> Result<Vec<(String, String)>> {
+        let owner = owner(component, part)?;
+        Ok(self
+            .lock()?
+            .doc
+            .properties(owner)?
+            .clone()
+            .into_iter()
+            .collect())
+    }
+
+    /// Sets a custom property of a component or a part (a str, number or bool, kept
+    /// as text).
+    #[pyo3(signature = (key, value, component = None, part = None))]
+    fn set_property(
+        &self,
+        key: &str,
+        value: &Bound<'_, PyAny>,
+        component: Option<&str>,
+        part: Option<&str>,
+    ) -> Result<()> {
+        let owner = owner(component, part)?;
+        let text = if let Ok(s) = value.extract::<String>() {
+            s
+        } else if let Ok(b) = value.extract::<bool>() {
+            b.to_string()
+        } else if let Ok(i) = value.extract::<i64>() {
+            i.to_string()
+        } else if let Ok(f) = value.extract::<f64>() {
+            f.to_string()
+        } else {
+            return Err(invalid(format!(
+                "custom property `{key}`: a value is a str, number or bool"
+            )));
+        };
+        self.lock()?.doc.set_property(owner, key, &text)?;
+        Ok(())
+    }
+
+    /// Deletes a custom property; returns its value (None when there was none).
+    #[pyo3(signature = (key, component = None, part = None))]
+    fn remove_property(
+        &self,
+        key: &str,
+        component: Option<&str>,
+        part: Option<&str>,
+    ) -> Result<Option<String>> {
+        let owner = owner(component, part)?;
+        Ok(self.lock()?.doc.remove_property(owner, key)?)
+    }
+
+    /// A part's geometry file (its mesh or STEP file).
+    fn part_file(&self, part: &str) -> Result<std::path::PathBuf> {
+        Ok(self.lock()?.doc.part(part)?.mesh_path.clone())
+    }
+
+    /// Adds a part whose mesh is ``file`` (relative to the document's folder, inside
+    /// its project); returns its name.
+    fn add_part(&self, name: &str, file: &str) -> Result<String> {
+        Ok(self.lock()?.doc.add_part_file(name, file)?)
+    }
+
+    /// Adds a component of ``part`` at ``pose`` (4×4, mm; identity when None), named
+    /// ``name`` or ``part-N`` with the first free N; returns its name.
+    #[pyo3(signature = (part, pose = None, name = None))]
+    fn add_component(
+        &self,
+        part: &str,
+        pose: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
+        name: Option<&str>,
+    ) -> Result<String> {
+        let t = match pose {
+            Some(p) => convert::pose_of(p.as_array(), "pose")?,
+            None => fitup::math::Transform::IDENTITY,
+        };
+        let mut inner = self.lock()?;
+        let name = name.map_or_else(|| inner.doc.next_instance_name(part), str::to_string);
+        let i = inner.doc.add_component(&name, part, t)?;
+        Ok(inner.doc.components()[i].name.clone())
+    }
+
+    /// Renames a component; mates and robots follow.
+    fn rename_component(&self, old: &str, new: &str) -> Result<()> {
+        self.lock()?.doc.rename_component(old, new)?;
+        Ok(())
+    }
+
+    /// Makes component ``name`` an instance of ``part`` (its mates' references must
+    /// exist in it) and re-solves.
+    fn replace_part(&self, name: &str, part: &str) -> Result<()> {
+        self.lock()?.doc.set_component_part(name, part)?;
+        Ok(())
+    }
+
+    /// Adds or replaces a reference of a part in the part frame (mm): ``kind``
+    /// ``"plane"`` (``direction`` is the normal), ``"axis"`` or ``"point"``.
+    #[pyo3(signature = (part, name, kind, point, direction = None))]
+    fn set_reference(
+        &self,
+        part: &str,
+        name: &str,
+        kind: &str,
+        point: [f64; 3],
+        direction: Option<[f64; 3]>,
+    ) -> Result<()> {
+        use fitup::document::Reference;
+        use fitup::math::{Point3, Vec3};
+        let p = Point3::new(point[0], point[1], point[2]);
+        let dir = || {
+            direction
+                .map(|d| Vec3::new(d[0], d[1], d[2]))
+                .ok_or_else(|| invalid(format!("a {kind} needs `direction`")))
+        };
+        let r = match kind {
+            "plane" => Reference::Plane {
+                point: p,
+                normal: dir()?,
+            },
+            "axis" => Reference::Axis {
+                point: p,
+                direction: dir()?,
+            },
+            "point" => Reference::Point(p),
+            other => {
+                return Err(invalid(format!(
+                    "reference kind `{other}`: plane, axis or point"
+                )))
+            }
+        };
+        self.lock()?.doc.set_reference(part, name, r)?;
+        Ok(())
+    }
+
+    /// The meshes of ``components`` (names; default: every component neither
+    /// suppressed nor hidden) at their poses, in the coordinate system ``frame`` (its
+    /// 4×4 pose in the world; default the world): ``(vertices (N, 3) mm, triangles
+    /// (M, 3))``, what ``export_stl`` writes.
+    #[pyo3(signature = (components = None, frame = None))]
+    fn world_mesh<'py>(
+        &self,
+        py: Python<'py>,
+        components: Option<Vec<String>>,
+        frame: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
+    ) -> Result<MeshArrays<'py>> {
+        let frame = frame
+            .map(|f| convert::pose_of(f.as_array(), "frame"))
+            .transpose()?;
+        let inner = self.lock()?;
+        let which = shown(&inner.doc, components)?;
+        let mesh = fitup::workspace::world_mesh(&inner.doc, &which, frame.as_ref());
+        let v = convert::rows(py, mesh.vertices.iter().map(|p| [p.x, p.y, p.z]), 3);
+        let t = convert::rows(py, mesh.triangles.iter().map(|t| t.map(f64::from)), 3);
+        Ok((v, t))
+    }
+
+    /// Writes ``world_mesh(components, frame)`` as binary STL (mm) to ``path``: never
+    /// over a file the document was built from, over an existing file only when
+    /// fitup wrote it or with ``overwrite``.
+    #[pyo3(signature = (path, components = None, frame = None, overwrite = false))]
+    fn export_stl(
+        &self,
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        components: Option<Vec<String>>,
+        frame: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
+        overwrite: bool,
+    ) -> Result<usize> {
+        let frame = frame
+            .map(|f| convert::pose_of(f.as_array(), "frame"))
+            .transpose()?;
+        py.detach(|| {
+            let inner = self.lock()?;
+            let which = shown(&inner.doc, components)?;
+            Ok(fitup::workspace::export_stl(
+                &inner.doc,
+                &path,
+                &which,
+                frame.as_ref(),
+                overwrite,
+            )?)
+        })
+    }
+
+    /// Writes the document as binary glTF (one node per component neither
+    /// suppressed nor hidden; metres, +Y up) to ``path``; returns the nodes written.
+    #[pyo3(signature = (path, overwrite = false))]
+    fn export_glb(
+        &self,
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        overwrite: bool,
+    ) -> Result<usize> {
+        py.detach(|| Ok(self.lock()?.doc.export_glb(&path, overwrite)?.nodes))
     }
 
     /// Marks a component fixed (never moved by mates or planners) or free.
@@ -336,7 +675,8 @@ impl Document {
         Ok(d)
     }
 
-    /// Mass properties of ``components`` (names; all when None) together, in world
+    /// Mass properties of ``components`` (names; every component not suppressed when
+    /// None) together, in world
     /// coordinates, or in the coordinate system ``frame`` (a 4×4 pose, mm) when given:
     /// a dict ``volume_mm3``, ``area_mm2``, ``mass_kg``, ``density_kg_m3``,
     /// ``centre_of_mass`` (mm), ``inertia`` (3×3 tensor about the centre of mass,
@@ -365,7 +705,9 @@ impl Document {
                     .iter()
                     .map(|n| inner.doc.component_index(n))
                     .collect::<std::result::Result<_, _>>()?,
-                None => (0..inner.doc.components().len()).collect(),
+                None => (0..inner.doc.components().len())
+                    .filter(|&i| !inner.doc.components()[i].suppressed)
+                    .collect(),
             };
             fitup::workspace::mass_properties(&inner.doc, &which, &o)?
         };

@@ -473,3 +473,44 @@ def test_mass_properties_equal_trimesh_and_overlap_reads_the_push():
     assert o["direction"] == pytest.approx([0.0, 0.0, 1.0], abs=1e-9)
     assert o["volume_mm3"] > 0
     assert doc.contact("screw4", "table")["depth_mm"] == pytest.approx(5.0, abs=1e-6)
+
+
+def test_the_solidworks_document_edits(project):
+    """Issue 37 from Python: mates as objects, suppression and visibility, custom
+    properties, added/renamed/replaced components, world meshes and exports."""
+    doc = fitup.Document(project / "models" / "cell.yaml")
+    mates = {m["name"]: m for m in doc.mates()}
+    assert mates["screw1_seated"]["aligned"] is False and mates["screw1_seated"]["active"]
+    doc.flip_mate("screw1_seated")
+    assert doc.pose("screw1")[2, 2] == pytest.approx(-1.0)
+    doc.set_mate_aligned("screw1_seated", None)
+    doc.set_mate_suppressed("screw2_seated", True)
+    doc.delete_mate("screw3_in_hole")
+    assert "screw3_in_hole" not in {m["name"] for m in doc.mates()}
+    with pytest.raises(fitup.InputError):
+        doc.add_mate("m", "coincident", "screw4/origin", "screw5/origin", valeu=1)
+    doc.set_suppressed("screw4", True)
+    doc.set_hidden("screw5", True)
+    doc.set_property("Description", "M5 screw", part="screw")
+    doc.set_property("Price", 0.25, component="screw5")
+    assert doc.properties(part="screw") == [("Description", "M5 screw")]
+    assert doc.remove_property("Price", component="screw5") == "0.25"
+    name = doc.add_component("screw", fitup.translation(0, 0, 900))
+    assert name == "screw-1"
+    doc.rename_component(name, "spare")
+    assert doc.component("spare")["part"] == "screw"
+    c = doc.component("screw4")
+    assert c["suppressed"] and doc.component("screw5")["hidden"]
+    # the suppressed screw weighs nothing in the assembly; the mesh leaves out both
+    everyone = [n for n in doc.components() if n != "screw4"]
+    assert doc.mass_properties()["mass_kg"] == pytest.approx(
+        doc.mass_properties(everyone)["mass_kg"], rel=1e-12)
+    v, t = doc.world_mesh(["spare"])
+    assert v.shape[1] == 3 and t.shape[1] == 3 and v[:, 2].min() == pytest.approx(900.0)
+    out = project / "out"
+    out.mkdir()
+    assert doc.export_stl(out / "spare.stl", ["spare"]) == 84 + 50 * t.shape[0]
+    assert doc.export_glb(out / "cell.glb") == len(doc.components()) - 2
+    doc.save_as(project / "models" / "edited.yaml")
+    back = fitup.Document(project / "models" / "edited.yaml")
+    assert back.component("screw4")["suppressed"] and back.properties(part="screw")

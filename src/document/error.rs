@@ -36,6 +36,11 @@ pub enum DocumentError {
         #[source]
         source: SolveError,
     },
+    /// A suppressed component is not checked, planned or measured.
+    #[error(
+        "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"
+    )]
+    Suppressed(String),
     /// Fixed components do not move.
     #[error("component `{0}` is fixed; set `fixed: false` to move it")]
     FixedComponent(String),

@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 pub struct GlbExport {
     /// The file written.
     pub path: PathBuf,
-    /// glTF nodes: one per component (robot links' generated components included).
+    /// glTF nodes: one per component shown (robot links' generated components
+    /// included; suppressed and hidden ones left out).
     pub nodes: usize,
     /// glTF meshes: one per distinct part mesh.
     pub meshes: usize,
@@ -19,7 +20,8 @@ pub struct GlbExport {
 }
 
 impl Document {
-    /// The document as GLB bytes: one node per component, named as the component, at
+    /// The document as GLB bytes: one node per component that is neither suppressed
+    /// nor hidden, named as the component, at
     /// its current pose (robot links where the joints put them), showing its part's
     /// mesh (one glTF mesh per part, shared by its components). Metres and +Y up as
     /// glTF wants: see [`crate::mesh::glb_bytes`] (a root node `fitup` turns fitup's
@@ -30,6 +32,7 @@ impl Document {
             .components()
             .iter()
             .enumerate()
+            .filter(|(_, c)| !c.suppressed && !c.hidden)
             .map(|(i, c)| GlbNode {
                 name: &c.name,
                 mesh: self.mesh_of(i).as_ref(),
@@ -64,14 +67,18 @@ impl Document {
         let bytes = self.glb_bytes()?;
         // Checked again through the folder handle it is written with.
         crate::fsutil::write_output(path, &bytes, &rule).map_err(|e| write_error(e.to_string()))?;
-        let mut meshes: Vec<*const crate::mesh::Mesh> = (0..self.components().len())
-            .map(|i| std::sync::Arc::as_ptr(self.mesh_of(i)))
+        let shown: Vec<usize> = (0..self.components().len())
+            .filter(|&i| !self.components()[i].suppressed && !self.components()[i].hidden)
+            .collect();
+        let mut meshes: Vec<*const crate::mesh::Mesh> = shown
+            .iter()
+            .map(|&i| std::sync::Arc::as_ptr(self.mesh_of(i)))
             .collect();
         meshes.sort();
         meshes.dedup();
         Ok(GlbExport {
             path: path.to_path_buf(),
-            nodes: self.components().len(),
+            nodes: shown.len(),
             meshes: meshes.len(),
             bytes: bytes.len(),
         })

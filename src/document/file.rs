@@ -71,6 +71,10 @@ pub struct PartFile {
     /// The feature tree (cut cells, …), in order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub features: Vec<FeatureFile>,
+    /// Custom properties of the part (SolidWorks' file properties: `Description`,
+    /// `Price`, `Material`, …): name → a text, number or true/false, kept as text.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub properties: IndexMap<String, serde_yaml::Value>,
 }
 
 impl PartFile {
@@ -86,6 +90,7 @@ impl PartFile {
             axes: IndexMap::new(),
             points: IndexMap::new(),
             features: Vec::new(),
+            properties: IndexMap::new(),
         }
     }
 }
@@ -174,6 +179,40 @@ pub struct ComponentFile {
     /// links and `exclude`d components.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub fixture: bool,
+    /// Suppressed (SolidWorks' suppression): kept in the document but not checked,
+    /// planned around, sequenced, weighed or exported; its mates are inactive.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub suppressed: bool,
+    /// Hidden: checked like any other component, but not shown or exported.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub hidden: bool,
+    /// Custom properties of this instance (SolidWorks' component-level properties):
+    /// name → a text, number or true/false, kept as text.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub properties: IndexMap<String, serde_yaml::Value>,
+}
+
+impl ComponentFile {
+    /// A component of `part` named `name` at `transform` (mm), with nothing else set.
+    pub fn new(
+        name: impl Into<String>,
+        part: impl Into<String>,
+        transform: Option<[[f64; 4]; 4]>,
+    ) -> Self {
+        ComponentFile {
+            name: name.into(),
+            part: part.into(),
+            fixed: false,
+            color: None,
+            transform,
+            mass: None,
+            threaded: false,
+            fixture: false,
+            suppressed: false,
+            hidden: false,
+            properties: IndexMap::new(),
+        }
+    }
 }
 
 /// A mate between two reference entities `component/reference`.
@@ -199,6 +238,9 @@ pub struct MateFile {
     /// making it a signed angle over the full turn.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub about: Option<String>,
+    /// Suppressed: kept in the document, not solved.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub suppressed: bool,
 }
 
 /// A robot: a kinematic tree (from the catalog, a D-H table or explicit links) placed

@@ -241,6 +241,9 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
             mass: None,
             threaded: false,
             fixture: false,
+            suppressed: false,
+            hidden: false,
+            properties: Default::default(),
         });
     }
     (doc, parts)

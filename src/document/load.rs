@@ -194,7 +194,7 @@ impl Document {
         Ok(doc)
     }
 
-    fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
+    pub(super) fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
         let (comp, reference) = spec
             .split_once('/')
             .ok_or_else(|| format!("entity `{spec}` must be written `component/reference`"))?;
@@ -384,6 +384,15 @@ impl Loader<'_> {
                 ));
             }
         }
+        let properties = properties(&pf.properties).map_err(|m| {
+            self.at_key(
+                &[
+                    &format!("parts/{name}/properties"),
+                    &format!("parts/{name}"),
+                ],
+                format!("part `{name}`: {m}"),
+            )
+        })?;
         Ok(Part {
             name: name.to_string(),
             stl: source.clone(),
@@ -393,6 +402,7 @@ impl Loader<'_> {
             mesh,
             references,
             features,
+            properties,
         })
     }
 
@@ -554,6 +564,8 @@ impl Loader<'_> {
                 ));
             }
         }
+        let properties = properties(&c.properties)
+            .map_err(|m| key_at("properties", format!("component `{}`: {m}", c.name)))?;
         Ok(Component {
             name: c.name.clone(),
             part: c.part.clone(),
@@ -563,6 +575,9 @@ impl Loader<'_> {
             mass: c.mass,
             threaded: c.threaded,
             fixture: c.fixture,
+            suppressed: c.suppressed,
+            hidden: c.hidden,
+            properties,
         })
     }
 
@@ -670,6 +685,7 @@ impl Loader<'_> {
             value,
             aligned: m.aligned,
             about,
+            suppressed: m.suppressed,
         })
     }
 }
@@ -714,6 +730,32 @@ impl Feature {
             }
         }
     }
+}
+
+/// Custom properties as the document keeps them: every value a text (a number
+/// becomes its decimal text, `42.50` → `42.5`; true/false their words).
+pub(super) fn properties(
+    file: &IndexMap<String, serde_yaml::Value>,
+) -> Result<IndexMap<String, String>, String> {
+    let mut out = IndexMap::with_capacity(file.len());
+    for (k, v) in file {
+        if k.trim().is_empty() {
+            return Err("a custom property needs a name".into());
+        }
+        let text = match v {
+            serde_yaml::Value::String(s) => s.clone(),
+            serde_yaml::Value::Number(n) => n.to_string(),
+            serde_yaml::Value::Bool(b) => b.to_string(),
+            serde_yaml::Value::Null => String::new(),
+            _ => {
+                return Err(format!(
+                    "custom property `{k}` must be a text, a number or true/false"
+                ))
+            }
+        };
+        out.insert(k.clone(), text);
+    }
+    Ok(out)
 }
 
 fn vec3(v: [f64; 3]) -> Vec3 {

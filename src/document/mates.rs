@@ -85,6 +85,23 @@ pub struct Mate {
     pub aligned: Option<bool>,
     /// Axis about which an angle is measured (signed angle), as `(component, axis)`.
     pub about: Option<MateEntity>,
+    /// Suppressed: kept in the document, not solved.
+    pub suppressed: bool,
+}
+
+impl Mate {
+    /// Whether the mate's directions are aligned (SolidWorks' `MateAlign`): what it
+    /// says, else its kind's default (coincident planes: anti-aligned), else what the
+    /// poses show (the nearer of the two); `None` for mates of points.
+    pub fn alignment(&self, poses: &[Transform]) -> Option<bool> {
+        let (a, b) = world(self, poses);
+        let (u, v) = (a.direction()?, b.direction()?);
+        Some(
+            self.aligned
+                .or(default_aligned(self.kind, &a))
+                .unwrap_or(u.dot(&v) >= 0.0),
+        )
+    }
 }
 
 /// Residual of a mate in the current poses: mm for positional, radians for angular

@@ -27,6 +27,7 @@
 //! ```
 
 pub mod dimension;
+mod edit;
 mod error;
 mod export;
 pub mod file;
@@ -42,6 +43,7 @@ pub use error::DocumentError;
 pub use export::GlbExport;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
+pub use edit::{MateSpec, PropertyOwner};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
 pub use robot::{LinkDisplay, RobotError, RobotInstance};
@@ -76,6 +78,9 @@ pub struct Part {
     pub references: IndexMap<String, Reference>,
     /// The feature tree, in order.
     pub features: Vec<Feature>,
+    /// Custom properties (SolidWorks' file properties: `Description`, `Price`, …),
+    /// name → text, in file order.
+    pub properties: IndexMap<String, String>,
 }
 
 /// A feature of a part's feature tree.
@@ -150,6 +155,13 @@ pub struct Component {
     /// Not part of the product (a fixture, the table): sequence planning leaves it
     /// out (document key `fixture: true`).
     pub fixture: bool,
+    /// Suppressed: kept in the document, but not checked, planned around, sequenced,
+    /// weighed, bounded or exported, and its mates are inactive.
+    pub suppressed: bool,
+    /// Hidden: checked like any other component, but not exported.
+    pub hidden: bool,
+    /// Custom properties of this instance, name → text, in file order.
+    pub properties: IndexMap<String, String>,
 }
 
 /// An assembly document.
@@ -226,6 +238,7 @@ impl Document {
                     mesh: Arc::new(mesh.clone()),
                     references: IndexMap::new(),
                     features: Vec::new(),
+                    properties: IndexMap::new(),
                 },
             );
             self.by_name.insert(name.clone(), self.components.len());
@@ -238,6 +251,9 @@ impl Document {
                 mass: None,
                 threaded: false,
                 fixture: false,
+                suppressed: false,
+                hidden: false,
+                properties: IndexMap::new(),
             });
             self.generated.insert(name);
         }
@@ -258,7 +274,13 @@ impl Document {
         self.apply_robots();
         let mut poses: Vec<Transform> = self.components.iter().map(|c| c.transform).collect();
         let fixed = self.solver_fixed();
-        mates::solve(&self.mates, &mut poses, &fixed)?;
+        let active: Vec<Mate> = self
+            .mates
+            .iter()
+            .filter(|m| self.mate_active(m))
+            .cloned()
+            .collect();
+        mates::solve(&active, &mut poses, &fixed)?;
         for (c, p) in self.components.iter_mut().zip(poses) {
             c.transform = p;
         }
@@ -480,9 +502,11 @@ impl Document {
         Some(b.translated(&t))
     }
 
-    /// The box around every component (mm), `None` for an empty document.
+    /// The box around every component but the suppressed ones (mm), `None` for an
+    /// empty document.
     pub fn assembly_aabb(&self) -> Option<Aabb> {
         (0..self.components.len())
+            .filter(|&i| !self.components[i].suppressed)
             .filter_map(|i| self.world_aabb(i))
             .reduce(|a, b| a.union(&b))
     }

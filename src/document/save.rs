@@ -19,6 +19,7 @@ impl Document {
             .map(|p| {
                 let mut pf = PartFile {
                     features: p.features.iter().map(Feature::to_file).collect(),
+                    properties: property_values(&p.properties),
                     ..PartFile::from_stl(p.stl.clone())
                 };
                 if let Some(step) = &p.step {
@@ -68,6 +69,9 @@ impl Document {
                 mass: c.mass,
                 threaded: c.threaded,
                 fixture: c.fixture,
+                suppressed: c.suppressed,
+                hidden: c.hidden,
+                properties: property_values(&c.properties),
             })
             .collect();
         let mates = self
@@ -92,6 +96,7 @@ impl Document {
                     .about
                     .as_ref()
                     .map(|e| format!("{}/{}", self.components[e.component].name, e.reference)),
+                suppressed: m.suppressed,
             })
             .collect();
         DocumentFile {
@@ -203,7 +208,16 @@ impl Document {
             path: path.into(),
             message,
         };
-        let text = self
+        // A save solves what loading solves (SolidWorks rebuilds on save): the file
+        // holds the poses the mates give, and a document whose mates cannot be
+        // satisfied (a mated component moved, then fixed) is refused, not written.
+        let mut solved = self.clone();
+        solved.solve_mates().map_err(|e| {
+            write_err(format!(
+                "not saved: the document would not open again ({e}); move the component back, float it, or delete or suppress the mate"
+            ))
+        })?;
+        let text = solved
             .to_file()
             .to_yaml()
             .map_err(|e| write_err(e.to_string()))?;
@@ -281,8 +295,24 @@ impl Document {
         dir.write_atomic(name, text.as_bytes())
             .map_err(|e| write_err(e.to_string()))?;
         self.disk_hash = Some(content_hash(text.as_bytes()));
+        let mut moved = false;
+        for (c, s) in self.components.iter_mut().zip(&solved.components) {
+            moved |= c.transform != s.transform;
+            c.transform = s.transform;
+        }
+        if moved {
+            self.revision += 1;
+        }
         Ok(())
     }
+}
+
+fn property_values(
+    p: &indexmap::IndexMap<String, String>,
+) -> indexmap::IndexMap<String, serde_yaml::Value> {
+    p.iter()
+        .map(|(k, v)| (k.clone(), serde_yaml::Value::String(v.clone())))
+        .collect()
 }
 
 fn color_value(c: &Color) -> serde_yaml::Value {

@@ -334,3 +334,150 @@ fn names_are_nfc_and_case_twins_are_warned() {
     doc.add_robot(&format!("arm{nfd}"), &robot, None).unwrap();
     assert!(doc.robot("arm\u{e9}").is_ok());
 }
+
+/// Issue 37: mates as objects, suppression, visibility, properties, added, renamed
+/// and re-pointed components survive a save and a reload, and a change the mates
+/// cannot satisfy changes nothing.
+#[test]
+fn edits_of_a_macro_author_round_trip() {
+    let dir = write_demo();
+    let p = dir.path().join("cell.yaml");
+    let mut doc = Document::open(&p).unwrap();
+    // mates: flip, suppress, delete, add
+    assert_eq!(doc.mate_alignment("screw1_seated").unwrap(), Some(false));
+    let seated = doc.component("screw1").unwrap().transform;
+    doc.flip_mate("screw1_seated").unwrap();
+    assert_eq!(doc.mate_alignment("screw1_seated").unwrap(), Some(true));
+    let flipped = doc.component("screw1").unwrap().transform;
+    let z = flipped.apply_vector(&Vec3::z());
+    assert!((z.z + 1.0).abs() < 1e-9, "screw1 turned over: {z}");
+    doc.flip_mate("screw1_seated").unwrap();
+    assert!(
+        (doc.component("screw1")
+            .unwrap()
+            .transform
+            .apply_vector(&Vec3::z())
+            - seated.apply_vector(&Vec3::z()))
+        .norm()
+            < 1e-9
+    );
+    doc.set_mate_suppressed("screw2_seated", true).unwrap();
+    assert!(!doc.mate_active(doc.mate("screw2_seated").unwrap()));
+    let deleted = doc.delete_mate("screw3_in_hole").unwrap();
+    assert_eq!(deleted.kind, MateKind::Concentric);
+    assert!(doc.mate("screw3_in_hole").is_err());
+    // a new mate that conflicts with the fixed plate is refused, nothing changed
+    let before = doc.to_file();
+    let conflict = MateSpec {
+        name: "bad".into(),
+        kind: MateKind::Distance,
+        entities: ["table/origin".into(), "plate_a/origin".into()],
+        value: Some(1.0),
+        aligned: None,
+        about: None,
+    };
+    assert!(doc.add_mate(&conflict).is_err());
+    assert_eq!(doc.to_file(), before);
+    // components: suppressed, hidden, properties, added, renamed, re-pointed
+    doc.set_suppressed("screw4", true).unwrap();
+    doc.set_hidden("screw5", true).unwrap();
+    doc.set_property(PropertyOwner::Part("screw"), "Description", "M5 screw")
+        .unwrap();
+    doc.set_property(PropertyOwner::Component("screw5"), "Finish", "zinc")
+        .unwrap();
+    let i = doc
+        .add_component(
+            "extra-1",
+            "screw",
+            Transform::from_translation(Vec3::new(0.0, 0.0, 900.0)),
+        )
+        .unwrap();
+    assert_eq!(doc.next_instance_name("extra"), "extra-2");
+    doc.rename_component("extra-1", "extra-2").unwrap();
+    assert_eq!(doc.component_index("extra-2").unwrap(), i);
+    assert!(doc
+        .add_component("extra-2", "screw", Transform::IDENTITY)
+        .is_err());
+    assert!(doc
+        .add_component("x", "no_part", Transform::IDENTITY)
+        .is_err());
+    doc.rename_component("screw1", "Screw-1").unwrap();
+    doc.save().unwrap();
+    let back = Document::open(&p).unwrap();
+    assert_eq!(back.to_file(), doc.to_file());
+    assert!(back.component("screw4").unwrap().suppressed);
+    assert!(back.component("screw5").unwrap().hidden);
+    assert_eq!(
+        back.component("screw5").unwrap().properties["Finish"],
+        "zinc"
+    );
+    assert_eq!(
+        back.part("screw").unwrap().properties["Description"],
+        "M5 screw"
+    );
+    assert!(back.mate("screw2_seated").unwrap().suppressed);
+    assert_eq!(back.mate_alignment("screw1_seated").unwrap(), Some(false));
+    assert_eq!(
+        back.mates()[3].entities[1].component,
+        back.component_index("Screw-1").unwrap()
+    );
+    assert!(back.component("extra-2").is_ok());
+    // the export leaves the suppressed and the hidden out; the box the suppressed one
+    let glb = back.export_glb(&dir.path().join("out.glb"), false).unwrap();
+    assert_eq!(glb.nodes, back.components().len() - 2);
+    let mut moved = back.clone();
+    let b0 = moved.assembly_aabb().unwrap();
+    moved
+        .set_transform(
+            "screw4",
+            Transform::from_translation(Vec3::new(0.0, 0.0, 1e5)),
+        )
+        .unwrap();
+    assert_eq!(moved.assembly_aabb().unwrap(), b0);
+}
+
+#[test]
+fn properties_must_be_scalars_and_a_replaced_part_needs_the_mates_references() {
+    let dir = write_demo();
+    let p = dir.path().join("cell.yaml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let bad = text.replacen(
+        "- name: screw5\n",
+        "- name: screw5\n  properties:\n    Price: [1, 2]\n",
+        1,
+    );
+    let e = load_text(dir.path(), &bad).unwrap_err().to_string();
+    assert!(e.contains("Price") && e.contains("text, a number"), "{e}");
+    let good = text.replacen(
+        "- name: screw5\n",
+        "- name: screw5\n  properties:\n    Price: 12.50\n    Stock: true\n",
+        1,
+    );
+    let doc = load_text(dir.path(), &good).unwrap();
+    let props = &doc.component("screw5").unwrap().properties;
+    assert_eq!(
+        (props["Price"].as_str(), props["Stock"].as_str()),
+        ("12.5", "true")
+    );
+    // plate_b has no `axis`: screw1's concentric mate cannot follow it there
+    let mut doc = Document::open(&p).unwrap();
+    let e = doc
+        .set_component_part("screw1", "plate_b")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("does not have"), "{e}");
+    assert_eq!(doc.component("screw1").unwrap().part, "screw");
+    // a reference added to the new part lets it through, and mates follow it
+    doc.set_reference(
+        "screw",
+        "under_head",
+        Reference::Plane {
+            point: Point3::new(0.0, 0.0, 12.0),
+            normal: Vec3::new(0.0, 0.0, -2.0),
+        },
+    )
+    .unwrap();
+    assert!(doc
+        .set_reference("screw", "origin", Reference::Point(Point3::origin()))
+        .is_err());
+}

@@ -32,6 +32,7 @@
 mod check;
 #[cfg(feature = "db")]
 mod db;
+mod mate;
 mod motion;
 mod plan;
 mod sequence;
@@ -39,6 +40,7 @@ mod sequence;
 pub use check::{Check, Sweep};
 #[cfg(feature = "db")]
 pub use db::{Limits, PathFilter};
+pub use mate::AddMate;
 pub use motion::{Drill, Motion};
 pub use plan::{Narrow, NarrowSwitch, Plan};
 pub use sequence::Sequence;
@@ -563,6 +565,7 @@ pub fn vocabularies() -> Vec<&'static Vocabulary> {
         Sequence::VOCABULARY,
         Motion::VOCABULARY,
         Drill::VOCABULARY,
+        AddMate::VOCABULARY,
         #[cfg(feature = "db")]
         PathFilter::VOCABULARY,
         #[cfg(feature = "db")]

@@ -48,6 +48,7 @@ fn every_vocabulary_is_its_structs() {
     holds::<Sequence>();
     holds::<Motion>();
     holds::<Drill>();
+    holds::<AddMate>();
     #[cfg(feature = "db")]
     {
         holds::<PathFilter>();
@@ -55,7 +56,7 @@ fn every_vocabulary_is_its_structs() {
     }
     assert_eq!(
         vocabularies().len(),
-        if cfg!(feature = "db") { 9 } else { 7 }
+        if cfg!(feature = "db") { 10 } else { 8 }
     );
 }
 

@@ -239,6 +239,7 @@ pub(crate) fn register_all(engine: &mut Engine, ctx: &Arc<Context>) -> Registere
     let mut api = Api::new(engine);
     super::bind_math::register(&mut api);
     super::bind_document::register(&mut api, ctx);
+    super::bind_edit::register(&mut api, ctx);
     super::bind_files::register(&mut api, ctx);
     super::bind_interference::register(&mut api);
     super::bind_mass::register(&mut api);

@@ -33,7 +33,9 @@ fn indices(d: &DocHandle, names: &Array) -> ScriptResult<Vec<usize>> {
 
 fn of(d: &DocHandle, which: Option<Vec<usize>>, o: &MassOptions) -> ScriptResult<MassProperties> {
     let doc = d.lock()?;
-    let all: Vec<usize> = (0..doc.components().len()).collect();
+    let all: Vec<usize> = (0..doc.components().len())
+        .filter(|&i| !doc.components()[i].suppressed)
+        .collect();
     mass_properties(&doc, which.as_deref().unwrap_or(&all), o).map_err(fail)
 }
 
@@ -224,7 +226,12 @@ pub(super) fn register_export(api: &mut Api) {
         },
     );
     api.f("Document.export_stl(file: string, options: map)", "Writes components at their poses as one binary STL: `#{components: [names] (default all), frame, overwrite}`.", |d: &mut DocHandle, file: &str, o: Map| -> ScriptResult<()> {
-        let all: Vec<usize> = (0..d.lock()?.components().len()).collect();
+        let all: Vec<usize> = {
+            let doc = d.lock()?;
+            (0..doc.components().len())
+                .filter(|&i| !doc.components()[i].suppressed && !doc.components()[i].hidden)
+                .collect()
+        };
         let (which, frame, overwrite) = export_options(d, &o, all)?;
         export_stl(d, file, &which, frame.as_ref(), overwrite)
     });

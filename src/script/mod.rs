@@ -11,6 +11,7 @@ mod assign;
 #[cfg(feature = "db")]
 mod bind_db;
 mod bind_document;
+mod bind_edit;
 mod bind_files;
 mod bind_interference;
 mod bind_mass;

@@ -523,6 +523,11 @@ fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, Sequence
         for name in &opts.exclude {
             m &= !bit(index(name)?);
         }
+        for (i, c) in doc.components().iter().enumerate() {
+            if c.suppressed {
+                m &= !bit(i);
+            }
+        }
         return Ok(m);
     }
     let mut m: Mask = if n == 128 { !0 } else { bit(n) - 1 };
@@ -534,7 +539,7 @@ fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, Sequence
         }
     }
     for (i, c) in doc.components().iter().enumerate() {
-        if c.fixture {
+        if c.fixture || c.suppressed {
             m &= !bit(i);
         }
     }

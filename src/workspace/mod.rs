@@ -37,7 +37,8 @@ mod scene;
 
 pub use features::{feature_cells, split_part, CUT_CELLS_FEATURE};
 pub use overlap::{
-    mass_properties, part_frame_mass_properties, world_mesh, MassOptions, Overlap, OverlapOptions,
+    export_stl, mass_properties, part_frame_mass_properties, world_mesh, MassOptions, Overlap,
+    OverlapOptions,
 };
 pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_DIAMETERS};
 pub use scene::{Scene, SceneCache};
@@ -183,7 +184,11 @@ impl<'d> Workspace<'d> {
     /// # Errors
     /// [`DocumentError::NotFound`] with close matches.
     pub fn index(&self, name: &str) -> Result<usize, WorkspaceError> {
-        Ok(self.doc.component_index(name)?)
+        let i = self.doc.component_index(name)?;
+        if self.doc.components()[i].suppressed {
+            return Err(DocumentError::Suppressed(self.doc.components()[i].name.clone()).into());
+        }
+        Ok(i)
     }
 
     /// The name of component `index`.

@@ -205,3 +205,38 @@ pub fn world_mesh(
     }
     out
 }
+
+/// Writes [`world_mesh`] of components `which` as binary STL to `path` through the
+/// project's write rule, as [`Document::export_glb`] does (a file the document was
+/// built from is never replaced, an existing file only when fitup wrote it or with
+/// `force`; atomically). Returns the bytes written.
+///
+/// # Errors
+/// [`DocumentError::Write`] naming the file.
+pub fn export_stl(
+    doc: &Document,
+    path: &std::path::Path,
+    which: &[usize],
+    frame: Option<&crate::math::Transform>,
+    force: bool,
+) -> Result<usize, crate::document::DocumentError> {
+    let sources: Vec<std::path::PathBuf> = doc
+        .source_files()
+        .iter()
+        .filter_map(|p| p.canonicalize().ok())
+        .collect();
+    let used = |p: &std::path::Path| p.canonicalize().is_ok_and(|c| sources.contains(&c));
+    let rule = crate::fsutil::OutputRule {
+        force,
+        used: Some(&used),
+        signature: None,
+    };
+    let write_error = |message: String| crate::document::DocumentError::Write {
+        path: path.to_path_buf(),
+        message,
+    };
+    crate::fsutil::check_output(path, &rule).map_err(|e| write_error(e.to_string()))?;
+    let bytes = crate::mesh::stl_bytes(&world_mesh(doc, which, frame));
+    crate::fsutil::write_output(path, &bytes, &rule).map_err(|e| write_error(e.to_string()))?;
+    Ok(bytes.len())
+}

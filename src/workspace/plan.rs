@@ -105,7 +105,7 @@ impl Workspace<'_> {
         let index = self.index(name)?;
         let s = self.scene();
         let obstacles = (0..s.poses.len())
-            .filter(|&i| i != index)
+            .filter(|&i| i != index && s.is_active(i))
             .map(|i| (s.colliders[i].clone(), s.poses[i]))
             .collect();
         Ok(MeshValidator::new(
@@ -136,7 +136,7 @@ impl Workspace<'_> {
         let index = self.index(name)?;
         let doc = self.document();
         Ok((0..doc.components().len())
-            .filter(|&i| i != index)
+            .filter(|&i| i != index && !doc.components()[i].suppressed)
             .filter_map(|i| doc.world_aabb(i))
             .reduce(|a, b| a.union(&b)))
     }

@@ -101,6 +101,9 @@ pub struct Scene {
     pub cells: Vec<Option<Arc<CutCells>>>,
     /// Per component: the pose (part frame → world, mm).
     pub poses: Vec<crate::math::Transform>,
+    /// Per component: whether it takes part (a suppressed component does not: no
+    /// contacts, no obstacle).
+    pub active: Vec<bool>,
     /// The cache's pair verdicts: a pass over an unchanged scene (a watch rerun, a
     /// repeated check) only recomputes the pairs that moved.
     verdicts: Arc<Mutex<Verdicts>>,
@@ -133,8 +136,14 @@ impl Scene {
             colliders,
             cells,
             poses: doc.components().iter().map(|c| c.transform).collect(),
+            active: doc.components().iter().map(|c| !c.suppressed).collect(),
             verdicts: cache.verdicts.clone(),
         })
+    }
+
+    /// Whether component `i` takes part in checks (it is not suppressed).
+    pub fn is_active(&self, i: usize) -> bool {
+        self.active.get(i).copied().unwrap_or(true)
     }
 
     /// Component `i` as a posed part.
@@ -159,7 +168,8 @@ impl Scene {
             return Err(CollisionError::BadTolerance(tolerance));
         }
         let parts: Vec<PosedPart> = (0..self.poses.len()).map(|i| self.posed(i)).collect();
-        let candidates = candidate_pairs(&parts)?;
+        let mut candidates = candidate_pairs(&parts)?;
+        candidates.retain(|&(i, j)| self.is_active(i) && self.is_active(j));
         let cells_id = |i: usize| {
             self.cells[i]
                 .as_ref()
@@ -284,7 +294,9 @@ impl Scene {
         motion: &Motion,
         options: &SweepOptions,
     ) -> Result<SweepHit, CollisionError> {
-        let others: Vec<usize> = (0..self.poses.len()).filter(|&i| i != moving).collect();
+        let others: Vec<usize> = (0..self.poses.len())
+            .filter(|&i| i != moving && self.is_active(i))
+            .collect();
         let obstacles: Vec<Obstacle> = others
             .iter()
             .map(|&i| Obstacle {

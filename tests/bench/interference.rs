@@ -595,6 +595,9 @@ fn script_rows() {
             mass: None,
             threaded: false,
             fixture: false,
+            suppressed: false,
+            hidden: false,
+            properties: Default::default(),
         });
     }
     std::fs::write(root.join("models/pair.yaml"), file.to_yaml().unwrap()).unwrap();

@@ -70,6 +70,9 @@ fn write_cell(dir: &Path, parts: usize) -> (std::path::PathBuf, usize) {
             mass: None,
             threaded: false,
             fixture: false,
+            suppressed: false,
+            hidden: false,
+            properties: Default::default(),
         });
     }
     let path = dir.join("cell.yaml");

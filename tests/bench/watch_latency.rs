@@ -44,6 +44,9 @@ fn measure(extra: &[&str]) {
         mass: None,
         threaded: false,
         fixture: false,
+        suppressed: false,
+        hidden: false,
+        properties: Default::default(),
     });
     std::fs::write(models.join("big.yaml"), file.to_yaml().unwrap()).unwrap();
     // the project root: scripts/ resolves `models/…` against it

@@ -187,6 +187,9 @@ impl Problem {
                 mass: None,
                 threaded: false,
                 fixture: false,
+                suppressed: false,
+                hidden: false,
+                properties: Default::default(),
             })
             .collect();
         components.push(ComponentFile {
@@ -198,6 +201,9 @@ impl Problem {
             mass: None,
             threaded: false,
             fixture: false,
+            suppressed: false,
+            hidden: false,
+            properties: Default::default(),
         });
         DocumentFile {
             units: "mm".into(),

@@ -230,7 +230,7 @@ fn setting_a_pose_in_one_call_and_the_hint_for_the_natural_spelling() {
     // A property without a setter still cannot be assigned: the hint says what can.
     std::fs::write(
         p.join("scripts/no_setter.rhai"),
-        "let doc = open_doc(\"models/cell.yaml\");\ndoc.component(\"screw4\").name = \"x\";\n",
+        "let doc = open_doc(\"models/cell.yaml\");\ndoc.component(\"screw4\").part_file = \"x\";\n",
     )
     .unwrap();
     let o = run_in(p, &["run", "scripts/no_setter.rhai"]);

@@ -15,7 +15,7 @@ fn every_ported_macro_runs() {
         .collect();
     scripts.sort();
     assert!(
-        scripts.len() >= 14,
+        scripts.len() >= 30,
         "expected the ported macros, found {scripts:?}"
     );
     let mut failures = Vec::new();
@@ -222,5 +222,41 @@ fn data_files_are_read_and_written_inside_the_project() {
         common::text(&out).contains("data/bad.csv:3"),
         "{}",
         common::text(&out)
+    );
+}
+
+/// Issue 37's first bug: a save wrote a document fitup then refused to open (a mated
+/// component moved and fixed). A save solves what loading solves: such a document is
+/// refused with the mate named and the file untouched, and a moved mated component
+/// is saved where the mates put it, so the file opens as saved.
+#[test]
+fn a_save_solves_what_loading_solves() {
+    let dir = common::project();
+    let before = std::fs::read_to_string(dir.path().join("models/cell.yaml")).unwrap();
+    std::fs::write(
+        dir.path().join("scripts/t.rhai"),
+        "let d = open_doc(\"models/cell.yaml\");\n\
+         d.component(\"plate_b\").translate(0, 0, 10);\n\
+         d.component(\"plate_b\").fixed = true;\n\
+         let refused = \"\";\n\
+         try { d.save(); } catch (e) { refused = `${e}`; }\n\
+         assert(refused.contains(\"plate_b_on_table\") && refused.contains(\"not saved\"), refused);\n\
+         d.component(\"plate_b\").fixed = false;\n\
+         d.save();\n\
+         let z = d.component(\"plate_b\").transform.translation[2];\n\
+         assert_near(z, 750.0, 1e-6);\n\
+         let again = open_doc(\"models/cell.yaml\");\n\
+         assert(again.component(\"plate_b\").transform == d.component(\"plate_b\").transform, \"opens as saved\");\n\
+         print(\"ok\");\n",
+    )
+    .unwrap();
+    let out = common::run_in(dir.path(), &["run", "scripts/t.rhai"]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    let after = std::fs::read_to_string(dir.path().join("models/cell.yaml")).unwrap();
+    // the file holds the poses the mates give (the demo's own file holds unsolved ones)
+    assert!(
+        before.contains("[690.0, 310.0, 753.0, 1.0]")
+            && after.contains("[700.0, 300.0, 750.0, 1.0]"),
+        "{after}"
     );
 }
