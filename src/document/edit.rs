@@ -6,7 +6,6 @@
 
 use super::mates::{self, Mate, MateKind};
 use super::{nfc_name, Component, Document, DocumentError, Part, Reference};
-use crate::diagnostics::suggestion;
 use crate::math::Transform;
 use crate::mesh::MeshCache;
 use crate::project::Project;
@@ -56,10 +55,8 @@ impl Document {
         self.mates
             .iter()
             .position(|m| m.name == name)
-            .ok_or_else(|| DocumentError::NotFound {
-                what: "mate",
-                name: name.into(),
-                hint: suggestion(name, self.mates.iter().map(|m| m.name.as_str())),
+            .ok_or_else(|| {
+                DocumentError::not_found("mate", name, self.mates.iter().map(|m| m.name.as_str()))
             })
     }
 
@@ -320,19 +317,8 @@ impl Document {
         super::check_pose(&transform, format_args!("the pose for `{name}`"))?;
         let i = self.components.len();
         self.by_name.insert(name.clone(), i);
-        self.components.push(Component {
-            name,
-            part,
-            fixed: false,
-            color: None,
-            transform,
-            mass: None,
-            threaded: false,
-            fixture: false,
-            suppressed: false,
-            hidden: false,
-            properties: IndexMap::new(),
-        });
+        self.components
+            .push(Component::placed(name, part, transform));
         self.revision += 1;
         Ok(i)
     }

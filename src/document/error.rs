@@ -106,6 +106,19 @@ pub enum DocumentError {
 }
 
 impl DocumentError {
+    /// No `what` is named `name`: the error names the closest of `candidates`.
+    pub(crate) fn not_found<'a>(
+        what: &'static str,
+        name: &str,
+        candidates: impl IntoIterator<Item = &'a str> + Clone,
+    ) -> Self {
+        DocumentError::NotFound {
+            what,
+            name: name.into(),
+            hint: crate::diagnostics::suggestion(name, candidates),
+        }
+    }
+
     /// Adds a hint to a located error.
     pub fn with_help(self, help: String) -> Self {
         match self {

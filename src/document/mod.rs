@@ -164,6 +164,26 @@ pub struct Component {
     pub properties: IndexMap<String, String>,
 }
 
+impl Component {
+    /// A free, shown, unsuppressed instance of `part` named `name` at `transform`
+    /// (component frame → assembly frame, mm), with no colour, mass or properties.
+    pub(crate) fn placed(name: String, part: String, transform: Transform) -> Self {
+        Self {
+            name,
+            part,
+            fixed: false,
+            color: None,
+            transform,
+            mass: None,
+            threaded: false,
+            fixture: false,
+            suppressed: false,
+            hidden: false,
+            properties: IndexMap::new(),
+        }
+    }
+}
+
 /// An assembly document.
 #[derive(Debug, Clone)]
 pub struct Document {
@@ -242,19 +262,11 @@ impl Document {
                 },
             );
             self.by_name.insert(name.clone(), self.components.len());
-            self.components.push(Component {
-                name: name.clone(),
-                part: name.clone(),
-                fixed: false,
-                color: None,
-                transform: Transform::IDENTITY,
-                mass: None,
-                threaded: false,
-                fixture: false,
-                suppressed: false,
-                hidden: false,
-                properties: IndexMap::new(),
-            });
+            self.components.push(Component::placed(
+                name.clone(),
+                name.clone(),
+                Transform::IDENTITY,
+            ));
             self.generated.insert(name);
         }
         Ok(())
@@ -309,13 +321,9 @@ impl Document {
 
     /// A part by name.
     pub fn part(&self, name: &str) -> Result<&Part, DocumentError> {
-        self.parts
-            .get(&*nfc_name(name))
-            .ok_or_else(|| DocumentError::NotFound {
-                what: "part",
-                name: name.into(),
-                hint: suggestion(name, self.parts.keys().map(String::as_str)),
-            })
+        self.parts.get(&*nfc_name(name)).ok_or_else(|| {
+            DocumentError::not_found("part", name, self.parts.keys().map(String::as_str))
+        })
     }
 
     /// Components in file order.
@@ -325,14 +333,13 @@ impl Document {
 
     /// The index of a component, or an error listing close matches.
     pub fn component_index(&self, name: &str) -> Result<usize, DocumentError> {
-        self.by_name
-            .get(&*nfc_name(name))
-            .copied()
-            .ok_or_else(|| DocumentError::NotFound {
-                what: "component",
-                name: name.into(),
-                hint: suggestion(name, self.components.iter().map(|c| c.name.as_str())),
-            })
+        self.by_name.get(&*nfc_name(name)).copied().ok_or_else(|| {
+            DocumentError::not_found(
+                "component",
+                name,
+                self.components.iter().map(|c| c.name.as_str()),
+            )
+        })
     }
 
     /// A component by name.
@@ -562,11 +569,7 @@ impl Document {
     /// "No dimension named …", with close matches among the existing ones.
     fn dimension_not_found(&self, full_name: &str) -> DocumentError {
         let names = self.dimensions();
-        DocumentError::NotFound {
-            what: "dimension",
-            name: full_name.into(),
-            hint: suggestion(full_name, names.iter().map(String::as_str)),
-        }
+        DocumentError::not_found("dimension", full_name, names.iter().map(String::as_str))
     }
 
     /// What a dimension drives: a mate or a robot joint.

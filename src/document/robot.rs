@@ -879,10 +879,8 @@ impl Document {
         self.robots
             .iter()
             .position(|r| r.name() == nfc)
-            .ok_or_else(|| DocumentError::NotFound {
-                what: "robot",
-                name: name.into(),
-                hint: suggestion(name, self.robots.iter().map(|r| r.name())),
+            .ok_or_else(|| {
+                DocumentError::not_found("robot", name, self.robots.iter().map(|r| r.name()))
             })
     }
 
