@@ -35,6 +35,7 @@
 mod backend;
 pub mod diff;
 mod functions;
+mod held;
 #[cfg(feature = "postgres")]
 mod pg;
 mod query;
@@ -353,11 +354,16 @@ const NO_POSTGRES: &str = "this fitup was built without PostgreSQL support: rebu
 /// An open results database (SQLite file or PostgreSQL server), migrated to
 /// [`SCHEMA_VERSION`].
 pub struct Database {
+    /// The read-only, jailed connection of [`Database::query_with`] (SQLite; opened
+    /// on the first query). Declared first, so it closes before the writing
+    /// connection, whose close (the last one) checkpoints and removes the `-wal`.
+    reader: Option<query::SqliteReader>,
     conn: Conn,
     target: Target,
-    /// The read-only, jailed connection of [`Database::query_with`] (SQLite; opened
-    /// on the first query).
-    reader: Option<query::SqliteReader>,
+    /// The SQLite file's folder, held open for as long as the connections (declared
+    /// after them: dropped after them); SQLite opens the file, its `-wal` and `-shm`
+    /// through it ([`held`]).
+    held: Option<held::HeldFile>,
 }
 
 impl std::fmt::Debug for Database {
@@ -378,29 +384,57 @@ impl Database {
     /// [`SCHEMA_VERSION`]): for migration tests and tools that must write an older
     /// schema. Prefer [`Database::open`].
     pub fn open_at_version(target: &Target, version: u32) -> Result<Self, DbError> {
+        Self::open_with(target, version, None)
+    }
+
+    /// [`Database::open`] for a database a script names: a SQLite file inside
+    /// `project` is reached from the project's held root folder one folder at a time
+    /// without following a symbolic link, and SQLite opens it (and its `-wal`, `-shm`)
+    /// through that folder handle, so a folder swapped for a link to an outside folder
+    /// after the script's path was checked is never followed (a link met is refused).
+    pub fn open_in(project: &crate::project::Project, target: &Target) -> Result<Self, DbError> {
+        Self::open_with(target, schema::LATEST, Some(project))
+    }
+
+    fn open_with(
+        target: &Target,
+        version: u32,
+        project: Option<&crate::project::Project>,
+    ) -> Result<Self, DbError> {
         let name = target.to_string();
         let open_err = |cause: String| DbError::Open {
             target: name.clone(),
             cause,
         };
+        let mut held_file = None;
         let conn = match target {
             Target::Sqlite(path) => {
-                if path.is_dir() {
-                    return Err(open_err("it is a folder, not a database file".into()));
-                }
-                if let Some(parent) = path.parent() {
-                    if !parent.as_os_str().is_empty() && !parent.is_dir() {
-                        return Err(open_err(format!(
-                            "the folder {} does not exist",
-                            parent.display()
-                        )));
+                let held = hold_folder(path, project).map_err(open_err)?;
+                let (dir, file) = (held.dir(), held.name());
+                let kind = dir.stat(file).map_err(|e| open_err(e.to_string()))?;
+                let existing = match kind {
+                    None => false,
+                    Some(crate::fsutil::Kind::File(len)) => len > 0,
+                    Some(crate::fsutil::Kind::Dir) => {
+                        return Err(open_err("it is a folder, not a database file".into()))
                     }
-                }
+                    Some(crate::fsutil::Kind::Symlink) => {
+                        return Err(open_err(
+                            "it is a symbolic link (it was not one when its path was checked): not followed".into(),
+                        ))
+                    }
+                    Some(crate::fsutil::Kind::Special(what)) => {
+                        return Err(open_err(format!(
+                            "it is {what}, not a database file"
+                        )))
+                    }
+                };
+                let read_only = || dir.open_file_rw(file).is_err();
                 // A file on read-only media (or without write permission) opens, or fails
                 // to open its WAL index, with SQLite's generic "unable to open": say
                 // read-only when that is the cause.
                 let fail = |e: rusqlite::Error| {
-                    if path.exists() && is_read_only(path) {
+                    if existing && read_only() {
                         DbError::ReadOnly {
                             target: name.clone(),
                             cause: format!("the file is not writable ({e})"),
@@ -415,17 +449,34 @@ impl Database {
                 };
                 // An existing file must already be SQLite before SQLite may touch it
                 // (opening in WAL mode rewrites its header).
-                let existing = std::fs::metadata(path).is_ok_and(|m| m.len() > 0);
                 if existing {
-                    let head =
-                        crate::fsutil::file_head(path, 16).map_err(|e| open_err(e.to_string()))?;
+                    let mut head = Vec::with_capacity(16);
+                    dir.open_file(file)
+                        .and_then(|f| {
+                            use std::io::Read;
+                            f.take(16).read_to_end(&mut head)
+                        })
+                        .map_err(|e| open_err(e.to_string()))?;
                     if !head.starts_with(crate::fsutil::SQLITE_MAGIC) {
                         return Err(foreign(
                             "it is not a SQLite file (its first bytes are not SQLite's header)",
                         ));
                     }
                 }
-                let c = rusqlite::Connection::open(path).map_err(fail)?;
+                let (sqlite_name, vfs) = held.sqlite_name();
+                // No SQLITE_OPEN_URI: a file name is a file name, never `file:…?mode=rwc`.
+                let flags = rusqlite::OpenFlags::SQLITE_OPEN_READ_WRITE
+                    | rusqlite::OpenFlags::SQLITE_OPEN_CREATE
+                    | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX;
+                let c = match vfs {
+                    Some(vfs) => rusqlite::Connection::open_with_flags_and_vfs(
+                        &sqlite_name,
+                        flags,
+                        vfs,
+                    ),
+                    None => rusqlite::Connection::open_with_flags(&sqlite_name, flags),
+                }
+                .map_err(fail)?;
                 c.busy_timeout(BUSY_TIMEOUT).map_err(fail)?;
                 if existing && !retry_locked(|| is_fitup_sqlite(&c)).map_err(fail)? {
                     return Err(foreign(
@@ -438,7 +489,7 @@ impl Database {
                         .map_err(fail)?;
                 if mode != "wal" {
                     // Read-only media cannot switch; reads still work.
-                    if path.exists() && is_read_only(path) {
+                    if read_only() {
                         return Err(DbError::ReadOnly {
                             target: name.clone(),
                             cause: "the file is not writable".into(),
@@ -458,6 +509,7 @@ impl Database {
                     )
                 })
                 .map_err(fail)?;
+                held_file = Some(held);
                 Conn::Sqlite(c)
             }
             #[cfg(feature = "postgres")]
@@ -471,6 +523,7 @@ impl Database {
             conn,
             target: target.clone(),
             reader: None,
+            held: held_file,
         };
         let target_version = version.min(schema::LATEST);
         let now = now_utc();
@@ -618,11 +671,11 @@ impl Database {
             #[cfg(feature = "postgres")]
             Conn::Postgres(c) => pg::pg_query(c, sql, params, limits, cancel),
             Conn::Sqlite(_) => {
-                let reader = match (&mut self.reader, &self.target) {
+                let reader = match (&mut self.reader, &self.held) {
                     (Some(r), _) => r,
-                    (slot @ None, Target::Sqlite(path)) => {
+                    (slot @ None, Some(held)) => {
                         let opened =
-                            query::SqliteReader::open(path, BUSY_TIMEOUT).map_err(|e| {
+                            query::SqliteReader::open(held, BUSY_TIMEOUT).map_err(|e| {
                                 DbError::Open {
                                     target: target.clone(),
                                     cause: format!("the read-only query connection: {}", e.message),
@@ -630,7 +683,7 @@ impl Database {
                             })?;
                         slot.insert(opened)
                     }
-                    (None, Target::Postgres(_)) => {
+                    (None, None) => {
                         return Err(DbError::Open {
                             target,
                             cause: "a SQLite connection without a file".into(),
@@ -705,9 +758,45 @@ fn is_fitup_sqlite(c: &rusqlite::Connection) -> rusqlite::Result<bool> {
     )
 }
 
-/// Whether the file cannot be written by this process.
-fn is_read_only(path: &Path) -> bool {
-    std::fs::OpenOptions::new().append(true).open(path).is_err()
+/// The folder of the SQLite file `path` held open, with the file's name: walked from
+/// `project`'s held root without following a link when the path lies inside it (a
+/// file a script named, its path checked by [`crate::project::Project::resolve`]),
+/// else opened by the path the caller named (links in it followed: `--db`,
+/// `FITUP_DB`, a library caller).
+fn hold_folder(
+    path: &Path,
+    project: Option<&crate::project::Project>,
+) -> Result<held::HeldFile, String> {
+    let (Some(name), Some(parent)) = (path.file_name(), path.parent()) else {
+        return Err("not a file name".into());
+    };
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    let missing = |e: std::io::Error| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            format!("the folder {} does not exist", parent.display())
+        } else {
+            format!("its folder {}: {e}", parent.display())
+        }
+    };
+    if let Some(project) = project.filter(|p| path.starts_with(p.root())) {
+        let dir = project.folder(parent, false).map_err(missing)?;
+        return Ok(held::HeldFile::new(dir, name));
+    }
+    // Named by the caller: a link at the file's own name is followed once, here.
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+        if let Ok(real) = path.canonicalize() {
+            if let (Some(n), Some(d)) = (real.file_name(), real.parent()) {
+                let dir = crate::fsutil::Dir::open(d).map_err(missing)?;
+                return Ok(held::HeldFile::new(dir, n));
+            }
+        }
+    }
+    let dir = crate::fsutil::Dir::open(parent).map_err(missing)?;
+    Ok(held::HeldFile::new(dir, name))
 }
 
 /// The columns and rows of a [`Database::query`].
@@ -818,6 +907,52 @@ mod tests {
         Database::open(&Target::Sqlite(empty.clone())).unwrap();
         drop(Database::open(&Target::Sqlite(d.join("new.db"))).unwrap());
         Database::open(&Target::Sqlite(d.join("new.db"))).unwrap();
+    }
+
+    /// A script's database is opened through the project's held folders: a folder or
+    /// the file itself turned into a link to the outside after the path was checked is
+    /// refused, nothing outside is opened or made; a database opened before the link
+    /// was put in place keeps working in its own folder.
+    #[cfg(unix)]
+    #[test]
+    fn a_scripts_database_never_follows_a_link_put_after_its_check() {
+        let dir = tempfile::tempdir().unwrap();
+        let outside = tempfile::tempdir().unwrap();
+        let project = crate::project::Project::new(dir.path()).unwrap();
+        let root = project.root().to_path_buf();
+        std::fs::create_dir(root.join("data")).unwrap();
+        let path = project.resolve("data/x.db").unwrap();
+        let mut db = Database::open_in(&project, &Target::Sqlite(path.clone())).unwrap();
+        // The folder swapped for a link after the check (and after the open).
+        std::fs::rename(root.join("data"), root.join("away")).unwrap();
+        std::os::unix::fs::symlink(outside.path(), root.join("data")).unwrap();
+        let e = Database::open_in(&project, &Target::Sqlite(path.clone())).unwrap_err();
+        assert!(e.to_string().contains("symbolic link"), "{e}");
+        // The open connection (and its query connection) still use the held folder.
+        db.start_run(&NewRun::script("s.rhai")).unwrap();
+        db.query("SELECT count(*) FROM runs", &[]).unwrap();
+        drop(db);
+        let names = |d: &Path| -> Vec<String> {
+            let mut v: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        assert!(names(outside.path()).is_empty(), "{:?}", names(outside.path()));
+        assert_eq!(names(&root.join("away")), ["x.db"]);
+        // The file itself a link to an outside database.
+        std::fs::remove_file(root.join("data")).unwrap();
+        std::fs::rename(root.join("away"), root.join("data")).unwrap();
+        std::fs::copy(root.join("data/x.db"), outside.path().join("y.db")).unwrap();
+        let before = std::fs::read(outside.path().join("y.db")).unwrap();
+        std::fs::remove_file(root.join("data/x.db")).unwrap();
+        std::os::unix::fs::symlink(outside.path().join("y.db"), root.join("data/x.db")).unwrap();
+        let e = Database::open_in(&project, &Target::Sqlite(path)).unwrap_err();
+        assert!(e.to_string().contains("symbolic link"), "{e}");
+        assert_eq!(std::fs::read(outside.path().join("y.db")).unwrap(), before);
+        assert_eq!(names(outside.path()), ["y.db"]);
     }
 
     #[test]

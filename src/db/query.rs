@@ -399,15 +399,18 @@ fn limit_sqlite_heap() {
 }
 
 impl SqliteReader {
-    /// Opens `path` read-only (the file must exist: the writing connection made it).
-    pub fn open(path: &std::path::Path, busy: Duration) -> Result<Self, Raw> {
+    /// Opens the held file read-only (it must exist: the writing connection made it),
+    /// through its held folder ([`super::held`]).
+    pub fn open(held: &super::held::HeldFile, busy: Duration) -> Result<Self, Raw> {
         use rusqlite::limits::Limit;
         use rusqlite::OpenFlags;
         // No SQLITE_OPEN_URI: a file name is a file name, never `file:…?mode=rwc`.
-        let mut conn = rusqlite::Connection::open_with_flags(
-            path,
-            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
-        )?;
+        let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+        let (name, vfs) = held.sqlite_name();
+        let mut conn = match vfs {
+            Some(vfs) => rusqlite::Connection::open_with_flags_and_vfs(&name, flags, vfs),
+            None => rusqlite::Connection::open_with_flags(&name, flags),
+        }?;
         conn.busy_timeout(busy)?;
         conn.set_limit(Limit::SQLITE_LIMIT_ATTACHED, 0)?;
         conn.set_limit(Limit::SQLITE_LIMIT_LENGTH, MAX_VALUE_BYTES)?;

@@ -88,6 +88,20 @@ impl Dir {
         &self.path
     }
 
+    /// The raw descriptor of the held folder (for `/proc/self/fd/N` names handed to a
+    /// library that opens by name); `None` off Unix.
+    pub(crate) fn raw_fd(&self) -> Option<i32> {
+        #[cfg(unix)]
+        {
+            use std::os::fd::AsRawFd;
+            Some(self.fd.as_raw_fd())
+        }
+        #[cfg(not(unix))]
+        {
+            None
+        }
+    }
+
     /// The folder `rel` below this one (relative, plain names only: no `..`, no root),
     /// reached one component at a time without following a link; with `create`,
     /// missing folders are made (`mkdirat`, 0755 less the umask).

@@ -33,7 +33,12 @@ impl DbHandle {
             // A file named by the script stays inside the project.
             Some(file) => Target::Sqlite(ctx.project.resolve(file).map_err(fail)?),
         };
-        let mut db = Database::open(&target).map_err(fail)?;
+        // A file the script named is opened through the project's held folders.
+        let mut db = match which {
+            Some(_) => Database::open_in(&ctx.project, &target),
+            None => Database::open(&target),
+        }
+        .map_err(fail)?;
         if let Target::Sqlite(p) = &target {
             // The run's own writes are not user saves (watch mode); never read back
             // while SQLite holds them (see `record_write_unread`).

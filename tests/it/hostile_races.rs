@@ -246,3 +246,88 @@ print(`saved ${ok} of 400 (${tries} opens refused)`);\n",
         "temporary files outside"
     );
 }
+
+/// A script opening `data/x.db` (`open_db`) and storing a snapshot in it 300 times
+/// while `data/` is swapped for a link to a folder holding an identical copy of the
+/// database: SQLite opens the file, its `-wal` and `-shm` through the folder handle
+/// walked from the project root (never by name), so the outside copy is never opened
+/// for writing (its bytes, inode and time stay), no `-wal`/`-shm` file appears outside,
+/// and every snapshot lands in the inside database.
+#[test]
+fn databases_never_open_outside_while_their_folder_is_swapped() {
+    let dir = common::project();
+    let p = dir.path();
+    let outside = tempfile::tempdir().unwrap();
+    std::fs::create_dir(p.join("data")).unwrap();
+    std::fs::write(
+        p.join("scripts/db.rhai"),
+        "let d = open_doc(\"models/cell.yaml\");
+let ok = 0;
+let tries = 0;
+let errs = #{};
+while ok < 200 && tries < 200000 {
+    tries += 1;
+    try {
+        let db = open_db(\"data/x.db\");
+        db.save(d);
+        ok += 1;
+    } catch (e) {
+        let k = `${e}`;
+        k.truncate(50);
+        if k in errs { errs[k] += 1; } else { errs[k] = 1; }
+    }
+}
+print(`stored ${ok} in ${tries} tries ${errs}`);
+",
+    )
+    .unwrap();
+    // The first run makes the database; the attacker's copy is that file.
+    let r = crate::hostile_bounds::run(p, &["run", "scripts/db.rhai"]);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(r.text.contains("stored 200 in 200 tries"), "{}", r.text);
+    let count = |db: &Path| -> i64 {
+        let c = rusqlite::Connection::open_with_flags(
+            db,
+            rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY,
+        )
+        .unwrap();
+        c.query_row("SELECT count(*) FROM snapshots", [], |r| r.get(0))
+            .unwrap()
+    };
+    assert_eq!(count(&p.join("data/x.db")), 200);
+    std::fs::copy(p.join("data/x.db"), outside.path().join("x.db")).unwrap();
+    let outside_before = identities(outside.path());
+    let outside_hashes = common::snapshot(outside.path());
+    let stop = Arc::new(AtomicBool::new(false));
+    let swap = swapper(p.join("data"), outside.path().to_path_buf(), stop.clone());
+    let r = crate::hostile_bounds::run_within(
+        p,
+        &["run", "scripts/db.rhai"],
+        Duration::from_secs(60),
+    );
+    stop.store(true, Ordering::Relaxed);
+    let swaps = swap.join().unwrap();
+    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(!r.text.contains("panicked"), "{}", r.text);
+    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
+    assert_eq!(
+        identities(outside.path()),
+        outside_before,
+        "opened for writing outside"
+    );
+    assert_eq!(common::snapshot(outside.path()), outside_hashes);
+    let stored: i64 = r
+        .text
+        .split("stored ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{}", r.text));
+    assert!(stored > 0, "{}", r.text);
+    assert_eq!(
+        count(&p.join("data/x.db")),
+        200 + stored,
+        "every stored snapshot is in the inside database"
+    );
+}
