@@ -126,6 +126,16 @@ impl Project {
         crate::fsutil::read_opened(f, kind)
     }
 
+    /// [`read_file`](Self::read_file) as UTF-8 text.
+    pub fn read_text(
+        &self,
+        path: &Path,
+        kind: crate::fsutil::FileKind,
+    ) -> Result<String, crate::fsutil::ReadError> {
+        String::from_utf8(self.read_file(path, kind)?)
+            .map_err(|e| crate::fsutil::ReadError::NotText(e.utf8_error().valid_up_to()))
+    }
+
     /// The project of a script or document at `file` when no `--root` is given: the
     /// nearest folder from the file's own folder upwards holding [`PROJECT_FILE`],
     /// else the file's own folder.

@@ -469,11 +469,9 @@ impl Database {
                     | rusqlite::OpenFlags::SQLITE_OPEN_CREATE
                     | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX;
                 let c = match vfs {
-                    Some(vfs) => rusqlite::Connection::open_with_flags_and_vfs(
-                        &sqlite_name,
-                        flags,
-                        vfs,
-                    ),
+                    Some(vfs) => {
+                        rusqlite::Connection::open_with_flags_and_vfs(&sqlite_name, flags, vfs)
+                    }
                     None => rusqlite::Connection::open_with_flags(&sqlite_name, flags),
                 }
                 .map_err(fail)?;
@@ -940,7 +938,11 @@ mod tests {
             v.sort();
             v
         };
-        assert!(names(outside.path()).is_empty(), "{:?}", names(outside.path()));
+        assert!(
+            names(outside.path()).is_empty(),
+            "{:?}",
+            names(outside.path())
+        );
         assert_eq!(names(&root.join("away")), ["x.db"]);
         // The file itself a link to an outside database.
         std::fs::remove_file(root.join("data")).unwrap();

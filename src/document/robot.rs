@@ -12,7 +12,7 @@ use super::file::{DhFile, LinkFile, RobotFile};
 use super::{Document, DocumentError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
-    read_urdf, resolve_mesh_in, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
+    resolve_mesh_in, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
     JointLimits, KinematicTree, KinematicsError, Link, MotionOptions, PackageFound, Program,
     ProgramRunError, Robot, Trajectory,
 };
@@ -465,7 +465,7 @@ pub(super) fn read_urdf_robot(
         }
         roots.push(root);
     }
-    let u = read_urdf(&path, tip).map_err(|e| e.to_string())?;
+    let u = crate::kinematics::read_urdf_in(project, &path, tip).map_err(|e| e.to_string())?;
     let tree = u.robot.tree();
     let mut meshes: Vec<Option<Mesh>> = vec![None; tree.len()];
     let mut files = vec![path.clone()];

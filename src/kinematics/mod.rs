@@ -59,6 +59,6 @@ pub use trajectory::{Trajectory, TrajectorySample};
 pub use tree::{KinematicTree, Link};
 pub use ur::{NotUr, UrParameters, UrSolver};
 pub use urdf::{
-    parse_urdf, read_urdf, resolve_mesh, resolve_mesh_in, PackageFound, UrdfMesh, UrdfRobot,
-    MAX_URDF_BYTES,
+    parse_urdf, read_urdf, read_urdf_in, resolve_mesh, resolve_mesh_in, PackageFound, UrdfMesh,
+    UrdfRobot, MAX_URDF_BYTES,
 };

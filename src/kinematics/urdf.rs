@@ -882,6 +882,47 @@ pub fn read_urdf(path: &Path, tip: Option<&str>) -> Result<UrdfRobot, SourceErro
     parse_urdf(path, &text, tip)
 }
 
+/// [`read_urdf`] of a file inside `project` (absolute, as
+/// [`crate::project::Project::resolve`] returns it), read through the project's held
+/// root folder: a folder swapped for a symbolic link after the path was checked is
+/// refused, never followed.
+pub fn read_urdf_in(
+    project: &crate::project::Project,
+    path: &Path,
+    tip: Option<&str>,
+) -> Result<UrdfRobot, SourceError> {
+    let bytes = project
+        .open_file(path)
+        .and_then(|f| {
+            use std::io::Read;
+            let len = f.metadata()?.len();
+            if len > MAX_URDF_BYTES as u64 {
+                return Ok(Err(len));
+            }
+            let mut bytes = Vec::with_capacity(len as usize);
+            f.take(MAX_URDF_BYTES as u64 + 1).read_to_end(&mut bytes)?;
+            Ok(Ok(bytes))
+        })
+        .map_err(|e| SourceError::new(path, 0, 0, e.to_string()))?
+        .map_err(|len| {
+            SourceError::new(
+                path,
+                0,
+                0,
+                format!("{len} bytes: larger than the {MAX_URDF_BYTES}-byte limit for a URDF"),
+            )
+        })?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        SourceError::new(
+            path,
+            0,
+            0,
+            format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        )
+    })?;
+    parse_urdf(path, &text, tip)
+}
+
 /// The 1-based line and column of attribute `attr`'s value of `node` (the node's
 /// start when the attribute is missing).
 fn attribute_pos(doc: &roxmltree::Document, node: roxmltree::Node, attr: &str) -> (usize, usize) {

@@ -544,7 +544,7 @@ fn register_models(api: &mut Api, ctx: &Arc<Context>) {
         move |path: &str| -> ScriptResult<RobotModel> {
             let full = c.project.resolve(path).map_err(fail)?;
             c.record_read(&full);
-            let u = crate::kinematics::read_urdf(&full, None).map_err(fail)?;
+            let u = crate::kinematics::read_urdf_in(&c.project, &full, None).map_err(fail)?;
             let source = format!("URDF {}", c.project.display(&full));
             Ok(RobotModel(
                 Arc::new(u.robot.with_limits_source(source)),
@@ -722,7 +722,9 @@ fn register_motions(api: &mut Api, ctx: &Arc<Context>) {
           -> ScriptResult<TrajectoryHandle> {
         let full = c.project.resolve(path).map_err(fail)?;
         c.record_read(&full);
-        let text = crate::fsutil::read_text(&full, crate::fsutil::FileKind::Program)
+        let text = c
+            .project
+            .read_text(&full, crate::fsutil::FileKind::Program)
             .map_err(|e| fail(format!("{path}: {e}")))?;
         let program = parse_program(&c.project.display(&full), &text).map_err(fail)?;
         motion(r, o, "run_program", |robot, q, o| {
@@ -803,7 +805,7 @@ fn register_drilling(api: &mut Api, ctx: &Arc<Context>) {
     api.f("load_holes(path: string) -> array", "Reads a hole table (CSV `id,x,y,z,nx,ny,nz` or `x y z nx ny nz`, mm, `#` comments) inside the project: an array of `#{id, position, normal, line}` (normals unit). The file is a dependency of the run; a bad line is an error naming it.", move |path: &str| -> ScriptResult<Array> {
         let full = c.project.resolve(path).map_err(fail)?;
         c.record_read(&full);
-        let text = crate::fsutil::read_text(&full, crate::fsutil::FileKind::Table).map_err(|e| fail(format!("{path}: {e}")))?;
+        let text = c.project.read_text(&full, crate::fsutil::FileKind::Table).map_err(|e| fail(format!("{path}: {e}")))?;
         let holes = parse_holes(&c.project.display(&full), &text).map_err(fail)?;
         Ok(holes.iter().map(|h| Dynamic::from_map(hole_map(h))).collect())
     });

@@ -223,7 +223,8 @@ impl Context {
         self.record_write_unread(path);
         // Seen by watch mode at once, while the run goes on.
         let key = write_key(path);
-        if let Ok(bytes) = crate::fsutil::read_file(path, crate::fsutil::FileKind::Mesh) {
+        // Read back through the project's held root (never through a swapped folder).
+        if let Ok(bytes) = self.project.read_file(path, crate::fsutil::FileKind::Mesh) {
             let hash = crate::fsutil::content_hash(&bytes);
             if let Ok(mut own) = self.caches.own_writes.lock() {
                 own.insert(key.clone(), hash);

@@ -217,7 +217,10 @@ impl rhai::ModuleResolver for ProjectResolver {
             chain.push(frame);
         }
         let _pop = PopOnDrop(self);
-        let text = crate::fsutil::read_text(&full, crate::fsutil::FileKind::Script)
+        let text = self
+            .ctx
+            .project
+            .read_text(&full, crate::fsutil::FileKind::Script)
             .map_err(|e| refuse(e.to_string()))?;
         self.ctx.record_read(&full);
         let in_module = |e: Box<EvalAltResult>| {

@@ -286,11 +286,9 @@ print(`stored ${ok} in ${tries} tries ${errs}`);
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(r.text.contains("stored 200 in 200 tries"), "{}", r.text);
     let count = |db: &Path| -> i64 {
-        let c = rusqlite::Connection::open_with_flags(
-            db,
-            rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY,
-        )
-        .unwrap();
+        let c =
+            rusqlite::Connection::open_with_flags(db, rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY)
+                .unwrap();
         c.query_row("SELECT count(*) FROM snapshots", [], |r| r.get(0))
             .unwrap()
     };
@@ -300,11 +298,8 @@ print(`stored ${ok} in ${tries} tries ${errs}`);
     let outside_hashes = common::snapshot(outside.path());
     let stop = Arc::new(AtomicBool::new(false));
     let swap = swapper(p.join("data"), outside.path().to_path_buf(), stop.clone());
-    let r = crate::hostile_bounds::run_within(
-        p,
-        &["run", "scripts/db.rhai"],
-        Duration::from_secs(60),
-    );
+    let r =
+        crate::hostile_bounds::run_within(p, &["run", "scripts/db.rhai"], Duration::from_secs(60));
     stop.store(true, Ordering::Relaxed);
     let swaps = swap.join().unwrap();
     eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
@@ -330,4 +325,102 @@ print(`stored ${ok} in ${tries} tries ${errs}`);
         200 + stored,
         "every stored snapshot is in the inside database"
     );
+}
+
+/// The files a script reads by path — a document (`open_doc`), a hole table
+/// (`load_holes`), a motion program (`run_program`), a URDF (`load_urdf`) and an
+/// imported module — are read through the project's held root while their folder is
+/// swapped for a link to a folder holding other files of the same names: every read
+/// returns the inside file or a located refusal, never the outside one, and nothing
+/// outside changes.
+#[test]
+fn script_reads_never_go_through_a_swapped_folder() {
+    let dir = common::project();
+    let p = dir.path();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    std::fs::create_dir(p.join("data")).unwrap();
+    let urdf = |name: &str, joints: usize| {
+        let mut s = format!("<robot name=\"{name}\"><link name=\"l0\"/>");
+        for j in 1..=joints {
+            s += &format!(
+                "<link name=\"l{j}\"/><joint name=\"j{j}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{j}\"/><origin xyz=\"0 0 0.1\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>",
+                j - 1
+            );
+        }
+        s + "</robot>\n"
+    };
+    let yaml = std::fs::read_to_string(p.join("models/cell.yaml"))
+        .unwrap()
+        .replace("stl: meshes/", "stl: ../models/meshes/");
+    for (d, who, holes, joints) in [
+        (p.join("data"), "inside", 3, 2),
+        (o.to_path_buf(), "outside", 1, 4),
+    ] {
+        std::fs::write(d.join("m.rhai"), format!("export const WHO = \"{who}\";\n")).unwrap();
+        let rows: String = (0..holes)
+            .map(|i| format!("h{i},{i},0,0,0,0,1\n"))
+            .collect();
+        std::fs::write(d.join("holes.csv"), format!("id,x,y,z,nx,ny,nz\n{rows}")).unwrap();
+        std::fs::write(d.join("robot.urdf"), urdf(who, joints)).unwrap();
+        // The outside document names a component the inside one lacks.
+        let doc = if who == "outside" {
+            yaml.replace("plate_b", "plate_outside")
+        } else {
+            yaml.clone()
+        };
+        std::fs::write(d.join("cell.yaml"), doc).unwrap();
+    }
+    std::fs::write(
+        p.join("scripts/read.rhai"),
+        "let seen = #{inside: 0, refused: 0, outside: 0};
+for i in 0..60 {
+    try { import \"../data/m\" as m; if m::WHO == \"inside\" { seen.inside += 1; } else { seen.outside += 1; } } catch (e) { seen.refused += 1; }
+    for k in 0..40 {
+        try { let h = load_holes(\"data/holes.csv\"); if h.len() == 3 { seen.inside += 1; } else { seen.outside += 1; } } catch (e) { seen.refused += 1; }
+        try { let r = load_urdf(\"data/robot.urdf\"); if r.name == \"inside\" && r.dof == 2 { seen.inside += 1; } else { seen.outside += 1; } } catch (e) { seen.refused += 1; }
+        if k % 8 == 0 {
+            try {
+                let d = open_doc(\"data/cell.yaml\");
+                let names = d.components().map(|c| c.name);
+                if names.contains(\"plate_outside\") { seen.outside += 1; } else { seen.inside += 1; }
+            } catch (e) { seen.refused += 1; }
+        }
+    }
+}
+print(`seen ${seen}`);
+",
+    )
+    .unwrap();
+    let r = crate::hostile_bounds::run(p, &["run", "scripts/read.rhai"]);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(
+        r.text.contains("\"outside\": 0, \"refused\": 0"),
+        "{}",
+        r.text
+    );
+    let before = common::snapshot(p);
+    let outside_before = identities(o);
+    let outside_hashes = common::snapshot(o);
+    let stop = Arc::new(AtomicBool::new(false));
+    let swap = swapper(p.join("data"), o.to_path_buf(), stop.clone());
+    let r = crate::hostile_bounds::run_within(
+        p,
+        &["run", "scripts/read.rhai"],
+        Duration::from_secs(120),
+    );
+    stop.store(true, Ordering::Relaxed);
+    let swaps = swap.join().unwrap();
+    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(!r.text.contains("panicked"), "{}", r.text);
+    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
+    assert!(
+        r.text.contains("\"outside\": 0,"),
+        "an outside file was read: {}",
+        r.text
+    );
+    assert_eq!(identities(o), outside_before, "changed outside");
+    assert_eq!(common::snapshot(o), outside_hashes);
+    assert_eq!(common::snapshot(p), before, "a user file changed");
 }
