@@ -48,7 +48,11 @@ impl Document {
     /// a name another equation sets, uses an unknown name, closes a circle, does not
     /// evaluate to a finite number, gives a dimension a value it refuses or leaves
     /// mates that cannot be satisfied.
-    pub fn add_equation(&mut self, index: Option<usize>, text: &str) -> Result<usize, DocumentError> {
+    pub fn add_equation(
+        &mut self,
+        index: Option<usize>,
+        text: &str,
+    ) -> Result<usize, DocumentError> {
         let n = self.equations.len();
         let at = index.unwrap_or(n);
         if at > n {
@@ -138,7 +142,10 @@ impl Document {
     }
 
     /// Changes the list of equations and rebuilds; on failure nothing changes.
-    fn change_equations(&mut self, change: impl FnOnce(&mut Vec<Equation>)) -> Result<(), DocumentError> {
+    fn change_equations(
+        &mut self,
+        change: impl FnOnce(&mut Vec<Equation>),
+    ) -> Result<(), DocumentError> {
         let before = self.equations.clone();
         change(&mut self.equations);
         if let Err(e) = self.rebuild() {
@@ -178,7 +185,10 @@ impl Document {
                 return Err(err(self, i, cause));
             }
             if e.kind == EquationTarget::Dimension && !dimensions.contains(&e.target) {
-                let hint = crate::diagnostics::suggestion(&e.target, dimensions.iter().map(String::as_str));
+                let hint = crate::diagnostics::suggestion(
+                    &e.target,
+                    dimensions.iter().map(String::as_str),
+                );
                 let cause = EquationCause::NotADimension {
                     name: e.target.clone(),
                     hint,
@@ -201,7 +211,10 @@ impl Document {
                         current.insert(n, d.document_value());
                     }
                     Err(_) => {
-                        let known = sets.keys().copied().chain(dimensions.iter().map(String::as_str));
+                        let known = sets
+                            .keys()
+                            .copied()
+                            .chain(dimensions.iter().map(String::as_str));
                         let hint = crate::diagnostics::suggestion(&n, known);
                         return Err(err(self, i, EquationCause::UnknownName { name: n, hint }));
                     }
@@ -215,7 +228,10 @@ impl Document {
                 Some(&j) => values[j],
                 None => current.get(n).copied().unwrap_or(0.0),
             };
-            values[i] = self.equations[i].expr.eval(&lookup).map_err(|c| err(self, i, c))?;
+            values[i] = self.equations[i]
+                .expr
+                .eval(&lookup)
+                .map_err(|c| err(self, i, c))?;
         }
         for &i in &ordered {
             if self.equations[i].kind != EquationTarget::Dimension {
@@ -239,15 +255,13 @@ impl Document {
 
 /// Parses `text` as the equation at `index`.
 fn parsed(text: &str, index: usize) -> Result<Equation, DocumentError> {
-    parse_equation(text).map_err(|cause| {
-        DocumentError::Equation {
-            at: None,
-            source: EquationError {
-                index,
-                text: shown(text),
-                cause,
-            },
-        }
+    parse_equation(text).map_err(|cause| DocumentError::Equation {
+        at: None,
+        source: EquationError {
+            index,
+            text: shown(text),
+            cause,
+        },
     })
 }
 

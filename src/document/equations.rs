@@ -569,7 +569,8 @@ impl Expr {
                 }
                 let v = f.apply(&a[..args.len()]);
                 if !v.is_finite() {
-                    let shown: Vec<String> = a[..args.len()].iter().map(|x| x.to_string()).collect();
+                    let shown: Vec<String> =
+                        a[..args.len()].iter().map(|x| x.to_string()).collect();
                     return Err(EquationCause::NonFinite(format!(
                         "{}({})",
                         f.name(),
@@ -611,7 +612,10 @@ pub(crate) fn order(
     for (i, e) in equations.iter().enumerate() {
         let mut names = Vec::new();
         e.expr.names(&mut names);
-        let deps: Vec<usize> = names.iter().filter_map(|m| sets.get(m.as_str()).copied()).collect();
+        let deps: Vec<usize> = names
+            .iter()
+            .filter_map(|m| sets.get(m.as_str()).copied())
+            .collect();
         for &d in &deps {
             used_by[d].push(i);
         }
@@ -691,15 +695,41 @@ mod tests {
 
     #[test]
     fn errors_name_their_cause_and_column() {
-        assert_eq!(value("\"a\" = 1 / (\"x\" - 3)"), Err(EquationCause::DivisionByZero));
-        assert!(matches!(value("\"a\" = sqr(-1)"), Err(EquationCause::NonFinite(s)) if s == "sqr(-1)"));
-        assert!(matches!(value("\"a\" = log(0)"), Err(EquationCause::NonFinite(_))));
-        assert!(matches!(value("\"a\" = 1e300 * 1e300"), Err(EquationCause::NonFinite(_))));
-        assert!(matches!(value("\"a\" = 1 +"), Err(EquationCause::Syntax { column: 10, .. })));
-        assert!(matches!(value("a = 1"), Err(EquationCause::Syntax { column: 1, .. })));
-        assert!(matches!(value("\"a\" = 10mm"), Err(EquationCause::Syntax { .. })));
-        assert!(matches!(value("\"a\" = sine(1)"), Err(EquationCause::Syntax { column: 7, .. })));
-        assert!(matches!(value("\"a\" = min(1)"), Err(EquationCause::Syntax { .. })));
+        assert_eq!(
+            value("\"a\" = 1 / (\"x\" - 3)"),
+            Err(EquationCause::DivisionByZero)
+        );
+        assert!(
+            matches!(value("\"a\" = sqr(-1)"), Err(EquationCause::NonFinite(s)) if s == "sqr(-1)")
+        );
+        assert!(matches!(
+            value("\"a\" = log(0)"),
+            Err(EquationCause::NonFinite(_))
+        ));
+        assert!(matches!(
+            value("\"a\" = 1e300 * 1e300"),
+            Err(EquationCause::NonFinite(_))
+        ));
+        assert!(matches!(
+            value("\"a\" = 1 +"),
+            Err(EquationCause::Syntax { column: 10, .. })
+        ));
+        assert!(matches!(
+            value("a = 1"),
+            Err(EquationCause::Syntax { column: 1, .. })
+        ));
+        assert!(matches!(
+            value("\"a\" = 10mm"),
+            Err(EquationCause::Syntax { .. })
+        ));
+        assert!(matches!(
+            value("\"a\" = sine(1)"),
+            Err(EquationCause::Syntax { column: 7, .. })
+        ));
+        assert!(matches!(
+            value("\"a\" = min(1)"),
+            Err(EquationCause::Syntax { .. })
+        ));
     }
 
     #[test]

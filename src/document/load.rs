@@ -624,10 +624,18 @@ impl Loader<'_> {
         let located = |source: EquationError| {
             let (line, col) = self
                 .positions
-                .get(&format!("equations/{}", source.index.min(file.equations.len().saturating_sub(1))))
+                .get(&format!(
+                    "equations/{}",
+                    source.index.min(file.equations.len().saturating_sub(1))
+                ))
                 .unwrap_or((0, 0));
             DocumentError::Equation {
-                at: Some(Box::new(SourceError::new(self.path, line, col, source.to_string()))),
+                at: Some(Box::new(SourceError::new(
+                    self.path,
+                    line,
+                    col,
+                    source.to_string(),
+                ))),
                 source,
             }
         };

@@ -634,7 +634,10 @@ impl Document {
                 .collect::<Vec<_>>(),
         );
         self.set_dimension_value(full_name, value)?;
-        let is_mate = matches!(self.dimension_target(full_name), Ok(DimensionTarget::Mate(_)));
+        let is_mate = matches!(
+            self.dimension_target(full_name),
+            Ok(DimensionTarget::Mate(_))
+        );
         if !is_mate && self.equations.is_empty() {
             return Ok(());
         }

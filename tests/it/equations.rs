@@ -59,16 +59,21 @@ fn equations_drive_dimensions_on_load_and_rebuild() {
     doc.set_global_variable("Factor", 3.5).unwrap();
     assert_eq!(doc.dimension("D1@lift").unwrap().value, 35.0);
     assert!((doc.dimension("D1@turn").unwrap().document_value() - 52.5).abs() < 1e-9);
-    assert!((z_of(&doc, "plate") - 785.0).abs() < 1e-6, "the mates follow");
+    assert!(
+        (z_of(&doc, "plate") - 785.0).abs() < 1e-6,
+        "the mates follow"
+    );
     assert_eq!(doc.equations()[2].value, 35.0);
     // a driven dimension is the equation's
     let e = doc.set_dimension("D1@lift", 5.0).unwrap_err().to_string();
     assert!(e.contains("driven by equation [2]"), "{e}");
     // an equation using a dimension nothing drives reads it at its value
-    doc.set_equation(1, "\"Clearance\" = \"D1@lift\" / 7").unwrap();
+    doc.set_equation(1, "\"Clearance\" = \"D1@lift\" / 7")
+        .unwrap();
     assert_eq!(doc.global_variable("Clearance").unwrap(), 5.0);
     // added at an index; deleted: what it set keeps its value
-    doc.add_equation(Some(0), "\"Spare\" = sin(30) * 2 + (10 - 5)").unwrap();
+    doc.add_equation(Some(0), "\"Spare\" = sin(30) * 2 + (10 - 5)")
+        .unwrap();
     assert!((doc.equations()[0].value - 6.0).abs() < 1e-12);
     doc.delete_equation(3).unwrap(); // "D1@lift" = 10 * "Factor"
     assert_eq!(doc.dimension("D1@lift").unwrap().value, 35.0);
@@ -97,20 +102,46 @@ fn equations_are_saved_and_reload_to_the_same_values() {
 #[test]
 fn a_bad_equation_in_a_file_is_located_with_its_cause() {
     let cases: &[(&[&str], &str, &str)] = &[
-        (&["\"Factor\" = 2", "\"D1@lift\" = 10 * \"Factr\""], "Factr", "unknown name \"Factr\""),
-        (&["\"A\" = \"B\" + 1", "\"B\" = \"A\" * 2"], "\"A\" = \"B\"", "circular: \"A\" uses \"B\" uses \"A\""),
-        (&["\"Zero\" = 0", "\"D1@lift\" = 10 / \"Zero\""], "10 / ", "division by zero"),
-        (&["\"D1@lift\" = sqr(-4)"], "sqr", "sqr(-4) is not a finite number"),
+        (
+            &["\"Factor\" = 2", "\"D1@lift\" = 10 * \"Factr\""],
+            "Factr",
+            "unknown name \"Factr\"",
+        ),
+        (
+            &["\"A\" = \"B\" + 1", "\"B\" = \"A\" * 2"],
+            "\"A\" = \"B\"",
+            "circular: \"A\" uses \"B\" uses \"A\"",
+        ),
+        (
+            &["\"Zero\" = 0", "\"D1@lift\" = 10 / \"Zero\""],
+            "10 / ",
+            "division by zero",
+        ),
+        (
+            &["\"D1@lift\" = sqr(-4)"],
+            "sqr",
+            "sqr(-4) is not a finite number",
+        ),
         (&["\"D1@lift\" = -3"], "-3", "a distance cannot be negative"),
-        (&["\"D1@nothing\" = 3"], "nothing", "not a dimension of this document"),
-        (&["\"Factor\" = 2", "\"Factor\" = 3"], "= 3", "set by equation [0] already"),
+        (
+            &["\"D1@nothing\" = 3"],
+            "nothing",
+            "not a dimension of this document",
+        ),
+        (
+            &["\"Factor\" = 2", "\"Factor\" = 3"],
+            "= 3",
+            "set by equation [0] already",
+        ),
         (&["\"Factor\" = 2 +"], "2 +", "syntax at column 15"),
         (&["\"Factor\" = 1e200 ^ 2"], "1e200", "not a finite number"),
     ];
     for (list, needle, cause) in cases {
         let (_dir, path) = with_equations(list);
         let e = Document::open(&path).unwrap_err();
-        let at = e.location().unwrap_or_else(|| panic!("{list:?}: not located: {e}"));
+        let at = e
+            .location()
+            .unwrap_or_else(|| panic!("{list:?}: not located: {e}"));
         assert_eq!(at.line, Some(line_of(&path, needle)), "{list:?}: {e}");
         let shown = e.to_string();
         assert!(shown.contains(cause), "{list:?}: {shown}");
@@ -125,10 +156,10 @@ fn a_refused_change_changes_nothing() {
     let mut doc = Document::open(&path).unwrap();
     let before = (doc.to_yaml(), z_of(&doc, "plate"));
     for bad in [
-        "\"Factor\" = \"D1@lift\"",   // circular through D1@lift
-        "\"Factor\" = 1 / 0",          // division by zero
-        "\"Factor\" = -4",             // D1@lift = -40: a negative distance
-        "\"Factor\" = \"Nope\"",       // unknown
+        "\"Factor\" = \"D1@lift\"", // circular through D1@lift
+        "\"Factor\" = 1 / 0",       // division by zero
+        "\"Factor\" = -4",          // D1@lift = -40: a negative distance
+        "\"Factor\" = \"Nope\"",    // unknown
     ] {
         let e = doc.set_equation(0, bad).unwrap_err();
         assert!(matches!(e, DocumentError::Equation { .. }), "{bad}: {e}");
@@ -136,11 +167,17 @@ fn a_refused_change_changes_nothing() {
     }
     match doc.add_equation(None, "\"D1@lift\" = 3").unwrap_err() {
         DocumentError::Equation { source, .. } => {
-            assert!(matches!(source.cause, EquationCause::SetTwice { first: 2, .. }))
+            assert!(matches!(
+                source.cause,
+                EquationCause::SetTwice { first: 2, .. }
+            ))
         }
         e => panic!("{e}"),
     }
-    assert!(doc.set_global_variable("D1@lift", 3.0).is_err(), "not a global variable");
+    assert!(
+        doc.set_global_variable("D1@lift", 3.0).is_err(),
+        "not a global variable"
+    );
     assert!(doc.set_global_variable("Factor", f64::NAN).is_err());
     // a mate whose dimension an equation drives is not deleted under it
     let e = doc.delete_mate("lift").unwrap_err().to_string();
@@ -167,5 +204,8 @@ fn long_chains_and_too_many_equations_are_bounded() {
     let (_dir, path) = with_equations(&refs);
     let e = Document::open(&path).unwrap_err();
     assert!(e.to_string().contains("at most 1000"), "{e}");
-    assert_eq!(e.location().unwrap().line, Some(line_of(&path, "\"w\" = 1")));
+    assert_eq!(
+        e.location().unwrap().line,
+        Some(line_of(&path, "\"w\" = 1"))
+    );
 }
