@@ -642,10 +642,7 @@ pub(crate) fn order(
     let mut seen = vec![usize::MAX; n];
     seen[start] = 0;
     let mut at = start;
-    loop {
-        let Some(&next) = uses[at].iter().find(|&&d| waiting[d] > 0) else {
-            break;
-        };
+    while let Some(&next) = uses[at].iter().find(|&&d| waiting[d] > 0) {
         if seen[next] != usize::MAX {
             let cycle: Vec<String> = path[seen[next]..]
                 .iter()
