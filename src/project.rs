@@ -136,6 +136,31 @@ impl Project {
             .map_err(|e| crate::fsutil::ReadError::NotText(e.utf8_error().valid_up_to()))
     }
 
+    /// Reads `path` as text, however the caller spelled it (relative to the working
+    /// folder, or through links the caller named): its folder is canonicalized, and a
+    /// file inside the project is read through the root's held handle
+    /// ([`read_text`](Self::read_text)); one outside it (a document given on the
+    /// command line with another `--root`) is read by its path.
+    pub fn read_named_text(
+        &self,
+        path: &Path,
+        kind: crate::fsutil::FileKind,
+    ) -> Result<String, crate::fsutil::ReadError> {
+        let parent = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let full = match (parent.canonicalize(), path.file_name()) {
+            (Ok(dir), Some(name)) => dir.join(name),
+            _ => return crate::fsutil::read_text(path, kind),
+        };
+        if full.starts_with(&self.root) {
+            self.read_text(&full, kind)
+        } else {
+            crate::fsutil::read_text(path, kind)
+        }
+    }
+
     /// The project of a script or document at `file` when no `--root` is given: the
     /// nearest folder from the file's own folder upwards holding [`PROJECT_FILE`],
     /// else the file's own folder.

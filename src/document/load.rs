@@ -41,7 +41,7 @@ impl Document {
         // Through the project's held root: a folder swapped for a link meanwhile is
         // refused, never followed.
         let text = project
-            .read_text(path, FileKind::Document)
+            .read_named_text(path, FileKind::Document)
             .map_err(|e| SourceError::new(path, 0, 0, format!("cannot read the document: {e}")))?;
         let mut doc = Self::from_yaml_in(&text, path, project, cache)?;
         doc.disk_hash = Some(content_hash(text.as_bytes()));
