@@ -287,6 +287,12 @@ class Document:
         """
     def set_mate_suppressed(self, name: str, suppressed: bool) -> None:
         """Suppresses or unsuppresses a mate and re-solves."""
+    def remove_component(self, name: str, with_mates: bool = False) -> List[str]:
+        """Removes a component. With ``with_mates=False`` a component that has mates is
+        refused (the error names them); with ``True`` its mates are deleted with it
+        (unless an equation uses one of their dimensions). Returns the deleted mates'
+        names.
+        """
     def equations(self) -> List[Dict[str, Any]]:
         """The equations in order (SolidWorks' ``IEquationMgr``), each a dict: ``text``
         (``"name" = expression``), ``name`` (the global variable or dimension it

@@ -291,6 +291,21 @@ impl Document {
         Ok(())
     }
 
+    /// Removes a component. With ``with_mates=False`` a component that has mates is
+    /// refused (the error names them); with ``True`` its mates are deleted with it
+    /// (unless an equation uses one of their dimensions). Returns the deleted mates'
+    /// names.
+    #[pyo3(signature = (name, with_mates = false))]
+    fn remove_component(&self, name: &str, with_mates: bool) -> Result<Vec<String>> {
+        let mates = if with_mates {
+            fitup::document::RemoveMates::Delete
+        } else {
+            fitup::document::RemoveMates::Refuse
+        };
+        let deleted = self.lock()?.doc.remove_component(name, mates)?;
+        Ok(deleted.into_iter().map(|m| m.name).collect())
+    }
+
     /// The equations in order (SolidWorks' ``IEquationMgr``), each a dict: ``text``
     /// (``"name" = expression``), ``name`` (the global variable or dimension it
     /// sets), ``expression``, ``value`` (at the last rebuild: mm, degrees, or no unit

@@ -538,3 +538,16 @@ def test_equations_and_global_variables(project):
     again = fitup.Document(path)
     assert [e["text"] for e in again.equations()] == [e["text"] for e in doc.equations()]
     assert again.global_variable("Factor") == 3.0
+
+
+def test_remove_component(project):
+    """Issue 37, capability 7: a component with mates is refused unless its mates go
+    with it; the others keep their poses."""
+    doc = fitup.Document(project / "models" / "cell.yaml")
+    with pytest.raises(fitup.DocumentError, match="screw1_in_hole"):
+        doc.remove_component("screw1")
+    before = doc.pose("screw2")
+    assert doc.remove_component("screw1", with_mates=True) == ["screw1_in_hole", "screw1_seated"]
+    assert "screw1" not in doc.components()
+    assert (doc.pose("screw2") == before).all()
+    assert doc.remove_component("screw4") == []

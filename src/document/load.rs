@@ -160,6 +160,7 @@ impl Document {
             aabb_cache: AabbCache::default(),
             disk_hash: None,
             warnings: Vec::new(),
+            removed: Vec::new(),
         };
         let urdf = load.urdf_robots(&file, &mut doc, cache)?;
         doc.mates = load.mates(&file, &doc)?;

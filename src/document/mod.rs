@@ -37,6 +37,7 @@ pub mod import;
 mod load;
 pub mod mates;
 pub mod reference;
+mod remove;
 pub mod robot;
 mod save;
 pub mod scan;
@@ -49,6 +50,7 @@ pub use edit::{MateSpec, PropertyOwner};
 pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
+pub use remove::RemoveMates;
 pub use robot::{LinkDisplay, RobotError, RobotInstance};
 pub use scan::MAX_ABS_VALUE;
 
@@ -209,6 +211,8 @@ pub struct Document {
     disk_hash: Option<u64>,
     /// Located warnings of the load (names that differ only by case).
     warnings: Vec<String>,
+    /// Component indices removed, in order (see [`Document::index_since`]).
+    removed: Vec<usize>,
 }
 
 /// A rotation and the box of a mesh rotated by it (mm).
