@@ -26,6 +26,7 @@
 //! # Ok::<(), fitup::document::DocumentError>(())
 //! ```
 
+pub mod assembly;
 pub mod dimension;
 mod edit;
 mod equation_mgr;
@@ -42,6 +43,7 @@ pub mod robot;
 mod save;
 pub mod scan;
 pub mod tessellations;
+pub use assembly::SubAssembly;
 pub use error::DocumentError;
 pub use export::GlbExport;
 
@@ -200,6 +202,8 @@ pub struct Document {
     mates: Vec<Mate>,
     /// Equations and global variables, evaluated on every rebuild.
     equations: Vec<Equation>,
+    /// Sub-assemblies, parents first (poses in the world frame).
+    assemblies: Vec<SubAssembly>,
     robots: Vec<RobotInstance>,
     /// Parts (and their components, same name) made from `urdf:` robots' link meshes:
     /// derived data, not written by `save`.
