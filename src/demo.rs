@@ -249,6 +249,7 @@ pub fn cell_document() -> DocumentFile {
         components,
         mates,
         robots: Vec::new(),
+        equations: Vec::new(),
     }
 }
 
@@ -432,6 +433,7 @@ pub fn mz07_document() -> DocumentFile {
         components,
         mates: vec![],
         robots: vec![robot],
+        equations: Vec::new(),
     }
 }
 
@@ -680,6 +682,7 @@ pub fn micro_cell_document() -> DocumentFile {
         components,
         mates: vec![],
         robots: vec![robot],
+        equations: Vec::new(),
     }
 }
 

@@ -287,6 +287,34 @@ class Document:
         """
     def set_mate_suppressed(self, name: str, suppressed: bool) -> None:
         """Suppresses or unsuppresses a mate and re-solves."""
+    def remove_component(self, name: str, with_mates: bool = False) -> List[str]:
+        """Removes a component. With ``with_mates=False`` a component that has mates is
+        refused (the error names them); with ``True`` its mates are deleted with it
+        (unless an equation uses one of their dimensions). Returns the deleted mates'
+        names.
+        """
+    def equations(self) -> List[Dict[str, Any]]:
+        """The equations in order (SolidWorks' ``IEquationMgr``), each a dict: ``text``
+        (``"name" = expression``), ``name`` (the global variable or dimension it
+        sets), ``expression``, ``value`` (at the last rebuild: mm, degrees, or no unit
+        for a global variable) and ``global`` (True for a global variable).
+        """
+    def add_equation(self, text: str, index: Optional[int] = None) -> int:
+        """Adds an equation (``'"Factor" = 2'``, ``'"D1@lift" = 10 * "Factor"'``) at
+        ``index`` (None: at the end) and rebuilds; returns its index. Refused, with
+        nothing changed, when it does not evaluate (``DocumentError`` naming the
+        equation and the cause).
+        """
+    def set_equation(self, index: int, text: str) -> None:
+        """Replaces equation ``index`` (0-based) by ``text`` and rebuilds."""
+    def delete_equation(self, index: int) -> None:
+        """Deletes equation ``index`` and rebuilds; what it set keeps its value."""
+    def global_variable(self, name: str) -> float:
+        """A global variable's value (no unit)."""
+    def set_global_variable(self, name: str, value: float) -> None:
+        """Sets a global variable (its equation becomes ``"name" = value``) and
+        rebuilds: the dimensions it drives and the mates follow.
+        """
     def set_suppressed(self, name: str, suppressed: bool) -> None:
         """Suppresses or unsuppresses a component (not checked, planned around,
         sequenced, weighed or exported; its mates inactive) and re-solves.

@@ -291,6 +291,73 @@ impl Document {
         Ok(())
     }
 
+    /// Removes a component. With ``with_mates=False`` a component that has mates is
+    /// refused (the error names them); with ``True`` its mates are deleted with it
+    /// (unless an equation uses one of their dimensions). Returns the deleted mates'
+    /// names.
+    #[pyo3(signature = (name, with_mates = false))]
+    fn remove_component(&self, name: &str, with_mates: bool) -> Result<Vec<String>> {
+        let mates = if with_mates {
+            fitup::document::RemoveMates::Delete
+        } else {
+            fitup::document::RemoveMates::Refuse
+        };
+        let deleted = self.lock()?.doc.remove_component(name, mates)?;
+        Ok(deleted.into_iter().map(|m| m.name).collect())
+    }
+
+    /// The equations in order (SolidWorks' ``IEquationMgr``), each a dict: ``text``
+    /// (``"name" = expression``), ``name`` (the global variable or dimension it
+    /// sets), ``expression``, ``value`` (at the last rebuild: mm, degrees, or no unit
+    /// for a global variable) and ``global`` (True for a global variable).
+    fn equations<'py>(&self, py: Python<'py>) -> Result<Vec<Bound<'py, PyDict>>> {
+        let inner = self.lock()?;
+        let mut out = Vec::with_capacity(inner.doc.equations().len());
+        for e in inner.doc.equations() {
+            let d = PyDict::new(py);
+            d.set_item("text", e.text())?;
+            d.set_item("name", &e.target)?;
+            d.set_item("expression", &e.expression)?;
+            d.set_item("value", e.value)?;
+            d.set_item("global", e.is_global())?;
+            out.push(d);
+        }
+        Ok(out)
+    }
+
+    /// Adds an equation (``'"Factor" = 2'``, ``'"D1@lift" = 10 * "Factor"'``) at
+    /// ``index`` (None: at the end) and rebuilds; returns its index. Refused, with
+    /// nothing changed, when it does not evaluate (``DocumentError`` naming the
+    /// equation and the cause).
+    #[pyo3(signature = (text, index = None))]
+    fn add_equation(&self, text: &str, index: Option<usize>) -> Result<usize> {
+        Ok(self.lock()?.doc.add_equation(index, text)?)
+    }
+
+    /// Replaces equation ``index`` (0-based) by ``text`` and rebuilds.
+    fn set_equation(&self, index: usize, text: &str) -> Result<()> {
+        self.lock()?.doc.set_equation(index, text)?;
+        Ok(())
+    }
+
+    /// Deletes equation ``index`` and rebuilds; what it set keeps its value.
+    fn delete_equation(&self, index: usize) -> Result<()> {
+        self.lock()?.doc.delete_equation(index)?;
+        Ok(())
+    }
+
+    /// A global variable's value (no unit).
+    fn global_variable(&self, name: &str) -> Result<f64> {
+        Ok(self.lock()?.doc.global_variable(name)?)
+    }
+
+    /// Sets a global variable (its equation becomes ``"name" = value``) and
+    /// rebuilds: the dimensions it drives and the mates follow.
+    fn set_global_variable(&self, name: &str, value: f64) -> Result<()> {
+        self.lock()?.doc.set_global_variable(name, value)?;
+        Ok(())
+    }
+
     /// Suppresses or unsuppresses a component (not checked, planned around,
     /// sequenced, weighed or exported; its mates inactive) and re-solves.
     fn set_suppressed(&self, name: &str, suppressed: bool) -> Result<()> {

@@ -98,9 +98,19 @@ impl Document {
     }
 
     /// Deletes a mate (SolidWorks' `DeleteSelection` on a mate); nothing moves.
-    /// Returns the deleted mate.
+    /// Returns the deleted mate. Refused while an equation uses or sets its
+    /// dimension (fitup keeps no broken equation).
     pub fn delete_mate(&mut self, name: &str) -> Result<Mate, DocumentError> {
         let i = self.mate_index(name)?;
+        if self.mates[i].kind.has_dimension() {
+            let dimension = super::dimension::full_name(&self.mates[i].name);
+            if let Some(&e) = self.equations_using(&dimension).first() {
+                return Err(DocumentError::Invalid(format!(
+                    "mate `{name}`: equation [{e}] {} uses its dimension `{dimension}`; delete or change the equation first",
+                    super::equations::shown(&self.equations()[e].text())
+                )));
+            }
+        }
         self.revision += 1;
         Ok(self.mates.remove(i))
     }

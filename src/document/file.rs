@@ -29,6 +29,11 @@ pub struct DocumentFile {
     /// Robots whose links are displayed by components (see [`RobotFile`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub robots: Vec<RobotFile>,
+    /// Equations and global variables, SolidWorks' way: `'"Factor" = 2'`,
+    /// `'"D1@lift" = 10 * "Factor"'` (values in mm and degrees; see
+    /// [`super::equations`]). Evaluated in dependency order on every rebuild.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub equations: Vec<String>,
 }
 
 fn default_units() -> String {

@@ -154,11 +154,13 @@ impl Document {
             components,
             by_name,
             mates: Vec::new(),
+            equations: Vec::new(),
             robots: Vec::new(),
             revision: 0,
             aabb_cache: AabbCache::default(),
             disk_hash: None,
             warnings: Vec::new(),
+            removed: Vec::new(),
         };
         let urdf = load.urdf_robots(&file, &mut doc, cache)?;
         doc.mates = load.mates(&file, &doc)?;
@@ -176,6 +178,7 @@ impl Document {
             text,
             path,
         )?;
+        load.equations(&file, &mut doc)?;
         doc.solve_mates().map_err(|source| {
             let (line, col) = load.locate(&format!("name: {}", source.mate), "mates");
             DocumentError::Mates {
@@ -613,6 +616,53 @@ impl Loader<'_> {
             out.loaded.insert(rf.name.clone(), loaded);
         }
         Ok(out)
+    }
+
+    /// The equations parsed, evaluated and applied to the dimensions they drive; an
+    /// error is located at its equation's line.
+    fn equations(&self, file: &DocumentFile, doc: &mut Document) -> Result<(), DocumentError> {
+        use super::equations::{shown, EquationCause, EquationError, MAX_EQUATIONS};
+        let located = |source: EquationError| {
+            let (line, col) = self
+                .positions
+                .get(&format!(
+                    "equations/{}",
+                    source.index.min(file.equations.len().saturating_sub(1))
+                ))
+                .unwrap_or((0, 0));
+            DocumentError::Equation {
+                at: Some(Box::new(SourceError::new(
+                    self.path,
+                    line,
+                    col,
+                    source.to_string(),
+                ))),
+                source,
+            }
+        };
+        if file.equations.len() > MAX_EQUATIONS {
+            return Err(located(EquationError {
+                index: MAX_EQUATIONS,
+                text: shown(&file.equations[MAX_EQUATIONS]),
+                cause: EquationCause::TooLarge(format!(
+                    "{} equations: a document holds at most {MAX_EQUATIONS}",
+                    file.equations.len()
+                )),
+            }));
+        }
+        let mut list = Vec::with_capacity(file.equations.len());
+        for (index, text) in file.equations.iter().enumerate() {
+            let e = super::equation_mgr::parse_equation(text).map_err(|cause| {
+                located(EquationError {
+                    index,
+                    text: shown(text),
+                    cause,
+                })
+            })?;
+            list.push(e);
+        }
+        doc.equations = list;
+        doc.apply_equations().map_err(located)
     }
 
     /// The mates, names unique, their entities found in `doc`'s components.

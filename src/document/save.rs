@@ -106,6 +106,7 @@ impl Document {
             components,
             mates,
             robots: self.robots.iter().map(RobotInstance::to_file).collect(),
+            equations: self.equations.iter().map(|e| e.text()).collect(),
         }
     }
 

@@ -12,6 +12,7 @@ mod assign;
 mod bind_db;
 mod bind_document;
 mod bind_edit;
+mod bind_equations;
 mod bind_files;
 mod bind_interference;
 mod bind_mass;

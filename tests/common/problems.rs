@@ -212,6 +212,7 @@ impl Problem {
             components,
             mates: vec![],
             robots: vec![],
+            equations: vec![],
         }
     }
 

@@ -10,6 +10,7 @@ mod api_docs;
 mod chain;
 mod cli;
 mod db;
+mod equations;
 mod hostile_bounds;
 mod hostile_db;
 mod hostile_files;
