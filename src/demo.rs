@@ -250,6 +250,7 @@ pub fn cell_document() -> DocumentFile {
         mates,
         robots: Vec::new(),
         equations: Vec::new(),
+        assemblies: Vec::new(),
     }
 }
 
@@ -434,6 +435,7 @@ pub fn mz07_document() -> DocumentFile {
         mates: vec![],
         robots: vec![robot],
         equations: Vec::new(),
+        assemblies: Vec::new(),
     }
 }
 
@@ -683,6 +685,7 @@ pub fn micro_cell_document() -> DocumentFile {
         mates: vec![],
         robots: vec![robot],
         equations: Vec::new(),
+        assemblies: Vec::new(),
     }
 }
 

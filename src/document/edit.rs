@@ -313,11 +313,7 @@ impl Document {
         transform: Transform,
     ) -> Result<usize, DocumentError> {
         let name = super::new_name(name, "component name")?;
-        if name.is_empty() || name.contains('/') {
-            return Err(DocumentError::Invalid(format!(
-                "component name `{name}` must be non-empty without `/`"
-            )));
-        }
+        self.check_parent(&name)?;
         if self.by_name.contains_key(&name) {
             return Err(DocumentError::Invalid(format!(
                 "a component named `{name}` exists already"
@@ -350,11 +346,7 @@ impl Document {
         if new == self.components[i].name {
             return Ok(());
         }
-        if new.is_empty() || new.contains('/') {
-            return Err(DocumentError::Invalid(format!(
-                "component name `{new}` must be non-empty without `/`"
-            )));
-        }
+        self.check_parent(&new)?;
         if self.by_name.contains_key(&new) {
             return Err(DocumentError::Invalid(format!(
                 "a component named `{new}` exists already"

@@ -282,3 +282,54 @@ pub(crate) fn parse_equation(text: &str) -> Result<Equation, EquationCause> {
         expr,
     })
 }
+
+/// A file's equations (`texts`) parsed, evaluated and applied to the dimensions they
+/// drive in `doc`; an error is located at its equation's line (`positions` of the
+/// scan of `path`).
+pub(super) fn load(
+    texts: &[String],
+    doc: &mut Document,
+    positions: &super::scan::Positions,
+    path: &std::path::Path,
+) -> Result<(), DocumentError> {
+    use super::equations::MAX_EQUATIONS;
+    use crate::diagnostics::SourceError;
+    let located = |source: EquationError| {
+        let item = source.index.min(texts.len().saturating_sub(1));
+        let (line, col) = positions
+            .get(&format!("equations/{item}"))
+            .unwrap_or((0, 0));
+        DocumentError::Equation {
+            at: Some(Box::new(SourceError::new(
+                path,
+                line,
+                col,
+                source.to_string(),
+            ))),
+            source,
+        }
+    };
+    if texts.len() > MAX_EQUATIONS {
+        return Err(located(EquationError {
+            index: MAX_EQUATIONS,
+            text: shown(&texts[MAX_EQUATIONS]),
+            cause: EquationCause::TooLarge(format!(
+                "{} equations: a document holds at most {MAX_EQUATIONS}",
+                texts.len()
+            )),
+        }));
+    }
+    let mut list = Vec::with_capacity(texts.len());
+    for (index, text) in texts.iter().enumerate() {
+        let e = parse_equation(text).map_err(|cause| {
+            located(EquationError {
+                index,
+                text: shown(text),
+                cause,
+            })
+        })?;
+        list.push(e);
+    }
+    doc.equations = list;
+    doc.apply_equations().map_err(located)
+}

@@ -26,6 +26,7 @@
 //! # Ok::<(), fitup::document::DocumentError>(())
 //! ```
 
+pub mod assembly;
 pub mod dimension;
 mod edit;
 mod equation_mgr;
@@ -37,10 +38,12 @@ pub mod import;
 mod load;
 pub mod mates;
 pub mod reference;
+mod remove;
 pub mod robot;
 mod save;
 pub mod scan;
 pub mod tessellations;
+pub use assembly::SubAssembly;
 pub use error::DocumentError;
 pub use export::GlbExport;
 
@@ -49,6 +52,7 @@ pub use edit::{MateSpec, PropertyOwner};
 pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
+pub use remove::RemoveMates;
 pub use robot::{LinkDisplay, RobotError, RobotInstance};
 pub use scan::MAX_ABS_VALUE;
 
@@ -198,6 +202,8 @@ pub struct Document {
     mates: Vec<Mate>,
     /// Equations and global variables, evaluated on every rebuild.
     equations: Vec<Equation>,
+    /// Sub-assemblies, parents first (poses in the world frame).
+    assemblies: Vec<SubAssembly>,
     robots: Vec<RobotInstance>,
     /// Parts (and their components, same name) made from `urdf:` robots' link meshes:
     /// derived data, not written by `save`.
@@ -209,6 +215,8 @@ pub struct Document {
     disk_hash: Option<u64>,
     /// Located warnings of the load (names that differ only by case).
     warnings: Vec<String>,
+    /// Component indices removed, in order (see [`Document::index_since`]).
+    removed: Vec<usize>,
 }
 
 /// A rotation and the box of a mesh rotated by it (mm).

@@ -1,7 +1,8 @@
 //! Writing a document: its YAML schema, and the checked atomic save.
 
 use super::file::{
-    AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile, PlaneFile, PlanesFile,
+    AssemblyFile, AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile,
+    PlaneFile, PlanesFile,
 };
 use super::{Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance};
 use crate::collision::CutSpec;
@@ -12,6 +13,7 @@ use std::path::{Path, PathBuf};
 impl Document {
     /// The document as its YAML schema (what `save` writes).
     pub fn to_file(&self) -> DocumentFile {
+        let frames = super::assembly::frames(&self.assemblies);
         let parts = self
             .parts
             .values()
@@ -65,7 +67,7 @@ impl Document {
                 part: c.part.clone(),
                 fixed: c.fixed,
                 color: c.color.as_ref().map(color_value),
-                transform: Some(c.transform.to_matrix().map(|row| row.map(tidy))),
+                transform: Some(Self::local_pose(&frames, &c.name, c.transform)),
                 mass: c.mass,
                 threaded: c.threaded,
                 fixture: c.fixture,
@@ -99,15 +101,46 @@ impl Document {
                 suppressed: m.suppressed,
             })
             .collect();
+        let assemblies = self
+            .assemblies
+            .iter()
+            .map(|a| AssemblyFile {
+                name: a.name.clone(),
+                transform: Some(Self::local_pose(&frames, &a.name, a.transform)),
+            })
+            .collect();
         DocumentFile {
             units: "mm".into(),
             description: self.description.clone(),
             parts,
+            assemblies,
             components,
             mates,
             robots: self.robots.iter().map(RobotInstance::to_file).collect(),
             equations: self.equations.iter().map(|e| e.text()).collect(),
         }
+    }
+
+    /// `world` (the pose of `name`) relative to its parent sub-assembly, as the file
+    /// writes it (mm, tidied).
+    fn local_pose(
+        frames: &std::collections::HashMap<&str, crate::math::Transform>,
+        name: &str,
+        world: crate::math::Transform,
+    ) -> [[f64; 4]; 4] {
+        let frame =
+            super::assembly::parent_frame(frames, name).unwrap_or(crate::math::Transform::IDENTITY);
+        let local = if frame == crate::math::Transform::IDENTITY {
+            world
+        } else {
+            world * frame.inverse()
+        };
+        if frame == crate::math::Transform::IDENTITY {
+            return local.to_matrix().map(|row| row.map(tidy));
+        }
+        // composing and decomposing leaves float noise (`180.00000000000003`,
+        // `-5.7e-14`): snapped to the nearest 1e-9 when within 1e-12 of it (relative)
+        local.to_matrix().map(|row| row.map(|x| tidy(snap(x))))
     }
 
     /// The document as YAML text.
@@ -322,6 +355,17 @@ fn color_value(c: &Color) -> serde_yaml::Value {
 }
 
 /// Snaps round-off (|x| < 1e-14 → 0) so saved matrices read cleanly; idempotent.
+/// `x` at the nearest multiple of 1e-9 when it is within 1e-12 (relative, at least
+/// absolute) of it: float noise of a composed pose, not a written digit.
+fn snap(x: f64) -> f64 {
+    let r = (x * 1e9).round() / 1e9;
+    if (r - x).abs() <= 1e-12 * x.abs().max(1.0) {
+        r
+    } else {
+        x
+    }
+}
+
 fn tidy(x: f64) -> f64 {
     if x.abs() < 1e-14 {
         0.0

@@ -8,6 +8,7 @@
 mod api;
 mod args;
 mod assign;
+mod bind_assembly;
 #[cfg(feature = "db")]
 mod bind_db;
 mod bind_document;

@@ -213,6 +213,7 @@ impl Problem {
             mates: vec![],
             robots: vec![],
             equations: vec![],
+            assemblies: vec![],
         }
     }
 

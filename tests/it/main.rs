@@ -45,6 +45,7 @@ mod solidworks;
 mod step_cache;
 mod step_corpus;
 mod step_import;
+mod sub_assemblies;
 mod ur_ik;
 mod ur_real;
 mod urdf;
