@@ -249,6 +249,8 @@ pub fn cell_document() -> DocumentFile {
         components,
         mates,
         robots: Vec::new(),
+        equations: Vec::new(),
+        assemblies: Vec::new(),
     }
 }
 
@@ -432,6 +434,8 @@ pub fn mz07_document() -> DocumentFile {
         components,
         mates: vec![],
         robots: vec![robot],
+        equations: Vec::new(),
+        assemblies: Vec::new(),
     }
 }
 
@@ -680,6 +684,8 @@ pub fn micro_cell_document() -> DocumentFile {
         components,
         mates: vec![],
         robots: vec![robot],
+        equations: Vec::new(),
+        assemblies: Vec::new(),
     }
 }
 

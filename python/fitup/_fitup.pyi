@@ -287,6 +287,52 @@ class Document:
         """
     def set_mate_suppressed(self, name: str, suppressed: bool) -> None:
         """Suppresses or unsuppresses a mate and re-solves."""
+    def sub_assemblies(self) -> List[str]:
+        """Every sub-assembly's full name (``Cart-1``, ``Cart-1/Axle-1``), parents first."""
+    def children(self, name: Optional[str] = None) -> List[str]:
+        """The direct children (sub-assemblies, then components, by full name) of
+        sub-assembly ``name``, or of the top level for None.
+        """
+    def parent(self, name: str) -> Optional[str]:
+        """The parent sub-assembly of a component or sub-assembly; None at the top level."""
+    def sub_assembly_pose(self, name: str) -> _F64:
+        """A sub-assembly's pose in the assembly frame: 4×4 column-vector matrix, mm."""
+    def set_sub_assembly_pose(self, name: str, pose: _Pose) -> None:
+        """Moves a sub-assembly, and everything in it rigidly, to ``pose`` (4×4, mm,
+        assembly frame). Refused when a component inside is fixed.
+        """
+    def add_sub_assembly(self, name: str, pose: Optional[_Pose] = None) -> None:
+        """Adds an empty sub-assembly ``name`` (a full name whose parent exists) at
+        ``pose`` (4×4, mm; identity when None).
+        """
+    def remove_component(self, name: str, with_mates: bool = False) -> List[str]:
+        """Removes a component. With ``with_mates=False`` a component that has mates is
+        refused (the error names them); with ``True`` its mates are deleted with it
+        (unless an equation uses one of their dimensions). Returns the deleted mates'
+        names.
+        """
+    def equations(self) -> List[Dict[str, Any]]:
+        """The equations in order (SolidWorks' ``IEquationMgr``), each a dict: ``text``
+        (``"name" = expression``), ``name`` (the global variable or dimension it
+        sets), ``expression``, ``value`` (at the last rebuild: mm, degrees, or no unit
+        for a global variable) and ``global`` (True for a global variable).
+        """
+    def add_equation(self, text: str, index: Optional[int] = None) -> int:
+        """Adds an equation (``'"Factor" = 2'``, ``'"D1@lift" = 10 * "Factor"'``) at
+        ``index`` (None: at the end) and rebuilds; returns its index. Refused, with
+        nothing changed, when it does not evaluate (``DocumentError`` naming the
+        equation and the cause).
+        """
+    def set_equation(self, index: int, text: str) -> None:
+        """Replaces equation ``index`` (0-based) by ``text`` and rebuilds."""
+    def delete_equation(self, index: int) -> None:
+        """Deletes equation ``index`` and rebuilds; what it set keeps its value."""
+    def global_variable(self, name: str) -> float:
+        """A global variable's value (no unit)."""
+    def set_global_variable(self, name: str, value: float) -> None:
+        """Sets a global variable (its equation becomes ``"name" = value``) and
+        rebuilds: the dimensions it drives and the mates follow.
+        """
     def set_suppressed(self, name: str, suppressed: bool) -> None:
         """Suppresses or unsuppresses a component (not checked, planned around,
         sequenced, weighed or exported; its mates inactive) and re-solves.

@@ -291,6 +291,137 @@ impl Document {
         Ok(())
     }
 
+    /// Removes a component. With ``with_mates=False`` a component that has mates is
+    /// refused (the error names them); with ``True`` its mates are deleted with it
+    /// (unless an equation uses one of their dimensions). Returns the deleted mates'
+    /// names.
+    #[pyo3(signature = (name, with_mates = false))]
+    fn remove_component(&self, name: &str, with_mates: bool) -> Result<Vec<String>> {
+        let mates = if with_mates {
+            fitup::document::RemoveMates::Delete
+        } else {
+            fitup::document::RemoveMates::Refuse
+        };
+        let deleted = self.lock()?.doc.remove_component(name, mates)?;
+        Ok(deleted.into_iter().map(|m| m.name).collect())
+    }
+
+    /// Every sub-assembly's full name (``Cart-1``, ``Cart-1/Axle-1``), parents first.
+    fn sub_assemblies(&self) -> Result<Vec<String>> {
+        Ok(self
+            .lock()?
+            .doc
+            .sub_assemblies()
+            .iter()
+            .map(|a| a.name.clone())
+            .collect())
+    }
+
+    /// The direct children (sub-assemblies, then components, by full name) of
+    /// sub-assembly ``name``, or of the top level for None.
+    #[pyo3(signature = (name = None))]
+    fn children(&self, name: Option<&str>) -> Result<Vec<String>> {
+        Ok(self.lock()?.doc.children(name)?)
+    }
+
+    /// The parent sub-assembly of a component or sub-assembly; None at the top level.
+    fn parent(&self, name: &str) -> Result<Option<String>> {
+        Ok(self.lock()?.doc.parent_of(name)?)
+    }
+
+    /// A sub-assembly's pose in the assembly frame: 4×4 column-vector matrix, mm.
+    fn sub_assembly_pose<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+    ) -> Result<Bound<'py, PyArray2<f64>>> {
+        let inner = self.lock()?;
+        Ok(convert::pose_array(
+            py,
+            &inner.doc.sub_assembly(name)?.transform,
+        ))
+    }
+
+    /// Moves a sub-assembly, and everything in it rigidly, to ``pose`` (4×4, mm,
+    /// assembly frame). Refused when a component inside is fixed.
+    fn set_sub_assembly_pose(
+        &self,
+        name: &str,
+        pose: PyArrayLike2<'_, f64, AllowTypeChange>,
+    ) -> Result<()> {
+        let t = convert::pose_of(pose.as_array(), "pose")?;
+        self.lock()?.doc.set_sub_assembly_transform(name, t)?;
+        Ok(())
+    }
+
+    /// Adds an empty sub-assembly ``name`` (a full name whose parent exists) at
+    /// ``pose`` (4×4, mm; identity when None).
+    #[pyo3(signature = (name, pose = None))]
+    fn add_sub_assembly(
+        &self,
+        name: &str,
+        pose: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
+    ) -> Result<()> {
+        let t = match pose {
+            Some(p) => convert::pose_of(p.as_array(), "pose")?,
+            None => fitup::math::Transform::IDENTITY,
+        };
+        self.lock()?.doc.add_sub_assembly(name, t)?;
+        Ok(())
+    }
+
+    /// The equations in order (SolidWorks' ``IEquationMgr``), each a dict: ``text``
+    /// (``"name" = expression``), ``name`` (the global variable or dimension it
+    /// sets), ``expression``, ``value`` (at the last rebuild: mm, degrees, or no unit
+    /// for a global variable) and ``global`` (True for a global variable).
+    fn equations<'py>(&self, py: Python<'py>) -> Result<Vec<Bound<'py, PyDict>>> {
+        let inner = self.lock()?;
+        let mut out = Vec::with_capacity(inner.doc.equations().len());
+        for e in inner.doc.equations() {
+            let d = PyDict::new(py);
+            d.set_item("text", e.text())?;
+            d.set_item("name", &e.target)?;
+            d.set_item("expression", &e.expression)?;
+            d.set_item("value", e.value)?;
+            d.set_item("global", e.is_global())?;
+            out.push(d);
+        }
+        Ok(out)
+    }
+
+    /// Adds an equation (``'"Factor" = 2'``, ``'"D1@lift" = 10 * "Factor"'``) at
+    /// ``index`` (None: at the end) and rebuilds; returns its index. Refused, with
+    /// nothing changed, when it does not evaluate (``DocumentError`` naming the
+    /// equation and the cause).
+    #[pyo3(signature = (text, index = None))]
+    fn add_equation(&self, text: &str, index: Option<usize>) -> Result<usize> {
+        Ok(self.lock()?.doc.add_equation(index, text)?)
+    }
+
+    /// Replaces equation ``index`` (0-based) by ``text`` and rebuilds.
+    fn set_equation(&self, index: usize, text: &str) -> Result<()> {
+        self.lock()?.doc.set_equation(index, text)?;
+        Ok(())
+    }
+
+    /// Deletes equation ``index`` and rebuilds; what it set keeps its value.
+    fn delete_equation(&self, index: usize) -> Result<()> {
+        self.lock()?.doc.delete_equation(index)?;
+        Ok(())
+    }
+
+    /// A global variable's value (no unit).
+    fn global_variable(&self, name: &str) -> Result<f64> {
+        Ok(self.lock()?.doc.global_variable(name)?)
+    }
+
+    /// Sets a global variable (its equation becomes ``"name" = value``) and
+    /// rebuilds: the dimensions it drives and the mates follow.
+    fn set_global_variable(&self, name: &str, value: f64) -> Result<()> {
+        self.lock()?.doc.set_global_variable(name, value)?;
+        Ok(())
+    }
+
     /// Suppresses or unsuppresses a component (not checked, planned around,
     /// sequenced, weighed or exported; its mates inactive) and re-solves.
     fn set_suppressed(&self, name: &str, suppressed: bool) -> Result<()> {

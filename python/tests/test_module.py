@@ -514,3 +514,63 @@ def test_the_solidworks_document_edits(project):
     doc.save_as(project / "models" / "edited.yaml")
     back = fitup.Document(project / "models" / "edited.yaml")
     assert back.component("screw4")["suppressed"] and back.properties(part="screw")
+
+
+def test_equations_and_global_variables(project):
+    """Issue 37, capability 8 from Python: equations drive dimensions, global
+    variables by name, a refused equation names its cause, saves keep them."""
+    path = project / "models" / "solidworks" / "lift.yaml"
+    doc = fitup.Document(path)
+    eqs = doc.equations()
+    assert [e["name"] for e in eqs] == ["Factor", "Clearance", "D1@lift", "D1@turn"]
+    assert eqs[2]["text"] == '"D1@lift" = 10 * "Factor"' and eqs[2]["value"] == 20.0
+    assert eqs[0]["global"] and not eqs[2]["global"]
+    doc.set_global_variable("Factor", 3.0)
+    assert doc.dimension("D1@lift")["value"] == pytest.approx(30.0)
+    assert doc.pose("plate")[2, 3] == pytest.approx(780.0)
+    with pytest.raises(fitup.DocumentError, match="division by zero"):
+        doc.set_equation(1, '"Clearance" = 1 / ("Factor" - 3)')
+    assert doc.global_variable("Clearance") == 5.0
+    i = doc.add_equation('"Half" = "Factor" / 2', index=0)
+    assert i == 0 and doc.global_variable("Half") == 1.5
+    doc.delete_equation(0)
+    doc.save()
+    again = fitup.Document(path)
+    assert [e["text"] for e in again.equations()] == [e["text"] for e in doc.equations()]
+    assert again.global_variable("Factor") == 3.0
+
+
+def test_remove_component(project):
+    """Issue 37, capability 7: a component with mates is refused unless its mates go
+    with it; the others keep their poses."""
+    doc = fitup.Document(project / "models" / "cell.yaml")
+    with pytest.raises(fitup.DocumentError, match="screw1_in_hole"):
+        doc.remove_component("screw1")
+    before = doc.pose("screw2")
+    assert doc.remove_component("screw1", with_mates=True) == ["screw1_in_hole", "screw1_seated"]
+    assert "screw1" not in doc.components()
+    assert (doc.pose("screw2") == before).all()
+    assert doc.remove_component("screw4") == []
+
+
+def test_sub_assemblies(project):
+    """Issue 37, capability 2 from Python: the tree by full names, composed poses,
+    a sub-assembly moved with what it holds, saved and reloaded."""
+    path = project / "models" / "solidworks" / "cart.yaml"
+    doc = fitup.Document(path)
+    assert doc.sub_assemblies() == ["Cart-1", "Cart-1/Axle-1", "Cart-1/Axle-2"]
+    assert doc.children() == ["Cart-1", "table"]
+    assert doc.children("Cart-1/Axle-2") == ["Cart-1/Axle-2/Wheel-1", "Cart-1/Axle-2/Wheel-2"]
+    assert doc.parent("Cart-1/Axle-2/Wheel-2") == "Cart-1/Axle-2"
+    assert doc.parent("Cart-1") is None
+    assert doc.pose("Cart-1/Axle-2/Wheel-2")[:3, 3] == pytest.approx([350.0, 330.0, 760.0])
+    pose = doc.sub_assembly_pose("Cart-1")
+    pose[2, 3] += 10.0
+    doc.set_sub_assembly_pose("Cart-1", pose)
+    assert doc.pose("Cart-1/Axle-2/Wheel-2")[2, 3] == pytest.approx(770.0)
+    doc.add_sub_assembly("Spare-1")
+    doc.add_component("wheel", None, "Spare-1/Wheel-1")
+    doc.save()
+    again = fitup.Document(path)
+    assert again.children("Spare-1") == ["Spare-1/Wheel-1"]
+    assert again.pose("Cart-1/Axle-2/Wheel-2")[2, 3] == pytest.approx(770.0)

@@ -98,9 +98,19 @@ impl Document {
     }
 
     /// Deletes a mate (SolidWorks' `DeleteSelection` on a mate); nothing moves.
-    /// Returns the deleted mate.
+    /// Returns the deleted mate. Refused while an equation uses or sets its
+    /// dimension (fitup keeps no broken equation).
     pub fn delete_mate(&mut self, name: &str) -> Result<Mate, DocumentError> {
         let i = self.mate_index(name)?;
+        if self.mates[i].kind.has_dimension() {
+            let dimension = super::dimension::full_name(&self.mates[i].name);
+            if let Some(&e) = self.equations_using(&dimension).first() {
+                return Err(DocumentError::Invalid(format!(
+                    "mate `{name}`: equation [{e}] {} uses its dimension `{dimension}`; delete or change the equation first",
+                    super::equations::shown(&self.equations()[e].text())
+                )));
+            }
+        }
         self.revision += 1;
         Ok(self.mates.remove(i))
     }
@@ -303,11 +313,7 @@ impl Document {
         transform: Transform,
     ) -> Result<usize, DocumentError> {
         let name = super::new_name(name, "component name")?;
-        if name.is_empty() || name.contains('/') {
-            return Err(DocumentError::Invalid(format!(
-                "component name `{name}` must be non-empty without `/`"
-            )));
-        }
+        self.check_parent(&name)?;
         if self.by_name.contains_key(&name) {
             return Err(DocumentError::Invalid(format!(
                 "a component named `{name}` exists already"
@@ -340,11 +346,7 @@ impl Document {
         if new == self.components[i].name {
             return Ok(());
         }
-        if new.is_empty() || new.contains('/') {
-            return Err(DocumentError::Invalid(format!(
-                "component name `{new}` must be non-empty without `/`"
-            )));
-        }
+        self.check_parent(&new)?;
         if self.by_name.contains_key(&new) {
             return Err(DocumentError::Invalid(format!(
                 "a component named `{new}` exists already"

@@ -1,5 +1,6 @@
 //! Why a document operation failed.
 
+use super::equations::EquationError;
 use super::mates::SolveError;
 use super::robot;
 use crate::diagnostics::SourceError;
@@ -35,6 +36,17 @@ pub enum DocumentError {
         /// The solver's verdict.
         #[source]
         source: SolveError,
+    },
+    /// An equation cannot be evaluated (syntax, unknown name, circle, division by
+    /// zero, a value that is not finite or that its dimension refuses): which
+    /// equation and why. A load's error is located at the equation's line (`at`).
+    #[error("{}", equation_message(.at.as_deref(), .source))]
+    Equation {
+        /// Where the equation is written, when it comes from a file.
+        at: Option<Box<SourceError>>,
+        /// Which equation and why.
+        #[source]
+        source: EquationError,
     },
     /// A suppressed component is not checked, planned or measured.
     #[error(
@@ -140,7 +152,7 @@ impl DocumentError {
     pub fn location(&self) -> Option<&SourceError> {
         match self {
             DocumentError::Source(s) => Some(s),
-            DocumentError::Mates { at, .. } => at.as_deref(),
+            DocumentError::Mates { at, .. } | DocumentError::Equation { at, .. } => at.as_deref(),
             _ => None,
         }
     }
@@ -148,6 +160,15 @@ impl DocumentError {
 
 /// A mate failure's message: located (`file:line:col: …`) when it comes from a file.
 fn mates_message(at: Option<&SourceError>, source: &SolveError) -> String {
+    match at {
+        Some(at) => at.to_string(),
+        None => source.to_string(),
+    }
+}
+
+/// An equation failure's message: located (`file:line:col: …`) when it comes from a
+/// file.
+fn equation_message(at: Option<&SourceError>, source: &EquationError) -> String {
     match at {
         Some(at) => at.to_string(),
         None => source.to_string(),

@@ -20,6 +20,10 @@ pub struct DocumentFile {
     /// Part definitions by name.
     #[serde(default)]
     pub parts: IndexMap<String, PartFile>,
+    /// Sub-assemblies: groups of components, nested by full name (`Cart-1`,
+    /// `Cart-1/Axle-1`), parents first (see [`super::assembly`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub assemblies: Vec<AssemblyFile>,
     /// Part instances.
     #[serde(default)]
     pub components: Vec<ComponentFile>,
@@ -29,6 +33,11 @@ pub struct DocumentFile {
     /// Robots whose links are displayed by components (see [`RobotFile`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub robots: Vec<RobotFile>,
+    /// Equations and global variables, SolidWorks' way: `'"Factor" = 2'`,
+    /// `'"D1@lift" = 10 * "Factor"'` (values in mm and degrees; see
+    /// [`super::equations`]). Evaluated in dependency order on every rebuild.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub equations: Vec<String>,
 }
 
 fn default_units() -> String {
@@ -149,11 +158,25 @@ pub struct AxisFile {
     pub direction: [f64; 3],
 }
 
+/// A sub-assembly: a group of components in this document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AssemblyFile {
+    /// Full name, levels joined by `/` (`Cart-1/Axle-1`); its parent is listed before.
+    pub name: String,
+    /// Pose relative to the parent sub-assembly (the assembly at the top), the
+    /// component pose layout, mm; identity when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transform: Option<[[f64; 4]; 4]>,
+}
+
 /// A component: an instance of a part at a pose.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ComponentFile {
-    /// Unique component name (SolidWorks style `part-1` or anything).
+    /// Unique component name (SolidWorks style `part-1` or anything); inside a
+    /// sub-assembly its full name `Cart-1/Wheel-2`, and then its `transform` is
+    /// relative to that sub-assembly.
     pub name: String,
     /// The part it instantiates.
     pub part: String,

@@ -145,7 +145,8 @@ impl Document {
         }
         let mut step_warnings = Vec::new();
         let parts = load.parts(&file, cache, &mut step_warnings)?;
-        let (components, by_name) = load.components(&file, &parts)?;
+        let assemblies = super::assembly::load(&file, |key, m| load.at_key(&[key], m))?;
+        let (components, by_name) = load.components(&file, &parts, &assemblies)?;
         let mut doc = Document {
             path: path.to_path_buf(),
             generated: Default::default(),
@@ -154,11 +155,14 @@ impl Document {
             components,
             by_name,
             mates: Vec::new(),
+            equations: Vec::new(),
+            assemblies,
             robots: Vec::new(),
             revision: 0,
             aabb_cache: AabbCache::default(),
             disk_hash: None,
             warnings: Vec::new(),
+            removed: Vec::new(),
         };
         let urdf = load.urdf_robots(&file, &mut doc, cache)?;
         doc.mates = load.mates(&file, &doc)?;
@@ -176,6 +180,7 @@ impl Document {
             text,
             path,
         )?;
+        super::equation_mgr::load(&file.equations, &mut doc, positions, path)?;
         doc.solve_mates().map_err(|source| {
             let (line, col) = load.locate(&format!("name: {}", source.mate), "mates");
             DocumentError::Mates {
@@ -196,7 +201,7 @@ impl Document {
 
     pub(super) fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
         let (comp, reference) = spec
-            .split_once('/')
+            .rsplit_once('/')
             .ok_or_else(|| format!("entity `{spec}` must be written `component/reference`"))?;
         let &component = self.by_name.get(comp).ok_or_else(|| {
             format!(
@@ -479,6 +484,7 @@ impl Loader<'_> {
         &self,
         file: &DocumentFile,
         parts: &IndexMap<String, Part>,
+        assemblies: &[super::SubAssembly],
     ) -> Result<(Vec<Component>, HashMap<String, usize>), DocumentError> {
         let mut components = Vec::with_capacity(file.components.len());
         let mut by_name = HashMap::new();
@@ -486,12 +492,18 @@ impl Loader<'_> {
             // The name's own line from the scan (the text may spell it in NFD).
             let name_at =
                 |message: String| self.at_key(&[&format!("components/{ci}/name")], message);
-            if c.name.is_empty() || c.name.contains('/') {
-                return Err(name_at(format!(
-                    "component name `{}` must be non-empty without `/`",
-                    c.name
-                )));
+            if c.name.is_empty() {
+                return Err(name_at("a component name must be non-empty".into()));
             }
+            super::assembly::check_levels(&c.name)
+                .map_err(|e| name_at(format!("component {e}")))?;
+            let Some(frame) = super::assembly::parent_frame(assemblies, &c.name) else {
+                return Err(name_at(format!(
+                    "component `{}`: its parent `{}` is no sub-assembly of `assemblies:`",
+                    c.name,
+                    super::assembly::parent_name(&c.name).unwrap_or_default()
+                )));
+            };
             if let Some(first) = by_name.insert(c.name.clone(), components.len()) {
                 let first_line = self
                     .positions
@@ -502,7 +514,9 @@ impl Loader<'_> {
                     c.name
                 )));
             }
-            components.push(self.component(c, parts)?);
+            let mut component = self.component(c, parts)?;
+            component.transform = component.transform * frame;
+            components.push(component);
         }
         Ok((components, by_name))
     }

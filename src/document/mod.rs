@@ -26,8 +26,11 @@
 //! # Ok::<(), fitup::document::DocumentError>(())
 //! ```
 
+pub mod assembly;
 pub mod dimension;
 mod edit;
+mod equation_mgr;
+pub mod equations;
 mod error;
 mod export;
 pub mod file;
@@ -35,17 +38,21 @@ pub mod import;
 mod load;
 pub mod mates;
 pub mod reference;
+mod remove;
 pub mod robot;
 mod save;
 pub mod scan;
 pub mod tessellations;
+pub use assembly::SubAssembly;
 pub use error::DocumentError;
 pub use export::GlbExport;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use edit::{MateSpec, PropertyOwner};
+pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
+pub use remove::RemoveMates;
 pub use robot::{LinkDisplay, RobotError, RobotInstance};
 pub use scan::MAX_ABS_VALUE;
 
@@ -193,6 +200,10 @@ pub struct Document {
     components: Vec<Component>,
     by_name: HashMap<String, usize>,
     mates: Vec<Mate>,
+    /// Equations and global variables, evaluated on every rebuild.
+    equations: Vec<Equation>,
+    /// Sub-assemblies, parents first (poses in the world frame).
+    assemblies: Vec<SubAssembly>,
     robots: Vec<RobotInstance>,
     /// Parts (and their components, same name) made from `urdf:` robots' link meshes:
     /// derived data, not written by `save`.
@@ -204,6 +215,8 @@ pub struct Document {
     disk_hash: Option<u64>,
     /// Located warnings of the load (names that differ only by case).
     warnings: Vec<String>,
+    /// Component indices removed, in order (see [`Document::index_since`]).
+    removed: Vec<usize>,
 }
 
 /// A rotation and the box of a mesh rotated by it (mm).
@@ -272,10 +285,26 @@ impl Document {
         Ok(())
     }
 
-    /// Re-solves the mates (SolidWorks' rebuild). On failure the poses are unchanged.
+    /// Evaluates the equations, gives the dimensions they drive their values and
+    /// re-solves the mates (SolidWorks' rebuild). On failure nothing changes.
     pub fn rebuild(&mut self) -> Result<(), DocumentError> {
-        self.solve_mates()
-            .map_err(|source| DocumentError::Mates { at: None, source })?;
+        if self.equations.is_empty() {
+            self.solve_mates()
+                .map_err(|source| DocumentError::Mates { at: None, source })?;
+        } else {
+            let before = self.clone();
+            let solved = self
+                .apply_equations()
+                .map_err(|source| DocumentError::Equation { at: None, source })
+                .and_then(|()| {
+                    self.solve_mates()
+                        .map_err(|source| DocumentError::Mates { at: None, source })
+                });
+            if let Err(e) = solved {
+                *self = before;
+                return Err(e);
+            }
+        }
         self.revision += 1;
         Ok(())
     }
@@ -593,9 +622,51 @@ impl Document {
     }
 
     /// Sets a dimension in internal units (mm or radians) and re-solves the mates, so
-    /// every later query sees the driven poses. On failure nothing changes.
+    /// every later query sees the driven poses. On failure nothing changes. A
+    /// dimension an equation drives is refused: change the equation or its global
+    /// variables.
     pub fn set_dimension(&mut self, full_name: &str, value: f64) -> Result<(), DocumentError> {
         let full_name = &*nfc_name(full_name);
+        if let Some(i) = self.driving_equation(full_name) {
+            return Err(DocumentError::Invalid(format!(
+                "dimension `{full_name}` is driven by equation [{i}] {}: change the equation (`set_equation`) or the global variables it uses",
+                equations::shown(&self.equations[i].text())
+            )));
+        }
+        let before = (
+            self.mates.clone(),
+            self.robots.clone(),
+            self.components
+                .iter()
+                .map(|c| c.transform)
+                .collect::<Vec<_>>(),
+        );
+        self.set_dimension_value(full_name, value)?;
+        let is_mate = matches!(
+            self.dimension_target(full_name),
+            Ok(DimensionTarget::Mate(_))
+        );
+        if !is_mate && self.equations.is_empty() {
+            return Ok(());
+        }
+        if let Err(e) = self.rebuild() {
+            self.mates = before.0;
+            self.robots = before.1;
+            for (c, t) in self.components.iter_mut().zip(before.2) {
+                c.transform = t;
+            }
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Checks `value` (internal units) for dimension `full_name` and sets it, without
+    /// solving the mates (a robot joint moves its links).
+    pub(crate) fn set_dimension_value(
+        &mut self,
+        full_name: &str,
+        value: f64,
+    ) -> Result<(), DocumentError> {
         if !value.is_finite() {
             return Err(DocumentError::OutOfRange {
                 what: full_name.to_string(),
@@ -634,21 +705,7 @@ impl Document {
                 rule: "a distance cannot be negative",
             });
         }
-        let before = (
-            self.mates[i].value,
-            self.components
-                .iter()
-                .map(|c| c.transform)
-                .collect::<Vec<_>>(),
-        );
         self.mates[i].value = Some(value);
-        if let Err(e) = self.rebuild() {
-            self.mates[i].value = before.0;
-            for (c, t) in self.components.iter_mut().zip(before.1) {
-                c.transform = t;
-            }
-            return Err(e);
-        }
         Ok(())
     }
 

@@ -1116,6 +1116,20 @@ impl Document {
             .map(|r| r.name())
     }
 
+    /// After component `removed` left the document: the later components' indices
+    /// in the robots' links shift down by one.
+    pub(super) fn shift_robot_links(&mut self, removed: usize) {
+        for r in &mut self.robots {
+            for l in &mut r.links {
+                if let Some(c) = &mut l.component {
+                    if *c > removed {
+                        *c -= 1;
+                    }
+                }
+            }
+        }
+    }
+
     /// Places every robot link component at its robot's current joints.
     pub(super) fn apply_robots(&mut self) {
         for r in &self.robots {

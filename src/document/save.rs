@@ -1,7 +1,8 @@
 //! Writing a document: its YAML schema, and the checked atomic save.
 
 use super::file::{
-    AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile, PlaneFile, PlanesFile,
+    AssemblyFile, AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile,
+    PlaneFile, PlanesFile,
 };
 use super::{Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance};
 use crate::collision::CutSpec;
@@ -65,7 +66,7 @@ impl Document {
                 part: c.part.clone(),
                 fixed: c.fixed,
                 color: c.color.as_ref().map(color_value),
-                transform: Some(c.transform.to_matrix().map(|row| row.map(tidy))),
+                transform: Some(self.local_pose(&c.name, c.transform)),
                 mass: c.mass,
                 threaded: c.threaded,
                 fixture: c.fixture,
@@ -99,14 +100,42 @@ impl Document {
                 suppressed: m.suppressed,
             })
             .collect();
+        let assemblies = self
+            .assemblies
+            .iter()
+            .map(|a| AssemblyFile {
+                name: a.name.clone(),
+                transform: Some(self.local_pose(&a.name, a.transform)),
+            })
+            .collect();
         DocumentFile {
             units: "mm".into(),
             description: self.description.clone(),
             parts,
+            assemblies,
             components,
             mates,
             robots: self.robots.iter().map(RobotInstance::to_file).collect(),
+            equations: self.equations.iter().map(|e| e.text()).collect(),
         }
+    }
+
+    /// `world` (the pose of `name`) relative to its parent sub-assembly, as the file
+    /// writes it (mm, tidied).
+    fn local_pose(&self, name: &str, world: crate::math::Transform) -> [[f64; 4]; 4] {
+        let frame = super::assembly::parent_frame(&self.assemblies, name)
+            .unwrap_or(crate::math::Transform::IDENTITY);
+        let local = if frame == crate::math::Transform::IDENTITY {
+            world
+        } else {
+            world * frame.inverse()
+        };
+        if frame == crate::math::Transform::IDENTITY {
+            return local.to_matrix().map(|row| row.map(tidy));
+        }
+        // composing and decomposing leaves float noise (`180.00000000000003`,
+        // `-5.7e-14`): snapped to the nearest 1e-9 when within 1e-12 of it (relative)
+        local.to_matrix().map(|row| row.map(|x| tidy(snap(x))))
     }
 
     /// The document as YAML text.
@@ -321,6 +350,17 @@ fn color_value(c: &Color) -> serde_yaml::Value {
 }
 
 /// Snaps round-off (|x| < 1e-14 → 0) so saved matrices read cleanly; idempotent.
+/// `x` at the nearest multiple of 1e-9 when it is within 1e-12 (relative, at least
+/// absolute) of it: float noise of a composed pose, not a written digit.
+fn snap(x: f64) -> f64 {
+    let r = (x * 1e9).round() / 1e9;
+    if (r - x).abs() <= 1e-12 * x.abs().max(1.0) {
+        r
+    } else {
+        x
+    }
+}
+
 fn tidy(x: f64) -> f64 {
     if x.abs() < 1e-14 {
         0.0

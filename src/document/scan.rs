@@ -72,6 +72,7 @@ const TEXT_KEYS: &[&str] = &[
     "component",
     "entities",
     "color",
+    "equations",
 ];
 
 enum Frame {

@@ -156,6 +156,7 @@ pub(crate) fn shortcut(
         run,
         until,
     );
+
     // The certification of the screened edges left in the path is the work an
     // eager smoothing would have done when it accepted them: it runs within the
     // call's budget, so that a smoothing share spent does not unfold the path.
@@ -167,7 +168,7 @@ pub(crate) fn shortcut(
     checker.set_deadline(share);
     if run.smoothing_tick(0, 0, 0.0, until) {
         let screen = screen_steps(checker, space);
-        path.linear_pass(checker, screen, false);
+        path.linear_pass(checker, space, screen, false);
     }
     checker.set_deadline(call);
     *poses = path.poses;
@@ -204,7 +205,7 @@ fn shortcut_until(
             crate::collision::SweepMethod::Continuous { .. }
         );
     let mut path = LazyPath::certified(poses);
-    path.linear_pass(checker, screen, exact);
+    path.linear_pass(checker, space, screen, exact);
     let mut stalled = 0;
     for attempt in 0..smoothing.shortcut_attempts {
         if stalled >= smoothing.patience.max(1) {
@@ -337,13 +338,23 @@ impl LazyPath {
     }
 
     /// Drops `p[i]` whenever its kept predecessor sees `p[i + 1]` (a spent budget
-    /// makes every check answer "not free", which keeps the pose). `lazy`: the new
-    /// edge is only screened, with the two edges it replaces as its detour.
-    fn linear_pass(&mut self, checker: &mut Checker<'_>, screen: (f64, f64), lazy: bool) {
+    /// makes every check answer "not free", which keeps the pose) and dropping it
+    /// shortens the path by at least [`Smoothing::GAIN`] of its length: a pose
+    /// whose removal gains less is not worth an edge check (on OMPL.app's alpha
+    /// puzzle one certification of a long sliding edge costs tens of ms). `lazy`:
+    /// the new edge is only screened, with the two edges it replaces as its detour.
+    fn linear_pass(
+        &mut self,
+        checker: &mut Checker<'_>,
+        space: &PlanningSpace,
+        screen: (f64, f64),
+        lazy: bool,
+    ) {
         let n = self.poses.len();
         if n < 3 || checker.expired() {
             return;
         }
+        let min_gain = Smoothing::GAIN * space.distance_along(&self.poses);
         let old_poses = std::mem::take(&mut self.poses);
         let mut old_edges = std::mem::take(&mut self.edges).into_iter();
         let mut poses = vec![old_poses[0]];
@@ -353,12 +364,31 @@ impl LazyPath {
         for i in 1..n - 1 {
             let next = old_edges.next().expect("one edge per pose pair");
             let last = poses[poses.len() - 1];
-            let free = if lazy {
-                checker.screen(&last, &old_poses[i + 1], screen)
-            } else {
-                screened(checker, &last, &old_poses[i + 1], screen)
-            };
-            if free {
+            let gain = space.distance(&last, &old_poses[i])
+                + space.distance(&old_poses[i], &old_poses[i + 1])
+                - space.distance(&last, &old_poses[i + 1]);
+            // A pose on the straight edge between its neighbours (an extension
+            // made in steps) goes at no cost: the joined edge is the same motion
+            // as the two it replaces.
+            let between = gain < min_gain && on_edge(&last, &old_poses[i], &old_poses[i + 1]);
+            let free = between
+                || gain >= min_gain
+                    && if lazy {
+                        checker.screen(&last, &old_poses[i + 1], screen)
+                    } else {
+                        screened(checker, &last, &old_poses[i + 1], screen)
+                    };
+            if between {
+                let both = matches!((&carried, &next), (Edge::Certified, Edge::Certified));
+                carried = if both {
+                    Edge::Certified
+                } else {
+                    Edge::Screened(Box::new(Detour {
+                        via: vec![old_poses[i]],
+                        edges: vec![carried, next],
+                    }))
+                };
+            } else if free {
                 carried = if lazy {
                     Edge::Screened(Box::new(Detour {
                         via: vec![old_poses[i]],
@@ -391,6 +421,22 @@ impl LazyPath {
         }
         self.poses
     }
+}
+
+/// Whether `p` lies on the straight edge `a → b` (translation lerp, rotation slerp
+/// at the same parameter), to rounding.
+fn on_edge(a: &Transform, p: &Transform, b: &Transform) -> bool {
+    let (angle, shift) = a.distance_to(b);
+    let (pa, ps) = a.distance_to(p);
+    let s = if shift > 1e-12 {
+        ps / shift
+    } else if angle > 1e-12 {
+        pa / angle
+    } else {
+        return p.approx_eq(a, 1e-9, 1e-12);
+    };
+    let tol = 1e-9 * (1.0 + a.translation().amax().max(b.translation().amax()));
+    (0.0..=1.0).contains(&s) && p.approx_eq(&a.interpolate(b, s), tol, 1e-9)
 }
 
 /// Whether the edge `a → b` is free: screened with pose checks `screen` (mm, rad)

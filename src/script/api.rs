@@ -240,6 +240,8 @@ pub(crate) fn register_all(engine: &mut Engine, ctx: &Arc<Context>) -> Registere
     super::bind_math::register(&mut api);
     super::bind_document::register(&mut api, ctx);
     super::bind_edit::register(&mut api, ctx);
+    super::bind_equations::register(&mut api);
+    super::bind_assembly::register(&mut api);
     super::bind_files::register(&mut api, ctx);
     super::bind_interference::register(&mut api);
     super::bind_mass::register(&mut api);

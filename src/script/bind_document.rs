@@ -20,7 +20,10 @@ pub struct DocHandle {
 #[derive(Clone)]
 pub struct ComponentHandle {
     pub(crate) doc: DocHandle,
-    pub(crate) index: usize,
+    /// Its index when the handle was made …
+    index: usize,
+    /// … and the document's number of removals then (see [`Document::index_since`]).
+    since: usize,
 }
 
 /// A driving dimension of a document, by full name (`D1@角度1`).
@@ -95,44 +98,78 @@ impl DocHandle {
     }
 
     pub(crate) fn component(&self, name: &str) -> ScriptResult<ComponentHandle> {
-        let index = self.lock()?.component_index(name).map_err(fail)?;
-        Ok(ComponentHandle {
-            doc: self.clone(),
-            index,
-        })
+        let doc = self.lock()?;
+        let index = doc.component_index(name).map_err(fail)?;
+        Ok(ComponentHandle::new(self, &doc, index))
     }
 }
 
 impl ComponentHandle {
+    /// A handle on component `index` of `doc` (the document of `handle`, locked).
+    pub(crate) fn new(handle: &DocHandle, doc: &Document, index: usize) -> Self {
+        ComponentHandle {
+            doc: handle.clone(),
+            index,
+            since: doc.removals().len(),
+        }
+    }
+
+    /// The component's index in `doc` (its document, locked) today: components
+    /// removed since the handle was made shift it; its own removal is an error.
+    pub(crate) fn at(&self, doc: &Document) -> ScriptResult<usize> {
+        doc.index_since(self.index, self.since)
+            .ok_or_else(|| fail("this component was removed from the document"))
+    }
+
+    /// The component's index today (locks the document for the lookup only).
+    pub(crate) fn index(&self) -> ScriptResult<usize> {
+        self.locked().map(|(_, i)| i)
+    }
+
+    /// The document locked, and the component's index in it.
+    pub(crate) fn locked(&self) -> ScriptResult<(MutexGuard<'_, Document>, usize)> {
+        let doc = self.doc.lock()?;
+        let i = self.at(&doc)?;
+        Ok((doc, i))
+    }
+
     fn with<R>(
         &self,
         f: impl FnOnce(&Document, &crate::document::Component) -> R,
     ) -> ScriptResult<R> {
-        let doc = self.doc.lock()?;
-        Ok(f(&doc, &doc.components()[self.index]))
+        let (doc, i) = self.locked()?;
+        Ok(f(&doc, &doc.components()[i]))
+    }
+
+    /// `f` of the component.
+    pub(crate) fn with_component<R>(
+        &self,
+        f: impl FnOnce(&crate::document::Component) -> R,
+    ) -> ScriptResult<R> {
+        self.with(|_, c| f(c))
     }
 
     fn set_transform(&self, t: Transform) -> ScriptResult<()> {
-        let mut doc = self.doc.lock()?;
-        doc.set_transform_at(self.index, t).map_err(fail)?;
-        self.show_pose(&doc);
+        let (mut doc, i) = self.locked()?;
+        doc.set_transform_at(i, t).map_err(fail)?;
+        self.show_pose(&doc, i);
         Ok(())
     }
 
     /// Shows the new pose in the viewer as a new animation frame.
-    fn show_pose(&self, doc: &Document) {
+    fn show_pose(&self, doc: &Document, i: usize) {
         let view = &self.doc.context().caches.view;
         if view.is_live() {
-            let c = &doc.components()[self.index];
+            let c = &doc.components()[i];
             view.log_poses(doc, vec![(c.name.clone(), c.transform)], true);
         }
     }
 
     /// Moves the component by `motion` applied after its pose (world frame), under one lock.
     fn move_by(&self, motion: Transform) -> ScriptResult<()> {
-        let mut doc = self.doc.lock()?;
-        doc.move_component_at(self.index, &motion).map_err(fail)?;
-        self.show_pose(&doc);
+        let (mut doc, i) = self.locked()?;
+        doc.move_component_at(i, &motion).map_err(fail)?;
+        self.show_pose(&doc, i);
         Ok(())
     }
 
@@ -191,14 +228,9 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Document.components() -> array",
         "Every component, in document order.",
         |d: &mut DocHandle| -> ScriptResult<Array> {
-            let n = d.lock()?.components().len();
-            Ok((0..n)
-                .map(|index| {
-                    Dynamic::from(ComponentHandle {
-                        doc: d.clone(),
-                        index,
-                    })
-                })
+            let doc = d.lock()?;
+            Ok((0..doc.components().len())
+                .map(|index| Dynamic::from(ComponentHandle::new(d, &doc, index)))
                 .collect())
         },
     );
@@ -323,8 +355,8 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.set(
         "Component.fixed",
         |c: &mut ComponentHandle, v: bool| -> ScriptResult<()> {
-            let mut doc = c.doc.lock()?;
-            let name = doc.components()[c.index].name.clone();
+            let (mut doc, i) = c.locked()?;
+            let name = doc.components()[i].name.clone();
             doc.set_fixed(&name, v).map_err(fail)
         },
     );
@@ -400,15 +432,16 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Component.aabb() -> Box",
         "World axis-aligned box (mm) of the posed mesh: a `Box` (`.min`, `.max`).",
         |c: &mut ComponentHandle| -> ScriptResult<Dynamic> {
-            let doc = c.doc.lock()?;
-            match doc.world_aabb(c.index) {
+            let (doc, i) = c.locked()?;
+            match doc.world_aabb(i) {
                 Some(b) => Ok(box_value(&b)),
                 None => err("the component's mesh is empty"),
             }
         },
     );
     api.f("Component.reference(name: string) -> map", "A reference of the part in world coordinates: `#{type, point, normal}` for planes, `#{type, point, direction}` for axes, `#{type, point}` for points (mm).", |c: &mut ComponentHandle, name: &str| -> ScriptResult<Map> {
-        let r = c.doc.lock()?.world_reference(c.index, name).map_err(fail)?;
+        let (doc, i) = c.locked()?;
+        let r = doc.world_reference(i, name).map_err(fail)?;
         Ok(reference_map(&r))
     });
     api.f(

@@ -8,7 +8,7 @@ use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
 use super::convert::{fail, point3, read_options, vec3};
 use super::{Context, ScriptResult};
-use crate::document::{Document, PropertyOwner, Reference};
+use crate::document::{Document, PropertyOwner, Reference, RemoveMates};
 use crate::math::Transform;
 use crate::options::AddMate;
 use rhai::{Array, Dynamic, Map};
@@ -51,7 +51,7 @@ fn properties_map(p: &indexmap::IndexMap<String, String>) -> Map {
 }
 
 fn component_name(c: &ComponentHandle) -> ScriptResult<String> {
-    Ok(c.doc.lock()?.components()[c.index].name.clone())
+    c.with_component(|c| c.name.clone())
 }
 
 fn mate_handles(d: &DocHandle, names: Vec<String>) -> Array {
@@ -276,10 +276,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "The mates that join this component (`IComponent2.GetMates`), in document order.",
         |c: &mut ComponentHandle| -> ScriptResult<Array> {
             let names = {
-                let doc = c.doc.lock()?;
+                let (doc, i) = c.locked()?;
                 doc.mates()
                     .iter()
-                    .filter(|m| m.entities.iter().any(|e| e.component == c.index))
+                    .filter(|m| m.entities.iter().any(|e| e.component == i))
                     .map(|m| m.name.clone())
                     .collect()
             };
@@ -291,9 +291,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.get(
         "Component.suppressed -> bool",
         "Whether the component is suppressed; setting it re-solves the mates.",
-        |c: &mut ComponentHandle| -> ScriptResult<bool> {
-            Ok(c.doc.lock()?.components()[c.index].suppressed)
-        },
+        |c: &mut ComponentHandle| -> ScriptResult<bool> { c.with_component(|c| c.suppressed) },
     );
     api.set(
         "Component.suppressed",
@@ -305,9 +303,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.get(
         "Component.visible -> bool",
         "Whether the component is shown (not hidden); `visible = false` hides it.",
-        |c: &mut ComponentHandle| -> ScriptResult<bool> {
-            Ok(!c.doc.lock()?.components()[c.index].hidden)
-        },
+        |c: &mut ComponentHandle| -> ScriptResult<bool> { c.with_component(|c| !c.hidden) },
     );
     api.set(
         "Component.visible",
@@ -322,20 +318,18 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Component.properties -> map",
         "The component's own properties.",
         |c: &mut ComponentHandle| -> ScriptResult<Map> {
-            Ok(properties_map(
-                &c.doc.lock()?.components()[c.index].properties,
-            ))
+            c.with_component(|c| properties_map(&c.properties))
         },
     );
     api.f("Component.property_names() -> array", "The names of the component's own properties in document order (a map's keys are sorted by name).", |c: &mut ComponentHandle| -> ScriptResult<Array> {
-        Ok(c.doc.lock()?.components()[c.index].properties.keys().map(|k| Dynamic::from(k.clone())).collect())
+        c.with_component(|c| c.properties.keys().map(|k| Dynamic::from(k.clone())).collect())
     });
     api.f(
         "Component.property(name: string) -> string",
         "A property of the component, else of its part (how a BOM reads it), else `()`.",
         |c: &mut ComponentHandle, key: &str| -> ScriptResult<Dynamic> {
-            let doc = c.doc.lock()?;
-            let comp = &doc.components()[c.index];
+            let (doc, i) = c.locked()?;
+            let comp = &doc.components()[i];
             let own = comp.properties.get(key).cloned();
             let v = match own {
                 Some(v) => Some(v),
@@ -421,7 +415,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "Component.part_file -> string",
         "The component's part file relative to the project folder (`IComponent2.GetPathName`).",
         |c: &mut ComponentHandle| -> ScriptResult<String> {
-            let part = c.doc.lock()?.components()[c.index].part.clone();
+            let part = c.with_component(|c| c.part.clone())?;
             part_file(&c.doc, &part)
         },
     );
@@ -438,22 +432,36 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         } else {
             to_transform(pose, "pose")?
         };
-        let index = {
-            let mut doc = d.lock()?;
-            let part = doc.part(part).map_err(fail)?.name.clone();
-            let name = name.map_or_else(|| doc.next_instance_name(&part), str::to_string);
-            doc.add_component(&name, &part, t).map_err(fail)?
-        };
-        Ok(ComponentHandle {
-            doc: d.clone(),
-            index,
-        })
+        let mut doc = d.lock()?;
+        let part = doc.part(part).map_err(fail)?.name.clone();
+        let name = name.map_or_else(|| doc.next_instance_name(&part), str::to_string);
+        let index = doc.add_component(&name, &part, t).map_err(fail)?;
+        Ok(ComponentHandle::new(d, &doc, index))
     }
     api.f("Document.add_component(part: string, pose) -> Component", "Adds a component of `part` at `pose` (a Transform, 4×4 matrix or `[x, y, z, a, b, c]`, mm and degrees), named `part-N` with the first free N.", |d: &mut DocHandle, part: &str, pose: Dynamic| add(d, None, part, &pose));
     api.f(
         "Document.add_component(name: string, part: string, pose) -> Component",
         "Adds a component named `name`.",
         |d: &mut DocHandle, name: &str, part: &str, pose: Dynamic| add(d, Some(name), part, &pose),
+    );
+    fn remove(d: &DocHandle, name: &str, mates: RemoveMates) -> ScriptResult<Array> {
+        let deleted = d.lock()?.remove_component(name, mates).map_err(fail)?;
+        Ok(deleted.into_iter().map(|m| Dynamic::from(m.name)).collect())
+    }
+    api.f(
+        "Document.remove_component(name: string)",
+        "Removes a component (SolidWorks' `DeleteSelection2` on it). Refused while it has mates (the error names them) and for a robot's link. Handles of the other components stay valid; a handle of the removed one is an error when used.",
+        |d: &mut DocHandle, name: &str| -> ScriptResult<()> {
+            remove(d, name, RemoveMates::Refuse).map(|_| ())
+        },
+    );
+    api.f(
+        "Document.remove_component(name: string, with_mates: bool) -> array",
+        "As above; `with_mates: true` deletes its mates with it (as SolidWorks does) and returns their names, unless an equation uses one of their dimensions.",
+        |d: &mut DocHandle, name: &str, with_mates: bool| -> ScriptResult<Array> {
+            let mates = if with_mates { RemoveMates::Delete } else { RemoveMates::Refuse };
+            remove(d, name, mates)
+        },
     );
     let c = ctx.clone();
     api.f("Document.add_part(name: string, file: string) -> string", "Adds a part whose mesh is `file` (STL, OBJ, PLY or glTF, relative to the document's folder, inside the project); returns its name. Its file becomes a dependency of the run.", move |d: &mut DocHandle, name: &str, file: &str| -> ScriptResult<String> {

@@ -147,8 +147,9 @@ fn feature_map(part: &str, f: &Feature) -> Map {
 
 fn split(c: &ComponentHandle, spec: CutSpec) -> ScriptResult<FeatureHandle> {
     let mut doc = c.doc.lock()?;
+    let i = c.at(&doc)?;
     let mut cache = c.doc.context().scene_cache()?;
-    let part = split_part(&mut doc, &mut cache, c.index, spec).map_err(fail)?;
+    let part = split_part(&mut doc, &mut cache, i, spec).map_err(fail)?;
     Ok(FeatureHandle {
         doc: c.doc.clone(),
         part,

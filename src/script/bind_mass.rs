@@ -56,13 +56,13 @@ pub(super) fn register(api: &mut Api) {
         let which = (!names.is_empty()).then(|| indices(d, &names)).transpose()?;
         of(d, which, &o)
     });
-    api.f("Component.mass_properties() -> MassProperties", "The component's mass properties in world coordinates (`in_frame(c.transform)` gives them in its part frame).", |c: &mut ComponentHandle| of(&c.doc, Some(vec![c.index]), &MassOptions::default()));
+    api.f("Component.mass_properties() -> MassProperties", "The component's mass properties in world coordinates (`in_frame(c.transform)` gives them in its part frame).", |c: &mut ComponentHandle| of(&c.doc, Some(vec![c.index()?]), &MassOptions::default()));
     api.f(
         "Component.mass_properties(options: map) -> MassProperties",
         "As above with `#{density}` (kg/m³).",
         |c: &mut ComponentHandle, o: Map| -> ScriptResult<MassProperties> {
             let o: MassOptions = options(&o, "mass_properties")?;
-            of(&c.doc, Some(vec![c.index]), &o)
+            of(&c.doc, Some(vec![c.index()?]), &o)
         },
     );
     api.get(
@@ -202,8 +202,8 @@ pub(super) fn register_export(api: &mut Api) {
     api.section("Export", "Component meshes with their pose baked in (CodeStack's \"Export Part Or Component To STL\", \"Export Relative To Coordinate System\"): binary STL in mm, in world coordinates or in a coordinate system `frame` (its pose in the world: a Transform, 4×4 matrix or `[x,y,z,a,b,c]`). Writers go through the write rule (see \"What a run writes\" in docs/scripting.md).");
     api.f("Component.world_mesh() -> map", "The component's mesh at its pose: `#{vertices: [[x,y,z], …] (mm, world), triangles: [[i,j,k], …]}`.", |c: &mut ComponentHandle| -> ScriptResult<Map> {
         let mesh = {
-            let doc = c.doc.lock()?;
-            crate::workspace::world_mesh(&doc, &[c.index], None)
+            let (doc, i) = c.locked()?;
+            crate::workspace::world_mesh(&doc, &[i], None)
         };
         let mut m = Map::new();
         m.insert("vertices".into(), Dynamic::from_array(mesh.vertices.iter().map(|p| array3(&p.coords)).collect()));
@@ -214,14 +214,14 @@ pub(super) fn register_export(api: &mut Api) {
         "Component.export_stl(file: string)",
         "Writes the component's mesh at its pose (world, mm) as binary STL.",
         |c: &mut ComponentHandle, file: &str| -> ScriptResult<()> {
-            export_stl(&c.doc, file, &[c.index], None, false)
+            export_stl(&c.doc, file, &[c.index()?], None, false)
         },
     );
     api.f(
         "Component.export_stl(file: string, options: map)",
         "As above with `#{frame, overwrite}`.",
         |c: &mut ComponentHandle, file: &str, o: Map| -> ScriptResult<()> {
-            let (which, frame, overwrite) = export_options(&c.doc, &o, vec![c.index])?;
+            let (which, frame, overwrite) = export_options(&c.doc, &o, vec![c.index()?])?;
             export_stl(&c.doc, file, &which, frame.as_ref(), overwrite)
         },
     );

@@ -336,7 +336,8 @@ fn follow(c: &ComponentHandle, p: &PathHandle, step: &Dynamic, print: bool) -> S
     let step = num(step, "step")?;
     let ctx = c.doc.context().clone();
     let mut doc = c.doc.lock()?;
-    let name = doc.components()[c.index].name.clone();
+    let i = c.at(&doc)?;
+    let name = doc.components()[i].name.clone();
     let view = ctx.caches.view.clone();
     view.log_path(&name, &p.0.poses);
     let doc_name = crate::viewer::document_name(&doc);

@@ -8,10 +8,12 @@
 mod api;
 mod args;
 mod assign;
+mod bind_assembly;
 #[cfg(feature = "db")]
 mod bind_db;
 mod bind_document;
 mod bind_edit;
+mod bind_equations;
 mod bind_files;
 mod bind_interference;
 mod bind_mass;

@@ -212,6 +212,8 @@ impl Problem {
             components,
             mates: vec![],
             robots: vec![],
+            equations: vec![],
+            assemblies: vec![],
         }
     }
 

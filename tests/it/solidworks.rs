@@ -260,3 +260,95 @@ fn a_save_solves_what_loading_solves() {
         "{after}"
     );
 }
+
+/// Capability 7, removing: a component with mates is refused unless its mates go with
+/// it; the other mates keep their components (indices shift under them), a robot's
+/// link and a mate under an equation are refused, and a save reloads.
+#[test]
+fn removing_a_component_handles_its_mates() {
+    use fitup::document::{Document, RemoveMates};
+    let dir = common::project();
+    let path = dir.path().join("models/cell.yaml");
+    let mut doc = Document::open(&path).unwrap();
+    let e = doc
+        .remove_component("screw1", RemoveMates::Refuse)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`screw1_in_hole`, `screw1_seated`"), "{e}");
+    let before: Vec<_> = doc
+        .components()
+        .iter()
+        .filter(|c| c.name != "screw1")
+        .map(|c| (c.name.clone(), c.transform))
+        .collect();
+    let deleted = doc.remove_component("screw1", RemoveMates::Delete).unwrap();
+    let names: Vec<_> = deleted.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["screw1_in_hole", "screw1_seated"]);
+    let after: Vec<_> = doc
+        .components()
+        .iter()
+        .map(|c| (c.name.clone(), c.transform))
+        .collect();
+    assert_eq!(after, before, "nothing else moved or changed place");
+    // every remaining mate still joins the components it joined
+    let m = doc.mate("screw2_in_hole").unwrap();
+    let joined: Vec<_> = m
+        .entities
+        .iter()
+        .map(|e| doc.components()[e.component].name.as_str())
+        .collect();
+    assert_eq!(joined, ["plate_a", "screw2"]);
+    // boxes are not taken from the component that had the index before
+    let i = doc.component_index("screw5").unwrap();
+    let b = doc.world_aabb(i).unwrap();
+    assert!((b.lo.x - 650.0).abs() < 10.0, "{b:?}");
+    doc.save().unwrap();
+    let again = Document::open(&path).unwrap();
+    assert!(again.component("screw1").is_err());
+    assert_eq!(again.mates().len(), doc.mates().len());
+
+    let robots = Document::open(&common::repo().join("models/cell_robots.yaml")).unwrap();
+    let e = robots
+        .clone()
+        .remove_component("mz07_a_link1", RemoveMates::Delete)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("link of robot"), "{e}");
+
+    let mut lift = Document::open(&common::repo().join("models/solidworks/lift.yaml")).unwrap();
+    let e = lift
+        .remove_component("plate", RemoveMates::Delete)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("D1@lift") && e.contains("equation [2]"), "{e}");
+    assert_eq!(lift.components().len(), 2);
+}
+
+/// A script's component handles stay on their component when an earlier one is
+/// removed; the removed one's handle is an error, not another component.
+#[test]
+fn component_handles_survive_a_removal() {
+    let out = run_script(
+        r#"
+let doc = open_doc("models/cell.yaml");
+let s1 = doc.component("screw1");
+let s5 = doc.component("screw5");
+let all = doc.components();
+let x5 = s5.transform.translation[0];
+let gone = doc.remove_component("screw1", true);
+assert(gone == ["screw1_in_hole", "screw1_seated"], `${gone}`);
+assert(s5.name == "screw5", s5.name);
+assert(all[7].name == "screw5", all[7].name);
+assert_near(s5.transform.translation[0], x5, 1e-12);
+assert_near(s5.aabb().min[0], x5 - 5.0, 5.0);
+let err = "";
+try { print(s1.name); } catch (e) { err = `${e}`; }
+assert(err.contains("removed"), err);
+let err = "";
+try { doc.remove_component("plate_b"); } catch (e) { err = `${e}`; }
+assert(err.contains("plate_b_on_table"), err);
+print("ok");
+"#,
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+}

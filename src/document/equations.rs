@@ -1,0 +1,743 @@
+//! Equations and global variables (SolidWorks' `IEquationMgr`): `"Factor" = 2`,
+//! `"D1@lift" = 10 * "Factor"`.
+//!
+//! An equation sets a global variable (a name without `@`) or a driving dimension
+//! (`D1@<mate>`, a robot joint's `D1@…`) to an expression of numbers, other global
+//! variables and dimensions. Values are in the **document's units**, as the file
+//! writes them: lengths mm, angles degrees; the trigonometric functions take and give
+//! degrees (SolidWorks' default "angular equation units"). Global variables have no
+//! unit.
+//!
+//! Equations are evaluated in dependency order on every rebuild; a dimension an
+//! equation uses but does not set is read at its current value. Every input is
+//! bounded ([`MAX_EQUATIONS`], [`MAX_EQUATION_LEN`], [`MAX_NODES`], [`MAX_NESTING`]):
+//! parsing and evaluation never recurse deeper than [`MAX_NODES`].
+
+use std::collections::HashMap;
+
+/// At most this many equations in a document.
+pub const MAX_EQUATIONS: usize = 1000;
+/// At most this many bytes in one equation's text.
+pub const MAX_EQUATION_LEN: usize = 1000;
+/// At most this many numbers, names, operators and function calls in one expression.
+pub const MAX_NODES: usize = 256;
+/// At most this many nested parentheses (and function calls) in one expression.
+pub const MAX_NESTING: usize = 32;
+/// At most this many bytes in a global variable's name.
+pub const MAX_NAME_LEN: usize = 256;
+
+/// Why an equation was refused: which one (0-based index, as `equation(i)`, and its
+/// text) and the cause.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("equation [{index}] {text}: {cause}")]
+pub struct EquationError {
+    /// 0-based index in the document's equations (SolidWorks' `Equation(i)`).
+    pub index: usize,
+    /// The equation's text (shortened when long).
+    pub text: String,
+    /// What is wrong.
+    pub cause: EquationCause,
+}
+
+/// What is wrong with an equation.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum EquationCause {
+    /// The text is not `"name" = expression`.
+    #[error("syntax at column {column}: {message}")]
+    Syntax {
+        /// 1-based column (in characters) in the equation's text.
+        column: usize,
+        /// What was expected.
+        message: String,
+    },
+    /// A name used in the expression is neither a global variable nor a dimension.
+    #[error("unknown name \"{name}\" ({hint})")]
+    UnknownName {
+        /// The name.
+        name: String,
+        /// Close matches.
+        hint: String,
+    },
+    /// The equation sets a name with `@` that is no dimension of the document.
+    #[error("\"{name}\" is not a dimension of this document ({hint}); names without `@` are global variables")]
+    NotADimension {
+        /// The name.
+        name: String,
+        /// Close matches.
+        hint: String,
+    },
+    /// Two equations set one name.
+    #[error("\"{name}\" is set by equation [{first}] already")]
+    SetTwice {
+        /// The name.
+        name: String,
+        /// The index of the first equation that sets it.
+        first: usize,
+    },
+    /// The equations depend on each other in a circle.
+    #[error("circular: {}", .0.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(" uses "))]
+    Cycle(Vec<String>),
+    /// A division by zero.
+    #[error("division by zero")]
+    DivisionByZero,
+    /// A result that is not a finite number (`sqr(-1)`, `log(0)`, an overflow).
+    #[error("{0} is not a finite number")]
+    NonFinite(String),
+    /// The dimension refused the value (a negative distance, beyond 1e9 mm, a joint
+    /// limit).
+    #[error("{0}")]
+    Value(String),
+    /// Past one of the bounds ([`MAX_EQUATIONS`], [`MAX_EQUATION_LEN`],
+    /// [`MAX_NODES`], [`MAX_NESTING`], [`MAX_NAME_LEN`]).
+    #[error("{0}")]
+    TooLarge(String),
+}
+
+/// What an equation sets.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum EquationTarget {
+    /// A global variable (no unit).
+    Global,
+    /// A driving dimension (its value in mm or degrees).
+    Dimension,
+}
+
+/// One equation: `"target" = expression`, and its value at the last rebuild.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Equation {
+    /// The name it sets, NFC: a global variable or a dimension's full name.
+    pub target: String,
+    /// A global variable or a dimension.
+    pub kind: EquationTarget,
+    /// The right-hand side as written (trimmed).
+    pub expression: String,
+    /// Its value at the last evaluation, in document units (mm, degrees, or none for a
+    /// global variable).
+    pub value: f64,
+    pub(crate) expr: Expr,
+}
+
+impl Equation {
+    /// The equation as SolidWorks' `IEquationMgr.Equation(i)` writes it:
+    /// `"target" = expression`.
+    pub fn text(&self) -> String {
+        format!("\"{}\" = {}", self.target, self.expression)
+    }
+
+    /// Whether it sets a global variable (`IEquationMgr.GlobalVariable(i)`).
+    pub fn is_global(&self) -> bool {
+        self.kind == EquationTarget::Global
+    }
+}
+
+/// An expression's tree.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Expr {
+    Number(f64),
+    Name(String),
+    Neg(Box<Expr>),
+    Binary(char, Box<Expr>, Box<Expr>),
+    Call(Function, Vec<Expr>),
+}
+
+/// The functions of SolidWorks' equations (angles in degrees).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Function {
+    Sin,
+    Cos,
+    Tan,
+    Sec,
+    Cosec,
+    Cotan,
+    Arcsin,
+    Arccos,
+    Atn,
+    Arcsec,
+    Arccosec,
+    Arccotan,
+    Abs,
+    Exp,
+    Log,
+    Sqr,
+    Int,
+    Sgn,
+    Min,
+    Max,
+}
+
+/// Every function name, as written in equations, with its number of arguments.
+const FUNCTIONS: &[(&str, Function, usize)] = &[
+    ("sin", Function::Sin, 1),
+    ("cos", Function::Cos, 1),
+    ("tan", Function::Tan, 1),
+    ("sec", Function::Sec, 1),
+    ("cosec", Function::Cosec, 1),
+    ("cotan", Function::Cotan, 1),
+    ("arcsin", Function::Arcsin, 1),
+    ("arccos", Function::Arccos, 1),
+    ("atn", Function::Atn, 1),
+    ("arcsec", Function::Arcsec, 1),
+    ("arccosec", Function::Arccosec, 1),
+    ("arccotan", Function::Arccotan, 1),
+    ("abs", Function::Abs, 1),
+    ("exp", Function::Exp, 1),
+    ("log", Function::Log, 1),
+    ("sqr", Function::Sqr, 1),
+    ("sqrt", Function::Sqr, 1),
+    ("int", Function::Int, 1),
+    ("sgn", Function::Sgn, 1),
+    ("min", Function::Min, 2),
+    ("max", Function::Max, 2),
+];
+
+impl Function {
+    fn name(self) -> &'static str {
+        FUNCTIONS
+            .iter()
+            .find(|f| f.1 == self)
+            .map(|f| f.0)
+            .unwrap_or("?")
+    }
+
+    fn apply(self, a: &[f64]) -> f64 {
+        let d = |x: f64| x.to_radians();
+        let x = a[0];
+        match self {
+            Function::Sin => d(x).sin(),
+            Function::Cos => d(x).cos(),
+            Function::Tan => d(x).tan(),
+            Function::Sec => 1.0 / d(x).cos(),
+            Function::Cosec => 1.0 / d(x).sin(),
+            Function::Cotan => 1.0 / d(x).tan(),
+            Function::Arcsin => x.asin().to_degrees(),
+            Function::Arccos => x.acos().to_degrees(),
+            Function::Atn => x.atan().to_degrees(),
+            Function::Arcsec => (1.0 / x).acos().to_degrees(),
+            Function::Arccosec => (1.0 / x).asin().to_degrees(),
+            Function::Arccotan => (1.0 / x).atan().to_degrees(),
+            Function::Abs => x.abs(),
+            Function::Exp => x.exp(),
+            Function::Log => x.ln(),
+            Function::Sqr => x.sqrt(),
+            Function::Int => x.trunc(),
+            Function::Sgn => {
+                if x > 0.0 {
+                    1.0
+                } else if x < 0.0 {
+                    -1.0
+                } else {
+                    0.0
+                }
+            }
+            Function::Min => x.min(a[1]),
+            Function::Max => x.max(a[1]),
+        }
+    }
+}
+
+/// `"target" = expression` parsed: the target (NFC), the expression's text and tree.
+pub(crate) fn parse(text: &str) -> Result<(String, String, Expr), EquationCause> {
+    if text.len() > MAX_EQUATION_LEN {
+        return Err(EquationCause::TooLarge(format!(
+            "{} bytes: an equation holds at most {MAX_EQUATION_LEN}",
+            text.len()
+        )));
+    }
+    let chars: Vec<char> = text.chars().collect();
+    let mut p = Parser {
+        chars: &chars,
+        at: 0,
+        nodes: 0,
+        nesting: 0,
+    };
+    p.skip_space();
+    if p.peek() != Some('"') {
+        return Err(p.error(
+            "an equation starts with the name it sets in double quotes: `\"Factor\" = 2`, `\"D1@lift\" = 10 * \"Factor\"`",
+        ));
+    }
+    let target = p.name()?;
+    p.skip_space();
+    if p.peek() != Some('=') {
+        return Err(p.error("expected `=` after the name"));
+    }
+    p.at += 1;
+    let start = p.at;
+    let expr = p.expression()?;
+    p.skip_space();
+    if p.at < chars.len() {
+        return Err(p.error("expected an operator (`+ - * / ^`) or the end"));
+    }
+    let expression: String = chars[start..].iter().collect::<String>().trim().to_string();
+    Ok((target, expression, expr))
+}
+
+struct Parser<'a> {
+    chars: &'a [char],
+    at: usize,
+    nodes: usize,
+    nesting: usize,
+}
+
+impl Parser<'_> {
+    fn peek(&self) -> Option<char> {
+        self.chars.get(self.at).copied()
+    }
+
+    fn skip_space(&mut self) {
+        while self.peek().is_some_and(char::is_whitespace) {
+            self.at += 1;
+        }
+    }
+
+    fn error(&self, message: &str) -> EquationCause {
+        EquationCause::Syntax {
+            column: self.at + 1,
+            message: message.to_string(),
+        }
+    }
+
+    /// Counts a node of the tree against [`MAX_NODES`].
+    fn node(&mut self) -> Result<(), EquationCause> {
+        self.nodes += 1;
+        if self.nodes > MAX_NODES {
+            return Err(EquationCause::TooLarge(format!(
+                "more than {MAX_NODES} numbers, names and operations in one expression"
+            )));
+        }
+        Ok(())
+    }
+
+    /// A name in double quotes (the quote is next), NFC and checked.
+    fn name(&mut self) -> Result<String, EquationCause> {
+        let open = self.at;
+        self.at += 1;
+        let start = self.at;
+        while self.peek().is_some_and(|c| c != '"') {
+            self.at += 1;
+        }
+        if self.peek().is_none() {
+            self.at = open;
+            return Err(self.error("a name's closing `\"` is missing"));
+        }
+        let raw: String = self.chars[start..self.at].iter().collect();
+        self.at += 1;
+        let name = raw.trim();
+        if name.is_empty() {
+            self.at = open;
+            return Err(self.error("an empty name `\"\"`"));
+        }
+        if name.len() > MAX_NAME_LEN {
+            return Err(EquationCause::TooLarge(format!(
+                "a name of {} bytes: at most {MAX_NAME_LEN}",
+                name.len()
+            )));
+        }
+        if let Err(c) = crate::diagnostics::checked_name(name) {
+            self.at = open;
+            return Err(self.error(&format!(
+                "{} is not allowed in names",
+                crate::diagnostics::describe_char(c)
+            )));
+        }
+        Ok(super::nfc_name(name).into_owned())
+    }
+
+    /// `term (('+' | '-') term)*`.
+    fn expression(&mut self) -> Result<Expr, EquationCause> {
+        let mut left = self.term()?;
+        loop {
+            self.skip_space();
+            match self.peek() {
+                Some(op @ ('+' | '-')) => {
+                    self.at += 1;
+                    self.node()?;
+                    let right = self.term()?;
+                    left = Expr::Binary(op, Box::new(left), Box::new(right));
+                }
+                _ => return Ok(left),
+            }
+        }
+    }
+
+    /// `unary (('*' | '/') unary)*`.
+    fn term(&mut self) -> Result<Expr, EquationCause> {
+        let mut left = self.unary()?;
+        loop {
+            self.skip_space();
+            match self.peek() {
+                Some(op @ ('*' | '/')) => {
+                    self.at += 1;
+                    self.node()?;
+                    let right = self.unary()?;
+                    left = Expr::Binary(op, Box::new(left), Box::new(right));
+                }
+                _ => return Ok(left),
+            }
+        }
+    }
+
+    /// `('-' | '+')* power`: `-2^2` is `-(2^2)`.
+    fn unary(&mut self) -> Result<Expr, EquationCause> {
+        self.skip_space();
+        match self.peek() {
+            Some('-') => {
+                self.at += 1;
+                self.node()?;
+                Ok(Expr::Neg(Box::new(self.unary()?)))
+            }
+            Some('+') => {
+                self.at += 1;
+                self.node()?;
+                self.unary()
+            }
+            _ => self.power(),
+        }
+    }
+
+    /// `atom ('^' unary)?`, right-associative.
+    fn power(&mut self) -> Result<Expr, EquationCause> {
+        let base = self.atom()?;
+        self.skip_space();
+        if self.peek() == Some('^') {
+            self.at += 1;
+            self.node()?;
+            let exponent = self.unary()?;
+            return Ok(Expr::Binary('^', Box::new(base), Box::new(exponent)));
+        }
+        Ok(base)
+    }
+
+    fn enter(&mut self) -> Result<(), EquationCause> {
+        self.nesting += 1;
+        if self.nesting > MAX_NESTING {
+            return Err(EquationCause::TooLarge(format!(
+                "more than {MAX_NESTING} nested parentheses"
+            )));
+        }
+        Ok(())
+    }
+
+    /// A number, a `"name"`, `pi`, `(expression)` or `function(arguments)`.
+    fn atom(&mut self) -> Result<Expr, EquationCause> {
+        self.skip_space();
+        self.node()?;
+        match self.peek() {
+            Some('"') => Ok(Expr::Name(self.name()?)),
+            Some('(') => {
+                self.at += 1;
+                self.enter()?;
+                let e = self.expression()?;
+                self.skip_space();
+                if self.peek() != Some(')') {
+                    return Err(self.error("expected `)`"));
+                }
+                self.at += 1;
+                self.nesting -= 1;
+                Ok(e)
+            }
+            Some(c) if c.is_ascii_digit() || c == '.' => self.number(),
+            Some(c) if c.is_alphabetic() => self.call(),
+            Some(_) => Err(self.error("expected a number, a \"name\", a function or `(`")),
+            None => Err(self.error("the expression ends too early")),
+        }
+    }
+
+    fn number(&mut self) -> Result<Expr, EquationCause> {
+        let start = self.at;
+        while self.peek().is_some_and(|c| c.is_ascii_digit() || c == '.') {
+            self.at += 1;
+        }
+        if matches!(self.peek(), Some('e' | 'E')) {
+            let mark = self.at;
+            self.at += 1;
+            if matches!(self.peek(), Some('+' | '-')) {
+                self.at += 1;
+            }
+            if self.peek().is_some_and(|c| c.is_ascii_digit()) {
+                while self.peek().is_some_and(|c| c.is_ascii_digit()) {
+                    self.at += 1;
+                }
+            } else {
+                self.at = mark;
+            }
+        }
+        let text: String = self.chars[start..self.at].iter().collect();
+        let v: f64 = text.parse().map_err(|_| EquationCause::Syntax {
+            column: start + 1,
+            message: format!("`{text}` is not a number"),
+        })?;
+        if self.peek().is_some_and(char::is_alphabetic) {
+            return Err(self.error(
+                "unit suffixes are not supported: lengths are mm and angles degrees, as the document writes them",
+            ));
+        }
+        if !v.is_finite() {
+            return Err(EquationCause::NonFinite(format!("`{text}`")));
+        }
+        Ok(Expr::Number(v))
+    }
+
+    /// `pi` or a function call.
+    fn call(&mut self) -> Result<Expr, EquationCause> {
+        let start = self.at;
+        while self.peek().is_some_and(|c| c.is_alphanumeric() || c == '_') {
+            self.at += 1;
+        }
+        let word: String = self.chars[start..self.at].iter().collect();
+        let lower = word.to_lowercase();
+        if lower == "pi" {
+            return Ok(Expr::Number(std::f64::consts::PI));
+        }
+        let Some(&(_, f, arity)) = FUNCTIONS.iter().find(|f| f.0 == lower) else {
+            self.at = start;
+            let names = FUNCTIONS.iter().map(|f| f.0).chain(["pi"]);
+            return Err(self.error(&format!(
+                "unknown function `{word}` ({}); names are written in double quotes",
+                crate::diagnostics::suggestion(&lower, names)
+            )));
+        };
+        self.skip_space();
+        if self.peek() != Some('(') {
+            return Err(self.error(&format!("expected `(` after `{word}`")));
+        }
+        self.at += 1;
+        self.enter()?;
+        let mut args = Vec::with_capacity(arity);
+        loop {
+            args.push(self.expression()?);
+            self.skip_space();
+            match self.peek() {
+                Some(',') if args.len() < arity => self.at += 1,
+                Some(')') if args.len() == arity => break,
+                _ => {
+                    return Err(self.error(&format!(
+                        "`{word}` takes {arity} argument{}",
+                        if arity == 1 { "" } else { "s" }
+                    )))
+                }
+            }
+        }
+        self.at += 1;
+        self.nesting -= 1;
+        Ok(Expr::Call(f, args))
+    }
+}
+
+impl Expr {
+    /// The names it uses, each once, in order of appearance.
+    pub(crate) fn names(&self, out: &mut Vec<String>) {
+        match self {
+            Expr::Number(_) => {}
+            Expr::Name(n) => {
+                if !out.contains(n) {
+                    out.push(n.clone());
+                }
+            }
+            Expr::Neg(e) => e.names(out),
+            Expr::Binary(_, a, b) => {
+                a.names(out);
+                b.names(out);
+            }
+            Expr::Call(_, args) => args.iter().for_each(|a| a.names(out)),
+        }
+    }
+
+    /// Its value with `value` giving each name's (every name is known: checked
+    /// before). The depth is bounded by [`MAX_NODES`].
+    pub(crate) fn eval(&self, value: &dyn Fn(&str) -> f64) -> Result<f64, EquationCause> {
+        let v = match self {
+            Expr::Number(v) => *v,
+            Expr::Name(n) => value(n),
+            Expr::Neg(e) => -e.eval(value)?,
+            Expr::Binary(op, a, b) => {
+                let (a, b) = (a.eval(value)?, b.eval(value)?);
+                match op {
+                    '+' => a + b,
+                    '-' => a - b,
+                    '*' => a * b,
+                    '/' if b == 0.0 => return Err(EquationCause::DivisionByZero),
+                    '/' => a / b,
+                    _ => a.powf(b),
+                }
+            }
+            Expr::Call(f, args) => {
+                let mut a = [0.0; 2];
+                for (slot, e) in a.iter_mut().zip(args) {
+                    *slot = e.eval(value)?;
+                }
+                let v = f.apply(&a[..args.len()]);
+                if !v.is_finite() {
+                    let shown: Vec<String> =
+                        a[..args.len()].iter().map(|x| x.to_string()).collect();
+                    return Err(EquationCause::NonFinite(format!(
+                        "{}({})",
+                        f.name(),
+                        shown.join(", ")
+                    )));
+                }
+                v
+            }
+        };
+        if !v.is_finite() {
+            return Err(EquationCause::NonFinite(match self {
+                Expr::Binary(op, ..) => format!("the result of `{op}`"),
+                _ => "a value".into(),
+            }));
+        }
+        Ok(v)
+    }
+}
+
+/// The equations' text shortened for messages.
+pub(crate) fn shown(text: &str) -> String {
+    let mut out: String = text.chars().take(80).collect();
+    if out.len() < text.len() {
+        out.push('…');
+    }
+    crate::diagnostics::printable(&out, false).into_owned()
+}
+
+/// The order to evaluate `equations` in (each after the equations setting the names
+/// it uses), or the first circle found. `sets`: name → index of the equation setting
+/// it. Iterative (Kahn's algorithm): no recursion however long the chain.
+pub(crate) fn order(
+    equations: &[Equation],
+    sets: &HashMap<&str, usize>,
+) -> Result<Vec<usize>, EquationError> {
+    let n = equations.len();
+    let mut uses: Vec<Vec<usize>> = Vec::with_capacity(n);
+    let mut used_by: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (i, e) in equations.iter().enumerate() {
+        let mut names = Vec::new();
+        e.expr.names(&mut names);
+        let deps: Vec<usize> = names
+            .iter()
+            .filter_map(|m| sets.get(m.as_str()).copied())
+            .collect();
+        for &d in &deps {
+            used_by[d].push(i);
+        }
+        uses.push(deps);
+    }
+    let mut waiting: Vec<usize> = uses.iter().map(Vec::len).collect();
+    let mut ready: Vec<usize> = (0..n).rev().filter(|&i| waiting[i] == 0).collect();
+    let mut out = Vec::with_capacity(n);
+    while let Some(i) = ready.pop() {
+        out.push(i);
+        for &j in &used_by[i] {
+            waiting[j] -= 1;
+            if waiting[j] == 0 {
+                ready.push(j);
+            }
+        }
+    }
+    if out.len() == n {
+        return Ok(out);
+    }
+    // A circle: walk from the first equation left waiting along its waiting uses.
+    let start = (0..n).find(|&i| waiting[i] > 0).unwrap_or(0);
+    let mut path = vec![start];
+    let mut seen = vec![usize::MAX; n];
+    seen[start] = 0;
+    let mut at = start;
+    while let Some(&next) = uses[at].iter().find(|&&d| waiting[d] > 0) {
+        if seen[next] != usize::MAX {
+            let cycle: Vec<String> = path[seen[next]..]
+                .iter()
+                .chain(std::iter::once(&next))
+                .map(|&k| equations[k].target.clone())
+                .collect();
+            return Err(EquationError {
+                index: next,
+                text: shown(&equations[next].text()),
+                cause: EquationCause::Cycle(cycle),
+            });
+        }
+        seen[next] = path.len();
+        path.push(next);
+        at = next;
+    }
+    Err(EquationError {
+        index: start,
+        text: shown(&equations[start].text()),
+        cause: EquationCause::Cycle(vec![equations[start].target.clone()]),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn value(text: &str) -> Result<f64, EquationCause> {
+        let (_, _, e) = parse(text)?;
+        e.eval(&|n| if n == "x" { 3.0 } else { 0.0 })
+    }
+
+    #[test]
+    fn arithmetic_follows_the_usual_precedence() {
+        assert_eq!(value("\"a\" = 1 + 2 * 3").unwrap(), 7.0);
+        assert_eq!(value("\"a\" = (1 + 2) * 3").unwrap(), 9.0);
+        assert_eq!(value("\"a\" = -2^2").unwrap(), -4.0);
+        assert_eq!(value("\"a\" = 2^3^2").unwrap(), 512.0);
+        assert_eq!(value("\"a\" = 10 - 4 - 3").unwrap(), 3.0);
+        assert_eq!(value("\"a\" = 12 / 4 / 3").unwrap(), 1.0);
+        assert_eq!(value("\"a\" = 2 * \"x\" + 1e1").unwrap(), 16.0);
+        assert_eq!(value("\"a\" = max(1, min(\"x\", 2))").unwrap(), 2.0);
+        assert!((value("\"a\" = sin(30) + cos(60)").unwrap() - 1.0).abs() < 1e-12);
+        assert!((value("\"a\" = atn(1)").unwrap() - 45.0).abs() < 1e-12);
+        assert!((value("\"a\" = 2 * PI").unwrap() - std::f64::consts::TAU).abs() < 1e-15);
+    }
+
+    #[test]
+    fn errors_name_their_cause_and_column() {
+        assert_eq!(
+            value("\"a\" = 1 / (\"x\" - 3)"),
+            Err(EquationCause::DivisionByZero)
+        );
+        assert!(
+            matches!(value("\"a\" = sqr(-1)"), Err(EquationCause::NonFinite(s)) if s == "sqr(-1)")
+        );
+        assert!(matches!(
+            value("\"a\" = log(0)"),
+            Err(EquationCause::NonFinite(_))
+        ));
+        assert!(matches!(
+            value("\"a\" = 1e300 * 1e300"),
+            Err(EquationCause::NonFinite(_))
+        ));
+        assert!(matches!(
+            value("\"a\" = 1 +"),
+            Err(EquationCause::Syntax { column: 10, .. })
+        ));
+        assert!(matches!(
+            value("a = 1"),
+            Err(EquationCause::Syntax { column: 1, .. })
+        ));
+        assert!(matches!(
+            value("\"a\" = 10mm"),
+            Err(EquationCause::Syntax { .. })
+        ));
+        assert!(matches!(
+            value("\"a\" = sine(1)"),
+            Err(EquationCause::Syntax { column: 7, .. })
+        ));
+        assert!(matches!(
+            value("\"a\" = min(1)"),
+            Err(EquationCause::Syntax { .. })
+        ));
+    }
+
+    #[test]
+    fn hostile_expressions_are_bounded() {
+        let deep = format!("\"a\" = {}1{}", "(".repeat(100), ")".repeat(100));
+        assert!(matches!(value(&deep), Err(EquationCause::TooLarge(_))));
+        let long = format!("\"a\" = {}1", "1+".repeat(300));
+        assert!(matches!(value(&long), Err(EquationCause::TooLarge(_))));
+        let neg = format!("\"a\" = {}1", "-".repeat(400));
+        assert!(matches!(value(&neg), Err(EquationCause::TooLarge(_))));
+        let huge = format!("\"a\" = {}", "1".repeat(2000));
+        assert!(matches!(value(&huge), Err(EquationCause::TooLarge(_))));
+    }
+}
