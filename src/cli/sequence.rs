@@ -52,9 +52,8 @@ fn request(a: &Args<'_>) -> Result<Sequence, String> {
     }
     map.insert("support".into(), json!(a.support));
     if let Some(g) = &a.gravity {
-        let v = parse_vec3(g).ok_or_else(|| {
-            format!("--gravity must be three numbers `x,y,z`, not `{g}`")
-        })?;
+        let v = parse_vec3(g)
+            .ok_or_else(|| format!("--gravity must be three numbers `x,y,z`, not `{g}`"))?;
         map.insert("gravity".into(), json!([v.x, v.y, v.z]));
     }
     map.insert("max_sequences".into(), json!(a.max_sequences));

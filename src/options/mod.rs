@@ -320,7 +320,11 @@ impl Vocabulary {
             let Some((key, text)) = arg.split_once('=') else {
                 return Err(format!(
                     "`{arg}`: expected KEY=VALUE (keys: {})",
-                    self.keys.iter().map(|k| k.name).collect::<Vec<_>>().join(", ")
+                    self.keys
+                        .iter()
+                        .map(|k| k.name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ));
             };
             let (key, text) = (key.trim(), text.trim());

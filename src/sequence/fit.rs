@@ -77,7 +77,11 @@ impl FitPairCheck {
         }
         let region = Aabb::new(swept.lo.sup(&qb.lo), swept.hi.inf(&qb.hi));
         // Lines along d across the region: a frame (u, v) across d.
-        let helper = if d.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+        let helper = if d.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
         let u = d.cross(&helper).normalize();
         let v = d.cross(&u);
         let corners: Vec<Point3> = (0..8)
@@ -90,10 +94,12 @@ impl FitPairCheck {
             })
             .collect();
         let range = |e: &Vec3| {
-            corners.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
-                let x = c.coords.dot(e);
-                (a.min(x), b.max(x))
-            })
+            corners
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+                    let x = c.coords.dot(e);
+                    (a.min(x), b.max(x))
+                })
         };
         let ((u0, u1), (v0, v1), (s0, _)) = (range(&u), range(&v), range(d));
         let mut h = self.spacing.max(1e-3);
@@ -116,7 +122,11 @@ impl FitPairCheck {
             self.p_home
         };
         let inv = [from.inverse(), room.inverse(), self.q_pose.inverse()];
-        let solids = [&self.p, if self.p_carved { &self.q } else { &self.p }, &self.q];
+        let solids = [
+            &self.p,
+            if self.p_carved { &self.q } else { &self.p },
+            &self.q,
+        ];
         let mut hits = Vec::new();
         for i in 0..nu {
             for j in 0..nv {
@@ -151,7 +161,13 @@ impl FitPairCheck {
 
 /// Along one line: whether `moving` swept forward by up to `len` meets `q` deeper
 /// than `tol` outside `home` (grown by `tol`).
-fn line_overlap(moving: &[(f64, f64)], home: &[(f64, f64)], q: &[(f64, f64)], len: f64, tol: f64) -> bool {
+fn line_overlap(
+    moving: &[(f64, f64)],
+    home: &[(f64, f64)],
+    q: &[(f64, f64)],
+    len: f64,
+    tol: f64,
+) -> bool {
     for &(a, b) in moving {
         let (a, b) = (a, b + len);
         for &(c, e) in q {
@@ -203,7 +219,8 @@ fn carved_line_overlap(
     }
     left.iter().any(|&(a, b)| {
         let (a, b) = (a, b + len);
-        q.iter().any(|&(c, e)| b.min(e - tol) - a.max(c + tol) > tol)
+        q.iter()
+            .any(|&(c, e)| b.min(e - tol) - a.max(c + tol) > tol)
     })
 }
 
@@ -263,4 +280,3 @@ impl MotionValidator for FitPairValidator {
         Some(Box::new(copy))
     }
 }
-

@@ -60,8 +60,9 @@ mod task;
 pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};
 pub use grasp::{face_pairs, FacePair};
 pub use options::{
-    Fit, Gripper, Mode, RejectReason, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan,
-    StepInfo, Stuck, SupportGap, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS, MAX_SEQUENCES,
+    Fit, Gripper, Mode, RejectReason, Rejected, Sequence, SequenceError, SequenceOptions,
+    SequencePlan, StepInfo, Stuck, SupportGap, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
+    MAX_SEQUENCES,
 };
 pub use plan::MAX_SEARCH_MEMO_BYTES;
 pub use revalidate::{revalidate, BrokenStep};

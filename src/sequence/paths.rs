@@ -4,12 +4,12 @@
 //! and radians, assembly frame.
 
 use super::context::*;
+use super::fit::FitPairValidator;
 use crate::collision::{Aabb, SweepMethod};
 use crate::math::{Transform, Vec3};
 use crate::planning::{
     MeshValidator, MeshValidatorOptions, MotionValidator, PlannedPath, Planner, PlanningSpace,
 };
-use super::fit::FitPairValidator;
 use std::time::Instant;
 
 /// The checks of one part moving among others where some pairs have a fit: a mesh

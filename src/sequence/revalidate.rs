@@ -147,7 +147,11 @@ pub fn revalidate(
                         p_home: scene.poses[p],
                         q: scene.colliders[q].clone(),
                         q_pose: scene.poses[q],
-                        p_carved: super::context::carved_first(doc.mesh_of(p), doc.mesh_of(q), p < q),
+                        p_carved: super::context::carved_first(
+                            doc.mesh_of(p),
+                            doc.mesh_of(q),
+                            p < q,
+                        ),
                         spacing,
                         tolerance,
                     }
