@@ -546,7 +546,7 @@ pub struct Fit {
 /// held by its mates): without them some part of the product could never be placed
 /// touching anything. Each is the closest link between two groups of parts that do
 /// not touch each other within the gap (the fewest, shortest links that connect the
-/// product).
+/// product), at most half the thinner part's thinnest box extent apart.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SupportGap {
     /// One component.

@@ -522,7 +522,8 @@ impl Parts<'_> {
     /// touch within the gap or fit) where it falls apart in groups: first the
     /// `mated` pairs joining two groups (mates mode: a mated part is held by its
     /// mate), then, Kruskal's way, the closest pairs of surfaces between groups
-    /// (a clearance joint wider than the gap). Each link joins two groups, so
+    /// (a clearance joint wider than the gap) no farther apart than half the
+    /// thinner part's thinnest box extent (a part standing apart is not held). Each link joins two groups, so
     /// there are at most groups − 1, and none when the graph is connected.
     fn bridges(
         &self,
@@ -579,8 +580,12 @@ impl Parts<'_> {
         let first = across.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
         let mut t = first.max(self.opts.contact_gap_mm).max(1e-3) * 2.0;
         let mut done = 0.0;
+        // No link is longer than half the thickest part's thinnest extent.
+        let longest = members(self.active)
+            .map(|i| 0.5 * (self.boxes[i].hi - self.boxes[i].lo).min())
+            .fold(0.0f64, f64::max);
         for _ in 0..64 {
-            if groups <= 1 || self.deadline.passed() {
+            if groups <= 1 || self.deadline.passed() || done > longest {
                 break;
             }
             let found: Vec<Option<f64>> = across
@@ -611,6 +616,12 @@ impl Parts<'_> {
                 .collect();
             round.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
             for (d, a, b) in round {
+                // A joint's clearance, not a part standing apart: at most half
+                // the thinner part's thinnest extent.
+                let thin = |i: usize| (self.boxes[i].hi - self.boxes[i].lo).min();
+                if d > 0.5 * thin(a).min(thin(b)) {
+                    continue;
+                }
                 if groups > 1 && join(&mut root, &mut groups, a, b) {
                     out.push(((a, b), Some(d)));
                 }
