@@ -39,7 +39,9 @@ fn intervals(hits: &[f64]) -> Option<Vec<(f64, f64)>> {
         }
         h.push(t);
     }
-    (h.len() % 2 == 0).then(|| h.chunks(2).map(|c| (c[0], c[1])).collect())
+    h.len()
+        .is_multiple_of(2)
+        .then(|| h.chunks(2).map(|c| (c[0], c[1])).collect())
 }
 
 /// One fit pair as the checks read it: the moving part `p` (its collider and
