@@ -203,10 +203,12 @@ pub(super) fn load(
     at: impl Fn(&str, String) -> DocumentError,
 ) -> Result<Vec<SubAssembly>, DocumentError> {
     let mut out: Vec<SubAssembly> = Vec::with_capacity(file.assemblies.len());
+    // by name: a file of many sub-assemblies is read in linear time
+    let mut index: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
     for (i, a) in file.assemblies.iter().enumerate() {
         let name_key = format!("assemblies/{i}/name");
         check_levels(&a.name).map_err(|e| at(&name_key, format!("sub-assembly {e}")))?;
-        if out.iter().any(|o| o.name == a.name) {
+        if index.contains_key(a.name.as_str()) {
             return Err(at(
                 &name_key,
                 format!("duplicate sub-assembly name `{}`", a.name),
@@ -214,8 +216,8 @@ pub(super) fn load(
         }
         let parent = match parent_name(&a.name) {
             None => Transform::IDENTITY,
-            Some(p) => match out.iter().find(|o| o.name == p) {
-                Some(o) => o.transform,
+            Some(p) => match index.get(p) {
+                Some(&k) => out[k].transform,
                 None => {
                     return Err(at(
                         &name_key,
@@ -241,6 +243,7 @@ pub(super) fn load(
                     .map_err(|e| at(&key, format!("sub-assembly `{}`: {e}", a.name)))?
             }
         };
+        index.insert(&a.name, out.len());
         out.push(SubAssembly {
             name: a.name.clone(),
             transform: local * parent,
@@ -249,10 +252,22 @@ pub(super) fn load(
     Ok(out)
 }
 
-/// The world pose of the parent of `name` among `assemblies` (identity at the top).
-pub(super) fn parent_frame(assemblies: &[SubAssembly], name: &str) -> Option<Transform> {
+/// The sub-assemblies' world poses by full name.
+pub(super) fn frames(assemblies: &[SubAssembly]) -> std::collections::HashMap<&str, Transform> {
+    assemblies
+        .iter()
+        .map(|a| (a.name.as_str(), a.transform))
+        .collect()
+}
+
+/// The world pose of the parent of `name` among `frames` (identity at the top),
+/// `None` when the parent is no sub-assembly.
+pub(super) fn parent_frame(
+    frames: &std::collections::HashMap<&str, Transform>,
+    name: &str,
+) -> Option<Transform> {
     match parent_name(name) {
         None => Some(Transform::IDENTITY),
-        Some(p) => assemblies.iter().find(|a| a.name == p).map(|a| a.transform),
+        Some(p) => frames.get(p).copied(),
     }
 }

@@ -488,6 +488,7 @@ impl Loader<'_> {
     ) -> Result<(Vec<Component>, HashMap<String, usize>), DocumentError> {
         let mut components = Vec::with_capacity(file.components.len());
         let mut by_name = HashMap::new();
+        let frames = super::assembly::frames(assemblies);
         for (ci, c) in file.components.iter().enumerate() {
             // The name's own line from the scan (the text may spell it in NFD).
             let name_at =
@@ -497,7 +498,7 @@ impl Loader<'_> {
             }
             super::assembly::check_levels(&c.name)
                 .map_err(|e| name_at(format!("component {e}")))?;
-            let Some(frame) = super::assembly::parent_frame(assemblies, &c.name) else {
+            let Some(frame) = super::assembly::parent_frame(&frames, &c.name) else {
                 return Err(name_at(format!(
                     "component `{}`: its parent `{}` is no sub-assembly of `assemblies:`",
                     c.name,

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 impl Document {
     /// The document as its YAML schema (what `save` writes).
     pub fn to_file(&self) -> DocumentFile {
+        let frames = super::assembly::frames(&self.assemblies);
         let parts = self
             .parts
             .values()
@@ -66,7 +67,7 @@ impl Document {
                 part: c.part.clone(),
                 fixed: c.fixed,
                 color: c.color.as_ref().map(color_value),
-                transform: Some(self.local_pose(&c.name, c.transform)),
+                transform: Some(Self::local_pose(&frames, &c.name, c.transform)),
                 mass: c.mass,
                 threaded: c.threaded,
                 fixture: c.fixture,
@@ -105,7 +106,7 @@ impl Document {
             .iter()
             .map(|a| AssemblyFile {
                 name: a.name.clone(),
-                transform: Some(self.local_pose(&a.name, a.transform)),
+                transform: Some(Self::local_pose(&frames, &a.name, a.transform)),
             })
             .collect();
         DocumentFile {
@@ -122,9 +123,13 @@ impl Document {
 
     /// `world` (the pose of `name`) relative to its parent sub-assembly, as the file
     /// writes it (mm, tidied).
-    fn local_pose(&self, name: &str, world: crate::math::Transform) -> [[f64; 4]; 4] {
-        let frame = super::assembly::parent_frame(&self.assemblies, name)
-            .unwrap_or(crate::math::Transform::IDENTITY);
+    fn local_pose(
+        frames: &std::collections::HashMap<&str, crate::math::Transform>,
+        name: &str,
+        world: crate::math::Transform,
+    ) -> [[f64; 4]; 4] {
+        let frame =
+            super::assembly::parent_frame(frames, name).unwrap_or(crate::math::Transform::IDENTITY);
         let local = if frame == crate::math::Transform::IDENTITY {
             world
         } else {
