@@ -1127,7 +1127,10 @@ impl Document {
     /// ``support``, ``contact_gap_mm``, ``gravity`` (a down vector),
     /// ``tight_clearance_mm``, ``planner_fallback``, ``fallback_time_limit_ms``,
     /// ``max_tilt_deg`` (degrees; ``max_tilt`` in radians is deprecated),
-    /// ``sphere_directions``.
+    /// ``sphere_directions``, ``probe_mm``, ``step_mm``, ``small_base_ratio``.
+    /// Interferences of the assembled pose come back as ``fits`` (each allowed its
+    /// depth in the removal checks), parts held across a clearance as
+    /// ``support_gaps``.
     #[pyo3(signature = (**options))]
     fn plan_sequence<'py>(
         &self,

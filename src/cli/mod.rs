@@ -259,6 +259,12 @@ pub enum Command {
         /// How many sequences to rank (1 to 1000).
         #[arg(long, default_value_t = 5)]
         max_sequences: usize,
+        /// Any key of the sequence options (the table of `assembly_sequence` in
+        /// docs/api.md, the same keys as scripts and Python), `KEY=VALUE`
+        /// (repeatable; e.g. `--option tolerance=0.05 --option contact_gap_mm=3`).
+        /// Lists are comma-separated. Wins over the flags above.
+        #[arg(long = "option", short = 'o', value_name = "KEY=VALUE")]
+        option: Vec<String>,
         /// Print the plan as JSON.
         #[arg(long)]
         json: bool,
@@ -331,6 +337,7 @@ pub fn main() -> i32 {
             no_support,
             gravity,
             max_sequences,
+            option,
             json,
         } => sequence::plan(sequence::Args {
             doc: &doc,
@@ -343,6 +350,7 @@ pub fn main() -> i32 {
             support: !no_support,
             gravity,
             max_sequences,
+            options: option,
             json,
         }),
         Command::View { file, open } => view::view_file(&file, open),

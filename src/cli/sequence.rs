@@ -1,13 +1,14 @@
 //! `fitup plan-sequence DOC [--mode mates|geometry] [--base NAME] [--threaded NAME…]
 //! [--time-limit-ms MS] [--exclude NAME…] [--component NAME…] [--no-support]
-//! [--gravity X,Y,Z] [--json]`.
+//! [--gravity X,Y,Z] [--option KEY=VALUE…] [--json]`: the flags and `--option`s fill
+//! the one table of sequence options (`fitup::options::Sequence`), as a script's map
+//! and Python's keywords do.
 
 use super::out::{errln as eprintln, outln as println};
 use super::Exit;
 use crate::document::Document;
-use crate::sequence::{
-    plan_sequence, Mode, SequenceError, SequenceOptions, DEFAULT_SEQUENCE_TIME_LIMIT_MS,
-};
+use crate::options::{Options, Sequence};
+use crate::sequence::{plan_sequence, SequenceError};
 use crate::workspace::SceneCache;
 use std::path::Path;
 
@@ -23,25 +24,52 @@ pub(super) struct Args<'a> {
     pub support: bool,
     pub gravity: Option<String>,
     pub max_sequences: usize,
+    /// `KEY=VALUE` of the sequence options table.
+    pub options: Vec<String>,
     pub json: bool,
 }
 
+/// The request the flags and `--option`s make (flags first, `--option`s over them),
+/// read through the vocabulary like a script's map.
+fn request(a: &Args<'_>) -> Result<Sequence, String> {
+    use serde_json::{json, Value};
+    let mut map = serde_json::Map::new();
+    map.insert("mode".into(), json!(a.mode));
+    if let Some(b) = &a.base {
+        map.insert("base".into(), json!(b));
+    }
+    for (key, list) in [
+        ("threaded", &a.threaded),
+        ("exclude", &a.exclude),
+        ("components", &a.components),
+    ] {
+        if !list.is_empty() {
+            map.insert(key.into(), json!(list));
+        }
+    }
+    if let Some(t) = a.time_limit_ms {
+        map.insert("time_limit_ms".into(), json!(t));
+    }
+    map.insert("support".into(), json!(a.support));
+    if let Some(g) = &a.gravity {
+        let v = parse_vec3(g)
+            .ok_or_else(|| format!("--gravity must be three numbers `x,y,z`, not `{g}`"))?;
+        map.insert("gravity".into(), json!([v.x, v.y, v.z]));
+    }
+    map.insert("max_sequences".into(), json!(a.max_sequences));
+    map.extend(Sequence::VOCABULARY.map_from_args(&a.options)?);
+    let parsed = Sequence::from_value(Value::Object(map)).map_err(|e| e.to_string())?;
+    for w in &parsed.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(parsed.options)
+}
+
 pub(super) fn plan(a: Args<'_>) -> Exit {
-    let Some(mode) = Mode::parse(a.mode) else {
-        eprintln!(
-            "error: --mode must be `mates` or `geometry`, not `{}`",
-            a.mode
-        );
-        return Exit::Usage;
-    };
-    let gravity = match a.gravity.as_deref().map(parse_vec3) {
-        None => None,
-        Some(Some(g)) => Some(g),
-        Some(None) => {
-            eprintln!(
-                "error: --gravity must be three numbers `x,y,z`, not `{}`",
-                a.gravity.unwrap_or_default()
-            );
+    let req = match request(&a) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
             return Exit::Usage;
         }
     };
@@ -55,8 +83,8 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
             return Exit::Failure;
         }
     };
-    let limit = a.time_limit_ms.unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS);
-    let mut left = a.time_limit_ms;
+    let limit = req.time_limit_ms;
+    let mut o = req.sequence_options();
     if limit.is_finite() && limit > 0.0 {
         let spent = started.elapsed().as_secs_f64() * 1e3;
         if spent >= limit {
@@ -67,20 +95,8 @@ pub(super) fn plan(a: Args<'_>) -> Exit {
             );
             return Exit::Failure;
         }
-        left = Some(limit - spent);
+        o.time_limit_ms = Some(limit - spent);
     }
-    let o = SequenceOptions {
-        mode,
-        base: a.base,
-        threaded: a.threaded,
-        time_limit_ms: left,
-        max_sequences: a.max_sequences,
-        exclude: a.exclude,
-        components: a.components,
-        support: a.support,
-        gravity,
-        ..SequenceOptions::default()
-    };
     match plan_sequence(&doc, &mut SceneCache::new(), &o) {
         Ok(p) => {
             if a.json {

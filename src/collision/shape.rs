@@ -413,6 +413,31 @@ impl Collider {
         (0..self.order.len()).map(|k| self.tri(k))
     }
 
+    /// The parameters `t` (any sign) at which the line `o + t·d` (part frame)
+    /// meets a triangle, ascending, into `out` (cleared first). For the solid's
+    /// inside along the line, pair them up (a line through an edge or a vertex may
+    /// count it twice: callers keep their lines off them).
+    pub(crate) fn line_hits(&self, o: &Point3, d: &Vec3, out: &mut Vec<f64>) {
+        out.clear();
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i as usize];
+            if super::volume::ray_box(o, d, &node.bounds).is_none() {
+                continue;
+            }
+            if node.count > 0 {
+                for t in self.leaf_tris(node) {
+                    if let Some(s) = super::volume::ray_triangle(o, d, &t) {
+                        out.push(s);
+                    }
+                }
+            } else {
+                stack.extend([node.first, node.first + 1]);
+            }
+        }
+        out.sort_by(f64::total_cmp);
+    }
+
     /// The triangles of leaf `n`.
     #[inline]
     pub(crate) fn leaf_tris(&self, n: &Node) -> impl Iterator<Item = Tri> + '_ {

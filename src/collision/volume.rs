@@ -486,7 +486,7 @@ fn boxes_meet(a: &Aabb, b: &Aabb) -> bool {
 }
 
 /// The parameter interval of the ray `o + t·d` inside box `b` (t may be negative).
-fn ray_box(o: &Point3, d: &Vec3, b: &Aabb) -> Option<(f64, f64)> {
+pub(crate) fn ray_box(o: &Point3, d: &Vec3, b: &Aabb) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
     for k in 0..3 {
         if d[k].abs() < 1e-300 {
@@ -506,7 +506,7 @@ fn ray_box(o: &Point3, d: &Vec3, b: &Aabb) -> Option<(f64, f64)> {
 
 /// Where the line `o + t·d` meets the closed triangle `t` (Möller–Trumbore, edges
 /// included); `None` when parallel or outside.
-fn ray_triangle(o: &Point3, d: &Vec3, t: &[Point3; 3]) -> Option<f64> {
+pub(crate) fn ray_triangle(o: &Point3, d: &Vec3, t: &[Point3; 3]) -> Option<f64> {
     let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
     let p = d.cross(&e2);
     let det = e1.dot(&p);

@@ -256,12 +256,87 @@ pub struct Parsed<T> {
     pub warnings: Vec<String>,
 }
 
+/// `text` read as a value of `kind` (see [`Vocabulary::map_from_args`]); `None`
+/// when it does not read as one.
+fn text_value(kind: &Kind, text: &str) -> Option<Value> {
+    let number = |t: &str| t.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    let list = |t: &str| -> Vec<String> {
+        t.split(',')
+            .map(|x| x.trim().to_string())
+            .filter(|x| !x.is_empty())
+            .collect()
+    };
+    Some(match kind {
+        Kind::Number => serde_json::json!(number(text)?),
+        Kind::Count => {
+            let v = number(text)?;
+            if v >= 0.0 && v.fract() == 0.0 && v < 9.0e15 {
+                serde_json::json!(v as u64)
+            } else {
+                serde_json::json!(v)
+            }
+        }
+        Kind::Bool => Value::Bool(text.parse().ok()?),
+        Kind::Text | Kind::Choice(_) => Value::String(text.to_string()),
+        Kind::Names => serde_json::json!(list(text)),
+        Kind::Vector => {
+            let v = list(text)
+                .iter()
+                .map(|x| number(x))
+                .collect::<Option<Vec<f64>>>()?;
+            serde_json::json!(v)
+        }
+        Kind::NumberMap => {
+            let mut m = Map::new();
+            for pair in list(text) {
+                let (k, v) = pair.split_once('=')?;
+                m.insert(k.trim().to_string(), serde_json::json!(number(v)?));
+            }
+            Value::Object(m)
+        }
+        Kind::Box | Kind::Pose | Kind::Switch(_) => serde_json::from_str(text).ok()?,
+    })
+}
+
 /// A value for messages: JSON text, at most 60 characters.
 fn shown(v: &Value) -> String {
     crate::diagnostics::shorten(&v.to_string(), 60)
 }
 
 impl Vocabulary {
+    /// Command-line `KEY=VALUE` texts (`fitup plan-sequence --option …`) as the map
+    /// [`Options::from_value`] reads, so that every key of the table is reachable
+    /// from the command line as from scripts and Python. Each value is read by its
+    /// key's kind: a number, `true`/`false`, names or numbers separated by commas
+    /// (`a,b`; `x,y,z`), `name=number` pairs separated by commas, JSON for boxes,
+    /// poses and switches; a value that does not read as its kind is passed as text,
+    /// and a key outside the table as it is (the check then refuses either by name).
+    ///
+    /// # Errors
+    /// A text without `=`, naming what was given.
+    pub fn map_from_args(&self, args: &[String]) -> Result<Map<String, Value>, String> {
+        let mut map = Map::new();
+        for arg in args {
+            let Some((key, text)) = arg.split_once('=') else {
+                return Err(format!(
+                    "`{arg}`: expected KEY=VALUE (keys: {})",
+                    self.keys
+                        .iter()
+                        .map(|k| k.name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            };
+            let (key, text) = (key.trim(), text.trim());
+            let value = self
+                .key(key)
+                .and_then(|k| text_value(&k.kind, text))
+                .unwrap_or_else(|| Value::String(text.to_string()));
+            map.insert(key.to_string(), value);
+        }
+        Ok(map)
+    }
+
     /// The key called `name`.
     pub fn key(&self, name: &str) -> Option<&'static Key> {
         self.keys.iter().find(|k| k.name == name)

@@ -50,6 +50,12 @@ pub struct Sequence {
     pub max_tilt_deg: f64,
     /// Directions of the sampled sphere.
     pub sphere_directions: u64,
+    /// Separation of a probe along a free direction, mm.
+    pub probe_mm: f64,
+    /// Step of the safe-length search, mm (0: automatic).
+    pub step_mm: f64,
+    /// Size ratio under which a base is inactive.
+    pub small_base_ratio: f64,
 }
 
 impl Default for Sequence {
@@ -75,6 +81,9 @@ impl Default for Sequence {
             fallback_time_limit_ms: o.fallback_time_limit_ms,
             max_tilt_deg: o.max_tilt.to_degrees(),
             sphere_directions: o.sphere_directions as u64,
+            probe_mm: o.probe_mm,
+            step_mm: o.step_mm,
+            small_base_ratio: o.small_base_ratio,
         }
     }
 }
@@ -104,6 +113,9 @@ impl Sequence {
             fallback_time_limit_ms: self.fallback_time_limit_ms,
             max_tilt: self.max_tilt_deg.to_radians(),
             sphere_directions: count(self.sphere_directions),
+            probe_mm: self.probe_mm,
+            step_mm: self.step_mm,
+            small_base_ratio: self.small_base_ratio,
             ..SequenceOptions::default()
         }
     }
@@ -159,7 +171,7 @@ impl Options for Sequence {
                 name: "tolerance",
                 kind: Kind::Number,
                 unit: "mm",
-                meaning: "penetration tolerance of every interference check",
+                meaning: "penetration tolerance of every interference check; components that interfere in the assembled pose (press fits, CAD overlaps) are fits, reported with their depth, and the checks between such a pair allow the overlap of the assembled pose and no other",
                 default: None,
             },
             Key {
@@ -194,7 +206,7 @@ impl Options for Sequence {
                 name: "support",
                 kind: Kind::Bool,
                 unit: "",
-                meaning: "physically plausible sequences: every added part touches (within `contact_gap_mm`) a part already placed",
+                meaning: "physically plausible sequences: every added part touches (within `contact_gap_mm`) a part already placed; parts that touch nothing within the gap are held by their closest neighbour (a clearance joint; reported as support gaps)",
                 default: None,
             },
             Key {
@@ -244,6 +256,27 @@ impl Options for Sequence {
                 kind: Kind::Count,
                 unit: "",
                 meaning: "directions on the sampled sphere (geometry mode, parts no other candidate frees; rotated by `seed`); 0 turns the sphere off",
+                default: None,
+            },
+            Key {
+                name: "probe_mm",
+                kind: Kind::Number,
+                unit: "mm",
+                meaning: "how far a part is separated along a free direction to test it (larger than the largest fit clearance)",
+                default: None,
+            },
+            Key {
+                name: "step_mm",
+                kind: Kind::Number,
+                unit: "mm",
+                meaning: "step of the safe-length search and the two-segment slide",
+                default: Some("0: 1 % of the smallest part's box diagonal, 0.05 to 2 mm"),
+            },
+            Key {
+                name: "small_base_ratio",
+                kind: Kind::Number,
+                unit: "",
+                meaning: "a base is inactive when its size is below this fraction of its largest related part (unless pinned by `base`)",
                 default: None,
             },
         ],

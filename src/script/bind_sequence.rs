@@ -293,6 +293,39 @@ pub(super) fn register(api: &mut Api) {
         },
     );
     api.get(
+        "Sequence.fits -> array",
+        "Interferences of the assembled pose taken as fits (press fits, CAD overlaps): `#{a, b, depth, contained}` (mm); the removal checks between `a` and `b` allow the overlap of the assembled pose and no other, every other pair `tolerance`.",
+        |s: &mut SequenceHandle| -> Array {
+            s.0.fits
+                .iter()
+                .map(|f| {
+                    let mut m = Map::new();
+                    m.insert("a".into(), f.a.clone().into());
+                    m.insert("b".into(), f.b.clone().into());
+                    m.insert("depth".into(), f.depth.into());
+                    m.insert("contained".into(), f.contained.into());
+                    Dynamic::from_map(m)
+                })
+                .collect()
+        },
+    );
+    api.get(
+        "Sequence.support_gaps -> array",
+        "Pairs the support rule takes as holding each other across a gap wider than `contact_gap_mm` (a clearance joint; the closest links that connect the product): `#{a, b, gap}` (mm; `()` for a mated pair).",
+        |s: &mut SequenceHandle| -> Array {
+            s.0.support_gaps
+                .iter()
+                .map(|g| {
+                    let mut m = Map::new();
+                    m.insert("a".into(), g.a.clone().into());
+                    m.insert("b".into(), g.b.clone().into());
+                    m.insert("gap".into(), g.gap_mm.map_or(Dynamic::UNIT, Dynamic::from));
+                    Dynamic::from_map(m)
+                })
+                .collect()
+        },
+    );
+    api.get(
         "Sequence.rejected -> array",
         "Orders that failed and why: `#{order, reason}`.",
         |s: &mut SequenceHandle| -> Array {

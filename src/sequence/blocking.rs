@@ -229,6 +229,8 @@ impl Ctx<'_> {
         let pose = self.scene.poses[c];
         let mut found: Vec<(Vec3, f64)> = Vec::new();
         for q in members(self.related[c]) {
+            // A fit's faces lie up to its depth inside the other part.
+            let tol = self.fit(c, q).map_or(tol, |f| tol.max(2.0 * f.depth));
             let qb = &self.boxes[q];
             let inv = self.scene.poses[q].inverse();
             for t in 0..mesh.triangles.len() {
@@ -278,7 +280,8 @@ impl Ctx<'_> {
         let swept = Aabb::new(bp.lo.inf(&moved.lo), bp.hi.sup(&moved.hi));
         // Interference needs the boxes to overlap deeper than the tolerance on every
         // axis: a part sliding on a face (a plate on the table) is never swept.
-        if swept.overlap(&bq).min() <= self.opts.tolerance {
+        let tolerance = self.opts.tolerance;
+        if swept.overlap(&bq).min() <= tolerance {
             return Ok(false);
         }
         let time_limit = || {
@@ -292,8 +295,13 @@ impl Ctx<'_> {
             return Err(time_limit());
         }
         self.sweeps.fetch_add(1, Ordering::Relaxed);
+        if let Some(check) = self.fit_check(p, q) {
+            // A fit pair: the overlap of the assembled pose allowed, the whole
+            // straight line at once (see `fit.rs`).
+            return Ok(check.translation_overlap(&self.scene.poses[p], d, len));
+        }
         let options = EdgeOptions {
-            tolerance: self.opts.tolerance,
+            tolerance,
             contact_step: SweepMethod::DEFAULT_CONTACT_STEP_MM,
         };
         let start = self.scene.poses[p];
@@ -305,7 +313,7 @@ impl Ctx<'_> {
         // where few triangle pairs can meet, instead of after a walk over every pair
         // a longer piece could meet (thin facets swept across many others, coplanar
         // faces sliding past each other); the deadline is read between pieces.
-        let entry = entry_distance(&bp, &bq, d, self.opts.tolerance).min(len);
+        let entry = entry_distance(&bp, &bq, d, tolerance).min(len);
         // Two large parts: shorter pieces, so the deadline is read often enough
         // (a piece of such a pair can walk many thousands of triangle pairs).
         let large = |i: usize| self.scene.colliders[i].triangle_count() > PIECE_TRIANGLES;
@@ -460,19 +468,24 @@ impl Ctx<'_> {
             .collect()
     }
 
-    /// Static interference of `p` at `pose` with any component of `mask`.
+    /// Static interference of `p` at `pose` with any component of `mask` (a pair
+    /// with a fit: an overlap the assembled pose does not have; see `fit.rs`).
     pub(super) fn pose_hits(&self, p: usize, pose: &Transform, mask: Mask) -> bool {
         let b = self.scene.colliders[p].world_bounds(pose);
+        let tolerance = self.opts.tolerance;
         members(mask).any(|q| {
-            boxes_meet(&b, &self.boxes[q], self.opts.tolerance)
-                && interferes(
-                    &self.scene.colliders[p],
-                    pose,
-                    &self.scene.colliders[q],
-                    &self.scene.poses[q],
-                    self.opts.tolerance,
-                )
-                .unwrap_or(true)
+            boxes_meet(&b, &self.boxes[q], tolerance)
+                && match self.fit_check(p, q) {
+                    Some(check) => check.new_overlap(pose),
+                    None => interferes(
+                        &self.scene.colliders[p],
+                        pose,
+                        &self.scene.colliders[q],
+                        &self.scene.poses[q],
+                        tolerance,
+                    )
+                    .unwrap_or(true),
+                }
         })
     }
 

@@ -72,6 +72,10 @@ pub(crate) struct Ctx<'d> {
     /// Grasps found, by part, mating direction, free directions and the assembled
     /// parts the fingers can reach.
     pub(super) grasps: Mutex<HashMap<GraspKey, Option<Grasp>>>,
+    /// The interferences of the assembled pose, taken as fits.
+    pub(super) fits: Vec<super::setup::FitPair>,
+    /// The support links added across gaps wider than the contact gap.
+    pub(super) support_gaps: Vec<((usize, usize), Option<f64>)>,
 }
 
 /// The directional blocking graph as far as it is known: per component `p` and
@@ -184,6 +188,8 @@ impl<'d> Ctx<'d> {
         let (n, active) = (setup.n, setup.active);
         let mut ctx = Ctx {
             doc,
+            fits: setup.fits,
+            support_gaps: setup.support_gaps,
             tight_near: setup.tight_near,
             scene: setup.scene,
             opts: setup.opts,
@@ -257,6 +263,33 @@ impl<'d> Ctx<'d> {
             left.extend(removed.into_iter().rev());
             self.graph.nodes[ni].members = left;
         }
+    }
+
+    /// The spacing (mm) of the lines of the checks between fit pairs, and the
+    /// step of the turning edges among them: twice the safe-length step, 0.1 to 1 mm.
+    pub(super) fn fit_step(&self) -> f64 {
+        (2.0 * self.step).clamp(0.1, 1.0)
+    }
+
+    /// The check of `p` moving against `q` when the two have a fit.
+    pub(super) fn fit_check(&self, p: usize, q: usize) -> Option<super::fit::FitPairCheck> {
+        self.fit(p, q)?;
+        Some(super::fit::FitPairCheck {
+            p: self.scene.colliders[p].clone(),
+            p_home: self.scene.poses[p],
+            q: self.scene.colliders[q].clone(),
+            q_pose: self.scene.poses[q],
+            p_carved: carved_first(self.doc.mesh_of(p), self.doc.mesh_of(q), p < q),
+            spacing: self.fit_step(),
+            tolerance: self.opts.tolerance,
+        })
+    }
+
+    /// The fit of `p` and `q` when they have one.
+    pub(super) fn fit(&self, p: usize, q: usize) -> Option<&super::setup::FitPair> {
+        self.fits
+            .iter()
+            .find(|f| (f.a, f.b) == (p.min(q), p.max(q)))
     }
 
     /// The product's components not in `mask`, ascending.
@@ -424,4 +457,11 @@ impl<'d> Ctx<'d> {
             by: members(by).map(|i| self.names[i].clone()).collect(),
         }
     }
+}
+
+/// Whether `a` is the part of a fit that is carved (see `fit.rs`): the larger by
+/// volume; equal volumes: the first in document order (`a_first`).
+pub(super) fn carved_first(a: &crate::mesh::Mesh, b: &crate::mesh::Mesh, a_first: bool) -> bool {
+    let (va, vb) = (a.signed_volume().abs(), b.signed_volume().abs());
+    va > vb || (va == vb && a_first)
 }

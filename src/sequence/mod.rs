@@ -46,6 +46,7 @@
 
 mod blocking;
 mod context;
+mod fit;
 mod graph;
 mod grasp;
 mod options;
@@ -59,8 +60,9 @@ mod task;
 pub use graph::{Freedom, LoopBreak, Node, Relation, RelationGraph};
 pub use grasp::{face_pairs, FacePair};
 pub use options::{
-    Gripper, Mode, RejectReason, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan,
-    StepInfo, Stuck, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS, MAX_SEQUENCES,
+    Fit, Gripper, Mode, RejectReason, Rejected, Sequence, SequenceError, SequenceOptions,
+    SequencePlan, StepInfo, Stuck, SupportGap, DEFAULT_SEQUENCE_TIME_LIMIT_MS, MAX_COMPONENTS,
+    MAX_SEQUENCES,
 };
 pub use plan::MAX_SEARCH_MEMO_BYTES;
 pub use revalidate::{revalidate, BrokenStep};
@@ -74,10 +76,13 @@ use crate::workspace::{SceneCache, WorkspaceError};
 /// task's insertion path is collision-free against exactly the components assembled
 /// before it. The whole call honours `options.time_limit_ms`.
 ///
+/// Components that interfere in the assembled pose are fits (reported in
+/// [`SequencePlan::fits`]), never a reason to refuse: the removal checks between such
+/// a pair allow the fit's depth, every other pair the tolerance.
+///
 /// # Errors
-/// Bad options, unknown pinned names, unusable meshes, components interfering in the
-/// assembled pose, no sequence (with the reasons), the time limit spent before the
-/// blocking graph was built.
+/// Bad options, unknown pinned names, unusable meshes, no sequence (with the
+/// reasons), the time limit spent before the blocking graph was built.
 pub fn plan_sequence(
     doc: &Document,
     cache: &mut SceneCache,

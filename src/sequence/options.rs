@@ -324,19 +324,8 @@ pub enum SequenceError {
     /// Too many components for the planner's sets.
     #[error("the document has {0} components; sequence planning handles at most {MAX_COMPONENTS}")]
     TooManyComponents(usize),
-    /// Components interfere in the assembled pose: no order can join them.
-    #[error("components `{a}` and `{b}` interfere in the assembled pose ({}); fix the model or raise `tolerance`", depth_text(*.depth))]
-    AssembledInterference {
-        /// One component.
-        a: String,
-        /// The other.
-        b: String,
-        /// Penetration depth, mm; `None` when the time budget ran out before the
-        /// depth was measured (the interference itself is certain).
-        depth: Option<f64>,
-    },
     /// No order assembles every component (every try is in `rejected`).
-    #[error("no assembly sequence found{}: {}", if *.timed_out { " within the time limit" } else { "" }, rejected_list(.rejected))]
+    #[error("no assembly sequence found{}: {}", if *.timed_out { " within the time limit (raise `time_limit_ms`)" } else { "" }, rejected_list(.rejected))]
     NoSequence {
         /// Whether the time budget ran out first.
         timed_out: bool,
@@ -344,7 +333,7 @@ pub enum SequenceError {
         rejected: Vec<Rejected>,
     },
     /// The time budget ran out before the blocking graph was built.
-    #[error("the time limit of {0} ms ran out before the blocking graph was complete")]
+    #[error("the time limit of {0} ms ran out before the blocking graph was complete (raise `time_limit_ms`)")]
     TimeLimit(f64),
 }
 
@@ -400,14 +389,6 @@ pub struct Rejected {
     pub order: Vec<String>,
     /// Why no component could go next (per remaining component, or a pin or base rule).
     pub reason: RejectReason,
-}
-
-/// The depth part of [`SequenceError::AssembledInterference`]'s message.
-fn depth_text(depth: Option<f64>) -> String {
-    match depth {
-        Some(d) => format!("depth {d:.3} mm"),
-        None => "depth not measured: the time limit ran out".into(),
-    }
 }
 
 /// `after [a, b]: reason; after [a, c]: reason` (the error's text).
@@ -490,7 +471,7 @@ impl std::fmt::Display for Stuck {
         match self {
             Stuck::Floats { part, gap_mm } => write!(
                 f,
-                "{part} would float: it touches nothing placed within {} mm (support on)",
+                "{part} would float: it touches nothing placed within {} mm (support on: raise `contact_gap_mm`, or set `support` false)",
                 crate::math::format::number(*gap_mm, 3)
             ),
             Stuck::WaitsFor { part, before } => {
@@ -526,7 +507,7 @@ impl std::fmt::Display for RejectReason {
                 largest_related,
             } => write!(
                 f,
-                "inactive base: {base} is much smaller ({}) than a part it joins ({})",
+                "inactive base: {base} is much smaller ({}) than a part it joins ({}; pin `base`, or lower `small_base_ratio`)",
                 crate::math::format::number(*size, 3),
                 crate::math::format::number(*largest_related, 3)
             ),
@@ -537,6 +518,44 @@ impl std::fmt::Display for RejectReason {
             ),
         }
     }
+}
+
+/// Two components of the product that interfere in the assembled pose: a press fit,
+/// an insertion that ends in contact, or the overlap a CAD model has (a part
+/// modelled through another). Taken as a fit, never a reason to refuse the product:
+/// the removal checks between `a` and `b` (sweeps, probes, planned paths) allow
+/// exactly the overlap of the assembled pose — the moving part may overlap the
+/// other only where it did when assembled (within `tolerance`; stepwise, `step_mm`
+/// apart) — and every other pair keeps [`SequenceOptions::tolerance`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fit {
+    /// One component.
+    pub a: String,
+    /// The other.
+    pub b: String,
+    /// Depth of the interference in the assembled pose (mm): the deepest crossing of
+    /// the two surfaces, or how deep a point of one lies inside the other (see
+    /// [`crate::collision::contact`]).
+    pub depth: f64,
+    /// Whether one solid lies wholly inside the other (no surfaces cross).
+    pub contained: bool,
+}
+
+/// Two components the support rule takes as holding each other though their
+/// surfaces are farther apart than `contact_gap_mm` (a clearance joint, a part
+/// held by its mates): without them some part of the product could never be placed
+/// touching anything. Each is the closest link between two groups of parts that do
+/// not touch each other within the gap (the fewest, shortest links that connect the
+/// product), at most half the thinner part's thinnest box extent apart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SupportGap {
+    /// One component.
+    pub a: String,
+    /// The other.
+    pub b: String,
+    /// Their surface distance (mm), or `None` when they are related by a mate
+    /// (mates mode: a mated pair holds each other whatever the gap).
+    pub gap_mm: Option<f64>,
 }
 
 /// The result of [`plan_sequence`](super::plan_sequence): ranked sequences and what
@@ -568,6 +587,11 @@ pub struct SequencePlan {
     /// The relation graph used (mates mode), or the contact graph (geometry mode,
     /// relations without mates).
     pub graph: RelationGraph,
+    /// The interferences of the assembled pose, taken as fits (pairs in document
+    /// order).
+    pub fits: Vec<Fit>,
+    /// The links the support rule added across gaps wider than `contact_gap_mm`.
+    pub support_gaps: Vec<SupportGap>,
     /// Wall-clock time of the call (ms).
     pub time_ms: f64,
     /// Blocking sweeps run.

@@ -4,11 +4,71 @@
 //! and radians, assembly frame.
 
 use super::context::*;
+use super::fit::FitPairValidator;
 use crate::collision::{Aabb, SweepMethod};
 use crate::math::{Transform, Vec3};
 use crate::planning::{
     MeshValidator, MeshValidatorOptions, MotionValidator, PlannedPath, Planner, PlanningSpace,
 };
+use std::time::Instant;
+
+/// The checks of one part moving among others where some pairs have a fit: a mesh
+/// validator for the obstacles without a fit (the call's tolerance) and a fit
+/// validator for the fit partners (the overlap of the assembled pose allowed, see
+/// `fit.rs`); a pose or edge is free when both say so.
+#[derive(Clone)]
+pub(crate) struct FitValidator {
+    main: MeshValidator,
+    fits: Option<FitPairValidator>,
+}
+
+impl FitValidator {
+    /// `main` and the fit partners' checks together.
+    pub(crate) fn new(main: MeshValidator, fits: Option<FitPairValidator>) -> Self {
+        FitValidator { main, fits }
+    }
+
+    /// The resolution and tolerance the path records (the main validator's).
+    pub(crate) fn options(&self) -> MeshValidatorOptions {
+        *self.main.options()
+    }
+}
+
+impl MotionValidator for FitValidator {
+    fn is_free(&mut self, pose: &Transform) -> bool {
+        self.main.is_free(pose) && self.fits.as_mut().is_none_or(|f| f.is_free(pose))
+    }
+    fn resolution(&self) -> SweepMethod {
+        self.main.resolution()
+    }
+    fn tolerance(&self) -> f64 {
+        self.main.tolerance()
+    }
+    fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
+        self.main.edge_free(from, to) && self.fits.as_mut().is_none_or(|f| f.edge_free(from, to))
+    }
+    fn clearance(&mut self, pose: &Transform) -> Option<f64> {
+        // The fit partners overlap the part: no clearance to report from them.
+        self.main.clearance(pose)
+    }
+    fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.main.set_deadline(deadline);
+        if let Some(f) = &mut self.fits {
+            f.set_deadline(deadline);
+        }
+    }
+    fn part_radius(&self) -> Option<f64> {
+        self.main.part_radius()
+    }
+    fn part_thickness(&self) -> Option<f64> {
+        self.main.part_thickness()
+    }
+    fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+        let mut copy = self.clone();
+        copy.set_deadline(None);
+        Some(Box::new(copy))
+    }
+}
 
 impl Ctx<'_> {
     /// A path for `p` out of the components of `mask` found by fitup's planners
@@ -21,19 +81,10 @@ impl Ctx<'_> {
         if budget < 1.0 {
             return None;
         }
-        let obstacles: Vec<_> = members(mask)
-            .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
-            .collect();
         let product = union_box(&self.boxes, mask)?;
-        let mut validator = MeshValidator::new(
-            self.scene.colliders[p].clone(),
-            obstacles,
-            MeshValidatorOptions {
-                tolerance: self.opts.tolerance,
-                ..MeshValidatorOptions::default()
-            },
-        )
-        .ok()?;
+        let mut validator = self.validator(p, mask, MeshValidatorOptions::default().edge)?;
+        // The planner sets its own deadline for the call.
+        validator.set_deadline(None);
         let margin = diag(&self.boxes[p]).max(10.0);
         let all = Aabb::new(
             product.lo.inf(&self.boxes[p].lo),
@@ -61,19 +112,24 @@ impl Ctx<'_> {
         path.found().then_some(path)
     }
 
-    /// A validator for `p` moving among the components of `mask`.
+    /// A validator for `p` moving among the components of `mask`: the call's
+    /// tolerance, and between `p` and its fit partners the overlap of the assembled
+    /// pose allowed.
     pub(super) fn validator(
         &self,
         p: usize,
         mask: Mask,
         edge: SweepMethod,
-    ) -> Option<MeshValidator> {
-        let obstacles: Vec<_> = members(mask)
-            .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
+    ) -> Option<FitValidator> {
+        let checks: Vec<_> = members(mask)
+            .filter_map(|q| self.fit_check(p, q).map(|c| (q, c)))
             .collect();
-        let mut v = MeshValidator::new(
+        let fitted: Mask = checks.iter().fold(0, |a, (q, _)| a | bit(*q));
+        let main = MeshValidator::new(
             self.scene.colliders[p].clone(),
-            obstacles,
+            members(mask & !fitted)
+                .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
+                .collect(),
             MeshValidatorOptions {
                 tolerance: self.opts.tolerance,
                 edge,
@@ -81,6 +137,12 @@ impl Ctx<'_> {
             },
         )
         .ok()?;
+        let fits = (!checks.is_empty()).then(|| FitPairValidator {
+            pairs: checks.into_iter().map(|(_, c)| c).collect(),
+            step_mm: self.fit_step(),
+            deadline: None,
+        });
+        let mut v = FitValidator::new(main, fits);
         // The call's one deadline: past it every check answers "not free" at once
         // (a path is then not taken, never wrongly taken).
         v.set_deadline(Some(self.deadline.instant()));

@@ -6,7 +6,8 @@
 use super::context::*;
 use super::grasp::find_grasp;
 use super::options::{
-    RejectReason, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
+    Fit, RejectReason, Rejected, Sequence, SequenceError, SequenceOptions, SequencePlan, StepInfo,
+    SupportGap,
 };
 use super::task::{Operation, Task};
 use crate::collision::SweepMethod;
@@ -541,6 +542,10 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, RejectReason> {
             sequence_frame,
             mount,
             path,
+            fits: members(mask)
+                .filter(|&q| ctx.fit(p, q).is_some())
+                .map(|q| ctx.names[q].clone())
+                .collect(),
         });
         let hard = ch.planned.is_some() || ctx.tight(p, &mate, mask);
         difficult += hard as usize;
@@ -755,9 +760,32 @@ fn finish(
         precedence,
         complete: !cut,
         graph: ctx.graph.clone(),
+        fits: fits_of(ctx),
+        support_gaps: ctx
+            .support_gaps
+            .iter()
+            .map(|&((a, b), gap_mm)| SupportGap {
+                a: ctx.names[a].clone(),
+                b: ctx.names[b].clone(),
+                gap_mm,
+            })
+            .collect(),
         time_ms: ctx.started.elapsed().as_secs_f64() * 1e3,
         sweeps: ctx.sweeps.load(Ordering::Relaxed),
     })
+}
+
+/// The fits of the assembled pose, as reported.
+pub(crate) fn fits_of(ctx: &Ctx) -> Vec<Fit> {
+    ctx.fits
+        .iter()
+        .map(|f| Fit {
+            a: ctx.names[f.a].clone(),
+            b: ctx.names[f.b].clone(),
+            depth: f.depth,
+            contained: f.contained,
+        })
+        .collect()
 }
 
 /// Why the first sequence ranked first, for people.

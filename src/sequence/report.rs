@@ -34,6 +34,7 @@ fn task_json(t: &Task, s: &super::options::StepInfo) -> Value {
         "difficult": s.difficult,
         "path_length_mm": t.path.length_mm,
         "path": t.path.poses.iter().map(pose).collect::<Vec<_>>(),
+        "fits": t.fits,
         "obstacle_box": {"min": [t.obstacle_box.lo.x, t.obstacle_box.lo.y, t.obstacle_box.lo.z],
                          "max": [t.obstacle_box.hi.x, t.obstacle_box.hi.y, t.obstacle_box.hi.z]},
         "assembled_pose": pose(&t.assembled_pose),
@@ -167,6 +168,12 @@ impl SequencePlan {
             "rejected": self.rejected.iter().map(|r| json!({"order": r.order, "reason": r.reason.to_string()})).collect::<Vec<_>>(),
             "precedence": self.precedence.iter().map(|(a, b)| json!([a, b])).collect::<Vec<_>>(),
             "complete": self.complete,
+            "fits": self.fits.iter().map(|f| json!({
+                "a": f.a, "b": f.b, "depth_mm": f.depth, "contained": f.contained,
+            })).collect::<Vec<_>>(),
+            "support_gaps": self.support_gaps.iter().map(|g| json!({
+                "a": g.a, "b": g.b, "gap_mm": g.gap_mm,
+            })).collect::<Vec<_>>(),
             "relations": g.relations.iter().map(|r| json!({
                 "a": g.components[r.a],
                 "b": g.components[r.b],
@@ -228,6 +235,26 @@ impl SequencePlan {
                 .map(|(a, b)| format!("{a} < {b}"))
                 .collect();
             s += &format!("precedence: {}\n", p.join(", "));
+        }
+        for f in &self.fits {
+            s += &format!(
+                "fit: {} {} {} ({} deep in the assembled pose; removal allows that overlap and no other)\n",
+                f.a,
+                if f.contained { "inside" } else { "and" },
+                f.b,
+                fmt_mm(f.depth)
+            );
+        }
+        for g in &self.support_gaps {
+            s += &match g.gap_mm {
+                Some(d) => format!(
+                    "held across a gap: {} and {} ({} apart, wider than the contact gap)\n",
+                    g.a,
+                    g.b,
+                    fmt_mm(d)
+                ),
+                None => format!("held by their mates: {} and {}\n", g.a, g.b),
+            };
         }
         for r in self.rejected.iter().take(5) {
             s += &format!("rejected after [{}]: {}\n", r.order.join(", "), r.reason);

@@ -2,7 +2,9 @@
 //! kept, the geometry edited): which steps still hold and which broke, and why.
 //! Units: millimetres, assembly frame.
 
+use super::fit::{FitPairCheck, FitPairValidator};
 use super::options::{Sequence, SequenceError};
+use super::paths::FitValidator;
 use crate::collision::SweepMethod;
 use crate::document::Document;
 use crate::math::format::length as fmt_mm;
@@ -24,8 +26,8 @@ pub struct BrokenStep {
 /// Re-checks every task of `sequence` against `doc` as it is now: the component and
 /// those assembled before it still exist, the part's assembled pose is where the task
 /// ends (within 1 µm / 1 µrad), and the insertion path is free (continuous check,
-/// `tolerance` mm) against exactly the components assembled before it at their
-/// current poses. Returns the broken steps, in order (empty: the sequence still holds).
+/// `tolerance` mm; a component the task records a fit with, its allowance) against
+/// exactly the components assembled before it at their current poses. Returns the broken steps, in order (empty: the sequence still holds).
 ///
 /// # Errors
 /// The scene cannot be built (unusable meshes); a bad tolerance.
@@ -113,20 +115,58 @@ pub fn revalidate(
             .flatten()
             .copied()
             .collect();
-        let options = MeshValidatorOptions {
-            tolerance,
-            edge: SweepMethod::CONTINUOUS,
-            ..MeshValidatorOptions::default()
-        };
+        // The task's fit partners (by name, as recorded when it was planned): the
+        // overlap of the assembled pose allowed (see `fit.rs`); every other
+        // component the tolerance.
+        let fitted = |q: usize| t.fits.contains(&doc.components()[q].name);
         let validator = |qs: &[usize]| {
-            MeshValidator::new(
+            let main = MeshValidator::new(
                 scene.colliders[p].clone(),
                 qs.iter()
+                    .filter(|&&q| !fitted(q))
                     .map(|&q| (scene.colliders[q].clone(), scene.poses[q]))
                     .collect(),
-                options,
+                MeshValidatorOptions {
+                    tolerance,
+                    edge: SweepMethod::CONTINUOUS,
+                    ..MeshValidatorOptions::default()
+                },
             )
-            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))
+            .map_err(|e| SequenceError::from(WorkspaceError::from(e)))?;
+            let pairs: Vec<FitPairCheck> = qs
+                .iter()
+                .filter(|&&q| fitted(q))
+                .map(|&q| {
+                    let diag = |i: usize| {
+                        let b = scene.colliders[i].bounds();
+                        (b.hi - b.lo).norm()
+                    };
+                    let spacing = (0.005 * diag(p).min(diag(q))).clamp(0.025, 1.0);
+                    FitPairCheck {
+                        p: scene.colliders[p].clone(),
+                        p_home: scene.poses[p],
+                        q: scene.colliders[q].clone(),
+                        q_pose: scene.poses[q],
+                        p_carved: super::context::carved_first(
+                            doc.mesh_of(p),
+                            doc.mesh_of(q),
+                            p < q,
+                        ),
+                        spacing,
+                        tolerance,
+                    }
+                })
+                .collect();
+            let step = pairs
+                .iter()
+                .map(|c| c.spacing)
+                .fold(f64::INFINITY, f64::min);
+            let fits = (!pairs.is_empty()).then(|| FitPairValidator {
+                pairs,
+                step_mm: step,
+                deadline: None,
+            });
+            Ok::<_, SequenceError>(FitValidator::new(main, fits))
         };
         if t.path.revalidate(&mut validator(&assembled)?).is_ok() {
             continue;

@@ -155,6 +155,75 @@ pub(super) struct Setup {
     pub tight_near: Vec<Mask>,
     /// Step of the safe-length search (mm).
     pub step: f64,
+    /// The interferences of the assembled pose, taken as fits.
+    pub fits: Vec<FitPair>,
+    /// The support links added across gaps wider than the contact gap: the pair and
+    /// its surface distance (`None`: a mated pair).
+    pub support_gaps: Vec<((usize, usize), Option<f64>)>,
+}
+
+/// An interference of the assembled pose taken as a fit: components `a < b`, the
+/// least tolerance at which they count as touching (mm), and whether one lies
+/// wholly inside the other.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct FitPair {
+    pub a: usize,
+    pub b: usize,
+    pub depth: f64,
+    pub contained: bool,
+}
+
+/// The depth of the interference of `a` at `pa` and `b` at `pb` (mm): the least
+/// penetration tolerance at which [`contact`](crate::collision::contact) calls the
+/// pair touching — the deepest crossing of the surfaces and the deepest point of
+/// one inside the other (a verdict reports the first of these it finds, so the
+/// tolerance is raised to each depth found until the pair touches) — or, for a
+/// solid wholly inside the other, its containment depth (`true`). `None`: the
+/// deadline passed first.
+pub(super) fn fit_depth(
+    a: &crate::collision::Collider,
+    pa: &Transform,
+    b: &crate::collision::Collider,
+    pb: &Transform,
+    tolerance: f64,
+    deadline: Instant,
+) -> Result<Option<(f64, bool)>, crate::collision::CollisionError> {
+    use crate::collision::{contact_until, Contact, InterferenceKind};
+    let mut t = tolerance;
+    // Each round raises the tolerance past the depth reported, which only a deeper
+    // kind of witness can exceed: crossing, then the depth walk, then faces.
+    for _ in 0..8 {
+        match contact_until(a, pa, b, pb, t, deadline)? {
+            None => return Ok(None),
+            Some(Contact::Interfering {
+                depth,
+                kind: InterferenceKind::Contained { .. },
+            }) => return Ok(Some((depth.max(t), true))),
+            Some(Contact::Interfering { depth, .. }) => {
+                t = depth.max(t) * (1.0 + 1e-9) + 1e-9;
+            }
+            Some(_) => return Ok(Some((t, false))),
+        }
+    }
+    Ok(Some((t, false)))
+}
+
+/// The pairs of the product's components related by a mate, `(a, b)` with `a < b`.
+fn mated_pairs(doc: &Document, active: Mask) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    for m in doc.mates() {
+        let cs: Vec<usize> = m.entities.iter().map(|e| e.component).collect();
+        for (i, &a) in cs.iter().enumerate() {
+            for &b in &cs[i + 1..] {
+                if a != b && active & bit(a) != 0 && active & bit(b) != 0 {
+                    out.push((a.min(b), a.max(b)));
+                }
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 impl Setup {
@@ -202,12 +271,28 @@ impl Setup {
             opts: &opts,
             deadline: budget.deadline,
         };
-        parts.check_assembled(&names, budget.limit_ms)?;
-        let (graph, related) = parts.relations(doc, &names, &sizes);
+        let fits = parts.fits(budget.limit_ms)?;
+        budget.check()?;
+        // The contact graph: touching within the gap, fits, and (connecting what
+        // nothing within the gap connects) the closest links across wider gaps.
+        let mut contacts = parts.touching_pairs();
+        contacts.extend(fits.iter().map(|f| (f.a, f.b)));
+        let mated = match opts.mode {
+            Mode::Mates => mated_pairs(doc, active),
+            Mode::Geometry => Vec::new(),
+        };
+        let support_gaps = parts.bridges(&contacts, &mated);
+        budget.check()?;
+        let mut contact_masks = vec![0 as Mask; n];
+        for &(a, b) in contacts.iter().chain(support_gaps.iter().map(|g| &g.0)) {
+            contact_masks[a] |= bit(b);
+            contact_masks[b] |= bit(a);
+        }
+        let (graph, related) = parts.relations(doc, &names, &sizes, &contact_masks);
         budget.check()?;
         // Support: touching within the contact gap (geometry mode: the relations).
         let touching = match opts.mode {
-            Mode::Mates if opts.support => parts.touching_masks(n),
+            Mode::Mates if opts.support => contact_masks,
             _ => related.clone(),
         };
         let step = if opts.step_mm > 0.0 {
@@ -218,6 +303,8 @@ impl Setup {
         };
         let tight_near = parts.tight_near();
         Ok(Setup {
+            fits,
+            support_gaps,
             opts,
             budget,
             scene,
@@ -334,61 +421,44 @@ impl Parts<'_> {
         pairs
     }
 
-    /// The assembled state must be free of interference (among the product: a
-    /// robot's adjacent links may overlap, they are not sequenced). Pair by pair in
-    /// parallel, each query stopping at the deadline (parts seated in each other over
-    /// fine facets take seconds a pair).
-    fn check_assembled(&self, names: &[String], limit_ms: f64) -> Result<(), SequenceError> {
+    /// The interferences of the assembled state among the product (a robot's
+    /// adjacent links may overlap, they are not sequenced), each taken as a fit with
+    /// its depth ([`fit_depth`]). Pair by pair in parallel, each query stopping at
+    /// the deadline (parts seated in each other over fine facets take seconds a
+    /// pair).
+    fn fits(&self, limit_ms: f64) -> Result<Vec<FitPair>, SequenceError> {
         let (scene, tolerance) = (self.scene, self.opts.tolerance);
         let deadline = self.deadline.instant();
         let near = self.near_pairs(tolerance);
-        let verdicts: Vec<Option<bool>> = near
+        let found: Vec<Option<Option<FitPair>>> = near
             .par_iter()
             .map(|&(a, b)| {
                 if self.deadline.passed() {
                     return Ok(None);
                 }
-                crate::collision::interferes_until(
-                    &scene.colliders[a],
-                    &scene.poses[a],
-                    &scene.colliders[b],
-                    &scene.poses[b],
-                    tolerance,
-                    deadline,
-                )
+                let (ca, cb) = (&scene.colliders[a], &scene.colliders[b]);
+                let (pa, pb) = (&scene.poses[a], &scene.poses[b]);
+                match crate::collision::interferes_until(ca, pa, cb, pb, tolerance, deadline)? {
+                    None => Ok(None),
+                    Some(false) => Ok(Some(None)),
+                    Some(true) => Ok(fit_depth(ca, pa, cb, pb, tolerance, deadline)?.map(
+                        |(depth, contained)| {
+                            Some(FitPair {
+                                a,
+                                b,
+                                depth,
+                                contained,
+                            })
+                        },
+                    )),
+                }
             })
-            .collect::<Result<_, _>>()
+            .collect::<Result<_, crate::collision::CollisionError>>()
             .map_err(WorkspaceError::from)?;
-        if let Some(&(a, b)) = near
-            .iter()
-            .zip(&verdicts)
-            .find(|(_, v)| **v == Some(true))
-            .map(|(p, _)| p)
-        {
-            // The depth for the message: one full query, on the error path only,
-            // within what is left of the budget (unknown when it runs out).
-            let depth = crate::collision::contact_until(
-                &scene.colliders[a],
-                &scene.poses[a],
-                &scene.colliders[b],
-                &scene.poses[b],
-                tolerance,
-                deadline,
-            )
-            .ok()
-            .flatten()
-            .map(|c| c.depth());
-            return Err(SequenceError::AssembledInterference {
-                a: names[a].clone(),
-                b: names[b].clone(),
-                depth,
-            });
-        }
-        // An interference found is the answer even when another pair ran out of time.
-        if verdicts.iter().any(Option::is_none) {
+        if found.iter().any(Option::is_none) {
             return Err(SequenceError::TimeLimit(limit_ms));
         }
-        Ok(())
+        Ok(found.into_iter().flatten().flatten().collect())
     }
 
     /// The relation graph and the related components (within the product): the
@@ -398,6 +468,7 @@ impl Parts<'_> {
         doc: &Document,
         names: &[String],
         sizes: &[f64],
+        contacts: &[Mask],
     ) -> (RelationGraph, Vec<Mask>) {
         let n = names.len();
         let mut related = vec![0 as Mask; n];
@@ -411,7 +482,7 @@ impl Parts<'_> {
                 graph
             }
             Mode::Geometry => {
-                related = self.touching_masks(n);
+                related = contacts.to_vec();
                 let mut relations = Vec::new();
                 for (a, &rel) in related.iter().enumerate() {
                     for b in members(rel).filter(|&b| b > a) {
@@ -447,21 +518,125 @@ impl Parts<'_> {
         (graph, related)
     }
 
-    /// Per component: the product's components it touches within `contact_gap_mm`.
-    fn touching_masks(&self, n: usize) -> Vec<Mask> {
-        let mut t = vec![0 as Mask; n];
-        for (a, b) in self.touching_pairs() {
-            t[a] |= bit(b);
-            t[b] |= bit(a);
+    /// The links that connect the product's contact graph (`contacts`: pairs that
+    /// touch within the gap or fit) where it falls apart in groups: first the
+    /// `mated` pairs joining two groups (mates mode: a mated part is held by its
+    /// mate), then, Kruskal's way, the closest pairs of surfaces between groups
+    /// (a clearance joint wider than the gap) no farther apart than half the
+    /// thinner part's thinnest box extent (a part standing apart is not held). Each link joins two groups, so
+    /// there are at most groups − 1, and none when the graph is connected.
+    fn bridges(
+        &self,
+        contacts: &[(usize, usize)],
+        mated: &[(usize, usize)],
+    ) -> Vec<((usize, usize), Option<f64>)> {
+        let n = self.boxes.len();
+        let mut root: Vec<usize> = (0..n).collect();
+        fn find(root: &mut [usize], mut i: usize) -> usize {
+            while root[i] != i {
+                root[i] = root[root[i]];
+                i = root[i];
+            }
+            i
         }
-        t
+        let mut groups = members(self.active).count();
+        fn join(root: &mut [usize], groups: &mut usize, a: usize, b: usize) -> bool {
+            let (ra, rb) = (find(root, a), find(root, b));
+            if ra != rb {
+                root[ra] = rb;
+                *groups -= 1;
+                true
+            } else {
+                false
+            }
+        }
+        for &(a, b) in contacts {
+            join(&mut root, &mut groups, a, b);
+        }
+        let mut out = Vec::new();
+        for &(a, b) in mated {
+            if join(&mut root, &mut groups, a, b) {
+                out.push(((a, b), None));
+            }
+        }
+        if groups <= 1 {
+            return out;
+        }
+        // Pairs across groups with their box gaps (a lower bound of their surface
+        // distance). Kruskal in rounds of a growing bound `t`: every pair whose box
+        // gap is below `t` gets its distance when it is below `t` (the search
+        // capped there), so when the links under `t` are taken in order, no pair
+        // closer than the one taken is unknown.
+        let scene = self.scene;
+        let mut across: Vec<(f64, usize, usize, Option<f64>)> = Vec::new();
+        for a in members(self.active) {
+            for b in members(self.active).filter(|&b| b > a) {
+                if find(&mut root, a) != find(&mut root, b) {
+                    let gap = (-self.boxes[a].overlap(&self.boxes[b]).min()).max(0.0);
+                    across.push((gap, a, b, None));
+                }
+            }
+        }
+        let first = across.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let mut t = first.max(self.opts.contact_gap_mm).max(1e-3) * 2.0;
+        let mut done = 0.0;
+        // No link is longer than half the thickest part's thinnest extent.
+        let longest = members(self.active)
+            .map(|i| 0.5 * (self.boxes[i].hi - self.boxes[i].lo).min())
+            .fold(0.0f64, f64::max);
+        for _ in 0..64 {
+            if groups <= 1 || self.deadline.passed() || done > longest {
+                break;
+            }
+            let found: Vec<Option<f64>> = across
+                .par_iter()
+                .map(|&(gap, a, b, known)| {
+                    if known.is_some() || gap >= t || self.deadline.passed() {
+                        return known;
+                    }
+                    crate::collision::distance_lower_bound(
+                        &scene.colliders[a],
+                        &scene.poses[a],
+                        &scene.colliders[b],
+                        &scene.poses[b],
+                        0.0,
+                        t,
+                        0.0,
+                    )
+                    .ok()
+                    .filter(|&d| d < t)
+                })
+                .collect();
+            for (p, d) in across.iter_mut().zip(found) {
+                p.3 = d;
+            }
+            let mut round: Vec<(f64, usize, usize)> = across
+                .iter()
+                .filter_map(|&(_, a, b, d)| d.filter(|&d| d >= done).map(|d| (d, a, b)))
+                .collect();
+            round.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+            for (d, a, b) in round {
+                // A joint's clearance, not a part standing apart: at most half
+                // the thinner part's thinnest extent.
+                let thin = |i: usize| (self.boxes[i].hi - self.boxes[i].lo).min();
+                if d > 0.5 * thin(a).min(thin(b)) {
+                    continue;
+                }
+                if groups > 1 && join(&mut root, &mut groups, a, b) {
+                    out.push(((a, b), Some(d)));
+                }
+            }
+            done = t;
+            t *= 2.0;
+        }
+        out
     }
 
     /// The pairs of product components `(a, b)`, `a < b`, that touch within
     /// `contact_gap_mm`: pairs whose surfaces are at most the gap apart (0 for
     /// surfaces that meet; searched only where the boxes are that close; skipped once
-    /// the deadline has passed). The assembled pose is known free of interference, so
-    /// no part lies inside another.
+    /// the deadline has passed). Pairs that interfere are fits (found before), so
+    /// a part inside another without touching it is counted there.
     fn touching_pairs(&self) -> Vec<(usize, usize)> {
         let gap = self.opts.contact_gap_mm;
         let scene = self.scene;

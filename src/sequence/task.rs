@@ -102,6 +102,10 @@ pub struct Task {
     pub mount: bool,
     /// The checked insertion path (part poses, assembly frame), start at the safe
     /// length, end at `assembled_pose`: collision-free against exactly the parts
-    /// assembled before this step.
+    /// assembled before this step (the fits below allowed).
     pub path: PlannedPath,
+    /// The components assembled before it that the part has a fit with (see
+    /// [`Fit`](super::Fit)): its path may overlap each where the part overlaps it
+    /// assembled, and interferes with no other deeper than the path's tolerance.
+    pub fits: Vec<String>,
 }

@@ -36,6 +36,7 @@ mod robots;
 mod scripts;
 mod sequence;
 mod sequence_cell_robots;
+mod sequence_fits;
 mod sequence_real;
 mod sequence_sliced_walls;
 mod sequence_watch;

@@ -113,6 +113,7 @@ fn task(operation: Operation) -> Task {
         sequence_frame: Transform::IDENTITY,
         mount: false,
         path: path(),
+        fits: Vec::new(),
     }
 }
 

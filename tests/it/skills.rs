@@ -52,6 +52,7 @@ fn gear_task(assembled: Transform) -> Task {
         sequence_frame: Transform::IDENTITY,
         mount: false,
         path: path(),
+        fits: Vec::new(),
     }
 }
 

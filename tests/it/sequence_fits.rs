@@ -1,0 +1,541 @@
+//! Sequences for real assemblies (issue 38): parts that interfere in the assembled
+//! pose (a press fit, a part modelled through another) are fits, reported per pair,
+//! not a reason to refuse; a linkage whose clearance joints leave every part more
+//! than the contact gap from the others is held across its gaps. Each product is
+//! generated here and every sequence returned is re-checked independently: the parts
+//! are taken out in reverse order along their paths and straight on (0.25 mm
+//! steps), each pose asked against every part placed before it — the exact
+//! interference query at the default tolerance for a pair without a reported fit;
+//! for a pair with one, a volume test on a grid of points (no point inside both the
+//! moved part and the other that the assembled part does not hold: the overlap of
+//! the assembled pose and nothing else); the reported fits must be exactly the pairs
+//! that interfere in the assembled pose.
+
+use fitup::collision::{interferes, Aabb, Collider, DEFAULT_TOLERANCE};
+use fitup::document::Document;
+use fitup::math::{Point3, Transform, Vec3};
+use fitup::mesh::Mesh;
+use fitup::sequence::{plan_sequence, Mode, SequenceOptions, SequencePlan};
+use fitup::workspace::{SceneCache, Workspace};
+use std::path::{Path, PathBuf};
+
+use crate::common::duct;
+
+/// A closed ring (a tube section) about +Z: outer radius `big`, bore `small`, from
+/// `z0` to `z1`, `n` facets around (the phase of [`Mesh::cylinder`]).
+fn ring(big: f64, small: f64, z0: f64, z1: f64, n: usize) -> Mesh {
+    let mut vertices = Vec::new();
+    for (r, z) in [(big, z0), (big, z1), (small, z0), (small, z1)] {
+        for i in 0..n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            vertices.push(Point3::new(r * a.cos(), r * a.sin(), z));
+        }
+    }
+    let n32 = n as u32;
+    let (ob, ot, ib, it) = (0, n32, 2 * n32, 3 * n32);
+    let mut triangles = Vec::new();
+    for i in 0..n32 {
+        let j = (i + 1) % n32;
+        triangles.push([ob + i, ob + j, ot + j]);
+        triangles.push([ob + i, ot + j, ot + i]);
+        triangles.push([ib + i, it + j, ib + j]);
+        triangles.push([ib + i, it + i, it + j]);
+        triangles.push([ot + i, ot + j, it + j]);
+        triangles.push([ot + i, it + j, it + i]);
+        triangles.push([ob + i, ib + j, ob + j]);
+        triangles.push([ob + i, ib + i, ib + j]);
+    }
+    Mesh::new(vertices, triangles).unwrap()
+}
+
+/// A cylinder of `radius` about +Z from `z0` to `z1`.
+fn rod(radius: f64, z0: f64, z1: f64, n: usize) -> Mesh {
+    Mesh::cylinder(radius, z1 - z0, n)
+        .transformed(&Transform::from_translation(Vec3::new(0.0, 0.0, z0)))
+}
+
+fn cuboid(lo: [f64; 3], hi: [f64; 3]) -> Mesh {
+    Mesh::cuboid(Point3::from(lo), Point3::from(hi))
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fitup_fits_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write_doc(dir: &Path, parts: &[(&str, Mesh)]) -> Document {
+    for (name, m) in parts {
+        assert!(m.signed_volume() > 0.0, "{name} is outward");
+    }
+    Document::open(&duct::write_doc(dir, parts)).unwrap()
+}
+
+/// The independent check of one pose of `p` against `q` (assembled): a pair with a
+/// reported fit may overlap only where the two overlapped assembled — the larger of
+/// the two has the smaller's assembled room cut out of it, carried with it — and
+/// any other pair may interfere by the tolerance.
+struct Checker<'a> {
+    doc: &'a Document,
+    colliders: Vec<std::sync::Arc<Collider>>,
+    poses: Vec<Transform>,
+    /// The reported fits (by index).
+    fits: Vec<(usize, usize)>,
+}
+
+/// Most grid points one fit check asks (the grid is as fine as this allows).
+const GRID_POINTS: f64 = 4_000.0;
+
+impl Checker<'_> {
+    fn fit(&self, p: usize, q: usize) -> bool {
+        self.fits.contains(&(p, q)) || self.fits.contains(&(q, p))
+    }
+
+    /// Whether `p` at `pose` is refused against `q`.
+    fn hits(&self, p: usize, pose: &Transform, q: usize) -> bool {
+        let (cp, cq, pq) = (&self.colliders[p], &self.colliders[q], &self.poses[q]);
+        if !self.fit(p, q) {
+            return interferes(cp, pose, cq, pq, DEFAULT_TOLERANCE).unwrap();
+        }
+        // The volume both `p` at `pose` and `q` hold, sampled on a grid: each point
+        // deeper than the tolerance in both must lie in the cut-out room (or within
+        // the tolerance of it): `p` assembled when `q` is the larger, else `q`
+        // assembled carried along with `p`.
+        let volume = |i: usize| self.doc.mesh_of(i).signed_volume().abs();
+        let p_carved = volume(p) > volume(q) || (volume(p) == volume(q) && p < q);
+        let room_of = |w: &Point3| -> (bool, Point3) {
+            if p_carved {
+                (
+                    true,
+                    self.poses[q]
+                        .inverse()
+                        .apply(&self.poses[p].apply(&pose.inverse().apply(w))),
+                )
+            } else {
+                (false, self.poses[p].inverse().apply(w))
+            }
+        };
+        let tol = DEFAULT_TOLERANCE;
+        let (bp, bq) = (cp.world_bounds(pose), cq.world_bounds(pq));
+        let lo = bp.lo.sup(&bq.lo);
+        let hi = bp.hi.inf(&bq.hi);
+        let size = hi - lo;
+        if size.min() <= tol {
+            return false;
+        }
+        let g = (size.x * size.y * size.z / GRID_POINTS).cbrt();
+        let n = size.map(|v| (v / g).ceil().max(1.0) as usize);
+        let deep =
+            |c: &Collider, x: &Point3| c.contains_point(x) && c.distance_to_point(x, tol) > tol;
+        let (inv_p, inv_q) = (pose.inverse(), pq.inverse());
+        for i in 0..n.x {
+            for j in 0..n.y {
+                for k in 0..n.z {
+                    let w = Point3::new(
+                        lo.x + (i as f64 + 0.5) * size.x / n.x as f64,
+                        lo.y + (j as f64 + 0.5) * size.y / n.y as f64,
+                        lo.z + (k as f64 + 0.5) * size.z / n.z as f64,
+                    );
+                    if deep(cp, &inv_p.apply(&w)) && deep(cq, &inv_q.apply(&w)) {
+                        let (in_q, h) = room_of(&w);
+                        let room: &Collider = if in_q { cq } else { cp };
+                        if !room.contains_point(&h) && room.distance_to_point(&h, tol) > tol {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+fn checker<'a>(doc: &'a Document, plan: &SequencePlan) -> Checker<'a> {
+    let mut cache = SceneCache::new();
+    let ws = Workspace::new(doc, &mut cache).unwrap();
+    let scene = ws.scene();
+    let idx = |n: &str| doc.component_index(n).unwrap();
+    Checker {
+        doc,
+        colliders: scene.colliders.clone(),
+        poses: scene.poses.clone(),
+        fits: plan.fits.iter().map(|f| (idx(&f.a), idx(&f.b))).collect(),
+    }
+}
+
+/// The reported fits are exactly the pairs that interfere in the assembled pose
+/// (default tolerance), each with a positive depth.
+fn fits_are_exact(c: &Checker, plan: &SequencePlan) {
+    let n = c.colliders.len();
+    for p in 0..n {
+        for q in p + 1..n {
+            let (cp, cq) = (&c.colliders[p], &c.colliders[q]);
+            let (pp, pq) = (&c.poses[p], &c.poses[q]);
+            let interfering = interferes(cp, pp, cq, pq, DEFAULT_TOLERANCE).unwrap();
+            let names = (&c.doc.components()[p].name, &c.doc.components()[q].name);
+            assert_eq!(
+                interfering,
+                c.fit(p, q),
+                "{names:?}: interfering {interfering}, fits {:?}",
+                plan.fits
+            );
+        }
+    }
+    for f in &plan.fits {
+        assert!(f.depth > DEFAULT_TOLERANCE, "{f:?}");
+    }
+}
+
+/// The dense removal re-check (see the module docs).
+fn dense_removal(c: &Checker, plan: &SequencePlan) {
+    assert!(!plan.sequences.is_empty());
+    let doc = c.doc;
+    for s in &plan.sequences {
+        let order = s.order();
+        let idx: Vec<usize> = order
+            .iter()
+            .map(|n| doc.component_index(n).unwrap())
+            .collect();
+        let mut seen = idx.clone();
+        seen.sort();
+        seen.dedup();
+        assert_eq!(seen.len(), doc.components().len(), "{order:?}");
+        for k in (0..s.tasks.len()).rev() {
+            let t = &s.tasks[k];
+            let p = idx[k + 1];
+            let before = &idx[..k + 1];
+            let bounds = |i: usize, pose: &Transform| c.colliders[i].world_bounds(pose);
+            let region = before
+                .iter()
+                .map(|&q| bounds(q, &c.poses[q]))
+                .reduce(|a, b| Aabb::new(a.lo.inf(&b.lo), a.hi.sup(&b.hi)))
+                .unwrap();
+            let check = |pose: &Transform, what: &str| {
+                for &q in before {
+                    assert!(
+                        !c.hits(p, pose, q),
+                        "{order:?}: removing {} ({what}, at {:?}, mating {:?}) hits {}",
+                        t.part,
+                        pose.translation(),
+                        t.mating_direction,
+                        doc.components()[q].name
+                    );
+                }
+            };
+            let mut way: Vec<Transform> = t.path.poses.iter().rev().copied().collect();
+            assert!(
+                way[0].approx_eq(&c.poses[p], 1e-9, 1e-9),
+                "starts assembled"
+            );
+            check(&way[0], "assembled");
+            for w in way.clone().windows(2) {
+                let (a, b) = (w[0], w[1]);
+                let len = (b.translation() - a.translation()).norm();
+                let rot = a.rotation().angle_to(&b.rotation());
+                let n = ((len / 0.25).max(rot / 0.01).ceil() as usize).max(1);
+                for i in 1..=n {
+                    check(&a.interpolate(&b, i as f64 / n as f64), "along its path");
+                }
+            }
+            let m = way.len();
+            let last = way[m - 1].translation() - way[m - 2].translation();
+            let d = if last.norm() > 1e-9 {
+                last.normalize()
+            } else {
+                -t.mating_direction
+            };
+            let mut at = way[m - 1];
+            for _ in 0..100_000 {
+                let b = bounds(p, &at);
+                let grown = Aabb::new(region.lo - Vec3::repeat(0.5), region.hi + Vec3::repeat(0.5));
+                if b.overlap(&grown).min() < 0.0 {
+                    break;
+                }
+                at = Transform::from_parts(at.translation() + d * 0.25, at.rotation());
+                check(&at, "straight on");
+                way.push(at);
+            }
+        }
+    }
+}
+
+fn plan(doc: &Document, mode: Mode) -> SequencePlan {
+    let o = SequenceOptions {
+        mode,
+        max_sequences: 3,
+        ..SequenceOptions::default()
+    };
+    match plan_sequence(doc, &mut SceneCache::new(), &o) {
+        Ok(p) => p,
+        Err(e) => panic!("{mode:?}: {e}"),
+    }
+}
+
+#[test]
+fn a_press_fit_is_a_fit_not_a_refusal() {
+    let d = dir("press");
+    // A pin 0.05 mm over its bore (on a 32-facet pin in a 32-facet bore: 0.05 mm of
+    // radial interference everywhere), a washer with clearance on top.
+    let doc = write_doc(
+        &d,
+        &[
+            ("housing", ring(20.0, 5.0, 0.0, 10.0, 32)),
+            ("pin", rod(5.05, -5.0, 25.0, 32)),
+            ("washer", ring(9.0, 5.5, 10.0, 12.0, 32)),
+        ],
+    );
+    for mode in [Mode::Mates, Mode::Geometry] {
+        let p = plan(&doc, mode);
+        assert_eq!(p.fits.len(), 1, "{:?}", p.fits);
+        let f = &p.fits[0];
+        assert_eq!((f.a.as_str(), f.b.as_str()), ("housing", "pin"));
+        assert!(f.depth > 0.02 && f.depth < 0.1, "{f:?}");
+        assert!(!f.contained);
+        let c = checker(&doc, &p);
+        fits_are_exact(&c, &p);
+        dense_removal(&c, &p);
+        // The pin goes in along its axis only: sideways it is held by the fit.
+        for s in &p.sequences {
+            let t = s.tasks.iter().find(|t| t.part == "pin");
+            if let Some(t) = t {
+                assert!(
+                    t.mating_direction.z.abs() > 1.0 - 1e-9,
+                    "{:?}",
+                    t.mating_direction
+                );
+            }
+        }
+        // The check is not a blanket pass: the pin 1 mm sideways is refused.
+        let (pin, housing) = (
+            doc.component_index("pin").unwrap(),
+            doc.component_index("housing").unwrap(),
+        );
+        let aside = Transform::from_translation(Vec3::new(1.0, 0.0, 0.0));
+        assert!(c.hits(pin, &aside, housing));
+        // The report names the fit.
+        assert!(
+            p.summary().contains("fit: housing and pin"),
+            "{}",
+            p.summary()
+        );
+        assert_eq!(p.to_json_value()["fits"][0]["b"], "pin");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_part_modelled_through_another_is_sequenced() {
+    let d = dir("through");
+    // A 10 mm bar modelled straight through an 82 mm block that has no hole for
+    // it (82 mm of overlap along the bar), a cap on the bar's top.
+    let doc = write_doc(
+        &d,
+        &[
+            ("block", cuboid([-20.0, -20.0, 0.0], [20.0, 20.0, 82.0])),
+            ("bar", cuboid([-5.0, -5.0, -19.0], [5.0, 5.0, 101.0])),
+            ("cap", cuboid([-8.0, -8.0, 101.0], [8.0, 8.0, 105.0])),
+        ],
+    );
+    for mode in [Mode::Mates, Mode::Geometry] {
+        let p = plan(&doc, mode);
+        assert_eq!(p.fits.len(), 1, "{:?}", p.fits);
+        let f = &p.fits[0];
+        assert_eq!((f.a.as_str(), f.b.as_str()), ("block", "bar"));
+        assert!(f.depth > 1.0, "{f:?}");
+        let c = checker(&doc, &p);
+        fits_are_exact(&c, &p);
+        dense_removal(&c, &p);
+        // Between block and bar only the bar's axis is free.
+        for s in &p.sequences {
+            let order = s.order();
+            let (b, k) = (
+                order.iter().position(|o| o == "bar").unwrap(),
+                order.iter().position(|o| o == "block").unwrap(),
+            );
+            let later = s.tasks.iter().find(|t| t.part == order[b.max(k)]).unwrap();
+            assert!(
+                later.mating_direction.z.abs() > 1.0 - 1e-9,
+                "{order:?}: {} along {:?}",
+                later.part,
+                later.mating_direction
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_clearance_linkage_is_held_across_its_gaps() {
+    let d = dir("linkage");
+    // A ground bracket and a link, 2 mm apart, joined by a pin with 2 mm of
+    // clearance in both bores: nothing touches within the default 1.5 mm gap.
+    let doc = write_doc(
+        &d,
+        &[
+            ("ground", ring(14.0, 5.0, 0.0, 5.0, 32)),
+            ("link", ring(10.0, 5.0, 7.0, 12.0, 32)),
+            ("pin", rod(3.0, -3.0, 15.0, 32)),
+        ],
+    );
+    for mode in [Mode::Mates, Mode::Geometry] {
+        let p = plan(&doc, mode);
+        assert!(p.fits.is_empty(), "{:?}", p.fits);
+        // Three groups, joined by two links of 2 mm.
+        assert_eq!(p.support_gaps.len(), 2, "{:?}", p.support_gaps);
+        for g in &p.support_gaps {
+            let gap = g.gap_mm.unwrap();
+            assert!((gap - 2.0).abs() < 0.05, "{g:?}");
+        }
+        assert_eq!(p.best().base, "ground", "the largest part");
+        let c = checker(&doc, &p);
+        fits_are_exact(&c, &p);
+        dense_removal(&c, &p);
+        // Every part placed is held: within the widest reported link of a part
+        // placed before it (surface distance, asked here).
+        let widest = p
+            .support_gaps
+            .iter()
+            .filter_map(|g| g.gap_mm)
+            .fold(1.5f64, f64::max);
+        for s in &p.sequences {
+            let order = s.order();
+            for k in 1..order.len() {
+                let i = doc.component_index(&order[k]).unwrap();
+                let held = order[..k].iter().any(|o| {
+                    let q = doc.component_index(o).unwrap();
+                    fitup::collision::clearance(
+                        &c.colliders[i],
+                        &c.poses[i],
+                        &c.colliders[q],
+                        &c.poses[q],
+                        widest + 1.0,
+                    )
+                    .unwrap()
+                        <= widest + 1e-6
+                });
+                assert!(held, "{} floats in {order:?}", order[k]);
+            }
+        }
+        assert!(p.summary().contains("held across a gap"), "{}", p.summary());
+    }
+    // Support off still works, and with a contact gap wider than the joints nothing
+    // needs a link.
+    let wide = SequenceOptions {
+        contact_gap_mm: 2.5,
+        ..SequenceOptions::default()
+    };
+    let p = plan_sequence(&doc, &mut SceneCache::new(), &wide).unwrap();
+    assert!(p.support_gaps.is_empty(), "{:?}", p.support_gaps);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn every_option_a_refusal_names_is_an_option_of_every_face() {
+    use fitup::options::{Options, Sequence};
+    use fitup::sequence::{RejectReason, SequenceError, Stuck};
+    // Every message the refusals can give, with each variant's option names.
+    let stuck = [
+        Stuck::Floats {
+            part: "a".into(),
+            gap_mm: 1.5,
+        }
+        .to_string(),
+        Stuck::Blocked {
+            part: "a".into(),
+            directions: 6,
+            by: vec!["b".into()],
+        }
+        .to_string(),
+    ];
+    let texts = [
+        stuck.join("; "),
+        RejectReason::InactiveBase {
+            base: "a".into(),
+            size: 1.0,
+            largest_related: 10.0,
+        }
+        .to_string(),
+        SequenceError::NoSequence {
+            timed_out: true,
+            rejected: Vec::new(),
+        }
+        .to_string(),
+        SequenceError::TimeLimit(5.0).to_string(),
+    ];
+    let mut named = Vec::new();
+    for t in &texts {
+        for (i, piece) in t.split('`').enumerate() {
+            if i % 2 == 1 {
+                named.push(piece.to_string());
+            }
+        }
+    }
+    for must in [
+        "contact_gap_mm",
+        "support",
+        "time_limit_ms",
+        "small_base_ratio",
+        "base",
+    ] {
+        assert!(named.iter().any(|n| n == must), "{must} in {texts:?}");
+    }
+    for name in &named {
+        // The one table (scripts' maps and Python's keywords read it).
+        assert!(
+            Sequence::VOCABULARY.key(name).is_some(),
+            "`{name}` named by a refusal is not a sequence option"
+        );
+        // The command line takes it through `--option`.
+        let key = Sequence::VOCABULARY.key(name).unwrap();
+        let sample = match key.kind {
+            fitup::options::Kind::Bool => "false",
+            fitup::options::Kind::Text => "ground",
+            _ => "2.5",
+        };
+        let map = Sequence::VOCABULARY
+            .map_from_args(&[format!("{name}={sample}")])
+            .unwrap();
+        Sequence::from_value(serde_json::Value::Object(map)).unwrap();
+    }
+    // `tolerance` too (the old refusal named it).
+    assert!(Sequence::VOCABULARY.key("tolerance").is_some());
+}
+
+#[test]
+fn the_command_line_reaches_the_options_table() {
+    let d = dir("cli");
+    write_doc(
+        &d,
+        &[
+            ("ground", ring(14.0, 5.0, 0.0, 5.0, 16)),
+            ("link", ring(10.0, 5.0, 7.0, 12.0, 16)),
+            ("pin", rod(3.0, -3.0, 15.0, 16)),
+        ],
+    );
+    let doc = d.join("product.yaml");
+    let doc = doc.to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["plan-sequence", doc, "--json"];
+        args.extend_from_slice(extra);
+        crate::common::run_in(&d, &args)
+    };
+    let out = run(&["--option", "contact_gap_mm=2.5", "-o", "tolerance=0.02"]);
+    assert!(out.status.success(), "{}", crate::common::text(&out));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["support_gaps"], serde_json::json!([]));
+    let out = run(&[]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["support_gaps"].as_array().unwrap().len(), 2, "{v}");
+    // A key outside the table is refused by name, with a close match.
+    let bad = run(&["--option", "contact_gap=2"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(
+        crate::common::text(&bad).contains("contact_gap_mm"),
+        "{}",
+        crate::common::text(&bad)
+    );
+    let bad = run(&["--option", "tolerance"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&d);
+}
