@@ -633,15 +633,20 @@ pub(super) fn sphere_directions(n: usize, seed: u64) -> Vec<Vec3> {
         .collect()
 }
 
-/// `k` unit directions at angle `angle` (rad) around unit `d`.
-pub(super) fn cone_around(d: &Vec3, angle: f64, k: usize) -> Vec<Vec3> {
+/// Two unit vectors `(u, v)` that make a right-handed frame `(u, v, d)` with unit `d`.
+pub(super) fn frame_across(d: &Vec3) -> (Vec3, Vec3) {
     let helper = if d.x.abs() < 0.9 {
         Vec3::x()
     } else {
         Vec3::y()
     };
     let u = d.cross(&helper).normalize();
-    let v = d.cross(&u);
+    (u, d.cross(&u))
+}
+
+/// `k` unit directions at angle `angle` (rad) around unit `d`.
+pub(super) fn cone_around(d: &Vec3, angle: f64, k: usize) -> Vec<Vec3> {
+    let (u, v) = frame_across(d);
     (0..k)
         .map(|i| {
             let a = std::f64::consts::TAU * i as f64 / k as f64;

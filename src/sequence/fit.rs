@@ -79,13 +79,7 @@ impl FitPairCheck {
         }
         let region = Aabb::new(swept.lo.sup(&qb.lo), swept.hi.inf(&qb.hi));
         // Lines along d across the region: a frame (u, v) across d.
-        let helper = if d.x.abs() < 0.9 {
-            Vec3::x()
-        } else {
-            Vec3::y()
-        };
-        let u = d.cross(&helper).normalize();
-        let v = d.cross(&u);
+        let (u, v) = super::blocking::frame_across(d);
         let corners: Vec<Point3> = (0..8)
             .map(|k| {
                 Point3::new(
