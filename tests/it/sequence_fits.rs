@@ -229,14 +229,9 @@ fn dense_removal(c: &Checker, plan: &SequencePlan) {
                 "starts assembled"
             );
             check(&way[0], "assembled");
-            for w in way.clone().windows(2) {
-                let (a, b) = (w[0], w[1]);
-                let len = (b.translation() - a.translation()).norm();
-                let rot = a.rotation().angle_to(&b.rotation());
-                let n = ((len / 0.25).max(rot / 0.01).ceil() as usize).max(1);
-                for i in 1..=n {
-                    check(&a.interpolate(&b, i as f64 / n as f64), "along its path");
-                }
+            // Every 0.25 mm and 0.01 rad along the planned path.
+            for q in t.path.densify(0.25, 0.01).expect("a finite path") {
+                check(&q, "along its path");
             }
             let m = way.len();
             let last = way[m - 1].translation() - way[m - 2].translation();
