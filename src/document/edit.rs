@@ -323,6 +323,7 @@ impl Document {
         super::check_pose(&transform, format_args!("the pose for `{name}`"))?;
         let i = self.components.len();
         self.by_name.insert(name.clone(), i);
+        self.numbering.insert(&name);
         self.components
             .push(Component::placed(name, part, transform));
         self.revision += 1;
@@ -332,10 +333,7 @@ impl Document {
     /// A name for a new component of `part`: `part-N` with the first free N (as
     /// SolidWorks numbers instances).
     pub fn next_instance_name(&self, part: &str) -> String {
-        (1..)
-            .map(|n| format!("{part}-{n}"))
-            .find(|n| !self.by_name.contains_key(n))
-            .unwrap_or_default()
+        self.numbering.next(&nfc_name(part))
     }
 
     /// Renames a component (SolidWorks' `IComponent2.Name2 = …`); mates, robots and
@@ -360,6 +358,8 @@ impl Document {
         }
         let old_name = std::mem::replace(&mut self.components[i].name, new.clone());
         self.by_name.remove(&old_name);
+        self.numbering.remove(&old_name);
+        self.numbering.insert(&new);
         self.by_name.insert(new, i);
         self.revision += 1;
         Ok(())

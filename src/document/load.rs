@@ -156,6 +156,7 @@ impl Document {
             description: file.description.clone(),
             parts,
             components,
+            numbering: super::numbering::Numbering::of(by_name.keys()),
             by_name,
             mates: Vec::new(),
             equations: Vec::new(),

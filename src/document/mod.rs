@@ -37,6 +37,7 @@ pub mod file;
 pub mod import;
 mod load;
 pub mod mates;
+mod numbering;
 pub mod reference;
 mod remove;
 pub mod robot;
@@ -199,6 +200,8 @@ pub struct Document {
     parts: IndexMap<String, Part>,
     components: Vec<Component>,
     by_name: HashMap<String, usize>,
+    /// The first free `N` of `part-N` per base, kept with `by_name`.
+    numbering: numbering::Numbering,
     mates: Vec<Mate>,
     /// Equations and global variables, evaluated on every rebuild.
     equations: Vec<Equation>,
@@ -275,6 +278,7 @@ impl Document {
                 },
             );
             self.by_name.insert(name.clone(), self.components.len());
+            self.numbering.insert(&name);
             self.components.push(Component::placed(
                 name.clone(),
                 name.clone(),

@@ -74,6 +74,7 @@ impl Document {
         self.shift_robot_links(i);
         let removed = self.components.remove(i);
         self.generated.remove(&removed.name);
+        self.numbering.remove(&removed.name);
         self.by_name = self
             .components
             .iter()
