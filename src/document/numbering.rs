@@ -136,7 +136,7 @@ mod tests {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            let base = if state % 3 == 0 { "b" } else { "a" };
+            let base = if state.is_multiple_of(3) { "b" } else { "a" };
             let n = state / 7 % 40 + 1;
             let name = match state % 11 {
                 0 => spellings[(state / 11 % 7) as usize].to_string(),

@@ -24,6 +24,7 @@ mod bind_sequence;
 #[cfg(feature = "skills")]
 mod bind_skills;
 mod bind_view;
+mod builders;
 mod convert;
 pub mod sandbox;
 
@@ -395,6 +396,7 @@ const OPERATION_LIMIT: &str = "operation limit";
 pub fn engine(ctx: &Arc<Context>, limits: &Limits) -> Engine {
     let mut engine = Engine::new();
     limits.apply(&mut engine);
+    builders::register(&mut engine, limits.max_array_size);
     engine.set_strict_variables(true);
     engine.set_fail_on_invalid_map_property(true);
     let c = ctx.clone();

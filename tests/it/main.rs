@@ -20,6 +20,7 @@ mod hostile_names;
 #[cfg(unix)]
 mod hostile_races;
 mod hostile_round3;
+mod hostile_round4;
 mod hostile_runs;
 mod hostile_skills;
 mod hostile_writers;

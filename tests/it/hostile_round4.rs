@@ -1,0 +1,58 @@
+//! Round 3 of the hostile cases, the classes left after the first two passes:
+//! string → array builders counted before they allocate, `fitup check` of a very
+//! large document, and files read through the project's held folder.
+//!
+//! Bounds (not speed assertions): every command ends within the runner's bound
+//! ([`crate::hostile_bounds::run`], 20 s), its peak resident memory is under the bound
+//! stated at the case, its message names the script line and the cause.
+
+/// Writes `scripts/NAME` in a fresh project and runs it.
+fn run_script(source: &str) -> (tempfile::TempDir, crate::hostile_bounds::Run) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    std::fs::create_dir(p.join("scripts")).unwrap();
+    std::fs::write(p.join("scripts/s.rhai"), source).unwrap();
+    let r = crate::hostile_bounds::run(p, &["run", "scripts/s.rhai"]);
+    (dir, r)
+}
+
+/// Peak resident memory of a refused string → array builder on a 16 M-character
+/// string (kB): 250 MB (the string is 16 MB; Rhai's own `split("")` took 1.08 GB
+/// before refusing).
+const BUILDER_RSS_KB: u64 = 250 * 1024;
+
+/// `split("")`, `split(' ')`, `split()`, `split_rev`, `to_chars` and `to_blob` of a
+/// 16 M-character string: refused by their element count before the array is built,
+/// naming the script line, the builder and the count.
+#[test]
+fn string_to_array_builders_count_before_allocating() {
+    for (call, what, count) in [
+        (r#"s.split("")"#, "`split`", "16,000,002"),
+        ("s.split(' ')", "`split`", "8,000,001"),
+        ("s.split()", "`split`", "8,000,000"),
+        (r#"s.split_rev(" ")"#, "`split_rev`", "8,000,001"),
+        ("s.to_chars()", "`to_chars`", "16,000,000"),
+        ("s.to_blob()", "`to_blob`", "16,000,000"),
+    ] {
+        let source = format!(
+            "let s = \"\";\ns = s.pad(8000000, 'x');\ns.replace(\"x\", \"x \");\nlet a = {call};\nprint(a.len());\n"
+        );
+        let (_dir, r) = run_script(&source);
+        assert_eq!(r.code, Some(1), "{call}: {}", r.text);
+        assert!(
+            r.text.contains("s.rhai:4:")
+                && r.text.contains(what)
+                && r.text.contains(&format!("({count} elements)"))
+                && r.text.contains("larger than the sandbox allows"),
+            "{call}: {}",
+            r.text
+        );
+        assert!(r.peak_kb < BUILDER_RSS_KB, "{call}: peak {} kB", r.peak_kb);
+    }
+    // Within the limit, the builders work as Rhai's.
+    let (_dir, r) =
+        run_script("print(\"a,b,,c\".split(\",\").len());\nprint(\"a b\".to_chars());\n");
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(r.text.contains("4\n['a', ' ', 'b']"), "{}", r.text);
+}
