@@ -7,6 +7,37 @@ use super::out::{errln as eprintln, outln as println};
 use crate::document::Document;
 use std::path::Path;
 
+/// Characters of a document's description that `check` prints (a description may be
+/// as long as the 16 MiB document).
+const DESCRIPTION_CHARS: usize = 2000;
+
+/// Lines of a document's description that `check` prints.
+const DESCRIPTION_LINES: usize = 20;
+
+/// The description as `check` prints it: at most [`DESCRIPTION_LINES`] lines and
+/// [`DESCRIPTION_CHARS`] characters, then how much was left out.
+fn shown_description(d: &str) -> String {
+    let mut end = d.len();
+    for (lines, (i, _)) in d.match_indices('\n').enumerate() {
+        if lines + 1 == DESCRIPTION_LINES {
+            end = i;
+            break;
+        }
+    }
+    if let Some((i, _)) = d[..end].char_indices().nth(DESCRIPTION_CHARS) {
+        end = i;
+    }
+    if end == d.len() {
+        return d.to_string();
+    }
+    let rest = d[end..].chars().count();
+    format!(
+        "{}… ({} more characters of the description not shown)",
+        &d[..end],
+        crate::math::format::count(rest as u64)
+    )
+}
+
 pub(super) fn check(path: &Path) -> Exit {
     let doc = match Document::open(path) {
         Ok(d) => d,
@@ -17,15 +48,19 @@ pub(super) fn check(path: &Path) -> Exit {
     };
     println!("{}: ok", path.display());
     if let Some(d) = doc.description() {
-        println!("  {d}");
+        println!("  {}", shown_description(d));
     }
     let mut warnings = doc.warnings().len();
     for w in doc.warnings() {
         println!("  warning: {w}");
     }
     println!("  parts ({}):", doc.parts().count());
+    // Parts sharing one mesh (one file named by many parts) are inspected once.
+    let mut inspected = std::collections::HashMap::new();
     for p in doc.parts() {
-        let r = p.mesh.inspect();
+        let r = inspected
+            .entry(std::sync::Arc::as_ptr(&p.mesh))
+            .or_insert_with(|| p.mesh.inspect());
         let mut notes = Vec::new();
         if !r.is_watertight() {
             notes.push(format!(
@@ -99,4 +134,28 @@ pub(super) fn check(path: &Path) -> Exit {
         println!("  {warnings} warning(s)");
     }
     Exit::Ok
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_description_is_cut_with_what_was_left_out() {
+        assert_eq!(shown_description("short\ntext"), "short\ntext");
+        let long = "é".repeat(5000);
+        let shown = shown_description(&long);
+        assert!(shown.starts_with(&"é".repeat(2000)), "{shown}");
+        assert!(
+            shown.ends_with("… (3,000 more characters of the description not shown)"),
+            "{shown}"
+        );
+        let lines = "line\n".repeat(100);
+        let shown = shown_description(&lines);
+        assert_eq!(shown.matches("line").count(), 20, "{shown}");
+        assert!(
+            shown.ends_with("(401 more characters of the description not shown)"),
+            "{shown}"
+        );
+    }
 }

@@ -245,6 +245,13 @@ struct Loader<'a> {
     dir: PathBuf,
 }
 
+/// The mesh parts of one load: file names resolved and meshes taken, each once.
+#[derive(Default)]
+struct PartMemo {
+    resolved: HashMap<String, PathBuf>,
+    meshes: HashMap<PathBuf, (Arc<crate::mesh::Mesh>, Vec<PathBuf>)>,
+}
+
 /// The URDF robots of a document, loaded: by robot name, with their warnings.
 struct UrdfRobots {
     loaded: HashMap<String, robot::UrdfLoaded>,
@@ -289,20 +296,28 @@ impl Loader<'_> {
         warnings: &mut Vec<String>,
     ) -> Result<IndexMap<String, Part>, DocumentError> {
         // every part's mesh read and parsed at once, in parallel (the cost of opening
-        // a cell of many distinct parts); errors are reported by the loop below
-        let resolved: Vec<_> = file
-            .parts
-            .values()
-            .filter(|pf| pf.step.is_none())
-            .filter_map(|pf| self.project.resolve_from(&self.dir, &pf.stl).ok())
-            .collect();
-        cache.prefetch_in(
-            self.project,
-            &resolved.iter().map(|p| p.as_path()).collect::<Vec<_>>(),
-        );
+        // a cell of many distinct parts); errors are reported by the loop below. Each
+        // distinct file name is resolved once and each mesh taken once per load: a
+        // document of 400,000 parts naming one mesh resolved and stat-ed it 400,000
+        // times over.
+        let mut memo = PartMemo::default();
+        for pf in file.parts.values().filter(|pf| pf.step.is_none()) {
+            if !memo.resolved.contains_key(&pf.stl) {
+                if let Ok(p) = self.project.resolve_from(&self.dir, &pf.stl) {
+                    memo.resolved.insert(pf.stl.clone(), p);
+                }
+            }
+        }
+        let mut distinct: Vec<&Path> = memo.resolved.values().map(PathBuf::as_path).collect();
+        distinct.sort();
+        distinct.dedup();
+        cache.prefetch_in(self.project, &distinct);
         let mut parts = IndexMap::new();
         for (name, pf) in &file.parts {
-            parts.insert(name.clone(), self.part(name, pf, cache, warnings)?);
+            parts.insert(
+                name.clone(),
+                self.part(name, pf, cache, &mut memo, warnings)?,
+            );
         }
         Ok(parts)
     }
@@ -313,6 +328,7 @@ impl Loader<'_> {
         name: &str,
         pf: &PartFile,
         cache: &mut MeshCache,
+        memo: &mut PartMemo,
         warnings: &mut Vec<String>,
     ) -> Result<Part, DocumentError> {
         let key = if pf.step.is_some() { "step" } else { "stl" };
@@ -342,7 +358,11 @@ impl Loader<'_> {
                 "part `{name}`: `deflection:` and `angle:` tessellate a `step:` part; an `stl:` mesh is used as it is"
             )));
         }
-        let mesh_path = self.project.resolve_from(&self.dir, source).map_err(|e| {
+        let resolved = match memo.resolved.get(source) {
+            Some(p) if pf.step.is_none() => Ok(p.clone()),
+            _ => self.project.resolve_from(&self.dir, source),
+        };
+        let mesh_path = resolved.map_err(|e| {
             let what = if pf.step.is_some() {
                 "STEP file"
             } else {
@@ -370,11 +390,16 @@ impl Loader<'_> {
                 ));
             }
             (mesh, Vec::new(), Some(geometry))
+        } else if let Some((mesh, files)) = memo.meshes.get(&mesh_path) {
+            (mesh.clone(), files.clone(), None)
         } else {
             let mesh = cache
                 .get_in(self.project, &mesh_path)
                 .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
-            (mesh, cache.files_of(&mesh_path), None)
+            let files = cache.files_of(&mesh_path);
+            memo.meshes
+                .insert(mesh_path.clone(), (mesh.clone(), files.clone()));
+            (mesh, files, None)
         };
         let references = self.references(name, pf)?;
         let features = self.features(name, pf)?;

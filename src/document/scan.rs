@@ -46,6 +46,14 @@ pub struct ScanIssue {
 pub struct Positions(HashMap<String, (usize, usize)>);
 
 impl Positions {
+    /// Records where the value at `path` (with or without its leading `/`) starts.
+    fn record(&mut self, mut path: String, at: (usize, usize)) {
+        if path.starts_with('/') {
+            path.remove(0);
+        }
+        self.0.insert(path, at);
+    }
+
     /// The 1-based line and column of the value at `path`.
     pub fn get(&self, path: &str) -> Option<(usize, usize)> {
         self.0.get(path).copied()
@@ -239,9 +247,7 @@ fn scan_with(text: &str, what: &str, empty: &str) -> Result<Positions, ScanIssue
                         format!("{path}/{}", *next - 1)
                     }
                 };
-                positions
-                    .0
-                    .insert(path.trim_start_matches('/').to_string(), (line, column));
+                positions.record(path.clone(), (line, column));
                 stack.push(if matches!(event, Event::MappingStart(..)) {
                     Frame::Map {
                         path,
@@ -268,12 +274,6 @@ fn scan_with(text: &str, what: &str, empty: &str) -> Result<Positions, ScanIssue
             message: empty.into(),
         });
     }
-    // Keys are stored without the leading `/`.
-    positions.0 = positions
-        .0
-        .into_iter()
-        .map(|(k, v)| (k.trim_start_matches('/').to_string(), v))
-        .collect();
     Ok(positions)
 }
 
@@ -379,8 +379,7 @@ fn scalar(
                 )));
             }
             keys.insert(value.clone(), (line, raw));
-            let full = format!("{path}/{value}");
-            positions.0.insert(full, (line, column));
+            positions.record(format!("{path}/{value}"), (line, column));
             *key = Some(value);
         }
         Frame::Map { path, key, .. } => {
@@ -390,7 +389,7 @@ fn scalar(
                     return Err(issue(format!("`{}`: {m}", &path_key(path, &k))));
                 }
             }
-            positions.0.insert(format!("{path}/{k}"), (line, column));
+            positions.record(format!("{path}/{k}"), (line, column));
         }
         Frame::Seq { path, next } => {
             let p = format!("{path}/{next}");
@@ -404,7 +403,7 @@ fn scalar(
                     return Err(issue(format!("`{}`: {m}", p.trim_start_matches('/'))));
                 }
             }
-            positions.0.insert(p, (line, column));
+            positions.record(p, (line, column));
         }
     }
     Ok(())
