@@ -259,7 +259,9 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
             }
         },
     };
-    let text = crate::fsutil::read_text(&program_path, crate::fsutil::FileKind::Program)
+    // Inside the project (as `project_of` resolved it): read through the held root.
+    let text = project
+        .read_text(&program_path, crate::fsutil::FileKind::Program)
         .map_err(|e| fail(format!("{}: {e}", a.script.display())))?;
     let program = crate::kinematics::parse_program(&project.display(&program_path), &text)
         .map_err(|e| fail(e.to_string()))?;

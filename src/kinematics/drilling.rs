@@ -267,6 +267,25 @@ pub fn read_holes(path: &Path) -> Result<Vec<Hole>, DrillError> {
     parse_holes(&name, &text)
 }
 
+/// [`read_holes`] of a file inside `project` (absolute, as
+/// [`crate::project::Project::resolve`] returns it), read through the project's held
+/// root folder: a folder swapped for a symbolic link after the path was checked is
+/// refused, never followed.
+pub fn read_holes_in(
+    project: &crate::project::Project,
+    path: &Path,
+) -> Result<Vec<Hole>, DrillError> {
+    let name = project.display(path);
+    let text = project
+        .read_text(path, crate::fsutil::FileKind::Table)
+        .map_err(|e| DrillError {
+            file: name.clone(),
+            line: 0,
+            cause: format!("cannot read the file: {e}"),
+        })?;
+    parse_holes(&name, &text)
+}
+
 /// A rotation whose drill axis (per `axis`) is `dir` (unit), turned by `spin` about it.
 fn drill_rotation(dir: &Vec3, axis: ToolAxis, spin: f64) -> UnitQuaternion<f64> {
     // Any unit vector perpendicular to dir, chosen stably.

@@ -214,6 +214,26 @@ pub fn read_program(path: &Path) -> Result<Program, ProgramError> {
     parse_program(&name, &text)
 }
 
+/// [`read_program`] of a file inside `project` (absolute, as
+/// [`crate::project::Project::resolve`] returns it), read through the project's held
+/// root folder: a folder swapped for a symbolic link after the path was checked is
+/// refused, never followed.
+pub fn read_program_in(
+    project: &crate::project::Project,
+    path: &Path,
+) -> Result<Program, ProgramError> {
+    let name = project.display(path);
+    let text = project
+        .read_text(path, crate::fsutil::FileKind::Program)
+        .map_err(|e| ProgramError {
+            file: name.clone(),
+            line: 0,
+            column: 0,
+            cause: format!("cannot read the file: {e}"),
+        })?;
+    parse_program(&name, &text)
+}
+
 fn pose(v: &[f64; 6], conv: AngleConvention) -> Transform {
     Transform::from_xyzabc(
         Vec3::new(v[0], v[1], v[2]),

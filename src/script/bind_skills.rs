@@ -140,7 +140,7 @@ fn skills(d: &DocHandle, seq: &SequenceHandle, m: &Map) -> ScriptResult<SkillsHa
             };
             let full = ctx.project.resolve(&name).map_err(fail)?;
             ctx.record_read(&full);
-            templates.push(Template::read(&full).map_err(|e| fail(e.render()))?);
+            templates.push(Template::read_in(&ctx.project, &full).map_err(|e| fail(e.render()))?);
         }
     }
     let tasks = &seq.0.best().tasks;

@@ -206,6 +206,20 @@ impl Template {
             .map_err(|e| SourceError::new(path, 0, 0, e.to_string()))?;
         Self::parse(path, &text)
     }
+
+    /// [`read`](Self::read) of a file inside `project` (absolute, as
+    /// [`crate::project::Project::resolve`] returns it), read through the project's held
+    /// root folder: a folder swapped for a symbolic link after the path was checked is
+    /// refused, never followed.
+    ///
+    /// # Errors
+    /// As [`read`](Self::read).
+    pub fn read_in(project: &crate::project::Project, path: &Path) -> Result<Self, TemplateError> {
+        let text = project
+            .read_text(path, crate::fsutil::FileKind::Document)
+            .map_err(|e| SourceError::new(path, 0, 0, e.to_string()))?;
+        Self::parse(path, &text)
+    }
 }
 
 /// The default template text of an operation (the files of `models/templates/`).

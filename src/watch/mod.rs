@@ -26,6 +26,7 @@
 //! between operations) and starts a new one.
 
 use crate::fsutil::content_hash;
+use crate::project::Project;
 use crate::script::{run_script, Caches, RunOptions, RunOutcome};
 use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind, RenameMode};
 use notify::{RecursiveMode, Watcher as _};
@@ -140,7 +141,7 @@ pub fn watch_with(
         .map(|p| absolute(&p))
         .collect();
     for p in &always {
-        baseline.insert(p.clone(), hash_file(p));
+        baseline.insert(p.clone(), hash_file(&opts.project, p));
         // Watched before the first run ends, so a save can cancel a first run that spins.
         if let Some(dir) = p.parent() {
             if !watched_dirs.contains_key(dir) {
@@ -162,7 +163,7 @@ pub fn watch_with(
             if let Some(changed) = queued.take() {
                 number += 1;
                 for p in &changed {
-                    baseline.insert(p.clone(), hash_file(p));
+                    baseline.insert(p.clone(), hash_file(&opts.project, p));
                 }
                 report(WatchEvent::RunStarted {
                     number,
@@ -283,7 +284,7 @@ pub fn watch_with(
                 // whatever it read. Its own writes are the new baseline, not a save.
                 for f in outcome.files_read.iter().chain(&always) {
                     let f = absolute(f);
-                    baseline.entry(f.clone()).or_insert_with(|| hash_file(&f));
+                    baseline.entry(f.clone()).or_insert_with(|| hash_file(&opts.project, &f));
                     if let Some(dir) = f.parent() {
                         if !watched_dirs.contains_key(dir) {
                             match watcher.watch(dir, RecursiveMode::NonRecursive) {
@@ -301,7 +302,7 @@ pub fn watch_with(
                 for f in &outcome.files_written {
                     let f = absolute(f);
                     if baseline.contains_key(&f) {
-                        baseline.insert(f.clone(), hash_file(&f));
+                        baseline.insert(f.clone(), hash_file(&opts.project, &f));
                     }
                 }
                 report(WatchEvent::RunFinished {
@@ -334,7 +335,7 @@ pub fn watch_with(
                     pending.insert(p, now + OWN_WRITE_RECHECK);
                     continue;
                 }
-                let hash = hash_file(&p);
+                let hash = hash_file(&opts.project, &p);
                 // A run's own write (a script rewriting a file it read, itself even):
                 // the new baseline, not a save.
                 let own = hash.is_some()
@@ -378,7 +379,7 @@ pub fn watch_with(
             }
             if !changed.is_empty() {
                 for p in &changed {
-                    baseline.insert(p.clone(), hash_file(p));
+                    baseline.insert(p.clone(), hash_file(&opts.project, p));
                 }
                 if let Some((_, cancel)) = &running {
                     cancel.store(true, Ordering::Relaxed);
@@ -391,11 +392,22 @@ pub fn watch_with(
     }
 }
 
-fn hash_file(p: &Path) -> Option<u64> {
-    // Capped, regular files only: a path replaced by a FIFO must not block the watcher.
-    crate::fsutil::read_file(p, crate::fsutil::FileKind::Mesh)
-        .ok()
-        .map(|b| content_hash(&b))
+/// The content hash of a watched file: capped, regular files only (a path replaced by
+/// a FIFO must not block the watcher); a file inside the project is read through the
+/// project's held folder, so a folder swapped for a link is refused, never followed.
+fn hash_file(project: &Project, p: &Path) -> Option<u64> {
+    let kind = crate::fsutil::FileKind::Mesh;
+    // Watched paths are absolute with their folder canonical as they were recorded: a
+    // path under the root is walked from the root's handle as it is (never
+    // re-resolved, which would follow a folder swapped for a link); the script or
+    // document given outside the project is read by its name.
+    if p.starts_with(project.root()) {
+        project.read_file(p, kind)
+    } else {
+        crate::fsutil::read_file(p, kind)
+    }
+    .ok()
+    .map(|b| content_hash(&b))
 }
 
 /// The absolute path with the folder canonicalized (the file itself may be missing
@@ -408,5 +420,31 @@ fn absolute(p: &Path) -> PathBuf {
     ) {
         (Some(dir), Some(name)) => dir.join(name),
         _ => abs,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A watched file whose folder became a link to a folder outside the project is not
+    /// hashed through the link (its hash would be the outside file's); a file inside
+    /// is hashed as it is.
+    #[test]
+    fn watched_files_are_hashed_through_the_held_root() {
+        let dir = tempfile::tempdir().unwrap();
+        let outside = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("real")).unwrap();
+        std::fs::write(dir.path().join("real/a.rhai"), "inside").unwrap();
+        std::fs::write(outside.path().join("a.rhai"), "outside").unwrap();
+        std::os::unix::fs::symlink(outside.path(), dir.path().join("data")).unwrap();
+        let project = Project::new(dir.path()).unwrap();
+        let root = project.root().to_path_buf();
+        assert_eq!(
+            hash_file(&project, &root.join("real/a.rhai")),
+            Some(content_hash(b"inside"))
+        );
+        // `data/a.rhai` as the watcher recorded it before `data` was swapped.
+        assert_eq!(hash_file(&project, &root.join("data/a.rhai")), None);
     }
 }
