@@ -33,8 +33,8 @@ pub use catalog::{catalog_names, robot_by_name, Catalog};
 pub use closed_form::{Branch, Branches, ClosedFormIk, ModelError};
 pub use dh::{DhConvention, DhRow};
 pub use drilling::{
-    drill_program, hole_tool_pose, parse_holes, read_holes, read_holes_in, DrillError, DrillOptions, DrillReport,
-    Hole, HoleOutcome, HoleReport, ToolAxis,
+    drill_program, hole_tool_pose, parse_holes, read_holes, read_holes_in, DrillError,
+    DrillOptions, DrillReport, Hole, HoleOutcome, HoleReport, ToolAxis,
 };
 pub use error::KinematicsError;
 pub use ik::{
@@ -51,8 +51,8 @@ pub use precision::{
     TABLE_TURN,
 };
 pub use program::{
-    parse_program, read_program, read_program_in, run_program, Instruction, Program, ProgramError, ProgramLine,
-    ProgramRunError,
+    parse_program, read_program, read_program_in, run_program, Instruction, Program, ProgramError,
+    ProgramLine, ProgramRunError,
 };
 pub use robot::{IkSolver, IkSolverKind, Robot};
 pub use trajectory::{Trajectory, TrajectorySample};

@@ -284,7 +284,9 @@ pub fn watch_with(
                 // whatever it read. Its own writes are the new baseline, not a save.
                 for f in outcome.files_read.iter().chain(&always) {
                     let f = absolute(f);
-                    baseline.entry(f.clone()).or_insert_with(|| hash_file(&opts.project, &f));
+                    baseline
+                        .entry(f.clone())
+                        .or_insert_with(|| hash_file(&opts.project, &f));
                     if let Some(dir) = f.parent() {
                         if !watched_dirs.contains_key(dir) {
                             match watcher.watch(dir, RecursiveMode::NonRecursive) {

@@ -103,7 +103,8 @@ fn check_of_a_huge_document_is_bounded() {
     let r = crate::hostile_bounds::run(p, &["check", "big.yaml"]);
     assert_eq!(r.code, Some(0), "{}", &r.text[..r.text.len().min(2000)]);
     assert!(
-        r.text.contains("(14,998,003 more characters of the description not shown)"),
+        r.text
+            .contains("(14,998,003 more characters of the description not shown)"),
         "{}",
         &r.text[..r.text.len().min(3000)]
     );
@@ -189,16 +190,17 @@ print(`seen ${seen}`);
     .unwrap();
     let r = crate::hostile_bounds::run(p, &["run", "scripts/t.rhai"]);
     assert_eq!(r.code, Some(0), "{}", r.text);
-    assert!(r.text.contains("\"outside\": 0, \"refused\": 0"), "{}", r.text);
+    assert!(
+        r.text.contains("\"outside\": 0, \"refused\": 0"),
+        "{}",
+        r.text
+    );
     let before = common::snapshot(p);
     let outside_hashes = common::snapshot(o);
     let stop = Arc::new(AtomicBool::new(false));
     let swap = crate::hostile_races::swapper(p.join("data"), o.to_path_buf(), stop.clone());
-    let r = crate::hostile_bounds::run_within(
-        p,
-        &["run", "scripts/t.rhai"],
-        Duration::from_secs(120),
-    );
+    let r =
+        crate::hostile_bounds::run_within(p, &["run", "scripts/t.rhai"], Duration::from_secs(120));
     stop.store(true, Ordering::Relaxed);
     let swaps = swap.join().unwrap();
     eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
