@@ -336,3 +336,43 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod held_root_tests {
+    use super::*;
+
+    /// The project readers of a template, a hole table and a robot program read a path
+    /// recorded inside the project through the held root: once its folder is a link to
+    /// a folder outside, the read is refused (a read by name follows the link and
+    /// returns the outside file).
+    #[test]
+    fn readers_in_a_project_never_follow_a_swapped_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let outside = tempfile::tempdir().unwrap();
+        let files = [
+            ("t.yaml", default_template_text(Operation::Insertion)),
+            ("h.csv", "id,x,y,z,nx,ny,nz\nh0,0,0,0,0,0,1\n"),
+            ("p.prg", include_str!("../../models/mz07_demo.prg")),
+        ];
+        std::fs::create_dir(dir.path().join("data")).unwrap();
+        for (name, text) in files {
+            std::fs::write(dir.path().join("data").join(name), text).unwrap();
+            std::fs::write(outside.path().join(name), text).unwrap();
+        }
+        let project = crate::project::Project::new(dir.path()).unwrap();
+        let data = project.root().join("data");
+        assert!(Template::read_in(&project, &data.join("t.yaml")).is_ok());
+        assert!(crate::kinematics::read_holes_in(&project, &data.join("h.csv")).is_ok());
+        assert!(crate::kinematics::read_program_in(&project, &data.join("p.prg")).is_ok());
+        // `data` swapped for a link to the outside folder after the paths were checked.
+        std::fs::rename(&data, dir.path().join("away")).unwrap();
+        std::os::unix::fs::symlink(outside.path(), &data).unwrap();
+        assert!(
+            Template::read(&data.join("t.yaml")).is_ok(),
+            "by name: followed"
+        );
+        assert!(Template::read_in(&project, &data.join("t.yaml")).is_err());
+        assert!(crate::kinematics::read_holes_in(&project, &data.join("h.csv")).is_err());
+        assert!(crate::kinematics::read_program_in(&project, &data.join("p.prg")).is_err());
+    }
+}

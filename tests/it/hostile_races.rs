@@ -21,7 +21,7 @@ use std::time::Duration;
 const SWAPS: usize = 400;
 
 /// Swaps `folder` for a link to `outside` and back until `stop` or [`SWAPS`] swaps.
-pub(crate) fn swapper(
+fn swapper(
     folder: PathBuf,
     outside: PathBuf,
     stop: Arc<AtomicBool>,
