@@ -396,15 +396,18 @@ pub fn watch_with(
 
 /// The content hash of a watched file: capped, regular files only (a path replaced by
 /// a FIFO must not block the watcher); a file inside the project is read through the
-/// project's held folder, so a folder swapped for a link is refused, never followed.
+/// project folder held open for this read and walked without following a link, so a
+/// folder swapped for a link is refused, never followed.
 fn hash_file(project: &Project, p: &Path) -> Option<u64> {
     let kind = crate::fsutil::FileKind::Mesh;
     // Watched paths are absolute with their folder canonical as they were recorded: a
-    // path under the root is walked from the root's handle as it is (never
-    // re-resolved, which would follow a folder swapped for a link); the script or
-    // document given outside the project is read by its name.
+    // path under the root is walked from the root as it is (never re-resolved, which
+    // would follow a folder swapped for a link). The root is opened again for each
+    // hash: a project folder moved away and recreated is watched at its path, not in
+    // the moved copy that `project` still holds. The script or document given outside
+    // the project is read by its name.
     if p.starts_with(project.root()) {
-        project.read_file(p, kind)
+        Project::new(project.root()).ok()?.read_file(p, kind)
     } else {
         crate::fsutil::read_file(p, kind)
     }
