@@ -11,6 +11,7 @@ mod euler;
 pub mod format;
 pub mod limits;
 mod rng;
+pub(crate) mod trig;
 pub mod transform;
 
 pub use aabb::Aabb;
