@@ -45,11 +45,11 @@ use super::closed_form::{
     Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::ur::snap_phi;
-use crate::math::trig::atan2;
 use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointKind, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
+use crate::math::trig::atan2;
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 

@@ -34,14 +34,14 @@
 //!   elbow with one double root); `q₄ = s₄(θ₂₃₄ − θ₂ − θ₃)`.
 
 use super::closed_form::{
-    canonical_frame, hyp, measure_model_error, rot2, wrap, zero_axis_lines, ArmPlane,
-    ModelError, Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
+    canonical_frame, hyp, measure_model_error, rot2, wrap, zero_axis_lines, ArmPlane, ModelError,
+    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
-use crate::math::trig::atan2;
 use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
+use crate::math::trig::atan2;
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
@@ -316,7 +316,12 @@ impl ClosedFormIk for UrSolver {
                 let r1 = -s1 * ra5.x + c1 * ra5.y;
                 let r2 = -s1 * ra65.x + c1 * ra65.y;
                 let n = hyp(r1, r2);
-                (wrap(self.phi5 + atan2(sd, cw)), atan2(r1, r2), r1 / n, r2 / n)
+                (
+                    wrap(self.phi5 + atan2(sd, cw)),
+                    atan2(r1, r2),
+                    r1 / n,
+                    r2 / n,
+                )
             };
             // Ry(θ234)·a5 = M·Rot(a6,−q6)·a5 = Rz(−q1)·(c6·R a5 − s6·R (a6×a5)), in xz.
             let m = ra5 * c6 - ra65 * s6;

@@ -11,8 +11,8 @@ mod euler;
 pub mod format;
 pub mod limits;
 mod rng;
-pub(crate) mod trig;
 pub mod transform;
+pub(crate) mod trig;
 
 pub use aabb::Aabb;
 pub use deadline::Deadline;
