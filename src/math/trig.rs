@@ -17,11 +17,12 @@
 //! `atan(c)`, `π/2` and `π` are carried as two doubles (`hi + lo`), `atan(c)` of the
 //! double `c` itself.
 
-use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_8, PI};
 
-/// `tan(π/8)` as a double, and `atan` of that double as `hi + lo`.
+/// `tan(π/8)` as a double, and `atan` of that double as `hi + lo` (its high part
+/// is the double nearest π/8).
 const C1: f64 = 0.414_213_562_373_095_03;
-const ATAN_C1_HI: f64 = 0.392_699_081_698_724_14;
+const ATAN_C1_HI: f64 = FRAC_PI_8;
 const ATAN_C1_LO: f64 = 3.060_132_146_563_891e-18;
 /// `π/4 = atan(1)`, `π/2` and `π`: the low parts.
 const PIO4_LO: f64 = 3.061_616_997_868_383e-17;

@@ -32,8 +32,7 @@ impl OpwKin {
     /// `EIGEN_INCLUDE_DIR`, default `/usr/include/eigen3`) into `out_dir` and starts it
     /// for the OPW parameters `[a1, a2, b, c1, c2, c3, c4]`.
     pub fn build(include: &Path, params: [f64; 7], out_dir: &Path) -> Result<OpwKin, String> {
-        let driver =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/common/opw_kin_driver.cpp");
+        let driver = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/common/opw_kin_driver.cpp");
         let eigen =
             std::env::var("EIGEN_INCLUDE_DIR").unwrap_or_else(|_| "/usr/include/eigen3".into());
         std::fs::create_dir_all(out_dir).map_err(|e| e.to_string())?;
