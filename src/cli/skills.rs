@@ -280,7 +280,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
     let handle = manager.handle();
     // Without `--db` nothing is logged; with it, the library's one policy (SkillLog):
     // a write that fails stops the run.
-    let log = db.map(|db| SkillLog::new(None, label, manager.plan(), LogDb::Owned(db)));
+    let log = db.map(|db| SkillLog::new(None, label, manager.plan(), LogDb::Owned(Box::new(db))));
     let tui = !*plain && std::io::stdout().is_terminal() && std::io::stdin().is_terminal();
     let result = if tui {
         let shown = manager.plan().clone();

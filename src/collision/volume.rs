@@ -78,10 +78,8 @@ impl Clock {
     #[inline]
     fn tick(&mut self) -> Result<(), VolumeError> {
         self.ticks = self.ticks.wrapping_add(1);
-        if self.ticks.is_multiple_of(1024) {
-            if self.deadline.is_some_and(Deadline::passed) {
-                return Err(VolumeError::TimeLimit(self.limit_ms));
-            }
+        if self.ticks.is_multiple_of(1024) && self.deadline.is_some_and(Deadline::passed) {
+            return Err(VolumeError::TimeLimit(self.limit_ms));
         }
         Ok(())
     }

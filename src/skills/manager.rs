@@ -725,7 +725,7 @@ pub fn log_event(
 /// The database a [`SkillLog`] writes to: its own, or one shared with a script.
 pub enum LogDb {
     /// A database of the log's own (the CLI's `--db`).
-    Owned(crate::db::Database),
+    Owned(Box<crate::db::Database>),
     /// A database other code uses too (a script's `open_db()`).
     Shared(Arc<Mutex<crate::db::Database>>),
 }
@@ -827,7 +827,7 @@ mod log_tests {
             joint_kinds: vec![],
             steps: vec![],
         };
-        let mut log = SkillLog::new(None, "plan.json", &plan, LogDb::Owned(db));
+        let mut log = SkillLog::new(None, "plan.json", &plan, LogDb::Owned(Box::new(db)));
         let event = ManagerEvent::Started(0, "Move".into());
         assert!(log.record(&event).is_none());
         assert!(!log.failed());

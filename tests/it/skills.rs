@@ -462,7 +462,7 @@ fn the_one_run_loop_stops_on_its_sink_and_on_a_failed_log() {
         .unwrap()
         .execute_batch("DROP TABLE skill_log")
         .unwrap();
-    let log = SkillLog::new(None, "plan", &plan, LogDb::Owned(db));
+    let log = SkillLog::new(None, "plan", &plan, LogDb::Owned(Box::new(db)));
     let mut manager = SkillManager::new(plan, options_for(&sim));
     let mut sink = StopAfterFirst(Vec::new(), 0);
     match manager.run_logged(Some(log), &mut sink) {
