@@ -20,6 +20,12 @@ pub struct SubAssembly {
     pub name: String,
     /// Pose: sub-assembly frame → assembly (world) frame, mm.
     pub transform: Transform,
+    /// The document whose content it holds, when it is another file (see
+    /// [`super::subdoc`]); `None` for a group of this document.
+    pub file: Option<super::SubDocument>,
+    /// Suppressed: everything inside is suppressed (saved in the file holding the
+    /// sub-assembly's entry).
+    pub suppressed: bool,
 }
 
 /// The parent's full name of a full name (`Cart-1/Axle-1` of `Cart-1/Axle-1/Wheel-2`),
@@ -172,9 +178,66 @@ impl Document {
         }
         self.check_parent(&name)?;
         check_pose(&t, format_args!("the pose for sub-assembly `{name}`"))?;
-        self.assemblies.push(SubAssembly { name, transform: t });
+        self.assemblies.push(SubAssembly {
+            name,
+            transform: t,
+            file: None,
+            suppressed: false,
+        });
         self.revision += 1;
         Ok(())
+    }
+
+    /// Suppresses or unsuppresses sub-assembly `name` and so everything it holds, at
+    /// every level (SolidWorks' `SetSuppression2` on a sub-assembly component), then
+    /// re-solves the mates; on failure nothing changes. A component's own
+    /// suppression is kept: unsuppressing the sub-assembly leaves it suppressed.
+    pub fn set_sub_assembly_suppressed(
+        &mut self,
+        name: &str,
+        suppressed: bool,
+    ) -> Result<(), DocumentError> {
+        let name = self.sub_assembly(name)?.name.clone();
+        let before = self.clone();
+        for a in &mut self.assemblies {
+            if a.name == name {
+                a.suppressed = suppressed;
+            }
+        }
+        self.apply_assembly_suppression();
+        if let Err(e) = self.rebuild() {
+            *self = before;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Whether sub-assembly `name` is suppressed, by its own flag or a suppressed
+    /// sub-assembly holding it.
+    pub fn sub_assembly_suppressed(&self, name: &str) -> Result<bool, DocumentError> {
+        let name = self.sub_assembly(name)?.name.clone();
+        Ok(self
+            .assemblies
+            .iter()
+            .any(|a| a.suppressed && (a.name == name || name.starts_with(&format!("{}/", a.name)))))
+    }
+
+    /// Gives every component its `held_suppressed` flag from the suppressed
+    /// sub-assemblies holding it.
+    pub(crate) fn apply_assembly_suppression(&mut self) {
+        let suppressed: std::collections::HashSet<&str> = self
+            .assemblies
+            .iter()
+            .filter(|a| a.suppressed)
+            .map(|a| a.name.as_str())
+            .collect();
+        for c in &mut self.components {
+            c.held_suppressed = !suppressed.is_empty()
+                && c
+                    .name
+                    .match_indices('/')
+                    .any(|(i, _)| suppressed.contains(&c.name[..i]));
+        }
     }
 
     /// Refuses a full name whose parent is no sub-assembly.
@@ -243,10 +306,23 @@ pub(super) fn load(
                     .map_err(|e| at(&key, format!("sub-assembly `{}`: {e}", a.name)))?
             }
         };
+        if let Some(p) = parent_name(&a.name) {
+            if file.assemblies[index[p]].file.is_some() {
+                return Err(at(
+                    &name_key,
+                    format!(
+                        "sub-assembly `{}`: `{p}` is another document; what it holds is written in that file",
+                        a.name
+                    ),
+                ));
+            }
+        }
         index.insert(&a.name, out.len());
         out.push(SubAssembly {
             name: a.name.clone(),
             transform: local * parent,
+            file: None,
+            suppressed: a.suppressed,
         });
     }
     Ok(out)
