@@ -124,7 +124,9 @@ impl Document {
     }
 
     /// Moves sub-assembly `name` to `t` (its frame → world, mm), and everything in it
-    /// with it, rigidly. Refused when a component inside is fixed or a robot's link.
+    /// with it, rigidly. Refused when a component inside is fixed (unless it is fixed
+    /// in a sub-document moved with it: fixed in that document's frame) or a robot's
+    /// link.
     /// Mates are re-solved at the next rebuild, as for a component's move.
     pub fn set_sub_assembly_transform(
         &mut self,
@@ -137,7 +139,12 @@ impl Document {
         let inside = |n: &str| n.starts_with(&prefix);
         for (i, c) in self.components.iter().enumerate() {
             if inside(&c.name) {
-                if c.fixed {
+                // a component fixed in a sub-document is fixed in that document's
+                // frame: it moves with it
+                let moves_with_its_file = self
+                    .owning_sub_document(&c.name)
+                    .is_some_and(|a| a.name == name || a.name.starts_with(&prefix));
+                if c.fixed && !moves_with_its_file {
                     return Err(DocumentError::FixedComponent(c.name.clone()));
                 }
                 if let Some(robot) = self.driving_robot(i) {

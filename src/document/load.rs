@@ -193,7 +193,9 @@ impl Document {
         )?;
         doc.apply_assembly_suppression();
         let urdf = load.urdf_robots(&file, &mut doc, cache)?;
-        doc.mates = load.mates(&file, &doc)?;
+        // the file's own mates first, then the sub-documents' (already in `doc`)
+        let own = load.mates(&file, &doc)?;
+        doc.mates.splice(0..0, own);
         let mate_dimensions = doc
             .mates
             .iter()
