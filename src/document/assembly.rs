@@ -240,8 +240,7 @@ impl Document {
             .collect();
         for c in &mut self.components {
             c.held_suppressed = !suppressed.is_empty()
-                && c
-                    .name
+                && c.name
                     .match_indices('/')
                     .any(|(i, _)| suppressed.contains(&c.name[..i]));
         }

@@ -188,9 +188,7 @@ impl Document {
             warnings: Vec::new(),
             removed: Vec::new(),
         };
-        doc.load_sub_documents(
-            &file, path, &load.dir, project, positions, nesting, cache,
-        )?;
+        doc.load_sub_documents(&file, path, &load.dir, project, positions, nesting, cache)?;
         doc.apply_assembly_suppression();
         let urdf = load.urdf_robots(&file, &mut doc, cache)?;
         // the file's own mates first, then the sub-documents' (already in `doc`)

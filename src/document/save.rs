@@ -235,7 +235,10 @@ impl Document {
         }
         let nested: Vec<bool> = {
             let held = super::subdoc::HeldBy::new(&self.assemblies);
-            self.assemblies.iter().map(|a| held.inside(&a.name)).collect()
+            self.assemblies
+                .iter()
+                .map(|a| held.inside(&a.name))
+                .collect()
         };
         for (a, nested) in self.assemblies.iter_mut().zip(nested) {
             if let (Some(f), false) = (&mut a.file, nested) {

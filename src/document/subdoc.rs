@@ -288,7 +288,11 @@ impl Document {
         self.components.reserve(sub.components.len());
         for c in &sub.components {
             let n = name(&c.name);
-            if self.by_name.insert(n.clone(), self.components.len()).is_some() {
+            if self
+                .by_name
+                .insert(n.clone(), self.components.len())
+                .is_some()
+            {
                 return Err(format!("a component named `{n}` exists already"));
             }
             let mut c = c.clone();
@@ -328,13 +332,13 @@ impl Document {
         best
     }
 
-
     /// The sub-document of the sub-assembly `at` as a document of its own: what it
     /// holds, named without the `at/` prefix, poses relative to `at`.
     fn extract(&self, at: &SubAssembly) -> Result<Document, DocumentError> {
-        let record = at.file.as_ref().ok_or_else(|| {
-            DocumentError::Invalid(format!("`{}` is no sub-document", at.name))
-        })?;
+        let record = at
+            .file
+            .as_ref()
+            .ok_or_else(|| DocumentError::Invalid(format!("`{}` is no sub-document", at.name)))?;
         let inv = at.transform.inverse();
         let strip = |n: &str| inside(n, &at.name).map(str::to_string);
         let mut parts = indexmap::IndexMap::new();
@@ -567,9 +571,7 @@ fn same_file(a: &DocumentFile, b: &DocumentFile) -> bool {
                 x.len() == y.len() && x.iter().zip(y).all(|(a, b)| same(a, b))
             }
             (Value::Mapping(x), Value::Mapping(y)) => {
-                x.len() == y.len()
-                    && x.iter()
-                        .all(|(k, v)| y.get(k).is_some_and(|w| same(v, w)))
+                x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same(v, w)))
             }
             _ => a == b,
         }

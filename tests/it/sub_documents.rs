@@ -135,9 +135,7 @@ fn pos(doc: &Document, name: &str) -> Vec3 {
 }
 
 fn located(e: &DocumentError) -> (String, usize) {
-    let at = e
-        .location()
-        .unwrap_or_else(|| panic!("not located: {e}"));
+    let at = e.location().unwrap_or_else(|| panic!("not located: {e}"));
     (
         at.path.file_name().unwrap().to_string_lossy().into_owned(),
         at.line.unwrap_or(0),
@@ -198,7 +196,10 @@ fn components_mates_and_poses_come_through_the_levels() {
     );
     let sa = doc.sub_assembly("Cart-1/Axle-2").unwrap();
     assert_eq!(sa.file.as_ref().unwrap().file, "axle.yaml");
-    assert_eq!(doc.parent_of("Cart-1/Axle-2/Rod-1").unwrap().as_deref(), Some("Cart-1/Axle-2"));
+    assert_eq!(
+        doc.parent_of("Cart-1/Axle-2/Rod-1").unwrap().as_deref(),
+        Some("Cart-1/Axle-2")
+    );
     // and the files are the document's sources (watch mode rereads on their change)
     let sources = doc.source_files();
     assert!(sources.iter().any(|p| p.ends_with("sub/axle.yaml")));
@@ -260,9 +261,15 @@ fn a_change_inside_is_written_to_the_sub_document_only() {
     let cart = std::fs::read_to_string(top.parent().unwrap().join("sub/cart.yaml")).unwrap();
     assert!(cart.contains("suppressed: true"), "{cart}");
     assert!(cart.contains("file: axle.yaml"), "{cart}");
-    assert!(!cart.contains("Wheel"), "axle flattened into the cart:\n{cart}");
+    assert!(
+        !cart.contains("Wheel"),
+        "axle flattened into the cart:\n{cart}"
+    );
     let top_text = std::fs::read_to_string(&top).unwrap();
-    assert!(!top_text.contains("Deck"), "flattened into the top:\n{top_text}");
+    assert!(
+        !top_text.contains("Deck"),
+        "flattened into the top:\n{top_text}"
+    );
     assert_eq!(
         std::fs::read(top.parent().unwrap().join("sub/axle.yaml")).unwrap(),
         axle_before
@@ -280,7 +287,10 @@ fn two_instances_of_one_file_changed_differently_are_refused() {
     let before = std::fs::read(&axle).unwrap();
     doc.set_dimension("D1@Cart-1/Axle-1/Gap", 45.0).unwrap();
     let e = doc.save().unwrap_err().to_string();
-    assert!(e.contains("Axle-1") && e.contains("Axle-2") && e.contains("changed differently"), "{e}");
+    assert!(
+        e.contains("Axle-1") && e.contains("Axle-2") && e.contains("changed differently"),
+        "{e}"
+    );
     assert_eq!(std::fs::read(&axle).unwrap(), before);
     // the same change in both: one file, written once
     doc.set_dimension("D1@Cart-1/Axle-2/Gap", 45.0).unwrap();
@@ -289,7 +299,15 @@ fn two_instances_of_one_file_changed_differently_are_refused() {
     assert!(text.contains("value: 45"), "{text}");
     assert!(text.contains("description: an axle"), "{text}");
     let back = Document::open(&top).unwrap();
-    assert!((back.dimension("D1@Cart-1/Axle-2/Gap").unwrap().document_value() - 45.0).abs() < 1e-9);
+    assert!(
+        (back
+            .dimension("D1@Cart-1/Axle-2/Gap")
+            .unwrap()
+            .document_value()
+            - 45.0)
+            .abs()
+            < 1e-9
+    );
     assert!((pos(&back, "Cart-1/Axle-1/Wheel-1") - Vec3::new(545.0, 100.0, 750.0)).norm() < 1e-6);
 }
 
@@ -324,7 +342,11 @@ fn a_circle_of_documents_is_refused_at_its_file_line() {
     assert_eq!(file, "axle.yaml", "{e}");
     assert_eq!(line, line_of(&axle, "file: ../top.yaml"), "{e}");
     let m = e.to_string();
-    assert!(m.contains("holds itself") && m.contains("top.yaml → sub/cart.yaml → sub/axle.yaml → top.yaml"), "{m}");
+    assert!(
+        m.contains("holds itself")
+            && m.contains("top.yaml → sub/cart.yaml → sub/axle.yaml → top.yaml"),
+        "{m}"
+    );
     // a file holding itself directly
     let (_dir, top) = project(|which, t| {
         if which == "top" {
@@ -398,7 +420,11 @@ fn what_a_sub_document_holds_cannot_be_written_in_the_assembly() {
     });
     let e = Document::open(&top).unwrap_err();
     let text = std::fs::read_to_string(&top).unwrap();
-    assert_eq!(located(&e), ("top.yaml".into(), line_of(&text, "Cart-1/Extra-1")), "{e}");
+    assert_eq!(
+        located(&e),
+        ("top.yaml".into(), line_of(&text, "Cart-1/Extra-1")),
+        "{e}"
+    );
     assert!(e.to_string().contains("sub/cart.yaml"), "{e}");
 }
 
@@ -407,14 +433,18 @@ fn a_suppressed_sub_assembly_suppresses_everything_it_holds() {
     let (_dir, top) = plain();
     let mut doc = Document::open(&top).unwrap();
     let full = doc.assembly_aabb().unwrap();
-    doc.set_sub_assembly_suppressed("Cart-1/Axle-2", true).unwrap();
+    doc.set_sub_assembly_suppressed("Cart-1/Axle-2", true)
+        .unwrap();
     assert!(doc.sub_assembly_suppressed("Cart-1/Axle-2").unwrap());
     assert!(!doc.sub_assembly_suppressed("Cart-1").unwrap());
     for c in ["Rod-1", "Wheel-1", "Wheel-2"] {
         let c = doc.component(&format!("Cart-1/Axle-2/{c}")).unwrap();
         assert!(c.is_suppressed() && !c.suppressed, "{}", c.name);
     }
-    assert!(!doc.component("Cart-1/Axle-1/Wheel-1").unwrap().is_suppressed());
+    assert!(!doc
+        .component("Cart-1/Axle-1/Wheel-1")
+        .unwrap()
+        .is_suppressed());
     // its mates are inactive, the box leaves it out (Axle-2 reached furthest in +y)
     assert!(!doc.mate_active(doc.mate("Cart-1/Axle-2/Gap").unwrap()));
     assert!(doc.assembly_aabb().unwrap().hi.y < full.hi.y - 1.0);
@@ -423,33 +453,51 @@ fn a_suppressed_sub_assembly_suppresses_everything_it_holds() {
     let cart = std::fs::read_to_string(top.parent().unwrap().join("sub/cart.yaml")).unwrap();
     assert!(cart.contains("suppressed: true"), "{cart}");
     let mut back = Document::open(&top).unwrap();
-    assert!(back.component("Cart-1/Axle-2/Wheel-1").unwrap().is_suppressed());
+    assert!(back
+        .component("Cart-1/Axle-2/Wheel-1")
+        .unwrap()
+        .is_suppressed());
     // suppressing the cart reaches every level; unsuppressing it keeps Axle-2's own
     back.set_sub_assembly_suppressed("Cart-1", true).unwrap();
-    assert!(back.component("Cart-1/Axle-1/Wheel-1").unwrap().is_suppressed());
+    assert!(back
+        .component("Cart-1/Axle-1/Wheel-1")
+        .unwrap()
+        .is_suppressed());
     assert!(back.component("Cart-1/Deck-1").unwrap().is_suppressed());
     assert!(back.sub_assembly_suppressed("Cart-1/Axle-1").unwrap());
     back.set_sub_assembly_suppressed("Cart-1", false).unwrap();
-    assert!(!back.component("Cart-1/Axle-1/Wheel-1").unwrap().is_suppressed());
-    assert!(back.component("Cart-1/Axle-2/Wheel-1").unwrap().is_suppressed());
+    assert!(!back
+        .component("Cart-1/Axle-1/Wheel-1")
+        .unwrap()
+        .is_suppressed());
+    assert!(back
+        .component("Cart-1/Axle-2/Wheel-1")
+        .unwrap()
+        .is_suppressed());
 }
 
 #[test]
 fn a_group_sub_assembly_suppressed_is_saved_in_the_document() {
-    let text =
-        std::fs::read_to_string(common::repo().join("models/solidworks/cart.yaml")).unwrap();
+    let text = std::fs::read_to_string(common::repo().join("models/solidworks/cart.yaml")).unwrap();
     let dir = common::project();
     std::fs::create_dir_all(dir.path().join("models/solidworks")).unwrap();
     let path = dir.path().join("models/solidworks/cart.yaml");
     std::fs::write(&path, text).unwrap();
     let mut doc = Document::open(&path).unwrap();
-    doc.set_sub_assembly_suppressed("Cart-1/Axle-1", true).unwrap();
+    doc.set_sub_assembly_suppressed("Cart-1/Axle-1", true)
+        .unwrap();
     doc.save().unwrap();
     let back = Document::open(&path).unwrap();
     assert!(back.sub_assembly_suppressed("Cart-1/Axle-1").unwrap());
-    assert!(back.component("Cart-1/Axle-1/Wheel-2").unwrap().is_suppressed());
+    assert!(back
+        .component("Cart-1/Axle-1/Wheel-2")
+        .unwrap()
+        .is_suppressed());
     assert!(!back.component("Cart-1/Axle-1/Wheel-2").unwrap().suppressed);
-    assert!(!back.component("Cart-1/Axle-2/Wheel-2").unwrap().is_suppressed());
+    assert!(!back
+        .component("Cart-1/Axle-2/Wheel-2")
+        .unwrap()
+        .is_suppressed());
 }
 
 #[test]
