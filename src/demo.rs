@@ -115,17 +115,9 @@ fn mate(name: &str, kind: &str, a: &str, b: &str) -> MateFile {
 
 fn component(name: &str, part: &str, fixed: bool, color: &str, t: Transform) -> ComponentFile {
     ComponentFile {
-        name: name.into(),
-        part: part.into(),
         fixed,
         color: Some(serde_yaml::Value::String(color.into())),
-        transform: Some(t.to_matrix()),
-        mass: None,
-        threaded: false,
-        fixture: false,
-        suppressed: false,
-        hidden: false,
-        properties: Default::default(),
+        ..ComponentFile::new(name, part, Some(t.to_matrix()))
     }
 }
 

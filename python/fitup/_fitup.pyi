@@ -305,6 +305,20 @@ class Document:
         """Adds an empty sub-assembly ``name`` (a full name whose parent exists) at
         ``pose`` (4×4, mm; identity when None).
         """
+    def sub_assembly_file(self, name: str) -> Optional[str]:
+        """The document file a sub-assembly holds (its ``file:`` key, relative to the
+        document holding the entry), or None for a group of this document.
+        """
+    def sub_assembly_suppressed(self, name: str) -> bool:
+        """Whether a sub-assembly is suppressed, itself or by a suppressed sub-assembly
+        holding it.
+        """
+    def set_sub_assembly_suppressed(self, name: str, suppressed: bool) -> None:
+        """Suppresses (or unsuppresses) a sub-assembly and everything it holds at every
+        level, then re-solves; saved with the document (or its sub-document).
+        """
+    def saved_sub_documents(self) -> List[str]:
+        """The sub-document files the last ``save`` wrote besides the document's own."""
     def remove_component(self, name: str, with_mates: bool = False) -> List[str]:
         """Removes a component. With ``with_mates=False`` a component that has mates is
         refused (the error names them); with ``True`` its mates are deleted with it

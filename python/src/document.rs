@@ -66,7 +66,7 @@ fn shown(doc: &fitup::document::Document, names: Option<Vec<String>>) -> Result<
             .map(|c| doc.component_index(c))
             .collect::<std::result::Result<_, _>>()?,
         None => (0..doc.components().len())
-            .filter(|&i| !doc.components()[i].suppressed && !doc.components()[i].hidden)
+            .filter(|&i| !doc.components()[i].is_suppressed() && !doc.components()[i].hidden)
             .collect(),
     })
 }
@@ -158,7 +158,7 @@ impl Document {
         d.set_item("mass", c.mass)?;
         d.set_item("threaded", c.threaded)?;
         d.set_item("color", c.color.map(|c| c.to_vec()))?;
-        d.set_item("suppressed", c.suppressed)?;
+        d.set_item("suppressed", c.is_suppressed())?;
         d.set_item("hidden", c.hidden)?;
         d.set_item(
             "properties",
@@ -368,6 +368,44 @@ impl Document {
         };
         self.lock()?.doc.add_sub_assembly(name, t)?;
         Ok(())
+    }
+
+    /// The document file a sub-assembly holds (its ``file:`` key, relative to the
+    /// document holding the entry), or None for a group of this document.
+    fn sub_assembly_file(&self, name: &str) -> Result<Option<String>> {
+        Ok(self
+            .lock()?
+            .doc
+            .sub_assembly(name)?
+            .file
+            .as_ref()
+            .map(|f| f.file.clone()))
+    }
+
+    /// Whether a sub-assembly is suppressed, itself or by a suppressed sub-assembly
+    /// holding it.
+    fn sub_assembly_suppressed(&self, name: &str) -> Result<bool> {
+        Ok(self.lock()?.doc.sub_assembly_suppressed(name)?)
+    }
+
+    /// Suppresses (or unsuppresses) a sub-assembly and everything it holds at every
+    /// level, then re-solves; saved with the document (or its sub-document).
+    fn set_sub_assembly_suppressed(&self, name: &str, suppressed: bool) -> Result<()> {
+        self.lock()?
+            .doc
+            .set_sub_assembly_suppressed(name, suppressed)?;
+        Ok(())
+    }
+
+    /// The sub-document files the last ``save`` wrote besides the document's own.
+    fn saved_sub_documents(&self) -> Result<Vec<String>> {
+        Ok(self
+            .lock()?
+            .doc
+            .saved_sub_documents()
+            .iter()
+            .map(|p| p.to_string_lossy().into_owned())
+            .collect())
     }
 
     /// The equations in order (SolidWorks' ``IEquationMgr``), each a dict: ``text``
@@ -837,7 +875,7 @@ impl Document {
                     .map(|n| inner.doc.component_index(n))
                     .collect::<std::result::Result<_, _>>()?,
                 None => (0..inner.doc.components().len())
-                    .filter(|&i| !inner.doc.components()[i].suppressed)
+                    .filter(|&i| !inner.doc.components()[i].is_suppressed())
                     .collect(),
             };
             fitup::workspace::mass_properties(&inner.doc, &which, &o)?

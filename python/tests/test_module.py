@@ -2,6 +2,7 @@
 sequences, the results database, scripts, and the typed errors."""
 
 import math
+import shutil
 import pickle
 import re
 import threading
@@ -574,3 +575,42 @@ def test_sub_assemblies(project):
     again = fitup.Document(path)
     assert again.children("Spare-1") == ["Spare-1/Wheel-1"]
     assert again.pose("Cart-1/Axle-2/Wheel-2")[2, 3] == pytest.approx(770.0)
+
+
+def test_sub_documents_and_suppressed_sub_assemblies(tmp_path):
+    """Issue 37 from Python: a sub-assembly that is another document (``file:``),
+    loaded through the levels, suppressed as a whole, saved back to its own file
+    only."""
+    (tmp_path / "fitup.toml").write_text("")
+    (tmp_path / "sub").mkdir()
+    shutil.copy(MODELS / "meshes" / "screw.stl", tmp_path / "sub" / "m.stl")
+    (tmp_path / "sub" / "axle.yaml").write_text(
+        "parts:\n  wheel:\n    stl: m.stl\n"
+        "components:\n- name: Wheel-1\n  part: wheel\n"
+        "- name: Wheel-2\n  part: wheel\n  transform:\n"
+        "  - [1, 0, 0, 0]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n  - [0, 100, 0, 1]\n")
+    (tmp_path / "top.yaml").write_text(
+        "parts:\n  base:\n    stl: sub/m.stl\n"
+        "assemblies:\n- name: Axle-1\n  file: sub/axle.yaml\n  transform:\n"
+        "  - [1, 0, 0, 0]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n  - [10, 0, 5, 1]\n"
+        "components:\n- name: base\n  part: base\n  fixed: true\n")
+    doc = fitup.Document(tmp_path / "top.yaml")
+    assert doc.sub_assembly_file("Axle-1") == "sub/axle.yaml"
+    assert doc.children("Axle-1") == ["Axle-1/Wheel-1", "Axle-1/Wheel-2"]
+    assert doc.pose("Axle-1/Wheel-2")[:3, 3] == pytest.approx([10.0, 100.0, 5.0])
+    axle_before = (tmp_path / "sub" / "axle.yaml").read_text()
+    doc.save()
+    assert doc.saved_sub_documents() == []
+    assert (tmp_path / "sub" / "axle.yaml").read_text() == axle_before
+    assert "Wheel" not in (tmp_path / "top.yaml").read_text()
+    doc.set_sub_assembly_suppressed("Axle-1", True)
+    assert doc.sub_assembly_suppressed("Axle-1")
+    assert doc.component("Axle-1/Wheel-2")["suppressed"]
+    doc.save()
+    again = fitup.Document(tmp_path / "top.yaml")
+    assert again.sub_assembly_suppressed("Axle-1")
+    assert again.component("Axle-1/Wheel-1")["suppressed"]
+    doc.rename_component("Axle-1/Wheel-2", "Axle-1/Wheel-9")
+    doc.save()
+    assert [p.endswith("axle.yaml") for p in doc.saved_sub_documents()] == [True]
+    assert "Wheel-9" in (tmp_path / "sub" / "axle.yaml").read_text()

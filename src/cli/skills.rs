@@ -5,7 +5,7 @@ use super::out::{errln, outln};
 use super::Exit;
 use crate::manipulator::message::ByteOrder;
 use crate::manipulator::simulator::{Simulator, SimulatorOptions};
-use crate::skills::{ManagerEvent, ManagerOptions, SkillLog, SkillManager};
+use crate::skills::{LogDb, ManagerEvent, ManagerOptions, RunSink, SkillLog, SkillManager};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -279,23 +279,20 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
     let mut manager = SkillManager::new(plan, options);
     let handle = manager.handle();
     // Without `--db` nothing is logged; with it, the library's one policy (SkillLog):
-    // a write that fails stops the run at the next skill boundary.
-    let mut log = db.map(|db| {
-        (
-            db,
-            SkillLog::new(None, label, manager.plan(), handle.clone()),
-        )
-    });
+    // a write that fails stops the run.
+    let log = db.map(|db| SkillLog::new(None, label, manager.plan(), LogDb::Owned(Box::new(db))));
     let tui = !*plain && std::io::stdout().is_terminal() && std::io::stdin().is_terminal();
     let result = if tui {
         let shown = manager.plan().clone();
         let (tx, rx) = std::sync::mpsc::channel();
         let runner = std::thread::spawn(move || {
-            let r = manager.run(&mut |e| {
-                record(&mut log, e);
-                let _ = tx.send(super::skills_tui::Msg::Manager(e.clone()));
-            });
-            let r = finish(log, r);
+            let events = tx.clone();
+            let r = manager.run_logged(
+                log,
+                &mut Cli(|e: &ManagerEvent| {
+                    let _ = events.send(super::skills_tui::Msg::Manager(e.clone()));
+                }),
+            );
             let _ = tx.send(super::skills_tui::Msg::End(
                 r.as_ref().err().map(|e| e.to_string()),
             ));
@@ -353,11 +350,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
                 }
             }
         });
-        let r = manager.run(&mut |e| {
-            record(&mut log, e);
-            print_event(e)
-        });
-        finish(log, r)
+        manager.run_logged(log, &mut Cli(|e: &ManagerEvent| outln!("{}", e.describe())))
     };
     match result {
         Ok(()) => {
@@ -373,29 +366,17 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
     }
 }
 
-/// The skill log of a `skills run --db`: the database and the run's log.
-type Log = Option<(crate::db::Database, SkillLog)>;
+/// The CLI's sink of a run: each event to `F` (printed, or sent to the terminal UI);
+/// a skill log that cannot be written is said at once.
+struct Cli<F>(F);
 
-/// Writes one event to the log (when there is one), saying at once when it fails.
-fn record(log: &mut Log, e: &ManagerEvent) {
-    if let Some((db, l)) = log.as_mut() {
-        if let Some(err) = l.record(db, e) {
-            errln!("error: the skill log could not be written: {err}; the run stops at the next skill boundary");
-        }
+impl<F: FnMut(&ManagerEvent)> RunSink for Cli<F> {
+    fn event(&mut self, e: &ManagerEvent) -> bool {
+        (self.0)(e);
+        true
     }
-}
 
-/// The run's result with the log's (a failed write fails the run).
-fn finish(
-    log: Log,
-    r: Result<(), crate::skills::ManagerError>,
-) -> Result<(), crate::skills::ManagerError> {
-    match log {
-        Some((_, l)) => l.finish(r),
-        None => r,
+    fn log_failed(&mut self, err: &crate::db::DbError) {
+        errln!("error: the skill log could not be written: {err}; the run stops at the next skill boundary");
     }
-}
-
-fn print_event(e: &ManagerEvent) {
-    outln!("{}", e.describe());
 }

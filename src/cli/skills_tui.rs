@@ -57,7 +57,7 @@ impl Ui<'_> {
                     ManagerEvent::Started(i, _) => self.set(*i, Status::Running),
                     ManagerEvent::Finished { skill, part, state } => {
                         self.set(*skill, Status::Finished);
-                        self.parts.insert(part.clone(), state.clone());
+                        self.parts.insert(part.clone(), state.name().to_string());
                     }
                     ManagerEvent::Failed(i, _) => self.set(*i, Status::Failed),
                     ManagerEvent::Paused => self.state = "paused".into(),

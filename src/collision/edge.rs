@@ -14,7 +14,7 @@ use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box, Relative
 use super::shape::{Collider, Obb};
 use super::triangle::{tri_distance, tri_tri, unit_normal, Tri};
 use super::{CollisionError, MotionFault};
-use crate::math::{Transform, Vec3};
+use crate::math::{Deadline, Transform, Vec3};
 use nalgebra::Isometry3;
 
 /// Options of [`edge_interferes`].
@@ -115,7 +115,15 @@ pub fn edge_interferes_until(
     options: &EdgeOptions,
     deadline: std::time::Instant,
 ) -> Result<Option<bool>, CollisionError> {
-    edge_check(moving, from, to, obstacle, pose, options, Some(deadline))
+    edge_check(
+        moving,
+        from,
+        to,
+        obstacle,
+        pose,
+        options,
+        Some(Deadline::at(deadline)),
+    )
 }
 
 /// The check of [`edge_interferes`]; `None`: `deadline` passed first.
@@ -126,9 +134,9 @@ fn edge_check(
     obstacle: &Collider,
     pose: &Transform,
     options: &EdgeOptions,
-    deadline: Option<std::time::Instant>,
+    deadline: Option<Deadline>,
 ) -> Result<Option<bool>, CollisionError> {
-    let late = || deadline.is_some_and(|d| std::time::Instant::now() >= d);
+    let late = || deadline.is_some_and(Deadline::passed);
     check_pose(from)?;
     check_pose(to)?;
     check_pose(pose)?;

@@ -5,7 +5,7 @@
 use super::shape::{Aabb, Collider, Node, Obb, Plane, LEAF_SIZE};
 use super::triangle::{tri_distance, tri_tri_with, unit_normal, Tri};
 use super::{CollisionError, Contact, InterferenceKind, PairMember, PoseFault};
-use crate::math::{Transform, Vec3};
+use crate::math::{Deadline, Transform, Vec3};
 use nalgebra::{Isometry3, Matrix3};
 use std::cell::{Cell, RefCell};
 use std::collections::{HashMap, HashSet};
@@ -503,18 +503,18 @@ pub fn interferes_until(
     tolerance: f64,
     deadline: std::time::Instant,
 ) -> Result<Option<bool>, CollisionError> {
-    interferes_by(a, pa, b, pb, tolerance, Some(deadline))
+    interferes_by(a, pa, b, pb, tolerance, Some(Deadline::at(deadline)))
 }
 
 /// The deadline of a static pair walk, read every 256 triangle pairs (a clock read
 /// per pair would cost more than the pair test).
 struct PairClock {
-    deadline: Option<std::time::Instant>,
+    deadline: Option<Deadline>,
     visited: u32,
 }
 
 impl PairClock {
-    fn new(deadline: Option<std::time::Instant>) -> Self {
+    fn new(deadline: Option<Deadline>) -> Self {
         Self {
             deadline,
             visited: 0,
@@ -525,17 +525,13 @@ impl PairClock {
     /// deadline passed before it started gives up at once, however few pairs its
     /// walk would visit.
     fn expired(&self) -> bool {
-        self.deadline
-            .is_some_and(|d| std::time::Instant::now() >= d)
+        self.deadline.is_some_and(Deadline::passed)
     }
 
     /// Counts one pair; whether the deadline has passed (read on every 256th).
     fn passed(&mut self) -> bool {
         self.visited = self.visited.wrapping_add(1);
-        self.visited.is_multiple_of(256)
-            && self
-                .deadline
-                .is_some_and(|d| std::time::Instant::now() >= d)
+        self.visited.is_multiple_of(256) && self.deadline.is_some_and(Deadline::passed)
     }
 }
 
@@ -546,7 +542,7 @@ fn interferes_by(
     b: &Collider,
     pb: &Transform,
     tolerance: f64,
-    deadline: Option<std::time::Instant>,
+    deadline: Option<Deadline>,
 ) -> Result<Option<bool>, CollisionError> {
     check_pose(pa)?;
     check_pose(pb)?;
@@ -666,7 +662,7 @@ pub fn contact_until(
     tolerance: f64,
     deadline: std::time::Instant,
 ) -> Result<Option<Contact>, CollisionError> {
-    contact_by(a, pa, b, pb, tolerance, Some(deadline))
+    contact_by(a, pa, b, pb, tolerance, Some(Deadline::at(deadline)))
 }
 
 /// [`contact`]; `None`: `deadline` passed first.
@@ -676,7 +672,7 @@ fn contact_by(
     b: &Collider,
     pb: &Transform,
     tolerance: f64,
-    deadline: Option<std::time::Instant>,
+    deadline: Option<Deadline>,
 ) -> Result<Option<Contact>, CollisionError> {
     check_pose(pa)?;
     check_pose(pb)?;

@@ -249,10 +249,8 @@ pub fn sweep(
             "a finite number of ms > 0",
         ));
     }
-    let deadline = std::time::Instant::now().checked_add(std::time::Duration::from_secs_f64(
-        budget_ms.min(1e12) / 1e3,
-    ));
-    let out_of_time = || deadline.is_some_and(|d| std::time::Instant::now() >= d);
+    let deadline = crate::math::Deadline::after_ms(budget_ms);
+    let out_of_time = || deadline.passed();
     let pieces = motion.pieces(moving.radius());
     let mut queries = 0usize;
     let hit_at = |t: f64, with: usize, queries: usize| SweepHit {

@@ -25,8 +25,7 @@
 //! the other is measured as pulled out of the whole other part, not into the cavity.
 
 use super::shape::{Collider, Node};
-use crate::math::{Aabb, Point3, Transform, Vec3};
-use std::time::{Duration, Instant};
+use crate::math::{Aabb, Deadline, Point3, Transform, Vec3};
 
 /// Why an overlap cannot be measured.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -60,15 +59,15 @@ pub struct Separation {
 }
 
 struct Clock {
-    deadline: Option<Instant>,
+    deadline: Option<Deadline>,
     limit_ms: f64,
     ticks: u32,
 }
 
 impl Clock {
     fn new(limit_ms: f64) -> Self {
-        let deadline = (limit_ms.is_finite() && limit_ms >= 0.0)
-            .then(|| Instant::now() + Duration::from_secs_f64(limit_ms / 1000.0));
+        let deadline =
+            (limit_ms.is_finite() && limit_ms >= 0.0).then(|| Deadline::after_ms(limit_ms));
         Clock {
             deadline,
             limit_ms,
@@ -79,12 +78,8 @@ impl Clock {
     #[inline]
     fn tick(&mut self) -> Result<(), VolumeError> {
         self.ticks = self.ticks.wrapping_add(1);
-        if self.ticks.is_multiple_of(1024) {
-            if let Some(d) = self.deadline {
-                if Instant::now() > d {
-                    return Err(VolumeError::TimeLimit(self.limit_ms));
-                }
-            }
+        if self.ticks.is_multiple_of(1024) && self.deadline.is_some_and(Deadline::passed) {
+            return Err(VolumeError::TimeLimit(self.limit_ms));
         }
         Ok(())
     }

@@ -43,7 +43,7 @@ pub mod recording;
 mod records;
 mod schema;
 mod skill_log;
-pub use skill_log::SkillLogEntry;
+pub use skill_log::{SkillEvent, SkillLogEntry};
 
 pub use backend::{Dialect, SqlValue};
 pub use query::{QueryLimits, RunQueryBudget, RUN_QUERY_BUDGET, SQLITE_HEAP_LIMIT};
@@ -722,7 +722,7 @@ impl Database {
 /// creating) at once, without waiting in its busy handler, so four processes opening a
 /// new database together lost one run record to "database is locked".
 fn retry_locked<T>(mut f: impl FnMut() -> rusqlite::Result<T>) -> rusqlite::Result<T> {
-    let started = std::time::Instant::now();
+    let until = crate::math::Deadline::after(BUSY_TIMEOUT);
     let jitter = u64::from(std::process::id() % 7);
     let mut attempt = 0u64;
     loop {
@@ -731,7 +731,7 @@ fn retry_locked<T>(mut f: impl FnMut() -> rusqlite::Result<T>) -> rusqlite::Resu
                 if matches!(
                     e.code,
                     rusqlite::ErrorCode::DatabaseBusy | rusqlite::ErrorCode::DatabaseLocked
-                ) && started.elapsed() < BUSY_TIMEOUT =>
+                ) && !until.passed() =>
             {
                 attempt += 1;
                 std::thread::sleep(Duration::from_millis((5 * attempt).min(100) + jitter));

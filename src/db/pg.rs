@@ -6,10 +6,11 @@
 use super::backend::{Dialect, Kind, Raw, SqlValue, Tx};
 use super::query::{Collector, QueryLimits, Stop, WHY_CANCEL, WHY_NONE, WHY_TIME};
 use super::QueryResult;
+use crate::math::Deadline;
 use postgres::types::{ToSql, Type};
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The longest `connect_timeout` a URL may ask for.
 const MAX_CONNECT_TIMEOUT: Duration = Duration::from_secs(120);
@@ -422,14 +423,14 @@ pub(crate) fn pg_query(
     let why = Arc::new(AtomicU8::new(WHY_NONE));
     {
         let (done, why, token) = (done.clone(), why.clone(), client.cancel_token());
-        let deadline = Instant::now() + limits.time + PG_GRACE;
+        let deadline = Deadline::after(limits.time + PG_GRACE);
         let _ = std::thread::Builder::new()
             .name("fitup-db-watch".into())
             .spawn(move || {
                 while !done.load(Ordering::Relaxed) {
                     let reason = if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
                         WHY_CANCEL
-                    } else if Instant::now() > deadline {
+                    } else if deadline.passed() {
                         WHY_TIME
                     } else {
                         std::thread::sleep(Duration::from_millis(20));
@@ -441,8 +442,7 @@ pub(crate) fn pg_query(
                 }
             });
     }
-    let start = Instant::now();
-    let result = pg_run(client, sql, params, limits, start);
+    let result = pg_run(client, sql, params, limits, Deadline::after(limits.time));
     done.store(true, Ordering::Relaxed);
     result.map_err(|e| match (e, why.load(Ordering::Relaxed)) {
         (_, WHY_CANCEL) => Stop::Cancelled,
@@ -465,7 +465,7 @@ fn pg_run(
     sql: &str,
     params: &[SqlValue],
     limits: QueryLimits,
-    start: Instant,
+    deadline: Deadline,
 ) -> Result<QueryResult, Stop> {
     let mut tx = client
         .build_transaction()
@@ -502,7 +502,7 @@ fn pg_run(
             break;
         }
         // Each batch is its own statement for the server's timeout: keep the total.
-        if start.elapsed() > limits.time {
+        if deadline.passed() {
             return Err(Stop::Timeout);
         }
     }

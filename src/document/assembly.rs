@@ -20,6 +20,12 @@ pub struct SubAssembly {
     pub name: String,
     /// Pose: sub-assembly frame → assembly (world) frame, mm.
     pub transform: Transform,
+    /// The document whose content it holds, when it is another file (see
+    /// [`super::subdoc`]); `None` for a group of this document.
+    pub file: Option<super::SubDocument>,
+    /// Suppressed: everything inside is suppressed (saved in the file holding the
+    /// sub-assembly's entry).
+    pub suppressed: bool,
 }
 
 /// The parent's full name of a full name (`Cart-1/Axle-1` of `Cart-1/Axle-1/Wheel-2`),
@@ -118,7 +124,9 @@ impl Document {
     }
 
     /// Moves sub-assembly `name` to `t` (its frame → world, mm), and everything in it
-    /// with it, rigidly. Refused when a component inside is fixed or a robot's link.
+    /// with it, rigidly. Refused when a component inside is fixed (unless it is fixed
+    /// in a sub-document moved with it: fixed in that document's frame) or a robot's
+    /// link.
     /// Mates are re-solved at the next rebuild, as for a component's move.
     pub fn set_sub_assembly_transform(
         &mut self,
@@ -131,7 +139,12 @@ impl Document {
         let inside = |n: &str| n.starts_with(&prefix);
         for (i, c) in self.components.iter().enumerate() {
             if inside(&c.name) {
-                if c.fixed {
+                // a component fixed in a sub-document is fixed in that document's
+                // frame: it moves with it
+                let moves_with_its_file = self
+                    .owning_sub_document(&c.name)
+                    .is_some_and(|a| a.name == name || a.name.starts_with(&prefix));
+                if c.fixed && !moves_with_its_file {
                     return Err(DocumentError::FixedComponent(c.name.clone()));
                 }
                 if let Some(robot) = self.driving_robot(i) {
@@ -172,9 +185,65 @@ impl Document {
         }
         self.check_parent(&name)?;
         check_pose(&t, format_args!("the pose for sub-assembly `{name}`"))?;
-        self.assemblies.push(SubAssembly { name, transform: t });
+        self.assemblies.push(SubAssembly {
+            name,
+            transform: t,
+            file: None,
+            suppressed: false,
+        });
         self.revision += 1;
         Ok(())
+    }
+
+    /// Suppresses or unsuppresses sub-assembly `name` and so everything it holds, at
+    /// every level (SolidWorks' `SetSuppression2` on a sub-assembly component), then
+    /// re-solves the mates; on failure nothing changes. A component's own
+    /// suppression is kept: unsuppressing the sub-assembly leaves it suppressed.
+    pub fn set_sub_assembly_suppressed(
+        &mut self,
+        name: &str,
+        suppressed: bool,
+    ) -> Result<(), DocumentError> {
+        let name = self.sub_assembly(name)?.name.clone();
+        let before = self.clone();
+        for a in &mut self.assemblies {
+            if a.name == name {
+                a.suppressed = suppressed;
+            }
+        }
+        self.apply_assembly_suppression();
+        if let Err(e) = self.rebuild() {
+            *self = before;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Whether sub-assembly `name` is suppressed, by its own flag or a suppressed
+    /// sub-assembly holding it.
+    pub fn sub_assembly_suppressed(&self, name: &str) -> Result<bool, DocumentError> {
+        let name = self.sub_assembly(name)?.name.clone();
+        Ok(self
+            .assemblies
+            .iter()
+            .any(|a| a.suppressed && (a.name == name || name.starts_with(&format!("{}/", a.name)))))
+    }
+
+    /// Gives every component its `held_suppressed` flag from the suppressed
+    /// sub-assemblies holding it.
+    pub(crate) fn apply_assembly_suppression(&mut self) {
+        let suppressed: std::collections::HashSet<&str> = self
+            .assemblies
+            .iter()
+            .filter(|a| a.suppressed)
+            .map(|a| a.name.as_str())
+            .collect();
+        for c in &mut self.components {
+            c.held_suppressed = !suppressed.is_empty()
+                && c.name
+                    .match_indices('/')
+                    .any(|(i, _)| suppressed.contains(&c.name[..i]));
+        }
     }
 
     /// Refuses a full name whose parent is no sub-assembly.
@@ -243,10 +312,23 @@ pub(super) fn load(
                     .map_err(|e| at(&key, format!("sub-assembly `{}`: {e}", a.name)))?
             }
         };
+        if let Some(p) = parent_name(&a.name) {
+            if file.assemblies[index[p]].file.is_some() {
+                return Err(at(
+                    &name_key,
+                    format!(
+                        "sub-assembly `{}`: `{p}` is another document; what it holds is written in that file",
+                        a.name
+                    ),
+                ));
+            }
+        }
         index.insert(&a.name, out.len());
         out.push(SubAssembly {
             name: a.name.clone(),
             transform: local * parent,
+            file: None,
+            suppressed: a.suppressed,
         });
     }
     Ok(out)

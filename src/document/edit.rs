@@ -46,7 +46,7 @@ impl Document {
             && m.entities
                 .iter()
                 .chain(m.about.iter())
-                .all(|e| !self.components[e.component].suppressed)
+                .all(|e| !self.components[e.component].is_suppressed())
     }
 
     /// The index of a mate by name, or an error listing close matches.
@@ -326,6 +326,7 @@ impl Document {
         self.numbering.insert(&name);
         self.components
             .push(Component::placed(name, part, transform));
+        self.apply_assembly_suppression();
         self.revision += 1;
         Ok(i)
     }
@@ -361,6 +362,7 @@ impl Document {
         self.numbering.remove(&old_name);
         self.numbering.insert(&new);
         self.by_name.insert(new, i);
+        self.apply_assembly_suppression();
         self.revision += 1;
         Ok(())
     }

@@ -168,6 +168,16 @@ pub struct AssemblyFile {
     /// component pose layout, mm; identity when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transform: Option<[[f64; 4]; 4]>,
+    /// Another fitup document (path relative to this document's folder, inside the
+    /// project) whose parts, components, sub-assemblies and mates this sub-assembly
+    /// holds, as SolidWorks' `.sldasm` inside an assembly (see
+    /// [`super::subdoc`]). Its content is written in that file, not here.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// Suppressed: everything it holds is suppressed (kept, but not checked,
+    /// planned around, sequenced, weighed or exported; mates to it inactive).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub suppressed: bool,
 }
 
 /// A component: an instance of a part at a pose.

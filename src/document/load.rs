@@ -111,8 +111,26 @@ impl Document {
         project: &Project,
         cache: &mut MeshCache,
     ) -> Result<Self, DocumentError> {
+        Self::from_yaml_nested(
+            text,
+            path,
+            project,
+            cache,
+            &mut super::subdoc::Nesting::root(path),
+        )
+    }
+
+    /// [`from_yaml_in`](Self::from_yaml_in) at a level of a tree of documents
+    /// (`nesting`: the documents being loaded around it).
+    pub(super) fn from_yaml_nested(
+        text: &str,
+        path: &Path,
+        project: &Project,
+        cache: &mut MeshCache,
+        nesting: &mut super::subdoc::Nesting,
+    ) -> Result<Self, DocumentError> {
         let (file, positions) = Self::parse_text(text, path)?;
-        Self::from_file(file, text, path, project, &positions, cache)
+        Self::from_file(file, text, path, project, &positions, cache, nesting)
     }
 
     /// Builds the document of a parsed file: its parts (meshes read), components, the
@@ -125,6 +143,7 @@ impl Document {
         project: &Project,
         positions: &scan::Positions,
         cache: &mut MeshCache,
+        nesting: &mut super::subdoc::Nesting,
     ) -> Result<Self, DocumentError> {
         let load = Loader {
             text,
@@ -152,6 +171,8 @@ impl Document {
         let (components, by_name) = load.components(&file, &parts, &assemblies)?;
         let mut doc = Document {
             path: path.to_path_buf(),
+            project: Some(project.clone()),
+            saved_sub_documents: Vec::new(),
             generated: Default::default(),
             description: file.description.clone(),
             parts,
@@ -168,8 +189,12 @@ impl Document {
             warnings: Vec::new(),
             removed: Vec::new(),
         };
+        doc.load_sub_documents(&file, path, &load.dir, project, positions, nesting, cache)?;
+        doc.apply_assembly_suppression();
         let urdf = load.urdf_robots(&file, &mut doc, cache)?;
-        doc.mates = load.mates(&file, &doc)?;
+        // the file's own mates first, then the sub-documents' (already in `doc`)
+        let own = load.mates(&file, &doc)?;
+        doc.mates.splice(0..0, own);
         let mate_dimensions = doc
             .mates
             .iter()
@@ -313,7 +338,14 @@ impl Loader<'_> {
         distinct.dedup();
         cache.prefetch_in(self.project, &distinct);
         let mut parts = IndexMap::new();
+        let backed = file_backed_set(file);
         for (name, pf) in &file.parts {
+            if let Some(a) = file_backed(&backed, name) {
+                return Err(self.at_key(
+                    &[&format!("parts/{name}")],
+                    format!("part `{name}`: names inside `{a}/` are the sub-document's own parts; name it otherwise"),
+                ));
+            }
             parts.insert(
                 name.clone(),
                 self.part(name, pf, cache, &mut memo, warnings)?,
@@ -518,6 +550,7 @@ impl Loader<'_> {
         let mut components = Vec::with_capacity(file.components.len());
         let mut by_name = HashMap::new();
         let frames = super::assembly::frames(assemblies);
+        let backed = file_backed_set(file);
         for (ci, c) in file.components.iter().enumerate() {
             // The name's own line from the scan (the text may spell it in NFD).
             let name_at =
@@ -527,6 +560,13 @@ impl Loader<'_> {
             }
             super::assembly::check_levels(&c.name)
                 .map_err(|e| name_at(format!("component {e}")))?;
+            if let Some(a) = file_backed(&backed, &c.name) {
+                return Err(name_at(format!(
+                    "component `{}`: `{a}` is the document `{}`; its components are written in that file",
+                    c.name,
+                    file.assemblies.iter().find(|b| b.name == a).and_then(|b| b.file.as_deref()).unwrap_or_default()
+                )));
+            }
             let Some(frame) = super::assembly::parent_frame(&frames, &c.name) else {
                 return Err(name_at(format!(
                     "component `{}`: its parent `{}` is no sub-assembly of `assemblies:`",
@@ -622,6 +662,7 @@ impl Loader<'_> {
             suppressed: c.suppressed,
             hidden: c.hidden,
             properties,
+            held_suppressed: false,
         })
     }
 
@@ -663,12 +704,22 @@ impl Loader<'_> {
     fn mates(&self, file: &DocumentFile, doc: &Document) -> Result<Vec<Mate>, DocumentError> {
         let mut mates = Vec::with_capacity(file.mates.len());
         let mut names = std::collections::HashSet::new();
+        let backed = file_backed_set(file);
         for (mi, m) in file.mates.iter().enumerate() {
             if !names.insert(m.name.clone()) {
                 return Err(self.at_key(
                     &[&format!("mates/{mi}/name")],
                     format!(
                         "duplicate mate name `{}` (names are compared in Unicode NFC)",
+                        m.name
+                    ),
+                ));
+            }
+            if let Some(a) = file_backed(&backed, &m.name) {
+                return Err(self.at_key(
+                    &[&format!("mates/{mi}/name")],
+                    format!(
+                        "mate `{}`: names inside `{a}/` are the sub-document's own mates; name it otherwise",
                         m.name
                     ),
                 ));
@@ -800,6 +851,24 @@ pub(super) fn properties(
         out.insert(k.clone(), text);
     }
     Ok(out)
+}
+
+/// The sub-assemblies of `file` whose content is another document, by name.
+fn file_backed_set(file: &DocumentFile) -> std::collections::HashSet<&str> {
+    file.assemblies
+        .iter()
+        .filter(|a| a.file.is_some())
+        .map(|a| a.name.as_str())
+        .collect()
+}
+
+/// The sub-assembly among `backed` holding `name` (a level above it), if any.
+fn file_backed<'a>(backed: &std::collections::HashSet<&'a str>, name: &str) -> Option<&'a str> {
+    if backed.is_empty() {
+        return None;
+    }
+    name.match_indices('/')
+        .find_map(|(i, _)| backed.get(&name[..i]).copied())
 }
 
 fn vec3(v: [f64; 3]) -> Vec3 {

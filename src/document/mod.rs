@@ -43,6 +43,7 @@ mod remove;
 pub mod robot;
 mod save;
 pub mod scan;
+pub mod subdoc;
 pub mod tessellations;
 pub use assembly::SubAssembly;
 pub use error::DocumentError;
@@ -56,6 +57,7 @@ pub use reference::Reference;
 pub use remove::RemoveMates;
 pub use robot::{LinkDisplay, RobotError, RobotInstance};
 pub use scan::MAX_ABS_VALUE;
+pub use subdoc::SubDocument;
 
 use crate::collision::CutSpec;
 use crate::diagnostics::suggestion;
@@ -170,6 +172,9 @@ pub struct Component {
     pub hidden: bool,
     /// Custom properties of this instance, name → text, in file order.
     pub properties: IndexMap<String, String>,
+    /// Inside a suppressed sub-assembly (then suppressed whatever its own
+    /// `suppressed` says; see [`is_suppressed`](Self::is_suppressed)).
+    pub held_suppressed: bool,
 }
 
 impl Component {
@@ -188,7 +193,15 @@ impl Component {
             suppressed: false,
             hidden: false,
             properties: IndexMap::new(),
+            held_suppressed: false,
         }
+    }
+
+    /// Suppressed by its own flag or by a suppressed sub-assembly holding it
+    /// (SolidWorks' `IsSuppressed`): not checked, planned around, sequenced, weighed,
+    /// bounded or exported.
+    pub fn is_suppressed(&self) -> bool {
+        self.suppressed || self.held_suppressed
     }
 }
 
@@ -196,6 +209,9 @@ impl Component {
 #[derive(Debug, Clone)]
 pub struct Document {
     path: PathBuf,
+    /// The project it was loaded in (bounds its files; sub-documents are written
+    /// through it).
+    project: Option<crate::project::Project>,
     description: Option<String>,
     parts: IndexMap<String, Part>,
     components: Vec<Component>,
@@ -220,6 +236,8 @@ pub struct Document {
     warnings: Vec<String>,
     /// Component indices removed, in order (see [`Document::index_since`]).
     removed: Vec<usize>,
+    /// The sub-document files the last save wrote.
+    saved_sub_documents: Vec<PathBuf>,
 }
 
 /// A rotation and the box of a mesh rotated by it (mm).
@@ -546,7 +564,7 @@ impl Document {
     /// empty document.
     pub fn assembly_aabb(&self) -> Option<Aabb> {
         (0..self.components.len())
-            .filter(|&i| !self.components[i].suppressed)
+            .filter(|&i| !self.components[i].is_suppressed())
             .filter_map(|i| self.world_aabb(i))
             .reduce(|a, b| a.union(&b))
     }
@@ -718,6 +736,11 @@ impl Document {
     /// mode.
     pub fn source_files(&self) -> Vec<PathBuf> {
         std::iter::once(self.path.clone())
+            .chain(
+                self.assemblies
+                    .iter()
+                    .filter_map(|a| a.file.as_ref().map(|f| f.path.clone())),
+            )
             .chain(self.parts.values().flat_map(|p| {
                 std::iter::once(p.mesh_path.clone()).chain(p.mesh_files.iter().cloned())
             }))

@@ -14,10 +14,12 @@ impl Document {
     /// The document as its YAML schema (what `save` writes).
     pub fn to_file(&self) -> DocumentFile {
         let frames = super::assembly::frames(&self.assemblies);
+        // what sub-documents hold is written in their files
+        let held = super::subdoc::HeldBy::new(&self.assemblies);
         let parts = self
             .parts
             .values()
-            .filter(|p| !self.generated.contains(&p.name))
+            .filter(|p| !self.generated.contains(&p.name) && !held.inside(&p.name))
             .map(|p| {
                 let mut pf = PartFile {
                     features: p.features.iter().map(Feature::to_file).collect(),
@@ -61,7 +63,7 @@ impl Document {
         let components = self
             .components
             .iter()
-            .filter(|c| !self.generated.contains(&c.part))
+            .filter(|c| !self.generated.contains(&c.part) && !held.inside(&c.name))
             .map(|c| ComponentFile {
                 name: c.name.clone(),
                 part: c.part.clone(),
@@ -79,6 +81,7 @@ impl Document {
         let mates = self
             .mates
             .iter()
+            .filter(|m| !held.inside(&m.name))
             .map(|m| MateFile {
                 name: m.name.clone(),
                 kind: m.kind.name().into(),
@@ -104,9 +107,12 @@ impl Document {
         let assemblies = self
             .assemblies
             .iter()
+            .filter(|a| !held.inside(&a.name))
             .map(|a| AssemblyFile {
                 name: a.name.clone(),
                 transform: Some(Self::local_pose(&frames, &a.name, a.transform)),
+                file: a.file.as_ref().map(|f| f.file.clone()),
+                suppressed: a.suppressed,
             })
             .collect();
         DocumentFile {
@@ -157,7 +163,10 @@ impl Document {
     pub fn save(&mut self) -> Result<(), DocumentError> {
         let path = self.path.clone();
         let expected = self.disk_hash;
-        self.write_checked(&path, expected, None)
+        let mut written = Vec::new();
+        let r = self.write_checked(&path, expected, None, &mut written);
+        self.saved(written);
+        r
     }
 
     /// [`save`](Self::save) through `folder`, the document's folder already held open
@@ -168,7 +177,10 @@ impl Document {
     pub fn save_in(&mut self, folder: crate::fsutil::Dir) -> Result<(), DocumentError> {
         let path = self.path.clone();
         let expected = self.disk_hash;
-        self.write_checked(&path, expected, Some(folder))
+        let mut written = Vec::new();
+        let r = self.write_checked(&path, expected, Some(folder), &mut written);
+        self.saved(written);
+        r
     }
 
     /// Writes the document to `path` atomically and makes it the document's file.
@@ -212,6 +224,7 @@ impl Document {
         let new_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let old = self.parts.clone();
         let old_robots = self.robots.clone();
+        let old_assemblies = self.assemblies.clone();
         for p in self.parts.values_mut() {
             if let Some(rel) = relative_path(&p.mesh_path, &new_dir) {
                 p.stl = rel;
@@ -220,9 +233,27 @@ impl Document {
         for r in &mut self.robots {
             r.rebase_urdf(|f| relative_path(f, &new_dir));
         }
-        if let Err(e) = self.write_checked(path, expected, folder) {
+        let nested: Vec<bool> = {
+            let held = super::subdoc::HeldBy::new(&self.assemblies);
+            self.assemblies
+                .iter()
+                .map(|a| held.inside(&a.name))
+                .collect()
+        };
+        for (a, nested) in self.assemblies.iter_mut().zip(nested) {
+            if let (Some(f), false) = (&mut a.file, nested) {
+                if let Some(rel) = relative_path(&f.path, &new_dir) {
+                    f.file = rel;
+                }
+            }
+        }
+        let mut written = Vec::new();
+        let r = self.write_checked(path, expected, folder, &mut written);
+        self.saved(written);
+        if let Err(e) = r {
             self.parts = old;
             self.robots = old_robots;
+            self.assemblies = old_assemblies;
             return Err(e);
         }
         self.path = path.to_path_buf();
@@ -232,11 +263,12 @@ impl Document {
     /// Validates the text, then, holding a lock on the folder (so concurrent fitup
     /// writers take turns), checks what is on disk — the bytes hashed to `expected`, or
     /// else no file or a fitup document — and replaces it atomically.
-    fn write_checked(
+    pub(super) fn write_checked(
         &mut self,
         path: &Path,
         expected: Option<u64>,
         folder: Option<crate::fsutil::Dir>,
+        written: &mut Vec<super::subdoc::Written>,
     ) -> Result<(), DocumentError> {
         let write_err = |message: String| DocumentError::Write {
             path: path.into(),
@@ -264,6 +296,10 @@ impl Document {
                 "not saved: the document would not open again ({why})"
             )));
         }
+        // The sub-documents changed from a script first (each through the same checked
+        // write), so the document is written last, over sub-documents that hold
+        // what it names.
+        solved.save_sub_documents(written)?;
         // The folder is opened once: the lock, the check of what is on disk and the
         // write all go through that handle (never a second lookup by name).
         let dir = match folder {

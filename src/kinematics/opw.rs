@@ -49,6 +49,7 @@ use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointKind, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
+use crate::math::trig::atan2;
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
@@ -312,10 +313,7 @@ impl ClosedFormIk for OpwSolver {
                     // φ5 + π and only q4 + q6 (or q4 − q6) is determined; it equals ψ,
                     // the angle about a4 from a5 to Rw·a5. Rule: q4 keeps the seed,
                     // q6 takes the rest; the flip branch is q4 + π.
-                    let psi = self
-                        .a4
-                        .dot(&self.a5.cross(&rw_a5))
-                        .atan2(self.a5.dot(&rw_a5));
+                    let psi = atan2(self.a4.dot(&self.a5.cross(&rw_a5)), self.a5.dot(&rw_a5));
                     let (q5, sgn) = if cw > 0.0 {
                         (self.phi5, 1.0)
                     } else {
@@ -339,7 +337,7 @@ impl ClosedFormIk for OpwSolver {
                 }
                 let polish =
                     sd.min(el.margin).min(sh.margin) < POLISH_NEAR && !(sh.snapped || el.snapped);
-                let delta = sd.atan2(cw);
+                let delta = atan2(sd, cw);
                 let tp = t - self.a4 * self.a4.dot(&t);
                 // No-flip root q5 = φ5 + δ.
                 let s5 = self.s_phi5 * cw + self.c_phi5 * sd;
@@ -353,8 +351,8 @@ impl ClosedFormIk for OpwSolver {
                 let (s4, c4) = (crs4 / n4, dot4 / n4);
                 // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
                 let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
-                let q4 = crs4.atan2(dot4);
-                let q6 = self.a6.dot(&self.a5.cross(&m)).atan2(self.a5.dot(&m));
+                let q4 = atan2(crs4, dot4);
+                let q6 = atan2(self.a6.dot(&self.a5.cross(&m)), self.a5.dot(&m));
                 out.push(Branch {
                     joints: [q1, q2, q3, q4, wrap(self.phi5 + delta), q6],
                     configuration: Configuration {

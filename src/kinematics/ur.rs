@@ -34,13 +34,14 @@
 //!   elbow with one double root); `q₄ = s₄(θ₂₃₄ − θ₂ − θ₃)`.
 
 use super::closed_form::{
-    canonical_frame, measure_model_error, rot2, wrap, zero_axis_lines, ArmPlane, ModelError,
+    canonical_frame, hyp, measure_model_error, rot2, wrap, zero_axis_lines, ArmPlane, ModelError,
     Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
+use crate::math::trig::atan2;
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
@@ -268,14 +269,14 @@ impl ClosedFormIk for UrSolver {
         let (shoulders, n_sh) = self.arm.shoulder(&w, tol, singularity_threshold, &mut out);
         // At the wrist singularity joint 6 is the seed on every branch.
         let seeded = q6_seed.sin_cos();
-        let rho = w.x.hypot(w.y);
-        let t6h = t6.x.hypot(t6.y);
+        let rho = hyp(w.x, w.y);
+        let t6h = hyp(t6.x, t6.y);
         for sh in &shoulders[..n_sh] {
             let mut sh = *sh;
             // t = Rz(−q1)·t6; the wrist sine and cosine δ = ∠(y, t).
             let tx = sh.c1 * t6.x + sh.s1 * t6.y;
             let mut cw = -sh.s1 * t6.x + sh.c1 * t6.y;
-            let mut sd = tx.hypot(t6.z);
+            let mut sd = hyp(tx, t6.z);
             // At the wrist singularity axis 6 lies along axes 2–4, Rz(q1)·y: joint 1
             // follows from the orientation alone, where the position's joint 1 is off
             // by the position band over x' (x' = √(ρ² − b²) near the shoulder
@@ -290,7 +291,7 @@ impl ClosedFormIk for UrSolver {
                 let (s1, c1) = (-sign * t6.x / t6h, sign * t6.y / t6h);
                 sh.s1 = s1;
                 sh.c1 = c1;
-                sh.q1 = s1.atan2(c1);
+                sh.q1 = atan2(s1, c1);
                 sh.xp = c1 * w.x + s1 * w.y;
                 cw = sign * t6h;
                 sd = t6.z.abs();
@@ -314,14 +315,19 @@ impl ClosedFormIk for UrSolver {
             } else {
                 let r1 = -s1 * ra5.x + c1 * ra5.y;
                 let r2 = -s1 * ra65.x + c1 * ra65.y;
-                let n = r1.hypot(r2);
-                (wrap(self.phi5 + sd.atan2(cw)), r1.atan2(r2), r1 / n, r2 / n)
+                let n = hyp(r1, r2);
+                (
+                    wrap(self.phi5 + atan2(sd, cw)),
+                    atan2(r1, r2),
+                    r1 / n,
+                    r2 / n,
+                )
             };
             // Ry(θ234)·a5 = M·Rot(a6,−q6)·a5 = Rz(−q1)·(c6·R a5 − s6·R (a6×a5)), in xz.
             let m = ra5 * c6 - ra65 * s6;
             let a5r = [c1 * m.x + s1 * m.y, m.z];
             let (ax, az) = (self.a5.x, self.a5.z);
-            let th234 = (az * a5r[0] - ax * a5r[1]).atan2(ax * a5r[0] + az * a5r[1]);
+            let th234 = atan2(az * a5r[0] - ax * a5r[1], ax * a5r[0] + az * a5r[1]);
             // The flip wrist: Ry(π)·Rot(a5, q5)·Ry(π)⁻¹ = Rot(a5, −q5) and a6 ∥ y at
             // φ5 = 0, so (θ234 + π, 2φ5 − q5, q6 + π) gives the same orientation: a5r
             // turns over, nothing else to compute.

@@ -16,6 +16,7 @@ use super::message::{
 };
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::kinematics::JointKind;
+use crate::math::Deadline;
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -414,7 +415,8 @@ impl Client {
                 options.byte_order,
             );
             let mut frames = FrameReader::new(order);
-            let mut last = Instant::now();
+            // Silence on the state port longer than `state_timeout` breaks it.
+            let mut quiet_until = Deadline::after(state_timeout);
             std::thread::spawn(move || loop {
                 if stop.load(Ordering::Relaxed) {
                     return;
@@ -429,10 +431,10 @@ impl Client {
                     f.decode().map(Some)
                 });
                 match packet {
-                    Err(e) if timed_out(&e) && last.elapsed() <= state_timeout => continue,
-                    Ok(None) => last = Instant::now(),
+                    Err(e) if timed_out(&e) && !quiet_until.passed() => continue,
+                    Ok(None) => quiet_until = Deadline::after(state_timeout),
                     Ok(Some(p)) => {
-                        last = Instant::now();
+                        quiet_until = Deadline::after(state_timeout);
                         let mut s = lock(&shared);
                         s.last_rx = Some(Instant::now());
                         match p.body {
@@ -471,7 +473,7 @@ impl Client {
             stop,
             reader: Some(reader),
         };
-        let deadline = Instant::now() + options.state_timeout;
+        let deadline = Deadline::after(options.state_timeout);
         loop {
             {
                 let s = lock(&client.shared);
@@ -482,7 +484,7 @@ impl Client {
                     return Err(state_lost(b.clone()));
                 }
             }
-            if Instant::now() > deadline {
+            if deadline.passed() {
                 return Err(state_lost(Lost::Silent {
                     awaited: "joint state",
                     waited: options.state_timeout,
@@ -551,8 +553,8 @@ impl Client {
     /// The reason of a refusal: the error code of the next STATUS after `since` with
     /// `in_error`, and the code fitup knows it as.
     fn refusal_reason(&self, since: Instant) -> (Option<RefusalCode>, Option<i32>) {
-        let deadline = Instant::now() + self.options.reply_timeout.min(Duration::from_secs(2));
-        while Instant::now() < deadline {
+        let deadline = Deadline::after(self.options.reply_timeout.min(Duration::from_secs(2)));
+        while !deadline.passed() {
             {
                 let s = lock(&self.shared);
                 if let (Some(st), Some(at)) = (s.status, s.status_at) {
@@ -678,7 +680,7 @@ impl Client {
         cancel: &dyn Fn() -> bool,
     ) -> Result<bool, ManipulatorError> {
         let since = Instant::now();
-        let deadline = since + timeout;
+        let deadline = Deadline::from_start(since, timeout);
         loop {
             let st = self.state()?;
             // Only a STATUS published after the wait began says anything about the
@@ -701,7 +703,7 @@ impl Client {
             if cancel() {
                 return Ok(false);
             }
-            if Instant::now() > deadline {
+            if deadline.passed() {
                 return Err(ManipulatorError::Timeout { waited: timeout });
             }
             std::thread::sleep(Duration::from_millis(10));
@@ -735,12 +737,12 @@ fn exchange(
         cause: Lost::from(e),
     };
     p.write_to(motion, order).map_err(lost)?;
-    let deadline = Instant::now() + timeout;
+    let deadline = Deadline::after(timeout);
     loop {
         let f = match frames.read_frame(motion) {
             Ok(f) => f,
             Err(e) if timed_out(&e) => {
-                if Instant::now() > deadline {
+                if deadline.passed() {
                     return Err(ManipulatorError::Disconnected {
                         port: Port::Motion,
                         cause: Lost::Silent {

@@ -12,6 +12,7 @@ pub mod format;
 pub mod limits;
 mod rng;
 pub mod transform;
+pub(crate) mod trig;
 
 pub use aabb::Aabb;
 pub use deadline::Deadline;

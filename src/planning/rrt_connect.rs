@@ -133,6 +133,9 @@ struct Strategy {
     stream: u64,
     /// The rotation weight of the search's metric (mm per rad).
     rotation_weight: f64,
+    /// Adaptive reach: the shortest extension (metric mm) a node's reach halves
+    /// down to after blocked extensions (`None`: every extension takes `step`).
+    reach_floor: Option<f64>,
 }
 
 impl Strategy {
@@ -148,12 +151,15 @@ impl Strategy {
             key_mm: key_mm(options.lattice.as_ref(), step),
             stream: 0,
             rotation_weight: space.rotation_weight,
+            reach_floor: None,
         }
     }
 
     /// The long-range search: OMPL's RRT-Connect range and resolution as shares
     /// of the space's metric extent, no fallbacks; what crosses open, twisting
-    /// space (a table carried through a house) fastest.
+    /// space (a table carried through a house) fastest. Its reach adapts per
+    /// node between the range and [`ProblemScale::reach_floor`]: it shrinks
+    /// where extensions are blocked and grows back where they go through.
     fn long_range(
         options: &RrtConnectOptions,
         space: &PlanningSpace,
@@ -171,6 +177,7 @@ impl Strategy {
             key_mm: res * 1e-3,
             stream: 0,
             rotation_weight: space.rotation_weight,
+            reach_floor: Some(scale.reach_floor()),
         }
     }
 
@@ -195,6 +202,7 @@ impl Strategy {
             unit: k,
             stream: 0x9E37_79B9_7F4A_7C15,
             rotation_weight: space.rotation_weight,
+            reach_floor: None,
         }
     }
 }
@@ -320,6 +328,7 @@ impl<'v, 's> Search<'v, 's> {
             &self.trees[a],
         );
         self.added.clear();
+        let step = self.s.step.min(self.trees[a].reach(near));
         let extended = narrow.extend(
             &mut self.checker,
             space,
@@ -327,8 +336,11 @@ impl<'v, 's> Search<'v, 's> {
             &mut self.trees[a],
             near,
             &sample,
-            self.s.step,
+            step,
         );
+        if let Some(floor) = self.s.reach_floor {
+            self.adapt_reach(a, near, step, extended.as_ref().ok().copied(), floor);
+        }
         match extended {
             Ok(i) => self.added.push(i),
             Err(candidate) => {
@@ -370,6 +382,28 @@ impl<'v, 's> Search<'v, 's> {
             (reached, last)
         };
         self.certified(s, g).then_some((s, g))
+    }
+
+    /// Adaptive reach after an extension of `step` from tree `a`'s node `near`:
+    /// blocked, the node's reach halves (down to `floor`); through to `added`,
+    /// it doubles back (from the full step on: unbounded again), and the new node
+    /// starts with its parent's reach, so a corridor is crossed in short steps
+    /// while open space keeps the long ones.
+    fn adapt_reach(&mut self, a: usize, near: usize, step: f64, added: Option<usize>, floor: f64) {
+        let tree = &mut self.trees[a];
+        match added {
+            Some(i) => {
+                let grown = 2.0 * step;
+                let reach = if grown >= self.s.step {
+                    f64::INFINITY
+                } else {
+                    grown
+                };
+                tree.set_reach(near, reach);
+                tree.set_reach(i, reach);
+            }
+            None => tree.set_reach(near, (0.5 * step).max(floor)),
+        }
     }
 
     /// The axis-move part of an iteration of tree `a` toward tree `b`'s root.
@@ -952,6 +986,60 @@ mod tests {
             let again = rrt_connect(&mut v, &space, &start, &goal, &o, None).unwrap();
             assert_eq!(again.poses, two.poses, "seed {seed}: same seed, same path");
         }
+    }
+
+    /// Free space a ball of radius 12 about the origin: every extension of 40
+    /// from the centre leaves it, one of 10 stays inside.
+    struct Ball;
+
+    impl MotionValidator for Ball {
+        fn is_free(&mut self, pose: &Transform) -> bool {
+            pose.translation().norm() <= 12.0
+        }
+    }
+
+    /// The long-range search's adaptive reach: blocked extensions halve a node's
+    /// reach down to the floor, where the search grows again; without it (the
+    /// narrow search's fixed step) the tree never leaves its root.
+    #[test]
+    fn a_blocked_node_shrinks_its_reach_down_to_the_floor_and_grows_again() {
+        let space = PlanningSpace::new(
+            Vec3::new(-100.0, -100.0, -100.0),
+            Vec3::new(100.0, 100.0, 100.0),
+        )
+        .with_rotation_weight(1.0);
+        let o = RrtConnectOptions::default();
+        let strategy = |floor: Option<f64>| Strategy {
+            reach_floor: floor,
+            lazy: Some((1.0, 1.0)),
+            narrow: NarrowPassage::OFF,
+            lattice: None,
+            fallback_share: 0.0,
+            ..Strategy::explicit(&o, &space, 40.0)
+        };
+        let start = Transform::IDENTITY;
+        let goal = Transform::from_translation(Vec3::new(90.0, 0.0, 0.0));
+        let grown = |floor: Option<f64>| {
+            let mut v = Ball;
+            let checker = Checker::new(&mut v, None);
+            let mut search = Search::new(checker, &space, &start, &goal, strategy(floor), 7);
+            let mut lowest = f64::INFINITY;
+            for _ in 0..400 {
+                search.iterate();
+                lowest = lowest.min(search.trees[0].reach(0));
+            }
+            let tree = &search.trees[0];
+            let inside = (0..tree.len()).all(|i| tree.poses[i].translation().norm() <= 12.0);
+            (tree.len(), lowest, inside)
+        };
+        let (nodes, lowest, inside) = grown(Some(10.0));
+        // Nodes near the ball's surface block at the floor too, and a uniform
+        // sample of the large space is nearest to one of them: a few nodes.
+        assert!(nodes >= 3, "the tree grows at the floor: {nodes} nodes");
+        assert!(inside, "every node is free");
+        assert_eq!(lowest, 10.0, "the root's reach halved from 40 to the floor");
+        let (fixed, ..) = grown(None);
+        assert_eq!(fixed, 1, "with a fixed reach of 40 nothing is added");
     }
 
     /// Scale-free defaults: every length of both searches follows the problem, so

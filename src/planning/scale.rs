@@ -37,6 +37,17 @@ impl ProblemScale {
     /// 0.05 or 0.07 no fewer than 0.1 (docs/planning.md).
     pub const RANGE_SHARE: f64 = 0.1;
 
+    /// Share of the [range](Self::range) the long-range search's adaptive reach
+    /// halves down to at most: a node whose extensions are blocked halves its
+    /// reach after each (a twisting corridor, a cluttered corner), one whose
+    /// extension goes through doubles it back (open space). On OMPL.app's
+    /// spirelli, whose corridors are narrow against the space, a fixed range
+    /// needed 763k pose checks (seed 1) and a quarter of it 193k; adapting down
+    /// to a quarter needed 189k–253k (seeds 1–3) and cut the median on Home,
+    /// Abstract and Apartment by 1.2–1.5×, at 1.4× more on cubicles
+    /// (docs/planning.md).
+    pub const REACH_FLOOR_SHARE: f64 = 0.25;
+
     /// Share of the metric extent between two poses the long-range search explores
     /// an edge with (lazily: pose checks that far apart, the path certified by the
     /// validator's own edge check): OMPL's default state-validity resolution, 1 %.
@@ -83,6 +94,12 @@ impl ProblemScale {
     /// of the metric extent.
     pub fn range(&self) -> f64 {
         Self::RANGE_SHARE * self.metric_extent()
+    }
+
+    /// The shortest extension of the long-range search's adaptive reach (metric
+    /// mm): [`REACH_FLOOR_SHARE`](Self::REACH_FLOOR_SHARE) of the range.
+    pub fn reach_floor(&self) -> f64 {
+        Self::REACH_FLOOR_SHARE * self.range()
     }
 
     /// The long-range search's exploration resolution (metric mm):

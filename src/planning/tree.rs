@@ -30,6 +30,9 @@ pub(crate) struct Tree {
     /// Dynamic-domain radius of each node (metric mm; infinite until an extension
     /// from it was blocked, see [`NarrowPassage`](super::NarrowPassage)).
     domain: Vec<f64>,
+    /// Adaptive reach of each node (metric mm; infinite: the search's full
+    /// step), see [`Tree::reach`].
+    reach: Vec<f64>,
     /// The k-d tree over the first `index.len()` nodes.
     index: KdIndex,
     /// The rotation weight of the last query (steers the next rebuild's splits).
@@ -52,6 +55,7 @@ impl Tree {
             dead: Vec::new(),
             certified: Vec::new(),
             domain: Vec::new(),
+            reach: Vec::new(),
             index: KdIndex::default(),
             weight: std::cell::Cell::new(25.0),
         };
@@ -74,6 +78,7 @@ impl Tree {
         self.dead.push(false);
         self.certified.push(false);
         self.domain.push(f64::INFINITY);
+        self.reach.push(f64::INFINITY);
         let built = self.index.len();
         if self.poses.len() >= INDEX_FROM && self.poses.len() - built > (built / 4).max(32) {
             self.index = KdIndex::build(&self.translations, &self.rotations, self.weight.get());
@@ -96,6 +101,17 @@ impl Tree {
         if self.domain[i].is_finite() {
             self.domain[i] *= factor;
         }
+    }
+
+    /// Node `i`'s adaptive reach: how far an extension from it goes at most
+    /// (metric mm; infinite until an extension from it was blocked).
+    pub fn reach(&self, i: usize) -> f64 {
+        self.reach[i]
+    }
+
+    /// Sets node `i`'s adaptive reach (metric mm).
+    pub fn set_reach(&mut self, i: usize, reach: f64) {
+        self.reach[i] = reach;
     }
 
     /// Cuts node `i` and everything grown from it out of the tree (they stay in the

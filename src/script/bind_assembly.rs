@@ -104,4 +104,34 @@ pub(super) fn register(api: &mut Api) {
             d.lock()?.add_sub_assembly(name, t).map_err(fail)
         },
     );
+    api.f(
+        "Document.sub_assembly_file(name: string) -> string",
+        "The document file a sub-assembly holds (SolidWorks' `IComponent2.GetPathName` of a sub-assembly), as written in its `file:` key (relative to the document holding the entry); `\"\"` for a group of this document. Components, sub-assemblies and mates loaded from it are named inside it (`Cart-1/Wheel-2`) and saved back to that file, which a save rewrites only when a script changed what it holds.",
+        |d: &mut DocHandle, name: &str| -> ScriptResult<String> {
+            Ok(d
+                .lock()?
+                .sub_assembly(name)
+                .map_err(fail)?
+                .file
+                .as_ref()
+                .map(|f| f.file.clone())
+                .unwrap_or_default())
+        },
+    );
+    api.f(
+        "Document.sub_assembly_suppressed(name: string) -> bool",
+        "Whether a sub-assembly is suppressed, itself or by a suppressed sub-assembly holding it (`IComponent2.IsSuppressed`).",
+        |d: &mut DocHandle, name: &str| -> ScriptResult<bool> {
+            d.lock()?.sub_assembly_suppressed(name).map_err(fail)
+        },
+    );
+    api.f(
+        "Document.set_sub_assembly_suppressed(name: string, suppressed: bool)",
+        "Suppresses (or unsuppresses) a sub-assembly and so everything it holds at every level (`IComponent2.SetSuppression2` on a sub-assembly), then re-solves; saved. A component suppressed on its own stays suppressed when its sub-assembly is unsuppressed.",
+        |d: &mut DocHandle, name: &str, suppressed: bool| -> ScriptResult<()> {
+            d.lock()?
+                .set_sub_assembly_suppressed(name, suppressed)
+                .map_err(fail)
+        },
+    );
 }

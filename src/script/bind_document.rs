@@ -291,6 +291,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             // following a link (a folder swapped for a link cannot redirect the save).
             let folder = d.ctx.document_folder(&path)?;
             d.ctx.writing(&path, || doc.save_in(folder)).map_err(fail)?;
+            // sub-documents a script changed were written too
+            for p in doc.saved_sub_documents() {
+                d.ctx.record_write(p);
+            }
             Ok(())
         },
     );
@@ -300,6 +304,9 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         let mut doc = d.lock()?;
         let folder = c.document_folder(&full)?;
         c.writing(&full, || doc.save_as_in(&full, folder)).map_err(fail)?;
+        for p in doc.saved_sub_documents() {
+            c.record_write(p);
+        }
         Ok(())
     });
     fn export_glb(d: &DocHandle, file: &str, overwrite: bool) -> ScriptResult<()> {

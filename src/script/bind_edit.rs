@@ -291,7 +291,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.get(
         "Component.suppressed -> bool",
         "Whether the component is suppressed; setting it re-solves the mates.",
-        |c: &mut ComponentHandle| -> ScriptResult<bool> { c.with_component(|c| c.suppressed) },
+        |c: &mut ComponentHandle| -> ScriptResult<bool> { c.with_component(|c| c.is_suppressed()) },
     );
     api.set(
         "Component.suppressed",

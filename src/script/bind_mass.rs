@@ -34,7 +34,7 @@ fn indices(d: &DocHandle, names: &Array) -> ScriptResult<Vec<usize>> {
 fn of(d: &DocHandle, which: Option<Vec<usize>>, o: &MassOptions) -> ScriptResult<MassProperties> {
     let doc = d.lock()?;
     let all: Vec<usize> = (0..doc.components().len())
-        .filter(|&i| !doc.components()[i].suppressed)
+        .filter(|&i| !doc.components()[i].is_suppressed())
         .collect();
     mass_properties(&doc, which.as_deref().unwrap_or(&all), o).map_err(fail)
 }
@@ -229,7 +229,7 @@ pub(super) fn register_export(api: &mut Api) {
         let all: Vec<usize> = {
             let doc = d.lock()?;
             (0..doc.components().len())
-                .filter(|&i| !doc.components()[i].suppressed && !doc.components()[i].hidden)
+                .filter(|&i| !doc.components()[i].is_suppressed() && !doc.components()[i].hidden)
                 .collect()
         };
         let (which, frame, overwrite) = export_options(d, &o, all)?;

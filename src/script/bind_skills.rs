@@ -21,12 +21,12 @@ use crate::manipulator::client::resolve;
 use crate::manipulator::simulator::{Simulator, SimulatorOptions};
 use crate::math::AngleConvention;
 use crate::skills::{
-    plan_chain, Chain, ChainOptions, Condition, ControllerCommand, ManagerError, ManagerEvent,
-    ManagerHandle, ManagerOptions, PlanStep, SkillLog, SkillManager, Template,
+    plan_chain, CancelToken, Chain, ChainOptions, Condition, ControllerCommand, LogDb,
+    ManagerError, ManagerEvent, ManagerHandle, ManagerOptions, PlanStep, RunSink, SkillLog,
+    SkillManager, Template,
 };
 use rhai::{Array, Dynamic, FnPtr, Map, NativeCallContext};
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -284,7 +284,7 @@ fn manager(ctx: &Arc<Context>, m: &Map) -> ScriptResult<ManagerObj> {
     };
     Ok(ManagerObj(Arc::new(ManagerInner {
         options,
-        handle: ManagerHandle::new(),
+        handle: ManagerHandle::with_cancel(CancelToken::linked(ctx.cancel_flag())),
         _sim: Mutex::new(sim),
         db,
         quiet,
@@ -296,7 +296,7 @@ fn manager(ctx: &Arc<Context>, m: &Map) -> ScriptResult<ManagerObj> {
 fn event_map(e: &ManagerEvent, plan: &crate::skills::Plan) -> Dynamic {
     let (skill, name, detail) = e.log_fields();
     let mut m = Map::new();
-    m.insert("event".into(), name.into());
+    m.insert("event".into(), name.name().into());
     m.insert(
         "skill".into(),
         skill.map_or(Dynamic::UNIT, |i| (i as i64).into()),
@@ -308,11 +308,46 @@ fn event_map(e: &ManagerEvent, plan: &crate::skills::Plan) -> Dynamic {
             .map_or(Dynamic::UNIT, |s| s.part.clone().into()),
     );
     if let ManagerEvent::Finished { state, .. } = e {
-        m.insert("state".into(), state.clone().into());
+        m.insert("state".into(), state.name().into());
     }
     m.insert("detail".into(), detail.into());
     m.insert("text".into(), e.describe().into());
     Dynamic::from_map(m)
+}
+
+/// A script's sink of a run: events printed (unless `quiet`), collected, the parts'
+/// states kept, and the script's callback called (its first error stops the run).
+struct ScriptSink<'a> {
+    inner: &'a ManagerInner,
+    manager: &'a ManagerObj,
+    plan: &'a crate::skills::Plan,
+    call: Option<(&'a NativeCallContext<'a>, &'a FnPtr)>,
+    events: Array,
+    callback_error: Option<Box<rhai::EvalAltResult>>,
+}
+
+impl RunSink for ScriptSink<'_> {
+    fn event(&mut self, e: &ManagerEvent) -> bool {
+        if let ManagerEvent::Finished { part, state, .. } = e {
+            if let Ok(mut p) = self.inner.parts.lock() {
+                p.insert(part.clone(), state.name().to_string());
+            }
+        }
+        if !self.inner.quiet {
+            self.inner.ctx.print(&e.describe());
+        }
+        let map = event_map(e, self.plan);
+        self.events.push(map.clone());
+        if let Some((ncc, f)) = self.call {
+            if self.callback_error.is_none() {
+                if let Err(x) = f.call_within_context::<Dynamic>(ncc, (map, self.manager.clone())) {
+                    self.callback_error = Some(x);
+                    return false;
+                }
+            }
+        }
+        true
+    }
 }
 
 fn run(
@@ -321,79 +356,37 @@ fn run(
     plan: &SkillsHandle,
 ) -> ScriptResult<Array> {
     let inner = &m.0;
+    // A cancelled script (new save, Ctrl-C in watch) stops the arm promptly: the run's
+    // cancel token is linked to the script's (ManagerHandle::with_cancel).
     inner.handle.reset();
     let steps = plan.0.plan.clone();
     let mut manager =
         SkillManager::with_handle(steps.clone(), inner.options.clone(), &inner.handle);
-    let finished = Arc::new(AtomicBool::new(false));
-    let mut events = Array::new();
-    let mut callback_error = None;
-    let mut log = SkillLog::new(
-        inner.db.as_ref().and_then(|d| d.run_id),
-        format!("script:{}", steps.robot),
-        &steps,
-        inner.handle.clone(),
-    );
-    let mut lock_error = None;
-    let result = std::thread::scope(|s| {
-        // A cancelled script (new save, Ctrl-C in watch) stops the arm promptly.
-        let (done, handle, ctx) = (finished.clone(), inner.handle.clone(), inner.ctx.clone());
-        s.spawn(move || {
-            while !done.load(Ordering::SeqCst) {
-                if ctx.cancelled() {
-                    handle.abort();
-                    return;
-                }
-                std::thread::sleep(Duration::from_millis(20));
-            }
-        });
-        let r = manager.run(&mut |e| {
-            if let Some(db) = &inner.db {
-                match db.db.lock() {
-                    Ok(mut d) => {
-                        log.record(&mut d, e);
-                    }
-                    Err(_) if lock_error.is_none() => {
-                        inner.handle.abort();
-                        lock_error = Some("the database lock is poisoned");
-                    }
-                    Err(_) => {}
-                }
-            }
-            if let ManagerEvent::Finished { part, state, .. } = e {
-                if let Ok(mut p) = inner.parts.lock() {
-                    p.insert(part.clone(), state.clone());
-                }
-            }
-            if !inner.quiet {
-                inner.ctx.print(&e.describe());
-            }
-            let map = event_map(e, &steps);
-            events.push(map.clone());
-            if let Some((ncc, f)) = call {
-                if callback_error.is_none() {
-                    if let Err(x) = f.call_within_context::<Dynamic>(ncc, (map, m.clone())) {
-                        inner.handle.abort();
-                        callback_error = Some(x);
-                    }
-                }
-            }
-        });
-        finished.store(true, Ordering::SeqCst);
-        r
+    let log = inner.db.as_ref().map(|d| {
+        SkillLog::new(
+            d.run_id,
+            format!("script:{}", steps.robot),
+            &steps,
+            LogDb::Shared(d.db.clone()),
+        )
     });
-    if let Some(e) = callback_error {
+    let mut sink = ScriptSink {
+        inner,
+        manager: m,
+        plan: &steps,
+        call,
+        events: Array::new(),
+        callback_error: None,
+    };
+    let result = manager.run_logged(log, &mut sink);
+    if let Some(e) = sink.callback_error {
         return Err(e);
     }
-    if let Some(e) = lock_error {
-        return err(format!("the skill log could not be written: {e}"));
-    }
-    let result = log.finish(result);
     if inner.ctx.cancelled() {
         return err("cancelled");
     }
     match result {
-        Ok(()) | Err(ManagerError::Aborted) => Ok(events),
+        Ok(()) | Err(ManagerError::Aborted) => Ok(sink.events),
         Err(e) => err(e.to_string()),
     }
 }

@@ -326,6 +326,12 @@ impl Context {
     pub fn cancelled(&self) -> bool {
         self.cancel.load(Ordering::Relaxed)
     }
+
+    /// The run's cancellation flag (set by a newer save or Ctrl-C), for a library
+    /// loop that stops on it (a skill run's cancel token).
+    pub(crate) fn cancel_flag(&self) -> Arc<AtomicBool> {
+        self.cancel.clone()
+    }
 }
 
 /// What to run.

@@ -20,7 +20,7 @@
 //! across the lines can be missed. A pose is the same test with `len` 0.
 
 use crate::collision::{Collider, SweepMethod};
-use crate::math::{Aabb, Point3, Transform, Vec3};
+use crate::math::{Aabb, Deadline, Point3, Transform, Vec3};
 use crate::planning::{stepwise_edge_free, MotionValidator};
 use std::sync::Arc;
 use std::time::Instant;
@@ -228,12 +228,12 @@ fn carved_line_overlap(
 pub(crate) struct FitPairValidator {
     pub pairs: Vec<FitPairCheck>,
     pub step_mm: f64,
-    pub deadline: Option<Instant>,
+    pub deadline: Option<Deadline>,
 }
 
 impl FitPairValidator {
     fn late(&self) -> bool {
-        self.deadline.is_some_and(|d| Instant::now() >= d)
+        self.deadline.is_some_and(Deadline::passed)
     }
 }
 
@@ -268,7 +268,7 @@ impl MotionValidator for FitPairValidator {
         stepwise_edge_free(|p| self.is_free(p), from, to, step, 0.01)
     }
     fn set_deadline(&mut self, deadline: Option<Instant>) {
-        self.deadline = deadline;
+        self.deadline = deadline.map(Deadline::at);
     }
     fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
         let mut copy = self.clone();

@@ -699,7 +699,7 @@ fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, Sequence
             m &= !bit(index(name)?);
         }
         for (i, c) in doc.components().iter().enumerate() {
-            if c.suppressed {
+            if c.is_suppressed() {
                 m &= !bit(i);
             }
         }
@@ -714,7 +714,7 @@ fn product_mask(doc: &Document, opts: &SequenceOptions) -> Result<Mask, Sequence
         }
     }
     for (i, c) in doc.components().iter().enumerate() {
-        if c.fixture || c.suppressed {
+        if c.fixture || c.is_suppressed() {
             m &= !bit(i);
         }
     }

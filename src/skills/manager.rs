@@ -14,14 +14,17 @@
 //! continues the running skill from where it stopped.
 
 use super::program::{ControllerCommand, Plan, PlanStep};
+use super::PartState;
+use crate::db::SkillEvent;
 use crate::manipulator::client::{
     resolve, AddressError, Client, ClientOptions, ManipulatorError, Request, WireError,
 };
+use crate::math::Deadline;
 use std::collections::VecDeque;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The first pause between two connection attempts.
 pub const RECONNECT_FIRST_DELAY: Duration = Duration::from_millis(100);
@@ -61,7 +64,7 @@ pub enum ManagerEvent {
         /// The part.
         part: String,
         /// Its new state.
-        state: String,
+        state: PartState,
     },
     /// The controller went away during a skill.
     Interrupted(usize, String),
@@ -116,10 +119,77 @@ impl Default for ManagerOptions {
     }
 }
 
+/// The one cancel token of a skill run: set by the user's abort, by a [`RunSink`]
+/// that stops the run or a log write that fails, or by the caller's own flag (a
+/// script's cancellation, [`CancelToken::linked`]). The manager stops the arm as soon
+/// as it sees it set.
+#[derive(Debug, Clone, Default)]
+pub struct CancelToken {
+    own: Arc<AtomicBool>,
+    outer: Option<Arc<AtomicBool>>,
+}
+
+impl CancelToken {
+    /// A token of its own, not cancelled.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A token that is also cancelled while `outer` is set (a flag its owner sets and
+    /// clears; [`reset`](Self::reset) leaves it alone).
+    pub fn linked(outer: Arc<AtomicBool>) -> Self {
+        Self {
+            own: Arc::default(),
+            outer: Some(outer),
+        }
+    }
+
+    /// Cancels the run.
+    pub fn cancel(&self) {
+        self.own.store(true, Ordering::SeqCst);
+    }
+
+    /// Whether the run is cancelled (by this token or its outer flag).
+    pub fn is_cancelled(&self) -> bool {
+        self.own.load(Ordering::SeqCst)
+            || self
+                .outer
+                .as_ref()
+                .is_some_and(|o| o.load(Ordering::SeqCst))
+    }
+
+    /// Clears this token's own cancellation, for a new run.
+    pub fn reset(&self) {
+        self.own.store(false, Ordering::SeqCst);
+    }
+}
+
+/// Where a skill run's events go, as they happen: the run loop's one output (as
+/// ripgrep's `Sink` is a search's). The CLI prints them or feeds its terminal UI, a
+/// script collects them and calls its callback; [`SkillManager::run_logged`] writes
+/// them to the skill log first. Any `FnMut(&ManagerEvent)` is a sink that never stops
+/// the run.
+pub trait RunSink {
+    /// Takes one event; `false` stops the run (the arm stops, as on an abort; the sink
+    /// keeps its own reason).
+    fn event(&mut self, event: &ManagerEvent) -> bool;
+
+    /// The skill log could not be written, so the run stops at once (called once, before
+    /// the event that was not written reaches [`event`](Self::event)).
+    fn log_failed(&mut self, _error: &crate::db::DbError) {}
+}
+
+impl<F: FnMut(&ManagerEvent)> RunSink for F {
+    fn event(&mut self, event: &ManagerEvent) -> bool {
+        self(event);
+        true
+    }
+}
+
 #[derive(Default)]
 struct Control {
     paused: AtomicBool,
-    abort: AtomicBool,
+    abort: CancelToken,
     manual: Mutex<VecDeque<ControllerCommand>>,
     edits: Mutex<VecDeque<(usize, PlanStep)>>,
     /// The controller's joints last seen (rad / mm).
@@ -142,6 +212,18 @@ impl ManagerHandle {
     pub fn new() -> Self {
         Self(Arc::new(Control::default()))
     }
+    /// A handle whose runs stop on `cancel` as well (e.g. a token
+    /// [`linked`](CancelToken::linked) to a script's cancellation).
+    pub fn with_cancel(cancel: CancelToken) -> Self {
+        Self(Arc::new(Control {
+            abort: cancel,
+            ..Control::default()
+        }))
+    }
+    /// The run's cancel token (what [`abort`](Self::abort) sets).
+    pub fn cancel_token(&self) -> CancelToken {
+        self.0.abort.clone()
+    }
     /// The controller's joints last seen by the manager (rad / mm; empty before the
     /// first motion), refreshed while a trajectory runs.
     pub fn joints(&self) -> Vec<f64> {
@@ -149,12 +231,13 @@ impl ManagerHandle {
     }
     /// Clears a previous abort and pause, for a new run.
     pub fn reset(&self) {
-        self.0.abort.store(false, Ordering::SeqCst);
+        self.0.abort.reset();
         self.0.paused.store(false, Ordering::SeqCst);
     }
-    /// Whether [`abort`](Self::abort) was called (and not [`reset`](Self::reset)).
+    /// Whether the run's cancel token is set ([`abort`](Self::abort) was called and not
+    /// [`reset`](Self::reset), or its outer flag is set).
     pub fn aborted(&self) -> bool {
-        self.0.abort.load(Ordering::SeqCst)
+        self.0.abort.is_cancelled()
     }
     /// Pauses: the arm stops now; the running skill resumes on [`resume`](Self::resume).
     pub fn pause(&self) {
@@ -166,7 +249,7 @@ impl ManagerHandle {
     }
     /// Stops the run (the arm stops; pending skills stay pending).
     pub fn abort(&self) {
-        self.0.abort.store(true, Ordering::SeqCst);
+        self.0.abort.cancel();
     }
     /// Queues a manual command, run between skills or while paused.
     pub fn manual(&self, command: ControllerCommand) {
@@ -274,7 +357,7 @@ impl SkillManager {
         Ok((motion, state))
     }
 
-    fn connect(&self, until: Instant) -> Result<Client, ManipulatorError> {
+    fn connect(&self, until: Deadline) -> Result<Client, ManipulatorError> {
         let (motion, state) = self.addresses()?;
         let mut delay = RECONNECT_FIRST_DELAY;
         loop {
@@ -284,11 +367,10 @@ impl SkillManager {
                     return Err(e)
                 }
                 Err(e) => {
-                    let now = Instant::now();
-                    if now > until || self.control.abort.load(Ordering::SeqCst) {
+                    if until.passed() || self.control.abort.is_cancelled() {
                         return Err(e);
                     }
-                    std::thread::sleep(delay.min(until - now));
+                    std::thread::sleep(delay.min(until.remaining()));
                     delay = (delay * 2).min(RECONNECT_MAX_DELAY);
                 }
             }
@@ -302,7 +384,7 @@ impl SkillManager {
     /// timeout), a controller that could not be reached.
     pub fn run(&mut self, on_event: &mut dyn FnMut(&ManagerEvent)) -> Result<(), ManagerError> {
         let mut client = self
-            .connect(Instant::now() + self.options.client.connect_timeout)
+            .connect(Deadline::after(self.options.client.connect_timeout))
             .map_err(ManagerError::Connection)?;
         on_event(&ManagerEvent::Connected(
             self.addresses().map_err(ManagerError::Connection)?.0,
@@ -318,7 +400,7 @@ impl SkillManager {
             if let Err(e) = self.manual_commands(&mut client, on_event) {
                 return self.fail(i, e, on_event);
             }
-            if self.control.abort.load(Ordering::SeqCst) {
+            if self.control.abort.is_cancelled() {
                 on_event(&ManagerEvent::Aborted);
                 return Err(ManagerError::Aborted);
             }
@@ -345,21 +427,21 @@ impl SkillManager {
                     on_event(&ManagerEvent::Finished {
                         skill: i,
                         part: s.part.clone(),
-                        state: s.end_state.clone(),
+                        state: s.end_state,
                     });
                     i += 1;
                 }
                 Ok(Outcome::Paused) => {
                     on_event(&ManagerEvent::Paused);
                     while self.control.paused.load(Ordering::SeqCst)
-                        && !self.control.abort.load(Ordering::SeqCst)
+                        && !self.control.abort.is_cancelled()
                     {
                         if let Err(e) = self.manual_commands(&mut client, on_event) {
                             return self.fail(i, e, on_event);
                         }
                         std::thread::sleep(Duration::from_millis(20));
                     }
-                    if !self.control.abort.load(Ordering::SeqCst) {
+                    if !self.control.abort.is_cancelled() {
                         on_event(&ManagerEvent::Resumed);
                     }
                 }
@@ -390,7 +472,7 @@ impl SkillManager {
                     ));
                     drop(client);
                     client = self
-                        .connect(Instant::now() + self.options.reconnect_timeout)
+                        .connect(Deadline::after(self.options.reconnect_timeout))
                         .map_err(|e| {
                             self.status[i] = SkillStatus::Failed(e.to_string());
                             on_event(&ManagerEvent::Failed(i, e.to_string()));
@@ -403,6 +485,35 @@ impl SkillManager {
         }
         on_event(&ManagerEvent::Done);
         Ok(())
+    }
+
+    /// The one run loop of every caller (the CLI and scripts): runs every pending skill
+    /// as [`run`](Self::run) does, writes each event to `log` (when there is one) and
+    /// then hands it to `sink`. A sink that says stop, or a log write that fails, stops
+    /// the run through the run's cancel token; a failed log write then wins over the
+    /// run's result ([`ManagerError::Log`]).
+    ///
+    /// # Errors
+    /// As [`run`](Self::run), and [`ManagerError::Log`].
+    pub fn run_logged(
+        &mut self,
+        mut log: Option<SkillLog>,
+        sink: &mut dyn RunSink,
+    ) -> Result<(), ManagerError> {
+        let cancel = self.control.abort.clone();
+        let result = self.run(&mut |e| {
+            if let Some(err) = log.as_mut().and_then(|l| l.record(e)) {
+                cancel.cancel();
+                sink.log_failed(err);
+            }
+            if !sink.event(e) {
+                cancel.cancel();
+            }
+        });
+        match log {
+            Some(l) => l.finish(result),
+            None => result,
+        }
     }
 
     fn fail(
@@ -452,7 +563,7 @@ impl SkillManager {
     }
 
     fn cancelled(&self) -> bool {
-        self.control.paused.load(Ordering::SeqCst) || self.control.abort.load(Ordering::SeqCst)
+        self.control.paused.load(Ordering::SeqCst) || self.control.abort.is_cancelled()
     }
 
     /// Runs skill `i` from command `done`; returns when done, paused or aborted.
@@ -536,7 +647,7 @@ impl SkillManager {
                     return Ok(Outcome::Done);
                 }
                 client.stop_motion()?;
-                if self.control.abort.load(Ordering::SeqCst) {
+                if self.control.abort.is_cancelled() {
                     Ok(Outcome::Aborted)
                 } else {
                     Ok(Outcome::Paused)
@@ -569,24 +680,25 @@ impl ManagerEvent {
         }
     }
 
-    /// The event as a log row: `(skill, event name, detail)`.
-    pub fn log_fields(&self) -> (Option<usize>, &'static str, String) {
+    /// The event as a log row: `(skill, event, detail)`.
+    pub fn log_fields(&self) -> (Option<usize>, SkillEvent, String) {
+        use SkillEvent as E;
         match self {
-            ManagerEvent::Connected(a) => (None, "connected", a.to_string()),
-            ManagerEvent::Started(i, d) => (Some(*i), "started", d.clone()),
+            ManagerEvent::Connected(a) => (None, E::Connected, a.to_string()),
+            ManagerEvent::Started(i, d) => (Some(*i), E::Started, d.clone()),
             ManagerEvent::Finished { skill, part, state } => {
-                (Some(*skill), "finished", format!("{part} {state}"))
+                (Some(*skill), E::Finished, format!("{part} {state}"))
             }
-            ManagerEvent::Interrupted(i, why) => (Some(*i), "interrupted", why.clone()),
-            ManagerEvent::Reconnected => (None, "reconnected", String::new()),
-            ManagerEvent::Paused => (None, "paused", String::new()),
-            ManagerEvent::Resumed => (None, "resumed", String::new()),
-            ManagerEvent::Edited(i) => (Some(*i), "edited", String::new()),
-            ManagerEvent::EditRefused(i, why) => (Some(*i), "edit_refused", why.clone()),
-            ManagerEvent::Manual(c) => (None, "manual", c.clone()),
-            ManagerEvent::Failed(i, why) => (Some(*i), "failed", why.clone()),
-            ManagerEvent::Aborted => (None, "aborted", String::new()),
-            ManagerEvent::Done => (None, "done", String::new()),
+            ManagerEvent::Interrupted(i, why) => (Some(*i), E::Interrupted, why.clone()),
+            ManagerEvent::Reconnected => (None, E::Reconnected, String::new()),
+            ManagerEvent::Paused => (None, E::Paused, String::new()),
+            ManagerEvent::Resumed => (None, E::Resumed, String::new()),
+            ManagerEvent::Edited(i) => (Some(*i), E::Edited, String::new()),
+            ManagerEvent::EditRefused(i, why) => (Some(*i), E::EditRefused, why.clone()),
+            ManagerEvent::Manual(c) => (None, E::Manual, c.clone()),
+            ManagerEvent::Failed(i, why) => (Some(*i), E::Failed, why.clone()),
+            ManagerEvent::Aborted => (None, E::Aborted, String::new()),
+            ManagerEvent::Done => (None, E::Done, String::new()),
         }
     }
 }
@@ -610,55 +722,58 @@ pub fn log_event(
     db.log_skill_event(run_id, plan_label, skill, part, name, &detail)
 }
 
+/// The database a [`SkillLog`] writes to: its own, or one shared with a script.
+pub enum LogDb {
+    /// A database of the log's own (the CLI's `--db`).
+    Owned(Box<crate::db::Database>),
+    /// A database other code uses too (a script's `open_db()`).
+    Shared(Arc<Mutex<crate::db::Database>>),
+}
+
 /// The skill log of one run: every event written to the results database as it
 /// happens ([`log_event`]), with one failure policy for every caller (CLI and scripts).
 ///
 /// The log is the record of what a machine did, so a run whose record would be
-/// incomplete does not go on: the first write that fails aborts the run through its
-/// [`ManagerHandle`] (the manager stops at the next skill boundary, never inside a
-/// motion), later events are not written, and [`SkillLog::finish`] turns the run's
-/// result into [`ManagerError::Log`].
+/// incomplete does not go on: the first write that fails stops the run through its
+/// cancel token ([`SkillManager::run_logged`]), later events are not written, and
+/// [`SkillLog::finish`] turns the run's result into [`ManagerError::Log`].
 pub struct SkillLog {
     run_id: Option<i64>,
     label: String,
     plan: Plan,
-    handle: ManagerHandle,
+    db: LogDb,
     failed: Option<crate::db::DbError>,
 }
 
 impl SkillLog {
     /// The log of a run of `plan` (stored under `label`, e.g. the plan file, and the
-    /// script's run when there is one), steering the run through `handle`.
-    pub fn new(
-        run_id: Option<i64>,
-        label: impl Into<String>,
-        plan: &Plan,
-        handle: ManagerHandle,
-    ) -> Self {
+    /// script's run when there is one) in `db`.
+    pub fn new(run_id: Option<i64>, label: impl Into<String>, plan: &Plan, db: LogDb) -> Self {
         Self {
             run_id,
             label: label.into(),
             plan: plan.clone(),
-            handle,
+            db,
             failed: None,
         }
     }
 
-    /// Writes one event. On the first failure the run is aborted and the error kept;
-    /// returns that error the first time (for a caller that shows it at once), `None`
-    /// otherwise.
-    pub fn record(
-        &mut self,
-        db: &mut crate::db::Database,
-        event: &ManagerEvent,
-    ) -> Option<&crate::db::DbError> {
+    /// Writes one event. On the first failure the error is kept and returned (for the
+    /// caller to stop the run and show it at once); `None` otherwise, and for every
+    /// event after a failure (not written).
+    pub fn record(&mut self, event: &ManagerEvent) -> Option<&crate::db::DbError> {
         if self.failed.is_some() {
             return None;
         }
-        match log_event(db, self.run_id, &self.label, &self.plan, event) {
+        let written = match &mut self.db {
+            LogDb::Owned(db) => log_event(db, self.run_id, &self.label, &self.plan, event),
+            LogDb::Shared(db) => {
+                log_event(&mut lock(db), self.run_id, &self.label, &self.plan, event)
+            }
+        };
+        match written {
             Ok(_) => None,
             Err(e) => {
-                self.handle.abort();
                 self.failed = Some(e);
                 self.failed.as_ref()
             }
@@ -702,36 +817,51 @@ mod log_tests {
     use crate::db::{Database, Target};
 
     #[test]
-    fn a_failed_log_write_stops_the_run_and_fails_it() {
+    fn a_failed_log_write_is_reported_once_and_fails_the_run() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("fitup.db");
-        let mut db = Database::open(&Target::Sqlite(path.clone())).unwrap();
+        let db = Database::open(&Target::Sqlite(path.clone())).unwrap();
         let plan = Plan {
             version: 1,
             robot: "arm".into(),
             joint_kinds: vec![],
             steps: vec![],
         };
-        let manager = SkillManager::new(plan.clone(), ManagerOptions::default());
-        let handle = manager.handle();
-        let mut log = SkillLog::new(None, "plan.json", &plan, handle.clone());
+        let mut log = SkillLog::new(None, "plan.json", &plan, LogDb::Owned(Box::new(db)));
         let event = ManagerEvent::Started(0, "Move".into());
-        assert!(log.record(&mut db, &event).is_none());
-        assert!(!handle.aborted());
+        assert!(log.record(&event).is_none());
+        assert!(!log.failed());
         // Another program breaks the table under the run: the next write fails.
         rusqlite::Connection::open(&path)
             .unwrap()
             .execute_batch("DROP TABLE skill_log")
             .unwrap();
         assert!(
-            log.record(&mut db, &event).is_some(),
+            log.record(&event).is_some(),
             "the first failure is reported"
         );
-        assert!(log.record(&mut db, &event).is_none(), "and only once");
-        assert!(handle.aborted(), "the run is stopped");
+        assert!(log.record(&event).is_none(), "and only once");
+        assert!(log.failed());
         match log.finish(Err(ManagerError::Aborted)) {
             Err(ManagerError::Log(e)) => assert!(e.to_string().contains("skill_log"), "{e}"),
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn a_linked_cancel_token_follows_its_outer_flag_and_reset_keeps_it() {
+        let outer = Arc::new(AtomicBool::new(false));
+        let handle = ManagerHandle::with_cancel(CancelToken::linked(outer.clone()));
+        assert!(!handle.aborted());
+        outer.store(true, Ordering::SeqCst);
+        assert!(handle.aborted());
+        handle.reset();
+        assert!(handle.aborted(), "reset clears only the token's own cancel");
+        outer.store(false, Ordering::SeqCst);
+        assert!(!handle.aborted());
+        handle.abort();
+        assert!(handle.cancel_token().is_cancelled());
+        handle.reset();
+        assert!(!handle.aborted());
     }
 }

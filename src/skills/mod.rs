@@ -15,6 +15,7 @@
 //!
 //! Units: millimetres and radians; every pose is part frame → assembly (world) frame.
 
+mod bind;
 pub mod chain;
 pub mod generator;
 pub mod manager;
@@ -22,16 +23,17 @@ mod precision;
 pub mod program;
 mod template;
 
+pub use bind::touch_index;
 pub use chain::{plan_chain, Chain, ChainError, ChainOptions};
 pub use generator::{
     generate, orientation_turns, screw_pose, segment_check_fn, skill_pose_at, turn_about,
     GeneratorOptions, SegmentCheck, SegmentHit, SkillError, TaskProblem,
 };
 pub use manager::{
-    log_event, ManagerError, ManagerEvent, ManagerHandle, ManagerOptions, SkillLog, SkillManager,
-    SkillStatus,
+    log_event, CancelToken, LogDb, ManagerError, ManagerEvent, ManagerHandle, ManagerOptions,
+    RunSink, SkillLog, SkillManager, SkillStatus,
 };
-pub use program::{touch_index, BindError, ControllerCommand, Plan, PlanStep};
+pub use program::{BindError, ControllerCommand, Plan, PlanStep};
 pub use template::{default_template, Template, TemplateError, Workflow};
 
 use crate::math::Transform;
@@ -153,6 +155,31 @@ impl PartState {
     /// Parses [`name`](Self::name).
     pub fn parse(s: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|a| a.name() == s)
+    }
+}
+
+impl std::fmt::Display for PartState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Stored by its [`name`](PartState::name), as plan files have always had it.
+impl serde::Serialize for PartState {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for PartState {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(d)?;
+        Self::parse(&text).ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "unknown state `{}` (FREE, In_WS, Grasped, Adjusted, Assembled)",
+                crate::diagnostics::shorten(&text, 80)
+            ))
+        })
     }
 }
 

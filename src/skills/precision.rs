@@ -171,15 +171,7 @@ pub(super) fn bind(
                 vec![t]
             }
         };
-        steps.push(PlanStep {
-            skill: s.id,
-            task: s.task,
-            part: s.part.clone(),
-            action: s.action.name().into(),
-            description: s.describe(),
-            end_state: s.end.1.name().into(),
-            commands,
-        });
+        steps.push(PlanStep::of(s, commands));
     }
     Ok(Plan::for_robot(robot, steps))
 }

@@ -185,7 +185,7 @@ impl<'d> Workspace<'d> {
     /// [`DocumentError::NotFound`] with close matches.
     pub fn index(&self, name: &str) -> Result<usize, WorkspaceError> {
         let i = self.doc.component_index(name)?;
-        if self.doc.components()[i].suppressed {
+        if self.doc.components()[i].is_suppressed() {
             return Err(DocumentError::Suppressed(self.doc.components()[i].name.clone()).into());
         }
         Ok(i)

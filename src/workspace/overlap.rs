@@ -56,7 +56,7 @@ impl Workspace<'_> {
         let scene = self.scene();
         let (ca, cb) = (&scene.colliders[ia], &scene.colliders[ib]);
         let (pa, pb) = (scene.poses[ia], scene.poses[ib]);
-        let start = std::time::Instant::now();
+        let deadline = crate::math::Deadline::after_ms(options.time_limit_ms);
         let volume = intersection_volume(ca, &pa, cb, &pb, options.time_limit_ms)
             .map_err(|e| WorkspaceError::overlap(a, b, e))?;
         if volume == 0.0 {
@@ -66,7 +66,7 @@ impl Workspace<'_> {
                 direction: Vec3::z(),
             });
         }
-        let left = (options.time_limit_ms - start.elapsed().as_secs_f64() * 1000.0).max(0.0);
+        let left = deadline.remaining().as_secs_f64() * 1000.0;
         let s = separation(
             ca,
             &pa,

@@ -136,7 +136,7 @@ impl Workspace<'_> {
         let index = self.index(name)?;
         let doc = self.document();
         Ok((0..doc.components().len())
-            .filter(|&i| i != index && !doc.components()[i].suppressed)
+            .filter(|&i| i != index && !doc.components()[i].is_suppressed())
             .filter_map(|i| doc.world_aabb(i))
             .reduce(|a, b| a.union(&b)))
     }

@@ -136,7 +136,11 @@ impl Scene {
             colliders,
             cells,
             poses: doc.components().iter().map(|c| c.transform).collect(),
-            active: doc.components().iter().map(|c| !c.suppressed).collect(),
+            active: doc
+                .components()
+                .iter()
+                .map(|c| !c.is_suppressed())
+                .collect(),
             verdicts: cache.verdicts.clone(),
         })
     }

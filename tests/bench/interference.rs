@@ -586,19 +586,7 @@ fn script_rows() {
             name.into(),
             PartFile::from_stl(format!("meshes/{name}.stl")),
         );
-        file.components.push(ComponentFile {
-            name: name.into(),
-            part: name.into(),
-            fixed: false,
-            color: None,
-            transform: None,
-            mass: None,
-            threaded: false,
-            fixture: false,
-            suppressed: false,
-            hidden: false,
-            properties: Default::default(),
-        });
+        file.components.push(ComponentFile::new(name, name, None));
     }
     std::fs::write(root.join("models/pair.yaml"), file.to_yaml().unwrap()).unwrap();
 

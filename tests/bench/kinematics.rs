@@ -2,10 +2,17 @@
 //! (flange as TCP), fitup against the `rs-opw-kinematics` crate, interleaved in one
 //! run (A, B, A, B…), CPU time per call from /proc/thread-self/schedstat, medians.
 //!
-//! Then the UR5e (UR closed form, offset wrist) against fitup's numeric solver on the
-//! same targets: CPU time per call and how many of the 8 branches each finds.
+//! With `FITUP_OPW_KIN_SRC` naming the C++ opw_kinematics include folder, its
+//! `inverse()` joins the MZ07 rounds (compiled at bench time, timed inside its driver).
 //!
-//! Run: `cargo bench --bench kinematics`
+//! Then the UR5e (UR closed form, offset wrist): with `FITUP_UR_KIN_SRC` naming the
+//! universal_robot checkout (tests/bench/ur_reference.sh), against ROS-Industrial's
+//! `ur_kin.cpp` `inverse()` (compiled at bench time with -O2 for `UR5e_PARAMS`,
+//! timed inside its driver) interleaved in the same run, each solving poses made by
+//! its own FK; then against fitup's numeric solver on the same targets: CPU time per
+//! call and how many of the 8 branches each finds. Neither reference is committed.
+//!
+//! Run: `FITUP_UR_KIN_SRC=… FITUP_OPW_KIN_SRC=… cargo bench --no-default-features --bench kinematics`
 
 use fitup::kinematics::{Catalog, ClosedFormIk, IkOptions, NumericIk, Robot};
 use fitup::math::{Rng, Transform};
@@ -14,10 +21,18 @@ use rs_opw_kinematics::kinematics_impl::OPWKinematics;
 use rs_opw_kinematics::parameters::opw_kinematics::Parameters;
 use std::hint::black_box;
 
+#[path = "../common/opw_kin.rs"]
+mod opw_kin;
+#[path = "../common/ur_kin.rs"]
+mod ur_kin;
+
 const CALLS: usize = 20_000;
 const ROUNDS: usize = 15;
 const IK_REPS: usize = 10;
 const FK_REPS: usize = 50;
+/// Targets handed to a C++ peer's driver, and its passes over them per measurement.
+const PEER_CALLS: usize = 2_000;
+const PEER_REPS: usize = 100;
 
 /// CPU time of this thread (ns), wall time as a fallback.
 fn cpu_ns() -> u64 {
@@ -56,6 +71,13 @@ fn loadavg() -> String {
 }
 
 fn main() {
+    // `FITUP_KIN_BENCH=ur`: only the UR5e against ur_kin.cpp (for profiling).
+    if std::env::var("FITUP_KIN_BENCH").is_ok_and(|v| v == "ur") {
+        let out_dir = std::env::temp_dir().join(format!("fitup-kin-bench-{}", std::process::id()));
+        ur_against_ur_kin(&out_dir);
+        let _ = std::fs::remove_dir_all(&out_dir);
+        return;
+    }
     // fitup: the catalog MZ07 with the tool at the flange (80 mm from the wrist centre).
     let mz07 = Catalog::NachiMz07.robot().with_tool(Transform::IDENTITY);
     let solver = mz07
@@ -106,6 +128,31 @@ fn main() {
         n_theirs as f64 / 1000.0
     );
 
+    // The C++ opw_kinematics, when its include folder is named: the same parameters,
+    // poses from its own FK (the first PEER_CALLS joint vectors), timed in its driver.
+    let out_dir = std::env::temp_dir().join(format!("fitup-kin-bench-{}", std::process::id()));
+    let mut opw_cpp = opw_kin::source().and_then(|src| {
+        opw_kin::OpwKin::build(
+            &src,
+            [50.0, -45.0, 0.0, 340.0, 330.0, 340.0, 80.0],
+            &out_dir,
+        )
+        .map_err(|e| eprintln!("opw_kinematics: {e}"))
+        .ok()
+    });
+    let cpp_targets: Vec<[f64; 16]> = match &mut opw_cpp {
+        Some(p) => joints.iter().take(PEER_CALLS).map(|q| p.fk(q)).collect(),
+        None => Vec::new(),
+    };
+    if let Some(p) = &mut opw_cpp {
+        let n: usize = cpp_targets.iter().take(1000).map(|t| p.ik(t).len()).sum();
+        println!(
+            "branches per pose (first 1000): C++ opw_kinematics {:.2}",
+            n as f64 / 1000.0
+        );
+    }
+    let mut ik_cpp: Vec<f64> = Vec::new();
+
     let mut ik_a: Vec<f64> = Vec::with_capacity(ROUNDS);
     let (mut ik_b, mut fk_a, mut fk_b, mut fk_tree, mut ik_full) = (
         ik_a.clone(),
@@ -127,6 +174,9 @@ fn main() {
                 black_box(peer.inverse(black_box(t)));
             }
         }));
+        if let Some(p) = &mut opw_cpp {
+            ik_cpp.push(p.bench(PEER_REPS, &cpp_targets).0);
+        }
         fk_a.push(per_call(FK_REPS, &mut || {
             for q in &joints {
                 black_box(solver.forward(black_box(q)));
@@ -170,10 +220,121 @@ fn main() {
         "| FK (closed form) | {fa:.1} ns | {fb:.1} ns | {:.2} |",
         fb / fa
     );
+    if !ik_cpp.is_empty() {
+        let ic = median(&mut ik_cpp);
+        println!(
+            "| all-branch IK, C++ opw_kinematics (same rounds) | {ia:.1} ns | {ic:.1} ns | {:.2} |",
+            ic / ia
+        );
+    }
     println!("| FK (generic tree walk, Robot::tcp_pose) | {ft:.1} ns | – | – |");
     println!("| Robot::inverse (limits, ±360° variants, sorted Vec) | {ifull:.1} ns | – | – |");
     println!("loadavg at end: {}", loadavg());
+    drop(opw_cpp);
+    ur_against_ur_kin(&out_dir);
+    let _ = std::fs::remove_dir_all(&out_dir);
     ur_against_numeric();
+}
+
+/// UR5e: fitup's all-branch closed form (`UrSolver::branches`) against ROS-Industrial's
+/// `ur_kin.cpp` `inverse()` (every solution in [0, 2π)), interleaved rounds, each on
+/// poses made by its own FK from the same joint vectors; skipped without
+/// `FITUP_UR_KIN_SRC`.
+fn ur_against_ur_kin(out_dir: &std::path::Path) {
+    let mut peer = ur_kin::source().and_then(|src| {
+        ur_kin::UrKin::build(&src, "UR5e", out_dir)
+            .map_err(|e| eprintln!("ur_kin.cpp: {e}"))
+            .ok()
+    });
+    let ur5e = Catalog::Ur5e.robot();
+    let solver = ur5e.ur_solver().expect("UR5e uses the UR solver").clone();
+    let mut rng = Rng::new(44);
+    let joints: Vec<[f64; 6]> = (0..PEER_CALLS)
+        .map(|_| {
+            let mut q = [0.0; 6];
+            for v in &mut q {
+                *v = rng.range(-std::f64::consts::PI, std::f64::consts::PI);
+            }
+            q
+        })
+        .collect();
+    let ours: Vec<_> = joints.iter().map(|q| solver.forward(q)).collect();
+    let theirs: Vec<[f64; 16]> = match &mut peer {
+        Some(p) => joints.iter().map(|q| p.fk(q)).collect(),
+        None => Vec::new(),
+    };
+    let n_ours: usize = ours.iter().map(|t| solver.branches(t, 1e-9).len()).sum();
+    // Each solves its own poses: the generating joints must be among the answers.
+    let wrap = |a: f64| {
+        let r = a.rem_euclid(std::f64::consts::TAU);
+        r.min(std::f64::consts::TAU - r)
+    };
+    let found = |sols: &[[f64; 6]], q: &[f64; 6]| {
+        sols.iter()
+            .any(|s| s.iter().zip(q).all(|(a, b)| wrap(a - b) < 1e-6))
+    };
+    let gen_ours = joints
+        .iter()
+        .zip(&ours)
+        .filter(|(q, t)| {
+            let br = solver.branches(t, 1e-9);
+            let sols: Vec<[f64; 6]> = br.as_slice().iter().map(|b| b.joints).collect();
+            found(&sols, q)
+        })
+        .count();
+    println!(
+        "\nUR5e, {PEER_CALLS} poses: fitup {:.2} solutions per pose, generating joints found {gen_ours}",
+        n_ours as f64 / PEER_CALLS as f64
+    );
+    if let Some(p) = &mut peer {
+        let n_theirs: usize = theirs.iter().map(|t| p.ik(t).len()).sum();
+        let gen_theirs = joints
+            .iter()
+            .zip(&theirs)
+            .filter(|(q, t)| found(&p.ik(t), q))
+            .count();
+        println!(
+            "ur_kin.cpp {:.2} solutions per pose, generating joints found {gen_theirs}",
+            n_theirs as f64 / PEER_CALLS as f64
+        );
+    }
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for round in 0..ROUNDS {
+        let t0 = cpu_ns();
+        for _ in 0..PEER_REPS {
+            for t in &ours {
+                black_box(solver.branches(black_box(t), 1e-9));
+            }
+        }
+        a.push((cpu_ns() - t0) as f64 / (PEER_REPS * PEER_CALLS) as f64);
+        if let Some(p) = &mut peer {
+            b.push(p.bench(PEER_REPS, &theirs).0);
+        }
+        println!(
+            "UR round {round:2}: UrSolver::branches {:7.1} ns | ur_kin.cpp inverse() {:7.1} ns | loadavg {}",
+            a[round],
+            b.last().copied().unwrap_or(f64::NAN),
+            loadavg()
+        );
+    }
+    let ma = median(&mut a);
+    let mb = if b.is_empty() {
+        f64::NAN
+    } else {
+        median(&mut b)
+    };
+    let (lo, hi) = (a[0], a[ROUNDS - 1]);
+    println!(
+        "\nUR5e, medians over {ROUNDS} rounds of {} calls (CPU time per call, one core):",
+        PEER_REPS * PEER_CALLS
+    );
+    println!("| operation | fitup | ur_kin.cpp | ratio (peer / fitup) |");
+    println!("|---|---|---|---|");
+    println!(
+        "| all-branch IK, UR closed form | {ma:.1} ns (rounds {lo:.1}–{hi:.1}) | {mb:.1} ns | {:.2} |",
+        mb / ma
+    );
+    println!("loadavg at end: {}", loadavg());
 }
 
 /// UR5e: all-branch closed form (`UrSolver::branches`, `Robot::inverse`) against the

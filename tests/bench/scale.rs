@@ -61,19 +61,11 @@ fn write_cell(dir: &Path, parts: usize) -> (std::path::PathBuf, usize) {
             PartFile::from_stl(format!("meshes/{name}.stl")),
         );
         let at = Vec3::new((i % side) as f64 * PITCH, (i / side) as f64 * PITCH, 0.0);
-        file.components.push(ComponentFile {
-            name: name.clone(),
-            part: name,
-            fixed: false,
-            color: None,
-            transform: Some(Transform::from_translation(at).to_matrix()),
-            mass: None,
-            threaded: false,
-            fixture: false,
-            suppressed: false,
-            hidden: false,
-            properties: Default::default(),
-        });
+        file.components.push(ComponentFile::new(
+            name.clone(),
+            name,
+            Some(Transform::from_translation(at).to_matrix()),
+        ));
     }
     let path = dir.join("cell.yaml");
     std::fs::write(&path, file.to_yaml().unwrap()).unwrap();

@@ -33,20 +33,15 @@ fn measure(extra: &[&str]) {
     file.parts
         .insert("sieve".into(), PartFile::from_stl("meshes/sieve.stl"));
     file.components.push(ComponentFile {
-        name: "sieve".into(),
-        part: "sieve".into(),
         fixed: true,
-        color: None,
-        transform: Some(
-            fitup::math::Transform::from_translation(fitup::math::Vec3::new(0.0, 0.0, 800.0))
-                .to_matrix(),
-        ),
-        mass: None,
-        threaded: false,
-        fixture: false,
-        suppressed: false,
-        hidden: false,
-        properties: Default::default(),
+        ..ComponentFile::new(
+            "sieve",
+            "sieve",
+            Some(
+                fitup::math::Transform::from_translation(fitup::math::Vec3::new(0.0, 0.0, 800.0))
+                    .to_matrix(),
+            ),
+        )
     });
     std::fs::write(models.join("big.yaml"), file.to_yaml().unwrap()).unwrap();
     // the project root: scripts/ resolves `models/…` against it

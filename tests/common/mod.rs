@@ -196,6 +196,20 @@ pub fn free_pair() -> u16 {
     panic!("no free port pair");
 }
 
+/// The motion and state addresses of a simulator's `listening` line
+/// (`… listening: motion 127.0.0.1:P, state 127.0.0.1:Q …`).
+pub fn listening_addrs(line: &str) -> (std::net::SocketAddr, std::net::SocketAddr) {
+    let addr = |key: &str| -> std::net::SocketAddr {
+        let rest = &line[line.find(key).unwrap() + key.len()..];
+        rest.split([',', ' '])
+            .find(|w| !w.is_empty())
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    (addr("motion "), addr("state "))
+}
+
 /// A `fitup manipulator` started by [`manipulator`]: killed when dropped.
 pub struct Manipulator {
     /// The process and its output.

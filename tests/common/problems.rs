@@ -179,31 +179,14 @@ impl Problem {
             .obstacles
             .iter()
             .map(|o| ComponentFile {
-                name: o.name.clone(),
-                part: o.part.clone(),
                 fixed: true,
                 color: Some(serde_yaml::Value::String("#8c8c8c".into())),
-                transform: Some(o.pose.to_matrix()),
-                mass: None,
-                threaded: false,
-                fixture: false,
-                suppressed: false,
-                hidden: false,
-                properties: Default::default(),
+                ..ComponentFile::new(&o.name, &o.part, Some(o.pose.to_matrix()))
             })
             .collect();
         components.push(ComponentFile {
-            name: "moving".into(),
-            part: self.moving_part.clone(),
-            fixed: false,
             color: Some(serde_yaml::Value::String("#d4a72c".into())),
-            transform: Some(self.start.to_matrix()),
-            mass: None,
-            threaded: false,
-            fixture: false,
-            suppressed: false,
-            hidden: false,
-            properties: Default::default(),
+            ..ComponentFile::new("moving", &self.moving_part, Some(self.start.to_matrix()))
         });
         DocumentFile {
             units: "mm".into(),

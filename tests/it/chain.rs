@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use fitup::db::{Database, SkillLogEntry, Target};
+use fitup::db::{Database, SkillEvent, SkillLogEntry, Target};
 use fitup::skills::Plan;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -36,14 +36,14 @@ fn assert_assembled(plan_file: &Path, db: &Path) {
     for event in ["started", "finished"] {
         let skills: Vec<i64> = log
             .iter()
-            .filter(|e| e.event == event)
+            .filter(|e| e.event_name() == event)
             .map(|e| e.skill.unwrap())
             .collect();
         let expected: Vec<i64> = (0..plan.steps.len() as i64).collect();
         assert_eq!(skills, expected, "`{event}` events of {}", db.display());
     }
     let mut state = BTreeMap::new();
-    for e in log.iter().filter(|e| e.event == "finished") {
+    for e in log.iter().filter(|e| e.event == Ok(SkillEvent::Finished)) {
         let (part, s) = e.detail.split_once(' ').unwrap();
         assert_eq!(Some(part), e.part.as_deref());
         state.insert(part.to_string(), s.to_string());
@@ -51,7 +51,7 @@ fn assert_assembled(plan_file: &Path, db: &Path) {
     for s in &plan.steps {
         assert_eq!(state[&s.part], "Assembled", "{}: {state:?}", s.part);
     }
-    assert_eq!(log.last().unwrap().event, "done");
+    assert_eq!(log.last().unwrap().event, Ok(SkillEvent::Done));
 }
 
 fn run(args: &[&str]) -> std::process::Output {

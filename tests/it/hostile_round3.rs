@@ -257,7 +257,7 @@ fn moves_plan(
                 part: "gear".into(),
                 action: "Move_Table".into(),
                 description: format!("#{i} Move_Table gear"),
-                end_state: "Adjusted".into(),
+                end_state: fitup::skills::PartState::Adjusted,
                 commands: vec![ControllerCommand::Trajectory(vec![
                     (from.clone(), 0.0),
                     (to.clone(), 1.0),

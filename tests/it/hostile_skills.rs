@@ -85,15 +85,7 @@ fn simulator(speed: &str) -> (Proc, SocketAddr, SocketAddr) {
         false,
     );
     let line = sim.out.wait_for("listening", Duration::from_secs(60));
-    let addr = |key: &str| -> SocketAddr {
-        let rest = &line[line.find(key).unwrap() + key.len()..];
-        rest.split([',', ' '])
-            .find(|w| !w.is_empty())
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
-    let (m, s) = (addr("motion "), addr("state "));
+    let (m, s) = common::listening_addrs(&line);
     (sim, m, s)
 }
 
@@ -112,7 +104,7 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
             part: "gear".into(),
             action: "Move_Table".into(),
             description: format!("#{i} Move_Table gear"),
-            end_state: "Grasped".into(),
+            end_state: fitup::skills::PartState::Grasped,
             commands: vec![ControllerCommand::Trajectory(vec![
                 (start, 0.0),
                 (end, seconds),

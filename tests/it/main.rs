@@ -48,6 +48,7 @@ mod step_cache;
 mod step_corpus;
 mod step_import;
 mod sub_assemblies;
+mod sub_documents;
 mod ur_ik;
 mod ur_real;
 mod urdf;

@@ -64,15 +64,7 @@ fn simulator_of(
         false,
     );
     let line = sim.wait_for("listening", Duration::from_secs(60));
-    let addr = |key: &str| -> SocketAddr {
-        let rest = &line[line.find(key).unwrap() + key.len()..];
-        rest.split([',', ' '])
-            .find(|w| !w.is_empty())
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
-    let (m, st) = (addr("motion "), addr("state "));
+    let (m, st) = common::listening_addrs(&line);
     (sim, m, st)
 }
 
@@ -333,11 +325,10 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
             action: "Move_Table".into(),
             description: format!("#{i} Move_Table gear"),
             end_state: if i + 1 == skills {
-                "Adjusted"
+                fitup::skills::PartState::Adjusted
             } else {
-                "Grasped"
-            }
-            .into(),
+                fitup::skills::PartState::Grasped
+            },
             commands: vec![
                 ControllerCommand::Trajectory(pts),
                 ControllerCommand::Tool {
@@ -448,8 +439,7 @@ fn killing_the_simulator_mid_skill_interrupts_and_resumes_without_repeating() {
     // The execution log is in the database, written as it happened.
     let mut db = fitup::db::Database::open(&fitup::db::Target::Sqlite(db_file.clone())).unwrap();
     let log = db.skill_log(None).unwrap();
-    let events: Vec<(Option<i64>, &str)> =
-        log.iter().map(|e| (e.skill, e.event.as_str())).collect();
+    let events: Vec<(Option<i64>, &str)> = log.iter().map(|e| (e.skill, e.event_name())).collect();
     let finished: Vec<_> = events.iter().filter(|e| e.1 == "finished").collect();
     assert_eq!(
         finished,

@@ -383,19 +383,19 @@ fn assert_assembled(plan: &Plan, db: &Path) {
     let log: Vec<_> = log.into_iter().filter(|e| e.run_id == last).collect();
     let finished: Vec<i64> = log
         .iter()
-        .filter(|e| e.event == "finished")
+        .filter(|e| e.event_name() == "finished")
         .map(|e| e.skill.unwrap())
         .collect();
     assert_eq!(finished, (0..plan.steps.len() as i64).collect::<Vec<_>>());
     let mut state = BTreeMap::new();
-    for e in log.iter().filter(|e| e.event == "finished") {
+    for e in log.iter().filter(|e| e.event_name() == "finished") {
         let (part, s) = e.detail.split_once(' ').unwrap();
         state.insert(part.to_string(), s.to_string());
     }
     for s in &plan.steps {
         assert_eq!(state[&s.part], "Assembled", "{state:?}");
     }
-    assert_eq!(log.last().unwrap().event, "done");
+    assert_eq!(log.last().unwrap().event_name(), "done");
 }
 
 /// docs/skills.md's commands for seed 003's experiment: in process, then over TCP to

@@ -184,15 +184,8 @@ fn manipulator(extra: &[&str]) -> (Proc, u16, SocketAddr, SocketAddr) {
     args.extend(extra);
     let mut sim = spawn(&args);
     let line = sim.wait_for("listening", Duration::from_secs(60));
-    let addr = |key: &str| -> SocketAddr {
-        let rest = &line[line.find(key).unwrap() + key.len()..];
-        rest.split([',', ' '])
-            .find(|w| !w.is_empty())
-            .unwrap()
-            .parse()
-            .unwrap()
-    };
-    (sim, p, addr("motion "), addr("state "))
+    let (m, st) = common::listening_addrs(&line);
+    (sim, p, m, st)
 }
 
 fn connect(a: SocketAddr) -> TcpStream {
@@ -664,7 +657,7 @@ fn plan() -> Plan {
             part: "gear".into(),
             action: "Move_Table".into(),
             description: format!("#{i} Move_Table gear"),
-            end_state: "Grasped".into(),
+            end_state: fitup::skills::PartState::Grasped,
             commands: vec![
                 ControllerCommand::Trajectory(pts),
                 ControllerCommand::Tool {

@@ -277,7 +277,7 @@ fn the_whole_chain_runs_on_the_simulated_mz07_until_assembled() {
     let states: Vec<&str> = events
         .iter()
         .filter_map(|e| match e {
-            ManagerEvent::Finished { state, .. } => Some(state.as_str()),
+            ManagerEvent::Finished { state, .. } => Some(state.name()),
             _ => None,
         })
         .collect();
@@ -341,7 +341,7 @@ fn a_pending_skill_can_be_edited_and_a_finished_one_cannot() {
                             part: "gear".into(),
                             action: "Touch".into(),
                             description: "changed".into(),
-                            end_state: "In_WS".into(),
+                            end_state: PartState::InWs,
                             commands: vec![],
                         },
                     );
@@ -421,4 +421,55 @@ fn fitup_skills_template_reports_located_errors() {
     assert!(o.status.success());
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("Grasped -> Adjusted: move"), "{out}");
+}
+
+/// The one run loop (`SkillManager::run_logged`, what the CLI and scripts use): a
+/// sink that says stop aborts the run at once, and a skill log that cannot be
+/// written stops it and fails it with the log's error, said to the sink once.
+#[test]
+fn the_one_run_loop_stops_on_its_sink_and_on_a_failed_log() {
+    use fitup::skills::{LogDb, ManagerError, RunSink, SkillLog, SkillStatus};
+    struct StopAfterFirst(Vec<ManagerEvent>, usize);
+    impl RunSink for StopAfterFirst {
+        fn event(&mut self, e: &ManagerEvent) -> bool {
+            self.0.push(e.clone());
+            !matches!(e, ManagerEvent::Finished { .. })
+        }
+        fn log_failed(&mut self, _: &fitup::db::DbError) {
+            self.1 += 1;
+        }
+    }
+    let (plan, sim, n) = chain(50.0);
+    assert!(n > 2);
+    let mut manager = SkillManager::new(plan.clone(), options_for(&sim));
+    let mut sink = StopAfterFirst(Vec::new(), 0);
+    let r = manager.run_logged(None, &mut sink);
+    assert!(matches!(r, Err(ManagerError::Aborted)), "{r:?}");
+    let finished = |events: &[ManagerEvent]| {
+        events
+            .iter()
+            .filter(|e| matches!(e, ManagerEvent::Finished { .. }))
+            .count()
+    };
+    assert_eq!(finished(&sink.0), 1, "{:?}", sink.0);
+    assert_eq!(manager.status()[0], SkillStatus::Finished);
+    assert_eq!(manager.status()[1], SkillStatus::Pending);
+
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fitup.db");
+    let db = fitup::db::Database::open(&fitup::db::Target::Sqlite(path.clone())).unwrap();
+    rusqlite::Connection::open(&path)
+        .unwrap()
+        .execute_batch("DROP TABLE skill_log")
+        .unwrap();
+    let log = SkillLog::new(None, "plan", &plan, LogDb::Owned(Box::new(db)));
+    let mut manager = SkillManager::new(plan, options_for(&sim));
+    let mut sink = StopAfterFirst(Vec::new(), 0);
+    match manager.run_logged(Some(log), &mut sink) {
+        Err(ManagerError::Log(e)) => assert!(e.to_string().contains("skill_log"), "{e}"),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(sink.1, 1, "the failed write is said once");
+    assert_eq!(finished(&sink.0), 0, "{:?}", sink.0);
+    assert_eq!(manager.status()[0], SkillStatus::Pending);
 }
