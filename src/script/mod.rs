@@ -329,6 +329,7 @@ impl Context {
 
     /// The run's cancellation flag (set by a newer save or Ctrl-C), for a library
     /// loop that stops on it (a skill run's cancel token).
+    #[cfg(feature = "skills")]
     pub(crate) fn cancel_flag(&self) -> Arc<AtomicBool> {
         self.cancel.clone()
     }
