@@ -50,6 +50,17 @@ pub struct DrillError {
     pub cause: String,
 }
 
+impl DrillError {
+    /// The file `file` could not be read (line 0).
+    fn unreadable(file: &str, e: impl std::fmt::Display) -> Self {
+        Self {
+            file: file.to_string(),
+            line: 0,
+            cause: format!("cannot read the file: {e}"),
+        }
+    }
+}
+
 /// Which axis of the TCP frame is the drill axis (pointing into the work, opposite the
 /// hole normal).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -258,12 +269,8 @@ pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
 /// Reads and parses a hole table file.
 pub fn read_holes(path: &Path) -> Result<Vec<Hole>, DrillError> {
     let name = path.display().to_string();
-    let text =
-        crate::fsutil::read_text(path, crate::fsutil::FileKind::Table).map_err(|e| DrillError {
-            file: name.clone(),
-            line: 0,
-            cause: format!("cannot read the file: {e}"),
-        })?;
+    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Table)
+        .map_err(|e| DrillError::unreadable(&name, e))?;
     parse_holes(&name, &text)
 }
 
@@ -278,11 +285,7 @@ pub fn read_holes_in(
     let name = project.display(path);
     let text = project
         .read_text(path, crate::fsutil::FileKind::Table)
-        .map_err(|e| DrillError {
-            file: name.clone(),
-            line: 0,
-            cause: format!("cannot read the file: {e}"),
-        })?;
+        .map_err(|e| DrillError::unreadable(&name, e))?;
     parse_holes(&name, &text)
 }
 

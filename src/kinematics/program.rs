@@ -78,6 +78,18 @@ pub struct ProgramError {
     pub cause: String,
 }
 
+impl ProgramError {
+    /// The file `file` could not be read (line and column 0).
+    fn unreadable(file: &str, e: impl std::fmt::Display) -> Self {
+        Self {
+            file: file.to_string(),
+            line: 0,
+            column: 0,
+            cause: format!("cannot read the file: {e}"),
+        }
+    }
+}
+
 /// A motion error while running a program, with the command's place.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{file}:{line}: {source}")]
@@ -203,14 +215,8 @@ pub fn parse_program(file: &str, text: &str) -> Result<Program, ProgramError> {
 /// Reads and parses a program file.
 pub fn read_program(path: &Path) -> Result<Program, ProgramError> {
     let name = path.display().to_string();
-    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Program).map_err(|e| {
-        ProgramError {
-            file: name.clone(),
-            line: 0,
-            column: 0,
-            cause: format!("cannot read the file: {e}"),
-        }
-    })?;
+    let text = crate::fsutil::read_text(path, crate::fsutil::FileKind::Program)
+        .map_err(|e| ProgramError::unreadable(&name, e))?;
     parse_program(&name, &text)
 }
 
@@ -225,12 +231,7 @@ pub fn read_program_in(
     let name = project.display(path);
     let text = project
         .read_text(path, crate::fsutil::FileKind::Program)
-        .map_err(|e| ProgramError {
-            file: name.clone(),
-            line: 0,
-            column: 0,
-            cause: format!("cannot read the file: {e}"),
-        })?;
+        .map_err(|e| ProgramError::unreadable(&name, e))?;
     parse_program(&name, &text)
 }
 
