@@ -21,6 +21,8 @@ use rs_opw_kinematics::kinematics_impl::OPWKinematics;
 use rs_opw_kinematics::parameters::opw_kinematics::Parameters;
 use std::hint::black_box;
 
+#[path = "../common/kin_driver.rs"]
+mod kin_driver;
 #[path = "../common/opw_kin.rs"]
 mod opw_kin;
 #[path = "../common/ur_kin.rs"]
@@ -132,7 +134,7 @@ fn main() {
     // poses from its own FK (the first PEER_CALLS joint vectors), timed in its driver.
     let out_dir = std::env::temp_dir().join(format!("fitup-kin-bench-{}", std::process::id()));
     let mut opw_cpp = opw_kin::source().and_then(|src| {
-        opw_kin::OpwKin::build(
+        opw_kin::build(
             &src,
             [50.0, -45.0, 0.0, 340.0, 330.0, 340.0, 80.0],
             &out_dir,
@@ -242,7 +244,7 @@ fn main() {
 /// `FITUP_UR_KIN_SRC`.
 fn ur_against_ur_kin(out_dir: &std::path::Path) {
     let mut peer = ur_kin::source().and_then(|src| {
-        ur_kin::UrKin::build(&src, "UR5e", out_dir)
+        ur_kin::build(&src, "UR5e", out_dir)
             .map_err(|e| eprintln!("ur_kin.cpp: {e}"))
             .ok()
     });

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod duct;
+pub mod kin_driver;
 pub mod lines;
 pub mod ur_kin;
 pub mod ur_urdf;

@@ -12,7 +12,7 @@
 //! from the universal_robot checkout in `FITUP_UR_KIN_SRC`; without them those parts
 //! are skipped with a note.
 
-use crate::common::ur_kin::{self, UrKin};
+use crate::common::ur_kin;
 use crate::common::ur_urdf::{ur_description, ROUNDED_ROLL};
 use fitup::kinematics::{parse_urdf, IkOptions, IkSolverKind, Robot};
 use fitup::math::{Rng, Transform};
@@ -333,7 +333,7 @@ fn branch_sets_equal_ur_kin_cpp() {
     let out_dir = std::env::temp_dir().join(format!("fitup-ur-kin-{}", std::process::id()));
     let params = ["UR3e", "UR5e", "UR10e", "UR16e"];
     for ((name, r), p) in real().iter().zip(params) {
-        let mut peer = UrKin::build(&src, p, &out_dir).unwrap();
+        let mut peer = ur_kin::build(&src, p, &out_dir).unwrap();
         // ur_kin's end effector in fitup's terms: tool0 · E, E fixed.
         let to_iso = |m: [f64; 16]| {
             let rot = nalgebra::Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
