@@ -310,3 +310,37 @@ pub fn manipulator(args: &[&str]) -> Manipulator {
     }
     panic!("fitup manipulator: no free ports after 5 starts");
 }
+
+/// The re-checks' way out after a removal path `way` (assembled → outside): straight
+/// on along its last move (or `fallback` when that move is a pure turn) in `step` mm
+/// steps until the part's box at the pose (`bounds_at`) is more than 0.5 mm clear of
+/// `region`, the box of everything placed before (at most 100,000 steps).
+pub fn straight_on_until_clear(
+    way: &[fitup::math::Transform],
+    fallback: fitup::math::Vec3,
+    step: f64,
+    region: &fitup::collision::Aabb,
+    bounds_at: impl Fn(&fitup::math::Transform) -> fitup::collision::Aabb,
+) -> Vec<fitup::math::Transform> {
+    let m = way.len();
+    let last = way[m - 1].translation() - way[m - 2].translation();
+    let d = if last.norm() > 1e-9 {
+        last.normalize()
+    } else {
+        fallback
+    };
+    let grown = fitup::collision::Aabb::new(
+        region.lo - fitup::math::Vec3::repeat(0.5),
+        region.hi + fitup::math::Vec3::repeat(0.5),
+    );
+    let mut at = way[m - 1];
+    let mut out = Vec::new();
+    for _ in 0..100_000 {
+        if bounds_at(&at).overlap(&grown).min() < 0.0 {
+            break;
+        }
+        at = fitup::math::Transform::from_parts(at.translation() + d * step, at.rotation());
+        out.push(at);
+    }
+    out
+}

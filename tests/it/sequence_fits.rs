@@ -223,7 +223,7 @@ fn dense_removal(c: &Checker, plan: &SequencePlan) {
                     );
                 }
             };
-            let mut way: Vec<Transform> = t.path.poses.iter().rev().copied().collect();
+            let way: Vec<Transform> = t.path.poses.iter().rev().copied().collect();
             assert!(
                 way[0].approx_eq(&c.poses[p], 1e-9, 1e-9),
                 "starts assembled"
@@ -233,23 +233,15 @@ fn dense_removal(c: &Checker, plan: &SequencePlan) {
             for q in t.path.densify(0.25, 0.01).expect("a finite path") {
                 check(&q, "along its path");
             }
-            let m = way.len();
-            let last = way[m - 1].translation() - way[m - 2].translation();
-            let d = if last.norm() > 1e-9 {
-                last.normalize()
-            } else {
-                -t.mating_direction
-            };
-            let mut at = way[m - 1];
-            for _ in 0..100_000 {
-                let b = bounds(p, &at);
-                let grown = Aabb::new(region.lo - Vec3::repeat(0.5), region.hi + Vec3::repeat(0.5));
-                if b.overlap(&grown).min() < 0.0 {
-                    break;
-                }
-                at = Transform::from_parts(at.translation() + d * 0.25, at.rotation());
+            let out = crate::common::straight_on_until_clear(
+                &way,
+                -t.mating_direction,
+                0.25,
+                &region,
+                |at| bounds(p, at),
+            );
+            for at in out {
                 check(&at, "straight on");
-                way.push(at);
             }
         }
     }

@@ -172,7 +172,7 @@ pub(crate) fn dense_removal_of(doc: &Document, sequences: &[Removal]) {
                     );
                 }
             };
-            let mut way: Vec<Transform> = t.path.iter().rev().copied().collect();
+            let way: Vec<Transform> = t.path.iter().rev().copied().collect();
             assert!(
                 way[0].approx_eq(&scene.poses[p], 1e-9, 1e-9),
                 "starts assembled"
@@ -188,7 +188,7 @@ pub(crate) fn dense_removal_of(doc: &Document, sequences: &[Removal]) {
                     t.mating_direction
                 );
             }
-            for w in way.clone().windows(2) {
+            for w in way.windows(2) {
                 let (a, b) = (w[0], w[1]);
                 let len = (b.translation() - a.translation()).norm();
                 let rot = a.rotation().angle_to(&b.rotation());
@@ -198,26 +198,15 @@ pub(crate) fn dense_removal_of(doc: &Document, sequences: &[Removal]) {
                 }
             }
             // Straight on until clear of everything placed before.
-            let m = way.len();
-            let last = way[m - 1].translation() - way[m - 2].translation();
-            let dir = if last.norm() > 1e-9 {
-                last.normalize()
-            } else {
-                -t.mating_direction
-            };
-            let mut at = way[m - 1];
-            for _ in 0..100_000 {
-                if scene.colliders[p]
-                    .world_bounds(&at)
-                    .overlap(&grow(&region, 0.5))
-                    .min()
-                    < 0.0
-                {
-                    break;
-                }
-                at = Transform::from_parts(at.translation() + dir * 0.2, at.rotation());
+            let out = crate::common::straight_on_until_clear(
+                &way,
+                -t.mating_direction,
+                0.2,
+                &region,
+                |at| scene.colliders[p].world_bounds(at),
+            );
+            for at in out {
                 check(&at, "straight on");
-                way.push(at);
             }
         }
     }
