@@ -38,13 +38,13 @@ fn segments(s: &str, delimiter: &str) -> usize {
     }
 }
 
-/// The segments `split(delimiter, n)` makes.
-fn segments_n(s: &str, delimiter: &str, n: INT) -> usize {
+/// The most segments `split(…, n)` asks for (Rhai: `n <= 1` keeps the string whole).
+fn limit(n: INT) -> usize {
     if n <= 1 {
-        return 1;
+        1
+    } else {
+        usize::try_from(n).unwrap_or(usize::MAX)
     }
-    let n = usize::try_from(n).unwrap_or(usize::MAX);
-    segments(s, delimiter).min(n)
 }
 
 fn segments_char(s: &str, delimiter: char) -> usize {
@@ -63,64 +63,71 @@ fn one(s: ImmutableString) -> Array {
     vec![s.into()]
 }
 
+/// Which end a split starts from: `split` the front, `split_rev` the back.
+#[derive(Clone, Copy)]
+enum End {
+    Front,
+    Back,
+}
+
+/// `s` split at the string `d` from `end`, into at most `n` segments (`None`: all),
+/// as Rhai splits it: an empty string, or one without a non-empty `d`, is one segment.
+fn split_str(s: ImmutableString, d: &str, n: Option<usize>, end: End) -> Array {
+    if n.is_some_and(|n| n <= 1) || s.is_empty() || (!d.is_empty() && !s.contains(d)) {
+        return one(s);
+    }
+    match (n, end) {
+        (None, End::Front) => s.split(d).map(segment).collect(),
+        (None, End::Back) => s.rsplit(d).map(segment).collect(),
+        (Some(n), End::Front) => s.splitn(n, d).map(segment).collect(),
+        (Some(n), End::Back) => s.rsplitn(n, d).map(segment).collect(),
+    }
+}
+
+/// [`split_str`] at the character `d`.
+fn split_char(s: ImmutableString, d: char, n: Option<usize>, end: End) -> Array {
+    if n.is_some_and(|n| n <= 1) || s.is_empty() || !s.contains(d) {
+        return one(s);
+    }
+    match (n, end) {
+        (None, End::Front) => s.split(d).map(segment).collect(),
+        (None, End::Back) => s.rsplit(d).map(segment).collect(),
+        (Some(n), End::Front) => s.splitn(n, d).map(segment).collect(),
+        (Some(n), End::Back) => s.rsplitn(n, d).map(segment).collect(),
+    }
+}
+
 /// Registers the counted builders (`max`: the sandbox's elements per array).
 pub(super) fn register(engine: &mut Engine, max: usize) {
-    engine.register_fn(
-        "split",
-        move |s: ImmutableString, d: ImmutableString| -> Built<Array> {
-            within(segments(&s, &d), max, "split")?;
-            let out: Array = if s.is_empty() || (!d.is_empty() && !s.contains(d.as_str())) {
-                one(s)
-            } else {
-                s.split(d.as_str()).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
-    engine.register_fn(
-        "split",
-        move |s: ImmutableString, d: ImmutableString, n: INT| -> Built<Array> {
-            within(segments_n(&s, &d, n), max, "split")?;
-            let out: Array = if n <= 1 || s.is_empty() || (!d.is_empty() && !s.contains(d.as_str()))
-            {
-                one(s)
-            } else {
-                let n = usize::try_from(n).unwrap_or(usize::MAX);
-                s.splitn(n, d.as_str()).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
-    engine.register_fn(
-        "split",
-        move |s: ImmutableString, d: char| -> Built<Array> {
-            within(segments_char(&s, d), max, "split")?;
-            let out: Array = if s.is_empty() || !s.contains(d) {
-                one(s)
-            } else {
-                s.split(d).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
-    engine.register_fn(
-        "split",
-        move |s: ImmutableString, d: char, n: INT| -> Built<Array> {
-            let count = if n <= 1 {
-                1
-            } else {
-                segments_char(&s, d).min(usize::try_from(n).unwrap_or(usize::MAX))
-            };
-            within(count, max, "split")?;
-            let out: Array = if n <= 1 || s.is_empty() || !s.contains(d) {
-                one(s)
-            } else {
-                let n = usize::try_from(n).unwrap_or(usize::MAX);
-                s.splitn(n, d).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
+    for (name, end) in [("split", End::Front), ("split_rev", End::Back)] {
+        engine.register_fn(
+            name,
+            move |s: ImmutableString, d: ImmutableString| -> Built<Array> {
+                within(segments(&s, &d), max, name)?;
+                Ok(split_str(s, &d, None, end))
+            },
+        );
+        engine.register_fn(
+            name,
+            move |s: ImmutableString, d: ImmutableString, n: INT| -> Built<Array> {
+                let n = limit(n);
+                within(segments(&s, &d).min(n), max, name)?;
+                Ok(split_str(s, &d, Some(n), end))
+            },
+        );
+        engine.register_fn(name, move |s: ImmutableString, d: char| -> Built<Array> {
+            within(segments_char(&s, d), max, name)?;
+            Ok(split_char(s, d, None, end))
+        });
+        engine.register_fn(
+            name,
+            move |s: ImmutableString, d: char, n: INT| -> Built<Array> {
+                let n = limit(n);
+                within(segments_char(&s, d).min(n), max, name)?;
+                Ok(split_char(s, d, Some(n), end))
+            },
+        );
+    }
     engine.register_fn("split", move |s: ImmutableString| -> Built<Array> {
         within(s.split_whitespace().count(), max, "split")?;
         let out: Array = if s.is_empty() {
@@ -130,62 +137,6 @@ pub(super) fn register(engine: &mut Engine, max: usize) {
         };
         Ok(out)
     });
-    engine.register_fn(
-        "split_rev",
-        move |s: ImmutableString, d: ImmutableString| -> Built<Array> {
-            within(segments(&s, &d), max, "split_rev")?;
-            let out: Array = if s.is_empty() || (!d.is_empty() && !s.contains(d.as_str())) {
-                one(s)
-            } else {
-                s.rsplit(d.as_str()).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
-    engine.register_fn(
-        "split_rev",
-        move |s: ImmutableString, d: ImmutableString, n: INT| -> Built<Array> {
-            within(segments_n(&s, &d, n), max, "split_rev")?;
-            let out: Array = if n <= 1 || s.is_empty() || (!d.is_empty() && !s.contains(d.as_str()))
-            {
-                one(s)
-            } else {
-                let n = usize::try_from(n).unwrap_or(usize::MAX);
-                s.rsplitn(n, d.as_str()).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
-    engine.register_fn(
-        "split_rev",
-        move |s: ImmutableString, d: char| -> Built<Array> {
-            within(segments_char(&s, d), max, "split_rev")?;
-            let out: Array = if s.is_empty() || !s.contains(d) {
-                one(s)
-            } else {
-                s.rsplit(d).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
-    engine.register_fn(
-        "split_rev",
-        move |s: ImmutableString, d: char, n: INT| -> Built<Array> {
-            let count = if n <= 1 {
-                1
-            } else {
-                segments_char(&s, d).min(usize::try_from(n).unwrap_or(usize::MAX))
-            };
-            within(count, max, "split_rev")?;
-            let out: Array = if n <= 1 || s.is_empty() || !s.contains(d) {
-                one(s)
-            } else {
-                let n = usize::try_from(n).unwrap_or(usize::MAX);
-                s.rsplitn(n, d).map(segment).collect()
-            };
-            Ok(out)
-        },
-    );
     engine.register_fn("to_chars", move |s: ImmutableString| -> Built<Array> {
         within(s.chars().count(), max, "to_chars")?;
         Ok(s.chars().map(Dynamic::from).collect())
@@ -239,6 +190,11 @@ mod tests {
             r#"s.split_rev("ll", 2)"#,
             "s.split_rev('l')",
             "s.split_rev('l', 3)",
+            "s.split_rev('z')",
+            r#"s.split_rev("ll", 0)"#,
+            r#"e.split_rev("")"#,
+            "s.split_rev('l', -1)",
+            r#"s.split_rev("zz", 5)"#,
             "t.to_chars()",
             "e.to_chars()",
             "t.to_blob()",
