@@ -89,7 +89,29 @@ impl fmt::Display for SourceError {
 
 /// The text of a file to quote from: a regular file of at most 16 MiB only (the error
 /// may be about a FIFO, a device or a huge file, which must not be read again).
+///
+/// The file is opened again by its name only to quote a line, so no link is followed
+/// anywhere along that name (Linux `openat2` with `RESOLVE_NO_SYMLINKS`): a folder of
+/// the path swapped for a link to an outside folder since the file was read gives no
+/// quote, never a line of the outside file. (Elsewhere: by name.)
 fn source_text(path: &Path) -> Option<String> {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{openat2, Mode, OFlags, ResolveFlags, CWD};
+        let fd = openat2(
+            CWD,
+            path,
+            OFlags::RDONLY | OFlags::NOFOLLOW | OFlags::NONBLOCK | OFlags::NOCTTY | OFlags::CLOEXEC,
+            Mode::empty(),
+            ResolveFlags::NO_SYMLINKS | ResolveFlags::NO_MAGICLINKS,
+        )
+        .ok()?;
+        let bytes =
+            crate::fsutil::read_opened(std::fs::File::from(fd), crate::fsutil::FileKind::Document)
+                .ok()?;
+        String::from_utf8(bytes).ok()
+    }
+    #[cfg(not(target_os = "linux"))]
     crate::fsutil::read_text(path, crate::fsutil::FileKind::Document).ok()
 }
 

@@ -159,7 +159,7 @@ pub enum ReadError {
     NotText(usize),
 }
 
-fn file_type_name(md: &std::fs::Metadata) -> &'static str {
+pub(crate) fn file_type_name(md: &std::fs::Metadata) -> &'static str {
     let t = md.file_type();
     #[cfg(unix)]
     {

@@ -137,25 +137,48 @@ impl Project {
     }
 
     /// Reads `path` as text, however the caller spelled it (relative to the working
-    /// folder, or through links the caller named): its folder is canonicalized, and a
-    /// file inside the project is read through the root's held handle
-    /// ([`read_text`](Self::read_text)); one outside it (a document given on the
-    /// command line with another `--root`) is read by its path.
+    /// folder, or through links the caller named). A path that lies inside the project
+    /// as written (made absolute against the working folder, without resolving links)
+    /// is read through the root's held handle ([`read_text`](Self::read_text)), never
+    /// by name: a folder on the way swapped for a link is refused, not followed. Only
+    /// when such a read meets a link is the folder resolved, and the file read through
+    /// the held handle if it lies inside the project (a link that leads out is
+    /// refused). A path outside the project as written and as resolved (a document
+    /// given on the command line with another `--root`) is read by its path.
     pub fn read_named_text(
         &self,
         path: &Path,
         kind: crate::fsutil::FileKind,
     ) -> Result<String, crate::fsutil::ReadError> {
+        let lexical = lexical_absolute(path).filter(|p| p.starts_with(&self.root));
+        if let Some(full) = &lexical {
+            match self.read_text(full, kind) {
+                Err(crate::fsutil::ReadError::Io(m)) if m.contains("symbolic link") => {}
+                other => return other,
+            }
+        }
         let parent = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
         let full = match (parent.canonicalize(), path.file_name()) {
             (Ok(dir), Some(name)) => dir.join(name),
+            _ if lexical.is_some() => {
+                return Err(crate::fsutil::ReadError::Io(format!(
+                    "{}: cannot resolve its folder",
+                    path.display()
+                )))
+            }
             _ => return crate::fsutil::read_text(path, kind),
         };
         if full.starts_with(&self.root) {
             self.read_text(&full, kind)
+        } else if lexical.is_some() {
+            Err(crate::fsutil::ReadError::Io(format!(
+                "{}: a symbolic link on the way leads outside the project folder {}: not followed",
+                path.display(),
+                self.root.display()
+            )))
         } else {
             crate::fsutil::read_text(path, kind)
         }
@@ -174,13 +197,57 @@ impl Project {
     /// let p = fitup::project::Project::for_file(&dir.path().join("scripts/a.rhai")).unwrap();
     /// assert_eq!(p.root(), dir.path().canonicalize().unwrap());
     /// ```
+    ///
+    /// The folders above the file are first searched as the path is written (made
+    /// absolute against the working folder): each candidate is opened without
+    /// following a link at its own name and asked for [`PROJECT_FILE`] through that
+    /// handle, so a folder of the path swapped for a link (to an outside folder that
+    /// holds a `fitup.toml`) is never taken as the root. Only when no folder on the
+    /// written path holds one are links resolved and the search made again.
     pub fn for_file(file: &Path) -> std::io::Result<Self> {
+        if let Some(p) = Self::for_written_file(file) {
+            return Ok(p);
+        }
         let file = file.canonicalize()?;
         let folder = file.parent().unwrap_or(Path::new("/"));
         if let Some(root) = folder.ancestors().find(|d| d.join(PROJECT_FILE).is_file()) {
             return Self::new(root);
         }
         Self::new(folder)
+    }
+
+    /// [`for_file`](Self::for_file)'s search along the path as written: the nearest
+    /// folder above `file` that is not itself a link and holds [`PROJECT_FILE`].
+    fn for_written_file(file: &Path) -> Option<Self> {
+        let abs = lexical_absolute(file)?;
+        for d in abs.parent()?.ancestors() {
+            let (Some(parent), Some(name)) = (d.parent(), d.file_name()) else {
+                break;
+            };
+            let Ok(dir) =
+                crate::fsutil::Dir::open(parent).and_then(|p| p.walk(Path::new(name), false))
+            else {
+                continue;
+            };
+            if !matches!(
+                dir.stat(std::ffi::OsStr::new(PROJECT_FILE)),
+                Ok(Some(crate::fsutil::Kind::File(_)))
+            ) {
+                continue;
+            }
+            // The root's canonical name is that of the folder opened (not a second
+            // lookup by name).
+            let root = dir
+                .raw_fd()
+                .and_then(|fd| std::fs::read_link(format!("/proc/self/fd/{fd}")).ok())
+                .filter(|r| r.is_absolute())
+                .or_else(|| d.canonicalize().ok())?;
+            return Some(Self {
+                root,
+                dir: std::sync::Arc::new(dir),
+            });
+        }
+        None
     }
 
     /// The canonical root folder.
@@ -362,6 +429,26 @@ impl Project {
             .display()
             .to_string()
     }
+}
+
+/// `path` made absolute against the working folder without resolving links, `.`
+/// dropped; `None` when it holds `..` (its meaning would depend on links) or the
+/// working folder is unknown.
+fn lexical_absolute(path: &Path) -> Option<PathBuf> {
+    let base = if path.is_absolute() {
+        PathBuf::new()
+    } else {
+        std::env::current_dir().ok()?
+    };
+    let mut out = base;
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => return None,
+            other => out.push(other.as_os_str()),
+        }
+    }
+    Some(out)
 }
 
 #[cfg(test)]

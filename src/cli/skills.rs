@@ -191,9 +191,21 @@ fn duration(s: f64, what: &str) -> Result<std::time::Duration, String> {
         .map_err(|_| format!("--{what} must be a number of seconds ≥ 0, got {s}"))
 }
 
+/// The text of a file named on the command line, read through its project's held
+/// root ([`crate::project::Project::read_named_text`]: a folder on the way swapped for
+/// a link is refused, never followed), as `fitup check` reads its document.
+fn read_in_its_project(file: &std::path::Path) -> Result<String, String> {
+    let project = crate::project::Project::for_file(file).map_err(|e| e.to_string())?;
+    project
+        .read_named_text(file, crate::fsutil::FileKind::Document)
+        .map_err(|e| e.to_string())
+}
+
 /// `fitup skills template FILE`.
 fn template(file: &std::path::Path) -> Exit {
-    match crate::skills::Template::read(file) {
+    let read =
+        read_in_its_project(file).map_err(|e| crate::diagnostics::SourceError::new(file, 0, 0, e));
+    match read.and_then(|text| crate::skills::Template::parse(file, &text)) {
         Ok(t) => {
             outln!("{}: {} template", file.display(), t.operation.name());
             for w in &t.workflows {
@@ -237,7 +249,7 @@ pub(super) fn skills(a: &SkillsArgs) -> Exit {
             return Exit::Usage;
         }
     };
-    let text = match crate::fsutil::read_text(plan, crate::fsutil::FileKind::Document) {
+    let text = match read_in_its_project(plan) {
         Ok(t) => t,
         Err(e) => {
             errln!("error: {}: {e}", plan.display());

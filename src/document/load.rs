@@ -406,6 +406,7 @@ impl Loader<'_> {
             let (mesh, geometry) = step_part(
                 pf,
                 &mesh_path,
+                &self.project,
                 &self.project.root().join(crate::mesh::step::STEP_STORE),
                 cache,
             )
@@ -909,6 +910,7 @@ fn parse_color(v: &serde_yaml::Value) -> Option<Color> {
 fn step_part(
     pf: &PartFile,
     file: &Path,
+    project: &Project,
     store: &Path,
     cache: &mut MeshCache,
 ) -> Result<(Arc<Mesh>, StepGeometry), String> {
@@ -928,7 +930,7 @@ fn step_part(
         ..StepOptions::default()
     };
     let got = cache
-        .get_step(file, &options, Some(store))
+        .get_step(file, Some(project), &options, Some(store))
         .map_err(|e| e.to_string())?;
     let geometry = StepGeometry {
         deflection: pf.deflection,

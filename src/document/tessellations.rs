@@ -47,31 +47,46 @@ pub fn in_use(root: &Path) -> InUse {
     let Ok(project) = crate::project::Project::new(root) else {
         return found;
     };
-    let mut stack = vec![(project.root().to_path_buf(), 0)];
+    // Walked from the root's held handle without following a link (a folder swapped
+    // for a link to an outside folder while this runs is skipped, never listed or
+    // read), each document read through the folder handle it was listed in.
+    let Ok(top) = project.folder(project.root(), false) else {
+        return found;
+    };
+    let mut stack = vec![(project.root().to_path_buf(), top, 0)];
     let mut seen = 0;
-    while let Some((dir, depth)) = stack.pop() {
-        let Ok(entries) = std::fs::read_dir(&dir) else {
+    while let Some((dir, handle, depth)) = stack.pop() {
+        let Ok(entries) = handle.entries() else {
             continue;
         };
-        for e in entries.flatten() {
+        for (name_os, kind) in entries {
             seen += 1;
             if seen > MAX_FILES {
                 return found;
             }
-            let name = e.file_name().to_string_lossy().into_owned();
-            let Ok(kind) = e.file_type() else { continue };
-            if kind.is_dir() {
+            let name = name_os.to_string_lossy().into_owned();
+            if kind == crate::fsutil::Kind::Dir {
                 if depth < MAX_DEPTH && !name.starts_with('.') && name != "target" {
-                    stack.push((e.path(), depth + 1));
+                    if let Ok(sub) = handle.walk(Path::new(&name_os), false) {
+                        stack.push((dir.join(&name_os), sub, depth + 1));
+                    }
                 }
                 continue;
             }
             let yaml = name.ends_with(".yaml") || name.ends_with(".yml");
-            if !kind.is_file() || !yaml {
+            if !matches!(kind, crate::fsutil::Kind::File(_)) || !yaml {
                 continue;
             }
-            let path = e.path();
-            let Ok(text) = crate::fsutil::read_text(&path, crate::fsutil::FileKind::Document)
+            let path = dir.join(&name_os);
+            let Ok(text) = handle
+                .open_file(&name_os)
+                .map_err(|e| crate::fsutil::ReadError::Io(e.to_string()))
+                .and_then(|f| crate::fsutil::read_opened(f, crate::fsutil::FileKind::Document))
+                .and_then(|b| {
+                    String::from_utf8(b).map_err(|e| {
+                        crate::fsutil::ReadError::NotText(e.utf8_error().valid_up_to())
+                    })
+                })
             else {
                 continue;
             };

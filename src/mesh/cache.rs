@@ -114,9 +114,13 @@ impl MeshCache {
     /// and angle: from memory while the file's stamp is unchanged, else read through
     /// the tessellation store `store` ([`read_step_stored`]; `None`: read with Open
     /// CASCADE every time the file changes).
+    ///
+    /// With `project`, the file is opened through the project's held root without
+    /// following a link ([`read_step_stored`]).
     pub fn get_step(
         &mut self,
         path: &Path,
+        project: Option<&Project>,
         options: &StepOptions,
         store: Option<&Path>,
     ) -> Result<StepMesh, StepError> {
@@ -134,11 +138,11 @@ impl MeshCache {
             }
         }
         let model = match store {
-            Some(store) => read_step_stored(path, options, store)?,
+            Some(store) => read_step_stored(path, project, options, store)?,
             None => read_step(path, options)?,
         };
         let mesh = StepMesh {
-            mesh: Arc::new(model.placed_mesh()),
+            mesh: Arc::new(model.placed_mesh()?),
             exact_volume: model.placed_exact_volume(),
             from_store: model.from_store,
         };

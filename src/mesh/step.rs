@@ -46,6 +46,7 @@ pub use store::{
 use super::{Mesh, MeshError};
 use crate::fsutil::{FileKind, ReadError};
 use crate::math::Transform;
+use crate::project::Project;
 use raw::RawModel;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -219,15 +220,40 @@ pub struct StepModel {
 impl StepModel {
     /// Every placed solid's mesh at its placement, as one mesh in the file's root frame
     /// (mm): a `step:` part's geometry. Each solid stays closed, so the whole is closed.
-    pub fn placed_mesh(&self) -> Mesh {
+    ///
+    /// # Errors
+    /// [`StepError::TooManyPlaced`]: the placed solids together have more than
+    /// [`MAX_TRIANGLES`](crate::mesh::MAX_TRIANGLES) triangles (counted before
+    /// anything is allocated: one small solid placed 100,000 times is refused, not
+    /// copied).
+    pub fn placed_mesh(&self) -> Result<Mesh, StepError> {
+        let triangles: u64 = self
+            .instances
+            .iter()
+            .map(|i| self.parts[i.part].mesh.triangles.len() as u64)
+            .sum();
+        let vertices: u64 = self
+            .instances
+            .iter()
+            .map(|i| self.parts[i.part].mesh.vertices.len() as u64)
+            .sum();
+        let cap = crate::mesh::MAX_TRIANGLES;
+        if triangles > cap as u64 || vertices > 3 * cap as u64 {
+            return Err(StepError::TooManyPlaced {
+                path: self.path.clone(),
+                instances: self.instances.len(),
+                triangles,
+                cap,
+            });
+        }
         let mut all = Mesh {
-            vertices: Vec::new(),
-            triangles: Vec::new(),
+            vertices: Vec::with_capacity(vertices as usize),
+            triangles: Vec::with_capacity(triangles as usize),
         };
         for inst in &self.instances {
             all.append(&self.parts[inst.part].mesh.transformed(&inst.transform));
         }
-        all
+        Ok(all)
     }
 
     /// The exact volume of every placed solid together, mm³.
@@ -471,6 +497,19 @@ pub enum StepError {
         /// The placement's scale factor (negative: mirrored).
         scale: f64,
     },
+    /// The placed solids together (a `step:` part's one mesh,
+    /// [`StepModel::placed_mesh`]) have more triangles than one mesh may hold.
+    #[error("{}: its {instances} placed solids have {triangles} triangles together, more than one mesh may hold ({cap}, MAX_TRIANGLES): give a coarser `deflection:`, or import the assembly (`fitup import`: one component per solid)", path.display())]
+    TooManyPlaced {
+        /// The file.
+        path: PathBuf,
+        /// How many solids are placed.
+        instances: usize,
+        /// Their triangles together.
+        triangles: u64,
+        /// The cap ([`crate::mesh::MAX_TRIANGLES`]).
+        cap: usize,
+    },
     /// A placement whose matrix is not a rotation and translation.
     #[error("{}: instance `{instance}`: its placement is not a rigid motion", path.display())]
     BadPlacement {
@@ -537,15 +576,35 @@ fn check_options(options: &StepOptions) -> Result<(), StepError> {
     Ok(())
 }
 
-/// Checks the file before Open CASCADE sees it: a regular file within the size cap
-/// that begins like a STEP file (so a mistaken path fails fast and clearly). Returns
-/// its bytes (the store's key is their hash).
-fn check_file(path: &Path) -> Result<Vec<u8>, StepError> {
+/// Opens and checks the file before Open CASCADE sees it: a regular file within the
+/// size cap that begins like a STEP file (so a mistaken path fails fast and clearly).
+/// With `project`, the file is opened through the project's held root without
+/// following a link ([`Project::open_file`]); without, by the path the caller named.
+/// Returns the opened file (what Open CASCADE is handed: it never looks the path up
+/// again) and its bytes (the store's key is their hash).
+fn check_file(
+    path: &Path,
+    project: Option<&Project>,
+) -> Result<(std::fs::File, Vec<u8>), StepError> {
+    let read = |source| StepError::Read {
+        path: path.into(),
+        source,
+    };
+    let io = |e: std::io::Error| read(ReadError::Io(e.to_string()));
+    let file = match project {
+        Some(p) => p.open_file(path).map_err(io)?,
+        None => {
+            let md = std::fs::metadata(path).map_err(io)?;
+            if !md.is_file() {
+                return Err(read(ReadError::NotRegular(crate::fsutil::file_type_name(
+                    &md,
+                ))));
+            }
+            std::fs::File::open(path).map_err(io)?
+        }
+    };
     let bytes =
-        crate::fsutil::read_file(path, FileKind::Step).map_err(|source| StepError::Read {
-            path: path.into(),
-            source,
-        })?;
+        crate::fsutil::read_opened(file.try_clone().map_err(io)?, FileKind::Step).map_err(read)?;
     let text = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes);
     let start = text
         .iter()
@@ -554,7 +613,7 @@ fn check_file(path: &Path) -> Result<Vec<u8>, StepError> {
     if !text[start..].starts_with(b"ISO-10303-21") {
         return Err(StepError::NotStep { path: path.into() });
     }
-    Ok(bytes)
+    Ok((file, bytes))
 }
 
 /// Reads a STEP file: its distinct solids meshed with `options`, its placed
@@ -566,8 +625,9 @@ pub fn read_step(path: &Path, options: &StepOptions) -> Result<StepModel, StepEr
         return Err(StepError::NotBuilt { path: path.into() });
     }
     check_options(options)?;
-    check_file(path)?;
-    let raw = read_raw(path, options)?;
+    let (file, bytes) = check_file(path, None)?;
+    drop(bytes);
+    let raw = read_raw(path, &file, options)?;
     from_raw(path, options, &raw, false, start)
 }
 
@@ -575,8 +635,14 @@ pub fn read_step(path: &Path, options: &StepOptions) -> Result<StepModel, StepEr
 /// missing): Open CASCADE's result for these bytes and this deflection and angle is
 /// taken from there when present and sound, else read and kept there (written by the
 /// write rule; a store that cannot be written only means the next read reads again).
+///
+/// With `project`, `path` (absolute, inside the project, as
+/// [`Project::resolve_from`] returns it) is opened through the project's held root
+/// without following a link, and Open CASCADE reads that opened file: a folder
+/// swapped for a link after the path was checked is refused, never read outside.
 pub fn read_step_stored(
     path: &Path,
+    project: Option<&Project>,
     options: &StepOptions,
     store: &Path,
 ) -> Result<StepModel, StepError> {
@@ -585,7 +651,7 @@ pub fn read_step_stored(
         return Err(StepError::NotBuilt { path: path.into() });
     }
     check_options(options)?;
-    let bytes = check_file(path)?;
+    let (file, bytes) = check_file(path, project)?;
     let key = store::StoreKey::new(&bytes, options);
     drop(bytes);
     if let Some(raw) = store::load_stored(store, &key) {
@@ -597,7 +663,8 @@ pub fn read_step_stored(
         drop(raw);
         store::discard(store, &key);
     }
-    let raw = read_raw(path, options)?;
+    let raw = read_raw(path, &file, options)?;
+    drop(file);
     // Only what makes a model is kept: an answer refused here (too many triangles, an
     // open solid) would otherwise be read whole from the store on every load, found
     // wanting and read again from the STEP file.
@@ -606,16 +673,43 @@ pub fn read_step_stored(
     Ok(model)
 }
 
-/// Open CASCADE's read, in this process or in a child.
-fn read_raw(path: &Path, options: &StepOptions) -> Result<RawModel, StepError> {
+/// Open CASCADE's read of the opened `file` (whose name, `path`, is only for
+/// messages), in this process or in a child: Open CASCADE opens it as
+/// `/proc/self/fd/N` (the child gets it as its standard input), the same file
+/// whatever is at `path` by now. (Without `/proc`, by `path`.)
+fn read_raw(
+    path: &Path,
+    file: &std::fs::File,
+    options: &StepOptions,
+) -> Result<RawModel, StepError> {
     let utf8 = path
         .to_str()
         .ok_or_else(|| StepError::NonUtf8Path { path: path.into() })?;
+    let by_fd = cfg!(unix) && Path::new("/proc/self/fd").is_dir();
     match &options.isolation {
         Isolation::InProcess => {
-            imp::occt_read(utf8, options).map_err(|what| shim_error(path, options, &what))
+            #[cfg(unix)]
+            let name = if by_fd {
+                use std::os::fd::AsRawFd;
+                format!("/proc/self/fd/{}", file.as_raw_fd())
+            } else {
+                utf8.to_string()
+            };
+            #[cfg(not(unix))]
+            let name = utf8.to_string();
+            imp::occt_read(&name, options).map_err(|what| shim_error(path, options, &what))
         }
-        Isolation::Child(child) => raw::read_in_child(path, options, child),
+        Isolation::Child(child) => {
+            let given = if by_fd {
+                Some(file.try_clone().map_err(|e| StepError::Child {
+                    path: path.into(),
+                    failure: ChildFailure::Io { kind: e.kind() },
+                })?)
+            } else {
+                None
+            };
+            raw::read_in_child(path, given, options, child)
+        }
     }
 }
 
@@ -1084,7 +1178,7 @@ mod tests {
         let start = std::time::Instant::now();
         let o = StepOptions::default();
         let m = from_raw(Path::new("b.step"), &o, &one_box(), false, start).unwrap();
-        assert!((m.placed_mesh().bounds().unwrap().lo.x - 5.0).abs() < 1e-12);
+        assert!((m.placed_mesh().unwrap().bounds().unwrap().lo.x - 5.0).abs() < 1e-12);
         assert!((m.placed_exact_volume() - 24.0).abs() < 1e-12);
         // A part index past the parts, a NaN placement, a face without triangles.
         let mut bad = one_box();

@@ -48,6 +48,67 @@ fn swapper(
     })
 }
 
+/// Opens of anything in a folder tree outside the project while a race runs, seen by
+/// inotify (`IN_OPEN`, `IN_ACCESS`, `IN_MODIFY`: a read or write through a swapped
+/// link opens the outside file; refusing the link opens nothing there).
+struct Opens {
+    fd: std::os::fd::OwnedFd,
+    names: std::collections::HashMap<i32, PathBuf>,
+}
+
+impl Opens {
+    fn watch(dir: &Path) -> Opens {
+        use rustix::fs::inotify;
+        let fd =
+            inotify::init(inotify::CreateFlags::NONBLOCK | inotify::CreateFlags::CLOEXEC).unwrap();
+        let mut names = std::collections::HashMap::new();
+        let mut stack = vec![dir.to_path_buf()];
+        while let Some(d) = stack.pop() {
+            let wd = inotify::add_watch(
+                &fd,
+                &d,
+                inotify::WatchFlags::OPEN
+                    | inotify::WatchFlags::ACCESS
+                    | inotify::WatchFlags::MODIFY,
+            )
+            .unwrap();
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                if std::fs::symlink_metadata(&p).unwrap().is_dir() {
+                    stack.push(p);
+                }
+            }
+            names.insert(wd, d);
+        }
+        // The walk above opened the folders: what it left queued is not the race's.
+        let _ = Opens::drain(&fd, &names);
+        Opens { fd, names }
+    }
+
+    /// What was opened, read or written since [`watch`](Self::watch) (path: events).
+    fn seen(self) -> Vec<String> {
+        Opens::drain(&self.fd, &self.names)
+    }
+
+    fn drain(
+        fd: &std::os::fd::OwnedFd,
+        names: &std::collections::HashMap<i32, PathBuf>,
+    ) -> Vec<String> {
+        use rustix::fs::inotify;
+        let mut buf = [std::mem::MaybeUninit::<u8>::uninit(); 4096];
+        let mut reader = inotify::Reader::new(fd, &mut buf);
+        let mut out = Vec::new();
+        while let Ok(e) = reader.next() {
+            let mut p = names.get(&e.wd()).cloned().unwrap_or_default();
+            if let Some(n) = e.file_name() {
+                p.push(n.to_string_lossy().as_ref());
+            }
+            out.push(format!("{}: {:?}", p.display(), e.events()));
+        }
+        out
+    }
+}
+
 /// Every file below `dir` whose name is a writer's temporary file.
 fn temporaries(dir: &Path) -> Vec<PathBuf> {
     common::snapshot(dir)
@@ -58,6 +119,29 @@ fn temporaries(dir: &Path) -> Vec<PathBuf> {
                 .is_some_and(|n| n.starts_with(".fitup-") && n.ends_with(".tmp"))
         })
         .collect()
+}
+
+/// Runs `work` while [`swapper`] swaps `folder` for a link to `outside`, then checks
+/// that the swapper ran (more than 10 swaps), that nothing below `outside` was even
+/// opened (inotify: no open of a file or folder there, [`Opens`]) and that nothing
+/// there was written: every file keeps its bytes (sha256), inode and modification
+/// time, and none appeared or vanished. The one setup of every race here.
+fn while_swapped<T>(folder: &Path, outside: &Path, work: impl FnOnce() -> T) -> T {
+    let ids = identities(outside);
+    let hashes = common::snapshot(outside);
+    let opens = Opens::watch(outside);
+    let stop = Arc::new(AtomicBool::new(false));
+    let swap = swapper(folder.to_path_buf(), outside.to_path_buf(), stop.clone());
+    let out = work();
+    stop.store(true, Ordering::Relaxed);
+    let swaps = swap.join().unwrap();
+    let opened = opens.seen();
+    eprintln!("{swaps} swaps of {}", folder.display());
+    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
+    assert_eq!(opened, Vec::<String>::new(), "opened outside");
+    assert_eq!(identities(outside), ids, "written outside");
+    assert_eq!(common::snapshot(outside), hashes, "changed outside");
+    out
 }
 
 /// A script writing outputs into `out/` 300 times while `out` is swapped for a link
@@ -74,16 +158,11 @@ fn outputs_never_land_outside_while_their_folder_is_swapped() {
     )
     .unwrap();
     let before = common::snapshot(p);
-    let stop = Arc::new(AtomicBool::new(false));
-    let swap = swapper(p.join("out"), outside.path().to_path_buf(), stop.clone());
-    let r = crate::hostile_bounds::run(p, &["run", "scripts/write.rhai"]);
-    stop.store(true, Ordering::Relaxed);
-    let swaps = swap.join().unwrap();
-    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    let r = while_swapped(&p.join("out"), outside.path(), || {
+        crate::hostile_bounds::run(p, &["run", "scripts/write.rhai"])
+    });
+    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
     assert_eq!(r.code, Some(0), "{}", r.text);
-    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
-    let leaked: Vec<_> = std::fs::read_dir(outside.path()).unwrap().collect();
-    assert!(leaked.is_empty(), "written outside: {leaked:?}");
     assert_eq!(
         temporaries(p),
         Vec::<PathBuf>::new(),
@@ -116,41 +195,33 @@ fn the_mesh_cache_never_reads_through_a_swapped_folder() {
         let name = f.unwrap().file_name();
         fitup::mesh::write_stl(&outside.path().join(&name), &other).unwrap();
     }
-    let outside_before = common::snapshot(outside.path());
     let inside = crate::hostile_bounds::run(p, &["check", "models/cell.yaml"]);
     assert_eq!(inside.code, Some(0), "{}", inside.text);
     assert!(!inside.text.contains(" 24 triangles"), "{}", inside.text);
     let before = common::snapshot(p);
-    let stop = Arc::new(AtomicBool::new(false));
-    let swap = swapper(
-        p.join("models/meshes"),
-        outside.path().to_path_buf(),
-        stop.clone(),
-    );
-    let (mut ok, mut refused) = (0, 0);
-    for _ in 0..40 {
-        let r = crate::hostile_bounds::run(p, &["check", "models/cell.yaml"]);
-        assert!(!r.text.contains("panicked"), "{}", r.text);
-        assert!(
-            !r.text.contains(" 24 triangles"),
-            "the outside mesh was loaded:\n{}",
-            r.text
-        );
-        match r.code {
-            Some(0) => ok += 1,
-            Some(1) => {
-                // Located: the document line of the part.
-                assert!(r.text.contains("cell.yaml:"), "{}", r.text);
-                refused += 1;
+    let (ok, refused) = while_swapped(&p.join("models/meshes"), outside.path(), || {
+        let (mut ok, mut refused) = (0, 0);
+        for _ in 0..40 {
+            let r = crate::hostile_bounds::run(p, &["check", "models/cell.yaml"]);
+            assert!(!r.text.contains("panicked"), "{}", r.text);
+            assert!(
+                !r.text.contains(" 24 triangles"),
+                "the outside mesh was loaded:\n{}",
+                r.text
+            );
+            match r.code {
+                Some(0) => ok += 1,
+                Some(1) => {
+                    // Located: the document line of the part.
+                    assert!(r.text.contains("cell.yaml:"), "{}", r.text);
+                    refused += 1;
+                }
+                other => panic!("exit {other:?}: {}", r.text),
             }
-            other => panic!("exit {other:?}: {}", r.text),
         }
-    }
-    stop.store(true, Ordering::Relaxed);
-    let swaps = swap.join().unwrap();
-    eprintln!("{swaps} swaps; {ok} runs read the inside meshes, {refused} were refused");
-    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
-    assert_eq!(common::snapshot(outside.path()), outside_before);
+        (ok, refused)
+    });
+    eprintln!("{ok} runs read the inside meshes, {refused} were refused");
     assert_eq!(common::snapshot(p), before);
 }
 
@@ -215,26 +286,11 @@ print(`saved ${ok} of 400 (${tries} opens refused)`);\n",
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(r.text.contains("saved 400 of 400"), "{}", r.text);
     std::fs::copy(p.join("docs/cell.yaml"), outside.path().join("cell.yaml")).unwrap();
-    let outside_before = identities(outside.path());
-    let outside_hashes = common::snapshot(outside.path());
-    let stop = Arc::new(AtomicBool::new(false));
-    let swap = swapper(p.join("docs"), outside.path().to_path_buf(), stop.clone());
-    let r = crate::hostile_bounds::run_within(
-        p,
-        &["run", "scripts/save.rhai"],
-        Duration::from_secs(60),
-    );
-    stop.store(true, Ordering::Relaxed);
-    let swaps = swap.join().unwrap();
-    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    let r = while_swapped(&p.join("docs"), outside.path(), || {
+        crate::hostile_bounds::run_within(p, &["run", "scripts/save.rhai"], Duration::from_secs(60))
+    });
+    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
     assert_eq!(r.code, Some(0), "{}", r.text);
-    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
-    assert_eq!(
-        identities(outside.path()),
-        outside_before,
-        "written outside"
-    );
-    assert_eq!(common::snapshot(outside.path()), outside_hashes);
     assert_eq!(
         temporaries(p),
         Vec::<PathBuf>::new(),
@@ -294,24 +350,12 @@ print(`stored ${ok} in ${tries} tries ${errs}`);
     };
     assert_eq!(count(&p.join("data/x.db")), 200);
     std::fs::copy(p.join("data/x.db"), outside.path().join("x.db")).unwrap();
-    let outside_before = identities(outside.path());
-    let outside_hashes = common::snapshot(outside.path());
-    let stop = Arc::new(AtomicBool::new(false));
-    let swap = swapper(p.join("data"), outside.path().to_path_buf(), stop.clone());
-    let r =
-        crate::hostile_bounds::run_within(p, &["run", "scripts/db.rhai"], Duration::from_secs(60));
-    stop.store(true, Ordering::Relaxed);
-    let swaps = swap.join().unwrap();
-    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    let r = while_swapped(&p.join("data"), outside.path(), || {
+        crate::hostile_bounds::run_within(p, &["run", "scripts/db.rhai"], Duration::from_secs(60))
+    });
+    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(!r.text.contains("panicked"), "{}", r.text);
-    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
-    assert_eq!(
-        identities(outside.path()),
-        outside_before,
-        "opened for writing outside"
-    );
-    assert_eq!(common::snapshot(outside.path()), outside_hashes);
     let stored: i64 = r
         .text
         .split("stored ")
@@ -400,27 +444,192 @@ print(`seen ${seen}`);
         r.text
     );
     let before = common::snapshot(p);
-    let outside_before = identities(o);
-    let outside_hashes = common::snapshot(o);
-    let stop = Arc::new(AtomicBool::new(false));
-    let swap = swapper(p.join("data"), o.to_path_buf(), stop.clone());
-    let r = crate::hostile_bounds::run_within(
-        p,
-        &["run", "scripts/read.rhai"],
-        Duration::from_secs(120),
-    );
-    stop.store(true, Ordering::Relaxed);
-    let swaps = swap.join().unwrap();
-    eprintln!("{swaps} swaps; peak {} kB; {}", r.peak_kb, r.text.trim());
+    let r = while_swapped(&p.join("data"), o, || {
+        crate::hostile_bounds::run_within(
+            p,
+            &["run", "scripts/read.rhai"],
+            Duration::from_secs(120),
+        )
+    });
+    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(!r.text.contains("panicked"), "{}", r.text);
-    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
     assert!(
         r.text.contains("\"outside\": 0,"),
         "an outside file was read: {}",
         r.text
     );
-    assert_eq!(identities(o), outside_before, "changed outside");
-    assert_eq!(common::snapshot(o), outside_hashes);
+    assert_eq!(common::snapshot(p), before, "a user file changed");
+}
+
+/// Runs `fitup ARGS` in `p` 30 times while `data/` is swapped for a link to `outside`
+/// (whose files carry `marker`): no run shows the marker in any case (an outside file
+/// was never read), every run shows `inside` (it read the inside file) or ends with
+/// exit 1 or 2 naming `file`, and at least one run read the inside file. Returns (inside reads, refusals).
+fn cli_reads_while_swapped(
+    p: &Path,
+    outside: &Path,
+    args: &[&str],
+    file: &str,
+    inside: &str,
+    marker: &str,
+) -> (usize, usize) {
+    let before = common::snapshot(p);
+    let seen = while_swapped(&p.join("data"), outside, || {
+        let (mut read, mut refused) = (0, 0);
+        for _ in 0..30 {
+            let r = crate::hostile_bounds::run(p, args);
+            assert!(!r.text.contains("panicked"), "{}", r.text);
+            assert!(
+                !r.text.to_lowercase().contains(&marker.to_lowercase()),
+                "an outside file was read:\n{}",
+                r.text
+            );
+            // Exit 2: the command-line path itself was refused (resolved outside).
+            assert!(
+                matches!(r.code, Some(0..=2)),
+                "exit {:?}: {}",
+                r.code,
+                r.text
+            );
+            if r.text.contains(inside) {
+                read += 1;
+            } else {
+                assert_ne!(r.code, Some(0), "{}", r.text);
+                assert!(r.text.contains(file), "not located: {}", r.text);
+                refused += 1;
+            }
+        }
+        (read, refused)
+    });
+    eprintln!("{args:?}: {} inside reads, {} refused", seen.0, seen.1);
+    assert!(seen.0 > 0, "the inside file was never read");
+    assert_eq!(common::snapshot(p), before, "a user file changed");
+    seen
+}
+
+/// `fitup skills template FILE` and `fitup skills run PLAN` read the file they are
+/// given through its project's held root (the project found along the path as
+/// written): while `data/` is swapped for a link to a folder holding a template of
+/// another operation and a plan that names itself, neither outside file is ever read
+/// (not even when the outside folder holds a `fitup.toml` of its own).
+#[test]
+fn cli_skills_reads_never_go_through_a_swapped_folder() {
+    let dir = common::project();
+    let p = dir.path();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    std::fs::create_dir(p.join("data")).unwrap();
+    let template = |op: &str| {
+        std::fs::read_to_string(common::repo().join(format!("models/templates/{op}.yaml"))).unwrap()
+    };
+    std::fs::write(p.join("data/t.yaml"), template("insertion")).unwrap();
+    std::fs::write(o.join("t.yaml"), template("screw")).unwrap();
+    // The inside plan is refused for a missing field; the outside one, a JSON string,
+    // would be quoted in its refusal.
+    std::fs::write(p.join("data/plan.json"), "{}").unwrap();
+    std::fs::write(o.join("plan.json"), "\"FROMOUTSIDE\"").unwrap();
+    std::fs::write(o.join("fitup.toml"), "").unwrap();
+    let r = crate::hostile_bounds::run(p, &["skills", "template", "data/t.yaml"]);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(r.text.contains("insertion template"), "{}", r.text);
+    let (read, _) = cli_reads_while_swapped(
+        p,
+        o,
+        &["skills", "template", "data/t.yaml"],
+        "data/t.yaml",
+        "insertion template",
+        "screw",
+    );
+    assert!(read > 0);
+    let r = crate::hostile_bounds::run(p, &["skills", "run", "data/plan.json", "--plain"]);
+    assert_eq!(r.code, Some(1), "{}", r.text);
+    assert!(r.text.contains("missing field"), "{}", r.text);
+    cli_reads_while_swapped(
+        p,
+        o,
+        &["skills", "run", "data/plan.json", "--plain"],
+        "data/plan.json",
+        "missing field",
+        "FROMOUTSIDE",
+    );
+}
+
+/// `fitup run PROGRAM --doc DOC` reads the motion program through the project's held
+/// root: while `data/` is swapped for a link to a folder holding another program of
+/// the same name (an instruction of its own), the outside program is never read.
+#[test]
+fn cli_programs_never_go_through_a_swapped_folder() {
+    let dir = common::project();
+    let p = dir.path();
+    fitup::demo::write_robots(&p.join("models")).unwrap();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    std::fs::create_dir(p.join("data")).unwrap();
+    std::fs::write(
+        p.join("data/p.prg"),
+        "Interval 0.05\nJoint 0 0 0 0 0 0\nJoint 10 0 0 0 0 0\n",
+    )
+    .unwrap();
+    std::fs::write(o.join("p.prg"), "FROMOUTSIDE 1\n").unwrap();
+    std::fs::write(o.join("fitup.toml"), "").unwrap();
+    let args = ["run", "data/p.prg", "--doc", "models/mz07.yaml"];
+    let r = crate::hostile_bounds::run(p, &args);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    // The log: its header, and the last Joint command's row.
+    assert!(r.text.starts_with("t_s,j1_deg"), "{}", r.text);
+    assert!(r.text.contains(",10.000000,"), "{}", r.text);
+    cli_reads_while_swapped(p, o, &args, "p.prg", "t_s,j1_deg", "FROMOUTSIDE");
+}
+
+/// `fitup watch` hashes the files a run read (to tell a save from a touch) through the
+/// project's held root: while the folder of a module and a hole table the script read
+/// is swapped for a link to a folder holding files of the same names, the watcher
+/// (its hashing, its reruns, its file-system watch) never opens anything outside.
+#[test]
+fn watch_never_hashes_through_a_swapped_folder() {
+    let dir = common::project();
+    let p = dir.path();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    std::fs::create_dir(p.join("data")).unwrap();
+    for (d, who, holes) in [
+        (p.join("data"), "inside", 3),
+        (o.to_path_buf(), "outside", 1),
+    ] {
+        std::fs::write(d.join("m.rhai"), format!("export const WHO = \"{who}\";\n")).unwrap();
+        let rows: String = (0..holes)
+            .map(|i| format!("h{i},{i},0,0,0,0,1\n"))
+            .collect();
+        std::fs::write(d.join("holes.csv"), format!("id,x,y,z,nx,ny,nz\n{rows}")).unwrap();
+    }
+    std::fs::write(
+        p.join("scripts/w.rhai"),
+        "import \"../data/m\" as m;\nlet h = load_holes(\"data/holes.csv\");\nprint(`who ${m::WHO} ${h.len()}`);\n",
+    )
+    .unwrap();
+    let before = common::snapshot(p);
+    let mut w = common::Watch::start(p, "scripts/w.rhai", &[]);
+    w.out.wait_for("== done 1 ok", Duration::from_secs(60));
+    assert!(
+        w.out.seen.iter().any(|l| l == "who inside 3"),
+        "{:?}",
+        w.out.seen
+    );
+    while_swapped(&p.join("data"), o, || {
+        // The swapper's bounded swaps, and the reruns they cause; then the watch is
+        // stopped (a bound on the test, not a speed assertion).
+        std::thread::sleep(Duration::from_secs(3));
+    });
+    w.out.quiet(Duration::from_millis(500));
+    let all = w.out.seen.join("\n");
+    drop(w);
+    let reruns = all.matches("== run ").count();
+    eprintln!("{reruns} runs under watch");
+    assert!(
+        !all.contains("who outside"),
+        "an outside file was read: {all}"
+    );
+    assert!(!all.contains("panicked"), "{all}");
     assert_eq!(common::snapshot(p), before, "a user file changed");
 }

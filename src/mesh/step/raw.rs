@@ -209,6 +209,7 @@ pub(super) fn encode_model(w: &mut Writer, m: &RawModel) {
     w.u64(m.peak_memory);
 }
 
+#[cfg(test)]
 pub(super) fn decode_model(r: &mut Reader) -> Result<RawModel, Bad> {
     decode_model_within(r, usize::MAX)
 }
@@ -297,11 +298,14 @@ fn max_reply(options: &StepOptions) -> u64 {
 }
 
 /// Runs the read in a child: `program __step-read FILE REPLY LINEAR ANGULAR
-/// TIME_LIMIT_S MAX_TRIANGLES MEMORY_LIMIT`, stdout to nowhere, stderr kept (a few
+/// TIME_LIMIT_S MAX_TRIANGLES MEMORY_LIMIT`; with `file` (the STEP file already opened
+/// through the jail), that file is the child's standard input and FILE is
+/// `/proc/self/fd/0`, so the child never looks the user's path up. Stdout to nowhere, stderr kept (a few
 /// KB) to tell an exhausted memory cap from a crash, killed at the time limit plus
 /// [`grace`].
 pub(super) fn read_in_child(
     path: &Path,
+    file: Option<std::fs::File>,
     options: &StepOptions,
     child: &ChildReader,
 ) -> Result<RawModel, StepError> {
@@ -323,14 +327,18 @@ pub(super) fn read_in_child(
     let start = Instant::now();
     let mut proc = std::process::Command::new(&child.program)
         .arg(CHILD_COMMAND)
-        .arg(path)
+        .arg(if file.is_some() {
+            Path::new("/proc/self/fd/0")
+        } else {
+            path
+        })
         .arg(&reply)
         .arg(options.linear_deflection.to_string())
         .arg(options.angular_deflection.to_string())
         .arg(options.time_limit.as_secs_f64().to_string())
         .arg(options.max_triangles.to_string())
         .arg(child.memory_limit.to_string())
-        .stdin(std::process::Stdio::null())
+        .stdin(file.map_or_else(std::process::Stdio::null, std::process::Stdio::from))
         .stdout(std::process::Stdio::null())
         .stderr(stderr)
         .spawn()
@@ -400,33 +408,32 @@ pub(super) fn read_in_child(
             code: status.code().unwrap_or(-1),
         }));
     }
-    let bytes = crate::fsutil::file_head(&reply, max_reply(options) + 1).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::NotFound {
-            fail(ChildFailure::BadReply {
-                program: child.program.clone(),
-                what: "missing",
-            })
-        } else {
-            io(e)
-        }
-    })?;
     let bad = |what| {
         fail(ChildFailure::BadReply {
             program: child.program.clone(),
             what,
         })
     };
-    if bytes.len() as u64 > max_reply(options) {
+    // Decoded as it is read (never held whole): every count is checked against the
+    // bytes left, each part against the one-mesh cap, before it is allocated.
+    let answer = std::fs::File::open(&reply).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            bad("missing")
+        } else {
+            io(e)
+        }
+    })?;
+    let len = answer.metadata().map_err(io)?.len();
+    if len > max_reply(options) {
         return Err(bad("larger than the triangle cap allows"));
     }
-    let mut r = Reader::new(
-        bytes
-            .strip_prefix(REPLY_MAGIC)
-            .ok_or_else(|| bad("not a fitup reader's answer"))?,
-    );
+    let mut r = Reader::stream(answer, len);
+    if r.take(REPLY_MAGIC.len()).map_err(bad)? != REPLY_MAGIC {
+        return Err(bad("not a fitup reader's answer"));
+    }
     match r.take(1).map_err(bad)?[0] {
         0 => {
-            let model = decode_model(&mut r).map_err(bad)?;
+            let model = decode_model_within(&mut r, crate::mesh::MAX_TRIANGLES).map_err(bad)?;
             if !r.is_empty() {
                 return Err(bad("longer than its contents"));
             }
