@@ -1056,7 +1056,11 @@ impl Document {
 
     /// [`Self::set_robot_joints`] without the equation check: how equations set the
     /// joints they drive.
-    pub(crate) fn move_robot_joints(&mut self, robot: usize, q: &[f64]) -> Result<(), DocumentError> {
+    pub(crate) fn move_robot_joints(
+        &mut self,
+        robot: usize,
+        q: &[f64],
+    ) -> Result<(), DocumentError> {
         let r = self.robot_at(robot)?;
         r.check_joints(q)?;
         let poses = r.component_poses(q)?;

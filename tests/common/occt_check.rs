@@ -60,8 +60,9 @@ pub struct Reading {
     pub assemblies: Vec<Placed>,
 }
 
-/// The occt_check program: `FITUP_OCCT_CHECK`, else compiled once (panics when it
-/// cannot be: the step tests run only where OCCT is installed).
+/// The occt_check program: `FITUP_OCCT_CHECK`, else compiled once into cargo's
+/// `CARGO_TARGET_TMPDIR` (panics when it cannot be: the step tests run only where OCCT
+/// is installed).
 pub fn program() -> PathBuf {
     if let Some(p) = std::env::var_os("FITUP_OCCT_CHECK") {
         return PathBuf::from(p);
@@ -69,22 +70,47 @@ pub fn program() -> PathBuf {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
     BUILT
         .get_or_init(|| {
-            let dir = std::env::temp_dir().join(format!("fitup-occt-check-{}", std::process::id()));
-            std::fs::create_dir_all(&dir).unwrap();
+            // In cargo's folder for integration tests' files, rebuilt when the source
+            // is newer; written under a temporary name, then renamed (test processes
+            // may build it at once).
+            let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
             let exe = dir.join("occt_check");
             let src = super::repo().join("tests/bench/step/occt_check.cpp");
+            let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+            if modified(&exe).is_some() && modified(&exe) >= modified(&src) {
+                return exe;
+            }
+            let tmp = dir.join(format!("occt_check.{}", std::process::id()));
             let libs = [
-                "TKXDESTEP", "TKSTEP", "TKSTEPBase", "TKSTEPAttr", "TKSTEP209", "TKXSBase",
-                "TKXCAF", "TKLCAF", "TKCAF", "TKCDF", "TKMesh", "TKBO", "TKPrim", "TKTopAlgo",
-                "TKShHealing", "TKGeomAlgo", "TKGeomBase", "TKBRep", "TKG3d", "TKG2d",
-                "TKMath", "TKernel",
+                "TKXDESTEP",
+                "TKSTEP",
+                "TKSTEPBase",
+                "TKSTEPAttr",
+                "TKSTEP209",
+                "TKXSBase",
+                "TKXCAF",
+                "TKLCAF",
+                "TKCAF",
+                "TKCDF",
+                "TKMesh",
+                "TKBO",
+                "TKPrim",
+                "TKTopAlgo",
+                "TKShHealing",
+                "TKGeomAlgo",
+                "TKGeomBase",
+                "TKBRep",
+                "TKG3d",
+                "TKG2d",
+                "TKMath",
+                "TKernel",
             ];
             let out = std::process::Command::new(std::env::var("CXX").unwrap_or("c++".into()))
                 .args(["-O0", "-std=c++17", "-w", "-I/usr/include/opencascade"])
                 .arg(&src)
                 .args(libs.iter().map(|l| format!("-l{l}")))
                 .arg("-o")
-                .arg(&exe)
+                .arg(&tmp)
                 .output()
                 .expect("a C++ compiler (cxx-build needs one for --features step)");
             assert!(
@@ -92,6 +118,7 @@ pub fn program() -> PathBuf {
                 "compiling occt_check: {}",
                 String::from_utf8_lossy(&out.stderr)
             );
+            std::fs::rename(&tmp, &exe).unwrap();
             exe
         })
         .clone()
@@ -99,7 +126,10 @@ pub fn program() -> PathBuf {
 
 /// occt_check's reading of `file`.
 pub fn read(check: &Path, file: &Path) -> Reading {
-    let o = std::process::Command::new(check).arg(file).output().unwrap();
+    let o = std::process::Command::new(check)
+        .arg(file)
+        .output()
+        .unwrap();
     assert!(
         o.status.success(),
         "occt_check {}: {}",
@@ -108,7 +138,8 @@ pub fn read(check: &Path, file: &Path) -> Reading {
     );
     let text = String::from_utf8(o.stdout).unwrap();
     let mut reading = Reading::default();
-    let numbers = |s: &str| -> Vec<f64> { s.split(' ').map(|x| x.parse::<f64>().unwrap()).collect() };
+    let numbers =
+        |s: &str| -> Vec<f64> { s.split(' ').map(|x| x.parse::<f64>().unwrap()).collect() };
     let placed = |path: &str, product: &str, volume: f64, m: &[f64]| {
         assert_eq!(m.len(), 12, "{text}");
         Placed {

@@ -221,8 +221,11 @@ fn mz07_with(list: &[&str]) -> (tempfile::TempDir, PathBuf, String) {
     for e in std::fs::read_dir(models.join("meshes")).unwrap() {
         let e = e.unwrap();
         if e.file_name().to_string_lossy().starts_with("mz07_") {
-            std::fs::copy(e.path(), dir.path().join("models/meshes").join(e.file_name()))
-                .unwrap();
+            std::fs::copy(
+                e.path(),
+                dir.path().join("models/meshes").join(e.file_name()),
+            )
+            .unwrap();
         }
     }
     let path = dir.path().join("models/mz07.yaml");
@@ -267,7 +270,10 @@ fn a_joint_an_equation_drives_is_refused_naming_the_equation() {
     assert_eq!(doc.robots()[0].joints(), &q[..], "nothing moved");
     // The dimension setters say the same.
     let e = doc.set_dimension(&j2, 0.2).unwrap_err();
-    assert!(matches!(e, DocumentError::DrivenByEquation { index: 1, .. }), "{e}");
+    assert!(
+        matches!(e, DocumentError::DrivenByEquation { index: 1, .. }),
+        "{e}"
+    );
     // Another joint moves; the driven one may be passed at its value.
     let mut other = q.clone();
     other[0] += 0.2;

@@ -100,7 +100,11 @@ mod with_occt {
             // The product tree (issue 37): one root assembly is the document itself;
             // every other assembly occurrence is a sub-assembly, in the tree's order,
             // at Open CASCADE's placement, as many levels down.
-            let roots = reference.assemblies.iter().filter(|a| a.depth() == 1).count();
+            let roots = reference
+                .assemblies
+                .iter()
+                .filter(|a| a.depth() == 1)
+                .count();
             let dropped = usize::from(roots == 1 && solids.iter().all(|s| s.depth() > 1));
             let expected: Vec<_> = reference
                 .assemblies

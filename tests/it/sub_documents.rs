@@ -554,8 +554,10 @@ fn equations_inside_sub_documents() {
     assert_eq!(snapshot(&top), before);
     assert!(!std::fs::read_to_string(&top).unwrap().contains("Spread"));
     // The same change in both instances is written to axle.yaml, in its own names.
-    doc.set_global_variable("Cart-1/Axle-1/Spread", 2.5).unwrap();
-    doc.set_global_variable("Cart-1/Axle-2/Spread", 2.5).unwrap();
+    doc.set_global_variable("Cart-1/Axle-1/Spread", 2.5)
+        .unwrap();
+    doc.set_global_variable("Cart-1/Axle-2/Spread", 2.5)
+        .unwrap();
     assert_eq!(doc.global_variable("Cart-1/Half").unwrap(), 1.25);
     doc.save().unwrap();
     let dir = top.parent().unwrap();
@@ -563,14 +565,18 @@ fn equations_inside_sub_documents() {
     assert!(axle.contains("'\"Spread\" = 2.5'"), "{axle}");
     assert!(axle.contains("'\"D1@Gap\" = 20 * \"Spread\"'"), "{axle}");
     let cart = std::fs::read_to_string(dir.join("sub/cart.yaml")).unwrap();
-    assert!(cart.contains("'\"Half\" = \"Axle-1/Spread\" / 2'"), "{cart}");
+    assert!(
+        cart.contains("'\"Half\" = \"Axle-1/Spread\" / 2'"),
+        "{cart}"
+    );
     assert!(!cart.contains("\"D1@"), "{cart}");
     let back = Document::open(&top).unwrap();
     assert_eq!(back.dimension("D1@Cart-1/Axle-1/Gap").unwrap().value, 50.0);
     assert_eq!(back.equations().len(), doc.equations().len());
     // Two instances changed differently are refused, as for any content.
     let mut doc = back;
-    doc.set_global_variable("Cart-1/Axle-1/Spread", 3.0).unwrap();
+    doc.set_global_variable("Cart-1/Axle-1/Spread", 3.0)
+        .unwrap();
     let e = doc.save().unwrap_err();
     assert!(e.to_string().contains("axle.yaml"), "{e}");
 
