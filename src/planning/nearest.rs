@@ -18,6 +18,7 @@ use nalgebra::UnitQuaternion;
 const LEAF: usize = 24;
 
 /// The exact metric distance the linear scan computes (kept bit-identical).
+#[cfg(test)]
 #[inline]
 pub(crate) fn metric(
     t: &Vec3,

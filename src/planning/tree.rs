@@ -1,6 +1,8 @@
 //! The search tree shared by the RRT family, and helpers every tree planner needs.
 
-use super::nearest::{metric, metric_below, KdIndex};
+#[cfg(test)]
+use super::nearest::metric;
+use super::nearest::{metric_below, KdIndex};
 use super::run::Failure;
 use super::space::PlanningSpace;
 use super::validator::Checker;
