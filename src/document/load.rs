@@ -406,7 +406,7 @@ impl Loader<'_> {
             let (mesh, geometry) = step_part(
                 pf,
                 &mesh_path,
-                &self.project,
+                self.project,
                 &self.project.root().join(crate::mesh::step::STEP_STORE),
                 cache,
             )

@@ -60,9 +60,17 @@ pub const DEFAULT_LINEAR_DEFLECTION: f64 = 0.1;
 /// normals of neighbouring triangles on a curved face, radians (OCCT's default, ≈ 28.6°).
 pub const DEFAULT_ANGULAR_DEFLECTION: f64 = 0.5;
 
-/// Default address-space cap of a child reader, bytes (4 GiB: Open CASCADE holds a
-/// model in 10–30 times the file's size, and files are at most 64 MiB).
-pub const DEFAULT_MEMORY_LIMIT: u64 = 4 << 30;
+/// Default address-space cap of a child reader, bytes (1 GiB: Open CASCADE holds a
+/// model in 10–30 times the file's size; a file that needs more is refused as
+/// [`StepError::MemoryLimit`], naming the file and the cap; `fitup import
+/// --memory-limit-mb` raises it).
+pub const DEFAULT_MEMORY_LIMIT: u64 = 1 << 30;
+
+/// Default cap on all meshes of one file together, triangles ([`StepOptions::max_triangles`]):
+/// what keeps fitup's own process under 1 GB at the cap (at most 84 bytes a triangle
+/// for the decoded answer, the same again for the store's encoding, and the welded
+/// meshes: see docs/document.md).
+pub const DEFAULT_MAX_TRIANGLES: u64 = 3_000_000;
 
 /// The hidden command a child reader is started with (`PROGRAM __step-read …`); a
 /// program that registers itself with [`read_in_child_processes`] must hand it to
@@ -140,7 +148,7 @@ impl Default for StepOptions {
             linear_deflection: DEFAULT_LINEAR_DEFLECTION,
             angular_deflection: DEFAULT_ANGULAR_DEFLECTION,
             time_limit: Duration::from_secs(300),
-            max_triangles: 20_000_000,
+            max_triangles: DEFAULT_MAX_TRIANGLES,
             isolation: Isolation::process_default(),
         }
     }

@@ -195,6 +195,12 @@ impl<'a> Reader<'a> {
 }
 
 pub(super) fn encode_model(w: &mut Writer, m: &RawModel) {
+    encode_model_peak(w, m, m.peak_memory);
+}
+
+/// [`encode_model`] with `peak` written as the reader's peak memory (the store keeps
+/// 0: encoded so rather than from a copy of the model).
+pub(super) fn encode_model_peak(w: &mut Writer, m: &RawModel, peak: u64) {
     w.u64(m.parts.len() as u64);
     for p in &m.parts {
         w.str(&p.name);
@@ -224,7 +230,7 @@ pub(super) fn encode_model(w: &mut Writer, m: &RawModel) {
     w.u32(m.faces_without_solid);
     w.u32(m.open_shells);
     w.str(&m.first_open_shell);
-    w.u64(m.peak_memory);
+    w.u64(peak);
     w.u64(m.assemblies.len() as u64);
     for a in &m.assemblies {
         w.str(&a.name);
@@ -382,6 +388,9 @@ pub(super) fn read_in_child(
         .arg(options.max_triangles.to_string())
         .arg(child.memory_limit.to_string())
         .stdin(file.map_or_else(std::process::Stdio::null, std::process::Stdio::from))
+        // Two malloc arenas: each thread's arena reserves 64 MiB of address space,
+        // which the address-space cap would otherwise spend on reservations.
+        .env("MALLOC_ARENA_MAX", "2")
         .stdout(std::process::Stdio::null())
         .stderr(stderr)
         .spawn()

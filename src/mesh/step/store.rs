@@ -26,7 +26,7 @@
 //! readers take no lock: removing an entry only unlinks it (a reader that has it open
 //! reads it whole; one that comes later misses and reads the STEP file again).
 
-use super::raw::{decode_model_within, encode_model, Bad, RawModel, Reader, Writer};
+use super::raw::{decode_model_within, encode_model_peak, Bad, RawModel, Reader, Writer};
 use super::StepOptions;
 use crate::fsutil::{Dir, FileKind, Kind};
 use std::collections::{HashMap, HashSet};
@@ -302,11 +302,9 @@ pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawMode
     let mut w = Writer(STORE_MAGIC.to_vec());
     key.write(&mut w);
     w.str(&source);
-    // The reader's peak memory (the encoding's last 8 bytes) is not kept: zeroed in
-    // place rather than encoding a copy of the model (that doubled the store's cost).
-    encode_model(&mut w, model);
-    let end = w.0.len();
-    w.0[end - 8..].fill(0);
+    // The reader's peak memory is not kept (written as 0, rather than encoding a copy
+    // of the model: that doubled the store's cost).
+    encode_model_peak(&mut w, model, 0);
     if w.0.len() as u64 > MAX_ENTRY_BYTES {
         return; // never read back: not kept
     }
