@@ -106,8 +106,7 @@ fn ik_round_trip_through_the_script_api() {
         }
         print("ok");
     "#;
-    std::fs::write(dir.path().join("scripts/ik.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/ik.rhai"]);
+    let out = common::run_script_in(dir.path(), "ik.rhai", script);
     assert!(out.status.success(), "{}", common::text(&out));
 }
 
@@ -141,8 +140,7 @@ fn batch_fk_ik_and_singular_flags_through_the_script_api() {
         assert(arm.limits_source.starts_with("unverified"), arm.limits_source);
         print("ok");
     "#;
-    std::fs::write(dir.path().join("scripts/batch.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/batch.rhai"]);
+    let out = common::run_script_in(dir.path(), "batch.rhai", script);
     assert!(out.status.success(), "{}", common::text(&out));
 }
 
@@ -187,8 +185,7 @@ fn robots_built_in_scripts_join_a_document() {
         assert_near(b.fk([5, 5, 5, 5, 5, 5]).distance_to(arm.fk([5, 5, 5, 5, 5, 5])).mm, 0.0, 1e-6);
         print("ok");
     "#;
-    std::fs::write(dir.path().join("scripts/build.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/build.rhai"]);
+    let out = common::run_script_in(dir.path(), "build.rhai", script);
     assert!(out.status.success(), "{}", common::text(&out));
 }
 
@@ -510,8 +507,7 @@ fn streamed_motions_print_every_sample() {
         let t = arm.move_line(pose(390, 0, 250, 0, 0, 0), #{speed: 100, interval: 0.1, stream: true});
         print(`samples ${t.len}`);
     "#;
-    std::fs::write(dir.path().join("scripts/s.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/s.rhai"]);
+    let out = common::run_script_in(dir.path(), "s.rhai", script);
     let text = common::text(&out);
     assert!(out.status.success(), "{text}");
     let lines: Vec<&str> = text
