@@ -6,8 +6,8 @@
 use super::context::*;
 use super::graph::separation_directions;
 use super::options::{Mode, SequenceError, DEFAULT_SEQUENCE_TIME_LIMIT_MS};
-use crate::collision::{edge_interferes_until, interferes, Aabb, EdgeOptions, SweepMethod};
-use crate::math::{frame_across, Transform, Vec3};
+use crate::collision::{edge_interferes_until, interferes, EdgeOptions, SweepMethod};
+use crate::math::{frame_across, Aabb, Transform, Vec3};
 use crate::workspace::WorkspaceError;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
