@@ -196,28 +196,34 @@ struct Walker {
     return index;
   }
 
+  // Rotation and translation (mm) of `t`, row-major 3 × 4.
+  static void put_matrix(const gp_Trsf &t, rust::Vec<double> &out) {
+    const gp_Mat r = t.HVectorialPart();
+    const gp_XYZ x = t.TranslationPart();
+    for (int row = 1; row <= 3; ++row) {
+      for (int col = 1; col <= 3; ++col) {
+        out.push_back(r.Value(row, col));
+      }
+      out.push_back(x.Coord(row));
+    }
+  }
+
   void add_instance(const TopoDS_Shape &solid, const gp_Trsf &placement, uint32_t part,
-                    const std::string &name, const std::string &path) {
+                    const std::string &name, const std::string &path, uint32_t parent) {
     const gp_Trsf t = placement * solid.Location().Transformation();
     Instance inst;
     inst.name = lossy(name);
     inst.path = lossy(path);
     inst.part = part;
-    const gp_Mat r = t.HVectorialPart();
-    const gp_XYZ x = t.TranslationPart();
-    for (int row = 1; row <= 3; ++row) {
-      for (int col = 1; col <= 3; ++col) {
-        inst.matrix.push_back(r.Value(row, col));
-      }
-      inst.matrix.push_back(x.Coord(row));
-    }
+    inst.parent = parent;
+    put_matrix(t, inst.matrix);
     inst.scale = t.ScaleFactor();
     model.instances.push_back(std::move(inst));
   }
 
   // A product (simple shape label): its solids become parts, placed at `placement`.
   void product(const TDF_Label &label, const gp_Trsf &placement, const std::string &instance,
-               const std::string &path) {
+               const std::string &path, uint32_t parent) {
     const TopoDS_Shape shape = XCAFDoc_ShapeTool::GetShape(label);
     std::string name = label_name(label);
     uint32_t solids = 0;
@@ -231,7 +237,7 @@ struct Walker {
     for (TopExp_Explorer sx(shape, TopAbs_SOLID); sx.More(); sx.Next()) {
       ++i;
       const uint32_t part = part_of(sx.Current(), sx.Current().TShape().get(), name, i, solids);
-      add_instance(sx.Current(), placement, part, instance, path);
+      add_instance(sx.Current(), placement, part, instance, path, parent);
     }
     // Shells outside any solid: a closed one (some exporters write solids as surface
     // models) is taken as the solid it bounds; an open one is reported.
@@ -252,16 +258,28 @@ struct Walker {
       const TopoDS_Shape placed = solid.Located(shell.Location());
       ++i;
       const uint32_t part = part_of(placed, shell.TShape().get(), name, i, solids);
-      add_instance(placed, placement, part, instance, path);
+      add_instance(placed, placement, part, instance, path, parent);
     }
   }
 
+  // `parent`: the assembly occurrence holding this one (1-based index into
+  // model.assemblies; 0 at the top).
   void walk(const TDF_Label &label, const gp_Trsf &placement, const std::string &instance,
-            const std::string &path, int depth) {
+            const std::string &path, int depth, uint32_t parent) {
     if (depth > 64) {
       throw std::runtime_error("fitup:deep:" + path);
     }
     if (XCAFDoc_ShapeTool::IsAssembly(label)) {
+      // The occurrence itself, before what it holds (parents before children).
+      Assembly a;
+      a.name = lossy(instance);
+      a.path = lossy(path);
+      a.product = lossy(label_name(label));
+      a.parent = parent;
+      put_matrix(placement, a.matrix);
+      a.scale = placement.ScaleFactor();
+      model.assemblies.push_back(std::move(a));
+      const uint32_t self = static_cast<uint32_t>(model.assemblies.size());
       TDF_LabelSequence components;
       XCAFDoc_ShapeTool::GetComponents(label, components, Standard_False);
       for (Standard_Integer i = 1; i <= components.Length(); ++i) {
@@ -275,10 +293,10 @@ struct Walker {
         if (name.empty()) {
           name = label_name(referred);
         }
-        walk(referred, here, name, path + "/" + name, depth + 1);
+        walk(referred, here, name, path + "/" + name, depth + 1, self);
       }
     } else if (XCAFDoc_ShapeTool::IsSimpleShape(label)) {
-      product(label, placement, instance, path);
+      product(label, placement, instance, path, parent);
     }
   }
 };
@@ -334,7 +352,7 @@ Model read(rust::Str path, const ReadOptions &options) {
     const TDF_Label &root = roots.Value(i);
     std::string name = label_name(root);
     const gp_Trsf placement = XCAFDoc_ShapeTool::GetLocation(root).Transformation();
-    w.walk(root, placement, name, name, 0);
+    w.walk(root, placement, name, name, 0, 0);
   }
   model.mesh_s = w.mesh_s;
   app->Close(doc);
@@ -412,6 +430,40 @@ void write_test(const std::string &kind, const std::string &file) {
     lying.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp::DX()), M_PI / 2);
     lying.SetTranslationPart(gp_Vec(50, 45, 14));
     TDataStd_Name::Set(tool->AddComponent(cell, peg, TopLoc_Location(lying)), "peg-3");
+    tool->UpdateAssemblies();
+    write_doc(doc, file);
+  } else if (kind == "nested") {
+    // Three levels of sub-assemblies, placed with rotations, one product used in two
+    // places, and two occurrences named as SolidWorks names them (`NAUO<n>`):
+    //   cart ─ Frame-1, Frame-2 (frame) ─ plate-1, Axle-1, Axle-2 (axle_asm) ─ bar-1,
+    //   Wheel-1, Wheel-2;  cart ─ NAUO7 (a wheel), NAUO8 (an axle_asm).
+    // tests/it/step_import.rs (nested_assemblies) repeats these placements.
+    auto pose = [](double ax, double ay, double az, double deg, double x, double y,
+                   double z) {
+      gp_Trsf t;
+      t.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(ax, ay, az)), deg * M_PI / 180.0);
+      t.SetTranslationPart(gp_Vec(x, y, z));
+      return TopLoc_Location(t);
+    };
+    TDF_Label wheel = named(tool, BRepPrimAPI_MakeCylinder(10.0, 5.0).Shape(), "wheel");
+    TDF_Label bar = named(tool, BRepPrimAPI_MakeBox(4.0, 4.0, 60.0).Shape(), "axle_bar");
+    TDF_Label plate = named(tool, BRepPrimAPI_MakeBox(100.0, 60.0, 5.0).Shape(), "frame_plate");
+    TDF_Label axle = tool->NewShape();
+    TDataStd_Name::Set(axle, "axle_asm");
+    TDataStd_Name::Set(tool->AddComponent(axle, bar, TopLoc_Location()), "bar-1");
+    TDataStd_Name::Set(tool->AddComponent(axle, wheel, pose(1, 0, 0, 180, 2, 2, 0)), "Wheel-1");
+    TDataStd_Name::Set(tool->AddComponent(axle, wheel, pose(0, 0, 1, 30, 2, 2, 60)), "Wheel-2");
+    TDF_Label frame = tool->NewShape();
+    TDataStd_Name::Set(frame, "frame");
+    TDataStd_Name::Set(tool->AddComponent(frame, plate, TopLoc_Location()), "plate-1");
+    TDataStd_Name::Set(tool->AddComponent(frame, axle, pose(0, 1, 0, 90, 10, 0, 5)), "Axle-1");
+    TDataStd_Name::Set(tool->AddComponent(frame, axle, pose(1, 1, 0, -60, 90, 0, 5)), "Axle-2");
+    TDF_Label cart = tool->NewShape();
+    TDataStd_Name::Set(cart, "cart");
+    TDataStd_Name::Set(tool->AddComponent(cart, frame, pose(0, 0, 1, 45, 0, 0, 20)), "Frame-1");
+    TDataStd_Name::Set(tool->AddComponent(cart, frame, pose(1, 0, 0, 180, 200, 0, 0)), "Frame-2");
+    TDataStd_Name::Set(tool->AddComponent(cart, wheel, pose(0, 1, 0, 90, -50, 0, 0)), "NAUO7");
+    TDataStd_Name::Set(tool->AddComponent(cart, axle, pose(0, 0, 1, -90, 0, -80, 0)), "NAUO8");
     tool->UpdateAssemblies();
     write_doc(doc, file);
   } else if (kind == "inch_box") {

@@ -16,7 +16,7 @@ struct Model;
 Model read_step(rust::Str path, const ReadOptions &options);
 
 // Writes one of the STEP files the tests use (`kind`: box, cylinder_hole,
-// assembly, inch_box, open_shell, no_solid, bad_face, plate_holes), made with Open
+// assembly, nested, inch_box, open_shell, no_solid, bad_face, plate_holes), made with Open
 // CASCADE itself.
 void write_test_step(rust::Str kind, rust::Str path);
 } // namespace fitup_step

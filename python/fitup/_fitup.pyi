@@ -527,7 +527,8 @@ class Document:
         """The joints of robot ``name`` (rad, mm for prismatic joints)."""
     def set_joints(self, robot: str, joints: _Joints) -> None:
         """Sets the joints of robot ``robot`` (rad, mm for prismatic joints; within the
-        limits); its link components move.
+        limits); its link components move. A new value for a joint an equation drives
+        raises DocumentError naming the equation.
         """
     def run_program(
         self, robot: str, file: Optional[_StrPath] = None, text: Optional[str] = None

@@ -1093,7 +1093,8 @@ impl Document {
     }
 
     /// Sets the joints of robot ``robot`` (rad, mm for prismatic joints; within the
-    /// limits); its link components move.
+    /// limits); its link components move. A new value for a joint an equation drives
+    /// raises DocumentError naming the equation.
     fn set_joints(
         &self,
         robot: &str,

@@ -541,6 +541,29 @@ def test_equations_and_global_variables(project):
     assert again.global_variable("Factor") == 3.0
 
 
+def test_equation_functions_and_driven_joints(project):
+    """Issue 37: SolidWorks' equation functions and unit suffixes (iif, sum, 2in,
+    45deg), and a robot joint an equation drives refused by set_joints, naming the
+    equation (the library decides; Python only converts)."""
+    doc = fitup.Document(project / "models" / "solidworks" / "lift.yaml")
+    doc.add_equation('"Wide" = iif("Factor" > 1, sum(1in, 2mm, 3), 0)')
+    assert doc.global_variable("Wide") == pytest.approx(25.4 + 2 + 3)
+    arm = fitup.Document(project / "models" / "mz07.yaml")
+    dims = arm.dimensions()
+    assert len(dims) == 6  # the six joints, D1@角度1 … 6
+    arm.add_equation(f'"{dims[1]}" = 20deg + 5')
+    q = arm.joints("mz07")
+    assert math.degrees(q[1]) == pytest.approx(25.0)
+    q[1] = 0.0
+    with pytest.raises(fitup.DocumentError, match=r"driven by equation \[0\]"):
+        arm.set_joints("mz07", q)
+    assert math.degrees(arm.joints("mz07")[1]) == pytest.approx(25.0)
+    q = arm.joints("mz07")
+    q[0] = 0.1
+    arm.set_joints("mz07", q)
+    assert arm.joints("mz07")[0] == pytest.approx(0.1)
+
+
 def test_remove_component(project):
     """Issue 37, capability 7: a component with mates is refused unless its mates go
     with it; the others keep their poses."""

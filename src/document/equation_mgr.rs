@@ -71,7 +71,9 @@ impl Document {
     /// rebuilds; refused as [`add_equation`](Self::add_equation).
     pub fn set_equation(&mut self, index: usize, text: &str) -> Result<(), DocumentError> {
         self.check_equation_index(index)?;
-        let e = parsed(text, index)?;
+        let mut e = parsed(text, index)?;
+        // An equation of a sub-document stays that document's.
+        e.scope = self.equations[index].scope.clone();
         self.change_equations(|list| list[index] = e)
     }
 
@@ -280,7 +282,48 @@ pub(crate) fn parse_equation(text: &str) -> Result<Equation, EquationCause> {
         expression,
         value: 0.0,
         expr,
+        scope: None,
     })
+}
+
+/// `text` with every name in double quotes passed through `rename` (the quotes and
+/// everything else kept as written).
+fn rename_quoted(
+    text: &str,
+    rename: &mut dyn FnMut(&str) -> Result<String, String>,
+) -> Result<String, String> {
+    let mut out = String::with_capacity(text.len() + 16);
+    let mut rest = text;
+    while let Some(open) = rest.find('"') {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let Some(close) = after.find('"') else {
+            out.push_str(&rest[open..]);
+            return Ok(out);
+        };
+        out.push('"');
+        let name = super::nfc_name(after[..close].trim());
+        out.push_str(&rename(&name)?);
+        out.push('"');
+        rest = &after[close + 1..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+impl Equation {
+    /// The same equation with every name (its target and those it uses) passed
+    /// through `rename`; value and scope kept.
+    pub(crate) fn renamed(
+        &self,
+        rename: &mut dyn FnMut(&str) -> Result<String, String>,
+    ) -> Result<Equation, String> {
+        let text = rename_quoted(&self.text(), rename)?;
+        let mut e = parse_equation(&text).map_err(|c| format!("equation {}: {c}", shown(&text)))?;
+        e.value = self.value;
+        e.scope = self.scope.clone();
+        Ok(e)
+    }
 }
 
 /// A file's equations (`texts`) parsed, evaluated and applied to the dimensions they
@@ -330,6 +373,8 @@ pub(super) fn load(
         })?;
         list.push(e);
     }
+    // The file's own first, then the sub-documents' (already in `doc`, renamed).
+    list.append(&mut doc.equations);
     doc.equations = list;
     doc.apply_equations().map_err(located)
 }

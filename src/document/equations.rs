@@ -116,6 +116,9 @@ pub struct Equation {
     /// global variable).
     pub value: f64,
     pub(crate) expr: Expr,
+    /// The sub-assembly whose document (`assemblies: - {file: …}`) it belongs to
+    /// (full name), `None` for this document's own: where a save writes it.
+    pub(crate) scope: Option<String>,
 }
 
 impl Equation {
@@ -138,6 +141,8 @@ pub(crate) enum Expr {
     Name(String),
     Neg(Box<Expr>),
     Binary(char, Box<Expr>, Box<Expr>),
+    /// A comparison (`<`, `>`, `<=`, `>=`, `=`, `<>`): 1 when it holds, else 0.
+    Compare(&'static str, Box<Expr>, Box<Expr>),
     Call(Function, Vec<Expr>),
 }
 
@@ -164,31 +169,44 @@ pub(crate) enum Function {
     Sgn,
     Min,
     Max,
+    Sum,
+    Avg,
+    /// `iif(condition, then, else)` (`if` too): only the branch taken is evaluated.
+    Iif,
 }
 
-/// Every function name, as written in equations, with its number of arguments.
-const FUNCTIONS: &[(&str, Function, usize)] = &[
-    ("sin", Function::Sin, 1),
-    ("cos", Function::Cos, 1),
-    ("tan", Function::Tan, 1),
-    ("sec", Function::Sec, 1),
-    ("cosec", Function::Cosec, 1),
-    ("cotan", Function::Cotan, 1),
-    ("arcsin", Function::Arcsin, 1),
-    ("arccos", Function::Arccos, 1),
-    ("atn", Function::Atn, 1),
-    ("arcsec", Function::Arcsec, 1),
-    ("arccosec", Function::Arccosec, 1),
-    ("arccotan", Function::Arccotan, 1),
-    ("abs", Function::Abs, 1),
-    ("exp", Function::Exp, 1),
-    ("log", Function::Log, 1),
-    ("sqr", Function::Sqr, 1),
-    ("sqrt", Function::Sqr, 1),
-    ("int", Function::Int, 1),
-    ("sgn", Function::Sgn, 1),
-    ("min", Function::Min, 2),
-    ("max", Function::Max, 2),
+/// How many arguments a function of [`FUNCTIONS`] takes: exactly `n`, or `n` or more
+/// (`usize::MAX` in the table's third column means "any number from the second").
+const MANY: usize = usize::MAX;
+
+/// Every function name, as written in equations, with its least number of arguments
+/// and its most ([`MANY`]: no limit but [`MAX_NODES`]).
+const FUNCTIONS: &[(&str, Function, usize, usize)] = &[
+    ("sin", Function::Sin, 1, 1),
+    ("cos", Function::Cos, 1, 1),
+    ("tan", Function::Tan, 1, 1),
+    ("sec", Function::Sec, 1, 1),
+    ("cosec", Function::Cosec, 1, 1),
+    ("cotan", Function::Cotan, 1, 1),
+    ("arcsin", Function::Arcsin, 1, 1),
+    ("arccos", Function::Arccos, 1, 1),
+    ("atn", Function::Atn, 1, 1),
+    ("arcsec", Function::Arcsec, 1, 1),
+    ("arccosec", Function::Arccosec, 1, 1),
+    ("arccotan", Function::Arccotan, 1, 1),
+    ("abs", Function::Abs, 1, 1),
+    ("exp", Function::Exp, 1, 1),
+    ("log", Function::Log, 1, 1),
+    ("sqr", Function::Sqr, 1, 1),
+    ("sqrt", Function::Sqr, 1, 1),
+    ("int", Function::Int, 1, 1),
+    ("sgn", Function::Sgn, 1, 1),
+    ("min", Function::Min, 2, MANY),
+    ("max", Function::Max, 2, MANY),
+    ("sum", Function::Sum, 1, MANY),
+    ("avg", Function::Avg, 1, MANY),
+    ("iif", Function::Iif, 3, 3),
+    ("if", Function::Iif, 3, 3),
 ];
 
 impl Function {
@@ -230,11 +248,36 @@ impl Function {
                     0.0
                 }
             }
-            Function::Min => x.min(a[1]),
-            Function::Max => x.max(a[1]),
+            Function::Min => a.iter().copied().fold(f64::INFINITY, f64::min),
+            Function::Max => a.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            Function::Sum => a.iter().sum(),
+            Function::Avg => a.iter().sum::<f64>() / a.len() as f64,
+            // Evaluated lazily by `Expr::eval`; here with all three known.
+            Function::Iif => {
+                if x != 0.0 {
+                    a[1]
+                } else {
+                    a[2]
+                }
+            }
         }
     }
 }
+
+/// The unit suffixes a number may carry (SolidWorks' `10mm`, `2in`, `45deg`), with
+/// the factor to document units (lengths mm, angles degrees).
+const UNITS: &[(&str, f64)] = &[
+    ("mm", 1.0),
+    ("cm", 10.0),
+    ("m", 1000.0),
+    ("um", 0.001),
+    ("µm", 0.001),
+    ("in", 25.4),
+    ("inch", 25.4),
+    ("ft", 304.8),
+    ("deg", 1.0),
+    ("rad", 180.0 / std::f64::consts::PI),
+];
 
 /// `"target" = expression` parsed: the target (NFC), the expression's text and tree.
 pub(crate) fn parse(text: &str) -> Result<(String, String, Expr), EquationCause> {
@@ -342,6 +385,26 @@ impl Parser<'_> {
             )));
         }
         Ok(super::nfc_name(name).into_owned())
+    }
+
+    /// `expression (comparison expression)?`: `iif`'s condition.
+    fn condition(&mut self) -> Result<Expr, EquationCause> {
+        let left = self.expression()?;
+        self.skip_space();
+        let next = |k: usize| self.chars.get(self.at + k).copied();
+        let op = match (next(0), next(1)) {
+            (Some('<'), Some('=')) => "<=",
+            (Some('>'), Some('=')) => ">=",
+            (Some('<'), Some('>')) => "<>",
+            (Some('<'), _) => "<",
+            (Some('>'), _) => ">",
+            (Some('='), _) => "=",
+            _ => return Ok(left),
+        };
+        self.at += op.len();
+        self.node()?;
+        let right = self.expression()?;
+        Ok(Expr::Compare(op, Box::new(left), Box::new(right)))
     }
 
     /// `term (('+' | '-') term)*`.
@@ -468,10 +531,22 @@ impl Parser<'_> {
             column: start + 1,
             message: format!("`{text}` is not a number"),
         })?;
+        // A unit suffix (`10mm`, `2in`, `45deg`): the value in document units.
+        let mut v = v;
         if self.peek().is_some_and(char::is_alphabetic) {
-            return Err(self.error(
-                "unit suffixes are not supported: lengths are mm and angles degrees, as the document writes them",
-            ));
+            let unit_at = self.at;
+            while self.peek().is_some_and(char::is_alphabetic) {
+                self.at += 1;
+            }
+            let unit: String = self.chars[unit_at..self.at].iter().collect();
+            let Some(&(_, factor)) = UNITS.iter().find(|u| u.0 == unit.to_lowercase()) else {
+                self.at = unit_at;
+                return Err(self.error(&format!(
+                    "unknown unit `{unit}` ({}); values are in document units: lengths mm, angles degrees",
+                    crate::diagnostics::suggestion(&unit.to_lowercase(), UNITS.iter().map(|u| u.0))
+                )));
+            };
+            v *= factor;
         }
         if !v.is_finite() {
             return Err(EquationCause::NonFinite(format!("`{text}`")));
@@ -490,7 +565,7 @@ impl Parser<'_> {
         if lower == "pi" {
             return Ok(Expr::Number(std::f64::consts::PI));
         }
-        let Some(&(_, f, arity)) = FUNCTIONS.iter().find(|f| f.0 == lower) else {
+        let Some(&(_, f, least, most)) = FUNCTIONS.iter().find(|f| f.0 == lower) else {
             self.at = start;
             let names = FUNCTIONS.iter().map(|f| f.0).chain(["pi"]);
             return Err(self.error(&format!(
@@ -504,19 +579,28 @@ impl Parser<'_> {
         }
         self.at += 1;
         self.enter()?;
-        let mut args = Vec::with_capacity(arity);
+        let takes = match (least, most) {
+            (1, 1) => "1 argument".to_string(),
+            (n, MANY) => format!("{n} or more arguments"),
+            (n, _) => format!("{n} arguments"),
+        };
+        self.skip_space();
+        if self.peek() == Some(')') {
+            return Err(self.error(&format!("`{word}` takes {takes}")));
+        }
+        let mut args = Vec::with_capacity(least);
         loop {
-            args.push(self.expression()?);
+            // The condition of `iif` may compare (`"D1@a" > 20`).
+            args.push(if f == Function::Iif && args.is_empty() {
+                self.condition()?
+            } else {
+                self.expression()?
+            });
             self.skip_space();
             match self.peek() {
-                Some(',') if args.len() < arity => self.at += 1,
-                Some(')') if args.len() == arity => break,
-                _ => {
-                    return Err(self.error(&format!(
-                        "`{word}` takes {arity} argument{}",
-                        if arity == 1 { "" } else { "s" }
-                    )))
-                }
+                Some(',') if args.len() < most => self.at += 1,
+                Some(')') if args.len() >= least => break,
+                _ => return Err(self.error(&format!("`{word}` takes {takes}"))),
             }
         }
         self.at += 1;
@@ -536,7 +620,7 @@ impl Expr {
                 }
             }
             Expr::Neg(e) => e.names(out),
-            Expr::Binary(_, a, b) => {
+            Expr::Binary(_, a, b) | Expr::Compare(_, a, b) => {
                 a.names(out);
                 b.names(out);
             }
@@ -562,15 +646,34 @@ impl Expr {
                     _ => a.powf(b),
                 }
             }
-            Expr::Call(f, args) => {
-                let mut a = [0.0; 2];
-                for (slot, e) in a.iter_mut().zip(args) {
-                    *slot = e.eval(value)?;
+            Expr::Compare(op, a, b) => {
+                let (a, b) = (a.eval(value)?, b.eval(value)?);
+                let holds = match *op {
+                    "<" => a < b,
+                    ">" => a > b,
+                    "<=" => a <= b,
+                    ">=" => a >= b,
+                    "<>" => a != b,
+                    _ => a == b,
+                };
+                f64::from(u8::from(holds))
+            }
+            Expr::Call(Function::Iif, args) => {
+                // Only the branch taken: `iif("x" > 0, 1 / "x", 0)` is defined at 0.
+                if args[0].eval(value)? != 0.0 {
+                    args[1].eval(value)?
+                } else {
+                    args[2].eval(value)?
                 }
-                let v = f.apply(&a[..args.len()]);
+            }
+            Expr::Call(f, args) => {
+                let mut a = Vec::with_capacity(args.len());
+                for e in args {
+                    a.push(e.eval(value)?);
+                }
+                let v = f.apply(&a);
                 if !v.is_finite() {
-                    let shown: Vec<String> =
-                        a[..args.len()].iter().map(|x| x.to_string()).collect();
+                    let shown: Vec<String> = a.iter().map(|x| x.to_string()).collect();
                     return Err(EquationCause::NonFinite(format!(
                         "{}({})",
                         f.name(),
@@ -716,8 +819,8 @@ mod tests {
             Err(EquationCause::Syntax { column: 1, .. })
         ));
         assert!(matches!(
-            value("\"a\" = 10mm"),
-            Err(EquationCause::Syntax { .. })
+            value("\"a\" = 10mmm"),
+            Err(EquationCause::Syntax { column: 9, .. })
         ));
         assert!(matches!(
             value("\"a\" = sine(1)"),
@@ -725,6 +828,52 @@ mod tests {
         ));
         assert!(matches!(
             value("\"a\" = min(1)"),
+            Err(EquationCause::Syntax { .. })
+        ));
+    }
+
+    /// Issue 37: SolidWorks' `iif`/`if`, `sum`, `avg`, `min`/`max` of many and unit
+    /// suffixes, in document units.
+    #[test]
+    fn solidworks_functions_and_unit_suffixes() {
+        let v = |t: &str| value(&format!("\"a\" = {t}")).unwrap();
+        assert_eq!(v("10mm"), 10.0);
+        assert_eq!(v("2in"), 50.8);
+        assert_eq!(v("1.5cm + 1m"), 1015.0);
+        assert_eq!(v("2ft"), 609.6);
+        assert_eq!(v("45deg"), 45.0);
+        assert!((v("1rad") - 57.295_779_513_082_32).abs() < 1e-12);
+        assert!((v("sin(pi / 6 * 1rad)") - 0.5).abs() < 1e-12);
+        assert!((v("tan(45deg)") - 1.0).abs() < 1e-12);
+        assert_eq!(v("1e1mm"), 10.0);
+        assert_eq!(v("sum(1, 2, \"x\")"), 6.0);
+        assert_eq!(v("sum(4)"), 4.0);
+        assert_eq!(v("avg(1, 2, 6)"), 3.0);
+        assert_eq!(v("min(5, \"x\", 4)"), 3.0);
+        assert_eq!(v("max(1, 7, \"x\", 2)"), 7.0);
+        assert_eq!(v("abs(-2) + sqr(16)"), 6.0);
+        assert_eq!(v("iif(\"x\" > 2, 10mm, 5mm)"), 10.0);
+        assert_eq!(v("IIF(\"x\" < 2, 10, 5)"), 5.0);
+        assert_eq!(v("if(\"x\" = 3, 1, 0)"), 1.0);
+        assert_eq!(v("if(\"x\" <> 3, 1, 0)"), 0.0);
+        assert_eq!(v("if(\"x\" >= 3, 1, 0) + if(\"x\" <= 2, 1, 0)"), 1.0);
+        assert_eq!(v("if(\"x\" - 3, 1, 2)"), 2.0);
+        // Only the branch taken is evaluated.
+        assert_eq!(v("iif(\"x\" > 5, 1 / 0, 2)"), 2.0);
+        let cause = value("\"a\" = 2inch + 1yd").unwrap_err();
+        assert!(
+            matches!(&cause, EquationCause::Syntax { column: 16, message } if message.contains("unknown unit `yd`")),
+            "{cause}"
+        );
+        assert!(matches!(
+            value("\"a\" = iif(1, 2)"),
+            Err(EquationCause::Syntax { .. })
+        ));
+        let e = value("\"a\" = sum()").unwrap_err();
+        assert!(e.to_string().contains("1 or more"), "{e}");
+        // A comparison only in a condition.
+        assert!(matches!(
+            value("\"a\" = 1 < 2"),
             Err(EquationCause::Syntax { .. })
         ));
     }

@@ -48,6 +48,19 @@ pub enum DocumentError {
         #[source]
         source: EquationError,
     },
+    /// A dimension an equation drives cannot be set by hand (SolidWorks refuses too):
+    /// change the equation or the global variables it uses.
+    #[error("dimension `{dimension}`{} is driven by equation [{index}] {equation}: change the equation (`set_equation`) or the global variables it uses", joint.as_ref().map_or(String::new(), |j| format!(" ({j})")))]
+    DrivenByEquation {
+        /// The dimension's full name.
+        dimension: String,
+        /// Which robot joint it is (`joint 2 of robot \`arm\``), when it is one.
+        joint: Option<String>,
+        /// The equation's index (`equation(i)`).
+        index: usize,
+        /// The equation's text (shortened when long).
+        equation: String,
+    },
     /// A suppressed component is not checked, planned or measured.
     #[error(
         "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"

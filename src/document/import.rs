@@ -1,7 +1,10 @@
 //! A STEP assembly as a new document (`fitup import`): one part per distinct solid
 //! (meshed once, written as a binary STL under `meshes/`), one component per placed
-//! solid at its pose from the assembly tree, names from the product tree made unique
-//! and safe, the tessellation recorded in the document's description.
+//! solid, the product tree kept as sub-assemblies (groups in the document: the root
+//! assembly is the document, each sub-assembly occurrence an `assemblies:` entry, so
+//! full names read `Frame-1/Wheel-2` and poses compose through the levels to the
+//! file's placements), names from the tree made unique among their siblings and safe,
+//! the tessellation recorded in the document's description.
 //!
 //! Nothing is half-written: the STEP file is read and every output checked by the
 //! write rule ([`crate::fsutil::check_output`]) before the first byte is written. A new
@@ -9,12 +12,12 @@
 //! an existing folder each file is written atomically, the document last, and the
 //! meshes written so far are removed when a later write fails.
 
-use super::file::{ComponentFile, DocumentFile, PartFile};
+use super::file::{AssemblyFile, ComponentFile, DocumentFile, PartFile};
 use super::{Document, DocumentError};
 use crate::fsutil::{OutputError, OutputRule};
 use crate::mesh::step::{read_step, StepError, StepModel, StepOptions};
 use crate::mesh::MeshError;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 /// How to import.
@@ -179,6 +182,57 @@ fn generated_occurrence_id(name: &str) -> bool {
         && n[4..].bytes().all(|b| b.is_ascii_digit())
 }
 
+/// `leaf` inside the sub-assembly `parent` (`parent/leaf`), or at the top.
+fn within(parent: Option<&str>, leaf: &str) -> String {
+    match parent {
+        Some(p) => format!("{p}/{leaf}"),
+        None => leaf.to_string(),
+    }
+}
+
+/// How the file's assembly tree maps onto the document's levels.
+struct Tree {
+    /// The one root assembly that is the document itself (when the file has exactly
+    /// one free shape and it is an assembly, as CAD exports have).
+    document: Option<usize>,
+}
+
+impl Tree {
+    fn of(model: &StepModel) -> Tree {
+        let roots: Vec<usize> = model
+            .assemblies
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| a.parent.is_none())
+            .map(|(k, _)| k)
+            .collect();
+        let free_solids = model.instances.iter().any(|i| i.parent.is_none());
+        Tree {
+            document: match roots[..] {
+                [only] if !free_solids => Some(only),
+                _ => None,
+            },
+        }
+    }
+
+    fn is_document(&self, k: usize) -> bool {
+        self.document == Some(k)
+    }
+
+    /// The document level of something held by the assembly `parent`: the
+    /// sub-assembly's index, or `None` at the top.
+    fn level(&self, parent: Option<usize>) -> Option<usize> {
+        parent.filter(|&p| !self.is_document(p))
+    }
+
+    /// The pose of a document level in the file's root frame (the document's frame).
+    fn pose(&self, level: Option<usize>, model: &StepModel) -> crate::math::Transform {
+        level.map_or(crate::math::Transform::IDENTITY, |k| {
+            model.assemblies[k].transform
+        })
+    }
+}
+
 /// The document (not yet written) and the meshes' relative paths for `model`.
 fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
     let step_stem = model
@@ -220,10 +274,49 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
             instances: 0,
         });
     }
-    let mut component_names = HashSet::new();
+    // The product tree as sub-assemblies (groups in this document): one root
+    // assembly is the document itself; any other assembly occurrence is a
+    // sub-assembly named inside its parent (`Frame-1/Wheel-2`), posed relative to it.
+    let tree = Tree::of(model);
+    let mut taken: HashMap<Option<usize>, HashSet<String>> = HashMap::new();
+    let mut counts: HashMap<(Option<usize>, String), usize> = HashMap::new();
+    // Each assembly's place in the document: its full name, or `None` for the root
+    // that is the document.
+    let mut full: Vec<Option<String>> = Vec::with_capacity(model.assemblies.len());
+    for (k, a) in model.assemblies.iter().enumerate() {
+        if tree.is_document(k) {
+            full.push(None);
+            continue;
+        }
+        let level = tree.level(a.parent);
+        let product = document_name(&a.product, "assembly");
+        let n = counts.entry((level, format!("a:{product}"))).or_insert(0);
+        *n += 1;
+        let given = if generated_occurrence_id(&a.name) {
+            ""
+        } else {
+            &a.name
+        };
+        let leaf = unique(
+            document_name(given, &format!("{product}-{n}")),
+            taken.entry(level).or_default(),
+        );
+        let name = within(level.and_then(|p| full[p].as_deref()), &leaf);
+        let parent_pose = tree.pose(level, model);
+        doc.assemblies.push(AssemblyFile {
+            name: name.clone(),
+            transform: Some(a.transform.then(&parent_pose.inverse()).to_matrix()),
+            file: None,
+            suppressed: false,
+        });
+        full.push(Some(name));
+    }
     for inst in &model.instances {
         let part = &mut parts[inst.part];
         part.instances += 1;
+        let level = tree.level(inst.parent);
+        let n = counts.entry((level, part.name.clone())).or_insert(0);
+        *n += 1;
         // SolidWorks (and other exporters) name every occurrence `NAUO<n>`, which says
         // nothing; such components are named as SolidWorks' own tree names them.
         let given = if generated_occurrence_id(&inst.name) {
@@ -231,20 +324,16 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
         } else {
             &inst.name
         };
-        let base = document_name(given, &format!("{}-{}", part.name, part.instances));
-        doc.components.push(ComponentFile {
-            name: unique(base, &mut component_names),
-            part: part.name.clone(),
-            fixed: false,
-            color: None,
-            transform: Some(inst.transform.to_matrix()),
-            mass: None,
-            threaded: false,
-            fixture: false,
-            suppressed: false,
-            hidden: false,
-            properties: Default::default(),
-        });
+        let leaf = unique(
+            document_name(given, &format!("{}-{n}", part.name)),
+            taken.entry(level).or_default(),
+        );
+        let parent_pose = tree.pose(level, model);
+        doc.components.push(ComponentFile::new(
+            within(level.and_then(|p| full[p].as_deref()), &leaf),
+            part.name.clone(),
+            Some(inst.transform.then(&parent_pose.inverse()).to_matrix()),
+        ));
     }
     (doc, parts)
 }

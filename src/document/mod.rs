@@ -654,10 +654,12 @@ impl Document {
     pub fn set_dimension(&mut self, full_name: &str, value: f64) -> Result<(), DocumentError> {
         let full_name = &*nfc_name(full_name);
         if let Some(i) = self.driving_equation(full_name) {
-            return Err(DocumentError::Invalid(format!(
-                "dimension `{full_name}` is driven by equation [{i}] {}: change the equation (`set_equation`) or the global variables it uses",
-                equations::shown(&self.equations[i].text())
-            )));
+            return Err(DocumentError::DrivenByEquation {
+                dimension: full_name.to_string(),
+                joint: None,
+                index: i,
+                equation: equations::shown(&self.equations[i].text()),
+            });
         }
         let before = (
             self.mates.clone(),
@@ -719,8 +721,9 @@ impl Document {
             DimensionTarget::Joint { robot, joint } => {
                 let mut q = self.robots[robot].joints().to_vec();
                 q[joint] = value;
+                // An equation sets its own dimension here: not the public check.
                 return self
-                    .set_robot_joints(robot, &q)
+                    .move_robot_joints(robot, &q)
                     .map_err(|e| DocumentError::Invalid(format!("{full_name}: {e}")));
             }
         };

@@ -1030,8 +1030,37 @@ impl Document {
 
     /// Sets a robot's joints (rad / mm, joint order) and moves its link components.
     /// Values outside the limits, of the wrong count or not finite are refused and
-    /// nothing changes.
+    /// nothing changes; so is a new value for a joint whose dimension an equation
+    /// drives ([`DocumentError::DrivenByEquation`], naming the equation, as SolidWorks
+    /// refuses to edit a driven dimension): change the equation instead.
     pub fn set_robot_joints(&mut self, robot: usize, q: &[f64]) -> Result<(), DocumentError> {
+        let r = self.robot_at(robot)?;
+        for (j, name) in r.dimension_names().iter().enumerate() {
+            let (Some(&new), Some(&now)) = (q.get(j), r.joints.get(j)) else {
+                break; // the count is checked below
+            };
+            if new == now {
+                continue;
+            }
+            if let Some(index) = self.driving_equation(name) {
+                return Err(DocumentError::DrivenByEquation {
+                    dimension: name.clone(),
+                    joint: Some(format!("joint {} of robot `{}`", j + 1, r.name())),
+                    index,
+                    equation: super::equations::shown(&self.equations[index].text()),
+                });
+            }
+        }
+        self.move_robot_joints(robot, q)
+    }
+
+    /// [`Self::set_robot_joints`] without the equation check: how equations set the
+    /// joints they drive.
+    pub(crate) fn move_robot_joints(
+        &mut self,
+        robot: usize,
+        q: &[f64],
+    ) -> Result<(), DocumentError> {
         let r = self.robot_at(robot)?;
         r.check_joints(q)?;
         let poses = r.component_poses(q)?;

@@ -123,7 +123,13 @@ impl Document {
             components,
             mates,
             robots: self.robots.iter().map(RobotInstance::to_file).collect(),
-            equations: self.equations.iter().map(|e| e.text()).collect(),
+            // A sub-document's equations are written in its own file.
+            equations: self
+                .equations
+                .iter()
+                .filter(|e| e.scope.is_none())
+                .map(|e| e.text())
+                .collect(),
         }
     }
 

@@ -169,6 +169,24 @@ fn inside<'a>(name: &'a str, at: &str) -> Option<&'a str> {
     name.strip_prefix(at)?.strip_prefix('/')
 }
 
+/// An equation's name `n` of a sub-document as named inside the sub-assembly `at`:
+/// a dimension `D1@Gap` is `D1@Cart-1/Gap`, a global variable `Factor` `Cart-1/Factor`.
+fn scoped(at: &str, n: &str) -> String {
+    match n.strip_prefix("D1@") {
+        Some(m) => format!("D1@{at}/{m}"),
+        None => format!("{at}/{n}"),
+    }
+}
+
+/// [`scoped`] undone: `n` as the sub-document itself names it, `None` when `n` is not
+/// inside `at`.
+fn unscoped(n: &str, at: &str) -> Option<String> {
+    match n.strip_prefix("D1@") {
+        Some(m) => inside(m, at).map(|r| format!("D1@{r}")),
+        None => inside(n, at).map(str::to_string),
+    }
+}
+
 impl Document {
     /// Loads the sub-documents of `file` (this document's parsed file) and adds what
     /// they hold under their sub-assemblies' names. `dir` is this document's folder.
@@ -250,9 +268,9 @@ impl Document {
     /// Adds the content of `sub` (a loaded sub-document) inside the sub-assembly
     /// `at` (which exists, and becomes the sub-document's `record`).
     fn import(&mut self, at: &str, record: SubDocument, sub: &Document) -> Result<(), String> {
-        if !sub.equations.is_empty() || !sub.robots.is_empty() {
+        if !sub.robots.is_empty() {
             return Err(format!(
-                "`{}` has equations or robots, which a sub-document cannot hold yet (move them to the top document)",
+                "`{}` has robots, which a sub-document cannot hold yet (move them to the top document)",
                 record.file
             ));
         }
@@ -313,6 +331,16 @@ impl Document {
                 e.component += offset;
             }
             self.mates.push(m);
+        }
+        // Its equations, every name inside the sub-assembly (`"Cart-1/Factor"`,
+        // `"D1@Cart-1/Gap"`), kept as the sub-document's for a save.
+        for e in &sub.equations {
+            let mut e = e.renamed(&mut |n| Ok(scoped(at, n)))?;
+            e.scope = Some(match &e.scope {
+                Some(s) => format!("{at}/{s}"),
+                None => at.to_string(),
+            });
+            self.equations.push(e);
         }
         self.apply_assembly_suppression();
         Ok(())
@@ -405,6 +433,29 @@ impl Document {
             }
             mates.push(m);
         }
+        let mut equations = Vec::new();
+        for e in &self.equations {
+            let Some(scope) = &e.scope else { continue };
+            let inner = if *scope == at.name {
+                None
+            } else if let Some(rest) = inside(scope, &at.name) {
+                Some(rest.to_string())
+            } else {
+                continue;
+            };
+            let mut e = e
+                .renamed(&mut |n| {
+                    unscoped(n, &at.name).ok_or_else(|| {
+                        format!(
+                            "an equation of sub-document `{}` uses \"{n}\", outside `{}`",
+                            record.file, at.name
+                        )
+                    })
+                })
+                .map_err(DocumentError::Invalid)?;
+            e.scope = inner;
+            equations.push(e);
+        }
         let parts: indexmap::IndexMap<String, super::Part> = parts;
         Ok(Document {
             path: record.path.clone(),
@@ -415,7 +466,7 @@ impl Document {
             numbering: super::numbering::Numbering::of(by_name.keys()),
             by_name,
             mates,
-            equations: Vec::new(),
+            equations,
             assemblies,
             robots: Vec::new(),
             generated: Default::default(),

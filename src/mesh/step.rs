@@ -178,6 +178,26 @@ pub struct StepInstance {
     pub part: usize,
     /// Its pose: part frame → world (the file's root frame), mm.
     pub transform: Transform,
+    /// The assembly occurrence holding it (index into [`StepModel::assemblies`]);
+    /// `None` for a free shape outside any assembly.
+    pub parent: Option<usize>,
+}
+
+/// A placed assembly: the root of the tree, or an occurrence of a sub-assembly.
+#[derive(Debug, Clone)]
+pub struct StepAssembly {
+    /// The occurrence's name (the instance name, else the product's; the root's
+    /// product name for a root).
+    pub name: String,
+    /// Its names from the root, `/`-separated.
+    pub path: String,
+    /// The assembly product's name.
+    pub product: String,
+    /// The assembly holding it (an index below its own into
+    /// [`StepModel::assemblies`]); `None` for a root.
+    pub parent: Option<usize>,
+    /// Its pose: assembly frame → world (the file's root frame), mm.
+    pub transform: Transform,
 }
 
 /// Where the time of a read went.
@@ -202,6 +222,9 @@ pub struct StepModel {
     pub parts: Vec<StepPart>,
     /// Placed solids, in the order of the assembly tree.
     pub instances: Vec<StepInstance>,
+    /// Placed assemblies (roots and sub-assembly occurrences), each listed before
+    /// everything it holds.
+    pub assemblies: Vec<StepAssembly>,
     /// The file's length unit as it names it (`MM`, `INCH`, `M`, …); lengths here are mm.
     pub file_unit: String,
     /// The options it was meshed with.
@@ -760,10 +783,42 @@ fn from_raw(
                 instance: inst.path.clone(),
             });
         };
+        if inst.parent as usize > model.assemblies.len() {
+            return Err(StepError::BadPlacement {
+                path: path.into(),
+                instance: inst.path.clone(),
+            });
+        }
         instances.push(StepInstance {
             name: inst.name.clone(),
             path: inst.path.clone(),
             part: inst.part as usize,
+            transform,
+            parent: (inst.parent as usize).checked_sub(1),
+        });
+    }
+    let mut assemblies = Vec::with_capacity(model.assemblies.len());
+    for (k, a) in model.assemblies.iter().enumerate() {
+        if !a.scale.is_finite() || (a.scale - 1.0).abs() > 1e-9 {
+            return Err(StepError::NotRigid {
+                path: path.into(),
+                instance: a.path.clone(),
+                scale: a.scale,
+            });
+        }
+        // Parents come first: an index at or past its own is a confused answer.
+        let transform = pose(&a.matrix).filter(|_| a.parent as usize <= k);
+        let Some(transform) = transform else {
+            return Err(StepError::BadPlacement {
+                path: path.into(),
+                instance: a.path.clone(),
+            });
+        };
+        assemblies.push(StepAssembly {
+            name: a.name.clone(),
+            path: a.path.clone(),
+            product: a.product.clone(),
+            parent: (a.parent as usize).checked_sub(1),
             transform,
         });
     }
@@ -772,6 +827,7 @@ fn from_raw(
         path: path.into(),
         parts,
         instances,
+        assemblies,
         file_unit: model.length_unit.clone(),
         options: options.clone(),
         timings: StepTimings {
@@ -862,7 +918,7 @@ fn weld(vertices: &[f64], triangles: &[u32]) -> Result<Mesh, MeshError> {
 }
 
 /// Writes a STEP file made with Open CASCADE for the tests (`kind`: `box`,
-/// `cylinder_hole`, `assembly`, `inch_box`, `open_shell`, `no_solid`, `bad_face`,
+/// `cylinder_hole`, `assembly`, `nested`, `inch_box`, `open_shell`, `no_solid`, `bad_face`,
 /// `plate_holes`, `sphere`, `cone`); see `cpp/step_shim.cpp` for their shapes. Not a stable API.
 #[doc(hidden)]
 pub fn write_test_step(kind: &str, path: &Path) -> Result<(), StepError> {
@@ -880,7 +936,7 @@ pub fn write_test_step(kind: &str, path: &Path) -> Result<(), StepError> {
 
 #[cfg(feature = "step")]
 mod imp {
-    use super::raw::{RawInstance, RawPart};
+    use super::raw::{RawAssembly, RawInstance, RawPart};
     use super::*;
     use crate::mesh::step_ffi::ffi;
     use std::sync::Mutex;
@@ -926,6 +982,19 @@ mod imp {
                     part: i.part,
                     matrix: i.matrix,
                     scale: i.scale,
+                    parent: i.parent,
+                })
+                .collect(),
+            assemblies: m
+                .assemblies
+                .into_iter()
+                .map(|a| RawAssembly {
+                    name: a.name,
+                    path: a.path,
+                    product: a.product,
+                    parent: a.parent,
+                    matrix: a.matrix,
+                    scale: a.scale,
                 })
                 .collect(),
             length_unit: m.length_unit,
@@ -1029,6 +1098,7 @@ mod tests {
                 part: 0,
                 matrix: vec![1., 0., 0., 5., 0., 1., 0., 0., 0., 0., 1., 0.],
                 scale: 1.0,
+                parent: 0,
             }],
             length_unit: "MM".into(),
             ..RawModel::default()

@@ -46,12 +46,34 @@ pub(crate) mod ffi {
         matrix: Vec<f64>,
         /// The placement's scale factor (1 for a rigid placement; negative: mirrored).
         scale: f64,
+        /// The assembly occurrence holding it: 1-based index into `Model::assemblies`,
+        /// 0 when it is a free shape (no assembly above it).
+        parent: u32,
+    }
+
+    /// One placed assembly (a root, or a sub-assembly occurrence), listed before
+    /// everything it holds.
+    struct Assembly {
+        /// The occurrence's name (NAUO), else the product's.
+        name: String,
+        /// Names from the root, `/`-separated.
+        path: String,
+        /// The assembly product's name.
+        product: String,
+        /// The assembly holding it, as [`Instance::parent`].
+        parent: u32,
+        /// Its placement: assembly frame → root, row-major 3 × 4, mm.
+        matrix: Vec<f64>,
+        /// The placement's scale factor.
+        scale: f64,
     }
 
     /// What the shim read.
     struct Model {
         parts: Vec<SolidPart>,
         instances: Vec<Instance>,
+        /// Placed assemblies, in the tree's order (each before what it holds).
+        assemblies: Vec<Assembly>,
         /// The file's length unit as its header names it (`MM`, `INCH`, …).
         length_unit: String,
         /// Parsing (ReadFile), transfer and meshing times, s.

@@ -142,15 +142,7 @@ pub fn plan_insertion(
     let deadline = budget.deadline(clock);
     // What is left of the budget, ms (a small positive floor: a limit must be > 0,
     // and a spent one then ends the next search at its first clock read).
-    let left = || {
-        Some(
-            (deadline
-                .saturating_duration_since(Instant::now())
-                .as_secs_f64()
-                * 1e3)
-                .max(1e-3),
-        )
-    };
+    let left = || Some((deadline.remaining().as_secs_f64() * 1e3).max(1e-3));
     let seed = options.disassembly.rrt().limits.seed;
     let (start_in, goal_in) = (
         inside(part_box, start, product_box),

@@ -6,9 +6,9 @@ use crate::collision::{
     contact_step, edge_interferes, interferes, surface_distance, Aabb, Collider, CollisionError,
     EdgeOptions, MotionFault, PoseFault, SweepMethod,
 };
+use crate::math::Deadline;
 use crate::math::Transform;
 use std::sync::Arc;
-use std::time::Instant;
 
 /// The finest stepwise edge resolution and contact step accepted, mm: finer steps
 /// cannot see anything the 0.01 mm default tolerance does not, and only make one
@@ -78,7 +78,7 @@ pub struct MeshValidator {
     options: MeshValidatorOptions,
     stats: ValidatorStats,
     near: Vec<usize>,
-    deadline: Option<Instant>,
+    deadline: Option<Deadline>,
 }
 
 impl MeshValidator {
@@ -205,7 +205,7 @@ impl MeshValidator {
 
     /// Whether the caller's deadline has passed (then every check answers "not free").
     fn expired(&self) -> bool {
-        self.deadline.is_some_and(|d| Instant::now() >= d)
+        self.deadline.is_some_and(Deadline::passed)
     }
 
     /// Static check of the obstacles in `self.near` (`false` for a bad pose or a
@@ -362,7 +362,7 @@ impl MotionValidator for MeshValidator {
         }
     }
 
-    fn set_deadline(&mut self, deadline: Option<Instant>) {
+    fn set_deadline(&mut self, deadline: Option<Deadline>) {
         self.deadline = deadline;
     }
 

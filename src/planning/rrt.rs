@@ -9,6 +9,7 @@ use super::smoothing::{shortcut, Smoothing};
 use super::space::PlanningSpace;
 use super::tree::{check_ends, Effort, PoseTarget, Target, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
+use crate::math::Deadline;
 use crate::math::{Rng, Transform};
 
 /// Options of [`rrt`] and [`biased_rrt`].
@@ -310,15 +311,8 @@ pub(crate) fn finish(
     // numbers the search drew.
     let mut rng = Rng::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
     // Smoothing's share of the budget, at most what is left of it.
-    let left_ms = run
-        .deadline()
-        .saturating_duration_since(std::time::Instant::now())
-        .as_secs_f64()
-        * 1e3;
-    let until = super::run::deadline_after(
-        std::time::Instant::now(),
-        smoothing.time_ms(run.budget_ms(), left_ms),
-    );
+    let left_ms = run.deadline().remaining().as_secs_f64() * 1e3;
+    let until = Deadline::after_ms(smoothing.time_ms(run.budget_ms(), left_ms));
     shortcut(checker, space, &mut poses, smoothing, &mut rng, run, until);
     PlannedPath::found_with(planner, poses, raw, run.iterations, nodes, checker, run)
 }

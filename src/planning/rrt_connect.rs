@@ -13,11 +13,10 @@ use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
 use super::tree::{check_ends, steer, Effort, PoseTarget, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
-use crate::math::{Rng, Transform};
+use crate::math::{Deadline, Rng, Transform};
 use nalgebra::UnitQuaternion;
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::Instant;
 
 /// Options of [`rrt_connect`].
 #[derive(Debug, Clone, PartialEq)]
@@ -609,7 +608,7 @@ struct Problem<'a> {
     start: &'a Transform,
     goal: &'a Transform,
     seed: u64,
-    deadline: Instant,
+    deadline: Deadline,
 }
 
 impl Problem<'_> {
@@ -740,7 +739,7 @@ impl MotionValidator for Shared<'_, '_> {
     fn clearance(&mut self, pose: &Transform) -> Option<f64> {
         self.0.borrow_mut().clearance(pose)
     }
-    fn set_deadline(&mut self, deadline: Option<Instant>) {
+    fn set_deadline(&mut self, deadline: Option<Deadline>) {
         self.0.borrow_mut().set_deadline(deadline)
     }
     fn part_radius(&self) -> Option<f64> {
@@ -947,7 +946,7 @@ mod tests {
         fn clearance(&mut self, pose: &Transform) -> Option<f64> {
             self.0.clearance(pose)
         }
-        fn set_deadline(&mut self, deadline: Option<Instant>) {
+        fn set_deadline(&mut self, deadline: Option<Deadline>) {
             self.0.set_deadline(deadline)
         }
         fn part_radius(&self) -> Option<f64> {

@@ -1,6 +1,7 @@
 //! What every planner shares: limits, progress reports, cancellation, option errors.
 
-use std::time::{Duration, Instant};
+use crate::math::Deadline;
+use std::time::Instant;
 
 /// Why a planner returned no path.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -72,9 +73,9 @@ impl PlanLimits {
         self.time_limit_ms.unwrap_or(DEFAULT_TIME_LIMIT_MS)
     }
 
-    /// The instant the budget runs out for a call started at `started`.
-    pub fn deadline(&self, started: Instant) -> Instant {
-        deadline_after(started, self.budget_ms())
+    /// When the budget runs out for a call started at `started`.
+    pub fn deadline(&self, started: Instant) -> Deadline {
+        Deadline::from_start(started, crate::math::deadline::budget_ms(self.budget_ms()))
     }
 
     pub(crate) fn validate(&self) -> Result<(), PlanError> {
@@ -90,14 +91,6 @@ impl PlanLimits {
         }
         Ok(())
     }
-}
-
-/// `started + ms`, saturating far in the future for huge budgets.
-pub(crate) fn deadline_after(started: Instant, ms: f64) -> Instant {
-    Duration::try_from_secs_f64(ms.max(0.0) / 1e3)
-        .ok()
-        .and_then(|d| started.checked_add(d))
-        .unwrap_or_else(|| started + Duration::from_secs(100 * 365 * 86_400))
 }
 
 /// What a planning call is doing when it reports progress.
@@ -227,14 +220,14 @@ impl PlanError {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct RunClock {
     started: Instant,
-    deadline: Instant,
+    deadline: Deadline,
     limits: PlanLimits,
 }
 
 /// The clock, counters and callback of one run.
 pub(crate) struct Run<'p> {
     started: Instant,
-    deadline: Instant,
+    deadline: Deadline,
     limits: PlanLimits,
     progress: Option<ProgressFn<'p>>,
     pub iterations: usize,
@@ -287,13 +280,13 @@ impl<'p> Run<'p> {
     }
 
     /// When the call's budget runs out.
-    pub fn deadline(&self) -> Instant {
+    pub fn deadline(&self) -> Deadline {
         self.deadline
     }
 
     /// Whether the budget is spent.
     pub fn expired(&self) -> bool {
-        Instant::now() >= self.deadline
+        self.deadline.passed()
     }
 
     /// The call's whole time budget (ms).
@@ -314,9 +307,9 @@ impl<'p> Run<'p> {
         attempt: usize,
         key_poses: usize,
         length: f64,
-        until: Instant,
+        until: Deadline,
     ) -> bool {
-        if self.expired() || Instant::now() >= until {
+        if self.expired() || until.passed() {
             return false;
         }
         if attempt.is_multiple_of(SMOOTHING_PROGRESS_EVERY) && attempt > 0 {

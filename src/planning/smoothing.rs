@@ -4,8 +4,7 @@ use super::path::{measure, PlannedPath};
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::space::PlanningSpace;
 use super::validator::{Checker, MotionValidator};
-use crate::math::{Rng, Transform};
-use std::time::Instant;
+use crate::math::{Deadline, Rng, Transform};
 
 /// How a found path is shortened.
 ///
@@ -138,10 +137,10 @@ pub(crate) fn shortcut(
     smoothing: &Smoothing,
     rng: &mut Rng,
     run: &mut Run<'_>,
-    until: Instant,
+    until: Deadline,
 ) {
     // No time for smoothing (a zero share, or the budget spent): the path as found.
-    if !smoothing.enabled || poses.len() < 3 || Instant::now() >= until {
+    if !smoothing.enabled || poses.len() < 3 || until.passed() {
         return;
     }
     let call = checker.deadline();
@@ -188,7 +187,7 @@ fn shortcut_until(
     smoothing: &Smoothing,
     rng: &mut Rng,
     run: &mut Run<'_>,
-    until: Instant,
+    until: Deadline,
 ) -> LazyPath {
     let screen = screen_steps(checker, space);
     // With a continuous validator a piece of a certified edge is certified (the

@@ -1,6 +1,8 @@
 //! The search tree shared by the RRT family, and helpers every tree planner needs.
 
-use super::nearest::{metric, KdIndex};
+#[cfg(test)]
+use super::nearest::metric;
+use super::nearest::{metric_below, KdIndex};
 use super::run::Failure;
 use super::space::PlanningSpace;
 use super::validator::Checker;
@@ -201,7 +203,14 @@ impl Tree {
             if d >= best.1 || self.dead[i] {
                 continue;
             }
-            let d = metric(&self.translations[i], &self.rotations[i], &tt, &tq, w);
+            let d = metric_below(
+                &self.translations[i],
+                &self.rotations[i],
+                &tt,
+                &tq,
+                w,
+                best.1,
+            );
             if d < best.1 {
                 best = (i, d);
             }

@@ -1,8 +1,7 @@
 //! [`MotionValidator`]: the one question planners ask about geometry.
 
 use crate::collision::SweepMethod;
-use crate::math::Transform;
-use std::time::Instant;
+use crate::math::{Deadline, Transform};
 
 /// Lazy validation of a tree search: edges are explored with pose checks only
 /// (`is_free` at most `step_mm` of translation and `step_mm / rotation_weight` of
@@ -96,7 +95,7 @@ pub trait MotionValidator {
     /// continuous edges) should answer "not free" once it has passed, so that one
     /// check cannot overrun the budget; planners set it for the duration of a call
     /// and clear it afterwards. The default ignores it.
-    fn set_deadline(&mut self, _deadline: Option<Instant>) {}
+    fn set_deadline(&mut self, _deadline: Option<Deadline>) {}
 
     /// Radius of the moving part about its own origin (mm), when the validator
     /// knows it: the scale-free defaults derive their lengths from it
@@ -139,7 +138,7 @@ impl<V: MotionValidator + ?Sized> MotionValidator for &mut V {
     fn clearance(&mut self, pose: &Transform) -> Option<f64> {
         (**self).clearance(pose)
     }
-    fn set_deadline(&mut self, deadline: Option<Instant>) {
+    fn set_deadline(&mut self, deadline: Option<Deadline>) {
         (**self).set_deadline(deadline)
     }
     fn part_radius(&self) -> Option<f64> {
@@ -216,7 +215,7 @@ pub fn stepwise_edge_free(
 /// search with the time limit.
 pub(crate) struct Checker<'v> {
     validator: &'v mut dyn MotionValidator,
-    deadline: Option<Instant>,
+    deadline: Option<Deadline>,
     /// Lazy exploration: `edge_free` checks poses `(mm, rad)` apart with `is_free`
     /// only; [`Checker::certify`] asks the validator's own edge check.
     lazy: Option<(f64, f64)>,
@@ -227,7 +226,7 @@ pub(crate) struct Checker<'v> {
 }
 
 impl<'v> Checker<'v> {
-    pub fn new(validator: &'v mut dyn MotionValidator, deadline: Option<Instant>) -> Self {
+    pub fn new(validator: &'v mut dyn MotionValidator, deadline: Option<Deadline>) -> Self {
         validator.set_deadline(deadline);
         Self {
             validator,
@@ -259,20 +258,20 @@ impl<'v> Checker<'v> {
     }
 
     /// The deadline every check honours (`None`: none).
-    pub fn deadline(&self) -> Option<Instant> {
+    pub fn deadline(&self) -> Option<Deadline> {
         self.deadline
     }
 
     /// Moves the deadline (smoothing narrows it to its share of the budget, then
     /// puts the call's back).
-    pub fn set_deadline(&mut self, deadline: Option<Instant>) {
+    pub fn set_deadline(&mut self, deadline: Option<Deadline>) {
         self.deadline = deadline;
         self.validator.set_deadline(deadline);
     }
 
     /// Whether the deadline has passed.
     pub fn expired(&self) -> bool {
-        self.deadline.is_some_and(|d| Instant::now() >= d)
+        self.deadline.is_some_and(Deadline::passed)
     }
 
     pub fn is_free(&mut self, pose: &Transform) -> bool {

@@ -23,7 +23,6 @@ use crate::collision::{Collider, SweepMethod};
 use crate::math::{Aabb, Deadline, Point3, Transform, Vec3};
 use crate::planning::{stepwise_edge_free, MotionValidator};
 use std::sync::Arc;
-use std::time::Instant;
 
 /// Most lines one check casts (the spacing is widened to stay within it).
 pub(crate) const MAX_FIT_LINES: usize = 20_000;
@@ -267,8 +266,8 @@ impl MotionValidator for FitPairValidator {
         let step = self.step_mm;
         stepwise_edge_free(|p| self.is_free(p), from, to, step, 0.01)
     }
-    fn set_deadline(&mut self, deadline: Option<Instant>) {
-        self.deadline = deadline.map(Deadline::at);
+    fn set_deadline(&mut self, deadline: Option<Deadline>) {
+        self.deadline = deadline;
     }
     fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
         let mut copy = self.clone();

@@ -6,11 +6,10 @@
 use super::context::*;
 use super::fit::FitPairValidator;
 use crate::collision::SweepMethod;
-use crate::math::{Aabb, Transform, Vec3};
+use crate::math::{Aabb, Deadline, Transform, Vec3};
 use crate::planning::{
     MeshValidator, MeshValidatorOptions, MotionValidator, PlannedPath, Planner, PlanningSpace,
 };
-use std::time::Instant;
 
 /// The checks of one part moving among others where some pairs have a fit: a mesh
 /// validator for the obstacles without a fit (the call's tolerance) and a fit
@@ -51,7 +50,7 @@ impl MotionValidator for FitValidator {
         // The fit partners overlap the part: no clearance to report from them.
         self.main.clearance(pose)
     }
-    fn set_deadline(&mut self, deadline: Option<Instant>) {
+    fn set_deadline(&mut self, deadline: Option<Deadline>) {
         self.main.set_deadline(deadline);
         if let Some(f) = &mut self.fits {
             f.set_deadline(deadline);
@@ -145,7 +144,7 @@ impl Ctx<'_> {
         let mut v = FitValidator::new(main, fits);
         // The call's one deadline: past it every check answers "not free" at once
         // (a path is then not taken, never wrongly taken).
-        v.set_deadline(Some(self.deadline.instant()));
+        v.set_deadline(Some(self.deadline));
         Some(v)
     }
 

@@ -6,6 +6,8 @@
 pub mod duct;
 pub mod kin_driver;
 pub mod lines;
+#[cfg(feature = "step")]
+pub mod occt_check;
 pub mod ur_kin;
 pub mod ur_urdf;
 

@@ -209,3 +209,93 @@ fn long_chains_and_too_many_equations_are_bounded() {
         Some(line_of(&path, "\"w\" = 1"))
     );
 }
+
+/// A project holding `models/mz07.yaml` (the repository's robot) with the equations
+/// `list` (`{J2}` stands for the full name of its second joint's dimension).
+fn mz07_with(list: &[&str]) -> (tempfile::TempDir, PathBuf, String) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("fitup.toml"), "").unwrap();
+    std::fs::create_dir_all(dir.path().join("models/meshes")).unwrap();
+    std::fs::create_dir_all(dir.path().join("scripts")).unwrap();
+    let models = common::repo().join("models");
+    for e in std::fs::read_dir(models.join("meshes")).unwrap() {
+        let e = e.unwrap();
+        if e.file_name().to_string_lossy().starts_with("mz07_") {
+            std::fs::copy(
+                e.path(),
+                dir.path().join("models/meshes").join(e.file_name()),
+            )
+            .unwrap();
+        }
+    }
+    let path = dir.path().join("models/mz07.yaml");
+    let text = std::fs::read_to_string(models.join("mz07.yaml")).unwrap();
+    std::fs::write(&path, &text).unwrap();
+    let j2 = Document::open(&path).unwrap().robots()[0].dimension_names()[1].clone();
+    let mut out = format!("{text}equations:\n");
+    for e in list {
+        out.push_str(&format!("- '{}'\n", e.replace("{J2}", &j2)));
+    }
+    std::fs::write(&path, out).unwrap();
+    (dir, path, j2)
+}
+
+/// Issue 37: a robot joint whose dimension an equation drives cannot be set by hand
+/// (SolidWorks refuses to edit a driven dimension): `set_robot_joints` and the
+/// dimension setters are refused naming the equation, from Rust and Rhai; the other
+/// joints still move, and the equation moves the driven one.
+#[test]
+fn a_joint_an_equation_drives_is_refused_naming_the_equation() {
+    let (dir, path, j2) = mz07_with(&["\"Lean\" = 20", "\"{J2}\" = \"Lean\" + 5deg"]);
+    let mut doc = Document::open(&path).unwrap();
+    let q = doc.robots()[0].joints().to_vec();
+    assert!((q[1].to_degrees() - 25.0).abs() < 1e-9, "{q:?}");
+    let mut moved = q.clone();
+    moved[1] += 0.1;
+    let e = doc.set_robot_joints(0, &moved).unwrap_err();
+    match &e {
+        DocumentError::DrivenByEquation {
+            dimension,
+            index,
+            equation,
+            joint,
+        } => {
+            assert_eq!((dimension.as_str(), *index), (j2.as_str(), 1));
+            assert!(equation.contains("\"Lean\" + 5deg"), "{equation}");
+            assert!(joint.as_deref().unwrap().contains("joint 2"), "{joint:?}");
+        }
+        other => panic!("{other}"),
+    }
+    assert!(e.to_string().contains("change the equation"), "{e}");
+    assert_eq!(doc.robots()[0].joints(), &q[..], "nothing moved");
+    // The dimension setters say the same.
+    let e = doc.set_dimension(&j2, 0.2).unwrap_err();
+    assert!(
+        matches!(e, DocumentError::DrivenByEquation { index: 1, .. }),
+        "{e}"
+    );
+    // Another joint moves; the driven one may be passed at its value.
+    let mut other = q.clone();
+    other[0] += 0.2;
+    doc.set_robot_joints(0, &other).unwrap();
+    assert_eq!(doc.robots()[0].joints()[0], q[0] + 0.2);
+    // The equation moves it.
+    doc.set_global_variable("Lean", 30.0).unwrap();
+    assert!((doc.robots()[0].joints()[1].to_degrees() - 35.0).abs() < 1e-9);
+
+    // Rhai: the same refusal, as a script error naming the equation.
+    std::fs::write(
+        dir.path().join("scripts/lean.rhai"),
+        "let doc = open_doc(\"models/mz07.yaml\");\nlet r = doc.robot(\"mz07\");\nlet q = r.joints;\nq[0] = q[0] + 5.0;\nr.joints = q;\nprint(\"moved\");\nq[1] = 0.0;\nr.joints = q;\n",
+    )
+    .unwrap();
+    let o = common::run_in(dir.path(), &["run", "scripts/lean.rhai"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("moved"), "{t}");
+    assert!(
+        t.contains(&format!("dimension `{j2}`")) && t.contains("equation [1]"),
+        "{t}"
+    );
+    assert!(t.contains("lean.rhai:8"), "located at the line: {t}");
+}

@@ -675,10 +675,10 @@ const SEQUENCE_RSS_KB: u64 = 600 * 1024;
 
 // ---- the tessellation store ------------------------------------------------------
 
-/// A forged store entry (format 2 header: magic, key, source) naming `source`, with
+/// A forged store entry (format 3 header: magic, key, source) naming `source`, with
 /// the key's length `len` (so that a source of that length must be hashed).
 fn forged_entry(source: &Path, len: u64, salt: u64) -> Vec<u8> {
-    let mut out = b"fitup-tessellation 2\n".to_vec();
+    let mut out = b"fitup-tessellation 3\n".to_vec();
     for v in [
         0x1234_5678_9abc_def0 ^ salt,
         len,
@@ -830,12 +830,12 @@ mod store_trust {
         (dir, entries[0].clone(), bytes)
     }
 
-    /// Offsets in an entry (format 2, one part): the first vertex coordinate (f64),
+    /// Offsets in an entry (format 3, one part): the first vertex coordinate (f64),
     /// the vertex count, the first triangle index (u32), and where the part's
     /// vertex count is.
     fn offsets(e: &[u8]) -> (usize, usize, usize, usize) {
         let u64_at = |i: usize| u64::from_le_bytes(e[i..i + 8].try_into().unwrap()) as usize;
-        let mut i = b"fitup-tessellation 2\n".len() + 32;
+        let mut i = b"fitup-tessellation 3\n".len() + 32;
         i += 8 + u64_at(i); // source
         assert_eq!(u64_at(i), 1, "one part");
         i += 8;

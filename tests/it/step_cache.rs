@@ -18,7 +18,7 @@ fn pruning_leaves_what_fitup_did_not_write() {
     let store = p.join(fitup::mesh::step::STEP_STORE);
     std::fs::create_dir_all(&store).unwrap();
     std::fs::write(store.join("0123456789abcdef.tess"), "my notes").unwrap();
-    std::fs::write(store.join("notes.txt"), "fitup-tessellation 2\n").unwrap();
+    std::fs::write(store.join("notes.txt"), "fitup-tessellation 3\n").unwrap();
     let before = common::snapshot(p);
     let o = common::run_in(p, &["cache", "prune", "--max-mb", "0"]);
     assert!(o.status.success(), "{}", common::text(&o));

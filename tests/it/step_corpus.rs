@@ -1,18 +1,19 @@
 //! `fitup import` on real CAD exports (SolidWorks, CATIA, …), which are third-party
 //! files and so never committed: `FITUP_STEP_CORPUS` names a folder of `.step`/`.stp`
-//! files (or one file); without it the test says so and passes. With
-//! `FITUP_OCCT_CHECK` naming tests/bench/step/occt_check (built by
-//! tests/bench/step_corpus.sh), every import is checked against Open CASCADE's own
-//! reading of the file: one component per placed solid at the placement of the
-//! assembly tree, its part named from the product, its mesh closed and within 1.5 % of
-//! the exact B-rep volume, the file's unit named and lengths in mm.
+//! files (or one file); without it the test says so and passes. Every import is
+//! checked against Open CASCADE's own reading of the file (tests/bench/step/occt_check:
+//! `FITUP_OCCT_CHECK`, else compiled by the test, see `common::occt_check`): one
+//! component per placed solid at the placement of the assembly tree and as many levels
+//! down, its part named from the product, its mesh closed and within 1.5 % of the exact
+//! B-rep volume; one sub-assembly per assembly occurrence below the root, in the tree's
+//! order, at its placement (issue 37); the file's unit named and lengths in mm.
 
 #[cfg(feature = "step")]
 mod with_occt {
     use crate::common;
+    use crate::common::occt_check;
     use fitup::document::Document;
-    use fitup::math::{Point3, Transform};
-    use std::path::{Path, PathBuf};
+    use std::path::PathBuf;
 
     /// The corpus files, sorted; empty when `FITUP_STEP_CORPUS` is not set.
     fn corpus() -> Vec<PathBuf> {
@@ -36,76 +37,6 @@ mod with_occt {
         files
     }
 
-    /// One placed solid as Open CASCADE alone reads it (occt_check's `solid` line).
-    struct Reference {
-        path: String,
-        product: String,
-        volume: f64,
-        /// Part frame → root, column vectors, mm.
-        r: [[f64; 3]; 3],
-        t: [f64; 3],
-    }
-
-    impl Reference {
-        fn apply(&self, p: [f64; 3]) -> Point3 {
-            let v: Vec<f64> = (0..3)
-                .map(|i| (0..3).map(|j| self.r[i][j] * p[j]).sum::<f64>() + self.t[i])
-                .collect();
-            Point3::new(v[0], v[1], v[2])
-        }
-
-        /// Whether `pose` moves the part frame as this placement does (within
-        /// `tol` mm at the origin and at 100 mm along each axis).
-        fn placed_as(&self, pose: &Transform, tol: f64) -> bool {
-            [
-                [0.0, 0.0, 0.0],
-                [100.0, 0.0, 0.0],
-                [0.0, 100.0, 0.0],
-                [0.0, 0.0, 100.0],
-            ]
-            .iter()
-            .all(|p| (pose.apply(&Point3::new(p[0], p[1], p[2])) - self.apply(*p)).norm() <= tol)
-        }
-    }
-
-    /// occt_check's reading: the file's length unit and its placed solids.
-    fn reference(check: &Path, file: &Path) -> (String, Vec<Reference>) {
-        let o = std::process::Command::new(check)
-            .arg(file)
-            .output()
-            .unwrap();
-        assert!(
-            o.status.success(),
-            "occt_check {}: {}",
-            file.display(),
-            common::text(&o)
-        );
-        let text = String::from_utf8(o.stdout).unwrap();
-        let mut unit = String::new();
-        let mut solids = Vec::new();
-        for line in text.lines() {
-            let f: Vec<&str> = line.split('\t').collect();
-            match f[0] {
-                "unit" => unit = f[1].to_string(),
-                "solid" => {
-                    let mut nums = f[3].split(' ').map(|x| x.parse::<f64>().unwrap());
-                    let volume = nums.next().unwrap();
-                    let m: Vec<f64> = nums.collect();
-                    assert_eq!(m.len(), 12, "{line}");
-                    solids.push(Reference {
-                        path: f[1].to_string(),
-                        product: f[2].to_string(),
-                        volume,
-                        r: [[m[0], m[1], m[2]], [m[4], m[5], m[6]], [m[8], m[9], m[10]]],
-                        t: [m[3], m[7], m[11]],
-                    });
-                }
-                _ => panic!("occt_check said {line:?}"),
-            }
-        }
-        (unit, solids)
-    }
-
     #[test]
     fn real_cad_exports_import_where_the_cad_put_them() {
         let files = corpus();
@@ -113,7 +44,7 @@ mod with_occt {
             eprintln!("FITUP_STEP_CORPUS is not set: no real CAD export checked");
             return;
         }
-        let check = std::env::var_os("FITUP_OCCT_CHECK").map(PathBuf::from);
+        let check = occt_check::program();
         for file in files {
             let dir = tempfile::tempdir().unwrap();
             let start = std::time::Instant::now();
@@ -152,11 +83,8 @@ mod with_occt {
                     c.name
                 );
             }
-            let Some(check) = &check else {
-                eprintln!("FITUP_OCCT_CHECK is not set: placements and volumes not checked against Open CASCADE");
-                continue;
-            };
-            let (unit, solids) = reference(check, &file);
+            let reference = occt_check::read(&check, &file);
+            let (unit, solids) = (&reference.unit, &reference.solids);
             let description = doc.description().unwrap_or_default();
             assert!(
                 description.contains(&format!("file unit {unit}")),
@@ -169,10 +97,41 @@ mod with_occt {
                 "{}: one component per placed solid",
                 file.display()
             );
+            // The product tree (issue 37): one root assembly is the document itself;
+            // every other assembly occurrence is a sub-assembly, in the tree's order,
+            // at Open CASCADE's placement, as many levels down.
+            let roots = reference
+                .assemblies
+                .iter()
+                .filter(|a| a.depth() == 1)
+                .count();
+            let dropped = usize::from(roots == 1 && solids.iter().all(|s| s.depth() > 1));
+            let expected: Vec<_> = reference
+                .assemblies
+                .iter()
+                .filter(|a| dropped == 0 || a.depth() > 1)
+                .collect();
+            assert_eq!(
+                doc.sub_assemblies().len(),
+                expected.len(),
+                "{}: one sub-assembly per assembly occurrence",
+                file.display()
+            );
+            for (a, r) in doc.sub_assemblies().iter().zip(&expected) {
+                let scale = 1.0 + r.t.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(
+                    r.placed_as(&a.transform, 1e-6 * scale),
+                    "{}: sub-assembly {} is not where Open CASCADE places `{}`",
+                    file.display(),
+                    a.name,
+                    r.path
+                );
+                assert_eq!(a.name.split('/').count(), r.depth() - dropped, "{}", a.name);
+            }
             // Match each placed solid to a component at its placement whose part has
             // its volume (two solids at one placement are told apart by volume).
             let mut free: Vec<bool> = vec![true; doc.components().len()];
-            for s in &solids {
+            for s in solids {
                 let scale = 1.0 + s.t.iter().fold(0.0f64, |a, v| a.max(v.abs()));
                 let hit = doc.components().iter().enumerate().position(|(i, c)| {
                     let part = doc.part(&c.part).unwrap();
@@ -191,6 +150,14 @@ mod with_occt {
                 };
                 free[i] = false;
                 let c = &doc.components()[i];
+                assert_eq!(
+                    c.name.split('/').count(),
+                    s.depth() - dropped,
+                    "{}: component {} for `{}`: not as many levels down",
+                    file.display(),
+                    c.name,
+                    s.path
+                );
                 let product = fitup::document::import::document_name(&s.product, "");
                 assert!(
                     product.is_empty() || c.part.starts_with(&product),

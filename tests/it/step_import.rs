@@ -99,6 +99,7 @@ mod with_occt {
             "box",
             "cylinder_hole",
             "assembly",
+            "nested",
             "inch_box",
             "open_shell",
             "no_solid",
@@ -248,14 +249,29 @@ mod with_occt {
             .unwrap()
             .count();
         assert_eq!(stls, 2);
+        // The sub-assembly `pegs-1` is kept (issue 37): its pegs are named inside it.
         let names: Vec<_> = doc.components().iter().map(|c| c.name.as_str()).collect();
-        assert_eq!(names, ["plate-1", "peg-1", "peg-2", "peg-3"]);
+        assert_eq!(names, ["plate-1", "pegs-1/peg-1", "pegs-1/peg-2", "peg-3"]);
+        assert_eq!(
+            doc.children(Some("pegs-1")).unwrap(),
+            ["pegs-1/peg-1", "pegs-1/peg-2"]
+        );
         assert!(doc.components()[1..].iter().all(|c| c.part == "peg"));
         // Placements: the sub-assembly's 10 mm composed with each peg's own.
         let near = |a: Vec3, b: [f64; 3]| (a - Vec3::from(b)).norm() < 1e-9;
+        assert!(near(
+            doc.sub_assembly("pegs-1").unwrap().transform.translation(),
+            [0.0, 0.0, 10.0]
+        ));
         assert!(near(translation_of(&doc, "plate-1").0, [0.0, 0.0, 0.0]));
-        assert!(near(translation_of(&doc, "peg-1").0, [20.0, 30.0, 10.0]));
-        assert!(near(translation_of(&doc, "peg-2").0, [80.0, 30.0, 10.0]));
+        assert!(near(
+            translation_of(&doc, "pegs-1/peg-1").0,
+            [20.0, 30.0, 10.0]
+        ));
+        assert!(near(
+            translation_of(&doc, "pegs-1/peg-2").0,
+            [80.0, 30.0, 10.0]
+        ));
         let (at, lying) = translation_of(&doc, "peg-3");
         assert!(near(at, [50.0, 45.0, 14.0]), "{at}");
         let expected =
@@ -283,9 +299,162 @@ mod with_occt {
         );
         let t = common::text(&o);
         assert!(o.status.success(), "{}", common::short_text(&o));
-        for c in ["plate-1", "peg-1", "peg-2", "peg-3"] {
+        for c in ["plate-1", "pegs-1/peg-1", "pegs-1/peg-2", "peg-3"] {
             assert!(t.contains(c), "{c} planned: {t}");
         }
+    }
+
+    /// A transform about `axis` by `deg` degrees, then moved by `at` (mm): the
+    /// generator's `pose` in cpp/step_shim.cpp (kind `nested`).
+    fn pose(axis: [f64; 3], deg: f64, at: [f64; 3]) -> Transform {
+        Transform::from_rotation_about(Point3::origin(), Vec3::from(axis), deg.to_radians())
+            .unwrap()
+            .then(&Transform::from_translation(Vec3::from(at)))
+    }
+
+    /// Issue 37: a STEP assembly with nested sub-assemblies imports with its tree —
+    /// sub-assemblies at every level, full names `Frame-1/Axle-2/Wheel-1`, occurrences
+    /// SolidWorks names `NAUO<n>` named as its tree names them — and every component
+    /// and sub-assembly where Open CASCADE's own reading (occt_check, no fitup code)
+    /// places it, composed through three levels; a save and a reload keep it all.
+    #[test]
+    fn nested_assemblies_import_with_their_tree() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = made(dir.path(), "nested");
+        let o = common::run_in(dir.path(), &["import", "nested.step", "--out", "cart"]);
+        let t = common::text(&o);
+        assert!(o.status.success(), "{t}");
+        assert!(t.contains("3 parts, 18 components"), "{t}");
+        let doc_path = dir.path().join("cart/nested.yaml");
+        let doc = Document::open(&doc_path).unwrap();
+        let subs: Vec<_> = doc
+            .sub_assemblies()
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect();
+        assert_eq!(
+            subs,
+            [
+                "Frame-1",
+                "Frame-1/Axle-1",
+                "Frame-1/Axle-2",
+                "Frame-2",
+                "Frame-2/Axle-1",
+                "Frame-2/Axle-2",
+                "axle_asm-1",
+            ]
+        );
+        assert_eq!(
+            doc.children(Some("Frame-2/Axle-1")).unwrap(),
+            [
+                "Frame-2/Axle-1/bar-1",
+                "Frame-2/Axle-1/Wheel-1",
+                "Frame-2/Axle-1/Wheel-2"
+            ]
+        );
+        assert_eq!(
+            doc.children(None).unwrap(),
+            ["Frame-1", "Frame-2", "axle_asm-1", "wheel-1"]
+        );
+        assert_eq!(
+            doc.parent_of("Frame-1/Axle-2/Wheel-1").unwrap().as_deref(),
+            Some("Frame-1/Axle-2")
+        );
+        // One part per distinct solid, whatever the level.
+        let mut parts: Vec<_> = doc.parts().map(|p| p.name.clone()).collect();
+        parts.sort();
+        assert_eq!(parts, ["axle_bar", "frame_plate", "wheel"]);
+
+        // Composed by hand from the generator's placements: Frame-1 ∘ Axle-2 ∘ Wheel-1.
+        let frame1 = pose([0.0, 0.0, 1.0], 45.0, [0.0, 0.0, 20.0]);
+        let axle2 = pose([1.0, 1.0, 0.0], -60.0, [90.0, 0.0, 5.0]);
+        let wheel1 = pose([1.0, 0.0, 0.0], 180.0, [2.0, 2.0, 0.0]);
+        let by_hand = wheel1.then(&axle2).then(&frame1);
+        let got = doc.component("Frame-1/Axle-2/Wheel-1").unwrap().transform;
+        assert!(got.approx_eq(&by_hand, 1e-9, 1e-9), "{got} vs {by_hand}");
+        // Relative to its parent, each pose is the generator's own.
+        let local = |name: &str| doc.local_transform(name).unwrap();
+        assert!(local("Frame-1/Axle-2/Wheel-1").approx_eq(&wheel1, 1e-9, 1e-9));
+        assert!(local("Frame-1/Axle-2").approx_eq(&axle2, 1e-9, 1e-9));
+        assert!(local("Frame-1").approx_eq(&frame1, 1e-9, 1e-9));
+
+        // Every placed solid and assembly as Open CASCADE reads the file.
+        let reference = common::occt_check::read(&common::occt_check::program(), &file);
+        assert_eq!(reference.solids.len(), doc.components().len());
+        assert_eq!(
+            reference.assemblies.len(),
+            doc.sub_assemblies().len() + 1,
+            "and the root"
+        );
+        // occt_check's paths start at the root `cart`, which is the document; the
+        // occurrences the exporter names NAUO<n> are named as SolidWorks does.
+        let name = |path: &str| {
+            let inside = path.strip_prefix("cart/").unwrap();
+            inside
+                .replace("NAUO7", "wheel-1")
+                .replace("NAUO8", "axle_asm-1")
+        };
+        let mut checked = 0;
+        for s in &reference.solids {
+            let c = doc.component(&name(&s.path)).unwrap();
+            assert!(
+                s.placed_as(&c.transform, 1e-9),
+                "{}: {}",
+                s.path,
+                c.transform
+            );
+            assert!(c.part.starts_with(&s.product), "{} {}", c.part, s.product);
+            checked += 1;
+        }
+        for a in reference.assemblies.iter().filter(|a| a.path != "cart") {
+            let sub = doc.sub_assembly(&name(&a.path)).unwrap();
+            assert!(
+                a.placed_as(&sub.transform, 1e-9),
+                "{}: {}",
+                a.path,
+                sub.transform
+            );
+            checked += 1;
+        }
+        assert_eq!(checked, 18 + 7);
+
+        // A save and a reload keep the tree and the poses.
+        let mut doc = doc;
+        doc.save().unwrap();
+        let again = Document::open(&doc_path).unwrap();
+        for s in &reference.solids {
+            let c = again.component(&name(&s.path)).unwrap();
+            assert!(s.placed_as(&c.transform, 1e-9), "after a save: {}", s.path);
+        }
+        assert_eq!(again.sub_assemblies().len(), 7);
+        let o = common::run_in(&dir.path().join("cart"), &["check", "nested.yaml"]);
+        assert!(o.status.success(), "{}", common::short_text(&o));
+    }
+
+    /// The library's reading keeps the tree too: assemblies before what they hold,
+    /// parents by index, placements composed (the root's is the identity here).
+    #[test]
+    fn read_step_gives_the_assembly_tree() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = read_step(&made(dir.path(), "nested"), &StepOptions::default()).unwrap();
+        let paths: Vec<_> = m.assemblies.iter().map(|a| a.path.as_str()).collect();
+        assert_eq!(paths[..3], ["cart", "cart/Frame-1", "cart/Frame-1/Axle-1"]);
+        assert_eq!(m.assemblies.len(), 8);
+        assert_eq!(m.assemblies[0].parent, None);
+        assert_eq!(m.assemblies[0].product, "cart");
+        for (k, a) in m.assemblies.iter().enumerate().skip(1) {
+            let p = a.parent.unwrap();
+            assert!(p < k);
+            assert!(a.path.starts_with(&format!("{}/", m.assemblies[p].path)));
+        }
+        for i in &m.instances {
+            let p = i.parent.unwrap();
+            assert_eq!(i.path, format!("{}/{}", m.assemblies[p].path, i.name));
+        }
+        // A single solid file has no assembly.
+        let b = read_step(&made(dir.path(), "box"), &StepOptions::default()).unwrap();
+        assert!(b.assemblies.is_empty());
+        assert_eq!(b.instances[0].parent, None);
     }
 
     #[test]
@@ -773,7 +942,7 @@ mod hostile {
         let forged = stand_in(
             dir.path(),
             "forged",
-            "printf 'fitup-step-reply 1\\n\\000\\377\\377\\377\\377\\377\\377\\377\\177' > \"$3\"",
+            "printf 'fitup-step-reply 2\\n\\000\\377\\377\\377\\377\\377\\377\\377\\177' > \"$3\"",
         );
         let e = read(&file, &child(&forged, 0, limit)).unwrap_err();
         assert!(

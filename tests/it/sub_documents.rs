@@ -520,3 +520,75 @@ print("ok");
     let cart = std::fs::read_to_string(dir.path().join("sub/cart.yaml")).unwrap();
     assert!(cart.contains("suppressed: true"), "{cart}");
 }
+
+/// Issue 37: a sub-document may hold equations (they were refused): its global
+/// variables and dimensions are named inside the sub-assembly (`"Cart-1/Axle-1/Spread"`,
+/// `"D1@Cart-1/Axle-1/Gap"`), each instance evaluates its own, the assembly's
+/// equations may use them, a save writes each equation back to its own file with its
+/// own names, and a bad one is located in its own file.
+#[test]
+fn equations_inside_sub_documents() {
+    let with = |which: &str, t: &str| match which {
+        "axle" => format!("{t}equations:\n- '\"Spread\" = 2'\n- '\"D1@Gap\" = 20 * \"Spread\"'\n"),
+        "cart" => format!("{t}equations:\n- '\"Half\" = \"Axle-1/Spread\" / 2'\n"),
+        _ => t.to_string(),
+    };
+    let (_dir, top) = project(with);
+    let before = snapshot(&top);
+    let mut doc = Document::open(&top).unwrap();
+    assert_eq!(doc.global_variable("Cart-1/Axle-1/Spread").unwrap(), 2.0);
+    assert_eq!(doc.global_variable("Cart-1/Half").unwrap(), 1.0);
+    assert_eq!(doc.dimension("D1@Cart-1/Axle-2/Gap").unwrap().value, 40.0);
+    assert!((pos(&doc, "Cart-1/Axle-1/Wheel-1") - Vec3::new(540.0, 100.0, 750.0)).norm() < 1e-6);
+    assert!((pos(&doc, "Cart-1/Axle-2/Wheel-1") - Vec3::new(500.0, 340.0, 750.0)).norm() < 1e-6);
+    let texts: Vec<String> = doc.equations().iter().map(|e| e.text()).collect();
+    assert!(
+        texts.contains(&"\"D1@Cart-1/Axle-2/Gap\" = 20 * \"Cart-1/Axle-2/Spread\"".to_string()),
+        "{texts:?}"
+    );
+    // A driven dimension inside is the equation's.
+    let e = doc.set_dimension("D1@Cart-1/Axle-1/Gap", 10.0).unwrap_err();
+    assert!(matches!(e, DocumentError::DrivenByEquation { .. }), "{e}");
+    // Saved unchanged: no file rewritten, nothing flattened into the top.
+    doc.save().unwrap();
+    assert_eq!(snapshot(&top), before);
+    assert!(!std::fs::read_to_string(&top).unwrap().contains("Spread"));
+    // The same change in both instances is written to axle.yaml, in its own names.
+    doc.set_global_variable("Cart-1/Axle-1/Spread", 2.5)
+        .unwrap();
+    doc.set_global_variable("Cart-1/Axle-2/Spread", 2.5)
+        .unwrap();
+    assert_eq!(doc.global_variable("Cart-1/Half").unwrap(), 1.25);
+    doc.save().unwrap();
+    let dir = top.parent().unwrap();
+    let axle = std::fs::read_to_string(dir.join("sub/axle.yaml")).unwrap();
+    assert!(axle.contains("'\"Spread\" = 2.5'"), "{axle}");
+    assert!(axle.contains("'\"D1@Gap\" = 20 * \"Spread\"'"), "{axle}");
+    let cart = std::fs::read_to_string(dir.join("sub/cart.yaml")).unwrap();
+    assert!(
+        cart.contains("'\"Half\" = \"Axle-1/Spread\" / 2'"),
+        "{cart}"
+    );
+    assert!(!cart.contains("\"D1@"), "{cart}");
+    let back = Document::open(&top).unwrap();
+    assert_eq!(back.dimension("D1@Cart-1/Axle-1/Gap").unwrap().value, 50.0);
+    assert_eq!(back.equations().len(), doc.equations().len());
+    // Two instances changed differently are refused, as for any content.
+    let mut doc = back;
+    doc.set_global_variable("Cart-1/Axle-1/Spread", 3.0)
+        .unwrap();
+    let e = doc.save().unwrap_err();
+    assert!(e.to_string().contains("axle.yaml"), "{e}");
+
+    // A bad equation of a sub-document is located in its own file.
+    let (_dir, top) = project(|which, t| {
+        if which == "axle" {
+            format!("{t}equations:\n- '\"D1@Gap\" = 20 * \"Sprad\"'\n")
+        } else {
+            t.to_string()
+        }
+    });
+    let e = Document::open(&top).unwrap_err();
+    assert_eq!(located(&e), ("axle.yaml".into(), 32), "{e}");
+    assert!(e.to_string().contains("Sprad"), "{e}");
+}

@@ -31,6 +31,22 @@ pub(crate) struct RawInstance {
     /// Row-major 3 × 4 `[R | t]`, mm.
     pub matrix: Vec<f64>,
     pub scale: f64,
+    /// The assembly occurrence holding it: 1-based index into
+    /// [`RawModel::assemblies`], 0 at the top.
+    pub parent: u32,
+}
+
+/// One placed assembly as the shim returns it (listed before what it holds).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct RawAssembly {
+    pub name: String,
+    pub path: String,
+    pub product: String,
+    /// As [`RawInstance::parent`]; always below this assembly's own index.
+    pub parent: u32,
+    /// Row-major 3 × 4 `[R | t]`, mm: assembly frame → root.
+    pub matrix: Vec<f64>,
+    pub scale: f64,
 }
 
 /// The shim's whole answer (see `src/mesh/step_ffi.rs` for the fields' meaning), and
@@ -48,6 +64,7 @@ pub(crate) struct RawModel {
     pub open_shells: u32,
     pub first_open_shell: String,
     pub peak_memory: u64,
+    pub assemblies: Vec<RawAssembly>,
 }
 
 // ---- the byte format ---------------------------------------------------------------
@@ -197,6 +214,7 @@ pub(super) fn encode_model(w: &mut Writer, m: &RawModel) {
         w.u32(i.part);
         w.f64s(&i.matrix);
         w.f64(i.scale);
+        w.u32(i.parent);
     }
     w.str(&m.length_unit);
     w.f64(m.read_s);
@@ -207,6 +225,15 @@ pub(super) fn encode_model(w: &mut Writer, m: &RawModel) {
     w.u32(m.open_shells);
     w.str(&m.first_open_shell);
     w.u64(m.peak_memory);
+    w.u64(m.assemblies.len() as u64);
+    for a in &m.assemblies {
+        w.str(&a.name);
+        w.str(&a.path);
+        w.str(&a.product);
+        w.u32(a.parent);
+        w.f64s(&a.matrix);
+        w.f64(a.scale);
+    }
 }
 
 pub(super) fn decode_model(r: &mut Reader) -> Result<RawModel, Bad> {
@@ -220,7 +247,8 @@ pub(super) fn decode_model_within(
     r: &mut Reader,
     max_part_triangles: usize,
 ) -> Result<RawModel, Bad> {
-    // The smallest encoded part is 52 bytes, the smallest instance 36.
+    // The smallest encoded part is 52 bytes, the smallest instance 40, the smallest
+    // assembly 44.
     let n = r.count(52)?;
     let mut parts = Vec::with_capacity(n);
     let max_corners = max_part_triangles.saturating_mul(3);
@@ -251,7 +279,7 @@ pub(super) fn decode_model_within(
             first_unmeshed_face: r.u32()?,
         });
     }
-    let n = r.count(36)?;
+    let n = r.count(40)?;
     let mut instances = Vec::with_capacity(n);
     for _ in 0..n {
         instances.push(RawInstance {
@@ -260,9 +288,10 @@ pub(super) fn decode_model_within(
             part: r.u32()?,
             matrix: r.f64s()?,
             scale: r.f64()?,
+            parent: r.u32()?,
         });
     }
-    Ok(RawModel {
+    let mut m = RawModel {
         parts,
         instances,
         length_unit: r.str()?,
@@ -274,13 +303,27 @@ pub(super) fn decode_model_within(
         open_shells: r.u32()?,
         first_open_shell: r.str()?,
         peak_memory: r.u64()?,
-    })
+        assemblies: Vec::new(),
+    };
+    let n = r.count(44)?;
+    m.assemblies.reserve_exact(n);
+    for _ in 0..n {
+        m.assemblies.push(RawAssembly {
+            name: r.str()?,
+            path: r.str()?,
+            product: r.str()?,
+            parent: r.u32()?,
+            matrix: r.f64s()?,
+            scale: r.f64()?,
+        });
+    }
+    Ok(m)
 }
 
 // ---- the child reader ----------------------------------------------------------------
 
 /// How a child's answer file begins.
-const REPLY_MAGIC: &[u8] = b"fitup-step-reply 1\n";
+const REPLY_MAGIC: &[u8] = b"fitup-step-reply 2\n";
 
 /// How long past the time limit a child may take before it is killed: Open CASCADE
 /// stops the transfer and the meshing itself at the limit, and parsing is not
@@ -575,6 +618,15 @@ pub(crate) mod tests {
                 name: "peg-1".into(),
                 path: "cell/peg-1".into(),
                 part: 0,
+                matrix: (0..12).map(f64::from).collect(),
+                scale: 1.0,
+                parent: 1,
+            }],
+            assemblies: vec![RawAssembly {
+                name: "cell".into(),
+                path: "cell".into(),
+                product: "cell".into(),
+                parent: 0,
                 matrix: (0..12).map(f64::from).collect(),
                 scale: 1.0,
             }],

@@ -34,8 +34,9 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 
-/// How an entry begins (format 2: with the source's path).
-const STORE_MAGIC: &[u8] = b"fitup-tessellation 2\n";
+/// How an entry begins (format 3: with the source's path and the assembly tree;
+/// format 2 had no assemblies).
+const STORE_MAGIC: &[u8] = b"fitup-tessellation 3\n";
 
 /// What every format of entry begins with (format 1 had no source).
 const ANY_STORE_MAGIC: &[u8] = b"fitup-tessellation ";
@@ -248,6 +249,17 @@ fn sound(m: &RawModel) -> Result<(), Bad> {
             // (Whether it is a rigid motion is the model's check: a stored model
             // that fails it is discarded by the reader, `read_step_stored`.)
             return Err("a placement that is not finite or names no stored part");
+        }
+        if i.parent as usize > m.assemblies.len() {
+            return Err("a solid in an assembly that is not stored");
+        }
+    }
+    for (k, a) in m.assemblies.iter().enumerate() {
+        if a.parent as usize > k
+            || !a.scale.is_finite()
+            || a.matrix.iter().any(|v| !v.is_finite() || v.abs() > max)
+        {
+            return Err("an assembly placement that is not finite or not below its parent");
         }
     }
     Ok(())
@@ -1010,11 +1022,11 @@ mod tests {
         let old_format = st.join("00000000000000a1.tess");
         std::fs::write(&old_format, b"fitup-tessellation 1\nwhatever").unwrap();
         let damaged = st.join("00000000000000d2.tess");
-        std::fs::write(&damaged, b"fitup-tessellation 2\n\x01\x02").unwrap();
+        std::fs::write(&damaged, b"fitup-tessellation 3\n\x01\x02").unwrap();
         let not_ours = st.join("00000000000000e3.tess");
         std::fs::write(&not_ours, b"my own notes").unwrap();
         let notes = st.join("README.txt");
-        std::fs::write(&notes, b"fitup-tessellation 2\n but a user's file").unwrap();
+        std::fs::write(&notes, b"fitup-tessellation 3\n but a user's file").unwrap();
         let dead = st.join(".fitup-dead.tmp");
         std::fs::write(&dead, b"half").unwrap();
         age(&dead, 2 * 3600);

@@ -10,6 +10,9 @@
 // Output (tab-separated):
 //   unit    <the file's first length unit, as Open CASCADE names it>
 //   solid   <instance path>  <product name>  <volume mm³>  <r00 r01 r02 t0 r10 … t2>
+//   assembly <instance path>  <product name>  <r00 r01 r02 t0 r10 … t2>
+// (an `assembly` line for the root and every sub-assembly occurrence, before the lines
+// of what it holds; its placement is the assembly frame → root).
 #include <BRepGProp.hxx>
 #include <GProp_GProps.hxx>
 #include <Interface_Static.hxx>
@@ -56,6 +59,14 @@ static void walk(const Handle(XCAFDoc_ShapeTool) &tool, const TDF_Label &label,
     return;
   }
   if (XCAFDoc_ShapeTool::IsAssembly(label)) {
+    const gp_Trsf a = loc.Transformation();
+    std::printf("assembly\t%s\t%s\t", path.c_str(), name_of(label).c_str());
+    for (int r = 1; r <= 3; ++r) {
+      for (int c = 1; c <= 4; ++c) {
+        std::printf(r + c == 2 ? "%.12g" : " %.12g", a.Value(r, c));
+      }
+    }
+    std::printf("\n");
     TDF_LabelSequence comps;
     XCAFDoc_ShapeTool::GetComponents(label, comps, Standard_False);
     for (Standard_Integer i = 1; i <= comps.Length(); ++i) {
@@ -117,7 +128,8 @@ int main(int argc, char **argv) {
   TDF_LabelSequence roots;
   tool->GetFreeShapes(roots);
   for (Standard_Integer i = 1; i <= roots.Length(); ++i) {
-    walk(tool, roots.Value(i), TopLoc_Location(), name_of(roots.Value(i)), 0);
+    walk(tool, roots.Value(i), XCAFDoc_ShapeTool::GetLocation(roots.Value(i)),
+         name_of(roots.Value(i)), 0);
   }
   app->Close(doc);
   return 0;
