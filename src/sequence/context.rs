@@ -324,7 +324,7 @@ impl<'d> Ctx<'d> {
         if self.out_of_time() {
             return false;
         }
-        let (u, v) = crate::math::frame_across(&mate);
+        let (u, v) = crate::math::frame_across(mate);
         let start = self.scene.poses[p];
         let hits = [u, -u, v, -v]
             .iter()
