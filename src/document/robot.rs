@@ -986,7 +986,7 @@ impl Document {
             .ok()
             .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
             .unwrap_or_else(|| project.root().to_path_buf());
-        let uri = super::save::relative_path(urdf, &dir)
+        let uri = crate::fsutil::relative_path(urdf, &dir)
             .unwrap_or_else(|| urdf.to_string_lossy().into_owned());
         let loaded = read_urdf_robot(&project, &dir, &uri, &[], None, &mut MeshCache::new())
             .map_err(invalid)?;
