@@ -992,7 +992,8 @@ impl Document {
             .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
             .unwrap_or_else(|| project.root().to_path_buf());
         let relative = |p: &Path| {
-            super::save::relative_path(p, &dir).unwrap_or_else(|| p.to_string_lossy().into_owned())
+            crate::fsutil::relative_path(p, &dir)
+                .unwrap_or_else(|| p.to_string_lossy().into_owned())
         };
         let uri = relative(urdf);
         let packages: Vec<String> = package_path.iter().map(|p| relative(p)).collect();

@@ -331,13 +331,7 @@ impl<'d> Ctx<'d> {
         if self.out_of_time() {
             return false;
         }
-        let helper = if mate.x.abs() < 0.9 {
-            Vec3::x()
-        } else {
-            Vec3::y()
-        };
-        let u = mate.cross(&helper).normalize();
-        let v = mate.cross(&u);
+        let (u, v) = crate::math::frame_across(mate);
         let start = self.scene.poses[p];
         let hits = [u, -u, v, -v]
             .iter()
