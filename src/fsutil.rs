@@ -717,6 +717,26 @@ pub fn read_line_bounded(
     }
 }
 
+/// `target` written relative to `base` when possible (both made absolute first).
+pub(crate) fn relative_path(target: &Path, base: &Path) -> Option<String> {
+    use std::path::PathBuf;
+    let abs = |p: &Path| std::path::absolute(p).ok();
+    let (t, b) = (abs(target)?, abs(base)?);
+    let (tc, bc): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
+    let common = tc.iter().zip(&bc).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        return Some(t.to_string_lossy().into_owned());
+    }
+    let mut out = PathBuf::new();
+    for _ in common..bc.len() {
+        out.push("..");
+    }
+    for c in &tc[common..] {
+        out.push(c);
+    }
+    Some(out.to_string_lossy().replace('\\', "/"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -381,6 +381,15 @@ class Document:
         """Adds a component of ``part`` at ``pose`` (4×4, mm; identity when None), named
         ``name`` or ``part-N`` with the first free N; returns its name.
         """
+    def add_urdf_robot(self, name: str, urdf: str, base: Optional[_Pose] = None, package_path: Optional[Sequence[str]] = None) -> str:
+        """Adds the robot of the URDF file ``urdf`` (relative to the document's folder,
+        inside its project) under ``name``, its root at ``base`` (4×4, mm; identity
+        when None): its links' meshes become components ``<name>:<link>``.
+        ``package_path``: folders (relative to the document's folder) where
+        ``package://NAME/…`` meshes of other packages are found (an arm and a gripper
+        from two packages), saved as the entry's ``package_path:``. Returns the
+        robot's name.
+        """
     def rename_component(self, old: str, new: str) -> None:
         """Renames a component; mates and robots follow."""
     def replace_part(self, name: str, part: str) -> None:
@@ -555,7 +564,8 @@ class Document:
         ``sphere_directions``, ``probe_mm``, ``step_mm``, ``small_base_ratio``.
         Interferences of the assembled pose come back as ``fits`` (each allowed its
         depth in the removal checks), parts held across a clearance as
-        ``support_gaps``.
+        ``support_gaps``, groups of parts nothing modelled holds together as
+        ``separate_groups``.
         """
 
 class Database:

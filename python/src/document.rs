@@ -561,6 +561,43 @@ impl Document {
         Ok(inner.doc.components()[i].name.clone())
     }
 
+    /// Adds the robot of the URDF file ``urdf`` (relative to the document's folder,
+    /// inside its project) under ``name``, its root at ``base`` (4×4, mm; identity
+    /// when None): its links' meshes become components ``<name>:<link>``.
+    /// ``package_path``: folders (relative to the document's folder) where
+    /// ``package://NAME/…`` meshes of other packages are found (an arm and a gripper
+    /// from two packages), saved as the entry's ``package_path:``. Returns the
+    /// robot's name.
+    #[pyo3(signature = (name, urdf, base = None, package_path = None))]
+    fn add_urdf_robot(
+        &self,
+        name: &str,
+        urdf: &str,
+        base: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
+        package_path: Option<Vec<String>>,
+    ) -> Result<String> {
+        let base = base
+            .map(|b| convert::pose_of(b.as_array(), "base"))
+            .transpose()?;
+        let mut inner = self.lock()?;
+        let dir = inner
+            .doc
+            .path()
+            .parent()
+            .unwrap_or(std::path::Path::new("."))
+            .to_path_buf();
+        let packages: Vec<std::path::PathBuf> = package_path
+            .unwrap_or_default()
+            .iter()
+            .map(|p| dir.join(p))
+            .collect();
+        let packages: Vec<&std::path::Path> = packages.iter().map(|p| p.as_path()).collect();
+        let i = inner
+            .doc
+            .add_urdf_robot(name, &dir.join(urdf), base, &packages)?;
+        Ok(inner.doc.robots()[i].name().to_string())
+    }
+
     /// Renames a component; mates and robots follow.
     fn rename_component(&self, old: &str, new: &str) -> Result<()> {
         self.lock()?.doc.rename_component(old, new)?;
@@ -1169,7 +1206,8 @@ impl Document {
     /// ``sphere_directions``, ``probe_mm``, ``step_mm``, ``small_base_ratio``.
     /// Interferences of the assembled pose come back as ``fits`` (each allowed its
     /// depth in the removal checks), parts held across a clearance as
-    /// ``support_gaps``.
+    /// ``support_gaps``, groups of parts nothing modelled holds together as
+    /// ``separate_groups``.
     #[pyo3(signature = (**options))]
     fn plan_sequence<'py>(
         &self,

@@ -1,9 +1,9 @@
 //! Seed 000's "finite subdivision": a part cut by arrays of planes into cells, one
 //! box per cell, and the box tests of the `aabb` and `cells` methods.
 
-use super::shape::{Aabb, Collider};
+use super::shape::Collider;
 use super::{CellsFault, CollisionError, Contact, InterferenceKind, Method, PoseFault, PosedPart};
-use crate::math::{Point3, Rng, Transform};
+use crate::math::{Aabb, Point3, Rng, Transform};
 
 /// Most cells a cut may make.
 pub const MAX_CELLS: usize = 100_000;

@@ -2,10 +2,10 @@
 //! the first part's frame, triangle pairs tested with [`tri_tri`], containment by
 //! ray parity, and the minimum distance used by continuous sweeps.
 
-use super::shape::{Aabb, Collider, Node, Obb, Plane, LEAF_SIZE};
+use super::shape::{Collider, Node, Obb, Plane, LEAF_SIZE};
 use super::triangle::{tri_distance, tri_tri_with, unit_normal, Tri};
 use super::{CollisionError, Contact, InterferenceKind, PairMember, PoseFault};
-use crate::math::{Deadline, Transform, Vec3};
+use crate::math::{Aabb, Deadline, Transform, Vec3};
 use nalgebra::{Isometry3, Matrix3};
 use std::cell::{Cell, RefCell};
 use std::collections::{HashMap, HashSet};

@@ -422,12 +422,12 @@ impl Collider {
         let mut stack = vec![0u32];
         while let Some(i) = stack.pop() {
             let node = &self.nodes[i as usize];
-            if super::volume::ray_box(o, d, &node.bounds).is_none() {
+            if super::triangle::ray_box(o, d, &node.bounds).is_none() {
                 continue;
             }
             if node.count > 0 {
                 for t in self.leaf_tris(node) {
-                    if let Some(s) = super::volume::ray_triangle(o, d, &t) {
+                    if let Some(s) = super::triangle::ray_triangle(o, d, &t) {
                         out.push(s);
                     }
                 }

@@ -4,7 +4,7 @@
 //!
 //! All coordinates are millimetres in one common frame (the caller transforms first).
 
-use crate::math::{Point3, Vec3};
+use crate::math::{Aabb, Point3, Vec3};
 
 /// A triangle as its three corners.
 pub(crate) type Tri = [Point3; 3];
@@ -383,6 +383,49 @@ pub(crate) fn x_line_crossing(t: &Tri, y: f64, z: f64) -> Option<f64> {
         return None;
     }
     Some((w[0] * t[0].x + w[1] * t[1].x + w[2] * t[2].x) / sum)
+}
+
+/// The parameter interval of the ray `o + t·d` inside box `b` (t may be negative).
+pub(crate) fn ray_box(o: &Point3, d: &Vec3, b: &Aabb) -> Option<(f64, f64)> {
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    for k in 0..3 {
+        if d[k].abs() < 1e-300 {
+            if o[k] < b.lo[k] || o[k] > b.hi[k] {
+                return None;
+            }
+        } else {
+            let (a, c) = ((b.lo[k] - o[k]) / d[k], (b.hi[k] - o[k]) / d[k]);
+            t0 = t0.max(a.min(c));
+            t1 = t1.min(a.max(c));
+        }
+    }
+    // a small margin: a ray along a face must not miss it by round-off
+    let m = 1e-9 * (1.0 + t1.abs());
+    (t0 <= t1 + m).then_some((t0, t1 + m))
+}
+
+/// Where the line `o + t·d` meets the closed triangle `t` (Möller–Trumbore, edges
+/// included); `None` when parallel or outside.
+pub(crate) fn ray_triangle(o: &Point3, d: &Vec3, t: &[Point3; 3]) -> Option<f64> {
+    let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+    let p = d.cross(&e2);
+    let det = e1.dot(&p);
+    let scale = e1.norm() * e2.norm() * d.norm();
+    if det.abs() <= 1e-12 * scale {
+        return None;
+    }
+    let s = o - t[0];
+    let u = s.dot(&p) / det;
+    let eps = 1e-12;
+    if !(-eps..=1.0 + eps).contains(&u) {
+        return None;
+    }
+    let q = s.cross(&e1);
+    let v = d.dot(&q) / det;
+    if v < -eps || u + v > 1.0 + eps {
+        return None;
+    }
+    Some(e2.dot(&q) / det)
 }
 
 #[cfg(test)]

@@ -25,6 +25,7 @@
 //! the other is measured as pulled out of the whole other part, not into the cavity.
 
 use super::shape::{Collider, Node};
+use super::triangle::{ray_box, ray_triangle};
 use crate::math::{Aabb, Deadline, Point3, Transform, Vec3};
 
 /// Why an overlap cannot be measured.
@@ -480,49 +481,6 @@ fn boxes_meet(a: &Aabb, b: &Aabb) -> bool {
     (0..3).all(|k| a.lo[k] <= b.hi[k] && b.lo[k] <= a.hi[k])
 }
 
-/// The parameter interval of the ray `o + t·d` inside box `b` (t may be negative).
-pub(crate) fn ray_box(o: &Point3, d: &Vec3, b: &Aabb) -> Option<(f64, f64)> {
-    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
-    for k in 0..3 {
-        if d[k].abs() < 1e-300 {
-            if o[k] < b.lo[k] || o[k] > b.hi[k] {
-                return None;
-            }
-        } else {
-            let (a, c) = ((b.lo[k] - o[k]) / d[k], (b.hi[k] - o[k]) / d[k]);
-            t0 = t0.max(a.min(c));
-            t1 = t1.min(a.max(c));
-        }
-    }
-    // a small margin: a ray along a face must not miss it by round-off
-    let m = 1e-9 * (1.0 + t1.abs());
-    (t0 <= t1 + m).then_some((t0, t1 + m))
-}
-
-/// Where the line `o + t·d` meets the closed triangle `t` (Möller–Trumbore, edges
-/// included); `None` when parallel or outside.
-pub(crate) fn ray_triangle(o: &Point3, d: &Vec3, t: &[Point3; 3]) -> Option<f64> {
-    let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
-    let p = d.cross(&e2);
-    let det = e1.dot(&p);
-    let scale = e1.norm() * e2.norm() * d.norm();
-    if det.abs() <= 1e-12 * scale {
-        return None;
-    }
-    let s = o - t[0];
-    let u = s.dot(&p) / det;
-    let eps = 1e-12;
-    if !(-eps..=1.0 + eps).contains(&u) {
-        return None;
-    }
-    let q = s.cross(&e1);
-    let v = d.dot(&q) / det;
-    if v < -eps || u + v > 1.0 + eps {
-        return None;
-    }
-    Some(e2.dot(&q) / det)
-}
-
 /// The `t` at which the segment `p0 p1` moved by `t·d` crosses the segment `q0 q1`;
 /// `None` when it never does or the segments are parallel to the motion's plane.
 fn segment_sweep(p0: &Point3, p1: &Point3, d: &Vec3, q0: &Point3, q1: &Point3) -> Option<f64> {
@@ -696,14 +654,7 @@ pub fn separation(
         let (mut t, mut d) = (t0, d0);
         let mut step = 0.05;
         while step > 1e-5 {
-            let u = d
-                .cross(&if d.x.abs() < 0.9 {
-                    Vec3::x()
-                } else {
-                    Vec3::y()
-                })
-                .normalize();
-            let v = d.cross(&u);
+            let (u, v) = crate::math::frame_across(&d);
             let mut improved = false;
             for (du, dv) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)] {
                 let n = (d + (u * du + v * dv) * step).normalize();

@@ -199,7 +199,7 @@ fn replace(ctx: &mut Context<'_>) -> rusqlite::Result<Option<String>> {
     }
     let count = x.matches(y.as_ref()).count();
     let len = x.len() as u128 + count as u128 * z.len() as u128;
-    if len.saturating_sub(count as u128 * y.len() as u128) > super::query::MAX_VALUE_BYTES as u128 {
+    if len.saturating_sub(count as u128 * y.len() as u128) > MAX_VALUE_BYTES as u128 {
         return Err(too_big());
     }
     Ok(Some(x.replace(y.as_ref(), z.as_ref())))
@@ -221,6 +221,10 @@ fn trim(ctx: &mut Context<'_>, left: bool, right: bool) -> rusqlite::Result<Opti
     }
     Ok(Some(s.to_string()))
 }
+
+/// The longest text or blob value a script's SQLite query may build (also bounds
+/// `zeroblob`, `printf` and `group_concat` bombs): the script string limit.
+pub(crate) const MAX_VALUE_BYTES: i32 = 16 << 20;
 
 /// The longest `like`/`glob` pattern, bytes (SQLite's own limit is 50,000).
 pub(crate) const MAX_PATTERN_BYTES: usize = 1000;

@@ -242,10 +242,6 @@ impl Collector {
     }
 }
 
-/// The longest text or blob value a script's SQLite query may build (also bounds
-/// `zeroblob`, `printf` and `group_concat` bombs): the script string limit.
-pub(crate) const MAX_VALUE_BYTES: i32 = 16 << 20;
-
 /// How many SQLite virtual-machine steps pass between two looks at the cancel flag
 /// and the clock by the progress handler (a few microseconds of work). The clock is
 /// also watched by time, by a watchdog thread that interrupts the statement at its
@@ -413,7 +409,10 @@ impl SqliteReader {
         }?;
         conn.busy_timeout(busy)?;
         conn.set_limit(Limit::SQLITE_LIMIT_ATTACHED, 0)?;
-        conn.set_limit(Limit::SQLITE_LIMIT_LENGTH, MAX_VALUE_BYTES)?;
+        conn.set_limit(
+            Limit::SQLITE_LIMIT_LENGTH,
+            super::functions::MAX_VALUE_BYTES,
+        )?;
         conn.set_db_config(rusqlite::config::DbConfig::SQLITE_DBCONFIG_DEFENSIVE, true)?;
         conn.set_db_config(
             rusqlite::config::DbConfig::SQLITE_DBCONFIG_TRUSTED_SCHEMA,

@@ -123,6 +123,15 @@ pub enum FeatureFile {
     },
 }
 
+impl FeatureFile {
+    /// The feature's name.
+    pub(crate) fn name(&self) -> &str {
+        match self {
+            FeatureFile::CutCells { name, .. } => name,
+        }
+    }
+}
+
 /// Cut plane positions along each axis of the part frame (mm).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]

@@ -3,9 +3,8 @@
 
 use super::file::{ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile};
 use super::{
-    mates, nfc_name, robot, scan, tessellations, AabbCache, Color, Component, Document,
-    DocumentError, Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry,
-    MAX_ABS_VALUE,
+    mates, robot, scan, tessellations, AabbCache, Color, Component, Document, DocumentError,
+    Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry, MAX_ABS_VALUE,
 };
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
@@ -97,7 +96,7 @@ impl Document {
         let file = if unicode_normalization::is_nfc(text) {
             file
         } else {
-            nfc_file(file).map_err(|e| {
+            super::names::nfc_file(file).map_err(|e| {
                 SourceError::new(path, 0, 0, format!("invalid document after NFC: {e}"))
             })?
         };
@@ -222,7 +221,7 @@ impl Document {
                 source,
             }
         })?;
-        doc.warnings = case_warnings(&file, path, positions);
+        doc.warnings = super::names::case_warnings(&file, path, positions);
         doc.warnings.extend(urdf.warnings);
         doc.warnings.extend(step_warnings);
         Ok(doc)
@@ -524,7 +523,7 @@ impl Loader<'_> {
         for f in &pf.features {
             let feature = Feature::from_file(f).map_err(|m| {
                 self.at(
-                    &format!("name: {}", feature_name(f)),
+                    &format!("name: {}", f.name()),
                     "parts",
                     format!("part `{name}`: {m}"),
                 )
@@ -939,147 +938,4 @@ fn step_part(
         from_store: got.from_store,
     };
     Ok((got.mesh, geometry))
-}
-
-fn feature_name(f: &FeatureFile) -> &str {
-    match f {
-        FeatureFile::CutCells { name, .. } => name,
-    }
-}
-
-/// The document file with every name in NFC: all text except file paths (`stl`,
-/// `step`, `urdf`, which name files on disk byte for byte) and `description`.
-fn nfc_file(file: DocumentFile) -> Result<DocumentFile, serde_yaml::Error> {
-    fn walk(v: &mut serde_yaml::Value) {
-        use serde_yaml::Value;
-        match v {
-            Value::String(s) => *s = nfc_name(s).into_owned(),
-            Value::Sequence(items) => items.iter_mut().for_each(walk),
-            Value::Mapping(m) => {
-                let old = std::mem::take(m);
-                for (k, mut val) in old {
-                    let keep = matches!(k.as_str(), Some("stl" | "step" | "urdf" | "description"));
-                    let k = match k {
-                        Value::String(s) => Value::String(nfc_name(&s).into_owned()),
-                        other => other,
-                    };
-                    if !keep {
-                        walk(&mut val);
-                    }
-                    m.insert(k, val);
-                }
-            }
-            Value::Tagged(t) => walk(&mut t.value),
-            _ => {}
-        }
-    }
-    let mut v = serde_yaml::to_value(&file)?;
-    walk(&mut v);
-    serde_yaml::from_value(v)
-}
-
-/// Names of one kind that differ only by case, as located warnings (see
-/// [`Document::warnings`]).
-/// A name and where it is written (line, column), when the scan saw it.
-type Placed = (String, Option<(usize, usize)>);
-
-fn case_warnings(file: &DocumentFile, path: &Path, positions: &scan::Positions) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut kind = |what: &str, names: Vec<Placed>| {
-        let mut by_case: IndexMap<String, Vec<&Placed>> = IndexMap::new();
-        for n in &names {
-            by_case.entry(n.0.to_lowercase()).or_default().push(n);
-        }
-        for group in by_case.values() {
-            let mut spellings: Vec<&str> = group.iter().map(|n| n.0.as_str()).collect();
-            spellings.dedup();
-            if spellings.len() < 2 {
-                continue;
-            }
-            let (line, col) = group[1].1.unwrap_or((0, 0));
-            let list: Vec<String> = group
-                .iter()
-                .map(|(n, at)| match at {
-                    Some((l, _)) => format!("`{n}` (line {l})"),
-                    None => format!("`{n}`"),
-                })
-                .collect();
-            out.push(
-                SourceError::new(
-                    path,
-                    line,
-                    col,
-                    format!(
-                        "{what} {} differ only by case: they are different names (lookups are exact), which is easy to confuse; rename one",
-                        list.join(" and ")
-                    ),
-                )
-                .to_string(),
-            );
-        }
-    };
-    let at = |p: String| positions.get(&p);
-    kind(
-        "parts",
-        file.parts
-            .keys()
-            .map(|n| (n.clone(), at(format!("parts/{n}"))))
-            .collect(),
-    );
-    kind(
-        "components",
-        file.components
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (c.name.clone(), at(format!("components/{i}/name"))))
-            .collect(),
-    );
-    kind(
-        "mates",
-        file.mates
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (m.name.clone(), at(format!("mates/{i}/name"))))
-            .collect(),
-    );
-    kind(
-        "robots",
-        file.robots
-            .iter()
-            .enumerate()
-            .map(|(i, r)| (r.name.clone(), at(format!("robots/{i}/name"))))
-            .collect(),
-    );
-    for (p, pf) in &file.parts {
-        let refs = pf
-            .planes
-            .keys()
-            .map(|r| (r.clone(), at(format!("parts/{p}/planes/{r}"))))
-            .chain(
-                pf.axes
-                    .keys()
-                    .map(|r| (r.clone(), at(format!("parts/{p}/axes/{r}")))),
-            )
-            .chain(
-                pf.points
-                    .keys()
-                    .map(|r| (r.clone(), at(format!("parts/{p}/points/{r}")))),
-            )
-            .collect();
-        kind(&format!("references of part `{p}`:"), refs);
-        kind(
-            &format!("features of part `{p}`:"),
-            pf.features
-                .iter()
-                .enumerate()
-                .map(|(i, f)| {
-                    (
-                        feature_name(f).to_string(),
-                        at(format!("parts/{p}/features/{i}/name")),
-                    )
-                })
-                .collect(),
-        );
-    }
-    out
 }

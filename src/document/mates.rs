@@ -435,14 +435,10 @@ fn angular_correction(
                 MateKind::Perpendicular => std::f64::consts::FRAC_PI_2,
                 _ => value,
             };
-            let axis = u.cross(&v).try_normalize(1e-12).unwrap_or_else(|| {
-                let perp = if u.x.abs() < 0.9 {
-                    Vec3::x()
-                } else {
-                    Vec3::y()
-                };
-                u.cross(&perp).normalize()
-            });
+            let axis = u
+                .cross(&v)
+                .try_normalize(1e-12)
+                .unwrap_or_else(|| crate::math::perpendicular(&u));
             let delta = target_angle - u.angle(&v);
             rotate_about(
                 &at,

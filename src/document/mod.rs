@@ -37,6 +37,7 @@ pub mod file;
 pub mod import;
 mod load;
 pub mod mates;
+mod names;
 mod numbering;
 pub mod reference;
 mod remove;
@@ -45,9 +46,12 @@ mod save;
 pub mod scan;
 pub mod subdoc;
 pub mod tessellations;
+
 pub use assembly::SubAssembly;
 pub use error::DocumentError;
 pub use export::GlbExport;
+pub(crate) use names::new_name;
+pub use names::nfc_name;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use edit::{MateSpec, PropertyOwner};
@@ -769,31 +773,6 @@ pub(crate) fn check_pose(t: &Transform, what: impl std::fmt::Display) -> Result<
         });
     }
     Ok(())
-}
-
-/// `name` in Unicode NFC, the form every name of a document is kept in: lookups by
-/// another spelling of the same text (`é` decomposed) find it. Borrows when `name` is
-/// NFC already (ASCII and most text).
-pub fn nfc_name(name: &str) -> std::borrow::Cow<'_, str> {
-    use unicode_normalization::UnicodeNormalization;
-    if unicode_normalization::is_nfc_quick(name.chars()) == unicode_normalization::IsNormalized::Yes
-    {
-        std::borrow::Cow::Borrowed(name)
-    } else {
-        std::borrow::Cow::Owned(name.nfc().collect())
-    }
-}
-
-/// A name given through the API (a new robot, …) as the document keeps it: NFC, and
-/// refused when it holds a control or invisible character (as in a file).
-pub(crate) fn new_name(name: &str, what: &str) -> Result<String, DocumentError> {
-    crate::diagnostics::checked_name(name)
-        .map(std::borrow::Cow::into_owned)
-        .map_err(|c| DocumentError::HiddenCharacter {
-            what: what.to_string(),
-            name: crate::diagnostics::printable(name, false).into_owned(),
-            character: crate::diagnostics::describe_char(c),
-        })
 }
 
 #[cfg(test)]

@@ -958,12 +958,17 @@ impl Document {
     /// the links (shown and checked for interference like any component), its root at
     /// `base` (world pose, mm; identity when `None`). Joints start at 0 (clamped into
     /// the limits). Mesh rules as for a document's `urdf:` entry
-    /// (see `docs/robots.md`). Nothing changes on error. Returns the robot's index.
+    /// (see `docs/robots.md`). `package_path`: folders inside the project where
+    /// `package://NAME/…` meshes of other packages are looked for (each folder itself
+    /// when it is named NAME, else its child NAME), as a document's `package_path:`
+    /// (saved relative to the document); an arm and a gripper from two packages load
+    /// this way. Nothing changes on error. Returns the robot's index.
     pub fn add_urdf_robot(
         &mut self,
         name: &str,
         urdf: &Path,
         base: Option<Transform>,
+        package_path: &[&Path],
     ) -> Result<usize, DocumentError> {
         let name = super::new_name(name, "robot")?;
         let name = name.as_str();
@@ -986,9 +991,13 @@ impl Document {
             .ok()
             .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
             .unwrap_or_else(|| project.root().to_path_buf());
-        let uri = super::save::relative_path(urdf, &dir)
-            .unwrap_or_else(|| urdf.to_string_lossy().into_owned());
-        let loaded = read_urdf_robot(&project, &dir, &uri, &[], None, &mut MeshCache::new())
+        let relative = |p: &Path| {
+            crate::fsutil::relative_path(p, &dir)
+                .unwrap_or_else(|| p.to_string_lossy().into_owned())
+        };
+        let uri = relative(urdf);
+        let packages: Vec<String> = package_path.iter().map(|p| relative(p)).collect();
+        let loaded = read_urdf_robot(&project, &dir, &uri, &packages, None, &mut MeshCache::new())
             .map_err(invalid)?;
         let mut next = self.clone();
         next.add_urdf_parts(name, &uri, &loaded).map_err(invalid)?;
@@ -1003,7 +1012,7 @@ impl Document {
             catalog: None,
             dh: None,
             urdf: Some(uri),
-            package_path: Vec::new(),
+            package_path: packages,
             base: Some(base.to_matrix()),
             tool: None,
             flange: None,

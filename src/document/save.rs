@@ -6,7 +6,7 @@ use super::file::{
 };
 use super::{Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance};
 use crate::collision::CutSpec;
-use crate::fsutil::{content_hash, FileKind};
+use crate::fsutil::{content_hash, relative_path, FileKind};
 use crate::math::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -430,25 +430,6 @@ fn canonical_target(p: &Path) -> PathBuf {
         (Some(d), Some(n)) => d.join(n),
         _ => abs,
     }
-}
-
-/// `target` written relative to `base` when possible (both made absolute first).
-pub(super) fn relative_path(target: &Path, base: &Path) -> Option<String> {
-    let abs = |p: &Path| std::path::absolute(p).ok();
-    let (t, b) = (abs(target)?, abs(base)?);
-    let (tc, bc): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
-    let common = tc.iter().zip(&bc).take_while(|(a, b)| a == b).count();
-    if common == 0 {
-        return Some(t.to_string_lossy().into_owned());
-    }
-    let mut out = PathBuf::new();
-    for _ in common..bc.len() {
-        out.push("..");
-    }
-    for c in &tc[common..] {
-        out.push(c);
-    }
-    Some(out.to_string_lossy().replace('\\', "/"))
 }
 
 impl Feature {

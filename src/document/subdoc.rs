@@ -383,7 +383,7 @@ impl Document {
                     // a part of the assembly used inside (a script's add_component)
                     // goes with the sub-document, its file relative to it
                     let mut p = self.parts[&c.part].clone();
-                    if let Some(rel) = super::save::relative_path(&p.mesh_path, sub_dir) {
+                    if let Some(rel) = crate::fsutil::relative_path(&p.mesh_path, sub_dir) {
                         p.stl = rel;
                     }
                     if !parts.contains_key(&p.name) {

@@ -26,7 +26,7 @@ use super::{
     Configuration, Elbow, IkError, IkOptions, IkSolution, JointKind, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
-use crate::math::trig::atan2;
+use crate::math::trig::{ang, atan2, hyp, rot2, wrap};
 use crate::math::{Rng, Transform};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::{PI, TAU};
@@ -306,53 +306,6 @@ impl Branches {
             self.len += 1;
         }
     }
-}
-
-/// `√(a² + b²)` without `f64::hypot`'s guard against overflow and underflow (a
-/// library call of ~18 ns, a sixth of a UR solve): the closed forms' lengths are mm
-/// and unit-vector components, whose squares stay far inside the range.
-#[inline]
-pub(crate) fn hyp(a: f64, b: f64) -> f64 {
-    (a * a + b * b).sqrt()
-}
-
-/// Angle of the planar vector (x, z), increasing with right-hand rotation about +y.
-#[inline]
-pub(crate) fn ang(v: [f64; 2]) -> f64 {
-    v[0].atan2(v[1])
-}
-
-/// Rotation of the planar vector (x, z) about +y by the angle with sine `s`, cosine `c`.
-#[inline]
-pub(crate) fn rot2(v: [f64; 2], s: f64, c: f64) -> [f64; 2] {
-    [v[0] * c + v[1] * s, -v[0] * s + v[1] * c]
-}
-
-/// Rodrigues rotation of `v` about unit `k` by the angle with sine `s`, cosine `c`.
-#[inline]
-pub(crate) fn rot_vec(k: &Vector3<f64>, s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
-    v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
-}
-
-/// Wraps an angle into (−π, π].
-#[inline]
-pub(crate) fn wrap(a: f64) -> f64 {
-    // Inputs here are sums of a few angles in (−π, π]: within ±2.5π one turn either
-    // way, as selects (no data-dependent jump: the closed forms wrap ~40 values a
-    // call); beyond, subtracting turns, and a floating-point remainder for anything
-    // larger. Both give the same bits.
-    if a.abs() < 2.5 * PI {
-        let r = if a > PI { a - TAU } else { a };
-        return if r <= -PI { r + TAU } else { r };
-    }
-    let mut r = if a.abs() > 4.0 * TAU { a % TAU } else { a };
-    while r > PI {
-        r -= TAU;
-    }
-    while r <= -PI {
-        r += TAU;
-    }
-    r
 }
 
 pub(crate) const PARALLEL_TOL: f64 = 1e-9;
@@ -948,8 +901,8 @@ pub(crate) fn solutions_within_limits(
 /// brute-force numeric search.
 #[cfg(test)]
 pub(crate) mod testing {
-    use super::wrap;
     use crate::kinematics::{Branches, Catalog, IkOptions, NumericIk, Robot};
+    use crate::math::trig::wrap;
     use crate::math::Rng;
     use nalgebra::Isometry3;
     use std::f64::consts::PI;

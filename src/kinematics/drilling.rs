@@ -291,14 +291,8 @@ pub fn read_holes_in(
 
 /// A rotation whose drill axis (per `axis`) is `dir` (unit), turned by `spin` about it.
 fn drill_rotation(dir: &Vec3, axis: ToolAxis, spin: f64) -> UnitQuaternion<f64> {
-    // Any unit vector perpendicular to dir, chosen stably.
-    let helper = if dir.x.abs() < 0.9 {
-        Vec3::x()
-    } else {
-        Vec3::y()
-    };
-    let u = dir.cross(&helper).normalize();
-    let w = dir.cross(&u);
+    // Two unit vectors across dir, chosen stably.
+    let (u, w) = crate::math::frame_across(dir);
     // Columns: images of the TCP x, y, z axes.
     let m = match axis {
         ToolAxis::X => Matrix3::from_columns(&[*dir, u, w]),

@@ -41,8 +41,8 @@
 //! (`sin(acos(a₄·t)) = 0`) axes 4 and 6 line up: the wrist singularity.
 
 use super::closed_form::{
-    canonical_frame, measure_model_error, rot_vec, wrap, zero_axis_lines, ArmPlane, ModelError,
-    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
+    canonical_frame, measure_model_error, zero_axis_lines, ArmPlane, ModelError, Tolerances,
+    DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::ur::snap_phi;
 use super::{
@@ -50,6 +50,7 @@ use super::{
     Unreachable, Wrist,
 };
 use crate::math::trig::atan2;
+use crate::math::trig::{rot_vec, wrap};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 

@@ -34,14 +34,15 @@
 //!   elbow with one double root); `q₄ = s₄(θ₂₃₄ − θ₂ − θ₃)`.
 
 use super::closed_form::{
-    canonical_frame, hyp, measure_model_error, rot2, wrap, zero_axis_lines, ArmPlane, ModelError,
-    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
+    canonical_frame, measure_model_error, zero_axis_lines, ArmPlane, ModelError, Tolerances,
+    DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
 use crate::math::trig::atan2;
+use crate::math::trig::{hyp, rot2, wrap};
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 

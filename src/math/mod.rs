@@ -26,18 +26,31 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 /// A point in millimetres.
 pub type Point3 = nalgebra::Point3<f64>;
 
+/// A unit vector perpendicular to the direction `d`, chosen stably (`d × X`, or
+/// `d × Y` when `d` is nearly along X). Deterministic: the same `d` gives the same vector.
+pub fn perpendicular(d: &Vec3) -> Vec3 {
+    let helper = if d.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    d.cross(&helper).normalize()
+}
+
+/// Two directions across the unit direction `d`: `u` = [`perpendicular`]`(d)` and
+/// `v = d × u`, so that `(u, v, d)` is a right-handed orthonormal frame.
+pub fn frame_across(d: &Vec3) -> (Vec3, Vec3) {
+    let u = perpendicular(d);
+    (u, d.cross(&u))
+}
+
 /// The smallest rotation taking the direction `from` onto the direction `to` (any
 /// axis perpendicular to `from` when they are opposite). Frame-free: both vectors in
 /// the same frame, the rotation in that frame.
 pub fn rotation_between(from: &Vec3, to: &Vec3) -> nalgebra::UnitQuaternion<f64> {
     nalgebra::UnitQuaternion::rotation_between(from, to).unwrap_or_else(|| {
-        let perp = if from.x.abs() < 0.9 {
-            Vec3::x()
-        } else {
-            Vec3::y()
-        };
         nalgebra::UnitQuaternion::from_axis_angle(
-            &nalgebra::Unit::new_normalize(from.cross(&perp)),
+            &nalgebra::Unit::new_unchecked(perpendicular(from)),
             std::f64::consts::PI,
         )
     })

@@ -251,7 +251,7 @@ fn shortcut_until(
             // The pieces p[i] → a and b → p[j + 1] stay: their edges must be
             // certified first (a failed one gives way to its detour, and the
             // attempt is spent).
-            path.certify(checker, j) && path.certify(checker, i)
+            path.certify_pair(checker, i, j)
         } else {
             checker.edge_free(&a, &b)
                 && screened(checker, &path.poses[i], &a, screen)
@@ -302,17 +302,42 @@ impl LazyPath {
         if matches!(self.edges[k], Edge::Certified) {
             return true;
         }
-        if checker.certify(&self.poses[k], &self.poses[k + 1]) {
-            self.edges[k] = Edge::Certified;
-            return true;
-        }
+        let free = checker.certify(&self.poses[k], &self.poses[k + 1]);
+        self.settle(k, free);
+        free
+    }
+
+    /// Edge `k`, screened, after its certification: certified when `free`, else
+    /// replaced by its detour.
+    fn settle(&mut self, k: usize, free: bool) {
         let Edge::Screened(detour) = std::mem::replace(&mut self.edges[k], Edge::Certified) else {
-            unreachable!("checked above");
+            return;
         };
-        let Detour { via, edges } = *detour;
-        self.poses.splice(k + 1..k + 1, via);
-        self.edges.splice(k..=k, edges);
-        false
+        if !free {
+            let Detour { via, edges } = *detour;
+            self.poses.splice(k + 1..k + 1, via);
+            self.edges.splice(k..=k, edges);
+        }
+    }
+
+    /// [`certify`](Self::certify) of edges `i < j`, both on two cores when both
+    /// are screened; whether both hold (a failed one has given way to its detour;
+    /// when `j` fails `i` is certified all the same, which one-by-one
+    /// certification would have skipped).
+    fn certify_pair(&mut self, checker: &mut Checker<'_>, i: usize, j: usize) -> bool {
+        let both = matches!(self.edges[i], Edge::Screened(_))
+            && matches!(self.edges[j], Edge::Screened(_));
+        if !both {
+            return self.certify(checker, j) && self.certify(checker, i);
+        }
+        let v = checker.certify_each(&[
+            (self.poses[i], self.poses[i + 1]),
+            (self.poses[j], self.poses[j + 1]),
+        ]);
+        // `j` first: its detour does not move edge `i`.
+        self.settle(j, v[1]);
+        self.settle(i, v[0]);
+        v[0] && v[1]
     }
 
     /// Replaces the path from `a` (on edge `i`) to `b` (on edge `j > i`) by the
@@ -412,13 +437,27 @@ impl LazyPath {
     /// whose every edge the validator accepted. Past the deadline every
     /// certification fails, which unfolds the path back to certified edges.
     fn resolve(mut self, checker: &mut Checker<'_>) -> Vec<Transform> {
-        let mut k = 0;
-        while k < self.edges.len() {
-            if self.certify(checker, k) {
-                k += 1;
+        // Round by round: every screened edge is certified (on both cores), then
+        // the failed ones, last first so that indices hold, give way to their
+        // detours, whose screened edges are the next round's. The verdict of an
+        // edge does not depend on the others, so this is the path one-by-one
+        // certification gives.
+        loop {
+            let screened: Vec<usize> = (0..self.edges.len())
+                .filter(|&k| matches!(self.edges[k], Edge::Screened(_)))
+                .collect();
+            if screened.is_empty() {
+                return self.poses;
+            }
+            let ends: Vec<(Transform, Transform)> = screened
+                .iter()
+                .map(|&k| (self.poses[k], self.poses[k + 1]))
+                .collect();
+            let verdicts = checker.certify_each(&ends);
+            for (&k, free) in screened.iter().zip(verdicts).rev() {
+                self.settle(k, free);
             }
         }
-        self.poses
     }
 }
 
@@ -454,10 +493,13 @@ mod tests {
     /// fence on x = 0 for 10 < y < 40 that no pose check sees (it is thinner than
     /// any screen step): only the validator's own edge check rejects an edge across
     /// it, as a continuous check rejects a graze between two screened poses.
-    #[derive(Default)]
+    #[derive(Default, Clone)]
     struct HiddenFence {
         certified: usize,
         refused: usize,
+        /// Whether [`MotionValidator::fork`] gives a copy (certification on two
+        /// cores).
+        forks: bool,
     }
 
     fn crosses_fence(from: &Transform, to: &Transform) -> bool {
@@ -488,6 +530,10 @@ mod tests {
         fn part_radius(&self) -> Option<f64> {
             Some(1.0)
         }
+        fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+            self.forks
+                .then(|| Box::new(self.clone()) as Box<dyn MotionValidator + Send>)
+        }
     }
 
     fn stepwise_free(v: &mut HiddenFence, from: &Transform, to: &Transform) -> bool {
@@ -514,8 +560,16 @@ mod tests {
     }
 
     fn smoothed(seed: u64) -> (PlannedPath, HiddenFence) {
+        smoothed_on(seed, false)
+    }
+
+    /// `forks`: the validator can be forked, so certification runs on two cores.
+    fn smoothed_on(seed: u64, forks: bool) -> (PlannedPath, HiddenFence) {
         let space = PlanningSpace::new(Vec3::new(-60.0, -60.0, -1.0), Vec3::new(60.0, 60.0, 1.0));
-        let mut fence = HiddenFence::default();
+        let mut fence = HiddenFence {
+            forks,
+            ..HiddenFence::default()
+        };
         let mut path = detour();
         smooth(
             &mut fence,
@@ -553,8 +607,12 @@ mod tests {
                     "seed {seed}: edge {k} crosses"
                 );
             }
-            // Same seed, same path.
+            // Same seed, same path, and the same with certification on two
+            // cores: the verdicts do not depend on which core gave them.
             assert_eq!(smoothed(seed).0.poses, path.poses);
+            let two = smoothed_on(seed, true).0;
+            assert_eq!(two.poses, path.poses, "seed {seed}: two cores");
+            assert_eq!(two.edge_checks, path.edge_checks, "seed {seed}: two cores");
         }
         // The fallback was exercised: some screened shortcut failed its
         // certification (the fence is invisible to the screen).

@@ -257,6 +257,43 @@ impl<'v> Checker<'v> {
         !self.expired() && self.validator.edge_free(from, to)
     }
 
+    /// [`certify`](Self::certify) of every edge `(from, to)`, the verdicts in order:
+    /// on two cores when the validator can be forked (a fork takes the second
+    /// half), else one after the other. Each verdict depends on its edge alone, so
+    /// the answer is the same either way (the deadline aside, which fails what it
+    /// stops). Why: certifying the edges a smoothed path keeps is most of
+    /// smoothing's time on long sliding contacts (OMPL.app's alpha puzzle), and
+    /// after a race the second core is idle.
+    pub fn certify_each(&mut self, edges: &[(Transform, Transform)]) -> Vec<bool> {
+        let fork = if edges.len() >= 2 {
+            self.validator.fork()
+        } else {
+            None
+        };
+        let Some(mut fork) = fork else {
+            return edges.iter().map(|(a, b)| self.certify(a, b)).collect();
+        };
+        let deadline = self.deadline;
+        fork.set_deadline(deadline);
+        let (mine, theirs) = edges.split_at(edges.len().div_ceil(2));
+        let mut verdicts = std::thread::scope(|scope| {
+            let other = scope.spawn(move || {
+                let free = |(a, b): &(Transform, Transform)| {
+                    !deadline.is_some_and(Deadline::passed) && fork.edge_free(a, b)
+                };
+                theirs.iter().map(free).collect::<Vec<bool>>()
+            });
+            let mut verdicts: Vec<bool> = mine.iter().map(|(a, b)| self.certify(a, b)).collect();
+            // A fork that panicked is a bug; its edges then count as not free,
+            // which only keeps the detours.
+            verdicts.extend(other.join().unwrap_or_else(|_| vec![false; theirs.len()]));
+            verdicts
+        });
+        self.edge_checks += theirs.len() as u64;
+        verdicts.truncate(edges.len());
+        verdicts
+    }
+
     /// The deadline every check honours (`None`: none).
     pub fn deadline(&self) -> Option<Deadline> {
         self.deadline

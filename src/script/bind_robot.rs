@@ -609,34 +609,61 @@ fn register_models(api: &mut Api, ctx: &Arc<Context>) {
         },
     );
     fn add_robot(
+        c: &Context,
         d: &DocHandle,
         name: &str,
         model: &RobotModel,
         m: &Map,
     ) -> ScriptResult<RobotHandle> {
-        check_keys(m, &["base"], "add_robot")?;
+        check_keys(m, &["base", "package_path"], "add_robot")?;
         let base = m.get("base").map(|b| to_transform(b, "base")).transpose()?;
-        let index = match &model.1 {
-            // A URDF robot brings its link meshes (a `urdf:` entry in the document).
-            Some(urdf) => d.lock()?.add_urdf_robot(name, urdf, base),
-            None => d.lock()?.add_robot(name, &model.0, base),
+        // Folders of other packages (relative to the project), as `package_path:`.
+        let mut packages = Vec::new();
+        if let Some(list) = m.get("package_path") {
+            let list = list.clone().into_array().map_err(|t| {
+                fail(format!(
+                    "add_robot: package_path must be an array of folders, not {t}"
+                ))
+            })?;
+            for p in list {
+                let p = p.into_immutable_string().map_err(|t| {
+                    fail(format!(
+                        "add_robot: package_path holds folder names, not {t}"
+                    ))
+                })?;
+                packages.push(c.project.resolve(&p).map_err(fail)?);
+            }
         }
-        .map_err(fail)?;
+        let index =
+            match &model.1 {
+                // A URDF robot brings its link meshes (a `urdf:` entry in the document).
+                Some(urdf) => {
+                    let packages: Vec<&std::path::Path> =
+                        packages.iter().map(|p| p.as_path()).collect();
+                    d.lock()?.add_urdf_robot(name, urdf, base, &packages)
+                }
+                None if !packages.is_empty() => return Err(fail(
+                    "add_robot: package_path is for a robot of `load_urdf` (its meshes' packages)",
+                )),
+                None => d.lock()?.add_robot(name, &model.0, base),
+            }
+            .map_err(fail)?;
         Ok(RobotHandle {
             doc: d.clone(),
             index,
         })
     }
+    let (c1, c2) = (ctx.clone(), ctx.clone());
     api.f(
         "Document.add_robot(name: string, robot: RobotModel, options: map) -> Robot",
-        "Adds a robot built with `robot_opw` / `robot_dh` / `load_urdf` to the document under `name`, options `#{base}` (world pose of its root, Transform or `[x,y,z,a,b,c]`). Its joints start at 0 (clamped into the limits) with dimensions `D1@角度<n>@<name>`; saving writes it as an explicit tree, or, for a `load_urdf` robot, as a `urdf:` entry whose links' STL meshes become components `<name>:<link>` (shown and checked for interference).",
-        |d: &mut DocHandle, name: &str, model: RobotModel, m: Map| -> ScriptResult<RobotHandle> { add_robot(d, name, &model, &m) },
+        "Adds a robot built with `robot_opw` / `robot_dh` / `load_urdf` to the document under `name`, options `#{base, package_path}` (`base`: world pose of its root, Transform or `[x,y,z,a,b,c]`; `package_path`: for a `load_urdf` robot, folders of the project where `package://NAME/…` meshes of other packages are found, as a document's `package_path:`). Its joints start at 0 (clamped into the limits) with dimensions `D1@角度<n>@<name>`; saving writes it as an explicit tree, or, for a `load_urdf` robot, as a `urdf:` entry whose links' STL meshes become components `<name>:<link>` (shown and checked for interference).",
+        move |d: &mut DocHandle, name: &str, model: RobotModel, m: Map| -> ScriptResult<RobotHandle> { add_robot(&c1, d, name, &model, &m) },
     );
     api.f(
         "Document.add_robot(name: string, robot: RobotModel) -> Robot",
         "`add_robot(name, robot, #{})`.",
-        |d: &mut DocHandle, name: &str, model: RobotModel| -> ScriptResult<RobotHandle> {
-            add_robot(d, name, &model, &Map::new())
+        move |d: &mut DocHandle, name: &str, model: RobotModel| -> ScriptResult<RobotHandle> {
+            add_robot(&c2, d, name, &model, &Map::new())
         },
     );
 }

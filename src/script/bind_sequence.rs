@@ -326,6 +326,16 @@ pub(super) fn register(api: &mut Api) {
         },
     );
     api.get(
+        "Sequence.separate_groups -> array",
+        "Groups of the product's parts that touch nothing of one another in the finished product (within `contact_gap_mm`, across the support gaps), when there is more than one: arrays of component names; the first part placed of each group needs no support. Empty when the product holds together.",
+        |s: &mut SequenceHandle| -> Array {
+            s.0.separate_groups
+                .iter()
+                .map(|g| Dynamic::from_array(g.iter().map(|n| n.clone().into()).collect()))
+                .collect()
+        },
+    );
+    api.get(
         "Sequence.rejected -> array",
         "Orders that failed and why: `#{order, reason}`.",
         |s: &mut SequenceHandle| -> Array {

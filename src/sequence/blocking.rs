@@ -6,8 +6,8 @@
 use super::context::*;
 use super::graph::separation_directions;
 use super::options::{Mode, SequenceError, DEFAULT_SEQUENCE_TIME_LIMIT_MS};
-use crate::collision::{edge_interferes_until, interferes, Aabb, EdgeOptions, SweepMethod};
-use crate::math::{Transform, Vec3};
+use crate::collision::{edge_interferes_until, interferes, EdgeOptions, SweepMethod};
+use crate::math::{frame_across, Aabb, Transform, Vec3};
 use crate::workspace::WorkspaceError;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
@@ -631,17 +631,6 @@ pub(super) fn sphere_directions(n: usize, seed: u64) -> Vec<Vec3> {
             turn * Vec3::new(r * a.cos(), r * a.sin(), z)
         })
         .collect()
-}
-
-/// Two unit vectors `(u, v)` that make a right-handed frame `(u, v, d)` with unit `d`.
-pub(super) fn frame_across(d: &Vec3) -> (Vec3, Vec3) {
-    let helper = if d.x.abs() < 0.9 {
-        Vec3::x()
-    } else {
-        Vec3::y()
-    };
-    let u = d.cross(&helper).normalize();
-    (u, d.cross(&u))
 }
 
 /// `k` unit directions at angle `angle` (rad) around unit `d`.

@@ -41,6 +41,12 @@ pub(crate) struct Ctx<'d> {
     /// Per component: the product's components it touches within the contact gap
     /// (the support relation).
     pub touching: Vec<Mask>,
+    /// Per component: its group of the support relation, the parts it is connected
+    /// to through touching pairs in the finished product. A product whose parts
+    /// form several groups (parts the file places apart, held by a frame or fixture
+    /// it leaves out) is held together by nothing modelled: the first part placed of
+    /// each group needs no support, every other part does.
+    pub support_groups: Vec<Mask>,
     /// Tight fits found, by part, mating direction and the placed parts near it.
     pub(super) tight: Mutex<HashMap<SafeKey, bool>>,
     /// Per component: the product's components whose boxes its box grown by
@@ -196,6 +202,7 @@ impl<'d> Ctx<'d> {
             n,
             active,
             touching: setup.touching,
+            support_groups: setup.support_groups,
             tight: Mutex::new(HashMap::new()),
             names: setup.names,
             boxes: setup.boxes,
@@ -324,13 +331,7 @@ impl<'d> Ctx<'d> {
         if self.out_of_time() {
             return false;
         }
-        let helper = if mate.x.abs() < 0.9 {
-            Vec3::x()
-        } else {
-            Vec3::y()
-        };
-        let u = mate.cross(&helper).normalize();
-        let v = mate.cross(&u);
+        let (u, v) = crate::math::frame_across(mate);
         let start = self.scene.poses[p];
         let hits = [u, -u, v, -v]
             .iter()
@@ -345,9 +346,12 @@ impl<'d> Ctx<'d> {
     }
 
     /// Whether `p` placed onto `mask` is held: it touches (within the contact gap) a
-    /// placed part, or support is off.
+    /// placed part, or it is the first placed of its support group (nothing of the
+    /// product touches that group in the finished product either), or support is off.
     pub(super) fn supported(&self, p: usize, mask: Mask) -> bool {
-        !self.opts.support || self.touching[p] & mask != 0
+        !self.opts.support
+            || self.touching[p] & mask != 0
+            || self.support_groups[p] & mask & !super::setup::bit(p) == 0
     }
 
     /// Whether the call's deadline has passed.

@@ -78,7 +78,7 @@ impl FitPairCheck {
         }
         let region = Aabb::new(swept.lo.sup(&qb.lo), swept.hi.inf(&qb.hi));
         // Lines along d across the region: a frame (u, v) across d.
-        let (u, v) = super::blocking::frame_across(d);
+        let (u, v) = crate::math::frame_across(d);
         let corners: Vec<Point3> = (0..8)
             .map(|k| {
                 Point3::new(

@@ -592,6 +592,13 @@ pub struct SequencePlan {
     pub fits: Vec<Fit>,
     /// The links the support rule added across gaps wider than `contact_gap_mm`.
     pub support_gaps: Vec<SupportGap>,
+    /// The product's groups of parts that touch nothing of one another in the
+    /// finished product (within `contact_gap_mm`, across the support gaps), in
+    /// document order, when there is more than one: nothing modelled holds them
+    /// together (a frame or fixture the file leaves out, parts placed apart), so the
+    /// first part placed of each group needs no support. Empty when the whole
+    /// product holds together.
+    pub separate_groups: Vec<Vec<String>>,
     /// Wall-clock time of the call (ms).
     pub time_ms: f64,
     /// Blocking sweeps run.

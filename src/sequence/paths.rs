@@ -5,8 +5,8 @@
 
 use super::context::*;
 use super::fit::FitPairValidator;
-use crate::collision::{Aabb, SweepMethod};
-use crate::math::{Deadline, Transform, Vec3};
+use crate::collision::SweepMethod;
+use crate::math::{Aabb, Deadline, Transform, Vec3};
 use crate::planning::{
     MeshValidator, MeshValidatorOptions, MotionValidator, PlannedPath, Planner, PlanningSpace,
 };

@@ -770,6 +770,7 @@ fn finish(
                 gap_mm,
             })
             .collect(),
+        separate_groups: separate_groups(ctx),
         time_ms: ctx.started.elapsed().as_secs_f64() * 1e3,
         sweeps: ctx.sweeps.load(Ordering::Relaxed),
     })
@@ -864,4 +865,22 @@ pub(crate) fn mating_directions_of(ctx: &Ctx, p: usize) -> Vec<Vec3> {
 /// Related components of `p`.
 pub(crate) fn related_of(ctx: &Ctx, p: usize) -> Mask {
     ctx.related[p]
+}
+
+/// [`SequencePlan::separate_groups`]: the distinct support groups of the product, each
+/// in document order, ordered by their first member; empty when there is one.
+fn separate_groups(ctx: &Ctx) -> Vec<Vec<String>> {
+    let mut seen: Vec<Mask> = Vec::new();
+    for i in members(ctx.active) {
+        let g = ctx.support_groups[i];
+        if g != 0 && !seen.contains(&g) {
+            seen.push(g);
+        }
+    }
+    if seen.len() < 2 {
+        return Vec::new();
+    }
+    seen.iter()
+        .map(|&g| members(g).map(|i| ctx.names[i].clone()).collect())
+        .collect()
 }

@@ -174,6 +174,7 @@ impl SequencePlan {
             "support_gaps": self.support_gaps.iter().map(|g| json!({
                 "a": g.a, "b": g.b, "gap_mm": g.gap_mm,
             })).collect::<Vec<_>>(),
+            "separate_groups": self.separate_groups,
             "relations": g.relations.iter().map(|r| json!({
                 "a": g.components[r.a],
                 "b": g.components[r.b],
@@ -255,6 +256,12 @@ impl SequencePlan {
                 ),
                 None => format!("held by their mates: {} and {}\n", g.a, g.b),
             };
+        }
+        for g in &self.separate_groups {
+            s += &format!(
+                "held by nothing modelled (touches no other group): {}\n",
+                g.join(", ")
+            );
         }
         for r in self.rejected.iter().take(5) {
             s += &format!("rejected after [{}]: {}\n", r.order.join(", "), r.reason);

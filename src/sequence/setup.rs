@@ -151,6 +151,9 @@ pub(super) struct Setup {
     pub related: Vec<Mask>,
     /// The support relation (see [`super::context::Ctx::touching`]).
     pub touching: Vec<Mask>,
+    /// Per component: its group of the support relation (see
+    /// [`super::context::Ctx::support_groups`]).
+    pub support_groups: Vec<Mask>,
     /// Per component: the product's components within `tight_clearance_mm` of its box.
     pub tight_near: Vec<Mask>,
     /// Step of the safe-length search (mm).
@@ -295,6 +298,7 @@ impl Setup {
             Mode::Mates if opts.support => contact_masks,
             _ => related.clone(),
         };
+        let support_groups = groups_of(&touching, active);
         let step = if opts.step_mm > 0.0 {
             opts.step_mm
         } else {
@@ -316,10 +320,37 @@ impl Setup {
             graph,
             related,
             touching,
+            support_groups,
             tight_near,
             step,
         })
     }
+}
+
+/// Per component of `active`: the members of its connected group of the relation
+/// `touching` (0 outside `active`). Parts of different groups touch nothing of each
+/// other in the finished product.
+fn groups_of(touching: &[Mask], active: Mask) -> Vec<Mask> {
+    let mut group = vec![0 as Mask; touching.len()];
+    for start in members(active) {
+        if group[start] != 0 {
+            continue;
+        }
+        let mut reached = bit(start);
+        let mut frontier = bit(start);
+        while frontier != 0 {
+            let mut next = 0 as Mask;
+            for i in members(frontier) {
+                next |= touching[i] & active;
+            }
+            frontier = next & !reached;
+            reached |= next;
+        }
+        for i in members(reached) {
+            group[i] = reached;
+        }
+    }
+    group
 }
 
 /// The base and the pinned order name components of the product.

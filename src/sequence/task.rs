@@ -8,8 +8,7 @@
 //! This type is the contract between sequence planning (which produces tasks) and
 //! skills (which turn each task into skill primitives for a manipulator).
 
-use crate::collision::Aabb;
-use crate::math::{Transform, Vec3};
+use crate::math::{Aabb, Transform, Vec3};
 use crate::planning::PlannedPath;
 
 /// What the robot does to join the assembly part to what is already assembled.

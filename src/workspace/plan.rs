@@ -2,9 +2,8 @@
 //! (validator, bounds, boxes), re-validation and following a path.
 
 use super::{Workspace, WorkspaceError};
-use crate::collision::Aabb;
 use crate::document::Document;
-use crate::math::{Transform, Vec3};
+use crate::math::{Aabb, Transform, Vec3};
 use crate::planning::{
     Control, MeshValidator, MeshValidatorOptions, PlannedPath, Planner, PlanningSpace, ProblemFile,
     ProgressFn, RotationFreedom,

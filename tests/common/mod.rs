@@ -35,9 +35,101 @@ pub fn run_in(dir: &Path, args: &[&str]) -> Output {
     fitup().current_dir(dir).args(args).output().unwrap()
 }
 
+/// Writes `source` as `scripts/NAME` of the project `dir` and runs it there (`fitup
+/// run scripts/NAME`).
+pub fn run_script_in(dir: &Path, name: &str, source: &str) -> Output {
+    let rel = format!("scripts/{name}");
+    std::fs::write(dir.join(&rel), source).unwrap();
+    run_in(dir, &["run", &rel])
+}
+
+/// Skill `i` of the test plans: `Move_Table` of the part `gear`, ending in `end_state`,
+/// doing `commands`.
+pub fn gear_step(
+    i: usize,
+    end_state: fitup::skills::PartState,
+    commands: Vec<fitup::skills::ControllerCommand>,
+) -> fitup::skills::PlanStep {
+    fitup::skills::PlanStep {
+        skill: i,
+        task: 0,
+        part: "gear".into(),
+        action: "Move_Table".into(),
+        description: format!("#{i} Move_Table gear"),
+        end_state,
+        commands,
+    }
+}
+
+/// A plan of the catalog MZ07 (six revolute joints) doing `steps`.
+pub fn mz07_plan(steps: Vec<fitup::skills::PlanStep>) -> fitup::skills::Plan {
+    fitup::skills::Plan {
+        version: 1,
+        robot: "mz07".into(),
+        joint_kinds: vec!["revolute".into(); 6],
+        steps,
+    }
+}
+
+/// The committed `models/` files `files` are byte for byte what the generator `write`
+/// (one of `fitup::demo`'s) writes into a fresh folder. With `FITUP_BLESS` set,
+/// `write` first rewrites them in `models/`; `test` is the test filter that does so.
+pub fn assert_models_generated<E: std::fmt::Debug>(
+    write: impl Fn(&Path) -> Result<(), E>,
+    files: &[&str],
+    test: &str,
+) {
+    let models = repo().join("models");
+    if std::env::var_os("FITUP_BLESS").is_some() {
+        write(&models).unwrap();
+    }
+    let fresh = tempfile::tempdir().unwrap();
+    write(fresh.path()).unwrap();
+    for f in files {
+        let committed = std::fs::read(models.join(f)).unwrap_or_else(|e| panic!("models/{f}: {e}"));
+        let generated = std::fs::read(fresh.path().join(f)).unwrap();
+        assert!(
+            committed == generated,
+            "models/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test it {test}"
+        );
+    }
+}
+
 /// The repository root.
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The `.rhai` scripts directly in the repository folder `folder`, sorted, each as its
+/// path from the repository root (how the README runs them: `fitup run scripts/…`).
+pub fn repo_scripts(folder: &str) -> Vec<String> {
+    let root = repo();
+    let mut scripts: Vec<String> = std::fs::read_dir(root.join(folder))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+        .map(|p| {
+            p.strip_prefix(&root)
+                .unwrap()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    scripts.sort();
+    scripts
+}
+
+/// Runs `fitup run SCRIPT` from the repository root for each of `scripts` (paths from
+/// the root); the ones that failed, each with its output.
+pub fn failing_repo_runs(scripts: &[String]) -> Vec<String> {
+    let root = repo();
+    scripts
+        .iter()
+        .filter_map(|rel| {
+            let out = run_in(&root, &["run", rel]);
+            (!out.status.success()).then(|| format!("{rel}:\n{}", text(&out)))
+        })
+        .collect()
 }
 
 /// Stdout and stderr as text.

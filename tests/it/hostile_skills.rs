@@ -12,7 +12,7 @@ use fitup::manipulator::client::{Client, ClientOptions, ManipulatorError, Port};
 use fitup::manipulator::message::{
     msg_type, Body, ByteOrder, JointPosition, Packet, ReplyCode, RobotMode, Status, TriState,
 };
-use fitup::skills::{ControllerCommand, Plan, PlanStep};
+use fitup::skills::{ControllerCommand, Plan};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::path::Path;
@@ -98,25 +98,16 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
         let mut end = start.clone();
         end[0] += 0.1;
         q = end.clone();
-        steps.push(PlanStep {
-            skill: i,
-            task: 0,
-            part: "gear".into(),
-            action: "Move_Table".into(),
-            description: format!("#{i} Move_Table gear"),
-            end_state: fitup::skills::PartState::Grasped,
-            commands: vec![ControllerCommand::Trajectory(vec![
+        steps.push(common::gear_step(
+            i,
+            fitup::skills::PartState::Grasped,
+            vec![ControllerCommand::Trajectory(vec![
                 (start, 0.0),
                 (end, seconds),
             ])],
-        });
+        ));
     }
-    Plan {
-        version: 1,
-        robot: "mz07".into(),
-        joint_kinds: vec!["revolute".into(); 6],
-        steps,
-    }
+    common::mz07_plan(steps)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> String {

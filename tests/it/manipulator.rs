@@ -9,7 +9,7 @@ use fitup::kinematics::JointKind;
 use fitup::manipulator::client::{Client, ClientOptions, Lost, ManipulatorError, Port, Request};
 use fitup::manipulator::message::{msg_type, Body, ByteOrder, Packet};
 use fitup::manipulator::RefusalCode;
-use fitup::skills::{ControllerCommand, Plan, PlanStep};
+use fitup::skills::{ControllerCommand, Plan};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::process::Stdio;
@@ -318,18 +318,15 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
             pts.push((p, seconds / n as f64));
         }
         q = pts.last().unwrap().0.clone();
-        steps.push(PlanStep {
-            skill: i,
-            task: 0,
-            part: "gear".into(),
-            action: "Move_Table".into(),
-            description: format!("#{i} Move_Table gear"),
-            end_state: if i + 1 == skills {
-                fitup::skills::PartState::Adjusted
-            } else {
-                fitup::skills::PartState::Grasped
-            },
-            commands: vec![
+        let end = if i + 1 == skills {
+            fitup::skills::PartState::Adjusted
+        } else {
+            fitup::skills::PartState::Grasped
+        };
+        steps.push(common::gear_step(
+            i,
+            end,
+            vec![
                 ControllerCommand::Trajectory(pts),
                 ControllerCommand::Tool {
                     action: "set_output".into(),
@@ -337,14 +334,9 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
                     value: 1.0,
                 },
             ],
-        });
+        ));
     }
-    Plan {
-        version: 1,
-        robot: "mz07".into(),
-        joint_kinds: vec!["revolute".into(); 6],
-        steps,
-    }
+    common::mz07_plan(steps)
 }
 
 fn write_plan(plan: &Plan) -> tempfile::NamedTempFile {

@@ -1,30 +1,22 @@
 //! The committed models are exactly what the generators in `fitup::demo` produce
-//! (regenerate with `FITUP_BLESS=1 cargo test --test models`), and they load.
+//! (regenerate with `FITUP_BLESS=1 cargo test --test it models`), and they load.
 
-use std::path::Path;
+use crate::common;
 
 #[test]
 fn committed_demo_cell_matches_generator() {
-    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
-    if std::env::var_os("FITUP_BLESS").is_some() {
-        fitup::demo::write_cell(&models).unwrap();
-    }
-    let fresh = tempfile::tempdir().unwrap();
-    fitup::demo::write_cell(fresh.path()).unwrap();
-    for f in [
-        "cell.yaml",
-        "meshes/table.stl",
-        "meshes/plate_a.stl",
-        "meshes/plate_b.stl",
-        "meshes/screw.stl",
-    ] {
-        let committed = std::fs::read(models.join(f)).unwrap_or_else(|e| panic!("models/{f}: {e}"));
-        let generated = std::fs::read(fresh.path().join(f)).unwrap();
-        assert!(
-            committed == generated,
-            "models/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test models"
-        );
-    }
+    common::assert_models_generated(
+        fitup::demo::write_cell,
+        &[
+            "cell.yaml",
+            "meshes/table.stl",
+            "meshes/plate_a.stl",
+            "meshes/plate_b.stl",
+            "meshes/screw.stl",
+        ],
+        "models::committed_demo_cell",
+    );
+    let models = common::repo().join("models");
     let doc = fitup::document::Document::open(&models.join("cell.yaml")).unwrap();
     for i in 0..doc.components().len() {
         assert!(
@@ -40,12 +32,6 @@ fn committed_demo_cell_matches_generator() {
 /// robot's forward kinematics puts the links.
 #[test]
 fn committed_robot_models_match_generator() {
-    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
-    if std::env::var_os("FITUP_BLESS").is_some() {
-        fitup::demo::write_robots(&models).unwrap();
-    }
-    let fresh = tempfile::tempdir().unwrap();
-    fitup::demo::write_robots(fresh.path()).unwrap();
     let mut files = vec![
         "mz07.yaml".to_string(),
         "cell_robots.yaml".to_string(),
@@ -54,14 +40,13 @@ fn committed_robot_models_match_generator() {
     for (name, _) in fitup::demo::mz07_link_meshes() {
         files.push(format!("meshes/{name}.stl"));
     }
-    for f in &files {
-        let committed = std::fs::read(models.join(f)).unwrap_or_else(|e| panic!("models/{f}: {e}"));
-        let generated = std::fs::read(fresh.path().join(f)).unwrap();
-        assert!(
-            committed == generated,
-            "models/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test models"
-        );
-    }
+    let files: Vec<&str> = files.iter().map(String::as_str).collect();
+    common::assert_models_generated(
+        fitup::demo::write_robots,
+        &files,
+        "models::committed_robot_models",
+    );
+    let models = common::repo().join("models");
     for doc in ["mz07.yaml", "cell_robots.yaml"] {
         let doc = fitup::document::Document::open(&models.join(doc)).unwrap();
         for i in 0..doc.components().len() {
@@ -88,7 +73,7 @@ fn committed_robot_models_match_generator() {
 /// robot loads with one component per meshed link.
 #[test]
 fn committed_urdf_meshes_match_generator() {
-    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    let models = common::repo().join("models");
     if std::env::var_os("FITUP_BLESS").is_some() {
         fitup::demo::write_arm6_meshes(&models).unwrap();
     }

@@ -183,8 +183,7 @@ fn script_option_errors_name_key_value_and_rule() {
             try { d.plan_path(\"screw5\", pose(0, 0, 0, 0, 0, 0), o); } catch (e) { print(`ERR ${e}`); }\n\
         }\n\
         try { d.interferences(#{tolerance: \"0.1\"}); } catch (e) { print(`ERR ${e}`); }\n";
-    std::fs::write(dir.path().join("scripts/bad.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/bad.rhai"]);
+    let out = common::run_script_in(dir.path(), "bad.rhai", script);
     let text = common::text(&out);
     let errors: Vec<&str> = text.lines().filter(|l| l.starts_with("ERR ")).collect();
     assert_eq!(errors.len(), 5, "{text}");

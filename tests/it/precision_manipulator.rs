@@ -29,24 +29,13 @@ const BOUND: Duration = Duration::from_secs(300);
 
 #[test]
 fn committed_micro_cell_matches_generator_and_its_links_follow_the_joints() {
-    let models = common::repo().join("models");
-    if std::env::var_os("FITUP_BLESS").is_some() {
-        fitup::demo::write_micro(&models).unwrap();
-    }
-    let fresh = tempfile::tempdir().unwrap();
-    fitup::demo::write_micro(fresh.path()).unwrap();
     let mut files = vec!["micro_cell.yaml".to_string()];
     for (name, _) in fitup::demo::micro_meshes() {
         files.push(format!("meshes/{name}.stl"));
     }
-    for f in &files {
-        let committed = std::fs::read(models.join(f)).unwrap_or_else(|e| panic!("models/{f}: {e}"));
-        let generated = std::fs::read(fresh.path().join(f)).unwrap();
-        assert!(
-            committed == generated,
-            "models/{f} differs from the generator: run FITUP_BLESS=1 cargo test --test it precision_manipulator"
-        );
-    }
+    let files: Vec<&str> = files.iter().map(String::as_str).collect();
+    common::assert_models_generated(fitup::demo::write_micro, &files, "precision_manipulator");
+    let models = common::repo().join("models");
     let mut doc = Document::open(&models.join("micro_cell.yaml")).unwrap();
     for i in 0..doc.components().len() {
         assert!(

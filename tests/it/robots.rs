@@ -19,6 +19,13 @@ fn mz07(dir: &Path) -> PathBuf {
     dir.join("models/mz07.yaml")
 }
 
+/// Runs `script` as `scripts/NAME` in a fresh robot project; it must succeed.
+fn script_passes(name: &str, script: &str) {
+    let dir = project();
+    let out = common::run_script_in(dir.path(), name, script);
+    assert!(out.status.success(), "{}", common::text(&out));
+}
+
 /// Setting a joint dimension moves every link component to `offset · link pose`, so
 /// the mesh drawn at the zero configuration follows the kinematics: the tool point of
 /// link 6's mesh is the robot's TCP, and the base does not move.
@@ -82,7 +89,6 @@ fn dimensions_drive_link_components() {
 /// through dimensions agree.
 #[test]
 fn ik_round_trip_through_the_script_api() {
-    let dir = project();
     let script = r#"
         let doc = open_doc("models/mz07.yaml");
         let arm = doc.robot("mz07");
@@ -106,9 +112,7 @@ fn ik_round_trip_through_the_script_api() {
         }
         print("ok");
     "#;
-    std::fs::write(dir.path().join("scripts/ik.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/ik.rhai"]);
-    assert!(out.status.success(), "{}", common::text(&out));
+    script_passes("ik.rhai", script);
 }
 
 /// Batch forms: `fk_many` equals `fk` entry by entry, `ik_many` follows a line of poses
@@ -117,7 +121,6 @@ fn ik_round_trip_through_the_script_api() {
 /// exactly 0; `limits_source` says where the catalog limits come from.
 #[test]
 fn batch_fk_ik_and_singular_flags_through_the_script_api() {
-    let dir = project();
     let script = r#"
         let doc = open_doc("models/mz07.yaml");
         let arm = doc.robot("mz07");
@@ -141,9 +144,7 @@ fn batch_fk_ik_and_singular_flags_through_the_script_api() {
         assert(arm.limits_source.starts_with("unverified"), arm.limits_source);
         print("ok");
     "#;
-    std::fs::write(dir.path().join("scripts/batch.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/batch.rhai"]);
-    assert!(out.status.success(), "{}", common::text(&out));
+    script_passes("batch.rhai", script);
 }
 
 /// Script constructors: `robot_opw` with the IRB 2400's published parameters
@@ -153,7 +154,6 @@ fn batch_fk_ik_and_singular_flags_through_the_script_api() {
 /// base, where it moves along a line, and saving then reopening keeps it.
 #[test]
 fn robots_built_in_scripts_join_a_document() {
-    let dir = project();
     let script = r#"
         let irb = robot_opw(#{a1: 100, a2: -135, b: 0, c1: 615, c2: 705, c3: 755, c4: 85,
                               offsets: [0, 0, -90, 0, 0, 0],
@@ -187,9 +187,7 @@ fn robots_built_in_scripts_join_a_document() {
         assert_near(b.fk([5, 5, 5, 5, 5, 5]).distance_to(arm.fk([5, 5, 5, 5, 5, 5])).mm, 0.0, 1e-6);
         print("ok");
     "#;
-    std::fs::write(dir.path().join("scripts/build.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/build.rhai"]);
-    assert!(out.status.success(), "{}", common::text(&out));
+    script_passes("build.rhai", script);
 }
 
 /// Robot errors reach the document caller typed: limits and kinematics errors are
@@ -510,8 +508,7 @@ fn streamed_motions_print_every_sample() {
         let t = arm.move_line(pose(390, 0, 250, 0, 0, 0), #{speed: 100, interval: 0.1, stream: true});
         print(`samples ${t.len}`);
     "#;
-    std::fs::write(dir.path().join("scripts/s.rhai"), script).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/s.rhai"]);
+    let out = common::run_script_in(dir.path(), "s.rhai", script);
     let text = common::text(&out);
     assert!(out.status.success(), "{text}");
     let lines: Vec<&str> = text

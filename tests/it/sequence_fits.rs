@@ -76,7 +76,7 @@ fn write_doc(dir: &Path, parts: &[(&str, Mesh)]) -> Document {
 /// reported fit may overlap only where the two overlapped assembled — the larger of
 /// the two has the smaller's assembled room cut out of it, carried with it — and
 /// any other pair may interfere by the tolerance.
-struct Checker<'a> {
+pub(crate) struct Checker<'a> {
     doc: &'a Document,
     colliders: Vec<std::sync::Arc<Collider>>,
     poses: Vec<Transform>,
@@ -151,7 +151,7 @@ impl Checker<'_> {
     }
 }
 
-fn checker<'a>(doc: &'a Document, plan: &SequencePlan) -> Checker<'a> {
+pub(crate) fn checker<'a>(doc: &'a Document, plan: &SequencePlan) -> Checker<'a> {
     let mut cache = SceneCache::new();
     let ws = Workspace::new(doc, &mut cache).unwrap();
     let scene = ws.scene();
@@ -166,7 +166,7 @@ fn checker<'a>(doc: &'a Document, plan: &SequencePlan) -> Checker<'a> {
 
 /// The reported fits are exactly the pairs that interfere in the assembled pose
 /// (default tolerance), each with a positive depth.
-fn fits_are_exact(c: &Checker, plan: &SequencePlan) {
+pub(crate) fn fits_are_exact(c: &Checker, plan: &SequencePlan) {
     let n = c.colliders.len();
     for p in 0..n {
         for q in p + 1..n {
@@ -188,7 +188,7 @@ fn fits_are_exact(c: &Checker, plan: &SequencePlan) {
 }
 
 /// The dense removal re-check (see the module docs).
-fn dense_removal(c: &Checker, plan: &SequencePlan) {
+pub(crate) fn dense_removal(c: &Checker, plan: &SequencePlan) {
     assert!(!plan.sequences.is_empty());
     let doc = c.doc;
     for s in &plan.sequences {
@@ -414,6 +414,92 @@ fn a_clearance_linkage_is_held_across_its_gaps() {
     };
     let p = plan_sequence(&doc, &mut SceneCache::new(), &wide).unwrap();
     assert!(p.support_gaps.is_empty(), "{:?}", p.support_gaps);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A real export whose parts the file places apart (issue 38's Onshape and CATIA
+/// assemblies: two sub-products a frame the file leaves out would hold): a pin in a
+/// block, and 200 mm away a peg in another block, touching nothing of the first
+/// group and farther than any support link reaches. Each group's first part needs
+/// no support and the plan names the groups; inside a group every part added
+/// touches one placed before it.
+#[test]
+fn groups_the_file_places_apart_are_sequenced_each_held_inside() {
+    let d = dir("apart");
+    let far = |m: Mesh| m.transformed(&Transform::from_translation(Vec3::new(200.0, 0.0, 0.0)));
+    let doc = write_doc(
+        &d,
+        &[
+            ("block", ring(14.0, 3.0, 0.0, 10.0, 32)),
+            ("pin", rod(3.0, 0.0, 20.0, 32)),
+            ("block2", far(ring(12.0, 2.0, 0.0, 8.0, 32))),
+            ("peg", far(rod(2.0, 0.0, 15.0, 32))),
+        ],
+    );
+    for mode in [Mode::Mates, Mode::Geometry] {
+        let p = plan(&doc, mode);
+        assert_eq!(
+            p.separate_groups,
+            vec![
+                vec!["block".to_string(), "pin".to_string()],
+                vec!["block2".to_string(), "peg".to_string()]
+            ],
+            "{mode:?}"
+        );
+        assert!(p.support_gaps.is_empty(), "{:?}", p.support_gaps);
+        let c = checker(&doc, &p);
+        fits_are_exact(&c, &p);
+        dense_removal(&c, &p);
+        // Inside each group, every part after its group's first touches (1.5 mm) a
+        // part of its group placed before it.
+        for s in &p.sequences {
+            let order = s.order();
+            for (k, name) in order.iter().enumerate() {
+                let group = p.separate_groups.iter().find(|g| g.contains(name)).unwrap();
+                let before: Vec<&String> =
+                    order[..k].iter().filter(|o| group.contains(o)).collect();
+                if before.is_empty() {
+                    continue;
+                }
+                let i = doc.component_index(name).unwrap();
+                let held = before.iter().any(|o| {
+                    let q = doc.component_index(o).unwrap();
+                    fitup::collision::clearance(
+                        &c.colliders[i],
+                        &c.poses[i],
+                        &c.colliders[q],
+                        &c.poses[q],
+                        2.5,
+                    )
+                    .unwrap()
+                        <= 1.5
+                });
+                assert!(held, "{name} floats in {order:?}");
+            }
+        }
+        assert!(
+            p.summary().contains("held by nothing modelled"),
+            "{}",
+            p.summary()
+        );
+        let json = p.to_json_value();
+        assert_eq!(
+            json["separate_groups"].as_array().unwrap().len(),
+            2,
+            "{json}"
+        );
+    }
+    // One group: nothing listed.
+    let d1 = dir("apart_one");
+    let one = write_doc(
+        &d1,
+        &[
+            ("block", ring(14.0, 3.0, 0.0, 10.0, 32)),
+            ("pin", rod(3.0, 0.0, 20.0, 32)),
+        ],
+    );
+    assert!(plan(&one, Mode::Geometry).separate_groups.is_empty());
+    let _ = std::fs::remove_dir_all(&d1);
     let _ = std::fs::remove_dir_all(&d);
 }
 

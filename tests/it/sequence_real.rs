@@ -470,6 +470,11 @@ fn robots_and_fixtures_are_not_sequenced() {
         assert!(plan.sequences.iter().all(|s| !s.order().contains(name)));
     }
     assert!(plan.product.contains(&"plate_b".to_string()));
+    assert!(
+        plan.separate_groups.is_empty(),
+        "{:?}",
+        plan.separate_groups
+    );
     dense_removal(&doc, &plan);
     assert!(floating_steps(&doc, &plan, o.contact_gap_mm).is_empty());
     // Naming the product instead does the same.
@@ -728,9 +733,10 @@ fn a_part_that_only_a_bent_path_brings_in_is_planned() {
 
 /// The robot cell marks its two pedestals `fixture: true` (models/cell_robots.yaml):
 /// they are left out without `exclude`, as robot links are. The same cell with the
-/// marks removed (written here from the generator) fails with the defaults — the
-/// pedestals touch nothing of the product — and excluding them by name gives the
-/// marked document's plan.
+/// marks removed (written here from the generator) takes the pedestals in, and as
+/// they touch nothing of the product the plan names each as a separate group held by
+/// nothing modelled (issue 38: such parts no longer refuse the product); excluding
+/// them by name gives the marked document's plan, without separate groups.
 #[test]
 fn components_the_document_marks_as_fixtures_are_not_sequenced() {
     let doc = Document::open(Path::new("models/cell_robots.yaml")).unwrap();
@@ -762,14 +768,27 @@ fn components_the_document_marks_as_fixtures_are_not_sequenced() {
     std::fs::write(&path, file.to_yaml().unwrap()).unwrap();
     let unmarked = Document::open(&path).unwrap();
     assert!(unmarked.components().iter().all(|c| !c.fixture));
-    match plan_sequence(
+    let taken_in = plan_sequence(
         &unmarked,
         &mut SceneCache::new(),
         &SequenceOptions::default(),
-    ) {
-        Err(SequenceError::NoSequence { .. }) => {}
-        other => panic!("unmarked: {:?}", other.map(|p| p.summary())),
+    )
+    .unwrap();
+    for p in pedestals {
+        assert!(taken_in.product.iter().any(|n| n == p), "{p} taken in");
+        assert!(
+            taken_in.separate_groups.contains(&vec![p.to_string()]),
+            "{p} alone: {:?}",
+            taken_in.separate_groups
+        );
     }
+    assert_eq!(
+        taken_in.separate_groups.len(),
+        3,
+        "{:?}",
+        taken_in.separate_groups
+    );
+    dense_removal(&unmarked, &taken_in);
     let o = SequenceOptions {
         exclude: pedestals.iter().map(|s| s.to_string()).collect(),
         ..SequenceOptions::default()

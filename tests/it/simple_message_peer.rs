@@ -9,7 +9,7 @@ use crate::common;
 
 use common::lines::Proc;
 use common::{fitup, free_pair, repo};
-use fitup::skills::{ControllerCommand, Plan, PlanStep};
+use fitup::skills::{ControllerCommand, Plan};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::process::Stdio;
@@ -651,14 +651,10 @@ fn plan() -> Plan {
             pts.push((p, 0.05));
         }
         q = pts.last().unwrap().0.clone();
-        steps.push(PlanStep {
-            skill: i,
-            task: 0,
-            part: "gear".into(),
-            action: "Move_Table".into(),
-            description: format!("#{i} Move_Table gear"),
-            end_state: fitup::skills::PartState::Grasped,
-            commands: vec![
+        steps.push(common::gear_step(
+            i,
+            fitup::skills::PartState::Grasped,
+            vec![
                 ControllerCommand::Trajectory(pts),
                 ControllerCommand::Tool {
                     action: "set_output".into(),
@@ -666,14 +662,9 @@ fn plan() -> Plan {
                     value: 1.0,
                 },
             ],
-        });
+        ));
     }
-    Plan {
-        version: 1,
-        robot: "mz07".into(),
-        joint_kinds: vec!["revolute".into(); 6],
-        steps,
-    }
+    common::mz07_plan(steps)
 }
 
 fn run_plan(args: &[&str]) -> (Option<i32>, String) {

@@ -7,36 +7,21 @@ use crate::common;
 
 #[test]
 fn every_ported_macro_runs() {
-    let root = common::repo();
-    let mut scripts: Vec<_> = std::fs::read_dir(root.join("scripts/solidworks"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
-        .collect();
-    scripts.sort();
+    let scripts = common::repo_scripts("scripts/solidworks");
     assert!(
         scripts.len() >= 30,
         "expected the ported macros, found {scripts:?}"
     );
-    let mut failures = Vec::new();
-    for s in &scripts {
-        let rel = s
-            .strip_prefix(&root)
-            .unwrap()
-            .to_string_lossy()
-            .into_owned();
-        let text = std::fs::read_to_string(s).unwrap();
+    for rel in &scripts {
+        let text = std::fs::read_to_string(common::repo().join(rel)).unwrap();
         assert!(
             text.lines()
                 .take(3)
                 .any(|l| l.contains("Ports CodeStack's")),
             "{rel} names the macro it ports in its first lines"
         );
-        let out = common::run_in(&root, &["run", &rel]);
-        if !out.status.success() {
-            failures.push(format!("{rel}:\n{}", common::text(&out)));
-        }
     }
+    let failures = common::failing_repo_runs(&scripts);
     assert!(
         failures.is_empty(),
         "failing ports:\n{}",
@@ -47,8 +32,7 @@ fn every_ported_macro_runs() {
 /// A scratch project with the demo cell and one script.
 fn run_script(body: &str) -> std::process::Output {
     let dir = common::project();
-    std::fs::write(dir.path().join("scripts/t.rhai"), body).unwrap();
-    let out = common::run_in(dir.path(), &["run", "scripts/t.rhai"]);
+    let out = common::run_script_in(dir.path(), "t.rhai", body);
     // keep the folder alive until the run is over
     drop(dir);
     out

@@ -6,7 +6,12 @@
 //! component per placed solid at the placement of the assembly tree and as many levels
 //! down, its part named from the product, its mesh closed and within 1.5 % of the exact
 //! B-rep volume; one sub-assembly per assembly occurrence below the root, in the tree's
-//! order, at its placement (issue 37); the file's unit named and lengths in mm.
+//! order, at its placement (issue 37); the file's unit named and lengths in mm. Every
+//! imported file of more than one component then gets an assembly sequence with the
+//! default options, re-checked independently by `sequence_fits`' dense removal test
+//! (the reported assembled-pose fits exactly the interfering pairs, each part taken
+//! out along its path and straight on against the parts placed before it, allowed the
+//! reported fits' overlap and nothing else).
 
 #[cfg(feature = "step")]
 mod with_occt {
@@ -35,6 +40,65 @@ mod with_occt {
             root.display()
         );
         files
+    }
+
+    /// Every multi-part assembly of the corpus that imports is sequenced with the
+    /// default options (geometry mode: an import has no mates) and every sequence is
+    /// re-checked; the failures are gathered and reported together.
+    #[test]
+    fn real_assemblies_get_a_sequence_with_the_default_options() {
+        use fitup::sequence::{plan_sequence, SequenceOptions};
+        use fitup::workspace::SceneCache;
+        let files = corpus();
+        if files.is_empty() {
+            eprintln!("FITUP_STEP_CORPUS is not set: no real assembly sequenced");
+            return;
+        }
+        let mut failed = Vec::new();
+        for file in files {
+            let dir = tempfile::tempdir().unwrap();
+            let o = common::run_in(
+                dir.path(),
+                &["import", file.to_str().unwrap(), "--out", "cell"],
+            );
+            if !o.status.success() {
+                // The import test names the import failures.
+                continue;
+            }
+            let stem = file.file_stem().unwrap().to_string_lossy().into_owned();
+            let doc = Document::open(&dir.path().join(format!("cell/{stem}.yaml"))).unwrap();
+            if doc.components().len() < 2 {
+                continue;
+            }
+            let start = std::time::Instant::now();
+            let plan = plan_sequence(&doc, &mut SceneCache::new(), &SequenceOptions::default());
+            let wall = start.elapsed().as_secs_f64();
+            match plan {
+                Ok(plan) => {
+                    eprintln!(
+                        "{}: {} components, {} sequences in {wall:.1} s, {} fits, {} separate groups; re-checking",
+                        file.display(),
+                        doc.components().len(),
+                        plan.sequences.len(),
+                        plan.fits.len(),
+                        plan.separate_groups.len()
+                    );
+                    let c = crate::sequence_fits::checker(&doc, &plan);
+                    crate::sequence_fits::fits_are_exact(&c, &plan);
+                    crate::sequence_fits::dense_removal(&c, &plan);
+                }
+                Err(e) => {
+                    eprintln!("{}: no sequence in {wall:.1} s: {e}", file.display());
+                    failed.push(format!("{}: {e}", file.display()));
+                }
+            }
+        }
+        assert!(
+            failed.is_empty(),
+            "{} assemblies without a sequence:\n{}",
+            failed.len(),
+            failed.join("\n")
+        );
     }
 
     #[test]

@@ -297,7 +297,7 @@ fn document_urdf_robot_meshes_are_posed_and_saved() {
     // add_urdf_robot: the same robot added in code brings its mesh component.
     let mut empty = Document::from_yaml("{}", &path, &mut fitup::mesh::MeshCache::new()).unwrap();
     let i = empty
-        .add_urdf_robot("r2", &path.parent().unwrap().join("r.urdf"), None)
+        .add_urdf_robot("r2", &path.parent().unwrap().join("r.urdf"), None, &[])
         .unwrap();
     assert_eq!(empty.robots()[i].name(), "r2");
     assert!(empty.component_index("r2:arm").is_ok());
@@ -477,6 +477,73 @@ fn an_arm_and_a_gripper_from_two_packages_load() {
     std::fs::write(&bare, docs_arm_and_gripper_entry()).unwrap();
     let doc = Document::open(&bare).unwrap();
     assert!((volume(&doc, "ur:left_finger") - cube(0.01)).abs() < 1e-3);
+}
+
+/// The same arm + gripper added in code (issue 38): `Document::add_urdf_robot` and a
+/// script's `add_robot(name, load_urdf(..), #{package_path})` take the folder of the
+/// gripper's package, load both packages' meshes and save the entry with it;
+/// without it the gripper's package is not found.
+#[test]
+fn an_arm_and_a_gripper_from_two_packages_are_added_from_rust_and_scripts() {
+    let dir = arm_and_gripper_project("vendor");
+    let p = dir.path().join("proj");
+    std::fs::write(p.join("empty.yaml"), "parts: {}\ncomponents: []\n").unwrap();
+    let urdf = p.join("ur_description/urdf/ur5e_robotiq.urdf");
+    let mut doc = Document::open(&p.join("empty.yaml")).unwrap();
+    let e = doc
+        .add_urdf_robot("ur", &urdf, None, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no folder named `robotiq_2f_85_gripper_visualization`"),
+        "{e}"
+    );
+    assert!(doc.robots().is_empty(), "nothing added on error");
+    doc.add_urdf_robot("ur", &urdf, None, &[&p.join("vendor")])
+        .unwrap();
+    let finger = doc.component_index("ur:left_finger").unwrap();
+    let cube = (ROBOTIQ_CUBE * 1000.0).powi(3);
+    assert!((doc.mesh_of(finger).signed_volume() - cube).abs() < 1e-6 * cube);
+    doc.save_as(&p.join("added.yaml")).unwrap();
+    let text = std::fs::read_to_string(p.join("added.yaml")).unwrap();
+    assert!(
+        text.contains("package_path:") && text.contains("vendor"),
+        "{text}"
+    );
+    let reopened = Document::open(&p.join("added.yaml")).unwrap();
+    assert!(reopened.component_index("ur:right_finger").is_ok());
+
+    // From a script, the folders relative to the project.
+    std::fs::create_dir_all(p.join("scripts")).unwrap();
+    let script = r#"let d = open_doc("empty.yaml");
+let arm = load_urdf("ur_description/urdf/ur5e_robotiq.urdf");
+let r = d.add_robot("ur", arm, #{package_path: ["vendor"]});
+print(d.components().len());
+d.save_as("scripted.yaml");
+"#;
+    std::fs::write(p.join("scripts/add.rhai"), script).unwrap();
+    let o = crate::common::run_in(&p, &["run", "scripts/add.rhai"]);
+    assert!(o.status.success(), "{}", crate::common::text(&o));
+    let text = std::fs::read_to_string(p.join("scripted.yaml")).unwrap();
+    assert!(
+        text.contains("package_path:") && text.contains("vendor"),
+        "{text}"
+    );
+    let scripted = Document::open(&p.join("scripted.yaml")).unwrap();
+    assert!(scripted.component_index("ur:left_finger").is_ok());
+    // Without it, the script's error names the missing package.
+    std::fs::write(
+        p.join("scripts/bare.rhai"),
+        script.replace(", #{package_path: [\"vendor\"]}", ""),
+    )
+    .unwrap();
+    let o = crate::common::run_in(&p, &["run", "scripts/bare.rhai"]);
+    assert!(!o.status.success());
+    assert!(
+        crate::common::text(&o).contains("robotiq_2f_85_gripper_visualization"),
+        "{}",
+        crate::common::text(&o)
+    );
 }
 
 /// The package search stays in the project: a `package_path` folder outside is
