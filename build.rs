@@ -35,33 +35,13 @@ fn step() {
         .compile("fitup_step_shim");
     println!("cargo:rerun-if-changed=cpp/step_shim.cpp");
     println!("cargo:rerun-if-changed=cpp/step_shim.h");
+    println!("cargo:rerun-if-changed=cpp/occt_libs.rs");
     if let Ok(dir) = std::env::var("OCCT_LIB_DIR") {
         println!("cargo:rustc-link-search=native={dir}");
     }
-    for lib in [
-        "TKXDESTEP",
-        "TKSTEP",
-        "TKSTEPBase",
-        "TKSTEPAttr",
-        "TKSTEP209",
-        "TKXSBase",
-        "TKXCAF",
-        "TKLCAF",
-        "TKCAF",
-        "TKCDF",
-        "TKMesh",
-        "TKBO",
-        "TKPrim",
-        "TKTopAlgo",
-        "TKShHealing",
-        "TKGeomAlgo",
-        "TKGeomBase",
-        "TKBRep",
-        "TKG3d",
-        "TKG2d",
-        "TKMath",
-        "TKernel",
-    ] {
+    for lib in OCCT_LIBS {
         println!("cargo:rustc-link-lib=dylib={lib}");
     }
 }
+
+include!("cpp/occt_libs.rs");

@@ -81,30 +81,7 @@ pub fn program() -> PathBuf {
                 return exe;
             }
             let tmp = dir.join(format!("occt_check.{}", std::process::id()));
-            let libs = [
-                "TKXDESTEP",
-                "TKSTEP",
-                "TKSTEPBase",
-                "TKSTEPAttr",
-                "TKSTEP209",
-                "TKXSBase",
-                "TKXCAF",
-                "TKLCAF",
-                "TKCAF",
-                "TKCDF",
-                "TKMesh",
-                "TKBO",
-                "TKPrim",
-                "TKTopAlgo",
-                "TKShHealing",
-                "TKGeomAlgo",
-                "TKGeomBase",
-                "TKBRep",
-                "TKG3d",
-                "TKG2d",
-                "TKMath",
-                "TKernel",
-            ];
+            let libs = OCCT_LIBS;
             let out = std::process::Command::new(std::env::var("CXX").unwrap_or("c++".into()))
                 .args(["-O0", "-std=c++17", "-w", "-I/usr/include/opencascade"])
                 .arg(&src)
@@ -168,3 +145,5 @@ pub fn read(check: &Path, file: &Path) -> Reading {
     }
     reading
 }
+
+include!("../../cpp/occt_libs.rs");
