@@ -23,6 +23,9 @@ pub enum DocumentError {
         /// Close matches or what exists.
         hint: String,
     },
+    /// An entry that is not valid (a full name, a mate's entities, a robot's joints).
+    #[error(transparent)]
+    Entry(#[from] super::EntryError),
     /// An operation a lower layer refused, in its words (a robot definition, a GLB
     /// export).
     #[error("{0}")]

@@ -264,7 +264,11 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
 }
 
 /// Whether the kind accepts these entity types; the message says what it needs.
-pub(crate) fn check_entities(kind: MateKind, a: &Reference, b: &Reference) -> Result<(), String> {
+pub(crate) fn check_entities(
+    kind: MateKind,
+    a: &Reference,
+    b: &Reference,
+) -> Result<(), super::EntryError> {
     use Reference::*;
     let ok = match kind {
         MateKind::Coincident => !matches!(
@@ -286,12 +290,11 @@ pub(crate) fn check_entities(kind: MateKind, a: &Reference, b: &Reference) -> Re
     if ok {
         Ok(())
     } else {
-        Err(format!(
-            "a {} mate cannot join a {} and a {}",
-            kind.name(),
-            a.kind_name(),
-            b.kind_name()
-        ))
+        Err(super::EntryError::MateEntities {
+            kind,
+            a: a.kind_name(),
+            b: b.kind_name(),
+        })
     }
 }
 

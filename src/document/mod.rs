@@ -29,6 +29,7 @@
 pub mod assembly;
 pub mod dimension;
 mod edit;
+mod entry;
 mod equation_mgr;
 pub mod equations;
 mod error;
@@ -55,6 +56,7 @@ pub use names::nfc_name;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use edit::{MateSpec, PropertyOwner};
+pub use entry::EntryError;
 pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::Reference;
