@@ -1,8 +1,8 @@
 //! `fitup db …` (list, show, export and compare stored results) and the recording
 //! of `fitup run`/`watch` runs in the results database.
 
-use super::CliError;
 use super::out::{errln, outln};
+use super::CliError;
 use super::{Exit, ScriptArgs};
 use crate::db::{recording, Database, NewRun, PathQuery, RunStatus, StoredPath, Target};
 use crate::math::AngleConvention;

@@ -202,10 +202,8 @@ fn read_in_its_project(file: &std::path::Path) -> Result<String, super::CliError
 
 /// `fitup skills template FILE`.
 fn template(file: &std::path::Path) -> Exit {
-    let read =
-        read_in_its_project(file).map_err(|e| {
-            crate::diagnostics::SourceError::new(file, 0, 0, e.to_string())
-        });
+    let read = read_in_its_project(file)
+        .map_err(|e| crate::diagnostics::SourceError::new(file, 0, 0, e.to_string()));
     match read.and_then(|text| crate::skills::Template::parse(file, &text)) {
         Ok(t) => {
             outln!("{}: {} template", file.display(), t.operation.name());

@@ -13,7 +13,9 @@ use crate::mesh::step::StepError;
 #[non_exhaustive]
 pub enum EntryError {
     /// A full name with an empty level or spaces around a level.
-    #[error("`{0}`: a full name is levels joined by `/`, each non-empty without surrounding spaces")]
+    #[error(
+        "`{0}`: a full name is levels joined by `/`, each non-empty without surrounding spaces"
+    )]
     FullName(String),
     /// A mate entity not written `component/reference`.
     #[error("entity `{0}` must be written `component/reference`")]

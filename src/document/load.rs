@@ -1,8 +1,8 @@
 //! Loading a document: YAML text checked and located, meshes read, references,
 //! components, URDF robots and mates built, the mates solved.
 
-use super::EntryError;
 use super::file::{ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile};
+use super::EntryError;
 use super::{
     mates, robot, scan, tessellations, AabbCache, Color, Component, Document, DocumentError,
     Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry, MAX_ABS_VALUE,

@@ -290,10 +290,7 @@ pub fn joints_to_document_iter<'a>(
     })
 }
 
-fn matrix(
-    m: &Option<[[f64; 4]; 4]>,
-    what: &'static str,
-) -> Result<Option<Transform>, EntryError> {
+fn matrix(m: &Option<[[f64; 4]; 4]>, what: &'static str) -> Result<Option<Transform>, EntryError> {
     m.as_ref()
         .map(|m| Transform::from_matrix(m).map_err(|source| EntryError::Matrix { what, source }))
         .transpose()
@@ -382,7 +379,8 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
                 ))
             })?),
         };
-        let kind = joint_kind(l.joint.as_deref(), JointKind::Fixed).map_err(|e| err(e.to_string()))?;
+        let kind =
+            joint_kind(l.joint.as_deref(), JointKind::Fixed).map_err(|e| err(e.to_string()))?;
         let v = |a: [f64; 3]| Vec3::new(a[0], a[1], a[2]);
         let mut joint = match kind {
             JointKind::Fixed => Joint::fixed(),
@@ -627,7 +625,9 @@ fn kinematics_of(f: &RobotFile, urdf: Option<&UrdfLoaded>) -> Result<Robot, (Str
                 ),
             )
         })?,
-        (None, Some(dh)) => dh_robot(&f.name, dh).map_err(|m| ("dh:".to_string(), m.to_string()))?,
+        (None, Some(dh)) => {
+            dh_robot(&f.name, dh).map_err(|m| ("dh:".to_string(), m.to_string()))?
+        }
         (None, None) => explicit_robot(f)?,
     };
     let robot_name = f.name.clone();

@@ -631,9 +631,8 @@ mod read {
                 i += 1;
             }
         }
-        String::from_utf8(out).map_err(|_| {
-            MeshError::invalid(format!("`{}` is not UTF-8 once decoded", short(s)))
-        })
+        String::from_utf8(out)
+            .map_err(|_| MeshError::invalid(format!("`{}` is not UTF-8 once decoded", short(s))))
     }
 
     fn base64(s: &str) -> Result<Vec<u8>, MeshError> {

@@ -315,7 +315,9 @@ fn check_counts(elements: &[Element]) -> Result<(), MeshError> {
 fn reader_error(format: Format, line: usize, element: &str, item: u64, e: MeshError) -> MeshError {
     let element = short(element);
     match format {
-        Format::Ascii => e.prefixed(&format!("{element} {item}: ")).on_line(line.max(1)),
+        Format::Ascii => e
+            .prefixed(&format!("{element} {item}: "))
+            .on_line(line.max(1)),
         _ => e.prefixed(&format!("binary PLY, {element} {item}: ")),
     }
 }
@@ -419,12 +421,9 @@ impl<'a> Reader<'a> {
             }
             f => {
                 let n = s.size();
-                let b = self
-                    .bytes
-                    .get(self.pos..self.pos + n)
-                    .ok_or_else(|| {
-                        MeshError::invalid("the file ends inside this item (truncated?)")
-                    })?;
+                let b = self.bytes.get(self.pos..self.pos + n).ok_or_else(|| {
+                    MeshError::invalid("the file ends inside this item (truncated?)")
+                })?;
                 self.pos += n;
                 Ok(s.read(b, f == Format::Little))
             }

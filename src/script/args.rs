@@ -79,7 +79,9 @@ pub enum ArgError {
         value: String,
     },
     /// An argument longer than [`MAX_ARGUMENT_BYTES`].
-    #[error("script argument `{key}`: {bytes} bytes is longer than the {MAX_ARGUMENT_BYTES} allowed")]
+    #[error(
+        "script argument `{key}`: {bytes} bytes is longer than the {MAX_ARGUMENT_BYTES} allowed"
+    )]
     TooLong {
         /// The key.
         key: String,
