@@ -6,7 +6,11 @@
 //! - The project root is `--root` when given. Otherwise it is the nearest folder,
 //!   starting at the script's (or, for `fitup check`, the document's) own folder and
 //!   going up, that holds a [`PROJECT_FILE`] (`fitup.toml`); without one, the
-//!   script's (document's) own folder.
+//!   script's (document's) own folder. The folders are searched as the path is
+//!   written, each held open from `/` down without following a link: a folder of the
+//!   path that is a symbolic link is not looked through (the search goes on above
+//!   it; pass `--root` for a project reached only through a link whose parents hold
+//!   a `fitup.toml`).
 //! - The SCRIPT (or document) argument on the command line is a path like any other
 //!   command-line path: relative to the current folder, never to `--root`.
 //! - Paths inside a script, and mesh paths inside a document, resolve against the
@@ -447,6 +451,18 @@ impl Project {
 /// `path` made absolute against the working folder without resolving links, `.`
 /// dropped; `None` when it holds `..` (its meaning would depend on links) or the
 /// working folder is unknown.
+/// The fallback of callers whose file may not exist yet: when [`Project::for_file`]
+/// failed because the file is missing (`NotFound`), the project rooted at `folder`;
+/// any other failure (a folder on the path changed while it was searched) is kept,
+/// never answered by a lookup of `folder` by name.
+pub(crate) fn unless_missing(e: std::io::Error, folder: &Path) -> std::io::Result<Project> {
+    if e.kind() == std::io::ErrorKind::NotFound {
+        Project::new(folder)
+    } else {
+        Err(e)
+    }
+}
+
 /// Every folder from `/` down to `folder` (absolute), each opened from the one above
 /// it without following a link (one held handle per level), stopping at the first
 /// link or folder that cannot be opened; how far it went.
@@ -586,5 +602,33 @@ mod tests {
         std::fs::write(d.join("a/fitup.toml"), "").unwrap();
         let p = Project::for_file(&d.join("a/b/s.rhai")).unwrap();
         assert_eq!(p.root(), d.join("a"));
+    }
+
+    /// A link on the written path, however far above the file, is not looked through:
+    /// the search goes on above it (here: `p`, not the `fitup.toml` three levels down
+    /// the link), and links are resolved only when nothing above one holds a
+    /// `fitup.toml`.
+    #[test]
+    fn the_search_never_looks_through_a_link_on_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path().canonicalize().unwrap();
+        let (p, o) = (d.join("p"), d.join("o"));
+        std::fs::create_dir_all(o.join("b/c")).unwrap();
+        std::fs::create_dir_all(&p).unwrap();
+        for f in ["b/c/s.rhai", "b/c/fitup.toml", "b/fitup.toml"] {
+            std::fs::write(o.join(f), "").unwrap();
+        }
+        std::os::unix::fs::symlink(&o, p.join("a")).unwrap();
+        // Nothing above the link holds fitup.toml: the links are resolved.
+        let found = Project::for_file(&p.join("a/b/c/s.rhai")).unwrap();
+        assert_eq!(found.root(), o.join("b/c"));
+        std::fs::write(p.join("fitup.toml"), "").unwrap();
+        let found = Project::for_file(&p.join("a/b/c/s.rhai")).unwrap();
+        assert_eq!(found.root(), p);
+        // Reading the file through that project meets the link: refused, not read.
+        let e = found
+            .read_named_text(&p.join("a/b/c/s.rhai"), crate::fsutil::FileKind::Script)
+            .unwrap_err();
+        assert!(e.to_string().contains("outside the project"), "{e}");
     }
 }

@@ -693,8 +693,15 @@ fn the_project_search_never_looks_through_a_folder_swapped_far_above() {
     let args = ["run", "a/b/c/p.prg", "--doc", "models/mz07.yaml"];
     let r = crate::hostile_bounds::run(p, &args);
     assert_eq!(r.code, Some(0), "{}", r.text);
-    let (_, refused) =
-        cli_reads_while_folder_swapped(p, &p.join("a"), o, &args, "p.prg", "t_s,j1_deg", "FROMOUTSIDE");
+    let (_, refused) = cli_reads_while_folder_swapped(
+        p,
+        &p.join("a"),
+        o,
+        &args,
+        "p.prg",
+        "t_s,j1_deg",
+        "FROMOUTSIDE",
+    );
     eprintln!("{refused} refused runs");
 }
 
@@ -743,10 +750,12 @@ print(`seen ${seen}`);
 ",
     )
     .unwrap();
-    let r = crate::hostile_bounds::run_within(p, &["run", "scripts/t.rhai"], Duration::from_secs(120));
+    let r =
+        crate::hostile_bounds::run_within(p, &["run", "scripts/t.rhai"], Duration::from_secs(120));
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(
-        r.text.contains("\"inside\": 400, \"outside\": 0, \"refused\": 0"),
+        r.text
+            .contains("\"inside\": 400, \"outside\": 0, \"refused\": 0"),
         "{}",
         r.text
     );
@@ -808,7 +817,11 @@ fn step_parts_never_go_through_a_swapped_folder() {
                 read += 1;
             } else {
                 assert_eq!(r.code, Some(1), "{}", r.text);
-                assert!(!r.text.contains("triangles"), "the sphere was read: {}", r.text);
+                assert!(
+                    !r.text.contains("triangles"),
+                    "the sphere was read: {}",
+                    r.text
+                );
                 assert!(r.text.contains("x.step"), "not located: {}", r.text);
                 refused += 1;
             }

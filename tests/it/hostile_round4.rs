@@ -151,15 +151,37 @@ fn every_refused_command_line_path_exits_1() {
         (vec!["run", "link/s.rhai", "--root", "."], "s.rhai"),
         (vec!["run", &script, "--root", "."], "s.rhai"),
         (vec!["run", "scripts/ok.rhai", "--doc", &doc], "d.yaml"),
-        (vec!["run", "scripts/ok.rhai", "--root", &missing], "missing"),
+        (
+            vec!["run", "scripts/ok.rhai", "--root", &missing],
+            "missing",
+        ),
         (vec!["watch", "link/s.rhai", "--root", "."], "s.rhai"),
-        (vec!["run", "missing.prg", "--doc", "models/mz07.yaml"], "missing.prg"),
-        (vec!["run", &program, "--root", ".", "--doc", "models/mz07.yaml"], "p.prg"),
-        (vec!["run", "link/p.prg", "--root", ".", "--doc", "models/mz07.yaml"], "p.prg"),
+        (
+            vec!["run", "missing.prg", "--doc", "models/mz07.yaml"],
+            "missing.prg",
+        ),
+        (
+            vec!["run", &program, "--root", ".", "--doc", "models/mz07.yaml"],
+            "p.prg",
+        ),
+        (
+            vec![
+                "run",
+                "link/p.prg",
+                "--root",
+                ".",
+                "--doc",
+                "models/mz07.yaml",
+            ],
+            "p.prg",
+        ),
         (vec!["run", "p.prg", "--doc", "link/d.yaml"], "d.yaml"),
         (vec!["run", "p.prg", "--doc", &doc], "d.yaml"),
         (vec!["skills", "template", "missing.yaml"], "missing.yaml"),
-        (vec!["skills", "run", "missing.json", "--plain"], "missing.json"),
+        (
+            vec!["skills", "run", "missing.json", "--plain"],
+            "missing.json",
+        ),
         (vec!["check", "missing.yaml"], "missing.yaml"),
         (vec!["cache", "prune", "missing"], "missing"),
     ];
@@ -167,7 +189,11 @@ fn every_refused_command_line_path_exits_1() {
     for (args, name) in cases {
         let r = crate::hostile_bounds::run(p, &args);
         assert_eq!(r.code, Some(1), "{args:?}: {}", r.text);
-        assert!(r.text.contains(name), "{args:?} does not name {name}: {}", r.text);
+        assert!(
+            r.text.contains(name),
+            "{args:?} does not name {name}: {}",
+            r.text
+        );
         assert!(!r.text.contains("FROMOUTSIDE"), "{args:?}: {}", r.text);
     }
     // The command line itself: exit 2.
