@@ -418,8 +418,6 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
     Robot::new(&f.name, tree, flange, Transform::IDENTITY).map_err(|e| whole(e.to_string()))
 }
 
-/// A URDF robot of a document with its generated link components.
-#[derive(Debug, Clone)]
 /// The most triangles the `urdf:` robots of one document may make together (every
 /// link's meshes, scaled and placed, and its primitives), counted before each link
 /// mesh is copied: a link mesh is a copy of its file's mesh, so one 2-million-triangle
@@ -427,6 +425,8 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
 /// took 16 GB). About 80 bytes a triangle while the document loads: at most ≈ 320 MB.
 pub const MAX_URDF_TRIANGLES: usize = 4_000_000;
 
+/// A URDF robot of a document with its generated link components.
+#[derive(Debug, Clone)]
 pub(super) struct UrdfLoaded {
     /// The kinematics.
     pub robot: Robot,
