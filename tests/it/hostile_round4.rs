@@ -145,14 +145,16 @@ fn every_refused_command_line_path_exits_1() {
     std::fs::write(p.join("scripts/ok.rhai"), "print(\"inside\");\n").unwrap();
     let os = |f: &str| o.join(f).to_string_lossy().into_owned();
     let (script, program, doc) = (os("s.rhai"), os("p.prg"), os("d.yaml"));
+    let (script, program, doc) = (script.as_str(), program.as_str(), doc.as_str());
     let missing = os("missing");
+    let missing = missing.as_str();
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (vec!["run", "scripts/missing.rhai"], "missing.rhai"),
         (vec!["run", "link/s.rhai", "--root", "."], "s.rhai"),
-        (vec!["run", &script, "--root", "."], "s.rhai"),
-        (vec!["run", "scripts/ok.rhai", "--doc", &doc], "d.yaml"),
+        (vec!["run", script, "--root", "."], "s.rhai"),
+        (vec!["run", "scripts/ok.rhai", "--doc", doc], "d.yaml"),
         (
-            vec!["run", "scripts/ok.rhai", "--root", &missing],
+            vec!["run", "scripts/ok.rhai", "--root", missing],
             "missing",
         ),
         (vec!["watch", "link/s.rhai", "--root", "."], "s.rhai"),
@@ -161,7 +163,7 @@ fn every_refused_command_line_path_exits_1() {
             "missing.prg",
         ),
         (
-            vec!["run", &program, "--root", ".", "--doc", "models/mz07.yaml"],
+            vec!["run", program, "--root", ".", "--doc", "models/mz07.yaml"],
             "p.prg",
         ),
         (
@@ -176,7 +178,7 @@ fn every_refused_command_line_path_exits_1() {
             "p.prg",
         ),
         (vec!["run", "p.prg", "--doc", "link/d.yaml"], "d.yaml"),
-        (vec!["run", "p.prg", "--doc", &doc], "d.yaml"),
+        (vec!["run", "p.prg", "--doc", doc], "d.yaml"),
         (vec!["skills", "template", "missing.yaml"], "missing.yaml"),
         (
             vec!["skills", "run", "missing.json", "--plain"],
