@@ -483,8 +483,9 @@ pub(super) fn read_urdf_robot(
     };
     let over = |n: usize, left: usize| {
         format!(
-            "the URDF robots of the document would make more than {} triangles together ({n} more, {} before; MAX_URDF_TRIANGLES): use coarser link meshes",
+            "the URDF robots of the document would make more than {} triangles together ({} more, {} before; MAX_URDF_TRIANGLES): use coarser link meshes",
             crate::math::format::count(MAX_URDF_TRIANGLES as u64),
+            crate::math::format::count(n as u64),
             crate::math::format::count(MAX_URDF_TRIANGLES.saturating_sub(left) as u64)
         )
     };
