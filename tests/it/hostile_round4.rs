@@ -153,10 +153,7 @@ fn every_refused_command_line_path_exits_1() {
         (vec!["run", "link/s.rhai", "--root", "."], "s.rhai"),
         (vec!["run", script, "--root", "."], "s.rhai"),
         (vec!["run", "scripts/ok.rhai", "--doc", doc], "d.yaml"),
-        (
-            vec!["run", "scripts/ok.rhai", "--root", missing],
-            "missing",
-        ),
+        (vec!["run", "scripts/ok.rhai", "--root", missing], "missing"),
         (vec!["watch", "link/s.rhai", "--root", "."], "s.rhai"),
         (
             vec!["run", "missing.prg", "--doc", "models/mz07.yaml"],
