@@ -422,7 +422,8 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
 /// link's meshes, scaled and placed, and its primitives), counted before each link
 /// mesh is copied: a link mesh is a copy of its file's mesh, so one 2-million-triangle
 /// file named by 400 links would otherwise make 800 million triangles (a 490 KB URDF
-/// took 16 GB). About 80 bytes a triangle while the document loads: at most ≈ 320 MB.
+/// took 16 GB). Measured at the cap: `fitup check` peaks at about 500 MB (4 links of a
+/// 1,000,000-triangle STL and the fifth refused; docs/document.md).
 pub const MAX_URDF_TRIANGLES: usize = 4_000_000;
 
 /// A URDF robot of a document with its generated link components.
