@@ -10,13 +10,17 @@ use crate::watch::{watch_with, WatchEvent};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-fn options(a: &ScriptArgs) -> Result<RunOptions, CliError> {
-    let (project, script) = project_of(a, "script")?;
+/// The options of a run, or the exit status and message of why not: a file named on
+/// the command line that is missing or refused by the path rule exits 1 (a script or
+/// document error, like every refused path), malformed arguments exit 2 (usage).
+fn options(a: &ScriptArgs) -> Result<RunOptions, (Exit, String)> {
+    let fail = |e: CliError| (Exit::Failure, e.to_string());
+    let (project, script) = project_of(a, "script").map_err(fail)?;
     let doc = match &a.doc {
-        Some(d) => Some(inside(&project, d, "document")?),
+        Some(d) => Some(inside(&project, d, "document").map_err(fail)?),
         None => None,
     };
-    let args = Arguments::parse(&a.args)?;
+    let args = Arguments::parse(&a.args).map_err(|e| (Exit::Usage, e.to_string()))?;
     Ok(RunOptions {
         script,
         doc,
@@ -118,9 +122,9 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
     }
     let mut opts = match options(a) {
         Ok(o) => o,
-        Err(e) => {
+        Err((exit, e)) => {
             errln!("error: {e}");
-            return Exit::Usage;
+            return exit;
         }
     };
     let live = match super::view::start(
@@ -170,9 +174,9 @@ fn run_name(script: &std::path::Path, number: Option<u64>) -> String {
 pub(super) fn watch(a: &ScriptArgs) -> Exit {
     let mut opts = match options(a) {
         Ok(o) => o,
-        Err(e) => {
+        Err((exit, e)) => {
             errln!("error: {e}");
-            return Exit::Usage;
+            return exit;
         }
     };
     let live = match super::view::start(&a.view, a.force, &opts.project, None) {
@@ -256,7 +260,9 @@ fn clock() -> String {
 /// robot of the document from its saved joints and prints (or writes) the joint/TCP log.
 fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     let usage = |m: String| (Exit::Usage, m);
-    let cli = |e: CliError| (Exit::Usage, e.to_string());
+    // A refused or missing file named on the command line exits 1, like every
+    // refused path.
+    let cli = |e: CliError| (Exit::Failure, e.to_string());
     let (project, program_path) = project_of(a, "program").map_err(cli)?;
     let doc_arg = a.doc.as_ref().ok_or_else(|| {
         usage(format!(
