@@ -390,7 +390,10 @@ impl Document {
             .parts
             .values()
             .filter_map(|p| p.step.as_ref())
-            .map(|s| s.deflection.unwrap_or(crate::mesh::step::DEFAULT_LINEAR_DEFLECTION))
+            .map(|s| {
+                s.deflection
+                    .unwrap_or(crate::mesh::step::DEFAULT_LINEAR_DEFLECTION)
+            })
             .fold(None, |a: Option<f64>, d| Some(a.map_or(d, |a| a.max(d))));
         match (self.mesh_deflection, step) {
             (Some(a), Some(b)) => Some(a.max(b)),

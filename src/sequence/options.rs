@@ -492,15 +492,19 @@ impl std::fmt::Display for Stuck {
             Stuck::Blocked {
                 part,
                 directions,
-                by: _,
+                by,
                 least: (d, least_by),
                 in_contact,
                 tolerance,
             } => {
                 let n = |v: f64| crate::math::format::number(v, 3);
+                // Every blocker is named (the one a user must move may block only
+                // the directions the part would naturally take), then the least
+                // blocked direction and what blocks it there.
                 write!(
                     f,
-                    "{part} is blocked along all {directions} directions; the least blocked, ({}, {}, {}), by {}",
+                    "{part} is blocked along all {directions} directions by {}; the least blocked, ({}, {}, {}), by {}",
+                    by.join(", "),
                     n(d[0]),
                     n(d[1]),
                     n(d[2]),

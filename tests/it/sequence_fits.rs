@@ -171,7 +171,10 @@ pub(crate) fn checker<'a>(doc: &'a Document, plan: &SequencePlan) -> Checker<'a>
 /// (default tolerance, or the document's mesh deflection when coarser, as the plan
 /// says it used), each deeper than that.
 pub(crate) fn fits_are_exact(c: &Checker, plan: &SequencePlan) {
-    assert_eq!(plan.tolerance, c.tolerance, "the tolerance the plan says it used");
+    assert_eq!(
+        plan.tolerance, c.tolerance,
+        "the tolerance the plan says it used"
+    );
     let n = c.colliders.len();
     for p in 0..n {
         for q in p + 1..n {
@@ -278,12 +281,7 @@ fn circle(r: f64, n: usize, z: f64, phase: f64) -> Vec<Point3> {
 /// +Z, each wound so its normal points along `outward(centroid)`: a faceted band
 /// whose facets twist where the rings' points do not line up, as a CAD mesher's
 /// do between edges meshed apart.
-fn band(
-    a: &[Point3],
-    b: &[Point3],
-    outward: impl Fn(&Point3) -> Vec3,
-    out: &mut Vec<[Point3; 3]>,
-) {
+fn band(a: &[Point3], b: &[Point3], outward: impl Fn(&Point3) -> Vec3, out: &mut Vec<[Point3; 3]>) {
     let ang = |p: &Point3, wrapped: bool| {
         p.y.atan2(p.x).rem_euclid(std::f64::consts::TAU)
             + if wrapped { std::f64::consts::TAU } else { 0.0 }
@@ -291,8 +289,16 @@ fn band(
     let (na, nb) = (a.len(), b.len());
     let (mut i, mut j) = (0, 0);
     while i < na || j < nb {
-        let next_a = if i < na { ang(&a[(i + 1) % na], i + 1 >= na) } else { f64::INFINITY };
-        let next_b = if j < nb { ang(&b[(j + 1) % nb], j + 1 >= nb) } else { f64::INFINITY };
+        let next_a = if i < na {
+            ang(&a[(i + 1) % na], i + 1 >= na)
+        } else {
+            f64::INFINITY
+        };
+        let next_b = if j < nb {
+            ang(&b[(j + 1) % nb], j + 1 >= nb)
+        } else {
+            f64::INFINITY
+        };
         let t = if next_a <= next_b {
             i += 1;
             [a[(i - 1) % na], a[i % na], b[j % nb]]
@@ -302,7 +308,11 @@ fn band(
         };
         let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
         let c = Point3::from((t[0].coords + t[1].coords + t[2].coords) / 3.0);
-        out.push(if n.dot(&outward(&c)) < 0.0 { [t[0], t[2], t[1]] } else { t });
+        out.push(if n.dot(&outward(&c)) < 0.0 {
+            [t[0], t[2], t[1]]
+        } else {
+            t
+        });
     }
 }
 
@@ -338,7 +348,11 @@ fn twisted_rod_in_bore() -> (Mesh, Mesh) {
         for k in 0..ring.len() {
             let t = [c, ring[k], ring[(k + 1) % ring.len()]];
             let tn = (t[1] - t[0]).cross(&(t[2] - t[0]));
-            rod.push(if tn.dot(&n) < 0.0 { [t[0], t[2], t[1]] } else { t });
+            rod.push(if tn.dot(&n) < 0.0 {
+                [t[0], t[2], t[1]]
+            } else {
+                t
+            });
         }
     }
     (mesh_of(&plate), mesh_of(&rod))
@@ -381,7 +395,11 @@ fn a_tessellated_line_to_line_fit_slides_at_the_mesh_deflection() {
     dense_removal(&c, &p);
     for s in &p.sequences {
         let t = &s.tasks[0];
-        assert!(t.mating_direction.z.abs() > 1.0 - 1e-9, "{:?}", t.mating_direction);
+        assert!(
+            t.mating_direction.z.abs() > 1.0 - 1e-9,
+            "{:?}",
+            t.mating_direction
+        );
     }
     // A mesh deflection that is not a length is refused where it is written.
     std::fs::write(&yaml, format!("mesh_deflection: -1\n{text}")).unwrap();
