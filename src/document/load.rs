@@ -165,6 +165,15 @@ impl Document {
                 ),
             ));
         }
+        if let Some(d) = file.mesh_deflection {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(load.at(
+                    "mesh_deflection",
+                    "mesh_deflection",
+                    format!("mesh_deflection {d} is not a finite number of mm ≥ 0"),
+                ));
+            }
+        }
         let mut step_warnings = Vec::new();
         let parts = load.parts(&file, cache, &mut step_warnings)?;
         let assemblies = super::assembly::load(&file, |key, m| load.at_key(&[key], m))?;
@@ -175,6 +184,7 @@ impl Document {
             saved_sub_documents: Vec::new(),
             generated: Default::default(),
             description: file.description.clone(),
+            mesh_deflection: file.mesh_deflection,
             parts,
             components,
             numbering: super::numbering::Numbering::of(by_name.keys()),
