@@ -24,8 +24,10 @@ pub enum DocumentError {
         hint: String,
     },
     /// An entry that is not valid (a full name, a mate's entities, a robot's joints).
+    /// Boxed: the entry's kinds are large, and every `Result` carrying a
+    /// `DocumentError` (the sequence and workspace layers') would grow with them.
     #[error(transparent)]
-    Entry(#[from] super::EntryError),
+    Entry(Box<super::EntryError>),
     /// An operation a lower layer refused, in its words (a robot definition, a GLB
     /// export).
     #[error("{0}")]
@@ -188,5 +190,11 @@ fn equation_message(at: Option<&SourceError>, source: &EquationError) -> String 
     match at {
         Some(at) => at.to_string(),
         None => source.to_string(),
+    }
+}
+
+impl From<super::EntryError> for DocumentError {
+    fn from(e: super::EntryError) -> Self {
+        Self::Entry(Box::new(e))
     }
 }
