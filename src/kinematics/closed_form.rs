@@ -537,12 +537,13 @@ impl ArmPlane {
                 false,
             )
         };
+        // sin(acos κ) from (1 − κ)(1 + κ) (exact near ±1), and acos κ from it.
         let sk = if snapped {
             0.0
         } else {
-            (1.0 - kappa * kappa).sqrt()
+            ((1.0 - kappa) * (1.0 + kappa)).sqrt()
         };
-        let acos_k = crate::math::trig::acos(kappa);
+        let acos_k = atan2(sk, kappa);
         let mut n = 0;
         for el in [1.0_f64, -1.0] {
             if el < 0.0 && snapped {

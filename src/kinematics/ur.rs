@@ -268,10 +268,6 @@ impl ClosedFormIk for UrSolver {
         let (t6, ra5, ra65) = (rt * self.a6, rt * self.a5, rt * self.a6x5);
         let tol = &self.tol;
         let (shoulders, n_sh) = self.arm.shoulder(&w, tol, singularity_threshold, &mut out);
-        // At the wrist singularity joint 6 is the seed on every branch.
-        let seeded = q6_seed.sin_cos();
-        let rho = hyp(w.x, w.y);
-        let t6h = hyp(t6.x, t6.y);
         for sh in &shoulders[..n_sh] {
             let mut sh = *sh;
             // t = Rz(−q1)·t6; the wrist sine and cosine δ = ∠(y, t).
@@ -284,10 +280,17 @@ impl ClosedFormIk for UrSolver {
             // singularity): when axis 6 is level within the wrist band and the
             // position's joint 1 agrees within its own error, the wrist is singular
             // and joint 1 the orientation's.
-            let xp_eff = sh.xp.abs().max(tol.disc.sqrt());
-            let dq1 = tol.len / rho + self.arm.b.abs() * tol.len / (rho * xp_eff);
+            // (The lengths and joint 1's error only where axis 6 is level.)
             let mut snapped = sd < tol.wrist;
-            if !snapped && t6.z.abs() < tol.wrist && sd < tol.wrist + dq1 && t6h > 0.5 {
+            let level = !snapped && t6.z.abs() < tol.wrist;
+            let t6h = if level { hyp(t6.x, t6.y) } else { 0.0 };
+            let near = level && t6h > 0.5 && {
+                let rho = hyp(w.x, w.y);
+                let xp_eff = sh.xp.abs().max(tol.disc.sqrt());
+                let dq1 = tol.len / rho + self.arm.b.abs() * tol.len / (rho * xp_eff);
+                sd < tol.wrist + dq1
+            };
+            if near {
                 let sign = cw.signum();
                 let (s1, c1) = (-sign * t6.x / t6h, sign * t6.y / t6h);
                 sh.s1 = s1;
@@ -312,7 +315,9 @@ impl ClosedFormIk for UrSolver {
                 } else {
                     wrap(self.phi5 + PI)
                 };
-                (q5, wrap(q6_seed), seeded.0, seeded.1)
+                // At the wrist singularity joint 6 is the seed on every branch.
+                let (s6, c6) = q6_seed.sin_cos();
+                (q5, wrap(q6_seed), s6, c6)
             } else {
                 let r1 = -s1 * ra5.x + c1 * ra5.y;
                 let r2 = -s1 * ra65.x + c1 * ra65.y;
