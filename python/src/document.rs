@@ -2,7 +2,7 @@
 //! (interference, sweeps, planning, robots, programs, sequences).
 
 use crate::convert;
-use crate::error::{Error, Result};
+use crate::error::{Argument, Error, Result};
 use crate::options;
 use crate::path::Path;
 use fitup::collision::Contact;
@@ -74,11 +74,6 @@ fn shown(doc: &fitup::document::Document, names: Option<Vec<String>>) -> Result<
 /// A mesh as numpy arrays: vertices `(N, 3)` and triangles `(M, 3)`.
 type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 
-/// A value the document refuses.
-fn invalid(message: String) -> Error {
-    Error::Document(fitup::document::DocumentError::Invalid(message))
-}
-
 /// Whose properties: exactly one of a component and a part.
 fn owner<'a>(
     component: Option<&'a str>,
@@ -87,7 +82,7 @@ fn owner<'a>(
     match (component, part) {
         (Some(c), None) => Ok(fitup::document::PropertyOwner::Component(c)),
         (None, Some(p)) => Ok(fitup::document::PropertyOwner::Part(p)),
-        _ => Err(invalid("give exactly one of `component` and `part`".into())),
+        _ => Err(Error::Argument(Argument::OneOwner)),
     }
 }
 
@@ -511,9 +506,9 @@ impl Document {
         } else if let Ok(f) = value.extract::<f64>() {
             f.to_string()
         } else {
-            return Err(invalid(format!(
-                "custom property `{key}`: a value is a str, number or bool"
-            )));
+            return Err(Error::Argument(Argument::PropertyValue {
+                key: key.to_string(),
+            }));
         };
         self.lock()?.doc.set_property(owner, key, &text)?;
         Ok(())
@@ -628,7 +623,7 @@ impl Document {
         let dir = || {
             direction
                 .map(|d| Vec3::new(d[0], d[1], d[2]))
-                .ok_or_else(|| invalid(format!("a {kind} needs `direction`")))
+                .ok_or_else(|| Error::Argument(Argument::NeedsDirection(kind.to_string())))
         };
         let r = match kind {
             "plane" => Reference::Plane {
@@ -640,11 +635,7 @@ impl Document {
                 direction: dir()?,
             },
             "point" => Reference::Point(p),
-            other => {
-                return Err(invalid(format!(
-                    "reference kind `{other}`: plane, axis or point"
-                )))
-            }
+            other => return Err(Error::Argument(Argument::ReferenceKind(other.to_string()))),
         };
         self.lock()?.doc.set_reference(part, name, r)?;
         Ok(())

@@ -84,6 +84,10 @@ pub enum Error {
         /// What is accepted.
         expected: &'static str,
     },
+    /// Document call arguments that do not fit together (raised as `DocumentError`,
+    /// as the document's own refusals).
+    #[error(transparent)]
+    Argument(#[from] Argument),
     /// A name that does not exist, with close matches.
     #[error("no {what} named `{name}`: {hint}")]
     Unknown {
@@ -105,6 +109,27 @@ pub enum Error {
     },
 }
 
+/// What is wrong with a document call's arguments ([`Error::Argument`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Argument {
+    /// Custom properties of both or neither of a component and a part.
+    #[error("give exactly one of `component` and `part`")]
+    OneOwner,
+    /// A custom property's value of another type.
+    #[error("custom property `{key}`: a value is a str, number or bool")]
+    PropertyValue {
+        /// The property's name.
+        key: String,
+    },
+    /// A plane or axis reference without its direction.
+    #[error("a {0} needs `direction`")]
+    NeedsDirection(String),
+    /// A reference kind that does not exist.
+    #[error("reference kind `{0}`: plane, axis or point")]
+    ReferenceKind(String),
+}
+
 /// Result of a conversion or a library call on the way to Python.
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -122,7 +147,7 @@ impl Error {
             Error::Kinematics(_) | Error::Ik(_) | Error::Program(_) => "RobotError",
             Error::Database(_) => "DatabaseError",
             Error::Script(_) | Error::Arguments(_) => "ScriptError",
-            Error::Project { .. } => "DocumentError",
+            Error::Project { .. } | Error::Argument(_) => "DocumentError",
             Error::Shape { .. } | Error::Pose { .. } | Error::Option { .. } => "InputError",
             Error::Path(_) => "InputError",
             Error::Unknown { .. } | Error::Options(_) => "InputError",

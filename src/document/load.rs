@@ -2,11 +2,11 @@
 //! components, URDF robots and mates built, the mates solved.
 
 use super::file::{ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile};
-use super::EntryError;
 use super::{
     mates, robot, scan, tessellations, AabbCache, Color, Component, Document, DocumentError,
     Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry, MAX_ABS_VALUE,
 };
+use super::{EntryError, UrdfRobotError};
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::fsutil::{content_hash, FileKind};
@@ -694,9 +694,9 @@ impl Loader<'_> {
         let mut left = robot::MAX_URDF_TRIANGLES;
         for rf in &file.robots {
             let Some(u) = &rf.urdf else { continue };
-            let robot_at = |m: String| -> DocumentError {
+            let robot_at = |e: UrdfRobotError| -> DocumentError {
                 let (line, col) = self.after(&format!("name: {}", rf.name), "urdf:");
-                SourceError::new(self.path, line, col, format!("robot `{}`: {m}", rf.name)).into()
+                SourceError::new(self.path, line, col, format!("robot `{}`: {e}", rf.name)).into()
             };
             let loaded = robot::read_urdf_robot(
                 self.project,

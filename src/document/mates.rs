@@ -263,6 +263,20 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
     }
 }
 
+impl Mate {
+    /// Whether the mate's two entities (as they are now) fit its type
+    /// ([`check_entities`]): [`DocumentError::MateEntity`] naming the mate if not.
+    pub(crate) fn check_geometry(&self) -> Result<(), super::DocumentError> {
+        let [a, b] = &self.entities;
+        check_entities(self.kind, &a.geometry, &b.geometry).map_err(|e| {
+            super::DocumentError::MateEntity {
+                mate: self.name.clone(),
+                source: Box::new(e),
+            }
+        })
+    }
+}
+
 /// Whether the kind accepts these entity types; the message says what it needs.
 pub(crate) fn check_entities(
     kind: MateKind,

@@ -49,7 +49,10 @@ pub mod subdoc;
 pub mod tessellations;
 
 pub use assembly::SubAssembly;
-pub use error::DocumentError;
+pub use error::{
+    DocumentError, LinkEdit, MateProblem, OutsideItem, PartMeshError, ReferenceProblem, UrdfLinkAt,
+    UrdfMeshProblem, UrdfRobotError,
+};
 pub use export::GlbExport;
 pub(crate) use names::new_name;
 pub use names::nfc_name;
@@ -285,7 +288,7 @@ impl Document {
         robot_name: &str,
         uri: &str,
         loaded: &robot::UrdfLoaded,
-    ) -> Result<(), String> {
+    ) -> Result<(), UrdfRobotError> {
         for (i, mesh) in loaded.meshes.iter().enumerate() {
             let Some(mesh) = mesh else { continue };
             let link = loaded.robot.tree().links()[i]
@@ -294,9 +297,7 @@ impl Document {
                 .unwrap_or_else(|| format!("link{i}"));
             let name = robot::urdf_component_name(robot_name, &link);
             if self.parts.contains_key(&name) || self.by_name.contains_key(&name) {
-                return Err(format!(
-                    "the part or component `{name}` (made for link `{link}` of the URDF) already exists"
-                ));
+                return Err(UrdfRobotError::LinkNameTaken { name, link });
             }
             self.parts.insert(
                 name.clone(),
@@ -756,9 +757,12 @@ impl Document {
                 let mut q = self.robots[robot].joints().to_vec();
                 q[joint] = value;
                 // An equation sets its own dimension here: not the public check.
-                return self
-                    .move_robot_joints(robot, &q)
-                    .map_err(|e| DocumentError::Invalid(format!("{full_name}: {e}")));
+                return self.move_robot_joints(robot, &q).map_err(|e| {
+                    DocumentError::JointDimension {
+                        dimension: full_name.to_string(),
+                        source: Box::new(e),
+                    }
+                });
             }
         };
         if self.mates[i].kind == MateKind::Distance && value < 0.0 {
