@@ -108,13 +108,15 @@ impl Document {
         if self.mates[i].kind.has_dimension() {
             let dimension = super::dimension::full_name(&self.mates[i].name);
             if let Some(&e) = self.equations_using(&dimension).first() {
-                return Err(DocumentError::DimensionInUse {
-                    component: None,
-                    mate: name.to_string(),
-                    dimension,
-                    index: e,
-                    equation: super::equations::shown(&self.equations()[e].text()),
-                });
+                return Err(DocumentError::DimensionInUse(Box::new(
+                    super::DimensionInUse {
+                        component: None,
+                        mate: name.to_string(),
+                        dimension,
+                        index: e,
+                        equation: super::equations::shown(&self.equations()[e].text()),
+                    },
+                )));
             }
         }
         self.revision += 1;
@@ -397,12 +399,12 @@ impl Document {
                     continue;
                 }
                 e.geometry = new_part.reference(&e.reference).ok_or_else(|| {
-                    DocumentError::MissingReference {
+                    DocumentError::MissingReference(Box::new(super::MissingReference {
                         mate: m.name.clone(),
                         component: name.to_string(),
                         reference: e.reference.clone(),
                         part: part.clone(),
-                    }
+                    }))
                 })?;
             }
             m.check_geometry()?;

@@ -60,19 +60,10 @@ pub enum DocumentError {
     },
     /// A mate's dimension that an equation uses: the mate (or, when `component` is
     /// given, the component the mate goes with) cannot be deleted before the equation.
-    #[error("{}", dimension_in_use(self))]
-    DimensionInUse {
-        /// The component being removed, when the mate goes with it.
-        component: Option<String>,
-        /// The mate.
-        mate: String,
-        /// The mate's dimension (full name).
-        dimension: String,
-        /// The equation's index (`equation(i)`).
-        index: usize,
-        /// The equation's text (shortened when long).
-        equation: String,
-    },
+    /// Boxed: it names five things, and every `Result` carrying a `DocumentError`
+    /// would grow with it.
+    #[error(transparent)]
+    DimensionInUse(Box<DimensionInUse>),
     /// A URDF robot link's component: the robot names it and gives its mesh.
     #[error("component `{component}` is a URDF robot link's{}", match edit {
         LinkEdit::Rename => ", named by the robot",
@@ -120,17 +111,9 @@ pub enum DocumentError {
         source: Box<super::EntryError>,
     },
     /// A mate uses a reference the component's new part does not have.
-    #[error("mate `{mate}` uses `{component}/{reference}`, which part `{part}` does not have")]
-    MissingReference {
-        /// The mate.
-        mate: String,
-        /// The component whose part is replaced.
-        component: String,
-        /// The reference the mate uses.
-        reference: String,
-        /// The new part.
-        part: String,
-    },
+    /// Boxed as [`DocumentError::DimensionInUse`] is.
+    #[error(transparent)]
+    MissingReference(Box<MissingReference>),
     /// A reference geometry that cannot be set.
     #[error("reference `{reference}` of part `{part}`: {problem}")]
     BadReference {
@@ -154,8 +137,8 @@ pub enum DocumentError {
     Urdf {
         /// The robot.
         robot: String,
-        /// Why.
-        source: UrdfRobotError,
+        /// Why (boxed: the mesh problems are large).
+        source: Box<UrdfRobotError>,
     },
     /// A robot definition the robot builder refused (its sources, joints or links),
     /// in the builder's words (the same text locates a load's error at its line).
@@ -191,15 +174,9 @@ pub enum DocumentError {
         hint: String,
     },
     /// A sub-document's mate or equation reaching outside the sub-document.
-    #[error("{}", outside_message(self))]
-    OutsideSubDocument {
-        /// The sub-document's file as written.
-        file: String,
-        /// The sub-assembly it is loaded as.
-        at: String,
-        /// What reaches out.
-        item: OutsideItem,
-    },
+    /// Boxed as [`DocumentError::DimensionInUse`] is.
+    #[error(transparent)]
+    OutsideSubDocument(Box<OutsideSubDocument>),
     /// A sub-document that holds robots.
     #[error(
         "`{0}` has robots, which a sub-document cannot hold yet (move them to the top document)"
@@ -355,18 +332,59 @@ impl DocumentError {
     }
 }
 
+/// A mate's dimension that an equation uses ([`DocumentError::DimensionInUse`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", dimension_in_use(self))]
+pub struct DimensionInUse {
+    /// The component being removed, when the mate goes with it.
+    pub component: Option<String>,
+    /// The mate.
+    pub mate: String,
+    /// The mate's dimension (full name).
+    pub dimension: String,
+    /// The equation's index (`equation(i)`).
+    pub index: usize,
+    /// The equation's text (shortened when long).
+    pub equation: String,
+}
+
+/// A mate using a reference the component's new part does not have
+/// ([`DocumentError::MissingReference`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("mate `{mate}` uses `{component}/{reference}`, which part `{part}` does not have")]
+pub struct MissingReference {
+    /// The mate.
+    pub mate: String,
+    /// The component whose part is replaced.
+    pub component: String,
+    /// The reference the mate uses.
+    pub reference: String,
+    /// The new part.
+    pub part: String,
+}
+
+/// A sub-document's mate or equation reaching outside it
+/// ([`DocumentError::OutsideSubDocument`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", outside_message(self))]
+pub struct OutsideSubDocument {
+    /// The sub-document's file as written.
+    pub file: String,
+    /// The sub-assembly it is loaded as.
+    pub at: String,
+    /// What reaches out.
+    pub item: OutsideItem,
+}
+
 /// [`DocumentError::DimensionInUse`]'s message.
-fn dimension_in_use(e: &DocumentError) -> String {
-    let DocumentError::DimensionInUse {
+fn dimension_in_use(e: &DimensionInUse) -> String {
+    let DimensionInUse {
         component,
         mate,
         dimension,
         index,
         equation,
-    } = e
-    else {
-        return String::new();
-    };
+    } = e;
     match component {
         None => format!("mate `{mate}`: equation [{index}] {equation} uses its dimension `{dimension}`; delete or change the equation first"),
         Some(c) => format!("component `{c}`: its mate `{mate}` has the dimension `{dimension}` that equation [{index}] {equation} uses; delete or change the equation first"),
@@ -374,10 +392,8 @@ fn dimension_in_use(e: &DocumentError) -> String {
 }
 
 /// [`DocumentError::OutsideSubDocument`]'s message.
-fn outside_message(e: &DocumentError) -> String {
-    let DocumentError::OutsideSubDocument { file, at, item } = e else {
-        return String::new();
-    };
+fn outside_message(e: &OutsideSubDocument) -> String {
+    let OutsideSubDocument { file, at, item } = e;
     match item {
         OutsideItem::Mate { mate, component } => format!(
             "mate `{at}/{mate}` of sub-document `{file}` refers to `{component}`, outside it"
@@ -520,7 +536,7 @@ pub enum UrdfRobotError {
     NotAFolder(String),
     /// The URDF itself cannot be read or parsed (located in it).
     #[error(transparent)]
-    Read(SourceError),
+    Read(Box<SourceError>),
     /// A link's mesh: where it is named and what is wrong with it.
     #[error("{}{}: {problem}", .urdf.display(), match .link { Some(l) => format!(":{}: link `{}`", l.line, l.link), None => String::new() })]
     Mesh {
@@ -528,8 +544,8 @@ pub enum UrdfRobotError {
         urdf: PathBuf,
         /// The link and line naming the mesh, none for the primitives together.
         link: Option<UrdfLinkAt>,
-        /// What is wrong.
-        problem: UrdfMeshProblem,
+        /// What is wrong (boxed: the readers' errors are large).
+        problem: Box<UrdfMeshProblem>,
     },
     /// A link whose generated part or component name is taken.
     #[error("the part or component `{name}` (made for link `{link}` of the URDF) already exists")]

@@ -50,8 +50,9 @@ pub mod tessellations;
 
 pub use assembly::SubAssembly;
 pub use error::{
-    DocumentError, LinkEdit, MateProblem, OutsideItem, PartMeshError, ReferenceProblem, UrdfLinkAt,
-    UrdfMeshProblem, UrdfRobotError,
+    DimensionInUse, DocumentError, LinkEdit, MateProblem, MissingReference, OutsideItem,
+    OutsideSubDocument, PartMeshError, ReferenceProblem, UrdfLinkAt, UrdfMeshProblem,
+    UrdfRobotError,
 };
 pub use export::GlbExport;
 pub(crate) use names::new_name;

@@ -48,13 +48,15 @@ impl Document {
         for m in own.iter().filter(|m| m.kind.has_dimension()) {
             let d = dimension::full_name(&m.name);
             if let Some(&e) = self.equations_using(&d).first() {
-                return Err(DocumentError::DimensionInUse {
-                    component: Some(name),
-                    mate: m.name.clone(),
-                    dimension: d,
-                    index: e,
-                    equation: equations::shown(&self.equations[e].text()),
-                });
+                return Err(DocumentError::DimensionInUse(Box::new(
+                    super::DimensionInUse {
+                        component: Some(name),
+                        mate: m.name.clone(),
+                        dimension: d,
+                        index: e,
+                        equation: equations::shown(&self.equations[e].text()),
+                    },
+                )));
             }
         }
         let before = self.clone();

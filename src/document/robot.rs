@@ -484,7 +484,8 @@ pub(super) fn read_urdf_robot(
         }
         roots.push(root);
     }
-    let u = crate::kinematics::read_urdf_in(project, &path, tip).map_err(UrdfRobotError::Read)?;
+    let u = crate::kinematics::read_urdf_in(project, &path, tip)
+        .map_err(|e| UrdfRobotError::Read(Box::new(e)))?;
     let tree = u.robot.tree();
     let mut meshes: Vec<Option<Mesh>> = vec![None; tree.len()];
     let mut files = vec![path.clone()];
@@ -502,7 +503,7 @@ pub(super) fn read_urdf_robot(
         return Err(UrdfRobotError::Mesh {
             urdf: path.clone(),
             link: None,
-            problem: over(None, primitive, *left),
+            problem: Box::new(over(None, primitive, *left)),
         });
     }
     *left -= primitive;
@@ -517,7 +518,7 @@ pub(super) fn read_urdf_robot(
                 line: m.line,
                 link: link.clone(),
             }),
-            problem,
+            problem: Box::new(problem),
         };
         if crate::mesh::MeshFormat::from_path(Path::new(&m.uri)).is_none() {
             return Err(at(UrdfMeshProblem::Format(m.uri.clone())));
@@ -1036,7 +1037,7 @@ impl Document {
         let name = name.as_str();
         let invalid = |source| DocumentError::Urdf {
             robot: name.to_string(),
-            source,
+            source: Box::new(source),
         };
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::RobotName(name.to_string()));

@@ -428,17 +428,16 @@ impl Document {
             let mut m = m.clone();
             m.name = n;
             for e in m.entities.iter_mut().chain(m.about.as_mut()) {
-                e.component =
-                    *index
-                        .get(&e.component)
-                        .ok_or_else(|| DocumentError::OutsideSubDocument {
-                            file: record.file.clone(),
-                            at: at.name.clone(),
-                            item: OutsideItem::Mate {
-                                mate: m.name.clone(),
-                                component: self.components[e.component].name.clone(),
-                            },
-                        })?;
+                e.component = *index.get(&e.component).ok_or_else(|| {
+                    DocumentError::OutsideSubDocument(Box::new(super::OutsideSubDocument {
+                        file: record.file.clone(),
+                        at: at.name.clone(),
+                        item: OutsideItem::Mate {
+                            mate: m.name.clone(),
+                            component: self.components[e.component].name.clone(),
+                        },
+                    }))
+                })?;
             }
             mates.push(m);
         }
@@ -453,12 +452,14 @@ impl Document {
                 continue;
             };
             let mut e = e.renamed(equations.len(), &mut |n| {
-                unscoped(n, &at.name).ok_or_else(|| DocumentError::OutsideSubDocument {
-                    file: record.file.clone(),
-                    at: at.name.clone(),
-                    item: OutsideItem::Equation {
-                        name: n.to_string(),
-                    },
+                unscoped(n, &at.name).ok_or_else(|| {
+                    DocumentError::OutsideSubDocument(Box::new(super::OutsideSubDocument {
+                        file: record.file.clone(),
+                        at: at.name.clone(),
+                        item: OutsideItem::Equation {
+                            name: n.to_string(),
+                        },
+                    }))
                 })
             })?;
             e.scope = inner;
