@@ -928,3 +928,59 @@ fn step_parts_race() {
     let _ = std::fs::remove_dir_all(p.join(STEP_STORE));
     assert_eq!(common::snapshot(p), before, "a user file changed");
 }
+
+/// `fitup import FILE --out DIR` into an existing project wrote its meshes by name:
+/// with `DIR/meshes` a link to a folder outside, the STL landed outside (and the
+/// document then failed to load). Every output now goes through the project's held
+/// root: the link is refused (exit 1 naming the mesh), and while `meshes` is swapped
+/// for that link over and over, repeated imports (`--force`) never open anything
+/// outside; each ends in the imported document or a located refusal.
+#[cfg(feature = "step")]
+#[test]
+fn imports_never_write_through_a_swapped_folder() {
+    imports_race();
+}
+
+/// The body of [`imports_never_write_through_a_swapped_folder`], compiled in every
+/// build, run with the `step` feature.
+#[cfg_attr(not(feature = "step"), allow(dead_code))]
+fn imports_race() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    std::fs::create_dir_all(p.join("models")).unwrap();
+    std::fs::write(p.join("models/notes.txt"), "mine").unwrap();
+    fitup::mesh::step::write_test_step("box", &p.join("box.step")).unwrap();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    let args = ["import", "box.step", "--out", "models", "--force"];
+    std::os::unix::fs::symlink(o, p.join("models/meshes")).unwrap();
+    let r = crate::hostile_bounds::run(p, &args);
+    assert_eq!(r.code, Some(1), "{}", r.text);
+    assert!(r.text.contains("meshes"), "{}", r.text);
+    assert_eq!(std::fs::read_dir(o).unwrap().count(), 0, "written outside");
+    std::fs::remove_file(p.join("models/meshes")).unwrap();
+    let r = crate::hostile_bounds::run(p, &args);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    let (done, refused) = while_swapped(&p.join("models/meshes"), o, || {
+        let (mut done, mut refused) = (0, 0);
+        for _ in 0..30 {
+            let r = crate::hostile_bounds::run(p, &args);
+            assert!(!r.text.contains("panicked"), "{}", r.text);
+            if r.code == Some(0) {
+                done += 1;
+            } else {
+                assert_eq!(r.code, Some(1), "{}", r.text);
+                assert!(r.text.contains("models"), "not located: {}", r.text);
+                refused += 1;
+            }
+        }
+        (done, refused)
+    });
+    eprintln!("{done} imports, {refused} refused");
+    assert!(done > 0, "no import went through");
+    assert_eq!(
+        std::fs::read_to_string(p.join("models/notes.txt")).unwrap(),
+        "mine"
+    );
+}
