@@ -70,6 +70,14 @@ pub enum Error {
         /// Why not.
         source: fitup::math::transform::TransformError,
     },
+    /// An origin and axes that are not a coordinate system.
+    #[error("`{argument}`: {source}")]
+    CoordinateSystem {
+        /// The argument's name.
+        argument: &'static str,
+        /// Why not.
+        source: fitup::document::CoordinateSystemError,
+    },
     /// Keyword arguments the request's vocabulary refuses (an unknown key, a value
     /// not of its kind).
     #[error(transparent)]
@@ -123,7 +131,10 @@ impl Error {
             Error::Database(_) => "DatabaseError",
             Error::Script(_) | Error::Arguments(_) => "ScriptError",
             Error::Project { .. } => "DocumentError",
-            Error::Shape { .. } | Error::Pose { .. } | Error::Option { .. } => "InputError",
+            Error::Shape { .. }
+            | Error::Pose { .. }
+            | Error::Option { .. }
+            | Error::CoordinateSystem { .. } => "InputError",
             Error::Path(_) => "InputError",
             Error::Unknown { .. } | Error::Options(_) => "InputError",
             Error::Poisoned { .. } | Error::Python(_) => "FitupError",

@@ -139,7 +139,7 @@ impl Document {
         let i = self.mate_index(name)?;
         if aligned.is_some() && self.mate_alignment(name)?.is_none() {
             return Err(DocumentError::Invalid(format!(
-                "mate `{}` joins points: it has no alignment to set",
+                "mate `{}` joins points or coordinate systems: it has no alignment to set",
                 self.mates[i].name
             )));
         }
@@ -154,7 +154,7 @@ impl Document {
     pub fn flip_mate(&mut self, name: &str) -> Result<(), DocumentError> {
         let now = self.mate_alignment(name)?.ok_or_else(|| {
             DocumentError::Invalid(format!(
-                "mate `{name}` joins points: it has no alignment to flip"
+                "mate `{name}` joins points or coordinate systems: it has no alignment to flip"
             ))
         })?;
         self.set_mate_aligned(name, Some(!now))
@@ -177,7 +177,7 @@ impl Document {
         let eb = self
             .mate_entity(&nfc_name(&spec.entities[1]))
             .map_err(bad)?;
-        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry).map_err(bad)?;
+        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry, spec.aligned).map_err(bad)?;
         let about = match &spec.about {
             None => None,
             Some(s) => {
@@ -393,7 +393,7 @@ impl Document {
                 })?;
             }
             let [a, b] = &m.entities;
-            mates::check_entities(m.kind, &a.geometry, &b.geometry)
+            mates::check_entities(m.kind, &a.geometry, &b.geometry, m.aligned)
                 .map_err(|e| DocumentError::Invalid(format!("mate `{}`: {e}", m.name)))?;
         }
         self.change_and_rebuild(|d| {
@@ -479,7 +479,8 @@ impl Document {
             .coords
             .iter()
             .chain(reference.direction().unwrap_or_default().iter())
-            .all(|v| v.is_finite() && v.abs() <= super::MAX_ABS_VALUE);
+            .all(|v| v.is_finite() && v.abs() <= super::MAX_ABS_VALUE)
+            && reference.coordinate_system().is_none_or(|f| f.is_finite());
         if !finite {
             return Err(bad("its numbers must be finite and at most 1e9".into()));
         }
@@ -496,7 +497,7 @@ impl Document {
                     .try_normalize(1e-12)
                     .ok_or_else(|| bad("a zero direction".into()))?,
             },
-            p @ Reference::Point(_) => p,
+            p @ (Reference::Point(_) | Reference::CoordinateSystem(_)) => p,
         };
         let mut mates = self.mates.clone();
         for m in &mut mates {
@@ -506,7 +507,7 @@ impl Document {
                 }
             }
             let [a, b] = &m.entities;
-            mates::check_entities(m.kind, &a.geometry, &b.geometry)
+            mates::check_entities(m.kind, &a.geometry, &b.geometry, m.aligned)
                 .map_err(|e| DocumentError::Invalid(format!("mate `{}`: {e}", m.name)))?;
         }
         let old = self.parts[&part].references.clone();

@@ -66,6 +66,16 @@ pub enum DocumentError {
         "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"
     )]
     Suppressed(String),
+    /// A reference asked for as a coordinate system is another kind.
+    #[error("reference `{reference}` of part `{part}` is a {kind}, not a coordinate system")]
+    NotACoordinateSystem {
+        /// The part.
+        part: String,
+        /// The reference's name.
+        reference: String,
+        /// What it is (`plane`, `axis`, `point`).
+        kind: &'static str,
+    },
     /// Fixed components do not move.
     #[error("component `{0}` is fixed; set `fixed: false` to move it")]
     FixedComponent(String),
