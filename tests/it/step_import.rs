@@ -484,7 +484,7 @@ mod with_occt {
         // included: none of them is the document).
         let reference = common::occt_check::read(&common::occt_check::program(), &file);
         assert_eq!(reference.solids.len(), doc.components().len());
-        assert_eq!(reference.solids.len(), 9);
+        assert_eq!(reference.solids.len(), 7);
         for (s, c) in reference.solids.iter().zip(doc.components()) {
             assert!(s.placed_as(&c.transform, 1e-9), "{}: {}", s.path, c.name);
             assert_eq!(
