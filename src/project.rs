@@ -6,7 +6,11 @@
 //! - The project root is `--root` when given. Otherwise it is the nearest folder,
 //!   starting at the script's (or, for `fitup check`, the document's) own folder and
 //!   going up, that holds a [`PROJECT_FILE`] (`fitup.toml`); without one, the
-//!   script's (document's) own folder.
+//!   script's (document's) own folder. The folders are searched as the path is
+//!   written, each held open from `/` down without following a link: a folder of the
+//!   path that is a symbolic link is not looked through (the search goes on above
+//!   it; pass `--root` for a project reached only through a link whose parents hold
+//!   a `fitup.toml`).
 //! - The SCRIPT (or document) argument on the command line is a path like any other
 //!   command-line path: relative to the current folder, never to `--root`.
 //! - Paths inside a script, and mesh paths inside a document, resolve against the
@@ -199,55 +203,68 @@ impl Project {
     /// ```
     ///
     /// The folders above the file are first searched as the path is written (made
-    /// absolute against the working folder): each candidate is opened without
-    /// following a link at its own name and asked for [`PROJECT_FILE`] through that
-    /// handle, so a folder of the path swapped for a link (to an outside folder that
-    /// holds a `fitup.toml`) is never taken as the root. Only when no folder on the
-    /// written path holds one are links resolved and the search made again.
+    /// absolute against the working folder): every folder from `/` down to the file's
+    /// own is opened from its parent's held handle without following a link
+    /// ([`held_chain`]), and each is asked for [`PROJECT_FILE`] through its handle, so
+    /// a folder of the path swapped for a link (at any depth, to an outside folder
+    /// that holds a `fitup.toml`) is never looked through: the search stops above
+    /// the link. Only when the written path meets a link and no folder above it
+    /// holds a [`PROJECT_FILE`] are links resolved (the caller named them) and the
+    /// canonical path walked the same way; a link met on that walk (the path changed
+    /// while it was searched) stops it too.
     pub fn for_file(file: &Path) -> std::io::Result<Self> {
-        if let Some(p) = Self::for_written_file(file) {
-            return Ok(p);
+        if let Some(abs) = lexical_absolute(file) {
+            if let Some(p) = Self::in_chain(&abs) {
+                return p;
+            }
         }
         let file = file.canonicalize()?;
-        let folder = file.parent().unwrap_or(Path::new("/"));
-        if let Some(root) = folder.ancestors().find(|d| d.join(PROJECT_FILE).is_file()) {
+        if let Some(p) = Self::in_chain(&file) {
+            return p;
+        }
+        if held_chain(file.parent().unwrap_or(Path::new("/"))).1 == Walked::Unopenable {
+            // A folder that may be searched but not listed (mode 0711): it cannot be
+            // held, so it is looked up by name.
+            let folder = file.parent().unwrap_or(Path::new("/"));
+            let root = folder
+                .ancestors()
+                .find(|d| d.join(PROJECT_FILE).is_file())
+                .unwrap_or(folder);
             return Self::new(root);
         }
-        Self::new(folder)
+        Err(std::io::Error::other(format!(
+            "{}: a folder on its path changed while its project was searched",
+            file.display()
+        )))
     }
 
-    /// [`for_file`](Self::for_file)'s search along the path as written: the nearest
-    /// folder above `file` that is not itself a link and holds [`PROJECT_FILE`].
-    fn for_written_file(file: &Path) -> Option<Self> {
-        let abs = lexical_absolute(file)?;
-        for d in abs.parent()?.ancestors() {
-            let (Some(parent), Some(name)) = (d.parent(), d.file_name()) else {
-                break;
-            };
-            let Ok(dir) =
-                crate::fsutil::Dir::open(parent).and_then(|p| p.walk(Path::new(name), false))
-            else {
-                continue;
-            };
-            if !matches!(
-                dir.stat(std::ffi::OsStr::new(PROJECT_FILE)),
+    /// The project of `file` (absolute) from [`held_chain`] of its folder: the deepest
+    /// held folder holding [`PROJECT_FILE`]; else, when the whole path was walked, the
+    /// file's own folder; else `None` (a link on the way).
+    fn in_chain(file: &Path) -> Option<std::io::Result<Self>> {
+        let (mut chain, walked) = held_chain(file.parent()?);
+        let found = chain.iter().rposition(|d| {
+            matches!(
+                d.stat(std::ffi::OsStr::new(PROJECT_FILE)),
                 Ok(Some(crate::fsutil::Kind::File(_)))
-            ) {
-                continue;
-            }
-            // The root's canonical name is that of the folder opened (not a second
-            // lookup by name).
-            let root = dir
-                .raw_fd()
-                .and_then(|fd| std::fs::read_link(format!("/proc/self/fd/{fd}")).ok())
-                .filter(|r| r.is_absolute())
-                .or_else(|| d.canonicalize().ok())?;
-            return Some(Self {
-                root,
-                dir: std::sync::Arc::new(dir),
-            });
-        }
-        None
+            )
+        });
+        let dir = match found {
+            Some(i) => chain.swap_remove(i),
+            None if walked == Walked::Whole => chain.pop()?,
+            None => return None,
+        };
+        // The root's canonical name is that of the folder opened (not a second lookup
+        // by name).
+        let root = dir
+            .raw_fd()
+            .and_then(|fd| std::fs::read_link(format!("/proc/self/fd/{fd}")).ok())
+            .filter(|r| r.is_absolute())
+            .unwrap_or_else(|| dir.path().to_path_buf());
+        Some(Ok(Self {
+            root,
+            dir: std::sync::Arc::new(dir),
+        }))
     }
 
     /// The canonical root folder.
@@ -434,6 +451,60 @@ impl Project {
 /// `path` made absolute against the working folder without resolving links, `.`
 /// dropped; `None` when it holds `..` (its meaning would depend on links) or the
 /// working folder is unknown.
+/// The fallback of callers whose file may not exist yet: when [`Project::for_file`]
+/// failed because the file is missing (`NotFound`), the project rooted at `folder`;
+/// any other failure (a folder on the path changed while it was searched) is kept,
+/// never answered by a lookup of `folder` by name.
+pub(crate) fn unless_missing(e: std::io::Error, folder: &Path) -> std::io::Result<Project> {
+    if e.kind() == std::io::ErrorKind::NotFound {
+        Project::new(folder)
+    } else {
+        Err(e)
+    }
+}
+
+/// Every folder from `/` down to `folder` (absolute), each opened from the one above
+/// it without following a link (one held handle per level), stopping at the first
+/// link or folder that cannot be opened; how far it went.
+fn held_chain(folder: &Path) -> (Vec<crate::fsutil::Dir>, Walked) {
+    let mut chain: Vec<crate::fsutil::Dir> = Vec::new();
+    let mut comps = folder.components();
+    match comps.next() {
+        Some(Component::RootDir) => {}
+        _ => return (chain, Walked::Unopenable),
+    }
+    let Ok(top) = crate::fsutil::Dir::open(Path::new("/")) else {
+        return (chain, Walked::Unopenable);
+    };
+    chain.push(top);
+    for c in comps {
+        let Component::Normal(name) = c else {
+            return (chain, Walked::Unopenable);
+        };
+        let next = chain.last().map(|d| d.walk(Path::new(name), false));
+        match next {
+            Some(Ok(d)) => chain.push(d),
+            Some(Err(e)) if e.kind() == std::io::ErrorKind::PermissionDenied => {
+                return (chain, Walked::Unopenable)
+            }
+            _ => return (chain, Walked::Link),
+        }
+    }
+    (chain, Walked::Whole)
+}
+
+/// How far [`held_chain`] walked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Walked {
+    /// Down to the folder asked for.
+    Whole,
+    /// Up to a link, a missing folder or something not a folder.
+    Link,
+    /// Up to a folder it may not open (searchable, not readable), or a path it cannot
+    /// walk (not absolute).
+    Unopenable,
+}
+
 fn lexical_absolute(path: &Path) -> Option<PathBuf> {
     let base = if path.is_absolute() {
         PathBuf::new()
@@ -531,5 +602,33 @@ mod tests {
         std::fs::write(d.join("a/fitup.toml"), "").unwrap();
         let p = Project::for_file(&d.join("a/b/s.rhai")).unwrap();
         assert_eq!(p.root(), d.join("a"));
+    }
+
+    /// A link on the written path, however far above the file, is not looked through:
+    /// the search goes on above it (here: `p`, not the `fitup.toml` three levels down
+    /// the link), and links are resolved only when nothing above one holds a
+    /// `fitup.toml`.
+    #[test]
+    fn the_search_never_looks_through_a_link_on_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path().canonicalize().unwrap();
+        let (p, o) = (d.join("p"), d.join("o"));
+        std::fs::create_dir_all(o.join("b/c")).unwrap();
+        std::fs::create_dir_all(&p).unwrap();
+        for f in ["b/c/s.rhai", "b/c/fitup.toml", "b/fitup.toml"] {
+            std::fs::write(o.join(f), "").unwrap();
+        }
+        std::os::unix::fs::symlink(&o, p.join("a")).unwrap();
+        // Nothing above the link holds fitup.toml: the links are resolved.
+        let found = Project::for_file(&p.join("a/b/c/s.rhai")).unwrap();
+        assert_eq!(found.root(), o.join("b/c"));
+        std::fs::write(p.join("fitup.toml"), "").unwrap();
+        let found = Project::for_file(&p.join("a/b/c/s.rhai")).unwrap();
+        assert_eq!(found.root(), p);
+        // Reading the file through that project meets the link: refused, not read.
+        let e = found
+            .read_named_text(&p.join("a/b/c/s.rhai"), crate::fsutil::FileKind::Script)
+            .unwrap_err();
+        assert!(e.to_string().contains("outside the project"), "{e}");
     }
 }

@@ -50,11 +50,11 @@ fn prune(dir: Option<&std::path::Path>, dry_run: bool, max_mb: u64) -> Exit {
         Ok(d) if d.is_dir() => d,
         Ok(d) => {
             errln!("error: {}: not a folder", d.display());
-            return Exit::Usage;
+            return Exit::Failure;
         }
         Err(e) => {
             errln!("error: {}: {e}", dir.display());
-            return Exit::Usage;
+            return Exit::Failure;
         }
     };
     let root = dir

@@ -10,13 +10,17 @@ use crate::watch::{watch_with, WatchEvent};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-fn options(a: &ScriptArgs) -> Result<RunOptions, String> {
-    let (project, script) = project_of(a, "script")?;
+/// The options of a run, or the exit status and message of why not: a file named on
+/// the command line that is missing or refused by the path rule exits 1 (a script or
+/// document error, like every refused path), malformed arguments exit 2 (usage).
+fn options(a: &ScriptArgs) -> Result<RunOptions, (Exit, String)> {
+    let fail = |m: String| (Exit::Failure, m);
+    let (project, script) = project_of(a, "script").map_err(fail)?;
     let doc = match &a.doc {
-        Some(d) => Some(inside(&project, d).map_err(|e| format!("document: {e}"))?),
+        Some(d) => Some(inside(&project, d).map_err(|e| fail(format!("document: {e}")))?),
         None => None,
     };
-    let args = Arguments::parse(&a.args).map_err(|e| e.to_string())?;
+    let args = Arguments::parse(&a.args).map_err(|e| (Exit::Usage, e.to_string()))?;
     Ok(RunOptions {
         script,
         doc,
@@ -91,9 +95,9 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
     }
     let mut opts = match options(a) {
         Ok(o) => o,
-        Err(e) => {
+        Err((exit, e)) => {
             errln!("error: {e}");
-            return Exit::Usage;
+            return exit;
         }
     };
     let live = match super::view::start(
@@ -143,9 +147,9 @@ fn run_name(script: &std::path::Path, number: Option<u64>) -> String {
 pub(super) fn watch(a: &ScriptArgs) -> Exit {
     let mut opts = match options(a) {
         Ok(o) => o,
-        Err(e) => {
+        Err((exit, e)) => {
             errln!("error: {e}");
-            return Exit::Usage;
+            return exit;
         }
     };
     let live = match super::view::start(&a.view, a.force, &opts.project, None) {
@@ -229,15 +233,15 @@ fn clock() -> String {
 /// robot of the document from its saved joints and prints (or writes) the joint/TCP log.
 fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     let usage = |m: String| (Exit::Usage, m);
-    let (project, program_path) = project_of(a, "program").map_err(usage)?;
+    let fail = |m: String| (Exit::Failure, m);
+    let (project, program_path) = project_of(a, "program").map_err(fail)?;
     let doc_arg = a.doc.as_ref().ok_or_else(|| {
         usage(format!(
             "{} is a robot program (not .rhai): pass --doc with the document holding the robot",
             a.script.display()
         ))
     })?;
-    let doc_path = inside(&project, doc_arg).map_err(|e| usage(format!("document: {e}")))?;
-    let fail = |m: String| (Exit::Failure, m);
+    let doc_path = inside(&project, doc_arg).map_err(|e| fail(format!("document: {e}")))?;
     let mut doc =
         crate::document::Document::load_in(&doc_path, &project, &mut crate::mesh::MeshCache::new())
             .map_err(|e| fail(e.render()))?;

@@ -338,7 +338,9 @@ fn walk_pairs<B>(
 ) -> ControlFlow<B> {
     s.begin(b.nodes.len());
     s.stack.push((0, 0));
+    let mut tally = super::EffortTally(0);
     while let Some((i, j)) = s.stack.pop() {
+        tally.0 += 1;
         let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
         let (oa, ob) = (&a.obbs[i as usize], &b.obbs[j as usize]);
         let least = floor.get();
@@ -1077,7 +1079,9 @@ fn distance_search(
     };
     let mut stack: Vec<(u32, u32, f64)> = vec![(0, 0, 0.0)];
     let mut moved_boxes: Vec<(Tri, Aabb)> = Vec::with_capacity(8);
+    let mut tally = super::EffortTally(0);
     while let Some((i, j, lb)) = stack.pop() {
+        tally.0 += 1;
         if lb * grow >= best {
             continue;
         }

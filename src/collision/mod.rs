@@ -563,3 +563,30 @@ pub fn candidate_pairs(parts: &[PosedPart]) -> Result<Vec<(usize, usize)>, Colli
 
 #[cfg(test)]
 mod tests;
+
+thread_local! {
+    /// Node pairs visited by this thread's pair traversals ([`effort`]).
+    static EFFORT: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// The node pairs of bounding-volume trees visited so far on this thread by pair
+/// traversals (pose checks, continuous edge checks, distance queries): a measure
+/// of collision work that is the same on every run and roughly proportional to
+/// its CPU time, which the number of checks is not (a check near contact visits
+/// many times the pairs of one deep in collision). The default planner's two
+/// racing searches compare their work by it (docs/planning.md). Wraps around
+/// after 2⁶⁴ pairs; take differences.
+pub fn effort() -> u64 {
+    EFFORT.with(std::cell::Cell::get)
+}
+
+/// Adds the node pairs a traversal visited to [`effort`] when dropped (on every
+/// return path of the traversal, early ones included).
+pub(crate) struct EffortTally(pub(crate) u64);
+
+impl Drop for EffortTally {
+    fn drop(&mut self) {
+        let n = self.0;
+        EFFORT.with(|e| e.set(e.get().wrapping_add(n)));
+    }
+}

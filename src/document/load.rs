@@ -79,7 +79,7 @@ impl Document {
         cache: &mut MeshCache,
     ) -> Result<Self, DocumentError> {
         let project = Project::for_file(path)
-            .or_else(|_| Project::new(path.parent().unwrap_or(Path::new("."))))
+            .or_else(|e| crate::project::unless_missing(e, path.parent().unwrap_or(Path::new("."))))
             .map_err(|e| SourceError::new(path, 0, 0, format!("cannot resolve its folder: {e}")))?;
         Self::from_yaml_in(text, path, &project, cache)
     }
@@ -689,6 +689,8 @@ impl Loader<'_> {
             loaded: HashMap::new(),
             warnings: Vec::new(),
         };
+        // One count for every URDF robot of the document (MAX_URDF_TRIANGLES).
+        let mut left = robot::MAX_URDF_TRIANGLES;
         for rf in &file.robots {
             let Some(u) = &rf.urdf else { continue };
             let robot_at = |m: String| -> DocumentError {
@@ -702,6 +704,7 @@ impl Loader<'_> {
                 &rf.package_path,
                 rf.tip.as_deref(),
                 cache,
+                &mut left,
             )
             .map_err(robot_at)?;
             out.warnings.extend(loaded.warnings.iter().cloned());

@@ -267,6 +267,15 @@ impl Document {
 
     /// Adds the parts and components of a URDF robot's link meshes (named by
     /// [`robot::urdf_component_name`]), recording them as generated.
+    /// The triangles of the parts made for URDF links (see [`robot::MAX_URDF_TRIANGLES`]).
+    fn generated_triangles(&self) -> usize {
+        self.generated
+            .iter()
+            .filter_map(|n| self.parts.get(n))
+            .map(|p| p.mesh.triangles.len())
+            .sum()
+    }
+
     fn add_urdf_parts(
         &mut self,
         robot_name: &str,

@@ -418,6 +418,14 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
     Robot::new(&f.name, tree, flange, Transform::IDENTITY).map_err(|e| whole(e.to_string()))
 }
 
+/// The most triangles the `urdf:` robots of one document may make together (every
+/// link's meshes, scaled and placed, and its primitives), counted before each link
+/// mesh is copied: a link mesh is a copy of its file's mesh, so one 2-million-triangle
+/// file named by 400 links would otherwise make 800 million triangles (a 490 KB URDF
+/// took 16 GB). Measured at the cap: `fitup check` peaks at about 500 MB (4 links of a
+/// 1,000,000-triangle STL and the fifth refused; docs/document.md).
+pub const MAX_URDF_TRIANGLES: usize = 4_000_000;
+
 /// A URDF robot of a document with its generated link components.
 #[derive(Debug, Clone)]
 pub(super) struct UrdfLoaded {
@@ -451,6 +459,7 @@ pub(super) fn read_urdf_robot(
     package_path: &[String],
     tip: Option<&str>,
     cache: &mut MeshCache,
+    left: &mut usize,
 ) -> Result<UrdfLoaded, String> {
     let path = project
         .resolve_from(dir, uri)
@@ -473,6 +482,19 @@ pub(super) fn read_urdf_robot(
         Some(all) => all.append(&mesh),
         slot => *slot = Some(mesh),
     };
+    let over = |n: usize, left: usize| {
+        format!(
+            "the URDF robots of the document would make more than {} triangles together ({} more, {} before; MAX_URDF_TRIANGLES): use coarser link meshes",
+            crate::math::format::count(MAX_URDF_TRIANGLES as u64),
+            crate::math::format::count(n as u64),
+            crate::math::format::count(MAX_URDF_TRIANGLES.saturating_sub(left) as u64)
+        )
+    };
+    let primitive: usize = u.primitives.iter().map(|p| p.mesh.triangles.len()).sum();
+    if primitive > *left {
+        return Err(format!("{}: {}", path.display(), over(primitive, *left)));
+    }
+    *left -= primitive;
     for p in &u.primitives {
         add(p.link, p.mesh.clone());
     }
@@ -503,6 +525,15 @@ pub(super) fn read_urdf_robot(
             .get_in(project, &file)
             .map_err(|e| at(unfound(format!("mesh `{}`: {e}", m.uri))))?;
         files.push(file);
+        // Counted before the copy is made.
+        if mesh.triangles.len() > *left {
+            return Err(at(format!(
+                "mesh `{}`: {}",
+                m.uri,
+                over(mesh.triangles.len(), *left)
+            )));
+        }
+        *left -= mesh.triangles.len();
         let [sx, sy, sz] = m.scale;
         let scaled = Mesh {
             vertices: mesh
@@ -985,7 +1016,9 @@ impl Document {
             .into());
         }
         let project = Project::for_file(&self.path)
-            .or_else(|_| Project::new(self.path.parent().unwrap_or(Path::new("."))))
+            .or_else(|e| {
+                crate::project::unless_missing(e, self.path.parent().unwrap_or(Path::new(".")))
+            })
             .map_err(|e| invalid(format!("cannot find the project: {e}")))?;
         let dir = std::path::absolute(&self.path)
             .ok()
@@ -997,8 +1030,18 @@ impl Document {
         };
         let uri = relative(urdf);
         let packages: Vec<String> = package_path.iter().map(|p| relative(p)).collect();
-        let loaded = read_urdf_robot(&project, &dir, &uri, &packages, None, &mut MeshCache::new())
-            .map_err(invalid)?;
+        // The document's URDF robots share one count (MAX_URDF_TRIANGLES).
+        let mut left = MAX_URDF_TRIANGLES.saturating_sub(self.generated_triangles());
+        let loaded = read_urdf_robot(
+            &project,
+            &dir,
+            &uri,
+            &packages,
+            None,
+            &mut MeshCache::new(),
+            &mut left,
+        )
+        .map_err(invalid)?;
         let mut next = self.clone();
         next.add_urdf_parts(name, &uri, &loaded).map_err(invalid)?;
         let zero: Vec<f64> = loaded

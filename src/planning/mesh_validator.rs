@@ -245,6 +245,16 @@ impl MeshValidator {
         }
     }
 
+    /// The longest piece of a continuous edge check (mm of point displacement):
+    /// [`PIECE_REACH`] radii of the moving part, at most its thinnest extent, at
+    /// least [`MIN_PIECE_REACH`] radii.
+    fn piece_reach(&self) -> f64 {
+        let r = self.moving.radius();
+        let b = self.moving.bounds();
+        let thinnest = (b.hi - b.lo).min();
+        (PIECE_REACH * r).min(thinnest).max(MIN_PIECE_REACH * r)
+    }
+
     /// Continuous check of `from → to` (`to` already known free) against every
     /// obstacle the swept part can reach ([`edge_interferes`]).
     fn continuous_edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
@@ -274,9 +284,7 @@ impl MeshValidator {
         // the straight edge between its ends, so nothing changes but where the
         // deadline is read) no single call overruns the caller's budget by much.
         let reach = dist + angle * r;
-        let pieces = (reach / (PIECE_REACH * r).max(MIN_PIECE_MM))
-            .ceil()
-            .clamp(1.0, 1e6) as u32;
+        let pieces = (reach / self.piece_reach()).ceil().clamp(1.0, 1e6) as u32;
         let mut a = *from;
         for i in 1..=pieces {
             let b = if i == pieces {
@@ -305,15 +313,25 @@ impl MeshValidator {
 /// part) get static checks at 15 inner poses before the continuous pass.
 const PRESAMPLE_REACH: f64 = 0.5;
 /// The continuous check runs in pieces whose points move at most this far (in
-/// radii of the moving part, at least [`MIN_PIECE_MM`]), reading the deadline
-/// between them: in a sliding contact the check steps by about the contact step
-/// (0.05 mm by default), so a piece must be short enough for the deadline to be
-/// read often; but each piece is a traversal of the trees of its own, which long
-/// edges of a large part in open space (a table carried through a house: edges
-/// of 200 mm) must not pay hundreds of times.
+/// radii of the moving part), reading the deadline between them: in a sliding
+/// contact the check steps by about the contact step (0.05 mm by default), so a
+/// piece must be short enough for the deadline to be read often; but each piece
+/// is a traversal of the trees of its own, which long edges of a large part in
+/// open space (a table carried through a house: edges of 200 mm) must not pay
+/// hundreds of times.
+///
+/// A piece is also at most the part's thinnest extent: a piece's swept boxes
+/// grow with its length, and a thin part sliding in a tight channel (OMPL.app's
+/// spirelli, a strip 1.1 thick and 14.8 in radius, screwed through a block)
+/// met most of the channel's walls in pieces of a quarter radius: 25k node pairs
+/// per piece, 1k in pieces of its thickness, and the whole call took 4.5 s
+/// instead of 12 s (same path). Parts whose thinnest side exceeds a quarter
+/// radius (every other OMPL.app robot: 0.39–1.0 radii) keep the quarter radius,
+/// where shorter pieces cost more traversals than they save (Apartment 1.8×).
 const PIECE_REACH: f64 = 0.25;
-/// The shortest piece (mm).
-const MIN_PIECE_MM: f64 = 2.0;
+/// The shortest piece, in radii of the moving part (a flat part has no
+/// thickness to bound its pieces by).
+const MIN_PIECE_REACH: f64 = 0.05;
 
 impl MotionValidator for MeshValidator {
     fn is_free(&mut self, pose: &Transform) -> bool {
@@ -440,6 +458,48 @@ mod tests {
 
     fn at(x: f64) -> Transform {
         Transform::from_translation(Vec3::new(x, 0.0, 0.0))
+    }
+
+    /// Pieces of a continuous check are at most a quarter of the part's radius,
+    /// at most its thinnest side, and not shorter than 0.05 radii.
+    #[test]
+    fn pieces_are_bounded_by_the_radius_and_the_thinnest_side() {
+        let piece = |lo: [f64; 3], hi: [f64; 3]| {
+            let part = collider(Mesh::cuboid(Point3::from(lo), Point3::from(hi)));
+            let r = part.radius();
+            let v = MeshValidator::new(part, vec![], MeshValidatorOptions::default()).unwrap();
+            (v.piece_reach(), r)
+        };
+        let (p, r) = piece([-5.0; 3], [5.0; 3]);
+        assert!((p - 0.25 * r).abs() < 1e-12, "a cube: a quarter radius");
+        let (p, r) = piece([-1.0, -20.0, -3.0], [1.0, 20.0, 3.0]);
+        assert!(p < 0.25 * r);
+        assert!((p - 2.0).abs() < 1e-12, "a strip 2 thick: its thickness");
+        let (p, r) = piece([0.0, -20.0, -3.0], [0.0, 20.0, 3.0]);
+        assert!((p - 0.05 * r).abs() < 1e-12, "a flat sheet: 0.05 radii");
+    }
+
+    /// A pose check in contact (touching the wall) visits more node pairs than
+    /// one far away, and the checker's cost (what racing searches compare)
+    /// counts them.
+    #[test]
+    fn collision_effort_grows_near_contact_and_counts_as_work() {
+        let mut v = wall_scene(SweepMethod::CONTINUOUS);
+        let effort = |v: &mut MeshValidator, x: f64| {
+            let before = crate::collision::effort();
+            v.is_free(&at(x));
+            crate::collision::effort() - before
+        };
+        let far = effort(&mut v, 0.0);
+        let near = effort(&mut v, 45.0);
+        assert!(near > far, "near {near} vs far {far}");
+        let mut checker = crate::planning::validator::Checker::new(&mut v, None);
+        let (w0, c0) = (checker.work(), checker.cost());
+        for _ in 0..100 {
+            checker.is_free(&at(45.0));
+        }
+        assert_eq!(checker.work() - w0, 100, "one unit per check");
+        assert!(checker.cost() - c0 > 100, "more than the checks' count");
     }
 
     #[test]

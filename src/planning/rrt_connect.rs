@@ -274,7 +274,7 @@ impl<'v, 's> Search<'v, 's> {
     }
 
     fn work(&self) -> u64 {
-        self.checker.work()
+        self.checker.cost()
     }
 
     /// The joined path: from the start tree's node `s` and the goal tree's `g`.

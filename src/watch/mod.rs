@@ -141,7 +141,7 @@ pub fn watch_with(
         .map(|p| absolute(&p))
         .collect();
     for p in &always {
-        baseline.insert(p.clone(), hash_file(&opts.project, p));
+        baseline.insert(p.clone(), hash_file(&opts.project, &always, p));
         // Watched before the first run ends, so a save can cancel a first run that spins.
         if let Some(dir) = p.parent() {
             if !watched_dirs.contains_key(dir) {
@@ -163,7 +163,7 @@ pub fn watch_with(
             if let Some(changed) = queued.take() {
                 number += 1;
                 for p in &changed {
-                    baseline.insert(p.clone(), hash_file(&opts.project, p));
+                    baseline.insert(p.clone(), hash_file(&opts.project, &always, p));
                 }
                 report(WatchEvent::RunStarted {
                     number,
@@ -286,7 +286,7 @@ pub fn watch_with(
                     let f = absolute(f);
                     baseline
                         .entry(f.clone())
-                        .or_insert_with(|| hash_file(&opts.project, &f));
+                        .or_insert_with(|| hash_file(&opts.project, &always, &f));
                     if let Some(dir) = f.parent() {
                         if !watched_dirs.contains_key(dir) {
                             match watcher.watch(dir, RecursiveMode::NonRecursive) {
@@ -304,7 +304,7 @@ pub fn watch_with(
                 for f in &outcome.files_written {
                     let f = absolute(f);
                     if baseline.contains_key(&f) {
-                        baseline.insert(f.clone(), hash_file(&opts.project, &f));
+                        baseline.insert(f.clone(), hash_file(&opts.project, &always, &f));
                     }
                 }
                 report(WatchEvent::RunFinished {
@@ -337,7 +337,7 @@ pub fn watch_with(
                     pending.insert(p, now + OWN_WRITE_RECHECK);
                     continue;
                 }
-                let hash = hash_file(&opts.project, &p);
+                let hash = hash_file(&opts.project, &always, &p);
                 // A run's own write (a script rewriting a file it read, itself even):
                 // the new baseline, not a save.
                 let own = hash.is_some()
@@ -381,7 +381,7 @@ pub fn watch_with(
             }
             if !changed.is_empty() {
                 for p in &changed {
-                    baseline.insert(p.clone(), hash_file(&opts.project, p));
+                    baseline.insert(p.clone(), hash_file(&opts.project, &always, p));
                 }
                 if let Some((_, cancel)) = &running {
                     cancel.store(true, Ordering::Relaxed);
@@ -397,8 +397,11 @@ pub fn watch_with(
 /// The content hash of a watched file: capped, regular files only (a path replaced by
 /// a FIFO must not block the watcher); a file inside the project is read through the
 /// project folder held open for this read and walked without following a link, so a
-/// folder swapped for a link is refused, never followed.
-fn hash_file(project: &Project, p: &Path) -> Option<u64> {
+/// folder swapped for a link is refused, never followed. A path outside the project is
+/// read by its name only when it is one of `named` (the script and document given on
+/// the command line): an event or dependency path whose folder was resolved while it
+/// was swapped for a link to an outside folder is never read.
+fn hash_file(project: &Project, named: &[PathBuf], p: &Path) -> Option<u64> {
     let kind = crate::fsutil::FileKind::Mesh;
     // Watched paths are absolute with their folder canonical as they were recorded: a
     // path under the root is walked from the root as it is (never re-resolved, which
@@ -408,8 +411,10 @@ fn hash_file(project: &Project, p: &Path) -> Option<u64> {
     // the project is read by its name.
     if p.starts_with(project.root()) {
         Project::new(project.root()).ok()?.read_file(p, kind)
-    } else {
+    } else if named.iter().any(|n| n == p) {
         crate::fsutil::read_file(p, kind)
+    } else {
+        return None;
     }
     .ok()
     .map(|b| content_hash(&b))
@@ -446,10 +451,18 @@ mod tests {
         let project = Project::new(dir.path()).unwrap();
         let root = project.root().to_path_buf();
         assert_eq!(
-            hash_file(&project, &root.join("real/a.rhai")),
+            hash_file(&project, &[], &root.join("real/a.rhai")),
             Some(content_hash(b"inside"))
         );
         // `data/a.rhai` as the watcher recorded it before `data` was swapped.
-        assert_eq!(hash_file(&project, &root.join("data/a.rhai")), None);
+        assert_eq!(hash_file(&project, &[], &root.join("data/a.rhai")), None);
+        // The outside file as an event path resolved through the link: not read,
+        // unless it is the script or document named on the command line.
+        let out = outside.path().canonicalize().unwrap().join("a.rhai");
+        assert_eq!(hash_file(&project, &[], &out), None);
+        assert_eq!(
+            hash_file(&project, std::slice::from_ref(&out), &out),
+            Some(content_hash(b"outside"))
+        );
     }
 }

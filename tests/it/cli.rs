@@ -54,10 +54,10 @@ fn exit_codes_and_located_errors() {
     // Usage errors: exit 2.
     assert_eq!(run_in(p, &["run"]).status.code(), Some(2));
     assert_eq!(run_in(p, &["frobnicate"]).status.code(), Some(2));
-    assert_eq!(
-        run_in(p, &["run", "scripts/missing.rhai"]).status.code(),
-        Some(2)
-    );
+    // A missing script is a file error, like every refused path: exit 1, named.
+    let o = run_in(p, &["run", "scripts/missing.rhai"]);
+    assert_eq!(o.status.code(), Some(1), "{}", common::text(&o));
+    assert!(common::text(&o).contains("scripts/missing.rhai"));
 }
 
 #[test]

@@ -364,7 +364,7 @@ fn five_million_rows_are_refused_by_the_cap_in_bounded_memory() {
     // Raised limits stay bounded by the byte cap: 64 MiB of rows, not 5M of them.
     std::fs::write(
         p.join("scripts/more.rhai"),
-        format!("let db = open_db();\nlet r = db.query({rows:?}, [], #{{max_rows: 1000000}});\nprint(r.len());\n"),
+        format!("let db = open_db();\nlet r = db.query({rows:?}, [], #{{max_rows: 1000000, max_seconds: 120}});\nprint(r.len());\n"),
     )
     .unwrap();
     let (code, t, peak) = run_measured(p, &["run", "scripts/more.rhai"]);

@@ -464,9 +464,10 @@ fn cli_paths_follow_the_path_rule() {
     );
     let (code, out) = run(&p.join("models"), &["run", "../scripts/n.rhai"]);
     assert_eq!((code, out.trim()), (0, "8"), "{out}");
-    // --root does not change where SCRIPT is looked up.
+    // --root does not change where SCRIPT is looked up; a script outside it is a
+    // refused path (exit 1, like every refused path), not a usage error.
     let (code, out) = run(p, &["run", "scripts/n.rhai", "--root", "models"]);
-    assert_eq!(code, 2, "{out}");
+    assert_eq!(code, 1, "{out}");
     assert!(out.contains("outside the project"), "{out}");
     // Scripts copied into a `fitup demo` folder work there.
     let (code, out) = run(p, &["demo", "mycell"]);

@@ -335,3 +335,78 @@ fn urdf_primitives_are_counted_against_the_cap() {
     assert!(r.peak_kb < REFUSED_RSS_KB, "peak {} kB", r.peak_kb);
     assert_eq!(common::snapshot(p), before);
 }
+
+/// Peak resident memory of a document whose URDF robots reach
+/// [`fitup::document::robot::MAX_URDF_TRIANGLES`] and are refused at the next link
+/// mesh (kB).
+const URDF_TOTAL_RSS_KB: u64 = 1024 * 1024;
+
+/// A URDF (12 KB) whose 40 links each name one 1,000,000-triangle STL: each link's
+/// mesh is a scaled, placed copy, so the document made 40 million triangles (400 links
+/// of a 1.9 M-triangle STL: 16 GB in 2 min 12 s). The URDF robots of a document share
+/// one count, checked before each copy: refused at the fifth link's `<mesh>` line,
+/// within the stated memory; two robots naming the same URDF share the count too.
+#[test]
+fn urdf_link_meshes_are_counted_together_before_they_are_copied() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    std::fs::write(p.join("big.stl"), distinct_stl(1_000_000)).unwrap();
+    let mut urdf = String::from("<robot name=\"r\">\n<link name=\"l0\"/>\n");
+    for j in 1..=40 {
+        urdf += &format!(
+            "<link name=\"l{j}\"><visual><geometry><mesh filename=\"big.stl\"/></geometry></visual></link>\n<joint name=\"j{j}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{j}\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\"/></joint>\n",
+            j - 1
+        );
+    }
+    urdf += "</robot>\n";
+    std::fs::write(p.join("r.urdf"), &urdf).unwrap();
+    std::fs::write(p.join("cell.yaml"), "robots:\n- name: r\n  urdf: r.urdf\n").unwrap();
+    let before = common::snapshot(p);
+    let r = crate::hostile_bounds::run_within(
+        p,
+        &["check", "cell.yaml"],
+        std::time::Duration::from_secs(120),
+    );
+    eprintln!("40 links of 1 M triangles: peak {} kB", r.peak_kb);
+    assert_eq!(r.code, Some(1), "{}", r.text);
+    let line = urdf.lines().position(|l| l.contains("\"l5\"")).unwrap() + 1;
+    assert!(r.text.contains(&format!("r.urdf:{line}:")), "{}", r.text);
+    assert!(r.text.contains("link `l5`"), "{}", r.text);
+    assert!(r.text.contains("MAX_URDF_TRIANGLES"), "{}", r.text);
+    assert!(r.peak_kb < URDF_TOTAL_RSS_KB, "peak {} kB", r.peak_kb);
+    assert_eq!(common::snapshot(p), before);
+    // Two robots of 3 links each (3 M triangles apiece): the second is refused.
+    let short: String = (1..=3)
+        .map(|j| {
+            format!(
+                "<link name=\"l{j}\"><visual><geometry><mesh filename=\"big.stl\"/></geometry></visual></link>\n<joint name=\"j{j}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{j}\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\"/></joint>\n",
+                j - 1
+            )
+        })
+        .collect();
+    std::fs::write(
+        p.join("r3.urdf"),
+        format!("<robot name=\"r\">\n<link name=\"l0\"/>\n{short}</robot>\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("two.yaml"),
+        "robots:\n- name: a\n  urdf: r3.urdf\n- name: b\n  urdf: r3.urdf\n",
+    )
+    .unwrap();
+    let before = common::snapshot(p);
+    let r = crate::hostile_bounds::run_within(
+        p,
+        &["check", "two.yaml"],
+        std::time::Duration::from_secs(120),
+    );
+    assert_eq!(r.code, Some(1), "{}", r.text);
+    assert!(
+        r.text.contains("robot `b`") && r.text.contains("MAX_URDF_TRIANGLES"),
+        "{}",
+        r.text
+    );
+    assert!(r.peak_kb < URDF_TOTAL_RSS_KB, "peak {} kB", r.peak_kb);
+    assert_eq!(common::snapshot(p), before);
+}

@@ -387,7 +387,7 @@ const DB_RSS_KB: u64 = 1024 * 1024;
 /// and rows whose every step costs a `replace` over 8 MB under a 2 s limit (the clock
 /// was read every 10,000 steps: 18 s). Both stop at their limit (within the 20 s
 /// bound of the runner; the script prints how long each took) with the limit's
-/// message; an `instr` within the limit answers.
+/// message; an `instr` within its limit answers.
 #[test]
 fn one_sql_step_cannot_outlast_the_query_limit() {
     let dir = project_with_db();
@@ -396,10 +396,12 @@ fn one_sql_step_cannot_outlast_the_query_limit() {
     let r = script(
         p,
         "slow.rhai",
-        "let db = open_db();\nlet r = db.query(\"SELECT instr(hex(zeroblob(8000000)), hex(zeroblob(4000000)) || '1') AS i\", [], #{max_seconds: 1});\nprint(`instr ${r[0].i}`);\nlet t = timestamp();\ntry {\n    db.query(\"WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 100000) SELECT count(*) FROM c WHERE length(replace(hex(zeroblob(4000000 + x)), '0', 'ab')) > 0\", [], #{max_seconds: 2});\n    print(\"rows: no limit\");\n} catch (e) {\n    print(`rows: ${e}`);\n}\nprint(`rows took ${t.elapsed}`);\ndb.query(\"WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 100000) SELECT count(*) FROM c WHERE instr(hex(zeroblob(8000000 + x)), hex(zeroblob(4000000)) || '1') > 0\", [], #{max_seconds: 1});\n",
-        Duration::from_secs(20),
+        "let db = open_db();\nlet r = db.query(\"SELECT instr(hex(zeroblob(8000000)), hex(zeroblob(4000000)) || '1') AS i\", [], #{max_seconds: 10});\nprint(`instr ${r[0].i}`);\nlet t = timestamp();\ntry {\n    db.query(\"WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 100000) SELECT count(*) FROM c WHERE length(replace(hex(zeroblob(4000000 + x)), '0', 'ab')) > 0\", [], #{max_seconds: 2});\n    print(\"rows: no limit\");\n} catch (e) {\n    print(`rows: ${e}`);\n}\nprint(`rows took ${t.elapsed}`);\ndb.query(\"WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c LIMIT 100000) SELECT count(*) FROM c WHERE instr(hex(zeroblob(8000000 + x)), hex(zeroblob(4000000)) || '1') > 0\", [], #{max_seconds: 1});\n",
+        Duration::from_secs(60),
     );
     eprintln!("{}", r.text);
+    // (The answering `instr` has 10 s: on a loaded machine 1 s was not enough to
+    // answer, which is speed, not the bound under test.)
     assert!(r.text.contains("instr 0"), "{}", r.text);
     assert!(
         r.text.contains("rows: query stopped after 2 s"),

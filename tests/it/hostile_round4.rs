@@ -121,3 +121,88 @@ fn check_of_a_huge_document_is_bounded() {
     assert_eq!(text.matches(" cube.stl").count(), n, "one line per part");
     assert!(r.peak_kb < 600 * 1024, "peak {} kB", r.peak_kb);
 }
+
+// ---- exit codes of refused paths ---------------------------------------------------
+
+/// Every file or folder named on the command line that is missing, outside the project
+/// or reached through a symbolic link is refused with exit code 1 (a file error) and
+/// its name, whatever the command (`run` of a script or a motion program, `--doc`,
+/// `--root`, `skills`, `check`, `cache prune`); exit code 2 stays for the command line
+/// itself. (`run PROGRAM` and `run SCRIPT` exited 2 for a refused path, `skills` and
+/// `check` 1.)
+#[test]
+fn every_refused_command_line_path_exits_1() {
+    let dir = common::project();
+    let p = dir.path();
+    fitup::demo::write_robots(&p.join("models")).unwrap();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    std::fs::write(o.join("s.rhai"), "print(\"FROMOUTSIDE\");\n").unwrap();
+    std::fs::write(o.join("p.prg"), "Joint 0 0 0 0 0 0\n").unwrap();
+    std::fs::write(o.join("d.yaml"), "parts: {}\n").unwrap();
+    std::os::unix::fs::symlink(o, p.join("link")).unwrap();
+    std::fs::write(p.join("p.prg"), "Joint 0 0 0 0 0 0\n").unwrap();
+    std::fs::write(p.join("scripts/ok.rhai"), "print(\"inside\");\n").unwrap();
+    let os = |f: &str| o.join(f).to_string_lossy().into_owned();
+    let (script, program, doc) = (os("s.rhai"), os("p.prg"), os("d.yaml"));
+    let (script, program, doc) = (script.as_str(), program.as_str(), doc.as_str());
+    let missing = os("missing");
+    let missing = missing.as_str();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["run", "scripts/missing.rhai"], "missing.rhai"),
+        (vec!["run", "link/s.rhai", "--root", "."], "s.rhai"),
+        (vec!["run", script, "--root", "."], "s.rhai"),
+        (vec!["run", "scripts/ok.rhai", "--doc", doc], "d.yaml"),
+        (vec!["run", "scripts/ok.rhai", "--root", missing], "missing"),
+        (vec!["watch", "link/s.rhai", "--root", "."], "s.rhai"),
+        (
+            vec!["run", "missing.prg", "--doc", "models/mz07.yaml"],
+            "missing.prg",
+        ),
+        (
+            vec!["run", program, "--root", ".", "--doc", "models/mz07.yaml"],
+            "p.prg",
+        ),
+        (
+            vec![
+                "run",
+                "link/p.prg",
+                "--root",
+                ".",
+                "--doc",
+                "models/mz07.yaml",
+            ],
+            "p.prg",
+        ),
+        (vec!["run", "p.prg", "--doc", "link/d.yaml"], "d.yaml"),
+        (vec!["run", "p.prg", "--doc", doc], "d.yaml"),
+        (vec!["skills", "template", "missing.yaml"], "missing.yaml"),
+        (
+            vec!["skills", "run", "missing.json", "--plain"],
+            "missing.json",
+        ),
+        (vec!["check", "missing.yaml"], "missing.yaml"),
+        (vec!["cache", "prune", "missing"], "missing"),
+    ];
+    let before = common::snapshot(o);
+    for (args, name) in cases {
+        let r = crate::hostile_bounds::run(p, &args);
+        assert_eq!(r.code, Some(1), "{args:?}: {}", r.text);
+        assert!(
+            r.text.contains(name),
+            "{args:?} does not name {name}: {}",
+            r.text
+        );
+        assert!(!r.text.contains("FROMOUTSIDE"), "{args:?}: {}", r.text);
+    }
+    // The command line itself: exit 2.
+    for args in [
+        vec!["run"],
+        vec!["run", "p.prg"],
+        vec!["run", "scripts/ok.rhai", "--", "x"],
+    ] {
+        let r = crate::hostile_bounds::run(p, &args);
+        assert_eq!(r.code, Some(2), "{args:?}: {}", r.text);
+    }
+    assert_eq!(common::snapshot(o), before, "changed outside");
+}
