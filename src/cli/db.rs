@@ -2,6 +2,7 @@
 //! of `fitup run`/`watch` runs in the results database.
 
 use super::out::{errln, outln};
+use super::CliError;
 use super::{Exit, ScriptArgs};
 use crate::db::{recording, Database, NewRun, PathQuery, RunStatus, StoredPath, Target};
 use crate::math::AngleConvention;
@@ -81,30 +82,26 @@ enum Kind {
     Interference,
 }
 
-fn parse_id(s: &str) -> Result<(Kind, i64), String> {
+fn parse_id(s: &str) -> Result<(Kind, i64), CliError> {
     let (kind, n) = match s.split_once(':') {
         None => (Kind::Run, s),
         Some(("run", n)) => (Kind::Run, n),
         Some(("path", n)) => (Kind::Path, n),
         Some(("trajectory", n)) => (Kind::Trajectory, n),
         Some(("interference", n)) => (Kind::Interference, n),
-        Some((k, _)) => {
-            return Err(format!(
-                "unknown record kind `{k}`: use run:N, path:N, trajectory:N or interference:N"
-            ))
-        }
+        Some((k, _)) => return Err(CliError::RecordKind(k.to_string())),
     };
     let id = n
         .trim()
         .parse()
-        .map_err(|_| format!("`{n}` is not a record number"))?;
+        .map_err(|_| CliError::RecordNumber(n.to_string()))?;
     Ok((kind, id))
 }
 
-fn root_of(root: &Option<PathBuf>) -> Result<PathBuf, String> {
+fn root_of(root: &Option<PathBuf>) -> Result<PathBuf, CliError> {
     match root {
         Some(r) => Ok(r.clone()),
-        None => std::env::current_dir().map_err(|e| format!("cannot read the current folder: {e}")),
+        None => std::env::current_dir().map_err(CliError::CurrentFolder),
     }
 }
 
@@ -122,7 +119,8 @@ pub(super) fn main(a: &DbArgs) -> Exit {
 fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
     let usage = |m: String| (Exit::Usage, m);
     let fail = |m: String| (Exit::Failure, m);
-    let root = root_of(&a.root).map_err(usage)?;
+    let cli = |e: CliError| (Exit::Usage, e.to_string());
+    let root = root_of(&a.root).map_err(cli)?;
     let target = Target::resolve(a.db.as_deref(), &root);
     if let Target::Sqlite(p) = &target {
         if !p.exists() {
@@ -204,7 +202,7 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
             }
         }
         DbAction::Show { id } => {
-            let (kind, id) = parse_id(id).map_err(usage)?;
+            let (kind, id) = parse_id(id).map_err(cli)?;
             show(&mut db, kind, id).map_err(e)?;
         }
         DbAction::Export {
@@ -214,7 +212,7 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
             out,
             force,
         } => {
-            let (kind, id) = parse_id(id).map_err(usage)?;
+            let (kind, id) = parse_id(id).map_err(cli)?;
             if !csv && !json {
                 return Err(usage("say --csv or --json".into()));
             }

@@ -6,6 +6,7 @@ mod batch;
 mod cache;
 mod check;
 mod db;
+mod error;
 mod import;
 pub(crate) mod out;
 mod run;
@@ -13,6 +14,8 @@ mod sequence;
 mod skills;
 mod skills_tui;
 mod view;
+
+pub use error::CliError;
 
 use clap::{Parser, Subcommand};
 use out::{errln, outln};

@@ -1,7 +1,7 @@
 //! `fitup run` and `fitup watch`.
 
 use super::out::{errln, outln};
-use super::{Exit, ScriptArgs};
+use super::{CliError, Exit, ScriptArgs};
 use crate::math::format;
 use crate::script::{
     run_script, Arguments, Caches, Dispatch, Limits, Project, RunOptions, ScriptError,
@@ -14,10 +14,10 @@ use std::sync::Arc;
 /// the command line that is missing or refused by the path rule exits 1 (a script or
 /// document error, like every refused path), malformed arguments exit 2 (usage).
 fn options(a: &ScriptArgs) -> Result<RunOptions, (Exit, String)> {
-    let fail = |m: String| (Exit::Failure, m);
+    let fail = |e: CliError| (Exit::Failure, e.to_string());
     let (project, script) = project_of(a, "script").map_err(fail)?;
     let doc = match &a.doc {
-        Some(d) => Some(inside(&project, d).map_err(|e| fail(format!("document: {e}")))?),
+        Some(d) => Some(inside(&project, d, "document").map_err(fail)?),
         None => None,
     };
     let args = Arguments::parse(&a.args).map_err(|e| (Exit::Usage, e.to_string()))?;
@@ -43,32 +43,59 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, (Exit, String)> {
 /// The project of a run (the path rule of [`Project`]: `--root`, else the nearest
 /// folder of the script holding `fitup.toml`, else the script's folder) and the
 /// script's absolute path. Command-line paths are relative to the current folder.
-fn project_of(a: &ScriptArgs, what: &str) -> Result<(Project, std::path::PathBuf), String> {
-    let script = std::path::absolute(&a.script)
-        .map_err(|e| format!("{what} {}: {e}", a.script.display()))?;
+fn project_of(
+    a: &ScriptArgs,
+    what: &'static str,
+) -> Result<(Project, std::path::PathBuf), CliError> {
+    let path_error = |source| CliError::Path {
+        what,
+        path: a.script.clone(),
+        source,
+    };
+    let script = std::path::absolute(&a.script).map_err(path_error)?;
     // Anything else that exists (a folder, a FIFO) is refused by name when it is read.
     if !script.exists() {
-        return Err(format!("{what} {} does not exist", a.script.display()));
+        return Err(CliError::Missing {
+            what,
+            path: a.script.clone(),
+        });
     }
     let project = match &a.root {
-        Some(r) => Project::new(r).map_err(|e| format!("project folder {}: {e}", r.display()))?,
-        None => {
-            Project::for_file(&script).map_err(|e| format!("{what} {}: {e}", a.script.display()))?
-        }
+        Some(r) => Project::new(r).map_err(|source| CliError::ProjectFolder {
+            path: r.clone(),
+            source,
+        })?,
+        None => Project::for_file(&script).map_err(path_error)?,
     };
     let script = project
         .resolve(&script.to_string_lossy())
-        .map_err(|e| format!("{what}: {e} (pass --root)"))?;
+        .map_err(|source| CliError::Refused {
+            what,
+            source,
+            root_hint: true,
+        })?;
     Ok((project, script))
 }
 
 /// A command-line path (relative to the current folder), checked to lie inside the
-/// project.
-fn inside(project: &Project, path: &std::path::Path) -> Result<std::path::PathBuf, String> {
-    let abs = std::path::absolute(path).map_err(|e| format!("{}: {e}", path.display()))?;
+/// project; `what` names it in errors.
+fn inside(
+    project: &Project,
+    path: &std::path::Path,
+    what: &'static str,
+) -> Result<std::path::PathBuf, CliError> {
+    let abs = std::path::absolute(path).map_err(|source| CliError::Path {
+        what,
+        path: path.to_path_buf(),
+        source,
+    })?;
     project
         .resolve(&abs.to_string_lossy())
-        .map_err(|e| e.to_string())
+        .map_err(|source| CliError::Refused {
+            what,
+            source,
+            root_hint: false,
+        })
 }
 
 /// Whether the file is a robot motion program rather than a Rhai script.
@@ -233,15 +260,18 @@ fn clock() -> String {
 /// robot of the document from its saved joints and prints (or writes) the joint/TCP log.
 fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     let usage = |m: String| (Exit::Usage, m);
-    let fail = |m: String| (Exit::Failure, m);
-    let (project, program_path) = project_of(a, "program").map_err(fail)?;
+    // A refused or missing file named on the command line exits 1, like every
+    // refused path.
+    let cli = |e: CliError| (Exit::Failure, e.to_string());
+    let (project, program_path) = project_of(a, "program").map_err(cli)?;
     let doc_arg = a.doc.as_ref().ok_or_else(|| {
         usage(format!(
             "{} is a robot program (not .rhai): pass --doc with the document holding the robot",
             a.script.display()
         ))
     })?;
-    let doc_path = inside(&project, doc_arg).map_err(|e| fail(format!("document: {e}")))?;
+    let doc_path = inside(&project, doc_arg, "document").map_err(cli)?;
+    let fail = |m: String| (Exit::Failure, m);
     let mut doc =
         crate::document::Document::load_in(&doc_path, &project, &mut crate::mesh::MeshCache::new())
             .map_err(|e| fail(e.render()))?;
@@ -282,7 +312,7 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
         &project,
         Some(run_name(&program_path, None)),
     )
-    .map_err(usage)?;
+    .map_err(cli)?;
     let viewer = super::view::handle(&live);
     viewer.log_document(&doc);
     viewer.log_trajectory(&doc, index, &trajectory);

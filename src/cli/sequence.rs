@@ -31,7 +31,7 @@ pub(super) struct Args<'a> {
 
 /// The request the flags and `--option`s make (flags first, `--option`s over them),
 /// read through the vocabulary like a script's map.
-fn request(a: &Args<'_>) -> Result<Sequence, String> {
+fn request(a: &Args<'_>) -> Result<Sequence, super::CliError> {
     use serde_json::{json, Value};
     let mut map = serde_json::Map::new();
     map.insert("mode".into(), json!(a.mode));
@@ -52,13 +52,12 @@ fn request(a: &Args<'_>) -> Result<Sequence, String> {
     }
     map.insert("support".into(), json!(a.support));
     if let Some(g) = &a.gravity {
-        let v = parse_vec3(g)
-            .ok_or_else(|| format!("--gravity must be three numbers `x,y,z`, not `{g}`"))?;
+        let v = parse_vec3(g).ok_or_else(|| super::CliError::Gravity(g.clone()))?;
         map.insert("gravity".into(), json!([v.x, v.y, v.z]));
     }
     map.insert("max_sequences".into(), json!(a.max_sequences));
     map.extend(Sequence::VOCABULARY.map_from_args(&a.options)?);
-    let parsed = Sequence::from_value(Value::Object(map)).map_err(|e| e.to_string())?;
+    let parsed = Sequence::from_value(Value::Object(map))?;
     for w in &parsed.warnings {
         eprintln!("warning: {w}");
     }

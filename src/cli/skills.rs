@@ -186,25 +186,24 @@ pub(super) fn manipulator(a: &ManipulatorArgs) -> Exit {
     }
 }
 
-fn duration(s: f64, what: &str) -> Result<std::time::Duration, String> {
+fn duration(s: f64, flag: &'static str) -> Result<std::time::Duration, super::CliError> {
     std::time::Duration::try_from_secs_f64(s)
-        .map_err(|_| format!("--{what} must be a number of seconds ≥ 0, got {s}"))
+        .map_err(|_| super::CliError::Seconds { flag, value: s })
 }
 
 /// The text of a file named on the command line, read through its project's held
 /// root ([`crate::project::Project::read_named_text`]: a folder on the way swapped for
 /// a link is refused, never followed), as `fitup check` reads its document.
-fn read_in_its_project(file: &std::path::Path) -> Result<String, String> {
-    let project = crate::project::Project::for_file(file).map_err(|e| e.to_string())?;
-    project
-        .read_named_text(file, crate::fsutil::FileKind::Document)
-        .map_err(|e| e.to_string())
+fn read_in_its_project(file: &std::path::Path) -> Result<String, super::CliError> {
+    let project =
+        crate::project::Project::for_file(file).map_err(super::CliError::ProjectOfFile)?;
+    Ok(project.read_named_text(file, crate::fsutil::FileKind::Document)?)
 }
 
 /// `fitup skills template FILE`.
 fn template(file: &std::path::Path) -> Exit {
-    let read =
-        read_in_its_project(file).map_err(|e| crate::diagnostics::SourceError::new(file, 0, 0, e));
+    let read = read_in_its_project(file)
+        .map_err(|e| crate::diagnostics::SourceError::new(file, 0, 0, e.to_string()));
     match read.and_then(|text| crate::skills::Template::parse(file, &text)) {
         Ok(t) => {
             outln!("{}: {} template", file.display(), t.operation.name());

@@ -3,7 +3,7 @@
 use super::out::errln;
 #[cfg(feature = "viewer")]
 use super::out::outln;
-use super::{Exit, ViewArgs};
+use super::{CliError, Exit, ViewArgs};
 use crate::script::Project;
 use std::path::Path;
 
@@ -22,23 +22,30 @@ pub(super) fn start(
     force: bool,
     project: &Project,
     first_run: Option<String>,
-) -> Result<Live, String> {
+) -> Result<Live, CliError> {
     use crate::viewer::{Session, SessionOptions};
     if !a.view && a.record.is_none() {
         return Ok(None);
     }
     let record = match &a.record {
         Some(r) => {
-            let abs =
-                std::path::absolute(r).map_err(|e| format!("--record {}: {e}", r.display()))?;
+            let path_error = |source| CliError::Path {
+                what: "--record",
+                path: r.clone(),
+                source,
+            };
+            let abs = std::path::absolute(r).map_err(path_error)?;
             let rule = crate::fsutil::OutputRule::forced(force);
             let path = project
                 .resolve_output(&abs.to_string_lossy(), &rule)
-                .map_err(|e| format!("--record: {e}"))?;
+                .map_err(|source| CliError::Refused {
+                    what: "--record",
+                    source,
+                    root_hint: false,
+                })?;
             // The recording is streamed while the run goes on: listed as fitup's own
             // by its magic, so the next run (or watch rerun) may replace it.
-            crate::fsutil::register_stream(&path, crate::fsutil::RRD_MAGIC)
-                .map_err(|e| format!("--record {}: {e}", r.display()))?;
+            crate::fsutil::register_stream(&path, crate::fsutil::RRD_MAGIC).map_err(path_error)?;
             Some(path)
         }
         None => None,
@@ -48,8 +55,7 @@ pub(super) fn start(
         record,
         first_run,
         report: Some(std::sync::Arc::new(|s: &str| errln!("{s}"))),
-    })
-    .map_err(|e| e.to_string())?;
+    })?;
     if let Some(url) = session.url() {
         announce(url, a.open);
     }
@@ -62,9 +68,9 @@ pub(super) fn start(
     _force: bool,
     _project: &Project,
     _first_run: Option<String>,
-) -> Result<Live, String> {
+) -> Result<Live, CliError> {
     if a.view || a.record.is_some() {
-        return Err(crate::viewer::not_built().to_string());
+        return Err(crate::viewer::not_built().into());
     }
     Ok(None)
 }

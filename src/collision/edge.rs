@@ -65,6 +65,23 @@ struct EdgeFrames {
 }
 
 impl EdgeFrames {
+    /// The edge `from → to` of the moving part against an obstacle at `pose`.
+    fn new(from: &Transform, to: &Transform, pose: &Transform) -> Self {
+        let (angle, shift) = from.distance_to(to);
+        let obstacle_inv = pose.isometry().inverse();
+        Self {
+            obstacle_inv,
+            from: *from,
+            to: *to,
+            shift,
+            shift_local: obstacle_inv.rotation * (to.translation() - from.translation()),
+            angle,
+            axis: (from.rotation().inverse() * to.rotation())
+                .axis()
+                .map_or_else(Vec3::zeros, |k| k.into_inner()),
+        }
+    }
+
     /// Moving part frame → obstacle frame at edge parameter `t`.
     fn at(&self, t: f64) -> Isometry3<f64> {
         self.obstacle_inv * self.from.interpolate(&self.to, t).isometry()
@@ -157,25 +174,14 @@ fn edge_check(
             "a finite number > 0 mm",
         ));
     }
-    let (angle, shift) = from.distance_to(to);
+    let frames = EdgeFrames::new(from, to, pose);
+    let angle = frames.angle;
     if angle > MAX_EDGE_ANGLE {
         return Ok(Some(true));
     }
-    if angle == 0.0 && shift == 0.0 {
+    if angle == 0.0 && frames.shift == 0.0 {
         return Ok(Some(false));
     }
-    let axis = (from.rotation().inverse() * to.rotation())
-        .axis()
-        .map_or_else(Vec3::zeros, |k| k.into_inner());
-    let frames = EdgeFrames {
-        obstacle_inv: pose.isometry().inverse(),
-        from: *from,
-        to: *to,
-        shift,
-        shift_local: pose.isometry().inverse().rotation * (to.translation() - from.translation()),
-        angle,
-        axis,
-    };
     // the translation in the start frame of the moving part: its boxes sweep along it
     let sweep = from.isometry().rotation.inverse() * (to.translation() - from.translation());
     // the obstacle's frame is "a", the moving part at `from` is "b"
@@ -499,18 +505,7 @@ mod tests {
                 from.translation() + Vec3::new(u(-4.0, 4.0), u(-4.0, 4.0), u(-4.0, 4.0)),
                 from.rotation() * rot(k, u(0.0, 1.5)),
             );
-            let (angle, shift) = from.distance_to(&to);
-            let frames = EdgeFrames {
-                obstacle_inv: Isometry3::identity(),
-                from,
-                to,
-                shift,
-                shift_local: to.translation() - from.translation(),
-                angle,
-                axis: (from.rotation().inverse() * to.rotation())
-                    .axis()
-                    .map_or_else(Vec3::zeros, |a| a.into_inner()),
-            };
+            let frames = EdgeFrames::new(&from, &to, &Transform::IDENTITY);
             let sweep =
                 from.isometry().rotation.inverse() * (to.translation() - from.translation());
             let swept = swept_obb(&b, &sweep, &frames);

@@ -212,7 +212,7 @@ pub enum DbError {
     #[error("{target} was written by a newer fitup (schema version {found}; this fitup {ours} knows versions up to {supported}): upgrade fitup to use it")]
     NewerSchema {
         /// The database.
-        target: String,
+        target: Target,
         /// Its schema version.
         found: u32,
         /// The newest version this build knows.
@@ -224,7 +224,7 @@ pub enum DbError {
     #[error("cannot open the database {target}: {cause}")]
     Open {
         /// The database.
-        target: String,
+        target: Target,
         /// The driver's message.
         cause: String,
     },
@@ -232,7 +232,7 @@ pub enum DbError {
     #[error("the database {target} is read-only: {cause}")]
     ReadOnly {
         /// The database.
-        target: String,
+        target: Target,
         /// The driver's message.
         cause: String,
     },
@@ -242,7 +242,7 @@ pub enum DbError {
     #[error("{target} is not a fitup results database: {cause}; it was left as it is (name a new file, or the project's own database)")]
     Foreign {
         /// The database file.
-        target: String,
+        target: Target,
         /// What it is instead.
         cause: String,
     },
@@ -250,7 +250,7 @@ pub enum DbError {
     #[error("the disk holding {target} is full; the result was not stored: {cause}")]
     DiskFull {
         /// The database.
-        target: String,
+        target: Target,
         /// The driver's message.
         cause: String,
     },
@@ -258,7 +258,7 @@ pub enum DbError {
     #[error("the database {target} stayed busy (other writers) through {tries} tries: {cause}")]
     Busy {
         /// The database.
-        target: String,
+        target: Target,
         /// Attempts made.
         tries: u32,
         /// The driver's last message.
@@ -275,7 +275,7 @@ pub enum DbError {
     #[error("query stopped after {} s (the time limit of db.query on {target}; a script may raise it up to {} s with #{{max_seconds: …}})", .limit.as_secs_f64(), QueryLimits::MAX.time.as_secs())]
     QueryTimeout {
         /// The database.
-        target: String,
+        target: Target,
         /// The limit that passed.
         limit: Duration,
     },
@@ -283,7 +283,7 @@ pub enum DbError {
     #[error("the query on {target} returned more than {} rows or {} (the result limit of db.query; a script may raise it up to {} rows and {} with #{{max_rows: …, max_bytes: …}}, or ask for fewer rows with LIMIT)", query::thousands(*.max_rows as u64), query::bytes(*.max_bytes), query::thousands(QueryLimits::MAX.max_rows as u64), query::bytes(QueryLimits::MAX.max_bytes))]
     QueryTooLarge {
         /// The database.
-        target: String,
+        target: Target,
         /// The row cap.
         max_rows: usize,
         /// The byte cap.
@@ -299,7 +299,7 @@ pub enum DbError {
     #[error("query on {target} cancelled")]
     QueryCancelled {
         /// The database.
-        target: String,
+        target: Target,
     },
     /// A query limit asked for by a script is out of range.
     #[error(
@@ -321,7 +321,7 @@ pub enum DbError {
         /// The id asked for.
         id: i64,
         /// The database.
-        target: String,
+        target: Target,
     },
     /// A value that cannot be stored (a non-finite number, …).
     #[error("cannot store {what}: {cause}")]
@@ -335,7 +335,7 @@ pub enum DbError {
     #[error("database {target}: {cause}")]
     Sql {
         /// The database.
-        target: String,
+        target: Target,
         /// The driver's message.
         cause: String,
     },
@@ -401,7 +401,7 @@ impl Database {
         version: u32,
         project: Option<&crate::project::Project>,
     ) -> Result<Self, DbError> {
-        let name = target.to_string();
+        let name = target.clone();
         let open_err = |cause: String| DbError::Open {
             target: name.clone(),
             cause,
@@ -409,7 +409,7 @@ impl Database {
         let mut held_file = None;
         let conn = match target {
             Target::Sqlite(path) => {
-                let held = hold_folder(path, project).map_err(open_err)?;
+                let held = hold_folder(path, project).map_err(|e| open_err(e.to_string()))?;
                 let (dir, file) = (held.dir(), held.name());
                 let kind = dir.stat(file).map_err(|e| open_err(e.to_string()))?;
                 let existing = match kind {
@@ -512,7 +512,7 @@ impl Database {
             }
             #[cfg(feature = "postgres")]
             Target::Postgres(url) => Conn::Postgres(Box::new(
-                pg::connect(url).map_err(|cause| open_err(target.scrub(&cause)))?,
+                pg::connect(url).map_err(|e| open_err(target.scrub(&e.to_string())))?,
             )),
             #[cfg(not(feature = "postgres"))]
             Target::Postgres(_) => return Err(open_err(NO_POSTGRES.into())),
@@ -528,7 +528,7 @@ impl Database {
         match db.transaction("the schema", |tx| schema::migrate(tx, target_version, &now))? {
             schema::Migrated::Ok => Ok(db),
             schema::Migrated::Newer(found) => Err(DbError::NewerSchema {
-                target: db.target.to_string(),
+                target: db.target.clone(),
                 found,
                 supported: schema::LATEST,
                 ours: env!("CARGO_PKG_VERSION"),
@@ -556,7 +556,7 @@ impl Database {
     }
 
     fn error(&self, what: &str, e: Raw, tries: u32) -> DbError {
-        let target = self.target.to_string();
+        let target = self.target.clone();
         match e.kind {
             Kind::Busy => DbError::Busy {
                 target,
@@ -664,7 +664,7 @@ impl Database {
         cancel: Option<Arc<AtomicBool>>,
     ) -> Result<QueryResult, DbError> {
         let limits = limits.checked()?;
-        let target = self.target.to_string();
+        let target = self.target.clone();
         let result = match &mut self.conn {
             #[cfg(feature = "postgres")]
             Conn::Postgres(c) => pg::pg_query(c, sql, params, limits, cancel),
@@ -764,20 +764,21 @@ fn is_fitup_sqlite(c: &rusqlite::Connection) -> rusqlite::Result<bool> {
 fn hold_folder(
     path: &Path,
     project: Option<&crate::project::Project>,
-) -> Result<held::HeldFile, String> {
+) -> Result<held::HeldFile, FolderError> {
     let (Some(name), Some(parent)) = (path.file_name(), path.parent()) else {
-        return Err("not a file name".into());
+        return Err(FolderError::NotAFileName);
     };
     let parent = if parent.as_os_str().is_empty() {
         Path::new(".")
     } else {
         parent
     };
-    let missing = |e: std::io::Error| {
-        if e.kind() == std::io::ErrorKind::NotFound {
-            format!("the folder {} does not exist", parent.display())
+    let missing = |source: std::io::Error| {
+        let folder = parent.to_path_buf();
+        if source.kind() == std::io::ErrorKind::NotFound {
+            FolderError::Missing(folder)
         } else {
-            format!("its folder {}: {e}", parent.display())
+            FolderError::Unreadable { folder, source }
         }
     };
     if let Some(project) = project.filter(|p| path.starts_with(p.root())) {
@@ -795,6 +796,27 @@ fn hold_folder(
     }
     let dir = crate::fsutil::Dir::open(parent).map_err(missing)?;
     Ok(held::HeldFile::new(dir, name))
+}
+
+/// Why the folder of a SQLite file cannot be held open (the cause of a
+/// [`DbError::Open`]).
+#[derive(Debug, thiserror::Error)]
+enum FolderError {
+    /// The path ends in `..` or is a root: no file name.
+    #[error("not a file name")]
+    NotAFileName,
+    /// The folder does not exist.
+    #[error("the folder {} does not exist", .0.display())]
+    Missing(PathBuf),
+    /// The folder cannot be opened (permissions, a file on the way, …).
+    #[error("its folder {}: {source}", .folder.display())]
+    Unreadable {
+        /// The folder.
+        folder: PathBuf,
+        /// The operating system's refusal.
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 /// The columns and rows of a [`Database::query`].

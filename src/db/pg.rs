@@ -51,15 +51,22 @@ impl From<postgres::Error> for Raw {
             Some(c) if *c == SqlState::DISK_FULL => Kind::Full,
             _ => Kind::Other,
         };
-        // The server's own message (and detail) says more than the client's summary.
-        let message = match e.as_db_error() {
-            Some(db) => match db.detail() {
-                Some(d) => format!("{} ({d})", db.message()),
-                None => db.message().to_string(),
-            },
-            None => e.to_string(),
-        };
-        Raw { kind, message }
+        Raw {
+            kind,
+            message: server_message(&e),
+        }
+    }
+}
+
+/// The server's own message (and detail), which says more than the client's summary;
+/// the client's when the server said nothing.
+fn server_message(e: &postgres::Error) -> String {
+    match e.as_db_error() {
+        Some(db) => match db.detail() {
+            Some(d) => format!("{} ({d})", db.message()),
+            None => db.message().to_string(),
+        },
+        None => e.to_string(),
     }
 }
 
@@ -253,9 +260,9 @@ impl Tx for PgTx<'_> {
 /// Opens a connection to the server at `url` with fitup's settings: the URL's
 /// `connect_timeout` (else [`CONNECT_TIMEOUT`](super::CONNECT_TIMEOUT)) bounds the whole
 /// handshake, a TCP user timeout and keepalives notice a server that went away. The
-/// error is the driver's message, not yet scrubbed of credentials.
-pub(crate) fn connect(url: &str) -> Result<postgres::Client, String> {
-    let mut config: postgres::Config = url.parse().map_err(|e: postgres::Error| e.to_string())?;
+/// error's message is the driver's, not yet scrubbed of credentials.
+pub(crate) fn connect(url: &str) -> Result<postgres::Client, ConnectError> {
+    let mut config: postgres::Config = url.parse().map_err(ConnectError::Url)?;
     let timeout = config
         .get_connect_timeout()
         .copied()
@@ -269,26 +276,43 @@ pub(crate) fn connect(url: &str) -> Result<postgres::Client, String> {
     connect_within(config, timeout)
 }
 
+/// Why a connection to PostgreSQL was not made (the cause of a
+/// [`DbError::Open`](super::DbError::Open), scrubbed of credentials there).
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum ConnectError {
+    /// The URL does not parse.
+    #[error("{0}")]
+    Url(#[source] postgres::Error),
+    /// The connecting thread could not start.
+    #[error("cannot start the connecting thread: {0}")]
+    Thread(#[source] std::io::Error),
+    /// The server or the network refused (the driver's message).
+    #[error("{}", server_message(.0))]
+    Refused(#[source] postgres::Error),
+    /// The handshake did not finish within the connect timeout.
+    #[error("no answer from the server within {} s (the connect timeout; `connect_timeout=N` in the URL changes it, up to {} s)", .0.as_secs_f64(), MAX_CONNECT_TIMEOUT.as_secs())]
+    NoAnswer(Duration),
+}
+
 /// Connects to PostgreSQL, giving up after `timeout`: the driver bounds the TCP
 /// connect only, so a server that accepts and then never answers would hang the
 /// handshake forever. The attempt runs on its own thread; one that has not finished
 /// in time is left to end by itself (when the server closes, or with the process).
-fn connect_within(config: postgres::Config, timeout: Duration) -> Result<postgres::Client, String> {
+fn connect_within(
+    config: postgres::Config,
+    timeout: Duration,
+) -> Result<postgres::Client, ConnectError> {
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::Builder::new()
         .name("fitup-db-connect".into())
         .spawn(move || {
             let _ = tx.send(config.connect(postgres::NoTls));
         })
-        .map_err(|e| format!("cannot start the connecting thread: {e}"))?;
+        .map_err(ConnectError::Thread)?;
     match rx.recv_timeout(timeout) {
         Ok(Ok(client)) => Ok(client),
-        Ok(Err(e)) => Err(Raw::from(e).message),
-        Err(_) => Err(format!(
-            "no answer from the server within {} s (the connect timeout; `connect_timeout=N` in the URL changes it, up to {} s)",
-            timeout.as_secs_f64(),
-            MAX_CONNECT_TIMEOUT.as_secs()
-        )),
+        Ok(Err(e)) => Err(ConnectError::Refused(e)),
+        Err(_) => Err(ConnectError::NoAnswer(timeout)),
     }
 }
 

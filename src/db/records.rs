@@ -430,7 +430,7 @@ impl Database {
         DbError::NotFound {
             what,
             id,
-            target: self.target.to_string(),
+            target: self.target.clone(),
         }
     }
 

@@ -36,11 +36,9 @@ pub fn parent_name(full_name: &str) -> Option<&str> {
 
 /// Whether `full_name` is well formed: no empty level, no surrounding spaces at a
 /// level.
-pub(crate) fn check_levels(full_name: &str) -> Result<(), String> {
+pub(crate) fn check_levels(full_name: &str) -> Result<(), super::EntryError> {
     if full_name.split('/').any(|s| s.is_empty() || s.trim() != s) {
-        return Err(format!(
-            "`{full_name}`: a full name is levels joined by `/`, each non-empty without surrounding spaces"
-        ));
+        return Err(super::EntryError::FullName(full_name.to_string()));
     }
     Ok(())
 }
@@ -177,7 +175,7 @@ impl Document {
     /// (world, mm).
     pub fn add_sub_assembly(&mut self, name: &str, t: Transform) -> Result<(), DocumentError> {
         let name = new_name(name, "sub-assembly name")?;
-        check_levels(&name).map_err(DocumentError::Invalid)?;
+        check_levels(&name)?;
         if self.by_name.contains_key(&name) || self.assemblies.iter().any(|a| a.name == name) {
             return Err(DocumentError::Invalid(format!(
                 "a component or sub-assembly named `{name}` exists already"
@@ -248,7 +246,7 @@ impl Document {
 
     /// Refuses a full name whose parent is no sub-assembly.
     pub(crate) fn check_parent(&self, name: &str) -> Result<(), DocumentError> {
-        check_levels(name).map_err(DocumentError::Invalid)?;
+        check_levels(name)?;
         match parent_name(name) {
             Some(p) if !self.assemblies.iter().any(|a| a.name == p) => {
                 Err(DocumentError::Invalid(format!(

@@ -171,17 +171,19 @@ impl Document {
             )));
         }
         let bad = |m: String| DocumentError::Invalid(format!("mate `{name}`: {m}"));
+        let entry = |e: super::EntryError| bad(e.to_string());
         let ea = self
             .mate_entity(&nfc_name(&spec.entities[0]))
-            .map_err(bad)?;
+            .map_err(entry)?;
         let eb = self
             .mate_entity(&nfc_name(&spec.entities[1]))
-            .map_err(bad)?;
-        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry, spec.aligned).map_err(bad)?;
+            .map_err(entry)?;
+        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry, spec.aligned)
+            .map_err(entry)?;
         let about = match &spec.about {
             None => None,
             Some(s) => {
-                let e = self.mate_entity(&nfc_name(s)).map_err(bad)?;
+                let e = self.mate_entity(&nfc_name(s)).map_err(entry)?;
                 if !matches!(e.geometry, Reference::Axis { .. }) {
                     return Err(bad("`about` must name an axis".into()));
                 }

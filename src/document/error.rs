@@ -23,6 +23,11 @@ pub enum DocumentError {
         /// Close matches or what exists.
         hint: String,
     },
+    /// An entry that is not valid (a full name, a mate's entities, a robot's joints).
+    /// Boxed: the entry's kinds are large, and every `Result` carrying a
+    /// `DocumentError` (the sequence and workspace layers') would grow with them.
+    #[error(transparent)]
+    Entry(Box<super::EntryError>),
     /// An operation a lower layer refused, in its words (a robot definition, a GLB
     /// export).
     #[error("{0}")]
@@ -195,5 +200,11 @@ fn equation_message(at: Option<&SourceError>, source: &EquationError) -> String 
     match at {
         Some(at) => at.to_string(),
         None => source.to_string(),
+    }
+}
+
+impl From<super::EntryError> for DocumentError {
+    fn from(e: super::EntryError) -> Self {
+        Self::Entry(Box::new(e))
     }
 }

@@ -17,6 +17,11 @@ pub struct DocumentFile {
     /// Free text.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
+    /// How far the parts' meshes may lie from the exact surfaces they stand for (mm):
+    /// the linear deflection of the tessellation that made them (`fitup import`
+    /// writes it). Sequence planning judges interference no finer than this.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh_deflection: Option<f64>,
     /// Part definitions by name.
     #[serde(default)]
     pub parts: IndexMap<String, PartFile>,

@@ -255,6 +255,7 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
             model.options.linear_deflection,
             model.options.angular_deflection,
         )),
+        mesh_deflection: Some(model.options.linear_deflection),
         ..DocumentFile::default()
     };
     for p in &model.parts {

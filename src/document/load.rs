@@ -2,6 +2,7 @@
 //! components, URDF robots and mates built, the mates solved.
 
 use super::file::{ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile};
+use super::EntryError;
 use super::{
     mates, robot, scan, tessellations, AabbCache, Color, Component, Document, DocumentError,
     Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry, MAX_ABS_VALUE,
@@ -164,6 +165,15 @@ impl Document {
                 ),
             ));
         }
+        if let Some(d) = file.mesh_deflection {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(load.at(
+                    "mesh_deflection",
+                    "mesh_deflection",
+                    format!("mesh_deflection {d} is not a finite number of mm ≥ 0"),
+                ));
+            }
+        }
         let mut step_warnings = Vec::new();
         let parts = load.parts(&file, cache, &mut step_warnings)?;
         let assemblies = super::assembly::load(&file, |key, m| load.at_key(&[key], m))?;
@@ -174,6 +184,7 @@ impl Document {
             saved_sub_documents: Vec::new(),
             generated: Default::default(),
             description: file.description.clone(),
+            mesh_deflection: file.mesh_deflection,
             parts,
             components,
             numbering: super::numbering::Numbering::of(by_name.keys()),
@@ -227,16 +238,17 @@ impl Document {
         Ok(doc)
     }
 
-    pub(super) fn mate_entity(&self, spec: &str) -> Result<MateEntity, String> {
+    pub(super) fn mate_entity(&self, spec: &str) -> Result<MateEntity, EntryError> {
         let (comp, reference) = spec
             .rsplit_once('/')
-            .ok_or_else(|| format!("entity `{spec}` must be written `component/reference`"))?;
-        let &component = self.by_name.get(comp).ok_or_else(|| {
-            format!(
-                "no component `{comp}` ({})",
-                suggestion(comp, self.by_name.keys().map(String::as_str))
-            )
-        })?;
+            .ok_or_else(|| EntryError::EntitySyntax(spec.to_string()))?;
+        let &component = self
+            .by_name
+            .get(comp)
+            .ok_or_else(|| EntryError::NoComponent {
+                name: comp.to_string(),
+                hint: suggestion(comp, self.by_name.keys().map(String::as_str)),
+            })?;
         let part = &self.parts[&self.components[component].part];
         let geometry = part.reference(reference).ok_or_else(|| {
             let names = part
@@ -244,11 +256,11 @@ impl Document {
                 .keys()
                 .map(String::as_str)
                 .chain(Reference::BUILTIN_NAMES);
-            format!(
-                "part `{}` has no reference `{reference}` ({})",
-                part.name,
-                suggestion(reference, names)
-            )
+            EntryError::NoReference {
+                part: part.name.clone(),
+                reference: reference.to_string(),
+                hint: suggestion(reference, names),
+            }
         })?;
         Ok(MateEntity {
             component,
@@ -800,7 +812,7 @@ impl Loader<'_> {
 }
 
 impl Feature {
-    fn from_file(f: &FeatureFile) -> Result<Feature, String> {
+    fn from_file(f: &FeatureFile) -> Result<Feature, EntryError> {
         match f {
             FeatureFile::CutCells {
                 name,
@@ -810,15 +822,14 @@ impl Feature {
                 let spec = match (cell_size, planes) {
                     (Some(s), None) if s.is_finite() && *s > 0.0 => CutSpec::Size(*s),
                     (Some(s), None) => {
-                        return Err(format!(
-                            "cut cells `{name}`: cell_size must be a number > 0 mm, not {s}"
-                        ))
+                        return Err(EntryError::CellSize {
+                            name: name.clone(),
+                            value: *s,
+                        })
                     }
                     (None, Some(p)) => {
                         if p.x.iter().chain(&p.y).chain(&p.z).any(|v| !v.is_finite()) {
-                            return Err(format!(
-                                "cut cells `{name}`: plane positions must be finite"
-                            ));
+                            return Err(EntryError::CutPlanes(name.clone()));
                         }
                         CutSpec::Planes {
                             x: p.x.clone(),
@@ -826,11 +837,7 @@ impl Feature {
                             z: p.z.clone(),
                         }
                     }
-                    _ => {
-                        return Err(format!(
-                            "cut cells `{name}`: give exactly one of `cell_size` and `planes`"
-                        ))
-                    }
+                    _ => return Err(EntryError::CutSpec(name.clone())),
                 };
                 Ok(Feature::CutCells {
                     name: name.clone(),
@@ -845,22 +852,18 @@ impl Feature {
 /// becomes its decimal text, `42.50` → `42.5`; true/false their words).
 pub(super) fn properties(
     file: &IndexMap<String, serde_yaml::Value>,
-) -> Result<IndexMap<String, String>, String> {
+) -> Result<IndexMap<String, String>, EntryError> {
     let mut out = IndexMap::with_capacity(file.len());
     for (k, v) in file {
         if k.trim().is_empty() {
-            return Err("a custom property needs a name".into());
+            return Err(EntryError::PropertyName);
         }
         let text = match v {
             serde_yaml::Value::String(s) => s.clone(),
             serde_yaml::Value::Number(n) => n.to_string(),
             serde_yaml::Value::Bool(b) => b.to_string(),
             serde_yaml::Value::Null => String::new(),
-            _ => {
-                return Err(format!(
-                    "custom property `{k}` must be a text, a number or true/false"
-                ))
-            }
+            _ => return Err(EntryError::PropertyValue(k.clone())),
         };
         out.insert(k.clone(), text);
     }
@@ -926,15 +929,15 @@ fn step_part(
     project: &Project,
     store: &Path,
     cache: &mut MeshCache,
-) -> Result<(Arc<Mesh>, StepGeometry), String> {
+) -> Result<(Arc<Mesh>, StepGeometry), EntryError> {
     use crate::mesh::step::StepOptions;
     for (key, v) in [("deflection", pf.deflection), ("angle", pf.angle)] {
         if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
-            return Err(format!("`{key}:` must be a number > 0"));
+            return Err(EntryError::StepSetting(key));
         }
     }
     if pf.angle.is_some_and(|a| a >= 180.0) {
-        return Err("`angle:` is in degrees and must be below 180".into());
+        return Err(EntryError::StepAngle);
     }
     let (linear_deflection, angular_deflection) = tessellations::of_part(pf);
     let options = StepOptions {
@@ -942,9 +945,7 @@ fn step_part(
         angular_deflection,
         ..StepOptions::default()
     };
-    let got = cache
-        .get_step(file, Some(project), &options, Some(store))
-        .map_err(|e| e.to_string())?;
+    let got = cache.get_step(file, Some(project), &options, Some(store))?;
     let geometry = StepGeometry {
         deflection: pf.deflection,
         angle: pf.angle,

@@ -268,22 +268,20 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
 }
 
 /// Whether the kind accepts these entity types (and, for coordinate systems, the
-/// alignment); the message says what it needs.
+/// alignment); the error says what it needs.
 pub(crate) fn check_entities(
     kind: MateKind,
     a: &Reference,
     b: &Reference,
     aligned: Option<bool>,
-) -> Result<(), String> {
+) -> Result<(), super::EntryError> {
     use Reference::*;
     let systems = [a, b]
         .iter()
         .filter(|r| matches!(r, CoordinateSystem(_)))
         .count();
     if systems == 2 && kind == MateKind::Coincident && aligned == Some(false) {
-        return Err(
-            "two coordinate systems coincide axis for axis: anti-aligned is not defined".into(),
-        );
+        return Err(super::EntryError::AntiAlignedSystems);
     }
     let ok = match kind {
         MateKind::Coincident => {
@@ -308,12 +306,11 @@ pub(crate) fn check_entities(
     if ok {
         Ok(())
     } else {
-        Err(format!(
-            "a {} mate cannot join a {} and a {}",
-            kind.name(),
-            a.kind_name(),
-            b.kind_name()
-        ))
+        Err(super::EntryError::MateEntities {
+            kind,
+            a: a.kind_name(),
+            b: b.kind_name(),
+        })
     }
 }
 

@@ -29,6 +29,7 @@
 pub mod assembly;
 pub mod dimension;
 mod edit;
+mod entry;
 mod equation_mgr;
 pub mod equations;
 mod error;
@@ -55,6 +56,7 @@ pub use names::nfc_name;
 
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use edit::{MateSpec, PropertyOwner};
+pub use entry::EntryError;
 pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::{coordinate_system, CoordinateSystemError, Reference};
@@ -217,6 +219,8 @@ pub struct Document {
     /// through it).
     project: Option<crate::project::Project>,
     description: Option<String>,
+    /// `mesh_deflection:` (mm, finite, ≥ 0), see [`Document::mesh_deflection`].
+    mesh_deflection: Option<f64>,
     parts: IndexMap<String, Part>,
     components: Vec<Component>,
     by_name: HashMap<String, usize>,
@@ -376,6 +380,27 @@ impl Document {
     /// Free-text description.
     pub fn description(&self) -> Option<&str> {
         self.description.as_deref()
+    }
+
+    /// How far the parts' meshes may lie from the exact surfaces they stand for
+    /// (mm; the document's `mesh_deflection:`, written by `fitup import` as the
+    /// tessellation's linear deflection), and the largest `deflection:` of its
+    /// `step:` parts (0.1 mm when not written). `None`: no part is known to be
+    /// tessellated (meshes taken as exact).
+    pub fn mesh_deflection(&self) -> Option<f64> {
+        let step = self
+            .parts
+            .values()
+            .filter_map(|p| p.step.as_ref())
+            .map(|s| {
+                s.deflection
+                    .unwrap_or(crate::mesh::step::DEFAULT_LINEAR_DEFLECTION)
+            })
+            .fold(None, |a: Option<f64>, d| Some(a.map_or(d, |a| a.max(d))));
+        match (self.mesh_deflection, step) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// Parts in file order.

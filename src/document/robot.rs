@@ -9,7 +9,7 @@
 
 use super::dimension;
 use super::file::{DhFile, LinkFile, RobotFile};
-use super::{Document, DocumentError};
+use super::{Document, DocumentError, EntryError};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
     resolve_mesh_in, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
@@ -290,31 +290,29 @@ pub fn joints_to_document_iter<'a>(
     })
 }
 
-fn matrix(m: &Option<[[f64; 4]; 4]>, what: &str) -> Result<Option<Transform>, String> {
+fn matrix(m: &Option<[[f64; 4]; 4]>, what: &'static str) -> Result<Option<Transform>, EntryError> {
     m.as_ref()
-        .map(|m| Transform::from_matrix(m).map_err(|e| format!("{what}: {e}")))
+        .map(|m| Transform::from_matrix(m).map_err(|source| EntryError::Matrix { what, source }))
         .transpose()
 }
 
-fn joint_kind(s: Option<&str>, default: JointKind) -> Result<JointKind, String> {
+fn joint_kind(s: Option<&str>, default: JointKind) -> Result<JointKind, EntryError> {
     match s {
         None => Ok(default),
         Some("fixed") => Ok(JointKind::Fixed),
         Some("revolute") => Ok(JointKind::Revolute),
         Some("prismatic") => Ok(JointKind::Prismatic),
-        Some(other) => Err(format!(
-            "unknown joint type `{other}` (fixed, revolute, prismatic)"
-        )),
+        Some(other) => Err(EntryError::JointType(other.to_string())),
     }
 }
 
-fn limits(l: Option<[f64; 2]>, kind: JointKind) -> Result<Option<JointLimits>, String> {
+fn limits(l: Option<[f64; 2]>, kind: JointKind) -> Result<Option<JointLimits>, EntryError> {
     let Some([lo, hi]) = l else { return Ok(None) };
     if !(lo.is_finite() && hi.is_finite()) {
-        return Err(format!("limits [{lo}, {hi}] are not finite"));
+        return Err(EntryError::LimitsNotFinite { lo, hi });
     }
     if lo > hi {
-        return Err(format!("limits [{lo}, {hi}] are inverted (min > max)"));
+        return Err(EntryError::LimitsInverted { lo, hi });
     }
     Ok(Some(if kind == JointKind::Prismatic {
         JointLimits::new(lo, hi)
@@ -323,36 +321,39 @@ fn limits(l: Option<[f64; 2]>, kind: JointKind) -> Result<Option<JointLimits>, S
     }))
 }
 
-fn dh_robot(name: &str, dh: &DhFile) -> Result<Robot, String> {
+fn dh_robot(name: &str, dh: &DhFile) -> Result<Robot, EntryError> {
     let convention = match dh.convention.as_deref() {
         None | Some("standard") => DhConvention::Standard,
         Some("modified") => DhConvention::Modified,
-        Some(o) => return Err(format!("unknown D-H convention `{o}` (standard, modified)")),
+        Some(o) => return Err(EntryError::DhConvention(o.to_string())),
     };
     let mut rows = Vec::with_capacity(dh.rows.len());
     for (i, r) in dh.rows.iter().enumerate() {
-        let kind = joint_kind(r.joint.as_deref(), JointKind::Revolute)
-            .map_err(|e| format!("D-H row {}: {e}", i + 1))?;
+        let in_row = |e: EntryError| EntryError::DhRow {
+            row: i + 1,
+            source: Box::new(e),
+        };
+        let kind = joint_kind(r.joint.as_deref(), JointKind::Revolute).map_err(in_row)?;
         let (theta, alpha) = (r.theta.to_radians(), r.alpha.to_radians());
         let mut row = match kind {
             JointKind::Revolute => DhRow::revolute(theta, r.d, r.a, alpha),
             JointKind::Prismatic => DhRow::prismatic(theta, r.d, r.a, alpha),
-            JointKind::Fixed => {
-                return Err(format!(
-                    "D-H row {}: a row must be revolute or prismatic",
-                    i + 1
-                ))
-            }
+            JointKind::Fixed => return Err(in_row(EntryError::DhFixedRow)),
         };
-        if let Some(l) = limits(r.limits, kind).map_err(|e| format!("D-H row {}: {e}", i + 1))? {
+        if let Some(l) = limits(r.limits, kind).map_err(in_row)? {
             row = row.with_limits(l);
         }
         rows.push(row);
     }
     if rows.is_empty() {
-        return Err("the D-H table has no rows".into());
+        return Err(EntryError::DhEmpty);
     }
-    Robot::from_dh(name, &rows, convention, Transform::IDENTITY).map_err(|e| e.to_string())
+    Ok(Robot::from_dh(
+        name,
+        &rows,
+        convention,
+        Transform::IDENTITY,
+    )?)
 }
 
 /// An explicit tree; errors carry a needle (the failing link's name) and a message.
@@ -378,7 +379,8 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
                 ))
             })?),
         };
-        let kind = joint_kind(l.joint.as_deref(), JointKind::Fixed).map_err(err)?;
+        let kind =
+            joint_kind(l.joint.as_deref(), JointKind::Fixed).map_err(|e| err(e.to_string()))?;
         let v = |a: [f64; 3]| Vec3::new(a[0], a[1], a[2]);
         let mut joint = match kind {
             JointKind::Fixed => Joint::fixed(),
@@ -394,11 +396,11 @@ fn explicit_robot(f: &RobotFile) -> Result<Robot, (String, String)> {
         if kind == JointKind::Fixed && (l.axis.is_some() || l.limits.is_some()) {
             return Err(err("a fixed link takes no `axis` or `limits`".into()));
         }
-        if let Some(lim) = limits(l.limits, kind).map_err(err)? {
+        if let Some(lim) = limits(l.limits, kind).map_err(|e| err(e.to_string()))? {
             joint = joint.with_limits(lim);
         }
         let home = matrix(&l.home, "home")
-            .map_err(err)?
+            .map_err(|e| err(e.to_string()))?
             .unwrap_or(Transform::IDENTITY);
         links.push(Link::new(name, parent, home, joint));
     }
@@ -654,7 +656,9 @@ fn kinematics_of(f: &RobotFile, urdf: Option<&UrdfLoaded>) -> Result<Robot, (Str
                 ),
             )
         })?,
-        (None, Some(dh)) => dh_robot(&f.name, dh).map_err(|m| ("dh:".to_string(), m))?,
+        (None, Some(dh)) => {
+            dh_robot(&f.name, dh).map_err(|m| ("dh:".to_string(), m.to_string()))?
+        }
         (None, None) => explicit_robot(f)?,
     };
     let robot_name = f.name.clone();
@@ -662,10 +666,10 @@ fn kinematics_of(f: &RobotFile, urdf: Option<&UrdfLoaded>) -> Result<Robot, (Str
     if robot.name() != robot_name {
         robot = robot.with_name(robot_name.clone());
     }
-    if let Some(t) = matrix(&f.base, "base").map_err(|m| ("base:".to_string(), m))? {
+    if let Some(t) = matrix(&f.base, "base").map_err(|m| ("base:".to_string(), m.to_string()))? {
         robot.set_base(t);
     }
-    if let Some(t) = matrix(&f.tool, "tool").map_err(|m| ("tool:".to_string(), m))? {
+    if let Some(t) = matrix(&f.tool, "tool").map_err(|m| ("tool:".to_string(), m.to_string()))? {
         robot.set_tool(t);
     }
     Ok(robot)
@@ -743,7 +747,7 @@ fn link_displays(
                 ))
             })?),
         };
-        let offset = match matrix(&lf.offset, "offset").map_err(err)? {
+        let offset = match matrix(&lf.offset, "offset").map_err(|e| err(e.to_string()))? {
             Some(t) => t,
             None if f.drawn_at_zero => zero[i].inverse(),
             None => Transform::IDENTITY,
@@ -1303,15 +1307,22 @@ mod tests {
             convention: Some("craig".into()),
             rows: vec![],
         };
-        assert!(dh_robot("t", &bad).unwrap_err().contains("convention"));
+        assert!(matches!(
+            dh_robot("t", &bad),
+            Err(EntryError::DhConvention(_))
+        ));
     }
 
     #[test]
     fn limits_are_checked_and_converted() {
-        assert!(limits(Some([10.0, -10.0]), JointKind::Revolute)
-            .unwrap_err()
-            .contains("inverted"));
-        assert!(limits(Some([f64::NAN, 1.0]), JointKind::Revolute).is_err());
+        assert!(matches!(
+            limits(Some([10.0, -10.0]), JointKind::Revolute),
+            Err(EntryError::LimitsInverted { .. })
+        ));
+        assert!(matches!(
+            limits(Some([f64::NAN, 1.0]), JointKind::Revolute),
+            Err(EntryError::LimitsNotFinite { .. })
+        ));
         let l = limits(Some([-90.0, 45.0]), JointKind::Revolute)
             .unwrap()
             .unwrap();

@@ -128,6 +128,7 @@ impl Document {
         DocumentFile {
             units: "mm".into(),
             description: self.description.clone(),
+            mesh_deflection: self.mesh_deflection,
             parts,
             assemblies,
             components,

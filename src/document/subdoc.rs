@@ -461,6 +461,7 @@ impl Document {
             path: record.path.clone(),
             project: self.project.clone(),
             description: record.as_loaded.description.clone(),
+            mesh_deflection: record.as_loaded.mesh_deflection,
             parts,
             components,
             numbering: super::numbering::Numbering::of(by_name.keys()),

@@ -182,7 +182,30 @@ pub enum HoleOutcome {
         joints: Vec<f64>,
     },
     /// Not drilled, and why (which step failed and the cause).
-    Unreachable(String),
+    Unreachable(HoleFailure),
+}
+
+/// Why a hole was not drilled (the run goes on with the next hole).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum HoleFailure {
+    /// No sampled spin has an IK solution at both the approach point and the bottom:
+    /// the last spin's IK error.
+    #[error("{0}")]
+    NoSpin(#[source] super::IkError),
+    /// The TCP pose of the joint values the hole starts from cannot be computed.
+    #[error("{0}")]
+    Start(#[source] super::KinematicsError),
+    /// A step of the hole's motion failed.
+    #[error("{step}: {source}")]
+    Step {
+        /// `initial posture`, `move to the approach point`, `align to the normal`,
+        /// `drill` or `retract`.
+        step: &'static str,
+        /// The motion's error.
+        #[source]
+        source: MotionError,
+    },
 }
 
 /// The report of one hole.
@@ -324,14 +347,14 @@ fn best_spin(
     hole: &Hole,
     q: &[f64],
     options: &DrillOptions,
-) -> Result<(f64, Vec<f64>), String> {
+) -> Result<(f64, Vec<f64>), HoleFailure> {
     let n = options.spin_samples.max(1);
     let ik = IkOptions {
         max_solutions: 1,
         ..options.motion.ik.clone()
     };
     let mut best: Option<(f64, f64, Vec<f64>)> = None;
-    let mut last_err = String::from("no spin sampled");
+    let mut last_err = super::IkError::Unreachable(super::Unreachable::NoSolution);
     for k in 0..n {
         let spin = -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64;
         let approach = hole_tool_pose(hole, spin, options.approach, options);
@@ -347,10 +370,11 @@ fn best_spin(
                     best = Some((a.distance, spin, b.joints));
                 }
             }
-            Err(e) => last_err = e.to_string(),
+            Err(e) => last_err = e,
         }
     }
-    best.map(|(_, s, j)| (s, j)).ok_or(last_err)
+    best.map(|(_, s, j)| (s, j))
+        .ok_or(HoleFailure::NoSpin(last_err))
 }
 
 /// Drills `holes` in order from joint values `start`: per hole (1) turn to the travel
@@ -388,9 +412,9 @@ pub fn drill_program(
             options.spin_samples as f64,
         )?;
         let mut cap: Option<MotionError> = None;
-        let outcome = (|| -> Result<(f64, Vec<f64>, Trajectory), String> {
+        let outcome = (|| -> Result<(f64, Vec<f64>, Trajectory), HoleFailure> {
             let (spin, _) = best_spin(robot, hole, &q, options)?;
-            let here = robot.tcp_pose(&q).map_err(|e| e.to_string())?;
+            let here = robot.tcp_pose(&q).map_err(HoleFailure::Start)?;
             let travel_rot = options.travel_orientation.unwrap_or(here.rotation());
             let approach = hole_tool_pose(hole, spin, options.approach, options);
             let bottom = hole_tool_pose(hole, spin, 0.0, options);
@@ -416,11 +440,13 @@ pub fn drill_program(
                     Ok(t) => t,
                     // The cap ends the whole run; it says nothing about this hole.
                     Err(e @ MotionError::Limit(_)) => {
-                        let text = format!("{name}: {e}");
-                        cap = Some(e);
-                        return Err(text);
+                        cap = Some(e.clone());
+                        return Err(HoleFailure::Step {
+                            step: name,
+                            source: e,
+                        });
                     }
-                    Err(e) => return Err(format!("{name}: {e}")),
+                    Err(source) => return Err(HoleFailure::Step { step: name, source }),
                 };
                 if let Some(last) = t.last_joints() {
                     cur = last.to_vec();

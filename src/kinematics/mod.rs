@@ -34,7 +34,7 @@ pub use closed_form::{Branch, Branches, ClosedFormIk, ModelError};
 pub use dh::{DhConvention, DhRow};
 pub use drilling::{
     drill_program, hole_tool_pose, parse_holes, read_holes, read_holes_in, DrillError,
-    DrillOptions, DrillReport, Hole, HoleOutcome, HoleReport, ToolAxis,
+    DrillOptions, DrillReport, Hole, HoleFailure, HoleOutcome, HoleReport, ToolAxis,
 };
 pub use error::KinematicsError;
 pub use ik::{

@@ -159,6 +159,35 @@ pub enum CellError {
     Check(#[from] crate::workspace::WorkspaceError),
 }
 
+/// Why a TOUCH (guarded move) was refused.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+enum TouchError {
+    /// The tool pose at the start joints cannot be computed.
+    #[error(transparent)]
+    Start(#[from] crate::kinematics::KinematicsError),
+    /// No IK solution `at` mm along the tool's axis.
+    #[error("the tool cannot go {at:.3} mm along its axis: {source}")]
+    Ik {
+        /// Distance along the axis (mm).
+        at: f64,
+        /// The IK error.
+        #[source]
+        source: crate::kinematics::IkError,
+    },
+    /// A joint (0-based) leaves its limits `at` mm along the axis.
+    #[error("joint {} leaves its limits {at:.3} mm along the touch", .joint + 1)]
+    Limit {
+        /// The joint (0-based).
+        joint: usize,
+        /// Distance along the axis (mm).
+        at: f64,
+    },
+    /// The cell cannot be checked.
+    #[error(transparent)]
+    Cell(#[from] CellError),
+}
+
 /// The cell as the simulator checks it: the document, the robot and the pairs that
 /// already interfere at start-up.
 struct Cell {
@@ -208,36 +237,28 @@ impl Cell {
         q0: &[f64],
         direction: Vector3<f64>,
         distance: f64,
-    ) -> Result<(f64, Vec<f64>, Option<String>), String> {
+    ) -> Result<(f64, Vec<f64>, Option<String>), TouchError> {
         let robot = self.doc.robots()[self.robot].shared_robot();
-        let tcp0 = robot.tcp_pose(q0).map_err(|e| e.to_string())?;
+        let tcp0 = robot.tcp_pose(q0)?;
         let ik = IkOptions::default();
-        let at = |s: f64, near: &[f64]| -> Result<Vec<f64>, String> {
+        let at = |s: f64, near: &[f64]| -> Result<Vec<f64>, TouchError> {
             let target = Transform::from_translation(direction * s).then(&tcp0);
             let sol = robot
                 .inverse_nearest(&target, near, &ik)
-                .map_err(|e| format!("the tool cannot go {s:.3} mm along its axis: {e}"))?;
-            if let Some(j) = robot.limit_violation(&sol.joints) {
-                return Err(format!(
-                    "joint {} leaves its limits {s:.3} mm along the touch",
-                    j + 1
-                ));
+                .map_err(|source| TouchError::Ik { at: s, source })?;
+            if let Some(joint) = robot.limit_violation(&sol.joints) {
+                return Err(TouchError::Limit { joint, at: s });
             }
             Ok(sol.joints)
         };
-        let baseline: HashSet<(usize, usize)> = self
-            .contacts(q0)
-            .map_err(|e| e.to_string())?
-            .into_iter()
-            .collect();
+        let baseline: HashSet<(usize, usize)> = self.contacts(q0)?.into_iter().collect();
         let n = ((distance / 0.2).ceil() as usize).clamp(1, 100_000);
         let (mut free_s, mut free_q) = (0.0, q0.to_vec());
         for k in 1..=n {
             let s = distance * k as f64 / n as f64;
             let q = at(s, &free_q)?;
             let hit: Vec<_> = self
-                .contacts(&q)
-                .map_err(|e| e.to_string())?
+                .contacts(&q)?
                 .into_iter()
                 .filter(|p| !baseline.contains(p))
                 .collect();
@@ -248,8 +269,7 @@ impl Cell {
                     let mid = 0.5 * (lo + hi);
                     let qm = at(mid, &free_q)?;
                     let hit: Vec<_> = self
-                        .contacts(&qm)
-                        .map_err(|e| e.to_string())?
+                        .contacts(&qm)?
                         .into_iter()
                         .filter(|p| !baseline.contains(p))
                         .collect();

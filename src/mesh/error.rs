@@ -84,6 +84,12 @@ impl MeshError {
         self
     }
 
+    /// The same error, `suffix` after its message (a unit, a hint).
+    pub(crate) fn suffixed(mut self, suffix: &str) -> Self {
+        self.message.push_str(suffix);
+        self
+    }
+
     /// The same error, naming `path`.
     pub fn in_file(mut self, path: &Path) -> Self {
         self.path = Some(path.to_path_buf());

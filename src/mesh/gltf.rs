@@ -228,10 +228,10 @@ mod read {
                         let (_, b64) = rest.split_once(";base64,").ok_or_else(|| {
                             MeshError::invalid(format!("{here}: a `data:` URI that is not base64"))
                         })?;
-                        base64(b64).map_err(|m| MeshError::invalid(format!("{here}: {m}")))?
+                        base64(b64).map_err(|e| e.prefixed(&format!("{here}: ")))?
                     } else {
-                        let file = external(folder, uri)
-                            .map_err(|m| MeshError::invalid(format!("{here}: {m}")))?;
+                        let file =
+                            external(folder, uri).map_err(|e| e.prefixed(&format!("{here}: ")))?;
                         let data = read(&file).map_err(|e| {
                             MeshError::new(MeshErrorKind::Read, format!("{here}: {e}"))
                         })?;
@@ -476,14 +476,9 @@ mod read {
             let q = world * nalgebra::Vector4::new(x, y, z, 1.0);
             let q = Point3::new(q.x * 1000.0, q.y * 1000.0, q.z * 1000.0);
             for c in q.coords.iter() {
-                check_coordinate(*c).map_err(|m| {
-                    MeshError::new(
-                        MeshErrorKind::Coordinate,
-                        format!(
-                            "accessors[{}] element {i}: {m} (mm, once placed)",
-                            p.accessor
-                        ),
-                    )
+                check_coordinate(*c).map_err(|e| {
+                    e.prefixed(&format!("accessors[{}] element {i}: ", p.accessor))
+                        .suffixed(" (mm, once placed)")
                 })?;
             }
             Ok(q)
@@ -576,8 +571,14 @@ mod read {
     }
 
     /// An external buffer file: a relative URI (percent-decoded) inside `folder`.
-    fn external(folder: Option<&Path>, uri: &str) -> Result<PathBuf, String> {
-        let folder = folder.ok_or("external buffer files are not read here (use a .glb)")?;
+    fn external(folder: Option<&Path>, uri: &str) -> Result<PathBuf, MeshError> {
+        let unreadable = |m: String| MeshError::new(MeshErrorKind::Read, m);
+        let folder = folder.ok_or_else(|| {
+            MeshError::new(
+                MeshErrorKind::Unsupported,
+                "external buffer files are not read here (use a .glb)",
+            )
+        })?;
         let decoded = percent_decode(uri)?;
         let rel = Path::new(&decoded);
         if decoded.contains("://")
@@ -589,28 +590,28 @@ mod read {
                 )
             })
         {
-            return Err(format!(
+            return Err(unreadable(format!(
                 "buffer `{}`: only files beside the glTF or below its folder are read (no absolute path, `..` or URL)",
                 short(uri)
-            ));
+            )));
         }
         let base = folder
             .canonicalize()
-            .map_err(|e| format!("{}: {e}", folder.display()))?;
+            .map_err(|e| unreadable(format!("{}: {e}", folder.display())))?;
         let file = base
             .join(rel)
             .canonicalize()
-            .map_err(|e| format!("buffer `{}`: {e}", short(uri)))?;
+            .map_err(|e| unreadable(format!("buffer `{}`: {e}", short(uri))))?;
         if !file.starts_with(&base) {
-            return Err(format!(
+            return Err(unreadable(format!(
                 "buffer `{}` leads outside the glTF's folder (a symbolic link)",
                 short(uri)
-            ));
+            )));
         }
         Ok(file)
     }
 
-    fn percent_decode(s: &str) -> Result<String, String> {
+    fn percent_decode(s: &str) -> Result<String, MeshError> {
         let b = s.as_bytes();
         let mut out = Vec::with_capacity(b.len());
         let mut i = 0;
@@ -620,7 +621,9 @@ mod read {
                     .get(i + 1..i + 3)
                     .and_then(|h| std::str::from_utf8(h).ok())
                     .and_then(|h| u8::from_str_radix(h, 16).ok())
-                    .ok_or_else(|| format!("`{}` has a bad %-escape", short(s)))?;
+                    .ok_or_else(|| {
+                        MeshError::invalid(format!("`{}` has a bad %-escape", short(s)))
+                    })?;
                 out.push(hex);
                 i += 3;
             } else {
@@ -628,10 +631,11 @@ mod read {
                 i += 1;
             }
         }
-        String::from_utf8(out).map_err(|_| format!("`{}` is not UTF-8 once decoded", short(s)))
+        String::from_utf8(out)
+            .map_err(|_| MeshError::invalid(format!("`{}` is not UTF-8 once decoded", short(s))))
     }
 
-    fn base64(s: &str) -> Result<Vec<u8>, String> {
+    fn base64(s: &str) -> Result<Vec<u8>, MeshError> {
         let mut out = Vec::with_capacity(s.len() / 4 * 3);
         let (mut acc, mut bits) = (0u32, 0u32);
         for (k, c) in s.bytes().enumerate() {
@@ -642,7 +646,11 @@ mod read {
                 b'+' | b'-' => 62,
                 b'/' | b'_' => 63,
                 b'=' => break,
-                _ => return Err(format!("byte {k} of the base64 data is not base64")),
+                _ => {
+                    return Err(MeshError::invalid(format!(
+                        "byte {k} of the base64 data is not base64"
+                    )))
+                }
             };
             acc = (acc << 6) | u32::from(v);
             bits += 6;

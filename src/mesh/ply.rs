@@ -212,7 +212,6 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                             if let Some(k) = xyz.iter().position(|&x| x == pi) {
                                 check_coordinate(v).map_err(|m| {
                                     reader_error(format, reader.line, &e.name, item, m)
-                                        .kind(MeshErrorKind::Coordinate)
                                 })?;
                                 coords[k] = v;
                             }
@@ -222,7 +221,9 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                         let n = reader
                             .value(*c)
                             .map_err(|m| reader_error(format, reader.line, &e.name, item, m))?;
-                        let fail = |m: String| reader_error(format, reader.line, &e.name, item, m);
+                        let fail = |m: String| {
+                            reader_error(format, reader.line, &e.name, item, MeshError::invalid(m))
+                        };
                         if !(n >= 0.0 && n.fract() == 0.0) {
                             return Err(fail(format!("list length {n} is not a count")));
                         }
@@ -232,14 +233,8 @@ pub fn parse_ply(bytes: &[u8]) -> Result<super::Mesh, MeshError> {
                         // and a face list cannot pass the triangle cap.
                         if keep && n - 2.0 + triangles.len() as f64 > MAX_TRIANGLES as f64 {
                             let cap = MeshError::too_many(MAX_TRIANGLES, "triangles");
-                            return Err(reader_error(
-                                format,
-                                reader.line,
-                                &e.name,
-                                item,
-                                format!("a list of {n} corners: {}", cap.message),
-                            )
-                            .kind(MeshErrorKind::TooLarge));
+                            let cap = cap.prefixed(&format!("a list of {n} corners: "));
+                            return Err(reader_error(format, reader.line, &e.name, item, cap));
                         }
                         if format == Format::Ascii {
                             let left = reader.words.clone().count();
@@ -316,28 +311,35 @@ fn check_counts(elements: &[Element]) -> Result<(), MeshError> {
     Ok(())
 }
 
-/// An error in the body: ASCII at its line, binary naming the element and item.
-fn reader_error(format: Format, line: usize, element: &str, item: u64, m: String) -> MeshError {
+/// An error in the body, located: ASCII at its line, binary naming the element and item.
+fn reader_error(format: Format, line: usize, element: &str, item: u64, e: MeshError) -> MeshError {
     let element = short(element);
     match format {
-        Format::Ascii => MeshError::at(line.max(1), format!("{element} {item}: {m}")),
-        _ => MeshError::invalid(format!("binary PLY, {element} {item}: {m}")),
+        Format::Ascii => e
+            .prefixed(&format!("{element} {item}: "))
+            .on_line(line.max(1)),
+        _ => e.prefixed(&format!("binary PLY, {element} {item}: ")),
     }
 }
 
 /// Appends the fan triangles of one face (indices as read) to `out`.
-fn face_triangles(idx: &[f64], vertex_count: usize, out: &mut Vec<[u32; 3]>) -> Result<(), String> {
+fn face_triangles(
+    idx: &[f64],
+    vertex_count: usize,
+    out: &mut Vec<[u32; 3]>,
+) -> Result<(), MeshError> {
     if idx.len() < 3 {
-        return Err(format!(
+        return Err(MeshError::invalid(format!(
             "a face needs at least 3 corners, this one has {}",
             idx.len()
-        ));
+        )));
     }
     let mut c = Vec::with_capacity(idx.len());
     for &v in idx {
         if !(v >= 0.0 && v.fract() == 0.0 && (v as usize) < vertex_count) {
-            return Err(format!(
-                "vertex index {v} is not one of the {vertex_count} vertices read before the faces"
+            return Err(MeshError::new(
+                MeshErrorKind::Index,
+                format!("vertex index {v} is not one of the {vertex_count} vertices read before the faces"),
             ));
         }
         c.push(v as u32);
@@ -361,14 +363,16 @@ struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
-    fn start_item(&mut self) -> Result<(), String> {
+    fn start_item(&mut self) -> Result<(), MeshError> {
         if self.format != Format::Ascii {
             return Ok(());
         }
         // Skip blank lines and `comment` lines some writers leave in the body.
         loop {
             if self.pos >= self.bytes.len() {
-                return Err("the file ends before this item (truncated?)".into());
+                return Err(MeshError::invalid(
+                    "the file ends before this item (truncated?)",
+                ));
             }
             let end = self.bytes[self.pos..]
                 .iter()
@@ -377,7 +381,8 @@ impl<'a> Reader<'a> {
             let raw = &self.bytes[self.pos..end];
             self.pos = (end + 1).min(self.bytes.len().max(end));
             self.line += 1;
-            let text = std::str::from_utf8(raw).map_err(|_| "the line is not UTF-8 text")?;
+            let text = std::str::from_utf8(raw)
+                .map_err(|_| MeshError::invalid("the line is not UTF-8 text"))?;
             let t = text.trim();
             if t.is_empty() || t.starts_with("comment") {
                 continue;
@@ -387,37 +392,38 @@ impl<'a> Reader<'a> {
         }
     }
 
-    fn end_item(&mut self) -> Result<(), String> {
+    fn end_item(&mut self) -> Result<(), MeshError> {
         match self.words.next() {
-            Some(w) if self.format == Format::Ascii => Err(format!(
+            Some(w) if self.format == Format::Ascii => Err(MeshError::invalid(format!(
                 "`{}`: more values on the line than the header's properties",
                 short(w)
-            )),
+            ))),
             _ => Ok(()),
         }
     }
 
-    fn value(&mut self, s: Scalar) -> Result<f64, String> {
+    fn value(&mut self, s: Scalar) -> Result<f64, MeshError> {
         match self.format {
             Format::Ascii => {
-                let w = self
-                    .words
-                    .next()
-                    .ok_or("fewer values on the line than the header's properties")?;
+                let w = self.words.next().ok_or_else(|| {
+                    MeshError::invalid("fewer values on the line than the header's properties")
+                })?;
                 let v: f64 = w
                     .parse()
-                    .map_err(|_| format!("`{}` is not a number", short(w)))?;
+                    .map_err(|_| MeshError::invalid(format!("`{}` is not a number", short(w))))?;
                 if s.is_integer() && v.fract() != 0.0 {
-                    return Err(format!("`{}` is not an integer", short(w)));
+                    return Err(MeshError::invalid(format!(
+                        "`{}` is not an integer",
+                        short(w)
+                    )));
                 }
                 Ok(v)
             }
             f => {
                 let n = s.size();
-                let b = self
-                    .bytes
-                    .get(self.pos..self.pos + n)
-                    .ok_or("the file ends inside this item (truncated?)")?;
+                let b = self.bytes.get(self.pos..self.pos + n).ok_or_else(|| {
+                    MeshError::invalid("the file ends inside this item (truncated?)")
+                })?;
                 self.pos += n;
                 Ok(s.read(b, f == Format::Little))
             }

@@ -60,18 +60,20 @@ pub(super) fn read_xyz<'a>(
         *c = w
             .parse::<f64>()
             .map_err(|_| MeshError::at(line, format!("`{}` is not a number", short(w))))?;
-        check_coordinate(*c)
-            .map_err(|m| MeshError::new(MeshErrorKind::Coordinate, m).on_line(line))?;
+        check_coordinate(*c).map_err(|e| e.on_line(line))?;
     }
     Ok(xyz)
 }
 
-pub(super) fn check_coordinate(v: f64) -> Result<(), String> {
+/// `v` as a coordinate: finite and within [`MAX_ABS_VALUE`](crate::math::MAX_ABS_VALUE)
+/// mm, else a [`MeshErrorKind::Coordinate`] error, not yet located.
+pub(super) fn check_coordinate(v: f64) -> Result<(), MeshError> {
     let max = crate::math::MAX_ABS_VALUE;
+    let fault = |m: String| Err(MeshError::new(MeshErrorKind::Coordinate, m));
     if !v.is_finite() {
-        Err(format!("coordinate {v} is not finite"))
+        fault(format!("coordinate {v} is not finite"))
     } else if v.abs() > max {
-        Err(format!(
+        fault(format!(
             "coordinate {v:e} is out of range (at most {max:e} mm)"
         ))
     } else {
@@ -130,12 +132,7 @@ fn parse_binary(bytes: &[u8]) -> Result<Mesh, MeshError> {
             Point3::new(f(6), f(7), f(8)),
         ];
         for v in corners.iter().flat_map(|c| c.coords.iter()) {
-            check_coordinate(*v).map_err(|m| {
-                MeshError::new(
-                    MeshErrorKind::Coordinate,
-                    format!("binary STL facet {i}: {m}"),
-                )
-            })?;
+            check_coordinate(*v).map_err(|e| e.prefixed(&format!("binary STL facet {i}: ")))?;
         }
         mesh.push(corners);
     }

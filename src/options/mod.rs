@@ -206,6 +206,14 @@ pub enum OptionError {
         /// Close matches or the keys that exist.
         hint: String,
     },
+    /// A command-line option text without `=` (`--option KEY=VALUE`).
+    #[error("`{arg}`: expected KEY=VALUE (keys: {})", .keys.join(", "))]
+    NotKeyValue {
+        /// The text given.
+        arg: String,
+        /// The keys of the request.
+        keys: Vec<&'static str>,
+    },
     /// A value that is not of the key's kind.
     #[error("{request} option `{key}` must be {expected}, not {value}")]
     Value {
@@ -313,19 +321,15 @@ impl Vocabulary {
     /// and a key outside the table as it is (the check then refuses either by name).
     ///
     /// # Errors
-    /// A text without `=`, naming what was given.
-    pub fn map_from_args(&self, args: &[String]) -> Result<Map<String, Value>, String> {
+    /// [`OptionError::NotKeyValue`]: a text without `=`.
+    pub fn map_from_args(&self, args: &[String]) -> Result<Map<String, Value>, OptionError> {
         let mut map = Map::new();
         for arg in args {
             let Some((key, text)) = arg.split_once('=') else {
-                return Err(format!(
-                    "`{arg}`: expected KEY=VALUE (keys: {})",
-                    self.keys
-                        .iter()
-                        .map(|k| k.name)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ));
+                return Err(OptionError::NotKeyValue {
+                    arg: arg.clone(),
+                    keys: self.keys.iter().map(|k| k.name).collect(),
+                });
             };
             let (key, text) = (key.trim(), text.trim());
             let value = self

@@ -21,8 +21,8 @@ pub enum ArgValue {
 }
 
 impl ArgValue {
-    /// Types a value: integers, finite floats, `true`/`false`, else text.
-    fn parse(text: &str) -> Result<Self, String> {
+    /// Types the value of `key`: integers, finite floats, `true`/`false`, else text.
+    fn parse(key: &str, text: &str) -> Result<Self, ArgError> {
         if let Ok(i) = text.parse::<i64>() {
             return Ok(Self::Int(i));
         }
@@ -39,7 +39,10 @@ impl ArgValue {
                 .all(|b| b.is_ascii_digit() || matches!(b, b'.' | b'e' | b'E' | b'+' | b'-'));
         match text.parse::<f64>() {
             Ok(x) if x.is_finite() && numeric => Ok(Self::Float(x)),
-            Ok(_) if numeric => Err(format!("`{text}` is out of range for a number")),
+            Ok(_) if numeric => Err(ArgError::OutOfRange {
+                key: shorten(key),
+                value: shorten(text),
+            }),
             _ => Ok(Self::Text(text.to_string())),
         }
     }
@@ -67,13 +70,23 @@ pub enum ArgError {
     /// The same key twice.
     #[error("script argument `{0}` is given twice")]
     Duplicate(String),
-    /// A value that cannot be used.
-    #[error("script argument `{key}`: {reason}")]
-    BadValue {
+    /// A numeric value beyond the range of a number (`x=1e999`).
+    #[error("script argument `{key}`: `{value}` is out of range for a number")]
+    OutOfRange {
         /// The key.
         key: String,
-        /// What is wrong.
-        reason: String,
+        /// The value as written (shortened).
+        value: String,
+    },
+    /// An argument longer than [`MAX_ARGUMENT_BYTES`].
+    #[error(
+        "script argument `{key}`: {bytes} bytes is longer than the {MAX_ARGUMENT_BYTES} allowed"
+    )]
+    TooLong {
+        /// The key.
+        key: String,
+        /// The argument's length in bytes.
+        bytes: usize,
     },
 }
 
@@ -109,18 +122,13 @@ impl Arguments {
             if out.iter().any(|(k, _)| k == key) {
                 return Err(ArgError::Duplicate(shorten(key)));
             }
-            let bad = |reason: String| ArgError::BadValue {
-                key: shorten(key),
-                reason,
-            };
             if word.len() > MAX_ARGUMENT_BYTES {
-                return Err(bad(format!(
-                    "{} bytes is longer than the {} allowed",
-                    word.len(),
-                    MAX_ARGUMENT_BYTES
-                )));
+                return Err(ArgError::TooLong {
+                    key: shorten(key),
+                    bytes: word.len(),
+                });
             }
-            out.push((key.to_string(), ArgValue::parse(value).map_err(bad)?));
+            out.push((key.to_string(), ArgValue::parse(key, value)?));
         }
         Ok(Self(out))
     }

@@ -9,6 +9,29 @@ use crate::math::{Transform, Vec3};
 use rhai::{Array, Dynamic, Map};
 use std::sync::{Arc, Mutex, MutexGuard};
 
+/// Why [`DocHandle::open`] could not open a script's document.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OpenError {
+    /// The path is refused by the project's path rule (outside the project, …).
+    #[error(transparent)]
+    Path(#[from] crate::project::PathError),
+    /// No file at the path.
+    #[error("`{}` does not exist in the project folder {} (the project folder is `--root`, else the nearest folder of the script holding fitup.toml, else the script's folder)", .path.display(), .root.display())]
+    Missing {
+        /// The path as the script gave it (relative to the project folder).
+        path: std::path::PathBuf,
+        /// The project folder.
+        root: std::path::PathBuf,
+    },
+    /// A shared cache is unusable after a panic in another run.
+    #[error("{0} cache poisoned")]
+    Poisoned(&'static str),
+    /// The document does not load; the message is located with its source line.
+    #[error("{}", .0.render())]
+    Document(#[source] crate::document::DocumentError),
+}
+
 /// A script's handle on an open document (cheap to clone; clones share the document).
 #[derive(Clone)]
 pub struct DocHandle {
@@ -36,22 +59,22 @@ pub struct DimensionHandle {
 impl DocHandle {
     /// Opens a document (path relative to the project root) through the shared mesh
     /// cache and records its files as dependencies of the run.
-    pub fn open(ctx: &Arc<Context>, path: &str) -> Result<Self, String> {
-        let full = ctx.project.resolve(path).map_err(|e| e.to_string())?;
+    pub fn open(ctx: &Arc<Context>, path: &str) -> Result<Self, OpenError> {
+        let full = ctx.project.resolve(path)?;
         ctx.record_read(&full);
         if !full.exists() {
             // The usual cause is a project root other than the user expects.
-            return Err(format!(
-                "`{path}` does not exist in the project folder {} (the project folder is `--root`, else the nearest folder of the script holding fitup.toml, else the script's folder)",
-                ctx.project.root().display()
-            ));
+            return Err(OpenError::Missing {
+                path: path.into(),
+                root: ctx.project.root().to_path_buf(),
+            });
         }
         let root = ctx.project.root().to_path_buf();
         let cached = ctx
             .caches
             .documents
             .lock()
-            .map_err(|_| "document cache poisoned".to_string())?
+            .map_err(|_| OpenError::Poisoned("document"))?
             .get(&root, &full);
         let doc = match cached {
             Some(doc) => doc,
@@ -61,13 +84,14 @@ impl DocHandle {
                         .caches
                         .meshes
                         .lock()
-                        .map_err(|_| "mesh cache poisoned".to_string())?;
-                    Document::load_in(&full, &ctx.project, &mut cache).map_err(|e| e.render())?
+                        .map_err(|_| OpenError::Poisoned("mesh"))?;
+                    Document::load_in(&full, &ctx.project, &mut cache)
+                        .map_err(OpenError::Document)?
                 };
                 ctx.caches
                     .documents
                     .lock()
-                    .map_err(|_| "document cache poisoned".to_string())?
+                    .map_err(|_| OpenError::Poisoned("document"))?
                     .insert(&root, &full, &doc);
                 doc
             }

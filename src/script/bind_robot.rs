@@ -794,7 +794,7 @@ fn register_drilling(api: &mut Api, ctx: &Arc<Context>) {
                 }
                 HoleOutcome::Unreachable(why) => {
                     row.insert("reachable".into(), Dynamic::FALSE);
-                    row.insert("reason".into(), Dynamic::from(why.clone()));
+                    row.insert("reason".into(), Dynamic::from(why.to_string()));
                 }
             }
             rows.push(Dynamic::from_map(row));

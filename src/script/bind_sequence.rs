@@ -408,7 +408,8 @@ fn plan(d: &DocHandle, opts: Option<&Map>) -> ScriptResult<SequenceHandle> {
     let ctx = d.context().clone();
     let o = options(opts, &ctx)?;
     let p = run(d, |doc, c| sequence::plan_sequence(doc, c, &o))?.map_err(fail)?;
-    Ok(SequenceHandle(Arc::new(p), ctx, o.tolerance))
+    let tolerance = p.tolerance;
+    Ok(SequenceHandle(Arc::new(p), ctx, tolerance))
 }
 
 /// `Sequence.revalidate`: the broken steps of the best sequence in `d` as it is now.

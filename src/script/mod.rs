@@ -30,7 +30,7 @@ pub mod sandbox;
 
 pub use api::{api_reference, ApiEntry};
 pub use args::{ArgError, ArgValue, Arguments};
-pub use bind_document::DocHandle;
+pub use bind_document::{DocHandle, OpenError};
 pub use sandbox::{Dispatch, Limits, Project};
 
 use crate::diagnostics::SourceError;

@@ -452,13 +452,24 @@ impl<'d> Ctx<'d> {
             return Stuck::NothingToGoOnto { part };
         }
         let mut by: Mask = 0;
+        let mut least: Option<(usize, Mask)> = None;
         for k in 0..self.dirs[p].len() {
-            by |= self.blockers_in(p, k, mask, true);
+            let m = self.blockers_in(p, k, mask, true);
+            by |= m;
+            if least.is_none_or(|(_, l)| m.count_ones() < l.count_ones()) {
+                least = Some((k, m));
+            }
         }
+        let (k, least_by) = least.unwrap_or((0, 0));
+        let d = self.dirs[p].get(k).copied().unwrap_or_else(Vec3::zeros);
+        let names = |m: Mask| members(m).map(|i| self.names[i].clone()).collect();
         Stuck::Blocked {
             part,
             directions: self.dirs[p].len(),
-            by: members(by).map(|i| self.names[i].clone()).collect(),
+            by: names(by),
+            least: ([d.x, d.y, d.z], names(least_by)),
+            in_contact: least_by != 0 && least_by & !self.touching[p] == 0,
+            tolerance: self.opts.tolerance,
         }
     }
 }

@@ -100,7 +100,10 @@ pub struct SequenceOptions {
     /// Seed of the planner fallback (the only randomized part).
     pub seed: u64,
     /// Penetration tolerance of every interference check (mm); default
-    /// [`crate::collision::DEFAULT_TOLERANCE`].
+    /// [`crate::collision::DEFAULT_TOLERANCE`]. Never finer than the document's
+    /// [`mesh_deflection`](crate::document::Document::mesh_deflection): a mesh
+    /// tessellated from exact surfaces is known to that much only (an imported
+    /// bolt's facets cross its bore's by up to the deflection).
     pub tolerance: f64,
     /// How far a part is separated along a free direction to test it (mm, larger than
     /// the largest fit clearance; seed 003 section 2.1 step 2). Default 0.5.
@@ -463,6 +466,14 @@ pub enum Stuck {
         directions: usize,
         /// The placed components blocking it along at least one of them.
         by: Vec<String>,
+        /// The least blocked direction (unit, assembly frame) and what blocks it
+        /// there: what would have to go (or change) for the part to come out.
+        least: ([f64; 3], Vec<String>),
+        /// Whether every one of `least`'s blockers touches the part where assembled
+        /// (a contact the tolerance may judge too finely: a tessellated fit).
+        in_contact: bool,
+        /// The penetration tolerance used (mm).
+        tolerance: f64,
     },
 }
 
@@ -482,11 +493,33 @@ impl std::fmt::Display for Stuck {
                 part,
                 directions,
                 by,
-            } => write!(
-                f,
-                "{part} is blocked along all {directions} directions by {}",
-                by.join(", ")
-            ),
+                least: (d, least_by),
+                in_contact,
+                tolerance,
+            } => {
+                let n = |v: f64| crate::math::format::number(v, 3);
+                // Every blocker is named (the one a user must move may block only
+                // the directions the part would naturally take), then the least
+                // blocked direction and what blocks it there.
+                write!(
+                    f,
+                    "{part} is blocked along all {directions} directions by {}; the least blocked, ({}, {}, {}), by {}",
+                    by.join(", "),
+                    n(d[0]),
+                    n(d[1]),
+                    n(d[2]),
+                    least_by.join(", ")
+                )?;
+                if *in_contact {
+                    write!(
+                        f,
+                        " only, which touch{} it where assembled (a fit whose meshes cross by more than the tolerance {} mm: raise `tolerance` to the meshes' deflection)",
+                        if least_by.len() == 1 { "es" } else { "" },
+                        n(*tolerance)
+                    )?;
+                }
+                Ok(())
+            }
         }
     }
 }
@@ -599,6 +632,10 @@ pub struct SequencePlan {
     /// first part placed of each group needs no support. Empty when the whole
     /// product holds together.
     pub separate_groups: Vec<Vec<String>>,
+    /// The penetration tolerance the checks used (mm): `tolerance`, raised to the
+    /// document's [`mesh_deflection`](crate::document::Document::mesh_deflection)
+    /// (an imported mesh is known no better).
+    pub tolerance: f64,
     /// Wall-clock time of the call (ms).
     pub time_ms: f64,
     /// Blocking sweeps run.

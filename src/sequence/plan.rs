@@ -771,6 +771,7 @@ fn finish(
             })
             .collect(),
         separate_groups: separate_groups(ctx),
+        tolerance: ctx.opts.tolerance,
         time_ms: ctx.started.elapsed().as_secs_f64() * 1e3,
         sweeps: ctx.sweeps.load(Ordering::Relaxed),
     })

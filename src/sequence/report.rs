@@ -175,6 +175,7 @@ impl SequencePlan {
                 "a": g.a, "b": g.b, "gap_mm": g.gap_mm,
             })).collect::<Vec<_>>(),
             "separate_groups": self.separate_groups,
+            "tolerance_mm": self.tolerance,
             "relations": g.relations.iter().map(|r| json!({
                 "a": g.components[r.a],
                 "b": g.components[r.b],

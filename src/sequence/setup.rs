@@ -252,6 +252,11 @@ impl Setup {
         let budget = Budget::new(started, opts.validate()?);
         let mut opts = opts.clone();
         opts.gravity = opts.gravity.map(|g| g.normalize());
+        // Meshes tessellated from exact surfaces lie up to their deflection from
+        // them: two facetings of one cylinder (a bolt in a bore of its diameter)
+        // cross by up to that much, and by a varying amount as one slides along the
+        // other, so a finer tolerance blocks what the CAD model leaves free.
+        opts.tolerance = opts.tolerance.max(doc.mesh_deflection().unwrap_or(0.0));
         let active = product_mask(doc, &opts)?;
         check_pins(doc, &opts, active)?;
         opts.mode = mode_used(doc, &opts, active);

@@ -191,6 +191,7 @@ impl Problem {
         DocumentFile {
             units: "mm".into(),
             description: Some(self.description.clone()),
+            mesh_deflection: None,
             parts,
             components,
             mates: vec![],

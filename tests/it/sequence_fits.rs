@@ -82,6 +82,8 @@ pub(crate) struct Checker<'a> {
     poses: Vec<Transform>,
     /// The reported fits (by index).
     fits: Vec<(usize, usize)>,
+    /// The tolerance the plan used (the default, or the document's mesh deflection).
+    tolerance: f64,
 }
 
 /// Most grid points one fit check asks (the grid is as fine as this allows).
@@ -96,7 +98,7 @@ impl Checker<'_> {
     fn hits(&self, p: usize, pose: &Transform, q: usize) -> bool {
         let (cp, cq, pq) = (&self.colliders[p], &self.colliders[q], &self.poses[q]);
         if !self.fit(p, q) {
-            return interferes(cp, pose, cq, pq, DEFAULT_TOLERANCE).unwrap();
+            return interferes(cp, pose, cq, pq, self.tolerance).unwrap();
         }
         // The volume both `p` at `pose` and `q` hold, sampled on a grid: each point
         // deeper than the tolerance in both must lie in the cut-out room (or within
@@ -116,7 +118,7 @@ impl Checker<'_> {
                 (false, self.poses[p].inverse().apply(w))
             }
         };
-        let tol = DEFAULT_TOLERANCE;
+        let tol = self.tolerance;
         let (bp, bq) = (cp.world_bounds(pose), cq.world_bounds(pq));
         let lo = bp.lo.sup(&bq.lo);
         let hi = bp.hi.inf(&bq.hi);
@@ -161,18 +163,24 @@ pub(crate) fn checker<'a>(doc: &'a Document, plan: &SequencePlan) -> Checker<'a>
         colliders: scene.colliders.clone(),
         poses: scene.poses.clone(),
         fits: plan.fits.iter().map(|f| (idx(&f.a), idx(&f.b))).collect(),
+        tolerance: DEFAULT_TOLERANCE.max(doc.mesh_deflection().unwrap_or(0.0)),
     }
 }
 
 /// The reported fits are exactly the pairs that interfere in the assembled pose
-/// (default tolerance), each with a positive depth.
+/// (default tolerance, or the document's mesh deflection when coarser, as the plan
+/// says it used), each deeper than that.
 pub(crate) fn fits_are_exact(c: &Checker, plan: &SequencePlan) {
+    assert_eq!(
+        plan.tolerance, c.tolerance,
+        "the tolerance the plan says it used"
+    );
     let n = c.colliders.len();
     for p in 0..n {
         for q in p + 1..n {
             let (cp, cq) = (&c.colliders[p], &c.colliders[q]);
             let (pp, pq) = (&c.poses[p], &c.poses[q]);
-            let interfering = interferes(cp, pp, cq, pq, DEFAULT_TOLERANCE).unwrap();
+            let interfering = interferes(cp, pp, cq, pq, c.tolerance).unwrap();
             let names = (&c.doc.components()[p].name, &c.doc.components()[q].name);
             assert_eq!(
                 interfering,
@@ -183,7 +191,7 @@ pub(crate) fn fits_are_exact(c: &Checker, plan: &SequencePlan) {
         }
     }
     for f in &plan.fits {
-        assert!(f.depth > DEFAULT_TOLERANCE, "{f:?}");
+        assert!(f.depth > c.tolerance, "{f:?}");
     }
 }
 
@@ -257,6 +265,147 @@ fn plan(doc: &Document, mode: Mode) -> SequencePlan {
         Ok(p) => p,
         Err(e) => panic!("{mode:?}: {e}"),
     }
+}
+
+/// A ring of `n` points of radius `r` at height `z`, the first at angle `phase`.
+fn circle(r: f64, n: usize, z: f64, phase: f64) -> Vec<Point3> {
+    (0..n)
+        .map(|i| {
+            let a = phase + std::f64::consts::TAU * i as f64 / n as f64;
+            Point3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}
+
+/// Triangles joining two closed rings of points (any counts) by their angles about
+/// +Z, each wound so its normal points along `outward(centroid)`: a faceted band
+/// whose facets twist where the rings' points do not line up, as a CAD mesher's
+/// do between edges meshed apart.
+fn band(a: &[Point3], b: &[Point3], outward: impl Fn(&Point3) -> Vec3, out: &mut Vec<[Point3; 3]>) {
+    let ang = |p: &Point3, wrapped: bool| {
+        p.y.atan2(p.x).rem_euclid(std::f64::consts::TAU)
+            + if wrapped { std::f64::consts::TAU } else { 0.0 }
+    };
+    let (na, nb) = (a.len(), b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < na || j < nb {
+        let next_a = if i < na {
+            ang(&a[(i + 1) % na], i + 1 >= na)
+        } else {
+            f64::INFINITY
+        };
+        let next_b = if j < nb {
+            ang(&b[(j + 1) % nb], j + 1 >= nb)
+        } else {
+            f64::INFINITY
+        };
+        let t = if next_a <= next_b {
+            i += 1;
+            [a[(i - 1) % na], a[i % na], b[j % nb]]
+        } else {
+            j += 1;
+            [a[i % na], b[j % nb], b[(j - 1) % nb]]
+        };
+        let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
+        let c = Point3::from((t[0].coords + t[1].coords + t[2].coords) / 3.0);
+        out.push(if n.dot(&outward(&c)) < 0.0 {
+            [t[0], t[2], t[1]]
+        } else {
+            t
+        });
+    }
+}
+
+fn mesh_of(tris: &[[Point3; 3]]) -> Mesh {
+    let vertices: Vec<Point3> = tris.iter().flatten().copied().collect();
+    let triangles = (0..tris.len() as u32)
+        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+        .collect();
+    Mesh::new(vertices, triangles).unwrap()
+}
+
+/// A rod of radius 5 through a 10 mm plate's bore of radius 5 (a line-to-line fit,
+/// as CAD models a bolt in its clearance-free hole), each faceted the way Open
+/// CASCADE meshes such faces: 12 points round one end and 16 (turned 0.2 rad) round
+/// the other, so facets twist and the two meshes cross by up to the chord sag
+/// 5·(1 − cos 15°) = 0.170 mm, by a different amount wherever the rod slides.
+fn twisted_rod_in_bore() -> (Mesh, Mesh) {
+    let radial = |c: &Point3| Vec3::new(c.x, c.y, 0.0);
+    let inward = |c: &Point3| Vec3::new(-c.x, -c.y, 0.0);
+    let (up, down) = (|_: &Point3| Vec3::z(), |_: &Point3| -Vec3::z());
+    let mut plate = Vec::new();
+    let (ob, ot) = (circle(20.0, 12, 0.0, 0.0), circle(20.0, 12, 10.0, 0.0));
+    let (ib, it) = (circle(5.0, 16, 0.0, 0.2), circle(5.0, 12, 10.0, 0.0));
+    band(&ob, &ot, radial, &mut plate);
+    band(&ib, &it, inward, &mut plate);
+    band(&ot, &it, up, &mut plate);
+    band(&ob, &ib, down, &mut plate);
+    let mut rod = Vec::new();
+    let (rb, rt) = (circle(5.0, 12, -10.0, 0.0), circle(5.0, 16, 20.0, 0.2));
+    band(&rb, &rt, radial, &mut rod);
+    for (ring, z, n) in [(&rt, 20.0, Vec3::z()), (&rb, -10.0, -Vec3::z())] {
+        let c = Point3::new(0.0, 0.0, z);
+        for k in 0..ring.len() {
+            let t = [c, ring[k], ring[(k + 1) % ring.len()]];
+            let tn = (t[1] - t[0]).cross(&(t[2] - t[0]));
+            rod.push(if tn.dot(&n) < 0.0 {
+                [t[0], t[2], t[1]]
+            } else {
+                t
+            });
+        }
+    }
+    (mesh_of(&plate), mesh_of(&rod))
+}
+
+/// Issue 38, the as1 bolts: a rod in a bore of its diameter, both tessellated (twisted
+/// facets, up to 0.17 mm from the exact cylinder), is blocked in every direction at
+/// the default tolerance (its facets enter the bore's anew wherever it slides); with
+/// the document's `mesh_deflection` (what `fitup import` writes) the checks judge no
+/// finer than the meshes are known, and the rod comes out along its axis.
+#[test]
+fn a_tessellated_line_to_line_fit_slides_at_the_mesh_deflection() {
+    let d = dir("twisted");
+    let (plate, rod) = twisted_rod_in_bore();
+    let doc = write_doc(&d, &[("plate", plate), ("rod", rod)]);
+    assert_eq!(doc.mesh_deflection(), None);
+    let o = SequenceOptions {
+        mode: Mode::Geometry,
+        ..SequenceOptions::default()
+    };
+    let e = plan_sequence(&doc, &mut SceneCache::new(), &o).unwrap_err();
+    // The refusal names what blocks along the freest way out and the option.
+    let e = e.to_string();
+    assert!(e.contains("rod is blocked along all"), "{e}");
+    assert!(
+        e.contains("by plate only, which touches it where assembled")
+            && e.contains("raise `tolerance`"),
+        "{e}"
+    );
+    // The same document with the tessellation's deflection recorded.
+    let yaml = doc.path().to_path_buf();
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    std::fs::write(&yaml, format!("mesh_deflection: 0.18\n{text}")).unwrap();
+    let doc = Document::open(&yaml).unwrap();
+    assert_eq!(doc.mesh_deflection(), Some(0.18));
+    let p = plan(&doc, Mode::Geometry);
+    assert_eq!(p.tolerance, 0.18);
+    let c = checker(&doc, &p);
+    fits_are_exact(&c, &p);
+    dense_removal(&c, &p);
+    for s in &p.sequences {
+        let t = &s.tasks[0];
+        assert!(
+            t.mating_direction.z.abs() > 1.0 - 1e-9,
+            "{:?}",
+            t.mating_direction
+        );
+    }
+    // A mesh deflection that is not a length is refused where it is written.
+    std::fs::write(&yaml, format!("mesh_deflection: -1\n{text}")).unwrap();
+    let e = Document::open(&yaml).unwrap_err().to_string();
+    assert!(e.contains(":1:") && e.contains("mesh_deflection"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
@@ -518,6 +667,9 @@ fn every_option_a_refusal_names_is_an_option_of_every_face() {
             part: "a".into(),
             directions: 6,
             by: vec!["b".into()],
+            least: ([0.0, 0.0, 1.0], vec!["b".into()]),
+            in_contact: true,
+            tolerance: 0.01,
         }
         .to_string(),
     ];
@@ -546,6 +698,7 @@ fn every_option_a_refusal_names_is_an_option_of_every_face() {
     }
     for must in [
         "contact_gap_mm",
+        "tolerance",
         "support",
         "time_limit_ms",
         "small_base_ratio",
