@@ -457,7 +457,7 @@ impl Plan {
         }
         let mut validator = MeshValidatorOptions::default();
         if let Some(t) = self.tolerance {
-            validator.tolerance = t;
+            validator.tolerance = Some(t);
         }
         validator.edge = if self.edge == "step" {
             SweepMethod::Stepwise {

@@ -21,8 +21,12 @@ pub const MIN_STEP_RAD: f64 = 1e-6;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshValidatorOptions {
     /// Penetration tolerance (mm, ≥ 0): surfaces crossing no deeper than this count
-    /// as touching, which is free. Default [`crate::collision::DEFAULT_TOLERANCE`].
-    pub tolerance: f64,
+    /// as touching, which is free. `None` (default): [`default_tolerance`] of the
+    /// moving part — [`crate::collision::DEFAULT_TOLERANCE`], at most
+    /// [`TOLERANCE_SHARE`] of the part's thinnest extent, so a scene scaled by `k`
+    /// is judged alike (the validator reports the value in use,
+    /// [`MotionValidator::tolerance`]).
+    pub tolerance: Option<f64>,
     /// How edges are checked — the same type the validator reports in
     /// [`PlannedPath::resolution`](super::PlannedPath::resolution). Default
     /// [`SweepMethod::CONTINUOUS`]: [`edge_interferes`] (the part's boxes swept
@@ -45,10 +49,33 @@ pub struct MeshValidatorOptions {
 impl Default for MeshValidatorOptions {
     fn default() -> Self {
         Self {
-            tolerance: crate::collision::DEFAULT_TOLERANCE,
+            tolerance: None,
             edge: SweepMethod::CONTINUOUS,
             clearance_cap: None,
         }
+    }
+}
+
+/// Largest share of the moving part's thinnest extent the default penetration
+/// tolerance may be ([`default_tolerance`]). At 1 %, every part at least 1 mm thin
+/// keeps [`crate::collision::DEFAULT_TOLERANCE`]; OMPL.app's spirelli scaled by 0.1
+/// (a strip 0.11 mm thin) is judged at 0.0011 mm, and its search makes the same
+/// moves as at full size, where 0.01 mm let it through crossings a tenth of the
+/// strip deep (unsolved in 20 s; docs/planning.md).
+pub const TOLERANCE_SHARE: f64 = 0.01;
+
+/// The default penetration tolerance for `moving` (mm): the CAD contact tolerance
+/// [`crate::collision::DEFAULT_TOLERANCE`], at most [`TOLERANCE_SHARE`] of the
+/// part's thinnest extent (the smallest side of its box in its own frame); a part
+/// with no thickness (a sheet) keeps the CAD tolerance.
+pub fn default_tolerance(moving: &Collider) -> f64 {
+    let b = moving.bounds();
+    let thinnest = (b.hi - b.lo).min();
+    let share = TOLERANCE_SHARE * thinnest;
+    if share.is_finite() && share > 0.0 {
+        crate::collision::DEFAULT_TOLERANCE.min(share)
+    } else {
+        crate::collision::DEFAULT_TOLERANCE
     }
 }
 
@@ -76,6 +103,8 @@ pub struct MeshValidator {
     moving: Arc<Collider>,
     obstacles: Vec<(Arc<Collider>, Transform, Aabb)>,
     options: MeshValidatorOptions,
+    /// The penetration tolerance in use (mm): the options', or the part's default.
+    tolerance: f64,
     stats: ValidatorStats,
     near: Vec<usize>,
     deadline: Option<Deadline>,
@@ -95,9 +124,13 @@ impl MeshValidator {
         obstacles: Vec<(Arc<Collider>, Transform)>,
         options: MeshValidatorOptions,
     ) -> Result<Self, CollisionError> {
-        if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
-            return Err(CollisionError::BadTolerance(options.tolerance));
-        }
+        let tolerance = match options.tolerance {
+            Some(t) if !(t.is_finite() && t >= 0.0) => {
+                return Err(CollisionError::BadTolerance(t));
+            }
+            Some(t) => t,
+            None => default_tolerance(&moving),
+        };
         if let SweepMethod::Stepwise {
             step_mm: mm,
             step_rad: rad,
@@ -153,6 +186,7 @@ impl MeshValidator {
             moving,
             obstacles,
             options,
+            tolerance,
             stats: ValidatorStats::default(),
             near: Vec::new(),
             deadline: None,
@@ -217,7 +251,7 @@ impl MeshValidator {
         for k in 0..self.near.len() {
             let (c, p, _) = &self.obstacles[self.near[k]];
             self.stats.pair_queries += 1;
-            match interferes(&self.moving, pose, c, p, self.options.tolerance) {
+            match interferes(&self.moving, pose, c, p, self.tolerance) {
                 Ok(false) => {}
                 _ => return false,
             }
@@ -237,7 +271,7 @@ impl MeshValidator {
     /// The options of the continuous edge check.
     fn edge_options(&self) -> EdgeOptions {
         EdgeOptions {
-            tolerance: self.options.tolerance,
+            tolerance: self.tolerance,
             contact_step: match self.options.edge {
                 SweepMethod::Continuous { contact_step_mm } => contact_step_mm,
                 SweepMethod::Stepwise { .. } => SweepMethod::DEFAULT_CONTACT_STEP_MM,
@@ -340,16 +374,13 @@ impl MotionValidator for MeshValidator {
     }
 
     fn tolerance(&self) -> f64 {
-        self.options.tolerance
+        self.tolerance
     }
 
     fn resolution(&self) -> SweepMethod {
         match self.options.edge {
             SweepMethod::Continuous { .. } => SweepMethod::Continuous {
-                contact_step_mm: contact_step(
-                    self.edge_options().contact_step,
-                    self.options.tolerance,
-                ),
+                contact_step_mm: contact_step(self.edge_options().contact_step, self.tolerance),
             },
             stepwise => stepwise,
         }
@@ -502,6 +533,75 @@ mod tests {
         assert!(checker.cost() - c0 > 100, "more than the checks' count");
     }
 
+    /// A cube of side 10k pressed into a wall by `push` sides, for scale `k`:
+    /// whether the default validator calls the pose free, and its tolerance.
+    fn pressed(k: f64, push: f64) -> (bool, f64) {
+        let cube = collider(Mesh::cuboid(
+            Point3::new(-5.0 * k, -5.0 * k, -5.0 * k),
+            Point3::new(5.0 * k, 5.0 * k, 5.0 * k),
+        ));
+        let wall = collider(Mesh::cuboid(
+            Point3::new(5.0 * k, -100.0 * k, -100.0 * k),
+            Point3::new(6.0 * k, 100.0 * k, 100.0 * k),
+        ));
+        let mut v = MeshValidator::new(
+            cube,
+            vec![(wall, Transform::IDENTITY)],
+            MeshValidatorOptions::default(),
+        )
+        .unwrap();
+        let pose = Transform::from_translation(Vec3::new(push * 10.0 * k, 0.0, 0.0));
+        (v.is_free(&pose), v.tolerance())
+    }
+
+    #[test]
+    fn the_default_tolerance_scales_down_with_a_thin_part() {
+        for k in [0.01, 0.1, 1.0, 10.0, 100.0] {
+            let side = 10.0 * k;
+            let (_, tol) = pressed(k, 0.0);
+            let want = crate::collision::DEFAULT_TOLERANCE.min(TOLERANCE_SHARE * side);
+            assert!(
+                (tol - want).abs() <= 1e-15,
+                "k {k}: tolerance {tol}, want {want}"
+            );
+            // pressed in by 2 % of its side: blocked at every scale (a fixed
+            // 0.01 mm let a 0.1 mm cube 10 % of its side into the wall)
+            assert!(!pressed(k, 0.02).0, "k {k}: pressed 2 % of its side in");
+            // touching is free at every scale
+            assert!(pressed(k, -1e-9).0, "k {k}: touching");
+        }
+        // below 1 mm the verdict is the same at every scale: 0.5 % in is touching
+        for k in [0.01, 0.1] {
+            assert!(pressed(k, 0.005).0, "k {k}: 0.5 % of its side in");
+        }
+        // an explicit tolerance is the one used
+        let cube = collider(Mesh::cuboid(Point3::origin(), Point3::new(0.1, 0.1, 0.1)));
+        let o = MeshValidatorOptions {
+            tolerance: Some(0.05),
+            ..Default::default()
+        };
+        assert_eq!(
+            MeshValidator::new(cube, vec![], o).unwrap().tolerance(),
+            0.05
+        );
+        // a part with no thickness (a sheet) keeps the CAD tolerance
+        let sheet = collider(
+            Mesh::new(
+                vec![
+                    Point3::origin(),
+                    Point3::new(1.0, 0.0, 0.0),
+                    Point3::new(0.0, 1.0, 0.0),
+                ],
+                vec![[0, 1, 2]],
+            )
+            .unwrap(),
+        );
+        assert_eq!(
+            default_tolerance(&sheet),
+            crate::collision::DEFAULT_TOLERANCE
+        );
+    }
+
     #[test]
     fn touching_is_free_and_crossing_is_not() {
         let mut v = wall_scene(SweepMethod::CONTINUOUS);
@@ -546,7 +646,7 @@ mod tests {
         let cube = collider(Mesh::cuboid(Point3::origin(), Point3::new(1.0, 1.0, 1.0)));
         let bad = |o: MeshValidatorOptions| MeshValidator::new(cube.clone(), vec![], o).is_err();
         assert!(bad(MeshValidatorOptions {
-            tolerance: -1.0,
+            tolerance: Some(-1.0),
             ..Default::default()
         }));
         assert!(bad(MeshValidatorOptions {

@@ -53,7 +53,8 @@ pub use insertion::{plan_insertion, InsertionOptions};
 pub use lattice::{DiscretizationFrame, Lattice};
 pub use local_rrt::{local_rrt, LocalRrtOptions};
 pub use mesh_validator::{
-    MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM, MIN_STEP_RAD,
+    default_tolerance, MeshValidator, MeshValidatorOptions, ValidatorStats, MIN_STEP_MM,
+    MIN_STEP_RAD, TOLERANCE_SHARE,
 };
 pub use narrow::NarrowPassage;
 pub use path::PlannedPath;

@@ -139,7 +139,7 @@ impl PlannedPath {
     /// planned with: its `tolerance_mm` and its edge `resolution` (the rest default).
     pub fn validator_options(&self) -> super::MeshValidatorOptions {
         super::MeshValidatorOptions {
-            tolerance: self.tolerance_mm,
+            tolerance: Some(self.tolerance_mm),
             edge: self.resolution,
             ..super::MeshValidatorOptions::default()
         }

@@ -158,7 +158,8 @@ impl Strategy {
     /// of the space's metric extent, no fallbacks; what crosses open, twisting
     /// space (a table carried through a house) fastest. Its reach adapts per
     /// node between the range and [`ProblemScale::reach_floor`]: it shrinks
-    /// where extensions are blocked and grows back where they go through.
+    /// where extensions are blocked and grows back where they go through. Its
+    /// metric weighs turns at [`ProblemScale::long_range_rotation_weight`].
     fn long_range(
         options: &RrtConnectOptions,
         space: &PlanningSpace,
@@ -175,7 +176,7 @@ impl Strategy {
             unit: 1.0,
             key_mm: res * 1e-3,
             stream: 0,
-            rotation_weight: space.rotation_weight,
+            rotation_weight: scale.long_range_rotation_weight(),
             reach_floor: Some(scale.reach_floor()),
         }
     }

@@ -130,7 +130,7 @@ impl Ctx<'_> {
                 .map(|q| (self.scene.colliders[q].clone(), self.scene.poses[q]))
                 .collect(),
             MeshValidatorOptions {
-                tolerance: self.opts.tolerance,
+                tolerance: Some(self.opts.tolerance),
                 edge,
                 ..MeshValidatorOptions::default()
             },
@@ -192,7 +192,7 @@ impl Ctx<'_> {
                         vec![from, corner, start],
                         v.options().edge,
                     )
-                    .with_tolerance(v.options().tolerance);
+                    .with_tolerance(v.tolerance());
                     if best.as_ref().is_some_and(|b| b.length_mm <= path.length_mm) {
                         continue;
                     }

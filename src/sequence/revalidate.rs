@@ -127,7 +127,7 @@ pub fn revalidate(
                     .map(|&q| (scene.colliders[q].clone(), scene.poses[q]))
                     .collect(),
                 MeshValidatorOptions {
-                    tolerance,
+                    tolerance: Some(tolerance),
                     edge: SweepMethod::CONTINUOUS,
                     ..MeshValidatorOptions::default()
                 },
