@@ -70,6 +70,14 @@ pub enum Error {
         /// Why not.
         source: fitup::math::transform::TransformError,
     },
+    /// An origin and axes that are not a coordinate system.
+    #[error("`{argument}`: {source}")]
+    CoordinateSystem {
+        /// The argument's name.
+        argument: &'static str,
+        /// Why not.
+        source: fitup::document::CoordinateSystemError,
+    },
     /// Keyword arguments the request's vocabulary refuses (an unknown key, a value
     /// not of its kind).
     #[error(transparent)]
@@ -122,11 +130,16 @@ pub enum Argument {
         /// The property's name.
         key: String,
     },
-    /// A plane or axis reference without its direction.
-    #[error("a {0} needs `direction`")]
-    NeedsDirection(String),
+    /// A reference without one of the vectors its kind needs.
+    #[error("a {kind} needs `{argument}`")]
+    Needs {
+        /// The reference kind.
+        kind: String,
+        /// The keyword it needs (`point`, `direction`, `x`, `y`).
+        argument: &'static str,
+    },
     /// A reference kind that does not exist.
-    #[error("reference kind `{0}`: plane, axis or point")]
+    #[error("reference kind `{0}`: plane, axis, point or coordinate_system")]
     ReferenceKind(String),
 }
 
@@ -148,7 +161,10 @@ impl Error {
             Error::Database(_) => "DatabaseError",
             Error::Script(_) | Error::Arguments(_) => "ScriptError",
             Error::Project { .. } | Error::Argument(_) => "DocumentError",
-            Error::Shape { .. } | Error::Pose { .. } | Error::Option { .. } => "InputError",
+            Error::Shape { .. }
+            | Error::Pose { .. }
+            | Error::Option { .. }
+            | Error::CoordinateSystem { .. } => "InputError",
             Error::Path(_) => "InputError",
             Error::Unknown { .. } | Error::Options(_) => "InputError",
             Error::Poisoned { .. } | Error::Python(_) => "FitupError",

@@ -191,7 +191,8 @@ impl Document {
         let eb = self
             .mate_entity(&nfc_name(&spec.entities[1]))
             .map_err(entry)?;
-        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry).map_err(entry)?;
+        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry, spec.aligned)
+            .map_err(entry)?;
         let about = match &spec.about {
             None => None,
             Some(s) => {
@@ -496,7 +497,8 @@ impl Document {
             .coords
             .iter()
             .chain(reference.direction().unwrap_or_default().iter())
-            .all(|v| v.is_finite() && v.abs() <= super::MAX_ABS_VALUE);
+            .all(|v| v.is_finite() && v.abs() <= super::MAX_ABS_VALUE)
+            && reference.coordinate_system().is_none_or(|f| f.is_finite());
         if !finite {
             return Err(bad(ReferenceProblem::NotFinite));
         }
@@ -513,7 +515,7 @@ impl Document {
                     .try_normalize(1e-12)
                     .ok_or_else(|| bad(ReferenceProblem::ZeroDirection))?,
             },
-            p @ Reference::Point(_) => p,
+            p @ (Reference::Point(_) | Reference::CoordinateSystem(_)) => p,
         };
         let mut mates = self.mates.clone();
         for m in &mut mates {

@@ -50,8 +50,8 @@ pub enum DocumentError {
         /// The property's name.
         key: String,
     },
-    /// A mate that joins points has no alignment to set or flip.
-    #[error("mate `{mate}` joins points: it has no alignment to {change}")]
+    /// A mate that joins points or coordinate systems has no alignment to set or flip.
+    #[error("mate `{mate}` joins points or coordinate systems: it has no alignment to {change}")]
     NoAlignment {
         /// The mate.
         mate: String,
@@ -227,6 +227,16 @@ pub enum DocumentError {
         "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"
     )]
     Suppressed(String),
+    /// A reference asked for as a coordinate system is another kind.
+    #[error("reference `{reference}` of part `{part}` is a {kind}, not a coordinate system")]
+    NotACoordinateSystem {
+        /// The part.
+        part: String,
+        /// The reference's name.
+        reference: String,
+        /// What it is (`plane`, `axis`, `point`).
+        kind: &'static str,
+    },
     /// Fixed components do not move.
     #[error("component `{0}` is fixed; set `fixed: false` to move it")]
     FixedComponent(String),

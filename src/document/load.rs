@@ -526,6 +526,17 @@ impl Loader<'_> {
         for (rname, p) in &pf.points {
             references.insert(rname.clone(), Reference::Point(vec3(*p).into()));
         }
+        for (rname, cs) in &pf.coordinate_systems {
+            let f =
+                super::coordinate_system(vec3(cs.origin), vec3(cs.x), vec3(cs.y)).map_err(|e| {
+                    self.at(
+                        rname,
+                        "parts",
+                        format!("coordinate system `{rname}` of part `{name}`: {e}"),
+                    )
+                })?;
+            references.insert(rname.clone(), Reference::CoordinateSystem(f));
+        }
         Ok(references)
     }
 
@@ -760,7 +771,7 @@ impl Loader<'_> {
         })?;
         let ea = entity(&m.entities[0])?;
         let eb = entity(&m.entities[1])?;
-        mates::check_entities(kind, &ea.geometry, &eb.geometry)
+        mates::check_entities(kind, &ea.geometry, &eb.geometry, m.aligned)
             .map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
         let about = match &m.about {
             None => None,

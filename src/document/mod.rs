@@ -63,7 +63,7 @@ pub use edit::{MateSpec, PropertyOwner};
 pub use entry::EntryError;
 pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
-pub use reference::Reference;
+pub use reference::{coordinate_system, CoordinateSystemError, Reference};
 pub use remove::RemoveMates;
 pub use robot::{LinkDisplay, RobotError, RobotInstance};
 pub use scan::MAX_ABS_VALUE;
@@ -512,6 +512,46 @@ impl Document {
                 ),
             })?;
         Ok(r.posed(&c.transform))
+    }
+
+    /// Coordinate system `name` of component `i`'s part in world coordinates: the pose
+    /// that maps coordinates in the system to the world (mm), as SolidWorks'
+    /// `CoordinateSystemFeatureData.Transform` of a component's `CoordSys` feature
+    /// times `Transform2`.
+    pub fn coordinate_system(&self, i: usize, name: &str) -> Result<Transform, DocumentError> {
+        let c = &self.components[i];
+        Ok(self.part_coordinate_system(&c.part, name)? * c.transform)
+    }
+
+    /// Coordinate system `name` of part `part` in the part frame (mm), as SolidWorks'
+    /// `CoordinateSystemFeatureData.Transform`.
+    pub fn part_coordinate_system(
+        &self,
+        part: &str,
+        name: &str,
+    ) -> Result<Transform, DocumentError> {
+        let p = self.part(part)?;
+        let r = p.reference(name).ok_or_else(|| DocumentError::NotFound {
+            what: "coordinate system",
+            name: name.into(),
+            hint: format!(
+                "part `{}` has none by that name; {}",
+                p.name,
+                suggestion(
+                    name,
+                    p.references
+                        .iter()
+                        .filter(|(_, r)| r.coordinate_system().is_some())
+                        .map(|(n, _)| n.as_str())
+                )
+            ),
+        })?;
+        r.coordinate_system()
+            .ok_or_else(|| DocumentError::NotACoordinateSystem {
+                part: p.name.clone(),
+                reference: name.into(),
+                kind: r.kind_name(),
+            })
     }
 
     /// Marks a component fixed or free.
