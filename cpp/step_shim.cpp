@@ -466,6 +466,35 @@ void write_test(const std::string &kind, const std::string &file) {
     TDataStd_Name::Set(tool->AddComponent(cart, axle, pose(0, 0, 1, -90, 0, -80, 0)), "NAUO8");
     tool->UpdateAssemblies();
     write_doc(doc, file);
+  } else if (kind == "roots") {
+    // Several free shapes, as some exporters write them: two root assemblies with one
+    // product name (`module`), each holding a block and a sub-assembly `pair` of two
+    // pegs at other placements, and a loose solid that is in no assembly.
+    // tests/it/step_import.rs (several_roots) repeats these placements.
+    auto pose = [](double ax, double ay, double az, double deg, double x, double y,
+                   double z) {
+      gp_Trsf t;
+      t.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(ax, ay, az)), deg * M_PI / 180.0);
+      t.SetTranslationPart(gp_Vec(x, y, z));
+      return TopLoc_Location(t);
+    };
+    TDF_Label peg = named(tool, BRepPrimAPI_MakeCylinder(4.0, 30.0).Shape(), "peg");
+    TDF_Label block = named(tool, BRepPrimAPI_MakeBox(10.0, 20.0, 5.0).Shape(), "block");
+    TDF_Label pair = tool->NewShape();
+    TDataStd_Name::Set(pair, "pair");
+    TDataStd_Name::Set(tool->AddComponent(pair, peg, TopLoc_Location()), "peg-1");
+    TDataStd_Name::Set(tool->AddComponent(pair, peg, pose(1, 0, 0, 90, 20, 0, 4)), "peg-2");
+    TDF_Label first = tool->NewShape();
+    TDataStd_Name::Set(first, "module");
+    TDataStd_Name::Set(tool->AddComponent(first, block, TopLoc_Location()), "block-1");
+    TDataStd_Name::Set(tool->AddComponent(first, pair, pose(0, 0, 1, 30, 40, 10, 5)), "pair-1");
+    TDF_Label second = tool->NewShape();
+    TDataStd_Name::Set(second, "module");
+    TDataStd_Name::Set(tool->AddComponent(second, pair, pose(0, 1, 0, -45, 100, 50, 0)), "pair-1");
+    TDataStd_Name::Set(tool->AddComponent(second, block, pose(1, 1, 1, 120, 150, 0, 0)), "block-1");
+    named(tool, BRepPrimAPI_MakeBox(gp_Pnt(300, 0, 0), 3.0, 3.0, 3.0).Shape(), "loose");
+    tool->UpdateAssemblies();
+    write_doc(doc, file);
   } else if (kind == "inch_box") {
     // 1 × 2 × 3 in, written in inches (the file's numbers are 1, 2, 3).
     Interface_Static::SetCVal("write.step.unit", "INCH");

@@ -162,9 +162,17 @@ pub struct Table {
     pub lines: Vec<usize>,
 }
 
+/// The most fields a CSV table may hold (every row's, the header's included),
+/// counted as they are read: a 64 MiB file of `1,2` lines is 33 million fields, which
+/// took 11.5 GB as a script's rows. At the cap a table takes about 32 bytes a field
+/// besides its text (≈ 130 MB, twice while the rows are typed).
+pub const MAX_CSV_FIELDS: usize = 4_000_000;
+
 /// Parses CSV text (RFC 4180: fields in double quotes may hold the delimiter, line
 /// breaks and doubled quotes; `\r\n` or `\n` line ends). Empty lines are skipped.
-/// With a header every row must have as many fields as the header.
+/// With a header every row must have as many fields as the header. A table of more
+/// than [`MAX_CSV_FIELDS`] fields is refused at the line that passes it, before the
+/// field is kept.
 pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
     let d = options.delimiter;
     if d == '"' || d == '\n' || d == '\r' {
@@ -176,9 +184,22 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
         line,
         message,
     };
-    let mut rows: Vec<(usize, Vec<(String, bool)>)> = Vec::new();
+    // Rows are typed as they end (never all kept as raw fields first): the header
+    // (when the options say there is one) is the first row that is not empty.
+    let mut table = Table::default();
+    let mut header_seen = !options.header;
     let mut chars = text.chars().peekable();
     let mut line = 1usize;
+    let mut kept = 0usize;
+    let too_many = |line: usize| {
+        bad(
+            line,
+            format!(
+                "more than {} fields: the most a table may hold (split the file)",
+                crate::math::format::count(MAX_CSV_FIELDS as u64)
+            ),
+        )
+    };
     while chars.peek().is_some() {
         let start = line;
         // a comment or empty line
@@ -198,6 +219,10 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
         loop {
             match chars.next() {
                 None => {
+                    kept += 1;
+                    if kept > MAX_CSV_FIELDS {
+                        return Err(too_many(line));
+                    }
                     fields.push((std::mem::take(&mut field), quoted));
                     break;
                 }
@@ -237,12 +262,20 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                     }
                 }
                 Some(c) if c == d => {
+                    kept += 1;
+                    if kept > MAX_CSV_FIELDS {
+                        return Err(too_many(line));
+                    }
                     fields.push((std::mem::take(&mut field), quoted));
                     quoted = false;
                     at_start = true;
                 }
                 Some('\r') if chars.peek() == Some(&'\n') => {}
                 Some('\n') => {
+                    kept += 1;
+                    if kept > MAX_CSV_FIELDS {
+                        return Err(too_many(line));
+                    }
                     line += 1;
                     fields.push((std::mem::take(&mut field), quoted));
                     break;
@@ -260,29 +293,26 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
             }
         }
         let empty = fields.len() == 1 && !fields[0].1 && fields[0].0.trim().is_empty();
-        if !empty {
-            rows.push((start, fields));
+        if empty {
+            kept -= 1;
+            continue;
         }
-    }
-    let mut table = Table::default();
-    let mut rows = rows.into_iter();
-    if options.header {
-        match rows.next() {
-            Some((_, h)) => {
-                table.columns = h.into_iter().map(|(t, _)| t.trim().to_string()).collect()
+        if !header_seen {
+            header_seen = true;
+            table.columns = fields
+                .into_iter()
+                .map(|(t, _)| t.trim().to_string())
+                .collect();
+            for (i, name) in table.columns.iter().enumerate() {
+                if table.columns[..i].contains(name) {
+                    return Err(bad(1, format!("the header names column `{name}` twice")));
+                }
             }
-            None => return Ok(table),
+            continue;
         }
-        for (i, name) in table.columns.iter().enumerate() {
-            if table.columns[..i].contains(name) {
-                return Err(bad(1, format!("the header names column `{name}` twice")));
-            }
-        }
-    }
-    for (l, fields) in rows {
         if options.header && fields.len() != table.columns.len() {
             return Err(bad(
-                l,
+                start,
                 format!(
                     "{} fields, but the header has {} columns",
                     fields.len(),
@@ -296,7 +326,7 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                 .map(|(t, q)| Cell::from_field(t, q, options.typed))
                 .collect(),
         );
-        table.lines.push(l);
+        table.lines.push(start);
     }
     Ok(table)
 }
@@ -339,13 +369,100 @@ pub fn read_csv(
 /// The deepest nesting a JSON file may have (serde_json's own recursion limit).
 pub const MAX_JSON_DEPTH: usize = 128;
 
-/// Parses JSON text; an error names the line and column.
+/// The most values a JSON file may hold (every scalar, array and object, nested
+/// ones included), counted by a first pass that keeps nothing: a 64 MiB file of
+/// `[1,2]` is 33 million values, which took 2.9 GB as a script's value. At the cap the
+/// parsed value takes 32 bytes a value in arrays and about 200 bytes a value in
+/// objects besides its text (900,000 objects of 3 numbers, 3.6 million values, took
+/// 734 MB): at most ≈ 400 MB.
+pub const MAX_JSON_VALUES: usize = 2_000_000;
+
+/// Counts the values of a JSON document without keeping any, failing past `max`.
+struct CountValues<'a> {
+    count: &'a std::cell::Cell<usize>,
+    max: usize,
+}
+
+impl CountValues<'_> {
+    fn one<E: serde::de::Error>(&self) -> Result<(), E> {
+        let n = self.count.get() + 1;
+        self.count.set(n);
+        if n > self.max {
+            return Err(E::custom(format!(
+                "more than {} values: the most a JSON file may hold",
+                crate::math::format::count(self.max as u64)
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for CountValues<'_> {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for CountValues<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E: serde::de::Error>(self, _: bool) -> Result<(), E> {
+        self.one()
+    }
+    fn visit_i64<E: serde::de::Error>(self, _: i64) -> Result<(), E> {
+        self.one()
+    }
+    fn visit_u64<E: serde::de::Error>(self, _: u64) -> Result<(), E> {
+        self.one()
+    }
+    fn visit_f64<E: serde::de::Error>(self, _: f64) -> Result<(), E> {
+        self.one()
+    }
+    fn visit_str<E: serde::de::Error>(self, _: &str) -> Result<(), E> {
+        self.one()
+    }
+    fn visit_unit<E: serde::de::Error>(self) -> Result<(), E> {
+        self.one()
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<(), A::Error> {
+        self.one()?;
+        let (count, max) = (self.count, self.max);
+        while a.next_element_seed(CountValues { count, max })?.is_some() {}
+        Ok(())
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut a: A) -> Result<(), A::Error> {
+        self.one()?;
+        let (count, max) = (self.count, self.max);
+        while a.next_key::<serde::de::IgnoredAny>()?.is_some() {
+            a.next_value_seed(CountValues { count, max })?;
+        }
+        Ok(())
+    }
+}
+
+/// Parses JSON text; an error names the line and column. A document of more than
+/// [`MAX_JSON_VALUES`] values is refused by a first pass that keeps nothing, at the
+/// line and column of the value past the cap, before anything is parsed into memory.
 pub fn parse_json(text: &str) -> Result<serde_json::Value, DataError> {
-    serde_json::from_str(text).map_err(|e| DataError::Parse {
+    use serde::de::DeserializeSeed;
+    let located = |e: serde_json::Error| DataError::Parse {
         path: PathBuf::new(),
         line: e.line(),
         message: format!("column {}: {e}", e.column()),
-    })
+    };
+    let count = std::cell::Cell::new(0);
+    let mut d = serde_json::Deserializer::from_str(text);
+    CountValues {
+        count: &count,
+        max: MAX_JSON_VALUES,
+    }
+    .deserialize(&mut d)
+    .and_then(|()| d.end())
+    .map_err(located)?;
+    serde_json::from_str(text).map_err(located)
 }
 
 /// Reads a JSON file inside the project ([`parse_json`]).

@@ -17,6 +17,8 @@
 //! | [`document`] | the assembly document: parts, components, mates, dimensions |
 //! | [`planning`] | path planners for one component: greedy ant, RRT family, Floyd, disassembly, insertion |
 //! | [`sequence`] | assembly sequences: tasks (base part, assembly part, operation) for a robot |
+//! | [`skills`] | skill primitives, part states, task templates and the skill manager that runs them on a manipulator (feature `skills`) |
+//! | [`manipulator`] | the manipulator over TCP: ROS-Industrial simple_message, a streaming client, a simulated controller (feature `manipulator`) |
 //! | [`workspace`] | a document as a collision scene and every document-level request: interference, contact, clearance, sweeps, planning, revalidation, following |
 //! | [`demo`] | the bundled demo cell (seed 000 fig. 11), generated in code |
 //! | [`options`] | one vocabulary per request: the option keys of Rhai maps and Python keywords, their kinds, units, defaults and reference tables |

@@ -213,36 +213,59 @@ impl Project {
     /// canonical path walked the same way; a link met on that walk (the path changed
     /// while it was searched) stops it too.
     pub fn for_file(file: &Path) -> std::io::Result<Self> {
-        if let Some(abs) = lexical_absolute(file) {
+        Self::search(file, true)
+    }
+
+    /// The project of the folder `folder` (`fitup cache prune DIR`): the nearest
+    /// folder from `folder` itself upwards holding [`PROJECT_FILE`], else `folder`,
+    /// searched as [`for_file`](Self::for_file) searches (every folder held from `/`
+    /// down without following a link; links resolved only when nothing above the
+    /// first one holds a [`PROJECT_FILE`]). The root is the folder that was opened,
+    /// held: nothing looks it up by name again.
+    pub fn for_folder(folder: &Path) -> std::io::Result<Self> {
+        Self::search(folder, false)
+    }
+
+    /// [`for_file`](Self::for_file) (`of_file`: the search starts at `path`'s folder)
+    /// or [`for_folder`](Self::for_folder) (it starts at `path`).
+    fn search(path: &Path, of_file: bool) -> std::io::Result<Self> {
+        let start = |p: &Path| -> Option<PathBuf> {
+            if of_file {
+                p.parent().map(Path::to_path_buf)
+            } else {
+                Some(p.to_path_buf())
+            }
+        };
+        if let Some(abs) = lexical_absolute(path).as_deref().and_then(start) {
             if let Some(p) = Self::in_chain(&abs) {
                 return p;
             }
         }
-        let file = file.canonicalize()?;
-        if let Some(p) = Self::in_chain(&file) {
+        let canonical = path.canonicalize()?;
+        let folder = start(&canonical).unwrap_or_else(|| PathBuf::from("/"));
+        if let Some(p) = Self::in_chain(&folder) {
             return p;
         }
-        if held_chain(file.parent().unwrap_or(Path::new("/"))).1 == Walked::Unopenable {
+        if held_chain(&folder).1 == Walked::Unopenable {
             // A folder that may be searched but not listed (mode 0711): it cannot be
             // held, so it is looked up by name.
-            let folder = file.parent().unwrap_or(Path::new("/"));
             let root = folder
                 .ancestors()
                 .find(|d| d.join(PROJECT_FILE).is_file())
-                .unwrap_or(folder);
+                .unwrap_or(&folder);
             return Self::new(root);
         }
         Err(std::io::Error::other(format!(
             "{}: a folder on its path changed while its project was searched",
-            file.display()
+            canonical.display()
         )))
     }
 
-    /// The project of `file` (absolute) from [`held_chain`] of its folder: the deepest
-    /// held folder holding [`PROJECT_FILE`]; else, when the whole path was walked, the
-    /// file's own folder; else `None` (a link on the way).
-    fn in_chain(file: &Path) -> Option<std::io::Result<Self>> {
-        let (mut chain, walked) = held_chain(file.parent()?);
+    /// The project of a file in `folder` (absolute) from [`held_chain`] of it: the
+    /// deepest held folder holding [`PROJECT_FILE`]; else, when the whole path was
+    /// walked, `folder` itself; else `None` (a link on the way).
+    fn in_chain(folder: &Path) -> Option<std::io::Result<Self>> {
+        let (mut chain, walked) = held_chain(folder);
         let found = chain.iter().rposition(|d| {
             matches!(
                 d.stat(std::ffi::OsStr::new(PROJECT_FILE)),

@@ -245,10 +245,21 @@ class Document:
         robot-driven components are refused; mates are not re-solved.
         """
     def reference(self, component: str, name: str) -> Dict[str, Any]:
-        """A reference (plane, axis or point of the component's part) in the world at
-        the component's pose: a dict ``kind`` (``"plane"``, ``"axis"``, ``"point"``),
-        ``point`` (mm, ``(3,)``) and ``direction`` (the unit normal or axis direction,
-        None for a point).
+        """A reference (plane, axis, point or coordinate system of the component's part)
+        in the world at the component's pose: a dict ``kind`` (``"plane"``, ``"axis"``,
+        ``"point"``, ``"coordinate_system"``), ``point`` (mm, ``(3,)``; a coordinate
+        system's origin), ``direction`` (the unit normal or axis direction, None for a
+        point or a coordinate system) and ``pose`` (a coordinate system's 4×4
+        column-vector pose, system → world, mm; None for the others).
+        """
+    def coordinate_system(self, component: str, name: str) -> _F64:
+        """Coordinate system ``name`` of component ``component``'s part in the world: its
+        4×4 column-vector pose (system → world, mm), SolidWorks'
+        ``CoordinateSystemFeatureData.Transform`` times ``Transform2``.
+        """
+    def part_coordinate_system(self, part: str, name: str) -> _F64:
+        """Coordinate system ``name`` of part ``part`` in the part frame: its 4×4
+        column-vector pose (system → part, mm).
         """
     def world_mesh(self, components: Optional[List[str]] = None, frame: Optional[_Pose] = None) -> Tuple[_F64, _F64]:
         """The meshes of ``components`` (names; default: every component neither
@@ -401,11 +412,16 @@ class Document:
         part: str,
         name: str,
         kind: str,
-        point: Sequence[float],
+        point: Optional[Sequence[float]] = None,
         direction: Optional[Sequence[float]] = None,
+        x: Optional[Sequence[float]] = None,
+        y: Optional[Sequence[float]] = None,
+        pose: Optional[_Pose] = None,
     ) -> None:
         """Adds or replaces a reference of a part in the part frame (mm): ``kind``
-        ``"plane"`` (``direction`` is the normal), ``"axis"`` or ``"point"``.
+        ``"plane"`` (``direction`` is the normal), ``"axis"``, ``"point"`` or
+        ``"coordinate_system"`` (its ``pose``, 4×4 column-vector, system → part; or
+        ``point`` as its origin with axes ``x`` and ``y``, Z = X × Y).
         """
     def set_fixed(self, name: str, fixed: bool) -> None:
         """Marks a component fixed (never moved by mates or planners) or free."""

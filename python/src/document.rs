@@ -2,7 +2,7 @@
 //! (interference, sweeps, planning, robots, programs, sequences).
 
 use crate::convert;
-use crate::error::{Error, Result};
+use crate::error::{Argument, Error, Result};
 use crate::options;
 use crate::path::Path;
 use fitup::collision::Contact;
@@ -74,11 +74,6 @@ fn shown(doc: &fitup::document::Document, names: Option<Vec<String>>) -> Result<
 /// A mesh as numpy arrays: vertices `(N, 3)` and triangles `(M, 3)`.
 type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 
-/// A value the document refuses.
-fn invalid(message: String) -> Error {
-    Error::Document(fitup::document::DocumentError::Invalid(message))
-}
-
 /// Whose properties: exactly one of a component and a part.
 fn owner<'a>(
     component: Option<&'a str>,
@@ -87,7 +82,7 @@ fn owner<'a>(
     match (component, part) {
         (Some(c), None) => Ok(fitup::document::PropertyOwner::Component(c)),
         (None, Some(p)) => Ok(fitup::document::PropertyOwner::Part(p)),
-        _ => Err(invalid("give exactly one of `component` and `part`".into())),
+        _ => Err(Error::Argument(Argument::OneOwner)),
     }
 }
 
@@ -185,10 +180,12 @@ impl Document {
         Ok(())
     }
 
-    /// A reference (plane, axis or point of the component's part) in the world at
-    /// the component's pose: a dict ``kind`` (``"plane"``, ``"axis"``, ``"point"``),
-    /// ``point`` (mm, ``(3,)``) and ``direction`` (the unit normal or axis direction,
-    /// None for a point).
+    /// A reference (plane, axis, point or coordinate system of the component's part)
+    /// in the world at the component's pose: a dict ``kind`` (``"plane"``, ``"axis"``,
+    /// ``"point"``, ``"coordinate_system"``), ``point`` (mm, ``(3,)``; a coordinate
+    /// system's origin), ``direction`` (the unit normal or axis direction, None for a
+    /// point or a coordinate system) and ``pose`` (a coordinate system's 4×4
+    /// column-vector pose, system → world, mm; None for the others).
     fn reference<'py>(
         &self,
         py: Python<'py>,
@@ -207,7 +204,43 @@ impl Document {
             r.direction()
                 .map(|v| convert::vector(py, vec![v.x, v.y, v.z])),
         )?;
+        d.set_item(
+            "pose",
+            r.coordinate_system().map(|f| convert::pose_array(py, &f)),
+        )?;
         Ok(d)
+    }
+
+    /// Coordinate system ``name`` of component ``component``'s part in the world: its
+    /// 4×4 column-vector pose (system → world, mm), SolidWorks'
+    /// ``CoordinateSystemFeatureData.Transform`` times ``Transform2``.
+    fn coordinate_system<'py>(
+        &self,
+        py: Python<'py>,
+        component: &str,
+        name: &str,
+    ) -> Result<Bound<'py, PyArray2<f64>>> {
+        let inner = self.lock()?;
+        let i = inner.doc.component_index(component)?;
+        Ok(convert::pose_array(
+            py,
+            &inner.doc.coordinate_system(i, name)?,
+        ))
+    }
+
+    /// Coordinate system ``name`` of part ``part`` in the part frame: its 4×4
+    /// column-vector pose (system → part, mm).
+    fn part_coordinate_system<'py>(
+        &self,
+        py: Python<'py>,
+        part: &str,
+        name: &str,
+    ) -> Result<Bound<'py, PyArray2<f64>>> {
+        let inner = self.lock()?;
+        Ok(convert::pose_array(
+            py,
+            &inner.doc.part_coordinate_system(part, name)?,
+        ))
     }
 
     /// Every mate in document order as dicts: ``name``, ``type``, ``entities``
@@ -511,9 +544,9 @@ impl Document {
         } else if let Ok(f) = value.extract::<f64>() {
             f.to_string()
         } else {
-            return Err(invalid(format!(
-                "custom property `{key}`: a value is a str, number or bool"
-            )));
+            return Err(Error::Argument(Argument::PropertyValue {
+                key: key.to_string(),
+            }));
         };
         self.lock()?.doc.set_property(owner, key, &text)?;
         Ok(())
@@ -612,39 +645,58 @@ impl Document {
     }
 
     /// Adds or replaces a reference of a part in the part frame (mm): ``kind``
-    /// ``"plane"`` (``direction`` is the normal), ``"axis"`` or ``"point"``.
-    #[pyo3(signature = (part, name, kind, point, direction = None))]
+    /// ``"plane"`` (``direction`` is the normal), ``"axis"``, ``"point"`` or
+    /// ``"coordinate_system"`` (its ``pose``, 4×4 column-vector, system → part; or
+    /// ``point`` as its origin with axes ``x`` and ``y``, Z = X × Y).
+    #[pyo3(signature = (part, name, kind, point = None, direction = None, x = None, y = None, pose = None))]
+    #[allow(clippy::too_many_arguments)]
     fn set_reference(
         &self,
         part: &str,
         name: &str,
         kind: &str,
-        point: [f64; 3],
+        point: Option<[f64; 3]>,
         direction: Option<[f64; 3]>,
+        x: Option<[f64; 3]>,
+        y: Option<[f64; 3]>,
+        pose: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
     ) -> Result<()> {
         use fitup::document::Reference;
         use fitup::math::{Point3, Vec3};
-        let p = Point3::new(point[0], point[1], point[2]);
-        let dir = || {
-            direction
-                .map(|d| Vec3::new(d[0], d[1], d[2]))
-                .ok_or_else(|| invalid(format!("a {kind} needs `direction`")))
+        let v = |a: [f64; 3]| Vec3::new(a[0], a[1], a[2]);
+        let need = |a: Option<[f64; 3]>, k: &'static str| {
+            a.map(v).ok_or_else(|| {
+                Error::Argument(Argument::Needs {
+                    kind: kind.to_string(),
+                    argument: k,
+                })
+            })
         };
         let r = match kind {
+            "coordinate_system" => match pose {
+                Some(p) => Reference::CoordinateSystem(convert::pose_of(p.as_array(), "pose")?),
+                None => Reference::CoordinateSystem(
+                    fitup::document::coordinate_system(
+                        need(point, "point` (or `pose")?,
+                        need(x, "x")?,
+                        need(y, "y")?,
+                    )
+                    .map_err(|source| Error::CoordinateSystem {
+                        argument: "x, y",
+                        source,
+                    })?,
+                ),
+            },
             "plane" => Reference::Plane {
-                point: p,
-                normal: dir()?,
+                point: Point3::from(need(point, "point")?),
+                normal: need(direction, "direction")?,
             },
             "axis" => Reference::Axis {
-                point: p,
-                direction: dir()?,
+                point: Point3::from(need(point, "point")?),
+                direction: need(direction, "direction")?,
             },
-            "point" => Reference::Point(p),
-            other => {
-                return Err(invalid(format!(
-                    "reference kind `{other}`: plane, axis or point"
-                )))
-            }
+            "point" => Reference::Point(Point3::from(need(point, "point")?)),
+            other => return Err(Error::Argument(Argument::ReferenceKind(other.to_string()))),
         };
         self.lock()?.doc.set_reference(part, name, r)?;
         Ok(())

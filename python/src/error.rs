@@ -70,6 +70,14 @@ pub enum Error {
         /// Why not.
         source: fitup::math::transform::TransformError,
     },
+    /// An origin and axes that are not a coordinate system.
+    #[error("`{argument}`: {source}")]
+    CoordinateSystem {
+        /// The argument's name.
+        argument: &'static str,
+        /// Why not.
+        source: fitup::document::CoordinateSystemError,
+    },
     /// Keyword arguments the request's vocabulary refuses (an unknown key, a value
     /// not of its kind).
     #[error(transparent)]
@@ -84,6 +92,10 @@ pub enum Error {
         /// What is accepted.
         expected: &'static str,
     },
+    /// Document call arguments that do not fit together (raised as `DocumentError`,
+    /// as the document's own refusals).
+    #[error(transparent)]
+    Argument(#[from] Argument),
     /// A name that does not exist, with close matches.
     #[error("no {what} named `{name}`: {hint}")]
     Unknown {
@@ -105,6 +117,32 @@ pub enum Error {
     },
 }
 
+/// What is wrong with a document call's arguments ([`Error::Argument`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Argument {
+    /// Custom properties of both or neither of a component and a part.
+    #[error("give exactly one of `component` and `part`")]
+    OneOwner,
+    /// A custom property's value of another type.
+    #[error("custom property `{key}`: a value is a str, number or bool")]
+    PropertyValue {
+        /// The property's name.
+        key: String,
+    },
+    /// A reference without one of the vectors its kind needs.
+    #[error("a {kind} needs `{argument}`")]
+    Needs {
+        /// The reference kind.
+        kind: String,
+        /// The keyword it needs (`point`, `direction`, `x`, `y`).
+        argument: &'static str,
+    },
+    /// A reference kind that does not exist.
+    #[error("reference kind `{0}`: plane, axis, point or coordinate_system")]
+    ReferenceKind(String),
+}
+
 /// Result of a conversion or a library call on the way to Python.
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -122,8 +160,11 @@ impl Error {
             Error::Kinematics(_) | Error::Ik(_) | Error::Program(_) => "RobotError",
             Error::Database(_) => "DatabaseError",
             Error::Script(_) | Error::Arguments(_) => "ScriptError",
-            Error::Project { .. } => "DocumentError",
-            Error::Shape { .. } | Error::Pose { .. } | Error::Option { .. } => "InputError",
+            Error::Project { .. } | Error::Argument(_) => "DocumentError",
+            Error::Shape { .. }
+            | Error::Pose { .. }
+            | Error::Option { .. }
+            | Error::CoordinateSystem { .. } => "InputError",
             Error::Path(_) => "InputError",
             Error::Unknown { .. } | Error::Options(_) => "InputError",
             Error::Poisoned { .. } | Error::Python(_) => "FitupError",

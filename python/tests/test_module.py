@@ -637,3 +637,35 @@ def test_sub_documents_and_suppressed_sub_assemblies(tmp_path):
     doc.save()
     assert [p.endswith("axle.yaml") for p in doc.saved_sub_documents()] == [True]
     assert "Wheel-9" in (tmp_path / "sub" / "axle.yaml").read_text()
+
+
+def test_coordinate_systems(project):
+    """Issue 37, capability 10 from Python: a part's coordinate system in the part
+    and in the world, a coincident mate between two of them, one added and saved."""
+    path = project / "models" / "solidworks" / "fixture_cs.yaml"
+    doc = fitup.Document(path)
+    c = math.cos(math.pi / 6)
+    part = doc.part_coordinate_system("table", "Coordinate System1")
+    # column-vector pose: the columns are the system's X, Y, Z and origin (mm)
+    assert part[:3, 0] == pytest.approx([c, 0.5, 0.0])
+    assert part[:3, 1] == pytest.approx([-0.5, c, 0.0])
+    assert part[:3, 3] == pytest.approx([600.0, 400.0, 750.0])
+    ref = doc.reference("plate-1", "Coordinate System1")
+    assert ref["kind"] == "coordinate_system" and ref["direction"] is None
+    world = doc.coordinate_system("plate-1", "Coordinate System1")
+    assert np.allclose(ref["pose"], world)
+    assert np.allclose(world, doc.pose("plate-1") @ doc.part_coordinate_system("plate", "Coordinate System1"))
+    doc.add_mate("cs_mate", "coincident", "table/Coordinate System1", "plate-1/Coordinate System1")
+    assert np.allclose(doc.coordinate_system("plate-1", "Coordinate System1"), part, atol=1e-9)
+    with pytest.raises(fitup.errors.DocumentError, match="coordinate systems"):
+        doc.set_mate_aligned("cs_mate", False)
+    with pytest.raises(fitup.errors.InputError, match="perpendicular"):
+        doc.set_reference("plate", "Skew", "coordinate_system", point=[0, 0, 0], x=[1, 0, 0], y=[0.5, 1, 0])
+    doc.set_reference("plate", "Top", "coordinate_system", point=[0, 0, 10], x=[0, 1, 0], y=[-1, 0, 0])
+    top = doc.part_coordinate_system("plate", "Top")
+    assert top[:3, 2] == pytest.approx([0.0, 0.0, 1.0])
+    doc.set_reference("plate", "Moved", "coordinate_system", pose=top)
+    doc.save()
+    again = fitup.Document(path)
+    assert np.allclose(again.part_coordinate_system("plate", "Moved"), top)
+    assert np.allclose(again.pose("plate-1"), doc.pose("plate-1"))

@@ -46,25 +46,30 @@ pub(super) fn cache(a: &CacheArgs) -> Exit {
 
 fn prune(dir: Option<&std::path::Path>, dry_run: bool, max_mb: u64) -> Exit {
     let dir = dir.unwrap_or(std::path::Path::new("."));
-    let dir = match dir.canonicalize() {
-        Ok(d) if d.is_dir() => d,
-        Ok(d) => {
-            errln!("error: {}: not a folder", d.display());
+    // For the message only: the project is searched (and then used) through folders
+    // held from `/` down, never by name.
+    match std::fs::metadata(dir) {
+        Ok(m) if !m.is_dir() => {
+            errln!("error: {}: not a folder", dir.display());
             return Exit::Failure;
         }
         Err(e) => {
             errln!("error: {}: {e}", dir.display());
             return Exit::Failure;
         }
+        Ok(_) => {}
+    }
+    let project = match crate::project::Project::for_folder(dir) {
+        Ok(p) => p,
+        Err(e) => {
+            errln!("error: {}: {e}", dir.display());
+            return Exit::Failure;
+        }
     };
-    let root = dir
-        .ancestors()
-        .find(|d| d.join(crate::project::PROJECT_FILE).is_file())
-        .unwrap_or(&dir)
-        .to_path_buf();
+    let root = project.root().to_path_buf();
     let max_bytes = max_mb.saturating_mul(1 << 20);
     let (report, used) =
-        match crate::document::tessellations::prune_project_store(&root, dry_run, max_bytes) {
+        match crate::document::tessellations::prune_project_store(&project, dry_run, max_bytes) {
             Ok(r) => r,
             Err(e) => {
                 errln!("error: {e}");

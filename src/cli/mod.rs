@@ -58,6 +58,10 @@ pub struct ScriptArgs {
     /// and its imports); the default stops an endless loop within about two seconds.
     #[arg(long, default_value_t = crate::script::Limits::default().max_operations)]
     pub max_operations: u64,
+    /// Time limit of the run, seconds (0: none). The operation limit alone does not
+    /// bound time (a call on a large array costs one operation).
+    #[arg(long, default_value_t = crate::script::Limits::default().max_seconds)]
+    pub max_seconds: u64,
     /// Script arguments after `--`: `key=value …`, the map `args` in the script
     /// (numbers become numbers, `true`/`false` booleans, anything else text).
     #[arg(last = true, value_name = "KEY=VALUE")]
@@ -120,6 +124,10 @@ pub struct WatchArgs {
     /// script and its imports); a new save cancels a running script anyway.
     #[arg(long, default_value_t = crate::script::Limits::default().max_operations)]
     pub max_operations: u64,
+    /// Time limit of each run, seconds (0: none); a new save cancels a running script
+    /// anyway.
+    #[arg(long, default_value_t = crate::script::Limits::default().max_seconds)]
+    pub max_seconds: u64,
     /// Script arguments after `--`: `key=value …`, the map `args` in the script.
     #[arg(last = true, value_name = "KEY=VALUE")]
     pub args: Vec<String>,
@@ -151,6 +159,7 @@ impl From<WatchArgs> for ScriptArgs {
             log: None,
             force: w.force,
             max_operations: w.max_operations,
+            max_seconds: w.max_seconds,
             args: w.args,
             db: w.db,
             dispatch: w.dispatch,

@@ -27,6 +27,7 @@ fn options(a: &ScriptArgs) -> Result<RunOptions, (Exit, String)> {
         project,
         limits: Limits {
             max_operations: a.max_operations,
+            max_seconds: a.max_seconds,
             dispatch: match (a.dispatch.dispatch, a.dispatch.allow_remote) {
                 (false, _) => Dispatch::Never,
                 (true, false) => Dispatch::Loopback,

@@ -177,9 +177,10 @@ impl Document {
         let name = new_name(name, "sub-assembly name")?;
         check_levels(&name)?;
         if self.by_name.contains_key(&name) || self.assemblies.iter().any(|a| a.name == name) {
-            return Err(DocumentError::Invalid(format!(
-                "a component or sub-assembly named `{name}` exists already"
-            )));
+            return Err(DocumentError::NameTaken {
+                what: "component or sub-assembly",
+                name,
+            });
         }
         self.check_parent(&name)?;
         check_pose(&t, format_args!("the pose for sub-assembly `{name}`"))?;
@@ -249,13 +250,14 @@ impl Document {
         check_levels(name)?;
         match parent_name(name) {
             Some(p) if !self.assemblies.iter().any(|a| a.name == p) => {
-                Err(DocumentError::Invalid(format!(
-                    "`{name}`: its parent `{p}` is no sub-assembly ({})",
-                    crate::diagnostics::suggestion(
+                Err(DocumentError::NoParentAssembly {
+                    name: name.to_string(),
+                    parent: p.to_string(),
+                    hint: crate::diagnostics::suggestion(
                         p,
-                        self.assemblies.iter().map(|a| a.name.as_str())
-                    )
-                )))
+                        self.assemblies.iter().map(|a| a.name.as_str()),
+                    ),
+                })
             }
             _ => Ok(()),
         }

@@ -5,7 +5,10 @@
 //! the mates cannot satisfy is undone and refused.
 
 use super::mates::{self, Mate, MateKind};
-use super::{nfc_name, Component, Document, DocumentError, Part, Reference};
+use super::{
+    nfc_name, Component, Document, DocumentError, LinkEdit, MateProblem, Part, PartMeshError,
+    Reference, ReferenceProblem,
+};
 use crate::math::Transform;
 use crate::mesh::MeshCache;
 use crate::project::Project;
@@ -105,9 +108,14 @@ impl Document {
         if self.mates[i].kind.has_dimension() {
             let dimension = super::dimension::full_name(&self.mates[i].name);
             if let Some(&e) = self.equations_using(&dimension).first() {
-                return Err(DocumentError::Invalid(format!(
-                    "mate `{name}`: equation [{e}] {} uses its dimension `{dimension}`; delete or change the equation first",
-                    super::equations::shown(&self.equations()[e].text())
+                return Err(DocumentError::DimensionInUse(Box::new(
+                    super::DimensionInUse {
+                        component: None,
+                        mate: name.to_string(),
+                        dimension,
+                        index: e,
+                        equation: super::equations::shown(&self.equations()[e].text()),
+                    },
                 )));
             }
         }
@@ -138,10 +146,10 @@ impl Document {
     ) -> Result<(), DocumentError> {
         let i = self.mate_index(name)?;
         if aligned.is_some() && self.mate_alignment(name)?.is_none() {
-            return Err(DocumentError::Invalid(format!(
-                "mate `{}` joins points: it has no alignment to set",
-                self.mates[i].name
-            )));
+            return Err(DocumentError::NoAlignment {
+                mate: self.mates[i].name.clone(),
+                change: "set",
+            });
         }
         self.change_and_rebuild(|d| {
             d.mates[i].aligned = aligned;
@@ -152,11 +160,12 @@ impl Document {
     /// Flips a mate between aligned and anti-aligned (SolidWorks' flip mate
     /// alignment), then re-solves.
     pub fn flip_mate(&mut self, name: &str) -> Result<(), DocumentError> {
-        let now = self.mate_alignment(name)?.ok_or_else(|| {
-            DocumentError::Invalid(format!(
-                "mate `{name}` joins points: it has no alignment to flip"
-            ))
-        })?;
+        let now = self
+            .mate_alignment(name)?
+            .ok_or_else(|| DocumentError::NoAlignment {
+                mate: name.to_string(),
+                change: "flip",
+            })?;
         self.set_mate_aligned(name, Some(!now))
     }
 
@@ -166,44 +175,47 @@ impl Document {
     pub fn add_mate(&mut self, spec: &MateSpec) -> Result<(), DocumentError> {
         let name = super::new_name(&spec.name, "mate name")?;
         if self.mates.iter().any(|m| m.name == name) {
-            return Err(DocumentError::Invalid(format!(
-                "a mate named `{name}` exists already"
-            )));
+            return Err(DocumentError::NameTaken { what: "mate", name });
         }
-        let bad = |m: String| DocumentError::Invalid(format!("mate `{name}`: {m}"));
-        let entry = |e: super::EntryError| bad(e.to_string());
+        let entry = |e: super::EntryError| DocumentError::MateEntity {
+            mate: name.clone(),
+            source: Box::new(e),
+        };
+        let bad = |problem| DocumentError::BadMate {
+            mate: name.clone(),
+            problem,
+        };
         let ea = self
             .mate_entity(&nfc_name(&spec.entities[0]))
             .map_err(entry)?;
         let eb = self
             .mate_entity(&nfc_name(&spec.entities[1]))
             .map_err(entry)?;
-        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry).map_err(entry)?;
+        mates::check_entities(spec.kind, &ea.geometry, &eb.geometry, spec.aligned)
+            .map_err(entry)?;
         let about = match &spec.about {
             None => None,
             Some(s) => {
                 let e = self.mate_entity(&nfc_name(s)).map_err(entry)?;
                 if !matches!(e.geometry, Reference::Axis { .. }) {
-                    return Err(bad("`about` must name an axis".into()));
+                    return Err(bad(MateProblem::AboutNotAnAxis));
                 }
                 Some(e)
             }
         };
         match (spec.kind.has_dimension(), spec.value) {
-            (true, None) => return Err(bad(format!("a {} mate needs a value", spec.kind.name()))),
-            (false, Some(_)) => {
-                return Err(bad(format!("a {} mate takes no value", spec.kind.name())))
-            }
+            (true, None) => return Err(bad(MateProblem::NeedsValue(spec.kind))),
+            (false, Some(_)) => return Err(bad(MateProblem::TakesNoValue(spec.kind))),
             (_, Some(v)) if !v.is_finite() || v.abs() > super::MAX_ABS_VALUE => {
-                return Err(bad(format!("value {v} is not a finite number up to 1e9")))
+                return Err(bad(MateProblem::ValueOutOfRange(v)))
             }
             (_, Some(v)) if spec.kind == MateKind::Distance && v < 0.0 => {
-                return Err(bad("a distance cannot be negative".into()))
+                return Err(bad(MateProblem::NegativeDistance(v)))
             }
             _ => {}
         }
         if spec.kind.has_dimension() && self.robot_dimension(&name).is_some() {
-            return Err(bad("a robot joint's dimension has that name".into()));
+            return Err(bad(MateProblem::RobotDimension));
         }
         let mate = Mate {
             name,
@@ -275,17 +287,15 @@ impl Document {
     ) -> Result<(), DocumentError> {
         let key = super::new_name(key, "property name")?;
         if key.trim().is_empty() {
-            return Err(DocumentError::Invalid(
-                "a custom property needs a name".into(),
-            ));
+            return Err(DocumentError::EmptyName {
+                what: "custom property",
+            });
         }
         if value
             .chars()
             .any(|c| c.is_control() && c != '\n' && c != '\t')
         {
-            return Err(DocumentError::Invalid(format!(
-                "custom property `{key}`: the value holds a control character"
-            )));
+            return Err(DocumentError::PropertyControl { key });
         }
         self.properties_mut(owner)?.insert(key, value.to_string());
         self.revision += 1;
@@ -316,9 +326,10 @@ impl Document {
         let name = super::new_name(name, "component name")?;
         self.check_parent(&name)?;
         if self.by_name.contains_key(&name) {
-            return Err(DocumentError::Invalid(format!(
-                "a component named `{name}` exists already"
-            )));
+            return Err(DocumentError::NameTaken {
+                what: "component",
+                name,
+            });
         }
         let part = self.part(part)?.name.clone();
         super::check_pose(&transform, format_args!("the pose for `{name}`"))?;
@@ -348,15 +359,16 @@ impl Document {
         }
         self.check_parent(&new)?;
         if self.by_name.contains_key(&new) {
-            return Err(DocumentError::Invalid(format!(
-                "a component named `{new}` exists already"
-            )));
+            return Err(DocumentError::NameTaken {
+                what: "component",
+                name: new,
+            });
         }
         if self.generated.contains(&self.components[i].part) {
-            return Err(DocumentError::Invalid(format!(
-                "component `{}` is a URDF robot link's, named by the robot",
-                self.components[i].name
-            )));
+            return Err(DocumentError::UrdfLink {
+                component: self.components[i].name.clone(),
+                edit: LinkEdit::Rename,
+            });
         }
         let old_name = std::mem::replace(&mut self.components[i].name, new.clone());
         self.by_name.remove(&old_name);
@@ -375,9 +387,10 @@ impl Document {
         let i = self.component_index(name)?;
         let part = self.part(part)?.name.clone();
         if self.generated.contains(&self.components[i].part) {
-            return Err(DocumentError::Invalid(format!(
-                "component `{name}` is a URDF robot link's; its mesh comes from the URDF"
-            )));
+            return Err(DocumentError::UrdfLink {
+                component: name.to_string(),
+                edit: LinkEdit::ReplacePart,
+            });
         }
         let mut mates = self.mates.clone();
         let new_part = &self.parts[&part];
@@ -387,15 +400,15 @@ impl Document {
                     continue;
                 }
                 e.geometry = new_part.reference(&e.reference).ok_or_else(|| {
-                    DocumentError::Invalid(format!(
-                        "mate `{}` uses `{}/{}`, which part `{part}` does not have",
-                        m.name, name, e.reference
-                    ))
+                    DocumentError::MissingReference(Box::new(super::MissingReference {
+                        mate: m.name.clone(),
+                        component: name.to_string(),
+                        reference: e.reference.clone(),
+                        part: part.clone(),
+                    }))
                 })?;
             }
-            let [a, b] = &m.entities;
-            mates::check_entities(m.kind, &a.geometry, &b.geometry)
-                .map_err(|e| DocumentError::Invalid(format!("mate `{}`: {e}", m.name)))?;
+            m.check_geometry()?;
         }
         self.change_and_rebuild(|d| {
             d.mates = mates;
@@ -419,25 +432,26 @@ impl Document {
     ) -> Result<String, DocumentError> {
         let name = super::new_name(name, "part name")?;
         if name.is_empty() {
-            return Err(DocumentError::Invalid("a part needs a name".into()));
+            return Err(DocumentError::EmptyName { what: "part" });
         }
         if self.parts.contains_key(&name) {
-            return Err(DocumentError::Invalid(format!(
-                "a part named `{name}` exists already"
-            )));
+            return Err(DocumentError::NameTaken { what: "part", name });
         }
         let dir = std::path::absolute(&self.path)
             .ok()
             .and_then(|p| p.parent().map(Path::to_path_buf))
             .and_then(|d| d.canonicalize().ok())
             .unwrap_or_else(|| project.root().to_path_buf());
-        let invalid = |m: String| DocumentError::Invalid(format!("part `{name}`: {m}"));
+        let invalid = |source| DocumentError::PartMesh {
+            part: name.clone(),
+            source,
+        };
         let mesh_path = project
             .resolve_from(&dir, file)
-            .map_err(|e| invalid(format!("mesh {e}")))?;
+            .map_err(|e| invalid(PartMeshError::Path(e)))?;
         let mesh = cache
             .get_in(project, &mesh_path)
-            .map_err(|e| invalid(e.to_string()))?;
+            .map_err(|e| invalid(PartMeshError::Read(e)))?;
         let mesh_files = cache.files_of(&mesh_path);
         self.parts.insert(
             name.clone(),
@@ -470,34 +484,38 @@ impl Document {
     ) -> Result<(), DocumentError> {
         let part = self.part(part)?.name.clone();
         let name = super::new_name(name, "reference name")?;
-        let bad =
-            |m: String| DocumentError::Invalid(format!("reference `{name}` of part `{part}`: {m}"));
+        let bad = |problem| DocumentError::BadReference {
+            part: part.clone(),
+            reference: name.clone(),
+            problem,
+        };
         if name.is_empty() || Reference::BUILTIN_NAMES.contains(&name.as_str()) {
-            return Err(bad("a built-in or empty name cannot be redefined".into()));
+            return Err(bad(ReferenceProblem::ReservedName));
         }
         let finite = reference
             .anchor()
             .coords
             .iter()
             .chain(reference.direction().unwrap_or_default().iter())
-            .all(|v| v.is_finite() && v.abs() <= super::MAX_ABS_VALUE);
+            .all(|v| v.is_finite() && v.abs() <= super::MAX_ABS_VALUE)
+            && reference.coordinate_system().is_none_or(|f| f.is_finite());
         if !finite {
-            return Err(bad("its numbers must be finite and at most 1e9".into()));
+            return Err(bad(ReferenceProblem::NotFinite));
         }
         let reference = match reference {
             Reference::Plane { point, normal } => Reference::Plane {
                 point,
                 normal: normal
                     .try_normalize(1e-12)
-                    .ok_or_else(|| bad("a zero normal".into()))?,
+                    .ok_or_else(|| bad(ReferenceProblem::ZeroNormal))?,
             },
             Reference::Axis { point, direction } => Reference::Axis {
                 point,
                 direction: direction
                     .try_normalize(1e-12)
-                    .ok_or_else(|| bad("a zero direction".into()))?,
+                    .ok_or_else(|| bad(ReferenceProblem::ZeroDirection))?,
             },
-            p @ Reference::Point(_) => p,
+            p @ (Reference::Point(_) | Reference::CoordinateSystem(_)) => p,
         };
         let mut mates = self.mates.clone();
         for m in &mut mates {
@@ -506,9 +524,7 @@ impl Document {
                     e.geometry = reference;
                 }
             }
-            let [a, b] = &m.entities;
-            mates::check_entities(m.kind, &a.geometry, &b.geometry)
-                .map_err(|e| DocumentError::Invalid(format!("mate `{}`: {e}", m.name)))?;
+            m.check_geometry()?;
         }
         let old = self.parts[&part].references.clone();
         let result = self.change_and_rebuild(|d| {
@@ -526,8 +542,13 @@ impl Document {
     /// of the document holding `fitup.toml`, else its folder), reading the mesh
     /// afresh.
     pub fn add_part_file(&mut self, name: &str, file: &str) -> Result<String, DocumentError> {
-        let project = Project::for_file(&self.path)
-            .map_err(|e| DocumentError::Invalid(format!("part `{name}`: {e}")))?;
+        let project = Project::for_file(&self.path).map_err(|e| DocumentError::PartMesh {
+            part: name.to_string(),
+            source: PartMeshError::Project {
+                kind: e.kind(),
+                message: e.to_string(),
+            },
+        })?;
         self.add_part(name, file, &project, &mut MeshCache::new())
     }
 }

@@ -43,11 +43,14 @@ pub enum EntryError {
     MateEntities {
         /// The mate's kind.
         kind: MateKind,
-        /// The first entity's type (`plane`, `axis`, `point`).
+        /// The first entity's type (`plane`, `axis`, `point`, `coordinate_system`).
         a: &'static str,
         /// The second entity's type.
         b: &'static str,
     },
+    /// A coincident mate between two coordinate systems asked to be anti-aligned.
+    #[error("two coordinate systems coincide axis for axis: anti-aligned is not defined")]
+    AntiAlignedSystems,
     /// Cut cells whose `cell_size` is not a number > 0 mm.
     #[error("cut cells `{name}`: cell_size must be a number > 0 mm, not {value}")]
     CellSize {

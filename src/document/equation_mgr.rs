@@ -288,10 +288,10 @@ pub(crate) fn parse_equation(text: &str) -> Result<Equation, EquationCause> {
 
 /// `text` with every name in double quotes passed through `rename` (the quotes and
 /// everything else kept as written).
-fn rename_quoted(
+fn rename_quoted<E>(
     text: &str,
-    rename: &mut dyn FnMut(&str) -> Result<String, String>,
-) -> Result<String, String> {
+    rename: &mut dyn FnMut(&str) -> Result<String, E>,
+) -> Result<String, E> {
     let mut out = String::with_capacity(text.len() + 16);
     let mut rest = text;
     while let Some(open) = rest.find('"') {
@@ -313,13 +313,22 @@ fn rename_quoted(
 
 impl Equation {
     /// The same equation with every name (its target and those it uses) passed
-    /// through `rename`; value and scope kept.
+    /// through `rename`; value and scope kept. `index` is the equation's index where
+    /// it goes, for the error when the renamed text does not parse.
     pub(crate) fn renamed(
         &self,
-        rename: &mut dyn FnMut(&str) -> Result<String, String>,
-    ) -> Result<Equation, String> {
+        index: usize,
+        rename: &mut dyn FnMut(&str) -> Result<String, DocumentError>,
+    ) -> Result<Equation, DocumentError> {
         let text = rename_quoted(&self.text(), rename)?;
-        let mut e = parse_equation(&text).map_err(|c| format!("equation {}: {c}", shown(&text)))?;
+        let mut e = parse_equation(&text).map_err(|cause| DocumentError::Equation {
+            at: None,
+            source: EquationError {
+                index,
+                text: shown(&text),
+                cause,
+            },
+        })?;
         e.value = self.value;
         e.scope = self.scope.clone();
         Ok(e)

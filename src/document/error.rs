@@ -28,10 +28,166 @@ pub enum DocumentError {
     /// `DocumentError` (the sequence and workspace layers') would grow with them.
     #[error(transparent)]
     Entry(Box<super::EntryError>),
-    /// An operation a lower layer refused, in its words (a robot definition, a GLB
-    /// export).
-    #[error("{0}")]
-    Invalid(String),
+    /// A new name another item already has (`what`: "mate", "component", "part",
+    /// "component or sub-assembly", …; a sub-document's names with their prefix).
+    #[error("a {what} named `{name}` exists already")]
+    NameTaken {
+        /// What is named.
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
+    /// A name that may not be empty (`what`: "part", "custom property").
+    #[error("a {what} needs a name")]
+    EmptyName {
+        /// What is named.
+        what: &'static str,
+    },
+    /// A custom property's value with a control character (tab and newline are
+    /// allowed).
+    #[error("custom property `{key}`: the value holds a control character")]
+    PropertyControl {
+        /// The property's name.
+        key: String,
+    },
+    /// A mate that joins points or coordinate systems has no alignment to set or flip.
+    #[error("mate `{mate}` joins points or coordinate systems: it has no alignment to {change}")]
+    NoAlignment {
+        /// The mate.
+        mate: String,
+        /// "set" or "flip".
+        change: &'static str,
+    },
+    /// A mate's dimension that an equation uses: the mate (or, when `component` is
+    /// given, the component the mate goes with) cannot be deleted before the equation.
+    /// Boxed: it names five things, and every `Result` carrying a `DocumentError`
+    /// would grow with it.
+    #[error(transparent)]
+    DimensionInUse(Box<DimensionInUse>),
+    /// A URDF robot link's component: the robot names it and gives its mesh.
+    #[error("component `{component}` is a URDF robot link's{}", match edit {
+        LinkEdit::Rename => ", named by the robot",
+        LinkEdit::ReplacePart => "; its mesh comes from the URDF",
+    })]
+    UrdfLink {
+        /// The component.
+        component: String,
+        /// What was asked of it.
+        edit: LinkEdit,
+    },
+    /// A robot's link is removed with its robot, not on its own.
+    #[error("component `{component}` is a link of robot `{robot}`: it goes with the robot")]
+    RobotLinkRemoval {
+        /// The component asked to be removed.
+        component: String,
+        /// The robot it is a link of.
+        robot: String,
+    },
+    /// A component with mates, removed without its mates ([`super::RemoveMates::Refuse`]).
+    #[error(
+        "component `{component}` has mates {}: delete them first, or remove it with its mates",
+        quoted(mates)
+    )]
+    HasMates {
+        /// The component.
+        component: String,
+        /// Its mates' names.
+        mates: Vec<String>,
+    },
+    /// A new mate's `about`, value or name that does not fit its type.
+    #[error("mate `{mate}`: {problem}")]
+    BadMate {
+        /// The mate.
+        mate: String,
+        /// What is wrong.
+        problem: MateProblem,
+    },
+    /// A mate whose entities are unknown or do not fit its type.
+    #[error("mate `{mate}`: {source}")]
+    MateEntity {
+        /// The mate.
+        mate: String,
+        /// Which entity and why (boxed: the entry's kinds are large).
+        source: Box<super::EntryError>,
+    },
+    /// A mate uses a reference the component's new part does not have.
+    /// Boxed as [`DocumentError::DimensionInUse`] is.
+    #[error(transparent)]
+    MissingReference(Box<MissingReference>),
+    /// A reference geometry that cannot be set.
+    #[error("reference `{reference}` of part `{part}`: {problem}")]
+    BadReference {
+        /// The part.
+        part: String,
+        /// The reference's name.
+        reference: String,
+        /// What is wrong.
+        problem: ReferenceProblem,
+    },
+    /// A new part's mesh file cannot be found or read.
+    #[error("part `{part}`: {source}")]
+    PartMesh {
+        /// The part.
+        part: String,
+        /// Why.
+        source: PartMeshError,
+    },
+    /// A URDF robot cannot be added: its file, its meshes or its links' names.
+    #[error("robot `{robot}`: {source}")]
+    Urdf {
+        /// The robot.
+        robot: String,
+        /// Why (boxed: the mesh problems are large).
+        source: Box<UrdfRobotError>,
+    },
+    /// A robot definition the robot builder refused (its sources, joints or links),
+    /// in the builder's words (the same text locates a load's error at its line).
+    #[error("robot `{robot}`: {reason}")]
+    RobotDefinition {
+        /// The robot.
+        robot: String,
+        /// The builder's reason.
+        reason: String,
+    },
+    /// A dimension that drives a robot joint, refused by the robot.
+    #[error("{dimension}: {source}")]
+    JointDimension {
+        /// The dimension's full name.
+        dimension: String,
+        /// The robot's refusal.
+        source: Box<DocumentError>,
+    },
+    /// The GLB export could not be built.
+    #[error("GLB export: {0}")]
+    GlbExport(#[source] crate::mesh::MeshError),
+    /// A sub-assembly with no file of its own, asked for its sub-document.
+    #[error("`{0}` is no sub-document")]
+    NotASubDocument(String),
+    /// A sub-assembly's parent (the name before its last `/`) that is no sub-assembly.
+    #[error("`{name}`: its parent `{parent}` is no sub-assembly ({hint})")]
+    NoParentAssembly {
+        /// The name given.
+        name: String,
+        /// Its parent's name.
+        parent: String,
+        /// Close matches or what exists.
+        hint: String,
+    },
+    /// A sub-document's mate or equation reaching outside the sub-document.
+    /// Boxed as [`DocumentError::DimensionInUse`] is.
+    #[error(transparent)]
+    OutsideSubDocument(Box<OutsideSubDocument>),
+    /// A sub-document that holds robots.
+    #[error(
+        "`{0}` has robots, which a sub-document cannot hold yet (move them to the top document)"
+    )]
+    SubDocumentRobots(String),
+    /// A mate type that does not exist.
+    #[error("unknown mate type `{0}` (coincident, concentric, parallel, perpendicular, distance, angle)")]
+    UnknownMateKind(String),
+    /// A sub-assembly that does not exist (while its sub-document is read in).
+    #[error("no sub-assembly `{0}`")]
+    NoSubAssembly(String),
     /// The mates cannot all be satisfied: the worst mate and its residual. A load's
     /// error is located at that mate's entry (`at`, whose message is the cause's).
     #[error("{}", mates_message(.at.as_deref(), .source))]
@@ -71,6 +227,16 @@ pub enum DocumentError {
         "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"
     )]
     Suppressed(String),
+    /// A reference asked for as a coordinate system is another kind.
+    #[error("reference `{reference}` of part `{part}` is a {kind}, not a coordinate system")]
+    NotACoordinateSystem {
+        /// The part.
+        part: String,
+        /// The reference's name.
+        reference: String,
+        /// What it is (`plane`, `axis`, `point`).
+        kind: &'static str,
+    },
     /// Fixed components do not move.
     #[error("component `{0}` is fixed; set `fixed: false` to move it")]
     FixedComponent(String),
@@ -174,6 +340,284 @@ impl DocumentError {
             _ => None,
         }
     }
+}
+
+/// A mate's dimension that an equation uses ([`DocumentError::DimensionInUse`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", dimension_in_use(self))]
+pub struct DimensionInUse {
+    /// The component being removed, when the mate goes with it.
+    pub component: Option<String>,
+    /// The mate.
+    pub mate: String,
+    /// The mate's dimension (full name).
+    pub dimension: String,
+    /// The equation's index (`equation(i)`).
+    pub index: usize,
+    /// The equation's text (shortened when long).
+    pub equation: String,
+}
+
+/// A mate using a reference the component's new part does not have
+/// ([`DocumentError::MissingReference`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("mate `{mate}` uses `{component}/{reference}`, which part `{part}` does not have")]
+pub struct MissingReference {
+    /// The mate.
+    pub mate: String,
+    /// The component whose part is replaced.
+    pub component: String,
+    /// The reference the mate uses.
+    pub reference: String,
+    /// The new part.
+    pub part: String,
+}
+
+/// A sub-document's mate or equation reaching outside it
+/// ([`DocumentError::OutsideSubDocument`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", outside_message(self))]
+pub struct OutsideSubDocument {
+    /// The sub-document's file as written.
+    pub file: String,
+    /// The sub-assembly it is loaded as.
+    pub at: String,
+    /// What reaches out.
+    pub item: OutsideItem,
+}
+
+/// [`DocumentError::DimensionInUse`]'s message.
+fn dimension_in_use(e: &DimensionInUse) -> String {
+    let DimensionInUse {
+        component,
+        mate,
+        dimension,
+        index,
+        equation,
+    } = e;
+    match component {
+        None => format!("mate `{mate}`: equation [{index}] {equation} uses its dimension `{dimension}`; delete or change the equation first"),
+        Some(c) => format!("component `{c}`: its mate `{mate}` has the dimension `{dimension}` that equation [{index}] {equation} uses; delete or change the equation first"),
+    }
+}
+
+/// [`DocumentError::OutsideSubDocument`]'s message.
+fn outside_message(e: &OutsideSubDocument) -> String {
+    let OutsideSubDocument { file, at, item } = e;
+    match item {
+        OutsideItem::Mate { mate, component } => format!(
+            "mate `{at}/{mate}` of sub-document `{file}` refers to `{component}`, outside it"
+        ),
+        OutsideItem::Equation { name } => {
+            format!("an equation of sub-document `{file}` uses \"{name}\", outside `{at}`")
+        }
+    }
+}
+
+/// `names` quoted and joined: `` `a`, `b` ``.
+fn quoted(names: &[String]) -> String {
+    let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+    names.join(", ")
+}
+
+/// What was asked of a URDF link's component ([`DocumentError::UrdfLink`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum LinkEdit {
+    /// A new name.
+    Rename,
+    /// Another part.
+    ReplacePart,
+}
+
+/// What is wrong with a new mate ([`DocumentError::BadMate`]).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MateProblem {
+    /// `about` names something other than an axis.
+    #[error("`about` must name an axis")]
+    AboutNotAnAxis,
+    /// A mate type with a dimension (distance, angle) given no value.
+    #[error("a {} mate needs a value", .0.name())]
+    NeedsValue(super::MateKind),
+    /// A mate type without a dimension given a value.
+    #[error("a {} mate takes no value", .0.name())]
+    TakesNoValue(super::MateKind),
+    /// A value not finite or beyond [`super::MAX_ABS_VALUE`].
+    #[error("value {0} is not a finite number up to 1e9")]
+    ValueOutOfRange(f64),
+    /// A negative distance.
+    #[error("a distance cannot be negative")]
+    NegativeDistance(f64),
+    /// The mate's dimension would have a robot joint's dimension's name.
+    #[error("a robot joint's dimension has that name")]
+    RobotDimension,
+}
+
+/// What is wrong with a reference geometry ([`DocumentError::BadReference`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReferenceProblem {
+    /// A built-in name (`origin`, `front`, …) or an empty one.
+    #[error("a built-in or empty name cannot be redefined")]
+    ReservedName,
+    /// A coordinate not finite or beyond [`super::MAX_ABS_VALUE`].
+    #[error("its numbers must be finite and at most 1e9")]
+    NotFinite,
+    /// A plane with a zero normal.
+    #[error("a zero normal")]
+    ZeroNormal,
+    /// An axis with a zero direction.
+    #[error("a zero direction")]
+    ZeroDirection,
+}
+
+/// Why a new part's mesh cannot be had ([`DocumentError::PartMesh`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PartMeshError {
+    /// The mesh path the project rule refuses.
+    #[error("mesh {0}")]
+    Path(#[source] crate::project::PathError),
+    /// The mesh file cannot be read.
+    #[error(transparent)]
+    Read(crate::mesh::MeshError),
+    /// No project holds the document's file (the operating system's words).
+    #[error("{message}")]
+    Project {
+        /// What kind of failure.
+        kind: std::io::ErrorKind,
+        /// The operating system's message.
+        message: String,
+    },
+}
+
+impl PartMeshError {
+    /// The cause without the `mesh` prefix of a path refusal.
+    fn cause(&self) -> String {
+        match self {
+            PartMeshError::Path(e) => e.to_string(),
+            other => other.to_string(),
+        }
+    }
+}
+
+/// What of a sub-document reaches outside it ([`DocumentError::OutsideSubDocument`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum OutsideItem {
+    /// A mate (named inside the sub-document) with an entity on `component`.
+    Mate {
+        /// The mate.
+        mate: String,
+        /// The component outside.
+        component: String,
+    },
+    /// An equation using `name`.
+    Equation {
+        /// The name outside.
+        name: String,
+    },
+}
+
+/// Why a URDF robot cannot be added ([`DocumentError::Urdf`]; a load's error is
+/// located at the robot's `urdf:` line with this message).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum UrdfRobotError {
+    /// No project holds the document's file (the operating system's words).
+    #[error("cannot find the project: {message}")]
+    Project {
+        /// What kind of failure.
+        kind: std::io::ErrorKind,
+        /// The operating system's message.
+        message: String,
+    },
+    /// The URDF path or a `package_path` entry the project rule refuses.
+    #[error("{what} {source}")]
+    Path {
+        /// "URDF" or "package_path".
+        what: &'static str,
+        /// Why.
+        source: crate::project::PathError,
+    },
+    /// A `package_path` entry that is not a folder.
+    #[error("package_path `{0}` is not a folder")]
+    NotAFolder(String),
+    /// The URDF itself cannot be read or parsed (located in it).
+    #[error(transparent)]
+    Read(Box<SourceError>),
+    /// A link's mesh: where it is named and what is wrong with it.
+    #[error("{}{}: {problem}", .urdf.display(), match .link { Some(l) => format!(":{}: link `{}`", l.line, l.link), None => String::new() })]
+    Mesh {
+        /// The URDF file.
+        urdf: PathBuf,
+        /// The link and line naming the mesh, none for the primitives together.
+        link: Option<UrdfLinkAt>,
+        /// What is wrong (boxed: the readers' errors are large).
+        problem: Box<UrdfMeshProblem>,
+    },
+    /// A link whose generated part or component name is taken.
+    #[error("the part or component `{name}` (made for link `{link}` of the URDF) already exists")]
+    LinkNameTaken {
+        /// The generated name.
+        name: String,
+        /// The link.
+        link: String,
+    },
+}
+
+/// A URDF line that names a link's mesh ([`UrdfRobotError::Mesh`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UrdfLinkAt {
+    /// 1-based line in the URDF.
+    pub line: usize,
+    /// The link's name.
+    pub link: String,
+}
+
+/// What is wrong with a URDF link's mesh ([`UrdfRobotError::Mesh`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum UrdfMeshProblem {
+    /// The document's URDF robots together would pass [`super::robot::MAX_URDF_TRIANGLES`].
+    #[error("{}the URDF robots of the document would make more than {} triangles together ({} more, {} before; MAX_URDF_TRIANGLES): use coarser link meshes", .mesh.as_ref().map_or(String::new(), |m| format!("mesh `{m}`: ")), count(super::robot::MAX_URDF_TRIANGLES), count(*.more), count(*.before))]
+    TooManyTriangles {
+        /// The mesh file as the URDF names it; none for the primitives.
+        mesh: Option<String>,
+        /// The triangles this mesh (or the primitives) would add.
+        more: usize,
+        /// The triangles the document's URDF robots had before.
+        before: usize,
+    },
+    /// A file format fitup does not read (`.dae`, …).
+    #[error("mesh `{0}` is not a format fitup reads (STL, OBJ, PLY, glTF)")]
+    Format(String),
+    /// The mesh file cannot be found or read.
+    #[error("mesh `{mesh}`: {}{}", .source.cause(), .own_package.as_ref().map_or(String::new(), |p| format!(" (no folder named `{p}` in the URDF's folders, on `package_path` or beside or above the URDF inside the project, so the URDF's own package was used; name the folder that holds it with `package_path:`)")))]
+    Unreadable {
+        /// The mesh file as the URDF names it.
+        mesh: String,
+        /// Why.
+        source: PartMeshError,
+        /// A `package://` whose package no folder is named after: its name.
+        own_package: Option<String>,
+    },
+    /// The scaled mesh reaches beyond [`super::MAX_ABS_VALUE`].
+    #[error("mesh `{mesh}` scaled by {scale:?} (mm per unit) reaches {reach:e} mm, beyond the {:e} mm fitup accepts", crate::math::MAX_ABS_VALUE)]
+    Scaled {
+        /// The mesh file as the URDF names it.
+        mesh: String,
+        /// The scale (mm per unit).
+        scale: [f64; 3],
+        /// The coordinate it reaches (mm).
+        reach: f64,
+    },
+}
+
+/// `n` grouped by thousands.
+fn count(n: usize) -> String {
+    crate::math::format::count(n as u64)
 }
 
 /// A mate failure's message: located (`file:line:col: …`) when it comes from a file.

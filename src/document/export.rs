@@ -39,7 +39,7 @@ impl Document {
                 pose: c.transform,
             })
             .collect();
-        glb_bytes(&nodes).map_err(|e| DocumentError::Invalid(format!("GLB export: {e}")))
+        glb_bytes(&nodes).map_err(DocumentError::GlbExport)
     }
 
     /// Writes [`Document::glb_bytes`] to `path` through the project's write rule

@@ -82,6 +82,9 @@ pub struct PartFile {
     /// Reference points.
     #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
     pub points: IndexMap<String, [f64; 3]>,
+    /// Coordinate systems (SolidWorks' `CoordSys` features): origin and axes.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub coordinate_systems: IndexMap<String, CoordinateSystemFile>,
     /// The feature tree (cut cells, …), in order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub features: Vec<FeatureFile>,
@@ -103,6 +106,7 @@ impl PartFile {
             planes: IndexMap::new(),
             axes: IndexMap::new(),
             points: IndexMap::new(),
+            coordinate_systems: IndexMap::new(),
             features: Vec::new(),
             properties: IndexMap::new(),
         }
@@ -170,6 +174,19 @@ pub struct AxisFile {
     pub point: [f64; 3],
     /// The axis direction.
     pub direction: [f64; 3],
+}
+
+/// A coordinate system: its origin and its X and Y axes in the part frame (mm); Z is
+/// X × Y. The axes are normalised on load and must be perpendicular (to 1e-6).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoordinateSystemFile {
+    /// The origin, mm.
+    pub origin: [f64; 3],
+    /// The X axis direction.
+    pub x: [f64; 3],
+    /// The Y axis direction.
+    pub y: [f64; 3],
 }
 
 /// A sub-assembly: a group of components in this document.

@@ -429,7 +429,11 @@ fn write_new(
 }
 
 /// An existing folder: every output checked first, then the meshes, then the
-/// document; on a failure the meshes this call created are removed again.
+/// document; on a failure the meshes this call created are removed again. The folder's
+/// project is found through folders held from `/` down ([`Project::for_folder`]) and
+/// every check, write and removal goes through its held root, one folder at a time
+/// without following a link: a `meshes` folder that is (or is swapped for) a link to
+/// a folder outside is refused, never written through.
 fn write_into(
     out: &Path,
     doc_name: &str,
@@ -438,36 +442,50 @@ fn write_into(
     force: bool,
 ) -> Result<(), ImportError> {
     let rule = OutputRule::forced(force);
-    let doc = out.join(doc_name);
-    for path in meshes
-        .iter()
-        .map(|(rel, _)| out.join(rel))
-        .chain([doc.clone()])
-    {
-        crate::fsutil::check_output(&path, &rule)
-            .map_err(|source| ImportError::Output { path, source })?;
+    let project = crate::project::Project::for_folder(out).map_err(|e| io_err(out, e))?;
+    let base = std::path::absolute(out).map_err(|e| io_err(out, e))?;
+    // An output's folder held open (walked from the root without following a link,
+    // made when missing) and its name; the write rule checked through that handle.
+    // (Not listed in the folder's output registry: an imported file is replaced by a
+    // later import only with --force, as before.)
+    let held = |rel: &Path| -> Result<(PathBuf, crate::fsutil::Dir), ImportError> {
+        let at = out.join(rel);
+        let full = project
+            .resolve(&base.join(rel).to_string_lossy())
+            .map_err(|e| io_err(&at, std::io::Error::other(e.to_string())))?;
+        let (Some(parent), Some(name)) = (full.parent(), full.file_name()) else {
+            return Err(io_err(&at, std::io::Error::other("not a file name")));
+        };
+        let dir = project.folder(parent, true).map_err(|e| io_err(&at, e))?;
+        crate::fsutil::check_output_in(&dir, name, &full, &rule)
+            .map_err(|source| ImportError::Output { path: at, source })?;
+        Ok((full, dir))
+    };
+    let doc = Path::new(doc_name);
+    for rel in meshes.iter().map(|(rel, _)| rel.as_path()).chain([doc]) {
+        held(rel)?;
     }
-    let dir = out.join("meshes");
-    let made_dir = !dir.exists();
-    std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
-    let mut created = Vec::new();
+    let mut created: Vec<(crate::fsutil::Dir, std::ffi::OsString)> = Vec::new();
     let result = (|| {
         for (rel, mesh) in meshes {
-            let path = out.join(rel);
-            let existed = path.exists();
-            crate::mesh::write_stl(&path, mesh)?;
+            let (full, dir) = held(rel)?;
+            let name = full.file_name().unwrap_or_default().to_os_string();
+            // Whether something is there already (a mesh it replaces stays replaced).
+            let existed = dir.stat(&name).is_ok_and(|k| k.is_some());
+            dir.write_atomic(&name, &crate::mesh::stl_bytes(mesh))
+                .map_err(|e| io_err(&full, e))?;
             if !existed {
-                created.push(path);
+                created.push((dir, name));
             }
         }
-        crate::fsutil::write_atomic(&doc, text.as_bytes()).map_err(|e| io_err(&doc, e))
+        let (full, dir) = held(doc)?;
+        dir.write_atomic(full.file_name().unwrap_or_default(), text.as_bytes())
+            .map_err(|e| io_err(&full, e))
     })();
     if result.is_err() {
-        for path in &created {
-            let _ = std::fs::remove_file(path);
-        }
-        if made_dir {
-            let _ = std::fs::remove_dir(&dir);
+        // Through the held folders too (never by name).
+        for (dir, name) in &created {
+            let _ = dir.remove(name);
         }
     }
     result

@@ -2,11 +2,11 @@
 //! components, URDF robots and mates built, the mates solved.
 
 use super::file::{ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile};
-use super::EntryError;
 use super::{
     mates, robot, scan, tessellations, AabbCache, Color, Component, Document, DocumentError,
     Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry, MAX_ABS_VALUE,
 };
+use super::{EntryError, UrdfRobotError};
 use crate::collision::CutSpec;
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::fsutil::{content_hash, FileKind};
@@ -526,6 +526,17 @@ impl Loader<'_> {
         for (rname, p) in &pf.points {
             references.insert(rname.clone(), Reference::Point(vec3(*p).into()));
         }
+        for (rname, cs) in &pf.coordinate_systems {
+            let f =
+                super::coordinate_system(vec3(cs.origin), vec3(cs.x), vec3(cs.y)).map_err(|e| {
+                    self.at(
+                        rname,
+                        "parts",
+                        format!("coordinate system `{rname}` of part `{name}`: {e}"),
+                    )
+                })?;
+            references.insert(rname.clone(), Reference::CoordinateSystem(f));
+        }
         Ok(references)
     }
 
@@ -694,9 +705,9 @@ impl Loader<'_> {
         let mut left = robot::MAX_URDF_TRIANGLES;
         for rf in &file.robots {
             let Some(u) = &rf.urdf else { continue };
-            let robot_at = |m: String| -> DocumentError {
+            let robot_at = |e: UrdfRobotError| -> DocumentError {
                 let (line, col) = self.after(&format!("name: {}", rf.name), "urdf:");
-                SourceError::new(self.path, line, col, format!("robot `{}`: {m}", rf.name)).into()
+                SourceError::new(self.path, line, col, format!("robot `{}`: {e}", rf.name)).into()
             };
             let loaded = robot::read_urdf_robot(
                 self.project,
@@ -760,7 +771,7 @@ impl Loader<'_> {
         })?;
         let ea = entity(&m.entities[0])?;
         let eb = entity(&m.entities[1])?;
-        mates::check_entities(kind, &ea.geometry, &eb.geometry)
+        mates::check_entities(kind, &ea.geometry, &eb.geometry, m.aligned)
             .map_err(|e| err(format!("mate `{}`: {e}", m.name)))?;
         let about = match &m.about {
             None => None,

@@ -235,6 +235,10 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
             let r = pb - pa;
             dir_err(da, db).max((r - da * da.dot(&r)).norm())
         }
+        (MateKind::Coincident, CoordinateSystem(fa), CoordinateSystem(fb)) => {
+            let (angle, distance) = fa.distance_to(fb);
+            angle.max(distance)
+        }
         (MateKind::Parallel, _, _) => {
             let (u, v) = (
                 a.direction().unwrap_or_default(),
@@ -263,18 +267,44 @@ fn error(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Reference>) -
     }
 }
 
-/// Whether the kind accepts these entity types; the message says what it needs.
+impl Mate {
+    /// Whether the mate's two entities (as they are now) fit its type and alignment
+    /// ([`check_entities`]): [`DocumentError::MateEntity`] naming the mate if not.
+    pub(crate) fn check_geometry(&self) -> Result<(), super::DocumentError> {
+        let [a, b] = &self.entities;
+        check_entities(self.kind, &a.geometry, &b.geometry, self.aligned).map_err(|e| {
+            super::DocumentError::MateEntity {
+                mate: self.name.clone(),
+                source: Box::new(e),
+            }
+        })
+    }
+}
+
+/// Whether the kind accepts these entity types (and, for coordinate systems, the
+/// alignment); the error says what it needs.
 pub(crate) fn check_entities(
     kind: MateKind,
     a: &Reference,
     b: &Reference,
+    aligned: Option<bool>,
 ) -> Result<(), super::EntryError> {
     use Reference::*;
+    let systems = [a, b]
+        .iter()
+        .filter(|r| matches!(r, CoordinateSystem(_)))
+        .count();
+    if systems == 2 && kind == MateKind::Coincident && aligned == Some(false) {
+        return Err(super::EntryError::AntiAlignedSystems);
+    }
     let ok = match kind {
-        MateKind::Coincident => !matches!(
-            (a, b),
-            (Plane { .. }, Axis { .. }) | (Axis { .. }, Plane { .. })
-        ),
+        MateKind::Coincident => {
+            systems != 1
+                && !matches!(
+                    (a, b),
+                    (Plane { .. }, Axis { .. }) | (Axis { .. }, Plane { .. })
+                )
+        }
         MateKind::Concentric => matches!((a, b), (Axis { .. }, Axis { .. })),
         MateKind::Distance => matches!(
             (a, b),
@@ -392,6 +422,10 @@ fn correction(mate: &Mate, a: &Reference, b: &Reference, about: Option<&Referenc
             let rot = align(da, db, pb);
             let r = pb - pa;
             rot * translate(-(r - da * da.dot(&r)))
+        }
+        (MateKind::Coincident, CoordinateSystem(fa), CoordinateSystem(fb)) => {
+            // b's system onto a's: b's pose followed by this is a's.
+            fb.inverse() * *fa
         }
         (MateKind::Parallel | MateKind::Perpendicular | MateKind::Angle, _, _) => {
             angular_correction(mate, a, b, about)

@@ -49,7 +49,11 @@ pub mod subdoc;
 pub mod tessellations;
 
 pub use assembly::SubAssembly;
-pub use error::DocumentError;
+pub use error::{
+    DimensionInUse, DocumentError, LinkEdit, MateProblem, MissingReference, OutsideItem,
+    OutsideSubDocument, PartMeshError, ReferenceProblem, UrdfLinkAt, UrdfMeshProblem,
+    UrdfRobotError,
+};
 pub use export::GlbExport;
 pub(crate) use names::new_name;
 pub use names::nfc_name;
@@ -59,7 +63,7 @@ pub use edit::{MateSpec, PropertyOwner};
 pub use entry::EntryError;
 pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
-pub use reference::Reference;
+pub use reference::{coordinate_system, CoordinateSystemError, Reference};
 pub use remove::RemoveMates;
 pub use robot::{LinkDisplay, RobotError, RobotInstance};
 pub use scan::MAX_ABS_VALUE;
@@ -285,7 +289,7 @@ impl Document {
         robot_name: &str,
         uri: &str,
         loaded: &robot::UrdfLoaded,
-    ) -> Result<(), String> {
+    ) -> Result<(), UrdfRobotError> {
         for (i, mesh) in loaded.meshes.iter().enumerate() {
             let Some(mesh) = mesh else { continue };
             let link = loaded.robot.tree().links()[i]
@@ -294,9 +298,7 @@ impl Document {
                 .unwrap_or_else(|| format!("link{i}"));
             let name = robot::urdf_component_name(robot_name, &link);
             if self.parts.contains_key(&name) || self.by_name.contains_key(&name) {
-                return Err(format!(
-                    "the part or component `{name}` (made for link `{link}` of the URDF) already exists"
-                ));
+                return Err(UrdfRobotError::LinkNameTaken { name, link });
             }
             self.parts.insert(
                 name.clone(),
@@ -510,6 +512,46 @@ impl Document {
                 ),
             })?;
         Ok(r.posed(&c.transform))
+    }
+
+    /// Coordinate system `name` of component `i`'s part in world coordinates: the pose
+    /// that maps coordinates in the system to the world (mm), as SolidWorks'
+    /// `CoordinateSystemFeatureData.Transform` of a component's `CoordSys` feature
+    /// times `Transform2`.
+    pub fn coordinate_system(&self, i: usize, name: &str) -> Result<Transform, DocumentError> {
+        let c = &self.components[i];
+        Ok(self.part_coordinate_system(&c.part, name)? * c.transform)
+    }
+
+    /// Coordinate system `name` of part `part` in the part frame (mm), as SolidWorks'
+    /// `CoordinateSystemFeatureData.Transform`.
+    pub fn part_coordinate_system(
+        &self,
+        part: &str,
+        name: &str,
+    ) -> Result<Transform, DocumentError> {
+        let p = self.part(part)?;
+        let r = p.reference(name).ok_or_else(|| DocumentError::NotFound {
+            what: "coordinate system",
+            name: name.into(),
+            hint: format!(
+                "part `{}` has none by that name; {}",
+                p.name,
+                suggestion(
+                    name,
+                    p.references
+                        .iter()
+                        .filter(|(_, r)| r.coordinate_system().is_some())
+                        .map(|(n, _)| n.as_str())
+                )
+            ),
+        })?;
+        r.coordinate_system()
+            .ok_or_else(|| DocumentError::NotACoordinateSystem {
+                part: p.name.clone(),
+                reference: name.into(),
+                kind: r.kind_name(),
+            })
     }
 
     /// Marks a component fixed or free.
@@ -756,9 +798,12 @@ impl Document {
                 let mut q = self.robots[robot].joints().to_vec();
                 q[joint] = value;
                 // An equation sets its own dimension here: not the public check.
-                return self
-                    .move_robot_joints(robot, &q)
-                    .map_err(|e| DocumentError::Invalid(format!("{full_name}: {e}")));
+                return self.move_robot_joints(robot, &q).map_err(|e| {
+                    DocumentError::JointDimension {
+                        dimension: full_name.to_string(),
+                        source: Box::new(e),
+                    }
+                });
             }
         };
         if self.mates[i].kind == MateKind::Distance && value < 0.0 {

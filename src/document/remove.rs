@@ -29,9 +29,10 @@ impl Document {
         let i = self.component_index(name)?;
         let name = self.components[i].name.clone();
         if let Some(robot) = self.driving_robot(i) {
-            return Err(DocumentError::Invalid(format!(
-                "component `{name}` is a link of robot `{robot}`: it goes with the robot"
-            )));
+            return Err(DocumentError::RobotLinkRemoval {
+                component: name,
+                robot: robot.to_string(),
+            });
         }
         let touches = |m: &Mate| {
             m.entities.iter().any(|e| e.component == i)
@@ -39,19 +40,22 @@ impl Document {
         };
         let own: Vec<&Mate> = self.mates.iter().filter(|m| touches(m)).collect();
         if !own.is_empty() && mates == RemoveMates::Refuse {
-            let names: Vec<String> = own.iter().map(|m| format!("`{}`", m.name)).collect();
-            return Err(DocumentError::Invalid(format!(
-                "component `{name}` has mates {}: delete them first, or remove it with its mates",
-                names.join(", ")
-            )));
+            return Err(DocumentError::HasMates {
+                component: name,
+                mates: own.iter().map(|m| m.name.clone()).collect(),
+            });
         }
         for m in own.iter().filter(|m| m.kind.has_dimension()) {
             let d = dimension::full_name(&m.name);
             if let Some(&e) = self.equations_using(&d).first() {
-                return Err(DocumentError::Invalid(format!(
-                    "component `{name}`: its mate `{}` has the dimension `{d}` that equation [{e}] {} uses; delete or change the equation first",
-                    m.name,
-                    equations::shown(&self.equations[e].text())
+                return Err(DocumentError::DimensionInUse(Box::new(
+                    super::DimensionInUse {
+                        component: Some(name),
+                        mate: m.name.clone(),
+                        dimension: d,
+                        index: e,
+                        equation: equations::shown(&self.equations[e].text()),
+                    },
                 )));
             }
         }

@@ -9,7 +9,9 @@
 
 use super::dimension;
 use super::file::{DhFile, LinkFile, RobotFile};
-use super::{Document, DocumentError, EntryError};
+use super::{
+    Document, DocumentError, EntryError, PartMeshError, UrdfLinkAt, UrdfMeshProblem, UrdfRobotError,
+};
 use crate::diagnostics::{locate, suggestion, SourceError};
 use crate::kinematics::{
     resolve_mesh_in, robot_by_name, run_program, DhConvention, DhRow, Joint, JointKind,
@@ -462,21 +464,28 @@ pub(super) fn read_urdf_robot(
     tip: Option<&str>,
     cache: &mut MeshCache,
     left: &mut usize,
-) -> Result<UrdfLoaded, String> {
+) -> Result<UrdfLoaded, UrdfRobotError> {
     let path = project
         .resolve_from(dir, uri)
-        .map_err(|e| format!("URDF {e}"))?;
+        .map_err(|source| UrdfRobotError::Path {
+            what: "URDF",
+            source,
+        })?;
     let mut roots = Vec::with_capacity(package_path.len());
     for p in package_path {
         let root = project
             .resolve_from(dir, p)
-            .map_err(|e| format!("package_path {e}"))?;
+            .map_err(|source| UrdfRobotError::Path {
+                what: "package_path",
+                source,
+            })?;
         if project.folder(&root, false).is_err() {
-            return Err(format!("package_path `{p}` is not a folder"));
+            return Err(UrdfRobotError::NotAFolder(p.clone()));
         }
         roots.push(root);
     }
-    let u = crate::kinematics::read_urdf_in(project, &path, tip).map_err(|e| e.to_string())?;
+    let u = crate::kinematics::read_urdf_in(project, &path, tip)
+        .map_err(|e| UrdfRobotError::Read(Box::new(e)))?;
     let tree = u.robot.tree();
     let mut meshes: Vec<Option<Mesh>> = vec![None; tree.len()];
     let mut files = vec![path.clone()];
@@ -484,17 +493,18 @@ pub(super) fn read_urdf_robot(
         Some(all) => all.append(&mesh),
         slot => *slot = Some(mesh),
     };
-    let over = |n: usize, left: usize| {
-        format!(
-            "the URDF robots of the document would make more than {} triangles together ({} more, {} before; MAX_URDF_TRIANGLES): use coarser link meshes",
-            crate::math::format::count(MAX_URDF_TRIANGLES as u64),
-            crate::math::format::count(n as u64),
-            crate::math::format::count(MAX_URDF_TRIANGLES.saturating_sub(left) as u64)
-        )
+    let over = |mesh: Option<&str>, more: usize, left: usize| UrdfMeshProblem::TooManyTriangles {
+        mesh: mesh.map(str::to_string),
+        more,
+        before: MAX_URDF_TRIANGLES.saturating_sub(left),
     };
     let primitive: usize = u.primitives.iter().map(|p| p.mesh.triangles.len()).sum();
     if primitive > *left {
-        return Err(format!("{}: {}", path.display(), over(primitive, *left)));
+        return Err(UrdfRobotError::Mesh {
+            urdf: path.clone(),
+            link: None,
+            problem: Box::new(over(None, primitive, *left)),
+        });
     }
     *left -= primitive;
     for p in &u.primitives {
@@ -502,38 +512,39 @@ pub(super) fn read_urdf_robot(
     }
     for m in &u.meshes {
         let link = tree.links()[m.link].name.clone().unwrap_or_default();
-        let at = |msg: String| format!("{}:{}: link `{link}`: {msg}", path.display(), m.line);
+        let at = |problem| UrdfRobotError::Mesh {
+            urdf: path.clone(),
+            link: Some(UrdfLinkAt {
+                line: m.line,
+                link: link.clone(),
+            }),
+            problem: Box::new(problem),
+        };
         if crate::mesh::MeshFormat::from_path(Path::new(&m.uri)).is_none() {
-            return Err(at(format!(
-                "mesh `{}` is not a format fitup reads (STL, OBJ, PLY, glTF)",
-                m.uri
-            )));
+            return Err(at(UrdfMeshProblem::Format(m.uri.clone())));
         }
         let (resolved, found) = resolve_mesh_in(project, &path, &m.uri, &roots);
         // A package no folder is named after: say so beside the missing file.
-        let unfound = |e: String| {
-            match (found, m.uri.strip_prefix("package://")) {
-            (PackageFound::OwnPackage, Some(rest)) => format!(
-                "{e} (no folder named `{}` in the URDF's folders, on `package_path` or beside or above the URDF inside the project, so the URDF's own package was used; name the folder that holds it with `package_path:`)",
-                rest.split('/').next().unwrap_or_default()
-            ),
-            _ => e,
-        }
+        let unreadable = |source| UrdfMeshProblem::Unreadable {
+            mesh: m.uri.clone(),
+            source,
+            own_package: match (found, m.uri.strip_prefix("package://")) {
+                (PackageFound::OwnPackage, Some(rest)) => {
+                    Some(rest.split('/').next().unwrap_or_default().to_string())
+                }
+                _ => None,
+            },
         };
         let file = project
             .resolve_from(dir, &resolved.to_string_lossy())
-            .map_err(|e| at(unfound(format!("mesh `{}`: {e}", m.uri))))?;
+            .map_err(|e| at(unreadable(PartMeshError::Path(e))))?;
         let mesh = cache
             .get_in(project, &file)
-            .map_err(|e| at(unfound(format!("mesh `{}`: {e}", m.uri))))?;
+            .map_err(|e| at(unreadable(PartMeshError::Read(e))))?;
         files.push(file);
         // Counted before the copy is made.
         if mesh.triangles.len() > *left {
-            return Err(at(format!(
-                "mesh `{}`: {}",
-                m.uri,
-                over(mesh.triangles.len(), *left)
-            )));
+            return Err(at(over(Some(&m.uri), mesh.triangles.len(), *left)));
         }
         *left -= mesh.triangles.len();
         let [sx, sy, sz] = m.scale;
@@ -554,10 +565,11 @@ pub(super) fn read_urdf_robot(
             .flat_map(|p| p.coords.iter())
             .find(|v| !v.is_finite() || v.abs() > max)
         {
-            return Err(at(format!(
-                "mesh `{}` scaled by {:?} (mm per unit) reaches {v:e} mm, beyond the {max:e} mm fitup accepts",
-                m.uri, m.scale
-            )));
+            return Err(at(UrdfMeshProblem::Scaled {
+                mesh: m.uri.clone(),
+                scale: m.scale,
+                reach: *v,
+            }));
         }
         add(m.link, scaled);
     }
@@ -935,6 +947,34 @@ impl Document {
             })
     }
 
+    /// The robot of `file` built (see [`build`]) for this document, refused when
+    /// one of its joint dimensions is a dimension the document already has.
+    fn build_new_robot(
+        &self,
+        file: &RobotFile,
+        components: &HashMap<String, usize>,
+        urdf: Option<&UrdfLoaded>,
+    ) -> Result<RobotInstance, DocumentError> {
+        let inst = build(file, components, urdf).map_err(|(_, reason)| {
+            DocumentError::RobotDefinition {
+                robot: file.name.clone(),
+                reason,
+            }
+        })?;
+        let taken = self.dimensions();
+        if let Some(d) = inst
+            .dimension_names()
+            .into_iter()
+            .find(|d| taken.contains(d))
+        {
+            return Err(DocumentError::DimensionTaken {
+                robot: file.name.clone(),
+                dimension: d,
+            });
+        }
+        Ok(inst)
+    }
+
     /// Adds a robot built in code (catalog, [`OpwParameters`](crate::kinematics::OpwParameters),
     /// D-H table, URDF, explicit tree) under `name`, its root placed at `base` (world
     /// pose, mm; the robot's own base when `None`). It displays no components; its
@@ -968,19 +1008,7 @@ impl Document {
             .map(|l| l.map_or(0.0, |l| 0.0f64.clamp(l.min, l.max)))
             .collect();
         file.joints = Some(joints_to_document(robot, &zero));
-        let mut inst = build(&file, &HashMap::new(), None)
-            .map_err(|(_, m)| DocumentError::Invalid(format!("robot `{name}`: {m}")))?;
-        let taken = self.dimensions();
-        if let Some(d) = inst
-            .dimension_names()
-            .into_iter()
-            .find(|d| taken.contains(d))
-        {
-            return Err(DocumentError::DimensionTaken {
-                robot: name.to_string(),
-                dimension: d,
-            });
-        }
+        let mut inst = self.build_new_robot(&file, &HashMap::new(), None)?;
         Arc::make_mut(&mut inst.robot).set_limits_source(robot.limits_source().map(String::from));
         self.robots.push(inst);
         self.revision += 1;
@@ -1007,7 +1035,10 @@ impl Document {
     ) -> Result<usize, DocumentError> {
         let name = super::new_name(name, "robot")?;
         let name = name.as_str();
-        let invalid = |m: String| DocumentError::Invalid(format!("robot `{name}`: {m}"));
+        let invalid = |source| DocumentError::Urdf {
+            robot: name.to_string(),
+            source: Box::new(source),
+        };
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::RobotName(name.to_string()));
         }
@@ -1023,7 +1054,12 @@ impl Document {
             .or_else(|e| {
                 crate::project::unless_missing(e, self.path.parent().unwrap_or(Path::new(".")))
             })
-            .map_err(|e| invalid(format!("cannot find the project: {e}")))?;
+            .map_err(|e| {
+                invalid(UrdfRobotError::Project {
+                    kind: e.kind(),
+                    message: e.to_string(),
+                })
+            })?;
         let dir = std::path::absolute(&self.path)
             .ok()
             .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))
@@ -1068,15 +1104,7 @@ impl Document {
             links: Vec::new(),
             joints: Some(joints_to_document(&loaded.robot, &zero)),
         };
-        let inst = build(&file, &next.by_name, Some(&loaded)).map_err(|(_, m)| invalid(m))?;
-        let taken = next.dimensions();
-        if let Some(d) = inst
-            .dimension_names()
-            .into_iter()
-            .find(|d| taken.contains(d))
-        {
-            return Err(invalid(format!("dimension `{d}` already exists")));
-        }
+        let inst = next.build_new_robot(&file, &next.by_name, Some(&loaded))?;
         next.robots.push(inst);
         next.apply_robots();
         next.revision += 1;

@@ -1,8 +1,8 @@
 //! Writing a document: its YAML schema, and the checked atomic save.
 
 use super::file::{
-    AssemblyFile, AxisFile, ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile,
-    PlaneFile, PlanesFile,
+    AssemblyFile, AxisFile, ComponentFile, CoordinateSystemFile, DocumentFile, FeatureFile,
+    MateFile, PartFile, PlaneFile, PlanesFile,
 };
 use super::{Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance};
 use crate::collision::CutSpec;
@@ -54,6 +54,16 @@ impl Document {
                         }
                         Reference::Point(point) => {
                             pf.points.insert(n.clone(), a(point.coords));
+                        }
+                        Reference::CoordinateSystem(f) => {
+                            pf.coordinate_systems.insert(
+                                n.clone(),
+                                CoordinateSystemFile {
+                                    origin: a(f.translation()),
+                                    x: a(f.apply_vector(&Vec3::x())),
+                                    y: a(f.apply_vector(&Vec3::y())),
+                                },
+                            );
                         }
                     }
                 }

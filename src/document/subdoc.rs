@@ -17,7 +17,7 @@
 //! others) is refused at the `file:` line that closes the circle.
 
 use super::file::DocumentFile;
-use super::{Document, DocumentError, SubAssembly};
+use super::{Document, DocumentError, OutsideItem, SubAssembly};
 use crate::diagnostics::SourceError;
 use crate::fsutil::{content_hash, FileKind};
 use crate::project::Project;
@@ -260,32 +260,36 @@ impl Document {
                 as_loaded,
                 disk_hash: sub_doc.disk_hash,
             };
-            self.import(&a.name, record, sub_doc).map_err(&err)?;
+            self.import(&a.name, record, sub_doc)
+                .map_err(|e| err(e.to_string()))?;
         }
         Ok(())
     }
 
     /// Adds the content of `sub` (a loaded sub-document) inside the sub-assembly
     /// `at` (which exists, and becomes the sub-document's `record`).
-    fn import(&mut self, at: &str, record: SubDocument, sub: &Document) -> Result<(), String> {
+    fn import(
+        &mut self,
+        at: &str,
+        record: SubDocument,
+        sub: &Document,
+    ) -> Result<(), DocumentError> {
         if !sub.robots.is_empty() {
-            return Err(format!(
-                "`{}` has robots, which a sub-document cannot hold yet (move them to the top document)",
-                record.file
-            ));
+            return Err(DocumentError::SubDocumentRobots(record.file));
         }
         let k = self
             .assemblies
             .iter()
             .position(|a| a.name == at)
-            .ok_or_else(|| format!("no sub-assembly `{at}`"))?;
+            .ok_or_else(|| DocumentError::NoSubAssembly(at.to_string()))?;
+        let taken = |what, name| DocumentError::NameTaken { what, name };
         let frame = self.assemblies[k].transform;
         self.assemblies[k].file = Some(record);
         let name = |n: &str| format!("{at}/{n}");
         for p in sub.parts.values() {
             let n = name(&p.name);
             if self.parts.contains_key(&n) {
-                return Err(format!("a part named `{n}` exists already"));
+                return Err(taken("part", n));
             }
             let mut p = p.clone();
             p.name = n.clone();
@@ -294,7 +298,7 @@ impl Document {
         for a in &sub.assemblies {
             let n = name(&a.name);
             if self.assemblies.iter().any(|b| b.name == n) || self.by_name.contains_key(&n) {
-                return Err(format!("a sub-assembly named `{n}` exists already"));
+                return Err(taken("sub-assembly", n));
             }
             self.assemblies.push(SubAssembly {
                 name: n,
@@ -311,7 +315,7 @@ impl Document {
                 .insert(n.clone(), self.components.len())
                 .is_some()
             {
-                return Err(format!("a component named `{n}` exists already"));
+                return Err(taken("component", n));
             }
             self.numbering.insert(&n);
             let mut c = c.clone();
@@ -323,7 +327,7 @@ impl Document {
         for m in &sub.mates {
             let n = name(&m.name);
             if self.mates.iter().any(|o| o.name == n) {
-                return Err(format!("a mate named `{n}` exists already"));
+                return Err(taken("mate", n));
             }
             let mut m = m.clone();
             m.name = n;
@@ -335,7 +339,7 @@ impl Document {
         // Its equations, every name inside the sub-assembly (`"Cart-1/Factor"`,
         // `"D1@Cart-1/Gap"`), kept as the sub-document's for a save.
         for e in &sub.equations {
-            let mut e = e.renamed(&mut |n| Ok(scoped(at, n)))?;
+            let mut e = e.renamed(self.equations.len(), &mut |n| Ok(scoped(at, n)))?;
             e.scope = Some(match &e.scope {
                 Some(s) => format!("{at}/{s}"),
                 None => at.to_string(),
@@ -367,7 +371,7 @@ impl Document {
         let record = at
             .file
             .as_ref()
-            .ok_or_else(|| DocumentError::Invalid(format!("`{}` is no sub-document", at.name)))?;
+            .ok_or_else(|| DocumentError::NotASubDocument(at.name.clone()))?;
         let inv = at.transform.inverse();
         let strip = |n: &str| inside(n, &at.name).map(str::to_string);
         let mut parts = indexmap::IndexMap::new();
@@ -425,10 +429,14 @@ impl Document {
             m.name = n;
             for e in m.entities.iter_mut().chain(m.about.as_mut()) {
                 e.component = *index.get(&e.component).ok_or_else(|| {
-                    DocumentError::Invalid(format!(
-                        "mate `{}/{}` of sub-document `{}` refers to `{}`, outside it",
-                        at.name, m.name, record.file, self.components[e.component].name
-                    ))
+                    DocumentError::OutsideSubDocument(Box::new(super::OutsideSubDocument {
+                        file: record.file.clone(),
+                        at: at.name.clone(),
+                        item: OutsideItem::Mate {
+                            mate: m.name.clone(),
+                            component: self.components[e.component].name.clone(),
+                        },
+                    }))
                 })?;
             }
             mates.push(m);
@@ -443,16 +451,17 @@ impl Document {
             } else {
                 continue;
             };
-            let mut e = e
-                .renamed(&mut |n| {
-                    unscoped(n, &at.name).ok_or_else(|| {
-                        format!(
-                            "an equation of sub-document `{}` uses \"{n}\", outside `{}`",
-                            record.file, at.name
-                        )
-                    })
+            let mut e = e.renamed(equations.len(), &mut |n| {
+                unscoped(n, &at.name).ok_or_else(|| {
+                    DocumentError::OutsideSubDocument(Box::new(super::OutsideSubDocument {
+                        file: record.file.clone(),
+                        at: at.name.clone(),
+                        item: OutsideItem::Equation {
+                            name: n.to_string(),
+                        },
+                    }))
                 })
-                .map_err(DocumentError::Invalid)?;
+            })?;
             e.scope = inner;
             equations.push(e);
         }

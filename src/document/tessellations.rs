@@ -4,7 +4,7 @@
 
 use super::file::{DocumentFile, PartFile};
 use crate::mesh::step::{
-    prune_store, PruneOptions, PruneReport, StoreError, Tessellation, DEFAULT_ANGULAR_DEFLECTION,
+    prune_held, PruneOptions, PruneReport, StoreError, Tessellation, DEFAULT_ANGULAR_DEFLECTION,
     DEFAULT_LINEAR_DEFLECTION, STEP_STORE,
 };
 use std::collections::HashSet;
@@ -42,11 +42,8 @@ pub struct InUse {
 /// below it (not in hidden folders such as `.fitup-cache` or `.git`, nor `target`)
 /// that mentions `step:` is read as a document, and each `step:` part's file is
 /// resolved from the document's folder.
-pub fn in_use(root: &Path) -> InUse {
+pub fn in_use(project: &crate::project::Project) -> InUse {
     let mut found = InUse::default();
-    let Ok(project) = crate::project::Project::new(root) else {
-        return found;
-    };
     // Walked from the root's held handle without following a link (a folder swapped
     // for a link to an outside folder while this runs is skipped, never listed or
     // read), each document read through the folder handle it was listed in.
@@ -116,23 +113,33 @@ pub fn in_use(root: &Path) -> InUse {
     found
 }
 
-/// Prunes the tessellation store of the project at `root` ([`prune_store`]): entries
-/// whose STEP file is gone or changed, of an old format or damaged, whose tessellation
-/// no document asks for (only while every document that names `step:` could be read),
+/// Prunes the tessellation store of `project` ([`prune_store`](crate::mesh::step::prune_store)): entries whose STEP
+/// file is gone or changed, of an old format or damaged, whose tessellation no
+/// document asks for (only while every document that names `step:` could be read),
 /// dead writers' temporary files, then the least recently used down to `max_bytes`.
-/// Nothing outside `root/.fitup-cache/step` is touched; a store reached through a
-/// symbolic link is refused. Returns what was (or, with `dry_run`, would be) removed
-/// and what the documents ask for.
+/// Nothing outside `.fitup-cache/step` of the project is touched; a store reached
+/// through a symbolic link is refused. The documents, the store and the sources its
+/// entries name are all reached from the project's held root folder, never by name:
+/// the root's path renamed or swapped for a link meanwhile changes nothing. Returns
+/// what was (or, with `dry_run`, would be) removed and what the documents ask for.
 pub fn prune_project_store(
-    root: &Path,
+    project: &crate::project::Project,
     dry_run: bool,
     max_bytes: u64,
 ) -> Result<(PruneReport, InUse), StoreError> {
+    let root = project.root();
+    let io = |path: &Path, e: std::io::Error| StoreError::Io {
+        path: path.to_path_buf(),
+        kind: e.kind(),
+    };
+    let top = project.folder(root, false).map_err(|e| io(root, e))?;
     let cache = root.join(".fitup-cache");
-    if std::fs::symlink_metadata(&cache).is_ok_and(|m| !m.is_dir()) {
-        return Err(StoreError::NotAFolder { path: cache });
+    match top.stat(std::ffi::OsStr::new(".fitup-cache")) {
+        Ok(None | Some(crate::fsutil::Kind::Dir)) => {}
+        Ok(Some(_)) => return Err(StoreError::NotAFolder { path: cache }),
+        Err(e) => return Err(io(&cache, e)),
     }
-    let used = in_use(root);
+    let used = in_use(project);
     let options = PruneOptions {
         dry_run,
         max_bytes,
@@ -141,6 +148,17 @@ pub fn prune_project_store(
             .is_empty()
             .then(|| used.tessellations.clone()),
     };
-    let report = prune_store(&root.join(STEP_STORE), &options)?;
+    let store = root.join(STEP_STORE);
+    let dir = match top.walk(Path::new(STEP_STORE), false) {
+        Ok(d) => d,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Ok((PruneReport::default(), used))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::Other => {
+            return Err(StoreError::NotAFolder { path: store })
+        }
+        Err(e) => return Err(io(&store, e)),
+    };
+    let report = prune_held(&store, dir, Some((root.to_path_buf(), top)), &options)?;
     Ok((report, used))
 }

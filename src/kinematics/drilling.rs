@@ -229,9 +229,15 @@ pub struct DrillReport {
     pub holes: Vec<HoleReport>,
 }
 
+/// The most holes a hole table may hold, counted as its lines are read: a 64 MiB
+/// table of short lines is 4.8 million holes, which took 4.2 GB as a script's array.
+/// At the cap the holes take about 100 bytes each (≈ 100 MB).
+pub const MAX_HOLES: usize = 1_000_000;
+
 /// Parses a hole table: per line `x y z nx ny nz` or `id x y z nx ny nz` (commas,
 /// tabs or spaces), an optional header line, `#` comments. Normals are normalised; a
-/// zero or non-finite value is an error naming the line.
+/// zero or non-finite value is an error naming the line. A table of more than
+/// [`MAX_HOLES`] holes is refused at the line of the first hole past it.
 pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
     let mut holes = Vec::new();
     let mut seen_data = false;
@@ -284,6 +290,12 @@ pub fn parse_holes(file: &str, text: &str) -> Result<Vec<Hole>, DrillError> {
             line,
         )
         .ok_or_else(|| err("the normal is zero".into()))?;
+        if holes.len() == MAX_HOLES {
+            return Err(err(format!(
+                "more than {} holes: the most a hole table may hold (split the table)",
+                crate::math::format::count(MAX_HOLES as u64)
+            )));
+        }
         holes.push(hole);
     }
     Ok(holes)

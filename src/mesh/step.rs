@@ -38,6 +38,7 @@
 mod raw;
 mod store;
 
+pub(crate) use store::prune_held;
 pub use store::{
     prune_store, PruneOptions, PruneReport, Pruned, StaleReason, StoreError, Tessellation,
     DEFAULT_STORE_CAP,

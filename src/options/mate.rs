@@ -31,11 +31,8 @@ impl AddMate {
         a: &str,
         b: &str,
     ) -> Result<MateSpec, DocumentError> {
-        let kind = MateKind::parse(kind).ok_or_else(|| {
-            DocumentError::Invalid(format!(
-                "unknown mate type `{kind}` (coincident, concentric, parallel, perpendicular, distance, angle)"
-            ))
-        })?;
+        let kind = MateKind::parse(kind)
+            .ok_or_else(|| DocumentError::UnknownMateKind(kind.to_string()))?;
         Ok(MateSpec {
             name: name.to_string(),
             kind,

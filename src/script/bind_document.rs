@@ -214,6 +214,12 @@ fn reference_map(r: &Reference) -> Map {
             m.insert("direction".into(), array3(direction));
         }
         Reference::Point(_) => {}
+        Reference::CoordinateSystem(f) => {
+            m.insert("x".into(), array3(&f.apply_vector(&Vec3::x())));
+            m.insert("y".into(), array3(&f.apply_vector(&Vec3::y())));
+            m.insert("z".into(), array3(&f.apply_vector(&Vec3::z())));
+            m.insert("transform".into(), Dynamic::from(*f));
+        }
     }
     m
 }
@@ -470,10 +476,14 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             }
         },
     );
-    api.f("Component.reference(name: string) -> map", "A reference of the part in world coordinates: `#{type, point, normal}` for planes, `#{type, point, direction}` for axes, `#{type, point}` for points (mm).", |c: &mut ComponentHandle, name: &str| -> ScriptResult<Map> {
+    api.f("Component.reference(name: string) -> map", "A reference of the part in world coordinates: `#{type, point, normal}` for planes, `#{type, point, direction}` for axes, `#{type, point}` for points, `#{type: \"coordinate_system\", point, x, y, z, transform}` for coordinate systems (mm).", |c: &mut ComponentHandle, name: &str| -> ScriptResult<Map> {
         let (doc, i) = c.locked()?;
         let r = doc.world_reference(i, name).map_err(fail)?;
         Ok(reference_map(&r))
+    });
+    api.f("Component.coordinate_system(name: string) -> Transform", "A coordinate system of the part in world coordinates: the pose that maps the system's coordinates to the world (mm; `.array_data` gives SolidWorks' `CoordinateSystemFeatureData.Transform.ArrayData` times `Transform2`, in metres).", |c: &mut ComponentHandle, name: &str| -> ScriptResult<Transform> {
+        let (doc, i) = c.locked()?;
+        doc.coordinate_system(i, name).map_err(fail)
     });
     api.f(
         "Component.to_string() -> string",

@@ -8,7 +8,7 @@ use super::bind_document::{ComponentHandle, DocHandle};
 use super::bind_math::to_transform;
 use super::convert::{fail, point3, read_options, vec3};
 use super::{Context, ScriptResult};
-use crate::document::{Document, PropertyOwner, Reference, RemoveMates};
+use crate::document::{coordinate_system, Document, PropertyOwner, Reference, RemoveMates};
 use crate::math::Transform;
 use crate::options::AddMate;
 use rhai::{Array, Dynamic, Map};
@@ -72,7 +72,9 @@ fn part_file(d: &DocHandle, part: &str) -> ScriptResult<String> {
     Ok(d.context().project.display(&path))
 }
 
-/// A reference from its script map `#{type, point, normal | direction}` (mm).
+/// A reference from its script map `#{type, point, normal | direction}` (mm), or a
+/// coordinate system `#{type: "coordinate_system", point, x, y}` or `#{type:
+/// "coordinate_system", transform}`.
 fn reference_of(m: &Map) -> ScriptResult<Reference> {
     let get = |k: &str| {
         m.get(k)
@@ -82,6 +84,24 @@ fn reference_of(m: &Map) -> ScriptResult<Reference> {
     let kind = get("type")?
         .into_string()
         .map_err(|t| fail(format!("`type` must be a string, not {t}")))?;
+    if kind == "coordinate_system" {
+        if !m.contains_key("point") {
+            if let Some(t) = m.get("transform") {
+                let t = t
+                    .clone()
+                    .try_cast::<Transform>()
+                    .ok_or_else(|| fail("`transform` must be a Transform"))?;
+                return Ok(Reference::CoordinateSystem(t));
+            }
+        }
+        let f = coordinate_system(
+            vec3(&get("point")?, "point")?,
+            vec3(&get("x")?, "x")?,
+            vec3(&get("y")?, "y")?,
+        )
+        .map_err(|e| fail(format!("coordinate system: {e}")))?;
+        return Ok(Reference::CoordinateSystem(f));
+    }
     let point = point3(&get("point")?, "point")?;
     Ok(match kind.as_str() {
         "plane" => Reference::Plane {
@@ -95,7 +115,7 @@ fn reference_of(m: &Map) -> ScriptResult<Reference> {
         "point" => Reference::Point(point),
         other => {
             return Err(fail(format!(
-                "reference type `{other}`: plane, axis or point"
+                "reference type `{other}`: plane, axis, point or coordinate_system"
             )))
         }
     })
@@ -410,6 +430,9 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
                 .is_some())
         },
     );
+    api.f("Document.part_coordinate_system(part: string, name: string) -> Transform", "A coordinate system of a part in the part frame (SolidWorks' `CoordinateSystemFeatureData.Transform` of a `CoordSys` feature; mm, `.array_data` in metres).", |d: &mut DocHandle, part: &str, name: &str| -> ScriptResult<Transform> {
+        d.lock()?.part_coordinate_system(part, name).map_err(fail)
+    });
     api.f("Document.part_file(part: string) -> string", "The part's geometry file (its mesh or STEP file) relative to the project folder (`IModelDoc2.GetPathName` of the part).", |d: &mut DocHandle, part: &str| part_file(d, part));
     api.get(
         "Component.part_file -> string",
@@ -472,7 +495,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         c.record_read(&part.mesh_path);
         Ok(name)
     });
-    api.f("Document.set_reference(part: string, name: string, reference: map)", "Adds or replaces a reference of a part, in the part frame (mm): `#{type: \"plane\", point, normal}`, `#{type: \"axis\", point, direction}` or `#{type: \"point\", point}` (what `Component.reference` gives, in world coordinates). Mates using it follow and are re-solved.", |d: &mut DocHandle, part: &str, name: &str, r: Map| -> ScriptResult<()> {
+    api.f("Document.set_reference(part: string, name: string, reference: map)", "Adds or replaces a reference of a part, in the part frame (mm): `#{type: \"plane\", point, normal}`, `#{type: \"axis\", point, direction}`, `#{type: \"point\", point}`, `#{type: \"coordinate_system\", point, x, y}` (Z = X × Y) or `#{type: \"coordinate_system\", transform}` (what `Component.reference` gives, in world coordinates). Mates using it follow and are re-solved.", |d: &mut DocHandle, part: &str, name: &str, r: Map| -> ScriptResult<()> {
         let r = reference_of(&r)?;
         d.lock()?.set_reference(part, name, r).map_err(fail)
     });

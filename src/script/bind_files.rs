@@ -2,7 +2,7 @@
 //! and `write_text`, `write_csv`, `write_json` through the output rule.
 
 use super::api::Api;
-use super::convert::{err, fail};
+use super::convert::{err, fail, Sizes};
 use super::{Context, ScriptResult};
 use crate::files::{self, Cell, CsvOptions};
 use rhai::{Array, Dynamic, Map};
@@ -97,9 +97,56 @@ struct WriteOptions {
     overwrite: bool,
 }
 
+/// What the script value of `v` ([`from_json`]) would hold.
+fn json_sizes(v: &serde_json::Value, s: &mut Sizes) {
+    use serde_json::Value;
+    match v {
+        Value::Array(a) => {
+            s.arrays += a.len();
+            a.iter().for_each(|x| json_sizes(x, s));
+        }
+        Value::Object(o) => {
+            s.maps += o.len();
+            o.values().for_each(|x| json_sizes(x, s));
+        }
+        Value::String(t) => s.chars += t.len(),
+        _ => {}
+    }
+}
+
 fn read_csv(c: &Context, path: &str, options: &CsvOptions) -> ScriptResult<Array> {
     let (full, table) = files::read_csv(&c.project, path, options).map_err(fail)?;
     c.record_read(&full);
+    let fields: usize = table.rows.iter().map(Vec::len).sum();
+    let chars = table
+        .rows
+        .iter()
+        .flatten()
+        .map(|v| match v {
+            Cell::Text(t) => t.len(),
+            _ => 0,
+        })
+        .sum();
+    let sizes = if options.header {
+        Sizes {
+            arrays: table.rows.len(),
+            maps: fields,
+            chars,
+        }
+    } else {
+        Sizes {
+            arrays: table.rows.len() + fields,
+            maps: 0,
+            chars,
+        }
+    };
+    sizes.within(
+        &c.limits,
+        &format!(
+            "read_csv(\"{path}\") of {} rows",
+            crate::math::format::count(table.rows.len() as u64)
+        ),
+    )?;
     Ok(table
         .rows
         .iter()
@@ -189,6 +236,9 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     api.f("read_json(path: string) -> any", "A JSON file as script values: objects as maps, arrays as arrays, whole numbers as integers, other numbers as floats, null as `()`.", move |path: &str| -> ScriptResult<Dynamic> {
         let (full, v) = files::read_json(&c.project, path).map_err(fail)?;
         c.record_read(&full);
+        let mut sizes = Sizes::default();
+        json_sizes(&v, &mut sizes);
+        sizes.within(&c.limits, &format!("read_json(\"{path}\")"))?;
         Ok(from_json(&v))
     });
     let c = ctx.clone();

@@ -834,6 +834,13 @@ fn register_drilling(api: &mut Api, ctx: &Arc<Context>) {
         c.record_read(&full);
         let text = c.project.read_text(&full, crate::fsutil::FileKind::Table).map_err(|e| fail(format!("{path}: {e}")))?;
         let holes = parse_holes(&c.project.display(&full), &text).map_err(fail)?;
+        // Each hole is a map of 4 properties holding two arrays of 3 (`hole_map`).
+        super::convert::Sizes {
+            arrays: holes.len() * 7,
+            maps: holes.len() * 4,
+            chars: holes.iter().map(|h| h.id.as_ref().map_or(0, String::len)).sum(),
+        }
+        .within(&c.limits, &format!("load_holes(\"{path}\") of {} holes", crate::math::format::count(holes.len() as u64)))?;
         Ok(holes.iter().map(|h| Dynamic::from_map(hole_map(h))).collect())
     });
 }

@@ -22,6 +22,44 @@ pub fn fail<E: std::fmt::Display>(e: E) -> Box<EvalAltResult> {
     ))
 }
 
+/// What a script value holds, counted as Rhai counts it against the sandbox's limits
+/// (every array element and map property, nested ones included, and the text of every
+/// string), so a binding can refuse a result *before* it builds it: Rhai checks only
+/// the built value, after its memory is taken.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct Sizes {
+    /// Array elements.
+    pub arrays: usize,
+    /// Map properties.
+    pub maps: usize,
+    /// Bytes of text.
+    pub chars: usize,
+}
+
+impl Sizes {
+    /// An error naming `what` and the limits when these sizes pass them.
+    pub(crate) fn within(self, limits: &super::Limits, what: &str) -> ScriptResult<()> {
+        if self.arrays <= limits.max_array_size
+            && self.maps <= limits.max_map_size
+            && self.chars <= limits.max_string_size
+        {
+            return Ok(());
+        }
+        let n = |x: usize| crate::math::format::count(x as u64);
+        err(format!(
+            "{what} would make {} array elements, {} map properties and {} characters of text: \
+             more than a script may hold (arrays up to {} elements, maps up to {} properties, \
+             strings up to {} characters, nested values counted); nothing was built",
+            n(self.arrays),
+            n(self.maps),
+            n(self.chars),
+            n(limits.max_array_size),
+            n(limits.max_map_size),
+            n(limits.max_string_size)
+        ))
+    }
+}
+
 /// A finite number from an integer or a float.
 pub fn num(v: &Dynamic, what: &str) -> ScriptResult<f64> {
     let x = if let Ok(f) = v.as_float() {

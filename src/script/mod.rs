@@ -39,6 +39,7 @@ use rhai::{Engine, EvalAltResult, Position, Scope};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -149,6 +150,8 @@ pub struct Context {
     reads: Mutex<BTreeSet<PathBuf>>,
     writes: Mutex<BTreeSet<PathBuf>>,
     operations: AtomicU64,
+    /// Set (with `cancel`) when the run passed its time limit (`Limits::max_seconds`).
+    timed_out: AtomicBool,
     /// The properties with a setter (`set_<name>` methods), known once the engine is
     /// built.
     setters: std::sync::OnceLock<std::collections::HashSet<String>>,
@@ -186,6 +189,7 @@ impl Context {
             reads: Mutex::default(),
             writes: Mutex::default(),
             operations: AtomicU64::new(0),
+            timed_out: AtomicBool::new(false),
             setters: Default::default(),
         }
     }
@@ -399,6 +403,9 @@ pub const SCRIPT_STACK_BYTES: usize = 256 << 20;
 /// each imported module from zero, so the limit over the whole run is kept here).
 const OPERATION_LIMIT: &str = "operation limit";
 
+/// What `on_progress` returns when the run passed its time limit.
+const TIME_LIMIT: &str = "time limit";
+
 /// Builds a sandboxed engine with the whole fitup API for the given context.
 pub fn engine(ctx: &Arc<Context>, limits: &Limits) -> Engine {
     let mut engine = Engine::new();
@@ -419,7 +426,11 @@ pub fn engine(ctx: &Arc<Context>, limits: &Limits) -> Engine {
         let n = c.operations.load(Ordering::Relaxed) + 1;
         c.operations.store(n, Ordering::Relaxed);
         if c.cancelled() {
-            Some("cancelled".into())
+            Some(if c.timed_out.load(Ordering::Relaxed) {
+                TIME_LIMIT.into()
+            } else {
+                "cancelled".into()
+            })
         } else if max_operations > 0 && n > max_operations {
             Some(OPERATION_LIMIT.into())
         } else {
@@ -450,6 +461,23 @@ pub fn run_script(opts: &RunOptions, caches: &Arc<Caches>) -> RunOutcome {
         .with_limits(opts.limits),
     );
     let result = std::thread::scope(|s| {
+        // The run's time limit: a watchdog sets the cancel flag (read at every
+        // operation and by the planners and queries) when it passes; it is told the
+        // run ended by the channel closing.
+        let (done, ended) = std::sync::mpsc::channel::<()>();
+        if opts.limits.max_seconds > 0 {
+            let limit = Duration::from_secs(opts.limits.max_seconds);
+            let ctx = ctx.clone();
+            let _ = std::thread::Builder::new()
+                .name("fitup-time-limit".into())
+                .spawn_scoped(s, move || {
+                    if ended.recv_timeout(limit) == Err(RecvTimeoutError::Timeout) {
+                        ctx.timed_out.store(true, Ordering::Relaxed);
+                        ctx.cancel.store(true, Ordering::Relaxed);
+                    }
+                });
+        }
+        let _done = done;
         let run = std::thread::Builder::new()
             .name("fitup-script".into())
             .stack_size(SCRIPT_STACK_BYTES)
@@ -541,6 +569,14 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
     match engine.run_ast_with_scope(&mut scope, &ast) {
         Ok(()) => Ok(()),
         Err(e) => {
+            // Whatever error a run stopped by its time limit ends with (the
+            // termination, or a planner's or module's error on the way) is the limit,
+            // at the line it was reached.
+            if ctx.timed_out.load(Ordering::Relaxed) {
+                let mut located = locate_error(&e, &script, &opts.limits);
+                located.message = time_limit_message(&opts.limits);
+                return Err(ScriptError::Located(located));
+            }
             // Whatever error a cancelled run ends with (the termination itself, or a
             // module's error wrapping it) is the cancellation.
             if ctx.cancelled() {
@@ -553,6 +589,15 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
             )))
         }
     }
+}
+
+/// The message of a run stopped by its time limit.
+fn time_limit_message(limits: &Limits) -> String {
+    format!(
+        "the script ran past its time limit of {} s; if it really needs longer, raise it \
+         with `--max-seconds N` (0: no limit)",
+        crate::math::format::count(limits.max_seconds)
+    )
 }
 
 /// Finds the innermost located cause of a Rhai error, in whichever file it happened.
@@ -612,6 +657,11 @@ fn position(pos: Position) -> (usize, usize) {
 fn describe(err: &EvalAltResult, limits: &Limits) -> String {
     match err {
         EvalAltResult::ErrorRuntime(v, _) => v.to_string(),
+        EvalAltResult::ErrorTerminated(token, _)
+            if token.clone().into_string().ok().as_deref() == Some(TIME_LIMIT) =>
+        {
+            time_limit_message(limits)
+        }
         EvalAltResult::ErrorTerminated(token, _)
             if token.clone().into_string().ok().as_deref() != Some(OPERATION_LIMIT) =>
         {

@@ -17,6 +17,11 @@ pub struct Limits {
     /// and every module it imports. The default stops a runaway loop within about two
     /// seconds; raise it with `--max-operations`.
     pub max_operations: u64,
+    /// Wall time of a run, seconds (0: none). The operation limit does not bound time:
+    /// Rhai measures an array after every native call on its variable (`a.len()` of a
+    /// 4-million-element array: about 10 ms for one operation), so a loop of such calls
+    /// within 50 million operations would run for days. Raise it with `--max-seconds`.
+    pub max_seconds: u64,
     /// Nested function calls.
     pub max_call_levels: usize,
     /// Nesting depth of expressions, and of expressions inside functions.
@@ -54,10 +59,14 @@ pub enum Dispatch {
 /// heavy work happens in Rust, which does not count).
 pub const DEFAULT_MAX_OPERATIONS: u64 = 50_000_000;
 
+/// The default time limit of a run (`--max-seconds`), seconds: one hour.
+pub const DEFAULT_MAX_SECONDS: u64 = 3600;
+
 impl Default for Limits {
     fn default() -> Self {
         Self {
             max_operations: DEFAULT_MAX_OPERATIONS,
+            max_seconds: DEFAULT_MAX_SECONDS,
             max_call_levels: 64,
             max_expr_depth: (128, 64),
             max_string_size: 16 << 20,

@@ -99,7 +99,8 @@ impl Freedom {
     /// → `{x, y}` and rotations; point on an axis → `{z}` and rotations; parallel →
     /// translations and `Rotz`; perpendicular and angle → translations and the rotation
     /// about the first entity's direction (an approximation: the second entity may
-    /// still turn about its own direction, which fitup ignores).
+    /// still turn about its own direction, which fitup ignores); two coordinate
+    /// systems coincident leave nothing free.
     pub fn of_mate(doc: &Document, mate: &Mate) -> Freedom {
         let poses: Vec<Transform> = doc.components().iter().map(|c| c.transform).collect();
         let [ea, eb] = &mate.entities;
@@ -129,6 +130,10 @@ impl Freedom {
                 Freedom::new(frame, &[z], &[x, y, z])
             }
             (MateKind::Parallel, _, _) => Freedom::new(frame, &[x, y, z], &[z]),
+            // Two coordinate systems coincident: nothing is left free.
+            (MateKind::Coincident, CoordinateSystem(_), CoordinateSystem(_)) => {
+                Freedom::new(frame, &[], &[])
+            }
             _ => Freedom::new(frame, &[x, y, z], &[z]),
         }
     }

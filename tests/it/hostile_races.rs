@@ -774,6 +774,94 @@ print(`seen ${seen}`);
     assert_eq!(common::snapshot(p), before, "a user file changed");
 }
 
+/// A project store `DIR/.fitup-cache/step` holding one stale entry (its STEP file,
+/// `gone.step` of `dir`, does not exist), and `fitup.toml` in `dir`.
+fn stale_store(dir: &Path) -> PathBuf {
+    std::fs::write(dir.join("fitup.toml"), "").unwrap();
+    let store = dir.join(".fitup-cache/step");
+    std::fs::create_dir_all(&store).unwrap();
+    let source = dir.canonicalize().unwrap().join("gone.step");
+    let entry = store.join("00000000000000a1.tess");
+    std::fs::write(
+        &entry,
+        crate::hostile_round3::forged_entry(&source, 1000, 0xa1),
+    )
+    .unwrap();
+    entry
+}
+
+/// `fitup cache prune a/b` (a folder of the project `p`, whose `fitup.toml` is at
+/// its top) finds its project through folders held from `/` down and prunes through
+/// that held root: while `a` is swapped for a link to an outside folder whose `b/`
+/// is a project of its own (a `fitup.toml` and a store holding a stale entry), the
+/// outside store is never opened, let alone pruned (it was: the folder was made
+/// canonical by name and the nearest `fitup.toml` looked up along it, so the link
+/// led the prune into the outside project and removed its entry).
+#[test]
+fn cache_prune_never_goes_through_a_swapped_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    std::fs::create_dir_all(p.join("a/b")).unwrap();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    std::fs::create_dir(o.join("b")).unwrap();
+    let entry = stale_store(&o.join("b"));
+    let args = ["cache", "prune", "a/b"];
+    let r = crate::hostile_bounds::run(p, &args);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    let before = common::snapshot(p);
+    let (pruned, refused) = while_swapped(&p.join("a"), o, || {
+        let (mut pruned, mut refused) = (0, 0);
+        for _ in 0..40 {
+            let r = crate::hostile_bounds::run(p, &args);
+            assert!(!r.text.contains("panicked"), "{}", r.text);
+            if r.code == Some(0) {
+                assert!(r.text.contains("removed 0 files"), "{}", r.text);
+                pruned += 1;
+            } else {
+                assert_eq!(r.code, Some(1), "{}", r.text);
+                assert!(r.text.contains("a/b"), "not located: {}", r.text);
+                refused += 1;
+            }
+        }
+        (pruned, refused)
+    });
+    eprintln!("{pruned} prunes of the project, {refused} refused");
+    assert!(pruned > 0, "the project was never pruned");
+    assert!(entry.is_file(), "the outside entry was removed");
+    assert_eq!(common::snapshot(p), before, "a user file changed");
+}
+
+/// The library's prune of a project works on the project's held root: when the
+/// root's path is renamed and a link to another project put in its place after the
+/// project was found, `prune_project_store` prunes the project it was given (its
+/// stale entry is removed) and leaves the other one alone (it looked the root, the
+/// store and the sources up by name again, three times).
+#[test]
+fn a_project_prune_stays_in_the_project_it_was_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().canonicalize().unwrap();
+    let (p, o) = (d.join("p"), d.join("o"));
+    std::fs::create_dir_all(&p).unwrap();
+    std::fs::create_dir_all(&o).unwrap();
+    stale_store(&p);
+    let other = stale_store(&o);
+    let project = fitup::project::Project::for_folder(&p).unwrap();
+    assert_eq!(project.root(), p);
+    std::fs::rename(&p, d.join("p.moved")).unwrap();
+    std::os::unix::fs::symlink(&o, &p).unwrap();
+    let (report, _) =
+        fitup::document::tessellations::prune_project_store(&project, false, u64::MAX).unwrap();
+    assert_eq!(report.removed.len(), 1, "{report:?}");
+    assert!(other.is_file(), "the other project's entry was removed");
+    assert_eq!(
+        common::snapshot(&d.join("p.moved/.fitup-cache/step")).len(),
+        0,
+        "the stale entry of the project given is still there"
+    );
+}
+
 /// A `step:` part is read through the project's held root and handed to the Open
 /// CASCADE child as an opened file: while `parts/` is swapped for a link to a folder
 /// holding another STEP file of the same name (a sphere; the inside one is a box of 12
@@ -839,4 +927,60 @@ fn step_parts_race() {
     assert!(read > 0, "the inside file was never read");
     let _ = std::fs::remove_dir_all(p.join(STEP_STORE));
     assert_eq!(common::snapshot(p), before, "a user file changed");
+}
+
+/// `fitup import FILE --out DIR` into an existing project wrote its meshes by name:
+/// with `DIR/meshes` a link to a folder outside, the STL landed outside (and the
+/// document then failed to load). Every output now goes through the project's held
+/// root: the link is refused (exit 1 naming the mesh), and while `meshes` is swapped
+/// for that link over and over, repeated imports (`--force`) never open anything
+/// outside; each ends in the imported document or a located refusal.
+#[cfg(feature = "step")]
+#[test]
+fn imports_never_write_through_a_swapped_folder() {
+    imports_race();
+}
+
+/// The body of [`imports_never_write_through_a_swapped_folder`], compiled in every
+/// build, run with the `step` feature.
+#[cfg_attr(not(feature = "step"), allow(dead_code))]
+fn imports_race() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    std::fs::create_dir_all(p.join("models")).unwrap();
+    std::fs::write(p.join("models/notes.txt"), "mine").unwrap();
+    fitup::mesh::step::write_test_step("box", &p.join("box.step")).unwrap();
+    let outside = tempfile::tempdir().unwrap();
+    let o = outside.path();
+    let args = ["import", "box.step", "--out", "models", "--force"];
+    std::os::unix::fs::symlink(o, p.join("models/meshes")).unwrap();
+    let r = crate::hostile_bounds::run(p, &args);
+    assert_eq!(r.code, Some(1), "{}", r.text);
+    assert!(r.text.contains("meshes"), "{}", r.text);
+    assert_eq!(std::fs::read_dir(o).unwrap().count(), 0, "written outside");
+    std::fs::remove_file(p.join("models/meshes")).unwrap();
+    let r = crate::hostile_bounds::run(p, &args);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    let (done, refused) = while_swapped(&p.join("models/meshes"), o, || {
+        let (mut done, mut refused) = (0, 0);
+        for _ in 0..30 {
+            let r = crate::hostile_bounds::run(p, &args);
+            assert!(!r.text.contains("panicked"), "{}", r.text);
+            if r.code == Some(0) {
+                done += 1;
+            } else {
+                assert_eq!(r.code, Some(1), "{}", r.text);
+                assert!(r.text.contains("models"), "not located: {}", r.text);
+                refused += 1;
+            }
+        }
+        (done, refused)
+    });
+    eprintln!("{done} imports, {refused} refused");
+    assert!(done > 0, "no import went through");
+    assert_eq!(
+        std::fs::read_to_string(p.join("models/notes.txt")).unwrap(),
+        "mine"
+    );
 }

@@ -679,7 +679,7 @@ const SEQUENCE_RSS_KB: u64 = 600 * 1024;
 
 /// A forged store entry (format 3 header: magic, key, source) naming `source`, with
 /// the key's length `len` (so that a source of that length must be hashed).
-fn forged_entry(source: &Path, len: u64, salt: u64) -> Vec<u8> {
+pub(crate) fn forged_entry(source: &Path, len: u64, salt: u64) -> Vec<u8> {
     let mut out = b"fitup-tessellation 3\n".to_vec();
     for v in [
         0x1234_5678_9abc_def0 ^ salt,

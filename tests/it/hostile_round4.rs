@@ -206,3 +206,234 @@ fn every_refused_command_line_path_exits_1() {
     }
     assert_eq!(common::snapshot(o), before, "changed outside");
 }
+
+/// Rhai measures an array after every native call on its variable, so one operation
+/// of `a.len()` or `a.push(x)` on a 4-million-element array costs milliseconds: a
+/// loop of them stays far inside the 50 million operations for a day (measured, dev
+/// build at load 8: 200 calls of `a.len()` on 4 M elements 1.6 s; 4 M pushes would
+/// walk 8·10¹² elements). The run's time limit (`--max-seconds`, default 3600 s)
+/// bounds it: each loop here stops at a 3 s limit with the limit's message at the
+/// script line, exit 1, in bounded memory; the default is printed by `--help`.
+#[test]
+fn calls_on_large_arrays_stop_at_the_runs_time_limit() {
+    for (body, line) in [
+        ("let n = 0;\nwhile true { n += a.len(); }\n", ":4:"),
+        ("let b = [];\nfor i in 0..4000000 { b.push(i); }\n", ":4:"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        std::fs::write(p.join("fitup.toml"), "").unwrap();
+        std::fs::create_dir(p.join("scripts")).unwrap();
+        let source = format!("let a = [];\na.pad(4000000, 0);\n{body}");
+        std::fs::write(p.join("scripts/s.rhai"), &source).unwrap();
+        let r = crate::hostile_bounds::run_within(
+            p,
+            &["run", "scripts/s.rhai", "--max-seconds", "3"],
+            std::time::Duration::from_secs(60),
+        );
+        eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
+        assert_eq!(r.code, Some(1), "{source}: {}", r.text);
+        assert!(
+            r.text.contains("time limit of 3 s")
+                && r.text.contains("--max-seconds")
+                && r.text.contains(&format!("s.rhai{line}")),
+            "{source}: {}",
+            r.text
+        );
+        assert!(!r.text.contains("panicked"), "{}", r.text);
+        assert!(r.peak_kb < 500 * 1024, "peak {} kB", r.peak_kb);
+    }
+    let help = common::run_in(std::path::Path::new("."), &["run", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("--max-seconds") && help.contains("[default: 3600]"),
+        "{help}"
+    );
+}
+
+/// Peak resident memory of a refused data file (kB): 700 MB. The file itself is up
+/// to 64 MiB; its values are counted before they are kept (at the library's caps,
+/// `MAX_CSV_FIELDS`, `MAX_JSON_VALUES`, `MAX_HOLES`) and before script values are
+/// built (the sandbox's sizes).
+const DATA_RSS_KB: u64 = 700 * 1024;
+
+/// Data files within the 64 MiB file cap whose values a script could not hold were
+/// parsed and converted whole before Rhai refused the result: `read_csv` of 64 MiB
+/// of `1,2` lines peaked at 11.5 GB, `read_json` of `[[1,2],…]` at 2.9 GB,
+/// `load_holes` of 4.8 million holes at 4.2 GB. Now the readers count as they read
+/// (refused at the line, or line and column, that passes the library's cap) and the
+/// bindings count a result's elements, properties and text before they build it
+/// (refused naming the call and the sandbox's limits): each case exits 1 at the
+/// script line within [`DATA_RSS_KB`]; a table within the limits is read.
+#[test]
+fn data_files_are_counted_before_a_script_holds_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    std::fs::create_dir(p.join("scripts")).unwrap();
+    let cap = 64usize << 20;
+    let fill = |head: &str, line: &str, tail: &str, bytes: usize| {
+        let n = (bytes - head.len() - tail.len()) / line.len();
+        let mut s = String::with_capacity(bytes);
+        s.push_str(head);
+        for _ in 0..n {
+            s.push_str(line);
+        }
+        s.push_str(tail);
+        s
+    };
+    std::fs::write(p.join("big.csv"), fill("a,b\n", "1,2\n", "", cap - 16)).unwrap();
+    std::fs::write(
+        p.join("mid.csv"),
+        fill("a,b\n", "1,2\n", "", 1_500_000 * 4 + 4),
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("ok.csv"),
+        fill("a,b\n", "1,2\n", "", 200_000 * 4 + 4),
+    )
+    .unwrap();
+    let big_json = fill("[[1,2]", ",[1,2]", "]", cap - 16);
+    std::fs::write(p.join("big.json"), big_json).unwrap();
+    let maps = fill(
+        "[{\"a\":1,\"b\":2,\"c\":3}",
+        ",{\"a\":1,\"b\":2,\"c\":3}",
+        "]",
+        900_000 * 20,
+    );
+    std::fs::write(p.join("maps.json"), maps).unwrap();
+    let long = "x".repeat(6 << 20);
+    std::fs::write(
+        p.join("text.json"),
+        format!("[\"{long}\",\"{long}\",\"{long}\"]"),
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("holes.csv"),
+        fill("", "1,0,0,0,0,0,1\n", "", cap - 16),
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("mid_holes.csv"),
+        fill("", "1,0,0,0,0,0,1\n", "", 600_000 * 14),
+    )
+    .unwrap();
+    let before = common::snapshot(p);
+    for (call, needles) in [
+        (
+            "read_csv(\"big.csv\")",
+            &["big.csv:2000001", "more than 4,000,000 fields"][..],
+        ),
+        (
+            "read_csv(\"mid.csv\")",
+            &[
+                "read_csv(\"mid.csv\") of 1,500,000 rows",
+                "3,000,000 map properties",
+                "more than a script may hold",
+            ][..],
+        ),
+        (
+            "read_csv(\"mid.csv\", #{header: false})",
+            &["4,500,003 array elements", "more than a script may hold"][..],
+        ),
+        (
+            "read_json(\"big.json\")",
+            &["big.json:1", "more than 2,000,000 values"][..],
+        ),
+        (
+            "read_json(\"maps.json\")",
+            &["maps.json:1", "more than 2,000,000 values"][..],
+        ),
+        (
+            "read_json(\"text.json\")",
+            &[
+                "read_json(\"text.json\")",
+                "18,874,368 characters of text",
+                "more than a script may hold",
+            ][..],
+        ),
+        (
+            "load_holes(\"holes.csv\")",
+            &["holes.csv:1000001", "more than 1,000,000 holes"][..],
+        ),
+        (
+            "load_holes(\"mid_holes.csv\")",
+            &[
+                "of 600,000 holes",
+                "2,400,000 map properties",
+                "more than a script may hold",
+            ][..],
+        ),
+    ] {
+        std::fs::write(
+            p.join("scripts/s.rhai"),
+            format!("let x = 1;\nlet t = {call};\nprint(t.len());\n"),
+        )
+        .unwrap();
+        let r = crate::hostile_bounds::run_within(
+            p,
+            &["run", "scripts/s.rhai"],
+            std::time::Duration::from_secs(120),
+        );
+        eprintln!(
+            "{call}: peak {} kB, {:.1} s; {}",
+            r.peak_kb,
+            r.elapsed.as_secs_f64(),
+            r.text.lines().next().unwrap_or("")
+        );
+        assert_eq!(r.code, Some(1), "{call}: {}", r.text);
+        assert!(
+            r.text.contains("s.rhai:2:"),
+            "{call}: not at the script line: {}",
+            r.text
+        );
+        for n in needles {
+            assert!(r.text.contains(n), "{call}: no `{n}` in {}", r.text);
+        }
+        assert!(!r.text.contains("panicked"), "{}", r.text);
+        assert!(r.peak_kb < DATA_RSS_KB, "{call}: peak {} kB", r.peak_kb);
+    }
+    std::fs::write(
+        p.join("scripts/s.rhai"),
+        "let t = read_csv(\"ok.csv\");\nprint(`rows ${t.len()} ${t[0].a + t[0].b}`);\n",
+    )
+    .unwrap();
+    let r = crate::hostile_bounds::run(p, &["run", "scripts/s.rhai"]);
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert!(r.text.contains("rows 200000 3"), "{}", r.text);
+    std::fs::remove_file(p.join("scripts/s.rhai")).unwrap();
+    let mut after = common::snapshot(p);
+    after.retain(|k, _| before.contains_key(k));
+    assert_eq!(after, before, "a user file changed");
+}
+
+/// A 64 MiB motion program of `Joint` lines (3.7 million commands) was parsed whole
+/// (784 MB) before the sample cap refused its millionth move: its commands are
+/// counted as they are read and the one past `MAX_PROGRAM_COMMANDS` is refused at its
+/// line, within [`DATA_RSS_KB`]; the user's files are unchanged.
+#[test]
+fn a_huge_motion_program_is_counted_before_it_is_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    std::fs::write(p.join("fitup.toml"), "").unwrap();
+    fitup::demo::write_robots(&p.join("models")).unwrap();
+    let line = "Joint 0 0 0 0 0 0\n";
+    let mut text = String::from("Interval 0.05\n");
+    text.push_str(&line.repeat(((64 << 20) - 64) / line.len()));
+    std::fs::write(p.join("big.prg"), text).unwrap();
+    let before = common::snapshot(p);
+    let r = crate::hostile_bounds::run_within(
+        p,
+        &["run", "big.prg", "--doc", "models/mz07.yaml"],
+        std::time::Duration::from_secs(120),
+    );
+    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
+    assert_eq!(r.code, Some(1), "{}", r.text);
+    assert!(
+        r.text.contains("big.prg:1000001:1") && r.text.contains("more than 1,000,000 commands"),
+        "{}",
+        r.text
+    );
+    assert!(r.peak_kb < DATA_RSS_KB, "peak {} kB", r.peak_kb);
+    assert_eq!(common::snapshot(p), before, "a user file changed");
+}

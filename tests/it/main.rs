@@ -9,6 +9,7 @@ mod common;
 mod api_docs;
 mod chain;
 mod cli;
+mod coordinate_systems;
 mod db;
 mod equations;
 mod hostile_bounds;

@@ -100,6 +100,7 @@ mod with_occt {
             "cylinder_hole",
             "assembly",
             "nested",
+            "roots",
             "inch_box",
             "open_shell",
             "no_solid",
@@ -429,6 +430,92 @@ mod with_occt {
         assert_eq!(again.sub_assemblies().len(), 7);
         let o = common::run_in(&dir.path().join("cart"), &["check", "nested.yaml"]);
         assert!(o.status.success(), "{}", common::short_text(&o));
+    }
+
+    /// Issue 37: a file with several free shapes — two root assemblies sharing one
+    /// product name and a loose solid — has no root that is the document: each root
+    /// is a sub-assembly at the top (the second named apart from the first), the
+    /// loose solid a component at the top, and every component and sub-assembly is
+    /// where Open CASCADE's own reading (occt_check) places it, in its order.
+    #[test]
+    fn several_root_shapes_import_side_by_side() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = made(dir.path(), "roots");
+        let o = common::run_in(dir.path(), &["import", "roots.step", "--out", "cell"]);
+        let t = common::text(&o);
+        assert!(o.status.success(), "{t}");
+        let doc_path = dir.path().join("cell/roots.yaml");
+        let doc = Document::open(&doc_path).unwrap();
+        let subs: Vec<_> = doc
+            .sub_assemblies()
+            .iter()
+            .map(|a| a.name.clone())
+            .collect();
+        let top = doc.children(None).unwrap();
+        assert_eq!(top.len(), 3, "two roots and the loose solid: {top:?}");
+        assert!(top.contains(&"loose".to_string()), "{top:?}");
+        let roots: Vec<_> = top.iter().filter(|n| doc.sub_assembly(n).is_ok()).collect();
+        assert_eq!(roots.len(), 2, "{top:?}");
+        assert_ne!(roots[0], roots[1]);
+        for r in &roots {
+            assert!(r.starts_with("module"), "{r}");
+            let kids = doc.children(Some(r.as_str())).unwrap();
+            assert_eq!(kids.len(), 2, "{r}: {kids:?}");
+            let pair = format!("{r}/pair-1");
+            assert!(subs.contains(&pair), "{pair} in {subs:?}");
+            assert_eq!(
+                doc.children(Some(&pair)).unwrap(),
+                [format!("{pair}/peg-1"), format!("{pair}/peg-2")]
+            );
+        }
+        assert_eq!(subs.len(), 4, "{subs:?}");
+
+        // By hand from the generator: the second module's pair-1 ∘ peg-2.
+        let peg2 = pose([1.0, 0.0, 0.0], 90.0, [20.0, 0.0, 4.0]);
+        let pair_in_second = pose([0.0, 1.0, 0.0], -45.0, [100.0, 50.0, 0.0]);
+        let got = doc
+            .component(&format!("{}/pair-1/peg-2", roots[1]))
+            .unwrap()
+            .transform;
+        let by_hand = peg2.then(&pair_in_second);
+        assert!(got.approx_eq(&by_hand, 1e-9, 1e-9), "{got} vs {by_hand}");
+
+        // Open CASCADE's reading, in its order: solids, then assemblies (the roots
+        // included: none of them is the document).
+        let reference = common::occt_check::read(&common::occt_check::program(), &file);
+        assert_eq!(reference.solids.len(), doc.components().len());
+        assert_eq!(reference.solids.len(), 7);
+        for (s, c) in reference.solids.iter().zip(doc.components()) {
+            assert!(s.placed_as(&c.transform, 1e-9), "{}: {}", s.path, c.name);
+            assert_eq!(
+                c.name.split('/').count(),
+                s.depth(),
+                "{} {}",
+                c.name,
+                s.path
+            );
+            let leaf = s.path.rsplit('/').next().unwrap();
+            assert!(c.name.ends_with(leaf), "{} for {}", c.name, s.path);
+        }
+        assert_eq!(reference.assemblies.len(), doc.sub_assemblies().len());
+        for (a, sub) in reference.assemblies.iter().zip(doc.sub_assemblies()) {
+            assert!(
+                a.placed_as(&sub.transform, 1e-9),
+                "{}: {}",
+                a.path,
+                sub.name
+            );
+            assert_eq!(sub.name.split('/').count(), a.depth(), "{}", sub.name);
+        }
+
+        // A save and a reload keep it.
+        let mut doc = doc;
+        doc.save().unwrap();
+        let again = Document::open(&doc_path).unwrap();
+        for (s, c) in reference.solids.iter().zip(again.components()) {
+            assert!(s.placed_as(&c.transform, 1e-9), "after a save: {}", s.path);
+        }
+        assert_eq!(again.sub_assemblies().len(), 4);
     }
 
     /// The library's reading keeps the tree too: assemblies before what they hold,

@@ -605,20 +605,17 @@ enum Seen {
 }
 
 impl Sources {
-    fn new(store: &Path) -> Sources {
+    /// The project folder of `store`, looked up by its name (for [`prune_store`], given
+    /// a path; a project's prune hands its held root to [`prune_held`] instead).
+    fn root_by_name(store: &Path) -> Option<(PathBuf, Dir)> {
         let depth = Path::new(super::STEP_STORE).components().count();
         let root = if store.ends_with(super::STEP_STORE) {
             store.ancestors().nth(depth).map(Path::to_path_buf)
         } else {
             store.parent().map(Path::to_path_buf)
         };
-        let root = root
-            .and_then(|r| r.canonicalize().ok())
-            .and_then(|r| Dir::open(&r).ok().map(|d| (r, d)));
-        Sources {
-            root,
-            seen: HashMap::new(),
-        }
+        root.and_then(|r| r.canonicalize().ok())
+            .and_then(|r| Dir::open(&r).ok().map(|d| (r, d)))
     }
 
     /// Whether the source an entry records is the file it was read from: `None` when
@@ -711,10 +708,9 @@ impl Sources {
 /// (reached without a symbolic link). The sources entries name are looked at only
 /// inside the project that holds the store, each once.
 pub fn prune_store(store: &Path, options: &PruneOptions) -> Result<PruneReport, StoreError> {
-    let mut report = PruneReport::default();
     let dir = match open_store(store, false) {
         Ok(d) => d,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(report),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(PruneReport::default()),
         Err(e) if e.kind() == std::io::ErrorKind::Other => {
             return Err(StoreError::NotAFolder { path: store.into() })
         }
@@ -725,12 +721,28 @@ pub fn prune_store(store: &Path, options: &PruneOptions) -> Result<PruneReport, 
             })
         }
     };
+    prune_held(store, dir, Sources::root_by_name(store), options)
+}
+
+/// [`prune_store`] of the store folder `dir` (held open; `store` its path, for the
+/// report), the sources its entries name looked at only inside `root` (the project
+/// folder, canonical, held open; `None`: every source counts as current).
+pub(crate) fn prune_held(
+    store: &Path,
+    dir: Dir,
+    root: Option<(PathBuf, Dir)>,
+    options: &PruneOptions,
+) -> Result<PruneReport, StoreError> {
+    let mut report = PruneReport::default();
     let _turn = dir.lock();
     let found = scan(&dir).map_err(|e| StoreError::Io {
         path: store.into(),
         kind: e.kind(),
     })?;
-    let mut sources = Sources::new(store);
+    let mut sources = Sources {
+        root,
+        seen: HashMap::new(),
+    };
     let mut stale = Vec::new();
     let now = SystemTime::now();
     for (file, bytes, modified) in found.leftovers {
