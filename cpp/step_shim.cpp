@@ -367,6 +367,16 @@ TDF_Label named(const Handle(XCAFDoc_ShapeTool) &tool, const TopoDS_Shape &s, co
   return l;
 }
 
+// A turn of `deg` degrees about the axis (ax, ay, az) through the origin, then a
+// shift by (x, y, z) mm.
+TopLoc_Location pose(double ax, double ay, double az, double deg, double x, double y,
+                     double z) {
+  gp_Trsf t;
+  t.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(ax, ay, az)), deg * M_PI / 180.0);
+  t.SetTranslationPart(gp_Vec(x, y, z));
+  return TopLoc_Location(t);
+}
+
 TopLoc_Location at(double x, double y, double z) {
   gp_Trsf t;
   t.SetTranslation(gp_Vec(x, y, z));
@@ -438,13 +448,6 @@ void write_test(const std::string &kind, const std::string &file) {
     //   cart ─ Frame-1, Frame-2 (frame) ─ plate-1, Axle-1, Axle-2 (axle_asm) ─ bar-1,
     //   Wheel-1, Wheel-2;  cart ─ NAUO7 (a wheel), NAUO8 (an axle_asm).
     // tests/it/step_import.rs (nested_assemblies) repeats these placements.
-    auto pose = [](double ax, double ay, double az, double deg, double x, double y,
-                   double z) {
-      gp_Trsf t;
-      t.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(ax, ay, az)), deg * M_PI / 180.0);
-      t.SetTranslationPart(gp_Vec(x, y, z));
-      return TopLoc_Location(t);
-    };
     TDF_Label wheel = named(tool, BRepPrimAPI_MakeCylinder(10.0, 5.0).Shape(), "wheel");
     TDF_Label bar = named(tool, BRepPrimAPI_MakeBox(4.0, 4.0, 60.0).Shape(), "axle_bar");
     TDF_Label plate = named(tool, BRepPrimAPI_MakeBox(100.0, 60.0, 5.0).Shape(), "frame_plate");
@@ -471,13 +474,6 @@ void write_test(const std::string &kind, const std::string &file) {
     // product name (`module`), each holding a block and a sub-assembly `pair` of two
     // pegs at other placements, and a loose solid that is in no assembly.
     // tests/it/step_import.rs (several_roots) repeats these placements.
-    auto pose = [](double ax, double ay, double az, double deg, double x, double y,
-                   double z) {
-      gp_Trsf t;
-      t.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(ax, ay, az)), deg * M_PI / 180.0);
-      t.SetTranslationPart(gp_Vec(x, y, z));
-      return TopLoc_Location(t);
-    };
     TDF_Label peg = named(tool, BRepPrimAPI_MakeCylinder(4.0, 30.0).Shape(), "peg");
     TDF_Label block = named(tool, BRepPrimAPI_MakeBox(10.0, 20.0, 5.0).Shape(), "block");
     TDF_Label pair = tool->NewShape();

@@ -69,14 +69,18 @@ pub const TOLERANCE_SHARE: f64 = 0.01;
 /// part's thinnest extent (the smallest side of its box in its own frame); a part
 /// with no thickness (a sheet) keeps the CAD tolerance.
 pub fn default_tolerance(moving: &Collider) -> f64 {
-    let b = moving.bounds();
-    let thinnest = (b.hi - b.lo).min();
-    let share = TOLERANCE_SHARE * thinnest;
+    let share = TOLERANCE_SHARE * thinnest(moving);
     if share.is_finite() && share > 0.0 {
         crate::collision::DEFAULT_TOLERANCE.min(share)
     } else {
         crate::collision::DEFAULT_TOLERANCE
     }
+}
+
+/// The part's thinnest extent (mm): the smallest side of its box in its own frame.
+fn thinnest(part: &Collider) -> f64 {
+    let b = part.bounds();
+    (b.hi - b.lo).min()
 }
 
 /// Work done by a [`MeshValidator`] (for benchmarks and reports).
@@ -284,9 +288,9 @@ impl MeshValidator {
     /// least [`MIN_PIECE_REACH`] radii.
     fn piece_reach(&self) -> f64 {
         let r = self.moving.radius();
-        let b = self.moving.bounds();
-        let thinnest = (b.hi - b.lo).min();
-        (PIECE_REACH * r).min(thinnest).max(MIN_PIECE_REACH * r)
+        (PIECE_REACH * r)
+            .min(thinnest(&self.moving))
+            .max(MIN_PIECE_REACH * r)
     }
 
     /// Continuous check of `from → to` (`to` already known free) against every
@@ -420,8 +424,7 @@ impl MotionValidator for MeshValidator {
     }
 
     fn part_thickness(&self) -> Option<f64> {
-        let b = self.moving.bounds();
-        Some((b.hi - b.lo).min())
+        Some(thinnest(&self.moving))
     }
 
     /// A copy sharing the colliders (`Arc`s), with zeroed counters and no deadline.
