@@ -191,14 +191,19 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
     let mut chars = text.chars().peekable();
     let mut line = 1usize;
     let mut kept = 0usize;
-    let too_many = |line: usize| {
-        bad(
-            line,
-            format!(
-                "more than {} fields: the most a table may hold (split the file)",
-                crate::math::format::count(MAX_CSV_FIELDS as u64)
-            ),
-        )
+    // One more field counted, refused past the cap at `line` before it is kept.
+    let count = |kept: &mut usize, line: usize| {
+        *kept += 1;
+        if *kept > MAX_CSV_FIELDS {
+            return Err(bad(
+                line,
+                format!(
+                    "more than {} fields: the most a table may hold (split the file)",
+                    crate::math::format::count(MAX_CSV_FIELDS as u64)
+                ),
+            ));
+        }
+        Ok(())
     };
     while chars.peek().is_some() {
         let start = line;
@@ -219,10 +224,7 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
         loop {
             match chars.next() {
                 None => {
-                    kept += 1;
-                    if kept > MAX_CSV_FIELDS {
-                        return Err(too_many(line));
-                    }
+                    count(&mut kept, line)?;
                     fields.push((std::mem::take(&mut field), quoted));
                     break;
                 }
@@ -262,20 +264,14 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                     }
                 }
                 Some(c) if c == d => {
-                    kept += 1;
-                    if kept > MAX_CSV_FIELDS {
-                        return Err(too_many(line));
-                    }
+                    count(&mut kept, line)?;
                     fields.push((std::mem::take(&mut field), quoted));
                     quoted = false;
                     at_start = true;
                 }
                 Some('\r') if chars.peek() == Some(&'\n') => {}
                 Some('\n') => {
-                    kept += 1;
-                    if kept > MAX_CSV_FIELDS {
-                        return Err(too_many(line));
-                    }
+                    count(&mut kept, line)?;
                     line += 1;
                     fields.push((std::mem::take(&mut field), quoted));
                     break;

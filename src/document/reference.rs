@@ -29,7 +29,10 @@ pub fn coordinate_system(
     x: Vec3,
     y: Vec3,
 ) -> Result<Transform, CoordinateSystemError> {
-    let finite = |v: &Vec3| v.iter().all(|c| c.is_finite() && c.abs() <= 1e9);
+    let finite = |v: &Vec3| {
+        v.iter()
+            .all(|c| c.is_finite() && c.abs() <= super::MAX_ABS_VALUE)
+    };
     if !(finite(&origin) && finite(&x) && finite(&y)) {
         return Err(CoordinateSystemError::NotFinite);
     }

@@ -7,7 +7,7 @@ use crate::common;
 
 use common::{repo, run_bounded, short_text};
 use fitup::document::Document;
-use fitup::viewer::{read_recording, Row};
+use fitup::viewer::{content_security_policy, read_recording, Row, Session, SessionOptions};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -260,4 +260,66 @@ fn a_file_that_is_not_a_recording_is_a_clear_error() {
     let o = run_bounded(dir.path(), &["view", "x.rrd"], BOUND);
     assert_eq!(o.status.code(), Some(1));
     assert!(short_text(&o).contains("x.rrd"), "{}", short_text(&o));
+}
+
+/// One GET on the session's web server: the response head and body.
+fn get(port: u16, path: &str) -> (String, Vec<u8>) {
+    use std::io::{Read, Write};
+    let mut c = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
+    c.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    write!(c, "GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n").unwrap();
+    let mut all = Vec::new();
+    c.read_to_end(&mut all).unwrap();
+    let split = all.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    (
+        String::from_utf8_lossy(&all[..split]).into_owned(),
+        all[split + 4..].to_vec(),
+    )
+}
+
+/// The served page and the wasm carry a local-only policy that names the session's own
+/// gRPC port, and nothing outside the web viewer's files is served.
+#[test]
+fn the_page_and_the_wasm_carry_a_local_only_policy() {
+    let session = Session::start(SessionOptions {
+        serve: true,
+        ..SessionOptions::default()
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
+    let url = session.url().expect("a serving session has an address");
+    let port = |text: Option<&str>| -> u16 {
+        text.and_then(|p| p.parse().ok())
+            .unwrap_or_else(|| panic!("no port in {url}"))
+    };
+    let rest = url.strip_prefix("http://127.0.0.1:").unwrap_or(url);
+    let (web, page) = rest.split_at(rest.find('/').unwrap_or(rest.len()));
+    let web = port(Some(web));
+    let grpc = port(
+        url.rsplit("127.0.0.1%3A")
+            .next()
+            .and_then(|p| p.strip_suffix("%2Fproxy")),
+    );
+    let (head, body) = get(web, page);
+    assert!(head.starts_with("HTTP/1.1 200"), "{head}");
+    assert!(
+        head.contains(&format!(
+            "Content-Security-Policy: {}",
+            content_security_policy(grpc)
+        )),
+        "{head}"
+    );
+    assert!(
+        head.contains("Content-Security-Policy: default-src 'self'"),
+        "{head}"
+    );
+    assert!(
+        head.contains(&format!("connect-src 'self' http://127.0.0.1:{grpc} ")),
+        "{head}"
+    );
+    assert!(String::from_utf8_lossy(&body).contains("re_viewer"));
+    let (head, body) = get(web, "/re_viewer_bg.wasm");
+    assert!(head.contains("application/wasm"), "{head}");
+    assert_eq!(&body[..4], b"\0asm");
+    let (head, _) = get(web, "/../etc/passwd");
+    assert!(head.starts_with("HTTP/1.1 404"), "{head}");
 }
