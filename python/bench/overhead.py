@@ -5,6 +5,9 @@ Run from the repository root, in the virtualenv holding the module:
 
     python python/bench/overhead.py            # runs the Rust bench first
     python python/bench/overhead.py --no-rust  # Python and Rhai only
+    python python/bench/overhead.py --bench-bin PATH  # that bench binary, not cargo's
+
+`FITUP_CALLS=ik_ur5e,floor` runs only the calls named (here and in the Rust bench).
 
 The Rust and Rhai columns come from `cargo bench --profile dev --bench call_overhead`
 (tests/bench/call_overhead.rs), started by this script, the dev profile being the one
@@ -15,9 +18,10 @@ MZ07, and a UR5e of the published D-H lengths without limits), an
 interference check of one pair of the demo cell (`Document.interferes`), a short plan
 (screw5 lifted 40 mm, RRT-Connect, seed 3), the floor (a trivial call: `Robot.dof`,
 Rhai's `q.len()`), and the batch forms per pose (`fk_batch`, `ik_batch`, 20 000
-poses). Medians of 7 rounds, process CPU time (`time.process_time`, as the Rust
-bench); Rhai figures minus the same loop binding the loop counter, as in the Rust
-bench.
+poses). Medians of 7 rounds of CPU time: the calling thread's for Python
+(`time.thread_time_ns`, as the Rust bench), the process's for `run_script` (the script
+runs on a thread of its own); Rhai figures minus the same loop binding the loop
+counter, as in the Rust bench.
 """
 
 import os
@@ -85,22 +89,29 @@ def loadavg():
     return pathlib.Path("/proc/loadavg").read_text().split()[:3]
 
 
+ONLY = os.environ.get("FITUP_CALLS")
+
+
+def wanted(name):
+    return ONLY is None or name in ONLY.split(",")
+
+
 def median_ns(f, n):
     out = []
     for _ in range(ROUNDS):
-        t0 = time.process_time()
+        t0 = time.thread_time_ns()
         for _ in range(n):
             f()
-        out.append((time.process_time() - t0) / n * 1e9)
+        out.append((time.thread_time_ns() - t0) / n)
     return statistics.median(out)
 
 
 def median_batch_ns(f, n):
     out = []
     for _ in range(ROUNDS):
-        t0 = time.process_time()
+        t0 = time.thread_time_ns()
         f()
-        out.append((time.process_time() - t0) / n * 1e9)
+        out.append((time.thread_time_ns() - t0) / n)
     return statistics.median(out)
 
 
@@ -121,6 +132,8 @@ def rhai_ns(project, call, n):
 def rust_rows():
     """`CALL name rust rhai` lines of the Rust bench, by name."""
     cmd = ["cargo", "bench", "--profile", "dev", "--bench", "call_overhead"]
+    if "--bench-bin" in sys.argv:
+        cmd = [sys.argv[sys.argv.index("--bench-bin") + 1]]
     print("$", " ".join(cmd), " # load", *loadavg(), flush=True)
     out = subprocess.run(cmd, cwd=REPO, check=True, capture_output=True, text=True).stdout
     rows = {}
@@ -147,29 +160,32 @@ def main():
     uq = np.radians(UR5E_Q)
     tu = ur.fk(uq)
     assert len(ur.ik(tu, uq)) > 1
-    py = {
-        "fk": median_ns(lambda: arm.fk(q), N_KINEMATICS),
-        "ik_all": median_ns(lambda: arm.ik(t, q), N_KINEMATICS),
-        "ik_ur5e": median_ns(lambda: ur.ik(tu, uq), N_KINEMATICS),
-        "floor": median_ns(lambda: arm.dof, N_KINEMATICS),
-        "interferes": median_ns(lambda: cell.interferes("screw4", "screw5"), N_CHECK),
-        "plan_short": median_ns(
-            lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3), N_PLAN
+    calls = {
+        "fk": (lambda: arm.fk(q), N_KINEMATICS),
+        "ik_all": (lambda: arm.ik(t, q), N_KINEMATICS),
+        "ik_ur5e": (lambda: ur.ik(tu, uq), N_KINEMATICS),
+        "floor": (lambda: arm.dof, N_KINEMATICS),
+        "interferes": (lambda: cell.interferes("screw4", "screw5"), N_CHECK),
+        "plan_short": (
+            lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3),
+            N_PLAN,
         ),
     }
+    py = {k: median_ns(f, n) for k, (f, n) in calls.items() if wanted(k)}
     qs = np.tile(q, (N_KINEMATICS, 1))
     ts = np.tile(t, (N_KINEMATICS, 1, 1))
-    batch = {
-        "fk": median_batch_ns(lambda: arm.fk_batch(qs), N_KINEMATICS),
-        "ik_all": median_batch_ns(lambda: arm.ik_batch(ts, q), N_KINEMATICS),
+    batches = {
+        "fk": lambda: arm.fk_batch(qs),
+        "ik_all": lambda: arm.ik_batch(ts, q),
     }
+    batch = {k: median_batch_ns(f, N_KINEMATICS) for k, f in batches.items() if wanted(k)}
     with tempfile.TemporaryDirectory() as d:
         p = pathlib.Path(d)
         (p / "fitup.toml").write_text("")
         (p / "scripts").mkdir()
         shutil.copytree(REPO / "models", p / "models")
         (p / "models" / "ur5e.yaml").write_text(UR5E_YAML)
-        rh = {k: rhai_ns(p, call, n) for k, (call, n) in RHAI.items()}
+        rh = {k: rhai_ns(p, call, n) for k, (call, n) in RHAI.items() if wanted(k)}
     print("done, load", *loadavg())
     print()
     print(
