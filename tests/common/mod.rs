@@ -62,6 +62,15 @@ pub const MZ07_SIMULATOR: [&str; 5] = [
     "mz07",
 ];
 
+/// A segment check for `fitup::skills::generate` that finds nothing in the way.
+pub fn no_check(
+    _: &fitup::sequence::Task,
+    _: &fitup::math::Transform,
+    _: &fitup::math::Transform,
+) -> Result<(), fitup::skills::SegmentHit> {
+    Ok(())
+}
+
 /// Skill `i` of the test plans: `Move_Table` of the part `gear`, ending in `end_state`,
 /// doing `commands`.
 pub fn gear_step(

@@ -743,7 +743,7 @@ fn cache_prune_hashes_a_source_once_and_never_outside() {
         std::thread::sleep(Duration::from_millis(2));
     };
     let text = String::from_utf8_lossy(&out.join().unwrap()).into_owned()
-        + &String::from_utf8_lossy(&err.join().unwrap());
+        + &*String::from_utf8_lossy(&err.join().unwrap());
     eprintln!(
         "prune --dry-run: read at least {most} bytes; {}",
         text.lines().last().unwrap_or("")
