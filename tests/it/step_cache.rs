@@ -48,7 +48,6 @@ mod with_occt {
     use common::run_ok as run;
     use common::stored_tessellations as stored;
     use fitup::mesh::step::write_test_step;
-    use std::path::Path;
 
     /// A user changes a part's `deflection:`, then deletes the STEP file: each time
     /// `fitup cache prune` removes what no document can use, and the tessellation in
