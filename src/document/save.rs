@@ -343,7 +343,7 @@ impl Document {
                         cap: FileKind::Document.max_bytes() >> 20,
                         what: FileKind::Document.name(),
                     })),
-                    Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.to_string()))),
+                    Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.into()))),
                 }
             }
             Ok(Some(crate::fsutil::Kind::Symlink)) => {
@@ -355,7 +355,7 @@ impl Document {
             Ok(Some(crate::fsutil::Kind::Special(what))) => {
                 Some(Err(crate::fsutil::ReadError::NotRegular(what)))
             }
-            Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.to_string()))),
+            Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.into()))),
         };
         match on_disk {
             None => {}
