@@ -30,46 +30,116 @@ use std::path::{Path, PathBuf};
 #[non_exhaustive]
 pub enum DataError {
     /// The path is outside the project or unusable.
-    #[error("`{path}`: {message}")]
+    #[error("`{path}`: {cause}")]
     Path {
         /// The path as given.
         path: String,
         /// Why.
-        message: String,
+        #[source]
+        cause: crate::project::PathError,
     },
     /// The file cannot be read (missing, a folder, too large, not UTF-8).
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {cause}", path.display())]
     Read {
         /// The file.
         path: PathBuf,
         /// Why.
-        message: String,
+        #[source]
+        cause: ReadError,
     },
     /// The content is malformed at `line` (1-based; 0 when unknown).
-    #[error("{}:{line}: {message}", path.display())]
+    #[error("{}:{line}: {cause}", path.display())]
     Parse {
         /// The file (empty for text parsed from memory).
         path: PathBuf,
         /// The line, 1-based.
         line: usize,
-        /// Why.
-        message: String,
+        /// What is wrong there.
+        #[source]
+        cause: DataProblem,
     },
-    /// Bad options.
-    #[error("{0}")]
-    Options(String),
+    /// A CSV delimiter that cannot separate fields (a double quote or a line break).
+    #[error("`delimiter` cannot be {0:?}")]
+    Delimiter(char),
 }
 
 impl DataError {
     fn at(self, file: &Path) -> Self {
         match self {
-            DataError::Parse { line, message, .. } => DataError::Parse {
+            DataError::Parse { line, cause, .. } => DataError::Parse {
                 path: file.to_path_buf(),
                 line,
-                message,
+                cause,
             },
             e => e,
         }
+    }
+}
+
+/// What is wrong at a line of a CSV or JSON text (the cause of a [`DataError::Parse`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DataProblem {
+    /// The table passed [`MAX_CSV_FIELDS`] at this line.
+    #[error("more than {} fields: the most a table may hold (split the file)", crate::math::format::count(*.max as u64))]
+    TooManyFields {
+        /// The cap.
+        max: usize,
+    },
+    /// A quoted field opened at this line is never closed.
+    #[error("a quoted field is never closed (a `\"` without its closing `\"`)")]
+    UnclosedQuote,
+    /// Something other than the delimiter or the line end after a closing quote.
+    #[error("{found:?} after a closing quote: a quoted field ends at the delimiter {delimiter:?} or the line end")]
+    AfterClosingQuote {
+        /// The character found.
+        found: char,
+        /// The table's delimiter.
+        delimiter: char,
+    },
+    /// A double quote inside a field that does not start with one.
+    #[error("a `\"` inside an unquoted field: quote the whole field and double the inner quotes")]
+    QuoteInField,
+    /// The header names a column twice.
+    #[error("the header names column `{column}` twice")]
+    DuplicateColumn {
+        /// The column's name.
+        column: String,
+    },
+    /// A row whose field count differs from the header's.
+    #[error("{fields} fields, but the header has {columns} columns")]
+    FieldCount {
+        /// The row's fields.
+        fields: usize,
+        /// The header's columns.
+        columns: usize,
+    },
+    /// JSON that does not parse, or passes [`MAX_JSON_VALUES`] values.
+    #[error("column {}: {source}", .source.column())]
+    Json {
+        /// The parser's error (its line is the [`DataError::Parse`]'s).
+        #[source]
+        source: JsonError,
+    },
+}
+
+/// A JSON parser's error kept shareable (a [`DataError`] is `Clone`); two compare
+/// equal when their line, column and message do.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(transparent)]
+pub struct JsonError(std::sync::Arc<serde_json::Error>);
+
+impl JsonError {
+    /// The 1-based column.
+    pub fn column(&self) -> usize {
+        self.0.column()
+    }
+}
+
+impl PartialEq for JsonError {
+    fn eq(&self, other: &Self) -> bool {
+        (self.0.line(), self.0.column(), self.0.to_string())
+            == (other.0.line(), other.0.column(), other.0.to_string())
     }
 }
 
@@ -176,13 +246,13 @@ pub const MAX_CSV_FIELDS: usize = 4_000_000;
 pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
     let d = options.delimiter;
     if d == '"' || d == '\n' || d == '\r' {
-        return Err(DataError::Options(format!("`delimiter` cannot be {d:?}")));
+        return Err(DataError::Delimiter(d));
     }
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let bad = |line: usize, message: String| DataError::Parse {
+    let bad = |line: usize, cause: DataProblem| DataError::Parse {
         path: PathBuf::new(),
         line,
-        message,
+        cause,
     };
     // Rows are typed as they end (never all kept as raw fields first): the header
     // (when the options say there is one) is the first row that is not empty.
@@ -197,10 +267,9 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
         if *kept > MAX_CSV_FIELDS {
             return Err(bad(
                 line,
-                format!(
-                    "more than {} fields: the most a table may hold (split the file)",
-                    crate::math::format::count(MAX_CSV_FIELDS as u64)
-                ),
+                DataProblem::TooManyFields {
+                    max: MAX_CSV_FIELDS,
+                },
             ));
         }
         Ok(())
@@ -234,11 +303,7 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                     let opened = line;
                     loop {
                         match chars.next() {
-                            None => return Err(bad(
-                                opened,
-                                "a quoted field is never closed (a `\"` without its closing `\"`)"
-                                    .into(),
-                            )),
+                            None => return Err(bad(opened, DataProblem::UnclosedQuote)),
                             Some('"') if chars.peek() == Some(&'"') => {
                                 chars.next();
                                 field.push('"');
@@ -258,7 +323,10 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                         Some(&c) => {
                             return Err(bad(
                                 line,
-                                format!("{c:?} after a closing quote: a quoted field ends at the delimiter {d:?} or the line end"),
+                                DataProblem::AfterClosingQuote {
+                                    found: c,
+                                    delimiter: d,
+                                },
                             ))
                         }
                     }
@@ -278,10 +346,7 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                 }
                 Some(c) => {
                     if c == '"' {
-                        return Err(bad(
-                            line,
-                            "a `\"` inside an unquoted field: quote the whole field and double the inner quotes".into(),
-                        ));
+                        return Err(bad(line, DataProblem::QuoteInField));
                     }
                     at_start = false;
                     field.push(c);
@@ -301,7 +366,12 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
                 .collect();
             for (i, name) in table.columns.iter().enumerate() {
                 if table.columns[..i].contains(name) {
-                    return Err(bad(1, format!("the header names column `{name}` twice")));
+                    return Err(bad(
+                        1,
+                        DataProblem::DuplicateColumn {
+                            column: name.clone(),
+                        },
+                    ));
                 }
             }
             continue;
@@ -309,11 +379,10 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
         if options.header && fields.len() != table.columns.len() {
             return Err(bad(
                 start,
-                format!(
-                    "{} fields, but the header has {} columns",
-                    fields.len(),
-                    table.columns.len()
-                ),
+                DataProblem::FieldCount {
+                    fields: fields.len(),
+                    columns: table.columns.len(),
+                },
             ));
         }
         table.rows.push(
@@ -329,9 +398,9 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
 
 /// Reads a text file inside the project: the resolved path and its text.
 pub fn read_text(project: &Project, path: &str) -> Result<(PathBuf, String), DataError> {
-    let full = project.resolve(path).map_err(|e| DataError::Path {
+    let full = project.resolve(path).map_err(|cause| DataError::Path {
         path: path.to_string(),
-        message: e.to_string(),
+        cause,
     })?;
     // Read through the project's held root: a folder swapped for a link after the
     // path check is refused, never followed outside.
@@ -340,9 +409,9 @@ pub fn read_text(project: &Project, path: &str) -> Result<(PathBuf, String), Dat
         .and_then(|b| {
             String::from_utf8(b).map_err(|e| ReadError::NotText(e.utf8_error().valid_up_to()))
         })
-        .map_err(|e| DataError::Read {
+        .map_err(|cause| DataError::Read {
             path: PathBuf::from(path),
-            message: e.to_string(),
+            cause,
         })?;
     let text = match text.strip_prefix('\u{feff}') {
         Some(t) => t.to_string(),
@@ -447,7 +516,9 @@ pub fn parse_json(text: &str) -> Result<serde_json::Value, DataError> {
     let located = |e: serde_json::Error| DataError::Parse {
         path: PathBuf::new(),
         line: e.line(),
-        message: format!("column {}: {e}", e.column()),
+        cause: DataProblem::Json {
+            source: JsonError(std::sync::Arc::new(e)),
+        },
     };
     let count = std::cell::Cell::new(0);
     let mut d = serde_json::Deserializer::from_str(text);

@@ -133,13 +133,52 @@ impl FileKind {
     }
 }
 
+/// An operating-system error kept shareable (the errors that carry one are `Clone`);
+/// two compare equal when their kinds and messages do.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(transparent)]
+pub struct IoCause(std::sync::Arc<std::io::Error>);
+
+impl IoCause {
+    /// The kind of the operating system's error.
+    pub fn kind(&self) -> std::io::ErrorKind {
+        self.0.kind()
+    }
+}
+
+impl From<std::io::Error> for IoCause {
+    fn from(e: std::io::Error) -> Self {
+        IoCause(std::sync::Arc::new(e))
+    }
+}
+
+impl PartialEq for IoCause {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.kind() == other.0.kind() && self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl Eq for IoCause {}
+
 /// Why a file could not be read.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ReadError {
     /// The operating system refused (missing file, permissions, …).
     #[error("cannot read: {0}")]
-    Io(String),
+    Io(#[source] IoCause),
+    /// A path inside the project whose folder cannot be resolved.
+    #[error("cannot read: {}: cannot resolve its folder", .0.display())]
+    FolderUnresolvable(std::path::PathBuf),
+    /// A path inside the project as written that a symbolic link on the way leads out
+    /// of it.
+    #[error("cannot read: {}: a symbolic link on the way leads outside the project folder {}: not followed", .path.display(), .root.display())]
+    LinkOutside {
+        /// The path as given.
+        path: std::path::PathBuf,
+        /// The project folder.
+        root: std::path::PathBuf,
+    },
     /// A folder, device, FIFO or socket: only regular files are read, because reading
     /// `/dev/zero` never ends and opening a FIFO waits for a writer forever.
     #[error("not a regular file (it is {0}): fitup reads only regular files")]
@@ -191,14 +230,14 @@ pub fn read_file(path: &Path, kind: FileKind) -> Result<Vec<u8>, ReadError> {
         cap: cap >> 20,
         what: kind.name(),
     };
-    let md = std::fs::metadata(path).map_err(|e| ReadError::Io(e.to_string()))?;
+    let md = std::fs::metadata(path).map_err(|e| ReadError::Io(e.into()))?;
     if !md.is_file() {
         return Err(ReadError::NotRegular(file_type_name(&md)));
     }
     if md.len() > cap {
         return Err(too_large(md.len()));
     }
-    let file = std::fs::File::open(path).map_err(|e| ReadError::Io(e.to_string()))?;
+    let file = std::fs::File::open(path).map_err(|e| ReadError::Io(e.into()))?;
     // The path may have been replaced between the check and the open.
     read_opened(file, kind)
 }
@@ -214,7 +253,7 @@ pub fn read_opened(file: std::fs::File, kind: FileKind) -> Result<Vec<u8>, ReadE
         cap: cap >> 20,
         what: kind.name(),
     };
-    let md = file.metadata().map_err(|e| ReadError::Io(e.to_string()))?;
+    let md = file.metadata().map_err(|e| ReadError::Io(e.into()))?;
     if !md.is_file() {
         return Err(ReadError::NotRegular(file_type_name(&md)));
     }
@@ -224,7 +263,7 @@ pub fn read_opened(file: std::fs::File, kind: FileKind) -> Result<Vec<u8>, ReadE
     let mut bytes = Vec::with_capacity(md.len().min(cap) as usize);
     file.take(cap + 1)
         .read_to_end(&mut bytes)
-        .map_err(|e| ReadError::Io(e.to_string()))?;
+        .map_err(|e| ReadError::Io(e.into()))?;
     if bytes.len() as u64 > cap {
         return Err(too_large(bytes.len() as u64));
     }
@@ -329,11 +368,14 @@ pub enum OutputError {
     NotOurs,
     /// The operating system refused (permissions, a full disk, …).
     #[error("cannot write: {0}")]
-    Io(String),
+    Io(#[source] IoCause),
+    /// The path ends in `..` or is a root: no file name.
+    #[error("cannot write: {}: not a file name", .0.display())]
+    NotAFileName(std::path::PathBuf),
 }
 
 fn io_err(e: std::io::Error) -> OutputError {
-    OutputError::Io(e.to_string())
+    OutputError::Io(e.into())
 }
 
 /// The one rule for every file a run writes (CSV logs and exports, plans, key poses,
@@ -371,7 +413,7 @@ pub fn check_output(path: &Path, rule: &OutputRule) -> Result<(), OutputError> {
 fn open_parent(path: &Path) -> Result<(Dir, std::ffi::OsString), OutputError> {
     let name = path
         .file_name()
-        .ok_or_else(|| OutputError::Io(format!("{}: not a file name", path.display())))?
+        .ok_or_else(|| OutputError::NotAFileName(path.to_path_buf()))?
         .to_os_string();
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,

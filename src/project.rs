@@ -48,13 +48,35 @@ pub enum PathError {
         cause: crate::fsutil::OutputError,
     },
     /// The path cannot be resolved (an unreadable folder, …).
-    #[error("`{path}` cannot be resolved: {message}")]
+    #[error("`{path}` cannot be resolved: {cause}")]
     Unresolvable {
         /// The path as written.
         path: String,
         /// Why.
-        message: String,
+        #[source]
+        cause: Unresolved,
     },
+}
+
+/// Why a path cannot be resolved (the cause of a [`PathError::Unresolvable`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Unresolved {
+    /// No folder on the way exists (not even a root).
+    #[error("no such folder")]
+    NoSuchFolder,
+    /// The path ends in `..` or is a root: no file name.
+    #[error("not a file name")]
+    NotAFileName,
+    /// The operating system could not resolve the existing part of the path.
+    #[error(transparent)]
+    Io(crate::fsutil::IoCause),
+    /// Its folder could not be made.
+    #[error("cannot create its folder: {0}")]
+    CreateFolder(#[source] crate::fsutil::IoCause),
+    /// Its folder could not be opened.
+    #[error("cannot open its folder: {0}")]
+    OpenFolder(#[source] crate::fsutil::IoCause),
 }
 
 /// The folder a run may read and write in. Relative paths are resolved against it;
@@ -126,7 +148,7 @@ impl Project {
     ) -> Result<Vec<u8>, crate::fsutil::ReadError> {
         let f = self
             .open_file(path)
-            .map_err(|e| crate::fsutil::ReadError::Io(e.to_string()))?;
+            .map_err(|e| crate::fsutil::ReadError::Io(e.into()))?;
         crate::fsutil::read_opened(f, kind)
     }
 
@@ -157,7 +179,8 @@ impl Project {
         let lexical = lexical_absolute(path).filter(|p| p.starts_with(&self.root));
         if let Some(full) = &lexical {
             match self.read_text(full, kind) {
-                Err(crate::fsutil::ReadError::Io(m)) if m.contains("symbolic link") => {}
+                Err(crate::fsutil::ReadError::Io(e)) if e.to_string().contains("symbolic link") => {
+                }
                 other => return other,
             }
         }
@@ -168,21 +191,19 @@ impl Project {
         let full = match (parent.canonicalize(), path.file_name()) {
             (Ok(dir), Some(name)) => dir.join(name),
             _ if lexical.is_some() => {
-                return Err(crate::fsutil::ReadError::Io(format!(
-                    "{}: cannot resolve its folder",
-                    path.display()
-                )))
+                return Err(crate::fsutil::ReadError::FolderUnresolvable(
+                    path.to_path_buf(),
+                ))
             }
             _ => return crate::fsutil::read_text(path, kind),
         };
         if full.starts_with(&self.root) {
             self.read_text(&full, kind)
         } else if lexical.is_some() {
-            Err(crate::fsutil::ReadError::Io(format!(
-                "{}: a symbolic link on the way leads outside the project folder {}: not followed",
-                path.display(),
-                self.root.display()
-            )))
+            Err(crate::fsutil::ReadError::LinkOutside {
+                path: path.to_path_buf(),
+                root: self.root.clone(),
+            })
         } else {
             crate::fsutil::read_text(path, kind)
         }
@@ -335,7 +356,7 @@ impl Project {
                     }
                     return Err(PathError::Unresolvable {
                         path: path.to_string(),
-                        message: "no such folder".into(),
+                        cause: Unresolved::NoSuchFolder,
                     });
                 }
             }
@@ -348,7 +369,7 @@ impl Project {
                     Ok(_) => outside(),
                     Err(_) => PathError::Unresolvable {
                         path: path.to_string(),
-                        message: e.to_string(),
+                        cause: Unresolved::Io(e.into()),
                     },
                 })?;
         for name in rest.iter().rev() {
@@ -377,7 +398,7 @@ impl Project {
             self.folder(parent, true)
                 .map_err(|e| PathError::Unresolvable {
                     path: path.to_string(),
-                    message: format!("cannot create its folder: {e}"),
+                    cause: Unresolved::CreateFolder(e.into()),
                 })?;
         }
         Ok(full)
@@ -450,14 +471,14 @@ impl Project {
         let (Some(parent), Some(_)) = (full.parent(), full.file_name()) else {
             return Err(PathError::Unresolvable {
                 path: path.to_string(),
-                message: "not a file name".into(),
+                cause: Unresolved::NotAFileName,
             });
         };
         let dir = self
             .folder(parent, true)
             .map_err(|e| PathError::Unresolvable {
                 path: path.to_string(),
-                message: format!("cannot open its folder: {e}"),
+                cause: Unresolved::OpenFolder(e.into()),
             })?;
         Ok((full, dir))
     }

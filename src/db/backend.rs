@@ -80,9 +80,10 @@ impl<T: Into<SqlValue>> From<Option<T>> for SqlValue {
     }
 }
 
-/// What went wrong at the back end, before the database's name is attached.
+/// How fitup classes what a database driver answered (the kind of a [`DriverError`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Kind {
+#[non_exhaustive]
+pub enum DriverErrorKind {
     /// Another writer holds the lock (SQLite busy/locked, PostgreSQL serialization
     /// failure or deadlock): worth retrying.
     Busy,
@@ -92,21 +93,30 @@ pub(crate) enum Kind {
     Full,
     /// A write inside a read-only query (PostgreSQL's read-only transaction; SQLite's
     /// jail refuses before running).
-    #[cfg_attr(not(feature = "postgres"), allow(dead_code))]
     WriteRefused,
     /// Anything else.
     Other,
 }
 
-/// A back-end error: its kind and the driver's message.
-#[derive(Debug, Clone)]
-pub(crate) struct Raw {
-    pub kind: Kind,
+pub(crate) use DriverErrorKind as Kind;
+
+/// What the back end (SQLite or PostgreSQL) answered, before the database's name is
+/// attached: fitup's class of it and the driver's own words (a PostgreSQL message is
+/// scrubbed of credentials where it names the server). The cause (`#[source]`) of a
+/// [`DbError`](super::DbError) that the driver reported.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{message}")]
+pub struct DriverError {
+    /// How fitup classes it.
+    pub kind: DriverErrorKind,
+    /// The driver's message.
     pub message: String,
 }
 
+pub(crate) use DriverError as Raw;
+
 impl Raw {
-    pub fn other(message: impl Into<String>) -> Self {
+    pub(crate) fn other(message: impl Into<String>) -> Self {
         Raw {
             kind: Kind::Other,
             message: message.into(),

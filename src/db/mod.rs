@@ -34,6 +34,7 @@
 
 mod backend;
 pub mod diff;
+mod error;
 mod functions;
 mod held;
 #[cfg(feature = "postgres")]
@@ -46,10 +47,15 @@ mod skill_log;
 pub use skill_log::{SkillEvent, SkillLogEntry};
 
 pub use backend::{Dialect, SqlValue};
+pub use error::{
+    DbError, DriverError, DriverErrorKind, FolderError, ForeignFile, OpenCause, ReadOnlyCause,
+    Refusal,
+};
 pub use query::{QueryLimits, RunQueryBudget, RUN_QUERY_BUDGET, SQLITE_HEAP_LIMIT};
 pub use records::*;
 pub use schema::LATEST as SCHEMA_VERSION;
 
+use crate::fsutil::IoCause;
 use backend::{Kind, Raw, SqliteTx, Tx};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -204,152 +210,11 @@ fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// Why a database operation failed. Every variant names the database.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum DbError {
-    /// The database was written by a newer fitup.
-    #[error("{target} was written by a newer fitup (schema version {found}; this fitup {ours} knows versions up to {supported}): upgrade fitup to use it")]
-    NewerSchema {
-        /// The database.
-        target: Target,
-        /// Its schema version.
-        found: u32,
-        /// The newest version this build knows.
-        supported: u32,
-        /// This build's version.
-        ours: &'static str,
-    },
-    /// The database cannot be opened or reached.
-    #[error("cannot open the database {target}: {cause}")]
-    Open {
-        /// The database.
-        target: Target,
-        /// The driver's message.
-        cause: String,
-    },
-    /// The file, its folder or the server refuses writes.
-    #[error("the database {target} is read-only: {cause}")]
-    ReadOnly {
-        /// The database.
-        target: Target,
-        /// The driver's message.
-        cause: String,
-    },
-    /// An existing file that is not a fitup results database (another program's
-    /// SQLite database, a CSV named `x.db`): it is not opened, so nothing turns it
-    /// into one.
-    #[error("{target} is not a fitup results database: {cause}; it was left as it is (name a new file, or the project's own database)")]
-    Foreign {
-        /// The database file.
-        target: Target,
-        /// What it is instead.
-        cause: String,
-    },
-    /// The disk is full; the result was not stored (earlier results are intact).
-    #[error("the disk holding {target} is full; the result was not stored: {cause}")]
-    DiskFull {
-        /// The database.
-        target: Target,
-        /// The driver's message.
-        cause: String,
-    },
-    /// Other writers held the database for too long.
-    #[error("the database {target} stayed busy (other writers) through {tries} tries: {cause}")]
-    Busy {
-        /// The database.
-        target: Target,
-        /// Attempts made.
-        tries: u32,
-        /// The driver's last message.
-        cause: String,
-    },
-    /// A read-only query tried to change the database, or to reach outside it
-    /// (ATTACH, a setting, a file or server function).
-    #[error("db.query is read-only and reads this database only: {cause}")]
-    WriteRefused {
-        /// What was refused.
-        cause: String,
-    },
-    /// A query ran past its time limit and was stopped.
-    #[error("query stopped after {} s (the time limit of db.query on {target}; a script may raise it up to {} s with #{{max_seconds: …}})", .limit.as_secs_f64(), QueryLimits::MAX.time.as_secs())]
-    QueryTimeout {
-        /// The database.
-        target: Target,
-        /// The limit that passed.
-        limit: Duration,
-    },
-    /// A query's result passed the row or byte cap; nothing of it is returned.
-    #[error("the query on {target} returned more than {} rows or {} (the result limit of db.query; a script may raise it up to {} rows and {} with #{{max_rows: …, max_bytes: …}}, or ask for fewer rows with LIMIT)", query::thousands(*.max_rows as u64), query::bytes(*.max_bytes), query::thousands(QueryLimits::MAX.max_rows as u64), query::bytes(QueryLimits::MAX.max_bytes))]
-    QueryTooLarge {
-        /// The database.
-        target: Target,
-        /// The row cap.
-        max_rows: usize,
-        /// The byte cap.
-        max_bytes: usize,
-    },
-    /// The run's queries used up their shared time budget ([`RunQueryBudget`]).
-    #[error("the queries of this run have used their time budget of {} s (db.query's run budget: {} s, or the largest max_seconds a query of the run asked for; docs/database.md)", .budget.as_secs_f64(), query::RUN_QUERY_BUDGET.as_secs())]
-    QueryBudget {
-        /// The budget that was used up.
-        budget: Duration,
-    },
-    /// The run was cancelled (a newer save in watch mode) while a query ran.
-    #[error("query on {target} cancelled")]
-    QueryCancelled {
-        /// The database.
-        target: Target,
-    },
-    /// A query limit asked for by a script is out of range.
-    #[error(
-        "the query limit {name} = {value} is out of range: it must be positive and at most {max}"
-    )]
-    QueryLimit {
-        /// `max_seconds`, `max_rows` or `max_bytes`.
-        name: &'static str,
-        /// What was asked for.
-        value: String,
-        /// The hard maximum.
-        max: String,
-    },
-    /// No record with that id.
-    #[error("no {what} with id {id} in {target}")]
-    NotFound {
-        /// "run", "path", …
-        what: &'static str,
-        /// The id asked for.
-        id: i64,
-        /// The database.
-        target: Target,
-    },
-    /// A value that cannot be stored (a non-finite number, …).
-    #[error("cannot store {what}: {cause}")]
-    Invalid {
-        /// What was being stored.
-        what: String,
-        /// Why not.
-        cause: String,
-    },
-    /// Any other SQL error.
-    #[error("database {target}: {cause}")]
-    Sql {
-        /// The database.
-        target: Target,
-        /// The driver's message.
-        cause: String,
-    },
-}
-
 enum Conn {
     Sqlite(rusqlite::Connection),
     #[cfg(feature = "postgres")]
     Postgres(Box<postgres::Client>),
 }
-
-/// What a `postgres://` target answers in a build without the `postgres` feature.
-#[cfg(not(feature = "postgres"))]
-const NO_POSTGRES: &str = "this fitup was built without PostgreSQL support: rebuild with `cargo install --path . --features postgres`";
 
 /// An open results database (SQLite file or PostgreSQL server), migrated to
 /// [`SCHEMA_VERSION`].
@@ -402,31 +267,25 @@ impl Database {
         project: Option<&crate::project::Project>,
     ) -> Result<Self, DbError> {
         let name = target.clone();
-        let open_err = |cause: String| DbError::Open {
+        let open_err = |cause: OpenCause| DbError::Open {
             target: name.clone(),
             cause,
         };
         let mut held_file = None;
         let conn = match target {
             Target::Sqlite(path) => {
-                let held = hold_folder(path, project).map_err(|e| open_err(e.to_string()))?;
+                let held = hold_folder(path, project).map_err(|e| open_err(e.into()))?;
                 let (dir, file) = (held.dir(), held.name());
-                let kind = dir.stat(file).map_err(|e| open_err(e.to_string()))?;
+                let kind = dir
+                    .stat(file)
+                    .map_err(|e| open_err(IoCause::from(e).into()))?;
                 let existing = match kind {
                     None => false,
                     Some(crate::fsutil::Kind::File(len)) => len > 0,
-                    Some(crate::fsutil::Kind::Dir) => {
-                        return Err(open_err("it is a folder, not a database file".into()))
-                    }
-                    Some(crate::fsutil::Kind::Symlink) => {
-                        return Err(open_err(
-                            "it is a symbolic link (it was not one when its path was checked): not followed".into(),
-                        ))
-                    }
+                    Some(crate::fsutil::Kind::Dir) => return Err(open_err(OpenCause::IsFolder)),
+                    Some(crate::fsutil::Kind::Symlink) => return Err(open_err(OpenCause::Symlink)),
                     Some(crate::fsutil::Kind::Special(what)) => {
-                        return Err(open_err(format!(
-                            "it is {what}, not a database file"
-                        )))
+                        return Err(open_err(OpenCause::Special(what)))
                     }
                 };
                 let read_only = || dir.open_file_rw(file).is_err();
@@ -437,15 +296,17 @@ impl Database {
                     if existing && read_only() {
                         DbError::ReadOnly {
                             target: name.clone(),
-                            cause: format!("the file is not writable ({e})"),
+                            cause: ReadOnlyCause::FileNotWritable {
+                                driver: Some(Raw::from(e)),
+                            },
                         }
                     } else {
-                        open_err(e.to_string())
+                        open_err(OpenCause::Driver(Raw::from(e)))
                     }
                 };
-                let foreign = |cause: &str| DbError::Foreign {
+                let foreign = |cause: ForeignFile| DbError::Foreign {
                     target: name.clone(),
-                    cause: cause.into(),
+                    cause,
                 };
                 // An existing file must already be SQLite before SQLite may touch it
                 // (opening in WAL mode rewrites its header).
@@ -456,11 +317,9 @@ impl Database {
                             use std::io::Read;
                             f.take(16).read_to_end(&mut head)
                         })
-                        .map_err(|e| open_err(e.to_string()))?;
+                        .map_err(|e| open_err(IoCause::from(e).into()))?;
                     if !head.starts_with(crate::fsutil::SQLITE_MAGIC) {
-                        return Err(foreign(
-                            "it is not a SQLite file (its first bytes are not SQLite's header)",
-                        ));
+                        return Err(foreign(ForeignFile::NotSqlite));
                     }
                 }
                 let (sqlite_name, vfs) = held.sqlite_name();
@@ -477,9 +336,7 @@ impl Database {
                 .map_err(fail)?;
                 c.busy_timeout(BUSY_TIMEOUT).map_err(fail)?;
                 if existing && !retry_locked(|| is_fitup_sqlite(&c)).map_err(fail)? {
-                    return Err(foreign(
-                        "it is a SQLite database of another program (it has tables but not fitup's schema_version)",
-                    ));
+                    return Err(foreign(ForeignFile::OtherProgram));
                 }
                 // A file that is not SQLite fails here with "file is not a database".
                 let mode: String =
@@ -490,7 +347,7 @@ impl Database {
                     if read_only() {
                         return Err(DbError::ReadOnly {
                             target: name.clone(),
-                            cause: "the file is not writable".into(),
+                            cause: ReadOnlyCause::FileNotWritable { driver: None },
                         });
                     }
                 }
@@ -511,11 +368,11 @@ impl Database {
                 Conn::Sqlite(c)
             }
             #[cfg(feature = "postgres")]
-            Target::Postgres(url) => Conn::Postgres(Box::new(
-                pg::connect(url).map_err(|e| open_err(target.scrub(&e.to_string())))?,
-            )),
+            Target::Postgres(url) => Conn::Postgres(Box::new(pg::connect(url).map_err(|e| {
+                open_err(OpenCause::Driver(Raw::other(target.scrub(&e.to_string()))))
+            })?)),
             #[cfg(not(feature = "postgres"))]
-            Target::Postgres(_) => return Err(open_err(NO_POSTGRES.into())),
+            Target::Postgres(_) => return Err(open_err(OpenCause::NoPostgres)),
         };
         let mut db = Database {
             conn,
@@ -561,20 +418,20 @@ impl Database {
             Kind::Busy => DbError::Busy {
                 target,
                 tries,
-                cause: e.message,
+                cause: e,
             },
             Kind::ReadOnly => DbError::ReadOnly {
                 target,
-                cause: e.message,
+                cause: ReadOnlyCause::Driver(e),
             },
-            Kind::Full => DbError::DiskFull {
-                target,
-                cause: e.message,
+            Kind::Full => DbError::DiskFull { target, cause: e },
+            Kind::WriteRefused => DbError::WriteRefused {
+                cause: Refusal::Driver(e),
             },
-            Kind::WriteRefused => DbError::WriteRefused { cause: e.message },
             Kind::Other => DbError::Sql {
                 target,
-                cause: format!("{what}: {}", e.message),
+                during: Some(what.to_string()),
+                cause: e,
             },
         }
     }
@@ -676,7 +533,7 @@ impl Database {
                             query::SqliteReader::open(held, BUSY_TIMEOUT).map_err(|e| {
                                 DbError::Open {
                                     target: target.clone(),
-                                    cause: format!("the read-only query connection: {}", e.message),
+                                    cause: OpenCause::QueryConnection(e),
                                 }
                             })?;
                         slot.insert(opened)
@@ -684,7 +541,7 @@ impl Database {
                     (None, None) => {
                         return Err(DbError::Open {
                             target,
-                            cause: "a SQLite connection without a file".into(),
+                            cause: OpenCause::NoFile,
                         })
                     }
                 };
@@ -692,7 +549,9 @@ impl Database {
             }
         };
         result.map_err(|stop| match stop {
-            query::Stop::Refused(cause) => DbError::WriteRefused { cause },
+            query::Stop::Refused(reason) => DbError::WriteRefused {
+                cause: Refusal::Jail { reason },
+            },
             query::Stop::Timeout => DbError::QueryTimeout {
                 target,
                 limit: limits.time,
@@ -704,10 +563,13 @@ impl Database {
                 max_bytes: limits.max_bytes,
             },
             query::Stop::Sql(e) => match e.kind {
-                Kind::WriteRefused | Kind::ReadOnly => DbError::WriteRefused { cause: e.message },
+                Kind::WriteRefused | Kind::ReadOnly => DbError::WriteRefused {
+                    cause: Refusal::Driver(e),
+                },
                 _ => DbError::Sql {
                     target,
-                    cause: e.message,
+                    during: None,
+                    cause: e,
                 },
             },
         })
@@ -778,7 +640,10 @@ fn hold_folder(
         if source.kind() == std::io::ErrorKind::NotFound {
             FolderError::Missing(folder)
         } else {
-            FolderError::Unreadable { folder, source }
+            FolderError::Unreadable {
+                folder,
+                source: source.into(),
+            }
         }
     };
     if let Some(project) = project.filter(|p| path.starts_with(p.root())) {
@@ -796,27 +661,6 @@ fn hold_folder(
     }
     let dir = crate::fsutil::Dir::open(parent).map_err(missing)?;
     Ok(held::HeldFile::new(dir, name))
-}
-
-/// Why the folder of a SQLite file cannot be held open (the cause of a
-/// [`DbError::Open`]).
-#[derive(Debug, thiserror::Error)]
-enum FolderError {
-    /// The path ends in `..` or is a root: no file name.
-    #[error("not a file name")]
-    NotAFileName,
-    /// The folder does not exist.
-    #[error("the folder {} does not exist", .0.display())]
-    Missing(PathBuf),
-    /// The folder cannot be opened (permissions, a file on the way, …).
-    #[error("its folder {}: {source}", .folder.display())]
-    Unreadable {
-        /// The folder.
-        folder: PathBuf,
-        /// The operating system's refusal.
-        #[source]
-        source: std::io::Error,
-    },
 }
 
 /// The columns and rows of a [`Database::query`].

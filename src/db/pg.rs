@@ -479,7 +479,8 @@ fn pg_error(e: postgres::Error) -> Stop {
     use postgres::error::SqlState;
     match e.code() {
         Some(c) if *c == SqlState::QUERY_CANCELED => Stop::Timeout,
-        Some(c) if *c == SqlState::READ_ONLY_SQL_TRANSACTION => Stop::Refused(Raw::from(e).message),
+        // A write in the read-only transaction is classed `WriteRefused` (From): a
+        // `DbError::WriteRefused` with the server's words.
         _ => Stop::Sql(Raw::from(e)),
     }
 }

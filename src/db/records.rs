@@ -375,11 +375,12 @@ const PATH_COLUMNS: &str = "id, run_id, name, created_at, component, seed, optio
 impl Database {
     fn invalid(&self, what: &str, e: DbError) -> DbError {
         match e {
-            DbError::Sql { cause, .. }
-                if cause.contains("non-finite") || cause.contains("not finite") =>
+            DbError::Sql { during, cause, .. }
+                if cause.message.contains("non-finite") || cause.message.contains("not finite") =>
             {
                 DbError::Invalid {
                     what: what.to_string(),
+                    during,
                     cause,
                 }
             }

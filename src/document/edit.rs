@@ -544,10 +544,7 @@ impl Document {
     pub fn add_part_file(&mut self, name: &str, file: &str) -> Result<String, DocumentError> {
         let project = Project::for_file(&self.path).map_err(|e| DocumentError::PartMesh {
             part: name.to_string(),
-            source: PartMeshError::Project {
-                kind: e.kind(),
-                message: e.to_string(),
-            },
+            source: PartMeshError::Project(e.into()),
         })?;
         self.add_part(name, file, &project, &mut MeshCache::new())
     }

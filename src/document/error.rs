@@ -292,13 +292,68 @@ pub enum DocumentError {
     #[error(transparent)]
     Robot(#[from] robot::RobotError),
     /// Writing the document failed.
-    #[error("cannot write {path}: {message}")]
+    #[error("cannot write {path}: {cause}")]
     Write {
         /// Target path.
         path: PathBuf,
-        /// OS message.
+        /// Why not.
+        #[source]
+        cause: WriteProblem,
+    },
+}
+
+/// Why a document, a sub-document or an export was not written (the cause of a
+/// [`DocumentError::Write`]); nothing was written.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum WriteProblem {
+    /// The write rule refused the file, or the write failed
+    /// ([`crate::fsutil::write_output`]).
+    #[error(transparent)]
+    Output(crate::fsutil::OutputError),
+    /// The operating system refused (its folder, the write).
+    #[error(transparent)]
+    Io(crate::fsutil::IoCause),
+    /// The path has no file name.
+    #[error("not a file name")]
+    NotAFileName,
+    /// The mates cannot be satisfied: the saved file would not open.
+    #[error("not saved: the document would not open again ({0}); move the component back, float it, or delete or suppress the mate")]
+    Unsolvable(#[source] SolveError),
+    /// The text to be written would not load again.
+    #[error("not saved: the document would not open again ({})", reload_why(.0))]
+    WouldNotReload(#[source] Box<DocumentError>),
+    /// The document could not be turned into YAML (the serializer's words).
+    #[error("{message}")]
+    Serialize {
+        /// The serializer's message.
         message: String,
     },
+    /// The file changed on disk since the document was loaded.
+    #[error("not saved: the file changed on disk since it was loaded (another program or script saved it); open it again and redo the change")]
+    ChangedOnDisk,
+    /// An existing file that is not a fitup document.
+    #[error("refusing to overwrite a file that is not a fitup document")]
+    NotADocument,
+    /// The existing file could not be read to check it.
+    #[error("refusing to overwrite it: {0}")]
+    Unreadable(#[source] crate::fsutil::ReadError),
+    /// Two sub-document instances of one file changed differently.
+    #[error("not saved: `{first}` and `{second}` are both this document and were changed differently (a document holds one content); make the same change in both, or save one with `save_as` under another name")]
+    ChangedTwice {
+        /// The first instance's name.
+        first: String,
+        /// The other instance's name.
+        second: String,
+    },
+}
+
+/// Why a text would not load: a located error's message alone, else the error.
+fn reload_why(e: &DocumentError) -> String {
+    match e {
+        DocumentError::Source(s) => s.message.clone(),
+        other => other.to_string(),
+    }
 }
 
 impl DocumentError {
@@ -482,14 +537,9 @@ pub enum PartMeshError {
     /// The mesh file cannot be read.
     #[error(transparent)]
     Read(crate::mesh::MeshError),
-    /// No project holds the document's file (the operating system's words).
-    #[error("{message}")]
-    Project {
-        /// What kind of failure.
-        kind: std::io::ErrorKind,
-        /// The operating system's message.
-        message: String,
-    },
+    /// No project holds the document's file (the operating system's refusal).
+    #[error(transparent)]
+    Project(crate::fsutil::IoCause),
 }
 
 impl PartMeshError {
@@ -525,14 +575,9 @@ pub enum OutsideItem {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum UrdfRobotError {
-    /// No project holds the document's file (the operating system's words).
-    #[error("cannot find the project: {message}")]
-    Project {
-        /// What kind of failure.
-        kind: std::io::ErrorKind,
-        /// The operating system's message.
-        message: String,
-    },
+    /// No project holds the document's file (the operating system's refusal).
+    #[error("cannot find the project: {0}")]
+    Project(#[source] crate::fsutil::IoCause),
     /// The URDF path or a `package_path` entry the project rule refuses.
     #[error("{what} {source}")]
     Path {

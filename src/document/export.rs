@@ -1,7 +1,7 @@
 //! A document written as binary glTF (GLB) for other viewers: `fitup export`,
 //! `doc.export_glb(file)` in scripts.
 
-use super::{Document, DocumentError};
+use super::{Document, DocumentError, WriteProblem};
 use crate::mesh::{glb_bytes, GlbNode};
 use std::path::{Path, PathBuf};
 
@@ -59,14 +59,14 @@ impl Document {
             used: Some(&used),
             signature: None,
         };
-        let write_error = |message: String| DocumentError::Write {
+        let write_error = |e: crate::fsutil::OutputError| DocumentError::Write {
             path: path.to_path_buf(),
-            message,
+            cause: WriteProblem::Output(e),
         };
-        crate::fsutil::check_output(path, &rule).map_err(|e| write_error(e.to_string()))?;
+        crate::fsutil::check_output(path, &rule).map_err(write_error)?;
         let bytes = self.glb_bytes()?;
         // Checked again through the folder handle it is written with.
-        crate::fsutil::write_output(path, &bytes, &rule).map_err(|e| write_error(e.to_string()))?;
+        crate::fsutil::write_output(path, &bytes, &rule).map_err(write_error)?;
         let shown: Vec<usize> = (0..self.components().len())
             .filter(|&i| !self.components()[i].is_suppressed() && !self.components()[i].hidden)
             .collect();

@@ -52,7 +52,7 @@ pub use assembly::SubAssembly;
 pub use error::{
     DimensionInUse, DocumentError, LinkEdit, MateProblem, MissingReference, OutsideItem,
     OutsideSubDocument, PartMeshError, ReferenceProblem, UrdfLinkAt, UrdfMeshProblem,
-    UrdfRobotError,
+    UrdfRobotError, WriteProblem,
 };
 pub use export::GlbExport;
 pub(crate) use names::new_name;

@@ -1054,12 +1054,7 @@ impl Document {
             .or_else(|e| {
                 crate::project::unless_missing(e, self.path.parent().unwrap_or(Path::new(".")))
             })
-            .map_err(|e| {
-                invalid(UrdfRobotError::Project {
-                    kind: e.kind(),
-                    message: e.to_string(),
-                })
-            })?;
+            .map_err(|e| invalid(UrdfRobotError::Project(e.into())))?;
         let dir = std::path::absolute(&self.path)
             .ok()
             .and_then(|p| p.parent().and_then(|d| d.canonicalize().ok()))

@@ -4,7 +4,9 @@ use super::file::{
     AssemblyFile, AxisFile, ComponentFile, CoordinateSystemFile, DocumentFile, FeatureFile,
     MateFile, PartFile, PlaneFile, PlanesFile,
 };
-use super::{Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance};
+use super::{
+    Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance, WriteProblem,
+};
 use crate::collision::CutSpec;
 use crate::fsutil::{content_hash, relative_path, FileKind};
 use crate::math::Vec3;
@@ -287,31 +289,24 @@ impl Document {
         folder: Option<crate::fsutil::Dir>,
         written: &mut Vec<super::subdoc::Written>,
     ) -> Result<(), DocumentError> {
-        let write_err = |message: String| DocumentError::Write {
+        let write_err = |cause: WriteProblem| DocumentError::Write {
             path: path.into(),
-            message,
+            cause,
         };
         // A save solves what loading solves (SolidWorks rebuilds on save): the file
         // holds the poses the mates give, and a document whose mates cannot be
         // satisfied (a mated component moved, then fixed) is refused, not written.
         let mut solved = self.clone();
-        solved.solve_mates().map_err(|e| {
-            write_err(format!(
-                "not saved: the document would not open again ({e}); move the component back, float it, or delete or suppress the mate"
-            ))
+        solved
+            .solve_mates()
+            .map_err(|e| write_err(WriteProblem::Unsolvable(e)))?;
+        let text = solved.to_file().to_yaml().map_err(|e| {
+            write_err(WriteProblem::Serialize {
+                message: e.to_string(),
+            })
         })?;
-        let text = solved
-            .to_file()
-            .to_yaml()
-            .map_err(|e| write_err(e.to_string()))?;
         if let Err(e) = Self::parse_text(&text, path) {
-            let why = match &e {
-                DocumentError::Source(s) => s.message.clone(),
-                other => other.to_string(),
-            };
-            return Err(write_err(format!(
-                "not saved: the document would not open again ({why})"
-            )));
+            return Err(write_err(WriteProblem::WouldNotReload(Box::new(e))));
         }
         // The sub-documents changed from a script first (each through the same checked
         // write), so the document is written last, over sub-documents that hold
@@ -326,11 +321,12 @@ impl Document {
                     Some(d) if !d.as_os_str().is_empty() => d,
                     _ => Path::new("."),
                 };
-                crate::fsutil::Dir::open(parent).map_err(|e| write_err(e.to_string()))?
+                crate::fsutil::Dir::open(parent)
+                    .map_err(|e| write_err(WriteProblem::Io(e.into())))?
             }
         };
         let Some(name) = path.file_name() else {
-            return Err(write_err("not a file name".into()));
+            return Err(write_err(WriteProblem::NotAFileName));
         };
         let _lock = dir.lock();
         let on_disk = match dir.stat(name) {
@@ -343,7 +339,7 @@ impl Document {
                         cap: FileKind::Document.max_bytes() >> 20,
                         what: FileKind::Document.name(),
                     })),
-                    Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.to_string()))),
+                    Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.into()))),
                 }
             }
             Ok(Some(crate::fsutil::Kind::Symlink)) => {
@@ -355,15 +351,13 @@ impl Document {
             Ok(Some(crate::fsutil::Kind::Special(what))) => {
                 Some(Err(crate::fsutil::ReadError::NotRegular(what)))
             }
-            Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.to_string()))),
+            Err(e) => Some(Err(crate::fsutil::ReadError::Io(e.into()))),
         };
         match on_disk {
             None => {}
             Some(Ok(bytes)) => match expected {
                 Some(h) if content_hash(&bytes) != h => {
-                    return Err(write_err(
-                        "not saved: the file changed on disk since it was loaded (another program or script saved it); open it again and redo the change".into(),
-                    ))
+                    return Err(write_err(WriteProblem::ChangedOnDisk))
                 }
                 Some(_) => {}
                 None => {
@@ -371,16 +365,14 @@ impl Document {
                         .ok()
                         .is_some_and(|t| Self::parse_text(t, path).is_ok());
                     if !is_document {
-                        return Err(write_err(
-                            "refusing to overwrite a file that is not a fitup document".into(),
-                        ));
+                        return Err(write_err(WriteProblem::NotADocument));
                     }
                 }
             },
-            Some(Err(e)) => return Err(write_err(format!("refusing to overwrite it: {e}"))),
+            Some(Err(e)) => return Err(write_err(WriteProblem::Unreadable(e))),
         }
         dir.write_atomic(name, text.as_bytes())
-            .map_err(|e| write_err(e.to_string()))?;
+            .map_err(|e| write_err(WriteProblem::Io(e.into())))?;
         self.disk_hash = Some(content_hash(text.as_bytes()));
         let mut moved = false;
         for (c, s) in self.components.iter_mut().zip(&solved.components) {

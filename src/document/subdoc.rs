@@ -17,7 +17,7 @@
 //! others) is refused at the `file:` line that closes the circle.
 
 use super::file::DocumentFile;
-use super::{Document, DocumentError, OutsideItem, SubAssembly};
+use super::{Document, DocumentError, OutsideItem, SubAssembly, WriteProblem};
 use crate::diagnostics::SourceError;
 use crate::fsutil::{content_hash, FileKind};
 use crate::project::Project;
@@ -535,10 +535,10 @@ impl Document {
             if let Some(j) = (1..docs.len()).find(|&j| !same_file(&files[0], &files[j])) {
                 return Err(DocumentError::Write {
                     path: record(0).path.clone(),
-                    message: format!(
-                        "not saved: `{}` and `{}` are both this document and were changed differently (a document holds one content); make the same change in both, or save one with `save_as` under another name",
-                        group[0].name, group[j].name
-                    ),
+                    cause: WriteProblem::ChangedTwice {
+                        first: group[0].name.clone(),
+                        second: group[j].name.clone(),
+                    },
                 });
             }
             let mut doc = docs.into_iter().nth(changed[0]).expect("index in range");
@@ -548,7 +548,7 @@ impl Document {
                     p.folder(r.path.parent().unwrap_or(p.root()), false)
                         .map_err(|e| DocumentError::Write {
                             path: r.path.clone(),
-                            message: e.to_string(),
+                            cause: WriteProblem::Io(e.into()),
                         })?,
                 ),
                 None => None,

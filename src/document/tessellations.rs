@@ -77,7 +77,7 @@ pub fn in_use(project: &crate::project::Project) -> InUse {
             let path = dir.join(&name_os);
             let Ok(text) = handle
                 .open_file(&name_os)
-                .map_err(|e| crate::fsutil::ReadError::Io(e.to_string()))
+                .map_err(|e| crate::fsutil::ReadError::Io(e.into()))
                 .and_then(|f| crate::fsutil::read_opened(f, crate::fsutil::FileKind::Document))
                 .and_then(|b| {
                     String::from_utf8(b).map_err(|e| {

@@ -1,6 +1,8 @@
 //! Robots from Denavit–Hartenberg tables (seed 000, table 2).
 
-use super::{Joint, JointKind, JointLimits, KinematicTree, KinematicsError, Link, Robot};
+use super::{
+    DescriptionProblem, Joint, JointKind, JointLimits, KinematicTree, KinematicsError, Link, Robot,
+};
 use crate::math::{Point3, Transform, Vec3};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
@@ -93,16 +95,14 @@ impl KinematicTree {
         let mut links = vec![Link::new("base", None, Transform::IDENTITY, Joint::fixed())];
         for (i, r) in rows.iter().enumerate() {
             if ![r.theta, r.d, r.a, r.alpha].iter().all(|v| v.is_finite()) {
-                return Err(KinematicsError::InvalidDescription(format!(
-                    "D-H row {} is not finite",
-                    i + 1
-                )));
+                return Err(KinematicsError::InvalidDescription(
+                    DescriptionProblem::DhNotFinite { row: i + 1 },
+                ));
             }
             if r.kind == JointKind::Fixed {
-                return Err(KinematicsError::InvalidDescription(format!(
-                    "D-H row {} must be revolute or prismatic",
-                    i + 1
-                )));
+                return Err(KinematicsError::InvalidDescription(
+                    DescriptionProblem::DhJointKind { row: i + 1 },
+                ));
             }
             let (home, axis, point) = match convention {
                 DhConvention::Standard => (

@@ -36,13 +36,13 @@ pub use drilling::{
     drill_program, hole_tool_pose, parse_holes, read_holes, read_holes_in, DrillError,
     DrillOptions, DrillReport, Hole, HoleFailure, HoleOutcome, HoleReport, ToolAxis,
 };
-pub use error::KinematicsError;
+pub use error::{DescriptionProblem, KinematicsError, LinkProblem};
 pub use ik::{
     Configuration, Elbow, IkError, IkOptions, IkSolution, Shoulder, Singularity, Unreachable, Wrist,
 };
 pub use ik_numeric::NumericIk;
 pub use joint::{Joint, JointKind, JointLimits, Mimic};
-pub use motion::{move_circle, move_joint, move_line, MotionError, MotionOptions};
+pub use motion::{move_circle, move_joint, move_line, DegeneratePath, MotionError, MotionOptions};
 pub use opw::{NotOpw, OpwSolver};
 pub use opw_params::OpwParameters;
 pub use precision::{

@@ -91,7 +91,7 @@ pub enum MotionError {
     },
     /// The path cannot be built (e.g. collinear circle points).
     #[error("degenerate path: {0}")]
-    Degenerate(String),
+    Degenerate(#[source] DegeneratePath),
     /// Inverse kinematics failed at a path point.
     #[error("at step {step} (s = {s:.4}): {cause}")]
     Ik {
@@ -140,6 +140,21 @@ pub enum MotionError {
         /// The allowed jump.
         max: f64,
     },
+}
+
+/// Why a Cartesian path cannot be built (the cause of a [`MotionError::Degenerate`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DegeneratePath {
+    /// A line's end pose has a NaN or an infinity.
+    #[error("end pose is not finite")]
+    EndNotFinite,
+    /// An arc's via or end pose has a NaN or an infinity.
+    #[error("via or end pose is not finite")]
+    ViaOrEndNotFinite,
+    /// An arc's three points do not span a circle.
+    #[error("start, via and end points are collinear or coincide")]
+    Collinear,
 }
 
 pub(crate) fn check_options(o: &MotionOptions) -> Result<(), MotionError> {
@@ -421,7 +436,7 @@ pub(crate) fn move_line_within(
 ) -> Result<Trajectory, MotionError> {
     let from = robot.tcp_pose(start)?;
     if !end.is_finite() {
-        return Err(MotionError::Degenerate("end pose is not finite".into()));
+        return Err(MotionError::Degenerate(DegeneratePath::EndNotFinite));
     }
     let (rotation, length) = from.distance_to(end);
     let end = *end;
@@ -460,9 +475,7 @@ pub(crate) fn move_circle_within(
 ) -> Result<Trajectory, MotionError> {
     let from = robot.tcp_pose(start)?;
     if !(via.is_finite() && end.is_finite()) {
-        return Err(MotionError::Degenerate(
-            "via or end pose is not finite".into(),
-        ));
+        return Err(MotionError::Degenerate(DegeneratePath::ViaOrEndNotFinite));
     }
     let (p0, p1, p2) = (from.translation(), via.translation(), end.translation());
     let u = p1 - p0;
@@ -473,9 +486,7 @@ pub(crate) fn move_circle_within(
         || u.norm() < 1e-9
         || v.norm() < 1e-9
     {
-        return Err(MotionError::Degenerate(
-            "start, via and end points are collinear or coincide".into(),
-        ));
+        return Err(MotionError::Degenerate(DegeneratePath::Collinear));
     }
     let center =
         p0 + (v.cross(&w) * u.norm_squared() + w.cross(&u) * v.norm_squared()) / (2.0 * wn);

@@ -3,7 +3,7 @@
 //! industrial robots (`opw_kinematics`, ROS-Industrial `opw_parameters_*.yaml`), and
 //! the one place where such a parameter set becomes a [`Robot`].
 
-use super::{Joint, JointLimits, KinematicTree, KinematicsError, Link, Robot};
+use super::{DescriptionProblem, Joint, JointLimits, KinematicTree, KinematicsError, Link, Robot};
 use crate::math::{Point3, Transform, Vec3};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
 
@@ -78,7 +78,7 @@ impl OpwParameters {
     /// Checks that every number is finite, every sign is ±1 and the arm has an upper
     /// arm and a forearm.
     pub fn validate(&self) -> Result<(), KinematicsError> {
-        let bad = |what: String| Err(KinematicsError::InvalidDescription(what));
+        let bad = |what: DescriptionProblem| Err(KinematicsError::InvalidDescription(what));
         let lengths = [
             ("a1", self.a1),
             ("a2", self.a2),
@@ -90,27 +90,27 @@ impl OpwParameters {
         ];
         for (name, v) in lengths {
             if !v.is_finite() {
-                return bad(format!("OPW parameter {name} = {v} is not finite"));
+                return bad(DescriptionProblem::OpwLength { name, value: v });
             }
         }
         for (i, o) in self.offsets.iter().enumerate() {
             if !o.is_finite() {
-                return bad(format!("OPW offset of joint {} is not finite", i + 1));
+                return bad(DescriptionProblem::OpwOffset { joint: i + 1 });
             }
         }
         for (i, s) in self.signs.iter().enumerate() {
             if *s != 1.0 && *s != -1.0 {
-                return bad(format!("OPW sign of joint {} is {s}, not ±1", i + 1));
+                return bad(DescriptionProblem::OpwSign {
+                    joint: i + 1,
+                    sign: *s,
+                });
             }
         }
         if self.c2 <= 0.0 {
-            return bad(format!(
-                "OPW c2 = {} mm: the upper arm needs a positive length",
-                self.c2
-            ));
+            return bad(DescriptionProblem::OpwUpperArm { c2: self.c2 });
         }
         if self.a2.hypot(self.c3) <= 0.0 {
-            return bad("OPW a2 = c3 = 0: the forearm has no length".into());
+            return bad(DescriptionProblem::OpwForearm);
         }
         Ok(())
     }

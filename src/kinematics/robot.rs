@@ -3,8 +3,8 @@
 
 use super::closed_form;
 use super::{
-    IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree, KinematicsError,
-    NumericIk, OpwSolver, UrSolver,
+    DescriptionProblem, IkError, IkOptions, IkSolution, JointKind, JointLimits, KinematicTree,
+    KinematicsError, LinkProblem, NumericIk, OpwSolver, UrSolver,
 };
 use crate::math::{AngleConvention, Transform};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
@@ -111,13 +111,15 @@ impl Robot {
         // A mimic joint on the chain would need every solver to drive it from its
         // leader; the URDF reader never chooses such a flange by itself.
         if let Some(&i) = chain.iter().find(|&&i| tree.mimic(i).is_some()) {
-            return Err(KinematicsError::InvalidDescription(format!(
-                "link `{}` on the chain to the flange moves with a mimic joint (it follows link `{}`): choose a flange above it",
-                tree.links()[i].name.as_deref().unwrap_or(""),
-                tree.mimic(i)
-                    .and_then(|m| tree.links()[m.leader].name.as_deref())
-                    .unwrap_or("")
-            )));
+            return Err(KinematicsError::InvalidDescription(
+                DescriptionProblem::MimicOnChain {
+                    link: tree.links()[i].name.clone().unwrap_or_default(),
+                    leader: tree
+                        .mimic(i)
+                        .and_then(|m| tree.links()[m.leader].name.clone())
+                        .unwrap_or_default(),
+                },
+            ));
         }
         let joints: Vec<usize> = chain
             .iter()
@@ -129,7 +131,7 @@ impl Robot {
         }
         if !tool.is_finite() {
             return Err(KinematicsError::InvalidDescription(
-                "tool frame is not finite".into(),
+                DescriptionProblem::ToolNotFinite,
             ));
         }
         let mut robot = Self {
@@ -256,7 +258,7 @@ impl Robot {
     /// the flange chain, follows a mimic joint or is listed twice.
     pub fn with_external_axes(mut self, links: &[usize]) -> Result<Self, KinematicsError> {
         for (k, &i) in links.iter().enumerate() {
-            let bad = |cause: &str| KinematicsError::InvalidLink {
+            let bad = |cause: LinkProblem| KinematicsError::InvalidLink {
                 link: i,
                 name: self
                     .tree
@@ -264,22 +266,22 @@ impl Robot {
                     .get(i)
                     .and_then(|l| l.name.clone())
                     .unwrap_or_default(),
-                cause: cause.to_string(),
+                cause,
             };
             let Some(link) = self.tree.links().get(i) else {
                 return Err(KinematicsError::NoSuchLink(i));
             };
             if !link.joint.kind.is_movable() {
-                return Err(bad("an external axis must be a movable joint"));
+                return Err(bad(LinkProblem::ExternalFixed));
             }
             if self.chain.contains(&i) {
-                return Err(bad("an external axis must be off the flange chain"));
+                return Err(bad(LinkProblem::ExternalOnChain));
             }
             if self.tree.mimic(i).is_some() {
-                return Err(bad("an external axis cannot follow a mimic joint"));
+                return Err(bad(LinkProblem::ExternalMimic));
             }
             if links[..k].contains(&i) {
-                return Err(bad("the link is listed twice as an external axis"));
+                return Err(bad(LinkProblem::ExternalTwice));
             }
         }
         self.joints.truncate(self.chain_dof);
@@ -465,7 +467,7 @@ impl Robot {
         self.check(reference).map_err(IkError::Input)?;
         if !target.is_finite() {
             return Err(IkError::Input(KinematicsError::InvalidDescription(
-                "target pose is not finite".into(),
+                DescriptionProblem::TargetNotFinite,
             )));
         }
         let local = Transform::from_isometry(self.base.isometry().inverse() * target.isometry());

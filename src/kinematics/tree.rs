@@ -1,7 +1,7 @@
 //! [`KinematicTree`]: links with parents, joints and home transforms (seed 001's tree of
 //! `CSTLModel` parts), and forward kinematics of every link.
 
-use super::{Joint, JointKind, KinematicsError, Mimic};
+use super::{Joint, JointKind, KinematicsError, LinkProblem, Mimic};
 use crate::math::Transform;
 use nalgebra::Isometry3;
 
@@ -54,37 +54,35 @@ impl KinematicTree {
     /// finite with `min <= max`.
     pub fn new(links: Vec<Link>) -> Result<Self, KinematicsError> {
         for (i, link) in links.iter().enumerate() {
-            let bad = |cause: String| KinematicsError::InvalidLink {
+            let bad = |cause: LinkProblem| KinematicsError::InvalidLink {
                 link: i,
                 name: link.name.clone().unwrap_or_default(),
                 cause,
             };
             if let Some(p) = link.parent {
                 if p >= i {
-                    return Err(bad(format!(
-                        "parent index {p} is not before the link (links must be listed parents first)"
-                    )));
+                    return Err(bad(LinkProblem::ParentAfter { parent: p }));
                 }
             }
             if !link.home.is_finite() {
-                return Err(bad("home transform is not finite".into()));
+                return Err(bad(LinkProblem::HomeNotFinite));
             }
             let j = &link.joint;
             if j.kind.is_movable() {
                 let n = j.axis.norm();
                 if !(n.is_finite() && (n - 1.0).abs() < 1e-9) {
-                    return Err(bad("joint axis is zero or not finite".into()));
+                    return Err(bad(LinkProblem::AxisNotUnit));
                 }
                 if !j.point.coords.iter().all(|v| v.is_finite()) {
-                    return Err(bad("joint axis point is not finite".into()));
+                    return Err(bad(LinkProblem::AxisPointNotFinite));
                 }
             }
             if let Some(l) = j.limits {
                 if !(l.min.is_finite() && l.max.is_finite() && l.min <= l.max) {
-                    return Err(bad(format!(
-                        "joint limits {}..{} are invalid",
-                        l.min, l.max
-                    )));
+                    return Err(bad(LinkProblem::Limits {
+                        min: l.min,
+                        max: l.max,
+                    }));
                 }
             }
         }
@@ -100,7 +98,7 @@ impl KinematicTree {
     pub fn with_mimics(mut self, mimics: &[(usize, Mimic)]) -> Result<Self, KinematicsError> {
         let mut table = vec![None; self.links.len()];
         for &(f, m) in mimics {
-            let bad = |cause: String| KinematicsError::InvalidLink {
+            let bad = |cause: LinkProblem| KinematicsError::InvalidLink {
                 link: f,
                 name: self
                     .links
@@ -111,12 +109,10 @@ impl KinematicTree {
             };
             let movable = |i: usize| self.links.get(i).is_some_and(|l| l.joint.kind.is_movable());
             if !movable(f) || !movable(m.leader) || f == m.leader {
-                return Err(bad(
-                    "a mimic joint and its leader must be two movable joints".into(),
-                ));
+                return Err(bad(LinkProblem::MimicNotMovable));
             }
             if !(m.multiplier.is_finite() && m.offset.is_finite()) {
-                return Err(bad("mimic multiplier and offset must be finite".into()));
+                return Err(bad(LinkProblem::MimicNotFinite));
             }
             table[f] = Some(m);
         }
@@ -126,9 +122,7 @@ impl KinematicTree {
             return Err(KinematicsError::InvalidLink {
                 link: f,
                 name: self.links[f].name.clone().unwrap_or_default(),
-                cause:
-                    "its mimic leader follows another joint (resolve the chain to the first leader)"
-                        .into(),
+                cause: LinkProblem::MimicChain,
             });
         }
         self.mimics = if table.iter().any(Option::is_some) {

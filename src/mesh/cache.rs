@@ -276,7 +276,9 @@ fn read_mesh(
     let read = |f: &Path| {
         opener
             .read(f)
-            .map_err(|e| crate::fsutil::ReadError::Io(e.message))
+            // The reader wants a ReadError; the opener's MeshError (a refused open, a
+            // precheck) is passed on in its words, as an error of kind `Other`.
+            .map_err(|e| crate::fsutil::ReadError::Io(std::io::Error::other(e.message).into()))
     };
     let hash = content_hash(&bytes);
     if known == Some(hash) {
@@ -316,15 +318,13 @@ impl Opener<'_> {
         let file = match self {
             Opener::Path => {
                 // Refused before the open (a FIFO must not block it).
-                let md = std::fs::metadata(path).map_err(|e| ReadError::Io(e.to_string()))?;
+                let md = std::fs::metadata(path).map_err(|e| ReadError::Io(e.into()))?;
                 if !md.is_file() {
                     return Ok(crate::fsutil::read_file(path, FileKind::Mesh)?);
                 }
-                std::fs::File::open(path).map_err(|e| ReadError::Io(e.to_string()))?
+                std::fs::File::open(path).map_err(|e| ReadError::Io(e.into()))?
             }
-            Opener::Project(p) => p
-                .open_file(path)
-                .map_err(|e| ReadError::Io(e.to_string()))?,
+            Opener::Project(p) => p.open_file(path).map_err(|e| ReadError::Io(e.into()))?,
         };
         super::precheck(&file, path)?;
         Ok(crate::fsutil::read_opened(file, FileKind::Mesh)?)

@@ -622,7 +622,7 @@ fn check_file(
         path: path.into(),
         source,
     };
-    let io = |e: std::io::Error| read(ReadError::Io(e.to_string()));
+    let io = |e: std::io::Error| read(ReadError::Io(e.into()));
     let file = match project {
         Some(p) => p.open_file(path).map_err(io)?,
         None => {

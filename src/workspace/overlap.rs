@@ -231,12 +231,12 @@ pub fn export_stl(
         used: Some(&used),
         signature: None,
     };
-    let write_error = |message: String| crate::document::DocumentError::Write {
+    let write_error = |e: crate::fsutil::OutputError| crate::document::DocumentError::Write {
         path: path.to_path_buf(),
-        message,
+        cause: crate::document::WriteProblem::Output(e),
     };
-    crate::fsutil::check_output(path, &rule).map_err(|e| write_error(e.to_string()))?;
+    crate::fsutil::check_output(path, &rule).map_err(write_error)?;
     let bytes = crate::mesh::stl_bytes(&world_mesh(doc, which, frame));
-    crate::fsutil::write_output(path, &bytes, &rule).map_err(|e| write_error(e.to_string()))?;
+    crate::fsutil::write_output(path, &bytes, &rule).map_err(write_error)?;
     Ok(bytes.len())
 }

@@ -14,6 +14,7 @@ pub mod ur_urdf;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// The built `fitup` binary.
@@ -35,12 +36,39 @@ pub fn run_in(dir: &Path, args: &[&str]) -> Output {
     fitup().current_dir(dir).args(args).output().unwrap()
 }
 
+/// [`run_in`] that must succeed: the combined output text.
+pub fn run_ok(dir: &Path, args: &[&str]) -> String {
+    let o = run_in(dir, args);
+    let t = text(&o);
+    assert!(o.status.success(), "{args:?}: {t}");
+    t
+}
+
 /// Writes `source` as `scripts/NAME` of the project `dir` and runs it there (`fitup
 /// run scripts/NAME`).
 pub fn run_script_in(dir: &Path, name: &str, source: &str) -> Output {
     let rel = format!("scripts/{name}");
     std::fs::write(dir.join(&rel), source).unwrap();
     run_in(dir, &["run", &rel])
+}
+
+/// `fitup manipulator` on the MZ07 of `models/mz07.yaml` (run from the repository
+/// root); the ports and the speed follow.
+pub const MZ07_SIMULATOR: [&str; 5] = [
+    "manipulator",
+    "--doc",
+    "models/mz07.yaml",
+    "--robot",
+    "mz07",
+];
+
+/// A segment check for `fitup::skills::generate` that finds nothing in the way.
+pub fn no_check(
+    _: &fitup::sequence::Task,
+    _: &fitup::math::Transform,
+    _: &fitup::math::Transform,
+) -> Result<(), fitup::skills::SegmentHit> {
+    Ok(())
 }
 
 /// Skill `i` of the test plans: `Move_Table` of the part `gear`, ending in `end_state`,
@@ -59,6 +87,27 @@ pub fn gear_step(
         end_state,
         commands,
     }
+}
+
+/// A [`gear_step`] that follows the joint trajectory `pts`, then sets digital output 1.
+pub fn gear_move_step(
+    i: usize,
+    end_state: fitup::skills::PartState,
+    pts: Vec<(Vec<f64>, f64)>,
+) -> fitup::skills::PlanStep {
+    use fitup::skills::ControllerCommand;
+    gear_step(
+        i,
+        end_state,
+        vec![
+            ControllerCommand::Trajectory(pts),
+            ControllerCommand::Tool {
+                action: "set_output".into(),
+                index: 1,
+                value: 1.0,
+            },
+        ],
+    )
 }
 
 /// A plan of the catalog MZ07 (six revolute joints) doing `steps`.
@@ -155,7 +204,12 @@ pub fn short_text(o: &Output) -> String {
 
 /// Starts `fitup ARGS` in `dir` with no input and both outputs piped.
 pub fn spawn(dir: &Path, args: &[&str]) -> Child {
-    fitup()
+    spawn_with(fitup(), dir, args)
+}
+
+/// [`spawn`] of another command line (`fitup` under a wrapper such as GNU time).
+pub fn spawn_with(mut command: Command, dir: &Path, args: &[&str]) -> Child {
+    command
         .current_dir(dir)
         .args(args)
         .stdin(Stdio::null())
@@ -165,11 +219,11 @@ pub fn spawn(dir: &Path, args: &[&str]) -> Child {
         .unwrap()
 }
 
-/// Waits for `child`, killing it and failing the test after `bound` — a bound on
-/// hangs, not a speed assertion. Its output is read meanwhile, so a chatty child
-/// never blocks on a full pipe.
-pub fn finish(mut child: Child, what: &str, bound: Duration) -> Output {
-    fn drain(r: Option<impl Read + Send + 'static>) -> std::thread::JoinHandle<Vec<u8>> {
+/// Reads `child`'s piped standard output and error to their ends on two threads, so a
+/// chatty child never blocks on a full pipe: join the handles for the bytes (empty for
+/// an output that was not piped).
+pub fn drain_outputs(child: &mut Child) -> (JoinHandle<Vec<u8>>, JoinHandle<Vec<u8>>) {
+    fn drain(r: Option<impl Read + Send + 'static>) -> JoinHandle<Vec<u8>> {
         std::thread::spawn(move || {
             let mut buf = Vec::new();
             if let Some(mut r) = r {
@@ -178,8 +232,33 @@ pub fn finish(mut child: Child, what: &str, bound: Duration) -> Output {
             buf
         })
     }
-    let out = drain(child.stdout.take());
-    let err = drain(child.stderr.take());
+    (drain(child.stdout.take()), drain(child.stderr.take()))
+}
+
+/// A GLB container around `json` (padded with spaces to 4 bytes) and the binary chunk
+/// `bin`, whose length is written as it is.
+pub fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = serde_json::to_vec(json).unwrap();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(&text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+/// Waits for `child`, killing it and failing the test after `bound` — a bound on
+/// hangs, not a speed assertion. Its output is read meanwhile, so a chatty child
+/// never blocks on a full pipe.
+pub fn finish(mut child: Child, what: &str, bound: Duration) -> Output {
+    let (out, err) = drain_outputs(&mut child);
     let start = Instant::now();
     let status = loop {
         if let Some(status) = child.try_wait().unwrap() {
@@ -251,6 +330,55 @@ pub fn copy_wheel(p: &Path) {
         let f = format!("models/meshes/wheel_{m}.stl");
         std::fs::copy(root.join(&f), p.join(&f)).unwrap();
     }
+}
+
+/// Every file of `before` is still in `now` with the same content (files written since
+/// are not user files).
+pub fn assert_kept(before: &Snapshot, now: &Snapshot) {
+    for (path, hash) in before {
+        assert_eq!(
+            now.get(path),
+            Some(hash),
+            "{} changed or vanished",
+            path.display()
+        );
+    }
+}
+
+/// The user's files as hashes: everything but the results database and its WAL
+/// (queries read it; fitup writes it).
+pub fn user_files(dir: &Path) -> Snapshot {
+    let mut s = snapshot(dir);
+    s.retain(|p, _| {
+        !p.file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with("fitup.db"))
+    });
+    s
+}
+
+/// Copies a folder tree (files and folders only).
+pub fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_tree(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
+}
+
+/// The tessellations in `dir`'s STEP store (`*.tess`), sorted.
+pub fn stored_tessellations(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir.join(fitup::mesh::step::STEP_STORE))
+        .map(|d| d.map(|e| e.unwrap().path()).collect())
+        .unwrap_or_default();
+    v.retain(|p: &PathBuf| p.extension().is_some_and(|e| e == "tess"));
+    v.sort();
+    v
 }
 
 /// sha256 of each regular file, by path: what the hostile tests compare before and

@@ -12,9 +12,8 @@ use crate::common;
 use common::snapshot;
 
 use common::project;
-use std::io::Read;
 use std::path::Path;
-use std::process::{Output, Stdio};
+use std::process::Output;
 use std::time::{Duration, Instant};
 
 /// Every case ends within this (a hang or an allocation storm does not).
@@ -67,7 +66,7 @@ pub(crate) fn run(dir: &Path, args: &[&str]) -> Run {
 /// work on purpose, such as reading a mesh at the triangle cap, while other tests run).
 pub(crate) fn run_within(dir: &Path, args: &[&str], bound: Duration) -> Run {
     let report = tempfile::NamedTempFile::new().unwrap();
-    let mut command = match gnu_time() {
+    let command = match gnu_time() {
         Some(time) => {
             let mut c = std::process::Command::new(time);
             c.arg("-f")
@@ -79,35 +78,8 @@ pub(crate) fn run_within(dir: &Path, args: &[&str], bound: Duration) -> Run {
         }
         None => common::fitup(),
     };
-    let mut child = command
-        .current_dir(dir)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let drain = |r: Option<Box<dyn Read + Send>>| {
-        std::thread::spawn(move || {
-            let mut buf = Vec::new();
-            if let Some(mut r) = r {
-                let _ = r.read_to_end(&mut buf);
-            }
-            buf
-        })
-    };
-    let out = drain(
-        child
-            .stdout
-            .take()
-            .map(|r| Box::new(r) as Box<dyn Read + Send>),
-    );
-    let err = drain(
-        child
-            .stderr
-            .take()
-            .map(|r| Box::new(r) as Box<dyn Read + Send>),
-    );
+    let mut child = common::spawn_with(command, dir, args);
+    let (out, err) = common::drain_outputs(&mut child);
     let start = Instant::now();
     let mut peak = 0;
     let status = loop {

@@ -11,7 +11,7 @@
 //! `tests/db.rs`) and is skipped with a note otherwise.
 
 use crate::common;
-use common::{snapshot, Snapshot};
+use common::{snapshot, user_files, Snapshot};
 
 use common::{project, spawn};
 use std::path::Path;
@@ -38,29 +38,10 @@ fn run_script(dir: &Path, name: &str, source: &str, extra: &[&str]) -> (i32, Str
     run(dir, &args)
 }
 
-/// The user's files (everything but the results database and its WAL) as hashes.
-fn user_files(dir: &Path) -> Snapshot {
-    let mut s = snapshot(dir);
-    s.retain(|p, _| {
-        !p.file_name()
-            .and_then(|n| n.to_str())
-            .is_some_and(|n| n.starts_with("fitup.db"))
-    });
-    s
-}
-
 /// Every file of `before` is still there with the same content (files the test wrote
 /// since are not user files).
 fn unchanged(before: &Snapshot, dir: &Path) {
-    let now = user_files(dir);
-    for (path, hash) in before {
-        assert_eq!(
-            now.get(path),
-            Some(hash),
-            "{} changed or vanished",
-            path.display()
-        );
-    }
+    common::assert_kept(before, &user_files(dir));
 }
 
 /// Writes a note to the test's stderr (the harness would swallow `eprintln!`).

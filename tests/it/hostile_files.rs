@@ -31,15 +31,7 @@ fn run(dir: &Path, args: &[&str]) -> (i32, String) {
 /// Every file of `before` is still there with the same content (files the test wrote
 /// since are not user files).
 fn unchanged(before: &Snapshot, dir: &Path) {
-    let now = snapshot(dir);
-    for (path, hash) in before {
-        assert_eq!(
-            now.get(path),
-            Some(hash),
-            "{} changed or vanished",
-            path.display()
-        );
-    }
+    common::assert_kept(before, &snapshot(dir));
 }
 
 /// The 1-based line of the first line of `text` containing `needle`.

@@ -68,26 +68,13 @@ fn refused(name: &str, bytes: &[u8], needles: &[&str]) {
     assert_eq!(common::snapshot(p), before, "{name}: user files changed");
 }
 
-/// A GLB of `json` (its buffer 0 is the binary chunk `bin`).
+/// A GLB of `json` (its buffer 0 is the binary chunk `bin`, padded to 4 bytes).
 fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut text = serde_json::to_vec(json).unwrap();
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
-    }
     let mut bin = bin.to_vec();
     while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(&text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
+    common::glb(json, &bin)
 }
 
 /// The JSON of one mesh: `positions` float VEC3 at the start of the binary chunk,

@@ -10,6 +10,7 @@
 //! user's files are byte for byte as before. Every file is generated here.
 
 use crate::common;
+use common::glb;
 use fitup::math::{Point3, Transform};
 use fitup::mesh::{glb_bytes, GlbNode, Mesh};
 use std::path::Path;
@@ -39,24 +40,6 @@ fn cube_glb_parts() -> (serde_json::Value, Vec<u8>) {
         serde_json::from_slice(&glb[20..20 + n]).unwrap(),
         glb[20 + n + 8..].to_vec(),
     )
-}
-
-/// A GLB container around `json` and `bin` (lengths as they are).
-fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut text = serde_json::to_vec(json).unwrap();
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
-    }
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(&text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
 }
 
 /// A binary little-endian PLY header with `vertices` float vertices and `faces`

@@ -24,14 +24,7 @@ fn run(dir: &Path, args: &[&str]) -> (i32, String) {
 }
 
 fn unchanged(before: &Snapshot, dir: &Path) {
-    let now = snapshot(dir);
-    for (path, bytes) in before {
-        assert!(
-            now.get(path) == Some(bytes),
-            "{} changed or vanished",
-            path.display()
-        );
-    }
+    common::assert_kept(before, &snapshot(dir));
 }
 
 /// No raw control character (other than newline and tab) and no invisible / bidi

@@ -12,6 +12,7 @@
 //! every user file (and of a watched folder outside the project) is unchanged.
 
 use crate::common;
+use common::user_files;
 use std::io::{Read, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -27,10 +28,7 @@ fn script(dir: &Path, name: &str, source: &str, bound: Duration) -> crate::hosti
 
 /// The user's files as they were (files the run wrote since are not compared).
 fn unchanged(before: &common::Snapshot, dir: &Path) {
-    let now = common::snapshot(dir);
-    for (path, hash) in before {
-        assert_eq!(now.get(path), Some(hash), "{} changed", path.display());
-    }
+    common::assert_kept(before, &common::snapshot(dir));
 }
 
 // ---- options ---------------------------------------------------------------------
@@ -367,17 +365,6 @@ fn project_with_db() -> tempfile::TempDir {
     );
     assert_eq!(r.code, Some(0), "{}", r.text);
     dir
-}
-
-/// The user's files, the results database left out (queries read it; fitup writes it).
-fn user_files(dir: &Path) -> common::Snapshot {
-    let mut s = common::snapshot(dir);
-    s.retain(|p, _| {
-        !p.file_name()
-            .and_then(|n| n.to_str())
-            .is_some_and(|n| n.starts_with("fitup.db"))
-    });
-    s
 }
 
 /// Peak resident memory of the database cases (kB): 1 GB.
@@ -742,27 +729,7 @@ fn cache_prune_hashes_a_source_once_and_never_outside() {
     let mut child = common::spawn(p, &["cache", "prune", "--dry-run"]);
     let pid = child.id();
     // Its 800 lines are read meanwhile (a full pipe would stop it).
-    let drain = |r: Option<Box<dyn Read + Send>>| {
-        std::thread::spawn(move || {
-            let mut s = String::new();
-            if let Some(mut r) = r {
-                let _ = r.read_to_string(&mut s);
-            }
-            s
-        })
-    };
-    let out = drain(
-        child
-            .stdout
-            .take()
-            .map(|r| Box::new(r) as Box<dyn Read + Send>),
-    );
-    let err = drain(
-        child
-            .stderr
-            .take()
-            .map(|r| Box::new(r) as Box<dyn Read + Send>),
-    );
+    let (out, err) = common::drain_outputs(&mut child);
     let mut most = 0;
     let start = Instant::now();
     let status = loop {
@@ -775,7 +742,8 @@ fn cache_prune_hashes_a_source_once_and_never_outside() {
         assert!(start.elapsed() < Duration::from_secs(120), "still pruning");
         std::thread::sleep(Duration::from_millis(2));
     };
-    let text = out.join().unwrap() + err.join().unwrap().as_str();
+    let text = String::from_utf8_lossy(&out.join().unwrap()).into_owned()
+        + &*String::from_utf8_lossy(&err.join().unwrap());
     eprintln!(
         "prune --dry-run: read at least {most} bytes; {}",
         text.lines().last().unwrap_or("")

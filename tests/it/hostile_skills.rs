@@ -67,23 +67,9 @@ fn wait_exit(p: &mut Proc, bound: Duration) -> Option<i32> {
 
 /// `fitup manipulator` on the MZ07 of `models/mz07.yaml` (free ports, ×`speed`).
 fn simulator(speed: &str) -> (Proc, SocketAddr, SocketAddr) {
-    let mut sim = spawn(
-        &repo(),
-        &[
-            "manipulator",
-            "--doc",
-            "models/mz07.yaml",
-            "--robot",
-            "mz07",
-            "--port",
-            "0",
-            "--state-port",
-            "0",
-            "--speed",
-            speed,
-        ],
-        false,
-    );
+    let mut args = common::MZ07_SIMULATOR.to_vec();
+    args.extend(["--port", "0", "--state-port", "0", "--speed", speed]);
+    let mut sim = spawn(&repo(), &args, false);
     let line = sim.out.wait_for("listening", Duration::from_secs(60));
     let (m, s) = common::listening_addrs(&line);
     (sim, m, s)
@@ -129,6 +115,25 @@ fn counting_listener() -> (SocketAddr, Arc<AtomicUsize>) {
         }
     });
     (a, n)
+}
+
+/// `fitup skills run FILE --target TARGET [--state-port PORT] --plain` in `dir`,
+/// killed after `bound`.
+fn run_plain(
+    dir: &Path,
+    file: &str,
+    target: SocketAddr,
+    state_port: Option<u16>,
+    bound: Duration,
+) -> std::process::Output {
+    let target = target.to_string();
+    let port = state_port.map(|p| p.to_string());
+    let mut args = vec!["skills", "run", file, "--target", &target];
+    if let Some(p) = &port {
+        args.extend(["--state-port", p.as_str()]);
+    }
+    args.push("--plain");
+    common::run_bounded(dir, &args, bound)
 }
 
 fn status() -> Status {
@@ -196,18 +201,7 @@ fn a_plan_value_that_does_not_fit_the_wire_is_refused_before_dispatch() {
     let file = write(dir.path(), "bomb.plan.json", &plan.to_json());
     let (motion, accepts) = counting_listener();
     let t0 = Instant::now();
-    let o = common::run_bounded(
-        dir.path(),
-        &[
-            "skills",
-            "run",
-            &file,
-            "--target",
-            &motion.to_string(),
-            "--plain",
-        ],
-        Duration::from_secs(20),
-    );
+    let o = run_plain(dir.path(), &file, motion, None, Duration::from_secs(20));
     let text = common::text(&o);
     assert_eq!(o.status.code(), Some(1), "{text}");
     // Located: the file, the JSON path of the value, the cause.
@@ -246,18 +240,11 @@ fn a_controller_that_drops_the_same_point_again_fails_the_run_after_bounded_atte
     }
     let dir = tempfile::tempdir().unwrap();
     let file = write(dir.path(), "p.plan.json", &joint_plan(1, 1.0).to_json());
-    let o = common::run_bounded(
+    let o = run_plain(
         dir.path(),
-        &[
-            "skills",
-            "run",
-            &file,
-            "--target",
-            &motion.to_string(),
-            "--state-port",
-            &state.port().to_string(),
-            "--plain",
-        ],
+        &file,
+        motion,
+        Some(state.port()),
         Duration::from_secs(40),
     );
     let text = common::text(&o);

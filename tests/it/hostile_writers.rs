@@ -11,6 +11,7 @@
 //! speed assertion); a FIFO target must not block a writer.
 
 use crate::common;
+use common::copy_tree;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -66,19 +67,6 @@ fn unchanged(before: &BTreeMap<PathBuf, String>, dir: &Path, what: &str) {
             "{what}: {} changed or vanished",
             path.display()
         );
-    }
-}
-
-fn copy_tree(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let target = to.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            copy_tree(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), target).unwrap();
-        }
     }
 }
 

@@ -9,7 +9,7 @@ use fitup::kinematics::JointKind;
 use fitup::manipulator::client::{Client, ClientOptions, Lost, ManipulatorError, Port, Request};
 use fitup::manipulator::message::{msg_type, Body, ByteOrder, Packet};
 use fitup::manipulator::RefusalCode;
-use fitup::skills::{ControllerCommand, Plan};
+use fitup::skills::Plan;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::process::Stdio;
@@ -70,6 +70,16 @@ fn simulator_of(
 
 fn client(m: SocketAddr, s: SocketAddr) -> Client {
     Client::connect(m, s, KINDS.to_vec(), &ClientOptions::default()).unwrap()
+}
+
+/// The arm reaches where [`joint_plan`]`(3, …)` ends: joint 1 at 0.3, joint 3 at 0.15.
+fn assert_at_the_end_of_three_skills(c: &Client) {
+    let mut end_q = vec![0.0; 6];
+    end_q[0] = 0.3;
+    end_q[2] = 0.15;
+    assert!(c
+        .wait_until_at(&end_q, 1e-3, Duration::from_secs(10), &|| false)
+        .unwrap());
 }
 
 #[test]
@@ -323,18 +333,7 @@ fn joint_plan(skills: usize, seconds: f64) -> Plan {
         } else {
             fitup::skills::PartState::Grasped
         };
-        steps.push(common::gear_step(
-            i,
-            end,
-            vec![
-                ControllerCommand::Trajectory(pts),
-                ControllerCommand::Tool {
-                    action: "set_output".into(),
-                    index: 1,
-                    value: 1.0,
-                },
-            ],
-        ));
+        steps.push(common::gear_move_step(i, end, pts));
     }
     common::mz07_plan(steps)
 }
@@ -386,12 +385,7 @@ fn pause_and_resume_mid_run() {
         .filter(|l| l.starts_with("finished"))
         .collect();
     assert_eq!(finished.len(), 3, "{:?}", run.seen());
-    let mut end_q = vec![0.0; 6];
-    end_q[0] = 0.3;
-    end_q[2] = 0.15;
-    assert!(c
-        .wait_until_at(&end_q, 1e-3, Duration::from_secs(10), &|| false)
-        .unwrap());
+    assert_at_the_end_of_three_skills(&c);
 }
 
 #[test]
@@ -449,12 +443,7 @@ fn killing_the_simulator_mid_skill_interrupts_and_resumes_without_repeating() {
     assert_eq!(log[1].part.as_deref(), Some("gear"));
     // The restarted controller started at home and ends where the plan ends.
     let c = client(m, s);
-    let mut end_q = vec![0.0; 6];
-    end_q[0] = 0.3;
-    end_q[2] = 0.15;
-    assert!(c
-        .wait_until_at(&end_q, 1e-3, Duration::from_secs(10), &|| false)
-        .unwrap());
+    assert_at_the_end_of_three_skills(&c);
 }
 
 /// The client's errors carry their causes as values (issue 25): an address that

@@ -5,6 +5,7 @@
 //! process and over TCP.
 
 use crate::common;
+use common::no_check;
 
 use fitup::collision::{Aabb, SweepMethod};
 use fitup::db::{Database, Target};
@@ -17,7 +18,7 @@ use fitup::math::{AngleConvention, Point3, Transform, Vec3};
 use fitup::planning::PlannedPath;
 use fitup::sequence::{Grasp, Operation, Task};
 use fitup::skills::{
-    generate, screw_pose, Action, ControllerCommand, GeneratorOptions, Plan, SegmentHit,
+    generate, screw_pose, Action, ControllerCommand, GeneratorOptions, Plan, Skill,
 };
 use nalgebra::{Unit, UnitQuaternion};
 use std::collections::BTreeMap;
@@ -106,8 +107,16 @@ fn task(operation: Operation) -> Task {
     }
 }
 
-fn no_check(_: &Task, _: &Transform, _: &Transform) -> Result<(), SegmentHit> {
-    Ok(())
+/// The skills of the one task `t` from the fixture pose `start`, nothing in the way.
+fn skills_from(t: &Task, start: Transform, options: &GeneratorOptions) -> Vec<Skill> {
+    generate(
+        std::slice::from_ref(t),
+        &[],
+        &|_| Some(start),
+        options,
+        &mut no_check,
+    )
+    .unwrap()
 }
 
 fn micro_options() -> GeneratorOptions {
@@ -148,14 +157,7 @@ fn the_generator_chooses_table_or_probes_by_the_seeds_rules() {
     for (turn, want) in cases {
         // At the fixture 10 mm to +X the part is turned by the inverse of `turn`.
         let start = Transform::from_parts(Vec3::new(10.0, 0.0, 0.0), turn.inverse());
-        let skills = generate(
-            std::slice::from_ref(&t),
-            &[],
-            &|_| Some(start),
-            &micro_options(),
-            &mut no_check,
-        )
-        .unwrap();
+        let skills = skills_from(&t, start, &micro_options());
         let turns: Vec<Action> = skills
             .iter()
             .map(|s| s.action)
@@ -189,14 +191,7 @@ fn the_generator_chooses_table_or_probes_by_the_seeds_rules() {
     }
     // A short crossing stays with the probes.
     let start = Transform::from_translation(Vec3::new(1.5, 0.0, 0.0));
-    let skills = generate(
-        std::slice::from_ref(&t),
-        &[],
-        &|_| Some(start),
-        &micro_options(),
-        &mut no_check,
-    )
-    .unwrap();
+    let skills = skills_from(&t, start, &micro_options());
     assert!(skills.iter().all(|s| s.action != Action::MoveTable));
 }
 
@@ -213,14 +208,7 @@ fn a_screw_turns_about_its_axis_and_advances_by_its_pitch() {
         ..micro_options()
     };
     let start = Transform::from_translation(Vec3::new(10.0, 0.0, 0.0));
-    let skills = generate(
-        std::slice::from_ref(&t),
-        &[],
-        &|_| Some(start),
-        &options,
-        &mut no_check,
-    )
-    .unwrap();
+    let skills = skills_from(&t, start, &options);
     let k = skills
         .iter()
         .position(|s| s.action == Action::Screw)

@@ -258,30 +258,20 @@ fn program_runs_through_the_cli() {
         assert!((v - w).abs() < 1e-5, "{last:?}");
     }
     // Two robots: --robot chooses, --log writes the CSV.
-    let out = common::run_in(
-        dir.path(),
-        &[
+    let two_robots = |extra: &[&str]| {
+        let mut args = vec![
             "run",
             "models/mz07_demo.prg",
             "--doc",
             "models/cell_robots.yaml",
-        ],
-    );
+        ];
+        args.extend_from_slice(extra);
+        common::run_in(dir.path(), &args)
+    };
+    let out = two_robots(&[]);
     assert_eq!(out.status.code(), Some(2), "{}", common::text(&out));
     assert!(common::text(&out).contains("--robot"));
-    let out = common::run_in(
-        dir.path(),
-        &[
-            "run",
-            "models/mz07_demo.prg",
-            "--doc",
-            "models/cell_robots.yaml",
-            "--robot",
-            "mz07_a",
-            "--log",
-            "log.csv",
-        ],
-    );
+    let out = two_robots(&["--robot", "mz07_a", "--log", "log.csv"]);
     assert!(out.status.success(), "{}", common::text(&out));
     let log = std::fs::read_to_string(dir.path().join("log.csv")).unwrap();
     assert!(log.lines().count() > 10);

@@ -9,7 +9,7 @@ use crate::common;
 
 use common::lines::Proc;
 use common::{fitup, free_pair, repo};
-use fitup::skills::{ControllerCommand, Plan};
+use fitup::skills::Plan;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::process::Stdio;
@@ -170,17 +170,8 @@ fn spawn(args: &[&str]) -> Proc {
 fn manipulator(extra: &[&str]) -> (Proc, u16, SocketAddr, SocketAddr) {
     let p = free_pair();
     let ps = p.to_string();
-    let mut args = vec![
-        "manipulator",
-        "--doc",
-        "models/mz07.yaml",
-        "--robot",
-        "mz07",
-        "--port",
-        &ps,
-        "--speed",
-        "20",
-    ];
+    let mut args = common::MZ07_SIMULATOR.to_vec();
+    args.extend(["--port", &ps, "--speed", "20"]);
     args.extend(extra);
     let mut sim = spawn(&args);
     let line = sim.wait_for("listening", Duration::from_secs(60));
@@ -651,17 +642,10 @@ fn plan() -> Plan {
             pts.push((p, 0.05));
         }
         q = pts.last().unwrap().0.clone();
-        steps.push(common::gear_step(
+        steps.push(common::gear_move_step(
             i,
             fitup::skills::PartState::Grasped,
-            vec![
-                ControllerCommand::Trajectory(pts),
-                ControllerCommand::Tool {
-                    action: "set_output".into(),
-                    index: 1,
-                    value: 1.0,
-                },
-            ],
+            pts,
         ));
     }
     common::mz07_plan(steps)

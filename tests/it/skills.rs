@@ -2,6 +2,7 @@
 //! generator's path, interference checks, templates, and the whole chain to the
 //! simulated manipulator (in process, over loopback).
 
+use crate::common::no_check;
 use fitup::collision::Aabb;
 use fitup::collision::SweepMethod;
 use fitup::document::Document;
@@ -54,10 +55,6 @@ fn gear_task(assembled: Transform) -> Task {
         path: path(),
         fits: Vec::new(),
     }
-}
-
-fn no_check(_: &Task, _: &Transform, _: &Transform) -> Result<(), SegmentHit> {
-    Ok(())
 }
 
 #[test]

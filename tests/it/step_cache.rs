@@ -45,24 +45,9 @@ fn a_store_that_is_a_symbolic_link_is_refused() {
 #[cfg(feature = "step")]
 mod with_occt {
     use crate::common;
-    use fitup::mesh::step::{write_test_step, STEP_STORE};
-    use std::path::{Path, PathBuf};
-
-    fn stored(dir: &Path) -> Vec<PathBuf> {
-        let mut v: Vec<_> = std::fs::read_dir(dir.join(STEP_STORE))
-            .map(|d| d.map(|e| e.unwrap().path()).collect())
-            .unwrap_or_default();
-        v.retain(|p: &PathBuf| p.extension().is_some_and(|e| e == "tess"));
-        v.sort();
-        v
-    }
-
-    fn run(dir: &Path, args: &[&str]) -> String {
-        let o = common::run_in(dir, args);
-        let t = common::text(&o);
-        assert!(o.status.success(), "{args:?}: {t}");
-        t
-    }
+    use common::run_ok as run;
+    use common::stored_tessellations as stored;
+    use fitup::mesh::step::write_test_step;
 
     /// A user changes a part's `deflection:`, then deletes the STEP file: each time
     /// `fitup cache prune` removes what no document can use, and the tessellation in

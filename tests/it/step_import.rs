@@ -6,25 +6,35 @@
 
 use crate::common;
 
+/// `arm.step` (a STEP header and nothing else) and `cell.yaml`, whose part `arm` names
+/// it with `key` (`stl` or `step`) on line 3.
+fn fake_step_cell(dir: &std::path::Path, key: &str) {
+    std::fs::write(dir.join("arm.step"), "ISO-10303-21;\nHEADER;\nENDSEC;\n").unwrap();
+    std::fs::write(
+        dir.join("cell.yaml"),
+        format!(
+            "parts:\n  arm:\n    {key}: arm.step\ncomponents:\n  - {{name: arm-1, part: arm}}\n"
+        ),
+    )
+    .unwrap();
+}
+
+/// `fitup check cell.yaml` in `dir` fails at the `key:` line (3): its output.
+fn refused_at_line_3(dir: &std::path::Path, key: &str) -> String {
+    let o = common::run_in(dir, &["check", "cell.yaml"]);
+    let t = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("cell.yaml:3"), "at the {key}: line: {t}");
+    t
+}
+
 /// A part whose `stl:` names a STEP file says how to import it (and, without the
 /// feature, how to rebuild), at the `stl:` line.
 #[test]
 fn a_step_file_as_a_part_mesh_says_how_to_import_it() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("arm.step"),
-        "ISO-10303-21;\nHEADER;\nENDSEC;\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.path().join("cell.yaml"),
-        "parts:\n  arm:\n    stl: arm.step\ncomponents:\n  - {name: arm-1, part: arm}\n",
-    )
-    .unwrap();
-    let o = common::run_in(dir.path(), &["check", "cell.yaml"]);
-    let t = common::text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
-    assert!(t.contains("cell.yaml:3"), "at the stl: line: {t}");
+    fake_step_cell(dir.path(), "stl");
+    let t = refused_at_line_3(dir.path(), "stl");
     assert!(t.contains("fitup import"), "{t}");
     if !fitup::mesh::step::AVAILABLE {
         assert!(t.contains("--features step"), "{t}");
@@ -707,21 +717,9 @@ fn the_readme_step_workflow_runs_as_documented() {
 fn without_the_feature_a_step_part_asks_for_a_rebuild() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("fitup.toml"), "").unwrap();
-    std::fs::write(
-        dir.path().join("arm.step"),
-        "ISO-10303-21;\nHEADER;\nENDSEC;\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.path().join("cell.yaml"),
-        "parts:\n  arm:\n    step: arm.step\ncomponents:\n  - {name: arm-1, part: arm}\n",
-    )
-    .unwrap();
+    fake_step_cell(dir.path(), "step");
     let before = common::snapshot(dir.path());
-    let o = common::run_in(dir.path(), &["check", "cell.yaml"]);
-    let t = common::text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
-    assert!(t.contains("cell.yaml:3"), "at the step: line: {t}");
+    let t = refused_at_line_3(dir.path(), "step");
     assert!(t.contains("arm.step"), "{t}");
     assert!(t.contains("cargo install --path . --features step"), "{t}");
     assert_eq!(common::snapshot(dir.path()), before, "nothing written");
@@ -733,8 +731,9 @@ fn without_the_feature_a_step_part_asks_for_a_rebuild() {
 #[cfg(feature = "step")]
 mod step_parts {
     use super::*;
+    use crate::common::stored_tessellations as stored;
     use fitup::document::Document;
-    use fitup::mesh::step::{write_test_step, STEP_STORE};
+    use fitup::mesh::step::write_test_step;
     use std::f64::consts::PI;
     use std::path::{Path, PathBuf};
 
@@ -753,20 +752,8 @@ mod step_parts {
         doc
     }
 
-    fn stored(dir: &Path) -> Vec<PathBuf> {
-        let mut v: Vec<_> = std::fs::read_dir(dir.join(STEP_STORE))
-            .map(|d| d.map(|e| e.unwrap().path()).collect())
-            .unwrap_or_default();
-        v.retain(|p: &PathBuf| p.extension().is_some_and(|e| e == "tess"));
-        v.sort();
-        v
-    }
-
     fn check(dir: &Path) -> String {
-        let o = common::run_in(dir, &["check", "cell.yaml"]);
-        let t = common::text(&o);
-        assert!(o.status.success(), "{t}");
-        t
+        common::run_ok(dir, &["check", "cell.yaml"])
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use crate::common;
 
-use common::Watch;
+use common::{copy_tree, Watch};
 
 use std::path::Path;
 use std::time::Duration;
@@ -142,20 +142,6 @@ fn a_save_cancels_the_running_script() {
     w.out.wait_for("== done 1 cancelled", BOUND);
     w.out.wait_for("== done 2 ok", BOUND);
     assert!(w.out.seen.iter().any(|l| l == "fixed"));
-}
-
-/// Copies a folder tree (files and folders only).
-fn copy_tree(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let target = to.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            copy_tree(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), &target).unwrap();
-        }
-    }
 }
 
 /// A script whose first and last lines print the tag, so a run of a half-written file
