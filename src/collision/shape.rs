@@ -777,7 +777,7 @@ impl Tree<'_> {
                 if parts < SPLIT_GAIN * whole && best.is_none_or(|(b, _)| parts < b) {
                     best = Some((parts, (axis, at)));
                 }
-                if n % 2 == 0 {
+                if n.is_multiple_of(2) {
                     break;
                 }
             }
