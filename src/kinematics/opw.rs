@@ -49,8 +49,7 @@ use super::{
     Branch, Branches, ClosedFormIk, Configuration, Elbow, JointKind, JointLimits, Robot, Shoulder,
     Unreachable, Wrist,
 };
-use crate::math::trig::atan2;
-use crate::math::trig::{rot_vec, wrap};
+use crate::math::trig::{atan2, atan2_lanes, rot_vec, wrap};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 
@@ -257,138 +256,12 @@ impl ClosedFormIk for OpwSolver {
         singularity_threshold: f64,
         q4_seed: f64,
     ) -> Branches {
-        let mut out = Branches::new();
-        let x = self.c_from_root * target;
-        let rx = x.rotation.to_rotation_matrix();
-        let rx = rx.matrix();
-        let w = rx * self.w_tcp + x.translation.vector;
-        if !(w.iter().all(|v| v.is_finite()) && rx.iter().all(|v| v.is_finite())) {
-            // A non-finite target has no solution (and must not yield NaN joints).
-            out.out_of_reach = true;
-            return out;
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (just detected).
+            return unsafe { self.solve_avx2(target, singularity_threshold, q4_seed) };
         }
-        // Only Rw·a6 and Rw·a5 are needed: R_E·a = R_X·(R0ᵀ·a), the bracket precomputed.
-        let re_a6 = rx * self.r0t_a6;
-        let re_a5 = rx * self.r0t_a5;
-        let tol = &self.tol;
-        let (shoulders, n_sh) = self.arm.shoulder(&w, tol, singularity_threshold, &mut out);
-        for sh in &shoulders[..n_sh] {
-            let (s1, c1, q1) = (sh.s1, sh.c1, sh.q1);
-            let d = [sh.xp - self.arm.p2[0], w.z - self.arm.p2[1]];
-            // Rz(−q1)·R_E·a6 and ·a5.
-            let rz =
-                |v: &Vector3<f64>| Vector3::new(c1 * v.x + s1 * v.y, -s1 * v.x + c1 * v.y, v.z);
-            let (r1_a6, r1_a5) = (rz(&re_a6), rz(&re_a5));
-            let shoulder = if sh.front {
-                Shoulder::Front
-            } else {
-                Shoulder::Back
-            };
-            let (elbows, n_el) = self.arm.elbow(d, tol.len, tol, &mut out);
-            for el in &elbows[..n_el] {
-                let (s23, c23) = (el.s23, el.c23);
-                // Ry(−θ23)·….
-                let ry = |v: &Vector3<f64>| {
-                    Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
-                };
-                let t = ry(&r1_a6);
-                // δ = ∠(a4, t) from its sine and cosine: acos(a4·t) loses half the
-                // digits near the singularity (δ = 1e-7 would come back ±1e-9 off).
-                let cw = self.a4.dot(&t);
-                let sd = self.a4.cross(&t).norm();
-                let elbow = if el.first == sh.front {
-                    Elbow::Up
-                } else {
-                    Elbow::Down
-                };
-                let rw_a5 = ry(&r1_a5);
-                let q2 = wrap(self.s2 * el.th2);
-                let q3 = wrap(self.s3 * el.th3);
-                let near_singular = sd < singularity_threshold;
-                let snapped = sd < tol.wrist;
-                if near_singular || snapped {
-                    out.singular = true;
-                }
-                if snapped {
-                    // Axes 4 and 6 aligned (cw > 0) or opposed: q5 is exactly φ5 or
-                    // φ5 + π and only q4 + q6 (or q4 − q6) is determined; it equals ψ,
-                    // the angle about a4 from a5 to Rw·a5. Rule: q4 keeps the seed,
-                    // q6 takes the rest; the flip branch is q4 + π.
-                    let psi = atan2(self.a4.dot(&self.a5.cross(&rw_a5)), self.a5.dot(&rw_a5));
-                    let (q5, sgn) = if cw > 0.0 {
-                        (self.phi5, 1.0)
-                    } else {
-                        (wrap(self.phi5 + PI), -1.0)
-                    };
-                    for (k, wrist) in [(0.0, Wrist::NoFlip), (PI, Wrist::Flip)] {
-                        let q4 = wrap(q4_seed + k);
-                        out.push(Branch {
-                            joints: [q1, q2, q3, q4, q5, wrap(sgn * (psi - q4))],
-                            configuration: Configuration {
-                                shoulder,
-                                elbow,
-                                wrist,
-                            },
-                            singular: true,
-                            polish: false,
-                            provisional: false,
-                        });
-                    }
-                    continue;
-                }
-                let polish =
-                    sd.min(el.margin).min(sh.margin) < POLISH_NEAR && !(sh.snapped || el.snapped);
-                let delta = atan2(sd, cw);
-                let tp = t - self.a4 * self.a4.dot(&t);
-                // No-flip root q5 = φ5 + δ.
-                let s5 = self.s_phi5 * cw + self.c_phi5 * sd;
-                let c5 = self.c_phi5 * cw - self.s_phi5 * sd;
-                let v5 = self.a6 * c5 + self.a5x6 * s5;
-                // q4 turns v5 onto t about a4.
-                let vp = v5 - self.a4 * self.a4.dot(&v5);
-                let crs4 = self.a4.dot(&vp.cross(&tp));
-                let dot4 = vp.dot(&tp);
-                let n4 = (crs4 * crs4 + dot4 * dot4).sqrt();
-                let (s4, c4) = (crs4 / n4, dot4 / n4);
-                // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
-                let m = rot_vec(&self.a5, -s5, c5, &rot_vec(&self.a4, -s4, c4, &rw_a5));
-                let q4 = atan2(crs4, dot4);
-                let q6 = atan2(self.a6.dot(&self.a5.cross(&m)), self.a5.dot(&m));
-                out.push(Branch {
-                    joints: [q1, q2, q3, q4, wrap(self.phi5 + delta), q6],
-                    configuration: Configuration {
-                        shoulder,
-                        elbow,
-                        wrist: Wrist::NoFlip,
-                    },
-                    singular: near_singular,
-                    polish,
-                    provisional: false,
-                });
-                // The flip root follows without trigonometry: since a5 ⟂ a4 and
-                // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
-                // Rot(a4,q4+π)·Rot(a5,2φ5−q5)·Rot(a6,q6+π) = Rot(a4,q4)·Rot(a5,q5)·Rot(a6,q6).
-                out.push(Branch {
-                    joints: [
-                        q1,
-                        q2,
-                        q3,
-                        wrap(q4 + PI),
-                        wrap(self.phi5 - delta),
-                        wrap(q6 + PI),
-                    ],
-                    configuration: Configuration {
-                        shoulder,
-                        elbow,
-                        wrist: Wrist::Flip,
-                    },
-                    singular: near_singular,
-                    polish,
-                    provisional: false,
-                });
-            }
-        }
-        out
+        self.solve(target, singularity_threshold, q4_seed)
     }
 
     fn joint_limits(&self) -> &[Option<JointLimits>; 6] {
@@ -411,6 +284,261 @@ impl ClosedFormIk for OpwSolver {
     fn idealized_forward(&self, q: &[f64; 6]) -> Isometry3<f64> {
         self.forward(q)
     }
+}
+
+impl OpwSolver {
+    /// [`Self::solve`] compiled for AVX2 (three-operand VEX instructions: the same
+    /// operations in the same order, so the same bits; issue 38).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn solve_avx2(
+        &self,
+        target: &Isometry3<f64>,
+        singularity_threshold: f64,
+        q4_seed: f64,
+    ) -> Branches {
+        self.solve(target, singularity_threshold, q4_seed)
+    }
+
+    /// [`ClosedFormIk::branches_seeded`].
+    // Lanes indexed in step across several arrays.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn solve(&self, target: &Isometry3<f64>, singularity_threshold: f64, q4_seed: f64) -> Branches {
+        let mut out = Branches::new();
+        let x = self.c_from_root * target;
+        let rx = x.rotation.to_rotation_matrix();
+        let rx = rx.matrix();
+        let w = rx * self.w_tcp + x.translation.vector;
+        if !(w.iter().all(|v| v.is_finite()) && rx.iter().all(|v| v.is_finite())) {
+            // A non-finite target has no solution (and must not yield NaN joints).
+            out.out_of_reach = true;
+            return out;
+        }
+        // Only Rw·a6 and Rw·a5 are needed: R_E·a = R_X·(R0ᵀ·a), the bracket precomputed.
+        let re_a6 = rx * self.r0t_a6;
+        let re_a5 = rx * self.r0t_a5;
+        let tol = &self.tol;
+        // The arm branches first (up to four), then their wrists side by side: the
+        // same operations lane by lane, straight-line code the compiler runs in
+        // vector registers (issue 38).
+        let mut arm = [ArmBranch::default(); 4];
+        let (mut t, mut r5) = ([[0.0; 4]; 3], [[0.0; 4]; 3]);
+        let mut n = 0;
+        let (shoulders, n_sh) = self.arm.shoulder(&w, tol, singularity_threshold, &mut out);
+        for sh in &shoulders[..n_sh] {
+            let (s1, c1) = (sh.s1, sh.c1);
+            let d = [sh.xp - self.arm.p2[0], w.z - self.arm.p2[1]];
+            // Rz(−q1)·R_E·a6 and ·a5.
+            let rz =
+                |v: &Vector3<f64>| Vector3::new(c1 * v.x + s1 * v.y, -s1 * v.x + c1 * v.y, v.z);
+            let (r1_a6, r1_a5) = (rz(&re_a6), rz(&re_a5));
+            let (elbows, n_el) = self.arm.elbow(d, tol.len, tol, &mut out);
+            for el in &elbows[..n_el] {
+                let (s23, c23) = (el.s23, el.c23);
+                // Ry(−θ23)·….
+                let ry = |v: &Vector3<f64>| {
+                    Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
+                };
+                let (tv, rv) = (ry(&r1_a6), ry(&r1_a5));
+                for k in 0..3 {
+                    t[k][n] = tv[k];
+                    r5[k][n] = rv[k];
+                }
+                arm[n] = ArmBranch {
+                    q: [sh.q1, wrap(self.s2 * el.th2), wrap(self.s3 * el.th3)],
+                    shoulder: if sh.front {
+                        Shoulder::Front
+                    } else {
+                        Shoulder::Back
+                    },
+                    elbow: if el.first == sh.front {
+                        Elbow::Up
+                    } else {
+                        Elbow::Down
+                    },
+                    margin: el.margin.min(sh.margin),
+                    snapped: sh.snapped || el.snapped,
+                };
+                n += 1;
+            }
+        }
+        if n == 0 {
+            return out;
+        }
+        // Unused lanes repeat the first (finite, so no lane takes the slow path).
+        for k in 0..3 {
+            for i in n..4 {
+                t[k][i] = t[k][0];
+                r5[k][i] = r5[k][0];
+            }
+        }
+        let wr = self.wrist_lanes(&t, &r5);
+        for (i, a) in arm.iter().enumerate().take(n) {
+            let [q1, q2, q3] = a.q;
+            let (sd, cw) = (wr.sd[i], wr.cw[i]);
+            let near_singular = sd < singularity_threshold;
+            let snapped = sd < tol.wrist;
+            if near_singular || snapped {
+                out.singular = true;
+            }
+            let configuration = |wrist| Configuration {
+                shoulder: a.shoulder,
+                elbow: a.elbow,
+                wrist,
+            };
+            if snapped {
+                // Axes 4 and 6 aligned (cw > 0) or opposed: q5 is exactly φ5 or
+                // φ5 + π and only q4 + q6 (or q4 − q6) is determined; it equals ψ,
+                // the angle about a4 from a5 to Rw·a5. Rule: q4 keeps the seed,
+                // q6 takes the rest; the flip branch is q4 + π.
+                let rw_a5 = Vector3::new(r5[0][i], r5[1][i], r5[2][i]);
+                let psi = atan2(self.a4.dot(&self.a5.cross(&rw_a5)), self.a5.dot(&rw_a5));
+                let (q5, sgn) = if cw > 0.0 {
+                    (self.phi5, 1.0)
+                } else {
+                    (wrap(self.phi5 + PI), -1.0)
+                };
+                for (k, wrist) in [(0.0, Wrist::NoFlip), (PI, Wrist::Flip)] {
+                    let q4 = wrap(q4_seed + k);
+                    out.push(Branch {
+                        joints: [q1, q2, q3, q4, q5, wrap(sgn * (psi - q4))],
+                        configuration: configuration(wrist),
+                        singular: true,
+                        polish: false,
+                        provisional: false,
+                    });
+                }
+                continue;
+            }
+            let polish = sd.min(a.margin) < POLISH_NEAR && !a.snapped;
+            let (delta, q4, q6) = (wr.delta[i], wr.q4[i], wr.q6[i]);
+            // No-flip root q5 = φ5 + δ.
+            out.push(Branch {
+                joints: [q1, q2, q3, q4, wrap(self.phi5 + delta), q6],
+                configuration: configuration(Wrist::NoFlip),
+                singular: near_singular,
+                polish,
+                provisional: false,
+            });
+            // The flip root follows without trigonometry: since a5 ⟂ a4 and
+            // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
+            // Rot(a4,q4+π)·Rot(a5,2φ5−q5)·Rot(a6,q6+π) = Rot(a4,q4)·Rot(a5,q5)·Rot(a6,q6).
+            out.push(Branch {
+                joints: [
+                    q1,
+                    q2,
+                    q3,
+                    wrap(q4 + PI),
+                    wrap(self.phi5 - delta),
+                    wrap(q6 + PI),
+                ],
+                configuration: configuration(Wrist::Flip),
+                singular: near_singular,
+                polish,
+                provisional: false,
+            });
+        }
+        out
+    }
+
+    /// The regular wrist of four arm branches at once, from `t = Rw·a6` and
+    /// `Rw·a5` (components by lane): the sine and cosine of δ = ∠(a4, t), δ, and
+    /// joints 4 and 6 of the no-flip root. Per lane the operations of the vector
+    /// forms in their order (the same bits; a lane at the singularity carries
+    /// meaningless values, not used).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn wrist_lanes(&self, t: &[[f64; 4]; 3], r5: &[[f64; 4]; 3]) -> WristLanes {
+        let [a4x, a4y, a4z] = [self.a4.x, self.a4.y, self.a4.z];
+        let [a5x, a5y, a5z] = [self.a5.x, self.a5.y, self.a5.z];
+        let [a6x, a6y, a6z] = [self.a6.x, self.a6.y, self.a6.z];
+        let [bx, by, bz] = [self.a5x6.x, self.a5x6.y, self.a5x6.z];
+        let (sp, cp) = (self.s_phi5, self.c_phi5);
+        let mut o = WristLanes::default();
+        let (mut y4, mut x4, mut y6, mut x6) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+        for i in 0..4 {
+            let (tx, ty, tz) = (t[0][i], t[1][i], t[2][i]);
+            // δ = ∠(a4, t) from its sine and cosine: acos(a4·t) loses half the
+            // digits near the singularity (δ = 1e-7 would come back ±1e-9 off).
+            let cw = a4x * tx + a4y * ty + a4z * tz;
+            let (cx, cy, cz) = (
+                a4y * tz - a4z * ty,
+                a4z * tx - a4x * tz,
+                a4x * ty - a4y * tx,
+            );
+            let sd = (cx * cx + cy * cy + cz * cz).sqrt();
+            let (tpx, tpy, tpz) = (tx - a4x * cw, ty - a4y * cw, tz - a4z * cw);
+            // No-flip root q5 = φ5 + δ.
+            let s5 = sp * cw + cp * sd;
+            let c5 = cp * cw - sp * sd;
+            let (vx, vy, vz) = (a6x * c5 + bx * s5, a6y * c5 + by * s5, a6z * c5 + bz * s5);
+            // q4 turns v5 onto t about a4.
+            let dv = a4x * vx + a4y * vy + a4z * vz;
+            let (px, py, pz) = (vx - a4x * dv, vy - a4y * dv, vz - a4z * dv);
+            let crs4 = a4x * (py * tpz - pz * tpy)
+                + a4y * (pz * tpx - px * tpz)
+                + a4z * (px * tpy - py * tpx);
+            let dot4 = px * tpx + py * tpy + pz * tpz;
+            let n4 = (crs4 * crs4 + dot4 * dot4).sqrt();
+            let (s4, c4) = (crs4 / n4, dot4 / n4);
+            // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
+            let m = rot_vec(
+                [a5x, a5y, a5z],
+                -s5,
+                c5,
+                rot_vec([a4x, a4y, a4z], -s4, c4, [r5[0][i], r5[1][i], r5[2][i]]),
+            );
+            let (ux, uy, uz) = (
+                a5y * m[2] - a5z * m[1],
+                a5z * m[0] - a5x * m[2],
+                a5x * m[1] - a5y * m[0],
+            );
+            o.cw[i] = cw;
+            o.sd[i] = sd;
+            y4[i] = crs4;
+            x4[i] = dot4;
+            y6[i] = a6x * ux + a6y * uy + a6z * uz;
+            x6[i] = a5x * m[0] + a5y * m[1] + a5z * m[2];
+        }
+        o.delta = atan2_lanes(&o.sd, &o.cw);
+        o.q4 = atan2_lanes(&y4, &x4);
+        o.q6 = atan2_lanes(&y6, &x6);
+        o
+    }
+}
+
+/// One arm branch of [`OpwSolver::solve`]: joints 1–3, its labels, the nearness of
+/// its shoulder and elbow singularities and whether either was snapped.
+#[derive(Clone, Copy)]
+struct ArmBranch {
+    q: [f64; 3],
+    shoulder: Shoulder,
+    elbow: Elbow,
+    margin: f64,
+    snapped: bool,
+}
+
+impl Default for ArmBranch {
+    fn default() -> Self {
+        Self {
+            q: [0.0; 3],
+            shoulder: Shoulder::Front,
+            elbow: Elbow::Up,
+            margin: 0.0,
+            snapped: false,
+        }
+    }
+}
+
+/// The wrists of [`OpwSolver::wrist_lanes`], by lane.
+#[derive(Default)]
+struct WristLanes {
+    cw: [f64; 4],
+    sd: [f64; 4],
+    delta: [f64; 4],
+    q4: [f64; 4],
+    q6: [f64; 4],
 }
 
 #[cfg(test)]
@@ -543,6 +671,214 @@ mod tests {
 
     /// Joint 5 values at and around the wrist singularity (issue 11).
     const NEAR_SINGULAR: [f64; 7] = [0.0, 1e-12, -1e-12, 1e-9, -1e-9, 1e-7, -1e-7];
+
+    /// Rodrigues rotation as the per-branch form had it.
+    fn rot_v(k: &Vector3<f64>, s: f64, c: f64, v: &Vector3<f64>) -> Vector3<f64> {
+        v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
+    }
+
+    /// The solve as it was before the wrists ran side by side (issue 38): one arm
+    /// branch after the other, nalgebra vectors.
+    fn per_branch(
+        s: &OpwSolver,
+        target: &Isometry3<f64>,
+        singularity_threshold: f64,
+        q4_seed: f64,
+    ) -> Branches {
+        let mut out = Branches::new();
+        let x = s.c_from_root * target;
+        let rx = x.rotation.to_rotation_matrix();
+        let rx = rx.matrix();
+        let w = rx * s.w_tcp + x.translation.vector;
+        if !(w.iter().all(|v| v.is_finite()) && rx.iter().all(|v| v.is_finite())) {
+            // A non-finite target has no solution (and must not yield NaN joints).
+            out.out_of_reach = true;
+            return out;
+        }
+        // Only Rw·a6 and Rw·a5 are needed: R_E·a = R_X·(R0ᵀ·a), the bracket precomputed.
+        let re_a6 = rx * s.r0t_a6;
+        let re_a5 = rx * s.r0t_a5;
+        let tol = &s.tol;
+        let (shoulders, n_sh) = s.arm.shoulder(&w, tol, singularity_threshold, &mut out);
+        for sh in &shoulders[..n_sh] {
+            let (s1, c1, q1) = (sh.s1, sh.c1, sh.q1);
+            let d = [sh.xp - s.arm.p2[0], w.z - s.arm.p2[1]];
+            // Rz(−q1)·R_E·a6 and ·a5.
+            let rz =
+                |v: &Vector3<f64>| Vector3::new(c1 * v.x + s1 * v.y, -s1 * v.x + c1 * v.y, v.z);
+            let (r1_a6, r1_a5) = (rz(&re_a6), rz(&re_a5));
+            let shoulder = if sh.front {
+                Shoulder::Front
+            } else {
+                Shoulder::Back
+            };
+            let (elbows, n_el) = s.arm.elbow(d, tol.len, tol, &mut out);
+            for el in &elbows[..n_el] {
+                let (s23, c23) = (el.s23, el.c23);
+                // Ry(−θ23)·….
+                let ry = |v: &Vector3<f64>| {
+                    Vector3::new(c23 * v.x - s23 * v.z, v.y, s23 * v.x + c23 * v.z)
+                };
+                let t = ry(&r1_a6);
+                // δ = ∠(a4, t) from its sine and cosine: acos(a4·t) loses half the
+                // digits near the singularity (δ = 1e-7 would come back ±1e-9 off).
+                let cw = s.a4.dot(&t);
+                let sd = s.a4.cross(&t).norm();
+                let elbow = if el.first == sh.front {
+                    Elbow::Up
+                } else {
+                    Elbow::Down
+                };
+                let rw_a5 = ry(&r1_a5);
+                let q2 = wrap(s.s2 * el.th2);
+                let q3 = wrap(s.s3 * el.th3);
+                let near_singular = sd < singularity_threshold;
+                let snapped = sd < tol.wrist;
+                if near_singular || snapped {
+                    out.singular = true;
+                }
+                if snapped {
+                    // Axes 4 and 6 aligned (cw > 0) or opposed: q5 is exactly φ5 or
+                    // φ5 + π and only q4 + q6 (or q4 − q6) is determined; it equals ψ,
+                    // the angle about a4 from a5 to Rw·a5. Rule: q4 keeps the seed,
+                    // q6 takes the rest; the flip branch is q4 + π.
+                    let psi = atan2(s.a4.dot(&s.a5.cross(&rw_a5)), s.a5.dot(&rw_a5));
+                    let (q5, sgn) = if cw > 0.0 {
+                        (s.phi5, 1.0)
+                    } else {
+                        (wrap(s.phi5 + PI), -1.0)
+                    };
+                    for (k, wrist) in [(0.0, Wrist::NoFlip), (PI, Wrist::Flip)] {
+                        let q4 = wrap(q4_seed + k);
+                        out.push(Branch {
+                            joints: [q1, q2, q3, q4, q5, wrap(sgn * (psi - q4))],
+                            configuration: Configuration {
+                                shoulder,
+                                elbow,
+                                wrist,
+                            },
+                            singular: true,
+                            polish: false,
+                            provisional: false,
+                        });
+                    }
+                    continue;
+                }
+                let polish =
+                    sd.min(el.margin).min(sh.margin) < POLISH_NEAR && !(sh.snapped || el.snapped);
+                let delta = atan2(sd, cw);
+                let tp = t - s.a4 * s.a4.dot(&t);
+                // No-flip root q5 = φ5 + δ.
+                let s5 = s.s_phi5 * cw + s.c_phi5 * sd;
+                let c5 = s.c_phi5 * cw - s.s_phi5 * sd;
+                let v5 = s.a6 * c5 + s.a5x6 * s5;
+                // q4 turns v5 onto t about a4.
+                let vp = v5 - s.a4 * s.a4.dot(&v5);
+                let crs4 = s.a4.dot(&vp.cross(&tp));
+                let dot4 = vp.dot(&tp);
+                let n4 = (crs4 * crs4 + dot4 * dot4).sqrt();
+                let (s4, c4) = (crs4 / n4, dot4 / n4);
+                // q6 turns a5 onto Rot(a5,−q5)·Rot(a4,−q4)·Rw·a5 about a6.
+                let m = rot_v(&s.a5, -s5, c5, &rot_v(&s.a4, -s4, c4, &rw_a5));
+                let q4 = atan2(crs4, dot4);
+                let q6 = atan2(s.a6.dot(&s.a5.cross(&m)), s.a5.dot(&m));
+                out.push(Branch {
+                    joints: [q1, q2, q3, q4, wrap(s.phi5 + delta), q6],
+                    configuration: Configuration {
+                        shoulder,
+                        elbow,
+                        wrist: Wrist::NoFlip,
+                    },
+                    singular: near_singular,
+                    polish,
+                    provisional: false,
+                });
+                // The flip root follows without trigonometry: since a5 ⟂ a4 and
+                // Rot(a4,π)·Rot(a6,π) = Rot(a5, 2φ5),
+                // Rot(a4,q4+π)·Rot(a5,2φ5−q5)·Rot(a6,q6+π) = Rot(a4,q4)·Rot(a5,q5)·Rot(a6,q6).
+                out.push(Branch {
+                    joints: [
+                        q1,
+                        q2,
+                        q3,
+                        wrap(q4 + PI),
+                        wrap(s.phi5 - delta),
+                        wrap(q6 + PI),
+                    ],
+                    configuration: Configuration {
+                        shoulder,
+                        elbow,
+                        wrist: Wrist::Flip,
+                    },
+                    singular: near_singular,
+                    polish,
+                    provisional: false,
+                });
+            }
+        }
+        out
+    }
+
+    /// The side-by-side wrists give the per-branch form's bits: every branch, label
+    /// and flag, on random, wrist-singular, near-singular and shoulder-singular
+    /// targets of every catalog OPW arm (both the dispatched and the portable code).
+    #[test]
+    fn lanes_give_the_per_branch_bits() {
+        let mut rng = Rng::new(3838);
+        let same = |a: &Branches, b: &Branches| {
+            a.len() == b.len()
+                && a.singular == b.singular
+                && a.undetermined == b.undetermined
+                && a.out_of_reach == b.out_of_reach
+                && a.as_slice().iter().zip(b.as_slice()).all(|(x, y)| {
+                    x.joints.map(f64::to_bits) == y.joints.map(f64::to_bits)
+                        && x.configuration == y.configuration
+                        && x.singular == y.singular
+                        && x.polish == y.polish
+                        && x.provisional == y.provisional
+                })
+        };
+        let mut compared = 0;
+        for arm in OPW_ARMS {
+            let r = arm.robot();
+            let s = r.analytic().unwrap();
+            for k in 0..4000 {
+                let mut q = random_q(&mut rng, &r);
+                match k % 4 {
+                    1 => q[4] = s.phi5 + NEAR_SINGULAR[k / 4 % NEAR_SINGULAR.len()],
+                    2 => q[4] = wrap(s.phi5 + PI) + NEAR_SINGULAR[k / 4 % NEAR_SINGULAR.len()],
+                    _ => {}
+                }
+                let mut target = *r.tcp_pose(&q).unwrap().isometry();
+                if k % 16 == 3 {
+                    // The wrist centre moved onto axis 1 (or near it).
+                    let wc = s.c_from_root * (target * Point3::from(s.w_tcp));
+                    let shift = Vector3::new(wc.x, wc.y, 0.0) * (1.0 - rng.range(0.0, 1e-9));
+                    target.translation.vector -= s.root_from_c.rotation * shift;
+                }
+                if k % 16 == 7 {
+                    // Out of reach or at the edge.
+                    target.translation.vector *= rng.range(1.0, 3.0);
+                }
+                for thr in [1e-9, 1e-3] {
+                    let seed = rng.range(-PI, PI);
+                    let reference = per_branch(s, &target, thr, seed);
+                    let got = s.branches_seeded(&target, thr, seed);
+                    let portable = s.solve(&target, thr, seed);
+                    assert!(
+                        same(&got, &reference) && same(&portable, &reference),
+                        "{} {q:?}: {:?} / {:?}, per branch {:?}",
+                        arm.name(),
+                        got.as_slice(),
+                        portable.as_slice(),
+                        reference.as_slice()
+                    );
+                    compared += reference.len();
+                }
+            }
+        }
+        assert!(compared > 100_000, "{compared}");
+    }
 
     /// Checks the wrist-singularity properties for `robot` at joints `q` whose joint 5
     /// is `eps` away from the singular value (axes 4 and 6 aligned, or opposed when

@@ -25,7 +25,6 @@
 //! guard, the branch-free angle [`wrap`], and the planar and Rodrigues rotations by a
 //! known sine and cosine.
 
-use super::Vec3;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_8, PI, TAU};
 
 /// `tan(π/8)` as a double.
@@ -86,6 +85,44 @@ pub fn atan2(y: f64, x: f64) -> f64 {
             0.0f64.copysign(y)
         };
     }
+    atan2_reduced(y, x, n, d, swapped)
+}
+
+/// [`atan2`] of `N` pairs, lane by lane the same bits: straight-line code that the
+/// compiler can run in vector registers; lanes that are infinite, NaN or both zero
+/// (rare) are redone by [`atan2`].
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(crate) fn atan2_lanes<const N: usize>(y: &[f64; N], x: &[f64; N]) -> [f64; N] {
+    let mut r = [0.0; N];
+    let mut special = false;
+    for i in 0..N {
+        r[i] = atan2_finite(y[i], x[i]);
+        let (ax, ay) = (x[i].abs(), y[i].abs());
+        // Finite (NaN compares false) and not both zero.
+        let ok = (ax < f64::INFINITY) & (ay < f64::INFINITY) & ((ax > 0.0) | (ay > 0.0));
+        special |= !ok;
+    }
+    if special {
+        for i in 0..N {
+            r[i] = atan2(y[i], x[i]);
+        }
+    }
+    r
+}
+
+/// [`atan2`] of finite `y`, `x`, not both zero.
+#[inline(always)]
+fn atan2_finite(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let swapped = ay > ax;
+    let (n, d) = if swapped { (ax, ay) } else { (ay, ax) };
+    atan2_reduced(y, x, n, d, swapped)
+}
+
+/// [`atan2`] from `n = min(|x|, |y|)`, `d = max(|x|, |y|) > 0` and whether `|y| > |x|`.
+#[inline(always)]
+fn atan2_reduced(y: f64, x: f64, n: f64, d: f64, swapped: bool) -> f64 {
     // atan(n / d) = atan(c) + atan(u).
     let (i1, i2) = (n > T1 * d, n > T2 * d);
     // The reduction point by a table load: with a chain of selects here the UR solve
@@ -132,10 +169,21 @@ pub(crate) fn rot2(v: [f64; 2], s: f64, c: f64) -> [f64; 2] {
     [v[0] * c + v[1] * s, -v[0] * s + v[1] * c]
 }
 
-/// Rodrigues rotation of `v` about unit `k` by the angle with sine `s`, cosine `c`.
-#[inline]
-pub(crate) fn rot_vec(k: &Vec3, s: f64, c: f64, v: &Vec3) -> Vec3 {
-    v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
+/// Rodrigues rotation of `v` about unit `k` by the angle with sine `s`, cosine `c`,
+/// on arrays (`v·c + (k × v)·s + k·((k·v)(1 − c))`, summed left to right).
+#[inline(always)]
+pub(crate) fn rot_vec(k: [f64; 3], s: f64, c: f64, v: [f64; 3]) -> [f64; 3] {
+    let kxv = [
+        k[1] * v[2] - k[2] * v[1],
+        k[2] * v[0] - k[0] * v[2],
+        k[0] * v[1] - k[1] * v[0],
+    ];
+    let f = (k[0] * v[0] + k[1] * v[1] + k[2] * v[2]) * (1.0 - c);
+    [
+        v[0] * c + kxv[0] * s + k[0] * f,
+        v[1] * c + kxv[1] * s + k[1] * f,
+        v[2] * c + kxv[2] * s + k[2] * f,
+    ]
 }
 
 /// Wraps an angle into (−π, π].

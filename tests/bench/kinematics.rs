@@ -80,6 +80,9 @@ fn main() {
         let _ = std::fs::remove_dir_all(&out_dir);
         return;
     }
+    // `FITUP_KIN_BENCH=opw`: only the MZ07 IK against C++ opw_kinematics (for profiling
+    // and before/after runs).
+    let opw_only = std::env::var("FITUP_KIN_BENCH").is_ok_and(|v| v == "opw");
     // fitup: the catalog MZ07 with the tool at the flange (80 mm from the wrist centre).
     let mz07 = Catalog::NachiMz07.robot().with_tool(Transform::IDENTITY);
     let solver = mz07
@@ -171,6 +174,18 @@ fn main() {
                 black_box(solver.branches(black_box(t), 1e-9));
             }
         }));
+        if opw_only {
+            if let Some(p) = &mut opw_cpp {
+                ik_cpp.push(p.bench(PEER_REPS, &cpp_targets).0);
+            }
+            println!(
+                "round {round:2}: IK fitup {:7.1} ns, C++ opw_kinematics {:7.1} ns | loadavg {}",
+                ik_a[round],
+                ik_cpp.last().copied().unwrap_or(f64::NAN),
+                loadavg()
+            );
+            continue;
+        }
         ik_b.push(per_call(IK_REPS, &mut || {
             for t in &theirs {
                 black_box(peer.inverse(black_box(t)));
@@ -203,6 +218,24 @@ fn main() {
             "round {round:2}: IK fitup {:7.1} ns, peer {:7.1} ns | FK fitup {:6.1} ns, peer {:6.1} ns | tree FK {:6.1} ns | Robot::inverse {:7.1} ns | loadavg {}",
             ik_a[round], ik_b[round], fk_a[round], fk_b[round], fk_tree[round], ik_full[round], loadavg()
         );
+    }
+    if opw_only {
+        if ik_cpp.is_empty() {
+            ik_cpp.push(f64::NAN); // no peer
+        }
+        let ic = median(&mut ik_cpp);
+        let ia = median(&mut ik_a);
+        let (lo, hi) = (ik_a[0], ik_a[ROUNDS - 1]);
+        println!(
+            "\nMZ07 all-branch IK, medians over {ROUNDS} rounds: fitup {ia:.1} ns (rounds {lo:.1}–{hi:.1}), C++ opw_kinematics {ic:.1} ns ({:.1}–{:.1}): peer / fitup {:.3}; loadavg at end: {}",
+            ik_cpp[0],
+            ik_cpp[ik_cpp.len() - 1],
+            ic / ia,
+            loadavg()
+        );
+        drop(opw_cpp);
+        let _ = std::fs::remove_dir_all(&out_dir);
+        return;
     }
     let (ia, ib, fa, fb) = (
         median(&mut ik_a),
