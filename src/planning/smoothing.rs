@@ -361,7 +361,9 @@ impl LazyPath {
         let mut needs = |k: usize| {
             matches!(self.edges[k], Edge::Screened(_))
                 && !ahead.is_some_and(|ahead| {
-                    let free = ahead.take(&self.poses[k], &self.poses[k + 1]) == Some(true);
+                    // Not waiting for an edge the worker is on: the piece is
+                    // less work than the rest of the edge might be.
+                    let free = ahead.take(&self.poses[k], &self.poses[k + 1], false) == Some(true);
                     if free {
                         checker.count_edge();
                     }
@@ -547,15 +549,23 @@ impl LazyPath {
                 // path's start: they meet in between.
                 Some(ahead) => {
                     ahead.resync(&self);
-                    ends.iter()
-                        .map(|(a, b)| match ahead.take(a, b) {
-                            Some(free) => {
-                                checker.count_edge();
-                                free
+                    // Edges the worker is on are waited for last.
+                    let mut verdicts = vec![None; ends.len()];
+                    for pass in [false, true] {
+                        for (v, (a, b)) in verdicts.iter_mut().zip(&ends) {
+                            if v.is_some() || !pass && ahead.running(a, b) {
+                                continue;
                             }
-                            None => checker.certify(a, b),
-                        })
-                        .collect()
+                            *v = Some(match ahead.take(a, b, true) {
+                                Some(free) => {
+                                    checker.count_edge();
+                                    free
+                                }
+                                None => checker.certify(a, b),
+                            });
+                        }
+                    }
+                    verdicts.into_iter().map(|v| v == Some(true)).collect()
                 }
                 None => checker.certify_each(&ends),
             };
@@ -598,7 +608,8 @@ fn screened(checker: &mut Checker<'_>, a: &Transform, b: &Transform, screen: (f6
 /// alone, so using the worker's verdict or making one gives the same path: the
 /// worker only changes when the answer is known. Where smoothing needs a verdict
 /// the worker has not reached, it takes the edge off the queue and certifies it
-/// itself; it waits only for the edge the worker is on.
+/// (or the piece it keeps) itself; it waits for the edge the worker is on only
+/// when it needs that whole edge (the final certification), after the others.
 struct Ahead {
     state: Mutex<AheadState>,
     changed: Condvar,
@@ -677,22 +688,28 @@ impl Ahead {
         self.changed.notify_all();
     }
 
-    /// The worker's verdict on `a → b`, waiting while the worker is on it; `None`
-    /// when it has not started it (the edge is then off its queue: the caller
-    /// certifies it).
-    fn take(&self, a: &Transform, b: &Transform) -> Option<bool> {
+    /// The worker's verdict on `a → b`; `None` when it has none (the edge is then
+    /// off its queue: the caller certifies it, or what it needs of it). `wait`:
+    /// while the worker is on the edge, wait for its verdict rather than answer
+    /// `None`.
+    fn take(&self, a: &Transform, b: &Transform, wait: bool) -> Option<bool> {
         let key = (*a, *b);
         let mut s = self.lock();
         loop {
             if let Some(&(_, free)) = s.done.iter().find(|(e, _)| *e == key) {
                 return Some(free);
             }
-            if s.running != Some(key) {
+            if !wait || s.running != Some(key) {
                 s.queue.retain(|e| *e != key);
                 return None;
             }
             s = self.changed.wait(s).unwrap_or_else(PoisonError::into_inner);
         }
+    }
+
+    /// Whether the worker is on edge `a → b`.
+    fn running(&self, a: &Transform, b: &Transform) -> bool {
+        self.lock().running == Some((*a, *b))
     }
 }
 
