@@ -5,16 +5,23 @@ Run from the repository root, in the virtualenv holding the module:
 
     python python/bench/overhead.py            # runs the Rust bench first
     python python/bench/overhead.py --no-rust  # Python and Rhai only
+    python python/bench/overhead.py --bench-bin PATH  # that bench binary, not cargo's
+
+`FITUP_CALLS=ik_ur5e,floor` runs only the calls named (here and in the Rust bench).
 
 The Rust and Rhai columns come from `cargo bench --profile dev --bench call_overhead`
 (tests/bench/call_overhead.rs), started by this script, the dev profile being the one
 `.ci/run` builds the module with; the Python column and a second Rhai column (through
 `fitup.run_script` in this process, the module's own build) are timed here right
-after. Calls: FK of the demo MZ07 (`Robot.fk`), IK of every branch (`Robot.ik`), an
+after. Calls: FK of the demo MZ07 (`Robot.fk`), IK of every branch (`Robot.ik`; the
+MZ07, and a UR5e of the published D-H lengths without limits), an
 interference check of one pair of the demo cell (`Document.interferes`), a short plan
-(screw5 lifted 40 mm, RRT-Connect, seed 3), and the batch forms per pose
-(`fk_batch`, `ik_batch`, 20 000 poses). Medians of 7 rounds, wall clock; Rhai figures
-minus an empty loop of the same shape, as in the Rust bench.
+(screw5 lifted 40 mm, RRT-Connect, seed 3), the floor (a trivial call: `Robot.dof`,
+Rhai's `q.len()`), and the batch forms per pose (`fk_batch`, `ik_batch`, 20 000
+poses). Medians of 7 rounds of CPU time: the calling thread's for Python
+(`time.thread_time_ns`, as the Rust bench), the process's for `run_script` (the script
+runs on a thread of its own); Rhai figures minus the same loop binding the loop
+counter, as in the Rust bench.
 """
 
 import os
@@ -45,6 +52,9 @@ let arm = d.robot("mz07");
 let q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0];
 arm.joints = q;
 let t = arm.fk(q);
+let ur = open_doc("models/ur5e.yaml").robot("ur5e");
+ur.joints = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0];
+let tu = ur.tcp;
 let cell = open_doc("models/cell.yaml");
 let goal = cell.component("screw5").transform * translation(0.0, 0.0, 40.0);
 let opts = #{planner: "rrt_connect", seed: 3};
@@ -53,51 +63,77 @@ cell.interferes("screw4", "screw5");
 RHAI = {
     "fk": ("arm.fk(q)", N_KINEMATICS),
     "ik_all": ("arm.ik(t)", N_KINEMATICS),
+    "ik_ur5e": ("ur.ik(tu)", N_KINEMATICS),
+    "floor": ("q.len()", N_KINEMATICS),
     "interferes": ('cell.interferes("screw4", "screw5")', N_CHECK),
     "plan_short": ('cell.plan_path("screw5", goal, opts)', N_PLAN),
 }
+
+
+# The UR5e of tests/bench/call_overhead.rs (`UR5E_YAML`), written beside the demo models.
+UR5E_YAML = """robots:
+- name: ur5e
+  dh:
+    rows:
+    - {theta: 0, d: 162.5, a: 0, alpha: 90}
+    - {theta: 0, d: 0, a: -425, alpha: 0}
+    - {theta: 0, d: 0, a: -392.2, alpha: 0}
+    - {theta: 0, d: 133.3, a: 0, alpha: 90}
+    - {theta: 0, d: 99.7, a: 0, alpha: -90}
+    - {theta: 0, d: 99.6, a: 0, alpha: 0}
+"""
+UR5E_Q = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0]
 
 
 def loadavg():
     return pathlib.Path("/proc/loadavg").read_text().split()[:3]
 
 
+ONLY = os.environ.get("FITUP_CALLS")
+
+
+def wanted(name):
+    return ONLY is None or name in ONLY.split(",")
+
+
 def median_ns(f, n):
     out = []
     for _ in range(ROUNDS):
-        t0 = time.perf_counter()
+        t0 = time.thread_time_ns()
         for _ in range(n):
             f()
-        out.append((time.perf_counter() - t0) / n * 1e9)
+        out.append((time.thread_time_ns() - t0) / n)
     return statistics.median(out)
 
 
 def median_batch_ns(f, n):
     out = []
     for _ in range(ROUNDS):
-        t0 = time.perf_counter()
+        t0 = time.thread_time_ns()
         f()
-        out.append((time.perf_counter() - t0) / n * 1e9)
+        out.append((time.thread_time_ns() - t0) / n)
     return statistics.median(out)
 
 
 def rhai_ns(project, call, n):
-    def wall(expr):
+    def cpu(expr):
         script = project / "scripts" / "bench.rhai"
         script.write_text(SETUP + f"for i in 0..{n} {{ let x = {expr}; }}\n")
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         fitup.run_script(script, max_operations=0)
-        return time.perf_counter() - t0
+        return time.process_time() - t0
 
     out = []
     for _ in range(ROUNDS):
-        out.append((wall(call) - wall("q")) / n * 1e9)
+        out.append((cpu(call) - cpu("i")) / n * 1e9)
     return statistics.median(out)
 
 
 def rust_rows():
     """`CALL name rust rhai` lines of the Rust bench, by name."""
     cmd = ["cargo", "bench", "--profile", "dev", "--bench", "call_overhead"]
+    if "--bench-bin" in sys.argv:
+        cmd = [sys.argv[sys.argv.index("--bench-bin") + 1]]
     print("$", " ".join(cmd), " # load", *loadavg(), flush=True)
     out = subprocess.run(cmd, cwd=REPO, check=True, capture_output=True, text=True).stdout
     rows = {}
@@ -118,33 +154,51 @@ def main():
     goal = fitup.translation(0, 0, 40) @ cell.pose("screw5")
     assert cell.plan_path("screw5", goal, planner="rrt_connect", seed=3).found
     assert len(arm.ik(t, q)) > 1
-    py = {
-        "fk": median_ns(lambda: arm.fk(q), N_KINEMATICS),
-        "ik_all": median_ns(lambda: arm.ik(t, q), N_KINEMATICS),
-        "interferes": median_ns(lambda: cell.interferes("screw4", "screw5"), N_CHECK),
-        "plan_short": median_ns(
-            lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3), N_PLAN
+    with tempfile.TemporaryDirectory() as d:
+        (pathlib.Path(d) / "ur5e.yaml").write_text(UR5E_YAML)
+        ur = fitup.Document(pathlib.Path(d) / "ur5e.yaml").robot("ur5e")
+    uq = np.radians(UR5E_Q)
+    tu = ur.fk(uq)
+    assert len(ur.ik(tu, uq)) > 1
+    calls = {
+        "fk": (lambda: arm.fk(q), N_KINEMATICS),
+        "ik_all": (lambda: arm.ik(t, q), N_KINEMATICS),
+        "ik_ur5e": (lambda: ur.ik(tu, uq), N_KINEMATICS),
+        "floor": (lambda: arm.dof, N_KINEMATICS),
+        "interferes": (lambda: cell.interferes("screw4", "screw5"), N_CHECK),
+        "plan_short": (
+            lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3),
+            N_PLAN,
         ),
     }
+    py = {k: median_ns(f, n) for k, (f, n) in calls.items() if wanted(k)}
     qs = np.tile(q, (N_KINEMATICS, 1))
     ts = np.tile(t, (N_KINEMATICS, 1, 1))
-    batch = {
-        "fk": median_batch_ns(lambda: arm.fk_batch(qs), N_KINEMATICS),
-        "ik_all": median_batch_ns(lambda: arm.ik_batch(ts, q), N_KINEMATICS),
+    batches = {
+        "fk": lambda: arm.fk_batch(qs),
+        "ik_all": lambda: arm.ik_batch(ts, q),
     }
+    batch = {k: median_batch_ns(f, N_KINEMATICS) for k, f in batches.items() if wanted(k)}
     with tempfile.TemporaryDirectory() as d:
         p = pathlib.Path(d)
         (p / "fitup.toml").write_text("")
         (p / "scripts").mkdir()
         shutil.copytree(REPO / "models", p / "models")
-        rh = {k: rhai_ns(p, call, n) for k, (call, n) in RHAI.items()}
+        (p / "models" / "ur5e.yaml").write_text(UR5E_YAML)
+        rh = {k: rhai_ns(p, call, n) for k, (call, n) in RHAI.items() if wanted(k)}
     print("done, load", *loadavg())
     print()
-    print("ns per call | Rust | Rhai (cargo bench) | Rhai (in Python) | Python | Python − Rust")
-    print("---|---|---|---|---|---")
+    print(
+        "ns per call | Rust | Rhai (cargo bench) | Rhai (in Python) | Python | Python − Rust"
+        " | Python / Rust"
+    )
+    print("---|---|---|---|---|---|---")
     for k in py:
         r, rb = rust.get(k, (float("nan"), float("nan")))
-        print(f"{k} | {r:.0f} | {rb:.0f} | {rh[k]:.0f} | {py[k]:.0f} | {py[k] - r:.0f}")
+        ratio = py[k] / r if r > 0 else float("nan")
+        print(
+            f"{k} | {r:.0f} | {rb:.0f} | {rh[k]:.0f} | {py[k]:.0f} | {py[k] - r:.0f} | {ratio:.2f}"
+        )
     for k in batch:
         r = rust.get(k, (float("nan"),))[0]
         print(f"{k} batch, per pose | {r:.0f} | | | {batch[k]:.0f} | {batch[k] - r:.0f}")

@@ -39,6 +39,7 @@ def run_script(
     root: Optional[_StrPath] = None,
     db: Optional[str] = None,
     max_operations: Optional[int] = None,
+    max_seconds: Optional[int] = None,
 ) -> Dict[str, Any]:
     """Runs the Rhai script ``script`` to completion, as ``fitup run`` does: sandboxed,
     file access bounded by its project (``root``, else the nearest folder holding
@@ -49,7 +50,9 @@ def run_script(
     floats, ``true``/``false``, else text); ``db``: record the run in this results
     database (a file or ``postgres://`` URL; the script's ``open_db()`` of the same
     database files its results under the run); ``max_operations``: the operation
-    limit (0 = none).
+    limit (0 = none); ``max_seconds``: the wall-time limit of the run, seconds (default
+    3600, as ``fitup run --max-seconds``; 0 = none): a script still running then stops
+    with a ``ScriptError`` naming the limit, at the line it had reached.
 
     Returns a dict ``output`` (the printed lines), ``files_read``, ``files_written``,
     ``elapsed_s``, ``operations``. A failing script raises ``ScriptError`` with the

@@ -5,7 +5,10 @@
 use crate::error::{Error, Result};
 use fitup::math::Transform;
 use numpy::ndarray::{aview2, Array1, Array2, Array3, ArrayView1, ArrayView2, ArrayView3};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use numpy::{
+    AllowTypeChange, IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayLike1, PyArrayLike2,
+    PyArrayMethods, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 
 /// The column-vector 4×4 matrix of a pose (mm): the transpose of the document's
@@ -37,6 +40,108 @@ pub fn pose_of(a: ArrayView2<'_, f64>, argument: &'static str) -> Result<Transfo
         }
     }
     Transform::from_matrix(&m).map_err(|source| Error::Pose { argument, source })
+}
+
+/// A 4×4 argument's numbers as given (column-vector layout), or its shape when it is
+/// not 4×4: a float64 array is read where it is (no copy of the array and none of
+/// numpy's borrow bookkeeping, which cost more than the kinematics of one call: the 16
+/// numbers are copied out at once, the GIL held); anything else (a list, another
+/// dtype) is converted by numpy first, as a `PyArrayLike2` argument is.
+pub enum Matrix4 {
+    /// The numbers, `m[row][column]`.
+    Numbers([[f64; 4]; 4]),
+    /// The shape of an argument that is not 4×4.
+    Shape(Vec<usize>),
+}
+
+impl Matrix4 {
+    fn of_view(a: ArrayView2<'_, f64>) -> Self {
+        if a.shape() != [4, 4] {
+            return Self::Shape(a.shape().to_vec());
+        }
+        Self::Numbers(std::array::from_fn(|i| std::array::from_fn(|j| a[[i, j]])))
+    }
+
+    /// The pose (see [`pose_of`]).
+    pub fn pose(&self, argument: &'static str) -> Result<Transform> {
+        match self {
+            Self::Numbers(c) => {
+                let m = std::array::from_fn(|i| std::array::from_fn(|j| c[j][i]));
+                Transform::from_matrix(&m).map_err(|source| Error::Pose { argument, source })
+            }
+            Self::Shape(shape) => Err(Error::Shape {
+                argument,
+                expected: "(4, 4)",
+                shape: shape.clone(),
+            }),
+        }
+    }
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Matrix4 {
+    type Error = PyErr;
+
+    fn extract(ob: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if let Ok(a) = ob.cast::<PyArray2<f64>>() {
+            if a.shape() != [4, 4] {
+                return Ok(Self::Shape(a.shape().to_vec()));
+            }
+            if a.is_c_contiguous() {
+                if let Ok(v) = a.to_vec() {
+                    return Ok(Self::Numbers(std::array::from_fn(|i| {
+                        std::array::from_fn(|j| v[4 * i + j])
+                    })));
+                }
+            }
+            let mut m = [[0.0; 4]; 4];
+            for (i, row) in m.iter_mut().enumerate() {
+                for (j, x) in row.iter_mut().enumerate() {
+                    *x = a.get_owned([i, j]).unwrap_or(f64::NAN);
+                }
+            }
+            return Ok(Self::Numbers(m));
+        }
+        let a: PyArrayLike2<'py, f64, AllowTypeChange> = ob.extract()?;
+        Ok(Self::of_view(a.as_array()))
+    }
+}
+
+/// A joint array argument (rad, mm): a float64 array copied out where it is, as
+/// [`Matrix4`] reads one; anything else converted by numpy first.
+pub struct Joints(pub Vec<f64>);
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Joints {
+    type Error = PyErr;
+
+    fn extract(ob: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if let Ok(a) = ob.cast::<PyArray1<f64>>() {
+            if let Ok(v) = a.to_vec() {
+                return Ok(Self(v));
+            }
+        }
+        let a: PyArrayLike1<'py, f64, AllowTypeChange> = ob.extract()?;
+        Ok(Self(joints_of(a.as_array())))
+    }
+}
+
+/// Rows as a new `(N, width)` array copied into numpy's own buffer (one object, as
+/// [`pose_array`]; [`rows`] hands numpy a Rust buffer, the form for large results).
+pub fn small_rows<'py, R: AsRef<[f64]>>(
+    py: Python<'py>,
+    rows: impl IntoIterator<Item = R>,
+    width: usize,
+) -> Bound<'py, PyArray2<f64>> {
+    let mut flat = Vec::new();
+    let mut n = 0;
+    for r in rows {
+        let r = r.as_ref();
+        flat.extend((0..width).map(|j| r.get(j).copied().unwrap_or(f64::NAN)));
+        n += 1;
+    }
+    match ArrayView2::from_shape((n, width), &flat) {
+        Ok(v) => PyArray2::from_array(py, &v),
+        Err(_) => PyArray2::zeros(py, [0, width], false),
+    }
 }
 
 /// Poses from an `(N, 4, 4)` view; a single `(4, 4)` is one pose.

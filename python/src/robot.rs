@@ -189,11 +189,17 @@ impl Robot {
     fn ik<'py>(
         &self,
         py: Python<'py>,
-        target: PyArrayLike2<'py, f64, AllowTypeChange>,
-        reference: Option<PyArrayLike1<'py, f64, AllowTypeChange>>,
+        target: convert::Matrix4,
+        reference: Option<convert::Joints>,
     ) -> Result<Bound<'py, PyArray2<f64>>> {
-        let t = convert::pose_of(target.as_array(), "target")?;
-        let r = self.reference(reference)?;
+        // Arguments read as `Matrix4` / `Joints`: a float64 array without numpy's
+        // borrow bookkeeping (most of this call's cost beside the kinematics).
+        let t = target.pose("target")?;
+        let r = match reference {
+            Some(convert::Joints(q)) => q,
+            None => vec![0.0; self.robot.dof()],
+        };
+        self.check_width(r.len())?;
         // A closed-form call is a few µs: releasing the GIL would cost a fair share of
         // it. The numeric solver's restarts can take milliseconds: released.
         let s = if self.robot.closed_form() {
@@ -201,7 +207,7 @@ impl Robot {
         } else {
             py.detach(|| self.solutions(&t, &r))?
         };
-        Ok(convert::rows(
+        Ok(convert::small_rows(
             py,
             s.iter().map(|s| &s.joints),
             self.robot.dof(),

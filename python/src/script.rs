@@ -44,14 +44,18 @@ fn words(args: Option<&Bound<'_, PyDict>>) -> Result<Vec<String>> {
 /// floats, ``true``/``false``, else text); ``db``: record the run in this results
 /// database (a file or ``postgres://`` URL; the script's ``open_db()`` of the same
 /// database files its results under the run); ``max_operations``: the operation
-/// limit (0 = none).
+/// limit (0 = none); ``max_seconds``: the wall-time limit of the run, seconds (default
+/// 3600, as ``fitup run --max-seconds``; 0 = none): a script still running then stops
+/// with a ``ScriptError`` naming the limit, at the line it had reached.
 ///
 /// Returns a dict ``output`` (the printed lines), ``files_read``, ``files_written``,
 /// ``elapsed_s``, ``operations``. A failing script raises ``ScriptError`` with the
 /// script's ``file``, ``line`` and ``column`` and the ``output`` printed before it.
 /// The GIL is released while the script runs.
 #[pyfunction]
-#[pyo3(signature = (script, doc = None, args = None, root = None, db = None, max_operations = None))]
+#[pyo3(signature = (script, doc = None, args = None, root = None, db = None, max_operations = None, max_seconds = None))]
+// Python's keyword arguments, one parameter each.
+#[allow(clippy::too_many_arguments)]
 pub fn run_script<'py>(
     py: Python<'py>,
     script: PathBuf,
@@ -60,6 +64,7 @@ pub fn run_script<'py>(
     root: Option<PathBuf>,
     db: Option<String>,
     max_operations: Option<u64>,
+    max_seconds: Option<u64>,
 ) -> Result<Bound<'py, PyDict>> {
     let words = words(args)?;
     let arguments = Arguments::parse(&words)?;
@@ -93,6 +98,7 @@ pub fn run_script<'py>(
         doc,
         limits: Limits {
             max_operations: max_operations.unwrap_or(Limits::default().max_operations),
+            max_seconds: max_seconds.unwrap_or(Limits::default().max_seconds),
             ..Limits::default()
         },
         cancel: Arc::new(AtomicBool::new(false)),

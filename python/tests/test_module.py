@@ -246,6 +246,18 @@ def test_run_script_with_arguments_and_located_failure(project):
     assert run["status"] == "ok" and "2 z" in run["output"]
 
 
+def test_run_script_stops_at_its_time_limit(project):
+    (project / "forever.rhai").write_text('print("started");\nlet x = 0;\nloop { x += 1; }\n')
+    t0 = time.monotonic()
+    with pytest.raises(fitup.ScriptError) as e:
+        # No operation limit: only the time limit can stop the loop.
+        fitup.run_script(project / "forever.rhai", max_operations=0, max_seconds=1)
+    assert time.monotonic() - t0 < 30
+    assert "time limit of 1 s" in e.value.cause and "max_seconds" in e.value.cause, e.value.cause
+    assert e.value.file.endswith("forever.rhai") and e.value.line == 3
+    assert e.value.output == ["started"]
+
+
 def test_long_calls_release_the_gil(project):
     (project / "spin.rhai").write_text("let x = 0;\nfor i in 0..3000000 { x += 1; }\nprint(x);\n")
     done = threading.Event()

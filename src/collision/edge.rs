@@ -201,7 +201,7 @@ fn edge_check(
     // reaches that far for them.
     let margin = super::containment::walk_margin(pairs.shared_faces, pairs.eps);
     // A moving node's swept box is met by many obstacle nodes: made once.
-    let mut swept_boxes: Vec<Option<Obb>> = vec![None; moving.obbs.len()];
+    let mut swept_boxes = SweptBoxes::lend(moving.obbs.len());
     let mut stack: Vec<(u32, u32)> = vec![(0, 0)];
     let mut popped = 0u32;
     let mut tally = super::EffortTally(0);
@@ -212,8 +212,7 @@ fn edge_check(
             return Ok(None);
         }
         let (no, nm) = (&obstacle.nodes[i as usize], &moving.nodes[j as usize]);
-        let swept = *swept_boxes[j as usize]
-            .get_or_insert_with(|| swept_obb(&moving.obbs[j as usize], &sweep, &frames));
+        let swept = swept_boxes.get(j, || swept_obb(&moving.obbs[j as usize], &sweep, &frames));
         if !rel.boxes_meet(&obstacle.obbs[i as usize], &swept, margin) {
             continue;
         }
@@ -267,6 +266,86 @@ fn edge_check(
         }
     }
     Ok(Some(false))
+}
+
+/// The moving part's swept node boxes of one edge check, made on first use: a
+/// thread's scratch lent to the check ([`SweptLease`]) and given back when it ends, so a check
+/// neither allocates nor clears a slot per node (on a finely meshed part, 65,000
+/// nodes for OMPL.app's escape robot, that cost more than the walk itself).
+struct SweptBoxes {
+    /// The current check; `stamp[j] == generation` when `boxes[j]` is node `j`'s.
+    generation: u32,
+    stamp: Vec<u32>,
+    boxes: Vec<Obb>,
+}
+
+thread_local! {
+    static SWEPT_BOXES: std::cell::Cell<Option<SweptBoxes>> = const { std::cell::Cell::new(None) };
+}
+
+impl SweptBoxes {
+    /// The thread's scratch (or a new one) for a check of a part with `nodes` nodes.
+    fn lend(nodes: usize) -> SweptLease {
+        let mut s = SWEPT_BOXES
+            .try_with(|c| c.take())
+            .ok()
+            .flatten()
+            .unwrap_or(SweptBoxes {
+                generation: 0,
+                stamp: Vec::new(),
+                boxes: Vec::new(),
+            });
+        s.generation = s.generation.wrapping_add(1);
+        if s.generation == 0 {
+            s.stamp.fill(0);
+            s.generation = 1;
+        }
+        if s.stamp.len() < nodes {
+            s.stamp.resize(nodes, 0);
+            s.boxes.resize(nodes, Obb::BLANK);
+        }
+        SweptLease(s)
+    }
+
+    /// Node `j`'s swept box, made by `make` on first use in this check.
+    #[inline]
+    fn get(&mut self, j: u32, make: impl FnOnce() -> Obb) -> Obb {
+        let at = j as usize;
+        if self.stamp[at] != self.generation {
+            self.stamp[at] = self.generation;
+            self.boxes[at] = make();
+        }
+        self.boxes[at]
+    }
+}
+
+/// A lent [`SweptBoxes`], given back to the thread when the check ends (a check
+/// nested in another's has a scratch of its own, dropped then).
+struct SweptLease(SweptBoxes);
+
+impl std::ops::Deref for SweptLease {
+    type Target = SweptBoxes;
+    fn deref(&self) -> &SweptBoxes {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for SweptLease {
+    fn deref_mut(&mut self) -> &mut SweptBoxes {
+        &mut self.0
+    }
+}
+
+impl Drop for SweptLease {
+    fn drop(&mut self) {
+        let s = SweptBoxes {
+            generation: self.0.generation,
+            stamp: std::mem::take(&mut self.0.stamp),
+            boxes: std::mem::take(&mut self.0.boxes),
+        };
+        // the value replaced is a plain `SweptBoxes`: no drop runs back in here
+        let _ = SWEPT_BOXES.try_with(|c| c.set(Some(s)));
+    }
 }
 
 /// A box (moving part frame at the edge start) holding every position of `b` over

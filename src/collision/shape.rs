@@ -15,9 +15,30 @@ use std::sync::{Arc, OnceLock, Weak};
 /// exceeds the contact tolerances used here.
 pub const MAX_COORDINATE: f64 = 1e9;
 
-/// Most triangles per BVH leaf (leaves hold 2 to 4): small leaves keep the leaf
-/// boxes tight, and a leaf pair's triangles are culled by plane before pairing.
+/// Most triangles per BVH leaf. A leaf pair's triangles are culled by plane before
+/// pairing, which beats two more levels of box tests where a few facets of a fine
+/// tessellation lie close together; a group bent round a corner or a tube is split
+/// further ([`SPLIT_GAIN`]).
 pub(crate) const LEAF_SIZE: usize = 4;
+
+/// A group small enough for a leaf is split on while some split of it gives halves
+/// whose oriented boxes have less than this share of its own box's surface
+/// (`Tree::leaf_split`).
+///
+/// Measured on OMPL.app's meshes (docs/performance.md, "Pose checks on OMPL.app's
+/// meshes"): leaves of up to four made near-contact checks 1.3–2× slower than
+/// leaves of one on the low-poly alpha, Home, Apartment and Abstract, where four
+/// facets bent round a corner or a tube leave their box mostly empty; leaves of one
+/// made them 1.3× slower on the finely meshed escape (and its plans up to 2.6×
+/// slower). Thresholds of 0.95 and 1.0 left most of alpha's loss.
+const SPLIT_GAIN: f64 = 1.1;
+
+/// A group whose facets' normals are all within about 14° of one another (cosine
+/// at least this) is a patch of a smooth or flat surface and keeps its leaf
+/// whatever [`SPLIT_GAIN`] says: splitting such groups gave a fine sphere 2.7 times
+/// the nodes (memory) and made escape's near-contact checks 1.2× slower, for no
+/// gain elsewhere.
+const FLAT_GROUP_COS: f64 = 0.97;
 
 /// Nodes over more triangles than this take their oriented box around their
 /// children's boxes instead of scanning every corner (the scans of the top levels
@@ -257,6 +278,12 @@ pub(crate) struct Node {
 /// Built once per mesh ([`Collider::new`]) and shared through `Arc`; queries take it
 /// with a pose (`Transform`, part frame → world). Degenerate (zero-area) triangles
 /// are dropped: they bound no material.
+///
+/// Memory: at most `2n − 1` nodes (a leaf per triangle) of an axis-aligned and an
+/// oriented box (184 bytes) for `n` triangles, with each triangle's plane and index:
+/// at most about 410 bytes a triangle besides the mesh, 0.8 GB at
+/// [`MAX_TRIANGLES`](crate::mesh::MAX_TRIANGLES); a fine, smooth tessellation keeps
+/// leaves of up to four and about a third of that.
 #[derive(Debug)]
 pub struct Collider {
     mesh: Arc<Mesh>,
@@ -366,8 +393,8 @@ impl Collider {
         let mut tree = Tree {
             mesh: &mesh,
             origin: mesh.bounds().map_or(Vec3::zeros(), |b| b.centre().coords),
-            nodes: Vec::with_capacity(2 * items.len() / (LEAF_SIZE / 2) + 2),
-            obbs: Vec::with_capacity(2 * items.len() / (LEAF_SIZE / 2) + 2),
+            nodes: Vec::with_capacity(2 * items.len()),
+            obbs: Vec::with_capacity(2 * items.len()),
         };
         tree.nodes.push(Node {
             bounds: Aabb::EMPTY,
@@ -684,6 +711,80 @@ struct Tree<'m> {
 }
 
 impl Tree<'_> {
+    /// Splits `items` at the median along the widest extent of their centroids
+    /// (reordering them) and returns the index of the split.
+    fn split(items: &mut [Item]) -> usize {
+        let mut cb = Aabb::EMPTY;
+        items.iter().for_each(|(c, _)| cb.grow(c));
+        let ext = cb.hi - cb.lo;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        Self::split_on(items, axis, items.len() / 2)
+    }
+
+    /// Splits `items` into the `at` of least centroid coordinate `axis` and the
+    /// rest (reordering them); returns `at`.
+    fn split_on(items: &mut [Item], axis: usize, at: usize) -> usize {
+        items.select_nth_unstable_by(at, |a, b| a.0[axis].total_cmp(&b.0[axis]));
+        at
+    }
+
+    /// The oriented box of `items`' corners along their principal axes.
+    fn fitted(&self, items: &[Item]) -> Obb {
+        let axes = Moments::of(self.mesh, items, &self.origin).principal_axes(&Matrix3::identity());
+        let (lo, hi, aabb) = extents(self.mesh, items, &axes);
+        Obb::from_extents(&axes, lo, hi, &aabb)
+    }
+
+    /// For a group of at most [`LEAF_SIZE`] triangles: how to split it instead of
+    /// making it a leaf, if at all (a centroid axis and how many go first). None for
+    /// a group of facets facing nearly one way ([`FLAT_GROUP_COS`]); else, of the
+    /// splits at the middle along x, y and z (both middles of an odd count), the one
+    /// whose halves' boxes have the least surface, if that is less than
+    /// [`SPLIT_GAIN`] of the group's box's (the widest axis's median alone missed
+    /// the split between two faces of a corner).
+    fn leaf_split(&self, items: &[Item]) -> Option<(usize, usize)> {
+        if items.len() < 2 {
+            return None;
+        }
+        // proportional to a box's surface
+        let surface =
+            |o: &Obb| o.half[0] * o.half[1] + o.half[1] * o.half[2] + o.half[2] * o.half[0];
+        let normals: Vec<Vec3> = items
+            .iter()
+            .filter_map(|it| unit_normal(&self.mesh.triangle(it.1 as usize)))
+            .collect();
+        if normals
+            .iter()
+            .all(|a| normals.iter().all(|b| a.dot(b) >= FLAT_GROUP_COS))
+        {
+            return None;
+        }
+        let whole = surface(&self.fitted(items));
+        let mut halves = items.to_vec();
+        let n = items.len();
+        let mut best: Option<(f64, (usize, usize))> = None;
+        for axis in 0..3 {
+            for at in [n / 2, n - n / 2] {
+                Self::split_on(&mut halves, axis, at);
+                let parts =
+                    surface(&self.fitted(&halves[..at])) + surface(&self.fitted(&halves[at..]));
+                if parts < SPLIT_GAIN * whole && best.is_none_or(|(b, _)| parts < b) {
+                    best = Some((parts, (axis, at)));
+                }
+                if n.is_multiple_of(2) {
+                    break;
+                }
+            }
+        }
+        best.map(|(_, split)| split)
+    }
+
     /// Builds node `at` over `items` (which start at `offset` in tree order) and
     /// returns the moments of its triangles' corners about `self.origin`.
     ///
@@ -701,24 +802,21 @@ impl Tree<'_> {
         offset: usize,
         hint: &Matrix3<f64>,
     ) -> (Moments, Matrix3<f64>) {
-        let (moments, start, children) = if items.len() <= LEAF_SIZE {
+        let leaf_split = if items.len() <= LEAF_SIZE {
+            self.leaf_split(items)
+        } else {
+            None
+        };
+        let (moments, start, children) = if items.len() <= LEAF_SIZE && leaf_split.is_none() {
             self.nodes[at].first = offset as u32;
             self.nodes[at].count = items.len() as u32;
             let m = Moments::of(self.mesh, items, &self.origin);
             (m, *hint, None)
         } else {
-            let mut cb = Aabb::EMPTY;
-            items.iter().for_each(|(c, _)| cb.grow(c));
-            let ext = cb.hi - cb.lo;
-            let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                0
-            } else if ext.y >= ext.z {
-                1
-            } else {
-                2
+            let mid = match leaf_split {
+                Some((axis, at)) => Self::split_on(items, axis, at),
+                None => Self::split(items),
             };
-            let mid = items.len() / 2;
-            items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
             let left = self.nodes.len();
             self.nodes[at].first = left as u32;
             self.nodes[at].count = 0;
@@ -850,6 +948,67 @@ impl ColliderCache {
 mod tests {
     use super::*;
     use crate::math::Rng;
+
+    /// Two facets folded at a right angle get a leaf each, the same two unfolded
+    /// into a square share one; a finely meshed flat plate and a fine sphere keep
+    /// leaves of several;
+    /// nodes are the size [`Collider`]'s memory note counts (184 bytes with their
+    /// oriented boxes).
+    #[test]
+    fn bent_groups_are_split_and_flat_patches_kept() {
+        let tree = |mesh: Mesh| {
+            let c = Collider::new(Arc::new(mesh)).unwrap();
+            let leaves = c.nodes.iter().filter(|x| x.count > 0).count();
+            assert_eq!(
+                c.nodes.iter().map(|x| x.count as usize).sum::<usize>(),
+                c.triangle_count()
+            );
+            assert!(c.nodes.iter().all(|x| x.count as usize <= LEAF_SIZE));
+            assert_eq!(c.nodes.len(), 2 * leaves - 1);
+            (c, leaves)
+        };
+        let p = |x: f64, y: f64, z: f64| Point3::new(x, y, z);
+        let pair = |fourth: Point3| {
+            let vertices = vec![
+                p(0.0, 0.0, 0.0),
+                p(10.0, 0.0, 0.0),
+                p(0.0, 10.0, 0.0),
+                fourth,
+            ];
+            Mesh::new(vertices, vec![[0, 1, 2], [1, 3, 2]]).unwrap()
+        };
+        // a square, then folded along its diagonal by a right angle
+        assert_eq!(tree(pair(p(10.0, 10.0, 0.0))).1, 1, "flat");
+        let h = 50f64.sqrt();
+        assert_eq!(tree(pair(p(5.0, 5.0, h))).1, 2, "folded");
+        // a 64 × 64 grid of squares, two triangles each, in one plane
+        let cells = 64usize;
+        let mut vertices = Vec::new();
+        for i in 0..=cells {
+            for j in 0..=cells {
+                vertices.push(Point3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let at = |i: usize, j: usize| (i * (cells + 1) + j) as u32;
+        let mut triangles = Vec::new();
+        for i in 0..cells {
+            for j in 0..cells {
+                triangles.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                triangles.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+        let (plate, leaves) = tree(Mesh::new(vertices, triangles).unwrap());
+        let mean = plate.triangle_count() as f64 / leaves as f64;
+        assert!(mean > 1.5, "leaves of {mean} triangles on average");
+        // a fine sphere (facets 5.6° apart) keeps leaves of up to four
+        let (sphere, leaves) = tree(Mesh::uv_sphere(10.0, 64));
+        let mean = sphere.triangle_count() as f64 / leaves as f64;
+        assert!(mean > 3.5, "leaves of {mean} triangles on average");
+        assert_eq!(
+            std::mem::size_of::<Node>() + std::mem::size_of::<Obb>(),
+            184
+        );
+    }
 
     /// The Jacobi solver's axes are orthonormal and diagonalise the matrix, for
     /// random covariances and the awkward cases (repeated eigenvalues, rank 1 and 2,

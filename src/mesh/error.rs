@@ -85,6 +85,7 @@ impl MeshError {
     }
 
     /// The same error, `suffix` after its message (a unit, a hint).
+    #[cfg_attr(not(feature = "formats"), allow(dead_code))]
     pub(crate) fn suffixed(mut self, suffix: &str) -> Self {
         self.message.push_str(suffix);
         self

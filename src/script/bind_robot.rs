@@ -17,8 +17,8 @@ use crate::document::robot::{
 };
 use crate::kinematics::{
     drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
-    DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkOptions, JointLimits, MotionOptions,
-    OpwParameters, Robot, Trajectory,
+    DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkOptions, IkSolution, JointLimits,
+    MotionOptions, OpwParameters, Robot, Trajectory,
 };
 use crate::math::{AngleConvention, Transform};
 use crate::options::{Drill, Motion};
@@ -78,6 +78,27 @@ impl RobotHandle {
         let doc = self.doc.lock()?;
         let r = doc.robot_at(self.index).map_err(fail)?;
         Ok((r.shared_robot(), r.joints().to_vec()))
+    }
+
+    /// `f` of the shared robot and its current joints (rad/mm), copied out under the
+    /// document lock onto the stack (no allocation for up to [`STACK_JOINTS`] joints);
+    /// the lock is not held while `f` runs.
+    fn with_joints<R>(&self, f: impl FnOnce(&Robot, &[f64]) -> ScriptResult<R>) -> ScriptResult<R> {
+        let mut stack = [0.0; STACK_JOINTS];
+        let (robot, heap, n) = {
+            let doc = self.doc.lock()?;
+            let r = doc.robot_at(self.index).map_err(fail)?;
+            let q = r.joints();
+            let heap = match stack.get_mut(..q.len()) {
+                Some(s) => {
+                    s.copy_from_slice(q);
+                    None
+                }
+                None => Some(q.to_vec()),
+            };
+            (r.shared_robot(), heap, q.len())
+        };
+        f(&robot, heap.as_deref().unwrap_or(&stack[..n]))
     }
 
     /// The shared robot alone (no joint copy).
@@ -144,6 +165,71 @@ fn joints_arg(robot: &Robot, v: &Dynamic, what: &str) -> ScriptResult<Vec<f64>> 
 /// A script array of joint values (degrees / mm) from rad / mm.
 fn joints_out(robot: &Robot, q: &[f64]) -> Dynamic {
     floats(joints_to_document_iter(robot, q))
+}
+
+/// Joint arrays of up to this many joints are handled on the stack by the IK bindings.
+const STACK_JOINTS: usize = 12;
+
+/// Solutions as a script array of joint arrays (degrees / mm), as [`joints_out`] makes
+/// each but with each joint's unit factor looked up once per call, not once per value:
+/// `x.to_degrees()` is `x * (180 / π)`, and the factor is `to_degrees(1)` (1 for a
+/// prismatic joint), so the values are the same to the bit.
+fn solutions_out(robot: &Robot, sols: &[IkSolution]) -> Array {
+    let dof = robot.dof();
+    if dof > STACK_JOINTS {
+        return sols.iter().map(|s| joints_out(robot, &s.joints)).collect();
+    }
+    let mut factor = [1.0; STACK_JOINTS];
+    for (f, k) in factor
+        .iter_mut()
+        .zip(joints_to_document_iter(robot, &[1.0; STACK_JOINTS][..dof]))
+    {
+        *f = k;
+    }
+    sols.iter()
+        .map(|s| {
+            Dynamic::from_array(
+                s.joints
+                    .iter()
+                    .zip(&factor)
+                    .map(|(v, f)| Dynamic::from_float(v * f))
+                    .collect(),
+            )
+        })
+        .collect()
+}
+
+/// `Robot.ik`: every solution for `target`, nearest the robot's current joints first.
+fn ik_every(r: &RobotHandle, target: &Transform) -> ScriptResult<Array> {
+    r.with_joints(|robot, q| {
+        let sols = robot
+            .inverse(target, q, &ik_all())
+            .map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
+        if sols.is_empty() {
+            return err(format!(
+                "robot `{}`: ik: no solution within the joint limits",
+                robot.name()
+            ));
+        }
+        Ok(solutions_out(robot, &sols))
+    })
+}
+
+/// `RobotModel.ik`: every solution for `target`, nearest all-zero joints first.
+fn model_ik_every(robot: &Robot, target: &Transform) -> ScriptResult<Array> {
+    let zero = [0.0; STACK_JOINTS];
+    let heap;
+    let reference = match zero.get(..robot.dof()) {
+        Some(z) => z,
+        None => {
+            heap = vec![0.0; robot.dof()];
+            &heap[..]
+        }
+    };
+    let sols = robot
+        .inverse(target, reference, &ik_all())
+        .map_err(|e| fail(format!("ik: {e}")))?;
+    Ok(solutions_out(robot, &sols))
 }
 
 /// Motion options from a map (the library's [`Motion`] vocabulary: `speed` mm/s,
@@ -427,14 +513,13 @@ fn register_robots(api: &mut Api) {
 /// Inverse kinematics: every branch, the nearest one, branches with their configuration.
 fn register_ik(api: &mut Api) {
     api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. At a wrist singularity (joints 4 and 6 aligned) every branch still comes back with joint 5 exactly at its singular value and joint 4 kept at its current value (joint 6 takes the rest). An unreachable target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
-        let (robot, q) = r.snapshot()?;
-        let target = to_transform(&t, "target")?;
-        let sols = robot.inverse(&target, &q, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
-        if sols.is_empty() {
-            return err(format!("robot `{}`: ik: no solution within the joint limits", robot.name()));
-        }
-        Ok(sols.iter().map(|s| joints_out(&robot, &s.joints)).collect())
+        ik_every(r, &to_transform(&t, "target")?)
     });
+    // A Transform target, the usual one: no Dynamic conversion.
+    api.overload(
+        "Robot.ik(target) -> array",
+        |r: &mut RobotHandle, t: Transform| -> ScriptResult<Array> { ik_every(r, &t) },
+    );
     api.f("Robot.ik_near(target, joints: array) -> array", "The joint solution (degrees) for the world pose `target` nearest to `joints` (degrees); the robot does not move.", |r: &mut RobotHandle, t: Dynamic, j: Dynamic| -> ScriptResult<Dynamic> {
         let robot = r.shared()?;
         let target = to_transform(&t, "target")?;
@@ -600,13 +685,12 @@ fn register_models(api: &mut Api, ctx: &Arc<Context>) {
         "RobotModel.ik(target) -> array",
         "Every joint solution (degrees) for the world pose, nearest to all-zero joints first.",
         |r: &mut RobotModel, t: Dynamic| -> ScriptResult<Array> {
-            let target = to_transform(&t, "target")?;
-            let zero = vec![0.0; r.0.dof()];
-            let sols =
-                r.0.inverse(&target, &zero, &ik_all())
-                    .map_err(|e| fail(format!("ik: {e}")))?;
-            Ok(sols.iter().map(|s| joints_out(&r.0, &s.joints)).collect())
+            model_ik_every(&r.0, &to_transform(&t, "target")?)
         },
+    );
+    api.overload(
+        "RobotModel.ik(target) -> array",
+        |r: &mut RobotModel, t: Transform| -> ScriptResult<Array> { model_ik_every(&r.0, &t) },
     );
     fn add_robot(
         c: &Context,

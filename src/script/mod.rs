@@ -595,7 +595,7 @@ fn run_inner(opts: &RunOptions, ctx: &Arc<Context>) -> Result<(), ScriptError> {
 fn time_limit_message(limits: &Limits) -> String {
     format!(
         "the script ran past its time limit of {} s; if it really needs longer, raise it \
-         with `--max-seconds N` (0: no limit)",
+         with `--max-seconds N` (from Python: `run_script(..., max_seconds=N)`; 0: no limit)",
         crate::math::format::count(limits.max_seconds)
     )
 }

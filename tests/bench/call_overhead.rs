@@ -1,26 +1,32 @@
 //! One call's cost from Rust and from a Rhai script, for the calls docs/performance.md
 //! ("Python") compares with Python (`python/bench/overhead.py` runs this bench first
-//! and adds its own columns): FK, IK of every branch, an interference check of one
-//! pair and a short plan (screw5 lifted 40 mm, RRT-Connect, seed 3), on the demo
-//! MZ07 and cell documents. Script figures subtract an empty loop of the same shape.
+//! and adds its own columns): FK, IK of every branch (the demo MZ07, and a UR5e of
+//! the published D-H lengths without joint limits), an interference check
+//! of one pair and a short plan (screw5 lifted 40 mm, RRT-Connect, seed 3), on the
+//! demo MZ07 and cell documents; and the floor, `q.len()`: the interpreter's cost of
+//! one native method call. Scripts run in fitup's script engine (`script::engine`:
+//! every binding, the sandbox's operation counting) on the bench's thread, the set-up
+//! once; times are this thread's CPU time, which a busy machine inflates far less than
+//! wall time. A script figure is the loop `for i in 0..n { let x = CALL; }` minus the
+//! same loop with `let x = i;`, divided by n.
 //!
 //! Run: `cargo bench --profile dev --bench call_overhead` (the profile of the Python
 //! module CI builds; drop `--profile dev` for release figures).
 //!
 //! Besides the table it prints one `CALL <name> <rust ns> <rhai ns>` line per call,
-//! read by overhead.py.
+//! read by overhead.py. `FITUP_CALLS=ik_ur5e,floor` runs only the calls named.
 
 use fitup::document::Document;
 use fitup::kinematics::IkOptions;
 use fitup::math::{Transform, Vec3};
 use fitup::planning::Planner;
+use fitup::script::{Caches, Context, Limits, Project};
 use fitup::workspace::{CheckOptions, PlanRequest, SceneCache, Workspace};
-#[path = "rhai_timing.rs"]
-mod rhai_timing;
 
 use std::hint::black_box;
 use std::path::Path;
-use std::time::Instant;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 const ROUNDS: usize = 7;
 
@@ -29,11 +35,31 @@ const N_KINEMATICS: usize = 20_000;
 const N_CHECK: usize = 2_000;
 const N_PLAN: usize = 20;
 
+/// A UR5e of the published D-H lengths (`Catalog::Ur5e`'s) without joint limits: every
+/// branch once, no ±360° variants. python/bench/overhead.py writes the same file.
+const UR5E_YAML: &str = "robots:
+- name: ur5e
+  dh:
+    rows:
+    - {theta: 0, d: 162.5, a: 0, alpha: 90}
+    - {theta: 0, d: 0, a: -425, alpha: 0}
+    - {theta: 0, d: 0, a: -392.2, alpha: 0}
+    - {theta: 0, d: 133.3, a: 0, alpha: 90}
+    - {theta: 0, d: 99.7, a: 0, alpha: -90}
+    - {theta: 0, d: 99.6, a: 0, alpha: 0}
+";
+
+/// The UR5e's joints (degrees): away from every singularity.
+const UR5E_Q: [f64; 6] = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0];
+
 const SETUP: &str = r#"let d = open_doc("models/mz07.yaml");
 let arm = d.robot("mz07");
 let q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0];
 arm.joints = q;
 let t = arm.fk(q);
+let ur = open_doc("models/ur5e.yaml").robot("ur5e");
+ur.joints = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0];
+let tu = ur.tcp;
 let cell = open_doc("models/cell.yaml");
 let goal = cell.component("screw5").transform * translation(0.0, 0.0, 40.0);
 let opts = #{planner: "rrt_connect", seed: 3};
@@ -45,21 +71,78 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-/// ns per call of `n` calls of the script expression `call`, minus the same loop on `q`.
-fn rhai_ns(dir: &Path, call: &str, n: usize) -> f64 {
-    let body = |x: &str| format!("{SETUP}for i in 0..{n} {{ let x = {x}; }}\n");
-    let full = rhai_timing::rhai_seconds(dir, &body(call));
-    let empty = rhai_timing::rhai_seconds(dir, &body("q"));
-    (full - empty) / n as f64 * 1e9
+/// CPU time of this thread (ns): `clock_gettime(CLOCK_THREAD_CPUTIME_ID)`, exact to the
+/// nanosecond (/proc/thread-self/schedstat moves in steps of a scheduler tick).
+#[cfg(unix)]
+fn cpu_ns() -> u64 {
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+    t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
 }
 
-/// ns per call of `n` calls of `f`.
+/// Wall time elsewhere (no thread CPU clock in std).
+#[cfg(not(unix))]
+fn cpu_ns() -> u64 {
+    use std::sync::OnceLock;
+    use std::time::Instant;
+    static START: OnceLock<Instant> = OnceLock::new();
+    START.get_or_init(Instant::now).elapsed().as_nanos() as u64
+}
+
+/// fitup's script engine on this thread, its scope after [`SETUP`]: the loops are
+/// timed alone (no document opening, no compiling), with this thread's CPU time.
+struct Rhai {
+    engine: rhai::Engine,
+    scope: rhai::Scope<'static>,
+}
+
+impl Rhai {
+    fn new(root: &Path) -> Self {
+        let limits = Limits {
+            max_operations: u64::MAX / 2,
+            ..Limits::default()
+        };
+        let ctx = Arc::new(Context::new(
+            Project::new(root).unwrap(),
+            Arc::new(Caches::default()),
+            Arc::new(AtomicBool::new(false)),
+            Arc::new(|l: &str| println!("{l}")),
+        ));
+        let engine = fitup::script::engine(&ctx, &limits);
+        let mut scope = rhai::Scope::new();
+        engine.run_with_scope(&mut scope, SETUP).expect("set-up");
+        Self { engine, scope }
+    }
+
+    /// CPU ns of `n` iterations of `let x = {expr};`.
+    fn loop_ns(&mut self, expr: &str, n: usize) -> f64 {
+        let text = format!("for i in 0..{n} {{ let x = {expr}; }}");
+        let ast = self
+            .engine
+            .compile_with_scope(&self.scope, &text)
+            .expect("loop");
+        let t0 = cpu_ns();
+        self.engine
+            .run_ast_with_scope(&mut self.scope, &ast)
+            .expect("bench loop");
+        (cpu_ns() - t0) as f64
+    }
+
+    /// ns per call of `n` calls of the script expression `call`, minus the same loop
+    /// binding the loop counter (`let x = i;`: no allocation, unlike an array).
+    fn ns(&mut self, call: &str, n: usize) -> f64 {
+        let full = self.loop_ns(call, n);
+        let empty = self.loop_ns("i", n);
+        (full - empty) / n as f64
+    }
+}
+
+/// CPU ns per call of `n` calls of `f`.
 fn rust_ns(n: usize, mut f: impl FnMut()) -> f64 {
-    let t0 = Instant::now();
+    let t0 = cpu_ns();
     for _ in 0..n {
         f();
     }
-    t0.elapsed().as_secs_f64() / n as f64 * 1e9
+    (cpu_ns() - t0) as f64 / n as f64
 }
 
 fn main() {
@@ -74,6 +157,18 @@ fn main() {
         .collect();
     let target = robot.tcp_pose(&q).unwrap();
     let every = IkOptions::every_branch();
+    std::fs::write(dir.path().join("models/ur5e.yaml"), UR5E_YAML).unwrap();
+    let ur_doc = Document::open(&dir.path().join("models/ur5e.yaml")).unwrap();
+    let ur = ur_doc.robot("ur5e").unwrap().robot().clone();
+    assert_eq!(
+        ur.solver_name(),
+        "ur",
+        "the UR5e must be solved in closed form"
+    );
+    let ur_q: Vec<f64> = UR5E_Q.iter().map(|v| v.to_radians()).collect();
+    let ur_target = ur.tcp_pose(&ur_q).unwrap();
+    let branches = ur.inverse(&ur_target, &ur_q, &every).unwrap().len();
+    println!("UR5e: {branches} branches at the target");
     let cell = Document::open(&dir.path().join("models/cell.yaml")).unwrap();
     let check = CheckOptions::default();
     let goal = {
@@ -110,6 +205,21 @@ fn main() {
             }),
         ),
         (
+            "ik_ur5e",
+            "ur.ik(tu)",
+            N_KINEMATICS,
+            Box::new(|| {
+                black_box(ur.inverse(black_box(&ur_target), &ur_q, &every).unwrap());
+            }),
+        ),
+        (
+            // The interpreter's own cost of one native method call: Rust does nothing.
+            "floor",
+            "q.len()",
+            N_KINEMATICS,
+            Box::new(|| {}),
+        ),
+        (
             // The workspace (the scene of the document as it is now, colliders from the
             // cache) is built per call, as the Rhai and Python bindings do.
             "interferes",
@@ -132,23 +242,34 @@ fn main() {
             }),
         ),
     ];
+    let mut engine = Rhai::new(dir.path());
+    // FITUP_CALLS=ik_ur5e,floor runs only those calls (a profile, a quick look).
+    let only = std::env::var("FITUP_CALLS").ok();
+    let wanted = |name: &str| {
+        only.as_deref()
+            .is_none_or(|o| o.split(',').any(|w| w == name))
+    };
     let mut rows = Vec::new();
     for (name, script, n, f) in &mut calls {
+        if !wanted(name) {
+            continue;
+        }
         f(); // warm-up: colliders, caches
         let (mut rust, mut rhai) = (Vec::new(), Vec::new());
         for _ in 0..ROUNDS {
             rust.push(rust_ns(*n, &mut *f));
-            rhai.push(rhai_ns(dir.path(), script, *n));
+            rhai.push(engine.ns(script, *n));
         }
         rows.push((*name, *script, median(&mut rust), median(&mut rhai)));
     }
-    println!("medians over {ROUNDS} rounds (ns per call, wall clock):");
-    println!("| call | Rust | Rhai | Rhai − Rust |");
-    println!("|---|---|---|---|");
+    println!("medians over {ROUNDS} rounds (ns per call, this thread's CPU time):");
+    println!("| call | Rust | Rhai | Rhai − Rust | Rhai / Rust |");
+    println!("|---|---|---|---|---|");
     for (name, script, rust, rhai) in &rows {
         println!(
-            "| {name} `{script}` | {rust:.0} | {rhai:.0} | {:.0} |",
-            rhai - rust
+            "| {name} `{script}` | {rust:.0} | {rhai:.0} | {:.0} | {:.2} |",
+            rhai - rust,
+            rhai / rust
         );
     }
     for (name, _, rust, rhai) in &rows {

@@ -106,6 +106,10 @@ fn ik_round_trip_through_the_script_api() {
                 if same { found = true; }
             }
             assert(found, `${q} is not among its branches`);
+            // The same target as `[x, y, z, a, b, c]` (the general, untyped overload).
+            let again = arm.ik(target.xyzabc);
+            assert(again.len() == sols.len(), `${again.len()} branches from xyzabc, ${sols.len()} from the Transform`);
+            for s in again { assert(arm.fk(s).distance_to(target).mm < 1e-6, `${s} from xyzabc misses ${q}`); }
             arm.joints = q;
             for i in 0..6 { assert_near(doc.dimension(arm.dimensions[i]).value, q[i], 1e-9); }
             assert(arm.tcp == target, "tcp");
@@ -166,6 +170,7 @@ fn robots_built_in_scripts_join_a_document() {
         assert_near(z[0], 1.0, 1e-12);
         let sols = irb.ik(irb.fk([10, 20, -30, 40, 50, 60]));
         assert(sols.len() >= 2, "branches");
+        assert(irb.ik(irb.fk([10, 20, -30, 40, 50, 60]).xyzabc).len() == sols.len(), "branches from xyzabc");
         let mz = robot_dh([[0, 340, 50, 90], [90, 0, 330, 0], [0, 0, 45, 90], [0, 340, 0, 90], [90, 0, 0, 90], [0, -80, 0, 0]]);
         let doc = open_doc("models/mz07.yaml");
         let ref = doc.robot("mz07");
