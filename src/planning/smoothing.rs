@@ -174,17 +174,13 @@ pub(crate) fn shortcut(
             ahead
         });
         let _stop = ahead.map(StopOnDrop);
-        let mut path = shortcut_until(
-            checker,
-            space,
-            std::mem::take(poses),
+        let how = Shortcutting {
             smoothing,
-            rng,
-            run,
             until,
             exact,
             ahead,
-        );
+        };
+        let mut path = shortcut_until(checker, space, std::mem::take(poses), rng, run, &how);
         // Shortcuts that land next to an existing key pose leave near-duplicates
         // behind: a last linear pass, screened like the shortcuts, so that the
         // certification below checks the joined edges and not the ones they replace.
@@ -218,17 +214,30 @@ fn screen_steps(checker: &Checker<'_>, space: &PlanningSpace) -> (f64, f64) {
     (r, r / space.rotation_weight)
 }
 
+/// How [`shortcut_until`] shortcuts: the options, until when, whether screened
+/// shortcuts are certified lazily (`exact`: a continuous validator), and the
+/// worker certifying ahead, if any.
+struct Shortcutting<'a> {
+    smoothing: &'a Smoothing,
+    until: Deadline,
+    exact: bool,
+    ahead: Option<&'a Ahead>,
+}
+
 fn shortcut_until(
     checker: &mut Checker<'_>,
     space: &PlanningSpace,
     poses: Vec<Transform>,
-    smoothing: &Smoothing,
     rng: &mut Rng,
     run: &mut Run<'_>,
-    until: Deadline,
-    exact: bool,
-    ahead: Option<&Ahead>,
+    how: &Shortcutting<'_>,
 ) -> LazyPath {
+    let &Shortcutting {
+        smoothing,
+        until,
+        exact,
+        ahead,
+    } = how;
     let screen = screen_steps(checker, space);
     let mut path = LazyPath::certified(poses);
     path.linear_pass(checker, space, screen, exact);
