@@ -217,8 +217,8 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                 return Err(usage("say --csv or --json".into()));
             }
             let text = export(&mut db, kind, id, *json).map_err(|m| match m {
-                Ok(db) => e(db),
-                Err(m) => usage(m),
+                ExportError::Db(db) => e(db),
+                other => usage(other.to_string()),
             })?;
             match out {
                 None => print!("{text}"),
@@ -407,31 +407,39 @@ fn path_json(p: &StoredPath) -> serde_json::Value {
     })
 }
 
-/// The record as CSV or JSON; `Err(Err(message))` for a usage error.
-fn export(
-    db: &mut Database,
-    kind: Kind,
-    id: i64,
-    json: bool,
-) -> Result<String, Result<crate::db::DbError, String>> {
+/// Why `fitup db export` wrote nothing: the database's error, or a usage error.
+#[derive(Debug, thiserror::Error)]
+enum ExportError {
+    /// The record could not be read.
+    #[error(transparent)]
+    Db(#[from] crate::db::DbError),
+    /// A run asked for as CSV.
+    #[error("a run holds several tables: export it with --json, or export path:N / trajectory:N / interference:N as CSV")]
+    RunAsCsv,
+    /// The path's CSV could not be written.
+    #[error(transparent)]
+    Csv(std::io::Error),
+}
+
+/// The record as CSV or JSON.
+fn export(db: &mut Database, kind: Kind, id: i64, json: bool) -> Result<String, ExportError> {
     let pretty = |v: serde_json::Value| serde_json::to_string_pretty(&v).unwrap_or_default() + "\n";
     Ok(match (kind, json) {
         (Kind::Path, false) => {
-            let p = db.path(id).map_err(Ok)?;
+            let p = db.path(id)?;
             let mut bytes = Vec::new();
             p.path
                 .write_csv(&mut bytes, AngleConvention::default())
-                .map_err(|e| Err(e.to_string()))?;
+                .map_err(ExportError::Csv)?;
             String::from_utf8_lossy(&bytes).into_owned()
         }
-        (Kind::Path, true) => pretty(path_json(&db.path(id).map_err(Ok)?)),
+        (Kind::Path, true) => pretty(path_json(&db.path(id)?)),
         (Kind::Trajectory, false) => db
-            .trajectory(id)
-            .map_err(Ok)?
+            .trajectory(id)?
             .trajectory
             .to_csv(AngleConvention::default()),
         (Kind::Trajectory, true) => {
-            let t = db.trajectory(id).map_err(Ok)?;
+            let t = db.trajectory(id)?;
             let samples: Vec<serde_json::Value> = t
                 .trajectory
                 .samples
@@ -452,41 +460,45 @@ fn export(
             }))
         }
         (Kind::Interference, false) => {
-            let r = db.interference(id).map_err(Ok)?;
+            let r = db.interference(id)?;
             let mut s = String::from("a,b,state,depth_mm,kind\n");
             for p in r.pairs {
-                s += &format!("{},{},{},{},{}\n", csv_field(&p.a), csv_field(&p.b), p.state(), p.depth_mm(), csv_field(&p.kind()));
+                s += &format!(
+                    "{},{},{},{},{}\n",
+                    csv_field(&p.a),
+                    csv_field(&p.b),
+                    p.state(),
+                    p.depth_mm(),
+                    csv_field(&p.kind())
+                );
             }
             s
         }
         (Kind::Interference, true) => {
-            let r = db.interference(id).map_err(Ok)?;
+            let r = db.interference(id)?;
             let pairs: Vec<serde_json::Value> = r
                 .pairs
                 .iter()
                 .map(|p| serde_json::json!({"a": p.a, "b": p.b, "state": p.state(), "depth_mm": p.depth_mm(), "kind": p.kind()}))
                 .collect();
-            pretty(serde_json::json!({"id": r.id, "name": r.name, "run": r.run_id, "created_at": r.created_at, "pairs": pairs}))
+            pretty(
+                serde_json::json!({"id": r.id, "name": r.name, "run": r.run_id, "created_at": r.created_at, "pairs": pairs}),
+            )
         }
-        (Kind::Run, false) => {
-            return Err(Err(
-                "a run holds several tables: export it with --json, or export path:N / trajectory:N / interference:N as CSV".into(),
-            ))
-        }
+        (Kind::Run, false) => return Err(ExportError::RunAsCsv),
         (Kind::Run, true) => {
-            let r = db.run(id).map_err(Ok)?;
+            let r = db.run(id)?;
             let paths: Vec<serde_json::Value> = db
                 .paths(&PathQuery {
                     run_id: Some(id),
                     ..Default::default()
-                })
-                .map_err(Ok)?
+                })?
                 .iter()
                 .map(path_json)
                 .collect();
             let snapshots: Vec<serde_json::Value> = db
                 .snapshots(Some(id))
-                .map_err(Ok)?
+                ?
                 .iter()
                 .map(|(sid, s)| {
                     let poses: serde_json::Map<String, serde_json::Value> = s
@@ -506,7 +518,9 @@ fn export(
                 })
                 .collect();
             let list = |v: Vec<(i64, String, i64)>| -> Vec<serde_json::Value> {
-                v.into_iter().map(|(i, n, c)| serde_json::json!({"id": i, "name": n, "count": c})).collect()
+                v.into_iter()
+                    .map(|(i, n, c)| serde_json::json!({"id": i, "name": n, "count": c}))
+                    .collect()
             };
             pretty(serde_json::json!({
                 "id": r.id, "script": r.script, "document": r.document,
@@ -514,8 +528,8 @@ fn export(
                 "started_at": r.started_at, "finished_at": r.finished_at, "status": r.status,
                 "output": r.output, "fitup_version": r.fitup_version,
                 "paths": paths, "snapshots": snapshots,
-                "trajectories": list(db.trajectory_list(Some(id)).map_err(Ok)?),
-                "interference": list(db.interference_list(Some(id)).map_err(Ok)?),
+                "trajectories": list(db.trajectory_list(Some(id))?),
+                "interference": list(db.interference_list(Some(id))?),
             }))
         }
     })

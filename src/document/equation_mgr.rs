@@ -3,7 +3,8 @@
 //! language and its bounds are in [`super::equations`].
 
 use super::equations::{
-    self, order, shown, Equation, EquationCause, EquationError, EquationTarget, MAX_EQUATIONS,
+    self, order, shown, Equation, EquationCause, EquationError, EquationLimit, EquationTarget,
+    MAX_EQUATIONS,
 };
 use super::{nfc_name, Document, DocumentError};
 use std::collections::HashMap;
@@ -170,10 +171,9 @@ impl Document {
             return Err(err(
                 self,
                 MAX_EQUATIONS,
-                EquationCause::TooLarge(format!(
-                    "{} equations: a document holds at most {MAX_EQUATIONS}",
-                    self.equations.len()
-                )),
+                EquationCause::TooLarge(EquationLimit::Equations {
+                    count: self.equations.len(),
+                }),
             ));
         }
         let dimensions = self.dimensions();
@@ -242,11 +242,11 @@ impl Document {
             let name = self.equations[i].target.clone();
             let kind = self
                 .dimension(&name)
-                .map_err(|e| err(self, i, EquationCause::Value(e.to_string())))?
+                .map_err(|e| err(self, i, EquationCause::Value(Box::new(e))))?
                 .kind;
             let internal = super::Dimension::from_document(kind, values[i]);
             self.set_dimension_value(&name, internal)
-                .map_err(|e| err(self, i, EquationCause::Value(e.to_string())))?;
+                .map_err(|e| err(self, i, EquationCause::Value(Box::new(e))))?;
         }
         for (e, v) in self.equations.iter_mut().zip(values) {
             e.value = v;
@@ -365,10 +365,7 @@ pub(super) fn load(
         return Err(located(EquationError {
             index: MAX_EQUATIONS,
             text: shown(&texts[MAX_EQUATIONS]),
-            cause: EquationCause::TooLarge(format!(
-                "{} equations: a document holds at most {MAX_EQUATIONS}",
-                texts.len()
-            )),
+            cause: EquationCause::TooLarge(EquationLimit::Equations { count: texts.len() }),
         }));
     }
     let mut list = Vec::with_capacity(texts.len());

@@ -87,11 +87,42 @@ pub enum EquationCause {
     /// The dimension refused the value (a negative distance, beyond 1e9 mm, a joint
     /// limit).
     #[error("{0}")]
-    Value(String),
+    Value(#[source] Box<super::DocumentError>),
     /// Past one of the bounds ([`MAX_EQUATIONS`], [`MAX_EQUATION_LEN`],
     /// [`MAX_NODES`], [`MAX_NESTING`], [`MAX_NAME_LEN`]).
     #[error("{0}")]
-    TooLarge(String),
+    TooLarge(#[source] EquationLimit),
+}
+
+/// Which bound of the equations was passed (the cause of an
+/// [`EquationCause::TooLarge`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum EquationLimit {
+    /// More than [`MAX_EQUATIONS`] equations.
+    #[error("{count} equations: a document holds at most {MAX_EQUATIONS}")]
+    Equations {
+        /// How many there are.
+        count: usize,
+    },
+    /// An equation longer than [`MAX_EQUATION_LEN`] bytes.
+    #[error("{bytes} bytes: an equation holds at most {MAX_EQUATION_LEN}")]
+    Length {
+        /// Its length.
+        bytes: usize,
+    },
+    /// More than [`MAX_NODES`] numbers, names and operations in one expression.
+    #[error("more than {MAX_NODES} numbers, names and operations in one expression")]
+    Nodes,
+    /// A name longer than [`MAX_NAME_LEN`] bytes.
+    #[error("a name of {bytes} bytes: at most {MAX_NAME_LEN}")]
+    Name {
+        /// Its length.
+        bytes: usize,
+    },
+    /// More than [`MAX_NESTING`] nested parentheses.
+    #[error("more than {MAX_NESTING} nested parentheses")]
+    Nesting,
 }
 
 /// What an equation sets.
@@ -282,10 +313,9 @@ const UNITS: &[(&str, f64)] = &[
 /// `"target" = expression` parsed: the target (NFC), the expression's text and tree.
 pub(crate) fn parse(text: &str) -> Result<(String, String, Expr), EquationCause> {
     if text.len() > MAX_EQUATION_LEN {
-        return Err(EquationCause::TooLarge(format!(
-            "{} bytes: an equation holds at most {MAX_EQUATION_LEN}",
-            text.len()
-        )));
+        return Err(EquationCause::TooLarge(EquationLimit::Length {
+            bytes: text.len(),
+        }));
     }
     let chars: Vec<char> = text.chars().collect();
     let mut p = Parser {
@@ -345,9 +375,7 @@ impl Parser<'_> {
     fn node(&mut self) -> Result<(), EquationCause> {
         self.nodes += 1;
         if self.nodes > MAX_NODES {
-            return Err(EquationCause::TooLarge(format!(
-                "more than {MAX_NODES} numbers, names and operations in one expression"
-            )));
+            return Err(EquationCause::TooLarge(EquationLimit::Nodes));
         }
         Ok(())
     }
@@ -372,10 +400,9 @@ impl Parser<'_> {
             return Err(self.error("an empty name `\"\"`"));
         }
         if name.len() > MAX_NAME_LEN {
-            return Err(EquationCause::TooLarge(format!(
-                "a name of {} bytes: at most {MAX_NAME_LEN}",
-                name.len()
-            )));
+            return Err(EquationCause::TooLarge(EquationLimit::Name {
+                bytes: name.len(),
+            }));
         }
         if let Err(c) = crate::diagnostics::checked_name(name) {
             self.at = open;
@@ -475,9 +502,7 @@ impl Parser<'_> {
     fn enter(&mut self) -> Result<(), EquationCause> {
         self.nesting += 1;
         if self.nesting > MAX_NESTING {
-            return Err(EquationCause::TooLarge(format!(
-                "more than {MAX_NESTING} nested parentheses"
-            )));
+            return Err(EquationCause::TooLarge(EquationLimit::Nesting));
         }
         Ok(())
     }

@@ -61,7 +61,7 @@ pub use names::nfc_name;
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use edit::{MateSpec, PropertyOwner};
 pub use entry::EntryError;
-pub use equations::{Equation, EquationCause, EquationError, EquationTarget};
+pub use equations::{Equation, EquationCause, EquationError, EquationLimit, EquationTarget};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::{coordinate_system, CoordinateSystemError, Reference};
 pub use remove::RemoveMates;

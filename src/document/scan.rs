@@ -96,11 +96,30 @@ enum Frame {
     },
 }
 
+/// Why a plain scalar that YAML reads as a number is refused.
+#[derive(Debug, thiserror::Error)]
+enum BadNumber {
+    /// `.inf`, `.nan` and their signed forms.
+    #[error("`{text}` is not a finite number")]
+    NotFinite {
+        /// The scalar as written.
+        text: String,
+    },
+    /// Past [`MAX_ABS_VALUE`] (or an overflow to infinity).
+    #[error("number out of range: `{text}` (fitup accepts magnitudes up to {max:e}: mm, degrees)", max = MAX_ABS_VALUE)]
+    OutOfRange {
+        /// The scalar as written.
+        text: String,
+    },
+}
+
 /// A plain scalar that YAML reads as a number: its value, or why it is refused.
-fn plain_number(s: &str) -> Option<Result<f64, String>> {
+fn plain_number(s: &str) -> Option<Result<f64, BadNumber>> {
     let lower = s.to_ascii_lowercase();
     if matches!(lower.as_str(), ".inf" | "+.inf" | "-.inf" | ".nan") {
-        return Some(Err(format!("`{s}` is not a finite number")));
+        return Some(Err(BadNumber::NotFinite {
+            text: s.to_string(),
+        }));
     }
     let numeric = !s.is_empty()
         && s.chars()
@@ -111,9 +130,9 @@ fn plain_number(s: &str) -> Option<Result<f64, String>> {
     }
     let v: f64 = s.replace('_', "").parse().ok()?;
     if !v.is_finite() || v.abs() > MAX_ABS_VALUE {
-        return Some(Err(format!(
-            "number out of range: `{s}` (fitup accepts magnitudes up to {MAX_ABS_VALUE:e}: mm, degrees)"
-        )));
+        return Some(Err(BadNumber::OutOfRange {
+            text: s.to_string(),
+        }));
     }
     Some(Ok(v))
 }
