@@ -168,12 +168,12 @@ pub(crate) fn shortcut(
     let ahead = Ahead::new();
     let worker = if exact { checker.fork() } else { None };
     let (mut path, unfolded) = std::thread::scope(|scope| {
-        let ahead = worker.map(|validator| {
+        let handle = worker.map(|validator| {
             let ahead = &ahead;
-            scope.spawn(move || ahead.work(validator, call));
-            ahead
+            scope.spawn(move || ahead.work(validator, call))
         });
-        let _stop = ahead.map(StopOnDrop);
+        let ahead = handle.is_some().then_some(&ahead);
+        let stop = ahead.map(StopOnDrop);
         let how = Shortcutting {
             smoothing,
             until,
@@ -193,6 +193,12 @@ pub(crate) fn shortcut(
         // call's budget, so that a smoothing share spent does not unfold the path.
         checker.set_deadline(call);
         let (poses_left, unfolded) = path.resolve(checker, ahead);
+        drop(stop);
+        // Joined here, a worker that panicked (a bug) only loses its verdicts,
+        // which this thread made itself; the scope would re-raise the panic.
+        if let Some(handle) = handle {
+            let _ = handle.join();
+        }
         (LazyPath::certified(poses_left), unfolded)
     });
     let screen = screen_steps(checker, space);
@@ -649,6 +655,15 @@ impl Ahead {
 
     /// The worker: certifies queued edges with `validator` until [`stop`](Self::stop).
     fn work(&self, mut validator: Box<dyn MotionValidator + Send>, deadline: Option<Deadline>) {
+        // A worker that panicked must not leave smoothing waiting for its edge.
+        struct Clear<'a>(&'a Ahead);
+        impl Drop for Clear<'_> {
+            fn drop(&mut self) {
+                self.0.lock().running = None;
+                self.0.changed.notify_all();
+            }
+        }
+        let _clear = Clear(self);
         validator.set_deadline(deadline);
         loop {
             let edge = {
@@ -866,6 +881,62 @@ mod tests {
         // The fallback was exercised: some screened shortcut failed its
         // certification (the fence is invisible to the screen).
         assert!(refused > 0);
+    }
+
+    #[test]
+    fn a_worker_that_panics_loses_only_its_verdicts() {
+        // The fence, with forks whose edge check panics: smoothing certifies
+        // every edge itself and returns the path it returns on one core.
+        struct PanickyForks(HiddenFence);
+        impl MotionValidator for PanickyForks {
+            fn is_free(&mut self, pose: &Transform) -> bool {
+                self.0.is_free(pose)
+            }
+            fn resolution(&self) -> SweepMethod {
+                SweepMethod::CONTINUOUS
+            }
+            fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
+                if self.0.forks {
+                    panic!("a forked edge check failed");
+                }
+                self.0.edge_free(from, to)
+            }
+            fn part_radius(&self) -> Option<f64> {
+                Some(1.0)
+            }
+            fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+                let fork = HiddenFence {
+                    forks: true,
+                    ..HiddenFence::default()
+                };
+                Some(Box::new(PanickyForks(fork)))
+            }
+        }
+        let space = PlanningSpace::new(Vec3::new(-60.0, -60.0, -1.0), Vec3::new(60.0, 60.0, 1.0));
+        for seed in 1..=3 {
+            let mut v = PanickyForks(HiddenFence::default());
+            let mut path = detour();
+            smooth(
+                &mut v,
+                &space,
+                &mut path,
+                &Smoothing::default(),
+                seed,
+                None,
+                None,
+            );
+            assert!(
+                path.length_mm < detour().length_mm,
+                "seed {seed}: not shortened"
+            );
+            let mut check = HiddenFence::default();
+            for (k, w) in path.poses.windows(2).enumerate() {
+                assert!(
+                    check.edge_free(&w[0], &w[1]),
+                    "seed {seed}: edge {k} crosses"
+                );
+            }
+        }
     }
 
     #[test]
