@@ -136,6 +136,12 @@ impl JsonError {
     }
 }
 
+impl From<serde_json::Error> for JsonError {
+    fn from(e: serde_json::Error) -> Self {
+        JsonError(std::sync::Arc::new(e))
+    }
+}
+
 impl PartialEq for JsonError {
     fn eq(&self, other: &Self) -> bool {
         (self.0.line(), self.0.column(), self.0.to_string())
@@ -516,9 +522,7 @@ pub fn parse_json(text: &str) -> Result<serde_json::Value, DataError> {
     let located = |e: serde_json::Error| DataError::Parse {
         path: PathBuf::new(),
         line: e.line(),
-        cause: DataProblem::Json {
-            source: JsonError(std::sync::Arc::new(e)),
-        },
+        cause: DataProblem::Json { source: e.into() },
     };
     let count = std::cell::Cell::new(0);
     let mut d = serde_json::Deserializer::from_str(text);
