@@ -391,21 +391,7 @@ fn first_word(sql: &str) -> String {
             }
         } else if b[i..].starts_with(b"/*") {
             // PostgreSQL block comments nest.
-            let mut depth = 0usize;
-            while i < b.len() {
-                if b[i..].starts_with(b"/*") {
-                    depth += 1;
-                    i += 2;
-                } else if b[i..].starts_with(b"*/") {
-                    depth -= 1;
-                    i += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    i += 1;
-                }
-            }
+            i = crate::diagnostics::nested_comment_end(b, i);
         } else {
             break;
         }
