@@ -33,7 +33,7 @@ pub enum DataError {
     #[error("`{path}`: {cause}")]
     Path {
         /// The path as given.
-        path: String,
+        path: PathBuf,
         /// Why.
         #[source]
         cause: crate::project::PathError,
@@ -405,7 +405,7 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
 /// Reads a text file inside the project: the resolved path and its text.
 pub fn read_text(project: &Project, path: &str) -> Result<(PathBuf, String), DataError> {
     let full = project.resolve(path).map_err(|cause| DataError::Path {
-        path: path.to_string(),
+        path: path.into(),
         cause,
     })?;
     // Read through the project's held root: a folder swapped for a link after the
