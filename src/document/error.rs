@@ -603,7 +603,7 @@ pub enum UrdfRobotError {
     },
     /// A `package_path` entry that is not a folder.
     #[error("package_path `{0}` is not a folder")]
-    NotAFolder(String),
+    NotAFolder(PathBuf),
     /// The URDF itself cannot be read or parsed (located in it).
     #[error(transparent)]
     Read(Box<SourceError>),
