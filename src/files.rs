@@ -130,6 +130,11 @@ pub enum DataProblem {
 pub struct JsonError(std::sync::Arc<serde_json::Error>);
 
 impl JsonError {
+    /// The 1-based line.
+    pub fn line(&self) -> usize {
+        self.0.line()
+    }
+
     /// The 1-based column.
     pub fn column(&self) -> usize {
         self.0.column()
