@@ -62,6 +62,8 @@ struct EdgeFrames {
     /// The unit axis of that rotation in the moving part's frame (slerp turns
     /// about one axis through the part origin), zero for a translation.
     axis: Vec3,
+    /// That whole rotation, in the moving part's frame.
+    turn: nalgebra::Matrix3<f64>,
 }
 
 impl EdgeFrames {
@@ -69,6 +71,7 @@ impl EdgeFrames {
     fn new(from: &Transform, to: &Transform, pose: &Transform) -> Self {
         let (angle, shift) = from.distance_to(to);
         let obstacle_inv = pose.isometry().inverse();
+        let turn = from.rotation().inverse() * to.rotation();
         Self {
             obstacle_inv,
             from: *from,
@@ -76,9 +79,8 @@ impl EdgeFrames {
             shift,
             shift_local: obstacle_inv.rotation * (to.translation() - from.translation()),
             angle,
-            axis: (from.rotation().inverse() * to.rotation())
-                .axis()
-                .map_or_else(Vec3::zeros, |k| k.into_inner()),
+            axis: turn.axis().map_or_else(Vec3::zeros, |k| k.into_inner()),
+            turn: turn.to_rotation_matrix().into_inner(),
         }
     }
 
@@ -349,26 +351,35 @@ impl Drop for SweptLease {
 }
 
 /// A box (moving part frame at the edge start) holding every position of `b` over
-/// the edge: swept along `sweep` (mm) and grown by the arcs its points travel. A
-/// point `ρ` from the rotation axis moves on an arc of at most `angle · ρ` in a
-/// plane normal to the axis, so along a unit box axis `a` it moves by at most
-/// `angle · ρ · √(1 − (a·k)²)`, and not at all along the axis `k` itself. A part
-/// screwed along its own length (OMPL.app's spirelli) keeps boxes about as thin as
-/// the part, where growing every side by the arc of the point farthest from the
-/// origin made them several times thicker: the walk then met most of the
-/// channel's walls (2.5× the node pairs).
+/// the edge. Its centre `c` moves by `sweep` (mm) plus the chord of its arc about
+/// the rotation axis `k` through the part origin, `turn · c − c`; off that straight
+/// chord it strays by at most the arc's sagitta bound `ρ · angle² / 8` (`ρ` its
+/// distance from the axis: a curve with `|f''| ≤ M` between two points of a chord
+/// leaves it by at most `M / 8`). The box turns about its centre as well, which
+/// moves its points by at most `angle` times their distance from the axis through
+/// the centre. Both offsets lie in planes normal to `k`, so along a unit box axis
+/// `a` they count `√(1 − (a·k)²)` of their length, and not at all along `k`.
+///
+/// Growing every side by the whole arc `angle · ρ` of the centre instead (the
+/// box before) made a node far from the axis a cube as wide as its arc: OMPL.app's
+/// alpha robot (radius 197) turning 0.2 rad met three times the obstacle nodes in
+/// smoothing's long edges. A part screwed along its own length (OMPL.app's
+/// spirelli) keeps boxes about as thin as the part.
 fn swept_obb(b: &Obb, sweep: &Vec3, frames: &EdgeFrames) -> Obb {
-    // A corner's distance from the axis is at most the centre's plus each half
-    // side times its axis's share normal to `k` (tighter than the box's radius
-    // for a box long along the axis).
     let normal_share = Vec3::from_fn(|i, _| {
         let c = b.axes.column(i).dot(&frames.axis);
         (1.0 - c * c).max(0.0).sqrt()
     });
-    let rho = frames.arm(&b.centre) + b.half.dot(&normal_share).min(b.radius);
-    let along = b.axes.tr_mul(sweep).abs() / 2.0;
-    let grow = normal_share * (frames.angle * rho);
-    Obb::new(b.centre + sweep / 2.0, b.axes, b.half + along + grow)
+    // A corner's distance from the axis through the centre is at most each half
+    // side times its axis's share normal to `k` (tighter than the box's radius for
+    // a box long along the axis).
+    let own = b.half.dot(&normal_share).min(b.radius);
+    let angle = frames.angle;
+    let chord = sweep + (frames.turn * b.centre - b.centre);
+    let sagitta = frames.arm(&b.centre) * angle * angle / 8.0;
+    let along = b.axes.tr_mul(&chord).abs() / 2.0;
+    let grow = normal_share * (angle * own + sagitta);
+    Obb::new(b.centre + chord / 2.0, b.axes, b.half + along + grow)
 }
 
 /// The per-triangle-pair conservative advancement.
@@ -556,57 +567,62 @@ mod tests {
     fn the_swept_box_holds_the_box_along_the_whole_edge() {
         let mut rng = crate::math::Rng::new(7);
         let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform();
-        for _ in 0..300 {
-            let unit = |v: Vec3| v / v.norm().max(1e-12);
-            let rot = |axis: Vec3, a: f64| {
-                UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), a)
-            };
-            let axes = rot(
-                Vec3::new(u(-1.0, 1.0), u(-1.0, 1.0), u(-1.0, 1.0)),
-                u(0.0, 3.0),
-            )
-            .to_rotation_matrix()
-            .into_inner();
-            let b = Obb::new(
-                Vec3::new(u(-20.0, 20.0), u(-20.0, 20.0), u(-20.0, 20.0)),
-                axes,
-                Vec3::new(u(0.0, 1.0), u(0.0, 8.0), u(0.0, 3.0)),
-            );
-            let from = Transform::from_parts(
-                Vec3::new(u(-5.0, 5.0), u(-5.0, 5.0), u(-5.0, 5.0)),
-                rot(
+        // Near the part origin with turns up to 1.5 rad, and far from it (where
+        // the arc's chord and sagitta bound the box, not its whole arc) with
+        // turns up to the 3 rad an edge may take.
+        for (far, turn) in [(20.0, 1.5), (300.0, 3.0)] {
+            for _ in 0..300 {
+                let unit = |v: Vec3| v / v.norm().max(1e-12);
+                let rot = |axis: Vec3, a: f64| {
+                    UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), a)
+                };
+                let axes = rot(
                     Vec3::new(u(-1.0, 1.0), u(-1.0, 1.0), u(-1.0, 1.0)),
                     u(0.0, 3.0),
-                ),
-            );
-            let k = unit(Vec3::new(u(-1.0, 1.0), u(-1.0, 1.0), u(-1.0, 1.0)));
-            let to = Transform::from_parts(
-                from.translation() + Vec3::new(u(-4.0, 4.0), u(-4.0, 4.0), u(-4.0, 4.0)),
-                from.rotation() * rot(k, u(0.0, 1.5)),
-            );
-            let frames = EdgeFrames::new(&from, &to, &Transform::IDENTITY);
-            let sweep =
-                from.isometry().rotation.inverse() * (to.translation() - from.translation());
-            let swept = swept_obb(&b, &sweep, &frames);
-            let start = from.isometry().inverse();
-            for n in 0..=40 {
-                let at = *from.interpolate(&to, f64::from(n) / 40.0).isometry();
-                for c in 0..8 {
-                    let sign = |bit: usize| if c >> bit & 1 == 1 { 1.0 } else { -1.0 };
-                    let corner = b.centre
-                        + b.axes.column(0) * (sign(0) * b.half.x)
-                        + b.axes.column(1) * (sign(1) * b.half.y)
-                        + b.axes.column(2) * (sign(2) * b.half.z);
-                    // the corner in the part frame at `from`, where the box sweeps
-                    let p = start * (at * Point3::from(corner));
-                    let local = swept.axes.tr_mul(&(p.coords - swept.centre));
-                    for i in 0..3 {
-                        assert!(
+                )
+                .to_rotation_matrix()
+                .into_inner();
+                let b = Obb::new(
+                    Vec3::new(u(-far, far), u(-far, far), u(-far, far)),
+                    axes,
+                    Vec3::new(u(0.0, 1.0), u(0.0, 8.0), u(0.0, 3.0)),
+                );
+                let from = Transform::from_parts(
+                    Vec3::new(u(-5.0, 5.0), u(-5.0, 5.0), u(-5.0, 5.0)),
+                    rot(
+                        Vec3::new(u(-1.0, 1.0), u(-1.0, 1.0), u(-1.0, 1.0)),
+                        u(0.0, 3.0),
+                    ),
+                );
+                let k = unit(Vec3::new(u(-1.0, 1.0), u(-1.0, 1.0), u(-1.0, 1.0)));
+                let to = Transform::from_parts(
+                    from.translation() + Vec3::new(u(-4.0, 4.0), u(-4.0, 4.0), u(-4.0, 4.0)),
+                    from.rotation() * rot(k, u(0.0, turn)),
+                );
+                let frames = EdgeFrames::new(&from, &to, &Transform::IDENTITY);
+                let sweep =
+                    from.isometry().rotation.inverse() * (to.translation() - from.translation());
+                let swept = swept_obb(&b, &sweep, &frames);
+                let start = from.isometry().inverse();
+                for n in 0..=200 {
+                    let at = *from.interpolate(&to, f64::from(n) / 200.0).isometry();
+                    for c in 0..8 {
+                        let sign = |bit: usize| if c >> bit & 1 == 1 { 1.0 } else { -1.0 };
+                        let corner = b.centre
+                            + b.axes.column(0) * (sign(0) * b.half.x)
+                            + b.axes.column(1) * (sign(1) * b.half.y)
+                            + b.axes.column(2) * (sign(2) * b.half.z);
+                        // the corner in the part frame at `from`, where the box sweeps
+                        let p = start * (at * Point3::from(corner));
+                        let local = swept.axes.tr_mul(&(p.coords - swept.centre));
+                        for i in 0..3 {
+                            assert!(
                             local[i].abs() <= swept.half[i] + 1e-9,
-                            "corner {c} at t = {n}/40 leaves the swept box along axis {i}: {} > {}",
+                            "corner {c} at t = {n}/200 leaves the swept box along axis {i}: {} > {}",
                             local[i].abs(),
                             swept.half[i]
                         );
+                        }
                     }
                 }
             }

@@ -5,6 +5,7 @@ use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::space::PlanningSpace;
 use super::validator::{Checker, MotionValidator};
 use crate::math::{Deadline, Rng, Transform};
+use std::sync::{Condvar, Mutex, PoisonError};
 
 /// How a found path is shortened.
 ///
@@ -19,8 +20,13 @@ use crate::math::{Deadline, Rng, Transform};
 /// shortcut is certified by the validator's own edge check only when it must be:
 /// when a later shortcut keeps a piece of it, or when it is still in the path at
 /// the end; a shortcut that fails its certification gives way to the path it
-/// replaced (itself certified, or screened with its own fallback). With a stepwise
-/// validator every shortcut is certified when it is accepted. Either way every
+/// replaced (itself certified, or screened with its own fallback); a shortcut
+/// that cuts a screened edge certifies only the piece it keeps. Meanwhile a
+/// second thread (when the validator can be forked) certifies the screened
+/// edges of the path ahead, newest first, so that the verdicts are often known
+/// when they are needed; a verdict depends on its edge alone, so the path is the
+/// same either way. With a stepwise validator every shortcut is certified when
+/// it is accepted. Either way every
 /// edge of the returned path has been accepted by the validator. The shortcuts
 /// take at most `budget_share` of the call's time budget (and never more than is
 /// left of it); the certification of the path's last screened edges runs within
@@ -146,50 +152,6 @@ pub(crate) fn shortcut(
     let call = checker.deadline();
     let share = Some(call.map_or(until, |d| d.min(until)));
     checker.set_deadline(share);
-    let path = shortcut_until(
-        checker,
-        space,
-        std::mem::take(poses),
-        smoothing,
-        rng,
-        run,
-        until,
-    );
-
-    // The certification of the screened edges left in the path is the work an
-    // eager smoothing would have done when it accepted them: it runs within the
-    // call's budget, so that a smoothing share spent does not unfold the path.
-    checker.set_deadline(call);
-    let mut path = LazyPath::certified(path.resolve(checker));
-    // Shortcuts that land next to an existing key pose leave near-duplicates
-    // behind, and a failed certification brings back the poses of its detour:
-    // a last linear pass, certified at once, within smoothing's share.
-    checker.set_deadline(share);
-    if run.smoothing_tick(0, 0, 0.0, until) {
-        let screen = screen_steps(checker, space);
-        path.linear_pass(checker, space, screen, false);
-    }
-    checker.set_deadline(call);
-    *poses = path.poses;
-}
-
-/// The pose-check spacing (mm, rad) that screens a candidate edge: the problem's
-/// resolution.
-fn screen_steps(checker: &Checker<'_>, space: &PlanningSpace) -> (f64, f64) {
-    let r = checker.scale(space).resolution();
-    (r, r / space.rotation_weight)
-}
-
-fn shortcut_until(
-    checker: &mut Checker<'_>,
-    space: &PlanningSpace,
-    poses: Vec<Transform>,
-    smoothing: &Smoothing,
-    rng: &mut Rng,
-    run: &mut Run<'_>,
-    until: Deadline,
-) -> LazyPath {
-    let screen = screen_steps(checker, space);
     // With a continuous validator a piece of a certified edge is certified (the
     // interpolation of a piece is the same motion: linear translation, slerp), and
     // a screened shortcut is certified only when it must be: when it is still in
@@ -203,8 +165,91 @@ fn shortcut_until(
             checker.resolution(),
             crate::collision::SweepMethod::Continuous { .. }
         );
+    let ahead = Ahead::new();
+    let worker = if exact { checker.fork() } else { None };
+    let (mut path, unfolded) = std::thread::scope(|scope| {
+        let handle = worker.map(|validator| {
+            let ahead = &ahead;
+            scope.spawn(move || ahead.work(validator, call))
+        });
+        let ahead = handle.is_some().then_some(&ahead);
+        let stop = ahead.map(StopOnDrop);
+        let how = Shortcutting {
+            smoothing,
+            until,
+            exact,
+            ahead,
+        };
+        let mut path = shortcut_until(checker, space, std::mem::take(poses), rng, run, &how);
+        // Shortcuts that land next to an existing key pose leave near-duplicates
+        // behind: a last linear pass, screened like the shortcuts, so that the
+        // certification below checks the joined edges and not the ones they replace.
+        if exact && run.smoothing_tick(0, 0, 0.0, until) {
+            path.linear_pass(checker, space, screen_steps(checker, space), true);
+        }
+
+        // The certification of the screened edges left in the path is the work an
+        // eager smoothing would have done when it accepted them: it runs within the
+        // call's budget, so that a smoothing share spent does not unfold the path.
+        checker.set_deadline(call);
+        let (poses_left, unfolded) = path.resolve(checker, ahead);
+        drop(stop);
+        // Joined here, a worker that panicked (a bug) only loses its verdicts,
+        // which this thread made itself; the scope would re-raise the panic.
+        if let Some(handle) = handle {
+            let _ = handle.join();
+        }
+        (LazyPath::certified(poses_left), unfolded)
+    });
+    let screen = screen_steps(checker, space);
+    // A failed certification brings back the poses of its detour (and a
+    // stepwise validator's shortcuts had no lazy pass): a linear pass, certified
+    // at once, within smoothing's share.
+    checker.set_deadline(share);
+    if (unfolded || !exact) && run.smoothing_tick(0, 0, 0.0, until) {
+        path.linear_pass(checker, space, screen, false);
+    }
+    checker.set_deadline(call);
+    *poses = path.poses;
+}
+
+/// The pose-check spacing (mm, rad) that screens a candidate edge: the problem's
+/// resolution.
+fn screen_steps(checker: &Checker<'_>, space: &PlanningSpace) -> (f64, f64) {
+    let r = checker.scale(space).resolution();
+    (r, r / space.rotation_weight)
+}
+
+/// How [`shortcut_until`] shortcuts: the options, until when, whether screened
+/// shortcuts are certified lazily (`exact`: a continuous validator), and the
+/// worker certifying ahead, if any.
+struct Shortcutting<'a> {
+    smoothing: &'a Smoothing,
+    until: Deadline,
+    exact: bool,
+    ahead: Option<&'a Ahead>,
+}
+
+fn shortcut_until(
+    checker: &mut Checker<'_>,
+    space: &PlanningSpace,
+    poses: Vec<Transform>,
+    rng: &mut Rng,
+    run: &mut Run<'_>,
+    how: &Shortcutting<'_>,
+) -> LazyPath {
+    let &Shortcutting {
+        smoothing,
+        until,
+        exact,
+        ahead,
+    } = how;
+    let screen = screen_steps(checker, space);
     let mut path = LazyPath::certified(poses);
     path.linear_pass(checker, space, screen, exact);
+    if let Some(ahead) = ahead {
+        ahead.resync(&path);
+    }
     let mut stalled = 0;
     for attempt in 0..smoothing.shortcut_attempts {
         if stalled >= smoothing.patience.max(1) {
@@ -248,10 +293,10 @@ fn shortcut_until(
             continue;
         }
         let accepted = if exact {
-            // The pieces p[i] → a and b → p[j + 1] stay: their edges must be
-            // certified first (a failed one gives way to its detour, and the
-            // attempt is spent).
-            path.certify_pair(checker, i, j)
+            // The pieces p[i] → a and b → p[j + 1] stay: a piece of a screened
+            // edge is certified first (a failed piece fails its edge, which gives
+            // way to its detour, and the attempt is spent).
+            path.certify_pieces(checker, (i, a), (j, b), ahead)
         } else {
             checker.edge_free(&a, &b)
                 && screened(checker, &path.poses[i], &a, screen)
@@ -260,6 +305,9 @@ fn shortcut_until(
         if accepted {
             stalled = 0;
             path.shortcut(i, a, j, b, exact);
+            if let Some(ahead) = ahead {
+                ahead.resync(&path);
+            }
         }
     }
     path
@@ -296,17 +344,6 @@ impl LazyPath {
         Self { poses, edges }
     }
 
-    /// Certifies edge `k` when it is only screened: `false` when it failed (or the
-    /// deadline passed), after which its detour has taken its place.
-    fn certify(&mut self, checker: &mut Checker<'_>, k: usize) -> bool {
-        if matches!(self.edges[k], Edge::Certified) {
-            return true;
-        }
-        let free = checker.certify(&self.poses[k], &self.poses[k + 1]);
-        self.settle(k, free);
-        free
-    }
-
     /// Edge `k`, screened, after its certification: certified when `free`, else
     /// replaced by its detour.
     fn settle(&mut self, k: usize, free: bool) {
@@ -320,35 +357,99 @@ impl LazyPath {
         }
     }
 
-    /// [`certify`](Self::certify) of edges `i < j`, both on two cores when both
-    /// are screened; whether both hold (a failed one has given way to its detour;
-    /// when `j` fails `i` is certified all the same, which one-by-one
-    /// certification would have skipped).
-    fn certify_pair(&mut self, checker: &mut Checker<'_>, i: usize, j: usize) -> bool {
-        let both = matches!(self.edges[i], Edge::Screened(_))
-            && matches!(self.edges[j], Edge::Screened(_));
-        if !both {
-            return self.certify(checker, j) && self.certify(checker, i);
+    /// Certifies the pieces `p[i] → a` and `b → p[j + 1]` (`i < j`) that a
+    /// shortcut `a → b` keeps of edges `i` and `j`, where those edges are only
+    /// screened (a piece of a certified edge is certified), on two cores when both
+    /// are: whether both hold. A piece is on average half its edge, and its
+    /// certification is what smoothing spends most of its time on (long sliding
+    /// edges on OMPL.app's alpha puzzle and Apartment). A failed piece fails its
+    /// edge, which gives way to its detour; the other edge keeps its state.
+    fn certify_pieces(
+        &mut self,
+        checker: &mut Checker<'_>,
+        (i, a): (usize, Transform),
+        (j, b): (usize, Transform),
+        ahead: Option<&Ahead>,
+    ) -> bool {
+        // A piece needs its own check unless its whole edge was certified ahead
+        // (a failed edge may still have a free piece).
+        let mut needs = |k: usize| {
+            matches!(self.edges[k], Edge::Screened(_))
+                && !ahead.is_some_and(|ahead| {
+                    // Not waiting for an edge the worker is on: the piece is
+                    // less work than the rest of the edge might be.
+                    let free = ahead.take(&self.poses[k], &self.poses[k + 1], false) == Some(true);
+                    if free {
+                        checker.count_edge();
+                    }
+                    free
+                })
+        };
+        let (check_j, check_i) = (needs(j), needs(i));
+        let mut pieces = Vec::with_capacity(2);
+        let mut edges = Vec::with_capacity(2);
+        if check_j {
+            pieces.push((b, self.poses[j + 1]));
+            edges.push(j);
         }
-        let v = checker.certify_each(&[
-            (self.poses[i], self.poses[i + 1]),
-            (self.poses[j], self.poses[j + 1]),
-        ]);
+        if check_i {
+            pieces.push((self.poses[i], a));
+            edges.push(i);
+        }
+        if pieces.is_empty() {
+            return true;
+        }
+        let verdicts = checker.certify_each(&pieces);
         // `j` first: its detour does not move edge `i`.
-        self.settle(j, v[1]);
-        self.settle(i, v[0]);
-        v[0] && v[1]
+        let mut all = true;
+        for (&k, free) in edges.iter().zip(verdicts) {
+            if !free {
+                self.settle(k, false);
+                all = false;
+            }
+        }
+        all
     }
 
     /// Replaces the path from `a` (on edge `i`) to `b` (on edge `j > i`) by the
-    /// straight edge `a → b`, screened (`lazy`) or already certified.
+    /// straight edge `a → b`, screened (`lazy`, after
+    /// [`certify_pieces`](Self::certify_pieces)) or already certified.
+    ///
+    /// The lazy edge's detour runs `a → p[i + 1] → … → p[j] → b`. Its first and
+    /// last pieces are pieces of edges `i` and `j`: certified when their edges
+    /// were, else screened, with a detour of their own back over the certified
+    /// piece and through the edge's detour (`a → p[i] ⇝ p[i + 1]`, and
+    /// `p[j] ⇝ p[j + 1] → b`). Those detours turn back on themselves, but they
+    /// are only walked when a certification fails, and the last linear pass
+    /// straightens them.
     fn shortcut(&mut self, i: usize, a: Transform, j: usize, b: Transform, lazy: bool) {
         let middle = if lazy {
-            // The pieces a → p[i + 1] and p[j] → b are pieces of certified edges.
+            let first = match &self.edges[i] {
+                Edge::Certified => Edge::Certified,
+                Edge::Screened(d) => {
+                    let mut via = Vec::with_capacity(d.via.len() + 1);
+                    via.push(self.poses[i]);
+                    via.extend_from_slice(&d.via);
+                    let mut edges = Vec::with_capacity(d.edges.len() + 1);
+                    edges.push(Edge::Certified);
+                    edges.extend(d.edges.iter().cloned());
+                    Edge::Screened(Box::new(Detour { via, edges }))
+                }
+            };
+            let last = match &self.edges[j] {
+                Edge::Certified => Edge::Certified,
+                Edge::Screened(d) => {
+                    let mut via = d.via.clone();
+                    via.push(self.poses[j + 1]);
+                    let mut edges = d.edges.clone();
+                    edges.push(Edge::Certified);
+                    Edge::Screened(Box::new(Detour { via, edges }))
+                }
+            };
             let mut edges = Vec::with_capacity(j - i + 1);
-            edges.push(Edge::Certified);
+            edges.push(first);
             edges.extend(self.edges[i + 1..j].iter().cloned());
-            edges.push(Edge::Certified);
+            edges.push(last);
             Edge::Screened(Box::new(Detour {
                 via: self.poses[i + 1..=j].to_vec(),
                 edges,
@@ -436,25 +537,55 @@ impl LazyPath {
     /// detour (whose own screened edges are certified next): the poses of a path
     /// whose every edge the validator accepted. Past the deadline every
     /// certification fails, which unfolds the path back to certified edges.
-    fn resolve(mut self, checker: &mut Checker<'_>) -> Vec<Transform> {
+    fn resolve(
+        mut self,
+        checker: &mut Checker<'_>,
+        ahead: Option<&Ahead>,
+    ) -> (Vec<Transform>, bool) {
         // Round by round: every screened edge is certified (on both cores), then
         // the failed ones, last first so that indices hold, give way to their
         // detours, whose screened edges are the next round's. The verdict of an
         // edge does not depend on the others, so this is the path one-by-one
         // certification gives.
+        let mut unfolded = false;
         loop {
             let screened: Vec<usize> = (0..self.edges.len())
                 .filter(|&k| matches!(self.edges[k], Edge::Screened(_)))
                 .collect();
             if screened.is_empty() {
-                return self.poses;
+                return (self.poses, unfolded);
             }
             let ends: Vec<(Transform, Transform)> = screened
                 .iter()
                 .map(|&k| (self.poses[k], self.poses[k + 1]))
                 .collect();
-            let verdicts = checker.certify_each(&ends);
+            let verdicts = match ahead {
+                // The worker takes the queue from its end, this thread from the
+                // path's start: they meet in between.
+                Some(ahead) => {
+                    ahead.resync(&self);
+                    // Edges the worker is on are waited for last.
+                    let mut verdicts = vec![None; ends.len()];
+                    for pass in [false, true] {
+                        for (v, (a, b)) in verdicts.iter_mut().zip(&ends) {
+                            if v.is_some() || !pass && ahead.running(a, b) {
+                                continue;
+                            }
+                            *v = Some(match ahead.take(a, b, true) {
+                                Some(free) => {
+                                    checker.count_edge();
+                                    free
+                                }
+                                None => checker.certify(a, b),
+                            });
+                        }
+                    }
+                    verdicts.into_iter().map(|v| v == Some(true)).collect()
+                }
+                None => checker.certify_each(&ends),
+            };
             for (&k, free) in screened.iter().zip(verdicts).rev() {
+                unfolded |= !free;
                 self.settle(k, free);
             }
         }
@@ -481,6 +612,139 @@ fn on_edge(a: &Transform, p: &Transform, b: &Transform) -> bool {
 /// apart, then, when they all pass, the checker's own edge check.
 fn screened(checker: &mut Checker<'_>, a: &Transform, b: &Transform, screen: (f64, f64)) -> bool {
     checker.screen(a, b, screen) && checker.edge_free(a, b)
+}
+
+/// Screened edges certified ahead on the second core while smoothing goes on.
+///
+/// After a race the second core is idle during smoothing, and most of smoothing's
+/// time is certification (OMPL.app's alpha puzzle and Apartment: long sliding
+/// edges). Every accepted shortcut hands its screened edge to a worker thread
+/// with a fork of the validator, newest first. A verdict depends on the edge
+/// alone, so using the worker's verdict or making one gives the same path: the
+/// worker only changes when the answer is known. Where smoothing needs a verdict
+/// the worker has not reached, it takes the edge off the queue and certifies it
+/// (or the piece it keeps) itself; it waits for the edge the worker is on only
+/// when it needs that whole edge (the final certification), after the others.
+struct Ahead {
+    state: Mutex<AheadState>,
+    changed: Condvar,
+}
+
+#[derive(Default)]
+struct AheadState {
+    /// Edges to certify, the newest last (taken first).
+    queue: Vec<(Transform, Transform)>,
+    /// The edge the worker is certifying.
+    running: Option<(Transform, Transform)>,
+    /// Verdicts so far.
+    done: Vec<((Transform, Transform), bool)>,
+    stop: bool,
+}
+
+impl Ahead {
+    fn new() -> Self {
+        Self {
+            state: Mutex::new(AheadState::default()),
+            changed: Condvar::new(),
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, AheadState> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The worker: certifies queued edges with `validator` until [`stop`](Self::stop).
+    fn work(&self, mut validator: Box<dyn MotionValidator + Send>, deadline: Option<Deadline>) {
+        // A worker that panicked must not leave smoothing waiting for its edge.
+        struct Clear<'a>(&'a Ahead);
+        impl Drop for Clear<'_> {
+            fn drop(&mut self) {
+                self.0.lock().running = None;
+                self.0.changed.notify_all();
+            }
+        }
+        let _clear = Clear(self);
+        validator.set_deadline(deadline);
+        loop {
+            let edge = {
+                let mut s = self.lock();
+                loop {
+                    if s.stop {
+                        return;
+                    }
+                    if let Some(edge) = s.queue.pop() {
+                        s.running = Some(edge);
+                        break edge;
+                    }
+                    s = self.changed.wait(s).unwrap_or_else(PoisonError::into_inner);
+                }
+            };
+            let free =
+                !deadline.is_some_and(Deadline::passed) && validator.edge_free(&edge.0, &edge.1);
+            let mut s = self.lock();
+            s.running = None;
+            s.done.push((edge, free));
+            self.changed.notify_all();
+        }
+    }
+
+    fn stop(&self) {
+        self.lock().stop = true;
+        self.changed.notify_all();
+    }
+
+    /// Makes the queue the screened edges of `path` the worker has not taken:
+    /// edges that left the path are dropped, new ones go last (taken first).
+    fn resync(&self, path: &LazyPath) {
+        let screened: Vec<(Transform, Transform)> = (0..path.edges.len())
+            .filter(|&k| matches!(path.edges[k], Edge::Screened(_)))
+            .map(|k| (path.poses[k], path.poses[k + 1]))
+            .collect();
+        let mut s = self.lock();
+        s.queue.retain(|e| screened.contains(e));
+        for e in screened {
+            let known = s.running == Some(e) || s.done.iter().any(|(d, _)| *d == e);
+            if !known && !s.queue.contains(&e) {
+                s.queue.push(e);
+            }
+        }
+        drop(s);
+        self.changed.notify_all();
+    }
+
+    /// The worker's verdict on `a → b`; `None` when it has none (the edge is then
+    /// off its queue: the caller certifies it, or what it needs of it). `wait`:
+    /// while the worker is on the edge, wait for its verdict rather than answer
+    /// `None`.
+    fn take(&self, a: &Transform, b: &Transform, wait: bool) -> Option<bool> {
+        let key = (*a, *b);
+        let mut s = self.lock();
+        loop {
+            if let Some(&(_, free)) = s.done.iter().find(|(e, _)| *e == key) {
+                return Some(free);
+            }
+            if !wait || s.running != Some(key) {
+                s.queue.retain(|e| *e != key);
+                return None;
+            }
+            s = self.changed.wait(s).unwrap_or_else(PoisonError::into_inner);
+        }
+    }
+
+    /// Whether the worker is on edge `a → b`.
+    fn running(&self, a: &Transform, b: &Transform) -> bool {
+        self.lock().running == Some((*a, *b))
+    }
+}
+
+/// Stops the worker when smoothing ends, however it ends (a panic would otherwise
+/// leave the scope waiting for it).
+struct StopOnDrop<'a>(&'a Ahead);
+
+impl Drop for StopOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.stop();
+    }
 }
 
 #[cfg(test)]
@@ -617,6 +881,62 @@ mod tests {
         // The fallback was exercised: some screened shortcut failed its
         // certification (the fence is invisible to the screen).
         assert!(refused > 0);
+    }
+
+    #[test]
+    fn a_worker_that_panics_loses_only_its_verdicts() {
+        // The fence, with forks whose edge check panics: smoothing certifies
+        // every edge itself and returns the path it returns on one core.
+        struct PanickyForks(HiddenFence);
+        impl MotionValidator for PanickyForks {
+            fn is_free(&mut self, pose: &Transform) -> bool {
+                self.0.is_free(pose)
+            }
+            fn resolution(&self) -> SweepMethod {
+                SweepMethod::CONTINUOUS
+            }
+            fn edge_free(&mut self, from: &Transform, to: &Transform) -> bool {
+                if self.0.forks {
+                    panic!("a forked edge check failed");
+                }
+                self.0.edge_free(from, to)
+            }
+            fn part_radius(&self) -> Option<f64> {
+                Some(1.0)
+            }
+            fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+                let fork = HiddenFence {
+                    forks: true,
+                    ..HiddenFence::default()
+                };
+                Some(Box::new(PanickyForks(fork)))
+            }
+        }
+        let space = PlanningSpace::new(Vec3::new(-60.0, -60.0, -1.0), Vec3::new(60.0, 60.0, 1.0));
+        for seed in 1..=3 {
+            let mut v = PanickyForks(HiddenFence::default());
+            let mut path = detour();
+            smooth(
+                &mut v,
+                &space,
+                &mut path,
+                &Smoothing::default(),
+                seed,
+                None,
+                None,
+            );
+            assert!(
+                path.length_mm < detour().length_mm,
+                "seed {seed}: not shortened"
+            );
+            let mut check = HiddenFence::default();
+            for (k, w) in path.poses.windows(2).enumerate() {
+                assert!(
+                    check.edge_free(&w[0], &w[1]),
+                    "seed {seed}: edge {k} crosses"
+                );
+            }
+        }
     }
 
     #[test]

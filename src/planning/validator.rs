@@ -309,6 +309,18 @@ impl<'v> Checker<'v> {
         verdicts
     }
 
+    /// A validator of the same scene for another thread, when the validator can
+    /// be forked.
+    pub fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
+        self.validator.fork()
+    }
+
+    /// Counts an edge verdict another thread's validator gave (so that a path's
+    /// counts do not depend on which thread certified what).
+    pub fn count_edge(&mut self) {
+        self.edge_checks += 1;
+    }
+
     /// The deadline every check honours (`None`: none).
     pub fn deadline(&self) -> Option<Deadline> {
         self.deadline
