@@ -31,6 +31,16 @@ impl SourceError {
         }
     }
 
+    /// [`SourceError::new`] with the message of `cause`, boxed: where an error that
+    /// carries its cause beside it is written in a file.
+    pub(crate) fn at(
+        path: &Path,
+        (line, column): (usize, usize),
+        cause: &impl std::fmt::Display,
+    ) -> Option<Box<Self>> {
+        Some(Box::new(Self::new(path, line, column, cause.to_string())))
+    }
+
     /// Adds a hint.
     pub fn with_help(mut self, help: impl Into<String>) -> Self {
         self.help = Some(help.into());
@@ -383,9 +393,41 @@ pub fn redact_credentials(text: &str) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(out)
 }
 
+/// Where the block comment that opens at `b[start]` (`/*`) ends: the index just past
+/// its `*/`, comments nesting (`/* a /* b */ c */`, as in PostgreSQL and Rhai), or
+/// `b.len()` when it is not closed.
+pub(crate) fn nested_comment_end(b: &[u8], start: usize) -> usize {
+    let (mut i, mut depth) = (start, 0usize);
+    while i < b.len() {
+        if b[i..].starts_with(b"/*") {
+            depth += 1;
+            i += 2;
+        } else if b[i..].starts_with(b"*/") {
+            depth -= 1;
+            i += 2;
+            if depth == 0 {
+                break;
+            }
+        } else {
+            i += 1;
+        }
+    }
+    i
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nested_comments_end_after_their_last_close() {
+        let end = |t: &str| nested_comment_end(t.as_bytes(), 0);
+        assert_eq!(end("/* a */ b"), 7);
+        assert_eq!(end("/* a /* b */ c */ d"), 17);
+        assert_eq!(end("/* open /* */"), 13);
+        assert_eq!(end("/*/ x */"), 8);
+        assert_eq!(nested_comment_end(b"x /* y */", 2), 9);
+    }
 
     #[test]
     fn printed_text_never_carries_a_database_password() {

@@ -33,7 +33,7 @@ pub enum DataError {
     #[error("`{path}`: {cause}")]
     Path {
         /// The path as given.
-        path: String,
+        path: PathBuf,
         /// Why.
         #[source]
         cause: crate::project::PathError,
@@ -130,9 +130,20 @@ pub enum DataProblem {
 pub struct JsonError(std::sync::Arc<serde_json::Error>);
 
 impl JsonError {
+    /// The 1-based line.
+    pub fn line(&self) -> usize {
+        self.0.line()
+    }
+
     /// The 1-based column.
     pub fn column(&self) -> usize {
         self.0.column()
+    }
+}
+
+impl From<serde_json::Error> for JsonError {
+    fn from(e: serde_json::Error) -> Self {
+        JsonError(std::sync::Arc::new(e))
     }
 }
 
@@ -399,7 +410,7 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
 /// Reads a text file inside the project: the resolved path and its text.
 pub fn read_text(project: &Project, path: &str) -> Result<(PathBuf, String), DataError> {
     let full = project.resolve(path).map_err(|cause| DataError::Path {
-        path: path.to_string(),
+        path: path.into(),
         cause,
     })?;
     // Read through the project's held root: a folder swapped for a link after the
@@ -516,9 +527,7 @@ pub fn parse_json(text: &str) -> Result<serde_json::Value, DataError> {
     let located = |e: serde_json::Error| DataError::Parse {
         path: PathBuf::new(),
         line: e.line(),
-        cause: DataProblem::Json {
-            source: JsonError(std::sync::Arc::new(e)),
-        },
+        cause: DataProblem::Json { source: e.into() },
     };
     let count = std::cell::Cell::new(0);
     let mut d = serde_json::Deserializer::from_str(text);

@@ -35,7 +35,7 @@ pub enum PathError {
     #[error("`{path}` is outside the project folder {root}: only files inside it may be used (the project folder is `--root`, else the nearest folder holding fitup.toml, else the script's or document's own folder)")]
     Outside {
         /// The path as written.
-        path: String,
+        path: PathBuf,
         /// The project root.
         root: PathBuf,
     },
@@ -43,7 +43,7 @@ pub enum PathError {
     #[error("`{path}`: {cause}")]
     Refused {
         /// The path as written.
-        path: String,
+        path: PathBuf,
         /// Why.
         cause: crate::fsutil::OutputError,
     },
@@ -51,7 +51,7 @@ pub enum PathError {
     #[error("`{path}` cannot be resolved: {cause}")]
     Unresolvable {
         /// The path as written.
-        path: String,
+        path: PathBuf,
         /// Why.
         #[source]
         cause: Unresolved,
@@ -331,7 +331,7 @@ impl Project {
             return Err(PathError::Empty);
         }
         let outside = || PathError::Outside {
-            path: path.to_string(),
+            path: path.into(),
             root: self.root.clone(),
         };
         let p = Path::new(path);
@@ -355,7 +355,7 @@ impl Project {
                         return Err(outside());
                     }
                     return Err(PathError::Unresolvable {
-                        path: path.to_string(),
+                        path: path.into(),
                         cause: Unresolved::NoSuchFolder,
                     });
                 }
@@ -368,7 +368,7 @@ impl Project {
                 .map_err(|e| match std::fs::read_link(&existing) {
                     Ok(_) => outside(),
                     Err(_) => PathError::Unresolvable {
-                        path: path.to_string(),
+                        path: path.into(),
                         cause: Unresolved::Io(e.into()),
                     },
                 })?;
@@ -397,7 +397,7 @@ impl Project {
             // meanwhile is refused, and no folder is ever made outside.
             self.folder(parent, true)
                 .map_err(|e| PathError::Unresolvable {
-                    path: path.to_string(),
+                    path: path.into(),
                     cause: Unresolved::CreateFolder(e.into()),
                 })?;
         }
@@ -421,7 +421,7 @@ impl Project {
         let name = full.file_name().unwrap_or_default();
         crate::fsutil::check_output_in(&dir, name, &full, rule).map_err(|cause| {
             PathError::Refused {
-                path: path.to_string(),
+                path: path.into(),
                 cause,
             }
         })?;
@@ -443,7 +443,7 @@ impl Project {
         let (full, dir) = self.output_folder(path)?;
         let name = full.file_name().unwrap_or_default();
         let refused = |cause| PathError::Refused {
-            path: path.to_string(),
+            path: path.into(),
             cause,
         };
         crate::fsutil::check_output_in(&dir, name, &full, rule).map_err(refused)?;
@@ -463,21 +463,21 @@ impl Project {
         };
         if std::fs::symlink_metadata(&lexical).is_ok_and(|m| m.file_type().is_symlink()) {
             return Err(PathError::Refused {
-                path: path.to_string(),
+                path: path.into(),
                 cause: crate::fsutil::OutputError::Symlink,
             });
         }
         let full = self.resolve(path)?;
         let (Some(parent), Some(_)) = (full.parent(), full.file_name()) else {
             return Err(PathError::Unresolvable {
-                path: path.to_string(),
+                path: path.into(),
                 cause: Unresolved::NotAFileName,
             });
         };
         let dir = self
             .folder(parent, true)
             .map_err(|e| PathError::Unresolvable {
-                path: path.to_string(),
+                path: path.into(),
                 cause: Unresolved::OpenFolder(e.into()),
             })?;
         Ok((full, dir))

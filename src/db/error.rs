@@ -114,15 +114,14 @@ pub enum DbError {
     },
     /// A query limit asked for by a script is out of range.
     #[error(
-        "the query limit {name} = {value} is out of range: it must be positive and at most {max}"
+        "the query limit {} = {} is out of range: it must be positive and at most {}",
+        .asked.name(),
+        .asked.value(),
+        .asked.max()
     )]
     QueryLimit {
-        /// `max_seconds`, `max_rows` or `max_bytes`.
-        name: &'static str,
-        /// What was asked for.
-        value: String,
-        /// The hard maximum.
-        max: String,
+        /// Which limit, and what was asked for.
+        asked: AskedLimit,
     },
     /// No record with that id.
     #[error("no {what} with id {id} in {target}")]
@@ -260,14 +259,118 @@ pub enum ForeignFile {
 pub enum Refusal {
     /// fitup's jail refused an action of the statement before it ran (SQLite's
     /// authorizer, or the PostgreSQL statement check): the action and why.
-    #[error("{reason}")]
-    Jail {
-        /// The refused action and why, in words (``INSERT into `runs` writes``).
-        reason: String,
-    },
+    #[error("{0}")]
+    Jail(JailRefusal),
     /// The server refused a write inside the read-only transaction (PostgreSQL).
     #[error(transparent)]
     Driver(DriverError),
+}
+
+/// What fitup's jail refused in a read-only query, and why (the cause of a
+/// [`Refusal::Jail`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum JailRefusal {
+    /// A function that reaches outside the database (`load_extension`, …).
+    Function {
+        /// The function as written.
+        name: String,
+    },
+    /// `PRAGMA name = …`: it changes a setting.
+    PragmaSet {
+        /// The pragma as written.
+        name: String,
+    },
+    /// A `PRAGMA` that is not a schema query.
+    Pragma {
+        /// The pragma as written.
+        name: String,
+    },
+    /// `ATTACH` (another database file).
+    Attach,
+    /// `DETACH` (it changes the connection).
+    Detach,
+    /// A transaction or savepoint (each query is one read).
+    Transaction,
+    /// DROP, CREATE or ALTER (a write to SQLite's schema table).
+    Schema,
+    /// `INSERT`.
+    Insert {
+        /// The table.
+        table: String,
+    },
+    /// `UPDATE`.
+    Update {
+        /// The table.
+        table: String,
+    },
+    /// `DELETE`.
+    Delete {
+        /// The table.
+        table: String,
+    },
+    /// `DROP TABLE`.
+    DropTable {
+        /// The table.
+        table: String,
+    },
+    /// Any other action of SQLite's authorizer (its name: `CreateIndex`, …).
+    Other {
+        /// The authorizer's name of the action.
+        action: String,
+    },
+    /// A statement SQLite says would change the database.
+    Writes,
+    /// A PostgreSQL statement that is not a query: its first word, uppercased
+    /// (empty: an empty statement).
+    NotAQuery {
+        /// The statement's first word.
+        first: String,
+    },
+    /// A PostgreSQL function that reaches outside the results database (server
+    /// files, other SQL, other sessions or settings): its name or prefix.
+    Outside {
+        /// The name (`pg_read_file`) or prefix (`pg_ls`).
+        function: &'static str,
+    },
+}
+
+impl std::fmt::Display for JailRefusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            JailRefusal::Function { name } => {
+                write!(f, "the function `{name}` reaches outside the database")
+            }
+            JailRefusal::PragmaSet { name } => write!(f, "`PRAGMA {name} = …` changes a setting"),
+            JailRefusal::Pragma { name } => write!(f, "`PRAGMA {name}` is not a schema query"),
+            JailRefusal::Attach => f.write_str("ATTACH would open another database file"),
+            JailRefusal::Detach => f.write_str("DETACH changes the connection"),
+            JailRefusal::Transaction => {
+                f.write_str("transactions are fitup's (each query is one read)")
+            }
+            JailRefusal::Schema => {
+                f.write_str("the statement changes the schema (DROP, CREATE or ALTER)")
+            }
+            JailRefusal::Insert { table } => write!(f, "INSERT into `{table}` writes"),
+            JailRefusal::Update { table } => write!(f, "UPDATE of `{table}` writes"),
+            JailRefusal::Delete { table } => write!(f, "DELETE from `{table}` writes"),
+            JailRefusal::DropTable { table } => write!(f, "DROP TABLE `{table}` writes"),
+            JailRefusal::Other { action } => write!(f, "{action} writes or changes the schema"),
+            JailRefusal::Writes => f.write_str("the statement would change the database"),
+            JailRefusal::NotAQuery { first } => {
+                if first.is_empty() {
+                    f.write_str("an empty statement")?;
+                } else {
+                    write!(f, "`{first}`")?;
+                }
+                f.write_str(" is not a query: only SELECT, WITH, VALUES and TABLE statements run")
+            }
+            JailRefusal::Outside { function } => write!(
+                f,
+                "`{function}…` reaches outside the results database (server files, other SQL, other sessions or settings)"
+            ),
+        }
+    }
 }
 
 impl PartialEq for FolderError {
@@ -286,6 +389,52 @@ impl PartialEq for FolderError {
                 },
             ) => a == b && x == y,
             _ => false,
+        }
+    }
+}
+
+/// A query limit a script asked for ([`DbError::QueryLimit`]): which limit and its
+/// value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum AskedLimit {
+    /// `max_seconds`: wall time, s.
+    Seconds(f64),
+    /// `max_rows`.
+    Rows(usize),
+    /// `max_bytes`.
+    Bytes(usize),
+}
+
+impl AskedLimit {
+    /// The limit's option name (`max_seconds`, `max_rows`, `max_bytes`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            AskedLimit::Seconds(_) => "max_seconds",
+            AskedLimit::Rows(_) => "max_rows",
+            AskedLimit::Bytes(_) => "max_bytes",
+        }
+    }
+
+    /// The value asked for, for people (`0 s`, `5,000,000`).
+    fn value(&self) -> String {
+        match *self {
+            AskedLimit::Seconds(s) => format!("{s} s"),
+            AskedLimit::Rows(n) | AskedLimit::Bytes(n) => query::thousands(n as u64),
+        }
+    }
+
+    /// The hard maximum ([`QueryLimits::MAX`]), for people.
+    fn max(&self) -> String {
+        let max = QueryLimits::MAX;
+        match self {
+            AskedLimit::Seconds(_) => format!("{} s", max.time.as_secs()),
+            AskedLimit::Rows(_) => query::thousands(max.max_rows as u64),
+            AskedLimit::Bytes(_) => format!(
+                "{} ({})",
+                query::thousands(max.max_bytes as u64),
+                query::bytes(max.max_bytes)
+            ),
         }
     }
 }

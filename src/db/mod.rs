@@ -48,8 +48,8 @@ pub use skill_log::{SkillEvent, SkillLogEntry};
 
 pub use backend::{Dialect, SqlValue};
 pub use error::{
-    DbError, DriverError, DriverErrorKind, FolderError, ForeignFile, OpenCause, ReadOnlyCause,
-    Refusal,
+    AskedLimit, DbError, DriverError, DriverErrorKind, FolderError, ForeignFile, JailRefusal,
+    OpenCause, ReadOnlyCause, Refusal,
 };
 pub use query::{QueryLimits, RunQueryBudget, RUN_QUERY_BUDGET, SQLITE_HEAP_LIMIT};
 pub use records::*;
@@ -549,8 +549,8 @@ impl Database {
             }
         };
         result.map_err(|stop| match stop {
-            query::Stop::Refused(reason) => DbError::WriteRefused {
-                cause: Refusal::Jail { reason },
+            query::Stop::Refused(why) => DbError::WriteRefused {
+                cause: Refusal::Jail(why),
             },
             query::Stop::Timeout => DbError::QueryTimeout {
                 target,

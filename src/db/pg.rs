@@ -5,7 +5,7 @@
 
 use super::backend::{Dialect, Kind, Raw, SqlValue, Tx};
 use super::query::{Collector, QueryLimits, Stop, WHY_CANCEL, WHY_NONE, WHY_TIME};
-use super::QueryResult;
+use super::{JailRefusal, QueryResult};
 use crate::math::Deadline;
 use postgres::types::{ToSql, Type};
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
@@ -360,25 +360,20 @@ const PG_DENIED: &[&str] = &[
 
 /// Refuses a PostgreSQL statement that is not a plain query or names a function of
 /// [`PG_DENIED`]; the message says which.
-pub(crate) fn pg_refusal(sql: &str) -> Option<String> {
+pub(crate) fn pg_refusal(sql: &str) -> Option<JailRefusal> {
     let first = first_word(sql);
     if !PG_STATEMENTS.contains(&first.as_str()) {
-        let shown = if first.is_empty() {
-            "an empty statement".to_string()
-        } else {
-            format!("`{}`", first.to_ascii_uppercase())
-        };
-        return Some(format!(
-            "{shown} is not a query: only SELECT, WITH, VALUES and TABLE statements run"
-        ));
+        return Some(JailRefusal::NotAQuery {
+            first: first.to_ascii_uppercase(),
+        });
     }
     let lower = sql.to_ascii_lowercase();
-    PG_DENIED.iter().find(|f| lower.contains(*f)).map(|f| {
-        format!(
-            "`{}…` reaches outside the results database (server files, other SQL, other sessions or settings)",
-            f.trim_end_matches('_')
-        )
-    })
+    PG_DENIED
+        .iter()
+        .find(|f| lower.contains(*f))
+        .map(|f| JailRefusal::Outside {
+            function: f.trim_end_matches('_'),
+        })
 }
 
 /// The first keyword of a statement, after spaces, comments and opening parentheses,
@@ -396,21 +391,7 @@ fn first_word(sql: &str) -> String {
             }
         } else if b[i..].starts_with(b"/*") {
             // PostgreSQL block comments nest.
-            let mut depth = 0usize;
-            while i < b.len() {
-                if b[i..].starts_with(b"/*") {
-                    depth += 1;
-                    i += 2;
-                } else if b[i..].starts_with(b"*/") {
-                    depth -= 1;
-                    i += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    i += 1;
-                }
-            }
+            i = crate::diagnostics::nested_comment_end(b, i);
         } else {
             break;
         }
@@ -568,7 +549,9 @@ mod tests {
             "EXPLAIN ANALYZE DELETE FROM runs",
             "",
         ] {
-            assert!(pg_refusal(bad).unwrap().contains("is not a query"), "{bad}");
+            let why = pg_refusal(bad).unwrap();
+            assert!(matches!(why, JailRefusal::NotAQuery { .. }), "{bad}");
+            assert!(why.to_string().contains("is not a query"), "{bad}");
         }
         for bad in [
             "SELECT pg_read_file('/etc/passwd')",
@@ -579,10 +562,22 @@ mod tests {
             "SELECT pg_advisory_lock(1)",
             "SELECT lo_export(1, '/tmp/x')",
         ] {
-            assert!(
-                pg_refusal(bad).unwrap().contains("reaches outside"),
-                "{bad}"
-            );
+            let why = pg_refusal(bad).unwrap();
+            assert!(matches!(why, JailRefusal::Outside { .. }), "{bad}");
+            assert!(why.to_string().contains("reaches outside"), "{bad}");
         }
+        let said = |sql: &str| pg_refusal(sql).unwrap().to_string();
+        assert_eq!(
+            said("copy runs to '/tmp/x'"),
+            "`COPY` is not a query: only SELECT, WITH, VALUES and TABLE statements run"
+        );
+        assert_eq!(
+            said(" -- nothing\n"),
+            "an empty statement is not a query: only SELECT, WITH, VALUES and TABLE statements run"
+        );
+        assert_eq!(
+            said("SELECT * FROM pg_ls_dir('.')"),
+            "`pg_ls…` reaches outside the results database (server files, other SQL, other sessions or settings)"
+        );
     }
 }

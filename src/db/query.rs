@@ -13,7 +13,7 @@
 //! the server when the run is cancelled.
 
 use super::backend::{self, Raw, SqlValue};
-use super::{DbError, QueryResult};
+use super::{AskedLimit, DbError, JailRefusal, QueryResult};
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -53,33 +53,15 @@ impl QueryLimits {
     /// These limits if each is positive and within [`QueryLimits::MAX`], else
     /// [`DbError::QueryLimit`] naming the first one that is not.
     pub fn checked(self) -> Result<Self, DbError> {
-        let bad = |name: &'static str, value: String, max: String| {
-            Err(DbError::QueryLimit { name, value, max })
-        };
+        let bad = |asked| Err(DbError::QueryLimit { asked });
         if self.time.is_zero() || self.time > Self::MAX.time {
-            return bad(
-                "max_seconds",
-                format!("{} s", self.time.as_secs_f64()),
-                format!("{} s", Self::MAX.time.as_secs()),
-            );
+            return bad(AskedLimit::Seconds(self.time.as_secs_f64()));
         }
         if self.max_rows == 0 || self.max_rows > Self::MAX.max_rows {
-            return bad(
-                "max_rows",
-                thousands(self.max_rows as u64),
-                thousands(Self::MAX.max_rows as u64),
-            );
+            return bad(AskedLimit::Rows(self.max_rows));
         }
         if self.max_bytes == 0 || self.max_bytes > Self::MAX.max_bytes {
-            return bad(
-                "max_bytes",
-                thousands(self.max_bytes as u64),
-                format!(
-                    "{} ({})",
-                    thousands(Self::MAX.max_bytes as u64),
-                    bytes(Self::MAX.max_bytes)
-                ),
-            );
+            return bad(AskedLimit::Bytes(self.max_bytes));
         }
         Ok(self)
     }
@@ -182,7 +164,7 @@ pub(crate) fn bytes(n: usize) -> String {
 #[derive(Debug)]
 pub(crate) enum Stop {
     /// The jail refused the statement (what and why).
-    Refused(String),
+    Refused(JailRefusal),
     /// The time limit passed.
     Timeout,
     /// The run was cancelled.
@@ -306,7 +288,7 @@ const DENIED_FUNCTIONS: &[&str] = &[
 
 /// The authorizer's verdict on one action of a statement being prepared: `None`
 /// allows it, `Some(why)` refuses it.
-pub(crate) fn sqlite_refusal(action: &rusqlite::hooks::AuthAction<'_>) -> Option<String> {
+pub(crate) fn sqlite_refusal(action: &rusqlite::hooks::AuthAction<'_>) -> Option<JailRefusal> {
     use rusqlite::hooks::AuthAction as A;
     match action {
         A::Select | A::Read { .. } | A::Recursive => None,
@@ -314,7 +296,9 @@ pub(crate) fn sqlite_refusal(action: &rusqlite::hooks::AuthAction<'_>) -> Option
             let f = function_name.to_ascii_lowercase();
             DENIED_FUNCTIONS
                 .contains(&f.as_str())
-                .then(|| format!("the function `{function_name}` reaches outside the database"))
+                .then(|| JailRefusal::Function {
+                    name: function_name.to_string(),
+                })
         }
         A::Pragma {
             pragma_name,
@@ -326,33 +310,42 @@ pub(crate) fn sqlite_refusal(action: &rusqlite::hooks::AuthAction<'_>) -> Option
             {
                 None
             } else if pragma_value.is_some() {
-                Some(format!("`PRAGMA {pragma_name} = …` changes a setting"))
+                Some(JailRefusal::PragmaSet {
+                    name: pragma_name.to_string(),
+                })
             } else {
-                Some(format!("`PRAGMA {pragma_name}` is not a schema query"))
+                Some(JailRefusal::Pragma {
+                    name: pragma_name.to_string(),
+                })
             }
         }
-        A::Attach { .. } => Some("ATTACH would open another database file".into()),
-        A::Detach { .. } => Some("DETACH changes the connection".into()),
-        A::Transaction { .. } | A::Savepoint { .. } => {
-            Some("transactions are fitup's (each query is one read)".into())
-        }
+        A::Attach { .. } => Some(JailRefusal::Attach),
+        A::Detach { .. } => Some(JailRefusal::Detach),
+        A::Transaction { .. } | A::Savepoint { .. } => Some(JailRefusal::Transaction),
         // DROP, CREATE and ALTER are first asked as a write to the schema table (and
         // end there).
         A::Insert { table_name } | A::Update { table_name, .. } | A::Delete { table_name }
             if is_schema_table(table_name) =>
         {
-            Some("the statement changes the schema (DROP, CREATE or ALTER)".into())
+            Some(JailRefusal::Schema)
         }
-        A::Insert { table_name } => Some(format!("INSERT into `{table_name}` writes")),
-        A::Update { table_name, .. } => Some(format!("UPDATE of `{table_name}` writes")),
-        A::Delete { table_name } => Some(format!("DELETE from `{table_name}` writes")),
+        A::Insert { table_name } => Some(JailRefusal::Insert {
+            table: table_name.to_string(),
+        }),
+        A::Update { table_name, .. } => Some(JailRefusal::Update {
+            table: table_name.to_string(),
+        }),
+        A::Delete { table_name } => Some(JailRefusal::Delete {
+            table: table_name.to_string(),
+        }),
         A::DropTable { table_name } | A::DropTempTable { table_name } => {
-            Some(format!("DROP TABLE `{table_name}` writes"))
+            Some(JailRefusal::DropTable {
+                table: table_name.to_string(),
+            })
         }
-        other => Some(format!(
-            "{} writes or changes the schema",
-            action_name(other)
-        )),
+        other => Some(JailRefusal::Other {
+            action: action_name(other),
+        }),
     }
 }
 
@@ -377,7 +370,7 @@ fn action_name(a: &rusqlite::hooks::AuthAction<'_>) -> String {
 pub(crate) struct SqliteReader {
     conn: rusqlite::Connection,
     /// What the authorizer refused last (its messages say more than "not authorized").
-    refused: Arc<Mutex<Option<String>>>,
+    refused: Arc<Mutex<Option<JailRefusal>>>,
     /// The running query's deadline and cancel flag, read by fitup's own functions.
     clock: Arc<super::functions::Clock>,
 }
@@ -523,9 +516,7 @@ impl SqliteReader {
     ) -> Result<QueryResult, Stop> {
         let mut stmt = self.conn.prepare(sql).map_err(Raw::from)?;
         if !stmt.readonly() {
-            return Err(Stop::Refused(
-                "the statement would change the database".into(),
-            ));
+            return Err(Stop::Refused(JailRefusal::Writes));
         }
         if stmt.parameter_count() != params.len() {
             return Err(Stop::Sql(Raw::other(format!(
@@ -705,6 +696,55 @@ mod tests {
         ] {
             assert!(sqlite_refusal(&refused).is_some(), "{refused:?}");
         }
+        let said = |a: A<'_>| sqlite_refusal(&a).unwrap().to_string();
+        assert_eq!(
+            said(A::Attach { filename: "o.db" }),
+            "ATTACH would open another database file"
+        );
+        assert_eq!(
+            said(A::Pragma {
+                pragma_name: "synchronous",
+                pragma_value: Some("OFF"),
+            }),
+            "`PRAGMA synchronous = …` changes a setting"
+        );
+        assert_eq!(
+            said(A::Pragma {
+                pragma_name: "wal_checkpoint",
+                pragma_value: None,
+            }),
+            "`PRAGMA wal_checkpoint` is not a schema query"
+        );
+        assert_eq!(
+            said(A::Function {
+                function_name: "LOAD_EXTENSION",
+            }),
+            "the function `LOAD_EXTENSION` reaches outside the database"
+        );
+        assert_eq!(
+            said(A::Insert { table_name: "runs" }),
+            "INSERT into `runs` writes"
+        );
+        assert_eq!(
+            said(A::Insert {
+                table_name: "sqlite_master"
+            }),
+            "the statement changes the schema (DROP, CREATE or ALTER)"
+        );
+        assert_eq!(
+            said(A::Delete {
+                table_name: "paths"
+            }),
+            "DELETE from `paths` writes"
+        );
+        assert_eq!(
+            said(A::DropTable { table_name: "runs" }),
+            "DROP TABLE `runs` writes"
+        );
+        assert_eq!(
+            said(A::CreateTable { table_name: "x" }),
+            "CreateTable writes or changes the schema"
+        );
     }
 
     /// A fresh project database with one run.
@@ -883,11 +923,55 @@ mod tests {
             matches!(
                 e,
                 DbError::QueryLimit {
-                    name: "max_rows",
-                    ..
+                    asked: AskedLimit::Rows(5_000_000)
                 }
             ),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn limits_out_of_range_name_the_limit_its_value_and_maximum() {
+        let e = |limits: QueryLimits| limits.checked().unwrap_err().to_string();
+        let d = QueryLimits::DEFAULT;
+        assert_eq!(
+            e(QueryLimits {
+                time: Duration::ZERO,
+                ..d
+            }),
+            "the query limit max_seconds = 0 s is out of range: it must be positive and at most 600 s"
+        );
+        assert_eq!(
+            e(QueryLimits {
+                time: Duration::from_millis(600_500),
+                ..d
+            }),
+            "the query limit max_seconds = 600.5 s is out of range: it must be positive and at most 600 s"
+        );
+        assert_eq!(
+            e(QueryLimits {
+                max_rows: 5_000_000,
+                ..d
+            }),
+            "the query limit max_rows = 5,000,000 is out of range: it must be positive and at most 1,000,000"
+        );
+        assert_eq!(
+            e(QueryLimits { max_bytes: 0, ..d }),
+            "the query limit max_bytes = 0 is out of range: it must be positive and at most 268,435,456 (256 MiB)"
+        );
+        let options = crate::options::Limits {
+            max_seconds: -1.5,
+            ..Default::default()
+        };
+        assert_eq!(
+            options.limits().unwrap_err(),
+            DbError::QueryLimit {
+                asked: AskedLimit::Seconds(-1.5)
+            }
+        );
+        assert_eq!(
+            options.limits().unwrap_err().to_string(),
+            "the query limit max_seconds = -1.5 s is out of range: it must be positive and at most 600 s"
         );
     }
 }

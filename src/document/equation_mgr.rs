@@ -348,16 +348,11 @@ pub(super) fn load(
     use crate::diagnostics::SourceError;
     let located = |source: EquationError| {
         let item = source.index.min(texts.len().saturating_sub(1));
-        let (line, col) = positions
+        let at = positions
             .get(&format!("equations/{item}"))
             .unwrap_or((0, 0));
         DocumentError::Equation {
-            at: Some(Box::new(SourceError::new(
-                path,
-                line,
-                col,
-                source.to_string(),
-            ))),
+            at: SourceError::at(path, at, &source),
             source,
         }
     };

@@ -44,12 +44,12 @@ pub struct EquationError {
 #[non_exhaustive]
 pub enum EquationCause {
     /// The text is not `"name" = expression`.
-    #[error("syntax at column {column}: {message}")]
+    #[error("syntax at column {column}: {problem}")]
     Syntax {
         /// 1-based column (in characters) in the equation's text.
         column: usize,
         /// What was expected.
-        message: String,
+        problem: SyntaxProblem,
     },
     /// A name used in the expression is neither a global variable nor a dimension.
     #[error("unknown name \"{name}\" ({hint})")]
@@ -83,7 +83,7 @@ pub enum EquationCause {
     DivisionByZero,
     /// A result that is not a finite number (`sqr(-1)`, `log(0)`, an overflow).
     #[error("{0} is not a finite number")]
-    NonFinite(String),
+    NonFinite(NonFiniteAt),
     /// The dimension refused the value (a negative distance, beyond 1e9 mm, a joint
     /// limit).
     #[error("{0}")]
@@ -92,6 +92,152 @@ pub enum EquationCause {
     /// [`MAX_NODES`], [`MAX_NESTING`], [`MAX_NAME_LEN`]).
     #[error("{0}")]
     TooLarge(#[source] EquationLimit),
+}
+
+/// What an equation's text holds where its grammar wants something else (the
+/// cause of an [`EquationCause::Syntax`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SyntaxProblem {
+    /// The text does not start with the name it sets.
+    NoTarget,
+    /// No `=` after the name.
+    NoEquals,
+    /// Text after the expression that is no operator.
+    NoOperator,
+    /// A name's closing `"` is missing.
+    UnclosedName,
+    /// An empty name `""`.
+    EmptyName,
+    /// A control or invisible character in a name.
+    NameCharacter(char),
+    /// A `(` that is not closed.
+    NoCloseParen,
+    /// Something that does not begin a number, a name, a function or `(`.
+    NoOperand,
+    /// The text ends before the expression does.
+    EndsEarly,
+    /// Digits that do not make a number.
+    NotANumber {
+        /// The text read.
+        text: String,
+    },
+    /// A unit suffix fitup does not know (the message names the closest units).
+    UnknownUnit {
+        /// The unit as written.
+        unit: String,
+    },
+    /// A function fitup does not know (the message names the closest functions).
+    UnknownFunction {
+        /// The word as written.
+        word: String,
+    },
+    /// A function's name without `(` after it.
+    NoOpenParen {
+        /// The function as written.
+        function: String,
+    },
+    /// A call with too few or too many arguments.
+    Arguments {
+        /// The function as written.
+        function: String,
+        /// The fewest arguments it takes.
+        least: usize,
+        /// The most (`usize::MAX`: no limit).
+        most: usize,
+    },
+}
+
+impl std::fmt::Display for SyntaxProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SyntaxProblem::NoTarget => f.write_str(
+                "an equation starts with the name it sets in double quotes: `\"Factor\" = 2`, `\"D1@lift\" = 10 * \"Factor\"`",
+            ),
+            SyntaxProblem::NoEquals => f.write_str("expected `=` after the name"),
+            SyntaxProblem::NoOperator => {
+                f.write_str("expected an operator (`+ - * / ^`) or the end")
+            }
+            SyntaxProblem::UnclosedName => f.write_str("a name's closing `\"` is missing"),
+            SyntaxProblem::EmptyName => f.write_str("an empty name `\"\"`"),
+            SyntaxProblem::NameCharacter(c) => write!(
+                f,
+                "{} is not allowed in names",
+                crate::diagnostics::describe_char(*c)
+            ),
+            SyntaxProblem::NoCloseParen => f.write_str("expected `)`"),
+            SyntaxProblem::NoOperand => {
+                f.write_str("expected a number, a \"name\", a function or `(`")
+            }
+            SyntaxProblem::EndsEarly => f.write_str("the expression ends too early"),
+            SyntaxProblem::NotANumber { text } => write!(f, "`{text}` is not a number"),
+            SyntaxProblem::UnknownUnit { unit } => write!(
+                f,
+                "unknown unit `{unit}` ({}); values are in document units: lengths mm, angles degrees",
+                crate::diagnostics::suggestion(&unit.to_lowercase(), UNITS.iter().map(|u| u.0))
+            ),
+            SyntaxProblem::UnknownFunction { word } => {
+                let names = FUNCTIONS.iter().map(|f| f.0).chain(["pi"]);
+                write!(
+                    f,
+                    "unknown function `{word}` ({}); names are written in double quotes",
+                    crate::diagnostics::suggestion(&word.to_lowercase(), names)
+                )
+            }
+            SyntaxProblem::NoOpenParen { function } => {
+                write!(f, "expected `(` after `{function}`")
+            }
+            SyntaxProblem::Arguments {
+                function,
+                least,
+                most,
+            } => match (*least, *most) {
+                (1, 1) => write!(f, "`{function}` takes 1 argument"),
+                (n, MANY) => write!(f, "`{function}` takes {n} or more arguments"),
+                (n, _) => write!(f, "`{function}` takes {n} arguments"),
+            },
+        }
+    }
+}
+
+/// Where a value that is not a finite number came from (the cause of an
+/// [`EquationCause::NonFinite`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum NonFiniteAt {
+    /// A number as written (`1e999`).
+    Number {
+        /// Its digits.
+        text: String,
+    },
+    /// A function's result (`sqr(-1)`, `log(0)`).
+    Call {
+        /// The function's name.
+        function: &'static str,
+        /// Its arguments.
+        arguments: Vec<f64>,
+    },
+    /// An operator's result (`+ - * / ^`).
+    Operator(char),
+    /// Any other value.
+    Value,
+}
+
+impl std::fmt::Display for NonFiniteAt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NonFiniteAt::Number { text } => write!(f, "`{text}`"),
+            NonFiniteAt::Call {
+                function,
+                arguments,
+            } => {
+                let shown: Vec<String> = arguments.iter().map(|x| x.to_string()).collect();
+                write!(f, "{function}({})", shown.join(", "))
+            }
+            NonFiniteAt::Operator(op) => write!(f, "the result of `{op}`"),
+            NonFiniteAt::Value => f.write_str("a value"),
+        }
+    }
 }
 
 /// Which bound of the equations was passed (the cause of an
@@ -326,21 +472,19 @@ pub(crate) fn parse(text: &str) -> Result<(String, String, Expr), EquationCause>
     };
     p.skip_space();
     if p.peek() != Some('"') {
-        return Err(p.error(
-            "an equation starts with the name it sets in double quotes: `\"Factor\" = 2`, `\"D1@lift\" = 10 * \"Factor\"`",
-        ));
+        return Err(p.error(SyntaxProblem::NoTarget));
     }
     let target = p.name()?;
     p.skip_space();
     if p.peek() != Some('=') {
-        return Err(p.error("expected `=` after the name"));
+        return Err(p.error(SyntaxProblem::NoEquals));
     }
     p.at += 1;
     let start = p.at;
     let expr = p.expression()?;
     p.skip_space();
     if p.at < chars.len() {
-        return Err(p.error("expected an operator (`+ - * / ^`) or the end"));
+        return Err(p.error(SyntaxProblem::NoOperator));
     }
     let expression: String = chars[start..].iter().collect::<String>().trim().to_string();
     Ok((target, expression, expr))
@@ -364,10 +508,10 @@ impl Parser<'_> {
         }
     }
 
-    fn error(&self, message: &str) -> EquationCause {
+    fn error(&self, problem: SyntaxProblem) -> EquationCause {
         EquationCause::Syntax {
             column: self.at + 1,
-            message: message.to_string(),
+            problem,
         }
     }
 
@@ -390,14 +534,14 @@ impl Parser<'_> {
         }
         if self.peek().is_none() {
             self.at = open;
-            return Err(self.error("a name's closing `\"` is missing"));
+            return Err(self.error(SyntaxProblem::UnclosedName));
         }
         let raw: String = self.chars[start..self.at].iter().collect();
         self.at += 1;
         let name = raw.trim();
         if name.is_empty() {
             self.at = open;
-            return Err(self.error("an empty name `\"\"`"));
+            return Err(self.error(SyntaxProblem::EmptyName));
         }
         if name.len() > MAX_NAME_LEN {
             return Err(EquationCause::TooLarge(EquationLimit::Name {
@@ -406,10 +550,7 @@ impl Parser<'_> {
         }
         if let Err(c) = crate::diagnostics::checked_name(name) {
             self.at = open;
-            return Err(self.error(&format!(
-                "{} is not allowed in names",
-                crate::diagnostics::describe_char(c)
-            )));
+            return Err(self.error(SyntaxProblem::NameCharacter(c)));
         }
         Ok(super::nfc_name(name).into_owned())
     }
@@ -519,7 +660,7 @@ impl Parser<'_> {
                 let e = self.expression()?;
                 self.skip_space();
                 if self.peek() != Some(')') {
-                    return Err(self.error("expected `)`"));
+                    return Err(self.error(SyntaxProblem::NoCloseParen));
                 }
                 self.at += 1;
                 self.nesting -= 1;
@@ -527,8 +668,8 @@ impl Parser<'_> {
             }
             Some(c) if c.is_ascii_digit() || c == '.' => self.number(),
             Some(c) if c.is_alphabetic() => self.call(),
-            Some(_) => Err(self.error("expected a number, a \"name\", a function or `(`")),
-            None => Err(self.error("the expression ends too early")),
+            Some(_) => Err(self.error(SyntaxProblem::NoOperand)),
+            None => Err(self.error(SyntaxProblem::EndsEarly)),
         }
     }
 
@@ -554,7 +695,7 @@ impl Parser<'_> {
         let text: String = self.chars[start..self.at].iter().collect();
         let v: f64 = text.parse().map_err(|_| EquationCause::Syntax {
             column: start + 1,
-            message: format!("`{text}` is not a number"),
+            problem: SyntaxProblem::NotANumber { text: text.clone() },
         })?;
         // A unit suffix (`10mm`, `2in`, `45deg`): the value in document units.
         let mut v = v;
@@ -566,15 +707,12 @@ impl Parser<'_> {
             let unit: String = self.chars[unit_at..self.at].iter().collect();
             let Some(&(_, factor)) = UNITS.iter().find(|u| u.0 == unit.to_lowercase()) else {
                 self.at = unit_at;
-                return Err(self.error(&format!(
-                    "unknown unit `{unit}` ({}); values are in document units: lengths mm, angles degrees",
-                    crate::diagnostics::suggestion(&unit.to_lowercase(), UNITS.iter().map(|u| u.0))
-                )));
+                return Err(self.error(SyntaxProblem::UnknownUnit { unit }));
             };
             v *= factor;
         }
         if !v.is_finite() {
-            return Err(EquationCause::NonFinite(format!("`{text}`")));
+            return Err(EquationCause::NonFinite(NonFiniteAt::Number { text }));
         }
         Ok(Expr::Number(v))
     }
@@ -592,26 +730,22 @@ impl Parser<'_> {
         }
         let Some(&(_, f, least, most)) = FUNCTIONS.iter().find(|f| f.0 == lower) else {
             self.at = start;
-            let names = FUNCTIONS.iter().map(|f| f.0).chain(["pi"]);
-            return Err(self.error(&format!(
-                "unknown function `{word}` ({}); names are written in double quotes",
-                crate::diagnostics::suggestion(&lower, names)
-            )));
+            return Err(self.error(SyntaxProblem::UnknownFunction { word }));
         };
         self.skip_space();
         if self.peek() != Some('(') {
-            return Err(self.error(&format!("expected `(` after `{word}`")));
+            return Err(self.error(SyntaxProblem::NoOpenParen { function: word }));
         }
         self.at += 1;
         self.enter()?;
-        let takes = match (least, most) {
-            (1, 1) => "1 argument".to_string(),
-            (n, MANY) => format!("{n} or more arguments"),
-            (n, _) => format!("{n} arguments"),
+        let arguments = |function| SyntaxProblem::Arguments {
+            function,
+            least,
+            most,
         };
         self.skip_space();
         if self.peek() == Some(')') {
-            return Err(self.error(&format!("`{word}` takes {takes}")));
+            return Err(self.error(arguments(word)));
         }
         let mut args = Vec::with_capacity(least);
         loop {
@@ -625,7 +759,7 @@ impl Parser<'_> {
             match self.peek() {
                 Some(',') if args.len() < most => self.at += 1,
                 Some(')') if args.len() >= least => break,
-                _ => return Err(self.error(&format!("`{word}` takes {takes}"))),
+                _ => return Err(self.error(arguments(word))),
             }
         }
         self.at += 1;
@@ -698,20 +832,18 @@ impl Expr {
                 }
                 let v = f.apply(&a);
                 if !v.is_finite() {
-                    let shown: Vec<String> = a.iter().map(|x| x.to_string()).collect();
-                    return Err(EquationCause::NonFinite(format!(
-                        "{}({})",
-                        f.name(),
-                        shown.join(", ")
-                    )));
+                    return Err(EquationCause::NonFinite(NonFiniteAt::Call {
+                        function: f.name(),
+                        arguments: a,
+                    }));
                 }
                 v
             }
         };
         if !v.is_finite() {
             return Err(EquationCause::NonFinite(match self {
-                Expr::Binary(op, ..) => format!("the result of `{op}`"),
-                _ => "a value".into(),
+                Expr::Binary(op, ..) => NonFiniteAt::Operator(*op),
+                _ => NonFiniteAt::Value,
             }));
         }
         Ok(v)
@@ -819,13 +951,61 @@ mod tests {
     }
 
     #[test]
+    fn syntax_problems_read_as_their_words() {
+        let cases: &[(&str, &str)] = &[
+            ("a = 1", "an equation starts with the name it sets in double quotes: `\"Factor\" = 2`, `\"D1@lift\" = 10 * \"Factor\"`"),
+            ("\"a\" 1", "expected `=` after the name"),
+            ("\"a\" = 1 2", "expected an operator (`+ - * / ^`) or the end"),
+            ("\"a = 1", "a name's closing `\"` is missing"),
+            ("\" \" = 1", "an empty name `\"\"`"),
+            ("\"a\u{200B}b\" = 1", "U+200B (ZERO WIDTH SPACE) is not allowed in names"),
+            ("\"a\" = (1 + 2", "expected `)`"),
+            ("\"a\" = )", "expected a number, a \"name\", a function or `(`"),
+            ("\"a\" = 2 *", "the expression ends too early"),
+            ("\"a\" = 2furlong", "unknown unit `furlong` ("),
+            ("\"a\" = cube(4)", "unknown function `cube` ("),
+            ("\"a\" = sqr 4", "expected `(` after `sqr`"),
+            ("\"a\" = sqr()", "`sqr` takes 1 argument"),
+            ("\"a\" = sqr(1, 2)", "`sqr` takes 1 argument"),
+            ("\"a\" = max()", "`max` takes 2 or more arguments"),
+            ("\"a\" = iif(1, 2)", "`iif` takes 3 arguments"),
+        ];
+        for (text, words) in cases {
+            let e = value(text).unwrap_err();
+            assert!(matches!(e, EquationCause::Syntax { .. }), "{text}: {e:?}");
+            let shown = e.to_string();
+            assert!(shown.starts_with("syntax at column "), "{text}: {shown}");
+            assert!(shown.contains(&format!(": {words}")), "{text}: {shown}");
+        }
+        let e = value("\"a\" = 2furlong").unwrap_err().to_string();
+        assert!(
+            e.ends_with("); values are in document units: lengths mm, angles degrees"),
+            "{e}"
+        );
+        let e = value("\"a\" = cube(4)").unwrap_err().to_string();
+        assert!(e.ends_with("); names are written in double quotes"), "{e}");
+    }
+
+    #[test]
     fn errors_name_their_cause_and_column() {
         assert_eq!(
             value("\"a\" = 1 / (\"x\" - 3)"),
             Err(EquationCause::DivisionByZero)
         );
         assert!(
-            matches!(value("\"a\" = sqr(-1)"), Err(EquationCause::NonFinite(s)) if s == "sqr(-1)")
+            matches!(value("\"a\" = sqr(-1)"), Err(EquationCause::NonFinite(NonFiniteAt::Call { function: "sqr", arguments })) if arguments == [-1.0])
+        );
+        assert_eq!(
+            value("\"a\" = sqr(-1)").unwrap_err().to_string(),
+            "sqr(-1) is not a finite number"
+        );
+        assert_eq!(
+            value("\"a\" = 1e300 * 1e300").unwrap_err().to_string(),
+            "the result of `*` is not a finite number"
+        );
+        assert_eq!(
+            value("\"a\" = 1e999").unwrap_err().to_string(),
+            "`1e999` is not a finite number"
         );
         assert!(matches!(
             value("\"a\" = log(0)"),
@@ -887,7 +1067,7 @@ mod tests {
         assert_eq!(v("iif(\"x\" > 5, 1 / 0, 2)"), 2.0);
         let cause = value("\"a\" = 2inch + 1yd").unwrap_err();
         assert!(
-            matches!(&cause, EquationCause::Syntax { column: 16, message } if message.contains("unknown unit `yd`")),
+            matches!(&cause, EquationCause::Syntax { column: 16, problem: SyntaxProblem::UnknownUnit { unit, .. } } if unit == "yd"),
             "{cause}"
         );
         assert!(matches!(

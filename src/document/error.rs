@@ -323,12 +323,9 @@ pub enum WriteProblem {
     /// The text to be written would not load again.
     #[error("not saved: the document would not open again ({})", reload_why(.0))]
     WouldNotReload(#[source] Box<DocumentError>),
-    /// The document could not be turned into YAML (the serializer's words).
-    #[error("{message}")]
-    Serialize {
-        /// The serializer's message.
-        message: String,
-    },
+    /// The document could not be turned into YAML.
+    #[error("{0}")]
+    Serialize(#[source] YamlError),
     /// The file changed on disk since the document was loaded.
     #[error("not saved: the file changed on disk since it was loaded (another program or script saved it); open it again and redo the change")]
     ChangedOnDisk,
@@ -346,6 +343,24 @@ pub enum WriteProblem {
         /// The other instance's name.
         second: String,
     },
+}
+
+/// A YAML serializer's error kept shareable (a [`WriteProblem`] is `Clone`); two
+/// compare equal when their messages do.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(transparent)]
+pub struct YamlError(std::sync::Arc<serde_yaml::Error>);
+
+impl From<serde_yaml::Error> for YamlError {
+    fn from(e: serde_yaml::Error) -> Self {
+        YamlError(std::sync::Arc::new(e))
+    }
+}
+
+impl PartialEq for YamlError {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.to_string() == other.0.to_string()
+    }
 }
 
 /// Why a text would not load: a located error's message alone, else the error.
@@ -588,7 +603,7 @@ pub enum UrdfRobotError {
     },
     /// A `package_path` entry that is not a folder.
     #[error("package_path `{0}` is not a folder")]
-    NotAFolder(String),
+    NotAFolder(PathBuf),
     /// The URDF itself cannot be read or parsed (located in it).
     #[error(transparent)]
     Read(Box<SourceError>),

@@ -221,14 +221,9 @@ impl Document {
         )?;
         super::equation_mgr::load(&file.equations, &mut doc, positions, path)?;
         doc.solve_mates().map_err(|source| {
-            let (line, col) = load.locate(&format!("name: {}", source.mate), "mates");
+            let at = load.locate(&format!("name: {}", source.mate), "mates");
             DocumentError::Mates {
-                at: Some(Box::new(SourceError::new(
-                    path,
-                    line,
-                    col,
-                    source.to_string(),
-                ))),
+                at: SourceError::at(path, at, &source),
                 source,
             }
         })?;

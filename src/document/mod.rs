@@ -52,7 +52,7 @@ pub use assembly::SubAssembly;
 pub use error::{
     DimensionInUse, DocumentError, LinkEdit, MateProblem, MissingReference, OutsideItem,
     OutsideSubDocument, PartMeshError, ReferenceProblem, UrdfLinkAt, UrdfMeshProblem,
-    UrdfRobotError, WriteProblem,
+    UrdfRobotError, WriteProblem, YamlError,
 };
 pub use export::GlbExport;
 pub(crate) use names::new_name;
@@ -61,7 +61,10 @@ pub use names::nfc_name;
 pub use dimension::{Dimension, DimensionKind, DimensionTarget};
 pub use edit::{MateSpec, PropertyOwner};
 pub use entry::EntryError;
-pub use equations::{Equation, EquationCause, EquationError, EquationLimit, EquationTarget};
+pub use equations::{
+    Equation, EquationCause, EquationError, EquationLimit, EquationTarget, NonFiniteAt,
+    SyntaxProblem,
+};
 pub use mates::{Mate, MateEntity, MateKind};
 pub use reference::{coordinate_system, CoordinateSystemError, Reference};
 pub use remove::RemoveMates;

@@ -480,7 +480,7 @@ pub(super) fn read_urdf_robot(
                 source,
             })?;
         if project.folder(&root, false).is_err() {
-            return Err(UrdfRobotError::NotAFolder(p.clone()));
+            return Err(UrdfRobotError::NotAFolder(p.into()));
         }
         roots.push(root);
     }

@@ -300,11 +300,10 @@ impl Document {
         solved
             .solve_mates()
             .map_err(|e| write_err(WriteProblem::Unsolvable(e)))?;
-        let text = solved.to_file().to_yaml().map_err(|e| {
-            write_err(WriteProblem::Serialize {
-                message: e.to_string(),
-            })
-        })?;
+        let text = solved
+            .to_file()
+            .to_yaml()
+            .map_err(|e| write_err(WriteProblem::Serialize(e.into())))?;
         if let Err(e) = Self::parse_text(&text, path) {
             return Err(write_err(WriteProblem::WouldNotReload(Box::new(e))));
         }

@@ -329,8 +329,8 @@ pub enum CodecError {
     BadBodySize {
         /// Message type.
         msg_type: i32,
-        /// Expected body size(s), for people.
-        expected: String,
+        /// Expected body size(s), for people (`40, 52 or 0`).
+        expected: &'static str,
         /// Body bytes received.
         got: usize,
     },
@@ -341,12 +341,37 @@ pub enum CodecError {
         msg_type: i32,
         /// Field name.
         field: &'static str,
-        /// The value, for people.
-        value: String,
+        /// The value.
+        value: FieldValue,
     },
     /// The connection failed or timed out.
     #[error("connection: {0}")]
     Io(#[from] std::io::Error),
+}
+
+/// A field's value outside its domain ([`CodecError::BadField`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum FieldValue {
+    /// A code no value of the field has (a tri-state, a tool action).
+    Code(i32),
+    /// A real that is not finite.
+    Real(f32),
+    /// A tool extension version this build does not speak
+    /// ([`TOOL_EXTENSION_VERSION`]).
+    Version(i32),
+}
+
+impl std::fmt::Display for FieldValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FieldValue::Code(v) => write!(f, "{v}"),
+            FieldValue::Real(v) => write!(f, "{v}"),
+            FieldValue::Version(v) => {
+                write!(f, "{v} (this build speaks {TOOL_EXTENSION_VERSION})")
+            }
+        }
+    }
 }
 
 impl ByteOrder {
@@ -510,9 +535,9 @@ impl Packet {
             (r, _) => return Err(CodecError::BadReplyCode(r)),
         };
         let b = &m[HEADER_SIZE..];
-        let size = |expected: &str| CodecError::BadBodySize {
+        let size = |expected: &'static str| CodecError::BadBodySize {
             msg_type,
-            expected: expected.into(),
+            expected,
             got: b.len(),
         };
         let real = |at: usize, field: &'static str| -> Result<f32, CodecError> {
@@ -523,7 +548,7 @@ impl Packet {
                 Err(CodecError::BadField {
                     msg_type,
                     field,
-                    value: v.to_string(),
+                    value: FieldValue::Real(v),
                 })
             }
         };
@@ -602,7 +627,7 @@ impl Packet {
                     v => Err(CodecError::BadField {
                         msg_type,
                         field,
-                        value: v.to_string(),
+                        value: FieldValue::Code(v),
                     }),
                 };
                 let mode = match order.i32_at(b, 20) {
@@ -630,7 +655,7 @@ impl Packet {
                     return Err(CodecError::BadField {
                         msg_type,
                         field: "version",
-                        value: format!("{version} (this build speaks {TOOL_EXTENSION_VERSION})"),
+                        value: FieldValue::Version(version),
                     });
                 }
                 let action = match order.i32_at(b, 4) {
@@ -642,7 +667,7 @@ impl Packet {
                         return Err(CodecError::BadField {
                             msg_type,
                             field: "action",
-                            value: v.to_string(),
+                            value: FieldValue::Code(v),
                         })
                     }
                 };
@@ -1002,9 +1027,14 @@ mod tests {
             Packet::decode(&v2, ByteOrder::Big),
             Err(CodecError::BadField {
                 field: "version",
+                value: FieldValue::Version(2),
                 ..
             })
         ));
+        assert_eq!(
+            Packet::decode(&v2, ByteOrder::Big).unwrap_err().to_string(),
+            "message type 65001: bad field `version`: 2 (this build speaks 1)"
+        );
     }
 
     #[test]
@@ -1067,18 +1097,28 @@ mod tests {
             Packet::decode(&b, ByteOrder::Big),
             Err(CodecError::BadField {
                 field: "joint_data",
+                value: FieldValue::Real(v),
                 ..
-            })
+            }) if v.is_nan()
         ));
+        assert_eq!(
+            Packet::decode(&b, ByteOrder::Big).unwrap_err().to_string(),
+            "message type 11: bad field `joint_data`: NaN"
+        );
         let mut b = hex(STATUS_EXAMPLE);
         b[19] = 5;
         assert!(matches!(
             Packet::decode(&b, ByteOrder::Big),
             Err(CodecError::BadField {
                 field: "drives_powered",
+                value: FieldValue::Code(5),
                 ..
             })
         ));
+        assert_eq!(
+            Packet::decode(&b, ByteOrder::Big).unwrap_err().to_string(),
+            "message type 13: bad field `drives_powered`: 5"
+        );
     }
 
     #[test]

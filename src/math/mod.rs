@@ -44,6 +44,32 @@ pub fn frame_across(d: &Vec3) -> (Vec3, Vec3) {
     (u, d.cross(&u))
 }
 
+/// The six axis directions: +X, -X, +Y, -Y, +Z, -Z.
+pub fn axis_directions() -> [Vec3; 6] {
+    [
+        Vec3::x(),
+        -Vec3::x(),
+        Vec3::y(),
+        -Vec3::y(),
+        Vec3::z(),
+        -Vec3::z(),
+    ]
+}
+
+/// `n` unit directions spread evenly over the sphere (a Fibonacci lattice, from near
+/// +Z to near -Z).
+pub fn sphere_lattice(n: usize) -> Vec<Vec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = golden * i as f64;
+            Vec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}
+
 /// The smallest rotation taking the direction `from` onto the direction `to` (any
 /// axis perpendicular to `from` when they are opposite). Frame-free: both vectors in
 /// the same frame, the rotation in that frame.

@@ -3,7 +3,7 @@
 //! build the library's [`PathQuery`] and [`QueryLimits`].
 
 use super::{Deprecated, Key, Kind, Options, Vocabulary};
-use crate::db::{DbError, PathQuery, QueryLimits};
+use crate::db::{AskedLimit, DbError, PathQuery, QueryLimits};
 use serde::{Deserialize, Serialize};
 
 /// Which stored paths `paths` lists.
@@ -122,9 +122,7 @@ impl Limits {
         if !(self.max_seconds > 0.0 && self.max_seconds <= max) {
             // Out of range before it becomes a `Duration` (which cannot hold every f64).
             return Err(DbError::QueryLimit {
-                name: "max_seconds",
-                value: format!("{} s", self.max_seconds),
-                max: format!("{max} s"),
+                asked: AskedLimit::Seconds(self.max_seconds),
             });
         }
         QueryLimits {

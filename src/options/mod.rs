@@ -227,12 +227,12 @@ pub enum OptionError {
         expected: String,
     },
     /// Options that are not a map.
-    #[error("{request} options must be a map of key: value, not {value}")]
+    #[error("{request} options must be a map of key: value, not {}", shown(.value))]
     NotAMap {
         /// The request.
         request: &'static str,
         /// What was given.
-        value: String,
+        value: Value,
     },
     /// A deprecated key given with the key that replaces it.
     #[error("{request} options `{old}` and `{new}` are the same option: give only `{new}`")]
@@ -246,12 +246,13 @@ pub enum OptionError {
     },
     /// The checked map still did not fit the struct (a vocabulary that disagrees
     /// with its struct: a bug the vocabulary tests catch).
-    #[error("{request} options: {detail}")]
+    #[error("{request} options: {source}")]
     Internal {
         /// The request.
         request: &'static str,
-        /// serde's words.
-        detail: String,
+        /// serde's error.
+        #[source]
+        source: crate::files::JsonError,
     },
 }
 
@@ -572,16 +573,13 @@ pub trait Options: Default + Serialize + DeserializeOwned {
     fn from_value(value: Value) -> Result<Parsed<Self>, OptionError> {
         let request = Self::VOCABULARY.request;
         let Value::Object(mut map) = value else {
-            return Err(OptionError::NotAMap {
-                request,
-                value: shown(&value),
-            });
+            return Err(OptionError::NotAMap { request, value });
         };
         let warnings = Self::VOCABULARY.check(&mut map, "")?;
         let options =
             serde_json::from_value(Value::Object(map)).map_err(|e| OptionError::Internal {
                 request,
-                detail: e.to_string(),
+                source: e.into(),
             })?;
         Ok(Parsed { options, warnings })
     }

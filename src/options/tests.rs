@@ -73,7 +73,27 @@ fn unknown_keys_name_close_matches() {
         "{e}"
     );
     let e = Check::from_value(json!([1])).unwrap_err();
-    assert!(matches!(e, OptionError::NotAMap { .. }), "{e}");
+    assert!(
+        matches!(&e, OptionError::NotAMap { value, .. } if *value == json!([1])),
+        "{e}"
+    );
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{} options must be a map of key: value, not [1]",
+            Check::VOCABULARY.request
+        )
+    );
+    let long = Check::from_value(json!("x".repeat(100)))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        long.ends_with(&format!(
+            ", not {}",
+            crate::diagnostics::shorten(&format!("\"{}\"", "x".repeat(100)), 60)
+        )),
+        "{long}"
+    );
 }
 
 #[test]

@@ -41,21 +41,7 @@ fn tokens(text: &str) -> Vec<Tok> {
             }
             b'/' if b.get(i + 1) == Some(&b'*') => {
                 // Rhai block comments nest
-                let mut depth = 0;
-                while i < b.len() {
-                    if b[i] == b'/' && b.get(i + 1) == Some(&b'*') {
-                        depth += 1;
-                        i += 2;
-                    } else if b[i] == b'*' && b.get(i + 1) == Some(&b'/') {
-                        depth -= 1;
-                        i += 2;
-                        if depth == 0 {
-                            break;
-                        }
-                    } else {
-                        i += 1;
-                    }
-                }
+                i = crate::diagnostics::nested_comment_end(b, i);
                 out.push(Tok::Other);
             }
             b'"' | b'`' | b'\'' => {

@@ -86,15 +86,7 @@ fn split_str(s: ImmutableString, d: &str, n: Option<usize>, end: End) -> Array {
 
 /// [`split_str`] at the character `d`.
 fn split_char(s: ImmutableString, d: char, n: Option<usize>, end: End) -> Array {
-    if n.is_some_and(|n| n <= 1) || s.is_empty() || !s.contains(d) {
-        return one(s);
-    }
-    match (n, end) {
-        (None, End::Front) => s.split(d).map(segment).collect(),
-        (None, End::Back) => s.rsplit(d).map(segment).collect(),
-        (Some(n), End::Front) => s.splitn(n, d).map(segment).collect(),
-        (Some(n), End::Back) => s.rsplitn(n, d).map(segment).collect(),
-    }
+    split_str(s, d.encode_utf8(&mut [0; 4]), n, end)
 }
 
 /// Registers the counted builders (`max`: the sandbox's elements per array).

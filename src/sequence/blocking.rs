@@ -622,14 +622,9 @@ pub(super) fn principal_axes(mesh: &crate::mesh::Mesh, pose: &Transform) -> Vec<
 /// a rotation drawn from `seed`: deterministic for a seed.
 pub(super) fn sphere_directions(n: usize, seed: u64) -> Vec<Vec3> {
     let turn = crate::math::Rng::new(seed ^ 0x5e9_d1c5).rotation();
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let a = golden * i as f64;
-            turn * Vec3::new(r * a.cos(), r * a.sin(), z)
-        })
+    crate::math::sphere_lattice(n)
+        .into_iter()
+        .map(|d| turn * d)
         .collect()
 }
 

@@ -123,14 +123,7 @@ pub(super) fn push_dir(v: &mut Vec<Vec3>, d: Vec3) {
 }
 
 pub(super) fn axis_dirs() -> [Vec3; 6] {
-    [
-        Vec3::x(),
-        -Vec3::x(),
-        Vec3::y(),
-        -Vec3::y(),
-        Vec3::z(),
-        -Vec3::z(),
-    ]
+    crate::math::axis_directions()
 }
 
 pub(super) fn union_box(boxes: &[Aabb], m: Mask) -> Option<Aabb> {

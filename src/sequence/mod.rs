@@ -70,7 +70,7 @@ pub use task::{Grasp, Operation, Task};
 
 use crate::document::Document;
 use crate::math::Vec3;
-use crate::workspace::{SceneCache, WorkspaceError};
+use crate::workspace::{GivenValue, SceneCache, WorkspaceError};
 
 /// Plans the assembly sequences of `doc` (seed 003 section 2.2): every returned
 /// task's insertion path is collision-free against exactly the components assembled
@@ -149,7 +149,7 @@ pub fn safe_length(
     if !(direction.iter().all(|v| v.is_finite()) && direction.norm() > 1e-12) {
         return Err(SequenceError::InvalidOption {
             option: "direction",
-            value: format!("{:?}", direction.as_slice()),
+            value: GivenValue::Numbers(direction.as_slice().to_vec()),
             expected: "a finite non-zero vector",
         });
     }

@@ -3,7 +3,7 @@
 use super::graph::RelationGraph;
 use super::task::Task;
 use crate::math::Vec3;
-use crate::workspace::WorkspaceError;
+use crate::workspace::{GivenValue, WorkspaceError};
 use std::collections::BTreeMap;
 
 /// Default time budget of one sequence-planning call (ms): 30 s, everything included
@@ -200,7 +200,7 @@ impl SequenceOptions {
         let bad = |option: &'static str, v: f64, expected: &'static str| {
             Err(SequenceError::InvalidOption {
                 option,
-                value: v.to_string(),
+                value: GivenValue::Number(v),
                 expected,
             })
         };
@@ -277,7 +277,7 @@ impl SequenceOptions {
             if !(g.iter().all(|v| v.is_finite()) && g.norm() > 1e-12) {
                 return Err(SequenceError::InvalidOption {
                     option: "gravity",
-                    value: format!("{:?}", g.as_slice()),
+                    value: GivenValue::Numbers(g.as_slice().to_vec()),
                     expected: "a finite non-zero down direction",
                 });
             }
@@ -285,7 +285,7 @@ impl SequenceOptions {
         if self.max_sequences == 0 || self.max_sequences > MAX_SEQUENCES {
             return Err(SequenceError::InvalidOption {
                 option: "max_sequences",
-                value: self.max_sequences.to_string(),
+                value: GivenValue::Count(self.max_sequences),
                 expected: "1 to 1000 (each sequence kept is built into tasks; the search's memo keeps up to this many costs a state)",
             });
         }
@@ -296,7 +296,10 @@ impl SequenceOptions {
         {
             return Err(SequenceError::InvalidOption {
                 option: "masses",
-                value: format!("{k}: {v}"),
+                value: GivenValue::Mass {
+                    component: k.clone(),
+                    mass: *v,
+                },
                 expected: "finite numbers > 0",
             });
         }
@@ -317,7 +320,7 @@ pub enum SequenceError {
         /// The option.
         option: &'static str,
         /// The value given.
-        value: String,
+        value: GivenValue,
         /// What is accepted.
         expected: &'static str,
     },

@@ -9,7 +9,7 @@ use crate::collision::SweepMethod;
 use crate::document::Document;
 use crate::math::format::length as fmt_mm;
 use crate::planning::{MeshValidator, MeshValidatorOptions};
-use crate::workspace::{Scene, SceneCache, WorkspaceError};
+use crate::workspace::{GivenValue, Scene, SceneCache, WorkspaceError};
 
 /// A step of a sequence that no longer holds in the edited document.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,7 +58,7 @@ pub fn revalidate(
     if !(tolerance.is_finite() && tolerance >= 0.0) {
         return Err(SequenceError::InvalidOption {
             option: "tolerance",
-            value: tolerance.to_string(),
+            value: GivenValue::Number(tolerance),
             expected: "a finite number of mm ≥ 0",
         });
     }

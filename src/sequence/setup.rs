@@ -10,7 +10,7 @@ use super::options::{Mode, SequenceError, SequenceOptions, MAX_COMPONENTS};
 use crate::document::Document;
 use crate::math::{Aabb, Deadline, Transform, Vec3};
 use crate::mesh::Mesh;
-use crate::workspace::{Scene, SceneCache, WorkspaceError};
+use crate::workspace::{GivenValue, Scene, SceneCache, WorkspaceError};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -365,7 +365,7 @@ fn check_pins(doc: &Document, opts: &SequenceOptions, active: Mask) -> Result<()
         if active & bit(i) == 0 {
             return Err(SequenceError::InvalidOption {
                 option: "base/order",
-                value: name.clone(),
+                value: GivenValue::Component(name.clone()),
                 expected: "a component of the product (not a robot link or excluded)",
             });
         }

@@ -33,7 +33,9 @@ pub use manager::{
     log_event, CancelToken, LogDb, ManagerError, ManagerEvent, ManagerHandle, ManagerOptions,
     RunSink, SkillLog, SkillManager, SkillStatus,
 };
-pub use program::{BindError, ControllerCommand, Plan, PlanStep};
+pub use program::{
+    BindError, ControllerCommand, Plan, PlanFileProblem, PlanStep, PlanValueProblem,
+};
 pub use template::{default_template, Template, TemplateError, Workflow};
 
 use crate::math::Transform;

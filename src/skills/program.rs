@@ -190,9 +190,113 @@ pub enum BindError {
         /// Which axis, and why.
         source: crate::kinematics::PrecisionError,
     },
-    /// A plan file that cannot be read or written.
-    #[error("plan file: {0}")]
-    File(String),
+    /// A plan file that cannot be read.
+    #[error("plan file: {}{problem}", .file.display())]
+    File {
+        /// The file, as named to [`Plan::from_json`].
+        file: std::path::PathBuf,
+        /// What is wrong, and where in the file.
+        problem: PlanFileProblem,
+    },
+}
+
+/// What is wrong in a plan file ([`BindError::File`]).
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum PlanFileProblem {
+    /// JSON that does not parse, or does not fit a plan (serde's error, with its line
+    /// and column).
+    Json(crate::files::JsonError),
+    /// A value the plan cannot take, at its JSON path
+    /// (`steps[2].commands[0].trajectory[5][1]`, with the skill: ` (skill #4)`).
+    Value {
+        /// Where.
+        at: String,
+        /// Why.
+        problem: PlanValueProblem,
+    },
+}
+
+impl std::fmt::Display for PlanFileProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PlanFileProblem::Json(e) => write!(
+                f,
+                ":{}:{}: {}",
+                e.line(),
+                e.column(),
+                crate::diagnostics::shorten(&e.to_string(), 200)
+            ),
+            PlanFileProblem::Value { at, problem } => write!(f, ": {at}: {problem}"),
+        }
+    }
+}
+
+/// A plan value the controller or the wire cannot take ([`PlanFileProblem::Value`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum PlanValueProblem {
+    /// A file version this build does not read.
+    Version(u32),
+    /// A joint count simple_message cannot carry.
+    JointCount(usize),
+    /// A joint kind other than revolute and prismatic (shortened).
+    JointKind(String),
+    /// More than [`MAX_PLAN_POINTS`] trajectory points.
+    TooManyPoints,
+    /// A trajectory point with another joint count than the robot's.
+    PointJoints {
+        /// The point's joint values.
+        values: usize,
+        /// The robot's joints.
+        joints: usize,
+    },
+    /// A duration that is not finite, negative, or beyond a 32-bit float.
+    Duration(f64),
+    /// A point the wire cannot carry.
+    Wire(crate::manipulator::client::WireError),
+    /// A tool action other than grasp, release, touch and set_output (shortened).
+    ToolAction(String),
+    /// A tool value beyond a 32-bit float.
+    ToolValue(f64),
+    /// A negative tool index.
+    ToolIndex(i32),
+}
+
+impl std::fmt::Display for PlanValueProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PlanValueProblem::Version(v) => write!(f, "{v} (this build reads 1)"),
+            PlanValueProblem::JointCount(n) => write!(
+                f,
+                "{n} joints (1 to {}: what simple_message carries)",
+                crate::manipulator::message::MAX_JOINTS
+            ),
+            PlanValueProblem::JointKind(k) => {
+                write!(f, "unknown joint kind `{k}` (revolute or prismatic)")
+            }
+            PlanValueProblem::TooManyPoints => write!(
+                f,
+                "more than {MAX_PLAN_POINTS} trajectory points in the plan"
+            ),
+            PlanValueProblem::PointJoints { values, joints } => {
+                write!(f, "{values} joint values, the robot has {joints}")
+            }
+            PlanValueProblem::Duration(d) => write!(
+                f,
+                "duration {d} s: a finite number ≥ 0 that fits a 32-bit float"
+            ),
+            PlanValueProblem::Wire(why) => write!(f, "{why}"),
+            PlanValueProblem::ToolAction(a) => write!(
+                f,
+                "unknown tool action `{a}` (grasp, release, touch, set_output)"
+            ),
+            PlanValueProblem::ToolValue(v) => {
+                write!(f, "{v} does not fit the wire's 32-bit float")
+            }
+            PlanValueProblem::ToolIndex(i) => write!(f, "{i} is negative"),
+        }
+    }
 }
 
 /// Each task's grasp (tool pose in the part frame, mm; gripper width, mm), by task
@@ -277,28 +381,24 @@ impl Plan {
     ///
     /// [`MAX_JOINTS`]: crate::manipulator::message::MAX_JOINTS
     pub fn from_json(name: &str, text: &str) -> Result<Self, BindError> {
-        let plan: Plan = serde_json::from_str(text).map_err(|e| {
-            BindError::File(format!(
-                "{name}:{}:{}: {}",
-                e.line(),
-                e.column(),
-                crate::diagnostics::shorten(&e.to_string(), 200)
-            ))
+        let plan: Plan = serde_json::from_str(text).map_err(|e| BindError::File {
+            file: name.into(),
+            problem: PlanFileProblem::Json(e.into()),
         })?;
-        let bad = |at: String, m: String| BindError::File(format!("{name}: {at}: {m}"));
+        let bad = |at: String, problem| BindError::File {
+            file: name.into(),
+            problem: PlanFileProblem::Value { at, problem },
+        };
         if plan.version != 1 {
             return Err(bad(
                 "version".into(),
-                format!("{} (this build reads 1)", plan.version),
+                PlanValueProblem::Version(plan.version),
             ));
         }
         let n = plan.joint_kinds.len();
         let max = crate::manipulator::message::MAX_JOINTS;
         if n == 0 || n > max {
-            return Err(bad(
-                "joint_kinds".into(),
-                format!("{n} joints (1 to {max}: what simple_message carries)"),
-            ));
+            return Err(bad("joint_kinds".into(), PlanValueProblem::JointCount(n)));
         }
         if let Some((j, k)) = plan
             .joint_kinds
@@ -308,10 +408,7 @@ impl Plan {
         {
             return Err(bad(
                 format!("joint_kinds[{j}]"),
-                format!(
-                    "unknown joint kind `{}` (revolute or prismatic)",
-                    crate::diagnostics::shorten(k, 80)
-                ),
+                PlanValueProblem::JointKind(crate::diagnostics::shorten(k, 80)),
             ));
         }
         let kinds = plan.kinds();
@@ -325,9 +422,7 @@ impl Plan {
                         if total > MAX_PLAN_POINTS {
                             return Err(bad(
                                 at(format!(".commands[{ci}]")),
-                                format!(
-                                    "more than {MAX_PLAN_POINTS} trajectory points in the plan"
-                                ),
+                                PlanValueProblem::TooManyPoints,
                             ));
                         }
                         for (pi, (q, d)) in pts.iter().enumerate() {
@@ -336,13 +431,16 @@ impl Plan {
                             if q.len() != n {
                                 return Err(bad(
                                     here("[0]".into()),
-                                    format!("{} joint values, the robot has {n}", q.len()),
+                                    PlanValueProblem::PointJoints {
+                                        values: q.len(),
+                                        joints: n,
+                                    },
                                 ));
                             }
                             if !(d.is_finite() && *d >= 0.0 && (*d as f32).is_finite()) {
                                 return Err(bad(
                                     here("[1]".into()),
-                                    format!("duration {d} s: a finite number ≥ 0 that fits a 32-bit float"),
+                                    PlanValueProblem::Duration(*d),
                                 ));
                             }
                             if let Err(why) =
@@ -354,7 +452,10 @@ impl Plan {
                                     } => joint,
                                     _ => 0,
                                 };
-                                return Err(bad(here(format!("[0][{j}]")), why.to_string()));
+                                return Err(bad(
+                                    here(format!("[0][{j}]")),
+                                    PlanValueProblem::Wire(why),
+                                ));
                             }
                         }
                     }
@@ -367,20 +468,16 @@ impl Plan {
                         if ControllerCommand::tool_action(action).is_none() {
                             return Err(bad(
                                 here("action"),
-                                format!(
-                                    "unknown tool action `{}` (grasp, release, touch, set_output)",
-                                    crate::diagnostics::shorten(action, 80)
-                                ),
+                                PlanValueProblem::ToolAction(crate::diagnostics::shorten(
+                                    action, 80,
+                                )),
                             ));
                         }
                         if !(value.is_finite() && (*value as f32).is_finite()) {
-                            return Err(bad(
-                                here("value"),
-                                format!("{value} does not fit the wire's 32-bit float"),
-                            ));
+                            return Err(bad(here("value"), PlanValueProblem::ToolValue(*value)));
                         }
                         if *index < 0 {
-                            return Err(bad(here("index"), format!("{index} is negative")));
+                            return Err(bad(here("index"), PlanValueProblem::ToolIndex(*index)));
                         }
                     }
                 }
@@ -478,6 +575,68 @@ mod tests {
             t[1].0[1] = 1e41;
         }
         assert!(Plan::from_json("p.json", &p.to_json()).is_ok());
+    }
+
+    #[test]
+    fn plan_file_messages_name_the_file_the_place_and_the_value() {
+        let refused = |p: &Plan| Plan::from_json("p.json", &p.to_json()).unwrap_err();
+        let mut p = plan();
+        p.version = 2;
+        assert_eq!(
+            refused(&p).to_string(),
+            "plan file: p.json: version: 2 (this build reads 1)"
+        );
+        let mut p = plan();
+        p.joint_kinds = vec!["revolute".into(); 11];
+        assert_eq!(
+            refused(&p).to_string(),
+            format!(
+                "plan file: p.json: joint_kinds: 11 joints (1 to {}: what simple_message carries)",
+                crate::manipulator::message::MAX_JOINTS
+            )
+        );
+        let mut p = plan();
+        p.joint_kinds[1] = "linear".into();
+        assert_eq!(
+            refused(&p).to_string(),
+            "plan file: p.json: joint_kinds[1]: unknown joint kind `linear` (revolute or prismatic)"
+        );
+        let mut p = plan();
+        if let ControllerCommand::Trajectory(t) = &mut p.steps[0].commands[0] {
+            t[1].1 = -1.0;
+        }
+        let e = refused(&p);
+        assert!(matches!(
+            &e,
+            BindError::File {
+                problem: PlanFileProblem::Value {
+                    problem: PlanValueProblem::Duration(d),
+                    ..
+                },
+                ..
+            } if *d == -1.0
+        ));
+        assert_eq!(
+            e.to_string(),
+            "plan file: p.json: steps[0].commands[0].trajectory[1][1] (skill #0): duration -1 s: a finite number ≥ 0 that fits a 32-bit float"
+        );
+        let mut p = plan();
+        if let ControllerCommand::Tool { index, .. } = &mut p.steps[0].commands[1] {
+            *index = -1;
+        }
+        assert_eq!(
+            refused(&p).to_string(),
+            "plan file: p.json: steps[0].commands[1].tool.index (skill #0): -1 is negative"
+        );
+        let json = serde_json::from_str::<Plan>("{").unwrap_err();
+        assert_eq!(
+            Plan::from_json("j.json", "{").unwrap_err().to_string(),
+            format!(
+                "plan file: j.json:{}:{}: {json}",
+                json.line(),
+                json.column()
+            )
+        );
     }
 
     #[test]

@@ -54,6 +54,44 @@ use crate::document::{Document, DocumentError};
 use crate::math::Transform;
 use crate::planning::PlanError;
 
+/// A value given for an option, as its refusal shows it
+/// ([`WorkspaceError::InvalidOption`], [`crate::sequence::SequenceError::InvalidOption`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum GivenValue {
+    /// A number.
+    Number(f64),
+    /// A count.
+    Count(usize),
+    /// Numbers: a direction, a list (`[0.0, 0.0, 0.0]`, `[]`).
+    Numbers(Vec<f64>),
+    /// A pose (boxed: a pose is seven numbers, and every `Result` carrying a
+    /// [`WorkspaceError`] would grow with it).
+    Pose(Box<Transform>),
+    /// A component, by name.
+    Component(String),
+    /// A component's mass (kg).
+    Mass {
+        /// The component.
+        component: String,
+        /// The mass given.
+        mass: f64,
+    },
+}
+
+impl std::fmt::Display for GivenValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GivenValue::Number(v) => write!(f, "{v}"),
+            GivenValue::Count(n) => write!(f, "{n}"),
+            GivenValue::Numbers(v) => write!(f, "{:?}", v.as_slice()),
+            GivenValue::Pose(t) => write!(f, "{t:?}"),
+            GivenValue::Component(name) => f.write_str(name),
+            GivenValue::Mass { component, mass } => write!(f, "{component}: {mass}"),
+        }
+    }
+}
+
 /// Why a workspace request could not be answered.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -84,7 +122,7 @@ pub enum WorkspaceError {
         /// The option's name.
         option: &'static str,
         /// The value given.
-        value: String,
+        value: GivenValue,
         /// What is accepted.
         expected: &'static str,
     },
@@ -348,7 +386,7 @@ impl<'d> Workspace<'d> {
         if waypoints.is_empty() {
             return Err(WorkspaceError::InvalidOption {
                 option: "waypoints",
-                value: "[]".into(),
+                value: GivenValue::Numbers(Vec::new()),
                 expected: "at least one pose",
             });
         }

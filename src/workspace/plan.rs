@@ -1,7 +1,7 @@
 //! Planning for a component of a document: the request, the problem it becomes
 //! (validator, bounds, boxes), re-validation and following a path.
 
-use super::{Workspace, WorkspaceError};
+use super::{GivenValue, Workspace, WorkspaceError};
 use crate::document::Document;
 use crate::math::{Aabb, Transform, Vec3};
 use crate::planning::{
@@ -165,7 +165,7 @@ impl Workspace<'_> {
                 if !(m.is_finite() && m >= 0.0) {
                     return Err(WorkspaceError::InvalidOption {
                         option: "margin",
-                        value: m.to_string(),
+                        value: GivenValue::Number(m),
                         expected: "a finite number of mm ≥ 0",
                     });
                 }
@@ -220,7 +220,7 @@ impl Workspace<'_> {
                 Some(s) if !s.is_finite() => {
                     return Err(WorkspaceError::InvalidOption {
                         option: "start",
-                        value: format!("{s:?}"),
+                        value: GivenValue::Pose(Box::new(s)),
                         expected: "a finite pose",
                     })
                 }

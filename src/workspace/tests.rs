@@ -335,3 +335,54 @@ fn clearance_agrees_with_contact_on_the_puzzles() {
         );
     }
 }
+
+#[test]
+fn given_values_read_as_the_text_they_replace() {
+    assert_eq!(GivenValue::Number(2.5).to_string(), "2.5");
+    assert_eq!(GivenValue::Number(5000.0).to_string(), "5000");
+    assert_eq!(GivenValue::Count(0).to_string(), "0");
+    assert_eq!(
+        GivenValue::Numbers(vec![0.0, 0.0, 0.0]).to_string(),
+        "[0.0, 0.0, 0.0]"
+    );
+    assert_eq!(GivenValue::Numbers(Vec::new()).to_string(), "[]");
+    let t = Transform::from_translation(Vec3::new(1.0, 2.0, f64::NAN));
+    assert_eq!(GivenValue::Pose(Box::new(t)).to_string(), format!("{t:?}"));
+    assert_eq!(GivenValue::Component("peg".into()).to_string(), "peg");
+    assert_eq!(
+        GivenValue::Mass {
+            component: "peg".into(),
+            mass: -1.0
+        }
+        .to_string(),
+        "peg: -1"
+    );
+    let refused = |o: crate::sequence::SequenceOptions| o.validate().unwrap_err().to_string();
+    let d = crate::sequence::SequenceOptions::default;
+    assert_eq!(
+        refused(crate::sequence::SequenceOptions {
+            gravity: Some(Vec3::zeros()),
+            ..d()
+        }),
+        "invalid sequence option `gravity` = [0.0, 0.0, 0.0]: expected a finite non-zero down direction"
+    );
+    assert_eq!(
+        refused(crate::sequence::SequenceOptions {
+            masses: [("peg".to_string(), -1.0)].into(),
+            ..d()
+        }),
+        "invalid sequence option `masses` = peg: -1: expected finite numbers > 0"
+    );
+    assert_eq!(
+        refused(crate::sequence::SequenceOptions {
+            tolerance: f64::NAN,
+            ..d()
+        }),
+        "invalid sequence option `tolerance` = NaN: expected a finite number of mm ≥ 0"
+    );
+    assert!(refused(crate::sequence::SequenceOptions {
+        max_sequences: 0,
+        ..d()
+    })
+    .starts_with("invalid sequence option `max_sequences` = 0: expected 1 to 1000 ("));
+}

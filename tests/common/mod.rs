@@ -17,6 +17,45 @@ use std::process::{Child, Command, Output, Stdio};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+/// The indices of the components an assembly order names, in its order.
+pub fn component_indices(doc: &fitup::document::Document, order: &[String]) -> Vec<usize> {
+    order
+        .iter()
+        .map(|n| doc.component_index(n).unwrap())
+        .collect()
+}
+
+/// Whether component `p` of `scene` at `pose` (whose world box is `bp`) interferes
+/// with component `q` at its pose by more than `tol`: the world boxes first (boxes
+/// that overlap by at most `tol` cannot), then the meshes.
+pub fn interferes_in(
+    scene: &fitup::workspace::Scene,
+    p: usize,
+    pose: &fitup::math::Transform,
+    bp: &fitup::collision::Aabb,
+    q: usize,
+    tol: f64,
+) -> bool {
+    let bq = scene.colliders[q].world_bounds(&scene.poses[q]);
+    bp.overlap(&bq).min() > tol
+        && fitup::collision::interferes(
+            &scene.colliders[p],
+            pose,
+            &scene.colliders[q],
+            &scene.poses[q],
+            tol,
+        )
+        .unwrap()
+}
+
+/// How many distinct indices `idx` holds.
+pub fn distinct(idx: &[usize]) -> usize {
+    let mut seen = idx.to_vec();
+    seen.sort();
+    seen.dedup();
+    seen.len()
+}
+
 /// The built `fitup` binary.
 pub fn fitup() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fitup"))

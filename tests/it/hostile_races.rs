@@ -161,13 +161,7 @@ fn outputs_never_land_outside_while_their_folder_is_swapped() {
     let r = while_swapped(&p.join("out"), outside.path(), || {
         crate::hostile_bounds::run(p, &["run", "scripts/write.rhai"])
     });
-    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
-    assert_eq!(r.code, Some(0), "{}", r.text);
-    assert_eq!(
-        temporaries(p),
-        Vec::<PathBuf>::new(),
-        "temporary files left"
-    );
+    ran_clean(p, &r);
     // The user's files are as they were (outputs in out/ are fitup's own).
     let now = common::snapshot(p);
     for (path, hash) in &before {
@@ -223,6 +217,18 @@ fn the_mesh_cache_never_reads_through_a_swapped_folder() {
     });
     eprintln!("{ok} runs read the inside meshes, {refused} were refused");
     assert_eq!(common::snapshot(p), before);
+}
+
+/// A run raced against a swap ended well (its peak memory shown) and left no
+/// temporary file in the project `p`.
+fn ran_clean(p: &Path, r: &crate::hostile_bounds::Run) {
+    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
+    assert_eq!(r.code, Some(0), "{}", r.text);
+    assert_eq!(
+        temporaries(p),
+        Vec::<PathBuf>::new(),
+        "temporary files left"
+    );
 }
 
 /// Inode and modification time of every file below `dir`: a write replaces the inode
@@ -289,13 +295,7 @@ print(`saved ${ok} of 400 (${tries} opens refused)`);\n",
     let r = while_swapped(&p.join("docs"), outside.path(), || {
         crate::hostile_bounds::run_within(p, &["run", "scripts/save.rhai"], Duration::from_secs(60))
     });
-    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
-    assert_eq!(r.code, Some(0), "{}", r.text);
-    assert_eq!(
-        temporaries(p),
-        Vec::<PathBuf>::new(),
-        "temporary files left"
-    );
+    ran_clean(p, &r);
     assert_eq!(
         temporaries(outside.path()),
         Vec::<PathBuf>::new(),
@@ -462,23 +462,12 @@ print(`seen ${seen}`);
     assert_eq!(common::snapshot(p), before, "a user file changed");
 }
 
-/// Runs `fitup ARGS` in `p` 30 times while `data/` is swapped for a link to `outside`
-/// (whose files carry `marker`): no run shows the marker in any case (an outside file
-/// was never read), every run shows `inside` (it read the inside file) or ends with
-/// exit 1 naming `file` (a refused path is a file error, never usage), and at least
-/// one run read the inside file. Returns (inside reads, refusals).
-fn cli_reads_while_swapped(
-    p: &Path,
-    outside: &Path,
-    args: &[&str],
-    file: &str,
-    inside: &str,
-    marker: &str,
-) -> (usize, usize) {
-    cli_reads_while_folder_swapped(p, &p.join("data"), outside, args, file, inside, marker)
-}
-
-/// [`cli_reads_while_swapped`] with the folder `swapped` (below `p`) swapped.
+/// Runs `fitup ARGS` in `p` 30 times while the folder `swapped` (below `p`: `data/`
+/// in most tests) is swapped for a link to `outside` (whose files carry `marker`): no
+/// run shows the marker in any case (an outside file was never read), every run shows
+/// `inside` (it read the inside file) or ends with exit 1 naming `file` (a refused
+/// path is a file error, never usage), and at least one run read the inside file.
+/// Returns (inside reads, refusals).
 fn cli_reads_while_folder_swapped(
     p: &Path,
     swapped: &Path,
@@ -546,8 +535,9 @@ fn cli_skills_reads_never_go_through_a_swapped_folder() {
     let r = crate::hostile_bounds::run(p, &["skills", "template", "data/t.yaml"]);
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(r.text.contains("insertion template"), "{}", r.text);
-    let (read, _) = cli_reads_while_swapped(
+    let (read, _) = cli_reads_while_folder_swapped(
         p,
+        &p.join("data"),
         o,
         &["skills", "template", "data/t.yaml"],
         "data/t.yaml",
@@ -558,8 +548,9 @@ fn cli_skills_reads_never_go_through_a_swapped_folder() {
     let r = crate::hostile_bounds::run(p, &["skills", "run", "data/plan.json", "--plain"]);
     assert_eq!(r.code, Some(1), "{}", r.text);
     assert!(r.text.contains("missing field"), "{}", r.text);
-    cli_reads_while_swapped(
+    cli_reads_while_folder_swapped(
         p,
+        &p.join("data"),
         o,
         &["skills", "run", "data/plan.json", "--plain"],
         "data/plan.json",
@@ -592,7 +583,15 @@ fn cli_programs_never_go_through_a_swapped_folder() {
     // The log: its header, and the last Joint command's row.
     assert!(r.text.starts_with("t_s,j1_deg"), "{}", r.text);
     assert!(r.text.contains(",10.000000,"), "{}", r.text);
-    cli_reads_while_swapped(p, o, &args, "p.prg", "t_s,j1_deg", "FROMOUTSIDE");
+    cli_reads_while_folder_swapped(
+        p,
+        &p.join("data"),
+        o,
+        &args,
+        "p.prg",
+        "t_s,j1_deg",
+        "FROMOUTSIDE",
+    );
 }
 
 /// `fitup watch` hashes the files a run read (to tell a save from a touch) through the

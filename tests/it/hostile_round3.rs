@@ -460,20 +460,27 @@ fn a_big_sort_writes_nothing_outside_the_project() {
     )
     .unwrap();
     let report = tempfile::NamedTempFile::new().unwrap();
-    let mut child = std::process::Command::new("/usr/bin/time")
-        .arg("-f")
-        .arg("%M")
-        .arg("-o")
-        .arg(report.path())
-        .arg(env!("CARGO_BIN_EXE_fitup"))
-        .args(["run", "scripts/sort.rhai"])
-        .current_dir(p)
-        .env("TMPDIR", outside.path())
-        .env("SQLITE_TMPDIR", outside.path())
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn();
+    // `fitup run scripts/sort.rhai` with the temporary folders outside, after `command`'s
+    // own arguments.
+    let sort = |command: &mut std::process::Command| {
+        command
+            .args(["run", "scripts/sort.rhai"])
+            .current_dir(p)
+            .env("TMPDIR", outside.path())
+            .env("SQLITE_TMPDIR", outside.path())
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+    };
+    let mut child = sort(
+        std::process::Command::new("/usr/bin/time")
+            .arg("-f")
+            .arg("%M")
+            .arg("-o")
+            .arg(report.path())
+            .arg(env!("CARGO_BIN_EXE_fitup")),
+    );
     let o = match child.as_mut() {
         Ok(_) => common::finish(
             child.unwrap(),
@@ -482,16 +489,7 @@ fn a_big_sort_writes_nothing_outside_the_project() {
         ),
         Err(_) => {
             // No GNU time: the same run without the peak.
-            let c = std::process::Command::new(env!("CARGO_BIN_EXE_fitup"))
-                .args(["run", "scripts/sort.rhai"])
-                .current_dir(p)
-                .env("TMPDIR", outside.path())
-                .env("SQLITE_TMPDIR", outside.path())
-                .stdin(std::process::Stdio::null())
-                .stdout(std::process::Stdio::piped())
-                .stderr(std::process::Stdio::piped())
-                .spawn()
-                .unwrap();
+            let c = sort(&mut std::process::Command::new(env!("CARGO_BIN_EXE_fitup"))).unwrap();
             common::finish(c, "run scripts/sort.rhai", Duration::from_secs(120))
         }
     };
@@ -620,17 +618,20 @@ fn max_sequences_is_bounded_in_memory() {
     }
     std::fs::write(p.join("cells.yaml"), doc).unwrap();
     let before = common::snapshot(p);
-    let r = crate::hostile_bounds::run(
-        p,
-        &[
+    let plan = |max_sequences| {
+        [
             "plan-sequence",
             "cells.yaml",
             "--mode",
             "geometry",
             "--max-sequences",
-            "1000000",
-        ],
-    );
+            max_sequences,
+            "--time-limit-ms",
+            "10000",
+        ]
+    };
+    // Refused before any search: the first six arguments (no time limit).
+    let r = crate::hostile_bounds::run(p, &plan("1000000")[..6]);
     assert_eq!(r.code, Some(1), "{}", r.text);
     assert!(
         r.text.contains("max_sequences") && r.text.contains("1 to 1000"),
@@ -638,20 +639,7 @@ fn max_sequences_is_bounded_in_memory() {
         r.text
     );
     assert!(r.peak_kb < REFUSED_RSS_KB, "peak {} kB", r.peak_kb);
-    let r = crate::hostile_bounds::run_within(
-        p,
-        &[
-            "plan-sequence",
-            "cells.yaml",
-            "--mode",
-            "geometry",
-            "--max-sequences",
-            "1000",
-            "--time-limit-ms",
-            "10000",
-        ],
-        Duration::from_secs(60),
-    );
+    let r = crate::hostile_bounds::run_within(p, &plan("1000"), Duration::from_secs(60));
     eprintln!("1000 sequences of 128 components: peak {} kB", r.peak_kb);
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(r.text.contains("c126"), "{}", r.text);

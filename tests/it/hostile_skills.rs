@@ -495,6 +495,15 @@ fn a_motion_port_without_a_state_port_by_the_rule_is_a_typed_address_error() {
     assert!(t0.elapsed() < Duration::from_secs(10));
 }
 
+/// `fitup skills template FILE` in `dir`, which must end with exit 1: its output and
+/// text.
+fn refused_template(dir: &Path, file: &str) -> (std::process::Output, String) {
+    let o = common::run_bounded(dir, &["skills", "template", file], Duration::from_secs(20));
+    let text = common::text(&o);
+    assert_eq!(o.status.code(), Some(1), "{}", common::short_text(&o));
+    (o, text)
+}
+
 #[test]
 fn an_alias_bomb_template_is_refused_fast_with_a_short_message() {
     let dir = tempfile::tempdir().unwrap();
@@ -513,13 +522,7 @@ fn an_alias_bomb_template_is_refused_fast_with_a_short_message() {
     }
     t += "operation: insertion\nworkflows: []\n";
     let file = write(dir.path(), "bomb.yaml", &t);
-    let o = common::run_bounded(
-        dir.path(),
-        &["skills", "template", &file],
-        Duration::from_secs(20),
-    );
-    let text = common::text(&o);
-    assert_eq!(o.status.code(), Some(1), "{}", common::short_text(&o));
+    let (o, text) = refused_template(dir.path(), &file);
     assert!(text.contains("bomb.yaml:1:"), "{}", common::short_text(&o));
     assert!(text.contains("anchors"), "{}", common::short_text(&o));
     assert!(text.len() < 2_000, "{} bytes of output", text.len());
@@ -533,13 +536,7 @@ fn an_alias_bomb_template_is_refused_fast_with_a_short_message() {
             "operation: {long}\nworkflows:\n  - {{from: FREE, to: In_WS, generator: locate}}\n"
         ),
     );
-    let o = common::run_bounded(
-        dir.path(),
-        &["skills", "template", &file],
-        Duration::from_secs(20),
-    );
-    let text = common::text(&o);
-    assert_eq!(o.status.code(), Some(1), "{}", common::short_text(&o));
+    let (o, text) = refused_template(dir.path(), &file);
     assert!(text.contains("long.yaml:1:"), "{}", common::short_text(&o));
     assert!(
         text.contains("unknown operation"),
@@ -557,13 +554,7 @@ fn an_alias_bomb_template_is_refused_fast_with_a_short_message() {
             &long[..1000]
         ),
     );
-    let o = common::run_bounded(
-        dir.path(),
-        &["skills", "template", &file],
-        Duration::from_secs(20),
-    );
-    let text = common::text(&o);
-    assert_eq!(o.status.code(), Some(1), "{}", common::short_text(&o));
+    let (o, text) = refused_template(dir.path(), &file);
     assert!(text.contains("field.yaml:2:"), "{}", common::short_text(&o));
     assert!(text.len() < 2_000, "{} bytes of output", text.len());
 }

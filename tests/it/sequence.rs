@@ -464,7 +464,6 @@ fn interfering_assembly_is_a_fit_and_tiny_budgets_are_refused_in_bounded_time() 
 /// query against exactly the parts assembled before it, one pair at a time (no
 /// planner validator involved).
 fn dense_recheck(doc: &Document, plan: &SequencePlan, step_mm: f64) {
-    use fitup::collision::interferes;
     let mut cache = SceneCache::new();
     let ws = fitup::workspace::Workspace::new(doc, &mut cache).unwrap();
     let scene = ws.scene();
@@ -482,19 +481,8 @@ fn dense_recheck(doc: &Document, plan: &SequencePlan, step_mm: f64) {
                     let pose = a.interpolate(&b, i as f64 / n as f64);
                     let bp = scene.colliders[p].world_bounds(&pose);
                     for &q in &before {
-                        let bq = scene.colliders[q].world_bounds(&scene.poses[q]);
-                        if bp.overlap(&bq).min() <= tol {
-                            continue;
-                        }
                         assert!(
-                            !interferes(
-                                &scene.colliders[p],
-                                &pose,
-                                &scene.colliders[q],
-                                &scene.poses[q],
-                                tol
-                            )
-                            .unwrap(),
+                            !common::interferes_in(scene, p, &pose, &bp, q, tol),
                             "{:?}: task {k} ({}) hits {} at sample {i}/{n}",
                             order,
                             t.part,

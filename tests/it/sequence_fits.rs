@@ -19,7 +19,7 @@ use fitup::sequence::{plan_sequence, Mode, SequenceOptions, SequencePlan};
 use fitup::workspace::{SceneCache, Workspace};
 use std::path::{Path, PathBuf};
 
-use crate::common::duct;
+use crate::common::{self, duct};
 
 /// A closed ring (a tube section) about +Z: outer radius `big`, bore `small`, from
 /// `z0` to `z1`, `n` facets around (the phase of [`Mesh::cylinder`]).
@@ -92,6 +92,18 @@ const GRID_POINTS: f64 = 4_000.0;
 impl Checker<'_> {
     fn fit(&self, p: usize, q: usize) -> bool {
         self.fits.contains(&(p, q)) || self.fits.contains(&(q, p))
+    }
+
+    /// The surface distance of `p` and `q` at their poses, asked up to `bound` mm.
+    fn clearance(&self, p: usize, q: usize, bound: f64) -> f64 {
+        fitup::collision::clearance(
+            &self.colliders[p],
+            &self.poses[p],
+            &self.colliders[q],
+            &self.poses[q],
+            bound,
+        )
+        .unwrap()
     }
 
     /// Whether `p` at `pose` is refused against `q`.
@@ -201,14 +213,8 @@ pub(crate) fn dense_removal(c: &Checker, plan: &SequencePlan) {
     let doc = c.doc;
     for s in &plan.sequences {
         let order = s.order();
-        let idx: Vec<usize> = order
-            .iter()
-            .map(|n| doc.component_index(n).unwrap())
-            .collect();
-        let mut seen = idx.clone();
-        seen.sort();
-        seen.dedup();
-        assert_eq!(seen.len(), doc.components().len(), "{order:?}");
+        let idx = common::component_indices(doc, &order);
+        assert_eq!(common::distinct(&idx), doc.components().len(), "{order:?}");
         for k in (0..s.tasks.len()).rev() {
             let t = &s.tasks[k];
             let p = idx[k + 1];
@@ -540,15 +546,7 @@ fn a_clearance_linkage_is_held_across_its_gaps() {
                 let i = doc.component_index(&order[k]).unwrap();
                 let held = order[..k].iter().any(|o| {
                     let q = doc.component_index(o).unwrap();
-                    fitup::collision::clearance(
-                        &c.colliders[i],
-                        &c.poses[i],
-                        &c.colliders[q],
-                        &c.poses[q],
-                        widest + 1.0,
-                    )
-                    .unwrap()
-                        <= widest + 1e-6
+                    c.clearance(i, q, widest + 1.0) <= widest + 1e-6
                 });
                 assert!(held, "{} floats in {order:?}", order[k]);
             }
@@ -613,15 +611,7 @@ fn groups_the_file_places_apart_are_sequenced_each_held_inside() {
                 let i = doc.component_index(name).unwrap();
                 let held = before.iter().any(|o| {
                     let q = doc.component_index(o).unwrap();
-                    fitup::collision::clearance(
-                        &c.colliders[i],
-                        &c.poses[i],
-                        &c.colliders[q],
-                        &c.poses[q],
-                        2.5,
-                    )
-                    .unwrap()
-                        <= 1.5
+                    c.clearance(i, q, 2.5) <= 1.5
                 });
                 assert!(held, "{name} floats in {order:?}");
             }

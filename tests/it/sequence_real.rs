@@ -16,7 +16,7 @@ use fitup::workspace::{SceneCache, Workspace};
 use std::path::Path;
 use std::time::Instant;
 
-use crate::common::duct;
+use crate::common::{self, duct};
 use duct::boxes;
 
 /// A document in `dir` with one component per mesh (identity poses), no mates.
@@ -132,14 +132,12 @@ pub(crate) fn dense_removal_of(doc: &Document, sequences: &[Removal]) {
             s.tasks.len() + 1,
             "{order:?}: one task per part after the base"
         );
-        let idx: Vec<usize> = order
-            .iter()
-            .map(|n| doc.component_index(n).unwrap())
-            .collect();
-        let mut seen = idx.clone();
-        seen.sort();
-        seen.dedup();
-        assert_eq!(seen.len(), idx.len(), "a part twice in {order:?}");
+        let idx = common::component_indices(doc, order);
+        assert_eq!(
+            common::distinct(&idx),
+            idx.len(),
+            "a part twice in {order:?}"
+        );
         for k in (0..s.tasks.len()).rev() {
             let t = &s.tasks[k];
             let p = idx[k + 1];
@@ -153,19 +151,8 @@ pub(crate) fn dense_removal_of(doc: &Document, sequences: &[Removal]) {
             let check = |pose: &Transform, what: &str| {
                 let bp = scene.colliders[p].world_bounds(pose);
                 for &q in before {
-                    let bq = scene.colliders[q].world_bounds(&scene.poses[q]);
-                    if bp.overlap(&bq).min() <= tol {
-                        continue;
-                    }
                     assert!(
-                        !interferes(
-                            &scene.colliders[p],
-                            pose,
-                            &scene.colliders[q],
-                            &scene.poses[q],
-                            tol
-                        )
-                        .unwrap(),
+                        !common::interferes_in(scene, p, pose, &bp, q, tol),
                         "{order:?}: removing {} ({what}) hits {}",
                         t.part,
                         doc.components()[q].name
@@ -221,10 +208,7 @@ fn floating_steps(doc: &Document, plan: &SequencePlan, gap: f64) -> Vec<String> 
     let mut out = Vec::new();
     for s in &plan.sequences {
         let order = s.order();
-        let idx: Vec<usize> = order
-            .iter()
-            .map(|n| doc.component_index(n).unwrap())
-            .collect();
+        let idx = common::component_indices(doc, &order);
         for k in 1..idx.len() {
             let p = idx[k];
             let held = idx[..k].iter().any(|&q| {
@@ -304,14 +288,7 @@ fn clip_leaves_thirty_degrees_off_the_axes() {
         doc.component_index("clip").unwrap(),
         doc.component_index("tube").unwrap(),
     );
-    for d in [
-        Vec3::x(),
-        -Vec3::x(),
-        Vec3::y(),
-        -Vec3::y(),
-        Vec3::z(),
-        -Vec3::z(),
-    ] {
+    for d in fitup::math::axis_directions() {
         let hit = (1..=125).any(|i| {
             let pose = Transform::from_parts(
                 scene.poses[c].translation() + d * (0.2 * i as f64),
@@ -640,20 +617,6 @@ fn roofed_pocket(dir: &Path) -> Document {
     )
 }
 
-/// `n` unit directions spread over the sphere (Fibonacci lattice), for the
-/// independent "no straight line" check.
-fn fibonacci(n: usize) -> Vec<Vec3> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let a = golden * i as f64;
-            Vec3::new(r * a.cos(), r * a.sin(), z)
-        })
-        .collect()
-}
-
 #[test]
 fn a_part_that_only_a_bent_path_brings_in_is_planned() {
     let dir = tempfile::tempdir().unwrap();
@@ -668,7 +631,7 @@ fn a_part_that_only_a_bent_path_brings_in_is_planned() {
         doc.component_index("frame").unwrap(),
     );
     let frame_box = grow(&scene.colliders[f].world_bounds(&scene.poses[f]), 0.5);
-    for d in fibonacci(400) {
+    for d in fitup::math::sphere_lattice(400) {
         let mut hit = false;
         for i in 1..=300 {
             let pose = Transform::from_parts(

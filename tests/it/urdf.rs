@@ -477,6 +477,16 @@ fn an_arm_and_a_gripper_from_two_packages_load() {
     std::fs::write(&bare, docs_arm_and_gripper_entry()).unwrap();
     let doc = Document::open(&bare).unwrap();
     assert!((volume(&doc, "ur:left_finger") - cube(0.01)).abs() < 1e-3);
+    // A package path entry that is a file is named as written.
+    let entry = docs_arm_and_gripper_entry() + "  package_path: [bare.yaml]\n";
+    std::fs::write(p.join("file.yaml"), entry).unwrap();
+    let e = Document::open(&p.join("file.yaml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("package_path `bare.yaml` is not a folder"),
+        "{e}"
+    );
 }
 
 /// The same arm + gripper added in code (issue 38): `Document::add_urdf_robot` and a
