@@ -396,6 +396,8 @@ pub fn redact_credentials(text: &str) -> std::borrow::Cow<'_, str> {
 /// Where the block comment that opens at `b[start]` (`/*`) ends: the index just past
 /// its `*/`, comments nesting (`/* a /* b */ c */`, as in PostgreSQL and Rhai), or
 /// `b.len()` when it is not closed.
+// Its callers are the Rhai assignment scan and the PostgreSQL statement check.
+#[cfg_attr(not(any(feature = "script", feature = "postgres")), allow(dead_code))]
 pub(crate) fn nested_comment_end(b: &[u8], start: usize) -> usize {
     let (mut i, mut depth) = (start, 0usize);
     while i < b.len() {
