@@ -167,6 +167,7 @@ pub(crate) fn shortcut(
         );
     let ahead = Ahead::new();
     let worker = if exact { checker.fork() } else { None };
+    let screen = screen_steps(checker, space);
     let (mut path, unfolded) = std::thread::scope(|scope| {
         let handle = worker.map(|validator| {
             let ahead = &ahead;
@@ -185,7 +186,7 @@ pub(crate) fn shortcut(
         // behind: a last linear pass, screened like the shortcuts, so that the
         // certification below checks the joined edges and not the ones they replace.
         if exact && run.smoothing_tick(0, 0, 0.0, until) {
-            path.linear_pass(checker, space, screen_steps(checker, space), true);
+            path.linear_pass(checker, space, screen, true);
         }
 
         // The certification of the screened edges left in the path is the work an
@@ -201,7 +202,6 @@ pub(crate) fn shortcut(
         }
         (LazyPath::certified(poses_left), unfolded)
     });
-    let screen = screen_steps(checker, space);
     // A failed certification brings back the poses of its detour (and a
     // stepwise validator's shortcuts had no lazy pass): a linear pass, certified
     // at once, within smoothing's share.
@@ -829,14 +829,20 @@ mod tests {
 
     /// `forks`: the validator can be forked, so certification runs on two cores.
     fn smoothed_on(seed: u64, forks: bool) -> (PlannedPath, HiddenFence) {
-        let space = PlanningSpace::new(Vec3::new(-60.0, -60.0, -1.0), Vec3::new(60.0, 60.0, 1.0));
         let mut fence = HiddenFence {
             forks,
             ..HiddenFence::default()
         };
+        let path = smoothed_with(&mut fence, seed);
+        (path, fence)
+    }
+
+    /// [`detour`] smoothed with `validator` by the default options, no budget.
+    fn smoothed_with(validator: &mut dyn MotionValidator, seed: u64) -> PlannedPath {
+        let space = PlanningSpace::new(Vec3::new(-60.0, -60.0, -1.0), Vec3::new(60.0, 60.0, 1.0));
         let mut path = detour();
         smooth(
-            &mut fence,
+            validator,
             &space,
             &mut path,
             &Smoothing::default(),
@@ -844,7 +850,7 @@ mod tests {
             None,
             None,
         );
-        (path, fence)
+        path
     }
 
     #[test]
@@ -912,19 +918,8 @@ mod tests {
                 Some(Box::new(PanickyForks(fork)))
             }
         }
-        let space = PlanningSpace::new(Vec3::new(-60.0, -60.0, -1.0), Vec3::new(60.0, 60.0, 1.0));
         for seed in 1..=3 {
-            let mut v = PanickyForks(HiddenFence::default());
-            let mut path = detour();
-            smooth(
-                &mut v,
-                &space,
-                &mut path,
-                &Smoothing::default(),
-                seed,
-                None,
-                None,
-            );
+            let path = smoothed_with(&mut PanickyForks(HiddenFence::default()), seed);
             assert!(
                 path.length_mm < detour().length_mm,
                 "seed {seed}: not shortened"
@@ -959,18 +954,8 @@ mod tests {
                 Some(1.0)
             }
         }
-        let space = PlanningSpace::new(Vec3::new(-60.0, -60.0, -1.0), Vec3::new(60.0, 60.0, 1.0));
         let mut open = Open(0);
-        let mut path = detour();
-        smooth(
-            &mut open,
-            &space,
-            &mut path,
-            &Smoothing::default(),
-            1,
-            None,
-            None,
-        );
+        let path = smoothed_with(&mut open, 1);
         // Straight from start to goal in one edge, after at most a handful of
         // certifications.
         assert_eq!(path.poses.len(), 2);
