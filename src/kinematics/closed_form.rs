@@ -121,13 +121,13 @@ impl ModelError {
 /// (seeded with the reference's free joint), the error when there is none, the
 /// polish of near-singular branches on `robot`'s tree when the idealized arm is not
 /// exact, and the expansion into every solution within the limits.
-pub(crate) fn solve<S: ClosedFormIk>(
+pub(crate) fn solve<S: ClosedFormIk, T: Solved>(
     solver: &S,
     robot: Option<&Robot>,
     target: &Transform,
     reference: &[f64],
     options: &IkOptions,
-) -> Result<Vec<IkSolution>, IkError> {
+) -> Result<Vec<T>, IkError> {
     let seed = reference.get(S::SEED_JOINT).copied().unwrap_or(0.0);
     let mut branches =
         solver.branches_seeded(target.isometry(), options.singularity_threshold, seed);
@@ -222,6 +222,67 @@ pub(crate) fn solve<S: ClosedFormIk>(
         }
     }
     solutions_within_limits(branches.as_slice(), solver.joint_limits(), reference)
+}
+
+/// A solution as [`solutions_within_limits`] makes it: an [`IkSolution`] (one `Vec`
+/// per solution), or a [`Solution6`] (joints inline) where the caller only reads it
+/// and allocating per solution would be most of its cost beside the solve.
+pub(crate) trait Solved {
+    /// The solution `joints` of branch `b`, at `distance` from the reference.
+    fn new(b: &Branch, joints: [f64; 6], distance: f64) -> Self;
+    /// Its distance to the reference (the sort key).
+    fn distance(&self) -> f64;
+}
+
+impl Solved for IkSolution {
+    fn new(b: &Branch, joints: [f64; 6], distance: f64) -> Self {
+        Solution6 {
+            joints,
+            configuration: b.configuration,
+            distance,
+            singular: b.singular,
+        }
+        .into()
+    }
+
+    fn distance(&self) -> f64 {
+        self.distance
+    }
+}
+
+/// An [`IkSolution`] of a 6-joint closed form with its joints inline (no allocation).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Solution6 {
+    pub(crate) joints: [f64; 6],
+    pub(crate) configuration: Configuration,
+    pub(crate) distance: f64,
+    pub(crate) singular: bool,
+}
+
+impl Solved for Solution6 {
+    fn new(b: &Branch, joints: [f64; 6], distance: f64) -> Self {
+        Self {
+            joints,
+            configuration: b.configuration,
+            distance,
+            singular: b.singular,
+        }
+    }
+
+    fn distance(&self) -> f64 {
+        self.distance
+    }
+}
+
+impl From<Solution6> for IkSolution {
+    fn from(s: Solution6) -> Self {
+        Self {
+            joints: s.joints.to_vec(),
+            configuration: Some(s.configuration),
+            distance: s.distance,
+            singular: s.singular,
+        }
+    }
 }
 
 /// The configuration tag of one principal branch.
@@ -394,6 +455,29 @@ pub(crate) struct ShoulderRoot {
     pub(crate) snapped: bool,
 }
 
+impl ShoulderRoot {
+    /// Its label.
+    #[inline]
+    pub(crate) fn shoulder(&self) -> Shoulder {
+        if self.front {
+            Shoulder::Front
+        } else {
+            Shoulder::Back
+        }
+    }
+}
+
+/// Joint 5 of both closed forms at the wrist singularity: exactly φ₅ when the
+/// singular axes are aligned (`cos_wrist > 0`), φ₅ + π (wrapped) when opposed.
+#[inline]
+pub(crate) fn singular_q5(phi5: f64, cos_wrist: f64) -> f64 {
+    if cos_wrist > 0.0 {
+        phi5
+    } else {
+        wrap(phi5 + PI)
+    }
+}
+
 /// One root of joints 2 and 3 (see [`ArmPlane::elbow`]).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct ElbowRoot {
@@ -410,6 +494,18 @@ pub(crate) struct ElbowRoot {
     pub(crate) beyond: bool,
     /// Taken as exactly stretched or folded (within the model error).
     pub(crate) snapped: bool,
+}
+
+impl ElbowRoot {
+    /// Its label on shoulder root `sh`: the first root is elbow up on the front side.
+    #[inline]
+    pub(crate) fn elbow(&self, sh: &ShoulderRoot) -> Elbow {
+        if self.first == sh.front {
+            Elbow::Up
+        } else {
+            Elbow::Down
+        }
+    }
 }
 
 impl ArmPlane {
@@ -815,11 +911,11 @@ pub(crate) fn zero_axis_lines(robot: &Robot) -> Option<(AxisLines, Isometry3<f64
 /// representative nearest the reference), sorted by Euclidean joint distance to
 /// `reference`; the error names the first violated joint of the nearest branch when
 /// every branch is outside the limits. Shared by the closed-form solvers.
-pub(crate) fn solutions_within_limits(
+pub(crate) fn solutions_within_limits<T: Solved>(
     branches: &[Branch],
     limits: &[Option<JointLimits>; 6],
     reference: &[f64],
-) -> Result<Vec<IkSolution>, IkError> {
+) -> Result<Vec<T>, IkError> {
     let mut out = Vec::new();
     let mut first_violation: Option<(f64, usize, f64)> = None;
     for br in branches {
@@ -860,19 +956,14 @@ pub(crate) fn solutions_within_limits(
         }
         let mut idx = [0usize; 6];
         loop {
-            let joints: Vec<f64> = (0..6).map(|j| choices[j][idx[j]]).collect();
+            let joints: [f64; 6] = std::array::from_fn(|j| choices[j][idx[j]]);
             let distance = joints
                 .iter()
                 .zip(reference)
                 .map(|(a, b)| (a - b) * (a - b))
                 .sum::<f64>()
                 .sqrt();
-            out.push(IkSolution {
-                joints,
-                configuration: Some(br.configuration),
-                distance,
-                singular: br.singular,
-            });
+            out.push(T::new(br, joints, distance));
             let mut j = 0;
             loop {
                 idx[j] += 1;
@@ -894,7 +985,7 @@ pub(crate) fn solutions_within_limits(
         let (_, joint, value) = first_violation.unwrap_or((0.0, 1, 0.0));
         return Err(IkError::JointLimits { joint, value });
     }
-    out.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+    out.sort_by(|a, b| a.distance().total_cmp(&b.distance()));
     Ok(out)
 }
 

@@ -41,8 +41,8 @@
 //! (`sin(acos(a₄·t)) = 0`) axes 4 and 6 line up: the wrist singularity.
 
 use super::closed_form::{
-    canonical_frame, measure_model_error, zero_axis_lines, ArmPlane, ModelError, Tolerances,
-    DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
+    canonical_frame, measure_model_error, singular_q5, zero_axis_lines, ArmPlane, ModelError,
+    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::ur::snap_phi;
 use super::{
@@ -347,16 +347,8 @@ impl OpwSolver {
                 }
                 arm[n] = ArmBranch {
                     q: [sh.q1, wrap(self.s2 * el.th2), wrap(self.s3 * el.th3)],
-                    shoulder: if sh.front {
-                        Shoulder::Front
-                    } else {
-                        Shoulder::Back
-                    },
-                    elbow: if el.first == sh.front {
-                        Elbow::Up
-                    } else {
-                        Elbow::Down
-                    },
+                    shoulder: sh.shoulder(),
+                    elbow: el.elbow(sh),
                     margin: el.margin.min(sh.margin),
                     snapped: sh.snapped || el.snapped,
                 };
@@ -394,11 +386,8 @@ impl OpwSolver {
                 // q6 takes the rest; the flip branch is q4 + π.
                 let rw_a5 = Vector3::new(r5[0][i], r5[1][i], r5[2][i]);
                 let psi = atan2(self.a4.dot(&self.a5.cross(&rw_a5)), self.a5.dot(&rw_a5));
-                let (q5, sgn) = if cw > 0.0 {
-                    (self.phi5, 1.0)
-                } else {
-                    (wrap(self.phi5 + PI), -1.0)
-                };
+                let q5 = singular_q5(self.phi5, cw);
+                let sgn = if cw > 0.0 { 1.0 } else { -1.0 };
                 for (k, wrist) in [(0.0, Wrist::NoFlip), (PI, Wrist::Flip)] {
                     let q4 = wrap(q4_seed + k);
                     out.push(Branch {

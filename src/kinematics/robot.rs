@@ -464,17 +464,71 @@ impl Robot {
         reference: &[f64],
         options: &IkOptions,
     ) -> Result<Vec<IkSolution>, IkError> {
+        let local = self.local_target(target, reference)?;
+        match &self.solver {
+            IkSolver::Opw(s) => closed_form::solve(s, Some(self), &local, reference, options),
+            IkSolver::Ur(s) => closed_form::solve(s, Some(self), &local, reference, options),
+            IkSolver::Numeric => NumericIk::from_options(options).solve(self, &local, reference),
+        }
+    }
+
+    /// The checks of [`Robot::inverse`] and the target in the root frame.
+    fn local_target(&self, target: &Transform, reference: &[f64]) -> Result<Transform, IkError> {
         self.check(reference).map_err(IkError::Input)?;
         if !target.is_finite() {
             return Err(IkError::Input(KinematicsError::InvalidDescription(
                 DescriptionProblem::TargetNotFinite,
             )));
         }
-        let local = Transform::from_isometry(self.base.isometry().inverse() * target.isometry());
-        match &self.solver {
-            IkSolver::Opw(s) => closed_form::solve(s, Some(self), &local, reference, options),
-            IkSolver::Ur(s) => closed_form::solve(s, Some(self), &local, reference, options),
-            IkSolver::Numeric => NumericIk::from_options(options).solve(self, &local, reference),
+        Ok(Transform::from_isometry(
+            self.base.isometry().inverse() * target.isometry(),
+        ))
+    }
+
+    /// The closed-form solutions of [`Robot::inverse`] with their joints inline (none
+    /// for the numeric solver).
+    fn inverse_inline(
+        &self,
+        target: &Transform,
+        reference: &[f64],
+        options: &IkOptions,
+    ) -> Option<Result<Vec<closed_form::Solution6>, IkError>> {
+        let solve = |local: &Transform| match &self.solver {
+            IkSolver::Opw(s) => Some(closed_form::solve(s, Some(self), local, reference, options)),
+            IkSolver::Ur(s) => Some(closed_form::solve(s, Some(self), local, reference, options)),
+            IkSolver::Numeric => None,
+        };
+        match self.local_target(target, reference) {
+            Ok(local) => solve(&local),
+            Err(e) => Some(Err(e)),
+        }
+    }
+
+    /// The joints of each solution of [`Robot::inverse`] (the same solutions in the
+    /// same order, `dof` values each, rad/mm) passed to `visit`, without a `Vec` per
+    /// solution: what a caller that copies the joints elsewhere (the script and
+    /// Python bindings) needs. Returns the number of solutions.
+    ///
+    /// # Errors
+    /// As [`Robot::inverse`].
+    pub fn inverse_each(
+        &self,
+        target: &Transform,
+        reference: &[f64],
+        options: &IkOptions,
+        mut visit: impl FnMut(&[f64]),
+    ) -> Result<usize, IkError> {
+        match self.inverse_inline(target, reference, options) {
+            Some(sols) => {
+                let sols = sols?;
+                sols.iter().for_each(|s| visit(&s.joints));
+                Ok(sols.len())
+            }
+            None => {
+                let sols = self.inverse(target, reference, options)?;
+                sols.iter().for_each(|s| visit(&s.joints));
+                Ok(sols.len())
+            }
         }
     }
 
@@ -485,11 +539,18 @@ impl Robot {
         reference: &[f64],
         options: &IkOptions,
     ) -> Result<IkSolution, IkError> {
-        let mut all = self.inverse(target, reference, options)?;
-        if all.is_empty() {
-            return Err(IkError::Unreachable(super::Unreachable::NoSolution));
+        let none = || IkError::Unreachable(super::Unreachable::NoSolution);
+        match self.inverse_inline(target, reference, options) {
+            // Only the nearest becomes an `IkSolution` (one allocation).
+            Some(sols) => sols?.first().map(|&s| s.into()).ok_or_else(none),
+            None => {
+                let mut all = self.inverse(target, reference, options)?;
+                if all.is_empty() {
+                    return Err(none());
+                }
+                Ok(all.swap_remove(0))
+            }
         }
-        Ok(all.swap_remove(0))
     }
 
     /// Inverse kinematics along a sequence of world poses (mm): for each pose in

@@ -34,12 +34,11 @@
 //!   elbow with one double root); `q₄ = s₄(θ₂₃₄ − θ₂ − θ₃)`.
 
 use super::closed_form::{
-    canonical_frame, measure_model_error, zero_axis_lines, ArmPlane, ModelError, Tolerances,
-    DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
+    canonical_frame, measure_model_error, singular_q5, zero_axis_lines, ArmPlane, ModelError,
+    Tolerances, DISTANCE_TOL, PARALLEL_TOL, POLISH_NEAR,
 };
 use super::{
-    Branch, Branches, ClosedFormIk, Configuration, Elbow, JointLimits, Robot, Shoulder,
-    Unreachable, Wrist,
+    Branch, Branches, ClosedFormIk, Configuration, JointLimits, Robot, Unreachable, Wrist,
 };
 use crate::math::trig::atan2;
 use crate::math::trig::{hyp, rot2, wrap};
@@ -310,11 +309,7 @@ impl ClosedFormIk for UrSolver {
             // (0, sin(q5 − φ5)): q6 = atan2(r1, r2), both components computed
             // directly (no difference of nearly equal numbers near the singularity).
             let (q5, q6, s6, c6) = if snapped {
-                let q5 = if cw > 0.0 {
-                    self.phi5
-                } else {
-                    wrap(self.phi5 + PI)
-                };
+                let q5 = singular_q5(self.phi5, cw);
                 // At the wrist singularity joint 6 is the seed on every branch.
                 let (s6, c6) = q6_seed.sin_cos();
                 (q5, wrap(q6_seed), s6, c6)
@@ -359,11 +354,6 @@ impl ClosedFormIk for UrSolver {
                 };
                 let (elbows, n_el) = self.arm.elbow(d, slack, tol, &mut out);
                 for el in &elbows[..n_el] {
-                    let elbow = if el.first == sh.front {
-                        Elbow::Up
-                    } else {
-                        Elbow::Down
-                    };
                     let margin = sd.min(el.margin).min(sh.margin);
                     out.push(Branch {
                         joints: [
@@ -375,12 +365,8 @@ impl ClosedFormIk for UrSolver {
                             q6w,
                         ],
                         configuration: Configuration {
-                            shoulder: if sh.front {
-                                Shoulder::Front
-                            } else {
-                                Shoulder::Back
-                            },
-                            elbow,
+                            shoulder: sh.shoulder(),
+                            elbow: el.elbow(&sh),
                             wrist,
                         },
                         singular: near_singular || snapped,

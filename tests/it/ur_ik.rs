@@ -355,3 +355,61 @@ fn detection_from_urdf_does_not_misfire() {
         .robot;
     assert_eq!(r.solver_name(), "numeric");
 }
+
+/// `Robot::inverse_each` (what the script and Python bindings call) and
+/// `Robot::inverse_nearest` give `Robot::inverse`'s solutions to the bit: the same
+/// joints in the same order, the nearest the first, the same errors; on every
+/// catalog arm (limits with their ±360° variants) and on a UR URDF with rounded
+/// angles (branches polished on the tree), at random, wrist-singular and
+/// out-of-reach targets.
+#[test]
+fn inverse_each_and_nearest_are_inverse_to_the_bit() {
+    let mut rng = Rng::new(38);
+    let arm = Catalog::Ur5e;
+    let text = ur_description(
+        arm.name(),
+        arm.ur_dh().unwrap().map(|v| v / 1000.0),
+        1.570796327,
+    );
+    let rounded = parse_urdf(Path::new("ur.urdf"), &text, None).unwrap().robot;
+    let every = IkOptions::every_branch();
+    let bits =
+        |rows: &[Vec<f64>]| -> Vec<u64> { rows.iter().flatten().map(|v| v.to_bits()).collect() };
+    let mut solved = 0;
+    for robot in Catalog::ALL.iter().map(|c| c.robot()).chain([rounded]) {
+        assert!(robot.closed_form(), "{}", robot.name());
+        for k in 0..40 {
+            let mut q: Vec<f64> = (0..robot.dof()).map(|_| rng.range(-PI, PI)).collect();
+            if k % 4 == 0 {
+                q[4] = 0.0; // the wrist singularity
+            }
+            let target = if k == 39 {
+                Transform::from_translation(Vec3::new(1e5, 0.0, 0.0))
+            } else {
+                robot.tcp_pose(&q).unwrap()
+            };
+            let reference: Vec<f64> = q.iter().map(|v| v + rng.range(-0.3, 0.3)).collect();
+            let all = robot.inverse(&target, &reference, &every);
+            let mut rows = Vec::new();
+            let each = robot.inverse_each(&target, &reference, &every, |j| rows.push(j.to_vec()));
+            let nearest = robot.inverse_nearest(&target, &reference, &every);
+            match all {
+                Ok(all) => {
+                    assert_eq!(each, Ok(all.len()), "{}", robot.name());
+                    let want: Vec<Vec<f64>> = all.iter().map(|s| s.joints.clone()).collect();
+                    assert_eq!(bits(&rows), bits(&want), "{}: {q:?}", robot.name());
+                    let n = nearest.unwrap();
+                    assert_eq!(bits(&[n.joints.clone()]), bits(&want[..1]));
+                    assert_eq!(Some(&n), all.first());
+                    solved += 1;
+                }
+                Err(e) => {
+                    assert!(rows.is_empty());
+                    assert_eq!(each, Err(e.clone()));
+                    assert_eq!(nearest, Err(e));
+                }
+            }
+        }
+    }
+    assert!(solved > 200, "{solved} targets solved");
+}
