@@ -17,7 +17,7 @@ use crate::document::robot::{
 };
 use crate::kinematics::{
     drill_program, move_circle, move_joint, move_line, parse_holes, parse_program, run_program,
-    DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkOptions, IkSolution, JointLimits,
+    DhConvention, DhRow, DrillOptions, Hole, HoleOutcome, IkError, IkOptions, JointLimits,
     MotionOptions, OpwParameters, Robot, Trajectory,
 };
 use crate::math::{AngleConvention, Transform};
@@ -170,40 +170,47 @@ fn joints_out(robot: &Robot, q: &[f64]) -> Dynamic {
 /// Joint arrays of up to this many joints are handled on the stack by the IK bindings.
 const STACK_JOINTS: usize = 12;
 
-/// Solutions as a script array of joint arrays (degrees / mm), as [`joints_out`] makes
-/// each but with each joint's unit factor looked up once per call, not once per value:
-/// `x.to_degrees()` is `x * (180 / π)`, and the factor is `to_degrees(1)` (1 for a
-/// prismatic joint), so the values are the same to the bit.
-fn solutions_out(robot: &Robot, sols: &[IkSolution]) -> Array {
+/// Each joint's unit factor (rad/mm → degrees/mm) for up to [`STACK_JOINTS`] joints:
+/// `x.to_degrees()` is `x * (180 / π)` and the factor is `to_degrees(1)` (1 for a
+/// prismatic joint), so `v * factor` is [`joints_out`]'s value to the bit.
+fn unit_factors(robot: &Robot) -> Option<[f64; STACK_JOINTS]> {
     let dof = robot.dof();
-    if dof > STACK_JOINTS {
-        return sols.iter().map(|s| joints_out(robot, &s.joints)).collect();
-    }
+    let ones = [1.0; STACK_JOINTS];
     let mut factor = [1.0; STACK_JOINTS];
     for (f, k) in factor
         .iter_mut()
-        .zip(joints_to_document_iter(robot, &[1.0; STACK_JOINTS][..dof]))
+        .zip(joints_to_document_iter(robot, ones.get(..dof)?))
     {
         *f = k;
     }
-    sols.iter()
-        .map(|s| {
-            Dynamic::from_array(
-                s.joints
-                    .iter()
-                    .zip(&factor)
-                    .map(|(v, f)| Dynamic::from_float(v * f))
-                    .collect(),
-            )
-        })
-        .collect()
+    Some(factor)
+}
+
+/// Every solution of [`Robot::inverse`] (every branch) as a script array of joint
+/// arrays (degrees / mm), as [`joints_out`] makes each, written straight from the
+/// solver's solutions (no `Vec` per solution, [`Robot::inverse_each`]) with each
+/// joint's unit looked up once per call.
+fn every_solution(robot: &Robot, target: &Transform, reference: &[f64]) -> Result<Array, IkError> {
+    let Some(factor) = unit_factors(robot) else {
+        let sols = robot.inverse(target, reference, &ik_all())?;
+        return Ok(sols.iter().map(|s| joints_out(robot, &s.joints)).collect());
+    };
+    let mut out = Array::with_capacity(8);
+    robot.inverse_each(target, reference, &ik_all(), |q| {
+        out.push(Dynamic::from_array(
+            q.iter()
+                .zip(&factor)
+                .map(|(v, f)| Dynamic::from_float(v * f))
+                .collect(),
+        ))
+    })?;
+    Ok(out)
 }
 
 /// `Robot.ik`: every solution for `target`, nearest the robot's current joints first.
 fn ik_every(r: &RobotHandle, target: &Transform) -> ScriptResult<Array> {
     r.with_joints(|robot, q| {
-        let sols = robot
-            .inverse(target, q, &ik_all())
+        let sols = every_solution(robot, target, q)
             .map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
         if sols.is_empty() {
             return err(format!(
@@ -211,8 +218,28 @@ fn ik_every(r: &RobotHandle, target: &Transform) -> ScriptResult<Array> {
                 robot.name()
             ));
         }
-        Ok(solutions_out(robot, &sols))
+        Ok(sols)
     })
+}
+
+/// `Robot.ik_near`: the solution nearest `joints` (degrees / mm), read onto the stack.
+fn ik_near(r: &RobotHandle, target: &Transform, joints: &Dynamic) -> ScriptResult<Dynamic> {
+    let robot = r.shared()?;
+    let mut stack = [0.0; STACK_JOINTS];
+    let mut heap = Vec::new();
+    let reference = match stack.get_mut(..robot.dof()) {
+        Some(s) => s,
+        None => {
+            heap.resize(robot.dof(), 0.0);
+            &mut heap[..]
+        }
+    };
+    numbers_into(joints, reference, "joints")?;
+    joints_from_document_in_place(&robot, reference);
+    let sol = robot
+        .inverse_nearest(target, reference, &ik_all())
+        .map_err(|e| fail(format!("robot `{}`: ik_near: {e}", robot.name())))?;
+    Ok(joints_out(&robot, &sol.joints))
 }
 
 /// `RobotModel.ik`: every solution for `target`, nearest all-zero joints first.
@@ -226,10 +253,7 @@ fn model_ik_every(robot: &Robot, target: &Transform) -> ScriptResult<Array> {
             &heap[..]
         }
     };
-    let sols = robot
-        .inverse(target, reference, &ik_all())
-        .map_err(|e| fail(format!("ik: {e}")))?;
-    Ok(solutions_out(robot, &sols))
+    every_solution(robot, target, reference).map_err(|e| fail(format!("ik: {e}")))
 }
 
 /// Motion options from a map (the library's [`Motion`] vocabulary: `speed` mm/s,
@@ -521,12 +545,15 @@ fn register_ik(api: &mut Api) {
         |r: &mut RobotHandle, t: Transform| -> ScriptResult<Array> { ik_every(r, &t) },
     );
     api.f("Robot.ik_near(target, joints: array) -> array", "The joint solution (degrees) for the world pose `target` nearest to `joints` (degrees); the robot does not move.", |r: &mut RobotHandle, t: Dynamic, j: Dynamic| -> ScriptResult<Dynamic> {
-        let robot = r.shared()?;
-        let target = to_transform(&t, "target")?;
-        let reference = joints_arg(&robot, &j, "joints")?;
-        let sol = robot.inverse_nearest(&target, &reference, &ik_all()).map_err(|e| fail(format!("robot `{}`: ik_near: {e}", robot.name())))?;
-        Ok(joints_out(&robot, &sol.joints))
+        ik_near(r, &to_transform(&t, "target")?, &j)
     });
+    // A Transform target, the usual one: no Dynamic conversion.
+    api.overload(
+        "Robot.ik_near(target, joints: array) -> array",
+        |r: &mut RobotHandle, t: Transform, j: Dynamic| -> ScriptResult<Dynamic> {
+            ik_near(r, &t, &j)
+        },
+    );
     api.f("Robot.ik_branches(target) -> array", "Every solution with its configuration: `#{joints, configuration, singular}` (configuration like `front/up/noflip`, or `\"\"` for numeric solutions; `singular` when joints 4 and 6 are at or near alignment).", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
         let (robot, q) = r.snapshot()?;
         let target = to_transform(&t, "target")?;
