@@ -13,8 +13,10 @@ The Rust and Rhai columns come from `cargo bench --profile dev --bench call_over
 (tests/bench/call_overhead.rs), started by this script, the dev profile being the one
 `.ci/run` builds the module with; the Python column and a second Rhai column (through
 `fitup.run_script` in this process, the module's own build) are timed here right
-after. Calls: FK of the demo MZ07 (`Robot.fk`), IK of every branch (`Robot.ik`; the
-MZ07, and a UR5e of the published D-H lengths without limits), an
+after. The set-up script, the UR5e and the Rhai calls are the Rust bench's files
+(tests/bench/call_overhead/). Calls: FK of the demo MZ07 (`Robot.fk`), IK of every
+branch (`Robot.ik`; the MZ07, and a UR5e of the published D-H lengths without
+limits; the UR5e's `ik_near` from Rhai and Rust only), an
 interference check of one pair of the demo cell (`Document.interferes`), a short plan
 (screw5 lifted 40 mm, RRT-Connect, seed 3), the floor (a trivial call: `Robot.dof`,
 Rhai's `q.len()`), and the batch forms per pose (`fk_batch`, `ik_batch`, 20 000
@@ -41,47 +43,18 @@ import numpy as np  # noqa: E402
 import fitup  # noqa: E402
 
 ROUNDS = 7
-N_KINEMATICS = 20_000
-N_CHECK = 2_000
-N_PLAN = 20
 REPO = pathlib.Path(__file__).resolve().parents[2]
 
-# The same setup and calls as tests/bench/call_overhead.rs.
-SETUP = """let d = open_doc("models/mz07.yaml");
-let arm = d.robot("mz07");
-let q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0];
-arm.joints = q;
-let t = arm.fk(q);
-let ur = open_doc("models/ur5e.yaml").robot("ur5e");
-ur.joints = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0];
-let tu = ur.tcp;
-let cell = open_doc("models/cell.yaml");
-let goal = cell.component("screw5").transform * translation(0.0, 0.0, 40.0);
-let opts = #{planner: "rrt_connect", seed: 3};
-cell.interferes("screw4", "screw5");
-"""
-RHAI = {
-    "fk": ("arm.fk(q)", N_KINEMATICS),
-    "ik_all": ("arm.ik(t)", N_KINEMATICS),
-    "ik_ur5e": ("ur.ik(tu)", N_KINEMATICS),
-    "floor": ("q.len()", N_KINEMATICS),
-    "interferes": ('cell.interferes("screw4", "screw5")', N_CHECK),
-    "plan_short": ('cell.plan_path("screw5", goal, opts)', N_PLAN),
-}
-
-
-# The UR5e of tests/bench/call_overhead.rs (`UR5E_YAML`), written beside the demo models.
-UR5E_YAML = """robots:
-- name: ur5e
-  dh:
-    rows:
-    - {theta: 0, d: 162.5, a: 0, alpha: 90}
-    - {theta: 0, d: 0, a: -425, alpha: 0}
-    - {theta: 0, d: 0, a: -392.2, alpha: 0}
-    - {theta: 0, d: 133.3, a: 0, alpha: 90}
-    - {theta: 0, d: 99.7, a: 0, alpha: -90}
-    - {theta: 0, d: 99.6, a: 0, alpha: 0}
-"""
+# The set-up script, the UR5e and the Rhai calls of tests/bench/call_overhead.rs.
+SHARED = REPO / "tests" / "bench" / "call_overhead"
+SETUP = (SHARED / "setup.rhai").read_text()
+UR5E_YAML = (SHARED / "ur5e.yaml").read_text()
+RHAI = {}
+for line in (SHARED / "calls.txt").read_text().splitlines():
+    if line and not line.startswith("#"):
+        name, n, expr = line.split(" ", 2)
+        RHAI[name] = (expr, int(n))
+N_KINEMATICS = RHAI["fk"][1]
 UR5E_Q = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0]
 
 
@@ -160,18 +133,16 @@ def main():
     uq = np.radians(UR5E_Q)
     tu = ur.fk(uq)
     assert len(ur.ik(tu, uq)) > 1
+    # The Python call of each name of calls.txt (Python has no `ik_near`).
     calls = {
-        "fk": (lambda: arm.fk(q), N_KINEMATICS),
-        "ik_all": (lambda: arm.ik(t, q), N_KINEMATICS),
-        "ik_ur5e": (lambda: ur.ik(tu, uq), N_KINEMATICS),
-        "floor": (lambda: arm.dof, N_KINEMATICS),
-        "interferes": (lambda: cell.interferes("screw4", "screw5"), N_CHECK),
-        "plan_short": (
-            lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3),
-            N_PLAN,
-        ),
+        "fk": lambda: arm.fk(q),
+        "ik_all": lambda: arm.ik(t, q),
+        "ik_ur5e": lambda: ur.ik(tu, uq),
+        "floor": lambda: arm.dof,
+        "interferes": lambda: cell.interferes("screw4", "screw5"),
+        "plan_short": lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3),
     }
-    py = {k: median_ns(f, n) for k, (f, n) in calls.items() if wanted(k)}
+    py = {k: median_ns(f, RHAI[k][1]) for k, f in calls.items() if wanted(k)}
     qs = np.tile(q, (N_KINEMATICS, 1))
     ts = np.tile(t, (N_KINEMATICS, 1, 1))
     batches = {
@@ -193,12 +164,11 @@ def main():
         " | Python / Rust"
     )
     print("---|---|---|---|---|---|---")
-    for k in py:
+    for k in rh:
         r, rb = rust.get(k, (float("nan"), float("nan")))
-        ratio = py[k] / r if r > 0 else float("nan")
-        print(
-            f"{k} | {r:.0f} | {rb:.0f} | {rh[k]:.0f} | {py[k]:.0f} | {py[k] - r:.0f} | {ratio:.2f}"
-        )
+        p = py.get(k, float("nan"))
+        ratio = p / r if r > 0 else float("nan")
+        print(f"{k} | {r:.0f} | {rb:.0f} | {rh[k]:.0f} | {p:.0f} | {p - r:.0f} | {ratio:.2f}")
     for k in batch:
         r = rust.get(k, (float("nan"),))[0]
         print(f"{k} batch, per pose | {r:.0f} | | | {batch[k]:.0f} | {batch[k] - r:.0f}")

@@ -1,10 +1,12 @@
 //! One call's cost from Rust and from a Rhai script, for the calls docs/performance.md
 //! ("Python") compares with Python (`python/bench/overhead.py` runs this bench first
 //! and adds its own columns): FK, IK of every branch (the demo MZ07, and a UR5e of
-//! the published D-H lengths without joint limits), an interference check
-//! of one pair and a short plan (screw5 lifted 40 mm, RRT-Connect, seed 3), on the
-//! demo MZ07 and cell documents; and the floor, `q.len()`: the interpreter's cost of
-//! one native method call. Scripts run in fitup's script engine (`script::engine`:
+//! the published D-H lengths without joint limits), the UR5e's nearest solution
+//! (`ik_near`), an interference check of one pair and a short plan (screw5 lifted
+//! 40 mm, RRT-Connect, seed 3), on the demo MZ07 and cell documents; and the floor,
+//! `q.len()`: the interpreter's cost of one native method call. The set-up script,
+//! the UR5e and the calls (name, calls per round, Rhai expression) are files under
+//! `call_overhead/`, read by overhead.py too. Scripts run in fitup's script engine (`script::engine`:
 //! every binding, the sandbox's operation counting) on the bench's thread, the set-up
 //! once; times are this thread's CPU time, which a busy machine inflates far less than
 //! wall time. A script figure is the loop `for i in 0..n { let x = CALL; }` minus the
@@ -30,41 +32,34 @@ use std::sync::Arc;
 
 const ROUNDS: usize = 7;
 
-/// Calls per round of each kind (about the same wall time each).
-const N_KINEMATICS: usize = 20_000;
-const N_CHECK: usize = 2_000;
-const N_PLAN: usize = 20;
+/// Run once before the timed loops (python/bench/overhead.py runs it too).
+const SETUP: &str = include_str!("call_overhead/setup.rhai");
 
-/// A UR5e of the published D-H lengths (`Catalog::Ur5e`'s) without joint limits: every
-/// branch once, no ±360° variants. python/bench/overhead.py writes the same file.
-const UR5E_YAML: &str = "robots:
-- name: ur5e
-  dh:
-    rows:
-    - {theta: 0, d: 162.5, a: 0, alpha: 90}
-    - {theta: 0, d: 0, a: -425, alpha: 0}
-    - {theta: 0, d: 0, a: -392.2, alpha: 0}
-    - {theta: 0, d: 133.3, a: 0, alpha: 90}
-    - {theta: 0, d: 99.7, a: 0, alpha: -90}
-    - {theta: 0, d: 99.6, a: 0, alpha: 0}
-";
+/// A UR5e of the published D-H lengths without joint limits (overhead.py writes it
+/// too).
+const UR5E_YAML: &str = include_str!("call_overhead/ur5e.yaml");
 
-/// The UR5e's joints (degrees): away from every singularity.
+/// `name calls expression` per line: the calls both benches time.
+const CALLS: &str = include_str!("call_overhead/calls.txt");
+
+/// The UR5e's joints (degrees, the set-up's): away from every singularity.
 const UR5E_Q: [f64; 6] = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0];
 
-const SETUP: &str = r#"let d = open_doc("models/mz07.yaml");
-let arm = d.robot("mz07");
-let q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0];
-arm.joints = q;
-let t = arm.fk(q);
-let ur = open_doc("models/ur5e.yaml").robot("ur5e");
-ur.joints = [10.0, -60.0, 80.0, -110.0, -70.0, 30.0];
-let tu = ur.tcp;
-let cell = open_doc("models/cell.yaml");
-let goal = cell.component("screw5").transform * translation(0.0, 0.0, 40.0);
-let opts = #{planner: "rrt_connect", seed: 3};
-cell.interferes("screw4", "screw5"); // colliders built before the timed loops
-"#;
+/// (name, calls per round, Rhai expression) of each line of [`CALLS`].
+fn call_table() -> Vec<(&'static str, usize, &'static str)> {
+    CALLS
+        .lines()
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .map(|l| {
+            let mut it = l.splitn(3, ' ');
+            let (name, n, expr) = (it.next(), it.next(), it.next());
+            match (name, n.and_then(|n| n.parse().ok()), expr) {
+                (Some(name), Some(n), Some(expr)) => (name, n, expr),
+                _ => panic!("calls.txt: bad line `{l}`"),
+            }
+        })
+        .collect()
+}
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -185,46 +180,41 @@ fn main() {
     };
     // Each call keeps its own scene cache, filled by the warm-up call below.
     let (mut check_cache, mut plan_cache) = (SceneCache::new(), SceneCache::new());
-    // (name, Rhai expression, calls per round, the Rust call)
-    type Call<'a> = (&'a str, &'a str, usize, Box<dyn FnMut() + 'a>);
-    let mut calls: Vec<Call> = vec![
+    // The Rust call of each name of calls.txt.
+    let mut rust_calls: Vec<(&str, Box<dyn FnMut() + '_>)> = vec![
         (
             "fk",
-            "arm.fk(q)",
-            N_KINEMATICS,
             Box::new(|| {
                 black_box(robot.tcp_pose(black_box(&q)).unwrap());
             }),
         ),
         (
             "ik_all",
-            "arm.ik(t)",
-            N_KINEMATICS,
             Box::new(|| {
                 black_box(robot.inverse(black_box(&target), &q, &every).unwrap());
             }),
         ),
         (
             "ik_ur5e",
-            "ur.ik(tu)",
-            N_KINEMATICS,
             Box::new(|| {
                 black_box(ur.inverse(black_box(&ur_target), &ur_q, &every).unwrap());
             }),
         ),
         (
-            // The interpreter's own cost of one native method call: Rust does nothing.
-            "floor",
-            "q.len()",
-            N_KINEMATICS,
-            Box::new(|| {}),
+            "ik_near_ur5e",
+            Box::new(|| {
+                black_box(
+                    ur.inverse_nearest(black_box(&ur_target), &ur_q, &every)
+                        .unwrap(),
+                );
+            }),
         ),
+        // The interpreter's own cost of one native method call: Rust does nothing.
+        ("floor", Box::new(|| {})),
         (
             // The workspace (the scene of the document as it is now, colliders from the
             // cache) is built per call, as the Rhai and Python bindings do.
             "interferes",
-            r#"cell.interferes("screw4", "screw5")"#,
-            N_CHECK,
             Box::new(|| {
                 let ws = Workspace::new(&cell, &mut check_cache).unwrap();
                 black_box(ws.interferes("screw4", "screw5", &check).unwrap());
@@ -232,8 +222,6 @@ fn main() {
         ),
         (
             "plan_short",
-            r#"cell.plan_path("screw5", goal, opts)"#,
-            N_PLAN,
             Box::new(|| {
                 let ws = Workspace::new(&cell, &mut plan_cache).unwrap();
                 let path = ws.plan_path("screw5", &goal, &request(), None).unwrap();
@@ -250,17 +238,21 @@ fn main() {
             .is_none_or(|o| o.split(',').any(|w| w == name))
     };
     let mut rows = Vec::new();
-    for (name, script, n, f) in &mut calls {
+    for (name, n, script) in call_table() {
         if !wanted(name) {
             continue;
         }
+        let f = match rust_calls.iter_mut().find(|(r, _)| *r == name) {
+            Some((_, f)) => f,
+            None => panic!("no Rust call for `{name}` of calls.txt"),
+        };
         f(); // warm-up: colliders, caches
         let (mut rust, mut rhai) = (Vec::new(), Vec::new());
         for _ in 0..ROUNDS {
-            rust.push(rust_ns(*n, &mut *f));
-            rhai.push(engine.ns(script, *n));
+            rust.push(rust_ns(n, &mut *f));
+            rhai.push(engine.ns(script, n));
         }
-        rows.push((*name, *script, median(&mut rust), median(&mut rhai)));
+        rows.push((name, script, median(&mut rust), median(&mut rhai)));
     }
     println!("medians over {ROUNDS} rounds (ns per call, this thread's CPU time):");
     println!("| call | Rust | Rhai | Rhai − Rust | Rhai / Rust |");
