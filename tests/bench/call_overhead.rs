@@ -181,7 +181,9 @@ fn main() {
     // Each call keeps its own scene cache, filled by the warm-up call below.
     let (mut check_cache, mut plan_cache) = (SceneCache::new(), SceneCache::new());
     // The Rust call of each name of calls.txt.
-    let mut rust_calls: Vec<(&str, Box<dyn FnMut() + '_>)> = vec![
+    // (name, the Rust call)
+    type RustCall<'a> = (&'a str, Box<dyn FnMut() + 'a>);
+    let mut rust_calls: Vec<RustCall> = vec![
         (
             "fk",
             Box::new(|| {
