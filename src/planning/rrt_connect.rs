@@ -11,7 +11,7 @@ use super::run::{Failure, PlanError, PlanLimits, ProgressFn, Run};
 use super::scale::ProblemScale;
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
-use super::tree::{check_ends, steer, Effort, PoseTarget, Tree};
+use super::tree::{begin, steer, Begun, Effort, PoseTarget, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Deadline, Rng, Transform};
 use nalgebra::UnitQuaternion;
@@ -848,21 +848,12 @@ pub fn rrt_connect(
         "rrt_connect"
     };
     options.validate()?;
-    space.validate()?;
-    PlanError::pose("start", start)?;
-    PlanError::pose("goal", goal)?;
-    let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator, Some(run.deadline()));
-    if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
-        return Ok(PlannedPath::failed(
-            name,
-            f,
-            0,
-            0,
-            &checker,
-            run.elapsed_ms(),
-        ));
-    }
+    let ends = (start, Some(goal));
+    let (mut run, mut checker) =
+        match begin(name, validator, space, ends, options.limits, progress)? {
+            Begun::Ready(run, checker) => (run, checker),
+            Begun::Refused(path) => return Ok(path),
+        };
     // A free straight line is the answer, found with one edge check before any tree
     // grows: a sampling search almost never draws it when the passage around it is
     // tight (a plate slid onto a pin with 0.2 mm clearance).
