@@ -7,7 +7,7 @@
 //! equivalent; targets at the wrist, shoulder and elbow singularities are solved
 //! completely; a URDF in ROS `ur_description` form gives the same FK and the UR solver.
 
-use crate::common::ur_urdf::ur_description;
+use crate::common::ur_urdf::{ur_description, ROUNDED_ROLL};
 use fitup::kinematics::{parse_urdf, Catalog, ClosedFormIk, IkOptions, IkSolverKind, Robot};
 use fitup::math::{Rng, Transform, Vec3};
 use nalgebra::{Isometry3, UnitQuaternion};
@@ -369,7 +369,7 @@ fn inverse_each_and_nearest_are_inverse_to_the_bit() {
     let text = ur_description(
         arm.name(),
         arm.ur_dh().unwrap().map(|v| v / 1000.0),
-        1.570796327,
+        ROUNDED_ROLL,
     );
     let rounded = parse_urdf(Path::new("ur.urdf"), &text, None).unwrap().robot;
     let every = IkOptions::every_branch();
@@ -399,7 +399,7 @@ fn inverse_each_and_nearest_are_inverse_to_the_bit() {
                     let want: Vec<Vec<f64>> = all.iter().map(|s| s.joints.clone()).collect();
                     assert_eq!(bits(&rows), bits(&want), "{}: {q:?}", robot.name());
                     let n = nearest.unwrap();
-                    assert_eq!(bits(&[n.joints.clone()]), bits(&want[..1]));
+                    assert_eq!(bits(std::slice::from_ref(&n.joints)), bits(&want[..1]));
                     assert_eq!(Some(&n), all.first());
                     solved += 1;
                 }
