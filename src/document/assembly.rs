@@ -143,12 +143,12 @@ impl Document {
                     .owning_sub_document(&c.name)
                     .is_some_and(|a| a.name == name || a.name.starts_with(&prefix));
                 if c.fixed && !moves_with_its_file {
-                    return Err(DocumentError::FixedComponent(c.name.clone()));
+                    return Err(DocumentError::FixedComponent(c.name.clone().into()));
                 }
                 if let Some(robot) = self.driving_robot(i) {
                     return Err(DocumentError::RobotLink {
-                        component: c.name.clone(),
-                        robot: robot.to_string(),
+                        component: c.name.clone().into(),
+                        robot: robot.into(),
                     });
                 }
             }
