@@ -249,11 +249,12 @@ fn a_robot_inside_moves_with_its_sub_assembly() {
 fn a_robot_inside_is_saved_to_its_own_file_without_loss() {
     let (_dir, top) = plain();
     let dir = top.parent().unwrap().to_path_buf();
-    let before = sub_files(&top);
+    let written = sub_files(&top);
     let mut doc = Document::open(&top).unwrap();
-    // unchanged: nothing rewritten, and the top document names no robot
+    // unchanged: no sub-document rewritten, and the top document names no robot
     doc.save().unwrap();
-    assert_eq!(sub_files(&top)[..2], before[..2]);
+    let before = sub_files(&top);
+    assert_eq!(before[..2], written[..2]);
     let text = std::fs::read_to_string(&top).unwrap();
     assert!(
         !text.contains("robots") && !text.contains("L3"),
@@ -406,13 +407,15 @@ fn a_urdf_robot_inside_keeps_its_generated_links_out_of_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
     std::fs::write(p.join("fitup.toml"), "").unwrap();
-    common::copy_tree(&common::repo().join("models/urdf"), &p.join("cell"));
+    // the URDF names its meshes `package://fitup_arm6/urdf/meshes/…`: the package is
+    // the folder above `urdf/`, as in the repository
+    common::copy_tree(&common::repo().join("models/urdf"), &p.join("cell/urdf"));
     std::fs::write(
         p.join("top.yaml"),
-        "parts: {}\nassemblies:\n- name: Cell-1\n  file: cell/arm6_cell.yaml\n  transform:\n  - [1, 0, 0, 0]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n  - [0, 0, 500, 1]\ncomponents: []\n",
+        "parts: {}\nassemblies:\n- name: Cell-1\n  file: cell/urdf/arm6_cell.yaml\n  transform:\n  - [1, 0, 0, 0]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n  - [0, 0, 500, 1]\ncomponents: []\n",
     )
     .unwrap();
-    let sub = p.join("cell/arm6_cell.yaml");
+    let sub = p.join("cell/urdf/arm6_cell.yaml");
     let mut alone = Document::open(&sub).unwrap();
     let mut doc = Document::open(&p.join("top.yaml")).unwrap();
     let frame = Transform::from_translation(Vec3::new(0.0, 0.0, 500.0));
