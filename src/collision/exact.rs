@@ -537,6 +537,26 @@ impl PairClock {
     }
 }
 
+/// What a pair query of `a` at `pa` and `b` at `pb` starts from, once the poses
+/// and the tolerance are checked: `b`'s frame in `a`'s, the length below which
+/// two points are one (mm), and whether both parts are solids.
+fn prepare(
+    a: &Collider,
+    pa: &Transform,
+    b: &Collider,
+    pb: &Transform,
+    tolerance: f64,
+) -> Result<(Relative, f64, bool), CollisionError> {
+    check_pose(pa)?;
+    check_pose(pb)?;
+    check_tolerance(tolerance)?;
+    Ok((
+        Relative::new(pa, pb),
+        eps(a, b, pa, pb),
+        a.is_solid() && b.is_solid(),
+    ))
+}
+
 /// [`interferes`]; `None`: `deadline` passed first.
 fn interferes_by(
     a: &Collider,
@@ -546,12 +566,7 @@ fn interferes_by(
     tolerance: f64,
     deadline: Option<Deadline>,
 ) -> Result<Option<bool>, CollisionError> {
-    check_pose(pa)?;
-    check_pose(pb)?;
-    check_tolerance(tolerance)?;
-    let rel = Relative::new(pa, pb);
-    let eps = eps(a, b, pa, pb);
-    let oriented = a.is_solid() && b.is_solid();
+    let (rel, eps, oriented) = prepare(a, pa, b, pb, tolerance)?;
     let mut crossed = false;
     let mut seeds = Vec::new();
     // Open meshes: once some pair crosses, only a pair deeper than the tolerance can
@@ -676,12 +691,7 @@ fn contact_by(
     tolerance: f64,
     deadline: Option<Deadline>,
 ) -> Result<Option<Contact>, CollisionError> {
-    check_pose(pa)?;
-    check_pose(pb)?;
-    check_tolerance(tolerance)?;
-    let rel = Relative::new(pa, pb);
-    let eps = eps(a, b, pa, pb);
-    let oriented = a.is_solid() && b.is_solid();
+    let (rel, eps, oriented) = prepare(a, pa, b, pb, tolerance)?;
     let mut touching = false;
     let mut depth = 0.0f64;
     let mut seeds = Vec::new();

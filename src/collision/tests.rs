@@ -34,6 +34,22 @@ fn random_pose(rng: &mut Rng, spread: f64) -> Transform {
 
 const TOL: f64 = DEFAULT_TOLERANCE;
 
+/// [`sweep`] of `mover` along `motion` in pose checks at most `step` mm of
+/// displacement apart, with the test tolerance.
+fn stepwise_sweep(
+    mover: &Collider,
+    motion: &Motion,
+    obstacles: &[Obstacle<'_>],
+    step: f64,
+) -> SweepHit {
+    let options = SweepOptions {
+        method: SweepMethod::displacement_steps(step),
+        tolerance: TOL,
+        ..Default::default()
+    };
+    sweep(mover, motion, obstacles, &options).unwrap()
+}
+
 #[test]
 fn plate_on_table_touches_in_any_world_pose() {
     let table = cuboid([-50.0, -50.0, -20.0], [50.0, 50.0, 0.0]);
@@ -654,17 +670,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
         start: Transform::IDENTITY,
         offset: Vec3::new(20.0, 0.0, 0.0),
     };
-    let stepped = sweep(
-        &mover,
-        &motion,
-        &obstacles,
-        &SweepOptions {
-            method: SweepMethod::displacement_steps(5.0),
-            tolerance: TOL,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let stepped = stepwise_sweep(&mover, &motion, &obstacles, 5.0);
     assert!(!stepped.hit, "{stepped:?}");
     let cont = sweep(&mover, &motion, &obstacles, &SweepOptions::default()).unwrap();
     assert!(cont.hit && cont.with == Some(0));
@@ -673,17 +679,7 @@ fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
     assert!(x > 11.3 && x < 11.3 + 2.0 * TOL, "{x}");
     assert!(interferes(&mover, &cont.pose, &wall, &Transform::IDENTITY, TOL).unwrap());
     // fine stepwise scan: nothing earlier
-    let fine = sweep(
-        &mover,
-        &motion,
-        &obstacles,
-        &SweepOptions {
-            method: SweepMethod::displacement_steps(TOL / 4.0),
-            tolerance: TOL,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let fine = stepwise_sweep(&mover, &motion, &obstacles, TOL / 4.0);
     assert!(
         fine.hit && fine.t >= cont.t - TOL / 20.0,
         "{} vs {}",
@@ -708,17 +704,7 @@ fn continuous_rotation_and_pose_sequences_find_first_contact() {
     };
     let cont = sweep(&arm, &rot, &obstacles, &SweepOptions::default()).unwrap();
     assert!(cont.hit);
-    let fine = sweep(
-        &arm,
-        &rot,
-        &obstacles,
-        &SweepOptions {
-            method: SweepMethod::displacement_steps(TOL / 2.0),
-            tolerance: TOL,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let fine = stepwise_sweep(&arm, &rot, &obstacles, TOL / 2.0);
     assert!(
         fine.hit && (fine.t - cont.t).abs() * 1.5 * 40.0 < 2.0 * TOL,
         "{} vs {}",

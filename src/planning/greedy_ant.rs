@@ -3,11 +3,11 @@
 use super::path::PlannedPath;
 use super::rrt::finish;
 use super::run::Failure;
-use super::run::{PlanError, PlanLimits, ProgressFn, Run};
+use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
-use super::tree::check_ends;
-use super::validator::{Checker, MotionValidator};
+use super::tree::{begin, Begun};
+use super::validator::MotionValidator;
 use crate::math::{Transform, Vec3};
 
 /// Largest number of grid points on one layer.
@@ -124,18 +124,12 @@ pub fn greedy_ant(
             "a grid spacing giving at most 4 million points per layer (raise dis or set radius)",
         ));
     }
-    let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator, Some(run.deadline()));
-    if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
-        return Ok(PlannedPath::failed(
-            NAME,
-            f,
-            0,
-            0,
-            &checker,
-            run.elapsed_ms(),
-        ));
-    }
+    let ends = (start, Some(goal));
+    let (mut run, mut checker) =
+        match begin(NAME, validator, space, ends, options.limits, progress)? {
+            Begun::Ready(run, checker) => (run, checker),
+            Begun::Refused(path) => return Ok(path),
+        };
     let reference = start.rotation();
     let mut poses = vec![*start];
     let mut candidates: Vec<(f64, Vec3)> = Vec::new();

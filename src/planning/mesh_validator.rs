@@ -371,6 +371,20 @@ const PIECE_REACH: f64 = 0.25;
 /// thickness to bound its pieces by).
 const MIN_PIECE_REACH: f64 = 0.05;
 
+/// A total order of poses (translation, then rotation, by their numbers), which
+/// fixes the direction an edge is swept in whatever the direction it is asked in.
+fn precedes(a: &Transform, b: &Transform) -> bool {
+    let (ta, tb) = (a.translation(), b.translation());
+    let (qa, qb) = (a.rotation(), b.rotation());
+    let ka = [ta.x, ta.y, ta.z, qa.w, qa.i, qa.j, qa.k];
+    let kb = [tb.x, tb.y, tb.z, qb.w, qb.i, qb.j, qb.k];
+    ka.iter()
+        .zip(&kb)
+        .map(|(x, y)| x.total_cmp(y))
+        .find(|o| o.is_ne())
+        .is_some_and(std::cmp::Ordering::is_lt)
+}
+
 impl MotionValidator for MeshValidator {
     fn is_free(&mut self, pose: &Transform) -> bool {
         self.stats.pose_checks += 1;
@@ -399,6 +413,15 @@ impl MotionValidator for MeshValidator {
         if !self.pose_free(to) {
             return false;
         }
+        // The same verdict both ways: the motion is swept from the end that sorts
+        // first. A path runs its goal tree's edges backwards, and near a contact
+        // at the tolerance a sweep from one end can step onto a depth that one
+        // from the other steps over.
+        let (from, to) = if precedes(to, from) {
+            (to, from)
+        } else {
+            (from, to)
+        };
         match self.options.edge {
             SweepMethod::Continuous { .. } => self.continuous_edge_free(from, to),
             SweepMethod::Stepwise {

@@ -7,7 +7,7 @@ use super::path::PlannedPath;
 use super::run::{PlanError, PlanLimits, ProgressFn, Run};
 use super::smoothing::{shortcut, Smoothing};
 use super::space::PlanningSpace;
-use super::tree::{check_ends, Effort, PoseTarget, Target, Tree};
+use super::tree::{begin, Begun, Effort, PoseTarget, Target, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::Deadline;
 use crate::math::{Rng, Transform};
@@ -160,23 +160,12 @@ pub(crate) fn plan_tree(
     local: Option<&Lattice>,
     progress: Option<ProgressFn<'_>>,
 ) -> Result<PlannedPath, PlanError> {
-    space.validate()?;
-    PlanError::pose("start", start)?;
-    if let Some(g) = target.pose() {
-        PlanError::pose("goal", g)?;
-    }
-    let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator, Some(run.deadline()));
-    if let Some(f) = check_ends(&mut checker, space, start, target.pose()) {
-        return Ok(PlannedPath::failed(
-            planner,
-            f,
-            0,
-            0,
-            &checker,
-            run.elapsed_ms(),
-        ));
-    }
+    let ends = (start, target.pose());
+    let (mut run, mut checker) =
+        match begin(planner, validator, space, ends, options.limits, progress)? {
+            Begun::Ready(run, checker) => (run, checker),
+            Begun::Refused(path) => return Ok(path),
+        };
     checker.set_lazy(options.lazy.map(|l| l.steps(space)));
     let mut rng = Rng::new(options.limits.seed);
     let key_mm = local.map_or(options.step * 1e-3, |l| l.edge_length_min * 0.25);

@@ -1,5 +1,5 @@
 //! [`rrt_connect`]: the bidirectional RRT (Kuffner & LaValle), fitup's default
-//! planner: with scale-free defaults, a long-range search for open space and a
+//! planner: with scale-free defaults, long-range searches for open space and a
 //! narrow-passage search for tight assemblies race on two cores, deterministically.
 
 use super::axis::AxisSearch;
@@ -11,7 +11,7 @@ use super::run::{Failure, PlanError, PlanLimits, ProgressFn, Run};
 use super::scale::ProblemScale;
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
-use super::tree::{check_ends, steer, Effort, PoseTarget, Tree};
+use super::tree::{begin, steer, Begun, Effort, PoseTarget, Tree};
 use super::validator::{Checker, LazyValidation, MotionValidator};
 use crate::math::{Deadline, Rng, Transform};
 use nalgebra::UnitQuaternion;
@@ -138,6 +138,13 @@ struct Strategy {
 }
 
 impl Strategy {
+    /// The random stream of the second long-range search, which shares the
+    /// narrow-passage search's core: the long-range search's time to a path
+    /// varies over seeds by 10× and more (alpha-1.5: 723 to 8,519 iterations),
+    /// so two independent draws cut its long tail where the narrow-passage
+    /// search does not win.
+    const SECOND_LONG_RANGE_STREAM: u64 = 0xD1B5_4A32_D192_ED03;
+
     /// One search with the options as given (`step` explicit).
     fn explicit(options: &RrtConnectOptions, space: &PlanningSpace, step: f64) -> Self {
         Self {
@@ -541,9 +548,17 @@ impl Rival {
     }
 }
 
-/// One iteration of `search` within the race: `Some` when it found its path, must
-/// stop, or is outrun by a rival that found its path with less work.
-fn step(search: &mut Search<'_, '_>, run: &mut Run<'_>, rival: &Rival) -> Option<Outcome> {
+/// One iteration of `search` within the race, whose lane has done `lane_work`
+/// before it: `Some` when it found its path, must stop, or is outrun by a rival
+/// that found its path at a lower cost. A path's cost is its lane's work when it
+/// was found (the work of every search of the lane), so a search sharing its
+/// core wins only with less work than its share of the core allows.
+fn step(
+    search: &mut Search<'_, '_>,
+    lane_work: u64,
+    run: &mut Run<'_>,
+    rival: &Rival,
+) -> Option<Outcome> {
     if rival.stop.load(Ordering::Relaxed) {
         return Some(Outcome::Failed(
             Failure::Cancelled,
@@ -551,14 +566,15 @@ fn step(search: &mut Search<'_, '_>, run: &mut Run<'_>, rival: &Rival) -> Option
             search.nodes(),
         ));
     }
-    if search.work() > rival.best.load(Ordering::Relaxed) {
+    if lane_work > rival.best.load(Ordering::Relaxed) {
         return Some(Outcome::Outrun);
     }
     if let Err(f) = run.next(search.nodes(), search.best) {
         return Some(Outcome::Failed(f, run.iterations, search.nodes()));
     }
+    let before = search.work();
     let joined = search.iterate()?;
-    let work = search.work();
+    let work = lane_work + (search.work() - before);
     rival.best.fetch_min(work, Ordering::Relaxed);
     Some(Outcome::Found {
         poses: search.path(joined),
@@ -570,16 +586,7 @@ fn step(search: &mut Search<'_, '_>, run: &mut Run<'_>, rival: &Rival) -> Option
     })
 }
 
-/// Runs `search` to its outcome ([`step`] after step).
-fn drive(search: &mut Search<'_, '_>, run: &mut Run<'_>, rival: &Rival) -> Outcome {
-    loop {
-        if let Some(o) = step(search, run, rival) {
-            return o;
-        }
-    }
-}
-
-/// The race's winner: the path found with the least work (the first search on a
+/// The race's winner: the path found at the lowest cost (the first search on a
 /// tie); without one, the first search's failure.
 fn winner(outcomes: Vec<Outcome>) -> Outcome {
     let mut best: Option<Outcome> = None;
@@ -631,93 +638,144 @@ impl Problem<'_> {
     ) -> Search<'v, 's> {
         Search::new(checker, space, self.start, self.goal, strategy, self.seed)
     }
+
+    /// The searches of `lane`, each checking through one of `views`.
+    fn searches<'v, 's>(
+        &self,
+        views: &'v mut [Shared<'_, '_>],
+        lane: Vec<(Strategy, &'s PlanningSpace)>,
+    ) -> Vec<Search<'v, 's>> {
+        views
+            .iter_mut()
+            .zip(lane)
+            .map(|(v, (strategy, space))| {
+                self.search(Checker::new(v, Some(self.deadline)), space, strategy)
+            })
+            .collect()
+    }
 }
 
-/// Races `strategies` (at least one): the first on this thread with the call's
-/// progress, each other in a thread of its own on a fork of the validator; when
-/// the validator cannot be forked, interleaves them on this thread, always
-/// advancing the search with the least work so far. The same winner either way.
+/// Races `lanes` of strategies (at least one strategy in the first lane): the
+/// first lane on this thread with the call's progress, each other lane in a
+/// thread of its own on a fork of the validator, the strategies of a lane
+/// interleaved on its thread ([`interleave`]). When the validator cannot be
+/// forked, every lane is interleaved on this thread. The same winner either way:
+/// the path found at the lowest cost (its lane's work, see [`step`]), the first
+/// strategy (lane by lane) on a tie, whichever thread finished first.
 fn race(
     validator: &mut dyn MotionValidator,
-    strategies: Vec<Strategy>,
+    lanes: Vec<Vec<Strategy>>,
     p: &Problem<'_>,
     run: &mut Run<'_>,
 ) -> Outcome {
     let rival = Rival::new();
-    let spaces: Vec<PlanningSpace> = strategies.iter().map(|s| p.space_for(s)).collect();
-    let mut strategies = strategies.into_iter().zip(&spaces);
-    let (first, first_space) = strategies.next().expect("at least one strategy");
-    let others: Vec<(Strategy, &PlanningSpace)> = strategies.collect();
+    let spaces: Vec<Vec<PlanningSpace>> = lanes
+        .iter()
+        .map(|lane| lane.iter().map(|s| p.space_for(s)).collect())
+        .collect();
+    let mut lanes: Vec<Vec<(Strategy, &PlanningSpace)>> = lanes
+        .into_iter()
+        .zip(&spaces)
+        .map(|(lane, spaces)| lane.into_iter().zip(spaces).collect())
+        .collect();
+    let others = lanes.split_off(1);
     let forks: Option<Vec<Box<dyn MotionValidator + Send>>> =
         others.iter().map(|_| validator.fork()).collect();
     let Some(forks) = forks else {
+        lanes.extend(others);
         let shared = RefCell::new(validator);
-        let mut views: Vec<Shared<'_, '_>> = (0..=others.len()).map(|_| Shared(&shared)).collect();
-        let mut views = views.iter_mut();
-        let mut searches = vec![p.search(
-            Checker::new(views.next().expect("a view"), Some(p.deadline)),
-            first_space,
-            first,
-        )];
-        for (v, (s, space)) in views.zip(others) {
-            searches.push(p.search(Checker::new(v, Some(p.deadline)), space, s));
-        }
+        let mut views: Vec<Vec<Shared<'_, '_>>> = lanes
+            .iter()
+            .map(|lane| lane.iter().map(|_| Shared(&shared)).collect())
+            .collect();
+        let mut searches: Vec<Vec<Search<'_, '_>>> = views
+            .iter_mut()
+            .zip(lanes)
+            .map(|(views, lane)| p.searches(views, lane))
+            .collect();
         return winner(interleave(&mut searches, run, &rival));
     };
+    let first = lanes.pop().expect("a first lane");
     let outcomes = std::thread::scope(|scope| {
         let handles: Vec<_> = forks
             .into_iter()
             .zip(others)
-            .map(|(mut v, (strategy, space))| {
+            .map(|(mut v, lane)| {
                 let rival = &rival;
                 let clock = run.clock();
                 scope.spawn(move || {
                     let mut sibling = Run::of_clock(clock);
-                    let checker = Checker::new(&mut *v, Some(p.deadline));
-                    let mut search = p.search(checker, space, strategy);
-                    drive(&mut search, &mut sibling, rival)
+                    run_lane(&mut *v, lane, p, &mut sibling, rival)
                 })
             })
             .collect();
-        let mut main = p.search(
-            Checker::new(validator, Some(p.deadline)),
-            first_space,
-            first,
-        );
-        let mine = drive(&mut main, run, &rival);
-        if matches!(mine, Outcome::Failed(Failure::Cancelled, ..)) {
-            rival.stop.store(true, Ordering::Relaxed);
-        }
-        let mut all = vec![mine];
+        let mut all = run_lane(validator, first, p, run, &rival);
         for h in handles {
-            // A search that panicked is a bug; it loses the race rather than
-            // taking the call down.
-            all.push(h.join().unwrap_or(Outcome::Outrun));
+            // A search that panicked is a bug; its lane loses the race rather
+            // than taking the call down.
+            all.extend(h.join().unwrap_or_else(|_| vec![Outcome::Outrun]));
         }
         all
     });
     winner(outcomes)
 }
 
-/// [`race`] on one thread: the search with the least work so far (the first on
-/// a tie) takes the next iteration; the first search's run reports progress, and
-/// its cancellation stops the others.
-fn interleave(searches: &mut [Search<'_, '_>], run: &mut Run<'_>, rival: &Rival) -> Vec<Outcome> {
-    let mut runs: Vec<Run<'_>> = (1..searches.len()).map(|_| run.sibling()).collect();
-    let mut done: Vec<Option<Outcome>> = searches.iter().map(|_| None).collect();
-    while let Some(i) = (0..searches.len())
-        .filter(|&i| done[i].is_none())
-        .min_by_key(|&i| (searches[i].work(), i))
-    {
-        let r = if i == 0 { &mut *run } else { &mut runs[i - 1] };
-        if let Some(o) = step(&mut searches[i], r, rival) {
-            if i == 0 && matches!(o, Outcome::Failed(Failure::Cancelled, ..)) {
+/// The outcomes of one lane's searches, interleaved on this thread through views
+/// of `validator`.
+fn run_lane(
+    validator: &mut dyn MotionValidator,
+    lane: Vec<(Strategy, &PlanningSpace)>,
+    p: &Problem<'_>,
+    run: &mut Run<'_>,
+    rival: &Rival,
+) -> Vec<Outcome> {
+    let shared = RefCell::new(validator);
+    let mut views: Vec<Shared<'_, '_>> = lane.iter().map(|_| Shared(&shared)).collect();
+    let mut searches = vec![p.searches(&mut views, lane)];
+    interleave(&mut searches, run, rival)
+}
+
+/// Runs `lanes` of searches on this thread to their outcomes (lane by lane,
+/// search by search): the lane with the least work so far (the first on a tie)
+/// advances its search with the least work so far by one iteration, so each
+/// lane's schedule, and with it the cost of every path, is the same whether the
+/// lanes share this thread or run on threads of their own. The first search's
+/// run reports progress, and its cancellation stops the others.
+fn interleave(lanes: &mut [Vec<Search<'_, '_>>], run: &mut Run<'_>, rival: &Rival) -> Vec<Outcome> {
+    let total: usize = lanes.iter().map(Vec::len).sum();
+    let mut runs: Vec<Run<'_>> = (1..total).map(|_| run.sibling()).collect();
+    let mut done: Vec<Vec<Option<Outcome>>> = lanes
+        .iter()
+        .map(|l| l.iter().map(|_| None).collect())
+        .collect();
+    let lane_work = |lane: &[Search<'_, '_>]| lane.iter().map(Search::work).sum::<u64>();
+    loop {
+        let open = |l: usize, i: usize, done: &Vec<Vec<Option<Outcome>>>| done[l][i].is_none();
+        let Some(l) = (0..lanes.len())
+            .filter(|&l| (0..lanes[l].len()).any(|i| open(l, i, &done)))
+            .min_by_key(|&l| (lane_work(&lanes[l]), l))
+        else {
+            break;
+        };
+        let i = (0..lanes[l].len())
+            .filter(|&i| open(l, i, &done))
+            .min_by_key(|&i| (lanes[l][i].work(), i))
+            .expect("an open search");
+        let work = lane_work(&lanes[l]);
+        let flat = lanes[..l].iter().map(Vec::len).sum::<usize>() + i;
+        let r = if flat == 0 {
+            &mut *run
+        } else {
+            &mut runs[flat - 1]
+        };
+        if let Some(o) = step(&mut lanes[l][i], work, r, rival) {
+            if flat == 0 && matches!(o, Outcome::Failed(Failure::Cancelled, ..)) {
                 rival.stop.store(true, Ordering::Relaxed);
             }
-            done[i] = Some(o);
+            done[l][i] = Some(o);
         }
     }
-    done.into_iter().flatten().collect()
+    done.into_iter().flatten().flatten().collect()
 }
 
 /// A view of one validator shared by the searches of an interleaved race (one
@@ -761,15 +819,18 @@ impl MotionValidator for Shared<'_, '_> {
 /// lets the trees creep through narrow passages.
 ///
 /// **Scale-free defaults** (`step: None`): every length comes from the problem
-/// ([`ProblemScale`]), and two searches race, each on its own core (on a
-/// [`fork`](MotionValidator::fork) of the validator): a long-range search
+/// ([`ProblemScale`]), and three searches race on two cores: a long-range search
 /// ([`ProblemScale::range`], explored at [`ProblemScale::resolution`], no
-/// fallbacks — open, twisting spaces) and the narrow-passage search
+/// fallbacks — open, twisting spaces) on this thread, and on a second thread (a
+/// [`fork`](MotionValidator::fork) of the validator) the narrow-passage search
 /// ([`ProblemScale::narrow_step`] with every measure of [`NarrowPassage`] and the
-/// lattice — tight assembly clearances). The path found with the least work
-/// (pose-check units) wins, whichever thread finished first: a search stops only
-/// once it has done more work than a path already found took, so the same seed
-/// gives the same path. Counts in the returned path are the winning search's.
+/// lattice — tight assembly clearances) interleaved with a second long-range
+/// search on another random stream (the long-range search's time to a path varies
+/// by 10× over seeds; a second draw cuts the tail). The path found at the lowest
+/// cost wins, whichever thread finished first: a path's cost is the work
+/// (pose-check units) its thread had done when it was found, and a thread stops
+/// only once its work is past the lowest cost found, so the same seed gives the
+/// same path. Counts in the returned path are the winning search's.
 ///
 /// # Errors
 /// Invalid options, bounds or non-finite poses.
@@ -787,21 +848,12 @@ pub fn rrt_connect(
         "rrt_connect"
     };
     options.validate()?;
-    space.validate()?;
-    PlanError::pose("start", start)?;
-    PlanError::pose("goal", goal)?;
-    let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator, Some(run.deadline()));
-    if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
-        return Ok(PlannedPath::failed(
-            name,
-            f,
-            0,
-            0,
-            &checker,
-            run.elapsed_ms(),
-        ));
-    }
+    let ends = (start, Some(goal));
+    let (mut run, mut checker) =
+        match begin(name, validator, space, ends, options.limits, progress)? {
+            Begun::Ready(run, checker) => (run, checker),
+            Begun::Refused(path) => return Ok(path),
+        };
     // A free straight line is the answer, found with one edge check before any tree
     // grows: a sampling search almost never draws it when the passage around it is
     // tight (a plate slid onto a pin with 0.2 mm clearance).
@@ -818,13 +870,18 @@ pub fn rrt_connect(
         ));
     }
     let seed = options.limits.seed;
-    let strategies = match options.step {
-        Some(step) => vec![Strategy::explicit(options, space, step)],
+    let lanes = match options.step {
+        Some(step) => vec![vec![Strategy::explicit(options, space, step)]],
         None => {
             let scale = checker.scale(space);
+            let long_range = Strategy::long_range(options, space, &scale);
+            let second = Strategy {
+                stream: Strategy::SECOND_LONG_RANGE_STREAM,
+                ..long_range.clone()
+            };
             vec![
-                Strategy::long_range(options, space, &scale),
-                Strategy::narrow(options, space, &scale),
+                vec![long_range],
+                vec![Strategy::narrow(options, space, &scale), second],
             ]
         }
     };
@@ -837,7 +894,7 @@ pub fn rrt_connect(
         seed,
         deadline: run.deadline(),
     };
-    let outcome = race(&mut *validator, strategies, &problem, &mut run);
+    let outcome = race(&mut *validator, lanes, &problem, &mut run);
     let mut checker = Checker::new(validator, Some(run.deadline()));
     match outcome {
         Outcome::Found {
@@ -1098,5 +1155,96 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The goal tree's edges are certified from parent to child and run backwards
+    /// in the path: the validator's verdict must not depend on the direction. This
+    /// edge of the window scene (k = 1, seed 2, the second long-range search's
+    /// path) grazes the window's frame: swept from its first pose it was refused,
+    /// from its second accepted, and the path failed its own edge check.
+    #[test]
+    fn an_edge_has_the_same_verdict_both_ways() {
+        let (mut v, ..) = window(1.0);
+        let pose = |m: [[f64; 4]; 4]| Transform::from_matrix(&m).unwrap();
+        let a = pose([
+            [
+                0.9885727391935328,
+                -0.12498714508365366,
+                0.0842742717988983,
+                0.0,
+            ],
+            [
+                -0.06556757308729438,
+                0.1468835829871868,
+                0.9869782704843557,
+                0.0,
+            ],
+            [
+                -0.13573810328289984,
+                -0.9812254718527671,
+                0.137010002205959,
+                0.0,
+            ],
+            [
+                -2.669005523283383,
+                -1.3046986378261967,
+                -0.9715228055244611,
+                1.0,
+            ],
+        ]);
+        let b = pose([
+            [
+                0.9509198006394701,
+                0.10909576000420058,
+                0.2895680367390304,
+                0.0,
+            ],
+            [
+                -0.3083368368000792,
+                0.2552090752573958,
+                0.9164042355742286,
+                0.0,
+            ],
+            [
+                0.026075425670771396,
+                -0.9607114254839331,
+                0.276321604513142,
+                0.0,
+            ],
+            [
+                11.305915399783231,
+                -2.0120772362623,
+                -1.396330613993733,
+                1.0,
+            ],
+        ]);
+        assert!(v.is_free(&a) && v.is_free(&b));
+        assert_eq!(v.edge_free(&a, &b), v.edge_free(&b, &a));
+        // And on random short edges between free poses about the window's frame.
+        let mut rng = Rng::new(7);
+        let mut u = |h: f64| (2.0 * rng.uniform() - 1.0) * h;
+        let (mut near_contact, mut tried) = (0, 0);
+        for _ in 0..3000 {
+            // From one side of the wall to the other, through or past the window.
+            let p = Transform::from_translation(Vec3::new(-9.0 + u(3.0), u(5.0), u(5.0)));
+            let q = Transform::from_translation(Vec3::new(9.0 + u(3.0), u(5.0), u(5.0)));
+            let turn = Transform::from_rotation_about(
+                Point3::from(q.translation()),
+                Vec3::new(u(1.0), u(1.0), u(1.0)).normalize(),
+                u(0.6),
+            )
+            .unwrap();
+            let q = q.then(&turn);
+            if v.is_free(&p) && v.is_free(&q) {
+                tried += 1;
+                let there = v.edge_free(&p, &q);
+                near_contact += usize::from(!there);
+                assert_eq!(there, v.edge_free(&q, &p), "{p:?} -> {q:?}");
+            }
+        }
+        assert!(
+            tried > 200 && near_contact > 10,
+            "{near_contact} blocked of {tried} edges: the sample misses the frame"
+        );
     }
 }

@@ -3,11 +3,11 @@
 use super::path::PlannedPath;
 use super::rrt::finish;
 use super::run::Failure;
-use super::run::{PlanError, PlanLimits, ProgressFn, Run};
+use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::Smoothing;
 use super::space::PlanningSpace;
-use super::tree::{check_ends, steer, Tree};
-use super::validator::{Checker, MotionValidator};
+use super::tree::{begin, steer, Begun, Tree};
+use super::validator::MotionValidator;
 use crate::math::{Rng, Transform};
 
 /// Largest accepted `max_nodes`: Floyd–Warshall is O(n³) in time and O(n²) in memory,
@@ -89,21 +89,12 @@ pub fn rrt_floyd(
 ) -> Result<PlannedPath, PlanError> {
     const NAME: &str = "rrt_floyd";
     options.validate()?;
-    space.validate()?;
-    PlanError::pose("start", start)?;
-    PlanError::pose("goal", goal)?;
-    let mut run = Run::new(options.limits, progress);
-    let mut checker = Checker::new(validator, Some(run.deadline()));
-    if let Some(f) = check_ends(&mut checker, space, start, Some(goal)) {
-        return Ok(PlannedPath::failed(
-            NAME,
-            f,
-            0,
-            0,
-            &checker,
-            run.elapsed_ms(),
-        ));
-    }
+    let ends = (start, Some(goal));
+    let (mut run, mut checker) =
+        match begin(NAME, validator, space, ends, options.limits, progress)? {
+            Begun::Ready(run, checker) => (run, checker),
+            Begun::Refused(path) => return Ok(path),
+        };
     let mut rng = Rng::new(options.limits.seed);
     let reference = start.rotation();
     let mut tree = Tree::new(*start, options.step * 1e-3);

@@ -266,16 +266,12 @@ fn plan(
     .expect("valid options")
 }
 
-const PLANNERS: [&str; 8] = [
-    "greedy_ant",
-    "rrt_floyd",
-    "rrt",
-    "biased_rrt",
-    "local_rrt",
-    "rrt_connect",
-    "rrt_connect_eager",
-    "rrt_connect_plain",
-];
+/// Every planner by name, and RRT-Connect eager and without its measures.
+fn planners() -> impl Iterator<Item = &'static str> {
+    super::request::PLANNER_NAMES
+        .into_iter()
+        .chain(["rrt_connect_eager", "rrt_connect_plain"])
+}
 
 /// The property every found path must have: it starts and ends where asked and is
 /// free in the exact scene at a resolution finer than the planner's.
@@ -317,7 +313,7 @@ fn every_planner_finds_a_free_path_around_an_obstacle() {
         z: true,
         max_angle: 0.5,
     });
-    for name in PLANNERS {
+    for name in planners() {
         let p = plan(name, &turn_z, &mut scene.clone(), &start, &goal, 1, 5000);
         assert_valid(&p, &scene, &start, Some(&goal));
         assert!(p.collision_checks() > 0);
@@ -328,7 +324,7 @@ fn every_planner_finds_a_free_path_around_an_obstacle() {
 fn same_seed_same_path() {
     let scene = slot_scene(2.0);
     let (start, goal) = (at(-30.0, 10.0, 10.0), at(30.0, -5.0, 0.0));
-    for name in PLANNERS {
+    for name in planners() {
         let a = plan(name, &space(), &mut scene.clone(), &start, &goal, 7, 3000);
         let b = plan(name, &space(), &mut scene.clone(), &start, &goal, 7, 3000);
         assert_eq!(a.failure, b.failure, "{name}");
@@ -341,7 +337,7 @@ fn same_seed_same_path() {
 fn sealed_box_fails_within_limits_with_a_reason() {
     let scene = sealed_scene();
     let (start, goal) = (at(0.0, 0.0, 0.0), at(40.0, 0.0, 0.0));
-    for name in PLANNERS {
+    for name in planners() {
         let p = plan(name, &space(), &mut scene.clone(), &start, &goal, 3, 300);
         assert!(!p.found(), "{name}");
         assert!(p.poses.is_empty());
@@ -361,7 +357,7 @@ fn sealed_box_fails_within_limits_with_a_reason() {
 #[test]
 fn colliding_or_outside_ends_are_reported() {
     let scene = open_scene();
-    for name in PLANNERS {
+    for name in planners() {
         let p = plan(
             name,
             &space(),

@@ -3,9 +3,10 @@
 #[cfg(test)]
 use super::nearest::metric;
 use super::nearest::{metric_below, KdIndex};
-use super::run::Failure;
+use super::path::PlannedPath;
+use super::run::{Failure, PlanError, PlanLimits, ProgressFn, Run};
 use super::space::PlanningSpace;
-use super::validator::Checker;
+use super::validator::{Checker, MotionValidator};
 use crate::math::{Rng, Transform, Vec3};
 use nalgebra::UnitQuaternion;
 use std::collections::HashSet;
@@ -349,8 +350,48 @@ pub(crate) fn steer(
     }
 }
 
+/// How a planning call begins ([`begin`]).
+pub(crate) enum Begun<'v, 'p> {
+    /// The run (limits, deadline, progress) and the checker to plan with.
+    Ready(Run<'p>, Checker<'v>),
+    /// The ends are out of bounds or in collision: the failed path to return.
+    Refused(PlannedPath),
+}
+
+/// The first steps of every planning call from `start` (to `goal`, when the
+/// target is one pose): the bounds and poses are checked (an error when they are
+/// invalid or not finite), the run starts on `limits` with `progress`, and the
+/// ends are checked for bounds and collisions through `validator`.
+pub(crate) fn begin<'v, 'p>(
+    planner: &'static str,
+    validator: &'v mut dyn MotionValidator,
+    space: &PlanningSpace,
+    (start, goal): (&Transform, Option<&Transform>),
+    limits: PlanLimits,
+    progress: Option<ProgressFn<'p>>,
+) -> Result<Begun<'v, 'p>, PlanError> {
+    space.validate()?;
+    PlanError::pose("start", start)?;
+    if let Some(g) = goal {
+        PlanError::pose("goal", g)?;
+    }
+    let run = Run::new(limits, progress);
+    let mut checker = Checker::new(validator, Some(run.deadline()));
+    Ok(match check_ends(&mut checker, space, start, goal) {
+        Some(f) => Begun::Refused(PlannedPath::failed(
+            planner,
+            f,
+            0,
+            0,
+            &checker,
+            run.elapsed_ms(),
+        )),
+        None => Begun::Ready(run, checker),
+    })
+}
+
 /// Bounds then collision checks of the start (and goal, when there is one).
-pub(crate) fn check_ends(
+fn check_ends(
     checker: &mut Checker<'_>,
     space: &PlanningSpace,
     start: &Transform,

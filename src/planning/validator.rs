@@ -114,7 +114,7 @@ pub trait MotionValidator {
 
     /// An independent copy of this validator for another thread (same geometry and
     /// rule, its own counters and deadline), or `None` when it cannot be copied.
-    /// The default planner races two searches with it, one per core
+    /// The default planner races its searches on two cores with it
     /// ([`rrt_connect`](super::rrt_connect)); without a copy it interleaves them on
     /// one thread, with the same result.
     fn fork(&self) -> Option<Box<dyn MotionValidator + Send>> {
