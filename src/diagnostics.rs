@@ -152,6 +152,86 @@ fn excerpt(line: &str, column: Option<usize>) -> (String, Option<usize>) {
     (shown, col_in)
 }
 
+/// A name an error carries: a component's, a mate's, a part's, a robot's, a key's, as
+/// the user wrote it. Shown as written (`Display` and `Debug` are the text's own, so a
+/// message reads the same as with a plain `String`); compared with text.
+#[derive(Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+pub struct Name(String);
+
+impl Name {
+    /// The name as text.
+    pub fn as_str(&self) -> &str {
+        &self.0
+    }
+}
+
+impl fmt::Display for Name {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(&self.0, f)
+    }
+}
+
+impl fmt::Debug for Name {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(&self.0, f)
+    }
+}
+
+impl std::ops::Deref for Name {
+    type Target = str;
+    fn deref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl AsRef<str> for Name {
+    fn as_ref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl From<String> for Name {
+    fn from(s: String) -> Self {
+        Name(s)
+    }
+}
+
+impl From<&str> for Name {
+    fn from(s: &str) -> Self {
+        Name(s.to_string())
+    }
+}
+
+impl From<&String> for Name {
+    fn from(s: &String) -> Self {
+        Name(s.clone())
+    }
+}
+
+impl From<Name> for String {
+    fn from(n: Name) -> Self {
+        n.0
+    }
+}
+
+impl PartialEq<str> for Name {
+    fn eq(&self, other: &str) -> bool {
+        self.0 == other
+    }
+}
+
+impl PartialEq<&str> for Name {
+    fn eq(&self, other: &&str) -> bool {
+        self.0 == *other
+    }
+}
+
+impl PartialEq<String> for Name {
+    fn eq(&self, other: &String) -> bool {
+        &self.0 == other
+    }
+}
+
 /// `text` cut to at most `max` characters, with `…` where it was cut: for quoting a
 /// user's value (which may be megabytes long) in an error message.
 pub fn shorten(text: &str, max: usize) -> String {
@@ -420,6 +500,18 @@ pub(crate) fn nested_comment_end(b: &[u8], start: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_name_reads_as_its_text() {
+        let n = Name::from("plate-1");
+        assert_eq!(n.to_string(), "plate-1");
+        assert_eq!(format!("{n:?}"), format!("{:?}", "plate-1"));
+        assert_eq!(format!("`{n:>9}`"), "`  plate-1`");
+        assert_eq!(n, "plate-1");
+        assert_ne!(n, "plate-2");
+        assert_eq!(String::from(n.clone()), "plate-1");
+        assert!(n.starts_with("plate"));
+    }
 
     #[test]
     fn nested_comments_end_after_their_last_close() {

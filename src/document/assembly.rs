@@ -143,13 +143,13 @@ impl Document {
                     .owning_sub_document(&c.name)
                     .is_some_and(|a| a.name == name || a.name.starts_with(&prefix));
                 if c.fixed && !moves_with_its_file {
-                    return Err(DocumentError::FixedComponent(c.name.clone()));
+                    return Err(DocumentError::FixedComponent(c.name.clone().into()));
                 }
                 // a robot inside moves with it (its base in the sub-assembly's frame)
                 if let Some(robot) = self.driving_robot(i).filter(|r| !inside(r)) {
                     return Err(DocumentError::RobotLink {
-                        component: c.name.clone(),
-                        robot: robot.to_string(),
+                        component: c.name.clone().into(),
+                        robot: robot.into(),
                     });
                 }
             }

@@ -147,7 +147,7 @@ impl Document {
         let i = self.mate_index(name)?;
         if aligned.is_some() && self.mate_alignment(name)?.is_none() {
             return Err(DocumentError::NoAlignment {
-                mate: self.mates[i].name.clone(),
+                mate: self.mates[i].name.clone().into(),
                 change: "set",
             });
         }
@@ -163,7 +163,7 @@ impl Document {
         let now = self
             .mate_alignment(name)?
             .ok_or_else(|| DocumentError::NoAlignment {
-                mate: name.to_string(),
+                mate: name.into(),
                 change: "flip",
             })?;
         self.set_mate_aligned(name, Some(!now))
@@ -178,11 +178,11 @@ impl Document {
             return Err(DocumentError::NameTaken { what: "mate", name });
         }
         let entry = |e: super::EntryError| DocumentError::MateEntity {
-            mate: name.clone(),
+            mate: name.clone().into(),
             source: Box::new(e),
         };
         let bad = |problem| DocumentError::BadMate {
-            mate: name.clone(),
+            mate: name.clone().into(),
             problem,
         };
         let ea = self
@@ -295,7 +295,7 @@ impl Document {
             .chars()
             .any(|c| c.is_control() && c != '\n' && c != '\t')
         {
-            return Err(DocumentError::PropertyControl { key });
+            return Err(DocumentError::PropertyControl { key: key.into() });
         }
         self.properties_mut(owner)?.insert(key, value.to_string());
         self.revision += 1;
@@ -366,7 +366,7 @@ impl Document {
         }
         if self.generated.contains(&self.components[i].part) {
             return Err(DocumentError::UrdfLink {
-                component: self.components[i].name.clone(),
+                component: self.components[i].name.clone().into(),
                 edit: LinkEdit::Rename,
             });
         }
@@ -388,7 +388,7 @@ impl Document {
         let part = self.part(part)?.name.clone();
         if self.generated.contains(&self.components[i].part) {
             return Err(DocumentError::UrdfLink {
-                component: name.to_string(),
+                component: name.into(),
                 edit: LinkEdit::ReplacePart,
             });
         }
@@ -443,7 +443,7 @@ impl Document {
             .and_then(|d| d.canonicalize().ok())
             .unwrap_or_else(|| project.root().to_path_buf());
         let invalid = |source| DocumentError::PartMesh {
-            part: name.clone(),
+            part: name.clone().into(),
             source,
         };
         let mesh_path = project
@@ -485,8 +485,8 @@ impl Document {
         let part = self.part(part)?.name.clone();
         let name = super::new_name(name, "reference name")?;
         let bad = |problem| DocumentError::BadReference {
-            part: part.clone(),
-            reference: name.clone(),
+            part: part.clone().into(),
+            reference: name.clone().into(),
             problem,
         };
         if name.is_empty() || Reference::BUILTIN_NAMES.contains(&name.as_str()) {
@@ -543,7 +543,7 @@ impl Document {
     /// afresh.
     pub fn add_part_file(&mut self, name: &str, file: &str) -> Result<String, DocumentError> {
         let project = Project::for_file(&self.path).map_err(|e| DocumentError::PartMesh {
-            part: name.to_string(),
+            part: name.into(),
             source: PartMeshError::Project(e.into()),
         })?;
         self.add_part(name, file, &project, &mut MeshCache::new())

@@ -3,7 +3,7 @@
 use super::equations::EquationError;
 use super::mates::SolveError;
 use super::robot;
-use crate::diagnostics::SourceError;
+use crate::diagnostics::{Name, SourceError};
 use std::path::PathBuf;
 
 /// Why a document operation failed. Load errors carry file, line and column.
@@ -48,13 +48,13 @@ pub enum DocumentError {
     #[error("custom property `{key}`: the value holds a control character")]
     PropertyControl {
         /// The property's name.
-        key: String,
+        key: Name,
     },
     /// A mate that joins points or coordinate systems has no alignment to set or flip.
     #[error("mate `{mate}` joins points or coordinate systems: it has no alignment to {change}")]
     NoAlignment {
         /// The mate.
-        mate: String,
+        mate: Name,
         /// "set" or "flip".
         change: &'static str,
     },
@@ -71,7 +71,7 @@ pub enum DocumentError {
     })]
     UrdfLink {
         /// The component.
-        component: String,
+        component: Name,
         /// What was asked of it.
         edit: LinkEdit,
     },
@@ -79,9 +79,9 @@ pub enum DocumentError {
     #[error("component `{component}` is a link of robot `{robot}`: it goes with the robot")]
     RobotLinkRemoval {
         /// The component asked to be removed.
-        component: String,
+        component: Name,
         /// The robot it is a link of.
-        robot: String,
+        robot: Name,
     },
     /// A component with mates, removed without its mates ([`super::RemoveMates::Refuse`]).
     #[error(
@@ -90,7 +90,7 @@ pub enum DocumentError {
     )]
     HasMates {
         /// The component.
-        component: String,
+        component: Name,
         /// Its mates' names.
         mates: Vec<String>,
     },
@@ -98,7 +98,7 @@ pub enum DocumentError {
     #[error("mate `{mate}`: {problem}")]
     BadMate {
         /// The mate.
-        mate: String,
+        mate: Name,
         /// What is wrong.
         problem: MateProblem,
     },
@@ -106,7 +106,7 @@ pub enum DocumentError {
     #[error("mate `{mate}`: {source}")]
     MateEntity {
         /// The mate.
-        mate: String,
+        mate: Name,
         /// Which entity and why (boxed: the entry's kinds are large).
         source: Box<super::EntryError>,
     },
@@ -118,9 +118,9 @@ pub enum DocumentError {
     #[error("reference `{reference}` of part `{part}`: {problem}")]
     BadReference {
         /// The part.
-        part: String,
+        part: Name,
         /// The reference's name.
-        reference: String,
+        reference: Name,
         /// What is wrong.
         problem: ReferenceProblem,
     },
@@ -128,7 +128,7 @@ pub enum DocumentError {
     #[error("part `{part}`: {source}")]
     PartMesh {
         /// The part.
-        part: String,
+        part: Name,
         /// Why.
         source: PartMeshError,
     },
@@ -136,7 +136,7 @@ pub enum DocumentError {
     #[error("robot `{robot}`: {source}")]
     Urdf {
         /// The robot.
-        robot: String,
+        robot: Name,
         /// Why (boxed: the mesh problems are large).
         source: Box<UrdfRobotError>,
     },
@@ -230,27 +230,27 @@ pub enum DocumentError {
     #[error(
         "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"
     )]
-    Suppressed(String),
+    Suppressed(Name),
     /// A reference asked for as a coordinate system is another kind.
     #[error("reference `{reference}` of part `{part}` is a {kind}, not a coordinate system")]
     NotACoordinateSystem {
         /// The part.
-        part: String,
+        part: Name,
         /// The reference's name.
-        reference: String,
+        reference: Name,
         /// What it is (`plane`, `axis`, `point`).
         kind: &'static str,
     },
     /// Fixed components do not move.
     #[error("component `{0}` is fixed; set `fixed: false` to move it")]
-    FixedComponent(String),
+    FixedComponent(Name),
     /// A robot's links move with its joints, not on their own.
     #[error("component `{component}` is a link of robot `{robot}`: set the robot's joints (or base) to move it")]
     RobotLink {
         /// The component asked to move.
-        component: String,
+        component: Name,
         /// The robot that drives it.
-        robot: String,
+        robot: Name,
     },
     /// A value out of range for what it sets.
     #[error("{what}: {value} is out of range: {rule}")]
@@ -264,14 +264,14 @@ pub enum DocumentError {
     },
     /// A new robot's name is empty or taken.
     #[error("robot names must be unique and non-empty: `{0}`")]
-    RobotName(String),
+    RobotName(Name),
     /// A new robot would add a dimension that exists.
     #[error("robot `{robot}`: dimension `{dimension}` already exists")]
     DimensionTaken {
         /// The robot being added.
-        robot: String,
+        robot: Name,
         /// The dimension's full name.
-        dimension: String,
+        dimension: Name,
     },
     /// A name with a control or invisible character (they hide or reorder what is
     /// shown).
@@ -290,7 +290,7 @@ pub enum DocumentError {
         /// The target path.
         path: PathBuf,
         /// The part whose mesh it is.
-        part: String,
+        part: Name,
     },
     /// A robot refused an operation (kinematics, joint limits, program).
     #[error(transparent)]
@@ -635,9 +635,9 @@ pub enum UrdfRobotError {
     #[error("the part or component `{name}` (made for link `{link}` of the URDF) already exists")]
     LinkNameTaken {
         /// The generated name.
-        name: String,
+        name: Name,
         /// The link.
-        link: String,
+        link: Name,
     },
 }
 

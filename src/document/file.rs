@@ -212,7 +212,7 @@ pub struct AssemblyFile {
 }
 
 /// A component: an instance of a part at a pose.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ComponentFile {
     /// Unique component name (SolidWorks style `part-1` or anything); inside a
@@ -266,15 +266,8 @@ impl ComponentFile {
         ComponentFile {
             name: name.into(),
             part: part.into(),
-            fixed: false,
-            color: None,
             transform,
-            mass: None,
-            threaded: false,
-            fixture: false,
-            suppressed: false,
-            hidden: false,
-            properties: IndexMap::new(),
+            ..ComponentFile::default()
         }
     }
 }

@@ -274,7 +274,7 @@ impl Mate {
         let [a, b] = &self.entities;
         check_entities(self.kind, &a.geometry, &b.geometry, self.aligned).map_err(|e| {
             super::DocumentError::MateEntity {
-                mate: self.name.clone(),
+                mate: self.name.clone().into(),
                 source: Box::new(e),
             }
         })

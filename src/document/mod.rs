@@ -301,7 +301,10 @@ impl Document {
                 .unwrap_or_else(|| format!("link{i}"));
             let name = robot::urdf_component_name(robot_name, &link);
             if self.parts.contains_key(&name) || self.by_name.contains_key(&name) {
-                return Err(UrdfRobotError::LinkNameTaken { name, link });
+                return Err(UrdfRobotError::LinkNameTaken {
+                    name: name.into(),
+                    link: link.into(),
+                });
             }
             self.parts.insert(
                 name.clone(),
@@ -466,12 +469,12 @@ impl Document {
             return Ok(());
         }
         if self.components[i].fixed {
-            return Err(DocumentError::FixedComponent(name.to_string()));
+            return Err(DocumentError::FixedComponent(name.into()));
         }
         if let Some(robot) = self.driving_robot(i) {
             return Err(DocumentError::RobotLink {
-                component: name.to_string(),
-                robot: robot.to_string(),
+                component: name.into(),
+                robot: robot.into(),
             });
         }
         self.components[i].transform = t;
@@ -551,7 +554,7 @@ impl Document {
         })?;
         r.coordinate_system()
             .ok_or_else(|| DocumentError::NotACoordinateSystem {
-                part: p.name.clone(),
+                part: p.name.clone().into(),
                 reference: name.into(),
                 kind: r.kind_name(),
             })

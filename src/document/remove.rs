@@ -30,8 +30,8 @@ impl Document {
         let name = self.components[i].name.clone();
         if let Some(robot) = self.driving_robot(i) {
             return Err(DocumentError::RobotLinkRemoval {
-                component: name,
-                robot: robot.to_string(),
+                component: name.into(),
+                robot: robot.into(),
             });
         }
         let touches = |m: &Mate| {
@@ -41,7 +41,7 @@ impl Document {
         let own: Vec<&Mate> = self.mates.iter().filter(|m| touches(m)).collect();
         if !own.is_empty() && mates == RemoveMates::Refuse {
             return Err(DocumentError::HasMates {
-                component: name,
+                component: name.into(),
                 mates: own.iter().map(|m| m.name.clone()).collect(),
             });
         }

@@ -1070,8 +1070,8 @@ impl Document {
             .find(|d| taken.contains(d))
         {
             return Err(DocumentError::DimensionTaken {
-                robot: file.name.clone(),
-                dimension: d,
+                robot: file.name.clone().into(),
+                dimension: d.into(),
             });
         }
         Ok(inst)
@@ -1092,7 +1092,7 @@ impl Document {
         let name = super::new_name(name, "robot")?;
         let name = name.as_str();
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
-            return Err(DocumentError::RobotName(name.to_string()));
+            return Err(DocumentError::RobotName(name.into()));
         }
         if let Some(a) = self.owning_sub_document(name) {
             return Err(DocumentError::RobotInSubDocument {
@@ -1144,11 +1144,11 @@ impl Document {
         let name = super::new_name(name, "robot")?;
         let name = name.as_str();
         let invalid = |source| DocumentError::Urdf {
-            robot: name.to_string(),
+            robot: name.into(),
             source: Box::new(source),
         };
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
-            return Err(DocumentError::RobotName(name.to_string()));
+            return Err(DocumentError::RobotName(name.into()));
         }
         if let Some(a) = self.owning_sub_document(name) {
             return Err(DocumentError::RobotInSubDocument {

@@ -237,7 +237,7 @@ impl Document {
         {
             return Err(DocumentError::OverMesh {
                 path: path.to_path_buf(),
-                part: p.name.clone(),
+                part: p.name.clone().into(),
             });
         }
         let expected = (target == canonical_target(&self.path))

@@ -6,6 +6,12 @@ use super::Context;
 use rhai::{Engine, FuncRegistration, RhaiNativeFunc};
 use std::sync::Arc;
 
+/// What a registered function may return: what Rhai keeps in a `Dynamic` (with its
+/// `sync` feature: cloneable, shared between threads, no borrowed data).
+pub trait Returned: Clone + Send + Sync + 'static {}
+
+impl<T: Clone + Send + Sync + 'static> Returned for T {}
+
 /// One documented script function or property.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ApiEntry {
@@ -94,13 +100,7 @@ impl<'e> Api<'e> {
         self.engine.register_type_with_name::<T>(name);
     }
 
-    fn add<
-        A: 'static,
-        const N: usize,
-        const X: bool,
-        R: Clone + Send + Sync + 'static,
-        const F: bool,
-    >(
+    fn add<A: 'static, const N: usize, const X: bool, R: Returned, const F: bool>(
         &mut self,
         name: String,
         signature: &str,
@@ -130,13 +130,7 @@ impl<'e> Api<'e> {
     }
 
     /// Registers a function or operator.
-    pub fn f<
-        A: 'static,
-        const N: usize,
-        const X: bool,
-        R: Clone + Send + Sync + 'static,
-        const F: bool,
-    >(
+    pub fn f<A: 'static, const N: usize, const X: bool, R: Returned, const F: bool>(
         &mut self,
         signature: &str,
         doc: &str,
@@ -149,13 +143,7 @@ impl<'e> Api<'e> {
     /// same `signature` (no entry of its own in the reference): Rhai picks it when
     /// the argument types match exactly, skipping the `Dynamic` conversions of the
     /// general form.
-    pub fn overload<
-        A: 'static,
-        const N: usize,
-        const X: bool,
-        R: Clone + Send + Sync + 'static,
-        const F: bool,
-    >(
+    pub fn overload<A: 'static, const N: usize, const X: bool, R: Returned, const F: bool>(
         &mut self,
         signature: &str,
         func: impl RhaiNativeFunc<A, N, X, R, F> + Send + Sync + 'static,
@@ -165,13 +153,7 @@ impl<'e> Api<'e> {
     }
 
     /// Registers a property getter (`Type.prop -> R`).
-    pub fn get<
-        A: 'static,
-        const N: usize,
-        const X: bool,
-        R: Clone + Send + Sync + 'static,
-        const F: bool,
-    >(
+    pub fn get<A: 'static, const N: usize, const X: bool, R: Returned, const F: bool>(
         &mut self,
         signature: &str,
         doc: &str,

@@ -267,7 +267,7 @@ impl Setup {
         let mut boxes = Vec::with_capacity(n);
         for (i, name) in names.iter().enumerate() {
             if doc.mesh_of(i).vertices.is_empty() {
-                return Err(WorkspaceError::EmptyMesh(name.clone()).into());
+                return Err(WorkspaceError::EmptyMesh(name.clone().into()).into());
             }
             boxes.push(scene.colliders[i].world_bounds(&scene.poses[i]));
         }

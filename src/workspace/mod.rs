@@ -50,6 +50,7 @@ pub const DEFAULT_CLEARANCE_SEARCH_MM: f64 = 1000.0;
 use crate::collision::{
     CollisionError, Contact, Method, Motion, PairContact, SweepHit, SweepOptions, DEFAULT_TOLERANCE,
 };
+use crate::diagnostics::Name;
 use crate::document::{Document, DocumentError};
 use crate::math::Transform;
 use crate::planning::PlanError;
@@ -109,13 +110,13 @@ pub enum WorkspaceError {
     #[error(
         "component `{0}` is fixed: planners never move fixed components (set `fixed: false` first)"
     )]
-    FixedComponent(String),
+    FixedComponent(Name),
     /// A pair query names the same component twice.
     #[error("`{0}` is checked against itself")]
-    SameComponent(String),
+    SameComponent(Name),
     /// The component's mesh has no vertices.
     #[error("the mesh of component `{0}` is empty")]
-    EmptyMesh(String),
+    EmptyMesh(Name),
     /// An option has a value the request cannot use.
     #[error("invalid option `{option}` = {value}: expected {expected}")]
     InvalidOption {
@@ -140,9 +141,9 @@ pub enum WorkspaceError {
     #[error("`{a}` and `{b}`: {source}")]
     Overlap {
         /// The first component.
-        a: String,
+        a: Name,
         /// The second component.
-        b: String,
+        b: Name,
         /// Why.
         #[source]
         source: crate::collision::VolumeError,
@@ -151,7 +152,7 @@ pub enum WorkspaceError {
     #[error("{}{source}", if component.is_empty() { String::new() } else { format!("component `{component}`: ") })]
     Mass {
         /// The component.
-        component: String,
+        component: Name,
         /// Why.
         #[source]
         source: crate::mesh::MassError,
@@ -161,8 +162,8 @@ pub enum WorkspaceError {
 impl WorkspaceError {
     fn overlap(a: &str, b: &str, source: crate::collision::VolumeError) -> Self {
         WorkspaceError::Overlap {
-            a: a.to_string(),
-            b: b.to_string(),
+            a: a.into(),
+            b: b.into(),
             source,
         }
     }
@@ -224,7 +225,9 @@ impl<'d> Workspace<'d> {
     pub fn index(&self, name: &str) -> Result<usize, WorkspaceError> {
         let i = self.doc.component_index(name)?;
         if self.doc.components()[i].is_suppressed() {
-            return Err(DocumentError::Suppressed(self.doc.components()[i].name.clone()).into());
+            return Err(
+                DocumentError::Suppressed(self.doc.components()[i].name.clone().into()).into(),
+            );
         }
         Ok(i)
     }
@@ -245,7 +248,7 @@ impl<'d> Workspace<'d> {
     fn pair(&self, a: &str, b: &str) -> Result<(usize, usize), WorkspaceError> {
         let (ia, ib) = (self.index(a)?, self.index(b)?);
         if ia == ib {
-            return Err(WorkspaceError::SameComponent(a.to_string()));
+            return Err(WorkspaceError::SameComponent(a.into()));
         }
         Ok((ia, ib))
     }

@@ -122,14 +122,14 @@ pub fn mass_properties(
         };
         let m = MassProperties::of_mesh_with(doc.mesh_of(i), spec).map_err(|e| {
             WorkspaceError::Mass {
-                component: c.name.clone(),
+                component: c.name.clone().into(),
                 source: e,
             }
         })?;
         bodies.push(m.moved(&c.transform));
     }
     MassProperties::combine(&bodies).map_err(|e| WorkspaceError::Mass {
-        component: String::new(),
+        component: crate::diagnostics::Name::default(),
         source: e,
     })
 }

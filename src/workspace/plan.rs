@@ -123,7 +123,7 @@ impl Workspace<'_> {
         self.document()
             .mesh_of(index)
             .bounds()
-            .ok_or_else(|| WorkspaceError::EmptyMesh(name.to_string()))
+            .ok_or_else(|| WorkspaceError::EmptyMesh(name.into()))
     }
 
     /// The box of every component but `name` (world, mm): the product a
@@ -203,7 +203,7 @@ impl Workspace<'_> {
     ) -> Result<Problem, WorkspaceError> {
         let index = self.index(name)?;
         if self.document().components()[index].fixed {
-            return Err(WorkspaceError::FixedComponent(name.to_string()));
+            return Err(WorkspaceError::FixedComponent(name.into()));
         }
         // Bad options are refused before the validator's meshes and trees are built.
         request.planner.validate()?;

@@ -18,6 +18,8 @@
 
 use fitup::document::Document;
 use fitup::kinematics::IkOptions;
+#[path = "demo_mz07.rs"]
+mod demo_mz07;
 use fitup::math::{Transform, Vec3};
 use fitup::planning::Planner;
 use fitup::script::{Caches, Context, Limits, Project};
@@ -146,16 +148,7 @@ fn rust_ns(n: usize, mut f: impl FnMut()) -> f64 {
 }
 
 fn main() {
-    let dir = tempfile::tempdir().unwrap();
-    fitup::demo::write_robots(&dir.path().join("models")).unwrap();
-    std::fs::create_dir(dir.path().join("scripts")).unwrap();
-    let doc = Document::open(&dir.path().join("models/mz07.yaml")).unwrap();
-    let robot = doc.robot("mz07").unwrap().robot().clone();
-    let q: Vec<f64> = [10.0f64, -20.0, 30.0, 40.0, -50.0, 60.0]
-        .iter()
-        .map(|v| v.to_radians())
-        .collect();
-    let target = robot.tcp_pose(&q).unwrap();
+    let (dir, robot, q, target) = demo_mz07::demo_mz07();
     let every = IkOptions::every_branch();
     std::fs::write(dir.path().join("models/ur5e.yaml"), UR5E_YAML).unwrap();
     let ur_doc = Document::open(&dir.path().join("models/ur5e.yaml")).unwrap();

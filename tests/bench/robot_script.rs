@@ -5,8 +5,9 @@
 //!
 //! Run: `cargo bench --bench robot_script`
 
-use fitup::document::Document;
 use fitup::kinematics::IkOptions;
+#[path = "demo_mz07.rs"]
+mod demo_mz07;
 #[path = "rhai_timing.rs"]
 mod rhai_timing;
 
@@ -35,16 +36,7 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 fn main() {
-    let dir = tempfile::tempdir().unwrap();
-    fitup::demo::write_robots(&dir.path().join("models")).unwrap();
-    std::fs::create_dir(dir.path().join("scripts")).unwrap();
-    let doc = Document::open(&dir.path().join("models/mz07.yaml")).unwrap();
-    let robot = doc.robot("mz07").unwrap().robot().clone();
-    let q: Vec<f64> = [10.0f64, -20.0, 30.0, 40.0, -50.0, 60.0]
-        .iter()
-        .map(|v| v.to_radians())
-        .collect();
-    let target = robot.tcp_pose(&q).unwrap();
+    let (dir, robot, q, target) = demo_mz07::demo_mz07();
     let opts = IkOptions::default();
     let empty = format!("for i in 0..{N} {{ let x = q; }}");
     let fk = format!("for i in 0..{N} {{ let x = arm.fk(q); }}");

@@ -12,30 +12,41 @@
 
 use crate::common;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-/// How many times the swapper swaps (each swap: the folder away, a link in its place,
-/// a pause, the folder back).
+/// How many times the swapper swaps at most (each swap: the folder away, a link in its
+/// place, a pause, the folder back).
 const SWAPS: usize = 400;
 
-/// Swaps `folder` for a link to `outside` and back until `stop` or [`SWAPS`] swaps.
+/// How many swaps a race needs to have raced against its work: the work is done again
+/// (a round) until the swapper has swapped this often while it ran, so a loaded machine
+/// (where the swapper thread gets few turns during one round) runs more rounds instead
+/// of racing less.
+const MIN_SWAPS: usize = 11;
+
+/// The most rounds of work a race runs waiting for [`MIN_SWAPS`] swaps: a swapper
+/// that cannot swap at all fails the race instead of running it forever.
+const MAX_ROUNDS: usize = 30;
+
+/// Swaps `folder` for a link to `outside` and back until `stop` or [`SWAPS`] swaps,
+/// counting them in `swaps` as they are done.
 fn swapper(
     folder: PathBuf,
     outside: PathBuf,
     stop: Arc<AtomicBool>,
-) -> std::thread::JoinHandle<usize> {
+    swaps: Arc<AtomicUsize>,
+) -> std::thread::JoinHandle<()> {
     std::thread::spawn(move || {
         let away = folder.with_extension("away");
-        let mut swaps = 0;
-        while swaps < SWAPS && !stop.load(Ordering::Relaxed) {
+        while swaps.load(Ordering::Relaxed) < SWAPS && !stop.load(Ordering::Relaxed) {
             if std::fs::rename(&folder, &away).is_ok() {
                 let _ = std::os::unix::fs::symlink(&outside, &folder);
                 std::thread::sleep(Duration::from_micros(300));
                 let _ = std::fs::remove_file(&folder);
                 let _ = std::fs::rename(&away, &folder);
-                swaps += 1;
+                swaps.fetch_add(1, Ordering::Relaxed);
             }
             std::thread::sleep(Duration::from_micros(300));
         }
@@ -44,7 +55,6 @@ fn swapper(
             let _ = std::fs::remove_file(&folder);
             let _ = std::fs::rename(&away, &folder);
         }
-        swaps
     })
 }
 
@@ -121,27 +131,50 @@ fn temporaries(dir: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Runs `work` while [`swapper`] swaps `folder` for a link to `outside`, then checks
-/// that the swapper ran (more than 10 swaps), that nothing below `outside` was even
-/// opened (inotify: no open of a file or folder there, [`Opens`]) and that nothing
-/// there was written: every file keeps its bytes (sha256), inode and modification
-/// time, and none appeared or vanished. The one setup of every race here.
-fn while_swapped<T>(folder: &Path, outside: &Path, work: impl FnOnce() -> T) -> T {
+/// Runs `work` while [`swapper`] swaps `folder` for a link to `outside`, again and
+/// again until the swapper has done [`MIN_SWAPS`] swaps while it ran (every round's
+/// result returned, the first round always run), then checks that the swapper did
+/// swap that often (at most [`MAX_ROUNDS`] rounds), that nothing below `outside` was
+/// even opened (inotify: no open of a file or folder there, [`Opens`]) and that
+/// nothing there was written: every file keeps its bytes (sha256), inode and
+/// modification time, and none appeared or vanished. The one setup of every race here.
+fn while_swapped<T>(folder: &Path, outside: &Path, mut work: impl FnMut() -> T) -> Vec<T> {
     let ids = identities(outside);
     let hashes = common::snapshot(outside);
     let opens = Opens::watch(outside);
     let stop = Arc::new(AtomicBool::new(false));
-    let swap = swapper(folder.to_path_buf(), outside.to_path_buf(), stop.clone());
-    let out = work();
+    let swaps = Arc::new(AtomicUsize::new(0));
+    let swap = swapper(
+        folder.to_path_buf(),
+        outside.to_path_buf(),
+        stop.clone(),
+        swaps.clone(),
+    );
+    let mut rounds = vec![work()];
+    while swaps.load(Ordering::Relaxed) < MIN_SWAPS && rounds.len() < MAX_ROUNDS {
+        rounds.push(work());
+    }
     stop.store(true, Ordering::Relaxed);
-    let swaps = swap.join().unwrap();
+    swap.join().unwrap();
+    let swaps = swaps.load(Ordering::Relaxed);
     let opened = opens.seen();
-    eprintln!("{swaps} swaps of {}", folder.display());
-    assert!(swaps > 10, "the swapper ran ({swaps} swaps)");
+    eprintln!(
+        "{swaps} swaps of {} in {} rounds",
+        folder.display(),
+        rounds.len()
+    );
+    assert!(swaps >= MIN_SWAPS, "the swapper ran ({swaps} swaps)");
     assert_eq!(opened, Vec::<String>::new(), "opened outside");
     assert_eq!(identities(outside), ids, "written outside");
     assert_eq!(common::snapshot(outside), hashes, "changed outside");
-    out
+    rounds
+}
+
+/// The sums of the (ok, refused) counts of every round of a race.
+fn summed(rounds: Vec<(usize, usize)>) -> (usize, usize) {
+    rounds
+        .into_iter()
+        .fold((0, 0), |(a, b), (x, y)| (a + x, b + y))
 }
 
 /// A script writing outputs into `out/` 300 times while `out` is swapped for a link
@@ -158,10 +191,11 @@ fn outputs_never_land_outside_while_their_folder_is_swapped() {
     )
     .unwrap();
     let before = common::snapshot(p);
-    let r = while_swapped(&p.join("out"), outside.path(), || {
+    for r in while_swapped(&p.join("out"), outside.path(), || {
         crate::hostile_bounds::run(p, &["run", "scripts/write.rhai"])
-    });
-    ran_clean(p, &r);
+    }) {
+        ran_clean(p, &r);
+    }
     // The user's files are as they were (outputs in out/ are fitup's own).
     let now = common::snapshot(p);
     for (path, hash) in &before {
@@ -193,28 +227,32 @@ fn the_mesh_cache_never_reads_through_a_swapped_folder() {
     assert_eq!(inside.code, Some(0), "{}", inside.text);
     assert!(!inside.text.contains(" 24 triangles"), "{}", inside.text);
     let before = common::snapshot(p);
-    let (ok, refused) = while_swapped(&p.join("models/meshes"), outside.path(), || {
-        let (mut ok, mut refused) = (0, 0);
-        for _ in 0..40 {
-            let r = crate::hostile_bounds::run(p, &["check", "models/cell.yaml"]);
-            assert!(!r.text.contains("panicked"), "{}", r.text);
-            assert!(
-                !r.text.contains(" 24 triangles"),
-                "the outside mesh was loaded:\n{}",
-                r.text
-            );
-            match r.code {
-                Some(0) => ok += 1,
-                Some(1) => {
-                    // Located: the document line of the part.
-                    assert!(r.text.contains("cell.yaml:"), "{}", r.text);
-                    refused += 1;
+    let (ok, refused) = summed(while_swapped(
+        &p.join("models/meshes"),
+        outside.path(),
+        || {
+            let (mut ok, mut refused) = (0, 0);
+            for _ in 0..40 {
+                let r = crate::hostile_bounds::run(p, &["check", "models/cell.yaml"]);
+                assert!(!r.text.contains("panicked"), "{}", r.text);
+                assert!(
+                    !r.text.contains(" 24 triangles"),
+                    "the outside mesh was loaded:\n{}",
+                    r.text
+                );
+                match r.code {
+                    Some(0) => ok += 1,
+                    Some(1) => {
+                        // Located: the document line of the part.
+                        assert!(r.text.contains("cell.yaml:"), "{}", r.text);
+                        refused += 1;
+                    }
+                    other => panic!("exit {other:?}: {}", r.text),
                 }
-                other => panic!("exit {other:?}: {}", r.text),
             }
-        }
-        (ok, refused)
-    });
+            (ok, refused)
+        },
+    ));
     eprintln!("{ok} runs read the inside meshes, {refused} were refused");
     assert_eq!(common::snapshot(p), before);
 }
@@ -292,10 +330,11 @@ print(`saved ${ok} of 400 (${tries} opens refused)`);\n",
     assert_eq!(r.code, Some(0), "{}", r.text);
     assert!(r.text.contains("saved 400 of 400"), "{}", r.text);
     std::fs::copy(p.join("docs/cell.yaml"), outside.path().join("cell.yaml")).unwrap();
-    let r = while_swapped(&p.join("docs"), outside.path(), || {
+    for r in while_swapped(&p.join("docs"), outside.path(), || {
         crate::hostile_bounds::run_within(p, &["run", "scripts/save.rhai"], Duration::from_secs(60))
-    });
-    ran_clean(p, &r);
+    }) {
+        ran_clean(p, &r);
+    }
     assert_eq!(
         temporaries(outside.path()),
         Vec::<PathBuf>::new(),
@@ -350,20 +389,23 @@ print(`stored ${ok} in ${tries} tries ${errs}`);
     };
     assert_eq!(count(&p.join("data/x.db")), 200);
     std::fs::copy(p.join("data/x.db"), outside.path().join("x.db")).unwrap();
-    let r = while_swapped(&p.join("data"), outside.path(), || {
+    let mut stored = 0;
+    for r in while_swapped(&p.join("data"), outside.path(), || {
         crate::hostile_bounds::run_within(p, &["run", "scripts/db.rhai"], Duration::from_secs(60))
-    });
-    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
-    assert_eq!(r.code, Some(0), "{}", r.text);
-    assert!(!r.text.contains("panicked"), "{}", r.text);
-    let stored: i64 = r
-        .text
-        .split("stored ")
-        .nth(1)
-        .and_then(|t| t.split(' ').next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("{}", r.text));
-    assert!(stored > 0, "{}", r.text);
+    }) {
+        eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
+        assert_eq!(r.code, Some(0), "{}", r.text);
+        assert!(!r.text.contains("panicked"), "{}", r.text);
+        let n: i64 = r
+            .text
+            .split("stored ")
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{}", r.text));
+        assert!(n > 0, "{}", r.text);
+        stored += n;
+    }
     assert_eq!(
         count(&p.join("data/x.db")),
         200 + stored,
@@ -444,21 +486,22 @@ print(`seen ${seen}`);
         r.text
     );
     let before = common::snapshot(p);
-    let r = while_swapped(&p.join("data"), o, || {
+    for r in while_swapped(&p.join("data"), o, || {
         crate::hostile_bounds::run_within(
             p,
             &["run", "scripts/read.rhai"],
             Duration::from_secs(120),
         )
-    });
-    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
-    assert_eq!(r.code, Some(0), "{}", r.text);
-    assert!(!r.text.contains("panicked"), "{}", r.text);
-    assert!(
-        r.text.contains("\"outside\": 0,"),
-        "an outside file was read: {}",
-        r.text
-    );
+    }) {
+        eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
+        assert_eq!(r.code, Some(0), "{}", r.text);
+        assert!(!r.text.contains("panicked"), "{}", r.text);
+        assert!(
+            r.text.contains("\"outside\": 0,"),
+            "an outside file was read: {}",
+            r.text
+        );
+    }
     assert_eq!(common::snapshot(p), before, "a user file changed");
 }
 
@@ -478,7 +521,7 @@ fn cli_reads_while_folder_swapped(
     marker: &str,
 ) -> (usize, usize) {
     let before = common::snapshot(p);
-    let seen = while_swapped(swapped, outside, || {
+    let seen = summed(while_swapped(swapped, outside, || {
         let (mut read, mut refused) = (0, 0);
         for _ in 0..30 {
             let r = crate::hostile_bounds::run(p, args);
@@ -503,7 +546,7 @@ fn cli_reads_while_folder_swapped(
             }
         }
         (read, refused)
-    });
+    }));
     eprintln!("{args:?}: {} inside reads, {} refused", seen.0, seen.1);
     assert!(seen.0 > 0, "the inside file was never read");
     assert_eq!(common::snapshot(p), before, "a user file changed");
@@ -759,17 +802,18 @@ print(`seen ${seen}`);
         r.text
     );
     let before = common::snapshot(p);
-    let r = while_swapped(&p.join("data"), o, || {
+    for r in while_swapped(&p.join("data"), o, || {
         crate::hostile_bounds::run_within(p, &["run", "scripts/t.rhai"], Duration::from_secs(120))
-    });
-    eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
-    assert_eq!(r.code, Some(0), "{}", r.text);
-    assert!(
-        r.text.contains("\"outside\": 0,"),
-        "an outside template was read: {}",
-        r.text
-    );
-    assert!(!r.text.contains("\"inside\": 0,"), "{}", r.text);
+    }) {
+        eprintln!("peak {} kB; {}", r.peak_kb, r.text.trim());
+        assert_eq!(r.code, Some(0), "{}", r.text);
+        assert!(
+            r.text.contains("\"outside\": 0,"),
+            "an outside template was read: {}",
+            r.text
+        );
+        assert!(!r.text.contains("\"inside\": 0,"), "{}", r.text);
+    }
     assert_eq!(common::snapshot(p), before, "a user file changed");
 }
 
@@ -810,7 +854,7 @@ fn cache_prune_never_goes_through_a_swapped_folder() {
     let r = crate::hostile_bounds::run(p, &args);
     assert_eq!(r.code, Some(0), "{}", r.text);
     let before = common::snapshot(p);
-    let (pruned, refused) = while_swapped(&p.join("a"), o, || {
+    let (pruned, refused) = summed(while_swapped(&p.join("a"), o, || {
         let (mut pruned, mut refused) = (0, 0);
         for _ in 0..40 {
             let r = crate::hostile_bounds::run(p, &args);
@@ -825,7 +869,7 @@ fn cache_prune_never_goes_through_a_swapped_folder() {
             }
         }
         (pruned, refused)
-    });
+    }));
     eprintln!("{pruned} prunes of the project, {refused} refused");
     assert!(pruned > 0, "the project was never pruned");
     assert!(entry.is_file(), "the outside entry was removed");
@@ -900,7 +944,7 @@ fn step_parts_race() {
     assert!(inside(&r.text), "{}", r.text);
     let _ = std::fs::remove_dir_all(p.join(STEP_STORE));
     let before = common::snapshot(p);
-    let (read, refused) = while_swapped(&p.join("parts"), o, || {
+    let (read, refused) = summed(while_swapped(&p.join("parts"), o, || {
         let (mut read, mut refused) = (0, 0);
         for _ in 0..20 {
             let _ = std::fs::remove_dir_all(p.join(STEP_STORE));
@@ -921,7 +965,7 @@ fn step_parts_race() {
             }
         }
         (read, refused)
-    });
+    }));
     eprintln!("{read} STEP reads inside, {refused} refused");
     assert!(read > 0, "the inside file was never read");
     let _ = std::fs::remove_dir_all(p.join(STEP_STORE));
@@ -961,7 +1005,7 @@ fn imports_race() {
     std::fs::remove_file(p.join("models/meshes")).unwrap();
     let r = crate::hostile_bounds::run(p, &args);
     assert_eq!(r.code, Some(0), "{}", r.text);
-    let (done, refused) = while_swapped(&p.join("models/meshes"), o, || {
+    let (done, refused) = summed(while_swapped(&p.join("models/meshes"), o, || {
         let (mut done, mut refused) = (0, 0);
         for _ in 0..30 {
             let r = crate::hostile_bounds::run(p, &args);
@@ -975,7 +1019,7 @@ fn imports_race() {
             }
         }
         (done, refused)
-    });
+    }));
     eprintln!("{done} imports, {refused} refused");
     assert!(done > 0, "no import went through");
     assert_eq!(

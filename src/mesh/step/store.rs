@@ -843,6 +843,18 @@ mod tests {
         }
     }
 
+    /// Prunes `st` with a size cap of 0 bytes: every entry goes.
+    fn prune_to_nothing(st: &Path) -> PruneReport {
+        prune_store(
+            st,
+            &PruneOptions {
+                max_bytes: 0,
+                ..PruneOptions::default()
+            },
+        )
+        .unwrap()
+    }
+
     /// A source file with `bytes` and its key at `linear` deflection.
     fn source(dir: &Path, name: &str, bytes: &[u8], linear: f64) -> (PathBuf, StoreKey) {
         let p = dir.join(name);
@@ -1117,14 +1129,7 @@ mod tests {
         let r = prune_store(&st, &PruneOptions::default()).unwrap();
         assert!(r.removed.is_empty(), "{r:?}");
         assert_eq!(r.kept, 2);
-        let r = prune_store(
-            &st,
-            &PruneOptions {
-                max_bytes: 0,
-                ..PruneOptions::default()
-            },
-        )
-        .unwrap();
+        let r = prune_to_nothing(&st);
         assert_eq!(r.removed.len(), 2);
         assert!(r.removed.iter().all(|p| p.reason == StaleReason::OverCap));
         assert_eq!((r.kept, r.kept_bytes), (0, 0));
@@ -1183,14 +1188,7 @@ mod tests {
                 (hits, misses)
             });
             for _ in 0..200 {
-                let r = prune_store(
-                    &st,
-                    &PruneOptions {
-                        max_bytes: 0,
-                        ..PruneOptions::default()
-                    },
-                )
-                .unwrap();
+                let r = prune_to_nothing(&st);
                 assert!(r.failed.is_empty());
                 store(&st, &key, &a, &big, DEFAULT_STORE_CAP);
             }
