@@ -681,3 +681,30 @@ def test_coordinate_systems(project):
     again = fitup.Document(path)
     assert np.allclose(again.part_coordinate_system("plate", "Moved"), top)
     assert np.allclose(again.pose("plate-1"), doc.pose("plate-1"))
+
+
+def test_a_robot_inside_a_sub_document(tmp_path):
+    """Issue 37: a sub-document's robot is reached by its full name, placed by the
+    sub-assembly's frame, driven, and saved back to its own file."""
+    (tmp_path / "fitup.toml").write_text("")
+    shutil.copytree(MODELS / "urdf", tmp_path / "cell" / "urdf")  # its package is cell/
+    (tmp_path / "top.yaml").write_text(
+        "parts: {}\nassemblies:\n- name: Cell-1\n  file: cell/urdf/arm6_cell.yaml\n"
+        "  transform:\n  - [0, 1, 0, 0]\n  - [-1, 0, 0, 0]\n  - [0, 0, 1, 0]\n"
+        "  - [100, 0, 500, 1]\ncomponents: []\n")
+    doc = fitup.Document(tmp_path / "top.yaml")
+    alone = fitup.Document(tmp_path / "cell" / "urdf" / "arm6_cell.yaml")
+    assert doc.robots() == ["Cell-1/arm6"]
+    q = np.array([0.3, -0.4, 0.5, 0.2, -0.6, 0.7])
+    doc.set_joints("Cell-1/arm6", q)
+    assert np.allclose(doc.joints("Cell-1/arm6"), q)
+    # the frame as a column-vector pose: 90 degrees about z, then (100, 0, 500)
+    frame = np.array([[0.0, -1, 0, 100], [1, 0, 0, 0], [0, 0, 1, 500], [0, 0, 0, 1]])
+    tcp = doc.robot("Cell-1/arm6").fk(q)
+    assert np.allclose(tcp, frame @ alone.robot("arm6").fk(q), atol=1e-6)
+    dim = doc.dimension("D1@Cell-1/角度2@arm6")
+    assert dim["value"] == pytest.approx(-0.4)
+    doc.save()
+    text = (tmp_path / "cell" / "urdf" / "arm6_cell.yaml").read_text()
+    assert "urdf: fitup_arm6.urdf" in text and "arm6:" not in text and "Cell-1" not in text
+    assert np.allclose(fitup.Document(tmp_path / "top.yaml").joints("Cell-1/arm6"), q)

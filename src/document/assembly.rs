@@ -122,9 +122,9 @@ impl Document {
     }
 
     /// Moves sub-assembly `name` to `t` (its frame → world, mm), and everything in it
-    /// with it, rigidly. Refused when a component inside is fixed (unless it is fixed
-    /// in a sub-document moved with it: fixed in that document's frame) or a robot's
-    /// link.
+    /// with it, rigidly (the robots inside too: their bases move). Refused when a
+    /// component inside is fixed (unless it is fixed in a sub-document moved with it:
+    /// fixed in that document's frame) or the link of a robot outside it.
     /// Mates are re-solved at the next rebuild, as for a component's move.
     pub fn set_sub_assembly_transform(
         &mut self,
@@ -145,7 +145,8 @@ impl Document {
                 if c.fixed && !moves_with_its_file {
                     return Err(DocumentError::FixedComponent(c.name.clone().into()));
                 }
-                if let Some(robot) = self.driving_robot(i) {
+                // a robot inside moves with it (its base in the sub-assembly's frame)
+                if let Some(robot) = self.driving_robot(i).filter(|r| !inside(r)) {
                     return Err(DocumentError::RobotLink {
                         component: c.name.clone().into(),
                         robot: robot.into(),
@@ -167,6 +168,7 @@ impl Document {
                 c.transform = c.transform * motion;
             }
         }
+        self.move_robots_inside(&prefix, motion);
         self.revision += 1;
         Ok(())
     }

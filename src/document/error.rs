@@ -177,11 +177,15 @@ pub enum DocumentError {
     /// Boxed as [`DocumentError::DimensionInUse`] is.
     #[error(transparent)]
     OutsideSubDocument(Box<OutsideSubDocument>),
-    /// A sub-document that holds robots.
-    #[error(
-        "`{0}` has robots, which a sub-document cannot hold yet (move them to the top document)"
-    )]
-    SubDocumentRobots(String),
+    /// A robot added through the API under a name inside a sub-assembly that is
+    /// another document (its robots are that file's).
+    #[error("robot `{robot}`: names inside `{at}/` are the sub-document's own robots; name it otherwise")]
+    RobotInSubDocument {
+        /// The name given.
+        robot: String,
+        /// The sub-assembly holding another document.
+        at: String,
+    },
     /// A mate type that does not exist.
     #[error("unknown mate type `{0}` (coincident, concentric, parallel, perpendicular, distance, angle)")]
     UnknownMateKind(String),
@@ -481,6 +485,9 @@ fn outside_message(e: &OutsideSubDocument) -> String {
         OutsideItem::Equation { name } => {
             format!("an equation of sub-document `{file}` uses \"{name}\", outside `{at}`")
         }
+        OutsideItem::RobotLink { robot, component } => format!(
+            "robot `{robot}` of sub-document `{file}` displays `{component}`, outside `{at}`"
+        ),
     }
 }
 
@@ -582,6 +589,13 @@ pub enum OutsideItem {
     Equation {
         /// The name outside.
         name: String,
+    },
+    /// A robot (full name) with a link displayed by `component`, outside.
+    RobotLink {
+        /// The robot.
+        robot: String,
+        /// The component outside.
+        component: String,
     },
 }
 

@@ -201,6 +201,18 @@ impl Document {
         };
         doc.load_sub_documents(&file, path, &load.dir, project, positions, nesting, cache)?;
         doc.apply_assembly_suppression();
+        let backed = file_backed_set(&file);
+        for (i, r) in file.robots.iter().enumerate() {
+            if let Some(a) = file_backed(&backed, &r.name) {
+                return Err(load.at_key(
+                    &[&format!("robots/{i}/name")],
+                    format!(
+                        "robot `{}`: names inside `{a}/` are the sub-document's own robots; name it otherwise",
+                        r.name
+                    ),
+                ));
+            }
+        }
         let urdf = load.urdf_robots(&file, &mut doc, cache)?;
         // the file's own mates first, then the sub-documents' (already in `doc`)
         let own = load.mates(&file, &doc)?;
@@ -211,14 +223,17 @@ impl Document {
             .filter(|m| m.kind.has_dimension())
             .map(|m| m.name.clone())
             .collect();
-        doc.robots = robot::load(
+        // the file's own robots first, then the sub-documents' (already in `doc`)
+        let own = robot::load(
             &file.robots,
             &doc.by_name,
             &urdf.loaded,
             &mate_dimensions,
+            &doc.robots,
             text,
             path,
         )?;
+        doc.robots.splice(0..0, own);
         super::equation_mgr::load(&file.equations, &mut doc, positions, path)?;
         doc.solve_mates().map_err(|source| {
             let at = load.locate(&format!("name: {}", source.mate), "mates");

@@ -218,6 +218,97 @@ impl RobotInstance {
         }
     }
 
+    /// This robot of a sub-document as the assembly holding it sees it: named inside
+    /// the sub-assembly `at` (`Cell-1/Arm`, dimensions `Cell-1/角度1@Arm`), its link
+    /// components `offset` further on, its base placed by the sub-assembly's `frame`
+    /// (sub-document frame → world, mm).
+    pub(super) fn nested(&self, at: &str, offset: usize, frame: Transform) -> RobotInstance {
+        let name = format!("{at}/{}", self.name());
+        let mut robot = (*self.robot).clone().with_name(name.clone());
+        robot.set_base(robot.base() * frame);
+        RobotInstance {
+            robot: Arc::new(robot),
+            links: self
+                .links
+                .iter()
+                .map(|l| LinkDisplay {
+                    component: l.component.map(|c| c + offset),
+                    offset: l.offset,
+                })
+                .collect(),
+            joints: self.joints.clone(),
+            dimensions: self
+                .dimensions
+                .iter()
+                .map(|d| format!("{at}/{d}"))
+                .collect(),
+            file: RobotFile {
+                name,
+                ..self.file.clone()
+            },
+            urdf_files: self.urdf_files.clone(),
+            package_path: self.package_path.clone(),
+        }
+    }
+
+    /// [`nested`](Self::nested) undone: the robot as the sub-document at `at` holds
+    /// it, its link components renumbered by `index` (assembly index → the
+    /// sub-document's), its base back in the sub-document's frame (`inv`: world →
+    /// sub-document frame). `Err(component)`: a link component that is not in the
+    /// sub-document (renamed out of it).
+    pub(super) fn extracted(
+        &self,
+        at: &str,
+        index: &HashMap<usize, usize>,
+        inv: Transform,
+    ) -> Result<RobotInstance, usize> {
+        let strip = |n: &str| {
+            n.strip_prefix(at)
+                .and_then(|r| r.strip_prefix('/'))
+                .unwrap_or(n)
+                .to_string()
+        };
+        let name = strip(self.name());
+        let mut robot = (*self.robot).clone().with_name(name.clone());
+        robot.set_base(super::save::snapped(robot.base() * inv));
+        let mut links = Vec::with_capacity(self.links.len());
+        for l in &self.links {
+            let component = match l.component {
+                Some(c) => Some(*index.get(&c).ok_or(c)?),
+                None => None,
+            };
+            links.push(LinkDisplay {
+                component,
+                offset: l.offset,
+            });
+        }
+        Ok(RobotInstance {
+            robot: Arc::new(robot),
+            links,
+            joints: self.joints.clone(),
+            dimensions: self.dimensions.iter().map(|d| strip(d)).collect(),
+            file: RobotFile {
+                name,
+                ..self.file.clone()
+            },
+            urdf_files: self.urdf_files.clone(),
+            package_path: self.package_path.clone(),
+        })
+    }
+
+    /// [`to_file`](Self::to_file) with each link's `component:` the current name of
+    /// the component it displays (`name` of an index): a renamed component is
+    /// written under its new name.
+    pub(super) fn to_file_named(&self, name: impl Fn(usize) -> String) -> RobotFile {
+        let mut f = self.to_file();
+        for (lf, l) in f.links.iter_mut().zip(&self.links) {
+            if let (Some(written), Some(c)) = (&mut lf.component, l.component) {
+                *written = name(c);
+            }
+        }
+        f
+    }
+
     /// The robot as written in the file, with the current base, tool and joints.
     pub fn to_file(&self) -> RobotFile {
         let tidy = |m: [[f64; 4]; 4]| m.map(|r| r.map(|x| if x.abs() < 1e-14 { 0.0 } else { x }));
@@ -855,19 +946,30 @@ fn explicit_file(name: &str, robot: &Robot) -> RobotFile {
 }
 
 /// Builds the robots of a document file. `taken` holds the mate dimension names
-/// (feature part, without `D1@`); errors are located in `text`.
+/// (feature part, without `D1@`); `nested` the robots its sub-documents brought
+/// (their names, dimensions and link components taken too); errors are located in
+/// `text`.
 pub(super) fn load(
     files: &[RobotFile],
     components: &HashMap<String, usize>,
     urdf: &HashMap<String, UrdfLoaded>,
     taken: &HashSet<String>,
+    nested: &[RobotInstance],
     text: &str,
     path: &Path,
 ) -> Result<Vec<RobotInstance>, DocumentError> {
     let section = locate(text, "robots:", 1).map(|l| l.0).unwrap_or(1);
-    let mut names = HashSet::new();
+    let mut names: HashSet<String> = nested.iter().map(|r| r.name().to_string()).collect();
     let mut dims: HashSet<String> = taken.clone();
-    let mut shown: HashMap<usize, String> = HashMap::new();
+    dims.extend(nested.iter().flat_map(|r| r.dimensions.iter().cloned()));
+    let mut shown: HashMap<usize, String> = nested
+        .iter()
+        .flat_map(|r| {
+            r.links
+                .iter()
+                .filter_map(|l| l.component.map(|c| (c, r.name().to_string())))
+        })
+        .collect();
     let mut out = Vec::with_capacity(files.len());
     for f in files {
         let from = locate(text, &format!("name: {}", f.name), section)
@@ -992,6 +1094,12 @@ impl Document {
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::RobotName(name.into()));
         }
+        if let Some(a) = self.owning_sub_document(name) {
+            return Err(DocumentError::RobotInSubDocument {
+                robot: name.to_string(),
+                at: a.name.clone(),
+            });
+        }
         let base = base.unwrap_or(robot.base());
         if !base.is_finite() {
             return Err(RobotError::NonFinite {
@@ -1041,6 +1149,12 @@ impl Document {
         };
         if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
             return Err(DocumentError::RobotName(name.into()));
+        }
+        if let Some(a) = self.owning_sub_document(name) {
+            return Err(DocumentError::RobotInSubDocument {
+                robot: name.to_string(),
+                at: a.name.clone(),
+            });
         }
         let base = base.unwrap_or(Transform::IDENTITY);
         if !base.is_finite() {
@@ -1208,6 +1322,22 @@ impl Document {
             self.set_robot_joints(robot, &q)?;
         }
         Ok(t)
+    }
+
+    /// Moves the bases of the robots named inside `prefix` (`Cell-1/`) by `motion`
+    /// (world → world, mm) and places their links: a sub-assembly moved rigidly.
+    pub(super) fn move_robots_inside(&mut self, prefix: &str, motion: Transform) {
+        let mut moved = false;
+        for r in &mut self.robots {
+            if r.name().starts_with(prefix) {
+                let base = r.robot.base() * motion;
+                Arc::make_mut(&mut r.robot).set_base(base);
+                moved = true;
+            }
+        }
+        if moved {
+            self.apply_robots();
+        }
     }
 
     /// Whether a component is moved by a robot link (the mate solver then treats it as

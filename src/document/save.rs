@@ -4,9 +4,7 @@ use super::file::{
     AssemblyFile, AxisFile, ComponentFile, CoordinateSystemFile, DocumentFile, FeatureFile,
     MateFile, PartFile, PlaneFile, PlanesFile,
 };
-use super::{
-    Color, Document, DocumentError, Feature, MateKind, Reference, RobotInstance, WriteProblem,
-};
+use super::{Color, Document, DocumentError, Feature, MateKind, Reference, WriteProblem};
 use crate::collision::CutSpec;
 use crate::fsutil::{content_hash, relative_path, FileKind};
 use crate::math::Vec3;
@@ -135,7 +133,12 @@ impl Document {
             assemblies,
             components,
             mates,
-            robots: self.robots.iter().map(RobotInstance::to_file).collect(),
+            robots: self
+                .robots
+                .iter()
+                .filter(|r| !held.inside(r.name()))
+                .map(|r| r.to_file_named(|c| self.components[c].name.clone()))
+                .collect(),
             // A sub-document's equations are written in its own file.
             equations: self
                 .equations
@@ -244,21 +247,27 @@ impl Document {
         let old = self.parts.clone();
         let old_robots = self.robots.clone();
         let old_assemblies = self.assemblies.clone();
-        for p in self.parts.values_mut() {
-            if let Some(rel) = relative_path(&p.mesh_path, &new_dir) {
+        let held = super::subdoc::HeldBy::new(&self.assemblies);
+        // a sub-document's parts name their meshes from its own folder
+        let own_parts: Vec<bool> = self.parts.values().map(|p| !held.inside(&p.name)).collect();
+        // a sub-document's robots name their URDF from its own folder
+        let own_robots: Vec<bool> = self.robots.iter().map(|r| !held.inside(r.name())).collect();
+        let nested: Vec<bool> = self
+            .assemblies
+            .iter()
+            .map(|a| held.inside(&a.name))
+            .collect();
+        drop(held);
+        for (p, own) in self.parts.values_mut().zip(own_parts) {
+            if let Some(rel) = relative_path(&p.mesh_path, &new_dir).filter(|_| own) {
                 p.stl = rel;
             }
         }
-        for r in &mut self.robots {
-            r.rebase_urdf(|f| relative_path(f, &new_dir));
+        for (r, own) in self.robots.iter_mut().zip(own_robots) {
+            if own {
+                r.rebase_urdf(|f| relative_path(f, &new_dir));
+            }
         }
-        let nested: Vec<bool> = {
-            let held = super::subdoc::HeldBy::new(&self.assemblies);
-            self.assemblies
-                .iter()
-                .map(|a| held.inside(&a.name))
-                .collect()
-        };
         for (a, nested) in self.assemblies.iter_mut().zip(nested) {
             if let (Some(f), false) = (&mut a.file, nested) {
                 if let Some(rel) = relative_path(&f.path, &new_dir) {
@@ -408,6 +417,12 @@ fn snap(x: f64) -> f64 {
     } else {
         x
     }
+}
+
+/// `t` with each matrix entry [`snap`]ped: a pose composed with a frame and taken
+/// apart again (a sub-document's content, written to its own file) reads as written.
+pub(super) fn snapped(t: crate::math::Transform) -> crate::math::Transform {
+    crate::math::Transform::from_matrix(&t.to_matrix().map(|row| row.map(snap))).unwrap_or(t)
 }
 
 fn tidy(x: f64) -> f64 {

@@ -5,7 +5,7 @@
 //! with its pose.
 //!
 //! Everything loaded from the file is named inside the sub-assembly (`Cart-1/…`:
-//! components, sub-assemblies, mates and parts) and is written back to that file,
+//! components, sub-assemblies, mates, parts, robots and their joint dimensions) and is written back to that file,
 //! never into the assembly's: a save rewrites the sub-document only when its content
 //! changed (a script moved, added, suppressed … something inside), through the same
 //! checked write as the document's own file (refused when the file changed on disk
@@ -274,9 +274,6 @@ impl Document {
         record: SubDocument,
         sub: &Document,
     ) -> Result<(), DocumentError> {
-        if !sub.robots.is_empty() {
-            return Err(DocumentError::SubDocumentRobots(record.file));
-        }
         let k = self
             .assemblies
             .iter()
@@ -336,6 +333,17 @@ impl Document {
             }
             self.mates.push(m);
         }
+        // Its robots, named inside the sub-assembly (`Cart-1/Arm`, dimensions
+        // `D1@Cart-1/角度1@Arm`), their bases placed by the sub-assembly's frame; the
+        // parts and components made for `urdf:` links stay generated.
+        for r in &sub.robots {
+            let r = r.nested(at, offset, frame);
+            if self.robots.iter().any(|o| o.name() == r.name()) {
+                return Err(taken("robot", r.name().to_string()));
+            }
+            self.robots.push(r);
+        }
+        self.generated.extend(sub.generated.iter().map(|g| name(g)));
         // Its equations, every name inside the sub-assembly (`"Cart-1/Factor"`,
         // `"D1@Cart-1/Gap"`), kept as the sub-document's for a save.
         for e in &sub.equations {
@@ -401,7 +409,7 @@ impl Document {
             let mut c = c.clone();
             c.name = n;
             c.part = part;
-            c.transform = c.transform * inv;
+            c.transform = super::save::snapped(c.transform * inv);
             components.push(c);
         }
         for p in self.parts.values() {
@@ -417,7 +425,7 @@ impl Document {
             .filter_map(|a| {
                 Some(SubAssembly {
                     name: strip(&a.name)?,
-                    transform: a.transform * inv,
+                    transform: super::save::snapped(a.transform * inv),
                     ..a.clone()
                 })
             })
@@ -465,6 +473,23 @@ impl Document {
             e.scope = inner;
             equations.push(e);
         }
+        let mut robots = Vec::new();
+        for r in &self.robots {
+            if strip(r.name()).is_none() {
+                continue;
+            }
+            robots.push(r.extracted(&at.name, &index, inv).map_err(|c| {
+                DocumentError::OutsideSubDocument(Box::new(super::OutsideSubDocument {
+                    file: record.file.clone(),
+                    at: at.name.clone(),
+                    item: OutsideItem::RobotLink {
+                        robot: r.name().to_string(),
+                        component: self.components[c].name.clone(),
+                    },
+                }))
+            })?);
+        }
+        let generated = self.generated.iter().filter_map(|g| strip(g)).collect();
         let parts: indexmap::IndexMap<String, super::Part> = parts;
         Ok(Document {
             path: record.path.clone(),
@@ -478,8 +503,8 @@ impl Document {
             mates,
             equations,
             assemblies,
-            robots: Vec::new(),
-            generated: Default::default(),
+            robots,
+            generated,
             revision: 0,
             aabb_cache: Default::default(),
             disk_hash: record.disk_hash,

@@ -49,6 +49,7 @@ mod step_cache;
 mod step_corpus;
 mod step_import;
 mod sub_assemblies;
+mod sub_document_robots;
 mod sub_documents;
 mod ur_ik;
 mod ur_real;

@@ -11,7 +11,7 @@ use fitup::math::{Transform, Vec3};
 use std::path::{Path, PathBuf};
 
 /// An ASCII STL cube of edge `s` mm from the origin.
-fn cube(s: f64) -> String {
+pub(crate) fn cube(s: f64) -> String {
     let v = |x: f64, y: f64, z: f64| format!("vertex {} {} {}\n", x * s, y * s, z * s);
     let quads: [[(f64, f64, f64); 4]; 6] = [
         [(0., 0., 0.), (0., 1., 0.), (1., 1., 0.), (1., 0., 0.)],
