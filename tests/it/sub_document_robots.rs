@@ -8,7 +8,7 @@
 //! file without loss. Every project is generated in code (the URDF arm is the
 //! repository's `models/urdf`, copied).
 
-use super::sub_documents::cube;
+use super::sub_documents::nested_project;
 use crate::common;
 use fitup::document::{Document, DocumentError};
 use fitup::kinematics::Catalog;
@@ -102,17 +102,7 @@ components:
 /// `top.yaml` → `sub/line.yaml` (Line-1) → `sub/cell.yaml` twice (Cell-1, Cell-2),
 /// `edit` applied to each file's text (`"cell"`, `"line"`, `"top"`).
 fn project(edit: impl Fn(&str, &str) -> String) -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path();
-    std::fs::write(p.join("fitup.toml"), "").unwrap();
-    std::fs::create_dir_all(p.join("meshes")).unwrap();
-    std::fs::create_dir_all(p.join("sub")).unwrap();
-    std::fs::write(p.join("meshes/cube.stl"), cube(10.0)).unwrap();
-    std::fs::write(p.join("sub/cell.yaml"), edit("cell", CELL)).unwrap();
-    std::fs::write(p.join("sub/line.yaml"), edit("line", LINE)).unwrap();
-    std::fs::write(p.join("top.yaml"), edit("top", TOP)).unwrap();
-    let top = p.join("top.yaml");
-    (dir, top)
+    nested_project([("cell", CELL), ("line", LINE), ("top", TOP)], edit)
 }
 
 fn plain() -> (tempfile::TempDir, PathBuf) {

@@ -113,15 +113,27 @@ components:
 /// A project: `top.yaml` holding `sub/cart.yaml` (Cart-1) holding `sub/axle.yaml`
 /// twice (Axle-1, Axle-2), with `edit` applied to each file's text.
 fn project(edit: impl Fn(&str, &str) -> String) -> (tempfile::TempDir, PathBuf) {
+    nested_project([("axle", AXLE), ("cart", CART), ("top", TOP)], edit)
+}
+
+/// A project of three documents, `sub/{inner}.yaml` held by `sub/{middle}.yaml`
+/// held by `top.yaml` (`files`: innermost first, each a name and its text), with
+/// `edit` applied to each text (given the name) and `meshes/cube.stl` beside.
+pub(crate) fn nested_project(
+    files: [(&str, &str); 3],
+    edit: impl Fn(&str, &str) -> String,
+) -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
     std::fs::write(p.join("fitup.toml"), "").unwrap();
     std::fs::create_dir_all(p.join("meshes")).unwrap();
     std::fs::create_dir_all(p.join("sub")).unwrap();
     std::fs::write(p.join("meshes/cube.stl"), cube(10.0)).unwrap();
-    std::fs::write(p.join("sub/axle.yaml"), edit("axle", AXLE)).unwrap();
-    std::fs::write(p.join("sub/cart.yaml"), edit("cart", CART)).unwrap();
-    std::fs::write(p.join("top.yaml"), edit("top", TOP)).unwrap();
+    let [inner, middle, (top_name, top_text)] = files;
+    for (name, text) in [inner, middle] {
+        std::fs::write(p.join(format!("sub/{name}.yaml")), edit(name, text)).unwrap();
+    }
+    std::fs::write(p.join("top.yaml"), edit(top_name, top_text)).unwrap();
     let top = p.join("top.yaml");
     (dir, top)
 }
