@@ -221,6 +221,19 @@ pub fn failing_repo_runs(scripts: &[String]) -> Vec<String> {
 }
 
 /// Stdout and stderr as text.
+/// The numbers of the last line of `text`, a CSV row a script printed (panics on
+/// an empty text or a field that is not a number).
+pub fn last_csv_numbers(text: &str) -> Vec<f64> {
+    let last = text.trim().lines().last().expect("a printed line");
+    last.split(',')
+        .map(|v| {
+            v.trim()
+                .parse()
+                .unwrap_or_else(|e| panic!("{v:?} in {last:?}: {e}"))
+        })
+        .collect()
+}
+
 pub fn text(o: &Output) -> String {
     format!(
         "{}{}",

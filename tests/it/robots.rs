@@ -251,13 +251,7 @@ fn program_runs_through_the_cli() {
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
     let mut lines = text.lines();
     assert!(lines.next().unwrap().starts_with("t_s,j1_deg"));
-    let last: Vec<f64> = text
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let last = common::last_csv_numbers(&text);
     let want = [20.0, -10.0, 10.0, 0.0, 0.0, 0.0];
     for (v, w) in last[1..7].iter().zip(want) {
         assert!((v - w).abs() < 1e-5, "{last:?}");

@@ -474,14 +474,7 @@ doc.save();
     // the TCP printed is the cell's own, placed
     let want = (alone.robot("Arm").unwrap().tcp() * frames()[0]).translation();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let got: Vec<f64> = stdout
-        .trim()
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let got = common::last_csv_numbers(&stdout);
     assert!(
         (Vec3::new(got[0], got[1], got[2]) - want).norm() < 1e-6,
         "{stdout} vs {want}"
