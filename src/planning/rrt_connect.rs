@@ -683,17 +683,7 @@ fn race(
         others.iter().map(|_| validator.fork()).collect();
     let Some(forks) = forks else {
         lanes.extend(others);
-        let shared = RefCell::new(validator);
-        let mut views: Vec<Vec<Shared<'_, '_>>> = lanes
-            .iter()
-            .map(|lane| lane.iter().map(|_| Shared(&shared)).collect())
-            .collect();
-        let mut searches: Vec<Vec<Search<'_, '_>>> = views
-            .iter_mut()
-            .zip(lanes)
-            .map(|(views, lane)| p.searches(views, lane))
-            .collect();
-        return winner(interleave(&mut searches, run, &rival));
+        return winner(run_lanes(validator, lanes, p, run, &rival));
     };
     let first = lanes.pop().expect("a first lane");
     let outcomes = std::thread::scope(|scope| {
@@ -705,11 +695,11 @@ fn race(
                 let clock = run.clock();
                 scope.spawn(move || {
                     let mut sibling = Run::of_clock(clock);
-                    run_lane(&mut *v, lane, p, &mut sibling, rival)
+                    run_lanes(&mut *v, vec![lane], p, &mut sibling, rival)
                 })
             })
             .collect();
-        let mut all = run_lane(validator, first, p, run, &rival);
+        let mut all = run_lanes(validator, vec![first], p, run, &rival);
         for h in handles {
             // A search that panicked is a bug; its lane loses the race rather
             // than taking the call down.
@@ -720,18 +710,25 @@ fn race(
     winner(outcomes)
 }
 
-/// The outcomes of one lane's searches, interleaved on this thread through views
-/// of `validator`.
-fn run_lane(
+/// The outcomes of `lanes` of searches, [`interleave`]d on this thread, each
+/// search checking through its own view of `validator`.
+fn run_lanes(
     validator: &mut dyn MotionValidator,
-    lane: Vec<(Strategy, &PlanningSpace)>,
+    lanes: Vec<Vec<(Strategy, &PlanningSpace)>>,
     p: &Problem<'_>,
     run: &mut Run<'_>,
     rival: &Rival,
 ) -> Vec<Outcome> {
     let shared = RefCell::new(validator);
-    let mut views: Vec<Shared<'_, '_>> = lane.iter().map(|_| Shared(&shared)).collect();
-    let mut searches = vec![p.searches(&mut views, lane)];
+    let mut views: Vec<Vec<Shared<'_, '_>>> = lanes
+        .iter()
+        .map(|lane| lane.iter().map(|_| Shared(&shared)).collect())
+        .collect();
+    let mut searches: Vec<Vec<Search<'_, '_>>> = views
+        .iter_mut()
+        .zip(lanes)
+        .map(|(views, lane)| p.searches(views, lane))
+        .collect();
     interleave(&mut searches, run, rival)
 }
 
