@@ -103,6 +103,29 @@ std::string label_name(const TDF_Label &l) {
 
 rust::String lossy(const std::string &s) { return rust::String::lossy(s.data(), s.size()); }
 
+Failure failure(Cause cause) {
+  Failure f{};
+  f.cause = cause;
+  f.stage = Stage::Reading;
+  return f;
+}
+
+// A stop the shim decides itself (the time limit, the triangle cap, the depth, the
+// test writer's refusals): thrown, and caught by `guarded`, which hands it to Rust.
+struct Stopped {
+  Failure failure;
+};
+
+[[noreturn]] void stop(Cause cause) { throw Stopped{failure(cause)}; }
+
+// The test writer's own refusal (an Exception of class `write`).
+[[noreturn]] void refuse_write(const std::string &message) {
+  Failure f = failure(Cause::Exception);
+  f.kind = "write";
+  f.message = lossy(message);
+  throw Stopped{std::move(f)};
+}
+
 struct Walker {
   Handle(XCAFDoc_ShapeTool) tool;
   ReadOptions options;
@@ -112,10 +135,11 @@ struct Walker {
   uint64_t triangles = 0;
   double mesh_s = 0;
 
-  void check_time(const char *stage) const {
+  void check_time(Stage stage) const {
     if (Clock::now() > end) {
-      // fitup:<code>[:<detail>]: src/mesh/step.rs (shim_error) makes a typed error of it.
-      throw std::runtime_error(std::string("fitup:time:") + stage);
+      Failure f = failure(Cause::TimeLimit);
+      f.stage = stage;
+      throw Stopped{std::move(f)};
     }
   }
 
@@ -127,7 +151,7 @@ struct Walker {
     if (found != parts.end()) {
       return found->second;
     }
-    check_time("mesh");
+    check_time(Stage::Meshing);
     TopoDS_Shape solid = placed.Located(TopLoc_Location());
     SolidPart part;
     part.name = lossy(product);
@@ -149,7 +173,7 @@ struct Walker {
     Handle(Deadline) progress = new Deadline(end);
     BRepMesh_IncrementalMesh mesher(solid, params, progress->Start());
     mesh_s += seconds_since(t0);
-    check_time("mesh");
+    check_time(Stage::Meshing);
     part.faces = 0;
     part.unmeshed_faces = 0;
     part.first_unmeshed_face = 0;
@@ -167,7 +191,7 @@ struct Walker {
       }
       triangles += static_cast<uint64_t>(tri->NbTriangles());
       if (triangles > options.max_triangles) {
-        throw std::runtime_error("fitup:triangles");
+        stop(Cause::TooManyTriangles);
       }
       const gp_Trsf tr = loc.Transformation();
       const uint32_t base = static_cast<uint32_t>(part.vertices.size() / 3);
@@ -267,7 +291,9 @@ struct Walker {
   void walk(const TDF_Label &label, const gp_Trsf &placement, const std::string &instance,
             const std::string &path, int depth, uint32_t parent) {
     if (depth > 64) {
-      throw std::runtime_error("fitup:deep:" + path);
+      Failure f = failure(Cause::TooDeep);
+      f.at = lossy(path);
+      throw Stopped{std::move(f)};
     }
     if (XCAFDoc_ShapeTool::IsAssembly(label)) {
       // The occurrence itself, before what it holds (parents before children).
@@ -328,7 +354,7 @@ Model read(rust::Str path, const ReadOptions &options) {
   reader.SetLayerMode(Standard_False);
   const std::string file(path.data(), path.size());
   if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) {
-    throw std::runtime_error("fitup:parse");
+    stop(Cause::Parse);
   }
   model.read_s = seconds_since(start);
   read_units(reader.ChangeReader(), model);
@@ -341,10 +367,10 @@ Model read(rust::Str path, const ReadOptions &options) {
   const bool ok = reader.Transfer(doc, progress->Start());
   model.transfer_s = seconds_since(t1);
   Walker w{XCAFDoc_DocumentTool::ShapeTool(doc->Main()), options, end, model, {}, 0, 0};
-  w.check_time("transfer");
+  w.check_time(Stage::Transferring);
   if (!ok) {
     app->Close(doc);
-    throw std::runtime_error("fitup:transfer");
+    stop(Cause::Transfer);
   }
   TDF_LabelSequence roots;
   w.tool->GetFreeShapes(roots);
@@ -383,11 +409,33 @@ TopLoc_Location at(double x, double y, double z) {
   return TopLoc_Location(t);
 }
 
+// A solid bounded by a 10 mm cube's first five faces and whatever `top(builder, shell,
+// face)` adds to its shell for the sixth (BRepPrim's face order: x-, x+, y-, y+, z-,
+// z+; adding nothing leaves the top open).
+template <class Top> TopoDS_Solid cube_with_top(Top top) {
+  const TopoDS_Shape cube = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape();
+  BRep_Builder b;
+  TopoDS_Shell shell;
+  b.MakeShell(shell);
+  int n = 0;
+  for (TopExp_Explorer fx(cube, TopAbs_FACE); fx.More(); fx.Next()) {
+    if (++n < 6) {
+      b.Add(shell, fx.Current());
+    } else {
+      top(b, shell, TopoDS::Face(fx.Current()));
+    }
+  }
+  TopoDS_Solid solid;
+  b.MakeSolid(solid);
+  b.Add(solid, shell);
+  return solid;
+}
+
 void write_doc(const Handle(TDocStd_Document) &doc, const std::string &file) {
   STEPCAFControl_Writer writer;
   writer.SetNameMode(Standard_True);
   if (!writer.Transfer(doc, STEPControl_AsIs) || writer.Write(file.c_str()) != IFSelect_RetDone) {
-    throw std::runtime_error("cannot write " + file);
+    refuse_write("cannot write " + file);
   }
 }
 
@@ -395,7 +443,7 @@ void write_shape(const TopoDS_Shape &s, const std::string &file) {
   STEPControl_Writer writer;
   if (writer.Transfer(s, STEPControl_AsIs) != IFSelect_RetDone ||
       writer.Write(file.c_str()) != IFSelect_RetDone) {
-    throw std::runtime_error("cannot write " + file);
+    refuse_write("cannot write " + file);
   }
 }
 
@@ -419,7 +467,7 @@ void write_test(const std::string &kind, const std::string &file) {
         BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -1), gp::DZ()), 3.0, 22.0).Shape();
     BRepAlgoAPI_Cut cut(body, hole);
     if (!cut.IsDone()) {
-      throw std::runtime_error("the boolean cut failed");
+      refuse_write("the boolean cut failed");
     }
     named(tool, cut.Shape(), "bushing");
     write_doc(doc, file);
@@ -499,19 +547,8 @@ void write_test(const std::string &kind, const std::string &file) {
     Interface_Static::SetCVal("write.step.unit", "MM");
   } else if (kind == "open_shell") {
     // A "solid" bounded by five faces of a cube: its top is missing.
-    TopoDS_Shape cube = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape();
-    BRep_Builder b;
-    TopoDS_Shell shell;
-    b.MakeShell(shell);
-    int n = 0;
-    for (TopExp_Explorer fx(cube, TopAbs_FACE); fx.More(); fx.Next()) {
-      if (++n < 6) {
-        b.Add(shell, fx.Current());
-      }
-    }
-    TopoDS_Solid solid;
-    b.MakeSolid(solid);
-    b.Add(solid, shell);
+    const TopoDS_Solid solid =
+        cube_with_top([](BRep_Builder &, TopoDS_Shell &, const TopoDS_Face &) {});
     // In an assembly beside a sound block, so the error must name which one.
     TDF_Label lidless = named(tool, solid, "lidless");
     TDF_Label block = named(tool, BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape(), "block");
@@ -525,28 +562,16 @@ void write_test(const std::string &kind, const std::string &file) {
     // A cube whose top face is put on the plane x = 0, at right angles to its own
     // edges: read back, its boundary projects onto that plane as a loop without area,
     // which BRepMesh cannot fill (a face that does not mesh).
-    TopoDS_Shape cube = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape();
-    BRep_Builder b;
-    TopoDS_Shell shell;
-    b.MakeShell(shell);
-    int n = 0;
-    for (TopExp_Explorer fx(cube, TopAbs_FACE); fx.More(); fx.Next()) {
-      const TopoDS_Face &f = TopoDS::Face(fx.Current());
-      if (++n == 6) { // BRepPrim's face order: x-, x+, y-, y+, z-, z+
-        TopoDS_Face bad;
-        b.MakeFace(bad, new Geom_Plane(gp_Ax3(gp_Pnt(0, 0, 0), gp::DX())), 1e-7);
-        for (TopExp_Explorer wx(f, TopAbs_WIRE); wx.More(); wx.Next()) {
-          b.Add(bad, wx.Current());
-        }
-        bad.Orientation(f.Orientation());
-        b.Add(shell, bad);
-      } else {
-        b.Add(shell, f);
-      }
-    }
-    TopoDS_Solid solid;
-    b.MakeSolid(solid);
-    b.Add(solid, shell);
+    const TopoDS_Solid solid =
+        cube_with_top([](BRep_Builder &b, TopoDS_Shell &shell, const TopoDS_Face &top) {
+          TopoDS_Face bad;
+          b.MakeFace(bad, new Geom_Plane(gp_Ax3(gp_Pnt(0, 0, 0), gp::DX())), 1e-7);
+          for (TopExp_Explorer wx(top, TopAbs_WIRE); wx.More(); wx.Next()) {
+            b.Add(bad, wx.Current());
+          }
+          bad.Orientation(top.Orientation());
+          b.Add(shell, bad);
+        });
     named(tool, solid, "warped");
     write_doc(doc, file);
   } else if (kind == "plate_holes") {
@@ -569,7 +594,7 @@ void write_test(const std::string &kind, const std::string &file) {
     cut.SetTools(tools);
     cut.Build();
     if (!cut.IsDone()) {
-      throw std::runtime_error("the boolean cut failed");
+      refuse_write("the boolean cut failed");
     }
     named(tool, cut.Shape(), "perforated");
     write_doc(doc, file);
@@ -585,44 +610,52 @@ void write_test(const std::string &kind, const std::string &file) {
     write_shape(BRepBuilderAPI_MakeFace(gp_Pln(), 0.0, 10.0, 0.0, 10.0).Shape(), file);
   } else {
     app->Close(doc);
-    throw std::runtime_error("unknown test file kind " + kind);
+    refuse_write("unknown test file kind " + kind);
   }
   app->Close(doc);
 }
 
-// OCCT's own exceptions do not derive from std::exception: translate them (and an
-// allocation failure) so cxx hands every failure to Rust as an error, never an abort.
-template <class F> auto guarded(F f) -> decltype(f()) {
+Failure exception(const std::string &cls, const char *message) {
+  Failure f = failure(Cause::Exception);
+  f.kind = lossy(cls);
+  f.message = lossy(message ? message : "");
+  return f;
+}
+
+// Runs `f` and says how it stopped: every failure (the shim's own stops, OCCT's
+// exceptions, which do not derive from std::exception, an allocation failure) is a
+// Failure handed to Rust as data, never an exception across the boundary.
+template <class F> Failure guarded(F f) {
   try {
-    return f();
+    f();
+    return failure(Cause::Done);
+  } catch (const Stopped &s) {
+    return s.failure;
   } catch (const Standard_Failure &e) {
-    const char *what = e.GetMessageString();
     if (e.IsKind(STANDARD_TYPE(Standard_OutOfMemory))) {
-      throw std::runtime_error("fitup:oom");
+      return failure(Cause::OutOfMemory);
     }
-    throw std::runtime_error(std::string("fitup:occt:") + e.DynamicType()->Name() + ":" +
-                             (what ? what : ""));
+    return exception(e.DynamicType()->Name(), e.GetMessageString());
   } catch (const std::bad_alloc &) {
-    throw std::runtime_error("fitup:oom");
-  } catch (const std::runtime_error &) {
-    throw; // the shim's own fitup:<code> messages
+    return failure(Cause::OutOfMemory);
   } catch (const std::exception &e) {
-    throw std::runtime_error(std::string("fitup:occt:std::exception:") + e.what());
+    return exception("std::exception", e.what());
   } catch (...) {
-    throw std::runtime_error("fitup:occt:unknown C++ exception:");
+    return exception("unknown C++ exception", "");
   }
 }
 
 } // namespace
 
-Model read_step(rust::Str path, const ReadOptions &options) {
-  return guarded([&] { return read(path, options); });
+Answer read_step(rust::Str path, const ReadOptions &options) {
+  Answer answer{};
+  answer.failure = guarded([&] { answer.model = read(path, options); });
+  return answer;
 }
 
-void write_test_step(rust::Str kind, rust::Str path) {
-  guarded([&] {
+Failure write_test_step(rust::Str kind, rust::Str path) {
+  return guarded([&] {
     write_test(std::string(kind.data(), kind.size()), std::string(path.data(), path.size()));
-    return 0;
   });
 }
 

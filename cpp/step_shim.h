@@ -7,16 +7,16 @@
 
 namespace fitup_step {
 struct ReadOptions;
-struct Model;
+struct Answer;
+struct Failure;
 
-// Reads, transfers and meshes the STEP file at `path`; lengths in mm.
-// Throws (as a Rust error) on any Open CASCADE failure, the time limit or the
-// triangle cap, with a `fitup:<code>[:<detail>]` message that src/mesh/step.rs turns
-// into a typed error.
-Model read_step(rust::Str path, const ReadOptions &options);
+// Reads, transfers and meshes the STEP file at `path`; lengths in mm. Never throws:
+// any Open CASCADE failure, the time limit or the triangle cap is the answer's
+// `failure`, a cause code with its fields (src/mesh/step.rs makes a typed error of it).
+Answer read_step(rust::Str path, const ReadOptions &options);
 
 // Writes one of the STEP files the tests use (`kind`: box, cylinder_hole,
 // assembly, nested, inch_box, open_shell, no_solid, bad_face, plate_holes), made with Open
-// CASCADE itself.
-void write_test_step(rust::Str kind, rust::Str path);
+// CASCADE itself. Never throws: the failure's cause is `Done` when it wrote the file.
+Failure write_test_step(rust::Str kind, rust::Str path);
 } // namespace fitup_step

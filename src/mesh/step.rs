@@ -35,7 +35,9 @@
 //! under [`DEFAULT_STORE_CAP`] (least recently used first); [`prune_store`] removes
 //! the rest of what is stale (`fitup cache prune`; see the `store` module).
 
+mod child;
 mod raw;
+mod shim;
 mod store;
 
 pub(crate) use store::prune_held;
@@ -729,7 +731,7 @@ fn read_raw(
             };
             #[cfg(not(unix))]
             let name = utf8.to_string();
-            imp::occt_read(&name, options).map_err(|what| shim_error(path, options, &what))
+            shim::read(&name, options).map_err(|failure| shim::error(path, options, failure))
         }
         Isolation::Child(child) => {
             let given = if by_fd {
@@ -740,54 +742,8 @@ fn read_raw(
             } else {
                 None
             };
-            raw::read_in_child(path, given, options, child)
+            child::read_in_child(path, given, options, child)
         }
-    }
-}
-
-/// The shim's failure message (`fitup:<code>[:<detail>]`, see `cpp/step_shim.cpp`) as
-/// a typed error.
-fn shim_error(path: &Path, options: &StepOptions, what: &str) -> StepError {
-    let occt = |failure| StepError::Occt {
-        path: path.into(),
-        failure,
-    };
-    let rest = what.strip_prefix("fitup:").unwrap_or(what);
-    let (code, detail) = rest.split_once(':').unwrap_or((rest, ""));
-    match code {
-        "parse" => occt(OcctFailure::Parse),
-        "transfer" => occt(OcctFailure::Transfer),
-        "time" => StepError::TimeLimit {
-            path: path.into(),
-            limit: options.time_limit,
-            stage: match detail {
-                "transfer" => StepStage::Transferring,
-                "mesh" => StepStage::Meshing,
-                _ => StepStage::Reading,
-            },
-        },
-        "triangles" => occt(OcctFailure::TooManyTriangles {
-            cap: options.max_triangles,
-        }),
-        "deep" => occt(OcctFailure::TooDeep { at: detail.into() }),
-        "oom" => match &options.isolation {
-            Isolation::Child(c) if c.memory_limit > 0 => StepError::MemoryLimit {
-                path: path.into(),
-                limit: c.memory_limit,
-            },
-            _ => occt(OcctFailure::OutOfMemory),
-        },
-        "occt" => {
-            let (kind, detail) = detail.split_once(':').unwrap_or((detail, ""));
-            occt(OcctFailure::Exception {
-                kind: kind.into(),
-                detail: detail.into(),
-            })
-        }
-        _ => occt(OcctFailure::Exception {
-            kind: "unknown".into(),
-            detail: what.into(),
-        }),
     }
 }
 
@@ -796,7 +752,7 @@ fn shim_error(path: &Path, options: &StepOptions, what: &str) -> StepError {
 /// parent named; returns the exit code. Only for programs that registered themselves
 /// with [`read_in_child_processes`].
 pub fn serve_child(args: &[std::ffi::OsString]) -> i32 {
-    raw::serve_child(args)
+    child::serve_child(args)
 }
 
 /// Checks what Open CASCADE returned and makes the model of it.
@@ -1028,255 +984,12 @@ pub fn write_test_step(kind: &str, path: &Path) -> Result<(), StepError> {
     let utf8 = path
         .to_str()
         .ok_or_else(|| StepError::NonUtf8Path { path: path.into() })?;
-    imp::write_test(kind, utf8).map_err(|what| StepError::Occt {
-        path: path.into(),
-        failure: OcctFailure::Exception {
-            kind: "write".into(),
-            detail: what,
-        },
-    })
-}
-
-#[cfg(feature = "step")]
-mod imp {
-    use super::raw::{RawAssembly, RawInstance, RawPart};
-    use super::*;
-    use crate::mesh::step_ffi::ffi;
-    use std::sync::Mutex;
-
-    /// Open CASCADE's reader settings are process-wide (`Interface_Static`): one read
-    /// or write at a time.
-    static OCCT: Mutex<()> = Mutex::new(());
-
-    /// The shim's read as plain data; `Err` is the shim's `fitup:<code>` message.
-    pub(super) fn occt_read(path: &str, options: &StepOptions) -> Result<RawModel, String> {
-        let opts = ffi::ReadOptions {
-            linear_deflection: options.linear_deflection,
-            angular_deflection: options.angular_deflection,
-            time_limit_s: options.time_limit.as_secs_f64(),
-            max_triangles: options.max_triangles,
-        };
-        let m = {
-            let _one = OCCT.lock().unwrap_or_else(|e| e.into_inner());
-            ffi::read_step(path, &opts).map_err(|e| e.what().to_string())?
-        };
-        Ok(RawModel {
-            parts: m
-                .parts
-                .into_iter()
-                .map(|p| RawPart {
-                    name: p.name,
-                    solid_index: p.solid_index,
-                    solids_in_product: p.solids_in_product,
-                    vertices: p.vertices,
-                    triangles: p.triangles,
-                    exact_volume: p.exact_volume,
-                    faces: p.faces,
-                    unmeshed_faces: p.unmeshed_faces,
-                    first_unmeshed_face: p.first_unmeshed_face,
-                })
-                .collect(),
-            instances: m
-                .instances
-                .into_iter()
-                .map(|i| RawInstance {
-                    name: i.name,
-                    path: i.path,
-                    part: i.part,
-                    matrix: i.matrix,
-                    scale: i.scale,
-                    parent: i.parent,
-                })
-                .collect(),
-            assemblies: m
-                .assemblies
-                .into_iter()
-                .map(|a| RawAssembly {
-                    name: a.name,
-                    path: a.path,
-                    product: a.product,
-                    parent: a.parent,
-                    matrix: a.matrix,
-                    scale: a.scale,
-                })
-                .collect(),
-            length_unit: m.length_unit,
-            read_s: m.read_s,
-            transfer_s: m.transfer_s,
-            mesh_s: m.mesh_s,
-            shells_without_solid: m.shells_without_solid,
-            faces_without_solid: m.faces_without_solid,
-            open_shells: m.open_shells,
-            first_open_shell: m.first_open_shell,
-            peak_memory: 0,
-        })
+    if !AVAILABLE {
+        return Err(StepError::NotBuilt { path: path.into() });
     }
-
-    pub(super) fn write_test(kind: &str, path: &str) -> Result<(), String> {
-        let _one = OCCT.lock().unwrap_or_else(|e| e.into_inner());
-        ffi::write_test_step(kind, path).map_err(|e| e.what().to_string())
-    }
-}
-
-#[cfg(not(feature = "step"))]
-mod imp {
-    use super::*;
-
-    pub(super) fn occt_read(_: &str, _: &StepOptions) -> Result<RawModel, String> {
-        Err("fitup:occt:NotBuilt:this build has no Open CASCADE".into())
-    }
-
-    pub(super) fn write_test(_: &str, _: &str) -> Result<(), String> {
-        Err("this build has no Open CASCADE (feature `step`)".into())
-    }
+    shim::write_test(kind, utf8)
+        .map_err(|failure| shim::error(path, &StepOptions::default(), failure))
 }
 
 #[cfg(test)]
-mod tests {
-    use super::raw::{RawInstance, RawPart};
-    use super::*;
-
-    #[test]
-    fn shim_messages_become_typed_errors() {
-        let p = Path::new("a.step");
-        let o = StepOptions {
-            isolation: Isolation::Child(ChildReader {
-                program: "fitup".into(),
-                memory_limit: 1 << 30,
-            }),
-            ..StepOptions::default()
-        };
-        assert!(matches!(
-            shim_error(p, &o, "fitup:time:mesh"),
-            StepError::TimeLimit {
-                stage: StepStage::Meshing,
-                ..
-            }
-        ));
-        assert!(matches!(
-            shim_error(p, &o, "fitup:oom"),
-            StepError::MemoryLimit { limit, .. } if limit == 1 << 30
-        ));
-        let e = shim_error(p, &o, "fitup:occt:Standard_NullObject:null handle");
-        assert_eq!(
-            e,
-            StepError::Occt {
-                path: p.into(),
-                failure: OcctFailure::Exception {
-                    kind: "Standard_NullObject".into(),
-                    detail: "null handle".into()
-                }
-            }
-        );
-        assert!(
-            e.to_string().starts_with("a.step: Open CASCADE failed"),
-            "{e}"
-        );
-        assert!(matches!(
-            shim_error(p, &o, "fitup:deep:/a/b"),
-            StepError::Occt { failure: OcctFailure::TooDeep { at }, .. } if at == "/a/b"
-        ));
-    }
-
-    fn one_box() -> RawModel {
-        let m = Mesh::cuboid(
-            crate::math::Point3::origin(),
-            crate::math::Point3::new(2.0, 3.0, 4.0),
-        );
-        RawModel {
-            parts: vec![RawPart {
-                name: "block".into(),
-                solid_index: 1,
-                solids_in_product: 1,
-                vertices: m.vertices.iter().flat_map(|p| [p.x, p.y, p.z]).collect(),
-                triangles: m.triangles.iter().flatten().copied().collect(),
-                exact_volume: 24.0,
-                faces: 6,
-                unmeshed_faces: 0,
-                first_unmeshed_face: 0,
-            }],
-            instances: vec![RawInstance {
-                name: "block-1".into(),
-                path: "block-1".into(),
-                part: 0,
-                matrix: vec![1., 0., 0., 5., 0., 1., 0., 0., 0., 0., 1., 0.],
-                scale: 1.0,
-                parent: 0,
-            }],
-            length_unit: "MM".into(),
-            ..RawModel::default()
-        }
-    }
-
-    /// Open CASCADE's sphere faces put several nodes at a pole: welded, their
-    /// triangles collapse. The solid imports closed, without them, at its volume; a
-    /// solid really open is refused, the message naming open edges only (issue 38).
-    #[test]
-    fn collapsed_pole_triangles_do_not_refuse_a_closed_solid() {
-        let soup = crate::mesh::tests::pole_sphere_soup(10.0, 24, 12);
-        let raw = |soup: &[[crate::math::Point3; 3]]| {
-            let mut model = one_box();
-            let part = &mut model.parts[0];
-            part.vertices = soup
-                .iter()
-                .flatten()
-                .flat_map(|p| [p.x, p.y, p.z])
-                .collect();
-            part.triangles = (0..3 * soup.len() as u32).collect();
-            part.exact_volume = 4.0 / 3.0 * std::f64::consts::PI * 1000.0;
-            model
-        };
-        let start = std::time::Instant::now();
-        let o = StepOptions::default();
-        let m = from_raw(Path::new("s.step"), &o, &raw(&soup), false, start).unwrap();
-        let mesh = &m.parts[0].mesh;
-        assert_eq!(
-            mesh.triangles.len(),
-            soup.len() - 2 * 24,
-            "collapsed ones left out"
-        );
-        assert!(mesh.inspect().is_watertight() && mesh.inspect().degenerate_triangles == 0);
-        let v = mesh.signed_volume() / m.parts[0].exact_volume;
-        assert!(v > 0.95 && v < 1.0, "{v}");
-        let mut open = soup.clone();
-        open.remove(1); // a triangle with area, at the pole
-        let Err(e) = from_raw(Path::new("s.step"), &o, &raw(&open), false, start) else {
-            panic!("a sphere with a hole imported");
-        };
-        let e = e.to_string();
-        assert!(
-            e.contains("3 open, 0 non-manifold")
-                && e.contains("open edges: a face missing")
-                && !e.contains("non-manifold edges:"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn a_raw_model_is_checked_and_placed() {
-        let start = std::time::Instant::now();
-        let o = StepOptions::default();
-        let m = from_raw(Path::new("b.step"), &o, &one_box(), false, start).unwrap();
-        assert!((m.placed_mesh().unwrap().bounds().unwrap().lo.x - 5.0).abs() < 1e-12);
-        assert!((m.placed_exact_volume() - 24.0).abs() < 1e-12);
-        // A part index past the parts, a NaN placement, a face without triangles.
-        let mut bad = one_box();
-        bad.instances[0].part = 7;
-        assert!(matches!(
-            from_raw(Path::new("b.step"), &o, &bad, false, start),
-            Err(StepError::BadPlacement { .. })
-        ));
-        let mut bad = one_box();
-        bad.instances[0].matrix[0] = f64::NAN;
-        assert!(from_raw(Path::new("b.step"), &o, &bad, false, start).is_err());
-        let mut bad = one_box();
-        bad.parts[0].unmeshed_faces = 1;
-        bad.parts[0].first_unmeshed_face = 4;
-        let e = from_raw(Path::new("b.step"), &o, &bad, false, start).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("solid `block-1`: face 4 of 6 did not mesh"),
-            "{e}"
-        );
-    }
-}
+mod tests;

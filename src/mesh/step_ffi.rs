@@ -1,5 +1,6 @@
 //! The cxx bridge to fitup's STEP shim (`cpp/step_shim.cpp`, feature `step`): plain
-//! data only; [`super::step`] checks and converts it.
+//! data only, failures included (a cause code and its fields, never text to parse);
+//! [`super::step`] checks and converts it.
 
 #[cxx::bridge(namespace = "fitup_step")]
 pub(crate) mod ffi {
@@ -88,13 +89,61 @@ pub(crate) mod ffi {
         first_open_shell: String,
     }
 
+    /// Why the shim stopped short of its answer (src/mesh/step.rs makes a `StepError`
+    /// of it with the file and the options).
+    enum Cause {
+        /// It did not: the answer is whole.
+        Done,
+        /// `ReadFile` failed.
+        Parse,
+        /// `Transfer` failed.
+        Transfer,
+        /// The time limit passed (where: `Failure::stage`).
+        TimeLimit,
+        /// The meshes passed `ReadOptions::max_triangles`.
+        TooManyTriangles,
+        /// The assembly tree is deeper than 64 levels (where: `Failure::at`).
+        TooDeep,
+        /// An allocation failed.
+        OutOfMemory,
+        /// An exception (`Failure::kind`, `Failure::message`).
+        Exception,
+    }
+
+    /// What Open CASCADE was doing when the time limit passed.
+    enum Stage {
+        Reading,
+        Transferring,
+        Meshing,
+    }
+
+    /// The shim's verdict on a call: a cause and what goes with it.
+    struct Failure {
+        cause: Cause,
+        /// With `Cause::TimeLimit`.
+        stage: Stage,
+        /// With `Cause::TooDeep`: the assembly path where it stopped.
+        at: String,
+        /// With `Cause::Exception`: the exception's class (`Standard_NullObject`,
+        /// `std::exception`, …; `write` for the test writer's own refusals).
+        kind: String,
+        /// With `Cause::Exception`: its message (may be empty).
+        message: String,
+    }
+
+    /// A read's answer: the model, whole only when `failure.cause` is `Done`.
+    struct Answer {
+        model: Model,
+        failure: Failure,
+    }
+
     unsafe extern "C++" {
         include!("fitup/cpp/step_shim.h");
 
-        /// Reads and meshes the STEP file at `path`.
-        fn read_step(path: &str, options: &ReadOptions) -> Result<Model>;
+        /// Reads and meshes the STEP file at `path`; never throws.
+        fn read_step(path: &str, options: &ReadOptions) -> Answer;
 
-        /// Writes a STEP file the tests use, made with Open CASCADE.
-        fn write_test_step(kind: &str, path: &str) -> Result<()>;
+        /// Writes a STEP file the tests use, made with Open CASCADE; never throws.
+        fn write_test_step(kind: &str, path: &str) -> Failure;
     }
 }

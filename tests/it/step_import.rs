@@ -79,7 +79,9 @@ mod with_occt {
     use super::*;
     use fitup::document::Document;
     use fitup::math::{Point3, Transform, Vec3};
-    use fitup::mesh::step::{read_step, write_test_step, StepError, StepOptions};
+    use fitup::mesh::step::{
+        read_step, write_test_step, OcctFailure, StepError, StepOptions, StepStage,
+    };
     use std::f64::consts::PI;
     use std::path::Path;
 
@@ -125,6 +127,16 @@ mod with_occt {
         }
         let e = write_test_step("torus", &dir.join("x.step")).unwrap_err();
         assert!(e.to_string().contains("unknown test file kind"), "{e}");
+        assert!(
+            matches!(
+                &e,
+                StepError::Occt {
+                    failure: OcctFailure::Exception { kind, detail },
+                    ..
+                } if kind == "write" && detail == "unknown test file kind torus"
+            ),
+            "{e:?}"
+        );
     }
 
     /// Open CASCADE meshes a sphere's poles and a cone's apex with several nodes at
@@ -639,6 +651,17 @@ mod with_occt {
         };
         let e = read_step(&made(dir.path(), "assembly"), &tight).unwrap_err();
         assert!(e.to_string().contains("time limit"), "{e}");
+        // The shim says where it stopped (a cause code and its stage, not text).
+        assert!(
+            matches!(
+                e,
+                StepError::TimeLimit {
+                    stage: StepStage::Transferring | StepStage::Meshing,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
     }
 
     #[test]
@@ -896,7 +919,8 @@ mod step_parts {
 mod hostile {
     use super::*;
     use fitup::mesh::step::{
-        read_step, write_test_step, ChildFailure, ChildReader, Isolation, StepError, StepOptions,
+        read_step, write_test_step, ChildFailure, ChildReader, Isolation, OcctFailure, StepError,
+        StepOptions,
     };
     use std::path::{Path, PathBuf};
     use std::time::{Duration, Instant};
@@ -959,6 +983,37 @@ mod hostile {
         assert_eq!(a.instances.len(), b.instances.len());
         assert!(a.reader_peak_memory.is_some_and(|m| m > 1 << 20));
 
+        // The child's own failures come back as the shim's causes, typed: a file
+        // Open CASCADE cannot parse, and the triangle cap (with the caller's cap).
+        let notes = dir.path().join("notes.step");
+        std::fs::write(&notes, "ISO-10303-21;\nthese are my notes\n").unwrap();
+        let e = read(&notes, &child(&fitup, 1 << 30, limit)).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                StepError::Occt {
+                    failure: OcctFailure::Parse,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let few = StepOptions {
+            max_triangles: 10,
+            ..child(&fitup, 1 << 30, limit)
+        };
+        let e = read(&file, &few).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                StepError::Occt {
+                    failure: OcctFailure::TooManyTriangles { cap: 10 },
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+
         // A child that crashes, hangs, runs out of memory, or is no reader at all.
         let crash = stand_in(dir.path(), "crash", "kill -SEGV $$");
         let e = read(&file, &child(&crash, 0, limit)).unwrap_err();
@@ -1016,7 +1071,7 @@ mod hostile {
         let forged = stand_in(
             dir.path(),
             "forged",
-            "printf 'fitup-step-reply 2\\n\\000\\377\\377\\377\\377\\377\\377\\377\\177' > \"$3\"",
+            "printf 'fitup-step-reply 3\\n\\000\\377\\377\\377\\377\\377\\377\\377\\177' > \"$3\"",
         );
         let e = read(&file, &child(&forged, 0, limit)).unwrap_err();
         assert!(
