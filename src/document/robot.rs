@@ -270,7 +270,7 @@ impl RobotInstance {
         };
         let name = strip(self.name());
         let mut robot = (*self.robot).clone().with_name(name.clone());
-        robot.set_base(super::save::snapped(robot.base() * inv));
+        robot.set_base(super::snapped(robot.base() * inv));
         let mut links = Vec::with_capacity(self.links.len());
         for l in &self.links {
             let component = match l.component {
@@ -1091,23 +1091,8 @@ impl Document {
     ) -> Result<usize, DocumentError> {
         let name = super::new_name(name, "robot")?;
         let name = name.as_str();
-        if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
-            return Err(DocumentError::RobotName(name.into()));
-        }
-        if let Some(a) = self.owning_sub_document(name) {
-            return Err(DocumentError::RobotInSubDocument {
-                robot: name.to_string(),
-                at: a.name.clone(),
-            });
-        }
         let base = base.unwrap_or(robot.base());
-        if !base.is_finite() {
-            return Err(RobotError::NonFinite {
-                robot: name.to_string(),
-                what: "base",
-            }
-            .into());
-        }
+        self.check_new_robot(name, &base)?;
         let mut file = explicit_file(name, robot);
         file.base = Some(base.to_matrix());
         let zero: Vec<f64> = robot
@@ -1121,6 +1106,28 @@ impl Document {
         self.robots.push(inst);
         self.revision += 1;
         Ok(self.robots.len() - 1)
+    }
+
+    /// Refuses a new robot's `name` (empty, taken, or inside a sub-document) and a
+    /// `base` pose that is not finite.
+    fn check_new_robot(&self, name: &str, base: &Transform) -> Result<(), DocumentError> {
+        if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
+            return Err(DocumentError::RobotName(name.into()));
+        }
+        if let Some(a) = self.owning_sub_document(name) {
+            return Err(DocumentError::RobotInSubDocument {
+                robot: name.to_string(),
+                at: a.name.clone(),
+            });
+        }
+        if !base.is_finite() {
+            return Err(RobotError::NonFinite {
+                robot: name.to_string(),
+                what: "base",
+            }
+            .into());
+        }
+        Ok(())
     }
 
     /// Adds the robot of the URDF file `urdf` (a path inside the document's project)
@@ -1147,23 +1154,8 @@ impl Document {
             robot: name.into(),
             source: Box::new(source),
         };
-        if name.is_empty() || self.robots.iter().any(|r| r.name() == name) {
-            return Err(DocumentError::RobotName(name.into()));
-        }
-        if let Some(a) = self.owning_sub_document(name) {
-            return Err(DocumentError::RobotInSubDocument {
-                robot: name.to_string(),
-                at: a.name.clone(),
-            });
-        }
         let base = base.unwrap_or(Transform::IDENTITY);
-        if !base.is_finite() {
-            return Err(RobotError::NonFinite {
-                robot: name.to_string(),
-                what: "base",
-            }
-            .into());
-        }
+        self.check_new_robot(name, &base)?;
         let project = Project::for_file(&self.path)
             .or_else(|e| {
                 crate::project::unless_missing(e, self.path.parent().unwrap_or(Path::new(".")))
@@ -1267,16 +1259,7 @@ impl Document {
 
     /// Moves a robot's base (world pose of its root, mm) and its link components.
     pub fn set_robot_base(&mut self, robot: usize, base: Transform) -> Result<(), DocumentError> {
-        let name = self.robot_at(robot)?.name().to_string();
-        if !base.is_finite() {
-            return Err(RobotError::NonFinite {
-                robot: name,
-                what: "base",
-            }
-            .into());
-        }
-        // Finite but beyond the document's range is refused like any pose.
-        super::check_pose(&base, "the base pose")?;
+        self.check_robot_frame(robot, &base, "base", "the base pose")?;
         let r = &mut self.robots[robot];
         Arc::make_mut(&mut r.robot).set_base(base);
         let q = r.joints.clone();
@@ -1285,20 +1268,27 @@ impl Document {
 
     /// Sets a robot's tool frame (TCP in the flange frame, mm).
     pub fn set_robot_tool(&mut self, robot: usize, tool: Transform) -> Result<(), DocumentError> {
-        let name = self.robot_at(robot)?.name().to_string();
-        if !tool.is_finite() {
-            return Err(RobotError::NonFinite {
-                robot: name,
-                what: "tool",
-            }
-            .into());
-        }
-        // Finite but beyond the document's range is refused like any pose.
-        super::check_pose(&tool, "the tool frame")?;
+        self.check_robot_frame(robot, &tool, "tool", "the tool frame")?;
         let r = &mut self.robots[robot];
         Arc::make_mut(&mut r.robot).set_tool(tool);
         self.revision += 1;
         Ok(())
+    }
+
+    /// Refuses a base or tool `frame` (`what`) for robot `robot` that is not finite
+    /// (a robot error) or beyond the document's range (as any pose, `described`).
+    fn check_robot_frame(
+        &self,
+        robot: usize,
+        frame: &Transform,
+        what: &'static str,
+        described: &str,
+    ) -> Result<(), DocumentError> {
+        let name = self.robot_at(robot)?.name().to_string();
+        if !frame.is_finite() {
+            return Err(RobotError::NonFinite { robot: name, what }.into());
+        }
+        super::check_pose(frame, described)
     }
 
     /// Runs a motion program on a robot from its current joints; on success the robot

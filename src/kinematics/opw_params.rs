@@ -60,6 +60,9 @@ pub struct OpwParameters {
 }
 
 impl OpwParameters {
+    /// The names of the seven lengths, in the order of [`lengths`](Self::lengths).
+    const LENGTH_NAMES: [&str; 7] = ["a1", "a2", "b", "c1", "c2", "c3", "c4"];
+
     /// Parameters with zero offsets and positive signs (lengths in mm).
     pub fn new(a1: f64, a2: f64, b: f64, c1: f64, c2: f64, c3: f64, c4: f64) -> Self {
         Self {
@@ -75,20 +78,16 @@ impl OpwParameters {
         }
     }
 
+    /// The seven lengths in the order of [`LENGTH_NAMES`](Self::LENGTH_NAMES) (mm).
+    fn lengths(&self) -> [f64; 7] {
+        [self.a1, self.a2, self.b, self.c1, self.c2, self.c3, self.c4]
+    }
+
     /// Checks that every number is finite, every sign is ±1 and the arm has an upper
     /// arm and a forearm.
     pub fn validate(&self) -> Result<(), KinematicsError> {
         let bad = |what: DescriptionProblem| Err(KinematicsError::InvalidDescription(what));
-        let lengths = [
-            ("a1", self.a1),
-            ("a2", self.a2),
-            ("b", self.b),
-            ("c1", self.c1),
-            ("c2", self.c2),
-            ("c3", self.c3),
-            ("c4", self.c4),
-        ];
-        for (name, v) in lengths {
+        for (name, v) in Self::LENGTH_NAMES.into_iter().zip(self.lengths()) {
             if !v.is_finite() {
                 return bad(DescriptionProblem::OpwLength { name, value: v });
             }
@@ -126,17 +125,8 @@ impl OpwParameters {
         limits: [Option<JointLimits>; 6],
     ) -> Result<Robot, KinematicsError> {
         self.validate()?;
-        let OpwParameters {
-            a1,
-            a2,
-            b,
-            c1,
-            c2,
-            c3,
-            c4,
-            offsets,
-            signs,
-        } = *self;
+        let [a1, a2, b, c1, c2, c3, c4] = self.lengths();
+        let (offsets, signs) = (self.offsets, self.signs);
         // Axis lines in the geometric reference pose (every geometric angle 0).
         let mut axes: Vec<(Vec3, Point3)> = vec![
             (Vec3::z(), Point3::origin()),

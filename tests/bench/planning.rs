@@ -322,44 +322,31 @@ fn narrow_variants() -> Vec<(&'static str, Variant)> {
 /// join only, lazy everywhere, and lazy with random coordinated moves in the
 /// local discretization.
 fn variants() -> Vec<(&'static str, Variant)> {
-    use fitup::planning::LazyValidation;
-    let lazy = Some(LazyValidation::default());
     vec![
-        (
-            "eager",
-            Box::new(|o: &mut InsertionOptions| {
-                o.approach.lazy = None;
-                o.disassembly.rrt_mut().lazy = None;
-            }),
-        ),
-        (
-            "lazy join",
-            Box::new(move |o: &mut InsertionOptions| {
-                o.approach.lazy = lazy;
-                o.disassembly.rrt_mut().lazy = None;
-            }),
-        ),
-        (
-            "lazy both",
-            Box::new(move |o: &mut InsertionOptions| {
-                o.approach.lazy = lazy;
-                o.disassembly.rrt_mut().lazy = lazy;
-            }),
-        ),
-        (
-            "lazy + 8 random moves",
-            Box::new(move |o: &mut InsertionOptions| {
-                o.approach.lazy = lazy;
-                o.disassembly.rrt_mut().lazy = lazy;
-                if let Some(l) = o.approach.lattice.as_mut() {
-                    l.random_moves = 8;
-                }
-                if let DisassemblyPlanner::LocalRrt(d) = &mut o.disassembly {
-                    d.lattice.random_moves = 8;
-                }
-            }),
-        ),
+        ("eager", lazy_variant(false, false, None)),
+        ("lazy join", lazy_variant(true, false, None)),
+        ("lazy both", lazy_variant(true, true, None)),
+        ("lazy + 8 random moves", lazy_variant(true, true, Some(8))),
     ]
+}
+
+/// Lazy validation of the join (`join`) and of the disassembly search (`disassembly`),
+/// else eager; with `moves`, that many random coordinated moves in both lattices.
+fn lazy_variant(join: bool, disassembly: bool, moves: Option<usize>) -> Variant {
+    use fitup::planning::LazyValidation;
+    let lazy = |on: bool| on.then(LazyValidation::default);
+    Box::new(move |o: &mut InsertionOptions| {
+        o.approach.lazy = lazy(join);
+        o.disassembly.rrt_mut().lazy = lazy(disassembly);
+        if let Some(moves) = moves {
+            if let Some(l) = o.approach.lattice.as_mut() {
+                l.random_moves = moves;
+            }
+            if let DisassemblyPlanner::LocalRrt(d) = &mut o.disassembly {
+                d.lattice.random_moves = moves;
+            }
+        }
+    })
 }
 
 /// The fallback-share variants compared by `FITUP_VARIANTS=share` (issue 12): how
@@ -443,7 +430,7 @@ fn scaled(p: &Problem, k: f64) -> Problem {
     q.space.min = p.space.min * k;
     q.space.max = p.space.max * k;
     q.space.rotation_weight = p.space.rotation_weight * k;
-    q.product_box = fitup::collision::Aabb::new(p.product_box.lo * k, p.product_box.hi * k);
+    q.product_box = fitup::math::Aabb::new(p.product_box.lo * k, p.product_box.hi * k);
     q.name = format!("{}_x{k}", p.name);
     q
 }
@@ -485,21 +472,26 @@ fn build_cpp_peer(out_dir: &Path) -> Option<PathBuf> {
 /// Runs the C++ harness on the problem's `problem.txt` beside `spec`.
 fn cpp_runs(exe: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> Option<Row> {
     let txt = spec.with_file_name("problem.txt");
-    let out = std::process::Command::new(exe)
-        .arg(&txt)
-        .arg(planner)
-        .arg(runs.to_string())
-        .arg(limit.to_string())
-        .output()
-        .ok()?;
-    parse_peer(out)
+    run_peer(std::process::Command::new(exe), &txt, planner, runs, limit)
 }
 
 fn peer_runs(py: &Path, spec: &Path, planner: &str, runs: usize, limit: f64) -> Option<Row> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bench/ompl_peer.py");
-    let out = std::process::Command::new(py)
-        .arg(script)
-        .arg(spec)
+    let mut python = std::process::Command::new(py);
+    python.arg(script);
+    run_peer(python, spec, planner, runs, limit)
+}
+
+/// Runs a peer as `PEER PROBLEM PLANNER RUNS LIMIT_S` and reads its answer.
+fn run_peer(
+    mut peer: std::process::Command,
+    problem: &Path,
+    planner: &str,
+    runs: usize,
+    limit: f64,
+) -> Option<Row> {
+    let out = peer
+        .arg(problem)
         .arg(planner)
         .arg(runs.to_string())
         .arg(limit.to_string())
