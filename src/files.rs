@@ -371,20 +371,7 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
         }
         if !header_seen {
             header_seen = true;
-            table.columns = fields
-                .into_iter()
-                .map(|(t, _)| t.trim().to_string())
-                .collect();
-            for (i, name) in table.columns.iter().enumerate() {
-                if table.columns[..i].contains(name) {
-                    return Err(bad(
-                        1,
-                        DataProblem::DuplicateColumn {
-                            column: name.clone(),
-                        },
-                    ));
-                }
-            }
+            table.columns = header_columns(fields).map_err(|cause| bad(1, cause))?;
             continue;
         }
         if options.header && fields.len() != table.columns.len() {
@@ -405,6 +392,22 @@ pub fn parse_csv(text: &str, options: &CsvOptions) -> Result<Table, DataError> {
         table.lines.push(start);
     }
     Ok(table)
+}
+
+/// A header row's column names (each field trimmed), refusing a name given twice.
+fn header_columns(fields: Vec<(String, bool)>) -> Result<Vec<String>, DataProblem> {
+    let columns: Vec<String> = fields
+        .into_iter()
+        .map(|(t, _)| t.trim().to_string())
+        .collect();
+    for (i, name) in columns.iter().enumerate() {
+        if columns[..i].contains(name) {
+            return Err(DataProblem::DuplicateColumn {
+                column: name.clone(),
+            });
+        }
+    }
+    Ok(columns)
 }
 
 /// Reads a text file inside the project: the resolved path and its text.

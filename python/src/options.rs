@@ -6,7 +6,7 @@
 
 use crate::convert;
 use crate::error::{Error, Result};
-use fitup::collision::Aabb;
+use fitup::math::Aabb;
 use fitup::options::{box_value, pose_value, Kind, Options, Vocabulary};
 use numpy::{AllowTypeChange, PyArrayLike2, PyUntypedArrayMethods};
 use pyo3::prelude::*;

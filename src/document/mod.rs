@@ -841,6 +841,24 @@ impl Document {
     }
 }
 
+/// `x` at the nearest multiple of 1e-9 when it is within 1e-12 (relative, at least
+/// absolute) of it: float noise of a composed pose, not a written digit.
+fn snap(x: f64) -> f64 {
+    let r = (x * 1e9).round() / 1e9;
+    if (r - x).abs() <= 1e-12 * x.abs().max(1.0) {
+        r
+    } else {
+        x
+    }
+}
+
+/// `t` with each matrix entry [`snap`]ped: a pose composed with a frame and taken
+/// apart again (a sub-document's content or robot, written to its own file) reads as
+/// written.
+fn snapped(t: Transform) -> Transform {
+    Transform::from_matrix(&t.to_matrix().map(|row| row.map(snap))).unwrap_or(t)
+}
+
 /// Checks a pose set through the API: finite, translation within [`MAX_ABS_VALUE`] mm.
 pub(crate) fn check_pose(t: &Transform, what: impl std::fmt::Display) -> Result<(), DocumentError> {
     if !t.is_finite() {

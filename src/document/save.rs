@@ -168,7 +168,9 @@ impl Document {
         }
         // composing and decomposing leaves float noise (`180.00000000000003`,
         // `-5.7e-14`): snapped to the nearest 1e-9 when within 1e-12 of it (relative)
-        local.to_matrix().map(|row| row.map(|x| tidy(snap(x))))
+        local
+            .to_matrix()
+            .map(|row| row.map(|x| tidy(super::snap(x))))
     }
 
     /// The document as YAML text.
@@ -408,23 +410,6 @@ fn color_value(c: &Color) -> serde_yaml::Value {
 }
 
 /// Snaps round-off (|x| < 1e-14 → 0) so saved matrices read cleanly; idempotent.
-/// `x` at the nearest multiple of 1e-9 when it is within 1e-12 (relative, at least
-/// absolute) of it: float noise of a composed pose, not a written digit.
-fn snap(x: f64) -> f64 {
-    let r = (x * 1e9).round() / 1e9;
-    if (r - x).abs() <= 1e-12 * x.abs().max(1.0) {
-        r
-    } else {
-        x
-    }
-}
-
-/// `t` with each matrix entry [`snap`]ped: a pose composed with a frame and taken
-/// apart again (a sub-document's content, written to its own file) reads as written.
-pub(super) fn snapped(t: crate::math::Transform) -> crate::math::Transform {
-    crate::math::Transform::from_matrix(&t.to_matrix().map(|row| row.map(snap))).unwrap_or(t)
-}
-
 fn tidy(x: f64) -> f64 {
     if x.abs() < 1e-14 {
         0.0

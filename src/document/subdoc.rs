@@ -409,7 +409,7 @@ impl Document {
             let mut c = c.clone();
             c.name = n;
             c.part = part;
-            c.transform = super::save::snapped(c.transform * inv);
+            c.transform = super::snapped(c.transform * inv);
             components.push(c);
         }
         for p in self.parts.values() {
@@ -425,7 +425,7 @@ impl Document {
             .filter_map(|a| {
                 Some(SubAssembly {
                     name: strip(&a.name)?,
-                    transform: super::save::snapped(a.transform * inv),
+                    transform: super::snapped(a.transform * inv),
                     ..a.clone()
                 })
             })

@@ -255,18 +255,7 @@ mod read {
             }
             buffers.push(data);
         }
-        let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
-            Some(s) => s.nodes().collect(),
-            None => {
-                let mut child = vec![false; doc.nodes().len()];
-                for n in doc.nodes() {
-                    for c in n.children() {
-                        child[c.index()] = true;
-                    }
-                }
-                doc.nodes().filter(|n| !child[n.index()]).collect()
-            }
-        };
+        let roots = scene_roots(doc);
         let mut mesh = Welder::new(0);
         // glTF's +Y up → fitup's +Z up: the inverse (transpose) of the export's root.
         let up = nalgebra::Matrix4::from_column_slice(&super::Z_UP_TO_Y_UP).transpose();
@@ -355,6 +344,23 @@ mod read {
             ));
         }
         Ok((mesh, files))
+    }
+
+    /// The nodes a scene starts from: the default scene's, else the first scene's,
+    /// else (a file without scenes) every node that is no other node's child.
+    fn scene_roots(doc: &gltf::Document) -> Vec<gltf::Node<'_>> {
+        match doc.default_scene().or_else(|| doc.scenes().next()) {
+            Some(s) => s.nodes().collect(),
+            None => {
+                let mut child = vec![false; doc.nodes().len()];
+                for n in doc.nodes() {
+                    for c in n.children() {
+                        child[c.index()] = true;
+                    }
+                }
+                doc.nodes().filter(|n| !child[n.index()]).collect()
+            }
+        }
     }
 
     /// One primitive's positions and corner list as views into the buffers (checked

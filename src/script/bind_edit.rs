@@ -122,6 +122,15 @@ fn reference_of(m: &Map) -> ScriptResult<Reference> {
 }
 
 pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
+    register_document_mates(api, ctx);
+    register_mate(api);
+    register_suppression(api);
+    register_properties(api);
+    register_components(api, ctx);
+}
+
+/// Mates: listing, adding and deleting them on a document.
+fn register_document_mates(api: &mut Api, ctx: &Arc<Context>) {
     api.section("Mates", "Mates as objects (SolidWorks' `IMate2` features): list, add, delete, suppress, flip. Every change re-solves the mates; one they cannot satisfy is undone and refused. A mate is suppressed with its own flag or when a component it joins is suppressed.");
     api.type_::<MateHandle>("Mate");
     api.f(
@@ -186,6 +195,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             d.lock()?.delete_mate(name).map_err(fail).map(|_| ())
         },
     );
+}
+
+/// A mate object: its properties, flip, suppress, delete; a component's mates.
+fn register_mate(api: &mut Api) {
     api.get(
         "Mate.name -> string",
         "The mate's name (its dimension, if any, is `D1@<name>`).",
@@ -306,7 +319,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             Ok(mate_handles(&c.doc, names))
         },
     );
+}
 
+/// Suppression and visibility of components.
+fn register_suppression(api: &mut Api) {
     api.section("Suppression and visibility", "A suppressed component (`IComponent2.SetSuppression2`) stays in the document but is not checked for interference, planned around, sequenced, weighed by `doc.mass_properties()`, bounded by `doc.aabb()` or exported, and its mates are inactive; asking to check or plan it is an error. A hidden one (`IComponent2.Visible = false`) is checked like the others but left out of exports. Both are saved.");
     api.get(
         "Component.suppressed -> bool",
@@ -332,7 +348,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             c.doc.lock()?.set_hidden(&name, !v).map_err(fail)
         },
     );
+}
 
+/// Custom properties of parts and components.
+fn register_properties(api: &mut Api) {
     api.section("Custom properties", "Name → text properties of parts (SolidWorks' file properties: `Description`, `Price`, `Material`…) and of components (component-level properties), from the document's `properties:` and set by scripts; saved with the document. Numbers and booleans are kept as their text, as `ICustomPropertyManager` keeps them.");
     api.get(
         "Component.properties -> map",
@@ -442,7 +461,10 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
             part_file(&c.doc, &part)
         },
     );
+}
 
+/// Adding, renaming and re-pointing components.
+fn register_components(api: &mut Api, ctx: &Arc<Context>) {
     api.section("Adding and replacing components", "Components added, renamed and re-pointed from a script (`IAssemblyDoc.AddComponent5`, `IComponent2.Name2`, `ReplaceComponents2`); saved with the document.");
     fn add(
         d: &DocHandle,

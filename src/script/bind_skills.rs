@@ -193,10 +193,11 @@ fn secs(m: &Map, key: &str, default: Duration) -> ScriptResult<Duration> {
 fn manager(ctx: &Arc<Context>, m: &Map) -> ScriptResult<ManagerObj> {
     check_keys(m, &MANAGER_KEYS, "skill_manager")?;
     let target = opt_str(m, "target")?.unwrap_or_else(|| "sim".into());
+    let defaults = ManagerOptions::default();
     let mut options = ManagerOptions {
-        skill_timeout: secs(m, "skill_timeout_s", Duration::from_secs(120))?,
-        reconnect_timeout: secs(m, "reconnect_timeout_s", Duration::from_secs(30))?,
-        ..ManagerOptions::default()
+        skill_timeout: secs(m, "skill_timeout_s", defaults.skill_timeout)?,
+        reconnect_timeout: secs(m, "reconnect_timeout_s", defaults.reconnect_timeout)?,
+        ..defaults
     };
     let mut sim = None;
     if target == "sim" {
@@ -206,7 +207,7 @@ fn manager(ctx: &Arc<Context>, m: &Map) -> ScriptResult<ManagerObj> {
         else {
             return err("skill_manager: target \"sim\" needs `robot` (the Robot to simulate)");
         };
-        let speed = opt_num(m, "speed")?.unwrap_or(1.0);
+        let speed = opt_num(m, "speed")?.unwrap_or(SimulatorOptions::default().speed);
         if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
             return err(format!(
                 "skill_manager: `speed` must be in (0, 1000], not {speed}"

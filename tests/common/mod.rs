@@ -32,7 +32,7 @@ pub fn interferes_in(
     scene: &fitup::workspace::Scene,
     p: usize,
     pose: &fitup::math::Transform,
-    bp: &fitup::collision::Aabb,
+    bp: &fitup::math::Aabb,
     q: usize,
     tol: f64,
 ) -> bool {
@@ -593,8 +593,8 @@ pub fn straight_on_until_clear(
     way: &[fitup::math::Transform],
     fallback: fitup::math::Vec3,
     step: f64,
-    region: &fitup::collision::Aabb,
-    bounds_at: impl Fn(&fitup::math::Transform) -> fitup::collision::Aabb,
+    region: &fitup::math::Aabb,
+    bounds_at: impl Fn(&fitup::math::Transform) -> fitup::math::Aabb,
 ) -> Vec<fitup::math::Transform> {
     let m = way.len();
     let last = way[m - 1].translation() - way[m - 2].translation();
@@ -603,7 +603,7 @@ pub fn straight_on_until_clear(
     } else {
         fallback
     };
-    let grown = fitup::collision::Aabb::new(
+    let grown = fitup::math::Aabb::new(
         region.lo - fitup::math::Vec3::repeat(0.5),
         region.hi + fitup::math::Vec3::repeat(0.5),
     );

@@ -22,9 +22,9 @@
 
 #![allow(dead_code)]
 
-use fitup::collision::{Aabb, Collider, CollisionError, SweepMethod};
+use fitup::collision::{Collider, CollisionError, SweepMethod};
 use fitup::document::file::{ComponentFile, DocumentFile, PartFile};
-use fitup::math::{Point3, Transform, Vec3};
+use fitup::math::{Aabb, Point3, Transform, Vec3};
 use fitup::mesh::{write_stl, Mesh, MeshError};
 use fitup::planning::{
     plan_insertion, InsertionOptions, MeshValidator, MeshValidatorOptions, PlanError, PlannedPath,

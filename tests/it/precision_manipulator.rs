@@ -7,14 +7,14 @@
 use crate::common;
 use common::no_check;
 
-use fitup::collision::{Aabb, SweepMethod};
+use fitup::collision::SweepMethod;
 use fitup::db::{Database, Target};
 use fitup::document::Document;
 use fitup::kinematics::{precision_manipulator, MotionOptions, PrecisionAxes, PROBE_HEIGHT};
 use fitup::manipulator::client::{Client, ClientOptions};
 use fitup::manipulator::message::ToolAction;
 use fitup::manipulator::simulator::{Simulator, SimulatorOptions};
-use fitup::math::{AngleConvention, Point3, Transform, Vec3};
+use fitup::math::{Aabb, AngleConvention, Point3, Transform, Vec3};
 use fitup::planning::PlannedPath;
 use fitup::sequence::{Grasp, Operation, Task};
 use fitup::skills::{

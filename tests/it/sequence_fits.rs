@@ -11,9 +11,9 @@
 //! the assembled pose and nothing else); the reported fits must be exactly the pairs
 //! that interfere in the assembled pose.
 
-use fitup::collision::{interferes, Aabb, Collider, DEFAULT_TOLERANCE};
+use fitup::collision::{interferes, Collider, DEFAULT_TOLERANCE};
 use fitup::document::Document;
-use fitup::math::{Point3, Transform, Vec3};
+use fitup::math::{Aabb, Point3, Transform, Vec3};
 use fitup::mesh::Mesh;
 use fitup::sequence::{plan_sequence, Mode, SequenceOptions, SequencePlan};
 use fitup::workspace::{SceneCache, Workspace};

@@ -5,9 +5,9 @@
 //! path and straight on, 0.2 mm steps, exact interference against the parts placed
 //! before it), not by the sequencer's own checks.
 
-use fitup::collision::{clearance, interferes, Aabb, DEFAULT_TOLERANCE};
+use fitup::collision::{clearance, interferes, DEFAULT_TOLERANCE};
 use fitup::document::Document;
-use fitup::math::{AngleConvention, Transform, Vec3};
+use fitup::math::{Aabb, AngleConvention, Transform, Vec3};
 use fitup::mesh::Mesh;
 use fitup::sequence::{
     plan_sequence, Mode, RejectReason, SequenceError, SequenceOptions, SequencePlan, Stuck,

@@ -3,12 +3,11 @@
 //! simulated manipulator (in process, over loopback).
 
 use crate::common::no_check;
-use fitup::collision::Aabb;
 use fitup::collision::SweepMethod;
 use fitup::document::Document;
 use fitup::kinematics::MotionOptions;
 use fitup::manipulator::simulator::{Simulator, SimulatorOptions};
-use fitup::math::{Point3, Transform, Vec3};
+use fitup::math::{Aabb, Point3, Transform, Vec3};
 use fitup::planning::PlannedPath;
 use fitup::sequence::{Grasp, Operation, Task};
 use fitup::skills::{
