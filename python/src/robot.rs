@@ -18,6 +18,11 @@ use std::sync::Arc;
 /// Joint arrays are radians (mm for prismatic joints), in joint order; poses are
 /// column-vector 4×4 arrays, world frame, mm. Batch forms take ``(N, dof)`` joints or
 /// ``(N, 4, 4)`` poses and release the GIL.
+#[pyclass(module = "fitup", name = "Robot", frozen)]
+pub struct Robot {
+    robot: Arc<fitup::kinematics::Robot>,
+}
+
 /// Solutions' joints one row after another: on the stack for up to eight 12-joint
 /// solutions (every branch of a 6-axis arm without ±360° variants), on the heap beyond.
 struct FlatRows {
@@ -58,11 +63,6 @@ impl FlatRows {
             &self.heap
         }
     }
-}
-
-#[pyclass(module = "fitup", name = "Robot", frozen)]
-pub struct Robot {
-    robot: Arc<fitup::kinematics::Robot>,
 }
 
 impl Robot {
