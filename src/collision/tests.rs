@@ -652,24 +652,35 @@ fn collider_cache_reuses_trees_for_the_same_mesh() {
     assert_eq!(cache.build_count(), 2);
 }
 
-fn thin_wall_scene() -> (Collider, Collider, Transform) {
-    // a 0.2 mm wall at x = 12.3; a 1 mm thick plate moving 20 mm along +X
+/// A 0.2 mm wall at x = 12.3 and a 1 mm thick plate at the origin that
+/// [`along_x`] moves toward it.
+fn thin_wall_scene() -> (Collider, Collider) {
     let wall = cuboid([12.3, -20.0, -20.0], [12.5, 20.0, 20.0]);
     let mover = cuboid([0.0, -5.0, -5.0], [1.0, 5.0, 5.0]);
-    (wall, mover, Transform::IDENTITY)
+    (wall, mover)
+}
+
+/// `collider` as the one obstacle of a sweep, at the identity.
+fn fixed(collider: &Collider) -> [Obstacle<'_>; 1] {
+    [Obstacle {
+        collider,
+        pose: Transform::IDENTITY,
+    }]
+}
+
+/// A translation from the identity by `mm` along +X.
+fn along_x(mm: f64) -> Motion {
+    Motion::Translation {
+        start: Transform::IDENTITY,
+        offset: Vec3::new(mm, 0.0, 0.0),
+    }
 }
 
 #[test]
 fn continuous_sweep_finds_the_thin_wall_that_steps_jump_over() {
-    let (wall, mover, _) = thin_wall_scene();
-    let obstacles = [Obstacle {
-        collider: &wall,
-        pose: Transform::IDENTITY,
-    }];
-    let motion = Motion::Translation {
-        start: Transform::IDENTITY,
-        offset: Vec3::new(20.0, 0.0, 0.0),
-    };
+    let (wall, mover) = thin_wall_scene();
+    let obstacles = fixed(&wall);
+    let motion = along_x(20.0);
     let stepped = stepwise_sweep(&mover, &motion, &obstacles, 5.0);
     assert!(!stepped.hit, "{stepped:?}");
     let cont = sweep(&mover, &motion, &obstacles, &SweepOptions::default()).unwrap();
@@ -722,15 +733,9 @@ fn continuous_rotation_and_pose_sequences_find_first_contact() {
 
 #[test]
 fn sweeps_refuse_bad_motions() {
-    let (wall, mover, _) = thin_wall_scene();
-    let obstacles = [Obstacle {
-        collider: &wall,
-        pose: Transform::IDENTITY,
-    }];
-    let nan = Motion::Translation {
-        start: Transform::IDENTITY,
-        offset: Vec3::new(f64::NAN, 0.0, 0.0),
-    };
+    let (wall, mover) = thin_wall_scene();
+    let obstacles = fixed(&wall);
+    let nan = along_x(f64::NAN);
     assert!(matches!(
         sweep(&mover, &nan, &obstacles, &SweepOptions::default()),
         Err(CollisionError::BadMotion(_))
@@ -749,10 +754,7 @@ fn sweeps_refuse_bad_motions() {
         &SweepOptions::default()
     )
     .is_err());
-    let ok = Motion::Translation {
-        start: Transform::IDENTITY,
-        offset: Vec3::new(1e9, 0.0, 0.0),
-    };
+    let ok = along_x(1e9);
     let tiny = SweepOptions {
         method: SweepMethod::displacement_steps(1e-6),
         tolerance: TOL,
@@ -1104,10 +1106,7 @@ fn stepwise_sweep_steps_rotations_by_step_rad() {
     let (c, s) = (30.0 * 0.5f64.cos(), 30.0 * 0.5f64.sin());
     let post = cuboid([c - 0.5, s - 0.5, -5.0], [c + 0.5, s + 0.5, 5.0]);
     let arm = cuboid([0.0, -0.5, -0.5], [40.0, 0.5, 0.5]);
-    let obstacles = [Obstacle {
-        collider: &post,
-        pose: Transform::IDENTITY,
-    }];
+    let obstacles = fixed(&post);
     let motion = Motion::Rotation {
         start: Transform::IDENTITY,
         centre: Point3::origin(),
@@ -1465,20 +1464,14 @@ fn clearance_agrees_with_contact_and_brute_force() {
 /// time budget.
 #[test]
 fn stepwise_sweeps_refuse_more_steps_than_the_cap() {
-    let (wall, mover, _) = thin_wall_scene();
-    let obstacles = [Obstacle {
-        collider: &wall,
-        pose: Transform::IDENTITY,
-    }];
-    let motion = Motion::Translation {
-        start: Transform::IDENTITY,
-        offset: Vec3::new(20.0, 0.0, 0.0),
-    };
+    let (wall, mover) = thin_wall_scene();
+    let obstacles = fixed(&wall);
+    let motion = along_x(20.0);
     let options = SweepOptions {
         method: SweepMethod::displacement_steps(1e-12),
         ..SweepOptions::default()
     };
-    let clock = std::time::Instant::now();
+    let before = crate::collision::effort();
     let e = sweep(&mover, &motion, &obstacles, &options).unwrap_err();
     assert!(
         matches!(
@@ -1488,13 +1481,23 @@ fn stepwise_sweeps_refuse_more_steps_than_the_cap() {
         ),
         "{e}"
     );
-    assert!(clock.elapsed().as_secs() < 5, "refused before any check");
+    // Refused before any check: no pair of the two trees was visited.
+    assert_eq!(
+        crate::collision::effort(),
+        before,
+        "refused before any check"
+    );
     // Within the cap the same sweep runs and finds the wall.
     let fine = SweepOptions {
         method: SweepMethod::displacement_steps(0.1),
         ..SweepOptions::default()
     };
     assert!(sweep(&mover, &motion, &obstacles, &fine).unwrap().hit);
+    // ... and the count above would have seen its checks.
+    assert!(
+        crate::collision::effort() > before,
+        "a sweep that runs visits pairs"
+    );
 }
 
 /// The deadline-bounded checks give up once their deadline has passed and

@@ -1,7 +1,7 @@
 //! Seed 000's single-ant dynamic greedy algorithm (section 5.2, table 4).
 
 use super::path::PlannedPath;
-use super::rrt::finish;
+use super::rrt::Ending;
 use super::run::Failure;
 use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::Smoothing;
@@ -201,14 +201,6 @@ pub fn greedy_ant(
     }
     poses.push(*goal);
     let nodes = poses.len();
-    Ok(finish(
-        NAME,
-        poses,
-        &mut checker,
-        space,
-        &options.smoothing,
-        options.limits.seed,
-        &mut run,
-        nodes,
-    ))
+    let ending = Ending::new(NAME, space, &options.smoothing, options.limits.seed);
+    Ok(ending.finish(poses, nodes, &mut checker, &mut run))
 }

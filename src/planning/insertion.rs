@@ -144,6 +144,19 @@ pub fn plan_insertion(
     // and a spent one then ends the next search at its first clock read).
     let left = || Some((deadline.remaining().as_secs_f64() * 1e3).max(1e-3));
     let seed = options.disassembly.rrt().limits.seed;
+    // Every found path ends the same way: smoothed within what is left, timed.
+    let end = |validator: &mut dyn MotionValidator, path: &mut PlannedPath, progress| {
+        finish(
+            validator,
+            space,
+            path,
+            options,
+            seed,
+            clock,
+            left(),
+            progress,
+        );
+    };
     let (start_in, goal_in) = (
         inside(part_box, start, product_box),
         inside(part_box, goal, product_box),
@@ -171,16 +184,7 @@ pub fn plan_insertion(
             &approach,
             progress.as_mut().map(|p| &mut **p as ProgressFn<'_>),
         )?;
-        finish(
-            validator,
-            space,
-            &mut path,
-            options,
-            seed,
-            clock,
-            left(),
-            progress,
-        );
+        end(validator, &mut path, progress);
         return Ok(path);
     }
     approach.limits.seed = options.approach.limits.seed ^ 0x9E37_79B9_7F4A_7C15;
@@ -273,16 +277,7 @@ pub fn plan_insertion(
     path.raw_rotation_rad = r;
     path.length_mm = l;
     path.rotation_rad = r;
-    finish(
-        validator,
-        space,
-        &mut path,
-        options,
-        seed,
-        clock,
-        left(),
-        progress,
-    );
+    end(validator, &mut path, progress);
     Ok(path)
 }
 

@@ -166,6 +166,7 @@ pub(crate) fn plan_tree(
             Begun::Ready(run, checker) => (run, checker),
             Begun::Refused(path) => return Ok(path),
         };
+    let ending = Ending::new(planner, space, &options.smoothing, options.limits.seed);
     checker.set_lazy(options.lazy.map(|l| l.steps(space)));
     let mut rng = Rng::new(options.limits.seed);
     let key_mm = local.map_or(options.step * 1e-3, |l| l.edge_length_min * 0.25);
@@ -268,40 +269,70 @@ pub(crate) fn plan_tree(
             let poses = tree.branch(i);
             // Smoothing keeps only edges the validator itself accepts.
             checker.set_lazy(None);
-            Ok(finish(
-                planner,
-                poses,
-                &mut checker,
-                space,
-                &options.smoothing,
-                options.limits.seed,
-                &mut run,
-                tree.len(),
-            ))
+            Ok(ending.finish(poses, tree.len(), &mut checker, &mut run))
         }
     }
 }
 
-/// Smooths a found path and builds the result.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn finish(
+/// How one planner call ends a path it found: the planner's name, the space its
+/// lengths are measured in (metric mm: mm + rotation weight · rad), its smoothing
+/// and its seed, fixed for the call.
+pub(crate) struct Ending<'a> {
     planner: &'static str,
-    mut poses: Vec<Transform>,
-    checker: &mut Checker<'_>,
-    space: &PlanningSpace,
-    smoothing: &Smoothing,
+    space: &'a PlanningSpace,
+    smoothing: &'a Smoothing,
     seed: u64,
-    run: &mut Run<'_>,
-    nodes: usize,
-) -> PlannedPath {
-    let raw = super::path::measure(&poses);
-    run.end_search();
-    // A different stream than the planner's, so smoothing does not depend on how many
-    // numbers the search drew.
-    let mut rng = Rng::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
-    // Smoothing's share of the budget, at most what is left of it.
-    let left_ms = run.deadline().remaining().as_secs_f64() * 1e3;
-    let until = Deadline::after_ms(smoothing.time_ms(run.budget_ms(), left_ms));
-    shortcut(checker, space, &mut poses, smoothing, &mut rng, run, until);
-    PlannedPath::found_with(planner, poses, raw, run.iterations, nodes, checker, run)
+}
+
+impl<'a> Ending<'a> {
+    pub(crate) fn new(
+        planner: &'static str,
+        space: &'a PlanningSpace,
+        smoothing: &'a Smoothing,
+        seed: u64,
+    ) -> Self {
+        Self {
+            planner,
+            space,
+            smoothing,
+            seed,
+        }
+    }
+
+    /// Smooths the found `poses` (the search grew `nodes` nodes) within the call's
+    /// smoothing share and builds the result.
+    pub(crate) fn finish(
+        &self,
+        mut poses: Vec<Transform>,
+        nodes: usize,
+        checker: &mut Checker<'_>,
+        run: &mut Run<'_>,
+    ) -> PlannedPath {
+        let raw = super::path::measure(&poses);
+        run.end_search();
+        // A different stream than the planner's, so smoothing does not depend on how
+        // many numbers the search drew.
+        let mut rng = Rng::new(self.seed ^ 0x5DEE_CE66_D1CE_5EED);
+        // Smoothing's share of the budget, at most what is left of it.
+        let left_ms = run.deadline().remaining().as_secs_f64() * 1e3;
+        let until = Deadline::after_ms(self.smoothing.time_ms(run.budget_ms(), left_ms));
+        shortcut(
+            checker,
+            self.space,
+            &mut poses,
+            self.smoothing,
+            &mut rng,
+            run,
+            until,
+        );
+        PlannedPath::found_with(
+            self.planner,
+            poses,
+            raw,
+            run.iterations,
+            nodes,
+            checker,
+            run,
+        )
+    }
 }

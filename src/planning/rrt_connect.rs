@@ -6,7 +6,7 @@ use super::axis::AxisSearch;
 use super::lattice::Lattice;
 use super::narrow::NarrowPassage;
 use super::path::PlannedPath;
-use super::rrt::finish;
+use super::rrt::Ending;
 use super::run::{Failure, PlanError, PlanLimits, ProgressFn, Run};
 use super::scale::ProblemScale;
 use super::smoothing::Smoothing;
@@ -851,20 +851,12 @@ pub fn rrt_connect(
             Begun::Ready(run, checker) => (run, checker),
             Begun::Refused(path) => return Ok(path),
         };
+    let ending = Ending::new(name, space, &options.smoothing, options.limits.seed);
     // A free straight line is the answer, found with one edge check before any tree
     // grows: a sampling search almost never draws it when the passage around it is
     // tight (a plate slid onto a pin with 0.2 mm clearance).
     if checker.edge_free(start, goal) {
-        return Ok(finish(
-            name,
-            vec![*start, *goal],
-            &mut checker,
-            space,
-            &options.smoothing,
-            options.limits.seed,
-            &mut run,
-            2,
-        ));
+        return Ok(ending.finish(vec![*start, *goal], 2, &mut checker, &mut run));
     }
     let seed = options.limits.seed;
     let lanes = match options.step {
@@ -908,16 +900,7 @@ pub fn rrt_connect(
             checker.edge_checks = ends.1 + edge_checks;
             run.iterations = iterations;
             // Smoothing keeps only edges the validator itself accepts.
-            Ok(finish(
-                name,
-                poses,
-                &mut checker,
-                space,
-                &options.smoothing,
-                seed,
-                &mut run,
-                nodes,
-            ))
+            Ok(ending.finish(poses, nodes, &mut checker, &mut run))
         }
         Outcome::Failed(f, iterations, nodes) => Ok(PlannedPath::failed(
             name,

@@ -1,7 +1,7 @@
 //! Seed 000's random-walk RRT + Floyd shortest path.
 
 use super::path::PlannedPath;
-use super::rrt::finish;
+use super::rrt::Ending;
 use super::run::Failure;
 use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::Smoothing;
@@ -209,14 +209,6 @@ pub fn rrt_floyd(
         i = next[i * n + g] as usize;
         poses.push(nodes[i]);
     }
-    Ok(finish(
-        NAME,
-        poses,
-        &mut checker,
-        space,
-        &options.smoothing,
-        options.limits.seed,
-        &mut run,
-        n,
-    ))
+    let ending = Ending::new(NAME, space, &options.smoothing, options.limits.seed);
+    Ok(ending.finish(poses, n, &mut checker, &mut run))
 }
