@@ -16,7 +16,8 @@ The Rust and Rhai columns come from `cargo bench --profile dev --bench call_over
 after. The set-up script, the UR5e and the Rhai calls are the Rust bench's files
 (tests/bench/call_overhead/). Calls: FK of the demo MZ07 (`Robot.fk`), IK of every
 branch (`Robot.ik`; the MZ07, and a UR5e of the published D-H lengths without
-limits; the UR5e's `ik_near` from Rhai and Rust only), an
+limits; the UR5e's `ik_near` and the script's `ik_solutions` from Rhai and Rust
+only; `ik_each_ur5e` times `Robot.ik` against Rust's `inverse_each`), an
 interference check of one pair of the demo cell (`Document.interferes`), a short plan
 (screw5 lifted 40 mm, RRT-Connect, seed 3), the floor (a trivial call: `Robot.dof`,
 Rhai's `q.len()`), and the batch forms per pose (`fk_batch`, `ik_batch`, 20 000
@@ -133,11 +134,14 @@ def main():
     uq = np.radians(UR5E_Q)
     tu = ur.fk(uq)
     assert len(ur.ik(tu, uq)) > 1
-    # The Python call of each name of calls.txt (Python has no `ik_near`).
+    # The Python call of each name of calls.txt (Python has no `ik_near` and no
+    # `ik_solutions`: its `ik` returns one array).
     calls = {
         "fk": lambda: arm.fk(q),
         "ik_all": lambda: arm.ik(t, q),
         "ik_ur5e": lambda: ur.ik(tu, uq),
+        # The same call against Rust's `inverse_each` into a stack array.
+        "ik_each_ur5e": lambda: ur.ik(tu, uq),
         "floor": lambda: arm.dof,
         "interferes": lambda: cell.interferes("screw4", "screw5"),
         "plan_short": lambda: cell.plan_path("screw5", goal, planner="rrt_connect", seed=3),

@@ -124,31 +124,10 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Joints {
     }
 }
 
-/// Rows side by side, each `width` numbers (a shorter row padded with NaN), and how
-/// many rows there are.
-fn flat_rows<R: AsRef<[f64]>>(
-    rows: impl IntoIterator<Item = R>,
-    width: usize,
-) -> (Vec<f64>, usize) {
-    let mut flat = Vec::new();
-    let mut n = 0;
-    for r in rows {
-        let r = r.as_ref();
-        flat.extend((0..width).map(|j| r.get(j).copied().unwrap_or(f64::NAN)));
-        n += 1;
-    }
-    (flat, n)
-}
-
-/// Rows as a new `(N, width)` array copied into numpy's own buffer (one object, as
-/// [`pose_array`]; [`rows`] hands numpy a Rust buffer, the form for large results).
-pub fn small_rows<'py, R: AsRef<[f64]>>(
-    py: Python<'py>,
-    rows: impl IntoIterator<Item = R>,
-    width: usize,
-) -> Bound<'py, PyArray2<f64>> {
-    let (flat, n) = flat_rows(rows, width);
-    match ArrayView2::from_shape((n, width), &flat) {
+/// Rows of `width` numbers laid one after another (`flat.len()` a multiple of `width`)
+/// as a new `(N, width)` array, copied once into numpy's own buffer.
+pub fn flat_rows<'py>(py: Python<'py>, flat: &[f64], width: usize) -> Bound<'py, PyArray2<f64>> {
+    match ArrayView2::from_shape((flat.len() / width.max(1), width), flat) {
         Ok(v) => PyArray2::from_array(py, &v),
         Err(_) => PyArray2::zeros(py, [0, width], false),
     }
@@ -200,7 +179,13 @@ pub fn rows<'py, R: AsRef<[f64]>>(
     rows: impl IntoIterator<Item = R>,
     width: usize,
 ) -> Bound<'py, PyArray2<f64>> {
-    let (flat, n) = flat_rows(rows, width);
+    let mut flat = Vec::new();
+    let mut n = 0;
+    for r in rows {
+        let r = r.as_ref();
+        flat.extend((0..width).map(|j| r.get(j).copied().unwrap_or(f64::NAN)));
+        n += 1;
+    }
     Array2::from_shape_vec((n, width), flat)
         .unwrap_or_default()
         .into_pyarray(py)

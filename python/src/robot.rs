@@ -23,6 +23,48 @@ pub struct Robot {
     robot: Arc<fitup::kinematics::Robot>,
 }
 
+/// Solutions' joints one row after another: on the stack for up to eight 12-joint
+/// solutions (every branch of a 6-axis arm without ±360° variants), on the heap beyond.
+struct FlatRows {
+    stack: [f64; FlatRows::STACK],
+    len: usize,
+    heap: Vec<f64>,
+}
+
+impl Default for FlatRows {
+    fn default() -> Self {
+        Self {
+            stack: [0.0; Self::STACK],
+            len: 0,
+            heap: Vec::new(),
+        }
+    }
+}
+
+impl FlatRows {
+    const STACK: usize = 96;
+
+    fn extend(&mut self, row: &[f64]) {
+        if self.heap.is_empty() {
+            if let Some(s) = self.stack.get_mut(self.len..self.len + row.len()) {
+                s.copy_from_slice(row);
+                self.len += row.len();
+                return;
+            }
+            self.heap.extend_from_slice(&self.stack[..self.len]);
+        }
+        self.heap.extend_from_slice(row);
+    }
+
+    fn as_slice(&self) -> &[f64] {
+        if self.heap.is_empty() {
+            &self.stack[..self.len]
+        } else {
+            &self.heap
+        }
+    }
+}
+
 impl Robot {
     /// Wraps a robot shared with a document (copy on write: nothing here changes it).
     pub(crate) fn from_shared(robot: Arc<fitup::kinematics::Robot>) -> Self {
@@ -51,6 +93,25 @@ impl Robot {
         {
             Ok(s) => Ok(s),
             Err(IkError::Unreachable(_)) | Err(IkError::JointLimits { .. }) => Ok(Vec::new()),
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// [`Robot::solutions`]' joints, row after row, into `out`, without an
+    /// `IkSolution` (a `Vec`) per solution ([`fitup::kinematics::Robot::inverse_each`]):
+    /// the same solutions in the same order.
+    fn solutions_into(
+        &self,
+        target: &Transform,
+        reference: &[f64],
+        out: &mut FlatRows,
+    ) -> Result<()> {
+        match self
+            .robot
+            .inverse_each(target, reference, &IkOptions::every_branch(), |q| {
+                out.extend(q)
+            }) {
+            Ok(_) | Err(IkError::Unreachable(_)) | Err(IkError::JointLimits { .. }) => Ok(()),
             Err(e) => Err(e.into()),
         }
     }
@@ -202,16 +263,13 @@ impl Robot {
         self.check_width(r.len())?;
         // A closed-form call is a few µs: releasing the GIL would cost a fair share of
         // it. The numeric solver's restarts can take milliseconds: released.
-        let s = if self.robot.closed_form() {
-            self.solutions(&t, &r)?
+        let mut rows = FlatRows::default();
+        if self.robot.closed_form() {
+            self.solutions_into(&t, &r, &mut rows)?;
         } else {
-            py.detach(|| self.solutions(&t, &r))?
-        };
-        Ok(convert::small_rows(
-            py,
-            s.iter().map(|s| &s.joints),
-            self.robot.dof(),
-        ))
+            py.detach(|| self.solutions_into(&t, &r, &mut rows))?;
+        }
+        Ok(convert::flat_rows(py, rows.as_slice(), self.robot.dof()))
     }
 
     /// Every branch for many targets (``(N, 4, 4)``, world, mm): a list of

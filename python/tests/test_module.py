@@ -177,6 +177,29 @@ def test_robot_fk_and_every_ik_branch():
     assert "ur5" in fitup.catalog_names()
 
 
+def test_ik_gives_the_library_solutions_to_the_bit():
+    # `ik` writes each solution's joints straight from the solver (no list per
+    # solution); `ik_batch` goes through the library's `Robot::inverse`: the same
+    # solutions, in the same order, to the bit, each reproducing the target. The
+    # catalog UR5's ±360° limits give more than eight solutions (past the stack store).
+    rng = np.random.default_rng(38)
+    for name in ("nachi_mz07", "ur5"):
+        r = fitup.Robot.catalog(name)
+        most = 0
+        for _ in range(20):
+            q = rng.uniform(-math.pi, math.pi, 6)
+            if r.limit_violation(q) is not None:
+                continue
+            t = r.fk(q)
+            for ref in (q, np.zeros(6)):
+                branches = r.ik(t, ref)
+                assert np.array_equal(branches, r.ik_batch(t[None], ref)[0]), name
+                most = max(most, len(branches))
+                for b in branches:
+                    assert np.allclose(r.fk(b), t, atol=1e-6), name
+        assert most > (8 if name == "ur5" else 1), (name, most)
+
+
 def test_ik_along_a_path_follows_the_line():
     r = fitup.Robot.catalog("nachi_mz07")
     q0 = np.radians([0, 10, -10, 0, 30, 0])

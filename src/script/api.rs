@@ -100,6 +100,27 @@ impl<'e> Api<'e> {
         self.engine.register_type_with_name::<T>(name);
     }
 
+    /// Makes a custom type iterable (`for x in value`), each item what its
+    /// `IntoIterator` gives; documented by the type's own entries.
+    pub fn iterable<T>(&mut self)
+    where
+        T: Clone + Send + Sync + 'static + IntoIterator,
+        <T as IntoIterator>::Item: Clone + Send + Sync + 'static,
+    {
+        self.engine.register_iterator::<T>();
+    }
+
+    /// Registers an index getter (`Type[i]`) of a custom type.
+    pub fn index_get<A: 'static, const N: usize, const X: bool, R: Returned, const F: bool>(
+        &mut self,
+        signature: &str,
+        doc: &str,
+        func: impl RhaiNativeFunc<A, N, X, R, F> + Send + Sync + 'static,
+    ) {
+        // Rhai's name of an index getter (`Engine::register_indexer_get`).
+        self.add("index$get$".to_string(), signature, doc, func);
+    }
+
     fn add<A: 'static, const N: usize, const X: bool, R: Returned, const F: bool>(
         &mut self,
         name: String,

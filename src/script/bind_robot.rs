@@ -186,33 +186,126 @@ fn unit_factors(robot: &Robot) -> Option<[f64; STACK_JOINTS]> {
     Some(factor)
 }
 
-/// Every solution of [`Robot::inverse`] (every branch) as a script array of joint
-/// arrays (degrees / mm), as [`joints_out`] makes each, written straight from the
-/// solver's solutions (no `Vec` per solution, [`Robot::inverse_each`]) with each
-/// joint's unit looked up once per call.
-fn every_solution(robot: &Robot, target: &Transform, reference: &[f64]) -> Result<Array, IkError> {
+/// Every solution of [`Robot::inverse`] (every branch), the joints in degrees / mm row
+/// after row: what `Robot.ik_solutions` returns, made into script arrays only where the
+/// script reads a solution (`sols[i]`, `for q in sols`), and what `Robot.ik` makes its
+/// array of arrays from. One value for the whole result: on the stack for up to eight
+/// 6-joint solutions, one allocation beyond.
+#[derive(Clone)]
+pub struct IkSolutions {
+    dof: usize,
+    len: usize,
+    inline: [f64; IkSolutions::INLINE],
+    heap: Vec<f64>,
+}
+
+impl IkSolutions {
+    /// Numbers kept inline: every branch of a 6-axis arm without ±360° variants.
+    const INLINE: usize = 48;
+
+    fn new(dof: usize) -> Self {
+        Self {
+            dof,
+            len: 0,
+            inline: [0.0; Self::INLINE],
+            heap: Vec::new(),
+        }
+    }
+
+    /// Appends one solution (`dof` numbers, degrees / mm).
+    fn push(&mut self, row: impl Iterator<Item = f64>) {
+        let at = self.len * self.dof;
+        let fits = self.heap.is_empty() && at + self.dof <= Self::INLINE;
+        if fits {
+            for (x, v) in self.inline[at..at + self.dof].iter_mut().zip(row) {
+                *x = v;
+            }
+        } else {
+            if self.heap.is_empty() {
+                self.heap.extend_from_slice(&self.inline[..at]);
+            }
+            self.heap.extend(row);
+        }
+        self.len += 1;
+    }
+
+    /// Every number, solution after solution.
+    fn numbers(&self) -> &[f64] {
+        if self.heap.is_empty() {
+            &self.inline[..self.len * self.dof]
+        } else {
+            &self.heap
+        }
+    }
+
+    /// Solution `i` (negative counts from the end, as for arrays).
+    fn get(&self, i: i64) -> ScriptResult<&[f64]> {
+        let k = if i < 0 { i + self.len as i64 } else { i };
+        match usize::try_from(k).ok().filter(|&k| k < self.len) {
+            Some(k) => Ok(&self.numbers()[k * self.dof..(k + 1) * self.dof]),
+            None => err(format!(
+                "IK solution index {i} out of range ({} solutions)",
+                self.len
+            )),
+        }
+    }
+
+    fn row_value(row: &[f64]) -> Dynamic {
+        floats(row.iter().copied())
+    }
+
+    /// The script array of joint arrays (`Robot.ik`'s value).
+    fn to_array(&self) -> Array {
+        if self.dof == 0 {
+            return (0..self.len)
+                .map(|_| Dynamic::from_array(Array::new()))
+                .collect();
+        }
+        self.numbers()
+            .chunks(self.dof)
+            .map(Self::row_value)
+            .collect()
+    }
+}
+
+impl IntoIterator for IkSolutions {
+    type Item = Dynamic;
+    type IntoIter = std::vec::IntoIter<Dynamic>;
+
+    /// `for q in sols`: each solution's joint array, in order.
+    fn into_iter(self) -> Self::IntoIter {
+        self.to_array().into_iter()
+    }
+}
+
+/// Every solution of [`Robot::inverse`] (every branch) as [`IkSolutions`], each as
+/// [`joints_out`] makes it, written straight from the solver's solutions (no `Vec` per
+/// solution, [`Robot::inverse_each`]) with each joint's unit looked up once per call.
+fn every_solution(
+    robot: &Robot,
+    target: &Transform,
+    reference: &[f64],
+) -> Result<IkSolutions, IkError> {
+    let mut out = IkSolutions::new(robot.dof());
     let Some(factor) = unit_factors(robot) else {
-        let sols = robot.inverse(target, reference, &ik_all())?;
-        return Ok(sols.iter().map(|s| joints_out(robot, &s.joints)).collect());
+        for s in robot.inverse(target, reference, &ik_all())? {
+            out.push(joints_to_document_iter(robot, &s.joints));
+        }
+        return Ok(out);
     };
-    let mut out = Array::with_capacity(8);
     robot.inverse_each(target, reference, &ik_all(), |q| {
-        out.push(Dynamic::from_array(
-            q.iter()
-                .zip(&factor)
-                .map(|(v, f)| Dynamic::from_float(v * f))
-                .collect(),
-        ))
+        out.push(q.iter().zip(&factor).map(|(v, f)| v * f))
     })?;
     Ok(out)
 }
 
-/// `Robot.ik`: every solution for `target`, nearest the robot's current joints first.
-fn ik_every(r: &RobotHandle, target: &Transform) -> ScriptResult<Array> {
+/// `Robot.ik` / `Robot.ik_solutions`: every solution for `target`, nearest the robot's
+/// current joints first.
+fn ik_every(r: &RobotHandle, target: &Transform) -> ScriptResult<IkSolutions> {
     r.with_joints(|robot, q| {
         let sols = every_solution(robot, target, q)
             .map_err(|e| fail(format!("robot `{}`: ik: {e}", robot.name())))?;
-        if sols.is_empty() {
+        if sols.len == 0 {
             return err(format!(
                 "robot `{}`: ik: no solution within the joint limits",
                 robot.name()
@@ -242,8 +335,9 @@ fn ik_near(r: &RobotHandle, target: &Transform, joints: &Dynamic) -> ScriptResul
     Ok(joints_out(&robot, &sol.joints))
 }
 
-/// `RobotModel.ik`: every solution for `target`, nearest all-zero joints first.
-fn model_ik_every(robot: &Robot, target: &Transform) -> ScriptResult<Array> {
+/// `RobotModel.ik` / `RobotModel.ik_solutions`: every solution for `target`, nearest
+/// all-zero joints first.
+fn model_ik_every(robot: &Robot, target: &Transform) -> ScriptResult<IkSolutions> {
     let zero = [0.0; STACK_JOINTS];
     let heap;
     let reference = match zero.get(..robot.dof()) {
@@ -537,12 +631,22 @@ fn register_robots(api: &mut Api) {
 /// Inverse kinematics: every branch, the nearest one, branches with their configuration.
 fn register_ik(api: &mut Api) {
     api.f("Robot.ik(target) -> array", "Every joint solution (arrays of degrees) putting the TCP at the world pose `target` (Transform or `[x,y,z,a,b,c]`), within the joint limits (every closed-form branch and the ±360° variants the limits allow), nearest the current joints first. At a wrist singularity (joints 4 and 6 aligned) every branch still comes back with joint 5 exactly at its singular value and joint 4 kept at its current value (joint 6 takes the rest). An unreachable target is an error saying why.", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<Array> {
-        ik_every(r, &to_transform(&t, "target")?)
+        Ok(ik_every(r, &to_transform(&t, "target")?)?.to_array())
     });
     // A Transform target, the usual one: no Dynamic conversion.
     api.overload(
         "Robot.ik(target) -> array",
-        |r: &mut RobotHandle, t: Transform| -> ScriptResult<Array> { ik_every(r, &t) },
+        |r: &mut RobotHandle, t: Transform| -> ScriptResult<Array> {
+            Ok(ik_every(r, &t)?.to_array())
+        },
+    );
+    api.f("Robot.ik_solutions(target) -> IkSolutions", "The solutions of `ik(target)` (the same, in the same order, nearest the current joints first; the same errors) as one `IkSolutions` value whose joint arrays are made only when read: `sols.len`, `sols[i]` (degrees; negative `i` counts from the end), `for q in sols`, `sols.to_array()` (what `ik` returns). The fast form where a script calls IK often and reads few of the solutions (one value instead of an array per solution).", |r: &mut RobotHandle, t: Dynamic| -> ScriptResult<IkSolutions> {
+        ik_every(r, &to_transform(&t, "target")?)
+    });
+    // A Transform target, the usual one: no Dynamic conversion.
+    api.overload(
+        "Robot.ik_solutions(target) -> IkSolutions",
+        |r: &mut RobotHandle, t: Transform| -> ScriptResult<IkSolutions> { ik_every(r, &t) },
     );
     api.f("Robot.ik_near(target, joints: array) -> array", "The joint solution (degrees) for the world pose `target` nearest to `joints` (degrees); the robot does not move.", |r: &mut RobotHandle, t: Dynamic, j: Dynamic| -> ScriptResult<Dynamic> {
         ik_near(r, &to_transform(&t, "target")?, &j)
@@ -565,6 +669,43 @@ fn register_ik(api: &mut Api) {
             m.insert("singular".into(), Dynamic::from(s.singular));
             Dynamic::from_map(m)
         }).collect())
+    });
+    register_ik_solutions(api);
+}
+
+/// `IkSolutions`, `Robot.ik_solutions`' value: length, indexing, iteration, the array.
+fn register_ik_solutions(api: &mut Api) {
+    api.type_::<IkSolutions>("IkSolutions");
+    api.iterable::<IkSolutions>();
+    api.get(
+        "IkSolutions.len -> int",
+        "Number of solutions (also `sols.len()`).",
+        |s: &mut IkSolutions| s.len as i64,
+    );
+    api.f(
+        "IkSolutions.len() -> int",
+        "Number of solutions.",
+        |s: &mut IkSolutions| s.len as i64,
+    );
+    api.index_get(
+        "IkSolutions[i: int] -> array",
+        "Solution `i` (0 the nearest the reference joints), its joints in degrees (mm for prismatic joints); negative `i` counts from the end; out of range is an error.",
+        |s: &mut IkSolutions, i: i64| -> ScriptResult<Dynamic> {
+            Ok(IkSolutions::row_value(s.get(i)?))
+        },
+    );
+    api.f(
+        "IkSolutions.to_array() -> array",
+        "Every solution as an array of joint arrays (degrees), what `Robot.ik` returns.",
+        |s: &mut IkSolutions| s.to_array(),
+    );
+    api.f(
+        "IkSolutions.to_string() -> string",
+        "As the array `to_array()` prints (what `print` and `${sols}` show).",
+        |s: &mut IkSolutions| Dynamic::from_array(s.to_array()).to_string(),
+    );
+    api.overload("to_debug(s: IkSolutions)", |s: &mut IkSolutions| {
+        format!("{:?}", Dynamic::from_array(s.to_array()))
     });
 }
 
@@ -712,12 +853,27 @@ fn register_models(api: &mut Api, ctx: &Arc<Context>) {
         "RobotModel.ik(target) -> array",
         "Every joint solution (degrees) for the world pose, nearest to all-zero joints first.",
         |r: &mut RobotModel, t: Dynamic| -> ScriptResult<Array> {
-            model_ik_every(&r.0, &to_transform(&t, "target")?)
+            Ok(model_ik_every(&r.0, &to_transform(&t, "target")?)?.to_array())
         },
     );
     api.overload(
         "RobotModel.ik(target) -> array",
-        |r: &mut RobotModel, t: Transform| -> ScriptResult<Array> { model_ik_every(&r.0, &t) },
+        |r: &mut RobotModel, t: Transform| -> ScriptResult<Array> {
+            Ok(model_ik_every(&r.0, &t)?.to_array())
+        },
+    );
+    api.f(
+        "RobotModel.ik_solutions(target) -> IkSolutions",
+        "The solutions of `ik(target)` as one `IkSolutions` value (see `Robot.ik_solutions`).",
+        |r: &mut RobotModel, t: Dynamic| -> ScriptResult<IkSolutions> {
+            model_ik_every(&r.0, &to_transform(&t, "target")?)
+        },
+    );
+    api.overload(
+        "RobotModel.ik_solutions(target) -> IkSolutions",
+        |r: &mut RobotModel, t: Transform| -> ScriptResult<IkSolutions> {
+            model_ik_every(&r.0, &t)
+        },
     );
     fn add_robot(
         c: &Context,

@@ -1,7 +1,8 @@
 //! One call's cost from Rust and from a Rhai script, for the calls docs/performance.md
 //! ("Python") compares with Python (`python/bench/overhead.py` runs this bench first
 //! and adds its own columns): FK, IK of every branch (the demo MZ07, and a UR5e of
-//! the published D-H lengths without joint limits), the UR5e's nearest solution
+//! the published D-H lengths without joint limits; from Rhai as `ik`'s array and as
+//! the fast form `ik_solutions`), the UR5e's nearest solution
 //! (`ik_near`), an interference check of one pair and a short plan (screw5 lifted
 //! 40 mm, RRT-Connect, seed 3), on the demo MZ07 and cell documents; and the floor,
 //! `q.len()`: the interpreter's cost of one native method call. The set-up script,
@@ -193,6 +194,34 @@ fn main() {
             "ik_ur5e",
             Box::new(|| {
                 black_box(ur.inverse(black_box(&ur_target), &ur_q, &every).unwrap());
+            }),
+        ),
+        (
+            "ik_solutions",
+            Box::new(|| {
+                black_box(robot.inverse(black_box(&target), &q, &every).unwrap());
+            }),
+        ),
+        (
+            "ik_solutions_ur5e",
+            Box::new(|| {
+                black_box(ur.inverse(black_box(&ur_target), &ur_q, &every).unwrap());
+            }),
+        ),
+        (
+            // Every solution's joints copied into one stack array: no allocation.
+            "ik_each_ur5e",
+            Box::new(|| {
+                let mut flat = [0.0; 48];
+                let mut n = 0;
+                ur.inverse_each(black_box(&ur_target), &ur_q, &every, |s| {
+                    if let Some(row) = flat.get_mut(n..n + s.len()) {
+                        row.copy_from_slice(s);
+                    }
+                    n += s.len();
+                })
+                .unwrap();
+                black_box((flat, n));
             }),
         ),
         (

@@ -119,6 +119,61 @@ fn ik_round_trip_through_the_script_api() {
     script_passes("ik.rhai", script);
 }
 
+/// `ik_solutions`, the fast form of `ik`, gives `ik`'s solutions to the bit and in the
+/// same order through every way a script reads it (index, negative index, `for`,
+/// `to_array`, printing), each reproducing the target; the same errors. Both stores
+/// are used: the MZ07's few branches inline, a UR5e with ±360° limits (hundreds of
+/// solutions) on the heap; and a script-built robot (`RobotModel.ik_solutions`).
+#[test]
+fn ik_solutions_are_ik_read_lazily() {
+    let script = r#"
+        fn same(arm, target, sols, all) {
+            assert(sols.len == all.len() && sols.len() == all.len(), `${sols.len} solutions, ik ${all.len()}`);
+            assert(sols.to_array() == all, "to_array is ik");
+            assert(`${sols}` == `${all}`, "printed as ik's array");
+            for i in 0..all.len() {
+                assert(sols[i] == all[i], `solution ${i}: ${sols[i]} != ${all[i]}`);
+                assert(sols[i - all.len()] == all[i], `solution ${i - all.len()}`);
+            }
+            let k = 0;
+            for q in sols {
+                assert(q == all[k], `for: solution ${k}`);
+                let d = arm.fk(q).distance_to(target);
+                assert(d.mm < 1e-6 && d.deg < 1e-6, `${q} misses the target by ${d}`);
+                k += 1;
+            }
+            assert(k == all.len(), "for visits every solution");
+            let why = "";
+            try { sols[all.len()]; } catch (e) { why = `${e}`; }
+            assert(why.contains("out of range"), why);
+        }
+        let doc = open_doc("models/mz07.yaml");
+        let arm = doc.robot("mz07");
+        for q in [[40, -60, 20, 90, -70, 10], [-120, 30, 100, -45, 60, -200], [0, 0, 0, 0, 30, 0]] {
+            arm.joints = q;
+            let target = arm.tcp;
+            same(arm, target, arm.ik_solutions(target), arm.ik(target));
+            same(arm, target, arm.ik_solutions(target.xyzabc), arm.ik(target.xyzabc));
+        }
+        let far = ["", ""];
+        try { arm.ik(pose(3000, 0, 500, 180, 0, 0)); } catch (e) { far[0] = `${e}`; }
+        try { arm.ik_solutions(pose(3000, 0, 500, 180, 0, 0)); } catch (e) { far[1] = `${e}`; }
+        assert(far[0].contains("unreachable") && far[0] == far[1], `${far}`);
+        let ur = robot_dh([[0, 162.5, 0, 90], [0, 0, -425, 0], [0, 0, -392.2, 0], [0, 133.3, 0, 90], [0, 99.7, 0, -90], [0, 99.6, 0, 0]],
+                          #{limits: [[-360, 360], [-360, 360], [-360, 360], [-360, 360], [-360, 360], [-360, 360]]});
+        assert(ur.closed_form, "the UR5e is solved in closed form");
+        let t = ur.fk([10, -60, 80, -110, -70, 30]);
+        let many = ur.ik_solutions(t);
+        assert(many.len > 8, `${many.len} solutions: the heap store is not used`);
+        same(ur, t, many, ur.ik(t));
+        let placed = doc.add_robot("ur", ur, #{base: [500, 0, 0, 0, 0, 90]});
+        placed.joints = [10, -60, 80, -110, -70, 30];
+        same(placed, placed.tcp, placed.ik_solutions(placed.tcp), placed.ik(placed.tcp));
+        print("ok");
+    "#;
+    script_passes("ik_solutions.rhai", script);
+}
+
 /// Batch forms: `fk_many` equals `fk` entry by entry, `ik_many` follows a line of poses
 /// keeping each solution next to the previous one (and `()` where a pose is out of
 /// reach); the wrist-singular pose comes back from `ik_branches` flagged with joint 5
