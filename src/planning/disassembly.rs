@@ -7,7 +7,7 @@ use super::run::{PlanError, ProgressFn};
 use super::space::PlanningSpace;
 use super::tree::Target;
 use super::validator::MotionValidator;
-use crate::collision::Aabb;
+use crate::math::Aabb;
 use crate::math::{Rng, Transform};
 
 /// Checks a box is finite with `lo ≤ hi` on every axis.

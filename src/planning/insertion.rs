@@ -11,7 +11,7 @@ use super::run::{PlanError, PlanLimits, ProgressFn};
 use super::smoothing::{smooth, Smoothing};
 use super::space::PlanningSpace;
 use super::validator::{Checker, LazyValidation, MotionValidator};
-use crate::collision::Aabb;
+use crate::math::Aabb;
 use crate::math::Transform;
 use std::time::Instant;
 

@@ -7,7 +7,7 @@
 //! on column vectors, `p' = R p + t`), boxes as `*_min` / `*_max` corners (mm), the
 //! rotation weight in mm per rad.
 
-use crate::collision::Aabb;
+use crate::math::Aabb;
 use crate::math::{Transform, Vec3};
 use nalgebra::{Quaternion, UnitQuaternion};
 use serde::Deserialize;

@@ -7,7 +7,7 @@ use super::{
     NarrowPassage, PlanError, PlanLimits, PlannedPath, PlanningSpace, ProgressFn,
     RrtConnectOptions, RrtFloydOptions, RrtOptions, Smoothing,
 };
-use crate::collision::Aabb;
+use crate::math::Aabb;
 use crate::math::Transform;
 
 /// A planner and its options.

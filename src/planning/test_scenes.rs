@@ -2,7 +2,8 @@
 //! checked exactly with a separating-axis test, and the planner property tests.
 
 use super::*;
-use crate::collision::{Aabb, SweepMethod};
+use crate::collision::SweepMethod;
+use crate::math::Aabb;
 use crate::math::{Transform, Vec3};
 use nalgebra::Matrix3;
 

@@ -405,7 +405,7 @@ fn run_fitup(p: &ProblemJson, seed: u64, budget_s: f64, recheck: bool) -> (Outco
     let mut cache = SceneCache::new();
     let ws = Workspace::new(&doc, &mut cache).expect("a workspace");
     let mut request = PlanRequest {
-        bounds: Some(fitup::collision::Aabb::new(p.min, p.max)),
+        bounds: Some(fitup::math::Aabb::new(p.min, p.max)),
         start: Some(p.start),
         ..PlanRequest::default()
     };
