@@ -142,13 +142,27 @@ impl Moments {
         }
     }
 
+    /// The moments of the corners of `self` that are not in `part` (a subset).
+    fn without(&self, part: &Moments) -> Moments {
+        Moments {
+            count: self.count - part.count,
+            sum: self.sum - part.sum,
+            outer: self.outer - part.outer,
+        }
+    }
+
     /// The principal axes (columns, orthonormal) of the corners: the eigenvectors of
     /// their covariance (the search starting from the orthonormal `start`), or the
     /// part frame's axes when that is not finite.
     fn principal_axes(&self, start: &Matrix3<f64>) -> Matrix3<f64> {
+        self.principal_axes_within(start, 1e-6)
+    }
+
+    /// [`Moments::principal_axes`] to a relative off-diagonal of `tolerance`.
+    fn principal_axes_within(&self, start: &Matrix3<f64>, tolerance: f64) -> Matrix3<f64> {
         let mean = self.sum / self.count;
         let cov = self.outer / self.count - mean * mean.transpose();
-        let axes = symmetric_eigenvectors(&cov, start);
+        let axes = symmetric_eigenvectors(&cov, start, tolerance);
         if axes.iter().all(|v| v.is_finite()) {
             axes
         } else {
@@ -160,11 +174,12 @@ impl Moments {
 /// Orthonormal eigenvectors (columns) of the symmetric 3×3 matrix `m`, by cyclic
 /// Jacobi rotations from the orthonormal `start` (a child's axes for its parent:
 /// nearly right already, so one or two sweeps do), to a relative off-diagonal of
-/// 1e-6 (axes within about a microradian of the principal ones: as tight a box). Several times cheaper than a general solver for this size and orthonormal
+/// `tolerance` (1e-6 for a node's box: axes within about a microradian of the
+/// principal ones, as tight a box). Several times cheaper than a general solver for this size and orthonormal
 /// by construction (`start` times rotations) even for repeated eigenvalues, which is
 /// all an oriented box needs: any orthonormal axes give a box that bounds the
 /// points, the eigenvectors only make it tight.
-fn symmetric_eigenvectors(m: &Matrix3<f64>, start: &Matrix3<f64>) -> Matrix3<f64> {
+fn symmetric_eigenvectors(m: &Matrix3<f64>, start: &Matrix3<f64>, tolerance: f64) -> Matrix3<f64> {
     let scale = m.abs().max();
     if !(scale.is_finite() && scale > 0.0) {
         return *start;
@@ -173,7 +188,7 @@ fn symmetric_eigenvectors(m: &Matrix3<f64>, start: &Matrix3<f64>) -> Matrix3<f64
     let mut v = *start;
     for _sweep in 0..12 {
         let off = a[(0, 1)].abs() + a[(0, 2)].abs() + a[(1, 2)].abs();
-        if off <= 1e-6 * scale {
+        if off <= tolerance * scale {
             break;
         }
         for (p, q) in [(0, 1), (0, 2), (1, 2)] {
@@ -756,18 +771,36 @@ impl Tree<'_> {
     /// "Pose checks on OMPL.app's meshes").
     fn split_search(&self, items: &mut [Item]) -> usize {
         // proportional to a box's surface
-        let surface =
-            |o: &Obb| o.half[0] * o.half[1] + o.half[1] * o.half[2] + o.half[2] * o.half[0];
+        let surface = |h: &Vec3| h[0] * h[1] + h[1] * h[2] + h[2] * h[0];
+        let whole = Moments::of(self.mesh, items, &self.origin);
+        // the box of `items` along the principal axes of their corners' moments,
+        // searched from the whole group's and only to 1e-3: a choice between cuts
+        // needs the surface to a few per cent, and the eigen search from scratch to
+        // 1e-6 was half of the trees' build
+        let near = whole.principal_axes_within(&Matrix3::identity(), 1e-3);
+        let half_extents = |items: &[Item], m: &Moments| {
+            let (lo, hi, _) = extents(self.mesh, items, &m.principal_axes_within(&near, 1e-3));
+            (hi - lo) * 0.5
+        };
         let at = items.len() / 2;
-        let mut best = (f64::INFINITY, 0);
+        let mut best = f64::INFINITY;
+        let mut kept: Vec<Item> = Vec::new();
         for cut in 0..4 {
             self.cut(items, cut, at);
-            let cost = surface(&self.fitted(&items[..at])) + surface(&self.fitted(&items[at..]));
-            if cost < best.0 {
-                best = (cost, cut);
+            // the second half's moments by difference: one pass fewer per cut (a
+            // little rounding only sways which cut is taken, never a box)
+            let first = Moments::of(self.mesh, &items[..at], &self.origin);
+            let cost = surface(&half_extents(&items[..at], &first))
+                + surface(&half_extents(&items[at..], &whole.without(&first)));
+            if cost < best {
+                best = cost;
+                kept.clear();
+                kept.extend_from_slice(items);
             }
         }
-        self.cut(items, best.1, at);
+        if !kept.is_empty() {
+            items.copy_from_slice(&kept);
+        }
         at
     }
 
@@ -784,7 +817,7 @@ impl Tree<'_> {
             let d = c.coords - mean;
             m + d * d.transpose()
         });
-        let axes = symmetric_eigenvectors(&cov, &Matrix3::identity());
+        let axes = symmetric_eigenvectors(&cov, &Matrix3::identity(), 1e-3);
         let spread = |k: usize| axes.column(k).dot(&(cov * axes.column(k)));
         let k = (0..3)
             .max_by(|&i, &j| spread(i).total_cmp(&spread(j)))
