@@ -730,7 +730,9 @@ fn finish(
     }
     if sequences.is_empty() {
         return Err(SequenceError::NoSequence {
-            timed_out: ctx.out_of_time(),
+            // The search stops at its share of the budget: a search cut there found
+            // nothing in time, though the whole budget has not run out yet.
+            timed_out: ctx.out_of_time() || (cut && ctx.search_out_of_time()),
             rejected: rejected.into_iter().take(4).collect(),
         });
     }
