@@ -1,10 +1,11 @@
 //! Exact interference of two posed parts: simultaneous traversal of the two trees in
-//! the first part's frame, triangle pairs tested with [`tri_tri`], containment by
-//! ray parity, and the minimum distance used by continuous sweeps.
+//! the first part's frame, triangle pairs tested with [`tri_tri`]; containment at
+//! rest is in `containment.rs`, distances for continuous sweeps in `distance.rs`.
 
+use super::containment::{contained, containment};
 use super::shape::{Collider, Node, Obb, Plane, LEAF_SIZE};
-use super::triangle::{tri_distance, tri_tri_with, unit_normal, Tri};
-use super::{CollisionError, Contact, InterferenceKind, PairMember, PoseFault};
+use super::triangle::{tri_tri_with, unit_normal, Tri};
+use super::{CollisionError, Contact, InterferenceKind, PoseFault};
 use crate::math::{Aabb, Deadline, Transform, Vec3};
 use nalgebra::{Isometry3, Matrix3};
 use std::cell::{Cell, RefCell};
@@ -13,7 +14,7 @@ use std::ops::ControlFlow;
 
 /// The pose of `b`'s part frame in `a`'s part frame, with what the node test needs.
 pub(crate) struct Relative {
-    iso: Isometry3<f64>,
+    pub(super) iso: Isometry3<f64>,
     rot: Matrix3<f64>,
 }
 
@@ -37,7 +38,7 @@ impl Relative {
     /// (frame B): the widest gap between their shadows on the six face normals, or
     /// between their bounding spheres.
     #[inline]
-    fn obb_gap(&self, a: &Obb, b: &Obb) -> f64 {
+    pub(super) fn obb_gap(&self, a: &Obb, b: &Obb) -> f64 {
         let d = self.rot * b.centre + self.iso.translation.vector - a.centre;
         let (ha, hb) = (&a.half, &b.half);
         let mut gap = d.norm() - a.radius - b.radius;
@@ -56,7 +57,7 @@ impl Relative {
         gap.max(0.0)
     }
 
-    fn tri(&self, t: &Tri) -> Tri {
+    pub(super) fn tri(&self, t: &Tri) -> Tri {
         [self.iso * t[0], self.iso * t[1], self.iso * t[2]]
     }
 
@@ -151,7 +152,7 @@ pub(crate) fn tri_box(t: &Tri) -> Aabb {
     }
 }
 
-fn size(n: &Node) -> f64 {
+pub(super) fn size(n: &Node) -> f64 {
     n.bounds.half_extents().norm_squared()
 }
 
@@ -922,422 +923,5 @@ fn climb(
     deepest
 }
 
-/// When the surfaces do not cross: is one solid inside the other? Returns which
-/// part is inside ([`PairMember::First`] = `a`) and the containment depth.
-fn containment(
-    a: &Collider,
-    pa: &Transform,
-    b: &Collider,
-    pb: &Transform,
-    eps: f64,
-) -> Option<(PairMember, f64)> {
-    let (inner, iso) = contained(a, pa, b, pb, eps)?;
-    Some(match inner {
-        PairMember::First => (inner, containment_depth(a, b, &iso)),
-        PairMember::Second => (inner, containment_depth(b, a, &iso)),
-    })
-}
-
-/// [`containment`] without the depth: which part is inside, and the map from its
-/// frame into the other's. The boolean checks stop here, since the depth visits
-/// every vertex of the inner part (nearly half a planner's time went to it where
-/// sampled poses fall inside solid walls).
-fn contained(
-    a: &Collider,
-    pa: &Transform,
-    b: &Collider,
-    pb: &Transform,
-    eps: f64,
-) -> Option<(PairMember, Isometry3<f64>)> {
-    let a_in_b = Relative::new(pb, pa).iso; // a's frame → b's frame
-    if b.is_solid() && inside(a, b, &a_in_b, eps) {
-        return Some((PairMember::First, a_in_b));
-    }
-    let b_in_a = Relative::new(pa, pb).iso;
-    if a.is_solid() && inside(b, a, &b_in_a, eps) {
-        return Some((PairMember::Second, b_in_a));
-    }
-    None
-}
-
-/// Whether the solid `inner` (mapped into `outer`'s frame by `iso`) has its
-/// material inside `outer`, judged at the first test point that is clearly off
-/// `outer`'s surface: vertices first, then points just inside `inner` under its
-/// triangles' centroids (so coincident solids count as overlapping).
-fn inside(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>, eps: f64) -> bool {
-    let bounds = outer.bounds();
-    let off = 1e3 * eps;
-    let vertices = inner.tris().flatten();
-    let under_faces = inner.tris().filter_map(|t| {
-        let n = (t[1] - t[0]).cross(&(t[2] - t[0])).try_normalize(0.0)?;
-        let c = nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]);
-        Some(c - n * off)
-    });
-    for p in vertices.take(64).chain(under_faces.take(256)) {
-        let q = iso * p;
-        if bounds.distance_to_point(&q) > eps {
-            return false;
-        }
-        if outer.within(&q, eps) {
-            continue;
-        }
-        return outer.contains_point(&q);
-    }
-    false
-}
-
-/// Largest distance from a vertex of `inner` to the surface of `outer`, mm.
-fn containment_depth(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>) -> f64 {
-    let mut best = 0.0f64;
-    for t in inner.tris() {
-        for p in t {
-            best = best.max(outer.distance_to_point(&(iso * p), 0.0));
-        }
-    }
-    best
-}
-
-/// The clearance between parts `a` at `pa` and `b` at `pb` (mm): the distance between
-/// their surfaces, searched up to `cap` mm (returns `cap` when nothing is nearer), and
-/// 0 when they meet or one solid lies inside the other — the same geometry
-/// [`contact`] judges, so the two agree at every tolerance `tol` ≥ 0:
-/// `Touching` or `Interfering` ⇒ clearance ≤ `tol` (0 for crossing or contained
-/// parts), and clearance > `tol` ⇒ `Separate`.
-///
-/// A surface distance within the pair's numerical slack (the colliders' `eps`, the
-/// distance at which [`contact`] counts surfaces as meeting) is reported as 0.
-pub fn clearance(
-    a: &Collider,
-    pa: &Transform,
-    b: &Collider,
-    pb: &Transform,
-    cap: f64,
-) -> Result<f64, CollisionError> {
-    // The full search (stop 0): a `stop` above 0 would return the first leaf pair's
-    // distance below it, not the minimum (clearance once answered 23 mm for touching
-    // parts that way).
-    let cap = if cap.is_nan() {
-        f64::INFINITY
-    } else {
-        cap.max(0.0)
-    };
-    let d = distance_search(a, pa, b, pb, 0.0, cap, 0.0)?;
-    let eps = eps(a, b, pa, pb);
-    // `tri_tri` counts pairs within `eps` of each other's planes as meeting; their
-    // distance may be a few `eps` (corner to edge), never more than 4·eps.
-    if d <= 4.0 * eps {
-        return Ok(0.0);
-    }
-    // Surfaces apart: one solid may still hold the other (contact says Interfering).
-    if contained(a, pa, b, pb, eps).is_some() {
-        return Ok(0.0);
-    }
-    Ok(d)
-}
-
-/// Minimum distance between the surfaces of `a` at `pa` and `b` at `pb`, mm (0 when
-/// they touch or cross; for one part inside another it is the gap between the
-/// surfaces). Pruned by box distances; stops early once below `stop`.
-pub fn surface_distance(
-    a: &Collider,
-    pa: &Transform,
-    b: &Collider,
-    pb: &Transform,
-    stop: f64,
-) -> Result<f64, CollisionError> {
-    distance_search(a, pa, b, pb, stop, f64::INFINITY, 0.0)
-}
-
-/// A lower bound `d` of the surface distance `d*` between `a` at `pa` and `b` at
-/// `pb` (mm) for conservative advancement, cheaper than [`surface_distance`]:
-/// `d ≤ d* ≤ (1 + slack) · d` when `d* < cap`, else `d ≥ cap / (1 + slack)`
-/// (the search drops every box pair farther than what it needs). Stops early once
-/// below `stop`. `slack ≥ 0` (0.25 loses a fifth of each advance and skips most
-/// of the exact search).
-pub fn distance_lower_bound(
-    a: &Collider,
-    pa: &Transform,
-    b: &Collider,
-    pb: &Transform,
-    stop: f64,
-    cap: f64,
-    slack: f64,
-) -> Result<f64, CollisionError> {
-    distance_search(a, pa, b, pb, stop, cap, slack.max(0.0))
-}
-
-/// Branch and bound over box pairs; a pair is dropped when its box distance times
-/// `1 + slack` reaches the best distance found (initially `cap`), so the true
-/// distance is at least `best / (1 + slack)`, which is returned.
-fn distance_search(
-    a: &Collider,
-    pa: &Transform,
-    b: &Collider,
-    pb: &Transform,
-    stop: f64,
-    cap: f64,
-    slack: f64,
-) -> Result<f64, CollisionError> {
-    check_pose(pa)?;
-    check_pose(pb)?;
-    let rel = Relative::new(pa, pb);
-    let grow = 1.0 + slack;
-    let mut best = if cap.is_nan() {
-        f64::INFINITY
-    } else {
-        cap * grow
-    };
-    let mut stack: Vec<(u32, u32, f64)> = vec![(0, 0, 0.0)];
-    let mut moved_boxes: Vec<(Tri, Aabb)> = Vec::with_capacity(8);
-    let mut tally = super::EffortTally(0);
-    while let Some((i, j, lb)) = stack.pop() {
-        tally.0 += 1;
-        if lb * grow >= best {
-            continue;
-        }
-        let (na, nb) = (&a.nodes[i as usize], &b.nodes[j as usize]);
-        if na.count > 0 && nb.count > 0 {
-            moved_boxes.clear();
-            moved_boxes.extend(b.leaf_tris(nb).map(|t| {
-                let m = rel.tri(&t);
-                (m, tri_box(&m))
-            }));
-            for ta in a.leaf_tris(na) {
-                let ba = tri_box(&ta);
-                for (tb, bb) in &moved_boxes {
-                    // the triangles' boxes bound their distance from below
-                    if ba.distance_to_box(bb) * grow < best {
-                        best = best.min(tri_distance(&ta, tb));
-                    }
-                }
-            }
-            if best < stop {
-                return Ok(best / grow);
-            }
-            continue;
-        }
-        let split_a = nb.count > 0 || (na.count == 0 && size(na) >= size(nb));
-        let children = if split_a {
-            [(na.first, j), (na.first + 1, j)]
-        } else {
-            [(i, nb.first), (i, nb.first + 1)]
-        };
-        let mut next = children.map(|(ci, cj)| {
-            let d = rel.obb_gap(&a.obbs[ci as usize], &b.obbs[cj as usize]);
-            (ci, cj, d)
-        });
-        // nearer pair last so it is explored first
-        if next[0].2 < next[1].2 {
-            next.swap(0, 1);
-        }
-        stack.extend(next.into_iter().filter(|c| c.2 * grow < best));
-    }
-    Ok(best / grow)
-}
-
 #[cfg(test)]
-mod tests {
-    //! The pair walk against all pairs: every pruning test in it is conservative.
-
-    use super::super::containment::{shared_face_overlap, walk_margin};
-    use super::super::triangle::tri_tri;
-    use super::*;
-    use crate::math::{Point3, Rng};
-    use crate::mesh::Mesh;
-    use nalgebra::UnitQuaternion;
-    use proptest::prelude::*;
-    use std::collections::BTreeMap;
-    use std::sync::Arc;
-
-    /// Per pair of triangles (tree order) that meets or shares a face: the crossing
-    /// depth and the shared-face overlap, as bits (the same arithmetic must give the
-    /// same numbers).
-    type Met = BTreeMap<(u32, u32), (Option<u64>, u64)>;
-
-    fn setup(a: &Collider, pa: &Transform, b: &Collider, pb: &Transform) -> (Relative, f64, bool) {
-        let shared = a.encloses_volume() && b.encloses_volume();
-        (Relative::new(pa, pb), eps(a, b, pa, pb), shared)
-    }
-
-    fn record(met: &mut Met, k: (u32, u32), depth: Option<f64>, overlap: f64) {
-        if depth.is_some() || overlap > 0.0 {
-            met.insert(k, (depth.map(f64::to_bits), overlap.to_bits()));
-        }
-    }
-
-    /// What the walk hands over, as `interferes` and `contact` test it.
-    fn walked(a: &Collider, pa: &Transform, b: &Collider, pb: &Transform) -> Met {
-        let (rel, eps, shared) = setup(a, pa, b, pb);
-        let oriented = a.is_solid() && b.is_solid();
-        let mut met = Met::new();
-        let margin = walk_margin(shared, eps);
-        let floor = Cell::new(-1.0);
-        let _ = for_each_triangle_pair::<()>(a, b, &rel, margin, shared, &floor, |fa, fb| {
-            let depth = tri_tri_with(fa.t, fa.n, fb.t, fb.n, eps, oriented);
-            let overlap = if shared {
-                super::super::containment::shared_face_overlap_with(fa.t, fa.n, fb.t, fb.n)
-            } else {
-                0.0
-            };
-            record(&mut met, (fa.k, fb.k), depth, overlap);
-            ControlFlow::Continue(())
-        });
-        met
-    }
-
-    /// Every pair of triangles, `b`'s moved into `a`'s frame as the walk moves them.
-    fn all_pairs(a: &Collider, pa: &Transform, b: &Collider, pb: &Transform) -> Met {
-        let (rel, eps, shared) = setup(a, pa, b, pb);
-        let oriented = a.is_solid() && b.is_solid();
-        let mut met = Met::new();
-        for ka in 0..a.triangle_count() {
-            let ta = a.tri(ka);
-            for kb in 0..b.triangle_count() {
-                let tb = rel.tri(&b.tri(kb));
-                let depth = tri_tri(&ta, &tb, eps, oriented);
-                let overlap = if shared {
-                    shared_face_overlap(&ta, &tb)
-                } else {
-                    0.0
-                };
-                record(&mut met, (ka as u32, kb as u32), depth, overlap);
-            }
-        }
-        met
-    }
-
-    /// A block cut in `slices` closed boxes stacked along Z: encloses a volume, not
-    /// a 2-manifold (the shared-face rule applies, containment does not).
-    fn sliced(hi: [f64; 3], slices: usize) -> Mesh {
-        let mut soup = Vec::new();
-        let level = |k: usize| hi[2] * k as f64 / slices as f64;
-        for s in 0..slices {
-            let m = Mesh::cuboid(
-                Point3::new(0.0, 0.0, level(s)),
-                Point3::new(hi[0], hi[1], level(s + 1)),
-            );
-            soup.extend((0..m.triangles.len()).map(|k| m.triangle(k)));
-        }
-        Mesh::from_triangle_soup(soup).unwrap()
-    }
-
-    /// A box of `n × n` facets a side: many small coplanar faces.
-    fn fine_box(hi: [f64; 3], n: usize) -> Mesh {
-        let mut soup = Vec::new();
-        let c = Mesh::cuboid(Point3::origin(), Point3::from(hi));
-        for k in 0..c.triangles.len() {
-            soup.push(c.triangle(k));
-        }
-        // split every triangle n² ways (midpoint subdivision keeps it closed)
-        for _ in 0..n {
-            soup = soup
-                .into_iter()
-                .flat_map(|t: Tri| {
-                    let m = [0, 1, 2].map(|i| nalgebra::center(&t[i], &t[(i + 1) % 3]));
-                    [
-                        [t[0], m[0], m[2]],
-                        [m[0], t[1], m[1]],
-                        [m[2], m[1], t[2]],
-                        [m[0], m[1], m[2]],
-                    ]
-                })
-                .collect();
-        }
-        Mesh::from_triangle_soup(soup).unwrap()
-    }
-
-    fn shape(kind: u8) -> Collider {
-        let mesh = match kind % 6 {
-            0 => Mesh::cuboid(Point3::origin(), Point3::new(10.0, 6.0, 4.0)),
-            1 => sliced([10.0, 6.0, 4.0], 3),
-            2 => fine_box([10.0, 6.0, 4.0], 2),
-            3 => {
-                // open: a box without its top
-                let mut m = Mesh::cuboid(Point3::origin(), Point3::new(10.0, 6.0, 4.0));
-                m.triangles.retain(|t| {
-                    let z = |i: u32| m.vertices[i as usize].z;
-                    !(z(t[0]) == 4.0 && z(t[1]) == 4.0 && z(t[2]) == 4.0)
-                });
-                m
-            }
-            4 => crate::mesh::Mesh::uv_sphere(4.0, 16),
-            _ => Mesh::cylinder(3.0, 8.0, 24),
-        };
-        Collider::new(Arc::new(mesh)).unwrap()
-    }
-
-    /// Poses that put faces in one plane and edges on faces (multiples of a
-    /// quarter turn, a half-millimetre grid), nudged a few f32 roundings or a
-    /// microradian off, or anywhere.
-    fn pose(rng: &mut Rng, style: u8) -> Transform {
-        let grid = |rng: &mut Rng| (rng.range(-20.0, 20.0) * 2.0).round() / 2.0;
-        let quarter = |rng: &mut Rng| {
-            let axis = [Vec3::x_axis(), Vec3::y_axis(), Vec3::z_axis()][rng.below(3)];
-            UnitQuaternion::from_axis_angle(
-                &axis,
-                std::f64::consts::FRAC_PI_2 * rng.below(4) as f64,
-            )
-        };
-        match style % 4 {
-            0 => Transform::from_parts(
-                Vec3::new(grid(rng), grid(rng), grid(rng)) / 2.0,
-                quarter(rng) * quarter(rng),
-            ),
-            1 => Transform::from_parts(
-                Vec3::new(grid(rng), grid(rng), grid(rng)) / 2.0
-                    + Vec3::new(rng.range(-3e-5, 3e-5), 0.0, rng.range(-3e-5, 3e-5)),
-                UnitQuaternion::from_scaled_axis(Vec3::new(0.0, rng.range(-2e-6, 2e-6), 0.0))
-                    * quarter(rng),
-            ),
-            2 => Transform::from_parts(
-                Vec3::new(grid(rng), grid(rng), grid(rng)) / 2.0,
-                UnitQuaternion::from_scaled_axis(Vec3::new(rng.range(-3e-5, 3e-5), 0.0, 0.0)),
-            ),
-            _ => Transform::from_parts(
-                Vec3::new(
-                    rng.range(-8.0, 8.0),
-                    rng.range(-8.0, 8.0),
-                    rng.range(-8.0, 8.0),
-                ),
-                rng.rotation(),
-            ),
-        }
-    }
-
-    proptest! {
-        #![proptest_config(crate::test_support::proptest_config(160))]
-        /// The walk hands over exactly the pairs that meet or share a face, with the
-        /// same depths and overlaps to the bit, as testing every pair: solids, closed
-        /// slices, fine and open meshes, in flush, nearly flush and random poses.
-        #[test]
-        fn the_walk_misses_no_pair_that_meets(
-            kinds in (0u8..6, 0u8..6),
-            styles in (0u8..4, 0u8..4),
-            seed in 0u64..1_000_000,
-        ) {
-            let (a, b) = (shape(kinds.0), shape(kinds.1));
-            let mut rng = Rng::new(seed);
-            let (pa, pb) = (pose(&mut rng, styles.0), pose(&mut rng, styles.1));
-            let all = all_pairs(&a, &pa, &b, &pb);
-            prop_assert_eq!(walked(&a, &pa, &b, &pb), all);
-        }
-    }
-
-    /// The same at poses where many pairs meet (the property above draws mostly
-    /// parts apart): each part at the other's faces.
-    #[test]
-    fn the_walk_misses_no_pair_in_contact() {
-        let mut rng = Rng::new(5);
-        let mut met = 0;
-        for k in 0..400 {
-            let (a, b) = (shape(k as u8), shape((k / 6) as u8));
-            let pa = Transform::IDENTITY;
-            let p = pose(&mut rng, (k % 3) as u8);
-            let pb = Transform::from_parts(p.translation() / 4.0, p.rotation());
-            let all = all_pairs(&a, &pa, &b, &pb);
-            met += all.len();
-            assert_eq!(walked(&a, &pa, &b, &pb), all, "{k}: {pb:?}");
-        }
-        assert!(met > 4000, "{met}");
-    }
-}
+mod tests;

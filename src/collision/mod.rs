@@ -52,6 +52,7 @@
 
 mod cells;
 mod containment;
+mod distance;
 mod edge;
 mod exact;
 mod method;
@@ -63,11 +64,9 @@ mod volume;
 pub use cells::{
     cells_contact, method_disagreement, Cell, CutCells, CutSpec, Disagreement, MAX_CELLS,
 };
+pub use distance::{clearance, distance_lower_bound, surface_distance};
 pub use edge::{edge_interferes, edge_interferes_until, EdgeOptions};
-pub use exact::{
-    clearance, contact, contact_until, distance_lower_bound, interferes, interferes_until,
-    surface_distance,
-};
+pub use exact::{contact, contact_until, interferes, interferes_until};
 pub use method::{contact_gap, contact_step, SweepMethod, MIN_CONTACT_GAP_MM};
 pub use shape::{Collider, ColliderCache, ColliderWarning, MAX_COORDINATE};
 pub use sweep::{sweep, Motion, Obstacle, SweepHit, SweepOptions, DEFAULT_SWEEP_TIME_LIMIT_MS};

@@ -40,6 +40,12 @@ const SPLIT_GAIN: f64 = 1.1;
 /// gain elsewhere.
 const FLAT_GROUP_COS: f64 = 0.97;
 
+/// Groups of at most this many triangles choose their split among four cuts
+/// (`Tree::split_search`); larger ones, few and near the root, take the widest
+/// axis's median (searching there too made the trees of 30–40k-triangle meshes
+/// another 1.3× longer to build for no fewer node pairs on the whole).
+const SPLIT_SEARCH_MAX: usize = 4096;
+
 /// Nodes over more triangles than this take their oriented box around their
 /// children's boxes instead of scanning every corner (the scans of the top levels
 /// were most of the build; their boxes are a little looser).
@@ -136,13 +142,27 @@ impl Moments {
         }
     }
 
+    /// The moments of the corners of `self` that are not in `part` (a subset).
+    fn without(&self, part: &Moments) -> Moments {
+        Moments {
+            count: self.count - part.count,
+            sum: self.sum - part.sum,
+            outer: self.outer - part.outer,
+        }
+    }
+
     /// The principal axes (columns, orthonormal) of the corners: the eigenvectors of
     /// their covariance (the search starting from the orthonormal `start`), or the
     /// part frame's axes when that is not finite.
     fn principal_axes(&self, start: &Matrix3<f64>) -> Matrix3<f64> {
+        self.principal_axes_within(start, 1e-6)
+    }
+
+    /// [`Moments::principal_axes`] to a relative off-diagonal of `tolerance`.
+    fn principal_axes_within(&self, start: &Matrix3<f64>, tolerance: f64) -> Matrix3<f64> {
         let mean = self.sum / self.count;
         let cov = self.outer / self.count - mean * mean.transpose();
-        let axes = symmetric_eigenvectors(&cov, start);
+        let axes = symmetric_eigenvectors(&cov, start, tolerance);
         if axes.iter().all(|v| v.is_finite()) {
             axes
         } else {
@@ -154,11 +174,12 @@ impl Moments {
 /// Orthonormal eigenvectors (columns) of the symmetric 3×3 matrix `m`, by cyclic
 /// Jacobi rotations from the orthonormal `start` (a child's axes for its parent:
 /// nearly right already, so one or two sweeps do), to a relative off-diagonal of
-/// 1e-6 (axes within about a microradian of the principal ones: as tight a box). Several times cheaper than a general solver for this size and orthonormal
+/// `tolerance` (1e-6 for a node's box: axes within about a microradian of the
+/// principal ones, as tight a box). Several times cheaper than a general solver for this size and orthonormal
 /// by construction (`start` times rotations) even for repeated eigenvalues, which is
 /// all an oriented box needs: any orthonormal axes give a box that bounds the
 /// points, the eigenvectors only make it tight.
-fn symmetric_eigenvectors(m: &Matrix3<f64>, start: &Matrix3<f64>) -> Matrix3<f64> {
+fn symmetric_eigenvectors(m: &Matrix3<f64>, start: &Matrix3<f64>, tolerance: f64) -> Matrix3<f64> {
     let scale = m.abs().max();
     if !(scale.is_finite() && scale > 0.0) {
         return *start;
@@ -167,7 +188,7 @@ fn symmetric_eigenvectors(m: &Matrix3<f64>, start: &Matrix3<f64>) -> Matrix3<f64
     let mut v = *start;
     for _sweep in 0..12 {
         let off = a[(0, 1)].abs() + a[(0, 2)].abs() + a[(1, 2)].abs();
-        if off <= 1e-6 * scale {
+        if off <= tolerance * scale {
             break;
         }
         for (p, q) in [(0, 1), (0, 2), (1, 2)] {
@@ -711,20 +732,104 @@ struct Tree<'m> {
 }
 
 impl Tree<'_> {
-    /// Splits `items` at the median along the widest extent of their centroids
-    /// (reordering them) and returns the index of the split.
-    fn split(items: &mut [Item]) -> usize {
+    /// Splits `items` (reordering them) and returns the index of the split: a group
+    /// of at most [`SPLIT_SEARCH_MAX`] at the median along whichever of x, y, z and
+    /// its centroids' principal axis gives children whose oriented boxes have the
+    /// least surface ([`Tree::split_search`]); a larger group at the median along the
+    /// widest extent of its centroids.
+    fn split(&self, items: &mut [Item]) -> usize {
+        if items.len() <= SPLIT_SEARCH_MAX {
+            return self.split_search(items);
+        }
+        let axis = Self::widest_axis(items);
+        Self::split_on(items, axis, items.len() / 2)
+    }
+
+    /// The axis (0 = x, 1 = y, 2 = z) of the widest extent of `items`' centroids.
+    fn widest_axis(items: &[Item]) -> usize {
         let mut cb = Aabb::EMPTY;
         items.iter().for_each(|(c, _)| cb.grow(c));
         let ext = cb.hi - cb.lo;
-        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        if ext.x >= ext.y && ext.x >= ext.z {
             0
         } else if ext.y >= ext.z {
             1
         } else {
             2
+        }
+    }
+
+    /// Of the four median splits (along x, y, z and the centroids' principal
+    /// axis), the one whose two children's oriented boxes have the least surface.
+    ///
+    /// A surface patch or tube running diagonally to the part frame (alpha's
+    /// tubes, Apartment's slanted walls) is cut across by an x, y or z median into
+    /// children as wide as their parent; the principal axis follows it, and the
+    /// surface picks the cut that leaves the least empty box. Measured on
+    /// OMPL.app's meshes against the widest-axis median alone: 1.3–3.4× fewer node
+    /// pairs per check, the trees 1.5–2.5× longer to build (docs/performance.md,
+    /// "Pose checks on OMPL.app's meshes").
+    fn split_search(&self, items: &mut [Item]) -> usize {
+        // proportional to a box's surface
+        let surface = |h: &Vec3| h[0] * h[1] + h[1] * h[2] + h[2] * h[0];
+        let whole = Moments::of(self.mesh, items, &self.origin);
+        // the box of `items` along the principal axes of their corners' moments,
+        // searched from the whole group's and only to 1e-3: a choice between cuts
+        // needs the surface to a few per cent, and the eigen search from scratch to
+        // 1e-6 was half of the trees' build
+        let near = whole.principal_axes_within(&Matrix3::identity(), 1e-3);
+        let half_extents = |items: &[Item], m: &Moments| {
+            let (lo, hi, _) = extents(self.mesh, items, &m.principal_axes_within(&near, 1e-3));
+            (hi - lo) * 0.5
         };
-        Self::split_on(items, axis, items.len() / 2)
+        let at = items.len() / 2;
+        let mut best = f64::INFINITY;
+        let mut kept: Vec<Item> = Vec::new();
+        for cut in 0..4 {
+            self.cut(items, cut, at);
+            // the second half's moments by difference: one pass fewer per cut (a
+            // little rounding only sways which cut is taken, never a box)
+            let first = Moments::of(self.mesh, &items[..at], &self.origin);
+            let cost = surface(&half_extents(&items[..at], &first))
+                + surface(&half_extents(&items[at..], &whole.without(&first)));
+            if cost < best {
+                best = cost;
+                kept.clear();
+                kept.extend_from_slice(items);
+            }
+        }
+        if !kept.is_empty() {
+            items.copy_from_slice(&kept);
+        }
+        at
+    }
+
+    /// Reorders `items` so the first `at` lie lowest along cut `cut`: 0–2 the
+    /// centroids' x, y, z, 3 their principal axis (x when that is not finite).
+    fn cut(&self, items: &mut [Item], cut: usize, at: usize) {
+        if cut < 3 {
+            Self::split_on(items, cut, at);
+            return;
+        }
+        let n = items.len() as f64;
+        let mean = items.iter().fold(Vec3::zeros(), |s, (c, _)| s + c.coords) / n;
+        let cov = items.iter().fold(Matrix3::zeros(), |m, (c, _)| {
+            let d = c.coords - mean;
+            m + d * d.transpose()
+        });
+        let axes = symmetric_eigenvectors(&cov, &Matrix3::identity(), 1e-3);
+        let spread = |k: usize| axes.column(k).dot(&(cov * axes.column(k)));
+        let k = (0..3)
+            .max_by(|&i, &j| spread(i).total_cmp(&spread(j)))
+            .unwrap_or(0);
+        let dir: Vec3 = axes.column(k).into();
+        if !dir.iter().all(|x| x.is_finite()) {
+            Self::split_on(items, 0, at);
+            return;
+        }
+        items.select_nth_unstable_by(at, |a, b| {
+            a.0.coords.dot(&dir).total_cmp(&b.0.coords.dot(&dir))
+        });
     }
 
     /// Splits `items` into the `at` of least centroid coordinate `axis` and the
@@ -815,7 +920,7 @@ impl Tree<'_> {
         } else {
             let mid = match leaf_split {
                 Some((axis, at)) => Self::split_on(items, axis, at),
-                None => Self::split(items),
+                None => self.split(items),
             };
             let left = self.nodes.len();
             self.nodes[at].first = left as u32;
@@ -945,108 +1050,4 @@ impl ColliderCache {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::math::Rng;
-
-    /// Two facets folded at a right angle get a leaf each, the same two unfolded
-    /// into a square share one; a finely meshed flat plate and a fine sphere keep
-    /// leaves of several;
-    /// nodes are the size [`Collider`]'s memory note counts (184 bytes with their
-    /// oriented boxes).
-    #[test]
-    fn bent_groups_are_split_and_flat_patches_kept() {
-        let tree = |mesh: Mesh| {
-            let c = Collider::new(Arc::new(mesh)).unwrap();
-            let leaves = c.nodes.iter().filter(|x| x.count > 0).count();
-            assert_eq!(
-                c.nodes.iter().map(|x| x.count as usize).sum::<usize>(),
-                c.triangle_count()
-            );
-            assert!(c.nodes.iter().all(|x| x.count as usize <= LEAF_SIZE));
-            assert_eq!(c.nodes.len(), 2 * leaves - 1);
-            (c, leaves)
-        };
-        let p = |x: f64, y: f64, z: f64| Point3::new(x, y, z);
-        let pair = |fourth: Point3| {
-            let vertices = vec![
-                p(0.0, 0.0, 0.0),
-                p(10.0, 0.0, 0.0),
-                p(0.0, 10.0, 0.0),
-                fourth,
-            ];
-            Mesh::new(vertices, vec![[0, 1, 2], [1, 3, 2]]).unwrap()
-        };
-        // a square, then folded along its diagonal by a right angle
-        assert_eq!(tree(pair(p(10.0, 10.0, 0.0))).1, 1, "flat");
-        let h = 50f64.sqrt();
-        assert_eq!(tree(pair(p(5.0, 5.0, h))).1, 2, "folded");
-        // a 64 × 64 grid of squares, two triangles each, in one plane
-        let cells = 64usize;
-        let mut vertices = Vec::new();
-        for i in 0..=cells {
-            for j in 0..=cells {
-                vertices.push(Point3::new(i as f64, j as f64, 0.0));
-            }
-        }
-        let at = |i: usize, j: usize| (i * (cells + 1) + j) as u32;
-        let mut triangles = Vec::new();
-        for i in 0..cells {
-            for j in 0..cells {
-                triangles.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-                triangles.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-            }
-        }
-        let (plate, leaves) = tree(Mesh::new(vertices, triangles).unwrap());
-        let mean = plate.triangle_count() as f64 / leaves as f64;
-        assert!(mean > 1.5, "leaves of {mean} triangles on average");
-        // a fine sphere (facets 5.6° apart) keeps leaves of up to four
-        let (sphere, leaves) = tree(Mesh::uv_sphere(10.0, 64));
-        let mean = sphere.triangle_count() as f64 / leaves as f64;
-        assert!(mean > 3.5, "leaves of {mean} triangles on average");
-        assert_eq!(
-            std::mem::size_of::<Node>() + std::mem::size_of::<Obb>(),
-            184
-        );
-    }
-
-    /// The Jacobi solver's axes are orthonormal and diagonalise the matrix, for
-    /// random covariances and the awkward cases (repeated eigenvalues, rank 1 and 2,
-    /// zero, huge entries).
-    #[test]
-    fn jacobi_axes_diagonalise_symmetric_matrices() {
-        let mut rng = Rng::new(7);
-        let mut cases: Vec<Matrix3<f64>> = vec![
-            Matrix3::zeros(),
-            Matrix3::identity(),
-            Matrix3::from_diagonal(&Vec3::new(3.0, 3.0, 1.0)),
-            Matrix3::from_diagonal(&Vec3::new(0.0, 0.0, 1e12)),
-        ];
-        for _ in 0..500 {
-            let g = Matrix3::from_fn(|_, _| rng.normal() * 10f64.powf(rng.range(-3.0, 6.0)));
-            let rank = rng.below(3) + 1;
-            let mut m = Matrix3::zeros();
-            for k in 0..rank {
-                let c = g.column(k);
-                m += c * c.transpose();
-            }
-            cases.push(m);
-        }
-        for (k, m) in cases.into_iter().enumerate() {
-            let start = if k % 2 == 0 {
-                Matrix3::identity()
-            } else {
-                *rng.rotation().to_rotation_matrix().matrix()
-            };
-            let v = symmetric_eigenvectors(&m, &start);
-            let ortho = v.transpose() * v - Matrix3::identity();
-            assert!(ortho.abs().max() < 1e-12, "not orthonormal: {v} for {m}");
-            let d = v.transpose() * m * v;
-            let off = d[(0, 1)].abs().max(d[(0, 2)].abs()).max(d[(1, 2)].abs());
-            assert!(
-                off <= 1e-5 * m.abs().max().max(1e-300),
-                "off-diagonal {off} left for {m}"
-            );
-        }
-    }
-}
+mod tests;

@@ -3,7 +3,8 @@
 //! after every step) or by a continuous method (conservative advancement) that cannot
 //! jump over thin features.
 
-use super::exact::{distance_lower_bound, interferes};
+use super::distance::distance_lower_bound;
+use super::exact::interferes;
 use super::method::{contact_gap, contact_step, SweepMethod};
 use super::shape::Collider;
 use super::{CollisionError, MotionFault, PoseFault};
