@@ -388,8 +388,11 @@ class Document:
     def part_file(self, part: str) -> Any:
         """A part's geometry file (its mesh or STEP file)."""
     def add_part(self, name: str, file: str) -> str:
-        """Adds a part whose mesh is ``file`` (relative to the document's folder, inside
-        its project); returns its name.
+        """Adds a part whose geometry is ``file`` (relative to the document's folder,
+        inside its project): a mesh (STL, OBJ, PLY, glTF), or a STEP file
+        (``.step``/``.stp``), which becomes a ``step:`` part tessellated with the
+        default deflection (the module is built without STEP import, so a STEP file is
+        refused with the command that adds it to ``fitup``); returns its name.
         """
     def add_component(self, part: str, pose: Optional[_Pose] = None, name: Optional[str] = None) -> str:
         """Adds a component of ``part`` at ``pose`` (4×4, mm; identity when None), named

@@ -66,7 +66,7 @@ fn shown(doc: &fitup::document::Document, names: Option<Vec<String>>) -> Result<
             .map(|c| doc.component_index(c))
             .collect::<std::result::Result<_, _>>()?,
         None => (0..doc.components().len())
-            .filter(|&i| !doc.components()[i].is_suppressed() && !doc.components()[i].hidden)
+            .filter(|&i| doc.components()[i].is_shown())
             .collect(),
     })
 }
@@ -569,8 +569,11 @@ impl Document {
         Ok(self.lock()?.doc.part(part)?.mesh_path.clone())
     }
 
-    /// Adds a part whose mesh is ``file`` (relative to the document's folder, inside
-    /// its project); returns its name.
+    /// Adds a part whose geometry is ``file`` (relative to the document's folder,
+    /// inside its project): a mesh (STL, OBJ, PLY, glTF), or a STEP file
+    /// (``.step``/``.stp``), which becomes a ``step:`` part tessellated with the
+    /// default deflection (the module is built without STEP import, so a STEP file is
+    /// refused with the command that adds it to ``fitup``); returns its name.
     fn add_part(&self, name: &str, file: &str) -> Result<String> {
         Ok(self.lock()?.doc.add_part_file(name, file)?)
     }

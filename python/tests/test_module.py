@@ -2,6 +2,7 @@
 sequences, the results database, scripts, and the typed errors."""
 
 import math
+import pathlib
 import shutil
 import pickle
 import re
@@ -597,6 +598,41 @@ def test_equation_functions_and_driven_joints(project):
     q[0] = 0.1
     arm.set_joints("mz07", q)
     assert arm.joints("mz07")[0] == pytest.approx(0.1)
+
+
+def test_parts_from_files_replaced_parts_and_source_files(project):
+    """Issue 37, capabilities 6 and 7 from Python (CodeStack's add, replace and
+    copy-path macros): a part added from a mesh file inside the project and placed,
+    a component's part replaced (refused until the new part has its mates'
+    references, then re-solved), and every part's source file."""
+    doc = fitup.Document(project / "models" / "gearbox.yaml")
+    meshes = (project / "models" / "meshes").resolve()
+
+    def source(part):
+        return pathlib.Path(doc.part_file(part)).resolve()
+
+    assert source("screw") == meshes / "gearbox_screw.stl"
+    assert pathlib.Path(doc.component("screw1")["part_file"]).resolve() == source("screw")
+    assert doc.add_part("cap2", "meshes/gearbox_cap.stl") == "cap2"
+    assert source("cap2") == meshes / "gearbox_cap.stl"
+    name = doc.add_component("cap2", fitup.translation(500, 500, 760))
+    assert name == "cap2-1" and doc.pose(name)[:3, 3] == pytest.approx([500, 500, 760])
+    with pytest.raises(fitup.FitupError):
+        doc.add_part("outside", "../../elsewhere.stl")
+    doc.add_part("screw_new", "meshes/gearbox_screw.stl")
+    z = doc.pose("screw1")[2, 3]
+    with pytest.raises(fitup.DocumentError, match="axis"):
+        doc.replace_part("screw1", "screw_new")
+    assert doc.component("screw1")["part"] == "screw"
+    doc.set_reference("screw_new", "axis", "axis", point=[0, 0, 0], direction=[0, 0, 1])
+    doc.set_reference("screw_new", "under_head", "plane", point=[0, 0, 12], direction=[0, 0, -1])
+    doc.replace_part("screw1", "screw_new")
+    assert doc.component("screw1")["part"] == "screw_new"
+    # the seat mate now holds the new under-head plane on the cover: 2 mm lower
+    assert doc.pose("screw1")[2, 3] == pytest.approx(z - 2.0, abs=1e-6)
+    doc.save_as(project / "models" / "replaced.yaml")
+    back = fitup.Document(project / "models" / "replaced.yaml")
+    assert back.component("screw1")["part"] == "screw_new" and back.pose("cap2-1")[2, 3] == pytest.approx(760)
 
 
 def test_remove_component(project):

@@ -14,6 +14,7 @@
 
 use super::backend::{self, Raw, SqlValue};
 use super::{AskedLimit, DbError, JailRefusal, QueryResult};
+use crate::math::Deadline;
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -453,7 +454,7 @@ impl SqliteReader {
             *slot = None;
         }
         let why = Arc::new(AtomicU8::new(WHY_NONE));
-        let deadline = Instant::now() + limits.time;
+        let deadline = Deadline::after(limits.time);
         let w = why.clone();
         let c = cancel.clone();
         self.conn
@@ -463,7 +464,7 @@ impl SqliteReader {
                     if c.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
                         w.store(WHY_CANCEL, Ordering::Relaxed);
                         true
-                    } else if Instant::now() > deadline {
+                    } else if deadline.passed() {
                         w.store(WHY_TIME, Ordering::Relaxed);
                         true
                     } else {
@@ -472,7 +473,7 @@ impl SqliteReader {
                 }),
             )
             .map_err(Raw::from)?;
-        self.clock.start(deadline, cancel.clone());
+        self.clock.start(deadline.instant(), cancel.clone());
         // The clock read by time, not by steps: a watchdog interrupts the statement at
         // its deadline (or when the run is cancelled) however long one step takes,
         // and is joined before the query returns (an interrupt never reaches the
@@ -492,7 +493,7 @@ impl SqliteReader {
             Stop::Sql(raw) => match why.load(Ordering::Relaxed) {
                 WHY_TIME => Stop::Timeout,
                 // One of fitup's functions saw the deadline before the watchdog did.
-                WHY_NONE if Instant::now() >= deadline => Stop::Timeout,
+                WHY_NONE if deadline.passed() => Stop::Timeout,
                 WHY_CANCEL => Stop::Cancelled,
                 _ => match self.refused.lock().ok().and_then(|mut s| s.take()) {
                     Some(reason) => Stop::Refused(reason),
@@ -558,14 +559,13 @@ impl Watchdog {
 
     fn start(
         handle: rusqlite::InterruptHandle,
-        deadline: Instant,
+        deadline: Deadline,
         cancel: Option<Arc<AtomicBool>>,
         why: Arc<AtomicU8>,
     ) -> Watchdog {
         let (done, rx) = std::sync::mpsc::channel::<()>();
         let thread = std::thread::spawn(move || loop {
-            let now = Instant::now();
-            if now >= deadline {
+            if deadline.passed() {
                 why.store(WHY_TIME, Ordering::Relaxed);
                 handle.interrupt();
                 return;
@@ -575,7 +575,7 @@ impl Watchdog {
                 handle.interrupt();
                 return;
             }
-            match rx.recv_timeout((deadline - now).min(Self::POLL)) {
+            match rx.recv_timeout(deadline.remaining().min(Self::POLL)) {
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
                 _ => return, // the statement ended
             }

@@ -4,6 +4,7 @@
 //! components. Every change that can move a component re-solves the mates; a change
 //! the mates cannot satisfy is undone and refused.
 
+use super::file::PartFile;
 use super::mates::{self, Mate, MateKind};
 use super::{
     nfc_name, Component, Document, DocumentError, LinkEdit, MateProblem, Part, PartMeshError,
@@ -422,7 +423,10 @@ impl Document {
     }
 
     /// Adds a part whose mesh is `file` (relative to the document's folder, inside
-    /// `project`), read through `cache`. Returns the part's name.
+    /// `project`), read through `cache`: a mesh file (STL, OBJ, PLY, glTF), or a STEP
+    /// file (`.step`/`.stp`), which makes a `step:` part tessellated with the default
+    /// deflection (needs the `step` feature; without it the error says how to add it).
+    /// Returns the part's name.
     pub fn add_part(
         &mut self,
         name: &str,
@@ -449,10 +453,24 @@ impl Document {
         let mesh_path = project
             .resolve_from(&dir, file)
             .map_err(|e| invalid(PartMeshError::Path(e)))?;
-        let mesh = cache
-            .get_in(project, &mesh_path)
-            .map_err(|e| invalid(PartMeshError::Read(e)))?;
-        let mesh_files = cache.files_of(&mesh_path);
+        // A STEP file is a `step:` part (SolidWorks' AddComponent of a STEP file),
+        // tessellated as a document's `step:` part with the default deflection and
+        // kept in the project's tessellation store.
+        let (mesh, mesh_files, step) = if crate::mesh::step::is_step_path(&mesh_path) {
+            let pf = PartFile {
+                step: Some(file.to_string()),
+                ..PartFile::from_stl(String::new())
+            };
+            let store = project.root().join(crate::mesh::step::STEP_STORE);
+            let (mesh, geometry) = super::load::step_mesh(&pf, &mesh_path, project, &store, cache)
+                .map_err(|e| invalid(PartMeshError::Step(Box::new(e))))?;
+            (mesh, Vec::new(), Some(geometry))
+        } else {
+            let mesh = cache
+                .get_in(project, &mesh_path)
+                .map_err(|e| invalid(PartMeshError::Read(e)))?;
+            (mesh, cache.files_of(&mesh_path), None)
+        };
         self.parts.insert(
             name.clone(),
             Part {
@@ -460,7 +478,7 @@ impl Document {
                 stl: file.replace('\\', "/"),
                 mesh_path,
                 mesh_files,
-                step: None,
+                step,
                 mesh,
                 references: IndexMap::new(),
                 features: Vec::new(),

@@ -562,6 +562,10 @@ pub enum PartMeshError {
     /// No project holds the document's file (the operating system's refusal).
     #[error(transparent)]
     Project(crate::fsutil::IoCause),
+    /// The STEP file cannot be read or tessellated (or the build has no `step`
+    /// feature: the message says how to add it).
+    #[error(transparent)]
+    Step(Box<crate::mesh::step::StepError>),
 }
 
 impl PartMeshError {

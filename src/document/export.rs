@@ -32,7 +32,7 @@ impl Document {
             .components()
             .iter()
             .enumerate()
-            .filter(|(_, c)| !c.is_suppressed() && !c.hidden)
+            .filter(|(_, c)| c.is_shown())
             .map(|(i, c)| GlbNode {
                 name: &c.name,
                 mesh: self.mesh_of(i).as_ref(),
@@ -68,7 +68,7 @@ impl Document {
         // Checked again through the folder handle it is written with.
         crate::fsutil::write_output(path, &bytes, &rule).map_err(write_error)?;
         let shown: Vec<usize> = (0..self.components().len())
-            .filter(|&i| !self.components()[i].is_suppressed() && !self.components()[i].hidden)
+            .filter(|&i| self.components()[i].is_shown())
             .collect();
         let mut meshes: Vec<*const crate::mesh::Mesh> = shown
             .iter()

@@ -940,7 +940,6 @@ fn step_part(
     store: &Path,
     cache: &mut MeshCache,
 ) -> Result<(Arc<Mesh>, StepGeometry), EntryError> {
-    use crate::mesh::step::StepOptions;
     for (key, v) in [("deflection", pf.deflection), ("angle", pf.angle)] {
         if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
             return Err(EntryError::StepSetting(key));
@@ -949,6 +948,20 @@ fn step_part(
     if pf.angle.is_some_and(|a| a >= 180.0) {
         return Err(EntryError::StepAngle);
     }
+    Ok(step_mesh(pf, file, project, store, cache)?)
+}
+
+/// [`step_part`] once its `deflection:` and `angle:` are checked: the mesh of STEP
+/// file `file` and what was measured of it (also a part a script adds from a STEP
+/// file, with the default tessellation).
+pub(super) fn step_mesh(
+    pf: &PartFile,
+    file: &Path,
+    project: &Project,
+    store: &Path,
+    cache: &mut MeshCache,
+) -> Result<(Arc<Mesh>, StepGeometry), crate::mesh::step::StepError> {
+    use crate::mesh::step::StepOptions;
     let (linear_deflection, angular_deflection) = tessellations::of_part(pf);
     let options = StepOptions {
         linear_deflection,

@@ -181,7 +181,7 @@ pub struct Component {
     /// Suppressed: kept in the document, but not checked, planned around, sequenced,
     /// weighed, bounded or exported, and its mates are inactive.
     pub suppressed: bool,
-    /// Hidden: checked like any other component, but not exported.
+    /// Hidden: checked like any other component, but not shown or exported.
     pub hidden: bool,
     /// Custom properties of this instance, name → text, in file order.
     pub properties: IndexMap<String, String>,
@@ -215,6 +215,12 @@ impl Component {
     /// bounded or exported.
     pub fn is_suppressed(&self) -> bool {
         self.suppressed || self.held_suppressed
+    }
+
+    /// Neither suppressed nor hidden (SolidWorks' `IComponent2.Visible` of an
+    /// unsuppressed component): what the viewer shows and the exports write by default.
+    pub fn is_shown(&self) -> bool {
+        !self.is_suppressed() && !self.hidden
     }
 }
 

@@ -36,7 +36,10 @@ use crate::math::{Point3, Transform, Vec3};
 use crate::mesh::{Mesh, MeshFormat};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+mod packages;
+pub use packages::{resolve_mesh, resolve_mesh_in, PackageFound};
 
 /// Largest URDF accepted (bytes): real descriptions are well under a megabyte.
 pub const MAX_URDF_BYTES: usize = 8 << 20;
@@ -80,89 +83,6 @@ pub struct UrdfRobot {
     pub primitives: Vec<UrdfPrimitive>,
     /// Located warnings: meshes left out (a `.dae` without a readable collision mesh).
     pub warnings: Vec<SourceError>,
-}
-
-/// Where a mesh URI points, for a URDF at `urdf_path`, by the URDF alone (no folder is
-/// looked at): `package://PKG/rest` → `<urdf folder>/../rest` when the URDF sits in a
-/// `urdf/` folder of its package (the ROS-Industrial layout), else `<urdf folder>/rest`
-/// (the URDF's own package, whatever `PKG` is); `file://` and plain paths are relative
-/// to the URDF's folder. [`resolve_mesh_in`] looks packages up by name first. The
-/// caller still checks the path (project jail).
-pub fn resolve_mesh(urdf_path: &Path, uri: &str) -> PathBuf {
-    let folder = urdf_path.parent().unwrap_or(Path::new(""));
-    if let Some(rest) = uri.strip_prefix("package://") {
-        let rest = rest.split_once('/').map_or("", |(_, r)| r);
-        return own_package(folder).join(rest);
-    }
-    folder.join(uri.strip_prefix("file://").unwrap_or(uri))
-}
-
-/// The package folder of a URDF in `folder`: the parent of a `urdf/` folder, else the
-/// folder itself.
-fn own_package(folder: &Path) -> &Path {
-    if folder.file_name().is_some_and(|n| n == "urdf") {
-        return folder.parent().unwrap_or(Path::new(""));
-    }
-    folder
-}
-
-/// How [`resolve_mesh_in`] found the folder of a `package://` URI.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PackageFound {
-    /// Not a `package://` URI: relative to the URDF's folder.
-    NotAPackage,
-    /// A folder named as the package: the URDF's own, one on the package path, or one
-    /// beside or above the URDF.
-    ByName,
-    /// No folder has the package's name: the URDF's own package folder (see
-    /// [`resolve_mesh`]).
-    OwnPackage,
-}
-
-/// Where a mesh URI points, for a URDF at `urdf_path` (absolute, inside `project`),
-/// looking `package://PKG/rest` up by name as ROS does with its package path, without
-/// leaving the project: the first folder named `PKG` among
-/// 1. the URDF's own folder and the folders above it (its own package);
-/// 2. each folder of `package_path` (absolute, inside the project): the folder itself
-///    when it is named `PKG`, else its sub-folder `PKG`;
-/// 3. beside or above the URDF: the sub-folder `PKG` of the URDF's folder and of each
-///    folder above it, nearest first, up to the project root;
-///
-/// then `rest` inside it. When no folder has that name, the URDF's own package
-/// ([`resolve_mesh`]'s rule), so a package folder named otherwise still loads.
-/// Folders are probed from the project's held root without following a link, so the
-/// search never looks outside the project. Other URIs as [`resolve_mesh`].
-pub fn resolve_mesh_in(
-    project: &crate::project::Project,
-    urdf_path: &Path,
-    uri: &str,
-    package_path: &[PathBuf],
-) -> (PathBuf, PackageFound) {
-    let Some(rest) = uri.strip_prefix("package://") else {
-        return (resolve_mesh(urdf_path, uri), PackageFound::NotAPackage);
-    };
-    let (pkg, rest) = rest.split_once('/').unwrap_or((rest, ""));
-    let folder = urdf_path.parent().unwrap_or(Path::new(""));
-    let inside = |d: &Path| d.starts_with(project.root());
-    let ancestors = || folder.ancestors().take_while(|d| inside(d));
-    let is_dir = |d: &Path| inside(d) && project.folder(d, false).is_ok();
-    let valid = !pkg.is_empty() && pkg != "." && pkg != ".." && !pkg.contains(['/', '\\']);
-    if valid {
-        let own = ancestors().find(|d| d.file_name().is_some_and(|n| n == pkg));
-        let on_path = || {
-            package_path.iter().find_map(|r| {
-                if r.file_name().is_some_and(|n| n == pkg) && is_dir(r) {
-                    return Some(r.clone());
-                }
-                Some(r.join(pkg)).filter(|d| is_dir(d))
-            })
-        };
-        let beside = || ancestors().map(|d| d.join(pkg)).find(|d| is_dir(d));
-        if let Some(dir) = own.map(Path::to_path_buf).or_else(on_path).or_else(beside) {
-            return (dir.join(rest), PackageFound::ByName);
-        }
-    }
-    (own_package(folder).join(rest), PackageFound::OwnPackage)
 }
 
 /// Parses URDF text; `path` names the file in errors (and is not read); `tip` names
@@ -1006,94 +926,4 @@ fn origin(xyz: [f64; 3], rpy: [f64; 3]) -> Transform {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A two-link URDF with `joint` as the joint's inner elements and `visual` as the
-    /// child link's content; the joint is on line 3, the visual on line 4.
-    fn urdf(kind: &str, joint: &str, visual: &str) -> String {
-        format!(
-            "<robot name=\"r\">\n<link name=\"a\"/>\n<joint name=\"j\" type=\"{kind}\"><parent link=\"a\"/><child link=\"b\"/>{joint}</joint>\n<link name=\"b\">{visual}</link>\n</robot>"
-        )
-    }
-
-    fn refused(text: &str) -> SourceError {
-        parse_urdf(Path::new("r.urdf"), text, None).unwrap_err()
-    }
-
-    /// Every number read is finite and, after m → mm, within the document's range; the
-    /// error names the file, the attribute's line and column.
-    #[test]
-    fn numbers_out_of_the_document_range_are_refused_at_their_attribute() {
-        let axis = "<axis xyz=\"0 0 1\"/>";
-        let cases = [
-            ("revolute", format!("<origin xyz=\"1e200 0 0\"/>{axis}"), "", "xyz", 3),
-            // 1e7 m is 1e10 mm: finite, but beyond 1e9 mm.
-            ("revolute", format!("<origin xyz=\"0 1e7 0\"/>{axis}"), "", "xyz", 3),
-            ("revolute", format!("<origin rpy=\"0 0 1e300\"/>{axis}"), "", "rpy", 3),
-            ("revolute", "<axis xyz=\"0 0 1e300\"/>".to_string(), "", "xyz", 3),
-            ("revolute", format!("{axis}<limit lower=\"-1e300\" upper=\"1\"/>"), "", "lower", 3),
-            ("prismatic", format!("{axis}<limit lower=\"0\" upper=\"1e7\"/>"), "", "upper", 3),
-            ("revolute", format!("{axis}<origin xyz=\"0 0 0 0\"/>"), "", "xyz", 3),
-            (
-                "revolute",
-                axis.to_string(),
-                "<visual><geometry><mesh filename=\"m.stl\" scale=\"1e306 1 1\"/></geometry></visual>",
-                "scale",
-                4,
-            ),
-            (
-                "revolute",
-                axis.to_string(),
-                "<visual><origin xyz=\"1e200 0 0\"/><geometry><mesh filename=\"m.stl\"/></geometry></visual>",
-                "xyz",
-                4,
-            ),
-            (
-                "revolute",
-                axis.to_string(),
-                "<visual><geometry><mesh filename=\"m.stl\" scale=\"1 0 1\"/></geometry></visual>",
-                "flat",
-                4,
-            ),
-            (
-                "revolute",
-                axis.to_string(),
-                "<visual><geometry><mesh filename=\"m.stl\" scale=\"1 x 1\"/></geometry></visual>",
-                "scale",
-                4,
-            ),
-        ];
-        for (kind, joint, visual, needle, line) in cases {
-            let text = urdf(kind, &joint, visual);
-            let e = refused(&text);
-            let shown = e.to_string();
-            assert_eq!(e.line, Some(line), "{shown}");
-            assert!(
-                shown.contains("r.urdf") && shown.contains(needle),
-                "{shown}"
-            );
-            // The column is the attribute's value, not the element's start.
-            let row = text.lines().nth(line - 1).unwrap();
-            let col = e.column.unwrap();
-            assert!(col > row.find('<').unwrap() + 1, "{shown}");
-        }
-        // In range: 1000 km (1e6 m = 1e9 mm) loads.
-        let ok = urdf(
-            "revolute",
-            "<origin xyz=\"1e6 0 0\"/><axis xyz=\"0 0 1\"/>",
-            "",
-        );
-        assert!(parse_urdf(Path::new("r.urdf"), &ok, None).is_ok());
-    }
-
-    #[test]
-    fn a_huge_attribute_is_quoted_short() {
-        let big = format!(
-            "<origin xyz=\"{} 0 0\"/><axis xyz=\"0 0 1\"/>",
-            "9".repeat(1 << 20)
-        );
-        let e = refused(&urdf("revolute", &big, ""));
-        assert!(e.message.len() < 300, "{}", e.message.len());
-    }
-}
+mod tests;

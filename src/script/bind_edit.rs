@@ -509,7 +509,7 @@ fn register_components(api: &mut Api, ctx: &Arc<Context>) {
         },
     );
     let c = ctx.clone();
-    api.f("Document.add_part(name: string, file: string) -> string", "Adds a part whose mesh is `file` (STL, OBJ, PLY or glTF, relative to the document's folder, inside the project); returns its name. Its file becomes a dependency of the run.", move |d: &mut DocHandle, name: &str, file: &str| -> ScriptResult<String> {
+    api.f("Document.add_part(name: string, file: string) -> string", "Adds a part whose geometry is `file` (relative to the document's folder, inside the project): a mesh (STL, OBJ, PLY or glTF), or a STEP file (`.step`/`.stp`), which becomes a `step:` part tessellated with the default deflection and kept in the project's tessellation store (needs a build with `--features step`; without it the error says how to add it). Returns its name. Its file becomes a dependency of the run.", move |d: &mut DocHandle, name: &str, file: &str| -> ScriptResult<String> {
         let mut doc = d.lock()?;
         let mut cache = c.caches.meshes.lock().map_err(|_| fail("mesh cache poisoned"))?;
         let name = doc.add_part(name, file, &c.project, &mut cache).map_err(fail)?;

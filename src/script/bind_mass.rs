@@ -229,7 +229,7 @@ pub(super) fn register_export(api: &mut Api) {
         let all: Vec<usize> = {
             let doc = d.lock()?;
             (0..doc.components().len())
-                .filter(|&i| !doc.components()[i].is_suppressed() && !doc.components()[i].hidden)
+                .filter(|&i| doc.components()[i].is_shown())
                 .collect()
         };
         let (which, frame, overwrite) = export_options(d, &o, all)?;

@@ -25,6 +25,9 @@ use crate::options::{Drill, Motion};
 use rhai::{Array, Dynamic, Map};
 use std::sync::Arc;
 
+mod drilling;
+mod trajectory;
+
 /// A robot of a document, by index (shares the document with its handle).
 #[derive(Clone)]
 pub struct RobotHandle {
@@ -362,50 +365,6 @@ fn ik_all() -> IkOptions {
     IkOptions::every_branch()
 }
 
-/// A hole from a `load_holes` map (`position`, `normal`, optional `id`).
-fn hole_arg(v: &Dynamic, i: usize) -> ScriptResult<Hole> {
-    let m = v
-        .read_lock::<Map>()
-        .ok_or_else(|| fail(format!("hole {i} must be a map #{{position, normal}}")))?;
-    let get = |k: &str| {
-        m.get(k)
-            .ok_or_else(|| fail(format!("hole {i} has no `{k}`")))
-    };
-    let position = vec3(get("position")?, &format!("hole {i} position"))?;
-    let normal = vec3(get("normal")?, &format!("hole {i} normal"))?;
-    let id = m.get("id").map(|v| v.to_string()).filter(|s| !s.is_empty());
-    let line = m
-        .get("line")
-        .and_then(|v| v.as_int().ok())
-        .unwrap_or(0)
-        .max(0) as usize;
-    Hole::new(id, position.into(), normal, line)
-        .ok_or_else(|| fail(format!("hole {i}: the normal is zero")))
-}
-
-fn hole_map(h: &Hole) -> Map {
-    let mut m = Map::new();
-    m.insert(
-        "id".into(),
-        h.id.clone()
-            .map(Dynamic::from)
-            .unwrap_or(Dynamic::from(String::new())),
-    );
-    m.insert("position".into(), array3(&h.position.coords));
-    m.insert("normal".into(), array3(&h.normal));
-    m.insert("line".into(), Dynamic::from_int(h.line as i64));
-    m
-}
-
-/// Drilling options from a map (the library's [`Drill`] vocabulary), checked by the
-/// library's rule before anything runs; with the `stream` flag.
-fn drill_options(m: &Map) -> ScriptResult<(DrillOptions, bool)> {
-    let o: Drill = read_options(m, &|_| {})?;
-    let d = o.drill_options();
-    d.validate().map_err(fail)?;
-    Ok((d, o.stream))
-}
-
 fn options_map(v: &Dynamic, what: &str) -> ScriptResult<Map> {
     v.read_lock::<Map>().map(|m| m.clone()).ok_or_else(|| {
         fail(format!(
@@ -425,8 +384,8 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     );
     api.options::<Drill>("Options of `drill_program`:");
     register_motions(api, ctx);
-    register_drilling(api, ctx);
-    register_trajectory(api);
+    drilling::register_drilling(api, ctx);
+    trajectory::register_trajectory(api);
 }
 
 /// Robot handles of a document: names, joints, joint dimensions, poses of the base, flange and TCP.
@@ -1028,180 +987,4 @@ fn register_motions(api: &mut Api, ctx: &Arc<Context>) {
     let rp2 = rp.clone();
     api.f("Robot.run_program(path: string) -> Trajectory", "Runs a motion program file (Line/Circle/Joint/Speed/Tool…, see docs/kinematics.md) from the current joints; a syntax or motion error names the file and line. The file is a dependency of the run (watch reruns on its saves).", move |r: &mut RobotHandle, p: &str| rp(r, p, None));
     api.f("Robot.run_program(path: string, options: map) -> Trajectory", "Runs a program file with motion options (the program's own Speed/Interval lines override them).", move |r: &mut RobotHandle, p: &str, o: Dynamic| rp2(r, p, Some(&o)));
-}
-
-/// Drilling programs and hole tables (seed 001).
-fn register_drilling(api: &mut Api, ctx: &Arc<Context>) {
-    let dp = |r: &mut RobotHandle, holes: Array, o: Option<&Dynamic>| -> ScriptResult<Map> {
-        let m = match o {
-            Some(v) => options_map(v, "drilling")?,
-            None => Map::new(),
-        };
-        let (opts, stream) = drill_options(&m)?;
-        let holes: Vec<Hole> = holes
-            .iter()
-            .enumerate()
-            .map(|(i, h)| hole_arg(h, i))
-            .collect::<ScriptResult<_>>()?;
-        let (robot, q) = r.snapshot()?;
-        let report = drill_program(&robot, &q, &holes, &opts)
-            .map_err(|e| fail(format!("robot `{}`: drill_program: {e}", robot.name())))?;
-        let mut rows = Array::new();
-        let mut drilled = 0;
-        for (h, rep) in holes.iter().zip(&report.holes) {
-            let mut row = hole_map(h);
-            row.insert("index".into(), Dynamic::from_int(rep.index as i64));
-            match &rep.outcome {
-                HoleOutcome::Drilled { spin, joints } => {
-                    drilled += 1;
-                    row.insert("reachable".into(), Dynamic::TRUE);
-                    row.insert("reason".into(), Dynamic::from(String::new()));
-                    row.insert("spin".into(), Dynamic::from_float(spin.to_degrees()));
-                    row.insert("joints".into(), joints_out(&robot, joints));
-                }
-                HoleOutcome::Unreachable(why) => {
-                    row.insert("reachable".into(), Dynamic::FALSE);
-                    row.insert("reason".into(), Dynamic::from(why.to_string()));
-                }
-            }
-            rows.push(Dynamic::from_map(row));
-        }
-        let n = rows.len();
-        let t = r.finish(&robot, report.trajectory, stream)?;
-        let mut out = Map::new();
-        out.insert("trajectory".into(), Dynamic::from(t));
-        out.insert("holes".into(), Dynamic::from_array(rows));
-        out.insert("drilled".into(), Dynamic::from_int(drilled));
-        out.insert("unreachable".into(), Dynamic::from_int(n as i64 - drilled));
-        Ok(out)
-    };
-    api.f("Robot.drill_program(holes: array) -> map", "Drills the holes (from `load_holes`) in order (seed 001 §2.2: travel posture, line to the approach point, align, drill, retract). Returns `#{trajectory, holes, drilled, unreachable}`; each hole row is the hole map plus `index`, `reachable`, `reason` (which step failed and why), and for drilled holes `spin` (degrees) and `joints` at the hole. Unreachable holes are reported, not errors.", move |r: &mut RobotHandle, h: Array| dp(r, h, None));
-    api.f(
-        "Robot.drill_program(holes: array, options: map) -> map",
-        "Drilling with the options of the drilling table below (its own keys and the motion keys).",
-        move |r: &mut RobotHandle, h: Array, o: Dynamic| dp(r, h, Some(&o)),
-    );
-    api.f(
-        "Robot.to_string() -> string",
-        "`Robot(name: joints …)`.",
-        |r: &mut RobotHandle| -> ScriptResult<String> {
-            let (robot, q) = r.snapshot()?;
-            let j = joints_to_document(&robot, &q)
-                .iter()
-                .map(|v| format!("{v:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            Ok(format!("Robot({}: [{j}])", robot.name()))
-        },
-    );
-
-    let c = ctx.clone();
-    api.f("load_holes(path: string) -> array", "Reads a hole table (CSV `id,x,y,z,nx,ny,nz` or `x y z nx ny nz`, mm, `#` comments) inside the project: an array of `#{id, position, normal, line}` (normals unit). The file is a dependency of the run; a bad line is an error naming it.", move |path: &str| -> ScriptResult<Array> {
-        let full = c.project.resolve(path).map_err(fail)?;
-        c.record_read(&full);
-        let text = c.project.read_text(&full, crate::fsutil::FileKind::Table).map_err(|e| fail(format!("{path}: {e}")))?;
-        let holes = parse_holes(&c.project.display(&full), &text).map_err(fail)?;
-        // Each hole is a map of 4 properties holding two arrays of 3 (`hole_map`).
-        super::convert::Sizes {
-            arrays: holes.len() * 7,
-            maps: holes.len() * 4,
-            chars: holes.iter().map(|h| h.id.as_ref().map_or(0, String::len)).sum(),
-        }
-        .within(&c.limits, &format!("load_holes(\"{path}\") of {} holes", crate::math::format::count(holes.len() as u64)))?;
-        Ok(holes.iter().map(|h| Dynamic::from_map(hole_map(h))).collect())
-    });
-}
-
-/// Trajectories: samples, joints and TCP poses over time, CSV logs.
-fn register_trajectory(api: &mut Api) {
-    api.section("Trajectory", "A sampled motion: `len` samples at times `0 … duration` (s), each with joint values (degrees / mm) and the TCP pose. Sample indices may be negative (−1 = last).");
-    fn sample(t: &TrajectoryHandle, i: i64) -> ScriptResult<&crate::kinematics::TrajectorySample> {
-        let n = t.trajectory.samples.len() as i64;
-        let k = if i < 0 { n + i } else { i };
-        if k < 0 || k >= n {
-            return err(format!(
-                "sample {i} is out of range: the trajectory has {n} samples"
-            ));
-        }
-        Ok(&t.trajectory.samples[k as usize])
-    }
-    let deg = |t: &TrajectoryHandle, q: &[f64]| -> Dynamic {
-        floats(
-            q.iter()
-                .zip(
-                    t.trajectory
-                        .joint_kinds
-                        .iter()
-                        .map(Some)
-                        .chain(std::iter::repeat(None)),
-                )
-                .map(|(v, k)| {
-                    if k == Some(&crate::kinematics::JointKind::Prismatic) {
-                        *v
-                    } else {
-                        v.to_degrees()
-                    }
-                }),
-        )
-    };
-    api.get(
-        "Trajectory.len -> int",
-        "Number of samples.",
-        |t: &mut TrajectoryHandle| t.trajectory.samples.len() as i64,
-    );
-    api.get(
-        "Trajectory.duration -> float",
-        "Duration (s).",
-        |t: &mut TrajectoryHandle| t.trajectory.duration(),
-    );
-    api.f(
-        "Trajectory.time(i: int) -> float",
-        "Time of sample `i` (s).",
-        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<f64> { Ok(sample(t, i)?.t) },
-    );
-    api.f(
-        "Trajectory.joints(i: int) -> array",
-        "Joint values of sample `i` (degrees / mm).",
-        move |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> {
-            Ok(deg(t, &sample(t, i)?.joints))
-        },
-    );
-    api.f(
-        "Trajectory.tcp(i: int) -> Transform",
-        "TCP world pose of sample `i` (mm).",
-        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Transform> { Ok(sample(t, i)?.tcp) },
-    );
-    api.f(
-        "Trajectory.tcp_xyzabc(i: int) -> array",
-        "TCP of sample `i` as `[x, y, z, a, b, c]` (mm, degrees, convention `xyz`).",
-        |t: &mut TrajectoryHandle, i: i64| -> ScriptResult<Dynamic> {
-            Ok(xyzabc_deg(&sample(t, i)?.tcp, AngleConvention::default()))
-        },
-    );
-    fn save_trajectory(t: &TrajectoryHandle, path: &str, overwrite: bool) -> ScriptResult<()> {
-        let csv = t.trajectory.to_csv(AngleConvention::default());
-        t.ctx.write_output(path, csv.as_bytes(), overwrite)?;
-        Ok(())
-    }
-    api.f("Trajectory.save_csv(path: string)", "Writes the joint/TCP log as CSV inside the project, atomically: `t_s,j1_deg,…,x_mm,y_mm,z_mm,a_deg,b_deg,c_deg`. Refuses to replace a file the project uses or one fitup did not write (see \"What a run writes\" in docs/scripting.md); `#{overwrite: true}` replaces it.", |t: &mut TrajectoryHandle, path: &str| -> ScriptResult<()> {
-        save_trajectory(t, path, false)
-    });
-    api.f(
-        "Trajectory.save_csv(path: string, options: map)",
-        "`save_csv(path)` with `#{overwrite}` (bool, default false).",
-        |t: &mut TrajectoryHandle, path: &str, opts: Map| -> ScriptResult<()> {
-            save_trajectory(t, path, overwrite_option(&opts, "save_csv")?)
-        },
-    );
-    api.f(
-        "Trajectory.to_string() -> string",
-        "`Trajectory(n samples, d s)`.",
-        |t: &mut TrajectoryHandle| {
-            format!(
-                "Trajectory({} samples, {:.3} s)",
-                t.trajectory.samples.len(),
-                t.trajectory.duration()
-            )
-        },
-    );
 }

@@ -238,7 +238,10 @@ impl Viewer {
         });
     }
 
-    /// Logs every component of `doc` (mesh, pose, colour, fixed) at the current step.
+    /// Logs every shown component of `doc` (mesh, pose, colour, fixed) at the current
+    /// step: a suppressed or hidden one is not drawn ([`Component::is_shown`]).
+    ///
+    /// [`Component::is_shown`]: crate::document::Component::is_shown
     pub fn log_document(&self, doc: &Document) {
         if !self.is_live() {
             return;
@@ -247,6 +250,7 @@ impl Viewer {
             .components()
             .iter()
             .enumerate()
+            .filter(|(_, c)| c.is_shown())
             .map(|(i, c)| PartView {
                 name: c.name.clone(),
                 mesh: doc.mesh_of(i).clone(),
@@ -262,9 +266,11 @@ impl Viewer {
     }
 
     /// Logs new poses of components of `doc` (by name); `advance` makes it a new
-    /// animation frame (the step moves forward by one first).
-    pub fn log_poses(&self, doc: &Document, poses: Vec<(String, Transform)>, advance: bool) {
+    /// animation frame (the step moves forward by one first). Poses of suppressed or
+    /// hidden components are left out, as their meshes are.
+    pub fn log_poses(&self, doc: &Document, mut poses: Vec<(String, Transform)>, advance: bool) {
         if self.is_live() {
+            poses.retain(|(name, _)| doc.component(name).map_or(true, |c| c.is_shown()));
             self.send(ViewEvent::Poses {
                 doc: document_name(doc),
                 poses,
@@ -297,7 +303,12 @@ impl Viewer {
         let Ok(instance) = doc.robot_at(robot) else {
             return;
         };
-        let names: Vec<&str> = doc.components().iter().map(|c| c.name.as_str()).collect();
+        // the link components drawn (a suppressed or hidden one is not)
+        let names: Vec<Option<&str>> = doc
+            .components()
+            .iter()
+            .map(|c| c.is_shown().then_some(c.name.as_str()))
+            .collect();
         let samples = trajectory
             .samples
             .iter()
@@ -309,7 +320,9 @@ impl Viewer {
                     .component_poses(&s.joints)
                     .unwrap_or_default()
                     .into_iter()
-                    .filter_map(|(c, p)| names.get(c).map(|n| (n.to_string(), p)))
+                    .filter_map(|(c, p)| {
+                        names.get(c).copied().flatten().map(|n| (n.to_string(), p))
+                    })
                     .collect(),
             })
             .collect();
@@ -404,6 +417,72 @@ mod tests {
         v.new_run("x");
         v.step(3);
         assert!(v.flush(Duration::from_millis(1)));
+    }
+
+    /// Issue 37: a suppressed or hidden component is not drawn (SolidWorks draws
+    /// neither): not by `log_document`, nor moved by `log_poses`, nor as a robot link
+    /// of `log_trajectory`; the shown ones are.
+    #[test]
+    fn suppressed_and_hidden_components_are_not_drawn() {
+        use crate::kinematics::{Trajectory, TrajectorySample};
+        let names =
+            |parts: &[PartView]| -> Vec<String> { parts.iter().map(|p| p.name.clone()).collect() };
+        let (tx, rx) = std::sync::mpsc::channel();
+        let v = Viewer::from_sender(tx);
+        let mut doc = Document::open(std::path::Path::new("models/cell.yaml")).unwrap();
+        let all = doc.components().len();
+        v.log_document(&doc);
+        match rx.recv().unwrap() {
+            ViewEvent::Document { parts, .. } => assert_eq!(parts.len(), all),
+            e => panic!("{e:?}"),
+        }
+        doc.set_suppressed("screw4", true).unwrap();
+        doc.set_hidden("screw5", true).unwrap();
+        v.log_document(&doc);
+        match rx.recv().unwrap() {
+            ViewEvent::Document { parts, .. } => {
+                let drawn = names(&parts);
+                assert_eq!(drawn.len(), all - 2, "{drawn:?}");
+                assert!(
+                    !drawn.iter().any(|n| n == "screw4" || n == "screw5"),
+                    "{drawn:?}"
+                );
+            }
+            e => panic!("{e:?}"),
+        }
+        let moved: Vec<(String, Transform)> = ["screw3", "screw4", "screw5"]
+            .iter()
+            .map(|n| (n.to_string(), Transform::IDENTITY))
+            .collect();
+        v.log_poses(&doc, moved, true);
+        match rx.recv().unwrap() {
+            ViewEvent::Poses { poses, .. } => {
+                let posed: Vec<&str> = poses.iter().map(|(n, _)| n.as_str()).collect();
+                assert_eq!(posed, ["screw3"]);
+            }
+            e => panic!("{e:?}"),
+        }
+        // a robot's hidden link is not moved by its trajectory; the others are
+        let mut doc = Document::open(std::path::Path::new("models/mz07.yaml")).unwrap();
+        doc.set_hidden("mz07_link3", true).unwrap();
+        let robot = doc.robot_at(0).unwrap().robot().clone();
+        let trajectory = Trajectory {
+            samples: vec![TrajectorySample {
+                t: 0.0,
+                joints: vec![0.0; robot.dof()],
+                tcp: Transform::IDENTITY,
+            }],
+            joint_kinds: robot.joint_kinds(),
+        };
+        v.log_trajectory(&doc, 0, &trajectory);
+        match rx.recv().unwrap() {
+            ViewEvent::Trajectory { samples, .. } => {
+                let links: Vec<&str> = samples[0].links.iter().map(|(n, _)| n.as_str()).collect();
+                assert!(links.contains(&"mz07_link2"), "{links:?}");
+                assert!(!links.contains(&"mz07_link3"), "{links:?}");
+            }
+            e => panic!("{e:?}"),
+        }
     }
 
     #[test]

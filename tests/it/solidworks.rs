@@ -336,3 +336,202 @@ print("ok");
     );
     assert!(out.status.success(), "{}", common::text(&out));
 }
+
+/// Capability 5, end to end on the demo cell: a suppressed component is not checked,
+/// planned around, sequenced or exported; a hidden one is checked, planned
+/// around and sequenced, but not exported (the viewer's half is the unit test
+/// `viewer::tests::suppressed_and_hidden_components_are_not_drawn`); both are saved.
+#[test]
+fn suppressed_and_hidden_components_as_solidworks_treats_them() {
+    use fitup::collision::SweepOptions;
+    use fitup::document::Document;
+    use fitup::math::{Transform, Vec3};
+    use fitup::sequence::{plan_sequence, SequenceOptions};
+    use fitup::workspace::{CheckOptions, SceneCache, Workspace};
+
+    let dir = common::project();
+    let path = dir.path().join("models/cell.yaml");
+    let mut doc = Document::open(&path).unwrap();
+    // screw4 (no mates) 60 mm above plate_b, away from its holes, lowered 100 mm: it
+    // lands on plate_b, or on the table under it once plate_b is out of the way.
+    let plate = doc
+        .world_aabb(doc.component_index("plate_b").unwrap())
+        .unwrap();
+    let thickness = plate.hi.z - plate.lo.z;
+    let above = |dz: f64| {
+        Transform::from_translation(Vec3::new(
+            plate.lo.x + 12.0,
+            plate.lo.y + 12.0,
+            plate.hi.z + dz,
+        ))
+    };
+    doc.set_transform("screw4", above(60.0)).unwrap();
+    let lowered = |doc: &Document| {
+        let mut cache = SceneCache::new();
+        let ws = Workspace::new(doc, &mut cache).unwrap();
+        let hit = ws
+            .sweep_through("screw4", &[above(-40.0)], &SweepOptions::default())
+            .unwrap();
+        assert!(hit.hit);
+        (hit.t * 100.0, ws.name(hit.with.unwrap()).to_string())
+    };
+    let interfering = |doc: &Document| -> Vec<String> {
+        let mut cache = SceneCache::new();
+        let ws = Workspace::new(doc, &mut cache).unwrap();
+        ws.interferences(&CheckOptions::default())
+            .unwrap()
+            .iter()
+            .map(|p| format!("{}-{}", ws.name(p.a), ws.name(p.b)))
+            .collect()
+    };
+    let product = |doc: &Document| {
+        plan_sequence(doc, &mut SceneCache::new(), &SequenceOptions::default())
+            .map(|p| p.product)
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let into_plate = |doc: &mut Document, travel: f64| {
+        doc.set_transform("screw4", above(60.0 - travel - 2.0))
+            .unwrap();
+        let hits = interfering(doc);
+        doc.set_transform("screw4", above(60.0)).unwrap();
+        hits
+    };
+    let (shown, with) = lowered(&doc);
+    assert_eq!(with, "plate_b", "{shown}");
+
+    // hidden: still in the way, checked and sequenced, but not exported
+    doc.set_hidden("plate_b", true).unwrap();
+    let (travel, with) = lowered(&doc);
+    assert!(
+        (travel - shown).abs() < 1e-9 && with == "plate_b",
+        "hidden: {travel} {with}"
+    );
+    let hits = into_plate(&mut doc, shown);
+    assert!(
+        hits.iter()
+            .any(|p| p.contains("plate_b") && p.contains("screw4")),
+        "hidden is checked: {hits:?}"
+    );
+    assert!(
+        product(&doc).iter().any(|n| n == "plate_b"),
+        "hidden is sequenced"
+    );
+    let glb = doc.export_glb(&dir.path().join("out.glb"), false).unwrap();
+    assert_eq!(
+        glb.nodes,
+        doc.components().len() - 1,
+        "hidden is not exported"
+    );
+
+    // suppressed: out of the way, the checks, the sequence, the box and the export
+    doc.set_hidden("plate_b", false).unwrap();
+    doc.set_suppressed("plate_b", true).unwrap();
+    let (travel, with) = lowered(&doc);
+    assert!(
+        with == "table" && (travel - shown - thickness).abs() < 0.5,
+        "suppressed: {travel} {with} (shown {shown}, plate {thickness} mm)"
+    );
+    let hits = into_plate(&mut doc, shown);
+    assert!(
+        !hits.iter().any(|p| p.contains("plate_b")),
+        "suppressed is not checked: {hits:?}"
+    );
+    let seq = product(&doc);
+    assert!(
+        !seq.iter().any(|n| n == "plate_b"),
+        "suppressed is not sequenced: {seq:?}"
+    );
+    let glb = doc.export_glb(&dir.path().join("out2.glb"), false).unwrap();
+    assert_eq!(
+        glb.nodes,
+        doc.components().len() - 1,
+        "suppressed is not exported"
+    );
+
+    // both saved and read back
+    doc.set_hidden("screw5", true).unwrap();
+    doc.save().unwrap();
+    let back = Document::open(&path).unwrap();
+    assert!(back.component("plate_b").unwrap().is_suppressed());
+    assert!(back.component("screw5").unwrap().hidden);
+    assert!(!back.component("screw5").unwrap().is_shown());
+}
+
+/// Capability 1, every kind a macro adds (`IAssemblyDoc.AddMate5`): coincident,
+/// concentric, angle (about an axis) and distance mates added by a script to a moved
+/// component are solved on the rebuild (the references land where each mate says),
+/// listed by name, type, entities and value, and kept by a save (the reopened file
+/// holds them and the same poses).
+#[test]
+fn mates_of_every_kind_added_by_a_script_are_solved_and_saved() {
+    let out = run_script(
+        r#"
+let doc = open_doc("models/cell.yaml");
+for m in ["plate_b_on_table", "plate_b_centred", "角度1"] { doc.delete_mate(m); }
+let p = doc.component("plate_b");
+p.transform = pose(100, 50, 900, 10, 20, 30);
+doc.add_mate("on_table", "coincident", "table/top_face", "plate_b/bottom");
+doc.add_mate("centred", "concentric", "table/b_axis", "plate_b/center_axis");
+doc.add_mate("turned", "angle", "table/front_edge", "plate_b/front_edge", #{value: 30, about: "table/b_axis"});
+doc.add_mate("lifted", "distance", "table/top_face", "screw4/tip", #{value: 25});
+// solved: on the table, on its axis, turned 30° about it; screw4's tip 25 mm above
+let bottom = p.reference("bottom");
+assert_near(bottom.point[2], 750.0, 1e-9);
+assert_near(bottom.normal[2], -1.0, 1e-12);
+let axis = p.reference("center_axis");
+assert_near(axis.point[0], 800.0, 1e-9);
+assert_near(axis.point[1], 400.0, 1e-9);
+let front = p.reference("front_edge").normal;
+assert_near(front[2], 0.0, 1e-12);
+assert_near(front[1], -(rad(30).cos()), 1e-9);
+assert_near(doc.component("screw4").reference("tip").point[2], 775.0, 1e-9);
+let added = doc.mates().filter(|m| ["on_table", "centred", "turned", "lifted"].contains(m.name));
+assert(added.map(|m| m.type) == ["coincident", "concentric", "angle", "distance"], `${added.map(|m| m.type)}`);
+assert(doc.mate("turned").entities == ["table/front_edge", "plate_b/front_edge"], "entities");
+assert_near(doc.mate("turned").value, 30.0, 1e-12);
+assert_near(doc.mate("lifted").value, 25.0, 1e-12);
+assert(doc.mate("lifted").components == ["table", "screw4"], `${doc.mate("lifted").components}`);
+doc.save();
+let back = open_doc("models/cell.yaml");
+for n in ["on_table", "centred", "turned", "lifted"] {
+    assert(back.mate(n).type == doc.mate(n).type && back.mate(n).entities == doc.mate(n).entities, n);
+}
+assert_near(back.mate("turned").value, 30.0, 1e-12);
+for c in ["plate_b", "screw4"] {
+    let d = back.component(c).transform.distance_to(doc.component(c).transform);
+    assert(d.mm < 1e-9 && d.deg < 1e-9, `${c} reopened where it was solved: ${d}`);
+}
+print("ok");
+"#,
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+}
+
+/// Capability 7 from a STEP file (`IAssemblyDoc.AddComponent5` of a STEP file): a
+/// build without the `step` feature refuses it with the file and the command that adds
+/// the feature, and the document is unchanged (the build with it:
+/// `step_import::step_parts::a_script_adds_a_part_from_a_step_file`).
+#[cfg(not(feature = "step"))]
+#[test]
+fn a_step_file_added_as_a_part_asks_for_the_step_feature() {
+    let dir = common::project();
+    std::fs::write(
+        dir.path().join("models/bracket.step"),
+        "ISO-10303-21;\nHEADER;\nENDSEC;\n",
+    )
+    .unwrap();
+    let out = common::run_script_in(
+        dir.path(),
+        "t.rhai",
+        r#"
+let doc = open_doc("models/cell.yaml");
+let n = doc.parts().len();
+let e = "";
+try { doc.add_part("bracket", "bracket.step"); } catch (err) { e = `${err}`; }
+assert(e.contains("bracket.step") && e.contains("--features step"), e);
+assert(doc.parts().len() == n && !doc.parts().contains("bracket"), "nothing added");
+print("ok");
+"#,
+    );
+    assert!(out.status.success(), "{}", common::text(&out));
+}
