@@ -461,6 +461,16 @@ impl Ctx<'_> {
         }
     }
 
+    /// Whether every candidate direction of `p` that gravity allows is blocked by
+    /// a component of `mask` by the sweeps run so far (none is run here): then it
+    /// has no straight insertion onto `mask` nor onto anything holding `mask`.
+    pub(super) fn known_blocked_everywhere(&self, p: usize, mask: Mask) -> bool {
+        let mask = mask & self.active & !bit(p);
+        let b = self.blocking.lock().unwrap();
+        (0..self.dirs[p].len())
+            .all(|k| !self.gravity_allows(&-self.dirs[p][k]) || b.hit[p][k] & mask != 0)
+    }
+
     /// The free separation directions of `p` among the components of `mask`.
     pub fn free_dirs(&self, p: usize, mask: Mask) -> Vec<usize> {
         (0..self.dirs[p].len())

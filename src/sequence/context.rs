@@ -444,6 +444,13 @@ impl<'d> Ctx<'d> {
             }
             return Stuck::NothingToGoOnto { part };
         }
+        self.blocked(p, mask)
+    }
+
+    /// Why `p` cannot go in straight onto `mask`: every candidate direction with
+    /// what blocks it, the least blocked one named.
+    pub(super) fn blocked(&self, p: usize, mask: Mask) -> Stuck {
+        let part = self.names[p].clone();
         let mut by: Mask = 0;
         let mut least: Option<(usize, Mask)> = None;
         for k in 0..self.dirs[p].len() {
