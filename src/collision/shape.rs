@@ -722,6 +722,11 @@ impl Collider {
     }
 }
 
+/// A box's surface over 8, from its half extents: what the split rules compare.
+fn half_surface(h: &Vec3) -> f64 {
+    h[0] * h[1] + h[1] * h[2] + h[2] * h[0]
+}
+
 /// The tree under construction.
 struct Tree<'m> {
     mesh: &'m Mesh,
@@ -770,8 +775,6 @@ impl Tree<'_> {
     /// pairs per check, the trees 1.5–2.5× longer to build (docs/performance.md,
     /// "Pose checks on OMPL.app's meshes").
     fn split_search(&self, items: &mut [Item]) -> usize {
-        // proportional to a box's surface
-        let surface = |h: &Vec3| h[0] * h[1] + h[1] * h[2] + h[2] * h[0];
         let whole = Moments::of(self.mesh, items, &self.origin);
         // the box of `items` along the principal axes of their corners' moments,
         // searched from the whole group's and only to 1e-3: a choice between cuts
@@ -790,8 +793,8 @@ impl Tree<'_> {
             // the second half's moments by difference: one pass fewer per cut (a
             // little rounding only sways which cut is taken, never a box)
             let first = Moments::of(self.mesh, &items[..at], &self.origin);
-            let cost = surface(&half_extents(&items[..at], &first))
-                + surface(&half_extents(&items[at..], &whole.without(&first)));
+            let cost = half_surface(&half_extents(&items[..at], &first))
+                + half_surface(&half_extents(&items[at..], &whole.without(&first)));
             if cost < best {
                 best = cost;
                 kept.clear();
@@ -857,9 +860,7 @@ impl Tree<'_> {
         if items.len() < 2 {
             return None;
         }
-        // proportional to a box's surface
-        let surface =
-            |o: &Obb| o.half[0] * o.half[1] + o.half[1] * o.half[2] + o.half[2] * o.half[0];
+        let surface = |o: &Obb| half_surface(&o.half);
         let normals: Vec<Vec3> = items
             .iter()
             .filter_map(|it| unit_normal(&self.mesh.triangle(it.1 as usize)))
