@@ -960,10 +960,14 @@ pub(super) fn step_mesh(
     Ok((got.mesh, geometry))
 }
 
+/// A part's geometry as read: its name, mesh, the files the mesh was read from and,
+/// for a `step:` part, how it was tessellated.
+type ReadPart = (String, Arc<Mesh>, Vec<PathBuf>, Option<StepGeometry>);
+
 /// The geometry files read for parts that were not loaded, by part name, and the
 /// warnings of reading them.
 pub(super) struct ReadParts {
-    parts: Vec<(String, Arc<Mesh>, Vec<PathBuf>, Option<StepGeometry>)>,
+    parts: Vec<ReadPart>,
     warnings: Vec<String>,
 }
 

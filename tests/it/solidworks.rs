@@ -610,7 +610,7 @@ fn a_suppressed_component_whose_mesh_is_missing_opens_checks_and_saves() {
         dir.path(),
         "unsuppress.rhai",
         r#"
-let doc = open("models/ghost.yaml");
+let doc = open_doc("models/ghost.yaml");
 let why = "";
 try { doc.component("ghost").suppressed = false; } catch (e) { why = `${e}`; }
 print(why);
