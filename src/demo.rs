@@ -272,14 +272,14 @@ pub const PROJECT_FILES: &[&str] = &[
 ];
 
 /// [`write_project`] for `fitup demo`: every file first passes the write rule
-/// ([`crate::fsutil::check_output`]; `force` is `--force`), so nothing is written when
+/// ([`crate::project::check_output`]; `force` is `--force`), so nothing is written when
 /// one of them may not be replaced — and never through a symbolic link or over a
 /// folder or FIFO, even with `force`.
 pub fn write_project_checked(dir: &Path, force: bool) -> Result<(), Box<dyn std::error::Error>> {
-    let rule = crate::fsutil::OutputRule::forced(force);
+    let rule = crate::project::OutputRule::forced(force);
     for file in PROJECT_FILES {
         let path = dir.join(file);
-        crate::fsutil::check_output(&path, &rule)
+        crate::project::check_output(&path, &rule)
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
     write_project(dir)

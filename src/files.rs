@@ -5,7 +5,7 @@
 //! outside the project folder, regular files only) and the table cap
 //! ([`FileKind::Table`], 64 MiB); the text must be UTF-8 (a byte order mark is
 //! skipped). Every parse error names the file, the line and the cause. Writing is
-//! the caller's: text goes through the output rule (`fsutil::check_output`, the
+//! the caller's: text goes through the output rule (`project::check_output`, the
 //! project's output registry), see [`csv_text`] for the CSV spelling.
 //!
 //! # Examples

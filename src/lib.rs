@@ -27,8 +27,8 @@
 //! | [`watch`] | watch mode: rerun on every save, exactly once |
 //! | [`cli`] | the `fitup` command line |
 //! | [`diagnostics`] | errors located in user files, "did you mean" hints |
-//! | [`project`] | the project folder that bounds every file a run touches, and the path rule |
-//! | [`fsutil`] | atomic writes, capped reads of regular files only, content hashes, file stamps |
+//! | [`project`] | the project folder that bounds every file a run touches, the path rule, the write rule and the output registry |
+//! | [`fsutil`] | atomic writes, capped reads of regular files only, content hashes, file stamps, the held folder |
 //! | [`files`] | data files a script reads inside the project: CSV tables, JSON, text |
 #![warn(missing_docs)]
 

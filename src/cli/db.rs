@@ -225,7 +225,7 @@ fn run_action(a: &DbArgs) -> Result<(), (Exit, String)> {
                 Some(o) => {
                     let project = crate::script::Project::new(&root)
                         .map_err(|x| fail(format!("project folder {}: {x}", root.display())))?;
-                    let rule = crate::fsutil::OutputRule::forced(*force);
+                    let rule = crate::project::OutputRule::forced(*force);
                     project
                         .write_output(&o.to_string_lossy(), text.as_bytes(), &rule)
                         .map_err(|x| fail(format!("--out: {x}")))?;

@@ -321,7 +321,7 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     match &a.log {
         Some(log) => {
             let abs = std::path::absolute(log).map_err(|e| usage(format!("log: {e}")))?;
-            let rule = crate::fsutil::OutputRule::forced(a.force);
+            let rule = crate::project::OutputRule::forced(a.force);
             project
                 .write_output(&abs.to_string_lossy(), csv.as_bytes(), &rule)
                 .map_err(|e| fail(format!("--log: {e}")))?;

@@ -35,7 +35,7 @@ pub(super) fn start(
                 source,
             };
             let abs = std::path::absolute(r).map_err(path_error)?;
-            let rule = crate::fsutil::OutputRule::forced(force);
+            let rule = crate::project::OutputRule::forced(force);
             let path = project
                 .resolve_output(&abs.to_string_lossy(), &rule)
                 .map_err(|source| CliError::Refused {
@@ -45,7 +45,8 @@ pub(super) fn start(
                 })?;
             // The recording is streamed while the run goes on: listed as fitup's own
             // by its magic, so the next run (or watch rerun) may replace it.
-            crate::fsutil::register_stream(&path, crate::fsutil::RRD_MAGIC).map_err(path_error)?;
+            crate::project::register_stream(&path, crate::project::RRD_MAGIC)
+                .map_err(path_error)?;
             Some(path)
         }
         None => None,

@@ -318,7 +318,7 @@ impl Database {
                             f.take(16).read_to_end(&mut head)
                         })
                         .map_err(|e| open_err(IoCause::from(e).into()))?;
-                    if !head.starts_with(crate::fsutil::SQLITE_MAGIC) {
+                    if !head.starts_with(crate::project::SQLITE_MAGIC) {
                         return Err(foreign(ForeignFile::NotSqlite));
                     }
                 }

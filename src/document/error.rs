@@ -312,9 +312,9 @@ pub enum DocumentError {
 #[non_exhaustive]
 pub enum WriteProblem {
     /// The write rule refused the file, or the write failed
-    /// ([`crate::fsutil::write_output`]).
+    /// ([`crate::project::write_output`]).
     #[error(transparent)]
-    Output(crate::fsutil::OutputError),
+    Output(crate::project::OutputError),
     /// The operating system refused (its folder, the write).
     #[error(transparent)]
     Io(crate::fsutil::IoCause),

@@ -43,7 +43,7 @@ impl Document {
     }
 
     /// Writes [`Document::glb_bytes`] to `path` through the project's write rule
-    /// ([`crate::fsutil::check_output`]): a file this document was built from (its
+    /// ([`crate::project::check_output`]): a file this document was built from (its
     /// YAML, meshes, URDF) is never replaced, an existing file only when fitup wrote it
     /// or with `force`; written atomically (a reader never sees half a file), and
     /// checked before anything is built.
@@ -54,19 +54,19 @@ impl Document {
             .filter_map(|p| p.canonicalize().ok())
             .collect();
         let used = |p: &Path| p.canonicalize().is_ok_and(|c| sources.contains(&c));
-        let rule = crate::fsutil::OutputRule {
+        let rule = crate::project::OutputRule {
             force,
             used: Some(&used),
             signature: None,
         };
-        let write_error = |e: crate::fsutil::OutputError| DocumentError::Write {
+        let write_error = |e: crate::project::OutputError| DocumentError::Write {
             path: path.to_path_buf(),
             cause: WriteProblem::Output(e),
         };
-        crate::fsutil::check_output(path, &rule).map_err(write_error)?;
+        crate::project::check_output(path, &rule).map_err(write_error)?;
         let bytes = self.glb_bytes()?;
         // Checked again through the folder handle it is written with.
-        crate::fsutil::write_output(path, &bytes, &rule).map_err(write_error)?;
+        crate::project::write_output(path, &bytes, &rule).map_err(write_error)?;
         let shown: Vec<usize> = (0..self.components().len())
             .filter(|&i| self.components()[i].is_shown())
             .collect();

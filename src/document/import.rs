@@ -7,16 +7,16 @@
 //! the tessellation recorded in the document's description.
 //!
 //! Nothing is half-written: the STEP file is read and every output checked by the
-//! write rule ([`crate::fsutil::check_output`]) before the first byte is written. A new
+//! write rule ([`crate::project::check_output`]) before the first byte is written. A new
 //! project folder is built in a temporary folder beside it and renamed into place; in
 //! an existing folder each file is written atomically, the document last, and the
 //! meshes written so far are removed when a later write fails.
 
 use super::file::{AssemblyFile, ComponentFile, DocumentFile, PartFile};
 use super::{Document, DocumentError};
-use crate::fsutil::{OutputError, OutputRule};
 use crate::mesh::step::{read_step, StepError, StepModel, StepOptions};
 use crate::mesh::MeshError;
+use crate::project::{OutputError, OutputRule};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
@@ -457,7 +457,7 @@ fn write_into(
             return Err(io_err(&at, std::io::Error::other("not a file name")));
         };
         let dir = project.folder(parent, true).map_err(|e| io_err(&at, e))?;
-        crate::fsutil::check_output_in(&dir, name, &full, &rule)
+        crate::project::check_output_in(&dir, name, &full, &rule)
             .map_err(|source| ImportError::Output { path: at, source })?;
         Ok((full, dir))
     };

@@ -28,7 +28,7 @@
 //!
 //! **Tessellation store.** [`read_step_stored`] keeps what Open CASCADE returned in a
 //! folder (a project's [`STEP_STORE`]), one file per STEP content hash, deflection and
-//! angle, written by the project's write rule ([`crate::fsutil::write_output`]); a
+//! angle, written by the project's write rule ([`crate::project::write_output`]); a
 //! later read of the same bytes with the same tessellation skips Open CASCADE. Stored
 //! files are checked like a fresh read (and ignored when damaged). Writing an entry
 //! removes the entries of the same STEP file's older contents and keeps the folder

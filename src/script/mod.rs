@@ -285,13 +285,13 @@ impl Context {
     }
 
     /// Writes a script's output file `path` (inside the project) through the one write
-    /// rule ([`crate::fsutil::check_output`]): the files this run read count as files
+    /// rule ([`crate::project::check_output`]): the files this run read count as files
     /// the project uses; `overwrite` is the script's `overwrite: true`. Atomic, listed
     /// in the folder's output registry, recorded as the run's write. Returns the
     /// absolute path.
     pub fn write_output(&self, path: &str, bytes: &[u8], overwrite: bool) -> ScriptResult<PathBuf> {
         let used = |p: &Path| self.reads.lock().map_or(true, |r| r.contains(p));
-        let rule = crate::fsutil::OutputRule {
+        let rule = crate::project::OutputRule {
             force: overwrite,
             used: Some(&used),
             signature: None,

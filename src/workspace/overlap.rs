@@ -226,17 +226,17 @@ pub fn export_stl(
         .filter_map(|p| p.canonicalize().ok())
         .collect();
     let used = |p: &std::path::Path| p.canonicalize().is_ok_and(|c| sources.contains(&c));
-    let rule = crate::fsutil::OutputRule {
+    let rule = crate::project::OutputRule {
         force,
         used: Some(&used),
         signature: None,
     };
-    let write_error = |e: crate::fsutil::OutputError| crate::document::DocumentError::Write {
+    let write_error = |e: crate::project::OutputError| crate::document::DocumentError::Write {
         path: path.to_path_buf(),
         cause: crate::document::WriteProblem::Output(e),
     };
-    crate::fsutil::check_output(path, &rule).map_err(write_error)?;
+    crate::project::check_output(path, &rule).map_err(write_error)?;
     let bytes = crate::mesh::stl_bytes(&world_mesh(doc, which, frame));
-    crate::fsutil::write_output(path, &bytes, &rule).map_err(write_error)?;
+    crate::project::write_output(path, &bytes, &rule).map_err(write_error)?;
     Ok(bytes.len())
 }

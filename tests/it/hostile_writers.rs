@@ -37,7 +37,7 @@ fn sha256_all(dir: &Path) -> BTreeMap<PathBuf, String> {
             let md = std::fs::symlink_metadata(&p).unwrap();
             if md.is_dir() && !p.ends_with("out") {
                 stack.push(p);
-            } else if md.is_file() && !p.ends_with(fitup::fsutil::OUTPUT_REGISTRY) {
+            } else if md.is_file() && !p.ends_with(fitup::project::OUTPUT_REGISTRY) {
                 files.push(p);
             }
         }

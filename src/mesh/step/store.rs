@@ -6,7 +6,7 @@
 //! **Entries.** One file `<16 hex digits>.tess` per STEP content (its hash and length)
 //! and tessellation (linear and angular deflection); it records the STEP file it was
 //! read from (its canonical path). Entries are written by the project's write rule
-//! ([`crate::fsutil::write_output`]: a temporary file renamed into place), so a reader
+//! ([`crate::project::write_output`]: a temporary file renamed into place), so a reader
 //! never sees half an entry, and a file there that fitup did not write is never
 //! replaced. A hit refreshes the entry's modification time: its last use.
 //!
@@ -308,9 +308,9 @@ pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawMode
     if w.0.len() as u64 > MAX_ENTRY_BYTES {
         return; // never read back: not kept
     }
-    let rule = crate::fsutil::OutputRule {
+    let rule = crate::project::OutputRule {
         signature: Some(ANY_STORE_MAGIC),
-        ..crate::fsutil::OutputRule::forced(false)
+        ..crate::project::OutputRule::forced(false)
     };
     let name = key.file_name();
     let os_name = OsStr::new(&name);
@@ -319,8 +319,8 @@ pub(super) fn store(store: &Path, key: &StoreKey, source: &Path, model: &RawMode
     if matches!(dir.stat(os_name), Ok(Some(Kind::Symlink))) {
         let _ = dir.remove(os_name);
     }
-    if crate::fsutil::check_output_in(&dir, os_name, &store.join(&name), &rule).is_err()
-        || crate::fsutil::write_in(&dir, os_name, &w.0).is_err()
+    if crate::project::check_output_in(&dir, os_name, &store.join(&name), &rule).is_err()
+        || crate::project::write_in(&dir, os_name, &w.0).is_err()
     {
         return;
     }

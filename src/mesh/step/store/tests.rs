@@ -271,7 +271,7 @@ fn pruning_removes_what_is_stale_and_nothing_else() {
     let mut left: Vec<String> = std::fs::read_dir(&st)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n != crate::fsutil::OUTPUT_REGISTRY)
+        .filter(|n| n != crate::project::OUTPUT_REGISTRY)
         .collect();
     left.sort();
     let mut keep = vec![

@@ -1,5 +1,7 @@
 //! The project: the one folder that bounds every file a run touches (scripts, imports,
 //! documents, meshes, CSV tables, programs, saves), and the rule that finds it.
+//! Beside it, the write rule every output goes through and the registry of the files
+//! fitup wrote ([`check_output`], [`write_output`], [`OUTPUT_REGISTRY`]).
 //!
 //! # The path rule
 //!
@@ -18,6 +20,13 @@
 //!   root: `..` that leaves it, absolute paths elsewhere and symbolic links that lead
 //!   out are refused before anything is opened.
 
+mod output;
+
+pub use output::{
+    check_output, register_output, register_stream, write_checked, write_output, OutputError,
+    OutputRule, OUTPUT_REGISTRY, RRD_MAGIC, SQLITE_MAGIC,
+};
+pub(crate) use output::{check_output_in, write_in};
 use std::path::{Component, Path, PathBuf};
 
 /// The file that marks a project root (its content is not read yet).
@@ -39,13 +48,13 @@ pub enum PathError {
         /// The project root.
         root: PathBuf,
     },
-    /// An output refused by the write rule ([`crate::fsutil::check_output`]).
+    /// An output refused by the write rule ([`check_output`]).
     #[error("`{path}`: {cause}")]
     Refused {
         /// The path as written.
         path: PathBuf,
         /// Why.
-        cause: crate::fsutil::OutputError,
+        cause: OutputError,
     },
     /// The path cannot be resolved (an unreadable folder, …).
     #[error("`{path}` cannot be resolved: {cause}")]
@@ -406,31 +415,25 @@ impl Project {
 
     /// [`resolve_for_write`](Self::resolve_for_write) for an output file (CSV logs,
     /// exports, plans, key poses, recordings): the path must also pass the one write
-    /// rule, [`crate::fsutil::check_output`] — never over a file the project uses or
+    /// rule, [`check_output`] — never over a file the project uses or
     /// that fitup did not write, unless `rule.force` (`--force`, `overwrite: true`);
     /// never over a folder, FIFO, device or symbolic link. This only checks (for
     /// writers that refuse before working); write with
     /// [`write_output`](Self::write_output), which checks again through the handle
     /// it writes with.
-    pub fn resolve_output(
-        &self,
-        path: &str,
-        rule: &crate::fsutil::OutputRule,
-    ) -> Result<PathBuf, PathError> {
+    pub fn resolve_output(&self, path: &str, rule: &OutputRule) -> Result<PathBuf, PathError> {
         let (full, dir) = self.output_folder(path)?;
         let name = full.file_name().unwrap_or_default();
-        crate::fsutil::check_output_in(&dir, name, &full, rule).map_err(|cause| {
-            PathError::Refused {
-                path: path.into(),
-                cause,
-            }
+        check_output_in(&dir, name, &full, rule).map_err(|cause| PathError::Refused {
+            path: path.into(),
+            cause,
         })?;
         Ok(full)
     }
 
     /// Writes `bytes` as the output `path` (relative to the root): resolved inside the
     /// project, its folder made and held open by walking from the root's handle, the
-    /// write rule checked ([`crate::fsutil::check_output`]) and the file written
+    /// write rule checked ([`check_output`]) and the file written
     /// atomically and listed in the folder's registry — all through that one handle,
     /// so a folder swapped for a link midway is refused and nothing (the output, its
     /// temporary file, the registry) lands outside. Returns the file's path.
@@ -438,7 +441,7 @@ impl Project {
         &self,
         path: &str,
         bytes: &[u8],
-        rule: &crate::fsutil::OutputRule,
+        rule: &OutputRule,
     ) -> Result<PathBuf, PathError> {
         let (full, dir) = self.output_folder(path)?;
         let name = full.file_name().unwrap_or_default();
@@ -446,8 +449,8 @@ impl Project {
             path: path.into(),
             cause,
         };
-        crate::fsutil::check_output_in(&dir, name, &full, rule).map_err(refused)?;
-        crate::fsutil::write_in(&dir, name, bytes).map_err(refused)?;
+        check_output_in(&dir, name, &full, rule).map_err(refused)?;
+        write_in(&dir, name, bytes).map_err(refused)?;
         Ok(full)
     }
 
@@ -464,7 +467,7 @@ impl Project {
         if std::fs::symlink_metadata(&lexical).is_ok_and(|m| m.file_type().is_symlink()) {
             return Err(PathError::Refused {
                 path: path.into(),
-                cause: crate::fsutil::OutputError::Symlink,
+                cause: OutputError::Symlink,
             });
         }
         let full = self.resolve(path)?;
@@ -606,7 +609,7 @@ mod tests {
         }
         let w = p.resolve_for_write("out/sub/x.csv").unwrap();
         assert!(w.parent().unwrap().is_dir());
-        let rule = crate::fsutil::OutputRule::default();
+        let rule = OutputRule::default();
         std::fs::write(dir.path().join("models/cell.yaml"), "parts: {}\n").unwrap();
         assert!(p.resolve_output("models/cell.yaml", &rule).is_err());
         assert!(p.resolve_output("models", &rule).is_err());
@@ -616,19 +619,18 @@ mod tests {
         assert!(matches!(
             p.resolve_output("out/sub/x.csv", &rule),
             Err(PathError::Refused {
-                cause: crate::fsutil::OutputError::NotOurs,
+                cause: OutputError::NotOurs,
                 ..
             })
         ));
-        crate::fsutil::write_output(&w, b"c,d\n", &crate::fsutil::OutputRule::forced(true))
-            .unwrap();
+        write_output(&w, b"c,d\n", &OutputRule::forced(true)).unwrap();
         assert!(p.resolve_output("out/sub/x.csv", &rule).is_ok());
         #[cfg(unix)]
         {
             // A link at the output path itself is refused, even to a file inside.
             std::os::unix::fs::symlink(&w, dir.path().join("link.csv")).unwrap();
             let e = p
-                .resolve_output("link.csv", &crate::fsutil::OutputRule::forced(true))
+                .resolve_output("link.csv", &OutputRule::forced(true))
                 .unwrap_err();
             assert!(e.to_string().contains("symbolic link"), "{e}");
         }
