@@ -10,7 +10,8 @@
 //! parts are close, not into the whole part.
 
 use super::containment::coplanar_overlap;
-use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box, Relative};
+use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box};
+use super::relative::Relative;
 use super::shape::{Collider, Obb};
 use super::triangle::{tri_distance, tri_tri, unit_normal, Tri};
 use super::{CollisionError, MotionFault};

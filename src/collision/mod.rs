@@ -56,8 +56,10 @@ mod distance;
 mod edge;
 mod exact;
 mod method;
+mod relative;
 mod shape;
 mod sweep;
+mod tree;
 mod triangle;
 mod volume;
 

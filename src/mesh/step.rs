@@ -7,6 +7,16 @@
 //! Every mesh is checked closed and consistently oriented, and its volume is compared
 //! with the exact B-rep volume ([`StepPart::volume_ratio`]).
 //!
+//! **Gaps.** Open CASCADE's mesh of a closed solid is now and then not closed: a face
+//! left without triangles (a sliver, or a face that did not mesh), or a node on one
+//! face's side of an edge that the other face's side skips (a T-junction). Before a
+//! solid is refused as open, such gaps are closed: a T-junction's triangle is split
+//! at the node (within the linear deflection of its side), and a hole whose rim is a
+//! triangle or a flat convex polygon (within the deflection) is filled. The mend is
+//! kept only when the closed mesh's volume is within 1.5 % of the exact B-rep volume
+//! (a hole that was not one missing face would not be); [`StepPart::mended`] counts
+//! what was closed and `fitup import` says so.
+//!
 //! Without the feature every call returns [`StepError::NotBuilt`], whose message says
 //! how to rebuild.
 //!
@@ -36,6 +46,7 @@
 //! the rest of what is stale (`fitup cache prune`; see the `store` module).
 
 mod child;
+mod gaps;
 mod raw;
 mod shim;
 mod store;
@@ -169,6 +180,9 @@ pub struct StepPart {
     pub mesh: Mesh,
     /// The exact B-rep volume (Open CASCADE's BRepGProp), mm³.
     pub exact_volume: f64,
+    /// Gaps of Open CASCADE's mesh closed before the solid was taken: T-junctions
+    /// split plus holes filled (this module's docs, "Gaps"); 0 for most solids.
+    pub mended: usize,
 }
 
 impl StepPart {
@@ -796,22 +810,42 @@ fn from_raw(
         if p.solids_in_product > 1 {
             solid += &format!(" (solid {} of {})", p.solid_index, p.solids_in_product);
         }
-        if p.unmeshed_faces > 0 {
-            return Err(StepError::UnmeshedFace {
-                path: path.into(),
-                solid,
-                face: p.first_unmeshed_face,
-                faces: p.faces,
-                count: p.unmeshed_faces,
-            });
-        }
-        let mesh = weld(&p.vertices, &p.triangles).map_err(|source| StepError::Mesh {
+        let unmeshed = (p.unmeshed_faces > 0).then(|| StepError::UnmeshedFace {
+            path: path.into(),
+            solid: solid.clone(),
+            face: p.first_unmeshed_face,
+            faces: p.faces,
+            count: p.unmeshed_faces,
+        });
+        let mut mesh = weld(&p.vertices, &p.triangles).map_err(|source| StepError::Mesh {
             path: path.into(),
             solid: solid.clone(),
             source,
         })?;
-        let report = mesh.inspect();
+        let mut report = mesh.inspect();
+        let mut mended = 0;
+        if !report.is_watertight() {
+            let welded = report;
+            mended = gaps::split_t_junctions(&mut mesh, options.linear_deflection)
+                + gaps::fill_holes(&mut mesh, options.linear_deflection);
+            report = mesh.inspect();
+            // A mend is kept only where it gives the B-rep's own volume: a hole that
+            // was not one missing face would not.
+            // (a NaN ratio, from a zero or broken exact volume, keeps no mend)
+            let off = (mesh.signed_volume() / p.exact_volume - 1.0).abs();
+            let exact = off
+                .partial_cmp(&gaps::MENDED_VOLUME_SLACK)
+                .is_some_and(|o| o.is_le());
+            if mended > 0 && !exact {
+                report = welded;
+            }
+        }
         if mesh.triangles.is_empty() || !report.is_watertight() {
+            // A face without triangles whose hole is not one flat convex polygon:
+            // that face is the cause.
+            if let Some(e) = unmeshed {
+                return Err(e);
+            }
             return Err(StepError::OpenSolid {
                 path: path.into(),
                 solid,
@@ -825,6 +859,7 @@ fn from_raw(
             solid: (p.solid_index, p.solids_in_product),
             mesh,
             exact_volume: p.exact_volume,
+            mended,
         });
     }
     let mut instances = Vec::with_capacity(model.instances.len());

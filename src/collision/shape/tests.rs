@@ -1,4 +1,5 @@
 use super::*;
+use crate::collision::tree::symmetric_eigenvectors;
 use crate::math::Rng;
 
 /// Two facets folded at a right angle get a leaf each, the same two unfolded
