@@ -3,8 +3,9 @@
 //! rest is in `containment.rs`, distances for continuous sweeps in `distance.rs`.
 
 use super::containment::{contained, containment};
+use super::node::{Node, Obb, LEAF_SIZE};
 use super::relative::{obbs_meet, Relative};
-use super::shape::{Collider, Node, Obb, Plane, LEAF_SIZE};
+use super::shape::{Collider, Plane};
 use super::triangle::{tri_tri_with, unit_normal, Tri};
 use super::{CollisionError, Contact, InterferenceKind, PoseFault};
 use crate::math::{Aabb, Deadline, Transform, Vec3};

@@ -56,6 +56,7 @@ mod distance;
 mod edge;
 mod exact;
 mod method;
+mod node;
 mod relative;
 mod shape;
 mod sweep;

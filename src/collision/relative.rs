@@ -2,7 +2,7 @@
 //! test of the tree walks ([`obbs_meet`]): what the pair queries (`exact.rs`), the
 //! containment test, distances and edge checks share.
 
-use super::shape::Obb;
+use super::node::Obb;
 use super::triangle::Tri;
 use crate::math::{Transform, Vec3};
 use nalgebra::{Isometry3, Matrix3};

@@ -2,7 +2,7 @@
 //! split, and each node's oriented box fitted (principal axes of its corners'
 //! moments, extents along them).
 
-use super::shape::{Node, Obb, LEAF_SIZE};
+use super::node::{Node, Obb, LEAF_SIZE};
 use super::triangle::unit_normal;
 use crate::math::{Aabb, Point3, Vec3};
 use crate::mesh::Mesh;
