@@ -1,5 +1,5 @@
-//! Closing the T-junctions Open CASCADE's meshing leaves between two faces of one
-//! closed solid.
+//! Closing the gaps Open CASCADE's meshing leaves in one closed solid: T-junctions
+//! between two faces, and holes where a face got no triangles.
 //!
 //! Open CASCADE discretizes each edge once and both faces of the edge share its
 //! nodes, so welding identical points closes a solid. Some exports still come back
@@ -7,9 +7,12 @@
 //! the edge carries a node the other face's side skips. The node lies on the other
 //! side's segment, within the deflection (the segment is a chord of the same curve),
 //! and the solid is closed once that segment's triangle is split at the node, as any
-//! mesh repair does for a T-junction. Nothing else is changed: a gap that is not a
-//! T-junction stays open and the solid is refused as before. The welding of the
-//! face meshes into one is here too ([`closed_mesh`]).
+//! mesh repair does for a T-junction. A face left without triangles (a sliver, or
+//! a face that did not mesh) leaves a hole whose rim is that face's outline: filled
+//! when the rim is a triangle or a flat convex polygon. Either mend is kept only
+//! when the closed mesh has the B-rep's volume; any other gap stays open and the
+//! solid is refused as before. The welding of the face meshes into one is here too
+//! ([`closed_mesh`]).
 
 use super::raw::RawPart;
 use super::{StepError, StepOptions};
@@ -110,7 +113,6 @@ pub(super) fn open_solid_cause(open: usize, non_manifold: usize, misoriented: us
 /// Triangles that collapse in the merge (two nodes at one point: a sphere's pole, a
 /// cone's apex) have no surface and are left out.
 fn weld(vertices: &[f64], triangles: &[u32]) -> Result<Mesh, MeshError> {
-    use crate::math::Point3;
     let n = vertices.len() / 3;
     let point = |i: u32| -> Result<Point3, MeshError> {
         let i = i as usize;
@@ -424,29 +426,34 @@ mod tests {
         m
     }
 
+    /// The triangle of the 2 × 3 × 4 box sharing a side with its triangle 0 and
+    /// lying in the same face (`same_face`) or in the face across that side.
+    fn beside_first(same_face: bool) -> usize {
+        let whole = Mesh::cuboid(Point3::origin(), Point3::new(2.0, 3.0, 4.0));
+        let normal = |t: &[u32; 3]| {
+            let p = |k: usize| whole.vertices[t[k] as usize];
+            (p(1) - p(0)).cross(&(p(2) - p(0))).normalize()
+        };
+        let first = whole.triangles[0];
+        (1..whole.triangles.len())
+            .find(|&b| {
+                let t = whole.triangles[b];
+                let shared = first.iter().filter(|v| t.contains(v)).count();
+                let cos = normal(&first).dot(&normal(&t));
+                shared == 2
+                    && if same_face {
+                        cos > 0.999
+                    } else {
+                        cos.abs() < 1e-9
+                    }
+            })
+            .expect("a triangle beside triangle 0")
+    }
+
     #[test]
     fn a_missing_triangle_or_flat_face_is_filled_facing_out() {
         // one triangle, then both triangles of one face (a flat, convex 4-sided hole)
-        let faces = |m: &Mesh, a: usize, b: usize| {
-            let share = m.triangles[a]
-                .iter()
-                .filter(|v| m.triangles[b].contains(v))
-                .count();
-            share == 2
-                && (0..3).any(|axis| {
-                    [a, b].iter().all(|&t| {
-                        m.triangles[t].iter().all(|&v| {
-                            m.vertices[v as usize][axis]
-                                == m.vertices[m.triangles[a][0] as usize][axis]
-                        })
-                    })
-                })
-        };
-        let whole = Mesh::cuboid(Point3::origin(), Point3::new(2.0, 3.0, 4.0));
-        let pair = (1..whole.triangles.len())
-            .find(|&b| faces(&whole, 0, b))
-            .expect("the other triangle of face 0");
-        for missing in [vec![0], vec![0, pair]] {
+        for missing in [vec![0], vec![0, beside_first(true)]] {
             let mut m = box_without(&missing);
             assert!(!m.inspect().is_watertight());
             assert_eq!(fill_holes(&mut m, 0.01), 1, "{missing:?}");
@@ -459,21 +466,8 @@ mod tests {
 
     #[test]
     fn a_hole_that_is_not_one_flat_face_stays_open() {
-        // two triangles of two faces meeting at a corner: a 4-sided rim bent 90°
-        let whole = Mesh::cuboid(Point3::origin(), Point3::new(2.0, 3.0, 4.0));
-        let normal = |t: &[u32; 3]| {
-            let p = |k: usize| whole.vertices[t[k] as usize];
-            (p(1) - p(0)).cross(&(p(2) - p(0)))
-        };
-        let other = (1..whole.triangles.len())
-            .find(|&b| {
-                let shared = whole.triangles[0]
-                    .iter()
-                    .filter(|v| whole.triangles[b].contains(v))
-                    .count();
-                shared == 2 && normal(&whole.triangles[0]).dot(&normal(&whole.triangles[b])) == 0.0
-            })
-            .expect("a triangle across an edge of the box");
+        // two triangles of two faces meeting at an edge: a 4-sided rim bent 90°
+        let other = beside_first(false);
         let mut m = box_without(&[0, other]);
         assert_eq!(fill_holes(&mut m, 0.01), 0);
         assert_eq!(m.inspect().boundary_edges, 4);
