@@ -113,6 +113,13 @@ pub(super) fn import(a: &ImportArgs) -> Exit {
                 ""
             }
         );
+        if p.mended > 0 {
+            outln!(
+                "  {:<16} note: {} gap(s) in Open CASCADE's mesh closed (a face's missing triangles filled or a node split in), at the exact volume",
+                "",
+                p.mended
+            );
+        }
     }
     outln!(
         "  Open CASCADE: parse {:.3} s, transfer {:.3} s, mesh {:.3} s{}; import {:.3} s in all",

@@ -12,38 +12,17 @@
 //! that: the overlap of two coplanar, equally facing triangles of closed meshes over
 //! a straight translation, in millimetres.
 //!
-//! "Closed" here ([`encloses_volume`]) is weaker than watertight: every edge is
+//! "Closed" here (`shape::encloses_volume`) is weaker than watertight: every edge is
 //! used as often in one direction as in the other, so the surface is the boundary of
 //! a volume even where it is not a 2-manifold — a wall cut in stacked closed slices,
 //! a union of closed boxes sharing faces (CAD exports, the bench's sliced ducts).
 
-use super::exact::Relative;
+use super::relative::Relative;
 use super::shape::Collider;
 use super::triangle::{unit_normal, Tri};
 use super::PairMember;
 use crate::math::{Point3, Transform, Vec3};
-use crate::mesh::Mesh;
 use nalgebra::Isometry3;
-use std::collections::HashMap;
-
-/// Whether `mesh` bounds a volume with its normals outward: every edge is
-/// traversed as often in one direction as in the other (a closed, consistently
-/// oriented surface, possibly non-manifold: stacked closed slices share their faces
-/// and edges), and its signed volume is positive (an inside-out mesh resting on a
-/// part would otherwise seem to share its faces' material).
-pub(crate) fn encloses_volume(mesh: &Mesh) -> bool {
-    let mut balance: HashMap<(u32, u32), i32> = HashMap::with_capacity(3 * mesh.triangles.len());
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (u, v) = (t[k], t[(k + 1) % 3]);
-            if u == v {
-                continue;
-            }
-            *balance.entry((u.min(v), u.max(v))).or_default() += if u < v { 1 } else { -1 };
-        }
-    }
-    !mesh.triangles.is_empty() && balance.values().all(|&b| b == 0) && mesh.signed_volume() > 0.0
-}
 
 /// How far apart (mm) two faces facing the same way may lie and still count as in one
 /// plane. STL stores f32 coordinates (7 significant digits), so faces that coincide in
@@ -362,8 +341,10 @@ fn containment_depth(inner: &Collider, outer: &Collider, iso: &Isometry3<f64>) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collision::shape::encloses_volume;
     use crate::collision::{edge_interferes, Collider, EdgeOptions};
     use crate::math::{Point3, Transform};
+    use crate::mesh::Mesh;
     use std::sync::Arc;
 
     /// A block `lo..hi` cut in `slices` stacked closed boxes along Z (closed, not a

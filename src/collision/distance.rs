@@ -4,7 +4,8 @@
 //! over the two trees' box pairs in the first part's frame.
 
 use super::containment::contained;
-use super::exact::{check_pose, eps, size, tri_box, Relative};
+use super::exact::{check_pose, eps, size, tri_box};
+use super::relative::Relative;
 use super::shape::Collider;
 use super::triangle::{tri_distance, Tri};
 use super::CollisionError;

@@ -10,8 +10,10 @@
 //! parts are close, not into the whole part.
 
 use super::containment::coplanar_overlap;
-use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box, Relative};
-use super::shape::{Collider, Obb};
+use super::exact::{check_pose, check_tolerance, eps, obb_size, tri_box};
+use super::node::Obb;
+use super::relative::Relative;
+use super::shape::Collider;
 use super::triangle::{tri_distance, tri_tri, unit_normal, Tri};
 use super::{CollisionError, MotionFault};
 use crate::math::{Deadline, Transform, Vec3};

@@ -56,8 +56,11 @@ mod distance;
 mod edge;
 mod exact;
 mod method;
+mod node;
+mod relative;
 mod shape;
 mod sweep;
+mod tree;
 mod triangle;
 mod volume;
 

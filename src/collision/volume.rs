@@ -24,7 +24,8 @@
 //! the sphere, then a local refinement of the best ones. A part inside a cavity of
 //! the other is measured as pulled out of the whole other part, not into the cavity.
 
-use super::shape::{Collider, Node};
+use super::node::Node;
+use super::shape::Collider;
 use super::triangle::{ray_box, ray_triangle};
 use crate::math::{Aabb, Deadline, Point3, Transform, Vec3};
 

@@ -43,6 +43,9 @@ pub struct ImportedPart {
     pub volume_ratio: f64,
     /// How many components place it.
     pub instances: usize,
+    /// Gaps of Open CASCADE's mesh closed to make it a closed solid
+    /// ([`StepPart::mended`](crate::mesh::step::StepPart::mended)).
+    pub mended: usize,
 }
 
 /// What [`import_step`] wrote.
@@ -273,6 +276,7 @@ fn build(model: &StepModel) -> (DocumentFile, Vec<ImportedPart>) {
             triangles: p.mesh.triangles.len(),
             volume_ratio: p.volume_ratio(),
             instances: 0,
+            mended: p.mended,
         });
     }
     // The product tree as sub-assemblies (groups in this document): one root

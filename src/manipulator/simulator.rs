@@ -38,7 +38,7 @@ use super::message::{
 use super::{joints_from_wire, joints_to_wire, RefusalCode};
 use crate::document::Document;
 use crate::kinematics::{IkOptions, JointKind};
-use crate::math::Transform;
+use crate::math::{Deadline, Transform};
 use crate::workspace::{CheckOptions, SceneCache, Workspace};
 use nalgebra::Vector3;
 use std::collections::{HashSet, VecDeque};
@@ -771,8 +771,10 @@ fn serve_motion_packets(
         .opts
         .byte_order
         .map_or_else(FrameReader::detecting, FrameReader::new);
-    let mut last_packet = conn.opened;
-    let mut packet_started: Option<Instant> = None;
+    // Its first packet, the rest of a packet begun, the next packet (re-armed by each).
+    let first_packet = Deadline::from_start(conn.opened, FIRST_PACKET_TIMEOUT);
+    let mut next_packet = Deadline::from_start(conn.opened, IDLE_TIMEOUT);
+    let mut packet_end: Option<Deadline> = None;
     let mut logged = 0usize;
     let mut log = |line: String| {
         logged += 1;
@@ -792,24 +794,22 @@ fn serve_motion_packets(
                     std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
                 ) =>
             {
-                let now = Instant::now();
                 if frames.pending() > 0 {
-                    let since = *packet_started.get_or_insert(now);
-                    if now - since > PARTIAL_PACKET_TIMEOUT {
+                    let end =
+                        *packet_end.get_or_insert_with(|| Deadline::after(PARTIAL_PACKET_TIMEOUT));
+                    if end.passed() {
                         return Some(format!(
                             "a packet started {} s ago is still incomplete ({} bytes)",
                             PARTIAL_PACKET_TIMEOUT.as_secs(),
                             frames.pending()
                         ));
                     }
-                } else if !conn.spoke.load(Ordering::Relaxed)
-                    && now - last_packet > FIRST_PACKET_TIMEOUT
-                {
+                } else if !conn.spoke.load(Ordering::Relaxed) && first_packet.passed() {
                     return Some(format!(
                         "no packet within {} s of connecting",
                         FIRST_PACKET_TIMEOUT.as_secs()
                     ));
-                } else if now - last_packet > IDLE_TIMEOUT {
+                } else if next_packet.passed() {
                     return Some(format!("idle for {} s", IDLE_TIMEOUT.as_secs()));
                 }
                 continue;
@@ -821,8 +821,8 @@ fn serve_motion_packets(
             // this connection ends.
             Err(e) => return Some(e.to_string()),
         };
-        packet_started = None;
-        last_packet = Instant::now();
+        packet_end = None;
+        next_packet = Deadline::after(IDLE_TIMEOUT);
         if !conn.spoke.swap(true, Ordering::Relaxed) {
             // The first frame fixed this connection's order: later state clients
             // speak it too (unless an order is forced).

@@ -15,11 +15,12 @@
 //! Plain `std` networking, compiled with or without the `viewer` feature, so it is
 //! tested without Rerun.
 
+use crate::math::Deadline;
 use std::io::{self, Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Whether a request with `Origin: origin` may use the gRPC port: only the web
 /// viewer page fitup serves on `page_port`, as `http://127.0.0.1:PORT` or
@@ -212,11 +213,11 @@ fn rewrite_head(head: &str) -> String {
 
 /// Connects to the upstream server, waiting for it to start listening.
 fn connect(upstream: SocketAddr) -> io::Result<TcpStream> {
-    let start = Instant::now();
+    let deadline = Deadline::after(UPSTREAM_WAIT);
     loop {
         match TcpStream::connect_timeout(&upstream, Duration::from_secs(1)) {
             Ok(s) => return Ok(s),
-            Err(e) if start.elapsed() > UPSTREAM_WAIT => return Err(e),
+            Err(e) if deadline.passed() => return Err(e),
             Err(_) => std::thread::sleep(Duration::from_millis(50)),
         }
     }

@@ -1,5 +1,8 @@
 use super::*;
+use crate::collision::node::LEAF_SIZE;
+use crate::collision::tree::symmetric_eigenvectors;
 use crate::math::Rng;
+use nalgebra::Matrix3;
 
 /// Two facets folded at a right angle get a leaf each, the same two unfolded
 /// into a square share one; a finely meshed flat plate and a fine sphere keep

@@ -75,6 +75,33 @@ fn collapsed_pole_triangles_do_not_refuse_a_closed_solid() {
     );
 }
 
+/// A solid whose mesh misses one triangle (Open CASCADE left three such holes in a
+/// HOOPS-exported servo) is mended when the filled mesh has the B-rep's volume, and
+/// refused as open when it has not (issue 38).
+#[test]
+fn a_hole_in_open_cascades_mesh_is_mended_only_to_the_exact_volume() {
+    let start = std::time::Instant::now();
+    let o = StepOptions::default();
+    let holed = |exact_volume: f64| {
+        let mut model = one_box();
+        let part = &mut model.parts[0];
+        part.triangles.truncate(part.triangles.len() - 3);
+        part.exact_volume = exact_volume;
+        model
+    };
+    let m = from_raw(Path::new("s.step"), &o, &holed(24.0), false, start).unwrap();
+    assert_eq!(m.parts[0].mended, 1);
+    assert!(m.parts[0].mesh.inspect().is_watertight());
+    assert!((m.parts[0].volume_ratio() - 1.0).abs() < 1e-12);
+    let whole = from_raw(Path::new("s.step"), &o, &one_box(), false, start).unwrap();
+    assert_eq!(whole.parts[0].mended, 0);
+    let Err(e) = from_raw(Path::new("s.step"), &o, &holed(30.0), false, start) else {
+        panic!("a mend 20 % off the exact volume was kept");
+    };
+    let e = e.to_string();
+    assert!(e.contains("3 open, 0 non-manifold"), "{e}");
+}
+
 #[test]
 fn a_raw_model_is_checked_and_placed() {
     let start = std::time::Instant::now();
@@ -92,10 +119,29 @@ fn a_raw_model_is_checked_and_placed() {
     let mut bad = one_box();
     bad.instances[0].matrix[0] = f64::NAN;
     assert!(from_raw(Path::new("b.step"), &o, &bad, false, start).is_err());
-    let mut bad = one_box();
-    bad.parts[0].unmeshed_faces = 1;
-    bad.parts[0].first_unmeshed_face = 4;
-    let e = from_raw(Path::new("b.step"), &o, &bad, false, start).unwrap_err();
+    // A face without triangles: its hole filled when it is one flat convex
+    // polygon of the exact volume (Cuboid's triangles 0 and 1 are its bottom face),
+    // else the face named.
+    let unmeshed = |drop: [usize; 2]| {
+        let mut m = one_box();
+        let part = &mut m.parts[0];
+        part.unmeshed_faces = 1;
+        part.first_unmeshed_face = 4;
+        let kept: Vec<u32> = part
+            .triangles
+            .chunks(3)
+            .enumerate()
+            .filter(|(k, _)| !drop.contains(k))
+            .flat_map(|(_, t)| t.to_vec())
+            .collect();
+        part.triangles = kept;
+        from_raw(Path::new("b.step"), &o, &m, false, start)
+    };
+    let mended = unmeshed([0, 1]).unwrap();
+    assert_eq!(mended.parts[0].mended, 1);
+    assert!((mended.parts[0].volume_ratio() - 1.0).abs() < 1e-12);
+    // bottom and side triangles sharing an edge: a bent rim, not one face
+    let e = unmeshed([0, 4]).unwrap_err();
     assert!(
         e.to_string()
             .contains("solid `block-1`: face 4 of 6 did not mesh"),
