@@ -275,9 +275,14 @@ class Document:
         over a file the document was built from, over an existing file only when
         fitup wrote it or with ``overwrite``.
         """
-    def export_glb(self, path: _StrPath, overwrite: bool = False) -> int:
+    def export_glb(self, path: _StrPath, overwrite: bool = False, *, components: Optional[List[str]] = None, frame: Optional[_Pose] = None) -> int:
         """Writes the document as binary glTF (one node per component neither
-        suppressed nor hidden; metres, +Y up) to ``path``; returns the nodes written.
+        suppressed nor hidden, at its pose; metres, +Y up) to ``path``; returns the
+        nodes written. With ``components`` (names; default every one neither
+        suppressed nor hidden) or ``frame`` (its 4×4 pose in the world, mm), each
+        component's mesh is written with its pose baked in, in the coordinates of
+        ``frame`` (default the world): one node per component, no node matrix, what
+        ``world_mesh([name], frame)`` gives; a suppressed one is refused.
         """
     def mates(self) -> List[Dict[str, Any]]:
         """Every mate in document order as dicts: ``name``, ``type``, ``entities``

@@ -756,15 +756,36 @@ impl Document {
     }
 
     /// Writes the document as binary glTF (one node per component neither
-    /// suppressed nor hidden; metres, +Y up) to ``path``; returns the nodes written.
-    #[pyo3(signature = (path, overwrite = false))]
+    /// suppressed nor hidden, at its pose; metres, +Y up) to ``path``; returns the
+    /// nodes written. With ``components`` (names; default every one neither
+    /// suppressed nor hidden) or ``frame`` (its 4×4 pose in the world, mm), each
+    /// component's mesh is written with its pose baked in, in the coordinates of
+    /// ``frame`` (default the world): one node per component, no node matrix, what
+    /// ``world_mesh([name], frame)`` gives; a suppressed one is refused.
+    #[pyo3(signature = (path, overwrite = false, *, components = None, frame = None))]
     fn export_glb(
         &self,
         py: Python<'_>,
         path: std::path::PathBuf,
         overwrite: bool,
+        components: Option<Vec<String>>,
+        frame: Option<PyArrayLike2<'_, f64, AllowTypeChange>>,
     ) -> Result<usize> {
-        py.detach(|| Ok(self.lock()?.doc.export_glb(&path, overwrite)?.nodes))
+        let frame = frame
+            .map(|f| convert::pose_of(f.as_array(), "frame"))
+            .transpose()?;
+        let baked = components.is_some() || frame.is_some();
+        py.detach(|| {
+            let inner = self.lock()?;
+            if !baked {
+                return Ok(inner.doc.export_glb(&path, overwrite)?.nodes);
+            }
+            let which = shown(&inner.doc, components)?;
+            Ok(
+                fitup::workspace::export_glb(&inner.doc, &path, &which, frame.as_ref(), overwrite)?
+                    .nodes,
+            )
+        })
     }
 
     /// Marks a component fixed (never moved by mates or planners) or free.

@@ -512,6 +512,36 @@ def test_mass_properties_equal_trimesh_and_overlap_reads_the_push():
     assert doc.contact("screw4", "table")["depth_mm"] == pytest.approx(5.0, abs=1e-6)
 
 
+def glb_nodes(path):
+    """The component nodes of a GLB fitup wrote (the root's children), by name:
+    ``(matrix or None, vertices (N, 3) mm, triangles (M, 3))``, read from the file's
+    own JSON and binary chunks."""
+    import json
+    import struct
+
+    data = path.read_bytes()
+    assert data[:4] == b"glTF"
+    size = struct.unpack_from("<I", data, 12)[0]
+    meta = json.loads(data[20:20 + size])
+    blob = 20 + size + 8
+
+    def array(accessor, kind, width):
+        a = meta["accessors"][accessor]
+        view = meta["bufferViews"][a["bufferView"]]
+        at = blob + view["byteOffset"] + a.get("byteOffset", 0)
+        return np.frombuffer(data, kind, a["count"] * (3 if a["type"] == "VEC3" else 1),
+                             at).reshape(-1, width)
+
+    nodes = {}
+    for k in meta["nodes"][0]["children"]:
+        node = meta["nodes"][k]
+        prim = meta["meshes"][node["mesh"]]["primitives"][0]
+        vertices = array(prim["attributes"]["POSITION"], "<f4", 3).astype(float) * 1000.0
+        triangles = array(prim["indices"], "<u4", 3).astype(float)
+        nodes[node["name"]] = (node.get("matrix"), vertices, triangles)
+    return nodes
+
+
 def test_the_solidworks_document_edits(project):
     """Issue 37 from Python: mates as objects, suppression and visibility, custom
     properties, added/renamed/replaced components, world meshes and exports."""
@@ -548,6 +578,20 @@ def test_the_solidworks_document_edits(project):
     out.mkdir()
     assert doc.export_stl(out / "spare.stl", ["spare"]) == 84 + 50 * t.shape[0]
     assert doc.export_glb(out / "cell.glb") == len(doc.components()) - 2
+    # per component, the pose baked in: the node has no matrix, its mesh is the
+    # world mesh (f32 metres); in a frame 900 mm up it sits on the frame's origin
+    lifted = fitup.translation(0, 0, 900)
+    for name, frame, want in [("spare.glb", None, v), ("spare_up.glb", lifted, v - [0, 0, 900])]:
+        assert doc.export_glb(out / name, components=["spare"], frame=frame) == 1
+        nodes = glb_nodes(out / name)
+        assert list(nodes) == ["spare"]
+        matrix, gv, gt = nodes["spare"]
+        assert matrix is None and np.array_equal(gt, t)
+        assert np.abs(gv - want).max() < 1e-3
+    assert nodes["spare"][1][:, 2].min() == pytest.approx(0.0, abs=1e-3)
+    with pytest.raises(fitup.DocumentError, match="`screw4` is suppressed"):
+        doc.export_glb(out / "screw4.glb", components=["screw4"])
+    assert not (out / "screw4.glb").exists()
     doc.save_as(project / "models" / "edited.yaml")
     back = fitup.Document(project / "models" / "edited.yaml")
     assert back.component("screw4")["suppressed"] and back.properties(part="screw")

@@ -251,9 +251,9 @@ pub enum DocumentError {
         /// Where and why (boxed: a located error is large).
         at: Box<SourceError>,
     },
-    /// A suppressed component is not checked, planned or measured.
+    /// A suppressed component is not checked, planned, measured or exported.
     #[error(
-        "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"
+        "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check, plan or export it"
     )]
     Suppressed(Name),
     /// A reference asked for as a coordinate system is another kind.

@@ -1,19 +1,22 @@
 //! A document written as binary glTF (GLB) for other viewers: `fitup export`,
-//! `doc.export_glb(file)` in scripts.
+//! `doc.export_glb(file)` in scripts. Components with their poses baked into their
+//! meshes (per-component export) are [`crate::workspace::export_glb`].
 
 use super::{Document, DocumentError, WriteProblem};
 use crate::mesh::{glb_bytes, GlbNode};
 use std::path::{Path, PathBuf};
 
-/// What [`Document::export_glb`] wrote.
+/// What [`Document::export_glb`] or [`crate::workspace::export_glb`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct GlbExport {
     /// The file written.
     pub path: PathBuf,
-    /// glTF nodes: one per component shown (robot links' generated components
-    /// included; suppressed and hidden ones left out).
+    /// glTF nodes besides the root: one per component written ([`Document::export_glb`]:
+    /// every one shown, robot links' generated components included, suppressed and
+    /// hidden ones left out).
     pub nodes: usize,
-    /// glTF meshes: one per distinct part mesh.
+    /// glTF meshes: one per distinct part mesh ([`crate::workspace::export_glb`]: one
+    /// per component, each placed by its pose).
     pub meshes: usize,
     /// Bytes written.
     pub bytes: usize,

@@ -349,13 +349,17 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
     });
     api.f(
         "Document.export_glb(file: string, options: map)",
-        "`export_glb(file)` with `#{overwrite}` (bool, default false).",
+        "`export_glb(file)` with `#{overwrite}` (bool, default false). With `components` (names) or `frame` (a pose in the world), those components (default: every one neither suppressed nor hidden) are written as `c.export_glb` writes one: each mesh with its pose baked in, in the coordinates of `frame` (default the world), one node per component without a matrix of its own; a suppressed one is refused.",
         |d: &mut DocHandle, file: &str, opts: Map| -> ScriptResult<()> {
-            export_glb(
-                d,
-                file,
-                super::convert::overwrite_option(&opts, "export_glb")?,
-            )
+            if !(opts.contains_key("components") || opts.contains_key("frame")) {
+                let overwrite = super::convert::overwrite_option(&opts, "export_glb")?;
+                return export_glb(d, file, overwrite);
+            }
+            let shown = super::bind_mass::shown_components(d)?;
+            let (which, frame, overwrite) =
+                super::bind_mass::export_options(d, &opts, shown, "export_glb")?;
+            let format = super::bind_mass::ExportFormat::Glb;
+            super::bind_mass::export_components(d, file, &which, frame.as_ref(), overwrite, format)
         },
     );
     api.f(

@@ -153,13 +153,15 @@ fn overlap(d: &DocHandle, a: &str, b: &str, o: &OverlapOptions) -> ScriptResult<
     Ok(m)
 }
 
-/// The components and frame of an export's options map, and `overwrite`.
-fn export_options(
+/// The components and frame of an export's options map, and `overwrite` (`what`:
+/// the function, named in a refusal).
+pub(super) fn export_options(
     d: &DocHandle,
     o: &Map,
     default: Vec<usize>,
+    what: &str,
 ) -> ScriptResult<(Vec<usize>, Option<crate::math::Transform>, bool)> {
-    super::convert::check_keys(o, &["components", "frame", "overwrite"], "export_stl")?;
+    super::convert::check_keys(o, &["components", "frame", "overwrite"], what)?;
     let which = match o.get("components") {
         Some(v) => {
             let names = v
@@ -183,23 +185,46 @@ fn export_options(
     Ok((which, frame, overwrite))
 }
 
-fn export_stl(
+/// The format of a per-component export.
+#[derive(Clone, Copy)]
+pub(super) enum ExportFormat {
+    Stl,
+    Glb,
+}
+
+/// Writes components `which` with their poses (in `frame`) baked in, through the
+/// run's write rule.
+pub(super) fn export_components(
     d: &DocHandle,
     file: &str,
     which: &[usize],
     frame: Option<&crate::math::Transform>,
     overwrite: bool,
+    format: ExportFormat,
 ) -> ScriptResult<()> {
     let bytes = {
         let doc = d.lock()?;
-        crate::mesh::stl_bytes(&crate::workspace::world_mesh(&doc, which, frame).map_err(fail)?)
+        match format {
+            ExportFormat::Stl => crate::workspace::world_stl_bytes(&doc, which, frame),
+            ExportFormat::Glb => crate::workspace::world_glb_bytes(&doc, which, frame),
+        }
+        .map_err(fail)?
     };
     d.context().write_output(file, &bytes, overwrite)?;
     Ok(())
 }
 
+/// The indices of the components neither suppressed nor hidden: what a document
+/// export writes by default.
+pub(super) fn shown_components(d: &DocHandle) -> ScriptResult<Vec<usize>> {
+    let doc = d.lock()?;
+    Ok((0..doc.components().len())
+        .filter(|&i| doc.components()[i].is_shown())
+        .collect())
+}
+
 pub(super) fn register_export(api: &mut Api) {
-    api.section("Export", "Component meshes with their pose baked in (CodeStack's \"Export Part Or Component To STL\", \"Export Relative To Coordinate System\"): binary STL in mm, in world coordinates or in a coordinate system `frame` (its pose in the world: a Transform, 4×4 matrix or `[x,y,z,a,b,c]`). Writers go through the write rule (see \"What a run writes\" in docs/scripting.md).");
+    api.section("Export", "Component meshes with their pose baked in (CodeStack's \"Export Part Or Component To STL\", \"Export Relative To Coordinate System\"): binary STL in mm, or binary glTF (one node per component, named as it, its mesh in the frame's coordinates and no node matrix; metres and +Y up as glTF wants, see docs/document.md), in world coordinates or in a coordinate system `frame` (its pose in the world: a Transform, 4×4 matrix or `[x,y,z,a,b,c]`). A suppressed component is refused (it has no body). Writers go through the write rule (see \"What a run writes\" in docs/scripting.md).");
     api.f("Component.world_mesh() -> map", "The component's mesh at its pose: `#{vertices: [[x,y,z], …] (mm, world), triangles: [[i,j,k], …]}`.", |c: &mut ComponentHandle| -> ScriptResult<Map> {
         let mesh = {
             let (doc, i) = c.locked()?;
@@ -214,25 +239,38 @@ pub(super) fn register_export(api: &mut Api) {
         "Component.export_stl(file: string)",
         "Writes the component's mesh at its pose (world, mm) as binary STL.",
         |c: &mut ComponentHandle, file: &str| -> ScriptResult<()> {
-            export_stl(&c.doc, file, &[c.index()?], None, false)
+            export_components(&c.doc, file, &[c.index()?], None, false, ExportFormat::Stl)
         },
     );
     api.f(
         "Component.export_stl(file: string, options: map)",
         "As above with `#{frame, overwrite}`.",
         |c: &mut ComponentHandle, file: &str, o: Map| -> ScriptResult<()> {
-            let (which, frame, overwrite) = export_options(&c.doc, &o, vec![c.index()?])?;
-            export_stl(&c.doc, file, &which, frame.as_ref(), overwrite)
+            let (which, frame, overwrite) =
+                export_options(&c.doc, &o, vec![c.index()?], "export_stl")?;
+            let format = ExportFormat::Stl;
+            export_components(&c.doc, file, &which, frame.as_ref(), overwrite, format)
         },
     );
-    api.f("Document.export_stl(file: string, options: map)", "Writes components at their poses as one binary STL: `#{components: [names] (default all), frame, overwrite}`.", |d: &mut DocHandle, file: &str, o: Map| -> ScriptResult<()> {
-        let all: Vec<usize> = {
-            let doc = d.lock()?;
-            (0..doc.components().len())
-                .filter(|&i| doc.components()[i].is_shown())
-                .collect()
-        };
-        let (which, frame, overwrite) = export_options(d, &o, all)?;
-        export_stl(d, file, &which, frame.as_ref(), overwrite)
+    api.f("Document.export_stl(file: string, options: map)", "Writes components at their poses as one binary STL: `#{components: [names] (default all neither suppressed nor hidden), frame, overwrite}`.", |d: &mut DocHandle, file: &str, o: Map| -> ScriptResult<()> {
+        let (which, frame, overwrite) = export_options(d, &o, shown_components(d)?, "export_stl")?;
+        export_components(d, file, &which, frame.as_ref(), overwrite, ExportFormat::Stl)
     });
+    api.f(
+        "Component.export_glb(file: string)",
+        "Writes the component as binary glTF with its pose baked in: one node named as it, its mesh in world coordinates (metres, +Y up under the root node `fitup`).",
+        |c: &mut ComponentHandle, file: &str| -> ScriptResult<()> {
+            export_components(&c.doc, file, &[c.index()?], None, false, ExportFormat::Glb)
+        },
+    );
+    api.f(
+        "Component.export_glb(file: string, options: map)",
+        "As above with `#{frame, overwrite}`: the mesh in the coordinates of `frame`.",
+        |c: &mut ComponentHandle, file: &str, o: Map| -> ScriptResult<()> {
+            let (which, frame, overwrite) =
+                export_options(&c.doc, &o, vec![c.index()?], "export_glb")?;
+            let format = ExportFormat::Glb;
+            export_components(&c.doc, file, &which, frame.as_ref(), overwrite, format)
+        },
+    );
 }

@@ -30,15 +30,16 @@
 //! assert!(gap > 0.0 && gap < 50.0, "{gap} mm");
 //! ```
 
+mod export;
 mod features;
 mod overlap;
 mod plan;
 mod scene;
 
+pub use export::{export_glb, export_stl, world_glb_bytes, world_mesh, world_stl_bytes};
 pub use features::{feature_cells, split_part, CUT_CELLS_FEATURE};
 pub use overlap::{
-    export_stl, mass_properties, part_frame_mass_properties, world_mesh, MassOptions, Overlap,
-    OverlapOptions,
+    mass_properties, part_frame_mass_properties, MassOptions, Overlap, OverlapOptions,
 };
 pub use plan::{follow, PlanRequest, Revalidation, DEFAULT_MARGIN_DIAMETERS};
 pub use scene::{Scene, SceneCache};

@@ -727,3 +727,198 @@ fn unsuppressing_reads_the_part_then_its_interference_is_reported() {
     let hits = interfering(&doc);
     assert!(hits.iter().any(|h| h == "ghost-table"), "{hits:?}");
 }
+
+/// The component nodes of a GLB fitup wrote (the children of its root node), read
+/// through the `gltf` crate (which validates the file): name, matrix (column-major),
+/// positions (mm, from the f32 metres stored) and indices.
+fn glb_component_nodes(bytes: &[u8]) -> Vec<(String, [[f32; 4]; 4], Vec<[f64; 3]>, Vec<u32>)> {
+    let g = gltf::Gltf::from_slice(bytes).unwrap();
+    let blob = g.blob.clone().unwrap();
+    let roots: Vec<_> = g.document.default_scene().unwrap().nodes().collect();
+    assert_eq!(roots.len(), 1);
+    assert_eq!(roots[0].name(), Some(fitup::mesh::GLB_ROOT));
+    let m = roots[0].transform().matrix();
+    for c in 0..4 {
+        for r in 0..4 {
+            assert_eq!(m[c][r] as f64, fitup::mesh::Z_UP_TO_Y_UP[4 * c + r]);
+        }
+    }
+    let word = |at: usize| u32::from_le_bytes(blob[at..at + 4].try_into().unwrap());
+    let start = |a: &gltf::Accessor| a.view().unwrap().offset() + a.offset();
+    roots[0]
+        .children()
+        .map(|node| {
+            let prim = node.mesh().unwrap().primitives().next().unwrap();
+            let pos = prim.get(&gltf::Semantic::Positions).unwrap();
+            let at = start(&pos);
+            let positions = (0..pos.count())
+                .map(|v| {
+                    [0, 1, 2].map(|k| 1000.0 * f32::from_bits(word(at + 12 * v + 4 * k)) as f64)
+                })
+                .collect();
+            let ix = prim.indices().unwrap();
+            let at = start(&ix);
+            let indices = (0..ix.count()).map(|k| word(at + 4 * k)).collect();
+            let name = node.name().unwrap_or_default().to_string();
+            (name, node.transform().matrix(), positions, indices)
+        })
+        .collect()
+}
+
+/// Capability 3, per-component export as glTF as well as STL
+/// (`IModelDocExtension.SaveAs` of a component, its transform baked in):
+/// `workspace::export_glb` writes one node per component, named as it, with no matrix
+/// of its own, whose mesh is the part's mesh placed by the component's pose — in the
+/// world, or in a slanted coordinate system's frame — to f32's precision (≤ 1e-3 mm
+/// here), the part's triangles unchanged; the file is valid glTF and reads back as
+/// a part at the components' place. A suppressed component is refused with
+/// `DocumentError::Suppressed` (also one whose part was never loaded), STL too, and
+/// nothing is written; the file goes through the write rule. Scripts get the same
+/// bytes (`c.export_glb`, `doc.export_glb(file, #{components, frame})`).
+#[test]
+fn a_component_exported_as_glb_has_its_pose_baked_in() {
+    use fitup::document::{Document, DocumentError};
+    use fitup::math::{Point3, Transform, Vec3};
+
+    let dir = common::project();
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let mut doc = Document::open(&dir.path().join("models/cell.yaml")).unwrap();
+    let names = ["plate_b", "screw5"];
+    let which: Vec<usize> = names
+        .iter()
+        .map(|n| doc.component_index(n).unwrap())
+        .collect();
+    let slanted = Transform::from_rotation_about(
+        Point3::new(100.0, -50.0, 20.0),
+        Vec3::new(1.0, 2.0, 3.0),
+        0.7,
+    )
+    .unwrap();
+    for (file, frame) in [("world.glb", None), ("slanted.glb", Some(slanted))] {
+        let path = out.join(file);
+        let e = fitup::workspace::export_glb(&doc, &path, &which, frame.as_ref(), false).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!((e.nodes, e.meshes, e.bytes), (2, 2, bytes.len()));
+        let nodes = glb_component_nodes(&bytes);
+        assert_eq!(nodes.len(), 2);
+        for ((name, matrix, positions, indices), &i) in nodes.iter().zip(&which) {
+            let c = &doc.components()[i];
+            assert_eq!(name, &c.name);
+            let identity: [[f32; 4]; 4] =
+                std::array::from_fn(|col| std::array::from_fn(|row| f32::from(col == row)));
+            assert_eq!(matrix, &identity, "{name}: no matrix of its own");
+            let part = doc.mesh_of(i);
+            let triangles: Vec<u32> = part.triangles.iter().flatten().copied().collect();
+            assert_eq!(indices, &triangles, "{name}");
+            assert_eq!(positions.len(), part.vertices.len(), "{name}");
+            let (mut worst, mut moved) = (0.0f64, 0.0f64);
+            for (got, v) in positions.iter().zip(&part.vertices) {
+                let world = c.transform.isometry() * v;
+                let want = match &frame {
+                    Some(f) => f.isometry().inverse_transform_point(&world),
+                    None => world,
+                };
+                worst = worst.max((Vec3::from(*got) - want.coords).norm());
+                moved = moved.max((want - v).norm());
+            }
+            assert!(
+                worst < 1e-3,
+                "{file} {name}: {worst} mm from its placed mesh"
+            );
+            assert!(
+                moved > 10.0,
+                "{file} {name}: the pose moves it ({moved} mm)"
+            );
+        }
+    }
+    // Read back as a part (fitup's glTF reader undoes the root's turn): the two
+    // components where they stand.
+    let back = fitup::mesh::read_mesh_file(&out.join("world.glb")).unwrap();
+    let b = back.bounds().unwrap();
+    let placed: Vec<Point3> = which
+        .iter()
+        .flat_map(|&i| {
+            let pose = doc.components()[i].transform;
+            doc.mesh_of(i)
+                .vertices
+                .iter()
+                .map(move |v| pose.isometry() * v)
+        })
+        .collect();
+    let lo = placed.iter().fold(placed[0], |a, p| a.inf(p));
+    let hi = placed.iter().fold(placed[0], |a, p| a.sup(p));
+    assert!(
+        (b.lo - lo).norm() < 1e-3 && (b.hi - hi).norm() < 1e-3,
+        "{b:?} vs {lo:?}..{hi:?}"
+    );
+
+    // The write rule: a mesh of the document is never replaced (not even with
+    // force), a file fitup did not write only with force, its own output again.
+    let plate = dir.path().join("models/meshes/plate_a.stl");
+    let before = std::fs::read(&plate).unwrap();
+    let refused = fitup::workspace::export_glb(&doc, &plate, &which, None, true);
+    assert!(
+        matches!(refused, Err(DocumentError::Write { .. })),
+        "{refused:?}"
+    );
+    assert_eq!(std::fs::read(&plate).unwrap(), before);
+    let theirs = out.join("theirs.glb");
+    std::fs::write(&theirs, b"not ours").unwrap();
+    let refused = fitup::workspace::export_glb(&doc, &theirs, &which, None, false);
+    assert!(
+        matches!(refused, Err(DocumentError::Write { .. })),
+        "{refused:?}"
+    );
+    assert_eq!(std::fs::read(&theirs).unwrap(), b"not ours");
+    fitup::workspace::export_glb(&doc, &theirs, &which, None, true).unwrap();
+    fitup::workspace::export_glb(&doc, &out.join("world.glb"), &which, None, false).unwrap();
+
+    // Scripts: the same bytes, through the run's write rule; a suppressed one refused.
+    let plate_a = doc.component_index("plate_a").unwrap();
+    let script = r#"
+let doc = open_doc("models/cell.yaml");
+doc.component("screw5").export_glb("out/screw5.glb");
+doc.export_glb("out/two.glb", #{components: ["plate_b", "screw5"], frame: doc.component("plate_a").transform});
+doc.component("screw5").suppressed = true;
+let why = "";
+try { doc.component("screw5").export_glb("out/not.glb"); } catch (e) { why = `${e}`; }
+print(why);
+assert(why.contains("`screw5` is suppressed"), why);
+"#;
+    let run = common::run_script_in(dir.path(), "export.rhai", script);
+    assert!(run.status.success(), "{}", common::text(&run));
+    let read = |f: &str| std::fs::read(out.join(f)).unwrap();
+    assert_eq!(
+        read("screw5.glb"),
+        fitup::workspace::world_glb_bytes(&doc, &which[1..], None).unwrap()
+    );
+    let frame = doc.components()[plate_a].transform;
+    assert_eq!(
+        read("two.glb"),
+        fitup::workspace::world_glb_bytes(&doc, &which, Some(&frame)).unwrap()
+    );
+    assert!(!out.join("not.glb").exists());
+
+    // Suppressed: refused by name in both formats, nothing written.
+    doc.set_suppressed("screw5", true).unwrap();
+    let suppressed = out.join("suppressed.glb");
+    for result in [
+        fitup::workspace::export_glb(&doc, &suppressed, &which, None, false).map(|e| e.bytes),
+        fitup::workspace::export_stl(&doc, &suppressed, &which, None, false),
+    ] {
+        match result {
+            Err(DocumentError::Suppressed(n)) => assert_eq!(&*n, "screw5"),
+            other => panic!("expected Suppressed, got {other:?}"),
+        }
+    }
+    assert!(!suppressed.exists());
+    // ... also a component whose part was never loaded (its mesh file is missing)
+    write_ghost_document(dir.path());
+    let ghostly = Document::open(&dir.path().join("models/ghost.yaml")).unwrap();
+    let ghost = ghostly.component_index("ghost").unwrap();
+    match fitup::workspace::world_glb_bytes(&ghostly, &[ghost], None) {
+        Err(DocumentError::Suppressed(n)) => assert_eq!(&*n, "ghost"),
+        other => panic!("expected Suppressed, got {other:?}"),
+    }
+}
