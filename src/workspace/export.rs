@@ -97,9 +97,10 @@ pub fn world_glb_bytes(
 }
 
 /// Writes `bytes()` to `path` through the project's write rule
-/// ([`crate::project::check_output`]), as [`Document::export_glb`] does: a file the
-/// document was built from (its YAML, meshes, URDF) is never replaced, an existing
-/// file only when fitup wrote it or with `force`; checked before anything is built,
+/// ([`crate::project::check_output`]), as [`Document::export_glb`] does: an existing
+/// file is replaced only when fitup wrote it and it is neither a project file (by
+/// extension) nor one the document was built from (its YAML, meshes, URDF), or with
+/// `force` (never a link or fitup's bookkeeping); checked before anything is built,
 /// written atomically. Returns the bytes written.
 fn write_export(
     doc: &Document,
@@ -130,9 +131,9 @@ fn write_export(
 }
 
 /// Writes [`world_stl_bytes`] of components `which` to `path` through the project's
-/// write rule, as [`Document::export_glb`] does (a file the document was built from is
-/// never replaced, an existing file only when fitup wrote it or with `force`;
-/// atomically). Returns the bytes written.
+/// write rule, as [`Document::export_glb`] does (an existing file only when fitup
+/// wrote it and the document was not built from it, or with `force`; atomically).
+/// Returns the bytes written.
 ///
 /// # Errors
 /// [`DocumentError::Write`] naming the file, or as [`world_stl_bytes`].

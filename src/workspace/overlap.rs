@@ -7,7 +7,7 @@ use super::{Workspace, WorkspaceError};
 use crate::collision::{
     intersection_volume, separation, Contact, SeparationOptions, DEFAULT_OVERLAP_TIME_LIMIT_MS,
 };
-use crate::document::{Document, DocumentError};
+use crate::document::Document;
 use crate::math::Vec3;
 use crate::mesh::{MassProperties, MassSpec};
 

@@ -728,19 +728,22 @@ fn unsuppressing_reads_the_part_then_its_interference_is_reported() {
     assert!(hits.iter().any(|h| h == "ghost-table"), "{hits:?}");
 }
 
+/// A component node of a GLB: name, matrix (column-major), positions (mm), indices.
+type GlbComponentNode = (String, [[f32; 4]; 4], Vec<[f64; 3]>, Vec<u32>);
+
 /// The component nodes of a GLB fitup wrote (the children of its root node), read
 /// through the `gltf` crate (which validates the file): name, matrix (column-major),
 /// positions (mm, from the f32 metres stored) and indices.
-fn glb_component_nodes(bytes: &[u8]) -> Vec<(String, [[f32; 4]; 4], Vec<[f64; 3]>, Vec<u32>)> {
+fn glb_component_nodes(bytes: &[u8]) -> Vec<GlbComponentNode> {
     let g = gltf::Gltf::from_slice(bytes).unwrap();
     let blob = g.blob.clone().unwrap();
     let roots: Vec<_> = g.document.default_scene().unwrap().nodes().collect();
     assert_eq!(roots.len(), 1);
     assert_eq!(roots[0].name(), Some(fitup::mesh::GLB_ROOT));
     let m = roots[0].transform().matrix();
-    for c in 0..4 {
-        for r in 0..4 {
-            assert_eq!(m[c][r] as f64, fitup::mesh::Z_UP_TO_Y_UP[4 * c + r]);
+    for (c, column) in m.iter().enumerate() {
+        for (r, v) in column.iter().enumerate() {
+            assert_eq!(*v as f64, fitup::mesh::Z_UP_TO_Y_UP[4 * c + r]);
         }
     }
     let word = |at: usize| u32::from_le_bytes(blob[at..at + 4].try_into().unwrap());
@@ -853,11 +856,11 @@ fn a_component_exported_as_glb_has_its_pose_baked_in() {
         "{b:?} vs {lo:?}..{hi:?}"
     );
 
-    // The write rule: a mesh of the document is never replaced (not even with
-    // force), a file fitup did not write only with force, its own output again.
+    // The write rule: a mesh of the document and a file fitup did not write are
+    // replaced only with force; its own output again without.
     let plate = dir.path().join("models/meshes/plate_a.stl");
     let before = std::fs::read(&plate).unwrap();
-    let refused = fitup::workspace::export_glb(&doc, &plate, &which, None, true);
+    let refused = fitup::workspace::export_glb(&doc, &plate, &which, None, false);
     assert!(
         matches!(refused, Err(DocumentError::Write { .. })),
         "{refused:?}"
