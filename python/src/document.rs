@@ -721,7 +721,7 @@ impl Document {
             .transpose()?;
         let inner = self.lock()?;
         let which = shown(&inner.doc, components)?;
-        let mesh = fitup::workspace::world_mesh(&inner.doc, &which, frame.as_ref());
+        let mesh = fitup::workspace::world_mesh(&inner.doc, &which, frame.as_ref())?;
         let v = convert::rows(py, mesh.vertices.iter().map(|p| [p.x, p.y, p.z]), 3);
         let t = convert::rows(py, mesh.triangles.iter().map(|t| t.map(f64::from)), 3);
         Ok((v, t))

@@ -635,6 +635,34 @@ def test_parts_from_files_replaced_parts_and_source_files(project):
     assert back.component("screw1")["part"] == "screw_new" and back.pose("cap2-1")[2, 3] == pytest.approx(760)
 
 
+def test_a_suppressed_part_is_read_when_unsuppressed(project):
+    """Issue 37, capability 5: a part only a suppressed component uses is not read
+    when the document opens, so its missing mesh file does not stop it; unsuppressing
+    it reads the file (refused, naming the file and the document's line, nothing
+    changed, while it is missing), and its world mesh is refused meanwhile."""
+    models = project / "models"
+    text = (models / "cell.yaml").read_text()
+    text = text.replace("\nparts:\n", "\nparts:\n  ghost:\n    stl: meshes/ghost.stl\n", 1)
+    text = text.replace(
+        "\ncomponents:\n", "\ncomponents:\n- name: ghost\n  part: ghost\n  suppressed: true\n", 1
+    )
+    (models / "ghost.yaml").write_text(text)
+    line = 1 + text.splitlines().index("    stl: meshes/ghost.stl")
+    doc = fitup.Document(models / "ghost.yaml")
+    assert doc.component("ghost")["suppressed"]
+    with pytest.raises(fitup.DocumentError, match="not loaded"):
+        doc.world_mesh(["ghost"])
+    with pytest.raises(fitup.DocumentError) as refused:
+        doc.set_suppressed("ghost", False)
+    message = str(refused.value)
+    assert f"ghost.yaml:{line}:" in message and "meshes/ghost.stl" in message, message
+    assert doc.component("ghost")["suppressed"]
+    (models / "meshes" / "ghost.stl").write_bytes((models / "meshes" / "plate_a.stl").read_bytes())
+    doc.set_suppressed("ghost", False)
+    vertices, _ = doc.world_mesh(["ghost"])
+    assert len(vertices) > 0
+
+
 def test_remove_component(project):
     """Issue 37, capability 7: a component with mates is refused unless its mates go
     with it; the others keep their poses."""

@@ -58,6 +58,14 @@ pub(super) fn check(path: &Path) -> Exit {
     // Parts sharing one mesh (one file named by many parts) are inspected once.
     let mut inspected = std::collections::HashMap::new();
     for p in doc.parts() {
+        if !p.is_loaded() {
+            // A note, not a warning: SolidWorks opens such an assembly the same way.
+            println!(
+                "    {:<12} not loaded (only suppressed components use it)  {}",
+                p.name, p.stl
+            );
+            continue;
+        }
         let r = inspected
             .entry(std::sync::Arc::as_ptr(&p.mesh))
             .or_insert_with(|| p.mesh.inspect());
@@ -101,11 +109,16 @@ pub(super) fn check(path: &Path) -> Exit {
     for c in doc.components() {
         // The Transform's Display is the pose for people (mm, degrees, no `-0`).
         println!(
-            "    {:<12} {:<10} {}  at {}",
+            "    {:<12} {:<10} {}  at {}{}",
             c.name,
             c.part,
             if c.fixed { "fixed" } else { "free " },
-            c.transform
+            c.transform,
+            if c.is_suppressed() {
+                "  (suppressed)"
+            } else {
+                ""
+            }
         );
     }
     println!("  mates ({}), all satisfied", doc.mates().len());

@@ -114,16 +114,63 @@ fn one_strict_side(d: &[f64; 3]) -> bool {
 /// a large triangle is judged where it meets `o`, not at a far corner. `oriented`:
 /// behind means against `n` (into the solid); otherwise the lesser of the two sides.
 fn reach_into(t: &Tri, o: &Tri, n: &Vec3, eps: f64, oriented: bool) -> f64 {
-    // Clipping a triangle by three half-planes leaves at most 6 corners: fixed
+    let mut sides = [(Vec3::zeros(), Point3::origin(), 0.0); 5];
+    for k in 0..3 {
+        let (u, v) = (o[k], o[(k + 1) % 3]);
+        let m = n.cross(&(v - u)); // points into `o` for a counter-clockwise `o`
+        sides[k] = (m, u, eps * m.norm());
+    }
+    reach_within(t, &sides[..3], o, n, oriented)
+}
+
+/// The most [`reach_into`] can become while `o` moves by `s` (mm) parallel to its
+/// plane (the component of `s` along `n` is ignored): how far `t` reaches behind
+/// `o`'s plane over the region `o` sweeps, the Minkowski sum of `o` and the segment
+/// `0..s`. That sum is bounded by `o`'s three sides, each moved out by the part of
+/// `s` across it, and by the two lines along `s` through `o`'s outermost corners.
+/// A pair of triangles translating against each other parallel to one's plane can
+/// cross no deeper than this anywhere on the way (`edge.rs`).
+pub(crate) fn reach_into_swept(
+    t: &Tri,
+    o: &Tri,
+    n: &Vec3,
+    s: &Vec3,
+    eps: f64,
+    oriented: bool,
+) -> f64 {
+    let s = s - n * n.dot(s);
+    let mut sides = [(Vec3::zeros(), Point3::origin(), 0.0); 5];
+    for k in 0..3 {
+        let (u, v) = (o[k], o[(k + 1) % 3]);
+        let m = n.cross(&(v - u));
+        // inside the swept region: m·(p − u) ≥ min(0, m·s)
+        sides[k] = (m, u, eps * m.norm() - m.dot(&s).min(0.0));
+    }
+    let w = n.cross(&s);
+    let slack = eps * w.norm();
+    let across = o.map(|p| w.dot(&p.coords));
+    let (lo, hi) = (0..3).fold((0, 0), |(lo, hi), k| {
+        (
+            if across[k] < across[lo] { k } else { lo },
+            if across[k] > across[hi] { k } else { hi },
+        )
+    });
+    sides[3] = (w, o[lo], slack);
+    sides[4] = (-w, o[hi], slack);
+    reach_within(t, &sides, o, n, oriented)
+}
+
+/// How far triangle `t`, clipped to the half-spaces `m·(p − u) + extra ≥ 0` of
+/// `sides`, reaches behind the plane through `o[0]` with unit normal `n`
+/// (`oriented`), or to the lesser side.
+fn reach_within(t: &Tri, sides: &[(Vec3, Point3, f64)], o: &Tri, n: &Vec3, oriented: bool) -> f64 {
+    // Clipping a triangle by five half-planes leaves at most 8 corners: fixed
     // buffers (this runs for every crossing pair; no allocation).
     let mut poly = [Point3::origin(); 8];
     let mut len = 3;
     poly[..3].copy_from_slice(t);
-    for k in 0..3 {
-        let (u, v) = (o[k], o[(k + 1) % 3]);
-        let m = n.cross(&(v - u)); // points into `o` for a counter-clockwise `o`
-        let slack = eps * m.norm();
-        let side = |p: &Point3| m.dot(&(p - u)) + slack;
+    for (m, u, extra) in sides {
+        let side = |p: &Point3| m.dot(&(p - u)) + extra;
         let mut next = [Point3::origin(); 8];
         let mut count = 0;
         for i in 0..len {

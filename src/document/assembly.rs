@@ -200,6 +200,9 @@ impl Document {
     /// every level (SolidWorks' `SetSuppression2` on a sub-assembly component), then
     /// re-solves the mates; on failure nothing changes. A component's own
     /// suppression is kept: unsuppressing the sub-assembly leaves it suppressed.
+    /// The parts of the components it unsuppresses are read if they were not loaded
+    /// ([`super::Part::is_loaded`]; an unreadable one is
+    /// [`DocumentError::PartUnreadable`]).
     pub fn set_sub_assembly_suppressed(
         &mut self,
         name: &str,
@@ -213,7 +216,14 @@ impl Document {
             }
         }
         self.apply_assembly_suppression();
-        if let Err(e) = self.rebuild() {
+        // the parts of the components it unsuppresses, read if they were not
+        let unsuppressed: Vec<usize> = (0..self.components.len())
+            .filter(|&i| !self.components[i].is_suppressed())
+            .collect();
+        if let Err(e) = self
+            .load_parts_of(&unsuppressed)
+            .and_then(|()| self.rebuild())
+        {
             *self = before;
             return Err(e);
         }

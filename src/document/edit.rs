@@ -76,7 +76,8 @@ impl Document {
     }
 
     /// Runs `change`, then re-solves the mates; when they cannot be satisfied, the
-    /// mates and poses are put back and the solver's error returned.
+    /// mates, poses, flags and parts of the components are put back and the
+    /// solver's error returned.
     fn change_and_rebuild(
         &mut self,
         change: impl FnOnce(&mut Self) -> Result<(), DocumentError>,
@@ -88,13 +89,16 @@ impl Document {
             .map(|c| (c.suppressed, c.hidden))
             .collect();
         let poses: Vec<Transform> = self.components.iter().map(|c| c.transform).collect();
+        let parts: Vec<String> = self.components.iter().map(|c| c.part.clone()).collect();
         change(self)?;
         if let Err(e) = self.rebuild() {
             self.mates = mates;
-            for ((c, t), (s, h)) in self.components.iter_mut().zip(poses).zip(flags) {
+            for (((c, t), (s, h)), p) in self.components.iter_mut().zip(poses).zip(flags).zip(parts)
+            {
                 c.transform = t;
                 c.suppressed = s;
                 c.hidden = h;
+                c.part = p;
             }
             return Err(e);
         }
@@ -234,9 +238,15 @@ impl Document {
     }
 
     /// Suppresses or unsuppresses a component (SolidWorks' `SetSuppression2`), then
-    /// re-solves: a suppressed component's mates are inactive.
+    /// re-solves: a suppressed component's mates are inactive. Unsuppressing a
+    /// component whose part is not loaded reads the part's file first
+    /// ([`super::Part::is_loaded`]); when it cannot be read, nothing changes
+    /// ([`DocumentError::PartUnreadable`]).
     pub fn set_suppressed(&mut self, name: &str, suppressed: bool) -> Result<(), DocumentError> {
         let i = self.component_index(name)?;
+        if !suppressed && !self.components[i].held_suppressed {
+            self.load_parts_of(&[i])?;
+        }
         self.change_and_rebuild(|d| {
             d.components[i].suppressed = suppressed;
             Ok(())
@@ -335,11 +345,22 @@ impl Document {
         let part = self.part(part)?.name.clone();
         super::check_pose(&transform, format_args!("the pose for `{name}`"))?;
         let i = self.components.len();
+        // a part not loaded yet is read for the new component (unless it goes into
+        // a suppressed sub-assembly); nothing changes when it cannot be
+        let before = (!self.parts[&part].loaded).then(|| self.clone());
         self.by_name.insert(name.clone(), i);
         self.numbering.insert(&name);
         self.components
             .push(Component::placed(name, part, transform));
         self.apply_assembly_suppression();
+        if let Some(before) = before {
+            if !self.components[i].is_suppressed() {
+                if let Err(e) = self.load_parts_of(&[i]) {
+                    *self = before;
+                    return Err(e);
+                }
+            }
+        }
         self.revision += 1;
         Ok(i)
     }
@@ -371,12 +392,23 @@ impl Document {
                 edit: LinkEdit::Rename,
             });
         }
+        // renamed out of a suppressed sub-assembly, a component whose part is not
+        // loaded needs it read; nothing changes when it cannot be
+        let before = (!self.part_loaded(i)).then(|| self.clone());
         let old_name = std::mem::replace(&mut self.components[i].name, new.clone());
         self.by_name.remove(&old_name);
         self.numbering.remove(&old_name);
         self.numbering.insert(&new);
         self.by_name.insert(new, i);
         self.apply_assembly_suppression();
+        if let Some(before) = before {
+            if !self.components[i].is_suppressed() {
+                if let Err(e) = self.load_parts_of(&[i]) {
+                    *self = before;
+                    return Err(e);
+                }
+            }
+        }
         self.revision += 1;
         Ok(())
     }
@@ -410,6 +442,13 @@ impl Document {
                 })?;
             }
             m.check_geometry()?;
+        }
+        if !self.components[i].is_suppressed() && !self.parts[&part].loaded {
+            // the new part is read first (as for the component, the error names it)
+            let old = std::mem::replace(&mut self.components[i].part, part.clone());
+            let read = self.load_parts_of(&[i]);
+            self.components[i].part = old;
+            read?;
         }
         self.change_and_rebuild(|d| {
             d.mates = mates;
@@ -483,6 +522,8 @@ impl Document {
                 references: IndexMap::new(),
                 features: Vec::new(),
                 properties: IndexMap::new(),
+                loaded: true,
+                at: None,
             },
         );
         self.revision += 1;

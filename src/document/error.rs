@@ -226,6 +226,31 @@ pub enum DocumentError {
         /// The equation's text (shortened when long).
         equation: String,
     },
+    /// A suppressed component whose part is not loaded ([`super::Part::is_loaded`]):
+    /// its mesh is not known, so it has no world mesh, mass, box or export.
+    #[error(
+        "component `{component}` is suppressed and its part `{part}` is not loaded: unsuppress it (`suppressed = false`) to read its mesh"
+    )]
+    NotLoaded {
+        /// The component.
+        component: Name,
+        /// Its part.
+        part: Name,
+    },
+    /// A part that only suppressed components used, so it was not read when the
+    /// document opened, cannot be read now that component `component` needs it
+    /// (unsuppressed, added or re-pointed to it); nothing changed. `at` is the
+    /// error opening the document would have given: the document file, the line
+    /// of the part's `stl:` or `step:`, and the cause.
+    #[error("component `{component}` needs part `{part}`, whose file cannot be read (nothing changed): {at}")]
+    PartUnreadable {
+        /// The component that needs it.
+        component: Name,
+        /// The part.
+        part: Name,
+        /// Where and why (boxed: a located error is large).
+        at: Box<SourceError>,
+    },
     /// A suppressed component is not checked, planned or measured.
     #[error(
         "component `{0}` is suppressed; unsuppress it (`suppressed = false`) to check or plan it"
@@ -399,6 +424,17 @@ impl DocumentError {
 
     /// The message with source snippet for located errors.
     pub fn render(&self) -> String {
+        if let DocumentError::PartUnreadable {
+            component,
+            part,
+            at,
+        } = self
+        {
+            return format!(
+                "component `{component}` needs part `{part}`, whose file cannot be read (nothing changed):\n{}",
+                at.render()
+            );
+        }
         match self.location() {
             Some(s) => s.render(),
             None => self.to_string(),
@@ -411,6 +447,7 @@ impl DocumentError {
         match self {
             DocumentError::Source(s) => Some(s),
             DocumentError::Mates { at, .. } | DocumentError::Equation { at, .. } => at.as_deref(),
+            DocumentError::PartUnreadable { at, .. } => Some(at),
             _ => None,
         }
     }

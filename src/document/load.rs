@@ -4,7 +4,7 @@
 use super::file::{ComponentFile, DocumentFile, FeatureFile, MateFile, PartFile};
 use super::{
     mates, robot, scan, tessellations, AabbCache, Color, Component, Document, DocumentError,
-    Feature, Mate, MateEntity, MateKind, Part, Reference, StepGeometry, MAX_ABS_VALUE,
+    Feature, GeometryAt, Mate, MateEntity, MateKind, Part, Reference, StepGeometry, MAX_ABS_VALUE,
 };
 use super::{EntryError, UrdfRobotError};
 use crate::collision::CutSpec;
@@ -174,8 +174,7 @@ impl Document {
                 ));
             }
         }
-        let mut step_warnings = Vec::new();
-        let parts = load.parts(&file, cache, &mut step_warnings)?;
+        let parts = load.parts(&file)?;
         let assemblies = super::assembly::load(&file, |key, m| load.at_key(&[key], m))?;
         let (components, by_name) = load.components(&file, &parts, &assemblies)?;
         let mut doc = Document {
@@ -201,6 +200,19 @@ impl Document {
         };
         doc.load_sub_documents(&file, path, &load.dir, project, positions, nesting, cache)?;
         doc.apply_assembly_suppression();
+        // The top document reads the files of the parts its unsuppressed components
+        // use, its sub-documents' too (a part only suppressed components use is not
+        // read, as SolidWorks opens an assembly without its suppressed components).
+        let mut step_warnings = Vec::new();
+        if nesting.stack.len() == 1 {
+            let needed: Vec<usize> = (0..doc.components.len())
+                .filter(|&i| !doc.components[i].is_suppressed())
+                .collect();
+            let read = doc
+                .read_parts_of(&needed, project, cache)
+                .map_err(|(_, e)| DocumentError::from(e))?;
+            step_warnings = doc.take_read_parts(read);
+        }
         let backed = file_backed_set(&file);
         for (i, r) in file.robots.iter().enumerate() {
             if let Some(a) = file_backed(&backed, &r.name) {
@@ -291,11 +303,10 @@ struct Loader<'a> {
     dir: PathBuf,
 }
 
-/// The mesh parts of one load: file names resolved and meshes taken, each once.
+/// The mesh parts of one load: file names resolved, each once.
 #[derive(Default)]
 struct PartMemo {
     resolved: HashMap<String, PathBuf>,
-    meshes: HashMap<PathBuf, (Arc<crate::mesh::Mesh>, Vec<PathBuf>)>,
 }
 
 /// The URDF robots of a document, loaded: by robot name, with their warnings.
@@ -333,31 +344,19 @@ impl Loader<'_> {
         SourceError::new(self.path, line, col, message).into()
     }
 
-    /// Every part, its mesh read; a STEP part whose mesh is far from the exact volume
-    /// adds a warning to `warnings`.
-    fn parts(
-        &self,
-        file: &DocumentFile,
-        cache: &mut MeshCache,
-        warnings: &mut Vec<String>,
-    ) -> Result<IndexMap<String, Part>, DocumentError> {
+    /// Every part, its entry checked and its file name resolved, not read yet
+    /// ([`Part::is_loaded`] false).
+    fn parts(&self, file: &DocumentFile) -> Result<IndexMap<String, Part>, DocumentError> {
         // every part's mesh read and parsed at once, in parallel (the cost of opening
         // a cell of many distinct parts); errors are reported by the loop below. Each
         // distinct file name is resolved once and each mesh taken once per load: a
         // document of 400,000 parts naming one mesh resolved and stat-ed it 400,000
         // times over.
+        // Each distinct file name is resolved once per load: a document of 400,000
+        // parts naming one mesh resolved and stat-ed it 400,000 times over. The files
+        // are read later, only for the parts an unsuppressed component uses
+        // ([`Document::read_parts_of`]).
         let mut memo = PartMemo::default();
-        for pf in file.parts.values().filter(|pf| pf.step.is_none()) {
-            if !memo.resolved.contains_key(&pf.stl) {
-                if let Ok(p) = self.project.resolve_from(&self.dir, &pf.stl) {
-                    memo.resolved.insert(pf.stl.clone(), p);
-                }
-            }
-        }
-        let mut distinct: Vec<&Path> = memo.resolved.values().map(PathBuf::as_path).collect();
-        distinct.sort();
-        distinct.dedup();
-        cache.prefetch_in(self.project, &distinct);
         let mut parts = IndexMap::new();
         let backed = file_backed_set(file);
         for (name, pf) in &file.parts {
@@ -367,30 +366,21 @@ impl Loader<'_> {
                     format!("part `{name}`: names inside `{a}/` are the sub-document's own parts; name it otherwise"),
                 ));
             }
-            parts.insert(
-                name.clone(),
-                self.part(name, pf, cache, &mut memo, warnings)?,
-            );
+            parts.insert(name.clone(), self.part(name, pf, &mut memo)?);
         }
         Ok(parts)
     }
 
-    /// One part: its geometry file, mesh, references and features.
-    fn part(
-        &self,
-        name: &str,
-        pf: &PartFile,
-        cache: &mut MeshCache,
-        memo: &mut PartMemo,
-        warnings: &mut Vec<String>,
-    ) -> Result<Part, DocumentError> {
+    /// One part: its geometry file (resolved, not read), references and features.
+    fn part(&self, name: &str, pf: &PartFile, memo: &mut PartMemo) -> Result<Part, DocumentError> {
         let key = if pf.step.is_some() { "step" } else { "stl" };
         // The `stl:` (or `step:`) value's own line, from the scan.
-        let stl_at = |message: String| {
-            self.at_key(
-                &[&format!("parts/{name}/{key}"), &format!("parts/{name}")],
-                message,
-            )
+        let (line, column) = [format!("parts/{name}/{key}"), format!("parts/{name}")]
+            .iter()
+            .find_map(|k| self.positions.get(k))
+            .unwrap_or((0, 0));
+        let stl_at = |message: String| -> DocumentError {
+            SourceError::new(self.path, line, column, message).into()
         };
         let source = match (&pf.step, pf.stl.is_empty()) {
             (Some(step), true) => step,
@@ -411,6 +401,9 @@ impl Loader<'_> {
                 "part `{name}`: `deflection:` and `angle:` tessellate a `step:` part; an `stl:` mesh is used as it is"
             )));
         }
+        if pf.step.is_some() {
+            check_step_settings(pf).map_err(|m| stl_at(format!("part `{name}`: {m}")))?;
+        }
         let resolved = match memo.resolved.get(source) {
             Some(p) if pf.step.is_none() => Ok(p.clone()),
             _ => self.project.resolve_from(&self.dir, source),
@@ -423,38 +416,15 @@ impl Loader<'_> {
             };
             stl_at(format!("part `{name}`: {what} {e}"))
         })?;
-        let (mesh, mesh_files, step) = if pf.step.is_some() {
-            let (mesh, geometry) = step_part(
-                pf,
-                &mesh_path,
-                self.project,
-                &self.project.root().join(crate::mesh::step::STEP_STORE),
-                cache,
-            )
-            .map_err(|m| stl_at(format!("part `{name}`: {m}")))?;
-            if (geometry.volume_ratio - 1.0).abs() > 0.015 {
-                let (line, col) = self
-                    .positions
-                    .get(&format!("parts/{name}/step"))
-                    .unwrap_or((0, 0));
-                warnings.push(format!(
-                    "{}:{line}:{col}: part `{name}`: its mesh is {:.4} of the exact volume (more than 1.5 % off): set a smaller `deflection:`",
-                    self.path.display(),
-                    geometry.volume_ratio
-                ));
-            }
-            (mesh, Vec::new(), Some(geometry))
-        } else if let Some((mesh, files)) = memo.meshes.get(&mesh_path) {
-            (mesh.clone(), files.clone(), None)
-        } else {
-            let mesh = cache
-                .get_in(self.project, &mesh_path)
-                .map_err(|e| stl_at(format!("part `{name}`: {e}")))?;
-            let files = cache.files_of(&mesh_path);
-            memo.meshes
-                .insert(mesh_path.clone(), (mesh.clone(), files.clone()));
-            (mesh, files, None)
-        };
+        if pf.step.is_none() {
+            memo.resolved.insert(source.clone(), mesh_path.clone());
+        }
+        let step = pf.step.as_ref().map(|_| StepGeometry {
+            deflection: pf.deflection,
+            angle: pf.angle,
+            volume_ratio: f64::NAN,
+            from_store: false,
+        });
         let references = self.references(name, pf)?;
         let features = self.features(name, pf)?;
         for (rname, r) in &references {
@@ -485,12 +455,18 @@ impl Loader<'_> {
             name: name.to_string(),
             stl: source.clone(),
             mesh_path,
-            mesh_files,
+            mesh_files: Vec::new(),
             step,
-            mesh,
+            mesh: super::unloaded_mesh(),
             references,
             features,
             properties,
+            loaded: false,
+            at: Some(GeometryAt {
+                file: self.path.to_path_buf(),
+                line,
+                column,
+            }),
         })
     }
 
@@ -940,6 +916,12 @@ fn step_part(
     store: &Path,
     cache: &mut MeshCache,
 ) -> Result<(Arc<Mesh>, StepGeometry), EntryError> {
+    check_step_settings(pf)?;
+    Ok(step_mesh(pf, file, project, store, cache)?)
+}
+
+/// A `step:` part's `deflection:` (mm) and `angle:` (degrees) checked.
+fn check_step_settings(pf: &PartFile) -> Result<(), EntryError> {
     for (key, v) in [("deflection", pf.deflection), ("angle", pf.angle)] {
         if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
             return Err(EntryError::StepSetting(key));
@@ -948,7 +930,7 @@ fn step_part(
     if pf.angle.is_some_and(|a| a >= 180.0) {
         return Err(EntryError::StepAngle);
     }
-    Ok(step_mesh(pf, file, project, store, cache)?)
+    Ok(())
 }
 
 /// [`step_part`] once its `deflection:` and `angle:` are checked: the mesh of STEP
@@ -976,4 +958,146 @@ pub(super) fn step_mesh(
         from_store: got.from_store,
     };
     Ok((got.mesh, geometry))
+}
+
+/// A part's geometry as read: its name, mesh, the files the mesh was read from and,
+/// for a `step:` part, how it was tessellated.
+type ReadPart = (String, Arc<Mesh>, Vec<PathBuf>, Option<StepGeometry>);
+
+/// The geometry files read for parts that were not loaded, by part name, and the
+/// warnings of reading them.
+pub(super) struct ReadParts {
+    parts: Vec<ReadPart>,
+    warnings: Vec<String>,
+}
+
+impl Document {
+    /// Reads the geometry files of the parts of `components` (indices) that are not
+    /// loaded, each once, without changing the document (see
+    /// [`take_read_parts`](Self::take_read_parts)). An error names the first
+    /// component whose part cannot be read, located where the document names the
+    /// file (as opening the document reports it).
+    pub(super) fn read_parts_of(
+        &self,
+        components: &[usize],
+        project: &Project,
+        cache: &mut MeshCache,
+    ) -> Result<ReadParts, (usize, SourceError)> {
+        let mut seen = std::collections::HashSet::new();
+        let needed: Vec<(usize, &Part)> = components
+            .iter()
+            .map(|&i| (i, &self.parts[&self.components[i].part]))
+            .filter(|(_, p)| !p.loaded && seen.insert(p.name.as_str()))
+            .collect();
+        let mut out = ReadParts {
+            parts: Vec::with_capacity(needed.len()),
+            warnings: Vec::new(),
+        };
+        if needed.is_empty() {
+            return Ok(out);
+        }
+        // every mesh read and parsed at once, in parallel (the cost of opening a cell
+        // of many distinct parts); errors are reported by the loop below
+        let mut distinct: Vec<&Path> = needed
+            .iter()
+            .filter(|(_, p)| p.step.is_none())
+            .map(|(_, p)| p.mesh_path.as_path())
+            .collect();
+        distinct.sort();
+        distinct.dedup();
+        cache.prefetch_in(project, &distinct);
+        let store = project.root().join(crate::mesh::step::STEP_STORE);
+        let mut meshes: HashMap<&Path, (Arc<Mesh>, Vec<PathBuf>)> = HashMap::new();
+        for (i, p) in needed {
+            let (file, line, column) = match &p.at {
+                Some(a) => (a.file.as_path(), a.line, a.column),
+                None => (self.path.as_path(), 0, 0),
+            };
+            let name = &p.name;
+            let at = |m: String| {
+                (
+                    i,
+                    SourceError::new(file, line, column, format!("part `{name}`: {m}")),
+                )
+            };
+            let read = if let Some(g) = &p.step {
+                let pf = PartFile {
+                    step: Some(p.stl.clone()),
+                    deflection: g.deflection,
+                    angle: g.angle,
+                    ..PartFile::from_stl(String::new())
+                };
+                let (mesh, geometry) = step_part(&pf, &p.mesh_path, project, &store, cache)
+                    .map_err(|e| at(e.to_string()))?;
+                if (geometry.volume_ratio - 1.0).abs() > 0.015 {
+                    out.warnings.push(format!(
+                        "{}:{line}:{column}: part `{name}`: its mesh is {:.4} of the exact volume (more than 1.5 % off): set a smaller `deflection:`",
+                        file.display(),
+                        geometry.volume_ratio
+                    ));
+                }
+                (mesh, Vec::new(), Some(geometry))
+            } else if let Some((mesh, files)) = meshes.get(p.mesh_path.as_path()) {
+                (mesh.clone(), files.clone(), None)
+            } else {
+                let mesh = cache
+                    .get_in(project, &p.mesh_path)
+                    .map_err(|e| at(e.to_string()))?;
+                let files = cache.files_of(&p.mesh_path);
+                meshes.insert(&p.mesh_path, (mesh.clone(), files.clone()));
+                (mesh, files, None)
+            };
+            out.parts.push((name.clone(), read.0, read.1, read.2));
+        }
+        Ok(out)
+    }
+
+    /// Gives the parts what [`read_parts_of`](Self::read_parts_of) read (they are
+    /// loaded from now on); returns its warnings.
+    pub(super) fn take_read_parts(&mut self, read: ReadParts) -> Vec<String> {
+        for (name, mesh, files, step) in read.parts {
+            let p = &mut self.parts[&name];
+            p.mesh = mesh;
+            p.mesh_files = files;
+            p.step = step;
+            p.loaded = true;
+        }
+        if let Ok(mut cache) = self.aabb_cache.0.lock() {
+            cache.clear();
+        }
+        read.warnings
+    }
+
+    /// Reads the parts of `components` that are not loaded (components about to be
+    /// unsuppressed, added or re-pointed): all or nothing, through the document's
+    /// project. Their warnings join [`warnings`](Self::warnings).
+    ///
+    /// # Errors
+    /// [`DocumentError::PartUnreadable`] naming the component, the part and, located
+    /// in the document, why its file cannot be read; the document is unchanged.
+    pub(super) fn load_parts_of(&mut self, components: &[usize]) -> Result<(), DocumentError> {
+        if components
+            .iter()
+            .all(|&i| self.parts[&self.components[i].part].loaded)
+        {
+            return Ok(());
+        }
+        let project = match &self.project {
+            Some(p) => p.clone(),
+            None => Project::for_file(&self.path).map_err(|e| {
+                SourceError::new(&self.path, 0, 0, format!("cannot resolve its folder: {e}"))
+            })?,
+        };
+        let read = self
+            .read_parts_of(components, &project, &mut MeshCache::new())
+            .map_err(|(i, at)| DocumentError::PartUnreadable {
+                component: self.components[i].name.clone().into(),
+                part: self.components[i].part.clone().into(),
+                at: Box::new(at),
+            })?;
+        let warnings = self.take_read_parts(read);
+        self.warnings.extend(warnings);
+        self.revision += 1;
+        Ok(())
+    }
 }

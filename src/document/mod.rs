@@ -93,9 +93,11 @@ pub struct Part {
     pub mesh_path: PathBuf,
     /// The other files its mesh was read from (a `.gltf`'s buffers), on disk.
     pub mesh_files: Vec<PathBuf>,
-    /// For a `step:` part, how it was tessellated (`None`: an `stl:` mesh).
+    /// For a `step:` part, how it was tessellated (`None`: an `stl:` mesh). While
+    /// the part is not loaded only the settings are known (`volume_ratio` is NaN).
     pub step: Option<StepGeometry>,
-    /// The triangle mesh (mm, part frame).
+    /// The triangle mesh (mm, part frame); empty while the part is not loaded
+    /// ([`Part::is_loaded`]).
     pub mesh: Arc<Mesh>,
     /// Named references (planes, axes, points) in the part frame, in file order.
     pub references: IndexMap<String, Reference>,
@@ -104,6 +106,33 @@ pub struct Part {
     /// Custom properties (SolidWorks' file properties: `Description`, `Price`, …),
     /// name → text, in file order.
     pub properties: IndexMap<String, String>,
+    /// Whether its geometry file has been read, see [`Part::is_loaded`].
+    pub(crate) loaded: bool,
+    /// Where a document names its geometry file (`None`: a part a script added).
+    pub(crate) at: Option<GeometryAt>,
+}
+
+/// Where a document names a part's geometry file: the document file, and the line
+/// and column of the part's `stl:` or `step:` (0: unknown), for the errors and
+/// warnings of reading it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct GeometryAt {
+    pub file: PathBuf,
+    pub line: usize,
+    pub column: usize,
+}
+
+/// The mesh every part that is not loaded holds: no vertex, no triangle.
+pub(crate) fn unloaded_mesh() -> Arc<Mesh> {
+    static EMPTY: std::sync::OnceLock<Arc<Mesh>> = std::sync::OnceLock::new();
+    EMPTY
+        .get_or_init(|| {
+            Arc::new(Mesh {
+                vertices: Vec::new(),
+                triangles: Vec::new(),
+            })
+        })
+        .clone()
 }
 
 /// A feature of a part's feature tree.
@@ -152,6 +181,19 @@ impl Part {
             .get(name)
             .copied()
             .or_else(|| Reference::builtin(name))
+    }
+
+    /// Whether its geometry file has been read (SolidWorks' "resolved"). A part that
+    /// only suppressed components use is not read when the document opens (as
+    /// SolidWorks opens an assembly without loading its suppressed components): its
+    /// file may be missing or broken, and its [`mesh`](Self::mesh) is empty until a
+    /// component using it is unsuppressed, added or re-pointed to it, which reads it
+    /// (an error then names the file, the document's line and the cause, and
+    /// changes nothing). Every check, export, mass, box and plan leaves suppressed
+    /// components out; asking for the mesh of a component whose part is not loaded
+    /// is [`DocumentError::NotLoaded`].
+    pub fn is_loaded(&self) -> bool {
+        self.loaded
     }
 }
 
@@ -324,6 +366,8 @@ impl Document {
                     references: IndexMap::new(),
                     features: Vec::new(),
                     properties: IndexMap::new(),
+                    loaded: true,
+                    at: None,
                 },
             );
             self.by_name.insert(name.clone(), self.components.len());
@@ -450,9 +494,33 @@ impl Document {
         Ok(&self.components[self.component_index(name)?])
     }
 
-    /// The mesh of a component's part (part frame, mm).
+    /// The mesh of a component's part (part frame, mm): empty when the part is not
+    /// loaded ([`Part::is_loaded`]: only suppressed components use it), see
+    /// [`loaded_mesh_of`](Self::loaded_mesh_of).
     pub fn mesh_of(&self, component: usize) -> &Arc<Mesh> {
         &self.parts[&self.components[component].part].mesh
+    }
+
+    /// Whether component `component`'s part is loaded ([`Part::is_loaded`]; always,
+    /// for a component that is not suppressed).
+    pub fn part_loaded(&self, component: usize) -> bool {
+        self.parts[&self.components[component].part].loaded
+    }
+
+    /// [`mesh_of`](Self::mesh_of), refused with [`DocumentError::NotLoaded`] for a
+    /// suppressed component whose part is not loaded (its mesh is not known, not
+    /// empty).
+    pub fn loaded_mesh_of(&self, component: usize) -> Result<&Arc<Mesh>, DocumentError> {
+        let c = &self.components[component];
+        let part = &self.parts[&c.part];
+        if part.loaded {
+            Ok(&part.mesh)
+        } else {
+            Err(DocumentError::NotLoaded {
+                component: c.name.clone().into(),
+                part: part.name.clone().into(),
+            })
+        }
     }
 
     /// Sets a component's pose (part → world, mm). Fixed components refuse to move.
@@ -624,7 +692,8 @@ impl Document {
     }
 
     /// World-frame axis-aligned box of a component (mm): the tight box of its mesh's
-    /// vertices at the component's pose; `None` for an empty mesh.
+    /// vertices at the component's pose; `None` for an empty mesh or a part that is
+    /// not loaded.
     pub fn world_aabb(&self, component: usize) -> Option<Aabb> {
         let c = &self.components[component];
         let rotation = c.transform.rotation();
@@ -640,7 +709,7 @@ impl Document {
                 return Some(b.translated(&t));
             }
         }
-        let mesh = self.mesh_of(component);
+        let mesh = self.loaded_mesh_of(component).ok()?;
         if mesh.vertices.is_empty() {
             return None;
         }

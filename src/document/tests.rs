@@ -481,3 +481,108 @@ fn properties_must_be_scalars_and_a_replaced_part_needs_the_mates_references() {
         .set_reference("screw", "origin", Reference::Point(Point3::origin()))
         .is_err());
 }
+
+/// Issue 37, "a suppressed component is not loaded": a part only suppressed
+/// components use is not read when the document opens (its file is missing here),
+/// and every way a component using it stops being suppressed reads it first: adding
+/// one, re-pointing one to it, unsuppressing the sub-assembly holding one, renaming
+/// one out of it. While the file is missing each is refused with
+/// [`DocumentError::PartUnreadable`] and changes nothing; with the file there, it
+/// is read.
+#[test]
+fn a_part_only_suppressed_components_use_is_read_when_one_needs_it() {
+    let dir = write_demo();
+    let cell = std::fs::read_to_string(dir.path().join("cell.yaml")).unwrap();
+    let text = cell
+        .replacen(
+            "\nparts:\n",
+            "\nparts:\n  ghost:\n    stl: meshes/ghost.stl\n",
+            1,
+        )
+        .replacen(
+            "\ncomponents:\n",
+            "\ncomponents:\n- name: ghost\n  part: ghost\n  suppressed: true\n",
+            1,
+        );
+    assert_ne!(text, cell);
+    let path = dir.path().join("ghost.yaml");
+    std::fs::write(&path, &text).unwrap();
+    let mut doc = Document::open(&path).unwrap();
+    let ghost = doc.component_index("ghost").unwrap();
+    assert!(!doc.part("ghost").unwrap().is_loaded() && !doc.part_loaded(ghost));
+    assert!(doc
+        .parts()
+        .filter(|p| p.name != "ghost")
+        .all(Part::is_loaded));
+    assert!(doc.world_aabb(ghost).is_none());
+    assert!(matches!(
+        doc.loaded_mesh_of(ghost),
+        Err(DocumentError::NotLoaded { .. })
+    ));
+    assert!(matches!(
+        crate::workspace::mass_properties(&doc, &[ghost], &Default::default()),
+        Err(crate::workspace::WorkspaceError::Document(
+            DocumentError::NotLoaded { .. }
+        ))
+    ));
+    let line = 1 + text.lines().position(|l| l.contains("ghost.stl")).unwrap();
+    let unreadable = |r: Result<(), DocumentError>, component: &str| match r {
+        Err(DocumentError::PartUnreadable {
+            component: c,
+            part,
+            at,
+        }) => {
+            assert_eq!((&*c, &*part), (component, "ghost"));
+            assert_eq!(at.line, Some(line), "{at}");
+            assert!(at.message.contains("ghost.stl"), "{at}");
+        }
+        other => panic!("{component}: expected PartUnreadable, got {other:?}"),
+    };
+    let file = doc.to_file();
+    let check_unchanged = |doc: &Document| {
+        assert_eq!(doc.to_file(), file);
+        assert!(!doc.part("ghost").unwrap().is_loaded());
+    };
+    unreadable(doc.set_suppressed("ghost", false), "ghost");
+    check_unchanged(&doc);
+    unreadable(
+        doc.add_component("ghost-2", "ghost", Transform::IDENTITY)
+            .map(|_| ()),
+        "ghost-2",
+    );
+    check_unchanged(&doc);
+    unreadable(doc.set_component_part("screw4", "ghost"), "screw4");
+    check_unchanged(&doc);
+    assert_eq!(doc.component("screw4").unwrap().part, "screw");
+
+    // inside a suppressed sub-assembly: added without a read, refused when it comes out
+    doc.add_sub_assembly("Box", Transform::IDENTITY).unwrap();
+    doc.set_sub_assembly_suppressed("Box", true).unwrap();
+    doc.add_component("Box/ghost", "ghost", Transform::IDENTITY)
+        .unwrap();
+    let file = doc.to_file();
+    let check_unchanged = |doc: &Document| {
+        assert_eq!(doc.to_file(), file);
+        assert!(doc.component("Box/ghost").unwrap().is_suppressed());
+        assert!(!doc.part("ghost").unwrap().is_loaded());
+    };
+    unreadable(doc.set_sub_assembly_suppressed("Box", false), "Box/ghost");
+    check_unchanged(&doc);
+    unreadable(doc.rename_component("Box/ghost", "ghost-3"), "ghost-3");
+    check_unchanged(&doc);
+
+    // the file there: read when needed, the same mesh as that file's other part
+    std::fs::copy(
+        dir.path().join("meshes/plate_a.stl"),
+        dir.path().join("meshes/ghost.stl"),
+    )
+    .unwrap();
+    doc.set_sub_assembly_suppressed("Box", false).unwrap();
+    assert!(doc.part("ghost").unwrap().is_loaded());
+    let i = doc.component_index("Box/ghost").unwrap();
+    assert_eq!(
+        doc.mesh_of(i).vertices,
+        doc.part("plate_a").unwrap().mesh.vertices
+    );
+    assert!(doc.world_aabb(i).is_some() && doc.world_aabb(ghost).is_some());
+}

@@ -470,6 +470,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         "World axis-aligned box (mm) of the posed mesh: a `Box` (`.min`, `.max`).",
         |c: &mut ComponentHandle| -> ScriptResult<Dynamic> {
             let (doc, i) = c.locked()?;
+            doc.loaded_mesh_of(i).map_err(fail)?;
             match doc.world_aabb(i) {
                 Some(b) => Ok(box_value(&b)),
                 None => err("the component's mesh is empty"),

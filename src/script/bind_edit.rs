@@ -323,7 +323,7 @@ fn register_mate(api: &mut Api) {
 
 /// Suppression and visibility of components.
 fn register_suppression(api: &mut Api) {
-    api.section("Suppression and visibility", "A suppressed component (`IComponent2.SetSuppression2`) stays in the document but is not checked for interference, planned around, sequenced, weighed by `doc.mass_properties()`, bounded by `doc.aabb()` or exported, and its mates are inactive; asking to check or plan it is an error. A hidden one (`IComponent2.Visible = false`) is checked like the others but left out of exports. Both are saved.");
+    api.section("Suppression and visibility", "A suppressed component (`IComponent2.SetSuppression2`) stays in the document but is not checked for interference, planned around, sequenced, weighed by `doc.mass_properties()`, bounded by `doc.aabb()` or exported, and its mates are inactive; asking to check or plan it is an error. A part only suppressed components use is not loaded when the document opens (its file may be missing): `c.suppressed = false` reads it first, and when it cannot be read the assignment fails naming the file, the document's line and the cause, and nothing changes; until then its world mesh, mass, box and export are refused. A hidden one (`IComponent2.Visible = false`) is checked like the others but left out of exports. Both are saved.");
     api.get(
         "Component.suppressed -> bool",
         "Whether the component is suppressed; setting it re-solves the mates.",

@@ -192,7 +192,7 @@ fn export_stl(
 ) -> ScriptResult<()> {
     let bytes = {
         let doc = d.lock()?;
-        crate::mesh::stl_bytes(&crate::workspace::world_mesh(&doc, which, frame))
+        crate::mesh::stl_bytes(&crate::workspace::world_mesh(&doc, which, frame).map_err(fail)?)
     };
     d.context().write_output(file, &bytes, overwrite)?;
     Ok(())
@@ -203,7 +203,7 @@ pub(super) fn register_export(api: &mut Api) {
     api.f("Component.world_mesh() -> map", "The component's mesh at its pose: `#{vertices: [[x,y,z], …] (mm, world), triangles: [[i,j,k], …]}`.", |c: &mut ComponentHandle| -> ScriptResult<Map> {
         let mesh = {
             let (doc, i) = c.locked()?;
-            crate::workspace::world_mesh(&doc, &[i], None)
+            crate::workspace::world_mesh(&doc, &[i], None).map_err(fail)?
         };
         let mut m = Map::new();
         m.insert("vertices".into(), Dynamic::from_array(mesh.vertices.iter().map(|p| array3(&p.coords)).collect()));

@@ -266,7 +266,9 @@ impl Setup {
         let names: Vec<String> = doc.components().iter().map(|c| c.name.clone()).collect();
         let mut boxes = Vec::with_capacity(n);
         for (i, name) in names.iter().enumerate() {
-            if doc.mesh_of(i).vertices.is_empty() {
+            // a component outside the product (a suppressed one's part may not be
+            // loaded, its mesh empty) is neither moved nor an obstacle
+            if active & bit(i) != 0 && doc.mesh_of(i).vertices.is_empty() {
                 return Err(WorkspaceError::EmptyMesh(name.clone().into()).into());
             }
             boxes.push(scene.colliders[i].world_bounds(&scene.poses[i]));

@@ -25,7 +25,7 @@ pub fn split_part(
     spec: CutSpec,
 ) -> Result<String, WorkspaceError> {
     let part = doc.components()[component].part.clone();
-    let mesh = doc.mesh_of(component).clone();
+    let mesh = doc.loaded_mesh_of(component)?.clone();
     cache.cells(&mesh, &spec)?;
     doc.set_feature(
         &part,
@@ -65,6 +65,14 @@ pub fn feature_cells(
                 crate::diagnostics::suggestion(feature, p.features.iter().map(|f| f.name()))
             ),
         })?;
+    if !p.is_loaded() {
+        let user = doc.components().iter().find(|c| c.part == p.name);
+        return Err(DocumentError::NotLoaded {
+            component: user.map_or_else(Default::default, |c| c.name.clone().into()),
+            part: p.name.clone().into(),
+        }
+        .into());
+    }
     Ok(cache.cells(&p.mesh, spec)?)
 }
 

@@ -7,7 +7,7 @@ use super::{Workspace, WorkspaceError};
 use crate::collision::{
     intersection_volume, separation, Contact, SeparationOptions, DEFAULT_OVERLAP_TIME_LIMIT_MS,
 };
-use crate::document::Document;
+use crate::document::{Document, DocumentError};
 use crate::math::Vec3;
 use crate::mesh::{MassProperties, MassSpec};
 
@@ -120,7 +120,7 @@ pub fn mass_properties(
             Some(kg) => MassSpec::Mass(kg),
             None => MassSpec::Density(options.density),
         };
-        let m = MassProperties::of_mesh_with(doc.mesh_of(i), spec).map_err(|e| {
+        let m = MassProperties::of_mesh_with(doc.loaded_mesh_of(i)?, spec).map_err(|e| {
             WorkspaceError::Mass {
                 component: c.name.clone().into(),
                 source: e,
@@ -185,11 +185,15 @@ impl Workspace<'_> {
 /// expressed in the coordinate system `frame` (its pose in the world; `None`: the
 /// world), mm: what a per-component export writes, with the transform baked in
 /// (CodeStack's "Export Part Or Component To STL").
+///
+/// # Errors
+/// [`DocumentError::NotLoaded`] for a suppressed component whose part is not loaded
+/// (its mesh is not known; an empty one would export nothing without a word).
 pub fn world_mesh(
     doc: &Document,
     which: &[usize],
     frame: Option<&crate::math::Transform>,
-) -> crate::mesh::Mesh {
+) -> Result<crate::mesh::Mesh, DocumentError> {
     let to_frame = frame.map(|f| f.inverse());
     let mut out = crate::mesh::Mesh {
         vertices: Vec::new(),
@@ -201,9 +205,9 @@ pub fn world_mesh(
             Some(f) => pose.then(f),
             None => pose,
         };
-        out.append(&doc.mesh_of(i).transformed(&pose));
+        out.append(&doc.loaded_mesh_of(i)?.transformed(&pose));
     }
-    out
+    Ok(out)
 }
 
 /// Writes [`world_mesh`] of components `which` as binary STL to `path` through the
@@ -212,7 +216,7 @@ pub fn world_mesh(
 /// `force`; atomically). Returns the bytes written.
 ///
 /// # Errors
-/// [`DocumentError::Write`] naming the file.
+/// [`DocumentError::Write`] naming the file, or as [`world_mesh`].
 pub fn export_stl(
     doc: &Document,
     path: &std::path::Path,
@@ -236,7 +240,7 @@ pub fn export_stl(
         cause: crate::document::WriteProblem::Output(e),
     };
     crate::project::check_output(path, &rule).map_err(write_error)?;
-    let bytes = crate::mesh::stl_bytes(&world_mesh(doc, which, frame));
+    let bytes = crate::mesh::stl_bytes(&world_mesh(doc, which, frame)?);
     crate::project::write_output(path, &bytes, &rule).map_err(write_error)?;
     Ok(bytes.len())
 }

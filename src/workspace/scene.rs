@@ -60,11 +60,26 @@ impl SceneCache {
     }
 
     /// The colliders of `meshes` (same order), the missing ones built in parallel.
+    /// The mesh of a part that is not loaded ([`crate::document::Part::is_loaded`],
+    /// used by suppressed components only) gets a stand-in collider (see
+    /// [`Scene::colliders`]).
     pub fn colliders(
         &mut self,
         meshes: &[&Arc<Mesh>],
     ) -> Result<Vec<Arc<Collider>>, CollisionError> {
-        self.colliders.get_all(meshes)
+        let unloaded = crate::document::unloaded_mesh();
+        let stand_in = stand_in_mesh();
+        let meshes: Vec<&Arc<Mesh>> = meshes
+            .iter()
+            .map(|&m| {
+                if Arc::ptr_eq(m, &unloaded) {
+                    stand_in
+                } else {
+                    m
+                }
+            })
+            .collect();
+        self.colliders.get_all(&meshes)
     }
 
     /// The cells of `spec` cut from `mesh`, derived once per mesh and spec.
@@ -93,9 +108,28 @@ impl SceneCache {
     }
 }
 
+/// The collider mesh of a component whose part is not loaded: one small triangle
+/// (1 mm) at its part origin. Such a component is suppressed, so inactive (no
+/// contact, no obstacle); the stand-in only fills its slot in [`Scene::colliders`].
+fn stand_in_mesh() -> &'static Arc<Mesh> {
+    static STAND_IN: std::sync::OnceLock<Arc<Mesh>> = std::sync::OnceLock::new();
+    STAND_IN.get_or_init(|| {
+        Arc::new(Mesh {
+            vertices: vec![
+                crate::math::Point3::new(0.0, 0.0, 0.0),
+                crate::math::Point3::new(1.0, 0.0, 0.0),
+                crate::math::Point3::new(0.0, 1.0, 0.0),
+            ],
+            triangles: vec![[0, 1, 2]],
+        })
+    })
+}
+
 /// The components of a document as collision shapes at their current poses.
 pub struct Scene {
-    /// Per component: the collider of its part's mesh.
+    /// Per component: the collider of its part's mesh (a suppressed component whose
+    /// part is not loaded: a stand-in, see [`SceneCache::colliders`]; it is never
+    /// active).
     pub colliders: Vec<Arc<Collider>>,
     /// Per component: the cut cells of its part, when the part has the feature.
     pub cells: Vec<Option<Arc<CutCells>>>,
@@ -124,6 +158,11 @@ impl Scene {
         for (i, c) in doc.components().iter().enumerate() {
             let mesh = doc.mesh_of(i);
             let part = doc.part(&c.part)?;
+            if !part.is_loaded() {
+                // suppressed: never checked, so never cut
+                cells.push(None);
+                continue;
+            }
             let mut spec = part.features.iter().map(|f| match f {
                 Feature::CutCells { spec, .. } => spec,
             });
@@ -139,7 +178,8 @@ impl Scene {
             active: doc
                 .components()
                 .iter()
-                .map(|c| !c.is_suppressed())
+                .enumerate()
+                .map(|(i, c)| !c.is_suppressed() && doc.part_loaded(i))
                 .collect(),
             verdicts: cache.verdicts.clone(),
         })

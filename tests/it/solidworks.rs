@@ -535,3 +535,195 @@ print("ok");
     );
     assert!(out.status.success(), "{}", common::text(&out));
 }
+
+/// The demo cell with a suppressed `ghost` (part and component, listed first) whose
+/// mesh file `meshes/ghost.stl` is not there, placed 5 mm into the table's top
+/// (away from the plates), written as `models/ghost.yaml`. Returns its text.
+fn write_ghost_document(dir: &std::path::Path) -> String {
+    let cell = std::fs::read_to_string(dir.join("models/cell.yaml")).unwrap();
+    let part = "\
+parts:
+  ghost:
+    stl: meshes/ghost.stl
+    properties:
+      Description: bracket, drawing 17-B
+";
+    let component = "\
+components:
+- name: ghost
+  part: ghost
+  suppressed: true
+  properties:
+    Supplier: ACME
+  transform:
+  - [1.0, 0.0, 0.0, 0.0]
+  - [0.0, 1.0, 0.0, 0.0]
+  - [0.0, 0.0, 1.0, 0.0]
+  - [850.0, 580.0, 745.0, 1.0]
+";
+    assert!(cell.contains("\nparts:\n") && cell.contains("\ncomponents:\n"));
+    let text = cell
+        .replacen("\nparts:\n", &format!("\n{part}"), 1)
+        .replacen("\ncomponents:\n", &format!("\n{component}"), 1);
+    std::fs::write(dir.join("models/ghost.yaml"), &text).unwrap();
+    text
+}
+
+/// The 1-based line of `models/ghost.yaml` naming the ghost's mesh.
+fn ghost_stl_line(text: &str) -> usize {
+    1 + text
+        .lines()
+        .position(|l| l.contains("stl: meshes/ghost.stl"))
+        .unwrap()
+}
+
+/// Capability 5, "a suppressed component is not loaded": SolidWorks opens an
+/// assembly without reading its suppressed components, so a missing or broken file
+/// of one does not stop it. A document whose suppressed component's mesh is missing
+/// opens (`fitup check` notes the part is not loaded), and garbage in that file does
+/// not matter while it stays suppressed; unsuppressing it from a script is refused
+/// with the file, the document's line and the cause, and the document stays as it
+/// was (still suppressed, saved with its part entry unchanged).
+#[test]
+fn a_suppressed_component_whose_mesh_is_missing_opens_checks_and_saves() {
+    let dir = common::project();
+    let text = write_ghost_document(dir.path());
+    let line = ghost_stl_line(&text);
+    let check = common::run_ok(dir.path(), &["check", "models/ghost.yaml"]);
+    assert!(
+        check.contains("ghost") && check.contains("not loaded (only suppressed components use it)"),
+        "{check}"
+    );
+    assert!(!check.contains("warning"), "a note, not a warning: {check}");
+    // garbage in the file: still not read
+    std::fs::write(
+        dir.path().join("models/meshes/ghost.stl"),
+        "solid ghost\nfacet oops\n",
+    )
+    .unwrap();
+    let check = common::run_ok(dir.path(), &["check", "models/ghost.yaml"]);
+    assert!(check.contains("not loaded"), "{check}");
+    std::fs::remove_file(dir.path().join("models/meshes/ghost.stl")).unwrap();
+
+    // unsuppressed by a script: refused, naming the file, the line and the cause
+    let out = common::run_script_in(
+        dir.path(),
+        "unsuppress.rhai",
+        r#"
+let doc = open_doc("models/ghost.yaml");
+let why = "";
+try { doc.component("ghost").suppressed = false; } catch (e) { why = `${e}`; }
+print(why);
+assert(why != "", "unsuppressing a part whose file is missing is refused");
+assert(doc.component("ghost").suppressed, "still suppressed");
+assert(doc.interferences().filter(|p| p.a == "ghost" || p.b == "ghost").len() == 0, "nothing checked against it");
+doc.save();
+"#,
+    );
+    let t = common::text(&out);
+    assert!(out.status.success(), "{t}");
+    for needed in [
+        "component `ghost` needs part `ghost`".to_string(),
+        format!("ghost.yaml:{line}:"),
+        "meshes/ghost.stl".to_string(),
+    ] {
+        assert!(t.contains(&needed), "`{needed}` in: {t}");
+    }
+    // the save kept the part entry and the component as they were
+    let saved = std::fs::read_to_string(dir.path().join("models/ghost.yaml")).unwrap();
+    let parse = |s: &str| serde_yaml::from_str::<serde_yaml::Value>(s).unwrap();
+    let (before, after) = (parse(&text), parse(&saved));
+    assert_eq!(after["parts"]["ghost"], before["parts"]["ghost"], "{saved}");
+    assert_eq!(
+        after["components"][0]["name"],
+        before["components"][0]["name"]
+    );
+    assert_eq!(
+        after["components"][0]["suppressed"],
+        serde_yaml::Value::Bool(true)
+    );
+    assert_eq!(
+        after["components"][0]["properties"],
+        before["components"][0]["properties"]
+    );
+    common::run_ok(dir.path(), &["check", "models/ghost.yaml"]);
+}
+
+/// The same through the Rust API: while not loaded the part has no world mesh
+/// (refused, not empty) and the cell is checked and sequenced without it; the
+/// refusal to unsuppress is [`fitup::document::DocumentError::PartUnreadable`]
+/// located at the part's `stl:` line, the document unchanged (still suppressed, its
+/// part not loaded); once the file holds a real mesh, unsuppressing reads it and the
+/// interference with it is reported (the ghost sits 5 mm into the table).
+#[test]
+fn unsuppressing_reads_the_part_then_its_interference_is_reported() {
+    use fitup::document::{Document, DocumentError};
+    use fitup::workspace::{CheckOptions, SceneCache, Workspace};
+
+    let dir = common::project();
+    let text = write_ghost_document(dir.path());
+    let path = dir.path().join("models/ghost.yaml");
+    let mut doc = Document::open(&path).unwrap();
+    assert!(!doc.part("ghost").unwrap().is_loaded());
+    assert!(doc.part("table").unwrap().is_loaded());
+    let ghost = doc.component_index("ghost").unwrap();
+    assert!(matches!(
+        fitup::workspace::world_mesh(&doc, &[ghost], None),
+        Err(DocumentError::NotLoaded { .. })
+    ));
+    let interfering = |doc: &Document| -> Vec<String> {
+        let mut cache = SceneCache::new();
+        let ws = Workspace::new(doc, &mut cache).unwrap();
+        ws.interferences(&CheckOptions::default())
+            .unwrap()
+            .iter()
+            .map(|p| format!("{}-{}", ws.name(p.a), ws.name(p.b)))
+            .collect()
+    };
+    let ghostly = |hits: &[String]| hits.iter().any(|h| h.contains("ghost"));
+    assert!(!ghostly(&interfering(&doc)));
+    let plan = fitup::sequence::plan_sequence(
+        &doc,
+        &mut SceneCache::new(),
+        &fitup::sequence::SequenceOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        plan.product.iter().any(|n| n == "plate_b") && !plan.product.iter().any(|n| n == "ghost"),
+        "{:?}",
+        plan.product
+    );
+    let revision = doc.revision();
+    match doc.set_suppressed("ghost", false) {
+        Err(DocumentError::PartUnreadable {
+            component,
+            part,
+            at,
+        }) => {
+            assert_eq!((&*component, &*part), ("ghost", "ghost"));
+            assert!(at.path.ends_with("models/ghost.yaml"), "{at}");
+            assert_eq!(at.line, Some(ghost_stl_line(&text)), "{at}");
+            assert!(at.message.contains("ghost.stl"), "{at}");
+        }
+        other => panic!("expected PartUnreadable, got {other:?}"),
+    }
+    assert!(doc.component("ghost").unwrap().is_suppressed());
+    assert!(!doc.part("ghost").unwrap().is_loaded());
+    assert_eq!(doc.revision(), revision);
+
+    // a real mesh: unsuppressing reads it, and it is checked
+    std::fs::copy(
+        dir.path().join("models/meshes/plate_a.stl"),
+        dir.path().join("models/meshes/ghost.stl"),
+    )
+    .unwrap();
+    doc.set_suppressed("ghost", false).unwrap();
+    assert!(doc.part("ghost").unwrap().is_loaded());
+    let plate = Document::open(&dir.path().join("models/cell.yaml")).unwrap();
+    assert_eq!(
+        doc.part("ghost").unwrap().mesh.triangles,
+        plate.part("plate_a").unwrap().mesh.triangles
+    );
+    let hits = interfering(&doc);
+    assert!(hits.iter().any(|h| h == "ghost-table"), "{hits:?}");
+}
