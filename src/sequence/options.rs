@@ -611,7 +611,9 @@ impl std::fmt::Display for RejectReason {
 /// the removal checks between `a` and `b` (sweeps, probes, planned paths) allow
 /// exactly the overlap of the assembled pose — the moving part may overlap the
 /// other only where it did when assembled (within `tolerance`; stepwise, `step_mm`
-/// apart) — and every other pair keeps [`SequenceOptions::tolerance`].
+/// apart) — and every other pair keeps [`SequenceOptions::tolerance`]. A fit no
+/// deeper than [`SequenceOptions::slide_fit_mm`] may also slide straight from the
+/// assembled pose (a press fit along its bore or guides; see the option).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Fit {
     /// One component.
