@@ -171,7 +171,11 @@ fn grid_intervals(
                 .collect();
             ts.sort_by(f64::total_cmp);
             ts.dedup_by(|b, a| *b - *a < 1e-9);
-            out.push((ts.len() % 2 == 0).then(|| ts.chunks(2).map(|c| (c[0], c[1])).collect()));
+            out.push(
+                ts.len()
+                    .is_multiple_of(2)
+                    .then(|| ts.chunks(2).map(|c| (c[0], c[1])).collect()),
+            );
         }
     }
     out
