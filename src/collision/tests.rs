@@ -1584,29 +1584,21 @@ fn a_sweep_draws_a_screw_out_of_its_hole_and_stops_at_the_cover() {
             Point3::new(-10.0, -10.0, 10.0),
             Point3::new(10.0, 10.0, 12.0),
         ));
-        let up = |start: Transform| Motion::Translation {
-            start,
-            offset: Vec3::new(0.0, 0.0, 12.0),
+        // the screw from `start` 12 mm up, against `obstacles`
+        let up = |start: Transform, obstacles: &[Obstacle]| {
+            let motion = Motion::Translation {
+                start,
+                offset: Vec3::new(0.0, 0.0, 12.0),
+            };
+            sweep(&screw, &motion, obstacles, &SweepOptions::default()).unwrap()
         };
         let alone = [Obstacle {
             collider: &plate,
             pose: Transform::IDENTITY,
         }];
-        let out = sweep(
-            &screw,
-            &up(Transform::IDENTITY),
-            &alone,
-            &SweepOptions::default(),
-        )
-        .unwrap();
+        let out = up(Transform::IDENTITY, &alone);
         assert!(!out.hit, "{n} facets: {out:?}");
-        let pushed = sweep(
-            &screw,
-            &up(at(0.3, 0.0, 0.0)),
-            &alone,
-            &SweepOptions::default(),
-        )
-        .unwrap();
+        let pushed = up(at(0.3, 0.0, 0.0), &alone);
         assert!(pushed.hit && pushed.t == 0.0, "{n} facets: {pushed:?}");
         let covered = [
             alone[0],
@@ -1615,13 +1607,7 @@ fn a_sweep_draws_a_screw_out_of_its_hole_and_stops_at_the_cover() {
                 pose: Transform::IDENTITY,
             },
         ];
-        let hit = sweep(
-            &screw,
-            &up(Transform::IDENTITY),
-            &covered,
-            &SweepOptions::default(),
-        )
-        .unwrap();
+        let hit = up(Transform::IDENTITY, &covered);
         // the head's top (z = 6) reaches the cover (z = 10) after 4 mm
         let z = hit.pose.translation().z;
         assert!(hit.hit && hit.with == Some(1), "{n} facets: {hit:?}");
