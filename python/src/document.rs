@@ -1275,7 +1275,8 @@ impl Document {
     /// Keywords: the sequence table of docs/api.md, the keys of a script's
     /// ``assembly_sequence`` map: ``mode`` (``"mates"``/``"geometry"``), ``base``,
     /// ``order``, ``max_sequences``, ``time_limit_ms`` (the whole call), ``seed``,
-    /// ``tolerance`` (mm), ``components``, ``exclude``, ``threaded``, ``masses``,
+    /// ``tolerance`` (mm), ``slide_fit_mm`` (mm), ``components``, ``exclude``,
+    /// ``threaded``, ``masses``,
     /// ``support``, ``contact_gap_mm``, ``gravity`` (a down vector),
     /// ``tight_clearance_mm``, ``planner_fallback``, ``fallback_time_limit_ms``,
     /// ``max_tilt_deg`` (degrees; ``max_tilt`` in radians is deprecated),

@@ -44,7 +44,7 @@ impl Default for EdgeOptions {
 }
 
 /// Largest rotation of one edge, rad: beyond it slerp's path is ill-defined.
-const MAX_EDGE_ANGLE: f64 = 3.0;
+pub(super) const MAX_EDGE_ANGLE: f64 = 3.0;
 
 /// Most advancement steps of one triangle pair (beyond: reported interfering).
 const MAX_PAIR_STEPS: usize = 1_000_000;

@@ -4,6 +4,7 @@
 //! jump over thin features.
 
 use super::distance::distance_lower_bound;
+use super::edge::{edge_interferes_until, EdgeOptions, MAX_EDGE_ANGLE};
 use super::exact::interferes;
 use super::method::{contact_gap, contact_step, SweepMethod};
 use super::shape::Collider;
@@ -356,13 +357,87 @@ pub fn sweep(
             // gap below which static checks take over, and their spacing
             let g = contact_gap(tol);
             let in_contact = contact_step(contact_step_mm, tol);
-            for &(t0, t1, reach, _) in &pieces {
+            let edge_options = EdgeOptions {
+                tolerance: tol,
+                contact_step: contact_step_mm,
+            };
+            // A translation and the pieces of a pose sequence are planner edges
+            // (lerp + slerp about the part origin; a rotation about another axis is
+            // not): each is checked whole by the continuous edge check, whose
+            // triangle pairs advance on their own, so a part sliding along a face or
+            // out of a bore line to line is not stepped pose by pose at the contact
+            // step (a screw drawn out of its hole: seconds became milliseconds).
+            let straight = !matches!(motion, Motion::Rotation { .. });
+            for &(t0, t1, reach, angle) in &pieces {
                 if reach <= 0.0 {
                     continue;
                 }
                 let near = reachable(t0, reach);
                 let speed = reach / (t1 - t0); // mm per unit t
                 let mut t = t0;
+                if straight && angle <= MAX_EDGE_ANGLE {
+                    // whether some obstacle is crossed on `a..b` after `a`, and which
+                    let crossed = |a: f64, b: f64, queries: &mut usize| {
+                        let (pa, pb) = (motion.pose_at(a), motion.pose_at(b));
+                        for &i in &near {
+                            *queries += 1;
+                            let o = &obstacles[i];
+                            let hit = edge_interferes_until(
+                                moving,
+                                &pa,
+                                &pb,
+                                o.collider,
+                                &o.pose,
+                                &edge_options,
+                                deadline.instant(),
+                            )?
+                            .ok_or(CollisionError::TimeLimit(budget_ms))?;
+                            if hit {
+                                return Ok(Some(i));
+                            }
+                        }
+                        Ok::<_, CollisionError>(None)
+                    };
+                    match crossed(t0, t1, &mut queries)? {
+                        // free on the way; the end pose still gets its static
+                        // check (containment) below
+                        None => t = t1,
+                        Some(_) => {
+                            // bisect to the first crossing: `lo` stays free
+                            let (mut lo, mut hi) = (t0, t1);
+                            while (hi - lo) * speed > g / 8.0 {
+                                if out_of_time() {
+                                    return Err(CollisionError::TimeLimit(budget_ms));
+                                }
+                                let mid = 0.5 * (lo + hi);
+                                if crossed(lo, mid, &mut queries)?.is_some() {
+                                    hi = mid;
+                                } else {
+                                    lo = mid;
+                                }
+                            }
+                            // the first pose past the crossing that a static check
+                            // finds interfering; else the stepping below from `lo`
+                            let mut at = hi;
+                            for _ in 0..64 {
+                                if let Some(i) = check(at, &near, &mut queries)? {
+                                    return Ok(hit_at(at, i, queries));
+                                }
+                                if at >= t1 {
+                                    break;
+                                }
+                                at = (at + g / 8.0 / speed).min(t1);
+                            }
+                            t = lo;
+                        }
+                    }
+                    if t >= t1 {
+                        if let Some(i) = check(t1, &near, &mut queries)? {
+                            return Ok(hit_at(t1, i, queries));
+                        }
+                        continue;
+                    }
+                }
                 while t < t1 {
                     if queries > MAX_QUERIES {
                         return Err(CollisionError::BadMotion(MotionFault::TooManyQueries(

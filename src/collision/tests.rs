@@ -1569,3 +1569,57 @@ fn a_screw_drawn_out_of_its_hole_line_to_line_is_free_all_the_way() {
         );
     }
 }
+
+/// `sweep` of a screw drawn out of its hole line to line: free all the way out, and
+/// stopped where its head meets a cover 4 mm above it, at the first interfering
+/// pose (the pose 0.01 mm before is free). A translation is checked as one
+/// continuous edge, not pose by pose along the sliding contact (1.4 s before at 32
+/// facets, a 10 s time-out at 512; now milliseconds).
+#[test]
+fn a_sweep_draws_a_screw_out_of_its_hole_and_stops_at_the_cover() {
+    for n in [32, 512] {
+        let plate = collider(fixtures::plate_with_hole(20.0, 4.0, 3.0, n));
+        let screw = collider(fixtures::screw(3.0, 4.0, 5.0, 2.0, n));
+        let cover = collider(Mesh::cuboid(
+            Point3::new(-10.0, -10.0, 10.0),
+            Point3::new(10.0, 10.0, 12.0),
+        ));
+        // the screw from `start` 12 mm up, against `obstacles`
+        let up = |start: Transform, obstacles: &[Obstacle]| {
+            let motion = Motion::Translation {
+                start,
+                offset: Vec3::new(0.0, 0.0, 12.0),
+            };
+            sweep(&screw, &motion, obstacles, &SweepOptions::default()).unwrap()
+        };
+        let alone = [Obstacle {
+            collider: &plate,
+            pose: Transform::IDENTITY,
+        }];
+        let out = up(Transform::IDENTITY, &alone);
+        assert!(!out.hit, "{n} facets: {out:?}");
+        let pushed = up(at(0.3, 0.0, 0.0), &alone);
+        assert!(pushed.hit && pushed.t == 0.0, "{n} facets: {pushed:?}");
+        let covered = [
+            alone[0],
+            Obstacle {
+                collider: &cover,
+                pose: Transform::IDENTITY,
+            },
+        ];
+        let hit = up(Transform::IDENTITY, &covered);
+        // the head's top (z = 6) reaches the cover (z = 10) after 4 mm
+        let z = hit.pose.translation().z;
+        assert!(hit.hit && hit.with == Some(1), "{n} facets: {hit:?}");
+        assert!((z - 4.0).abs() <= 0.02, "{n} facets: stopped at {z}");
+        assert!(interferes(&screw, &hit.pose, &cover, &Transform::IDENTITY, TOL).unwrap());
+        assert!(!interferes(
+            &screw,
+            &at(0.0, 0.0, z - 0.01),
+            &cover,
+            &Transform::IDENTITY,
+            TOL
+        )
+        .unwrap());
+    }
+}

@@ -26,6 +26,8 @@ pub struct Sequence {
     pub seed: u64,
     /// Penetration tolerance, mm.
     pub tolerance: f64,
+    /// Deepest fit that may slide, mm.
+    pub slide_fit_mm: f64,
     /// The product's components.
     pub components: Vec<String>,
     /// Components that are not part of the product.
@@ -69,6 +71,7 @@ impl Default for Sequence {
             time_limit_ms: o.time_limit_ms.unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS),
             seed: o.seed,
             tolerance: o.tolerance,
+            slide_fit_mm: o.slide_fit_mm,
             components: o.components,
             exclude: o.exclude,
             threaded: o.threaded,
@@ -101,6 +104,7 @@ impl Sequence {
             time_limit_ms: Some(self.time_limit_ms),
             seed: self.seed,
             tolerance: self.tolerance,
+            slide_fit_mm: self.slide_fit_mm,
             components: self.components.clone(),
             exclude: self.exclude.clone(),
             threaded: self.threaded.clone(),
@@ -172,6 +176,13 @@ impl Options for Sequence {
                 kind: Kind::Number,
                 unit: "mm",
                 meaning: "penetration tolerance of every interference check; components that interfere in the assembled pose (press fits, CAD overlaps) are fits, reported with their depth, and the checks between such a pair allow the overlap of the assembled pose and no other",
+                default: None,
+            },
+            Key {
+                name: "slide_fit_mm",
+                kind: Kind::Number,
+                unit: "mm",
+                meaning: "fits (components that interfere in the assembled pose) no deeper than this (their reported depth) may also slide along a straight motion from the assembled pose, overlapping the partner along every line of the motion only where and by no more than assembled: a press fit, a card a little wider than its guides; deeper fits (a bolt modelled through a plate without its hole) keep to the overlap of the assembled pose; 0 turns sliding off",
                 default: None,
             },
             Key {

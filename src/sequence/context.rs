@@ -273,8 +273,9 @@ impl<'d> Ctx<'d> {
 
     /// The check of `p` moving against `q` when the two have a fit.
     pub(super) fn fit_check(&self, p: usize, q: usize) -> Option<super::fit::FitPairCheck> {
-        self.fit(p, q)?;
+        let fit = self.fit(p, q)?;
         Some(super::fit::FitPairCheck {
+            slides: fit.depth <= self.opts.slide_fit_mm,
             p: self.scene.colliders[p].clone(),
             p_home: self.scene.poses[p],
             q: self.scene.colliders[q].clone(),
@@ -470,6 +471,14 @@ impl<'d> Ctx<'d> {
             least: ([d.x, d.y, d.z], names(least_by)),
             in_contact: least_by != 0 && least_by & !self.touching[p] == 0,
             tolerance: self.opts.tolerance,
+            deflection: self.doc.mesh_deflection(),
+            deep_fits: members(least_by)
+                .filter_map(|q| {
+                    let f = self.fit(p, q)?;
+                    (f.depth > self.opts.slide_fit_mm).then(|| (self.names[q].clone(), f.depth))
+                })
+                .collect(),
+            slide_fit_mm: self.opts.slide_fit_mm,
         }
     }
 }

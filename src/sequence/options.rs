@@ -105,6 +105,14 @@ pub struct SequenceOptions {
     /// tessellated from exact surfaces is known to that much only (an imported
     /// bolt's facets cross its bore's by up to the deflection).
     pub tolerance: f64,
+    /// Fits (interferences of the assembled pose) no deeper than this (mm, their
+    /// reported depth) may also slide: a press fit, a card modelled a little wider
+    /// than the guides it slides down. Along a straight motion from the assembled
+    /// pose such a part may overlap its fit partner, along every line of the motion,
+    /// only where it overlapped it assembled and by no more; deeper fits (a bolt
+    /// modelled through a plate without its hole) keep to the overlap of the
+    /// assembled pose. Default 2; 0 turns sliding off.
+    pub slide_fit_mm: f64,
     /// How far a part is separated along a free direction to test it (mm, larger than
     /// the largest fit clearance; seed 003 section 2.1 step 2). Default 0.5.
     pub probe_mm: f64,
@@ -169,6 +177,7 @@ impl Default for SequenceOptions {
             time_limit_ms: None,
             seed: 0,
             tolerance: crate::collision::DEFAULT_TOLERANCE,
+            slide_fit_mm: 2.0,
             probe_mm: 0.5,
             step_mm: 0.0,
             masses: BTreeMap::new(),
@@ -207,7 +216,7 @@ impl SequenceOptions {
         let limit = self.time_limit_ms.unwrap_or(DEFAULT_SEQUENCE_TIME_LIMIT_MS);
         let finite_at_least = |v: f64, min: f64| v.is_finite() && v >= min;
         let finite_above = |v: f64, min: f64| v.is_finite() && v > min;
-        let checks: [(&'static str, f64, bool, &'static str); 9] = [
+        let checks: [(&'static str, f64, bool, &'static str); 10] = [
             (
                 "time_limit_ms",
                 limit,
@@ -218,6 +227,12 @@ impl SequenceOptions {
                 "tolerance",
                 self.tolerance,
                 finite_at_least(self.tolerance, 0.0),
+                "a finite number of mm ≥ 0",
+            ),
+            (
+                "slide_fit_mm",
+                self.slide_fit_mm,
+                finite_at_least(self.slide_fit_mm, 0.0),
                 "a finite number of mm ≥ 0",
             ),
             (
@@ -477,6 +492,15 @@ pub enum Stuck {
         in_contact: bool,
         /// The penetration tolerance used (mm).
         tolerance: f64,
+        /// The document's mesh deflection (mm), when it records one: the tolerance
+        /// is never finer, so raising it to that frees nothing.
+        deflection: Option<f64>,
+        /// Those of `least`'s blockers that have a fit with the part deeper than
+        /// `slide_fit_mm`, with the fit's depth (mm): they hold it to the overlap
+        /// of the assembled pose and do not let it slide.
+        deep_fits: Vec<(String, f64)>,
+        /// The `slide_fit_mm` used (mm).
+        slide_fit_mm: f64,
     },
 }
 
@@ -499,6 +523,9 @@ impl std::fmt::Display for Stuck {
                 least: (d, least_by),
                 in_contact,
                 tolerance,
+                deflection,
+                deep_fits,
+                slide_fit_mm,
             } => {
                 let n = |v: f64| crate::math::format::number(v, 3);
                 // Every blocker is named (the one a user must move may block only
@@ -513,15 +540,37 @@ impl std::fmt::Display for Stuck {
                     n(d[2]),
                     least_by.join(", ")
                 )?;
-                if *in_contact {
-                    write!(
-                        f,
-                        " only, which touch{} it where assembled (a fit whose meshes cross by more than the tolerance {} mm: raise `tolerance` to the meshes' deflection)",
-                        if least_by.len() == 1 { "es" } else { "" },
-                        n(*tolerance)
-                    )?;
+                if !*in_contact {
+                    return Ok(());
                 }
-                Ok(())
+                let touch = if least_by.len() == 1 { "es" } else { "" };
+                if !deep_fits.is_empty() {
+                    // Fits too deep to slide: the option that would let them.
+                    let list: Vec<String> = deep_fits
+                        .iter()
+                        .map(|(q, depth)| format!("{q} {} mm", n(*depth)))
+                        .collect();
+                    return write!(
+                        f,
+                        " only, which touch{touch} it where assembled; fits deeper than `slide_fit_mm` ({} mm) may not slide: {}",
+                        n(*slide_fit_mm),
+                        list.join(", ")
+                    );
+                }
+                match deflection {
+                    // The tolerance is the meshes' own accuracy already: raising
+                    // it to that would change nothing.
+                    Some(dfl) if *tolerance >= *dfl => write!(
+                        f,
+                        " only, which touch{touch} it where assembled (the tolerance {} mm is already the meshes' deflection: blocked as modelled)",
+                        n(*tolerance)
+                    ),
+                    _ => write!(
+                        f,
+                        " only, which touch{touch} it where assembled (a fit whose meshes cross by more than the tolerance {} mm: raise `tolerance` to the meshes' deflection)",
+                        n(*tolerance)
+                    ),
+                }
             }
         }
     }
@@ -562,7 +611,9 @@ impl std::fmt::Display for RejectReason {
 /// the removal checks between `a` and `b` (sweeps, probes, planned paths) allow
 /// exactly the overlap of the assembled pose — the moving part may overlap the
 /// other only where it did when assembled (within `tolerance`; stepwise, `step_mm`
-/// apart) — and every other pair keeps [`SequenceOptions::tolerance`].
+/// apart) — and every other pair keeps [`SequenceOptions::tolerance`]. A fit no
+/// deeper than [`SequenceOptions::slide_fit_mm`] may also slide straight from the
+/// assembled pose (a press fit along its bore or guides; see the option).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Fit {
     /// One component.

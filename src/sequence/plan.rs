@@ -579,6 +579,13 @@ fn build_sequence(ctx: &Ctx, f: &Found) -> Result<Sequence, RejectReason> {
                 .filter(|&q| ctx.fit(p, q).is_some())
                 .map(|q| ctx.names[q].clone())
                 .collect(),
+            slides: members(mask)
+                .filter(|&q| {
+                    ctx.fit(p, q)
+                        .is_some_and(|f| f.depth <= ctx.opts.slide_fit_mm)
+                })
+                .map(|q| ctx.names[q].clone())
+                .collect(),
         });
         let hard = ch.planned.is_some() || ctx.tight(p, &mate, mask);
         difficult += hard as usize;

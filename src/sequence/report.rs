@@ -35,6 +35,7 @@ fn task_json(t: &Task, s: &super::options::StepInfo) -> Value {
         "path_length_mm": t.path.length_mm,
         "path": t.path.poses.iter().map(pose).collect::<Vec<_>>(),
         "fits": t.fits,
+        "slides": t.slides,
         "obstacle_box": {"min": [t.obstacle_box.lo.x, t.obstacle_box.lo.y, t.obstacle_box.lo.z],
                          "max": [t.obstacle_box.hi.x, t.obstacle_box.hi.y, t.obstacle_box.hi.z]},
         "assembled_pose": pose(&t.assembled_pose),

@@ -119,6 +119,7 @@ pub fn revalidate(
         // overlap of the assembled pose allowed (see `fit.rs`); every other
         // component the tolerance.
         let fitted = |q: usize| t.fits.contains(&doc.components()[q].name);
+        let slides = |q: usize| t.slides.contains(&doc.components()[q].name);
         let validator = |qs: &[usize]| {
             let main = MeshValidator::new(
                 scene.colliders[p].clone(),
@@ -152,6 +153,7 @@ pub fn revalidate(
                             doc.mesh_of(q),
                             p < q,
                         ),
+                        slides: slides(q),
                         spacing,
                         tolerance,
                     }

@@ -107,4 +107,9 @@ pub struct Task {
     /// [`Fit`](super::Fit)): its path may overlap each where the part overlaps it
     /// assembled, and interferes with no other deeper than the path's tolerance.
     pub fits: Vec<String>,
+    /// Those of `fits` no deeper than `slide_fit_mm` (press fits): along a straight
+    /// stretch of the path through the assembled pose the part may also slide
+    /// against each, overlapping along every line of the motion only the material
+    /// it overlaps assembled, by no more than assembled.
+    pub slides: Vec<String>,
 }

@@ -104,6 +104,7 @@ fn task(operation: Operation) -> Task {
         mount: false,
         path: path(),
         fits: Vec::new(),
+        slides: Vec::new(),
     }
 }
 

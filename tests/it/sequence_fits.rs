@@ -9,7 +9,12 @@
 //! for a pair with one, a volume test on a grid of points (no point inside both the
 //! moved part and the other that the assembled part does not hold: the overlap of
 //! the assembled pose and nothing else); the reported fits must be exactly the pairs
-//! that interfere in the assembled pose.
+//! that interfere in the assembled pose. A reported fit no deeper than `slide_fit_mm`
+//! may instead slide: a pose that is the assembled one moved straight along `d`
+//! passes when, on every line parallel to `d` (a grid of its own, cut by the meshes'
+//! triangles directly, not by the library's colliders), each stretch of the moved
+//! part overlaps only the stretches of the other it overlapped assembled, by no more
+//! than assembled (within the tolerance).
 
 use fitup::collision::{interferes, Collider, DEFAULT_TOLERANCE};
 use fitup::document::Document;
@@ -84,6 +89,96 @@ pub(crate) struct Checker<'a> {
     fits: Vec<(usize, usize)>,
     /// The tolerance the plan used (the default, or the document's mesh deflection).
     tolerance: f64,
+    /// The reported fits' depths (by index pair, either order).
+    depths: Vec<((usize, usize), f64)>,
+    /// Fits no deeper than this may slide (the option the plan was made with).
+    pub(crate) slide_fit_mm: f64,
+    /// The slide lines already cut, per pair and direction.
+    slide_cache: SlideCache,
+}
+
+/// A slide check's lines: the moving part, the still one, the direction (rounded).
+type SlideKey = (usize, usize, [i64; 3]);
+
+/// The slide lines cut so far.
+type SlideCache =
+    std::cell::RefCell<std::collections::HashMap<SlideKey, std::rc::Rc<Vec<SlideLine>>>>;
+
+/// One line of a slide check: the moving part's intervals at its assembled pose and
+/// the still part's, as parameters along the line.
+struct SlideLine {
+    p: Vec<(f64, f64)>,
+    q: Vec<(f64, f64)>,
+}
+
+/// Most lines of one slide check.
+const SLIDE_LINES: f64 = 12_000.0;
+
+/// The world triangles of a mesh at a pose.
+fn world_triangles(mesh: &Mesh, pose: &Transform) -> Vec<[Point3; 3]> {
+    (0..mesh.triangles.len())
+        .map(|i| mesh.triangle(i).map(|v| pose.apply(&v)))
+        .collect()
+}
+
+/// The intervals inside a closed mesh along the lines `u a + v b + t d` of a grid
+/// (`a = a0 + i h`, `b = b0 + j h`, `n.0 × n.1` lines): each triangle is handed to
+/// the lines its shadow across `d` covers, and cut there (Möller–Trumbore, `t` of
+/// any sign). A line with an odd count of crossings (through an edge) gives `None`.
+fn grid_intervals(
+    tris: &[[Point3; 3]],
+    (u, v, d): (&Vec3, &Vec3, &Vec3),
+    (a0, b0, h): (f64, f64, f64),
+    n: (usize, usize),
+) -> Vec<Option<Vec<(f64, f64)>>> {
+    let mut cells: Vec<Vec<u32>> = vec![Vec::new(); n.0 * n.1];
+    for (k, t) in tris.iter().enumerate() {
+        let us = t.map(|p| p.coords.dot(u));
+        let vs = t.map(|p| p.coords.dot(v));
+        let lo = |x: [f64; 3], o: f64| ((x[0].min(x[1]).min(x[2]) - o) / h).ceil().max(0.0);
+        let hi = |x: [f64; 3], o: f64| ((x[0].max(x[1]).max(x[2]) - o) / h).floor();
+        let (i0, i1) = (lo(us, a0), hi(us, a0).min(n.0 as f64 - 1.0));
+        let (j0, j1) = (lo(vs, b0), hi(vs, b0).min(n.1 as f64 - 1.0));
+        if i1 < i0 || j1 < j0 {
+            continue;
+        }
+        for i in i0 as usize..=i1 as usize {
+            for j in j0 as usize..=j1 as usize {
+                cells[i * n.1 + j].push(k as u32);
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(n.0 * n.1);
+    for i in 0..n.0 {
+        for j in 0..n.1 {
+            let o = Point3::from(u * (a0 + i as f64 * h) + v * (b0 + j as f64 * h));
+            let mut ts: Vec<f64> = cells[i * n.1 + j]
+                .iter()
+                .filter_map(|&k| {
+                    let [p0, p1, p2] = tris[k as usize];
+                    let (e1, e2) = (p1 - p0, p2 - p0);
+                    let pv = d.cross(&e2);
+                    let det = e1.dot(&pv);
+                    if det.abs() < 1e-14 {
+                        return None;
+                    }
+                    let s = o - p0;
+                    let bu = s.dot(&pv) / det;
+                    let qv = s.cross(&e1);
+                    let bv = d.dot(&qv) / det;
+                    (bu >= 0.0 && bv >= 0.0 && bu + bv <= 1.0).then(|| e2.dot(&qv) / det)
+                })
+                .collect();
+            ts.sort_by(f64::total_cmp);
+            ts.dedup_by(|b, a| *b - *a < 1e-9);
+            out.push(
+                ts.len()
+                    .is_multiple_of(2)
+                    .then(|| ts.chunks(2).map(|c| (c[0], c[1])).collect()),
+            );
+        }
+    }
+    out
 }
 
 /// Most grid points one fit check asks (the grid is as fine as this allows).
@@ -92,6 +187,97 @@ const GRID_POINTS: f64 = 4_000.0;
 impl Checker<'_> {
     fn fit(&self, p: usize, q: usize) -> bool {
         self.fits.contains(&(p, q)) || self.fits.contains(&(q, p))
+    }
+
+    /// Whether the reported fit of `p` and `q` may slide (no deeper than
+    /// `slide_fit_mm`).
+    fn slides(&self, p: usize, q: usize) -> bool {
+        self.depths
+            .iter()
+            .any(|&((a, b), depth)| (a, b) == (p.min(q), p.max(q)) && depth <= self.slide_fit_mm)
+    }
+
+    /// The lines of the slide check of `p` along unit `d` against `q`: every line
+    /// along `d` on which `p` slid any distance can meet `q`.
+    fn slide_lines(&self, p: usize, q: usize, d: &Vec3) -> std::rc::Rc<Vec<SlideLine>> {
+        let key = (p, q, d.map(|x| (x * 1e6).round() as i64).into());
+        if let Some(l) = self.slide_cache.borrow().get(&key) {
+            return l.clone();
+        }
+        let (u, v) = fitup::math::frame_across(d);
+        let span = |b: &Aabb, e: &Vec3| {
+            (0..8).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), k| {
+                let c = Vec3::new(
+                    if k & 1 == 0 { b.lo.x } else { b.hi.x },
+                    if k & 2 == 0 { b.lo.y } else { b.hi.y },
+                    if k & 4 == 0 { b.lo.z } else { b.hi.z },
+                );
+                (lo.min(c.dot(e)), hi.max(c.dot(e)))
+            })
+        };
+        let (bp, bq) = (
+            self.colliders[p].world_bounds(&self.poses[p]),
+            self.colliders[q].world_bounds(&self.poses[q]),
+        );
+        let across = |e: &Vec3| {
+            let (a, b) = (span(&bp, e), span(&bq, e));
+            (a.0.max(b.0), a.1.min(b.1))
+        };
+        let ((u0, u1), (v0, v1)) = (across(&u), across(&v));
+        let mut lines = Vec::new();
+        if u1 > u0 && v1 > v0 {
+            let h = ((u1 - u0) * (v1 - v0) / SLIDE_LINES).sqrt().max(1e-3);
+            let n = (
+                ((u1 - u0) / h).ceil() as usize,
+                ((v1 - v0) / h).ceil() as usize,
+            );
+            // Offsets of its own (not the library's), off round numbers.
+            let (a0, b0) = (u0 + 0.271_828 * h, v0 + 0.732_050 * h);
+            let cut = |i: usize| {
+                grid_intervals(
+                    &world_triangles(self.doc.mesh_of(i), &self.poses[i]),
+                    (&u, &v, d),
+                    (a0, b0, h),
+                    n,
+                )
+            };
+            for (lp, lq) in cut(p).into_iter().zip(cut(q)) {
+                if let (Some(p), Some(q)) = (lp, lq) {
+                    if !p.is_empty() && !q.is_empty() {
+                        lines.push(SlideLine { p, q });
+                    }
+                }
+            }
+        }
+        let lines = std::rc::Rc::new(lines);
+        self.slide_cache.borrow_mut().insert(key, lines.clone());
+        lines
+    }
+
+    /// Whether `p` at `pose` is refused by the slide rule against `q`: `pose` is
+    /// not the assembled one moved straight (same orientation), or along some line
+    /// of the motion a stretch of `p` overlaps a stretch of `q` it did not overlap
+    /// assembled, or one it did by more (beyond the tolerance).
+    fn slide_hits(&self, p: usize, pose: &Transform, q: usize) -> bool {
+        let home = &self.poses[p];
+        if pose.rotation().angle_to(&home.rotation()) > 1e-9 {
+            return true;
+        }
+        let shift = pose.translation() - home.translation();
+        let s = shift.norm();
+        if s < 1e-9 {
+            return true;
+        }
+        let tol = self.tolerance;
+        self.slide_lines(p, q, &(shift / s)).iter().any(|line| {
+            line.p.iter().any(|&(a, b)| {
+                line.q.iter().any(|&(c, e)| {
+                    let over = |s: f64| (b + s).min(e) - (a + s).max(c);
+                    let home = over(0.0);
+                    over(s) > if home > tol { home + tol } else { tol }
+                })
+            })
+        })
     }
 
     /// The surface distance of `p` and `q` at their poses, asked up to `bound` mm.
@@ -155,7 +341,9 @@ impl Checker<'_> {
                         let (in_q, h) = room_of(&w);
                         let room: &Collider = if in_q { cq } else { cp };
                         if !room.contains_point(&h) && room.distance_to_point(&h, tol) > tol {
-                            return true;
+                            // Outside the room: refused unless the fit slides
+                            // and the pose is a slide the rule allows.
+                            return !self.slides(p, q) || self.slide_hits(p, pose, q);
                         }
                     }
                 }
@@ -176,6 +364,16 @@ pub(crate) fn checker<'a>(doc: &'a Document, plan: &SequencePlan) -> Checker<'a>
         poses: scene.poses.clone(),
         fits: plan.fits.iter().map(|f| (idx(&f.a), idx(&f.b))).collect(),
         tolerance: DEFAULT_TOLERANCE.max(doc.mesh_deflection().unwrap_or(0.0)),
+        depths: plan
+            .fits
+            .iter()
+            .map(|f| {
+                let (a, b) = (idx(&f.a), idx(&f.b));
+                ((a.min(b), a.max(b)), f.depth)
+            })
+            .collect(),
+        slide_fit_mm: SequenceOptions::default().slide_fit_mm,
+        slide_cache: Default::default(),
     }
 }
 
@@ -660,9 +858,42 @@ fn every_option_a_refusal_names_is_an_option_of_every_face() {
             least: ([0.0, 0.0, 1.0], vec!["b".into()]),
             in_contact: true,
             tolerance: 0.01,
+            deflection: None,
+            deep_fits: Vec::new(),
+            slide_fit_mm: 2.0,
+        }
+        .to_string(),
+        Stuck::Blocked {
+            part: "a".into(),
+            directions: 6,
+            by: vec!["b".into()],
+            least: ([0.0, 0.0, 1.0], vec!["b".into()]),
+            in_contact: true,
+            tolerance: 0.1,
+            deflection: Some(0.1),
+            deep_fits: vec![("b".into(), 2.5)],
+            slide_fit_mm: 2.0,
         }
         .to_string(),
     ];
+    // The tolerance already at the meshes' deflection: raising it to that is not
+    // offered.
+    let at_deflection = Stuck::Blocked {
+        part: "a".into(),
+        directions: 6,
+        by: vec!["b".into()],
+        least: ([0.0, 0.0, 1.0], vec!["b".into()]),
+        in_contact: true,
+        tolerance: 0.1,
+        deflection: Some(0.1),
+        deep_fits: Vec::new(),
+        slide_fit_mm: 2.0,
+    }
+    .to_string();
+    assert!(
+        !at_deflection.contains('`') && at_deflection.contains("already the meshes' deflection"),
+        "{at_deflection}"
+    );
     let texts = [
         stuck.join("; "),
         RejectReason::InactiveBase {
@@ -693,6 +924,7 @@ fn every_option_a_refusal_names_is_an_option_of_every_face() {
         "time_limit_ms",
         "small_base_ratio",
         "base",
+        "slide_fit_mm",
     ] {
         assert!(named.iter().any(|n| n == must), "{must} in {texts:?}");
     }
@@ -806,5 +1038,183 @@ fn a_part_shut_in_by_an_early_choice_ends_that_branch_at_once() {
     let c = checker(&doc, &p);
     fits_are_exact(&c, &p);
     dense_removal(&c, &p);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A U-channel along +Y: outer half-width `w_out`, slot half-width `w_in`, floor
+/// `0..floor`, walls up to `top`, from `y0` to `y1` (the cross-section in X–Z
+/// extruded, its caps split into six triangles on its own corners).
+fn channel(w_out: f64, w_in: f64, floor: f64, top: f64, y0: f64, y1: f64) -> Mesh {
+    // The U counter-clockwise in (x, z).
+    let u = [
+        (-w_out, 0.0),
+        (w_out, 0.0),
+        (w_out, top),
+        (w_in, top),
+        (w_in, floor),
+        (-w_in, floor),
+        (-w_in, top),
+        (-w_out, top),
+    ];
+    let mut vertices = Vec::new();
+    for y in [y0, y1] {
+        for &(x, z) in &u {
+            vertices.push(Point3::new(x, y, z));
+        }
+    }
+    // At y0 the counter-clockwise (x, z) triangles face −Y (outward); at y1 flipped.
+    let cap = [
+        [0, 1, 4],
+        [0, 4, 5],
+        [1, 2, 3],
+        [1, 3, 4],
+        [0, 5, 6],
+        [0, 6, 7],
+    ];
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    for t in cap {
+        triangles.push(t);
+        triangles.push([t[0] + 8, t[2] + 8, t[1] + 8]);
+    }
+    for a in 0..8u32 {
+        let b = (a + 1) % 8;
+        triangles.push([a, b + 8, b]);
+        triangles.push([a, a + 8, b + 8]);
+    }
+    Mesh::new(vertices, triangles).unwrap()
+}
+
+/// Issue 38's press-fit slide, first class (the servo arm pressed 0.69 mm onto its
+/// shaft in Aryanbrb's robot arm): a hub pressed 0.3 mm onto a shaft that stands on
+/// a plate. The shaft is the larger, so the cut-out model carves the hub's room out
+/// of it and the hub slid along the shaft meets shaft the room does not cover: the
+/// pair could never part. A fit no deeper than `slide_fit_mm` slides: the hub comes
+/// off along the shaft, sideways it is still held, and the independent re-check
+/// allows exactly that slide.
+#[test]
+fn a_hub_pressed_onto_a_shaft_slides_off_along_it() {
+    let d = dir("hub");
+    let doc = write_doc(
+        &d,
+        &[
+            ("plate", cuboid([-30.0, -30.0, -5.0], [30.0, 30.0, 0.0])),
+            ("shaft", rod(5.3, 0.0, 60.0, 32)),
+            ("hub", ring(9.0, 5.0, 20.0, 30.0, 32)),
+        ],
+    );
+    let (hub, shaft) = (
+        doc.component_index("hub").unwrap(),
+        doc.component_index("shaft").unwrap(),
+    );
+    for mode in [Mode::Mates, Mode::Geometry] {
+        let p = plan(&doc, mode);
+        assert_eq!(p.fits.len(), 1, "{:?}", p.fits);
+        let f = &p.fits[0];
+        assert_eq!((f.a.as_str(), f.b.as_str()), ("shaft", "hub"));
+        assert!(f.depth > 0.2 && f.depth < 0.4, "{f:?}");
+        let c = checker(&doc, &p);
+        fits_are_exact(&c, &p);
+        dense_removal(&c, &p);
+        for s in &p.sequences {
+            let order = s.order();
+            let later = if order.iter().position(|o| o == "hub")
+                > order.iter().position(|o| o == "shaft")
+            {
+                "hub"
+            } else {
+                "shaft"
+            };
+            let t = s.tasks.iter().find(|t| t.part == later).unwrap();
+            // Whichever goes second slides along the shaft's axis.
+            assert!(
+                t.mating_direction.z.abs() > 1.0 - 1e-9,
+                "{order:?}: {later} along {:?}",
+                t.mating_direction
+            );
+            assert_eq!(t.slides, vec![if later == "hub" { "shaft" } else { "hub" }]);
+        }
+        // The re-check allows the slide and nothing else: 10 mm up the shaft is
+        // free, 0.5 mm sideways (the overlap grows on one side) is not, nor 2 mm up
+        // turned 0.1 rad.
+        let at = |v: Vec3| Transform::from_translation(v);
+        assert!(!c.hits(hub, &at(Vec3::new(0.0, 0.0, 10.0)), shaft));
+        assert!(c.hits(hub, &at(Vec3::new(0.5, 0.0, 0.0)), shaft));
+        let turned = Transform::from_rotation_about(Point3::origin(), Vec3::x(), 0.1)
+            .unwrap()
+            .then(&at(Vec3::new(0.0, 0.0, 2.0)));
+        assert!(c.hits(hub, &turned, shaft));
+    }
+    // Sliding off: no sequence, and the refusal names the fit and the option.
+    let off = SequenceOptions {
+        slide_fit_mm: 0.0,
+        ..SequenceOptions::default()
+    };
+    let e = plan_sequence(&doc, &mut SceneCache::new(), &off)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("`slide_fit_mm` (0 mm) may not slide") && e.contains("mm"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The second class (the tweezer grinder's PCB, 0.2 mm wider than the guides it
+/// slides down): a board pressed 0.1 mm into each wall of a slot in a U-channel
+/// longer than the board (the slot runs on past it along Y). The channel is the
+/// larger part, so the cut-out model blocks the board every way; as a sliding fit
+/// it leaves up out of the slot or along it, never down into the floor or sideways
+/// into a wall, and the re-check allows exactly that.
+#[test]
+fn a_board_pressed_into_a_slot_slides_out_of_it() {
+    let d = dir("board");
+    let doc = write_doc(
+        &d,
+        &[
+            ("channel", channel(15.0, 5.0, 4.0, 30.0, -40.0, 40.0)),
+            ("board", cuboid([-5.1, -10.0, 4.0], [5.1, 10.0, 25.0])),
+        ],
+    );
+    let (board, chan) = (
+        doc.component_index("board").unwrap(),
+        doc.component_index("channel").unwrap(),
+    );
+    for mode in [Mode::Mates, Mode::Geometry] {
+        let p = plan(&doc, mode);
+        assert_eq!(p.fits.len(), 1, "{:?}", p.fits);
+        assert!(p.fits[0].depth < 0.2, "{:?}", p.fits);
+        let c = checker(&doc, &p);
+        fits_are_exact(&c, &p);
+        dense_removal(&c, &p);
+        for s in &p.sequences {
+            let t = &s.tasks[0];
+            // The board out of the slot up (inserted along −Z) or along it (±Y),
+            // never across (the channel onto the board: the same, reversed).
+            let m = if t.part == "board" {
+                t.mating_direction
+            } else {
+                -t.mating_direction
+            };
+            assert!(
+                m.x.abs() < 1e-9 && m.z < 1e-9,
+                "{} along {:?}",
+                t.part,
+                t.mating_direction
+            );
+        }
+        let at = |v: Vec3| Transform::from_translation(v);
+        for free in [Vec3::new(0.0, 0.0, 8.0), Vec3::new(0.0, 12.0, 0.0)] {
+            assert!(!c.hits(board, &at(free), chan), "{free:?}");
+        }
+        // (The re-check's volume grid is about 1 mm here: a sideways step it can
+        // see.)
+        for held in [
+            Vec3::new(1.5, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(1.5, 0.0, 8.0),
+        ] {
+            assert!(c.hits(board, &at(held), chan), "{held:?}");
+        }
+    }
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -53,6 +53,7 @@ fn gear_task(assembled: Transform) -> Task {
         mount: false,
         path: path(),
         fits: Vec::new(),
+        slides: Vec::new(),
     }
 }
 
