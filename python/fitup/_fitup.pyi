@@ -138,24 +138,8 @@ class Robot:
 
     @staticmethod
     def catalog(name: str) -> "Robot":
-        """staticmethod(function) -> method
-
-        Convert a function to be a static method.
-
-        A static method does not receive an implicit first argument.
-        To declare a static method, use this idiom:
-
-             class C:
-                 @staticmethod
-                 def f(arg1, arg2, argN):
-                     ...
-
-        It can be called either on the class (e.g. C.f()) or on an instance
-        (e.g. C().f()). Both the class and the instance are ignored, and
-        neither is passed implicitly as the first argument to the method.
-
-        Static methods in Python are similar to those found in Java or C++.
-        For a more advanced concept, see the classmethod builtin.
+        """A robot of the built-in catalog (``catalog_names()``: ``"nachi_mz07"``, ``"ur5"``,
+        ``"kuka_kr6_r700"``, …), base at the origin, tool at the flange.
         """
     @property
     def name(self) -> str:
@@ -272,8 +256,10 @@ class Document:
         """
     def export_stl(self, path: _StrPath, components: Optional[List[str]] = None, frame: Optional[_Pose] = None, overwrite: bool = False) -> int:
         """Writes ``world_mesh(components, frame)`` as binary STL (mm) to ``path``: never
-        over a file the document was built from, over an existing file only when
-        fitup wrote it or with ``overwrite``.
+        over a file the document was built from (its YAML, sub-documents, meshes, STEP
+        files, URDFs), not even with ``overwrite`` (``DocumentError``: "a source of the
+        open document"); over another existing file only when fitup wrote it or with
+        ``overwrite``.
         """
     def export_glb(self, path: _StrPath, overwrite: bool = False, *, components: Optional[List[str]] = None, frame: Optional[_Pose] = None) -> int:
         """Writes the document as binary glTF (one node per component neither
@@ -282,7 +268,9 @@ class Document:
         suppressed nor hidden) or ``frame`` (its 4×4 pose in the world, mm), each
         component's mesh is written with its pose baked in, in the coordinates of
         ``frame`` (default the world): one node per component, no node matrix, what
-        ``world_mesh([name], frame)`` gives; a suppressed one is refused.
+        ``world_mesh([name], frame)`` gives; a suppressed one is refused. The write
+        rule is ``export_stl``'s: never over a file the document was built from, not
+        even with ``overwrite``.
         """
     def mates(self) -> List[Dict[str, Any]]:
         """Every mate in document order as dicts: ``name``, ``type``, ``entities``
@@ -456,7 +444,11 @@ class Document:
         on disk since it was loaded).
         """
     def save_as(self, path: _StrPath) -> None:
-        """Writes the document to ``path`` atomically and makes it the document's file."""
+        """Writes the document to ``path`` atomically and makes it the document's file.
+        Refuses a file the document was read from (its meshes, sub-documents, STEP
+        files, URDFs) and any existing file that is not a fitup document; over its own
+        file it is ``save``.
+        """
     def to_yaml(self) -> str:
         """The document as YAML text (what ``save`` writes)."""
     def contacts(self, **options: Any) -> List[Dict[str, Any]]:

@@ -728,8 +728,10 @@ impl Document {
     }
 
     /// Writes ``world_mesh(components, frame)`` as binary STL (mm) to ``path``: never
-    /// over a file the document was built from, over an existing file only when
-    /// fitup wrote it or with ``overwrite``.
+    /// over a file the document was built from (its YAML, sub-documents, meshes, STEP
+    /// files, URDFs), not even with ``overwrite`` (``DocumentError``: "a source of the
+    /// open document"); over another existing file only when fitup wrote it or with
+    /// ``overwrite``.
     #[pyo3(signature = (path, components = None, frame = None, overwrite = false))]
     fn export_stl(
         &self,
@@ -761,7 +763,9 @@ impl Document {
     /// suppressed nor hidden) or ``frame`` (its 4×4 pose in the world, mm), each
     /// component's mesh is written with its pose baked in, in the coordinates of
     /// ``frame`` (default the world): one node per component, no node matrix, what
-    /// ``world_mesh([name], frame)`` gives; a suppressed one is refused.
+    /// ``world_mesh([name], frame)`` gives; a suppressed one is refused. The write
+    /// rule is ``export_stl``'s: never over a file the document was built from, not
+    /// even with ``overwrite``.
     #[pyo3(signature = (path, overwrite = false, *, components = None, frame = None))]
     fn export_glb(
         &self,
@@ -843,6 +847,9 @@ impl Document {
     }
 
     /// Writes the document to ``path`` atomically and makes it the document's file.
+    /// Refuses a file the document was read from (its meshes, sub-documents, STEP
+    /// files, URDFs) and any existing file that is not a fitup document; over its own
+    /// file it is ``save``.
     fn save_as(&self, py: Python<'_>, path: std::path::PathBuf) -> Result<()> {
         py.detach(|| Ok(self.lock()?.doc.save_as(&path)?))
     }

@@ -157,6 +157,49 @@ def test_save_as_writes_a_document_that_loads_again(project):
     assert np.allclose(fitup.Document(out).pose("screw5"), moved)
 
 
+def test_exports_and_save_as_never_replace_the_documents_sources(project):
+    """A file the document was read from is never replaced, not even with overwrite."""
+    models = project / "models"
+    (models / "sub").mkdir()
+    (models / "sub" / "sub.yaml").write_text(
+        "parts:\n  plate:\n    stl: ../meshes/plate_a.stl\n"
+        "components:\n- name: plate\n  part: plate\n  fixed: true\n")
+    (models / "top.yaml").write_text(
+        "parts:\n  screw:\n    stl: meshes/screw.stl\n"
+        "assemblies:\n- name: Sub-1\n  file: sub/sub.yaml\n"
+        "components:\n- name: screw\n  part: screw\n  fixed: true\n")
+    doc = fitup.Document(models / "top.yaml")
+    sources = [models / "top.yaml", models / "sub" / "sub.yaml", models / "meshes" / "screw.stl",
+               models / "meshes" / "plate_a.stl", models / "sub" / ".." / "meshes" / "screw.stl"]
+    before = {p: p.read_bytes() for p in sources}
+    writers = {
+        "export_stl": lambda p: doc.export_stl(p, overwrite=True),
+        "export_stl components": lambda p: doc.export_stl(p, ["screw"], overwrite=True),
+        "export_glb": lambda p: doc.export_glb(p, overwrite=True),
+        "export_glb components": lambda p: doc.export_glb(p, True, components=["screw"]),
+    }
+    for target in sources:
+        for name, write in writers.items():
+            with pytest.raises(fitup.DocumentError, match="a source of the open document") as e:
+                write(target)
+            assert target.name in str(e.value), (name, str(e.value))
+        if target != models / "top.yaml":
+            with pytest.raises(fitup.DocumentError, match="a source of the open document"):
+                doc.save_as(target)
+    assert {p: p.read_bytes() for p in sources} == before
+    # overwrite still replaces an earlier output and a user's file that is no source
+    out = project / "out"
+    out.mkdir()
+    doc.export_glb(out / "own.glb")
+    assert doc.export_glb(out / "own.glb", overwrite=True) == 2
+    (out / "mine.stl").write_bytes(b"mine")
+    with pytest.raises(fitup.DocumentError, match="fitup did not write"):
+        doc.export_stl(out / "mine.stl")
+    assert (out / "mine.stl").read_bytes() == b"mine"
+    doc.export_stl(out / "mine.stl", overwrite=True)
+    assert (out / "mine.stl").read_bytes()[:5] != b"mine"
+
+
 def test_robot_fk_and_every_ik_branch():
     r = fitup.Robot.catalog("nachi_mz07")
     assert r.dof == 6 and r.solver == "opw"
@@ -441,6 +484,8 @@ def test_the_stub_docstrings_are_the_modules():
         else:
             continue
         for stub, obj in items:
+            # A static or class method's own ``__doc__`` is its wrapper type's.
+            obj = getattr(obj, "__func__", obj)
             want = inspect.cleandoc(obj.__doc__)
             assert ast.get_docstring(stub) == want, (
                 f"{stub.name}: the stub's docstring differs from the module's; "

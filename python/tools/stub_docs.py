@@ -29,6 +29,8 @@ def native_doc(native, cls, name):
         obj = getattr(native, cls)
     else:
         obj = getattr(native, cls).__dict__[name]
+        # A static or class method's own ``__doc__`` is its wrapper type's.
+        obj = getattr(obj, "__func__", obj)
     doc = getattr(obj, "__doc__", None)
     return inspect.cleandoc(doc) if doc else None
 

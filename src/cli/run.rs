@@ -131,6 +131,7 @@ pub(super) fn run(a: &ScriptArgs) -> Exit {
     let live = match super::view::start(
         &a.view,
         a.force,
+        std::slice::from_ref(&opts.script),
         &opts.project,
         Some(run_name(&opts.script, None)),
     ) {
@@ -180,7 +181,13 @@ pub(super) fn watch(a: &ScriptArgs) -> Exit {
             return exit;
         }
     };
-    let live = match super::view::start(&a.view, a.force, &opts.project, None) {
+    let live = match super::view::start(
+        &a.view,
+        a.force,
+        std::slice::from_ref(&opts.script),
+        &opts.project,
+        None,
+    ) {
         Ok(l) => l,
         Err(e) => {
             errln!("error: {e}");
@@ -307,9 +314,14 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
             &crate::kinematics::MotionOptions::default(),
         )
         .map_err(|e| fail(e.to_string()))?;
+    // The document's files and the program: never replaced by the log or the
+    // recording, not even with --force.
+    let mut sources = doc.source_files();
+    sources.push(program_path.clone());
     let live = super::view::start(
         &a.view,
         a.force,
+        &sources,
         &project,
         Some(run_name(&program_path, None)),
     )
@@ -321,7 +333,7 @@ fn run_program(a: &ScriptArgs) -> Result<(), (Exit, String)> {
     match &a.log {
         Some(log) => {
             let abs = std::path::absolute(log).map_err(|e| usage(format!("log: {e}")))?;
-            let rule = crate::project::OutputRule::forced(a.force);
+            let rule = crate::project::OutputRule::forced(a.force).protecting(&sources);
             project
                 .write_output(&abs.to_string_lossy(), csv.as_bytes(), &rule)
                 .map_err(|e| fail(format!("--log: {e}")))?;

@@ -15,11 +15,14 @@ pub(super) type Live = Option<crate::viewer::Session>;
 pub(super) type Live = Option<std::convert::Infallible>;
 
 /// Starts the session the flags ask for; `first_run` names a first recording (for
-/// `run`; `watch` starts one per run). The `.rrd` file must lie inside the project.
+/// `run`; `watch` starts one per run). The `.rrd` file must lie inside the project
+/// and may not be one of `sources` (the run's script, the open document's files and
+/// program: [`crate::project::OutputRule::sources`]), not even with `force`.
 #[cfg(feature = "viewer")]
 pub(super) fn start(
     a: &ViewArgs,
     force: bool,
+    sources: &[std::path::PathBuf],
     project: &Project,
     first_run: Option<String>,
 ) -> Result<Live, CliError> {
@@ -35,7 +38,7 @@ pub(super) fn start(
                 source,
             };
             let abs = std::path::absolute(r).map_err(path_error)?;
-            let rule = crate::project::OutputRule::forced(force);
+            let rule = crate::project::OutputRule::forced(force).protecting(sources);
             let path = project
                 .resolve_output(&abs.to_string_lossy(), &rule)
                 .map_err(|source| CliError::Refused {
@@ -67,6 +70,7 @@ pub(super) fn start(
 pub(super) fn start(
     a: &ViewArgs,
     _force: bool,
+    _sources: &[std::path::PathBuf],
     _project: &Project,
     _first_run: Option<String>,
 ) -> Result<Live, CliError> {

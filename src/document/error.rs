@@ -310,7 +310,7 @@ pub enum DocumentError {
         character: String,
     },
     /// `save_as` onto one of the document's own meshes.
-    #[error("refusing to save over {}: it is the mesh of part `{part}`", .path.display())]
+    #[error("refusing to save over {}: it is the mesh of part `{part}`, a source of the open document", .path.display())]
     OverMesh {
         /// The target path.
         path: PathBuf,

@@ -46,22 +46,15 @@ impl Document {
     }
 
     /// Writes [`Document::glb_bytes`] to `path` through the project's write rule
-    /// ([`crate::project::check_output`]): a file this document was built from (its
-    /// YAML, meshes, URDF) is never replaced, an existing file only when fitup wrote it
-    /// or with `force`; written atomically (a reader never sees half a file), and
-    /// checked before anything is built.
+    /// ([`crate::project::check_output`]): a file this document was built from
+    /// ([`Document::source_files`]: its YAML, sub-documents, meshes, STEP files,
+    /// URDFs) is never replaced, not even with `force`
+    /// ([`crate::project::OutputError::Source`]); another existing file only when
+    /// fitup wrote it, or with `force`; written atomically (a reader never sees half a
+    /// file), and checked before anything is built.
     pub fn export_glb(&self, path: &Path, force: bool) -> Result<GlbExport, DocumentError> {
-        let sources: Vec<PathBuf> = self
-            .source_files()
-            .iter()
-            .filter_map(|p| p.canonicalize().ok())
-            .collect();
-        let used = |p: &Path| p.canonicalize().is_ok_and(|c| sources.contains(&c));
-        let rule = crate::project::OutputRule {
-            force,
-            used: Some(&used),
-            signature: None,
-        };
+        let sources = self.source_files();
+        let rule = crate::project::OutputRule::forced(force).protecting(&sources);
         let write_error = |e: crate::project::OutputError| DocumentError::Write {
             path: path.to_path_buf(),
             cause: WriteProblem::Output(e),

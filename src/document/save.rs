@@ -210,8 +210,11 @@ impl Document {
     /// Writes the document to `path` atomically and makes it the document's file.
     /// Relative mesh paths are rewritten so they still point at the same meshes.
     ///
-    /// Refuses to overwrite a mesh of this document and any existing file that is not
-    /// a fitup document; over its own file it behaves as [`save`](Self::save).
+    /// Refuses to overwrite a file this document was read from
+    /// ([`source_files`](Self::source_files): a mesh, [`DocumentError::OverMesh`]; a
+    /// sub-document, STEP file, URDF, [`crate::project::OutputError::Source`]) and any
+    /// existing file that is not a fitup document; over its own file it behaves as
+    /// [`save`](Self::save).
     pub fn save_as(&mut self, path: &Path) -> Result<(), DocumentError> {
         self.save_as_through(path, None)
     }
@@ -240,6 +243,21 @@ impl Document {
             return Err(DocumentError::OverMesh {
                 path: path.to_path_buf(),
                 part: p.name.clone().into(),
+            });
+        }
+        // Its other sources (sub-documents, URDFs, a mesh's buffers); its own file is
+        // its save.
+        let others: Vec<PathBuf> = self
+            .source_files()
+            .into_iter()
+            .filter(|s| *s != self.path)
+            .collect();
+        if target != canonical_target(&self.path) && crate::project::is_source(path, &others) {
+            return Err(DocumentError::Write {
+                path: path.to_path_buf(),
+                cause: WriteProblem::Output(crate::project::OutputError::Source {
+                    path: path.to_path_buf(),
+                }),
             });
         }
         let expected = (target == canonical_target(&self.path))

@@ -23,8 +23,8 @@
 mod output;
 
 pub use output::{
-    check_output, register_output, register_stream, write_checked, write_output, OutputError,
-    OutputRule, OUTPUT_REGISTRY, RRD_MAGIC, SQLITE_MAGIC,
+    check_output, is_source, register_output, register_stream, write_checked, write_output,
+    OutputError, OutputRule, OUTPUT_REGISTRY, RRD_MAGIC, SQLITE_MAGIC,
 };
 pub(crate) use output::{check_output_in, write_in};
 use std::path::{Component, Path, PathBuf};

@@ -103,8 +103,10 @@ impl DocHandle {
             ctx.warn(w);
         }
         ctx.caches.view.log_document(&doc);
+        let inner = Arc::new(Mutex::new(doc));
+        ctx.record_document(&inner);
         Ok(Self {
-            inner: Arc::new(Mutex::new(doc)),
+            inner,
             ctx: ctx.clone(),
         })
     }
@@ -329,9 +331,25 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         },
     );
     let c = ctx.clone();
-    api.f("Document.save_as(path: string)", "Writes the document to a new file (inside the project; missing folders are created) atomically and makes it the document's file; mesh paths are rewritten relative to it. Refuses to overwrite a mesh of the document or any file that is not a fitup document.", move |d: &mut DocHandle, path: &str| -> ScriptResult<()> {
+    api.f("Document.save_as(path: string)", "Writes the document to a new file (inside the project; missing folders are created) atomically and makes it the document's file; mesh paths are rewritten relative to it. Refuses to overwrite a file a document open in the run was read from (its meshes, STEP files, sub-documents, URDFs; another open document's file) and any file that is not a fitup document.", move |d: &mut DocHandle, path: &str| -> ScriptResult<()> {
         let full = c.project.resolve_for_write(path).map_err(fail)?;
         let mut doc = d.lock()?;
+        // Another open document's files (its own are checked by `save_as`; its own
+        // file is its save).
+        let own = [doc.path().to_path_buf()];
+        let others: Vec<std::path::PathBuf> = c
+            .document_sources()
+            .into_iter()
+            .filter(|s| !crate::project::is_source(s, &own))
+            .collect();
+        if !crate::project::is_source(&full, &own) && crate::project::is_source(&full, &others) {
+            return Err(fail(crate::document::DocumentError::Write {
+                path: full.clone(),
+                cause: crate::document::WriteProblem::Output(crate::project::OutputError::Source {
+                    path: full,
+                }),
+            }));
+        }
         let folder = c.document_folder(&full)?;
         c.writing(&full, || doc.save_as_in(&full, folder)).map_err(fail)?;
         for p in doc.saved_sub_documents() {
@@ -344,7 +362,7 @@ pub(super) fn register(api: &mut Api, ctx: &Arc<Context>) {
         d.ctx.write_output(file, &bytes, overwrite)?;
         Ok(())
     }
-    api.f("Document.export_glb(file: string)", "Writes the document as binary glTF (one node per component, named as it, at its pose; metres and +Y up as glTF wants, see docs/document.md) inside the project, atomically. Refuses to replace a file the project uses or one fitup did not write; `#{overwrite: true}` replaces it.", |d: &mut DocHandle, file: &str| -> ScriptResult<()> {
+    api.f("Document.export_glb(file: string)", "Writes the document as binary glTF (one node per component, named as it, at its pose; metres and +Y up as glTF wants, see docs/document.md) inside the project, atomically. Never replaces a file a document open in the run was read from (its YAML, sub-documents, meshes, STEP files, URDFs), not even with `#{overwrite: true}`; refuses another file the project uses or one fitup did not write, which `#{overwrite: true}` replaces.", |d: &mut DocHandle, file: &str| -> ScriptResult<()> {
         export_glb(d, file, false)
     });
     api.f(

@@ -124,6 +124,13 @@ impl DocumentCache {
     }
 }
 
+/// A document a run opened (held weakly: closed when the script drops its last
+/// handle) and its source files as last seen.
+type OpenDocument = (
+    std::sync::Weak<Mutex<crate::document::Document>>,
+    Vec<PathBuf>,
+);
+
 /// Where a script's `print` and progress lines go.
 pub type OutputSink = Arc<dyn Fn(&str) + Send + Sync>;
 
@@ -149,6 +156,9 @@ pub struct Context {
     pub query_budget: crate::db::RunQueryBudget,
     reads: Mutex<BTreeSet<PathBuf>>,
     writes: Mutex<BTreeSet<PathBuf>>,
+    /// The documents this run opened (while a handle on them lives) with their source
+    /// files as last seen: what no output of the run may replace.
+    documents: Mutex<Vec<OpenDocument>>,
     operations: AtomicU64,
     /// Set (with `cancel`) when the run passed its time limit (`Limits::max_seconds`).
     timed_out: AtomicBool,
@@ -188,6 +198,7 @@ impl Context {
             query_budget: crate::db::RunQueryBudget::default(),
             reads: Mutex::default(),
             writes: Mutex::default(),
+            documents: Mutex::default(),
             operations: AtomicU64::new(0),
             timed_out: AtomicBool::new(false),
             setters: Default::default(),
@@ -222,6 +233,37 @@ impl Context {
         if let Ok(mut r) = self.reads.lock() {
             r.insert(path.to_path_buf());
         }
+    }
+
+    /// Records a document this run opened: while a handle on it lives, no output of
+    /// the run replaces a file it was read from ([`Self::document_sources`]).
+    pub(crate) fn record_document(&self, doc: &Arc<Mutex<crate::document::Document>>) {
+        let sources = doc.lock().map(|d| d.source_files()).unwrap_or_default();
+        if let Ok(mut open) = self.documents.lock() {
+            open.retain(|(d, _)| d.strong_count() > 0);
+            open.push((Arc::downgrade(doc), sources));
+        }
+    }
+
+    /// The files the documents this run has open were read from
+    /// ([`crate::document::Document::source_files`]): their YAML, sub-documents,
+    /// meshes, STEP files, URDFs, as they are now (a part added since counts; a
+    /// document locked by the caller counts with its files as last seen).
+    pub fn document_sources(&self) -> Vec<PathBuf> {
+        let Ok(mut open) = self.documents.lock() else {
+            return Vec::new();
+        };
+        open.retain(|(d, _)| d.strong_count() > 0);
+        let mut all = Vec::new();
+        for (doc, seen) in open.iter_mut() {
+            if let Some(doc) = doc.upgrade() {
+                if let Ok(d) = doc.try_lock() {
+                    *seen = d.source_files();
+                }
+            }
+            all.extend(seen.iter().cloned());
+        }
+        all
     }
 
     /// Records a file the run wrote, so watch mode does not mistake the run's own
@@ -285,16 +327,19 @@ impl Context {
     }
 
     /// Writes a script's output file `path` (inside the project) through the one write
-    /// rule ([`crate::project::check_output`]): the files this run read count as files
-    /// the project uses; `overwrite` is the script's `overwrite: true`. Atomic, listed
-    /// in the folder's output registry, recorded as the run's write. Returns the
-    /// absolute path.
+    /// rule ([`crate::project::check_output`]): a file a document open in this run was
+    /// read from ([`Self::document_sources`]) is never replaced, not even with
+    /// `overwrite`; the other files this run read count as files the project uses;
+    /// `overwrite` is the script's `overwrite: true`. Atomic, listed in the folder's
+    /// output registry, recorded as the run's write. Returns the absolute path.
     pub fn write_output(&self, path: &str, bytes: &[u8], overwrite: bool) -> ScriptResult<PathBuf> {
         let used = |p: &Path| self.reads.lock().map_or(true, |r| r.contains(p));
+        let sources = self.document_sources();
         let rule = crate::project::OutputRule {
             force: overwrite,
             used: Some(&used),
             signature: None,
+            sources: &sources,
         };
         // Checked and written through one folder handle walked from the project root.
         // Marked as the run's write before it lands (see `writing`); the path is the

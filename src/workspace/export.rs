@@ -7,7 +7,7 @@
 use crate::document::{Document, DocumentError, GlbExport, WriteProblem};
 use crate::math::Transform;
 use crate::mesh::{glb_bytes, stl_bytes, GlbNode, Mesh};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The meshes of components `which` (indices) of `doc` at their poses, in one mesh,
 /// expressed in the coordinate system `frame` (its pose in the world; `None`: the
@@ -97,28 +97,21 @@ pub fn world_glb_bytes(
 }
 
 /// Writes `bytes()` to `path` through the project's write rule
-/// ([`crate::project::check_output`]), as [`Document::export_glb`] does: an existing
-/// file is replaced only when fitup wrote it and it is neither a project file (by
-/// extension) nor one the document was built from (its YAML, meshes, URDF), or with
-/// `force` (never a link or fitup's bookkeeping); checked before anything is built,
-/// written atomically. Returns the bytes written.
+/// ([`crate::project::check_output`]), as [`Document::export_glb`] does: a file the
+/// document was built from ([`Document::source_files`]: its YAML, sub-documents,
+/// meshes, STEP files, URDFs) is never replaced, not even with `force`
+/// ([`crate::project::OutputError::Source`]); another existing file only when fitup
+/// wrote it and it is not a project file (by extension), or with `force` (never a
+/// link or fitup's bookkeeping); checked before anything is built, written
+/// atomically. Returns the bytes written.
 fn write_export(
     doc: &Document,
     path: &Path,
     force: bool,
     bytes: impl FnOnce() -> Result<Vec<u8>, DocumentError>,
 ) -> Result<Vec<u8>, DocumentError> {
-    let sources: Vec<PathBuf> = doc
-        .source_files()
-        .iter()
-        .filter_map(|p| p.canonicalize().ok())
-        .collect();
-    let used = |p: &Path| p.canonicalize().is_ok_and(|c| sources.contains(&c));
-    let rule = crate::project::OutputRule {
-        force,
-        used: Some(&used),
-        signature: None,
-    };
+    let sources = doc.source_files();
+    let rule = crate::project::OutputRule::forced(force).protecting(&sources);
     let write_error = |e: crate::project::OutputError| DocumentError::Write {
         path: path.to_path_buf(),
         cause: WriteProblem::Output(e),
@@ -131,8 +124,9 @@ fn write_export(
 }
 
 /// Writes [`world_stl_bytes`] of components `which` to `path` through the project's
-/// write rule, as [`Document::export_glb`] does (an existing file only when fitup
-/// wrote it and the document was not built from it, or with `force`; atomically).
+/// write rule, as [`Document::export_glb`] does (never a file the document was built
+/// from, even with `force`; another existing file only when fitup wrote it, or with
+/// `force`; atomically).
 /// Returns the bytes written.
 ///
 /// # Errors

@@ -13,6 +13,8 @@
 use crate::common;
 use common::copy_tree;
 
+mod sources;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -83,6 +85,10 @@ const USER_TARGETS: &[(&str, &str)] = &[
     ("models/cell.yaml", "a file the project uses"),
     ("data/mine.csv", "a file fitup did not write"),
 ];
+
+/// The document [`matrix_script`] opens (a user target the command line's writers,
+/// which open no document, refuse only without `--force`).
+const OPEN_DOCUMENT: &str = "models/cell.yaml";
 
 /// Targets that are never replaced, even with `--force` / `overwrite: true`.
 const SPECIAL_TARGETS: &[(&str, &str)] = &[
@@ -195,6 +201,11 @@ fn script_writers_never_replace_user_files() {
     let r = results(&t);
     assert_eq!(r.len(), targets.len() * WRITERS.len(), "{t}");
     for (target, cause) in USER_TARGETS.iter().chain(SPECIAL_TARGETS) {
+        // The script has the document open: its own file is a source of it.
+        let cause = match *target {
+            OPEN_DOCUMENT => "a source of the open document",
+            _ => cause,
+        };
         for w in WRITERS {
             let got = &r[&(w.to_string(), target.to_string())];
             assert!(
@@ -242,20 +253,27 @@ fn script_writers_never_replace_user_files() {
     assert!(t.contains("typo.rhai:3") && t.contains("overwrite"), "{t}");
     unchanged(&before, p, "located refusals");
 
-    // overwrite: true replaces user files, never links, FIFOs or folders.
+    // overwrite: true replaces user files, never links, FIFOs or folders, nor a file
+    // a document the run has open was read from (tests in `sources`).
+    let open_before = std::fs::read(p.join(OPEN_DOCUMENT)).unwrap();
     std::fs::write(p.join("scripts/force.rhai"), matrix_script(&targets, true)).unwrap();
     let (code, t) = run(p, &["run", "scripts/force.rhai"]);
     assert_eq!(code, 0, "{t}");
     let r = results(&t);
     for (target, _) in USER_TARGETS {
         for w in WRITERS {
-            assert_eq!(
-                r[&(w.to_string(), target.to_string())],
-                "ok",
-                "{w} {target}"
-            );
+            let got = &r[&(w.to_string(), target.to_string())];
+            if *target == OPEN_DOCUMENT {
+                assert!(
+                    got.starts_with("err ") && got.contains("a source of the open document"),
+                    "{w} {target}: {got}"
+                );
+            } else {
+                assert_eq!(got, "ok", "{w} {target}");
+            }
         }
     }
+    assert_eq!(std::fs::read(p.join(OPEN_DOCUMENT)).unwrap(), open_before);
     for (target, cause) in SPECIAL_TARGETS {
         let got = &r[&("path".to_string(), target.to_string())];
         assert!(

@@ -150,3 +150,37 @@ fn the_registry_stays_bounded_and_forgets_deleted_files() {
     assert_eq!(text.lines().count(), 1 + 10 + 1, "{text}");
     assert!(check_output(&d.join("f45.csv"), &rule).is_ok());
 }
+
+#[test]
+fn a_source_of_the_open_document_is_refused_even_with_force_under_any_spelling() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir_all(d.join("m/sub")).unwrap();
+    let mesh = d.join("m/part.stl");
+    std::fs::write(&mesh, b"solid part").unwrap();
+    let sources = vec![mesh.clone(), d.join("m/gone.yaml")];
+    let rule = OutputRule::forced(true).protecting(&sources);
+    std::os::unix::fs::symlink(d.join("m"), d.join("link")).unwrap();
+    std::fs::hard_link(&mesh, d.join("m/other_name.stl")).unwrap();
+    // Itself, through `..`, through a linked folder, another name of the same file,
+    // and a source that is missing now.
+    for p in [
+        mesh.clone(),
+        d.join("m/sub/../part.stl"),
+        d.join("link/part.stl"),
+        d.join("m/other_name.stl"),
+        d.join("m/gone.yaml"),
+    ] {
+        let source = OutputError::Source { path: p.clone() };
+        assert_eq!(refused(&p, &rule), source, "{}", p.display());
+        assert_eq!(write_output(&p, b"x", &rule), Err(source.clone()));
+        assert!(source.to_string().contains("a source of the open document"));
+    }
+    assert_eq!(std::fs::read(&mesh).unwrap(), b"solid part");
+    assert!(!d.join("m/gone.yaml").exists());
+    // A file that is no source: `force` replaces it.
+    let free = d.join("m/free.stl");
+    std::fs::write(&free, b"mine").unwrap();
+    write_output(&free, b"out", &rule).unwrap();
+    assert_eq!(std::fs::read(&free).unwrap(), b"out");
+}
