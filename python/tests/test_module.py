@@ -193,7 +193,7 @@ def test_exports_and_save_as_never_replace_the_documents_sources(project):
     doc.export_glb(out / "own.glb")
     assert doc.export_glb(out / "own.glb", overwrite=True) == 2
     (out / "mine.stl").write_bytes(b"mine")
-    with pytest.raises(fitup.DocumentError, match="fitup did not write"):
+    with pytest.raises(fitup.DocumentError, match="refusing to overwrite"):
         doc.export_stl(out / "mine.stl")
     assert (out / "mine.stl").read_bytes() == b"mine"
     doc.export_stl(out / "mine.stl", overwrite=True)
