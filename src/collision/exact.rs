@@ -717,6 +717,10 @@ fn climb(
     let mut deepest = 0.0f64;
     let mut scores: HashMap<u32, f64> = HashMap::new();
     let mut walked: HashSet<u32> = HashSet::new();
+    // The nearest face of the point scored before bounds the next point's
+    // nearest-point search from the start (`Collider::closest_from`, same answers):
+    // the points of a triangle, and of its neighbours, lie beside each other.
+    let mut last_near: Option<usize> = None;
     // signed depth of triangle k: the largest over its sample points of the
     // distance to `outer`'s surface, negative outside
     let mut score = |k: u32, deepest: &mut f64| -> f64 {
@@ -733,7 +737,8 @@ fn climb(
         ];
         let mut best = f64::NEG_INFINITY;
         for p in points {
-            let (d, near, on_surface) = outer.closest_triangle(&p);
+            let (d, near, on_surface) = outer.closest_from(&p, 0.0, last_near);
+            last_near = Some(near);
             if d <= eps {
                 best = best.max(0.0);
                 continue;
