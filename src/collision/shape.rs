@@ -203,6 +203,13 @@ impl Collider {
         self.mesh.triangle(self.order[k] as usize)
     }
 
+    /// The mesh's vertex indices of triangle `k` in tree order, in the order of
+    /// [`tri`](Self::tri)'s corners.
+    #[inline]
+    pub(crate) fn corners(&self, k: usize) -> [u32; 3] {
+        self.mesh.triangles[self.order[k] as usize]
+    }
+
     /// The plane of triangle `k` in tree order (part frame).
     #[inline]
     pub(crate) fn plane(&self, k: usize) -> &Plane {
