@@ -224,7 +224,7 @@ impl Checker<'_> {
     }
 
     /// The surface distance of `p` and `q` at their poses, asked up to `bound` mm.
-    fn clearance(&self, p: usize, q: usize, bound: f64) -> f64 {
+    pub(crate) fn clearance(&self, p: usize, q: usize, bound: f64) -> f64 {
         fitup::collision::clearance(
             &self.colliders[p],
             &self.poses[p],
