@@ -717,6 +717,44 @@ fn climb(
     let mut deepest = 0.0f64;
     let mut scores: HashMap<u32, f64> = HashMap::new();
     let mut walked: HashSet<u32> = HashSet::new();
+    // The nearest face of the point scored before bounds the next point's
+    // nearest-point search from the start (`Collider::closest_from`, same answers):
+    // the points of a triangle, and of its neighbours, lie beside each other.
+    let mut last_near: Option<usize> = None;
+    // A sample point's signed distance to `outer`'s surface: 0 on it, negative
+    // outside; a point farther than `sure` and inside is a witness (`deepest`).
+    let mut signed_depth = |p: &crate::math::Point3, deepest: &mut f64| -> f64 {
+        let (d, near, on_surface) = outer.closest_from(p, 0.0, last_near);
+        last_near = Some(near);
+        if d <= eps {
+            return 0.0;
+        }
+        let f = outer.tri(near);
+        let n = (f[1] - f[0]).cross(&(f[2] - f[0])).normalize();
+        let along = n.dot(&(p - on_surface));
+        if d > sure {
+            // Closest to a face's interior (offset along its normal) and in
+            // front of it: outside for sure, no ray cast (most points of a
+            // touching part). Otherwise ray parity decides.
+            if along >= 0.999 * d {
+                -d
+            } else if outer.contains_point(p) {
+                *deepest = deepest.max(d);
+                d
+            } else {
+                -d
+            }
+        } else if along < 0.0 {
+            d
+        } else {
+            -d
+        }
+    };
+    // The signed depth of each edge midpoint scored, by the edge's two mesh
+    // vertices: the two triangles sharing an edge share the point, to the bit
+    // (the same corners, moved the same way, summed in either order).
+    let mut at_edge: HashMap<u64, f64> = HashMap::new();
+    let edge = |a: u32, b: u32| (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
     // signed depth of triangle k: the largest over its sample points of the
     // distance to `outer`'s surface, negative outside
     let mut score = |k: u32, deepest: &mut f64| -> f64 {
@@ -724,40 +762,24 @@ fn climb(
             return s;
         }
         let t = inner.tri(k as usize).map(|p| iso * p);
+        let v = inner.corners(k as usize);
         let centre = nalgebra::center(&nalgebra::center(&t[0], &t[1]), &t[2]);
         let points = [
-            centre,
-            nalgebra::center(&t[0], &t[1]),
-            nalgebra::center(&t[1], &t[2]),
-            nalgebra::center(&t[2], &t[0]),
+            (centre, None),
+            (nalgebra::center(&t[0], &t[1]), Some(edge(v[0], v[1]))),
+            (nalgebra::center(&t[1], &t[2]), Some(edge(v[1], v[2]))),
+            (nalgebra::center(&t[2], &t[0]), Some(edge(v[2], v[0]))),
         ];
         let mut best = f64::NEG_INFINITY;
-        for p in points {
-            let (d, near, on_surface) = outer.closest_triangle(&p);
-            if d <= eps {
-                best = best.max(0.0);
+        for (p, key) in points {
+            if let Some(&s) = key.and_then(|e| at_edge.get(&e)) {
+                best = best.max(s);
                 continue;
             }
-            let f = outer.tri(near);
-            let n = (f[1] - f[0]).cross(&(f[2] - f[0])).normalize();
-            let along = n.dot(&(p - on_surface));
-            let signed = if d > sure {
-                // Closest to a face's interior (offset along its normal) and in
-                // front of it: outside for sure, no ray cast (most points of a
-                // touching part). Otherwise ray parity decides.
-                if along >= 0.999 * d {
-                    -d
-                } else if outer.contains_point(&p) {
-                    *deepest = deepest.max(d);
-                    d
-                } else {
-                    -d
-                }
-            } else if along < 0.0 {
-                d
-            } else {
-                -d
-            };
+            let signed = signed_depth(&p, deepest);
+            if let Some(e) = key {
+                at_edge.insert(e, signed);
+            }
             best = best.max(signed);
         }
         scores.insert(k, best);

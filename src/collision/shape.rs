@@ -203,6 +203,13 @@ impl Collider {
         self.mesh.triangle(self.order[k] as usize)
     }
 
+    /// The mesh's vertex indices of triangle `k` in tree order, in the order of
+    /// [`tri`](Self::tri)'s corners.
+    #[inline]
+    pub(crate) fn corners(&self, k: usize) -> [u32; 3] {
+        self.mesh.triangles[self.order[k] as usize]
+    }
+
     /// The plane of triangle `k` in tree order (part frame).
     #[inline]
     pub(crate) fn plane(&self, k: usize) -> &Plane {
@@ -334,21 +341,38 @@ impl Collider {
         false
     }
 
-    /// The nearest point of the surface to `p` (part frame): its distance (mm), the
-    /// tree-order index of its triangle, and the point itself (part frame).
-    pub(crate) fn closest_triangle(&self, p: &Point3) -> (f64, usize, Point3) {
-        self.closest(p, 0.0)
-    }
-
     /// The nearest surface point to `p` (part frame): distance (mm), tree-order
     /// index of its triangle and the point, best first through the tree; stops at
     /// the first leaf that brings the distance below `stop` (0: never stops early).
     fn closest(&self, p: &Point3, stop: f64) -> (f64, usize, Point3) {
+        self.closest_from(p, stop, None)
+    }
+
+    /// [`closest`](Self::closest) given a triangle `hint` (tree order) that is
+    /// likely near `p`, such as the answer for a nearby point: its distance bounds
+    /// the search from the start, so only nodes nearer than it are opened. The
+    /// answer is the same as without the hint when `stop` is 0, down to which of
+    /// equally near triangles is returned: a node no nearer than the hint holds no
+    /// triangle as near as the nearest, and the nodes left are visited in the same
+    /// order.
+    pub(crate) fn closest_from(
+        &self,
+        p: &Point3,
+        stop: f64,
+        hint: Option<usize>,
+    ) -> (f64, usize, Point3) {
         let mut best = (f64::INFINITY, 0usize, *p);
-        let mut stack = vec![0u32];
+        // strictly above the hint's distance: a triangle exactly as near is found
+        let mut bound = f64::INFINITY;
+        if let Some(k) = hint.filter(|&k| k < self.order.len()) {
+            let d = (p - closest_on_triangle(p, &self.tri(k))).norm();
+            bound = d + d * 1e-9 + f64::MIN_POSITIVE;
+        }
+        let mut stack = WalkStack::new();
+        stack.push(0);
         while let Some(i) = stack.pop() {
             let node = &self.nodes[i as usize];
-            if node.bounds.distance_to_point(p) >= best.0 {
+            if node.bounds.distance_to_point(p) >= best.0.min(bound) {
                 continue;
             }
             if node.count > 0 {
@@ -368,9 +392,11 @@ impl Collider {
                 let dr = self.nodes[r as usize].bounds.distance_to_point(p);
                 // nearer child last so it is popped first
                 if dl < dr {
-                    stack.extend([r, l]);
+                    stack.push(r);
+                    stack.push(l);
                 } else {
-                    stack.extend([l, r]);
+                    stack.push(l);
+                    stack.push(r);
                 }
             }
         }
@@ -492,6 +518,49 @@ pub(crate) fn encloses_volume(mesh: &Mesh) -> bool {
         }
     }
     !mesh.triangles.is_empty() && balance.values().all(|&b| b == 0) && mesh.signed_volume() > 0.0
+}
+
+/// A depth-first walk's stack of node indices: on the call's stack up to 64
+/// entries (a tree's depth; the walk holds one entry per level and one more),
+/// spilling to the heap beyond, so the nearest-point queries a depth walk makes by
+/// the thousand allocate nothing.
+struct WalkStack {
+    inline: [u32; 64],
+    len: usize,
+    spill: Vec<u32>,
+}
+
+impl WalkStack {
+    fn new() -> Self {
+        WalkStack {
+            inline: [0; 64],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn push(&mut self, v: u32) {
+        if self.len < self.inline.len() {
+            self.inline[self.len] = v;
+            self.len += 1;
+        } else {
+            self.spill.push(v);
+        }
+    }
+
+    /// The last pushed: the spilled entries are the newest when there are any.
+    #[inline]
+    fn pop(&mut self) -> Option<u32> {
+        if let Some(v) = self.spill.pop() {
+            return Some(v);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.inline[self.len])
+    }
 }
 
 /// Colliders by mesh, so trees survive watch reruns while the mesh is unchanged.

@@ -271,8 +271,7 @@ impl Database {
             target: name.clone(),
             cause,
         };
-        let mut held_file = None;
-        let conn = match target {
+        let (conn, held_file) = match target {
             Target::Sqlite(path) => {
                 let held = hold_folder(path, project).map_err(|e| open_err(e.into()))?;
                 let (dir, file) = (held.dir(), held.name());
@@ -364,13 +363,15 @@ impl Database {
                     )
                 })
                 .map_err(fail)?;
-                held_file = Some(held);
-                Conn::Sqlite(c)
+                (Conn::Sqlite(c), Some(held))
             }
             #[cfg(feature = "postgres")]
-            Target::Postgres(url) => Conn::Postgres(Box::new(pg::connect(url).map_err(|e| {
-                open_err(OpenCause::Driver(Raw::other(target.scrub(&e.to_string()))))
-            })?)),
+            Target::Postgres(url) => (
+                Conn::Postgres(Box::new(pg::connect(url).map_err(|e| {
+                    open_err(OpenCause::Driver(Raw::other(target.scrub(&e.to_string()))))
+                })?)),
+                None,
+            ),
             #[cfg(not(feature = "postgres"))]
             Target::Postgres(_) => return Err(open_err(OpenCause::NoPostgres)),
         };

@@ -48,6 +48,11 @@ fn random_pose(rng: &mut Rng, spread: f64) -> Transform {
 }
 
 fn main() {
+    // `FITUP_BENCH_AREA_ONLY=1`: the sliding-contact rows only
+    if std::env::var_os("FITUP_BENCH_AREA_ONLY").is_some() {
+        area_contacts();
+        return;
+    }
     script_rows();
     if std::env::var_os("FITUP_BENCH_SCRIPT_ONLY").is_some() {
         return;
@@ -182,10 +187,50 @@ fn main() {
 
     parry_rows(&a_mesh, &b_mesh, &a, &b, &cats);
 
+    area_contacts();
     // `FITUP_BENCH_EXACT_ONLY=1`: the exact pair rows only (the other tables take minutes)
     if std::env::var_os("FITUP_BENCH_EXACT_ONLY").is_none() {
         cells_vs_exact();
         sweeps();
+    }
+}
+
+/// A screw's shank in a hole of its own diameter meshed with other facets (as two
+/// CAD parts meshed apart are): every facet of the shank crosses the hole's by less
+/// than the tolerance, so each query climbs from hundreds of shallow crossings to
+/// learn that no surface reaches deeper (`interferes`' depth walk). The screw is
+/// drawn out 0–4 mm and turned about its axis; every pose is free (asserted).
+fn area_contacts() {
+    println!("\n## sliding area contact (interferes), median of {ROUNDS} rounds, µs/query");
+    println!("| shank / hole facets | triangles | poses | fitup µs |");
+    println!("|---|---|---|---|");
+    for (ns, nh) in [(48, 64), (192, 256), (768, 1024)] {
+        let plate = Collider::new(Arc::new(fixtures::plate_with_hole(20.0, 4.0, 3.0, nh))).unwrap();
+        let screw = Collider::new(Arc::new(fixtures::screw(3.0, 4.0, 5.0, 2.0, ns))).unwrap();
+        let poses: Vec<Transform> = (0..40)
+            .map(|k| {
+                let k = f64::from(k);
+                let turn = nalgebra::UnitQuaternion::from_axis_angle(&Vec3::z_axis(), 0.037 * k);
+                Transform::from_parts(Vec3::new(0.0, 0.0, 0.1 * k), turn)
+            })
+            .collect();
+        let mut times = Vec::new();
+        for _ in 0..ROUNDS {
+            let t0 = Instant::now();
+            for p in &poses {
+                let hit =
+                    interferes(&screw, p, &plate, &Transform::IDENTITY, DEFAULT_TOLERANCE).unwrap();
+                assert!(!hit, "{ns}/{nh} facets: a line-to-line pose interferes");
+            }
+            times.push(t0.elapsed().as_secs_f64() / poses.len() as f64 * 1e6);
+        }
+        println!(
+            "| {ns} / {nh} | {} + {} | {} | {:.1} |",
+            screw.triangle_count(),
+            plate.triangle_count(),
+            poses.len(),
+            median(times)
+        );
     }
 }
 

@@ -104,3 +104,68 @@ fn jacobi_axes_diagonalise_symmetric_matrices() {
         );
     }
 }
+
+/// A nearest-point search given a hint returns exactly what the search without
+/// one returns (distance, triangle, point), whatever the hint: near, far or out
+/// of range; points on, inside, beside and far from a sphere's and a box's
+/// surfaces, and at their vertices and edge midpoints (ties between
+/// faces).
+#[test]
+fn a_hint_changes_no_nearest_point() {
+    let sphere = Collider::new(Arc::new(crate::mesh::Mesh::uv_sphere(7.0, 24))).unwrap();
+    let cube = Collider::new(Arc::new(crate::mesh::Mesh::cuboid(
+        Point3::new(-5.0, -3.0, -1.0),
+        Point3::new(5.0, 3.0, 1.0),
+    )))
+    .unwrap();
+    let mut rng = Rng::new(31);
+    let mut off_surface = 0;
+    for c in [&sphere, &cube] {
+        let n = c.triangle_count();
+        let mut points: Vec<Point3> = Vec::new();
+        for k in 0..n {
+            let t = c.tri(k);
+            points.extend([t[0], nalgebra::center(&t[0], &t[1])]);
+        }
+        for _ in 0..2000 {
+            let spread = [0.01, 1.0, 10.0, 100.0][rng.below(4)];
+            let t = c.tri(rng.below(n));
+            let v = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            points.push(t[0] + v * spread);
+        }
+        for p in points {
+            let want = c.closest(&p, 0.0);
+            for hint in [Some(want.1), Some(rng.below(n)), Some(n + 5), None] {
+                let got = c.closest_from(&p, 0.0, hint);
+                assert_eq!(
+                    (got.0.to_bits(), got.1, got.2),
+                    (want.0.to_bits(), want.1, want.2),
+                    "{p:?} hint {hint:?}"
+                );
+            }
+            off_surface += usize::from(want.0 > 0.0);
+        }
+    }
+    assert!(off_surface > 1000);
+}
+
+/// The walk's stack keeps last-in first-out order across its spill to the heap.
+#[test]
+fn the_walk_stack_spills_in_order() {
+    let mut s = WalkStack::new();
+    for v in 0..200u32 {
+        s.push(v);
+        if v % 3 == 0 {
+            assert_eq!(s.pop(), Some(v));
+            s.push(v);
+        }
+    }
+    for v in (0..200u32).rev() {
+        assert_eq!(s.pop(), Some(v));
+    }
+    assert_eq!(s.pop(), None);
+}
