@@ -12,7 +12,7 @@ FITUP="$T/debug/fitup"
 RUNS="${RUNS:-3}"
 WORK="$(mktemp -d /tmp/fitup-step-bench.XXXXXX)"
 trap 'rm -rf "$WORK"' EXIT
-FITUP_STEP_SAMPLES="$WORK/samples" cargo test --features step --test it \
+FITUP_STEP_SAMPLES="$WORK/samples" cargo test --features step --test step \
   step_import::with_occt::every_test_file_kind_is_a_step_file >/dev/null 2>&1
 g++ -O2 -std=c++17 -w -I/usr/include/opencascade tests/bench/step/occt_peer.cpp \
   -lTKXDESTEP -lTKSTEP -lTKSTEPBase -lTKSTEPAttr -lTKSTEP209 -lTKXSBase -lTKXCAF \

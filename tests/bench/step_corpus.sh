@@ -24,7 +24,7 @@ for tool in occt_check occt_peer; do
     -o "$WORK/$tool"
 done
 uptime
-FITUP_OCCT_CHECK="$WORK/occt_check" cargo test --features step --test it \
+FITUP_OCCT_CHECK="$WORK/occt_check" cargo test --features step --test step \
   step_corpus:: -- --nocapture 2>&1 | grep -E "^test |test result|panicked|: fitup import"
 for f in "$FITUP_STEP_CORPUS"/*.step "$FITUP_STEP_CORPUS"/*.STEP "$FITUP_STEP_CORPUS"/*.stp \
   "$FITUP_STEP_CORPUS"/*.STP; do

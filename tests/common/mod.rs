@@ -3,7 +3,9 @@
 
 #![allow(dead_code)]
 
+pub mod bounded;
 pub mod duct;
+pub mod fit_check;
 pub mod kin_driver;
 pub mod lines;
 #[cfg(feature = "step")]

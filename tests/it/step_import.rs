@@ -1,8 +1,8 @@
 //! `fitup import FILE.step` (issue 24, STEP): the STEP files are made in the tests by
 //! Open CASCADE itself (`fitup::mesh::step::write_test_step`), never committed. The
-//! tests that need OCCT run with `--features step`
-//! (`cargo test --features step --test it step_import::`); the default build checks
-//! the "rebuild with --features step" answer.
+//! tests that need OCCT run with `--features step`, in the `step` binary
+//! (`cargo test --features step --test step step_import::`); the default build checks
+//! the "rebuild with --features step" answer (in `it`).
 
 use crate::common;
 
@@ -1219,7 +1219,7 @@ mod hostile {
             let before = common::snapshot(p);
             let mut args = vec!["import", file, "--out", "out"];
             args.extend(extra);
-            let r = crate::hostile_bounds::run(p, &args);
+            let r = common::bounded::run(p, &args);
             let what = format!("{file} {extra:?}: {} ({} kB)", r.text, r.peak_kb);
             assert_eq!(r.code, Some(1), "{what}");
             assert!(r.text.contains(file), "{what}");
@@ -1240,7 +1240,7 @@ mod hostile {
             );
         }
         // An entity numbered near 2^63 is read like any other: no table sized by it.
-        let r = crate::hostile_bounds::run(p, &["import", "numbers.step", "--out", "out"]);
+        let r = common::bounded::run(p, &["import", "numbers.step", "--out", "out"]);
         assert_eq!(r.code, Some(0), "{}", r.text);
         assert!(r.peak_kb < 600 * 1024, "{} kB", r.peak_kb);
     }

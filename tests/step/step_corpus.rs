@@ -9,9 +9,9 @@
 //! order, at its placement (issue 37); the file's unit named and lengths in mm. Every
 //! imported file of more than one component then gets an assembly sequence with the
 //! default options, re-checked independently by `sequence_fits`' dense removal test
-//! (the reported assembled-pose fits exactly the interfering pairs, each part taken
-//! out along its path and straight on against the parts placed before it, allowed the
-//! reported fits' overlap and nothing else).
+//! (tests/common/fit_check.rs: the reported assembled-pose fits exactly the
+//! interfering pairs, each part taken out along its path and straight on against the
+//! parts placed before it, allowed the reported fits' overlap and nothing else).
 
 #[cfg(feature = "step")]
 mod with_occt {
@@ -83,9 +83,9 @@ mod with_occt {
                         plan.fits.len(),
                         plan.separate_groups.len()
                     );
-                    let c = crate::sequence_fits::checker(&doc, &plan);
-                    crate::sequence_fits::fits_are_exact(&c, &plan);
-                    crate::sequence_fits::dense_removal(&c, &plan);
+                    let c = common::fit_check::checker(&doc, &plan);
+                    common::fit_check::fits_are_exact(&c, &plan);
+                    common::fit_check::dense_removal(&c, &plan);
                 }
                 Err(e) => {
                     eprintln!("{}: no sequence in {wall:.1} s: {e}", file.display());
