@@ -44,6 +44,23 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     Ok(())
 }
 
+/// `p` absolute with its links and `..` resolved; for a file that does not exist yet,
+/// its folder resolved and its name: the form in which two paths naming the same file
+/// compare equal.
+pub(crate) fn resolved_path(p: &Path) -> std::path::PathBuf {
+    if let Ok(c) = p.canonicalize() {
+        return c;
+    }
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    match (
+        abs.parent().and_then(|d| d.canonicalize().ok()),
+        abs.file_name(),
+    ) {
+        (Some(d), Some(n)) => d.join(n),
+        _ => abs,
+    }
+}
+
 /// A 64-bit hash of file contents (FNV-1a), used to tell a real change from a save
 /// that wrote the same bytes.
 pub fn content_hash(bytes: &[u8]) -> u64 {

@@ -234,11 +234,11 @@ impl Document {
         path: &Path,
         folder: Option<crate::fsutil::Dir>,
     ) -> Result<(), DocumentError> {
-        let target = canonical_target(path);
+        let target = crate::fsutil::resolved_path(path);
         if let Some(p) = self
             .parts
             .values()
-            .find(|p| canonical_target(&p.mesh_path) == target)
+            .find(|p| crate::fsutil::resolved_path(&p.mesh_path) == target)
         {
             return Err(DocumentError::OverMesh {
                 path: path.to_path_buf(),
@@ -252,7 +252,9 @@ impl Document {
             .into_iter()
             .filter(|s| *s != self.path)
             .collect();
-        if target != canonical_target(&self.path) && crate::project::is_source(path, &others) {
+        if target != crate::fsutil::resolved_path(&self.path)
+            && crate::project::is_source(path, &others)
+        {
             return Err(DocumentError::Write {
                 path: path.to_path_buf(),
                 cause: WriteProblem::Output(crate::project::OutputError::Source {
@@ -260,7 +262,7 @@ impl Document {
                 }),
             });
         }
-        let expected = (target == canonical_target(&self.path))
+        let expected = (target == crate::fsutil::resolved_path(&self.path))
             .then_some(self.disk_hash)
             .flatten();
         let new_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -433,22 +435,6 @@ fn tidy(x: f64) -> f64 {
         0.0
     } else {
         x
-    }
-}
-
-/// The canonical form of a path that may not exist yet (its folder canonicalized), to
-/// tell whether two paths name the same file.
-fn canonical_target(p: &Path) -> PathBuf {
-    if let Ok(c) = p.canonicalize() {
-        return c;
-    }
-    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    match (
-        abs.parent().and_then(|d| d.canonicalize().ok()),
-        abs.file_name(),
-    ) {
-        (Some(d), Some(n)) => d.join(n),
-        _ => abs,
     }
 }
 

@@ -264,7 +264,7 @@ pub fn is_source(path: &Path, sources: &[std::path::PathBuf]) -> bool {
     if sources.is_empty() {
         return false;
     }
-    let target = resolved(path);
+    let target = crate::fsutil::resolved_path(path);
     #[cfg(unix)]
     let identity = |p: &Path| {
         use std::os::unix::fs::MetadataExt;
@@ -273,7 +273,7 @@ pub fn is_source(path: &Path, sources: &[std::path::PathBuf]) -> bool {
     #[cfg(unix)]
     let target_id = identity(path);
     sources.iter().any(|s| {
-        if resolved(s) == target {
+        if crate::fsutil::resolved_path(s) == target {
             return true;
         }
         #[cfg(unix)]
@@ -282,22 +282,6 @@ pub fn is_source(path: &Path, sources: &[std::path::PathBuf]) -> bool {
         }
         false
     })
-}
-
-/// `p` absolute with its links and `..` resolved; for a file that does not exist,
-/// its folder resolved and its name.
-fn resolved(p: &Path) -> std::path::PathBuf {
-    if let Ok(c) = p.canonicalize() {
-        return c;
-    }
-    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    match (
-        abs.parent().and_then(|d| d.canonicalize().ok()),
-        abs.file_name(),
-    ) {
-        (Some(d), Some(n)) => d.join(n),
-        _ => abs,
-    }
 }
 
 /// [`check_output`], then [`write_atomic`], then [`register_output`]: how every
